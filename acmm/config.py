@@ -1,0 +1,321 @@
+"""Validated run configuration (pydantic v2), read from YAML.
+
+Every field documents its unit.  Numbers may also be written as ``"<number> <unit>"``
+strings (e.g. ``"31.5e6 kg*m^2"``, ``"2 N*m"``); they are converted to the report's units
+(slug·ft², ft·lbf, ft·lbf·s, deg, rad/s, s) on load.  Unknown keys, non-finite numbers,
+impossible inertias and inconsistent sections are rejected with one message naming the
+field (:class:`acmm.errors.ConfigError`).
+"""
+from __future__ import annotations
+
+import math
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Literal, Optional
+
+import numpy as np
+import yaml
+from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, ValidationError,
+                      field_validator, model_validator)
+
+from acmm.errors import ConfigError
+from acmm.units import to_canonical
+
+
+def _finite(x: float) -> float:
+    if not math.isfinite(x):
+        raise ValueError("must be a finite number")
+    return x
+
+
+def _q(dimension: str):
+    def conv(v):
+        return _finite(to_canonical(v, dimension))
+    return BeforeValidator(conv)
+
+
+def _vec3(dimension: str):
+    def conv(v):
+        if isinstance(v, (str, int, float)) or not hasattr(v, "__len__"):
+            raise ValueError("must be a list of three values [roll, pitch, yaw]")
+        if len(v) != 3:
+            raise ValueError(f"must have three values [roll, pitch, yaw], got {len(v)}")
+        return [_finite(to_canonical(x, dimension)) for x in v]
+    return BeforeValidator(conv)
+
+
+InertiaValue = Annotated[float, _q("inertia")]
+Torque = Annotated[float, _q("torque")]
+Momentum = Annotated[float, _q("momentum")]
+Angle = Annotated[float, _q("angle")]
+Rate = Annotated[float, _q("rate")]
+Time = Annotated[float, _q("time")]
+TorqueVec = Annotated[list[float], _vec3("torque")]
+AngleVec = Annotated[list[float], _vec3("angle")]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Inertia(_Model):
+    """Inertia matrix about the body control axes (slug·ft²), eq 3.2; I_ij = I_ji."""
+
+    I11: InertiaValue = Field(description="roll moment of inertia, slug·ft²")
+    I22: InertiaValue = Field(description="pitch moment of inertia, slug·ft²")
+    I33: InertiaValue = Field(description="yaw moment of inertia, slug·ft²")
+    I12: InertiaValue = Field(0.0, description="product of inertia I12 = I21, slug·ft²")
+    I13: InertiaValue = Field(0.0, description="product of inertia I13 = I31, slug·ft²")
+    I23: InertiaValue = Field(0.0, description="product of inertia I23 = I32, slug·ft²")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_matrix(cls, data):
+        """Accept a 3×3 nested list too; it must then be symmetric."""
+        if isinstance(data, (list, tuple)):
+            try:
+                m = np.array([[to_canonical(x, "inertia") for x in row] for row in data], float)
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"inertia matrix must be 3×3 numbers: {exc}") from None
+            if m.shape != (3, 3):
+                raise ValueError(f"inertia matrix must be 3×3, got shape {m.shape}")
+            if not np.all(np.isfinite(m)):
+                raise ValueError("inertia matrix must contain finite numbers")
+            if not np.allclose(m, m.T, rtol=1e-9, atol=0.0):
+                raise ValueError("inertia matrix is not symmetric (I_ij must equal I_ji)")
+            return {"I11": m[0, 0], "I22": m[1, 1], "I33": m[2, 2],
+                    "I12": m[0, 1], "I13": m[0, 2], "I23": m[1, 2]}
+        return data
+
+    @model_validator(mode="after")
+    def _physical(self):
+        m = self.matrix()
+        eig = np.linalg.eigvalsh(m)
+        if eig[0] <= 0:
+            raise ValueError(
+                f"inertia matrix is not positive definite (smallest principal moment {eig[0]:.4g} slug·ft²)")
+        a, b, c = eig
+        if a + b < c * (1 - 1e-12):
+            raise ValueError(
+                "principal moments violate the triangle inequality "
+                f"({a:.4g} + {b:.4g} < {c:.4g} slug·ft²): no rigid body has this inertia")
+        return self
+
+    def matrix(self) -> np.ndarray:
+        """The symmetric 3×3 inertia matrix (slug·ft²)."""
+        return np.array([[self.I11, self.I12, self.I13],
+                         [self.I12, self.I22, self.I23],
+                         [self.I13, self.I23, self.I33]])
+
+    def without_cross_products(self) -> "Inertia":
+        """The same body with I12 = I13 = I23 = 0 (the report's ch. 6 design model)."""
+        return Inertia(I11=self.I11, I22=self.I22, I33=self.I33)
+
+
+class Disturbance(_Model):
+    """External torque per body axis, eq 3.9: w_i = bias_i + A_i sin(nt) + B_i sin(2nt) (ft·lbf).
+
+    Give the bias either directly (``bias``) or as ``bias_from_tea``: the attitude (deg) that
+    the bias must make a torque equilibrium (eq 4.1).  Neither means zero bias.
+    """
+
+    bias: Optional[TorqueVec] = Field(None, description="constant torque [roll, pitch, yaw], ft·lbf")
+    bias_from_tea: Optional[AngleVec] = Field(
+        None, description="attitude [roll, pitch, yaw] in deg whose equilibrium bias (eq 4.1) is used")
+    A: TorqueVec = Field([1.0, 2.0, 1.0], description="amplitude of sin(n t) per axis, ft·lbf")
+    B: TorqueVec = Field([0.5, 0.5, 0.5], description="amplitude of sin(2 n t) per axis, ft·lbf")
+
+    @model_validator(mode="after")
+    def _one_bias(self):
+        if self.bias is not None and self.bias_from_tea is not None:
+            raise ValueError("give either 'bias' or 'bias_from_tea', not both")
+        if self.bias_from_tea is not None and any(abs(a) >= 89.0 for a in self.bias_from_tea):
+            raise ValueError("bias_from_tea angles must lie within ±89 deg (eq 3.6 is singular at 90 deg)")
+        return self
+
+
+class Actuators(_Model):
+    """CMG actuator limits (report ch. 5.1)."""
+
+    torque_limit: Torque = Field(150.0, description="control torque limit per axis, ft·lbf")
+    momentum_limit: Momentum = Field(20000.0, description="CMG momentum limit per axis, ft·lbf·s")
+
+    @field_validator("torque_limit", "momentum_limit")
+    @classmethod
+    def _positive(cls, v):
+        if v <= 0:
+            raise ValueError("must be > 0")
+        return v
+
+
+class Sector(_Model):
+    """Closed-loop pole region of ch. 5.2: Re λ ≤ −sigma·n and |Im λ| ≤ tan(half_angle)·|Re λ|."""
+
+    sigma: float = Field(0.5, gt=0, description="minimum decay rate in units of the orbital rate n")
+    half_angle_deg: float = Field(45.0, gt=0, lt=90, description="sector half-angle about the negative real axis, deg")
+
+
+class Design(_Model):
+    """Linear design model (eq 4.46) and the sector LQR (ch. 5.2)."""
+
+    model: Literal["coupled", "no_cross_inertia", "small_angle"] = Field(
+        "coupled", description="design model: fully coupled (eq 4.46), I12=I13=I23=0, or theta*=0 (LVLH)")
+    drf_mode: Literal["attitude_hold", "momentum_hold"] = Field(
+        "attitude_hold", description="DRF inputs: (h1, θ2, θ3) or (h1, h2, θ3), filters at n and 2n")
+    sector: Sector = Sector()
+    R: float = Field(1e-4, gt=0, description="control weight R = r·I, 1/(ft·lbf)²")
+    Q0: float = Field(0.0, ge=0, description="state weight Q0 = q·I on the scaled states (dimensionless)")
+    riccati_method: Literal["sign", "scipy", "slycot"] = Field("scipy", description="CARE solver")
+    pole_method: Literal["shift", "uniform"] = Field(
+        "shift", description="sector enforcement: optimal pole shifting of the stray poles, or a uniform shift")
+    residual_tol: float = Field(1e-9, gt=0, lt=1, description="largest accepted relative Riccati residual (scaled)")
+
+
+class DesignPoint(_Model):
+    """A named station configuration used as a design point of the gain schedule."""
+
+    name: str
+    inertia: Inertia
+    disturbance: Disturbance = Disturbance()
+
+
+class Schedule(_Model):
+    """Design points of the gain schedule (ch. 5.3)."""
+
+    to: Optional[DesignPoint] = Field(
+        None, description="end configuration of the blend I(s) = (1−s)·I_start + s·I_to (bias blended alike)")
+    n_points: int = Field(12, ge=3, le=200, description="number of blend points including both ends")
+    points: list[DesignPoint] = Field([], description="additional named design points")
+    order: int = Field(2, ge=1, le=4, description="polynomial order of K_ij(θ2*) (the report uses 2)")
+
+
+class Simulation(_Model):
+    """Nonlinear closed-loop simulation (ch. 6)."""
+
+    orbits: float = Field(5.0, gt=0, le=10000, description="simulated time, orbits (2π/n s each)")
+    levels: Optional[list[float]] = Field(
+        None, description="orbit at which each schedule design point starts (default: equal dwell)")
+    initial_offset: AngleVec = Field([0.0, 0.0, 0.0], description="initial attitude minus TEA, deg")
+    sample_interval: Time = Field(60.0, gt=0, description="output sample interval, s")
+    rtol: float = Field(1e-8, gt=0, lt=1, description="integrator relative tolerance")
+    atol_scale: float = Field(1e-8, gt=0, lt=1, description="absolute tolerance relative to state scales")
+    divergence_deg: Angle = Field(60.0, gt=0, description="stop as diverged when an angle error exceeds this, deg")
+    max_saturation_orbits: float = Field(
+        1.0, gt=0, description="stop as diverged when a CMG axis stays saturated this long, orbits")
+
+
+class Output(_Model):
+    """Where results go."""
+
+    root: str = Field("runs", description="results root; files go to <root>/<name>/")
+    figures: bool = Field(True, description="write matplotlib figures next to the HDF5 files")
+
+
+class Config(_Model):
+    """A complete acmm run configuration."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$", description="run name; results go to runs/<name>/")
+    description: str = ""
+    inertia: Inertia
+    orbit_rate: Rate = Field(0.0011, description="circular orbit rate n, rad/s")
+    disturbance: Disturbance = Disturbance()
+    actuators: Actuators = Actuators()
+    design: Design = Design()
+    schedule: Optional[Schedule] = None
+    simulation: Simulation = Simulation()
+    output: Output = Output()
+
+    @field_validator("orbit_rate")
+    @classmethod
+    def _n_positive(cls, v):
+        if v <= 0:
+            raise ValueError("must be > 0 rad/s")
+        if v > 0.01:
+            raise ValueError("must be ≤ 0.01 rad/s (below low-Earth-orbit rates ~0.0011 rad/s)")
+        return v
+
+    @model_validator(mode="after")
+    def _levels_consistent(self):
+        lv = self.simulation.levels
+        if lv is not None:
+            if any(b <= a for a, b in zip(lv, lv[1:])) or (lv and lv[0] != 0):
+                raise ValueError("simulation.levels must start at 0 and increase")
+            if lv and lv[-1] >= self.simulation.orbits:
+                raise ValueError("simulation.levels must all start before simulation.orbits")
+        return self
+
+    def run_dir(self) -> Path:
+        """Directory of this run's results (``<output.root>/<name>``)."""
+        return Path(self.output.root) / self.name
+
+    def to_yaml(self) -> str:
+        """The resolved config (all defaults filled in) as YAML text."""
+        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+
+
+def _format_error(exc: ValidationError) -> str:
+    err = exc.errors()[0]
+    loc = ".".join(str(p) for p in err["loc"]) or "config"
+    msg = err["msg"]
+    for prefix in ("Value error, ", "Assertion failed, "):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix):]
+    if err["type"] == "extra_forbidden":
+        msg = "unknown key"
+    extra = f" (and {len(exc.errors()) - 1} more)" if len(exc.errors()) > 1 else ""
+    return f"{loc}: {msg}{extra}"
+
+
+def parse_config(data: object, source: str = "config") -> Config:
+    """Validate a mapping (e.g. parsed YAML) into a :class:`Config`.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the offending field.
+    """
+    if not isinstance(data, dict):
+        raise ConfigError(f"{source}: the top level must be a mapping of keys to values")
+    try:
+        return Config.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(f"{source}: {_format_error(exc)}") from None
+
+
+DEFAULT_CONFIG = "staircase.yaml"
+
+
+def packaged_config_path(name: str = DEFAULT_CONFIG) -> Path:
+    """Path of a config shipped inside the distribution (``configs/`` in the source tree)."""
+    return Path(str(resources.files("acmm.configs").joinpath(name)))
+
+
+def load_config(path: str | Path | None = None) -> Config:
+    """Read and validate a YAML config file (``None``: the packaged default).
+
+    A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working
+    directory is looked up among the packaged configs.
+    """
+    if path is None:
+        p = packaged_config_path()
+    else:
+        p = Path(path)
+        if not p.exists():
+            candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml")
+            if len(p.parts) == 1 and candidate.exists():
+                p = candidate
+            else:
+                raise ConfigError(f"config file not found: {path}")
+    if p.is_dir():
+        raise ConfigError(f"config path is a directory, not a file: {p}")
+    try:
+        text = p.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"cannot read config file {p}: {exc}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise ConfigError(f"{p}: not valid YAML{where}") from None
+    return parse_config(data, source=str(p))

@@ -1,0 +1,186 @@
+"""Nonlinear rigid-body dynamics of the Space Station (CR-185644 eqs 3.1–3.9).
+
+Conventions (see ``shared/reference/NOTES.md``):
+
+* Units: slug·ft², ft·lbf, ft·lbf·s, rad, s.
+* θ = (roll θ1, pitch θ2, yaw θ3) is a pitch–yaw–roll (2-3-1) sequence from LVLH to body:
+  ``C_BL = C1(θ1) C3(θ3) C2(θ2)``; LVLH axes x = velocity, y = −orbit normal, z = nadir.
+* The nadir vector c (eq 3.4) is the third column of C_BL; the LVLH angular velocity seen in
+  body axes is C_BL·(0, −n, 0) (eq 4.3).
+* Eq 3.6 is misprinted: its (1,1) bracket entry is cos θ3, so f11 = 1.
+* The control torque u enters ω̇ as −u and ḣ as +u; the disturbance w enters ω̇ as +w.
+
+All functions are pure and accept stacked inputs along leading axes where noted.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """Cross-product matrix [v×] such that ``skew(a) @ b == cross(a, b)``."""
+    v = np.asarray(v, float)
+    z = np.zeros_like(v[..., 0])
+    return np.stack([
+        np.stack([z, -v[..., 2], v[..., 1]], -1),
+        np.stack([v[..., 2], z, -v[..., 0]], -1),
+        np.stack([-v[..., 1], v[..., 0], z], -1),
+    ], -2)
+
+
+def rotation_1(a: float) -> np.ndarray:
+    """Elementary frame rotation about axis 1 by angle ``a`` (rad)."""
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])
+
+
+def rotation_2(a: float) -> np.ndarray:
+    """Elementary frame rotation about axis 2 by angle ``a`` (rad)."""
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+
+
+def rotation_3(a: float) -> np.ndarray:
+    """Elementary frame rotation about axis 3 by angle ``a`` (rad)."""
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def dcm_body_from_lvlh(theta: np.ndarray) -> np.ndarray:
+    """Direction-cosine matrix C_BL = C1(θ1) C3(θ3) C2(θ2) (pitch–yaw–roll sequence).
+
+    Parameters
+    ----------
+    theta : (3,) array
+        Roll, pitch, yaw (rad).
+    """
+    t1, t2, t3 = theta
+    return rotation_1(t1) @ rotation_3(t3) @ rotation_2(t2)
+
+
+def nadir_vector(theta: np.ndarray) -> np.ndarray:
+    """Nadir unit vector in body axes, eq 3.4 (the third column of C_BL).
+
+    Parameters
+    ----------
+    theta : (..., 3) array
+        Roll, pitch, yaw (rad).
+    """
+    theta = np.asarray(theta, float)
+    s1, s2, s3 = np.sin(theta[..., 0]), np.sin(theta[..., 1]), np.sin(theta[..., 2])
+    c1, c2, c3 = np.cos(theta[..., 0]), np.cos(theta[..., 1]), np.cos(theta[..., 2])
+    return np.stack([-s2 * c3, c1 * s2 * s3 + s1 * c2, -s1 * s2 * s3 + c1 * c2], -1)
+
+
+def nadir_vector_jacobian(theta: np.ndarray) -> np.ndarray:
+    """∂c/∂θ (3×3): column k is d_k = ∂c/∂θ_k of eq 3.4."""
+    s1, s2, s3 = np.sin(theta)
+    c1, c2, c3 = np.cos(theta)
+    d1 = [0.0, -s1 * s2 * s3 + c1 * c2, -c1 * s2 * s3 - s1 * c2]
+    d2 = [-c2 * c3, c1 * c2 * s3 - s1 * s2, -s1 * c2 * s3 - c1 * s2]
+    d3 = [s2 * s3, c1 * s2 * c3, -s1 * s2 * c3]
+    return np.array([d1, d2, d3]).T
+
+
+def lvlh_rate_in_body(theta: np.ndarray, n: float) -> np.ndarray:
+    """Angular velocity of LVLH in body axes, C_BL·(0, −n, 0) (rad/s); ω* of eq 4.3.
+
+    A body at rest in LVLH has absolute angular velocity ``lvlh_rate_in_body(θ, n)``.
+    """
+    theta = np.asarray(theta, float)
+    s1, s3 = np.sin(theta[..., 0]), np.sin(theta[..., 2])
+    c1, c3 = np.cos(theta[..., 0]), np.cos(theta[..., 2])
+    return np.stack([-n * s3, -n * c1 * c3, n * s1 * c3], -1)
+
+
+def lvlh_rate_jacobian(theta: np.ndarray, n: float) -> np.ndarray:
+    """∂ω*/∂θ (3×3) of eq 4.3 (rad/s per rad)."""
+    s1, _, s3 = np.sin(theta)
+    c1, _, c3 = np.cos(theta)
+    return np.array([[0.0, 0.0, -n * c3],
+                     [n * s1 * c3, 0.0, n * c1 * s3],
+                     [n * c1 * c3, 0.0, -n * s1 * s3]])
+
+
+def kinematics_matrix(theta: np.ndarray) -> np.ndarray:
+    """f(θ) of eq 3.6 (corrected: the (1,1) bracket entry is cos θ3, so f11 = 1).
+
+    θ̇ = f(θ) ω + q with q = (0, n, 0) (eq 3.5, 3.7).
+    """
+    s1, _, s3 = np.sin(theta)
+    c1, _, c3 = np.cos(theta)
+    return np.array([[c3, -c1 * s3, s1 * s3],
+                     [0.0, c1, -s1],
+                     [0.0, s1 * c3, c1 * c3]]) / c3
+
+
+def attitude_rate(theta: np.ndarray, omega: np.ndarray, n: float) -> np.ndarray:
+    """θ̇ = f(θ) ω + q, eq 3.5 (rad/s), for stacked inputs (..., 3).
+
+    Written out row by row so it vectorizes; equal to ``kinematics_matrix(θ) @ ω + q``.
+    """
+    theta = np.asarray(theta, float)
+    omega = np.asarray(omega, float)
+    s1, s3 = np.sin(theta[..., 0]), np.sin(theta[..., 2])
+    c1, c3 = np.cos(theta[..., 0]), np.cos(theta[..., 2])
+    w1, w2, w3 = omega[..., 0], omega[..., 1], omega[..., 2]
+    d2 = (c1 * w2 - s1 * w3) / c3
+    d1 = w1 - s3 * d2
+    d3 = s1 * w2 + c1 * w3
+    return np.stack([d1, d2 + n, d3], -1)
+
+
+def gyroscopic_torque(omega: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """τ_gyro = −ω × (I ω), eq 3.2 (ft·lbf)."""
+    omega = np.asarray(omega, float)
+    return -np.cross(omega, omega @ inertia.T)
+
+
+def gyroscopic_torque_jacobian(omega: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """∂τ_gyro/∂ω = [(Iω)×] − [ω×] I (ft·lbf per rad/s); eqs 4.8–4.10 in matrix form."""
+    return skew(inertia @ omega) - skew(omega) @ inertia
+
+
+def gravity_gradient_torque(theta: np.ndarray, inertia: np.ndarray, n: float) -> np.ndarray:
+    """τ_gg = 3n² c × (I c), eq 3.3 (ft·lbf), c the nadir vector of eq 3.4."""
+    c = nadir_vector(theta)
+    return 3.0 * n * n * np.cross(c, c @ inertia.T)
+
+
+def gravity_gradient_jacobian(theta: np.ndarray, inertia: np.ndarray, n: float) -> np.ndarray:
+    """∂τ_gg/∂θ (3×3, ft·lbf/rad); column k = 3n²(d_k × I c + c × I d_k), d_k = ∂c/∂θ_k.
+
+    This replaces the printed eqs 4.12–4.14 (4.12 has the wrong prefactor sign and a missing
+    −I23·B1·C1 term in row 2; 4.13–4.14 are garbled beyond repair).
+    """
+    c = nadir_vector(theta)
+    d = nadir_vector_jacobian(theta)
+    ic = inertia @ c
+    cols = [np.cross(d[:, k], ic) + np.cross(c, inertia @ d[:, k]) for k in range(3)]
+    return 3.0 * n * n * np.array(cols).T
+
+
+def disturbance_torque(t, bias: np.ndarray, a: np.ndarray, b: np.ndarray, n: float) -> np.ndarray:
+    """w(t) = bias + A sin(nt) + B sin(2nt), eq 3.9 (ft·lbf); ``t`` scalar or (N,) s."""
+    t = np.asarray(t, float)[..., None]
+    return np.asarray(bias) + np.asarray(a) * np.sin(n * t) + np.asarray(b) * np.sin(2 * n * t)
+
+
+def angular_acceleration(theta, omega, inertia, n, w, u, inertia_inv=None) -> np.ndarray:
+    """ω̇ from eq 3.1: I ω̇ = τ_gyro + τ_gg + (w − u) (rad/s²)."""
+    if inertia_inv is None:
+        inertia_inv = np.linalg.inv(inertia)
+    torque = gyroscopic_torque(omega, inertia) + gravity_gradient_torque(theta, inertia, n) + w - u
+    return torque @ inertia_inv.T
+
+
+def cmg_momentum_rate(omega: np.ndarray, h: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """ḣ = u − ω × h, eq 3.8 (ft·lbf)."""
+    return u - np.cross(omega, h)
+
+
+def plant_rhs(theta, omega, h, inertia, n, w, u, inertia_inv=None):
+    """Right-hand side of eqs 3.1, 3.5, 3.8: returns (θ̇, ω̇, ḣ)."""
+    return (attitude_rate(theta, omega, n),
+            angular_acceleration(theta, omega, inertia, n, w, u, inertia_inv),
+            cmg_momentum_rate(omega, h, u))

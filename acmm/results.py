@@ -1,0 +1,142 @@
+"""Self-describing HDF5 results, written atomically.
+
+Every dataset carries a ``units`` attribute; the root group carries the resolved config
+(YAML text), its hash, the package version, the git commit when known and the creation
+time.  Files are written to a temporary name in the target directory and renamed into
+place, so an interrupted run never leaves a partial file.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import tempfile
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+
+@dataclass
+class Dataset:
+    """One array to store, with its unit and optional axis/element names."""
+
+    data: Any
+    units: str
+    description: str = ""
+    names: list[str] | None = None
+    attrs: dict[str, Any] = field(default_factory=dict)
+
+
+def git_commit() -> str:
+    """The git commit of the source tree, or ``"unknown"``."""
+    here = Path(__file__).resolve().parent
+    try:
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, timeout=5
+        )
+        if out.returncode == 0:
+            return out.stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return "unknown"
+
+
+def config_hash(config_text: str) -> str:
+    """SHA-256 of a canonical config text (first 16 hex digits)."""
+    return hashlib.sha256(config_text.encode()).hexdigest()[:16]
+
+
+def provenance(config_text: str) -> dict[str, str]:
+    """Attributes stored on every results file."""
+    from acmm import __version__
+
+    return {
+        "package": "acmm-qpp",
+        "package_version": __version__,
+        "git_commit": git_commit(),
+        "config_hash": config_hash(config_text),
+        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+    }
+
+
+def _write_group(group, items: Mapping[str, Any]) -> None:
+    for key, value in items.items():
+        if isinstance(value, Mapping):
+            _write_group(group.create_group(key), value)
+            continue
+        if not isinstance(value, Dataset):
+            raise TypeError(f"results item {key!r} must be a Dataset or a mapping")
+        data = value.data
+        if isinstance(data, str):
+            ds = group.create_dataset(key, data=data)
+        else:
+            arr = np.asarray(data)
+            ds = group.create_dataset(key, data=arr)
+        ds.attrs["units"] = value.units
+        if value.description:
+            ds.attrs["description"] = value.description
+        if value.names is not None:
+            ds.attrs["names"] = json.dumps(list(value.names))
+        for ak, av in value.attrs.items():
+            ds.attrs[ak] = av
+
+
+def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
+             attrs: Mapping[str, Any] | None = None) -> Path:
+    """Write ``items`` (name → :class:`Dataset` or nested mapping) to ``path`` atomically.
+
+    Parameters
+    ----------
+    path : path-like
+        Target file; its directory is created if needed.
+    items : mapping
+        Datasets (or groups of datasets) to store.
+    config_text : str
+        The resolved config as YAML; embedded as the root attribute ``config``.
+    attrs : mapping, optional
+        Extra root attributes (e.g. a verdict).
+    """
+    import h5py
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        with h5py.File(tmp, "w") as f:
+            f.attrs["config"] = config_text
+            for k, v in provenance(config_text).items():
+                f.attrs[k] = v
+            for k, v in (attrs or {}).items():
+                f.attrs[k] = v
+            _write_group(f, items)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def read_h5(path: str | Path) -> dict[str, Any]:
+    """Read a results file back as a nested dict of numpy arrays plus ``"attrs"``."""
+    import h5py
+
+    def _read(group):
+        out: dict[str, Any] = {}
+        for k, v in group.items():
+            if isinstance(v, h5py.Group):
+                out[k] = _read(v)
+            else:
+                val = v[()]
+                out[k] = val.decode() if isinstance(val, bytes) else val
+        return out
+
+    with h5py.File(path, "r") as f:
+        out = _read(f)
+        out["attrs"] = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    return out

@@ -1,0 +1,57 @@
+"""Stage runners: config in, results file out.  The glue between the pure library
+modules and the CLI (I/O at the edge; the mathematics lives in the library modules)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from acmm import tea as tea_mod
+from acmm.config import Config, load_config
+from acmm.results import Dataset, write_h5
+
+AXES = ["roll", "pitch", "yaw"]
+
+
+@dataclass
+class TeaResult:
+    config: Config
+    tea: tea_mod.TEA
+    others: list = field(default_factory=list)
+
+
+def _as_config(config) -> Config:
+    return config if isinstance(config, Config) else load_config(config)
+
+
+def compute_tea(config) -> TeaResult:
+    """TEA of a config's own inertia and bias (physical branch)."""
+    cfg = _as_config(config)
+    inertia = cfg.inertia.matrix()
+    bias = tea_mod.resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate)
+    return TeaResult(cfg, tea_mod.solve_tea(inertia, cfg.orbit_rate, bias))
+
+
+def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
+    """Compute the TEA and write ``runs/<name>/tea.h5``."""
+    result = compute_tea(config)
+    cfg, t = result.config, result.tea
+    inertia = cfg.inertia.matrix()
+    if all_roots:
+        result.others = [r for r in tea_mod.all_equilibria(inertia, cfg.orbit_rate, t.bias)
+                         if np.max(np.abs(r.theta - t.theta)) > 1e-6]
+    items = {
+        "theta": Dataset(t.theta, "rad", "torque-equilibrium attitude θ* (eq 4.1)", AXES),
+        "theta_deg": Dataset(t.theta_deg, "deg", "θ* in degrees", AXES),
+        "omega": Dataset(t.omega, "rad/s", "ω* at θ* (eq 4.3)", AXES),
+        "bias": Dataset(t.bias, "ft*lbf", "bias torque balanced at θ* (eq 4.1)", AXES),
+        "inertia": Dataset(inertia, "slug*ft^2", "inertia matrix (eq 3.2)", AXES),
+        "orbit_rate": Dataset(cfg.orbit_rate, "rad/s", "orbital rate n"),
+        "residual": Dataset(t.residual, "ft*lbf", "max |τ_gyro + τ_gg + bias| at θ*"),
+    }
+    if result.others:
+        items["other_roots"] = Dataset(np.array([o.theta for o in result.others]), "rad",
+                                       "other equilibria found by multi-start Newton", AXES)
+    path = write_h5(cfg.run_dir() / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"})
+    return result, path

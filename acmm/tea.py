@@ -1,0 +1,212 @@
+"""Torque-equilibrium attitude (TEA), CR-185644 eqs 4.1–4.3.
+
+The TEA θ* solves τ_gyro(ω*(θ*)) + τ_gg(θ*) + bias = 0 with ω*(θ) = C_BL·(0, −n, 0)
+(eq 4.3).  Several roots exist; the physical branch is reached reproducibly by continuation
+(NOTES.md): start from the diagonal body at LVLH (θ = 0 is exact there with zero bias), grow the
+products of inertia to their values, then grow the bias.  A fold in the bias continuation
+means no equilibrium exists for the full bias.
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from acmm import dynamics as dyn
+from acmm.errors import ConvergenceError, NoEquilibriumError
+
+#: Largest residual (ft·lbf) accepted for an equilibrium.
+RESIDUAL_TOL = 1e-12
+
+
+@dataclass(frozen=True)
+class TEA:
+    """A torque-equilibrium attitude.
+
+    Attributes
+    ----------
+    theta : (3,) array
+        θ* = (roll, pitch, yaw), rad.
+    omega : (3,) array
+        ω* of eq 4.3, rad/s.
+    bias : (3,) array
+        Bias torque the equilibrium balances, ft·lbf.
+    residual : float
+        max |τ_gyro + τ_gg + bias| at θ*, ft·lbf.
+    """
+
+    theta: np.ndarray
+    omega: np.ndarray
+    bias: np.ndarray
+    residual: float
+
+    @property
+    def theta_deg(self) -> np.ndarray:
+        return np.degrees(self.theta)
+
+
+def equilibrium_residual(theta, inertia, n, bias) -> np.ndarray:
+    """τ_gyro(ω*(θ)) + τ_gg(θ) + bias, eq 4.1 with eq 4.3 substituted (ft·lbf)."""
+    omega = dyn.lvlh_rate_in_body(theta, n)
+    return dyn.gyroscopic_torque(omega, inertia) + dyn.gravity_gradient_torque(theta, inertia, n) + bias
+
+
+def equilibrium_jacobian(theta, inertia, n) -> np.ndarray:
+    """∂/∂θ of :func:`equilibrium_residual` (ft·lbf/rad), analytic."""
+    omega = dyn.lvlh_rate_in_body(theta, n)
+    return (dyn.gyroscopic_torque_jacobian(omega, inertia) @ dyn.lvlh_rate_jacobian(theta, n)
+            + dyn.gravity_gradient_jacobian(theta, inertia, n))
+
+
+def bias_for_attitude(theta, inertia, n) -> np.ndarray:
+    """The bias torque (ft·lbf) that makes ``theta`` (rad) an equilibrium (eq 4.1 solved for bias)."""
+    return -(equilibrium_residual(np.asarray(theta, float), inertia, n, np.zeros(3)))
+
+
+def _newton(theta0, inertia, n, bias, tol=RESIDUAL_TOL, max_iter=50, max_step=0.5):
+    """Damped Newton on eq 4.1; returns θ or None when it fails to converge."""
+    theta = np.array(theta0, float)
+    scale = max(3 * n * n * np.abs(inertia).max(), 1e-300)
+    for _ in range(max_iter):
+        r = equilibrium_residual(theta, inertia, n, bias)
+        if np.max(np.abs(r)) <= max(tol, 1e-15 * scale):
+            return theta
+        jac = equilibrium_jacobian(theta, inertia, n)
+        try:
+            step = np.linalg.solve(jac, -r)
+        except np.linalg.LinAlgError:
+            return None
+        if not np.all(np.isfinite(step)):
+            return None
+        norm = np.max(np.abs(step))
+        if norm > max_step:
+            step *= max_step / norm
+        theta = theta + step
+        if np.max(np.abs(theta)) > np.radians(89.5):
+            return None
+    r = equilibrium_residual(theta, inertia, n, bias)
+    return theta if np.max(np.abs(r)) <= max(tol, 1e-15 * scale) else None
+
+
+def _continue(theta, path, n, max_jump=np.radians(5.0), min_step=1e-7):
+    """Follow θ(λ) along ``path(λ) -> (inertia, bias)`` for λ from 0 to 1.
+
+    Returns (θ at λ=1, None) or (θ at the last λ reached, λ_last) on a fold.
+    """
+    lam, step = 0.0, 0.05
+    inertia, _ = path(0.0)
+    det0 = np.sign(np.linalg.det(equilibrium_jacobian(theta, inertia, n)))
+    while lam < 1.0:
+        trial = min(1.0, lam + step)
+        inertia, bias = path(trial)
+        new = _newton(theta, inertia, n, bias)
+        ok = new is not None and np.max(np.abs(new - theta)) <= max_jump
+        if ok:
+            det = np.sign(np.linalg.det(equilibrium_jacobian(new, inertia, n)))
+            ok = det == det0
+        if ok:
+            theta, lam = new, trial
+            step = min(step * 1.5, 0.1)
+        else:
+            step *= 0.5
+            if step < min_step:
+                return theta, lam
+    return theta, None
+
+
+def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
+    """The physical-branch TEA by continuation (eqs 4.1–4.3).
+
+    Parameters
+    ----------
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        Constant disturbance torque, ft·lbf.
+
+    Raises
+    ------
+    NoEquilibriumError
+        When the bias continuation folds: the message gives the largest bias (same direction)
+        that still has an equilibrium on this branch.
+    """
+    inertia = np.asarray(inertia, float)
+    bias = np.asarray(bias, float)
+    diag = np.diag(np.diag(inertia))
+
+    def inertia_path(lam):
+        return diag + lam * (inertia - diag), np.zeros(3)
+
+    theta, fold = _continue(np.zeros(3), inertia_path, n)
+    if fold is not None:
+        raise ConvergenceError(
+            "TEA continuation in the products of inertia failed at "
+            f"{100 * fold:.3g}% of their values (the inertia may have no LVLH-near equilibrium)")
+
+    def bias_path(lam):
+        return inertia, lam * bias
+
+    theta, fold = _continue(theta, bias_path, n)
+    if fold is not None:
+        lam_max = _fold_location(theta, fold, inertia, n, bias)
+        b = lam_max * bias
+        raise NoEquilibriumError(
+            "no torque-equilibrium attitude exists for bias "
+            f"[{bias[0]:.4g}, {bias[1]:.4g}, {bias[2]:.4g}] ft·lbf: the gravity-gradient torque "
+            f"cannot balance it; the largest bias in this direction with an equilibrium is "
+            f"[{b[0]:.4g}, {b[1]:.4g}, {b[2]:.4g}] ft·lbf ({100 * lam_max:.1f}% of the given bias)")
+    return make_tea(theta, inertia, n, bias)
+
+
+def _fold_location(theta, lam, inertia, n, bias):
+    """Refine the fold of the bias continuation: the largest λ whose equilibrium exists."""
+    lo, hi, th = lam, 1.0, theta
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        new = _newton(th, inertia, n, mid * bias, max_step=0.05)
+        if new is not None and np.max(np.abs(new - th)) < np.radians(5):
+            lo, th = mid, new
+        else:
+            hi = mid
+    return lo
+
+
+def make_tea(theta, inertia, n, bias) -> TEA:
+    """Package θ* with ω*, bias and the residual (ft·lbf)."""
+    theta = np.asarray(theta, float)
+    res = float(np.max(np.abs(equilibrium_residual(theta, inertia, n, bias))))
+    return TEA(theta=theta, omega=dyn.lvlh_rate_in_body(theta, n), bias=np.asarray(bias, float),
+               residual=res)
+
+
+def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: float = 30.0,
+                   limit_deg: float = 85.0) -> list[TEA]:
+    """Every equilibrium found by Newton from a grid of starts in |θ_i| < ``limit_deg``.
+
+    Distinct roots (to 1e-6 rad) sorted by |θ|; useful to see the other branches (e.g. the
+    two principal-axis alignments of MB3 at pitch −44.70° and +45.30°).
+    """
+    inertia = np.asarray(inertia, float)
+    bias = np.asarray(bias, float)
+    starts = np.radians(np.arange(-limit_deg + grid_deg / 2, limit_deg, grid_deg))
+    roots: list[np.ndarray] = []
+    for t0 in itertools.product(starts, repeat=3):
+        th = _newton(np.array(t0), inertia, n, bias, max_iter=100, max_step=0.2)
+        if th is None or np.max(np.abs(th)) > np.radians(limit_deg):
+            continue
+        if not any(np.max(np.abs(th - r)) < 1e-6 for r in roots):
+            roots.append(th)
+    roots.sort(key=lambda r: float(np.linalg.norm(r)))
+    return [make_tea(r, inertia, n, bias) for r in roots]
+
+
+def resolve_bias(disturbance, inertia: np.ndarray, n: float) -> np.ndarray:
+    """The bias (ft·lbf) a :class:`acmm.config.Disturbance` asks for (``bias_from_tea`` resolved)."""
+    if disturbance.bias_from_tea is not None:
+        return bias_for_attitude(np.radians(disturbance.bias_from_tea), inertia, n)
+    if disturbance.bias is not None:
+        return np.asarray(disturbance.bias, float)
+    return np.zeros(3)

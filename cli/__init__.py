@@ -1,0 +1,1 @@
+"""Command-line apps (typer): parse arguments, call the libraries, print. No mathematics here."""
