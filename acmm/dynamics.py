@@ -10,7 +10,8 @@ Conventions (see ``shared/reference/NOTES.md``):
 * Eq 3.6 is misprinted: its (1,1) bracket entry is cos θ3, so f11 = 1.
 * The control torque u enters ω̇ as −u and ḣ as +u; the disturbance w enters ω̇ as +w.
 
-All functions are pure and accept stacked inputs along leading axes where noted.
+All functions are pure and accept stacked inputs along leading axes where noted; they keep
+the input dtype, so complex-step differentiation works through them.
 """
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ import numpy as np
 
 def skew(v: np.ndarray) -> np.ndarray:
     """Cross-product matrix [v×] such that ``skew(a) @ b == cross(a, b)``."""
-    v = np.asarray(v, float)
+    v = np.asarray(v)
     z = np.zeros_like(v[..., 0])
     return np.stack([
         np.stack([z, -v[..., 2], v[..., 1]], -1),
@@ -66,7 +67,7 @@ def nadir_vector(theta: np.ndarray) -> np.ndarray:
     theta : (..., 3) array
         Roll, pitch, yaw (rad).
     """
-    theta = np.asarray(theta, float)
+    theta = np.asarray(theta)
     s1, s2, s3 = np.sin(theta[..., 0]), np.sin(theta[..., 1]), np.sin(theta[..., 2])
     c1, c2, c3 = np.cos(theta[..., 0]), np.cos(theta[..., 1]), np.cos(theta[..., 2])
     return np.stack([-s2 * c3, c1 * s2 * s3 + s1 * c2, -s1 * s2 * s3 + c1 * c2], -1)
@@ -87,7 +88,7 @@ def lvlh_rate_in_body(theta: np.ndarray, n: float) -> np.ndarray:
 
     A body at rest in LVLH has absolute angular velocity ``lvlh_rate_in_body(θ, n)``.
     """
-    theta = np.asarray(theta, float)
+    theta = np.asarray(theta)
     s1, s3 = np.sin(theta[..., 0]), np.sin(theta[..., 2])
     c1, c3 = np.cos(theta[..., 0]), np.cos(theta[..., 2])
     return np.stack([-n * s3, -n * c1 * c3, n * s1 * c3], -1)
@@ -119,8 +120,8 @@ def attitude_rate(theta: np.ndarray, omega: np.ndarray, n: float) -> np.ndarray:
 
     Written out row by row so it vectorizes; equal to ``kinematics_matrix(θ) @ ω + q``.
     """
-    theta = np.asarray(theta, float)
-    omega = np.asarray(omega, float)
+    theta = np.asarray(theta)
+    omega = np.asarray(omega)
     s1, s3 = np.sin(theta[..., 0]), np.sin(theta[..., 2])
     c1, c3 = np.cos(theta[..., 0]), np.cos(theta[..., 2])
     w1, w2, w3 = omega[..., 0], omega[..., 1], omega[..., 2]
@@ -132,7 +133,7 @@ def attitude_rate(theta: np.ndarray, omega: np.ndarray, n: float) -> np.ndarray:
 
 def gyroscopic_torque(omega: np.ndarray, inertia: np.ndarray) -> np.ndarray:
     """τ_gyro = −ω × (I ω), eq 3.2 (ft·lbf)."""
-    omega = np.asarray(omega, float)
+    omega = np.asarray(omega)
     return -np.cross(omega, omega @ inertia.T)
 
 

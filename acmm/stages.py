@@ -55,3 +55,47 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
                                        "other equilibria found by multi-start Newton", AXES)
     path = write_h5(cfg.run_dir() / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"})
     return result, path
+
+
+@dataclass
+class LinearizeResult:
+    config: Config
+    tea: tea_mod.TEA
+    model: object
+    controllability: object
+
+
+def run_linearize(config) -> tuple[LinearizeResult, Path]:
+    """TEA, then the design model of ``design.model``; writes ``runs/<name>/linearize.h5``."""
+    from acmm import linearize as lin
+
+    tr = compute_tea(config)
+    cfg = tr.config
+    model = lin.design_point(cfg.inertia.matrix(), tr.tea.theta, cfg.orbit_rate,
+                             model=cfg.design.model, drf_mode=cfg.design.drf_mode)
+    ctrb = lin.controllability(model)
+    result = LinearizeResult(cfg, tr.tea, model, ctrb)
+    names = list(model.state_names)
+    eig = np.linalg.eigvals(model.A)
+    items = {
+        "A": Dataset(model.A, "per-state (see state_units)", "state matrix of eq 4.46 (x' = A x + B u + G w)",
+                     names, {"state_units": np.array(model.state_units, dtype="S")}),
+        "B": Dataset(model.B, "state unit per ft*lbf", "control input matrix (u enters ω' as −u, h' as +u)",
+                     names),
+        "G": Dataset(model.G, "state unit per ft*lbf", "disturbance input matrix", names),
+        "state_names": Dataset(np.array(names, dtype="S"), "1", "state order of eq 4.47"),
+        "state_units": Dataset(np.array(model.state_units, dtype="S"), "1", "unit of each state"),
+        "scales": Dataset(model.scales, "per-state (see state_units)", "nominal state magnitudes", names),
+        "theta_star": Dataset(model.theta_star, "rad", "linearization attitude", AXES),
+        "omega_star": Dataset(model.omega_star, "rad/s", "ω* at the linearization attitude (eq 4.3)", AXES),
+        "tea": Dataset(tr.tea.theta, "rad", "TEA of the full inertia", AXES),
+        "inertia_design": Dataset(model.inertia, "slug*ft^2", "inertia of the design model", AXES),
+        "inertia": Dataset(cfg.inertia.matrix(), "slug*ft^2", "full inertia", AXES),
+        "eigenvalues": Dataset(eig, "rad/s", "open-loop eigenvalues of A"),
+        "controllability_min_ratio": Dataset(ctrb.min_ratio, "1",
+                                             "min σmin([A−sI, B])/σmax over eigenvalues and s=0, scaled"),
+        "controllability_rank": Dataset(ctrb.rank, "1", f"PBH rank with tolerance {ctrb.tol:g}"),
+    }
+    path = write_h5(cfg.run_dir() / "linearize.h5", items, cfg.to_yaml(),
+                    {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
+    return result, path

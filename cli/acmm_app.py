@@ -62,5 +62,30 @@ def tea(config: Optional[Path] = ConfigArg,
     typer.echo(f"  wrote {path}")
 
 
+@app.command()
+@user_errors
+def linearize(config: Optional[Path] = ConfigArg) -> None:
+    """24-state linearization about the TEA (eqs 4.4-4.50); writes runs/<name>/linearize.h5."""
+    import numpy as np
+
+    from acmm.stages import run_linearize
+
+    r, path = run_linearize(config)
+    m, c = r.model, r.controllability
+    typer.echo(f"{r.config.name}: {m.variant} model, {m.drf_mode}, about theta* = "
+               f"{_fmt(np.degrees(m.theta_star), '{:+.3f}')} deg")
+    eig = np.linalg.eigvals(m.A) / m.n
+    eig = eig[np.lexsort((eig.imag, eig.real))]
+    typer.echo("  open-loop eigenvalues / n:")
+    for k in range(0, len(eig), 4):
+        typer.echo("    " + "  ".join(f"{e.real:+9.4f}{e.imag:+9.4f}j" for e in eig[k:k + 4]))
+    typer.echo(f"  controllability (PBH, scaled): rank {c.rank}/{c.order} at tol {c.tol:g}; "
+               f"smallest sigma ratio {c.min_ratio:.2e} at s = {c.worst_s.real / m.n:+.3f}{c.worst_s.imag / m.n:+.3f}j n")
+    if c.min_ratio < 1e-6:
+        typer.echo(f"  warning: the model is nearly uncontrollable (sigma ratio {c.min_ratio:.1e} < 1e-6);"
+                   " expect poor Riccati residuals", err=True)
+    typer.echo(f"  wrote {path}")
+
+
 def main() -> None:
     app()
