@@ -55,7 +55,7 @@ AngleVec = Annotated[list[float], _vec3("angle")]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class Inertia(_Model):
@@ -174,7 +174,7 @@ class Design(_Model):
 class DesignPoint(_Model):
     """A named station configuration used as a design point of the gain schedule."""
 
-    name: str
+    name: str = Field(pattern=r"^[A-Za-z0-9_-][A-Za-z0-9_.-]*$", description="name of the design point")
     inertia: Inertia
     disturbance: Disturbance = Disturbance()
 
@@ -214,8 +214,9 @@ class Output(_Model):
 class Config(_Model):
     """A complete acmm run configuration."""
 
-    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$", description="run name; results go to runs/<name>/")
-    description: str = ""
+    name: str = Field(pattern=r"^[A-Za-z0-9_-][A-Za-z0-9_.-]*$",
+                      description="run name (letters, digits, _ . -; not starting with a dot); results go to runs/<name>/")
+    description: str = Field("", description="free text describing the run")
     inertia: Inertia
     orbit_rate: Rate = Field(0.0011, description="circular orbit rate n, rad/s")
     disturbance: Disturbance = Disturbance()
@@ -251,6 +252,20 @@ class Config(_Model):
     def to_yaml(self) -> str:
         """The resolved config (all defaults filled in) as YAML text."""
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """SafeLoader that rejects duplicate keys (PyYAML silently keeps the last one)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r}", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep)
 
 
 def _format_error(exc: ValidationError) -> str:
@@ -313,9 +328,10 @@ def load_config(path: str | Path | None = None) -> Config:
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"cannot read config file {p}: {exc}") from None
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise ConfigError(f"{p}: not valid YAML{where}") from None
+        what = getattr(exc, "problem", None) or "not valid YAML"
+        raise ConfigError(f"{p}: not valid YAML: {what}{where}") from None
     return parse_config(data, source=str(p))

@@ -19,14 +19,22 @@ import numpy as np
 
 
 def skew(v: np.ndarray) -> np.ndarray:
-    """Cross-product matrix [v×] such that ``skew(a) @ b == cross(a, b)``."""
+    """Cross-product matrix [v×] such that ``skew(a) @ b == cross(a, b)``; v may be stacked (..., 3)."""
     v = np.asarray(v)
-    z = np.zeros_like(v[..., 0])
-    return np.stack([
-        np.stack([z, -v[..., 2], v[..., 1]], -1),
-        np.stack([v[..., 2], z, -v[..., 0]], -1),
-        np.stack([-v[..., 1], v[..., 0], z], -1),
-    ], -2)
+    out = np.zeros(v.shape[:-1] + (3, 3), dtype=np.result_type(v.dtype, float))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a × b along the last axis (written out: several times faster than ``np.cross`` on 3-vectors)."""
+    a = np.asarray(a)
+    b = np.asarray(b)
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], -1)
 
 
 def rotation_1(a: float) -> np.ndarray:
@@ -134,7 +142,7 @@ def attitude_rate(theta: np.ndarray, omega: np.ndarray, n: float) -> np.ndarray:
 def gyroscopic_torque(omega: np.ndarray, inertia: np.ndarray) -> np.ndarray:
     """τ_gyro = −ω × (I ω), eq 3.2 (ft·lbf)."""
     omega = np.asarray(omega)
-    return -np.cross(omega, omega @ inertia.T)
+    return -cross(omega, omega @ inertia.T)
 
 
 def gyroscopic_torque_jacobian(omega: np.ndarray, inertia: np.ndarray) -> np.ndarray:
@@ -145,7 +153,7 @@ def gyroscopic_torque_jacobian(omega: np.ndarray, inertia: np.ndarray) -> np.nda
 def gravity_gradient_torque(theta: np.ndarray, inertia: np.ndarray, n: float) -> np.ndarray:
     """τ_gg = 3n² c × (I c), eq 3.3 (ft·lbf), c the nadir vector of eq 3.4."""
     c = nadir_vector(theta)
-    return 3.0 * n * n * np.cross(c, c @ inertia.T)
+    return 3.0 * n * n * cross(c, c @ inertia.T)
 
 
 def gravity_gradient_jacobian(theta: np.ndarray, inertia: np.ndarray, n: float) -> np.ndarray:
@@ -156,9 +164,8 @@ def gravity_gradient_jacobian(theta: np.ndarray, inertia: np.ndarray, n: float) 
     """
     c = nadir_vector(theta)
     d = nadir_vector_jacobian(theta)
-    ic = inertia @ c
-    cols = [np.cross(d[:, k], ic) + np.cross(c, inertia @ d[:, k]) for k in range(3)]
-    return 3.0 * n * n * np.array(cols).T
+    # d_k × Ic + c × I d_k for all k at once: (−[Ic×] + [c×] I) D
+    return 3.0 * n * n * ((skew(c) @ inertia - skew(inertia @ c)) @ d)
 
 
 def disturbance_torque(t, bias: np.ndarray, a: np.ndarray, b: np.ndarray, n: float) -> np.ndarray:
@@ -177,7 +184,7 @@ def angular_acceleration(theta, omega, inertia, n, w, u, inertia_inv=None) -> np
 
 def cmg_momentum_rate(omega: np.ndarray, h: np.ndarray, u: np.ndarray) -> np.ndarray:
     """ḣ = u − ω × h, eq 3.8 (ft·lbf)."""
-    return u - np.cross(omega, h)
+    return u - cross(omega, h)
 
 
 def plant_rhs(theta, omega, h, inertia, n, w, u, inertia_inv=None):

@@ -23,3 +23,7 @@ class NoEquilibriumError(AcmmError):
 
 class DesignError(AcmmError):
     """A control design cannot meet its specification (e.g. poles outside the sector)."""
+
+
+class OutputError(AcmmError, OSError):
+    """A results file or figure cannot be written (e.g. the output root is not a directory)."""

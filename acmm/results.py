@@ -102,9 +102,14 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
     """
     import h5py
 
+    from acmm.errors import OutputError
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise OutputError(f"cannot write results to {path.parent}: {exc.strerror or exc}") from None
     os.close(fd)
     try:
         with h5py.File(tmp, "w") as f:

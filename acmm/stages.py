@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from acmm import dynamics as dyn
 from acmm import tea as tea_mod
 from acmm.config import Config, load_config
 from acmm.results import Dataset, write_h5
@@ -98,4 +99,237 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
     }
     path = write_h5(cfg.run_dir() / "linearize.h5", items, cfg.to_yaml(),
                     {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
+    return result, path
+
+
+# ---------------------------------------------------------------------------------------------
+# design: TEA → linearize → sector LQR per point → schedule
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class DesignTable:
+    """What a simulation needs from a design, as arrays (one row per design point)."""
+
+    names: list
+    inertia: np.ndarray      # (P, 3, 3) slug·ft²
+    bias: np.ndarray         # (P, 3) ft·lbf
+    tea: np.ndarray          # (P, 3) rad
+    gain: np.ndarray         # (P, 3, 24) LQR gains
+    coef: np.ndarray | None  # (order+1, 3, 24) schedule coefficients, or None
+    design_hash: str
+
+    def scheduled_gain(self, k: int) -> np.ndarray:
+        """Gain in use at point k: the fitted schedule when there is one, else the LQR gain."""
+        if self.coef is None:
+            return self.gain[k]
+        powers = self.tea[k, 1] ** np.arange(self.coef.shape[0])
+        return np.tensordot(powers, self.coef, axes=1)
+
+
+@dataclass
+class DesignResult:
+    config: Config
+    points: list
+    fit: object
+    check: object
+    table: DesignTable
+    wall_time: float
+
+
+def design_hash(cfg: Config) -> str:
+    """Hash of the design-relevant part of a config (inertia, n, disturbance, design, schedule)."""
+    import json
+
+    from acmm.results import config_hash
+
+    d = cfg.model_dump(mode="json")
+    keys = ("inertia", "orbit_rate", "disturbance", "design", "schedule")
+    return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
+
+
+def compute_design(config, progress=None) -> DesignResult:
+    """Design every point of a config and fit the schedule (when there are ≥ 2 points)."""
+    import time
+
+    from acmm import schedule as sch
+
+    cfg = _as_config(config)
+    t0 = time.perf_counter()
+    specs = sch.point_specs(cfg)
+    points = []
+    for spec in specs:
+        points.append(sch.design_one(spec, cfg))
+        if progress is not None:
+            progress(spec.name)
+    fit = check = None
+    gains = np.array([p.lqr.K for p in points])
+    teas = np.array([p.tea.theta for p in points])
+    if len(points) >= 2:
+        fit = sch.fit_schedule(teas[:, 1], gains, cfg.schedule.order if cfg.schedule else 2)
+        check = sch.check_schedule(fit, points, cfg)
+    table = DesignTable([p.spec.name for p in points], np.array([p.spec.inertia for p in points]),
+                        np.array([p.spec.bias for p in points]), teas, gains,
+                        None if fit is None else fit.coef, design_hash(cfg))
+    return DesignResult(cfg, points, fit, check, table, time.perf_counter() - t0)
+
+
+def run_design(config, progress=None, figures: bool | None = None) -> tuple[DesignResult, Path]:
+    """Design and write ``runs/<name>/design.h5`` plus the gain-schedule and pole-map figures."""
+    from acmm.linearize import STATE_NAMES
+
+    r = compute_design(config, progress)
+    cfg = r.config
+    P = len(r.points)
+    pts = {}
+    for k, p in enumerate(r.points):
+        res = p.lqr
+        pts[f"{k:03d}_{p.spec.name}"] = {
+            "inertia": Dataset(p.spec.inertia, "slug*ft^2", "inertia of the design point", AXES),
+            "bias": Dataset(p.spec.bias, "ft*lbf", "bias torque", AXES),
+            "tea": Dataset(p.tea.theta, "rad", "torque-equilibrium attitude", AXES),
+            "A": Dataset(p.model.A, "per-state", "design model state matrix (eq 4.46)", STATE_NAMES),
+            "B": Dataset(p.model.B, "per-state per ft*lbf", "input matrix", STATE_NAMES),
+            "G": Dataset(p.model.G, "per-state per ft*lbf", "disturbance matrix", STATE_NAMES),
+            "Q": Dataset(res.Q, "per-state^-2 (shifted problem)", "state weight for which K is the exact LQR gain"),
+            "R": Dataset(res.R, "1/(ft*lbf)^2", "control weight"),
+            "P": Dataset(res.P, "per-state", "Riccati solution (physical units)"),
+            "K": Dataset(res.K, "ft*lbf per state unit", "LQR gain, u = -K x", STATE_NAMES),
+            "poles": Dataset(res.poles, "rad/s", "closed-loop poles of A - B K"),
+            "sector_margin": Dataset(res.margin, "n", "worst pole distance into the sector (>0 inside)"),
+            "riccati_residual": Dataset(res.residual, "1", "relative CARE residual, scaled coordinates"),
+            "scales": Dataset(p.model.scales, "per-state", "state scaling used for the Riccati solve",
+                              STATE_NAMES),
+        }
+    items = {
+        "points": pts,
+        "names": Dataset(np.array(r.table.names, dtype="S"), "1", "design point names in order"),
+        "inertia": Dataset(r.table.inertia, "slug*ft^2", "inertia per point"),
+        "bias": Dataset(r.table.bias, "ft*lbf", "bias per point", AXES),
+        "tea": Dataset(r.table.tea, "rad", "TEA per point", AXES),
+        "K": Dataset(r.table.gain, "ft*lbf per state unit", "LQR gain per point (u = -K x)"),
+        "state_names": Dataset(np.array(STATE_NAMES, dtype="S"), "1", "state order of eq 4.47"),
+        "wall_time": Dataset(r.wall_time, "s", "design wall time"),
+    }
+    if r.fit is not None:
+        items["schedule"] = {
+            "coef": Dataset(r.fit.coef, "K units per rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k"),
+            "variable": Dataset(r.fit.variable, "rad", "scheduling variable: pitch TEA θ2* per point"),
+            "rms_residual": Dataset(r.fit.rms_residual, "K units", "RMS fit residual per element"),
+            "rel_residual": Dataset(r.fit.rel_residual, "1", "RMS residual / max |K_ij|"),
+            "check_names": Dataset(np.array(r.check.names, dtype="S"), "1", "where the scheduled gain was checked"),
+            "check_theta2": Dataset(r.check.theta2, "rad", "pitch TEA of each check"),
+            "check_margin": Dataset(r.check.margin, "n", "sector margin of the scheduled gain (>0 inside)"),
+        }
+    path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
+                    {"stage": "design", "design_hash": r.table.design_hash, "n_points": P})
+    if cfg.output.figures if figures is None else figures:
+        from acmm import plots
+
+        d = cfg.design
+        plots.pole_map([p.lqr.poles for p in r.points], r.table.names, cfg.orbit_rate, d.sector.sigma,
+                       d.sector.half_angle_deg, cfg.run_dir() / "design_poles.png")
+        if r.fit is not None:
+            plots.gain_schedule_grid(r.table.tea[:, 1], r.table.gain, r.fit, STATE_NAMES,
+                                     cfg.run_dir() / "design_gains.png")
+    return r, path
+
+
+def load_design_table(path: Path) -> DesignTable:
+    """Read the arrays a simulation needs back from ``design.h5``."""
+    from acmm.results import read_h5
+
+    d = read_h5(path)
+    coef = d["schedule"]["coef"] if "schedule" in d else None
+    names = [x.decode() if isinstance(x, bytes) else str(x) for x in d["names"]]
+    return DesignTable(names, d["inertia"], d["bias"], d["tea"], d["K"], coef, d["attrs"]["design_hash"])
+
+
+def design_for(cfg: Config, progress=None) -> tuple[DesignTable, str]:
+    """The design of a config: reused from ``design.h5`` when its hash matches, else computed."""
+    path = cfg.run_dir() / "design.h5"
+    want = design_hash(cfg)
+    if path.exists():
+        try:
+            table = load_design_table(path)
+            if table.design_hash == want:
+                return table, f"reused {path}"
+        except (OSError, KeyError, ValueError):
+            pass
+    r, path = run_design(cfg, progress)
+    return r.table, f"designed, wrote {path}"
+
+
+# ---------------------------------------------------------------------------------------------
+# simulation
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class SimulateResult:
+    config: Config
+    scenario: object
+    sim: object
+    stats: list
+    design_note: str
+    wall_time: float
+
+
+def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[SimulateResult, Path]:
+    """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures."""
+    import time
+
+    from acmm import simulate as sim_mod
+
+    cfg = _as_config(config)
+    table, note = design_for(cfg, progress)
+    sc = sim_mod.scenario_from_config(cfg, table)
+    t0 = time.perf_counter()
+    r = sim_mod.simulate(sc)
+    wall = time.perf_counter() - t0
+    stats = sim_mod.level_statistics(sc, r)
+    result = SimulateResult(cfg, sc, r, stats, note, wall)
+    n = cfg.orbit_rate
+    orbits = r.t * n / (2 * np.pi)
+    err = sim_mod.attitude_error(sc, r)
+    rel_rate = np.degrees(r.state[:, 0:3] - dyn.lvlh_rate_in_body(r.state[:, 3:6], n))
+    items = {
+        "t": Dataset(r.t, "s", "time"),
+        "orbits": Dataset(orbits, "orbit", "time in orbits (2π/n)"),
+        "theta": Dataset(r.state[:, 3:6], "rad", "attitude (roll, pitch, yaw), 2-3-1 from LVLH", AXES),
+        "attitude_error": Dataset(err, "rad", "θ − θ̂* of the level in force", AXES),
+        "omega": Dataset(r.state[:, 0:3], "rad/s", "absolute body rate", AXES),
+        "rate_rel_lvlh": Dataset(rel_rate, "deg/s", "body rate relative to LVLH", AXES),
+        "h": Dataset(r.state[:, 6:9], "ft*lbf*s", "CMG momentum", AXES),
+        "int_h": Dataset(r.state[:, 9:12], "ft*lbf*s^2", "momentum integral (controller state)", AXES),
+        "drf": Dataset(r.state[:, 12:24], "per-state", "DRF states", sim_mod.PLAIN_STATE_NAMES[12:]),
+        "u_cmd": Dataset(r.u_cmd, "ft*lbf", "commanded torque −K x (before saturation)", AXES),
+        "u": Dataset(r.u, "ft*lbf", "delivered torque (after torque and momentum saturation)", AXES),
+        "w": Dataset(r.w, "ft*lbf", "disturbance torque (eq 3.9)", AXES),
+        "level": Dataset(r.level, "1", "index of the inertia level in force"),
+        "torque_saturated": Dataset(r.torque_saturated, "1", "torque clipped per axis", AXES),
+        "momentum_saturated": Dataset(r.momentum_saturated, "1", "CMG axis at its momentum limit", AXES),
+        "levels": {
+            "start": Dataset(sc.level_start, "s", "start time of each level"),
+            "inertia": Dataset(sc.inertia, "slug*ft^2", "plant inertia per level"),
+            "bias": Dataset(sc.bias, "ft*lbf", "bias per level", AXES),
+            "tea_estimate": Dataset(sc.theta_est, "rad", "TEA estimate used by the controller", AXES),
+            "gain": Dataset(sc.gain, "ft*lbf per state unit", "gain in use per level (u = −K x)"),
+            "steady_error": Dataset(np.array([s["steady_error_deg"] for s in stats]).reshape(-1, 3), "deg",
+                                    "max |θ − θ̂*| over the second half of each level", AXES),
+            "peak_momentum": Dataset(np.array([s["peak_momentum"] for s in stats]), "ft*lbf*s",
+                                     "peak |h_i| over each level"),
+        },
+        "wall_time": Dataset(wall, "s", "integration wall time"),
+    }
+    attrs = {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
+             "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
+             "design_hash": table.design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
+    path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
+    if cfg.output.figures if figures is None else figures:
+        from acmm import plots
+
+        d = cfg.run_dir()
+        title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
+        plots.axis_histories(orbits, np.degrees(err), rel_rate, r.u, r.state[:, 6:9], title, d / "sim_axes.png")
+        if len(sc.level_start) > 1:
+            inertia_t = sc.inertia[r.level]
+            plots.inertia_histories(orbits, inertia_t, d / "sim_inertia.png")
+        plots.summary(orbits, np.degrees(err), r.state[:, 6:9], r.u, stats, r.verdict, cfg.name, d / "sim_summary.png")
     return result, path

@@ -87,5 +87,68 @@ def linearize(config: Optional[Path] = ConfigArg) -> None:
     typer.echo(f"  wrote {path}")
 
 
+def _progress(total_hint: int = 0):
+    """A simple progress printer on stderr (one dot per design point)."""
+    import sys
+
+    def tick(name):
+        sys.stderr.write(".")
+        sys.stderr.flush()
+    return tick
+
+
+@app.command()
+@user_errors
+def design(config: Optional[Path] = ConfigArg) -> None:
+    """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures."""
+    import numpy as np
+
+    from acmm.stages import run_design
+
+    r, path = run_design(config, progress=_progress())
+    typer.echo("", err=True)
+    cfg = r.config
+    n = cfg.orbit_rate
+    typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
+               f"sector Re <= -{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g} deg "
+               f"({r.wall_time:.2f} s)")
+    typer.echo(f"  {'point':<14} {'TEA r/p/y (deg)':<28} {'margin (n)':>10} {'residual':>9} {'max|Re|/n':>9}")
+    for p in r.points:
+        res = p.lqr
+        typer.echo(f"  {p.spec.name:<14} {_fmt(p.tea.theta_deg, '{:+.2f}'):<28} {res.margin:>10.3f} "
+                   f"{res.residual:>9.1e} {np.max(-res.poles.real) / n:>9.2f}")
+    if r.fit is not None:
+        typer.echo(f"  schedule: order {r.fit.order} in theta2*; worst relative fit residual "
+                   f"{r.fit.rel_residual.max():.2e}")
+        c = r.check
+        worst = int(np.argmin(c.margin))
+        verdict = "all in the sector" if c.worst > 0 else "NOT all in the sector"
+        typer.echo(f"  scheduled gain on the local models ({len(c.names)} checks): {verdict}; worst margin "
+                   f"{c.worst:+.3f} n at {c.names[worst]} ({c.kind[worst]})")
+    typer.echo(f"  wrote {path}")
+
+
+@app.command()
+@user_errors
+def simulate(config: Optional[Path] = ConfigArg) -> None:
+    """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures."""
+    import numpy as np
+
+    from acmm.stages import run_simulate
+
+    r, path = run_simulate(config, progress=_progress())
+    cfg, s = r.config, r.sim
+    n = cfg.orbit_rate
+    typer.echo(f"{cfg.name}: design {r.design_note}")
+    typer.echo(f"  simulated {s.t[-1] * n / (2 * np.pi):.2f} of {cfg.simulation.orbits:g} orbits in "
+               f"{r.wall_time:.2f} s ({s.n_steps} steps, {s.n_rejected} rejected)")
+    typer.echo(f"  verdict: {s.verdict.upper()} ({s.reason}" +
+               (f" at {s.stop_time * n / (2 * np.pi):.3f} orbit)" if s.diverged else ")"))
+    for st in r.stats:
+        typer.echo(f"  level {st['level']:>2} from orbit {st['start_orbit']:6.1f}: theta2* {st['theta2_deg']:+7.2f} deg, "
+                   f"steady |err| {_fmt(st['steady_error_deg'], '{:.3f}')} deg, peak |h| {st['peak_momentum']:.0f} ft*lbf*s")
+    typer.echo(f"  wrote {path}")
+
+
 def main() -> None:
     app()

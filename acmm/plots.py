@@ -1,0 +1,153 @@
+"""Matplotlib figures for the design and simulation stages (report Figs 5.3–5.26, 6.2–6.30).
+
+Each function takes arrays, draws one figure and saves it as PNG (and PDF when asked) under the
+given path; nothing is shown on screen.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+AXES = ("roll", "pitch", "yaw")
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.rcParams.update({"figure.dpi": 110, "axes.grid": True, "grid.alpha": 0.3, "font.size": 9})
+    return plt
+
+
+def _save(fig, path: Path, vector: bool = False) -> list[Path]:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    out = [path.with_suffix(".png")]
+    fig.savefig(out[0], bbox_inches="tight")
+    if vector:
+        out.append(path.with_suffix(".pdf"))
+        fig.savefig(out[1], bbox_inches="tight")
+    fig.clf()
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    return out
+
+
+def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False):
+    """K(i, j) versus pitch TEA for all 24 columns (3 rows each), with the fitted curves."""
+    plt = _plt()
+    theta2_deg = np.degrees(theta2)
+    fine = np.linspace(theta2.min(), theta2.max(), 100)
+    kf = np.array([fit.gain(t) for t in fine])
+    fig, axs = plt.subplots(6, 4, figsize=(13, 15), sharex=True)
+    for j, ax in enumerate(axs.flat):
+        for i, color in zip(range(3), ("C0", "C1", "C2")):
+            ax.plot(theta2_deg, gains[:, i, j], "o", ms=3, color=color, label=f"K({i + 1},·) LQR")
+            ax.plot(np.degrees(fine), kf[:, i, j], "-", lw=1, color=color)
+        ax.set_title(f"K(i,{j + 1}) — {state_names[j]}", fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in axs[-1]:
+        ax.set_xlabel("pitch TEA θ2* (deg)")
+    axs[0, 0].legend(fontsize=6)
+    fig.suptitle("Gain schedule: LQR gains (dots) and 2nd-order fits (lines) vs TEA (cf. Figs 5.3–5.26)")
+    fig.tight_layout()
+    return _save(fig, path, vector)
+
+
+def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=False):
+    """Closed-loop poles (units of n) of every design point with the sector drawn."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    allp = np.concatenate([np.asarray(p) for p in poles_per_point]) / n
+    rmin = min(allp.real.min() * 1.1, -2 * sigma)
+    x = np.linspace(rmin, -sigma, 10)
+    t = np.tan(np.radians(half_angle_deg))
+    ax.fill_between(x, t * x, -t * x, color="0.9", label="sector")
+    ax.plot([-sigma, -sigma], [-t * sigma, t * sigma], "k-", lw=0.8)
+    ax.plot(x, t * x, "k-", lw=0.8)
+    ax.plot(x, -t * x, "k-", lw=0.8)
+    cmap = plt.get_cmap("viridis")
+    for k, (p, name) in enumerate(zip(poles_per_point, names)):
+        p = np.asarray(p) / n
+        ax.plot(p.real, p.imag, "x", ms=4, color=cmap(k / max(1, len(names) - 1)),
+                label=name if len(names) <= 12 else None)
+    ax.axvline(0, color="k", lw=0.5)
+    ax.set_xlabel("Re λ / n")
+    ax.set_ylabel("Im λ / n")
+    ax.set_title(f"Closed-loop poles and the sector (Re λ ≤ −{sigma}n, |Im λ| ≤ tan {half_angle_deg:g}°·|Re λ|)")
+    ax.legend(fontsize=6, ncol=2)
+    return _save(fig, path, vector)
+
+
+def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False):
+    """Angle error, rate, delivered torque and CMG momentum per axis vs orbit (Figs 6.2–6.13, 6.20–6.30)."""
+    plt = _plt()
+    fig, axs = plt.subplots(4, 3, figsize=(13, 10), sharex=True)
+    rows = [(err_deg, "attitude error θ−θ̂* (deg)"), (rate, "body rate rel. LVLH (deg/s)"),
+            (u, "control torque (ft·lbf)"), (h, "CMG momentum (ft·lbf·s)")]
+    for r, (data, label) in enumerate(rows):
+        for a in range(3):
+            ax = axs[r, a]
+            ax.plot(orbits, data[:, a], lw=0.7)
+            if r == 0:
+                ax.set_title(AXES[a])
+            if a == 0:
+                ax.set_ylabel(label)
+    for ax in axs[-1]:
+        ax.set_xlabel("time (orbits)")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return _save(fig, path, vector)
+
+
+def inertia_histories(orbits, inertia, path, vector=False):
+    """The six inertia elements vs orbit (Figs 6.14–6.19)."""
+    plt = _plt()
+    fig, axs = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
+    idx = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+    for ax, (i, j) in zip(axs.flat, idx):
+        ax.step(orbits, inertia[:, i, j] / 1e6, where="post")
+        ax.set_title(f"I({i + 1},{j + 1})")
+        ax.set_ylabel("10⁶ slug·ft²")
+    for ax in axs[-1]:
+        ax.set_xlabel("time (orbits)")
+    fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
+    fig.tight_layout()
+    return _save(fig, path, vector)
+
+
+def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=False):
+    """One-page summary: errors, momentum, torque and per-level statistics."""
+    plt = _plt()
+    fig = plt.figure(figsize=(11, 8.5))
+    gs = fig.add_gridspec(3, 2)
+    ax = fig.add_subplot(gs[0, :])
+    for a in range(3):
+        ax.plot(orbits, err_deg[:, a], lw=0.7, label=AXES[a])
+    ax.set_ylabel("attitude error (deg)")
+    ax.legend(fontsize=7)
+    ax.set_title(f"{title} — verdict: {verdict}")
+    ax = fig.add_subplot(gs[1, 0])
+    ax.plot(orbits, h, lw=0.7)
+    ax.set_ylabel("CMG momentum (ft·lbf·s)")
+    ax.set_xlabel("orbits")
+    ax = fig.add_subplot(gs[1, 1])
+    ax.plot(orbits, u, lw=0.7)
+    ax.set_ylabel("torque (ft·lbf)")
+    ax.set_xlabel("orbits")
+    ax = fig.add_subplot(gs[2, :])
+    ax.axis("off")
+    if level_stats:
+        header = ["level", "start (orbit)", "θ2* est (deg)", "steady |err| max (deg) r/p/y", "peak |h| (ft·lbf·s)"]
+        rows = [[str(s["level"]), f"{s['start_orbit']:.1f}", f"{s['theta2_deg']:.2f}",
+                 " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum']:.0f}"]
+                for s in level_stats]
+        tab = ax.table(cellText=rows, colLabels=header, loc="center", cellLoc="center")
+        tab.auto_set_font_size(False)
+        tab.set_fontsize(7)
+    fig.tight_layout()
+    return _save(fig, path, vector)

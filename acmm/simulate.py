@@ -1,0 +1,477 @@
+"""Nonlinear closed-loop simulation of the ACMM law (CR-185644 ch. 6).
+
+Plant: eqs 3.1, 3.5, 3.8 with the disturbance of eq 3.9 (per-level bias).  Controller: the
+integral ∫h and the twelve DRF states (eqs 4.35–4.40, fed by deviations) are integrated with
+the plant; u = −K(θ̂*)·x (eq 5.1) with x of eq 4.47 built from the nonlinear state around the
+current TEA estimate θ̂* (θ̇2 from the nonlinear kinematics).  Saturation (ch. 5.1, NOTES.md):
+the commanded torque is clipped to ±torque_limit per axis; a CMG axis at |h_i| ≥ momentum_limit
+delivers only the torque that stops |h_i| growing, and the body receives exactly the torque the
+CMG absorbs, so I ω̇ + ḣ + ω×(Iω + h) = τ_gg + w holds along every trajectory.
+
+The integrator is an adaptive Dormand–Prince 5(4) pair compiled with numba (``cache=True``: the
+one-time compilation is reused across runs).  :func:`rhs_numpy` is a plain-numpy right-hand side
+of the same model built from :mod:`acmm.dynamics`, used as the independent reference and as the
+``solve_ivp`` baseline of ``make bench``.
+
+Integrated state X (24): ω (rad/s), θ (rad), h (ft·lbf·s), ∫h (ft·lbf·s²), DRF states
+(α̇1, α1, α̇2, α2, α̇3, α3, β̇1, β1, β̇2, β2, β̇3, β3).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from acmm import dynamics as dyn
+from acmm.linearize import DRF_INPUTS, state_scales
+
+PLAIN_STATE_NAMES = ["omega1", "omega2", "omega3", "theta1", "theta2", "theta3",
+                     "h1", "h2", "h3", "int_h1", "int_h2", "int_h3",
+                     "alpha1_dot", "alpha1", "alpha2_dot", "alpha2", "alpha3_dot", "alpha3",
+                     "beta1_dot", "beta1", "beta2_dot", "beta2", "beta3_dot", "beta3"]
+
+STOP_NONE, STOP_ANGLE, STOP_SATURATION, STOP_NONFINITE, STOP_STEP = 0, 1, 2, 3, 4
+STOP_REASONS = {
+    STOP_NONE: "completed",
+    STOP_ANGLE: "attitude error exceeded the divergence bound",
+    STOP_SATURATION: "a CMG axis stayed saturated longer than the bound",
+    STOP_NONFINITE: "the state became non-finite",
+    STOP_STEP: "the integrator step size underflowed",
+}
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Everything the simulator needs, as arrays (one row per inertia level).
+
+    Attributes
+    ----------
+    level_start : (L,) array, s
+        Start time of each level (first is 0).
+    inertia : (L, 3, 3) array, slug·ft²
+        True plant inertia per level.
+    bias : (L, 3) array, ft·lbf
+        Bias torque per level (eq 3.9).
+    theta_est : (L, 3) array, rad
+        TEA estimate θ̂* the controller uses per level.
+    gain : (L, 3, 24) array
+        Gain K per level (u = −K x), in the units of eq 4.47.
+    harmonic_a, harmonic_b : (3,) arrays, ft·lbf
+        Amplitudes of sin(nt) and sin(2nt).
+    n : float, rad/s
+    torque_limit : float, ft·lbf
+    momentum_limit : float, ft·lbf·s
+    drf_mode : str
+    t_end : float, s
+    sample_times : (S,) array, s
+        Output times (include 0 and every level start).
+    x0 : (24,) array
+        Initial plain state X.
+    rtol : float
+    atol : (24,) array
+    divergence : float, rad
+    max_saturation : float, s
+    """
+
+    level_start: np.ndarray
+    inertia: np.ndarray
+    bias: np.ndarray
+    theta_est: np.ndarray
+    gain: np.ndarray
+    harmonic_a: np.ndarray
+    harmonic_b: np.ndarray
+    n: float
+    torque_limit: float
+    momentum_limit: float
+    drf_mode: str
+    t_end: float
+    sample_times: np.ndarray
+    x0: np.ndarray
+    rtol: float
+    atol: np.ndarray
+    divergence: float
+    max_saturation: float
+
+
+@dataclass(frozen=True)
+class SimResult:
+    """Sampled trajectory and verdict.
+
+    ``state`` rows follow :data:`PLAIN_STATE_NAMES`; ``u_cmd`` is −K x before saturation,
+    ``u`` the torque delivered; ``torque_saturated``/``momentum_saturated`` flag each axis.
+    """
+
+    t: np.ndarray
+    state: np.ndarray
+    u_cmd: np.ndarray
+    u: np.ndarray
+    w: np.ndarray
+    level: np.ndarray
+    torque_saturated: np.ndarray
+    momentum_saturated: np.ndarray
+    stop_code: int
+    stop_time: float
+    n_steps: int
+    n_rejected: int
+
+    @property
+    def diverged(self) -> bool:
+        return self.stop_code != STOP_NONE
+
+    @property
+    def verdict(self) -> str:
+        return "diverged" if self.diverged else "bounded"
+
+    @property
+    def reason(self) -> str:
+        return STOP_REASONS[self.stop_code]
+
+
+def plain_scales(n: float, drf_mode: str) -> np.ndarray:
+    """Nominal magnitudes of the plain state X (for absolute tolerances)."""
+    s = state_scales(n, drf_mode).copy()
+    s[1] = s[0]            # ω2 instead of θ̇2: same rate scale
+    return s
+
+
+# ----------------------------------------------------------------------------------------------
+# compiled kernel
+# ----------------------------------------------------------------------------------------------
+@njit(cache=True, fastmath=False)
+def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n,
+         tmax, hmax, drf_idx, out, u_out, ucmd_out, flags):
+    w1, w2, w3 = X[0], X[1], X[2]
+    t1, t2, t3 = X[3], X[4], X[5]
+    h1, h2, h3 = X[6], X[7], X[8]
+    s1, c1 = np.sin(t1), np.cos(t1)
+    s2, c2 = np.sin(t2), np.cos(t2)
+    s3, c3 = np.sin(t3), np.cos(t3)
+    # kinematics, eq 3.5/3.6 (corrected)
+    d2 = (c1 * w2 - s1 * w3) / c3
+    th1d = w1 - s3 * d2
+    th2d = d2 + n
+    th3d = s1 * w2 + c1 * w3
+    # controller state x of eq 4.47 around the TEA estimate
+    x = np.empty(24)
+    x[0] = w1 - omega_est[0]
+    x[1] = th2d
+    x[2] = w3 - omega_est[2]
+    x[3] = t1 - theta_est[0]
+    x[4] = t2 - theta_est[1]
+    x[5] = t3 - theta_est[2]
+    for i in range(6, 24):
+        x[i] = X[i]
+    u = np.empty(3)
+    for i in range(3):
+        acc = 0.0
+        for j in range(24):
+            acc -= gain[i, j] * x[j]
+        ucmd_out[i] = acc
+        if acc > tmax:
+            acc = tmax
+            flags[i] = 1.0
+        elif acc < -tmax:
+            acc = -tmax
+            flags[i] = 1.0
+        else:
+            flags[i] = 0.0
+        u[i] = acc
+    # CMG momentum saturation: an axis at the limit delivers only the torque that stops |h_i| growing
+    wxh0 = w2 * h3 - w3 * h2
+    wxh1 = w3 * h1 - w1 * h3
+    wxh2 = w1 * h2 - w2 * h1
+    wxh = (wxh0, wxh1, wxh2)
+    hh = (h1, h2, h3)
+    for i in range(3):
+        flags[3 + i] = 0.0
+        if abs(hh[i]) >= hmax:
+            flags[3 + i] = 1.0
+            if (u[i] - wxh[i]) * hh[i] > 0.0:
+                u[i] = wxh[i]
+        u_out[i] = u[i]
+    # disturbance, eq 3.9
+    sn, s2n = np.sin(n * t), np.sin(2.0 * n * t)
+    # gravity gradient, eqs 3.3-3.4
+    cn0 = -s2 * c3
+    cn1 = c1 * s2 * s3 + s1 * c2
+    cn2 = -s1 * s2 * s3 + c1 * c2
+    ic0 = inertia[0, 0] * cn0 + inertia[0, 1] * cn1 + inertia[0, 2] * cn2
+    ic1 = inertia[1, 0] * cn0 + inertia[1, 1] * cn1 + inertia[1, 2] * cn2
+    ic2 = inertia[2, 0] * cn0 + inertia[2, 1] * cn1 + inertia[2, 2] * cn2
+    k = 3.0 * n * n
+    iw0 = inertia[0, 0] * w1 + inertia[0, 1] * w2 + inertia[0, 2] * w3
+    iw1 = inertia[1, 0] * w1 + inertia[1, 1] * w2 + inertia[1, 2] * w3
+    iw2 = inertia[2, 0] * w1 + inertia[2, 1] * w2 + inertia[2, 2] * w3
+    tq0 = -(w2 * iw2 - w3 * iw1) + k * (cn1 * ic2 - cn2 * ic1) + bias[0] + ha[0] * sn + hb[0] * s2n - u[0]
+    tq1 = -(w3 * iw0 - w1 * iw2) + k * (cn2 * ic0 - cn0 * ic2) + bias[1] + ha[1] * sn + hb[1] * s2n - u[1]
+    tq2 = -(w1 * iw1 - w2 * iw0) + k * (cn0 * ic1 - cn1 * ic0) + bias[2] + ha[2] * sn + hb[2] * s2n - u[2]
+    for i in range(3):
+        out[i] = inertia_inv[i, 0] * tq0 + inertia_inv[i, 1] * tq1 + inertia_inv[i, 2] * tq2
+    out[3] = th1d
+    out[4] = th2d
+    out[5] = th3d
+    out[6] = u[0] - wxh0
+    out[7] = u[1] - wxh1
+    out[8] = u[2] - wxh2
+    out[9] = h1
+    out[10] = h2
+    out[11] = h3
+    # DRFs, eqs 4.35-4.40: d(α̇)/dt = −ω_f² α + input, dα/dt = α̇
+    for j in range(6):
+        wf = n if j < 3 else 2.0 * n
+        out[12 + 2 * j] = -wf * wf * X[13 + 2 * j] + x[drf_idx[j]]
+        out[13 + 2 * j] = X[12 + 2 * j]
+
+
+# Dormand–Prince 5(4) coefficients
+_C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
+_A = np.array([
+    [0, 0, 0, 0, 0, 0],
+    [1 / 5, 0, 0, 0, 0, 0],
+    [3 / 40, 9 / 40, 0, 0, 0, 0],
+    [44 / 45, -56 / 15, 32 / 9, 0, 0, 0],
+    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0],
+    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0],
+    [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84],
+])
+_B5 = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
+_B4 = np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40])
+_E = _B5 - _B4
+
+
+@njit(cache=True)
+def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est, omega_est, gain,
+               ha, hb, n, tmax, hmax, drf_idx, x0, rtol, atol, divergence, max_sat,
+               C, A, B5, E, out_state, out_ucmd, out_u, out_flags, out_level):
+    nx = 24
+    L = level_start.shape[0]
+    X = x0.copy()
+    K = np.empty((7, nx))
+    tmp = np.empty(nx)
+    u = np.empty(3)
+    ucmd = np.empty(3)
+    flags = np.zeros(6)
+    sat_time = np.zeros(3)
+    t = sample_times[0]
+    dt = 10.0
+    n_steps = 0
+    n_rej = 0
+    stop = 0
+    level = 0
+    # record the first sample
+    _rhs(t, X, inertia[0], inertia_inv[0], bias[0], theta_est[0], omega_est[0], gain[0], ha, hb,
+         n, tmax, hmax, drf_idx, tmp, u, ucmd, flags)
+    out_state[0] = X
+    out_u[0] = u
+    out_ucmd[0] = ucmd
+    out_flags[0] = flags
+    out_level[0] = 0
+    n_samples = sample_times.shape[0]
+    last = 0
+    for s in range(1, n_samples):
+        t_target = sample_times[s]
+        while level + 1 < L and level_start[level + 1] <= t + 1e-9:
+            level += 1
+        Il, Iil, bl = inertia[level], inertia_inv[level], bias[level]
+        tl, ol, gl = theta_est[level], omega_est[level], gain[level]
+        while t < t_target - 1e-9:
+            h = min(dt, t_target - t)
+            # stages
+            for st in range(7):
+                for i in range(nx):
+                    acc = X[i]
+                    for j in range(st):
+                        acc += h * A[st, j] * K[j, i]
+                    tmp[i] = acc
+                _rhs(t + C[st] * h, tmp, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
+                     K[st], u, ucmd, flags)
+            # error estimate (RMS of scaled error)
+            err = 0.0
+            finite = True
+            for i in range(nx):
+                y5 = X[i]
+                e = 0.0
+                for j in range(7):
+                    y5 += h * B5[j] * K[j, i]
+                    e += h * E[j] * K[j, i]
+                tmp[i] = y5
+                sc = atol[i] + rtol * max(abs(X[i]), abs(y5))
+                err += (e / sc) ** 2
+                if not np.isfinite(y5):
+                    finite = False
+            err = np.sqrt(err / nx)
+            if not finite:
+                stop = 3
+                break
+            if err <= 1.0:
+                # accept
+                step_len = h
+                t += h
+                for i in range(nx):
+                    X[i] = tmp[i]
+                n_steps += 1
+                fac = 0.9 * err ** (-0.2) if err > 0 else 5.0
+                dt = h * min(5.0, max(0.2, fac))
+                # divergence checks
+                for i in range(3):
+                    if abs(X[3 + i] - tl[i]) > divergence:
+                        stop = 1
+                    if abs(X[6 + i]) >= hmax * (1.0 - 1e-9):
+                        sat_time[i] += step_len
+                        if sat_time[i] > max_sat:
+                            stop = 2
+                    else:
+                        sat_time[i] = 0.0
+                if stop != 0:
+                    break
+            else:
+                n_rej += 1
+                dt = h * max(0.1, 0.9 * err ** (-0.25))
+                if dt < 1e-6:
+                    stop = 4
+                    break
+        # record the sample (the last state reached, also when stopping)
+        _rhs(t, X, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx, tmp, u, ucmd, flags)
+        out_state[s] = X
+        out_u[s] = u
+        out_ucmd[s] = ucmd
+        out_flags[s] = flags
+        out_level[s] = level
+        last = s
+        if stop != 0:
+            break
+    return last, stop, t, n_steps, n_rej
+
+
+def simulate(sc: Scenario) -> SimResult:
+    """Integrate a :class:`Scenario`; stops early (a result, not an error) on divergence."""
+    L = sc.level_start.shape[0]
+    inertia = np.ascontiguousarray(sc.inertia, float)
+    inertia_inv = np.linalg.inv(inertia)
+    omega_est = np.array([dyn.lvlh_rate_in_body(th, sc.n) for th in sc.theta_est]).reshape(L, 3)
+    drf_idx = np.array([DRF_INPUTS[sc.drf_mode][j % 3] for j in range(6)], dtype=np.int64)
+    S = sc.sample_times.shape[0]
+    out_state = np.full((S, 24), np.nan)
+    out_ucmd = np.full((S, 3), np.nan)
+    out_u = np.full((S, 3), np.nan)
+    out_flags = np.zeros((S, 6))
+    out_level = np.zeros(S, dtype=np.int64)
+    last, stop, t_stop, n_steps, n_rej = _integrate(
+        np.ascontiguousarray(sc.sample_times, float), np.ascontiguousarray(sc.level_start, float),
+        inertia, inertia_inv, np.ascontiguousarray(sc.bias, float),
+        np.ascontiguousarray(sc.theta_est, float), omega_est, np.ascontiguousarray(sc.gain, float),
+        np.asarray(sc.harmonic_a, float), np.asarray(sc.harmonic_b, float), float(sc.n),
+        float(sc.torque_limit), float(sc.momentum_limit), drf_idx, np.asarray(sc.x0, float),
+        float(sc.rtol), np.asarray(sc.atol, float), float(sc.divergence), float(sc.max_saturation),
+        _C, _A, _B5, _E, out_state, out_ucmd, out_u, out_flags, out_level)
+    k = last + 1
+    t = sc.sample_times[:k].copy()
+    if stop != STOP_NONE:
+        t[-1] = t_stop
+    w = np.asarray(sc.bias)[out_level[:k]] + dyn.disturbance_torque(t, 0.0, sc.harmonic_a, sc.harmonic_b, sc.n)
+    return SimResult(t=t, state=out_state[:k], u_cmd=out_ucmd[:k], u=out_u[:k], w=w,
+                     level=out_level[:k], torque_saturated=out_flags[:k, :3] > 0,
+                     momentum_saturated=out_flags[:k, 3:] > 0, stop_code=int(stop),
+                     stop_time=float(t_stop), n_steps=int(n_steps), n_rejected=int(n_rej))
+
+
+def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
+    """The compiled right-hand side at one state: returns (Ẋ, u delivered, u commanded)."""
+    inertia = np.ascontiguousarray(sc.inertia[level], float)
+    omega_est = dyn.lvlh_rate_in_body(sc.theta_est[level], sc.n)
+    drf_idx = np.array([DRF_INPUTS[sc.drf_mode][j % 3] for j in range(6)], dtype=np.int64)
+    out, u, ucmd, flags = np.empty(24), np.empty(3), np.empty(3), np.zeros(6)
+    _rhs(t, np.asarray(X, float), inertia, np.linalg.inv(inertia), np.asarray(sc.bias[level], float),
+         np.asarray(sc.theta_est[level], float), omega_est, np.ascontiguousarray(sc.gain[level], float),
+         np.asarray(sc.harmonic_a, float), np.asarray(sc.harmonic_b, float), float(sc.n),
+         float(sc.torque_limit), float(sc.momentum_limit), drf_idx, out, u, ucmd, flags)
+    return out, u, ucmd
+
+
+def rhs_numpy(t: float, X: np.ndarray, sc: Scenario, level: int = 0) -> np.ndarray:
+    """Plain-numpy right-hand side of the same closed loop, from :mod:`acmm.dynamics`.
+
+    The independent reference for the compiled kernel and the ``solve_ivp`` baseline.
+    """
+    n = sc.n
+    omega, theta, h = X[0:3], X[3:6], X[6:9]
+    th_est = sc.theta_est[level]
+    om_est = dyn.lvlh_rate_in_body(th_est, n)
+    theta_dot = dyn.attitude_rate(theta, omega, n)
+    x = np.concatenate([[omega[0] - om_est[0], theta_dot[1], omega[2] - om_est[2]],
+                        theta - th_est, X[6:24]])
+    u = np.clip(-sc.gain[level] @ x, -sc.torque_limit, sc.torque_limit)
+    absorbed = np.cross(omega, h)
+    at_limit = (np.abs(h) >= sc.momentum_limit) & ((u - absorbed) * h > 0)
+    u = np.where(at_limit, absorbed, u)
+    w = dyn.disturbance_torque(t, sc.bias[level], sc.harmonic_a, sc.harmonic_b, n)
+    _, omega_dot, h_dot = dyn.plant_rhs(theta, omega, h, sc.inertia[level], n, w, u)
+    drf_in = x[list(DRF_INPUTS[sc.drf_mode])]
+    drf = X[12:24]
+    d_drf = np.empty(12)
+    for j in range(6):
+        wf = n if j < 3 else 2 * n
+        d_drf[2 * j] = -wf * wf * drf[2 * j + 1] + drf_in[j % 3]
+        d_drf[2 * j + 1] = drf[2 * j]
+    return np.concatenate([omega_dot, theta_dot, h_dot, h, d_drf])
+
+
+def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float | None = None) -> Scenario:
+    """The :class:`Scenario` of a config and its design table (``acmm.stages.DesignTable``).
+
+    Levels are the design points in order (the stair-case); each starts at the orbit given by
+    ``simulation.levels`` or, by default, after an equal dwell.  The controller uses the TEA of
+    each level's mass properties as its estimate θ̂* (report ch. 5.1) and the scheduled gain
+    K(θ̂2*) when the design has a schedule, else the level's own LQR gain.
+    """
+    sim = cfg.simulation
+    n = cfg.orbit_rate
+    orbit = 2 * np.pi / n
+    total = sim.orbits if orbits is None else orbits
+    P = len(table.names)
+    levels = np.asarray(sim.levels, float) if sim.levels is not None else total * np.arange(P) / P
+    if levels.size != P:
+        from acmm.errors import ConfigError
+
+        raise ConfigError(f"simulation.levels has {levels.size} entries but the design has {P} points")
+    t_end = total * orbit
+    level_start = levels * orbit
+    keep = level_start < t_end
+    level_start = level_start[keep]
+    idx = np.nonzero(keep)[0]
+    samples = np.union1d(np.arange(0.0, t_end, sim.sample_interval), np.append(level_start, t_end))
+    theta0 = table.tea[0] + np.radians(sim.initial_offset)
+    x0 = np.concatenate([dyn.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
+    return Scenario(
+        level_start=level_start, inertia=table.inertia[idx], bias=table.bias[idx], theta_est=table.tea[idx],
+        gain=np.array([table.scheduled_gain(k) for k in idx]),
+        harmonic_a=np.asarray(cfg.disturbance.A), harmonic_b=np.asarray(cfg.disturbance.B), n=n,
+        torque_limit=cfg.actuators.torque_limit, momentum_limit=cfg.actuators.momentum_limit,
+        drf_mode=cfg.design.drf_mode, t_end=t_end, sample_times=samples, x0=x0,
+        rtol=sim.rtol if rtol is None else rtol, atol=plain_scales(n, cfg.design.drf_mode) * sim.atol_scale,
+        divergence=np.radians(sim.divergence_deg), max_saturation=sim.max_saturation_orbits * orbit)
+
+
+def attitude_error(sc: Scenario, r: SimResult) -> np.ndarray:
+    """θ − θ̂* of the level in force at each sample (rad)."""
+    return r.state[:, 3:6] - sc.theta_est[r.level]
+
+
+def level_statistics(sc: Scenario, r: SimResult) -> list[dict]:
+    """Per level: steady attitude error (max |θ − θ̂*| over the second half of the dwell, deg)
+    and peak CMG momentum (ft·lbf·s)."""
+    err = np.degrees(attitude_error(sc, r))
+    hmag = np.abs(r.state[:, 6:9])
+    out = []
+    ends = np.append(sc.level_start[1:], sc.t_end)
+    orbit = 2 * np.pi / sc.n
+    for k, (t0, t1) in enumerate(zip(sc.level_start, ends)):
+        in_level = (r.t >= t0) & (r.t <= t1)
+        steady = in_level & (r.t >= 0.5 * (t0 + t1))
+        if not steady.any():
+            continue
+        out.append({"level": k, "start_orbit": t0 / orbit, "theta2_deg": float(np.degrees(sc.theta_est[k, 1])),
+                    "steady_error_deg": np.abs(err[steady]).max(axis=0),
+                    "peak_momentum": float(hmag[in_level].max())})
+    return out

@@ -1,0 +1,36 @@
+"""Shared test fixtures: a scratch working directory and a CLI runner."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+#: Root of the source tree (the directory holding ``configs/``).
+REPO = Path(__file__).resolve().parent.parent
+CONFIGS = REPO / "configs"
+
+
+@pytest.fixture
+def tmp_runs(tmp_path, monkeypatch) -> Path:
+    """Run the test inside an empty ``tmp_path`` (so ``runs/`` lands there)."""
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def invoke(app, *args: str):
+    """Run a typer ``app`` in-process with ``args``; returns the click ``Result``
+    (``exit_code``, ``stdout``, ``stderr``, ``output``, ``exception``)."""
+    from typer.testing import CliRunner
+
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+@pytest.fixture
+def run_acmm():
+    """``run_acmm("tea", "configs/mb3.yaml")`` runs the ``acmm`` CLI in-process."""
+    from cli.acmm_app import app
+
+    return lambda *args: invoke(app, *args)

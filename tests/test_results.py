@@ -1,0 +1,112 @@
+"""HDF5 results (acmm.results) and the tea.h5 written by the TEA stage."""
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+
+import h5py
+import numpy as np
+import pytest
+import yaml
+
+import acmm
+from acmm.config import load_config, parse_config
+from acmm.results import Dataset, read_h5, write_h5
+from acmm.stages import run_tea
+
+from conftest import CONFIGS
+
+CONFIG_TEXT = "name: demo\ninertia: {I11: 1.0, I22: 1.0, I33: 1.0}\n"
+
+
+def _all_datasets(path):
+    found = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda name, obj: found.__setitem__(name, dict(obj.attrs))
+                     if isinstance(obj, h5py.Dataset) else None)
+    return found
+
+
+def _leftovers(directory, keep):
+    return sorted(p.name for p in directory.iterdir() if p.name not in keep)
+
+
+def test_write_h5_units_provenance_and_round_trip(tmp_path):
+    target = tmp_path / "sub" / "dir" / "r.h5"
+    items = {
+        "x": Dataset(np.arange(3.0), "rad", "angles", ["roll", "pitch", "yaw"]),
+        "scalar": Dataset(2.5, "s"),
+        "label": Dataset("hello", "1"),
+        "group": {"y": Dataset(np.eye(2), "ft*lbf", attrs={"extra": 7})},
+    }
+    out = write_h5(target, items, CONFIG_TEXT, {"stage": "unit-test"})
+    assert out == target and target.is_file()
+    ds = _all_datasets(target)
+    assert set(ds) == {"x", "scalar", "label", "group/y"}
+    assert {k: v["units"] for k, v in ds.items()} == {"x": "rad", "scalar": "s", "label": "1",
+                                                      "group/y": "ft*lbf"}
+    assert json.loads(ds["x"]["names"]) == ["roll", "pitch", "yaw"]
+    assert ds["x"]["description"] == "angles"
+    assert ds["group/y"]["extra"] == 7
+    back = read_h5(target)
+    np.testing.assert_array_equal(back["x"], np.arange(3.0))
+    np.testing.assert_array_equal(back["group"]["y"], np.eye(2))
+    assert back["scalar"] == 2.5 and back["label"] == "hello"
+    attrs = back["attrs"]
+    assert attrs["config"] == CONFIG_TEXT
+    assert attrs["config_hash"] == hashlib.sha256(CONFIG_TEXT.encode()).hexdigest()[:16]
+    assert attrs["package_version"] == acmm.__version__
+    assert attrs["git_commit"] == "unknown" or re.fullmatch(r"[0-9a-f]{40}", attrs["git_commit"])
+    assert attrs["stage"] == "unit-test"
+    assert _leftovers(target.parent, {"r.h5"}) == []
+
+
+def test_write_h5_failure_leaves_no_file_and_keeps_old_one(tmp_path):
+    target = tmp_path / "r.h5"
+    with pytest.raises(TypeError):
+        write_h5(target, {"ok": Dataset([1.0], "s"), "bad": [1, 2, 3]}, CONFIG_TEXT)
+    assert list(tmp_path.iterdir()) == []
+    write_h5(target, {"v": Dataset([1.0], "s")}, CONFIG_TEXT)
+    before = target.read_bytes()
+    with pytest.raises(TypeError):
+        write_h5(target, {"v": Dataset([2.0], "s"), "bad": object()}, CONFIG_TEXT)
+    assert target.read_bytes() == before
+    assert _leftovers(tmp_path, {"r.h5"}) == []
+
+
+def test_config_hash_changes_with_config(tmp_path):
+    a = write_h5(tmp_path / "a.h5", {"v": Dataset(1.0, "s")}, CONFIG_TEXT)
+    b = write_h5(tmp_path / "b.h5", {"v": Dataset(1.0, "s")}, CONFIG_TEXT.replace("demo", "other"))
+    assert read_h5(a)["attrs"]["config_hash"] != read_h5(b)["attrs"]["config_hash"]
+
+
+def test_tea_h5_contents(tmp_runs):
+    result, path = run_tea(CONFIGS / "mb3.yaml")
+    assert path.resolve() == (tmp_runs / "runs" / "mb3" / "tea.h5").resolve()
+    ds = _all_datasets(path)
+    assert {"theta", "omega", "bias", "inertia"} <= set(ds)
+    for name, attrs in ds.items():
+        assert attrs.get("units"), f"dataset {name} has no units attribute"
+    assert ds["theta"]["units"] == "rad" and ds["omega"]["units"] == "rad/s"
+    assert ds["bias"]["units"] == "ft*lbf" and ds["inertia"]["units"] == "slug*ft^2"
+    back = read_h5(path)
+    np.testing.assert_allclose(np.degrees(back["theta"]), [1.3, -44.7, 2.1], atol=0.01)
+    np.testing.assert_array_equal(back["inertia"], load_config(CONFIGS / "mb3.yaml").inertia.matrix())
+    np.testing.assert_array_equal(back["bias"], result.tea.bias)
+    np.testing.assert_array_equal(back["omega"], result.tea.omega)
+    attrs = back["attrs"]
+    # the embedded config is the resolved config and re-validates to the same run
+    assert parse_config(yaml.safe_load(attrs["config"])) == result.config
+    assert attrs["config_hash"] == hashlib.sha256(attrs["config"].encode()).hexdigest()[:16]
+    assert attrs["package_version"] == acmm.__version__
+    assert "git_commit" in attrs
+    assert _leftovers(path.parent, {"tea.h5"}) == []
+
+
+def test_tea_h5_overwrite_is_atomic_and_clean(tmp_runs):
+    _, p1 = run_tea(CONFIGS / "ac.yaml")
+    _, p2 = run_tea(CONFIGS / "ac.yaml")
+    assert p1 == p2
+    assert _leftovers(p1.parent, {"tea.h5"}) == []
+    np.testing.assert_allclose(np.degrees(read_h5(p2)["theta"]), [0.19, -5.0, 0.56], atol=0.01)
