@@ -185,6 +185,11 @@ class Schedule(_Model):
     to: Optional[DesignPoint] = Field(
         None, description="end configuration of the blend I(s) = (1−s)·I_start + s·I_to (bias blended alike)")
     n_points: int = Field(12, ge=3, le=200, description="number of blend points including both ends")
+    spacing: Literal["tea", "blend"] = Field(
+        "tea", description="blend points evenly spaced in pitch TEA (tea) or in the blend parameter s (blend)")
+    form: Literal["polynomial", "table"] = Field(
+        "polynomial", description="gain schedule: least-squares polynomial in θ2* (report ch. 5.3) or "
+                                  "table look-up, linear in θ2* between design points (ch. 7 alternative)")
     points: list[DesignPoint] = Field([], description="additional named design points")
     order: int = Field(2, ge=1, le=4, description="polynomial order of K_ij(θ2*) (the report uses 2)")
 

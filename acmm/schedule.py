@@ -14,7 +14,7 @@ import numpy as np
 
 from acmm import linearize as lin
 from acmm import lqr
-from acmm.tea import TEA, resolve_bias, solve_tea
+from acmm.tea import TEA, resolve_bias, solve_tea, solve_tea_near
 
 
 @dataclass(frozen=True)
@@ -25,6 +25,7 @@ class PointSpec:
     inertia: np.ndarray
     bias: np.ndarray
     s: float = float("nan")
+    theta_guess: np.ndarray | None = None
 
 
 @dataclass
@@ -39,7 +40,11 @@ class PointDesign:
 
 @dataclass
 class ScheduleFit:
-    """K_ij(θ2*) = Σ_k coef[k, i, j]·θ2*^k (θ2* in rad), fitted by least squares.
+    """A gain schedule K(θ2*) over the design points (θ2* = pitch TEA, rad).
+
+    ``form="polynomial"`` (report ch. 5.3): K_ij(θ2*) = Σ_k coef[k, i, j]·θ2*^k, least squares.
+    ``form="table"`` (the look-up alternative of ch. 6–7): K linear in θ2* between design points,
+    held constant outside them.
 
     Attributes
     ----------
@@ -47,16 +52,21 @@ class ScheduleFit:
         Polynomial coefficients, lowest power first; units of K per rad^k.
     variable : (P,) array
         Pitch TEA of each design point, rad.
+    gains : (P, 3, 24) array
+        LQR gains at the design points.
     rms_residual : (3, 24) array
-        RMS fit residual per element (units of K).
+        RMS residual of the polynomial per element (units of K).
     rel_residual : (3, 24) array
         RMS residual relative to max |K_ij| over the points.
+    form : str
     """
 
     coef: np.ndarray
     variable: np.ndarray
+    gains: np.ndarray
     rms_residual: np.ndarray
     rel_residual: np.ndarray
+    form: str = "polynomial"
 
     @property
     def order(self) -> int:
@@ -64,8 +74,22 @@ class ScheduleFit:
 
     def gain(self, theta2: float) -> np.ndarray:
         """Scheduled K (3×24) at pitch TEA ``theta2`` (rad)."""
-        powers = theta2 ** np.arange(self.coef.shape[0])
-        return np.tensordot(powers, self.coef, axes=1)
+        return schedule_gain(self.form, self.coef, self.variable, self.gains, theta2)
+
+
+def schedule_gain(form: str, coef: np.ndarray, nodes: np.ndarray, gains: np.ndarray,
+                  theta2: float) -> np.ndarray:
+    """Evaluate a schedule given as arrays (see :class:`ScheduleFit`)."""
+    if form == "polynomial":
+        powers = theta2 ** np.arange(coef.shape[0])
+        return np.tensordot(powers, coef, axes=1)
+    if form == "table":
+        order = np.argsort(nodes)
+        x, g = nodes[order], gains[order]
+        k = int(np.clip(np.searchsorted(x, theta2) - 1, 0, len(x) - 2))
+        w = float(np.clip((theta2 - x[k]) / (x[k + 1] - x[k]), 0.0, 1.0))
+        return (1 - w) * g[k] + w * g[k + 1]
+    raise ValueError(f"unknown schedule form {form!r}")
 
 
 @dataclass
@@ -92,6 +116,41 @@ def blend_points(start: PointSpec, end: PointSpec, n_points: int) -> list[PointS
     return out
 
 
+def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
+                     n_track: int = 81) -> list[PointSpec]:
+    """``n_points`` blend configurations whose pitch TEAs are evenly spaced.
+
+    The TEA is tracked along the blend by Newton continuation on ``n_track`` values of s (the
+    physical branch, starting from the start configuration's TEA), then s is interpolated at
+    evenly spaced θ2*.  Falls back to evenly spaced s when θ2*(s) is not monotonic.
+    """
+    from acmm.tea import solve_tea, solve_tea_near
+
+    s_grid = np.linspace(0.0, 1.0, n_track)
+    t = solve_tea(start.inertia, n, start.bias).theta
+    thetas = []
+    for s in s_grid:
+        t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
+                           t).theta
+        thetas.append(t)
+    thetas = np.array(thetas)
+    th2 = thetas[:, 1]
+    d = np.diff(th2)
+    if not (np.all(d > 0) or np.all(d < 0)):
+        return blend_points(start, end, n_points)
+    order = np.argsort(th2)
+    targets = np.linspace(th2[0], th2[-1], n_points)
+    s_pts = np.interp(targets, th2[order], s_grid[order])
+    s_pts[0], s_pts[-1] = 0.0, 1.0
+    out = []
+    for k, s in enumerate(s_pts):
+        name = start.name if k == 0 else end.name if k == n_points - 1 else f"blend_{s:.3f}"
+        guess = np.array([np.interp(s, s_grid, thetas[:, i]) for i in range(3)])
+        out.append(PointSpec(name, (1 - s) * start.inertia + s * end.inertia,
+                             (1 - s) * start.bias + s * end.bias, float(s), guess))
+    return out
+
+
 def point_specs(cfg) -> list[PointSpec]:
     """Design points of a config: the blend start → ``schedule.to`` plus ``schedule.points``.
 
@@ -107,7 +166,10 @@ def point_specs(cfg) -> list[PointSpec]:
     if sch.to is not None:
         i_to = sch.to.inertia.matrix()
         end = PointSpec(sch.to.name, i_to, resolve_bias(sch.to.disturbance, i_to, n), 1.0)
-        specs = blend_points(start, end, sch.n_points)
+        if sch.spacing == "tea":
+            specs = tea_spaced_blend(start, end, sch.n_points, n)
+        else:
+            specs = blend_points(start, end, sch.n_points)
     for p in sch.points:
         i_p = p.inertia.matrix()
         specs.append(PointSpec(p.name, i_p, resolve_bias(p.disturbance, i_p, n)))
@@ -118,7 +180,10 @@ def design_one(spec: PointSpec, cfg) -> PointDesign:
     """TEA, design model and sector LQR of one design point (config's ``design`` section)."""
     d = cfg.design
     n = cfg.orbit_rate
-    t = solve_tea(spec.inertia, n, spec.bias)
+    if spec.theta_guess is not None:
+        t = solve_tea_near(spec.inertia, n, spec.bias, spec.theta_guess)
+    else:
+        t = solve_tea(spec.inertia, n, spec.bias)
     model = lin.design_point(spec.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
     res = lqr.sector_lqr(model.A, model.B, d.R * np.eye(3), n, sigma=d.sector.sigma,
                          half_angle_deg=d.sector.half_angle_deg,
@@ -128,7 +193,7 @@ def design_one(spec: PointSpec, cfg) -> PointDesign:
     return PointDesign(spec, t, model, res)
 
 
-def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2) -> ScheduleFit:
+def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: str = "polynomial") -> ScheduleFit:
     """Least-squares polynomial fit of every gain element versus θ2* (ch. 5.3).
 
     Parameters
@@ -139,6 +204,9 @@ def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2) -> Sched
         LQR gains per point.
     order : int
         Polynomial order (2 in the report); reduced to P−1 when there are fewer points.
+    form : {"polynomial", "table"}
+        Which form :meth:`ScheduleFit.gain` evaluates; the polynomial and its residuals are
+        computed in both cases, for the record.
     """
     theta2 = np.asarray(theta2, float)
     gains = np.asarray(gains, float)
@@ -151,7 +219,7 @@ def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2) -> Sched
     rms = np.sqrt(np.mean(resid ** 2, axis=0)).reshape(3, -1)
     peak = np.max(np.abs(flat), axis=0).reshape(3, -1)
     rel = np.divide(rms, peak, out=np.zeros_like(rms), where=peak > 0)
-    return ScheduleFit(coef.reshape(order + 1, 3, -1), theta2, rms, rel)
+    return ScheduleFit(coef.reshape(order + 1, 3, -1), theta2, gains, rms, rel, form)
 
 
 def check_schedule(fit: ScheduleFit, points: list[PointDesign], cfg) -> ScheduleCheck:
@@ -173,7 +241,7 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], cfg) -> Schedule
     for a, b in zip(blended, blended[1:]):
         spec = PointSpec(f"mid_{0.5 * (a.spec.s + b.spec.s):.3f}", 0.5 * (a.spec.inertia + b.spec.inertia),
                          0.5 * (a.spec.bias + b.spec.bias), 0.5 * (a.spec.s + b.spec.s))
-        t = solve_tea(spec.inertia, n, spec.bias)
+        t = solve_tea_near(spec.inertia, n, spec.bias, 0.5 * (a.tea.theta + b.tea.theta))
         model = lin.design_point(spec.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
         _check(spec.name, model, t.theta[1], "midpoint")
     return ScheduleCheck(names, np.array(th2), np.array(margins), kinds)

@@ -116,13 +116,16 @@ class DesignTable:
     gain: np.ndarray         # (P, 3, 24) LQR gains
     coef: np.ndarray | None  # (order+1, 3, 24) schedule coefficients, or None
     design_hash: str
+    form: str = "polynomial"
 
     def scheduled_gain(self, k: int) -> np.ndarray:
-        """Gain in use at point k: the fitted schedule when there is one, else the LQR gain."""
+        """Gain in use at point k: the schedule evaluated at its TEA when there is one, else
+        the point's LQR gain."""
+        from acmm.schedule import schedule_gain
+
         if self.coef is None:
             return self.gain[k]
-        powers = self.tea[k, 1] ** np.arange(self.coef.shape[0])
-        return np.tensordot(powers, self.coef, axes=1)
+        return schedule_gain(self.form, self.coef, self.tea[:, 1], self.gain, self.tea[k, 1])
 
 
 @dataclass
@@ -164,11 +167,13 @@ def compute_design(config, progress=None) -> DesignResult:
     gains = np.array([p.lqr.K for p in points])
     teas = np.array([p.tea.theta for p in points])
     if len(points) >= 2:
-        fit = sch.fit_schedule(teas[:, 1], gains, cfg.schedule.order if cfg.schedule else 2)
+        sc = cfg.schedule
+        fit = sch.fit_schedule(teas[:, 1], gains, sc.order if sc else 2, sc.form if sc else "polynomial")
         check = sch.check_schedule(fit, points, cfg)
     table = DesignTable([p.spec.name for p in points], np.array([p.spec.inertia for p in points]),
                         np.array([p.spec.bias for p in points]), teas, gains,
-                        None if fit is None else fit.coef, design_hash(cfg))
+                        None if fit is None else fit.coef, design_hash(cfg),
+                        "polynomial" if fit is None else fit.form)
     return DesignResult(cfg, points, fit, check, table, time.perf_counter() - t0)
 
 
@@ -220,7 +225,8 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
             "check_margin": Dataset(r.check.margin, "n", "sector margin of the scheduled gain (>0 inside)"),
         }
     path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
-                    {"stage": "design", "design_hash": r.table.design_hash, "n_points": P})
+                    {"stage": "design", "design_hash": r.table.design_hash, "n_points": P,
+                     "schedule_form": r.table.form})
     if cfg.output.figures if figures is None else figures:
         from acmm import plots
 
@@ -240,7 +246,8 @@ def load_design_table(path: Path) -> DesignTable:
     d = read_h5(path)
     coef = d["schedule"]["coef"] if "schedule" in d else None
     names = [x.decode() if isinstance(x, bytes) else str(x) for x in d["names"]]
-    return DesignTable(names, d["inertia"], d["bias"], d["tea"], d["K"], coef, d["attrs"]["design_hash"])
+    return DesignTable(names, d["inertia"], d["bias"], d["tea"], d["K"], coef, d["attrs"]["design_hash"],
+                       d["attrs"].get("schedule_form", "polynomial"))
 
 
 def design_for(cfg: Config, progress=None) -> tuple[DesignTable, str]:

@@ -161,6 +161,19 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
     return make_tea(theta, inertia, n, bias)
 
 
+def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess: np.ndarray) -> TEA:
+    """The equilibrium nearest a guess (rad) by damped Newton, e.g. along a continuation path.
+
+    Falls back to :func:`solve_tea` when Newton does not converge within 5° of the guess.
+    """
+    inertia = np.asarray(inertia, float)
+    bias = np.asarray(bias, float)
+    theta = _newton(theta_guess, inertia, n, bias, max_step=0.05)
+    if theta is None or np.max(np.abs(theta - theta_guess)) > np.radians(5.0):
+        return solve_tea(inertia, n, bias)
+    return make_tea(theta, inertia, n, bias)
+
+
 def _fold_location(theta, lam, inertia, n, bias):
     """Refine the fold of the bias continuation: the largest λ whose equilibrium exists."""
     lo, hi, th = lam, 1.0, theta

@@ -1,15 +1,72 @@
-"""``qpp`` command line (Part III of CR-185644)."""
+"""``qpp`` command line (Part III of CR-185644).
+
+Commands parse arguments, call the ``qpp`` library, print, and write results; user errors print
+one line and exit with code 2.
+"""
 from __future__ import annotations
 
+from pathlib import Path
+
+import numpy as np
 import typer
+
+from cli.common import user_errors
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Quantitative pole placement for Lure systems (CR-185644 Part III).")
+
+ConfigArg = typer.Argument(..., help="YAML config file (or the name of a packaged config, e.g. qpp_siso)")
+FigOpt = typer.Option(None, "--figures/--no-figures", help="override output.figures")
 
 
 @app.callback()
 def _root() -> None:
     """Quantitative pole placement for Lure systems (CR-185644 Part III)."""
+
+
+def _mat(a) -> str:
+    return np.array2string(np.asarray(a), precision=4, suppress_small=True, max_line_width=120)
+
+
+@app.command()
+@user_errors
+def design(config: Path = ConfigArg, figures: bool = FigOpt) -> None:
+    """H∞ gains (ch. 11), β1, thresholds m and the circle criterion (ch. 12.1) → qpp_design.h5."""
+    from qpp.stages import run_design
+
+    cfg, r, path = run_design(config, figures)
+    typer.echo(f"{cfg.name}: gains from {r.gains_source} (a = {r.a:g} 1/s, T = {r.T:g} s)")
+    typer.echo(f"  K1 = {_mat(r.K1)}\n  Kc = {_mat(r.Kc)}\n  H  = {_mat(r.H.T)}ᵀ")
+    if cfg.published.H is not None:
+        rel = np.abs(r.H - np.asarray(cfg.published.H)) / np.maximum(np.abs(np.asarray(cfg.published.H)), 1e-12)
+        rel = rel[np.abs(np.asarray(cfg.published.H)) > 0]
+        typer.echo(f"  H vs printed: max relative difference {rel.max():.2%}")
+    for rd, b in r.beta1.items():
+        typer.echo(f"  beta1 [{rd:8s}] = {b['value']:.6f} exact (peak at {b['omega_peak']:.4g} rad/s; "
+                   f"grid {b['grid_value']:.6f})")
+    for t in r.thresholds:
+        v = ", ".join(f"{rd}: {'beta1 <= m' if r.beta1[rd]['value'] <= t.m else 'beta1 > m'}" for rd in r.beta1)
+        typer.echo(f"  m [{t.name:10s}] = {t.m:.5f} (beta3 {t.beta3:.5g}, beta4 {t.beta4:.5g}) -> {v}")
+    c = r.circle
+    typer.echo(f"  circle criterion (lemma 1) on H(-a+jw), sector {r.sector.tolist()}: "
+               f"{'PASS' if c.passed else 'FAIL'}; margins {np.round(c.margins, 4).tolist()}; "
+               f"P0 = {c.P0}; largest admissible scale {c.max_scale:.4g}")
+    typer.echo(f"  wrote {path}")
+
+
+@app.command()
+@user_errors
+def simulate(config: Path = ConfigArg, figures: bool = FigOpt) -> None:
+    """Nonlinear closed loop per scenario and the sphere check ‖y − y_o‖∞ ≤ β_o → qpp_sim.h5."""
+    from qpp.stages import run_simulate
+
+    cfg, r, sims, path = run_simulate(config, figures)
+    typer.echo(f"{cfg.name}: beta_o = {cfg.spheres.beta_o:g}")
+    for s in sims:
+        typer.echo(f"  {s.name:12s} gamma = {s.gamma:<8g} ||y - y_o||inf = {s.error_inf:.5f} "
+                   f"(per output {np.round(s.error_per_output, 5).tolist()}) "
+                   f"{'within' if s.passed else 'OUTSIDE'} the output sphere")
+    typer.echo(f"  wrote {path}")
 
 
 def main() -> None:

@@ -1,0 +1,356 @@
+"""LQR with every closed-loop pole in a sector (report ch. 5.2, eqs 5.2–5.4, Fig 5.2).
+
+The sector of Fig 5.2, for orbital rate n::
+
+    S = {λ : Re λ ≤ −σ·n  and  |Im λ| ≤ tan φ · |Re λ|}        (σ = 0.5, φ = 45° in the report)
+
+The Sunkel–Shieh algorithm the report cites is not publicly available (NOTES.md, "Sector LQR").
+:func:`sector_lqr` instead returns an R, a Q ⪰ 0 and the gain K (u = −K x) that is the *exact*
+LQR gain of the α-shifted problem ::
+
+    minimize ∫ e^{2αt} (x'Qx + u'Ru) dt   ⇔   LQR of (A + αI, B, Q, R),   α = σ·n,
+
+with every closed-loop pole of A − BK verified to lie in S.
+
+``method="shift"`` (default)
+    1. minimum-energy (Q = Q0, default 0) LQR on A + αI: every pole ends with Re ≤ −α;
+    2. the poles still outside the φ lines (the disturbance-rejection-filter poles) are moved by
+       *optimal pole shifting* (Amin 1985): for the left invariant subspace U1 of the selected
+       poles (ordered real Schur form A_cl' = U T U', selected first) solve the Q = 0 Riccati
+       equation of (T11' + hI, U1'B), which mirrors those poles about Re = −h while leaving all
+       others unchanged; P ← P + U1 P̃ U1', K = R⁻¹B'P.  The Q making K exact for the shifted
+       problem is Q ← Q + 2(h − α) U1 P̃ U1' ⪰ 0 (h ≥ α), checked through the Riccati residual.
+``method="uniform"``
+    The smallest uniform shift α ≥ σn (bisection) for which the LQR of (A + αI, B, Q0, R) puts
+    every pole in S; Q = Q0.  Simpler, but moves every pole further than needed.
+
+All computations are done on the state-scaled model x = D x̃ (``scale``), where the Riccati
+residual is checked; K, P and Q are returned in physical units.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+
+from acmm.errors import ConvergenceError, DesignError
+from acmm.riccati import _as_R, care_residual, scale_problem, solve_care
+
+
+def sector_margin(poles, n: float, sigma: float = 0.5, half_angle_deg: float = 45.0) -> np.ndarray:
+    """Signed distance of each pole into the sector, in units of n (negative = outside).
+
+    For λ = x + iy the sector is the intersection of the half-planes x ≤ −σn and
+    |y| cos φ + x sin φ ≤ 0, so the margin is ::
+
+        m(λ) = min(−σn − x,  −(|y| cos φ + x sin φ)) / n,
+
+    the exact Euclidean distance to the boundary for a pole inside, and a negative number whose
+    magnitude does not exceed the distance to the sector for a pole outside.
+
+    Parameters
+    ----------
+    poles : array_like of complex
+        Closed-loop eigenvalues, rad/s.
+    n : float
+        Orbital rate, rad/s.
+    sigma : float
+        Minimum decay rate in units of n.
+    half_angle_deg : float
+        Sector half-angle φ about the negative real axis, deg.
+    """
+    lam = np.asarray(poles, dtype=complex)
+    phi = np.deg2rad(half_angle_deg)
+    x, y = lam.real, np.abs(lam.imag)
+    d1 = -sigma * n - x
+    d2 = -(y * np.cos(phi) + x * np.sin(phi))
+    return np.minimum(d1, d2) / n
+
+
+def in_sector(poles, n: float, sigma: float = 0.5, half_angle_deg: float = 45.0, *,
+              min_margin: float = 0.0) -> np.ndarray:
+    """Boolean mask: pole lies in the sector with :func:`sector_margin` ≥ ``min_margin`` (units of n)."""
+    return sector_margin(poles, n, sigma, half_angle_deg) >= min_margin
+
+
+@dataclass(frozen=True)
+class SectorLQR:
+    """A verified sector-constrained LQR design.
+
+    Attributes
+    ----------
+    K : (M, N) array
+        Gain, u = −K x (eq 5.3), physical units (e.g. ft·lbf per state unit).
+    P : (N, N) array
+        Stabilizing solution of the Riccati equation of (A + shift·I, B, Q, R), physical units.
+    Q : (N, N) array
+        State weight (⪰ 0, symmetric) for which K is the exact LQR gain of the shifted problem,
+        physical units (Q_ij in 1/(unit_i·unit_j) of the cost, R's units × ft·lbf²).
+    R : (M, M) array
+        Control weight, 1/(ft·lbf)².
+    poles : (N,) complex array
+        Eigenvalues of A − BK, rad/s, sorted by real part.
+    margin : float
+        Worst :func:`sector_margin` over the poles, units of n (> 0: all inside).
+    residual : float
+        Relative Riccati residual (:func:`acmm.riccati.care_residual`) of (A + shift·I, B, Q, R, P)
+        in the scaled coordinates.
+    shift : float
+        α (rad/s): K is the LQR gain of (A + αI, B, Q, R).
+    mirror_shifts : tuple of float
+        The h (rad/s) of each pole-shifting step (``method="shift"``).
+    method, riccati_method : str
+        Design method and Riccati solver.
+    scale : (N,) array or None
+        State scaling used, x = diag(scale) x̃.
+    """
+
+    K: np.ndarray
+    P: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+    poles: np.ndarray
+    margin: float
+    residual: float
+    shift: float
+    mirror_shifts: tuple = ()
+    method: str = "shift"
+    riccati_method: str = "scipy"
+    scale: np.ndarray | None = field(default=None)
+
+
+def _required_h(lam: np.ndarray, n: float, sigma: float, phi: float, target: float) -> np.ndarray:
+    """Mirror line h (rad/s) that moves λ = a + ib (a < 0) to −(2h − |a|) + ib with margin `target`."""
+    a = np.abs(lam.real)
+    b = np.abs(lam.imag)
+    h_angle = 0.5 * (a + (b * np.cos(phi) + target * n) / np.sin(phi))
+    h_decay = 0.5 * (a + (sigma + target) * n)
+    # h > |a| is needed for the Q = 0 Riccati equation to mirror λ at all.
+    return np.maximum.reduce([h_angle, h_decay, a * (1.0 + 1e-3) + 1e-3 * target * n])
+
+
+def _group(h: np.ndarray, rel_gap: float = 0.02) -> list[tuple[float, float]]:
+    """Chain-link sorted h values into groups whose neighbours differ by < rel_gap."""
+    hs = np.sort(h)
+    groups, lo, hi = [], hs[0], hs[0]
+    for v in hs[1:]:
+        if v - hi <= rel_gap * hi:
+            hi = v
+        else:
+            groups.append((lo, hi))
+            lo = hi = v
+    groups.append((lo, hi))
+    return groups
+
+
+#: PBH ratio σmin([A − λI, B]) / ‖[A, B]‖₂ below which a mode counts as uncontrollable.
+UNCONTROLLABLE_RATIO = 1e-12
+
+
+def _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin):
+    """DesignError if an open-loop pole that must move is (numerically) uncontrollable (PBH)."""
+    lam = np.linalg.eigvals(As)
+    outside = lam[sector_margin(lam, n, sigma, half_angle_deg) < min_margin]
+    if outside.size == 0:
+        return
+    nx = As.shape[0]
+    norm = np.linalg.norm(np.hstack([As, Bs]), 2)
+    for z in outside:
+        smin = np.linalg.svd(np.hstack([As - z * np.eye(nx), Bs]), compute_uv=False)[-1]
+        if smin <= UNCONTROLLABLE_RATIO * norm:
+            raise DesignError(
+                f"sector LQR: open-loop pole λ/n = {complex(z / n):.4g} lies outside the sector "
+                f"and is uncontrollable (PBH ratio {smin / norm:.2e}); no feedback can move it")
+
+
+def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, residual_tol,
+            method, riccati_method, mirror_shifts) -> SectorLQR:
+    """Verify a design in scaled coordinates and map it back to physical units."""
+    Ps = 0.5 * (Ps + Ps.T)
+    Qs = 0.5 * (Qs + Qs.T)
+    Ks = np.linalg.solve(R, Bs.T @ Ps)
+    poles = np.linalg.eigvals(As - Bs @ Ks)
+    poles = poles[np.lexsort((poles.imag, poles.real))]
+    margins = sector_margin(poles, n, sigma, half_angle_deg)
+    margin = float(np.min(margins))
+    nx = As.shape[0]
+    qmin = float(np.min(np.linalg.eigvalsh(Qs))) if nx else 0.0
+    if qmin < -1e-12 * max(1.0, np.linalg.norm(Qs, 2)):
+        raise DesignError(f"sector LQR ({method}): Q is not positive semidefinite "
+                          f"(smallest eigenvalue {qmin:.3e})")
+    res = care_residual(As + alpha * np.eye(nx), Bs, Qs, R, Ps)
+    if not res <= residual_tol:
+        raise ConvergenceError(f"sector LQR ({method}, Riccati method {riccati_method!r}): relative "
+                               f"Riccati residual {res:.3e} exceeds tolerance {residual_tol:.1e}")
+    if margin < min_margin:
+        bad = poles[margins < min_margin]
+        raise DesignError(
+            f"sector LQR ({method}): {bad.size} closed-loop pole(s) outside the sector "
+            f"Re λ ≤ −{sigma}n, |Im λ| ≤ tan({half_angle_deg}°)|Re λ| with margin {min_margin}n "
+            f"(worst margin {margin:.3g}n at λ/n = {complex(bad[0] / n):.4g})")
+    if d is not None:
+        K = Ks / d[None, :]
+        P = Ps / d[:, None] / d[None, :]
+        Q = Qs / d[:, None] / d[None, :]
+    else:
+        K, P, Q = Ks, Ps, Qs
+    return SectorLQR(K=K, P=P, Q=Q, R=R, poles=poles, margin=margin, residual=res, shift=alpha,
+                     mirror_shifts=tuple(mirror_shifts), method=method,
+                     riccati_method=riccati_method, scale=d)
+
+
+def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float = 45.0,
+               Q0=None, scale=None, method: str = "shift", riccati_method: str = "scipy",
+               residual_tol: float = 1e-9, min_margin: float = 0.01,
+               max_uniform_shift: float = 100.0) -> SectorLQR:
+    """LQR gain with every closed-loop pole in the sector of Fig 5.2 (module docstring).
+
+    Parameters
+    ----------
+    A : (N, N) array
+        Open-loop state matrix (eq 4.46), 1/s.
+    B : (N, M) array
+        Control input matrix.
+    R : float or (M, M) array
+        Control weight, e.g. 1e-4 = 1/(100 ft·lbf)² per axis; a float r means r·I.
+    n : float
+        Orbital rate, rad/s (the sector's unit).
+    sigma : float
+        Minimum decay rate σ in units of n (Re λ ≤ −σn).
+    half_angle_deg : float
+        Sector half-angle φ, deg (|Im λ| ≤ tan φ |Re λ|).
+    Q0 : None, float or (N, N) array
+        Initial state weight in the coordinates the problem is solved in — the scaled states x̃
+        when ``scale`` is given (dimensionless), else physical.  None or 0: minimum energy.
+        A float q means q·I.
+    scale : (N,) array or None
+        Nominal state magnitudes d (x = diag(d) x̃); strongly recommended (NOTES.md, "Scaling").
+    method : {"shift", "uniform"}
+        Optimal pole shifting of the stray poles, or the smallest uniform shift.
+    riccati_method : {"scipy", "sign", "slycot"}
+        Solver used for every Riccati equation (:func:`acmm.riccati.solve_care`).
+    residual_tol : float
+        Largest accepted relative Riccati residual (scaled coordinates).
+    min_margin : float
+        Required :func:`sector_margin` of every pole, units of n; moved poles are placed with
+        1.5× this margin.
+    max_uniform_shift : float
+        Largest α/n tried by ``method="uniform"``.
+
+    Returns
+    -------
+    SectorLQR
+
+    Raises
+    ------
+    DesignError
+        A pole cannot be brought into the sector (or Q would be indefinite).
+    ConvergenceError
+        A Riccati solve failed or its residual exceeds ``residual_tol``.
+    """
+    if method not in ("shift", "uniform"):
+        raise ValueError(f"method must be 'shift' or 'uniform', got {method!r}")
+    if not (n > 0 and sigma > 0 and 0 < half_angle_deg < 90 and min_margin >= 0):
+        raise ValueError("need n > 0, sigma > 0, 0 < half_angle_deg < 90 and min_margin ≥ 0")
+    A = np.asarray(A, dtype=float)
+    B = np.asarray(B, dtype=float)
+    nx, m = B.shape
+    R = _as_R(R, m)
+    if Q0 is None:
+        Q0s = np.zeros((nx, nx))
+    else:
+        Q0s = np.asarray(Q0, dtype=float)
+        Q0s = float(Q0s) * np.eye(nx) if Q0s.ndim == 0 else 0.5 * (Q0s + Q0s.T)
+    if scale is not None:
+        d = np.asarray(scale, dtype=float)
+        As, Bs, _ = scale_problem(A, B, np.zeros((nx, nx)), d)
+    else:
+        d = None
+        As, Bs = A, B
+    eye = np.eye(nx)
+    phi = np.deg2rad(half_angle_deg)
+    alpha = sigma * n
+    _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin)
+
+    def lqr_shifted(a):
+        try:
+            return solve_care(As + a * eye, Bs, Q0s, R, method=riccati_method, tol=residual_tol)
+        except ConvergenceError as exc:
+            raise ConvergenceError(f"sector LQR ({method}) at shift α = {a / n:.4g}n: {exc}") from exc
+
+    if method == "uniform":
+        def ok(a):
+            r = lqr_shifted(a)
+            lam = np.linalg.eigvals(As - Bs @ r.K)
+            return np.min(sector_margin(lam, n, sigma, half_angle_deg)) >= min_margin, r
+
+        good, r = ok(alpha)
+        if good:
+            return _finish(As, Bs, Q0s, R, r.P, alpha, n, sigma, half_angle_deg, d, min_margin,
+                           residual_tol, method, riccati_method, ())
+        # Gentle bracketing: the minimum-energy gains grow steeply with α (every mirrored pole
+        # moves by 2α), and so does the Riccati condition number.
+        lo, hi = alpha, 1.25 * alpha
+        while True:
+            good, r_hi = ok(hi)
+            if good:
+                break
+            lo = hi
+            hi *= 1.25
+            if hi > max_uniform_shift * n:
+                raise DesignError(f"sector LQR (uniform): no shift α ≤ {max_uniform_shift}n puts "
+                                  f"every pole in the sector")
+        while hi - lo > 1e-3 * hi:
+            mid = 0.5 * (lo + hi)
+            good, r_mid = ok(mid)
+            if good:
+                hi, r_hi = mid, r_mid
+            else:
+                lo = mid
+        return _finish(As, Bs, Q0s, R, r_hi.P, hi, n, sigma, half_angle_deg, d, min_margin,
+                       residual_tol, method, riccati_method, ())
+
+    # --- method == "shift": shifted LQR, then optimal pole shifting of the stray poles -------
+    r0 = lqr_shifted(alpha)
+    Ps = r0.P.copy()
+    Qs = Q0s.copy()
+    target = 1.5 * min_margin
+    mirror_shifts = []
+    for _sweep in range(4):
+        Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
+        lam = np.linalg.eigvals(Acl)
+        stray = lam[sector_margin(lam, n, sigma, half_angle_deg) < min_margin]
+        if stray.size == 0:
+            break
+        groups = _group(_required_h(stray, n, sigma, phi, target))
+        for lo, hi in groups:
+            Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
+
+            def select(re, im, lo=lo, hi=hi):
+                z = np.array([complex(re, im)])
+                if sector_margin(z, n, sigma, half_angle_deg)[0] >= min_margin:
+                    return False
+                h = _required_h(z, n, sigma, phi, target)[0]
+                return bool(lo * (1 - 0.01) <= h <= hi * (1 + 0.01))
+
+            T, Z, sdim = sla.schur(Acl.T, output="real", sort=select)
+            if sdim == 0:
+                continue
+            T11, U1 = T[:sdim, :sdim], Z[:, :sdim]
+            lam1 = np.linalg.eigvals(T11)
+            h = float(np.max(_required_h(lam1, n, sigma, phi, target)))
+            h = max(h, alpha)
+            try:
+                sub = solve_care(T11.T + h * np.eye(sdim), U1.T @ Bs, np.zeros((sdim, sdim)), R,
+                                 method=riccati_method, tol=residual_tol)
+            except ConvergenceError as exc:
+                raise DesignError(f"sector LQR (shift): cannot shift the poles λ/n = "
+                                  f"{np.round(lam1 / n, 4).tolist()} (uncontrollable?): {exc}") from exc
+            dP = U1 @ sub.P @ U1.T
+            dP = 0.5 * (dP + dP.T)
+            Ps = Ps + dP
+            Qs = Qs + 2.0 * (h - alpha) * dP
+            mirror_shifts.append(h)
+    return _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin,
+                   residual_tol, method, riccati_method, mirror_shifts)

@@ -1,0 +1,388 @@
+"""Continuous algebraic Riccati equation (eq 5.4) with a verified residual.
+
+Solves ::
+
+    A'P + P A − P B R⁻¹ B' P + Q = 0                                       (eq 5.4)
+
+for the stabilizing solution P = P' (A − B K stable, K = R⁻¹ B' P, eq 5.3) by one of three
+methods behind :func:`solve_care`:
+
+``"scipy"``
+    :func:`scipy.linalg.solve_continuous_are` (generalized Schur of the extended pencil, with
+    balancing).
+``"sign"``
+    The matrix sign function of the Hamiltonian (eq 5.5) by the fifth-order iteration of eq 5.6
+    with the *corrected* denominator (NOTES.md)::
+
+        S(k+1) = S(k) [5I + 10S²(k) + S⁴(k)] [I + 10S²(k) + 5S⁴(k)]⁻¹,   S(0) = H,
+
+    evaluated in partial fractions (the same rational map, conditioned like κ(S) instead of
+    κ(S)⁴) and accelerated by determinantal (or norm) scaling; [I; P] then spans the stable
+    invariant subspace of H = [[A, −G], [−Q, −A']], G = BR⁻¹B', i.e. (sign H + I)[I; P] = 0,
+    solved by least squares.  The printed denominator I + 10S + 5S⁴ does not converge to the
+    sign (from the left half-line it either ends at +1 or wanders near −2); it is kept as
+    ``form="printed"`` of :func:`matrix_sign` only so that tests can show it.
+``"slycot"``
+    SLICOT SB02MD (Schur vectors of the Hamiltonian) via :func:`slycot.sb02md`.
+
+State scaling: with nominal state magnitudes d (``scale``), x = D x̃, D = diag(d), the solver
+works on Ã = D⁻¹AD, B̃ = D⁻¹B, Q̃ = DQD and maps back P = D⁻¹P̃D⁻¹, K = K̃D⁻¹.  In physical units
+the 24 ACMM states span ~12 orders of magnitude; unscaled, every method loses most digits
+(NOTES.md, "Scaling").
+
+Every solve computes its relative residual (see :func:`care_residual`) in the scaled
+coordinates and raises :class:`acmm.errors.ConvergenceError` above ``tol``.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+
+from acmm.errors import ConvergenceError
+
+METHODS = ("scipy", "sign", "slycot")
+
+
+@dataclass(frozen=True)
+class CareResult:
+    """Stabilizing solution of eq 5.4.
+
+    Attributes
+    ----------
+    P : (N, N) array
+        Stabilizing solution in the caller's (physical) coordinates, symmetric.
+    K : (M, N) array
+        Optimal gain K = R⁻¹B'P (u = −K x, eq 5.3), physical coordinates.
+    residual : float
+        Relative residual of :func:`care_residual`, evaluated in the scaled coordinates.
+    method : str
+        ``"scipy"``, ``"sign"`` or ``"slycot"``.
+    iterations : int
+        Sign-function iterations (0 for the direct methods).
+    scale : (N,) array or None
+        The state scaling d used (x = diag(d) x̃).
+    seconds : float
+        Wall time of the solve proper (excluding the residual check), s.
+    """
+
+    P: np.ndarray
+    K: np.ndarray
+    residual: float
+    method: str
+    iterations: int = 0
+    scale: np.ndarray | None = field(default=None)
+    seconds: float = 0.0
+
+
+@dataclass(frozen=True)
+class SignResult:
+    """Matrix sign function by eq 5.6: the limit ``S``, ``iterations`` and the final
+    relative step ``step`` = ‖S(k+1) − S(k)‖₁ / ‖S(k+1)‖₁."""
+
+    S: np.ndarray
+    iterations: int
+    step: float
+
+
+def _as_R(R, m: int) -> np.ndarray:
+    R = np.asarray(R, dtype=float)
+    if R.ndim == 0:
+        return float(R) * np.eye(m)
+    if R.shape != (m, m):
+        raise ValueError(f"R must be a scalar or {m}×{m}, got shape {R.shape}")
+    return 0.5 * (R + R.T)
+
+
+def _as_Q(Q, n: int) -> np.ndarray:
+    Q = np.asarray(Q, dtype=float)
+    if Q.ndim == 0:
+        return float(Q) * np.eye(n)
+    if Q.shape != (n, n):
+        raise ValueError(f"Q must be a scalar or {n}×{n}, got shape {Q.shape}")
+    return 0.5 * (Q + Q.T)
+
+
+def scale_problem(A, B, Q, scale):
+    """(Ã, B̃, Q̃) = (D⁻¹AD, D⁻¹B, DQD) for x = D x̃, D = diag(scale)."""
+    d = np.asarray(scale, dtype=float)
+    if d.shape != (A.shape[0],) or not np.all(np.isfinite(d)) or np.any(d <= 0):
+        raise ValueError(f"scale must be {A.shape[0]} positive finite magnitudes")
+    return A * (1.0 / d)[:, None] * d[None, :], B / d[:, None], Q * d[:, None] * d[None, :]
+
+
+def care_residual(A, B, Q, R, P) -> float:
+    """Relative residual of eq 5.4 (all norms Frobenius)::
+
+        ρ = ‖A'P + PA − PGP + Q‖ / (‖Q‖ + 2‖A'P‖ + ‖PGP‖),   G = B R⁻¹ B',
+
+    i.e. the residual relative to the sum of the sizes of the terms that cancel (ρ = 0 when
+    P = Q = 0).  Computed in whatever coordinates the arguments are given in; :func:`solve_care`
+    passes the scaled ones.  Independent of how P was obtained.
+    """
+    A, B, P = (np.asarray(x, dtype=float) for x in (A, B, P))
+    Q = _as_Q(Q, A.shape[0])
+    R = _as_R(R, B.shape[1])
+    AtP = A.T @ P
+    PB = P @ B
+    PGP = PB @ np.linalg.solve(R, PB.T)
+    res = AtP + AtP.T - PGP + Q
+    den = np.linalg.norm(Q) + 2.0 * np.linalg.norm(AtP) + np.linalg.norm(PGP)
+    num = np.linalg.norm(res)
+    if den == 0.0:
+        return 0.0 if num == 0.0 else float("inf")
+    return float(num / den)
+
+
+#: Partial fractions of eq 5.6 (corrected):  x(5 + 10x² + x⁴)/(1 + 10x² + 5x⁴)
+#: = x/5 + Σ c_i x/(x² + a_i),  a_{1,2} = 1 ∓ √0.8 (the roots of 5t² + 10t + 1 are −a_i).
+_A1, _A2 = 1.0 - np.sqrt(0.8), 1.0 + np.sqrt(0.8)
+_PF = ((float((4.8 - 8.0 * _A1) / (5.0 * (_A2 - _A1))), float(_A1)),
+       (float((4.8 - 8.0 * _A2) / (5.0 * (_A1 - _A2))), float(_A2)))
+
+
+def matrix_sign(M, *, scaling: str = "det", tol: float = 1e-13, max_iter: int = 60,
+                form: str = "corrected", evaluation: str = "partial_fraction") -> SignResult:
+    """Matrix sign function by the fifth-order rational iteration of eq 5.6.
+
+    Parameters
+    ----------
+    M : (n, n) array
+        A matrix with no eigenvalue on the imaginary axis.
+    scaling : {"det", "norm", None}
+        Acceleration applied before each step while the step is still large (> 1e-2):
+        determinantal μ = |det S|^(−1/n) or norm μ = (‖S⁻¹‖_F / ‖S‖_F)^½; S ← μ S.
+    tol : float
+        Stop when the relative step ‖S(k+1) − S(k)‖₁/‖S(k+1)‖₁ ≤ tol, or when the step stops
+        decreasing after it has fallen below 1e-6 (round-off floor).
+    max_iter : int
+        Iteration limit.
+    form : {"corrected", "printed"}
+        ``"corrected"``: denominator I + 10S² + 5S⁴ (NOTES.md).  ``"printed"``: the report's
+        misprint I + 10S + 5S⁴, kept only to demonstrate that it does not converge.
+    evaluation : {"partial_fraction", "polynomial"}
+        How the corrected rational map is evaluated.  ``"polynomial"`` forms S⁴ and solves with
+        I + 10S² + 5S⁴ as printed, whose condition grows like κ(S)⁴ and loses the eigenvalues
+        near the imaginary axis when |λ| is widely spread.  ``"partial_fraction"`` (default)
+        evaluates the same function as S/5 + Σ c_i Re (S + i√a_i I)⁻¹ (Kenney–Laub; Higham,
+        *Functions of Matrices*, §5.4), conditioned like κ(S).  The printed form is always
+        evaluated as a polynomial.
+
+    Returns
+    -------
+    SignResult
+
+    Raises
+    ------
+    ConvergenceError
+        No convergence within ``max_iter``, a singular step, a limit that is not
+        involutory (‖S² − I‖₁ > √tol·max(1, ‖S‖₁)²), or an involutory limit that is not the sign
+        (S·M must have its spectrum in the open right half-plane).
+    """
+    M0 = np.array(M, dtype=float)
+    S = M0.copy()
+    n = S.shape[0]
+    eye = np.eye(n)
+    if form not in ("corrected", "printed"):
+        raise ValueError(f"form must be 'corrected' or 'printed', got {form!r}")
+    if evaluation not in ("partial_fraction", "polynomial"):
+        raise ValueError(f"evaluation must be 'partial_fraction' or 'polynomial', got {evaluation!r}")
+    if scaling not in ("det", "norm", None, "none"):
+        raise ValueError(f"scaling must be 'det', 'norm' or None, got {scaling!r}")
+    step = np.inf
+    prev = np.inf
+    for k in range(1, max_iter + 1):
+        if scaling in ("det", "norm") and step > 1e-2:
+            if scaling == "det":
+                sgn, logdet = np.linalg.slogdet(S)
+                mu = np.exp(-logdet / n) if sgn != 0 and np.isfinite(logdet) else 1.0
+            else:
+                try:
+                    mu = np.sqrt(np.linalg.norm(np.linalg.inv(S)) / np.linalg.norm(S))
+                except np.linalg.LinAlgError:
+                    mu = 1.0
+            if np.isfinite(mu) and mu > 0:
+                S = mu * S
+        try:
+            if form == "corrected" and evaluation == "partial_fraction":
+                # f(S) = S/5 + Σ c_i S (S² + a_i I)⁻¹ and S (S² + a I)⁻¹ = Re (S + i√a I)⁻¹
+                S_new = S / 5.0
+                for c, a in _PF:
+                    S_new = S_new + c * np.linalg.inv(S + 1j * np.sqrt(a) * eye).real
+            else:
+                S2 = S @ S
+                S4 = S2 @ S2
+                num = S @ (5.0 * eye + 10.0 * S2 + S4)
+                den = eye + (10.0 * S2 if form == "corrected" else 10.0 * S) + 5.0 * S4
+                S_new = np.linalg.solve(den, num)
+        except np.linalg.LinAlgError as exc:
+            raise ConvergenceError(f"matrix sign (eq 5.6, {form}): singular denominator "
+                                   f"at iteration {k}") from exc
+        if not np.all(np.isfinite(S_new)):
+            raise ConvergenceError(f"matrix sign (eq 5.6, {form}): iteration overflowed "
+                                   f"at iteration {k}")
+        prev, step = step, np.linalg.norm(S_new - S, 1) / np.linalg.norm(S_new, 1)
+        S = S_new
+        if step <= tol or (step < 1e-6 and step >= prev):
+            inv = np.linalg.norm(S @ S - eye, 1)
+            if inv > np.sqrt(tol) * max(1.0, np.linalg.norm(S, 1)) ** 2:
+                raise ConvergenceError(
+                    f"matrix sign (eq 5.6, {form}): iteration settled after {k} steps on a "
+                    f"matrix that is not a sign (‖S²−I‖₁ = {inv:.3g})")
+            # sign(M)·M = (M²)^½ has its spectrum in the open right half-plane; a wrong
+            # involutory limit (e.g. I for a matrix with stable eigenvalues) fails this.
+            mineig = float(np.min(np.linalg.eigvals(S @ M0).real))
+            if not mineig > 0.0:
+                raise ConvergenceError(
+                    f"matrix sign (eq 5.6, {form}): iteration converged after {k} steps to an "
+                    f"involutory matrix that is not sign(M) (eigenvalue of S·M with real part "
+                    f"{mineig:.3g} ≤ 0)")
+            return SignResult(S=S, iterations=k, step=float(step))
+    raise ConvergenceError(f"matrix sign (eq 5.6, {form}): no convergence in {max_iter} "
+                           f"iterations (last relative step {step:.3g}, tolerance {tol:.1e})")
+
+
+def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign_tol=1e-13,
+               max_iter=60):
+    n = A.shape[0]
+    G = B @ np.linalg.solve(R, B.T)
+    G = 0.5 * (G + G.T)
+    H = np.block([[A, -G], [-Q, -A.T]])
+    sr = matrix_sign(H, scaling=scaling, evaluation=evaluation, tol=sign_tol, max_iter=max_iter)
+    W = sr.S
+    # (W + I) annihilates the stable invariant subspace span[I; P] of H.
+    lhs = np.vstack([W[:n, n:], W[n:, n:] + np.eye(n)])
+    rhs = -np.vstack([W[:n, :n] + np.eye(n), W[n:, :n]])
+    P, *_ = np.linalg.lstsq(lhs, rhs, rcond=None)
+    return P, sr.iterations
+
+
+def _care_slycot(A, B, Q, R):
+    try:
+        from slycot import sb02md
+    except ImportError as exc:  # pragma: no cover - slycot is a declared dependency
+        raise ConvergenceError("method='slycot' needs the slycot package") from exc
+    n = A.shape[0]
+    G = B @ np.linalg.solve(R, B.T)
+    G = 0.5 * (G + G.T)
+    try:
+        out = sb02md(n, A.copy(), G, Q.copy(), "C", scal="N", sort="S")
+    except Exception as exc:  # slycot raises SlycotArithmeticError / ValueError
+        raise ConvergenceError(f"Riccati solve (method='slycot', SB02MD) failed: {exc}") from exc
+    return out[0]
+
+
+def solve_unverified(A, B, Q, R, *, method: str = "scipy", sign_scaling: str = "det",
+                     sign_evaluation: str = "partial_fraction", max_iter: int = 60):
+    """The raw solver behind :func:`solve_care`: (P, iterations), no scaling, no checks.
+
+    For comparisons only (``scripts/compare_riccati.py``); use :func:`solve_care`.  Solver
+    failures raise :class:`ConvergenceError`.  Q and R must be arrays.
+    """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    iterations = 0
+    try:
+        if method == "scipy":
+            P = sla.solve_continuous_are(A, B, Q, R)
+        elif method == "sign":
+            P, iterations = _care_sign(A, B, Q, R, scaling=sign_scaling,
+                                       evaluation=sign_evaluation, max_iter=max_iter)
+        else:
+            P = _care_slycot(A, B, Q, R)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ConvergenceError(f"Riccati solve (method={method!r}) failed: {exc}") from exc
+    return P, iterations
+
+
+def _refusal(message: str, method: str, residual: float) -> ConvergenceError:
+    exc = ConvergenceError(message)
+    exc.method = method          # for reports (scripts/compare_riccati.py)
+    exc.residual = residual
+    return exc
+
+
+def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e-9,
+               sign_scaling: str = "det", sign_evaluation: str = "partial_fraction",
+               max_iter: int = 60) -> CareResult:
+    """Stabilizing solution of A'P + PA − PBR⁻¹B'P + Q = 0 (eq 5.4), verified.
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix (physical units, e.g. 1/s).
+    B : (N, M) array
+        Input matrix.
+    Q : (N, N) array or float
+        State weight, symmetric positive semidefinite (a float q means q·I), physical units.
+    R : (M, M) array or float
+        Control weight, symmetric positive definite (a float r means r·I), e.g. 1/(ft·lbf)².
+    method : {"scipy", "sign", "slycot"}
+        Algorithm (module docstring).
+    scale : (N,) array or None
+        Nominal state magnitudes d; the solve is done on x̃ = D⁻¹x and mapped back.
+    tol : float
+        Largest acceptable relative residual (:func:`care_residual`, scaled coordinates).
+        ``np.inf`` disables the refusal (for comparisons).
+    sign_scaling : {"det", "norm", None}
+        Acceleration of the sign iteration (``method="sign"`` only).
+    sign_evaluation : {"partial_fraction", "polynomial"}
+        Evaluation of eq 5.6 (:func:`matrix_sign`; ``method="sign"`` only).
+    max_iter : int
+        Iteration limit of the sign iteration.
+
+    Returns
+    -------
+    CareResult
+        P and K in physical coordinates, the scaled relative residual, method, iterations.
+
+    Raises
+    ------
+    ConvergenceError
+        The solver failed, the sign iteration did not converge, the residual exceeds ``tol``,
+        or A − BK is not stable.
+    """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    A = np.asarray(A, dtype=float)
+    B = np.asarray(B, dtype=float)
+    if B.ndim == 1:
+        B = B[:, None]
+    n, m = B.shape
+    if A.shape != (n, n):
+        raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
+    Q = _as_Q(Q, n)
+    R = _as_R(R, m)
+    if scale is not None:
+        d = np.asarray(scale, dtype=float)
+        As, Bs, Qs = scale_problem(A, B, Q, d)
+    else:
+        d = None
+        As, Bs, Qs = A, B, Q
+
+    t0 = time.perf_counter()
+    Ps, iterations = solve_unverified(As, Bs, Qs, R, method=method, sign_scaling=sign_scaling,
+                                      sign_evaluation=sign_evaluation, max_iter=max_iter)
+    seconds = time.perf_counter() - t0
+    Ps = 0.5 * (Ps + Ps.T)
+    if not np.all(np.isfinite(Ps)):
+        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values")
+    res = care_residual(As, Bs, Qs, R, Ps)
+    if not res <= tol:
+        raise _refusal(f"Riccati solve (method={method!r}{', state-scaled' if d is not None else ''}"
+                       f"): relative residual {res:.3e} exceeds tolerance {tol:.1e}", method, res)
+    Ks = np.linalg.solve(R, Bs.T @ Ps)
+    worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
+    if not worst < 0.0:
+        raise _refusal(f"Riccati solve (method={method!r}): solution is not stabilizing "
+                       f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
+                       f"{res:.3e})", method, res)
+    if d is not None:
+        P = Ps / d[:, None] / d[None, :]
+        K = Ks / d[None, :]
+    else:
+        P, K = Ps, Ks
+    return CareResult(P=P, K=K, residual=res, method=method, iterations=iterations,
+                      scale=d, seconds=seconds)

@@ -1,0 +1,293 @@
+"""Validated ``qpp`` configuration (pydantic v2), read from YAML.
+
+Units: time s, frequency rad/s, the exponential weighting ``a`` 1/s; plant matrices and signals
+are in the user's units (the report's examples: m, rad, kg).  Unknown keys are rejected; a
+validation error becomes one :class:`acmm.errors.ConfigError` line naming the field.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Literal, Optional, Union
+
+import numpy as np
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from acmm.errors import ConfigError
+
+Matrix = list[list[float]]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+def _finite_matrix(v):
+    a = np.asarray(v, float)
+    if a.ndim != 2 or a.size == 0:
+        raise ValueError("must be a non-empty matrix (list of rows)")
+    if not np.all(np.isfinite(a)):
+        raise ValueError("must contain finite numbers")
+    return v
+
+
+class Plant(_Model):
+    """Lure plant x' = A x + B u + G d + B f1(·), y = C x (eqs 10.1, 13.1, 14.2) and servo-compensator."""
+
+    A: Matrix = Field(description="plant state matrix (n×n), 1/s")
+    B: Matrix = Field(description="control input matrix (n×m)")
+    C: Matrix = Field(description="output matrix (p×n)")
+    G: Matrix = Field(description="disturbance input matrix (n×r), B = G N (assumption iii)")
+    Ac: Matrix = Field(description="servo-compensator matrix (q×q), eq 10.2: internal model of r_o")
+    Bc: Matrix = Field(description="servo-compensator input matrix (q×p), driven by e = r − y")
+    Cc: Matrix = Field(description="servo output matrix (·×q): the H∞ weight W_s e = C_c x_c (13.5)")
+    x0: Optional[list[float]] = Field(None, description="initial plant state (n), default 0; observer starts equal")
+    xc0: Union[Literal["zero", "equilibrium"], list[float]] = Field(
+        "zero", description="initial servo state: 0, 'equilibrium' (K_c x_c = −K_1 x0, least squares) or a list")
+
+    @field_validator("A", "B", "C", "G", "Ac", "Bc", "Cc")
+    @classmethod
+    def _mats(cls, v):
+        return _finite_matrix(v)
+
+
+class SinusoidalNonlinearity(_Model):
+    """f1(y, γ, t) = F0 y + (F1 + γ F_unc) y sin(ω t), |γ| ≤ gamma_max (ch. 13: F0 = 2, F1 = 1.5, γ = Δm).
+
+    The controller and observer cancel the nominal part f1o = F0 y + F1 y sin(ωt) (γ = 0).
+    """
+
+    kind: Literal["sinusoidal"] = "sinusoidal"
+    F0: Matrix = Field(description="constant output feedback part (m×p)")
+    F1: Matrix = Field(description="nominal time-varying part (m×p), multiplies y sin(ωt)")
+    F_unc: Matrix = Field(description="uncertain direction (m×p), multiplies γ y sin(ωt)")
+    omega: float = Field(1.0, ge=0, description="frequency of the time variation, rad/s (0: constant)")
+    gamma_max: float = Field(gt=0, description="uncertainty bound |γ| ≤ gamma_max (dimensionless)")
+
+
+class PolarArmNonlinearity(_Model):
+    """Two-DOF extend/rotate arm of ch. 14 (eq 14.1), uncertain payload M ∈ [M_min, M_max] (kg).
+
+    f1 = [R/(μ+M) x4²; −2 R x3 x4 / I], R = μ x1 + M (x1 + a), I = J1 + J2 + μ x1² + M (x1 + a)².
+    """
+
+    kind: Literal["polar_arm"] = "polar_arm"
+    mu: float = Field(gt=0, description="arm mass μ, kg (not printed in the report)")
+    M_min: float = Field(gt=0, description="lower payload bound, kg")
+    M_max: float = Field(gt=0, description="upper payload bound, kg")
+    J1: float = Field(100.0, gt=0, description="inertia of the mechanism about O, kg·m²")
+    J2: float = Field(100.0, gt=0, description="inertia of the arm about C, kg·m²")
+    a: float = Field(1.0, gt=0, description="distance from the arm's mass centre C to the load, m")
+
+    @model_validator(mode="after")
+    def _bounds(self):
+        if self.M_max < self.M_min:
+            raise ValueError("M_max must be ≥ M_min")
+        return self
+
+    @property
+    def M_nominal(self) -> float:
+        """M° = (M_min + M_max)/2, kg."""
+        return 0.5 * (self.M_min + self.M_max)
+
+
+Nonlinearity = Annotated[Union[SinusoidalNonlinearity, PolarArmNonlinearity], Field(discriminator="kind")]
+
+
+class Hinf(_Model):
+    """Chapter 11 H∞ gains (Riccati 11.1 and the observer Riccati)."""
+
+    rho: float = Field(gt=0, description="control weight ρ in z = [ρ u; W_s e] (dimensionless)")
+    a: float = Field(ge=0, description="exponential weighting a, 1/s (10.27); the report uses 1e-8 / 1e-9")
+    nu: float = Field(1.0, gt=0, description="H∞ level ν of the scaling 11.3 (γ = ν)")
+    weight: Literal["servo", "output"] = Field("servo", description="state weight [0 Cc] or printed [C 0]")
+    observer: Literal["filter", "dgkf"] = Field("filter", description="observer gain formula")
+    search: bool = Field(False, description="run the ch. 11 steps 1-8 search over ν and ρ")
+
+
+class Published(_Model):
+    """Gains and numbers printed in the report, for comparison (and optionally for use)."""
+
+    K1: Optional[Matrix] = Field(None, description="printed K1 (m×n)")
+    Kc: Optional[Matrix] = Field(None, description="printed Kc (m×q)")
+    H: Optional[Matrix] = Field(None, description="printed observer gain H (n×p), report's sign")
+    beta1: Optional[float] = Field(None, description="printed β1")
+    beta3: Optional[float] = Field(None, description="printed β3")
+    beta4: Optional[float] = Field(None, description="printed β4")
+    m: Optional[float] = Field(None, description="printed threshold m")
+
+
+class Spheres(_Model):
+    """Input/output spheres (eqs 10.34–10.35) and the truncation time T."""
+
+    beta_o: float = Field(gt=0, description="output sphere radius β_o, output units")
+    beta_ri: float = Field(ge=0, description="reference sphere radius β_ri, output units")
+    d_inf: float = Field(0.0, ge=0, description="‖d‖∞ used in the threshold m (12.1)")
+    T: float = Field(gt=0, description="truncation time T, s (settling time; 10.44)")
+
+
+class Design(_Model):
+    """Design procedure of ch. 12.1."""
+
+    gains: Literal["design", "published"] = Field("design", description="use the H∞ gains or the printed ones")
+    sector: Optional[Matrix] = Field(None, description="sector [[α_i, β_i], ...] of φ for the circle check; "
+                                                        "default from the nonlinearity")
+    bz: Literal["eq10.7", "printed"] = Field("eq10.7", description="B_z reading for the design loop")
+    bookkeeping: Literal["printed", "report", "circle", "trajectory"] = Field(
+        "report", description="threshold m the design iterates against (see qpp.design)")
+    max_iter: int = Field(8, ge=1, le=100, description="iterations of ch. 12.1 (ρ ← ρ·rho_factor when β1 > m)")
+    rho_factor: float = Field(0.5, gt=0, lt=1, description="ρ reduction per iteration")
+    a_factor: float = Field(0.1, gt=0, lt=1, description="a reduction when the circle criterion fails")
+
+
+class Term(_Model):
+    """One additive term of a signal: sin, step (on [t_on, t_off)), or ramp held after t_end."""
+
+    kind: Literal["sin", "step", "ramp"]
+    amplitude: float = Field(1.0, description="sin amplitude / step value / ramp slope (per s)")
+    omega: float = Field(0.0, ge=0, description="sin frequency, rad/s")
+    phase: float = Field(0.0, description="sin phase, rad")
+    t_on: Optional[float] = Field(None, description="step/ramp start, s (default: −∞ for a step, 0 for a ramp)")
+    t_off: Optional[float] = Field(None, description="step end / ramp hold time, s (default: never)")
+
+
+Signal = list[list[Term]]   # one list of terms per channel
+
+
+class Scenario(_Model):
+    """A simulation case: r = r_o + delta_r, uncertain parameter value, disturbance impulse."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$")
+    delta_r: Optional[Signal] = Field(None, description="reference perturbation r − r_o per channel")
+    gamma: float = Field(0.0, description="uncertain parameter: γ (sinusoidal) or payload M in kg (polar_arm)")
+    impulse_time: Optional[float] = Field(None, ge=0, description="time of a disturbance impulse d = I δ(t − t_i), s")
+    impulse: Optional[list[float]] = Field(None, description="impulse size I per disturbance channel (r)")
+
+
+class Simulation(_Model):
+    """Nonlinear closed-loop simulation (ch. 13.4 / 14.5)."""
+
+    t_final: float = Field(10.0, gt=0, le=1e5, description="simulated time, s")
+    n_samples: int = Field(2001, ge=11, le=200001, description="output samples")
+    rtol: float = Field(1e-8, gt=0, lt=1, description="integrator relative tolerance")
+    atol: float = Field(1e-10, gt=0, lt=1, description="integrator absolute tolerance")
+    r_o: Signal = Field(description="nominal reference r_o(t), one list of terms per output")
+    scenarios: list[Scenario] = Field(min_length=1)
+
+
+class Output(_Model):
+    root: str = Field("runs", description="results root; files go to <root>/<name>/")
+    figures: bool = Field(True, description="write PNG figures next to the HDF5 files")
+
+
+class QppConfig(_Model):
+    """A complete ``qpp`` configuration."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$", description="run name; results go to <root>/<name>/")
+    description: str = ""
+    plant: Plant
+    nonlinearity: Nonlinearity
+    hinf: Hinf
+    spheres: Spheres
+    design: Design = Design()
+    published: Published = Published()
+    simulation: Simulation
+    output: Output = Output()
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        from qpp.lure import LurePlant
+
+        try:
+            P = self.lure_plant()
+        except ConfigError as exc:
+            raise ValueError(str(exc)) from None
+        if self.plant.x0 is not None and len(self.plant.x0) != P.n:
+            raise ValueError(f"plant.x0 must have {P.n} entries")
+        if isinstance(self.plant.xc0, list) and len(self.plant.xc0) != P.q:
+            raise ValueError(f"plant.xc0 must have {P.q} entries")
+        nl = self.nonlinearity
+        if isinstance(nl, SinusoidalNonlinearity):
+            for nm in ("F0", "F1", "F_unc"):
+                if np.shape(getattr(nl, nm)) != (P.m, P.p):
+                    raise ValueError(f"nonlinearity.{nm} must be {P.m}×{P.p}")
+        elif (P.n, P.m, P.p) != (4, 2, 2):
+            raise ValueError("nonlinearity.kind polar_arm needs n=4, m=2, p=2 (eq 14.2)")
+        if len(self.simulation.r_o) != P.p:
+            raise ValueError(f"simulation.r_o must have {P.p} channels (one per output)")
+        for s in self.simulation.scenarios:
+            if s.delta_r is not None and len(s.delta_r) != P.p:
+                raise ValueError(f"scenario {s.name}: delta_r must have {P.p} channels")
+            if s.impulse is not None and len(s.impulse) != P.r:
+                raise ValueError(f"scenario {s.name}: impulse must have {P.r} entries")
+            if (s.impulse is None) != (s.impulse_time is None):
+                raise ValueError(f"scenario {s.name}: give both impulse and impulse_time")
+        if self.design.sector is not None and np.shape(self.design.sector) != (P.r, 2):
+            raise ValueError(f"design.sector must be {P.r} pairs [alpha, beta]")
+        if self.design.gains == "published" and any(
+                x is None for x in (self.published.K1, self.published.Kc, self.published.H)):
+            raise ValueError("design.gains = published needs published.K1, Kc and H")
+        return self
+
+    def lure_plant(self):
+        """The :class:`qpp.lure.LurePlant` of this config."""
+        from qpp.lure import LurePlant
+
+        p = self.plant
+        return LurePlant(p.A, p.B, p.C, p.G, p.Ac, p.Bc, p.Cc)
+
+    def run_dir(self) -> Path:
+        return Path(self.output.root) / self.name
+
+    def to_yaml(self) -> str:
+        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+
+
+def _format_error(exc: ValidationError) -> str:
+    err = exc.errors()[0]
+    loc = ".".join(str(p) for p in err["loc"]) or "config"
+    msg = err["msg"]
+    for prefix in ("Value error, ", "Assertion failed, "):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix):]
+    if err["type"] == "extra_forbidden":
+        msg = "unknown key"
+    extra = f" (and {len(exc.errors()) - 1} more)" if len(exc.errors()) > 1 else ""
+    return f"{loc}: {msg}{extra}"
+
+
+def parse_config(data: object, source: str = "config") -> QppConfig:
+    """Validate a mapping into a :class:`QppConfig` (one-line :class:`ConfigError` on failure)."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"{source}: the top level must be a mapping of keys to values")
+    try:
+        return QppConfig.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(f"{source}: {_format_error(exc)}") from None
+
+
+def load_config(path) -> QppConfig:
+    """Read and validate a YAML file; a bare name (``qpp_siso``) falls back to the packaged configs."""
+    from acmm.config import packaged_config_path
+
+    p = Path(path)
+    if not p.exists():
+        candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml")
+        if len(p.parts) == 1 and candidate.exists():
+            p = candidate
+        else:
+            raise ConfigError(f"config file not found: {path}")
+    if p.is_dir():
+        raise ConfigError(f"config path is a directory, not a file: {p}")
+    try:
+        text = p.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"cannot read config file {p}: {exc}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise ConfigError(f"{p}: not valid YAML{where}") from None
+    return parse_config(data, source=str(p))

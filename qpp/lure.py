@@ -1,0 +1,146 @@
+"""Lure plant, servo-compensator and the closed loop of eq 10.7 (CR-185644 ch. 10.1).
+
+Sign conventions (NOTES.md, Part III, confirmed by rebuilding the printed A_z of eq 13.6 and
+Table 14.1 from the printed gains):
+
+* control ``u = K1 x̂ + Kc x_c − f1o``  (closed loop ``A + B K``, eq 10.6);
+* observer ``x̂' = A x̂ + B u + B f1o + L (y − C x̂)`` with ``L = −H`` where ``H`` is the
+  observer gain *as printed* (eq 10.5 / 13.6);
+* the plant nonlinearity enters with ``+f`` (eqs 13.1, 14.2; eq 10.1 prints ``−f``) and the
+  observer's ``f_o`` follows the plant.
+
+Two readings of ``B_z`` exist: eq 10.7 (zeros in the observer rows) and the printed matrices of
+13.6 / Table 14.1, which carry ``H`` in the reference columns of the observer rows.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acmm.errors import ConfigError
+
+BZ_READINGS = ("eq10.7", "printed")
+
+
+def _m(x, name: str, ndim: int = 2) -> np.ndarray:
+    a = np.atleast_2d(np.asarray(x, dtype=float)) if ndim == 2 else np.asarray(x, float)
+    if not np.all(np.isfinite(a)):
+        raise ConfigError(f"{name}: must contain finite numbers")
+    return a
+
+
+@dataclass(frozen=True)
+class LurePlant:
+    """Matrices of the Lure plant (eq 10.1) and of the servo-compensator (eq 10.2).
+
+    ``x' = A x + B u + G d + B f1(x, y, γ, t)``, ``y = C x``;
+    ``x_c' = Ac x_c + Bc (r − y)``, ``y_c = Cc x_c`` (the H∞ output weight W_s = S_c, eq 13.5).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    G: np.ndarray
+    Ac: np.ndarray
+    Bc: np.ndarray
+    Cc: np.ndarray
+
+    def __post_init__(self):
+        for name in ("A", "B", "C", "G", "Ac", "Bc", "Cc"):
+            object.__setattr__(self, name, _m(getattr(self, name), name))
+        n, m, p, r, q = self.n, self.m, self.p, self.r, self.q
+        checks = [("A", self.A.shape, (n, n)), ("B", self.B.shape, (n, m)), ("C", self.C.shape, (p, n)),
+                  ("G", self.G.shape, (n, r)), ("Ac", self.Ac.shape, (q, q)), ("Bc", self.Bc.shape, (q, p)),
+                  ("Cc", self.Cc.shape[1:], (q,))]
+        for name, got, want in checks:
+            if tuple(got) != tuple(want):
+                raise ConfigError(f"{name}: shape {tuple(got)} does not match {tuple(want)}")
+
+    n = property(lambda self: self.A.shape[0], doc="plant order")
+    m = property(lambda self: self.B.shape[1], doc="number of controls")
+    p = property(lambda self: self.C.shape[0], doc="number of outputs (= references)")
+    r = property(lambda self: self.G.shape[1], doc="number of disturbances")
+    q = property(lambda self: self.Ac.shape[0], doc="servo-compensator order")
+
+    def N(self) -> np.ndarray:
+        """The matrix N of assumption (iii), ``B = G N`` (least squares; checked exactly).
+
+        Raises
+        ------
+        ConfigError
+            If B is not in the range of G (the matching assumption fails).
+        """
+        N, *_ = np.linalg.lstsq(self.G, self.B, rcond=None)
+        if not np.allclose(self.G @ N, self.B, atol=1e-10 * max(1.0, np.abs(self.B).max())):
+            raise ConfigError("plant: B is not G·N for any N (assumption (iii) of ch. 10.1 fails)")
+        return N
+
+
+def augmented(plant: LurePlant):
+    """Plant plus servo-compensator, eqs 10.3–10.4.
+
+    Returns
+    -------
+    Aa, Ba, Ga, Ca : ndarray
+        ``x_a' = Aa x_a + Ba u + Ga w``, ``y = Ca x_a`` with ``x_a = [x; x_c]`` and ``w = [r; d]``.
+    """
+    P = plant
+    n, q, p, r, m = P.n, P.q, P.p, P.r, P.m
+    Aa = np.block([[P.A, np.zeros((n, q))], [-P.Bc @ P.C, P.Ac]])
+    Ba = np.vstack([P.B, np.zeros((q, m))])
+    Ga = np.block([[np.zeros((n, p)), P.G], [P.Bc, np.zeros((q, r))]])
+    Ca = np.hstack([P.C, np.zeros((p, q))])
+    return Aa, Ba, Ga, Ca
+
+
+def closed_loop(plant: LurePlant, K1, Kc, H, *, bz: str = "eq10.7"):
+    """Closed-loop matrices (A_z, B_z, C_z) of eq 10.7, state ``z = [x; x_c; x̂]``.
+
+    Parameters
+    ----------
+    plant : LurePlant
+    K1 : (m, n) array
+        Observer-state feedback gain (eq 10.6).
+    Kc : (m, q) array
+        Servo-compensator state gain (eq 10.6).
+    H : (n, p) array
+        Observer gain with the report's printed sign (``L = −H`` is the output-injection gain).
+    bz : {"eq10.7", "printed"}
+        ``"eq10.7"``: B_z = [[0, G], [Bc, 0], [0, 0]]; ``"printed"``: the observer rows carry ``H`` in
+        the reference columns as in 13.6 and Table 14.1.
+
+    Returns
+    -------
+    Az : (2n+q, 2n+q) ndarray
+    Bz : (2n+q, p+r) ndarray
+        Columns ``[r, d]``; the sector nonlinearity φ enters through the ``d`` columns (eq 10.7).
+    Cz : (p, 2n+q) ndarray
+    """
+    P = plant
+    n, q, p, r = P.n, P.q, P.p, P.r
+    K1 = _m(K1, "K1").reshape(P.m, n)
+    Kc = _m(Kc, "Kc").reshape(P.m, q)
+    H = _m(H, "H").reshape(n, p)
+    L = -H
+    Az = np.block([
+        [P.A, P.B @ Kc, P.B @ K1],
+        [-P.Bc @ P.C, P.Ac, np.zeros((q, n))],
+        [L @ P.C, P.B @ Kc, P.A + P.B @ K1 - L @ P.C],
+    ])
+    Bz = np.block([
+        [np.zeros((n, p)), P.G],
+        [P.Bc, np.zeros((q, r))],
+        [np.zeros((n, p + r))],
+    ])
+    if bz == "printed":
+        Bz[n + q:, :p] = H
+    elif bz != "eq10.7":
+        raise ValueError(f"bz must be one of {BZ_READINGS}, got {bz!r}")
+    Cz = np.hstack([P.C, np.zeros((p, q + n))])
+    return Az, Bz, Cz
+
+
+def channels(plant: LurePlant) -> tuple[slice, slice]:
+    """Column slices of B_z: (reference columns, disturbance/φ columns)."""
+    return slice(0, plant.p), slice(plant.p, plant.p + plant.r)

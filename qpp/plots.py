@@ -1,0 +1,100 @@
+"""Figures of ``qpp design`` (Figs 13.1, 14.2–14.3) and ``qpp simulate`` (Figs 13.2–13.10, 14.4–14.6)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_circle(res, path: Path) -> list[Path]:
+    """Gershgorin mean band of H(−a + jω) against the critical disc, one figure per channel."""
+    from qpp.circle import critical_disc
+
+    plt = _plt()
+    c = res.circle
+    out = []
+    for i in range(c.centres.shape[0]):
+        fig, ax = plt.subplots(figsize=(5.5, 5))
+        h = c.centres[i]
+        idx = np.unique(np.linspace(0, h.size - 1, 300).astype(int))
+        for k in idx:
+            ax.add_patch(plt.Circle((h[k].real, h[k].imag), c.radii[i, k], fill=False, lw=0.3, color="0.6"))
+        ax.plot(h.real, h.imag, "b-", lw=1.2, label="h_ii(−a+jω), ω ≥ 0")
+        ax.plot(h.real, -h.imag, "b--", lw=0.8, label="ω ≤ 0")
+        al, be = c.alpha[i], c.beta[i]
+        if al != 0 and be != 0:
+            cc, R = critical_disc(al, be)
+            ax.add_patch(plt.Circle((cc, 0), R, fill=False, color="r", lw=1.5, label=f"critical disc D({al:g}, {be:g})"))
+            lim = 1.1 * max(abs(cc) + R, np.abs(h).max() + c.radii[i].max())
+        else:
+            lim = 1.1 * (np.abs(h).max() + c.radii[i].max() + 1)
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(-lim, lim)
+        ax.set_aspect("equal")
+        ax.axhline(0, color="k", lw=0.5)
+        ax.axvline(0, color="k", lw=0.5)
+        ax.set_xlabel("Re")
+        ax.set_ylabel("Im")
+        ax.set_title(f"Circle criterion, channel {i + 1}: {'pass' if c.passed else 'FAIL'} "
+                     f"(margin {c.margins[i]:.3g})")
+        ax.legend(fontsize=7, loc="upper right")
+        p = path.with_name(f"{path.stem}_ch{i + 1}.png")
+        fig.savefig(p, dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        out.append(p)
+    return out
+
+
+def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
+    """r, r_o, y, y_o; tracking error |y − y_o| against β_o; control u."""
+    plt = _plt()
+    p = sim.y.shape[0]
+    fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
+    for i in range(p):
+        axes[0].plot(sim.t, sim.r[i], "g:", label=f"r{i + 1}")
+        axes[0].plot(sim.t, sim.r_o[i], "k--", lw=0.8, label=f"r_o{i + 1}")
+        axes[0].plot(sim.t, sim.y[i], "b-", label=f"y{i + 1}")
+        axes[0].plot(sim.t, sim.y_o[i], "r-", lw=0.8, label=f"y_o{i + 1}")
+        axes[1].plot(sim.t, np.abs(sim.y[i] - sim.y_o[i]), label=f"|y{i + 1} − y_o{i + 1}|")
+    axes[0].legend(fontsize=7, ncol=2)
+    axes[0].set_ylabel("reference / output")
+    axes[1].axhline(sim.beta_o, color="r", ls="--", label=f"β_o = {sim.beta_o:g}")
+    axes[1].set_ylabel("tracking error")
+    axes[1].set_title(f"‖y − y_o‖∞ = {sim.error_inf:.4g} ({'within' if sim.passed else 'OUTSIDE'} the sphere)")
+    axes[1].legend(fontsize=7)
+    for j in range(sim.u.shape[0]):
+        axes[2].plot(sim.t, sim.u[j], label=f"u{j + 1}")
+    axes[2].set_ylabel("control u")
+    axes[2].set_xlabel("t, s")
+    axes[2].legend(fontsize=7)
+    fig.suptitle(f"scenario {sim.name} (γ = {sim.gamma:g})")
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def plot_cartesian(sims, a: float, path: Path) -> Path:
+    """Load path Y_A1 = (x1 + a) sin x2, Y_A2 = (x1 + a) cos x2 (Fig 14.5)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(5.5, 6))
+    s0 = sims[0]
+    ax.plot((s0.y_o[0] + a) * np.sin(s0.y_o[1]), (s0.y_o[0] + a) * np.cos(s0.y_o[1]), "k--", lw=0.8,
+            label="nominal y_o")
+    for s in sims:
+        ax.plot((s.y[0] + a) * np.sin(s.y[1]), (s.y[0] + a) * np.cos(s.y[1]), label=f"{s.name} (M = {s.gamma:g} kg)")
+    ax.set_aspect("equal")
+    ax.set_xlabel("Y_A1, m")
+    ax.set_ylabel("Y_A2, m")
+    ax.legend(fontsize=7)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path

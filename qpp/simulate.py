@@ -1,0 +1,199 @@
+"""Nonlinear closed-loop simulation of a Lure plant with observer and servo-compensator.
+
+State z = [x; x_c; x̂] (eq 10.7).  With f1 the plant nonlinearity and f1o its nominal value
+(γ = nominal), the loop is (sign conventions of NOTES.md / :mod:`qpp.lure`):
+
+    u   = K1 x̂ + Kc x_c − f1o                       (eq 10.6, "computed torque" in ch. 14)
+    x'  = A x + B u + G d + B f1(x, y, γ, t)         (eqs 13.1, 14.2)
+    x_c'= Ac x_c + Bc (r − y)                        (eq 10.2)
+    x̂'  = A x̂ + B u + B f1o + L (y − C x̂),  L = −H  (eq 10.5)
+
+The nominal output y_o is the same loop with r = r_o, γ = nominal and d = 0 (eq 10.29).  The
+sphere check is ‖y − y_o‖∞ = max_i sup_t |y_i − y_oi| ≤ β_o (eq 10.35).  The nonlinear feedback
+terms are evaluated at the true state x (the report's φ(x, M, t) in ch. 14 uses x).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from acmm.errors import ConvergenceError
+from qpp.config import PolarArmNonlinearity, QppConfig, Scenario, SinusoidalNonlinearity, Term
+from qpp.lure import LurePlant
+
+
+def eval_terms(terms: list[Term], t: float) -> float:
+    """Value of a sum of :class:`~qpp.config.Term` at time t (s)."""
+    v = 0.0
+    for tm in terms:
+        if tm.kind == "sin":
+            v += tm.amplitude * np.sin(tm.omega * t + tm.phase)
+        elif tm.kind == "step":
+            on = -np.inf if tm.t_on is None else tm.t_on
+            off = np.inf if tm.t_off is None else tm.t_off
+            v += tm.amplitude if on <= t < off else 0.0
+        else:  # ramp
+            on = 0.0 if tm.t_on is None else tm.t_on
+            off = np.inf if tm.t_off is None else tm.t_off
+            v += tm.amplitude * (min(max(t, on), off) - on)
+    return v
+
+
+def eval_signal(signal, t: float) -> np.ndarray:
+    """Vector signal (one list of terms per channel) at time t."""
+    return np.array([eval_terms(ch, t) for ch in signal]) if signal else np.zeros(0)
+
+
+def make_f1(nl, plant: LurePlant):
+    """Matched nonlinearity f1(x, t, γ) ∈ R^m (f = B f1) of the config's kind."""
+    if isinstance(nl, SinusoidalNonlinearity):
+        F0, F1, Fu = (np.asarray(getattr(nl, k), float) for k in ("F0", "F1", "F_unc"))
+        C = plant.C
+
+        def f1(x, t, g):
+            y = C @ x
+            return F0 @ y + (F1 + g * Fu) @ y * np.sin(nl.omega * t)
+        return f1, 0.0
+    if isinstance(nl, PolarArmNonlinearity):
+        mu, J, a = nl.mu, nl.J1 + nl.J2, nl.a
+
+        def f1(x, t, M):
+            x1, _, x3, x4 = x
+            R = mu * x1 + M * (x1 + a)
+            I = J + mu * x1 ** 2 + M * (x1 + a) ** 2
+            return np.array([R / (mu + M) * x4 ** 2, -2.0 * R * x3 * x4 / I])
+        return f1, nl.M_nominal
+    raise TypeError(f"unknown nonlinearity {type(nl).__name__}")
+
+
+def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
+    """z(0) = [x0; x_c0; x̂0 = x0]."""
+    n, q = plant.n, plant.q
+    x0 = np.zeros(n) if cfg.plant.x0 is None else np.asarray(cfg.plant.x0, float)
+    if isinstance(cfg.plant.xc0, list):
+        xc0 = np.asarray(cfg.plant.xc0, float)
+    elif cfg.plant.xc0 == "equilibrium":
+        xc0 = np.linalg.lstsq(np.atleast_2d(Kc), -np.atleast_2d(K1) @ x0, rcond=None)[0]
+    else:
+        xc0 = np.zeros(q)
+    return np.concatenate([x0, xc0, x0])
+
+
+@dataclass
+class SimResult:
+    """One scenario: samples of r, r_o, y, y_o, u and the sphere check."""
+
+    name: str
+    t: np.ndarray
+    r: np.ndarray       #: (p, N)
+    r_o: np.ndarray     #: (p, N)
+    y: np.ndarray       #: (p, N)
+    y_o: np.ndarray     #: (p, N)
+    u: np.ndarray       #: (m, N) control including −f1o
+    u_o: np.ndarray     #: (m, N) nominal control
+    x: np.ndarray       #: (n, N) plant state
+    x_o: np.ndarray     #: (n, N) nominal plant state
+    gamma: float
+    error_inf: float    #: ‖y − y_o‖∞
+    error_per_output: np.ndarray
+    beta_o: float
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.error_inf <= self.beta_o)
+
+
+def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nominal: float, r_fun,
+                  t_eval, z0, impulse_time=None, impulse=None, rtol=1e-8, atol=1e-10):
+    """Integrate the nonlinear loop; returns (z samples (N_z, N), u samples (m, N)).
+
+    A disturbance impulse I δ(t − t_i) is applied as the jump x(t_i⁺) = x(t_i⁻) + G I.
+    """
+    A, B, C, G, Ac, Bc = plant.A, plant.B, plant.C, plant.G, plant.Ac, plant.Bc
+    K1, Kc, L = np.atleast_2d(K1), np.atleast_2d(Kc), -np.atleast_2d(H)
+    n, q = plant.n, plant.q
+
+    def control(z, t):
+        x, xc, xh = z[:n], z[n:n + q], z[n + q:]
+        f1o = f1(x, t, gamma_nominal)
+        return K1 @ xh + Kc @ xc - f1o, f1o
+
+    def rhs(t, z):
+        x, xc, xh = z[:n], z[n:n + q], z[n + q:]
+        y = C @ x
+        u, f1o = control(z, t)
+        dx = A @ x + B @ (u + f1(x, t, gamma))
+        dxc = Ac @ xc + Bc @ (r_fun(t) - y)
+        dxh = A @ xh + B @ (u + f1o) + L @ (y - C @ xh)
+        return np.concatenate([dx, dxc, dxh])
+
+    t_eval = np.asarray(t_eval, float)
+    t0, tf = t_eval[0], t_eval[-1]
+    segments = [(t0, tf)]
+    if impulse_time is not None and t0 < impulse_time < tf:
+        segments = [(t0, impulse_time), (impulse_time, tf)]
+    elif impulse_time is not None and impulse_time <= t0:
+        z0 = z0.copy()
+        z0[:n] += G @ np.asarray(impulse, float)
+    zs = []
+    z = np.asarray(z0, float)
+    for k, (ta, tb) in enumerate(segments):
+        if k == 1:
+            z = z.copy()
+            z[:n] += G @ np.asarray(impulse, float)
+        mask = (t_eval >= ta) & ((t_eval < tb) if k < len(segments) - 1 else (t_eval <= tb))
+        te = np.concatenate([[ta], t_eval[mask], [tb]])
+        max_step = (tf - t0) / 200
+        sol = solve_ivp(rhs, (ta, tb), z, method="DOP853", t_eval=np.unique(te), rtol=rtol, atol=atol,
+                        max_step=max_step)
+        if not sol.success:
+            raise ConvergenceError(f"simulation failed at t = {sol.t[-1]:.4g} s: {sol.message}")
+        keep = np.isin(sol.t, t_eval[mask])
+        zs.append(sol.y[:, keep])
+        z = sol.y[:, -1]
+    Z = np.hstack(zs)
+    U = np.array([control(Z[:, i], t)[0] for i, t in enumerate(t_eval)]).T
+    return Z, U
+
+
+def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=None) -> SimResult:
+    """Run one scenario and its nominal loop; compare ‖y − y_o‖∞ with β_o."""
+    plant = cfg.lure_plant()
+    sim = cfg.simulation
+    f1, g_nom = make_f1(cfg.nonlinearity, plant)
+    t = np.linspace(0.0, sim.t_final, sim.n_samples)
+    z0 = initial_state(cfg, plant, K1, Kc)
+    r_o_fun = lambda tt: eval_signal(sim.r_o, tt)  # noqa: E731
+    if scenario.delta_r is None:
+        r_fun = r_o_fun
+    else:
+        r_fun = lambda tt: r_o_fun(tt) + eval_signal(scenario.delta_r, tt)  # noqa: E731
+    if nominal is None:
+        nominal = simulate_loop(plant, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom, r_fun=r_o_fun,
+                                t_eval=t, z0=z0, rtol=sim.rtol, atol=sim.atol)
+    Zo, Uo = nominal
+    Z, U = simulate_loop(plant, K1, Kc, H, f1, gamma=scenario.gamma, gamma_nominal=g_nom, r_fun=r_fun,
+                         t_eval=t, z0=z0, impulse_time=scenario.impulse_time, impulse=scenario.impulse,
+                         rtol=sim.rtol, atol=sim.atol)
+    n = plant.n
+    y, yo = plant.C @ Z[:n], plant.C @ Zo[:n]
+    err = np.max(np.abs(y - yo), axis=1)
+    R = np.array([r_fun(tt) for tt in t]).T
+    Ro = np.array([r_o_fun(tt) for tt in t]).T
+    return SimResult(scenario.name, t, R, Ro, y, yo, U, Uo, Z[:n], Zo[:n], scenario.gamma,
+                     float(err.max()), err, cfg.spheres.beta_o)
+
+
+def simulate(cfg: QppConfig, K1, Kc, H) -> list[SimResult]:
+    """All scenarios of a config (the nominal loop is integrated once)."""
+    plant = cfg.lure_plant()
+    sim = cfg.simulation
+    f1, g_nom = make_f1(cfg.nonlinearity, plant)
+    t = np.linspace(0.0, sim.t_final, sim.n_samples)
+    z0 = initial_state(cfg, plant, K1, Kc)
+    nominal = simulate_loop(plant, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom,
+                            r_fun=lambda tt: eval_signal(sim.r_o, tt), t_eval=t, z0=z0,
+                            rtol=sim.rtol, atol=sim.atol)
+    return [simulate_scenario(cfg, K1, Kc, H, s, nominal) for s in sim.scenarios]

@@ -1,0 +1,122 @@
+#!/usr/bin/env python
+"""Compare the Riccati solvers of acmm.riccati on the MB3 and AC design problems.
+
+For each configuration two Riccati equations of the sector LQR (acmm.lqr, ch. 5.2) are solved:
+
+* **step 1** — the minimum-energy LQR on A + σn·I (Q = 0, R = I/(100 ft·lbf)²), the solve
+  every design starts from;
+* **final** — (A + σn·I, B, Q, R) with the Q returned by the design (after pole shifting), the
+  equation whose stabilizing solution must reproduce K.
+
+Each is solved by the sign function (eq 5.6 corrected, partial-fraction evaluation), scipy and
+Slycot, on the state-scaled problem (x = D x̃, D = diag(LinearModel.scales)) and on the raw
+physical-unit problem.  The residual is always evaluated the same way: the relative residual of
+acmm.riccati.care_residual in the *scaled* coordinates (the unscaled P is mapped by P̃ = DPD).
+"!" marks a solution that is not stabilizing; "fail" a solver that returned nothing.  Time is
+the median wall time of the solve alone (no verification) over ``--repeat`` runs, with
+single-threaded BLAS.
+
+Usage: python scripts/compare_riccati.py [--repeat 7] [--out FILE.md]
+"""
+from __future__ import annotations
+
+import os
+
+# Time single-threaded BLAS: 24/48-order problems only lose to thread start-up and contention
+# (several-fold slower on a loaded 2-core machine).  Must precede the numpy import.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from acmm.config import load_config
+from acmm.errors import ConvergenceError
+from acmm.linearize import linearize_config
+from acmm.lqr import sector_lqr
+from acmm.riccati import care_residual, scale_problem, solve_unverified
+
+SOLVERS = [("sign", {}), ("sign (polynomial eval.)", {"sign_evaluation": "polynomial"}),
+           ("scipy", {}), ("slycot", {})]
+
+
+def problems(name):
+    cfg = load_config(name)
+    m = linearize_config(cfg)
+    sec = cfg.design.sector
+    d = m.scales
+    alpha = sec.sigma * m.n
+    R = cfg.design.R * np.eye(3)
+    design = sector_lqr(m.A, m.B, R, m.n, sigma=sec.sigma, half_angle_deg=sec.half_angle_deg,
+                        Q0=cfg.design.Q0 or None, scale=d)
+    As = m.A + alpha * np.eye(24)
+    return d, R, {"step 1": (As, m.B, np.zeros((24, 24))), "final": (As, m.B, design.Q)}
+
+
+def measure(A, B, Q, R, d, scaled, solver, kw, repeat):
+    """(scaled relative residual, stabilizing?, median seconds) or None on failure."""
+    At, Bt, Qt = scale_problem(A, B, Q, d)
+    args = (At, Bt, Qt, R) if scaled else (A, B, Q, R)
+    method = solver.split()[0]
+    times = []
+    try:
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            P, _it = solve_unverified(*args, method=method, **kw)
+            times.append(time.perf_counter() - t0)
+    except ConvergenceError:
+        return None
+    Pt = P if scaled else P * d[:, None] * d[None, :]
+    Pt = 0.5 * (Pt + Pt.T)
+    res = care_residual(At, Bt, Qt, R, Pt)
+    K = np.linalg.solve(R, Bt.T @ Pt)
+    stable = bool(np.max(np.linalg.eigvals(At - Bt @ K).real) < 0) and np.all(np.isfinite(Pt))
+    return res, stable, float(np.median(times))
+
+
+def table(repeat=7) -> str:
+    cols = []
+    data = {}
+    for name in ("mb3", "ac"):
+        d, R, probs = problems(name)
+        for pname, (A, B, Q) in probs.items():
+            col = f"{name.upper()} {pname}"
+            cols.append(col)
+            for solver, kw in SOLVERS:
+                for scaled in (True, False):
+                    data[(solver, scaled, col)] = measure(A, B, Q, R, d, scaled, solver, kw, repeat)
+    head = "| solver | states | " + " | ".join(cols) + " |"
+    sep = "|---|---|" + "---|" * len(cols)
+    lines = [head, sep]
+    for solver, _kw in SOLVERS:
+        for scaled in (True, False):
+            cells = []
+            for col in cols:
+                r = data[(solver, scaled, col)]
+                if r is None:
+                    cells.append("fail")
+                else:
+                    res, stable, t = r
+                    cells.append(f"{res:.1e}{'' if stable else ' !'} / {t * 1e3:.1f} ms")
+            lines.append(f"| {solver} | {'scaled' if scaled else 'unscaled'} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--out", default=None, help="also write the table to this markdown file")
+    a = ap.parse_args()
+    t = table(a.repeat)
+    print(t)
+    print("\nrelative residual (acmm.riccati.care_residual, scaled coordinates) / median solve time;"
+          " '!' = not stabilizing, 'fail' = no solution")
+    if a.out:
+        with open(a.out, "w") as fh:
+            fh.write(t + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,173 @@
+"""Riccati solvers (eq 5.4) and the matrix sign function (eqs 5.5–5.6).
+
+References are independent of the code under test: SLICOT SB02PD's published example, the
+spectral definition of sign(M) through an eigendecomposition, the residual of eq 5.4 written out
+in the test, and scipy's solver called directly.
+"""
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from acmm.errors import ConvergenceError
+from acmm.riccati import METHODS, care_residual, matrix_sign, solve_care
+
+# SLICOT SB02PD documentation example: A'X + XA − XGX + Q = 0 with G = diag(0, 1) = B R⁻¹ B'.
+SB02PD_A = np.array([[0.0, 1.0], [0.0, 0.0]])
+SB02PD_B = np.array([[0.0], [1.0]])
+SB02PD_Q = np.diag([1.0, 2.0])
+SB02PD_X = np.array([[2.0, 1.0], [1.0, 2.0]])
+
+
+def _hamiltonian(A, G, Q):
+    return np.block([[A, -G], [-Q, -A.T]])
+
+
+def _sign_by_eig(M):
+    w, V = np.linalg.eig(M)
+    return ((V * np.sign(w.real)) @ np.linalg.inv(V)).real
+
+
+def _random_problem(rng, nx=6, m=2, unstable=True):
+    """Stabilizable (A, B) (B generic), Q ⪰ 0 with (Q, A) detectable, R ≻ 0."""
+    A = rng.standard_normal((nx, nx))
+    if not unstable:
+        A -= (np.max(np.linalg.eigvals(A).real) + 0.5) * np.eye(nx)
+    B = rng.standard_normal((nx, m))
+    C = rng.standard_normal((nx, nx))
+    Q = C @ C.T
+    L = rng.standard_normal((m, m))
+    R = L @ L.T + m * np.eye(m)
+    return A, B, Q, R
+
+
+def _residual_by_hand(A, B, Q, R, P):
+    res = A.T @ P + P @ A - P @ B @ np.linalg.inv(R) @ B.T @ P + Q
+    return np.linalg.norm(res) / np.linalg.norm(P @ B @ np.linalg.inv(R) @ B.T @ P)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_sb02pd_published_example(method):
+    r = solve_care(SB02PD_A, SB02PD_B, SB02PD_Q, 1.0, method=method)
+    np.testing.assert_allclose(r.P, SB02PD_X, atol=1e-12)
+    np.testing.assert_allclose(r.K, [[1.0, 2.0]], atol=1e-12)  # K = R⁻¹B'X = second row of X
+    assert r.residual < 1e-14 and r.method == method
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_three_methods_agree_on_random_problems(seed):
+    rng = np.random.default_rng(seed)
+    A, B, Q, R = _random_problem(rng, nx=6 + seed)
+    ref = sla.solve_continuous_are(A, B, Q, R)
+    for method in METHODS:
+        r = solve_care(A, B, Q, R, method=method)
+        np.testing.assert_allclose(r.P, ref, rtol=1e-8, atol=1e-8 * np.linalg.norm(ref))
+        # stabilizing, and the residual written out here
+        assert np.max(np.linalg.eigvals(A - B @ r.K).real) < 0
+        assert _residual_by_hand(A, B, Q, R, r.P) < 1e-10
+
+
+def test_residual_is_independent_of_solver_and_can_fail():
+    A, B, Q, R = _random_problem(np.random.default_rng(7))
+    X = sla.solve_continuous_are(A, B, Q, R)
+    assert care_residual(A, B, Q, R, X) < 1e-12
+    # definition: ‖res‖_F / (‖Q‖ + 2‖A'P‖ + ‖PGP‖), checked on a perturbed solution
+    Xp = X + 1e-3 * np.eye(len(X))
+    G = B @ np.linalg.solve(R, B.T)
+    res = A.T @ Xp + Xp @ A - Xp @ G @ Xp + Q
+    den = np.linalg.norm(Q) + 2 * np.linalg.norm(A.T @ Xp) + np.linalg.norm(Xp @ G @ Xp)
+    assert care_residual(A, B, Q, R, Xp) == pytest.approx(np.linalg.norm(res) / den, rel=1e-12)
+    assert care_residual(A, B, Q, R, Xp) > 1e-6
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_residual_above_tolerance_refuses(method):
+    A, B, Q, R = _random_problem(np.random.default_rng(3))
+    with pytest.raises(ConvergenceError, match=rf"method='{method}'.*residual .* exceeds tolerance 1\.0e-30"):
+        solve_care(A, B, Q, R, method=method, tol=1e-30)
+
+
+def test_scaling_maps_back_to_physical_units():
+    """A badly scaled problem (states of magnitude 1e-5 … 1e6) solved with scale=d equals the
+    well-scaled problem mapped by x = D x̃."""
+    rng = np.random.default_rng(11)
+    At, Bt, Qt, R = _random_problem(rng, nx=6)
+    d = 10.0 ** np.array([-5, -2, 0, 2, 4, 6])
+    A = At * d[:, None] / d[None, :]        # x = D x̃  ⇒  A = D Ã D⁻¹
+    B = Bt * d[:, None]
+    Q = Qt / d[:, None] / d[None, :]
+    Xt = sla.solve_continuous_are(At, Bt, Qt, R)
+    for method in METHODS:
+        r = solve_care(A, B, Q, R, method=method, scale=d)
+        np.testing.assert_allclose(r.P * d[:, None] * d[None, :], Xt, rtol=1e-8,
+                                   atol=1e-9 * np.linalg.norm(Xt))
+        np.testing.assert_allclose(r.K * d[None, :], np.linalg.solve(R, Bt.T @ Xt), rtol=1e-8,
+                                   atol=1e-9 * np.linalg.norm(Xt))
+        assert r.residual == pytest.approx(care_residual(At, Bt, Qt, R, r.P * np.outer(d, d)),
+                                           rel=1e-6, abs=1e-15)
+
+
+def test_sign_iteration_matches_spectral_definition():
+    rng = np.random.default_rng(5)
+    A, B, Q, R = _random_problem(rng, nx=8)
+    H = _hamiltonian(A, B @ np.linalg.solve(R, B.T), Q)
+    ref = _sign_by_eig(H)
+    for scaling in ("det", "norm", None):
+        for evaluation in ("partial_fraction", "polynomial"):
+            s = matrix_sign(H, scaling=scaling, evaluation=evaluation)
+            np.testing.assert_allclose(s.S, ref, atol=1e-9 * np.linalg.norm(ref))
+            assert s.iterations < 15
+
+
+def test_partial_fraction_is_the_rational_map_of_eq_5_6():
+    """One unscaled step in both evaluations is the same matrix (corrected eq 5.6)."""
+    rng = np.random.default_rng(2)
+    S = rng.standard_normal((5, 5)) + 3 * np.eye(5)
+    one_pf = matrix_sign(S, scaling=None, max_iter=1, tol=np.inf)
+    one_poly = matrix_sign(S, scaling=None, max_iter=1, tol=np.inf, evaluation="polynomial")
+    I = np.eye(5)
+    S2 = S @ S
+    expect = S @ (5 * I + 10 * S2 + S2 @ S2) @ np.linalg.inv(I + 10 * S2 + 5 * S2 @ S2)
+    np.testing.assert_allclose(one_pf.S, expect, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(one_poly.S, expect, rtol=1e-12, atol=1e-12)
+
+
+def test_printed_denominator_of_eq_5_6_does_not_give_the_sign():
+    """NOTES.md: the printed I + 10S + 5S⁴ never converges to the sign function."""
+    f = lambda x: x * (5 + 10 * x**2 + x**4) / (1 + 10 * x + 5 * x**4)   # noqa: E731
+    # scalar: −1 is not a fixed point (sign(−1) = −1 but f(−1) = 4) ...
+    assert f(-1.0) == pytest.approx(4.0)
+    # ... and iterates from the left half-line either end at +1 (wrong) or wander near −2
+    x = -0.5
+    for _ in range(100):
+        x = f(x)
+    assert x == pytest.approx(1.0)
+    xs = [-3.0]
+    for _ in range(200):
+        xs.append(f(xs[-1]))
+    assert np.ptp(xs[-20:]) > 0.1 and max(xs[-20:]) < 0
+    # matrix: SB02PD's Hamiltonian, with and without scaling
+    H = _hamiltonian(SB02PD_A, SB02PD_B @ SB02PD_B.T, SB02PD_Q)
+    for scaling in ("det", None):
+        with pytest.raises(ConvergenceError, match="printed"):
+            matrix_sign(H, form="printed", scaling=scaling, max_iter=300)
+    # the corrected iteration converges, to the spectral sign
+    np.testing.assert_allclose(matrix_sign(H).S, _sign_by_eig(H), atol=1e-12)
+    # a random Hamiltonian
+    A, B, Q, R = _random_problem(np.random.default_rng(1))
+    H = _hamiltonian(A, B @ np.linalg.solve(R, B.T), Q)
+    with pytest.raises(ConvergenceError):
+        matrix_sign(H, form="printed", max_iter=300)
+
+
+def test_sign_of_matrix_with_imaginary_eigenvalues_fails():
+    with pytest.raises(ConvergenceError, match="matrix sign"):
+        matrix_sign(np.array([[0.0, 1.0], [-1.0, 0.0]]), max_iter=40)
+
+
+def test_not_stabilizable_refuses():
+    """An uncontrollable unstable mode: no stabilizing solution exists."""
+    A = np.diag([1.0, -1.0])
+    B = np.array([[0.0], [1.0]])
+    for method in METHODS:
+        with pytest.raises(ConvergenceError):
+            solve_care(A, B, np.eye(2), 1.0, method=method)
