@@ -94,12 +94,14 @@ def schedule_gain(form: str, coef: np.ndarray, nodes: np.ndarray, gains: np.ndar
 
 @dataclass
 class ScheduleCheck:
-    """Sector margins (units of n; > 0 means inside) of the scheduled gain on local models."""
+    """Sector margins (units of n; > 0 means inside) and the largest pole real part (units of
+    n; < 0 means stable) of the scheduled gain on the local linear models."""
 
     names: list[str]
     theta2: np.ndarray
     margin: np.ndarray
     kind: list[str] = field(default_factory=list)
+    max_real: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def worst(self) -> float:
@@ -226,7 +228,7 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], cfg) -> Schedule
     """Sector margin of the scheduled gain at each design point and each blend midpoint."""
     d = cfg.design
     n = cfg.orbit_rate
-    names, th2, margins, kinds = [], [], [], []
+    names, th2, margins, kinds, max_real = [], [], [], [], []
 
     def _check(name, model, theta2, kind):
         poles = np.linalg.eigvals(model.A - model.B @ fit.gain(theta2))
@@ -234,6 +236,7 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], cfg) -> Schedule
         th2.append(theta2)
         kinds.append(kind)
         margins.append(np.min(lqr.sector_margin(poles, n, d.sector.sigma, d.sector.half_angle_deg)))
+        max_real.append(np.max(poles.real) / n)
 
     for p in points:
         _check(p.spec.name, p.model, p.tea.theta[1], "design point")
@@ -244,4 +247,4 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], cfg) -> Schedule
         t = solve_tea_near(spec.inertia, n, spec.bias, 0.5 * (a.tea.theta + b.tea.theta))
         model = lin.design_point(spec.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
         _check(spec.name, model, t.theta[1], "midpoint")
-    return ScheduleCheck(names, np.array(th2), np.array(margins), kinds)
+    return ScheduleCheck(names, np.array(th2), np.array(margins), kinds, np.array(max_real))

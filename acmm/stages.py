@@ -223,6 +223,7 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
             "check_names": Dataset(np.array(r.check.names, dtype="S"), "1", "where the scheduled gain was checked"),
             "check_theta2": Dataset(r.check.theta2, "rad", "pitch TEA of each check"),
             "check_margin": Dataset(r.check.margin, "n", "sector margin of the scheduled gain (>0 inside)"),
+            "check_max_real": Dataset(r.check.max_real, "n", "largest closed-loop Re λ with the scheduled gain"),
         }
     path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
                     {"stage": "design", "design_hash": r.table.design_hash, "n_points": P,

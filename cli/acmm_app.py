@@ -123,8 +123,10 @@ def design(config: Optional[Path] = ConfigArg) -> None:
         c = r.check
         worst = int(np.argmin(c.margin))
         verdict = "all in the sector" if c.worst > 0 else "NOT all in the sector"
-        typer.echo(f"  scheduled gain on the local models ({len(c.names)} checks): {verdict}; worst margin "
-                   f"{c.worst:+.3f} n at {c.names[worst]} ({c.kind[worst]})")
+        typer.echo(f"  scheduled gain ({r.fit.form}) on the local models ({len(c.names)} checks): {verdict}; "
+                   f"worst margin {c.worst:+.3f} n at {c.names[worst]} ({c.kind[worst]})")
+        stable = "stable at every check" if c.max_real.max() < 0 else "UNSTABLE at some checks"
+        typer.echo(f"  scheduled closed loops: {stable}; largest Re(pole) = {c.max_real.max():+.3f} n")
     typer.echo(f"  wrote {path}")
 
 
@@ -152,3 +154,20 @@ def simulate(config: Optional[Path] = ConfigArg) -> None:
 
 def main() -> None:
     app()
+
+
+def _register_optional_commands() -> None:
+    """Commands that live in their own CLI modules (``register(app)`` adds them)."""
+    import importlib
+
+    for mod in ("cli.acmm_sweep", "cli.acmm_report"):
+        try:
+            module = importlib.import_module(mod)
+        except ModuleNotFoundError as exc:
+            if exc.name != mod:
+                raise
+            continue
+        module.register(app)
+
+
+_register_optional_commands()
