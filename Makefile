@@ -15,13 +15,14 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/acmm tea
+	OPENBLAS_NUM_THREADS=1 $(BIN)/acmm simulate
 
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest
 
 bench: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python scripts/bench.py
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench.py
+	OPENBLAS_NUM_THREADS=1 $(BIN)/python scripts/compare_riccati.py
 
 clean:
 	rm -rf $(VENV) runs build *.egg-info

@@ -99,13 +99,15 @@ def _progress(total_hint: int = 0):
 
 @app.command()
 @user_errors
-def design(config: Optional[Path] = ConfigArg) -> None:
+def design(config: Optional[Path] = ConfigArg,
+           figures: Optional[bool] = typer.Option(None, "--figures/--no-figures",
+                                                  help="write figures (default: output.figures)")) -> None:
     """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures."""
     import numpy as np
 
     from acmm.stages import run_design
 
-    r, path = run_design(config, progress=_progress())
+    r, path = run_design(config, progress=_progress(), figures=figures)
     typer.echo("", err=True)
     cfg = r.config
     n = cfg.orbit_rate
@@ -132,13 +134,15 @@ def design(config: Optional[Path] = ConfigArg) -> None:
 
 @app.command()
 @user_errors
-def simulate(config: Optional[Path] = ConfigArg) -> None:
+def simulate(config: Optional[Path] = ConfigArg,
+             figures: Optional[bool] = typer.Option(None, "--figures/--no-figures",
+                                                    help="write figures (default: output.figures)")) -> None:
     """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures."""
     import numpy as np
 
     from acmm.stages import run_simulate
 
-    r, path = run_simulate(config, progress=_progress())
+    r, path = run_simulate(config, progress=_progress(), figures=figures)
     cfg, s = r.config, r.sim
     n = cfg.orbit_rate
     typer.echo(f"{cfg.name}: design {r.design_note}")

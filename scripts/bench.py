@@ -1,0 +1,111 @@
+"""`make bench`: speed and memory targets (printed, never asserted in tests).
+
+Targets (issues 4 and 5):
+* `acmm --help` < 0.5 s;
+* `acmm design configs/staircase.yaml` < 2 s wall;
+* the 130-orbit stair-case simulation ≤ 1 s wall after the one-time (cached) compilation,
+  ≥ 15x faster than the same model integrated by scipy `solve_ivp` (RK45, rtol 1e-8) with a plain
+  numpy right-hand side; peak memory < 500 MB.
+"""
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import resource  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+from scipy.integrate import solve_ivp  # noqa: E402
+
+from acmm import simulate as sm  # noqa: E402
+from acmm.config import load_config  # noqa: E402
+from acmm.stages import compute_design  # noqa: E402
+
+BIN = Path(sys.executable).parent
+
+
+def _wall(cmd, cwd, repeat=3):
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        subprocess.run(cmd, cwd=cwd, check=True, capture_output=True)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def _row(name, value, target, ok):
+    print(f"  {name:<52} {value:>14}   target {target:<12} {'ok' if ok else 'MISSED'}")
+
+
+def baseline_solve_ivp(sc: sm.Scenario, rtol=1e-8):
+    """The same closed loop, level by level, with scipy's RK45 and the numpy right-hand side."""
+    x = sc.x0.copy()
+    ends = np.append(sc.level_start[1:], sc.t_end)
+    steps = 0
+    for k, (t0, t1) in enumerate(zip(sc.level_start, ends)):
+        sol = solve_ivp(lambda t, y: sm.rhs_numpy(t, y, sc, k), (t0, t1), x, method="RK45",
+                        rtol=rtol, atol=sc.atol)
+        x = sol.y[:, -1]
+        steps += sol.t.size
+    return x, steps
+
+
+def main() -> int:
+    print("acmm-qpp benchmarks (2-core machine; best of repeated runs)")
+    with tempfile.TemporaryDirectory() as tmp:
+        t_help = _wall([str(BIN / "acmm"), "--help"], tmp)
+        _row("acmm --help", f"{t_help:.3f} s", "< 0.5 s", t_help < 0.5)
+        t_design_cli = _wall([str(BIN / "acmm"), "design", "staircase", "--no-figures"], tmp, repeat=2)
+        _row("acmm design configs/staircase.yaml --no-figures (wall)", f"{t_design_cli:.2f} s", "< 2 s",
+             t_design_cli < 2.0)
+        t_design_fig = _wall([str(BIN / "acmm"), "design", "staircase"], tmp, repeat=1)
+        _row("acmm design configs/staircase.yaml with figures (wall)", f"{t_design_fig:.2f} s", "-", True)
+
+    cfg = load_config("staircase")
+    t0 = time.perf_counter()
+    table = compute_design(cfg).table
+    t_design = time.perf_counter() - t0
+    _row("staircase design in-process (12 points + 11 checks)", f"{t_design:.2f} s", "-", True)
+
+    sc = sm.scenario_from_config(cfg, table)
+    t0 = time.perf_counter()
+    sm.simulate(sc)                       # compile or load the cached machine code
+    t_first = time.perf_counter() - t0
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        r = sm.simulate(sc)
+        times.append(time.perf_counter() - t0)
+    t_sim = min(times)
+    _row("first simulate() in this process (cache load/compile)", f"{t_first:.2f} s", "-", True)
+    _row(f"130-orbit stair-case, compiled DOPRI5 ({r.n_steps} steps)", f"{t_sim:.3f} s", "<= 1 s",
+         t_sim <= 1.0)
+
+    t0 = time.perf_counter()
+    x_ref, steps = baseline_solve_ivp(sc)
+    t_base = time.perf_counter() - t0
+    _row(f"same model, solve_ivp RK45 rtol 1e-8 + numpy rhs ({steps} steps)", f"{t_base:.2f} s", "-", True)
+    ratio = t_base / t_sim
+    _row("speed-up over the solve_ivp baseline", f"{ratio:.0f}x", ">= 15x", ratio >= 15)
+    scale = sm.plain_scales(sc.n, sc.drf_mode)
+    diff = np.max(np.abs(r.state[-1] - x_ref) / (scale * 1e-6 + 1e-6 * np.abs(x_ref)))
+    _row("final-state agreement with the baseline (in 1e-6 units)", f"{diff:.2f}", "-", True)
+
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([str(BIN / "acmm"), "simulate"], cwd=tmp, check=True, capture_output=True)
+        child_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    _row("peak memory, `acmm simulate` (design + 130 orbits + figures)", f"{child_mb:.0f} MB", "< 500 MB",
+         child_mb < 500)
+    _row("peak memory, this benchmark process", f"{peak_mb:.0f} MB", "-", True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
