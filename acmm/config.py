@@ -286,8 +286,8 @@ def _format_error(exc: ValidationError) -> str:
     return f"{loc}: {msg}{extra}"
 
 
-def parse_config(data: object, source: str = "config") -> Config:
-    """Validate a mapping (e.g. parsed YAML) into a :class:`Config`.
+def validate_model(model_cls, data: object, source: str = "config"):
+    """Validate a mapping (e.g. parsed YAML) into a pydantic ``model_cls``.
 
     Raises
     ------
@@ -297,9 +297,14 @@ def parse_config(data: object, source: str = "config") -> Config:
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the top level must be a mapping of keys to values")
     try:
-        return Config.model_validate(data)
+        return model_cls.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(f"{source}: {_format_error(exc)}") from None
+
+
+def parse_config(data: object, source: str = "config") -> Config:
+    """Validate a mapping (e.g. parsed YAML) into a :class:`Config` (one-line ConfigError)."""
+    return validate_model(Config, data, source)
 
 
 DEFAULT_CONFIG = "staircase.yaml"
@@ -310,11 +315,16 @@ def packaged_config_path(name: str = DEFAULT_CONFIG) -> Path:
     return Path(str(resources.files("acmm.configs").joinpath(name)))
 
 
-def load_config(path: str | Path | None = None) -> Config:
-    """Read and validate a YAML config file (``None``: the packaged default).
+def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
+    """Read a YAML config file (``None``: the packaged default); returns (data, path).
 
-    A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working
-    directory is looked up among the packaged configs.
+    A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working directory is
+    looked up among the packaged configs.  Duplicate keys are rejected.
+
+    Raises
+    ------
+    ConfigError
+        Missing or unreadable file, or invalid YAML (with line and column).
     """
     if path is None:
         p = packaged_config_path()
@@ -339,4 +349,10 @@ def load_config(path: str | Path | None = None) -> Config:
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         what = getattr(exc, "problem", None) or "not valid YAML"
         raise ConfigError(f"{p}: not valid YAML: {what}{where}") from None
+    return data, p
+
+
+def load_config(path: str | Path | None = None) -> Config:
+    """Read and validate a YAML config file (``None``: the packaged default stair-case)."""
+    data, p = read_yaml(path)
     return parse_config(data, source=str(p))

@@ -87,22 +87,22 @@ class SignResult:
     step: float
 
 
+def _as_square(M, k: int, name: str) -> np.ndarray:
+    """A scalar (times I) or a k×k matrix, symmetrized."""
+    M = np.asarray(M, dtype=float)
+    if M.ndim == 0:
+        return float(M) * np.eye(k)
+    if M.shape != (k, k):
+        raise ValueError(f"{name} must be a scalar or {k}×{k}, got shape {M.shape}")
+    return 0.5 * (M + M.T)
+
+
 def _as_R(R, m: int) -> np.ndarray:
-    R = np.asarray(R, dtype=float)
-    if R.ndim == 0:
-        return float(R) * np.eye(m)
-    if R.shape != (m, m):
-        raise ValueError(f"R must be a scalar or {m}×{m}, got shape {R.shape}")
-    return 0.5 * (R + R.T)
+    return _as_square(R, m, "R")
 
 
 def _as_Q(Q, n: int) -> np.ndarray:
-    Q = np.asarray(Q, dtype=float)
-    if Q.ndim == 0:
-        return float(Q) * np.eye(n)
-    if Q.shape != (n, n):
-        raise ValueError(f"Q must be a scalar or {n}×{n}, got shape {Q.shape}")
-    return 0.5 * (Q + Q.T)
+    return _as_square(Q, n, "Q")
 
 
 def scale_problem(A, B, Q, scale):

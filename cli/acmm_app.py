@@ -20,6 +20,9 @@ ConfigArg = typer.Argument(None, help="YAML config file (or the name of a packag
                                       "default: the packaged stair-case config")
 
 
+FiguresOpt = typer.Option(None, "--figures/--no-figures", help="write figures (default: output.figures)")
+
+
 def _fmt(v, fmt="{:+.4f}"):
     return "[" + ", ".join(fmt.format(x) for x in v) + "]"
 
@@ -87,7 +90,7 @@ def linearize(config: Optional[Path] = ConfigArg) -> None:
     typer.echo(f"  wrote {path}")
 
 
-def _progress(total_hint: int = 0):
+def _progress():
     """A simple progress printer on stderr (one dot per design point)."""
     import sys
 
@@ -100,8 +103,7 @@ def _progress(total_hint: int = 0):
 @app.command()
 @user_errors
 def design(config: Optional[Path] = ConfigArg,
-           figures: Optional[bool] = typer.Option(None, "--figures/--no-figures",
-                                                  help="write figures (default: output.figures)")) -> None:
+           figures: Optional[bool] = FiguresOpt) -> None:
     """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures."""
     import numpy as np
 
@@ -114,7 +116,7 @@ def design(config: Optional[Path] = ConfigArg,
     typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
                f"sector Re <= -{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g} deg "
                f"({r.wall_time:.2f} s)")
-    typer.echo(f"  {'point':<14} {'TEA r/p/y (deg)':<28} {'margin (n)':>10} {'residual':>9} {'max|Re|/n':>9}")
+    typer.echo(f"  {'point':<14} {'TEA r/p/y (deg)':<28} {'margin (n)':>10} {'residual':>9} {'fastest/n':>9}")
     for p in r.points:
         res = p.lqr
         typer.echo(f"  {p.spec.name:<14} {_fmt(p.tea.theta_deg, '{:+.2f}'):<28} {res.margin:>10.3f} "
@@ -135,8 +137,7 @@ def design(config: Optional[Path] = ConfigArg,
 @app.command()
 @user_errors
 def simulate(config: Optional[Path] = ConfigArg,
-             figures: Optional[bool] = typer.Option(None, "--figures/--no-figures",
-                                                    help="write figures (default: output.figures)")) -> None:
+             figures: Optional[bool] = FiguresOpt) -> None:
     """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures."""
     import numpy as np
 

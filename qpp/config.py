@@ -12,7 +12,7 @@ from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from acmm.errors import ConfigError
 
@@ -244,50 +244,16 @@ class QppConfig(_Model):
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
 
 
-def _format_error(exc: ValidationError) -> str:
-    err = exc.errors()[0]
-    loc = ".".join(str(p) for p in err["loc"]) or "config"
-    msg = err["msg"]
-    for prefix in ("Value error, ", "Assertion failed, "):
-        if msg.startswith(prefix):
-            msg = msg[len(prefix):]
-    if err["type"] == "extra_forbidden":
-        msg = "unknown key"
-    extra = f" (and {len(exc.errors()) - 1} more)" if len(exc.errors()) > 1 else ""
-    return f"{loc}: {msg}{extra}"
-
-
 def parse_config(data: object, source: str = "config") -> QppConfig:
     """Validate a mapping into a :class:`QppConfig` (one-line :class:`ConfigError` on failure)."""
-    if not isinstance(data, dict):
-        raise ConfigError(f"{source}: the top level must be a mapping of keys to values")
-    try:
-        return QppConfig.model_validate(data)
-    except ValidationError as exc:
-        raise ConfigError(f"{source}: {_format_error(exc)}") from None
+    from acmm.config import validate_model
+
+    return validate_model(QppConfig, data, source)
 
 
 def load_config(path) -> QppConfig:
     """Read and validate a YAML file; a bare name (``qpp_siso``) falls back to the packaged configs."""
-    from acmm.config import packaged_config_path
+    from acmm.config import read_yaml
 
-    p = Path(path)
-    if not p.exists():
-        candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml")
-        if len(p.parts) == 1 and candidate.exists():
-            p = candidate
-        else:
-            raise ConfigError(f"config file not found: {path}")
-    if p.is_dir():
-        raise ConfigError(f"config path is a directory, not a file: {p}")
-    try:
-        text = p.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"cannot read config file {p}: {exc}") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise ConfigError(f"{p}: not valid YAML{where}") from None
+    data, p = read_yaml(path)
     return parse_config(data, source=str(p))
