@@ -134,14 +134,13 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     ax.set_ylabel("attitude error (deg)")
     ax.legend(fontsize=7)
     ax.set_title(f"{title} — verdict: {verdict}")
-    ax = fig.add_subplot(gs[1, 0])
-    ax.plot(orbits, h, lw=0.7)
-    ax.set_ylabel("CMG momentum (ft·lbf·s)")
-    ax.set_xlabel("orbits")
-    ax = fig.add_subplot(gs[1, 1])
-    ax.plot(orbits, u, lw=0.7)
-    ax.set_ylabel("torque (ft·lbf)")
-    ax.set_xlabel("orbits")
+    for col, (data, label) in enumerate(((h, "CMG momentum (ft·lbf·s)"), (u, "delivered torque (ft·lbf)"))):
+        ax = fig.add_subplot(gs[1, col])
+        for a in range(3):
+            ax.plot(orbits, data[:, a], lw=0.7, label=AXES[a])
+        ax.set_ylabel(label)
+        ax.set_xlabel("time (orbits)")
+        ax.legend(fontsize=7)
     ax = fig.add_subplot(gs[2, :])
     ax.axis("off")
     if level_stats:
