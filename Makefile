@@ -23,6 +23,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench.py
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python scripts/compare_riccati.py
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench_sweep.py
 
 clean:
 	rm -rf $(VENV) runs build *.egg-info

@@ -1,0 +1,98 @@
+"""``acmm sweep``: batch sweeps / Monte Carlo robustness studies (issue 7).
+
+Registered on the ``acmm`` app by :func:`register`; every import of the library happens inside
+the command so that ``acmm --help`` stays fast.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from cli.common import user_errors
+
+
+class _Bar:
+    """A one-line progress bar on stderr (a line every 10 % when stderr is not a terminal)."""
+
+    def __init__(self):
+        import sys
+
+        self.err = sys.stderr
+        self.tty = self.err.isatty()
+        self.bad = 0
+        self.last_decile = -1
+
+    def __call__(self, done: int, total: int, rec: dict) -> None:
+        if rec.get("kind") == "case" and rec.get("verdict") != "bounded":
+            self.bad += 1
+        frac = done / max(total, 1)
+        text = f"{done}/{total} tasks, {self.bad} not bounded"
+        if self.tty:
+            n = int(30 * frac)
+            self.err.write(f"\r[{'#' * n}{'.' * (30 - n)}] {text}")
+            if done == total:
+                self.err.write("\n")
+            self.err.flush()
+        elif int(10 * frac) > self.last_decile:
+            self.last_decile = int(10 * frac)
+            self.err.write(f"  {100 * frac:3.0f}% {text}\n")
+            self.err.flush()
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``sweep`` command to ``app``."""
+
+    @app.command()
+    @user_errors
+    def sweep(config: Path = typer.Argument(..., help="sweep config YAML (see configs/sweep_smoke.yaml)"),
+              workers: Optional[int] = typer.Option(None, "--workers", "-j", min=1,
+                                                    help="local worker processes (1: in-process; "
+                                                         "default: sweep.workers or the CPU count)"),
+              scheduler: Optional[str] = typer.Option(None, "--scheduler",
+                                                      help="Dask scheduler address (needs acmm-qpp[dask])"),
+              resume: bool = typer.Option(False, "--resume", help="skip the cases already in the journal"),
+              figures: Optional[bool] = typer.Option(None, "--figures/--no-figures",
+                                                     help="write figures (default: output.figures)")) -> None:
+        """Monte Carlo / grid sweep of closed-loop runs; writes runs/<name>/sweep.h5, sweep.csv, figures."""
+        import numpy as np
+
+        from acmm.sweep import run_sweep
+        from acmm.sweep_config import load_sweep
+
+        sw = load_sweep(config)
+        if resume and not (sw.run_dir() / "sweep.journal").exists():
+            typer.echo(f"note: no journal in {sw.run_dir()}; starting from the first case", err=True)
+        r = run_sweep(sw, workers=workers, scheduler=scheduler, resume=resume, progress=_Bar(), figures=figures)
+        spec = sw.spec
+        how = (f"grid of {spec.n_cases()}" if spec.grid is not None else
+               f"Monte Carlo, {spec.n_cases()} runs, seed {spec.seed}")
+        typer.echo(f"{sw.name}: {how} per base; {spec.design} design"
+                   + (f", {spec.tea_estimate} TEA estimate" if spec.design == "fixed" else "")
+                   + f"; {r.n_new} task(s) run, {r.n_resumed} resumed, {r.wall_time:.1f} s")
+        for lab, counts in r.summary().items():
+            rows = [x for x in r.rows if x["base"] == lab]
+            others = ", ".join(f"{v} {c}" for v, c in counts.items() if c and v not in ("bounded", "total"))
+            line = f"  {lab}: {counts['bounded']}/{counts['total']} bounded" + (f" ({others})" if others else "")
+            ok = [x for x in rows if x["verdict"] == "bounded"]
+            if ok:
+                peak = np.array([x["peak_attitude_error"] for x in ok])
+                line += ("; bounded: median/max peak |err| r/p/y "
+                         + "/".join(f"{v:.1f}" for v in np.median(peak, axis=0)) + " / "
+                         + "/".join(f"{v:.1f}" for v in peak.max(axis=0)) + " deg")
+            draws = sum(x["n_draws"] for x in rows)
+            if draws > len(rows):
+                line += f"; {draws - len(rows)} unphysical draws resampled"
+            typer.echo(line)
+        for m in r.margins:
+            word = "largest" if m["direction"] == "up" else "smallest"
+            if m["limit"] != m["limit"]:
+                typer.echo(f"  {m['base']} margin: the nominal case itself is not bounded")
+            elif m["reached_end"]:
+                typer.echo(f"  {m['base']} margin: bounded over the whole searched range to s = {m['search_end']:g}")
+            else:
+                typer.echo(f"  {m['base']} margin: {word} uniform inertia scaling tolerated s = {m['limit']:.3f} "
+                           f"(fails at {m['first_failure']:.3f}: {m['failure_verdict']})")
+        typer.echo(f"  wrote {r.path} and {r.path.with_suffix('.csv').name}"
+                   + (f", {len(r.figures)} figure(s)" if r.figures else ""))

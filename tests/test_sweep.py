@@ -1,0 +1,251 @@
+"""Batch sweeps (issue 7): reproducible cases, physical perturbations, kill-and-resume, Dask,
+and one-line config errors."""
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from acmm.errors import ConfigError
+from acmm.results import read_h5
+from acmm.sweep import (case_values, perturb_inertia, run_sweep, simulate_values, unphysical_reason,
+                        prepare_base)
+from acmm.sweep_config import load_sweep, parse_sweep
+
+from conftest import CONFIGS
+
+DATA_KEYS = ("case", "base", "index", "verdict", "verdict_code", "reason", "stable", "time_to_divergence",
+             "peak_attitude_error", "steady_attitude_error", "peak_momentum", "torque_saturation_time",
+             "momentum_saturation_time", "tea_true", "tea_estimate", "inertia", "bias", "n_draws")
+
+
+def _sweep_yaml(tmp: Path, name: str, **over) -> Path:
+    spec = {"base": str(CONFIGS / "ac.yaml"), "monte_carlo": {"inertia": {"percent": 10}},
+            "n_runs": 6, "seed": 11, "orbits": 1.0}
+    spec.update(over)
+    data = {"name": name, "sweep": spec, "output": {"root": str(tmp / "runs"), "figures": False}}
+    p = tmp / f"{name}.yaml"
+    p.write_text(yaml.safe_dump(data))
+    return p
+
+
+def _assert_same_data(a: dict, b: dict):
+    for k in DATA_KEYS:
+        np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    assert a["parameters"].keys() == b["parameters"].keys()
+    for k in a["parameters"]:
+        np.testing.assert_array_equal(a["parameters"][k], b["parameters"][k], err_msg=k)
+
+
+# --------------------------------------------------------------------------------------------
+# case generation
+# --------------------------------------------------------------------------------------------
+def test_unphysical_reason_agrees_with_config_validator():
+    from pydantic import ValidationError
+
+    from acmm.config import Inertia
+
+    rng = np.random.default_rng(0)
+    base = np.array([[23.22e6, -0.023e6, 0.477e6], [-0.023e6, 1.30e6, -0.011e6], [0.477e6, -0.011e6, 23.23e6]])
+    seen = set()
+    for _ in range(300):
+        m = perturb_inertia(base, dict(zip(["dI11", "dI22", "dI33", "dI12", "dI13", "dI23"],
+                                           rng.uniform(-0.6, 0.6, 6))))
+        try:
+            Inertia.model_validate(m.tolist())
+            ok = True
+        except ValidationError:
+            ok = False
+        assert (unphysical_reason(m) is None) == ok
+        seen.add(ok)
+    assert seen == {True, False}      # both outcomes were exercised
+
+
+def test_case_draws_follow_seedsequence_contract(tmp_path):
+    sw = load_sweep(_sweep_yaml(tmp_path, "draws", monte_carlo={"inertia_scale": {"uniform": [0.9, 1.1]},
+                                                                "offset_pitch": {"normal": [0.0, 2.0]}}))
+    inertias = sw.bases[0].config.inertia.matrix()[None]
+    for i in (5, 0, 3):                                 # any order
+        rng = np.random.default_rng(np.random.SeedSequence([11, i]))
+        want = {"inertia_scale": rng.uniform(0.9, 1.1), "offset_pitch": rng.normal(0.0, 2.0)}
+        got, draws, why = case_values(sw.spec, i, inertias)
+        assert got == want and draws == 1 and why is None
+
+
+def test_grid_order_and_unperturbed_case_equals_plain_simulation(tmp_path):
+    from acmm import simulate as sm
+    from acmm.config import load_config
+    from acmm.stages import compute_design
+
+    sw = load_sweep(_sweep_yaml(tmp_path, "grid", monte_carlo=None, n_runs=None,
+                                grid={"inertia_scale": [1.0, 0.9], "offset_pitch": [0.0, 1.0, -1.0]}))
+    assert sw.spec.n_cases() == 6
+    inertias = sw.bases[0].config.inertia.matrix()[None]
+    got = [case_values(sw.spec, i, inertias)[0] for i in range(6)]
+    want = [{"inertia_scale": s, "offset_pitch": o} for s, o in itertools.product([1.0, 0.9], [0.0, 1.0, -1.0])]
+    assert got == want
+    # case 0 perturbs nothing: it must reproduce the ordinary simulation of the base config
+    cfg = load_config(CONFIGS / "ac.yaml")
+    r = sm.simulate(sm.scenario_from_config(cfg, compute_design(cfg).table, orbits=1.0))
+    ctx = prepare_base(sw.bases[0], sw.spec)
+    row = simulate_values(ctx, got[0])
+    assert row["verdict"] == r.verdict == "bounded"
+    np.testing.assert_allclose(row["peak_attitude_error"],
+                               np.degrees(np.abs(sm.attitude_error(
+                                   sm.scenario_from_config(cfg, ctx.table, orbits=1.0), r))).max(axis=0),
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(row["peak_momentum"], np.abs(r.state[:, 6:9]).max(axis=0), rtol=1e-12)
+
+
+def test_no_equilibrium_is_a_verdict_not_a_crash(tmp_path):
+    # NOTES.md: MB3's gravity-gradient pitch capacity is ≈ 1.73 ft·lbf, so +4 ft·lbf pitch bias has no TEA
+    sw = load_sweep(_sweep_yaml(tmp_path, "noeq", base=str(CONFIGS / "mb3.yaml")))
+    ctx = prepare_base(sw.bases[0], sw.spec)
+    assert simulate_values(ctx, {"bias_pitch": 4.0})["verdict"] == "no_equilibrium"
+    assert simulate_values(ctx, {"bias_pitch": 1.0})["verdict"] != "no_equilibrium"
+
+
+# --------------------------------------------------------------------------------------------
+# whole sweeps
+# --------------------------------------------------------------------------------------------
+def test_same_config_and_seed_give_identical_data_serial_and_pool(tmp_path):
+    cfg = _sweep_yaml(tmp_path, "same", margin={"low": 0.8, "high": 1.25, "scan_points": 1, "rel_tol": 0.1})
+    r1 = run_sweep(cfg, workers=1)
+    a = read_h5(r1.path)
+    os.replace(r1.path, tmp_path / "first.h5")
+    r2 = run_sweep(cfg, workers=2)
+    b = read_h5(r2.path)
+    _assert_same_data(read_h5(tmp_path / "first.h5"), b)
+    assert a["attrs"]["complete"] and a["attrs"]["n_cases_done"] == 6
+    assert a["parameters"]["dI11"].shape == (6,) and a["peak_attitude_error"].shape == (6, 3)
+    assert a["attrs"]["results_key"] == b["attrs"]["results_key"]
+    # the stored inertia is the perturbation of the base inertia by the stored parameters
+    base = parse_sweep(yaml.safe_load(cfg.read_text())).bases[0].config.inertia.matrix()
+    for i in range(6):
+        f = {k: a["parameters"][k][i] for k in a["parameters"]}
+        np.testing.assert_allclose(a["inertia"][i], perturb_inertia(base, f), rtol=1e-15)
+        assert unphysical_reason(a["inertia"][i]) is None
+    # margin: the reported limit is bounded and the first failure (when found) is not
+    for key, m in a["margin"].items():
+        v = dict(zip(m["evaluated_s"], m["evaluated_verdict"]))
+        assert v[m["limit"]] == b"bounded"
+        if np.isfinite(m["first_failure"]):
+            assert v[m["first_failure"]] != b"bounded"
+
+
+class _Kill(Exception):
+    pass
+
+
+def test_interrupted_then_resumed_equals_uninterrupted(tmp_path):
+    cfg = _sweep_yaml(tmp_path, "resume", n_runs=8)
+    ref = read_h5(run_sweep(cfg, workers=1).path)
+
+    def boom(n):
+        if n == 3:
+            raise _Kill
+    with pytest.raises(_Kill):
+        run_sweep(cfg, workers=1, after_record=boom)
+    part = read_h5(tmp_path / "runs" / "resume" / "sweep.h5")
+    assert not part["attrs"]["complete"] and part["attrs"]["n_cases_done"] == 3
+    # a torn line left by a killed writer is ignored on resume
+    with open(tmp_path / "runs" / "resume" / "sweep.journal", "a") as f:
+        f.write('{"kind": "case", "base": "ac", "ind')
+    r = run_sweep(cfg, workers=1, resume=True)
+    assert r.n_resumed == 3 and r.n_new == 5
+    _assert_same_data(ref, read_h5(r.path))
+    # resuming a complete sweep runs nothing
+    assert run_sweep(cfg, workers=1, resume=True).n_new == 0
+
+
+def test_sigkill_then_resume_equals_uninterrupted(tmp_path):
+    cfg = _sweep_yaml(tmp_path, "killed", n_runs=16, orbits=40.0)
+    journal = tmp_path / "runs" / "killed" / "sweep.journal"
+    proc = subprocess.Popen([sys.executable, "-c", "from cli.acmm_app import main; main()", "sweep", str(cfg),
+                             "--workers", "1"], cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            env={**os.environ, "MPLBACKEND": "Agg"})
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and proc.poll() is None:
+        if journal.exists() and journal.read_text().count('"kind": "case"') >= 3:
+            break
+        time.sleep(0.005)
+    proc.send_signal(signal.SIGKILL)
+    assert proc.wait(10) == -signal.SIGKILL, "the sweep finished before it could be killed"
+    n_before = journal.read_text().count('"kind": "case"')
+    assert 3 <= n_before < 16
+    r = run_sweep(cfg, workers=2, resume=True)
+    assert r.n_resumed == n_before and r.n_new == 16 - n_before
+    resumed = read_h5(r.path)
+    os.replace(r.path, tmp_path / "resumed.h5")
+    _assert_same_data(read_h5(run_sweep(cfg, workers=1).path), resumed)
+
+
+def test_resume_refuses_a_journal_of_another_config(tmp_path):
+    run_sweep(_sweep_yaml(tmp_path, "other", n_runs=2), workers=1)
+    with pytest.raises(ConfigError, match="different sweep configuration"):
+        run_sweep(_sweep_yaml(tmp_path, "other", n_runs=2, seed=12), workers=1, resume=True)
+
+
+def test_dask_local_cluster_gives_the_same_table(tmp_path):
+    distributed = pytest.importorskip("distributed", reason="optional extra acmm-qpp[dask] not installed")
+    cfg = _sweep_yaml(tmp_path, "dask", n_runs=4)
+    ref = read_h5(run_sweep(cfg, workers=1).path)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        r = run_sweep(cfg, scheduler=cluster.scheduler_address)
+    _assert_same_data(ref, read_h5(r.path))
+
+
+def test_scheduler_without_distributed_is_a_one_line_error(tmp_path, run_acmm, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)      # import distributed -> ImportError
+    cfg = _sweep_yaml(tmp_path, "nosched", n_runs=1)
+    r = run_acmm("sweep", cfg, "--scheduler", "tcp://127.0.0.1:8786")
+    assert r.exit_code == 2 and "acmm-qpp[dask]" in r.stderr and r.stderr.count("\n") == 1
+
+
+# --------------------------------------------------------------------------------------------
+# command line
+# --------------------------------------------------------------------------------------------
+def test_cli_smoke_sweep(tmp_runs, run_acmm):
+    r = run_acmm("sweep", CONFIGS / "sweep_smoke.yaml", "--workers", "2")
+    assert r.exit_code == 0, r.output
+    d = tmp_runs / "runs" / "sweep_smoke"
+    for f in ("sweep.h5", "sweep.csv", "sweep_map.png", "sweep_peak_error.png"):
+        assert (d / f).is_file(), f
+    lines = (d / "sweep.csv").read_text().splitlines()
+    assert len(lines) == 1 + 8
+    h = read_h5(d / "sweep.h5")
+    assert h["peak_momentum"].shape == (8, 3)
+    assert h["attrs"]["complete"]
+    counts = json.loads(h["attrs"]["summary"])["ac"]
+    assert sum(counts.values()) == 8
+    assert f"ac: {counts['bounded']}/8 bounded" in r.stdout
+
+
+@pytest.mark.parametrize("sweep, message", [
+    ({"base": "ac", "monte_carlo": {"inertia": {"percent": 10}}, "n_runs": 2, "bogus": 1}, "sweep.bogus: unknown key"),
+    ({"base": "ac", "monte_carlo": {"dI44": {"percent": 10}}, "n_runs": 2}, "unknown parameter 'dI44'"),
+    ({"base": "ac", "monte_carlo": {"bias": {"percent": 10}}, "n_runs": 2}, "'percent' applies only"),
+    ({"base": "ac", "monte_carlo": {"inertia": {"percent": 10}}}, "monte_carlo needs n_runs"),
+    ({"base": "ac", "grid": {"inertia_scale": [1.0]}, "monte_carlo": {"dI11": {"percent": 1}}, "n_runs": 1},
+     "exactly one of 'monte_carlo' or 'grid'"),
+    ({"base": "nonexistent_base.yaml", "grid": {"inertia_scale": [1.0]}}, "config file not found"),
+    ({"base": "ac", "grid": {"inertia_scale": [1.0, -0.5]}}, "inertia_scale must stay > 0"),
+    ({"base": "ac", "monte_carlo": {"dI11": {"uniform": [0.1, -0.1]}}, "n_runs": 2}, "low must be"),
+])
+def test_bad_sweep_config_exits_2_with_one_line(tmp_runs, run_acmm, sweep, message):
+    p = tmp_runs / "bad.yaml"
+    p.write_text(yaml.safe_dump({"name": "bad", "sweep": sweep}))
+    r = run_acmm("sweep", p)
+    assert r.exit_code == 2
+    assert message in r.stderr and r.stderr.count("\n") == 1 and "Traceback" not in r.output
+    assert not (tmp_runs / "runs").exists()
