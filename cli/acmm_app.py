@@ -91,13 +91,23 @@ def linearize(config: Optional[Path] = ConfigArg) -> None:
 
 
 def _progress():
-    """A simple progress printer on stderr (one dot per design point)."""
+    """Progress on an interactive terminal: the name of each design point as it is done."""
     import sys
 
+    if not sys.stderr.isatty():
+        return None
+    count = [0]
+
     def tick(name):
-        sys.stderr.write(".")
+        count[0] += 1
+        sys.stderr.write(f"\r  designed {count[0]:>3} point(s): {name:<20}")
         sys.stderr.flush()
     return tick
+
+
+def _end_progress(progress) -> None:
+    if progress is not None:
+        typer.echo("", err=True)
 
 
 @app.command()
@@ -109,8 +119,9 @@ def design(config: Optional[Path] = ConfigArg,
 
     from acmm.stages import run_design
 
-    r, path = run_design(config, progress=_progress(), figures=figures)
-    typer.echo("", err=True)
+    progress = _progress()
+    r, path = run_design(config, progress=progress, figures=figures)
+    _end_progress(progress)
     cfg = r.config
     n = cfg.orbit_rate
     typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
@@ -143,7 +154,9 @@ def simulate(config: Optional[Path] = ConfigArg,
 
     from acmm.stages import run_simulate
 
-    r, path = run_simulate(config, progress=_progress(), figures=figures)
+    progress = _progress()
+    r, path = run_simulate(config, progress=progress, figures=figures)
+    _end_progress(progress)
     cfg, s = r.config, r.sim
     n = cfg.orbit_rate
     typer.echo(f"{cfg.name}: design {r.design_note}")
