@@ -1,0 +1,52 @@
+"""``acmm report``: regenerate every table and figure of CR-185644 into one HTML page.
+
+Registered on the ``acmm`` app by :func:`register` (called from ``cli.acmm_app``).  Imports of
+the report machinery stay inside the command so ``acmm --help`` stays fast.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from cli.common import user_errors
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``report`` command to ``app``."""
+
+    @app.command("report")
+    @user_errors
+    def report(
+        out: Path = typer.Option(Path("runs/report"), "--out", help="output directory (index.html, report.md, "
+                                                                     "figures/, manifest.json)"),
+        fast: bool = typer.Option(False, "--fast", help="CI mode: a 13-orbit stair-case instead of 130 orbits"),
+        rerun: bool = typer.Option(False, "--rerun", help="recompute every stage even when results with the "
+                                                          "same config hash exist (determinism check)"),
+        root: Optional[Path] = typer.Option(None, "--root", help="results root of the stages "
+                                                                 "(default: each config's output.root, 'runs')"),
+    ) -> None:
+        """Every figure and table of CR-185644 regenerated and compared with the printed values;
+        writes <out>/index.html (self-contained) and <out>/report.md."""
+        import sys
+
+        from acmm.report import build_report
+
+        def say(msg: str) -> None:
+            sys.stderr.write(msg + "\n")
+            sys.stderr.flush()
+
+        r = build_report(out, fast=fast, rerun=rerun, root=root, progress=say)
+        counts: dict[str, int] = {}
+        for p in r.ledger:
+            counts[p.status] = counts.get(p.status, 0) + 1
+        typer.echo(f"report: {len(r.sections)} sections, {len(r.figures)} figures, "
+                   f"{len(r.stages)} result files ({sum(s.reused for s in r.stages)} reused) in {r.wall_time:.1f} s")
+        typer.echo("  printed numbers: " + "; ".join(f"{v} {k}" for k, v in sorted(counts.items())))
+        d = r.determinism
+        typer.echo(f"  determinism: {d['status']}" +
+                   (f" ({d['compared']} datasets compared, {d['recomputed']} files recomputed)"
+                    if d["status"] != "no previous report" else ""))
+        typer.echo(f"  wrote {r.html}")
+        typer.echo(f"  wrote {r.markdown}")

@@ -1,0 +1,326 @@
+"""``acmm report`` (issue 8): the fast report end to end, its HTML, its numbers and determinism.
+
+One fast report is built into a temporary directory (module fixture, ~30 s on 2 cores); the
+other tests read it.  Numbers are checked against the report's printed values (Table 1, the
+ch. 13/14 gains) or against independent closed forms (the MB3 gravity-gradient capacity, the
+printed eq 3.6 residual of eq 4.2).
+"""
+from __future__ import annotations
+
+import base64
+import math
+import re
+import subprocess
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from acmm import report as rp
+
+N = 0.0011
+MB3 = np.array([[23.22e6, -0.023e6, 0.477e6], [-0.023e6, 1.30e6, -0.011e6], [0.477e6, -0.011e6, 23.23e6]])
+
+
+VOID = {"meta", "img", "br", "hr", "link", "input", "source", "wbr"}
+
+
+class PageParser(HTMLParser):
+    """Collects section ids, image sources, links and the text of every table."""
+
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.ids, self.imgs, self.links, self.tables = [], [], [], []
+        self._cell = None
+        self._stack = []
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag not in VOID:
+            self._stack.append(tag)
+        if tag in ("h2", "h3") and "id" in a:
+            self.ids.append(a["id"])
+        if tag == "img":
+            self.imgs.append(a.get("src", ""))
+        if tag == "a":
+            self.links.append(a.get("href", ""))
+        if tag == "table":
+            self.tables.append({"caption": "", "rows": []})
+        if tag == "tr":
+            self.tables[-1]["rows"].append([])
+        if tag in ("td", "th", "caption"):
+            self._cell = []
+
+    def handle_endtag(self, tag):
+        assert self._stack and self._stack[-1] == tag, f"unbalanced </{tag}> (open: {self._stack[-3:]})"
+        self._stack.pop()
+        if tag in ("td", "th"):
+            self.tables[-1]["rows"][-1].append("".join(self._cell).strip())
+            self._cell = None
+        if tag == "caption":
+            self.tables[-1]["caption"] = "".join(self._cell).strip()
+            self._cell = None
+
+    def handle_data(self, data):
+        if self._cell is not None:
+            self._cell.append(data)
+
+
+@pytest.fixture(scope="module")
+def fast_report(tmp_path_factory):
+    base = tmp_path_factory.mktemp("report")
+    r = rp.build_report(base / "out", fast=True, root=base / "runs")
+    return base, r
+
+
+@pytest.fixture(scope="module")
+def page(fast_report):
+    _, r = fast_report
+    p = PageParser()
+    p.feed(r.html.read_text(encoding="utf-8"))
+    p.close()
+    return p
+
+
+def _table(page, caption_start):
+    t = [t for t in page.tables if t["caption"].startswith(caption_start)]
+    assert t, [x["caption"] for x in page.tables]
+    return t[0]["rows"]
+
+
+# ----------------------------------------------------------------------------- structure
+def test_every_section_present_in_html_and_markdown(fast_report, page):
+    _, r = fast_report
+    keys = [k for k, _ in rp.SECTIONS]
+    assert page.ids == keys
+    md = r.markdown.read_text(encoding="utf-8")
+    for _, title in rp.SECTIONS:
+        assert f"## {title}" in md
+    assert page._stack == []                      # every tag closed
+
+
+def test_every_image_is_embedded_or_exists(fast_report, page):
+    _, r = fast_report
+    assert len(page.imgs) >= 10
+    for src in page.imgs:
+        if src.startswith("data:image/png;base64,"):
+            assert base64.b64decode(src.split(",", 1)[1])[:8] == b"\x89PNG\r\n\x1a\n"
+        else:
+            assert (r.html.parent / src).is_file(), src
+    local = [h for h in page.links if not h.startswith(("#", "http", "data:"))]
+    assert any(h.endswith(".pdf") for h in local)
+    for h in local:
+        assert (r.html.parent / h).is_file(), h
+    for pdf in (r.out / "figures").glob("*.pdf"):
+        assert pdf.read_bytes()[:5] == b"%PDF-"
+    # the Markdown references only files that exist
+    for ref in re.findall(r"\]\((figures/[^)]+)\)", r.markdown.read_text(encoding="utf-8")):
+        assert (r.out / ref).is_file(), ref
+
+
+def test_cli_report_command_registered_and_user_error(tmp_path):
+    from typer.testing import CliRunner
+
+    from cli.acmm_app import app
+
+    res = CliRunner().invoke(app, ["report", "--help"])
+    assert res.exit_code == 0 and "--out" in res.output and "--fast" in res.output
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    res = CliRunner().invoke(app, ["report", "--out", str(blocker / "report"), "--root", str(tmp_path)])
+    assert res.exit_code == 2
+    assert res.output.strip().startswith("error:") and len(res.output.strip().splitlines()) == 1
+    assert not (tmp_path / "mb3").exists()        # nothing was run
+
+
+# ----------------------------------------------------------------------------- numbers
+def test_table1_computed_teas_round_to_printed(page):
+    rows = _table(page, "Table 1: printed vs computed")
+    header, body = rows[0], rows[1:]
+    ip, ic, ist = header.index("printed"), header.index("computed"), header.index("status")
+    printed_tea = {("MB3", 1): 1.3, ("MB3", 2): -44.7, ("MB3", 3): 2.1,
+                   ("AC", 1): 0.19, ("AC", 2): -5.0, ("AC", 3): 0.56}
+    seen = 0
+    for row in body:
+        m = re.match(r"θ(\d)\* \(deg\)", row[1])
+        if m:
+            want = printed_tea[(row[0], int(m.group(1)))]
+            dec = len(row[ip].split(".")[1])
+            assert float(row[ip]) == want
+            assert round(float(row[ic]), dec) == pytest.approx(want, abs=1e-12)
+            assert row[ist] == rp.STATUS_MATCHED
+            seen += 1
+        else:
+            assert float(row[ic]) == pytest.approx(float(row[ip]), abs=1e-12)
+    assert seen == 6
+
+
+def test_qpp_gains_match_printed_to_one_decimal(page):
+    for cap, printed in (("Ch. 13 gains", {"K1(1, 1)": -299.9, "K1(1, 2)": -23.5, "Kc(1, 1)": 2506.2,
+                                           "Kc(1, 2)": 1937.1}),
+                         ("Ch. 14 gains", {"K1(1, 1)": -202.9, "K1(2, 2)": -108.4, "Kc(1, 1)": 1020.4,
+                                           "Kc(2, 3)": 466.9})):
+        rows = {r[0]: r for r in _table(page, cap)[1:]}
+        for k, v in printed.items():
+            assert float(rows[k][1]) == v
+            assert abs(float(rows[k][2]) - v) <= 0.05 + 1e-9
+            assert rows[k][3] == rp.STATUS_MATCHED
+
+
+def test_every_printed_number_matched_or_explained(fast_report, page):
+    _, r = fast_report
+    assert r.unexplained == []
+    statuses = [p.status for p in r.ledger]
+    assert statuses.count(rp.STATUS_MATCHED) >= 25
+    ledger_rows = [t for t in page.tables if t["rows"] and t["rows"][0][:3] == ["section", "quantity", "printed"]]
+    assert len(ledger_rows) == 1 and len(ledger_rows[0]["rows"]) - 1 == len(r.ledger)
+    for row in ledger_rows[0]["rows"][1:]:
+        assert row[-1].startswith((rp.STATUS_MATCHED, rp.STATUS_BOUND, rp.STATUS_EXPLAINED + ": ")), row
+
+
+def test_matches_printed_precision_rule():
+    assert rp.matches_printed("-44.7", -44.7499)
+    assert not rp.matches_printed("-44.7", -44.7501)
+    assert rp.matches_printed("1005.9", 1005.855)
+    assert not rp.matches_printed("0.02727", 0.0272922)
+    assert rp.check_printed("s", "q", "0.094", 0.09189, bound="upper").status == rp.STATUS_BOUND
+    assert rp.check_printed("s", "q", "0.094", 0.1, bound="upper").status == rp.STATUS_UNEXPLAINED
+
+
+def test_claim1_numbers_come_from_the_simulation(fast_report, page):
+    import h5py
+
+    base, r = fast_report
+    with h5py.File(base / "runs" / "mb3_decoupled" / "sim.h5", "r") as f:
+        div = float(f.attrs["stop_time_orbits"])
+        assert f.attrs["verdict"] == "diverged"
+    with h5py.File(base / "runs" / "mb3" / "sim.h5", "r") as f:
+        assert f.attrs["verdict"] == "bounded"
+    assert div < 0.1
+    rows = _table(page, "Claim 1 on the nonlinear MB3 model")
+    assert rows[2][3] == "DIVERGED" and float(rows[2][4]) == pytest.approx(div, abs=5e-4)
+    assert rows[1][3] == "BOUNDED"
+    assert "claim 1 REPRODUCED" in r.markdown.read_text(encoding="utf-8")
+
+
+def test_errata_table_carries_independent_evidence(page):
+    rows = {r[0]: r for r in [t for t in page.tables if t["rows"] and t["rows"][0][0] == "item"][0]["rows"][1:]}
+    for key in ("eq 3.6 (1,1) entry", "4 ft·lbf pitch bias (Wie et al. 1989)", "eq 4.34 A2(3,1)",
+                "eq 4.44 DRF input rows", "eq 5.6 sign iteration", "state scaling", "claim 1",
+                "eqs 4.12–4.14 ∂τgg/∂θ", "B_z of 13.6 / Table 14.1", "β3 (10.54) and m"):
+        assert key in rows, sorted(rows)
+        assert rows[key][3] and rows[key][4].startswith("tests/")
+    # MB3's pitch capacity in closed form: 3n² sqrt(((I33 − I11)/2)² + I13²)
+    cap = 3 * N**2 * math.hypot((MB3[2, 2] - MB3[0, 0]) / 2, MB3[0, 2])
+    assert f"{cap:.3f} ft·lbf < 4" in rows["4 ft·lbf pitch bias (Wie et al. 1989)"][3]
+    assert "no equilibrium" in rows["4 ft·lbf pitch bias (Wie et al. 1989)"][3]
+    # printed eq 3.6 residual of eq 4.2 in row 1: n sin θ3 (1 − 1/cos θ3) at (10°, −30°, 25°)
+    t3 = math.radians(25.0)
+    assert f"{abs(N * math.sin(t3) * (1 - 1 / math.cos(t3))):.2e} rad/s" in rows["eq 3.6 (1,1) entry"][3]
+    # A2(3,1) at the MB3 TEA (1.3°, −44.7°, 2.1°): −n cos θ1 cos θ3, printed sign breaks skewness by 2|·|
+    a231 = N * math.cos(math.radians(1.3)) * math.cos(math.radians(2.1))
+    assert f"{2 * a231:.3e} rad/s" in rows["eq 4.34 A2(3,1)"][3]
+    assert "UNSTABLE on the true model" in rows["eq 4.34 A2(3,1)"][3]
+    assert "UNSTABLE on the true model" in rows["eq 4.44 DRF input rows"][3]
+    assert "printed form — matrix sign" in rows["eq 5.6 sign iteration"][3]
+    # 0.05 ‖(sin 5t)_T‖₂ at T = 0.5 s, closed form
+    b3 = 0.05 * math.sqrt(0.25 - math.sin(5.0) / 20)
+    assert f"{b3:.5f}" in rows["β3 (10.54) and m"][3]
+
+
+def test_robustness_section(fast_report, page, monkeypatch):
+    _, r = fast_report
+    md = r.markdown.read_text(encoding="utf-8")
+    try:
+        import acmm.sweep  # noqa: F401
+        have = True
+    except ImportError:
+        have = False
+    if have:
+        rows = _table(page, "±30 % inertia Monte Carlo")
+        assert [x[0] for x in rows[1:]] == ["MB3", "AC"]
+        for x in rows[1:]:
+            nb, tot = map(int, re.match(r"(\d+)/(\d+)", x[1]).groups())
+            assert tot == rp.FAST_SWEEP_RUNS and 0 <= nb <= tot
+    else:
+        assert "Not available in this run" in md
+
+
+def test_robustness_absent_renders_not_available(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "acmm.sweep", None)        # import now raises ImportError
+    res, note = rp.robustness_result(tmp_path)
+    assert res is None and "not installed" in note
+    g = rp.Gathered(configs={}, runs={}, robustness=None, robustness_note=note)
+    rep = rp._Report(g, tmp_path, fast=True)
+    rep.robustness()
+    md = rp.render_markdown(rep.doc, "t")
+    assert "Not available in this run" in md and "## ±30 % inertia robustness" in md
+    assert rep.ledger[-1].status == rp.STATUS_EXPLAINED
+    html = rp.render_html(rep.doc, "t", tmp_path)
+    p = PageParser()
+    p.feed(html)
+    assert "robustness" in p.ids
+
+
+# ----------------------------------------------------------------------------- determinism
+def test_two_runs_give_identical_datasets(fast_report, tmp_path):
+    """Recompute the cheap stages into a fresh root; every dataset hash equals the report's."""
+    import json
+
+    _, r = fast_report
+    manifest = json.loads(r.manifest.read_text())
+    cfgs = {n: rp.acmm_config(n, tmp_path) for n in ("mb3", "mb3_decoupled")}
+    fresh = [rp.ensure_acmm_design(cfgs["mb3"], rerun=True), rp.ensure_acmm_simulation(cfgs["mb3"], rerun=True),
+             rp.ensure_acmm_simulation(cfgs["mb3_decoupled"], rerun=True)]
+    q = rp.qpp_config("qpp_siso", tmp_path)
+    fresh += [rp.ensure_qpp(q, "design", rerun=True), rp.ensure_qpp(q, "simulate", rerun=True)]
+    compared = 0
+    for run in fresh:
+        assert not run.reused
+        old = manifest["files"][f"{run.stage}:{run.config}"]
+        # (config hashes differ: the resolved config records its results root)
+        new = rp.dataset_hashes(run.path)
+        assert new == old["datasets"]
+        compared += len(new)
+    assert compared > 100
+    # the comparison the report prints: identical, then a changed dataset is reported
+    same = rp.compare_manifests(manifest, manifest)
+    assert same["status"] == "identical" and same["compared"] > compared
+    changed = json.loads(json.dumps(manifest))
+    key = "acmm simulate:mb3"
+    ds = sorted(changed["files"][key]["datasets"])[0]
+    changed["files"][key]["datasets"][ds] = "0" * 16
+    diff = rp.compare_manifests(manifest, changed)
+    assert diff["status"] == "different" and diff["differences"] == [f"{key}: {ds}"]
+    assert rp.compare_manifests(None, manifest)["status"] == "no previous report"
+
+
+def test_dataset_hashes_ignore_timing_and_attributes(tmp_path):
+    from acmm.results import Dataset, write_h5
+
+    a = write_h5(tmp_path / "a.h5", {"x": Dataset(np.arange(3.0), "1"), "wall_time": Dataset(1.0, "s")}, "c: 1")
+    b = write_h5(tmp_path / "b.h5", {"x": Dataset(np.arange(3.0), "1"), "wall_time": Dataset(2.0, "s")}, "c: 1")
+    c = write_h5(tmp_path / "c.h5", {"x": Dataset(np.arange(3.0) + 1e-15, "1")}, "c: 1")
+    assert rp.dataset_hashes(a) == rp.dataset_hashes(b) and list(rp.dataset_hashes(a)) == ["x"]
+    assert rp.dataset_hashes(a) != rp.dataset_hashes(c)
+
+
+# ----------------------------------------------------------------------------- real browser
+CHROMIUM = Path("/usr/bin/chromium")
+
+
+@pytest.mark.skipif(not CHROMIUM.exists(), reason="no /usr/bin/chromium on this machine")
+def test_headless_chromium_screenshot(fast_report, tmp_path):
+    _, r = fast_report
+    shot = tmp_path / "page.png"
+    subprocess.run([str(CHROMIUM), "--headless", "--disable-gpu", "--no-sandbox", "--hide-scrollbars",
+                    f"--screenshot={shot}", "--window-size=1200,2400", r.html.resolve().as_uri()],
+                   check=True, timeout=120, capture_output=True)
+    data = shot.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
+    from matplotlib.image import imread
+
+    img = imread(shot)
+    assert img.shape[0] >= 1000 and np.std(img[..., :3]) > 0.05        # not a blank page
