@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test bench install clean
+.PHONY: run test bench report report-fast browser install clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -17,13 +17,26 @@ install: $(STAMP)
 run: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 $(BIN)/acmm simulate
 
-test: $(STAMP)
+# In CI (CI=true) the report test also opens the page in a real headless Chromium (Debian's
+# package); elsewhere that test is skipped unless /usr/bin/chromium exists.
+test: $(STAMP) $(if $(CI),browser)
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest
+
+browser:
+	@test -x /usr/bin/chromium || { command -v apt-get >/dev/null && [ "$$(id -u)" = 0 ] && \
+	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; } || \
+	  echo "chromium not installed: the browser test will be skipped"
 
 bench: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench.py
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python scripts/compare_riccati.py
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench_sweep.py
+
+report: $(STAMP)
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/acmm report
+
+report-fast: $(STAMP)
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/acmm report --fast
 
 clean:
 	rm -rf $(VENV) runs build *.egg-info

@@ -316,6 +316,8 @@ def test_headless_chromium_screenshot(fast_report, tmp_path):
     _, r = fast_report
     shot = tmp_path / "page.png"
     subprocess.run([str(CHROMIUM), "--headless", "--disable-gpu", "--no-sandbox", "--hide-scrollbars",
+                    "--disable-quic", "--no-first-run", "--disable-background-networking",
+                    "--disable-component-update", "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}",
                     f"--screenshot={shot}", "--window-size=1200,2400", r.html.resolve().as_uri()],
                    check=True, timeout=120, capture_output=True)
     data = shot.read_bytes()
