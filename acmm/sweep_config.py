@@ -36,9 +36,9 @@ from pathlib import Path
 from typing import Literal, Optional
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from acmm.config import Config, Output, _format_error, load_config, parse_config
+from acmm.config import Config, Output, load_config, parse_config, validate_model
 from acmm.errors import ConfigError
 
 
@@ -325,10 +325,7 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
                      "output": base_cfg.output.model_dump(mode="json")}
     else:
         file_data = data
-    try:
-        sf = SweepFile.model_validate(file_data)
-    except ValidationError as exc:
-        raise ConfigError(f"{source}: {_format_error(exc)}") from None
+    sf = validate_model(SweepFile, file_data, source)
     if inline:
         bases = (Base(base_cfg.name, base_cfg, source),)
     else:

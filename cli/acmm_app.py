@@ -105,9 +105,13 @@ def _progress():
     return tick
 
 
-def _end_progress(progress) -> None:
+def _run_with_progress(runner, config, figures):
+    """Call a stage runner with terminal progress, ending the progress line afterwards."""
+    progress = _progress()
+    out = runner(config, progress=progress, figures=figures)
     if progress is not None:
         typer.echo("", err=True)
+    return out
 
 
 @app.command()
@@ -119,9 +123,7 @@ def design(config: Optional[Path] = ConfigArg,
 
     from acmm.stages import run_design
 
-    progress = _progress()
-    r, path = run_design(config, progress=progress, figures=figures)
-    _end_progress(progress)
+    r, path = _run_with_progress(run_design, config, figures)
     cfg = r.config
     n = cfg.orbit_rate
     typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
@@ -154,9 +156,7 @@ def simulate(config: Optional[Path] = ConfigArg,
 
     from acmm.stages import run_simulate
 
-    progress = _progress()
-    r, path = run_simulate(config, progress=progress, figures=figures)
-    _end_progress(progress)
+    r, path = _run_with_progress(run_simulate, config, figures)
     cfg, s = r.config, r.sim
     n = cfg.orbit_rate
     typer.echo(f"{cfg.name}: design {r.design_note}")
