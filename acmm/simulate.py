@@ -140,7 +140,8 @@ def plain_scales(n: float, drf_mode: str) -> np.ndarray:
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True, fastmath=False)
 def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n,
-         tmax, hmax, drf_idx, out, u_out, ucmd_out, flags):
+         tmax, hmax, drf_idx, out, u_out, ucmd_out, flags, x, u):
+    """Closed-loop Ẋ into ``out``; ``x`` (24) and ``u`` (3) are scratch buffers."""
     w1, w2, w3 = X[0], X[1], X[2]
     t1, t2, t3 = X[3], X[4], X[5]
     h1, h2, h3 = X[6], X[7], X[8]
@@ -153,7 +154,6 @@ def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n
     th2d = d2 + n
     th3d = s1 * w2 + c1 * w3
     # controller state x of eq 4.47 around the TEA estimate
-    x = np.empty(24)
     x[0] = w1 - omega_est[0]
     x[1] = th2d
     x[2] = w3 - omega_est[2]
@@ -162,7 +162,6 @@ def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n
     x[5] = t3 - theta_est[2]
     for i in range(6, 24):
         x[i] = X[i]
-    u = np.empty(3)
     for i in range(3):
         acc = 0.0
         for j in range(24):
@@ -252,6 +251,8 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
     u = np.empty(3)
     ucmd = np.empty(3)
     flags = np.zeros(6)
+    xs = np.empty(24)
+    us = np.empty(3)
     sat_time = np.zeros(3)
     t = sample_times[0]
     dt = 10.0
@@ -261,7 +262,7 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
     level = 0
     # record the first sample
     _rhs(t, X, inertia[0], inertia_inv[0], bias[0], theta_est[0], omega_est[0], gain[0], ha, hb,
-         n, tmax, hmax, drf_idx, tmp, u, ucmd, flags)
+         n, tmax, hmax, drf_idx, tmp, u, ucmd, flags, xs, us)
     out_state[0] = X
     out_u[0] = u
     out_ucmd[0] = ucmd
@@ -285,7 +286,7 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
                         acc += h * A[st, j] * K[j, i]
                     tmp[i] = acc
                 _rhs(t + C[st] * h, tmp, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
-                     K[st], u, ucmd, flags)
+                     K[st], u, ucmd, flags, xs, us)
             # error estimate (RMS of scaled error)
             err = 0.0
             finite = True
@@ -332,7 +333,7 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
                     stop = 4
                     break
         # record the sample (the last state reached, also when stopping)
-        _rhs(t, X, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx, tmp, u, ucmd, flags)
+        _rhs(t, X, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx, tmp, u, ucmd, flags, xs, us)
         out_state[s] = X
         out_u[s] = u
         out_ucmd[s] = ucmd
@@ -382,10 +383,11 @@ def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
     omega_est = dyn.lvlh_rate_in_body(sc.theta_est[level], sc.n)
     drf_idx = np.array([DRF_INPUTS[sc.drf_mode][j % 3] for j in range(6)], dtype=np.int64)
     out, u, ucmd, flags = np.empty(24), np.empty(3), np.empty(3), np.zeros(6)
+    scratch_x, scratch_u = np.empty(24), np.empty(3)
     _rhs(t, np.asarray(X, float), inertia, np.linalg.inv(inertia), np.asarray(sc.bias[level], float),
          np.asarray(sc.theta_est[level], float), omega_est, np.ascontiguousarray(sc.gain[level], float),
          np.asarray(sc.harmonic_a, float), np.asarray(sc.harmonic_b, float), float(sc.n),
-         float(sc.torque_limit), float(sc.momentum_limit), drf_idx, out, u, ucmd, flags)
+         float(sc.torque_limit), float(sc.momentum_limit), drf_idx, out, u, ucmd, flags, scratch_x, scratch_u)
     return out, u, ucmd
 
 
