@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from acmm.results import save_figure
+
 AXES = ("roll", "pitch", "yaw")
 
 
@@ -24,13 +26,12 @@ def _plt():
 
 def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Path]:
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     out = [path.with_suffix(".png")]
     bbox = "tight" if tight else None
-    fig.savefig(out[0], bbox_inches=bbox)
+    save_figure(fig, out[0], bbox_inches=bbox)
     if vector:
         out.append(path.with_suffix(".pdf"))
-        fig.savefig(out[1], bbox_inches=bbox)
+        save_figure(fig, out[1], bbox_inches=bbox)
     fig.clf()
     import matplotlib.pyplot as plt
 

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from acmm.results import save_figure
+
 #: Okabe–Ito colour-blind-safe palette (roll, pitch, yaw first).
 COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#000000")
 AXIS_COLORS = dict(zip(("roll", "pitch", "yaw"), COLORS))
@@ -60,7 +62,7 @@ def save(fig, directory: Path, stem: str) -> dict[str, Path]:
     out = {"pdf": directory / f"{stem}.pdf", "png": directory / f"{stem}.png"}
     # layouts are fixed by tight_layout (no bbox_inches="tight": it costs a second draw);
     # fixed metadata: the same data give byte-identical PDFs (no creation date)
-    fig.savefig(out["pdf"], metadata={"CreationDate": None, "Creator": "acmm report"})
-    fig.savefig(out["png"], metadata={"Software": "acmm report"})
+    save_figure(fig, out["pdf"], metadata={"CreationDate": None, "Creator": "acmm report"})
+    save_figure(fig, out["png"], metadata={"Software": "acmm report"})
     plt.close(fig)
     return out

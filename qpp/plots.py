@@ -5,6 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
+from acmm.results import save_figure
+
 
 def _plt():
     import matplotlib
@@ -48,7 +50,7 @@ def plot_circle(res, path: Path) -> list[Path]:
                      f"(margin {c.margins[i]:.3g})")
         ax.legend(fontsize=7, loc="upper right")
         p = path.with_name(f"{path.stem}_ch{i + 1}.png")
-        fig.savefig(p, dpi=110, bbox_inches="tight")
+        save_figure(fig, p, dpi=110, bbox_inches="tight")
         plt.close(fig)
         out.append(p)
     return out
@@ -77,7 +79,7 @@ def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
     axes[2].set_xlabel("t, s")
     axes[2].legend(fontsize=7)
     fig.suptitle(f"scenario {sim.name} (γ = {sim.gamma:g})")
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
 
@@ -95,6 +97,6 @@ def plot_cartesian(sims, a: float, path: Path) -> Path:
     ax.set_xlabel("Y_A1, m")
     ax.set_ylabel("Y_A2, m")
     ax.legend(fontsize=7)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
