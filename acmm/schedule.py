@@ -189,7 +189,7 @@ def design_one(spec: PointSpec, cfg) -> PointDesign:
     model = lin.design_point(spec.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
     res = lqr.sector_lqr(model.A, model.B, d.R * np.eye(3), n, sigma=d.sector.sigma,
                          half_angle_deg=d.sector.half_angle_deg,
-                         Q0=d.Q0 * np.diag(1.0 / model.scales ** 2) if d.Q0 > 0 else None,
+                         Q0=d.Q0 if d.Q0 > 0 else None,       # q·I on the scaled states
                          scale=model.scales, method=d.pole_method, riccati_method=d.riccati_method,
                          residual_tol=d.residual_tol)
     return PointDesign(spec, t, model, res)

@@ -101,3 +101,17 @@ def test_design_h5_is_self_describing_and_reused(tmp_path, monkeypatch):
     cfg2 = cfg.model_copy(update={"design": cfg.design.model_copy(update={"R": 2e-4})})
     _, note2 = design_for(cfg2)
     assert note2.startswith("designed")
+
+
+def test_config_q0_is_a_weight_on_the_scaled_states():
+    """design.Q0 = q means Q̃ = q·I on x̃ = D⁻¹x: the returned physical Q satisfies D Q D ⪰ q I
+    (pole shifting only adds positive semidefinite terms)."""
+    from acmm.schedule import design_one, point_specs
+
+    cfg = load_config("ac")
+    cfg = cfg.model_copy(update={"design": cfg.design.model_copy(update={"Q0": 1e-3})})
+    p = design_one(point_specs(cfg)[0], cfg)
+    d = p.model.scales
+    q_scaled = p.lqr.Q * d[:, None] * d[None, :]
+    assert np.linalg.eigvalsh(0.5 * (q_scaled + q_scaled.T) - 1e-3 * np.eye(24)).min() > -1e-9
+    assert np.linalg.eigvalsh(q_scaled).max() < 10.0      # not the 1/d² blow-up of a physical q·I
