@@ -29,12 +29,15 @@ def _fmt(v, fmt="{:+.4f}"):
 
 @app.command()
 @user_errors
-def validate(config: Optional[Path] = ConfigArg) -> None:
-    """Check a config file and print the resolved values."""
+def validate(config: Optional[Path] = ConfigArg,
+             show: bool = typer.Option(False, "--show", help="print the resolved config (all defaults, canonical units)")) -> None:
+    """Check a config file (exit 2 naming the offending field when it is invalid)."""
     from acmm.config import load_config
 
     cfg = load_config(config)
     typer.echo(f"{cfg.name}: valid")
+    if show:
+        typer.echo(cfg.to_yaml())
 
 
 @app.command()
