@@ -27,7 +27,6 @@ import os
 import platform
 import shutil
 import subprocess
-import tempfile
 import time
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
@@ -37,6 +36,7 @@ from typing import Callable
 import numpy as np
 
 from acmm.errors import AcmmError
+from acmm.results import write_text
 
 #: stair-case length of ``--fast`` (orbits): one dwell per design point of the 12-point schedule
 FAST_ORBITS = 13.0
@@ -584,21 +584,6 @@ def render_html(doc: Doc, title: str, figdir: Path) -> str:
                          f'<a href="figures/{e(stem)}.png">PNG</a>)</figcaption></figure>')
     parts.append("</body></html>")
     return "\n".join(parts)
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)          # mkstemp makes 0600; a report is for reading
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 # =============================================================================================
@@ -1568,9 +1553,9 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     md = render_markdown(rep.doc, title)
     page = render_html(rep.doc, title, figdir)
     manifest["determinism"] = {k: v for k, v in cmp.items() if k != "differences"}
-    _write_atomic(man_path, json.dumps(manifest, indent=1))
-    _write_atomic(out / "report.md", md)
-    _write_atomic(out / "index.html", page)
+    write_text(man_path, json.dumps(manifest, indent=1))
+    write_text(out / "report.md", md)
+    write_text(out / "index.html", page)
     figs = sorted(figdir.glob("*.png"))
     say(f"wrote {out / 'index.html'} ({len(figs)} figures) in {time.perf_counter() - t_start:.1f} s")
     return ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),

@@ -12,6 +12,7 @@ import json
 import os
 import subprocess
 import tempfile
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -85,6 +86,41 @@ def _write_group(group, items: Mapping[str, Any]) -> None:
             ds.attrs[ak] = av
 
 
+@contextmanager
+def atomic_path(path: str | Path, what: str = "results"):
+    """Yield a temporary path beside ``path``; on success it is renamed onto ``path``.
+
+    The file gets the usual permissions (0666 & ~umask, not mkstemp's 0600); on any error the
+    temporary file is removed and ``path`` is left as it was.
+    """
+    from acmm.errors import OutputError
+
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise OutputError(f"cannot write {what} to {path.parent}: {exc.strerror or exc}") from None
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write a text file atomically (see :func:`atomic_path`)."""
+    with atomic_path(path, "text") as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return Path(path)
+
+
 def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
              attrs: Mapping[str, Any] | None = None) -> Path:
     """Write ``items`` (name → :class:`Dataset` or nested mapping) to ``path`` atomically.
@@ -102,16 +138,8 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
     """
     import h5py
 
-    from acmm.errors import OutputError
-
     path = Path(path)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    except OSError as exc:
-        raise OutputError(f"cannot write results to {path.parent}: {exc.strerror or exc}") from None
-    os.close(fd)
-    try:
+    with atomic_path(path) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["config"] = config_text
             for k, v in provenance(config_text).items():
@@ -119,11 +147,6 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
             for k, v in (attrs or {}).items():
                 f.attrs[k] = v
             _write_group(f, items)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path
 
 
@@ -152,20 +175,7 @@ def save_figure(fig, path: str | Path, **kwargs) -> Path:
 
     The format is taken from ``path``'s suffix; ``kwargs`` go to ``savefig``.
     """
-    from acmm.errors import OutputError
-
     path = Path(path)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".tmp", dir=path.parent)
-    except OSError as exc:
-        raise OutputError(f"cannot write figure to {path.parent}: {exc.strerror or exc}") from None
-    os.close(fd)
-    try:
+    with atomic_path(path, "figure") as tmp:
         fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", **kwargs)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path

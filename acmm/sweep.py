@@ -55,6 +55,8 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from acmm.results import write_text
+
 from acmm.errors import AcmmError, ConfigError, ConvergenceError, DesignError, NoEquilibriumError
 from acmm.sweep_config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sweep, swept_parameters
 
@@ -762,9 +764,7 @@ def _write_csv(path: Path, labels, a) -> None:
         vals += [repr(float(a["torque_saturation_time"][i])), repr(float(a["momentum_saturation_time"][i])),
                  str(a["n_draws"][i]), '"' + a["reason"][i].replace('"', "'") + '"']
         lines.append(",".join(vals))
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text("\n".join(lines) + "\n")
-    os.replace(tmp, path)
+    write_text(path, "\n".join(lines) + "\n")
 
 
 def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:

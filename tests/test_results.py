@@ -110,3 +110,19 @@ def test_tea_h5_overwrite_is_atomic_and_clean(tmp_runs):
     assert p1 == p2
     assert _leftovers(p1.parent, {"tea.h5"}) == []
     np.testing.assert_allclose(np.degrees(read_h5(p2)["theta"]), [0.19, -5.0, 0.56], atol=0.01)
+
+
+def test_results_are_readable_by_others_not_mkstemp_0600(tmp_path):
+    import os
+    import stat
+
+    from acmm.results import Dataset, write_h5, write_text
+
+    old = os.umask(0o022)
+    try:
+        h5 = write_h5(tmp_path / "x.h5", {"x": Dataset([1.0], "1")}, "c: 1")
+        txt = write_text(tmp_path / "x.txt", "hello")
+    finally:
+        os.umask(old)
+    for p in (h5, txt):
+        assert stat.S_IMODE(p.stat().st_mode) == 0o644
