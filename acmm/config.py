@@ -216,6 +216,10 @@ class Output(_Model):
     figures: bool = Field(True, description="write matplotlib figures next to the HDF5 files")
 
 
+#: Largest number of output samples a simulation may ask for (memory guard).
+MAX_SAMPLES = 2_000_000
+
+
 class Config(_Model):
     """A complete acmm run configuration."""
 
@@ -241,14 +245,29 @@ class Config(_Model):
         return v
 
     @model_validator(mode="after")
-    def _levels_consistent(self):
-        lv = self.simulation.levels
+    def _simulation_consistent(self):
+        sim = self.simulation
+        lv = sim.levels
         if lv is not None:
             if any(b <= a for a, b in zip(lv, lv[1:])) or (lv and lv[0] != 0):
                 raise ValueError("simulation.levels must start at 0 and increase")
-            if lv and lv[-1] >= self.simulation.orbits:
+            if lv and lv[-1] >= sim.orbits:
                 raise ValueError("simulation.levels must all start before simulation.orbits")
+            if len(lv) != self.n_design_points():
+                raise ValueError(f"simulation.levels has {len(lv)} entries but the design has "
+                                 f"{self.n_design_points()} point(s), one level each")
+        samples = sim.orbits * 2 * math.pi / self.orbit_rate / sim.sample_interval
+        if samples > MAX_SAMPLES:
+            raise ValueError(f"simulation.sample_interval: {sim.sample_interval:g} s gives {samples:.3g} output "
+                             f"samples over {sim.orbits:g} orbits (at most {MAX_SAMPLES:.0e})")
         return self
+
+    def n_design_points(self) -> int:
+        """Number of design points (= stair-case levels): the blend points plus the named ones."""
+        sch = self.schedule
+        if sch is None:
+            return 1
+        return (sch.n_points if sch.to is not None else 1) + len(sch.points)
 
     def run_dir(self) -> Path:
         """Directory of this run's results (``<output.root>/<name>``)."""

@@ -251,7 +251,7 @@ def load_design_table(path: Path) -> DesignTable:
                        d["attrs"].get("schedule_form", "polynomial"))
 
 
-def design_for(cfg: Config, progress=None) -> tuple[DesignTable, str]:
+def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple[DesignTable, str]:
     """The design of a config: reused from ``design.h5`` when its hash matches, else computed."""
     path = cfg.run_dir() / "design.h5"
     want = design_hash(cfg)
@@ -262,7 +262,7 @@ def design_for(cfg: Config, progress=None) -> tuple[DesignTable, str]:
                 return table, f"reused {path}"
         except (OSError, KeyError, ValueError):
             pass
-    r, path = run_design(cfg, progress)
+    r, path = run_design(cfg, progress, figures)
     return r.table, f"designed, wrote {path}"
 
 
@@ -286,7 +286,7 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
     from acmm import simulate as sim_mod
 
     cfg = _as_config(config)
-    table, note = design_for(cfg, progress)
+    table, note = design_for(cfg, progress, figures)
     sc = sim_mod.scenario_from_config(cfg, table)
     t0 = time.perf_counter()
     r = sim_mod.simulate(sc)

@@ -57,7 +57,6 @@ def test_schedule_is_stable_at_points_and_midpoints(staircase):
     # the 4th-order schedule of configs/staircase.yaml keeps every local loop stable (it does
     # not keep every pole in the sector; the README reports the worst margin)
     assert c.max_real.max() < 0
-    assert np.all(np.isfinite(c.margin))
 
 
 def test_quadratic_schedule_is_not_enough_for_these_gains():

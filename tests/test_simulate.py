@@ -134,3 +134,36 @@ def test_divergence_is_a_result_not_a_crash(tmp_path, monkeypatch):
     with h5py.File(tmp_path / "runs" / "mb3_decoupled" / "sim.h5") as f:
         assert f.attrs["verdict"] == "diverged"
         assert f.attrs["stop_time_orbits"] < 0.1
+
+
+@pytest.mark.parametrize("extra, field", [
+    ("simulation: {orbits: 5, levels: [0, 1]}\n", "simulation.levels"),
+    ("simulation: {orbits: 5, sample_interval: 1.0e-300}\n", "simulation.sample_interval"),
+])
+def test_simulate_rejects_inconsistent_simulation_before_writing(tmp_path, monkeypatch, extra, field):
+    from typer.testing import CliRunner
+
+    from cli.acmm_app import app
+
+    from acmm.config import packaged_config_path
+
+    monkeypatch.chdir(tmp_path)
+    text = packaged_config_path("mb3.yaml").read_text()
+    text = text.replace("name: mb3", "name: badsim").split("simulation:")[0] + extra
+    (tmp_path / "bad.yaml").write_text(text)
+    out = CliRunner().invoke(app, ["simulate", "bad.yaml"])
+    assert out.exit_code == 2
+    assert field in out.stderr and "Traceback" not in out.output
+    assert not (tmp_path / "runs").exists()
+
+
+def test_simulate_no_figures_writes_no_figures(tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from cli.acmm_app import app
+
+    monkeypatch.chdir(tmp_path)
+    out = CliRunner().invoke(app, ["simulate", "ac", "--no-figures"])
+    assert out.exit_code == 0, out.output
+    files = sorted(p.name for p in (tmp_path / "runs" / "ac").iterdir())
+    assert files == ["design.h5", "sim.h5"]
