@@ -332,7 +332,12 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
                 if dt < 1e-6:
                     stop = 4
                     break
-        # record the sample (the last state reached, also when stopping)
+        # record the sample (the last state reached, also when stopping) with the level in force
+        # from t on: a sample at a level start belongs to the new level
+        while level + 1 < L and level_start[level + 1] <= t + 1e-9:
+            level += 1
+        Il, Iil, bl = inertia[level], inertia_inv[level], bias[level]
+        tl, ol, gl = theta_est[level], omega_est[level], gain[level]
         _rhs(t, X, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx, tmp, u, ucmd, flags, xs, us)
         out_state[s] = X
         out_u[s] = u
@@ -469,7 +474,7 @@ def level_statistics(sc: Scenario, r: SimResult) -> list[dict]:
     ends = np.append(sc.level_start[1:], sc.t_end)
     orbit = 2 * np.pi / sc.n
     for k, (t0, t1) in enumerate(zip(sc.level_start, ends)):
-        in_level = (r.t >= t0) & (r.t <= t1)
+        in_level = r.level == k
         steady = in_level & (r.t >= 0.5 * (t0 + t1))
         if not steady.any():
             continue

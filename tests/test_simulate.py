@@ -167,3 +167,12 @@ def test_simulate_no_figures_writes_no_figures(tmp_path, monkeypatch):
     assert out.exit_code == 0, out.output
     files = sorted(p.name for p in (tmp_path / "runs" / "ac").iterdir())
     assert files == ["design.h5", "sim.h5"]
+
+
+def test_sample_at_a_level_start_belongs_to_the_new_level():
+    cfg = load_config("staircase")
+    sc = sm.scenario_from_config(cfg, compute_design(cfg).table, orbits=1.2)
+    r = sm.simulate(sc)
+    at_start = np.isin(r.t, sc.level_start)
+    assert at_start.sum() == len(sc.level_start)
+    assert np.array_equal(r.level[at_start], np.arange(len(sc.level_start)))
