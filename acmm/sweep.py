@@ -63,7 +63,8 @@ from acmm.sweep_config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sw
 AXES = ("roll", "pitch", "yaw")
 
 #: Verdict codes stored in ``verdict_code``.
-VERDICTS = ("bounded", "diverged", "no_equilibrium", "unphysical", "design_failed", "tea_failed")
+VERDICTS = ("bounded", "not_settled", "diverged", "no_equilibrium", "unphysical", "design_failed",
+            "tea_failed")
 
 JOURNAL_VERSION = 1
 
@@ -298,11 +299,18 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
     gap = np.abs(true - sc.theta_est).max()
     if r.stop_code == sm.STOP_ANGLE and gap >= sc.divergence:
         reason += f" (the plant's TEA is {np.degrees(gap):.1f} deg from the controller's estimate)"
+    steady = err[half].max(axis=0)
+    verdict = r.verdict
+    if verdict == "bounded" and steady.max() > spec.settle_deg:
+        # within the divergence bound of the controller's estimate, but not at the plant's TEA
+        verdict = "not_settled"
+        reason = (f"bounded, but the steady attitude error from the plant's TEA is {steady.max():.1f} deg "
+                  f"(> settle_deg {spec.settle_deg:g})")
     row.update(
-        verdict=r.verdict, reason=reason,
+        verdict=verdict, reason=reason,
         time_to_divergence=r.stop_time / orbit if r.diverged else math.nan,
         peak_attitude_error=err.max(axis=0).tolist(),
-        steady_attitude_error=err[half].max(axis=0).tolist(),
+        steady_attitude_error=steady.tolist(),
         peak_momentum=np.abs(r.state[:, 6:9]).max(axis=0).tolist(),
         torque_saturation_time=float(dt @ r.torque_saturated[:-1].any(axis=1)) / orbit,
         momentum_saturation_time=float(dt @ r.momentum_saturated[:-1].any(axis=1)) / orbit,
@@ -694,7 +702,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
         "index": Dataset(a["index"], "1", "case index within its base (seeds SeedSequence([seed, index]))"),
         "parameters": {k: Dataset(v, PARAMETERS[k].unit, PARAMETERS[k].description)
                        for k, v in a["parameters"].items()},
-        "verdict": Dataset(S(a["verdict"]), "1", "bounded | diverged | no_equilibrium | unphysical | "
+        "verdict": Dataset(S(a["verdict"]), "1", "bounded | not_settled | diverged | no_equilibrium | unphysical | "
                                                  "design_failed | tea_failed"),
         "verdict_code": Dataset(a["verdict_code"], "1", "index into the root attribute 'verdicts'"),
         "reason": Dataset(S(a["reason"]), "1", "why the run stopped or was not run"),
@@ -783,7 +791,7 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
         ax = MAP_EXTRAS.index(name)
         return a["tea_true"][sel, ax] - nominal[lab][ax]
 
-    colors = {"bounded": "tab:green", "diverged": "tab:red", "no_equilibrium": "tab:purple",
+    colors = {"bounded": "tab:green", "not_settled": "gold", "diverged": "tab:red", "no_equilibrium": "tab:purple",
               "unphysical": "tab:gray", "design_failed": "tab:orange", "tea_failed": "tab:brown"}
     B = len(labels)
     fig, axs = plt.subplots(1, B, figsize=(4.6 * B, 4.0), squeeze=False)

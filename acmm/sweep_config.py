@@ -33,10 +33,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal, Optional
+from typing import Annotated, Literal, Optional
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
 from acmm.config import Config, Output, load_config, parse_config, validate_model
 from acmm.errors import ConfigError
@@ -132,7 +132,8 @@ class SweepSpec(_Model):
     seed: int = Field(0, ge=0, description="root seed; case i uses SeedSequence([seed, i])")
     design: Literal["fixed", "redesign"] = Field(
         "fixed", description="fixed: the nominal design for every case; redesign: TEA, LQR and schedule per case")
-    tea_estimate: Literal["nominal", "true"] = Field(
+    tea_estimate: Annotated[Literal["nominal", "true"], BeforeValidator(
+        lambda v: {True: "true", False: "nominal"}.get(v, v) if isinstance(v, bool) else v)] = Field(
         "nominal", description="fixed design only: the controller's TEA estimate is the nominal design's TEA "
                                "(nominal) or the perturbed plant's own TEA (true: exact mass properties)")
     orbits: Optional[float] = Field(None, gt=0, le=10000, description="orbits per run (default: base config's)")
@@ -140,6 +141,10 @@ class SweepSpec(_Model):
         "resample", description="perturbed inertia not positive definite or violating the triangle inequality: "
                                 "draw again (resample) or record the case as 'unphysical' (reject)")
     max_draws: int = Field(10000, ge=1, description="resample: give up (verdict 'unphysical') after this many draws")
+    settle_deg: float = Field(
+        10.0, gt=0, le=180, description="a run that stays within the divergence bound but whose steady attitude "
+                                        "error from the plant's true TEA exceeds this (deg) gets the verdict "
+                                        "'not_settled' instead of 'bounded'")
     workers: Optional[int] = Field(None, ge=1, le=1024, description="worker processes (default: CPU count)")
     margin: Optional[Margin] = Field(None, description="uniform-inertia-scaling margin search per base")
     map: Optional[list[str]] = Field(None, min_length=2, max_length=2,

@@ -83,7 +83,7 @@ def register(app: typer.Typer) -> None:
                          + "/".join(f"{v:.1f}" for v in peak.max(axis=0)) + " deg")
             draws = sum(x["n_draws"] for x in rows)
             if draws > len(rows):
-                line += f"; {draws - len(rows)} unphysical draws resampled"
+                line += f"; {draws} draws for {len(rows)} cases ({draws - len(rows)} unphysical draws discarded)"
             typer.echo(line)
         for m in r.margins:
             word = "largest" if m["direction"] == "up" else "smallest"
