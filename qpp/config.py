@@ -20,7 +20,7 @@ Matrix = list[list[float]]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 def _finite_matrix(v):
@@ -124,7 +124,7 @@ class Spheres(_Model):
     beta_o: float = Field(gt=0, description="output sphere radius β_o, output units")
     beta_ri: float = Field(ge=0, description="reference sphere radius β_ri, output units")
     d_inf: float = Field(0.0, ge=0, description="‖d‖∞ used in the threshold m (12.1)")
-    T: float = Field(gt=0, description="truncation time T, s (settling time; 10.44)")
+    T: float = Field(gt=0, le=1e4, description="truncation time T, s (settling time; 10.44)")
 
 
 class Design(_Model):

@@ -94,3 +94,20 @@ def test_bad_config_one_line_exit_2(tmp_path):
         c = _random_config(tmp_path)
         c["plant"]["B"] = [[float("nan")], [1.0]]
         parse_config(c)
+
+
+@pytest.mark.parametrize("edit, field", [
+    (lambda c: c["spheres"].__setitem__("T", float("inf")), "spheres.T"),
+    (lambda c: c["spheres"].__setitem__("T", 1e9), "spheres.T"),
+    (lambda c: c["plant"].__setitem__("x0", [float("nan"), 0.0]), "plant.x0"),
+])
+def test_non_finite_or_huge_values_rejected_before_any_work(tmp_path, edit, field):
+    cfg = _random_config(tmp_path)
+    edit(cfg)
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    for cmd in ("design", "simulate"):
+        r = runner.invoke(app, [cmd, str(path)])
+        assert r.exit_code == 2, r.output
+        assert field in r.output and "Traceback" not in r.output
+    assert not (tmp_path / "runs").exists()
