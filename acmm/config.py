@@ -305,16 +305,17 @@ def _format_error(exc: ValidationError) -> str:
     return f"{loc}: {msg}{extra}"
 
 
-def validate_model(model_cls, data: object, source: str = "config"):
-    """Validate a mapping (e.g. parsed YAML) into a pydantic ``model_cls``.
-
-    Raises
-    ------
-    ConfigError
-        One line naming the offending field.
-    """
+def require_mapping(data: object, source: str = "config") -> dict:
+    """``data`` if it is a mapping, else a one-line :class:`ConfigError`."""
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the top level must be a mapping of keys to values")
+    return data
+
+
+def validate_model(model_cls, data: object, source: str = "config"):
+    """Validate a mapping (e.g. parsed YAML) into a pydantic ``model_cls``; a
+    :class:`ConfigError` naming the offending field otherwise."""
+    require_mapping(data, source)
     try:
         return model_cls.model_validate(data)
     except ValidationError as exc:

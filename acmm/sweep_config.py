@@ -38,7 +38,7 @@ from typing import Annotated, Literal, Optional
 import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
-from acmm.config import Config, Output, load_config, parse_config, validate_model
+from acmm.config import Config, Output, load_config, parse_config, require_mapping, validate_model
 from acmm.errors import ConfigError
 
 
@@ -310,14 +310,8 @@ def _resolve_base(ref: str, directory: Path) -> Base:
 
 def parse_sweep(data: object, source: str = "sweep config", directory: Path | None = None) -> Sweep:
     """Validate a mapping (parsed YAML) into a :class:`Sweep`; base paths resolve against ``directory``.
-
-    Raises
-    ------
-    ConfigError
-        One line naming the offending field.
-    """
-    if not isinstance(data, dict):
-        raise ConfigError(f"{source}: the top level must be a mapping of keys to values")
+    Raises :class:`ConfigError` (one line naming the offending field)."""
+    require_mapping(data, source)
     if "sweep" not in data:
         raise ConfigError(f"{source}: sweep: missing (a sweep config needs a 'sweep' section)")
     directory = Path(".") if directory is None else directory
