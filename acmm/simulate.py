@@ -350,13 +350,18 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
     return last, stop, t, n_steps, n_rej
 
 
+def _drf_index(drf_mode: str) -> np.ndarray:
+    """Index in x (eq 4.47) of the input of each of the six DRFs (n filters, then 2n)."""
+    return np.array([DRF_INPUTS[drf_mode][j % 3] for j in range(6)], dtype=np.int64)
+
+
 def simulate(sc: Scenario) -> SimResult:
     """Integrate a :class:`Scenario`; stops early (a result, not an error) on divergence."""
     L = sc.level_start.shape[0]
     inertia = np.ascontiguousarray(sc.inertia, float)
     inertia_inv = np.linalg.inv(inertia)
     omega_est = np.array([dyn.lvlh_rate_in_body(th, sc.n) for th in sc.theta_est]).reshape(L, 3)
-    drf_idx = np.array([DRF_INPUTS[sc.drf_mode][j % 3] for j in range(6)], dtype=np.int64)
+    drf_idx = _drf_index(sc.drf_mode)
     S = sc.sample_times.shape[0]
     out_state = np.full((S, 24), np.nan)
     out_ucmd = np.full((S, 3), np.nan)
@@ -386,7 +391,7 @@ def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
     """The compiled right-hand side at one state: returns (Ẋ, u delivered, u commanded)."""
     inertia = np.ascontiguousarray(sc.inertia[level], float)
     omega_est = dyn.lvlh_rate_in_body(sc.theta_est[level], sc.n)
-    drf_idx = np.array([DRF_INPUTS[sc.drf_mode][j % 3] for j in range(6)], dtype=np.int64)
+    drf_idx = _drf_index(sc.drf_mode)
     out, u, ucmd, flags = np.empty(24), np.empty(3), np.empty(3), np.zeros(6)
     scratch_x, scratch_u = np.empty(24), np.empty(3)
     _rhs(t, np.asarray(X, float), inertia, np.linalg.inv(inertia), np.asarray(sc.bias[level], float),

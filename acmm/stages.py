@@ -121,11 +121,15 @@ class DesignTable:
     def scheduled_gain(self, k: int) -> np.ndarray:
         """Gain in use at point k: the schedule evaluated at its TEA when there is one, else
         the point's LQR gain."""
+        return self.gain_at(self.tea[k, 1], k)
+
+    def gain_at(self, theta2: float, k: int) -> np.ndarray:
+        """The schedule at pitch TEA ``theta2`` (rad); without a schedule, point k's LQR gain."""
         from acmm.schedule import schedule_gain
 
         if self.coef is None:
             return self.gain[k]
-        return schedule_gain(self.form, self.coef, self.tea[:, 1], self.gain, self.tea[k, 1])
+        return schedule_gain(self.form, self.coef, self.tea[:, 1], self.gain, theta2)
 
 
 @dataclass

@@ -189,14 +189,6 @@ def prepare_base(base, spec) -> BaseContext:
     return BaseContext(base.label, cfg, table, sc, spec, float(orbits))
 
 
-def _level_gain(table, theta2: float, k: int) -> np.ndarray:
-    from acmm.schedule import schedule_gain
-
-    if table.coef is None:
-        return table.gain[k]
-    return schedule_gain(table.form, table.coef, table.tea[:, 1], table.gain, theta2)
-
-
 def _redesigned_config(cfg, values: dict, biases: np.ndarray):
     """The base config with the perturbed inertia and explicit (held) bias torques."""
     from acmm.config import parse_config
@@ -270,7 +262,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
             true = np.array([solve_tea(inertia[k], n, bias[k]).theta for k in range(L)])
             if spec.tea_estimate == "true":
                 est = true
-                gain = np.array([_level_gain(table, true[k, 1], k) for k in range(L)])
+                gain = np.array([table.gain_at(true[k, 1], k) for k in range(L)])
             else:
                 est, gain = sc0.theta_est, sc0.gain
             sc = dataclasses.replace(sc0, inertia=inertia, bias=bias, theta_est=est, gain=gain,

@@ -122,11 +122,32 @@ def test_signal_norms_against_quadrature():
     assert spheres.E_factor(1e-12, 0.5) == pytest.approx(np.sqrt(0.5))
 
 
-@pytest.mark.parametrize("name,a,exact,verdict", [
-    ("qpp_siso", 1e-8, {"eq10.7": 1.603792, "printed": 1.620231}, {"eq10.7": True, "printed": False}),
-    ("qpp_manipulator", 1e-9, {"eq10.7": 2.153343, "printed": 2.343661}, {"eq10.7": True, "printed": True}),
+def _peak_gain_independent(A, B, C):
+    """sup_ω σmax(C (jωI − A)⁻¹ B) by a dense log grid refined with scipy's bounded search —
+    written here, independent of qpp.spheres."""
+    from scipy.optimize import minimize_scalar
+
+    n = len(A)
+
+    def sig(w):
+        return np.linalg.svd(C @ np.linalg.solve(1j * w * np.eye(n) - A, B), compute_uv=False)[0]
+
+    w = np.concatenate([[0.0], np.logspace(-4, 5, 6000)])
+    g = np.array([sig(x) for x in w])
+    k = int(np.argmax(g))
+    lo, hi = w[max(k - 1, 0)], w[min(k + 1, len(w) - 1)]
+    if hi > lo:
+        res = minimize_scalar(lambda x: -sig(x), bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-10 * max(hi, 1.0)})
+        return max(g[k], -res.fun)
+    return g[k]
+
+
+@pytest.mark.parametrize("name,a,verdict", [
+    ("qpp_siso", 1e-8, {"eq10.7": True, "printed": False}),
+    ("qpp_manipulator", 1e-9, {"eq10.7": True, "printed": True}),
 ])
-def test_beta1_both_readings(name, a, exact, verdict):
+def test_beta1_both_readings(name, a, verdict):
     cfg = load_config(name)
     m = cfg.published.m
     for rd in ("eq10.7", "printed"):
@@ -136,7 +157,8 @@ def test_beta1_both_readings(name, a, exact, verdict):
         assert b["value"] == pytest.approx(ham, rel=1e-7)          # two independent exact methods
         assert b["grid_value"] <= b["value"] * (1 + 1e-9)          # grid is a lower bound ...
         assert b["grid_value"] > b["value"] * (1 - 1e-3)           # ... and close
-        assert b["value"] == pytest.approx(exact[rd], rel=1e-5)
+        indep = _peak_gain_independent(Az + a * np.eye(len(Az)), Bz, Cz)
+        assert b["value"] == pytest.approx(indep, rel=1e-6)
         assert (b["value"] <= m) is verdict[rd]                     # the report's verdict, per reading
         assert b["value"] != pytest.approx(cfg.published.beta1, rel=1e-4)   # printed beta1 matches neither
 
