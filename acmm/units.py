@@ -69,6 +69,6 @@ def to_canonical(value: object, dimension: str) -> float:
     if factor is None:
         accepted = sorted({k for k in table})
         raise ValueError(
-            f"unit {unit!r} is not a {dimension} unit (use {canonical}; accepted: {', '.join(accepted)})"
+            f"unit {unit!r} is not a unit of {dimension} (use {canonical}; accepted: {', '.join(accepted)})"
         )
     return number * factor
