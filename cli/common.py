@@ -1,4 +1,5 @@
-"""Shared CLI plumbing: one clear message and exit code 2 for every user error."""
+"""Shared CLI plumbing: one clear message and a documented exit code for every user error
+(:mod:`acmm.errors` lists the codes)."""
 from __future__ import annotations
 
 import functools
@@ -6,29 +7,30 @@ import sys
 
 import typer
 
-from acmm.errors import AcmmError
+from acmm.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError
 
-EXIT_USER_ERROR = 2
+EXIT_USER_ERROR = EXIT_INPUT
 
 
-def fail(message: str) -> None:
-    """Print ``error: message`` on stderr and exit with code 2 (no traceback)."""
+def fail(message: str, code: int = EXIT_INPUT) -> None:
+    """Print ``error: message`` on stderr (one line) and exit with ``code`` (no traceback)."""
+    message = " ".join(str(message).split())
     typer.echo(f"error: {message}", err=True)
-    raise typer.Exit(EXIT_USER_ERROR)
+    raise typer.Exit(code)
 
 
 def user_errors(fn):
-    """Decorator for typer commands: turn :class:`AcmmError` (and a missing optional
-    dependency) into one line on stderr and exit code 2."""
+    """Decorator for typer commands: turn :class:`AcmmError` into one line on stderr and the
+    error's ``exit_code``."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
         except AcmmError as exc:
-            fail(str(exc))
+            fail(str(exc), exc.exit_code)
         except KeyboardInterrupt:
             typer.echo("interrupted", err=True)
-            sys.exit(130)
+            sys.exit(EXIT_INTERRUPTED)
 
     return wrapper

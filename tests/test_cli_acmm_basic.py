@@ -113,5 +113,5 @@ def test_tea_output_root_is_a_file_is_user_error(tmp_runs, run_acmm):
     (tmp_runs / "c.yaml").write_text(
         "name: t\ninertia: {I11: 23.22e6, I22: 1.30e6, I33: 23.23e6}\noutput: {root: blocker}\n")
     r = run_acmm("tea", "c.yaml")
-    assert r.exit_code == 2, (r.exit_code, repr(r.exception))
+    assert r.exit_code == 4, (r.exit_code, repr(r.exception))
     assert "\n" not in r.stderr.strip() and "Traceback" not in r.output

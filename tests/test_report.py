@@ -130,7 +130,7 @@ def test_cli_report_command_registered_and_user_error(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("x")
     res = CliRunner().invoke(app, ["report", "--out", str(blocker / "report"), "--root", str(tmp_path)])
-    assert res.exit_code == 2
+    assert res.exit_code == 4  # EXIT_OUTPUT
     assert res.output.strip().startswith("error:") and len(res.output.strip().splitlines()) == 1
     assert not (tmp_path / "mb3").exists()        # nothing was run
 
