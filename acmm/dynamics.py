@@ -1,6 +1,6 @@
 """Nonlinear rigid-body dynamics of the Space Station (CR-185644 eqs 3.1–3.9).
 
-Conventions (see ``shared/reference/NOTES.md``):
+Conventions (see ``docs/ERRATA.md`` § Units, § Frames, § Kinematics and § Momentum balance):
 
 * Units: slug·ft², ft·lbf, ft·lbf·s, rad, s.
 * θ = (roll θ1, pitch θ2, yaw θ3) is a pitch–yaw–roll (2-3-1) sequence from LVLH to body:
@@ -19,7 +19,20 @@ import numpy as np
 
 
 def skew(v: np.ndarray) -> np.ndarray:
-    """Cross-product matrix [v×] such that ``skew(a) @ b == cross(a, b)``; v may be stacked (..., 3)."""
+    """Cross-product matrix [v×] such that ``skew(a) @ b == cross(a, b)``; v may be stacked (..., 3).
+
+    The skew-symmetric matrices of eqs 3.2, 3.3 and 3.8.
+
+    Parameters
+    ----------
+    v : (..., 3) array
+        Vector(s), any unit.
+
+    Returns
+    -------
+    (..., 3, 3) array
+        [v×], in the unit of ``v``.
+    """
     v = np.asarray(v)
     out = np.zeros(v.shape[:-1] + (3, 3), dtype=np.result_type(v.dtype, float))
     out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
@@ -29,7 +42,18 @@ def skew(v: np.ndarray) -> np.ndarray:
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a × b along the last axis (written out: several times faster than ``np.cross`` on 3-vectors)."""
+    """a × b along the last axis (written out: several times faster than ``np.cross`` on 3-vectors).
+
+    Parameters
+    ----------
+    a, b : (..., 3) arrays
+        Vectors, any units; leading axes broadcast.
+
+    Returns
+    -------
+    (..., 3) array
+        a × b, in the unit of ``a`` times the unit of ``b``.
+    """
     a = np.asarray(a)
     b = np.asarray(b)
     return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
@@ -38,19 +62,58 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def rotation_1(a: float) -> np.ndarray:
-    """Elementary frame rotation about axis 1 by angle ``a`` (rad)."""
+    """Elementary frame rotation about axis 1 by angle ``a`` (rad).
+
+    C1(a) of the sequence C_BL = C1(θ1) C3(θ3) C2(θ2) (``docs/ERRATA.md`` § Frames).
+
+    Parameters
+    ----------
+    a : float
+        Rotation angle, rad.
+
+    Returns
+    -------
+    (3, 3) array
+        Direction-cosine matrix C1(a) (dimensionless).
+    """
     c, s = np.cos(a), np.sin(a)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])
 
 
 def rotation_2(a: float) -> np.ndarray:
-    """Elementary frame rotation about axis 2 by angle ``a`` (rad)."""
+    """Elementary frame rotation about axis 2 by angle ``a`` (rad).
+
+    C2(a) of the sequence C_BL = C1(θ1) C3(θ3) C2(θ2) (``docs/ERRATA.md`` § Frames).
+
+    Parameters
+    ----------
+    a : float
+        Rotation angle, rad.
+
+    Returns
+    -------
+    (3, 3) array
+        Direction-cosine matrix C2(a) (dimensionless).
+    """
     c, s = np.cos(a), np.sin(a)
     return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
 
 
 def rotation_3(a: float) -> np.ndarray:
-    """Elementary frame rotation about axis 3 by angle ``a`` (rad)."""
+    """Elementary frame rotation about axis 3 by angle ``a`` (rad).
+
+    C3(a) of the sequence C_BL = C1(θ1) C3(θ3) C2(θ2) (``docs/ERRATA.md`` § Frames).
+
+    Parameters
+    ----------
+    a : float
+        Rotation angle, rad.
+
+    Returns
+    -------
+    (3, 3) array
+        Direction-cosine matrix C3(a) (dimensionless).
+    """
     c, s = np.cos(a), np.sin(a)
     return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
 
@@ -58,10 +121,17 @@ def rotation_3(a: float) -> np.ndarray:
 def dcm_body_from_lvlh(theta: np.ndarray) -> np.ndarray:
     """Direction-cosine matrix C_BL = C1(θ1) C3(θ3) C2(θ2) (pitch–yaw–roll sequence).
 
+    The nadir vector of eq 3.4 is its third column (``docs/ERRATA.md`` § Frames).
+
     Parameters
     ----------
     theta : (3,) array
         Roll, pitch, yaw (rad).
+
+    Returns
+    -------
+    (3, 3) array
+        C_BL, body components from LVLH components (dimensionless).
     """
     t1, t2, t3 = theta
     return rotation_1(t1) @ rotation_3(t3) @ rotation_2(t2)
@@ -74,6 +144,11 @@ def nadir_vector(theta: np.ndarray) -> np.ndarray:
     ----------
     theta : (..., 3) array
         Roll, pitch, yaw (rad).
+
+    Returns
+    -------
+    c : (..., 3) array
+        Nadir unit vector (c1, c2, c3) in body axes (dimensionless).
     """
     theta = np.asarray(theta)
     s1, s2, s3 = np.sin(theta[..., 0]), np.sin(theta[..., 1]), np.sin(theta[..., 2])
@@ -82,7 +157,20 @@ def nadir_vector(theta: np.ndarray) -> np.ndarray:
 
 
 def nadir_vector_jacobian(theta: np.ndarray) -> np.ndarray:
-    """∂c/∂θ (3×3): column k is d_k = ∂c/∂θ_k of eq 3.4."""
+    """∂c/∂θ (3×3): column k is d_k = ∂c/∂θ_k of eq 3.4.
+
+    Used for the gravity-gradient partials that replace eqs 4.12–4.14.
+
+    Parameters
+    ----------
+    theta : (3,) array
+        Roll, pitch, yaw (rad).
+
+    Returns
+    -------
+    (3, 3) array
+        ∂c/∂θ, 1/rad.
+    """
     s1, s2, s3 = np.sin(theta)
     c1, c2, c3 = np.cos(theta)
     d1 = [0.0, -s1 * s2 * s3 + c1 * c2, -c1 * s2 * s3 - s1 * c2]
@@ -94,7 +182,20 @@ def nadir_vector_jacobian(theta: np.ndarray) -> np.ndarray:
 def lvlh_rate_in_body(theta: np.ndarray, n: float) -> np.ndarray:
     """Angular velocity of LVLH in body axes, C_BL·(0, −n, 0) (rad/s); ω* of eq 4.3.
 
-    A body at rest in LVLH has absolute angular velocity ``lvlh_rate_in_body(θ, n)``.
+    A body at rest in LVLH has absolute angular velocity ``lvlh_rate_in_body(θ, n)``
+    (``docs/ERRATA.md`` § Frames).
+
+    Parameters
+    ----------
+    theta : (..., 3) array
+        Roll, pitch, yaw (rad).
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    omega_star : (..., 3) array
+        ω* in body axes, rad/s.
     """
     theta = np.asarray(theta)
     s1, s3 = np.sin(theta[..., 0]), np.sin(theta[..., 2])
@@ -103,7 +204,20 @@ def lvlh_rate_in_body(theta: np.ndarray, n: float) -> np.ndarray:
 
 
 def lvlh_rate_jacobian(theta: np.ndarray, n: float) -> np.ndarray:
-    """∂ω*/∂θ (3×3) of eq 4.3 (rad/s per rad)."""
+    """∂ω*/∂θ (3×3) of eq 4.3 (rad/s per rad).
+
+    Parameters
+    ----------
+    theta : (3,) array
+        Roll, pitch, yaw (rad).
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    (3, 3) array
+        ∂ω*/∂θ, rad/s per rad.
+    """
     s1, _, s3 = np.sin(theta)
     c1, _, c3 = np.cos(theta)
     return np.array([[0.0, 0.0, -n * c3],
@@ -114,7 +228,17 @@ def lvlh_rate_jacobian(theta: np.ndarray, n: float) -> np.ndarray:
 def kinematics_matrix(theta: np.ndarray) -> np.ndarray:
     """f(θ) of eq 3.6 (corrected: the (1,1) bracket entry is cos θ3, so f11 = 1).
 
-    θ̇ = f(θ) ω + q with q = (0, n, 0) (eq 3.5, 3.7).
+    θ̇ = f(θ) ω + q with q = (0, n, 0) (eq 3.5, 3.7).  See ``docs/ERRATA.md`` § Kinematics.
+
+    Parameters
+    ----------
+    theta : (3,) array
+        Roll, pitch, yaw (rad); |θ3| < 90°.
+
+    Returns
+    -------
+    f : (3, 3) array
+        f(θ), dimensionless (θ̇ in rad/s per ω in rad/s).
     """
     s1, _, s3 = np.sin(theta)
     c1, _, c3 = np.cos(theta)
@@ -127,6 +251,20 @@ def attitude_rate(theta: np.ndarray, omega: np.ndarray, n: float) -> np.ndarray:
     """θ̇ = f(θ) ω + q, eq 3.5 (rad/s), for stacked inputs (..., 3).
 
     Written out row by row so it vectorizes; equal to ``kinematics_matrix(θ) @ ω + q``.
+
+    Parameters
+    ----------
+    theta : (..., 3) array
+        Roll, pitch, yaw (rad).
+    omega : (..., 3) array
+        Absolute angular velocity in body axes, rad/s.
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    theta_dot : (..., 3) array
+        θ̇, rad/s.
     """
     theta = np.asarray(theta)
     omega = np.asarray(omega)
@@ -140,18 +278,59 @@ def attitude_rate(theta: np.ndarray, omega: np.ndarray, n: float) -> np.ndarray:
 
 
 def gyroscopic_torque(omega: np.ndarray, inertia: np.ndarray) -> np.ndarray:
-    """τ_gyro = −ω × (I ω), eq 3.2 (ft·lbf)."""
+    """τ_gyro = −ω × (I ω), eq 3.2 (ft·lbf).
+
+    Parameters
+    ----------
+    omega : (..., 3) array
+        Absolute angular velocity in body axes, rad/s.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+
+    Returns
+    -------
+    (..., 3) array
+        Gyroscopic torque, ft·lbf.
+    """
     omega = np.asarray(omega)
     return -cross(omega, omega @ inertia.T)
 
 
 def gyroscopic_torque_jacobian(omega: np.ndarray, inertia: np.ndarray) -> np.ndarray:
-    """∂τ_gyro/∂ω = [(Iω)×] − [ω×] I (ft·lbf per rad/s); eqs 4.8–4.10 in matrix form."""
+    """∂τ_gyro/∂ω = [(Iω)×] − [ω×] I (ft·lbf per rad/s); eqs 4.8–4.10 in matrix form.
+
+    Parameters
+    ----------
+    omega : (3,) array
+        Angular velocity at which to differentiate (ω* of eq 4.3), rad/s.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+
+    Returns
+    -------
+    (3, 3) array
+        ∂τ_gyro/∂ω, ft·lbf per rad/s.
+    """
     return skew(inertia @ omega) - skew(omega) @ inertia
 
 
 def gravity_gradient_torque(theta: np.ndarray, inertia: np.ndarray, n: float) -> np.ndarray:
-    """τ_gg = 3n² c × (I c), eq 3.3 (ft·lbf), c the nadir vector of eq 3.4."""
+    """τ_gg = 3n² c × (I c), eq 3.3 (ft·lbf), c the nadir vector of eq 3.4.
+
+    Parameters
+    ----------
+    theta : (..., 3) array
+        Roll, pitch, yaw (rad).
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    (..., 3) array
+        Gravity-gradient torque, ft·lbf.
+    """
     c = nadir_vector(theta)
     return 3.0 * n * n * cross(c, c @ inertia.T)
 
@@ -160,7 +339,22 @@ def gravity_gradient_jacobian(theta: np.ndarray, inertia: np.ndarray, n: float) 
     """∂τ_gg/∂θ (3×3, ft·lbf/rad); column k = 3n²(d_k × I c + c × I d_k), d_k = ∂c/∂θ_k.
 
     This replaces the printed eqs 4.12–4.14 (4.12 has the wrong prefactor sign and a missing
-    −I23·B1·C1 term in row 2; 4.13–4.14 are garbled beyond repair).
+    −I23·B1·C1 term in row 2; 4.13–4.14 are garbled beyond repair); see ``docs/ERRATA.md``
+    § Linearization.
+
+    Parameters
+    ----------
+    theta : (3,) array
+        Roll, pitch, yaw at which to differentiate (θ*), rad.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    (3, 3) array
+        ∂τ_gg/∂θ, ft·lbf/rad.
     """
     c = nadir_vector(theta)
     d = nadir_vector_jacobian(theta)
@@ -169,13 +363,57 @@ def gravity_gradient_jacobian(theta: np.ndarray, inertia: np.ndarray, n: float) 
 
 
 def disturbance_torque(t, bias: np.ndarray, a: np.ndarray, b: np.ndarray, n: float) -> np.ndarray:
-    """w(t) = bias + A sin(nt) + B sin(2nt), eq 3.9 (ft·lbf); ``t`` scalar or (N,) s."""
+    """w(t) = bias + A sin(nt) + B sin(2nt), eq 3.9 (ft·lbf); ``t`` scalar or (N,) s.
+
+    Parameters
+    ----------
+    t : float or (N,) array
+        Time, s.
+    bias : (3,) array
+        Constant (bias) torque, ft·lbf.
+    a : (3,) array
+        Amplitude A of sin(nt) per axis, ft·lbf.
+    b : (3,) array
+        Amplitude B of sin(2nt) per axis, ft·lbf.
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    w : (3,) or (N, 3) array
+        Disturbance torque, ft·lbf (one row per time when ``t`` is an array).
+    """
     t = np.asarray(t, float)[..., None]
     return np.asarray(bias) + np.asarray(a) * np.sin(n * t) + np.asarray(b) * np.sin(2 * n * t)
 
 
 def angular_acceleration(theta, omega, inertia, n, w, u, inertia_inv=None) -> np.ndarray:
-    """ω̇ from eq 3.1: I ω̇ = τ_gyro + τ_gg + (w − u) (rad/s²)."""
+    """ω̇ from eq 3.1: I ω̇ = τ_gyro + τ_gg + (w − u) (rad/s²).
+
+    Signs of u and w: ``docs/ERRATA.md`` § Momentum balance.
+
+    Parameters
+    ----------
+    theta : (..., 3) array
+        Roll, pitch, yaw (rad).
+    omega : (..., 3) array
+        Absolute angular velocity in body axes, rad/s.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    w : (..., 3) array
+        Disturbance torque (eq 3.9), ft·lbf.
+    u : (..., 3) array
+        CMG control torque, ft·lbf.
+    inertia_inv : (3, 3) array, optional
+        Inverse of ``inertia``, 1/(slug·ft²); computed when omitted.
+
+    Returns
+    -------
+    omega_dot : (..., 3) array
+        ω̇, rad/s².
+    """
     if inertia_inv is None:
         inertia_inv = np.linalg.inv(inertia)
     torque = gyroscopic_torque(omega, inertia) + gravity_gradient_torque(theta, inertia, n) + w - u
@@ -183,12 +421,56 @@ def angular_acceleration(theta, omega, inertia, n, w, u, inertia_inv=None) -> np
 
 
 def cmg_momentum_rate(omega: np.ndarray, h: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """ḣ = u − ω × h, eq 3.8 (ft·lbf)."""
+    """ḣ = u − ω × h, eq 3.8 (ft·lbf).
+
+    Parameters
+    ----------
+    omega : (..., 3) array
+        Absolute angular velocity in body axes, rad/s.
+    h : (..., 3) array
+        CMG momentum in body axes, ft·lbf·s.
+    u : (..., 3) array
+        CMG control torque, ft·lbf.
+
+    Returns
+    -------
+    h_dot : (..., 3) array
+        ḣ, ft·lbf.
+    """
     return u - cross(omega, h)
 
 
 def plant_rhs(theta, omega, h, inertia, n, w, u, inertia_inv=None):
-    """Right-hand side of eqs 3.1, 3.5, 3.8: returns (θ̇, ω̇, ḣ)."""
+    """Right-hand side of eqs 3.1, 3.5, 3.8: returns (θ̇, ω̇, ḣ).
+
+    Parameters
+    ----------
+    theta : (..., 3) array
+        Roll, pitch, yaw (rad).
+    omega : (..., 3) array
+        Absolute angular velocity in body axes, rad/s.
+    h : (..., 3) array
+        CMG momentum in body axes, ft·lbf·s.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    w : (..., 3) array
+        Disturbance torque (eq 3.9), ft·lbf.
+    u : (..., 3) array
+        CMG control torque, ft·lbf.
+    inertia_inv : (3, 3) array, optional
+        Inverse of ``inertia``, 1/(slug·ft²); computed when omitted.
+
+    Returns
+    -------
+    theta_dot : (..., 3) array
+        θ̇ (eq 3.5), rad/s.
+    omega_dot : (..., 3) array
+        ω̇ (eq 3.1), rad/s².
+    h_dot : (..., 3) array
+        ḣ (eq 3.8), ft·lbf.
+    """
     return (attitude_rate(theta, omega, n),
             angular_acceleration(theta, omega, inertia, n, w, u, inertia_inv),
             cmg_momentum_rate(omega, h, u))

@@ -9,8 +9,8 @@ with ẋ = A x + B u + G w (eq 4.46).  The model is assembled from closed-form p
 
 * kinematics (eq 4.4): δθ̇ = f(θ*) δω + ∂(f(θ)ω*)/∂θ δθ;
 * gyroscopic torque (eqs 4.8–4.10): ∂τ_gyro/∂ω = [(Iω*)×] − [ω*×] I;
-* gravity-gradient torque (eqs 4.12–4.14, corrected, NOTES.md): column k is
-  3n²(d_k × I c + c × I d_k), d_k = ∂c/∂θ_k;
+* gravity-gradient torque (eqs 4.12–4.14, corrected, ``docs/ERRATA.md`` § Linearization):
+  column k is 3n²(d_k × I c + c × I d_k), d_k = ∂c/∂θ_k;
 * the change of variable δω2 → θ̇2 of eq 4.26: x1 = M z with z = (δω, δθ) and M the identity
   except its second row, the linearized θ̇2.  Then ẋ1 = M A_z M⁻¹ x1, which is E1⁻¹A1 of
   eqs 4.27–4.29 (4.28: the 1/cos θ1 factor scales rows 1–3 only; 4.29: column 6, rows 1–3
@@ -20,6 +20,9 @@ with ẋ = A x + B u + G w (eq 4.46).  The model is assembled from closed-form p
   signs are wrong);
 * disturbance-rejection filters (eqs 4.35–4.45) at n and 2n on deviations; in attitude hold
   δθ2 and δθ3 drive rows 9 and 11 of x3 (the β̇2, β̇3 rows; printed 4.44 says 10 and 12).
+
+The misprints named here are listed, with the tests that establish them, in ``docs/ERRATA.md``
+§ Linearization and § Momentum balance; the state scaling in § Scaling.
 """
 from __future__ import annotations
 
@@ -67,7 +70,10 @@ class LinearModel:
     variant, drf_mode : str
         Design-model variant and DRF mode.
     scales : (24,) array
-        Nominal state magnitudes for scaling (x = diag(scales) x̃).
+        Nominal state magnitudes for scaling (x = diag(scales) x̃), in the units of each state
+        (:func:`state_units`; ``docs/ERRATA.md`` § Scaling).
+    state_names : tuple of str
+        Names of the 24 states of eq 4.47 (:data:`STATE_NAMES`).
     """
 
     A: np.ndarray
@@ -84,15 +90,35 @@ class LinearModel:
 
     @property
     def state_units(self) -> list[str]:
+        """Unit of each state of eq 4.47 for this model's DRF mode (see :func:`state_units`)."""
         return state_units(self.drf_mode)
 
     def scaled(self):
-        """(Ã, B̃, G̃) of the state-scaled model x = D x̃, D = diag(scales)."""
+        """(Ã, B̃, G̃) of the state-scaled model x = D x̃, D = diag(scales).
+
+        See ``docs/ERRATA.md`` § Scaling.
+
+        Returns
+        -------
+        A_scaled : (24, 24) array
+            D⁻¹ A D, 1/s.
+        B_scaled : (24, 3) array
+            D⁻¹ B, scaled state units per ft·lbf.
+        G_scaled : (24, 3) array
+            D⁻¹ G, scaled state units per ft·lbf.
+        """
         d = self.scales
         return self.A * (1.0 / d)[:, None] * d[None, :], self.B / d[:, None], self.G / d[:, None]
 
     def to_statespace(self):
-        """A python-control ``StateSpace`` with inputs [u1..u3, w1..w3] and all states as outputs."""
+        """A python-control ``StateSpace`` with inputs [u1..u3, w1..w3] and all states as outputs.
+
+        Returns
+        -------
+        control.StateSpace
+            ẋ = A x + [B G] [u; w], y = x (eq 4.46), in the report's physical units
+            (torques ft·lbf; states as :func:`state_units`).
+        """
         import control
 
         return control.ss(self.A, np.hstack([self.B, self.G]), np.eye(24), np.zeros((24, 6)),
@@ -101,7 +127,19 @@ class LinearModel:
 
 
 def state_units(drf_mode: str = "attitude_hold") -> list[str]:
-    """Unit of each state of eq 4.47 (the DRF units follow their inputs)."""
+    """Unit of each state of eq 4.47 (the DRF units follow their inputs).
+
+    Parameters
+    ----------
+    drf_mode : {"attitude_hold", "momentum_hold"}
+        DRF inputs (h1, δθ2, δθ3) or (h1, h2, δθ3) (report ch. 5.1).
+
+    Returns
+    -------
+    list of str
+        24 unit strings (``"rad/s"``, ``"rad"``, ``"ft*lbf*s"``, …) in the order of
+        :data:`STATE_NAMES`.
+    """
     base = ["rad/s"] * 3 + ["rad"] * 3 + ["ft*lbf*s"] * 3 + ["ft*lbf*s^2"] * 3
     in_units = {4: "rad", 5: "rad", 6: "ft*lbf*s", 7: "ft*lbf*s"}
     drf = []
@@ -116,6 +154,18 @@ def kinematics_jacobian(theta: np.ndarray, n: float) -> np.ndarray:
     """∂(f(θ) ω*)/∂θ at θ = θ* (rad/s per rad), the δθ terms of eq 4.4.
 
     Closed form: [[0, 0, n/cos θ3], [0, 0, −n tan θ3], [−n cos θ3, 0, 0]].
+
+    Parameters
+    ----------
+    theta : (3,) array
+        Linearization attitude θ*, rad.
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    (3, 3) array
+        ∂(f(θ) ω*)/∂θ, rad/s per rad.
     """
     c3, s3 = np.cos(theta[2]), np.sin(theta[2])
     return np.array([[0.0, 0.0, n / c3], [0.0, 0.0, -n * s3 / c3], [-n * c3, 0.0, 0.0]])
@@ -125,7 +175,19 @@ def state_scales(n: float, drf_mode: str = "attitude_hold") -> np.ndarray:
     """Nominal magnitude of every state (same units as the state).
 
     Angles 0.01 rad, rates n·0.01 rad/s, momentum 1000 ft·lbf·s, its integral 1000/n, and each
-    DRF state its input's scale divided by (filter frequency)^k.
+    DRF state its input's scale divided by (filter frequency)^k (``docs/ERRATA.md`` § Scaling).
+
+    Parameters
+    ----------
+    n : float
+        Orbital rate, rad/s.
+    drf_mode : {"attitude_hold", "momentum_hold"}
+        DRF inputs (h1, δθ2, δθ3) or (h1, h2, δθ3).
+
+    Returns
+    -------
+    (24,) array
+        Nominal magnitudes, in the units of :func:`state_units` for the same ``drf_mode``.
     """
     ang, mom = NOMINAL_ANGLE, NOMINAL_MOMENTUM
     s = np.empty(24)
@@ -160,6 +222,17 @@ def linearize(inertia: np.ndarray, theta_star: np.ndarray, n: float, *,
         DRF inputs (h1, δθ2, δθ3) or (h1, h2, δθ3).
     variant : str
         Label stored with the model.
+
+    Returns
+    -------
+    LinearModel
+        A (24×24), B and G (24×3, state units per ft·lbf) of eq 4.46 in the report's physical
+        units (:func:`state_units`), with the state scales of :func:`state_scales`.
+
+    Raises
+    ------
+    ValueError
+        When ``drf_mode`` is not one of the two modes.
     """
     if drf_mode not in DRF_INPUTS:
         raise ValueError(f"drf_mode must be one of {sorted(DRF_INPUTS)}")
@@ -211,6 +284,30 @@ def design_point(inertia_full: np.ndarray, theta_tea: np.ndarray, n: float, *,
 
     ``coupled``: full inertia about the TEA; ``no_cross_inertia``: I12 = I13 = I23 = 0 in the
     model, TEA still from the full inertia (report ch. 6); ``small_angle``: θ* = 0 (LVLH).
+    The variants are those named after eq 4.46 (``docs/ERRATA.md`` § Claim 1).
+
+    Parameters
+    ----------
+    inertia_full : (3, 3) array
+        Full inertia of the plant, slug·ft².
+    theta_tea : (3,) array
+        Torque-equilibrium attitude of the full inertia (eqs 4.1–4.3), rad.
+    n : float
+        Orbital rate, rad/s.
+    model : {"coupled", "no_cross_inertia", "small_angle"}
+        Design-model variant.
+    drf_mode : {"attitude_hold", "momentum_hold"}
+        DRF inputs (h1, δθ2, δθ3) or (h1, h2, δθ3).
+
+    Returns
+    -------
+    LinearModel
+        The 24-state model of eq 4.46 for that variant.
+
+    Raises
+    ------
+    ValueError
+        When ``model`` is not one of the three variants.
     """
     inertia_full = np.asarray(inertia_full, float)
     if model == "coupled":
@@ -224,7 +321,21 @@ def design_point(inertia_full: np.ndarray, theta_tea: np.ndarray, n: float, *,
 
 
 def linearize_config(cfg) -> LinearModel:
-    """TEA of a :class:`acmm.config.Config` (physical branch), then its design model."""
+    """TEA of a :class:`acmm.config.Config` (physical branch), then its design model.
+
+    Eqs 4.1–4.3 (:func:`acmm.tea.solve_tea`), then eq 4.46 (:func:`design_point`).
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        Validated config; its inertia (slug·ft²), orbital rate (rad/s), disturbance bias
+        (ft·lbf) and ``design.model`` / ``design.drf_mode`` are used.
+
+    Returns
+    -------
+    LinearModel
+        The design model of eq 4.46 about the config's TEA.
+    """
     from acmm.tea import resolve_bias, solve_tea
 
     inertia = cfg.inertia.matrix()
@@ -238,7 +349,21 @@ class Controllability:
     """PBH controllability of the scaled model.
 
     ``ratios[i]`` = σmin([A − λ_i I, B]) / σmax([A, B]) at each open-loop eigenvalue λ_i (and
-    at s = 0); ``rank`` counts the eigenvalues whose ratio exceeds ``tol``.
+    at s = 0); ``rank`` counts the eigenvalues whose ratio exceeds ``tol``.  See
+    ``docs/ERRATA.md`` § Sector LQR for the nearly uncontrollable cross-inertia-free MB3 model.
+
+    Attributes
+    ----------
+    rank : int
+        Number of eigenvalues whose PBH ratio exceeds ``tol`` (of ``order``).
+    order : int
+        Number of states (24).
+    min_ratio : float
+        Smallest PBH ratio, dimensionless.
+    worst_s : complex
+        Point (eigenvalue of the scaled A, or 0) where the ratio is smallest, 1/s.
+    tol : float
+        Ratio below which an eigenvalue counts as uncontrollable, dimensionless.
     """
 
     rank: int
@@ -249,7 +374,20 @@ class Controllability:
 
 
 def controllability(model: LinearModel, tol: float = 1e-10) -> Controllability:
-    """Popov–Belevitch–Hautus test on the state-scaled (A, B)."""
+    """Popov–Belevitch–Hautus test on the state-scaled (A, B).
+
+    Parameters
+    ----------
+    model : LinearModel
+        Model of eq 4.46; its state-scaled form (:meth:`LinearModel.scaled`) is tested.
+    tol : float
+        PBH ratio below which an eigenvalue counts as uncontrollable, dimensionless.
+
+    Returns
+    -------
+    Controllability
+        Rank, smallest ratio and where it occurs.
+    """
     a, b, _ = model.scaled()
     nx = a.shape[0]
     norm = np.linalg.norm(np.hstack([a, b]), 2)

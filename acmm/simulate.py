@@ -3,7 +3,8 @@
 Plant: eqs 3.1, 3.5, 3.8 with the disturbance of eq 3.9 (per-level bias).  Controller: the
 integral ∫h and the twelve DRF states (eqs 4.35–4.40, fed by deviations) are integrated with
 the plant; u = −K(θ̂*)·x (eq 5.1) with x of eq 4.47 built from the nonlinear state around the
-current TEA estimate θ̂* (θ̇2 from the nonlinear kinematics).  Saturation (ch. 5.1, NOTES.md):
+current TEA estimate θ̂* (θ̇2 from the nonlinear kinematics).  Saturation (ch. 5.1,
+``docs/ERRATA.md`` § Saturation):
 the commanded torque is clipped to ±torque_limit per axis; a CMG axis at |h_i| ≥ momentum_limit
 delivers only the torque that stops |h_i| growing, and the body receives exactly the torque the
 CMG absorbs, so I ω̇ + ḣ + ω×(Iω + h) = τ_gg + w holds along every trajectory.
@@ -60,18 +61,27 @@ class Scenario:
     harmonic_a, harmonic_b : (3,) arrays, ft·lbf
         Amplitudes of sin(nt) and sin(2nt).
     n : float, rad/s
+        Orbital rate.
     torque_limit : float, ft·lbf
+        Commanded torque is clipped to ±torque_limit per axis (ch. 5.1: 150 ft·lbf).
     momentum_limit : float, ft·lbf·s
+        CMG momentum limit per axis (ch. 5.1: 20 000 ft·lbf·s).
     drf_mode : str
+        ``"attitude_hold"`` or ``"momentum_hold"`` (DRF inputs, ch. 5.1).
     t_end : float, s
+        End of the simulation.
     sample_times : (S,) array, s
         Output times (include 0 and every level start).
     x0 : (24,) array
-        Initial plain state X.
+        Initial plain state X, in the units listed in the module docstring.
     rtol : float
+        Relative tolerance of the integrator, dimensionless.
     atol : (24,) array
+        Absolute tolerance per component of X, in the units of X.
     divergence : float, rad
+        A run stops as diverged when |θ_i − θ̂*_i| exceeds this bound.
     max_saturation : float, s
+        A run stops as diverged when a CMG axis stays saturated longer than this.
     """
 
     level_start: np.ndarray
@@ -100,6 +110,33 @@ class SimResult:
 
     ``state`` rows follow :data:`PLAIN_STATE_NAMES`; ``u_cmd`` is −K x before saturation,
     ``u`` the torque delivered; ``torque_saturated``/``momentum_saturated`` flag each axis.
+
+    Attributes
+    ----------
+    t : (S,) array
+        Sample times, s (the last one is the stop time when the run stopped early).
+    state : (S, 24) array
+        Plain state X at each sample, in the units listed in the module docstring.
+    u_cmd : (S, 3) array
+        Commanded torque −K x (eq 5.1) before saturation, ft·lbf.
+    u : (S, 3) array
+        Torque delivered after saturation (``docs/ERRATA.md`` § Saturation), ft·lbf.
+    w : (S, 3) array
+        Disturbance torque of eq 3.9, ft·lbf.
+    level : (S,) int array
+        Index of the inertia level in force at each sample.
+    torque_saturated : (S, 3) bool array
+        Commanded torque clipped, per axis.
+    momentum_saturated : (S, 3) bool array
+        CMG momentum at its limit, per axis.
+    stop_code : int
+        One of the ``STOP_*`` codes (:data:`STOP_REASONS`); ``STOP_NONE`` when completed.
+    stop_time : float
+        Time reached, s.
+    n_steps : int
+        Accepted integrator steps.
+    n_rejected : int
+        Rejected integrator steps.
     """
 
     t: np.ndarray
@@ -117,19 +154,38 @@ class SimResult:
 
     @property
     def diverged(self) -> bool:
+        """True when the run stopped early (divergence is a result, not an error)."""
         return self.stop_code != STOP_NONE
 
     @property
     def verdict(self) -> str:
+        """``"diverged"`` or ``"bounded"``."""
         return "diverged" if self.diverged else "bounded"
 
     @property
     def reason(self) -> str:
+        """Why the run stopped, in words (:data:`STOP_REASONS`)."""
         return STOP_REASONS[self.stop_code]
 
 
 def plain_scales(n: float, drf_mode: str) -> np.ndarray:
-    """Nominal magnitudes of the plain state X (for absolute tolerances)."""
+    """Nominal magnitudes of the plain state X (for absolute tolerances).
+
+    The scales of :func:`acmm.linearize.state_scales` (``docs/ERRATA.md`` § Scaling) with ω2
+    in place of θ̇2.
+
+    Parameters
+    ----------
+    n : float
+        Orbital rate, rad/s.
+    drf_mode : {"attitude_hold", "momentum_hold"}
+        DRF inputs (h1, δθ2, δθ3) or (h1, h2, δθ3).
+
+    Returns
+    -------
+    (24,) array
+        Nominal magnitudes, in the units of X (module docstring).
+    """
     s = state_scales(n, drf_mode).copy()
     s[1] = s[0]            # ω2 instead of θ̇2: same rate scale
     return s
@@ -356,7 +412,22 @@ def _drf_index(drf_mode: str) -> np.ndarray:
 
 
 def simulate(sc: Scenario) -> SimResult:
-    """Integrate a :class:`Scenario`; stops early (a result, not an error) on divergence."""
+    """Integrate a :class:`Scenario`; stops early (a result, not an error) on divergence.
+
+    The closed loop of eqs 3.1, 3.5, 3.8, 3.9 and 5.1 with saturation (ch. 5.1,
+    ``docs/ERRATA.md`` § Saturation).
+
+    Parameters
+    ----------
+    sc : Scenario
+        Plant, gains, disturbance and integration settings, as arrays (units in
+        :class:`Scenario`).
+
+    Returns
+    -------
+    SimResult
+        Sampled trajectory (up to the stop) and verdict.
+    """
     L = sc.level_start.shape[0]
     inertia = np.ascontiguousarray(sc.inertia, float)
     inertia_inv = np.linalg.inv(inertia)
@@ -388,7 +459,28 @@ def simulate(sc: Scenario) -> SimResult:
 
 
 def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
-    """The compiled right-hand side at one state: returns (Ẋ, u delivered, u commanded)."""
+    """The compiled right-hand side at one state: returns (Ẋ, u delivered, u commanded).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The closed loop (units in :class:`Scenario`).
+    t : float
+        Time, s.
+    X : (24,) array
+        Plain state, in the units listed in the module docstring.
+    level : int
+        Index of the inertia level in force.
+
+    Returns
+    -------
+    X_dot : (24,) array
+        Ẋ, in the units of X per second.
+    u : (3,) array
+        Torque delivered after saturation, ft·lbf.
+    u_cmd : (3,) array
+        Commanded torque −K x (eq 5.1), ft·lbf.
+    """
     inertia = np.ascontiguousarray(sc.inertia[level], float)
     omega_est = dyn.lvlh_rate_in_body(sc.theta_est[level], sc.n)
     drf_idx = _drf_index(sc.drf_mode)
@@ -404,7 +496,24 @@ def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
 def rhs_numpy(t: float, X: np.ndarray, sc: Scenario, level: int = 0) -> np.ndarray:
     """Plain-numpy right-hand side of the same closed loop, from :mod:`acmm.dynamics`.
 
-    The independent reference for the compiled kernel and the ``solve_ivp`` baseline.
+    The independent reference for the compiled kernel and the ``solve_ivp`` baseline
+    (eqs 3.1, 3.5, 3.8, 3.9, 4.35–4.40 and 5.1; ``docs/ERRATA.md`` § Saturation).
+
+    Parameters
+    ----------
+    t : float
+        Time, s.
+    X : (24,) array
+        Plain state, in the units listed in the module docstring.
+    sc : Scenario
+        The closed loop (units in :class:`Scenario`).
+    level : int
+        Index of the inertia level in force.
+
+    Returns
+    -------
+    (24,) array
+        Ẋ, in the units of X per second.
     """
     n = sc.n
     omega, theta, h = X[0:3], X[3:6], X[6:9]
@@ -435,7 +544,29 @@ def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float
     Levels are the design points in order (the stair-case); each starts at the orbit given by
     ``simulation.levels`` or, by default, after an equal dwell.  The controller uses the TEA of
     each level's mass properties as its estimate θ̂* (report ch. 5.1) and the scheduled gain
-    K(θ̂2*) when the design has a schedule, else the level's own LQR gain.
+    K(θ̂2*) when the design has a schedule, else the level's own LQR gain (eq 5.1, ch. 5.3).
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        Validated config (orbital rate rad/s, disturbance ft·lbf, actuator limits ft·lbf and
+        ft·lbf·s, ``simulation`` settings).
+    table : acmm.stages.DesignTable
+        Design points in order: inertia (slug·ft²), bias (ft·lbf), TEA (rad) and gains.
+    orbits : float, optional
+        Simulated duration in orbits (dimensionless); default ``simulation.orbits``.
+    rtol : float, optional
+        Relative tolerance (dimensionless); default ``simulation.rtol``.
+
+    Returns
+    -------
+    Scenario
+        The arrays the simulator needs.
+
+    Raises
+    ------
+    ConfigError
+        When ``simulation.levels`` and the design table differ in length.
     """
     sim = cfg.simulation
     n = cfg.orbit_rate
@@ -466,13 +597,43 @@ def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float
 
 
 def attitude_error(sc: Scenario, r: SimResult) -> np.ndarray:
-    """θ − θ̂* of the level in force at each sample (rad)."""
+    """θ − θ̂* of the level in force at each sample (rad).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The simulated scenario (its TEA estimates, rad).
+    r : SimResult
+        Its result.
+
+    Returns
+    -------
+    (S, 3) array
+        Attitude error, rad.
+    """
     return r.state[:, 3:6] - sc.theta_est[r.level]
 
 
 def level_statistics(sc: Scenario, r: SimResult) -> list[dict]:
     """Per level: steady attitude error (max |θ − θ̂*| over the second half of the dwell, deg)
-    and peak CMG momentum (ft·lbf·s)."""
+    and peak CMG momentum (ft·lbf·s).
+
+    The stair-case of inertia levels of report ch. 6 (claim 2).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The simulated scenario.
+    r : SimResult
+        Its result.
+
+    Returns
+    -------
+    list of dict
+        One per level reached: ``level``, ``start_orbit`` (orbits), ``theta2_deg`` (deg, the
+        TEA pitch estimate), ``steady_error_deg`` ((3,) array, deg) and ``peak_momentum``
+        (ft·lbf·s).
+    """
     err = np.degrees(attitude_error(sc, r))
     hmag = np.abs(r.state[:, 6:9])
     out = []

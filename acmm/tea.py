@@ -2,7 +2,7 @@
 
 The TEA θ* solves τ_gyro(ω*(θ*)) + τ_gg(θ*) + bias = 0 with ω*(θ) = C_BL·(0, −n, 0)
 (eq 4.3).  Several roots exist; the physical branch is reached reproducibly by continuation
-(NOTES.md): start from the diagonal body at LVLH (θ = 0 is exact there with zero bias), grow the
+(``docs/ERRATA.md`` § TEA): start from the diagonal body at LVLH (θ = 0 is exact there with zero bias), grow the
 products of inertia to their values, then grow the bias.  A fold in the bias continuation
 means no equilibrium exists for the full bias.
 """
@@ -43,24 +43,77 @@ class TEA:
 
     @property
     def theta_deg(self) -> np.ndarray:
+        """θ* in degrees, (3,) array (as printed in Table 1)."""
         return np.degrees(self.theta)
 
 
 def equilibrium_residual(theta, inertia, n, bias) -> np.ndarray:
-    """τ_gyro(ω*(θ)) + τ_gg(θ) + bias, eq 4.1 with eq 4.3 substituted (ft·lbf)."""
+    """τ_gyro(ω*(θ)) + τ_gg(θ) + bias, eq 4.1 with eq 4.3 substituted (ft·lbf).
+
+    Parameters
+    ----------
+    theta : (3,) array
+        Roll, pitch, yaw, rad.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        Constant disturbance torque, ft·lbf.
+
+    Returns
+    -------
+    (3,) array
+        Residual torque, ft·lbf (zero at an equilibrium).
+    """
     omega = dyn.lvlh_rate_in_body(theta, n)
     return dyn.gyroscopic_torque(omega, inertia) + dyn.gravity_gradient_torque(theta, inertia, n) + bias
 
 
 def equilibrium_jacobian(theta, inertia, n) -> np.ndarray:
-    """∂/∂θ of :func:`equilibrium_residual` (ft·lbf/rad), analytic."""
+    """∂/∂θ of :func:`equilibrium_residual` (ft·lbf/rad), analytic.
+
+    Built from the partials of eqs 4.3, 4.8–4.10 and the corrected 4.12–4.14
+    (``docs/ERRATA.md`` § Linearization).
+
+    Parameters
+    ----------
+    theta : (3,) array
+        Roll, pitch, yaw, rad.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    (3, 3) array
+        Jacobian of the residual, ft·lbf/rad.
+    """
     omega = dyn.lvlh_rate_in_body(theta, n)
     return (dyn.gyroscopic_torque_jacobian(omega, inertia) @ dyn.lvlh_rate_jacobian(theta, n)
             + dyn.gravity_gradient_jacobian(theta, inertia, n))
 
 
 def bias_for_attitude(theta, inertia, n) -> np.ndarray:
-    """The bias torque (ft·lbf) that makes ``theta`` (rad) an equilibrium (eq 4.1 solved for bias)."""
+    """The bias torque (ft·lbf) that makes ``theta`` (rad) an equilibrium (eq 4.1 solved for bias).
+
+    How Table 1 is reproduced exactly (``docs/ERRATA.md`` § TEA).
+
+    Parameters
+    ----------
+    theta : (3,) array
+        Attitude to be made an equilibrium, rad.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    (3,) array
+        Bias torque, ft·lbf.
+    """
     return -(equilibrium_residual(np.asarray(theta, float), inertia, n, np.zeros(3)))
 
 
@@ -127,11 +180,18 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
     bias : (3,) array
         Constant disturbance torque, ft·lbf.
 
+    Returns
+    -------
+    TEA
+        θ* (rad), ω* (rad/s), the bias (ft·lbf) and the residual (ft·lbf).
+
     Raises
     ------
     NoEquilibriumError
         When the bias continuation folds: the message gives the largest bias (same direction)
-        that still has an equilibrium on this branch.
+        that still has an equilibrium on this branch (``docs/ERRATA.md`` § TEA).
+    ConvergenceError
+        When the continuation in the products of inertia fails (no LVLH-near equilibrium).
     """
     inertia = np.asarray(inertia, float)
     bias = np.asarray(bias, float)
@@ -165,6 +225,27 @@ def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess:
     """The equilibrium nearest a guess (rad) by damped Newton, e.g. along a continuation path.
 
     Falls back to :func:`solve_tea` when Newton does not converge within 5° of the guess.
+
+    Parameters
+    ----------
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        Constant disturbance torque, ft·lbf.
+    theta_guess : (3,) array
+        Starting attitude, rad.
+
+    Returns
+    -------
+    TEA
+        The equilibrium of eqs 4.1–4.3 near the guess (or the physical branch).
+
+    Raises
+    ------
+    NoEquilibriumError, ConvergenceError
+        From the fallback :func:`solve_tea`.
     """
     inertia = np.asarray(inertia, float)
     bias = np.asarray(bias, float)
@@ -188,7 +269,24 @@ def _fold_location(theta, lam, inertia, n, bias):
 
 
 def make_tea(theta, inertia, n, bias) -> TEA:
-    """Package θ* with ω*, bias and the residual (ft·lbf)."""
+    """Package θ* with ω*, bias and the residual (ft·lbf).
+
+    Parameters
+    ----------
+    theta : (3,) array
+        Equilibrium attitude θ*, rad.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        Bias torque balanced at θ*, ft·lbf.
+
+    Returns
+    -------
+    TEA
+        θ*, ω* of eq 4.3 (rad/s), the bias and max |residual of eq 4.1| (ft·lbf).
+    """
     theta = np.asarray(theta, float)
     res = float(np.max(np.abs(equilibrium_residual(theta, inertia, n, bias))))
     return TEA(theta=theta, omega=dyn.lvlh_rate_in_body(theta, n), bias=np.asarray(bias, float),
@@ -200,7 +298,26 @@ def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: fl
     """Every equilibrium found by Newton from a grid of starts in |θ_i| < ``limit_deg``.
 
     Distinct roots (to 1e-6 rad) sorted by |θ|; useful to see the other branches (e.g. the
-    two principal-axis alignments of MB3 at pitch −44.70° and +45.30°).
+    two principal-axis alignments of MB3 at pitch −44.70° and +45.30°; ``docs/ERRATA.md``
+    § TEA).
+
+    Parameters
+    ----------
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        Constant disturbance torque, ft·lbf.
+    grid_deg : float
+        Spacing of the grid of starting attitudes, deg.
+    limit_deg : float
+        Largest |θ_i| searched and accepted, deg.
+
+    Returns
+    -------
+    list of TEA
+        The distinct equilibria of eqs 4.1–4.3, smallest |θ| first.
     """
     inertia = np.asarray(inertia, float)
     bias = np.asarray(bias, float)
@@ -217,7 +334,25 @@ def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: fl
 
 
 def resolve_bias(disturbance, inertia: np.ndarray, n: float) -> np.ndarray:
-    """The bias (ft·lbf) a :class:`acmm.config.Disturbance` asks for (``bias_from_tea`` resolved)."""
+    """The bias (ft·lbf) a :class:`acmm.config.Disturbance` asks for (``bias_from_tea`` resolved).
+
+    The bias of eq 3.9; ``bias_from_tea`` (deg) is turned into a torque by
+    :func:`bias_for_attitude`.
+
+    Parameters
+    ----------
+    disturbance : acmm.config.Disturbance
+        Config section with ``bias`` (ft·lbf) or ``bias_from_tea`` (deg), or neither.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    (3,) array
+        Bias torque, ft·lbf (zero when neither is given).
+    """
     if disturbance.bias_from_tea is not None:
         return bias_for_attitude(np.radians(disturbance.bias_from_tea), inertia, n)
     if disturbance.bias is not None:

@@ -1,0 +1,492 @@
+"""Docstring conventions of the public API, enforced (issue 12, item 7).
+
+In the style of python-control's ``control/tests/docstrings_test.py``: every public function,
+class and method of a checked module has a docstring in numpydoc layout, and every parameter in
+its signature is documented in a ``Parameters`` section.  On top of that, for this project:
+
+* numeric entries (``float``, ``complex``, arrays) of ``Parameters``, ``Returns`` and
+  ``Attributes`` state their unit (or say ``dimensionless`` / name the units they follow);
+* a function that returns a value has a ``Returns`` section, and every exception class it
+  raises itself is listed under ``Raises``;
+* a dataclass documents every field under ``Attributes``;
+* each module docstring cites the report's equations or chapters (CR-185644);
+* docstrings cite no file outside the repository (``NOTES.md``, ``shared/reference``, absolute
+  paths); conventions and misprints are cited as ``docs/ERRATA.md § <section>`` with a section
+  that exists in that document, and any other ``docs/*.md`` cited must exist.
+
+The numpydoc parser is a small one written here (sections, ``name : type`` entries), so the test
+needs no extra dependency.  To bring a module under the test, add it to :data:`CHECKED_MODULES`.
+The checker is exercised on deliberately faulty code in :func:`test_checker_reports_each_defect`.
+"""
+from __future__ import annotations
+
+import ast
+import dataclasses
+import importlib
+import importlib.util
+import inspect
+import re
+import textwrap
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+#: Modules whose public API is checked.  Other modules join this list as they are brought into
+#: line (issue 12); the checker takes any importable module name.
+CHECKED_MODULES = [
+    "acmm.dynamics",
+    "acmm.errors",
+    "acmm.linearize",
+    "acmm.simulate",
+    "acmm.tea",
+]
+
+#: Modules whose docstring need not cite the report's equations, with the reason.
+NO_REPORT_CITATION = {
+    "acmm.errors": "exception classes and exit codes: no mathematics of the report",
+}
+
+#: Section headers numpydoc knows (a misspelt header is reported).
+NUMPYDOC_SECTIONS = {
+    "Parameters", "Other Parameters", "Returns", "Yields", "Receives", "Raises", "Warns",
+    "Warnings", "See Also", "Notes", "References", "Examples", "Attributes", "Methods",
+}
+
+#: An entry's type marks it numeric (so it must state a unit).
+NUMERIC_RE = re.compile(r"\b(float|complex|array|ndarray)s?\b")
+#: ...unless it is an array of integers, booleans or strings (indices, flags, names).
+NON_PHYSICAL_RE = re.compile(r"\b(int|bool|str)\s+arrays?\b|\barrays? of (int|bool|str)")
+#: What counts as a unit statement.
+UNIT_RE = re.compile(
+    r"\brad\b|(?<![\w'’])s\b|ft·lbf|slug·ft²|ft\*lbf|slug\*ft|\bkg\b|N·m|\bdeg\b|°|"
+    r"[Dd]imensionless|\b[Uu]nits?\b")
+#: A report citation in a module docstring: an equation, a chapter or a table.
+REPORT_RE = re.compile(r"\beqs?\.? ?\d+\.\d+|\bch\. ?\d+|\bTable \d+")
+#: Citations of files outside the repository.
+FORBIDDEN_RE = re.compile(r"NOTES\.md|shared/reference|/work/|reference/")
+ERRATA = "docs/ERRATA.md"
+
+
+# ------------------------------------------------------------------------------------------------
+# a small numpydoc reader
+# ------------------------------------------------------------------------------------------------
+@dataclasses.dataclass
+class Entry:
+    """One ``name : type`` entry of a numpydoc list section, with its description lines."""
+
+    names: list
+    type: str
+    desc: list
+
+    @property
+    def text(self) -> str:
+        return " ".join([self.type] + self.desc)
+
+
+def parse_sections(doc: str) -> tuple[dict, list]:
+    """Split a cleaned docstring into {header: lines}; the text before any header is 'Summary'."""
+    lines = inspect.cleandoc(doc).splitlines()
+    sections, problems, current = {"Summary": []}, [], "Summary"
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        if (i + 1 < len(lines) and line.strip() and not line.startswith(" ")
+                and re.fullmatch(r"-{3,}", lines[i + 1].strip())):
+            current = line.strip()
+            if current not in NUMPYDOC_SECTIONS:
+                problems.append(f"unknown section {current!r}")
+            if len(lines[i + 1].strip()) != len(current):
+                problems.append(f"underline of section {current!r} has the wrong length")
+            if current in sections:
+                problems.append(f"section {current!r} appears twice")
+            sections[current] = []
+            i += 2
+            continue
+        sections[current].append(line)
+        i += 1
+    return sections, problems
+
+
+def parse_entries(lines: list, *, named: bool = True) -> tuple[list, list]:
+    """The entries of a list section (Parameters, Returns, Attributes, Raises).
+
+    ``named``: entries are ``name : type`` (Parameters, Attributes); otherwise (Returns, Raises)
+    a bare ``type`` line is also an entry.
+    """
+    entries, problems = [], []
+    for line in lines:
+        if not line.strip():
+            continue
+        if line.startswith(" "):
+            if not entries:
+                problems.append(f"indented text before the first entry: {line.strip()!r}")
+                continue
+            entries[-1].desc.append(line.strip())
+            continue
+        head, sep, typ = line.partition(" : ")
+        if sep:
+            names = [n.strip().lstrip("*") for n in head.split(",")]
+            entries.append(Entry(names, typ.strip(), []))
+        elif named and not line.rstrip().endswith(":"):
+            names = [n.strip().lstrip("*") for n in line.split(",")]
+            entries.append(Entry(names, "", []))
+            problems.append(f"entry {line.strip()!r} has no ' : type'")
+        else:
+            entries.append(Entry([], line.strip(), []))
+    return entries, problems
+
+
+# ------------------------------------------------------------------------------------------------
+# the checks
+# ------------------------------------------------------------------------------------------------
+def errata_sections() -> set:
+    """Section names of ``docs/ERRATA.md`` (its ``###`` headings)."""
+    text = (REPO / ERRATA).read_text(encoding="utf-8")
+    return {m.group(1).strip() for m in re.finditer(r"^###\s+(.+)$", text, re.M)}
+
+
+def citation_problems(doc: str) -> list:
+    """Citations outside the repository, malformed ERRATA citations, missing docs files."""
+    problems = []
+    for m in FORBIDDEN_RE.finditer(doc):
+        problems.append(f"cites a file outside the repository ({m.group(0)!r}); cite {ERRATA}")
+    flat = " ".join(doc.split())
+    for m in re.finditer(r"(\S*)ERRATA\.md`*\s*(§?)", flat):
+        if not m.group(1).endswith("docs/") or not m.group(2):
+            problems.append(f"cite the errata as '{ERRATA} § <section>', not {m.group(0)!r}")
+    known = errata_sections()
+    for m in re.finditer(r"§\s*([^§]*)", flat):
+        if not any(m.group(1).startswith(name) for name in known):
+            problems.append(f"'§ {m.group(1)[:30]}' is no section of {ERRATA}")
+    for m in re.finditer(r"\bdocs/[\w./-]+\.md", flat):
+        if not (REPO / m.group(0)).is_file():
+            problems.append(f"cites {m.group(0)}, which is not in the repository")
+    return problems
+
+
+def unit_problems(entries: list, section: str) -> list:
+    """Numeric entries that state no unit."""
+    return [f"{section} entry {', '.join(e.names) or e.type!r} states no unit"
+            for e in entries if NUMERIC_RE.search(e.type) and not NON_PHYSICAL_RE.search(e.type)
+            and not UNIT_RE.search(e.text)]
+
+
+def _own_nodes(func_node):
+    """AST nodes of a function body, not descending into nested functions or classes."""
+    stack = list(func_node.body)
+    while stack:
+        node = stack.pop()
+        yield node
+        for child in ast.iter_child_nodes(node):
+            if not isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda,
+                                      ast.ClassDef)):
+                stack.append(child)
+
+
+def _function_ast(func):
+    """The ``FunctionDef`` node of a function (None when its source is not available)."""
+    try:
+        source = textwrap.dedent(inspect.getsource(func))
+    except (OSError, TypeError):
+        return None
+    node = ast.parse(source).body[0]
+    return node if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) else None
+
+
+def returns_value(func) -> bool:
+    """Does the function (not a nested one) ``return`` something other than None?"""
+    node = _function_ast(func)
+    if node is None:
+        return False
+    return any(isinstance(n, ast.Return) and n.value is not None
+               and not (isinstance(n.value, ast.Constant) and n.value.value is None)
+               for n in _own_nodes(node))
+
+
+def raised_names(func) -> set:
+    """Names of the exception classes the function raises itself (``raise Name(...)``)."""
+    node = _function_ast(func)
+    out = set()
+    for n in (_own_nodes(node) if node is not None else ()):
+        if isinstance(n, ast.Raise) and n.exc is not None:
+            exc = n.exc.func if isinstance(n.exc, ast.Call) else n.exc
+            if isinstance(exc, ast.Name):
+                out.add(exc.id)
+            elif isinstance(exc, ast.Attribute):
+                out.add(exc.attr)
+    return out
+
+
+def function_problems(func, *, method: bool = False) -> list:
+    """Problems of one function's (or method's) docstring."""
+    func = getattr(func, "py_func", func)   # numba dispatchers
+    doc = func.__doc__
+    if not doc or not doc.strip():
+        return ["has no docstring"]
+    sections, problems = parse_sections(doc)
+    if not "".join(sections["Summary"]).strip():
+        problems.append("has no summary line")
+    problems += citation_problems(doc)
+
+    params = [p for name, p in inspect.signature(func).parameters.items()
+              if not (method and name in ("self", "cls"))]
+    entries, probs = parse_entries(sections.get("Parameters", []))
+    problems += probs + unit_problems(entries, "Parameters")
+    documented = {name for e in entries for name in e.names}
+    if params and "Parameters" not in sections:
+        problems.append("has parameters but no 'Parameters' section")
+    for p in params:
+        if p.name not in documented:
+            problems.append(f"parameter {p.name!r} is not documented")
+    for name in sorted(documented - {p.name for p in params}):
+        problems.append(f"documents {name!r}, which is not in the signature")
+
+    if returns_value(func):
+        if "Returns" not in sections and "Yields" not in sections:
+            problems.append("returns a value but has no 'Returns' section")
+    entries, probs = parse_entries(sections.get("Returns", []), named=False)
+    problems += probs + unit_problems(entries, "Returns")
+
+    raises, _ = parse_entries(sections.get("Raises", []), named=False)
+    listed = {name.strip().split(".")[-1] for e in raises for name in e.type.split(",")}
+    for name in sorted(raised_names(func) - listed):
+        problems.append(f"raises {name} but does not list it under 'Raises'")
+    return problems
+
+
+def class_problems(cls) -> list:
+    """Problems of a class docstring and of its public methods and properties."""
+    doc = cls.__doc__
+    if not doc or not doc.strip():
+        return ["has no docstring"]
+    sections, problems = parse_sections(doc)
+    problems += citation_problems(doc)
+    if issubclass(cls, BaseException):
+        return problems
+    attrs, probs = parse_entries(sections.get("Attributes", []))
+    params, probs2 = parse_entries(sections.get("Parameters", []))
+    problems += probs + probs2 + unit_problems(attrs, "Attributes") + unit_problems(params, "Parameters")
+    documented = {name for e in attrs + params for name in e.names}
+    if dataclasses.is_dataclass(cls):
+        for f in dataclasses.fields(cls):
+            if f.name not in documented:
+                problems.append(f"field {f.name!r} is not documented under 'Attributes'")
+    elif "__init__" in vars(cls):
+        for name in list(inspect.signature(cls.__init__).parameters)[1:]:
+            if name not in documented:
+                problems.append(f"constructor parameter {name!r} is not documented")
+    for name, member in vars(cls).items():
+        if name.startswith("_"):
+            continue
+        if isinstance(member, property):
+            if not member.fget.__doc__ or not member.fget.__doc__.strip():
+                problems.append(f"property {name!r} has no docstring")
+            else:
+                problems += [f"property {name!r}: {p}" for p in citation_problems(member.fget.__doc__)]
+        elif isinstance(member, (staticmethod, classmethod)):
+            problems += [f"{name}: {p}" for p in function_problems(member.__func__, method=True)]
+        elif inspect.isfunction(member):
+            problems += [f"{name}: {p}" for p in function_problems(member, method=True)]
+    return problems
+
+
+def module_problems(module) -> list:
+    """Every problem of a module's docstrings, as 'module.object: problem' lines."""
+    name = module.__name__
+    problems = []
+    doc = module.__doc__ or ""
+    if not doc.strip():
+        problems.append(f"{name}: module has no docstring")
+    problems += [f"{name}: {p}" for p in citation_problems(doc)]
+    if name not in NO_REPORT_CITATION and not REPORT_RE.search(doc):
+        problems.append(f"{name}: module docstring cites no equation or chapter of the report")
+    for attr, obj in vars(module).items():
+        if attr.startswith("_") or getattr(obj, "__module__", None) != name:
+            continue
+        if inspect.isclass(obj):
+            found = class_problems(obj)
+        elif inspect.isfunction(obj) or inspect.isfunction(getattr(obj, "py_func", None)):
+            found = function_problems(obj)
+        else:
+            continue
+        problems += [f"{name}.{attr}: {p}" for p in found]
+    return problems
+
+
+# ------------------------------------------------------------------------------------------------
+# tests
+# ------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("module_name", CHECKED_MODULES)
+def test_docstrings(module_name):
+    problems = module_problems(importlib.import_module(module_name))
+    assert not problems, f"{len(problems)} docstring problem(s):\n" + "\n".join(problems)
+
+
+def test_errata_sections_are_read():
+    names = errata_sections()
+    assert {"Units", "Frames", "Kinematics", "Momentum balance", "TEA", "Linearization",
+            "Saturation"} <= names
+
+
+FAULTY = '''
+"""A module with one faulty object per rule (cites reference/NOTES.md)."""
+
+
+def no_doc(x):
+    return x
+
+
+def undocumented_param(a, b):
+    """Sum.
+
+    Parameters
+    ----------
+    a : float
+        First, rad.
+    c : float
+        Not in the signature, rad.
+
+    Returns
+    -------
+    float
+        Sum, rad.
+    """
+    return a + b
+
+
+def no_returns(a):
+    """Twice.
+
+    Parameters
+    ----------
+    a : float
+        Value, rad.
+    """
+    return 2 * a
+
+
+def no_unit(a):
+    """Nothing.
+
+    Parameters
+    ----------
+    a : float
+        A number.
+    """
+
+
+def unlisted_raise(a):
+    """Check ``docs/ERRATA.md`` § Nonexistent and ``docs/ERRATA.md`` without section.
+
+    Parameters
+    ----------
+    a : int
+        Anything.
+
+    Raises
+    ------
+    KeyError
+        Never.
+    """
+    if a:
+        raise ValueError("a")
+
+
+def misspelt(a):
+    """Misspelt header.
+
+    Parameter
+    ---------
+    a : int
+        Anything.
+    """
+
+
+class Undocumented:
+    pass
+'''
+
+GOOD = '''
+"""A module that follows every rule (eq 3.1; ``docs/ERRATA.md`` § Momentum balance)."""
+import dataclasses
+
+
+def torque(omega, inertia, *, scale=1.0):
+    """Gyroscopic torque, eq 3.2.
+
+    Parameters
+    ----------
+    omega : (3,) array
+        Angular velocity, rad/s.
+    inertia : (3, 3) array
+        Inertia, slug·ft².
+    scale : float, optional
+        Dimensionless factor.
+
+    Returns
+    -------
+    (3,) array
+        Torque, ft·lbf.
+
+    Raises
+    ------
+    ValueError
+        When ``scale`` is negative.
+    """
+    if scale < 0:
+        raise ValueError("scale")
+    return scale * omega @ inertia
+
+
+@dataclasses.dataclass
+class Point:
+    """A point.
+
+    Attributes
+    ----------
+    theta : (3,) array
+        Attitude, rad.
+    """
+
+    theta: object
+
+    @property
+    def theta_deg(self):
+        """Attitude in degrees."""
+        return self.theta
+'''
+
+
+def _load(tmp_path, name, source):
+    path = tmp_path / f"{name}.py"
+    path.write_text(source, encoding="utf-8")
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_checker_reports_each_defect(tmp_path):
+    problems = "\n".join(module_problems(_load(tmp_path, "faulty_docs", FAULTY)))
+    for expected in [
+        "faulty_docs: cites a file outside the repository",
+        "faulty_docs: module docstring cites no equation",
+        "no_doc: has no docstring",
+        "undocumented_param: parameter 'b' is not documented",
+        "undocumented_param: documents 'c', which is not in the signature",
+        "no_returns: returns a value but has no 'Returns' section",
+        "no_unit: Parameters entry 'a' states no unit",
+        "unlisted_raise: raises ValueError but does not list it",
+        "unlisted_raise: '§ Nonexistent",
+        "unlisted_raise: cite the errata as",
+        "misspelt: unknown section 'Parameter'",
+        "misspelt: has parameters but no 'Parameters' section",
+        "Undocumented: has no docstring",
+    ]:
+        assert expected in problems, f"checker missed: {expected}\n{problems}"
+
+
+def test_checker_accepts_conforming_code(tmp_path):
+    assert module_problems(_load(tmp_path, "good_docs", GOOD)) == []
