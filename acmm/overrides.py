@@ -22,7 +22,14 @@ import re
 
 import yaml
 
-from acmm.errors import ConfigError
+from acmm.errors import EXIT_USAGE, ConfigError
+
+
+class OverrideSyntaxError(ConfigError):
+    """A command-line word that is not ``dotted.key=value`` / ``~dotted.key``: a usage error
+    (exit 64), unlike a bad key or value, which is reported like the same error in the file (2)."""
+
+    exit_code = EXIT_USAGE
 
 _KEY = re.compile(r"^~?[A-Za-z_][A-Za-z0-9_]*(\.([A-Za-z0-9_]+))*$")
 
@@ -46,7 +53,7 @@ def parse_override(text: str) -> tuple[list, object, bool]:
     """
     text = str(text)
     if not looks_like_override(text):
-        raise ConfigError(f"override {text!r}: expected dotted.key=value (e.g. simulation.orbits=10) "
+        raise OverrideSyntaxError(f"unexpected argument {text!r}: an override must read dotted.key=value (e.g. simulation.orbits=10) "
                           "or ~dotted.key to remove a key")
     if text.startswith("~"):
         return [_part(p) for p in text[1:].split(".")], None, True

@@ -54,11 +54,22 @@ StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes w
                                                  "(for CI)")
 
 
+def _click():
+    """The click that typer uses: recent typer vendors it as ``typer._click``, older ones use click."""
+    import types
+
+    try:
+        from typer._click import exceptions
+    except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
+        from click import exceptions
+    return types.SimpleNamespace(exceptions=exceptions)
+
+
 def _one_line_usage(exc) -> str:
     """A click usage error as one line: the message and where to get help."""
-    import click
+    click = _click()
 
-    msg = " ".join(exc.format_message().split())
+    msg = " ".join(exc.format_message().replace("Value error, ", "").split())
     ctx = getattr(exc, "ctx", None)
     if ctx is not None and not isinstance(exc, click.exceptions.NoArgsIsHelpError):
         msg += f" (see '{ctx.command_path} --help')"
@@ -76,7 +87,7 @@ class ExitCodeGroup(TyperGroup):
     """
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
-        import click
+        click = _click()
 
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
@@ -97,7 +108,7 @@ class ExitCodeGroup(TyperGroup):
         except click.exceptions.ClickException as exc:
             typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
             sys.exit(exc.exit_code)
-        except (click.exceptions.Abort, KeyboardInterrupt):
+        except (typer.Abort, KeyboardInterrupt):
             typer.echo("interrupted", err=True)
             sys.exit(EXIT_INTERRUPTED)
         sys.exit(rv if isinstance(rv, int) else 0)

@@ -86,11 +86,13 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
 
 
 @owns_outputs("qpp simulate", lambda c: _cfg(c))
-def run_simulate(config, figures: bool | None = None):
-    """Design, simulate every scenario, write ``<root>/<name>/qpp_sim.h5`` (+ figures)."""
+def run_simulate(config, figures: bool | None = None, progress=None):
+    """Design, simulate every scenario, write ``<root>/<name>/qpp_sim.h5`` (+ figures).
+
+    ``progress(done, total, name)`` is called after each scenario."""
     cfg = _cfg(config)
     r = design(cfg)
-    sims = simulate(cfg, r.K1, r.Kc, r.H)
+    sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
     items = {"K1": Dataset(r.K1, "1", "gain K1 used"), "Kc": Dataset(r.Kc, "1", "gain Kc used"),
              "H": Dataset(r.H, "1", "observer gain H used (report's sign)")}
     for s in sims:
