@@ -3,7 +3,8 @@ models so that they accept what the loader accepts:
 
 * a dimensional field (one converted by a unit-aware before-validator, e.g. ``"2 N*m"``) is
   ``number`` **or** a ``"<number> [unit]"`` string; a vector of them likewise per element;
-* ``inertia`` may also be a symmetric 3×3 list of rows; ``sweep.tea_estimate`` also a boolean;
+* ``inertia`` may also be a symmetric 3×3 list of rows; a choice spelt ``true`` (``sweep.tea_estimate``)
+  also a YAML boolean;
 * a sweep file is either a sweep file proper (``sweep.base``/``bases``) or an ordinary acmm
   config with an inline ``sweep`` section (no ``base``/``bases``).
 
@@ -54,7 +55,8 @@ class _Generator(GenerateJsonSchema):
         generated = super().function_before_schema(schema)
         if qual.endswith("Inertia._from_matrix"):
             return {"anyOf": [generated, _inertia_matrix()]}
-        if qual.startswith("SweepSpec.") and inner_core.get("type") == "literal":
+        if inner_core.get("type") == "literal" and {"true", "false"} & set(map(str, inner_core["expected"])):
+            # a choice spelt like a YAML boolean (sweep.tea_estimate: true) is also accepted as one
             return {"anyOf": [generated, {"type": "boolean"}]}
         kind = inner_core.get("type")
         if kind == "float":
@@ -62,6 +64,8 @@ class _Generator(GenerateJsonSchema):
         if kind == "list" and inner_core.get("items_schema", {}).get("type") == "float":
             out = dict(generated)
             out["items"] = _quantity(generated.get("items", {"type": "number"}))
+            if "_vec3" in qual:                 # [roll, pitch, yaw]
+                out["minItems"] = out["maxItems"] = 3
             return out
         return generated
 
