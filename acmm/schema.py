@@ -71,8 +71,7 @@ class _Generator(GenerateJsonSchema):
 
 
 def _header(schema: dict, kind: str, title: str) -> dict:
-    out = {"$schema": "https://json-schema.org/draft/2020-12/schema",
-           "$id": f"https://acmm-qpp.invalid/schemas/{kind}.schema.json", "title": title}
+    out = {"$schema": "https://json-schema.org/draft/2020-12/schema", "title": title}
     out.update(schema)
     return out
 

@@ -16,16 +16,14 @@ import typer
 from cli.common import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
-                  help="Space Station attitude control / momentum management (CR-185644 Part II).")
+                  help="Space Station attitude control / momentum management (CR-185644 Part II).",
+                  epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
+                         "or option value), 3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
 
 
 @app.callback()
 def _root(version: bool = version_option()) -> None:
-    """Space Station attitude control / momentum management (CR-185644 Part II).
-
-    Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config or option value),
-    3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.
-    """
+    """Space Station attitude control / momentum management (CR-185644 Part II)."""
 
 
 def _load(config, overrides):
@@ -186,7 +184,7 @@ def design(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = 
                     f"(worst margin {r.check.worst:+.3f} n)")
 
 
-@app.command()
+@app.command(short_help="Nonlinear closed-loop simulation (ch 6); designs first if needed; writes sim.h5 + figures.")
 @user_errors
 def simulate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
              figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:

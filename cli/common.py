@@ -46,7 +46,7 @@ from typer.core import TyperGroup  # noqa: E402
 from acmm.errors import EXIT_USAGE, EXIT_VERDICT  # noqa: E402
 
 #: Positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm.overrides`).
-OverridesArg = typer.Argument(None, metavar="[KEY=VALUE]...",
+OverridesArg = typer.Argument(None, metavar="KEY=VALUE",
                               help="overrides of config values, dotted: simulation.orbits=10 "
                                    "design.sector.sigma=0.6 (validated like the file; ~key removes one)",
                               show_default=False)

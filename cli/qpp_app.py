@@ -14,7 +14,9 @@ import typer
 from cli.common import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
-                  help="Quantitative pole placement for Lure systems (CR-185644 Part III).")
+                  help="Quantitative pole placement for Lure systems (CR-185644 Part III).",
+                  epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
+                         "or option value), 3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
 
 ConfigArg = typer.Argument(..., help="YAML config file (or the name of a packaged config, e.g. qpp_siso)")
 FigOpt = typer.Option(None, "--figures/--no-figures", help="override output.figures")
@@ -22,11 +24,7 @@ FigOpt = typer.Option(None, "--figures/--no-figures", help="override output.figu
 
 @app.callback()
 def _root(version: bool = version_option()) -> None:
-    """Quantitative pole placement for Lure systems (CR-185644 Part III).
-
-    Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config or option value),
-    3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.
-    """
+    """Quantitative pole placement for Lure systems (CR-185644 Part III)."""
 
 
 def _load(config, overrides):
@@ -61,7 +59,7 @@ def _mat(a) -> str:
     return np.array2string(np.asarray(a), precision=4, suppress_small=True, max_line_width=120)
 
 
-@app.command()
+@app.command(short_help="H-infinity gains (ch 11), beta1, thresholds m and the circle criterion (ch 12.1).")
 @user_errors
 def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
            strict: bool = StrictOpt) -> None:
