@@ -67,10 +67,7 @@ def model_at(model_cls: type, loc: tuple) -> type | None:
 def valid_keys(model_cls: type, loc: tuple) -> list[str]:
     """Field names of the model holding ``loc[-1]`` (the parent of an unknown key)."""
     m = model_at(model_cls, tuple(loc[:-1]))
-    if m is None:
-        # a tagged union: the parent location may end with the tag itself, try without it
-        return []
-    return list(m.model_fields)
+    return [] if m is None else list(m.model_fields)
 
 
 def closest(word: str, candidates: list[str]) -> str | None:
@@ -134,6 +131,8 @@ _NUMERICAL_HINTS: list[tuple[tuple[str, ...], str]] = [
     (("residual",), "raise design.residual_tol or try design.riccati_method: scipy; a nearly "
                     "uncontrollable model (see `acmm linearize`) needs another design.model or design.drf_mode"),
     (("matrix sign",), "use design.riccati_method: scipy (the sign iteration needs a well-conditioned model)"),
+    (("sector lqr", "riccati", "failed"), "lower design.sector.sigma (the shift α asked of the LQR may be "
+                                          "too large), or try another design.riccati_method (scipy, sign, slycot)"),
     (("riccati",), "try another design.riccati_method (scipy, sign or slycot)"),
     (("uncontrollable",), "no gain moves that pole: lower design.sector.sigma, or change design.model / "
                           "design.drf_mode"),

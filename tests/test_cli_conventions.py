@@ -259,6 +259,8 @@ def test_numerical_failure_says_which_setting_to_change(tmp_runs):
     r = acmm("design", "mb3", "design.residual_tol=1e-40", "--no-figures")
     assert r.exit_code == EXIT_NUMERICAL and one_line(r)
     assert "hint:" in r.stderr and "design.residual_tol" in r.stderr
+    r = acmm("design", "mb3", "design.sector.sigma=50", "--no-figures")
+    assert r.exit_code == EXIT_NUMERICAL and one_line(r) and "hint: lower design.sector.sigma" in r.stderr
     r = acmm("tea", "mb3", "disturbance.bias=[0, 4, 0]", "~disturbance.bias_from_tea")
     assert r.exit_code == EXIT_INPUT and one_line(r)
     assert "hint:" in r.stderr and "disturbance.bias" in r.stderr
