@@ -133,7 +133,7 @@ def split_overrides(config, overrides) -> tuple[object, list[str]]:
 
 def header(source: str | None, overrides: list[str] | None) -> str:
     """The comment block heading ``config.yaml``: where the config came from and the overrides."""
-    lines = ["# resolved config of this run (every default filled in; units as in the results)"]
+    lines = ["# resolved config of this run (every default filled in, numbers in the config's canonical units)"]
     if source:
         lines.append(f"# source: {source}")
     if overrides:
