@@ -130,10 +130,9 @@ def _run_with_progress(runner, cfg, figures, what: str):
     total = cfg.n_design_points()
     if what == "simulate":
         prog.announce_numba_compile()
-    after = ("simulating, writing results" + (" and figures" if figures or (figures is None and cfg.output.figures)
-                                              else "")) if what == "simulate" else \
-        "fitting the schedule, checking it, writing results" + (
-            " and figures" if figures or (figures is None and cfg.output.figures) else "")
+    with_figures = cfg.output.figures if figures is None else figures
+    after = ("simulating, writing results" if what == "simulate" else
+             "fitting the schedule, checking it, writing results") + (" and figures" if with_figures else "")
     with prog.Steps(f"{cfg.name}: designing", total) as bar:
         count = [0]
 
