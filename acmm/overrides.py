@@ -95,6 +95,9 @@ def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None)
                 if delete:
                     node = None
                     break
+                if isinstance(path[depth + 1], int):
+                    raise ConfigError(f"override {text}: {where} is not set in the file, so it has no element "
+                                      f"{path[depth + 1]}; give the whole list ({where}=[...])")
                 node[key] = {}
             node = node[key]
         if node is None:

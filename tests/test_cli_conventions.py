@@ -355,3 +355,18 @@ def test_numba_compile_detection_does_not_fail():
     from cli.progress import numba_needs_compile
 
     assert numba_needs_compile() in (True, False)
+
+
+def test_override_paths_and_errors():
+    from acmm.overrides import OverrideSyntaxError, apply_overrides
+
+    data = {"a": {"b": [1, 2, 3]}, "c": 1}
+    out = apply_overrides(data, ["a.b.1=5", "d.e=x", "~c", "~no.such", "a.f="])
+    assert out == {"a": {"b": [1, 5, 3], "f": None}, "d": {"e": "x"}}
+    assert data == {"a": {"b": [1, 2, 3]}, "c": 1}                 # the input is not modified
+    for bad, match in ((["a.b.7=1"], "no such list element"), (["c.x=1"], "cannot go inside"),
+                       (["z.0=1"], "give the whole list"), (["c=[1"], "not valid YAML")):
+        with pytest.raises(ConfigError, match=match):
+            apply_overrides(data, bad)
+    with pytest.raises(OverrideSyntaxError):
+        apply_overrides(data, ["a..b=1"])
