@@ -292,15 +292,17 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep)
 
 
-def _format_error(exc: ValidationError) -> str:
-    err = exc.errors()[0]
+def _format_error(exc: ValidationError, model_cls=None) -> str:
+    from acmm.hints import prioritize, unknown_key_hint
+
+    err = prioritize(exc.errors())[0]
     loc = ".".join(str(p) for p in err["loc"]) or "config"
     msg = err["msg"]
     for prefix in ("Value error, ", "Assertion failed, "):
         if msg.startswith(prefix):
             msg = msg[len(prefix):]
     if err["type"] == "extra_forbidden":
-        msg = "unknown key"
+        msg = "unknown key" + (unknown_key_hint(model_cls, tuple(err["loc"])) if model_cls else "")
     extra = f" (and {len(exc.errors()) - 1} more)" if len(exc.errors()) > 1 else ""
     return f"{loc}: {msg}{extra}"
 
@@ -319,7 +321,7 @@ def validate_model(model_cls, data: object, source: str = "config"):
     try:
         return model_cls.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(f"{source}: {_format_error(exc)}") from None
+        raise ConfigError(f"{source}: {_format_error(exc, model_cls)}") from None
 
 
 def parse_config(data: object, source: str = "config") -> Config:
@@ -355,7 +357,9 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
             if len(p.parts) == 1 and candidate.exists():
                 p = candidate
             else:
-                raise ConfigError(f"config file not found: {path}")
+                from acmm.hints import missing_config_message
+
+                raise ConfigError(missing_config_message(path))
     if p.is_dir():
         raise ConfigError(f"config path is a directory, not a file: {p}")
     try:
@@ -372,7 +376,13 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
     return data, p
 
 
-def load_config(path: str | Path | None = None) -> Config:
-    """Read and validate a YAML config file (``None``: the packaged default stair-case)."""
+def load_config(path: str | Path | None = None, overrides: list[str] | None = None) -> Config:
+    """Read and validate a YAML config file (``None``: the packaged default stair-case).
+
+    ``overrides`` (``["simulation.orbits=10", ...]``, see :mod:`acmm.overrides`) are applied to
+    the raw mapping before validation."""
+    from acmm.overrides import apply_overrides, remember_origin
+
     data, p = read_yaml(path)
-    return parse_config(data, source=str(p))
+    cfg = parse_config(apply_overrides(data, overrides), source=str(p))
+    return remember_origin(cfg, str(p), overrides)

@@ -108,6 +108,9 @@ def atomic_path(path: str | Path, what: str = "results"):
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
+        from acmm.outputs import record_written
+
+        record_written(path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)

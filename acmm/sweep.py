@@ -55,6 +55,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from acmm.outputs import owns_outputs
 from acmm.results import write_text
 
 from acmm.errors import AcmmError, ConfigError, ConvergenceError, DesignError, NoEquilibriumError
@@ -522,6 +523,7 @@ def _call(task, ctx):
     return run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg)
 
 
+@owns_outputs("sweep", lambda s: s if isinstance(s, Sweep) else load_sweep(s))
 def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, scheduler: Optional[str] = None,
               resume: bool = False, progress: Optional[Callable[[int, int, dict], None]] = None,
               after_record: Optional[Callable[[int], None]] = None, figures: Optional[bool] = None,

@@ -211,7 +211,12 @@ class SweepSpec(_Model):
 
 def _check_name(name: str) -> None:
     if name not in PARAMETERS and name not in SHORTHANDS:
-        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(list(SHORTHANDS) + list(PARAMETERS))}")
+        from acmm.hints import closest
+
+        known = list(SHORTHANDS) + list(PARAMETERS)
+        best = closest(name, known)
+        raise ValueError(f"unknown parameter {name!r}" + (f" (did you mean `{best}`?)" if best else "")
+                         + f"; known: {', '.join(known)}")
 
 
 def _support(spec: SweepSpec, name: str) -> list[float]:
@@ -336,9 +341,13 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
     return Sweep(sf, bases, source)
 
 
-def load_sweep(path: str | Path) -> Sweep:
-    """Read and validate a sweep config file (a bare name is looked up among the packaged configs)."""
+def load_sweep(path: str | Path, overrides: list[str] | None = None) -> Sweep:
+    """Read and validate a sweep config file (a bare name is looked up among the packaged configs).
+    ``overrides`` (dotted ``key=value``, :mod:`acmm.overrides`) apply before validation, e.g.
+    ``sweep.n_runs=20``."""
     from acmm.config import read_yaml
+    from acmm.overrides import apply_overrides, remember_origin
 
     data, p = read_yaml(path)
-    return parse_sweep(data, source=str(p), directory=p.parent)
+    sw = parse_sweep(apply_overrides(data, overrides), source=str(p), directory=p.parent)
+    return remember_origin(sw, str(p), overrides)

@@ -9,12 +9,30 @@ import json
 from pathlib import Path
 from typing import Optional
 
+import enum
+
 import typer
 
-from cli.common import user_errors
+from cli.common import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Space Station attitude control / momentum management (CR-185644 Part II).")
+app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
+                  help="Space Station attitude control / momentum management (CR-185644 Part II).",
+                  epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
+                         "or option value), 3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
+
+
+@app.callback()
+def _root(version: bool = version_option()) -> None:
+    """Space Station attitude control / momentum management (CR-185644 Part II)."""
+
+
+def _load(config, overrides):
+    """The validated acmm config of CONFIG plus KEY=VALUE overrides (a CONFIG that is itself an
+    override means: the packaged default with that override)."""
+    from acmm.config import load_config
+    from acmm.overrides import split_overrides
+
+    return load_config(*split_overrides(config, overrides))
 
 ConfigArg = typer.Argument(None, help="YAML config file (or the name of a packaged config); "
                                       "default: the packaged stair-case config")
@@ -29,34 +47,45 @@ def _fmt(v, fmt="{:+.4f}"):
 
 @app.command()
 @user_errors
-def validate(config: Optional[Path] = ConfigArg,
+def validate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
              show: bool = typer.Option(False, "--show", help="print the resolved config (all defaults, canonical units)")) -> None:
-    """Check a config file (exit 2 naming the offending field when it is invalid)."""
-    from acmm.config import load_config
+    """Check a config of any kind (acmm run, sweep or qpp; detected from its sections); exit 2
+    naming the offending field when it is invalid."""
+    from acmm.overrides import split_overrides
+    from acmm.schema import load_any
 
-    cfg = load_config(config)
-    typer.echo(f"{cfg.name}: valid")
+    config, overrides = split_overrides(config, overrides)
+    kind, cfg = load_any(config, overrides)
+    typer.echo(f"{cfg.name}: valid ({kind} config)")
     if show:
         typer.echo(cfg.to_yaml())
 
 
+class ConfigKind(str, enum.Enum):
+    """The three config kinds."""
+
+    acmm = "acmm"
+    sweep = "sweep"
+    qpp = "qpp"
+
+
 @app.command()
 @user_errors
-def schema() -> None:
-    """Print the JSON schema of the config format."""
-    from acmm.config import Config
+def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="config kind")) -> None:
+    """Print the JSON schema of a config kind (for editors: see README, 'Config format')."""
+    from acmm.schema import schema_json
 
-    typer.echo(json.dumps(Config.model_json_schema(), indent=2))
+    typer.echo(schema_json(kind.value))
 
 
 @app.command()
 @user_errors
-def tea(config: Optional[Path] = ConfigArg,
+def tea(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
         all_roots: bool = typer.Option(False, "--all", help="also list every other equilibrium found")) -> None:
     """Torque-equilibrium attitude (eqs 4.1–4.3); writes runs/<name>/tea.h5."""
     from acmm.stages import run_tea
 
-    result, path = run_tea(config, all_roots=all_roots)
+    result, path = run_tea(_load(config, overrides), all_roots=all_roots)
     t = result.tea
     typer.echo(f"{result.config.name}: torque-equilibrium attitude (eqs 4.1-4.3)")
     typer.echo(f"  theta* [roll, pitch, yaw]  = {_fmt(t.theta_deg)} deg")
@@ -70,13 +99,13 @@ def tea(config: Optional[Path] = ConfigArg,
 
 @app.command()
 @user_errors
-def linearize(config: Optional[Path] = ConfigArg) -> None:
+def linearize(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg) -> None:
     """24-state linearization about the TEA (eqs 4.4-4.50); writes runs/<name>/linearize.h5."""
     import numpy as np
 
     from acmm.stages import run_linearize
 
-    r, path = run_linearize(config)
+    r, path = run_linearize(_load(config, overrides))
     m, c = r.model, r.controllability
     typer.echo(f"{r.config.name}: {m.variant} model, {m.drf_mode}, about theta* = "
                f"{_fmt(np.degrees(m.theta_star), '{:+.3f}')} deg")
@@ -93,40 +122,40 @@ def linearize(config: Optional[Path] = ConfigArg) -> None:
     typer.echo(f"  wrote {path}")
 
 
-def _progress():
-    """Progress on an interactive terminal: the name of each design point as it is done."""
-    import sys
+def _run_with_progress(runner, cfg, figures, what: str):
+    """Call a stage runner with terminal progress (cli.progress: a bar over the design points,
+    then the remaining work; silent when stderr is not a terminal)."""
+    from cli import progress as prog
 
-    if not sys.stderr.isatty():
-        return None
-    count = [0]
+    total = cfg.n_design_points()
+    if what == "simulate":
+        prog.announce_numba_compile()
+    with_figures = cfg.output.figures if figures is None else figures
+    after = ("simulating, writing results" if what == "simulate" else
+             "fitting the schedule, checking it, writing results") + (" and figures" if with_figures else "")
+    with prog.Steps(f"{cfg.name}: designing", total) as bar:
+        count = [0]
 
-    def tick(name):
-        count[0] += 1
-        sys.stderr.write(f"\r  designed {count[0]:>3} point(s): {name:<20}")
-        sys.stderr.flush()
-    return tick
+        def tick(name):
+            count[0] += 1
+            bar.advance(f"{cfg.name}: designed {name}" if count[0] < total else f"{cfg.name}: {after}")
 
-
-def _run_with_progress(runner, config, figures):
-    """Call a stage runner with terminal progress, ending the progress line afterwards."""
-    progress = _progress()
-    out = runner(config, progress=progress, figures=figures)
-    if progress is not None:
-        typer.echo("", err=True)
-    return out
+        if what == "simulate":
+            bar.describe(f"{cfg.name}: design (or reuse), {after}")
+        return runner(cfg, progress=tick, figures=figures)
 
 
 @app.command()
 @user_errors
-def design(config: Optional[Path] = ConfigArg,
-           figures: Optional[bool] = FiguresOpt) -> None:
-    """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures."""
+def design(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+           figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
+    """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures.
+    With --strict, a scheduled gain with poles outside the sector exits 1."""
     import numpy as np
 
     from acmm.stages import run_design
 
-    r, path = _run_with_progress(run_design, config, figures)
+    r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
     cfg = r.config
     n = cfg.orbit_rate
     typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
@@ -148,18 +177,23 @@ def design(config: Optional[Path] = ConfigArg,
         stable = "stable at every check" if c.max_real.max() < 0 else "UNSTABLE at some checks"
         typer.echo(f"  scheduled closed loops: {stable}; largest Re(pole) = {c.max_real.max():+.3f} n")
     typer.echo(f"  wrote {path}")
+    if r.check is not None:
+        strict_exit(strict, r.check.worst <= 0,
+                    f"{cfg.name}: the scheduled gain puts poles outside the sector "
+                    f"(worst margin {r.check.worst:+.3f} n)")
 
 
-@app.command()
+@app.command(short_help="Nonlinear closed-loop simulation (ch 6); designs first if needed; writes sim.h5 + figures.")
 @user_errors
-def simulate(config: Optional[Path] = ConfigArg,
-             figures: Optional[bool] = FiguresOpt) -> None:
-    """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures."""
+def simulate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+             figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
+    """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures.
+    With --strict, a DIVERGED verdict exits 1."""
     import numpy as np
 
     from acmm.stages import run_simulate
 
-    r, path = _run_with_progress(run_simulate, config, figures)
+    r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
     cfg, s = r.config, r.sim
     n = cfg.orbit_rate
     typer.echo(f"{cfg.name}: design {r.design_note}")
@@ -171,6 +205,7 @@ def simulate(config: Optional[Path] = ConfigArg,
         typer.echo(f"  level {st['level']:>2} from orbit {st['start_orbit']:6.1f}: theta2* {st['theta2_deg']:+7.2f} deg, "
                    f"steady |err| {_fmt(st['steady_error_deg'], '{:.3f}')} deg, peak |h| {st['peak_momentum']:.0f} ft*lbf*s")
     typer.echo(f"  wrote {path}")
+    strict_exit(strict, s.verdict != "bounded", f"{cfg.name}: verdict {s.verdict.upper()} ({s.reason})")
 
 
 def main() -> None:

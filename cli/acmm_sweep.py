@@ -10,35 +10,36 @@ from typing import Optional
 
 import typer
 
-from cli.common import user_errors
+from cli.common import OverridesArg, strict_exit, user_errors
 
 
 class _Bar:
-    """A one-line progress bar on stderr (a line every 10 % when stderr is not a terminal)."""
+    """Sweep progress on an interactive terminal (rich: bar, cases/s, elapsed, ETA, how many are not
+    bounded); silent when stderr is not a terminal."""
 
-    def __init__(self):
-        import sys
-
-        self.err = sys.stderr
-        self.tty = self.err.isatty()
+    def __init__(self, name: str = "sweep"):
+        self.name = name
         self.bad = 0
-        self.last_decile = -1
+        self.steps = None
 
     def __call__(self, done: int, total: int, rec: dict) -> None:
+        from cli.progress import Steps, enabled
+
         if rec.get("kind") == "case" and rec.get("verdict") != "bounded":
             self.bad += 1
-        frac = done / max(total, 1)
-        text = f"{done}/{total} tasks, {self.bad} not bounded"
-        if self.tty:
-            n = int(30 * frac)
-            self.err.write(f"\r[{'#' * n}{'.' * (30 - n)}] {text}")
-            if done == total:
-                self.err.write("\n")
-            self.err.flush()
-        elif int(10 * frac) > self.last_decile:
-            self.last_decile = int(10 * frac)
-            self.err.write(f"  {100 * frac:3.0f}% {text}\n")
-            self.err.flush()
+        if not enabled():
+            return
+        if self.steps is None:
+            self.steps = Steps(f"{self.name}: {done - 1}/{total} tasks", total, rate=True).__enter__()
+            self.steps.advance(n=done - 1)
+        self.steps.advance(f"{self.name}: {self.bad} not bounded")
+        if done >= total:
+            self.close()
+
+    def close(self) -> None:
+        if self.steps is not None:
+            self.steps.__exit__(None, None, None)
+            self.steps = None
 
 
 def register(app: typer.Typer) -> None:
@@ -47,6 +48,7 @@ def register(app: typer.Typer) -> None:
     @app.command()
     @user_errors
     def sweep(config: Path = typer.Argument(..., help="sweep config YAML (see configs/sweep_smoke.yaml)"),
+              overrides: Optional[list[str]] = OverridesArg,
               workers: Optional[int] = typer.Option(None, "--workers", "-j", min=1,
                                                     help="local worker processes (1: in-process; "
                                                          "default: sweep.workers or the CPU count)"),
@@ -54,17 +56,27 @@ def register(app: typer.Typer) -> None:
                                                       help="Dask scheduler address (needs acmm-qpp[dask])"),
               resume: bool = typer.Option(False, "--resume", help="skip the cases already in the journal"),
               figures: Optional[bool] = typer.Option(None, "--figures/--no-figures",
-                                                     help="write figures (default: output.figures)")) -> None:
-        """Monte Carlo / grid sweep of closed-loop runs; writes runs/<name>/sweep.h5, sweep.csv, figures."""
+                                                     help="write figures (default: output.figures)"),
+              strict: bool = typer.Option(False, "--strict", help="exit 1 when any case is not bounded (for CI)")
+              ) -> None:
+        """Monte Carlo / grid sweep of closed-loop runs; writes runs/<name>/sweep.h5, sweep.csv, figures.
+        KEY=VALUE overrides apply to the sweep file (e.g. sweep.n_runs=20 sweep.orbits=2)."""
         import numpy as np
 
         from acmm.sweep import run_sweep
         from acmm.sweep_config import load_sweep
 
-        sw = load_sweep(config)
+        from cli.progress import announce_numba_compile
+
+        sw = load_sweep(config, overrides)
         if resume and not (sw.run_dir() / "sweep.journal").exists():
             typer.echo(f"note: no journal in {sw.run_dir()}; starting from the first case", err=True)
-        r = run_sweep(sw, workers=workers, scheduler=scheduler, resume=resume, progress=_Bar(), figures=figures)
+        announce_numba_compile()
+        bar = _Bar(sw.name)
+        try:
+            r = run_sweep(sw, workers=workers, scheduler=scheduler, resume=resume, progress=bar, figures=figures)
+        finally:
+            bar.close()
         spec = sw.spec
         how = (f"grid of {spec.n_cases()}" if spec.grid is not None else
                f"Monte Carlo, {spec.n_cases()} runs, seed {spec.seed}")
@@ -96,3 +108,5 @@ def register(app: typer.Typer) -> None:
                            f"(fails at {m['first_failure']:.3f}: {m['failure_verdict']})")
         typer.echo(f"  wrote {r.path} and {r.path.with_suffix('.csv').name}"
                    + (f", {len(r.figures)} figure(s)" if r.figures else ""))
+        bad = [x for x in r.rows if x["verdict"] != "bounded"]
+        strict_exit(strict, bool(bad), f"{sw.name}: {len(bad)} of {len(r.rows)} case(s) not bounded")

@@ -28,9 +28,112 @@ def user_errors(fn):
         try:
             return fn(*args, **kwargs)
         except AcmmError as exc:
-            fail(str(exc), exc.exit_code)
+            from acmm.hints import with_hint
+
+            fail(with_hint(exc), exc.exit_code)
         except KeyboardInterrupt:
             typer.echo("interrupted", err=True)
             sys.exit(EXIT_INTERRUPTED)
 
     return wrapper
+
+
+# ---------------------------------------------------------------------------------------------
+# command-line conventions (issue 14): exit codes of click errors, --version, overrides, --strict
+# ---------------------------------------------------------------------------------------------
+from typer.core import TyperGroup  # noqa: E402
+
+from acmm.errors import EXIT_USAGE, EXIT_VERDICT  # noqa: E402
+
+#: Positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm.overrides`).
+OverridesArg = typer.Argument(None, metavar="KEY=VALUE",
+                              help="overrides of config values, dotted: simulation.orbits=10 "
+                                   "design.sector.sigma=0.6 (validated like the file; ~key removes one)",
+                              show_default=False)
+StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes with a failing verdict "
+                                                 "(for CI)")
+
+
+def _click():
+    """The click that typer uses: recent typer vendors it as ``typer._click``, older ones use click."""
+    import types
+
+    try:
+        from typer._click import exceptions
+    except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
+        from click import exceptions
+    return types.SimpleNamespace(exceptions=exceptions)
+
+
+def _one_line_usage(exc) -> str:
+    """A click usage error as one line: the message and where to get help."""
+    click = _click()
+
+    msg = " ".join(exc.format_message().replace("Value error, ", "").split())
+    ctx = getattr(exc, "ctx", None)
+    if ctx is not None and not isinstance(exc, click.exceptions.NoArgsIsHelpError):
+        msg += f" (see '{ctx.command_path} --help')"
+    return msg
+
+
+class ExitCodeGroup(TyperGroup):
+    """The apps' click group: click's own errors get the documented exit codes, on one line.
+
+    * a usage error (unknown option or command, missing argument, extra argument) → 64
+      (``EXIT_USAGE``);
+    * a bad *value* of an option or argument (``-j 0``, ``--kind foo``) → 2 (``EXIT_INPUT``, like a
+      bad value in a config file);
+    * Ctrl-C → 130.
+    """
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        click = _click()
+
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.exceptions.NoArgsIsHelpError as exc:
+            typer.echo(exc.ctx.get_help() if exc.ctx is not None else exc.format_message(), err=True)
+            sys.exit(EXIT_USAGE)
+        except click.exceptions.MissingParameter as exc:
+            typer.echo(f"error: {_one_line_usage(exc)}", err=True)
+            sys.exit(EXIT_USAGE)
+        except click.exceptions.BadParameter as exc:
+            typer.echo(f"error: {_one_line_usage(exc)}", err=True)
+            sys.exit(EXIT_INPUT)
+        except click.exceptions.UsageError as exc:
+            typer.echo(f"error: {_one_line_usage(exc)}", err=True)
+            sys.exit(EXIT_USAGE)
+        except click.exceptions.ClickException as exc:
+            typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
+            sys.exit(exc.exit_code)
+        except (typer.Abort, KeyboardInterrupt):
+            typer.echo("interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+def version_option():
+    """An eager ``--version`` option printing the package version."""
+
+    def show(value: bool) -> None:
+        if value:
+            from importlib.metadata import PackageNotFoundError, version
+
+            try:
+                v = version("acmm-qpp")
+            except PackageNotFoundError:  # pragma: no cover (source tree without install)
+                v = "unknown (not installed)"
+            typer.echo(f"acmm-qpp {v}")
+            raise typer.Exit(0)
+
+    return typer.Option(False, "--version", callback=show, is_eager=True,
+                        help="print the version and exit")
+
+
+def strict_exit(strict: bool, failed: bool, why: str) -> None:
+    """With ``--strict``, a failing verdict exits 1 (``EXIT_VERDICT``) after the output, with one line."""
+    if strict and failed:
+        typer.echo(f"strict: {' '.join(why.split())}", err=True)
+        raise typer.Exit(EXIT_VERDICT)

@@ -6,35 +6,71 @@ one line and exit with code 2.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 import typer
 
-from cli.common import user_errors
+from cli.common import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Quantitative pole placement for Lure systems (CR-185644 Part III).")
+app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
+                  help="Quantitative pole placement for Lure systems (CR-185644 Part III).",
+                  epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
+                         "or option value), 3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
 
 ConfigArg = typer.Argument(..., help="YAML config file (or the name of a packaged config, e.g. qpp_siso)")
 FigOpt = typer.Option(None, "--figures/--no-figures", help="override output.figures")
 
 
 @app.callback()
-def _root() -> None:
+def _root(version: bool = version_option()) -> None:
     """Quantitative pole placement for Lure systems (CR-185644 Part III)."""
+
+
+def _load(config, overrides):
+    from qpp.config import load_config
+
+    return load_config(config, overrides)
+
+
+@app.command()
+@user_errors
+def validate(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+             show: bool = typer.Option(False, "--show", help="print the resolved config")) -> None:
+    """Check a config of any kind (qpp, acmm run or sweep; detected from its sections)."""
+    from acmm.schema import load_any
+
+    kind, cfg = load_any(config, overrides)
+    typer.echo(f"{cfg.name}: valid ({kind} config)")
+    if show:
+        typer.echo(cfg.to_yaml())
+
+
+@app.command()
+@user_errors
+def schema() -> None:
+    """Print the JSON schema of the qpp config format (`acmm schema --kind ...` for the others)."""
+    from acmm.schema import schema_json
+
+    typer.echo(schema_json("qpp"))
 
 
 def _mat(a) -> str:
     return np.array2string(np.asarray(a), precision=4, suppress_small=True, max_line_width=120)
 
 
-@app.command()
+@app.command(short_help="H-infinity gains (ch 11), beta1, thresholds m and the circle criterion (ch 12.1).")
 @user_errors
-def design(config: Path = ConfigArg, figures: bool = FigOpt) -> None:
-    """H∞ gains (ch. 11), β1, thresholds m and the circle criterion (ch. 12.1) → qpp_design.h5."""
+def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
+           strict: bool = StrictOpt) -> None:
+    """H∞ gains (ch. 11), β1, thresholds m and the circle criterion (ch. 12.1) → qpp_design.h5.
+    With --strict, a failed circle criterion or β1 > m (for design.bz and design.bookkeeping) exits 1."""
+    from cli.progress import status
     from qpp.stages import run_design
 
-    cfg, r, path = run_design(config, figures)
+    cfg = _load(config, overrides)
+    with status(f"{cfg.name}: designing (ch. 12.1: H∞ gains, β1, thresholds, circle criterion) ..."):
+        cfg, r, path = run_design(cfg, figures)
     typer.echo(f"{cfg.name}: gains from {r.gains_source} (a = {r.a:g} 1/s, T = {r.T:g} s)")
     typer.echo(f"  K1 = {_mat(r.K1)}\n  Kc = {_mat(r.Kc)}\n  H  = {_mat(r.H.T)}ᵀ")
     if cfg.published.H is not None:
@@ -52,21 +88,39 @@ def design(config: Path = ConfigArg, figures: bool = FigOpt) -> None:
                f"{'PASS' if c.passed else 'FAIL'}; margins {np.round(c.margins, 4).tolist()}; "
                f"P0 = {c.P0}; largest admissible scale {c.max_scale:.4g}")
     typer.echo(f"  wrote {path}")
+    names = [t.name for t in r.thresholds]
+    book = cfg.design.bookkeeping if cfg.design.bookkeeping in names else names[-1]
+    certified = r.verdicts().get((cfg.design.bz, book), True)
+    strict_exit(strict, not (c.passed and certified),
+                f"{cfg.name}: " + ("circle criterion FAILS" if not c.passed else
+                                   f"beta1 > m (B_z {cfg.design.bz}, bookkeeping {book})"))
 
 
 @app.command()
 @user_errors
-def simulate(config: Path = ConfigArg, figures: bool = FigOpt) -> None:
-    """Nonlinear closed loop per scenario and the sphere check ‖y − y_o‖∞ ≤ β_o → qpp_sim.h5."""
+def simulate(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
+             strict: bool = StrictOpt) -> None:
+    """Nonlinear closed loop per scenario and the sphere check ‖y − y_o‖∞ ≤ β_o → qpp_sim.h5.
+    The gains are designed first (as `qpp design`). With --strict, an output outside the sphere exits 1."""
+    from cli.progress import status
     from qpp.stages import run_simulate
 
-    cfg, r, sims, path = run_simulate(config, figures)
+    cfg = _load(config, overrides)
+    n = len(cfg.simulation.scenarios)
+    with status(f"{cfg.name}: designing the gains (ch. 12.1), then simulating the nominal loop and "
+                f"{n} scenario(s) over {cfg.simulation.t_final:g} s ...") as update:
+        def tick(done, total, name):
+            update(f"{cfg.name}: simulated {done}/{total} scenario(s) (last: {name}) ...")
+
+        cfg, r, sims, path = run_simulate(cfg, figures, progress=tick)
     typer.echo(f"{cfg.name}: beta_o = {cfg.spheres.beta_o:g}")
     for s in sims:
         typer.echo(f"  {s.name:12s} gamma = {s.gamma:<8g} ||y - y_o||inf = {s.error_inf:.5f} "
                    f"(per output {np.round(s.error_per_output, 5).tolist()}) "
                    f"{'within' if s.passed else 'OUTSIDE'} the output sphere")
     typer.echo(f"  wrote {path}")
+    out = [s.name for s in sims if not s.passed]
+    strict_exit(strict, bool(out), f"{cfg.name}: outside the output sphere in {', '.join(out)}")
 
 
 def main() -> None:

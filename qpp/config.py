@@ -251,9 +251,12 @@ def parse_config(data: object, source: str = "config") -> QppConfig:
     return validate_model(QppConfig, data, source)
 
 
-def load_config(path) -> QppConfig:
-    """Read and validate a YAML file; a bare name (``qpp_siso``) falls back to the packaged configs."""
+def load_config(path, overrides: list[str] | None = None) -> QppConfig:
+    """Read and validate a YAML file; a bare name (``qpp_siso``) falls back to the packaged configs.
+    ``overrides`` (dotted ``key=value``, :mod:`acmm.overrides`) apply before validation."""
     from acmm.config import read_yaml
+    from acmm.overrides import apply_overrides, remember_origin
 
     data, p = read_yaml(path)
-    return parse_config(data, source=str(p))
+    cfg = parse_config(apply_overrides(data, overrides), source=str(p))
+    return remember_origin(cfg, str(p), overrides)

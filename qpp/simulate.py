@@ -186,8 +186,9 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
                      float(err.max()), err, cfg.spheres.beta_o)
 
 
-def simulate(cfg: QppConfig, K1, Kc, H) -> list[SimResult]:
-    """All scenarios of a config (the nominal loop is integrated once)."""
+def simulate(cfg: QppConfig, K1, Kc, H, progress=None) -> list[SimResult]:
+    """All scenarios of a config (the nominal loop is integrated once); ``progress(done, total,
+    name)`` is called after each scenario."""
     plant = cfg.lure_plant()
     sim = cfg.simulation
     f1, g_nom = make_f1(cfg.nonlinearity, plant)
@@ -196,4 +197,9 @@ def simulate(cfg: QppConfig, K1, Kc, H) -> list[SimResult]:
     nominal = simulate_loop(plant, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom,
                             r_fun=lambda tt: eval_signal(sim.r_o, tt), t_eval=t, z0=z0,
                             rtol=sim.rtol, atol=sim.atol)
-    return [simulate_scenario(cfg, K1, Kc, H, s, nominal) for s in sim.scenarios]
+    out = []
+    for s in sim.scenarios:
+        out.append(simulate_scenario(cfg, K1, Kc, H, s, nominal))
+        if progress is not None:
+            progress(len(out), len(sim.scenarios), s.name)
+    return out

@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
+from acmm.outputs import owns_outputs
 from acmm.results import Dataset, write_h5
 from qpp.config import PolarArmNonlinearity, QppConfig, load_config
 from qpp.design import DesignResult, design
@@ -69,6 +70,7 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     return items
 
 
+@owns_outputs("qpp design", lambda c: _cfg(c))
 def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignResult, Path]:
     """Design (ch. 12.1) and write ``<root>/<name>/qpp_design.h5`` (+ circle-criterion figures)."""
     cfg = _cfg(config)
@@ -83,11 +85,14 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     return cfg, r, path
 
 
-def run_simulate(config, figures: bool | None = None):
-    """Design, simulate every scenario, write ``<root>/<name>/qpp_sim.h5`` (+ figures)."""
+@owns_outputs("qpp simulate", lambda c: _cfg(c))
+def run_simulate(config, figures: bool | None = None, progress=None):
+    """Design, simulate every scenario, write ``<root>/<name>/qpp_sim.h5`` (+ figures).
+
+    ``progress(done, total, name)`` is called after each scenario."""
     cfg = _cfg(config)
     r = design(cfg)
-    sims = simulate(cfg, r.K1, r.Kc, r.H)
+    sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
     items = {"K1": Dataset(r.K1, "1", "gain K1 used"), "Kc": Dataset(r.Kc, "1", "gain Kc used"),
              "H": Dataset(r.H, "1", "observer gain H used (report's sign)")}
     for s in sims:

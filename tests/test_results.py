@@ -101,14 +101,14 @@ def test_tea_h5_contents(tmp_runs):
     assert attrs["config_hash"] == hashlib.sha256(attrs["config"].encode()).hexdigest()[:16]
     assert attrs["package_version"] == acmm.__version__
     assert "git_commit" in attrs
-    assert _leftovers(path.parent, {"tea.h5"}) == []
+    assert _leftovers(path.parent, {"tea.h5", "config.yaml"}) == []
 
 
 def test_tea_h5_overwrite_is_atomic_and_clean(tmp_runs):
     _, p1 = run_tea(CONFIGS / "ac.yaml")
     _, p2 = run_tea(CONFIGS / "ac.yaml")
     assert p1 == p2
-    assert _leftovers(p1.parent, {"tea.h5"}) == []
+    assert _leftovers(p1.parent, {"tea.h5", "config.yaml"}) == []
     np.testing.assert_allclose(np.degrees(read_h5(p2)["theta"]), [0.19, -5.0, 0.56], atol=0.01)
 
 

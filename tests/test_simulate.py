@@ -166,7 +166,7 @@ def test_simulate_no_figures_writes_no_figures(tmp_path, monkeypatch):
     out = CliRunner().invoke(app, ["simulate", "ac", "--no-figures"])
     assert out.exit_code == 0, out.output
     files = sorted(p.name for p in (tmp_path / "runs" / "ac").iterdir())
-    assert files == ["design.h5", "sim.h5"]
+    assert files == ["config.yaml", "design.h5", "sim.h5"]
 
 
 def test_sample_at_a_level_start_belongs_to_the_new_level():
