@@ -379,10 +379,12 @@ def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> di
     """
     import h5py
 
+    from acmm.results import _dimension_only
+
     out: dict[str, str] = {}
 
     def visit(name, obj):
-        if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in exclude:
+        if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in exclude and not _dimension_only(obj):
             arr = np.ascontiguousarray(obj[()])
             h = hashlib.sha256(f"{arr.dtype.str}|{arr.shape}|".encode())
             h.update(arr.tobytes() if arr.dtype.kind != "O" else repr(arr.tolist()).encode())
@@ -797,7 +799,7 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
     plt = pyplot()
     with h5py.File(sim_path, "r") as f:
         scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
-        data = {k: {d: f[k][d][()] for d in ("t", "y", "y_o", "r", "u")} for k in scen}
+        data = {k: {d: f[k][d][()].T for d in ("t", "y", "y_o", "r", "u")} for k in scen}   # stored (t, channel)
     p = next(iter(data.values()))["y"].shape[0]
     fig, axs = plt.subplots(2, len(scen), figsize=(3.8 * len(scen) + 1, 6.5), squeeze=False)
     for c, k in enumerate(scen):

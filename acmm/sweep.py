@@ -739,6 +739,9 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     if wall_time is not None:
         attrs["wall_time_s"] = float(wall_time)
     run_dir = sweep.run_dir()
+    from acmm.netcdf_layout import with_leading_dim
+
+    items = with_leading_dim(items, "case", len(a["case"]))   # one row per case (netCDF dimension)
     path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs)
     _write_csv(run_dir / "sweep.csv", labels, a)
     figs = []
