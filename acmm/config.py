@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Literal, Optional
+from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
 import yaml
@@ -182,8 +182,10 @@ class DesignPoint(_Model):
 class Schedule(_Model):
     """Design points of the gain schedule (ch. 5.3)."""
 
-    to: Optional[DesignPoint] = Field(
-        None, description="end configuration of the blend I(s) = (1−s)·I_start + s·I_to (bias blended alike)")
+    to: Optional[Union[DesignPoint, str]] = Field(
+        None, description="end configuration of the blend I(s) = (1−s)·I_start + s·I_to (bias blended alike): "
+                          "a mapping, or a config file (path relative to the referring file) or packaged name "
+                          "whose name, inertia and disturbance are used")
     n_points: int = Field(12, ge=3, le=200, description="number of blend points including both ends")
     spacing: Literal["tea", "blend"] = Field(
         "tea", description="blend points evenly spaced in pitch TEA (tea) or in the blend parameter s (blend)")
@@ -234,6 +236,16 @@ class Config(_Model):
     schedule: Optional[Schedule] = None
     simulation: Simulation = Simulation()
     output: Output = Output()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _references(cls, data):
+        """``schedule.to`` naming a file (relative to the working directory here; to the
+        referring file through :func:`load_config`) or a packaged config."""
+        try:
+            return resolve_references(data, ".")
+        except ConfigError as exc:
+            raise ValueError(str(exc)) from None
 
     @field_validator("orbit_rate")
     @classmethod
@@ -375,4 +387,32 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
 def load_config(path: str | Path | None = None) -> Config:
     """Read and validate a YAML config file (``None``: the packaged default stair-case)."""
     data, p = read_yaml(path)
+    data = resolve_references(data, p.parent, str(p))
     return parse_config(data, source=str(p))
+
+
+def resolve_references(data: object, base_dir: str | Path = ".", source: str = "config",
+                       _depth: int = 0) -> object:
+    """Replace ``schedule.to: <file or packaged name>`` by that config's end point.
+
+    The string is a YAML path relative to ``base_dir`` (the referring file's folder), else
+    the name of a packaged config.  The referred config is validated in full; its ``name``,
+    ``inertia`` and ``disturbance`` become the mapping ``schedule.to`` of eq 5.3's blend (its
+    own ``schedule`` and other sections are not used).
+    """
+    if not isinstance(data, dict) or not isinstance(data.get("schedule"), dict):
+        return data
+    ref = data["schedule"].get("to")
+    if not isinstance(ref, (str, Path)):
+        return data
+    p = Path(base_dir) / ref
+    try:
+        sub, sub_path = read_yaml(p if p.is_file() else ref)
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: schedule.to: {exc}") from None
+    if _depth >= 8:
+        raise ConfigError(f"{source}: schedule.to: references nest deeper than 8 files (a cycle?)")
+    sub = resolve_references(sub, sub_path.parent, str(sub_path), _depth + 1)
+    other = parse_config(sub, source=str(sub_path))
+    end = {"name": other.name, "inertia": sub["inertia"], "disturbance": sub.get("disturbance", {})}
+    return {**data, "schedule": {**data["schedule"], "to": end}}
