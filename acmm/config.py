@@ -52,6 +52,7 @@ Rate = Annotated[float, _q("rate")]
 Time = Annotated[float, _q("time")]
 TorqueVec = Annotated[list[float], _vec3("torque")]
 AngleVec = Annotated[list[float], _vec3("angle")]
+WeightTorque = Annotated[float, _q("weight_torque")]
 
 
 class _Model(BaseModel):
@@ -152,7 +153,7 @@ class Sector(_Model):
     """Closed-loop pole region of ch. 5.2: Re λ ≤ −sigma·n and |Im λ| ≤ tan(half_angle)·|Re λ|."""
 
     sigma: float = Field(0.5, gt=0, description="minimum decay rate in units of the orbital rate n")
-    half_angle_deg: float = Field(45.0, gt=0, lt=90, description="sector half-angle about the negative real axis, deg")
+    half_angle_deg: Angle = Field(45.0, gt=0, lt=90, description="sector half-angle about the negative real axis, deg")
 
 
 class Design(_Model):
@@ -163,7 +164,7 @@ class Design(_Model):
     drf_mode: Literal["attitude_hold", "momentum_hold"] = Field(
         "attitude_hold", description="DRF inputs: (h1, θ2, θ3) or (h1, h2, θ3), filters at n and 2n")
     sector: Sector = Sector()
-    R: float = Field(1e-4, gt=0, description="control weight R = r·I, 1/(ft·lbf)²")
+    R: WeightTorque = Field(1e-4, gt=0, description="control weight R = r·I, 1/(ft·lbf)²")
     Q0: float = Field(0.0, ge=0, description="state weight Q0 = q·I on the scaled states (dimensionless)")
     riccati_method: Literal["sign", "scipy", "slycot"] = Field("scipy", description="CARE solver")
     pole_method: Literal["shift", "uniform"] = Field(
@@ -216,6 +217,10 @@ class Output(_Model):
 
     root: str = Field("runs", description="results root; files go to <root>/<name>/")
     figures: bool = Field(True, description="write matplotlib figures next to the HDF5 files")
+    units: Literal["imperial", "SI"] = Field(
+        "imperial", description="unit system of the HDF5 values and units attributes, prints, CSV and figures: "
+                                "imperial (the report's slug·ft², ft·lbf, ft·lbf·s) or SI (kg·m², N·m, N·m·s); "
+                                "angles are stored in rad in both")
 
 
 #: Largest number of output samples a simulation may ask for (memory guard).
