@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Literal, Optional, Union
+from typing import Annotated, Literal, Optional
 
 import numpy as np
 import yaml
@@ -183,7 +183,9 @@ class DesignPoint(_Model):
 class Schedule(_Model):
     """Design points of the gain schedule (ch. 5.3)."""
 
-    to: Optional[Union[DesignPoint, str]] = Field(
+    # a string is resolved to the mapping by Config's before-validator (resolve_references), so
+    # the validated type stays DesignPoint; a JSON schema should allow a string here too
+    to: Optional[DesignPoint] = Field(
         None, description="end configuration of the blend I(s) = (1−s)·I_start + s·I_to (bias blended alike): "
                           "a mapping, or a config file (path relative to the referring file) or packaged name "
                           "whose name, inertia and disturbance are used")

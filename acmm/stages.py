@@ -353,9 +353,12 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
 
         d = cfg.run_dir()
         title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
-        plots.axis_histories(orbits, np.degrees(err), rel_rate, r.u, r.state[:, 6:9], title, d / "sim_axes.png")
+        units = cfg.output.units
+        plots.axis_histories(orbits, np.degrees(err), rel_rate, r.u, r.state[:, 6:9], title, d / "sim_axes.png",
+                             units=units)
         if len(sc.level_start) > 1:
             inertia_t = sc.inertia[r.level]
-            plots.inertia_histories(orbits, inertia_t, d / "sim_inertia.png")
-        plots.summary(orbits, np.degrees(err), r.state[:, 6:9], r.u, stats, r.verdict, cfg.name, d / "sim_summary.png")
+            plots.inertia_histories(orbits, inertia_t, d / "sim_inertia.png", units=units)
+        plots.summary(orbits, np.degrees(err), r.state[:, 6:9], r.u, stats, r.verdict, cfg.name, d / "sim_summary.png",
+                      units=units)
     return result, path

@@ -31,6 +31,7 @@ DIMENSIONS: dict[str, str] = {
     "torque": "ft*lbf",
     "momentum": "ft*lbf*s",
     "angle": "deg",
+    "angle_rad": "rad",
     "rate": "rad/s",
     "time": "s",
     "weight_torque": "1/(ft*lbf)^2",
@@ -162,3 +163,14 @@ def check_system(system: str) -> str:
         if str(system).lower() == s.lower():
             return s
     raise ValueError(f"unknown unit system {system!r} (use imperial or SI)")
+
+
+def pretty(unit: str) -> str:
+    """A unit as printed in labels: ``ft*lbf*s`` → ``ft·lbf·s``, ``kg*m^2`` → ``kg·m²``."""
+    return unit.replace("*", "·").replace("^2", "²")
+
+
+def shown(value, unit: str, system: str = "imperial"):
+    """(value, unit) of a report-unit quantity as shown to a person under ``system``
+    (prints, CSV, figures; angles stay in degrees)."""
+    return to_system(value, unit, system, display=True)
