@@ -15,6 +15,35 @@ from acmm.results import Dataset, write_h5
 AXES = ["roll", "pitch", "yaw"]
 
 
+def _in_system(items: dict, cfg: Config, roles: dict) -> dict:
+    """Per-state arrays of ``items`` (path → role of :func:`acmm.units.state_space_in`) in the
+    config's ``output.units``; their unit strings and ``state_units`` follow.  Other datasets
+    are converted by unit string in :func:`acmm.results.write_h5`."""
+    from dataclasses import replace
+
+    from acmm.units import state_factors, state_space_in
+
+    system = cfg.output.units
+    if system == "imperial":
+        return items
+    _, su = state_factors(cfg.design.drf_mode, system)
+    for path, role in roles.items():
+        *groups, key = path.split("/")
+        g = items
+        for name in groups:
+            g = g[name]
+        ds = g[key]
+        new = state_space_in(system, cfg.design.drf_mode, **{role: ds.data})[role]
+        attrs = dict(ds.attrs)
+        if "state_units" in attrs:
+            attrs["state_units"] = np.array(su, dtype="S")
+        g[key] = replace(ds, data=new, units=ds.units.replace("ft*lbf", "N*m"), attrs=attrs)
+    if "state_units" in items:
+        items["state_units"] = replace(items["state_units"], data=np.array(su, dtype="S"))
+    return items
+
+
+
 @dataclass
 class TeaResult:
     config: Config
@@ -97,6 +126,7 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
                                              "min σmin([A−sI, B])/σmax over eigenvalues and s=0, scaled"),
         "controllability_rank": Dataset(ctrb.rank, "1", f"PBH rank with tolerance {ctrb.tol:g}"),
     }
+    items = _in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
     path = write_h5(cfg.run_dir() / "linearize.h5", items, cfg.to_yaml(),
                     {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
     return result, path
@@ -237,6 +267,13 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
             "check_max_real": Dataset(r.check.max_real, "n", "largest closed-loop Re λ with the scheduled gain",
                                       dims=("check",)),
         }
+    roles = {"K": "K"}
+    for key in pts:
+        roles.update({f"points/{key}/{m}": m for m in ("A", "B", "G", "Q", "P", "K")})
+        roles[f"points/{key}/scales"] = "scales"
+    if r.fit is not None:
+        roles.update({"schedule/coef": "K", "schedule/rms_residual": "K"})
+    items = _in_system(items, cfg, roles)
     path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
                     {"stage": "design", "design_hash": r.table.design_hash, "n_points": P,
                      "schedule_form": r.table.form})
@@ -259,7 +296,18 @@ def load_design_table(path: Path) -> DesignTable:
     d = read_h5(path)
     coef = d["schedule"]["coef"] if "schedule" in d else None
     names = [x.decode() if isinstance(x, bytes) else str(x) for x in d["names"]]
-    return DesignTable(names, d["inertia"], d["bias"], d["tea"], d["K"], coef, d["attrs"]["design_hash"],
+    inertia, bias, K = d["inertia"], d["bias"], d["K"]
+    if d["attrs"].get("unit_system", "imperial") == "SI":      # back to the report's units
+        import yaml
+
+        from acmm.units import FT_LBF_IN_NM, state_factors
+
+        drf_mode = (yaml.safe_load(d["attrs"]["config"]).get("design") or {}).get("drf_mode", "attitude_hold")
+        f, _ = state_factors(drf_mode, "SI")
+        inertia, bias = inertia / FT_LBF_IN_NM, bias / FT_LBF_IN_NM
+        K = K * f / FT_LBF_IN_NM
+        coef = None if coef is None else coef * f / FT_LBF_IN_NM
+    return DesignTable(names, inertia, bias, d["tea"], K, coef, d["attrs"]["design_hash"],
                        d["attrs"].get("schedule_form", "polynomial"))
 
 
@@ -347,6 +395,7 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
     attrs = {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
              "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
              "design_hash": table.design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
+    items = _in_system(items, cfg, {"levels/gain": "K", "drf": "drf"})
     path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
     if cfg.output.figures if figures is None else figures:
         from acmm import plots

@@ -742,20 +742,25 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     from acmm.netcdf_layout import with_leading_dim
 
     items = with_leading_dim(items, "case", len(a["case"]))   # one row per case (netCDF dimension)
-    path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs)
-    _write_csv(run_dir / "sweep.csv", labels, a)
+    path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units)
+    _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
     if figures and rows:
         figs = plot_sweep(sweep, a, run_dir)
     return path, figs
 
 
-def _write_csv(path: Path, labels, a) -> None:
-    cols = ["case", "base", "index"] + [f"{k}[{PARAMETERS[k].unit}]" for k in a["parameters"]] + [
+def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
+    from acmm.units import display_unit, shown
+
+    cols = ["case", "base", "index"] + [f"{k}[{display_unit(PARAMETERS[k].unit, units)}]" for k in a["parameters"]] + [
         "verdict", "time_to_divergence[orbit]"]
     for what, unit in (("peak_attitude_error", "deg"), ("steady_attitude_error", "deg"),
-                       ("peak_momentum", "ft*lbf*s"), ("tea_true", "deg")):
+                       ("peak_momentum", display_unit("ft*lbf*s", units)), ("tea_true", "deg")):
         cols += [f"{what}_{ax}[{unit}]" for ax in AXES]
+    a = dict(a)
+    a["parameters"] = {k: shown(np.asarray(v, float), PARAMETERS[k].unit, units)[0] for k, v in a["parameters"].items()}
+    a["peak_momentum"] = shown(np.asarray(a["peak_momentum"], float), "ft*lbf*s", units)[0]
     cols += ["torque_saturation_time[orbit]", "momentum_saturation_time[orbit]", "n_draws", "reason"]
     lines = [",".join(cols)]
     for i in range(len(a["case"])):

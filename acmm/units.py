@@ -174,3 +174,53 @@ def shown(value, unit: str, system: str = "imperial"):
     """(value, unit) of a report-unit quantity as shown to a person under ``system``
     (prints, CSV, figures; angles stay in degrees)."""
     return to_system(value, unit, system, display=True)
+
+
+def state_factors(drf_mode: str = "attitude_hold", system: str = "imperial"):
+    """(factors d, units) of the 24 states of eq 4.47 under ``system``: x_system = d · x_report.
+
+    Angles stay in rad, rates in rad/s; momentum-like states become N·m·s (·sⁿ) under SI.
+    """
+    import numpy as np
+
+    from acmm.linearize import state_units
+
+    units = state_units(drf_mode)
+    if system != "SI":
+        return np.ones(len(units)), units
+    si = [u.replace("ft*lbf", "N*m") for u in units]
+    return np.array([_factor(u, v) for u, v in zip(units, si)]), si
+
+
+def state_space_in(system: str, drf_mode: str, **arrays):
+    """Per-state matrices of the report's units expressed in ``system`` (x_sys = D x, u_sys = k u):
+    A → D A D⁻¹, B, G → D B / k, K (…, 3, 24) → k K D⁻¹, P, Q → D⁻¹ P D⁻¹, R → R / k²,
+    x (…, 24) or scales → D x; a DRF block ``drf`` (…, 12) → D[12:] x.  Returns a dict of the
+    arrays given (unchanged under imperial)."""
+    import numpy as np
+
+    d, _ = state_factors(drf_mode, system)
+    k = _factor("ft*lbf", "N*m") if system == "SI" else 1.0
+    out = {}
+    for name, a in arrays.items():
+        if a is None:
+            out[name] = None
+            continue
+        a = np.asarray(a, float)
+        if name == "A":
+            out[name] = d[:, None] * a / d[None, :]
+        elif name in ("B", "G"):
+            out[name] = d[:, None] * a / k
+        elif name == "K":
+            out[name] = k * a / d
+        elif name in ("P", "Q"):
+            out[name] = a / d[:, None] / d[None, :]
+        elif name == "R":
+            out[name] = a / k ** 2
+        elif name in ("x", "scales"):
+            out[name] = a * d
+        elif name == "drf":
+            out[name] = a * d[12:]
+        else:
+            raise KeyError(name)
+    return out

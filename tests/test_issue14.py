@@ -190,3 +190,37 @@ def test_si_config_round_trips(tmp_path):
                                        atol=1e-5 * np.abs(a[name][()]).max() * factor + 1e-300, err_msg=name)
         for name, unit in si_units.items():
             assert b[name].attrs["units"] == unit, name
+
+
+def test_si_design_h5_is_the_imperial_design_in_si_and_is_reused_exactly(tmp_path):
+    """Per-state matrices in SI: D A D⁻¹, k K D⁻¹ (D: state factors, k = N·m per ft·lbf), poles
+    unchanged; the SI design.h5 read back equals the imperial design."""
+    import h5py
+
+    from acmm.stages import load_design_table, run_design
+    from acmm.units import FT_LBF_IN_NM as k
+
+    imp = _short("ac", tmp_path / "imp")
+    d = imp.model_dump(mode="json")
+    d["output"].update({"root": str(tmp_path / "si" / "runs"), "units": "SI"})
+    si = parse_config(d)
+    r_imp, p_imp = run_design(imp, figures=False)
+    _, p_si = run_design(si, figures=False)
+    # independent state factors: rad, rad/s unchanged; ft·lbf·s → N·m·s etc.; attitude-hold DRFs
+    # filter (h1, θ2, θ3): α1, β1 carry ft·lbf·s·s(²), the others rad·s(²)
+    f = np.ones(24)
+    f[6:12] = k
+    f[[12, 13, 18, 19]] = k
+    with h5py.File(p_imp) as a, h5py.File(p_si) as b:
+        pa, pb = (g["points"][next(iter(g["points"]))] for g in (a, b))
+        np.testing.assert_allclose(pb["A"][()], f[:, None] * pa["A"][()] / f[None, :], rtol=1e-12)
+        np.testing.assert_allclose(pb["K"][()], k * pa["K"][()] / f, rtol=1e-12)
+        np.testing.assert_allclose(pb["R"][()], pa["R"][()] / k ** 2, rtol=1e-12)
+        np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(pb["A"][()] - pb["B"][()] @ pb["K"][()])),
+                                   np.sort_complex(pa["poles"][()]), rtol=0, atol=1e-5 * imp.orbit_rate)
+        # (near-repeated poles: eigenvalues agree to ~1e-6 n, not to machine precision)
+        np.testing.assert_allclose(b["inertia"][()], a["inertia"][()] * k, rtol=1e-12)
+        assert b["inertia"].attrs["units"] == "kg*m^2" and b["bias"].attrs["units"] == "N*m"
+    ta, tb = load_design_table(p_imp), load_design_table(p_si)
+    np.testing.assert_allclose(tb.gain, ta.gain, rtol=1e-12)
+    np.testing.assert_allclose(tb.inertia, ta.inertia, rtol=1e-12)
