@@ -690,7 +690,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     items = {
         "case": Dataset(a["case"], "1", "global case index = base_index·n_cases + index"),
         "base": Dataset(a["base"], "1", "index into base_names"),
-        "base_names": Dataset(S(labels), "1", "base config names"),
+        "base_names": Dataset(S(labels), "1", "base config names", dims=("base_name",)),
         "index": Dataset(a["index"], "1", "case index within its base (seeds SeedSequence([seed, index]))"),
         "parameters": {k: Dataset(v, PARAMETERS[k].unit, PARAMETERS[k].description)
                        for k, v in a["parameters"].items()},
@@ -722,8 +722,9 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
                 "limit": Dataset(m["limit"], "1", "tolerated uniform inertia scaling (bounded up to here)"),
                 "first_failure": Dataset(m["first_failure"], "1", "first failing scaling (NaN: none up to search_end)"),
                 "search_end": Dataset(m["search_end"], "1", "end of the searched range"),
-                "evaluated_s": Dataset(np.array(m["evaluated_s"]), "1", "scalings evaluated, in order"),
-                "evaluated_verdict": Dataset(S(m["evaluated_verdict"]), "1", "verdict at each"),
+                "evaluated_s": Dataset(np.array(m["evaluated_s"]), "1", "scalings evaluated, in order",
+                                       dims=("evaluation",)),
+                "evaluated_verdict": Dataset(S(m["evaluated_verdict"]), "1", "verdict at each", dims=("evaluation",)),
                 "failure_reason": Dataset(m["failure_reason"] or "-", "1", "why the first failure failed"),
             } for m in margins}
     summary = {}
