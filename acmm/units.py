@@ -16,10 +16,21 @@ import math
 import re
 from functools import lru_cache
 
-import pint
 
-#: The package's single unit registry.
-ureg = pint.UnitRegistry()
+@lru_cache(maxsize=1)
+def registry():
+    """The package's single :class:`pint.UnitRegistry` (built on first use: ~0.5 s, so runs whose
+    configs hold bare numbers never pay for it).  Also available as ``acmm.units.ureg``."""
+    import pint
+
+    return pint.UnitRegistry()
+
+
+def __getattr__(name):
+    if name == "ureg":
+        return registry()
+    raise AttributeError(f"module 'acmm.units' has no attribute {name!r}")
+
 #: 1 ft·lbf in N·m (exact by definition of the foot and the pound-force).
 FT_LBF_IN_NM = 0.3048 * 4.4482216152605
 #: 1 slug·ft² in kg·m² (1 slug = 1 lbf·s²/ft, so slug·ft² = lbf·ft·s²).
@@ -67,8 +78,10 @@ def _spell(unit: str) -> str:
 @lru_cache(maxsize=256)
 def parse_unit(unit: str):
     """A pint unit from a string; ``ValueError`` if pint does not know it."""
+    import pint
+
     try:
-        return ureg.parse_units(_spell(unit))
+        return registry().parse_units(_spell(unit))
     except (pint.errors.UndefinedUnitError, pint.errors.DefinitionSyntaxError, AttributeError,
             TypeError, ValueError, AssertionError, SyntaxError) as exc:
         raise ValueError(f"unknown unit {unit!r}") from exc
@@ -76,6 +89,9 @@ def parse_unit(unit: str):
 
 def _factor(unit: str, target: str) -> float:
     """Factor from ``unit`` to ``target``; ``ValueError`` naming both if the dimensions differ."""
+    import pint
+
+    ureg = registry()
     src, dst = parse_unit(unit), parse_unit(target)
     try:
         return float(ureg.Quantity(1.0, src).to(dst).magnitude)
