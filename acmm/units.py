@@ -82,8 +82,9 @@ def parse_unit(unit: str):
 
     try:
         return registry().parse_units(_spell(unit))
-    except (pint.errors.UndefinedUnitError, pint.errors.DefinitionSyntaxError, AttributeError,
-            TypeError, ValueError, AssertionError, SyntaxError) as exc:
+    except Exception as exc:    # pint raises many kinds (tokenizer, syntax, undefined): one message
+        if isinstance(exc, pint.errors.DimensionalityError):
+            raise ValueError(f"unit {unit!r} cannot be used here: {exc}") from None
         raise ValueError(f"unknown unit {unit!r}") from exc
 
 
@@ -95,7 +96,7 @@ def _factor(unit: str, target: str) -> float:
     src, dst = parse_unit(unit), parse_unit(target)
     try:
         return float(ureg.Quantity(1.0, src).to(dst).magnitude)
-    except pint.errors.DimensionalityError:
+    except (pint.errors.DimensionalityError, pint.errors.OffsetUnitCalculusError):
         # engineering habit: "lb" in a torque or momentum means pound-force
         alt = re.sub(r"(?<![A-Za-z_])lb(?![A-Za-z_])", "lbf", unit)
         if alt != unit:
