@@ -786,9 +786,13 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
     axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
     nominal = _nominal_tea_deg(sweep)
 
+    from acmm.units import shown
+
+    system = sweep.file.output.units
+
     def values(name, sel, lab):
         if name in a["parameters"]:
-            return a["parameters"][name][sel]
+            return shown(np.asarray(a["parameters"][name][sel], float), PARAMETERS[name].unit, system)[0]
         ax = MAP_EXTRAS.index(name)
         return a["tea_true"][sel, ax] - nominal[lab][ax]
 
@@ -809,8 +813,8 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
             m = verdicts == v
             if m.any():
                 ax.scatter(x[m], y[m], s=14, c=colors[v], label=f"{v} ({int(m.sum())})", alpha=0.8)
-        ax.set_xlabel(_label(axes_names[0]))
-        ax.set_ylabel(_label(axes_names[1]) if len(axes_names) > 1 else "peak attitude error, deg")
+        ax.set_xlabel(_label(axes_names[0], system))
+        ax.set_ylabel(_label(axes_names[1], system) if len(axes_names) > 1 else "peak attitude error, deg")
         ax.set_title(f"{lab}: {int(np.sum(verdicts == 'bounded'))}/{int(sel.sum())} bounded")
         ax.legend(fontsize=7)
     fig.suptitle(f"{sweep.name}: stability map ({sweep.spec.design} design)")
@@ -834,7 +838,9 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
     return out
 
 
-def _label(name: str) -> str:
+def _label(name: str, units: str = "imperial") -> str:
     if name in PARAMETERS:
-        return f"{name} [{PARAMETERS[name].unit}]"
+        from acmm.units import display_unit
+
+        return f"{name} [{display_unit(PARAMETERS[name].unit, units)}]"
     return f"{name} [deg] (true TEA − nominal TEA)"
