@@ -311,6 +311,15 @@ def load_design_table(path: Path) -> DesignTable:
                        d["attrs"].get("schedule_form", "polynomial"))
 
 
+def _unit_system(path: Path) -> str:
+    """``unit_system`` root attribute of a results file (files before issue 14: imperial)."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        v = f.attrs.get("unit_system", "imperial")
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
 def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple[DesignTable, str]:
     """The design of a config: reused from ``design.h5`` when its hash matches, else computed."""
     path = cfg.run_dir() / "design.h5"
@@ -318,7 +327,7 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple
     if path.exists():
         try:
             table = load_design_table(path)
-            if table.design_hash == want:
+            if table.design_hash == want and _unit_system(path) == cfg.output.units:   # one system per run folder
                 return table, f"reused {path}"
         except (OSError, KeyError, ValueError):
             pass
