@@ -284,7 +284,16 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
         plots.pole_map([p.lqr.poles for p in r.points], r.table.names, cfg.orbit_rate, d.sector.sigma,
                        d.sector.half_angle_deg, cfg.run_dir() / "design_poles.png")
         if r.fit is not None:
-            plots.gain_schedule_grid(r.table.tea[:, 1], r.table.gain, r.fit, STATE_NAMES,
+            fit, gains = r.fit, r.table.gain
+            if cfg.output.units != "imperial":     # K in the output system (the schedule is linear in K)
+                from dataclasses import replace as _replace
+
+                from acmm.units import state_space_in
+
+                conv = lambda K: state_space_in(cfg.output.units, d.drf_mode, K=K)["K"]  # noqa: E731
+                gains = conv(gains)
+                fit = _replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
+            plots.gain_schedule_grid(r.table.tea[:, 1], gains, fit, STATE_NAMES,
                                      cfg.run_dir() / "design_gains.png")
     return r, path
 
