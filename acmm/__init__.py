@@ -8,3 +8,17 @@ quadratic gain schedules (ch. 5.3) and the nonlinear stair-case simulation (ch. 
 __version__ = "0.1.0"
 
 from acmm.errors import AcmmError, ConfigError, ConvergenceError, NoEquilibriumError  # noqa: F401
+
+#: The Python API (acmm/api.py), imported on first use.  ``acmm.linearize`` and
+#: ``acmm.simulate`` are submodules, so the API's functions of those names are re-exported
+#: as ``acmm.linear_model`` and ``acmm.simulation``.
+_API = {"load_config": "load_config", "design": "design", "Design": "Design",
+        "linear_model": "linearize", "simulation": "simulate"}
+
+
+def __getattr__(name):
+    if name in _API:
+        from acmm import api
+
+        return getattr(api, _API[name])
+    raise AttributeError(f"module 'acmm' has no attribute {name!r}")

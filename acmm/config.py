@@ -52,6 +52,7 @@ Rate = Annotated[float, _q("rate")]
 Time = Annotated[float, _q("time")]
 TorqueVec = Annotated[list[float], _vec3("torque")]
 AngleVec = Annotated[list[float], _vec3("angle")]
+WeightTorque = Annotated[float, _q("weight_torque")]
 
 
 class _Model(BaseModel):
@@ -152,7 +153,7 @@ class Sector(_Model):
     """Closed-loop pole region of ch. 5.2: Re λ ≤ −sigma·n and |Im λ| ≤ tan(half_angle)·|Re λ|."""
 
     sigma: float = Field(0.5, gt=0, description="minimum decay rate in units of the orbital rate n")
-    half_angle_deg: float = Field(45.0, gt=0, lt=90, description="sector half-angle about the negative real axis, deg")
+    half_angle_deg: Angle = Field(45.0, gt=0, lt=90, description="sector half-angle about the negative real axis, deg")
 
 
 class Design(_Model):
@@ -163,7 +164,7 @@ class Design(_Model):
     drf_mode: Literal["attitude_hold", "momentum_hold"] = Field(
         "attitude_hold", description="DRF inputs: (h1, θ2, θ3) or (h1, h2, θ3), filters at n and 2n")
     sector: Sector = Sector()
-    R: float = Field(1e-4, gt=0, description="control weight R = r·I, 1/(ft·lbf)²")
+    R: WeightTorque = Field(1e-4, gt=0, description="control weight R = r·I, 1/(ft·lbf)²")
     Q0: float = Field(0.0, ge=0, description="state weight Q0 = q·I on the scaled states (dimensionless)")
     riccati_method: Literal["sign", "scipy", "slycot"] = Field("scipy", description="CARE solver")
     pole_method: Literal["shift", "uniform"] = Field(
@@ -182,8 +183,12 @@ class DesignPoint(_Model):
 class Schedule(_Model):
     """Design points of the gain schedule (ch. 5.3)."""
 
+    # a string is resolved to the mapping by Config's before-validator (resolve_references), so
+    # the validated type stays DesignPoint; a JSON schema should allow a string here too
     to: Optional[DesignPoint] = Field(
-        None, description="end configuration of the blend I(s) = (1−s)·I_start + s·I_to (bias blended alike)")
+        None, description="end configuration of the blend I(s) = (1−s)·I_start + s·I_to (bias blended alike): "
+                          "a mapping, or a config file (path relative to the referring file) or packaged name "
+                          "whose name, inertia and disturbance are used")
     n_points: int = Field(12, ge=3, le=200, description="number of blend points including both ends")
     spacing: Literal["tea", "blend"] = Field(
         "tea", description="blend points evenly spaced in pitch TEA (tea) or in the blend parameter s (blend)")
@@ -214,6 +219,10 @@ class Output(_Model):
 
     root: str = Field("runs", description="results root; files go to <root>/<name>/")
     figures: bool = Field(True, description="write matplotlib figures next to the HDF5 files")
+    units: Literal["imperial", "SI"] = Field(
+        "imperial", description="unit system of the HDF5 values and units attributes, prints, CSV and figures: "
+                                "imperial (the report's slug·ft², ft·lbf, ft·lbf·s) or SI (kg·m², N·m, N·m·s); "
+                                "angles are stored in rad in both")
 
 
 #: Largest number of output samples a simulation may ask for (memory guard).
@@ -234,6 +243,16 @@ class Config(_Model):
     schedule: Optional[Schedule] = None
     simulation: Simulation = Simulation()
     output: Output = Output()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _references(cls, data):
+        """``schedule.to`` naming a file (relative to the working directory here; to the
+        referring file through :func:`load_config`) or a packaged config."""
+        try:
+            return resolve_references(data, ".")
+        except ConfigError as exc:
+            raise ValueError(str(exc)) from None
 
     @field_validator("orbit_rate")
     @classmethod
@@ -384,5 +403,33 @@ def load_config(path: str | Path | None = None, overrides: list[str] | None = No
     from acmm.overrides import apply_overrides, remember_origin
 
     data, p = read_yaml(path)
-    cfg = parse_config(apply_overrides(data, overrides), source=str(p))
+    data = resolve_references(apply_overrides(data, overrides), p.parent, str(p))
+    cfg = parse_config(data, source=str(p))
     return remember_origin(cfg, str(p), overrides)
+
+
+def resolve_references(data: object, base_dir: str | Path = ".", source: str = "config",
+                       _depth: int = 0) -> object:
+    """Replace ``schedule.to: <file or packaged name>`` by that config's end point.
+
+    The string is a YAML path relative to ``base_dir`` (the referring file's folder), else
+    the name of a packaged config.  The referred config is validated in full; its ``name``,
+    ``inertia`` and ``disturbance`` become the mapping ``schedule.to`` of eq 5.3's blend (its
+    own ``schedule`` and other sections are not used).
+    """
+    if not isinstance(data, dict) or not isinstance(data.get("schedule"), dict):
+        return data
+    ref = data["schedule"].get("to")
+    if not isinstance(ref, (str, Path)):
+        return data
+    p = Path(base_dir) / ref
+    try:
+        sub, sub_path = read_yaml(p if p.is_file() else ref)
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: schedule.to: {exc}") from None
+    if _depth >= 8:
+        raise ConfigError(f"{source}: schedule.to: references nest deeper than 8 files (a cycle?)")
+    sub = resolve_references(sub, sub_path.parent, str(sub_path), _depth + 1)
+    other = parse_config(sub, source=str(sub_path))
+    end = {"name": other.name, "inertia": sub["inertia"], "disturbance": sub.get("disturbance", {})}
+    return {**data, "schedule": {**data["schedule"], "to": end}}

@@ -87,12 +87,18 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
     return _save(fig, path, vector)
 
 
-def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False):
-    """Angle error, rate, delivered torque and CMG momentum per axis vs orbit (Figs 6.2–6.13, 6.20–6.30)."""
+def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units="imperial"):
+    """Angle error, rate, delivered torque and CMG momentum per axis vs orbit (Figs 6.2–6.13, 6.20–6.30).
+
+    ``u`` (ft·lbf) and ``h`` (ft·lbf·s) are shown in the unit system ``units``."""
+    from acmm.units import pretty, shown
+
     plt = _plt()
     fig, axs = plt.subplots(4, 3, figsize=(13, 10), sharex=True)
+    u, uu = shown(np.asarray(u), "ft*lbf", units)
+    h, hu = shown(np.asarray(h), "ft*lbf*s", units)
     rows = [(err_deg, "attitude error θ−θ̂* (deg)"), (rate, "body rate rel. LVLH (deg/s)"),
-            (u, "control torque (ft·lbf)"), (h, "CMG momentum (ft·lbf·s)")]
+            (u, f"control torque ({pretty(uu)})"), (h, f"CMG momentum ({pretty(hu)})")]
     for r, (data, label) in enumerate(rows):
         for a in range(3):
             ax = axs[r, a]
@@ -108,15 +114,18 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False):
     return _save(fig, path, vector)
 
 
-def inertia_histories(orbits, inertia, path, vector=False):
-    """The six inertia elements vs orbit (Figs 6.14–6.19)."""
+def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
+    """The six inertia elements vs orbit (Figs 6.14–6.19), in the unit system ``units``."""
+    from acmm.units import pretty, shown
+
+    inertia, iu = shown(np.asarray(inertia), "slug*ft^2", units)
     plt = _plt()
     fig, axs = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
     idx = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
     for ax, (i, j) in zip(axs.flat, idx):
         ax.step(orbits, inertia[:, i, j] / 1e6, where="post")
         ax.set_title(f"I({i + 1},{j + 1})")
-        ax.set_ylabel("10⁶ slug·ft²")
+        ax.set_ylabel(f"10⁶ {pretty(iu)}")
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
     fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
@@ -124,8 +133,13 @@ def inertia_histories(orbits, inertia, path, vector=False):
     return _save(fig, path, vector)
 
 
-def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=False):
-    """One-page summary: errors, momentum, torque and per-level statistics."""
+def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=False, units="imperial"):
+    """One-page summary: errors, momentum, torque and per-level statistics (``units``: imperial | SI)."""
+    from acmm.units import pretty, shown
+
+    h, hu = shown(np.asarray(h), "ft*lbf*s", units)
+    u, uu = shown(np.asarray(u), "ft*lbf", units)
+    k_h = shown(1.0, "ft*lbf*s", units)[0]
     plt = _plt()
     fig = plt.figure(figsize=(11, 8.5))
     gs = fig.add_gridspec(3, 2)
@@ -135,7 +149,7 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     ax.set_ylabel("attitude error (deg)")
     ax.legend(fontsize=7)
     ax.set_title(f"{title} — verdict: {verdict}")
-    for col, (data, label) in enumerate(((h, "CMG momentum (ft·lbf·s)"), (u, "delivered torque (ft·lbf)"))):
+    for col, (data, label) in enumerate(((h, f"CMG momentum ({pretty(hu)})"), (u, f"delivered torque ({pretty(uu)})"))):
         ax = fig.add_subplot(gs[1, col])
         for a in range(3):
             ax.plot(orbits, data[:, a], lw=0.7, label=AXES[a])
@@ -145,9 +159,9 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     ax = fig.add_subplot(gs[2, :])
     ax.axis("off")
     if level_stats:
-        header = ["level", "start (orbit)", "θ2* est (deg)", "steady |err| max (deg) r/p/y", "peak |h| (ft·lbf·s)"]
+        header = ["level", "start (orbit)", "θ2* est (deg)", "steady |err| max (deg) r/p/y", f"peak |h| ({pretty(hu)})"]
         rows = [[str(s["level"]), f"{s['start_orbit']:.1f}", f"{s['theta2_deg']:.2f}",
-                 " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum']:.0f}"]
+                 " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum'] * k_h:.0f}"]
                 for s in level_stats]
         tab = ax.table(cellText=rows, colLabels=header, loc="center", cellLoc="center")
         tab.auto_set_font_size(False)

@@ -379,10 +379,12 @@ def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> di
     """
     import h5py
 
+    from acmm.results import _dimension_only
+
     out: dict[str, str] = {}
 
     def visit(name, obj):
-        if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in exclude:
+        if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in exclude and not _dimension_only(obj):
             arr = np.ascontiguousarray(obj[()])
             h = hashlib.sha256(f"{arr.dtype.str}|{arr.shape}|".encode())
             h.update(arr.tobytes() if arr.dtype.kind != "O" else repr(arr.tolist()).encode())
@@ -722,7 +724,7 @@ def fig_staircase(sim: dict, figdir: Path):
     f1 = save(fig1, figdir, "staircase_inertia")
     fig2, axs = plt.subplots(4, 3, figsize=(11, 10), sharex=True)
     rows = [(np.degrees(sim["attitude_error"]), "attitude error θ − θ̂* (deg)"),
-            (sim["rate_rel_lvlh"], "body rate rel. LVLH (deg/s)"),
+            (np.degrees(sim["rate_rel_lvlh"]), "body rate rel. LVLH (deg/s)"),   # stored in rad/s
             (sim["u"], "control torque (ft·lbf)"), (sim["h"], "CMG momentum (ft·lbf·s)")]
     for r, (data, label) in enumerate(rows):
         for a in range(3):
@@ -743,7 +745,7 @@ def fig_staircase(sim: dict, figdir: Path):
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
     th = np.degrees(sim["levels"]["tea_estimate"][:, 1])[: len(sim["levels"]["steady_error"])]
     for a in range(3):
-        axs[0].plot(th, sim["levels"]["steady_error"][:, a], "o-", color=COLORS[a], label=AXES[a])
+        axs[0].plot(th, np.degrees(sim["levels"]["steady_error"][:, a]), "o-", color=COLORS[a], label=AXES[a])
     axs[0].set_xlabel("pitch TEA of the level θ2* (deg)")
     axs[0].set_ylabel("steady |θ − θ̂*| (deg)")
     axs[0].set_title("Steady attitude error per level (second half of each dwell)")
@@ -797,7 +799,7 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
     plt = pyplot()
     with h5py.File(sim_path, "r") as f:
         scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
-        data = {k: {d: f[k][d][()] for d in ("t", "y", "y_o", "r", "u")} for k in scen}
+        data = {k: {d: f[k][d][()].T for d in ("t", "y", "y_o", "r", "u")} for k in scen}   # stored (t, channel)
     p = next(iter(data.values()))["y"].shape[0]
     fig, axs = plt.subplots(2, len(scen), figsize=(3.8 * len(scen) + 1, 6.5), squeeze=False)
     for c, k in enumerate(scen):
@@ -1043,7 +1045,7 @@ class _Report:
             rows.append([str(k), f"{lv['start'][k] / orbit:.1f}", f"{np.degrees(lv['tea_estimate'][k, 1]):+.2f}",
                          f"{lv['inertia'][k, 0, 0] / 1e6:.2f} / {lv['inertia'][k, 1, 1] / 1e6:.2f} / "
                          f"{lv['inertia'][k, 2, 2] / 1e6:.2f}",
-                         " / ".join(f"{v:.3f}" for v in lv["steady_error"][k]),
+                         " / ".join(f"{v:.3f}" for v in np.degrees(lv["steady_error"][k])),
                          f"{lv['peak_momentum'][k]:.0f}"])
         self.doc.table(["level", "start (orbit)", "θ2* (deg)", "I11 / I22 / I33 (10⁶ slug·ft²)",
                         "steady |θ − θ̂*| roll / pitch / yaw (deg)", "peak |h| (ft·lbf·s)"], rows,
@@ -1084,7 +1086,7 @@ class _Report:
         names = [x.decode() if isinstance(x, bytes) else str(x) for x in np.atleast_1d(d["base_names"])]
         verdict = np.array([x.decode() if isinstance(x, bytes) else str(x) for x in np.atleast_1d(d["verdict"])])
         base = np.atleast_1d(d["base"])
-        peak = np.atleast_2d(d["peak_attitude_error"])
+        peak = np.degrees(np.atleast_2d(d["peak_attitude_error"]))   # stored in rad
         params = d["parameters"]
         if r["fast"]:
             self.doc.p(f"FAST MODE: reduced sweep, {r['n_runs']} Monte Carlo runs per base of {r['orbits']:g} orbits, "

@@ -30,6 +30,9 @@ class Dataset:
     description: str = ""
     names: list[str] | None = None
     attrs: dict[str, Any] = field(default_factory=dict)
+    #: netCDF dimension name of each axis (time first); inferred when None, see
+    #: :mod:`acmm.netcdf_layout`.
+    dims: tuple[str, ...] | None = None
 
 
 def git_commit() -> str:
@@ -76,7 +79,12 @@ def _write_group(group, items: Mapping[str, Any]) -> None:
             ds = group.create_dataset(key, data=data)
         else:
             arr = np.asarray(data)
-            ds = group.create_dataset(key, data=arr)
+            if arr.dtype.kind in "OU":   # text arrays: variable-length UTF-8 strings
+                import h5py
+
+                ds = group.create_dataset(key, data=arr.astype(object), dtype=h5py.string_dtype())
+            else:
+                ds = group.create_dataset(key, data=arr)
         ds.attrs["units"] = value.units
         if value.description:
             ds.attrs["description"] = value.description
@@ -125,7 +133,7 @@ def write_text(path: str | Path, text: str) -> Path:
 
 
 def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
-             attrs: Mapping[str, Any] | None = None) -> Path:
+             attrs: Mapping[str, Any] | None = None, units: str | None = None) -> Path:
     """Write ``items`` (name → :class:`Dataset` or nested mapping) to ``path`` atomically.
 
     Parameters
@@ -138,7 +146,12 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         The resolved config as YAML; embedded as the root attribute ``config``.
     attrs : mapping, optional
         Extra root attributes (e.g. a verdict).
+    units : {"imperial", "SI"}, optional
+        Output unit system (``output.units``; default: read from ``config_text``, else
+        imperial).  Items are given in the report's units and converted on writing; angles
+        are stored in rad in both systems (:func:`acmm.units.output_unit`).
     """
+    from acmm.netcdf_layout import annotate, convert_items, unit_system_of
     import h5py
 
     path = Path(path)
@@ -149,8 +162,19 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
                 f.attrs[k] = v
             for k, v in (attrs or {}).items():
                 f.attrs[k] = v
+            system = units or unit_system_of(config_text)
+            items = convert_items(items, system)
+            f.attrs["unit_system"] = system
             _write_group(f, items)
+            annotate(f, items)
     return path
+
+
+def _dimension_only(ds) -> bool:
+    """A netCDF dimension scale that is not a variable (holds no data)."""
+    name = ds.attrs.get("NAME", b"")
+    name = name.decode() if isinstance(name, bytes) else str(name)
+    return name.startswith("This is a netCDF dimension but not a netCDF variable.")
 
 
 def read_h5(path: str | Path) -> dict[str, Any]:
@@ -162,6 +186,8 @@ def read_h5(path: str | Path) -> dict[str, Any]:
         for k, v in group.items():
             if isinstance(v, h5py.Group):
                 out[k] = _read(v)
+            elif _dimension_only(v):
+                continue
             else:
                 val = v[()]
                 out[k] = val.decode() if isinstance(val, bytes) else val

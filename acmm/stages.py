@@ -16,6 +16,35 @@ from acmm.results import Dataset, write_h5
 AXES = ["roll", "pitch", "yaw"]
 
 
+def _in_system(items: dict, cfg: Config, roles: dict) -> dict:
+    """Per-state arrays of ``items`` (path → role of :func:`acmm.units.state_space_in`) in the
+    config's ``output.units``; their unit strings and ``state_units`` follow.  Other datasets
+    are converted by unit string in :func:`acmm.results.write_h5`."""
+    from dataclasses import replace
+
+    from acmm.units import state_factors, state_space_in
+
+    system = cfg.output.units
+    if system == "imperial":
+        return items
+    _, su = state_factors(cfg.design.drf_mode, system)
+    for path, role in roles.items():
+        *groups, key = path.split("/")
+        g = items
+        for name in groups:
+            g = g[name]
+        ds = g[key]
+        new = state_space_in(system, cfg.design.drf_mode, **{role: ds.data})[role]
+        attrs = dict(ds.attrs)
+        if "state_units" in attrs:
+            attrs["state_units"] = np.array(su, dtype="S")
+        g[key] = replace(ds, data=new, units=ds.units.replace("ft*lbf", "N*m"), attrs=attrs)
+    if "state_units" in items:
+        items["state_units"] = replace(items["state_units"], data=np.array(su, dtype="S"))
+    return items
+
+
+
 @dataclass
 class TeaResult:
     config: Config
@@ -46,7 +75,6 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
                          if np.max(np.abs(r.theta - t.theta)) > 1e-6]
     items = {
         "theta": Dataset(t.theta, "rad", "torque-equilibrium attitude θ* (eq 4.1)", AXES),
-        "theta_deg": Dataset(t.theta_deg, "deg", "θ* in degrees", AXES),
         "omega": Dataset(t.omega, "rad/s", "ω* at θ* (eq 4.3)", AXES),
         "bias": Dataset(t.bias, "ft*lbf", "bias torque balanced at θ* (eq 4.1)", AXES),
         "inertia": Dataset(inertia, "slug*ft^2", "inertia matrix (eq 3.2)", AXES),
@@ -55,7 +83,8 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
     }
     if result.others:
         items["other_roots"] = Dataset(np.array([o.theta for o in result.others]), "rad",
-                                       "other equilibria found by multi-start Newton", AXES)
+                                       "other equilibria found by multi-start Newton", AXES,
+                                       dims=("root", "axis"))
     path = write_h5(cfg.run_dir() / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"})
     return result, path
 
@@ -83,23 +112,24 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
     eig = np.linalg.eigvals(model.A)
     items = {
         "A": Dataset(model.A, "per-state (see state_units)", "state matrix of eq 4.46 (x' = A x + B u + G w)",
-                     names, {"state_units": np.array(model.state_units, dtype="S")}),
+                     names, {"state_units": np.array(model.state_units, dtype="S")}, dims=("state", "state_col")),
         "B": Dataset(model.B, "state unit per ft*lbf", "control input matrix (u enters ω' as −u, h' as +u)",
-                     names),
-        "G": Dataset(model.G, "state unit per ft*lbf", "disturbance input matrix", names),
-        "state_names": Dataset(np.array(names, dtype="S"), "1", "state order of eq 4.47"),
-        "state_units": Dataset(np.array(model.state_units, dtype="S"), "1", "unit of each state"),
+                     names, dims=("state", "axis")),
+        "G": Dataset(model.G, "state unit per ft*lbf", "disturbance input matrix", names, dims=("state", "axis")),
+        "state_names": Dataset(np.array(names, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
+        "state_units": Dataset(np.array(model.state_units, dtype="S"), "1", "unit of each state", dims=("state",)),
         "scales": Dataset(model.scales, "per-state (see state_units)", "nominal state magnitudes", names),
         "theta_star": Dataset(model.theta_star, "rad", "linearization attitude", AXES),
         "omega_star": Dataset(model.omega_star, "rad/s", "ω* at the linearization attitude (eq 4.3)", AXES),
         "tea": Dataset(tr.tea.theta, "rad", "TEA of the full inertia", AXES),
         "inertia_design": Dataset(model.inertia, "slug*ft^2", "inertia of the design model", AXES),
         "inertia": Dataset(cfg.inertia.matrix(), "slug*ft^2", "full inertia", AXES),
-        "eigenvalues": Dataset(eig, "rad/s", "open-loop eigenvalues of A"),
+        "eigenvalues": Dataset(eig, "rad/s", "open-loop eigenvalues of A", dims=("eigenvalue",)),
         "controllability_min_ratio": Dataset(ctrb.min_ratio, "1",
                                              "min σmin([A−sI, B])/σmax over eigenvalues and s=0, scaled"),
         "controllability_rank": Dataset(ctrb.rank, "1", f"PBH rank with tolerance {ctrb.tol:g}"),
     }
+    items = _in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
     path = write_h5(cfg.run_dir() / "linearize.h5", items, cfg.to_yaml(),
                     {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
     return result, path
@@ -199,14 +229,16 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
             "inertia": Dataset(p.spec.inertia, "slug*ft^2", "inertia of the design point", AXES),
             "bias": Dataset(p.spec.bias, "ft*lbf", "bias torque", AXES),
             "tea": Dataset(p.tea.theta, "rad", "torque-equilibrium attitude", AXES),
-            "A": Dataset(p.model.A, "per-state", "design model state matrix (eq 4.46)", STATE_NAMES),
-            "B": Dataset(p.model.B, "per-state per ft*lbf", "input matrix", STATE_NAMES),
-            "G": Dataset(p.model.G, "per-state per ft*lbf", "disturbance matrix", STATE_NAMES),
-            "Q": Dataset(res.Q, "per-state^-2 (shifted problem)", "state weight for which K is the exact LQR gain"),
-            "R": Dataset(res.R, "1/(ft*lbf)^2", "control weight"),
-            "P": Dataset(res.P, "per-state", "Riccati solution (physical units)"),
-            "K": Dataset(res.K, "ft*lbf per state unit", "LQR gain, u = -K x", STATE_NAMES),
-            "poles": Dataset(res.poles, "rad/s", "closed-loop poles of A - B K"),
+            "A": Dataset(p.model.A, "per-state", "design model state matrix (eq 4.46)", STATE_NAMES,
+                         dims=("state", "state_col")),
+            "B": Dataset(p.model.B, "per-state per ft*lbf", "input matrix", STATE_NAMES, dims=("state", "axis")),
+            "G": Dataset(p.model.G, "per-state per ft*lbf", "disturbance matrix", STATE_NAMES, dims=("state", "axis")),
+            "Q": Dataset(res.Q, "per-state^-2 (shifted problem)", "state weight for which K is the exact LQR gain",
+                         dims=("state", "state_col")),
+            "R": Dataset(res.R, "1/(ft*lbf)^2", "control weight", dims=("axis", "axis_col")),
+            "P": Dataset(res.P, "per-state", "Riccati solution (physical units)", dims=("state", "state_col")),
+            "K": Dataset(res.K, "ft*lbf per state unit", "LQR gain, u = -K x", STATE_NAMES, dims=("axis", "state")),
+            "poles": Dataset(res.poles, "rad/s", "closed-loop poles of A - B K", dims=("pole",)),
             "sector_margin": Dataset(res.margin, "n", "worst pole distance into the sector (>0 inside)"),
             "riccati_residual": Dataset(res.residual, "1", "relative CARE residual, scaled coordinates"),
             "scales": Dataset(p.model.scales, "per-state", "state scaling used for the Riccati solve",
@@ -214,25 +246,38 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
         }
     items = {
         "points": pts,
-        "names": Dataset(np.array(r.table.names, dtype="S"), "1", "design point names in order"),
-        "inertia": Dataset(r.table.inertia, "slug*ft^2", "inertia per point"),
-        "bias": Dataset(r.table.bias, "ft*lbf", "bias per point", AXES),
-        "tea": Dataset(r.table.tea, "rad", "TEA per point", AXES),
-        "K": Dataset(r.table.gain, "ft*lbf per state unit", "LQR gain per point (u = -K x)"),
-        "state_names": Dataset(np.array(STATE_NAMES, dtype="S"), "1", "state order of eq 4.47"),
+        "names": Dataset(np.array(r.table.names, dtype="S"), "1", "design point names in order", dims=("point",)),
+        "point": Dataset(np.array(r.table.names, dtype=object), "1", "design point name", dims=("point",)),
+        "inertia": Dataset(r.table.inertia, "slug*ft^2", "inertia per point", dims=("point", "axis", "axis_col")),
+        "bias": Dataset(r.table.bias, "ft*lbf", "bias per point", AXES, dims=("point", "axis")),
+        "tea": Dataset(r.table.tea, "rad", "TEA per point", AXES, dims=("point", "axis")),
+        "K": Dataset(r.table.gain, "ft*lbf per state unit", "LQR gain per point (u = -K x)",
+                     dims=("point", "axis", "state")),
+        "state_names": Dataset(np.array(STATE_NAMES, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
         "wall_time": Dataset(r.wall_time, "s", "design wall time"),
     }
     if r.fit is not None:
         items["schedule"] = {
-            "coef": Dataset(r.fit.coef, "K units per rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k"),
-            "variable": Dataset(r.fit.variable, "rad", "scheduling variable: pitch TEA θ2* per point"),
-            "rms_residual": Dataset(r.fit.rms_residual, "K units", "RMS fit residual per element"),
-            "rel_residual": Dataset(r.fit.rel_residual, "1", "RMS residual / max |K_ij|"),
-            "check_names": Dataset(np.array(r.check.names, dtype="S"), "1", "where the scheduled gain was checked"),
-            "check_theta2": Dataset(r.check.theta2, "rad", "pitch TEA of each check"),
-            "check_margin": Dataset(r.check.margin, "n", "sector margin of the scheduled gain (>0 inside)"),
-            "check_max_real": Dataset(r.check.max_real, "n", "largest closed-loop Re λ with the scheduled gain"),
+            "coef": Dataset(r.fit.coef, "K units per rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k",
+                            dims=("power", "axis", "state")),
+            "variable": Dataset(r.fit.variable, "rad", "scheduling variable: pitch TEA θ2* per point", dims=("point",)),
+            "rms_residual": Dataset(r.fit.rms_residual, "K units", "RMS fit residual per element", dims=("axis", "state")),
+            "rel_residual": Dataset(r.fit.rel_residual, "1", "RMS residual / max |K_ij|", dims=("axis", "state")),
+            "check_names": Dataset(np.array(r.check.names, dtype="S"), "1", "where the scheduled gain was checked",
+                                   dims=("check",)),
+            "check_theta2": Dataset(r.check.theta2, "rad", "pitch TEA of each check", dims=("check",)),
+            "check_margin": Dataset(r.check.margin, "n", "sector margin of the scheduled gain (>0 inside)",
+                                    dims=("check",)),
+            "check_max_real": Dataset(r.check.max_real, "n", "largest closed-loop Re λ with the scheduled gain",
+                                      dims=("check",)),
         }
+    roles = {"K": "K"}
+    for key in pts:
+        roles.update({f"points/{key}/{m}": m for m in ("A", "B", "G", "Q", "P", "K")})
+        roles[f"points/{key}/scales"] = "scales"
+    if r.fit is not None:
+        roles.update({"schedule/coef": "K", "schedule/rms_residual": "K"})
+    items = _in_system(items, cfg, roles)
     path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
                     {"stage": "design", "design_hash": r.table.design_hash, "n_points": P,
                      "schedule_form": r.table.form})
@@ -243,7 +288,16 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
         plots.pole_map([p.lqr.poles for p in r.points], r.table.names, cfg.orbit_rate, d.sector.sigma,
                        d.sector.half_angle_deg, cfg.run_dir() / "design_poles.png")
         if r.fit is not None:
-            plots.gain_schedule_grid(r.table.tea[:, 1], r.table.gain, r.fit, STATE_NAMES,
+            fit, gains = r.fit, r.table.gain
+            if cfg.output.units != "imperial":     # K in the output system (the schedule is linear in K)
+                from dataclasses import replace as _replace
+
+                from acmm.units import state_space_in
+
+                conv = lambda K: state_space_in(cfg.output.units, d.drf_mode, K=K)["K"]  # noqa: E731
+                gains = conv(gains)
+                fit = _replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
+            plots.gain_schedule_grid(r.table.tea[:, 1], gains, fit, STATE_NAMES,
                                      cfg.run_dir() / "design_gains.png")
     return r, path
 
@@ -255,8 +309,28 @@ def load_design_table(path: Path) -> DesignTable:
     d = read_h5(path)
     coef = d["schedule"]["coef"] if "schedule" in d else None
     names = [x.decode() if isinstance(x, bytes) else str(x) for x in d["names"]]
-    return DesignTable(names, d["inertia"], d["bias"], d["tea"], d["K"], coef, d["attrs"]["design_hash"],
+    inertia, bias, K = d["inertia"], d["bias"], d["K"]
+    if d["attrs"].get("unit_system", "imperial") == "SI":      # back to the report's units
+        import yaml
+
+        from acmm.units import FT_LBF_IN_NM, state_factors
+
+        drf_mode = (yaml.safe_load(d["attrs"]["config"]).get("design") or {}).get("drf_mode", "attitude_hold")
+        f, _ = state_factors(drf_mode, "SI")
+        inertia, bias = inertia / FT_LBF_IN_NM, bias / FT_LBF_IN_NM
+        K = K * f / FT_LBF_IN_NM
+        coef = None if coef is None else coef * f / FT_LBF_IN_NM
+    return DesignTable(names, inertia, bias, d["tea"], K, coef, d["attrs"]["design_hash"],
                        d["attrs"].get("schedule_form", "polynomial"))
+
+
+def _unit_system(path: Path) -> str:
+    """``unit_system`` root attribute of a results file (files before issue 14: imperial)."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        v = f.attrs.get("unit_system", "imperial")
+    return v.decode() if isinstance(v, bytes) else str(v)
 
 
 def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple[DesignTable, str]:
@@ -266,7 +340,7 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple
     if path.exists():
         try:
             table = load_design_table(path)
-            if table.design_hash == want:
+            if table.design_hash == want and _unit_system(path) == cfg.output.units:   # one system per run folder
                 return table, f"reused {path}"
         except (OSError, KeyError, ValueError):
             pass
@@ -307,46 +381,56 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
     err = sim_mod.attitude_error(sc, r)
     rel_rate = np.degrees(r.state[:, 0:3] - dyn.lvlh_rate_in_body(r.state[:, 3:6], n))
     items = {
-        "t": Dataset(r.t, "s", "time"),
-        "orbits": Dataset(orbits, "orbit", "time in orbits (2π/n)"),
-        "theta": Dataset(r.state[:, 3:6], "rad", "attitude (roll, pitch, yaw), 2-3-1 from LVLH", AXES),
-        "attitude_error": Dataset(err, "rad", "θ − θ̂* of the level in force", AXES),
-        "omega": Dataset(r.state[:, 0:3], "rad/s", "absolute body rate", AXES),
-        "rate_rel_lvlh": Dataset(rel_rate, "deg/s", "body rate relative to LVLH", AXES),
-        "h": Dataset(r.state[:, 6:9], "ft*lbf*s", "CMG momentum", AXES),
-        "int_h": Dataset(r.state[:, 9:12], "ft*lbf*s^2", "momentum integral (controller state)", AXES),
-        "drf": Dataset(r.state[:, 12:24], "per-state", "DRF states", sim_mod.PLAIN_STATE_NAMES[12:]),
-        "u_cmd": Dataset(r.u_cmd, "ft*lbf", "commanded torque −K x (before saturation)", AXES),
-        "u": Dataset(r.u, "ft*lbf", "delivered torque (after torque and momentum saturation)", AXES),
-        "w": Dataset(r.w, "ft*lbf", "disturbance torque (eq 3.9)", AXES),
-        "level": Dataset(r.level, "1", "index of the inertia level in force"),
-        "torque_saturated": Dataset(r.torque_saturated, "1", "torque clipped per axis", AXES),
-        "momentum_saturated": Dataset(r.momentum_saturated, "1", "CMG axis at its momentum limit", AXES),
+        "t": Dataset(r.t, "s", "time", dims=("t",)),
+        "orbits": Dataset(orbits, "orbit", "time in orbits (2π/n)", dims=("t",)),
+        "theta": Dataset(r.state[:, 3:6], "rad", "attitude (roll, pitch, yaw), 2-3-1 from LVLH", AXES,
+                         dims=("t", "axis")),
+        "attitude_error": Dataset(err, "rad", "θ − θ̂* of the level in force", AXES, dims=("t", "axis")),
+        "omega": Dataset(r.state[:, 0:3], "rad/s", "absolute body rate", AXES, dims=("t", "axis")),
+        "rate_rel_lvlh": Dataset(rel_rate, "deg/s", "body rate relative to LVLH", AXES, dims=("t", "axis")),
+        "h": Dataset(r.state[:, 6:9], "ft*lbf*s", "CMG momentum", AXES, dims=("t", "axis")),
+        "int_h": Dataset(r.state[:, 9:12], "ft*lbf*s^2", "momentum integral (controller state)", AXES, dims=("t", "axis")),
+        "drf": Dataset(r.state[:, 12:24], "per-state", "DRF states", sim_mod.PLAIN_STATE_NAMES[12:],
+                       dims=("t", "drf_state")),
+        "u_cmd": Dataset(r.u_cmd, "ft*lbf", "commanded torque −K x (before saturation)", AXES, dims=("t", "axis")),
+        "u": Dataset(r.u, "ft*lbf", "delivered torque (after torque and momentum saturation)", AXES, dims=("t", "axis")),
+        "w": Dataset(r.w, "ft*lbf", "disturbance torque (eq 3.9)", AXES, dims=("t", "axis")),
+        "level": Dataset(r.level, "1", "index of the inertia level in force", dims=("t",)),
+        "torque_saturated": Dataset(r.torque_saturated, "1", "torque clipped per axis", AXES, dims=("t", "axis")),
+        "momentum_saturated": Dataset(r.momentum_saturated, "1", "CMG axis at its momentum limit", AXES, dims=("t", "axis")),
         "levels": {
-            "start": Dataset(sc.level_start, "s", "start time of each level"),
-            "inertia": Dataset(sc.inertia, "slug*ft^2", "plant inertia per level"),
-            "bias": Dataset(sc.bias, "ft*lbf", "bias per level", AXES),
-            "tea_estimate": Dataset(sc.theta_est, "rad", "TEA estimate used by the controller", AXES),
-            "gain": Dataset(sc.gain, "ft*lbf per state unit", "gain in use per level (u = −K x)"),
+            "start": Dataset(sc.level_start, "s", "start time of each level", dims=("level",)),
+            "inertia": Dataset(sc.inertia, "slug*ft^2", "plant inertia per level", dims=("level", "axis", "axis_col")),
+            "bias": Dataset(sc.bias, "ft*lbf", "bias per level", AXES, dims=("level", "axis")),
+            "tea_estimate": Dataset(sc.theta_est, "rad", "TEA estimate used by the controller", AXES,
+                                    dims=("level", "axis")),
+            "gain": Dataset(sc.gain, "ft*lbf per state unit", "gain in use per level (u = −K x)",
+                            dims=("level", "axis", "state")),
             "steady_error": Dataset(np.array([s["steady_error_deg"] for s in stats]).reshape(-1, 3), "deg",
-                                    "max |θ − θ̂*| over the second half of each level", AXES),
+                                    "max |θ − θ̂*| over the second half of each level", AXES, dims=("level", "axis")),
             "peak_momentum": Dataset(np.array([s["peak_momentum"] for s in stats]), "ft*lbf*s",
-                                     "peak |h_i| over each level"),
+                                     "peak |h_i| over each level",
+                                     dims=("level",) if np.ndim([s["peak_momentum"] for s in stats]) == 1
+                                     else ("level", "axis")),
         },
         "wall_time": Dataset(wall, "s", "integration wall time"),
     }
     attrs = {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
              "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
              "design_hash": table.design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
+    items = _in_system(items, cfg, {"levels/gain": "K", "drf": "drf"})
     path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
     if cfg.output.figures if figures is None else figures:
         from acmm import plots
 
         d = cfg.run_dir()
         title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
-        plots.axis_histories(orbits, np.degrees(err), rel_rate, r.u, r.state[:, 6:9], title, d / "sim_axes.png")
+        units = cfg.output.units
+        plots.axis_histories(orbits, np.degrees(err), rel_rate, r.u, r.state[:, 6:9], title, d / "sim_axes.png",
+                             units=units)
         if len(sc.level_start) > 1:
             inertia_t = sc.inertia[r.level]
-            plots.inertia_histories(orbits, inertia_t, d / "sim_inertia.png")
-        plots.summary(orbits, np.degrees(err), r.state[:, 6:9], r.u, stats, r.verdict, cfg.name, d / "sim_summary.png")
+            plots.inertia_histories(orbits, inertia_t, d / "sim_inertia.png", units=units)
+        plots.summary(orbits, np.degrees(err), r.state[:, 6:9], r.u, stats, r.verdict, cfg.name, d / "sim_summary.png",
+                      units=units)
     return result, path

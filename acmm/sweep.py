@@ -692,7 +692,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     items = {
         "case": Dataset(a["case"], "1", "global case index = base_index·n_cases + index"),
         "base": Dataset(a["base"], "1", "index into base_names"),
-        "base_names": Dataset(S(labels), "1", "base config names"),
+        "base_names": Dataset(S(labels), "1", "base config names", dims=("base_name",)),
         "index": Dataset(a["index"], "1", "case index within its base (seeds SeedSequence([seed, index]))"),
         "parameters": {k: Dataset(v, PARAMETERS[k].unit, PARAMETERS[k].description)
                        for k, v in a["parameters"].items()},
@@ -724,8 +724,9 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
                 "limit": Dataset(m["limit"], "1", "tolerated uniform inertia scaling (bounded up to here)"),
                 "first_failure": Dataset(m["first_failure"], "1", "first failing scaling (NaN: none up to search_end)"),
                 "search_end": Dataset(m["search_end"], "1", "end of the searched range"),
-                "evaluated_s": Dataset(np.array(m["evaluated_s"]), "1", "scalings evaluated, in order"),
-                "evaluated_verdict": Dataset(S(m["evaluated_verdict"]), "1", "verdict at each"),
+                "evaluated_s": Dataset(np.array(m["evaluated_s"]), "1", "scalings evaluated, in order",
+                                       dims=("evaluation",)),
+                "evaluated_verdict": Dataset(S(m["evaluated_verdict"]), "1", "verdict at each", dims=("evaluation",)),
                 "failure_reason": Dataset(m["failure_reason"] or "-", "1", "why the first failure failed"),
             } for m in margins}
     summary = {}
@@ -741,20 +742,28 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     if wall_time is not None:
         attrs["wall_time_s"] = float(wall_time)
     run_dir = sweep.run_dir()
-    path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs)
-    _write_csv(run_dir / "sweep.csv", labels, a)
+    from acmm.netcdf_layout import with_leading_dim
+
+    items = with_leading_dim(items, "case", len(a["case"]))   # one row per case (netCDF dimension)
+    path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units)
+    _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
     if figures and rows:
         figs = plot_sweep(sweep, a, run_dir)
     return path, figs
 
 
-def _write_csv(path: Path, labels, a) -> None:
-    cols = ["case", "base", "index"] + [f"{k}[{PARAMETERS[k].unit}]" for k in a["parameters"]] + [
+def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
+    from acmm.units import display_unit, shown
+
+    cols = ["case", "base", "index"] + [f"{k}[{display_unit(PARAMETERS[k].unit, units)}]" for k in a["parameters"]] + [
         "verdict", "time_to_divergence[orbit]"]
     for what, unit in (("peak_attitude_error", "deg"), ("steady_attitude_error", "deg"),
-                       ("peak_momentum", "ft*lbf*s"), ("tea_true", "deg")):
+                       ("peak_momentum", display_unit("ft*lbf*s", units)), ("tea_true", "deg")):
         cols += [f"{what}_{ax}[{unit}]" for ax in AXES]
+    a = dict(a)
+    a["parameters"] = {k: shown(np.asarray(v, float), PARAMETERS[k].unit, units)[0] for k, v in a["parameters"].items()}
+    a["peak_momentum"] = shown(np.asarray(a["peak_momentum"], float), "ft*lbf*s", units)[0]
     cols += ["torque_saturation_time[orbit]", "momentum_saturation_time[orbit]", "n_draws", "reason"]
     lines = [",".join(cols)]
     for i in range(len(a["case"])):
@@ -779,9 +788,13 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
     axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
     nominal = _nominal_tea_deg(sweep)
 
+    from acmm.units import shown
+
+    system = sweep.file.output.units
+
     def values(name, sel, lab):
         if name in a["parameters"]:
-            return a["parameters"][name][sel]
+            return shown(np.asarray(a["parameters"][name][sel], float), PARAMETERS[name].unit, system)[0]
         ax = MAP_EXTRAS.index(name)
         return a["tea_true"][sel, ax] - nominal[lab][ax]
 
@@ -802,8 +815,8 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
             m = verdicts == v
             if m.any():
                 ax.scatter(x[m], y[m], s=14, c=colors[v], label=f"{v} ({int(m.sum())})", alpha=0.8)
-        ax.set_xlabel(_label(axes_names[0]))
-        ax.set_ylabel(_label(axes_names[1]) if len(axes_names) > 1 else "peak attitude error, deg")
+        ax.set_xlabel(_label(axes_names[0], system))
+        ax.set_ylabel(_label(axes_names[1], system) if len(axes_names) > 1 else "peak attitude error, deg")
         ax.set_title(f"{lab}: {int(np.sum(verdicts == 'bounded'))}/{int(sel.sum())} bounded")
         ax.legend(fontsize=7)
     fig.suptitle(f"{sweep.name}: stability map ({sweep.spec.design} design)")
@@ -827,7 +840,9 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
     return out
 
 
-def _label(name: str) -> str:
+def _label(name: str, units: str = "imperial") -> str:
     if name in PARAMETERS:
-        return f"{name} [{PARAMETERS[name].unit}]"
+        from acmm.units import display_unit
+
+        return f"{name} [{display_unit(PARAMETERS[name].unit, units)}]"
     return f"{name} [deg] (true TEA − nominal TEA)"

@@ -121,6 +121,24 @@ class Margin(_Model):
     rel_tol: float = Field(0.01, gt=0, lt=0.5, description="relative width of the final bracket")
 
 
+def _param_unit_value(v, unit: str, where: str):
+    from acmm.units import to_canonical, DIMENSIONS
+
+    if not isinstance(v, str):
+        return v
+    kind = next((k for k, u in DIMENSIONS.items() if u == unit), None)
+    try:
+        return to_canonical(v, kind) if kind else to_canonical(v, "dimensionless")
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+def _param_value(name: str, v, where: str):
+    """A grid or distribution value of parameter ``name``, converted to its unit."""
+    p = PARAMETERS.get(name)
+    return v if p is None else _param_unit_value(v, p.unit, where)
+
+
 class SweepSpec(_Model):
     """The ``sweep`` section."""
 
@@ -149,6 +167,31 @@ class SweepSpec(_Model):
     margin: Optional[Margin] = Field(None, description="uniform-inertia-scaling margin search per base")
     map: Optional[list[str]] = Field(None, min_length=2, max_length=2,
                                      description="two parameters (or tea_shift_*) for the stability-map axes")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _units(cls, data):
+        """Grid values and distribution parameters may carry units (``"2 N*m"``, ``"5 deg"``):
+        converted (pint) to the parameter's unit, a wrong dimension is an error."""
+        if not isinstance(data, dict):
+            return data
+        data = dict(data)
+        if isinstance(data.get("grid"), dict):
+            data["grid"] = {k: [_param_value(k, x, f"grid.{k}") for x in v] if isinstance(v, list) else v
+                            for k, v in data["grid"].items()}
+        if isinstance(data.get("monte_carlo"), dict):
+            mc = {}
+            for k, dist in data["monte_carlo"].items():
+                if isinstance(dist, dict):
+                    dist = dict(dist)
+                    for kind in ("uniform", "normal"):
+                        if isinstance(dist.get(kind), (list, tuple)):
+                            dist[kind] = [_param_value(k, x, f"monte_carlo.{k}.{kind}") for x in dist[kind]]
+                mc[k] = dist
+            data["monte_carlo"] = mc
+        if "settle_deg" in data:
+            data["settle_deg"] = _param_unit_value(data["settle_deg"], "deg", "settle_deg")
+        return data
 
     @model_validator(mode="after")
     def _consistent(self):

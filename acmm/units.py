@@ -1,58 +1,122 @@
-"""Physical units accepted in configs, and their conversion to the report's units.
+"""Physical units: config values with units, and the unit system of the outputs (pint).
 
 The report works in slug·ft², ft·lbf, ft·lbf·s, rad and s.  A config value may be a bare
-number (taken in the field's documented unit) or a string ``"<number> <unit>"``; a unit of
-the wrong dimension is rejected with a message naming the accepted units.
+number (taken in the field's documented unit) or a string ``"<number> <unit>"`` in any unit
+pint understands (``"31.5e6 kg*m^2"``, ``"2 N*m"``, ``"1e-4 1/(N*m)^2"``, ``"0.063 deg/s"``);
+it is converted to the field's unit, and a unit of the wrong dimension is an error naming the
+expected unit.  One :class:`pint.UnitRegistry` (:data:`ureg`) serves the whole package.
+
+Outputs are written in the system chosen by ``output.units`` (:data:`SYSTEMS`): ``imperial``
+(the report's units) or ``SI``.  Angles are stored in rad in every HDF5 file of both systems
+(a degree value is converted on writing); prints, CSV files and figures show degrees.
 """
 from __future__ import annotations
 
 import math
 import re
+from functools import lru_cache
+
+
+@lru_cache(maxsize=1)
+def registry():
+    """The package's single :class:`pint.UnitRegistry` (built on first use: ~0.5 s, so runs whose
+    configs hold bare numbers never pay for it).  Also available as ``acmm.units.ureg``."""
+    import pint
+
+    return pint.UnitRegistry()
+
+
+def __getattr__(name):
+    if name == "ureg":
+        return registry()
+    raise AttributeError(f"module 'acmm.units' has no attribute {name!r}")
 
 #: 1 ft·lbf in N·m (exact by definition of the foot and the pound-force).
 FT_LBF_IN_NM = 0.3048 * 4.4482216152605
 #: 1 slug·ft² in kg·m² (1 slug = 1 lbf·s²/ft, so slug·ft² = lbf·ft·s²).
 SLUG_FT2_IN_KGM2 = FT_LBF_IN_NM
 
-#: dimension -> (canonical unit, {normalized unit: factor to canonical})
-DIMENSIONS: dict[str, tuple[str, dict[str, float]]] = {
-    "inertia": ("slug*ft^2", {
-        "slug*ft^2": 1.0, "slug*ft2": 1.0, "ft^2*slug": 1.0,
-        "kg*m^2": 1.0 / SLUG_FT2_IN_KGM2, "kg*m2": 1.0 / SLUG_FT2_IN_KGM2,
-    }),
-    "torque": ("ft*lbf", {
-        "ft*lbf": 1.0, "lbf*ft": 1.0, "ft*lb": 1.0,
-        "n*m": 1.0 / FT_LBF_IN_NM, "nm": 1.0 / FT_LBF_IN_NM,
-    }),
-    "momentum": ("ft*lbf*s", {
-        "ft*lbf*s": 1.0, "lbf*ft*s": 1.0, "ft*lb*s": 1.0,
-        "n*m*s": 1.0 / FT_LBF_IN_NM, "nms": 1.0 / FT_LBF_IN_NM,
-    }),
-    "angle": ("deg", {"deg": 1.0, "degree": 1.0, "degrees": 1.0, "rad": 180.0 / math.pi}),
-    "rate": ("rad/s", {"rad/s": 1.0, "rad/sec": 1.0, "deg/s": math.pi / 180.0}),
-    "time": ("s", {"s": 1.0, "sec": 1.0, "min": 60.0, "h": 3600.0}),
-    "weight_torque": ("1/(ft*lbf)^2", {"1/(ft*lbf)^2": 1.0}),
+#: dimension kind -> the unit a bare number (and the internal value) is in.
+DIMENSIONS: dict[str, str] = {
+    "inertia": "slug*ft^2",
+    "torque": "ft*lbf",
+    "momentum": "ft*lbf*s",
+    "angle": "deg",
+    "angle_rad": "rad",
+    "rate": "rad/s",
+    "time": "s",
+    "weight_torque": "1/(ft*lbf)^2",
+    "frequency": "rad/s",
+    "inverse_time": "1/s",
+    "mass": "kg",
+    "length": "m",
+    "si_inertia": "kg*m^2",
+    "dimensionless": "1",
+}
+
+#: Output unit systems: imperial unit -> SI unit for each quantity kind that differs.
+SYSTEMS = ("imperial", "SI")
+_SI = {
+    "slug*ft^2": "kg*m^2",
+    "ft*lbf": "N*m",
+    "ft*lbf*s": "N*m*s",
+    "ft*lbf*s^2": "N*m*s^2",
+    "1/(ft*lbf)^2": "1/(N*m)^2",
 }
 
 _QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 
 
-def normalize_unit(unit: str) -> str:
-    """Canonical spelling of a unit string: lower case, ``*`` for products, no blanks."""
-    u = unit.strip().lower().replace("·", "*").replace("-", "*").replace(" ", "*")
-    u = u.replace("²", "^2").replace("**", "^")
-    return re.sub(r"\*+", "*", u)
+def _spell(unit: str) -> str:
+    """Normalize the spellings pint does not take: · ² ³, and ``h`` (hour, not Planck)."""
+    u = unit.strip().replace("·", "*").replace("²", "^2").replace("³", "^3").replace("⁻¹", "^-1")
+    u = re.sub(r"(?<![A-Za-z_])h(?![A-Za-z_])", "hour", u)
+    u = re.sub(r"(?<![A-Za-z_])sec(?![A-Za-z_])", "s", u)
+    return u
+
+
+@lru_cache(maxsize=256)
+def parse_unit(unit: str):
+    """A pint unit from a string; ``ValueError`` if pint does not know it."""
+    import pint
+
+    try:
+        return registry().parse_units(_spell(unit))
+    except Exception as exc:    # pint raises many kinds (tokenizer, syntax, undefined): one message
+        if isinstance(exc, pint.errors.DimensionalityError):
+            raise ValueError(f"unit {unit!r} cannot be used here: {exc}") from None
+        raise ValueError(f"unknown unit {unit!r}") from exc
+
+
+def _factor(unit: str, target: str) -> float:
+    """Factor from ``unit`` to ``target``; ``ValueError`` naming both if the dimensions differ."""
+    import pint
+
+    ureg = registry()
+    src, dst = parse_unit(unit), parse_unit(target)
+    try:
+        return float(ureg.Quantity(1.0, src).to(dst).magnitude)
+    except (pint.errors.DimensionalityError, pint.errors.OffsetUnitCalculusError):
+        # engineering habit: "lb" in a torque or momentum means pound-force
+        alt = re.sub(r"(?<![A-Za-z_])lb(?![A-Za-z_])", "lbf", unit)
+        if alt != unit:
+            try:
+                return float(ureg.Quantity(1.0, parse_unit(alt)).to(dst).magnitude)
+            except (pint.errors.DimensionalityError, ValueError):
+                pass
+        raise ValueError(f"unit {unit!r} is not a unit of {target} (wrong dimension)") from None
 
 
 def to_canonical(value: object, dimension: str) -> float:
-    """Convert a number or a ``"<number> <unit>"`` string to the dimension's canonical unit.
+    """Convert a number or a ``"<number> <unit>"`` string to the dimension kind's unit
+    (:data:`DIMENSIONS`); a bare number is taken as already in that unit.
 
     Raises
     ------
     ValueError
-        With a message naming the unit and the accepted ones.
+        One line naming the unit and the expected one (pydantic adds the field name).
     """
-    canonical, table = DIMENSIONS[dimension]
+    canonical = DIMENSIONS[dimension]
     if isinstance(value, bool):
         raise ValueError("expected a number, got a boolean")
     if isinstance(value, (int, float)):
@@ -65,10 +129,115 @@ def to_canonical(value: object, dimension: str) -> float:
     number, unit = float(m.group(1)), m.group(2)
     if not unit:
         return number
-    factor = table.get(normalize_unit(unit))
-    if factor is None:
-        accepted = sorted({k for k in table})
-        raise ValueError(
-            f"unit {unit!r} is not a unit of {dimension} (use {canonical}; accepted: {', '.join(accepted)})"
-        )
-    return number * factor
+    try:
+        parse_unit(unit)
+    except ValueError:
+        raise ValueError(f"unknown unit {unit!r} (expected a unit of {canonical})") from None
+    return number * _factor(unit, canonical)
+
+
+def convert(value, unit: str, target: str):
+    """``value`` (number or array) in ``unit`` expressed in ``target``."""
+    return value * _factor(unit, target)
+
+
+def output_unit(unit: str, system: str = "imperial") -> str:
+    """The unit a quantity stored in ``unit`` (report units) is written in under ``system``.
+
+    Angles (deg) become rad in both systems (one angle unit in every file); imperial units
+    become SI under ``SI``; anything else (``1``, ``s``, ``rad/s``, descriptive units) is kept.
+    """
+    if unit == "deg":
+        return "rad"
+    if unit == "deg/s":
+        return "rad/s"
+    if system == "SI":
+        return _SI.get(unit, unit)
+    return unit
+
+
+def display_unit(unit: str, system: str = "imperial") -> str:
+    """The unit shown to a person (prints, CSV, figures): like :func:`output_unit` but angles
+    stay in degrees."""
+    if system == "SI":
+        return _SI.get(unit, unit)
+    return unit
+
+
+def to_system(value, unit: str, system: str = "imperial", display: bool = False):
+    """(value, unit) of a report-unit quantity in ``system`` (``display``: degrees kept)."""
+    target = display_unit(unit, system) if display else output_unit(unit, system)
+    if target == unit:
+        return value, unit
+    if unit in ("deg", "deg/s") and not display:
+        return value * (math.pi / 180.0), target
+    return convert(value, unit, target), target
+
+
+def check_system(system: str) -> str:
+    """``system`` if it is one of :data:`SYSTEMS` (case-insensitive), else ``ValueError``."""
+    for s in SYSTEMS:
+        if str(system).lower() == s.lower():
+            return s
+    raise ValueError(f"unknown unit system {system!r} (use imperial or SI)")
+
+
+def pretty(unit: str) -> str:
+    """A unit as printed in labels: ``ft*lbf*s`` → ``ft·lbf·s``, ``kg*m^2`` → ``kg·m²``."""
+    return unit.replace("*", "·").replace("^2", "²")
+
+
+def shown(value, unit: str, system: str = "imperial"):
+    """(value, unit) of a report-unit quantity as shown to a person under ``system``
+    (prints, CSV, figures; angles stay in degrees)."""
+    return to_system(value, unit, system, display=True)
+
+
+def state_factors(drf_mode: str = "attitude_hold", system: str = "imperial"):
+    """(factors d, units) of the 24 states of eq 4.47 under ``system``: x_system = d · x_report.
+
+    Angles stay in rad, rates in rad/s; momentum-like states become N·m·s (·sⁿ) under SI.
+    """
+    import numpy as np
+
+    from acmm.linearize import state_units
+
+    units = state_units(drf_mode)
+    if system != "SI":
+        return np.ones(len(units)), units
+    si = [u.replace("ft*lbf", "N*m") for u in units]
+    return np.array([_factor(u, v) for u, v in zip(units, si)]), si
+
+
+def state_space_in(system: str, drf_mode: str, **arrays):
+    """Per-state matrices of the report's units expressed in ``system`` (x_sys = D x, u_sys = k u):
+    A → D A D⁻¹, B, G → D B / k, K (…, 3, 24) → k K D⁻¹, P, Q → D⁻¹ P D⁻¹, R → R / k²,
+    x (…, 24) or scales → D x; a DRF block ``drf`` (…, 12) → D[12:] x.  Returns a dict of the
+    arrays given (unchanged under imperial)."""
+    import numpy as np
+
+    d, _ = state_factors(drf_mode, system)
+    k = _factor("ft*lbf", "N*m") if system == "SI" else 1.0
+    out = {}
+    for name, a in arrays.items():
+        if a is None:
+            out[name] = None
+            continue
+        a = np.asarray(a, float)
+        if name == "A":
+            out[name] = d[:, None] * a / d[None, :]
+        elif name in ("B", "G"):
+            out[name] = d[:, None] * a / k
+        elif name == "K":
+            out[name] = k * a / d
+        elif name in ("P", "Q"):
+            out[name] = a / d[:, None] / d[None, :]
+        elif name == "R":
+            out[name] = a / k ** 2
+        elif name in ("x", "scales"):
+            out[name] = a * d
+        elif name == "drf":
+            out[name] = a * d[12:]
+        else:
+            raise KeyError(name)
+    return out

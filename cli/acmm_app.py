@@ -90,8 +90,12 @@ def tea(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = Ove
     typer.echo(f"{result.config.name}: torque-equilibrium attitude (eqs 4.1-4.3)")
     typer.echo(f"  theta* [roll, pitch, yaw]  = {_fmt(t.theta_deg)} deg")
     typer.echo(f"  omega*                     = {_fmt(t.omega, '{:+.6e}')} rad/s")
-    typer.echo(f"  bias used                  = {_fmt(t.bias, '{:+.5f}')} ft*lbf")
-    typer.echo(f"  residual max|eq 4.1|       = {t.residual:.2e} ft*lbf")
+    from acmm.units import shown
+
+    sys_ = result.config.output.units
+    bias, tu = shown(t.bias, "ft*lbf", sys_)
+    typer.echo(f"  bias used                  = {_fmt(bias, '{:+.5f}')} {tu}")
+    typer.echo(f"  residual max|eq 4.1|       = {shown(t.residual, 'ft*lbf', sys_)[0]:.2e} {tu}")
     for k, other in enumerate(result.others):
         typer.echo(f"  other root {k + 1}: theta = {_fmt(other.theta_deg)} deg (residual {other.residual:.1e})")
     typer.echo(f"  wrote {path}")
@@ -192,6 +196,7 @@ def simulate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] 
     import numpy as np
 
     from acmm.stages import run_simulate
+    from acmm.units import shown
 
     r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
     cfg, s = r.config, r.sim
@@ -203,7 +208,8 @@ def simulate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] 
                (f" at {s.stop_time * n / (2 * np.pi):.3f} orbit)" if s.diverged else ")"))
     for st in r.stats:
         typer.echo(f"  level {st['level']:>2} from orbit {st['start_orbit']:6.1f}: theta2* {st['theta2_deg']:+7.2f} deg, "
-                   f"steady |err| {_fmt(st['steady_error_deg'], '{:.3f}')} deg, peak |h| {st['peak_momentum']:.0f} ft*lbf*s")
+                   f"steady |err| {_fmt(st['steady_error_deg'], '{:.3f}')} deg, peak |h| "
+                   "{:.0f} {}".format(*shown(st['peak_momentum'], "ft*lbf*s", cfg.output.units)))
     typer.echo(f"  wrote {path}")
     strict_exit(strict, s.verdict != "bounded", f"{cfg.name}: verdict {s.verdict.upper()} ({s.reason})")
 

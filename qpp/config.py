@@ -12,11 +12,34 @@ from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
 from acmm.errors import ConfigError
+from acmm.units import to_canonical
 
 Matrix = list[list[float]]
+
+
+def _q(kind: str):
+    """A number, or a ``"<number> <unit>"`` string converted (pint) to the SI unit of ``kind``."""
+    def conv(v):
+        if v is None:
+            return v
+        x = to_canonical(v, kind)
+        if not math.isfinite(x):
+            raise ValueError("must be a finite number")
+        return x
+    return BeforeValidator(conv)
+
+
+Seconds = Annotated[float, _q("time")]
+OptSeconds = Annotated[Optional[float], _q("time")]
+RadPerSecond = Annotated[float, _q("frequency")]
+PerSecond = Annotated[float, _q("inverse_time")]
+Kilograms = Annotated[float, _q("mass")]
+Metres = Annotated[float, _q("length")]
+KgM2 = Annotated[float, _q("si_inertia")]
+Radians = Annotated[float, _q("angle_rad")]
 
 
 class _Model(BaseModel):
@@ -62,7 +85,7 @@ class SinusoidalNonlinearity(_Model):
     F0: Matrix = Field(description="constant output feedback part (m×p)")
     F1: Matrix = Field(description="nominal time-varying part (m×p), multiplies y sin(ωt)")
     F_unc: Matrix = Field(description="uncertain direction (m×p), multiplies γ y sin(ωt)")
-    omega: float = Field(1.0, ge=0, description="frequency of the time variation, rad/s (0: constant)")
+    omega: RadPerSecond = Field(1.0, ge=0, description="frequency of the time variation, rad/s (0: constant)")
     gamma_max: float = Field(gt=0, description="uncertainty bound |γ| ≤ gamma_max (dimensionless)")
 
 
@@ -73,12 +96,12 @@ class PolarArmNonlinearity(_Model):
     """
 
     kind: Literal["polar_arm"] = "polar_arm"
-    mu: float = Field(gt=0, description="arm mass μ, kg (not printed in the report)")
-    M_min: float = Field(gt=0, description="lower payload bound, kg")
-    M_max: float = Field(gt=0, description="upper payload bound, kg")
-    J1: float = Field(100.0, gt=0, description="inertia of the mechanism about O, kg·m²")
-    J2: float = Field(100.0, gt=0, description="inertia of the arm about C, kg·m²")
-    a: float = Field(1.0, gt=0, description="distance from the arm's mass centre C to the load, m")
+    mu: Kilograms = Field(gt=0, description="arm mass μ, kg (not printed in the report)")
+    M_min: Kilograms = Field(gt=0, description="lower payload bound, kg")
+    M_max: Kilograms = Field(gt=0, description="upper payload bound, kg")
+    J1: KgM2 = Field(100.0, gt=0, description="inertia of the mechanism about O, kg·m²")
+    J2: KgM2 = Field(100.0, gt=0, description="inertia of the arm about C, kg·m²")
+    a: Metres = Field(1.0, gt=0, description="distance from the arm's mass centre C to the load, m")
 
     @model_validator(mode="after")
     def _bounds(self):
@@ -99,7 +122,7 @@ class Hinf(_Model):
     """Chapter 11 H∞ gains (Riccati 11.1 and the observer Riccati)."""
 
     rho: float = Field(gt=0, description="control weight ρ in z = [ρ u; W_s e] (dimensionless)")
-    a: float = Field(ge=0, description="exponential weighting a, 1/s (10.27); the report uses 1e-8 / 1e-9")
+    a: PerSecond = Field(ge=0, description="exponential weighting a, 1/s (10.27); the report uses 1e-8 / 1e-9")
     nu: float = Field(1.0, gt=0, description="H∞ level ν of the scaling 11.3 (γ = ν)")
     weight: Literal["servo", "output"] = Field("servo", description="state weight [0 Cc] or printed [C 0]")
     observer: Literal["filter", "dgkf"] = Field("filter", description="observer gain formula")
@@ -124,7 +147,7 @@ class Spheres(_Model):
     beta_o: float = Field(gt=0, description="output sphere radius β_o, output units")
     beta_ri: float = Field(ge=0, description="reference sphere radius β_ri, output units")
     d_inf: float = Field(0.0, ge=0, description="‖d‖∞ used in the threshold m (12.1)")
-    T: float = Field(gt=0, le=1e4, description="truncation time T, s (settling time; 10.44)")
+    T: Seconds = Field(gt=0, le=1e4, description="truncation time T, s (settling time; 10.44)")
 
 
 class Design(_Model):
@@ -146,10 +169,10 @@ class Term(_Model):
 
     kind: Literal["sin", "step", "ramp"]
     amplitude: float = Field(1.0, description="sin amplitude / step value / ramp slope (per s)")
-    omega: float = Field(0.0, ge=0, description="sin frequency, rad/s")
-    phase: float = Field(0.0, description="sin phase, rad")
-    t_on: Optional[float] = Field(None, description="step/ramp start, s (default: −∞ for a step, 0 for a ramp)")
-    t_off: Optional[float] = Field(None, description="step end / ramp hold time, s (default: never)")
+    omega: RadPerSecond = Field(0.0, ge=0, description="sin frequency, rad/s")
+    phase: Radians = Field(0.0, description="sin phase, rad")
+    t_on: OptSeconds = Field(None, description="step/ramp start, s (default: −∞ for a step, 0 for a ramp)")
+    t_off: OptSeconds = Field(None, description="step end / ramp hold time, s (default: never)")
 
 
 Signal = list[list[Term]]   # one list of terms per channel
@@ -161,14 +184,14 @@ class Scenario(_Model):
     name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$")
     delta_r: Optional[Signal] = Field(None, description="reference perturbation r − r_o per channel")
     gamma: float = Field(0.0, description="uncertain parameter: γ (sinusoidal) or payload M in kg (polar_arm)")
-    impulse_time: Optional[float] = Field(None, ge=0, description="time of a disturbance impulse d = I δ(t − t_i), s")
+    impulse_time: OptSeconds = Field(None, ge=0, description="time of a disturbance impulse d = I δ(t − t_i), s")
     impulse: Optional[list[float]] = Field(None, description="impulse size I per disturbance channel (r)")
 
 
 class Simulation(_Model):
     """Nonlinear closed-loop simulation (ch. 13.4 / 14.5)."""
 
-    t_final: float = Field(10.0, gt=0, le=1e5, description="simulated time, s")
+    t_final: Seconds = Field(10.0, gt=0, le=1e5, description="simulated time, s")
     n_samples: int = Field(2001, ge=11, le=200001, description="output samples")
     rtol: float = Field(1e-8, gt=0, lt=1, description="integrator relative tolerance")
     atol: float = Field(1e-10, gt=0, lt=1, description="integrator absolute tolerance")
@@ -179,6 +202,8 @@ class Simulation(_Model):
 class Output(_Model):
     root: str = Field("runs", description="results root; files go to <root>/<name>/")
     figures: bool = Field(True, description="write PNG figures next to the HDF5 files")
+    units: Literal["SI"] = Field("SI", description="unit system of the results: qpp works in SI (s, rad/s, kg, m); "
+                                                   "plant signals are in the user's units")
 
 
 class QppConfig(_Model):

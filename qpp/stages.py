@@ -24,49 +24,57 @@ def _rel(a, b):
 def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     """Datasets of qpp_design.h5."""
     items = {
-        "K1": Dataset(r.K1, "1", "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)"),
-        "Kc": Dataset(r.Kc, "1", "servo-state gain Kc (eq 10.6)"),
-        "H": Dataset(r.H, "1", "observer gain H, report's sign (L = −H, eq 10.5)"),
-        "Cz": Dataset(r.Cz, "1", "C_z (eq 10.7)"),
+        "K1": Dataset(r.K1, "1", "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
+                      dims=("input", "state")),
+        "Kc": Dataset(r.Kc, "1", "servo-state gain Kc (eq 10.6)", dims=("input", "servo_state")),
+        "H": Dataset(r.H, "1", "observer gain H, report's sign (L = −H, eq 10.5)", dims=("state", "output")),
+        "Cz": Dataset(r.Cz, "1", "C_z (eq 10.7)", dims=("output", "loop_state")),
         "a": Dataset(r.a, "1/s", "exponential weighting a (10.27)"),
         "T": Dataset(r.T, "s", "truncation time T"),
         "E": Dataset(r.E, "s^0.5", "E = [(e^{2aT} − 1)/(2a)]^{1/2} (10.44)"),
-        "sector": Dataset(r.sector, "1", "sector [α_i, β_i] of φ for the circle check", ["alpha", "beta"]),
-        "y_o_T": {"t": Dataset(r.y_o_t, "s", "time on [0, T]"),
-                  "y_o": Dataset(r.y_o, "output units", "nominal output y_o on [0, T]")},
+        "sector": Dataset(r.sector, "1", "sector [α_i, β_i] of φ for the circle check", ["alpha", "beta"],
+                          dims=("channel", "bound")),
+        "y_o_T": {"t": Dataset(r.y_o_t, "s", "time on [0, T]", dims=("t",)),
+                  "y_o": Dataset(np.asarray(r.y_o).T if np.ndim(r.y_o) == 2 and np.shape(r.y_o)[-1] == np.size(r.y_o_t)
+                                 else r.y_o, "output units", "nominal output y_o on [0, T], (t, output)",
+                                 dims=("t", "output") if np.ndim(r.y_o) == 2 else ("t",))},
         "iterations": Dataset(np.array([[it["rho"], it["a"], it["beta1"], it["m"], float(it["circle"])]
                                         for it in r.iterations]) if r.iterations else np.zeros((0, 5)),
-                              "mixed", "ch. 12.1 iterations", ["rho", "a_1/s", "beta1", "m", "circle_passed"]),
+                              "mixed", "ch. 12.1 iterations", ["rho", "a_1/s", "beta1", "m", "circle_passed"],
+                              dims=("iteration", "quantity")),
     }
     for reading in r.beta1:
         key = reading.replace(".", "_")
         b = r.beta1[reading]
-        items[f"Bz_{key}"] = Dataset(r.Bz[reading], "1", f"B_z, {reading} reading (columns [r, d])")
+        items[f"Bz_{key}"] = Dataset(r.Bz[reading], "1", f"B_z, {reading} reading (columns [r, d])",
+                                     dims=("loop_state", "exogenous"))
         items[f"beta1_{key}"] = Dataset(b["value"], "1", f"β1 exact (SLICOT L∞ norm), B_z {reading}",
                                         attrs={"omega_peak_rad_s": b["omega_peak"], "grid_value": b["grid_value"]})
-    items["Az"] = Dataset(r.Az["eq10.7"], "1/s", "A_z (eq 10.7; 13.6 / Table 14.1)")
+    items["Az"] = Dataset(r.Az["eq10.7"], "1/s", "A_z (eq 10.7; 13.6 / Table 14.1)",
+                         dims=("loop_state", "loop_state_col"))
     items["thresholds"] = Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in r.thresholds]),
                                   "1", "β3, β4, m (12.1) per bookkeeping: " + ", ".join(t.name for t in r.thresholds),
-                                  ["half_width", "beta3", "beta4", "m"])
+                                  ["half_width", "beta3", "beta4", "m"], dims=("bookkeeping", "threshold"))
     c = r.circle
     items["circle"] = {
-        "omega": Dataset(c.omega, "rad/s", "frequency grid"),
-        "centres": Dataset(c.centres, "1", "h_ii(−a + jω), complex"),
-        "radii": Dataset(c.radii, "1", "Gershgorin mean radii (d_i + d'_i)/2"),
-        "margins": Dataset(c.margins, "1", "distance of band to disc boundary (>0 passes)"),
-        "encirclements": Dataset(c.encirclements, "1", "N_ci (clockwise)"),
+        "omega": Dataset(c.omega, "rad/s", "frequency grid", dims=("omega",)),
+        "centres": Dataset(c.centres, "1", "h_ii(−a + jω), complex", dims=("channel", "omega")),
+        "radii": Dataset(c.radii, "1", "Gershgorin mean radii (d_i + d'_i)/2", dims=("channel", "omega")),
+        "margins": Dataset(c.margins, "1", "distance of band to disc boundary (>0 passes)", dims=("channel",)),
+        "encirclements": Dataset(c.encirclements, "1", "N_ci (clockwise)", dims=("channel",)),
         "max_scale": Dataset(c.max_scale, "1", "largest s with sector s·[α, β] passing"),
     }
     pub = cfg.published
     if pub.K1 is not None and pub.Kc is not None:
         items["published"] = {
-            "K1": Dataset(np.asarray(pub.K1, float), "1", "printed K1"),
-            "Kc": Dataset(np.asarray(pub.Kc, float), "1", "printed Kc"),
+            "K1": Dataset(np.asarray(pub.K1, float), "1", "printed K1", dims=("input", "state")),
+            "Kc": Dataset(np.asarray(pub.Kc, float), "1", "printed Kc", dims=("input", "servo_state")),
         }
         if pub.H is not None:
-            items["published"]["H"] = Dataset(np.asarray(pub.H, float), "1", "printed H")
+            items["published"]["H"] = Dataset(np.asarray(pub.H, float), "1", "printed H", dims=("state", "output"))
             items["published"]["H_rel_diff"] = Dataset(
-                np.where(np.abs(np.asarray(pub.H)) > 0, _rel(r.H, pub.H), 0.0), "1", "|H − H_printed|/|H_printed|")
+                np.where(np.abs(np.asarray(pub.H)) > 0, _rel(r.H, pub.H), 0.0), "1", "|H − H_printed|/|H_printed|",
+                dims=("state", "output"))
     return items
 
 
@@ -93,20 +101,22 @@ def run_simulate(config, figures: bool | None = None, progress=None):
     cfg = _cfg(config)
     r = design(cfg)
     sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
-    items = {"K1": Dataset(r.K1, "1", "gain K1 used"), "Kc": Dataset(r.Kc, "1", "gain Kc used"),
-             "H": Dataset(r.H, "1", "observer gain H used (report's sign)")}
+    items = {"K1": Dataset(r.K1, "1", "gain K1 used", dims=("input", "state")),
+             "Kc": Dataset(r.Kc, "1", "gain Kc used", dims=("input", "servo_state")),
+             "H": Dataset(r.H, "1", "observer gain H used (report's sign)", dims=("state", "output"))}
     for s in sims:
+        # time first: (t, channel), as in acmm's files
         items[s.name] = {
-            "t": Dataset(s.t, "s", "time"),
-            "r": Dataset(s.r, "output units", "reference r"),
-            "r_o": Dataset(s.r_o, "output units", "nominal reference r_o"),
-            "y": Dataset(s.y, "output units", "output y"),
-            "y_o": Dataset(s.y_o, "output units", "nominal output y_o (eq 10.29)"),
-            "u": Dataset(s.u, "control units", "control u = K1 x̂ + Kc x_c − f1o"),
-            "x": Dataset(s.x, "state units", "plant state"),
+            "t": Dataset(s.t, "s", "time", dims=("t",)),
+            "r": Dataset(np.asarray(s.r).T, "output units", "reference r", dims=("t", "output")),
+            "r_o": Dataset(np.asarray(s.r_o).T, "output units", "nominal reference r_o", dims=("t", "output")),
+            "y": Dataset(np.asarray(s.y).T, "output units", "output y", dims=("t", "output")),
+            "y_o": Dataset(np.asarray(s.y_o).T, "output units", "nominal output y_o (eq 10.29)", dims=("t", "output")),
+            "u": Dataset(np.asarray(s.u).T, "control units", "control u = K1 x̂ + Kc x_c − f1o", dims=("t", "input")),
+            "x": Dataset(np.asarray(s.x).T, "state units", "plant state", dims=("t", "state")),
             "error_inf": Dataset(s.error_inf, "output units", "‖y − y_o‖∞",
                                  attrs={"beta_o": s.beta_o, "passed": int(s.passed), "gamma": s.gamma}),
-            "error_per_output": Dataset(s.error_per_output, "output units", "sup_t |y_i − y_oi|"),
+            "error_per_output": Dataset(s.error_per_output, "output units", "sup_t |y_i − y_oi|", dims=("output",)),
         }
     path = write_h5(cfg.run_dir() / "qpp_sim.h5", items, cfg.to_yaml(),
                     {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims))})

@@ -21,10 +21,11 @@ CONFIG_TEXT = "name: demo\ninertia: {I11: 1.0, I22: 1.0, I33: 1.0}\n"
 
 
 def _all_datasets(path):
+    """Datasets other than the netCDF dimension scales added by acmm.netcdf_layout."""
     found = {}
     with h5py.File(path, "r") as f:
         f.visititems(lambda name, obj: found.__setitem__(name, dict(obj.attrs))
-                     if isinstance(obj, h5py.Dataset) else None)
+                     if isinstance(obj, h5py.Dataset) and not h5py.h5ds.is_scale(obj.id) else None)
     return found
 
 

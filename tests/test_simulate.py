@@ -110,9 +110,9 @@ def test_claim2_staircase_130_orbits(tmp_path, monkeypatch):
     assert len(res.stats) == 12
     with h5py.File(path) as f:
         assert f.attrs["verdict"] == "bounded"
-        steady = f["levels/steady_error"][()]
+        steady = np.degrees(f["levels/steady_error"][()])   # angles are stored in rad (issue 14)
         peak = f["levels/peak_momentum"][()]
-        assert f["levels/steady_error"].attrs["units"] == "deg"
+        assert f["levels/steady_error"].attrs["units"] == "rad"
         bad = []
         f.visititems(lambda n, o: bad.append(n) if isinstance(o, h5py.Dataset) and "units" not in o.attrs else None)
         assert not bad

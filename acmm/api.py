@@ -1,0 +1,206 @@
+"""A small Python API: load a config, design, simulate, linearize — results as python-control
+``StateSpace`` objects with named states, inputs and outputs.
+
+>>> import acmm, control
+>>> cfg = acmm.load_config("staircase")
+>>> d = acmm.design(cfg)                        # sector LQR per design point + gain schedule
+>>> cl = d.scheduled_closed_loop(tea_pitch_deg=-20.0)
+>>> control.step_response(cl, T=20000.0)        # doctest: +SKIP
+
+Conventions (eq 4.46): x = the 24 states of :data:`acmm.linearize.STATE_NAMES` (rad, rad/s,
+ft·lbf·s, ft·lbf·s², DRF states), control u (ft·lbf) enters ω' as −u and h' as +u, the
+disturbance w (ft·lbf) enters ω' as +w; the LQR law is u = −K x.  Every system here is in the
+report's (imperial) units whatever ``output.units`` says; time is in s.
+
+Systems
+-------
+* :meth:`Design.open_loop` — inputs u1..u3, w1..w3; outputs the 24 states;
+* :meth:`Design.closed_loop` — point k with its own LQR gain: x' = (A − B K) x + B v + G w,
+  inputs v1..v3 (a torque added to −K x) and w1..w3, outputs the 24 states and u1..u3;
+* :meth:`Design.scheduled_closed_loop` — the same at any pitch TEA along the blend, with the
+  scheduled gain K(θ2*) (what the nonlinear simulation uses) and the plant linearized at the
+  blended station's own TEA;
+* :meth:`Design.loop_transfer` — L = K (sI − A)⁻¹ B broken at the plant input (for
+  ``control.disk_margins``; negative feedback).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from acmm.config import Config
+from acmm.config import load_config as _load_config
+
+__all__ = ["load_config", "design", "simulate", "linearize", "Design"]
+
+V_NAMES = ["v1", "v2", "v3"]
+
+
+def load_config(config: str | Path | Config | None = None) -> Config:
+    """A validated :class:`acmm.config.Config` from a path, a packaged name (``"mb3"``), or
+    ``None`` (the packaged stair-case); a ``Config`` is returned as is."""
+    return config if isinstance(config, Config) else _load_config(config)
+
+
+def linearize(config, tea_pitch_deg: float | None = None):
+    """The 24-state design model (:class:`acmm.linearize.LinearModel`) of a config at its TEA,
+    or of its blended station whose pitch TEA is ``tea_pitch_deg``.  ``.to_statespace()`` gives
+    the python-control system."""
+    from acmm import linearize as lin
+
+    cfg = load_config(config)
+    if tea_pitch_deg is None:
+        return lin.linearize_config(cfg)
+    return design(cfg, _compute=False).model_at(tea_pitch_deg)
+
+
+def simulate(config, figures: bool = False):
+    """Design (or reuse ``design.h5``), run the nonlinear closed loop and write ``sim.h5``.
+
+    Returns ``(result, path)``: :class:`acmm.stages.SimulateResult` (``.sim`` holds t, state,
+    u, verdict) and the path of ``sim.h5`` (open it with ``xarray.open_dataset(path,
+    engine="h5netcdf")``)."""
+    from acmm.stages import run_simulate
+
+    return run_simulate(load_config(config), figures=figures)
+
+
+def design(config, _compute: bool = True) -> "Design":
+    """Design every point of a config (TEA → linearize → sector LQR) and fit its schedule."""
+    from acmm.stages import compute_design
+
+    cfg = load_config(config)
+    return Design(cfg, compute_design(cfg) if _compute else None)
+
+
+def _named(A, B, C, D, states, inputs, outputs, name):
+    import control
+
+    return control.ss(A, B, C, D, states=list(states), inputs=list(inputs), outputs=list(outputs), name=name)
+
+
+@dataclass
+class Design:
+    """A config's design: per-point LQR gains and the gain schedule, as python-control systems."""
+
+    config: Config
+    result: object      # acmm.stages.DesignResult (None for linearize-only use)
+
+    # ------------------------------------------------------------------ design points
+    @property
+    def names(self) -> list[str]:
+        return [p.spec.name for p in self.result.points]
+
+    def _index(self, point) -> int:
+        if isinstance(point, str):
+            try:
+                return self.names.index(point)
+            except ValueError:
+                raise KeyError(f"no design point {point!r} (points: {', '.join(self.names)})") from None
+        return int(point)
+
+    def gain(self, point=0) -> np.ndarray:
+        """LQR gain K (3×24, ft·lbf per state unit) of design point ``point`` (index or name)."""
+        return self.result.points[self._index(point)].lqr.K
+
+    def open_loop(self, point=0):
+        """Open-loop design model of a point: inputs u1..u3, w1..w3; outputs the states."""
+        p = self.result.points[self._index(point)]
+        return p.model.to_statespace()
+
+    def closed_loop(self, point=0):
+        """Closed loop of a point with its own LQR gain (see the module docstring)."""
+        p = self.result.points[self._index(point)]
+        return self._closed(p.model, p.lqr.K, f"acmm_closed_loop_{p.spec.name}")
+
+    # ------------------------------------------------------------------ scheduled loop
+    def plant_at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
+        """(inertia slug·ft², bias ft·lbf) of the blend I(s) = (1−s) I_start + s I_to."""
+        from acmm import schedule as sch
+
+        specs = sch.point_specs(self.config)
+        blended = [p for p in specs if np.isfinite(p.s)]
+        if len(blended) < 2:
+            raise ValueError("the config has no schedule.to blend")
+        a, b = blended[0], blended[-1]
+        return (1 - s) * a.inertia + s * b.inertia, (1 - s) * a.bias + s * b.bias
+
+    def _tea_at(self, s: float, guess=None):
+        from acmm.tea import solve_tea, solve_tea_near
+
+        inertia, bias = self.plant_at(s)
+        n = self.config.orbit_rate
+        t = solve_tea_near(inertia, n, bias, guess) if guess is not None else solve_tea(inertia, n, bias)
+        return inertia, t
+
+    def blend_for_tea(self, tea_pitch_deg: float) -> float:
+        """Blend parameter s whose station has pitch TEA ``tea_pitch_deg`` (deg), by bisection
+        between the design points that bracket it."""
+        from scipy.optimize import brentq
+
+        from acmm import schedule as sch
+
+        specs = [p for p in sch.point_specs(self.config) if np.isfinite(p.s)]
+        if len(specs) < 2:
+            raise ValueError("the config has no schedule.to blend")
+        target = np.radians(tea_pitch_deg)
+        grid = np.linspace(0.0, 1.0, max(len(specs), 3))
+        teas = [self._tea_at(s)[1].theta for s in grid]
+        f = [t[1] - target for t in teas]
+        for k in range(len(grid) - 1):
+            if f[k] == 0.0:
+                return float(grid[k])
+            if f[k] * f[k + 1] <= 0.0:
+                guess = teas[k]
+                return float(brentq(lambda s: self._tea_at(s, guess)[1].theta[1] - target,
+                                    grid[k], grid[k + 1], xtol=1e-12))
+        lo, hi = np.degrees(min(t[1] for t in teas)), np.degrees(max(t[1] for t in teas))
+        raise ValueError(f"pitch TEA {tea_pitch_deg:g} deg is outside the blend ({lo:.2f} … {hi:.2f} deg)")
+
+    def model_at(self, tea_pitch_deg: float):
+        """Design model (:class:`acmm.linearize.LinearModel`) of the blended station whose
+        pitch TEA is ``tea_pitch_deg``, linearized at its own TEA."""
+        from acmm import linearize as lin
+
+        s = self.blend_for_tea(tea_pitch_deg)
+        inertia, t = self._tea_at(s)
+        d = self.config.design
+        return lin.design_point(inertia, t.theta, self.config.orbit_rate, model=d.model, drf_mode=d.drf_mode)
+
+    def scheduled_gain(self, tea_pitch_deg: float) -> np.ndarray:
+        """The scheduled gain K(θ2*) (3×24) at pitch TEA ``tea_pitch_deg`` (deg)."""
+        return self.result.table.gain_at(np.radians(tea_pitch_deg), 0)
+
+    def scheduled_closed_loop(self, tea_pitch_deg: float):
+        """Closed loop with the scheduled gain at pitch TEA ``tea_pitch_deg`` (deg): the blended
+        station with that TEA, linearized there, under u = −K(θ2*) x + v."""
+        model = self.model_at(tea_pitch_deg)
+        K = self.result.table.gain_at(model.theta_star[1], 0)
+        return self._closed(model, K, "acmm_scheduled_loop_" + f"{tea_pitch_deg:+.2f}deg".replace(".", "p"))
+
+    def loop_transfer(self, point=0, tea_pitch_deg: float | None = None):
+        """Loop transfer L = K (sI − A)⁻¹ B at the plant input (u1..u3 → Ku1..Ku3), for
+        ``control.disk_margins(L, omega)``; with ``tea_pitch_deg`` the scheduled loop."""
+        if tea_pitch_deg is None:
+            p = self.result.points[self._index(point)]
+            model, K = p.model, p.lqr.K
+        else:
+            model = self.model_at(tea_pitch_deg)
+            K = self.result.table.gain_at(model.theta_star[1], 0)
+        from acmm.linearize import INPUT_NAMES
+
+        return _named(model.A, model.B, K, np.zeros((3, 3)), model.state_names, INPUT_NAMES,
+                      [f"K{u}" for u in INPUT_NAMES], "acmm_loop_transfer")
+
+    @staticmethod
+    def _closed(model, K, name):
+        from acmm.linearize import DISTURBANCE_NAMES, INPUT_NAMES
+
+        A = model.A - model.B @ K
+        B = np.hstack([model.B, model.G])
+        C = np.vstack([np.eye(24), -K])
+        D = np.vstack([np.zeros((24, 6)), np.hstack([np.eye(3), np.zeros((3, 3))])])
+        return _named(A, B, C, D, model.state_names, V_NAMES + DISTURBANCE_NAMES,
+                      list(model.state_names) + INPUT_NAMES, name)
