@@ -345,6 +345,15 @@ class _Procedure:
         ws = np.asarray(ws, float)
         prev_b1, m_est = np.inf, None
         tried_a = set()
+        if self.hc.search:                                      # step 1: m from a first fixed-nu design
+            try:
+                g0 = hinf_gains(weighted_plant(self.P, ws), rho=rho, a=a, nu=self.hc.nu, weight=self.hc.weight,
+                                observer=self.hc.observer)
+                r0 = self.evaluate(g0, a, T, ws, stage + " step 1")
+                r0, T = self.adapt_T(g0, a, T, ws, r0, stage + " step 1")
+                m_est = r0.m_ref
+            except (DesignError, ConvergenceError):
+                m_est = None
         for _ in range(dc.max_iter):
             g = self.gains(rho, a, ws, target=m_est)
             if g is None:
@@ -419,7 +428,7 @@ class _Procedure:
                     f2 = self.beta1_only(10 ** x2, a, ws)
             cand = [(vals[k], lr[k]), (f1, x1), (f2, x2)]
             rho = 10 ** min(cand)[1]
-            g = self.gains(rho, a, ws)
+            g = self.gains(rho, a, ws, target=self.best.m_ref if self.best is not None else None)
             if g is None:
                 continue
             res = self.evaluate(g, a, self.best.T if self.best is not None else self.cfg.spheres.T, ws, "wider")
@@ -452,7 +461,8 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
     txt = (f"β1 > m: m = β_o/(β_ri + ‖d‖∞ + β_o·β3 + β4) = {sp.beta_o:g}/("
            + " + ".join(f"{v:.4g}" for v in terms.values()) + f"), largest term {dom} = {terms[dom]:.4g}")
     if t.m < 1.0:
-        txt += "; m < 1 while β1 ≥ 1 for a loop that tracks r_o (gain 1 at the servo frequencies)"
+        txt += ("; m < 1 at this T while β1 ≥ 1 for a loop that tracks r_o (gain 1 at the servo "
+                "frequencies)")
     return txt
 
 
