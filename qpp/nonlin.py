@@ -110,7 +110,7 @@ def parse_expression(text: str, symbols: dict, where: str = "expression"):
             raise ConfigError(f"{where}: operator {type(node.op).__name__} not allowed")
         if isinstance(node, ast.Call):
             if not isinstance(node.func, ast.Name) or node.func.id not in funcs:
-                name = node.func.id if isinstance(node.func, ast.Name) else ast.dump(node.func)[:30]
+                name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)[:40]
                 raise ConfigError(f"{where}: unknown function {name!r} (allowed: {', '.join(FUNCTIONS)})")
             if node.keywords:
                 raise ConfigError(f"{where}: keyword arguments not allowed in {node.func.id}()")
