@@ -315,6 +315,9 @@ class QppConfig(_Model):
             except ConfigError as exc:
                 raise ValueError(str(exc)) from None
             for s in self.simulation.scenarios:
+                if s.gamma != 0.0:
+                    raise ValueError(f"scenario {s.name}: nonlinearity.kind expression takes parameters: "
+                                     "{name: value}, not gamma")
                 for k in (s.parameters or {}):
                     if k not in nl.parameters:
                         raise ValueError(f"scenario {s.name}: unknown parameter {k!r}")

@@ -1,7 +1,7 @@
 """General sector-bounded nonlinearities written by the user (CR-185644 ch. 10.1, 10.4, lemma 1).
 
 A channel of the matched nonlinearity f1 (f = B f1, eq 10.1) is an expression in the outputs
-``y1 … yp``, the time ``t`` and named uncertain parameters with stated ranges.  The expression is
+``y1 … yp`` (``y`` when p = 1), the time ``t`` and named uncertain parameters with stated ranges.  The expression is
 parsed **without eval**: Python's :mod:`ast` tree is walked node by node and only numbers, the
 whitelisted symbols and the whitelisted functions below are turned into a :mod:`sympy` expression.
 
@@ -187,8 +187,10 @@ class ExpressionModel:
         self.t = sp.Symbol("t", real=True)
         self.th = [sp.Symbol(k, real=True) for k in self.names]
         syms = {str(s): s for s in [*self.ys, self.t, *self.th]}
+        if self.p == 1 and "y" not in syms:
+            syms["y"] = self.ys[0]                        # single output: y is y1
         for k in self.names:
-            if k in FUNCTIONS or k == "pi" or k == "t" or (k.startswith("y") and k[1:].isdigit()):
+            if k in FUNCTIONS or k in ("pi", "t", "y") or (k.startswith("y") and k[1:].isdigit()):
                 raise ConfigError(f"nonlinearity.parameters: name {k!r} is reserved")
         self.texts = list(exprs)
         self.f = [parse_expression(e, syms, f"nonlinearity.f1[{i}]") for i, e in enumerate(exprs)]

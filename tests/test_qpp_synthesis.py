@@ -102,6 +102,12 @@ def test_library_forms_and_stated_overrides(tmp_path):
     d["nonlinearity"]["f1"] = [{"form": "sin", "output": 1, "gain": "k"}]
     m = parse_config(d).expression_model()
     np.testing.assert_allclose(m.sector_info.sector, [[-0.5, 0.5]], rtol=1e-6)
+    d["nonlinearity"]["f1"] = ["k*sin(y)"]                     # y is y1 when p = 1
+    np.testing.assert_allclose(parse_config(d).expression_model().sector_info.sector, [[-0.5, 0.5]], rtol=1e-6)
+    d["simulation"]["scenarios"][0]["gamma"] = 0.1
+    with pytest.raises(ConfigError, match="not gamma"):
+        parse_config(d)
+    d["simulation"]["scenarios"][0]["gamma"] = 0.0
     d["nonlinearity"].update({"sector": [[-0.7, 0.7]], "beta3": 0.01, "beta4": 0.02})
     d["simulation"]["t_final"] = 2.0
     from qpp.design import certify, default_sector
@@ -112,6 +118,21 @@ def test_library_forms_and_stated_overrides(tmp_path):
     st = res.threshold("stated")
     assert (st.beta3, st.beta4) == (0.01, 0.02) and res.bookkeeping == "stated"
     assert st.m == pytest.approx(0.3 / (0.05 + 0.3 * 0.01 + 0.02))
+
+
+def test_cross_coupled_channel_gets_the_slope_sector(tmp_path):
+    d = _cfg("qpp_cubic2", tmp_path)
+    d["nonlinearity"]["f1"] = ["-c*sin(y1 - y2)", "0"]
+    m = parse_config(d).expression_model()
+    si_ = m.sector_info
+    # φ1 = -(c - 1) sin(y1 - y2): Σ_j sup|∂φ1/∂y_j| = 0.1 (1 + 1); φ1 is not a function of y1 alone
+    assert not si_.diagonal[0] and si_.slope_bound[0] == pytest.approx(0.2, rel=1e-9)
+    np.testing.assert_allclose(si_.sector[0], [-0.2, 0.2], rtol=1e-9)
+    # independent: |φ1| ≤ 0.2 max|y| at random points of the range
+    rng = np.random.default_rng(0)
+    y = rng.uniform(-1, 1, (2, 500))
+    c = rng.uniform(0.9, 1.1, 500)
+    assert np.all(np.abs((c - 1) * np.sin(y[0] - y[1])) <= 0.2 * np.abs(y).max(axis=0) + 1e-15)
 
 
 # ---------------------------------------------------------------------- new examples
