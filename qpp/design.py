@@ -27,7 +27,7 @@ import numpy as np
 from acmm.errors import ConvergenceError, DesignError
 from qpp import circle as circle_mod
 from qpp import spheres
-from qpp.config import ExpressionNonlinearity, PolarArmNonlinearity, QppConfig, SinusoidalNonlinearity
+from qpp.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinearity
 from qpp.hinf import HinfGains, hinf_gains, hinf_search
 from qpp.lure import LurePlant, channels, closed_loop
 from qpp.simulate import config_f1, eval_signal, initial_state, simulate_loop
@@ -266,9 +266,10 @@ class _Procedure:
                 g = hinf_gains(Pw, rho=rho, a=a, nu=hc.nu, weight=hc.weight, observer=obs)
                 from qpp.hinf import closed_loop_norm, existence_tests
 
-                self.hist.append({"rho": rho, "nu": hc.nu, "delta": closed_loop_norm(Pw, g, bz=dc.bz),
-                                  **existence_tests(g), "admissible": True, "action": "fixed nu",
-                                  "a": a, "ws": float(np.mean(ws))})
+                tests = existence_tests(g)
+                self.hist.append({"rho": rho, "nu": hc.nu, "delta": closed_loop_norm(Pw, g, bz=dc.bz), **tests,
+                                  "admissible": bool(tests["k_psd"] and tests["h_psd"] and tests["spectral"]),
+                                  "action": "fixed nu", "a": a, "ws": float(np.mean(ws))})
             return g
         except (DesignError, ConvergenceError) as exc:
             self.records.append(self._rec("riccati", rho, np.nan, a, np.nan, np.nan, np.nan, np.nan, False,
@@ -477,7 +478,6 @@ def design(cfg: QppConfig) -> DesignResult:
     Every evaluation is in ``iterations``; the result's ``certified``/``verdict`` say the outcome.
     """
     hc, dc = cfg.hinf, cfg.design
-    P = cfg.lure_plant()
     if dc.gains == "published":
         p = cfg.published
         res = certify(cfg, p.K1, p.Kc, p.H, hc.a, "published")
@@ -499,7 +499,6 @@ def design(cfg: QppConfig) -> DesignResult:
     pub = cfg.published
     if pub.K1 is not None and pub.Kc is not None and pub.H is not None:
         res.published = certify(cfg, pub.K1, pub.Kc, pub.H, res.a, "published", T=res.T)
-    del P
     return res
 
 
