@@ -131,7 +131,7 @@ class ExpressionNonlinearity(_Model):
     """
 
     kind: Literal["expression"] = "expression"
-    f1: list[Union[str, LibraryForm]] = Field(min_length=1, description="one entry per control input (m)")
+    f1: list[Union[str, float, LibraryForm]] = Field(min_length=1, description="one entry per control input (m)")
     parameters: dict[str, ParameterRange] = Field(default_factory=dict, description="uncertain parameters")
     y_range: Matrix = Field(description="[[lo, hi], ...] per output: the set on which φ is sector-bounded")
     t_range: Optional[float] = Field(None, gt=0, description="sampled time horizon, s (default: simulation.t_final)")
@@ -154,8 +154,8 @@ class ExpressionNonlinearity(_Model):
         """The channel expressions, library forms expanded."""
         from qpp.nonlin import library_expression
 
-        return [e if isinstance(e, str) else library_expression(e.form, e.output, str(e.gain), e.level)
-                for e in self.f1]
+        return [e if isinstance(e, str) else repr(float(e)) if isinstance(e, (int, float))
+                else library_expression(e.form, e.output, str(e.gain), e.level) for e in self.f1]
 
     def param_table(self) -> dict:
         return {k: (r.min, r.max, r.nominal_value) for k, r in self.parameters.items()}
@@ -306,7 +306,7 @@ class QppConfig(_Model):
                 raise ValueError(f"nonlinearity.kind expression needs as many disturbance channels as outputs "
                                  f"(G has {P.r} columns, C {P.p} rows) for the circle criterion")
             for e in nl.f1:
-                if not isinstance(e, str) and e.output > P.p:
+                if isinstance(e, LibraryForm) and e.output > P.p:
                     raise ValueError(f"nonlinearity.f1: output {e.output} > p = {P.p}")
             if nl.sector is not None and np.shape(nl.sector) != (P.r, 2):
                 raise ValueError(f"nonlinearity.sector must be {P.r} pairs [alpha, beta]")

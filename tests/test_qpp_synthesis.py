@@ -50,6 +50,8 @@ def _sup_gain(A, B, C, a):
     ("2*y2*k", "unknown symbol 'y2'"),
     ("k*y1/0", "singular"),
     ("k*log(y1)", "singular"),
+    ("k*tan(y1)", "not continuous in y1"),                     # pole at pi/2 between grid points
+    ("y1/(k - 4.1)", "not continuous in k"),
     ("k*sqrt(abs(y1))", "not sector-bounded"),
     ("k + y1", "not sector-bounded"),
     ("__import__('os').system('true')", "unknown function \"__import__('os').system\""),
