@@ -287,3 +287,10 @@ def test_manipulator_beta3_beta4_bookkeeping():
         assert scale * b4 == pytest.approx(0.056, abs=5e-4)
         assert b3 < 1e-6 < 0.018
         assert np.max(np.abs(x[2])) < 1e-6                    # x3 = ẋ1 stays 0 on the nominal path
+
+
+def test_every_shipped_qpp_config_is_covered_by_a_design_test():
+    from pathlib import Path
+
+    shipped = {p.stem for p in (Path(__file__).resolve().parents[1] / "configs").glob("qpp_*.yaml")}
+    assert shipped == set(NEW) | {"qpp_siso", "qpp_manipulator"}
