@@ -1188,6 +1188,7 @@ class _Report:
         for rd, (v, _, _) in b1.items():
             verd = ", ".join(f"{nm}: {'β1 ≤ m' if v <= row[3] else 'β1 > m'}" for nm, row in th.items())
             brow.append([f"design inequality β1 ≤ m, B_z {rd}", "β1 < m", verd, ""])
+        brow.extend(self._qpp_printed_gain_rows(chap, d, pub, names))
         brow.append(["circle criterion (lemma 1), sector " + _fmt(d["sector"], "{:g}"), "satisfied",
                      f"{'PASS' if circle_passed else 'FAIL'}; margins {_fmt(d['circle']['margins'], '{:.4f}')}; "
                      f"largest admissible sector scale {float(d['circle']['max_scale']):.4g}",
@@ -1218,6 +1219,27 @@ class _Report:
         self.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion", fig_circle(d, name, self.figdir))
         self.doc.fig(f"{name}_responses", f"Ch. {chap}: outputs vs nominal outputs and tracking errors",
                      fig_qpp(spath, d, cfg.spheres.beta_o, name, self.figdir, out_labels))
+
+    def _qpp_printed_gain_rows(self, chap, d, pub, names=()):
+        """β1, β3, β4, m of the *printed* gains (qpp_design.h5 ``published_certificate``) beside the
+        synthesized ones; β1 of the printed gains also enters the ledger."""
+        pc = d.get("published_certificate") if isinstance(d, dict) else None
+        if not pc:
+            return []
+        rows = []
+        b1e, b1p = float(pc["beta1_eq10_7"]), float(pc["beta1_printed"])
+        pn = self.ledger_add(f"ch. {chap}", "β1 of the printed gains (B_z eq 10.7)", _num_str(pub.beta1), b1e,
+                             explanation=f"printed gains, exact L∞ norm: {b1e:.5f} (eq 10.7 B_z), {b1p:.5f} "
+                                         "(printed B_z); see the β1 row above for the synthesized gains")
+        rows.append(["β1 with the printed gains, B_z eq 10.7 / printed", _num_str(pub.beta1),
+                     f"{b1e:.6f} / {b1p:.6f}", self.status_text(pn)])
+        for k, row in enumerate(np.atleast_2d(pc["thresholds"])):
+            nm = f", {names[k]} bookkeeping" if k < len(names) else ""
+            rows.append([f"β3 / β4 / m with the printed gains{nm}", f"{pub.beta3} / {pub.beta4} / {pub.m}",
+                         f"{row[1]:.5g} / {row[2]:.5g} / {row[3]:.5f}", "printed gains"])
+        rows.append(["circle criterion with the printed gains", "satisfied",
+                     "PASS" if int(pc["circle_passed"]) else "FAIL", ""])
+        return rows
 
     def _qpp_thresholds(self, chap, cfg, th):
         from qpp import spheres

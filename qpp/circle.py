@@ -38,7 +38,9 @@ def frequency_response(A, B, C, a: float, omega) -> np.ndarray:
     A, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C))
     n = A.shape[0]
     I = np.eye(n)
-    return np.array([C @ np.linalg.solve((-a + 1j * w) * I - A, B) for w in omega])
+    omega = np.asarray(omega, float)
+    M = (-a + 1j * omega)[:, None, None] * I[None] - A[None]
+    return C[None] @ np.linalg.solve(M, np.broadcast_to(B.astype(complex), (omega.size,) + B.shape))
 
 
 def gershgorin_bands(Hw: np.ndarray):

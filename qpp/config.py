@@ -115,7 +115,77 @@ class PolarArmNonlinearity(_Model):
         return 0.5 * (self.M_min + self.M_max)
 
 
-Nonlinearity = Annotated[Union[SinusoidalNonlinearity, PolarArmNonlinearity], Field(discriminator="kind")]
+class ParameterRange(_Model):
+    """An uncertain parameter θ ∈ [min, max] with its nominal value θ° (default: the midpoint)."""
+
+    min: float
+    max: float
+    nominal: Optional[float] = Field(None, description="value cancelled by the controller (f1o = f1(θ°))")
+
+    @model_validator(mode="after")
+    def _order(self):
+        if self.max < self.min:
+            raise ValueError("max must be ≥ min")
+        if self.nominal is not None and not self.min <= self.nominal <= self.max:
+            raise ValueError("nominal must lie in [min, max]")
+        return self
+
+    @property
+    def nominal_value(self) -> float:
+        return 0.5 * (self.min + self.max) if self.nominal is None else self.nominal
+
+
+class LibraryForm(_Model):
+    """A library nonlinearity on one output: gain·form(y_output) (qpp.nonlin.library_expression)."""
+
+    form: Literal["saturation", "dead_zone", "cubic", "sin"]
+    output: int = Field(1, ge=1, description="output index (1-based) the form acts on")
+    gain: Union[float, str] = Field(1.0, description="number or an expression in the parameters, e.g. 'k'")
+    level: Optional[float] = Field(None, gt=0, description="saturation level / dead-zone half-width")
+
+
+class ExpressionNonlinearity(_Model):
+    """General sector-bounded f1(y, t, θ) per control channel (qpp.nonlin), parsed without eval.
+
+    ``f1`` has one entry per control input: an expression in y1…yp, t and the parameter names
+    (functions: sin cos tan exp log sqrt tanh atan abs sign min max sat deadzone cubic), or a
+    library form.  The sector, β3 and β4 are computed over ``y_range`` × parameter ranges ×
+    [0, t_range]; ``sector``, ``beta3``, ``beta4`` override the computed values.
+    """
+
+    kind: Literal["expression"] = "expression"
+    f1: list[Union[str, float, LibraryForm]] = Field(min_length=1, description="one entry per control input (m)")
+    parameters: dict[str, ParameterRange] = Field(default_factory=dict, description="uncertain parameters")
+    y_range: Matrix = Field(description="[[lo, hi], ...] per output: the set on which φ is sector-bounded")
+    t_range: Optional[float] = Field(None, gt=0, description="sampled time horizon, s (default: simulation.t_final)")
+    sector: Optional[Matrix] = Field(None, description="stated sector [[α, β], ...] of φ (overrides the computed one)")
+    beta3: Optional[float] = Field(None, ge=0, description="stated β3 (overrides the computed one)")
+    beta4: Optional[float] = Field(None, ge=0, description="stated β4 (overrides the computed one)")
+    n_grid: int = Field(41, ge=5, le=401, description="grid points per output for the sampled bounds")
+
+    @field_validator("parameters")
+    @classmethod
+    def _names(cls, v):
+        import re
+
+        for k in v:
+            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,30}", k):
+                raise ValueError(f"parameter name {k!r} is not an identifier")
+        return v
+
+    def texts(self) -> list[str]:
+        """The channel expressions, library forms expanded."""
+        from qpp.nonlin import library_expression
+
+        return [e if isinstance(e, str) else repr(float(e)) if isinstance(e, (int, float))
+                else library_expression(e.form, e.output, str(e.gain), e.level) for e in self.f1]
+
+    def param_table(self) -> dict:
+        return {k: (r.min, r.max, r.nominal_value) for k, r in self.parameters.items()}
+
+
+Nonlinearity = Annotated[Union[SinusoidalNonlinearity, PolarArmNonlinearity, ExpressionNonlinearity],
+                         Field(discriminator="kind")]
 
 
 class Hinf(_Model):
@@ -148,6 +218,9 @@ class Spheres(_Model):
     beta_ri: float = Field(ge=0, description="reference sphere radius β_ri, output units")
     d_inf: float = Field(0.0, ge=0, description="‖d‖∞ used in the threshold m (12.1)")
     T: Seconds = Field(gt=0, le=1e4, description="truncation time T, s (settling time; 10.44)")
+    adapt_T: bool = Field(True, description="12.1 step 3: adapt T to the closed loop's settling time")
+    settle_band: float = Field(0.05, gt=0, lt=1, description="settling: |y_o − r_o| stays below this "
+                                                             "fraction of its peak after T")
 
 
 class Design(_Model):
@@ -162,6 +235,13 @@ class Design(_Model):
     max_iter: int = Field(8, ge=1, le=100, description="iterations of ch. 12.1 (ρ ← ρ·rho_factor when β1 > m)")
     rho_factor: float = Field(0.5, gt=0, lt=1, description="ρ reduction per iteration")
     a_factor: float = Field(0.1, gt=0, lt=1, description="a reduction when the circle criterion fails")
+    a_min: Optional[float] = Field(None, ge=0, description="smallest a tried, 1/s (default a·1e-4)")
+    a_max: Optional[float] = Field(None, ge=0, description="largest a tried, 1/s (default the configured a)")
+    rho_min: float = Field(1e-8, gt=0, description="ε of ch. 11 step 6: smallest ρ")
+    rho_max: float = Field(1e2, gt=0, description="largest ρ of the wider bracketing search")
+    wider_search: bool = Field(True, description="when 12.1 fails: other W_s weights and a bracketing ρ search")
+    ws_scales: list[float] = Field([1.0, 0.3, 3.0, 0.1, 10.0], min_length=1,
+                                   description="W_s = w·S_c scalings tried by the wider search")
 
 
 class Term(_Model):
@@ -184,6 +264,8 @@ class Scenario(_Model):
     name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$")
     delta_r: Optional[Signal] = Field(None, description="reference perturbation r − r_o per channel")
     gamma: float = Field(0.0, description="uncertain parameter: γ (sinusoidal) or payload M in kg (polar_arm)")
+    parameters: Optional[dict[str, float]] = Field(None, description="expression kind: parameter values "
+                                                                     "(missing ones nominal)")
     impulse_time: OptSeconds = Field(None, ge=0, description="time of a disturbance impulse d = I δ(t − t_i), s")
     impulse: Optional[list[float]] = Field(None, description="impulse size I per disturbance channel (r)")
 
@@ -204,6 +286,9 @@ class Output(_Model):
     figures: bool = Field(True, description="write PNG figures next to the HDF5 files")
     units: Literal["SI"] = Field("SI", description="unit system of the results: qpp works in SI (s, rad/s, kg, m); "
                                                    "plant signals are in the user's units")
+
+
+_EXPR_CACHE: dict = {}
 
 
 class QppConfig(_Model):
@@ -237,6 +322,34 @@ class QppConfig(_Model):
             for nm in ("F0", "F1", "F_unc"):
                 if np.shape(getattr(nl, nm)) != (P.m, P.p):
                     raise ValueError(f"nonlinearity.{nm} must be {P.m}×{P.p}")
+        elif isinstance(nl, ExpressionNonlinearity):
+            if len(nl.f1) != P.m:
+                raise ValueError(f"nonlinearity.f1 must have {P.m} entries (one per control input)")
+            if np.shape(nl.y_range) != (P.p, 2) or any(lo >= hi for lo, hi in nl.y_range):
+                raise ValueError(f"nonlinearity.y_range must be {P.p} pairs [lo, hi] with lo < hi")
+            if P.r != P.p:
+                raise ValueError(f"nonlinearity.kind expression needs as many disturbance channels as outputs "
+                                 f"(G has {P.r} columns, C {P.p} rows) for the circle criterion")
+            for e in nl.f1:
+                if isinstance(e, LibraryForm) and e.output > P.p:
+                    raise ValueError(f"nonlinearity.f1: output {e.output} > p = {P.p}")
+            if nl.sector is not None and np.shape(nl.sector) != (P.r, 2):
+                raise ValueError(f"nonlinearity.sector must be {P.r} pairs [alpha, beta]")
+            try:
+                self.expression_model().sector_info      # parse, check singular / sector-bounded
+            except ConfigError as exc:
+                raise ValueError(str(exc)) from None
+            for s in self.simulation.scenarios:
+                if s.gamma != 0.0:
+                    raise ValueError(f"scenario {s.name}: nonlinearity.kind expression takes parameters: "
+                                     "{name: value}, not gamma")
+                for k in (s.parameters or {}):
+                    if k not in nl.parameters:
+                        raise ValueError(f"scenario {s.name}: unknown parameter {k!r}")
+                    rg = nl.parameters[k]
+                    if not rg.min <= s.parameters[k] <= rg.max:
+                        raise ValueError(f"scenario {s.name}: parameter {k} = {s.parameters[k]} outside "
+                                         f"[{rg.min}, {rg.max}]")
         elif (P.n, P.m, P.p) != (4, 2, 2):
             raise ValueError("nonlinearity.kind polar_arm needs n=4, m=2, p=2 (eq 14.2)")
         if len(self.simulation.r_o) != P.p:
@@ -261,6 +374,24 @@ class QppConfig(_Model):
 
         p = self.plant
         return LurePlant(p.A, p.B, p.C, p.G, p.Ac, p.Bc, p.Cc)
+
+    def expression_model(self):
+        """The compiled :class:`qpp.nonlin.ExpressionModel` of an ``expression`` nonlinearity (cached)."""
+        from qpp.nonlin import ExpressionModel
+
+        nl = self.nonlinearity
+        if not isinstance(nl, ExpressionNonlinearity):
+            raise TypeError("expression_model() needs nonlinearity.kind = expression")
+        P = self.lure_plant()
+        t_range = nl.t_range or max(self.simulation.t_final, self.spheres.T)
+        key = (tuple(nl.texts()), tuple(sorted(nl.param_table().items())), np.asarray(nl.y_range).tobytes(),
+               P.N().tobytes(), t_range, nl.n_grid)
+        if key not in _EXPR_CACHE:
+            if len(_EXPR_CACHE) > 32:
+                _EXPR_CACHE.clear()
+            _EXPR_CACHE[key] = ExpressionModel(nl.texts(), P.p, nl.param_table(), nl.y_range, P.N(), t_range,
+                                               n_grid=nl.n_grid)
+        return _EXPR_CACHE[key]
 
     def run_dir(self) -> Path:
         return Path(self.output.root) / self.name

@@ -53,7 +53,7 @@ def _rel_res(R, X):
 
 
 def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
-               weight: str = "servo", observer: str = "filter") -> HinfGains:
+               weight: str = "servo", observer: str = "filter", strict: bool = True) -> HinfGains:
     """Gains K1, Kc, H of theorem 3 for control weight ``rho`` and shift ``a``.
 
     Parameters
@@ -69,6 +69,9 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
         State weight ``[0 Cc]`` (reproduces the report) or the printed ``[C 0]``.
     observer : {"filter", "dgkf"}
         Observer gain: filter Riccati, or with the (I − h k11)⁻¹ correction.
+    strict : bool
+        Raise when k is not positive semi-definite (step 4); ``False`` returns the gains and leaves
+        the tests to the caller (:func:`existence_tests`).
 
     Raises
     ------
@@ -97,7 +100,7 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
     res_k = _rel_res(Ab.T @ k + k @ Ab + k @ (Ga @ Ga.T / nu ** 2 - Ba @ Ba.T / rho ** 2) @ k + Q, k)
     if not np.all(np.isfinite(k)) or res_k > 1e-6:
         raise ConvergenceError(f"Riccati 11.1 residual {res_k:.1e} too large at rho={rho:g}, nu={nu:g}")
-    if np.linalg.eigvalsh(k).min() < -1e-9 * max(1.0, np.abs(k).max()):
+    if strict and np.linalg.eigvalsh(k).min() < -1e-9 * max(1.0, np.abs(k).max()):
         raise DesignError(f"Riccati 11.1 solution is not k ≥ 0 at rho={rho:g}, nu={nu:g} (step 4)")
     K = -Ba.T @ k / rho ** 2
     n = P.n
@@ -128,42 +131,87 @@ def closed_loop_norm(plant: LurePlant, g: HinfGains, *, bz: str = "eq10.7") -> f
     return hinf_norm(Az + g.a * np.eye(Az.shape[0]), Bz, Cz)[0]
 
 
+def existence_tests(g: HinfGains) -> dict:
+    """Existence conditions of theorem 3 / steps 4–5 of ch. 11 for one solution.
+
+    ``k_psd``: k1 ⪰ 0 (plant block of k); ``h_psd``: h∞ ⪰ 0; ``spectral``: λmax(k1 h∞) < ν², i.e.
+    λmax < 1 for the scaled system of 11.3 (the scaling multiplies k1 h∞ by ν⁻²).
+    """
+    n = g.h.shape[0]
+    k1 = g.k[:n, :n]
+    tol_k = 1e-9 * max(1.0, np.abs(g.k).max())
+    tol_h = 1e-9 * max(1.0, np.abs(g.h).max())
+    k_psd = bool(np.linalg.eigvalsh(g.k).min() >= -tol_k)
+    h_psd = bool(np.linalg.eigvalsh(g.h).min() >= -tol_h)
+    lam = float(np.max(np.real(np.linalg.eigvals(k1 @ g.h))))
+    return {"k_psd": k_psd, "h_psd": h_psd, "lambda_kh_scaled": lam / g.nu ** 2,
+            "spectral": bool(lam / g.nu ** 2 < 1.0)}
+
+
 def hinf_search(plant: LurePlant, *, rho: float, a: float, nu: float | None = None,
                 rho_factor: float = 0.5, rho_min: float = 1e-8, max_iter: int = 60,
-                weight: str = "servo", observer: str = "filter", bz: str = "eq10.7") -> HinfGains:
-    """Steps 1–8 of ch. 11: lower ν while a solution exists, lower ρ when it stalls.
+                weight: str = "servo", observer: str = "filter", bz: str = "eq10.7",
+                target: float | None = None) -> HinfGains:
+    """Steps 1–8 of ch. 11 with all of their tests.
 
-    Step 1 starts from ν = ‖T_wy‖∞ of the ν = 1 design (or the given ``nu``).  At each (ρ, ν) the
-    Riccati 11.1 and filter equations are solved (step 2), δ = ‖T_wy‖∞ is evaluated (step 3), the
-    existence conditions k ≥ 0, h ≥ 0 and λ_max(k h) < ν² are checked (steps 4–5); if δ < ν, ν ← δ
-    (steps 6–7), otherwise ρ ← ρ·rho_factor until ρ ≤ rho_min (step 6).  The best gains (smallest δ)
-    are returned (step 8); ``history`` lists (ρ, ν, δ, ok).
+    Step 1: ν starts at δ = ‖T_wy‖∞ of the ν = 1 design (or the given ``nu``).  Steps 2–3: solve
+    Riccati 11.1 and the observer equation at (ρ, ν) and evaluate δ (11.4) — here δ is the a-shifted
+    norm from w = [r; d] to y, i.e. β1 of the gains.  Step 4: k1 ⪰ 0 and h∞ ⪰ 0, else (δ ≥ ν:
+    ρ ← ρ·rho_factor; δ < ν: ν ← δ).  Step 5: λmax(k1 h∞)/ν² < 1, same branching.  Step 6: δ < ν →
+    ν ← δ (step 7: repeat while ν keeps falling); otherwise ρ ≤ ε (``rho_min``) ends the search
+    (step 8), else ρ is decreased.  With ``target`` the search stops at the first admissible
+    solution with δ ≤ target (procedure 12.1 step 2: "until β1 ≤ m").
+
+    Returns the admissible gains of smallest δ; ``history`` holds one dict per pass: ρ, ν, δ,
+    k_psd, h_psd, lambda_kh_scaled, spectral, admissible, action.
     """
     history = []
     best: HinfGains | None = None
     best_delta = np.inf
     if nu is None:
-        g0 = hinf_gains(plant, rho=rho, a=a, nu=1.0, weight=weight, observer=observer)
-        nu = closed_loop_norm(plant, g0, bz=bz)
-        best, best_delta = g0, nu
-        history.append((rho, 1.0, nu, True))
-    for _ in range(max_iter):
         try:
-            g = hinf_gains(plant, rho=rho, a=a, nu=nu, weight=weight, observer=observer)
-            ok = g.lambda_kh < nu ** 2
-            delta = closed_loop_norm(plant, g, bz=bz)
+            g0 = hinf_gains(plant, rho=rho, a=a, nu=1.0, weight=weight, observer=observer, strict=False)
+            nu = closed_loop_norm(plant, g0, bz=bz)
+            if not np.isfinite(nu) or nu <= 0:
+                nu = 1.0
         except (DesignError, ConvergenceError):
-            ok, delta, g = False, np.inf, None
-        history.append((rho, nu, delta, ok))
+            nu = 1.0
+    nu_min = np.inf
+    for _ in range(max_iter):
+        rec = {"rho": rho, "nu": nu, "delta": np.inf, "k_psd": False, "h_psd": False,
+               "lambda_kh_scaled": np.nan, "spectral": False, "admissible": False}
+        try:
+            g = hinf_gains(plant, rho=rho, a=a, nu=nu, weight=weight, observer=observer, strict=False)
+            rec.update(existence_tests(g))
+            rec["delta"] = delta = closed_loop_norm(plant, g, bz=bz)
+        except (DesignError, ConvergenceError):
+            g, delta = None, np.inf
+        ok = g is not None and rec["k_psd"] and rec["h_psd"] and rec["spectral"] and np.isfinite(delta)
+        rec["admissible"] = bool(ok)
+        history.append(rec)
         if ok and delta < best_delta:
             best, best_delta = g, delta
-        if ok and delta < nu * (1 - 1e-6):
-            nu = delta
-            continue
-        if rho * rho_factor < rho_min:
+        if ok and target is not None and delta <= target:
+            rec["action"] = "target met"
             break
-        rho *= rho_factor
+        if not ok:                                    # steps 4-5
+            if np.isfinite(delta) and delta < nu:
+                rec["action"] = "nu <- delta"
+                nu = delta
+                continue
+        elif delta < nu * (1 - 1e-6):                 # steps 6-7
+            nu = delta
+            if nu < nu_min:
+                nu_min = nu
+                rec["action"] = "nu <- delta (smaller)"
+                continue
+        if rho <= rho_min:                            # step 6: rho <= eps -> step 8
+            rec["action"] = "rho <= eps: stop"
+            break
+        rec["action"] = "rho decreased"
+        rho = max(rho * rho_factor, rho_min)
     if best is None:
-        raise DesignError("H∞ search (ch. 11 steps 1-8) found no admissible gains")
+        raise DesignError("H∞ search (ch. 11 steps 1-8) found no admissible gains "
+                          "(k1 ⪰ 0, h∞ ⪰ 0, λmax(k1 h∞) < ν² failed for every ρ, ν tried)")
     best.history = history
     return best

@@ -100,3 +100,30 @@ def plot_cartesian(sims, a: float, path: Path) -> Path:
     save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+def plot_iterations(res, path: Path) -> Path:
+    """β1 and the threshold m versus the evaluation index of procedure 12.1 (circle verdict marked)."""
+    plt = _plt()
+    its = [it for it in res.iterations if np.isfinite(it.get("beta1", np.nan))]
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    if its:
+        k = np.arange(1, len(its) + 1)
+        b1 = np.array([it["beta1"] for it in its])
+        m = np.array([it["m"] for it in its])
+        circ = np.array([it["circle"] for it in its], bool)
+        ax.plot(k, b1, "b.-", label="β1")
+        ax.plot(k, m, "r.-", label="m (12.1)")
+        ax.plot(k[~circ], b1[~circ], "kx", ms=8, label="circle criterion fails")
+        for i, it in enumerate(its):
+            if it.get("certified"):
+                ax.plot(k[i], b1[i], "go", mfc="none", ms=10)
+        ax.set_xticks(k if k.size <= 30 else k[:: max(1, k.size // 15)])
+    ax.set_xlabel("evaluation of procedure 12.1")
+    ax.set_ylabel("β1, m")
+    ax.set_title(("certified" if res.certified else "NO certified design")
+                 + f": β1 = {res.beta1_ref:.4g}, m = {res.m_ref:.4g}")
+    ax.legend(fontsize=8)
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path

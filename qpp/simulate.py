@@ -20,7 +20,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from acmm.errors import ConvergenceError
-from qpp.config import PolarArmNonlinearity, QppConfig, Scenario, SinusoidalNonlinearity, Term
+from qpp.config import (ExpressionNonlinearity, PolarArmNonlinearity, QppConfig, Scenario,
+                        SinusoidalNonlinearity, Term)
 from qpp.lure import LurePlant
 
 
@@ -46,8 +47,17 @@ def eval_signal(signal, t: float) -> np.ndarray:
     return np.array([eval_terms(ch, t) for ch in signal]) if signal else np.zeros(0)
 
 
-def make_f1(nl, plant: LurePlant):
-    """Matched nonlinearity f1(x, t, γ) ∈ R^m (f = B f1) of the config's kind."""
+def make_f1(nl, plant: LurePlant, model=None):
+    """Matched nonlinearity f1(x, t, γ) ∈ R^m (f = B f1) of the config's kind and the nominal γ.
+
+    For ``kind: expression`` γ is the vector of parameter values and ``model`` the config's
+    :meth:`~qpp.config.QppConfig.expression_model`."""
+    if isinstance(nl, ExpressionNonlinearity):
+        C = plant.C
+
+        def f1(x, t, g):
+            return model.f1(C @ x, t, g)
+        return f1, model.nom.copy()
     if isinstance(nl, SinusoidalNonlinearity):
         F0, F1, Fu = (np.asarray(getattr(nl, k), float) for k in ("F0", "F1", "F_unc"))
         C = plant.C
@@ -95,10 +105,11 @@ class SimResult:
     u_o: np.ndarray     #: (m, N) nominal control
     x: np.ndarray       #: (n, N) plant state
     x_o: np.ndarray     #: (n, N) nominal plant state
-    gamma: float
+    gamma: float        #: γ / payload; expression kind: first parameter value (all in ``parameters``)
     error_inf: float    #: ‖y − y_o‖∞
     error_per_output: np.ndarray
     beta_o: float
+    parameters: dict = None   #: expression kind: parameter values of the scenario
 
     @property
     def passed(self) -> bool:
@@ -158,11 +169,27 @@ def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nomina
     return Z, U
 
 
+def config_f1(cfg: QppConfig, plant: LurePlant):
+    """:func:`make_f1` of a config (compiles the expression model when needed)."""
+    nl = cfg.nonlinearity
+    return make_f1(nl, plant, cfg.expression_model() if isinstance(nl, ExpressionNonlinearity) else None)
+
+
+def scenario_gamma(cfg: QppConfig, scenario: Scenario):
+    """Value of the uncertain parameter(s) in a scenario: γ, M, or the parameter vector."""
+    nl = cfg.nonlinearity
+    if not isinstance(nl, ExpressionNonlinearity):
+        return scenario.gamma
+    vals = scenario.parameters or {}
+    return np.array([vals.get(k, r.nominal_value) for k, r in nl.parameters.items()], float)
+
+
 def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=None) -> SimResult:
     """Run one scenario and its nominal loop; compare ‖y − y_o‖∞ with β_o."""
     plant = cfg.lure_plant()
     sim = cfg.simulation
-    f1, g_nom = make_f1(cfg.nonlinearity, plant)
+    f1, g_nom = config_f1(cfg, plant)
+    gam = scenario_gamma(cfg, scenario)
     t = np.linspace(0.0, sim.t_final, sim.n_samples)
     z0 = initial_state(cfg, plant, K1, Kc)
     r_o_fun = lambda tt: eval_signal(sim.r_o, tt)  # noqa: E731
@@ -174,7 +201,7 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
         nominal = simulate_loop(plant, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom, r_fun=r_o_fun,
                                 t_eval=t, z0=z0, rtol=sim.rtol, atol=sim.atol)
     Zo, Uo = nominal
-    Z, U = simulate_loop(plant, K1, Kc, H, f1, gamma=scenario.gamma, gamma_nominal=g_nom, r_fun=r_fun,
+    Z, U = simulate_loop(plant, K1, Kc, H, f1, gamma=gam, gamma_nominal=g_nom, r_fun=r_fun,
                          t_eval=t, z0=z0, impulse_time=scenario.impulse_time, impulse=scenario.impulse,
                          rtol=sim.rtol, atol=sim.atol)
     n = plant.n
@@ -182,8 +209,12 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
     err = np.max(np.abs(y - yo), axis=1)
     R = np.array([r_fun(tt) for tt in t]).T
     Ro = np.array([r_o_fun(tt) for tt in t]).T
-    return SimResult(scenario.name, t, R, Ro, y, yo, U, Uo, Z[:n], Zo[:n], scenario.gamma,
-                     float(err.max()), err, cfg.spheres.beta_o)
+    pars = None
+    if isinstance(cfg.nonlinearity, ExpressionNonlinearity):
+        pars = dict(zip(cfg.nonlinearity.parameters, map(float, np.atleast_1d(gam))))
+    g_scalar = float(np.atleast_1d(gam)[0]) if np.size(gam) else 0.0
+    return SimResult(scenario.name, t, R, Ro, y, yo, U, Uo, Z[:n], Zo[:n], g_scalar,
+                     float(err.max()), err, cfg.spheres.beta_o, pars)
 
 
 def simulate(cfg: QppConfig, K1, Kc, H, progress=None) -> list[SimResult]:
@@ -191,9 +222,9 @@ def simulate(cfg: QppConfig, K1, Kc, H, progress=None) -> list[SimResult]:
     name)`` is called after each scenario."""
     plant = cfg.lure_plant()
     sim = cfg.simulation
-    f1, g_nom = make_f1(cfg.nonlinearity, plant)
     t = np.linspace(0.0, sim.t_final, sim.n_samples)
     z0 = initial_state(cfg, plant, K1, Kc)
+    f1, g_nom = config_f1(cfg, plant)
     nominal = simulate_loop(plant, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom,
                             r_fun=lambda tt: eval_signal(sim.r_o, tt), t_eval=t, z0=z0,
                             rtol=sim.rtol, atol=sim.atol)

@@ -77,8 +77,11 @@ def _hinf_hamiltonian(A, B, C, D, tol=1e-10):
 def grid_norm(A, B, C, omega) -> tuple[float, float]:
     """max over a frequency grid of σ_max(C (jωI − A)⁻¹ B) — a lower bound for the cross-check."""
     A, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C))
-    D = np.zeros((C.shape[0], B.shape[1]))
-    vals = np.array([_sigma(A, B, C, D, w) for w in np.asarray(omega, float)])
+    omega = np.asarray(omega, float)
+    n = A.shape[0]
+    M = 1j * omega[:, None, None] * np.eye(n)[None] - A[None]          # batched (jωI − A)
+    G = C[None] @ np.linalg.solve(M, np.broadcast_to(B, (omega.size,) + B.shape))
+    vals = np.linalg.svd(G, compute_uv=False)[:, 0]
     i = int(np.argmax(vals))
     return float(vals[i]), float(omega[i])
 

@@ -38,11 +38,33 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
                   "y_o": Dataset(np.asarray(r.y_o).T if np.ndim(r.y_o) == 2 and np.shape(r.y_o)[-1] == np.size(r.y_o_t)
                                  else r.y_o, "output units", "nominal output y_o on [0, T], (t, output)",
                                  dims=("t", "output") if np.ndim(r.y_o) == 2 else ("t",))},
-        "iterations": Dataset(np.array([[it["rho"], it["a"], it["beta1"], it["m"], float(it["circle"])]
-                                        for it in r.iterations]) if r.iterations else np.zeros((0, 5)),
-                              "mixed", "ch. 12.1 iterations", ["rho", "a_1/s", "beta1", "m", "circle_passed"],
-                              dims=("iteration", "quantity")),
+        "iterations": _iterations(r),
     }
+    if r.hinf_history:
+        keys = ["rho", "nu", "delta", "k_psd", "h_psd", "lambda_kh_scaled", "spectral", "admissible", "a", "ws"]
+        items["hinf_search"] = Dataset(np.array([[float(h.get(k, np.nan)) for k in keys] for h in r.hinf_history]),
+                                       "mixed", "ch. 11 passes: rho, nu, delta = ||T_wy||inf (a-shifted, = beta1), "
+                                       "tests k1 >= 0, h >= 0, lambda_max(k1 h)/nu^2 < 1 (1 = true), admissible, "
+                                       "a (1/s), mean W_s scale", keys,
+                                       attrs={"actions": "; ".join(str(h.get("action", "")) for h in r.hinf_history)})
+    items["certificate"] = {
+        "certified": Dataset(int(r.certified), "1", "1: beta1 <= m and circle criterion (theorem 2, lemma 1)"),
+        "beta1": Dataset(r.beta1_ref, "1", f"beta1 of the design inequality (B_z {r.bz})"),
+        "m": Dataset(r.m_ref, "1", f"threshold m (12.1), bookkeeping {r.bookkeeping}"),
+        "T_settle": Dataset(r.T_settle, "s", "settling time of the nominal closed loop"),
+        "ws_scale": Dataset(np.asarray(r.ws_scale or [1.0], float), "1", "W_s = diag(w)·S_c of the gains"),
+    }
+    if r.published is not None:
+        pb = r.published
+        items["published_certificate"] = {
+            "beta1_eq10_7": Dataset(pb.beta1["eq10.7"]["value"], "1", "beta1 of the printed gains, B_z eq 10.7"),
+            "beta1_printed": Dataset(pb.beta1["printed"]["value"], "1", "beta1 of the printed gains, printed B_z"),
+            "thresholds": Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in pb.thresholds]), "1",
+                                  "β3, β4, m of the printed gains per bookkeeping: "
+                                  + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"]),
+            "circle_passed": Dataset(int(pb.circle.passed), "1", "circle criterion with the printed gains"),
+            "T": Dataset(pb.T, "s", "truncation time used"),
+        }
     for reading in r.beta1:
         key = reading.replace(".", "_")
         b = r.beta1[reading]
@@ -78,18 +100,42 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     return items
 
 
+_ITER_KEYS = ["rho", "nu", "a", "T", "delta", "beta1", "m", "circle", "certified"]
+_ITER_UNITS = ["1", "1", "1/s", "s", "1", "1", "1", "bool", "bool"]
+
+
+def _iterations(r: DesignResult) -> Dataset:
+    rows = [[float(it.get(k, np.nan)) for k in _ITER_KEYS] for it in r.iterations]
+    return Dataset(np.array(rows) if rows else np.zeros((0, len(_ITER_KEYS))), "mixed",
+                   "procedure 12.1, one row per evaluation: rho, nu, a (1/s), T (s), delta = ||T_wy||inf, "
+                   "beta1, m (recomputed), circle passed, certified",
+                   _ITER_KEYS, dims=("iteration", "quantity"),
+                   attrs={"column_units": ",".join(_ITER_UNITS),
+                                      "stages": ";".join(str(it.get("stage", "")) for it in r.iterations),
+                                      "ws": ";".join(",".join(f"{w:g}" for w in it.get("ws", [1.0]))
+                                                     for it in r.iterations),
+                                      "notes": ";".join(str(it.get("note", "")).replace(";", ",")
+                                                        for it in r.iterations)})
+
+
 @owns_outputs("qpp design", lambda c: _cfg(c))
 def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignResult, Path]:
-    """Design (ch. 12.1) and write ``<root>/<name>/qpp_design.h5`` (+ circle-criterion figures)."""
+    """Design (ch. 12.1) and write ``<root>/<name>/qpp_design.h5`` (+ circle and iteration figures).
+
+    An uncertified design is still written (root attributes ``certified = 0``, ``label =
+    "uncertified"``, ``verdict``); the caller decides the exit code (:class:`DesignError`, 3)."""
     cfg = _cfg(config)
     r = design(cfg)
     verdicts = {f"beta1_le_m[{rd},{bk}]": int(v) for (rd, bk), v in r.verdicts().items()}
     path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
-                    {"stage": "qpp design", "circle_passed": int(r.circle.passed), **verdicts})
+                    {"stage": "qpp design", "circle_passed": int(r.circle.passed), **verdicts,
+                     "certified": int(r.certified), "label": "certified" if r.certified else "uncertified",
+                     "verdict": r.verdict, "bookkeeping": r.bookkeeping})
     if cfg.output.figures if figures is None else figures:
-        from qpp.plots import plot_circle
+        from qpp.plots import plot_circle, plot_iterations
 
         plot_circle(r, cfg.run_dir() / "qpp_circle.png")
+        plot_iterations(r, cfg.run_dir() / "qpp_iterations.png")
     return cfg, r, path
 
 
@@ -115,11 +161,13 @@ def run_simulate(config, figures: bool | None = None, progress=None):
             "u": Dataset(np.asarray(s.u).T, "control units", "control u = K1 x̂ + Kc x_c − f1o", dims=("t", "input")),
             "x": Dataset(np.asarray(s.x).T, "state units", "plant state", dims=("t", "state")),
             "error_inf": Dataset(s.error_inf, "output units", "‖y − y_o‖∞",
-                                 attrs={"beta_o": s.beta_o, "passed": int(s.passed), "gamma": s.gamma}),
+                                 attrs={"beta_o": s.beta_o, "passed": int(s.passed), "gamma": s.gamma,
+                                        **{f"param_{k}": v for k, v in (s.parameters or {}).items()}}),
             "error_per_output": Dataset(s.error_per_output, "output units", "sup_t |y_i − y_oi|", dims=("output",)),
         }
     path = write_h5(cfg.run_dir() / "qpp_sim.h5", items, cfg.to_yaml(),
-                    {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims))})
+                    {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims)),
+                     "design_certified": int(r.certified), "design_verdict": r.verdict})
     if cfg.output.figures if figures is None else figures:
         from qpp.plots import plot_cartesian, plot_scenario
 
