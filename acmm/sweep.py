@@ -56,6 +56,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from acmm.results import write_text
+from acmm.runlock import locked_stage
 
 from acmm.errors import AcmmError, ConfigError, ConvergenceError, DesignError, NoEquilibriumError
 from acmm.sweep_config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sweep, swept_parameters
@@ -404,7 +405,10 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
     import multiprocessing
 
     ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
-    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+    from acmm.workers import die_with_parent
+
+    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=die_with_parent,
+                                  initargs=(os.getpid(),))
     return pool, lambda: pool.shutdown(wait=True, cancel_futures=True)
 
 
@@ -446,6 +450,14 @@ class Journal:
     """Append-only JSON-lines file; each record is flushed and fsynced before returning."""
 
     def __init__(self, path: Path, key: str, fresh: bool):
+        try:
+            self._open(path, key, fresh)
+        except OSError as exc:
+            from acmm.results import output_error
+
+            raise output_error(exc, "the sweep journal", path) from None
+
+    def _open(self, path: Path, key: str, fresh: bool) -> None:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         if fresh or not self.path.exists():
@@ -464,12 +476,20 @@ class Journal:
         self._f = open(self.path, "a")
 
     def append(self, record: dict) -> None:
-        self._f.write(json.dumps(record) + "\n")
-        self._f.flush()
-        os.fsync(self._f.fileno())
+        try:
+            self._f.write(json.dumps(record) + "\n")
+            self._f.flush()
+            os.fsync(self._f.fileno())
+        except OSError as exc:
+            from acmm.results import output_error
+
+            raise output_error(exc, "the sweep journal", self.path) from None
 
     def close(self) -> None:
-        self._f.close()
+        try:
+            self._f.close()
+        except OSError:          # every record was already flushed and fsynced
+            pass
 
 
 # ---------------------------------------------------------------------------------------------
@@ -522,6 +542,11 @@ def _call(task, ctx):
     return run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg)
 
 
+def _as_sweep(sweep) -> Sweep:
+    return sweep if isinstance(sweep, Sweep) else load_sweep(sweep)
+
+
+@locked_stage(_as_sweep)
 def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, scheduler: Optional[str] = None,
               resume: bool = False, progress: Optional[Callable[[int, int, dict], None]] = None,
               after_record: Optional[Callable[[int], None]] = None, figures: Optional[bool] = None,
@@ -563,10 +588,14 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         simulate_values(ctx, {})
     if workers is None:
         workers = spec.workers or os.cpu_count() or 1
-    journal = Journal(jpath, key, fresh=not resume)
     close = lambda: None  # noqa: E731
-    if executor is None and tasks:
+    if executor is None and tasks:        # before the journal: an unreachable scheduler writes nothing
         executor, close = make_executor(workers if not scheduler else 0, scheduler)
+    try:
+        journal = Journal(jpath, key, fresh=not resume)
+    except BaseException:
+        close()
+        raise
     window = 1 if isinstance(executor, SerialExecutor) else max(4, 4 * workers)
     n_new = 0
     last_snap = time.monotonic()

@@ -40,6 +40,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_valida
 
 from acmm.config import Config, Output, load_config, parse_config, require_mapping, validate_model
 from acmm.errors import ConfigError
+from acmm.results import RUN_NAME_MAX, RUN_NAME_PATTERN
 
 
 @dataclass(frozen=True)
@@ -242,7 +243,7 @@ def swept_parameters(spec: SweepSpec) -> list[str]:
 class SweepFile(_Model):
     """A sweep config file: name, description, the ``sweep`` section and ``output``."""
 
-    name: str = Field(pattern=r"^[A-Za-z0-9_-][A-Za-z0-9_.-]*$", description="sweep name; results in <root>/<name>/")
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX, description="sweep name; results in <root>/<name>/")
     description: str = Field("", description="free text")
     sweep: SweepSpec
     output: Output = Output()

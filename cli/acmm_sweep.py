@@ -10,7 +10,8 @@ from typing import Optional
 
 import typer
 
-from cli.common import user_errors
+from acmm.errors import EXIT_INPUT
+from cli.common import fail, user_errors
 
 
 class _Bar:
@@ -47,7 +48,7 @@ def register(app: typer.Typer) -> None:
     @app.command()
     @user_errors
     def sweep(config: Path = typer.Argument(..., help="sweep config YAML (see configs/sweep_smoke.yaml)"),
-              workers: Optional[int] = typer.Option(None, "--workers", "-j", min=1,
+              workers: Optional[int] = typer.Option(None, "--workers", "-j",
                                                     help="local worker processes (1: in-process; "
                                                          "default: sweep.workers or the CPU count)"),
               scheduler: Optional[str] = typer.Option(None, "--scheduler",
@@ -61,6 +62,8 @@ def register(app: typer.Typer) -> None:
         from acmm.sweep import run_sweep
         from acmm.sweep_config import load_sweep
 
+        if workers is not None and not 1 <= workers <= 1024:
+            fail(f"--workers: must be between 1 and 1024 (got {workers})", EXIT_INPUT)
         sw = load_sweep(config)
         if resume and not (sw.run_dir() / "sweep.journal").exists():
             typer.echo(f"note: no journal in {sw.run_dir()}; starting from the first case", err=True)

@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm.results import Dataset, write_h5
+from acmm.runlock import locked_stage
 from qpp.config import PolarArmNonlinearity, QppConfig, load_config
 from qpp.design import DesignResult, design
 from qpp.simulate import simulate
@@ -69,6 +70,7 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     return items
 
 
+@locked_stage(_cfg)
 def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignResult, Path]:
     """Design (ch. 12.1) and write ``<root>/<name>/qpp_design.h5`` (+ circle-criterion figures)."""
     cfg = _cfg(config)
@@ -83,6 +85,7 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     return cfg, r, path
 
 
+@locked_stage(_cfg)
 def run_simulate(config, figures: bool | None = None):
     """Design, simulate every scenario, write ``<root>/<name>/qpp_sim.h5`` (+ figures)."""
     cfg = _cfg(config)
