@@ -106,14 +106,12 @@ def run_lock(run_dir: str | Path):
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
     except OSError as exc:
-        if fd >= 0:
-            os.close(fd)
-        if not isinstance(exc, OutputError):
+        if fd >= 0:                       # we hold the lock (writing the pid failed): drop the file
             try:
-                if not os.listdir(d) or os.listdir(d) == [LOCK_NAME]:
-                    os.unlink(lock)
+                os.unlink(lock)
             except OSError:
                 pass
+            os.close(fd)
         remove_empty_dirs(created)
         raise output_error(exc, "the run lock", lock) from None
     remove_stale_temps(d)

@@ -396,7 +396,9 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
         except ImportError:
             raise ConfigError("--scheduler needs the optional Dask dependency: pip install 'acmm-qpp[dask]'") from None
         try:
-            client = distributed.Client(scheduler, timeout="10s")
+            from acmm.limits import limit
+
+            client = distributed.Client(scheduler, timeout=f"{limit('DASK_CONNECT_SECONDS'):g}s")
         except (OSError, TimeoutError, ValueError) as exc:
             raise ConfigError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
         return client.get_executor(), client.close
@@ -462,11 +464,18 @@ class Journal:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         if fresh or not self.path.exists():
             tmp = self.path.with_name(f".{self.path.name}.tmp")
-            with open(tmp, "w") as f:
-                f.write(json.dumps({"kind": "header", "version": JOURNAL_VERSION, "key": key}) + "\n")
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, self.path)
+            try:
+                with open(tmp, "w") as f:
+                    f.write(json.dumps({"kind": "header", "version": JOURNAL_VERSION, "key": key}) + "\n")
+                    f.flush()
+                    os.fsync(f.fileno())
+                os.replace(tmp, self.path)       # only under the run lock: no sweep is using it
+            except BaseException:
+                try:
+                    os.unlink(tmp)
+                except OSError:
+                    pass
+                raise
         else:
             # drop a torn final line before appending
             data = self.path.read_bytes()

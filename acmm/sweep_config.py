@@ -334,7 +334,11 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
     if len(set(labels)) != len(labels):
         raise ConfigError(f"{source}: sweep.bases: two base configs share the name "
                           f"{next(x for x in labels if labels.count(x) > 1)!r}")
-    return Sweep(sf, bases, source)
+    sweep = Sweep(sf, bases, source)
+    from acmm.sweep_limits import check_sweep_work
+
+    check_sweep_work(sweep, source)
+    return sweep
 
 
 def load_sweep(path: str | Path) -> Sweep:
