@@ -305,8 +305,12 @@ class Sweep:
 def _resolve_base(ref: str, directory: Path) -> Base:
     p = Path(ref)
     local = p if p.is_absolute() else directory / p
-    cfg = load_config(local if local.is_file() else ref)
-    return Base(cfg.name, cfg, str(local if local.is_file() else ref))
+    try:
+        is_file = local.is_file()
+    except (OSError, ValueError) as exc:       # name too long, NUL byte
+        raise ConfigError(f"sweep.base: cannot read {ref[:200]!r}: {getattr(exc, 'strerror', None) or exc}") from None
+    cfg = load_config(local if is_file else ref)
+    return Base(cfg.name, cfg, str(local if is_file else ref))
 
 
 def parse_sweep(data: object, source: str = "sweep config", directory: Path | None = None) -> Sweep:

@@ -46,6 +46,8 @@ def check_sweep_work(sweep, source: str = "sweep config") -> None:
     """Raise a one-line :class:`ConfigError` when a sweep exceeds a work limit."""
     spec = sweep.spec
     nb = len(sweep.bases)
+    if nb == 0:
+        raise ConfigError(f"{source}: sweep.base: give a base config ('base: NAME' or 'bases: [...]')")
     if spec.grid is not None:
         cases = 1
         for v in spec.grid.values():
