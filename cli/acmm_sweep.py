@@ -65,9 +65,10 @@ def register(app: typer.Typer) -> None:
         if workers is not None and not 1 <= workers <= 1024:
             fail(f"--workers: must be between 1 and 1024 (got {workers})", EXIT_INPUT)
         sw = load_sweep(config)
-        if resume and not (sw.run_dir() / "sweep.journal").exists():
-            typer.echo(f"note: no journal in {sw.run_dir()}; starting from the first case", err=True)
+        no_journal = resume and not (sw.run_dir() / "sweep.journal").exists()
         r = run_sweep(sw, workers=workers, scheduler=scheduler, resume=resume, progress=_Bar(), figures=figures)
+        if no_journal and r.n_resumed == 0:     # after the run: a refused run prints one line only
+            typer.echo(f"note: no journal in {sw.run_dir()}; started from the first case", err=True)
         spec = sw.spec
         how = (f"grid of {spec.n_cases()}" if spec.grid is not None else
                f"Monte Carlo, {spec.n_cases()} runs, seed {spec.seed}")
