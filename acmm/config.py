@@ -36,6 +36,11 @@ _CANON = {"inertia": "slug·ft²", "torque": "ft·lbf", "momentum": "ft·lbf·s"
           "time": "s"}
 
 
+#: Smallest accepted principal moment of inertia, slug·ft² (a 1 cm, 1 g body is ~1e-8; below
+#: this the linear model's scaling underflows and "uncontrollable" would be reported instead).
+MIN_PRINCIPAL_MOMENT = 1e-6
+
+
 def _plausible(x: float, dimension: str) -> float:
     bound = _RANGE.get(dimension)
     if bound is not None and abs(x) > bound:
@@ -112,6 +117,9 @@ class Inertia(_Model):
         if eig[0] <= 0:
             raise ValueError(
                 f"inertia matrix is not positive definite (smallest principal moment {eig[0]:.4g} slug·ft²)")
+        if eig[0] < MIN_PRINCIPAL_MOMENT:
+            raise ValueError(f"smallest principal moment {eig[0]:.4g} slug·ft² is below the physically plausible "
+                             f"{MIN_PRINCIPAL_MOMENT:g} slug·ft²")
         a, b, c = eig
         if a + b < c * (1 - 1e-12):
             raise ValueError(

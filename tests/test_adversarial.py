@@ -47,6 +47,7 @@ ACMM_BAD = [
     ("inertia_1e308", {"inertia.I11": 1e308, "inertia.I22": 1e308, "inertia.I33": 1e308}, r"inertia\.I11.*plausible"),
     ("inertia_I13_1e300", {"inertia.I13": 1e300}, r"inertia\.I13.*plausible"),
     ("inertia_negative", {"inertia.I22": -1.0e6}, r"inertia.*positive definite"),
+    ("inertia_tiny", {"inertia": {"I11": 2e-300, "I22": 1e-300, "I33": 2.5e-300}}, r"inertia.*principal moment"),
     ("inertia_nan", {"inertia.I11": float("nan")}, r"inertia\.I11.*finite"),
     ("inertia_inf", {"inertia.I33": float("inf")}, r"inertia\.I33.*finite"),
     ("inertia_2x2", {"inertia": [[1, 2], [3, 4]]}, r"inertia.*3×3"),
