@@ -228,8 +228,8 @@ class Simulation(_Model):
         None, description="orbit at which each schedule design point starts (default: equal dwell)")
     initial_offset: AngleVec = Field([0.0, 0.0, 0.0], description="initial attitude minus TEA, deg")
     sample_interval: Time = Field(60.0, gt=0, description="output sample interval, s")
-    rtol: float = Field(1e-8, gt=0, lt=1, description="integrator relative tolerance")
-    atol_scale: float = Field(1e-8, gt=0, lt=1, description="absolute tolerance relative to state scales")
+    rtol: float = Field(1e-8, ge=1e-14, lt=1, description="integrator relative tolerance (≥ 1e-14: ~100 ulp)")
+    atol_scale: float = Field(1e-8, ge=1e-20, lt=1, description="absolute tolerance relative to state scales")
     divergence_deg: Angle = Field(60.0, gt=0, description="stop as diverged when an angle error exceeds this, deg")
     max_saturation_orbits: float = Field(
         1.0, gt=0, description="stop as diverged when a CMG axis stays saturated this long, orbits")

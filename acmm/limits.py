@@ -18,7 +18,7 @@ QPP_WORK               50 000        qpp simulation work: t_final × fastest clo
 QPP_SAMPLES            2 000 000     qpp output samples × (scenarios + 1)
 SWEEP_DRAWS            2 000 000     expected Monte Carlo draws of a sweep (resampling included)
 SWEEP_CASES            1 000 000     cases of a sweep (all bases)
-SWEEP_ORBITS           1 000 000     simulated orbits of a sweep (cases × orbits per run)
+SWEEP_ORBITS           100 000       simulated orbits of a sweep (cases × orbits per run)
 DASK_CONNECT_SECONDS   5             how long ``--scheduler`` waits for a Dask scheduler, s
 =====================  ============  ==========================================================
 """
@@ -36,7 +36,7 @@ DEFAULTS: dict[str, float] = {
     "QPP_SAMPLES": 2_000_000,
     "SWEEP_DRAWS": 2_000_000,
     "SWEEP_CASES": 1_000_000,
-    "SWEEP_ORBITS": 1_000_000,
+    "SWEEP_ORBITS": 100_000,
     "DASK_CONNECT_SECONDS": 5,
 }
 

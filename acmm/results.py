@@ -211,7 +211,11 @@ def _in_memory(path: Path, what: str = "results"):
 
     buf = io.BytesIO()
     yield buf
-    write_bytes(path, buf.getvalue(), what)
+    view = buf.getbuffer()                # no copy of a large file
+    try:
+        write_bytes(path, view, what)
+    finally:
+        view.release()
 
 
 def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,

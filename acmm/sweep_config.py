@@ -119,7 +119,7 @@ class Margin(_Model):
     low: float = Field(0.2, gt=0, lt=1, description="smallest scaling searched")
     high: float = Field(10.0, gt=1, le=1000, description="largest scaling searched")
     scan_points: int = Field(8, ge=1, le=100, description="geometric scan steps each way before bisection")
-    rel_tol: float = Field(0.01, gt=0, lt=0.5, description="relative width of the final bracket")
+    rel_tol: float = Field(0.01, ge=1e-6, lt=0.5, description="relative width of the final bracket")
 
 
 class SweepSpec(_Model):

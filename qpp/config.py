@@ -205,8 +205,8 @@ class Simulation(_Model):
 
     t_final: float = Field(10.0, gt=0, le=1e5, description="simulated time, s")
     n_samples: int = Field(2001, ge=11, le=200001, description="output samples")
-    rtol: float = Field(1e-8, gt=0, lt=1, description="integrator relative tolerance")
-    atol: float = Field(1e-10, gt=0, lt=1, description="integrator absolute tolerance")
+    rtol: float = Field(1e-8, ge=1e-14, lt=1, description="integrator relative tolerance (≥ 1e-14: ~100 ulp)")
+    atol: float = Field(1e-10, ge=1e-20, lt=1, description="integrator absolute tolerance")
     r_o: Signal = Field(description="nominal reference r_o(t), one list of terms per output")
     scenarios: list[Scenario] = Field(min_length=1)
 
