@@ -284,6 +284,9 @@ class Config(_Model):
                                  f"{self.n_design_points()} point(s), one level each")
         from acmm.limits import how_to_raise, limit
 
+        if self.n_design_points() > limit("DESIGN_POINTS"):
+            raise ValueError(f"schedule: {self.n_design_points()} design points (one sector LQR each); use fewer "
+                             f"schedule.n_points or schedule.points ({how_to_raise('DESIGN_POINTS')})")
         samples = sim.orbits * 2 * math.pi / self.orbit_rate / sim.sample_interval
         if samples > limit("SIM_SAMPLES"):
             raise ValueError(f"simulation.sample_interval: {sim.sample_interval:g} s gives {samples:.3g} output "

@@ -12,6 +12,7 @@ CONFIG_BYTES           1 000 000     size of a YAML config file, bytes
 YAML_DEPTH             32            nesting depth of mappings/lists in a YAML config
 YAML_NODES             20 000        scalars + collections in a YAML config (aliases expanded)
 SIM_SAMPLES            2 000 000     output samples of one acmm simulation
+DESIGN_POINTS          400           design points of one acmm schedule (one sector LQR each)
 QPP_PERIODS            10 000        periods of a qpp signal or nonlinearity (ω·t_final/2π)
 QPP_WORK               50 000        qpp simulation work: t_final × fastest closed-loop rate (1/s)
                                      × (scenarios + 1); ~2.4 ms per unit, so ~2 min at the limit
@@ -19,6 +20,7 @@ QPP_SAMPLES            2 000 000     qpp output samples × (scenarios + 1)
 SWEEP_DRAWS            2 000 000     expected Monte Carlo draws of a sweep (resampling included)
 SWEEP_CASES            1 000 000     cases of a sweep (all bases)
 SWEEP_ORBITS           100 000       simulated orbits of a sweep (cases × orbits per run)
+SWEEP_DESIGNS          50 000        LQR designs of a ``design: redesign`` sweep (cases × points)
 DASK_CONNECT_SECONDS   5             how long ``--scheduler`` waits for a Dask scheduler, s
 =====================  ============  ==========================================================
 """
@@ -31,12 +33,14 @@ DEFAULTS: dict[str, float] = {
     "YAML_DEPTH": 32,
     "YAML_NODES": 20_000,
     "SIM_SAMPLES": 2_000_000,
+    "DESIGN_POINTS": 400,
     "QPP_PERIODS": 10_000,
     "QPP_WORK": 50_000,
     "QPP_SAMPLES": 2_000_000,
     "SWEEP_DRAWS": 2_000_000,
     "SWEEP_CASES": 1_000_000,
     "SWEEP_ORBITS": 100_000,
+    "SWEEP_DESIGNS": 50_000,
     "DASK_CONNECT_SECONDS": 5,
 }
 

@@ -63,6 +63,11 @@ def check_sweep_work(sweep, source: str = "sweep config") -> None:
     if total_orbits > limit("SWEEP_ORBITS"):
         raise ConfigError(f"{source}: sweep.orbits: {cases} cases simulate {total_orbits:.3g} orbits in all; "
                           f"lower sweep.orbits or the number of cases ({how_to_raise('SWEEP_ORBITS')})")
+    if spec.design == "redesign":
+        designs = (cases // nb) * sum(b.config.n_design_points() for b in sweep.bases)
+        if designs > limit("SWEEP_DESIGNS"):
+            raise ConfigError(f"{source}: sweep.design: redesign runs {designs} sector-LQR designs ({cases} cases "
+                              f"× design points); use design: fixed or fewer cases ({how_to_raise('SWEEP_DESIGNS')})")
     if spec.grid is not None or spec.unphysical != "resample":
         return
     cap = limit("SWEEP_DRAWS")

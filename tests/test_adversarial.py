@@ -81,6 +81,9 @@ ACMM_BAD = [
     ("residual_tol_2", {"design.residual_tol": 2}, r"design\.residual_tol"),
     ("n_points_1", {"schedule": {"n_points": 1}}, r"schedule\.n_points"),
     ("order_9", {"schedule": {"order": 9}}, r"schedule\.order"),
+    ("design_points_too_many", {"schedule": {"points": [{"name": f"p{k}", "inertia": {"I11": 2.3e7, "I22": 1.3e6,
+                                                                                    "I33": 2.3e7}}
+                                                       for k in range(450)]}}, r"ACMM_LIMIT_DESIGN_POINTS"),
     ("orbits_zero", {"simulation.orbits": 0}, r"simulation\.orbits"),
     ("orbits_1e9", {"simulation.orbits": 1e9}, r"simulation\.orbits"),
     ("samples_too_many", {"simulation.sample_interval": 1e-3}, r"sample_interval.*ACMM_LIMIT_SIM_SAMPLES"),
@@ -161,6 +164,8 @@ SWEEP_BAD = [
                    "sweep.grid": {"dI11": [0.0] * 200, "dI22": [0.0] * 200, "dI33": [0.0] * 200}},
      r"ACMM_LIMIT_SWEEP_CASES"),
     ("workers_zero", {"sweep.workers": 0}, r"sweep\.workers"),
+    ("redesign_budget", {"sweep.design": "redesign", "sweep.n_runs": 60000, "sweep.orbits": 1},
+     r"ACMM_LIMIT_SWEEP_DESIGNS"),
     ("margin_low_2", {"sweep.margin.low": 2}, r"sweep\.margin\.low"),
     ("margin_rel_tol_tiny", {"sweep.margin.rel_tol": 1e-300}, r"sweep\.margin\.rel_tol"),
     ("settle_zero", {"sweep.settle_deg": 0}, r"sweep\.settle_deg"),
