@@ -248,7 +248,9 @@ class QppConfig(_Model):
         try:
             P = self.lure_plant()
         except ConfigError as exc:
-            raise ValueError(str(exc)) from None
+            msg = str(exc)
+            raise ValueError(("plant." + msg) if msg.split(":")[0] in ("A", "B", "C", "G", "Ac", "Bc", "Cc")
+                             else msg) from None
         if self.plant.x0 is not None and len(self.plant.x0) != P.n:
             raise ValueError(f"plant.x0 must have {P.n} entries")
         if isinstance(self.plant.xc0, list) and len(self.plant.xc0) != P.q:
