@@ -46,7 +46,7 @@ def _note_warnings(caught) -> None:
     if not caught:
         return
     first = caught[0]
-    typer.echo(f"note: {len(caught)} numerical warning(s) during the run; first: "
+    typer.echo(f"note: {len(caught)} distinct numerical warning(s) during the run; first: "
                f"{first.category.__name__}: {' '.join(str(first.message).split())}", err=True)
 
 
@@ -64,7 +64,7 @@ def user_errors(fn):
         import warnings
 
         with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
+            warnings.simplefilter("default")      # each distinct warning once (a hot loop stays cheap)
             try:
                 out = fn(*args, **kwargs)
             except AcmmError as exc:

@@ -107,6 +107,12 @@ ACMM_BAD = [
     ("description_int", {"description": 5}, r"description"),
 ]
 ACMM_COMMANDS = ["validate", "tea", "linearize", "design", "simulate"]
+# valid configs refused by a stage after the run lock was taken: the lock and the run directory
+# must go again
+ACMM_STAGE_BAD = [
+    ("no_equilibrium", {"disturbance.bias": [0, 1.0e5, 0], "disturbance.bias_from_tea": DELETE},
+     r"no torque-equilibrium attitude"),
+]
 
 QPP_BAD = [
     ("name_dotdot", {"name": ".."}, r"name"),
@@ -236,6 +242,9 @@ def _cases():
     out = []
     for cid, edits, rx in ACMM_BAD:
         for cmd in ACMM_COMMANDS:
+            out.append(pytest.param("acmm", [cmd], ("mb3", edits), 2, rx, id=f"acmm-{cmd}-{cid}"))
+    for cid, edits, rx in ACMM_STAGE_BAD:
+        for cmd in ACMM_COMMANDS[1:]:
             out.append(pytest.param("acmm", [cmd], ("mb3", edits), 2, rx, id=f"acmm-{cmd}-{cid}"))
     for cid, edits, rx in QPP_BAD:
         for cmd in QPP_COMMANDS:
