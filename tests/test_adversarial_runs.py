@@ -182,10 +182,10 @@ def test_two_concurrent_sweeps_and_resumes_one_refused(tmp_runs):
 
 @pytest.fixture
 def small_tmpfs(tmp_path):
-    """A 1 MiB tmpfs; skipped where mounting one is not permitted."""
+    """A 256 KiB tmpfs; skipped where mounting one is not permitted."""
     d = tmp_path / "small"
     d.mkdir()
-    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(d)], capture_output=True)
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(d)], capture_output=True)
     if r.returncode != 0:
         pytest.skip(f"cannot mount a tmpfs here (needs root or CAP_SYS_ADMIN): "
                     f"{r.stderr.decode().strip() or r.returncode}")
@@ -196,7 +196,7 @@ def small_tmpfs(tmp_path):
 def test_full_disk_one_line_exit_4_no_temp_no_crash(tmp_runs, small_tmpfs):
     cfg = tmp_runs / "full.yaml"
     cfg.write_text(yaml.safe_dump({"name": "full", "inertia": {"I11": 1.0e7, "I22": 2.0e7, "I33": 2.5e7},
-                                   "simulation": {"orbits": 20},
+                                   "simulation": {"orbits": 8},
                                    "output": {"root": str(small_tmpfs / "runs"), "figures": True}}))
     r = subprocess.run([ACMM, "simulate", str(cfg)], env=ENV, capture_output=True, text=True, timeout=120)
     assert r.returncode == 4, (r.returncode, r.stderr)               # not 139 (segfault in HDF5)
