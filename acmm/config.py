@@ -19,6 +19,7 @@ from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, ValidationE
                       field_validator, model_validator)
 
 from acmm.errors import ConfigError
+from acmm.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 from acmm.units import to_canonical
 
 
@@ -28,9 +29,29 @@ def _finite(x: float) -> float:
     return x
 
 
+#: |value| bound per dimension, canonical units (issue 13: no overflow accepted); see
+#: :data:`acmm.limits.PHYSICAL_MAX` for the reasoning.
+_RANGE = {"inertia": 1e13, "torque": 1e9, "momentum": 1e12, "angle": 3600.0, "rate": 1.0, "time": 1e9}
+_CANON = {"inertia": "slug·ft²", "torque": "ft·lbf", "momentum": "ft·lbf·s", "angle": "deg", "rate": "rad/s",
+          "time": "s"}
+
+
+#: Smallest accepted principal moment of inertia, slug·ft² (a 1 cm, 1 g body is ~1e-8; below
+#: this the linear model's scaling underflows and "uncontrollable" would be reported instead).
+MIN_PRINCIPAL_MOMENT = 1e-6
+
+
+def _plausible(x: float, dimension: str) -> float:
+    bound = _RANGE.get(dimension)
+    if bound is not None and abs(x) > bound:
+        raise ValueError(f"{x:.4g} {_CANON[dimension]} is outside the physically plausible range "
+                         f"|value| ≤ {bound:g} {_CANON[dimension]}")
+    return x
+
+
 def _q(dimension: str):
     def conv(v):
-        return _finite(to_canonical(v, dimension))
+        return _plausible(_finite(to_canonical(v, dimension)), dimension)
     return BeforeValidator(conv)
 
 
@@ -40,7 +61,7 @@ def _vec3(dimension: str):
             raise ValueError("must be a list of three values [roll, pitch, yaw]")
         if len(v) != 3:
             raise ValueError(f"must have three values [roll, pitch, yaw], got {len(v)}")
-        return [_finite(to_canonical(x, dimension)) for x in v]
+        return [_plausible(_finite(to_canonical(x, dimension)), dimension) for x in v]
     return BeforeValidator(conv)
 
 
@@ -82,6 +103,8 @@ class Inertia(_Model):
                 raise ValueError(f"inertia matrix must be 3×3, got shape {m.shape}")
             if not np.all(np.isfinite(m)):
                 raise ValueError("inertia matrix must contain finite numbers")
+            for x in m.ravel():
+                _plausible(float(x), "inertia")
             if not np.allclose(m, m.T, rtol=1e-9, atol=0.0):
                 raise ValueError("inertia matrix is not symmetric (I_ij must equal I_ji)")
             return {"I11": m[0, 0], "I22": m[1, 1], "I33": m[2, 2],
@@ -95,6 +118,9 @@ class Inertia(_Model):
         if eig[0] <= 0:
             raise ValueError(
                 f"inertia matrix is not positive definite (smallest principal moment {eig[0]:.4g} slug·ft²)")
+        if eig[0] < MIN_PRINCIPAL_MOMENT:
+            raise ValueError(f"smallest principal moment {eig[0]:.4g} slug·ft² is below the physically plausible "
+                             f"{MIN_PRINCIPAL_MOMENT:g} slug·ft²")
         a, b, c = eig
         if a + b < c * (1 - 1e-12):
             raise ValueError(
@@ -152,7 +178,7 @@ class Actuators(_Model):
 class Sector(_Model):
     """Closed-loop pole region of ch. 5.2: Re λ ≤ −sigma·n and |Im λ| ≤ tan(half_angle)·|Re λ|."""
 
-    sigma: float = Field(0.5, gt=0, description="minimum decay rate in units of the orbital rate n")
+    sigma: float = Field(0.5, gt=0, le=1000, description="minimum decay rate in units of the orbital rate n")
     half_angle_deg: Angle = Field(45.0, gt=0, lt=90, description="sector half-angle about the negative real axis, deg")
 
 
@@ -164,8 +190,8 @@ class Design(_Model):
     drf_mode: Literal["attitude_hold", "momentum_hold"] = Field(
         "attitude_hold", description="DRF inputs: (h1, θ2, θ3) or (h1, h2, θ3), filters at n and 2n")
     sector: Sector = Sector()
-    R: WeightTorque = Field(1e-4, gt=0, description="control weight R = r·I, 1/(ft·lbf)²")
-    Q0: float = Field(0.0, ge=0, description="state weight Q0 = q·I on the scaled states (dimensionless)")
+    R: WeightTorque = Field(1e-4, ge=1e-20, le=1e12, description="control weight R = r·I, 1/(ft·lbf)²")
+    Q0: float = Field(0.0, ge=0, le=1e12, description="state weight Q0 = q·I on the scaled states (dimensionless)")
     riccati_method: Literal["sign", "scipy", "slycot"] = Field("scipy", description="CARE solver")
     pole_method: Literal["shift", "uniform"] = Field(
         "shift", description="sector enforcement: optimal pole shifting of the stray poles, or a uniform shift")
@@ -175,7 +201,7 @@ class Design(_Model):
 class DesignPoint(_Model):
     """A named station configuration used as a design point of the gain schedule."""
 
-    name: str = Field(pattern=r"^[A-Za-z0-9_-][A-Za-z0-9_.-]*$", description="name of the design point")
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX, description="name of the design point")
     inertia: Inertia
     disturbance: Disturbance = Disturbance()
 
@@ -207,8 +233,8 @@ class Simulation(_Model):
         None, description="orbit at which each schedule design point starts (default: equal dwell)")
     initial_offset: AngleVec = Field([0.0, 0.0, 0.0], description="initial attitude minus TEA, deg")
     sample_interval: Time = Field(60.0, gt=0, description="output sample interval, s")
-    rtol: float = Field(1e-8, gt=0, lt=1, description="integrator relative tolerance")
-    atol_scale: float = Field(1e-8, gt=0, lt=1, description="absolute tolerance relative to state scales")
+    rtol: float = Field(1e-8, ge=1e-14, lt=1, description="integrator relative tolerance (≥ 1e-14: ~100 ulp)")
+    atol_scale: float = Field(1e-8, ge=1e-20, lt=1, description="absolute tolerance relative to state scales")
     divergence_deg: Angle = Field(60.0, gt=0, description="stop as diverged when an angle error exceeds this, deg")
     max_saturation_orbits: float = Field(
         1.0, gt=0, description="stop as diverged when a CMG axis stays saturated this long, orbits")
@@ -217,7 +243,7 @@ class Simulation(_Model):
 class Output(_Model):
     """Where results go."""
 
-    root: str = Field("runs", description="results root; files go to <root>/<name>/")
+    root: str = Field("runs", pattern=ROOT_PATTERN, description="results root; files go to <root>/<name>/")
     figures: bool = Field(True, description="write matplotlib figures next to the HDF5 files")
     units: Literal["imperial", "SI"] = Field(
         "imperial", description="unit system of the HDF5 values and units attributes, prints, CSV and figures: "
@@ -232,7 +258,7 @@ MAX_SAMPLES = 2_000_000
 class Config(_Model):
     """A complete acmm run configuration."""
 
-    name: str = Field(pattern=r"^[A-Za-z0-9_-][A-Za-z0-9_.-]*$",
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX,
                       description="run name (letters, digits, _ . -; not starting with a dot); results go to runs/<name>/")
     description: str = Field("", description="free text describing the run")
     inertia: Inertia
@@ -275,10 +301,16 @@ class Config(_Model):
             if len(lv) != self.n_design_points():
                 raise ValueError(f"simulation.levels has {len(lv)} entries but the design has "
                                  f"{self.n_design_points()} point(s), one level each")
+        from acmm.limits import how_to_raise, limit
+
+        if self.n_design_points() > limit("DESIGN_POINTS"):
+            raise ValueError(f"schedule: {self.n_design_points()} design points (one sector LQR each); use fewer "
+                             f"schedule.n_points or schedule.points ({how_to_raise('DESIGN_POINTS')})")
         samples = sim.orbits * 2 * math.pi / self.orbit_rate / sim.sample_interval
-        if samples > MAX_SAMPLES:
+        if samples > limit("SIM_SAMPLES"):
             raise ValueError(f"simulation.sample_interval: {sim.sample_interval:g} s gives {samples:.3g} output "
-                             f"samples over {sim.orbits:g} orbits (at most {MAX_SAMPLES:.0e})")
+                             f"samples over {sim.orbits:g} orbits; raise sample_interval or lower orbits "
+                             f"({how_to_raise('SIM_SAMPLES')})")
         return self
 
     def n_design_points(self) -> int:
@@ -371,7 +403,11 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
         p = packaged_config_path()
     else:
         p = Path(path)
-        if not p.exists():
+        try:
+            present = p.exists()
+        except (OSError, ValueError) as exc:   # name too long, NUL byte, ...
+            raise ConfigError(f"cannot read config file {str(path)[:200]}: {getattr(exc, 'strerror', None) or exc}") from None
+        if not present:
             candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml")
             if len(p.parts) == 1 and candidate.exists():
                 p = candidate
@@ -379,13 +415,9 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
                 from acmm.hints import missing_config_message
 
                 raise ConfigError(missing_config_message(path))
-    if p.is_dir():
-        raise ConfigError(f"config path is a directory, not a file: {p}")
+    text = read_config_text(p)
     try:
-        text = p.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"cannot read config file {p}: {exc}") from None
-    try:
+        check_yaml_structure(text, p)
         data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
@@ -393,6 +425,92 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
         what = getattr(exc, "problem", None) or "not valid YAML"
         raise ConfigError(f"{p}: not valid YAML: {what}{where}") from None
     return data, p
+
+
+def read_config_text(p: Path) -> str:
+    """The text of config file ``p``, read with bounds (issue 13): only a regular file (a FIFO,
+    a device such as ``/dev/zero`` or a directory is refused without blocking), at most
+    ``CONFIG_BYTES`` bytes (:mod:`acmm.limits`), UTF-8.  One-line :class:`ConfigError` otherwise."""
+    import os
+    import stat
+
+    from acmm.limits import how_to_raise, limit
+
+    cap = int(limit("CONFIG_BYTES"))
+    try:
+        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
+    except OSError as exc:
+        raise ConfigError(f"cannot read config file {p}: {exc.strerror or exc}") from None
+    try:
+        st = os.fstat(fd)
+        if stat.S_ISDIR(st.st_mode):
+            raise ConfigError(f"config path is a directory, not a file: {p}")
+        if not stat.S_ISREG(st.st_mode):
+            raise ConfigError(f"config path is not a regular file (a FIFO, device or socket): {p}")
+        if st.st_size > cap:
+            raise ConfigError(f"config file {p} is too large: {st.st_size} bytes ({how_to_raise('CONFIG_BYTES')})")
+        chunks, size = [], 0
+        while True:
+            chunk = os.read(fd, 1 << 16)
+            if not chunk:
+                break
+            size += len(chunk)
+            if size > cap:
+                raise ConfigError(f"config file {p} is too large: over {cap} bytes ({how_to_raise('CONFIG_BYTES')})")
+            chunks.append(chunk)
+    except OSError as exc:
+        raise ConfigError(f"cannot read config file {p}: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+    try:
+        return b"".join(chunks).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"cannot read config file {p}: not UTF-8 text (byte {exc.start})") from None
+
+
+def check_yaml_structure(text: str, source: object = "config") -> None:
+    """Refuse YAML that would be expensive or recursive to build, before building it.
+
+    Scans the parser's event stream (iterative, so deep nesting cannot overflow the stack):
+    nesting deeper than ``YAML_DEPTH``, more than ``YAML_NODES`` nodes with aliases expanded
+    (so "billion laughs" alias bombs count at their expanded size) or an alias to a collection
+    that contains it (a cycle) raise :class:`ConfigError`.  Syntax errors raise
+    :class:`yaml.YAMLError` as :func:`yaml.load` would.
+    """
+    from acmm.limits import how_to_raise, limit
+
+    max_depth, max_nodes = int(limit("YAML_DEPTH")), int(limit("YAML_NODES"))
+    stack: list[tuple[str | None, int]] = []
+    sizes: dict[str, int] = {}
+    open_anchors: set[str] = set()
+    count = 0
+    for ev in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(ev, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+            count += 1
+            stack.append((ev.anchor, count))
+            if ev.anchor:
+                open_anchors.add(ev.anchor)
+            if len(stack) > max_depth:
+                line = ev.start_mark.line + 1 if ev.start_mark else "?"
+                raise ConfigError(f"{source}: YAML nested deeper than {max_depth} levels at line {line} "
+                                  f"({how_to_raise('YAML_DEPTH')})")
+        elif isinstance(ev, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+            anchor, start = stack.pop()
+            if anchor:
+                sizes[anchor] = count - start + 1
+                open_anchors.discard(anchor)
+        elif isinstance(ev, yaml.ScalarEvent):
+            count += 1
+            if ev.anchor:
+                sizes[ev.anchor] = 1
+        elif isinstance(ev, yaml.AliasEvent):
+            if ev.anchor in open_anchors:
+                raise ConfigError(f"{source}: YAML alias *{ev.anchor} refers to a collection that contains it "
+                                  "(a cycle)")
+            count += sizes.get(ev.anchor, 1)
+        if count > max_nodes:
+            raise ConfigError(f"{source}: YAML has more than {max_nodes} values (aliases expanded) "
+                              f"({how_to_raise('YAML_NODES')})")
 
 
 def load_config(path: str | Path | None = None, overrides: list[str] | None = None) -> Config:

@@ -94,21 +94,82 @@ def _write_group(group, items: Mapping[str, Any]) -> None:
             ds.attrs[ak] = av
 
 
+#: Run names (acmm, qpp and sweep configs, qpp scenarios): a single path component of letters,
+#: digits, ``_ . -`` that does not start with a dot (so never ``.``/``..``/hidden), at most
+#: :data:`RUN_NAME_MAX` characters (room for the longest file name written inside it).
+RUN_NAME_PATTERN = r"^[A-Za-z0-9_-][A-Za-z0-9_.-]*$"
+RUN_NAME_MAX = 100
+#: ``output.root``: any path without a NUL byte.
+ROOT_PATTERN = r"^[^\x00]+$"
+
+
+def make_dirs(directory: str | Path) -> list[Path]:
+    """Create ``directory`` and its missing parents; return the ones created (outermost first),
+    so that a refused run can remove them again (:func:`remove_empty_dirs`)."""
+    d = Path(directory)
+    missing = []
+    while not os.path.lexists(d) and d != d.parent:
+        missing.append(d)
+        d = d.parent
+    created = []
+    try:
+        for q in reversed(missing):
+            try:
+                os.mkdir(q)
+            except FileExistsError:
+                if not os.path.isdir(q):
+                    raise
+                continue
+            created.append(q)
+    except BaseException:
+        remove_empty_dirs(created)
+        raise
+    if not os.path.isdir(directory):
+        raise NotADirectoryError(20, "Not a directory", str(directory))
+    return created
+
+
+def remove_empty_dirs(created: list[Path]) -> None:
+    """Remove the directories of :func:`make_dirs` again, innermost first, while they are empty."""
+    for q in reversed(created):
+        try:
+            os.rmdir(q)
+        except OSError:
+            break
+
+
+def output_error(exc: OSError, what: str, where: str | Path):
+    """A one-line :class:`~acmm.errors.OutputError` (exit 4) for an OS error while writing."""
+    from acmm.errors import OutputError
+
+    if isinstance(exc, OutputError):
+        return exc
+    why = exc.strerror or str(exc)
+    return OutputError(f"cannot write {what} {where}: {why}")
+
+
 @contextmanager
 def atomic_path(path: str | Path, what: str = "results"):
     """Yield a temporary path beside ``path``; on success it is renamed onto ``path``.
 
     The file gets the usual permissions (0666 & ~umask, not mkstemp's 0600); on any error the
-    temporary file is removed and ``path`` is left as it was.
+    temporary file is removed, directories created for it are removed again, ``path`` is left
+    as it was, and an OS error (read-only, not a directory, no space, name too long, a
+    directory where the file should go) becomes one :class:`~acmm.errors.OutputError` line.
     """
     from acmm.errors import OutputError
 
     path = Path(path)
+    created: list[Path] = []
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+        created = make_dirs(path.parent)
+        if os.path.isdir(path):
+            remove_empty_dirs(created)
+            raise OutputError(f"cannot write {what} {path}: a directory of that name is in the way")
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     except OSError as exc:
-        raise OutputError(f"cannot write {what} to {path.parent}: {exc.strerror or exc}") from None
+        remove_empty_dirs(created)
+        raise output_error(exc, what, path) from None
     os.close(fd)
     try:
         yield Path(tmp)
@@ -119,17 +180,53 @@ def atomic_path(path: str | Path, what: str = "results"):
         from acmm.outputs import record_written
 
         record_written(path)
-    except BaseException:
-        if os.path.exists(tmp):
+    except BaseException as exc:
+        try:
             os.unlink(tmp)
+        except OSError:
+            pass
+        remove_empty_dirs(created)
+        if isinstance(exc, OSError):
+            raise output_error(exc, what, path) from None
         raise
+
+
+def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
+    """Write ``data`` atomically with plain ``os.write`` calls and an fsync (see
+    :func:`atomic_path`): a full disk is then an ordinary OSError → OutputError, never a crash
+    inside a C library, and no temporary file survives."""
+    with atomic_path(path, what) as tmp:
+        fd = os.open(tmp, os.O_WRONLY | os.O_TRUNC | getattr(os, "O_CLOEXEC", 0))
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    return Path(path)
 
 
 def write_text(path: str | Path, text: str) -> Path:
     """Write a text file atomically (see :func:`atomic_path`)."""
-    with atomic_path(path, "text") as tmp:
-        tmp.write_text(text, encoding="utf-8")
-    return Path(path)
+    return write_bytes(path, text.encode("utf-8"), "text")
+
+
+@contextmanager
+def _in_memory(path: Path, what: str = "results"):
+    """Yield a :class:`io.BytesIO`; afterwards its bytes are written to ``path`` atomically.
+
+    HDF5 files and figures are built in memory so that the libraries (HDF5 segfaults on ENOSPC)
+    never write to the disk themselves."""
+    import io
+
+    buf = io.BytesIO()
+    yield buf
+    view = buf.getbuffer()                # no copy of a large file
+    try:
+        write_bytes(path, view, what)
+    finally:
+        view.release()
 
 
 def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
@@ -155,7 +252,7 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
     import h5py
 
     path = Path(path)
-    with atomic_path(path) as tmp:
+    with _in_memory(path) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["config"] = config_text
             for k, v in provenance(config_text).items():
@@ -205,6 +302,6 @@ def save_figure(fig, path: str | Path, **kwargs) -> Path:
     The format is taken from ``path``'s suffix; ``kwargs`` go to ``savefig``.
     """
     path = Path(path)
-    with atomic_path(path, "figure") as tmp:
+    with _in_memory(path, "figure") as tmp:
         fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", **kwargs)
     return path

@@ -12,6 +12,7 @@ from acmm import tea as tea_mod
 from acmm.config import Config, load_config
 from acmm.outputs import owns_outputs
 from acmm.results import Dataset, write_h5
+from acmm.runlock import locked_stage
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -64,6 +65,7 @@ def compute_tea(config) -> TeaResult:
     return TeaResult(cfg, tea_mod.solve_tea(inertia, cfg.orbit_rate, bias))
 
 
+@locked_stage(_as_config)
 @owns_outputs("tea", lambda c: _as_config(c))
 def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
     """Compute the TEA and write ``runs/<name>/tea.h5``."""
@@ -97,6 +99,7 @@ class LinearizeResult:
     controllability: object
 
 
+@locked_stage(_as_config)
 @owns_outputs("linearize", lambda c: _as_config(c))
 def run_linearize(config) -> tuple[LinearizeResult, Path]:
     """TEA, then the design model of ``design.model``; writes ``runs/<name>/linearize.h5``."""
@@ -214,6 +217,7 @@ def compute_design(config, progress=None) -> DesignResult:
     return DesignResult(cfg, points, fit, check, table, time.perf_counter() - t0)
 
 
+@locked_stage(_as_config)
 @owns_outputs("design", lambda c: _as_config(c))
 def run_design(config, progress=None, figures: bool | None = None) -> tuple[DesignResult, Path]:
     """Design and write ``runs/<name>/design.h5`` plus the gain-schedule and pole-map figures."""
@@ -361,6 +365,7 @@ class SimulateResult:
     wall_time: float
 
 
+@locked_stage(_as_config)
 @owns_outputs("simulate", lambda c: _as_config(c))
 def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[SimulateResult, Path]:
     """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures."""

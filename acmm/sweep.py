@@ -57,6 +57,7 @@ import numpy as np
 
 from acmm.outputs import owns_outputs
 from acmm.results import write_text
+from acmm.runlock import locked_stage
 
 from acmm.errors import AcmmError, ConfigError, ConvergenceError, DesignError, NoEquilibriumError
 from acmm.sweep_config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sweep, swept_parameters
@@ -396,7 +397,9 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
         except ImportError:
             raise ConfigError("--scheduler needs the optional Dask dependency: pip install 'acmm-qpp[dask]'") from None
         try:
-            client = distributed.Client(scheduler, timeout="10s")
+            from acmm.limits import limit
+
+            client = distributed.Client(scheduler, timeout=f"{limit('DASK_CONNECT_SECONDS'):g}s")
         except (OSError, TimeoutError, ValueError) as exc:
             raise ConfigError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
         return client.get_executor(), client.close
@@ -405,7 +408,10 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
     import multiprocessing
 
     ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
-    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+    from acmm.workers import die_with_parent
+
+    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=die_with_parent,
+                                  initargs=(os.getpid(),))
     return pool, lambda: pool.shutdown(wait=True, cancel_futures=True)
 
 
@@ -447,15 +453,30 @@ class Journal:
     """Append-only JSON-lines file; each record is flushed and fsynced before returning."""
 
     def __init__(self, path: Path, key: str, fresh: bool):
+        try:
+            self._open(path, key, fresh)
+        except OSError as exc:
+            from acmm.results import output_error
+
+            raise output_error(exc, "the sweep journal", path) from None
+
+    def _open(self, path: Path, key: str, fresh: bool) -> None:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         if fresh or not self.path.exists():
             tmp = self.path.with_name(f".{self.path.name}.tmp")
-            with open(tmp, "w") as f:
-                f.write(json.dumps({"kind": "header", "version": JOURNAL_VERSION, "key": key}) + "\n")
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, self.path)
+            try:
+                with open(tmp, "w") as f:
+                    f.write(json.dumps({"kind": "header", "version": JOURNAL_VERSION, "key": key}) + "\n")
+                    f.flush()
+                    os.fsync(f.fileno())
+                os.replace(tmp, self.path)       # only under the run lock: no sweep is using it
+            except BaseException:
+                try:
+                    os.unlink(tmp)
+                except OSError:
+                    pass
+                raise
         else:
             # drop a torn final line before appending
             data = self.path.read_bytes()
@@ -465,12 +486,20 @@ class Journal:
         self._f = open(self.path, "a")
 
     def append(self, record: dict) -> None:
-        self._f.write(json.dumps(record) + "\n")
-        self._f.flush()
-        os.fsync(self._f.fileno())
+        try:
+            self._f.write(json.dumps(record) + "\n")
+            self._f.flush()
+            os.fsync(self._f.fileno())
+        except OSError as exc:
+            from acmm.results import output_error
+
+            raise output_error(exc, "the sweep journal", self.path) from None
 
     def close(self) -> None:
-        self._f.close()
+        try:
+            self._f.close()
+        except OSError:          # every record was already flushed and fsynced
+            pass
 
 
 # ---------------------------------------------------------------------------------------------
@@ -523,7 +552,12 @@ def _call(task, ctx):
     return run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg)
 
 
-@owns_outputs("sweep", lambda s: s if isinstance(s, Sweep) else load_sweep(s))
+def _as_sweep(sweep) -> Sweep:
+    return sweep if isinstance(sweep, Sweep) else load_sweep(sweep)
+
+
+@locked_stage(_as_sweep)
+@owns_outputs("sweep", lambda s: _as_sweep(s))
 def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, scheduler: Optional[str] = None,
               resume: bool = False, progress: Optional[Callable[[int, int, dict], None]] = None,
               after_record: Optional[Callable[[int], None]] = None, figures: Optional[bool] = None,
@@ -565,10 +599,14 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         simulate_values(ctx, {})
     if workers is None:
         workers = spec.workers or os.cpu_count() or 1
-    journal = Journal(jpath, key, fresh=not resume)
     close = lambda: None  # noqa: E731
-    if executor is None and tasks:
+    if executor is None and tasks:        # before the journal: an unreachable scheduler writes nothing
         executor, close = make_executor(workers if not scheduler else 0, scheduler)
+    try:
+        journal = Journal(jpath, key, fresh=not resume)
+    except BaseException:
+        close()
+        raise
     window = 1 if isinstance(executor, SerialExecutor) else max(4, 4 * workers)
     n_new = 0
     last_snap = time.monotonic()

@@ -40,6 +40,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_valida
 
 from acmm.config import Config, Output, load_config, parse_config, require_mapping, validate_model
 from acmm.errors import ConfigError
+from acmm.results import RUN_NAME_MAX, RUN_NAME_PATTERN
 
 
 @dataclass(frozen=True)
@@ -118,7 +119,7 @@ class Margin(_Model):
     low: float = Field(0.2, gt=0, lt=1, description="smallest scaling searched")
     high: float = Field(10.0, gt=1, le=1000, description="largest scaling searched")
     scan_points: int = Field(8, ge=1, le=100, description="geometric scan steps each way before bisection")
-    rel_tol: float = Field(0.01, gt=0, lt=0.5, description="relative width of the final bracket")
+    rel_tol: float = Field(0.01, ge=1e-6, lt=0.5, description="relative width of the final bracket")
 
 
 def _param_unit_value(v, unit: str, where: str):
@@ -290,7 +291,7 @@ def swept_parameters(spec: SweepSpec) -> list[str]:
 class SweepFile(_Model):
     """A sweep config file: name, description, the ``sweep`` section and ``output``."""
 
-    name: str = Field(pattern=r"^[A-Za-z0-9_-][A-Za-z0-9_.-]*$", description="sweep name; results in <root>/<name>/")
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX, description="sweep name; results in <root>/<name>/")
     description: str = Field("", description="free text")
     sweep: SweepSpec
     output: Output = Output()
@@ -352,8 +353,12 @@ class Sweep:
 def _resolve_base(ref: str, directory: Path) -> Base:
     p = Path(ref)
     local = p if p.is_absolute() else directory / p
-    cfg = load_config(local if local.is_file() else ref)
-    return Base(cfg.name, cfg, str(local if local.is_file() else ref))
+    try:
+        is_file = local.is_file()
+    except (OSError, ValueError) as exc:       # name too long, NUL byte
+        raise ConfigError(f"sweep.base: cannot read {ref[:200]!r}: {getattr(exc, 'strerror', None) or exc}") from None
+    cfg = load_config(local if is_file else ref)
+    return Base(cfg.name, cfg, str(local if is_file else ref))
 
 
 def parse_sweep(data: object, source: str = "sweep config", directory: Path | None = None) -> Sweep:
@@ -381,7 +386,11 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
     if len(set(labels)) != len(labels):
         raise ConfigError(f"{source}: sweep.bases: two base configs share the name "
                           f"{next(x for x in labels if labels.count(x) > 1)!r}")
-    return Sweep(sf, bases, source)
+    sweep = Sweep(sf, bases, source)
+    from acmm.sweep_limits import check_sweep_work
+
+    check_sweep_work(sweep, source)
+    return sweep
 
 
 def load_sweep(path: str | Path, overrides: list[str] | None = None) -> Sweep:

@@ -10,7 +10,8 @@ from typing import Optional
 
 import typer
 
-from cli.common import OverridesArg, strict_exit, user_errors
+from acmm.errors import EXIT_INPUT
+from cli.common import OverridesArg, fail, strict_exit, user_errors
 
 
 class _Bar:
@@ -49,7 +50,7 @@ def register(app: typer.Typer) -> None:
     @user_errors
     def sweep(config: Path = typer.Argument(..., help="sweep config YAML (see configs/sweep_smoke.yaml)"),
               overrides: Optional[list[str]] = OverridesArg,
-              workers: Optional[int] = typer.Option(None, "--workers", "-j", min=1,
+              workers: Optional[int] = typer.Option(None, "--workers", "-j",
                                                     help="local worker processes (1: in-process; "
                                                          "default: sweep.workers or the CPU count)"),
               scheduler: Optional[str] = typer.Option(None, "--scheduler",
@@ -68,15 +69,18 @@ def register(app: typer.Typer) -> None:
 
         from cli.progress import announce_numba_compile
 
+        if workers is not None and not 1 <= workers <= 1024:
+            fail(f"--workers: must be between 1 and 1024 (got {workers})", EXIT_INPUT)
         sw = load_sweep(config, overrides)
-        if resume and not (sw.run_dir() / "sweep.journal").exists():
-            typer.echo(f"note: no journal in {sw.run_dir()}; starting from the first case", err=True)
+        no_journal = resume and not (sw.run_dir() / "sweep.journal").exists()
         announce_numba_compile()
         bar = _Bar(sw.name)
         try:
             r = run_sweep(sw, workers=workers, scheduler=scheduler, resume=resume, progress=bar, figures=figures)
         finally:
             bar.close()
+        if no_journal and r.n_resumed == 0:     # after the run: a refused run prints one line only
+            typer.echo(f"note: no journal in {sw.run_dir()}; started from the first case", err=True)
         spec = sw.spec
         how = (f"grid of {spec.n_cases()}" if spec.grid is not None else
                f"Monte Carlo, {spec.n_cases()} runs, seed {spec.seed}")

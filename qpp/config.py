@@ -16,6 +16,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_valida
 
 from acmm.errors import ConfigError
 from acmm.units import to_canonical
+from acmm.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 
 Matrix = list[list[float]]
 
@@ -40,16 +41,43 @@ Kilograms = Annotated[float, _q("mass")]
 Metres = Annotated[float, _q("length")]
 KgM2 = Annotated[float, _q("si_inertia")]
 Radians = Annotated[float, _q("angle_rad")]
+#: Largest magnitude accepted for any number of a qpp config (matrix entry, gain, weight,
+#: amplitude, time); beyond it products in the design and the simulation overflow (issue 13).
+QPP_MAX = 1e12
+
+
+def _implausible(v):
+    """The first number in ``v`` (scalar or nested list) with |x| > QPP_MAX, else ``None``."""
+    if isinstance(v, bool) or isinstance(v, BaseModel):
+        return None
+    if isinstance(v, (int, float)):
+        return v if abs(v) > QPP_MAX else None
+    if isinstance(v, (list, tuple)):
+        for x in v:
+            bad = _implausible(x)
+            if bad is not None:
+                return bad
+    return None
 
 
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
+    @model_validator(mode="after")
+    def _plausible_magnitudes(self):
+        for name in type(self).model_fields:
+            bad = _implausible(getattr(self, name))
+            if bad is not None:
+                raise ValueError(f"{name}: {bad:.4g} is outside the plausible range |value| ≤ {QPP_MAX:g}")
+        return self
+
 
 def _finite_matrix(v):
-    a = np.asarray(v, float)
-    if a.ndim != 2 or a.size == 0:
+    if not isinstance(v, list) or not v or not all(isinstance(r, list) for r in v):
         raise ValueError("must be a non-empty matrix (list of rows)")
+    if len({len(r) for r in v}) != 1 or not v[0]:
+        raise ValueError(f"rows must all have the same, non-zero length (got row lengths {[len(r) for r in v]})")
+    a = np.asarray(v, float)
     if not np.all(np.isfinite(a)):
         raise ValueError("must contain finite numbers")
     return v
@@ -210,6 +238,11 @@ class Published(_Model):
     beta4: Optional[float] = Field(None, description="printed β4")
     m: Optional[float] = Field(None, description="printed threshold m")
 
+    @field_validator("K1", "Kc", "H")
+    @classmethod
+    def _mats(cls, v):
+        return v if v is None else _finite_matrix(v)
+
 
 class Spheres(_Model):
     """Input/output spheres (eqs 10.34–10.35) and the truncation time T."""
@@ -261,7 +294,7 @@ Signal = list[list[Term]]   # one list of terms per channel
 class Scenario(_Model):
     """A simulation case: r = r_o + delta_r, uncertain parameter value, disturbance impulse."""
 
-    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$")
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX)
     delta_r: Optional[Signal] = Field(None, description="reference perturbation r − r_o per channel")
     gamma: float = Field(0.0, description="uncertain parameter: γ (sinusoidal) or payload M in kg (polar_arm)")
     parameters: Optional[dict[str, float]] = Field(None, description="expression kind: parameter values "
@@ -275,14 +308,14 @@ class Simulation(_Model):
 
     t_final: Seconds = Field(10.0, gt=0, le=1e5, description="simulated time, s")
     n_samples: int = Field(2001, ge=11, le=200001, description="output samples")
-    rtol: float = Field(1e-8, gt=0, lt=1, description="integrator relative tolerance")
-    atol: float = Field(1e-10, gt=0, lt=1, description="integrator absolute tolerance")
+    rtol: float = Field(1e-8, ge=1e-14, lt=1, description="integrator relative tolerance (≥ 1e-14: ~100 ulp)")
+    atol: float = Field(1e-10, ge=1e-20, lt=1, description="integrator absolute tolerance")
     r_o: Signal = Field(description="nominal reference r_o(t), one list of terms per output")
     scenarios: list[Scenario] = Field(min_length=1)
 
 
 class Output(_Model):
-    root: str = Field("runs", description="results root; files go to <root>/<name>/")
+    root: str = Field("runs", pattern=ROOT_PATTERN, description="results root; files go to <root>/<name>/")
     figures: bool = Field(True, description="write PNG figures next to the HDF5 files")
     units: Literal["SI"] = Field("SI", description="unit system of the results: qpp works in SI (s, rad/s, kg, m); "
                                                    "plant signals are in the user's units")
@@ -291,10 +324,21 @@ class Output(_Model):
 _EXPR_CACHE: dict = {}
 
 
+def _check_periods(field: str, omega: float, t_final: float) -> None:
+    from acmm.limits import how_to_raise, limit
+
+    periods = omega * t_final / (2 * math.pi)
+    if periods > limit("QPP_PERIODS"):
+        raise ValueError(f"{field}: {omega:g} rad/s over simulation.t_final = {t_final:g} s is {periods:.3g} "
+                         f"periods to integrate; lower the frequency or t_final ({how_to_raise('QPP_PERIODS')})")
+
+
 class QppConfig(_Model):
     """A complete ``qpp`` configuration."""
 
-    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$", description="run name; results go to <root>/<name>/")
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX,
+                      description="run name (as for acmm: letters, digits, _ . -, not starting with a dot); "
+                                  "results go to <root>/<name>/")
     description: str = ""
     plant: Plant
     nonlinearity: Nonlinearity
@@ -312,7 +356,9 @@ class QppConfig(_Model):
         try:
             P = self.lure_plant()
         except ConfigError as exc:
-            raise ValueError(str(exc)) from None
+            msg = str(exc)
+            raise ValueError(("plant." + msg) if msg.split(":")[0] in ("A", "B", "C", "G", "Ac", "Bc", "Cc")
+                             else msg) from None
         if self.plant.x0 is not None and len(self.plant.x0) != P.n:
             raise ValueError(f"plant.x0 must have {P.n} entries")
         if isinstance(self.plant.xc0, list) and len(self.plant.xc0) != P.q:
@@ -366,6 +412,31 @@ class QppConfig(_Model):
         if self.design.gains == "published" and any(
                 x is None for x in (self.published.K1, self.published.Kc, self.published.H)):
             raise ValueError("design.gains = published needs published.K1, Kc and H")
+        pub = self.published
+        for nm, want in (("K1", (P.m, P.n)), ("Kc", (P.m, P.q)), ("H", (P.n, P.p))):
+            got = getattr(pub, nm)
+            if got is not None and np.shape(got) != want:
+                raise ValueError(f"published.{nm} must be {want[0]}×{want[1]}, got {np.shape(got)[0]}×"
+                                 f"{np.shape(got)[1]}")
+        if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
+            # the nonlinearity's sin(ω t) must be resolved by the integrator: bound the periods
+            _check_periods("nonlinearity.omega", nl.omega, self.simulation.t_final)
+        for sig_name, sig in [("simulation.r_o", self.simulation.r_o)] + [
+                (f"simulation.scenarios.{s.name}.delta_r", s.delta_r) for s in self.simulation.scenarios]:
+            for chan in sig or []:
+                for term in chan:
+                    if term.kind == "sin" and term.omega > 0:
+                        _check_periods(f"{sig_name} omega", term.omega, self.simulation.t_final)
+        from acmm.limits import how_to_raise, limit
+
+        runs = len(self.simulation.scenarios) + 1
+        if self.simulation.n_samples * runs > limit("QPP_SAMPLES"):
+            raise ValueError(f"simulation.n_samples: {self.simulation.n_samples} samples × {runs} runs (scenarios + "
+                             f"the nominal loop) is too many; lower n_samples or the scenarios "
+                             f"({how_to_raise('QPP_SAMPLES')})")
+        if 2 * self.hinf.a * self.spheres.T > 600:
+            raise ValueError(f"hinf.a × spheres.T = {self.hinf.a * self.spheres.T:.4g}: e^(2aT) of eq 10.44 "
+                             "overflows; lower hinf.a or spheres.T")
         return self
 
     def lure_plant(self):

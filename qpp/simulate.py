@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import math
+
 import numpy as np
 from scipy.integrate import solve_ivp
 
@@ -217,9 +219,45 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
                      float(err.max()), err, cfg.spheres.beta_o, pars)
 
 
+def check_work(cfg: QppConfig, K1, Kc, H) -> float:
+    """Refuse a simulation that would run for minutes (issue 13), before integrating.
+
+    An explicit integrator needs a number of steps proportional to t_final × (the fastest rate
+    of the loop): the largest |eigenvalue| of the linear closed loop (plant, servo-compensator,
+    observer) plus the size of the nonlinearity's output feedback and the fastest signal
+    frequency.  Work = that × (scenarios + 1) is bounded by the ``QPP_WORK`` limit
+    (:mod:`acmm.limits`).  Returns the work estimate.
+    """
+    from acmm.errors import ConfigError
+    from acmm.limits import how_to_raise, limit
+
+    P = cfg.lure_plant()
+    A, B, C, Ac, Bc = (np.atleast_2d(np.asarray(x, float)) for x in (P.A, P.B, P.C, P.Ac, P.Bc))
+    K1, Kc, L = np.atleast_2d(K1), np.atleast_2d(Kc), -np.atleast_2d(H)
+    n, q = P.n, P.q
+    Acl = np.block([[A, B @ Kc, B @ K1], [-Bc @ C, Ac, np.zeros((q, n))], [L @ C, B @ Kc, A + B @ K1 - L @ C]])
+    with np.errstate(all="ignore"):
+        rate = float(np.max(np.abs(np.linalg.eigvals(Acl)))) if np.all(np.isfinite(Acl)) else math.inf
+    nl = cfg.nonlinearity
+    sim = cfg.simulation
+    if hasattr(nl, "F0"):
+        gain = sum(float(np.linalg.norm(np.asarray(getattr(nl, k), float), 2)) for k in ("F0", "F1"))
+        gain += nl.gamma_max * float(np.linalg.norm(np.asarray(nl.F_unc, float), 2))
+        rate += gain * float(np.linalg.norm(B, 2) * np.linalg.norm(C, 2)) + nl.omega
+    omegas = [t.omega for sig in [sim.r_o] + [s.delta_r or [] for s in sim.scenarios] for ch in sig for t in ch]
+    rate = max([rate] + omegas)
+    work = sim.t_final * rate * (len(sim.scenarios) + 1)
+    if not work <= limit("QPP_WORK"):
+        raise ConfigError(f"simulation.t_final: {sim.t_final:g} s × the loop's fastest rate {rate:.4g} 1/s × "
+                          f"{len(sim.scenarios) + 1} runs needs too many integrator steps (work {work:.3g}); "
+                          f"shorten t_final, use fewer scenarios or slower gains ({how_to_raise('QPP_WORK')})")
+    return work
+
+
 def simulate(cfg: QppConfig, K1, Kc, H, progress=None) -> list[SimResult]:
     """All scenarios of a config (the nominal loop is integrated once); ``progress(done, total,
     name)`` is called after each scenario."""
+    check_work(cfg, K1, Kc, H)
     plant = cfg.lure_plant()
     sim = cfg.simulation
     t = np.linspace(0.0, sim.t_final, sim.n_samples)

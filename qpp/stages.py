@@ -7,6 +7,7 @@ import numpy as np
 
 from acmm.outputs import owns_outputs
 from acmm.results import Dataset, write_h5
+from acmm.runlock import locked_stage
 from qpp.config import PolarArmNonlinearity, QppConfig, load_config
 from qpp.design import DesignResult, design
 from qpp.simulate import simulate
@@ -118,6 +119,7 @@ def _iterations(r: DesignResult) -> Dataset:
                                                         for it in r.iterations)})
 
 
+@locked_stage(_cfg)
 @owns_outputs("qpp design", lambda c: _cfg(c))
 def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignResult, Path]:
     """Design (ch. 12.1) and write ``<root>/<name>/qpp_design.h5`` (+ circle and iteration figures).
@@ -139,6 +141,7 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     return cfg, r, path
 
 
+@locked_stage(_cfg)
 @owns_outputs("qpp simulate", lambda c: _cfg(c))
 def run_simulate(config, figures: bool | None = None, progress=None):
     """Design, simulate every scenario, write ``<root>/<name>/qpp_sim.h5`` (+ figures).

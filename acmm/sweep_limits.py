@@ -1,0 +1,82 @@
+"""Work bounds of a sweep, checked when the sweep config is validated (issue 13: nothing hangs).
+
+* ``SWEEP_CASES``: cases of all bases together (a grid's Cartesian product can be enormous).
+* ``SWEEP_ORBITS``: simulated orbits of all cases together (cases × orbits per run).
+* ``SWEEP_DRAWS``: expected Monte Carlo draws, resampling of unphysical inertias included.  When
+  the worst case (cases × ``max_draws``) exceeds the limit, a pilot of :data:`PILOT` draws (its
+  own random stream, so the cases' draws are untouched) estimates the fraction p of physical
+  draws; the expected total is cases × min(max_draws, 1/p).  A distribution that almost never
+  gives a physical inertia with a huge ``max_draws`` is thus refused in well under a second
+  instead of grinding through billions of eigenvalue tests.
+
+Limits: :mod:`acmm.limits` (``ACMM_LIMIT_<NAME>`` environment variables).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from acmm.errors import ConfigError
+from acmm.limits import how_to_raise, limit
+
+PILOT = 1000
+
+
+def _physical_fraction(sweep, n: int) -> tuple[int, int]:
+    """(physical draws, draws) of a pilot of ``n`` draws at every level of every base."""
+    from acmm.schedule import point_specs
+    from acmm.sweep import _draw, perturb_inertia
+
+    spec = sweep.spec
+    rng = np.random.default_rng(np.random.SeedSequence([spec.seed, 0x9E3779B9]))
+    draws = [_draw(rng, spec) for _ in range(n)]
+    ok = np.ones(n, bool)
+    for b in sweep.bases:
+        for s in point_specs(b.config):
+            m = np.array([perturb_inertia(s.inertia, d) for d in draws])
+            with np.errstate(all="ignore"):
+                fin = np.all(np.isfinite(m), axis=(1, 2))
+                m[~fin] = np.eye(3)
+                eig = np.linalg.eigvalsh(m)
+            good = fin & (eig[:, 0] > 0) & (eig[:, 0] + eig[:, 1] >= eig[:, 2] * (1 - 1e-12))
+            ok &= good
+    return int(ok.sum()), n
+
+
+def check_sweep_work(sweep, source: str = "sweep config") -> None:
+    """Raise a one-line :class:`ConfigError` when a sweep exceeds a work limit."""
+    spec = sweep.spec
+    nb = len(sweep.bases)
+    if nb == 0:
+        raise ConfigError(f"{source}: sweep.base: give a base config ('base: NAME' or 'bases: [...]')")
+    if spec.grid is not None:
+        cases = 1
+        for v in spec.grid.values():
+            cases *= len(v)
+    else:
+        cases = int(spec.n_runs)
+    cases *= nb
+    if cases > limit("SWEEP_CASES"):
+        raise ConfigError(f"{source}: sweep: {cases:.3g} cases over {nb} base(s); use fewer grid values or "
+                          f"n_runs ({how_to_raise('SWEEP_CASES')})")
+    orbits = sum(spec.orbits if spec.orbits is not None else b.config.simulation.orbits for b in sweep.bases)
+    total_orbits = orbits * (cases // nb)
+    if total_orbits > limit("SWEEP_ORBITS"):
+        raise ConfigError(f"{source}: sweep.orbits: {cases} cases simulate {total_orbits:.3g} orbits in all; "
+                          f"lower sweep.orbits or the number of cases ({how_to_raise('SWEEP_ORBITS')})")
+    if spec.design == "redesign":
+        designs = (cases // nb) * sum(b.config.n_design_points() for b in sweep.bases)
+        if designs > limit("SWEEP_DESIGNS"):
+            raise ConfigError(f"{source}: sweep.design: redesign runs {designs} sector-LQR designs ({cases} cases "
+                              f"× design points); use design: fixed or fewer cases ({how_to_raise('SWEEP_DESIGNS')})")
+    if spec.grid is not None or spec.unphysical != "resample":
+        return
+    cap = limit("SWEEP_DRAWS")
+    if cases * spec.max_draws <= cap:
+        return
+    good, n = _physical_fraction(sweep, PILOT)
+    per_case = spec.max_draws if good == 0 else min(spec.max_draws, n / good)
+    expected = cases * per_case
+    if expected > cap:
+        raise ConfigError(f"{source}: sweep.max_draws: {good} of {n} pilot draws give a physical inertia, so "
+                          f"{cases} cases would need ~{expected:.3g} draws; narrow sweep.monte_carlo, lower "
+                          f"max_draws or set unphysical: reject ({how_to_raise('SWEEP_DRAWS')})")
