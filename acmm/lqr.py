@@ -35,7 +35,8 @@ import numpy as np
 import scipy.linalg as sla
 
 from acmm.errors import ConvergenceError, DesignError
-from acmm.riccati import _as_R, care_residual, scale_problem, solve_care
+from acmm.riccati import (ILL_CONDITIONED, _as_R, care_condition, care_residual, scale_problem,
+                           solve_care)
 
 
 def sector_margin(poles, n: float, sigma: float = 0.5, half_angle_deg: float = 45.0) -> np.ndarray:
@@ -104,6 +105,17 @@ class SectorLQR:
         Design method and Riccati solver.
     scale : (N,) array or None
         State scaling used, x = diag(scale) x̃.
+    eig_condition : (N,) array
+        Condition number κ_i = ‖w_i‖‖v_i‖/|w_i^H v_i| of each pole (same order as ``poles``) of
+        A − BK in the scaled coordinates (:func:`eigen_conditioning`).
+    robustness_radius, robustness_radius_elementwise : float
+        Sector robustness radius (:func:`sector_robustness`): the estimated smallest relative
+        gain error that moves a pole out of the sector, normwise (‖δK̃‖₂/‖K̃‖₂, scaled) and
+        elementwise (max |δK_ij/K_ij|).
+    riccati_condition : float
+        κ_CARE of the Riccati equation solved for the shifted LQR (:mod:`acmm.riccati`).
+    riccati_ill_conditioned : bool
+        κ_CARE above :data:`acmm.riccati.ILL_CONDITIONED`.
     """
 
     K: np.ndarray
@@ -118,6 +130,77 @@ class SectorLQR:
     method: str = "shift"
     riccati_method: str = "scipy"
     scale: np.ndarray | None = field(default=None)
+    eig_condition: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    robustness_radius: float = float("nan")
+    robustness_radius_elementwise: float = float("nan")
+    riccati_condition: float = float("nan")
+    riccati_ill_conditioned: bool = False
+
+    @property
+    def max_eig_condition(self) -> float:
+        """Largest eigenvalue condition number of A − BK in the scaled coordinates."""
+        return float(np.max(self.eig_condition)) if self.eig_condition.size else float("nan")
+
+
+def eigen_conditioning(Acl):
+    """Eigenvalues λ_i, right/left eigenvectors and condition numbers of ``Acl``.
+
+    κ_i = ‖w_i‖₂‖v_i‖₂/|w_i^H v_i| (Wilkinson): a perturbation E of Acl moves λ_i by at most
+    κ_i‖E‖₂ to first order.  Returns (λ, V, W, κ) with W = V⁻¹ (rows are left eigenvectors
+    normalized so that W V = I), so that κ_i = ‖W[i]‖‖V[:, i]‖.
+    """
+    lam, V = np.linalg.eig(np.asarray(Acl, dtype=float))
+    try:
+        W = np.linalg.inv(V)
+    except np.linalg.LinAlgError:
+        return lam, V, np.full_like(V, np.nan), np.full(lam.shape, np.inf)
+    kappa = np.linalg.norm(V, axis=0) * np.linalg.norm(W, axis=1)
+    return lam, V, W, kappa
+
+
+def sector_robustness(A, B, K, n: float, sigma: float = 0.5, half_angle_deg: float = 45.0,
+                      scale=None) -> tuple[float, float]:
+    """Estimated smallest relative gain error that moves a pole of A − BK out of the sector.
+
+    First-order eigenvalue perturbation: δλ_i = −w_i^H B δK v_i (W V = I).  A pole with
+    :func:`sector_margin` m_i (units of n) leaves the sector once |δλ_i| ≥ m_i n, so ::
+
+        ε_norm = min_i m_i n / (‖K̃‖₂ ‖B̃'w̄_i‖₂ ‖v_i‖₂)           (‖δK̃‖₂ ≤ ε‖K̃‖₂, scaled),
+        ε_elem = min_i m_i n / Σ_ab |(w_i^H B)_a K_ab v_ib|        (|δK_ab| ≤ ε|K_ab|),
+
+    the first attained by the rank-one δK̃ = −ε‖K̃‖ (B̃'w̄_i)(v_i)^H/(‖·‖‖·‖) aligned with the
+    pole's outward normal.  Both are first-order *estimates* (exact for small radii; clusters
+    of poles make them optimistic or pessimistic).  Zero if a pole is already outside.
+
+    Parameters
+    ----------
+    A, B, K : arrays
+        Model and gain (physical units; ``scale`` applied for the normwise radius).
+    n, sigma, half_angle_deg :
+        Sector (units of n, deg).
+    scale : (N,) array or None
+        State scaling x = diag(scale) x̃ in which the normwise radius is measured.
+
+    Returns
+    -------
+    (ε_norm, ε_elem) : tuple of float
+    """
+    A, B, K = (np.asarray(x, dtype=float) for x in (A, B, K))
+    if scale is not None:
+        d = np.asarray(scale, dtype=float)
+        A, B, K = A / d[:, None] * d[None, :], B / d[:, None], K * d[None, :]
+    lam, V, W, _ = eigen_conditioning(A - B @ K)
+    m = sector_margin(lam, n, sigma, half_angle_deg)
+    if np.min(m) <= 0:
+        return 0.0, 0.0
+    wb = W @ B                                              # rows w_i^H B
+    kn = np.linalg.norm(K, 2)
+    sens_norm = kn * np.linalg.norm(wb, axis=1) * np.linalg.norm(V, axis=0)
+    sens_elem = np.einsum("ia,ab,bi->i", np.abs(wb), np.abs(K), np.abs(V))
+    with np.errstate(divide="ignore"):
+        e_norm = float(np.min(m * n / sens_norm))
+        e_elem = float(np.min(m * n / sens_elem))
+    return e_norm, e_elem
 
 
 def _required_h(lam: np.ndarray, n: float, sigma: float, phi: float, target: float) -> np.ndarray:
@@ -189,6 +272,10 @@ def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, r
             f"sector LQR ({method}): {bad.size} closed-loop pole(s) outside the sector "
             f"Re λ ≤ −{sigma}n, |Im λ| ≤ tan({half_angle_deg}°)|Re λ| with margin {min_margin}n "
             f"(worst margin {margin:.3g}n at λ/n = {complex(bad[0] / n):.4g})")
+    lam_c, _, _, kappa = eigen_conditioning(As - Bs @ Ks)
+    kappa = kappa[np.lexsort((lam_c.imag, lam_c.real))]
+    e_norm, e_elem = sector_robustness(As, Bs, Ks, n, sigma, half_angle_deg)
+    kcare = care_condition(As + alpha * np.eye(nx), Bs, Qs, R, Ps)
     if d is not None:
         K = Ks / d[None, :]
         P = Ps / d[:, None] / d[None, :]
@@ -197,7 +284,9 @@ def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, r
         K, P, Q = Ks, Ps, Qs
     return SectorLQR(K=K, P=P, Q=Q, R=R, poles=poles, margin=margin, residual=res, shift=alpha,
                      mirror_shifts=tuple(mirror_shifts), method=method,
-                     riccati_method=riccati_method, scale=d)
+                     riccati_method=riccati_method, scale=d, eig_condition=kappa,
+                     robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
+                     riccati_condition=kcare, riccati_ill_conditioned=bool(not kcare <= ILL_CONDITIONED))
 
 
 def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float = 45.0,
