@@ -188,6 +188,8 @@ class Design(_Model):
     Q0_groups: Optional[Q0Groups] = Field(
         None, description="per-group diagonal weights on the scaled states, added to Q0·I (dimensionless)")
     min_margin: float = Field(0.01, ge=0, lt=10, description="required sector margin of every design pole, units of n")
+    line_spacing: float = Field(0.0, ge=0, lt=10, description="pole shifting: 0 mirrors a group of stray poles about one "
+                                                          "line; > 0 one pole at a time about distinct lines, units of n")
 
 
 class DesignPoint(_Model):

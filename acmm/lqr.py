@@ -292,7 +292,7 @@ def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, r
 def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float = 45.0,
                Q0=None, scale=None, method: str = "shift", riccati_method: str = "scipy",
                residual_tol: float = 1e-9, min_margin: float = 0.01,
-               max_uniform_shift: float = 100.0) -> SectorLQR:
+               max_uniform_shift: float = 100.0, line_spacing: float = 0.0) -> SectorLQR:
     """LQR gain with every closed-loop pole in the sector of Fig 5.2 (module docstring).
 
     Parameters
@@ -326,6 +326,11 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
         1.5× this margin.
     max_uniform_shift : float
         Largest α/n tried by ``method="uniform"``.
+    line_spacing : float
+        ``method="shift"``: 0 mirrors every stray pole of a group about one line (the poles of
+        a group stay clustered); δ > 0 mirrors them one real-Schur block at a time, the k-th
+        about h + kδn (raised further until it lands ≥ δn from every other pole), so the
+        moved poles are distinct (units of n).
 
     Returns
     -------
@@ -423,23 +428,39 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
                 h = _required_h(z, n, sigma, phi, target)[0]
                 return bool(lo * (1 - 0.01) <= h <= hi * (1 + 0.01))
 
-            T, Z, sdim = sla.schur(Acl.T, output="real", sort=select)
-            if sdim == 0:
-                continue
-            T11, U1 = T[:sdim, :sdim], Z[:, :sdim]
-            lam1 = np.linalg.eigvals(T11)
-            h = float(np.max(_required_h(lam1, n, sigma, phi, target)))
-            h = max(h, alpha)
-            try:
-                sub = solve_care(T11.T + h * np.eye(sdim), U1.T @ Bs, np.zeros((sdim, sdim)), R,
-                                 method=riccati_method, tol=residual_tol)
-            except ConvergenceError as exc:
-                raise DesignError(f"sector LQR (shift): cannot shift the poles λ/n = "
-                                  f"{np.round(lam1 / n, 4).tolist()} (uncontrollable?): {exc}") from exc
-            dP = U1 @ sub.P @ U1.T
-            dP = 0.5 * (dP + dP.T)
-            Ps = Ps + dP
-            Qs = Qs + 2.0 * (h - alpha) * dP
-            mirror_shifts.append(h)
+            for k in range(nx if line_spacing > 0 else 1):
+                if k:
+                    Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
+                T, Z, sdim = sla.schur(Acl.T, output="real", sort=select)
+                if sdim == 0:
+                    break
+                if line_spacing > 0:
+                    # one real-Schur block at a time (the leading block is invariant), each
+                    # about its own line: distinct poles instead of a near-defective cluster
+                    sdim = 2 if sdim > 1 and T[1, 0] != 0.0 else 1
+                T11, U1 = T[:sdim, :sdim], Z[:, :sdim]
+                lam1 = np.linalg.eigvals(T11)
+                h = float(np.max(_required_h(lam1, n, sigma, phi, target)))
+                h = max(h, alpha) + k * line_spacing * n
+                if line_spacing > 0:
+                    # nor onto (or next to) a pole that is already there
+                    rest = np.linalg.eigvals(T[sdim:, sdim:])
+                    for _bump in range(400):
+                        moved = -(2.0 * h + lam1.real) + 1j * np.abs(lam1.imag)
+                        gap = np.min(np.abs(rest[None, :] - moved[:, None])) if rest.size else np.inf
+                        if gap >= line_spacing * n:
+                            break
+                        h += 0.25 * line_spacing * n
+                try:
+                    sub = solve_care(T11.T + h * np.eye(sdim), U1.T @ Bs, np.zeros((sdim, sdim)), R,
+                                     method=riccati_method, tol=residual_tol)
+                except ConvergenceError as exc:
+                    raise DesignError(f"sector LQR (shift): cannot shift the poles λ/n = "
+                                      f"{np.round(lam1 / n, 4).tolist()} (uncontrollable?): {exc}") from exc
+                dP = U1 @ sub.P @ U1.T
+                dP = 0.5 * (dP + dP.T)
+                Ps = Ps + dP
+                Qs = Qs + 2.0 * (h - alpha) * dP
+                mirror_shifts.append(h)
     return _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin,
                    residual_tol, method, riccati_method, mirror_shifts)

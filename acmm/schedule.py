@@ -67,6 +67,8 @@ class ScheduleFit:
     rms_residual: np.ndarray
     rel_residual: np.ndarray
     form: str = "polynomial"
+    method: str = "least_squares"
+    refit_info: dict = field(default_factory=dict)
 
     @property
     def order(self) -> int:
@@ -191,7 +193,8 @@ def design_one(spec: PointSpec, cfg) -> PointDesign:
                          half_angle_deg=d.sector.half_angle_deg,
                          Q0=design_q0(d, model.A.shape[0]),   # on the scaled states
                          scale=model.scales, method=d.pole_method, riccati_method=d.riccati_method,
-                         residual_tol=d.residual_tol, min_margin=d.min_margin)
+                         residual_tol=d.residual_tol, min_margin=d.min_margin,
+                         line_spacing=d.line_spacing)
     return PointDesign(spec, t, model, res)
 
 
@@ -503,3 +506,101 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
             dm[j] = 1.0 / worst
             dg[j], dp[j] = disk_gain_phase(dm[j])
     return PathCheck(path.theta2.copy(), path.s.copy(), mr, mg, dm, dg, dp, np.array(poles))
+
+
+def _power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
+    """Coefficients in powers of θ of Σ_k a[k]·((θ − c)/h)^k (a: (order+1, ...))."""
+    from math import comb
+
+    order = a.shape[0] - 1
+    b = np.zeros_like(a)
+    for k in range(order + 1):
+        for j in range(k + 1):       # ((θ − c)/h)^k = Σ_j C(k,j) θ^j (−c)^(k−j) / h^k
+            b[j] = b[j] + a[k] * comb(k, j) * (-c) ** (k - j) / h ** k
+    return b
+
+
+def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: int = 5,
+                      beta: float = 20.0, max_iter: int = 60) -> ScheduleFit:
+    """Refine a least-squares polynomial schedule against the closed loop along the path.
+
+    The coefficients are moved to minimize the smooth maximum ::
+
+        f(c) = (1/β) log Σ_{j,i} exp(β Re λ_i(A_j − B_j K(θ_j; c)) / n)
+
+    over every ``every``-th TEA of ``path`` (the ends included), i.e. to push the least damped
+    closed-loop pole along the whole path to the left.  Gradient: first-order eigenvalue
+    perturbation ∂λ_i/∂K_ab = −(w_i^H B)_a v_ib (W V = I), chained through K = Σ c_k u^k;
+    L-BFGS-B (scipy) on the coefficients relative to the least-squares ones, in the normalized
+    variable u = (θ2* − c)/h ∈ [−1, 1], mapped back to powers of θ2*.  The form stays the
+    report's: one polynomial of the fit's order per gain element.  The result is accepted only
+    if it lowers the largest Re λ on those TEAs; it is re-checked on every TEA by
+    :func:`check_path`.
+    """
+    from scipy.optimize import minimize
+
+    if fit.form != "polynomial":
+        raise ValueError("refit_closed_loop refines a polynomial schedule")
+    idx = sorted(set(range(0, path.theta2.size, max(1, every))) | {path.theta2.size - 1})
+    th = path.theta2[idx]
+    c0, h0 = 0.5 * (th.max() + th.min()), 0.5 * (th.max() - th.min())
+    d = path.scales
+    As = [path.A[j] / d[:, None] * d[None, :] for j in idx]
+    Bs = [path.B[j] / d[:, None] for j in idx]
+    order = fit.order
+    u = (th - c0) / h0
+    up = u[:, None] ** np.arange(order + 1)[None, :]                     # (T, order+1)
+    # least-squares coefficients in u, scaled gains
+    vander = (fit.variable[:, None] - c0) / h0
+    vander = vander ** np.arange(order + 1)[None, :]
+    flat = (fit.gains * d[None, None, :]).reshape(fit.gains.shape[0], -1)
+    a0, *_ = np.linalg.lstsq(vander, flat, rcond=None)
+    shape = (order + 1,) + fit.gains.shape[1:]
+    a0 = a0.reshape(shape)
+    sc = np.broadcast_to(np.maximum(np.abs(a0).max(axis=0, keepdims=True), 1e-12), shape)
+
+    def fg(x):
+        a = a0 + x.reshape(shape) * sc
+        vals, grads = [], []
+        for A, B, tp in zip(As, Bs, up):
+            K = np.tensordot(tp, a, axes=1)
+            lam, V = np.linalg.eig(A - B @ K)
+            try:
+                W = np.linalg.inv(V)
+            except np.linalg.LinAlgError:
+                W = np.linalg.pinv(V)
+            dl = -np.einsum("ia,bi->iab", W @ B, V).real / n           # ∂Re λ_i/∂K_ab / n
+            vals.append(lam.real / n)
+            grads.append(np.einsum("k,iab->ikab", tp, dl))
+        v = np.concatenate(vals)
+        G = np.concatenate(grads)
+        vm = v.max()
+        e = np.exp(beta * (v - vm))
+        s_ = e.sum()
+        g = np.einsum("t,tkab->kab", e / s_, G) * sc
+        return vm + np.log(s_) / beta, g.ravel()
+
+    def worst(x):
+        a = a0 + x.reshape(shape) * sc
+        return max(np.max(np.linalg.eigvals(A - B @ np.tensordot(tp, a, axes=1)).real)
+                   for A, B, tp in zip(As, Bs, up)) / n
+
+    x0 = np.zeros(a0.size)
+    w0 = worst(x0)
+    res = minimize(fg, x0, jac=True, method="L-BFGS-B", options={"maxiter": max_iter})
+    w1 = worst(res.x)
+    info = {"beta": beta, "iterations": int(res.nit), "evaluations": int(res.nfev),
+            "n_tea": len(idx), "max_real_before": float(w0), "max_real_after": float(w1),
+            "accepted": bool(w1 < w0)}
+    if not w1 < w0:
+        return ScheduleFit(fit.coef, fit.variable, fit.gains, fit.rms_residual, fit.rel_residual,
+                           fit.form, "least_squares", info)
+    a = a0 + res.x.reshape(shape) * sc
+    coef = _power_basis(a, c0, h0) / d[None, None, :]
+    P = fit.variable.size
+    vander_th = fit.variable[:, None] ** np.arange(order + 1)[None, :]
+    resid = fit.gains.reshape(P, -1) - vander_th @ coef.reshape(order + 1, -1)
+    rms = np.sqrt(np.mean(resid ** 2, axis=0)).reshape(fit.gains.shape[1:])
+    peak = np.max(np.abs(fit.gains.reshape(P, -1)), axis=0).reshape(fit.gains.shape[1:])
+    rel = np.divide(rms, peak, out=np.zeros_like(rms), where=peak > 0)
+    return ScheduleFit(coef, fit.variable, fit.gains, rms, rel, fit.form, "closed_loop", info)

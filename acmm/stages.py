@@ -140,6 +140,7 @@ class DesignResult:
     check: object
     table: DesignTable
     wall_time: float
+    path_check: object = None
 
 
 def design_hash(cfg: Config) -> str:
@@ -170,15 +171,23 @@ def compute_design(config, progress=None) -> DesignResult:
     fit = check = None
     gains = np.array([p.lqr.K for p in points])
     teas = np.array([p.tea.theta for p in points])
+    path_check = None
     if len(points) >= 2:
         sc = cfg.schedule
         fit = sch.fit_schedule(teas[:, 1], gains, sc.order if sc else 2, sc.form if sc else "polynomial")
+        path = sch.path_models(points, cfg, sc.n_check) if sc is not None else None
+        if path is not None and sc.fit == "closed_loop" and fit.form == "polynomial":
+            fit = sch.refit_closed_loop(fit, path, cfg.orbit_rate)
         check = sch.check_schedule(fit, points, cfg)
+        if path is not None:
+            d = cfg.design
+            path_check = sch.check_path(fit.gain, path, cfg.orbit_rate, d.sector.sigma,
+                                        d.sector.half_angle_deg)
     table = DesignTable([p.spec.name for p in points], np.array([p.spec.inertia for p in points]),
                         np.array([p.spec.bias for p in points]), teas, gains,
                         None if fit is None else fit.coef, design_hash(cfg),
                         "polynomial" if fit is None else fit.form)
-    return DesignResult(cfg, points, fit, check, table, time.perf_counter() - t0)
+    return DesignResult(cfg, points, fit, check, table, time.perf_counter() - t0, path_check)
 
 
 def run_design(config, progress=None, figures: bool | None = None) -> tuple[DesignResult, Path]:
