@@ -210,7 +210,8 @@ def design_q0(d, nx: int):
     return np.diag(q) if np.any(q > 0) else None
 
 
-def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: str = "polynomial") -> ScheduleFit:
+def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: str = "polynomial",
+                 weights=None) -> ScheduleFit:
     """Least-squares polynomial fit of every gain element versus θ2* (ch. 5.3).
 
     Parameters
@@ -224,6 +225,8 @@ def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: st
     form : {"polynomial", "table"}
         Which form :meth:`ScheduleFit.gain` evaluates; the polynomial and its residuals are
         computed in both cases, for the record.
+    weights : (P,) array or None
+        Least-squares weight of each design point (default 1).
     """
     theta2 = np.asarray(theta2, float)
     gains = np.asarray(gains, float)
@@ -231,7 +234,8 @@ def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: st
     order = min(order, p - 1)
     vander = theta2[:, None] ** np.arange(order + 1)[None, :]
     flat = gains.reshape(p, -1)
-    coef, *_ = np.linalg.lstsq(vander, flat, rcond=None)
+    w = np.ones(p) if weights is None else np.sqrt(np.asarray(weights, dtype=float))
+    coef, *_ = np.linalg.lstsq(vander * w[:, None], flat * w[:, None], rcond=None)
     resid = flat - vander @ coef
     rms = np.sqrt(np.mean(resid ** 2, axis=0)).reshape(3, -1)
     peak = np.max(np.abs(flat), axis=0).reshape(3, -1)
@@ -521,7 +525,9 @@ def _power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
 
 
 def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: int = 5,
-                      beta: float = 20.0, max_iter: int = 60) -> ScheduleFit:
+                      beta: float = 20.0, max_iter: int = 60, angle_weight: float = 0.0,
+                      half_angle_deg: float = 45.0, re_weight: float = 1.0,
+                      re_offset: float = 0.0, angle_offset: float = 0.0) -> ScheduleFit:
     """Refine a least-squares polynomial schedule against the closed loop along the path.
 
     The coefficients are moved to minimize the smooth maximum ::
@@ -550,35 +556,46 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
     order = fit.order
     u = (th - c0) / h0
     up = u[:, None] ** np.arange(order + 1)[None, :]                     # (T, order+1)
-    # least-squares coefficients in u, scaled gains
-    vander = (fit.variable[:, None] - c0) / h0
-    vander = vander ** np.arange(order + 1)[None, :]
-    flat = (fit.gains * d[None, None, :]).reshape(fit.gains.shape[0], -1)
-    a0, *_ = np.linalg.lstsq(vander, flat, rcond=None)
+    # the starting coefficients (fit.coef, powers of θ) in u, scaled gains: sample and refit
     shape = (order + 1,) + fit.gains.shape[1:]
-    a0 = a0.reshape(shape)
+    us = np.linspace(-1.0, 1.0, order + 1)
+    ks = np.array([fit.gain(c0 + h0 * x) * d[None, :] for x in us]).reshape(order + 1, -1)
+    a0 = np.linalg.solve(us[:, None] ** np.arange(order + 1)[None, :], ks).reshape(shape)
     sc = np.broadcast_to(np.maximum(np.abs(a0).max(axis=0, keepdims=True), 1e-12), shape)
+    sphi, cphi = np.sin(np.radians(half_angle_deg)), np.cos(np.radians(half_angle_deg))
 
     def fg(x):
         a = a0 + x.reshape(shape) * sc
-        vals, grads = [], []
+        eigs = []
+        vals = []
         for A, B, tp in zip(As, Bs, up):
-            K = np.tensordot(tp, a, axes=1)
-            lam, V = np.linalg.eig(A - B @ K)
-            try:
-                W = np.linalg.inv(V)
-            except np.linalg.LinAlgError:
-                W = np.linalg.pinv(V)
-            dl = -np.einsum("ia,bi->iab", W @ B, V).real / n           # ∂Re λ_i/∂K_ab / n
-            vals.append(lam.real / n)
-            grads.append(np.einsum("k,iab->ikab", tp, dl))
+            lam, V = np.linalg.eig(A - B @ np.tensordot(tp, a, axes=1))
+            eigs.append((lam, V, B, tp))
+            vals.append(re_weight * (lam.real / n - re_offset))
+            if angle_weight > 0:
+                # distance beyond the φ lines, |Im λ| cos φ + Re λ sin φ (> 0 outside), weighted
+                vals.append(angle_weight * ((np.abs(lam.imag) * cphi + lam.real * sphi) / n - angle_offset))
         v = np.concatenate(vals)
-        G = np.concatenate(grads)
         vm = v.max()
         e = np.exp(beta * (v - vm))
         s_ = e.sum()
-        g = np.einsum("t,tkab->kab", e / s_, G) * sc
-        return vm + np.log(s_) / beta, g.ravel()
+        wgt = (e / s_).reshape(len(As), -1, lam.size)        # (TEA, term, pole)
+        g = np.zeros(shape)
+        for (lam, V, B, tp), wj in zip(eigs, wgt):
+            keep = np.flatnonzero(wj.max(axis=0) > 1e-10)        # poles that carry weight
+            if keep.size == 0:
+                continue
+            try:
+                Wk = np.linalg.inv(V)[keep]
+            except np.linalg.LinAlgError:
+                Wk = np.linalg.pinv(V)[keep]
+            dlc = -np.einsum("ia,bi->iab", Wk @ B, V[:, keep]) / n      # ∂λ_i/∂K_ab / n
+            gK = np.einsum("i,iab->ab", wj[0, keep] * re_weight, dlc.real)
+            if angle_weight > 0:
+                g2 = (np.sign(lam[keep].imag)[:, None, None] * dlc.imag * cphi + dlc.real * sphi)
+                gK = gK + np.einsum("i,iab->ab", wj[1, keep] * angle_weight, g2)
+            g += tp[:, None, None] * gK[None]
+        return vm + np.log(s_) / beta, (g * sc).ravel()
 
     def worst(x):
         a = a0 + x.reshape(shape) * sc
