@@ -524,6 +524,13 @@ def _power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
     return b
 
 
+#: Parameters of the closed-loop refit used by the design stage, chosen by measurement on the
+#: stair-case (README "Gain schedule"): a smooth max (β = 20) of Re λ/n and of 0.7·(distance
+#: beyond the φ lines/n − 2.2) — the angle term only bites on strongly oscillatory poles and
+#: keeps the disk margin up — on every 5th of the path TEAs, 300 L-BFGS iterations.
+REFIT_DEFAULTS = {"every": 5, "beta": 20.0, "max_iter": 300, "angle_weight": 0.7, "angle_offset": 2.2}
+
+
 def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: int = 5,
                       beta: float = 20.0, max_iter: int = 60, angle_weight: float = 0.0,
                       half_angle_deg: float = 45.0, re_weight: float = 1.0,
@@ -535,7 +542,10 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
         f(c) = (1/β) log Σ_{j,i} exp(β Re λ_i(A_j − B_j K(θ_j; c)) / n)
 
     over every ``every``-th TEA of ``path`` (the ends included), i.e. to push the least damped
-    closed-loop pole along the whole path to the left.  Gradient: first-order eigenvalue
+    closed-loop pole along the whole path to the left; with ``angle_weight`` w > 0 the terms
+    w·((|Im λ| cos φ + Re λ sin φ)/n − ``angle_offset``) of the sector's φ lines join the max, so
+    strongly oscillatory poles (which carry the smallest disk margins) are pulled back too.
+    ``re_weight``/``re_offset`` scale and shift the Re λ terms.  Gradient: first-order eigenvalue
     perturbation ∂λ_i/∂K_ab = −(w_i^H B)_a v_ib (W V = I), chained through K = Σ c_k u^k;
     L-BFGS-B (scipy) on the coefficients relative to the least-squares ones, in the normalized
     variable u = (θ2* − c)/h ∈ [−1, 1], mapped back to powers of θ2*.  The form stays the

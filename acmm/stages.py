@@ -177,7 +177,8 @@ def compute_design(config, progress=None) -> DesignResult:
         fit = sch.fit_schedule(teas[:, 1], gains, sc.order if sc else 2, sc.form if sc else "polynomial")
         path = sch.path_models(points, cfg, sc.n_check) if sc is not None else None
         if path is not None and sc.fit == "closed_loop" and fit.form == "polynomial":
-            fit = sch.refit_closed_loop(fit, path, cfg.orbit_rate)
+            fit = sch.refit_closed_loop(fit, path, cfg.orbit_rate,
+                                        half_angle_deg=cfg.design.sector.half_angle_deg, **sch.REFIT_DEFAULTS)
         check = sch.check_schedule(fit, points, cfg)
         if path is not None:
             d = cfg.design
