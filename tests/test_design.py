@@ -164,9 +164,27 @@ def test_config_q0_is_a_weight_on_the_scaled_states():
     from acmm.schedule import design_one, point_specs
 
     cfg = load_config("ac")
-    cfg = cfg.model_copy(update={"design": cfg.design.model_copy(update={"Q0": 1e-3})})
+    cfg = cfg.model_copy(update={"design": cfg.design.model_copy(
+        update={"Q0": 1e-3, "Q0_groups": None, "min_margin": 0.01})})
     p = design_one(point_specs(cfg)[0], cfg)
     d = p.model.scales
     q_scaled = p.lqr.Q * d[:, None] * d[None, :]
     assert np.linalg.eigvalsh(0.5 * (q_scaled + q_scaled.T) - 1e-3 * np.eye(24)).min() > -1e-9
     assert np.linalg.eigvalsh(q_scaled).max() < 10.0      # not the 1/d² blow-up of a physical q·I
+
+
+def test_config_q0_groups_are_diagonal_weights_on_the_scaled_states():
+    """Q0_groups = per-group diagonal on x̃ = D⁻¹x: D Q D − diag(groups) ⪰ 0 (pole shifting only
+    adds positive semidefinite terms), and the groups sit on the right states."""
+    from acmm.config import Q0Groups
+    from acmm.schedule import design_one, point_specs
+
+    g = Q0Groups(rates=1e-5, attitudes=2e-6, momentum=3e-6, momentum_integral=4e-5, drf=5e-7)
+    np.testing.assert_array_equal(g.diagonal()[[0, 3, 6, 9, 12, 23]], [1e-5, 2e-6, 3e-6, 4e-5, 5e-7, 5e-7])
+    cfg = load_config("ac")
+    cfg = cfg.model_copy(update={"design": cfg.design.model_copy(update={"Q0_groups": g})})
+    p = design_one(point_specs(cfg)[0], cfg)
+    d = p.model.scales
+    q_scaled = p.lqr.Q * d[:, None] * d[None, :]
+    q_scaled = 0.5 * (q_scaled + q_scaled.T)
+    assert np.linalg.eigvalsh(q_scaled - np.diag(g.diagonal())).min() > -1e-9 * np.abs(q_scaled).max()
