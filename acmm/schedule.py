@@ -593,37 +593,32 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
     sc = np.broadcast_to(np.maximum(np.abs(a0).max(axis=0, keepdims=True), 1e-12), shape)
     sphi, cphi = np.sin(np.radians(half_angle_deg)), np.cos(np.radians(half_angle_deg))
 
+    As_t, Bs_t = np.array(As), np.array(Bs)                          # (T, N, N), (T, N, M)
+
     def fg(x):
+        # all TEAs at once: batched eigendecompositions and first-order gradients
         a = a0 + x.reshape(shape) * sc
-        eigs = []
-        vals = []
-        for A, B, tp in zip(As, Bs, up):
-            lam, V = np.linalg.eig(A - B @ np.tensordot(tp, a, axes=1))
-            eigs.append((lam, V, B, tp))
-            vals.append(re_weight * (lam.real / n - re_offset))
-            if angle_weight > 0:
-                # distance beyond the φ lines, |Im λ| cos φ + Re λ sin φ (> 0 outside), weighted
-                vals.append(angle_weight * ((np.abs(lam.imag) * cphi + lam.real * sphi) / n - angle_offset))
-        v = np.concatenate(vals)
+        Kt = np.einsum("tk,kab->tab", up, a)
+        lam, V = np.linalg.eig(As_t - Bs_t @ Kt)                      # (T, N), (T, N, N)
+        terms = [re_weight * (lam.real / n - re_offset)]
+        if angle_weight > 0:
+            # distance beyond the φ lines, |Im λ| cos φ + Re λ sin φ (> 0 outside), weighted
+            terms.append(angle_weight * ((np.abs(lam.imag) * cphi + lam.real * sphi) / n - angle_offset))
+        v = np.stack(terms, axis=1)                                     # (T, terms, N)
         vm = v.max()
         e = np.exp(beta * (v - vm))
         s_ = e.sum()
-        wgt = (e / s_).reshape(len(As), -1, lam.size)        # (TEA, term, pole)
-        g = np.zeros(shape)
-        for (lam, V, B, tp), wj in zip(eigs, wgt):
-            keep = np.flatnonzero(wj.max(axis=0) > 1e-10)        # poles that carry weight
-            if keep.size == 0:
-                continue
-            try:
-                Wk = np.linalg.inv(V)[keep]
-            except np.linalg.LinAlgError:
-                Wk = np.linalg.pinv(V)[keep]
-            dlc = -np.einsum("ia,bi->iab", Wk @ B, V[:, keep]) / n      # ∂λ_i/∂K_ab / n
-            gK = np.einsum("i,iab->ab", wj[0, keep] * re_weight, dlc.real)
-            if angle_weight > 0:
-                g2 = (np.sign(lam[keep].imag)[:, None, None] * dlc.imag * cphi + dlc.real * sphi)
-                gK = gK + np.einsum("i,iab->ab", wj[1, keep] * angle_weight, g2)
-            g += tp[:, None, None] * gK[None]
+        wgt = e / s_
+        try:
+            W = np.linalg.inv(V)
+        except np.linalg.LinAlgError:
+            W = np.linalg.pinv(V)
+        dlc = -np.einsum("tia,tbi->tiab", W @ Bs_t, V) / n              # ∂λ_i/∂K_ab / n
+        gK = np.einsum("ti,tiab->tab", wgt[:, 0] * re_weight, dlc.real)
+        if angle_weight > 0:
+            g2 = np.sign(lam.imag)[:, :, None, None] * dlc.imag * cphi + dlc.real * sphi
+            gK = gK + np.einsum("ti,tiab->tab", wgt[:, 1] * angle_weight, g2)
+        g = np.einsum("tk,tab->kab", up, gK)
         return vm + np.log(s_) / beta, (g * sc).ravel()
 
     def worst(x):
