@@ -182,6 +182,22 @@ class Sector(_Model):
     half_angle_deg: Angle = Field(45.0, gt=0, lt=90, description="sector half-angle about the negative real axis, deg")
 
 
+class Q0Groups(_Model):
+    """Diagonal initial state weight on the *scaled* states (dimensionless), one value per state
+    group (x̃ = D⁻¹x, :func:`acmm.linearize.state_scales`); added to ``Q0``·I."""
+
+    rates: float = Field(0.0, ge=0, description="weight on the scaled body-rate errors δω1, θ̇2, δω3")
+    attitudes: float = Field(0.0, ge=0, description="weight on the scaled attitude errors δθ1..3")
+    momentum: float = Field(0.0, ge=0, description="weight on the scaled CMG momentum h1..3")
+    momentum_integral: float = Field(0.0, ge=0, description="weight on the scaled momentum integrals ∫h1..3")
+    drf: float = Field(0.0, ge=0, description="weight on the 12 scaled disturbance-rejection-filter states")
+
+    def diagonal(self) -> np.ndarray:
+        """The 24 diagonal entries in the state order of eq 4.47."""
+        return np.array([self.rates] * 3 + [self.attitudes] * 3 + [self.momentum] * 3
+                        + [self.momentum_integral] * 3 + [self.drf] * 12)
+
+
 class Design(_Model):
     """Linear design model (eq 4.46) and the sector LQR (ch. 5.2)."""
 
@@ -196,6 +212,11 @@ class Design(_Model):
     pole_method: Literal["shift", "uniform"] = Field(
         "shift", description="sector enforcement: optimal pole shifting of the stray poles, or a uniform shift")
     residual_tol: float = Field(1e-9, gt=0, lt=1, description="largest accepted relative Riccati residual (scaled)")
+    Q0_groups: Optional[Q0Groups] = Field(
+        None, description="per-group diagonal weights on the scaled states, added to Q0·I (dimensionless)")
+    min_margin: float = Field(0.01, ge=0, lt=10, description="required sector margin of every design pole, units of n")
+    line_spacing: float = Field(0.0, ge=0, lt=10, description="pole shifting: 0 mirrors a group of stray poles about one "
+                                                          "line; > 0 one pole at a time about distinct lines, units of n")
 
 
 class DesignPoint(_Model):
@@ -223,6 +244,11 @@ class Schedule(_Model):
                                   "table look-up, linear in θ2* between design points (ch. 7 alternative)")
     points: list[DesignPoint] = Field([], description="additional named design points")
     order: int = Field(2, ge=1, le=4, description="polynomial order of K_ij(θ2*) (the report uses 2)")
+    fit: Literal["least_squares", "closed_loop"] = Field(
+        "least_squares", description="polynomial fit: least squares on the gains, or least squares refined "
+                                     "against the closed loop along the path (acmm.schedule.refit_closed_loop)")
+    n_check: int = Field(201, ge=2, le=2001, description="TEAs evenly spaced along the blend path at which "
+                                                         "the scheduled gain is checked on the local model")
 
 
 class Simulation(_Model):

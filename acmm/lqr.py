@@ -26,6 +26,20 @@ with every closed-loop pole of A − BK verified to lie in S.
 
 All computations are done on the state-scaled model x = D x̃ (``scale``), where the Riccati
 residual is checked; K, P and Q are returned in physical units.
+
+Conditioning (the shipped configs; README "Sector design and gain schedule").  With Q0 = 0 the
+shifted LQR mirrors repeated open-loop modes — the three DRF pairs at ±jn and ±j2n, the Jordan
+chains h → ∫h at 0 — onto identical points: near-defective clusters with eigenvalue condition
+numbers ~1e9, "in the sector" only to rounding.  The configs therefore use a small fixed diagonal
+Q0 on the scaled states (1e-5 rates, 1e-6 attitudes, 5e-6 momentum, 5e-5 momentum integral, 0 DRF;
+``Q0_groups``), which splits the Jordan chains, and ``min_margin = 0.1`` (n), so every pole is
+≥ 0.1n inside: largest eigenvalue condition ≤ 1e5 at MB3, AC and every stair-case point.  The
+weights were chosen by measurement among ~40 candidates (README) for the condition number *and*
+for a second-order gain schedule that can be made stable along the whole path; larger weights lower
+the condition number further but make the scheduled loop unstable.  ``line_spacing`` > 0 mirrors
+stray poles one real-Schur block at a time about distinct lines (distinct poles; it did not help
+the stair-case).  Every result carries the eigenvalue condition numbers (:func:`eigen_conditioning`),
+the sector robustness radius (:func:`sector_robustness`) and the CARE condition estimate.
 """
 from __future__ import annotations
 
@@ -35,7 +49,8 @@ import numpy as np
 import scipy.linalg as sla
 
 from acmm.errors import ConvergenceError, DesignError
-from acmm.riccati import _as_R, care_residual, scale_problem, solve_care
+from acmm.riccati import (ILL_CONDITIONED, _as_R, care_condition, care_residual, scale_problem,
+                           solve_care)
 
 
 def sector_margin(poles, n: float, sigma: float = 0.5, half_angle_deg: float = 45.0) -> np.ndarray:
@@ -104,6 +119,17 @@ class SectorLQR:
         Design method and Riccati solver.
     scale : (N,) array or None
         State scaling used, x = diag(scale) x̃.
+    eig_condition : (N,) array
+        Condition number κ_i = ‖w_i‖‖v_i‖/|w_i^H v_i| of each pole (same order as ``poles``) of
+        A − BK in the scaled coordinates (:func:`eigen_conditioning`).
+    robustness_radius, robustness_radius_elementwise : float
+        Sector robustness radius (:func:`sector_robustness`): the estimated smallest relative
+        gain error that moves a pole out of the sector, normwise (‖δK̃‖₂/‖K̃‖₂, scaled) and
+        elementwise (max |δK_ij/K_ij|).
+    riccati_condition : float
+        κ_CARE of the Riccati equation solved for the shifted LQR (:mod:`acmm.riccati`).
+    riccati_ill_conditioned : bool
+        κ_CARE above :data:`acmm.riccati.ILL_CONDITIONED`.
     """
 
     K: np.ndarray
@@ -118,6 +144,77 @@ class SectorLQR:
     method: str = "shift"
     riccati_method: str = "scipy"
     scale: np.ndarray | None = field(default=None)
+    eig_condition: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    robustness_radius: float = float("nan")
+    robustness_radius_elementwise: float = float("nan")
+    riccati_condition: float = float("nan")
+    riccati_ill_conditioned: bool = False
+
+    @property
+    def max_eig_condition(self) -> float:
+        """Largest eigenvalue condition number of A − BK in the scaled coordinates."""
+        return float(np.max(self.eig_condition)) if self.eig_condition.size else float("nan")
+
+
+def eigen_conditioning(Acl):
+    """Eigenvalues λ_i, right/left eigenvectors and condition numbers of ``Acl``.
+
+    κ_i = ‖w_i‖₂‖v_i‖₂/|w_i^H v_i| (Wilkinson): a perturbation E of Acl moves λ_i by at most
+    κ_i‖E‖₂ to first order.  Returns (λ, V, W, κ) with W = V⁻¹ (rows are left eigenvectors
+    normalized so that W V = I), so that κ_i = ‖W[i]‖‖V[:, i]‖.
+    """
+    lam, V = np.linalg.eig(np.asarray(Acl, dtype=float))
+    try:
+        W = np.linalg.inv(V)
+    except np.linalg.LinAlgError:
+        return lam, V, np.full_like(V, np.nan), np.full(lam.shape, np.inf)
+    kappa = np.linalg.norm(V, axis=0) * np.linalg.norm(W, axis=1)
+    return lam, V, W, kappa
+
+
+def sector_robustness(A, B, K, n: float, sigma: float = 0.5, half_angle_deg: float = 45.0,
+                      scale=None) -> tuple[float, float]:
+    """Estimated smallest relative gain error that moves a pole of A − BK out of the sector.
+
+    First-order eigenvalue perturbation: δλ_i = −w_i^H B δK v_i (W V = I).  A pole with
+    :func:`sector_margin` m_i (units of n) leaves the sector once |δλ_i| ≥ m_i n, so ::
+
+        ε_norm = min_i m_i n / (‖K̃‖₂ ‖B̃'w̄_i‖₂ ‖v_i‖₂)           (‖δK̃‖₂ ≤ ε‖K̃‖₂, scaled),
+        ε_elem = min_i m_i n / Σ_ab |(w_i^H B)_a K_ab v_ib|        (|δK_ab| ≤ ε|K_ab|),
+
+    the first attained by the rank-one δK̃ = −ε‖K̃‖ (B̃'w̄_i)(v_i)^H/(‖·‖‖·‖) aligned with the
+    pole's outward normal.  Both are first-order *estimates* (exact for small radii; clusters
+    of poles make them optimistic or pessimistic).  Zero if a pole is already outside.
+
+    Parameters
+    ----------
+    A, B, K : arrays
+        Model and gain (physical units; ``scale`` applied for the normwise radius).
+    n, sigma, half_angle_deg :
+        Sector (units of n, deg).
+    scale : (N,) array or None
+        State scaling x = diag(scale) x̃ in which the normwise radius is measured.
+
+    Returns
+    -------
+    (ε_norm, ε_elem) : tuple of float
+    """
+    A, B, K = (np.asarray(x, dtype=float) for x in (A, B, K))
+    if scale is not None:
+        d = np.asarray(scale, dtype=float)
+        A, B, K = A / d[:, None] * d[None, :], B / d[:, None], K * d[None, :]
+    lam, V, W, _ = eigen_conditioning(A - B @ K)
+    m = sector_margin(lam, n, sigma, half_angle_deg)
+    if np.min(m) <= 0:
+        return 0.0, 0.0
+    wb = W @ B                                              # rows w_i^H B
+    kn = np.linalg.norm(K, 2)
+    sens_norm = kn * np.linalg.norm(wb, axis=1) * np.linalg.norm(V, axis=0)
+    sens_elem = np.einsum("ia,ab,bi->i", np.abs(wb), np.abs(K), np.abs(V))
+    with np.errstate(divide="ignore"):
+        e_norm = float(np.min(m * n / sens_norm))
+        e_elem = float(np.min(m * n / sens_elem))
+    return e_norm, e_elem
 
 
 def _required_h(lam: np.ndarray, n: float, sigma: float, phi: float, target: float) -> np.ndarray:
@@ -189,6 +286,10 @@ def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, r
             f"sector LQR ({method}): {bad.size} closed-loop pole(s) outside the sector "
             f"Re λ ≤ −{sigma}n, |Im λ| ≤ tan({half_angle_deg}°)|Re λ| with margin {min_margin}n "
             f"(worst margin {margin:.3g}n at λ/n = {complex(bad[0] / n):.4g})")
+    lam_c, _, _, kappa = eigen_conditioning(As - Bs @ Ks)
+    kappa = kappa[np.lexsort((lam_c.imag, lam_c.real))]
+    e_norm, e_elem = sector_robustness(As, Bs, Ks, n, sigma, half_angle_deg)
+    kcare = care_condition(As + alpha * np.eye(nx), Bs, Qs, R, Ps)
     if d is not None:
         K = Ks / d[None, :]
         P = Ps / d[:, None] / d[None, :]
@@ -197,13 +298,15 @@ def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, r
         K, P, Q = Ks, Ps, Qs
     return SectorLQR(K=K, P=P, Q=Q, R=R, poles=poles, margin=margin, residual=res, shift=alpha,
                      mirror_shifts=tuple(mirror_shifts), method=method,
-                     riccati_method=riccati_method, scale=d)
+                     riccati_method=riccati_method, scale=d, eig_condition=kappa,
+                     robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
+                     riccati_condition=kcare, riccati_ill_conditioned=bool(not kcare <= ILL_CONDITIONED))
 
 
 def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float = 45.0,
                Q0=None, scale=None, method: str = "shift", riccati_method: str = "scipy",
                residual_tol: float = 1e-9, min_margin: float = 0.01,
-               max_uniform_shift: float = 100.0) -> SectorLQR:
+               max_uniform_shift: float = 100.0, line_spacing: float = 0.0) -> SectorLQR:
     """LQR gain with every closed-loop pole in the sector of Fig 5.2 (module docstring).
 
     Parameters
@@ -237,6 +340,11 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
         1.5× this margin.
     max_uniform_shift : float
         Largest α/n tried by ``method="uniform"``.
+    line_spacing : float
+        ``method="shift"``: 0 mirrors every stray pole of a group about one line (the poles of
+        a group stay clustered); δ > 0 mirrors them one real-Schur block at a time, the k-th
+        about h + kδn (raised further until it lands ≥ δn from every other pole), so the
+        moved poles are distinct (units of n).
 
     Returns
     -------
@@ -334,23 +442,39 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
                 h = _required_h(z, n, sigma, phi, target)[0]
                 return bool(lo * (1 - 0.01) <= h <= hi * (1 + 0.01))
 
-            T, Z, sdim = sla.schur(Acl.T, output="real", sort=select)
-            if sdim == 0:
-                continue
-            T11, U1 = T[:sdim, :sdim], Z[:, :sdim]
-            lam1 = np.linalg.eigvals(T11)
-            h = float(np.max(_required_h(lam1, n, sigma, phi, target)))
-            h = max(h, alpha)
-            try:
-                sub = solve_care(T11.T + h * np.eye(sdim), U1.T @ Bs, np.zeros((sdim, sdim)), R,
-                                 method=riccati_method, tol=residual_tol)
-            except ConvergenceError as exc:
-                raise DesignError(f"sector LQR (shift): cannot shift the poles λ/n = "
-                                  f"{np.round(lam1 / n, 4).tolist()} (uncontrollable?): {exc}") from exc
-            dP = U1 @ sub.P @ U1.T
-            dP = 0.5 * (dP + dP.T)
-            Ps = Ps + dP
-            Qs = Qs + 2.0 * (h - alpha) * dP
-            mirror_shifts.append(h)
+            for k in range(nx if line_spacing > 0 else 1):
+                if k:
+                    Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
+                T, Z, sdim = sla.schur(Acl.T, output="real", sort=select)
+                if sdim == 0:
+                    break
+                if line_spacing > 0:
+                    # one real-Schur block at a time (the leading block is invariant), each
+                    # about its own line: distinct poles instead of a near-defective cluster
+                    sdim = 2 if sdim > 1 and T[1, 0] != 0.0 else 1
+                T11, U1 = T[:sdim, :sdim], Z[:, :sdim]
+                lam1 = np.linalg.eigvals(T11)
+                h = float(np.max(_required_h(lam1, n, sigma, phi, target)))
+                h = max(h, alpha) + k * line_spacing * n
+                if line_spacing > 0:
+                    # nor onto (or next to) a pole that is already there
+                    rest = np.linalg.eigvals(T[sdim:, sdim:])
+                    for _bump in range(400):
+                        moved = -(2.0 * h + lam1.real) + 1j * np.abs(lam1.imag)
+                        gap = np.min(np.abs(rest[None, :] - moved[:, None])) if rest.size else np.inf
+                        if gap >= line_spacing * n:
+                            break
+                        h += 0.25 * line_spacing * n
+                try:
+                    sub = solve_care(T11.T + h * np.eye(sdim), U1.T @ Bs, np.zeros((sdim, sdim)), R,
+                                     method=riccati_method, tol=residual_tol)
+                except ConvergenceError as exc:
+                    raise DesignError(f"sector LQR (shift): cannot shift the poles λ/n = "
+                                      f"{np.round(lam1 / n, 4).tolist()} (uncontrollable?): {exc}") from exc
+                dP = U1 @ sub.P @ U1.T
+                dP = 0.5 * (dP + dP.T)
+                Ps = Ps + dP
+                Qs = Qs + 2.0 * (h - alpha) * dP
+                mirror_shifts.append(h)
     return _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin,
                    residual_tol, method, riccati_method, mirror_shifts)

@@ -168,3 +168,49 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
         tab.set_fontsize(7)
     fig.tight_layout()
     return _save(fig, path, vector)
+
+
+def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=False):
+    """The scheduled gain on the local model along the path: largest Re λ and worst sector
+    margin (units of n) and the plant-input disk margin α versus pitch TEA."""
+    plt = _plt()
+    th = np.degrees(theta2)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
+    a1.plot(th, max_real, "-", color="C3", label="largest Re λ / n")
+    a1.plot(th, margin, "-", color="C0", label="worst sector margin / n")
+    a1.axhline(0.0, color="k", lw=0.8)
+    a1.axhline(-0.25, color="C3", lw=0.8, ls="--", label="Re λ = −0.25n")
+    a1.set_ylabel("units of n")
+    a1.legend(fontsize=7)
+    a1.set_title(f"Scheduled gain on the local model at {th.size} TEAs")
+    a2.semilogy(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
+    a2.set_ylabel("disk margin α at u (skew 0)")
+    a2.set_xlabel("pitch TEA θ2* (deg)")
+    return _save(fig, path, vector)
+
+
+def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=False):
+    """Closed-loop poles (units of n) of the scheduled loop at every path TEA, coloured by θ2*,
+    with the sector of Fig 5.2."""
+    plt = _plt()
+    p = np.asarray(poles) / n
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    t = np.tan(np.radians(half_angle_deg))
+    lo = max(min(p.real.min() * 1.05, -2 * sigma), -60.0)
+    x = np.linspace(lo, -sigma, 10)
+    ax.fill_between(x, t * x, -t * x, color="0.9", label="sector")
+    ax.plot(x, t * x, "k-", lw=0.8)
+    ax.plot(x, -t * x, "k-", lw=0.8)
+    ax.plot([-sigma, -sigma], [-t * sigma, t * sigma], "k-", lw=0.8)
+    c = np.repeat(np.degrees(theta2), p.shape[1])
+    sc = ax.scatter(p.real.ravel(), p.imag.ravel(), c=c, s=3, cmap="viridis")
+    fig.colorbar(sc, ax=ax, label="pitch TEA θ2* (deg)")
+    ax.axvline(0.0, color="k", lw=0.5)
+    ax.set_xlim(lo, max(1.0, p.real.max() * 1.1))
+    ylim = min(max(3.0, np.abs(p.imag).max() * 1.05), 60.0)
+    ax.set_ylim(-ylim, ylim)
+    ax.set_xlabel("Re λ / n")
+    ax.set_ylabel("Im λ / n")
+    ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
+    ax.legend(fontsize=7, loc="upper left")
+    return _save(fig, path, vector)

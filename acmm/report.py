@@ -496,6 +496,12 @@ class Doc:
         self.blocks.append(("fig", stem, caption, files))
 
 
+def _decode(x) -> str:
+    """A name stored as bytes (HDF5) or str, as str."""
+    x = x.item() if hasattr(x, "item") else x
+    return x.decode() if isinstance(x, bytes) else str(x)
+
+
 def _md_cell(s: str) -> str:
     return str(s).replace("|", "\\|").replace("\n", " ")
 
@@ -954,8 +960,9 @@ class _Report:
         self.doc.p(f"{len(pts)} design points along the MB3 → AC blend, evenly spaced in pitch TEA from "
                    f"{np.degrees(d['tea'][0, 1]):.2f}° to {np.degrees(d['tea'][-1, 1]):.2f}°; sector LQR "
                    f"(Re λ ≤ −{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g}°) per point, "
-                   f"then an order-{order} {form} schedule in θ2* (the report uses order 2; see "
-                   "configs/staircase.yaml and staircase_quadratic.yaml for why order 4 is used here).")
+                   f"then an order-{order} {form} schedule in θ2* (the report uses order 2), fitted by "
+                   f"{_decode(sc.get('fit_method', b'least_squares'))}"
+                   " (README, 'Gain schedule').")
         cm = np.asarray(sc["check_margin"])
         self.doc.table(["quantity", "value"], [
             ["worst sector margin of the LQR gains (units of n, > 0 inside)", f"{margins.min():+.4f}"],
@@ -968,6 +975,7 @@ class _Report:
                f"{np.max(sc['check_max_real']):+.4f} "
                f"({'stable at every check' if np.max(sc['check_max_real']) < 0 else 'UNSTABLE at some check'})"]]
              if "check_max_real" in sc else []), "Stair-case design summary")
+        self._schedule_conditioning(d, pts)
         files = fig_gain_schedule(d, cfg.design.drf_mode, self.figdir)
         self.doc.fig("gain_schedule", "Gain schedule: the 72 gains K(i, j) vs pitch TEA (Figs 5.3–5.26 analogue)",
                      files)
@@ -985,6 +993,45 @@ class _Report:
         self.doc.fig("pole_maps", "Closed-loop poles (units of n) and the sector of Fig 5.2: every stair-case "
                      "design point (left); the claim-1 designs and the cross-inertia-free gain on the true "
                      "coupled MB3 model (right)", files)
+
+    def _schedule_conditioning(self, d, pts):
+        """Per-point conditioning and robustness; the scheduled gain along the whole path."""
+        from acmm import plots
+
+        if "max_eig_condition" in pts[0]:
+            rows = []
+            for name, p in zip(d["names"], pts):
+                rows.append([_decode(name), f"{np.degrees(float(p['tea'][1])):.2f}",
+                             f"{float(p['sector_margin']):+.3f}", f"{float(p['max_eig_condition']):.2e}",
+                             f"{float(p['robustness_radius']):.1e}",
+                             f"{float(p['robustness_radius_elementwise']):.1e}",
+                             f"{float(p['riccati_condition']):.1e}"])
+            self.doc.table(["point", "θ2* (deg)", "sector margin (n)", "max eigenvalue condition (scaled)",
+                            "sector robustness radius ‖δK‖/‖K‖", "radius, elementwise", "CARE condition"],
+                           rows, "Design points: conditioning of the closed loop and the estimated smallest "
+                                 "relative gain error that moves a pole out of the sector (first order)")
+        sc = d["schedule"]
+        if "path" not in sc:
+            return
+        pa = sc["path"]
+        mr, mg, dm = (np.asarray(pa[k]) for k in ("max_real", "sector_margin", "disk_margin"))
+        self.doc.table(["quantity along the path", "value"], [
+            ["TEAs checked (evenly spaced, first to last design point)", f"{mr.size}"],
+            ["largest Re λ of the scheduled local loop (units of n)", f"{mr.max():+.3f}"],
+            ["worst sector margin (units of n)", f"{mg.min():+.3f}"],
+            ["fraction of the path with every pole in the sector", f"{float(np.mean(mg >= 0)):.3f}"],
+            ["smallest disk margin α at the plant input (skew 0)", f"{dm.min():.3f}"],
+        ], "The order-2 schedule judged on the closed loop at every path TEA")
+        f1 = plots.schedule_path_check(pa["theta2"], mr, mg, dm, self.figdir / "schedule_path_margins", vector=True)
+        self.doc.fig("schedule_path_margins", "Scheduled gain on the local model along the path: largest Re λ, "
+                     "worst sector margin and disk margin at the plant input vs pitch TEA",
+                     {"png": f1[0], "pdf": f1[1]})
+        cfg = self.g.configs["staircase"]
+        f2 = plots.scheduled_pole_map(pa["poles"], pa["theta2"], cfg.orbit_rate, cfg.design.sector.sigma,
+                                      cfg.design.sector.half_angle_deg, self.figdir / "schedule_path_poles",
+                                      vector=True)
+        self.doc.fig("schedule_path_poles", "Poles of the scheduled loop at every path TEA with the sector of "
+                     "Fig 5.2", {"png": f2[0], "pdf": f2[1]})
 
     # ------------------------------------------------------------------ claim 1
     def claim1(self):

@@ -32,6 +32,30 @@ the 24 ACMM states span ~12 orders of magnitude; unscaled, every method loses mo
 
 Every solve computes its relative residual (see :func:`care_residual`) in the scaled
 coordinates and raises :class:`acmm.errors.ConvergenceError` above ``tol``.
+
+Existence check (every method): before solving, the eigenvalues λ_i of the (scaled) Hamiltonian
+H = [[A, −G], [−Q, −A']] are computed, after balancing (H_b = T⁻¹HT, LAPACK GEBAL with
+permutation), with their condition numbers κ_i (left/right eigenvectors of H_b).  A stabilizing
+solution exists only if no λ_i lies on the imaginary axis; a computed λ_i is indistinguishable
+from the axis when |Re λ_i| ≤ δ_i, ::
+
+    δ_i = min(IMAG_AXIS_RTOL · κ_i · ε,  √ε) · ‖H_b‖_F,
+
+(ε = machine epsilon): IMAG_AXIS_RTOL·κ_i·ε‖H_b‖ bounds the rounding error of a simple
+eigenvalue; the √ε‖H_b‖ cap is the O(√ε) split of a defective (Jordan) pair by rounding, and
+keeps a cluster of benign repeated eigenvalues (whose individual κ_i are huge) from being
+rejected.  Such a problem is refused (``ConvergenceError`` naming the eigenvalue) instead of
+returning "stabilizing" closed-loop poles at −1e-8.
+
+Condition estimate: every solution carries ::
+
+    κ_CARE = ‖Ω⁻¹‖₂ (‖Q‖₂ + 2‖A‖₂‖P‖₂ + ‖G‖₂‖P‖₂²) / ‖P‖₂,        Ω(X) = A_c'X + XA_c,
+
+(A_c = A − GP, scaled coordinates), the relative condition number of the Riccati equation
+(Kenney & Hewer 1990; Byers 1985), with ‖Ω⁻¹‖₂ = ‖Y‖₂ for A_c'Y + YA_c = −I (Hewer & Kenney
+1988: exact for stable A_c), i.e. one extra Lyapunov solve.  A solution with
+κ_CARE > ``ILL_CONDITIONED`` (1/√ε ≈ 6.7e7: fewer than half the digits of P can be trusted) is
+flagged (``CareResult.ill_conditioned``) and the flag is written to the design output.
 """
 from __future__ import annotations
 
@@ -44,6 +68,11 @@ import scipy.linalg as sla
 from acmm.errors import ConvergenceError
 
 METHODS = ("scipy", "sign", "slycot")
+
+#: Relative factor of the rounding band about the imaginary axis (module docstring).
+IMAG_AXIS_RTOL = 100.0
+#: κ_CARE above which a solution is flagged ill-conditioned (1/√ε).
+ILL_CONDITIONED = 1.0 / np.sqrt(np.finfo(float).eps)
 
 
 @dataclass(frozen=True)
@@ -66,6 +95,12 @@ class CareResult:
         The state scaling d used (x = diag(d) x̃).
     seconds : float
         Wall time of the solve proper (excluding the residual check), s.
+    condition : float
+        Relative condition estimate κ_CARE of the (scaled) Riccati equation (module docstring).
+    ill_conditioned : bool
+        κ_CARE > :data:`ILL_CONDITIONED`.
+    hamiltonian_gap : float
+        min_i |Re λ_i(H)| / ‖H_b‖_F (balanced H): relative distance of the Hamiltonian spectrum from the axis.
     """
 
     P: np.ndarray
@@ -75,6 +110,9 @@ class CareResult:
     iterations: int = 0
     scale: np.ndarray | None = field(default=None)
     seconds: float = 0.0
+    condition: float = float("nan")
+    ill_conditioned: bool = False
+    hamiltonian_gap: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -297,6 +335,72 @@ def solve_unverified(A, B, Q, R, *, method: str = "scipy", sign_scaling: str = "
     return P, iterations
 
 
+def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
+    """Refuse a CARE without a stabilizing solution; return the relative spectral gap.
+
+    Computes the eigenvalues λ_i of H = [[A, −G], [−Q, −A']] (G = BR⁻¹B') with their condition
+    numbers κ_i and raises :class:`ConvergenceError` if some |Re λ_i| ≤ δ_i (module docstring):
+    an eigenvalue on, or within rounding of, the imaginary axis.
+
+    Returns
+    -------
+    float
+        min_i |Re λ_i| / ‖H_b‖_F (H_b: balanced H).
+    """
+    n = A.shape[0]
+    G = B @ np.linalg.solve(R, B.T)
+    H = np.block([[A, -0.5 * (G + G.T)], [-Q, -A.T]])
+    hn = float(np.linalg.norm(H))
+    if n == 0 or hn == 0.0:
+        if n:
+            raise _refusal(f"Riccati solve (method={method!r}): no stabilizing solution "
+                           f"(Hamiltonian is zero: every eigenvalue on the imaginary axis)",
+                           method, float("nan"))
+        return float("inf")
+    Hb, _ = sla.matrix_balance(H, permute=True)
+    hn = float(np.linalg.norm(Hb))
+    w, vl, vr = sla.eig(Hb, left=True, right=True)
+    num = np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
+    den = np.abs(np.sum(vl.conj() * vr, axis=0))
+    kappa = np.divide(num, den, out=np.full(num.shape, np.inf), where=den > 0)
+    eps = np.finfo(float).eps
+    band = np.minimum(IMAG_AXIS_RTOL * kappa * eps, np.sqrt(eps)) * hn
+    bad = np.abs(w.real) <= band
+    if np.any(bad):
+        i = int(np.argmin(np.where(bad, np.abs(w.real) / band, np.inf)))
+        raise _refusal(
+            f"Riccati solve (method={method!r}): no stabilizing solution: the Hamiltonian has "
+            f"eigenvalue {complex(w[i]):.6g} on or within rounding of the imaginary axis "
+            f"(|Re λ| = {abs(w[i].real):.3g} ≤ {band[i]:.3g}; eigenvalue condition "
+            f"{kappa[i]:.3g}): a mode on the axis is uncontrollable or unobservable", method,
+            float("nan"))
+    return float(np.min(np.abs(w.real)) / hn)
+
+
+def care_condition(A, B, Q, R, P) -> float:
+    """Relative condition estimate κ_CARE of eq 5.4 at the stabilizing P (module docstring).
+
+    ``inf`` when A − GP is not stable (Y does not exist).
+    """
+    G = B @ np.linalg.solve(R, B.T)
+    G = 0.5 * (G + G.T)
+    Ac = A - G @ P
+    if A.shape[0] == 0:
+        return 0.0
+    if np.max(np.linalg.eigvals(Ac).real) >= 0:
+        return float("inf")
+    try:
+        Y = sla.solve_continuous_lyapunov(Ac.T, -np.eye(A.shape[0]))
+    except (np.linalg.LinAlgError, ValueError):
+        return float("inf")
+    n2 = lambda M: float(np.linalg.norm(M, 2))  # noqa: E731
+    p = n2(P)
+    top = n2(Q) + 2.0 * n2(A) * p + n2(G) * p * p
+    if p == 0.0:
+        return n2(Y) * 2.0 * n2(A)
+    return n2(Y) * top / p
+
+
 def _refusal(message: str, method: str, residual: float) -> ConvergenceError:
     exc = ConvergenceError(message)
     exc.method = method          # for reports (scripts/compare_riccati.py)
@@ -341,8 +445,9 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     Raises
     ------
     ConvergenceError
-        The solver failed, the sign iteration did not converge, the residual exceeds ``tol``,
-        or A − BK is not stable.
+        The Hamiltonian has an eigenvalue on or within rounding of the imaginary axis (no
+        stabilizing solution), the solver failed, the sign iteration did not converge, the
+        residual exceeds ``tol``, or A − BK is not stable.
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -362,6 +467,7 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
         d = None
         As, Bs, Qs = A, B, Q
 
+    gap = hamiltonian_check(As, Bs, Qs, R, method=method)
     t0 = time.perf_counter()
     Ps, iterations = solve_unverified(As, Bs, Qs, R, method=method, sign_scaling=sign_scaling,
                                       sign_evaluation=sign_evaluation, max_iter=max_iter)
@@ -379,10 +485,12 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
         raise _refusal(f"Riccati solve (method={method!r}): solution is not stabilizing "
                        f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
                        f"{res:.3e})", method, res)
+    cond = care_condition(As, Bs, Qs, R, Ps)
     if d is not None:
         P = Ps / d[:, None] / d[None, :]
         K = Ks / d[None, :]
     else:
         P, K = Ps, Ks
     return CareResult(P=P, K=K, residual=res, method=method, iterations=iterations,
-                      scale=d, seconds=seconds)
+                      scale=d, seconds=seconds, condition=cond,
+                      ill_conditioned=bool(not cond <= ILL_CONDITIONED), hamiltonian_gap=gap)

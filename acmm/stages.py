@@ -176,6 +176,7 @@ class DesignResult:
     check: object
     table: DesignTable
     wall_time: float
+    path_check: object = None
 
 
 def design_hash(cfg: Config) -> str:
@@ -206,15 +207,24 @@ def compute_design(config, progress=None) -> DesignResult:
     fit = check = None
     gains = np.array([p.lqr.K for p in points])
     teas = np.array([p.tea.theta for p in points])
+    path_check = None
     if len(points) >= 2:
         sc = cfg.schedule
         fit = sch.fit_schedule(teas[:, 1], gains, sc.order if sc else 2, sc.form if sc else "polynomial")
+        path = sch.path_models(points, cfg, sc.n_check) if sc is not None else None
+        if path is not None and sc.fit == "closed_loop" and fit.form == "polynomial":
+            fit = sch.refit_closed_loop(fit, path, cfg.orbit_rate,
+                                        half_angle_deg=cfg.design.sector.half_angle_deg, **sch.REFIT_DEFAULTS)
         check = sch.check_schedule(fit, points, cfg)
+        if path is not None:
+            d = cfg.design
+            path_check = sch.check_path(fit.gain, path, cfg.orbit_rate, d.sector.sigma,
+                                        d.sector.half_angle_deg)
     table = DesignTable([p.spec.name for p in points], np.array([p.spec.inertia for p in points]),
                         np.array([p.spec.bias for p in points]), teas, gains,
                         None if fit is None else fit.coef, design_hash(cfg),
                         "polynomial" if fit is None else fit.form)
-    return DesignResult(cfg, points, fit, check, table, time.perf_counter() - t0)
+    return DesignResult(cfg, points, fit, check, table, time.perf_counter() - t0, path_check)
 
 
 @locked_stage(_as_config)
@@ -247,6 +257,19 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
             "riccati_residual": Dataset(res.residual, "1", "relative CARE residual, scaled coordinates"),
             "scales": Dataset(p.model.scales, "per-state", "state scaling used for the Riccati solve",
                               STATE_NAMES),
+            "eig_condition": Dataset(res.eig_condition, "1",
+                                     "eigenvalue condition number of each pole (order of 'poles'), scaled states"),
+            "max_eig_condition": Dataset(res.max_eig_condition, "1",
+                                         "largest eigenvalue condition number of A - B K, scaled states"),
+            "robustness_radius": Dataset(res.robustness_radius, "1",
+                                         "estimated smallest relative gain error ||dK||/||K|| (scaled) moving a pole "
+                                         "out of the sector (first order)"),
+            "robustness_radius_elementwise": Dataset(res.robustness_radius_elementwise, "1",
+                                                     "same for elementwise relative errors max|dK_ij/K_ij|"),
+            "riccati_condition": Dataset(res.riccati_condition, "1",
+                                         "relative condition estimate of the shifted CARE (acmm.riccati)"),
+            "riccati_ill_conditioned": Dataset(int(res.riccati_ill_conditioned), "1",
+                                               "1 if the CARE condition exceeds 1/sqrt(eps)"),
         }
     items = {
         "points": pts,
@@ -259,6 +282,17 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
                      dims=("point", "axis", "state")),
         "state_names": Dataset(np.array(STATE_NAMES, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
         "wall_time": Dataset(r.wall_time, "s", "design wall time"),
+        "sector_margin": Dataset(np.array([p.lqr.margin for p in r.points]), "n",
+                                 "worst pole distance into the sector per point (>0 inside)"),
+        "max_eig_condition": Dataset(np.array([p.lqr.max_eig_condition for p in r.points]), "1",
+                                     "largest eigenvalue condition number of A - B K per point, scaled states"),
+        "robustness_radius": Dataset(np.array([p.lqr.robustness_radius for p in r.points]), "1",
+                                     "sector robustness radius per point (relative gain error, normwise, scaled)"),
+        "robustness_radius_elementwise": Dataset(
+            np.array([p.lqr.robustness_radius_elementwise for p in r.points]), "1",
+            "sector robustness radius per point (elementwise relative gain error)"),
+        "riccati_condition": Dataset(np.array([p.lqr.riccati_condition for p in r.points]), "1",
+                                     "CARE condition estimate per point"),
     }
     if r.fit is not None:
         items["schedule"] = {
@@ -274,7 +308,26 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
                                     dims=("check",)),
             "check_max_real": Dataset(r.check.max_real, "n", "largest closed-loop Re λ with the scheduled gain",
                                       dims=("check",)),
+            "fit_method": Dataset(np.array(r.fit.method, dtype="S"), "1",
+                                  "least_squares, or closed_loop (least squares refined on the path)"),
         }
+        for key, val in r.fit.refit_info.items():
+            items["schedule"][f"refit_{key}"] = Dataset(float(val), "n" if key.startswith("max_real") else "1",
+                                                         f"closed-loop refit: {key.replace('_', ' ')}")
+        pc = r.path_check
+        if pc is not None:
+            items["schedule"]["path"] = {
+                "theta2": Dataset(pc.theta2, "rad", "pitch TEA of each path check (evenly spaced)", dims=("path",)),
+                "s": Dataset(pc.s, "1", "blend parameter of each path check", dims=("path",)),
+                "max_real": Dataset(pc.max_real, "n", "largest Re λ of the scheduled local loop", dims=("path",)),
+                "sector_margin": Dataset(pc.margin, "n", "worst sector margin of the scheduled local loop (>0 inside)", dims=("path",)),
+                "disk_margin": Dataset(pc.disk_margin, "1",
+                                       "balanced multiloop disk margin alpha at the plant input (loop broken at u)", dims=("path",)),
+                "disk_gain_margin": Dataset(pc.disk_gain_margin_db, "dB", "gain variation guaranteed by the disk", dims=("path",)),
+                "disk_phase_margin": Dataset(np.deg2rad(pc.disk_phase_margin_deg), "rad", "phase variation guaranteed by the disk", dims=("path",)),
+                "poles": Dataset(pc.poles, "rad/s", "closed-loop poles of the scheduled local loop", dims=("path", "pole")),
+                "fraction_in_sector": Dataset(pc.fraction_in_sector, "1", "fraction of path TEAs with every pole in the sector"),
+            }
     roles = {"K": "K"}
     for key in pts:
         roles.update({f"points/{key}/{m}": m for m in ("A", "B", "G", "Q", "P", "K")})
@@ -303,6 +356,12 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
                 fit = _replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
             plots.gain_schedule_grid(r.table.tea[:, 1], gains, fit, STATE_NAMES,
                                      cfg.run_dir() / "design_gains.png")
+        if r.path_check is not None:
+            pc = r.path_check
+            plots.schedule_path_check(pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
+                                      cfg.run_dir() / "design_path_margins.png")
+            plots.scheduled_pole_map(pc.poles, pc.theta2, cfg.orbit_rate, d.sector.sigma,
+                                     d.sector.half_angle_deg, cfg.run_dir() / "design_path_poles.png")
     return r, path
 
 

@@ -36,7 +36,8 @@ from acmm.config import load_config
 from acmm.errors import ConvergenceError
 from acmm.linearize import linearize_config
 from acmm.lqr import sector_lqr
-from acmm.riccati import care_residual, scale_problem, solve_unverified
+from acmm.riccati import care_condition, care_residual, scale_problem, solve_unverified
+from acmm.schedule import design_q0
 
 SOLVERS = [("sign", {}), ("sign (polynomial eval.)", {"sign_evaluation": "polynomial"}),
            ("scipy", {}), ("slycot", {})]
@@ -49,10 +50,25 @@ def problems(name):
     d = m.scales
     alpha = sec.sigma * m.n
     R = cfg.design.R * np.eye(3)
+    q0 = design_q0(cfg.design, 24)                       # on the scaled states
     design = sector_lqr(m.A, m.B, R, m.n, sigma=sec.sigma, half_angle_deg=sec.half_angle_deg,
-                        Q0=cfg.design.Q0 or None, scale=d)
+                        Q0=q0, scale=d, min_margin=cfg.design.min_margin,
+                        line_spacing=cfg.design.line_spacing)
     As = m.A + alpha * np.eye(24)
-    return d, R, {"step 1": (As, m.B, np.zeros((24, 24))), "final": (As, m.B, design.Q)}
+    q0_phys = np.zeros((24, 24)) if q0 is None else q0 / d[:, None] / d[None, :]
+    return d, R, {"step 1": (As, m.B, q0_phys), "final": (As, m.B, design.Q)}
+
+
+def conditions(repeat=1) -> str:
+    """κ_CARE (acmm.riccati.care_condition, scaled) of each problem, from scipy's solution."""
+    cells = []
+    for name in ("mb3", "ac"):
+        d, R, probs = problems(name)
+        for pname, (A, B, Q) in probs.items():
+            At, Bt, Qt = scale_problem(A, B, Q, d)
+            P, _ = solve_unverified(At, Bt, Qt, R, method="scipy")
+            cells.append(f"{name.upper()} {pname}: {care_condition(At, Bt, Qt, R, 0.5 * (P + P.T)):.1e}")
+    return "κ_CARE (scaled): " + "; ".join(cells)
 
 
 def measure(A, B, Q, R, d, scaled, solver, kw, repeat):
@@ -113,6 +129,7 @@ def main():
     print(t)
     print("\nrelative residual (acmm.riccati.care_residual, scaled coordinates) / median solve time;"
           " '!' = not stabilizing, 'fail' = no solution")
+    print(conditions())
     if a.out:
         with open(a.out, "w") as fh:
             fh.write(t + "\n")

@@ -194,3 +194,71 @@ def test_mb3_ac_designs(models, name, riccati_method):
     _check_design(m.A, m.B, res, m.scales, sigma=sec.sigma, phi=sec.half_angle_deg)
     # the disturbance-rejection-filter poles (open loop ±jn, ±2jn) were the ones moved
     assert len(res.mirror_shifts) >= 1
+
+
+def _eig_conditions(M):
+    """κ_i = 1/|y_i^H x_i| with unit left/right eigenvectors (scipy, independent of acmm)."""
+    w, vl, vr = sla.eig(M, left=True, right=True)
+    vl = vl / np.linalg.norm(vl, axis=0)
+    vr = vr / np.linalg.norm(vr, axis=0)
+    return w, 1.0 / np.abs(np.sum(vl.conj() * vr, axis=0))
+
+
+def test_eigen_condition_numbers_match_left_right_eigenvectors():
+    A, B = _random_plant(2)
+    res = sector_lqr(A, B, 1e-4, N, min_margin=0.1, line_spacing=0.05)
+    _check_design(A, B, res, min_margin=0.1 - 1e-6)
+    w, kap = _eig_conditions(A - B @ res.K)
+    np.testing.assert_allclose(np.sort(res.eig_condition), np.sort(kap), rtol=1e-6)
+    assert res.max_eig_condition == pytest.approx(kap.max(), rel=1e-6)
+
+
+def test_distinct_shift_lines_separate_the_moved_poles():
+    """Three identical undamped pairs (one per input, as the DRF filters of the three axes) are
+    mirrored onto one line by the grouped shift (a triple pair); line_spacing puts them on
+    distinct lines, which lowers the eigenvalue condition numbers."""
+    w = N
+    osc = np.array([[0.0, w], [-w, 0.0]])
+    A = sla.block_diag(osc, osc, osc) + 1e-3 * N * np.random.default_rng(0).standard_normal((6, 6))
+    B = np.kron(np.eye(3), np.array([[0.0], [1.0]])) + 0.1 * np.random.default_rng(1).standard_normal((6, 3))
+    grouped = sector_lqr(A, B, 1e-4, N, min_margin=0.1)
+    spread = sector_lqr(A, B, 1e-4, N, min_margin=0.1, line_spacing=0.1)
+    for res in (grouped, spread):
+        _check_design(A, B, res, min_margin=0.1 - 1e-6)
+    def min_gap(p):
+        d = np.abs(p[:, None] - p[None, :]) + np.eye(p.size) * 1e9
+        return d.min() / N
+    assert min_gap(np.linalg.eigvals(A - B @ spread.K)) >= 0.05
+    assert min_gap(np.linalg.eigvals(A - B @ spread.K)) > 5 * min_gap(np.linalg.eigvals(A - B @ grouped.K))
+
+
+def test_sector_robustness_radius_is_a_first_order_bound():
+    """Elementwise relative gain errors below half the estimated radius never take a pole out
+    of the sector; an error pattern aligned with the worst pole's outward normal, a few times
+    the radius, does (poles recomputed from scratch)."""
+    A, B = _random_plant(5)
+    res = sector_lqr(A, B, 1e-4, N, min_margin=0.1, line_spacing=0.05)
+    eps = res.robustness_radius_elementwise
+    assert 0 < eps < 1
+    rng = np.random.default_rng(7)
+    for _ in range(100):
+        E = rng.uniform(-1, 1, res.K.shape)
+        lam = np.linalg.eigvals(A - B @ (res.K * (1 + 0.5 * eps * E)))
+        assert _margin(lam).min() > 0
+    # worst pole and its outward direction, written out independently
+    w, vl, vr = sla.eig(A - B @ res.K, left=True, right=True)
+    m = _margin(w)
+    i = int(np.argmin(m))
+    z = w[i]
+    phi = np.pi / 4
+    out = 1.0 + 0j if (-0.5 * N - z.real) <= (np.sin(phi) * -z.real - np.cos(phi) * abs(z.imag)) \
+        else complex(np.sin(phi), np.sign(z.imag) * np.cos(phi))
+    g = -np.outer(vl[:, i].conj() @ B, vr[:, i]) / (vl[:, i].conj() @ vr[:, i])   # dλ/dK
+    sgn = np.sign((np.conj(out) * g * res.K).real)
+    ratio = np.sum(np.abs(g * res.K)) / np.sum(np.abs((np.conj(out) * g * res.K).real))
+    for scale in (3.0, 6.0, 12.0):
+        lam = np.linalg.eigvals(A - B @ (res.K * (1 + scale * ratio * eps * sgn)))
+        if _margin(lam).min() < 0:
+            break
+    else:
+        pytest.fail("an aligned error of 12x the estimated radius kept every pole in the sector")

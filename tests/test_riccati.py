@@ -171,3 +171,76 @@ def test_not_stabilizable_refuses():
     for method in METHODS:
         with pytest.raises(ConvergenceError):
             solve_care(A, B, np.eye(2), 1.0, method=method)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("w", [1.0, 1e-3])
+def test_undamped_oscillator_with_zero_q_is_refused(method, w):
+    """ẍ = −w²x + u, Q = 0: the Hamiltonian is block triangular with eig(A) = ±jw and
+    eig(−A') = ±jw, all on the imaginary axis; the only solution P = 0 leaves A − BK = A
+    undamped, so there is no stabilizing solution (closed form)."""
+    A = np.array([[0.0, 1.0], [-w * w, 0.0]])
+    B = np.array([[0.0], [1.0]])
+    H = _hamiltonian(A, B @ B.T, np.zeros((2, 2)))
+    np.testing.assert_allclose(np.sort(np.abs(np.linalg.eigvals(H).imag)), [w, w, w, w], rtol=1e-9)
+    with pytest.raises(ConvergenceError, match="no stabilizing solution.*imaginary axis"):
+        solve_care(A, B, np.zeros((2, 2)), 1.0, method=method)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_double_imaginary_hamiltonian_pair_is_refused(method):
+    """Closed form: A = [[0, 1], [−1, 0]], B = e2, R = 1, Q = diag(q1, q2).  With
+    (sI − A)⁻¹B = [1, s]'/(s² + 1) the Hamiltonian's characteristic polynomial is
+    (s² + 1)² + q1 − q2 s² = s⁴ + (2 − q2)s² + 1 + q1, which equals (s² + ω0²)² for
+    q2 = 2 − 2ω0², q1 = ω0⁴ − 1: a double eigenvalue pair ±jω0 on the imaginary axis (ω0 = 2:
+    Q = diag(15, −6)).  Rounding splits it by ~1e-8, and an unchecked solver returns
+    closed-loop poles that look stable; solve_care must refuse."""
+    w0 = 2.0
+    A = np.array([[0.0, 1.0], [-1.0, 0.0]])
+    B = np.array([[0.0], [1.0]])
+    Q = np.diag([w0 ** 4 - 1.0, 2.0 - 2.0 * w0 ** 2])
+    H = _hamiltonian(A, B @ B.T, Q)
+    np.testing.assert_allclose(np.poly(H), [1, 0, 2 * w0 ** 2, 0, w0 ** 4], atol=1e-9)
+    lam = np.linalg.eigvals(H)
+    assert np.max(np.abs(lam.real)) < 1e-6 and np.allclose(np.sort(np.abs(lam.imag)), w0, atol=1e-6)
+    with pytest.raises(ConvergenceError, match="no stabilizing solution.*imaginary axis"):
+        solve_care(A, B, Q, 1.0, method=method)
+    # the same problem moved off the axis (A − 0.5I) has a stabilizing solution again
+    r = solve_care(A - 0.5 * np.eye(2), B, Q, 1.0, method=method)
+    assert np.max(np.linalg.eigvals(A - 0.5 * np.eye(2) - B @ r.K).real) < 0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_condition_estimate_matches_kronecker_definition(seed):
+    """κ_CARE = ‖Ω⁻¹‖(‖Q‖ + 2‖A‖‖P‖ + ‖G‖‖P‖²)/‖P‖, with ‖Ω⁻¹‖ computed independently as
+    1/σmin of the Kronecker matrix I⊗A_c' + A_c'⊗I (the Frobenius-induced norm, within a factor
+    √n of the 2-norm-induced one that solve_care obtains from one Lyapunov solve)."""
+    rng = np.random.default_rng(seed)
+    A, B, Q, R = _random_problem(rng, nx=5)
+    r = solve_care(A, B, Q, R)
+    P = sla.solve_continuous_are(A, B, Q, R)
+    G = B @ np.linalg.inv(R) @ B.T
+    Ac = A - G @ P
+    n = A.shape[0]
+    L = np.kron(np.eye(n), Ac.T) + np.kron(Ac.T, np.eye(n))
+    inv_f = 1.0 / np.linalg.svd(L, compute_uv=False)[-1]
+    nrm = lambda M: np.linalg.norm(M, 2)  # noqa: E731
+    top = nrm(Q) + 2 * nrm(A) * nrm(P) + nrm(G) * nrm(P) ** 2
+    kf = inv_f * top / nrm(P)
+    assert kf / np.sqrt(n) <= r.condition * (1 + 1e-8) and r.condition <= kf * np.sqrt(n) * (1 + 1e-8)
+    assert not r.ill_conditioned
+
+
+def test_ill_conditioned_solution_is_flagged():
+    """Double integrator, Q = diag(q, 0), R = 1 (closed form P12 = √q, P22 = √2 q^¼,
+    P11 = √2 q^¾): for q = 1e-16 the entries of P span 12 decades and the closed-loop poles
+    sit at ~q^¼ = 1e-4, so κ_CARE ≈ 1/q^¼·… ≫ 1/√ε — solved, but flagged."""
+    q = 1e-16
+    A = np.array([[0.0, 1.0], [0.0, 0.0]])
+    B = np.array([[0.0], [1.0]])
+    r = solve_care(A, B, np.diag([q, 0.0]), 1.0)
+    exact = np.array([[np.sqrt(2) * q ** 0.75, np.sqrt(q)], [np.sqrt(q), np.sqrt(2) * q ** 0.25]])
+    np.testing.assert_allclose(r.P, exact, rtol=1e-6)
+    assert r.ill_conditioned and r.condition > 1.0 / np.sqrt(np.finfo(float).eps)
+    well = solve_care(A, B, np.diag([1.0, 0.0]), 1.0)
+    assert not well.ill_conditioned and well.condition < 100
