@@ -58,7 +58,7 @@ def test_scheduled_closed_loop_equals_independent_linearization():
     m = lin.linearize((1 - s) * i0 + s * i1, theta, n)
     coef = d.result.fit.coef                       # K_ij(θ2*) = Σ_k coef[k,i,j] θ2*^k (ch. 5.3)
     K = sum(coef[k] * theta[1] ** k for k in range(coef.shape[0]))
-    scale = np.abs(m.A).max()
+    scale = max(np.abs(m.A).max(), np.abs(m.B @ K).max())
     np.testing.assert_allclose(cl.A, m.A - m.B @ K, rtol=0, atol=1e-9 * scale)
     np.testing.assert_allclose(cl.B, np.hstack([m.B, m.G]), rtol=0, atol=1e-12)
     np.testing.assert_allclose(cl.C[24:], -K, rtol=1e-9, atol=1e-12 * np.abs(K).max())
