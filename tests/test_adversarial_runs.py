@@ -80,10 +80,10 @@ def test_kill9_at_random_instants_then_resume_reproduces_uninterrupted(tmp_runs)
     data of an uninterrupted sweep."""
     from acmm.sweep import run_sweep
 
-    cfg = _sweep_config(tmp_runs)
+    cfg = _sweep_config(tmp_runs, n_runs=48)
     ref_dir = tmp_runs / "ref"
     ref_dir.mkdir()
-    ref_cfg = _sweep_config(ref_dir)
+    ref_cfg = _sweep_config(ref_dir, n_runs=48)
     os.chdir(ref_dir)
     ref = _sweep_data(run_sweep(ref_cfg, workers=1).path)
     os.chdir(tmp_runs)
@@ -93,7 +93,13 @@ def test_kill9_at_random_instants_then_resume_reproduces_uninterrupted(tmp_runs)
     for attempt in range(3):
         proc = subprocess.Popen([ACMM, "sweep", str(cfg), "-j", "2", "--resume"], env=ENV, cwd=tmp_runs,
                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-        time.sleep(rng.uniform(0.8, 3.0))
+        # a random instant once cases are being recorded (independent of start-up time and speed)
+        journal = run_dir / "sweep.journal"
+        deadline = time.monotonic() + 60
+        while proc.poll() is None and time.monotonic() < deadline and not (
+                journal.exists() and len(journal.read_bytes().splitlines()) >= 2 + 4 * attempt):
+            time.sleep(0.01)
+        time.sleep(rng.uniform(0.0, 0.25))
         if proc.poll() is None:
             proc.send_signal(signal.SIGKILL)
             kills += 1
@@ -155,26 +161,40 @@ def test_lock_of_a_killed_holder_does_not_block(tmp_runs):
     assert not (tmp_runs / "runs" / "mb3" / ".lock").exists()
 
 
+HOLD_SWEEP = """
+import sys
+from acmm.sweep import run_sweep
+paused = []
+def pause(done, total, rec):
+    if not paused:                      # hold the run (and its lock) after the first case
+        paused.append(1)
+        print("running", flush=True)
+        sys.stdin.read()
+run_sweep(sys.argv[1], workers=1, progress=pause)
+print("done", flush=True)
+"""
+
+
 def test_two_concurrent_sweeps_and_resumes_one_refused(tmp_runs):
     """A second fresh sweep or a concurrent --resume is refused (exit 4) instead of replacing the
-    journal under the running sweep; the running sweep completes every case exactly once."""
+    journal under the running sweep; the running sweep completes every case exactly once.  The
+    first sweep is held after its first case (independent of the machine's speed)."""
     cfg = _sweep_config(tmp_runs, n_runs=16)
-    lock = tmp_runs / "runs" / "swk" / ".lock"
-    a = subprocess.Popen([ACMM, "sweep", str(cfg), "-j", "1"], env=ENV, cwd=tmp_runs,
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    a = subprocess.Popen([sys.executable, "-c", HOLD_SWEEP, str(cfg)], env=ENV, cwd=tmp_runs,
+                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        deadline = time.monotonic() + 30
-        while not (lock.exists() and lock.read_text().strip()) and time.monotonic() < deadline:
-            time.sleep(0.05)
+        assert a.stdout.readline().strip() == "running", a.stderr.read() if a.poll() is not None else ""
         for extra in ([], ["--resume"]):
             b = subprocess.run([ACMM, "sweep", str(cfg), "-j", "1", *extra], env=ENV, cwd=tmp_runs,
                                capture_output=True, text=True, timeout=60)
-            assert a.poll() is None, "the first sweep ended before the second was tried; make it longer"
+            assert a.poll() is None
             assert b.returncode == 4, b.stderr
             assert b.stderr.splitlines() == [b.stderr.strip()] and f"pid {a.pid}" in b.stderr
     finally:
-        out, err = a.communicate(timeout=120)
-    assert a.returncode == 0, err
+        a.stdin.close()                 # lets the held sweep go on
+        a.wait(timeout=120)
+    out, err = a.stdout.read(), a.stderr.read()
+    assert a.returncode == 0 and out.strip().endswith("done"), err
     lines = (tmp_runs / "runs" / "swk" / "sweep.journal").read_text().splitlines()
     assert len(lines) == 1 + 16                                       # header + each case once
     assert _sweep_data(tmp_runs / "runs" / "swk" / "sweep.h5")["complete"]
