@@ -409,7 +409,7 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
             client = distributed.Client(scheduler, timeout="10s")
         except (OSError, TimeoutError, ValueError) as exc:
             raise ConfigError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
-        return client.get_executor(), client.close
+        return client.get_executor(pure=False), client.close
     if workers <= 1:
         return SerialExecutor(), lambda: None
     import multiprocessing
@@ -533,10 +533,82 @@ def _call(task, ctx):
     return run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg)
 
 
+#: most cases in one task: a chunk of ~64 10-orbit cases is ~0.3 s of work, so progress, the
+#: journal and load balancing stay live while the per-task cost (pickling the base context,
+#: scheduling, a round trip: ~1–5 ms on Dask) is amortized over many cases
+MAX_CHUNK = 64
+#: chunks per worker aimed at, so that the last chunks do not leave workers idle
+CHUNKS_PER_WORKER = 8
+
+_WARM = False
+
+
+def chunk_size(n_tasks: int, workers: int) -> int:
+    """Cases per task for ``n_tasks`` cases on ``workers`` workers (1 when serial).
+
+    ⌈n / (8·workers)⌉ clipped to [1, :data:`MAX_CHUNK`]: about 8 tasks per worker (the tail
+    imbalance is then ≤ 1/8 of a worker's share) and never more than ~0.3 s per task.  The cost of
+    one task on a scheduler is a fixed few ms, so once a chunk holds more than a few cases that
+    cost is a small fraction whatever the number of workers; see README *Performance*.
+    """
+    if workers <= 1:
+        return 1
+    return max(1, min(MAX_CHUNK, -(-n_tasks // (CHUNKS_PER_WORKER * workers))))
+
+
+def make_chunks(tasks: list, size: int) -> list[list]:
+    """Consecutive case tasks of one base in lists of ``size``; each margin search alone."""
+    chunks: list[list] = []
+    for t in tasks:
+        if (t[0] == "case" and chunks and len(chunks[-1]) < size and chunks[-1][0][0] == "case"
+                and chunks[-1][0][1] == t[1]):
+            chunks[-1].append(t)
+        else:
+            chunks.append([t])
+    return chunks
+
+
+def _warm_worker() -> None:
+    """Load the compiled kernels once per worker process (from numba's cache: no compile)."""
+    global _WARM
+    if not _WARM:
+        from acmm.tea_compiled import warm_up
+
+        warm_up()
+        _WARM = True
+
+
+def _call_chunk(chunk, ctx) -> list[dict]:
+    """Run the tasks of one chunk in order; returns their records."""
+    _warm_worker()
+    return [_call(t, ctx) for t in chunk]
+
+
+def _scheduler_workers(executor, default: int) -> int:
+    """Number of workers (threads) of the Dask cluster behind ``executor``, else ``default``."""
+    try:
+        info = executor._client.scheduler_info()
+        return max(1, sum(int(w.get("nthreads", 1)) for w in info["workers"].values()))
+    except (AttributeError, KeyError, OSError, TypeError, ValueError):
+        return max(1, default)
+
+
+def _remote_contexts(executor, contexts: dict) -> dict:
+    """The base contexts as the executor's tasks take them: on a Dask cluster scattered once to
+    every worker (a task then carries a reference, not a pickled design); else as they are."""
+    client = getattr(executor, "_client", None)
+    if client is None or not contexts:
+        return contexts
+    try:
+        return {k: client.scatter(v, broadcast=True, hash=False) for k, v in contexts.items()}
+    except (AttributeError, TypeError, ValueError):
+        return contexts
+
+
 def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, scheduler: Optional[str] = None,
               resume: bool = False, progress: Optional[Callable[[int, int, dict], None]] = None,
               after_record: Optional[Callable[[int], None]] = None, figures: Optional[bool] = None,
-              snapshot_interval: float = 5.0, executor=None) -> SweepResult:
+              snapshot_interval: float = 5.0, executor=None, chunk: Optional[int] = None) -> SweepResult:
     """Run (or resume) a sweep; writes ``sweep.journal``, ``sweep.h5``, ``sweep.csv`` and figures.
 
     Parameters
@@ -554,6 +626,9 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         Called after each record is committed (tests use it to interrupt a sweep).
     executor : concurrent.futures.Executor, optional
         Use this executor instead of making one (it is not shut down).
+    chunk : int, optional
+        Cases per task (default :func:`chunk_size`: ~8 tasks per worker, ≤ :data:`MAX_CHUNK`;
+        1 in-process).  The results do not depend on it.
     """
     if not isinstance(sweep, Sweep):
         sweep = load_sweep(sweep)
@@ -578,34 +653,38 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     close = lambda: None  # noqa: E731
     if executor is None and tasks:
         executor, close = make_executor(workers if not scheduler else 0, scheduler)
-    window = 1 if isinstance(executor, SerialExecutor) else max(4, 4 * workers)
+    serial = isinstance(executor, SerialExecutor)
+    n_workers = 1 if serial else _scheduler_workers(executor, workers)
+    chunks = make_chunks(tasks, chunk if chunk is not None else chunk_size(len(tasks), n_workers))
+    window = 1 if serial else max(4, 2 * n_workers)
+    remote = _remote_contexts(executor, contexts)
     n_new = 0
     last_snap = time.monotonic()
     complete = False
     pending: dict = {}
     try:
-        it = iter(tasks)
+        it = iter(chunks)
         exhausted = False
         while True:
             while not exhausted and len(pending) < window:
-                t = next(it, None)
-                if t is None:
+                c = next(it, None)
+                if c is None:
                     exhausted = True
                     break
-                pending[executor.submit(_call, t, contexts[t[1]])] = t
+                pending[executor.submit(_call_chunk, c, remote[c[0][1]])] = c
             if not pending:
                 break
             finished, _ = cf.wait(list(pending), return_when=cf.FIRST_COMPLETED)
             for fut in finished:
                 pending.pop(fut)
-                rec = fut.result()
-                journal.append(rec)
-                done[_task_key(rec)] = rec
-                n_new += 1
-                if progress is not None:
-                    progress(len(done), total, rec)
-                if after_record is not None:
-                    after_record(n_new)
+                for rec in fut.result():
+                    journal.append(rec)
+                    done[_task_key(rec)] = rec
+                    n_new += 1
+                    if progress is not None:
+                        progress(len(done), total, rec)
+                    if after_record is not None:
+                        after_record(n_new)
             if time.monotonic() - last_snap > snapshot_interval:
                 write_results(sweep, list(done.values()), complete=False)
                 last_snap = time.monotonic()

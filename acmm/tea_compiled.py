@@ -300,4 +300,4 @@ def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
 
 def warm_up() -> None:
     """Compile (or load from numba's cache) the kernels of this module."""
-    solve_tea_fast(np.diag([2.0, 1.0, 2.5]), 0.0011, np.array([0.0, 0.1, 0.0]))
+    solve_tea_fast(np.diag([2.0e7, 1.0e6, 2.5e7]), 0.0011, np.array([0.0, 0.1, 0.0]))
