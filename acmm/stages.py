@@ -235,12 +235,14 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
     if cfg.output.figures if figures is None else figures:
         from acmm import plots
 
+        plots.parallel_saves()
         d = cfg.design
         plots.pole_map([p.lqr.poles for p in r.points], r.table.names, cfg.orbit_rate, d.sector.sigma,
                        d.sector.half_angle_deg, cfg.run_dir() / "design_poles.png")
         if r.fit is not None:
             plots.gain_schedule_grid(r.table.tea[:, 1], r.table.gain, r.fit, STATE_NAMES,
-                                     cfg.run_dir() / "design_gains.png")
+                                     cfg.run_dir() / "design_gains.png", units=plots.state_units(d.drf_mode))
+        plots.wait_saves()
     return r, path
 
 
@@ -337,6 +339,7 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
     if cfg.output.figures if figures is None else figures:
         from acmm import plots
 
+        plots.parallel_saves()
         d = cfg.run_dir()
         title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
         plots.axis_histories(orbits, np.degrees(err), rel_rate, r.u, r.state[:, 6:9], title, d / "sim_axes.png")
@@ -344,4 +347,5 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
             inertia_t = sc.inertia[r.level]
             plots.inertia_histories(orbits, inertia_t, d / "sim_inertia.png")
         plots.summary(orbits, np.degrees(err), r.state[:, 6:9], r.u, stats, r.verdict, cfg.name, d / "sim_summary.png")
+        plots.wait_saves()
     return result, path

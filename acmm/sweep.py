@@ -928,7 +928,7 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
             if m.any():
                 ax.scatter(x[m], y[m], s=14, c=colors[v], label=f"{v} ({int(m.sum())})", alpha=0.8)
         ax.set_xlabel(_label(axes_names[0]))
-        ax.set_ylabel(_label(axes_names[1]) if len(axes_names) > 1 else "peak attitude error, deg")
+        ax.set_ylabel(_label(axes_names[1]) if len(axes_names) > 1 else "peak attitude error (deg)")
         ax.set_title(f"{lab}: {int(np.sum(verdicts == 'bounded'))}/{int(sel.sum())} bounded")
         ax.legend(fontsize=7)
     fig.suptitle(f"{sweep.name}: stability map ({sweep.spec.design} design)")
@@ -944,8 +944,8 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
             for j, axn in enumerate(AXES):
                 ax.hist(err[:, j], bins=bins, histtype="step", label=axn)
             ax.legend(fontsize=7)
-        ax.set_xlabel("peak |θ − θ*_true|, deg (bounded cases)")
-        ax.set_ylabel("cases")
+        ax.set_xlabel("peak attitude error |θ − θ*_true| of bounded cases (deg)")
+        ax.set_ylabel("number of cases (count)")
         ax.set_title(f"{lab}: {int(sel.sum())} bounded of {int(np.sum(a['base'] == k))}")
     fig.suptitle(f"{sweep.name}: peak attitude error")
     out += _save(fig, run_dir / "sweep_peak_error.png")
@@ -953,6 +953,12 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
 
 
 def _label(name: str) -> str:
+    """Axis label: quantity and unit (a relative change is dimensionless: 0.1 = +10 %)."""
     if name in PARAMETERS:
-        return f"{name} [{PARAMETERS[name].unit}]"
-    return f"{name} [deg] (true TEA − nominal TEA)"
+        p = PARAMETERS[name]
+        if p.kind == "relative":
+            return f"{name}: relative change of {name[1:]} (1, 0.1 = +10 %)"
+        if p.kind == "scale":
+            return f"{name}: {p.description.split(':')[0].split('(')[0].strip()} (1, × nominal)"
+        return f"{name}: {p.description.split('(')[0].split(',')[0].strip()} ({p.unit.replace('*', '·')})"
+    return f"{name}: plant's {name.rsplit('_', 1)[-1]} TEA − nominal TEA (deg)"
