@@ -10,6 +10,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
+	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m acmm.warmup
 	touch $(STAMP)
 
 install: $(STAMP)
