@@ -5,7 +5,6 @@ given path; nothing is shown on screen.
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -25,71 +24,34 @@ def _plt():
     return plt
 
 
-#: (pid, read end of the error pipe, path) of figure writers forked by :func:`parallel_saves`
-_PENDING: list | None = None
-
-
 def parallel_saves(enabled: bool = True) -> None:
     """From now on, :func:`_save` draws and writes each figure in a forked child process while
-    the caller builds the next one (issue 16); :func:`wait_saves` joins them.
+    the caller builds the next one (:mod:`acmm.parallel_figures`); :func:`wait_saves` joins them."""
+    from acmm import parallel_figures
 
-    Only where ``os.fork`` exists and there is more than one CPU; otherwise saving stays
-    sequential.  A stage brackets its figures with ``parallel_saves()`` … ``wait_saves()``.
-    """
-    global _PENDING
-    if enabled and hasattr(os, "fork") and (os.cpu_count() or 1) > 1:
-        _PENDING = []
+    parallel_figures.enable(enabled)
 
 
 def wait_saves() -> None:
-    """Wait for the figure writers started since :func:`parallel_saves`; sequential saving again.
+    """Wait for the figure writers (raises :class:`acmm.errors.OutputError` on a failure)."""
+    from acmm import parallel_figures
 
-    Raises
-    ------
-    OutputError
-        A figure could not be written (the first failure's message).
-    """
-    global _PENDING
-    pending, _PENDING = _PENDING, None
-    first = None
-    for pid, fd, path in pending or []:
-        with os.fdopen(fd, "rb") as f:
-            msg = f.read().decode(errors="replace")
-        _, status = os.waitpid(pid, 0)
-        if (msg or os.waitstatus_to_exitcode(status) != 0) and first is None:
-            first = msg or f"cannot write figure {path}: the writer process failed"
-    if first is not None:
-        from acmm.errors import OutputError
-
-        raise OutputError(first)
+    parallel_figures.wait()
 
 
 def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Path]:
     path = Path(path)
     out = [path.with_suffix(".png")]
-    if _PENDING is not None:
-        import sys
+    from acmm import parallel_figures
 
-        sys.stdout.flush()
-        sys.stderr.flush()
-        r, w = os.pipe()
-        pid = os.fork()
-        if pid == 0:                                   # child: draw, write, report, exit
-            os.close(r)
-            code = 0
-            try:
-                _save_now(fig, path, out, vector, tight)
-            except BaseException as exc:  # noqa: BLE001 (reported to the parent through the pipe)
-                os.write(w, str(exc).encode()[:4000] or type(exc).__name__.encode())
-                code = 1
-            finally:
-                os._exit(code)
-        os.close(w)
-        _PENDING.append((pid, r, out[0]))
+    if parallel_figures.active():
+        if vector:
+            out.append(path.with_suffix(".pdf"))
+        parallel_figures.run(lambda: _save_now(fig, path, [out[0]], vector, tight), str(out[0]))
         import matplotlib.pyplot as plt
 
         plt.close(fig)
-        return out + ([path.with_suffix(".pdf")] if vector else [])
+        return out
     _save_now(fig, path, out, vector, tight)
     fig.clf()
     import matplotlib.pyplot as plt

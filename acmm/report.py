@@ -20,6 +20,7 @@ numbers; determinism; provenance.  Every printed number the project reproduces i
 from __future__ import annotations
 
 import base64
+import concurrent.futures as cf
 import hashlib
 import html
 import json
@@ -252,6 +253,7 @@ class Gathered:
     robustness: dict | None = None
     robustness_note: str = ""
     robustness_wall: float = 0.0
+    timings: dict = field(default_factory=dict)   #: wall time (s) per group of stages
 
 
 def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
@@ -278,15 +280,20 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
         say(f"  {r.stage:<14} {r.config:<16} {'reused' if r.reused else f'{r.wall_time:6.1f} s'}  {r.path}")
 
     full = acmm_config("staircase", root)
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    # the qpp stages do not depend on the acmm ones: run them in a forked process meanwhile
+    qpp_job = _start_qpp_stages(cfgs, rerun)
     for name in ("mb3", "mb3_decoupled", "ac", "staircase"):
         donors = [full.run_dir()] if cfgs[name].name != full.name else []
         keep(ensure_acmm_design(cfgs[name], rerun=rerun, donor_roots=donors))
     for name in ("mb3", "mb3_decoupled", "staircase"):
         keep(ensure_acmm_simulation(cfgs[name], rerun=rerun))
-    for name in ("qpp_siso", "qpp_manipulator"):
-        keep(ensure_qpp(cfgs[name], "design", rerun=rerun))
-        keep(ensure_qpp(cfgs[name], "simulate", rerun=rerun))
-    g = Gathered(cfgs, runs)
+    timings["acmm stages"] = time.perf_counter() - t0
+    for r in qpp_job():
+        keep(r)
+    timings["acmm + qpp stages"] = time.perf_counter() - t0
+    g = Gathered(cfgs, runs, timings=timings)
     if robustness:
         t0 = time.perf_counter()
         g.robustness, g.robustness_note = robustness_result(root, fast=fast, rerun=rerun)
@@ -297,6 +304,43 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
         say(f"  robustness     {'available' if g.robustness else 'not available'} "
             f"({g.robustness_wall:.1f} s) {g.robustness_note}")
     return g
+
+
+def _qpp_stages(cfgs: dict, rerun: bool) -> list:
+    out = []
+    for name in ("qpp_siso", "qpp_manipulator"):
+        out.append(ensure_qpp(cfgs[name], "design", rerun=rerun))
+        out.append(ensure_qpp(cfgs[name], "simulate", rerun=rerun))
+    return out
+
+
+def _start_qpp_stages(cfgs: dict, rerun: bool) -> Callable[[], list]:
+    """Start the four qpp stages in a forked process (POSIX, > 1 CPU, and only when one of them
+    must run); returns a function that waits and gives their :class:`StageRun` records in order.
+    Elsewhere the stages run when that function is called."""
+    import multiprocessing
+    import sys
+
+    def here():
+        return _qpp_stages(cfgs, rerun)
+
+    if not (sys.platform.startswith("linux") and (os.cpu_count() or 1) > 1):
+        return here
+    try:
+        pool = cf.ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("fork"))
+        fut = pool.submit(_qpp_stages, cfgs, rerun)
+    except (OSError, ValueError):
+        return here
+
+    def collect():
+        try:
+            return fut.result()
+        except cf.process.BrokenProcessPool:
+            return here()
+        finally:
+            pool.shutdown(wait=True)
+
+    return collect
 
 
 def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bool = False):
@@ -1482,6 +1526,8 @@ class ReportResult:
     determinism: dict
     wall_time: float
     sections: list = field(default_factory=lambda: [k for k, _ in SECTIONS])
+    #: wall time (s) of the gathering, of each stage group and of each section (issue 16)
+    timings: dict = field(default_factory=dict)
 
     @property
     def unexplained(self) -> list:
@@ -1529,11 +1575,19 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     rep = _Report(g, figdir, fast)
     say("writing sections and figures")
     t1 = time.perf_counter()
-    for key in ("table1", "schedule", "claim1", "staircase", "robustness"):
-        getattr(rep, key)()
-    rep.qpp()
-    rep.errata()
-    rep.printed()
+    from acmm import parallel_figures
+
+    parallel_figures.enable()            # figures written by forked processes meanwhile (issue 16)
+    try:
+        for key in ("table1", "schedule", "claim1", "staircase", "robustness", "qpp", "errata", "printed"):
+            t_sec = time.perf_counter()
+            getattr(rep, key)()
+            rep.timings[key] = time.perf_counter() - t_sec
+            say(f"  section {key:<12} {rep.timings[key]:6.2f} s")
+    finally:
+        t_sec = time.perf_counter()
+        parallel_figures.wait()
+        rep.timings["figure writers (wait)"] = time.perf_counter() - t_sec
     t_sections = time.perf_counter() - t1
     # determinism
     man_path = out / "manifest.json"
@@ -1558,8 +1612,10 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     write_text(out / "index.html", page)
     figs = sorted(figdir.glob("*.png"))
     say(f"wrote {out / 'index.html'} ({len(figs)} figures) in {time.perf_counter() - t_start:.1f} s")
-    return ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),
-                        rep.ledger, cmp, time.perf_counter() - t_start)
+    res = ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),
+                       rep.ledger, cmp, time.perf_counter() - t_start)
+    res.timings = {"gather": t_gather, **g.timings, **rep.timings, "total": res.wall_time}
+    return res
 
 
 def _determinism_section(rep: _Report, cmp: dict, manifest: dict) -> None:
