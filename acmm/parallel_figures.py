@@ -9,8 +9,12 @@ cost little more than building them.
     parallel_figures.run(lambda: fig.savefig(...), path)
     parallel_figures.wait()          # join; raises OutputError with the first failure's message
 
-Without :func:`enable` (or without ``os.fork``, or on one CPU) :func:`run` calls the function in
-place, so callers need not care.  At most one writer per CPU runs at a time.
+Opt-in: only with the environment variable ``ACMM_PARALLEL_FIGURES=1`` (and ``os.fork``, > 1 CPU).
+Measured on the shared 2-core machine (load ≈ 2) it gained nothing — each child redraws with cold
+font and glyph caches and there was no idle core — and forking a process that may hold threads
+(a notebook, a Dask worker) is a risk, so the default stays sequential; on an idle multi-core
+machine it overlaps the figure writing with the next figure.  Otherwise :func:`run` calls the
+function in place, so callers need not care.  At most one writer per CPU runs at a time.
 """
 from __future__ import annotations
 
@@ -25,6 +29,8 @@ _PENDING: list | None = None
 def enable(enabled: bool = True) -> bool:
     """Start forking figure writers; returns whether it is on."""
     global _PENDING
+    if os.environ.get("ACMM_PARALLEL_FIGURES", "0") != "1":
+        enabled = False
     if enabled and hasattr(os, "fork") and (os.cpu_count() or 1) > 1 and _PENDING is None:
         _PENDING = []
     return _PENDING is not None
