@@ -93,3 +93,28 @@ def test_decimate_keeps_the_envelope():
     assert yd.max() == y.max() and yd.min() == y.min()
     short = np.arange(10.0)
     assert plots.decimate(short, short)[0] is short or np.array_equal(plots.decimate(short, short)[0], short)
+
+
+def test_forked_figure_writers_write_and_report_failures(tmp_path, monkeypatch):
+    from acmm import parallel_figures
+    from acmm.errors import OutputError
+
+    monkeypatch.setenv("ACMM_PARALLEL_FIGURES", "1")
+    if not parallel_figures.enable():
+        pytest.skip("no fork or one CPU")
+    plt = plots._plt()
+    for k in range(3):
+        fig, ax = plt.subplots()
+        ax.plot([0, 1], [k, 1])
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("angle (deg)")
+        plots._save(fig, tmp_path / f"f{k}.png", tight=False)
+    parallel_figures.wait()
+    assert all((tmp_path / f"f{k}.png").stat().st_size > 1000 for k in range(3))
+    assert not parallel_figures.active()
+    parallel_figures.enable()
+    parallel_figures.run(lambda: (_ for _ in ()).throw(OSError("disk full")), "x.png")
+    with pytest.raises(OutputError, match="disk full"):
+        parallel_figures.wait()
+    monkeypatch.setenv("ACMM_PARALLEL_FIGURES", "0")
+    assert not parallel_figures.enable()
