@@ -580,16 +580,15 @@ _WARM = False
 
 
 def chunk_size(n_tasks: int, workers: int) -> int:
-    """Cases per task for ``n_tasks`` cases on ``workers`` workers (1 when serial).
+    """Cases per task for ``n_tasks`` cases on ``workers`` workers (a pool or a Dask cluster;
+    the in-process executor runs one case per task).
 
     ⌈n / (8·workers)⌉ clipped to [1, :data:`MAX_CHUNK`]: about 8 tasks per worker (the tail
     imbalance is then ≤ 1/8 of a worker's share) and never more than ~0.3 s per task.  The cost of
     one task on a scheduler is a fixed few ms, so once a chunk holds more than a few cases that
     cost is a small fraction whatever the number of workers; see README *Performance*.
     """
-    if workers <= 1:
-        return 1
-    return max(1, min(MAX_CHUNK, -(-n_tasks // (CHUNKS_PER_WORKER * workers))))
+    return max(1, min(MAX_CHUNK, -(-n_tasks // (CHUNKS_PER_WORKER * max(1, workers)))))
 
 
 def make_chunks(tasks: list, size: int) -> list[list]:
@@ -605,18 +604,43 @@ def make_chunks(tasks: list, size: int) -> list[list]:
 
 
 def _warm_worker() -> None:
-    """Load the compiled kernels once per worker process (from numba's cache: no compile)."""
+    """Load the compiled kernels once per worker process (from numba's cache: no compile); a
+    long-lived Dask cluster can be warmed ahead with ``client.run(acmm.sweep._warm_worker)``."""
     global _WARM
     if not _WARM:
-        from acmm.tea_compiled import warm_up
+        from acmm.warmup import warm_up
 
         warm_up()
         _WARM = True
 
 
+_LOCAL: dict = {}
+
+
+def _local_context(ctx: BaseContext) -> BaseContext:
+    """``ctx`` with writable arrays, made once per worker and context.
+
+    Dask hands a task its (scattered) context deserialized from shared buffers, i.e. with
+    read-only arrays; numba types read-only arrays differently, so the simulator would be
+    compiled afresh on every Dask worker (~10 s) instead of loaded from the cache.
+    """
+    hit = _LOCAL.get(id(ctx))
+    if hit is not None and hit[0] is ctx:
+        return hit[1]
+    sc = ctx.scenario
+    fix = {f.name: np.array(getattr(sc, f.name)) for f in dataclasses.fields(sc)
+           if isinstance(getattr(sc, f.name), np.ndarray) and not getattr(sc, f.name).flags.writeable}
+    local = dataclasses.replace(ctx, scenario=dataclasses.replace(sc, **fix)) if fix else ctx
+    if len(_LOCAL) > 16:
+        _LOCAL.clear()
+    _LOCAL[id(ctx)] = (ctx, local)
+    return local
+
+
 def _call_chunk(chunk, ctx) -> list[dict]:
     """Run the tasks of one chunk in order; returns their records."""
     _warm_worker()
+    ctx = _local_context(ctx)
     return [_call(t, ctx) for t in chunk]
 
 
@@ -691,7 +715,8 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         executor, close = make_executor(workers if not scheduler else 0, scheduler)
     serial = isinstance(executor, SerialExecutor)
     n_workers = 1 if serial else _scheduler_workers(executor, workers)
-    chunks = make_chunks(tasks, chunk if chunk is not None else chunk_size(len(tasks), n_workers))
+    size = chunk if chunk is not None else (1 if serial else chunk_size(len(tasks), n_workers))
+    chunks = make_chunks(tasks, size)
     window = 1 if serial else max(4, 2 * n_workers)
     remote = _remote_contexts(executor, contexts)
     n_new = 0

@@ -5,7 +5,8 @@
 
 For each N it runs the same seeded ±30 % inertia Monte Carlo (fixed design, no figures) on N
 local worker processes and, when ``distributed`` is installed, on a Dask LocalCluster of N
-single-threaded worker processes (cluster start-up excluded: a user starts a cluster once),
+single-threaded worker processes (cluster start-up and the one-time kernel load per worker
+excluded: a user starts and warms a cluster once),
 and prints wall time, cases/s, speed-up over 1 worker and Dask / pool; ``--unchunked`` adds a
 Dask run with one case per task (the pre-issue-16 behaviour) to show what chunking buys.  Every
 run's table is compared with the 1-worker table (bit for bit).  Also prints the per-case cost
@@ -117,6 +118,12 @@ def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool
             else:
                 with distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                               dashboard_address=None) as cluster:
+                    # start-up and the one-time kernel load per worker are not timed: a cluster
+                    # serving many sweeps pays them once (a forked pool inherits them)
+                    with distributed.Client(cluster) as client:
+                        from acmm.sweep import _warm_worker
+
+                        client.run(_warm_worker)
                     one(label, n, scheduler=cluster.scheduler_address, **kw)
             t = times[label, n]
             vs = f"{t / times['pool', n]:.2f}x" if label != "pool" else "-"
