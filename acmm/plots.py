@@ -100,15 +100,24 @@ def decimate(x, y, max_points: int = MAX_LINE_POINTS):
 
 
 def state_units(drf_mode: str = "attitude_hold") -> list[str]:
-    """Unit of each of the 24 states of eq 4.46 (the DRF states carry their input's unit × s or s²)."""
-    from acmm.linearize import DRF_INPUTS
+    """:func:`acmm.linearize.state_units` written for labels (ft·lbf·s², rad·s)."""
+    import re
 
-    base = ["rad/s"] * 3 + ["rad"] * 3 + ["ft·lbf·s"] * 3 + ["ft·lbf·s²"] * 3
-    times_s = {"rad": ("rad·s", "rad·s²"), "ft·lbf·s": ("ft·lbf·s²", "ft·lbf·s³")}
-    out = list(base)
-    for j in range(6):
-        out += list(times_s[base[DRF_INPUTS[drf_mode][j % 3]]])
-    return out
+    from acmm.linearize import state_units as units
+
+    def pretty(u: str) -> str:
+        if "/" in u:
+            return u
+        u = u.replace("*", "·")
+        # combine repeated s factors: ft·lbf·s·s^2 -> ft·lbf·s³
+        m = re.fullmatch(r"(.*?)((?:·?s(?:\^\d)?)+)", u)
+        if m and m.group(2).strip("·"):
+            p = sum(int(f[2:]) if "^" in f else 1 for f in m.group(2).strip("·").split("·"))
+            head = m.group(1)
+            u = (head + "·" if head else "") + "s" + ("" if p == 1 else "⁰¹²³⁴⁵⁶⁷⁸⁹"[p])
+        return u
+
+    return [pretty(u) for u in units(drf_mode)]
 
 
 def _few_ticks(ax, nx: int = 4, ny: int = 4) -> None:
