@@ -783,7 +783,7 @@ def fig_staircase(sim: dict, figdir: Path):
         ax.set_xlabel("time (orbits)")
     fig2.suptitle("Gain-scheduled responses, inertia MB3 → AC (Figs 6.20–6.30 analogue; dotted: level changes)",
                   fontsize=10)
-    fig2.tight_layout()
+    fig2.subplots_adjust(left=0.08, right=0.985, bottom=0.055, top=0.94, wspace=0.28, hspace=0.12)  # issue 16
     f2 = save(fig2, figdir, "staircase_responses")
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
     th = np.degrees(sim["levels"]["tea_estimate"][:, 1])[: len(sim["levels"]["steady_error"])]
