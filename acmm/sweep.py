@@ -646,9 +646,11 @@ def _call_chunk(chunk, ctx) -> list[dict]:
 
 def _scheduler_workers(executor, default: int) -> int:
     """Number of workers (threads) of the Dask cluster behind ``executor``, else ``default``."""
+    client = getattr(executor, "_client", None)
+    if client is None:
+        return max(1, default)
     try:
-        info = executor._client.scheduler_info()
-        return max(1, sum(int(w.get("nthreads", 1)) for w in info["workers"].values()))
+        return max(1, sum(int(v) for v in client.nthreads().values()))
     except (AttributeError, KeyError, OSError, TypeError, ValueError):
         return max(1, default)
 
