@@ -20,7 +20,6 @@ numbers; determinism; provenance.  Every printed number the project reproduces i
 from __future__ import annotations
 
 import base64
-import concurrent.futures as cf
 import hashlib
 import html
 import json
@@ -282,65 +281,29 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
     full = acmm_config("staircase", root)
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
-    # the qpp stages do not depend on the acmm ones: run them in a forked process meanwhile
-    qpp_job = _start_qpp_stages(cfgs, rerun)
     for name in ("mb3", "mb3_decoupled", "ac", "staircase"):
         donors = [full.run_dir()] if cfgs[name].name != full.name else []
         keep(ensure_acmm_design(cfgs[name], rerun=rerun, donor_roots=donors))
     for name in ("mb3", "mb3_decoupled", "staircase"):
         keep(ensure_acmm_simulation(cfgs[name], rerun=rerun))
     timings["acmm stages"] = time.perf_counter() - t0
-    for r in qpp_job():
-        keep(r)
-    timings["acmm + qpp stages"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    for name in ("qpp_siso", "qpp_manipulator"):
+        keep(ensure_qpp(cfgs[name], "design", rerun=rerun))
+        keep(ensure_qpp(cfgs[name], "simulate", rerun=rerun))
+    timings["qpp stages"] = time.perf_counter() - t0
     g = Gathered(cfgs, runs, timings=timings)
     if robustness:
         t0 = time.perf_counter()
         g.robustness, g.robustness_note = robustness_result(root, fast=fast, rerun=rerun)
         g.robustness_wall = time.perf_counter() - t0
+        g.timings["robustness sweep"] = g.robustness_wall
         if g.robustness is not None:
             r = g.robustness["run"]
             runs[f"{r.stage}:{r.config}"] = r
         say(f"  robustness     {'available' if g.robustness else 'not available'} "
             f"({g.robustness_wall:.1f} s) {g.robustness_note}")
     return g
-
-
-def _qpp_stages(cfgs: dict, rerun: bool) -> list:
-    out = []
-    for name in ("qpp_siso", "qpp_manipulator"):
-        out.append(ensure_qpp(cfgs[name], "design", rerun=rerun))
-        out.append(ensure_qpp(cfgs[name], "simulate", rerun=rerun))
-    return out
-
-
-def _start_qpp_stages(cfgs: dict, rerun: bool) -> Callable[[], list]:
-    """Start the four qpp stages in a forked process (POSIX, > 1 CPU, and only when one of them
-    must run); returns a function that waits and gives their :class:`StageRun` records in order.
-    Elsewhere the stages run when that function is called."""
-    import multiprocessing
-    import sys
-
-    def here():
-        return _qpp_stages(cfgs, rerun)
-
-    if not (sys.platform.startswith("linux") and (os.cpu_count() or 1) > 1):
-        return here
-    try:
-        pool = cf.ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("fork"))
-        fut = pool.submit(_qpp_stages, cfgs, rerun)
-    except (OSError, ValueError):
-        return here
-
-    def collect():
-        try:
-            return fut.result()
-        except cf.process.BrokenProcessPool:
-            return here()
-        finally:
-            pool.shutdown(wait=True)
-
-    return collect
 
 
 def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bool = False):
