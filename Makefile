@@ -10,6 +10,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
+	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m acmm.warmup
 	touch $(STAMP)
 
 install: $(STAMP)
@@ -31,6 +32,7 @@ bench: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench.py
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python scripts/compare_riccati.py
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench_sweep.py
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench_issue16.py --full
 
 report: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/acmm report

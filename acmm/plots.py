@@ -24,14 +24,35 @@ def _plt():
     return plt
 
 
+def parallel_saves(enabled: bool = True) -> None:
+    """From now on, :func:`_save` draws and writes each figure in a forked child process while
+    the caller builds the next one (:mod:`acmm.parallel_figures`); :func:`wait_saves` joins them."""
+    from acmm import parallel_figures
+
+    parallel_figures.enable(enabled)
+
+
+def wait_saves() -> None:
+    """Wait for the figure writers (raises :class:`acmm.errors.OutputError` on a failure)."""
+    from acmm import parallel_figures
+
+    parallel_figures.wait()
+
+
 def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Path]:
     path = Path(path)
     out = [path.with_suffix(".png")]
-    bbox = "tight" if tight else None
-    save_figure(fig, out[0], bbox_inches=bbox)
-    if vector:
-        out.append(path.with_suffix(".pdf"))
-        save_figure(fig, out[1], bbox_inches=bbox)
+    from acmm import parallel_figures
+
+    if parallel_figures.active():
+        if vector:
+            out.append(path.with_suffix(".pdf"))
+        parallel_figures.run(lambda: _save_now(fig, path, [out[0]], vector, tight), str(out[0]))
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+        return out
+    _save_now(fig, path, out, vector, tight)
     fig.clf()
     import matplotlib.pyplot as plt
 
@@ -39,26 +60,103 @@ def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Pat
     return out
 
 
-def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False):
+def _save_now(fig, path: Path, out: list, vector: bool, tight: bool) -> None:
+    bbox = "tight" if tight else None
+    save_figure(fig, out[0], bbox_inches=bbox)
+    if vector:
+        out.append(path.with_suffix(".pdf"))
+        save_figure(fig, out[1], bbox_inches=bbox)
+
+
+#: lines longer than this are drawn as a min/max envelope per pixel column (issue 16)
+MAX_LINE_POINTS = 4000
+
+
+def decimate(x, y, max_points: int = MAX_LINE_POINTS):
+    """(x, y) reduced to at most ~``max_points`` points keeping each bucket's min and max.
+
+    At figure resolution (a few hundred pixels per axes) the drawn envelope is identical to the
+    full line; shorter lines are returned unchanged.
+    """
+    x = np.asarray(x)
+    y = np.asarray(y)
+    n = x.shape[0]
+    if n <= max_points:
+        return x, y
+    buckets = max_points // 2
+    edges = np.linspace(0, n, buckets + 1).astype(int)
+    idx = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        if b <= a:
+            continue
+        seg = y[a:b]
+        if not np.isfinite(seg).any():
+            idx.append(a)
+            continue
+        i, j = a + int(np.nanargmin(seg)), a + int(np.nanargmax(seg))
+        idx.extend(sorted({i, j}))
+    idx = np.asarray(idx)
+    return x[idx], y[idx]
+
+
+def state_units(drf_mode: str = "attitude_hold") -> list[str]:
+    """:func:`acmm.linearize.state_units` written for labels (ft·lbf·s², rad·s)."""
+    import re
+
+    from acmm.linearize import state_units as units
+
+    def pretty(u: str) -> str:
+        if "/" in u:
+            return u
+        u = u.replace("*", "·")
+        # combine repeated s factors: ft·lbf·s·s^2 -> ft·lbf·s³
+        m = re.fullmatch(r"(.*?)((?:·?s(?:\^\d)?)+)", u)
+        if m and m.group(2).strip("·"):
+            p = sum(int(f[2:]) if "^" in f else 1 for f in m.group(2).strip("·").split("·"))
+            head = m.group(1)
+            u = (head + "·" if head else "") + "s" + ("" if p == 1 else "⁰¹²³⁴⁵⁶⁷⁸⁹"[p])
+        return u
+
+    return [pretty(u) for u in units(drf_mode)]
+
+
+def _few_ticks(ax, nx: int = 4, ny: int = 4) -> None:
+    """At most ~``nx``/``ny`` major ticks: every tick is four artists to create and draw."""
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(nx))
+    ax.yaxis.set_major_locator(MaxNLocator(ny))
+
+
+def gain_unit(state_unit: str, torque_unit: str = "ft·lbf") -> str:
+    """Unit of a gain column K(i, j): torque (``torque_unit``) per unit of state j."""
+    return f"{torque_unit}/({state_unit})" if any(ch in state_unit for ch in "/·") else f"{torque_unit}/{state_unit}"
+
+
+def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, units=None,
+                       torque_unit="ft·lbf"):
     """K(i, j) versus pitch TEA for all 24 columns (3 rows each), with the fitted curves."""
     plt = _plt()
     theta2_deg = np.degrees(theta2)
     fine = np.linspace(theta2.min(), theta2.max(), 60)
     kf = np.array([fit.gain(t) for t in fine])
     fig, axs = plt.subplots(6, 4, figsize=(13, 15), sharex=True, dpi=80)
+    units = units or state_units()
     for j, ax in enumerate(axs.flat):
         for i, color in zip(range(3), ("C0", "C1", "C2")):
             ax.plot(theta2_deg, gains[:, i, j], "o", ms=3, color=color, label=f"K({i + 1},·) LQR")
             ax.plot(np.degrees(fine), kf[:, i, j], "-", lw=1, color=color)
         ax.set_title(f"K(i,{j + 1}) — {state_names[j]}", fontsize=8)
+        ax.set_ylabel(f"K(i,{j + 1}) ({gain_unit(units[j], torque_unit)})", fontsize=6)
         ax.tick_params(labelsize=7)
+        _few_ticks(ax)
     for ax in axs[-1]:
         ax.set_xlabel("pitch TEA θ2* (deg)")
     axs[0, 0].legend(fontsize=6)
     fig.suptitle(f"Gain schedule: LQR gains (dots) and the {fit.form} schedule (lines) vs TEA "
                  "(cf. Figs 5.3–5.26)")
     # a fixed layout: tight_layout/bbox 'tight' on 24 panels costs seconds
-    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.35, hspace=0.35)
+    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.45, hspace=0.35)
     return _save(fig, path, vector, tight=False)
 
 
@@ -80,11 +178,12 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
         ax.plot(p.real, p.imag, "x", ms=4, color=cmap(k / max(1, len(names) - 1)),
                 label=name if len(names) <= 12 else None)
     ax.axvline(0, color="k", lw=0.5)
-    ax.set_xlabel("Re λ / n")
-    ax.set_ylabel("Im λ / n")
+    ax.set_xlabel("real part Re λ (units of n, the orbit rate)")
+    ax.set_ylabel("imaginary part Im λ (units of n)")
     ax.set_title(f"Closed-loop poles and the sector (Re λ ≤ −{sigma}n, |Im λ| ≤ tan {half_angle_deg:g}°·|Re λ|)")
     ax.legend(fontsize=6, ncol=2)
-    return _save(fig, path, vector)
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.1, top=0.92)
+    return _save(fig, path, vector, tight=False)
 
 
 def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units="imperial"):
@@ -102,16 +201,17 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     for r, (data, label) in enumerate(rows):
         for a in range(3):
             ax = axs[r, a]
-            ax.plot(orbits, data[:, a], lw=0.7)
+            ax.plot(*decimate(orbits, data[:, a]), lw=0.7)
+            _few_ticks(ax, 6, 4)
             if r == 0:
                 ax.set_title(AXES[a])
-            if a == 0:
-                ax.set_ylabel(label)
+            ax.set_ylabel(label, fontsize=8 if a == 0 else 7)
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
     fig.suptitle(title)
-    fig.tight_layout()
-    return _save(fig, path, vector)
+    # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.06, top=0.93, wspace=0.25, hspace=0.12)
+    return _save(fig, path, vector, tight=False)
 
 
 def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
@@ -125,12 +225,12 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
     for ax, (i, j) in zip(axs.flat, idx):
         ax.step(orbits, inertia[:, i, j] / 1e6, where="post")
         ax.set_title(f"I({i + 1},{j + 1})")
-        ax.set_ylabel(f"10⁶ {pretty(iu)}")
+        ax.set_ylabel(f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})")
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
     fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
-    fig.tight_layout()
-    return _save(fig, path, vector)
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.09, top=0.9, wspace=0.3, hspace=0.25)
+    return _save(fig, path, vector, tight=False)
 
 
 def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=False, units="imperial"):
@@ -145,14 +245,15 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     gs = fig.add_gridspec(3, 2)
     ax = fig.add_subplot(gs[0, :])
     for a in range(3):
-        ax.plot(orbits, err_deg[:, a], lw=0.7, label=AXES[a])
+        ax.plot(*decimate(orbits, err_deg[:, a]), lw=0.7, label=AXES[a])
     ax.set_ylabel("attitude error (deg)")
+    ax.set_xlabel("time (orbits)")
     ax.legend(fontsize=7)
     ax.set_title(f"{title} — verdict: {verdict}")
     for col, (data, label) in enumerate(((h, f"CMG momentum ({pretty(hu)})"), (u, f"delivered torque ({pretty(uu)})"))):
         ax = fig.add_subplot(gs[1, col])
         for a in range(3):
-            ax.plot(orbits, data[:, a], lw=0.7, label=AXES[a])
+            ax.plot(*decimate(orbits, data[:, a]), lw=0.7, label=AXES[a])
         ax.set_ylabel(label)
         ax.set_xlabel("time (orbits)")
         ax.legend(fontsize=7)
@@ -166,8 +267,8 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
         tab = ax.table(cellText=rows, colLabels=header, loc="center", cellLoc="center")
         tab.auto_set_font_size(False)
         tab.set_fontsize(7)
-    fig.tight_layout()
-    return _save(fig, path, vector)
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
+    return _save(fig, path, vector, tight=False)
 
 
 def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=False):

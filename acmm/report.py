@@ -252,6 +252,7 @@ class Gathered:
     robustness: dict | None = None
     robustness_note: str = ""
     robustness_wall: float = 0.0
+    timings: dict = field(default_factory=dict)   #: wall time (s) per group of stages
 
 
 def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
@@ -278,19 +279,25 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
         say(f"  {r.stage:<14} {r.config:<16} {'reused' if r.reused else f'{r.wall_time:6.1f} s'}  {r.path}")
 
     full = acmm_config("staircase", root)
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
     for name in ("mb3", "mb3_decoupled", "ac", "staircase"):
         donors = [full.run_dir()] if cfgs[name].name != full.name else []
         keep(ensure_acmm_design(cfgs[name], rerun=rerun, donor_roots=donors))
     for name in ("mb3", "mb3_decoupled", "staircase"):
         keep(ensure_acmm_simulation(cfgs[name], rerun=rerun))
+    timings["acmm stages"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
     for name in ("qpp_siso", "qpp_manipulator"):
         keep(ensure_qpp(cfgs[name], "design", rerun=rerun))
         keep(ensure_qpp(cfgs[name], "simulate", rerun=rerun))
-    g = Gathered(cfgs, runs)
+    timings["qpp stages"] = time.perf_counter() - t0
+    g = Gathered(cfgs, runs, timings=timings)
     if robustness:
         t0 = time.perf_counter()
         g.robustness, g.robustness_note = robustness_result(root, fast=fast, rerun=rerun)
         g.robustness_wall = time.perf_counter() - t0
+        g.timings["robustness sweep"] = g.robustness_wall
         if g.robustness is not None:
             r = g.robustness["run"]
             runs[f"{r.stage}:{r.config}"] = r
@@ -630,7 +637,8 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     fig.legend(handles, labels, loc="upper center", ncol=3, fontsize=7, bbox_to_anchor=(0.5, 0.985))
     fig.suptitle(f"Gain schedule vs TEA: LQR gains (markers) and the order-{sc['coef'].shape[0] - 1} "
                  f"{form} schedule (lines); rows i = roll, pitch, yaw torque", y=0.995, fontsize=9)
-    fig.tight_layout(rect=(0, 0, 1, 0.955))
+    # a fixed layout: tight_layout on 24 panels costs as much as drawing them (issue 16)
+    fig.subplots_adjust(left=0.075, right=0.985, bottom=0.04, top=0.93, wspace=0.42, hspace=0.32)
     return save(fig, figdir, "gain_schedule")
 
 
@@ -746,7 +754,7 @@ def fig_staircase(sim: dict, figdir: Path):
         ax.set_xlabel("time (orbits)")
     fig2.suptitle("Gain-scheduled responses, inertia MB3 → AC (Figs 6.20–6.30 analogue; dotted: level changes)",
                   fontsize=10)
-    fig2.tight_layout()
+    fig2.subplots_adjust(left=0.08, right=0.985, bottom=0.055, top=0.94, wspace=0.28, hspace=0.12)  # issue 16
     f2 = save(fig2, figdir, "staircase_responses")
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
     th = np.degrees(sim["levels"]["tea_estimate"][:, 1])[: len(sim["levels"]["steady_error"])]
@@ -1553,6 +1561,8 @@ class ReportResult:
     determinism: dict
     wall_time: float
     sections: list = field(default_factory=lambda: [k for k, _ in SECTIONS])
+    #: wall time (s) of the gathering, of each stage group and of each section (issue 16)
+    timings: dict = field(default_factory=dict)
 
     @property
     def unexplained(self) -> list:
@@ -1600,11 +1610,19 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     rep = _Report(g, figdir, fast)
     say("writing sections and figures")
     t1 = time.perf_counter()
-    for key in ("table1", "schedule", "claim1", "staircase", "robustness"):
-        getattr(rep, key)()
-    rep.qpp()
-    rep.errata()
-    rep.printed()
+    from acmm import parallel_figures
+
+    parallel_figures.enable()            # figures written by forked processes meanwhile (issue 16)
+    try:
+        for key in ("table1", "schedule", "claim1", "staircase", "robustness", "qpp", "errata", "printed"):
+            t_sec = time.perf_counter()
+            getattr(rep, key)()
+            rep.timings[key] = time.perf_counter() - t_sec
+            say(f"  section {key:<12} {rep.timings[key]:6.2f} s")
+    finally:
+        t_sec = time.perf_counter()
+        parallel_figures.wait()
+        rep.timings["figure writers (wait)"] = time.perf_counter() - t_sec
     t_sections = time.perf_counter() - t1
     # determinism
     man_path = out / "manifest.json"
@@ -1629,8 +1647,10 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     write_text(out / "index.html", page)
     figs = sorted(figdir.glob("*.png"))
     say(f"wrote {out / 'index.html'} ({len(figs)} figures) in {time.perf_counter() - t_start:.1f} s")
-    return ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),
-                        rep.ledger, cmp, time.perf_counter() - t_start)
+    res = ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),
+                       rep.ledger, cmp, time.perf_counter() - t_start)
+    res.timings = {"gather": t_gather, **g.timings, **rep.timings, "total": res.wall_time}
+    return res
 
 
 def _determinism_section(rep: _Report, cmp: dict, manifest: dict) -> None:

@@ -62,7 +62,13 @@ def save(fig, directory: Path, stem: str) -> dict[str, Path]:
     out = {"pdf": directory / f"{stem}.pdf", "png": directory / f"{stem}.png"}
     # layouts are fixed by tight_layout (no bbox_inches="tight": it costs a second draw);
     # fixed metadata: the same data give byte-identical PDFs (no creation date)
-    save_figure(fig, out["pdf"], metadata={"CreationDate": None, "Creator": "acmm report"})
-    save_figure(fig, out["png"], metadata={"Software": "acmm report"})
+    from acmm import parallel_figures
+
+    def write():
+        save_figure(fig, out["pdf"], metadata={"CreationDate": None, "Creator": "acmm report"})
+        save_figure(fig, out["png"], metadata={"Software": "acmm report"})
+
+    # in a forked writer when the report enabled it (acmm.parallel_figures), else here
+    parallel_figures.run(write, str(out["png"]))
     plt.close(fig)
     return out

@@ -341,6 +341,7 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
     if cfg.output.figures if figures is None else figures:
         from acmm import plots
 
+        plots.parallel_saves()
         d = cfg.design
         plots.pole_map([p.lqr.poles for p in r.points], r.table.names, cfg.orbit_rate, d.sector.sigma,
                        d.sector.half_angle_deg, cfg.run_dir() / "design_poles.png")
@@ -354,14 +355,21 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
                 conv = lambda K: state_space_in(cfg.output.units, d.drf_mode, K=K)["K"]  # noqa: E731
                 gains = conv(gains)
                 fit = _replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
+            if cfg.output.units == "imperial":
+                units, torque = plots.state_units(d.drf_mode), "ft·lbf"
+            else:
+                from acmm.units import state_factors
+
+                units, torque = [u.replace("*", "·") for u in state_factors(d.drf_mode, cfg.output.units)[1]], "N·m"
             plots.gain_schedule_grid(r.table.tea[:, 1], gains, fit, STATE_NAMES,
-                                     cfg.run_dir() / "design_gains.png")
+                                     cfg.run_dir() / "design_gains.png", units=units, torque_unit=torque)
         if r.path_check is not None:
             pc = r.path_check
             plots.schedule_path_check(pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
                                       cfg.run_dir() / "design_path_margins.png")
             plots.scheduled_pole_map(pc.poles, pc.theta2, cfg.orbit_rate, d.sector.sigma,
                                      d.sector.half_angle_deg, cfg.run_dir() / "design_path_poles.png")
+        plots.wait_saves()
     return r, path
 
 
@@ -487,6 +495,7 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
     if cfg.output.figures if figures is None else figures:
         from acmm import plots
 
+        plots.parallel_saves()
         d = cfg.run_dir()
         title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
         units = cfg.output.units
@@ -497,4 +506,5 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
             plots.inertia_histories(orbits, inertia_t, d / "sim_inertia.png", units=units)
         plots.summary(orbits, np.degrees(err), r.state[:, 6:9], r.u, stats, r.verdict, cfg.name, d / "sim_summary.png",
                       units=units)
+        plots.wait_saves()
     return result, path

@@ -232,8 +232,6 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
     """Simulate the base with the given parameter values; returns the metrics row (no case info)."""
     from acmm import dynamics as dyn
     from acmm import simulate as sm
-    from acmm.tea import solve_tea
-
     sc0, table, cfg, spec = ctx.scenario, ctx.table, ctx.config, ctx.spec
     L = sc0.inertia.shape[0]
     row = _empty_row(L)
@@ -261,7 +259,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
             # levels are the perturbed design points
             sc = dataclasses.replace(sc, harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
         else:
-            true = np.array([solve_tea(inertia[k], n, bias[k]).theta for k in range(L)])
+            true = perturbed_tea(sc0, inertia, bias)
             if spec.tea_estimate == "true":
                 est = true
                 gain = np.array([table.gain_at(true[k, 1], k) for k in range(L)])
@@ -311,6 +309,19 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
         tea_true=np.degrees(true[0]).tolist(), tea_estimate=np.degrees(sc.theta_est[0]).tolist(),
         n_steps=int(r.n_steps))
     return row
+
+
+def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> np.ndarray:
+    """The perturbed plant's TEA per level (rad) on the physical branch of :mod:`acmm.tea`.
+
+    The continuation of :func:`acmm.tea.solve_tea`, compiled (:mod:`acmm.tea_compiled`: same
+    root, ~100× cheaper; any fold falls back to :func:`acmm.tea.solve_tea` and its errors).  A
+    case's TEA depends only on its plant, never on the cases run before, so its row is the same
+    whatever executor, chunking or order runs it.
+    """
+    from acmm.tea_compiled import solve_tea_fast
+
+    return np.array([solve_tea_fast(inertia[k], sc0.n, bias[k]).theta for k in range(inertia.shape[0])])
 
 
 def run_case(ctx: BaseContext, index: int) -> dict:
@@ -402,7 +413,7 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
             client = distributed.Client(scheduler, timeout=f"{limit('DASK_CONNECT_SECONDS'):g}s")
         except (OSError, TimeoutError, ValueError) as exc:
             raise ConfigError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
-        return client.get_executor(), client.close
+        return client.get_executor(pure=False), client.close
     if workers <= 1:
         return SerialExecutor(), lambda: None
     import multiprocessing
@@ -502,6 +513,42 @@ class Journal:
             pass
 
 
+class GroupCommitJournal(Journal):
+    """A :class:`Journal` that flushes every record at once but fsyncs at most every
+    ``sync_interval`` seconds (and on close): group commit (issue 16).
+
+    A flushed line is in the operating system's cache, so a killed sweep (SIGKILL, Ctrl-C) keeps
+    every record, as before; only a machine crash can lose the records of the last
+    ``sync_interval``, which ``--resume`` recomputes (a torn line is ignored).  An fsync costs
+    ~1–6 ms here, as much as a 10-orbit case, so one per record would dominate a sweep.
+    """
+
+    sync_interval = 0.5
+
+    def __init__(self, path: Path, key: str, fresh: bool):
+        super().__init__(path, key, fresh)
+        self._last_sync = time.monotonic()
+
+    def append(self, record: dict) -> None:
+        self.append_many([record])
+
+    def append_many(self, records: list) -> None:
+        """Append records (one write, one flush; an fsync when the last is older than the interval)."""
+        if not records:
+            return
+        self._f.write("".join(json.dumps(r) + "\n" for r in records))
+        self._f.flush()
+        if time.monotonic() - self._last_sync >= self.sync_interval:
+            os.fsync(self._f.fileno())
+            self._last_sync = time.monotonic()
+
+    def close(self) -> None:
+        if not self._f.closed:
+            self._f.flush()
+            os.fsync(self._f.fileno())
+        super().close()
+
+
 # ---------------------------------------------------------------------------------------------
 # the sweep driver
 # ---------------------------------------------------------------------------------------------
@@ -552,6 +599,104 @@ def _call(task, ctx):
     return run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg)
 
 
+#: most cases in one task: a chunk of ~64 10-orbit cases is ~0.3 s of work, so progress, the
+#: journal and load balancing stay live while the per-task cost (pickling the base context,
+#: scheduling, a round trip: ~1–5 ms on Dask) is amortized over many cases
+MAX_CHUNK = 64
+#: chunks per worker aimed at, so that the last chunks do not leave workers idle
+CHUNKS_PER_WORKER = 8
+
+_WARM = False
+
+
+def chunk_size(n_tasks: int, workers: int) -> int:
+    """Cases per task for ``n_tasks`` cases on ``workers`` workers (a pool or a Dask cluster;
+    the in-process executor runs one case per task).
+
+    ⌈n / (8·workers)⌉ clipped to [1, :data:`MAX_CHUNK`]: about 8 tasks per worker (the tail
+    imbalance is then ≤ 1/8 of a worker's share) and never more than ~0.3 s per task.  The cost of
+    one task on a scheduler is a fixed few ms, so once a chunk holds more than a few cases that
+    cost is a small fraction whatever the number of workers; see README *Performance*.
+    """
+    return max(1, min(MAX_CHUNK, -(-n_tasks // (CHUNKS_PER_WORKER * max(1, workers)))))
+
+
+def make_chunks(tasks: list, size: int) -> list[list]:
+    """Consecutive case tasks of one base in lists of ``size``; each margin search alone."""
+    chunks: list[list] = []
+    for t in tasks:
+        if (t[0] == "case" and chunks and len(chunks[-1]) < size and chunks[-1][0][0] == "case"
+                and chunks[-1][0][1] == t[1]):
+            chunks[-1].append(t)
+        else:
+            chunks.append([t])
+    return chunks
+
+
+def _warm_worker() -> None:
+    """Load the compiled kernels once per worker process (from numba's cache: no compile); a
+    long-lived Dask cluster can be warmed ahead with ``client.run(acmm.sweep._warm_worker)``."""
+    global _WARM
+    if not _WARM:
+        from acmm.warmup import warm_up
+
+        warm_up()
+        _WARM = True
+
+
+_LOCAL: dict = {}
+
+
+def _local_context(ctx: BaseContext) -> BaseContext:
+    """``ctx`` with writable arrays, made once per worker and context.
+
+    Dask hands a task its (scattered) context deserialized from shared buffers, i.e. with
+    read-only arrays; numba types read-only arrays differently, so the simulator would be
+    compiled afresh on every Dask worker (~10 s) instead of loaded from the cache.
+    """
+    hit = _LOCAL.get(id(ctx))
+    if hit is not None and hit[0] is ctx:
+        return hit[1]
+    sc = ctx.scenario
+    fix = {f.name: np.array(getattr(sc, f.name)) for f in dataclasses.fields(sc)
+           if isinstance(getattr(sc, f.name), np.ndarray) and not getattr(sc, f.name).flags.writeable}
+    local = dataclasses.replace(ctx, scenario=dataclasses.replace(sc, **fix)) if fix else ctx
+    if len(_LOCAL) > 16:
+        _LOCAL.clear()
+    _LOCAL[id(ctx)] = (ctx, local)
+    return local
+
+
+def _call_chunk(chunk, ctx) -> list[dict]:
+    """Run the tasks of one chunk in order; returns their records."""
+    _warm_worker()
+    ctx = _local_context(ctx)
+    return [_call(t, ctx) for t in chunk]
+
+
+def _scheduler_workers(executor, default: int) -> int:
+    """Number of workers (threads) of the Dask cluster behind ``executor``, else ``default``."""
+    client = getattr(executor, "_client", None)
+    if client is None:
+        return max(1, default)
+    try:
+        return max(1, sum(int(v) for v in client.nthreads().values()))
+    except (AttributeError, KeyError, OSError, TypeError, ValueError):
+        return max(1, default)
+
+
+def _remote_contexts(executor, contexts: dict) -> dict:
+    """The base contexts as the executor's tasks take them: on a Dask cluster scattered once to
+    every worker (a task then carries a reference, not a pickled design); else as they are."""
+    client = getattr(executor, "_client", None)
+    if client is None or not contexts:
+        return contexts
+    try:
+        return {k: client.scatter(v, broadcast=True, hash=False) for k, v in contexts.items()}
+    except (AttributeError, TypeError, ValueError):
+        return contexts
+
+
 def _as_sweep(sweep) -> Sweep:
     return sweep if isinstance(sweep, Sweep) else load_sweep(sweep)
 
@@ -561,7 +706,7 @@ def _as_sweep(sweep) -> Sweep:
 def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, scheduler: Optional[str] = None,
               resume: bool = False, progress: Optional[Callable[[int, int, dict], None]] = None,
               after_record: Optional[Callable[[int], None]] = None, figures: Optional[bool] = None,
-              snapshot_interval: float = 5.0, executor=None) -> SweepResult:
+              snapshot_interval: float = 5.0, executor=None, chunk: Optional[int] = None) -> SweepResult:
     """Run (or resume) a sweep; writes ``sweep.journal``, ``sweep.h5``, ``sweep.csv`` and figures.
 
     Parameters
@@ -579,6 +724,9 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         Called after each record is committed (tests use it to interrupt a sweep).
     executor : concurrent.futures.Executor, optional
         Use this executor instead of making one (it is not shut down).
+    chunk : int, optional
+        Cases per task (default :func:`chunk_size`: ~8 tasks per worker, ≤ :data:`MAX_CHUNK`;
+        1 in-process).  The results do not depend on it.
     """
     if not isinstance(sweep, Sweep):
         sweep = load_sweep(sweep)
@@ -603,38 +751,44 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     if executor is None and tasks:        # before the journal: an unreachable scheduler writes nothing
         executor, close = make_executor(workers if not scheduler else 0, scheduler)
     try:
-        journal = Journal(jpath, key, fresh=not resume)
+        journal = GroupCommitJournal(jpath, key, fresh=not resume)
     except BaseException:
         close()
         raise
-    window = 1 if isinstance(executor, SerialExecutor) else max(4, 4 * workers)
+    serial = isinstance(executor, SerialExecutor)
+    n_workers = 1 if serial else _scheduler_workers(executor, workers)
+    size = chunk if chunk is not None else (1 if serial else chunk_size(len(tasks), n_workers))
+    chunks = make_chunks(tasks, size)
+    window = 1 if serial else max(4, 2 * n_workers)
+    remote = _remote_contexts(executor, contexts)
     n_new = 0
     last_snap = time.monotonic()
     complete = False
     pending: dict = {}
     try:
-        it = iter(tasks)
+        it = iter(chunks)
         exhausted = False
         while True:
             while not exhausted and len(pending) < window:
-                t = next(it, None)
-                if t is None:
+                c = next(it, None)
+                if c is None:
                     exhausted = True
                     break
-                pending[executor.submit(_call, t, contexts[t[1]])] = t
+                pending[executor.submit(_call_chunk, c, remote[c[0][1]])] = c
             if not pending:
                 break
             finished, _ = cf.wait(list(pending), return_when=cf.FIRST_COMPLETED)
             for fut in finished:
                 pending.pop(fut)
-                rec = fut.result()
-                journal.append(rec)
-                done[_task_key(rec)] = rec
-                n_new += 1
-                if progress is not None:
-                    progress(len(done), total, rec)
-                if after_record is not None:
-                    after_record(n_new)
+                recs = fut.result()
+                journal.append_many(recs)
+                for rec in recs:
+                    done[_task_key(rec)] = rec
+                    n_new += 1
+                    if progress is not None:
+                        progress(len(done), total, rec)
+                    if after_record is not None:
+                        after_record(n_new)
             if time.monotonic() - last_snap > snapshot_interval:
                 write_results(sweep, list(done.values()), complete=False)
                 last_snap = time.monotonic()
@@ -854,7 +1008,7 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
             if m.any():
                 ax.scatter(x[m], y[m], s=14, c=colors[v], label=f"{v} ({int(m.sum())})", alpha=0.8)
         ax.set_xlabel(_label(axes_names[0], system))
-        ax.set_ylabel(_label(axes_names[1], system) if len(axes_names) > 1 else "peak attitude error, deg")
+        ax.set_ylabel(_label(axes_names[1], system) if len(axes_names) > 1 else "peak attitude error (deg)")
         ax.set_title(f"{lab}: {int(np.sum(verdicts == 'bounded'))}/{int(sel.sum())} bounded")
         ax.legend(fontsize=7)
     fig.suptitle(f"{sweep.name}: stability map ({sweep.spec.design} design)")
@@ -870,8 +1024,8 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
             for j, axn in enumerate(AXES):
                 ax.hist(err[:, j], bins=bins, histtype="step", label=axn)
             ax.legend(fontsize=7)
-        ax.set_xlabel("peak |θ − θ*_true|, deg (bounded cases)")
-        ax.set_ylabel("cases")
+        ax.set_xlabel("peak attitude error |θ − θ*_true| of bounded cases (deg)")
+        ax.set_ylabel("number of cases (count)")
         ax.set_title(f"{lab}: {int(sel.sum())} bounded of {int(np.sum(a['base'] == k))}")
     fig.suptitle(f"{sweep.name}: peak attitude error")
     out += _save(fig, run_dir / "sweep_peak_error.png")
@@ -879,8 +1033,16 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
 
 
 def _label(name: str, units: str = "imperial") -> str:
+    """Axis label: quantity and unit in the output system ``units`` (a relative change is
+    dimensionless: 0.1 = +10 %)."""
     if name in PARAMETERS:
+        p = PARAMETERS[name]
+        if p.kind == "relative":
+            return f"{name}: relative change of {name[1:]} (1, 0.1 = +10 %)"
+        if p.kind == "scale":
+            return f"{name}: {p.description.split(':')[0].split('(')[0].strip()} (1, × nominal)"
         from acmm.units import display_unit
 
-        return f"{name} [{display_unit(PARAMETERS[name].unit, units)}]"
-    return f"{name} [deg] (true TEA − nominal TEA)"
+        unit = display_unit(p.unit, units).replace("*", "·")
+        return f"{name}: {p.description.split('(')[0].split(',')[0].strip()} ({unit})"
+    return f"{name}: plant's {name.rsplit('_', 1)[-1]} TEA − nominal TEA (deg)"

@@ -1,0 +1,45 @@
+"""Compile the numba kernels ahead of time (``python -m acmm.warmup``; run by ``make install``).
+
+The compiled Dormand–Prince closed loop (:mod:`acmm.simulate`) and the compiled TEA continuation
+(:mod:`acmm.tea_compiled`) are cached by numba (``cache=True``) in ``__pycache__`` beside the
+sources (or numba's user cache directory when that is not writable), so the first ``acmm simulate``
+after install loads machine code instead of compiling it (~10 s).  Prints what it does.
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+
+def warm_up(say=print) -> float:
+    """Compile (or load) every numba kernel; returns the wall time (s)."""
+    t0 = time.perf_counter()
+    import numpy as np
+
+    from acmm import simulate as sm
+    from acmm.tea_compiled import warm_up as warm_tea
+
+    warm_tea()
+    n = 0.0011
+    inertia = np.diag([2.0e7, 1.0e6, 2.1e7])[None]
+    sc = sm.Scenario(level_start=np.zeros(1), inertia=inertia, bias=np.zeros((1, 3)), theta_est=np.zeros((1, 3)),
+                     gain=np.zeros((1, 3, 24)), harmonic_a=np.zeros(3), harmonic_b=np.zeros(3), n=n,
+                     torque_limit=100.0, momentum_limit=1e4, drf_mode="attitude_hold", t_end=600.0,
+                     sample_times=np.array([0.0, 300.0, 600.0]), x0=np.zeros(24), rtol=1e-8,
+                     atol=sm.plain_scales(n, "attitude_hold") * 1e-8, divergence=1.0, max_saturation=1e4)
+    sm.simulate(sc)
+    sm.kernel_rhs(sc, 0.0, np.zeros(24))
+    return time.perf_counter() - t0
+
+
+def main() -> int:
+    sys.stdout.write("acmm: compiling the numba kernels (simulator, TEA continuation) into the cache "
+                     "— one time, ~10–20 s ... ")
+    sys.stdout.flush()
+    dt = warm_up()
+    print(f"done in {dt:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,120 @@
+"""Every acmm figure kind renders and every axis names a quantity and a unit (issues 14, 16)."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from acmm import plots
+from acmm.config import load_config
+from acmm.linearize import STATE_NAMES
+
+UNIT = re.compile(r"^(?P<quantity>.{3,}?)\s*\((?P<unit>[^()]*(\([^()]*\))?[^()]*)\)\s*$")
+
+
+@pytest.fixture
+def captured(monkeypatch):
+    figs = []
+
+    def fake_save(fig, path, vector=False, tight=True):
+        fig.canvas.draw()                      # renders: a figure that cannot draw fails here
+        figs.append(fig)
+        return [path]
+
+    monkeypatch.setattr(plots, "_save", fake_save)
+    return figs
+
+
+def _check_labels(fig):
+    axes = [ax for ax in fig.axes if ax.axison]
+    assert axes
+    for ax in axes:
+        m = UNIT.match(ax.get_ylabel())
+        assert m and m["unit"].strip(), f"y label without quantity and unit: {ax.get_ylabel()!r}"
+        siblings = ax.get_shared_x_axes().get_siblings(ax)
+        labelled = [a.get_xlabel() for a in siblings if a.get_xlabel()]
+        assert labelled, f"no x label on the column of {ax.get_title()!r}"
+        for lab in labelled:
+            m = UNIT.match(lab)
+            assert m and m["unit"].strip(), f"x label without quantity and unit: {lab!r}"
+        for lab in (ax.get_xlabel(), ax.get_ylabel()):
+            assert "[1]" not in lab
+
+
+def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_path):
+    from acmm import simulate as sm
+    from acmm.stages import compute_design
+
+    cfg = load_config("staircase")
+    r = compute_design(cfg)
+    plots.gain_schedule_grid(r.table.tea[:, 1], r.table.gain, r.fit, STATE_NAMES, tmp_path / "g.png",
+                             units=plots.state_units(cfg.design.drf_mode))
+    plots.pole_map([p.lqr.poles for p in r.points], r.table.names, cfg.orbit_rate, 0.5, 45, tmp_path / "p.png")
+    sc = sm.scenario_from_config(cfg, r.table, orbits=12)
+    res = sm.simulate(sc)
+    orbits = res.t * cfg.orbit_rate / (2 * np.pi)
+    err = np.degrees(sm.attitude_error(sc, res))
+    plots.axis_histories(orbits, err, err, res.u, res.state[:, 6:9], "t", tmp_path / "a.png")
+    plots.inertia_histories(orbits, sc.inertia[res.level], tmp_path / "i.png")
+    plots.summary(orbits, err, res.state[:, 6:9], res.u, sm.level_statistics(sc, res), res.verdict, "x",
+                  tmp_path / "s.png")
+    assert len(captured) == 5
+    for fig in captured:
+        _check_labels(fig)
+    # the gain panels carry the gain's unit: torque per unit of the state
+    grid = captured[0]
+    assert "ft·lbf/(rad/s)" in grid.axes[0].get_ylabel() and "ft·lbf/rad" in grid.axes[3].get_ylabel()
+
+
+def test_sweep_figures_have_quantities_and_units(captured, tmp_path):
+    import yaml
+
+    from acmm.sweep import run_sweep
+
+    from conftest import CONFIGS
+
+    p = tmp_path / "s.yaml"
+    p.write_text(yaml.safe_dump({"name": "figs", "sweep": {
+        "base": str(CONFIGS / "ac.yaml"), "grid": {"dI22": [-0.1, 0.1], "bias_pitch": [0.0, 0.2]},
+        "orbits": 0.5}, "output": {"root": str(tmp_path / "runs"), "figures": True}}))
+    run_sweep(p, workers=1)
+    assert len(captured) == 2
+    for fig in captured:
+        _check_labels(fig)
+    assert "relative change of I22" in captured[0].axes[0].get_xlabel()
+
+
+def test_decimate_keeps_the_envelope():
+    x = np.linspace(0, 1, 100_001)
+    y = np.sin(200 * x) + (x > 0.5) * 3
+    xd, yd = plots.decimate(x, y, 2000)
+    assert len(xd) <= 2000 and np.all(np.diff(xd) > 0)
+    assert yd.max() == y.max() and yd.min() == y.min()
+    short = np.arange(10.0)
+    assert plots.decimate(short, short)[0] is short or np.array_equal(plots.decimate(short, short)[0], short)
+
+
+def test_forked_figure_writers_write_and_report_failures(tmp_path, monkeypatch):
+    from acmm import parallel_figures
+    from acmm.errors import OutputError
+
+    monkeypatch.setenv("ACMM_PARALLEL_FIGURES", "1")
+    if not parallel_figures.enable():
+        pytest.skip("no fork or one CPU")
+    plt = plots._plt()
+    for k in range(3):
+        fig, ax = plt.subplots()
+        ax.plot([0, 1], [k, 1])
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("angle (deg)")
+        plots._save(fig, tmp_path / f"f{k}.png", tight=False)
+    parallel_figures.wait()
+    assert all((tmp_path / f"f{k}.png").stat().st_size > 1000 for k in range(3))
+    assert not parallel_figures.active()
+    parallel_figures.enable()
+    parallel_figures.run(lambda: (_ for _ in ()).throw(OSError("disk full")), "x.png")
+    with pytest.raises(OutputError, match="disk full"):
+        parallel_figures.wait()
+    monkeypatch.setenv("ACMM_PARALLEL_FIGURES", "0")
+    assert not parallel_figures.enable()

@@ -1,0 +1,67 @@
+"""Sweep tasks in chunks (issue 16): the tables do not depend on chunking or executor."""
+from __future__ import annotations
+
+import os
+
+import pytest
+import yaml
+
+from acmm.results import read_h5
+from acmm.sweep import MAX_CHUNK, chunk_size, make_chunks, run_sweep
+
+from conftest import CONFIGS
+from test_sweep import _assert_same_data
+
+
+def _cfg(tmp, name="chunks", n_runs=7):
+    spec = {"base": str(CONFIGS / "ac.yaml"), "monte_carlo": {"inertia": {"percent": 10}},
+            "n_runs": n_runs, "seed": 16, "orbits": 1.0,
+            "margin": {"low": 0.8, "high": 1.25, "scan_points": 1, "rel_tol": 0.1}}
+    p = tmp / f"{name}.yaml"
+    p.write_text(yaml.safe_dump({"name": name, "sweep": spec,
+                                 "output": {"root": str(tmp / "runs"), "figures": False}}))
+    return p
+
+
+def test_chunk_size_and_chunks():
+    assert chunk_size(1000, 1) == 64                      # one worker process: still amortized
+    assert chunk_size(10, 2) == 1
+    assert chunk_size(3200, 2) == 64 == MAX_CHUNK
+    assert chunk_size(3200, 16) == 25                     # 8 tasks per worker
+    tasks = [("case", "a", i) for i in range(5)] + [("case", "b", i) for i in range(3)] + \
+        [("margin", "a", "up"), ("margin", "a", "down")]
+    chunks = make_chunks(tasks, 2)
+    assert [len(c) for c in chunks] == [2, 2, 1, 2, 1, 1, 1]
+    assert [t for c in chunks for t in c] == tasks        # order kept, nothing lost
+    assert all(len({t[1] for t in c}) == 1 for c in chunks)
+
+
+def _run_bytes(path, **kw):
+    r = run_sweep(path, **kw)
+    data = read_h5(r.path)
+    csv = (r.path.parent / "sweep.csv").read_bytes()
+    os.replace(r.path, r.path.with_name(f"sweep_{len(os.listdir(r.path.parent))}.h5"))
+    return data, csv
+
+
+def test_pool_chunked_unchunked_and_serial_identical(tmp_path):
+    cfg = _cfg(tmp_path)
+    ref, ref_csv = _run_bytes(cfg, workers=1)
+    for chunk in (1, 3):
+        got, csv = _run_bytes(cfg, workers=2, chunk=chunk)
+        _assert_same_data(ref, got)
+        assert csv == ref_csv
+        assert got["margin"].keys() == ref["margin"].keys()
+        for k in ref["margin"]:
+            assert got["margin"][k]["limit"] == ref["margin"][k]["limit"]
+
+
+def test_dask_chunked_identical(tmp_path):
+    distributed = pytest.importorskip("distributed", reason="optional extra acmm-qpp[dask] not installed")
+    cfg = _cfg(tmp_path, "dask_chunks", n_runs=5)
+    ref, ref_csv = _run_bytes(cfg, workers=1)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster:
+        got, csv = _run_bytes(cfg, scheduler=cluster.scheduler_address, chunk=2)
+    _assert_same_data(ref, got)
+    assert csv == ref_csv
