@@ -1,0 +1,55 @@
+"""docs/ERRATA.md is the repository's own record of the report's misprints and conventions.
+
+Every test it names as evidence must exist, every section it lists must be present, and no source
+file may cite a document outside the repository.
+"""
+import ast
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+ERRATA = ROOT / "docs" / "ERRATA.md"
+
+
+def _tests_defined(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    return {n.name for n in tree.body if isinstance(n, ast.FunctionDef) and n.name.startswith("test_")}
+
+
+def _evidence() -> list[tuple[str, str]]:
+    """(file, test) pairs named in the document; a bare test name belongs to the last file named."""
+    pairs, current = [], None
+    for token in re.findall(r"`([^`]+)`", ERRATA.read_text(encoding="utf-8")):
+        m = re.fullmatch(r"(tests/test_\w+\.py)::(test_\w+)", token)
+        if m:
+            current = m.group(1)
+            pairs.append((current, m.group(2)))
+        elif re.fullmatch(r"test_\w+", token):
+            assert current is not None, f"test {token} named before any test file"
+            pairs.append((current, token))
+    return pairs
+
+
+def test_every_named_test_exists():
+    pairs = _evidence()
+    assert len(pairs) >= 40
+    missing = [f"{f}::{t}" for f, t in pairs if t not in _tests_defined(ROOT / f)]
+    assert not missing, missing
+
+
+def test_every_listed_section_has_a_heading():
+    text = ERRATA.read_text(encoding="utf-8")
+    listed = re.search(r"Section names used in citations:(.*?)\n\n", text, re.S).group(1)
+    names = re.findall(r"\*\*([^*]+)\*\*", listed)
+    headings = set(re.findall(r"^### (.+)$", text, re.M))
+    assert len(names) >= 15 and set(names) == headings, set(names) ^ headings
+
+
+def test_no_source_cites_a_file_outside_the_repository():
+    offenders = []
+    for pkg in ("acmm", "qpp", "cli", "report", "common", "tests", "scripts"):
+        for f in (ROOT / pkg).rglob("*.py") if (ROOT / pkg).is_dir() else []:
+            text = f.read_text(encoding="utf-8")
+            if "NOTES.md" in text.replace("test_errata_doc", "") and f.name != "test_errata_doc.py":
+                offenders.append(str(f.relative_to(ROOT)))
+    assert not offenders, offenders
