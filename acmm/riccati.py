@@ -31,7 +31,7 @@ the 24 ACMM states span ~12 orders of magnitude; unscaled, every method loses mo
 (NOTES.md, "Scaling").
 
 Every solve computes its relative residual (see :func:`care_residual`) in the scaled
-coordinates and raises :class:`acmm.errors.ConvergenceError` above ``tol``.
+coordinates and raises :class:`common.errors.ConvergenceError` above ``tol``.
 
 Existence check (every method): before solving, the eigenvalues λ_i of the (scaled) Hamiltonian
 H = [[A, −G], [−Q, −A']] are computed, after balancing (H_b = T⁻¹HT, LAPACK GEBAL with
@@ -65,7 +65,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from acmm.errors import ConvergenceError
+from common.errors import ConvergenceError
 
 METHODS = ("scipy", "sign", "slycot")
 

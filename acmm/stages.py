@@ -10,9 +10,9 @@ import numpy as np
 from acmm import dynamics as dyn
 from acmm import tea as tea_mod
 from acmm.config import Config, load_config
-from acmm.outputs import owns_outputs
-from acmm.results import Dataset, write_h5
-from acmm.runlock import locked_stage
+from common.outputs import owns_outputs
+from common.results import Dataset, write_h5
+from common.runlock import locked_stage
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -20,7 +20,7 @@ AXES = ["roll", "pitch", "yaw"]
 def _in_system(items: dict, cfg: Config, roles: dict) -> dict:
     """Per-state arrays of ``items`` (path → role of :func:`acmm.units.state_space_in`) in the
     config's ``output.units``; their unit strings and ``state_units`` follow.  Other datasets
-    are converted by unit string in :func:`acmm.results.write_h5`."""
+    are converted by unit string in :func:`common.results.write_h5`."""
     from dataclasses import replace
 
     from acmm.units import state_factors, state_space_in
@@ -183,7 +183,7 @@ def design_hash(cfg: Config) -> str:
     """Hash of the design-relevant part of a config (inertia, n, disturbance, design, schedule)."""
     import json
 
-    from acmm.results import config_hash
+    from common.results import config_hash
 
     d = cfg.model_dump(mode="json")
     keys = ("inertia", "orbit_rate", "disturbance", "design", "schedule")
@@ -367,7 +367,7 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
 
 def load_design_table(path: Path) -> DesignTable:
     """Read the arrays a simulation needs back from ``design.h5``."""
-    from acmm.results import read_h5
+    from common.results import read_h5
 
     d = read_h5(path)
     coef = d["schedule"]["coef"] if "schedule" in d else None

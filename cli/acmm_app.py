@@ -30,7 +30,7 @@ def _load(config, overrides):
     """The validated acmm config of CONFIG plus KEY=VALUE overrides (a CONFIG that is itself an
     override means: the packaged default with that override)."""
     from acmm.config import load_config
-    from acmm.overrides import split_overrides
+    from common.overrides import split_overrides
 
     return load_config(*split_overrides(config, overrides))
 
@@ -51,7 +51,7 @@ def validate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] 
              show: bool = typer.Option(False, "--show", help="print the resolved config (all defaults, canonical units)")) -> None:
     """Check a config of any kind (acmm run, sweep or qpp; detected from its sections); exit 2
     naming the offending field when it is invalid."""
-    from acmm.overrides import split_overrides
+    from common.overrides import split_overrides
     from acmm.schema import load_any
 
     config, overrides = split_overrides(config, overrides)
@@ -90,7 +90,7 @@ def tea(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = Ove
     typer.echo(f"{result.config.name}: torque-equilibrium attitude (eqs 4.1-4.3)")
     typer.echo(f"  theta* [roll, pitch, yaw]  = {_fmt(t.theta_deg)} deg")
     typer.echo(f"  omega*                     = {_fmt(t.omega, '{:+.6e}')} rad/s")
-    from acmm.units import shown
+    from common.units import shown
 
     sys_ = result.config.output.units
     bias, tu = shown(t.bias, "ft*lbf", sys_)
@@ -196,7 +196,7 @@ def simulate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] 
     import numpy as np
 
     from acmm.stages import run_simulate
-    from acmm.units import shown
+    from common.units import shown
 
     r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
     cfg, s = r.config, r.sim

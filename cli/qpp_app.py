@@ -11,7 +11,7 @@ from typing import Optional
 import numpy as np
 import typer
 
-from acmm.errors import DesignError
+from common.errors import DesignError
 from cli.common import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acmm.errors import ConvergenceError, DesignError
+from common.errors import ConvergenceError, DesignError
 from qpp import circle as circle_mod
 from qpp import spheres
 from qpp.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinearity

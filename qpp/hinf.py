@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from acmm.errors import ConvergenceError, DesignError
+from common.errors import ConvergenceError, DesignError
 from qpp.lure import LurePlant, augmented, closed_loop
 
 

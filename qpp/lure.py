@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acmm.errors import ConfigError
+from common.errors import ConfigError
 
 BZ_READINGS = ("eq10.7", "printed")
 

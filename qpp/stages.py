@@ -5,9 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm.outputs import owns_outputs
-from acmm.results import Dataset, write_h5
-from acmm.runlock import locked_stage
+from common.outputs import owns_outputs
+from common.results import Dataset, write_h5
+from common.runlock import locked_stage
 from qpp.config import PolarArmNonlinearity, QppConfig, load_config
 from qpp.design import DesignResult, design
 from qpp.simulate import simulate

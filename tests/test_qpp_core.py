@@ -87,7 +87,7 @@ def test_chapter11_reproduces_published_K(name, rho, a, digits):
     rel = np.abs(g.H - H)[H != 0] / np.abs(H[H != 0])
     assert rel.max() < (0.01 if name == "qpp_siso" else 0.025)
     # printed [C 0] weight: no admissible solution at nu = 1, or clearly different gains (NOTES)
-    from acmm.errors import AcmmError
+    from common.errors import AcmmError
     try:
         g2 = hinf_gains(P, rho=rho, a=a, weight="output")
     except AcmmError:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from acmm.errors import ConvergenceError
+from common.errors import ConvergenceError
 from acmm.riccati import METHODS, care_residual, matrix_sign, solve_care
 
 # SLICOT SB02PD documentation example: A'X + XA − XGX + Q = 0 with G = diag(0, 1) = B R⁻¹ B'.

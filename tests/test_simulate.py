@@ -156,7 +156,7 @@ def test_simulate_rejects_inconsistent_simulation_before_writing(tmp_path, monke
 
     from cli.acmm_app import app
 
-    from acmm.config import packaged_config_path
+    from common.configio import packaged_config_path
 
     monkeypatch.chdir(tmp_path)
     text = packaged_config_path("mb3.yaml").read_text()
