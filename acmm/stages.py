@@ -97,6 +97,13 @@ class LinearizeResult:
     tea: tea_mod.TEA
     model: object
     controllability: object
+    #: open-loop eigenvalues of A (rad/s), as written to ``linearize.h5``
+    eigenvalues: np.ndarray | None = None
+
+    def eigenvalues_over_n(self) -> np.ndarray:
+        """The open-loop eigenvalues divided by the orbit rate n, sorted by real then imaginary part."""
+        eig = self.eigenvalues / self.model.n
+        return eig[np.lexsort((eig.imag, eig.real))]
 
 
 @locked_stage(_as_config)
@@ -113,6 +120,7 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
     result = LinearizeResult(cfg, tr.tea, model, ctrb)
     names = list(model.state_names)
     eig = np.linalg.eigvals(model.A)
+    result.eigenvalues = eig
     items = {
         "A": Dataset(model.A, "per-state (see state_units)", "state matrix of eq 4.46 (x' = A x + B u + G w)",
                      names, {"state_units": np.array(model.state_units, dtype="S")}, dims=("state", "state_col")),
@@ -177,6 +185,14 @@ class DesignResult:
     table: DesignTable
     wall_time: float
     path_check: object = None
+
+    def fastest_over_n(self) -> np.ndarray:
+        """Per design point, the fastest closed-loop pole's decay rate max(−Re s) divided by n."""
+        return np.array([np.max(-p.lqr.poles.real) / self.config.orbit_rate for p in self.points])
+
+    def worst_check_index(self) -> int | None:
+        """Index of the schedule check with the smallest sector margin (None without a schedule)."""
+        return None if self.check is None else int(np.argmin(self.check.margin))
 
 
 def design_hash(cfg: Config) -> str:
@@ -422,6 +438,16 @@ class SimulateResult:
     stats: list
     design_note: str
     wall_time: float
+
+    @property
+    def orbits_simulated(self) -> float:
+        """Simulated time in orbits (2π/n)."""
+        return float(self.sim.t[-1] * self.config.orbit_rate / (2 * np.pi))
+
+    @property
+    def stop_orbit(self) -> float:
+        """Time the integration stopped at, in orbits (2π/n)."""
+        return float(self.sim.stop_time * self.config.orbit_rate / (2 * np.pi))
 
 
 @locked_stage(_as_config)

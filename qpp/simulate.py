@@ -1,7 +1,7 @@
 """Nonlinear closed-loop simulation of a Lure plant with observer and servo-compensator.
 
 State z = [x; x_c; x̂] (eq 10.7).  With f1 the plant nonlinearity and f1o its nominal value
-(γ = nominal), the loop is (sign conventions of NOTES.md / :mod:`qpp.lure`):
+(γ = nominal), the loop is (sign conventions of ``docs/ERRATA.md`` § QPP signs and :mod:`qpp.lure`):
 
     u   = K1 x̂ + Kc x_c − f1o                       (eq 10.6, "computed torque" in ch. 14)
     x'  = A x + B u + G d + B f1(x, y, γ, t)         (eqs 13.1, 14.2)

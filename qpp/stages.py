@@ -22,6 +22,15 @@ def _rel(a, b):
     return np.abs(a - b) / np.maximum(np.abs(b), 1e-12)
 
 
+def printed_H_difference(cfg: QppConfig, r: DesignResult) -> float | None:
+    """Largest |H − H_printed| / |H_printed| over the non-zero printed entries of the observer gain
+    (dimensionless); None when the config gives no printed H."""
+    pub = cfg.published.H
+    if pub is None:
+        return None
+    return float(_rel(r.H, pub)[np.abs(np.asarray(pub, float)) > 0].max())
+
+
 def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     """Datasets of qpp_design.h5."""
     items = {

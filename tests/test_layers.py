@@ -103,3 +103,26 @@ def test_old_module_paths_still_import():
     assert read_yaml is r2 and validate_model is v2
     assert to_canonical("1 N*m", "torque") == pytest.approx(1 / (0.3048 * 4.4482216152605), rel=1e-12)
     assert len(state_factors()[0]) == 24
+
+
+#: Files still citing a file outside the repository, edited in parallel by others (issue 12):
+#: their citations are replaced when those edits land.
+CITATION_PENDING = {"acmm/report.py", "acmm/lqr.py"}
+
+
+def test_sources_cite_no_file_outside_the_repository():
+    """Docstrings and comments cite ``docs/ERRATA.md § <section>``, never NOTES.md or a path
+    outside the repository."""
+    import re
+
+    forbidden = re.compile(r"NOTES\.md|NOTES\b|shared/reference|/work/")
+    bad = []
+    for package in ("acmm", "qpp", "cli", "common", "scripts", "tests"):
+        for path in sorted((REPO / package).rglob("*.py")):
+            rel = path.relative_to(REPO).as_posix()
+            if rel in CITATION_PENDING or rel in ("tests/test_docstrings.py", "tests/test_layers.py"):
+                continue
+            for k, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+                if forbidden.search(line):
+                    bad.append(f"{rel}:{k}: {line.strip()}")
+    assert bad == []
