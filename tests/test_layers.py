@@ -126,3 +126,19 @@ def test_sources_cite_no_file_outside_the_repository():
                 if forbidden.search(line):
                     bad.append(f"{rel}:{k}: {line.strip()}")
     assert bad == []
+
+
+def test_importing_every_qpp_module_loads_no_acmm_module():
+    """At run time too: importing all of qpp (and common) in a fresh interpreter loads no acmm."""
+    import subprocess
+    import sys
+
+    mods = sorted({f"{p.parent.name}.{p.stem}" for pkg in ("qpp", "common")
+                   for p in (REPO / pkg).glob("*.py") if p.stem != "__init__"})
+    code = ("import importlib, sys\n"
+            f"for m in {mods!r}: importlib.import_module(m)\n"
+            "print(sorted(m for m in sys.modules if m == 'acmm' or m.startswith('acmm.')))\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
+                         timeout=120, env={**__import__("os").environ, "PYTHONPATH": str(REPO)})
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"
