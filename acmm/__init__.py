@@ -7,7 +7,18 @@ quadratic gain schedules (ch. 5.3) and the nonlinear stair-case simulation (ch. 
 """
 __version__ = "0.1.0"
 
-from acmm.errors import AcmmError, ConfigError, ConvergenceError, NoEquilibriumError  # noqa: F401
+from common.errors import AcmmError, ConfigError, ConvergenceError, NoEquilibriumError  # noqa: F401
+from common.netcdf_layout import register_state_names as _register_state_names
+
+
+def _state_names():
+    from acmm.linearize import STATE_NAMES
+
+    return STATE_NAMES
+
+
+#: the ``state`` dimension of every results file holds the 24 states of eq 4.47
+_register_state_names(_state_names)
 
 #: The Python API (acmm/api.py), imported on first use.  ``acmm.linearize`` and
 #: ``acmm.simulate`` are submodules, so the API's functions of those names are re-exported

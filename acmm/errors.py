@@ -1,69 +1,10 @@
-"""The package's small exception hierarchy and the exit code of each kind of failure.
+"""Moved to :mod:`common.errors` (the base shared by acmm and qpp); this old path stays importable.
 
-Every error a user can trigger with a config, a file or a numerical problem derives from
-:class:`AcmmError`; the command-line apps catch it, print its message on one line on stderr and
-exit with the class's ``exit_code``:
-
-====  =====================================================================================
-code  meaning
-====  =====================================================================================
-0     success (a diverged run or a sector violation is a *result*: 0 unless ``--strict``)
-1     ``--strict``: the run finished but its verdict is a failure (diverged, outside the
-      output sphere, pole outside the sector, no certified design)
-2     bad input: config missing, unreadable, malformed, inconsistent or physically impossible;
-      a bad command-line value
-3     numerical failure: a solver did not converge, a design cannot meet its specification
-4     output / I/O: the results cannot be written (not a directory, read-only, disk full),
-      or another run holds the lock on ``runs/<name>``
-64    command-line usage (unknown option, missing argument) — EX_USAGE of sysexits.h
-130   interrupted (Ctrl-C)
-====  =====================================================================================
+``acmm.errors`` is the very same module object as ``common.errors`` (all names, private ones
+included, and any module state are shared).
 """
+import sys
 
-EXIT_OK = 0
-EXIT_VERDICT = 1
-EXIT_INPUT = 2
-EXIT_NUMERICAL = 3
-EXIT_OUTPUT = 4
-EXIT_USAGE = 64
-EXIT_INTERRUPTED = 130
+import common.errors as _module
 
-
-class AcmmError(Exception):
-    """Base class of every error the tool reports to a user."""
-
-    exit_code = EXIT_INPUT
-
-
-class ConfigError(AcmmError, ValueError):
-    """A config file is missing, unreadable, malformed or physically impossible (exit 2)."""
-
-    exit_code = EXIT_INPUT
-
-
-class ConvergenceError(AcmmError, ArithmeticError):
-    """A numerical solver did not converge or its result failed verification (exit 3)."""
-
-    exit_code = EXIT_NUMERICAL
-
-
-class NoEquilibriumError(AcmmError):
-    """No torque-equilibrium attitude exists for the given inertia and bias (eqs 4.1–4.3).
-
-    A property of the configured plant, so it is an input error (exit 2); see
-    ``docs/ERRATA.md`` § TEA."""
-
-    exit_code = EXIT_INPUT
-
-
-class DesignError(AcmmError):
-    """A control design cannot meet its specification, e.g. poles outside the sector (exit 3)."""
-
-    exit_code = EXIT_NUMERICAL
-
-
-class OutputError(AcmmError, OSError):
-    """A results file or figure cannot be written (e.g. the output root is not a directory),
-    or the run folder is locked by another run (exit 4)."""
-
-    exit_code = EXIT_OUTPUT
+sys.modules[__name__] = _module

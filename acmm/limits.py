@@ -1,74 +1,10 @@
-"""Work and size limits shared by ``acmm`` and ``qpp`` (issue 13: nothing hangs).
+"""Moved to :mod:`common.limits` (the base shared by acmm and qpp); this old path stays importable.
 
-Every limit has a default here and can be changed without editing code through an environment
-variable ``ACMM_LIMIT_<NAME>`` (e.g. ``ACMM_LIMIT_CONFIG_BYTES=4000000``).  A config that would
-exceed a limit is refused at validation with one line naming the field, the limit and the
-variable that raises it.
-
-=====================  ============  ==========================================================
-name                   default       what it bounds
-=====================  ============  ==========================================================
-CONFIG_BYTES           1 000 000     size of a YAML config file, bytes
-YAML_DEPTH             32            nesting depth of mappings/lists in a YAML config
-YAML_NODES             20 000        scalars + collections in a YAML config (aliases expanded)
-SIM_SAMPLES            2 000 000     output samples of one acmm simulation
-DESIGN_POINTS          400           design points of one acmm schedule (one sector LQR each)
-QPP_PERIODS            10 000        periods of a qpp signal or nonlinearity (ω·t_final/2π)
-QPP_WORK               50 000        qpp simulation work: t_final × fastest closed-loop rate (1/s)
-                                     × (scenarios + 1); ~2.4 ms per unit, so ~2 min at the limit
-QPP_SAMPLES            2 000 000     qpp output samples × (scenarios + 1)
-SWEEP_DRAWS            2 000 000     expected Monte Carlo draws of a sweep (resampling included)
-SWEEP_CASES            1 000 000     cases of a sweep (all bases)
-SWEEP_ORBITS           100 000       simulated orbits of a sweep (cases × orbits per run)
-SWEEP_DESIGNS          50 000        LQR designs of a ``design: redesign`` sweep (cases × points)
-DASK_CONNECT_SECONDS   5             how long ``--scheduler`` waits for a Dask scheduler, s
-=====================  ============  ==========================================================
+``acmm.limits`` is the very same module object as ``common.limits`` (all names, private ones
+included, and any module state are shared).
 """
-from __future__ import annotations
+import sys
 
-import os
+import common.limits as _module
 
-DEFAULTS: dict[str, float] = {
-    "CONFIG_BYTES": 1_000_000,
-    "YAML_DEPTH": 32,
-    "YAML_NODES": 20_000,
-    "SIM_SAMPLES": 2_000_000,
-    "DESIGN_POINTS": 400,
-    "QPP_PERIODS": 10_000,
-    "QPP_WORK": 50_000,
-    "QPP_SAMPLES": 2_000_000,
-    "SWEEP_DRAWS": 2_000_000,
-    "SWEEP_CASES": 1_000_000,
-    "SWEEP_ORBITS": 100_000,
-    "SWEEP_DESIGNS": 50_000,
-    "DASK_CONNECT_SECONDS": 5,
-}
-
-#: Physical plausibility ranges (report units) beyond which a value is refused as a typo or an
-#: overflow hazard: |value| ≤ bound.  The Space Station is ~1e7–1e8 slug·ft², bias torques are a
-#: few ft·lbf, CMG momentum ~1e4 ft·lbf·s; the bounds leave orders of magnitude of headroom while
-#: keeping every derived quantity (ω²·I, I·ω·h, Riccati products) far from float overflow.
-PHYSICAL_MAX = {
-    "inertia": 1e13,      # slug·ft²
-    "torque": 1e9,        # ft·lbf
-    "momentum": 1e12,     # ft·lbf·s
-    "qpp": 1e12,          # any qpp matrix entry, gain, amplitude or weight
-}
-
-
-def limit(name: str) -> float:
-    """The value of limit ``name`` (``ACMM_LIMIT_<name>`` overrides the default)."""
-    raw = os.environ.get(f"ACMM_LIMIT_{name}")
-    if raw is not None:
-        try:
-            value = float(raw)
-            if value > 0:
-                return value
-        except ValueError:
-            pass
-    return DEFAULTS[name]
-
-
-def how_to_raise(name: str) -> str:
-    """The hint appended to a refusal: which environment variable raises the limit."""
-    return f"limit {limit(name):.6g}; set ACMM_LIMIT_{name} to change it"
+sys.modules[__name__] = _module

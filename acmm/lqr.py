@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from acmm.errors import ConvergenceError, DesignError
+from common.errors import ConvergenceError, DesignError
 from acmm.riccati import (ILL_CONDITIONED, _as_R, care_condition, care_residual, scale_problem,
                            solve_care)
 

@@ -92,6 +92,6 @@ def wait() -> None:
     if _FAILED:
         first = _FAILED[0]
         _FAILED.clear()
-        from acmm.errors import OutputError
+        from common.errors import OutputError
 
         raise OutputError(first)

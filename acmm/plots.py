@@ -9,19 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm.results import save_figure
+from common.plot_style import stage_pyplot as _plt  # noqa: F401 (acmm.sweep uses plots._plt)
+from common.results import save_figure
 
 AXES = ("roll", "pitch", "yaw")
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    plt.rcParams.update({"figure.dpi": 110, "axes.grid": True, "grid.alpha": 0.3, "font.size": 9})
-    return plt
 
 
 def parallel_saves(enabled: bool = True) -> None:
@@ -190,7 +181,7 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     """Angle error, rate, delivered torque and CMG momentum per axis vs orbit (Figs 6.2–6.13, 6.20–6.30).
 
     ``u`` (ft·lbf) and ``h`` (ft·lbf·s) are shown in the unit system ``units``."""
-    from acmm.units import pretty, shown
+    from common.units import pretty, shown
 
     plt = _plt()
     fig, axs = plt.subplots(4, 3, figsize=(13, 10), sharex=True)
@@ -216,7 +207,7 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
 
 def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
     """The six inertia elements vs orbit (Figs 6.14–6.19), in the unit system ``units``."""
-    from acmm.units import pretty, shown
+    from common.units import pretty, shown
 
     inertia, iu = shown(np.asarray(inertia), "slug*ft^2", units)
     plt = _plt()
@@ -235,7 +226,7 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
 
 def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=False, units="imperial"):
     """One-page summary: errors, momentum, torque and per-level statistics (``units``: imperial | SI)."""
-    from acmm.units import pretty, shown
+    from common.units import pretty, shown
 
     h, hu = shown(np.asarray(h), "ft*lbf*s", units)
     u, uu = shown(np.asarray(u), "ft*lbf", units)

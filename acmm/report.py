@@ -35,8 +35,8 @@ from typing import Callable
 
 import numpy as np
 
-from acmm.errors import AcmmError
-from acmm.results import write_text
+from common.errors import AcmmError
+from common.results import write_text
 
 #: stair-case length of ``--fast`` (orbits): one dwell per design point of the 12-point schedule
 FAST_ORBITS = 13.0
@@ -189,7 +189,7 @@ def ensure_acmm_design(cfg, *, rerun: bool = False, donor_roots=()) -> StageRun:
     ``donor_roots``: other run directories whose ``design.h5`` may be copied when its design hash
     matches (the ``--fast`` stair-case reuses the full stair-case's design).
     """
-    from acmm.results import config_hash
+    from common.results import config_hash
     from acmm.stages import design_hash, run_design
 
     want = design_hash(cfg)
@@ -212,7 +212,7 @@ def ensure_acmm_design(cfg, *, rerun: bool = False, donor_roots=()) -> StageRun:
 
 def ensure_acmm_simulation(cfg, *, rerun: bool = False) -> StageRun:
     """``sim.h5`` of an acmm config: reused when config and design hashes match, else simulated."""
-    from acmm.results import config_hash
+    from common.results import config_hash
     from acmm.stages import design_hash, run_simulate
 
     chash, dhash = config_hash(cfg.to_yaml()), design_hash(cfg)
@@ -227,7 +227,7 @@ def ensure_acmm_simulation(cfg, *, rerun: bool = False) -> StageRun:
 
 def ensure_qpp(cfg, stage: str, *, rerun: bool = False) -> StageRun:
     """``qpp_design.h5`` (``stage="design"``) or ``qpp_sim.h5`` (``"simulate"``), reused by config hash."""
-    from acmm.results import config_hash
+    from common.results import config_hash
     from qpp import stages as qst
 
     chash = config_hash(cfg.to_yaml())
@@ -341,7 +341,7 @@ def _robustness_from_sweep(root, *, fast, rerun):
     import importlib
 
     from acmm.config import packaged_config_path
-    from acmm.results import read_h5
+    from common.results import read_h5
     from acmm.sweep_config import parse_sweep
 
     p = packaged_config_path(SWEEP_CONFIG)
@@ -386,7 +386,7 @@ def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> di
     """
     import h5py
 
-    from acmm.results import _dimension_only
+    from common.results import _dimension_only
 
     out: dict[str, str] = {}
 
@@ -447,7 +447,7 @@ def compare_manifests(old: dict | None, new: dict) -> dict:
 # helpers
 # =============================================================================================
 def _git_commit() -> str:
-    from acmm.results import git_commit
+    from common.results import git_commit
 
     return git_commit()
 
@@ -464,7 +464,7 @@ def _git_dirty() -> str:
 
 
 def _h5(path):
-    from acmm.results import read_h5
+    from common.results import read_h5
 
     return read_h5(path)
 
@@ -1376,7 +1376,7 @@ def errata_rows(rep: _Report) -> list[list[str]]:
     from acmm import lqr
     from acmm import riccati as ric
     from acmm import tea as tea_mod
-    from acmm.errors import ConvergenceError, NoEquilibriumError
+    from common.errors import ConvergenceError, NoEquilibriumError
 
     cfg = rep.g.configs["mb3"]
     n, I = cfg.orbit_rate, cfg.inertia.matrix()
@@ -1595,7 +1595,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     t_start = time.perf_counter()
     say = progress or (lambda msg: None)
     out = Path(out)
-    from acmm.errors import OutputError
+    from common.errors import OutputError
 
     try:
         out.mkdir(parents=True, exist_ok=True)

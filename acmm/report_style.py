@@ -8,43 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from acmm.results import save_figure
-
-#: Okabe–Ito colour-blind-safe palette (roll, pitch, yaw first).
-COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#000000")
-AXIS_COLORS = dict(zip(("roll", "pitch", "yaw"), COLORS))
-
-RC = {
-    "figure.dpi": 100,
-    "savefig.dpi": 120,
-    "font.size": 9,
-    "axes.titlesize": 9,
-    "axes.labelsize": 9,
-    "legend.fontsize": 7.5,
-    "xtick.labelsize": 8,
-    "ytick.labelsize": 8,
-    "axes.grid": True,
-    "grid.alpha": 0.3,
-    "grid.linewidth": 0.5,
-    "lines.linewidth": 1.0,
-    "axes.spines.top": False,
-    "axes.spines.right": False,
-    "legend.frameon": False,
-    "pdf.fonttype": 3,           # subsetted Type 3 fonts: small, fast, still vector text
-}
-
-
-def pyplot():
-    """``matplotlib.pyplot`` on the Agg backend with the report style applied."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
-    from cycler import cycler
-
-    plt.rcParams.update(RC)
-    plt.rcParams["axes.prop_cycle"] = cycler(color=list(COLORS))
-    return plt
+from common.plot_style import AXIS_COLORS, COLORS, RC, pyplot  # noqa: F401
+from common.results import save_figure
 
 
 def save(fig, directory: Path, stem: str) -> dict[str, Path]:

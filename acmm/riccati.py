@@ -12,7 +12,7 @@ methods behind :func:`solve_care`:
     balancing).
 ``"sign"``
     The matrix sign function of the Hamiltonian (eq 5.5) by the fifth-order iteration of eq 5.6
-    with the *corrected* denominator (NOTES.md)::
+    with the *corrected* denominator (``docs/ERRATA.md`` § Riccati sign function)::
 
         S(k+1) = S(k) [5I + 10S²(k) + S⁴(k)] [I + 10S²(k) + 5S⁴(k)]⁻¹,   S(0) = H,
 
@@ -28,10 +28,10 @@ methods behind :func:`solve_care`:
 State scaling: with nominal state magnitudes d (``scale``), x = D x̃, D = diag(d), the solver
 works on Ã = D⁻¹AD, B̃ = D⁻¹B, Q̃ = DQD and maps back P = D⁻¹P̃D⁻¹, K = K̃D⁻¹.  In physical units
 the 24 ACMM states span ~12 orders of magnitude; unscaled, every method loses most digits
-(NOTES.md, "Scaling").
+(``docs/ERRATA.md`` § Scaling).
 
 Every solve computes its relative residual (see :func:`care_residual`) in the scaled
-coordinates and raises :class:`acmm.errors.ConvergenceError` above ``tol``.
+coordinates and raises :class:`common.errors.ConvergenceError` above ``tol``.
 
 Existence check (every method): before solving, the eigenvalues λ_i of the (scaled) Hamiltonian
 H = [[A, −G], [−Q, −A']] are computed, after balancing (H_b = T⁻¹HT, LAPACK GEBAL with
@@ -65,7 +65,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from acmm.errors import ConvergenceError
+from common.errors import ConvergenceError
 
 METHODS = ("scipy", "sign", "slycot")
 
@@ -198,7 +198,7 @@ def matrix_sign(M, *, scaling: str = "det", tol: float = 1e-13, max_iter: int = 
     max_iter : int
         Iteration limit.
     form : {"corrected", "printed"}
-        ``"corrected"``: denominator I + 10S² + 5S⁴ (NOTES.md).  ``"printed"``: the report's
+        ``"corrected"``: denominator I + 10S² + 5S⁴ (``docs/ERRATA.md`` § Riccati sign function).  ``"printed"``: the report's
         misprint I + 10S + 5S⁴, kept only to demonstrate that it does not converge.
     evaluation : {"partial_fraction", "polynomial"}
         How the corrected rational map is evaluated.  ``"polynomial"`` forms S⁴ and solves with

@@ -159,9 +159,10 @@ def detect_kind(data: object) -> str:
 def load_any(path, overrides=None):
     """Read a config of any kind (detected), apply the overrides, validate; returns (kind, model).
 
-    Raises :class:`acmm.errors.ConfigError` exactly like the kind's own loader."""
-    from acmm.config import parse_config, read_yaml
-    from acmm.overrides import apply_overrides, remember_origin
+    Raises :class:`common.errors.ConfigError` exactly like the kind's own loader."""
+    from acmm.config import parse_config
+    from common.configio import read_yaml
+    from common.overrides import apply_overrides, remember_origin
 
     data, p = read_yaml(path)
     data = apply_overrides(data, overrides)

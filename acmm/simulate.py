@@ -575,7 +575,7 @@ def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float
     P = len(table.names)
     levels = np.asarray(sim.levels, float) if sim.levels is not None else total * np.arange(P) / P
     if levels.size != P:
-        from acmm.errors import ConfigError
+        from common.errors import ConfigError
 
         raise ConfigError(f"simulation.levels has {levels.size} entries but the design has {P} points")
     t_end = total * orbit

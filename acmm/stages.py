@@ -10,9 +10,9 @@ import numpy as np
 from acmm import dynamics as dyn
 from acmm import tea as tea_mod
 from acmm.config import Config, load_config
-from acmm.outputs import owns_outputs
-from acmm.results import Dataset, write_h5
-from acmm.runlock import locked_stage
+from common.outputs import owns_outputs
+from common.results import Dataset, write_h5
+from common.runlock import locked_stage
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -20,7 +20,7 @@ AXES = ["roll", "pitch", "yaw"]
 def _in_system(items: dict, cfg: Config, roles: dict) -> dict:
     """Per-state arrays of ``items`` (path → role of :func:`acmm.units.state_space_in`) in the
     config's ``output.units``; their unit strings and ``state_units`` follow.  Other datasets
-    are converted by unit string in :func:`acmm.results.write_h5`."""
+    are converted by unit string in :func:`common.results.write_h5`."""
     from dataclasses import replace
 
     from acmm.units import state_factors, state_space_in
@@ -97,6 +97,13 @@ class LinearizeResult:
     tea: tea_mod.TEA
     model: object
     controllability: object
+    #: open-loop eigenvalues of A (rad/s), as written to ``linearize.h5``
+    eigenvalues: np.ndarray | None = None
+
+    def eigenvalues_over_n(self) -> np.ndarray:
+        """The open-loop eigenvalues divided by the orbit rate n, sorted by real then imaginary part."""
+        eig = self.eigenvalues / self.model.n
+        return eig[np.lexsort((eig.imag, eig.real))]
 
 
 @locked_stage(_as_config)
@@ -113,6 +120,7 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
     result = LinearizeResult(cfg, tr.tea, model, ctrb)
     names = list(model.state_names)
     eig = np.linalg.eigvals(model.A)
+    result.eigenvalues = eig
     items = {
         "A": Dataset(model.A, "per-state (see state_units)", "state matrix of eq 4.46 (x' = A x + B u + G w)",
                      names, {"state_units": np.array(model.state_units, dtype="S")}, dims=("state", "state_col")),
@@ -178,12 +186,20 @@ class DesignResult:
     wall_time: float
     path_check: object = None
 
+    def fastest_over_n(self) -> np.ndarray:
+        """Per design point, the fastest closed-loop pole's decay rate max(−Re s) divided by n."""
+        return np.array([np.max(-p.lqr.poles.real) / self.config.orbit_rate for p in self.points])
+
+    def worst_check_index(self) -> int | None:
+        """Index of the schedule check with the smallest sector margin (None without a schedule)."""
+        return None if self.check is None else int(np.argmin(self.check.margin))
+
 
 def design_hash(cfg: Config) -> str:
     """Hash of the design-relevant part of a config (inertia, n, disturbance, design, schedule)."""
     import json
 
-    from acmm.results import config_hash
+    from common.results import config_hash
 
     d = cfg.model_dump(mode="json")
     keys = ("inertia", "orbit_rate", "disturbance", "design", "schedule")
@@ -375,7 +391,7 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
 
 def load_design_table(path: Path) -> DesignTable:
     """Read the arrays a simulation needs back from ``design.h5``."""
-    from acmm.results import read_h5
+    from common.results import read_h5
 
     d = read_h5(path)
     coef = d["schedule"]["coef"] if "schedule" in d else None
@@ -430,6 +446,16 @@ class SimulateResult:
     stats: list
     design_note: str
     wall_time: float
+
+    @property
+    def orbits_simulated(self) -> float:
+        """Simulated time in orbits (2π/n)."""
+        return float(self.sim.t[-1] * self.config.orbit_rate / (2 * np.pi))
+
+    @property
+    def stop_orbit(self) -> float:
+        """Time the integration stopped at, in orbits (2π/n)."""
+        return float(self.sim.stop_time * self.config.orbit_rate / (2 * np.pi))
 
 
 @locked_stage(_as_config)

@@ -55,11 +55,11 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from acmm.outputs import owns_outputs
-from acmm.results import write_text
-from acmm.runlock import locked_stage
+from common.outputs import owns_outputs
+from common.results import write_text
+from common.runlock import locked_stage
 
-from acmm.errors import AcmmError, ConfigError, ConvergenceError, DesignError, NoEquilibriumError
+from common.errors import AcmmError, ConfigError, ConvergenceError, DesignError, NoEquilibriumError
 from acmm.sweep_config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sweep, swept_parameters
 
 AXES = ("roll", "pitch", "yaw")
@@ -408,7 +408,7 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
         except ImportError:
             raise ConfigError("--scheduler needs the optional Dask dependency: pip install 'acmm-qpp[dask]'") from None
         try:
-            from acmm.limits import limit
+            from common.limits import limit
 
             client = distributed.Client(scheduler, timeout=f"{limit('DASK_CONNECT_SECONDS'):g}s")
         except (OSError, TimeoutError, ValueError) as exc:
@@ -419,7 +419,7 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
     import multiprocessing
 
     ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
-    from acmm.workers import die_with_parent
+    from common.workers import die_with_parent
 
     pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=die_with_parent,
                                   initargs=(os.getpid(),))
@@ -467,7 +467,7 @@ class Journal:
         try:
             self._open(path, key, fresh)
         except OSError as exc:
-            from acmm.results import output_error
+            from common.results import output_error
 
             raise output_error(exc, "the sweep journal", path) from None
 
@@ -502,7 +502,7 @@ class Journal:
             self._f.flush()
             os.fsync(self._f.fileno())
         except OSError as exc:
-            from acmm.results import output_error
+            from common.results import output_error
 
             raise output_error(exc, "the sweep journal", self.path) from None
 
@@ -874,7 +874,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
                   wall_time: float | None = None) -> tuple[Path, list]:
     """Build ``sweep.h5`` (atomically, via :func:`acmm.results.write_h5`) and ``sweep.csv`` from
     the records; with ``figures`` also the stability map and the peak-error distributions."""
-    from acmm.results import Dataset, write_h5
+    from common.results import Dataset, write_h5
 
     rows, margins = _split(sweep, records)
     a = table_arrays(sweep, rows)
@@ -934,7 +934,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     if wall_time is not None:
         attrs["wall_time_s"] = float(wall_time)
     run_dir = sweep.run_dir()
-    from acmm.netcdf_layout import with_leading_dim
+    from common.netcdf_layout import with_leading_dim
 
     items = with_leading_dim(items, "case", len(a["case"]))   # one row per case (netCDF dimension)
     path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units)
@@ -946,7 +946,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
 
 
 def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
-    from acmm.units import display_unit, shown
+    from common.units import display_unit, shown
 
     cols = ["case", "base", "index"] + [f"{k}[{display_unit(PARAMETERS[k].unit, units)}]" for k in a["parameters"]] + [
         "verdict", "time_to_divergence[orbit]"]
@@ -972,7 +972,8 @@ def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
 
 def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
     """Stability map over two swept quantities and distributions of the peak attitude error."""
-    from acmm.plots import _plt, _save
+    from acmm.plots import _save
+    from common.plot_style import stage_pyplot as _plt
 
     plt = _plt()
     labels = [b.label for b in sweep.bases]
@@ -980,7 +981,7 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
     axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
     nominal = _nominal_tea_deg(sweep)
 
-    from acmm.units import shown
+    from common.units import shown
 
     system = sweep.file.output.units
 
@@ -1041,7 +1042,7 @@ def _label(name: str, units: str = "imperial") -> str:
             return f"{name}: relative change of {name[1:]} (1, 0.1 = +10 %)"
         if p.kind == "scale":
             return f"{name}: {p.description.split(':')[0].split('(')[0].strip()} (1, × nominal)"
-        from acmm.units import display_unit
+        from common.units import display_unit
 
         unit = display_unit(p.unit, units).replace("*", "·")
         return f"{name}: {p.description.split('(')[0].split(',')[0].strip()} ({unit})"

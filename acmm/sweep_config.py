@@ -38,9 +38,10 @@ from typing import Annotated, Literal, Optional
 import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
-from acmm.config import Config, Output, load_config, parse_config, require_mapping, validate_model
-from acmm.errors import ConfigError
-from acmm.results import RUN_NAME_MAX, RUN_NAME_PATTERN
+from acmm.config import Config, Output, load_config, parse_config
+from common.configio import require_mapping, validate_model
+from common.errors import ConfigError
+from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN
 
 
 @dataclass(frozen=True)
@@ -123,7 +124,7 @@ class Margin(_Model):
 
 
 def _param_unit_value(v, unit: str, where: str):
-    from acmm.units import to_canonical, DIMENSIONS
+    from common.units import to_canonical, DIMENSIONS
 
     if not isinstance(v, str):
         return v
@@ -255,7 +256,7 @@ class SweepSpec(_Model):
 
 def _check_name(name: str) -> None:
     if name not in PARAMETERS and name not in SHORTHANDS:
-        from acmm.hints import closest
+        from common.hints import closest
 
         known = list(SHORTHANDS) + list(PARAMETERS)
         best = closest(name, known)
@@ -335,7 +336,7 @@ class Sweep:
         """Hash of everything that determines the case results (not workers, figures, description)."""
         import json
 
-        from acmm.results import config_hash
+        from common.results import config_hash
 
         f = self.file.model_dump(mode="json", exclude_none=True)
         f["sweep"].pop("workers", None)
@@ -395,10 +396,10 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
 
 def load_sweep(path: str | Path, overrides: list[str] | None = None) -> Sweep:
     """Read and validate a sweep config file (a bare name is looked up among the packaged configs).
-    ``overrides`` (dotted ``key=value``, :mod:`acmm.overrides`) apply before validation, e.g.
+    ``overrides`` (dotted ``key=value``, :mod:`common.overrides`) apply before validation, e.g.
     ``sweep.n_runs=20``."""
-    from acmm.config import read_yaml
-    from acmm.overrides import apply_overrides, remember_origin
+    from common.configio import read_yaml
+    from common.overrides import apply_overrides, remember_origin
 
     data, p = read_yaml(path)
     sw = parse_sweep(apply_overrides(data, overrides), source=str(p), directory=p.parent)

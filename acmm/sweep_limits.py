@@ -9,14 +9,14 @@
   gives a physical inertia with a huge ``max_draws`` is thus refused in well under a second
   instead of grinding through billions of eigenvalue tests.
 
-Limits: :mod:`acmm.limits` (``ACMM_LIMIT_<NAME>`` environment variables).
+Limits: :mod:`common.limits` (``ACMM_LIMIT_<NAME>`` environment variables).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from acmm.errors import ConfigError
-from acmm.limits import how_to_raise, limit
+from common.errors import ConfigError
+from common.limits import how_to_raise, limit
 
 PILOT = 1000
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm import dynamics as dyn
-from acmm.errors import ConvergenceError, NoEquilibriumError
+from common.errors import ConvergenceError, NoEquilibriumError
 
 #: Largest residual (ft·lbf) accepted for an equilibrium.
 RESIDUAL_TOL = 1e-12

@@ -30,7 +30,7 @@ import math
 import numpy as np
 from numba import njit
 
-from acmm.errors import ConvergenceError, NoEquilibriumError
+from common.errors import ConvergenceError, NoEquilibriumError
 from acmm.tea import RESIDUAL_TOL, TEA, equilibrium_residual, make_tea, solve_tea
 
 _MAX_JUMP = math.radians(5.0)

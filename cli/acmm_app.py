@@ -30,7 +30,7 @@ def _load(config, overrides):
     """The validated acmm config of CONFIG plus KEY=VALUE overrides (a CONFIG that is itself an
     override means: the packaged default with that override)."""
     from acmm.config import load_config
-    from acmm.overrides import split_overrides
+    from common.overrides import split_overrides
 
     return load_config(*split_overrides(config, overrides))
 
@@ -51,7 +51,7 @@ def validate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] 
              show: bool = typer.Option(False, "--show", help="print the resolved config (all defaults, canonical units)")) -> None:
     """Check a config of any kind (acmm run, sweep or qpp; detected from its sections); exit 2
     naming the offending field when it is invalid."""
-    from acmm.overrides import split_overrides
+    from common.overrides import split_overrides
     from acmm.schema import load_any
 
     config, overrides = split_overrides(config, overrides)
@@ -90,7 +90,7 @@ def tea(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = Ove
     typer.echo(f"{result.config.name}: torque-equilibrium attitude (eqs 4.1-4.3)")
     typer.echo(f"  theta* [roll, pitch, yaw]  = {_fmt(t.theta_deg)} deg")
     typer.echo(f"  omega*                     = {_fmt(t.omega, '{:+.6e}')} rad/s")
-    from acmm.units import shown
+    from common.units import shown
 
     sys_ = result.config.output.units
     bias, tu = shown(t.bias, "ft*lbf", sys_)
@@ -113,8 +113,7 @@ def linearize(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]]
     m, c = r.model, r.controllability
     typer.echo(f"{r.config.name}: {m.variant} model, {m.drf_mode}, about theta* = "
                f"{_fmt(np.degrees(m.theta_star), '{:+.3f}')} deg")
-    eig = np.linalg.eigvals(m.A) / m.n
-    eig = eig[np.lexsort((eig.imag, eig.real))]
+    eig = r.eigenvalues_over_n()
     typer.echo("  open-loop eigenvalues / n:")
     for k in range(0, len(eig), 4):
         typer.echo("    " + "  ".join(f"{e.real:+9.4f}{e.imag:+9.4f}j" for e in eig[k:k + 4]))
@@ -155,26 +154,24 @@ def design(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = 
            figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
     """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures.
     With --strict, a scheduled gain with poles outside the sector exits 1."""
-    import numpy as np
 
     from acmm.stages import run_design
 
     r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
     cfg = r.config
-    n = cfg.orbit_rate
     typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
                f"sector Re <= -{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g} deg "
                f"({r.wall_time:.2f} s)")
     typer.echo(f"  {'point':<14} {'TEA r/p/y (deg)':<28} {'margin (n)':>10} {'residual':>9} {'fastest/n':>9}")
-    for p in r.points:
+    for p, fastest in zip(r.points, r.fastest_over_n()):
         res = p.lqr
         typer.echo(f"  {p.spec.name:<14} {_fmt(p.tea.theta_deg, '{:+.2f}'):<28} {res.margin:>10.3f} "
-                   f"{res.residual:>9.1e} {np.max(-res.poles.real) / n:>9.2f}")
+                   f"{res.residual:>9.1e} {fastest:>9.2f}")
     if r.fit is not None:
         typer.echo(f"  schedule: order {r.fit.order} in theta2*; worst relative fit residual "
                    f"{r.fit.rel_residual.max():.2e}")
         c = r.check
-        worst = int(np.argmin(c.margin))
+        worst = r.worst_check_index()
         verdict = "all in the sector" if c.worst > 0 else "NOT all in the sector"
         typer.echo(f"  scheduled gain ({r.fit.form}) on the local models ({len(c.names)} checks): {verdict}; "
                    f"worst margin {c.worst:+.3f} n at {c.names[worst]} ({c.kind[worst]})")
@@ -193,19 +190,17 @@ def simulate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] 
              figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
     """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures.
     With --strict, a DIVERGED verdict exits 1."""
-    import numpy as np
 
     from acmm.stages import run_simulate
-    from acmm.units import shown
+    from common.units import shown
 
     r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
     cfg, s = r.config, r.sim
-    n = cfg.orbit_rate
     typer.echo(f"{cfg.name}: design {r.design_note}")
-    typer.echo(f"  simulated {s.t[-1] * n / (2 * np.pi):.2f} of {cfg.simulation.orbits:g} orbits in "
+    typer.echo(f"  simulated {r.orbits_simulated:.2f} of {cfg.simulation.orbits:g} orbits in "
                f"{r.wall_time:.2f} s ({s.n_steps} steps, {s.n_rejected} rejected)")
     typer.echo(f"  verdict: {s.verdict.upper()} ({s.reason}" +
-               (f" at {s.stop_time * n / (2 * np.pi):.3f} orbit)" if s.diverged else ")"))
+               (f" at {r.stop_orbit:.3f} orbit)" if s.diverged else ")"))
     for st in r.stats:
         typer.echo(f"  level {st['level']:>2} from orbit {st['start_orbit']:6.1f}: theta2* {st['theta2_deg']:+7.2f} deg, "
                    f"steady |err| {_fmt(st['steady_error_deg'], '{:.3f}')} deg, peak |h| "

@@ -10,7 +10,7 @@ from typing import Optional
 
 import typer
 
-from acmm.errors import EXIT_INPUT
+from common.errors import EXIT_INPUT
 from cli.common import OverridesArg, fail, strict_exit, user_errors
 
 

@@ -1,5 +1,5 @@
 """Shared CLI plumbing: one clear message and a documented exit code for every user error
-(:mod:`acmm.errors` lists the codes)."""
+(:mod:`common.errors` lists the codes)."""
 from __future__ import annotations
 
 import functools
@@ -7,7 +7,7 @@ import sys
 
 import typer
 
-from acmm.errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_NUMERICAL, EXIT_OUTPUT, AcmmError
+from common.errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_NUMERICAL, EXIT_OUTPUT, AcmmError
 
 EXIT_USER_ERROR = EXIT_INPUT
 
@@ -68,7 +68,7 @@ def user_errors(fn):
             try:
                 out = fn(*args, **kwargs)
             except AcmmError as exc:
-                from acmm.hints import with_hint
+                from common.hints import with_hint
 
                 fail(with_hint(exc), exc.exit_code)
             except KeyboardInterrupt:
@@ -91,9 +91,9 @@ def user_errors(fn):
 # ---------------------------------------------------------------------------------------------
 from typer.core import TyperGroup  # noqa: E402
 
-from acmm.errors import EXIT_USAGE, EXIT_VERDICT  # noqa: E402
+from common.errors import EXIT_USAGE, EXIT_VERDICT  # noqa: E402
 
-#: Positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm.overrides`).
+#: Positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`common.overrides`).
 OverridesArg = typer.Argument(None, metavar="KEY=VALUE",
                               help="overrides of config values, dotted: simulation.orbits=10 "
                                    "design.sector.sigma=0.6 (validated like the file; ~key removes one)",

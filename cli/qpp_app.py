@@ -11,7 +11,7 @@ from typing import Optional
 import numpy as np
 import typer
 
-from acmm.errors import DesignError
+from common.errors import DesignError
 from cli.common import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
@@ -67,22 +67,22 @@ def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesA
     """H∞ gains (ch. 11), β1, thresholds m and the circle criterion (ch. 12.1) → qpp_design.h5.
     With --strict, a failed circle criterion or β1 > m (for design.bz and design.bookkeeping) exits 1."""
     from cli.progress import status
-    from qpp.stages import run_design
+    from qpp.stages import printed_H_difference, run_design
 
     cfg = _load(config, overrides)
     with status(f"{cfg.name}: designing (ch. 12.1: H∞ gains, β1, thresholds, circle criterion) ..."):
         cfg, r, path = run_design(cfg, figures)
     typer.echo(f"{cfg.name}: gains from {r.gains_source} (a = {r.a:g} 1/s, T = {r.T:g} s)")
     typer.echo(f"  K1 = {_mat(r.K1)}\n  Kc = {_mat(r.Kc)}\n  H  = {_mat(r.H.T)}ᵀ")
-    if cfg.published.H is not None:
-        rel = np.abs(r.H - np.asarray(cfg.published.H)) / np.maximum(np.abs(np.asarray(cfg.published.H)), 1e-12)
-        rel = rel[np.abs(np.asarray(cfg.published.H)) > 0]
-        typer.echo(f"  H vs printed: max relative difference {rel.max():.2%}")
+    h_diff = printed_H_difference(cfg, r)
+    if h_diff is not None:
+        typer.echo(f"  H vs printed: max relative difference {h_diff:.2%}")
     for rd, b in r.beta1.items():
         typer.echo(f"  beta1 [{rd:8s}] = {b['value']:.6f} exact (peak at {b['omega_peak']:.4g} rad/s; "
                    f"grid {b['grid_value']:.6f})")
+    verdicts = r.verdicts()
     for t in r.thresholds:
-        v = ", ".join(f"{rd}: {'beta1 <= m' if r.beta1[rd]['value'] <= t.m else 'beta1 > m'}" for rd in r.beta1)
+        v = ", ".join(f"{rd}: {'beta1 <= m' if verdicts[(rd, t.name)] else 'beta1 > m'}" for rd in r.beta1)
         typer.echo(f"  m [{t.name:10s}] = {t.m:.5f} (beta3 {t.beta3:.5g}, beta4 {t.beta4:.5g}) -> {v}")
     c = r.circle
     typer.echo(f"  circle criterion (lemma 1) on H(-a+jw), sector {np.round(r.sector, 6).tolist()}: "

@@ -2,7 +2,7 @@
 
 Units: time s, frequency rad/s, the exponential weighting ``a`` 1/s; plant matrices and signals
 are in the user's units (the report's examples: m, rad, kg).  Unknown keys are rejected; a
-validation error becomes one :class:`acmm.errors.ConfigError` line naming the field.
+validation error becomes one :class:`common.errors.ConfigError` line naming the field.
 """
 from __future__ import annotations
 
@@ -14,9 +14,9 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
-from acmm.errors import ConfigError
-from acmm.units import to_canonical
-from acmm.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
+from common.errors import ConfigError
+from common.units import to_canonical
+from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 
 Matrix = list[list[float]]
 
@@ -325,7 +325,7 @@ _EXPR_CACHE: dict = {}
 
 
 def _check_periods(field: str, omega: float, t_final: float) -> None:
-    from acmm.limits import how_to_raise, limit
+    from common.limits import how_to_raise, limit
 
     periods = omega * t_final / (2 * math.pi)
     if periods > limit("QPP_PERIODS"):
@@ -427,7 +427,7 @@ class QppConfig(_Model):
                 for term in chan:
                     if term.kind == "sin" and term.omega > 0:
                         _check_periods(f"{sig_name} omega", term.omega, self.simulation.t_final)
-        from acmm.limits import how_to_raise, limit
+        from common.limits import how_to_raise, limit
 
         runs = len(self.simulation.scenarios) + 1
         if self.simulation.n_samples * runs > limit("QPP_SAMPLES"):
@@ -473,16 +473,16 @@ class QppConfig(_Model):
 
 def parse_config(data: object, source: str = "config") -> QppConfig:
     """Validate a mapping into a :class:`QppConfig` (one-line :class:`ConfigError` on failure)."""
-    from acmm.config import validate_model
+    from common.configio import validate_model
 
     return validate_model(QppConfig, data, source)
 
 
 def load_config(path, overrides: list[str] | None = None) -> QppConfig:
     """Read and validate a YAML file; a bare name (``qpp_siso``) falls back to the packaged configs.
-    ``overrides`` (dotted ``key=value``, :mod:`acmm.overrides`) apply before validation."""
-    from acmm.config import read_yaml
-    from acmm.overrides import apply_overrides, remember_origin
+    ``overrides`` (dotted ``key=value``, :mod:`common.overrides`) apply before validation."""
+    from common.configio import read_yaml
+    from common.overrides import apply_overrides, remember_origin
 
     data, p = read_yaml(path)
     cfg = parse_config(apply_overrides(data, overrides), source=str(p))

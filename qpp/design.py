@@ -8,7 +8,7 @@ H(−a + jω), a adjusted both ways within [a_min, a_max] when it fails; (5) rep
 the circle criterion holds.  When that loop fails, a wider search (other W_s = w·S_c weights, a
 bracketing search over ρ) runs before the verdict "no certified design".
 
-Thresholds are reported in three bookkeepings (NOTES.md, Part III):
+Thresholds are reported in three bookkeepings (``docs/ERRATA.md`` § QPP thresholds):
 
 * ``"printed"``: the report's printed β3, β4 (when given in the config);
 * ``"report"``: the report's arithmetic — sector half-width without the factor N of B = G N
@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acmm.errors import ConvergenceError, DesignError
+from common.errors import ConvergenceError, DesignError
 from qpp import circle as circle_mod
 from qpp import spheres
 from qpp.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinearity

@@ -1,6 +1,6 @@
 """Chapter 11: H∞ state-feedback and observer gains (Riccati 11.1, steps 1–8).
 
-The published gains are reproduced (NOTES.md, Part III) by the γ = 1 (ν = 1 after the
+The published gains are reproduced (``docs/ERRATA.md`` § QPP chapter 11) by the γ = 1 (ν = 1 after the
 scaling 11.3) H∞ state-feedback Riccati equation on the a-shifted augmented plant
 
     Āᵀk + k Ā + k (G_a G_aᵀ/ν² − B_a B_aᵀ/ρ²) k + Qᵀ Q = 0,      Ā = aI + A_a     (11.1)
@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from acmm.errors import ConvergenceError, DesignError
+from common.errors import ConvergenceError, DesignError
 from qpp.lure import LurePlant, augmented, closed_loop
 
 

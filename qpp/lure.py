@@ -1,6 +1,6 @@
 """Lure plant, servo-compensator and the closed loop of eq 10.7 (CR-185644 ch. 10.1).
 
-Sign conventions (NOTES.md, Part III, confirmed by rebuilding the printed A_z of eq 13.6 and
+Sign conventions (``docs/ERRATA.md`` § QPP signs, confirmed by rebuilding the printed A_z of eq 13.6 and
 Table 14.1 from the printed gains):
 
 * control ``u = K1 x̂ + Kc x_c − f1o``  (closed loop ``A + B K``, eq 10.6);
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acmm.errors import ConfigError
+from common.errors import ConfigError
 
 BZ_READINGS = ("eq10.7", "printed")
 

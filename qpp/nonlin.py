@@ -21,7 +21,7 @@ module computes, over the stated ranges y ∈ Y, θ ∈ Θ, t ∈ [0, t_range]:
 * β4 (14.8)  = sup_θ max_i ‖(φ_i(y_o(t), θ, t))_T‖₂ along the nominal output y_o.
 
 A bad expression (unknown symbol, unsupported syntax, singular or not sector-bounded on the stated
-range) raises :class:`acmm.errors.ConfigError` naming the channel and the cause.
+range) raises :class:`common.errors.ConfigError` naming the channel and the cause.
 """
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ from functools import cached_property
 
 import numpy as np
 
-from acmm.errors import ConfigError
+from common.errors import ConfigError
 
 MAX_LEN = 400           #: longest accepted expression, characters
 MAX_EXPONENT = 64       #: largest |numeric exponent| accepted in ``**``

@@ -5,16 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm.results import save_figure
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    return plt
+from common.plot_style import agg_pyplot as _plt
+from common.results import save_figure
 
 
 def plot_circle(res, path: Path) -> list[Path]:

@@ -1,7 +1,7 @@
 """Nonlinear closed-loop simulation of a Lure plant with observer and servo-compensator.
 
 State z = [x; x_c; x̂] (eq 10.7).  With f1 the plant nonlinearity and f1o its nominal value
-(γ = nominal), the loop is (sign conventions of NOTES.md / :mod:`qpp.lure`):
+(γ = nominal), the loop is (sign conventions of ``docs/ERRATA.md`` § QPP signs and :mod:`qpp.lure`):
 
     u   = K1 x̂ + Kc x_c − f1o                       (eq 10.6, "computed torque" in ch. 14)
     x'  = A x + B u + G d + B f1(x, y, γ, t)         (eqs 13.1, 14.2)
@@ -21,7 +21,7 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from acmm.errors import ConvergenceError
+from common.errors import ConvergenceError
 from qpp.config import (ExpressionNonlinearity, PolarArmNonlinearity, QppConfig, Scenario,
                         SinusoidalNonlinearity, Term)
 from qpp.lure import LurePlant
@@ -226,10 +226,10 @@ def check_work(cfg: QppConfig, K1, Kc, H) -> float:
     of the loop): the largest |eigenvalue| of the linear closed loop (plant, servo-compensator,
     observer) plus the size of the nonlinearity's output feedback and the fastest signal
     frequency.  Work = that × (scenarios + 1) is bounded by the ``QPP_WORK`` limit
-    (:mod:`acmm.limits`).  Returns the work estimate.
+    (:mod:`common.limits`).  Returns the work estimate.
     """
-    from acmm.errors import ConfigError
-    from acmm.limits import how_to_raise, limit
+    from common.errors import ConfigError
+    from common.limits import how_to_raise, limit
 
     P = cfg.lure_plant()
     A, B, C, Ac, Bc = (np.atleast_2d(np.asarray(x, float)) for x in (P.A, P.B, P.C, P.Ac, P.Bc))

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm.errors import ConvergenceError
+from common.errors import ConvergenceError
 
 
 def hinf_norm(A, B, C, D=None, *, method: str = "slycot") -> tuple[float, float]:

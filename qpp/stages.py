@@ -5,9 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm.outputs import owns_outputs
-from acmm.results import Dataset, write_h5
-from acmm.runlock import locked_stage
+from common.outputs import owns_outputs
+from common.results import Dataset, write_h5
+from common.runlock import locked_stage
 from qpp.config import PolarArmNonlinearity, QppConfig, load_config
 from qpp.design import DesignResult, design
 from qpp.simulate import simulate
@@ -20,6 +20,15 @@ def _cfg(config) -> QppConfig:
 def _rel(a, b):
     a, b = np.asarray(a, float), np.asarray(b, float)
     return np.abs(a - b) / np.maximum(np.abs(b), 1e-12)
+
+
+def printed_H_difference(cfg: QppConfig, r: DesignResult) -> float | None:
+    """Largest |H − H_printed| / |H_printed| over the non-zero printed entries of the observer gain
+    (dimensionless); None when the config gives no printed H."""
+    pub = cfg.published.H
+    if pub is None:
+        return None
+    return float(_rel(r.H, pub)[np.abs(np.asarray(pub, float)) > 0].max())
 
 
 def design_items(cfg: QppConfig, r: DesignResult) -> dict:

@@ -80,7 +80,7 @@ def per_case_cost(base: str, orbits: float, n: int = 60) -> tuple[float, float]:
 def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool = True,
             unchunked: bool = False, out=print) -> dict:
     """Run the table; returns {(executor, N): seconds} and prints rows through ``out``."""
-    from acmm.results import read_h5
+    from common.results import read_h5
     from acmm.sweep import run_sweep
     from acmm.sweep_config import parse_sweep
 

@@ -25,7 +25,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     args = ap.parse_args()
 
-    from acmm.results import read_h5
+    from common.results import read_h5
     from acmm.sweep import run_sweep
     from acmm.sweep_config import parse_sweep
 

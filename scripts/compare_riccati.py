@@ -33,7 +33,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from acmm.config import load_config
-from acmm.errors import ConvergenceError
+from common.errors import ConvergenceError
 from acmm.linearize import linearize_config
 from acmm.lqr import sector_lqr
 from acmm.riccati import care_condition, care_residual, scale_problem, solve_unverified

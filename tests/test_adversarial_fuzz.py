@@ -23,7 +23,7 @@ from hypothesis import strategies as st  # noqa: E402
 
 from conftest import CONFIGS  # noqa: E402
 
-from acmm.errors import AcmmError, ConfigError  # noqa: E402
+from common.errors import AcmmError, ConfigError  # noqa: E402
 
 HOSTILE = st.one_of(
     st.none(), st.booleans(),

@@ -21,7 +21,7 @@ ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
 
 HOLD_LOCK = """
 import sys, time
-from acmm.runlock import run_lock
+from common.runlock import run_lock
 with run_lock(sys.argv[1]):
     print("locked", flush=True)
     sys.stdin.read()

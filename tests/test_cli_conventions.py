@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from acmm.config import load_config, parse_config
-from acmm.errors import EXIT_INPUT, EXIT_NUMERICAL, EXIT_USAGE, EXIT_VERDICT, ConfigError
-from acmm.results import read_h5
+from common.errors import EXIT_INPUT, EXIT_NUMERICAL, EXIT_USAGE, EXIT_VERDICT, ConfigError
+from common.results import read_h5
 
 from conftest import CONFIGS, invoke
 
@@ -358,7 +358,7 @@ def test_numba_compile_detection_does_not_fail():
 
 
 def test_override_paths_and_errors():
-    from acmm.overrides import OverrideSyntaxError, apply_overrides
+    from common.overrides import OverrideSyntaxError, apply_overrides
 
     data = {"a": {"b": [1, 2, 3]}, "c": 1}
     out = apply_overrides(data, ["a.b.1=5", "d.e=x", "~c", "~no.such", "a.f="])

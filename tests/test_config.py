@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 import yaml
 
-from acmm.config import Config, load_config, packaged_config_path, parse_config
-from acmm.errors import ConfigError
+from acmm.config import Config, load_config, parse_config
+from common.configio import packaged_config_path
+from common.errors import ConfigError
 
 from conftest import CONFIGS
 

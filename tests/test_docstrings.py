@@ -37,7 +37,7 @@ REPO = Path(__file__).resolve().parents[1]
 #: line (issue 12); the checker takes any importable module name.
 CHECKED_MODULES = [
     "acmm.dynamics",
-    "acmm.errors",
+    "common.errors",
     "acmm.linearize",
     "acmm.simulate",
     "acmm.tea",
@@ -45,7 +45,7 @@ CHECKED_MODULES = [
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
 NO_REPORT_CITATION = {
-    "acmm.errors": "exception classes and exit codes: no mathematics of the report",
+    "common.errors": "exception classes and exit codes: no mathematics of the report",
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).

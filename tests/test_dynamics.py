@@ -75,7 +75,7 @@ def num_jac(fun, x, h):
 CASES = list(range(8))
 
 
-# ----------------------------------------------------------------- frames (NOTES Part II)
+# ----------------------------------------------------------------- frames (docs/ERRATA.md § Frames)
 @pytest.mark.parametrize("case", CASES)
 def test_dcm_is_pitch_yaw_roll_sequence(case):
     th = random_theta(np.random.default_rng(RNG_SEED + case))

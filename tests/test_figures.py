@@ -97,7 +97,7 @@ def test_decimate_keeps_the_envelope():
 
 def test_forked_figure_writers_write_and_report_failures(tmp_path, monkeypatch):
     from acmm import parallel_figures
-    from acmm.errors import OutputError
+    from common.errors import OutputError
 
     monkeypatch.setenv("ACMM_PARALLEL_FIGURES", "1")
     if not parallel_figures.enable():

@@ -185,7 +185,7 @@ def test_statespace_view_and_controllability():
     assert list(sys.state_labels) == list(m.state_names)
     c = controllability(m)
     assert c.rank == 24
-    # decoupled MB3 design model is nearly uncontrollable (NOTES.md: ≈5e-9 at s = 0)
+    # decoupled MB3 design model is nearly uncontrollable (docs/ERRATA.md § Sector LQR; ≈5e-9 at s = 0)
     cfg_d = load_config("mb3_decoupled")
     c_d = controllability(linearize_config(cfg_d))
     assert c_d.min_ratio < 1e-6

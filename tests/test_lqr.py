@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from acmm.errors import DesignError
+from common.errors import DesignError
 from acmm.lqr import in_sector, sector_lqr, sector_margin
 
 N = 0.0011  # rad/s

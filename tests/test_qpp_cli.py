@@ -4,8 +4,8 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from acmm.errors import ConfigError
-from acmm.results import read_h5
+from common.errors import ConfigError
+from common.results import read_h5
 from cli.qpp_app import app
 from qpp.config import load_config, parse_config
 from qpp.simulate import simulate

@@ -83,11 +83,11 @@ def test_chapter11_reproduces_published_K(name, rho, a, digits):
     R = Ab.T @ g.k + g.k @ Ab + g.k @ (Ga @ Ga.T - Ba @ Ba.T / rho ** 2) @ g.k + Q.T @ Q
     assert np.abs(R).max() < 1e-6 * np.abs(g.k).max()
     assert np.linalg.eigvals(Aa + Ba @ g.K).real.max() < 0
-    # H beside the printed values: within 1 % (SISO) / 2.5 % (manipulator, NOTES: ~2 %)
+    # H beside the printed values: within 1 % (SISO) / 2.5 % (manipulator, docs/ERRATA.md § QPP chapter 11: ~2 %)
     rel = np.abs(g.H - H)[H != 0] / np.abs(H[H != 0])
     assert rel.max() < (0.01 if name == "qpp_siso" else 0.025)
-    # printed [C 0] weight: no admissible solution at nu = 1, or clearly different gains (NOTES)
-    from acmm.errors import AcmmError
+    # printed [C 0] weight: no admissible solution at nu = 1, or clearly different gains (docs/ERRATA.md § QPP chapter 11)
+    from common.errors import AcmmError
     try:
         g2 = hinf_gains(P, rho=rho, a=a, weight="output")
     except AcmmError:
@@ -107,7 +107,7 @@ def test_hinf_search_does_not_worsen():
 def test_threshold_m_printed():
     assert round(spheres.threshold_m(0.2, 0.1, 0.0, 0.02727, 0.05 * 0.363), 5) == 1.61807
     assert round(spheres.threshold_m(0.14, 0.0, 0.0, 0.018, 0.056), 4) == 2.3923
-    # NOTES: printed beta3 = 0.05 ||(sin 5t)_T||_2, T = 0.5 s (to 1e-3)
+    # docs/ERRATA.md § QPP thresholds: printed beta3 = 0.05 ||(sin 5t)_T||_2, T = 0.5 s (to 1e-3)
     assert spheres.beta3_sinusoidal(0.05, 5.0, 0.5) == pytest.approx(0.02727, rel=1e-3)
     # the definition with sin t gives a smaller value
     assert spheres.beta3_sinusoidal(0.05, 1.0, 0.5) < 0.02727

@@ -8,8 +8,8 @@ import scipy.integrate as si
 import yaml
 from typer.testing import CliRunner
 
-from acmm.errors import EXIT_INPUT, EXIT_NUMERICAL, ConfigError
-from acmm.results import read_h5
+from common.errors import EXIT_INPUT, EXIT_NUMERICAL, ConfigError
+from common.results import read_h5
 from cli.qpp_app import app
 from qpp.config import load_config, parse_config
 from qpp.simulate import simulate

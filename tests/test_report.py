@@ -298,7 +298,7 @@ def test_two_runs_give_identical_datasets(fast_report, tmp_path):
 
 
 def test_dataset_hashes_ignore_timing_and_attributes(tmp_path):
-    from acmm.results import Dataset, write_h5
+    from common.results import Dataset, write_h5
 
     a = write_h5(tmp_path / "a.h5", {"x": Dataset(np.arange(3.0), "1"), "wall_time": Dataset(1.0, "s")}, "c: 1")
     b = write_h5(tmp_path / "b.h5", {"x": Dataset(np.arange(3.0), "1"), "wall_time": Dataset(2.0, "s")}, "c: 1")

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from acmm.errors import ConvergenceError
+from common.errors import ConvergenceError
 from acmm.riccati import METHODS, care_residual, matrix_sign, solve_care
 
 # SLICOT SB02PD documentation example: A'X + XA − XGX + Q = 0 with G = diag(0, 1) = B R⁻¹ B'.
@@ -132,7 +132,7 @@ def test_partial_fraction_is_the_rational_map_of_eq_5_6():
 
 
 def test_printed_denominator_of_eq_5_6_does_not_give_the_sign():
-    """NOTES.md: the printed I + 10S + 5S⁴ never converges to the sign function."""
+    """docs/ERRATA.md § Riccati sign function: the printed I + 10S + 5S⁴ never converges to the sign function."""
     f = lambda x: x * (5 + 10 * x**2 + x**4) / (1 + 10 * x + 5 * x**4)   # noqa: E731
     # scalar: −1 is not a fixed point (sign(−1) = −1 but f(−1) = 4) ...
     assert f(-1.0) == pytest.approx(4.0)

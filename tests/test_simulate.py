@@ -95,7 +95,8 @@ def test_claim1_coupled_design_stays_bounded(mb3):
     r = sm.simulate(sc)
     assert r.verdict == "bounded" and r.t[-1] == pytest.approx(5 * ORBIT)
     err = np.degrees(np.abs(sm.attitude_error(sc, r)))
-    # NOTES.md: peak pitch error ≈ 21° in the first orbit, < 2° on every axis from the third
+    # docs/ERRATA.md § Claim 1 (coupled design bounded): peak pitch error ≈ 21° in the first
+    # orbit, < 2° on every axis from the third
     assert 10 < err[:, 1].max() < 30
     assert err[r.t > 2 * ORBIT].max() < 2.0
     assert np.all(np.abs(sc.harmonic_a) > 0)     # with the Wie et al. harmonics
@@ -156,7 +157,7 @@ def test_simulate_rejects_inconsistent_simulation_before_writing(tmp_path, monke
 
     from cli.acmm_app import app
 
-    from acmm.config import packaged_config_path
+    from common.configio import packaged_config_path
 
     monkeypatch.chdir(tmp_path)
     text = packaged_config_path("mb3.yaml").read_text()

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 import yaml
 
-from acmm.errors import ConfigError
-from acmm.results import read_h5
+from common.errors import ConfigError
+from common.results import read_h5
 from acmm.sweep import (case_values, perturb_inertia, run_sweep, simulate_values, unphysical_reason,
                         prepare_base)
 from acmm.sweep_config import load_sweep, parse_sweep
@@ -107,7 +107,7 @@ def test_grid_order_and_unperturbed_case_equals_plain_simulation(tmp_path):
 
 
 def test_no_equilibrium_is_a_verdict_not_a_crash(tmp_path):
-    # NOTES.md: MB3's gravity-gradient pitch capacity is ≈ 1.73 ft·lbf, so +4 ft·lbf pitch bias has no TEA
+    # docs/ERRATA.md § TEA: MB3's gravity-gradient pitch capacity is ≈ 1.73 ft·lbf, so +4 ft·lbf pitch bias has no TEA
     sw = load_sweep(_sweep_yaml(tmp_path, "noeq", base=str(CONFIGS / "mb3.yaml")))
     ctx = prepare_base(sw.bases[0], sw.spec)
     assert simulate_values(ctx, {"bias_pitch": 4.0})["verdict"] == "no_equilibrium"

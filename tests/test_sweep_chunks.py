@@ -6,7 +6,7 @@ import os
 import pytest
 import yaml
 
-from acmm.results import read_h5
+from common.results import read_h5
 from acmm.sweep import MAX_CHUNK, chunk_size, make_chunks, run_sweep
 
 from conftest import CONFIGS

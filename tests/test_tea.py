@@ -14,7 +14,7 @@ from scipy.optimize import fsolve, minimize_scalar
 
 from acmm import tea
 from acmm.config import Disturbance, load_config
-from acmm.errors import NoEquilibriumError
+from common.errors import NoEquilibriumError
 from acmm.stages import compute_tea
 
 from conftest import CONFIGS

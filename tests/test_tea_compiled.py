@@ -7,7 +7,7 @@ import pytest
 
 from acmm import tea
 from acmm.config import load_config
-from acmm.errors import AcmmError
+from common.errors import AcmmError
 from acmm.schedule import point_specs
 from acmm.sweep import perturb_inertia, unphysical_reason
 from acmm.tea_compiled import solve_tea_fast

@@ -6,7 +6,7 @@ import pytest
 import yaml
 
 from acmm.config import load_config, parse_config
-from acmm.errors import ConfigError
+from common.errors import ConfigError
 from conftest import CONFIGS
 
 
@@ -161,7 +161,7 @@ def test_si_config_round_trips(tmp_path):
     import h5py
 
     from acmm.stages import run_simulate
-    from acmm.units import FT_LBF_IN_NM
+    from common.units import FT_LBF_IN_NM
 
     imp = _short("mb3", tmp_path / "imp")
     d = imp.model_dump(mode="json")
@@ -198,7 +198,7 @@ def test_si_design_h5_is_the_imperial_design_in_si_and_is_reused_exactly(tmp_pat
     import h5py
 
     from acmm.stages import load_design_table, run_design
-    from acmm.units import FT_LBF_IN_NM as k
+    from common.units import FT_LBF_IN_NM as k
 
     imp = _short("ac", tmp_path / "imp")
     d = imp.model_dump(mode="json")
@@ -229,7 +229,7 @@ def test_si_design_h5_is_the_imperial_design_in_si_and_is_reused_exactly(tmp_pat
 # ---------------------------------------------------------------- unit strings everywhere
 def test_unit_strings_in_acmm_sweep_and_qpp_configs():
     from acmm.sweep_config import SweepSpec
-    from acmm.units import FT_LBF_IN_NM as k
+    from common.units import FT_LBF_IN_NM as k
     from qpp.config import QppConfig
 
     base = yaml.safe_load((CONFIGS / "mb3.yaml").read_text())

@@ -1,0 +1,196 @@
+"""YAML config files: bounded reading, structure checks, duplicate keys, pydantic validation.
+
+Shared by the acmm and qpp configs (:mod:`acmm.config`, :mod:`qpp.config`) and the sweep spec:
+:func:`read_yaml` reads a file (or a config packaged with the distribution) with the bounds of
+:mod:`common.limits`, :func:`validate_model` turns a mapping into a pydantic model, and any
+failure becomes one :class:`~common.errors.ConfigError` line naming the file, field or cause.
+"""
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+import yaml
+from pydantic import ValidationError
+
+from common import PACKAGED_CONFIGS
+from common.errors import ConfigError
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """SafeLoader that rejects duplicate keys (PyYAML silently keeps the last one)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r}", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep)
+
+
+def _format_error(exc: ValidationError, model_cls=None) -> str:
+    from common.hints import prioritize, unknown_key_hint
+
+    err = prioritize(exc.errors())[0]
+    loc = ".".join(str(p) for p in err["loc"]) or "config"
+    msg = err["msg"]
+    for prefix in ("Value error, ", "Assertion failed, "):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix):]
+    if err["type"] == "extra_forbidden":
+        msg = "unknown key" + (unknown_key_hint(model_cls, tuple(err["loc"])) if model_cls else "")
+    extra = f" (and {len(exc.errors()) - 1} more)" if len(exc.errors()) > 1 else ""
+    return f"{loc}: {msg}{extra}"
+
+
+def require_mapping(data: object, source: str = "config") -> dict:
+    """``data`` if it is a mapping, else a one-line :class:`ConfigError`."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"{source}: the top level must be a mapping of keys to values")
+    return data
+
+
+def validate_model(model_cls, data: object, source: str = "config"):
+    """Validate a mapping (e.g. parsed YAML) into a pydantic ``model_cls``; a
+    :class:`ConfigError` naming the offending field otherwise."""
+    require_mapping(data, source)
+    try:
+        return model_cls.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(f"{source}: {_format_error(exc, model_cls)}") from None
+
+
+DEFAULT_CONFIG = "staircase.yaml"
+
+
+def packaged_config_path(name: str = DEFAULT_CONFIG) -> Path:
+    """Path of a config shipped inside the distribution (``configs/`` in the source tree)."""
+    return Path(str(resources.files(PACKAGED_CONFIGS).joinpath(name)))
+
+
+def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
+    """Read a YAML config file (``None``: the packaged default); returns (data, path).
+
+    A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working directory is
+    looked up among the packaged configs.  Duplicate keys are rejected.
+
+    Raises
+    ------
+    ConfigError
+        Missing or unreadable file, or invalid YAML (with line and column).
+    """
+    if path is None:
+        p = packaged_config_path()
+    else:
+        p = Path(path)
+        try:
+            present = p.exists()
+        except (OSError, ValueError) as exc:   # name too long, NUL byte, ...
+            raise ConfigError(f"cannot read config file {str(path)[:200]}: {getattr(exc, 'strerror', None) or exc}") from None
+        if not present:
+            candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml")
+            if len(p.parts) == 1 and candidate.exists():
+                p = candidate
+            else:
+                from common.hints import missing_config_message
+
+                raise ConfigError(missing_config_message(path))
+    text = read_config_text(p)
+    try:
+        check_yaml_structure(text, p)
+        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        what = getattr(exc, "problem", None) or "not valid YAML"
+        raise ConfigError(f"{p}: not valid YAML: {what}{where}") from None
+    return data, p
+
+
+def read_config_text(p: Path) -> str:
+    """The text of config file ``p``, read with bounds (issue 13): only a regular file (a FIFO,
+    a device such as ``/dev/zero`` or a directory is refused without blocking), at most
+    ``CONFIG_BYTES`` bytes (:mod:`common.limits`), UTF-8.  One-line :class:`ConfigError` otherwise."""
+    import os
+    import stat
+
+    from common.limits import how_to_raise, limit
+
+    cap = int(limit("CONFIG_BYTES"))
+    try:
+        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
+    except OSError as exc:
+        raise ConfigError(f"cannot read config file {p}: {exc.strerror or exc}") from None
+    try:
+        st = os.fstat(fd)
+        if stat.S_ISDIR(st.st_mode):
+            raise ConfigError(f"config path is a directory, not a file: {p}")
+        if not stat.S_ISREG(st.st_mode):
+            raise ConfigError(f"config path is not a regular file (a FIFO, device or socket): {p}")
+        if st.st_size > cap:
+            raise ConfigError(f"config file {p} is too large: {st.st_size} bytes ({how_to_raise('CONFIG_BYTES')})")
+        chunks, size = [], 0
+        while True:
+            chunk = os.read(fd, 1 << 16)
+            if not chunk:
+                break
+            size += len(chunk)
+            if size > cap:
+                raise ConfigError(f"config file {p} is too large: over {cap} bytes ({how_to_raise('CONFIG_BYTES')})")
+            chunks.append(chunk)
+    except OSError as exc:
+        raise ConfigError(f"cannot read config file {p}: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+    try:
+        return b"".join(chunks).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"cannot read config file {p}: not UTF-8 text (byte {exc.start})") from None
+
+
+def check_yaml_structure(text: str, source: object = "config") -> None:
+    """Refuse YAML that would be expensive or recursive to build, before building it.
+
+    Scans the parser's event stream (iterative, so deep nesting cannot overflow the stack):
+    nesting deeper than ``YAML_DEPTH``, more than ``YAML_NODES`` nodes with aliases expanded
+    (so "billion laughs" alias bombs count at their expanded size) or an alias to a collection
+    that contains it (a cycle) raise :class:`ConfigError`.  Syntax errors raise
+    :class:`yaml.YAMLError` as :func:`yaml.load` would.
+    """
+    from common.limits import how_to_raise, limit
+
+    max_depth, max_nodes = int(limit("YAML_DEPTH")), int(limit("YAML_NODES"))
+    stack: list[tuple[str | None, int]] = []
+    sizes: dict[str, int] = {}
+    open_anchors: set[str] = set()
+    count = 0
+    for ev in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(ev, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+            count += 1
+            stack.append((ev.anchor, count))
+            if ev.anchor:
+                open_anchors.add(ev.anchor)
+            if len(stack) > max_depth:
+                line = ev.start_mark.line + 1 if ev.start_mark else "?"
+                raise ConfigError(f"{source}: YAML nested deeper than {max_depth} levels at line {line} "
+                                  f"({how_to_raise('YAML_DEPTH')})")
+        elif isinstance(ev, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+            anchor, start = stack.pop()
+            if anchor:
+                sizes[anchor] = count - start + 1
+                open_anchors.discard(anchor)
+        elif isinstance(ev, yaml.ScalarEvent):
+            count += 1
+            if ev.anchor:
+                sizes[ev.anchor] = 1
+        elif isinstance(ev, yaml.AliasEvent):
+            if ev.anchor in open_anchors:
+                raise ConfigError(f"{source}: YAML alias *{ev.anchor} refers to a collection that contains it "
+                                  "(a cycle)")
+            count += sizes.get(ev.anchor, 1)
+        if count > max_nodes:
+            raise ConfigError(f"{source}: YAML has more than {max_nodes} values (aliases expanded) "
+                              f"({how_to_raise('YAML_NODES')})")

@@ -1,0 +1,174 @@
+"""Hints attached to user-facing error messages.
+
+* :func:`unknown_key_hint` — the closest valid key of the model at an error's location
+  ("did you mean `orbits`?", :mod:`difflib`), or the list of valid keys when none is close;
+* :func:`prioritize` — the error to report first: an unknown key explains the "missing field"
+  errors it causes (``Ixx:`` instead of ``I11:`` is one typo, not six missing fields);
+* :func:`missing_config_message` — a config that is neither a file nor a packaged name lists the
+  packaged names (closest first);
+* :func:`numerical_hint` — which setting to change when a solver or a design fails.
+"""
+from __future__ import annotations
+
+import difflib
+import types
+import typing
+from pathlib import Path
+
+from pydantic import BaseModel
+
+
+# ---------------------------------------------------------------------------------------------
+# unknown keys
+# ---------------------------------------------------------------------------------------------
+def _unwrap(tp) -> list:
+    """The types an annotation can hold, with Optional/Union/Annotated removed."""
+    origin = typing.get_origin(tp)
+    if origin is typing.Annotated:
+        return _unwrap(typing.get_args(tp)[0])
+    if origin is typing.Union or origin is types.UnionType:
+        return [x for a in typing.get_args(tp) for x in _unwrap(a)]
+    return [tp]
+
+
+def _step(tp, key):
+    """The annotation reached from ``tp`` by one location element ``key`` (None if unknown)."""
+    for t in _unwrap(tp):
+        if isinstance(t, type) and issubclass(t, BaseModel):
+            if isinstance(key, str) and key in t.model_fields:
+                return t.model_fields[key].annotation
+            continue
+        origin = typing.get_origin(t)
+        args = typing.get_args(t)
+        if origin in (list, tuple) and isinstance(key, int) and args:
+            return args[0]
+        if origin is dict and len(args) == 2:
+            return args[1]
+    # a tagged-union tag in the location (pydantic puts the discriminator value there)
+    for t in _unwrap(tp):
+        if isinstance(t, type) and issubclass(t, BaseModel) and isinstance(key, str):
+            f = t.model_fields.get("kind")
+            if f is not None and typing.get_args(f.annotation) == (key,):
+                return t
+    return None
+
+
+def model_at(model_cls: type, loc: tuple) -> type | None:
+    """The pydantic model class at an error location ``loc`` below ``model_cls`` (or None)."""
+    tp = model_cls
+    for key in loc:
+        tp = _step(tp, key)
+        if tp is None:
+            return None
+    models = [t for t in _unwrap(tp) if isinstance(t, type) and issubclass(t, BaseModel)]
+    return models[0] if len(models) == 1 else None
+
+
+def valid_keys(model_cls: type, loc: tuple) -> list[str]:
+    """Field names of the model holding ``loc[-1]`` (the parent of an unknown key)."""
+    m = model_at(model_cls, tuple(loc[:-1]))
+    return [] if m is None else list(m.model_fields)
+
+
+def closest(word: str, candidates: list[str]) -> str | None:
+    """The candidate closest to ``word`` (case-insensitive difflib ratio ≥ 0.6), or None."""
+    lower = {c.lower(): c for c in candidates}
+    m = difflib.get_close_matches(str(word).lower(), list(lower), n=1, cutoff=0.6)
+    return lower[m[0]] if m else None
+
+
+def unknown_key_hint(model_cls: type, loc: tuple) -> str:
+    """`` (did you mean `x`?)`` or `` (valid keys: a, b, c)`` for an unknown key at ``loc``."""
+    keys = valid_keys(model_cls, loc)
+    if not keys:
+        return ""
+    best = closest(str(loc[-1]), keys)
+    if best is not None:
+        return f" (did you mean `{best}`?)"
+    return " (valid keys: " + ", ".join(keys) + ")"
+
+
+def prioritize(errors: list[dict]) -> list[dict]:
+    """Errors in reporting order: unknown keys first (they usually cause the 'missing' ones)."""
+    return sorted(errors, key=lambda e: 0 if e.get("type") == "extra_forbidden" else 1)
+
+
+# ---------------------------------------------------------------------------------------------
+# packaged config names
+# ---------------------------------------------------------------------------------------------
+def packaged_names() -> list[str]:
+    """Names of the configs shipped with the package (without ``.yaml``)."""
+    from importlib import resources
+
+    from common import PACKAGED_CONFIGS
+
+    try:
+        return sorted(Path(p.name).stem for p in resources.files(PACKAGED_CONFIGS).iterdir()
+                      if p.name.endswith(".yaml"))
+    except (OSError, ModuleNotFoundError):  # pragma: no cover
+        return []
+
+
+def missing_config_message(path) -> str:
+    """``config file not found: x (not a packaged config either; did you mean `mb3`? packaged: ...)``."""
+    names = packaged_names()
+    msg = f"config file not found: {path}"
+    p = Path(str(path))
+    if len(p.parts) == 1 and names:
+        best = closest(p.stem, names)
+        hint = f"did you mean `{best}`? " if best else ""
+        msg += f" (not a packaged config either; {hint}packaged configs: {', '.join(names)})"
+    elif names:
+        msg += f" (packaged configs, usable by name: {', '.join(names)})"
+    return msg
+
+
+# ---------------------------------------------------------------------------------------------
+# numerical failures
+# ---------------------------------------------------------------------------------------------
+#: (words that must all occur in the message, hint) — first match wins; case-insensitive.
+_NUMERICAL_HINTS: list[tuple[tuple[str, ...], str]] = [
+    (("riccati 11.1",), "change hinf.rho or hinf.nu (larger values relax the H∞ problem), "
+                        "or set hinf.search: true"),
+    (("residual",), "raise design.residual_tol or try design.riccati_method: scipy; a nearly "
+                    "uncontrollable model (see `acmm linearize`) needs another design.model or design.drf_mode"),
+    (("matrix sign",), "use design.riccati_method: scipy (the sign iteration needs a well-conditioned model)"),
+    (("sector lqr", "riccati", "failed"), "lower design.sector.sigma (the shift α asked of the LQR may be "
+                                          "too large), or try another design.riccati_method (scipy, sign, slycot)"),
+    (("riccati",), "try another design.riccati_method (scipy, sign or slycot)"),
+    (("uncontrollable",), "no gain moves that pole: lower design.sector.sigma, or change design.model / "
+                          "design.drf_mode"),
+    (("not positive semidefinite",), "change design.Q0 or design.R"),
+    (("sector",), "lower design.sector.sigma, widen design.sector.half_angle_deg, or try "
+                  "design.pole_method: uniform / shift"),
+    (("no torque-equilibrium",), "reduce disturbance.bias (or use disturbance.bias_from_tea with the "
+                                 "attitude you want)"),
+    (("tea continuation",), "check the products of inertia (inertia.I12, I13, I23) or give the bias as "
+                            "disturbance.bias_from_tea"),
+    (("converge",), "loosen the tolerance (design.residual_tol, simulation.rtol) or change "
+                    "design.riccati_method"),
+]
+
+
+def numerical_hint(message: str) -> str:
+    """A "which setting to change" hint for a numerical failure message (empty if none applies)."""
+    low = message.lower()
+    if "hint:" in low:
+        return ""                      # already has one
+    for words, hint in _NUMERICAL_HINTS:
+        if all(w in low for w in words):
+            return hint
+    return ""
+
+
+def with_hint(exc: Exception) -> str:
+    """The message of a user-facing error, with a numerical hint appended when one applies
+    (solver/design failures, exit 3, and a missing equilibrium)."""
+    from common.errors import EXIT_NUMERICAL, NoEquilibriumError
+
+    msg = str(exc)
+    if getattr(exc, "exit_code", None) == EXIT_NUMERICAL or isinstance(exc, NoEquilibriumError):
+        hint = numerical_hint(msg)
+        if hint:
+            msg = f"{msg}; hint: {hint}"
+    return msg

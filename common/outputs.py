@@ -1,0 +1,119 @@
+"""What a stage owns in its run folder, and the run's ``config.yaml``.
+
+Policy (README, *Results*): a rerun **replaces the outputs the stage owns** in ``runs/<name>/``
+— no history folders.  Each stage declares glob patterns of the files it writes
+(:data:`STAGE_OUTPUTS`); every file written through :func:`common.results.atomic_path` while the
+stage runs is recorded, and when the stage finishes successfully
+
+1. its resolved config is written as ``config.yaml`` (a comment names the source file and the
+   command-line overrides), and
+2. every file matching the stage's patterns that this run did *not* write is removed — a figure
+   of a previous run (another scenario name, a schedule that no longer exists, ``--no-figures``)
+   cannot be mistaken for a result of this one.
+
+Files of other stages are left alone (``acmm simulate`` does not remove ``design.h5``; the sweep
+journal survives for ``--resume``).  A stage that fails removes nothing and writes no
+``config.yaml``.
+"""
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+from common.results import WRITTEN_HOOKS
+
+#: stage → glob patterns (relative to the run folder) of the files the stage owns.
+STAGE_OUTPUTS: dict[str, tuple[str, ...]] = {
+    "tea": ("tea.h5",),
+    "linearize": ("linearize.h5",),
+    "design": ("design.h5", "design_*.png"),
+    "simulate": ("sim.h5", "sim_*.png"),
+    "sweep": ("sweep.h5", "sweep.csv", "sweep_*.png"),
+    "qpp design": ("qpp_design.h5", "qpp_circle*.png"),
+    "qpp simulate": ("qpp_sim.h5", "qpp_sim_*.png"),
+}
+
+CONFIG_FILE = "config.yaml"
+
+#: Stack of the recorders of the stages running in this process (nested: simulate → design).
+_RECORDERS: list[set] = []
+
+
+def record_written(path) -> None:
+    """Called by :func:`common.results.atomic_path` for each file it completes."""
+    p = Path(path).resolve()
+    for rec in _RECORDERS:
+        rec.add(p)
+
+
+WRITTEN_HOOKS.append(record_written)
+
+
+@contextlib.contextmanager
+def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = None):
+    """Context of one stage writing into ``run_dir``; see the module docstring.
+
+    Parameters
+    ----------
+    run_dir : path
+        The run folder (``<output.root>/<name>``).
+    stage : str
+        A key of :data:`STAGE_OUTPUTS`.
+    config : model, optional
+        The resolved config (its ``to_yaml()`` and, when loaded from a file, its source and
+        overrides go into ``config.yaml``).
+    config_text : str, optional
+        The resolved config as YAML, when ``config`` has no ``to_yaml``.
+    """
+    written: set = set()
+    _RECORDERS.append(written)
+    try:
+        yield written
+    finally:
+        del _RECORDERS[next(i for i, r in enumerate(_RECORDERS) if r is written)]
+    run_dir = Path(run_dir)
+    if config is not None or config_text is not None:
+        write_config_yaml(run_dir, config, config_text)
+    prune(run_dir, stage, written)
+
+
+def write_config_yaml(run_dir, config=None, config_text: str | None = None) -> Path:
+    """Write ``<run_dir>/config.yaml``: the resolved config headed by its source and overrides."""
+    from common.overrides import header, origin_of
+    from common.results import write_text
+
+    text = config_text if config_text is not None else config.to_yaml()
+    source, overrides = origin_of(config) if config is not None else (None, [])
+    return write_text(Path(run_dir) / CONFIG_FILE, header(source, overrides) + text)
+
+
+def prune(run_dir, stage: str, written: set) -> list[Path]:
+    """Remove the files of ``stage`` in ``run_dir`` that are not in ``written``; returns them."""
+    removed = []
+    run_dir = Path(run_dir)
+    if not run_dir.is_dir():
+        return removed
+    for pattern in STAGE_OUTPUTS[stage]:
+        for p in sorted(run_dir.glob(pattern)):
+            if p.is_file() and p.resolve() not in written:
+                try:
+                    p.unlink()
+                    removed.append(p)
+                except OSError:
+                    pass
+    return removed
+
+
+def owns_outputs(stage: str, load):
+    """Decorator of a stage runner ``fn(config, ...)``: resolve ``config`` with ``load`` (path →
+    validated config; a config passes through), then run ``fn`` inside :func:`stage_outputs`."""
+    import functools
+
+    def deco(fn):
+        @functools.wraps(fn)
+        def wrapper(config=None, *args, **kwargs):
+            cfg = load(config)
+            with stage_outputs(cfg.run_dir(), stage, cfg):
+                return fn(cfg, *args, **kwargs)
+        return wrapper
+    return deco

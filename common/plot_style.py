@@ -1,0 +1,87 @@
+"""The one matplotlib style module of the project: backend, rcParams and colour cycle.
+
+Every figure (the stage figures of :mod:`acmm.plots` and :mod:`qpp.plots`, the sweep's, the
+report's through :mod:`acmm.report_style`) gets ``matplotlib.pyplot`` from here, on the
+non-interactive Agg backend; nothing is shown on screen.  Two sets of rcParams exist so the
+existing figures stay as they were: :data:`RC` (publication style of ``acmm report``: Okabe–Ito
+colour-blind-safe cycle, light grids, no top/right spines) and :data:`STAGE_RC` (the stage
+figures: grid, 110 dpi, 9 pt).
+"""
+from __future__ import annotations
+
+#: Okabe–Ito colour-blind-safe palette (roll, pitch, yaw first).
+COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#000000")
+AXIS_COLORS = dict(zip(("roll", "pitch", "yaw"), COLORS))
+
+#: rcParams of the report's figures.
+RC = {
+    "figure.dpi": 100,
+    "savefig.dpi": 120,
+    "font.size": 9,
+    "axes.titlesize": 9,
+    "axes.labelsize": 9,
+    "legend.fontsize": 7.5,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "grid.linewidth": 0.5,
+    "lines.linewidth": 1.0,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "legend.frameon": False,
+    "pdf.fonttype": 3,           # subsetted Type 3 fonts: small, fast, still vector text
+}
+
+#: rcParams of the stage figures (``acmm design|simulate``, the sweep).
+STAGE_RC = {"figure.dpi": 110, "axes.grid": True, "grid.alpha": 0.3, "font.size": 9}
+
+
+def agg_pyplot(force: bool = False):
+    """``matplotlib.pyplot`` on the Agg backend, rcParams untouched (the qpp stage figures).
+
+    Parameters
+    ----------
+    force : bool
+        Switch to Agg even if another backend is already selected.
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg", force=force)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def stage_pyplot():
+    """``matplotlib.pyplot`` on the Agg backend with :data:`STAGE_RC` applied.
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``.
+    """
+    plt = agg_pyplot(force=True)
+    plt.rcParams.update(STAGE_RC)
+    return plt
+
+
+def pyplot():
+    """``matplotlib.pyplot`` on the Agg backend with the report style (:data:`RC`, :data:`COLORS`).
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``.
+    """
+    from cycler import cycler
+
+    plt = agg_pyplot(force=True)
+    plt.rcParams.update(RC)
+    plt.rcParams["axes.prop_cycle"] = cycler(color=list(COLORS))
+    return plt
