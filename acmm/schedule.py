@@ -544,16 +544,20 @@ def _power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
 
 
 #: Parameters of the closed-loop refit used by the design stage, chosen by measurement on the
-#: stair-case (README "Gain schedule"): a smooth max (β = 20) of Re λ/n and of 0.7·(distance
-#: beyond the φ lines/n − 2.2) — the angle term only bites on strongly oscillatory poles and
-#: keeps the disk margin up — on every 10th of the path TEAs (21 of 201), 300 L-BFGS iterations.
-REFIT_DEFAULTS = {"every": 10, "beta": 20.0, "max_iter": 300, "angle_weight": 0.7, "angle_offset": 2.2}
+#: stair-case (README "Gain schedule"): the max of Re λ/n and of 0.7·(distance beyond the φ lines/n
+#: − 2.2) — the angle term only bites on strongly oscillatory poles and keeps the disk margin up —
+#: on every 10th of the path TEAs (21 of 201), in epigraph form (the 4 largest terms of each kind
+#: per TEA) by 15 SLSQP iterations (~0.25 s; the former smooth max β = 20 by 300 L-BFGS iterations
+#: took ~3 s for a worse worst Re λ, −0.33n against −0.42n).
+REFIT_DEFAULTS = {"every": 10, "beta": 20.0, "max_iter": 15, "angle_weight": 0.7, "angle_offset": 2.2,
+                  "solver": "slsqp", "top": 4}
 
 
 def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: int = 5,
                       beta: float = 20.0, max_iter: int = 60, angle_weight: float = 0.0,
                       half_angle_deg: float = 45.0, re_weight: float = 1.0,
-                      re_offset: float = 0.0, angle_offset: float = 0.0) -> ScheduleFit:
+                      re_offset: float = 0.0, angle_offset: float = 0.0, solver: str = "lbfgs",
+                      top: int = 3) -> ScheduleFit:
     """Refine a least-squares polynomial schedule against the closed loop along the path.
 
     The coefficients are moved to minimize the smooth maximum ::
@@ -571,6 +575,12 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
     report's: one polynomial of the fit's order per gain element.  The result is accepted only
     if it lowers the largest Re λ on those TEAs; it is re-checked on every TEA by
     :func:`check_path`.
+
+    ``solver="slsqp"`` minimizes the same quantity in its exact (β → ∞) epigraph form,
+    min t subject to v ≤ t for the ``top`` largest Re λ terms and the ``top`` largest φ-line
+    terms per TEA (poles with Im λ ≥ 0, each conjugate pair once), by SLSQP with the same
+    analytic eigenvalue gradients; it reaches a lower worst Re λ in ~10× fewer eigenvalue
+    evaluations than L-BFGS on the smooth maximum (README "Gain schedule").
     """
     from scipy.optimize import minimize
 
@@ -628,7 +638,13 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
 
     x0 = np.zeros(a0.size)
     w0 = worst(x0)
-    res = minimize(fg, x0, jac=True, method="L-BFGS-B", options={"maxiter": max_iter})
+    if solver == "slsqp":
+        res = _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offset,
+                             angle_weight, angle_offset, half_angle_deg)
+    elif solver == "lbfgs":
+        res = minimize(fg, x0, jac=True, method="L-BFGS-B", options={"maxiter": max_iter})
+    else:
+        raise ValueError(f"unknown refit solver {solver!r}")
     w1 = worst(res.x)
     info = {"beta": beta, "iterations": int(res.nit), "evaluations": int(res.nfev),
             "n_tea": len(idx), "max_real_before": float(w0), "max_real_after": float(w1),
@@ -645,3 +661,66 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
     peak = np.max(np.abs(fit.gains.reshape(P, -1)), axis=0).reshape(fit.gains.shape[1:])
     rel = np.divide(rms, peak, out=np.zeros_like(rms), where=peak > 0)
     return ScheduleFit(coef, fit.variable, fit.gains, rms, rel, fit.form, "closed_loop", info)
+
+
+def _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offset, angle_weight,
+                   angle_offset, half_angle_deg):
+    """Epigraph form of :func:`refit_closed_loop`'s objective solved by SLSQP.
+
+    Variables z = (x, t), x the coefficient change relative to ``a0`` in units of ``sc``;
+    minimize t subject to t − v ≥ 0 for the ``top`` largest terms of each kind per TEA.
+    Returns the scipy result with ``x`` set to the coefficient part.
+    """
+    from scipy.optimize import minimize
+
+    shape = a0.shape
+    sphi, cphi = np.sin(np.radians(half_angle_deg)), np.cos(np.radians(half_angle_deg))
+    T = As_t.shape[0]
+    rows = np.arange(T)[:, None]
+    memo = {}
+
+    def terms(z):
+        key = z.tobytes()
+        if key in memo:
+            return memo[key]
+        a = a0 + z[:-1].reshape(shape) * sc
+        Kt = np.einsum("tk,kab->tab", up, a)
+        lam, V = np.linalg.eig(As_t - Bs_t @ Kt)
+        try:
+            W = np.linalg.inv(V)
+        except np.linalg.LinAlgError:
+            W = np.linalg.pinv(V)
+        dlc = -np.einsum("tia,tbi->tiab", W @ Bs_t, V) / n                # ∂λ_i/∂K_ab / n
+        kinds = [(re_weight * (lam.real / n - re_offset), re_weight * dlc.real)]
+        if angle_weight > 0:
+            kinds.append((angle_weight * ((np.abs(lam.imag) * cphi + lam.real * sphi) / n - angle_offset),
+                          angle_weight * (np.sign(lam.imag)[:, :, None, None] * dlc.imag * cphi
+                                          + dlc.real * sphi)))
+        upper = lam.imag >= 0
+        vals, jacs = [], []
+        for v, g in kinds:
+            o = np.argsort(-np.where(upper, v, -np.inf), axis=1)[:, :top]
+            vals.append(v[rows, o].ravel())
+            gk = g[rows, o]                                                 # (T, top, M, N)
+            jacs.append((up[:, None, :, None, None] * gk[:, :, None] * sc[None, None]).reshape(-1, a0.size))
+        out = (np.concatenate(vals), np.vstack(jacs))
+        memo.clear()
+        memo[key] = out
+        return out
+
+    def cons(z):
+        return z[-1] - terms(z)[0]
+
+    def cons_jac(z):
+        J = terms(z)[1]
+        return np.hstack([-J, np.ones((J.shape[0], 1))])
+
+    e_t = np.zeros(a0.size + 1)
+    e_t[-1] = 1.0
+    z0 = np.zeros(a0.size + 1)
+    z0[-1] = float(np.max(terms(z0)[0]))
+    res = minimize(lambda z: z[-1], z0, jac=lambda z: e_t, method="SLSQP",
+                   constraints=[{"type": "ineq", "fun": cons, "jac": cons_jac}],
+                   options={"maxiter": max_iter, "ftol": 1e-6})
+    res.x = res.x[:-1]
+    return res
