@@ -131,16 +131,8 @@ def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
     physical branch, starting from the start configuration's TEA), then s is interpolated at
     evenly spaced θ2*.  Falls back to evenly spaced s when θ2*(s) is not monotonic.
     """
-    from acmm.tea import solve_tea, solve_tea_near
-
     s_grid = np.linspace(0.0, 1.0, n_track)
-    t = solve_tea(start.inertia, n, start.bias).theta
-    thetas = []
-    for s in s_grid:
-        t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
-                           t).theta
-        thetas.append(t)
-    thetas = np.array(thetas)
+    thetas = _tea_track(start, end, n, n_track)
     th2 = thetas[:, 1]
     d = np.diff(th2)
     if not (np.all(d > 0) or np.all(d < 0)):
@@ -156,6 +148,30 @@ def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
         out.append(PointSpec(name, (1 - s) * start.inertia + s * end.inertia,
                              (1 - s) * start.bias + s * end.bias, float(s), guess))
     return out
+
+
+_TRACKS: dict = {}
+
+
+def _tea_track(start: PointSpec, end: PointSpec, n: float, n_track: int) -> np.ndarray:
+    """TEA (n_track, 3) along the blend start → end by Newton continuation on evenly spaced s,
+    remembered per (start, end, n, n_track): the design points and the path check of one design
+    track the same blend."""
+    key = tuple(np.asarray(x, dtype=float).tobytes() for x in (start.inertia, start.bias, end.inertia, end.bias)) + (
+        float(n), int(n_track))
+    if key in _TRACKS:
+        return _TRACKS[key].copy()
+    t = solve_tea(start.inertia, n, start.bias).theta
+    thetas = []
+    for s in np.linspace(0.0, 1.0, n_track):
+        t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
+                           t).theta
+        thetas.append(t)
+    thetas = np.array(thetas)
+    if len(_TRACKS) > 16:
+        _TRACKS.clear()
+    _TRACKS[key] = thetas
+    return thetas.copy()
 
 
 def point_specs(cfg) -> list[PointSpec]:
@@ -359,13 +375,15 @@ def path_models(points: list[PointDesign], cfg, n_check: int) -> PathModels | No
 DISK_OMEGA_N = np.logspace(-2.0, 3.0, 121)
 
 
-def _mu_upper(M: np.ndarray, iters: int = 25) -> np.ndarray:
+def _mu_upper(M: np.ndarray, iters: int = 25, floor=None) -> np.ndarray:
     """min over diagonal D > 0 of σ̄(D M D⁻¹) for stacked square complex M (F, m, m).
 
     Osborne balancing start, then the fixed point |u_i| = |v_i| of the top singular vectors
     (the optimality condition of the D-scaling for a simple σ̄).  Every iterate is an upper
     bound on μ with respect to m independent complex scalars; for m ≤ 3 the infimum equals μ
-    (Packard & Doyle 1993), the iteration approaches it from above.
+    (Packard & Doyle 1993), the iteration approaches it from above.  With ``floor`` (F,), a
+    row stops iterating once its bound is below its floor (the caller's lower bound on the
+    largest μ that matters), returning that bound.
     """
     F, m, _ = M.shape
     d = np.ones((F, m))
@@ -377,12 +395,27 @@ def _mu_upper(M: np.ndarray, iters: int = 25) -> np.ndarray:
         c = np.sqrt((A ** 2).sum(axis=1)) + 1e-300
         d = d * np.sqrt(np.sqrt(c / r))
     best = np.full(F, np.inf)
+    act = np.arange(F)                      # rows whose D-scaling is still moving
     for _ in range(iters):
-        U, sv, Vh = np.linalg.svd(M * d[:, :, None] / d[:, None, :])
-        best = np.minimum(best, sv[:, 0])
-        u = np.abs(U[:, :, 0]) + 1e-300
-        v = np.abs(Vh[:, 0, :]) + 1e-300
-        d = d * np.sqrt(v / u)
+        Ma = M[act] * d[act, :, None] / d[act, None, :]
+        # σ̄ and the top singular vectors from the 3×3 Hermitian MᴴM (faster than a batched
+        # SVD; u = M v/σ̄ — same values to rounding)
+        w, X = np.linalg.eigh(np.conj(np.swapaxes(Ma, 1, 2)) @ Ma)
+        sig = np.sqrt(np.maximum(w[:, -1], 0.0))
+        vv = X[:, :, -1]
+        best[act] = np.minimum(best[act], sig)
+        u = np.abs(np.einsum("fab,fb->fa", Ma, vv)) / (sig[:, None] + 1e-300) + 1e-300
+        v = np.abs(vv) + 1e-300
+        step = np.sqrt(v / u)
+        d[act] = d[act] * step
+        # a row whose scaling no longer moves (relative 1e-12) has reached its fixed point:
+        # further iterates repeat its σ̄ to rounding
+        keep = np.max(np.abs(step - 1.0), axis=1) > 1e-12
+        if floor is not None:
+            keep &= best[act] >= floor[act]
+        act = act[keep]
+        if act.size == 0:
+            break
     return best
 
 
@@ -427,20 +460,27 @@ def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None, *, refine: in
     return (alpha,) + disk_gain_phase(alpha)
 
 
-def _disk_parts(A, B, K, n, omega_n=None, refine=6):
+def _disk_parts(A, B, K, n, omega_n=None, refine=6, eig=None):
     """S(jω) − I/2 on the frequency grid (stacked) and the cheap upper bound √(‖M‖₁‖M‖∞) of
-    σ̄ ≥ μ at each frequency; None for an unstable closed loop.  Scaled inputs."""
+    σ̄ ≥ μ at each frequency; None for an unstable closed loop.  Scaled inputs.  ``eig``:
+    the eigendecomposition (λ, V, V⁻¹ or None, cond V) of A − BK when already computed."""
     Acl = A - B @ K
-    lam, V = np.linalg.eig(Acl)
+    if eig is None:
+        lam, V = np.linalg.eig(Acl)
+        W, ok = None, False
+        if np.max(lam.real) < 0:
+            try:
+                W = np.linalg.inv(V)
+                ok = np.linalg.cond(V) < 1e8
+            except np.linalg.LinAlgError:
+                ok = False
+    else:
+        lam, V, W, condV = eig
+        ok = W is not None and condV < 1e8
     if np.max(lam.real) >= 0:
         return None
     w = n * (DISK_OMEGA_N if omega_n is None else np.asarray(omega_n, dtype=float))
     m = B.shape[1]
-    try:
-        W = np.linalg.inv(V)
-        ok = np.linalg.cond(V) < 1e8
-    except np.linalg.LinAlgError:
-        ok = False
     if ok:
         KV, WB = K @ V, W @ B
         S = np.eye(m)[None] - np.einsum("ak,fk,kb->fab", KV, 1.0 / (1j * w[:, None] - lam[None, :]), WB)
@@ -461,6 +501,13 @@ def _disk_alpha_batch(parts, refine: int = 6, rounds: int = 6) -> np.ndarray:
     ub = [None if p is None else p[1].copy() for p in parts]      # current upper bound per freq
     exact = [None if p is None else np.zeros(p[1].size, bool) for p in parts]
     best = np.zeros(P)
+    # a lower bound of the largest μ per loop: max|M_ii| ≤ μ(M) and ρ(M) ≤ μ(M) at every
+    # frequency, so a frequency whose D-scaled bound falls below the largest of these cannot
+    # set α (its iteration may stop there; α is unchanged)
+    low = np.zeros(P)
+    for j, p in enumerate(parts):
+        if p is not None:
+            low[j] = float(np.max(np.abs(np.diagonal(p[0], axis1=1, axis2=2))))
     for rnd in range(rounds + 1):
         pick = []
         for j, p in enumerate(parts):
@@ -474,8 +521,14 @@ def _disk_alpha_batch(parts, refine: int = 6, rounds: int = 6) -> np.ndarray:
         if not pick:
             break
         Ms = np.concatenate([parts[j][0][f] for j, f in pick])
+        rho = np.max(np.abs(np.linalg.eigvals(Ms)), axis=1)
+        k = 0
+        for j, f in pick:
+            low[j] = max(low[j], float(np.max(rho[k:k + f.size])))
+            k += f.size
+        floor = np.concatenate([np.full(f.size, max(low[j], best[j])) for j, f in pick])
         sig = np.linalg.norm(Ms, ord=2, axis=(1, 2))
-        mu = np.minimum(sig, _mu_upper(Ms))
+        mu = np.minimum(sig, _mu_upper(Ms, floor=floor))
         k = 0
         for j, f in pick:
             r = f.size
@@ -512,17 +565,26 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
     mr, mg, dm, dg, dp = (np.full(P, np.nan) for _ in range(5))
     poles, parts = [], []
     d = path.scales
+    Ks = np.array([gain_at(path.theta2[j]) for j in range(P)]) * d[None, None, :]
+    As = path.A / d[None, :, None] * d[None, None, :]
+    Bs = path.B / d[None, :, None]
+    # one batched eigendecomposition of every closed loop, reused by the disk margin
+    lam_all, V_all = np.linalg.eig(As - Bs @ Ks)
+    if disk:
+        condV = np.linalg.cond(V_all)
+        try:
+            W_all = np.linalg.inv(V_all)
+        except np.linalg.LinAlgError:
+            W_all = None
     for j in range(P):
-        Ks = gain_at(path.theta2[j]) * d[None, :]
-        As = path.A[j] / d[:, None] * d[None, :]
-        Bs = path.B[j] / d[:, None]
-        lam = np.linalg.eigvals(As - Bs @ Ks)
+        lam = lam_all[j]
         lam = lam[np.lexsort((lam.imag, lam.real))]
         poles.append(lam)
         mr[j] = np.max(lam.real) / n
         mg[j] = np.min(lqr.sector_margin(lam, n, sigma, half_angle_deg))
         if disk:
-            parts.append(_disk_parts(As, Bs, Ks, n))
+            eig = (lam_all[j], V_all[j], None if W_all is None else W_all[j], condV[j])
+            parts.append(_disk_parts(As[j], Bs[j], Ks[j], n, eig=eig))
     if disk:
         # batched branch and bound over every TEA's frequencies
         dm[:] = _disk_alpha_batch(parts)
