@@ -582,9 +582,27 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
         poles.append(lam)
         mr[j] = np.max(lam.real) / n
         mg[j] = np.min(lqr.sector_margin(lam, n, sigma, half_angle_deg))
-        if disk:
+    if disk:
+        # S(jω) − I/2 of every stable, well-conditioned loop in one modal evaluation
+        # (as in _disk_parts); the others one by one
+        fast = (np.max(lam_all.real, axis=1) < 0) & (condV < 1e8) & (W_all is not None)
+        parts = [None] * P
+        if np.any(fast):
+            idx = np.flatnonzero(fast)
+            w = n * DISK_OMEGA_N
+            m = Bs.shape[2]
+            KV = Ks[idx] @ V_all[idx]                                   # (Q, M, N)
+            WB = W_all[idx] @ Bs[idx]                                   # (Q, N, M)
+            res = 1.0 / (1j * w[None, :, None] - lam_all[idx][:, None, :])   # (Q, F, N)
+            M_all = (0.5 * np.eye(m))[None, None] - np.einsum("qak,qfk,qkb->qfab", KV, res, WB,
+                                                                optimize=True)
+            aM = np.abs(M_all)
+            cheap = np.sqrt(aM.sum(axis=2).max(axis=2) * aM.sum(axis=3).max(axis=2))
+            for r, j in enumerate(idx):
+                parts[j] = (M_all[r], cheap[r])
+        for j in np.flatnonzero(~fast):
             eig = (lam_all[j], V_all[j], None if W_all is None else W_all[j], condV[j])
-            parts.append(_disk_parts(As[j], Bs[j], Ks[j], n, eig=eig))
+            parts[j] = _disk_parts(As[j], Bs[j], Ks[j], n, eig=eig)
     if disk:
         # batched branch and bound over every TEA's frequencies
         dm[:] = _disk_alpha_batch(parts)
