@@ -4,7 +4,7 @@ The sector of Fig 5.2, for orbital rate n::
 
     S = {λ : Re λ ≤ −σ·n  and  |Im λ| ≤ tan φ · |Re λ|}        (σ = 0.5, φ = 45° in the report)
 
-The Sunkel–Shieh algorithm the report cites is not publicly available (NOTES.md, "Sector LQR").
+The Sunkel–Shieh algorithm the report cites is not publicly available (`docs/ERRATA.md` § Sector LQR).
 :func:`sector_lqr` instead returns an R, a Q ⪰ 0 and the gain K (u = −K x) that is the *exact*
 LQR gain of the α-shifted problem ::
 
@@ -329,7 +329,7 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
         when ``scale`` is given (dimensionless), else physical.  None or 0: minimum energy.
         A float q means q·I.
     scale : (N,) array or None
-        Nominal state magnitudes d (x = diag(d) x̃); strongly recommended (NOTES.md, "Scaling").
+        Nominal state magnitudes d (x = diag(d) x̃); strongly recommended (`docs/ERRATA.md` § Scaling).
     method : {"shift", "uniform"}
         Optimal pole shifting of the stray poles, or the smallest uniform shift.
     riccati_method : {"scipy", "sign", "slycot"}

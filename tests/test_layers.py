@@ -107,7 +107,7 @@ def test_old_module_paths_still_import():
 
 #: Files still citing a file outside the repository, edited in parallel by others (issue 12):
 #: their citations are replaced when those edits land.
-CITATION_PENDING = {"acmm/report.py", "acmm/lqr.py"}
+CITATION_PENDING = {"acmm/report.py"}
 
 
 def test_sources_cite_no_file_outside_the_repository():
