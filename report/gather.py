@@ -237,7 +237,7 @@ def _robustness_from_sweep(root, *, fast, rerun):
 
     from acmm.config import packaged_config_path
     from acmm.results import read_h5
-    from acmm.sweep_config import parse_sweep
+    from acmm.sweep.config import parse_sweep
 
     p = packaged_config_path(SWEEP_CONFIG)
     if not p.exists():

@@ -19,7 +19,7 @@ from acmm.errors import ConfigError
 from acmm.results import read_h5
 from acmm.sweep import (case_values, perturb_inertia, run_sweep, simulate_values, unphysical_reason,
                         prepare_base)
-from acmm.sweep_config import load_sweep, parse_sweep
+from acmm.sweep.config import load_sweep, parse_sweep
 
 from conftest import CONFIGS
 
