@@ -108,9 +108,24 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     serial = isinstance(executor, SerialExecutor)
     n_workers = 1 if serial else _scheduler_workers(executor, workers)
     size = chunk if chunk is not None else (1 if serial else chunk_size(len(tasks), n_workers))
-    chunks = make_chunks(tasks, size)
     window = 1 if serial else max(4, 2 * n_workers)
     remote = _remote_contexts(executor, contexts)
+    n_new = _drive(sweep, executor, close, journal, make_chunks(tasks, size), remote, window, done, total,
+                   progress, after_record, snapshot_interval)
+    close()
+    path, figs = write_results(sweep, list(done.values()), complete=True,
+                               figures=sweep.file.output.figures if figures is None else figures,
+                               wall_time=time.perf_counter() - t0)
+    rows, margins = _split(sweep, list(done.values()))
+    return SweepResult(sweep, path, rows, margins, n_new, n_resumed, time.perf_counter() - t0, True, figs)
+
+
+def _drive(sweep: Sweep, executor, close, journal, chunks: list, remote: dict, window: int, done: dict,
+           total: int, progress, after_record, snapshot_interval: float) -> int:
+    """Submit the chunks (at most ``window`` in flight), journal every record as it comes back and
+    snapshot ``sweep.h5`` every ``snapshot_interval`` s; on any exit the journal is closed, and on
+    an interruption the pending tasks are cancelled, the executor closed and a partial
+    ``sweep.h5`` written.  Returns the number of new records (added to ``done``)."""
     n_new = 0
     last_snap = time.monotonic()
     complete = False
@@ -153,10 +168,4 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
                 close()
                 if done:
                     write_results(sweep, list(done.values()), complete=False)
-    close()
-    path, figs = write_results(sweep, list(done.values()), complete=True,
-                               figures=sweep.file.output.figures if figures is None else figures,
-                               wall_time=time.perf_counter() - t0)
-    rows, margins = _split(sweep, list(done.values()))
-    return SweepResult(sweep, path, rows, margins, n_new, n_resumed, time.perf_counter() - t0, True, figs)
-
+    return n_new

@@ -13,35 +13,13 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
     """One QPP chapter; returns (β3 with sin 5t, with sin t) for ch. 13, else None."""
     import h5py
 
-    from qpp.hinf import hinf_gains
-
     ctx.section(key)
     cfg = ctx.g.configs[name]
     dpath, spath = ctx.run(f"qpp design:{name}").path, ctx.run(f"qpp simulate:{name}").path
     d = ctx.data(f"qpp design:{name}")
     pub = cfg.published
     chap = "13" if key == "qpp13" else "14"
-    rows = []
-    dgkf = hinf_gains(cfg.lure_plant(), rho=cfg.hinf.rho, a=cfg.hinf.a, nu=cfg.hinf.nu,
-                      weight=cfg.hinf.weight, observer="dgkf")
-    for gname, comp, printed in (("K1", d["K1"], pub.K1), ("Kc", d["Kc"], pub.Kc), ("H", d["H"], pub.H)):
-        P = np.asarray(printed, float)
-        for idx in np.ndindex(P.shape):
-            if P[idx] == 0.0:
-                continue
-            ps = _printed_str(P[idx], gname)
-            expl = ""
-            if gname == "H":
-                dv = float(np.asarray(dgkf.H)[idx])
-                expl = (f"observer gain from the filter Riccati (NOTES.md: printed eq 11.2 has an indefinite "
-                        f"solution); DGKF-style reading gives {dv:.4f}"
-                        + (" (matched)" if matches_printed(ps, dv) else "")
-                        + f"; within {100 * abs(comp[idx] - P[idx]) / abs(P[idx]):.1f} % of the printed value")
-            pn = ctx.ledger_add(f"ch. {chap}", f"{gname}{tuple(int(i) + 1 for i in idx)}", ps, comp[idx],
-                                 explanation=expl)
-            rows.append([f"{gname}{tuple(int(i) + 1 for i in idx)}", ps, f"{comp[idx]:.5g}", ctx.status_text(pn)])
-    ctx.doc.table(["gain", "printed", "computed (ch. 11 Riccati)", "status"], rows,
-                   f"Ch. {chap} gains (ρ = {cfg.hinf.rho:g}, a = {cfg.hinf.a:g} 1/s, servo weight [0 C_c])")
+    _gain_table(ctx, chap, cfg, d)
     with h5py.File(dpath, "r") as f:
         b1 = {rd: (float(f[f"beta1_{rd.replace('.', '_')}"][()]),
                    float(f[f"beta1_{rd.replace('.', '_')}"].attrs["grid_value"]),
@@ -77,6 +55,51 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
     ctx.doc.table(["quantity", "printed", "computed", "status"], brow,
                    f"Ch. {chap}: β1, thresholds and the circle criterion")
     beta3 = _thresholds(ctx, chap, cfg, th)
+    _error_table(ctx, chap, cfg, spath, printed_errors, out_labels)
+    led = [pn for pn in ctx.ledger if pn.section == f"ch. {chap}" and pn.quantity.startswith("‖y")]
+    if led:
+        ctx.doc.table(["printed", "quantity", "computed", "status"],
+                       [[p.printed, p.quantity, _fmt(p.computed, "{:.5f}"), ctx.status_text(p)] for p in led],
+                       "Printed simulation results")
+    ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion", fig_circle(d, name, ctx.figdir))
+    ctx.doc.fig(f"{name}_responses", f"Ch. {chap}: outputs vs nominal outputs and tracking errors",
+                 fig_qpp(spath, d, cfg.spheres.beta_o, name, ctx.figdir, out_labels))
+    return beta3
+
+
+
+def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
+    """K1, Kc, H printed vs synthesized (ch. 11 Riccati); H also vs the DGKF-style observer."""
+    from qpp.hinf import hinf_gains
+
+    pub = cfg.published
+    rows = []
+    dgkf = hinf_gains(cfg.lure_plant(), rho=cfg.hinf.rho, a=cfg.hinf.a, nu=cfg.hinf.nu,
+                      weight=cfg.hinf.weight, observer="dgkf")
+    for gname, comp, printed in (("K1", d["K1"], pub.K1), ("Kc", d["Kc"], pub.Kc), ("H", d["H"], pub.H)):
+        P = np.asarray(printed, float)
+        for idx in np.ndindex(P.shape):
+            if P[idx] == 0.0:
+                continue
+            ps = _printed_str(P[idx], gname)
+            expl = ""
+            if gname == "H":
+                dv = float(np.asarray(dgkf.H)[idx])
+                expl = (f"observer gain from the filter Riccati (NOTES.md: printed eq 11.2 has an indefinite "
+                        f"solution); DGKF-style reading gives {dv:.4f}"
+                        + (" (matched)" if matches_printed(ps, dv) else "")
+                        + f"; within {100 * abs(comp[idx] - P[idx]) / abs(P[idx]):.1f} % of the printed value")
+            pn = ctx.ledger_add(f"ch. {chap}", f"{gname}{tuple(int(i) + 1 for i in idx)}", ps, comp[idx],
+                                 explanation=expl)
+            rows.append([f"{gname}{tuple(int(i) + 1 for i in idx)}", ps, f"{comp[idx]:.5g}", ctx.status_text(pn)])
+    ctx.doc.table(["gain", "printed", "computed (ch. 11 Riccati)", "status"], rows,
+                   f"Ch. {chap} gains (ρ = {cfg.hinf.rho:g}, a = {cfg.hinf.a:g} 1/s, servo weight [0 C_c])")
+
+
+def _error_table(ctx: SectionWriter, chap: str, cfg, spath, printed_errors, out_labels) -> None:
+    """Simulated tracking errors per scenario (``qpp_sim.h5``) and the printed ones in the ledger."""
+    import h5py
+
     with h5py.File(spath, "r") as f:
         scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
         erow = []
@@ -92,15 +115,6 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
                                     out_labels[i], bound=bound, explanation=expl)
     ctx.doc.table(["scenario", "γ / payload", "sup |y_i − y_oi| per output", "‖y − y_o‖∞", "β_o", "sphere"],
                    erow, f"Ch. {chap}: simulated tracking errors (nonlinear closed loop)")
-    led = [pn for pn in ctx.ledger if pn.section == f"ch. {chap}" and pn.quantity.startswith("‖y")]
-    if led:
-        ctx.doc.table(["printed", "quantity", "computed", "status"],
-                       [[p.printed, p.quantity, _fmt(p.computed, "{:.5f}"), ctx.status_text(p)] for p in led],
-                       "Printed simulation results")
-    ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion", fig_circle(d, name, ctx.figdir))
-    ctx.doc.fig(f"{name}_responses", f"Ch. {chap}: outputs vs nominal outputs and tracking errors",
-                 fig_qpp(spath, d, cfg.spheres.beta_o, name, ctx.figdir, out_labels))
-    return beta3
 
 
 def _printed_gain_rows(ctx: SectionWriter, chap, d, pub, names=()):
