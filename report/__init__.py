@@ -7,7 +7,7 @@ it imports both, neither imports it.
 ``<root>/<name>/*.h5`` whose ``design_hash`` / ``config_hash`` match the packaged configs, else
 running the stage), writes one section per module of :mod:`report.sections` (each with declared
 inputs), keeps the printed-number ledger (:mod:`report.ledger`), draws the figures
-(:mod:`report.figures`, style :mod:`acmm.report_style`: vector PDF + PNG) and writes
+(:mod:`report.figures`, style :mod:`report.figure_style`: vector PDF + PNG) and writes
 
 * ``<out>/index.html`` — self-contained (PNG figures embedded as base64; no server needed),
 * ``<out>/report.md`` — the same content in Markdown (figures as relative files),

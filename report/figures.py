@@ -1,4 +1,4 @@
-"""Every figure of the report (vector PDF + PNG, :mod:`acmm.report_style`)."""
+"""Every figure of the report (vector PDF + PNG, :mod:`report.figure_style`)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -13,7 +13,7 @@ AXES = ("roll", "pitch", "yaw")
 def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     """K(i, j) vs pitch TEA for the 24 columns: LQR gains (markers) and the schedule (lines)."""
     from acmm.linearize import STATE_NAMES, state_units
-    from acmm.report_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, pyplot, save
     from acmm.schedule import schedule_gain
 
     plt = pyplot()
@@ -56,7 +56,7 @@ def _sector(ax, sigma, half_angle_deg, xmin):
 
 def fig_pole_maps(stair: dict, mb3: dict, dec: dict, dec_true_poles, n, sector, figdir: Path):
     """Closed-loop poles / n: the stair-case schedule points, and the claim-1 designs."""
-    from acmm.report_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
     sigma, phi = sector
@@ -96,7 +96,7 @@ def fig_pole_maps(stair: dict, mb3: dict, dec: dict, dec_true_poles, n, sector, 
 
 def fig_claim1(mb3: dict, dec: dict, figdir: Path):
     """Attitude error, torque and momentum per axis: coupled vs cross-inertia-free (Figs 6.2–6.13)."""
-    from acmm.report_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
     fig, axs = plt.subplots(4, 3, figsize=(11, 10))
@@ -124,7 +124,7 @@ def fig_claim1(mb3: dict, dec: dict, figdir: Path):
 
 def fig_staircase(sim: dict, figdir: Path):
     """Inertia steps (Figs 6.14–6.19) and the responses (Figs 6.20–6.30)."""
-    from acmm.report_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
     o = sim["orbits"]
@@ -179,7 +179,7 @@ def fig_staircase(sim: dict, figdir: Path):
 
 def fig_robustness(params: dict, base, verdict, peak, names, figdir: Path):
     """Peak attitude error (deg) vs max_k |δ_k| per Monte Carlo case, one panel per base."""
-    from acmm.report_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
     keys = [k for k in ("dI11", "dI22", "dI33", "dI12", "dI13", "dI23") if k in params]
@@ -211,7 +211,7 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
     """Per scenario: y and y_o; |y − y_o| against β_o (Figs 13.3–13.9, 14.4)."""
     import h5py
 
-    from acmm.report_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
     with h5py.File(sim_path, "r") as f:
@@ -243,7 +243,7 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
 
 def fig_circle(design: dict, name: str, figdir: Path):
     """Circle criterion (lemma 1): h_ii(−a + jω) with Gershgorin mean radii and the critical disc."""
-    from acmm.report_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, pyplot, save
     from qpp.circle import critical_disc
 
     plt = pyplot()
