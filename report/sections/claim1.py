@@ -37,7 +37,7 @@ def build(ctx: SectionWriter, dec_true_poles: np.ndarray) -> Claim1Numbers:
                      a["verdict"].upper(), f"{float(a['stop_time_orbits']):.3f}",
                      f"{np.degrees(np.abs(s['attitude_error'])).max():.2f}"])
     ctx.doc.table(["design model", "sector margin (n)", "Riccati residual", "nonlinear verdict",
-                    "stopped at (orbit)", "peak |θ − θ*| (deg)"], rows,
+                   "stopped at (orbit)", "peak |θ − θ*| (deg)"], rows,
                    "Claim 1 on the nonlinear MB3 model (same TEA, initial condition and disturbances)")
     o, err = s_c["orbits"], np.degrees(np.abs(s_c["attitude_error"]))
     first = err[o <= 1.0].max(axis=0)
@@ -54,8 +54,8 @@ def build(ctx: SectionWriter, dec_true_poles: np.ndarray) -> Claim1Numbers:
         f"Verdict: claim 1 {'REPRODUCED' if (div < 0.1 and s_c['attrs']['verdict'] == 'bounded') else 'NOT reproduced'}.",
     ])
     ctx.ledger_add("Claim 1", "divergence of the cross-inertia-free design", "0.1", div, "orbit",
-                    bound="upper")
+                   bound="upper")
     ctx.doc.fig("claim1_responses", "Claim 1: attitude error (full run and first 0.1 orbit), torque and "
-                 "momentum per axis (Figs 6.2–6.13 analogue)",
-                 fig_claim1(s_c, s_d, ctx.figdir))
+                "momentum per axis (Figs 6.2–6.13 analogue)",
+                fig_claim1(s_c, s_d, ctx.figdir))
     return numbers

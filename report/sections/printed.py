@@ -11,8 +11,8 @@ def build(ctx: SectionWriter, ledger: list) -> None:
     for pn in ledger:
         counts[pn.status] = counts.get(pn.status, 0) + 1
     ctx.doc.p("Every printed number this report compares, with its status. Matched: |computed − printed| ≤ "
-               "half a unit of the last printed digit. Summary: " +
-               "; ".join(f"{v} {k}" for k, v in sorted(counts.items())) + ".")
+              "half a unit of the last printed digit. Summary: " +
+              "; ".join(f"{v} {k}" for k, v in sorted(counts.items())) + ".")
     ctx.doc.table(["section", "quantity", "printed", "computed", "unit", "status"],
-                   [[p.section, p.quantity, p.printed, "—" if p.computed is None else f"{p.computed:.6g}",
-                     p.unit, ctx.status_text(p)] for p in ledger])
+                  [[p.section, p.quantity, p.printed, "—" if p.computed is None else f"{p.computed:.6g}",
+                    p.unit, ctx.status_text(p)] for p in ledger])

@@ -53,17 +53,17 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
                  f"largest admissible sector scale {float(d['circle']['max_scale']):.4g}",
                  "✔ reproduced" if circle_passed else "not reproduced"])
     ctx.doc.table(["quantity", "printed", "computed", "status"], brow,
-                   f"Ch. {chap}: β1, thresholds and the circle criterion")
+                  f"Ch. {chap}: β1, thresholds and the circle criterion")
     beta3 = _thresholds(ctx, chap, cfg, th)
     _error_table(ctx, chap, cfg, spath, printed_errors, out_labels)
     led = [pn for pn in ctx.ledger if pn.section == f"ch. {chap}" and pn.quantity.startswith("‖y")]
     if led:
         ctx.doc.table(["printed", "quantity", "computed", "status"],
-                       [[p.printed, p.quantity, _fmt(p.computed, "{:.5f}"), ctx.status_text(p)] for p in led],
-                       "Printed simulation results")
+                      [[p.printed, p.quantity, _fmt(p.computed, "{:.5f}"), ctx.status_text(p)] for p in led],
+                      "Printed simulation results")
     ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion", fig_circle(d, name, ctx.figdir))
     ctx.doc.fig(f"{name}_responses", f"Ch. {chap}: outputs vs nominal outputs and tracking errors",
-                 fig_qpp(spath, d, cfg.spheres.beta_o, name, ctx.figdir, out_labels))
+                fig_qpp(spath, d, cfg.spheres.beta_o, name, ctx.figdir, out_labels))
     return beta3
 
 
@@ -90,10 +90,10 @@ def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
                         + (" (matched)" if matches_printed(ps, dv) else "")
                         + f"; within {100 * abs(comp[idx] - P[idx]) / abs(P[idx]):.1f} % of the printed value")
             pn = ctx.ledger_add(f"ch. {chap}", f"{gname}{tuple(int(i) + 1 for i in idx)}", ps, comp[idx],
-                                 explanation=expl)
+                                explanation=expl)
             rows.append([f"{gname}{tuple(int(i) + 1 for i in idx)}", ps, f"{comp[idx]:.5g}", ctx.status_text(pn)])
     ctx.doc.table(["gain", "printed", "computed (ch. 11 Riccati)", "status"], rows,
-                   f"Ch. {chap} gains (ρ = {cfg.hinf.rho:g}, a = {cfg.hinf.a:g} 1/s, servo weight [0 C_c])")
+                  f"Ch. {chap} gains (ρ = {cfg.hinf.rho:g}, a = {cfg.hinf.a:g} 1/s, servo weight [0 C_c])")
 
 
 def _error_table(ctx: SectionWriter, chap: str, cfg, spath, printed_errors, out_labels) -> None:
@@ -112,9 +112,9 @@ def _error_table(ctx: SectionWriter, chap: str, cfg, spath, printed_errors, out_
             for (scn, i, pstr, bound, expl) in printed_errors:
                 if scn == k:
                     ctx.ledger_add(f"ch. {chap}", f"‖y{i + 1} − y_o{i + 1}‖∞, {k}", pstr, per[i],
-                                    out_labels[i], bound=bound, explanation=expl)
+                                   out_labels[i], bound=bound, explanation=expl)
     ctx.doc.table(["scenario", "γ / payload", "sup |y_i − y_oi| per output", "‖y − y_o‖∞", "β_o", "sphere"],
-                   erow, f"Ch. {chap}: simulated tracking errors (nonlinear closed loop)")
+                  erow, f"Ch. {chap}: simulated tracking errors (nonlinear closed loop)")
 
 
 def _printed_gain_rows(ctx: SectionWriter, chap, d, pub, names=()):
@@ -126,8 +126,8 @@ def _printed_gain_rows(ctx: SectionWriter, chap, d, pub, names=()):
     rows = []
     b1e, b1p = float(pc["beta1_eq10_7"]), float(pc["beta1_printed"])
     pn = ctx.ledger_add(f"ch. {chap}", "β1 of the printed gains (B_z eq 10.7)", _num_str(pub.beta1), b1e,
-                         explanation=f"printed gains, exact L∞ norm: {b1e:.5f} (eq 10.7 B_z), {b1p:.5f} "
-                                     "(printed B_z); see the β1 row above for the synthesized gains")
+                        explanation=f"printed gains, exact L∞ norm: {b1e:.5f} (eq 10.7 B_z), {b1p:.5f} "
+                                    "(printed B_z); see the β1 row above for the synthesized gains")
     rows.append(["β1 with the printed gains, B_z eq 10.7 / printed", _num_str(pub.beta1),
                  f"{b1e:.6f} / {b1p:.6f}", ctx.status_text(pn)])
     for k, row in enumerate(np.atleast_2d(pc["thresholds"])):
@@ -149,16 +149,16 @@ def _thresholds(ctx: SectionWriter, chap, cfg, th):
         b3_5 = spheres.beta3_sinusoidal(0.05, 5.0, cfg.spheres.T)
         b3_1 = spheres.beta3_sinusoidal(0.05, nl.omega, cfg.spheres.T)
         ctx.ledger_add("ch. 13", "β3 = 0.05‖(sin 5t)_T‖₂, T = 0.5 s", _num_str(pub.beta3), b3_5,
-                        explanation=f"the exact integral gives 0.05‖(sin 5t)_T‖₂ = {b3_5:.5f} "
-                                    f"({100 * abs(b3_5 - pub.beta3) / pub.beta3:.2f} % above the printed value, "
-                                    "presumably a coarse quadrature); the definition 10.54 with sin t gives "
-                                    f"{b3_1:.5f} (NOTES.md)")
+                       explanation=f"the exact integral gives 0.05‖(sin 5t)_T‖₂ = {b3_5:.5f} "
+                                   f"({100 * abs(b3_5 - pub.beta3) / pub.beta3:.2f} % above the printed value, "
+                                   "presumably a coarse quadrature); the definition 10.54 with sin t gives "
+                                   f"{b3_1:.5f} (NOTES.md)")
         b4 = th["report"][2]
         ctx.ledger_add("ch. 13", "β4 = 0.05·‖(y_o)_T‖₂", _num_str(pub.beta4), b4,
-                        explanation=f"‖(y_o)_T‖₂ = {b4 / 0.05:.4f} here vs the printed 0.363: y_o is the "
-                                    "nominal closed-loop output on [0, T], which depends on the gains and the "
-                                    "initial servo state; m changes by "
-                                    f"{abs(th['report'][3] - pub.m) / pub.m * 100:.1f} %")
+                       explanation=f"‖(y_o)_T‖₂ = {b4 / 0.05:.4f} here vs the printed 0.363: y_o is the "
+                                   "nominal closed-loop output on [0, T], which depends on the gains and the "
+                                   "initial servo state; m changes by "
+                                   f"{abs(th['report'][3] - pub.m) / pub.m * 100:.1f} %")
     else:
         b3, b4 = th["trajectory"][1], th["trajectory"][2]
         why = (f"the arm mass μ is not printed (μ = {cfg.nonlinearity.mu:g} kg assumed) and the report does not "

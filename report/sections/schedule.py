@@ -24,11 +24,11 @@ def build(ctx: SectionWriter) -> np.ndarray:
     margins = np.array([float(p["sector_margin"]) for p in pts])
     resid = np.array([float(p["riccati_residual"]) for p in pts])
     ctx.doc.p(f"{len(pts)} design points along the MB3 → AC blend, evenly spaced in pitch TEA from "
-               f"{np.degrees(d['tea'][0, 1]):.2f}° to {np.degrees(d['tea'][-1, 1]):.2f}°; sector LQR "
-               f"(Re λ ≤ −{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g}°) per point, "
-               f"then an order-{order} {form} schedule in θ2* (the report uses order 2), fitted by "
-               f"{_decode(sc.get('fit_method', b'least_squares'))}"
-               " (README, 'Gain schedule').")
+              f"{np.degrees(d['tea'][0, 1]):.2f}° to {np.degrees(d['tea'][-1, 1]):.2f}°; sector LQR "
+              f"(Re λ ≤ −{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g}°) per point, "
+              f"then an order-{order} {form} schedule in θ2* (the report uses order 2), fitted by "
+              f"{_decode(sc.get('fit_method', b'least_squares'))}"
+              " (README, 'Gain schedule').")
     cm = np.asarray(sc["check_margin"])
     ctx.doc.table(["quantity", "value"], [
         ["worst sector margin of the LQR gains (units of n, > 0 inside)", f"{margins.min():+.4f}"],
@@ -44,7 +44,7 @@ def build(ctx: SectionWriter) -> np.ndarray:
     _conditioning(ctx, d, pts)
     files = fig_gain_schedule(d, cfg.design.drf_mode, ctx.figdir)
     ctx.doc.fig("gain_schedule", "Gain schedule: the 72 gains K(i, j) vs pitch TEA (Figs 5.3–5.26 analogue)",
-                 files)
+                files)
     # claim-1 pole map: the decoupled gain on the true coupled model
     mb3 = ctx.data("acmm design:mb3")
     dec = ctx.data("acmm design:mb3_decoupled")
@@ -56,8 +56,8 @@ def build(ctx: SectionWriter) -> np.ndarray:
     files = fig_pole_maps(d, mb3, dec, ev, n, (cfg.design.sector.sigma, cfg.design.sector.half_angle_deg),
                           ctx.figdir)
     ctx.doc.fig("pole_maps", "Closed-loop poles (units of n) and the sector of Fig 5.2: every stair-case "
-                 "design point (left); the claim-1 designs and the cross-inertia-free gain on the true "
-                 "coupled MB3 model (right)", files)
+                "design point (left); the claim-1 designs and the cross-inertia-free gain on the true "
+                "coupled MB3 model (right)", files)
     return ev
 
 
@@ -74,7 +74,7 @@ def _conditioning(ctx: SectionWriter, d, pts):
                          f"{float(p['robustness_radius_elementwise']):.1e}",
                          f"{float(p['riccati_condition']):.1e}"])
         ctx.doc.table(["point", "θ2* (deg)", "sector margin (n)", "max eigenvalue condition (scaled)",
-                        "sector robustness radius ‖δK‖/‖K‖", "radius, elementwise", "CARE condition"],
+                       "sector robustness radius ‖δK‖/‖K‖", "radius, elementwise", "CARE condition"],
                        rows, "Design points: conditioning of the closed loop and the estimated smallest "
                              "relative gain error that moves a pole out of the sector (first order)")
     sc = d["schedule"]
@@ -91,11 +91,11 @@ def _conditioning(ctx: SectionWriter, d, pts):
     ], "The order-2 schedule judged on the closed loop at every path TEA")
     f1 = plots.schedule_path_check(pa["theta2"], mr, mg, dm, ctx.figdir / "schedule_path_margins", vector=True)
     ctx.doc.fig("schedule_path_margins", "Scheduled gain on the local model along the path: largest Re λ, "
-                 "worst sector margin and disk margin at the plant input vs pitch TEA",
-                 {"png": f1[0], "pdf": f1[1]})
+                "worst sector margin and disk margin at the plant input vs pitch TEA",
+                {"png": f1[0], "pdf": f1[1]})
     cfg = ctx.g.configs["staircase"]
     f2 = plots.scheduled_pole_map(pa["poles"], pa["theta2"], cfg.orbit_rate, cfg.design.sector.sigma,
                                   cfg.design.sector.half_angle_deg, ctx.figdir / "schedule_path_poles",
                                   vector=True)
     ctx.doc.fig("schedule_path_poles", "Poles of the scheduled loop at every path TEA with the sector of "
-                 "Fig 5.2", {"png": f2[0], "pdf": f2[1]})
+                "Fig 5.2", {"png": f2[0], "pdf": f2[1]})

@@ -16,12 +16,12 @@ def build(ctx: SectionWriter) -> None:
     a = s["attrs"]
     if ctx.fast:
         ctx.doc.p(f"FAST MODE (--fast): the stair-case is shortened to {FAST_ORBITS:g} orbits "
-                   f"(about one orbit per level). Run `acmm report` without --fast for the report's 130 orbits.")
+                  f"(about one orbit per level). Run `acmm report` without --fast for the report's 130 orbits.")
     lv = s["levels"]
     o = s["orbits"]
     ctx.doc.p(f"{len(lv['start'])} inertia levels over {o[-1]:.1f} orbits, scheduled gain K(θ̂2*) per level, "
-               f"torque limit ±{cfg.actuators.torque_limit:g} ft·lbf, momentum limit "
-               f"±{cfg.actuators.momentum_limit:g} ft·lbf·s. Verdict: {a['verdict'].upper()} ({a['reason']}).")
+              f"torque limit ±{cfg.actuators.torque_limit:g} ft·lbf, momentum limit "
+              f"±{cfg.actuators.momentum_limit:g} ft·lbf·s. Verdict: {a['verdict'].upper()} ({a['reason']}).")
     orbit = 2 * np.pi / cfg.orbit_rate
     rows = []
     for k in range(len(lv["steady_error"])):
@@ -31,13 +31,13 @@ def build(ctx: SectionWriter) -> None:
                      " / ".join(f"{v:.3f}" for v in np.degrees(lv["steady_error"][k])),
                      f"{lv['peak_momentum'][k]:.0f}"])
     ctx.doc.table(["level", "start (orbit)", "θ2* (deg)", "I11 / I22 / I33 (10⁶ slug·ft²)",
-                    "steady |θ − θ̂*| roll / pitch / yaw (deg)", "peak |h| (ft·lbf·s)"], rows,
+                   "steady |θ − θ̂*| roll / pitch / yaw (deg)", "peak |h| (ft·lbf·s)"], rows,
                    "Per-level statistics (steady: second half of each dwell)")
     tsat = float(np.mean(np.any(s["torque_saturated"] > 0, axis=1)))
     msat = float(np.mean(np.any(s["momentum_saturated"] > 0, axis=1)))
     ctx.doc.p(f"Samples with a torque-saturated axis: {100 * tsat:.2f} %; with a momentum-saturated axis: "
-               f"{100 * msat:.2f} %. Peak |u| = {np.abs(s['u']).max():.1f} ft·lbf, peak |h| = "
-               f"{np.abs(s['h']).max():.0f} ft·lbf·s.")
+              f"{100 * msat:.2f} %. Peak |u| = {np.abs(s['u']).max():.1f} ft·lbf, peak |h| = "
+              f"{np.abs(s['h']).max():.0f} ft·lbf·s.")
     if not ctx.fast:
         ctx.ledger_add("Claim 2", "stair-case length", "130", o[-1], "orbit")
     i0, i1 = lv["inertia"][0], lv["inertia"][-1] if len(lv["inertia"]) else lv["inertia"][0]
@@ -45,9 +45,9 @@ def build(ctx: SectionWriter) -> None:
         off = [(0, 1), (0, 2), (1, 2)]
         var = max(100 * abs(i1[i, j] / i0[i, j] - 1) for i, j in off if i0[i, j] != 0)
         ctx.ledger_add("Claim 2", "largest cross-inertia variation MB3 → AC ('up to 1600 %')", "1600", var,
-                        "%", bound="upper")
+                       "%", bound="upper")
     f1, f2, f3 = fig_staircase(s, ctx.figdir)
     ctx.doc.fig("staircase_inertia", "Inertia elements vs time (Figs 6.14–6.19 analogue)", f1)
     ctx.doc.fig("staircase_responses", "Attitude error, rate, torque and momentum per axis (Figs 6.20–6.30 "
-                 "analogue)", f2)
+                "analogue)", f2)
     ctx.doc.fig("staircase_levels", "Per-level steady error and peak momentum vs the level's pitch TEA", f3)

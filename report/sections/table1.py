@@ -20,10 +20,10 @@ def build(ctx: SectionWriter) -> dict:
 
     ctx.section("table1")
     ctx.doc.p("Table 1 of CR-185644 next to this run. The bias torque is not printed in the report: each "
-               "config uses the bias back-solved from eq 4.1 at the printed attitude (bias_from_tea), and the "
-               "TEA is then recomputed by continuation from LVLH (NOTES.md), so the computed TEA is an "
-               "independent solve of eqs 4.1–4.3, not a copy. The zero-bias TEA shows how much of each "
-               "attitude the inertia alone explains.")
+              "config uses the bias back-solved from eq 4.1 at the printed attitude (bias_from_tea), and the "
+              "TEA is then recomputed by continuation from LVLH (NOTES.md), so the computed TEA is an "
+              "independent solve of eqs 4.1–4.3, not a copy. The zero-bias TEA shows how much of each "
+              "attitude the inertia alone explains.")
     rows, teas = [], {}
     for name in ("mb3", "ac"):
         cfg = ctx.g.configs[name]
@@ -43,12 +43,12 @@ def build(ctx: SectionWriter) -> dict:
             rows.append([name.upper(), f"θ{a + 1}* (deg)", pr["tea"][a], f"{t.theta_deg[a]:+.4f}",
                          f"{t0.theta_deg[a]:+.3f}", ctx.status_text(pn)])
     ctx.doc.table(["config", "quantity", "printed", "computed", "zero-bias TEA", "status"], rows,
-                   "Table 1: printed vs computed (TEA residual of eq 4.1 below 1e-12 ft·lbf)")
+                  "Table 1: printed vs computed (TEA residual of eq 4.1 below 1e-12 ft·lbf)")
     brow = []
     for name in ("mb3", "ac"):
         t, t0, bias = teas[name]
         brow.append([name.upper(), _fmt(bias, "{:+.5f}"), f"{t.residual:.1e}",
                      _fmt(np.degrees(t.omega) * 3600, "{:+.4f}")])
     ctx.doc.table(["config", "bias used [roll, pitch, yaw] (ft·lbf)", "residual (ft·lbf)", "ω* (deg/h)"], brow,
-                   "Bias torques used (back-solved from eq 4.1 at the printed TEA; not printed in the report)")
+                  "Bias torques used (back-solved from eq 4.1 at the printed TEA; not printed in the report)")
     return teas
