@@ -129,6 +129,14 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
     x0 = np.concatenate([dyn.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
     sc = dataclasses.replace(sc, x0=x0)
     r = sm.simulate(sc)
+    return _metrics(row, r, sc, true, n, spec)
+
+
+def _metrics(row: dict, r, sc, true: np.ndarray, n: float, spec) -> dict:
+    """Fill ``row`` with the verdict and metrics of the simulation ``r`` of scenario ``sc``;
+    ``true``: the plant's TEA per level (rad); ``n``: orbit rate (rad/s)."""
+    from acmm import simulate as sm
+
     err = np.degrees(np.abs(r.state[:, 3:6] - true[r.level]))
     half = r.t >= 0.5 * sc.t_end
     if not half.any():
