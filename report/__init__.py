@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from report.build import ReportResult, build_report
 from report.constants import FAST_ORBITS, SECTIONS, TIMING_DATASETS
-from report.context import Section, SectionWriter
+from report.context import SectionWriter
 from report.document import Doc, render_html, render_markdown
 from report.figures import (fig_circle, fig_claim1, fig_gain_schedule, fig_pole_maps, fig_qpp, fig_robustness,
                             fig_staircase)
@@ -55,7 +55,7 @@ class _Report(SectionWriter):
 __all__ = [
     "FAST_ORBITS", "FAST_SWEEP_ORBITS", "FAST_SWEEP_RUNS", "SECTIONS", "STATUS_BOUND", "STATUS_EXPLAINED",
     "STATUS_MATCHED", "STATUS_UNEXPLAINED", "SWEEP_CONFIG", "TIMING_DATASETS", "Doc", "Gathered",
-    "PrintedNumber", "ReportResult", "Section", "SectionWriter", "StageRun", "acmm_config", "build_manifest",
+    "PrintedNumber", "ReportResult", "SectionWriter", "StageRun", "acmm_config", "build_manifest",
     "build_report", "check_printed", "compare_manifests", "dataset_hashes", "ensure_acmm_design",
     "ensure_acmm_simulation", "ensure_qpp", "errata_rows", "fig_circle", "fig_claim1", "fig_gain_schedule",
     "fig_pole_maps", "fig_qpp", "fig_robustness", "fig_staircase", "gather", "matches_printed",

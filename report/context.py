@@ -2,7 +2,6 @@
 and where it writes: its own document blocks and printed-number ledger entries."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from report.constants import SECTIONS
@@ -11,22 +10,9 @@ from report.gather import Gathered
 from report.ledger import PrintedNumber, check_printed, status_text
 
 
-@dataclass
-class Section:
-    """The output of one section: its document blocks (figures included) and ledger entries."""
-
-    key: str
-    doc: Doc = field(default_factory=Doc)
-    ledger: list = field(default_factory=list)
-
-    @property
-    def figures(self) -> list:
-        """The figure blocks of this section: ``(stem, caption, files)``."""
-        return [b[1:] for b in self.doc.blocks if b[0] == "fig"]
-
-
 class SectionWriter:
-    """Inputs of a section (``g``: the gathered results, ``figdir``, ``fast``) and its output.
+    """Inputs of a section (``g``: the gathered results, ``figdir``, ``fast``) and its output:
+    ``doc`` (its text, tables and figures) and ``ledger`` (its printed numbers).
 
     HDF5 files are read once per report (``results``, shared read-only between sections);
     sections pass values to each other only through explicit arguments and return values.
