@@ -208,13 +208,20 @@ def design_one(spec: PointSpec, cfg) -> PointDesign:
     else:
         t = solve_tea(spec.inertia, n, spec.bias)
     model = lin.design_point(spec.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
-    res = lqr.sector_lqr(model.A, model.B, d.R * np.eye(3), n, sigma=d.sector.sigma,
-                         half_angle_deg=d.sector.half_angle_deg,
-                         Q0=design_q0(d, model.A.shape[0]),   # on the scaled states
-                         scale=model.scales, method=d.pole_method, riccati_method=d.riccati_method,
-                         residual_tol=d.residual_tol, min_margin=d.min_margin,
-                         line_spacing=d.line_spacing)
+    res = sector_design(model.A, model.B, model.scales, d, n)
     return PointDesign(spec, t, model, res)
+
+
+def sector_design(A, B, scales, d, n: float):
+    """The sector LQR of one linear model with the design settings ``d`` (``cfg.design``: R, Q0,
+    sector, pole method, Riccati solver, tolerances) — the one call the pipeline and the report's
+    errata evidence share."""
+    return lqr.sector_lqr(A, B, d.R * np.eye(3), n, sigma=d.sector.sigma,
+                          half_angle_deg=d.sector.half_angle_deg,
+                          Q0=design_q0(d, A.shape[0]),   # on the scaled states
+                          scale=scales, method=d.pole_method, riccati_method=d.riccati_method,
+                          residual_tol=d.residual_tol, min_margin=d.min_margin,
+                          line_spacing=d.line_spacing)
 
 
 def design_q0(d, nx: int):

@@ -110,7 +110,7 @@ def qpp_schema() -> dict:
 def sweep_schema() -> dict:
     """Schema of a sweep config: a sweep file, or an acmm config with an inline ``sweep`` section."""
     from acmm.config import Config
-    from acmm.sweep_config import SweepFile, SweepSpec
+    from acmm.sweep.config import SweepFile, SweepSpec
 
     keys, top = models_json_schema([(SweepFile, "validation"), (Config, "validation"),
                                     (SweepSpec, "validation")], schema_generator=_Generator)
@@ -168,7 +168,7 @@ def load_any(path, overrides=None):
     data = apply_overrides(data, overrides)
     kind = detect_kind(data)
     if kind == "sweep":
-        from acmm.sweep_config import parse_sweep
+        from acmm.sweep.config import parse_sweep
 
         model = parse_sweep(data, source=str(p), directory=p.parent)
     elif kind == "qpp":

@@ -31,7 +31,7 @@ def register(app: typer.Typer) -> None:
         writes <out>/index.html (self-contained) and <out>/report.md."""
         import sys
 
-        from acmm.report import build_report
+        from report import build_report
 
         def say(msg: str) -> None:
             sys.stderr.write(msg + "\n")

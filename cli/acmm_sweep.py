@@ -65,7 +65,7 @@ def register(app: typer.Typer) -> None:
         import numpy as np
 
         from acmm.sweep import run_sweep
-        from acmm.sweep_config import load_sweep
+        from acmm.sweep.config import load_sweep
 
         from cli.progress import announce_numba_compile
 

@@ -1,7 +1,7 @@
 """The one matplotlib style module of the project: backend, rcParams and colour cycle.
 
 Every figure (the stage figures of :mod:`acmm.plots` and :mod:`qpp.plots`, the sweep's, the
-report's through :mod:`acmm.report_style`) gets ``matplotlib.pyplot`` from here, on the
+report's through :mod:`report.figure_style`) gets ``matplotlib.pyplot`` from here, on the
 non-interactive Agg backend; nothing is shown on screen.  Two sets of rcParams exist so the
 existing figures stay as they were: :data:`RC` (publication style of ``acmm report``: Okabe–Ito
 colour-blind-safe cycle, light grids, no top/right spines) and :data:`STAGE_RC` (the stage

@@ -64,7 +64,7 @@ def main() -> int:
             without = _wall([acmm, stage, "staircase", "--no-figures"], tmp)
             print(f"   acmm {stage:<8} staircase: with figures {with_f:5.2f} s, without {without:5.2f} s "
                   f"(figures {with_f - without:+.2f} s; target with figures <= 1.5 s)")
-    from acmm.report import build_report
+    from report import build_report
 
     for fast in ([True, False] if args.full else [True]):
         with tempfile.TemporaryDirectory() as tmp:

@@ -43,7 +43,7 @@ def per_case_cost(base: str, orbits: float, n: int = 60) -> tuple[float, float]:
     from acmm import dynamics as dyn
     from acmm import simulate as sm
     from acmm.sweep import case_values, perturb_inertia, prepare_base, run_case, simulate_values
-    from acmm.sweep_config import parse_sweep
+    from acmm.sweep.config import parse_sweep
 
     sw = parse_sweep({"name": "bench_case", "sweep": {"base": base, "monte_carlo": {"inertia": {"percent": 30}},
                                                        "n_runs": n, "seed": 185644, "design": "fixed",
@@ -82,7 +82,7 @@ def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool
     """Run the table; returns {(executor, N): seconds} and prints rows through ``out``."""
     from common.results import read_h5
     from acmm.sweep import run_sweep
-    from acmm.sweep_config import parse_sweep
+    from acmm.sweep.config import parse_sweep
 
     tmp = Path(tempfile.mkdtemp(prefix="bench_scaling_"))
     spec = {"base": base, "monte_carlo": {"inertia": {"percent": 30}}, "n_runs": cases, "seed": 185644,

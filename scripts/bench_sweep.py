@@ -27,7 +27,7 @@ def main() -> None:
 
     from common.results import read_h5
     from acmm.sweep import run_sweep
-    from acmm.sweep_config import parse_sweep
+    from acmm.sweep.config import parse_sweep
 
     tmp = Path(tempfile.mkdtemp(prefix="bench_sweep_"))
     spec = {"base": args.base, "monte_carlo": {"inertia": {"percent": 30}}, "n_runs": args.cases,

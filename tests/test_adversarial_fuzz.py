@@ -123,7 +123,7 @@ def test_fuzz_qpp_config_accepts_or_refuses_cleanly(data):
 @settings(FUZZ, max_examples=150)
 @given(mutated("sweep_smoke"))
 def test_fuzz_sweep_config_accepts_or_refuses_cleanly(data):
-    from acmm.sweep_config import parse_sweep
+    from acmm.sweep.config import parse_sweep
 
     try:
         _strict(parse_sweep, data, directory=CONFIGS)

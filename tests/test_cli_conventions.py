@@ -91,7 +91,7 @@ def test_bad_override_key_is_reported_like_the_file(tmp_runs):
 
 
 def test_overrides_for_qpp_and_sweep(tmp_runs):
-    from acmm.sweep_config import load_sweep
+    from acmm.sweep.config import load_sweep
     from qpp.config import load_config as load_qpp
 
     assert load_qpp("qpp_siso", ["hinf.rho=2e-4"]).hinf.rho == 2e-4

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from acmm import report as rp
+import report as rp
 
 N = 0.0011
 MB3 = np.array([[23.22e6, -0.023e6, 0.477e6], [-0.023e6, 1.30e6, -0.011e6], [0.477e6, -0.011e6, 23.23e6]])

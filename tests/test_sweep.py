@@ -19,7 +19,7 @@ from common.errors import ConfigError
 from common.results import read_h5
 from acmm.sweep import (case_values, perturb_inertia, run_sweep, simulate_values, unphysical_reason,
                         prepare_base)
-from acmm.sweep_config import load_sweep, parse_sweep
+from acmm.sweep.config import load_sweep, parse_sweep
 
 from conftest import CONFIGS
 

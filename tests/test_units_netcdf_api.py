@@ -138,7 +138,7 @@ def test_results_open_in_xarray_with_named_dimensions_and_time(tmp_path):
 
 def test_sweep_h5_opens_in_xarray(tmp_path):
     from acmm.sweep import run_sweep
-    from acmm.sweep_config import load_sweep
+    from acmm.sweep.config import load_sweep
 
     data = yaml.safe_load((CONFIGS / "sweep_smoke.yaml").read_text())
     data["output"] = {"root": str(tmp_path / "runs"), "figures": False}
@@ -228,7 +228,7 @@ def test_si_design_h5_is_the_imperial_design_in_si_and_is_reused_exactly(tmp_pat
 
 # ---------------------------------------------------------------- unit strings everywhere
 def test_unit_strings_in_acmm_sweep_and_qpp_configs():
-    from acmm.sweep_config import SweepSpec
+    from acmm.sweep.config import SweepSpec
     from common.units import FT_LBF_IN_NM as k
     from qpp.config import QppConfig
 

@@ -1,0 +1,69 @@
+"""Batch sweeps and Monte Carlo robustness studies of the ACMM closed loop (issue 7).
+
+A sweep (:mod:`acmm.sweep.config`) varies plant parameters of one or more base configs and
+runs one nonlinear closed-loop simulation (ch. 6) per case.
+
+Cases
+    Case ``i`` of a Monte Carlo sweep draws its parameters from
+    ``numpy.random.default_rng(SeedSequence([seed, i]))``, so every case is reproducible from
+    (base config, case index, seed) alone, whatever the order or the machine that runs it.  The
+    seed does not involve the base: case ``i`` of every base gets the same draws (common random
+    numbers) unless resampling of an unphysical inertia makes them differ.  Grid case ``i`` is
+    the ``i``-th point of the Cartesian product (last parameter fastest).
+
+Perturbed plant
+    I_pert = s · (I_nom ∘ (1 + δ)) element by element (δ = dI11 … dI23 symmetric, s =
+    ``inertia_scale``), the same factors at every design point/level of a schedule.  An inertia
+    that is not positive definite or violates the triangle inequality is redrawn (``unphysical:
+    resample``; the number of draws is recorded) or recorded as verdict ``unphysical``.  The bias
+    *torque* (ft·lbf) is external and is held at its nominal value (plus ``bias_*``), so the
+    plant's true TEA moves with the inertia; it is re-solved on the physical branch
+    (:func:`acmm.tea.solve_tea`).  No equilibrium → verdict ``no_equilibrium`` (not simulated).
+
+Controller
+    ``design: fixed`` keeps the nominal gain schedule.  Its TEA estimate θ̂* is the nominal one
+    (``tea_estimate: nominal``, the default: the controller does not know the perturbation) or
+    the perturbed plant's own TEA (``true``: exact mass properties, report ch. 5.1); a scheduled
+    gain is evaluated at that estimate.  ``design: redesign`` re-runs TEA → linearization →
+    sector LQR (→ schedule) for the perturbed plant.  The run starts at the plant's true TEA plus
+    the initial offset, with the LVLH rate.
+
+Metrics (one row per case)
+    verdict, time to divergence, peak and steady (second half of the run) attitude error about
+    the plant's true TEA per axis, peak |h_i| per axis, time spent torque- or momentum-saturated.
+
+Execution and results
+    Cases run on a ``concurrent.futures`` executor: in-process for one worker, a process pool
+    otherwise, or a Dask cluster (``scheduler=ADDRESS``).  Every finished case is appended to
+    ``<run dir>/sweep.journal`` (one JSON line, flushed and fsynced) and ``sweep.h5`` is rebuilt
+    atomically from the journal every few seconds and at the end, so a killed sweep leaves a
+    valid journal (a torn last line is ignored) and a valid, possibly partial ``sweep.h5``
+    (root attribute ``complete``).  ``resume=True`` skips the cases already in the journal.
+
+Package layout
+    :mod:`~acmm.sweep.config` (the sweep file and its validation), :mod:`~acmm.sweep.cases`
+    (pure case generation: draws, grids, perturbation), :mod:`~acmm.sweep.case` (running one case
+    and the margin search), :mod:`~acmm.sweep.executors` (executors, tasks, chunking),
+    :mod:`~acmm.sweep.journal` (the group-commit journal), :mod:`~acmm.sweep.output` (HDF5, CSV,
+    figures) and :mod:`~acmm.sweep.run` (the driver).  Every name is re-exported here.
+"""
+from __future__ import annotations
+
+from acmm.sweep.case import (BaseContext, _empty_row, _redesigned_config, margin_search, perturbed_tea,
+                             prepare_base, run_case, simulate_values)
+from acmm.sweep.cases import AXES, VERDICTS, _draw, _why, case_values, perturb_inertia, unphysical_reason
+from acmm.sweep.config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sweep, swept_parameters
+from acmm.sweep.executors import (CHUNKS_PER_WORKER, MAX_CHUNK, SerialExecutor, _call, _call_chunk, _local_context,
+                                  _remote_contexts, _scheduler_workers, _task_key, _tasks, _warm_worker, chunk_size,
+                                  make_chunks, make_executor)
+from acmm.sweep.journal import JOURNAL_VERSION, GroupCommitJournal, Journal, SweepInterrupted, read_journal
+from acmm.sweep.output import _label, _nominal_tea_deg, _split, _write_csv, plot_sweep, table_arrays, write_results
+from acmm.sweep.run import SweepResult, _as_sweep, run_sweep
+
+__all__ = [
+    "AXES", "CHUNKS_PER_WORKER", "JOURNAL_VERSION", "MAP_EXTRAS", "MAX_CHUNK", "PARAMETERS", "SHORTHANDS",
+    "VERDICTS", "BaseContext", "GroupCommitJournal", "Journal", "SerialExecutor", "Sweep", "SweepInterrupted",
+    "SweepResult", "case_values", "chunk_size", "load_sweep", "make_chunks", "make_executor", "margin_search",
+    "perturb_inertia", "perturbed_tea", "plot_sweep", "prepare_base", "read_journal", "run_case", "run_sweep",
+    "simulate_values", "swept_parameters", "table_arrays", "unphysical_reason", "write_results",
+]

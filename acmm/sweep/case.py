@@ -1,0 +1,235 @@
+"""Running one case: the base context, the perturbed plant (redesigned when asked), one
+nonlinear closed-loop simulation and its metrics; the margin search of uniform inertia scaling."""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from common.errors import ConvergenceError, DesignError, NoEquilibriumError
+from acmm.sweep.cases import AXES, _why, case_values, perturb_inertia
+
+
+# ---------------------------------------------------------------------------------------------
+# one case
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class BaseContext:
+    """What a worker needs for every case of one base (picklable)."""
+
+    label: str
+    config: object          # acmm.config.Config
+    table: object           # acmm.stages.DesignTable (nominal design)
+    scenario: object        # acmm.simulate.Scenario of the nominal config (orbits of the sweep)
+    spec: object            # SweepSpec
+    orbits: float
+
+
+def prepare_base(base, spec) -> BaseContext:
+    """Design the base config once (nominal design) and build its nominal scenario."""
+    from acmm.simulate import scenario_from_config
+    from acmm.stages import compute_design
+
+    cfg = base.config
+    orbits = spec.orbits if spec.orbits is not None else cfg.simulation.orbits
+    table = compute_design(cfg).table
+    sc = scenario_from_config(cfg, table, orbits=orbits)
+    return BaseContext(base.label, cfg, table, sc, spec, float(orbits))
+
+
+def _redesigned_config(cfg, values: dict, biases: np.ndarray):
+    """The base config with the perturbed inertia and explicit (held) bias torques."""
+    from acmm.config import parse_config
+
+    d = cfg.model_dump(mode="json")
+
+    def inertia_dict(m):
+        m = perturb_inertia(m, values)
+        return {"I11": m[0, 0], "I22": m[1, 1], "I33": m[2, 2], "I12": m[0, 1], "I13": m[0, 2], "I23": m[1, 2]}
+
+    def dist(dd, bias):
+        return {"bias": [float(b) for b in bias], "A": dd["A"], "B": dd["B"]}
+
+    d["inertia"] = inertia_dict(cfg.inertia.matrix())
+    d["disturbance"] = dist(d["disturbance"], biases[0])
+    if cfg.schedule is not None:
+        from acmm.tea import resolve_bias
+
+        added = biases[0] - resolve_bias(cfg.disturbance, cfg.inertia.matrix(), cfg.orbit_rate)
+        entries = ([(d["schedule"]["to"], cfg.schedule.to)] if cfg.schedule.to is not None else []) + \
+            list(zip(d["schedule"]["points"], cfg.schedule.points))
+        for dd, point in entries:
+            m = point.inertia.matrix()
+            dd["inertia"] = inertia_dict(m)
+            dd["disturbance"] = dist(dd["disturbance"], resolve_bias(point.disturbance, m, cfg.orbit_rate) + added)
+    return parse_config(d, source="perturbed config")
+
+
+def _empty_row(n_levels: int) -> dict:
+    nan3 = [math.nan] * 3
+    return {"verdict": "", "reason": "", "time_to_divergence": math.nan,
+            "peak_attitude_error": nan3, "steady_attitude_error": nan3, "peak_momentum": nan3,
+            "torque_saturation_time": math.nan, "momentum_saturation_time": math.nan,
+            "tea_true": nan3, "tea_estimate": nan3, "inertia": [[math.nan] * 3] * 3, "bias": nan3,
+            "n_steps": 0}
+
+
+def simulate_values(ctx: BaseContext, values: dict) -> dict:
+    """Simulate the base with the given parameter values; returns the metrics row (no case info)."""
+    from acmm import dynamics as dyn
+    from acmm import simulate as sm
+    sc0, table, cfg, spec = ctx.scenario, ctx.table, ctx.config, ctx.spec
+    L = sc0.inertia.shape[0]
+    row = _empty_row(L)
+    inertia = np.array([perturb_inertia(m, values) for m in sc0.inertia])
+    bias = sc0.bias + np.array([values.get(f"bias_{a}", 0.0) for a in AXES])
+    row["inertia"] = inertia[0].tolist()
+    row["bias"] = bias[0].tolist()
+    why = _why(values, sc0.inertia)
+    if why is not None:
+        row.update(verdict="unphysical", reason=why)
+        return row
+    n = sc0.n
+    hs = values.get("harmonic_scale", 1.0)
+    offset = np.radians(np.asarray(cfg.simulation.initial_offset)
+                        + np.array([values.get(f"offset_{a}", 0.0) for a in AXES]))
+    try:
+        if spec.design == "redesign":
+            from acmm.stages import compute_design
+
+            pcfg = _redesigned_config(cfg, values, bias)
+            ptable = compute_design(pcfg).table
+            sc = sm.scenario_from_config(pcfg, ptable, orbits=ctx.orbits)
+            true = sc.theta_est.copy()
+            # the redesign's bias per point is the held nominal bias (+ offsets); the schedule's
+            # levels are the perturbed design points
+            sc = dataclasses.replace(sc, harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
+        else:
+            true = perturbed_tea(sc0, inertia, bias)
+            if spec.tea_estimate == "true":
+                est = true
+                gain = np.array([table.gain_at(true[k, 1], k) for k in range(L)])
+            else:
+                est, gain = sc0.theta_est, sc0.gain
+            sc = dataclasses.replace(sc0, inertia=inertia, bias=bias, theta_est=est, gain=gain,
+                                     harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
+    except NoEquilibriumError as exc:
+        row.update(verdict="no_equilibrium", reason=str(exc).split(":")[0])
+        return row
+    except DesignError as exc:
+        row.update(verdict="design_failed", reason=str(exc)[:200])
+        return row
+    except ConvergenceError as exc:
+        row.update(verdict="tea_failed", reason=str(exc)[:200])
+        return row
+    theta0 = true[0] + offset
+    x0 = np.concatenate([dyn.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
+    sc = dataclasses.replace(sc, x0=x0)
+    r = sm.simulate(sc)
+    return _metrics(row, r, sc, true, n, spec)
+
+
+def _metrics(row: dict, r, sc, true: np.ndarray, n: float, spec) -> dict:
+    """Fill ``row`` with the verdict and metrics of the simulation ``r`` of scenario ``sc``;
+    ``true``: the plant's TEA per level (rad); ``n``: orbit rate (rad/s)."""
+    from acmm import simulate as sm
+
+    err = np.degrees(np.abs(r.state[:, 3:6] - true[r.level]))
+    half = r.t >= 0.5 * sc.t_end
+    if not half.any():
+        half = np.zeros_like(half)
+        half[-1] = True
+    dt = np.diff(r.t)
+    orbit = 2 * np.pi / n
+    reason = r.reason
+    gap = np.abs(true - sc.theta_est).max()
+    if r.stop_code == sm.STOP_ANGLE and gap >= sc.divergence:
+        reason += f" (the plant's TEA is {np.degrees(gap):.1f} deg from the controller's estimate)"
+    steady = err[half].max(axis=0)
+    verdict = r.verdict
+    if verdict == "bounded" and steady.max() > spec.settle_deg:
+        # within the divergence bound of the controller's estimate, but not at the plant's TEA
+        verdict = "not_settled"
+        reason = (f"bounded, but the steady attitude error from the plant's TEA is {steady.max():.1f} deg "
+                  f"(> settle_deg {spec.settle_deg:g})")
+    row.update(
+        verdict=verdict, reason=reason,
+        time_to_divergence=r.stop_time / orbit if r.diverged else math.nan,
+        peak_attitude_error=err.max(axis=0).tolist(),
+        steady_attitude_error=steady.tolist(),
+        peak_momentum=np.abs(r.state[:, 6:9]).max(axis=0).tolist(),
+        torque_saturation_time=float(dt @ r.torque_saturated[:-1].any(axis=1)) / orbit,
+        momentum_saturation_time=float(dt @ r.momentum_saturated[:-1].any(axis=1)) / orbit,
+        tea_true=np.degrees(true[0]).tolist(), tea_estimate=np.degrees(sc.theta_est[0]).tolist(),
+        n_steps=int(r.n_steps))
+    return row
+
+
+def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> np.ndarray:
+    """The perturbed plant's TEA per level (rad) on the physical branch of :mod:`acmm.tea`.
+
+    The continuation of :func:`acmm.tea.solve_tea`, compiled (:mod:`acmm.tea_compiled`: same
+    root, ~100× cheaper; any fold falls back to :func:`acmm.tea.solve_tea` and its errors).  A
+    case's TEA depends only on its plant, never on the cases run before, so its row is the same
+    whatever executor, chunking or order runs it.
+    """
+    from acmm.tea_compiled import solve_tea_fast
+
+    return np.array([solve_tea_fast(inertia[k], sc0.n, bias[k]).theta for k in range(inertia.shape[0])])
+
+
+def run_case(ctx: BaseContext, index: int) -> dict:
+    """Case ``index`` of a base: draw (or look up) its parameters, simulate, return its row."""
+    values, draws, _ = case_values(ctx.spec, index, ctx.scenario.inertia)
+    row = simulate_values(ctx, values)
+    row.update(kind="case", base=ctx.label, index=int(index), values=values, n_draws=int(draws))
+    return row
+
+
+# ---------------------------------------------------------------------------------------------
+# margin search on a uniform inertia scaling
+# ---------------------------------------------------------------------------------------------
+def margin_search(ctx: BaseContext, direction: str) -> dict:
+    """Largest (``up``) or smallest (``down``) uniform inertia scaling s the design tolerates.
+
+    Geometric scan from s = 1 towards ``margin.high`` (``low``) in ``scan_points`` steps, then
+    bisection in log s between the last bounded and the first failing point until their ratio is
+    below 1 + ``rel_tol``.  Assumes the bounded set is an interval around 1 between scanned
+    points (a failure hidden between two bounded scan points would be missed).
+    """
+    m = ctx.spec.margin
+    end = m.high if direction == "up" else m.low
+    evaluated: list[tuple[float, str, str]] = []
+
+    def ok(s: float) -> bool:
+        row = simulate_values(ctx, {"inertia_scale": s})
+        evaluated.append((s, row["verdict"], row["reason"]))
+        return row["verdict"] == "bounded"
+
+    nominal = ok(1.0)
+    good, bad = 1.0, None
+    if nominal:
+        for k in range(1, m.scan_points + 1):
+            s = end ** (k / m.scan_points)
+            if ok(s):
+                good = s
+            else:
+                bad = s
+                break
+        if bad is not None:
+            while max(good, bad) / min(good, bad) > 1 + m.rel_tol:
+                mid = math.sqrt(good * bad)
+                if ok(mid):
+                    good = mid
+                else:
+                    bad = mid
+    fail = next((e for e in evaluated if e[0] == bad), None)
+    return {"kind": "margin", "base": ctx.label, "direction": direction,
+            "limit": good if nominal else math.nan, "first_failure": math.nan if bad is None else bad,
+            "failure_verdict": fail[1] if fail else "", "failure_reason": fail[2] if fail else "",
+            "reached_end": bool(nominal and bad is None), "search_end": end,
+            "evaluated_s": [e[0] for e in evaluated], "evaluated_verdict": [e[1] for e in evaluated]}
+

@@ -1,0 +1,188 @@
+"""Executors (in-process, process pool, Dask) and the tasks they run: case and margin tasks,
+chunking, worker warm-up and base contexts made local or scattered."""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import dataclasses
+import os
+import sys
+from typing import Optional
+
+import numpy as np
+
+from common.errors import ConfigError
+from acmm.sweep.config import Sweep
+from acmm.sweep.case import BaseContext, margin_search, run_case
+
+
+# ---------------------------------------------------------------------------------------------
+# executors
+# ---------------------------------------------------------------------------------------------
+class SerialExecutor(cf.Executor):
+    """Runs each task in the calling process when it is submitted (one worker)."""
+
+    def submit(self, fn, /, *args, **kwargs):
+        fut: cf.Future = cf.Future()
+        try:
+            fut.set_result(fn(*args, **kwargs))
+        except BaseException as exc:  # noqa: BLE001 (re-raised by Future.result())
+            if isinstance(exc, KeyboardInterrupt):
+                raise
+            fut.set_exception(exc)
+        return fut
+
+
+def make_executor(workers: int = 1, scheduler: Optional[str] = None):
+    """(executor, close) for ``workers`` local processes or a Dask scheduler address.
+
+    Raises
+    ------
+    ConfigError
+        ``scheduler`` given but ``distributed`` is not installed, or it cannot be reached.
+    """
+    if scheduler:
+        try:
+            import distributed
+        except ImportError:
+            raise ConfigError("--scheduler needs the optional Dask dependency: pip install 'acmm-qpp[dask]'") from None
+        try:
+            from common.limits import limit
+
+            client = distributed.Client(scheduler, timeout=f"{limit('DASK_CONNECT_SECONDS'):g}s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise ConfigError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
+        return client.get_executor(pure=False), client.close
+    if workers <= 1:
+        return SerialExecutor(), lambda: None
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
+    from common.workers import die_with_parent
+
+    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=die_with_parent,
+                                  initargs=(os.getpid(),))
+    return pool, lambda: pool.shutdown(wait=True, cancel_futures=True)
+
+
+
+
+def _tasks(sweep: Sweep):
+    n = sweep.spec.n_cases()
+    for b in sweep.bases:
+        for i in range(n):
+            yield ("case", b.label, i)
+    if sweep.spec.margin is not None:
+        for b in sweep.bases:
+            for d in ("up", "down"):
+                yield ("margin", b.label, d)
+
+
+def _task_key(rec_or_task) -> tuple:
+    if isinstance(rec_or_task, dict):
+        r = rec_or_task
+        return ("case", r["base"], r["index"]) if r["kind"] == "case" else ("margin", r["base"], r["direction"])
+    return tuple(rec_or_task)
+
+
+def _call(task, ctx):
+    kind, _, arg = task
+    return run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg)
+
+
+#: most cases in one task: a chunk of ~64 10-orbit cases is ~0.3 s of work, so progress, the
+#: journal and load balancing stay live while the per-task cost (pickling the base context,
+
+MAX_CHUNK = 64
+#: chunks per worker aimed at, so that the last chunks do not leave workers idle
+CHUNKS_PER_WORKER = 8
+
+_WARM = False
+
+
+def chunk_size(n_tasks: int, workers: int) -> int:
+    """Cases per task for ``n_tasks`` cases on ``workers`` workers (a pool or a Dask cluster;
+    the in-process executor runs one case per task).
+
+    ⌈n / (8·workers)⌉ clipped to [1, :data:`MAX_CHUNK`]: about 8 tasks per worker (the tail
+    imbalance is then ≤ 1/8 of a worker's share) and never more than ~0.3 s per task.  The cost of
+    one task on a scheduler is a fixed few ms, so once a chunk holds more than a few cases that
+    cost is a small fraction whatever the number of workers; see README *Performance*.
+    """
+    return max(1, min(MAX_CHUNK, -(-n_tasks // (CHUNKS_PER_WORKER * max(1, workers)))))
+
+
+def make_chunks(tasks: list, size: int) -> list[list]:
+    """Consecutive case tasks of one base in lists of ``size``; each margin search alone."""
+    chunks: list[list] = []
+    for t in tasks:
+        if (t[0] == "case" and chunks and len(chunks[-1]) < size and chunks[-1][0][0] == "case"
+                and chunks[-1][0][1] == t[1]):
+            chunks[-1].append(t)
+        else:
+            chunks.append([t])
+    return chunks
+
+
+def _warm_worker() -> None:
+    """Load the compiled kernels once per worker process (from numba's cache: no compile); a
+    long-lived Dask cluster can be warmed ahead with ``client.run(acmm.sweep._warm_worker)``."""
+    global _WARM
+    if not _WARM:
+        from acmm.warmup import warm_up
+
+        warm_up()
+        _WARM = True
+
+
+_LOCAL: dict = {}
+
+
+def _local_context(ctx: BaseContext) -> BaseContext:
+    """``ctx`` with writable arrays, made once per worker and context.
+
+    Dask hands a task its (scattered) context deserialized from shared buffers, i.e. with
+    read-only arrays; numba types read-only arrays differently, so the simulator would be
+    compiled afresh on every Dask worker (~10 s) instead of loaded from the cache.
+    """
+    hit = _LOCAL.get(id(ctx))
+    if hit is not None and hit[0] is ctx:
+        return hit[1]
+    sc = ctx.scenario
+    fix = {f.name: np.array(getattr(sc, f.name)) for f in dataclasses.fields(sc)
+           if isinstance(getattr(sc, f.name), np.ndarray) and not getattr(sc, f.name).flags.writeable}
+    local = dataclasses.replace(ctx, scenario=dataclasses.replace(sc, **fix)) if fix else ctx
+    if len(_LOCAL) > 16:
+        _LOCAL.clear()
+    _LOCAL[id(ctx)] = (ctx, local)
+    return local
+
+
+def _call_chunk(chunk, ctx) -> list[dict]:
+    """Run the tasks of one chunk in order; returns their records."""
+    _warm_worker()
+    ctx = _local_context(ctx)
+    return [_call(t, ctx) for t in chunk]
+
+
+def _scheduler_workers(executor, default: int) -> int:
+    """Number of workers (threads) of the Dask cluster behind ``executor``, else ``default``."""
+    client = getattr(executor, "_client", None)
+    if client is None:
+        return max(1, default)
+    try:
+        return max(1, sum(int(v) for v in client.nthreads().values()))
+    except (AttributeError, KeyError, OSError, TypeError, ValueError):
+        return max(1, default)
+
+
+def _remote_contexts(executor, contexts: dict) -> dict:
+    """The base contexts as the executor's tasks take them: on a Dask cluster scattered once to
+    every worker (a task then carries a reference, not a pickled design); else as they are."""
+    client = getattr(executor, "_client", None)
+    if client is None or not contexts:
+        return contexts
+    try:
+        return {k: client.scatter(v, broadcast=True, hash=False) for k, v in contexts.items()}
+    except (AttributeError, TypeError, ValueError):
+        return contexts
+

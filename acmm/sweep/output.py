@@ -1,0 +1,249 @@
+"""Sweep results: ``sweep.h5`` (atomic), ``sweep.csv`` and the figures."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from common.errors import AcmmError
+from common.results import write_text
+from acmm.sweep.cases import AXES, VERDICTS
+from acmm.sweep.config import MAP_EXTRAS, PARAMETERS, Sweep, swept_parameters
+
+
+# ---------------------------------------------------------------------------------------------
+# results: sweep.h5, sweep.csv, figures
+# ---------------------------------------------------------------------------------------------
+def _split(sweep: Sweep, records: list[dict]):
+    order = {b.label: k for k, b in enumerate(sweep.bases)}
+    rows = sorted((r for r in records if r["kind"] == "case"), key=lambda r: (order[r["base"]], r["index"]))
+    margins = sorted((r for r in records if r["kind"] == "margin"),
+                     key=lambda r: (order[r["base"]], r["direction"] != "up"))
+    return rows, margins
+
+
+def table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
+    """Column arrays of the case rows (sorted by base then index)."""
+    names = swept_parameters(sweep.spec)
+    labels = [b.label for b in sweep.bases]
+    N = len(rows)
+
+    def col(k, shape=()):
+        return np.array([r[k] for r in rows], float).reshape((N,) + shape)
+
+    out = {
+        "base": np.array([labels.index(r["base"]) for r in rows], np.int64),
+        "index": np.array([r["index"] for r in rows], np.int64),
+        "case": np.array([labels.index(r["base"]) * sweep.spec.n_cases() + r["index"] for r in rows], np.int64),
+        "parameters": {k: np.array([r["values"].get(k, PARAMETERS[k].neutral) for r in rows], float)
+                       for k in names},
+        "verdict": [r["verdict"] for r in rows],
+        "verdict_code": np.array([VERDICTS.index(r["verdict"]) for r in rows], np.int64),
+        "reason": [r["reason"] for r in rows],
+        "stable": np.array([r["verdict"] == "bounded" for r in rows], bool),
+        "time_to_divergence": col("time_to_divergence"),
+        "peak_attitude_error": col("peak_attitude_error", (3,)),
+        "steady_attitude_error": col("steady_attitude_error", (3,)),
+        "peak_momentum": col("peak_momentum", (3,)),
+        "torque_saturation_time": col("torque_saturation_time"),
+        "momentum_saturation_time": col("momentum_saturation_time"),
+        "tea_true": col("tea_true", (3,)),
+        "tea_estimate": col("tea_estimate", (3,)),
+        "inertia": col("inertia", (3, 3)),
+        "bias": col("bias", (3,)),
+        "n_draws": np.array([r["n_draws"] for r in rows], np.int64),
+    }
+    return out
+
+
+def _nominal_tea_deg(sweep: Sweep) -> dict:
+    from acmm.schedule import point_specs
+    from acmm.tea import solve_tea
+
+    out = {}
+    for b in sweep.bases:
+        s = point_specs(b.config)[0]
+        try:
+            out[b.label] = np.degrees(solve_tea(s.inertia, b.config.orbit_rate, s.bias).theta)
+        except AcmmError:
+            out[b.label] = np.full(3, np.nan)
+    return out
+
+
+def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bool = False,
+                  wall_time: float | None = None) -> tuple[Path, list]:
+    """Build ``sweep.h5`` (atomically, via :func:`acmm.results.write_h5`) and ``sweep.csv`` from
+    the records; with ``figures`` also the stability map and the peak-error distributions."""
+    from common.results import Dataset, write_h5
+
+    rows, margins = _split(sweep, records)
+    a = table_arrays(sweep, rows)
+    spec = sweep.spec
+    labels = [b.label for b in sweep.bases]
+    S = lambda xs: np.array([x.encode() for x in xs], dtype="S") if len(xs) else np.zeros(0, "S1")  # noqa: E731
+    items = {
+        "case": Dataset(a["case"], "1", "global case index = base_index·n_cases + index"),
+        "base": Dataset(a["base"], "1", "index into base_names"),
+        "base_names": Dataset(S(labels), "1", "base config names", dims=("base_name",)),
+        "index": Dataset(a["index"], "1", "case index within its base (seeds SeedSequence([seed, index]))"),
+        "parameters": {k: Dataset(v, PARAMETERS[k].unit, PARAMETERS[k].description)
+                       for k, v in a["parameters"].items()},
+        "verdict": Dataset(S(a["verdict"]), "1", "bounded | not_settled | diverged | no_equilibrium | unphysical | "
+                                                 "design_failed | tea_failed"),
+        "verdict_code": Dataset(a["verdict_code"], "1", "index into the root attribute 'verdicts'"),
+        "reason": Dataset(S(a["reason"]), "1", "why the run stopped or was not run"),
+        "stable": Dataset(a["stable"], "1", "verdict == bounded"),
+        "time_to_divergence": Dataset(a["time_to_divergence"], "orbit", "stop time of a diverged run (NaN if not)"),
+        "peak_attitude_error": Dataset(a["peak_attitude_error"], "deg",
+                                       "max |θ − θ*_true| over the run (θ*_true: the plant's TEA)", list(AXES)),
+        "steady_attitude_error": Dataset(a["steady_attitude_error"], "deg",
+                                         "max |θ − θ*_true| over the second half of the run", list(AXES)),
+        "peak_momentum": Dataset(a["peak_momentum"], "ft*lbf*s", "max |h_i| over the run", list(AXES)),
+        "torque_saturation_time": Dataset(a["torque_saturation_time"], "orbit",
+                                          "time with any axis torque-limited (sample resolution)"),
+        "momentum_saturation_time": Dataset(a["momentum_saturation_time"], "orbit",
+                                            "time with any CMG axis at its momentum limit (sample resolution)"),
+        "tea_true": Dataset(a["tea_true"], "deg", "TEA of the perturbed plant (first level)", list(AXES)),
+        "tea_estimate": Dataset(a["tea_estimate"], "deg", "TEA estimate used by the controller (first level)",
+                                list(AXES)),
+        "inertia": Dataset(a["inertia"], "slug*ft^2", "perturbed inertia (first level)"),
+        "bias": Dataset(a["bias"], "ft*lbf", "bias torque (first level)", list(AXES)),
+        "n_draws": Dataset(a["n_draws"], "1", "Monte Carlo draws used (resampling of unphysical inertia)"),
+    }
+    if margins:
+        items["margin"] = {
+            m["base"] + "_" + m["direction"]: {
+                "limit": Dataset(m["limit"], "1", "tolerated uniform inertia scaling (bounded up to here)"),
+                "first_failure": Dataset(m["first_failure"], "1", "first failing scaling (NaN: none up to search_end)"),
+                "search_end": Dataset(m["search_end"], "1", "end of the searched range"),
+                "evaluated_s": Dataset(np.array(m["evaluated_s"]), "1", "scalings evaluated, in order",
+                                       dims=("evaluation",)),
+                "evaluated_verdict": Dataset(S(m["evaluated_verdict"]), "1", "verdict at each", dims=("evaluation",)),
+                "failure_reason": Dataset(m["failure_reason"] or "-", "1", "why the first failure failed"),
+            } for m in margins}
+    summary = {}
+    for k, lab in enumerate(labels):
+        sel = a["base"] == k
+        summary[lab] = {v: int(np.sum(sel & (a["verdict_code"] == j))) for j, v in enumerate(VERDICTS)}
+    attrs = {"stage": "sweep", "sweep_name": sweep.name, "complete": bool(complete),
+             "n_cases_expected": spec.n_cases() * len(labels), "n_cases_done": len(rows),
+             "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed,
+             "method": "grid" if spec.grid is not None else "monte_carlo",
+             "verdicts": json.dumps(list(VERDICTS)), "summary": json.dumps(summary),
+             "results_key": sweep.results_key()}
+    if wall_time is not None:
+        attrs["wall_time_s"] = float(wall_time)
+    run_dir = sweep.run_dir()
+    from common.netcdf_layout import with_leading_dim
+
+    items = with_leading_dim(items, "case", len(a["case"]))   # one row per case (netCDF dimension)
+    path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units)
+    _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
+    figs = []
+    if figures and rows:
+        figs = plot_sweep(sweep, a, run_dir)
+    return path, figs
+
+
+def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
+    from acmm.units import display_unit, shown
+
+    cols = ["case", "base", "index"] + [f"{k}[{display_unit(PARAMETERS[k].unit, units)}]" for k in a["parameters"]] + [
+        "verdict", "time_to_divergence[orbit]"]
+    for what, unit in (("peak_attitude_error", "deg"), ("steady_attitude_error", "deg"),
+                       ("peak_momentum", display_unit("ft*lbf*s", units)), ("tea_true", "deg")):
+        cols += [f"{what}_{ax}[{unit}]" for ax in AXES]
+    a = dict(a)
+    a["parameters"] = {k: shown(np.asarray(v, float), PARAMETERS[k].unit, units)[0] for k, v in a["parameters"].items()}
+    a["peak_momentum"] = shown(np.asarray(a["peak_momentum"], float), "ft*lbf*s", units)[0]
+    cols += ["torque_saturation_time[orbit]", "momentum_saturation_time[orbit]", "n_draws", "reason"]
+    lines = [",".join(cols)]
+    for i in range(len(a["case"])):
+        vals = [str(a["case"][i]), labels[a["base"][i]], str(a["index"][i])]
+        vals += [repr(float(v[i])) for v in a["parameters"].values()]
+        vals += [a["verdict"][i], repr(float(a["time_to_divergence"][i]))]
+        for what in ("peak_attitude_error", "steady_attitude_error", "peak_momentum", "tea_true"):
+            vals += [repr(float(x)) for x in a[what][i]]
+        vals += [repr(float(a["torque_saturation_time"][i])), repr(float(a["momentum_saturation_time"][i])),
+                 str(a["n_draws"][i]), '"' + a["reason"][i].replace('"', "'") + '"']
+        lines.append(",".join(vals))
+    write_text(path, "\n".join(lines) + "\n")
+
+
+def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
+    """Stability map over two swept quantities and distributions of the peak attitude error."""
+    from acmm.plots import _plt, _save
+
+    plt = _plt()
+    labels = [b.label for b in sweep.bases]
+    names = list(a["parameters"])
+    axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
+    nominal = _nominal_tea_deg(sweep)
+
+    from acmm.units import shown
+
+    system = sweep.file.output.units
+
+    def values(name, sel, lab):
+        if name in a["parameters"]:
+            return shown(np.asarray(a["parameters"][name][sel], float), PARAMETERS[name].unit, system)[0]
+        ax = MAP_EXTRAS.index(name)
+        return a["tea_true"][sel, ax] - nominal[lab][ax]
+
+    colors = {"bounded": "tab:green", "not_settled": "gold", "diverged": "tab:red", "no_equilibrium": "tab:purple",
+              "unphysical": "tab:gray", "design_failed": "tab:orange", "tea_failed": "tab:brown"}
+    B = len(labels)
+    fig, axs = plt.subplots(1, B, figsize=(4.6 * B, 4.0), squeeze=False)
+    for k, lab in enumerate(labels):
+        ax = axs[0, k]
+        sel = a["base"] == k
+        x = values(axes_names[0], sel, lab)
+        if len(axes_names) > 1:
+            y = values(axes_names[1], sel, lab)
+        else:
+            y = np.nanmax(a["peak_attitude_error"][sel], axis=1)
+        verdicts = np.array(a["verdict"], dtype=object)[sel]
+        for v in VERDICTS:
+            m = verdicts == v
+            if m.any():
+                ax.scatter(x[m], y[m], s=14, c=colors[v], label=f"{v} ({int(m.sum())})", alpha=0.8)
+        ax.set_xlabel(_label(axes_names[0], system))
+        ax.set_ylabel(_label(axes_names[1], system) if len(axes_names) > 1 else "peak attitude error (deg)")
+        ax.set_title(f"{lab}: {int(np.sum(verdicts == 'bounded'))}/{int(sel.sum())} bounded")
+        ax.legend(fontsize=7)
+    fig.suptitle(f"{sweep.name}: stability map ({sweep.spec.design} design)")
+    out = _save(fig, run_dir / "sweep_map.png")
+    fig, axs = plt.subplots(1, B, figsize=(4.6 * B, 3.6), squeeze=False)
+    for k, lab in enumerate(labels):
+        ax = axs[0, k]
+        sel = (a["base"] == k) & a["stable"]
+        err = a["peak_attitude_error"][sel]
+        if len(err):
+            hi = max(float(np.nanmax(err)), 1e-3)
+            bins = np.linspace(0, hi * 1.02, 25)
+            for j, axn in enumerate(AXES):
+                ax.hist(err[:, j], bins=bins, histtype="step", label=axn)
+            ax.legend(fontsize=7)
+        ax.set_xlabel("peak attitude error |θ − θ*_true| of bounded cases (deg)")
+        ax.set_ylabel("number of cases (count)")
+        ax.set_title(f"{lab}: {int(sel.sum())} bounded of {int(np.sum(a['base'] == k))}")
+    fig.suptitle(f"{sweep.name}: peak attitude error")
+    out += _save(fig, run_dir / "sweep_peak_error.png")
+    return out
+
+
+def _label(name: str, units: str = "imperial") -> str:
+    """Axis label: quantity and unit in the output system ``units`` (a relative change is
+    dimensionless: 0.1 = +10 %)."""
+    if name in PARAMETERS:
+        p = PARAMETERS[name]
+        if p.kind == "relative":
+            return f"{name}: relative change of {name[1:]} (1, 0.1 = +10 %)"
+        if p.kind == "scale":
+            return f"{name}: {p.description.split(':')[0].split('(')[0].strip()} (1, × nominal)"
+        from acmm.units import display_unit
+
+        unit = display_unit(p.unit, units).replace("*", "·")
+        return f"{name}: {p.description.split('(')[0].split(',')[0].strip()} ({unit})"
+    return f"{name}: plant's {name.rsplit('_', 1)[-1]} TEA − nominal TEA (deg)"

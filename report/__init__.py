@@ -1,0 +1,63 @@
+"""``acmm report``: every table and figure of CR-185644 regenerated and compared, in one page.
+
+The report covers both products (``acmm``, Part II, and ``qpp``, Part III) and sits above them:
+it imports both, neither imports it.
+
+:func:`build_report` gathers the results it needs (:mod:`report.gather`: reusing
+``<root>/<name>/*.h5`` whose ``design_hash`` / ``config_hash`` match the packaged configs, else
+running the stage), writes one section per module of :mod:`report.sections` (each with declared
+inputs), keeps the printed-number ledger (:mod:`report.ledger`), draws the figures
+(:mod:`report.figures`, style :mod:`report.figure_style`: vector PDF + PNG) and writes
+
+* ``<out>/index.html`` — self-contained (PNG figures embedded as base64; no server needed),
+* ``<out>/report.md`` — the same content in Markdown (figures as relative files),
+* ``<out>/figures/*.pdf|png`` — every figure,
+* ``<out>/manifest.json`` — SHA-256 of every HDF5 dataset used (timing datasets excluded),
+  compared with the previous report's manifest when one exists (:mod:`report.manifest`).
+
+Sections: Table 1; gain schedules and pole maps (Figs 5.3–5.26); claim 1 (Figs 6.2–6.13); the
+130-orbit stair-case (Figs 6.14–6.30); ±30 % robustness; QPP ch. 13 and 14; errata; printed
+numbers; determinism; provenance.  Every printed number the project reproduces is marked
+"matched to printed precision" (|computed − printed| ≤ half a unit of the last printed digit),
+"consistent with the printed bound", or carries its explanation.
+"""
+from __future__ import annotations
+
+from report.build import ReportResult, build_report
+from report.constants import FAST_ORBITS, SECTIONS, TIMING_DATASETS
+from report.context import SectionWriter
+from report.document import Doc, render_html, render_markdown
+from report.figures import (fig_circle, fig_claim1, fig_gain_schedule, fig_pole_maps, fig_qpp, fig_robustness,
+                            fig_staircase)
+from report.gather import (FAST_SWEEP_ORBITS, FAST_SWEEP_RUNS, SWEEP_CONFIG, Gathered, StageRun, acmm_config,
+                           ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, gather, qpp_config,
+                           robustness_result)
+from report.ledger import (STATUS_BOUND, STATUS_EXPLAINED, STATUS_MATCHED, STATUS_UNEXPLAINED, PrintedNumber,
+                           check_printed, matches_printed, printed_decimals)
+from report.manifest import build_manifest, compare_manifests, dataset_hashes
+from report.sections.errata import errata_rows
+
+
+class _Report(SectionWriter):
+    """Compatibility: one writer whose methods run single sections that need no other section's output."""
+
+    def robustness(self):
+        from report.sections import robustness
+
+        robustness.build(self)
+
+    def staircase(self):
+        from report.sections import staircase
+
+        staircase.build(self)
+
+
+__all__ = [
+    "FAST_ORBITS", "FAST_SWEEP_ORBITS", "FAST_SWEEP_RUNS", "SECTIONS", "STATUS_BOUND", "STATUS_EXPLAINED",
+    "STATUS_MATCHED", "STATUS_UNEXPLAINED", "SWEEP_CONFIG", "TIMING_DATASETS", "Doc", "Gathered",
+    "PrintedNumber", "ReportResult", "SectionWriter", "StageRun", "acmm_config", "build_manifest",
+    "build_report", "check_printed", "compare_manifests", "dataset_hashes", "ensure_acmm_design",
+    "ensure_acmm_simulation", "ensure_qpp", "errata_rows", "fig_circle", "fig_claim1", "fig_gain_schedule",
+    "fig_pole_maps", "fig_qpp", "fig_robustness", "fig_staircase", "gather", "matches_printed",
+    "printed_decimals", "qpp_config", "render_html", "render_markdown", "robustness_result",
+]

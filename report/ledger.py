@@ -1,0 +1,80 @@
+"""The printed-number ledger: every number printed in CR-185644 that the report compares, and its status."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+STATUS_MATCHED = "matched to printed precision"
+STATUS_BOUND = "consistent with the printed bound"
+STATUS_EXPLAINED = "explained"
+STATUS_UNEXPLAINED = "NOT EXPLAINED"
+
+
+@dataclass
+class PrintedNumber:
+    """One number printed in CR-185644 and what this run computed for it."""
+
+    section: str
+    quantity: str
+    printed: str
+    computed: float | None
+    unit: str = ""
+    status: str = STATUS_UNEXPLAINED
+    note: str = ""
+
+
+def printed_decimals(printed: str) -> int:
+    """Number of decimals of a printed number (``"-44.7"`` → 1, ``"1020"`` → 0)."""
+    s = printed.strip().lower().split("e")[0]
+    return len(s.split(".")[1]) if "." in s else 0
+
+
+def matches_printed(printed: str, computed: float) -> bool:
+    """|computed − printed| ≤ half a unit of the printed number's last digit."""
+    half = 0.5 * 10.0 ** (-printed_decimals(printed))
+    return bool(abs(float(computed) - float(printed)) <= half * (1 + 1e-9) + 1e-15)
+
+
+def check_printed(section: str, quantity: str, printed: str, computed, unit: str = "", *,
+                  explanation: str = "", bound: str | None = None) -> PrintedNumber:
+    """Classify one printed number.
+
+    Parameters
+    ----------
+    printed : str
+        The number exactly as printed (its decimals set the precision).
+    computed : float or None
+        This run's value (None: not computed, ``explanation`` required).
+    bound : {"upper", None}
+        ``"upper"``: the report prints a bound ("less than 0.094"); the value is consistent when
+        it is below the bound.
+    explanation : str
+        Why a number that does not match differs (required for it to count as explained).
+    """
+    if computed is not None and bound == "upper" and float(computed) < float(printed):
+        status = STATUS_BOUND
+    elif computed is not None and bound is None and matches_printed(printed, computed):
+        status = STATUS_MATCHED
+    elif explanation:
+        status = STATUS_EXPLAINED
+    else:
+        status = STATUS_UNEXPLAINED
+    return PrintedNumber(section, quantity, printed, None if computed is None else float(computed), unit,
+                         status, explanation if status == STATUS_EXPLAINED else "")
+
+
+# =============================================================================================
+# gathering results (reuse by hash, else run the stage)
+
+
+def status_text(pn: PrintedNumber) -> str:
+    """The status of a ledger entry as shown in the tables (explained ones carry their note)."""
+    return pn.status if pn.status != STATUS_EXPLAINED else f"{STATUS_EXPLAINED}: {pn.note}"
+
+
+def _printed_str(v: float, gname: str) -> str:
+    """The printed form of a gain (K: one decimal; H: four decimals, as in the report)."""
+    return f"{v:.4f}" if gname == "H" else f"{v:.1f}"
+
+
+def _num_str(v) -> str:
+    return repr(float(v)) if v is not None else "—"

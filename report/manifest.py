@@ -1,0 +1,97 @@
+"""Determinism: SHA-256 of every HDF5 dataset the report used, and the comparison of two manifests."""
+from __future__ import annotations
+
+import hashlib
+import subprocess
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+from report.constants import TIMING_DATASETS
+from report.gather import Gathered
+
+
+def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> dict[str, str]:
+    """SHA-256 (16 hex digits) of every dataset of an HDF5 file: dtype, shape and bytes.
+
+    Attributes (creation time, commit) and the datasets named in ``exclude`` (timings) are left
+    out, so two runs of the same computation hash equal exactly when their numbers are equal.
+    """
+    import h5py
+
+    from common.results import _dimension_only
+
+    out: dict[str, str] = {}
+
+    def visit(name, obj):
+        if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in exclude and not _dimension_only(obj):
+            arr = np.ascontiguousarray(obj[()])
+            h = hashlib.sha256(f"{arr.dtype.str}|{arr.shape}|".encode())
+            h.update(arr.tobytes() if arr.dtype.kind != "O" else repr(arr.tolist()).encode())
+            out[name] = h.hexdigest()[:16]
+
+    with h5py.File(path, "r") as f:
+        f.visititems(visit)
+    return dict(sorted(out.items()))
+
+
+def build_manifest(g: Gathered) -> dict:
+    files = {}
+    for key, r in g.runs.items():
+        files[key] = {"path": str(r.path), "config_hash": r.config_hash, "design_hash": r.design_hash,
+                      "created_utc": r.created_utc, "reused": r.reused, "datasets": dataset_hashes(r.path)}
+    return {"created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "git_commit": _git_commit(), "files": files}
+
+
+def compare_manifests(old: dict | None, new: dict) -> dict:
+    """Compare two manifests dataset by dataset.
+
+    Returns
+    -------
+    dict
+        ``status`` ("no previous report" | "identical" | "different"), ``compared`` (number of
+        datasets compared), ``recomputed`` (files recomputed since the previous report, i.e.
+        with a different creation time), ``differences`` (list of "file: dataset"), ``missing``.
+    """
+    if not old:
+        return {"status": "no previous report", "compared": 0, "recomputed": 0, "differences": [],
+                "missing": [], "previous": None}
+    diffs, missing, compared, recomputed = [], [], 0, 0
+    for key, f in new["files"].items():
+        o = old.get("files", {}).get(key)
+        if o is None or o.get("config_hash") != f["config_hash"]:
+            missing.append(key)
+            continue
+        recomputed += o.get("created_utc") != f["created_utc"]
+        for ds, h in f["datasets"].items():
+            if ds not in o["datasets"]:
+                missing.append(f"{key}: {ds}")
+            else:
+                compared += 1
+                if o["datasets"][ds] != h:
+                    diffs.append(f"{key}: {ds}")
+    return {"status": "identical" if not diffs else "different", "compared": compared,
+            "recomputed": recomputed, "differences": diffs, "missing": missing,
+            "previous": old.get("created_utc")}
+
+
+# =============================================================================================
+# helpers
+# =============================================================================================
+def _git_commit() -> str:
+    from common.results import git_commit
+
+    return git_commit()
+
+
+def _git_dirty() -> str:
+    try:
+        out = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                             cwd=Path(__file__).resolve().parent, capture_output=True, text=True, timeout=5)
+        if out.returncode == 0:
+            return "modified files present" if out.stdout.strip() else "clean"
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return "unknown"
