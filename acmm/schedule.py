@@ -17,6 +17,7 @@ import numpy as np
 
 from acmm import linearize as lin
 from acmm import lqr
+from acmm.settings import DesignSettings, ScheduleSettings, Sector  # noqa: F401  (re-exported)
 from acmm.tea import TEA, resolve_bias, solve_tea, solve_tea_near
 
 
@@ -177,51 +178,67 @@ def _tea_track(start: PointSpec, end: PointSpec, n: float, n_track: int) -> np.n
 def point_specs(cfg) -> list[PointSpec]:
     """Design points of a config: the blend start → ``schedule.to`` plus ``schedule.points``.
 
-    Without a ``schedule`` section, the config's own configuration is the only point.
+    Without a ``schedule`` section, the config's own configuration is the only point.  This is
+    where the config's inertias and biases become :class:`PointSpec` s (with
+    :func:`acmm.settings.design_settings`, the one reading of the config on the design path).
     """
+    from acmm.settings import schedule_settings
+
     n = cfg.orbit_rate
     inertia = cfg.inertia.matrix()
     start = PointSpec(cfg.name, inertia, resolve_bias(cfg.disturbance, inertia, n), 0.0)
     sch = cfg.schedule
     if sch is None:
         return [start]
-    specs = [start]
+    end = None
     if sch.to is not None:
         i_to = sch.to.inertia.matrix()
         end = PointSpec(sch.to.name, i_to, resolve_bias(sch.to.disturbance, i_to, n), 1.0)
-        if sch.spacing == "tea":
-            specs = tea_spaced_blend(start, end, sch.n_points, n)
-        else:
-            specs = blend_points(start, end, sch.n_points)
+    extras = []
     for p in sch.points:
         i_p = p.inertia.matrix()
-        specs.append(PointSpec(p.name, i_p, resolve_bias(p.disturbance, i_p, n)))
-    return specs
+        extras.append(PointSpec(p.name, i_p, resolve_bias(p.disturbance, i_p, n)))
+    return schedule_specs(start, end, extras, schedule_settings(cfg), n)
 
 
-def design_one(spec: PointSpec, cfg) -> PointDesign:
-    """TEA, design model and sector LQR of one design point (config's ``design`` section)."""
-    d = cfg.design
-    n = cfg.orbit_rate
+def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSpec], sched, n: float
+                   ) -> list[PointSpec]:
+    """The design points: ``start`` alone (``sched`` None), else the blend ``start`` → ``end``
+    (``sched.n_points`` points spaced by ``sched.spacing``; none when ``end`` is None) followed by
+    the named ``extras``.  ``n``: orbital rate, rad/s."""
+    if sched is None:
+        return [start]
+    specs = [start]
+    if end is not None:
+        if sched.spacing == "tea":
+            specs = tea_spaced_blend(start, end, sched.n_points, n)
+        else:
+            specs = blend_points(start, end, sched.n_points)
+    return specs + list(extras)
+
+
+def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
+    """TEA, design model and sector LQR of one design point (settings ``s``)."""
+    n = s.orbit_rate
     if spec.theta_guess is not None:
         t = solve_tea_near(spec.inertia, n, spec.bias, spec.theta_guess)
     else:
         t = solve_tea(spec.inertia, n, spec.bias)
-    model = lin.design_point(spec.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
-    res = sector_design(model.A, model.B, model.scales, d, n)
+    model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
+    res = sector_design(model.A, model.B, model.scales, s)
     return PointDesign(spec, t, model, res)
 
 
-def sector_design(A, B, scales, d, n: float):
-    """The sector LQR of one linear model with the design settings ``d`` (``cfg.design``: R, Q0,
-    sector, pole method, Riccati solver, tolerances) — the one call the pipeline and the report's
-    errata evidence share."""
-    return lqr.sector_lqr(A, B, d.R * np.eye(3), n, sigma=d.sector.sigma,
-                          half_angle_deg=d.sector.half_angle_deg,
-                          Q0=design_q0(d, A.shape[0]),   # on the scaled states
-                          scale=scales, method=d.pole_method, riccati_method=d.riccati_method,
-                          residual_tol=d.residual_tol, min_margin=d.min_margin,
-                          line_spacing=d.line_spacing)
+def sector_design(A, B, scales, s: DesignSettings):
+    """The sector LQR of one linear model with the design settings ``s`` (R, Q0, sector, pole
+    method, Riccati solver, tolerances; orbital rate ``s.orbit_rate``) — the one call the
+    pipeline, the sweep's redesign and the report's errata evidence share."""
+    return lqr.sector_lqr(A, B, s.R * np.eye(3), s.orbit_rate, sigma=s.sector.sigma,
+                          half_angle_deg=s.sector.half_angle_deg,
+                          Q0=s.q0_weight(A.shape[0]),   # on the scaled states
+                          scale=scales, method=s.pole_method, riccati_method=s.riccati_method,
+                          residual_tol=s.residual_tol, min_margin=s.min_margin,
+                          line_spacing=s.line_spacing)
 
 
 def design_q0(d, nx: int):
@@ -269,10 +286,10 @@ def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: st
     return ScheduleFit(coef.reshape(order + 1, 3, -1), theta2, gains, rms, rel, form)
 
 
-def check_schedule(fit: ScheduleFit, points: list[PointDesign], cfg) -> ScheduleCheck:
+def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSettings) -> ScheduleCheck:
     """Sector margin of the scheduled gain at each design point and each blend midpoint."""
-    d = cfg.design
-    n = cfg.orbit_rate
+    d = s
+    n = s.orbit_rate
     names, th2, margins, kinds, max_real = [], [], [], [], []
 
     def _check(name, model, theta2, kind):
@@ -346,15 +363,15 @@ class PathCheck:
         return float(np.mean(self.margin >= 0.0))
 
 
-def path_models(points: list[PointDesign], cfg, n_check: int) -> PathModels | None:
+def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> PathModels | None:
     """Design models at ``n_check`` TEAs evenly spaced between the first and last blend point.
 
     None when the config has no blend (``schedule.to``).  The TEA of each model is solved
     exactly (Newton from the continuation guess), so the θ2* are evenly spaced to within the
     interpolation of the 81-point continuation track.
     """
-    d = cfg.design
-    n = cfg.orbit_rate
+    d = s
+    n = s.orbit_rate
     blended = [p for p in points if np.isfinite(p.spec.s)]
     if len(blended) < 2:
         return None

@@ -207,40 +207,31 @@ def design_hash(cfg: Config) -> str:
 
 
 def compute_design(config, progress=None) -> DesignResult:
-    """Design every point of a config and fit the schedule (when there are ≥ 2 points)."""
+    """Design every point of a config and fit the schedule (when there are ≥ 2 points).
+
+    The config is read here once (:func:`acmm.settings.design_settings`,
+    :func:`acmm.schedule.point_specs`); the core :func:`acmm.design_core.design_schedule` gets
+    only explicit arguments."""
     import time
 
     from acmm import schedule as sch
+    from acmm.design_core import design_schedule
+    from acmm.settings import design_settings, schedule_settings
 
     cfg = _as_config(config)
     t0 = time.perf_counter()
-    specs = sch.point_specs(cfg)
-    points = []
-    for spec in specs:
-        points.append(sch.design_one(spec, cfg))
-        if progress is not None:
-            progress(spec.name)
-    fit = check = None
-    gains = np.array([p.lqr.K for p in points])
-    teas = np.array([p.tea.theta for p in points])
-    path_check = None
-    if len(points) >= 2:
-        sc = cfg.schedule
-        fit = sch.fit_schedule(teas[:, 1], gains, sc.order if sc else 2, sc.form if sc else "polynomial")
-        path = sch.path_models(points, cfg, sc.n_check) if sc is not None else None
-        if path is not None and sc.fit == "closed_loop" and fit.form == "polynomial":
-            fit = sch.refit_closed_loop(fit, path, cfg.orbit_rate,
-                                        half_angle_deg=cfg.design.sector.half_angle_deg, **sch.REFIT_DEFAULTS)
-        check = sch.check_schedule(fit, points, cfg)
-        if path is not None:
-            d = cfg.design
-            path_check = sch.check_path(fit.gain, path, cfg.orbit_rate, d.sector.sigma,
-                                        d.sector.half_angle_deg)
-    table = DesignTable([p.spec.name for p in points], np.array([p.spec.inertia for p in points]),
-                        np.array([p.spec.bias for p in points]), teas, gains,
-                        None if fit is None else fit.coef, design_hash(cfg),
-                        "polynomial" if fit is None else fit.form)
-    return DesignResult(cfg, points, fit, check, table, time.perf_counter() - t0, path_check)
+    ds = design_schedule(sch.point_specs(cfg), design_settings(cfg), schedule_settings(cfg), progress)
+    table = design_table(ds.points, ds.fit, design_hash(cfg))
+    return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check)
+
+
+def design_table(points, fit, design_hash: str) -> DesignTable:
+    """The :class:`DesignTable` of point designs and their schedule fit (None: one point)."""
+    return DesignTable([p.spec.name for p in points], np.array([p.spec.inertia for p in points]),
+                       np.array([p.spec.bias for p in points]), np.array([p.tea.theta for p in points]),
+                       np.array([p.lqr.K for p in points]),
+                       None if fit is None else fit.coef, design_hash,
+                       "polynomial" if fit is None else fit.form)
 
 
 @locked_stage(_as_config)

@@ -37,7 +37,7 @@ from common.errors import ConvergenceError
 from acmm.linearize import linearize_config
 from acmm.lqr import sector_lqr
 from acmm.riccati import care_condition, care_residual, scale_problem, solve_unverified
-from acmm.schedule import design_q0
+from acmm.settings import design_settings
 
 SOLVERS = [("sign", {}), ("sign (polynomial eval.)", {"sign_evaluation": "polynomial"}),
            ("scipy", {}), ("slycot", {})]
@@ -50,7 +50,7 @@ def problems(name):
     d = m.scales
     alpha = sec.sigma * m.n
     R = cfg.design.R * np.eye(3)
-    q0 = design_q0(cfg.design, 24)                       # on the scaled states
+    q0 = design_settings(cfg).q0_weight(24)                       # on the scaled states
     design = sector_lqr(m.A, m.B, R, m.n, sigma=sec.sigma, half_angle_deg=sec.half_angle_deg,
                         Q0=q0, scale=d, min_margin=cfg.design.min_margin,
                         line_spacing=cfg.design.line_spacing)

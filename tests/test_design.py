@@ -10,6 +10,7 @@ import scipy.linalg as sla
 
 from acmm.config import load_config
 from acmm.schedule import fit_schedule, schedule_gain
+from acmm.settings import design_settings
 from acmm.stages import compute_design, design_for, load_design_table, run_design
 
 N = 0.0011
@@ -108,7 +109,7 @@ def test_path_disk_margin_agrees_with_python_control(staircase):
     if not hasattr(control, "disk_margins"):       # python-control < 0.10.2
         pytest.skip("this python-control has no disk_margins")
     pc = staircase.path_check
-    path = sch.path_models(staircase.points, staircase.config, pc.theta2.size)
+    path = sch.path_models(staircase.points, design_settings(staircase.config), pc.theta2.size)
     d = path.scales
     for j in (0, pc.theta2.size // 2, pc.theta2.size - 1):
         K = staircase.fit.gain(pc.theta2[j]) * d[None, :]
@@ -168,7 +169,7 @@ def test_config_q0_is_a_weight_on_the_scaled_states():
     cfg = load_config("ac")
     cfg = cfg.model_copy(update={"design": cfg.design.model_copy(
         update={"Q0": 1e-3, "Q0_groups": None, "min_margin": 0.01})})
-    p = design_one(point_specs(cfg)[0], cfg)
+    p = design_one(point_specs(cfg)[0], design_settings(cfg))
     d = p.model.scales
     q_scaled = p.lqr.Q * d[:, None] * d[None, :]
     assert np.linalg.eigvalsh(0.5 * (q_scaled + q_scaled.T) - 1e-3 * np.eye(24)).min() > -1e-9
@@ -185,7 +186,7 @@ def test_config_q0_groups_are_diagonal_weights_on_the_scaled_states():
     np.testing.assert_array_equal(g.diagonal()[[0, 3, 6, 9, 12, 23]], [1e-5, 2e-6, 3e-6, 4e-5, 5e-7, 5e-7])
     cfg = load_config("ac")
     cfg = cfg.model_copy(update={"design": cfg.design.model_copy(update={"Q0_groups": g})})
-    p = design_one(point_specs(cfg)[0], cfg)
+    p = design_one(point_specs(cfg)[0], design_settings(cfg))
     d = p.model.scales
     q_scaled = p.lqr.Q * d[:, None] * d[None, :]
     q_scaled = 0.5 * (q_scaled + q_scaled.T)

@@ -9,6 +9,7 @@ import pytest
 
 from acmm import linearize as lin
 from acmm import schedule
+from acmm.settings import design_settings
 from acmm import tea
 from acmm.config import load_config
 from report.sections import errata
@@ -48,16 +49,18 @@ def test_design_on_is_the_pipelines_sector_design(mb3, monkeypatch):
     seen = []
     real = schedule.sector_design
 
-    def spy(A, B, scales, d, n_):
-        seen.append(d)
-        return real(A, B, scales, d, n_)
+    def spy(A, B, scales, s):
+        seen.append(s)
+        return real(A, B, scales, s)
 
     monkeypatch.setattr(schedule, "sector_design", spy)
-    text = errata.design_on(m.A, m.B, m, cfg.design, n)
-    assert seen == [cfg.design]                       # R, Q0, sector and solver settings of the config
-    margin = real(m.A, m.B, m.scales, cfg.design, n).margin
+    settings = design_settings(cfg)
+    assert settings.orbit_rate == n
+    text = errata.design_on(m.A, m.B, m, settings)
+    assert seen == [settings]                         # R, Q0, sector and solver settings of the config
+    margin = real(m.A, m.B, m.scales, settings).margin
     assert f"margin {margin:+.3f} n" in text and "stable on the true model" in text
-    assert "UNSTABLE" in errata.design_on(m.A, -m.B, m, cfg.design, n)
+    assert "UNSTABLE" in errata.design_on(m.A, -m.B, m, settings)
 
 
 def test_riccati_rows_printed_sign_iteration_fails_corrected_converges(mb3):

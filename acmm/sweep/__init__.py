@@ -49,7 +49,7 @@ Package layout
 """
 from __future__ import annotations
 
-from acmm.sweep.case import (BaseContext, _empty_row, _redesigned_config, margin_search, perturbed_tea,
+from acmm.sweep.case import (BaseContext, _empty_row, _redesigned_specs, _redesigned_table, margin_search, perturbed_tea,
                              prepare_base, run_case, simulate_values)
 from acmm.sweep.cases import AXES, VERDICTS, _draw, _why, case_values, perturb_inertia, unphysical_reason
 from acmm.sweep.config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sweep, swept_parameters

@@ -40,32 +40,39 @@ def prepare_base(base, spec) -> BaseContext:
     return BaseContext(base.label, cfg, table, sc, spec, float(orbits))
 
 
-def _redesigned_config(cfg, values: dict, biases: np.ndarray):
-    """The base config with the perturbed inertia and explicit (held) bias torques."""
-    from acmm.config import parse_config
+def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
+    """The design points of the base config with the perturbed inertia and explicit (held) bias
+    torques: ``biases[0]`` at the start, each other configuration's own bias plus the same
+    added torque (``biases[0]`` minus the start's nominal bias)."""
+    from acmm.schedule import PointSpec, schedule_specs
+    from acmm.settings import schedule_settings
+    from acmm.tea import resolve_bias
 
-    d = cfg.model_dump(mode="json")
+    n = cfg.orbit_rate
+    start = PointSpec(cfg.name, perturb_inertia(cfg.inertia.matrix(), values),
+                      np.array([float(b) for b in biases[0]]), 0.0)
+    if cfg.schedule is None:
+        return [start]
+    added = biases[0] - resolve_bias(cfg.disturbance, cfg.inertia.matrix(), n)
 
-    def inertia_dict(m):
-        m = perturb_inertia(m, values)
-        return {"I11": m[0, 0], "I22": m[1, 1], "I33": m[2, 2], "I12": m[0, 1], "I13": m[0, 2], "I23": m[1, 2]}
+    def spec(point, s=float("nan")):
+        m = point.inertia.matrix()
+        bias = resolve_bias(point.disturbance, m, n) + added
+        return PointSpec(point.name, perturb_inertia(m, values), np.array([float(b) for b in bias]), s)
 
-    def dist(dd, bias):
-        return {"bias": [float(b) for b in bias], "A": dd["A"], "B": dd["B"]}
+    end = spec(cfg.schedule.to, 1.0) if cfg.schedule.to is not None else None
+    return schedule_specs(start, end, [spec(p) for p in cfg.schedule.points], schedule_settings(cfg), n)
 
-    d["inertia"] = inertia_dict(cfg.inertia.matrix())
-    d["disturbance"] = dist(d["disturbance"], biases[0])
-    if cfg.schedule is not None:
-        from acmm.tea import resolve_bias
 
-        added = biases[0] - resolve_bias(cfg.disturbance, cfg.inertia.matrix(), cfg.orbit_rate)
-        entries = ([(d["schedule"]["to"], cfg.schedule.to)] if cfg.schedule.to is not None else []) + \
-            list(zip(d["schedule"]["points"], cfg.schedule.points))
-        for dd, point in entries:
-            m = point.inertia.matrix()
-            dd["inertia"] = inertia_dict(m)
-            dd["disturbance"] = dist(dd["disturbance"], resolve_bias(point.disturbance, m, cfg.orbit_rate) + added)
-    return parse_config(d, source="perturbed config")
+def _redesigned_table(cfg, values: dict, biases: np.ndarray):
+    """The design table of the perturbed plant: the core (:func:`acmm.design_core.design_schedule`)
+    called directly on the perturbed design points with the base config's settings."""
+    from acmm.design_core import design_schedule
+    from acmm.settings import design_settings, schedule_settings
+    from acmm.stages import design_table
+
+    ds = design_schedule(_redesigned_specs(cfg, values, biases), design_settings(cfg), schedule_settings(cfg))
+    return design_table(ds.points, ds.fit, "")
 
 
 def _empty_row(n_levels: int) -> dict:
@@ -98,11 +105,9 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
                         + np.array([values.get(f"offset_{a}", 0.0) for a in AXES]))
     try:
         if spec.design == "redesign":
-            from acmm.stages import compute_design
-
-            pcfg = _redesigned_config(cfg, values, bias)
-            ptable = compute_design(pcfg).table
-            sc = sm.scenario_from_config(pcfg, ptable, orbits=ctx.orbits)
+            ptable = _redesigned_table(cfg, values, bias)
+            # only the inertia and bias differ from the base config, and those come from the table
+            sc = sm.scenario_from_config(cfg, ptable, orbits=ctx.orbits)
             true = sc.theta_est.copy()
             # the redesign's bias per point is the held nominal bias (+ offsets); the schedule's
             # levels are the perturbed design points

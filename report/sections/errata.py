@@ -39,22 +39,24 @@ def errata_rows(cfg, tea_mb3, st, sim, c1: Claim1Numbers, s13, d13, a, beta3) ->
     beta3 : ch. 13 β3 with sin 5t and with sin t.
     """
     from acmm import linearize as lin
+    from acmm.settings import design_settings
 
     n, I = cfg.orbit_rate, cfg.inertia.matrix()
     t, t0, bias = tea_mb3
     th, d = t.theta, cfg.design
     m = lin.design_point(I, th, n, model="coupled", drf_mode=d.drf_mode)
-    return (kinematics_rows(th, n) + tea_rows(I, n, t0, bias) + linearization_rows(I, th, n, m, d)
+    return (kinematics_rows(th, n) + tea_rows(I, n, t0, bias) + linearization_rows(I, th, n, m, design_settings(cfg))
             + riccati_rows(m, d, n) + design_rows(I, th, n, d, st, sim, c1) + qpp_rows(s13, d13, a, beta3))
 
 
-def design_on(A, B, m, d, n: float) -> str:
-    """A sector design (the pipeline's :func:`acmm.schedule.sector_design`, settings ``d``) on the
-    model (A, B), judged on the true model ``m``."""
+def design_on(A, B, m, s) -> str:
+    """A sector design (the pipeline's :func:`acmm.schedule.sector_design`, settings ``s``: an
+    :class:`acmm.settings.DesignSettings`) on the model (A, B), judged on the true model ``m``."""
     from acmm.schedule import sector_design
 
+    n = s.orbit_rate
     try:
-        r = sector_design(A, B, m.scales, d, n)
+        r = sector_design(A, B, m.scales, s)
     except AcmmError as exc:
         return f"design fails ({exc})"
     ev = np.linalg.eigvals(m.A - m.B @ r.K)
@@ -112,7 +114,7 @@ def tea_rows(I, n: float, t0, bias) -> list[list[str]]:
     return rows
 
 
-def linearization_rows(I, th, n: float, m, d) -> list[list[str]]:
+def linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
     """Eqs 4.12–4.14, 4.28–4.34, 4.44: the Jacobian and the printed signs, with designs on them."""
     from acmm import dynamics as dyn
 
@@ -134,18 +136,18 @@ def linearization_rows(I, th, n: float, m, d) -> list[list[str]]:
                  "tests/test_linearize.py"])
     rows.append(["eq 4.29 column 6", "τgg² term in rows 1–3", "τgyr²·n·sin θ3 (units)", "—", "tests/test_linearize.py"])
     rows.append(["eqs 4.30, 4.33, 4.49 signs", "u, w signs", "u enters ω̇ as −u and ḣ as +u; w enters ω̇ as +w",
-                 "input sign reversed: " + design_on(m.A, -m.B, m, d, n), "tests/test_dynamics.py, tests/test_linearize.py"])
+                 "input sign reversed: " + design_on(m.A, -m.B, m, s), "tests/test_dynamics.py, tests/test_linearize.py"])
     a2 = m.A[6:9, 6:9]
     Ap = m.A.copy()
     Ap[8, 6] = -Ap[8, 6]
     rows.append(["eq 4.34 A2(3,1)", "+n cos θ1 cos θ3", "−n cos θ1 cos θ3 (block −[ω*×] skew-symmetric)",
                  f"A2(3,1) = {a2[2, 0]:+.4e} rad/s; printed sign gives |A2 + A2ᵀ|max = {2 * abs(a2[2, 0]):.3e} rad/s "
-                 f"(ours {np.abs(a2 + a2.T).max():.1e}); " + design_on(Ap, m.B, m, d, n), "tests/test_linearize.py"])
+                 f"(ours {np.abs(a2 + a2.T).max():.1e}); " + design_on(Ap, m.B, m, s), "tests/test_linearize.py"])
     Aq = m.A.copy()
     for src, good, bad in ((4, 20, 21), (5, 22, 23)):
         Aq[bad, src], Aq[good, src] = Aq[good, src], 0.0
     rows.append(["eq 4.44 DRF input rows", "θ2, θ3 drive rows 10, 12 of x3", "rows 9, 11 (β̇2, β̇3)",
-                 "printed rows: " + design_on(Aq, m.B, m, d, n), "tests/test_linearize.py"])
+                 "printed rows: " + design_on(Aq, m.B, m, s), "tests/test_linearize.py"])
     return rows
 
 

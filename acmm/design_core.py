@@ -1,0 +1,50 @@
+"""The design pipeline on explicit arguments: design points → sector LQR each → schedule → checks.
+
+:func:`design_schedule` is what :func:`acmm.stages.compute_design` runs for a config and what the
+sweep's redesign runs for a perturbed plant: it takes :class:`acmm.schedule.PointSpec` s and the
+settings objects of :mod:`acmm.settings`, never a Config.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acmm import schedule as sch
+from acmm.settings import DesignSettings, ScheduleSettings
+
+
+@dataclass
+class DesignedSchedule:
+    """Point designs, the fitted schedule and its checks (None with a single point)."""
+
+    points: list            # list[acmm.schedule.PointDesign]
+    fit: object             # acmm.schedule.ScheduleFit or None
+    check: object           # acmm.schedule.ScheduleCheck or None
+    path_check: object      # acmm.path_check.PathCheck or None
+
+
+def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | None,
+                    progress=None) -> DesignedSchedule:
+    """Design every point of ``specs`` with settings ``s`` and fit the schedule ``sched``
+    (when there are ≥ 2 points); ``progress(name)`` is called after each point."""
+    points = []
+    for spec in specs:
+        points.append(sch.design_one(spec, s))
+        if progress is not None:
+            progress(spec.name)
+    fit = check = path_check = None
+    if len(points) >= 2:
+        gains = np.array([p.lqr.K for p in points])
+        teas = np.array([p.tea.theta for p in points])
+        fit = sch.fit_schedule(teas[:, 1], gains, sched.order if sched else 2,
+                               sched.form if sched else "polynomial")
+        path = sch.path_models(points, s, sched.n_check) if sched is not None else None
+        if path is not None and sched.fit == "closed_loop" and fit.form == "polynomial":
+            fit = sch.refit_closed_loop(fit, path, s.orbit_rate,
+                                        half_angle_deg=s.sector.half_angle_deg, **sch.REFIT_DEFAULTS)
+        check = sch.check_schedule(fit, points, s)
+        if path is not None:
+            path_check = sch.check_path(fit.gain, path, s.orbit_rate, s.sector.sigma,
+                                        s.sector.half_angle_deg)
+    return DesignedSchedule(points, fit, check, path_check)
