@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm import schedule as sch
+from acmm.path_check import check_path, path_models
+from acmm.schedule_refit import REFIT_DEFAULTS, refit_closed_loop
 from acmm.settings import DesignSettings, ScheduleSettings
 
 
@@ -39,12 +41,12 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
         teas = np.array([p.tea.theta for p in points])
         fit = sch.fit_schedule(teas[:, 1], gains, sched.order if sched else 2,
                                sched.form if sched else "polynomial")
-        path = sch.path_models(points, s, sched.n_check) if sched is not None else None
+        path = path_models(points, s, sched.n_check) if sched is not None else None
         if path is not None and sched.fit == "closed_loop" and fit.form == "polynomial":
-            fit = sch.refit_closed_loop(fit, path, s.orbit_rate,
-                                        half_angle_deg=s.sector.half_angle_deg, **sch.REFIT_DEFAULTS)
+            fit = refit_closed_loop(fit, path, s.orbit_rate,
+                                    half_angle_deg=s.sector.half_angle_deg, **REFIT_DEFAULTS)
         check = sch.check_schedule(fit, points, s)
         if path is not None:
-            path_check = sch.check_path(fit.gain, path, s.orbit_rate, s.sector.sigma,
-                                        s.sector.half_angle_deg)
+            path_check = check_path(fit.gain, path, s.orbit_rate, s.sector.sigma,
+                                    s.sector.half_angle_deg)
     return DesignedSchedule(points, fit, check, path_check)
