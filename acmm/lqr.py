@@ -47,11 +47,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
 
 from common.errors import ConvergenceError, DesignError
-from acmm.riccati import (ILL_CONDITIONED, _as_R, care_condition, care_residual, scale_problem,
-                           solve_care)
+from acmm.riccati import ILL_CONDITIONED, care_condition, care_residual
 
 
 def sector_margin(poles, n: float, sigma: float = 0.5, half_angle_deg: float = 45.0) -> np.ndarray:
@@ -362,120 +360,10 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
         raise ValueError(f"method must be 'shift' or 'uniform', got {method!r}")
     if not (n > 0 and sigma > 0 and 0 < half_angle_deg < 90 and min_margin >= 0):
         raise ValueError("need n > 0, sigma > 0, 0 < half_angle_deg < 90 and min_margin ≥ 0")
-    A = np.asarray(A, dtype=float)
-    B = np.asarray(B, dtype=float)
-    nx, m = B.shape
-    R = _as_R(R, m)
-    if Q0 is None:
-        Q0s = np.zeros((nx, nx))
-    else:
-        Q0s = np.asarray(Q0, dtype=float)
-        Q0s = float(Q0s) * np.eye(nx) if Q0s.ndim == 0 else 0.5 * (Q0s + Q0s.T)
-    if scale is not None:
-        d = np.asarray(scale, dtype=float)
-        As, Bs, _ = scale_problem(A, B, np.zeros((nx, nx)), d)
-    else:
-        d = None
-        As, Bs = A, B
-    eye = np.eye(nx)
-    phi = np.deg2rad(half_angle_deg)
-    alpha = sigma * n
-    _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin)
+    from acmm.lqr_methods import _problem, _sector_shift, _sector_uniform   # they build on this module
 
-    def lqr_shifted(a):
-        try:
-            return solve_care(As + a * eye, Bs, Q0s, R, method=riccati_method, tol=residual_tol)
-        except ConvergenceError as exc:
-            raise ConvergenceError(f"sector LQR ({method}) at shift α = {a / n:.4g}n: {exc}") from exc
-
+    p = _problem(A, B, R, n, sigma, half_angle_deg, Q0, scale, method, riccati_method, residual_tol,
+                 min_margin)
     if method == "uniform":
-        def ok(a):
-            r = lqr_shifted(a)
-            lam = np.linalg.eigvals(As - Bs @ r.K)
-            return np.min(sector_margin(lam, n, sigma, half_angle_deg)) >= min_margin, r
-
-        good, r = ok(alpha)
-        if good:
-            return _finish(As, Bs, Q0s, R, r.P, alpha, n, sigma, half_angle_deg, d, min_margin,
-                           residual_tol, method, riccati_method, ())
-        # Gentle bracketing: the minimum-energy gains grow steeply with α (every mirrored pole
-        # moves by 2α), and so does the Riccati condition number.
-        lo, hi = alpha, 1.25 * alpha
-        while True:
-            good, r_hi = ok(hi)
-            if good:
-                break
-            lo = hi
-            hi *= 1.25
-            if hi > max_uniform_shift * n:
-                raise DesignError(f"sector LQR (uniform): no shift α ≤ {max_uniform_shift}n puts "
-                                  f"every pole in the sector")
-        while hi - lo > 1e-3 * hi:
-            mid = 0.5 * (lo + hi)
-            good, r_mid = ok(mid)
-            if good:
-                hi, r_hi = mid, r_mid
-            else:
-                lo = mid
-        return _finish(As, Bs, Q0s, R, r_hi.P, hi, n, sigma, half_angle_deg, d, min_margin,
-                       residual_tol, method, riccati_method, ())
-
-    # --- method == "shift": shifted LQR, then optimal pole shifting of the stray poles -------
-    r0 = lqr_shifted(alpha)
-    Ps = r0.P.copy()
-    Qs = Q0s.copy()
-    target = 1.5 * min_margin
-    mirror_shifts = []
-    for _sweep in range(4):
-        Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
-        lam = np.linalg.eigvals(Acl)
-        stray = lam[sector_margin(lam, n, sigma, half_angle_deg) < min_margin]
-        if stray.size == 0:
-            break
-        groups = _group(_required_h(stray, n, sigma, phi, target))
-        for lo, hi in groups:
-            Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
-
-            def select(re, im, lo=lo, hi=hi):
-                z = np.array([complex(re, im)])
-                if sector_margin(z, n, sigma, half_angle_deg)[0] >= min_margin:
-                    return False
-                h = _required_h(z, n, sigma, phi, target)[0]
-                return bool(lo * (1 - 0.01) <= h <= hi * (1 + 0.01))
-
-            for k in range(nx if line_spacing > 0 else 1):
-                if k:
-                    Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
-                T, Z, sdim = sla.schur(Acl.T, output="real", sort=select)
-                if sdim == 0:
-                    break
-                if line_spacing > 0:
-                    # one real-Schur block at a time (the leading block is invariant), each
-                    # about its own line: distinct poles instead of a near-defective cluster
-                    sdim = 2 if sdim > 1 and T[1, 0] != 0.0 else 1
-                T11, U1 = T[:sdim, :sdim], Z[:, :sdim]
-                lam1 = np.linalg.eigvals(T11)
-                h = float(np.max(_required_h(lam1, n, sigma, phi, target)))
-                h = max(h, alpha) + k * line_spacing * n
-                if line_spacing > 0:
-                    # nor onto (or next to) a pole that is already there
-                    rest = np.linalg.eigvals(T[sdim:, sdim:])
-                    for _bump in range(400):
-                        moved = -(2.0 * h + lam1.real) + 1j * np.abs(lam1.imag)
-                        gap = np.min(np.abs(rest[None, :] - moved[:, None])) if rest.size else np.inf
-                        if gap >= line_spacing * n:
-                            break
-                        h += 0.25 * line_spacing * n
-                try:
-                    sub = solve_care(T11.T + h * np.eye(sdim), U1.T @ Bs, np.zeros((sdim, sdim)), R,
-                                     method=riccati_method, tol=residual_tol)
-                except ConvergenceError as exc:
-                    raise DesignError(f"sector LQR (shift): cannot shift the poles λ/n = "
-                                      f"{np.round(lam1 / n, 4).tolist()} (uncontrollable?): {exc}") from exc
-                dP = U1 @ sub.P @ U1.T
-                dP = 0.5 * (dP + dP.T)
-                Ps = Ps + dP
-                Qs = Qs + 2.0 * (h - alpha) * dP
-                mirror_shifts.append(h)
-    return _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin,
-                   residual_tol, method, riccati_method, mirror_shifts)
+        return _sector_uniform(p, max_uniform_shift)
+    return _sector_shift(p, line_spacing)
