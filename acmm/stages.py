@@ -237,146 +237,24 @@ def design_table(points, fit, design_hash: str) -> DesignTable:
 @locked_stage(_as_config)
 @owns_outputs("design", lambda c: _as_config(c))
 def run_design(config, progress=None, figures: bool | None = None) -> tuple[DesignResult, Path]:
-    """Design and write ``runs/<name>/design.h5`` plus the gain-schedule and pole-map figures."""
-    from acmm.linearize import STATE_NAMES
+    """Design and write ``runs/<name>/design.h5`` plus the gain-schedule and pole-map figures
+    (:mod:`acmm.design_output` builds both)."""
+    from acmm import design_output as out
+    from acmm.settings import design_settings
 
     r = compute_design(config, progress)
     cfg = r.config
     P = len(r.points)
-    pts = {}
-    for k, p in enumerate(r.points):
-        res = p.lqr
-        pts[f"{k:03d}_{p.spec.name}"] = {
-            "inertia": Dataset(p.spec.inertia, "slug*ft^2", "inertia of the design point", AXES),
-            "bias": Dataset(p.spec.bias, "ft*lbf", "bias torque", AXES),
-            "tea": Dataset(p.tea.theta, "rad", "torque-equilibrium attitude", AXES),
-            "A": Dataset(p.model.A, "per-state", "design model state matrix (eq 4.46)", STATE_NAMES,
-                         dims=("state", "state_col")),
-            "B": Dataset(p.model.B, "per-state per ft*lbf", "input matrix", STATE_NAMES, dims=("state", "axis")),
-            "G": Dataset(p.model.G, "per-state per ft*lbf", "disturbance matrix", STATE_NAMES, dims=("state", "axis")),
-            "Q": Dataset(res.Q, "per-state^-2 (shifted problem)", "state weight for which K is the exact LQR gain",
-                         dims=("state", "state_col")),
-            "R": Dataset(res.R, "1/(ft*lbf)^2", "control weight", dims=("axis", "axis_col")),
-            "P": Dataset(res.P, "per-state", "Riccati solution (physical units)", dims=("state", "state_col")),
-            "K": Dataset(res.K, "ft*lbf per state unit", "LQR gain, u = -K x", STATE_NAMES, dims=("axis", "state")),
-            "poles": Dataset(res.poles, "rad/s", "closed-loop poles of A - B K", dims=("pole",)),
-            "sector_margin": Dataset(res.margin, "n", "worst pole distance into the sector (>0 inside)"),
-            "riccati_residual": Dataset(res.residual, "1", "relative CARE residual, scaled coordinates"),
-            "scales": Dataset(p.model.scales, "per-state", "state scaling used for the Riccati solve",
-                              STATE_NAMES),
-            "eig_condition": Dataset(res.eig_condition, "1",
-                                     "eigenvalue condition number of each pole (order of 'poles'), scaled states"),
-            "max_eig_condition": Dataset(res.max_eig_condition, "1",
-                                         "largest eigenvalue condition number of A - B K, scaled states"),
-            "robustness_radius": Dataset(res.robustness_radius, "1",
-                                         "estimated smallest relative gain error ||dK||/||K|| (scaled) moving a pole "
-                                         "out of the sector (first order)"),
-            "robustness_radius_elementwise": Dataset(res.robustness_radius_elementwise, "1",
-                                                     "same for elementwise relative errors max|dK_ij/K_ij|"),
-            "riccati_condition": Dataset(res.riccati_condition, "1",
-                                         "relative condition estimate of the shifted CARE (acmm.riccati)"),
-            "riccati_ill_conditioned": Dataset(int(res.riccati_ill_conditioned), "1",
-                                               "1 if the CARE condition exceeds 1/sqrt(eps)"),
-        }
-    items = {
-        "points": pts,
-        "names": Dataset(np.array(r.table.names, dtype="S"), "1", "design point names in order", dims=("point",)),
-        "point": Dataset(np.array(r.table.names, dtype=object), "1", "design point name", dims=("point",)),
-        "inertia": Dataset(r.table.inertia, "slug*ft^2", "inertia per point", dims=("point", "axis", "axis_col")),
-        "bias": Dataset(r.table.bias, "ft*lbf", "bias per point", AXES, dims=("point", "axis")),
-        "tea": Dataset(r.table.tea, "rad", "TEA per point", AXES, dims=("point", "axis")),
-        "K": Dataset(r.table.gain, "ft*lbf per state unit", "LQR gain per point (u = -K x)",
-                     dims=("point", "axis", "state")),
-        "state_names": Dataset(np.array(STATE_NAMES, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
-        "wall_time": Dataset(r.wall_time, "s", "design wall time"),
-        "sector_margin": Dataset(np.array([p.lqr.margin for p in r.points]), "n",
-                                 "worst pole distance into the sector per point (>0 inside)"),
-        "max_eig_condition": Dataset(np.array([p.lqr.max_eig_condition for p in r.points]), "1",
-                                     "largest eigenvalue condition number of A - B K per point, scaled states"),
-        "robustness_radius": Dataset(np.array([p.lqr.robustness_radius for p in r.points]), "1",
-                                     "sector robustness radius per point (relative gain error, normwise, scaled)"),
-        "robustness_radius_elementwise": Dataset(
-            np.array([p.lqr.robustness_radius_elementwise for p in r.points]), "1",
-            "sector robustness radius per point (elementwise relative gain error)"),
-        "riccati_condition": Dataset(np.array([p.lqr.riccati_condition for p in r.points]), "1",
-                                     "CARE condition estimate per point"),
-    }
+    pts = out.point_items(r.points)
+    items = out.table_items(r, pts)
     if r.fit is not None:
-        items["schedule"] = {
-            "coef": Dataset(r.fit.coef, "K units per rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k",
-                            dims=("power", "axis", "state")),
-            "variable": Dataset(r.fit.variable, "rad", "scheduling variable: pitch TEA θ2* per point", dims=("point",)),
-            "rms_residual": Dataset(r.fit.rms_residual, "K units", "RMS fit residual per element", dims=("axis", "state")),
-            "rel_residual": Dataset(r.fit.rel_residual, "1", "RMS residual / max |K_ij|", dims=("axis", "state")),
-            "check_names": Dataset(np.array(r.check.names, dtype="S"), "1", "where the scheduled gain was checked",
-                                   dims=("check",)),
-            "check_theta2": Dataset(r.check.theta2, "rad", "pitch TEA of each check", dims=("check",)),
-            "check_margin": Dataset(r.check.margin, "n", "sector margin of the scheduled gain (>0 inside)",
-                                    dims=("check",)),
-            "check_max_real": Dataset(r.check.max_real, "n", "largest closed-loop Re λ with the scheduled gain",
-                                      dims=("check",)),
-            "fit_method": Dataset(np.array(r.fit.method, dtype="S"), "1",
-                                  "least_squares, or closed_loop (least squares refined on the path)"),
-        }
-        for key, val in r.fit.refit_info.items():
-            items["schedule"][f"refit_{key}"] = Dataset(float(val), "n" if key.startswith("max_real") else "1",
-                                                         f"closed-loop refit: {key.replace('_', ' ')}")
-        pc = r.path_check
-        if pc is not None:
-            items["schedule"]["path"] = {
-                "theta2": Dataset(pc.theta2, "rad", "pitch TEA of each path check (evenly spaced)", dims=("path",)),
-                "s": Dataset(pc.s, "1", "blend parameter of each path check", dims=("path",)),
-                "max_real": Dataset(pc.max_real, "n", "largest Re λ of the scheduled local loop", dims=("path",)),
-                "sector_margin": Dataset(pc.margin, "n", "worst sector margin of the scheduled local loop (>0 inside)", dims=("path",)),
-                "disk_margin": Dataset(pc.disk_margin, "1",
-                                       "balanced multiloop disk margin alpha at the plant input (loop broken at u)", dims=("path",)),
-                "disk_gain_margin": Dataset(pc.disk_gain_margin_db, "dB", "gain variation guaranteed by the disk", dims=("path",)),
-                "disk_phase_margin": Dataset(np.deg2rad(pc.disk_phase_margin_deg), "rad", "phase variation guaranteed by the disk", dims=("path",)),
-                "poles": Dataset(pc.poles, "rad/s", "closed-loop poles of the scheduled local loop", dims=("path", "pole")),
-                "fraction_in_sector": Dataset(pc.fraction_in_sector, "1", "fraction of path TEAs with every pole in the sector"),
-            }
-    roles = {"K": "K"}
-    for key in pts:
-        roles.update({f"points/{key}/{m}": m for m in ("A", "B", "G", "Q", "P", "K")})
-        roles[f"points/{key}/scales"] = "scales"
-    if r.fit is not None:
-        roles.update({"schedule/coef": "K", "schedule/rms_residual": "K"})
-    items = _in_system(items, cfg, roles)
+        items["schedule"] = out.schedule_items(r)
+    items = _in_system(items, cfg, out.unit_roles(pts, r.fit is not None))
     path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
                     {"stage": "design", "design_hash": r.table.design_hash, "n_points": P,
                      "schedule_form": r.table.form})
     if cfg.output.figures if figures is None else figures:
-        from acmm import plots
-
-        plots.parallel_saves()
-        d = cfg.design
-        plots.pole_map([p.lqr.poles for p in r.points], r.table.names, cfg.orbit_rate, d.sector.sigma,
-                       d.sector.half_angle_deg, cfg.run_dir() / "design_poles.png")
-        if r.fit is not None:
-            fit, gains = r.fit, r.table.gain
-            if cfg.output.units != "imperial":     # K in the output system (the schedule is linear in K)
-                from dataclasses import replace as _replace
-
-                from acmm.units import state_space_in
-
-                conv = lambda K: state_space_in(cfg.output.units, d.drf_mode, K=K)["K"]  # noqa: E731
-                gains = conv(gains)
-                fit = _replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
-            if cfg.output.units == "imperial":
-                units, torque = plots.state_units(d.drf_mode), "ft·lbf"
-            else:
-                from acmm.units import state_factors
-
-                units, torque = [u.replace("*", "·") for u in state_factors(d.drf_mode, cfg.output.units)[1]], "N·m"
-            plots.gain_schedule_grid(r.table.tea[:, 1], gains, fit, STATE_NAMES,
-                                     cfg.run_dir() / "design_gains.png", units=units, torque_unit=torque)
-        if r.path_check is not None:
-            pc = r.path_check
-            plots.schedule_path_check(pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
-                                      cfg.run_dir() / "design_path_margins.png")
-            plots.scheduled_pole_map(pc.poles, pc.theta2, cfg.orbit_rate, d.sector.sigma,
-                                     d.sector.half_angle_deg, cfg.run_dir() / "design_path_poles.png")
-        plots.wait_saves()
+        out.design_figures(r, design_settings(cfg), cfg.run_dir(), cfg.output.units)
     return r, path
 
 
