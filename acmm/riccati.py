@@ -65,6 +65,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
+from acmm.matrix_sign import _PF, SignResult, matrix_sign  # noqa: F401  (moved, issue 12)
 from common.errors import ConvergenceError
 
 METHODS = ("scipy", "sign", "slycot")
@@ -115,16 +116,6 @@ class CareResult:
     hamiltonian_gap: float = float("nan")
 
 
-@dataclass(frozen=True)
-class SignResult:
-    """Matrix sign function by eq 5.6: the limit ``S``, ``iterations`` and the final
-    relative step ``step`` = ‖S(k+1) − S(k)‖₁ / ‖S(k+1)‖₁."""
-
-    S: np.ndarray
-    iterations: int
-    step: float
-
-
 def _as_square(M, k: int, name: str) -> np.ndarray:
     """A scalar (times I) or a k×k matrix, symmetrized."""
     M = np.asarray(M, dtype=float)
@@ -172,114 +163,6 @@ def care_residual(A, B, Q, R, P) -> float:
     if den == 0.0:
         return 0.0 if num == 0.0 else float("inf")
     return float(num / den)
-
-
-#: Partial fractions of eq 5.6 (corrected):  x(5 + 10x² + x⁴)/(1 + 10x² + 5x⁴)
-#: = x/5 + Σ c_i x/(x² + a_i),  a_{1,2} = 1 ∓ √0.8 (the roots of 5t² + 10t + 1 are −a_i).
-_A1, _A2 = 1.0 - np.sqrt(0.8), 1.0 + np.sqrt(0.8)
-_PF = ((float((4.8 - 8.0 * _A1) / (5.0 * (_A2 - _A1))), float(_A1)),
-       (float((4.8 - 8.0 * _A2) / (5.0 * (_A1 - _A2))), float(_A2)))
-
-
-def matrix_sign(M, *, scaling: str = "det", tol: float = 1e-13, max_iter: int = 60,
-                form: str = "corrected", evaluation: str = "partial_fraction") -> SignResult:
-    """Matrix sign function by the fifth-order rational iteration of eq 5.6.
-
-    Parameters
-    ----------
-    M : (n, n) array
-        A matrix with no eigenvalue on the imaginary axis.
-    scaling : {"det", "norm", None}
-        Acceleration applied before each step while the step is still large (> 1e-2):
-        determinantal μ = |det S|^(−1/n) or norm μ = (‖S⁻¹‖_F / ‖S‖_F)^½; S ← μ S.
-    tol : float
-        Stop when the relative step ‖S(k+1) − S(k)‖₁/‖S(k+1)‖₁ ≤ tol, or when the step stops
-        decreasing after it has fallen below 1e-6 (round-off floor).
-    max_iter : int
-        Iteration limit.
-    form : {"corrected", "printed"}
-        ``"corrected"``: denominator I + 10S² + 5S⁴ (``docs/ERRATA.md`` § Riccati sign function).  ``"printed"``: the report's
-        misprint I + 10S + 5S⁴, kept only to demonstrate that it does not converge.
-    evaluation : {"partial_fraction", "polynomial"}
-        How the corrected rational map is evaluated.  ``"polynomial"`` forms S⁴ and solves with
-        I + 10S² + 5S⁴ as printed, whose condition grows like κ(S)⁴ and loses the eigenvalues
-        near the imaginary axis when |λ| is widely spread.  ``"partial_fraction"`` (default)
-        evaluates the same function as S/5 + Σ c_i Re (S + i√a_i I)⁻¹ (Kenney–Laub; Higham,
-        *Functions of Matrices*, §5.4), conditioned like κ(S).  The printed form is always
-        evaluated as a polynomial.
-
-    Returns
-    -------
-    SignResult
-
-    Raises
-    ------
-    ConvergenceError
-        No convergence within ``max_iter``, a singular step, a limit that is not
-        involutory (‖S² − I‖₁ > √tol·max(1, ‖S‖₁)²), or an involutory limit that is not the sign
-        (S·M must have its spectrum in the open right half-plane).
-    """
-    M0 = np.array(M, dtype=float)
-    S = M0.copy()
-    n = S.shape[0]
-    eye = np.eye(n)
-    if form not in ("corrected", "printed"):
-        raise ValueError(f"form must be 'corrected' or 'printed', got {form!r}")
-    if evaluation not in ("partial_fraction", "polynomial"):
-        raise ValueError(f"evaluation must be 'partial_fraction' or 'polynomial', got {evaluation!r}")
-    if scaling not in ("det", "norm", None, "none"):
-        raise ValueError(f"scaling must be 'det', 'norm' or None, got {scaling!r}")
-    step = np.inf
-    prev = np.inf
-    for k in range(1, max_iter + 1):
-        if scaling in ("det", "norm") and step > 1e-2:
-            if scaling == "det":
-                sgn, logdet = np.linalg.slogdet(S)
-                mu = np.exp(-logdet / n) if sgn != 0 and np.isfinite(logdet) else 1.0
-            else:
-                try:
-                    mu = np.sqrt(np.linalg.norm(np.linalg.inv(S)) / np.linalg.norm(S))
-                except np.linalg.LinAlgError:
-                    mu = 1.0
-            if np.isfinite(mu) and mu > 0:
-                S = mu * S
-        try:
-            if form == "corrected" and evaluation == "partial_fraction":
-                # f(S) = S/5 + Σ c_i S (S² + a_i I)⁻¹ and S (S² + a I)⁻¹ = Re (S + i√a I)⁻¹
-                S_new = S / 5.0
-                for c, a in _PF:
-                    S_new = S_new + c * np.linalg.inv(S + 1j * np.sqrt(a) * eye).real
-            else:
-                S2 = S @ S
-                S4 = S2 @ S2
-                num = S @ (5.0 * eye + 10.0 * S2 + S4)
-                den = eye + (10.0 * S2 if form == "corrected" else 10.0 * S) + 5.0 * S4
-                S_new = np.linalg.solve(den, num)
-        except np.linalg.LinAlgError as exc:
-            raise ConvergenceError(f"matrix sign (eq 5.6, {form}): singular denominator "
-                                   f"at iteration {k}") from exc
-        if not np.all(np.isfinite(S_new)):
-            raise ConvergenceError(f"matrix sign (eq 5.6, {form}): iteration overflowed "
-                                   f"at iteration {k}")
-        prev, step = step, np.linalg.norm(S_new - S, 1) / np.linalg.norm(S_new, 1)
-        S = S_new
-        if step <= tol or (step < 1e-6 and step >= prev):
-            inv = np.linalg.norm(S @ S - eye, 1)
-            if inv > np.sqrt(tol) * max(1.0, np.linalg.norm(S, 1)) ** 2:
-                raise ConvergenceError(
-                    f"matrix sign (eq 5.6, {form}): iteration settled after {k} steps on a "
-                    f"matrix that is not a sign (‖S²−I‖₁ = {inv:.3g})")
-            # sign(M)·M = (M²)^½ has its spectrum in the open right half-plane; a wrong
-            # involutory limit (e.g. I for a matrix with stable eigenvalues) fails this.
-            mineig = float(np.min(np.linalg.eigvals(S @ M0).real))
-            if not mineig > 0.0:
-                raise ConvergenceError(
-                    f"matrix sign (eq 5.6, {form}): iteration converged after {k} steps to an "
-                    f"involutory matrix that is not sign(M) (eigenvalue of S·M with real part "
-                    f"{mineig:.3g} ≤ 0)")
-            return SignResult(S=S, iterations=k, step=float(step))
-    raise ConvergenceError(f"matrix sign (eq 5.6, {form}): no convergence in {max_iter} "
-                           f"iterations (last relative step {step:.3g}, tolerance {tol:.1e})")
 
 
 def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign_tol=1e-13,
@@ -451,21 +334,8 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    A = np.asarray(A, dtype=float)
-    B = np.asarray(B, dtype=float)
-    if B.ndim == 1:
-        B = B[:, None]
-    n, m = B.shape
-    if A.shape != (n, n):
-        raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
-    Q = _as_Q(Q, n)
-    R = _as_R(R, m)
-    if scale is not None:
-        d = np.asarray(scale, dtype=float)
-        As, Bs, Qs = scale_problem(A, B, Q, d)
-    else:
-        d = None
-        As, Bs, Qs = A, B, Q
+    A, B, Q, R, d = _as_problem(A, B, Q, R, scale)
+    As, Bs, Qs = scale_problem(A, B, Q, d) if d is not None else (A, B, Q)
 
     gap = hamiltonian_check(As, Bs, Qs, R, method=method)
     t0 = time.perf_counter()
@@ -473,18 +343,7 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
                                       sign_evaluation=sign_evaluation, max_iter=max_iter)
     seconds = time.perf_counter() - t0
     Ps = 0.5 * (Ps + Ps.T)
-    if not np.all(np.isfinite(Ps)):
-        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values")
-    res = care_residual(As, Bs, Qs, R, Ps)
-    if not res <= tol:
-        raise _refusal(f"Riccati solve (method={method!r}{', state-scaled' if d is not None else ''}"
-                       f"): relative residual {res:.3e} exceeds tolerance {tol:.1e}", method, res)
-    Ks = np.linalg.solve(R, Bs.T @ Ps)
-    worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
-    if not worst < 0.0:
-        raise _refusal(f"Riccati solve (method={method!r}): solution is not stabilizing "
-                       f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
-                       f"{res:.3e})", method, res)
+    Ks, res = _verified_gain(As, Bs, Qs, R, Ps, method=method, tol=tol, scaled=d is not None)
     cond = care_condition(As, Bs, Qs, R, Ps)
     if d is not None:
         P = Ps / d[:, None] / d[None, :]
@@ -494,3 +353,33 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     return CareResult(P=P, K=K, residual=res, method=method, iterations=iterations,
                       scale=d, seconds=seconds, condition=cond,
                       ill_conditioned=bool(not cond <= ILL_CONDITIONED), hamiltonian_gap=gap)
+
+
+def _as_problem(A, B, Q, R, scale):
+    """Arrays (A, B, Q, R) of matching shapes, and the scale d as an array (or None)."""
+    A = np.asarray(A, dtype=float)
+    B = np.asarray(B, dtype=float)
+    if B.ndim == 1:
+        B = B[:, None]
+    n, m = B.shape
+    if A.shape != (n, n):
+        raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
+    d = np.asarray(scale, dtype=float) if scale is not None else None
+    return A, B, _as_Q(Q, n), _as_R(R, m), d
+
+
+def _verified_gain(As, Bs, Qs, R, Ps, *, method, tol, scaled):
+    """(K̃, residual) of a solution P̃, refused if non-finite, inaccurate or not stabilizing."""
+    if not np.all(np.isfinite(Ps)):
+        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values")
+    res = care_residual(As, Bs, Qs, R, Ps)
+    if not res <= tol:
+        raise _refusal(f"Riccati solve (method={method!r}{', state-scaled' if scaled else ''}"
+                       f"): relative residual {res:.3e} exceeds tolerance {tol:.1e}", method, res)
+    Ks = np.linalg.solve(R, Bs.T @ Ps)
+    worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
+    if not worst < 0.0:
+        raise _refusal(f"Riccati solve (method={method!r}): solution is not stabilizing "
+                       f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
+                       f"{res:.3e})", method, res)
+    return Ks, res

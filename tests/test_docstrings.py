@@ -45,6 +45,7 @@ CHECKED_MODULES = [
     "acmm.schema",
     "qpp.schema",
     "configkinds",
+    "acmm.matrix_sign",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
