@@ -61,6 +61,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import NoReturn
 
 import numpy as np
 import scipy.linalg as sla
@@ -83,25 +84,30 @@ class CareResult:
     Attributes
     ----------
     P : (N, N) array
-        Stabilizing solution in the caller's (physical) coordinates, symmetric.
+        Stabilizing solution in the caller's (physical) coordinates, symmetric; units of
+        Q times s (the cost x'Px has the units of ∫x'Qx dt).
     K : (M, N) array
-        Optimal gain K = R⁻¹B'P (u = −K x, eq 5.3), physical coordinates.
+        Optimal gain K = R⁻¹B'P (u = −K x, eq 5.3), physical coordinates: units of u per unit
+        of x.
     residual : float
-        Relative residual of :func:`care_residual`, evaluated in the scaled coordinates.
+        Relative residual of :func:`care_residual`, evaluated in the scaled coordinates
+        (dimensionless).
     method : str
         ``"scipy"``, ``"sign"`` or ``"slycot"``.
     iterations : int
         Sign-function iterations (0 for the direct methods).
     scale : (N,) array or None
-        The state scaling d used (x = diag(d) x̃).
+        The state scaling d used (x = diag(d) x̃), in the units of the states.
     seconds : float
         Wall time of the solve proper (excluding the residual check), s.
     condition : float
-        Relative condition estimate κ_CARE of the (scaled) Riccati equation (module docstring).
+        Relative condition estimate κ_CARE of the (scaled) Riccati equation (module docstring),
+        dimensionless.
     ill_conditioned : bool
         κ_CARE > :data:`ILL_CONDITIONED`.
     hamiltonian_gap : float
-        min_i |Re λ_i(H)| / ‖H_b‖_F (balanced H): relative distance of the Hamiltonian spectrum from the axis.
+        min_i |Re λ_i(H)| / ‖H_b‖_F (balanced H): relative distance of the Hamiltonian spectrum
+        from the axis, dimensionless.
     """
 
     P: np.ndarray
@@ -135,7 +141,29 @@ def _as_Q(Q, n: int) -> np.ndarray:
 
 
 def scale_problem(A, B, Q, scale):
-    """(Ã, B̃, Q̃) = (D⁻¹AD, D⁻¹B, DQD) for x = D x̃, D = diag(scale)."""
+    """(Ã, B̃, Q̃) = (D⁻¹AD, D⁻¹B, DQD) for x = D x̃, D = diag(scale) (eq 5.4 in scaled states).
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix, physical units (1/s for rates).
+    B : (N, M) array
+        Input matrix, physical units (state units per s per input unit).
+    Q : (N, N) array
+        State weight, physical units (1 / state unit² per s).
+    scale : (N,) array
+        Positive nominal state magnitudes d, in the units of the states.
+
+    Returns
+    -------
+    tuple of arrays
+        (Ã, B̃, Q̃) in the scaled (dimensionless) states; same time units as A.
+
+    Raises
+    ------
+    ValueError
+        ``scale`` has the wrong shape or a non-positive or non-finite entry.
+    """
     d = np.asarray(scale, dtype=float)
     if d.shape != (A.shape[0],) or not np.all(np.isfinite(d)) or np.any(d <= 0):
         raise ValueError(f"scale must be {A.shape[0]} positive finite magnitudes")
@@ -150,6 +178,24 @@ def care_residual(A, B, Q, R, P) -> float:
     i.e. the residual relative to the sum of the sizes of the terms that cancel (ρ = 0 when
     P = Q = 0).  Computed in whatever coordinates the arguments are given in; :func:`solve_care`
     passes the scaled ones.  Independent of how P was obtained.
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix (units of the chosen coordinates, 1/s for rates).
+    B : (N, M) array
+        Input matrix, same coordinates (state units per s per input unit).
+    Q : (N, N) array or float
+        State weight (a float q means q·I), same coordinates (units of 1/s per state unit²).
+    R : (M, M) array or float
+        Control weight (a float r means r·I), 1 / input unit² per s.
+    P : (N, N) array
+        Candidate solution, units of Q times s.
+
+    Returns
+    -------
+    float
+        ρ, dimensionless (``inf`` when the denominator vanishes but the residual does not).
     """
     A, B, P = (np.asarray(x, dtype=float) for x in (A, B, P))
     Q = _as_Q(Q, A.shape[0])
@@ -201,6 +247,38 @@ def solve_unverified(A, B, Q, R, *, method: str = "scipy", sign_scaling: str = "
 
     For comparisons only (``scripts/compare_riccati.py``); use :func:`solve_care`.  Solver
     failures raise :class:`ConvergenceError`.  Q and R must be arrays.
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix, 1/s for rates (any consistent units).
+    B : (N, M) array
+        Input matrix, same units.
+    Q : (N, N) array
+        State weight, same units.
+    R : (M, M) array
+        Control weight, 1 / input unit² per s.
+    method : {"scipy", "sign", "slycot"}
+        Algorithm (module docstring).
+    sign_scaling : {"det", "norm", None}
+        Acceleration of the sign iteration (``method="sign"`` only).
+    sign_evaluation : {"partial_fraction", "polynomial"}
+        Evaluation of eq 5.6 (``method="sign"`` only).
+    max_iter : int
+        Iteration limit of the sign iteration.
+
+    Returns
+    -------
+    tuple
+        (P, iterations): the unverified solution (units of Q times s) and the sign-function
+        iterations (0 for the direct methods).
+
+    Raises
+    ------
+    ValueError
+        An unknown ``method``.
+    ConvergenceError
+        The solver failed.
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -225,10 +303,28 @@ def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
     numbers κ_i and raises :class:`ConvergenceError` if some |Re λ_i| ≤ δ_i (module docstring):
     an eigenvalue on, or within rounding of, the imaginary axis.
 
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix, 1/s for rates (any consistent units).
+    B : (N, M) array
+        Input matrix, same units.
+    Q : (N, N) array
+        State weight, same units.
+    R : (M, M) array
+        Control weight, 1 / input unit² per s.
+    method : str
+        Solver name, for the message only.
+
     Returns
     -------
     float
-        min_i |Re λ_i| / ‖H_b‖_F (H_b: balanced H).
+        min_i |Re λ_i| / ‖H_b‖_F (H_b: balanced H), dimensionless; ``inf`` for N = 0.
+
+    Raises
+    ------
+    ConvergenceError
+        An eigenvalue of H on, or within rounding of, the imaginary axis.
     """
     n = A.shape[0]
     G = B @ np.linalg.solve(R, B.T)
@@ -236,7 +332,7 @@ def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
     hn = float(np.linalg.norm(H))
     if n == 0 or hn == 0.0:
         if n:
-            raise _refusal(f"Riccati solve (method={method!r}): no stabilizing solution "
+            _refuse(f"Riccati solve (method={method!r}): no stabilizing solution "
                            f"(Hamiltonian is zero: every eigenvalue on the imaginary axis)",
                            method, float("nan"))
         return float("inf")
@@ -251,7 +347,7 @@ def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
     bad = np.abs(w.real) <= band
     if np.any(bad):
         i = int(np.argmin(np.where(bad, np.abs(w.real) / band, np.inf)))
-        raise _refusal(
+        _refuse(
             f"Riccati solve (method={method!r}): no stabilizing solution: the Hamiltonian has "
             f"eigenvalue {complex(w[i]):.6g} on or within rounding of the imaginary axis "
             f"(|Re λ| = {abs(w[i].real):.3g} ≤ {band[i]:.3g}; eigenvalue condition "
@@ -264,6 +360,24 @@ def care_condition(A, B, Q, R, P) -> float:
     """Relative condition estimate κ_CARE of eq 5.4 at the stabilizing P (module docstring).
 
     ``inf`` when A − GP is not stable (Y does not exist).
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix, 1/s for rates (any consistent units).
+    B : (N, M) array
+        Input matrix, same units.
+    Q : (N, N) array
+        State weight, same units.
+    R : (M, M) array
+        Control weight, 1 / input unit² per s.
+    P : (N, N) array
+        Stabilizing solution, units of Q times s.
+
+    Returns
+    -------
+    float
+        κ_CARE, dimensionless.
     """
     G = B @ np.linalg.solve(R, B.T)
     G = 0.5 * (G + G.T)
@@ -284,6 +398,11 @@ def care_condition(A, B, Q, R, P) -> float:
     return n2(Y) * top / p
 
 
+def _refuse(message: str, method: str, residual: float) -> NoReturn:
+    """Raise the :class:`ConvergenceError` of :func:`_refusal`."""
+    raise _refusal(message, method, residual)
+
+
 def _refusal(message: str, method: str, residual: float) -> ConvergenceError:
     exc = ConvergenceError(message)
     exc.method = method          # for reports (scripts/compare_riccati.py)
@@ -301,7 +420,7 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     A : (N, N) array
         State matrix (physical units, e.g. 1/s).
     B : (N, M) array
-        Input matrix.
+        Input matrix (physical units: state units per s per input unit).
     Q : (N, N) array or float
         State weight, symmetric positive semidefinite (a float q means q·I), physical units.
     R : (M, M) array or float
@@ -309,9 +428,10 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     method : {"scipy", "sign", "slycot"}
         Algorithm (module docstring).
     scale : (N,) array or None
-        Nominal state magnitudes d; the solve is done on x̃ = D⁻¹x and mapped back.
+        Nominal state magnitudes d, in the units of the states; the solve is done on x̃ = D⁻¹x and mapped back.
     tol : float
-        Largest acceptable relative residual (:func:`care_residual`, scaled coordinates).
+        Largest acceptable relative residual (:func:`care_residual`, scaled coordinates),
+        dimensionless.
         ``np.inf`` disables the refusal (for comparisons).
     sign_scaling : {"det", "norm", None}
         Acceleration of the sign iteration (``method="sign"`` only).
@@ -327,6 +447,8 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
 
     Raises
     ------
+    ValueError
+        An unknown ``method`` or mismatched shapes.
     ConvergenceError
         The Hamiltonian has an eigenvalue on or within rounding of the imaginary axis (no
         stabilizing solution), the solver failed, the sign iteration did not converge, the
@@ -374,12 +496,12 @@ def _verified_gain(As, Bs, Qs, R, Ps, *, method, tol, scaled):
         raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values")
     res = care_residual(As, Bs, Qs, R, Ps)
     if not res <= tol:
-        raise _refusal(f"Riccati solve (method={method!r}{', state-scaled' if scaled else ''}"
+        _refuse(f"Riccati solve (method={method!r}{', state-scaled' if scaled else ''}"
                        f"): relative residual {res:.3e} exceeds tolerance {tol:.1e}", method, res)
     Ks = np.linalg.solve(R, Bs.T @ Ps)
     worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
     if not worst < 0.0:
-        raise _refusal(f"Riccati solve (method={method!r}): solution is not stabilizing "
+        _refuse(f"Riccati solve (method={method!r}): solution is not stabilizing "
                        f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
                        f"{res:.3e})", method, res)
     return Ks, res

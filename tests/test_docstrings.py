@@ -46,6 +46,7 @@ CHECKED_MODULES = [
     "qpp.schema",
     "configkinds",
     "acmm.matrix_sign",
+    "acmm.riccati",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
