@@ -47,6 +47,7 @@ CHECKED_MODULES = [
     "configkinds",
     "acmm.matrix_sign",
     "acmm.riccati",
+    "acmm.care_checks",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
