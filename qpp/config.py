@@ -351,8 +351,6 @@ class QppConfig(_Model):
 
     @model_validator(mode="after")
     def _consistent(self):
-        from qpp.lure import LurePlant
-
         try:
             P = self.lure_plant()
         except ConfigError as exc:
@@ -363,6 +361,13 @@ class QppConfig(_Model):
             raise ValueError(f"plant.x0 must have {P.n} entries")
         if isinstance(self.plant.xc0, list) and len(self.plant.xc0) != P.q:
             raise ValueError(f"plant.xc0 must have {P.q} entries")
+        self._check_nonlinearity(P)
+        self._check_signals_and_gains(P)
+        self._check_resolution_and_limits()
+        return self
+
+    def _check_nonlinearity(self, P):
+        """Shapes of the nonlinearity section against the plant P; its parameters per scenario."""
         nl = self.nonlinearity
         if isinstance(nl, SinusoidalNonlinearity):
             for nm in ("F0", "F1", "F_unc"):
@@ -385,19 +390,26 @@ class QppConfig(_Model):
                 self.expression_model().sector_info      # parse, check singular / sector-bounded
             except ConfigError as exc:
                 raise ValueError(str(exc)) from None
-            for s in self.simulation.scenarios:
-                if s.gamma != 0.0:
-                    raise ValueError(f"scenario {s.name}: nonlinearity.kind expression takes parameters: "
-                                     "{name: value}, not gamma")
-                for k in (s.parameters or {}):
-                    if k not in nl.parameters:
-                        raise ValueError(f"scenario {s.name}: unknown parameter {k!r}")
-                    rg = nl.parameters[k]
-                    if not rg.min <= s.parameters[k] <= rg.max:
-                        raise ValueError(f"scenario {s.name}: parameter {k} = {s.parameters[k]} outside "
-                                         f"[{rg.min}, {rg.max}]")
+            self._check_expression_scenarios(nl)
         elif (P.n, P.m, P.p) != (4, 2, 2):
             raise ValueError("nonlinearity.kind polar_arm needs n=4, m=2, p=2 (eq 14.2)")
+
+    def _check_expression_scenarios(self, nl):
+        """The scenarios of an ``expression`` nonlinearity set its parameters within their ranges."""
+        for s in self.simulation.scenarios:
+            if s.gamma != 0.0:
+                raise ValueError(f"scenario {s.name}: nonlinearity.kind expression takes parameters: "
+                                 "{name: value}, not gamma")
+            for k in (s.parameters or {}):
+                if k not in nl.parameters:
+                    raise ValueError(f"scenario {s.name}: unknown parameter {k!r}")
+                rg = nl.parameters[k]
+                if not rg.min <= s.parameters[k] <= rg.max:
+                    raise ValueError(f"scenario {s.name}: parameter {k} = {s.parameters[k]} outside "
+                                     f"[{rg.min}, {rg.max}]")
+
+    def _check_signals_and_gains(self, P):
+        """Channel counts of the reference, the scenarios, the design sector and published gains."""
         if len(self.simulation.r_o) != P.p:
             raise ValueError(f"simulation.r_o must have {P.p} channels (one per output)")
         for s in self.simulation.scenarios:
@@ -418,6 +430,10 @@ class QppConfig(_Model):
             if got is not None and np.shape(got) != want:
                 raise ValueError(f"published.{nm} must be {want[0]}×{want[1]}, got {np.shape(got)[0]}×"
                                  f"{np.shape(got)[1]}")
+
+    def _check_resolution_and_limits(self):
+        """Sinusoids resolved by the integrator, sample budget, no overflow of e^(2aT) (eq 10.44)."""
+        nl = self.nonlinearity
         if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
             # the nonlinearity's sin(ω t) must be resolved by the integrator: bound the periods
             _check_periods("nonlinearity.omega", nl.omega, self.simulation.t_final)
@@ -437,7 +453,6 @@ class QppConfig(_Model):
         if 2 * self.hinf.a * self.spheres.T > 600:
             raise ValueError(f"hinf.a × spheres.T = {self.hinf.a * self.spheres.T:.4g}: e^(2aT) of eq 10.44 "
                              "overflows; lower hinf.a or spheres.T")
-        return self
 
     def lure_plant(self):
         """The :class:`qpp.lure.LurePlant` of this config."""
