@@ -48,6 +48,7 @@ CHECKED_MODULES = [
     "acmm.matrix_sign",
     "acmm.riccati",
     "acmm.care_checks",
+    "acmm.scenario",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
