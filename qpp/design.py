@@ -36,7 +36,20 @@ from qpp.lure import LurePlant, channels, closed_loop
 
 # ---------------------------------------------------------------------- procedure 12.1
 def weighted_plant(P: LurePlant, ws) -> LurePlant:
-    """The plant with the H∞ output weight W_s = diag(ws)·S_c (z = [ρu; W_s e], eq 13.5)."""
+    """The plant with the H∞ output weight W_s = diag(ws)·S_c (z = [ρu; W_s e], eq 13.5).
+
+    Parameters
+    ----------
+    P : qpp.lure.LurePlant
+        Lure plant with servo-compensator (eqs 10.1, 13.1), in the config's units.
+    ws : float or (k,) array
+        Weight w per compensator output, dimensionless (a scalar applies to all).
+
+    Returns
+    -------
+    qpp.lure.LurePlant
+        The same plant with the compensator output matrix C_c replaced by diag(w)·C_c.
+    """
     w = np.broadcast_to(np.asarray(ws, float), (P.Cc.shape[0],))
     return LurePlant(P.A, P.B, P.C, P.G, P.Ac, P.Bc, np.diag(w) @ P.Cc)
 
@@ -255,7 +268,20 @@ def _score(res: DesignResult) -> tuple:
 
 
 def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
-    """Why the best design is not certified, in words and numbers."""
+    """Why the best design is not certified, in words and numbers.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        The config (its ``spheres`` section: β_o, β_ri, ‖d‖∞ in the config's units).
+    res : DesignResult
+        The best, uncertified design.
+
+    Returns
+    -------
+    str
+        The failing condition (circle criterion, or β1 > m of eq 12.1 with its largest term).
+    """
     sp = cfg.spheres
     if not res.circle.passed:
         return (f"circle criterion fails for every a tried (largest admissible sector scale "
@@ -280,6 +306,21 @@ def design(cfg: QppConfig) -> DesignResult:
     geometric grid of [a_min, a_max] and back to step 1; (5) stop at the first certified design,
     then try to raise a towards a_max.  If the loop fails: the wider search over W_s weights and ρ.
     Every evaluation is in ``iterations``; the result's ``certified``/``verdict`` say the outcome.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (plant, nonlinearity, ``hinf``, ``spheres``, ``design`` sections).
+
+    Returns
+    -------
+    DesignResult
+        The certified design, or the best uncertified one (``certified`` False, ``limiting``).
+
+    Raises
+    ------
+    DesignError
+        No stabilizing H∞ gains for any ρ, a or weight tried.
     """
     hc, dc = cfg.hinf, cfg.design
     if dc.gains == "published":

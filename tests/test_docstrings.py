@@ -49,6 +49,7 @@ CHECKED_MODULES = [
     "acmm.riccati",
     "acmm.care_checks",
     "acmm.scenario",
+    "qpp.design",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
