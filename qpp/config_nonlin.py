@@ -70,6 +70,7 @@ class ParameterRange(_Model):
 
     @property
     def nominal_value(self) -> float:
+        """θ°: ``nominal``, else the midpoint of [min, max] (units of the parameter)."""
         return 0.5 * (self.min + self.max) if self.nominal is None else self.nominal
 
 
@@ -112,13 +113,26 @@ class ExpressionNonlinearity(_Model):
         return v
 
     def texts(self) -> list[str]:
-        """The channel expressions, library forms expanded."""
+        """The channel expressions, library forms expanded.
+
+        Returns
+        -------
+        list of str
+            One expression per control input, in y1…yp, t and the parameter names.
+        """
         from qpp.nonlin import library_expression
 
         return [e if isinstance(e, str) else repr(float(e)) if isinstance(e, (int, float))
                 else library_expression(e.form, e.output, str(e.gain), e.level) for e in self.f1]
 
     def param_table(self) -> dict:
+        """The uncertain parameters as ``{name: (min, max, nominal)}``.
+
+        Returns
+        -------
+        dict
+            Name → (min, max, θ°), in the units of each parameter.
+        """
         return {k: (r.min, r.max, r.nominal_value) for k, r in self.parameters.items()}
 
 

@@ -50,6 +50,8 @@ CHECKED_MODULES = [
     "acmm.care_checks",
     "acmm.scenario",
     "qpp.design",
+    "qpp.config_fields",
+    "qpp.config_nonlin",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
