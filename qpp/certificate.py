@@ -23,7 +23,22 @@ from qpp.simulate import config_f1, eval_signal, initial_state, simulate_loop
 
 @dataclass
 class Thresholds:
-    """β3, β4 and m (12.1) of one bookkeeping."""
+    """β3, β4 and m (12.1) of one bookkeeping.
+
+    Attributes
+    ----------
+    name : str
+        Bookkeeping: ``printed``, ``report``, ``circle``, ``computed``, ``stated`` or
+        ``trajectory``.
+    half_width : float
+        Sector half-width k used for β3 and β4 (dimensionless gain; NaN when not applicable).
+    beta3 : float
+        β3 (10.54), dimensionless gain of the truncated L2 norms.
+    beta4 : float
+        β4 (10.55), in the units of the plant output (truncated L2 norm, unit·s^½).
+    m : float
+        Threshold m = β_o/(β_ri + ‖d‖∞ + β_o·β3 + β4) of eq 12.1, dimensionless.
+    """
 
     name: str
     half_width: float
@@ -34,7 +49,63 @@ class Thresholds:
 
 @dataclass
 class DesignResult:
-    """Everything ``qpp design`` reports and stores."""
+    """Everything ``qpp design`` reports and stores.
+
+    Attributes
+    ----------
+    K1 : (m, n) array
+        State-feedback gain, plant input units per state unit.
+    Kc : (m, q) array
+        Compensator gain, plant input units per compensator-state unit.
+    H : (n, p) array
+        Observer gain, state units per output unit per s.
+    gains_source : str
+        Where the gains come from (``given``, ``published``, ``hinf``, ...).
+    hinf : qpp.hinf.HinfGains or None
+        The ch. 11 solution the gains come from, if any.
+    a : float
+        Exponential weighting a, 1/s (10.27).
+    T : float
+        Truncation time T, s.
+    Az, Bz : dict
+        B_z reading (``eq10.7``, ``printed``) → closed-loop A_z (1/s) and B_z matrices.
+    Cz : (k, N) array
+        Closed-loop output matrix, units of the output per state unit.
+    beta1 : dict
+        B_z reading → :func:`qpp.spheres.beta1` (``value`` dimensionless, ``omega_peak`` rad/s).
+    thresholds : list of Thresholds
+        m (12.1) in each bookkeeping.
+    circle : qpp.circle.CircleResult
+        Circle criterion on H(−a + jω).
+    sector : (r, 2) array
+        Sector [α, β] per channel used in the circle check, dimensionless gains.
+    E : float
+        E = [(e^{2aT} − 1)/(2a)]^½ of eq 10.44, units of s^½.
+    y_o_t : (S,) array
+        Sample times of the nominal output on [0, T], s.
+    y_o : (p, S) array
+        Nominal output on [0, T], in the plant's output units.
+    iterations : list of dict
+        Every evaluation of the procedure.
+    bookkeeping : str
+        Threshold the design iterates against.
+    bz : str
+        B_z reading of the design inequality.
+    T_settle : float
+        Settling time of the nominal loop, s.
+    certified : bool
+        β1 ≤ m (bookkeeping, bz) and circle criterion.
+    verdict : str
+        The outcome in words.
+    limiting : str
+        Why an uncertified design fails (:func:`qpp.design.limiting_factor`).
+    ws_scale : list of float
+        Weights w of W_s = diag(w)·S_c of the gains, dimensionless.
+    hinf_history : list of dict
+        ch. 11 passes (ρ, ν, δ, tests).
+    published : DesignResult or None
+        Certificate of the printed gains (report examples).
+    """
 
     K1: np.ndarray
     Kc: np.ndarray
@@ -66,22 +137,58 @@ class DesignResult:
 
     @property
     def m_ref(self) -> float:
+        """Threshold m of the design's bookkeeping, dimensionless."""
         return self.threshold(self.bookkeeping).m
 
     @property
     def beta1_ref(self) -> float:
+        """β1 of the design's B_z reading, dimensionless."""
         return float(self.beta1[self.bz]["value"])
 
     def threshold(self, name: str) -> Thresholds:
+        """The thresholds of one bookkeeping.
+
+        Parameters
+        ----------
+        name : str
+            Bookkeeping name (:class:`Thresholds`).
+
+        Returns
+        -------
+        Thresholds
+            The first entry of ``thresholds`` with that name.
+        """
         return next(t for t in self.thresholds if t.name == name)
 
     def verdicts(self) -> dict:
-        """(reading, bookkeeping) → β1 ≤ m."""
+        """(reading, bookkeeping) → β1 ≤ m.
+
+        Returns
+        -------
+        dict
+            ``{(reading, bookkeeping): bool}`` for every B_z reading and bookkeeping.
+        """
         return {(r, t.name): bool(self.beta1[r]["value"] <= t.m) for r in self.beta1 for t in self.thresholds}
 
 
 def default_sector(cfg: QppConfig) -> np.ndarray:
-    """Sector of φ = N (f1 − f1o) for the circle check: config value, else ±N·γ_max·|F_unc| (diagonal)."""
+    """Sector of φ = N (f1 − f1o) for the circle check: config value, else ±N·γ_max·|F_unc| (diagonal).
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+
+    Returns
+    -------
+    (r, 2) array
+        [α, β] per disturbance channel, dimensionless gains.
+
+    Raises
+    ------
+    DesignError
+        A polar-arm nonlinearity without ``design.sector``.
+    """
     if cfg.design.sector is not None:
         return np.asarray(cfg.design.sector, float)
     nl = cfg.nonlinearity
@@ -98,7 +205,28 @@ def default_sector(cfg: QppConfig) -> np.ndarray:
 
 
 def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801):
-    """Nominal loop (γ nominal, r = r_o, d = 0) on [0, T]: (t, y_o, x_o)."""
+    """Nominal loop (γ nominal, r = r_o, d = 0) on [0, T]: (t, y_o, x_o).
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+    K1 : (m, n) array
+        State-feedback gain, input units per state unit.
+    Kc : (m, q) array
+        Compensator gain, input units per compensator-state unit.
+    H : (n, p) array
+        Observer gain, state units per output unit per s.
+    T : float
+        Horizon, s.
+    n : int
+        Number of samples.
+
+    Returns
+    -------
+    tuple of arrays
+        t (n,) in s, y_o (p, n) in output units, x_o (n_x, n) in state units.
+    """
     P = cfg.lure_plant()
     f1, g_nom = config_f1(cfg, P)
     t = np.linspace(0.0, T, n)
@@ -131,7 +259,28 @@ def _arm_betas(cfg: QppConfig, t, x_o, T):
 
 
 def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> list[Thresholds]:
-    """Threshold m (12.1) in each bookkeeping (see module docstring) at truncation time T (s)."""
+    """Threshold m (12.1) in each bookkeeping (see :mod:`qpp.design`) at truncation time T (s).
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+    t : (S,) array
+        Sample times of the nominal loop, s.
+    y_o : (p, S) array
+        Nominal output, output units.
+    x_o : (n, S) array
+        Nominal plant state, state units.
+    sector : (r, 2) array
+        Sector of the circle check, dimensionless gains.
+    T : float, optional
+        Truncation time, s (default ``spheres.T``).
+
+    Returns
+    -------
+    list of Thresholds
+        One per bookkeeping available for this nonlinearity.
+    """
     sp = cfg.spheres
     T = sp.T if T is None else T
     nl = cfg.nonlinearity
@@ -165,7 +314,24 @@ def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> l
 
 def settling_time(t, y_o, r_o, band: float) -> float:
     """Settling time of the nominal loop, s: the last time |y_o − r_o| (largest channel) exceeds
-    ``band`` × its peak; 0 when the loop tracks from the start, t[-1] when it never settles."""
+    ``band`` × its peak; 0 when the loop tracks from the start, t[-1] when it never settles.
+
+    Parameters
+    ----------
+    t : (S,) array
+        Sample times, s.
+    y_o : (p, S) array
+        Nominal output, output units.
+    r_o : (p, S) array
+        Reference, output units.
+    band : float
+        Settling band as a fraction of the peak error, dimensionless.
+
+    Returns
+    -------
+    float
+        Settling time, s.
+    """
     e = np.max(np.abs(np.atleast_2d(y_o) - np.atleast_2d(r_o)), axis=0)
     peak = float(e.max()) if e.size else 0.0
     if peak <= 1e-12:
@@ -176,7 +342,20 @@ def settling_time(t, y_o, r_o, band: float) -> float:
 
 def pick_bookkeeping(cfg: QppConfig, names: list[str]) -> str:
     """The threshold the design iterates against: ``design.bookkeeping`` when available, else the
-    stated values, else the last (most specific) bookkeeping."""
+    stated values, else the last (most specific) bookkeeping.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+    names : list of str
+        Bookkeepings available (:func:`thresholds`).
+
+    Returns
+    -------
+    str
+        The chosen bookkeeping.
+    """
     if cfg.design.bookkeeping in names:
         return cfg.design.bookkeeping
     return "stated" if "stated" in names else names[-1]
@@ -185,7 +364,32 @@ def pick_bookkeeping(cfg: QppConfig, names: list[str]) -> str:
 def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
             hinf: HinfGains | None = None, T: float | None = None) -> DesignResult:
     """β1 for both B_z readings, thresholds at T (default ``spheres.T``), the circle criterion and
-    the settling time of the nominal loop, for fixed gains."""
+    the settling time of the nominal loop, for fixed gains.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+    K1 : (m, n) array
+        State-feedback gain, input units per state unit.
+    Kc : (m, q) array
+        Compensator gain, input units per compensator-state unit.
+    H : (n, p) array
+        Observer gain, state units per output unit per s.
+    a : float
+        Exponential weighting a, 1/s (10.27).
+    gains_source : str
+        Label of the gains' origin, stored in the result.
+    hinf : qpp.hinf.HinfGains, optional
+        The ch. 11 solution the gains come from.
+    T : float, optional
+        Truncation time, s (default ``spheres.T``).
+
+    Returns
+    -------
+    DesignResult
+        The certificate (``certified``: β1 ≤ m and circle criterion).
+    """
     P = cfg.lure_plant()
     K1 = np.atleast_2d(np.asarray(K1, float))
     Kc = np.atleast_2d(np.asarray(Kc, float))

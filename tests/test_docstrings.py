@@ -52,6 +52,7 @@ CHECKED_MODULES = [
     "qpp.design",
     "qpp.config_fields",
     "qpp.config_nonlin",
+    "qpp.certificate",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
