@@ -34,20 +34,12 @@ from acmm.scenario import (PLAIN_STATE_NAMES, STOP_ANGLE, STOP_NONE, STOP_NONFIN
 # compiled kernel
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True, fastmath=False)
-def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n,
-         tmax, hmax, drf_idx, out, u_out, ucmd_out, flags, x, u):
-    """Closed-loop Ẋ into ``out``; ``x`` (24) and ``u`` (3) are scratch buffers."""
+def _torque(X, th2d, theta_est, omega_est, gain, tmax, hmax, ucmd_out, u_out, flags, x, u):
+    """Controller state x (eq 4.47) into ``x``, commanded and delivered torque (eq 5.1, saturation)
+    into ``ucmd_out``, ``u_out`` and ``u``; returns ω × h."""
     w1, w2, w3 = X[0], X[1], X[2]
     t1, t2, t3 = X[3], X[4], X[5]
     h1, h2, h3 = X[6], X[7], X[8]
-    s1, c1 = np.sin(t1), np.cos(t1)
-    s2, c2 = np.sin(t2), np.cos(t2)
-    s3, c3 = np.sin(t3), np.cos(t3)
-    # kinematics, eq 3.5/3.6 (corrected)
-    d2 = (c1 * w2 - s1 * w3) / c3
-    th1d = w1 - s3 * d2
-    th2d = d2 + n
-    th3d = s1 * w2 + c1 * w3
     # controller state x of eq 4.47 around the TEA estimate
     x[0] = w1 - omega_est[0]
     x[1] = th2d
@@ -84,6 +76,26 @@ def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n
             if (u[i] - wxh[i]) * hh[i] > 0.0:
                 u[i] = wxh[i]
         u_out[i] = u[i]
+    return wxh0, wxh1, wxh2
+
+
+@njit(cache=True, fastmath=False)
+def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n,
+         tmax, hmax, drf_idx, out, u_out, ucmd_out, flags, x, u):
+    """Closed-loop Ẋ into ``out``; ``x`` (24) and ``u`` (3) are scratch buffers."""
+    w1, w2, w3 = X[0], X[1], X[2]
+    t1, t2, t3 = X[3], X[4], X[5]
+    h1, h2, h3 = X[6], X[7], X[8]
+    s1, c1 = np.sin(t1), np.cos(t1)
+    s2, c2 = np.sin(t2), np.cos(t2)
+    s3, c3 = np.sin(t3), np.cos(t3)
+    # kinematics, eq 3.5/3.6 (corrected)
+    d2 = (c1 * w2 - s1 * w3) / c3
+    th1d = w1 - s3 * d2
+    th2d = d2 + n
+    th3d = s1 * w2 + c1 * w3
+    wxh0, wxh1, wxh2 = _torque(X, th2d, theta_est, omega_est, gain, tmax, hmax, ucmd_out, u_out,
+                               flags, x, u)
     # disturbance, eq 3.9
     sn, s2n = np.sin(n * t), np.sin(2.0 * n * t)
     # gravity gradient, eqs 3.3-3.4
@@ -135,6 +147,56 @@ _E = _B5 - _B4
 
 
 @njit(cache=True)
+def _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx, rtol, atol,
+                C, A, B5, E, K, tmp, u, ucmd, flags, xs, us):
+    """One Dormand–Prince 5(4) step of length h from (t, X): stages into ``K``, the 5th-order
+    solution into ``tmp``; returns (RMS of the scaled error estimate, all finite)."""
+    nx = 24
+    # stages
+    for st in range(7):
+        for i in range(nx):
+            acc = X[i]
+            for j in range(st):
+                acc += h * A[st, j] * K[j, i]
+            tmp[i] = acc
+        _rhs(t + C[st] * h, tmp, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
+             K[st], u, ucmd, flags, xs, us)
+    # error estimate (RMS of scaled error)
+    err = 0.0
+    finite = True
+    for i in range(nx):
+        y5 = X[i]
+        e = 0.0
+        for j in range(7):
+            y5 += h * B5[j] * K[j, i]
+            e += h * E[j] * K[j, i]
+        tmp[i] = y5
+        sc = atol[i] + rtol * max(abs(X[i]), abs(y5))
+        err += (e / sc) ** 2
+        if not np.isfinite(y5):
+            finite = False
+    err = np.sqrt(err / nx)
+    return err, finite
+
+
+@njit(cache=True)
+def _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time):
+    """Divergence checks after an accepted step: 1 (attitude bound), 2 (saturated too long) or 0;
+    updates the saturation clocks ``sat_time``."""
+    stop = 0
+    for i in range(3):
+        if abs(X[3 + i] - tl[i]) > divergence:
+            stop = 1
+        if abs(X[6 + i]) >= hmax * (1.0 - 1e-9):
+            sat_time[i] += step_len
+            if sat_time[i] > max_sat:
+                stop = 2
+        else:
+            sat_time[i] = 0.0
+    return stop
+
+
+@njit(cache=True)
 def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est, omega_est, gain,
                ha, hb, n, tmax, hmax, drf_idx, x0, rtol, atol, divergence, max_sat,
                C, A, B5, E, out_state, out_ucmd, out_u, out_flags, out_level):
@@ -173,30 +235,8 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
         tl, ol, gl = theta_est[level], omega_est[level], gain[level]
         while t < t_target - 1e-9:
             h = min(dt, t_target - t)
-            # stages
-            for st in range(7):
-                for i in range(nx):
-                    acc = X[i]
-                    for j in range(st):
-                        acc += h * A[st, j] * K[j, i]
-                    tmp[i] = acc
-                _rhs(t + C[st] * h, tmp, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
-                     K[st], u, ucmd, flags, xs, us)
-            # error estimate (RMS of scaled error)
-            err = 0.0
-            finite = True
-            for i in range(nx):
-                y5 = X[i]
-                e = 0.0
-                for j in range(7):
-                    y5 += h * B5[j] * K[j, i]
-                    e += h * E[j] * K[j, i]
-                tmp[i] = y5
-                sc = atol[i] + rtol * max(abs(X[i]), abs(y5))
-                err += (e / sc) ** 2
-                if not np.isfinite(y5):
-                    finite = False
-            err = np.sqrt(err / nx)
+            err, finite = _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
+                                      rtol, atol, C, A, B5, E, K, tmp, u, ucmd, flags, xs, us)
             if not finite:
                 stop = 3
                 break
@@ -209,16 +249,7 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
                 n_steps += 1
                 fac = 0.9 * err ** (-0.2) if err > 0 else 5.0
                 dt = h * min(5.0, max(0.2, fac))
-                # divergence checks
-                for i in range(3):
-                    if abs(X[3 + i] - tl[i]) > divergence:
-                        stop = 1
-                    if abs(X[6 + i]) >= hmax * (1.0 - 1e-9):
-                        sat_time[i] += step_len
-                        if sat_time[i] > max_sat:
-                            stop = 2
-                    else:
-                        sat_time[i] = 0.0
+                stop = _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time)
                 if stop != 0:
                     break
             else:
