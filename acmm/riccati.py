@@ -65,14 +65,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
+from acmm.care_checks import (ILL_CONDITIONED, IMAG_AXIS_RTOL, _as_Q, _as_R,  # noqa: F401
+                              _as_square, _refusal, _refuse, care_condition, care_residual,
+                              hamiltonian_check, scale_problem)
+from acmm.matrix_sign import _PF, SignResult, matrix_sign  # noqa: F401  (moved, issue 12)
 from common.errors import ConvergenceError
 
 METHODS = ("scipy", "sign", "slycot")
-
-#: Relative factor of the rounding band about the imaginary axis (module docstring).
-IMAG_AXIS_RTOL = 100.0
-#: κ_CARE above which a solution is flagged ill-conditioned (1/√ε).
-ILL_CONDITIONED = 1.0 / np.sqrt(np.finfo(float).eps)
 
 
 @dataclass(frozen=True)
@@ -82,25 +81,30 @@ class CareResult:
     Attributes
     ----------
     P : (N, N) array
-        Stabilizing solution in the caller's (physical) coordinates, symmetric.
+        Stabilizing solution in the caller's (physical) coordinates, symmetric; units of
+        Q times s (the cost x'Px has the units of ∫x'Qx dt).
     K : (M, N) array
-        Optimal gain K = R⁻¹B'P (u = −K x, eq 5.3), physical coordinates.
+        Optimal gain K = R⁻¹B'P (u = −K x, eq 5.3), physical coordinates: units of u per unit
+        of x.
     residual : float
-        Relative residual of :func:`care_residual`, evaluated in the scaled coordinates.
+        Relative residual of :func:`care_residual`, evaluated in the scaled coordinates
+        (dimensionless).
     method : str
         ``"scipy"``, ``"sign"`` or ``"slycot"``.
     iterations : int
         Sign-function iterations (0 for the direct methods).
     scale : (N,) array or None
-        The state scaling d used (x = diag(d) x̃).
+        The state scaling d used (x = diag(d) x̃), in the units of the states.
     seconds : float
         Wall time of the solve proper (excluding the residual check), s.
     condition : float
-        Relative condition estimate κ_CARE of the (scaled) Riccati equation (module docstring).
+        Relative condition estimate κ_CARE of the (scaled) Riccati equation (module docstring),
+        dimensionless.
     ill_conditioned : bool
         κ_CARE > :data:`ILL_CONDITIONED`.
     hamiltonian_gap : float
-        min_i |Re λ_i(H)| / ‖H_b‖_F (balanced H): relative distance of the Hamiltonian spectrum from the axis.
+        min_i |Re λ_i(H)| / ‖H_b‖_F (balanced H): relative distance of the Hamiltonian spectrum
+        from the axis, dimensionless.
     """
 
     P: np.ndarray
@@ -113,173 +117,6 @@ class CareResult:
     condition: float = float("nan")
     ill_conditioned: bool = False
     hamiltonian_gap: float = float("nan")
-
-
-@dataclass(frozen=True)
-class SignResult:
-    """Matrix sign function by eq 5.6: the limit ``S``, ``iterations`` and the final
-    relative step ``step`` = ‖S(k+1) − S(k)‖₁ / ‖S(k+1)‖₁."""
-
-    S: np.ndarray
-    iterations: int
-    step: float
-
-
-def _as_square(M, k: int, name: str) -> np.ndarray:
-    """A scalar (times I) or a k×k matrix, symmetrized."""
-    M = np.asarray(M, dtype=float)
-    if M.ndim == 0:
-        return float(M) * np.eye(k)
-    if M.shape != (k, k):
-        raise ValueError(f"{name} must be a scalar or {k}×{k}, got shape {M.shape}")
-    return 0.5 * (M + M.T)
-
-
-def _as_R(R, m: int) -> np.ndarray:
-    return _as_square(R, m, "R")
-
-
-def _as_Q(Q, n: int) -> np.ndarray:
-    return _as_square(Q, n, "Q")
-
-
-def scale_problem(A, B, Q, scale):
-    """(Ã, B̃, Q̃) = (D⁻¹AD, D⁻¹B, DQD) for x = D x̃, D = diag(scale)."""
-    d = np.asarray(scale, dtype=float)
-    if d.shape != (A.shape[0],) or not np.all(np.isfinite(d)) or np.any(d <= 0):
-        raise ValueError(f"scale must be {A.shape[0]} positive finite magnitudes")
-    return A * (1.0 / d)[:, None] * d[None, :], B / d[:, None], Q * d[:, None] * d[None, :]
-
-
-def care_residual(A, B, Q, R, P) -> float:
-    """Relative residual of eq 5.4 (all norms Frobenius)::
-
-        ρ = ‖A'P + PA − PGP + Q‖ / (‖Q‖ + 2‖A'P‖ + ‖PGP‖),   G = B R⁻¹ B',
-
-    i.e. the residual relative to the sum of the sizes of the terms that cancel (ρ = 0 when
-    P = Q = 0).  Computed in whatever coordinates the arguments are given in; :func:`solve_care`
-    passes the scaled ones.  Independent of how P was obtained.
-    """
-    A, B, P = (np.asarray(x, dtype=float) for x in (A, B, P))
-    Q = _as_Q(Q, A.shape[0])
-    R = _as_R(R, B.shape[1])
-    AtP = A.T @ P
-    PB = P @ B
-    PGP = PB @ np.linalg.solve(R, PB.T)
-    res = AtP + AtP.T - PGP + Q
-    den = np.linalg.norm(Q) + 2.0 * np.linalg.norm(AtP) + np.linalg.norm(PGP)
-    num = np.linalg.norm(res)
-    if den == 0.0:
-        return 0.0 if num == 0.0 else float("inf")
-    return float(num / den)
-
-
-#: Partial fractions of eq 5.6 (corrected):  x(5 + 10x² + x⁴)/(1 + 10x² + 5x⁴)
-#: = x/5 + Σ c_i x/(x² + a_i),  a_{1,2} = 1 ∓ √0.8 (the roots of 5t² + 10t + 1 are −a_i).
-_A1, _A2 = 1.0 - np.sqrt(0.8), 1.0 + np.sqrt(0.8)
-_PF = ((float((4.8 - 8.0 * _A1) / (5.0 * (_A2 - _A1))), float(_A1)),
-       (float((4.8 - 8.0 * _A2) / (5.0 * (_A1 - _A2))), float(_A2)))
-
-
-def matrix_sign(M, *, scaling: str = "det", tol: float = 1e-13, max_iter: int = 60,
-                form: str = "corrected", evaluation: str = "partial_fraction") -> SignResult:
-    """Matrix sign function by the fifth-order rational iteration of eq 5.6.
-
-    Parameters
-    ----------
-    M : (n, n) array
-        A matrix with no eigenvalue on the imaginary axis.
-    scaling : {"det", "norm", None}
-        Acceleration applied before each step while the step is still large (> 1e-2):
-        determinantal μ = |det S|^(−1/n) or norm μ = (‖S⁻¹‖_F / ‖S‖_F)^½; S ← μ S.
-    tol : float
-        Stop when the relative step ‖S(k+1) − S(k)‖₁/‖S(k+1)‖₁ ≤ tol, or when the step stops
-        decreasing after it has fallen below 1e-6 (round-off floor).
-    max_iter : int
-        Iteration limit.
-    form : {"corrected", "printed"}
-        ``"corrected"``: denominator I + 10S² + 5S⁴ (``docs/ERRATA.md`` § Riccati sign function).  ``"printed"``: the report's
-        misprint I + 10S + 5S⁴, kept only to demonstrate that it does not converge.
-    evaluation : {"partial_fraction", "polynomial"}
-        How the corrected rational map is evaluated.  ``"polynomial"`` forms S⁴ and solves with
-        I + 10S² + 5S⁴ as printed, whose condition grows like κ(S)⁴ and loses the eigenvalues
-        near the imaginary axis when |λ| is widely spread.  ``"partial_fraction"`` (default)
-        evaluates the same function as S/5 + Σ c_i Re (S + i√a_i I)⁻¹ (Kenney–Laub; Higham,
-        *Functions of Matrices*, §5.4), conditioned like κ(S).  The printed form is always
-        evaluated as a polynomial.
-
-    Returns
-    -------
-    SignResult
-
-    Raises
-    ------
-    ConvergenceError
-        No convergence within ``max_iter``, a singular step, a limit that is not
-        involutory (‖S² − I‖₁ > √tol·max(1, ‖S‖₁)²), or an involutory limit that is not the sign
-        (S·M must have its spectrum in the open right half-plane).
-    """
-    M0 = np.array(M, dtype=float)
-    S = M0.copy()
-    n = S.shape[0]
-    eye = np.eye(n)
-    if form not in ("corrected", "printed"):
-        raise ValueError(f"form must be 'corrected' or 'printed', got {form!r}")
-    if evaluation not in ("partial_fraction", "polynomial"):
-        raise ValueError(f"evaluation must be 'partial_fraction' or 'polynomial', got {evaluation!r}")
-    if scaling not in ("det", "norm", None, "none"):
-        raise ValueError(f"scaling must be 'det', 'norm' or None, got {scaling!r}")
-    step = np.inf
-    prev = np.inf
-    for k in range(1, max_iter + 1):
-        if scaling in ("det", "norm") and step > 1e-2:
-            if scaling == "det":
-                sgn, logdet = np.linalg.slogdet(S)
-                mu = np.exp(-logdet / n) if sgn != 0 and np.isfinite(logdet) else 1.0
-            else:
-                try:
-                    mu = np.sqrt(np.linalg.norm(np.linalg.inv(S)) / np.linalg.norm(S))
-                except np.linalg.LinAlgError:
-                    mu = 1.0
-            if np.isfinite(mu) and mu > 0:
-                S = mu * S
-        try:
-            if form == "corrected" and evaluation == "partial_fraction":
-                # f(S) = S/5 + Σ c_i S (S² + a_i I)⁻¹ and S (S² + a I)⁻¹ = Re (S + i√a I)⁻¹
-                S_new = S / 5.0
-                for c, a in _PF:
-                    S_new = S_new + c * np.linalg.inv(S + 1j * np.sqrt(a) * eye).real
-            else:
-                S2 = S @ S
-                S4 = S2 @ S2
-                num = S @ (5.0 * eye + 10.0 * S2 + S4)
-                den = eye + (10.0 * S2 if form == "corrected" else 10.0 * S) + 5.0 * S4
-                S_new = np.linalg.solve(den, num)
-        except np.linalg.LinAlgError as exc:
-            raise ConvergenceError(f"matrix sign (eq 5.6, {form}): singular denominator "
-                                   f"at iteration {k}") from exc
-        if not np.all(np.isfinite(S_new)):
-            raise ConvergenceError(f"matrix sign (eq 5.6, {form}): iteration overflowed "
-                                   f"at iteration {k}")
-        prev, step = step, np.linalg.norm(S_new - S, 1) / np.linalg.norm(S_new, 1)
-        S = S_new
-        if step <= tol or (step < 1e-6 and step >= prev):
-            inv = np.linalg.norm(S @ S - eye, 1)
-            if inv > np.sqrt(tol) * max(1.0, np.linalg.norm(S, 1)) ** 2:
-                raise ConvergenceError(
-                    f"matrix sign (eq 5.6, {form}): iteration settled after {k} steps on a "
-                    f"matrix that is not a sign (‖S²−I‖₁ = {inv:.3g})")
-            # sign(M)·M = (M²)^½ has its spectrum in the open right half-plane; a wrong
-            # involutory limit (e.g. I for a matrix with stable eigenvalues) fails this.
-            mineig = float(np.min(np.linalg.eigvals(S @ M0).real))
-            if not mineig > 0.0:
-                raise ConvergenceError(
-                    f"matrix sign (eq 5.6, {form}): iteration converged after {k} steps to an "
-                    f"involutory matrix that is not sign(M) (eigenvalue of S·M with real part "
-                    f"{mineig:.3g} ≤ 0)")
-            return SignResult(S=S, iterations=k, step=float(step))
-    raise ConvergenceError(f"matrix sign (eq 5.6, {form}): no convergence in {max_iter} "
-                           f"iterations (last relative step {step:.3g}, tolerance {tol:.1e})")
 
 
 def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign_tol=1e-13,
@@ -318,6 +155,38 @@ def solve_unverified(A, B, Q, R, *, method: str = "scipy", sign_scaling: str = "
 
     For comparisons only (``scripts/compare_riccati.py``); use :func:`solve_care`.  Solver
     failures raise :class:`ConvergenceError`.  Q and R must be arrays.
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix, 1/s for rates (any consistent units).
+    B : (N, M) array
+        Input matrix, same units.
+    Q : (N, N) array
+        State weight, same units.
+    R : (M, M) array
+        Control weight, 1 / input unit² per s.
+    method : {"scipy", "sign", "slycot"}
+        Algorithm (module docstring).
+    sign_scaling : {"det", "norm", None}
+        Acceleration of the sign iteration (``method="sign"`` only).
+    sign_evaluation : {"partial_fraction", "polynomial"}
+        Evaluation of eq 5.6 (``method="sign"`` only).
+    max_iter : int
+        Iteration limit of the sign iteration.
+
+    Returns
+    -------
+    tuple
+        (P, iterations): the unverified solution (units of Q times s) and the sign-function
+        iterations (0 for the direct methods).
+
+    Raises
+    ------
+    ValueError
+        An unknown ``method``.
+    ConvergenceError
+        The solver failed.
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -335,79 +204,6 @@ def solve_unverified(A, B, Q, R, *, method: str = "scipy", sign_scaling: str = "
     return P, iterations
 
 
-def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
-    """Refuse a CARE without a stabilizing solution; return the relative spectral gap.
-
-    Computes the eigenvalues λ_i of H = [[A, −G], [−Q, −A']] (G = BR⁻¹B') with their condition
-    numbers κ_i and raises :class:`ConvergenceError` if some |Re λ_i| ≤ δ_i (module docstring):
-    an eigenvalue on, or within rounding of, the imaginary axis.
-
-    Returns
-    -------
-    float
-        min_i |Re λ_i| / ‖H_b‖_F (H_b: balanced H).
-    """
-    n = A.shape[0]
-    G = B @ np.linalg.solve(R, B.T)
-    H = np.block([[A, -0.5 * (G + G.T)], [-Q, -A.T]])
-    hn = float(np.linalg.norm(H))
-    if n == 0 or hn == 0.0:
-        if n:
-            raise _refusal(f"Riccati solve (method={method!r}): no stabilizing solution "
-                           f"(Hamiltonian is zero: every eigenvalue on the imaginary axis)",
-                           method, float("nan"))
-        return float("inf")
-    Hb, _ = sla.matrix_balance(H, permute=True)
-    hn = float(np.linalg.norm(Hb))
-    w, vl, vr = sla.eig(Hb, left=True, right=True)
-    num = np.linalg.norm(vl, axis=0) * np.linalg.norm(vr, axis=0)
-    den = np.abs(np.sum(vl.conj() * vr, axis=0))
-    kappa = np.divide(num, den, out=np.full(num.shape, np.inf), where=den > 0)
-    eps = np.finfo(float).eps
-    band = np.minimum(IMAG_AXIS_RTOL * kappa * eps, np.sqrt(eps)) * hn
-    bad = np.abs(w.real) <= band
-    if np.any(bad):
-        i = int(np.argmin(np.where(bad, np.abs(w.real) / band, np.inf)))
-        raise _refusal(
-            f"Riccati solve (method={method!r}): no stabilizing solution: the Hamiltonian has "
-            f"eigenvalue {complex(w[i]):.6g} on or within rounding of the imaginary axis "
-            f"(|Re λ| = {abs(w[i].real):.3g} ≤ {band[i]:.3g}; eigenvalue condition "
-            f"{kappa[i]:.3g}): a mode on the axis is uncontrollable or unobservable", method,
-            float("nan"))
-    return float(np.min(np.abs(w.real)) / hn)
-
-
-def care_condition(A, B, Q, R, P) -> float:
-    """Relative condition estimate κ_CARE of eq 5.4 at the stabilizing P (module docstring).
-
-    ``inf`` when A − GP is not stable (Y does not exist).
-    """
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
-    Ac = A - G @ P
-    if A.shape[0] == 0:
-        return 0.0
-    if np.max(np.linalg.eigvals(Ac).real) >= 0:
-        return float("inf")
-    try:
-        Y = sla.solve_continuous_lyapunov(Ac.T, -np.eye(A.shape[0]))
-    except (np.linalg.LinAlgError, ValueError):
-        return float("inf")
-    n2 = lambda M: float(np.linalg.norm(M, 2))  # noqa: E731
-    p = n2(P)
-    top = n2(Q) + 2.0 * n2(A) * p + n2(G) * p * p
-    if p == 0.0:
-        return n2(Y) * 2.0 * n2(A)
-    return n2(Y) * top / p
-
-
-def _refusal(message: str, method: str, residual: float) -> ConvergenceError:
-    exc = ConvergenceError(message)
-    exc.method = method          # for reports (scripts/compare_riccati.py)
-    exc.residual = residual
-    return exc
-
-
 def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e-9,
                sign_scaling: str = "det", sign_evaluation: str = "partial_fraction",
                max_iter: int = 60) -> CareResult:
@@ -418,7 +214,7 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     A : (N, N) array
         State matrix (physical units, e.g. 1/s).
     B : (N, M) array
-        Input matrix.
+        Input matrix (physical units: state units per s per input unit).
     Q : (N, N) array or float
         State weight, symmetric positive semidefinite (a float q means q·I), physical units.
     R : (M, M) array or float
@@ -426,9 +222,10 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     method : {"scipy", "sign", "slycot"}
         Algorithm (module docstring).
     scale : (N,) array or None
-        Nominal state magnitudes d; the solve is done on x̃ = D⁻¹x and mapped back.
+        Nominal state magnitudes d, in the units of the states; the solve is done on x̃ = D⁻¹x and mapped back.
     tol : float
-        Largest acceptable relative residual (:func:`care_residual`, scaled coordinates).
+        Largest acceptable relative residual (:func:`care_residual`, scaled coordinates),
+        dimensionless.
         ``np.inf`` disables the refusal (for comparisons).
     sign_scaling : {"det", "norm", None}
         Acceleration of the sign iteration (``method="sign"`` only).
@@ -444,6 +241,8 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
 
     Raises
     ------
+    ValueError
+        An unknown ``method`` or mismatched shapes.
     ConvergenceError
         The Hamiltonian has an eigenvalue on or within rounding of the imaginary axis (no
         stabilizing solution), the solver failed, the sign iteration did not converge, the
@@ -451,21 +250,8 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    A = np.asarray(A, dtype=float)
-    B = np.asarray(B, dtype=float)
-    if B.ndim == 1:
-        B = B[:, None]
-    n, m = B.shape
-    if A.shape != (n, n):
-        raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
-    Q = _as_Q(Q, n)
-    R = _as_R(R, m)
-    if scale is not None:
-        d = np.asarray(scale, dtype=float)
-        As, Bs, Qs = scale_problem(A, B, Q, d)
-    else:
-        d = None
-        As, Bs, Qs = A, B, Q
+    A, B, Q, R, d = _as_problem(A, B, Q, R, scale)
+    As, Bs, Qs = scale_problem(A, B, Q, d) if d is not None else (A, B, Q)
 
     gap = hamiltonian_check(As, Bs, Qs, R, method=method)
     t0 = time.perf_counter()
@@ -473,18 +259,7 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
                                       sign_evaluation=sign_evaluation, max_iter=max_iter)
     seconds = time.perf_counter() - t0
     Ps = 0.5 * (Ps + Ps.T)
-    if not np.all(np.isfinite(Ps)):
-        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values")
-    res = care_residual(As, Bs, Qs, R, Ps)
-    if not res <= tol:
-        raise _refusal(f"Riccati solve (method={method!r}{', state-scaled' if d is not None else ''}"
-                       f"): relative residual {res:.3e} exceeds tolerance {tol:.1e}", method, res)
-    Ks = np.linalg.solve(R, Bs.T @ Ps)
-    worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
-    if not worst < 0.0:
-        raise _refusal(f"Riccati solve (method={method!r}): solution is not stabilizing "
-                       f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
-                       f"{res:.3e})", method, res)
+    Ks, res = _verified_gain(As, Bs, Qs, R, Ps, method=method, tol=tol, scaled=d is not None)
     cond = care_condition(As, Bs, Qs, R, Ps)
     if d is not None:
         P = Ps / d[:, None] / d[None, :]
@@ -494,3 +269,33 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     return CareResult(P=P, K=K, residual=res, method=method, iterations=iterations,
                       scale=d, seconds=seconds, condition=cond,
                       ill_conditioned=bool(not cond <= ILL_CONDITIONED), hamiltonian_gap=gap)
+
+
+def _as_problem(A, B, Q, R, scale):
+    """Arrays (A, B, Q, R) of matching shapes, and the scale d as an array (or None)."""
+    A = np.asarray(A, dtype=float)
+    B = np.asarray(B, dtype=float)
+    if B.ndim == 1:
+        B = B[:, None]
+    n, m = B.shape
+    if A.shape != (n, n):
+        raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
+    d = np.asarray(scale, dtype=float) if scale is not None else None
+    return A, B, _as_Q(Q, n), _as_R(R, m), d
+
+
+def _verified_gain(As, Bs, Qs, R, Ps, *, method, tol, scaled):
+    """(K̃, residual) of a solution P̃, refused if non-finite, inaccurate or not stabilizing."""
+    if not np.all(np.isfinite(Ps)):
+        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values")
+    res = care_residual(As, Bs, Qs, R, Ps)
+    if not res <= tol:
+        _refuse(f"Riccati solve (method={method!r}{', state-scaled' if scaled else ''}"
+                       f"): relative residual {res:.3e} exceeds tolerance {tol:.1e}", method, res)
+    Ks = np.linalg.solve(R, Bs.T @ Ps)
+    worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
+    if not worst < 0.0:
+        _refuse(f"Riccati solve (method={method!r}): solution is not stabilizing "
+                       f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
+                       f"{res:.3e})", method, res)
+    return Ks, res

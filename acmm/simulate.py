@@ -19,196 +19,27 @@ Integrated state X (24): ω (rad/s), θ (rad), h (ft·lbf·s), ∫h (ft·lbf·s�
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from numba import njit
 
 from acmm import dynamics as dyn
-from acmm.linearize import DRF_INPUTS, state_scales
-
-PLAIN_STATE_NAMES = ["omega1", "omega2", "omega3", "theta1", "theta2", "theta3",
-                     "h1", "h2", "h3", "int_h1", "int_h2", "int_h3",
-                     "alpha1_dot", "alpha1", "alpha2_dot", "alpha2", "alpha3_dot", "alpha3",
-                     "beta1_dot", "beta1", "beta2_dot", "beta2", "beta3_dot", "beta3"]
-
-STOP_NONE, STOP_ANGLE, STOP_SATURATION, STOP_NONFINITE, STOP_STEP = 0, 1, 2, 3, 4
-STOP_REASONS = {
-    STOP_NONE: "completed",
-    STOP_ANGLE: "attitude error exceeded the divergence bound",
-    STOP_SATURATION: "a CMG axis stayed saturated longer than the bound",
-    STOP_NONFINITE: "the state became non-finite",
-    STOP_STEP: "the integrator step size underflowed",
-}
-
-
-@dataclass(frozen=True)
-class Scenario:
-    """Everything the simulator needs, as arrays (one row per inertia level).
-
-    Attributes
-    ----------
-    level_start : (L,) array, s
-        Start time of each level (first is 0).
-    inertia : (L, 3, 3) array, slug·ft²
-        True plant inertia per level.
-    bias : (L, 3) array, ft·lbf
-        Bias torque per level (eq 3.9).
-    theta_est : (L, 3) array, rad
-        TEA estimate θ̂* the controller uses per level.
-    gain : (L, 3, 24) array
-        Gain K per level (u = −K x), in the units of eq 4.47.
-    harmonic_a, harmonic_b : (3,) arrays, ft·lbf
-        Amplitudes of sin(nt) and sin(2nt).
-    n : float, rad/s
-        Orbital rate.
-    torque_limit : float, ft·lbf
-        Commanded torque is clipped to ±torque_limit per axis (ch. 5.1: 150 ft·lbf).
-    momentum_limit : float, ft·lbf·s
-        CMG momentum limit per axis (ch. 5.1: 20 000 ft·lbf·s).
-    drf_mode : str
-        ``"attitude_hold"`` or ``"momentum_hold"`` (DRF inputs, ch. 5.1).
-    t_end : float, s
-        End of the simulation.
-    sample_times : (S,) array, s
-        Output times (include 0 and every level start).
-    x0 : (24,) array
-        Initial plain state X, in the units listed in the module docstring.
-    rtol : float
-        Relative tolerance of the integrator, dimensionless.
-    atol : (24,) array
-        Absolute tolerance per component of X, in the units of X.
-    divergence : float, rad
-        A run stops as diverged when |θ_i − θ̂*_i| exceeds this bound.
-    max_saturation : float, s
-        A run stops as diverged when a CMG axis stays saturated longer than this.
-    """
-
-    level_start: np.ndarray
-    inertia: np.ndarray
-    bias: np.ndarray
-    theta_est: np.ndarray
-    gain: np.ndarray
-    harmonic_a: np.ndarray
-    harmonic_b: np.ndarray
-    n: float
-    torque_limit: float
-    momentum_limit: float
-    drf_mode: str
-    t_end: float
-    sample_times: np.ndarray
-    x0: np.ndarray
-    rtol: float
-    atol: np.ndarray
-    divergence: float
-    max_saturation: float
-
-
-@dataclass(frozen=True)
-class SimResult:
-    """Sampled trajectory and verdict.
-
-    ``state`` rows follow :data:`PLAIN_STATE_NAMES`; ``u_cmd`` is −K x before saturation,
-    ``u`` the torque delivered; ``torque_saturated``/``momentum_saturated`` flag each axis.
-
-    Attributes
-    ----------
-    t : (S,) array
-        Sample times, s (the last one is the stop time when the run stopped early).
-    state : (S, 24) array
-        Plain state X at each sample, in the units listed in the module docstring.
-    u_cmd : (S, 3) array
-        Commanded torque −K x (eq 5.1) before saturation, ft·lbf.
-    u : (S, 3) array
-        Torque delivered after saturation (``docs/ERRATA.md`` § Saturation), ft·lbf.
-    w : (S, 3) array
-        Disturbance torque of eq 3.9, ft·lbf.
-    level : (S,) int array
-        Index of the inertia level in force at each sample.
-    torque_saturated : (S, 3) bool array
-        Commanded torque clipped, per axis.
-    momentum_saturated : (S, 3) bool array
-        CMG momentum at its limit, per axis.
-    stop_code : int
-        One of the ``STOP_*`` codes (:data:`STOP_REASONS`); ``STOP_NONE`` when completed.
-    stop_time : float
-        Time reached, s.
-    n_steps : int
-        Accepted integrator steps.
-    n_rejected : int
-        Rejected integrator steps.
-    """
-
-    t: np.ndarray
-    state: np.ndarray
-    u_cmd: np.ndarray
-    u: np.ndarray
-    w: np.ndarray
-    level: np.ndarray
-    torque_saturated: np.ndarray
-    momentum_saturated: np.ndarray
-    stop_code: int
-    stop_time: float
-    n_steps: int
-    n_rejected: int
-
-    @property
-    def diverged(self) -> bool:
-        """True when the run stopped early (divergence is a result, not an error)."""
-        return self.stop_code != STOP_NONE
-
-    @property
-    def verdict(self) -> str:
-        """``"diverged"`` or ``"bounded"``."""
-        return "diverged" if self.diverged else "bounded"
-
-    @property
-    def reason(self) -> str:
-        """Why the run stopped, in words (:data:`STOP_REASONS`)."""
-        return STOP_REASONS[self.stop_code]
-
-
-def plain_scales(n: float, drf_mode: str) -> np.ndarray:
-    """Nominal magnitudes of the plain state X (for absolute tolerances).
-
-    The scales of :func:`acmm.linearize.state_scales` (``docs/ERRATA.md`` § Scaling) with ω2
-    in place of θ̇2.
-
-    Parameters
-    ----------
-    n : float
-        Orbital rate, rad/s.
-    drf_mode : {"attitude_hold", "momentum_hold"}
-        DRF inputs (h1, δθ2, δθ3) or (h1, h2, δθ3).
-
-    Returns
-    -------
-    (24,) array
-        Nominal magnitudes, in the units of X (module docstring).
-    """
-    s = state_scales(n, drf_mode).copy()
-    s[1] = s[0]            # ω2 instead of θ̇2: same rate scale
-    return s
+from acmm.linearize import DRF_INPUTS
+# moved to acmm.scenario (issue 12), re-exported here
+from acmm.scenario import (PLAIN_STATE_NAMES, STOP_ANGLE, STOP_NONE, STOP_NONFINITE,  # noqa: F401
+                           STOP_REASONS, STOP_SATURATION, STOP_STEP, Scenario, SimResult,
+                           attitude_error, level_statistics, plain_scales, scenario_from_config)
 
 
 # ----------------------------------------------------------------------------------------------
 # compiled kernel
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True, fastmath=False)
-def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n,
-         tmax, hmax, drf_idx, out, u_out, ucmd_out, flags, x, u):
-    """Closed-loop Ẋ into ``out``; ``x`` (24) and ``u`` (3) are scratch buffers."""
+def _torque(X, th2d, theta_est, omega_est, gain, tmax, hmax, ucmd_out, u_out, flags, x, u):
+    """Controller state x (eq 4.47) into ``x``, commanded and delivered torque (eq 5.1, saturation)
+    into ``ucmd_out``, ``u_out`` and ``u``; returns ω × h."""
     w1, w2, w3 = X[0], X[1], X[2]
     t1, t2, t3 = X[3], X[4], X[5]
     h1, h2, h3 = X[6], X[7], X[8]
-    s1, c1 = np.sin(t1), np.cos(t1)
-    s2, c2 = np.sin(t2), np.cos(t2)
-    s3, c3 = np.sin(t3), np.cos(t3)
-    # kinematics, eq 3.5/3.6 (corrected)
-    d2 = (c1 * w2 - s1 * w3) / c3
-    th1d = w1 - s3 * d2
-    th2d = d2 + n
-    th3d = s1 * w2 + c1 * w3
     # controller state x of eq 4.47 around the TEA estimate
     x[0] = w1 - omega_est[0]
     x[1] = th2d
@@ -245,6 +76,26 @@ def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n
             if (u[i] - wxh[i]) * hh[i] > 0.0:
                 u[i] = wxh[i]
         u_out[i] = u[i]
+    return wxh0, wxh1, wxh2
+
+
+@njit(cache=True, fastmath=False)
+def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n,
+         tmax, hmax, drf_idx, out, u_out, ucmd_out, flags, x, u):
+    """Closed-loop Ẋ into ``out``; ``x`` (24) and ``u`` (3) are scratch buffers."""
+    w1, w2, w3 = X[0], X[1], X[2]
+    t1, t2, t3 = X[3], X[4], X[5]
+    h1, h2, h3 = X[6], X[7], X[8]
+    s1, c1 = np.sin(t1), np.cos(t1)
+    s2, c2 = np.sin(t2), np.cos(t2)
+    s3, c3 = np.sin(t3), np.cos(t3)
+    # kinematics, eq 3.5/3.6 (corrected)
+    d2 = (c1 * w2 - s1 * w3) / c3
+    th1d = w1 - s3 * d2
+    th2d = d2 + n
+    th3d = s1 * w2 + c1 * w3
+    wxh0, wxh1, wxh2 = _torque(X, th2d, theta_est, omega_est, gain, tmax, hmax, ucmd_out, u_out,
+                               flags, x, u)
     # disturbance, eq 3.9
     sn, s2n = np.sin(n * t), np.sin(2.0 * n * t)
     # gravity gradient, eqs 3.3-3.4
@@ -296,6 +147,56 @@ _E = _B5 - _B4
 
 
 @njit(cache=True)
+def _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx, rtol, atol,
+                C, A, B5, E, K, tmp, u, ucmd, flags, xs, us):
+    """One Dormand–Prince 5(4) step of length h from (t, X): stages into ``K``, the 5th-order
+    solution into ``tmp``; returns (RMS of the scaled error estimate, all finite)."""
+    nx = 24
+    # stages
+    for st in range(7):
+        for i in range(nx):
+            acc = X[i]
+            for j in range(st):
+                acc += h * A[st, j] * K[j, i]
+            tmp[i] = acc
+        _rhs(t + C[st] * h, tmp, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
+             K[st], u, ucmd, flags, xs, us)
+    # error estimate (RMS of scaled error)
+    err = 0.0
+    finite = True
+    for i in range(nx):
+        y5 = X[i]
+        e = 0.0
+        for j in range(7):
+            y5 += h * B5[j] * K[j, i]
+            e += h * E[j] * K[j, i]
+        tmp[i] = y5
+        sc = atol[i] + rtol * max(abs(X[i]), abs(y5))
+        err += (e / sc) ** 2
+        if not np.isfinite(y5):
+            finite = False
+    err = np.sqrt(err / nx)
+    return err, finite
+
+
+@njit(cache=True)
+def _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time):
+    """Divergence checks after an accepted step: 1 (attitude bound), 2 (saturated too long) or 0;
+    updates the saturation clocks ``sat_time``."""
+    stop = 0
+    for i in range(3):
+        if abs(X[3 + i] - tl[i]) > divergence:
+            stop = 1
+        if abs(X[6 + i]) >= hmax * (1.0 - 1e-9):
+            sat_time[i] += step_len
+            if sat_time[i] > max_sat:
+                stop = 2
+        else:
+            sat_time[i] = 0.0
+    return stop
+
+
+@njit(cache=True)
 def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est, omega_est, gain,
                ha, hb, n, tmax, hmax, drf_idx, x0, rtol, atol, divergence, max_sat,
                C, A, B5, E, out_state, out_ucmd, out_u, out_flags, out_level):
@@ -334,30 +235,8 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
         tl, ol, gl = theta_est[level], omega_est[level], gain[level]
         while t < t_target - 1e-9:
             h = min(dt, t_target - t)
-            # stages
-            for st in range(7):
-                for i in range(nx):
-                    acc = X[i]
-                    for j in range(st):
-                        acc += h * A[st, j] * K[j, i]
-                    tmp[i] = acc
-                _rhs(t + C[st] * h, tmp, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
-                     K[st], u, ucmd, flags, xs, us)
-            # error estimate (RMS of scaled error)
-            err = 0.0
-            finite = True
-            for i in range(nx):
-                y5 = X[i]
-                e = 0.0
-                for j in range(7):
-                    y5 += h * B5[j] * K[j, i]
-                    e += h * E[j] * K[j, i]
-                tmp[i] = y5
-                sc = atol[i] + rtol * max(abs(X[i]), abs(y5))
-                err += (e / sc) ** 2
-                if not np.isfinite(y5):
-                    finite = False
-            err = np.sqrt(err / nx)
+            err, finite = _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
+                                      rtol, atol, C, A, B5, E, K, tmp, u, ucmd, flags, xs, us)
             if not finite:
                 stop = 3
                 break
@@ -370,16 +249,7 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
                 n_steps += 1
                 fac = 0.9 * err ** (-0.2) if err > 0 else 5.0
                 dt = h * min(5.0, max(0.2, fac))
-                # divergence checks
-                for i in range(3):
-                    if abs(X[3 + i] - tl[i]) > divergence:
-                        stop = 1
-                    if abs(X[6 + i]) >= hmax * (1.0 - 1e-9):
-                        sat_time[i] += step_len
-                        if sat_time[i] > max_sat:
-                            stop = 2
-                    else:
-                        sat_time[i] = 0.0
+                stop = _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time)
                 if stop != 0:
                     break
             else:
@@ -538,113 +408,3 @@ def rhs_numpy(t: float, X: np.ndarray, sc: Scenario, level: int = 0) -> np.ndarr
     return np.concatenate([omega_dot, theta_dot, h_dot, h, d_drf])
 
 
-def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float | None = None) -> Scenario:
-    """The :class:`Scenario` of a config and its design table (``acmm.stages.DesignTable``).
-
-    Levels are the design points in order (the stair-case); each starts at the orbit given by
-    ``simulation.levels`` or, by default, after an equal dwell.  The controller uses the TEA of
-    each level's mass properties as its estimate θ̂* (report ch. 5.1) and the scheduled gain
-    K(θ̂2*) when the design has a schedule, else the level's own LQR gain (eq 5.1, ch. 5.3).
-
-    Parameters
-    ----------
-    cfg : acmm.config.Config
-        Validated config (orbital rate rad/s, disturbance ft·lbf, actuator limits ft·lbf and
-        ft·lbf·s, ``simulation`` settings).
-    table : acmm.stages.DesignTable
-        Design points in order: inertia (slug·ft²), bias (ft·lbf), TEA (rad) and gains.
-    orbits : float, optional
-        Simulated duration in orbits (dimensionless); default ``simulation.orbits``.
-    rtol : float, optional
-        Relative tolerance (dimensionless); default ``simulation.rtol``.
-
-    Returns
-    -------
-    Scenario
-        The arrays the simulator needs.
-
-    Raises
-    ------
-    ConfigError
-        When ``simulation.levels`` and the design table differ in length.
-    """
-    sim = cfg.simulation
-    n = cfg.orbit_rate
-    orbit = 2 * np.pi / n
-    total = sim.orbits if orbits is None else orbits
-    P = len(table.names)
-    levels = np.asarray(sim.levels, float) if sim.levels is not None else total * np.arange(P) / P
-    if levels.size != P:
-        from common.errors import ConfigError
-
-        raise ConfigError(f"simulation.levels has {levels.size} entries but the design has {P} points")
-    t_end = total * orbit
-    level_start = levels * orbit
-    keep = level_start < t_end
-    level_start = level_start[keep]
-    idx = np.nonzero(keep)[0]
-    samples = np.union1d(np.arange(0.0, t_end, sim.sample_interval), np.append(level_start, t_end))
-    theta0 = table.tea[0] + np.radians(sim.initial_offset)
-    x0 = np.concatenate([dyn.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
-    return Scenario(
-        level_start=level_start, inertia=table.inertia[idx], bias=table.bias[idx], theta_est=table.tea[idx],
-        gain=np.array([table.scheduled_gain(k) for k in idx]),
-        harmonic_a=np.asarray(cfg.disturbance.A), harmonic_b=np.asarray(cfg.disturbance.B), n=n,
-        torque_limit=cfg.actuators.torque_limit, momentum_limit=cfg.actuators.momentum_limit,
-        drf_mode=cfg.design.drf_mode, t_end=t_end, sample_times=samples, x0=x0,
-        rtol=sim.rtol if rtol is None else rtol, atol=plain_scales(n, cfg.design.drf_mode) * sim.atol_scale,
-        divergence=np.radians(sim.divergence_deg), max_saturation=sim.max_saturation_orbits * orbit)
-
-
-def attitude_error(sc: Scenario, r: SimResult) -> np.ndarray:
-    """θ − θ̂* of the level in force at each sample (rad).
-
-    Parameters
-    ----------
-    sc : Scenario
-        The simulated scenario (its TEA estimates, rad).
-    r : SimResult
-        Its result.
-
-    Returns
-    -------
-    (S, 3) array
-        Attitude error, rad.
-    """
-    return r.state[:, 3:6] - sc.theta_est[r.level]
-
-
-def level_statistics(sc: Scenario, r: SimResult) -> list[dict]:
-    """Per level: steady attitude error (max |θ − θ̂*| over the second half of the dwell, deg)
-    and peak CMG momentum (ft·lbf·s).
-
-    The stair-case of inertia levels of report ch. 6 (claim 2).
-
-    Parameters
-    ----------
-    sc : Scenario
-        The simulated scenario.
-    r : SimResult
-        Its result.
-
-    Returns
-    -------
-    list of dict
-        One per level reached: ``level``, ``start_orbit`` (orbits), ``theta2_deg`` (deg, the
-        TEA pitch estimate), ``steady_error_deg`` ((3,) array, deg) and ``peak_momentum``
-        (ft·lbf·s).
-    """
-    err = np.degrees(attitude_error(sc, r))
-    hmag = np.abs(r.state[:, 6:9])
-    out = []
-    ends = np.append(sc.level_start[1:], sc.t_end)
-    orbit = 2 * np.pi / sc.n
-    for k, (t0, t1) in enumerate(zip(sc.level_start, ends)):
-        in_level = r.level == k
-        steady = in_level & (r.t >= 0.5 * (t0 + t1))
-        if not steady.any():
-            continue
-        out.append({"level": k, "start_orbit": t0 / orbit, "theta2_deg": float(np.degrees(sc.theta_est[k, 1])),
-                    "steady_error_deg": np.abs(err[steady]).max(axis=0),
-                    "peak_momentum": float(hmag[in_level].max())})
-    return out

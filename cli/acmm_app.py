@@ -52,7 +52,7 @@ def validate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] 
     """Check a config of any kind (acmm run, sweep or qpp; detected from its sections); exit 2
     naming the offending field when it is invalid."""
     from common.overrides import split_overrides
-    from acmm.schema import load_any
+    from configkinds import load_any
 
     config, overrides = split_overrides(config, overrides)
     kind, cfg = load_any(config, overrides)
@@ -73,7 +73,7 @@ class ConfigKind(str, enum.Enum):
 @user_errors
 def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="config kind")) -> None:
     """Print the JSON schema of a config kind (for editors: see README, 'Config format')."""
-    from acmm.schema import schema_json
+    from configkinds import schema_json
 
     typer.echo(schema_json(kind.value))
 

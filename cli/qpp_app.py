@@ -39,7 +39,7 @@ def _load(config, overrides):
 def validate(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
              show: bool = typer.Option(False, "--show", help="print the resolved config")) -> None:
     """Check a config of any kind (qpp, acmm run or sweep; detected from its sections)."""
-    from acmm.schema import load_any
+    from configkinds import load_any
 
     kind, cfg = load_any(config, overrides)
     typer.echo(f"{cfg.name}: valid ({kind} config)")
@@ -51,7 +51,7 @@ def validate(config: Path = ConfigArg, overrides: Optional[list[str]] = Override
 @user_errors
 def schema() -> None:
     """Print the JSON schema of the qpp config format (`acmm schema --kind ...` for the others)."""
-    from acmm.schema import schema_json
+    from configkinds import schema_json
 
     typer.echo(schema_json("qpp"))
 

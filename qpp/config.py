@@ -8,80 +8,20 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Literal, Optional, Union
+from typing import Literal, Optional, Union
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from common.errors import ConfigError
-from common.units import to_canonical
 from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
-
-Matrix = list[list[float]]
-
-
-def _q(kind: str):
-    """A number, or a ``"<number> <unit>"`` string converted (pint) to the SI unit of ``kind``."""
-    def conv(v):
-        if v is None:
-            return v
-        x = to_canonical(v, kind)
-        if not math.isfinite(x):
-            raise ValueError("must be a finite number")
-        return x
-    return BeforeValidator(conv)
-
-
-Seconds = Annotated[float, _q("time")]
-OptSeconds = Annotated[Optional[float], _q("time")]
-RadPerSecond = Annotated[float, _q("frequency")]
-PerSecond = Annotated[float, _q("inverse_time")]
-Kilograms = Annotated[float, _q("mass")]
-Metres = Annotated[float, _q("length")]
-KgM2 = Annotated[float, _q("si_inertia")]
-Radians = Annotated[float, _q("angle_rad")]
-#: Largest magnitude accepted for any number of a qpp config (matrix entry, gain, weight,
-#: amplitude, time); beyond it products in the design and the simulation overflow (issue 13).
-QPP_MAX = 1e12
-
-
-def _implausible(v):
-    """The first number in ``v`` (scalar or nested list) with |x| > QPP_MAX, else ``None``."""
-    if isinstance(v, bool) or isinstance(v, BaseModel):
-        return None
-    if isinstance(v, (int, float)):
-        return v if abs(v) > QPP_MAX else None
-    if isinstance(v, (list, tuple)):
-        for x in v:
-            bad = _implausible(x)
-            if bad is not None:
-                return bad
-    return None
-
-
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
-    @model_validator(mode="after")
-    def _plausible_magnitudes(self):
-        for name in type(self).model_fields:
-            bad = _implausible(getattr(self, name))
-            if bad is not None:
-                raise ValueError(f"{name}: {bad:.4g} is outside the plausible range |value| ≤ {QPP_MAX:g}")
-        return self
-
-
-def _finite_matrix(v):
-    if not isinstance(v, list) or not v or not all(isinstance(r, list) for r in v):
-        raise ValueError("must be a non-empty matrix (list of rows)")
-    if len({len(r) for r in v}) != 1 or not v[0]:
-        raise ValueError(f"rows must all have the same, non-zero length (got row lengths {[len(r) for r in v]})")
-    a = np.asarray(v, float)
-    if not np.all(np.isfinite(a)):
-        raise ValueError("must contain finite numbers")
-    return v
-
+# field types and the nonlinearity sections moved out (issue 12), re-exported here
+from qpp.config_fields import (QPP_MAX, KgM2, Kilograms, Matrix, Metres, OptSeconds,  # noqa: F401
+                               PerSecond, Radians, RadPerSecond, Seconds, _finite_matrix,
+                               _implausible, _Model, _q)
+from qpp.config_nonlin import (ExpressionNonlinearity, LibraryForm, Nonlinearity,  # noqa: F401
+                               ParameterRange, PolarArmNonlinearity, SinusoidalNonlinearity)
 
 class Plant(_Model):
     """Lure plant x' = A x + B u + G d + B f1(·), y = C x (eqs 10.1, 13.1, 14.2) and servo-compensator."""
@@ -101,119 +41,6 @@ class Plant(_Model):
     @classmethod
     def _mats(cls, v):
         return _finite_matrix(v)
-
-
-class SinusoidalNonlinearity(_Model):
-    """f1(y, γ, t) = F0 y + (F1 + γ F_unc) y sin(ω t), |γ| ≤ gamma_max (ch. 13: F0 = 2, F1 = 1.5, γ = Δm).
-
-    The controller and observer cancel the nominal part f1o = F0 y + F1 y sin(ωt) (γ = 0).
-    """
-
-    kind: Literal["sinusoidal"] = "sinusoidal"
-    F0: Matrix = Field(description="constant output feedback part (m×p)")
-    F1: Matrix = Field(description="nominal time-varying part (m×p), multiplies y sin(ωt)")
-    F_unc: Matrix = Field(description="uncertain direction (m×p), multiplies γ y sin(ωt)")
-    omega: RadPerSecond = Field(1.0, ge=0, description="frequency of the time variation, rad/s (0: constant)")
-    gamma_max: float = Field(gt=0, description="uncertainty bound |γ| ≤ gamma_max (dimensionless)")
-
-
-class PolarArmNonlinearity(_Model):
-    """Two-DOF extend/rotate arm of ch. 14 (eq 14.1), uncertain payload M ∈ [M_min, M_max] (kg).
-
-    f1 = [R/(μ+M) x4²; −2 R x3 x4 / I], R = μ x1 + M (x1 + a), I = J1 + J2 + μ x1² + M (x1 + a)².
-    """
-
-    kind: Literal["polar_arm"] = "polar_arm"
-    mu: Kilograms = Field(gt=0, description="arm mass μ, kg (not printed in the report)")
-    M_min: Kilograms = Field(gt=0, description="lower payload bound, kg")
-    M_max: Kilograms = Field(gt=0, description="upper payload bound, kg")
-    J1: KgM2 = Field(100.0, gt=0, description="inertia of the mechanism about O, kg·m²")
-    J2: KgM2 = Field(100.0, gt=0, description="inertia of the arm about C, kg·m²")
-    a: Metres = Field(1.0, gt=0, description="distance from the arm's mass centre C to the load, m")
-
-    @model_validator(mode="after")
-    def _bounds(self):
-        if self.M_max < self.M_min:
-            raise ValueError("M_max must be ≥ M_min")
-        return self
-
-    @property
-    def M_nominal(self) -> float:
-        """M° = (M_min + M_max)/2, kg."""
-        return 0.5 * (self.M_min + self.M_max)
-
-
-class ParameterRange(_Model):
-    """An uncertain parameter θ ∈ [min, max] with its nominal value θ° (default: the midpoint)."""
-
-    min: float
-    max: float
-    nominal: Optional[float] = Field(None, description="value cancelled by the controller (f1o = f1(θ°))")
-
-    @model_validator(mode="after")
-    def _order(self):
-        if self.max < self.min:
-            raise ValueError("max must be ≥ min")
-        if self.nominal is not None and not self.min <= self.nominal <= self.max:
-            raise ValueError("nominal must lie in [min, max]")
-        return self
-
-    @property
-    def nominal_value(self) -> float:
-        return 0.5 * (self.min + self.max) if self.nominal is None else self.nominal
-
-
-class LibraryForm(_Model):
-    """A library nonlinearity on one output: gain·form(y_output) (qpp.nonlin.library_expression)."""
-
-    form: Literal["saturation", "dead_zone", "cubic", "sin"]
-    output: int = Field(1, ge=1, description="output index (1-based) the form acts on")
-    gain: Union[float, str] = Field(1.0, description="number or an expression in the parameters, e.g. 'k'")
-    level: Optional[float] = Field(None, gt=0, description="saturation level / dead-zone half-width")
-
-
-class ExpressionNonlinearity(_Model):
-    """General sector-bounded f1(y, t, θ) per control channel (qpp.nonlin), parsed without eval.
-
-    ``f1`` has one entry per control input: an expression in y1…yp, t and the parameter names
-    (functions: sin cos tan exp log sqrt tanh atan abs sign min max sat deadzone cubic), or a
-    library form.  The sector, β3 and β4 are computed over ``y_range`` × parameter ranges ×
-    [0, t_range]; ``sector``, ``beta3``, ``beta4`` override the computed values.
-    """
-
-    kind: Literal["expression"] = "expression"
-    f1: list[Union[str, float, LibraryForm]] = Field(min_length=1, description="one entry per control input (m)")
-    parameters: dict[str, ParameterRange] = Field(default_factory=dict, description="uncertain parameters")
-    y_range: Matrix = Field(description="[[lo, hi], ...] per output: the set on which φ is sector-bounded")
-    t_range: Optional[float] = Field(None, gt=0, description="sampled time horizon, s (default: simulation.t_final)")
-    sector: Optional[Matrix] = Field(None, description="stated sector [[α, β], ...] of φ (overrides the computed one)")
-    beta3: Optional[float] = Field(None, ge=0, description="stated β3 (overrides the computed one)")
-    beta4: Optional[float] = Field(None, ge=0, description="stated β4 (overrides the computed one)")
-    n_grid: int = Field(41, ge=5, le=401, description="grid points per output for the sampled bounds")
-
-    @field_validator("parameters")
-    @classmethod
-    def _names(cls, v):
-        import re
-
-        for k in v:
-            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,30}", k):
-                raise ValueError(f"parameter name {k!r} is not an identifier")
-        return v
-
-    def texts(self) -> list[str]:
-        """The channel expressions, library forms expanded."""
-        from qpp.nonlin import library_expression
-
-        return [e if isinstance(e, str) else repr(float(e)) if isinstance(e, (int, float))
-                else library_expression(e.form, e.output, str(e.gain), e.level) for e in self.f1]
-
-    def param_table(self) -> dict:
-        return {k: (r.min, r.max, r.nominal_value) for k, r in self.parameters.items()}
-
-
-Nonlinearity = Annotated[Union[SinusoidalNonlinearity, PolarArmNonlinearity, ExpressionNonlinearity],
-                         Field(discriminator="kind")]
 
 
 class Hinf(_Model):
@@ -351,8 +178,6 @@ class QppConfig(_Model):
 
     @model_validator(mode="after")
     def _consistent(self):
-        from qpp.lure import LurePlant
-
         try:
             P = self.lure_plant()
         except ConfigError as exc:
@@ -363,6 +188,13 @@ class QppConfig(_Model):
             raise ValueError(f"plant.x0 must have {P.n} entries")
         if isinstance(self.plant.xc0, list) and len(self.plant.xc0) != P.q:
             raise ValueError(f"plant.xc0 must have {P.q} entries")
+        self._check_nonlinearity(P)
+        self._check_signals_and_gains(P)
+        self._check_resolution_and_limits()
+        return self
+
+    def _check_nonlinearity(self, P):
+        """Shapes of the nonlinearity section against the plant P; its parameters per scenario."""
         nl = self.nonlinearity
         if isinstance(nl, SinusoidalNonlinearity):
             for nm in ("F0", "F1", "F_unc"):
@@ -385,19 +217,26 @@ class QppConfig(_Model):
                 self.expression_model().sector_info      # parse, check singular / sector-bounded
             except ConfigError as exc:
                 raise ValueError(str(exc)) from None
-            for s in self.simulation.scenarios:
-                if s.gamma != 0.0:
-                    raise ValueError(f"scenario {s.name}: nonlinearity.kind expression takes parameters: "
-                                     "{name: value}, not gamma")
-                for k in (s.parameters or {}):
-                    if k not in nl.parameters:
-                        raise ValueError(f"scenario {s.name}: unknown parameter {k!r}")
-                    rg = nl.parameters[k]
-                    if not rg.min <= s.parameters[k] <= rg.max:
-                        raise ValueError(f"scenario {s.name}: parameter {k} = {s.parameters[k]} outside "
-                                         f"[{rg.min}, {rg.max}]")
+            self._check_expression_scenarios(nl)
         elif (P.n, P.m, P.p) != (4, 2, 2):
             raise ValueError("nonlinearity.kind polar_arm needs n=4, m=2, p=2 (eq 14.2)")
+
+    def _check_expression_scenarios(self, nl):
+        """The scenarios of an ``expression`` nonlinearity set its parameters within their ranges."""
+        for s in self.simulation.scenarios:
+            if s.gamma != 0.0:
+                raise ValueError(f"scenario {s.name}: nonlinearity.kind expression takes parameters: "
+                                 "{name: value}, not gamma")
+            for k in (s.parameters or {}):
+                if k not in nl.parameters:
+                    raise ValueError(f"scenario {s.name}: unknown parameter {k!r}")
+                rg = nl.parameters[k]
+                if not rg.min <= s.parameters[k] <= rg.max:
+                    raise ValueError(f"scenario {s.name}: parameter {k} = {s.parameters[k]} outside "
+                                     f"[{rg.min}, {rg.max}]")
+
+    def _check_signals_and_gains(self, P):
+        """Channel counts of the reference, the scenarios, the design sector and published gains."""
         if len(self.simulation.r_o) != P.p:
             raise ValueError(f"simulation.r_o must have {P.p} channels (one per output)")
         for s in self.simulation.scenarios:
@@ -418,6 +257,10 @@ class QppConfig(_Model):
             if got is not None and np.shape(got) != want:
                 raise ValueError(f"published.{nm} must be {want[0]}×{want[1]}, got {np.shape(got)[0]}×"
                                  f"{np.shape(got)[1]}")
+
+    def _check_resolution_and_limits(self):
+        """Sinusoids resolved by the integrator, sample budget, no overflow of e^(2aT) (eq 10.44)."""
+        nl = self.nonlinearity
         if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
             # the nonlinearity's sin(ω t) must be resolved by the integrator: bound the periods
             _check_periods("nonlinearity.omega", nl.omega, self.simulation.t_final)
@@ -437,7 +280,6 @@ class QppConfig(_Model):
         if 2 * self.hinf.a * self.spheres.T > 600:
             raise ValueError(f"hinf.a × spheres.T = {self.hinf.a * self.spheres.T:.4g}: e^(2aT) of eq 10.44 "
                              "overflows; lower hinf.a or spheres.T")
-        return self
 
     def lure_plant(self):
         """The :class:`qpp.lure.LurePlant` of this config."""

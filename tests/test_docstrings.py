@@ -41,11 +41,27 @@ CHECKED_MODULES = [
     "acmm.linearize",
     "acmm.simulate",
     "acmm.tea",
+    "common.schema",
+    "acmm.schema",
+    "qpp.schema",
+    "configkinds",
+    "acmm.matrix_sign",
+    "acmm.riccati",
+    "acmm.care_checks",
+    "acmm.scenario",
+    "qpp.design",
+    "qpp.config_fields",
+    "qpp.config_nonlin",
+    "qpp.certificate",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
 NO_REPORT_CITATION = {
     "common.errors": "exception classes and exit codes: no mathematics of the report",
+    "common.schema": "JSON-schema generation of config files: no mathematics of the report",
+    "acmm.schema": "JSON schemas of config files: no mathematics of the report",
+    "qpp.schema": "JSON schema of config files: no mathematics of the report",
+    "configkinds": "config-kind dispatch: no mathematics of the report",
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).

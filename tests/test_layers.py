@@ -5,9 +5,11 @@ import cannot hide a dependency:
 
 * no module of ``qpp`` imports ``acmm`` (or ``cli``);
 * no module of ``common`` imports ``acmm``, ``qpp`` or ``cli``;
-* the modules of ``common`` import each other without a cycle.
-
-``acmm/report.py`` still imports ``qpp`` (the report covers both and is to move above them).
+* the modules of ``common`` import each other without a cycle;
+* no module of ``acmm`` imports ``qpp``, ``report``, ``configkinds`` or ``cli`` at import time
+  (module level); inside a function it may (``acmm.schema``'s wrappers import ``configkinds``),
+  except the compatibility shims ``acmm/report.py`` and ``acmm/report_style.py``;
+* ``configkinds`` (the dispatcher across config kinds) sits above both cores, below ``cli``.
 """
 from __future__ import annotations
 
@@ -19,9 +21,11 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 
 
-def imported_modules(path: Path) -> set[str]:
-    """Absolute names of the modules ``path`` imports (``from x import y`` gives ``x`` and ``x.y``)."""
-    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+def imported_modules(path: Path, tree: ast.AST | None = None) -> set[str]:
+    """Absolute names of the modules ``path`` imports (``from x import y`` gives ``x`` and ``x.y``);
+    ``tree``: its AST, if already parsed (and pruned)."""
+    if tree is None:
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
     package = ".".join(path.relative_to(REPO).with_suffix("").parts[:-1])
     names: set[str] = set()
     for node in ast.walk(tree):
@@ -38,10 +42,23 @@ def imported_modules(path: Path) -> set[str]:
     return names
 
 
-def _offenders(package: str, forbidden: tuple[str, ...]) -> list[str]:
+def module_level_imports(path: Path) -> set[str]:
+    """Like :func:`imported_modules`, but only the imports run when the module is imported (not
+    those inside a function body)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            node.body = [ast.Pass()]
+    return imported_modules(path, tree)
+
+
+def _offenders(package: str, forbidden: tuple[str, ...], reader=imported_modules,
+               exempt: tuple[str, ...] = ()) -> list[str]:
     bad = []
     for path in sorted((REPO / package).rglob("*.py")):
-        for name in sorted(imported_modules(path)):
+        if path.relative_to(REPO).as_posix() in exempt:
+            continue
+        for name in sorted(reader(path)):
             if name.split(".")[0] in forbidden:
                 bad.append(f"{path.relative_to(REPO)} imports {name}")
     return bad
@@ -64,7 +81,39 @@ def test_qpp_does_not_import_acmm():
 
 
 def test_common_imports_neither_acmm_nor_qpp():
-    assert _offenders("common", ("acmm", "qpp", "cli")) == []
+    assert _offenders("common", ("acmm", "qpp", "cli", "report", "configkinds")) == []
+
+
+def test_qpp_does_not_import_the_layers_above():
+    assert _offenders("qpp", ("report", "configkinds")) == []
+
+
+#: Compatibility shims of ``acmm`` that re-export a module of a layer above (issue 12).
+ACMM_SHIMS = ("acmm/report.py", "acmm/report_style.py")
+
+
+def test_acmm_imports_no_qpp_report_or_configkinds_at_import_time():
+    """Module-level imports of ``acmm``: neither the other core nor a layer above it."""
+    assert _offenders("acmm", ("qpp", "report", "configkinds", "cli"), module_level_imports,
+                      exempt=ACMM_SHIMS) == []
+
+
+def test_module_level_reader_skips_function_bodies(tmp_path):
+    probe = REPO / "acmm" / "_layers_probe2_tmp.py"
+    probe.write_text("import json\nfrom .config import Config\n"
+                     "def f():\n    from qpp.config import QppConfig\n"
+                     "class C:\n    import math\n    def g(self):\n        import report\n")
+    try:
+        names = module_level_imports(probe)
+    finally:
+        probe.unlink()
+    assert {"json", "acmm.config", "math"} <= names
+    assert not any(n.split(".")[0] in ("qpp", "report") for n in names)
+
+
+def test_configkinds_is_above_the_cores():
+    """``configkinds`` imports neither the report nor the command line."""
+    assert _offenders("configkinds", ("report", "cli")) == []
 
 
 def test_no_import_cycle_inside_common():
@@ -126,6 +175,38 @@ def test_sources_cite_no_file_outside_the_repository():
                 if forbidden.search(line):
                     bad.append(f"{rel}:{k}: {line.strip()}")
     assert bad == []
+
+
+def test_schema_names_keep_their_old_home():
+    """``acmm.schema`` keeps the names it had before the split; the schemas are unchanged."""
+    import acmm.schema as old
+    import common.schema
+    import configkinds
+
+    assert old.QUANTITY_PATTERN is common.schema.QUANTITY_PATTERN
+    assert old._Generator is common.schema.Generator
+    for kind in configkinds.KINDS:
+        assert old.schema_for(kind) == configkinds.schema_for(kind)
+    assert old.detect_kind({"plant": {}}) == "qpp"
+
+
+def test_importing_acmm_loads_no_qpp_report_or_configkinds():
+    """At run time: importing every module of acmm (shims aside) loads none of the layers
+    above nor qpp."""
+    import subprocess
+    import sys
+
+    mods = sorted({".".join(p.relative_to(REPO).with_suffix("").parts)
+                   for p in (REPO / "acmm").rglob("*.py")
+                   if p.stem != "__init__" and p.relative_to(REPO).as_posix() not in ACMM_SHIMS})
+    code = ("import importlib, sys\n"
+            f"for m in {mods!r}: importlib.import_module(m)\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('qpp', 'report', 'configkinds', 'cli')))\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
+                         timeout=300, env={**__import__("os").environ, "PYTHONPATH": str(REPO)})
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"
 
 
 def test_importing_every_qpp_module_loads_no_acmm_module():

@@ -1,0 +1,115 @@
+"""The three config kinds (acmm run, sweep, qpp) side by side: which kind a YAML file is, its
+JSON schema, and loading a file of any kind (CR-185644 Part II for acmm and sweeps, Part III for
+qpp).
+
+This package sits above both cores (like :mod:`report`, below :mod:`cli`): it imports ``acmm``
+and ``qpp``, neither of them imports it at import time (``tests/test_layers.py``).  It is not
+part of :mod:`cli` because tests and scripts use it without the command line, and its
+:func:`load_any` validates models, which is more than parsing arguments.  The schemas themselves
+are in :mod:`acmm.schema`, :mod:`qpp.schema` and :mod:`common.schema`.
+"""
+from __future__ import annotations
+
+import json
+
+__all__ = ["KINDS", "detect_kind", "load_any", "schema_for", "schema_json"]
+
+KINDS = ("acmm", "sweep", "qpp")
+
+
+def schema_for(kind: str) -> dict:
+    """The JSON schema of a config kind.
+
+    Parameters
+    ----------
+    kind : str
+        ``acmm``, ``sweep`` or ``qpp``.
+
+    Returns
+    -------
+    dict
+        JSON schema (draft 2020-12).
+    """
+    from acmm.schema import acmm_schema, sweep_schema
+    from qpp.schema import qpp_schema
+
+    return {"acmm": acmm_schema, "sweep": sweep_schema, "qpp": qpp_schema}[kind]()
+
+
+def schema_json(kind: str) -> str:
+    """The JSON schema of a config kind as indented JSON text.
+
+    Parameters
+    ----------
+    kind : str
+        ``acmm``, ``sweep`` or ``qpp``.
+
+    Returns
+    -------
+    str
+        JSON text (UTF-8 characters kept).
+    """
+    return json.dumps(schema_for(kind), indent=2, ensure_ascii=False)
+
+
+def detect_kind(data: object) -> str:
+    """The kind of a parsed config mapping.
+
+    Parameters
+    ----------
+    data : object
+        Parsed YAML document.
+
+    Returns
+    -------
+    str
+        ``sweep`` (has a ``sweep`` section), ``qpp`` (has a plant / nonlinearity / hinf /
+        spheres section) or ``acmm``.
+    """
+    if isinstance(data, dict):
+        if "sweep" in data:
+            return "sweep"
+        if any(k in data for k in ("plant", "nonlinearity", "hinf", "spheres")):
+            return "qpp"
+    return "acmm"
+
+
+def load_any(path, overrides=None):
+    """Read a config of any kind (detected), apply the overrides, validate.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        YAML file.
+    overrides : list of str, optional
+        ``key.path=value`` overrides, applied before validation.
+
+    Returns
+    -------
+    tuple
+        ``(kind, model)``: the kind (:func:`detect_kind`) and the validated model, its origin
+        remembered.
+
+    Raises
+    ------
+    common.errors.ConfigError
+        Exactly like the kind's own loader.
+    """
+    from acmm.config import parse_config
+    from common.configio import read_yaml
+    from common.overrides import apply_overrides, remember_origin
+
+    data, p = read_yaml(path)
+    data = apply_overrides(data, overrides)
+    kind = detect_kind(data)
+    if kind == "sweep":
+        from acmm.sweep.config import parse_sweep
+
+        model = parse_sweep(data, source=str(p), directory=p.parent)
+    elif kind == "qpp":
+        from qpp.config import parse_config as parse_qpp
+
+        model = parse_qpp(data, source=str(p))
+    else:
+        model = parse_config(data, source=str(p))
+    return kind, remember_origin(model, str(p), overrides)

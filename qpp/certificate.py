@@ -1,0 +1,420 @@
+"""Guarantee certificate of fixed gains (CR-185644 ch. 12.1, theorem 2, lemma 1): β1 for both
+B_z readings, the threshold m of eq 12.1 in each bookkeeping, the circle criterion and the
+settling time of the nominal loop.  The bookkeepings are described in :mod:`qpp.design`
+(``docs/ERRATA.md`` § QPP thresholds).
+
+Moved out of :mod:`qpp.design` (issue 12), which re-exports every name here and runs the design
+procedure of ch. 12.1 on top of :func:`certify`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from common.errors import DesignError
+from qpp import circle as circle_mod
+from qpp import spheres
+from qpp.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinearity
+from qpp.hinf import HinfGains
+from qpp.lure import channels, closed_loop
+from qpp.simulate import config_f1, eval_signal, initial_state, simulate_loop
+
+
+@dataclass
+class Thresholds:
+    """β3, β4 and m (12.1) of one bookkeeping.
+
+    Attributes
+    ----------
+    name : str
+        Bookkeeping: ``printed``, ``report``, ``circle``, ``computed``, ``stated`` or
+        ``trajectory``.
+    half_width : float
+        Sector half-width k used for β3 and β4 (dimensionless gain; NaN when not applicable).
+    beta3 : float
+        β3 (10.54), dimensionless gain of the truncated L2 norms.
+    beta4 : float
+        β4 (10.55), in the units of the plant output (truncated L2 norm, unit·s^½).
+    m : float
+        Threshold m = β_o/(β_ri + ‖d‖∞ + β_o·β3 + β4) of eq 12.1, dimensionless.
+    """
+
+    name: str
+    half_width: float
+    beta3: float
+    beta4: float
+    m: float
+
+
+@dataclass
+class DesignResult:
+    """Everything ``qpp design`` reports and stores.
+
+    Attributes
+    ----------
+    K1 : (m, n) array
+        State-feedback gain, plant input units per state unit.
+    Kc : (m, q) array
+        Compensator gain, plant input units per compensator-state unit.
+    H : (n, p) array
+        Observer gain, state units per output unit per s.
+    gains_source : str
+        Where the gains come from (``given``, ``published``, ``hinf``, ...).
+    hinf : qpp.hinf.HinfGains or None
+        The ch. 11 solution the gains come from, if any.
+    a : float
+        Exponential weighting a, 1/s (10.27).
+    T : float
+        Truncation time T, s.
+    Az, Bz : dict
+        B_z reading (``eq10.7``, ``printed``) → closed-loop A_z (1/s) and B_z matrices.
+    Cz : (k, N) array
+        Closed-loop output matrix, units of the output per state unit.
+    beta1 : dict
+        B_z reading → :func:`qpp.spheres.beta1` (``value`` dimensionless, ``omega_peak`` rad/s).
+    thresholds : list of Thresholds
+        m (12.1) in each bookkeeping.
+    circle : qpp.circle.CircleResult
+        Circle criterion on H(−a + jω).
+    sector : (r, 2) array
+        Sector [α, β] per channel used in the circle check, dimensionless gains.
+    E : float
+        E = [(e^{2aT} − 1)/(2a)]^½ of eq 10.44, units of s^½.
+    y_o_t : (S,) array
+        Sample times of the nominal output on [0, T], s.
+    y_o : (p, S) array
+        Nominal output on [0, T], in the plant's output units.
+    iterations : list of dict
+        Every evaluation of the procedure.
+    bookkeeping : str
+        Threshold the design iterates against.
+    bz : str
+        B_z reading of the design inequality.
+    T_settle : float
+        Settling time of the nominal loop, s.
+    certified : bool
+        β1 ≤ m (bookkeeping, bz) and circle criterion.
+    verdict : str
+        The outcome in words.
+    limiting : str
+        Why an uncertified design fails (:func:`qpp.design.limiting_factor`).
+    ws_scale : list of float
+        Weights w of W_s = diag(w)·S_c of the gains, dimensionless.
+    hinf_history : list of dict
+        ch. 11 passes (ρ, ν, δ, tests).
+    published : DesignResult or None
+        Certificate of the printed gains (report examples).
+    """
+
+    K1: np.ndarray
+    Kc: np.ndarray
+    H: np.ndarray
+    gains_source: str
+    hinf: HinfGains | None
+    a: float
+    T: float
+    Az: dict                      #: reading → A_z (same for both readings)
+    Bz: dict                      #: reading → B_z
+    Cz: np.ndarray
+    beta1: dict                   #: reading → dict of spheres.beta1
+    thresholds: list
+    circle: circle_mod.CircleResult
+    sector: np.ndarray
+    E: float
+    y_o_t: np.ndarray
+    y_o: np.ndarray
+    iterations: list = field(default_factory=list)
+    bookkeeping: str = ""             #: threshold the design iterates against
+    bz: str = "eq10.7"                #: B_z reading of the design inequality
+    T_settle: float = np.nan          #: settling time of the nominal loop, s
+    certified: bool = False           #: β1 ≤ m (bookkeeping, bz) and circle criterion
+    verdict: str = ""
+    limiting: str = ""
+    ws_scale: list = field(default_factory=list)   #: W_s = diag(w)·S_c of the gains
+    hinf_history: list = field(default_factory=list)  #: ch. 11 passes (ρ, ν, δ, tests)
+    published: "DesignResult | None" = None  #: certificate of the printed gains (report examples)
+
+    @property
+    def m_ref(self) -> float:
+        """Threshold m of the design's bookkeeping, dimensionless."""
+        return self.threshold(self.bookkeeping).m
+
+    @property
+    def beta1_ref(self) -> float:
+        """β1 of the design's B_z reading, dimensionless."""
+        return float(self.beta1[self.bz]["value"])
+
+    def threshold(self, name: str) -> Thresholds:
+        """The thresholds of one bookkeeping.
+
+        Parameters
+        ----------
+        name : str
+            Bookkeeping name (:class:`Thresholds`).
+
+        Returns
+        -------
+        Thresholds
+            The first entry of ``thresholds`` with that name.
+        """
+        return next(t for t in self.thresholds if t.name == name)
+
+    def verdicts(self) -> dict:
+        """(reading, bookkeeping) → β1 ≤ m.
+
+        Returns
+        -------
+        dict
+            ``{(reading, bookkeeping): bool}`` for every B_z reading and bookkeeping.
+        """
+        return {(r, t.name): bool(self.beta1[r]["value"] <= t.m) for r in self.beta1 for t in self.thresholds}
+
+
+def default_sector(cfg: QppConfig) -> np.ndarray:
+    """Sector of φ = N (f1 − f1o) for the circle check: config value, else ±N·γ_max·|F_unc| (diagonal).
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+
+    Returns
+    -------
+    (r, 2) array
+        [α, β] per disturbance channel, dimensionless gains.
+
+    Raises
+    ------
+    DesignError
+        A polar-arm nonlinearity without ``design.sector``.
+    """
+    if cfg.design.sector is not None:
+        return np.asarray(cfg.design.sector, float)
+    nl = cfg.nonlinearity
+    if isinstance(nl, SinusoidalNonlinearity):
+        P = cfg.lure_plant()
+        k = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        k = np.where(k > 0, k, 1e-12)
+        return np.column_stack([-k, k])
+    if isinstance(nl, ExpressionNonlinearity):
+        if nl.sector is not None:
+            return np.asarray(nl.sector, float)
+        return cfg.expression_model().sector_info.sector.copy()
+    raise DesignError("design.sector must be given for a polar_arm nonlinearity")
+
+
+def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801):
+    """Nominal loop (γ nominal, r = r_o, d = 0) on [0, T]: (t, y_o, x_o).
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+    K1 : (m, n) array
+        State-feedback gain, input units per state unit.
+    Kc : (m, q) array
+        Compensator gain, input units per compensator-state unit.
+    H : (n, p) array
+        Observer gain, state units per output unit per s.
+    T : float
+        Horizon, s.
+    n : int
+        Number of samples.
+
+    Returns
+    -------
+    tuple of arrays
+        t (n,) in s, y_o (p, n) in output units, x_o (n_x, n) in state units.
+    """
+    P = cfg.lure_plant()
+    f1, g_nom = config_f1(cfg, P)
+    t = np.linspace(0.0, T, n)
+    Z, _ = simulate_loop(P, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom,
+                         r_fun=lambda tt: eval_signal(cfg.simulation.r_o, tt), t_eval=t,
+                         z0=initial_state(cfg, P, K1, Kc), rtol=1e-9, atol=1e-11)
+    return t, P.C @ Z[:P.n], Z[:P.n]
+
+
+def _arm_betas(cfg: QppConfig, t, x_o, T):
+    """β3, β4 of the polar arm along the nominal trajectory (sup over M ∈ {M_min, M_max})."""
+    P = cfg.lure_plant()
+    nl = cfg.nonlinearity
+    f1, g_nom = config_f1(cfg, P)
+    N = P.N()
+    b3 = b4 = 0.0
+    h = 1e-6
+    for M in (nl.M_min, nl.M_max):
+        phi = np.array([N @ (f1(x, tt, M) - f1(x, tt, g_nom)) for x, tt in zip(x_o.T, t)]).T
+        b4 = max(b4, spheres.truncated_l2(t, phi, T))
+        grads = []
+        for j in range(P.p):           # ∂φ/∂y_j with y_j = x_j (C = [I 0])
+            e = np.zeros(P.n)
+            e[j] = h
+            gp = np.array([N @ (f1(x + e, tt, M) - f1(x + e, tt, g_nom)) for x, tt in zip(x_o.T, t)])
+            gm = np.array([N @ (f1(x - e, tt, M) - f1(x - e, tt, g_nom)) for x, tt in zip(x_o.T, t)])
+            grads.append(((gp - gm) / (2 * h)).T)
+        b3 = max(b3, max(spheres.truncated_l2(t, g, T) for g in grads))
+    return b3, b4
+
+
+def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> list[Thresholds]:
+    """Threshold m (12.1) in each bookkeeping (see :mod:`qpp.design`) at truncation time T (s).
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+    t : (S,) array
+        Sample times of the nominal loop, s.
+    y_o : (p, S) array
+        Nominal output, output units.
+    x_o : (n, S) array
+        Nominal plant state, state units.
+    sector : (r, 2) array
+        Sector of the circle check, dimensionless gains.
+    T : float, optional
+        Truncation time, s (default ``spheres.T``).
+
+    Returns
+    -------
+    list of Thresholds
+        One per bookkeeping available for this nonlinearity.
+    """
+    sp = cfg.spheres
+    T = sp.T if T is None else T
+    nl = cfg.nonlinearity
+    out = []
+    pub = cfg.published
+    if pub.beta3 is not None and pub.beta4 is not None:
+        out.append(Thresholds("printed", np.nan, pub.beta3, pub.beta4,
+                              spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, pub.beta3, pub.beta4)))
+    if isinstance(nl, SinusoidalNonlinearity):
+        k_rep = float(np.max(np.abs(np.asarray(nl.F_unc)).sum(axis=1)) * nl.gamma_max)
+        k_circ = float(np.max(np.abs(sector)))
+        for name, k in (("report", k_rep), ("circle", k_circ)):
+            b3 = spheres.beta3_sinusoidal(k, nl.omega, T)
+            b4 = spheres.beta4_sector(k, t, y_o, T)
+            out.append(Thresholds(name, k, b3, b4, spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, b3, b4)))
+    elif isinstance(nl, ExpressionNonlinearity):
+        M = cfg.expression_model()
+        b3, b4 = M.beta3(T), M.beta4(t, y_o, T)
+        k = float(np.max(np.abs(sector)))
+        out.append(Thresholds("computed", k, b3, b4, spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, b3, b4)))
+        if nl.beta3 is not None or nl.beta4 is not None:
+            s3 = b3 if nl.beta3 is None else nl.beta3
+            s4 = b4 if nl.beta4 is None else nl.beta4
+            out.append(Thresholds("stated", k, s3, s4, spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, s3, s4)))
+    else:
+        b3, b4 = _arm_betas(cfg, t, x_o, T)
+        out.append(Thresholds("trajectory", np.nan, b3, b4,
+                              spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, b3, b4)))
+    return out
+
+
+def settling_time(t, y_o, r_o, band: float) -> float:
+    """Settling time of the nominal loop, s: the last time |y_o − r_o| (largest channel) exceeds
+    ``band`` × its peak; 0 when the loop tracks from the start, t[-1] when it never settles.
+
+    Parameters
+    ----------
+    t : (S,) array
+        Sample times, s.
+    y_o : (p, S) array
+        Nominal output, output units.
+    r_o : (p, S) array
+        Reference, output units.
+    band : float
+        Settling band as a fraction of the peak error, dimensionless.
+
+    Returns
+    -------
+    float
+        Settling time, s.
+    """
+    e = np.max(np.abs(np.atleast_2d(y_o) - np.atleast_2d(r_o)), axis=0)
+    peak = float(e.max()) if e.size else 0.0
+    if peak <= 1e-12:
+        return 0.0
+    idx = np.nonzero(e > band * peak)[0]
+    return float(t[idx[-1]]) if idx.size else 0.0
+
+
+def pick_bookkeeping(cfg: QppConfig, names: list[str]) -> str:
+    """The threshold the design iterates against: ``design.bookkeeping`` when available, else the
+    stated values, else the last (most specific) bookkeeping.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+    names : list of str
+        Bookkeepings available (:func:`thresholds`).
+
+    Returns
+    -------
+    str
+        The chosen bookkeeping.
+    """
+    if cfg.design.bookkeeping in names:
+        return cfg.design.bookkeeping
+    return "stated" if "stated" in names else names[-1]
+
+
+def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
+            hinf: HinfGains | None = None, T: float | None = None) -> DesignResult:
+    """β1 for both B_z readings, thresholds at T (default ``spheres.T``), the circle criterion and
+    the settling time of the nominal loop, for fixed gains.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+    K1 : (m, n) array
+        State-feedback gain, input units per state unit.
+    Kc : (m, q) array
+        Compensator gain, input units per compensator-state unit.
+    H : (n, p) array
+        Observer gain, state units per output unit per s.
+    a : float
+        Exponential weighting a, 1/s (10.27).
+    gains_source : str
+        Label of the gains' origin, stored in the result.
+    hinf : qpp.hinf.HinfGains, optional
+        The ch. 11 solution the gains come from.
+    T : float, optional
+        Truncation time, s (default ``spheres.T``).
+
+    Returns
+    -------
+    DesignResult
+        The certificate (``certified``: β1 ≤ m and circle criterion).
+    """
+    P = cfg.lure_plant()
+    K1 = np.atleast_2d(np.asarray(K1, float))
+    Kc = np.atleast_2d(np.asarray(Kc, float))
+    H = np.asarray(H, float).reshape(P.n, P.p)
+    Az = Bz = Cz = None
+    Azd, Bzd, b1 = {}, {}, {}
+    for reading in ("eq10.7", "printed"):
+        Az, Bz, Cz = closed_loop(P, K1, Kc, H, bz=reading)
+        Azd[reading], Bzd[reading] = Az, Bz
+        b1[reading] = spheres.beta1(Az, Bz, Cz, a)
+    sector = default_sector(cfg)
+    _, dcols = channels(P)
+    circ = circle_mod.circle_criterion(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a)
+    T = cfg.spheres.T if T is None else float(T)
+    horizon = max(T, cfg.simulation.t_final)
+    n = int(min(20001, max(801, 801 * horizon / T)))
+    t, y_o, x_o = nominal_output(cfg, K1, Kc, H, horizon, n)
+    r_o = np.array([eval_signal(cfg.simulation.r_o, tt) for tt in t]).T
+    Ts = settling_time(t, y_o, r_o, cfg.spheres.settle_band)
+    keep = t <= T + 1e-12
+    th = thresholds(cfg, t, y_o, x_o, sector, T)
+    res = DesignResult(K1, Kc, H, gains_source, hinf, a, T, Azd, Bzd, Cz, b1, th, circ, sector,
+                       spheres.E_factor(a, T), t[keep], y_o[:, keep])
+    res.T_settle = Ts
+    res.bookkeeping = pick_bookkeeping(cfg, [x.name for x in th])
+    res.bz = cfg.design.bz
+    res.certified = bool(res.beta1_ref <= res.m_ref and circ.passed)
+    return res
