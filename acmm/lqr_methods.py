@@ -13,7 +13,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from common.errors import ConvergenceError, DesignError
-from acmm.lqr import SectorLQR, _check_movable, _finish, _group, _required_h, sector_margin
+from acmm.sector import SectorLQR, _check_movable, _finish, _group, _required_h, sector_margin
 from acmm.riccati import _as_R, scale_problem, solve_care
 
 

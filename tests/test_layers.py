@@ -223,3 +223,41 @@ def test_importing_every_qpp_module_loads_no_acmm_module():
                          timeout=120, env={**__import__("os").environ, "PYTHONPATH": str(REPO)})
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[]"
+
+
+def test_no_import_cycle_between_modules_at_import_time():
+    """Module-level imports of the packages form no cycle (function-level imports are used only
+    for the documented compatibility re-exports)."""
+    import ast
+
+    pkgs = ("acmm", "qpp", "common", "report", "configkinds")
+    mods = {}
+    for pkg in pkgs:
+        for path in (REPO / pkg).rglob("*.py"):
+            name = ".".join(path.relative_to(REPO).with_suffix("").parts)
+            mods[name.removesuffix(".__init__")] = path
+    graph = {}
+    for name, path in mods.items():
+        deps = set()
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                deps.add(node.module)
+                deps.update(f"{node.module}.{a.name}" for a in node.names)
+            elif isinstance(node, ast.Import):
+                deps.update(a.name for a in node.names)
+        graph[name] = {d for d in deps if d in mods and d != name
+                       and not name.startswith(d + ".")}     # a package's own __init__ is not a cycle
+    state: dict[str, int] = {}
+
+    def visit(v, stack):
+        state[v] = 1
+        for w in graph[v]:
+            if state.get(w) == 1:
+                raise AssertionError("import cycle: " + " -> ".join(stack[stack.index(w):] + [w]))
+            if w not in state:
+                visit(w, stack + [w])
+        state[v] = 2
+
+    for v in sorted(graph):
+        if v not in state:
+            visit(v, [v])
