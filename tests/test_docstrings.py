@@ -55,6 +55,7 @@ CHECKED_MODULES = [
     "qpp.certificate",
     "acmm.sector",
     "acmm.lqr",
+    "acmm.lqr_methods",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
