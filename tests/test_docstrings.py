@@ -56,6 +56,7 @@ CHECKED_MODULES = [
     "acmm.sector",
     "acmm.lqr",
     "acmm.lqr_methods",
+    "acmm.settings",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
