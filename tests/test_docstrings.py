@@ -57,6 +57,7 @@ CHECKED_MODULES = [
     "acmm.lqr",
     "acmm.lqr_methods",
     "acmm.settings",
+    "acmm.schedule",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
