@@ -58,6 +58,7 @@ CHECKED_MODULES = [
     "acmm.lqr_methods",
     "acmm.settings",
     "acmm.schedule",
+    "acmm.path_check",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
