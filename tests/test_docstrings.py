@@ -59,6 +59,7 @@ CHECKED_MODULES = [
     "acmm.settings",
     "acmm.schedule",
     "acmm.path_check",
+    "acmm.schedule_refit",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
