@@ -60,6 +60,7 @@ CHECKED_MODULES = [
     "acmm.schedule",
     "acmm.path_check",
     "acmm.schedule_refit",
+    "acmm.design_core",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
