@@ -61,6 +61,7 @@ CHECKED_MODULES = [
     "acmm.path_check",
     "acmm.schedule_refit",
     "acmm.design_core",
+    "acmm.tea_compiled",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
