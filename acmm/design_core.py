@@ -3,6 +3,9 @@
 :func:`design_schedule` is what :func:`acmm.stages.compute_design` runs for a config and what the
 sweep's redesign runs for a perturbed plant: it takes :class:`acmm.schedule.PointSpec` s and the
 settings objects of :mod:`acmm.settings`, never a Config.
+
+Each point: TEA (eqs 4.1–4.3), design model (eq 4.46) and sector LQR (report ch. 5.2, Fig 5.2,
+eqs 5.2–5.4); then the gain schedule and its checks (ch. 5.3).
 """
 from __future__ import annotations
 
@@ -18,7 +21,19 @@ from acmm.settings import DesignSettings, ScheduleSettings
 
 @dataclass
 class DesignedSchedule:
-    """Point designs, the fitted schedule and its checks (None with a single point)."""
+    """Point designs, the fitted schedule and its checks (None with a single point).
+
+    Attributes
+    ----------
+    points : list of acmm.schedule.PointDesign
+        The design of every point.
+    fit : acmm.schedule.ScheduleFit or None
+        The fitted schedule.
+    check : acmm.schedule.ScheduleCheck or None
+        The schedule at the design points and blend midpoints.
+    path_check : acmm.path_check.PathCheck or None
+        The schedule along the path (``schedule.n_check``).
+    """
 
     points: list            # list[acmm.schedule.PointDesign]
     fit: object             # acmm.schedule.ScheduleFit or None
@@ -29,7 +44,24 @@ class DesignedSchedule:
 def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | None,
                     progress=None) -> DesignedSchedule:
     """Design every point of ``specs`` with settings ``s`` and fit the schedule ``sched``
-    (when there are ≥ 2 points); ``progress(name)`` is called after each point."""
+    (when there are ≥ 2 points); ``progress(name)`` is called after each point.
+
+    Parameters
+    ----------
+    specs : list of acmm.schedule.PointSpec
+        The design points.
+    s : DesignSettings
+        The design settings.
+    sched : ScheduleSettings or None
+        The schedule settings (None: order 2 polynomial, no path check).
+    progress : callable or None
+        Called with each point's name after its design.
+
+    Returns
+    -------
+    DesignedSchedule
+        The point designs, the schedule and its checks.
+    """
     points = []
     for spec in specs:
         points.append(sch.design_one(spec, s))

@@ -61,7 +61,7 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
     A : (N, N) array
         Open-loop state matrix (eq 4.46), 1/s.
     B : (N, M) array
-        Control input matrix.
+        Control input matrix, state units per ft·lbf (e.g. rad/s² per ft·lbf).
     R : float or (M, M) array
         Control weight, e.g. 1e-4 = 1/(100 ft·lbf)² per axis; a float r means r·I.
     n : float
@@ -76,17 +76,18 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
         A float q means q·I.
     scale : (N,) array or None
         Nominal state magnitudes d (x = diag(d) x̃); strongly recommended (`docs/ERRATA.md` § Scaling).
+        Units of each state (rad, rad/s, ft·lbf·s, ...).
     method : {"shift", "uniform"}
         Optimal pole shifting of the stray poles, or the smallest uniform shift.
     riccati_method : {"scipy", "sign", "slycot"}
         Solver used for every Riccati equation (:func:`acmm.riccati.solve_care`).
     residual_tol : float
-        Largest accepted relative Riccati residual (scaled coordinates).
+        Largest accepted relative Riccati residual (scaled coordinates), dimensionless.
     min_margin : float
         Required :func:`sector_margin` of every pole, units of n; moved poles are placed with
         1.5× this margin.
     max_uniform_shift : float
-        Largest α/n tried by ``method="uniform"``.
+        Largest α/n tried by ``method="uniform"``, dimensionless (units of n).
     line_spacing : float
         ``method="shift"``: 0 mirrors every stray pole of a group about one line (the poles of
         a group stay clustered); δ > 0 mirrors them one real-Schur block at a time, the k-th
@@ -96,9 +97,12 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
     Returns
     -------
     SectorLQR
+        The verified design (K, P, Q in physical units).
 
     Raises
     ------
+    ValueError
+        ``method`` is unknown, or n, sigma, half_angle_deg or min_margin is out of range.
     DesignError
         A pole cannot be brought into the sector (or Q would be indefinite).
     ConvergenceError

@@ -3,7 +3,7 @@
 ``"uniform"`` (:func:`_sector_uniform`): the smallest uniform shift α ≥ σn whose LQR puts every
 pole in the sector.  ``"shift"`` (:func:`_sector_shift`): the LQR shifted by σn, then optimal
 pole shifting of the stray poles, group by group (:func:`_mirror_group`).  See the module
-docstring of :mod:`acmm.lqr` and ``docs/ERRATA.md``.
+docstring of :mod:`acmm.lqr` and ``docs/ERRATA.md`` § Sector LQR.
 """
 from __future__ import annotations
 

@@ -19,7 +19,21 @@ from acmm.tea import solve_tea, solve_tea_near
 
 @dataclass
 class PathModels:
-    """Local design models at TEAs evenly spaced along the blend path (``schedule.n_check``)."""
+    """Local design models at TEAs evenly spaced along the blend path (``schedule.n_check``).
+
+    Attributes
+    ----------
+    theta2 : (P,) array
+        Pitch TEA of each model, rad.
+    s : (P,) array
+        Blend parameter of each model, dimensionless.
+    A : (P, N, N) array
+        State matrices, physical units (1/s).
+    B : (P, N, M) array
+        Control input matrices, state units per ft·lbf.
+    scales : (N,) array
+        State scaling of the design models, in the units of each state.
+    """
 
     theta2: np.ndarray          # (P,) pitch TEA, rad
     s: np.ndarray               # (P,) blend parameter
@@ -37,7 +51,7 @@ class PathCheck:
     theta2 : (P,) array
         Pitch TEA, rad.
     s : (P,) array
-        Blend parameter.
+        Blend parameter, dimensionless.
     max_real : (P,) array
         Largest Re λ(A − BK(θ2*)), units of n.
     margin : (P,) array
@@ -62,6 +76,7 @@ class PathCheck:
 
     @property
     def fraction_in_sector(self) -> float:
+        """Fraction of the TEAs at which every pole lies in the sector, dimensionless."""
         return float(np.mean(self.margin >= 0.0))
 
 
@@ -71,6 +86,20 @@ def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> P
     None when the config has no blend (``schedule.to``).  The TEA of each model is solved
     exactly (Newton from the continuation guess), so the θ2* are evenly spaced to within the
     interpolation of the 81-point continuation track.
+
+    Parameters
+    ----------
+    points : list of acmm.schedule.PointDesign
+        The design points; the first and last blend points bound the path.
+    s : DesignSettings
+        The design settings (orbital rate, design model, DRF mode).
+    n_check : int
+        Number of TEAs along the path.
+
+    Returns
+    -------
+    PathModels or None
+        The models, None without a blend.
     """
     d = s
     n = s.orbit_rate
@@ -169,14 +198,18 @@ def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None, *, refine: in
     n : float
         Orbital rate, rad/s (frequency unit of ``omega_n``).
     scale : (N,) array or None
-        State scaling for the computation (the transfer function is unchanged).
+        State scaling for the computation (the transfer function is unchanged), in the units of
+        each state.
     omega_n : array or None
         Frequencies in units of n; default :data:`DISK_OMEGA_N` (0.01n … 1000n, 121 points).
+    refine : int
+        Refinement steps of the branch and bound (:func:`_disk_alpha_batch`).
 
     Returns
     -------
     (α, gain margin dB, phase margin deg) : tuple of float
-        The disk, and the gain/phase variations it guarantees simultaneously in all loops.
+        The disk (α dimensionless), and the gain (dB) / phase (deg) variations it guarantees
+        simultaneously in all loops.
     """
     A, B, K = (np.asarray(x, dtype=float) for x in (A, B, K))
     if scale is not None:
@@ -270,7 +303,18 @@ def _disk_alpha_batch(parts, refine: int = 6, rounds: int = 6) -> np.ndarray:
 
 
 def disk_gain_phase(alpha: float) -> tuple[float, float]:
-    """Gain (dB) and phase (deg) margins guaranteed by a balanced disk of size α (skew 0)."""
+    """Gain (dB) and phase (deg) margins guaranteed by a balanced disk of size α (skew 0).
+
+    Parameters
+    ----------
+    alpha : float
+        Disk size α, dimensionless.
+
+    Returns
+    -------
+    (gain margin, phase margin) : tuple of float
+        Gain margin, dB, and phase margin, deg.
+    """
     if alpha >= 2.0:
         return float("inf"), 90.0
     gmin = (1 - 0.5 * alpha) / (1 + 0.5 * alpha)
@@ -286,6 +330,26 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
     """Largest Re λ, worst sector margin and disk margin of the scheduled gain along a path.
 
     ``gain_at(θ2*)`` returns the scheduled K (physical units) at pitch TEA θ2* (rad).
+
+    Parameters
+    ----------
+    gain_at : callable
+        θ2* (rad) → scheduled K (3, N), physical units.
+    path : PathModels
+        The local models along the path.
+    n : float
+        Orbital rate, rad/s.
+    sigma : float
+        Minimum decay rate σ, in units of n.
+    half_angle_deg : float
+        Sector half-angle φ, deg.
+    disk : bool
+        Also compute the disk margins (else NaN).
+
+    Returns
+    -------
+    PathCheck
+        The closed-loop measures at every TEA of the path.
     """
     P = path.theta2.size
     mr, mg, dm, dg, dp = (np.full(P, np.nan) for _ in range(5))

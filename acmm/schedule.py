@@ -25,7 +25,21 @@ from acmm.tea import TEA, resolve_bias, solve_tea, solve_tea_near
 
 @dataclass(frozen=True)
 class PointSpec:
-    """A station configuration to design for: name, inertia (slug·ft²), bias (ft·lbf), blend s."""
+    """A station configuration to design for: name, inertia (slug·ft²), bias (ft·lbf), blend s.
+
+    Attributes
+    ----------
+    name : str
+        Name of the configuration.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    bias : (3,) array
+        Bias torque, ft·lbf.
+    s : float
+        Blend parameter, dimensionless (NaN for a named point off the blend).
+    theta_guess : (3,) array or None
+        Starting guess for its TEA, rad; None: solve from scratch.
+    """
 
     name: str
     inertia: np.ndarray
@@ -36,7 +50,19 @@ class PointSpec:
 
 @dataclass
 class PointDesign:
-    """One design point: its TEA, design model and sector-LQR result."""
+    """One design point: its TEA, design model and sector-LQR result.
+
+    Attributes
+    ----------
+    spec : PointSpec
+        The configuration.
+    tea : acmm.tea.TEA
+        Its torque equilibrium attitude (eqs 4.1–4.3).
+    model : acmm.linearize.LinearModel
+        Its design model (eq 4.46).
+    lqr : acmm.lqr.SectorLQR
+        Its sector-LQR design (ch. 5.2).
+    """
 
     spec: PointSpec
     tea: TEA
@@ -59,12 +85,17 @@ class ScheduleFit:
     variable : (P,) array
         Pitch TEA of each design point, rad.
     gains : (P, 3, 24) array
-        LQR gains at the design points.
+        LQR gains at the design points, units of K.
     rms_residual : (3, 24) array
         RMS residual of the polynomial per element (units of K).
     rel_residual : (3, 24) array
-        RMS residual relative to max |K_ij| over the points.
+        RMS residual relative to max |K_ij| over the points, dimensionless.
     form : str
+        ``"polynomial"`` or ``"table"``: what :meth:`gain` evaluates.
+    method : str
+        How the polynomial was fitted: ``"least_squares"`` or ``"closed_loop"``.
+    refit_info : dict
+        Diagnostics of the closed-loop refit (:func:`acmm.schedule_refit.refit_closed_loop`).
     """
 
     coef: np.ndarray
@@ -78,16 +109,52 @@ class ScheduleFit:
 
     @property
     def order(self) -> int:
+        """Polynomial order of the schedule."""
         return self.coef.shape[0] - 1
 
     def gain(self, theta2: float) -> np.ndarray:
-        """Scheduled K (3×24) at pitch TEA ``theta2`` (rad)."""
+        """Scheduled K (3×24) at pitch TEA ``theta2`` (rad).
+
+        Parameters
+        ----------
+        theta2 : float
+            Pitch TEA θ2*, rad.
+
+        Returns
+        -------
+        (3, 24) array
+            Scheduled gain, units of K.
+        """
         return schedule_gain(self.form, self.coef, self.variable, self.gains, theta2)
 
 
 def schedule_gain(form: str, coef: np.ndarray, nodes: np.ndarray, gains: np.ndarray,
                   theta2: float) -> np.ndarray:
-    """Evaluate a schedule given as arrays (see :class:`ScheduleFit`)."""
+    """Evaluate a schedule given as arrays (see :class:`ScheduleFit`).
+
+    Parameters
+    ----------
+    form : str
+        ``"polynomial"`` or ``"table"``.
+    coef : (order+1, 3, 24) array
+        Polynomial coefficients, lowest power first; units of K per rad^k.
+    nodes : (P,) array
+        Pitch TEA of each design point, rad.
+    gains : (P, 3, 24) array
+        Gains at the design points, units of K.
+    theta2 : float
+        Pitch TEA θ2* at which to evaluate, rad.
+
+    Returns
+    -------
+    (3, 24) array
+        Scheduled gain, units of K.
+
+    Raises
+    ------
+    ValueError
+        ``form`` is unknown.
+    """
     if form == "polynomial":
         powers = theta2 ** np.arange(coef.shape[0])
         return np.tensordot(powers, coef, axes=1)
@@ -103,7 +170,21 @@ def schedule_gain(form: str, coef: np.ndarray, nodes: np.ndarray, gains: np.ndar
 @dataclass
 class ScheduleCheck:
     """Sector margins (units of n; > 0 means inside) and the largest pole real part (units of
-    n; < 0 means stable) of the scheduled gain on the local linear models."""
+    n; < 0 means stable) of the scheduled gain on the local linear models.
+
+    Attributes
+    ----------
+    names : list of str
+        Name of each checked point.
+    theta2 : (P,) array
+        Pitch TEA of each checked point, rad.
+    margin : (P,) array
+        Worst sector margin at each point, units of n.
+    kind : list of str
+        ``"design point"`` or ``"midpoint"``.
+    max_real : (P,) array
+        Largest pole real part at each point, units of n.
+    """
 
     names: list[str]
     theta2: np.ndarray
@@ -113,11 +194,25 @@ class ScheduleCheck:
 
     @property
     def worst(self) -> float:
+        """Worst sector margin over the checked points, units of n."""
         return float(np.min(self.margin))
 
 
 def blend_points(start: PointSpec, end: PointSpec, n_points: int) -> list[PointSpec]:
-    """``n_points`` configurations on I(s) = (1−s)·I_start + s·I_end, bias blended alike."""
+    """``n_points`` configurations on I(s) = (1−s)·I_start + s·I_end, bias blended alike.
+
+    Parameters
+    ----------
+    start, end : PointSpec
+        The configurations at s = 0 and s = 1.
+    n_points : int
+        Number of points including both ends.
+
+    Returns
+    -------
+    list of PointSpec
+        The configurations at evenly spaced s.
+    """
     out = []
     for k, s in enumerate(np.linspace(0.0, 1.0, n_points)):
         name = start.name if k == 0 else end.name if k == n_points - 1 else f"blend_{s:.3f}"
@@ -133,6 +228,22 @@ def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
     The TEA is tracked along the blend by Newton continuation on ``n_track`` values of s (the
     physical branch, starting from the start configuration's TEA), then s is interpolated at
     evenly spaced θ2*.  Falls back to evenly spaced s when θ2*(s) is not monotonic.
+
+    Parameters
+    ----------
+    start, end : PointSpec
+        The configurations at s = 0 and s = 1.
+    n_points : int
+        Number of points including both ends.
+    n : float
+        Orbital rate, rad/s.
+    n_track : int
+        Number of s values on which the TEA is tracked.
+
+    Returns
+    -------
+    list of PointSpec
+        The configurations, with their tracked TEA as ``theta_guess``.
     """
     s_grid = np.linspace(0.0, 1.0, n_track)
     thetas = _tea_track(start, end, n, n_track)
@@ -183,6 +294,16 @@ def point_specs(cfg) -> list[PointSpec]:
     Without a ``schedule`` section, the config's own configuration is the only point.  This is
     where the config's inertias and biases become :class:`PointSpec` s (with
     :func:`acmm.settings.design_settings`, the one reading of the config on the design path).
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        A validated configuration.
+
+    Returns
+    -------
+    list of PointSpec
+        The design points.
     """
     from acmm.settings import schedule_settings
 
@@ -207,7 +328,26 @@ def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSp
                    ) -> list[PointSpec]:
     """The design points: ``start`` alone (``sched`` None), else the blend ``start`` → ``end``
     (``sched.n_points`` points spaced by ``sched.spacing``; none when ``end`` is None) followed by
-    the named ``extras``.  ``n``: orbital rate, rad/s."""
+    the named ``extras``.  ``n``: orbital rate, rad/s.
+
+    Parameters
+    ----------
+    start : PointSpec
+        The config's own configuration (s = 0).
+    end : PointSpec or None
+        The end of the blend (s = 1), or None.
+    extras : list of PointSpec
+        Named extra points.
+    sched : ScheduleSettings or None
+        Schedule settings; None: ``start`` only.
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    list of PointSpec
+        The design points.
+    """
     if sched is None:
         return [start]
     specs = [start]
@@ -220,7 +360,20 @@ def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSp
 
 
 def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
-    """TEA, design model and sector LQR of one design point (settings ``s``)."""
+    """TEA, design model and sector LQR of one design point (settings ``s``).
+
+    Parameters
+    ----------
+    spec : PointSpec
+        The configuration.
+    s : DesignSettings
+        The design settings.
+
+    Returns
+    -------
+    PointDesign
+        Its TEA, design model and sector-LQR design.
+    """
     n = s.orbit_rate
     if spec.theta_guess is not None:
         t = solve_tea_near(spec.inertia, n, spec.bias, spec.theta_guess)
@@ -234,7 +387,24 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
 def sector_design(A, B, scales, s: DesignSettings):
     """The sector LQR of one linear model with the design settings ``s`` (R, Q0, sector, pole
     method, Riccati solver, tolerances; orbital rate ``s.orbit_rate``) — the one call the
-    pipeline, the sweep's redesign and the report's errata evidence share."""
+    pipeline, the sweep's redesign and the report's errata evidence share.
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix, 1/s.
+    B : (N, 3) array
+        Control input matrix, state units per ft·lbf.
+    scales : (N,) array
+        Nominal state magnitudes, in the units of each state.
+    s : DesignSettings
+        The design settings.
+
+    Returns
+    -------
+    acmm.lqr.SectorLQR
+        The verified design.
+    """
     return lqr.sector_lqr(A, B, s.R * np.eye(3), s.orbit_rate, sigma=s.sector.sigma,
                           half_angle_deg=s.sector.half_angle_deg,
                           Q0=s.q0_weight(A.shape[0]),   # on the scaled states
@@ -245,7 +415,25 @@ def sector_design(A, B, scales, s: DesignSettings):
 
 def design_q0(d, nx: int):
     """The initial state weight of a config's ``design`` section on the scaled states:
-    Q0·I plus ``Q0_groups`` on the diagonal; None when zero (minimum energy)."""
+    Q0·I plus ``Q0_groups`` on the diagonal; None when zero (minimum energy).
+
+    Parameters
+    ----------
+    d : acmm.config.Design
+        The config's ``design`` section (``Q0``, ``Q0_groups``).
+    nx : int
+        Number of states of the model.
+
+    Returns
+    -------
+    (nx, nx) array or None
+        Q0 on the scaled states, dimensionless; None when zero.
+
+    Raises
+    ------
+    ValueError
+        ``Q0_groups`` does not have ``nx`` entries.
+    """
     q = np.full(nx, float(d.Q0))
     if d.Q0_groups is not None:
         g = d.Q0_groups.diagonal()
@@ -264,14 +452,19 @@ def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: st
     theta2 : (P,) array
         Pitch TEA of each design point, rad.
     gains : (P, 3, 24) array
-        LQR gains per point.
+        LQR gains per point, units of K.
     order : int
         Polynomial order (2 in the report); reduced to P−1 when there are fewer points.
     form : {"polynomial", "table"}
         Which form :meth:`ScheduleFit.gain` evaluates; the polynomial and its residuals are
         computed in both cases, for the record.
     weights : (P,) array or None
-        Least-squares weight of each design point (default 1).
+        Least-squares weight of each design point (default 1), dimensionless.
+
+    Returns
+    -------
+    ScheduleFit
+        The fitted schedule with its residuals.
     """
     theta2 = np.asarray(theta2, float)
     gains = np.asarray(gains, float)
@@ -289,7 +482,22 @@ def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: st
 
 
 def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSettings) -> ScheduleCheck:
-    """Sector margin of the scheduled gain at each design point and each blend midpoint."""
+    """Sector margin of the scheduled gain at each design point and each blend midpoint.
+
+    Parameters
+    ----------
+    fit : ScheduleFit
+        The schedule.
+    points : list of PointDesign
+        The design points.
+    s : DesignSettings
+        The design settings (sector, orbital rate, design model).
+
+    Returns
+    -------
+    ScheduleCheck
+        Margins and largest pole real parts, units of n.
+    """
     d = s
     n = s.orbit_rate
     names, th2, margins, kinds, max_real = [], [], [], [], []

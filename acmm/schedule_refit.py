@@ -61,6 +61,46 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
     terms per TEA (poles with Im λ ≥ 0, each conjugate pair once), by SLSQP with the same
     analytic eigenvalue gradients; it reaches a lower worst Re λ in ~10× fewer eigenvalue
     evaluations than L-BFGS on the smooth maximum (README "Gain schedule").
+
+    Parameters
+    ----------
+    fit : acmm.schedule.ScheduleFit
+        The least-squares polynomial schedule to refine.
+    path : acmm.path_check.PathModels
+        Local models along the path.
+    n : float
+        Orbital rate, rad/s.
+    every : int
+        Use every ``every``-th TEA of ``path`` (the ends included).
+    beta : float
+        Sharpness β of the smooth maximum (L-BFGS), dimensionless.
+    max_iter : int
+        Largest number of optimizer iterations.
+    angle_weight : float
+        Weight w of the φ-line terms, dimensionless (0: Re λ terms only).
+    half_angle_deg : float
+        Sector half-angle φ, deg.
+    re_weight : float
+        Weight of the Re λ terms, dimensionless.
+    re_offset : float
+        Shift of the Re λ terms, units of n.
+    angle_offset : float
+        Shift of the φ-line terms, units of n.
+    solver : {"lbfgs", "slsqp"}
+        Smooth maximum by L-BFGS-B, or the epigraph form by SLSQP.
+    top : int
+        ``solver="slsqp"``: number of largest terms of each kind per TEA.
+
+    Returns
+    -------
+    acmm.schedule.ScheduleFit
+        The refitted schedule (``method="closed_loop"``), or the least-squares one when the
+        refit does not lower the largest Re λ; ``refit_info`` records the outcome.
+
+    Raises
+    ------
+    ValueError
+        ``fit`` is not a polynomial schedule, or ``solver`` is unknown.
     """
     from scipy.optimize import minimize
 

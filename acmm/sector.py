@@ -36,6 +36,11 @@ def sector_margin(poles, n: float, sigma: float = 0.5, half_angle_deg: float = 4
         Minimum decay rate in units of n.
     half_angle_deg : float
         Sector half-angle φ about the negative real axis, deg.
+
+    Returns
+    -------
+    ndarray of float
+        Margin m(λ) of each pole, in units of n (dimensionless); negative = outside.
     """
     lam = np.asarray(poles, dtype=complex)
     phi = np.deg2rad(half_angle_deg)
@@ -47,7 +52,26 @@ def sector_margin(poles, n: float, sigma: float = 0.5, half_angle_deg: float = 4
 
 def in_sector(poles, n: float, sigma: float = 0.5, half_angle_deg: float = 45.0, *,
               min_margin: float = 0.0) -> np.ndarray:
-    """Boolean mask: pole lies in the sector with :func:`sector_margin` ≥ ``min_margin`` (units of n)."""
+    """Boolean mask: pole lies in the sector with :func:`sector_margin` ≥ ``min_margin`` (units of n).
+
+    Parameters
+    ----------
+    poles : array_like of complex
+        Closed-loop eigenvalues, rad/s.
+    n : float
+        Orbital rate, rad/s.
+    sigma : float
+        Minimum decay rate in units of n.
+    half_angle_deg : float
+        Sector half-angle φ about the negative real axis, deg.
+    min_margin : float
+        Required margin, in units of n.
+
+    Returns
+    -------
+    bool array
+        True where the pole lies in the sector with the required margin.
+    """
     return sector_margin(poles, n, sigma, half_angle_deg) >= min_margin
 
 
@@ -72,7 +96,7 @@ class SectorLQR:
         Worst :func:`sector_margin` over the poles, units of n (> 0: all inside).
     residual : float
         Relative Riccati residual (:func:`acmm.riccati.care_residual`) of (A + shift·I, B, Q, R, P)
-        in the scaled coordinates.
+        in the scaled coordinates, dimensionless.
     shift : float
         α (rad/s): K is the LQR gain of (A + αI, B, Q, R).
     mirror_shifts : tuple of float
@@ -80,16 +104,17 @@ class SectorLQR:
     method, riccati_method : str
         Design method and Riccati solver.
     scale : (N,) array or None
-        State scaling used, x = diag(scale) x̃.
+        State scaling used, x = diag(scale) x̃, in the units of each state.
     eig_condition : (N,) array
         Condition number κ_i = ‖w_i‖‖v_i‖/|w_i^H v_i| of each pole (same order as ``poles``) of
-        A − BK in the scaled coordinates (:func:`eigen_conditioning`).
+        A − BK in the scaled coordinates (:func:`eigen_conditioning`), dimensionless.
     robustness_radius, robustness_radius_elementwise : float
         Sector robustness radius (:func:`sector_robustness`): the estimated smallest relative
         gain error that moves a pole out of the sector, normwise (‖δK̃‖₂/‖K̃‖₂, scaled) and
-        elementwise (max |δK_ij/K_ij|).
+        elementwise (max |δK_ij/K_ij|), dimensionless.
     riccati_condition : float
-        κ_CARE of the Riccati equation solved for the shifted LQR (:mod:`acmm.riccati`).
+        κ_CARE of the Riccati equation solved for the shifted LQR (:mod:`acmm.riccati`),
+        dimensionless.
     riccati_ill_conditioned : bool
         κ_CARE above :data:`acmm.riccati.ILL_CONDITIONED`.
     """
@@ -124,6 +149,22 @@ def eigen_conditioning(Acl):
     κ_i = ‖w_i‖₂‖v_i‖₂/|w_i^H v_i| (Wilkinson): a perturbation E of Acl moves λ_i by at most
     κ_i‖E‖₂ to first order.  Returns (λ, V, W, κ) with W = V⁻¹ (rows are left eigenvectors
     normalized so that W V = I), so that κ_i = ‖W[i]‖‖V[:, i]‖.
+
+    Parameters
+    ----------
+    Acl : (N, N) array
+        Closed-loop state matrix, units of the state (rad/s for a rate).
+
+    Returns
+    -------
+    lam : (N,) complex array
+        Eigenvalues λ_i, rad/s.
+    V : (N, N) complex array
+        Right eigenvectors (columns), dimensionless.
+    W : (N, N) complex array
+        V⁻¹ (rows are left eigenvectors), dimensionless; NaN if V is singular.
+    kappa : (N,) array
+        Condition numbers κ_i, dimensionless; inf if V is singular.
     """
     lam, V = np.linalg.eig(np.asarray(Acl, dtype=float))
     try:
@@ -152,14 +193,20 @@ def sector_robustness(A, B, K, n: float, sigma: float = 0.5, half_angle_deg: flo
     ----------
     A, B, K : arrays
         Model and gain (physical units; ``scale`` applied for the normwise radius).
-    n, sigma, half_angle_deg :
-        Sector (units of n, deg).
+    n : float
+        Orbital rate, rad/s.
+    sigma : float
+        Minimum decay rate in units of n.
+    half_angle_deg : float
+        Sector half-angle, deg.
     scale : (N,) array or None
-        State scaling x = diag(scale) x̃ in which the normwise radius is measured.
+        State scaling x = diag(scale) x̃ in which the normwise radius is measured, in the units
+        of each state.
 
     Returns
     -------
     (ε_norm, ε_elem) : tuple of float
+        Normwise and elementwise robustness radii, dimensionless (relative gain errors).
     """
     A, B, K = (np.asarray(x, dtype=float) for x in (A, B, K))
     if scale is not None:

@@ -268,6 +268,11 @@ def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
     bias : (3,) array
         Constant disturbance torque, ft·lbf.
 
+    Returns
+    -------
+    acmm.tea.TEA
+        The torque equilibrium attitude (eqs 4.1–4.3), θ in rad.
+
     Raises
     ------
     NoEquilibriumError

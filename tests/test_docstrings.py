@@ -53,6 +53,15 @@ CHECKED_MODULES = [
     "qpp.config_fields",
     "qpp.config_nonlin",
     "qpp.certificate",
+    "acmm.sector",
+    "acmm.lqr",
+    "acmm.lqr_methods",
+    "acmm.settings",
+    "acmm.schedule",
+    "acmm.path_check",
+    "acmm.schedule_refit",
+    "acmm.design_core",
+    "acmm.tea_compiled",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
