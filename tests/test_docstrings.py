@@ -53,6 +53,7 @@ CHECKED_MODULES = [
     "qpp.config_fields",
     "qpp.config_nonlin",
     "qpp.certificate",
+    "qpp.hinf",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
