@@ -54,6 +54,7 @@ CHECKED_MODULES = [
     "qpp.config_nonlin",
     "qpp.certificate",
     "qpp.hinf",
+    "qpp.circle",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
