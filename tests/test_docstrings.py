@@ -55,6 +55,7 @@ CHECKED_MODULES = [
     "qpp.certificate",
     "qpp.hinf",
     "qpp.circle",
+    "qpp.spheres",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
