@@ -56,6 +56,7 @@ CHECKED_MODULES = [
     "qpp.hinf",
     "qpp.circle",
     "qpp.spheres",
+    "qpp.simulate",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
