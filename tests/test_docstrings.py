@@ -57,6 +57,7 @@ CHECKED_MODULES = [
     "qpp.circle",
     "qpp.spheres",
     "qpp.simulate",
+    "common.results",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
@@ -66,6 +67,7 @@ NO_REPORT_CITATION = {
     "acmm.schema": "JSON schemas of config files: no mathematics of the report",
     "qpp.schema": "JSON schema of config files: no mathematics of the report",
     "configkinds": "config-kind dispatch: no mathematics of the report",
+    "common.results": "atomic HDF5/text/figure writing and provenance: no mathematics of the report",
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).
