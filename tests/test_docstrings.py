@@ -58,6 +58,7 @@ CHECKED_MODULES = [
     "qpp.spheres",
     "qpp.simulate",
     "common.results",
+    "common.units",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
@@ -68,6 +69,7 @@ NO_REPORT_CITATION = {
     "qpp.schema": "JSON schema of config files: no mathematics of the report",
     "configkinds": "config-kind dispatch: no mathematics of the report",
     "common.results": "atomic HDF5/text/figure writing and provenance: no mathematics of the report",
+    "common.units": "unit conversion of config values and outputs (pint): no mathematics of the report",
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).
