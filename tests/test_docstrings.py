@@ -59,6 +59,8 @@ CHECKED_MODULES = [
     "qpp.simulate",
     "common.results",
     "common.units",
+    "common.limits",
+    "common.runlock",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
@@ -70,6 +72,8 @@ NO_REPORT_CITATION = {
     "configkinds": "config-kind dispatch: no mathematics of the report",
     "common.results": "atomic HDF5/text/figure writing and provenance: no mathematics of the report",
     "common.units": "unit conversion of config values and outputs (pint): no mathematics of the report",
+    "common.limits": "work and size limits of the programs: no mathematics of the report",
+    "common.runlock": "per-run-directory file lock: no mathematics of the report",
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).
