@@ -61,6 +61,7 @@ CHECKED_MODULES = [
     "common.units",
     "common.limits",
     "common.runlock",
+    "common.configio",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
@@ -74,6 +75,7 @@ NO_REPORT_CITATION = {
     "common.units": "unit conversion of config values and outputs (pint): no mathematics of the report",
     "common.limits": "work and size limits of the programs: no mathematics of the report",
     "common.runlock": "per-run-directory file lock: no mathematics of the report",
+    "common.configio": "bounded YAML reading and pydantic validation of configs: no mathematics of the report",
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).
