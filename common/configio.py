@@ -47,7 +47,25 @@ def _format_error(exc: ValidationError, model_cls=None) -> str:
 
 
 def require_mapping(data: object, source: str = "config") -> dict:
-    """``data`` if it is a mapping, else a one-line :class:`ConfigError`."""
+    """``data`` if it is a mapping, else a one-line :class:`ConfigError`.
+
+    Parameters
+    ----------
+    data : object
+        Parsed YAML.
+    source : str
+        Name of the file or section, for the message.
+
+    Returns
+    -------
+    dict
+        ``data``.
+
+    Raises
+    ------
+    ConfigError
+        ``data`` is not a mapping.
+    """
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the top level must be a mapping of keys to values")
     return data
@@ -55,7 +73,27 @@ def require_mapping(data: object, source: str = "config") -> dict:
 
 def validate_model(model_cls, data: object, source: str = "config"):
     """Validate a mapping (e.g. parsed YAML) into a pydantic ``model_cls``; a
-    :class:`ConfigError` naming the offending field otherwise."""
+    :class:`ConfigError` naming the offending field otherwise.
+
+    Parameters
+    ----------
+    model_cls : type
+        The pydantic model class.
+    data : object
+        The mapping to validate.
+    source : str
+        Name of the file or section, for the message.
+
+    Returns
+    -------
+    pydantic.BaseModel
+        The validated ``model_cls`` instance.
+
+    Raises
+    ------
+    ConfigError
+        ``data`` is not a mapping or fails validation.
+    """
     require_mapping(data, source)
     try:
         return model_cls.model_validate(data)
@@ -67,7 +105,18 @@ DEFAULT_CONFIG = "staircase.yaml"
 
 
 def packaged_config_path(name: str = DEFAULT_CONFIG) -> Path:
-    """Path of a config shipped inside the distribution (``configs/`` in the source tree)."""
+    """Path of a config shipped inside the distribution (``configs/`` in the source tree).
+
+    Parameters
+    ----------
+    name : str
+        File name of the config.
+
+    Returns
+    -------
+    Path
+        Its path (which need not exist).
+    """
     return Path(str(resources.files(PACKAGED_CONFIGS).joinpath(name)))
 
 
@@ -76,6 +125,18 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
 
     A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working directory is
     looked up among the packaged configs.  Duplicate keys are rejected.
+
+    Parameters
+    ----------
+    path : path-like or None
+        The config file, a packaged config's name, or None for the packaged default.
+
+    Returns
+    -------
+    data : object
+        The parsed YAML.
+    path : Path
+        The file read.
 
     Raises
     ------
@@ -113,7 +174,23 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
 def read_config_text(p: Path) -> str:
     """The text of config file ``p``, read with bounds (issue 13): only a regular file (a FIFO,
     a device such as ``/dev/zero`` or a directory is refused without blocking), at most
-    ``CONFIG_BYTES`` bytes (:mod:`common.limits`), UTF-8.  One-line :class:`ConfigError` otherwise."""
+    ``CONFIG_BYTES`` bytes (:mod:`common.limits`), UTF-8.  One-line :class:`ConfigError` otherwise.
+
+    Parameters
+    ----------
+    p : Path
+        The config file.
+
+    Returns
+    -------
+    str
+        Its text.
+
+    Raises
+    ------
+    ConfigError
+        Not a readable regular file, too large, or not UTF-8.
+    """
     import os
     import stat
 
@@ -159,6 +236,18 @@ def check_yaml_structure(text: str, source: object = "config") -> None:
     (so "billion laughs" alias bombs count at their expanded size) or an alias to a collection
     that contains it (a cycle) raise :class:`ConfigError`.  Syntax errors raise
     :class:`yaml.YAMLError` as :func:`yaml.load` would.
+
+    Parameters
+    ----------
+    text : str
+        The YAML text.
+    source : object
+        Name of the file, for the message.
+
+    Raises
+    ------
+    ConfigError
+        Too deep, too many nodes, or a cyclic alias.
     """
     from common.limits import how_to_raise, limit
 

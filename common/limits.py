@@ -57,7 +57,18 @@ PHYSICAL_MAX = {
 
 
 def limit(name: str) -> float:
-    """The value of limit ``name`` (``ACMM_LIMIT_<name>`` overrides the default)."""
+    """The value of limit ``name`` (``ACMM_LIMIT_<name>`` overrides the default).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`DEFAULTS`.
+
+    Returns
+    -------
+    float
+        The limit, in the unit of the table above (bytes, samples, 1, s, ...).
+    """
     raw = os.environ.get(f"ACMM_LIMIT_{name}")
     if raw is not None:
         try:
@@ -70,5 +81,16 @@ def limit(name: str) -> float:
 
 
 def how_to_raise(name: str) -> str:
-    """The hint appended to a refusal: which environment variable raises the limit."""
+    """The hint appended to a refusal: which environment variable raises the limit.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`DEFAULTS`.
+
+    Returns
+    -------
+    str
+        The hint, with the current value of the limit.
+    """
     return f"limit {limit(name):.6g}; set ACMM_LIMIT_{name} to change it"

@@ -23,7 +23,23 @@ import numpy as np
 
 @dataclass
 class Dataset:
-    """One array to store, with its unit and optional axis/element names."""
+    """One array to store, with its unit and optional axis/element names.
+
+    Attributes
+    ----------
+    data : array-like or str
+        The values, in the unit ``units`` (report units; converted on writing).
+    units : str
+        Unit of ``data`` (stored as the ``units`` attribute).
+    description : str
+        Stored as the ``description`` attribute when not empty.
+    names : list of str or None
+        Element names, stored as JSON in the ``names`` attribute.
+    attrs : dict
+        Further dataset attributes.
+    dims : tuple of str or None
+        netCDF dimension name of each axis (time first); inferred when None.
+    """
 
     data: Any
     units: str
@@ -41,7 +57,13 @@ WRITTEN_HOOKS: list = []
 
 
 def git_commit() -> str:
-    """The git commit of the source tree, or ``"unknown"``."""
+    """The git commit of the source tree, or ``"unknown"``.
+
+    Returns
+    -------
+    str
+        The commit hash, or ``"unknown"``.
+    """
     here = Path(__file__).resolve().parent
     try:
         out = subprocess.run(
@@ -55,12 +77,34 @@ def git_commit() -> str:
 
 
 def config_hash(config_text: str) -> str:
-    """SHA-256 of a canonical config text (first 16 hex digits)."""
+    """SHA-256 of a canonical config text (first 16 hex digits).
+
+    Parameters
+    ----------
+    config_text : str
+        The canonical config text.
+
+    Returns
+    -------
+    str
+        The first 16 hex digits of the hash.
+    """
     return hashlib.sha256(config_text.encode()).hexdigest()[:16]
 
 
 def provenance(config_text: str) -> dict[str, str]:
-    """Attributes stored on every results file."""
+    """Attributes stored on every results file.
+
+    Parameters
+    ----------
+    config_text : str
+        The resolved config as YAML.
+
+    Returns
+    -------
+    dict
+        Package, version, git commit, config hash and creation time (UTC).
+    """
     from common import __version__
 
     return {
@@ -110,7 +154,23 @@ ROOT_PATTERN = r"^[^\x00]+$"
 
 def make_dirs(directory: str | Path) -> list[Path]:
     """Create ``directory`` and its missing parents; return the ones created (outermost first),
-    so that a refused run can remove them again (:func:`remove_empty_dirs`)."""
+    so that a refused run can remove them again (:func:`remove_empty_dirs`).
+
+    Parameters
+    ----------
+    directory : path-like
+        The directory to create.
+
+    Returns
+    -------
+    list of Path
+        The directories created, outermost first.
+
+    Raises
+    ------
+    NotADirectoryError
+        ``directory`` exists but is not a directory.
+    """
     d = Path(directory)
     missing = []
     while not os.path.lexists(d) and d != d.parent:
@@ -135,7 +195,13 @@ def make_dirs(directory: str | Path) -> list[Path]:
 
 
 def remove_empty_dirs(created: list[Path]) -> None:
-    """Remove the directories of :func:`make_dirs` again, innermost first, while they are empty."""
+    """Remove the directories of :func:`make_dirs` again, innermost first, while they are empty.
+
+    Parameters
+    ----------
+    created : list of Path
+        Directories as returned by :func:`make_dirs`.
+    """
     for q in reversed(created):
         try:
             os.rmdir(q)
@@ -144,7 +210,22 @@ def remove_empty_dirs(created: list[Path]) -> None:
 
 
 def output_error(exc: OSError, what: str, where: str | Path):
-    """A one-line :class:`~common.errors.OutputError` (exit 4) for an OS error while writing."""
+    """A one-line :class:`~common.errors.OutputError` (exit 4) for an OS error while writing.
+
+    Parameters
+    ----------
+    exc : OSError
+        The error (an OutputError is returned as it is).
+    what : str
+        What was being written ("results", "figure", ...).
+    where : path-like
+        Where it was being written.
+
+    Returns
+    -------
+    OutputError
+        The error to raise.
+    """
     from common.errors import OutputError
 
     if isinstance(exc, OutputError):
@@ -161,6 +242,25 @@ def atomic_path(path: str | Path, what: str = "results"):
     temporary file is removed, directories created for it are removed again, ``path`` is left
     as it was, and an OS error (read-only, not a directory, no space, name too long, a
     directory where the file should go) becomes one :class:`~common.errors.OutputError` line.
+
+    Parameters
+    ----------
+    path : path-like
+        The target file.
+    what : str
+        What is written, for error messages.
+
+    Yields
+    ------
+    Path
+        The temporary path to write to.
+
+    Raises
+    ------
+    OutputError
+        A directory of that name is in the way, or an OS error occurred.
+    output_error
+        (the :class:`~common.errors.OutputError` built by :func:`output_error` from an OS error)
     """
     from common.errors import OutputError
 
@@ -198,7 +298,22 @@ def atomic_path(path: str | Path, what: str = "results"):
 def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
     """Write ``data`` atomically with plain ``os.write`` calls and an fsync (see
     :func:`atomic_path`): a full disk is then an ordinary OSError → OutputError, never a crash
-    inside a C library, and no temporary file survives."""
+    inside a C library, and no temporary file survives.
+
+    Parameters
+    ----------
+    path : path-like
+        The target file.
+    data : bytes-like
+        The content.
+    what : str
+        What is written, for error messages.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     with atomic_path(path, what) as tmp:
         fd = os.open(tmp, os.O_WRONLY | os.O_TRUNC | getattr(os, "O_CLOEXEC", 0))
         try:
@@ -212,7 +327,20 @@ def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
 
 
 def write_text(path: str | Path, text: str) -> Path:
-    """Write a text file atomically (see :func:`atomic_path`)."""
+    """Write a text file atomically (see :func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : path-like
+        The target file.
+    text : str
+        The content, written as UTF-8.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     return write_bytes(path, text.encode("utf-8"), "text")
 
 
@@ -251,6 +379,11 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         Output unit system (``output.units``; default: read from ``config_text``, else
         imperial).  Items are given in the report's units and converted on writing; angles
         are stored in rad in both systems (:func:`common.units.output_unit`).
+
+    Returns
+    -------
+    Path
+        ``path``.
     """
     from common.netcdf_layout import annotate, convert_items, unit_system_of
     import h5py
@@ -279,7 +412,19 @@ def _dimension_only(ds) -> bool:
 
 
 def read_h5(path: str | Path) -> dict[str, Any]:
-    """Read a results file back as a nested dict of numpy arrays plus ``"attrs"``."""
+    """Read a results file back as a nested dict of numpy arrays plus ``"attrs"``.
+
+    Parameters
+    ----------
+    path : path-like
+        The results file.
+
+    Returns
+    -------
+    dict
+        Nested dict of the stored datasets (in the file's units, see their ``units``
+        attributes) plus the root attributes under ``"attrs"``.
+    """
     import h5py
 
     def _read(group):
@@ -304,6 +449,20 @@ def save_figure(fig, path: str | Path, **kwargs) -> Path:
     """``fig.savefig`` atomically: to a temporary file beside ``path``, then renamed into place.
 
     The format is taken from ``path``'s suffix; ``kwargs`` go to ``savefig``.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : path-like
+        The target file.
+    **kwargs : dict
+        Passed on to ``savefig``.
+
+    Returns
+    -------
+    Path
+        ``path``.
     """
     path = Path(path)
     with _in_memory(path, "figure") as tmp:

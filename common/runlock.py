@@ -43,7 +43,18 @@ def _holder(fd: int) -> str:
 def remove_stale_temps(directory: Path) -> list[str]:
     """Remove the temporary files of killed writers (``.<name>.*.tmp``) in ``directory``.
 
-    Only call this while holding the directory's run lock: no live writer then owns them."""
+    Only call this while holding the directory's run lock: no live writer then owns them.
+
+    Parameters
+    ----------
+    directory : Path
+        The run directory.
+
+    Returns
+    -------
+    list of str
+        Names of the files removed.
+    """
     removed = []
     try:
         entries = list(os.scandir(directory))
@@ -63,11 +74,24 @@ def remove_stale_temps(directory: Path) -> list[str]:
 def run_lock(run_dir: str | Path):
     """Hold the exclusive run lock of ``run_dir`` (created if needed) for the ``with`` block.
 
+    Parameters
+    ----------
+    run_dir : path-like
+        The run directory ``<root>/<name>/``.
+
+    Yields
+    ------
+    Path
+        ``run_dir``.
+
     Raises
     ------
     OutputError
         Another live process holds the lock (message names its pid), or the directory cannot
         be created / the lock file cannot be written (exit 4).
+    output_error
+        (the :class:`~common.errors.OutputError` built by
+        :func:`common.results.output_error` from an OS error)
     """
     d = Path(run_dir)
     key = os.path.abspath(d)
@@ -131,7 +155,18 @@ def run_lock(run_dir: str | Path):
 def locked_stage(as_config):
     """Decorator for a stage runner ``fn(config, ...)``: resolve the config with ``as_config``
     (validation first: a refused config creates nothing), then run ``fn`` on it under
-    :func:`run_lock` of its ``run_dir()``."""
+    :func:`run_lock` of its ``run_dir()``.
+
+    Parameters
+    ----------
+    as_config : callable
+        Resolves the stage's ``config`` argument (path, mapping or model) to a validated config.
+
+    Returns
+    -------
+    callable
+        The decorator.
+    """
 
     def deco(fn):
         @functools.wraps(fn)

@@ -111,6 +111,18 @@ def to_canonical(value: object, dimension: str) -> float:
     """Convert a number or a ``"<number> <unit>"`` string to the dimension kind's unit
     (:data:`DIMENSIONS`); a bare number is taken as already in that unit.
 
+    Parameters
+    ----------
+    value : float or str
+        A number (in the dimension kind's unit) or a ``"<number> <unit>"`` string.
+    dimension : str
+        A key of :data:`DIMENSIONS`.
+
+    Returns
+    -------
+    float
+        The value in the dimension kind's unit (:data:`DIMENSIONS`).
+
     Raises
     ------
     ValueError
@@ -137,7 +149,22 @@ def to_canonical(value: object, dimension: str) -> float:
 
 
 def convert(value, unit: str, target: str):
-    """``value`` (number or array) in ``unit`` expressed in ``target``."""
+    """``value`` (number or array) in ``unit`` expressed in ``target``.
+
+    Parameters
+    ----------
+    value : float or array
+        The value, in the unit ``unit``.
+    unit : str
+        Its unit.
+    target : str
+        The unit wanted.
+
+    Returns
+    -------
+    float or array
+        The value in the unit ``target``.
+    """
     return value * _factor(unit, target)
 
 
@@ -146,6 +173,18 @@ def output_unit(unit: str, system: str = "imperial") -> str:
 
     Angles (deg) become rad in both systems (one angle unit in every file); imperial units
     become SI under ``SI``; anything else (``1``, ``s``, ``rad/s``, descriptive units) is kept.
+
+    Parameters
+    ----------
+    unit : str
+        The report unit of the quantity.
+    system : {"imperial", "SI"}
+        Output unit system.
+
+    Returns
+    -------
+    str
+        The unit written to output files.
     """
     if unit == "deg":
         return "rad"
@@ -158,14 +197,46 @@ def output_unit(unit: str, system: str = "imperial") -> str:
 
 def display_unit(unit: str, system: str = "imperial") -> str:
     """The unit shown to a person (prints, CSV, figures): like :func:`output_unit` but angles
-    stay in degrees."""
+    stay in degrees.
+
+    Parameters
+    ----------
+    unit : str
+        The report unit of the quantity.
+    system : {"imperial", "SI"}
+        Output unit system.
+
+    Returns
+    -------
+    str
+        The unit shown.
+    """
     if system == "SI":
         return _SI.get(unit, unit)
     return unit
 
 
 def to_system(value, unit: str, system: str = "imperial", display: bool = False):
-    """(value, unit) of a report-unit quantity in ``system`` (``display``: degrees kept)."""
+    """(value, unit) of a report-unit quantity in ``system`` (``display``: degrees kept).
+
+    Parameters
+    ----------
+    value : float or array
+        The value, in the report unit ``unit``.
+    unit : str
+        Its report unit.
+    system : {"imperial", "SI"}
+        Output unit system.
+    display : bool
+        Keep degrees (as shown to a person) instead of converting them to rad.
+
+    Returns
+    -------
+    value : float or array
+        The value in the unit returned alongside.
+    unit : str
+        The unit of ``value`` under ``system``.
+    """
     target = display_unit(unit, system) if display else output_unit(unit, system)
     if target == unit:
         return value, unit
@@ -175,7 +246,23 @@ def to_system(value, unit: str, system: str = "imperial", display: bool = False)
 
 
 def check_system(system: str) -> str:
-    """``system`` if it is one of :data:`SYSTEMS` (case-insensitive), else ``ValueError``."""
+    """``system`` if it is one of :data:`SYSTEMS` (case-insensitive), else ``ValueError``.
+
+    Parameters
+    ----------
+    system : str
+        A unit system's name, any case.
+
+    Returns
+    -------
+    str
+        The name as spelt in :data:`SYSTEMS`.
+
+    Raises
+    ------
+    ValueError
+        ``system`` is not one of :data:`SYSTEMS`.
+    """
     for s in SYSTEMS:
         if str(system).lower() == s.lower():
             return s
@@ -183,11 +270,39 @@ def check_system(system: str) -> str:
 
 
 def pretty(unit: str) -> str:
-    """A unit as printed in labels: ``ft*lbf*s`` → ``ft·lbf·s``, ``kg*m^2`` → ``kg·m²``."""
+    """A unit as printed in labels: ``ft*lbf*s`` → ``ft·lbf·s``, ``kg*m^2`` → ``kg·m²``.
+
+    Parameters
+    ----------
+    unit : str
+        A unit in pint spelling.
+
+    Returns
+    -------
+    str
+        The unit as printed.
+    """
     return unit.replace("*", "·").replace("^2", "²")
 
 
 def shown(value, unit: str, system: str = "imperial"):
     """(value, unit) of a report-unit quantity as shown to a person under ``system``
-    (prints, CSV, figures; angles stay in degrees)."""
+    (prints, CSV, figures; angles stay in degrees).
+
+    Parameters
+    ----------
+    value : float or array
+        The value, in the report unit ``unit``.
+    unit : str
+        Its report unit.
+    system : {"imperial", "SI"}
+        Output unit system.
+
+    Returns
+    -------
+    value : float or array
+        The value in the unit returned alongside.
+    unit : str
+        The unit shown under ``system``.
+    """
     return to_system(value, unit, system, display=True)

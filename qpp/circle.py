@@ -25,7 +25,20 @@ import numpy as np
 
 
 def default_grid(A, n: int = 6000) -> np.ndarray:
-    """Non-negative frequencies (rad/s) spanning the pole magnitudes of A by three decades."""
+    """Non-negative frequencies (rad/s) spanning the pole magnitudes of A by three decades.
+
+    Parameters
+    ----------
+    A : (k, k) array
+        State matrix, 1/s.
+    n : int
+        Number of log-spaced points (the grid also holds ω = 0).
+
+    Returns
+    -------
+    (n+1,) ndarray
+        Frequencies, rad/s.
+    """
     mags = np.abs(np.linalg.eigvals(A))
     mags = mags[mags > 0]
     lo = (mags.min() if mags.size else 1.0) / 1e3
@@ -34,7 +47,26 @@ def default_grid(A, n: int = 6000) -> np.ndarray:
 
 
 def frequency_response(A, B, C, a: float, omega) -> np.ndarray:
-    """H(−a + jω) for each ω; shape (len(omega), p, k)."""
+    """H(−a + jω) for each ω; shape (len(omega), p, k).
+
+    Parameters
+    ----------
+    A : (n, n) array
+        State matrix, 1/s.
+    B : (n, k) array
+        Input matrix, in the units of the state per unit of input and second.
+    C : (p, n) array
+        Output matrix, in the units of the output per unit of state.
+    a : float
+        Exponential weighting, 1/s.
+    omega : (N,) array
+        Frequencies, rad/s.
+
+    Returns
+    -------
+    (N, p, k) complex ndarray
+        H(−a + jω), in the units of the output per unit of input.
+    """
     A, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C))
     n = A.shape[0]
     I = np.eye(n)
@@ -44,7 +76,25 @@ def frequency_response(A, B, C, a: float, omega) -> np.ndarray:
 
 
 def gershgorin_bands(Hw: np.ndarray):
-    """Centres h_ii and mean radii (d_i + d'_i)/2 (definition 3) of a response array (N, m, m)."""
+    """Centres h_ii and mean radii (d_i + d'_i)/2 (definition 3) of a response array (N, m, m).
+
+    Parameters
+    ----------
+    Hw : (N, m, m) complex ndarray
+        Frequency response, in the units of the output per unit of input.
+
+    Returns
+    -------
+    centres : (m, N) complex ndarray
+        h_ii, same units as ``Hw``.
+    radii : (m, N) ndarray
+        Mean Gershgorin radii, same units as ``Hw``.
+
+    Raises
+    ------
+    ValueError
+        ``Hw`` is not square.
+    """
     Hw = np.asarray(Hw)
     if Hw.shape[1] != Hw.shape[2]:
         raise ValueError(f"circle criterion needs a square H(s), got {Hw.shape[1]}×{Hw.shape[2]}")
@@ -57,14 +107,53 @@ def gershgorin_bands(Hw: np.ndarray):
 
 
 def critical_disc(alpha: float, beta: float) -> tuple[float, float]:
-    """Centre and radius of D(α, β), the disc with diameter [−1/α, −1/β] (α ≠ 0)."""
+    """Centre and radius of D(α, β), the disc with diameter [−1/α, −1/β] (α ≠ 0).
+
+    Parameters
+    ----------
+    alpha : float
+        Lower sector gain α, dimensionless.
+    beta : float
+        Upper sector gain β, dimensionless.
+
+    Returns
+    -------
+    centre : float
+        Centre of the disc on the real axis, dimensionless.
+    radius : float
+        Radius of the disc, dimensionless.
+    """
     p1, p2 = -1.0 / alpha, -1.0 / beta
     return 0.5 * (p1 + p2), 0.5 * abs(p1 - p2)
 
 
 @dataclass
 class CircleResult:
-    """Outcome of lemma 1 on H(−a + jω)."""
+    """Outcome of lemma 1 on H(−a + jω).
+
+    Attributes
+    ----------
+    passed : bool
+        All conditions of lemma 1 hold.
+    margins : (m,) ndarray
+        Per channel: smallest distance band ↔ disc boundary (> 0 is good), dimensionless.
+    encirclements : (m,) int array
+        N_ci, clockwise encirclements of each critical disc.
+    P0 : int
+        Open-loop poles of H(s − a) in the closed right half plane.
+    omega : (N,) ndarray
+        Frequency grid, rad/s.
+    centres : (m, N) complex ndarray
+        h_ii(−a + jω) for ω ≥ 0, dimensionless.
+    radii : (m, N) ndarray
+        Mean Gershgorin radii, dimensionless.
+    alpha : (m,) ndarray
+        Lower sector gains, dimensionless.
+    beta : (m,) ndarray
+        Upper sector gains, dimensionless.
+    max_scale : float
+        Largest s with [s α, s β] passing (grid), inf if unbounded; dimensionless.
+    """
 
     passed: bool
     margins: np.ndarray        #: per channel: smallest distance band ↔ disc boundary (> 0 is good)
@@ -116,13 +205,24 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None) -> CircleResul
     Parameters
     ----------
     A, B, C : arrays
-        Realization of H (for eq 10.7: A_z, the φ columns of B_z, C_z).
+        Realization of H (for eq 10.7: A_z, the φ columns of B_z, C_z), in the units of the
+        closed loop's state, φ and y.
     sector : sequence of (α_i, β_i)
         Sector of each φ_i (dimensionless gains), α_i < β_i.
     a : float
         Exponential weighting, 1/s (lemma 2).
     omega : array, optional
         Non-negative grid, rad/s (default :func:`default_grid`).
+
+    Returns
+    -------
+    CircleResult
+        The outcome, margins and the largest passing sector scale.
+
+    Raises
+    ------
+    ValueError
+        The sector has not one (α_i, β_i) per channel of H, or some α_i ≥ β_i.
     """
     A = np.asarray(A, float)
     sector = np.atleast_2d(np.asarray(sector, float))

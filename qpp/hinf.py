@@ -1,4 +1,4 @@
-"""Chapter 11: H∞ state-feedback and observer gains (Riccati 11.1, steps 1–8).
+"""Chapter 11: H∞ state-feedback and observer gains (Riccati 11.1, steps 1–8; CR-185644 ch. 11, eqs 11.1–11.3).
 
 The published gains are reproduced (``docs/ERRATA.md`` § QPP chapter 11) by the γ = 1 (ν = 1 after the
 scaling 11.3) H∞ state-feedback Riccati equation on the a-shifted augmented plant
@@ -27,7 +27,35 @@ from qpp.lure import LurePlant, augmented, closed_loop
 
 @dataclass
 class HinfGains:
-    """Result of one pass of theorem 3 (eqs 11.1–11.3)."""
+    """Result of one pass of theorem 3 (eqs 11.1–11.3).
+
+    Attributes
+    ----------
+    K1 : (m, n) ndarray
+        Observer-state gain, in the units of the plant's u and x.
+    Kc : (m, q) ndarray
+        Servo-state gain, in the units of the plant's u and x_c.
+    H : (n, p) ndarray
+        Observer gain, printed sign (L = −H), in the units of the plant's x and y.
+    k : (n+q, n+q) ndarray
+        Solution of 11.1, in the units of the augmented plant.
+    h : (n, n) ndarray
+        Filter-Riccati solution, in the units of the plant's x.
+    rho : float
+        Control weight ρ, dimensionless.
+    nu : float
+        H∞ level ν, dimensionless.
+    a : float
+        Exponential weighting a, 1/s.
+    residual_k : float
+        Relative residual of 11.1, dimensionless.
+    residual_h : float
+        Relative residual of the filter Riccati equation, dimensionless.
+    lambda_kh : float
+        λ_max(k11 h), existence condition (iii), dimensionless.
+    history : list
+        One dict per pass of :func:`hinf_search` (empty for a single pass).
+    """
 
     K1: np.ndarray          #: (m, n) observer-state gain
     Kc: np.ndarray          #: (m, q) servo-state gain
@@ -59,12 +87,14 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
     Parameters
     ----------
     plant : LurePlant
+        The Lure plant and servo-compensator.
     rho : float
-        Control weight ρ > 0 in z = [ρ u; W_s e] (13.5); the report uses 1e-4 (ch. 13), 1e-3 (ch. 14).
+        Control weight ρ > 0 in z = [ρ u; W_s e] (13.5), dimensionless; the report uses 1e-4
+        (ch. 13), 1e-3 (ch. 14).
     a : float
         Exponential weighting a ≥ 0, 1/s (10.27).
     nu : float
-        H∞ level ν of the scaling 11.3 (γ = ν); the published gains use ν = 1.
+        H∞ level ν of the scaling 11.3 (γ = ν), dimensionless; the published gains use ν = 1.
     weight : {"servo", "output"}
         State weight ``[0 Cc]`` (reproduces the report) or the printed ``[C 0]``.
     observer : {"filter", "dgkf"}
@@ -73,10 +103,19 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
         Raise when k is not positive semi-definite (step 4); ``False`` returns the gains and leaves
         the tests to the caller (:func:`existence_tests`).
 
+    Returns
+    -------
+    HinfGains
+        The gains K1, Kc, H with the Riccati solutions and their residuals.
+
     Raises
     ------
     DesignError
         No stabilizing non-negative solution of 11.1 exists at this (ρ, ν).
+    ConvergenceError
+        The residual of 11.1 is too large.
+    ValueError
+        ``weight`` or ``observer`` is not one of the readings listed above.
     """
     if rho <= 0 or nu <= 0 or a < 0:
         raise DesignError(f"need rho > 0, nu > 0, a >= 0 (got rho={rho}, nu={nu}, a={a})")
@@ -124,7 +163,22 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
 
 
 def closed_loop_norm(plant: LurePlant, g: HinfGains, *, bz: str = "eq10.7") -> float:
-    """δ = ‖T_wy‖∞ of the a-shifted closed loop (11.4) = β1 of these gains."""
+    """δ = ‖T_wy‖∞ of the a-shifted closed loop (11.4) = β1 of these gains.
+
+    Parameters
+    ----------
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+    g : HinfGains
+        The gains (and shift ``a``) of one pass of theorem 3.
+    bz : {"eq10.7", "printed"}
+        Reading of B_z (:func:`qpp.lure.closed_loop`).
+
+    Returns
+    -------
+    float
+        δ, the H∞ norm from w = [r; d] to y, in the units of y per unit of w.
+    """
     from qpp.spheres import hinf_norm
 
     Az, Bz, Cz = closed_loop(plant, g.K1, g.Kc, g.H, bz=bz)
@@ -136,6 +190,16 @@ def existence_tests(g: HinfGains) -> dict:
 
     ``k_psd``: k1 ⪰ 0 (plant block of k); ``h_psd``: h∞ ⪰ 0; ``spectral``: λmax(k1 h∞) < ν², i.e.
     λmax < 1 for the scaled system of 11.3 (the scaling multiplies k1 h∞ by ν⁻²).
+
+    Parameters
+    ----------
+    g : HinfGains
+        The gains and Riccati solutions of one pass of theorem 3.
+
+    Returns
+    -------
+    dict
+        ``k_psd``, ``h_psd``, ``spectral`` (bool) and ``lambda_kh_scaled`` (float, dimensionless).
     """
     n = g.h.shape[0]
     k1 = g.k[:n, :n]
@@ -164,6 +228,42 @@ def hinf_search(plant: LurePlant, *, rho: float, a: float, nu: float | None = No
 
     Returns the admissible gains of smallest δ; ``history`` holds one dict per pass: ρ, ν, δ,
     k_psd, h_psd, lambda_kh_scaled, spectral, admissible, action.
+
+    Parameters
+    ----------
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+    rho : float
+        Initial control weight ρ > 0, dimensionless.
+    a : float
+        Exponential weighting a ≥ 0, 1/s (10.27).
+    nu : float or None
+        Initial H∞ level ν, dimensionless; None starts from δ of the ν = 1 design (step 1).
+    rho_factor : float
+        Factor by which ρ is decreased, dimensionless.
+    rho_min : float
+        Smallest ρ (ε of step 6), dimensionless.
+    max_iter : int
+        Largest number of passes.
+    weight : {"servo", "output"}
+        State weight, as in :func:`hinf_gains`.
+    observer : {"filter", "dgkf"}
+        Observer gain, as in :func:`hinf_gains`.
+    bz : {"eq10.7", "printed"}
+        Reading of B_z (:func:`qpp.lure.closed_loop`).
+    target : float or None
+        Stop at the first admissible solution with δ ≤ target (units of y per unit of w); None
+        searches on.
+
+    Returns
+    -------
+    HinfGains
+        The admissible gains of smallest δ, with ``history`` filled in.
+
+    Raises
+    ------
+    DesignError
+        No admissible gains were found.
     """
     history = []
     best: HinfGains | None = None

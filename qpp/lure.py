@@ -36,6 +36,23 @@ class LurePlant:
 
     ``x' = A x + B u + G d + B f1(x, y, γ, t)``, ``y = C x``;
     ``x_c' = Ac x_c + Bc (r − y)``, ``y_c = Cc x_c`` (the H∞ output weight W_s = S_c, eq 13.5).
+
+    Attributes
+    ----------
+    A : (n, n) ndarray
+        Plant state matrix, 1/s.
+    B : (n, m) ndarray
+        Control matrix, in the units of x per unit of u and second.
+    C : (p, n) ndarray
+        Output matrix, in the units of y per unit of x.
+    G : (n, r) ndarray
+        Disturbance matrix, in the units of x per unit of d and second.
+    Ac : (q, q) ndarray
+        Servo-compensator state matrix, 1/s.
+    Bc : (q, p) ndarray
+        Servo-compensator input matrix, in the units of x_c per unit of y and second.
+    Cc : (k, q) ndarray
+        Servo-compensator output matrix (H∞ weight W_s), in the units of y_c per unit of x_c.
     """
 
     A: np.ndarray
@@ -57,14 +74,38 @@ class LurePlant:
             if tuple(got) != tuple(want):
                 raise ConfigError(f"{name}: shape {tuple(got)} does not match {tuple(want)}")
 
-    n = property(lambda self: self.A.shape[0], doc="plant order")
-    m = property(lambda self: self.B.shape[1], doc="number of controls")
-    p = property(lambda self: self.C.shape[0], doc="number of outputs (= references)")
-    r = property(lambda self: self.G.shape[1], doc="number of disturbances")
-    q = property(lambda self: self.Ac.shape[0], doc="servo-compensator order")
+    @property
+    def n(self) -> int:
+        """Plant order (dimensionless count)."""
+        return self.A.shape[0]
+
+    @property
+    def m(self) -> int:
+        """Number of controls (dimensionless count)."""
+        return self.B.shape[1]
+
+    @property
+    def p(self) -> int:
+        """Number of outputs, equal to the number of references (dimensionless count)."""
+        return self.C.shape[0]
+
+    @property
+    def r(self) -> int:
+        """Number of disturbances (dimensionless count)."""
+        return self.G.shape[1]
+
+    @property
+    def q(self) -> int:
+        """Servo-compensator order (dimensionless count)."""
+        return self.Ac.shape[0]
 
     def N(self) -> np.ndarray:
         """The matrix N of assumption (iii), ``B = G N`` (least squares; checked exactly).
+
+        Returns
+        -------
+        (r, m) ndarray
+            N, in the units of d per unit of u.
 
         Raises
         ------
@@ -80,10 +121,16 @@ class LurePlant:
 def augmented(plant: LurePlant):
     """Plant plus servo-compensator, eqs 10.3–10.4.
 
+    Parameters
+    ----------
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+
     Returns
     -------
     Aa, Ba, Ga, Ca : ndarray
-        ``x_a' = Aa x_a + Ba u + Ga w``, ``y = Ca x_a`` with ``x_a = [x; x_c]`` and ``w = [r; d]``.
+        ``x_a' = Aa x_a + Ba u + Ga w``, ``y = Ca x_a`` with ``x_a = [x; x_c]`` and ``w = [r; d]``;
+        in the units of the blocks of :class:`LurePlant`.
     """
     P = plant
     n, q, p, r, m = P.n, P.q, P.p, P.r, P.m
@@ -100,12 +147,14 @@ def closed_loop(plant: LurePlant, K1, Kc, H, *, bz: str = "eq10.7"):
     Parameters
     ----------
     plant : LurePlant
+        The Lure plant and servo-compensator.
     K1 : (m, n) array
-        Observer-state feedback gain (eq 10.6).
+        Observer-state feedback gain (eq 10.6), in the units of u per unit of x.
     Kc : (m, q) array
-        Servo-compensator state gain (eq 10.6).
+        Servo-compensator state gain (eq 10.6), in the units of u per unit of x_c.
     H : (n, p) array
-        Observer gain with the report's printed sign (``L = −H`` is the output-injection gain).
+        Observer gain with the report's printed sign (``L = −H`` is the output-injection gain),
+        in the units of x per unit of y and second.
     bz : {"eq10.7", "printed"}
         ``"eq10.7"``: B_z = [[0, G], [Bc, 0], [0, 0]]; ``"printed"``: the observer rows carry ``H`` in
         the reference columns as in 13.6 and Table 14.1.
@@ -113,9 +162,17 @@ def closed_loop(plant: LurePlant, K1, Kc, H, *, bz: str = "eq10.7"):
     Returns
     -------
     Az : (2n+q, 2n+q) ndarray
+        Closed-loop state matrix, 1/s.
     Bz : (2n+q, p+r) ndarray
-        Columns ``[r, d]``; the sector nonlinearity φ enters through the ``d`` columns (eq 10.7).
+        Columns ``[r, d]``; the sector nonlinearity φ enters through the ``d`` columns (eq 10.7);
+        in the units of z per unit of r, d and second.
     Cz : (p, 2n+q) ndarray
+        Output matrix, in the units of y per unit of z.
+
+    Raises
+    ------
+    ValueError
+        ``bz`` is not one of :data:`BZ_READINGS`.
     """
     P = plant
     n, q, p, r = P.n, P.q, P.p, P.r
@@ -142,5 +199,16 @@ def closed_loop(plant: LurePlant, K1, Kc, H, *, bz: str = "eq10.7"):
 
 
 def channels(plant: LurePlant) -> tuple[slice, slice]:
-    """Column slices of B_z: (reference columns, disturbance/φ columns)."""
+    """Column slices of B_z: (reference columns, disturbance/φ columns).
+
+    Parameters
+    ----------
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+
+    Returns
+    -------
+    tuple of slice
+        (reference columns, disturbance/φ columns).
+    """
     return slice(0, plant.p), slice(plant.p, plant.p + plant.r)

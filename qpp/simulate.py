@@ -28,7 +28,20 @@ from qpp.lure import LurePlant
 
 
 def eval_terms(terms: list[Term], t: float) -> float:
-    """Value of a sum of :class:`~qpp.config.Term` at time t (s)."""
+    """Value of a sum of :class:`~qpp.config.Term` at time t (s).
+
+    Parameters
+    ----------
+    terms : list of Term
+        Sine, step and ramp terms of one channel.
+    t : float
+        Time, s.
+
+    Returns
+    -------
+    float
+        The sum, in the units of the channel's signal.
+    """
     v = 0.0
     for tm in terms:
         if tm.kind == "sin":
@@ -45,7 +58,20 @@ def eval_terms(terms: list[Term], t: float) -> float:
 
 
 def eval_signal(signal, t: float) -> np.ndarray:
-    """Vector signal (one list of terms per channel) at time t."""
+    """Vector signal (one list of terms per channel) at time t.
+
+    Parameters
+    ----------
+    signal : list of list of Term
+        One list of terms per channel (empty or None: no channel).
+    t : float
+        Time, s.
+
+    Returns
+    -------
+    (p,) ndarray
+        The signal's value per channel, in the units of the channels.
+    """
     return np.array([eval_terms(ch, t) for ch in signal]) if signal else np.zeros(0)
 
 
@@ -53,7 +79,30 @@ def make_f1(nl, plant: LurePlant, model=None):
     """Matched nonlinearity f1(x, t, γ) ∈ R^m (f = B f1) of the config's kind and the nominal γ.
 
     For ``kind: expression`` γ is the vector of parameter values and ``model`` the config's
-    :meth:`~qpp.config.QppConfig.expression_model`."""
+    :meth:`~qpp.config.QppConfig.expression_model`.
+
+    Parameters
+    ----------
+    nl : ExpressionNonlinearity or SinusoidalNonlinearity or PolarArmNonlinearity
+        The config's nonlinearity section.
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+    model : object, optional
+        The compiled expression model (``kind: expression`` only).
+
+    Returns
+    -------
+    f1 : callable
+        ``f1(x, t, γ)``, in the units of the config's u.
+    gamma_nominal : float or ndarray
+        The nominal γ (M for the polar arm, the parameter vector for expressions), in the
+        config's units.
+
+    Raises
+    ------
+    TypeError
+        ``nl`` is of no known kind.
+    """
     if isinstance(nl, ExpressionNonlinearity):
         C = plant.C
 
@@ -81,7 +130,24 @@ def make_f1(nl, plant: LurePlant, model=None):
 
 
 def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
-    """z(0) = [x0; x_c0; x̂0 = x0]."""
+    """z(0) = [x0; x_c0; x̂0 = x0].
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The validated config.
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+    K1 : (m, n) array
+        Observer-state gain (eq 10.6), in the units of the config's u per unit of x.
+    Kc : (m, q) array
+        Servo-compensator state gain (eq 10.6), in the units of the config's u per unit of x_c.
+
+    Returns
+    -------
+    (2n+q,) ndarray
+        z(0), in the config's units of x and x_c.
+    """
     n, q = plant.n, plant.q
     x0 = np.zeros(n) if cfg.plant.x0 is None else np.asarray(cfg.plant.x0, float)
     if isinstance(cfg.plant.xc0, list):
@@ -95,7 +161,42 @@ def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
 
 @dataclass
 class SimResult:
-    """One scenario: samples of r, r_o, y, y_o, u and the sphere check."""
+    """One scenario: samples of r, r_o, y, y_o, u and the sphere check.
+
+    Attributes
+    ----------
+    name : str
+        Scenario name.
+    t : (N,) ndarray
+        Sample times, s.
+    r : (p, N) ndarray
+        Reference, in the config's units of y.
+    r_o : (p, N) ndarray
+        Nominal reference, in the config's units of y.
+    y : (p, N) ndarray
+        Output, in the config's units of y.
+    y_o : (p, N) ndarray
+        Nominal output, in the config's units of y.
+    u : (m, N) ndarray
+        Control including −f1o, in the config's units of u.
+    u_o : (m, N) ndarray
+        Nominal control, in the config's units of u.
+    x : (n, N) ndarray
+        Plant state, in the config's units of x.
+    x_o : (n, N) ndarray
+        Nominal plant state, in the config's units of x.
+    gamma : float
+        γ / payload; expression kind: first parameter value (all in ``parameters``), in the
+        config's units.
+    error_inf : float
+        ‖y − y_o‖∞, in the config's units of y.
+    error_per_output : (p,) ndarray
+        sup_t |y_i − y_oi| per output, in the config's units of y.
+    beta_o : float
+        Sphere radius β_o (eq 10.35), in the config's units of y.
+    parameters : dict or None
+        Expression kind: parameter values of the scenario.
+    """
 
     name: str
     t: np.ndarray
@@ -115,6 +216,7 @@ class SimResult:
 
     @property
     def passed(self) -> bool:
+        """Whether ‖y − y_o‖∞ ≤ β_o (eq 10.35)."""
         return bool(self.error_inf <= self.beta_o)
 
 
@@ -123,6 +225,49 @@ def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nomina
     """Integrate the nonlinear loop; returns (z samples (N_z, N), u samples (m, N)).
 
     A disturbance impulse I δ(t − t_i) is applied as the jump x(t_i⁺) = x(t_i⁻) + G I.
+
+    Parameters
+    ----------
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+    K1 : (m, n) array
+        Observer-state gain (eq 10.6), in the units of the config's u per unit of x.
+    Kc : (m, q) array
+        Servo-compensator state gain (eq 10.6), in the units of the config's u per unit of x_c.
+    H : (n, p) array
+        Observer gain, printed sign (L = −H), in the units of the config's x per unit of y and s.
+    f1 : callable
+        ``f1(x, t, γ)``, the matched nonlinearity (:func:`make_f1`), in the units of u.
+    gamma : float or ndarray
+        The uncertain parameter(s) of the run, in the config's units.
+    gamma_nominal : float or ndarray
+        The nominal parameter(s), used by the observer's f1o, in the config's units.
+    r_fun : callable
+        ``r_fun(t)``, the reference at time t (s), in the units of y.
+    t_eval : (N,) array
+        Sample times, s.
+    z0 : (2n+q,) array
+        Initial state z(0), in the units of x and x_c.
+    impulse_time : float, optional
+        Time of the disturbance impulse, s.
+    impulse : (r,) array, optional
+        Impulse I, in the units of d times s.
+    rtol : float
+        Relative tolerance of the integrator, dimensionless.
+    atol : float
+        Absolute tolerance of the integrator, in the units of z.
+
+    Returns
+    -------
+    Z : (2n+q, N) ndarray
+        Samples of z, in the units of x and x_c.
+    U : (m, N) ndarray
+        Samples of u, in the units of u.
+
+    Raises
+    ------
+    ConvergenceError
+        The integrator failed.
     """
     A, B, C, G, Ac, Bc = plant.A, plant.B, plant.C, plant.G, plant.Ac, plant.Bc
     K1, Kc, L = np.atleast_2d(K1), np.atleast_2d(Kc), -np.atleast_2d(H)
@@ -172,13 +317,39 @@ def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nomina
 
 
 def config_f1(cfg: QppConfig, plant: LurePlant):
-    """:func:`make_f1` of a config (compiles the expression model when needed)."""
+    """:func:`make_f1` of a config (compiles the expression model when needed).
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The validated config.
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+
+    Returns
+    -------
+    tuple
+        ``(f1, gamma_nominal)`` as returned by :func:`make_f1`.
+    """
     nl = cfg.nonlinearity
     return make_f1(nl, plant, cfg.expression_model() if isinstance(nl, ExpressionNonlinearity) else None)
 
 
 def scenario_gamma(cfg: QppConfig, scenario: Scenario):
-    """Value of the uncertain parameter(s) in a scenario: γ, M, or the parameter vector."""
+    """Value of the uncertain parameter(s) in a scenario: γ, M, or the parameter vector.
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The validated config.
+    scenario : Scenario
+        One scenario of the config.
+
+    Returns
+    -------
+    float or ndarray
+        γ, M or the parameter vector, in the config's units.
+    """
     nl = cfg.nonlinearity
     if not isinstance(nl, ExpressionNonlinearity):
         return scenario.gamma
@@ -187,7 +358,28 @@ def scenario_gamma(cfg: QppConfig, scenario: Scenario):
 
 
 def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=None) -> SimResult:
-    """Run one scenario and its nominal loop; compare ‖y − y_o‖∞ with β_o."""
+    """Run one scenario and its nominal loop; compare ‖y − y_o‖∞ with β_o.
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The validated config.
+    K1 : (m, n) array
+        Observer-state gain (eq 10.6), in the units of the config's u per unit of x.
+    Kc : (m, q) array
+        Servo-compensator state gain (eq 10.6), in the units of the config's u per unit of x_c.
+    H : (n, p) array
+        Observer gain, printed sign (L = −H), in the units of the config's x per unit of y and s.
+    scenario : Scenario
+        The scenario to run.
+    nominal : tuple, optional
+        ``(Z_o, U_o)`` of the nominal loop (:func:`simulate_loop`); integrated when None.
+
+    Returns
+    -------
+    SimResult
+        The samples and the sphere check.
+    """
     plant = cfg.lure_plant()
     sim = cfg.simulation
     f1, g_nom = config_f1(cfg, plant)
@@ -227,6 +419,27 @@ def check_work(cfg: QppConfig, K1, Kc, H) -> float:
     observer) plus the size of the nonlinearity's output feedback and the fastest signal
     frequency.  Work = that × (scenarios + 1) is bounded by the ``QPP_WORK`` limit
     (:mod:`common.limits`).  Returns the work estimate.
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The validated config.
+    K1 : (m, n) array
+        Observer-state gain (eq 10.6), in the units of the config's u per unit of x.
+    Kc : (m, q) array
+        Servo-compensator state gain (eq 10.6), in the units of the config's u per unit of x_c.
+    H : (n, p) array
+        Observer gain, printed sign (L = −H), in the units of the config's x per unit of y and s.
+
+    Returns
+    -------
+    float
+        The work estimate, dimensionless (integrator steps, up to a constant).
+
+    Raises
+    ------
+    ConfigError
+        The work exceeds the ``QPP_WORK`` limit.
     """
     from common.errors import ConfigError
     from common.limits import how_to_raise, limit
@@ -256,7 +469,26 @@ def check_work(cfg: QppConfig, K1, Kc, H) -> float:
 
 def simulate(cfg: QppConfig, K1, Kc, H, progress=None) -> list[SimResult]:
     """All scenarios of a config (the nominal loop is integrated once); ``progress(done, total,
-    name)`` is called after each scenario."""
+    name)`` is called after each scenario.
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The validated config.
+    K1 : (m, n) array
+        Observer-state gain (eq 10.6), in the units of the config's u per unit of x.
+    Kc : (m, q) array
+        Servo-compensator state gain (eq 10.6), in the units of the config's u per unit of x_c.
+    H : (n, p) array
+        Observer gain, printed sign (L = −H), in the units of the config's x per unit of y and s.
+    progress : callable, optional
+        ``progress(done, total, name)``, called after each scenario.
+
+    Returns
+    -------
+    list of SimResult
+        One result per scenario, in the config's order.
+    """
     check_work(cfg, K1, Kc, H)
     plant = cfg.lure_plant()
     sim = cfg.simulation

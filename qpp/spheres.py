@@ -15,10 +15,30 @@ def hinf_norm(A, B, C, D=None, *, method: str = "slycot") -> tuple[float, float]
 
     Parameters
     ----------
+    A : (n, n) array
+        State matrix, 1/s.
+    B : (n, k) array
+        Input matrix, in the units of the state per unit of input and second.
+    C : (p, n) array
+        Output matrix, in the units of the output per unit of state.
+    D : (p, k) array, optional
+        Feed-through, in the units of the output per unit of input (default zero).
     method : {"slycot", "hamiltonian"}
         ``"slycot"``: :func:`control.linfnorm` (SLICOT AB13DD, Bruinsma–Steinbuch);
         ``"hamiltonian"``: bisection on the imaginary-axis eigenvalues of the Hamiltonian
         (Boyd–Balakrishnan), an independent implementation used as a cross-check.
+
+    Returns
+    -------
+    norm : float
+        The L∞ norm, in the units of the output per unit of input.
+    omega_peak : float
+        Frequency of the peak, rad/s.
+
+    Raises
+    ------
+    ValueError
+        ``method`` is neither ``"slycot"`` nor ``"hamiltonian"``.
     """
     A, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C))
     D = np.zeros((C.shape[0], B.shape[1])) if D is None else np.atleast_2d(np.asarray(D, float))
@@ -75,7 +95,26 @@ def _hinf_hamiltonian(A, B, C, D, tol=1e-10):
 
 
 def grid_norm(A, B, C, omega) -> tuple[float, float]:
-    """max over a frequency grid of σ_max(C (jωI − A)⁻¹ B) — a lower bound for the cross-check."""
+    """max over a frequency grid of σ_max(C (jωI − A)⁻¹ B) — a lower bound for the cross-check.
+
+    Parameters
+    ----------
+    A : (n, n) array
+        State matrix, 1/s.
+    B : (n, k) array
+        Input matrix, in the units of the state per unit of input and second.
+    C : (p, n) array
+        Output matrix, in the units of the output per unit of state.
+    omega : (N,) array
+        Frequency grid, rad/s.
+
+    Returns
+    -------
+    norm : float
+        Largest σ_max on the grid, in the units of the output per unit of input.
+    omega_peak : float
+        Grid frequency of that largest value, rad/s.
+    """
     A, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C))
     omega = np.asarray(omega, float)
     n = A.shape[0]
@@ -88,6 +127,21 @@ def grid_norm(A, B, C, omega) -> tuple[float, float]:
 
 def beta1(Az, Bz, Cz, a: float, *, method: str = "slycot", omega=None) -> dict:
     """β1 = ‖C_z (sI − A_n)⁻¹ B_z‖∞ with A_n = aI + A_z (theorem 2), exactly and on a grid.
+
+    Parameters
+    ----------
+    Az : (k, k) array
+        Closed-loop state matrix of eq 10.7, 1/s.
+    Bz : (k, p+r) array
+        Closed-loop input matrix of eq 10.7, in the units of the closed loop's state and inputs.
+    Cz : (p, k) array
+        Closed-loop output matrix of eq 10.7, in the units of y per unit of state.
+    a : float
+        Exponential weighting, 1/s.
+    method : {"slycot", "hamiltonian"}
+        Exact norm algorithm (:func:`hinf_norm`).
+    omega : (N,) array, optional
+        Grid of the cross-check, rad/s.
 
     Returns
     -------
@@ -105,7 +159,20 @@ def beta1(Az, Bz, Cz, a: float, *, method: str = "slycot", omega=None) -> dict:
 
 
 def E_factor(a: float, T: float) -> float:
-    """E = [(e^{2aT} − 1)/(2a)]^{1/2} (eq 10.44); √T in the limit a → 0."""
+    """E = [(e^{2aT} − 1)/(2a)]^{1/2} (eq 10.44); √T in the limit a → 0.
+
+    Parameters
+    ----------
+    a : float
+        Exponential weighting, 1/s.
+    T : float
+        Horizon, s.
+
+    Returns
+    -------
+    float
+        E, in s^{1/2} (units: square root of seconds).
+    """
     if a * T < 1e-8:
         return float(np.sqrt(T * (1 + a * T)))
     return float(np.sqrt(np.expm1(2 * a * T) / (2 * a)))
@@ -115,6 +182,20 @@ def truncated_l2(t, y, T: float) -> float:
     """‖(y)_T‖₂ = max_i (∫₀^T y_i² dt)^{1/2} (ch. 9) by the trapezoidal rule on samples.
 
     ``y`` has shape (len(t),) or (k, len(t)).
+
+    Parameters
+    ----------
+    t : (N,) array
+        Sample times, s.
+    y : (N,) or (k, N) array
+        Samples of the signal, in its own units.
+    T : float
+        Horizon, s.
+
+    Returns
+    -------
+    float
+        The truncated L2 norm, in the units of ``y`` times s^{1/2} (0 with fewer than two samples).
     """
     t = np.asarray(t, float)
     y = np.atleast_2d(np.asarray(y, float))
@@ -125,22 +206,87 @@ def truncated_l2(t, y, T: float) -> float:
 
 
 def sin_l2(omega: float, T: float) -> float:
-    """‖(sin ωt)_T‖₂ = (T/2 − sin(2ωT)/(4ω))^{1/2}, exactly; √T for ω = 0 means ‖(1)_T‖₂."""
+    """‖(sin ωt)_T‖₂ = (T/2 − sin(2ωT)/(4ω))^{1/2}, exactly; √T for ω = 0 means ‖(1)_T‖₂.
+
+    Parameters
+    ----------
+    omega : float
+        Frequency ω, rad/s.
+    T : float
+        Horizon, s.
+
+    Returns
+    -------
+    float
+        The truncated L2 norm, in s^{1/2} (units: square root of seconds).
+    """
     if omega == 0:
         return float(np.sqrt(T))
     return float(np.sqrt(T / 2 - np.sin(2 * omega * T) / (4 * omega)))
 
 
 def beta3_sinusoidal(half_width: float, omega: float, T: float) -> float:
-    """β3 (eq 10.54) for φ = k·γ̂·y·sin(ωt), |γ̂| ≤ 1: ∇_yφ = k sin ωt, so β3 = k ‖(sin ωt)_T‖₂."""
+    """β3 (eq 10.54) for φ = k·γ̂·y·sin(ωt), |γ̂| ≤ 1: ∇_yφ = k sin ωt, so β3 = k ‖(sin ωt)_T‖₂.
+
+    Parameters
+    ----------
+    half_width : float
+        Gain k, dimensionless (φ per unit of y).
+    omega : float
+        Frequency ω, rad/s.
+    T : float
+        Horizon, s.
+
+    Returns
+    -------
+    float
+        β3, in s^{1/2} (units: square root of seconds).
+    """
     return float(abs(half_width) * sin_l2(omega, T))
 
 
 def beta4_sector(half_width: float, t, y_o, T: float) -> float:
-    """β4 = ((β − α)/2) ‖(y_o)_T‖₂ (eq 10.55) with φ_o = ((α + β)/2) y_o."""
+    """β4 = ((β − α)/2) ‖(y_o)_T‖₂ (eq 10.55) with φ_o = ((α + β)/2) y_o.
+
+    Parameters
+    ----------
+    half_width : float
+        (β − α)/2, dimensionless.
+    t : (N,) array
+        Sample times, s.
+    y_o : (N,) or (p, N) array
+        Observer output samples, in the units of y.
+    T : float
+        Horizon, s.
+
+    Returns
+    -------
+    float
+        β4, in the units of y times s^{1/2}.
+    """
     return float(abs(half_width) * truncated_l2(t, y_o, T))
 
 
 def threshold_m(beta_o: float, beta_ri: float, d_inf: float, beta3: float, beta4: float) -> float:
-    """m = β_o / (β_ri + ‖d‖∞ + β_o β3 + β4) (eqs 10.57, 12.1)."""
+    """m = β_o / (β_ri + ‖d‖∞ + β_o β3 + β4) (eqs 10.57, 12.1).
+
+    Parameters
+    ----------
+    beta_o : float
+        β_o, in the units of the truncated L2 norms of the loop's signals.
+    beta_ri : float
+        β_ri, same units as ``beta_o``.
+    d_inf : float
+        ‖d‖∞, same units as ``beta_o``.
+    beta3 : float
+        β3, in the units that make β_o β3 those of ``beta_o``.
+    beta4 : float
+        β4, same units as ``beta_o``.
+
+    Returns
+    -------
+    float
+        The threshold m, in the units of β_o divided by those of the denominator
+        (dimensionless when they agree).
+    """
     return float(beta_o / (beta_ri + d_inf + beta_o * beta3 + beta4))

@@ -62,6 +62,16 @@ CHECKED_MODULES = [
     "acmm.schedule_refit",
     "acmm.design_core",
     "acmm.tea_compiled",
+    "qpp.hinf",
+    "qpp.circle",
+    "qpp.spheres",
+    "qpp.simulate",
+    "common.results",
+    "common.units",
+    "common.limits",
+    "common.runlock",
+    "common.configio",
+    "qpp.lure",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
@@ -71,6 +81,11 @@ NO_REPORT_CITATION = {
     "acmm.schema": "JSON schemas of config files: no mathematics of the report",
     "qpp.schema": "JSON schema of config files: no mathematics of the report",
     "configkinds": "config-kind dispatch: no mathematics of the report",
+    "common.results": "atomic HDF5/text/figure writing and provenance: no mathematics of the report",
+    "common.units": "unit conversion of config values and outputs (pint): no mathematics of the report",
+    "common.limits": "work and size limits of the programs: no mathematics of the report",
+    "common.runlock": "per-run-directory file lock: no mathematics of the report",
+    "common.configio": "bounded YAML reading and pydantic validation of configs: no mathematics of the report",
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).
