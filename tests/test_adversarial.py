@@ -317,9 +317,18 @@ def test_unreachable_dask_scheduler_writes_nothing(tmp_runs):
     path = tmp_runs / "s.yaml"
     path.write_text(yaml.safe_dump(_mutate(_load("sweep_smoke"), {"sweep.margin": DELETE})))
     before = _snapshot(tmp_runs)
-    r, dt = _invoke("acmm", ["sweep", path, "--scheduler", "tcp://127.0.0.1:9"],
-                    env={"ACMM_LIMIT_DASK_CONNECT_SECONDS": "1"})
-    check_one_line_refusal(r, dt, 2, r"Dask scheduler", before, _snapshot(tmp_runs))
+    # in a fresh process, as a user runs it: the refusal must not depend on Dask state (event
+    # loops, comm pools) left in the test process by earlier in-process runs
+    import subprocess
+    import sys
+    from types import SimpleNamespace
+
+    t0 = time.monotonic()
+    p = subprocess.run([str(Path(sys.executable).parent / "acmm"), "sweep", str(path), "--scheduler",
+                        "tcp://127.0.0.1:9"], cwd=tmp_runs, capture_output=True, text=True, timeout=60,
+                       env={**os.environ, "ACMM_LIMIT_DASK_CONNECT_SECONDS": "1", "OPENBLAS_NUM_THREADS": "1"})
+    r = SimpleNamespace(exit_code=p.returncode, stderr=p.stderr, exception=None)
+    check_one_line_refusal(r, time.monotonic() - t0, 2, r"Dask scheduler", before, _snapshot(tmp_runs))
 
 
 # ---------------------------------------------------------------------------------------------
