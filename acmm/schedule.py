@@ -413,36 +413,6 @@ def sector_design(A, B, scales, s: DesignSettings):
                           line_spacing=s.line_spacing)
 
 
-def design_q0(d, nx: int):
-    """The initial state weight of a config's ``design`` section on the scaled states:
-    Q0·I plus ``Q0_groups`` on the diagonal; None when zero (minimum energy).
-
-    Parameters
-    ----------
-    d : acmm.config.Design
-        The config's ``design`` section (``Q0``, ``Q0_groups``).
-    nx : int
-        Number of states of the model.
-
-    Returns
-    -------
-    (nx, nx) array or None
-        Q0 on the scaled states, dimensionless; None when zero.
-
-    Raises
-    ------
-    ValueError
-        ``Q0_groups`` does not have ``nx`` entries.
-    """
-    q = np.full(nx, float(d.Q0))
-    if d.Q0_groups is not None:
-        g = d.Q0_groups.diagonal()
-        if g.size != nx:
-            raise ValueError(f"Q0_groups gives {g.size} weights for a {nx}-state model")
-        q = q + g
-    return np.diag(q) if np.any(q > 0) else None
-
-
 def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: str = "polynomial",
                  weights=None) -> ScheduleFit:
     """Least-squares polynomial fit of every gain element versus θ2* (ch. 5.3).
