@@ -25,6 +25,7 @@ import dataclasses
 import importlib
 import importlib.util
 import inspect
+import pkgutil
 import re
 import textwrap
 from pathlib import Path
@@ -33,46 +34,109 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 
-#: Modules whose public API is checked.  Other modules join this list as they are brought into
-#: line (issue 12); the checker takes any importable module name.
-CHECKED_MODULES = [
-    "acmm.dynamics",
-    "common.errors",
-    "acmm.linearize",
-    "acmm.simulate",
-    "acmm.tea",
-    "common.schema",
-    "acmm.schema",
-    "qpp.schema",
-    "configkinds",
-    "acmm.matrix_sign",
-    "acmm.riccati",
-    "acmm.care_checks",
-    "acmm.scenario",
-    "qpp.design",
-    "qpp.config_fields",
-    "qpp.config_nonlin",
-    "qpp.certificate",
-    "acmm.sector",
-    "acmm.lqr",
-    "acmm.lqr_methods",
-    "acmm.settings",
-    "acmm.schedule",
-    "acmm.path_check",
-    "acmm.schedule_refit",
-    "acmm.design_core",
-    "acmm.tea_compiled",
-    "qpp.hinf",
-    "qpp.circle",
-    "qpp.spheres",
-    "qpp.simulate",
-    "common.results",
-    "common.units",
-    "common.limits",
-    "common.runlock",
-    "common.configio",
-    "qpp.lure",
-]
+#: The packages whose every module is checked; their modules are found by
+#: :func:`pkgutil.walk_packages` (:func:`discover_modules`), so a new module is checked from the
+#: moment it exists.
+PACKAGES = ["acmm", "qpp", "common", "report", "configkinds", "cli"]
+
+#: Compatibility shims: old import paths that only re-export another module (the code, and so the
+#: docstrings, live in the target, which is checked).  :func:`test_exclusions_are_justified`
+#: verifies that each one's source holds nothing but a docstring, imports and the re-export.
+SHIMS = {
+    "acmm.errors": "common.errors",
+    "acmm.hints": "common.hints",
+    "acmm.limits": "common.limits",
+    "acmm.netcdf_layout": "common.netcdf_layout",
+    "acmm.outputs": "common.outputs",
+    "acmm.overrides": "common.overrides",
+    "acmm.results": "common.results",
+    "acmm.runlock": "common.runlock",
+    "acmm.workers": "common.workers",
+    "acmm.report": "report",
+    "acmm.report_style": "report.figure_style",
+    "acmm.sweep_config": "acmm.sweep.config",
+}
+
+#: TEMPORARY -- being split, checked by the split branch.  These modules are being split into
+#: smaller files by another branch in parallel (issue 12) and were not yet under this test; their
+#: docstrings are brought into line there.  The integrator removes this list after merging.
+BEING_SPLIT = {
+    "acmm.config": "being split (issue 12); checked by the split branch",
+    "acmm.sweep.config": "being split (issue 12); checked by the split branch",
+    "qpp.config": "being split (issue 12); checked by the split branch",
+    "qpp.nonlin": "being split (issue 12); checked by the split branch",
+}
+
+
+def discover_modules() -> list:
+    """Every module of :data:`PACKAGES` (the packages themselves included), sorted."""
+    names = []
+    for package in PACKAGES:
+        pkg = importlib.import_module(package)
+        names.append(package)
+        for info in pkgutil.walk_packages(pkg.__path__, prefix=package + "."):
+            names.append(info.name)
+    return sorted(names)
+
+
+#: Modules whose public API is checked: every module of :data:`PACKAGES` but the exclusions.
+CHECKED_MODULES = [m for m in discover_modules() if m not in SHIMS and m not in BEING_SPLIT]
+
+#: WORK IN PROGRESS -- modules whose docstrings are not yet in line: expected to fail (strict xfail,
+#: so a module brought into line must leave this list).
+NOT_YET = {
+    "acmm.api",
+    "acmm.design_output",
+    "acmm.parallel_figures",
+    "acmm.plots",
+    "acmm.stages",
+    "acmm.sweep.case",
+    "acmm.sweep.cases",
+    "acmm.sweep.executors",
+    "acmm.sweep.journal",
+    "acmm.sweep.output",
+    "acmm.sweep.run",
+    "acmm.sweep_limits",
+    "acmm.units",
+    "acmm.warmup",
+    "cli",
+    "cli.acmm_app",
+    "cli.acmm_report",
+    "cli.acmm_sweep",
+    "cli.common",
+    "cli.progress",
+    "cli.qpp_app",
+    "common",
+    "common.hints",
+    "common.netcdf_layout",
+    "common.outputs",
+    "common.overrides",
+    "common.plot_style",
+    "common.workers",
+    "qpp",
+    "qpp.plots",
+    "qpp.stages",
+    "report.build",
+    "report.constants",
+    "report.context",
+    "report.document",
+    "report.figure_style",
+    "report.figures",
+    "report.gather",
+    "report.ledger",
+    "report.manifest",
+    "report.sections",
+    "report.sections.claim1",
+    "report.sections.determinism",
+    "report.sections.errata",
+    "report.sections.printed",
+    "report.sections.provenance",
+    "report.sections.qpp",
+    "report.sections.robustness",
+    "report.sections.schedule",
+    "report.sections.staircase",
+    "report.sections.table1",
+}
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
 NO_REPORT_CITATION = {
@@ -317,6 +381,13 @@ def class_problems(cls) -> list:
         for name in list(inspect.signature(cls.__init__).parameters)[1:]:
             if name not in documented:
                 problems.append(f"constructor parameter {name!r} is not documented")
+    if params:      # what 'Parameters' lists must be a constructor parameter (python-control)
+        try:
+            accepted = set(inspect.signature(cls).parameters)
+        except (TypeError, ValueError):
+            accepted = set()
+        for name in sorted({n for e in params for n in e.names} - accepted):
+            problems.append(f"documents {name!r} under 'Parameters', which is no constructor parameter")
     for name, member in vars(cls).items():
         if name.startswith("_"):
             continue
@@ -332,10 +403,61 @@ def class_problems(cls) -> list:
     return problems
 
 
+def typer_commands(module) -> dict:
+    """{callback: command name} of every command registered on a typer app of ``module``."""
+    import typer
+
+    out = {}
+    for obj in vars(module).values():
+        if isinstance(obj, typer.Typer):
+            for command in obj.registered_commands:
+                out[command.callback] = command.name or command.callback.__name__
+    return out
+
+
+def command_problems(func) -> list:
+    """Problems of a typer command function (the ``cli`` apps' commands).
+
+    A command's docstring is its ``--help`` text and its parameters are documented by typer: each
+    is a ``typer.Option``/``typer.Argument`` whose ``help=`` is printed by ``--help``.  So a
+    command needs a summary line and a non-empty ``help=`` on every parameter, not a numpydoc
+    ``Parameters`` section (which would repeat ``--help``); if it has one anyway, it is checked
+    against the signature like any other.
+    """
+    from typer.models import ParameterInfo
+
+    doc = func.__doc__
+    if not doc or not doc.strip():
+        return ["has no docstring (its summary is the command's --help text)"]
+    sections, problems = parse_sections(doc)
+    if not "".join(sections["Summary"]).strip():
+        problems.append("has no summary line")
+    problems += citation_problems(doc)
+    params = inspect.signature(func).parameters
+    for name, p in params.items():
+        if not isinstance(p.default, ParameterInfo):
+            problems.append(f"parameter {name!r} is no typer Option/Argument (so has no --help text)")
+        elif not (p.default.help or "").strip():
+            problems.append(f"parameter {name!r} has no help= text")
+    if "Parameters" in sections:
+        entries, probs = parse_entries(sections["Parameters"])
+        problems += probs
+        for doc_name in sorted({n for e in entries for n in e.names} - set(params)):
+            problems.append(f"documents {doc_name!r}, which is not in the signature")
+    return problems
+
+
 def module_problems(module) -> list:
-    """Every problem of a module's docstrings, as 'module.object: problem' lines."""
+    """Every problem of a module's docstrings, as 'module.object: problem' lines.
+
+    Functions registered as typer commands on an app of the module are checked by
+    :func:`command_problems` (also those defined inside a ``register(app)`` function elsewhere);
+    every other public function, class and method by :func:`function_problems` /
+    :func:`class_problems`.
+    """
     name = module.__name__
     problems = []
+    commands = typer_commands(module)
     doc = module.__doc__ or ""
     if not doc.strip():
         problems.append(f"{name}: module has no docstring")
@@ -347,21 +469,68 @@ def module_problems(module) -> list:
             continue
         if inspect.isclass(obj):
             found = class_problems(obj)
+        elif obj in commands:
+            found = command_problems(obj)
         elif inspect.isfunction(obj) or inspect.isfunction(getattr(obj, "py_func", None)):
             found = function_problems(obj)
         else:
             continue
         problems += [f"{name}.{attr}: {p}" for p in found]
+    for callback, command in commands.items():
+        if vars(module).get(callback.__name__) is not callback:     # registered from elsewhere
+            problems += [f"{name}: command {command!r}: {p}" for p in command_problems(callback)]
     return problems
 
 
 # ------------------------------------------------------------------------------------------------
 # tests
 # ------------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("module_name", CHECKED_MODULES)
+@pytest.mark.parametrize("module_name", [
+    pytest.param(m, marks=pytest.mark.xfail(strict=True, reason="not yet in line")) if m in NOT_YET else m
+    for m in CHECKED_MODULES])
 def test_docstrings(module_name):
     problems = module_problems(importlib.import_module(module_name))
     assert not problems, f"{len(problems)} docstring problem(s):\n" + "\n".join(problems)
+
+
+def test_every_module_is_found():
+    """Discovery reaches into subpackages, and the known modules are among those checked."""
+    found = discover_modules()
+    for name in ("acmm.tea", "acmm.sweep.run", "report.sections.errata", "cli.acmm_app",
+                 "configkinds", "common.units", "qpp.lure"):
+        assert name in found
+    assert len(found) >= 100
+
+
+def _only_reexports(path: Path) -> bool:
+    """Does a module's source hold nothing but its docstring, imports and a re-export
+    (``sys.modules[__name__] = ...`` or ``globals().update(...)``)?"""
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            continue
+        if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant):
+            continue                                                     # the docstring
+        if isinstance(node, ast.Assign) and ast.unparse(node.targets[0]) == "sys.modules[__name__]":
+            continue
+        if (isinstance(node, ast.Expr) and isinstance(node.value, ast.Call)
+                and ast.unparse(node.value.func) == "globals().update"):
+            continue
+        return False
+    return True
+
+
+def test_exclusions_are_justified():
+    """Each shim only re-exports a module that is itself checked; the temporary list of modules
+    being split names existing modules."""
+    found = set(discover_modules())
+    for shim, target in SHIMS.items():
+        assert shim in found, f"{shim} no longer exists: drop it from SHIMS"
+        parent, _, leaf = shim.rpartition(".")     # not find_spec: some shims replace themselves
+        path = Path(importlib.import_module(parent).__path__[0]) / f"{leaf}.py"   # in sys.modules
+        assert _only_reexports(path), f"{shim} defines code of its own: check it, it is no shim"
+        assert target in CHECKED_MODULES or target in BEING_SPLIT, target
+    for name in BEING_SPLIT:
+        assert name in found, f"{name} no longer exists: drop it from BEING_SPLIT"
 
 
 def test_errata_sections_are_read():
@@ -446,6 +615,30 @@ def misspelt(a):
 
 class Undocumented:
     pass
+
+
+class WrongParameters:
+    """A class whose 'Parameters' name no constructor parameter.
+
+    Parameters
+    ----------
+    size : int
+        Not a parameter.
+    """
+
+    def __init__(self, n):
+        self.n = n
+
+
+import typer  # noqa: E402
+
+app = typer.Typer()
+
+
+@app.command()
+def helpless(config: str = typer.Argument(..., help="a config"),
+             fast: bool = typer.Option(False, "--fast"), plain=1):
+    """A command."""
 '''
 
 GOOD = '''
@@ -524,6 +717,10 @@ def test_checker_reports_each_defect(tmp_path):
         "misspelt: unknown section 'Parameter'",
         "misspelt: has parameters but no 'Parameters' section",
         "Undocumented: has no docstring",
+        "WrongParameters: constructor parameter 'n' is not documented",
+        "WrongParameters: documents 'size' under 'Parameters', which is no constructor parameter",
+        "helpless: parameter 'fast' has no help= text",
+        "helpless: parameter 'plain' is no typer Option/Argument",
     ]:
         assert expected in problems, f"checker missed: {expected}\n{problems}"
 
