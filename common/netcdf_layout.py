@@ -96,6 +96,20 @@ def annotate(group, items: Mapping[str, Any], root: bool = True) -> None:
 
     Recurses into sub-groups.  ``items`` maps names to :class:`common.results.Dataset` or to
     nested mappings, exactly as passed to :func:`common.results.write_h5`.
+
+    Parameters
+    ----------
+    group : h5py.Group
+        The group (the file's root first) holding the datasets written from ``items``.
+    items : Mapping
+        Dataset name → :class:`common.results.Dataset` or nested mapping (a sub-group).
+    root : bool, optional
+        ``group`` is the file's root (it gets ``Conventions="CF-1.8"``).
+
+    Raises
+    ------
+    ValueError
+        When a dataset's ``dims`` do not match its number of axes.
     """
     import h5py
 
@@ -165,7 +179,18 @@ def annotate(group, items: Mapping[str, Any], root: bool = True) -> None:
 
 
 def unit_system_of(config_text: str) -> str:
-    """``output.units`` of a resolved config text (``imperial`` when absent or unreadable)."""
+    """``output.units`` of a resolved config text (``imperial`` when absent or unreadable).
+
+    Parameters
+    ----------
+    config_text : str
+        Resolved config, YAML.
+
+    Returns
+    -------
+    str
+        ``"imperial"`` or ``"SI"`` (whatever the config says).
+    """
     import yaml
 
     try:
@@ -177,7 +202,20 @@ def unit_system_of(config_text: str) -> str:
 
 def convert_items(items: Mapping[str, Any], system: str) -> dict:
     """A copy of ``items`` with each dataset in its output unit (:func:`common.units.output_unit`):
-    deg → rad always, imperial → SI under ``SI``.  Units pint does not know are kept."""
+    deg → rad always, imperial → SI under ``SI``.  Units pint does not know are kept.
+
+    Parameters
+    ----------
+    items : Mapping
+        Dataset name → :class:`common.results.Dataset` or nested mapping.
+    system : str
+        Output unit system, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    dict
+        Same structure; float/complex datasets converted with their ``units`` updated.
+    """
     from dataclasses import replace
 
     from common.units import to_system
@@ -204,7 +242,22 @@ def convert_items(items: Mapping[str, Any], system: str) -> dict:
 
 def with_leading_dim(items: Mapping[str, Any], dim: str, n: int) -> dict:
     """``items`` with ``dims`` set on every dataset (recursively) whose first axis has length
-    ``n`` and no dims yet: ``(dim, <inferred rest>)`` — e.g. one row per sweep case."""
+    ``n`` and no dims yet: ``(dim, <inferred rest>)`` — e.g. one row per sweep case.
+
+    Parameters
+    ----------
+    items : Mapping
+        Dataset name → :class:`common.results.Dataset` or nested mapping.
+    dim : str
+        Name of the leading dimension.
+    n : int
+        Its length.
+
+    Returns
+    -------
+    dict
+        Same structure, with ``dims`` set where they apply.
+    """
     from dataclasses import replace
 
     out = {}
