@@ -1,4 +1,8 @@
-"""Stage runners for ``qpp design`` / ``qpp simulate``: config in, HDF5 (+ figures) out."""
+"""Stage runners for ``qpp design`` / ``qpp simulate``: config in, HDF5 (+ figures) out.
+
+The design is procedure 12.1 (ch. 12.1; gains of eqs 10.5–10.6), the simulations those of
+ch. 13–14.
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -24,7 +28,20 @@ def _rel(a, b):
 
 def printed_H_difference(cfg: QppConfig, r: DesignResult) -> float | None:
     """Largest |H − H_printed| / |H_printed| over the non-zero printed entries of the observer gain
-    (dimensionless); None when the config gives no printed H."""
+    (dimensionless); None when the config gives no printed H.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        The config (``published.H``).
+    r : qpp.certificate.DesignResult
+        The design (``H``).
+
+    Returns
+    -------
+    float or None
+        The largest relative difference, dimensionless.
+    """
     pub = cfg.published.H
     if pub is None:
         return None
@@ -32,7 +49,21 @@ def printed_H_difference(cfg: QppConfig, r: DesignResult) -> float | None:
 
 
 def design_items(cfg: QppConfig, r: DesignResult) -> dict:
-    """Datasets of qpp_design.h5."""
+    """Datasets of qpp_design.h5.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        The config.
+    r : qpp.certificate.DesignResult
+        The design.
+
+    Returns
+    -------
+    dict
+        Name → :class:`common.results.Dataset` (each with its units), for
+        :func:`common.results.write_h5`.
+    """
     items = {
         "K1": Dataset(r.K1, "1", "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
                       dims=("input", "state")),
@@ -134,7 +165,20 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     """Design (ch. 12.1) and write ``<root>/<name>/qpp_design.h5`` (+ circle and iteration figures).
 
     An uncertified design is still written (root attributes ``certified = 0``, ``label =
-    "uncertified"``, ``verdict``); the caller decides the exit code (:class:`DesignError`, 3)."""
+    "uncertified"``, ``verdict``); the caller decides the exit code (:class:`DesignError`, 3).
+
+    Parameters
+    ----------
+    config : qpp.config.QppConfig or path-like or str
+        The config, or a config file / packaged name to load.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+
+    Returns
+    -------
+    tuple
+        (config, :class:`qpp.certificate.DesignResult`, path of ``qpp_design.h5``).
+    """
     cfg = _cfg(config)
     r = design(cfg)
     verdicts = {f"beta1_le_m[{rd},{bk}]": int(v) for (rd, bk), v in r.verdicts().items()}
@@ -155,7 +199,23 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
 def run_simulate(config, figures: bool | None = None, progress=None):
     """Design, simulate every scenario, write ``<root>/<name>/qpp_sim.h5`` (+ figures).
 
-    ``progress(done, total, name)`` is called after each scenario."""
+    ``progress(done, total, name)`` is called after each scenario.
+
+    Parameters
+    ----------
+    config : qpp.config.QppConfig or path-like or str
+        The config, or a config file / packaged name to load.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+    progress : callable, optional
+        ``progress(done, total, name)``.
+
+    Returns
+    -------
+    tuple
+        (config, :class:`qpp.certificate.DesignResult`, list of :class:`qpp.simulate.SimResult`,
+        path of ``qpp_sim.h5``).
+    """
     cfg = _cfg(config)
     r = design(cfg)
     sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
