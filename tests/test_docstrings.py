@@ -85,17 +85,11 @@ CHECKED_MODULES = [m for m in discover_modules() if m not in SHIMS and m not in 
 #: WORK IN PROGRESS -- modules whose docstrings are not yet in line: expected to fail (strict xfail,
 #: so a module brought into line must leave this list).
 NOT_YET = {
-    "acmm.api",
     "acmm.design_output",
     "acmm.parallel_figures",
     "acmm.plots",
     "acmm.stages",
-    "acmm.sweep.case",
-    "acmm.sweep.cases",
     "acmm.sweep.executors",
-    "acmm.sweep.journal",
-    "acmm.sweep.output",
-    "acmm.sweep.run",
     "report.build",
     "report.constants",
     "report.context",
@@ -138,6 +132,10 @@ NO_REPORT_CITATION = {
     "common.plot_style": "matplotlib style of all figures: no mathematics of the report",
     "acmm.warmup": "compiling the numba kernels ahead of time: no mathematics of the report",
     "acmm.sweep_limits": "work bounds of a sweep config: no mathematics of the report",
+    "acmm.sweep.cases": "random draws and grid points of a sweep's cases: no mathematics of the report",
+    "acmm.sweep.journal": "the sweep's append-only journal file: no mathematics of the report",
+    "acmm.sweep.output": "the sweep's HDF5/CSV/figure output: no mathematics of the report",
+    "acmm.sweep.run": "the sweep driver (tasks, executor, journal): no mathematics of the report",
     **{m: "command line: parses, calls and prints, no mathematics (the layer rule)" for m in (
         "cli", "cli.acmm_app", "cli.qpp_app", "cli.acmm_sweep", "cli.acmm_report", "cli.common",
         "cli.progress")},
@@ -156,7 +154,7 @@ NON_PHYSICAL_RE = re.compile(r"\b(int|bool|str)\s+arrays?\b|\barrays? of (int|bo
 #: What counts as a unit statement.
 UNIT_RE = re.compile(
     r"\brad\b|(?<![\w'’])s\b|ft·lbf|slug·ft²|ft\*lbf|slug\*ft|\bkg\b|N·m|\bdeg\b|°|"
-    r"[Dd]imensionless|\b[Uu]nits?\b")
+    r"[Dd]imensionless|\b[Uu]nits?\b|\borbits\b")
 #: A report citation in a module docstring: an equation, a chapter or a table.
 REPORT_RE = re.compile(r"\beqs?\.? ?\d+\.\d+|\bch\. ?\d+|\bTable \d+")
 #: Citations of files outside the repository.
@@ -302,7 +300,11 @@ def returns_value(func) -> bool:
 
 
 def raised_names(func) -> set:
-    """Names of the exception classes the function raises itself (``raise Name(...)``)."""
+    """Names of the exception classes the function raises itself (``raise Name(...)``).
+
+    ``raise factory(...)`` with a lower-case name calls a function that builds the exception
+    (e.g. :func:`common.results.output_error`), whose class the AST cannot tell: not counted.
+    """
     node = _function_ast(func)
     out = set()
     for n in (_own_nodes(node) if node is not None else ()):
@@ -312,7 +314,7 @@ def raised_names(func) -> set:
                 out.add(exc.id)
             elif isinstance(exc, ast.Attribute):
                 out.add(exc.attr)
-    return out
+    return {name for name in out if not name[:1].islower()}
 
 
 def function_problems(func, *, method: bool = False) -> list:

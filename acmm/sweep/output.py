@@ -24,7 +24,22 @@ def _split(sweep: Sweep, records: list[dict]):
 
 
 def table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
-    """Column arrays of the case rows (sorted by base then index)."""
+    """Column arrays of the case rows (sorted by base then index).
+
+    Parameters
+    ----------
+    sweep : acmm.sweep.config.Sweep
+        The sweep.
+    rows : list of dict
+        Case rows (:func:`acmm.sweep.case.run_case`), sorted.
+
+    Returns
+    -------
+    dict
+        Column name → array (N rows) in the rows' units: attitude errors and TEAs deg, momentum
+        ft·lbf·s, times orbits, inertia slug·ft², bias ft·lbf; ``parameters`` a dict of the
+        swept parameters; ``verdict`` and ``reason`` lists of str.
+    """
     names = swept_parameters(sweep.spec)
     labels = [b.label for b in sweep.bases]
     N = len(rows)
@@ -74,7 +89,26 @@ def _nominal_tea_deg(sweep: Sweep) -> dict:
 def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bool = False,
                   wall_time: float | None = None) -> tuple[Path, list]:
     """Build ``sweep.h5`` (atomically, via :func:`acmm.results.write_h5`) and ``sweep.csv`` from
-    the records; with ``figures`` also the stability map and the peak-error distributions."""
+    the records; with ``figures`` also the stability map and the peak-error distributions.
+
+    Parameters
+    ----------
+    sweep : acmm.sweep.config.Sweep
+        The sweep.
+    records : list of dict
+        Journal records (cases and margin searches).
+    complete : bool
+        Every task is done (root attribute ``complete``; False for a snapshot).
+    figures : bool, optional
+        Also write the figures.
+    wall_time : float, optional
+        Wall time of the sweep so far, s (root attribute ``wall_time_s``).
+
+    Returns
+    -------
+    tuple
+        (pathlib.Path of ``sweep.h5``, list of the figure paths).
+    """
     from common.results import Dataset, write_h5
 
     rows, margins = _split(sweep, records)
@@ -172,7 +206,22 @@ def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
 
 
 def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
-    """Stability map over two swept quantities and distributions of the peak attitude error."""
+    """Stability map over two swept quantities and distributions of the peak attitude error.
+
+    Parameters
+    ----------
+    sweep : acmm.sweep.config.Sweep
+        The sweep.
+    a : dict
+        Column arrays of :func:`table_arrays` (their units).
+    run_dir : pathlib.Path
+        Folder of the figures.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The figures written.
+    """
     from acmm.plots import _plt, _save
 
     plt = _plt()
