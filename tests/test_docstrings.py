@@ -88,7 +88,6 @@ NOT_YET = {
     "acmm.design_output",
     "acmm.parallel_figures",
     "acmm.plots",
-    "acmm.stages",
     "acmm.sweep.executors",
     "report.build",
     "report.constants",
