@@ -22,6 +22,22 @@ class SerialExecutor(cf.Executor):
     """Runs each task in the calling process when it is submitted (one worker)."""
 
     def submit(self, fn, /, *args, **kwargs):
+        """Run ``fn(*args, **kwargs)`` now; its result or exception goes into the future.
+
+        Parameters
+        ----------
+        fn : callable
+            The task.
+        *args : tuple
+            Its positional arguments.
+        **kwargs : dict
+            Its keyword arguments.
+
+        Returns
+        -------
+        concurrent.futures.Future
+            A completed future (``KeyboardInterrupt`` is raised, not stored).
+        """
         fut: cf.Future = cf.Future()
         try:
             fut.set_result(fn(*args, **kwargs))
@@ -34,6 +50,18 @@ class SerialExecutor(cf.Executor):
 
 def make_executor(workers: int = 1, scheduler: Optional[str] = None):
     """(executor, close) for ``workers`` local processes or a Dask scheduler address.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local worker processes (≤ 1: :class:`SerialExecutor`, in-process).
+    scheduler : str, optional
+        Dask scheduler address (takes precedence over ``workers``).
+
+    Returns
+    -------
+    tuple
+        (concurrent.futures.Executor, callable that shuts it down).
 
     Raises
     ------
@@ -107,12 +135,37 @@ def chunk_size(n_tasks: int, workers: int) -> int:
     imbalance is then ≤ 1/8 of a worker's share) and never more than ~0.3 s per task.  The cost of
     one task on a scheduler is a fixed few ms, so once a chunk holds more than a few cases that
     cost is a small fraction whatever the number of workers; see README *Performance*.
+
+    Parameters
+    ----------
+    n_tasks : int
+        Number of case tasks.
+    workers : int
+        Number of workers.
+
+    Returns
+    -------
+    int
+        Cases per task.
     """
     return max(1, min(MAX_CHUNK, -(-n_tasks // (CHUNKS_PER_WORKER * max(1, workers)))))
 
 
 def make_chunks(tasks: list, size: int) -> list[list]:
-    """Consecutive case tasks of one base in lists of ``size``; each margin search alone."""
+    """Consecutive case tasks of one base in lists of ``size``; each margin search alone.
+
+    Parameters
+    ----------
+    tasks : list of tuple
+        Tasks ``("case", base, index)`` or ``("margin", base, direction)``, in order.
+    size : int
+        Most case tasks per chunk.
+
+    Returns
+    -------
+    list of list
+        The chunks, in order.
+    """
     chunks: list[list] = []
     for t in tasks:
         if (t[0] == "case" and chunks and len(chunks[-1]) < size and chunks[-1][0][0] == "case"
