@@ -86,11 +86,8 @@ CHECKED_MODULES = [m for m in discover_modules() if m not in SHIMS and m not in 
 #: so a module brought into line must leave this list).
 NOT_YET = {
     "report.build",
-    "report.document",
     "report.figures",
     "report.gather",
-    "report.ledger",
-    "report.manifest",
     "report.sections.errata",
 }
 
@@ -129,6 +126,7 @@ NO_REPORT_CITATION = {
     "report.sections.determinism": "dataset hashes compared between runs: no mathematics",
     "report.sections.printed": "the table of every printed number: no mathematics of its own",
     "report.sections.provenance": "software versions and stage files used: no mathematics",
+    "report.ledger": "comparison of printed and computed numbers: no mathematics of the report",
     **{m: "command line: parses, calls and prints, no mathematics (the layer rule)" for m in (
         "cli", "cli.acmm_app", "cli.qpp_app", "cli.acmm_sweep", "cli.acmm_report", "cli.common",
         "cli.progress")},

@@ -180,7 +180,8 @@ def build(ctx: SectionWriter) -> tuple[float, float]:
     Returns
     -------
     tuple of float
-        (β3 with sin 5t, β3 with sin t), in the units of the output y.
+        (β3 with sin 5t; β3 at the frequency ω of the config's nonlinearity, the sin t
+        reading), in the units of the output y.
     """
     why14 = ("μ (arm mass) and the impulse size are not printed; this run uses μ = {mu:g} kg and impulse "
              "{imp} at t = {ti:g} s (configs/qpp_manipulator.yaml), so the error sizes differ; both stay far "
