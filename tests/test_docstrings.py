@@ -72,6 +72,7 @@ CHECKED_MODULES = [
     "common.runlock",
     "common.configio",
     "qpp.lure",
+    "acmm.schedule_points",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
