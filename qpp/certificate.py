@@ -17,8 +17,10 @@ from qpp import circle as circle_mod
 from qpp import spheres
 from qpp.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinearity
 from qpp.hinf import HinfGains
+from qpp.loop import initial_state, simulate_loop
 from qpp.lure import channels, closed_loop
-from qpp.simulate import config_f1, eval_signal, initial_state, simulate_loop
+from qpp.matched_nonlinearity import config_f1
+from qpp.signals import eval_signal
 
 
 @dataclass

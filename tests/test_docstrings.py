@@ -73,6 +73,9 @@ CHECKED_MODULES = [
     "common.configio",
     "qpp.lure",
     "acmm.schedule_points",
+    "qpp.signals",
+    "qpp.matched_nonlinearity",
+    "qpp.loop",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
