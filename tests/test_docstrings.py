@@ -76,6 +76,7 @@ CHECKED_MODULES = [
     "qpp.signals",
     "qpp.matched_nonlinearity",
     "qpp.loop",
+    "acmm.kinematics",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
