@@ -77,6 +77,8 @@ CHECKED_MODULES = [
     "qpp.matched_nonlinearity",
     "qpp.loop",
     "acmm.kinematics",
+    "common.atomic_write",
+    "common.provenance",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
@@ -91,6 +93,8 @@ NO_REPORT_CITATION = {
     "common.limits": "work and size limits of the programs: no mathematics of the report",
     "common.runlock": "per-run-directory file lock: no mathematics of the report",
     "common.configio": "bounded YAML reading and pydantic validation of configs: no mathematics of the report",
+    "common.atomic_write": "atomic file writing: no mathematics of the report",
+    "common.provenance": "git commit, config hash and creation time of results: no mathematics of the report",
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).
