@@ -79,6 +79,8 @@ CHECKED_MODULES = [
     "acmm.kinematics",
     "common.atomic_write",
     "common.provenance",
+    "qpp.expression_parser",
+    "qpp.nonlin",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
