@@ -81,6 +81,7 @@ CHECKED_MODULES = [
     "common.provenance",
     "qpp.expression_parser",
     "qpp.nonlin",
+    "qpp.thresholds",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
