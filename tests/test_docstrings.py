@@ -82,6 +82,9 @@ CHECKED_MODULES = [
     "qpp.expression_parser",
     "qpp.nonlin",
     "qpp.thresholds",
+    "acmm.sweep.parameters",
+    "acmm.sweep.config",
+    "acmm.sweep.spec",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
