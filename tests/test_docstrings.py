@@ -85,6 +85,7 @@ CHECKED_MODULES = [
     "acmm.sweep.parameters",
     "acmm.sweep.config",
     "acmm.sweep.spec",
+    "acmm.controllability",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
