@@ -20,16 +20,11 @@ from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, ValidationE
 
 from common.errors import ConfigError
 from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
+from common.quantity_fields import quantity, quantity_value
 from common.units import to_canonical
 from common.configio import (DEFAULT_CONFIG, _UniqueKeyLoader, _format_error,  # noqa: F401
                              check_yaml_structure, packaged_config_path, read_config_text,
                              read_yaml, require_mapping, validate_model)
-
-
-def _finite(x: float) -> float:
-    if not math.isfinite(x):
-        raise ValueError("must be a finite number")
-    return x
 
 
 #: |value| bound per dimension, canonical units (issue 13: no overflow accepted); see
@@ -53,9 +48,8 @@ def _plausible(x: float, dimension: str) -> float:
 
 
 def _q(dimension: str):
-    def conv(v):
-        return _plausible(_finite(to_canonical(v, dimension)), dimension)
-    return BeforeValidator(conv)
+    """The quantity validator of the acmm config: finite and within :data:`_RANGE`."""
+    return quantity(dimension, _plausible)
 
 
 def _vec3(dimension: str):
@@ -64,7 +58,7 @@ def _vec3(dimension: str):
             raise ValueError("must be a list of three values [roll, pitch, yaw]")
         if len(v) != 3:
             raise ValueError(f"must have three values [roll, pitch, yaw], got {len(v)}")
-        return [_plausible(_finite(to_canonical(x, dimension)), dimension) for x in v]
+        return [quantity_value(x, dimension, _plausible) for x in v]
     return BeforeValidator(conv)
 
 

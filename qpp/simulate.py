@@ -1,19 +1,14 @@
 """Nonlinear closed-loop simulation of a Lure plant with observer and servo-compensator.
 
-State z = [x; x_c; x̂] (eq 10.7).  With f1 the plant nonlinearity and f1o its nominal value
-(γ = nominal), the loop is (sign conventions of ``docs/ERRATA.md`` § QPP signs and :mod:`qpp.lure`):
+Each scenario runs the loop of eqs 10.2, 10.5–10.7 (integrated by :mod:`qpp.loop`, which states
+it with the sign conventions of ``docs/ERRATA.md`` § QPP signs) with its reference r = r_o + Δr,
+uncertain parameter γ and disturbance impulse.  The nominal output y_o is the same loop with
+r = r_o, γ = nominal and d = 0 (eq 10.29).  The sphere check is
+‖y − y_o‖∞ = max_i sup_t |y_i − y_oi| ≤ β_o (eq 10.35).  The nonlinear feedback terms are
+evaluated at the true state x (the report's φ(x, M, t) in ch. 14 uses x).
 
-    u   = K1 x̂ + Kc x_c − f1o                       (eq 10.6, "computed torque" in ch. 14)
-    x'  = A x + B u + G d + B f1(x, y, γ, t)         (eqs 13.1, 14.2)
-    x_c'= Ac x_c + Bc (r − y)                        (eq 10.2)
-    x̂'  = A x̂ + B u + B f1o + L (y − C x̂),  L = −H  (eq 10.5)
-
-The nominal output y_o is the same loop with r = r_o, γ = nominal and d = 0 (eq 10.29).  The
-sphere check is ‖y − y_o‖∞ = max_i sup_t |y_i − y_oi| ≤ β_o (eq 10.35).  The nonlinear feedback
-terms are evaluated at the true state x (the report's φ(x, M, t) in ch. 14 uses x).
-
-The loop is integrated by :mod:`qpp.loop`, its inputs come from :mod:`qpp.signals` (r, r_o) and
-:mod:`qpp.matched_nonlinearity` (f1, γ); this module runs the scenarios and checks the sphere.
+The loop's inputs come from :mod:`qpp.signals` (r, r_o) and :mod:`qpp.matched_nonlinearity`
+(f1, γ); this module runs the scenarios and checks the sphere.
 """
 from __future__ import annotations
 

@@ -86,6 +86,7 @@ CHECKED_MODULES = [
     "acmm.sweep.config",
     "acmm.sweep.spec",
     "acmm.controllability",
+    "common.quantity_fields",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
@@ -102,6 +103,7 @@ NO_REPORT_CITATION = {
     "common.configio": "bounded YAML reading and pydantic validation of configs: no mathematics of the report",
     "common.atomic_write": "atomic file writing: no mathematics of the report",
     "common.provenance": "git commit, config hash and creation time of results: no mathematics of the report",
+    "common.quantity_fields": "unit conversion of config fields (pydantic validators): no mathematics of the report",
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).
