@@ -87,6 +87,9 @@ CHECKED_MODULES = [
     "acmm.sweep.spec",
     "acmm.controllability",
     "common.quantity_fields",
+    "acmm.config",
+    "acmm.config_fields",
+    "acmm.config_station",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
