@@ -90,6 +90,7 @@ CHECKED_MODULES = [
     "acmm.config",
     "acmm.config_fields",
     "acmm.config_station",
+    "acmm.disk_margin",
 ]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
