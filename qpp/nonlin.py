@@ -1,15 +1,10 @@
 """General sector-bounded nonlinearities written by the user (CR-185644 ch. 10.1, 10.4, lemma 1).
 
 A channel of the matched nonlinearity f1 (f = B f1, eq 10.1) is an expression in the outputs
-``y1 … yp`` (``y`` when p = 1), the time ``t`` and named uncertain parameters with stated ranges.  The expression is
-parsed **without eval**: Python's :mod:`ast` tree is walked node by node and only numbers, the
-whitelisted symbols and the whitelisted functions below are turned into a :mod:`sympy` expression.
-
-Functions: sin cos tan exp log sqrt tanh atan abs sign min max, and the library forms
-
-* ``sat(x, L)``       saturation  max(−L, min(L, x))  (L = 1 by default),
-* ``deadzone(x, w)``  dead zone   x − sat(x, w),
-* ``cubic(x)``        x³ (sector-bounded only on a bounded set: the stated ``y_range``).
+``y1 … yp`` (``y`` when p = 1), the time ``t`` and named uncertain parameters with stated
+ranges, parsed **without eval** into a :mod:`sympy` expression by :mod:`qpp.expression_parser`
+(whitelisted functions, and the library forms ``sat``, ``deadzone`` and ``cubic`` — the cubic is
+sector-bounded only on a bounded set: the stated ``y_range``).
 
 With θ the parameters and θ° their nominal values, the controller cancels f1o = f1(y, t, θ°) and
 the loop sees φ = N (f1(y, t, θ) − f1(y, t, θ°)) through G (B = G N, assumption iii).  From φ this
@@ -21,8 +16,7 @@ module computes, over the stated ranges y ∈ Y, θ ∈ Θ, t ∈ [0, t_range]:
 * β4 (14.8)  = sup_θ max_i ‖(φ_i(y_o(t), θ, t))_T‖₂ along the nominal output y_o.
 
 A bad expression (unknown symbol, unsupported syntax, singular or not sector-bounded on the stated
-range) raises :class:`common.errors.ConfigError` naming the channel and the cause.  The parsing
-lives in :mod:`qpp.expression_parser`.
+range) raises :class:`common.errors.ConfigError` naming the channel and the cause.
 """
 from __future__ import annotations
 
