@@ -7,8 +7,7 @@ class and method (name not starting with ``_``) of every module of the packages 
 docstring in numpydoc layout; every parameter in its signature is documented in a ``Parameters``
 section and every name listed there is a parameter (for a class: a constructor parameter).
 Excluded, each with its reason: compatibility shims that only re-export (:data:`SHIMS`, verified
-by :func:`test_exclusions_are_justified`) and, temporarily, the modules being split on another
-branch (:data:`BEING_SPLIT`).  On top of that, for this project:
+by :func:`test_exclusions_are_justified`).  On top of that, for this project:
 
 * numeric entries (``float``, ``complex``, arrays) of ``Parameters``, ``Returns`` and
   ``Attributes`` state their unit (or say ``dimensionless`` / name the units they follow);
@@ -69,15 +68,6 @@ SHIMS = {
     "acmm.sweep_config": "acmm.sweep.config",
 }
 
-#: TEMPORARY -- being split, checked by the split branch.  These modules are being split into
-#: smaller files by another branch in parallel (issue 12) and were not yet under this test; their
-#: docstrings are brought into line there.  The integrator removes this list after merging.
-BEING_SPLIT = {
-    "acmm.config": "being split (issue 12); checked by the split branch",
-    "acmm.sweep.config": "being split (issue 12); checked by the split branch",
-    "qpp.config": "being split (issue 12); checked by the split branch",
-    "qpp.nonlin": "being split (issue 12); checked by the split branch",
-}
 
 
 def discover_modules() -> list:
@@ -92,10 +82,13 @@ def discover_modules() -> list:
 
 
 #: Modules whose public API is checked: every module of :data:`PACKAGES` but the exclusions.
-CHECKED_MODULES = [m for m in discover_modules() if m not in SHIMS and m not in BEING_SPLIT]
+CHECKED_MODULES = [m for m in discover_modules() if m not in SHIMS]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
 NO_REPORT_CITATION = {
+    "common.atomic_write": "atomic file writing: no mathematics of the report",
+    "common.provenance": "git commit, config hash and creation time of results: no mathematics of the report",
+    "common.quantity_fields": "unit conversion of config fields (pydantic validators): no mathematics of the report",
     "common.errors": "exception classes and exit codes: no mathematics of the report",
     "common.schema": "JSON-schema generation of config files: no mathematics of the report",
     "acmm.schema": "JSON schemas of config files: no mathematics of the report",
@@ -506,17 +499,14 @@ def _only_reexports(path: Path) -> bool:
 
 
 def test_exclusions_are_justified():
-    """Each shim only re-exports a module that is itself checked; the temporary list of modules
-    being split names existing modules."""
+    """Each shim only re-exports a module that is itself checked."""
     found = set(discover_modules())
     for shim, target in SHIMS.items():
         assert shim in found, f"{shim} no longer exists: drop it from SHIMS"
         parent, _, leaf = shim.rpartition(".")     # not find_spec: some shims replace themselves
         path = Path(importlib.import_module(parent).__path__[0]) / f"{leaf}.py"   # in sys.modules
         assert _only_reexports(path), f"{shim} defines code of its own: check it, it is no shim"
-        assert target in CHECKED_MODULES or target in BEING_SPLIT, target
-    for name in BEING_SPLIT:
-        assert name in found, f"{name} no longer exists: drop it from BEING_SPLIT"
+        assert target in CHECKED_MODULES, target
 
 
 def test_errata_sections_are_read():
