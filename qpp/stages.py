@@ -48,6 +48,35 @@ def printed_H_difference(cfg: QppConfig, r: DesignResult) -> float | None:
     return float(_rel(r.H, pub)[np.abs(np.asarray(pub, float)) > 0].max())
 
 
+def _published_certificate_items(pb) -> dict:
+    """Datasets of the certificate of the printed gains (β1 both readings, β3/β4/m, circle)."""
+    return {
+        "beta1_eq10_7": Dataset(pb.beta1["eq10.7"]["value"], "1", "beta1 of the printed gains, B_z eq 10.7"),
+        "beta1_printed": Dataset(pb.beta1["printed"]["value"], "1", "beta1 of the printed gains, printed B_z"),
+        "thresholds": Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in pb.thresholds]), "1",
+                              "β3, β4, m of the printed gains per bookkeeping: "
+                              + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"]),
+        "circle_passed": Dataset(int(pb.circle.passed), "1", "circle criterion with the printed gains"),
+        "T": Dataset(pb.T, "s", "truncation time used"),
+    }
+
+
+def _printed_gain_items(pub, H) -> dict:
+    """Datasets of the printed gains of the config's ``published`` section ({} when absent)."""
+    if pub.K1 is None or pub.Kc is None:
+        return {}
+    items = {
+        "K1": Dataset(np.asarray(pub.K1, float), "1", "printed K1", dims=("input", "state")),
+        "Kc": Dataset(np.asarray(pub.Kc, float), "1", "printed Kc", dims=("input", "servo_state")),
+    }
+    if pub.H is not None:
+        items["H"] = Dataset(np.asarray(pub.H, float), "1", "printed H", dims=("state", "output"))
+        items["H_rel_diff"] = Dataset(
+            np.where(np.abs(np.asarray(pub.H)) > 0, _rel(H, pub.H), 0.0), "1", "|H − H_printed|/|H_printed|",
+            dims=("state", "output"))
+    return items
+
+
 def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     """Datasets of qpp_design.h5.
 
@@ -96,16 +125,7 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         "ws_scale": Dataset(np.asarray(r.ws_scale or [1.0], float), "1", "W_s = diag(w)·S_c of the gains"),
     }
     if r.published is not None:
-        pb = r.published
-        items["published_certificate"] = {
-            "beta1_eq10_7": Dataset(pb.beta1["eq10.7"]["value"], "1", "beta1 of the printed gains, B_z eq 10.7"),
-            "beta1_printed": Dataset(pb.beta1["printed"]["value"], "1", "beta1 of the printed gains, printed B_z"),
-            "thresholds": Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in pb.thresholds]), "1",
-                                  "β3, β4, m of the printed gains per bookkeeping: "
-                                  + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"]),
-            "circle_passed": Dataset(int(pb.circle.passed), "1", "circle criterion with the printed gains"),
-            "T": Dataset(pb.T, "s", "truncation time used"),
-        }
+        items["published_certificate"] = _published_certificate_items(r.published)
     for reading in r.beta1:
         key = reading.replace(".", "_")
         b = r.beta1[reading]
@@ -127,17 +147,9 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         "encirclements": Dataset(c.encirclements, "1", "N_ci (clockwise)", dims=("channel",)),
         "max_scale": Dataset(c.max_scale, "1", "largest s with sector s·[α, β] passing"),
     }
-    pub = cfg.published
-    if pub.K1 is not None and pub.Kc is not None:
-        items["published"] = {
-            "K1": Dataset(np.asarray(pub.K1, float), "1", "printed K1", dims=("input", "state")),
-            "Kc": Dataset(np.asarray(pub.Kc, float), "1", "printed Kc", dims=("input", "servo_state")),
-        }
-        if pub.H is not None:
-            items["published"]["H"] = Dataset(np.asarray(pub.H, float), "1", "printed H", dims=("state", "output"))
-            items["published"]["H_rel_diff"] = Dataset(
-                np.where(np.abs(np.asarray(pub.H)) > 0, _rel(r.H, pub.H), 0.0), "1", "|H − H_printed|/|H_printed|",
-                dims=("state", "output"))
+    printed = _printed_gain_items(cfg.published, r.H)
+    if printed:
+        items["published"] = printed
     return items
 
 
