@@ -123,7 +123,12 @@ def fig_claim1(mb3: dict, dec: dict, figdir: Path):
 
 
 def fig_staircase(sim: dict, figdir: Path):
-    """Inertia steps (Figs 6.14–6.19) and the responses (Figs 6.20–6.30)."""
+    """Inertia steps (Figs 6.14–6.19), the responses (Figs 6.20–6.30) and the per-level statistics."""
+    return fig_staircase_inertia(sim, figdir), fig_staircase_responses(sim, figdir), fig_staircase_levels(sim, figdir)
+
+
+def fig_staircase_inertia(sim: dict, figdir: Path):
+    """Inertia elements vs time (Figs 6.14–6.19)."""
     from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
@@ -138,7 +143,15 @@ def fig_staircase(sim: dict, figdir: Path):
         ax.set_xlabel("time (orbits)")
     fig1.suptitle("Inertia variation MB3 → AC (Figs 6.14–6.19 analogue)", fontsize=10)
     fig1.tight_layout()
-    f1 = save(fig1, figdir, "staircase_inertia")
+    return save(fig1, figdir, "staircase_inertia")
+
+
+def fig_staircase_responses(sim: dict, figdir: Path):
+    """Attitude error, rate, torque and momentum per axis (Figs 6.20–6.30)."""
+    from report.figure_style import COLORS, pyplot, save
+
+    plt = pyplot()
+    o = sim["orbits"]
     fig2, axs = plt.subplots(4, 3, figsize=(11, 10), sharex=True)
     rows = [(np.degrees(sim["attitude_error"]), "attitude error θ − θ̂* (deg)"),
             (np.degrees(sim["rate_rel_lvlh"]), "body rate rel. LVLH (deg/s)"),   # stored in rad/s
@@ -158,7 +171,14 @@ def fig_staircase(sim: dict, figdir: Path):
     fig2.suptitle("Gain-scheduled responses, inertia MB3 → AC (Figs 6.20–6.30 analogue; dotted: level changes)",
                   fontsize=10)
     fig2.subplots_adjust(left=0.08, right=0.985, bottom=0.055, top=0.94, wspace=0.28, hspace=0.12)  # issue 16
-    f2 = save(fig2, figdir, "staircase_responses")
+    return save(fig2, figdir, "staircase_responses")
+
+
+def fig_staircase_levels(sim: dict, figdir: Path):
+    """Steady attitude error and peak momentum per inertia level."""
+    from report.figure_style import COLORS, pyplot, save
+
+    plt = pyplot()
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
     th = np.degrees(sim["levels"]["tea_estimate"][:, 1])[: len(sim["levels"]["steady_error"])]
     for a in range(3):
@@ -173,8 +193,7 @@ def fig_staircase(sim: dict, figdir: Path):
     axs[1].set_title("Peak momentum per level")
     axs[1].legend()
     fig3.tight_layout()
-    f3 = save(fig3, figdir, "staircase_levels")
-    return f1, f2, f3
+    return save(fig3, figdir, "staircase_levels")
 
 
 def fig_robustness(params: dict, base, verdict, peak, names, figdir: Path):
