@@ -39,6 +39,8 @@ class ReportResult:
     #: wall time (s) of the stages, of each stage and of each section, and the total CPU (issue 16)
     timings: dict = field(default_factory=dict)
     jobs: int = 1                   #: processes that ran the stages and sections
+    #: per task of the graph (stages and section parts): (wall s, CPU s of the process that ran it)
+    tasks: dict = field(default_factory=dict)
 
     @property
     def unexplained(self) -> list:
@@ -114,6 +116,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     say(f"wrote {out / 'index.html'} ({len(figs)} figures) in {time.perf_counter() - t_start:.1f} s")
     res = ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),
                        rep.ledger, cmp, time.perf_counter() - t_start)
+    res.tasks = timings.pop("tasks")
     res.timings = {**timings, "total": res.wall_time, "cpu (all processes)": _cpu() - cpu0}
     res.jobs = jobs
     return res
@@ -137,6 +140,7 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
     names = {t.name for t in stages}
     parts = section_tasks(g, figdir, fast, names, rep._results if jobs == 1 else None)
     timings: dict[str, float] = {"stages": 0.0}
+    stats: dict[str, tuple] = {}
 
     def on_done(name, result):
         if name in names:
@@ -150,7 +154,7 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
 
         parallel_figures.enable()        # opt-in (ACMM_PARALLEL_FIGURES=1): forked figure writers
     try:
-        done = run_tasks(stages + parts, jobs, on_done, warm=warm_workers)
+        done = run_tasks(stages + parts, jobs, on_done, warm=warm_workers, stats=stats)
     finally:
         if jobs == 1:
             parallel_figures.wait()
@@ -162,6 +166,7 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
         say(f"  section {key:<12} {sec:6.2f} s")
     timings.update(g.timings)
     timings.update({f"section {k}": v for k, v in sections.items()})
+    timings["tasks"] = stats
     return g, rep, timings
 
 

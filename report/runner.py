@@ -75,7 +75,7 @@ def default_jobs() -> int:
 
 
 def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str, object], None]] = None,
-              warm: Optional[Callable[[], None]] = None) -> dict:
+              warm: Optional[Callable[[], None]] = None, stats: Optional[dict] = None) -> dict:
     """Run ``tasks`` (a list in a valid serial order) and return ``{name: result}``.
 
     Parameters
@@ -88,19 +88,24 @@ def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str,
         Called in this process after each task, in completion order.
     warm : callable, optional
         Called once in this process before the workers are forked (imports they all need).
+    stats : dict, optional
+        Filled with ``name → (wall s, CPU s)`` of each task (CPU of the process that ran it).
     """
     _check(tasks)
     on_done = on_done or (lambda name, result: None)
+    stats = {} if stats is None else stats
     done: dict[str, object] = {}
     if jobs <= 1 or len(tasks) <= 1 or not hasattr(os, "fork"):
-        for t in tasks:
+        for t in tasks:              # errors propagate unchanged
+            t0, c0 = time.perf_counter(), time.process_time()
             done[t.name] = t.fn(*t.args(done))
+            stats[t.name] = (time.perf_counter() - t0, time.process_time() - c0)
             on_done(t.name, done[t.name])
         return done
     _prioritize(tasks)
     if warm is not None:
         warm()
-    _run_pool(tasks, jobs, done, on_done)
+    _run_pool(tasks, jobs, done, on_done, stats)
     return done
 
 
@@ -123,7 +128,7 @@ def _prioritize(tasks: list[Task]) -> None:
         t.priority = t.cost + max((s.priority for s in after[t.name]), default=0.0)
 
 
-def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done) -> None:
+def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict) -> None:
     import multiprocessing
 
     waiting = list(tasks)
@@ -141,7 +146,9 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done) -> None:
             finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
             for fut in finished:
                 t = running.pop(fut)
-                done[t.name] = _unwrap(fut)
+                out = _result(fut)
+                stats[t.name] = out[-2:]
+                done[t.name] = _unwrap_value(out)
                 on_done(t.name, done[t.name])
     except BaseException:
         pool.shutdown(wait=True, cancel_futures=True)
@@ -164,26 +171,32 @@ def _worker_init(parent: int) -> None:
 
 
 def _call(fn, args):
-    """Run ``fn(*args)``; an :class:`AcmmError` comes back as data (its class may not pickle)."""
+    """Run ``fn(*args)``: ``("ok", result, wall, cpu)``, or an :class:`AcmmError` as data
+    ``("error", module, class name, message, exit code, wall, cpu)`` (its class may not pickle)."""
+    t0, c0 = time.perf_counter(), time.process_time()
     try:
-        return ("ok", fn(*args))
+        out = ("ok", fn(*args))
     except AcmmError as exc:
         cls = type(exc)
-        return ("error", cls.__module__, cls.__qualname__, str(exc), getattr(exc, "exit_code", None))
+        out = ("error", cls.__module__, cls.__qualname__, str(exc), getattr(exc, "exit_code", None))
+    return out + (time.perf_counter() - t0, time.process_time() - c0)
 
 
-def _unwrap(fut: cf.Future):
+def _result(fut: cf.Future) -> tuple:
     from concurrent.futures.process import BrokenProcessPool
 
     try:
-        out = fut.result()
+        return fut.result()
     except BrokenProcessPool:
         from common.errors import OutputError
 
         raise OutputError("a report worker process died (killed, or out of memory); nothing was written") from None
+
+
+def _unwrap_value(out: tuple):
     if out[0] == "ok":
         return out[1]
-    raise _rebuild(*out[1:])
+    raise _rebuild(*out[1:5])
 
 
 def _rebuild(module: str, qualname: str, message: str, exit_code) -> AcmmError:
@@ -201,10 +214,3 @@ def _rebuild(module: str, qualname: str, message: str, exit_code) -> AcmmError:
     if exit_code is not None:
         exc.exit_code = exit_code
     return exc
-
-
-def elapsed(fn: Callable, *args):
-    """``(fn(*args), wall seconds)``."""
-    t0 = time.perf_counter()
-    out = fn(*args)
-    return out, time.perf_counter() - t0
