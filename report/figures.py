@@ -262,6 +262,8 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
 
 def fig_circle(design: dict, name: str, figdir: Path):
     """Circle criterion (lemma 1): h_ii(−a + jω) with Gershgorin mean radii and the critical disc."""
+    from matplotlib.collections import PatchCollection
+
     from report.figure_style import COLORS, pyplot, save
     from qpp.circle import critical_disc
 
@@ -273,8 +275,10 @@ def fig_circle(design: dict, name: str, figdir: Path):
     for i in range(m):
         ax = axs[0, i]
         h = centres[i]
-        for k in np.unique(np.linspace(0, h.size - 1, 150).astype(int)):
-            ax.add_patch(plt.Circle((h[k].real, h[k].imag), radii[i, k], fill=False, lw=0.3, color="0.7"))
+        # the Gershgorin circles as one collection (one artist instead of 150, issue 16)
+        ax.add_collection(PatchCollection([plt.Circle((h[k].real, h[k].imag), radii[i, k]) for k in
+                                           np.unique(np.linspace(0, h.size - 1, 150).astype(int))],
+                                          facecolor="none", edgecolor="0.7", linewidths=0.3))
         ax.plot(h.real, h.imag, color=COLORS[0], label="h_ii(−a + jω), ω ≥ 0")
         ax.plot(h.real, -h.imag, "--", color=COLORS[0], lw=0.7, label="ω ≤ 0")
         al, be = sector[i]
