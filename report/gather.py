@@ -177,8 +177,9 @@ def _sweep_task(root, fast, rerun, workers):
 
 
 #: rough run times (s) of the stages on one idle core, only to order the parallel tasks
-_COST = {"design:staircase": 1.5, "simulate:mb3": 0.5, "qpp design:qpp_siso": 2.5, "qpp simulate:qpp_siso": 2.0,
-         "qpp design:qpp_manipulator": 0.8, "qpp simulate:qpp_manipulator": 1.3, "sweep": 2.5}
+_COST = {"design:staircase": 1.2, "simulate:staircase": 0.4, "qpp design:qpp_siso": 2.0,
+         "qpp simulate:qpp_siso": 1.9, "qpp design:qpp_manipulator": 1.8, "qpp simulate:qpp_manipulator": 1.4,
+         "sweep": 2.7}
 
 
 def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rerun: bool = False,
@@ -196,10 +197,10 @@ def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rer
     for name in ("mb3", "mb3_decoupled", "ac", "staircase"):
         donors = [full.run_dir()] if cfgs[name].name != full.name else []
         tasks.append(Task(f"design:{name}", _design_task, (), _const(cfgs[name], rerun, donors),
-                          _COST.get(f"design:{name}", 0.3)))
+                          _COST.get(f"design:{name}", 0.1)))
     for name in ("mb3", "mb3_decoupled", "staircase"):
         tasks.append(Task(f"simulate:{name}", _simulate_task, (f"design:{name}",), _const(cfgs[name], rerun),
-                          _COST.get(f"simulate:{name}", 0.3 if not fast else 0.1)))
+                          _COST.get(f"simulate:{name}", 0.1) if not fast else 0.1))
     for name in ("qpp_siso", "qpp_manipulator"):
         for stage, deps in (("design", ()), ("simulate", (f"qpp design:{name}",))):
             tasks.append(Task(f"qpp {stage}:{name}", _qpp_task, deps, _const(cfgs[name], stage, rerun),

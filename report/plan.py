@@ -51,27 +51,30 @@ def _simulate(c):
 
 
 #: (task name, section, function, stage tasks it reads, parts whose values it takes, rough cost in s)
+_STAIR, _MB3, _DEC = _design("staircase"), _design("mb3"), _design("mb3_decoupled")
+_SIM = _simulate("staircase")
+_Q13 = ("qpp design:qpp_siso", "qpp simulate:qpp_siso")
+_Q14 = ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator")
 PARTS = [
     ("table1", "table1", table1.build, (), (), 0.1),
-    ("schedule", "schedule", schedule.summary, (_design("staircase"),), (), 0.3),
-    ("schedule/paths", "schedule", schedule.path_figures, (_design("staircase"),), (), 0.9),
-    ("poles", "schedule", schedule.true_poles, (_design("mb3"), _design("mb3_decoupled")), (), 0.05),
-    ("schedule/figures", "schedule", schedule.figures,
-     (_design("staircase"), _design("mb3"), _design("mb3_decoupled")), ("poles",), 2.0),
-    ("claim1", "claim1", claim1.build, (_design("mb3"), _design("mb3_decoupled"), _simulate("mb3"),
-                                        _simulate("mb3_decoupled")), ("poles",), 1.3),
-    ("staircase", "staircase", staircase.summary, (_simulate("staircase"),), (), 0.1),
-    ("staircase/inertia", "staircase", staircase.figure_inertia, (_simulate("staircase"),), (), 0.7),
-    ("staircase/responses", "staircase", staircase.figure_responses, (_simulate("staircase"),), (), 1.0),
-    ("staircase/levels", "staircase", staircase.figure_levels, (_simulate("staircase"),), (), 0.4),
-    ("robustness", "robustness", robustness.build, ("sweep",), (), 0.7),
-    ("qpp13", "qpp13", qpp.text13, ("qpp design:qpp_siso", "qpp simulate:qpp_siso"), (), 0.5),
-    ("qpp13/figures", "qpp13", qpp.figures13, ("qpp design:qpp_siso", "qpp simulate:qpp_siso"), (), 1.0),
-    ("qpp14", "qpp14", qpp.text14, ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator"), (), 0.3),
-    ("qpp14/figures", "qpp14", qpp.figures14, ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator"),
-     (), 1.6),
-    ("errata", "errata", errata.build, (_design("staircase"), _simulate("staircase"), "qpp design:qpp_siso"),
-     ("table1", "claim1", "qpp13"), 0.3),
+    ("schedule", "schedule", schedule.summary, (_STAIR,), (), 0.2),
+    ("schedule/paths", "schedule", schedule.path_figures, (_STAIR,), (), 1.4),
+    ("poles", "schedule", schedule.true_poles, (_MB3, _DEC), (), 0.05),
+    ("schedule/gains", "schedule", schedule.gain_figure, (_STAIR,), (), 2.6),
+    ("schedule/poles", "schedule", schedule.pole_figure, (_STAIR, _MB3, _DEC), ("poles",), 0.5),
+    ("claim1", "claim1", claim1.build, (_MB3, _DEC, _simulate("mb3"), _simulate("mb3_decoupled")), ("poles",), 1.6),
+    ("staircase", "staircase", staircase.summary, (_SIM,), (), 0.1),
+    ("staircase/inertia", "staircase", staircase.figure_inertia, (_SIM,), (), 0.9),
+    ("staircase/responses", "staircase", staircase.figure_responses, (_SIM,), (), 1.1),
+    ("staircase/levels", "staircase", staircase.figure_levels, (_SIM,), (), 0.6),
+    ("robustness", "robustness", robustness.build, ("sweep",), (), 0.9),
+    ("qpp13", "qpp13", qpp.text13, _Q13, (), 0.1),
+    ("qpp13/circle", "qpp13", qpp.circle13, _Q13, (), 0.4),
+    ("qpp13/responses", "qpp13", qpp.responses13, _Q13, (), 1.2),
+    ("qpp14", "qpp14", qpp.text14, _Q14, (), 0.1),
+    ("qpp14/circle", "qpp14", qpp.circle14, _Q14, (), 0.8),
+    ("qpp14/responses", "qpp14", qpp.responses14, _Q14, (), 2.0),
+    ("errata", "errata", errata.build, (_STAIR, _SIM, "qpp design:qpp_siso"), ("table1", "claim1", "qpp13"), 0.5),
 ]
 
 

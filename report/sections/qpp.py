@@ -70,13 +70,22 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures:
 
 def _figures(ctx: SectionWriter, key, name, out_labels) -> None:
     """The chapter's circle-criterion and response figures."""
+    _circle_figure(ctx, key, name)
+    _responses_figure(ctx, key, name, out_labels)
+
+
+def _circle_figure(ctx: SectionWriter, key, name) -> None:
+    chap = "13" if key == "qpp13" else "14"
+    ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion",
+                fig_circle(ctx.data(f"qpp design:{name}"), name, ctx.figdir))
+
+
+def _responses_figure(ctx: SectionWriter, key, name, out_labels) -> None:
     chap = "13" if key == "qpp13" else "14"
     cfg = ctx.g.configs[name]
-    d = ctx.data(f"qpp design:{name}")
-    spath = ctx.run(f"qpp simulate:{name}").path
-    ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion", fig_circle(d, name, ctx.figdir))
     ctx.doc.fig(f"{name}_responses", f"Ch. {chap}: outputs vs nominal outputs and tracking errors",
-                fig_qpp(spath, d, cfg.spheres.beta_o, name, ctx.figdir, out_labels))
+                fig_qpp(ctx.run(f"qpp simulate:{name}").path, ctx.data(f"qpp design:{name}"), cfg.spheres.beta_o,
+                        name, ctx.figdir, out_labels))
 
 
 
@@ -195,8 +204,18 @@ def text13(ctx: SectionWriter) -> tuple[float, float]:
 
 
 def figures13(ctx: SectionWriter) -> None:
-    """Chapter 13's figures."""
+    """Chapter 13's figures (:func:`circle13`, :func:`responses13`)."""
     _figures(ctx, "qpp13", "qpp_siso", _OUT13)
+
+
+def circle13(ctx: SectionWriter) -> None:
+    """Chapter 13's circle-criterion figure."""
+    _circle_figure(ctx, "qpp13", "qpp_siso")
+
+
+def responses13(ctx: SectionWriter) -> None:
+    """Chapter 13's responses figure."""
+    _responses_figure(ctx, "qpp13", "qpp_siso", _OUT13)
 
 
 def text14(ctx: SectionWriter) -> None:
@@ -209,8 +228,18 @@ def text14(ctx: SectionWriter) -> None:
 
 
 def figures14(ctx: SectionWriter) -> None:
-    """Chapter 14's figures."""
+    """Chapter 14's figures (:func:`circle14`, :func:`responses14`)."""
     _figures(ctx, "qpp14", "qpp_manipulator", _OUT14)
+
+
+def circle14(ctx: SectionWriter) -> None:
+    """Chapter 14's circle-criterion figure."""
+    _circle_figure(ctx, "qpp14", "qpp_manipulator")
+
+
+def responses14(ctx: SectionWriter) -> None:
+    """Chapter 14's responses figure."""
+    _responses_figure(ctx, "qpp14", "qpp_manipulator", _OUT14)
 
 
 def build(ctx: SectionWriter) -> tuple[float, float]:
