@@ -65,12 +65,18 @@ class Task:
 
 
 def default_jobs() -> int:
-    """Worker processes for the report: ``ACMM_REPORT_JOBS`` if set, else min(2, CPUs); 1 without fork."""
+    """Worker processes for the report: ``ACMM_REPORT_JOBS`` if set, else min(2, CPUs); 1 without
+    ``os.fork`` or when this process runs other threads (forking a multi-threaded process, e.g. one
+    holding a Dask client, can deadlock the child)."""
+    import threading
+
     if not hasattr(os, "fork"):
         return 1
     env = os.environ.get("ACMM_REPORT_JOBS", "").strip()
     if env.isdigit() and int(env) > 0:
         return int(env)
+    if threading.active_count() > 1:
+        return 1
     return max(1, min(2, os.cpu_count() or 1))
 
 

@@ -161,3 +161,22 @@ def test_report_failure_in_a_worker_is_one_line_and_writes_nothing(tmp_path, mon
     assert not any(line.startswith("Traceback") for line in lines)
     assert not (out / "index.html").exists() and not (out / "report.md").exists()
     assert not (out / "manifest.json").exists()
+
+
+def test_default_jobs(monkeypatch):
+    import threading
+
+    from report.runner import default_jobs
+
+    monkeypatch.setenv("ACMM_REPORT_JOBS", "3")
+    assert default_jobs() == 3
+    monkeypatch.delenv("ACMM_REPORT_JOBS")
+    assert default_jobs() == (1 if threading.active_count() > 1 else max(1, min(2, os.cpu_count() or 1)))
+    stop = threading.Event()
+    t = threading.Thread(target=stop.wait)
+    t.start()
+    try:
+        assert default_jobs() == 1                    # no fork beside other threads
+    finally:
+        stop.set()
+        t.join()
