@@ -87,15 +87,21 @@ def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, resul
     (a part waits only for those), ``results``: the shared cache of read files when serial."""
     tasks = []
     for name, _, fn, stage_deps, value_deps, cost in PARTS:
-        if name == "errata":
-            values = _errata_values
-        else:
-            values = (lambda deps: (lambda done: tuple(done[d].value for d in deps)))(value_deps)
+        values = _errata_values if name == "errata" else _values_of(value_deps)
         deps = tuple(d for d in stage_deps if d in stage_names) + value_deps
-        tasks.append(Task(name, run_part, deps,
-                          (lambda fn, values: (lambda done: (fn, g, figdir, fast, values(done), results)))(fn, values),
-                          cost))
+        tasks.append(Task(name, run_part, deps, _part_args(fn, values, g, figdir, fast, results), cost))
     return tasks
+
+
+def _values_of(deps: tuple):
+    """``done → (value of each part in deps)``."""
+    return lambda done: tuple(done[d].value for d in deps)
+
+
+def _part_args(fn, values, g, figdir, fast, results):
+    """``done → arguments of run_part`` (built when the part is submitted: ``g`` then holds the
+    stages it reads)."""
+    return lambda done: (fn, g, figdir, fast, values(done), results)
 
 
 def assemble(rep: SectionWriter, done: dict, timings: dict) -> None:

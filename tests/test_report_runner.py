@@ -91,20 +91,24 @@ def test_a_worker_that_dies_is_one_clear_error():
 def _claim1_graph(root, figdir, jobs):
     """The MB3 stages and the parts that read them (claim-1 poles and section), as in build_report."""
     from report.context import SectionWriter
-    from report.gather import Gathered, keep_stage, order_runs, report_configs, stage_tasks, warm_workers
-    from report.plan import PARTS, run_part
+    from report.gather import (
+        Gathered,
+        keep_stage,
+        order_runs,
+        report_configs,
+        stage_tasks,
+        warm_workers,
+    )
+    from report.plan import PARTS, _part_args, _values_of, run_part
 
     g = Gathered(report_configs(root), {})
     stages = [t for t in stage_tasks(g.configs, root, robustness=False, jobs=jobs)
               if t.name.endswith((":mb3", ":mb3_decoupled"))]
     rep = SectionWriter(g, figdir, False)
     by_name = {p[0]: p for p in PARTS}
-    parts = []
-    for name in ("poles", "claim1"):
-        _, _, fn, sdeps, vdeps, _ = by_name[name]
-        parts.append(Task(name, run_part, sdeps + vdeps,
-                          (lambda fn, vdeps: lambda d: (fn, g, figdir, False, tuple(d[v].value for v in vdeps),
-                                                        rep._results if jobs == 1 else None))(fn, vdeps)))
+    parts = [Task(name, run_part, by_name[name][3] + by_name[name][4],
+                  _part_args(by_name[name][2], _values_of(by_name[name][4]), g, figdir, False,
+                             rep._results if jobs == 1 else None)) for name in ("poles", "claim1")]
     names = {t.name for t in stages}
     done = run_tasks(stages + parts, jobs, lambda n, r: keep_stage(g, n, r, lambda s: None) if n in names else None,
                      warm=warm_workers)
@@ -144,10 +148,11 @@ def _broken_qpp(cfg, stage, rerun):
 
 
 def test_report_failure_in_a_worker_is_one_line_and_writes_nothing(tmp_path, monkeypatch):
+    import sys
+
     from typer.testing import CliRunner
 
     from cli.acmm_app import app
-    import sys
 
     gather_mod = sys.modules["report.gather"]
 

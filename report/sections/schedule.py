@@ -26,7 +26,6 @@ def summary(ctx: SectionWriter) -> None:
     ctx.section("schedule")
     d = ctx.data("acmm design:" + ctx.g.configs["staircase"].name)
     cfg = ctx.g.configs["staircase"]
-    n = cfg.orbit_rate
     sc = d["schedule"]
     form = d["attrs"].get("schedule_form", "polynomial")
     order = sc["coef"].shape[0] - 1
