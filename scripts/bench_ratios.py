@@ -123,7 +123,7 @@ def _report_block(fast: bool, jobs) -> None:
         print(f"   {label:<10} {r['process_wall']:6.1f} s wall, {r['process_cpu']:6.1f} s CPU for the whole "
               f"process (report itself {r['wall']:.1f} s; {load}); determinism {r['determinism']}")
     keys = [k for k in runs[0][2]["timings"] if k.startswith("section ")]
-    print(f"   {'wall time (s) per section':<34} {'fresh':>7} {'reuse':>7}")
+    print(f"   {'wall time (s) per section (its parts)':<34} {'fresh':>7} {'reuse':>7}")
     for k in keys:
         print(f"   {k:<34} " + " ".join(f"{r['timings'].get(k, 0.0):7.2f}" for _, _, r in runs))
     stages = sorted(((k, w, c) for k, (w, c) in runs[0][2]["tasks"].items() if ":" in k or k == "sweep"),
