@@ -32,6 +32,9 @@ def register(app: typer.Typer) -> None:
                                                           "same config hash exist (determinism check)"),
         root: Optional[Path] = typer.Option(None, "--root", help="results root of the stages "
                                                                  "(default: each config's output.root, 'runs')"),
+        jobs: Optional[int] = typer.Option(None, "--jobs", min=1, help="processes running the stages and "
+                                           "sections (default: 2 on a multi-core machine, or ACMM_REPORT_JOBS); "
+                                           "1: one after the other; the output is the same"),
     ) -> None:
         """Every figure and table of CR-185644 regenerated and compared with the printed values;
         writes <out>/index.html (self-contained) and <out>/report.md."""
@@ -43,12 +46,13 @@ def register(app: typer.Typer) -> None:
             sys.stderr.write(msg + "\n")
             sys.stderr.flush()
 
-        r = build_report(out, fast=fast, rerun=rerun, root=root, progress=say)
+        r = build_report(out, fast=fast, rerun=rerun, root=root, progress=say, jobs=jobs)
         counts: dict[str, int] = {}
         for p in r.ledger:
             counts[p.status] = counts.get(p.status, 0) + 1
         typer.echo(f"report: {len(r.sections)} sections, {len(r.figures)} figures, "
-                   f"{len(r.stages)} result files ({sum(s.reused for s in r.stages)} reused) in {r.wall_time:.1f} s")
+                   f"{len(r.stages)} result files ({sum(s.reused for s in r.stages)} reused) in {r.wall_time:.1f} s "
+                   f"({r.jobs} process{'es' if r.jobs > 1 else ''})")
         typer.echo("  printed numbers: " + "; ".join(f"{v} {k}" for k, v in sorted(counts.items())))
         d = r.determinism
         typer.echo(f"  determinism: {d['status']}" +

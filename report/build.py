@@ -15,19 +15,14 @@ from common.results import write_text
 from report.constants import SECTIONS
 from report.context import SectionWriter
 from report.document import render_html, render_markdown
-from report.gather import gather
+from report.gather import Gathered, keep_stage, order_runs, report_configs, stage_tasks, warm_workers
 from report.ledger import STATUS_UNEXPLAINED
 from report.manifest import build_manifest, compare_manifests
-from report.sections import claim1 as sec_claim1
+from report.plan import assemble, section_tasks
+from report.runner import default_jobs, run_tasks
 from report.sections import determinism as sec_determinism
-from report.sections import errata as sec_errata
 from report.sections import printed as sec_printed
 from report.sections import provenance as sec_provenance
-from report.sections import qpp as sec_qpp
-from report.sections import robustness as sec_robustness
-from report.sections import schedule as sec_schedule
-from report.sections import staircase as sec_staircase
-from report.sections import table1 as sec_table1
 
 
 @dataclass
@@ -70,8 +65,11 @@ class ReportResult:
     determinism: dict
     wall_time: float
     sections: list = field(default_factory=lambda: [k for k, _ in SECTIONS])
-    #: wall time (s) of the gathering, of each stage group and of each section (issue 16)
+    #: wall time (s) of the stages, of each stage and of each section, and the total CPU (issue 16)
     timings: dict = field(default_factory=dict)
+    jobs: int = 1                   #: processes that ran the stages and sections
+    #: per task of the graph (stages and section parts): (wall s, CPU s of the process that ran it)
+    tasks: dict = field(default_factory=dict)
 
     @property
     def unexplained(self) -> list:
@@ -81,7 +79,7 @@ class ReportResult:
 
 def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: bool = False,
                  root: Path | str | None = None, progress: Callable[[str], None] | None = None,
-                 robustness: bool = True) -> ReportResult:
+                 robustness: bool = True, jobs: int | None = None) -> ReportResult:
     """Gather (or reuse) every result and write ``index.html``, ``report.md``, figures and manifest.
 
     Parameters
@@ -99,6 +97,10 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
         Called with one line of text per step.
     robustness : bool
         Include the ±30 % inertia robustness sweep.
+    jobs : int or None
+        Processes that run the stages and the section parts (:mod:`report.runner`); default
+        :func:`report.runner.default_jobs` (2 on a multi-core POSIX machine); 1: one after the
+        other in this process.  The output is the same.
 
     Returns
     -------
@@ -111,7 +113,9 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
         The output directory cannot be created.
     """
     t_start = time.perf_counter()
+    cpu0 = _cpu()
     say = progress or (lambda msg: None)
+    jobs = default_jobs() if jobs is None else max(1, int(jobs))
     out = Path(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -119,24 +123,11 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
         figdir.mkdir(exist_ok=True)
     except OSError as exc:
         raise OutputError(f"cannot create the report directory {out}: {exc.strerror or exc}") from None
-    say(f"gathering results ({'fast' if fast else 'full'} mode, root {root or 'from configs'})")
-    g = gather(Path(root) if root is not None else None, fast=fast, rerun=rerun, progress=say,
-               robustness=robustness)
-    t_gather = time.perf_counter() - t_start
-    rep = SectionWriter(g, figdir, fast)
-    say("writing sections and figures")
-    timings: dict[str, float] = {}
-    t1 = time.perf_counter()
-    from acmm import parallel_figures
-
-    parallel_figures.enable()            # figures written by forked processes meanwhile (issue 16)
-    try:
-        _write_sections(rep, timings, say)
-    finally:
-        t_sec = time.perf_counter()
-        parallel_figures.wait()
-        timings["figure writers (wait)"] = time.perf_counter() - t_sec
-    t_sections = time.perf_counter() - t1
+    say(f"gathering results and writing sections ({'fast' if fast else 'full'} mode, root "
+        f"{root or 'from configs'}, {jobs} process{'es' if jobs > 1 else ''})")
+    g, rep, timings = _run_graph(Path(root) if root is not None else None, figdir, fast, rerun, robustness,
+                                 jobs, say)
+    _add(rep, "printed", sec_printed.build, list(rep.ledger))
     # determinism
     man_path = out / "manifest.json"
     old = None
@@ -149,8 +140,9 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     cmp = compare_manifests(old, manifest)
     _add(rep, "determinism", sec_determinism.build, cmp, manifest)
     total = time.perf_counter() - t_start
-    _add(rep, "provenance", sec_provenance.build, g, {"gather (all stages)": t_gather,
-                                                      "sections, evidence and figures": t_sections, "total": total})
+    _add(rep, "provenance", sec_provenance.build, g, {
+        "stages (until the last one finished)": timings["stages"],
+        f"stages and sections ({jobs} process{'es' if jobs > 1 else ''})": timings["graph"], "total": total})
     title = "CR-185644 regenerated: ACMM (Part II) and QPP (Part III)" + (" — fast mode" if fast else "")
     md = render_markdown(rep.doc, title)
     page = render_html(rep.doc, title, figdir)
@@ -162,8 +154,58 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     say(f"wrote {out / 'index.html'} ({len(figs)} figures) in {time.perf_counter() - t_start:.1f} s")
     res = ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),
                        rep.ledger, cmp, time.perf_counter() - t_start)
-    res.timings = {"gather": t_gather, **g.timings, **timings, "total": res.wall_time}
+    res.tasks = timings.pop("tasks")
+    res.timings = {**timings, "total": res.wall_time, "cpu (all processes)": _cpu() - cpu0}
+    res.jobs = jobs
     return res
+
+
+def _cpu() -> float:
+    """User + system CPU time (s) of this process and of its finished children."""
+    import resource
+
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jobs: int, say):
+    """Stages and section parts as one task graph (:mod:`report.runner`); returns the gathered
+    results, the writer holding every content section, and the wall times."""
+    t0 = time.perf_counter()
+    g = Gathered(report_configs(root, fast=fast), {})
+    rep = SectionWriter(g, figdir, fast)
+    stages = stage_tasks(g.configs, root, fast=fast, rerun=rerun, robustness=robustness, jobs=jobs)
+    names = {t.name for t in stages}
+    parts = section_tasks(g, figdir, fast, names, rep._results if jobs == 1 else None)
+    timings: dict[str, float] = {"stages": 0.0}
+    stats: dict[str, tuple] = {}
+
+    def on_done(name, result):
+        if name in names:
+            keep_stage(g, name, result, say)
+            timings["stages"] = time.perf_counter() - t0
+        else:
+            say(f"  part {name:<20} {result.seconds:6.2f} s")
+
+    if jobs == 1:
+        from acmm import parallel_figures
+
+        parallel_figures.enable()        # opt-in (ACMM_PARALLEL_FIGURES=1): forked figure writers
+    try:
+        done = run_tasks(stages + parts, jobs, on_done, warm=warm_workers, stats=stats)
+    finally:
+        if jobs == 1:
+            parallel_figures.wait()
+    timings["graph"] = time.perf_counter() - t0
+    order_runs(g, stages)
+    sections: dict[str, float] = {}
+    assemble(rep, done, sections)
+    for key, sec in sections.items():
+        say(f"  section {key:<12} {sec:6.2f} s")
+    timings.update(g.timings)
+    timings.update({f"section {k}": v for k, v in sections.items()})
+    timings["tasks"] = stats
+    return g, rep, timings
 
 
 def _add(rep: SectionWriter, key: str, build, *args):
@@ -173,22 +215,3 @@ def _add(rep: SectionWriter, key: str, build, *args):
     rep.doc.blocks.extend(w.doc.blocks)
     rep.ledger.extend(w.ledger)
     return result
-
-
-def _write_sections(rep: SectionWriter, timings: dict, say) -> None:
-    """The content sections in order; values one section needs from another pass explicitly."""
-    def timed(key, build, *args):
-        t_sec = time.perf_counter()
-        result = _add(rep, key, build, *args)
-        timings[key] = time.perf_counter() - t_sec
-        say(f"  section {key:<12} {timings[key]:6.2f} s")
-        return result
-
-    teas = timed("table1", sec_table1.build)
-    dec_true_poles = timed("schedule", sec_schedule.build)
-    claim1 = timed("claim1", sec_claim1.build, dec_true_poles)
-    timed("staircase", sec_staircase.build)
-    timed("robustness", sec_robustness.build)
-    beta3 = timed("qpp", sec_qpp.build)
-    timed("errata", sec_errata.build, teas["mb3"], claim1, beta3)
-    timed("printed", sec_printed.build, list(rep.ledger))

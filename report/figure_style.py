@@ -11,8 +11,28 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from common.plot_style import AXIS_COLORS, COLORS, RC, pyplot  # noqa: F401 (the one style module)
+from common.plot_style import AXIS_COLORS, COLORS, RC  # noqa: F401 (the one style module)
+from common.plot_style import pyplot as _style_pyplot
 from common.results import save_figure
+
+#: rcParams of the report's figures on top of :data:`common.plot_style.RC` that change no pixel but
+#: save drawing time (issue 16): an axes title at the top edge of the axes, where matplotlib's
+#: automatic placement puts it anyway when nothing is drawn above the axes, so that the search for
+#: overlapping tick labels (a quarter of a 24-panel figure's drawing time) is skipped.
+SPEED_RC = {"axes.titley": 1.0}
+
+
+def pyplot():
+    """``matplotlib.pyplot`` with the report style (:func:`common.plot_style.pyplot`) and :data:`SPEED_RC`.
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``.
+    """
+    plt = _style_pyplot()
+    plt.rcParams.update(SPEED_RC)
+    return plt
 
 
 def save(fig, directory: Path, stem: str) -> dict[str, Path]:

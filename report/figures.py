@@ -180,21 +180,12 @@ def fig_claim1(mb3: dict, dec: dict, figdir: Path):
 
 
 def fig_staircase(sim: dict, figdir: Path):
-    """Inertia steps (Figs 6.14–6.19) and the responses (Figs 6.20–6.30).
+    """Inertia steps (Figs 6.14–6.19), the responses (Figs 6.20–6.30) and the per-level statistics."""
+    return fig_staircase_inertia(sim, figdir), fig_staircase_responses(sim, figdir), fig_staircase_levels(sim, figdir)
 
-    Parameters
-    ----------
-    sim : dict
-        The stair-case ``sim.h5`` (t in s, orbits, attitude error in rad, rates in rad/s, u in
-        ft·lbf, h in ft·lbf·s, the ``levels`` group).
-    figdir : pathlib.Path
-        Folder of the figures.
 
-    Returns
-    -------
-    tuple of dict
-        The inertia, response and per-level figures, each ``{"pdf": path, "png": path}``.
-    """
+def fig_staircase_inertia(sim: dict, figdir: Path):
+    """Inertia elements vs time (Figs 6.14–6.19)."""
     from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
@@ -209,7 +200,15 @@ def fig_staircase(sim: dict, figdir: Path):
         ax.set_xlabel("time (orbits)")
     fig1.suptitle("Inertia variation MB3 → AC (Figs 6.14–6.19 analogue)", fontsize=10)
     fig1.tight_layout()
-    f1 = save(fig1, figdir, "staircase_inertia")
+    return save(fig1, figdir, "staircase_inertia")
+
+
+def fig_staircase_responses(sim: dict, figdir: Path):
+    """Attitude error, rate, torque and momentum per axis (Figs 6.20–6.30)."""
+    from report.figure_style import COLORS, pyplot, save
+
+    plt = pyplot()
+    o = sim["orbits"]
     fig2, axs = plt.subplots(4, 3, figsize=(11, 10), sharex=True)
     rows = [(np.degrees(sim["attitude_error"]), "attitude error θ − θ̂* (deg)"),
             (np.degrees(sim["rate_rel_lvlh"]), "body rate rel. LVLH (deg/s)"),   # stored in rad/s
@@ -229,7 +228,14 @@ def fig_staircase(sim: dict, figdir: Path):
     fig2.suptitle("Gain-scheduled responses, inertia MB3 → AC (Figs 6.20–6.30 analogue; dotted: level changes)",
                   fontsize=10)
     fig2.subplots_adjust(left=0.08, right=0.985, bottom=0.055, top=0.94, wspace=0.28, hspace=0.12)  # issue 16
-    f2 = save(fig2, figdir, "staircase_responses")
+    return save(fig2, figdir, "staircase_responses")
+
+
+def fig_staircase_levels(sim: dict, figdir: Path):
+    """Steady attitude error and peak momentum per inertia level."""
+    from report.figure_style import COLORS, pyplot, save
+
+    plt = pyplot()
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
     th = np.degrees(sim["levels"]["tea_estimate"][:, 1])[: len(sim["levels"]["steady_error"])]
     for a in range(3):
@@ -244,8 +250,7 @@ def fig_staircase(sim: dict, figdir: Path):
     axs[1].set_title("Peak momentum per level")
     axs[1].legend()
     fig3.tight_layout()
-    f3 = save(fig3, figdir, "staircase_levels")
-    return f1, f2, f3
+    return save(fig3, figdir, "staircase_levels")
 
 
 def fig_robustness(params: dict, base, verdict, peak, names, figdir: Path):
@@ -356,23 +361,9 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
 
 
 def fig_circle(design: dict, name: str, figdir: Path):
-    """Circle criterion (lemma 1): h_ii(−a + jω) with Gershgorin mean radii and the critical disc.
+    """Circle criterion (lemma 1): h_ii(−a + jω) with Gershgorin mean radii and the critical disc."""
+    from matplotlib.collections import PatchCollection
 
-    Parameters
-    ----------
-    design : dict
-        ``qpp_design.h5`` as read by :func:`common.results.read_h5` (its ``circle`` group and
-        ``sector``; h_ii dimensionless).
-    name : str
-        Config name (file stem prefix).
-    figdir : pathlib.Path
-        Folder of the figures.
-
-    Returns
-    -------
-    dict
-        ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
-    """
     from report.figure_style import COLORS, pyplot, save
     from qpp.circle import critical_disc
 
@@ -384,8 +375,10 @@ def fig_circle(design: dict, name: str, figdir: Path):
     for i in range(m):
         ax = axs[0, i]
         h = centres[i]
-        for k in np.unique(np.linspace(0, h.size - 1, 150).astype(int)):
-            ax.add_patch(plt.Circle((h[k].real, h[k].imag), radii[i, k], fill=False, lw=0.3, color="0.7"))
+        # the Gershgorin circles as one collection (one artist instead of 150, issue 16)
+        ax.add_collection(PatchCollection([plt.Circle((h[k].real, h[k].imag), radii[i, k]) for k in
+                                           np.unique(np.linspace(0, h.size - 1, 150).astype(int))],
+                                          facecolor="none", edgecolor="0.7", linewidths=0.3))
         ax.plot(h.real, h.imag, color=COLORS[0], label="h_ii(−a + jω), ω ≥ 0")
         ax.plot(h.real, -h.imag, "--", color=COLORS[0], lw=0.7, label="ω ≤ 0")
         al, be = sector[i]

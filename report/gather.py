@@ -258,11 +258,103 @@ class Gathered:
     robustness: dict | None = None
     robustness_note: str = ""
     robustness_wall: float = 0.0
-    timings: dict = field(default_factory=dict)   #: wall time (s) per group of stages
+    timings: dict = field(default_factory=dict)   #: wall time (s) per stage
+    produced_by: dict = field(default_factory=dict)   #: run key → name of the task that made it
+
+
+def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
+    """The six packaged configs of the report, keyed by config name (``--fast``: short stair-case)."""
+    cfgs = {name: acmm_config(name, root, fast=fast and name == "staircase")
+            for name in ("mb3", "mb3_decoupled", "ac", "staircase")}
+    cfgs.update({name: qpp_config(name, root) for name in ("qpp_siso", "qpp_manipulator")})
+    return cfgs
+
+
+def _design_task(cfg, rerun, donors):
+    return ensure_acmm_design(cfg, rerun=rerun, donor_roots=donors)
+
+
+def _simulate_task(cfg, rerun):
+    return ensure_acmm_simulation(cfg, rerun=rerun)
+
+
+def _qpp_task(cfg, stage, rerun):
+    return ensure_qpp(cfg, stage, rerun=rerun)
+
+
+def _sweep_task(root, fast, rerun, workers):
+    t0 = time.perf_counter()
+    res, note = robustness_result(root, fast=fast, rerun=rerun, workers=workers)
+    return res, note, time.perf_counter() - t0
+
+
+#: rough run times (s) of the stages on one idle core, only to order the parallel tasks
+_COST = {"design:staircase": 1.2, "simulate:staircase": 0.4, "qpp design:qpp_siso": 2.0,
+         "qpp simulate:qpp_siso": 1.9, "qpp design:qpp_manipulator": 1.8, "qpp simulate:qpp_manipulator": 1.4,
+         "sweep": 2.7}
+
+
+def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rerun: bool = False,
+                robustness: bool = True, jobs: int = 1) -> list:
+    """The stages of the report as :class:`report.runner.Task` s, in the serial order.
+
+    A simulation waits for the design of its config (it reuses ``design.h5``); a qpp simulation
+    waits for the qpp design of its config (one run at a time holds a run directory's lock).
+    The robustness sweep runs on one process when the report itself runs ``jobs`` > 1 processes.
+    """
+    from report.runner import Task
+
+    full = acmm_config("staircase", root)
+    tasks = []
+    for name in ("mb3", "mb3_decoupled", "ac", "staircase"):
+        donors = [full.run_dir()] if cfgs[name].name != full.name else []
+        tasks.append(Task(f"design:{name}", _design_task, (), _const(cfgs[name], rerun, donors),
+                          _COST.get(f"design:{name}", 0.1)))
+    for name in ("mb3", "mb3_decoupled", "staircase"):
+        tasks.append(Task(f"simulate:{name}", _simulate_task, (f"design:{name}",), _const(cfgs[name], rerun),
+                          _COST.get(f"simulate:{name}", 0.1) if not fast else 0.1))
+    for name in ("qpp_siso", "qpp_manipulator"):
+        for stage, deps in (("design", ()), ("simulate", (f"qpp design:{name}",))):
+            tasks.append(Task(f"qpp {stage}:{name}", _qpp_task, deps, _const(cfgs[name], stage, rerun),
+                              _COST[f"qpp {stage}:{name}"]))
+    if robustness:
+        tasks.append(Task("sweep", _sweep_task, (), _const(root, fast, rerun, 1 if jobs > 1 else None),
+                          0.5 if fast else _COST["sweep"]))
+    return tasks
+
+
+def _const(*args):
+    return lambda done: args
+
+
+def keep_stage(g: "Gathered", name: str, result, say: Callable[[str], None]) -> None:
+    """Record the result of stage task ``name`` in ``g`` (and print one line)."""
+    if name == "sweep":
+        g.robustness, g.robustness_note, g.robustness_wall = result
+        g.timings["robustness sweep"] = g.robustness_wall
+        if g.robustness is not None:
+            r = g.robustness["run"]
+            g.runs[f"{r.stage}:{r.config}"] = r
+            g.produced_by[f"{r.stage}:{r.config}"] = name
+        say(f"  robustness     {'available' if g.robustness else 'not available'} "
+            f"({g.robustness_wall:.1f} s) {g.robustness_note}")
+        return
+    r: StageRun = result
+    g.runs[f"{r.stage}:{r.config}"] = r
+    g.produced_by[f"{r.stage}:{r.config}"] = name
+    g.timings[f"{r.stage} {r.config}"] = r.wall_time
+    say(f"  {r.stage:<14} {r.config:<16} {'reused' if r.reused else f'{r.wall_time:6.1f} s'}  {r.path}")
+
+
+def order_runs(g: "Gathered", tasks: list) -> None:
+    """``g.runs`` in the serial order of ``tasks`` (the manifest and provenance list them so)."""
+    index = {t.name: i for i, t in enumerate(tasks)}
+    rank = {key: index.get(name, len(index)) for key, name in g.produced_by.items()}
+    g.runs = dict(sorted(g.runs.items(), key=lambda kv: rank.get(kv[0], len(index))))
 
 
 def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
-           progress: Callable[[str], None] | None = None, robustness: bool = True) -> Gathered:
+           progress: Callable[[str], None] | None = None, robustness: bool = True, jobs: int = 1) -> Gathered:
     """Run (or reuse) every stage the report needs.
 
     Parameters
@@ -277,51 +369,40 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
         Called with one line of text per stage.
     robustness : bool
         Also run (or reuse) the robustness sweep.
+    jobs : int
+        Worker processes (:mod:`report.runner`); 1 runs the stages one after the other here.
 
     Returns
     -------
     Gathered
         The configs and the results files.
     """
+    from report.runner import run_tasks
+
     say = progress or (lambda msg: None)
-    cfgs = {name: acmm_config(name, root, fast=fast and name == "staircase")
-            for name in ("mb3", "mb3_decoupled", "ac", "staircase")}
-    cfgs.update({name: qpp_config(name, root) for name in ("qpp_siso", "qpp_manipulator")})
-    runs: dict[str, StageRun] = {}
-
-    def keep(r: StageRun):
-        runs[f"{r.stage}:{r.config}"] = r
-        say(f"  {r.stage:<14} {r.config:<16} {'reused' if r.reused else f'{r.wall_time:6.1f} s'}  {r.path}")
-
-    full = acmm_config("staircase", root)
-    timings: dict[str, float] = {}
-    t0 = time.perf_counter()
-    for name in ("mb3", "mb3_decoupled", "ac", "staircase"):
-        donors = [full.run_dir()] if cfgs[name].name != full.name else []
-        keep(ensure_acmm_design(cfgs[name], rerun=rerun, donor_roots=donors))
-    for name in ("mb3", "mb3_decoupled", "staircase"):
-        keep(ensure_acmm_simulation(cfgs[name], rerun=rerun))
-    timings["acmm stages"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    for name in ("qpp_siso", "qpp_manipulator"):
-        keep(ensure_qpp(cfgs[name], "design", rerun=rerun))
-        keep(ensure_qpp(cfgs[name], "simulate", rerun=rerun))
-    timings["qpp stages"] = time.perf_counter() - t0
-    g = Gathered(cfgs, runs, timings=timings)
-    if robustness:
-        t0 = time.perf_counter()
-        g.robustness, g.robustness_note = robustness_result(root, fast=fast, rerun=rerun)
-        g.robustness_wall = time.perf_counter() - t0
-        g.timings["robustness sweep"] = g.robustness_wall
-        if g.robustness is not None:
-            r = g.robustness["run"]
-            runs[f"{r.stage}:{r.config}"] = r
-        say(f"  robustness     {'available' if g.robustness else 'not available'} "
-            f"({g.robustness_wall:.1f} s) {g.robustness_note}")
+    g = Gathered(report_configs(root, fast=fast), {})
+    tasks = stage_tasks(g.configs, root, fast=fast, rerun=rerun, robustness=robustness, jobs=jobs)
+    run_tasks(tasks, jobs, lambda name, res: keep_stage(g, name, res, say), warm=warm_workers)
+    order_runs(g, tasks)
     return g
 
 
-def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bool = False):
+def warm_workers() -> None:
+    """Imports (and the compiled simulator) every worker needs, done once before forking them."""
+    import h5py  # noqa: F401
+    import matplotlib.pyplot  # noqa: F401
+    import scipy.linalg  # noqa: F401
+
+    import acmm.stages  # noqa: F401
+    import acmm.sweep  # noqa: F401
+    import qpp.stages  # noqa: F401
+    from acmm.warmup import warm_up
+
+    warm_up(lambda *a: None)
+
+
+def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
+                      workers: int | None = None):
     """The ±30 % inertia sweep (issue 7, :mod:`acmm.sweep`), or (None, why not).
 
     Parameters
@@ -348,7 +429,7 @@ def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bo
     except ImportError as exc:
         return None, f"acmm.sweep is not installed in this tree ({exc.name or exc})"
     try:
-        return _robustness_from_sweep(root, fast=fast, rerun=rerun)
+        return _robustness_from_sweep(root, fast=fast, rerun=rerun, workers=workers)
     except (AcmmError, OSError) as exc:        # a sweep that refuses its input or cannot write;
         return None, f"the sweep failed: {type(exc).__name__}: {exc}"   # a bug (TypeError, …) propagates
 
@@ -359,7 +440,7 @@ FAST_SWEEP_ORBITS = 2.0
 SWEEP_CONFIG = "sweep_inertia30.yaml"
 
 
-def _robustness_from_sweep(root, *, fast, rerun):
+def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     """Run (or reuse, by ``results_key``) ``configs/sweep_inertia30.yaml`` through
     :func:`acmm.sweep.run_sweep` and read ``sweep.h5`` back."""
     import yaml
@@ -390,7 +471,7 @@ def _robustness_from_sweep(root, *, fast, rerun):
     t0 = time.perf_counter()
     if not reused:
         run_sweep = importlib.import_module("acmm.sweep").run_sweep
-        path = run_sweep(sweep, workers=max(1, min(2, os.cpu_count() or 1)), figures=False).path
+        path = run_sweep(sweep, workers=workers or max(1, min(2, os.cpu_count() or 1)), figures=False).path
     wall = 0.0 if reused else time.perf_counter() - t0
     d = read_h5(path)
     chash = str(d["attrs"].get("config_hash", ""))

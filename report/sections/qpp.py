@@ -9,8 +9,10 @@ from report.figures import fig_circle, fig_qpp
 from report.ledger import _num_str, _printed_str, matches_printed
 
 
-def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
-    """One QPP chapter; returns (β3 with sin 5t, with sin t) for ch. 13, else None."""
+def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures: bool = True):
+    """One QPP chapter; returns (β3 with sin 5t, with sin t) for ch. 13, else None.
+
+    ``figures=False``: text and tables only (:func:`_figures` adds the two figures)."""
     import h5py
 
     ctx.section(key)
@@ -61,10 +63,29 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
         ctx.doc.table(["printed", "quantity", "computed", "status"],
                       [[p.printed, p.quantity, _fmt(p.computed, "{:.5f}"), ctx.status_text(p)] for p in led],
                       "Printed simulation results")
-    ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion", fig_circle(d, name, ctx.figdir))
-    ctx.doc.fig(f"{name}_responses", f"Ch. {chap}: outputs vs nominal outputs and tracking errors",
-                fig_qpp(spath, d, cfg.spheres.beta_o, name, ctx.figdir, out_labels))
+    if figures:
+        _figures(ctx, key, name, out_labels)
     return beta3
+
+
+def _figures(ctx: SectionWriter, key, name, out_labels) -> None:
+    """The chapter's circle-criterion and response figures."""
+    _circle_figure(ctx, key, name)
+    _responses_figure(ctx, key, name, out_labels)
+
+
+def _circle_figure(ctx: SectionWriter, key, name) -> None:
+    chap = "13" if key == "qpp13" else "14"
+    ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion",
+                fig_circle(ctx.data(f"qpp design:{name}"), name, ctx.figdir))
+
+
+def _responses_figure(ctx: SectionWriter, key, name, out_labels) -> None:
+    chap = "13" if key == "qpp13" else "14"
+    cfg = ctx.g.configs[name]
+    ctx.doc.fig(f"{name}_responses", f"Ch. {chap}: outputs vs nominal outputs and tracking errors",
+                fig_qpp(ctx.run(f"qpp simulate:{name}").path, ctx.data(f"qpp design:{name}"), cfg.spheres.beta_o,
+                        name, ctx.figdir, out_labels))
 
 
 
@@ -169,28 +190,63 @@ def _thresholds(ctx: SectionWriter, chap, cfg, th):
     return b3_5, b3_1
 
 
-def build(ctx: SectionWriter) -> tuple[float, float]:
-    """Chapters 13 and 14; returns ch. 13's β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading.
+#: the two chapters: section key, config, printed errors (scenario, output, printed, bound, why), outputs
+_WHY14 = ("μ (arm mass) and the impulse size are not printed; this run uses μ = {mu:g} kg and impulse "
+          "{imp} at t = {ti:g} s (configs/qpp_manipulator.yaml), so the error sizes differ; both stay far "
+          "inside β_o = 0.14")
+_OUT13, _OUT14 = ["y"], ["m", "rad"]
 
-    Parameters
-    ----------
-    ctx : report.context.SectionWriter
-        The section's inputs and output.
 
-    Returns
-    -------
-    tuple of float
-        (β3 with sin 5t; β3 at the frequency ω of the config's nonlinearity, the sin t
-        reading), in the units of the output y.
-    """
-    why14 = ("μ (arm mass) and the impulse size are not printed; this run uses μ = {mu:g} kg and impulse "
-             "{imp} at t = {ti:g} s (configs/qpp_manipulator.yaml), so the error sizes differ; both stay far "
-             "inside β_o = 0.14")
-    beta3 = _chapter(ctx, "qpp13", "qpp_siso", [("step_offset", 0, "0.094", "upper", ""),
-                                     ("sin10", 0, "0.16", "upper", "")], ["y"])
+def text13(ctx: SectionWriter) -> tuple[float, float]:
+    """Chapter 13 without its figures; returns β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading."""
+    return _chapter(ctx, "qpp13", "qpp_siso", [("step_offset", 0, "0.094", "upper", ""),
+                                               ("sin10", 0, "0.16", "upper", "")], _OUT13, figures=False)
+
+
+def figures13(ctx: SectionWriter) -> None:
+    """Chapter 13's figures (:func:`circle13`, :func:`responses13`)."""
+    _figures(ctx, "qpp13", "qpp_siso", _OUT13)
+
+
+def circle13(ctx: SectionWriter) -> None:
+    """Chapter 13's circle-criterion figure."""
+    _circle_figure(ctx, "qpp13", "qpp_siso")
+
+
+def responses13(ctx: SectionWriter) -> None:
+    """Chapter 13's responses figure."""
+    _responses_figure(ctx, "qpp13", "qpp_siso", _OUT13)
+
+
+def text14(ctx: SectionWriter) -> None:
+    """Chapter 14 without its figures."""
     c = ctx.g.configs["qpp_manipulator"]
     sc0 = c.simulation.scenarios[0]
-    w = why14.format(mu=c.nonlinearity.mu, imp=sc0.impulse, ti=sc0.impulse_time or 0.0)
+    w = _WHY14.format(mu=c.nonlinearity.mu, imp=sc0.impulse, ti=sc0.impulse_time or 0.0)
     _chapter(ctx, "qpp14", "qpp_manipulator", [("M45", 0, "0.006", None, w), ("M45", 1, "0.0015", None, w)],
-              ["m", "rad"])
+             _OUT14, figures=False)
+
+
+def figures14(ctx: SectionWriter) -> None:
+    """Chapter 14's figures (:func:`circle14`, :func:`responses14`)."""
+    _figures(ctx, "qpp14", "qpp_manipulator", _OUT14)
+
+
+def circle14(ctx: SectionWriter) -> None:
+    """Chapter 14's circle-criterion figure."""
+    _circle_figure(ctx, "qpp14", "qpp_manipulator")
+
+
+def responses14(ctx: SectionWriter) -> None:
+    """Chapter 14's responses figure."""
+    _responses_figure(ctx, "qpp14", "qpp_manipulator", _OUT14)
+
+
+def build(ctx: SectionWriter) -> tuple[float, float]:
+    """Chapters 13 and 14 (:func:`text13`, :func:`figures13`, :func:`text14`, :func:`figures14` in this
+    order); returns ch. 13's β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading."""
+    beta3 = text13(ctx)
+    figures13(ctx)
+    text14(ctx)
+    figures14(ctx)
     return beta3

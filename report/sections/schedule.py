@@ -12,6 +12,9 @@ def build(ctx: SectionWriter) -> np.ndarray:
     """Stair-case design summary, gain schedule and pole maps; returns the poles of the
     cross-inertia-free MB3 gain on the true coupled linear model (claim 1).
 
+    The same as its parts in order: :func:`summary`, :func:`path_figures`, :func:`true_poles`,
+    :func:`figures` (the report runs them as separate tasks).
+
     Parameters
     ----------
     ctx : report.context.SectionWriter
@@ -22,12 +25,18 @@ def build(ctx: SectionWriter) -> np.ndarray:
     (24,) complex array
         Those closed-loop poles, rad/s.
     """
-    from acmm import linearize as lin
+    summary(ctx)
+    path_figures(ctx)
+    ev = true_poles(ctx)
+    figures(ctx, ev)
+    return ev
 
+
+def summary(ctx: SectionWriter) -> None:
+    """The section's text and tables (design summary, conditioning, the schedule along the path)."""
     ctx.section("schedule")
     d = ctx.data("acmm design:" + ctx.g.configs["staircase"].name)
     cfg = ctx.g.configs["staircase"]
-    n = cfg.orbit_rate
     sc = d["schedule"]
     form = d["attrs"].get("schedule_form", "polynomial")
     order = sc["coef"].shape[0] - 1
@@ -53,29 +62,48 @@ def build(ctx: SectionWriter) -> np.ndarray:
            f"({'stable at every check' if np.max(sc['check_max_real']) < 0 else 'UNSTABLE at some check'})"]]
          if "check_max_real" in sc else []), "Stair-case design summary")
     _conditioning(ctx, d, pts)
-    files = fig_gain_schedule(d, cfg.design.drf_mode, ctx.figdir)
-    ctx.doc.fig("gain_schedule", "Gain schedule: the 72 gains K(i, j) vs pitch TEA (Figs 5.3–5.26 analogue)",
-                files)
-    # claim-1 pole map: the decoupled gain on the true coupled model
-    mb3 = ctx.data("acmm design:mb3")
+
+
+def true_poles(ctx: SectionWriter) -> np.ndarray:
+    """Claim 1: poles of the cross-inertia-free MB3 gain on the true coupled linear model (rad/s)."""
+    from acmm import linearize as lin
+
     dec = ctx.data("acmm design:mb3_decoupled")
     cfg_m = ctx.g.configs["mb3"]
-    theta = dec["tea"][0]
-    true = lin.design_point(cfg_m.inertia.matrix(), theta, n, model="coupled",
+    true = lin.design_point(cfg_m.inertia.matrix(), dec["tea"][0], cfg_m.orbit_rate, model="coupled",
                             drf_mode=cfg_m.design.drf_mode)
-    ev = np.linalg.eigvals(true.A - true.B @ dec["K"][0])
-    files = fig_pole_maps(d, mb3, dec, ev, n, (cfg.design.sector.sigma, cfg.design.sector.half_angle_deg),
-                          ctx.figdir)
+    return np.linalg.eigvals(true.A - true.B @ dec["K"][0])
+
+
+def figures(ctx: SectionWriter, ev: np.ndarray) -> None:
+    """The gain schedule and the pole maps (``ev``: :func:`true_poles`)."""
+    gain_figure(ctx)
+    pole_figure(ctx, ev)
+
+
+def gain_figure(ctx: SectionWriter) -> None:
+    """The 72 gains of the stair-case design points and their schedule."""
+    cfg = ctx.g.configs["staircase"]
+    files = fig_gain_schedule(ctx.data("acmm design:" + cfg.name), cfg.design.drf_mode, ctx.figdir)
+    ctx.doc.fig("gain_schedule", "Gain schedule: the 72 gains K(i, j) vs pitch TEA (Figs 5.3–5.26 analogue)",
+                files)
+
+
+def pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:
+    """Pole maps: the stair-case design points; claim 1 with ``ev`` (:func:`true_poles`)."""
+    cfg = ctx.g.configs["staircase"]
+    d = ctx.data("acmm design:" + cfg.name)
+    mb3 = ctx.data("acmm design:mb3")
+    dec = ctx.data("acmm design:mb3_decoupled")
+    files = fig_pole_maps(d, mb3, dec, ev, cfg.orbit_rate,
+                          (cfg.design.sector.sigma, cfg.design.sector.half_angle_deg), ctx.figdir)
     ctx.doc.fig("pole_maps", "Closed-loop poles (units of n) and the sector of Fig 5.2: every stair-case "
                 "design point (left); the claim-1 designs and the cross-inertia-free gain on the true "
                 "coupled MB3 model (right)", files)
-    return ev
 
 
 def _conditioning(ctx: SectionWriter, d, pts):
-    """Per-point conditioning and robustness; the scheduled gain along the whole path."""
-    from acmm import plots
-
+    """Per-point conditioning and robustness; the scheduled gain along the whole path (tables)."""
     if "max_eig_condition" in pts[0]:
         rows = []
         for name, p in zip(d["names"], pts):
@@ -100,11 +128,21 @@ def _conditioning(ctx: SectionWriter, d, pts):
         ["fraction of the path with every pole in the sector", f"{float(np.mean(mg >= 0)):.3f}"],
         ["smallest disk margin α at the plant input (skew 0)", f"{dm.min():.3f}"],
     ], "The order-2 schedule judged on the closed loop at every path TEA")
+
+
+def path_figures(ctx: SectionWriter) -> None:
+    """The scheduled gain along the path: margins and poles (figures of :mod:`acmm.plots`)."""
+    from acmm import plots
+
+    cfg = ctx.g.configs["staircase"]
+    pa = ctx.data("acmm design:" + cfg.name)["schedule"].get("path")
+    if pa is None:
+        return
+    mr, mg, dm = (np.asarray(pa[k]) for k in ("max_real", "sector_margin", "disk_margin"))
     f1 = plots.schedule_path_check(pa["theta2"], mr, mg, dm, ctx.figdir / "schedule_path_margins", vector=True)
     ctx.doc.fig("schedule_path_margins", "Scheduled gain on the local model along the path: largest Re λ, "
                 "worst sector margin and disk margin at the plant input vs pitch TEA",
                 {"png": f1[0], "pdf": f1[1]})
-    cfg = ctx.g.configs["staircase"]
     f2 = plots.scheduled_pole_map(pa["poles"], pa["theta2"], cfg.orbit_rate, cfg.design.sector.sigma,
                                   cfg.design.sector.half_angle_deg, ctx.figdir / "schedule_path_poles",
                                   vector=True)

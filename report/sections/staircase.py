@@ -5,17 +5,24 @@ import numpy as np
 
 from report.constants import FAST_ORBITS
 from report.context import SectionWriter
-from report.figures import fig_staircase
+from report.figures import fig_staircase_inertia, fig_staircase_levels, fig_staircase_responses
 
 
 def build(ctx: SectionWriter) -> None:
-    """The MB3 → AC stair-case simulation (Figs 6.14–6.30).
+    """The MB3 → AC stair-case simulation (Figs 6.14–6.30): :func:`summary` and the three figures
+    (:func:`figure_inertia`, :func:`figure_responses`, :func:`figure_levels`), in this order."""
+    summary(ctx)
+    figure_inertia(ctx)
+    figure_responses(ctx)
+    figure_levels(ctx)
 
-    Parameters
-    ----------
-    ctx : report.context.SectionWriter
-        The section's inputs and output.
-    """
+
+def _sim(ctx: SectionWriter) -> dict:
+    return ctx.data("acmm simulate:" + ctx.g.configs["staircase"].name)
+
+
+def summary(ctx: SectionWriter) -> None:
+    """Text, per-level table and printed numbers of the stair-case."""
     ctx.section("staircase")
     cfg = ctx.g.configs["staircase"]
     s = ctx.data("acmm simulate:" + cfg.name)
@@ -52,8 +59,18 @@ def build(ctx: SectionWriter) -> None:
         var = max(100 * abs(i1[i, j] / i0[i, j] - 1) for i, j in off if i0[i, j] != 0)
         ctx.ledger_add("Claim 2", "largest cross-inertia variation MB3 → AC ('up to 1600 %')", "1600", var,
                        "%", bound="upper")
-    f1, f2, f3 = fig_staircase(s, ctx.figdir)
-    ctx.doc.fig("staircase_inertia", "Inertia elements vs time (Figs 6.14–6.19 analogue)", f1)
+
+
+def figure_inertia(ctx: SectionWriter) -> None:
+    ctx.doc.fig("staircase_inertia", "Inertia elements vs time (Figs 6.14–6.19 analogue)",
+                fig_staircase_inertia(_sim(ctx), ctx.figdir))
+
+
+def figure_responses(ctx: SectionWriter) -> None:
     ctx.doc.fig("staircase_responses", "Attitude error, rate, torque and momentum per axis (Figs 6.20–6.30 "
-                "analogue)", f2)
-    ctx.doc.fig("staircase_levels", "Per-level steady error and peak momentum vs the level's pitch TEA", f3)
+                "analogue)", fig_staircase_responses(_sim(ctx), ctx.figdir))
+
+
+def figure_levels(ctx: SectionWriter) -> None:
+    ctx.doc.fig("staircase_levels", "Per-level steady error and peak momentum vs the level's pitch TEA",
+                fig_staircase_levels(_sim(ctx), ctx.figdir))

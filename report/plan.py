@@ -1,0 +1,114 @@
+"""The report's sections as tasks of :mod:`report.runner` (issue 16).
+
+Each section is one or more *parts* (its text and tables, then figures) run in section order when
+serial, or concurrently on worker processes.  A part is a function ``fn(ctx, *values)`` of a fresh
+:class:`~report.context.SectionWriter`; values other sections computed (the MB3 TEA of Table 1,
+the claim-1 poles and numbers, β3 of ch. 13) are passed explicitly.  Its blocks and printed numbers
+come back as a :class:`Part` and are put together in the order of :data:`PARTS`, so the document
+is the same whichever process wrote which part.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from report.context import SectionWriter
+from report.gather import Gathered
+from report.runner import WORKER_CACHE, Task
+from report.sections import claim1, errata, qpp, robustness, schedule, staircase, table1
+
+
+@dataclass
+class Part:
+    """What one part of a section produced."""
+
+    blocks: list          #: document blocks (:class:`report.document.Doc`)
+    ledger: list          #: printed numbers (:class:`report.ledger.PrintedNumber`)
+    value: object         #: its return value (passed on to other parts)
+    seconds: float        #: wall time of the part
+
+
+def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: dict | None) -> Part:
+    """``fn(ctx, *values)`` on a fresh writer; ``results``: HDF5 files already read (None: this
+    worker process's cache).  matplotlib's settings are reset first, so a figure looks the same
+    whichever figures the process drew before."""
+    t0 = time.perf_counter()
+    if "matplotlib" in sys.modules:
+        sys.modules["matplotlib"].rc_file_defaults()
+    ctx = SectionWriter(g, figdir, fast, WORKER_CACHE if results is None else results)
+    value = fn(ctx, *values)
+    return Part(ctx.doc.blocks, ctx.ledger, value, time.perf_counter() - t0)
+
+
+def _design(c):
+    return f"design:{c}"
+
+
+def _simulate(c):
+    return f"simulate:{c}"
+
+
+#: (task name, section, function, stage tasks it reads, parts whose values it takes, rough cost in s)
+_STAIR, _MB3, _DEC = _design("staircase"), _design("mb3"), _design("mb3_decoupled")
+_SIM = _simulate("staircase")
+_Q13 = ("qpp design:qpp_siso", "qpp simulate:qpp_siso")
+_Q14 = ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator")
+PARTS = [
+    ("table1", "table1", table1.build, (), (), 0.1),
+    ("schedule", "schedule", schedule.summary, (_STAIR,), (), 0.2),
+    ("schedule/paths", "schedule", schedule.path_figures, (_STAIR,), (), 1.4),
+    ("poles", "schedule", schedule.true_poles, (_MB3, _DEC), (), 0.05),
+    ("schedule/gains", "schedule", schedule.gain_figure, (_STAIR,), (), 2.6),
+    ("schedule/poles", "schedule", schedule.pole_figure, (_STAIR, _MB3, _DEC), ("poles",), 0.5),
+    ("claim1", "claim1", claim1.build, (_MB3, _DEC, _simulate("mb3"), _simulate("mb3_decoupled")), ("poles",), 1.6),
+    ("staircase", "staircase", staircase.summary, (_SIM,), (), 0.1),
+    ("staircase/inertia", "staircase", staircase.figure_inertia, (_SIM,), (), 0.9),
+    ("staircase/responses", "staircase", staircase.figure_responses, (_SIM,), (), 1.1),
+    ("staircase/levels", "staircase", staircase.figure_levels, (_SIM,), (), 0.6),
+    ("robustness", "robustness", robustness.build, ("sweep",), (), 0.9),
+    ("qpp13", "qpp13", qpp.text13, _Q13, (), 0.1),
+    ("qpp13/circle", "qpp13", qpp.circle13, _Q13, (), 0.4),
+    ("qpp13/responses", "qpp13", qpp.responses13, _Q13, (), 1.2),
+    ("qpp14", "qpp14", qpp.text14, _Q14, (), 0.1),
+    ("qpp14/circle", "qpp14", qpp.circle14, _Q14, (), 0.8),
+    ("qpp14/responses", "qpp14", qpp.responses14, _Q14, (), 2.0),
+    ("errata", "errata", errata.build, (_STAIR, _SIM, "qpp design:qpp_siso"), ("table1", "claim1", "qpp13"), 0.5),
+]
+
+
+def _errata_values(done: dict) -> tuple:
+    return done["table1"].value["mb3"], done["claim1"].value, done["qpp13"].value
+
+
+def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, results: dict | None) -> list[Task]:
+    """The parts of :data:`PARTS` as tasks; ``stage_names``: the stage tasks of the same graph
+    (a part waits only for those), ``results``: the shared cache of read files when serial."""
+    tasks = []
+    for name, _, fn, stage_deps, value_deps, cost in PARTS:
+        values = _errata_values if name == "errata" else _values_of(value_deps)
+        deps = tuple(d for d in stage_deps if d in stage_names) + value_deps
+        tasks.append(Task(name, run_part, deps, _part_args(fn, values, g, figdir, fast, results), cost))
+    return tasks
+
+
+def _values_of(deps: tuple):
+    """``done → (value of each part in deps)``."""
+    return lambda done: tuple(done[d].value for d in deps)
+
+
+def _part_args(fn, values, g, figdir, fast, results):
+    """``done → arguments of run_part`` (built when the part is submitted: ``g`` then holds the
+    stages it reads)."""
+    return lambda done: (fn, g, figdir, fast, values(done), results)
+
+
+def assemble(rep: SectionWriter, done: dict, timings: dict) -> None:
+    """Append every part's blocks and printed numbers to ``rep`` in section order; per-section wall
+    time (sum of its parts) into ``timings``."""
+    for name, section, *_ in PARTS:
+        part: Part = done[name]
+        rep.doc.blocks.extend(part.blocks)
+        rep.ledger.extend(part.ledger)
+        timings[section] = timings.get(section, 0.0) + part.seconds

@@ -1,0 +1,222 @@
+"""A small task graph run in dependency order, in this process or on forked worker processes (issue 16).
+
+The report is a graph of independent pieces of work: the stages it gathers (designs, simulations,
+the robustness sweep, the QPP chapters) and the parts of its sections (each writes its own
+figures).  :func:`run_tasks` runs such a graph
+
+* serially (``jobs=1``): in the order of the list, in this process — exactly what the report
+  did before it had a graph;
+* on ``jobs`` forked worker processes (POSIX): a task is submitted as soon as the tasks it
+  depends on have finished, longest remaining chain first.  Only the task's function, its
+  arguments (built in this process from the results of its dependencies) and its return value
+  cross the process boundary; everything a task writes (HDF5 files, figures) is a file.
+
+The results are the same either way: every task is a deterministic function of its arguments and
+of files its dependencies wrote completely before it starts.
+
+Failures: a task that raises an :class:`~common.errors.AcmmError` in a worker is re-raised here
+as the same class with the same message (one clear line at the command line); any other
+exception propagates with the worker's traceback attached.  On the first failure no further task
+is started, the running ones are waited for, and the error is raised — the caller writes its
+output only after :func:`run_tasks` returned.
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import importlib
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+from common.errors import AcmmError
+
+
+def _no_args(done: dict) -> tuple:
+    return ()
+
+
+@dataclass
+class Task:
+    """One node of the graph.
+
+    Attributes
+    ----------
+    name : str
+        Unique name; the key of its result.
+    fn : callable
+        A module-level function (sent to a worker by reference).
+    deps : tuple of str
+        Names of the tasks that must have finished first.
+    args : callable
+        ``args(done) -> tuple``: the positional arguments of ``fn``, built in the calling process
+        from ``done`` (name → result of every finished task).
+    cost : float
+        Rough run time (s) used only to order the ready tasks (longest remaining chain first).
+    """
+
+    name: str
+    fn: Callable
+    deps: tuple = ()
+    args: Callable[[dict], tuple] = _no_args
+    cost: float = 1.0
+    priority: float = field(default=0.0, init=False)
+
+
+def default_jobs() -> int:
+    """Worker processes for the report: ``ACMM_REPORT_JOBS`` if set, else min(2, CPUs); 1 without
+    ``os.fork`` or when this process runs other threads (forking a multi-threaded process, e.g. one
+    holding a Dask client, can deadlock the child)."""
+    import threading
+
+    if not hasattr(os, "fork"):
+        return 1
+    env = os.environ.get("ACMM_REPORT_JOBS", "").strip()
+    if env.isdigit() and int(env) > 0:
+        return int(env)
+    if threading.active_count() > 1:
+        return 1
+    return max(1, min(2, os.cpu_count() or 1))
+
+
+def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str, object], None]] = None,
+              warm: Optional[Callable[[], None]] = None, stats: Optional[dict] = None) -> dict:
+    """Run ``tasks`` (a list in a valid serial order) and return ``{name: result}``.
+
+    Parameters
+    ----------
+    tasks : list of Task
+        Every dependency must name an earlier task of the list.
+    jobs : int
+        1: in this process, in list order; > 1: that many forked worker processes.
+    on_done : callable(name, result), optional
+        Called in this process after each task, in completion order.
+    warm : callable, optional
+        Called once in this process before the workers are forked (imports they all need).
+    stats : dict, optional
+        Filled with ``name → (wall s, CPU s)`` of each task (CPU of the process that ran it).
+    """
+    _check(tasks)
+    on_done = on_done or (lambda name, result: None)
+    stats = {} if stats is None else stats
+    done: dict[str, object] = {}
+    if jobs <= 1 or len(tasks) <= 1 or not hasattr(os, "fork"):
+        for t in tasks:              # errors propagate unchanged
+            t0, c0 = time.perf_counter(), time.process_time()
+            done[t.name] = t.fn(*t.args(done))
+            stats[t.name] = (time.perf_counter() - t0, time.process_time() - c0)
+            on_done(t.name, done[t.name])
+        return done
+    _prioritize(tasks)
+    if warm is not None:
+        warm()
+    _run_pool(tasks, jobs, done, on_done, stats)
+    return done
+
+
+def _check(tasks: list[Task]) -> None:
+    seen: set[str] = set()
+    for t in tasks:
+        missing = [d for d in t.deps if d not in seen]
+        if missing or t.name in seen:
+            raise ValueError(f"task {t.name!r}: duplicate, or dependencies {missing} not listed before it")
+        seen.add(t.name)
+
+
+def _prioritize(tasks: list[Task]) -> None:
+    """``priority`` = cost of the task plus the longest chain of tasks that wait for it."""
+    after: dict[str, list[Task]] = {t.name: [] for t in tasks}
+    for t in tasks:
+        for d in t.deps:
+            after[d].append(t)
+    for t in reversed(tasks):
+        t.priority = t.cost + max((s.priority for s in after[t.name]), default=0.0)
+
+
+def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict) -> None:
+    import multiprocessing
+
+    waiting = list(tasks)
+    pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("fork"),
+                                  initializer=_worker_init, initargs=(os.getpid(),))
+    running: dict[cf.Future, Task] = {}
+    try:
+        while waiting or running:
+            ready = sorted((t for t in waiting if all(d in done for d in t.deps)), key=lambda t: -t.priority)
+            for t in ready[: max(0, jobs - len(running))]:
+                waiting.remove(t)
+                sys.stdout.flush()
+                sys.stderr.flush()
+                running[pool.submit(_call, t.fn, t.args(done))] = t
+            finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
+            for fut in finished:
+                t = running.pop(fut)
+                out = _result(fut)
+                stats[t.name] = out[-2:]
+                done[t.name] = _unwrap_value(out)
+                on_done(t.name, done[t.name])
+    except BaseException:
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# in the worker
+# ---------------------------------------------------------------------------------------------
+#: per-worker-process cache (e.g. HDF5 files already read), emptied when the worker starts
+WORKER_CACHE: dict = {}
+
+
+def _worker_init(parent: int) -> None:
+    from common.workers import die_with_parent
+
+    WORKER_CACHE.clear()
+    die_with_parent(parent)
+
+
+def _call(fn, args):
+    """Run ``fn(*args)``: ``("ok", result, wall, cpu)``, or an :class:`AcmmError` as data
+    ``("error", module, class name, message, exit code, wall, cpu)`` (its class may not pickle)."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    try:
+        out = ("ok", fn(*args))
+    except AcmmError as exc:
+        cls = type(exc)
+        out = ("error", cls.__module__, cls.__qualname__, str(exc), getattr(exc, "exit_code", None))
+    return out + (time.perf_counter() - t0, time.process_time() - c0)
+
+
+def _result(fut: cf.Future) -> tuple:
+    from concurrent.futures.process import BrokenProcessPool
+
+    try:
+        return fut.result()
+    except BrokenProcessPool:
+        from common.errors import OutputError
+
+        raise OutputError("a report worker process died (killed, or out of memory); nothing was written") from None
+
+
+def _unwrap_value(out: tuple):
+    if out[0] == "ok":
+        return out[1]
+    raise _rebuild(*out[1:5])
+
+
+def _rebuild(module: str, qualname: str, message: str, exit_code) -> AcmmError:
+    """The worker's error as the same class (or a plain :class:`AcmmError` with its exit code)."""
+    try:
+        cls = importlib.import_module(module)
+        for part in qualname.split("."):
+            cls = getattr(cls, part)
+        exc = cls(message)
+        if isinstance(exc, AcmmError):
+            return exc
+    except Exception:  # noqa: BLE001 (a class that cannot be rebuilt from its message)
+        pass
+    exc = AcmmError(message)
+    if exit_code is not None:
+        exc.exit_code = exit_code
+    return exc

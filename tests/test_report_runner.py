@@ -1,0 +1,187 @@
+"""The report's task graph (issue 16, :mod:`report.runner`, :mod:`report.plan`): the same results on
+forked worker processes as one after the other, and one clear error with no output on a failure."""
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import pytest
+
+from common.errors import ConvergenceError, OutputError
+from report.runner import Task, run_tasks
+
+pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="worker processes are forked")
+
+
+# ----------------------------------------------------------------------------- toy graphs
+def _square(x):
+    return x * x
+
+
+def _add(a, b):
+    return a + b
+
+
+def _pid_after(path, delay):
+    time.sleep(delay)
+    with open(path, "a") as f:
+        f.write(f"{os.getpid()}\n")
+    return os.getpid()
+
+
+def _fail(msg):
+    raise ConvergenceError(msg)
+
+
+def _die():
+    os._exit(9)
+
+
+def _graph(tmp_path):
+    log = tmp_path / "log"
+    return [
+        Task("a", _square, (), lambda d: (3,)),
+        Task("b", _square, (), lambda d: (4,)),
+        Task("slow1", _pid_after, (), lambda d: (log, 0.3), cost=5),
+        Task("slow2", _pid_after, (), lambda d: (log, 0.3), cost=5),
+        Task("sum", _add, ("a", "b"), lambda d: (d["a"], d["b"])),
+        Task("sum2", _add, ("sum", "slow1"), lambda d: (d["sum"], 0)),
+    ]
+
+
+def test_parallel_and_serial_give_the_same_results(tmp_path):
+    seen = []
+    serial = run_tasks(_graph(tmp_path), 1, on_done=lambda n, r: seen.append(n))
+    assert seen == ["a", "b", "slow1", "slow2", "sum", "sum2"]          # list order when serial
+    order = []
+    stats: dict = {}
+    par = run_tasks(_graph(tmp_path), 2, on_done=lambda n, r: order.append(n), stats=stats)
+    assert {k: v for k, v in par.items() if not k.startswith("slow")} == \
+        {k: v for k, v in serial.items() if not k.startswith("slow")} == {"a": 9, "b": 16, "sum": 25, "sum2": 25}
+    # ran in two other processes at the same time, each task once, after its dependencies
+    assert par["slow1"] != par["slow2"] and os.getpid() not in (par["slow1"], par["slow2"])
+    assert sorted(order) == sorted(serial) and order.index("sum") > max(order.index("a"), order.index("b"))
+    assert order.index("sum2") > order.index("slow1")
+    assert set(stats) == set(serial) and all(w >= 0 and c >= 0 for w, c in stats.values())
+
+
+def test_a_dependency_must_come_first():
+    with pytest.raises(ValueError, match="'x'"):
+        run_tasks([Task("x", _square, ("y",)), Task("y", _square)], 2)
+
+
+def test_error_in_a_worker_is_the_same_error_and_stops_the_graph(tmp_path):
+    log = tmp_path / "log"
+    tasks = [Task("bad", _fail, (), lambda d: ("solver did not converge: field x",), cost=10),
+             Task("slow", _pid_after, (), lambda d: (log, 0.2)),
+             Task("after", _pid_after, ("bad",), lambda d: (log, 0.0))]
+    with pytest.raises(ConvergenceError, match="^solver did not converge: field x$") as exc:
+        run_tasks(tasks, 2)
+    assert exc.value.exit_code == 3
+    assert len(log.read_text().split()) <= 1          # "after" never ran; "slow" was waited for
+
+
+def test_a_worker_that_dies_is_one_clear_error():
+    with pytest.raises(OutputError, match="worker process died"):
+        run_tasks([Task("die", _die), Task("ok", _square, (), lambda d: (2,))], 2)
+
+
+# ----------------------------------------------------------------------------- the report's graph
+def _claim1_graph(root, figdir, jobs):
+    """The MB3 stages and the parts that read them (claim-1 poles and section), as in build_report."""
+    from report.context import SectionWriter
+    from report.gather import (
+        Gathered,
+        keep_stage,
+        order_runs,
+        report_configs,
+        stage_tasks,
+        warm_workers,
+    )
+    from report.plan import PARTS, _part_args, _values_of, run_part
+
+    g = Gathered(report_configs(root), {})
+    stages = [t for t in stage_tasks(g.configs, root, robustness=False, jobs=jobs)
+              if t.name.endswith((":mb3", ":mb3_decoupled"))]
+    rep = SectionWriter(g, figdir, False)
+    by_name = {p[0]: p for p in PARTS}
+    parts = [Task(name, run_part, by_name[name][3] + by_name[name][4],
+                  _part_args(by_name[name][2], _values_of(by_name[name][4]), g, figdir, False,
+                             rep._results if jobs == 1 else None)) for name in ("poles", "claim1")]
+    names = {t.name for t in stages}
+    done = run_tasks(stages + parts, jobs, lambda n, r: keep_stage(g, n, r, lambda s: None) if n in names else None,
+                     warm=warm_workers)
+    order_runs(g, stages)
+    return g, done
+
+
+def test_report_graph_in_workers_matches_serial(tmp_path):
+    """The claim-1 branch of the report (4 stages, 2 parts) on 2 processes and on 1: the same
+    datasets (hashes), run order, document blocks, printed numbers and figure bytes."""
+    from report.manifest import dataset_hashes
+
+    out = {}
+    for jobs in (1, 2):
+        figdir = tmp_path / f"fig{jobs}"
+        figdir.mkdir()
+        g, done = _claim1_graph(tmp_path / f"runs{jobs}", figdir, jobs)
+        out[jobs] = (g, done, figdir)
+    (g1, d1, f1), (g2, d2, f2) = out[1], out[2]
+    assert list(g1.runs) == list(g2.runs) == ["acmm design:mb3", "acmm design:mb3_decoupled",
+                                              "acmm simulate:mb3", "acmm simulate:mb3_decoupled"]
+    for key in g1.runs:
+        assert dataset_hashes(g1.runs[key].path) == dataset_hashes(g2.runs[key].path), key
+    np.testing.assert_array_equal(d1["poles"].value, d2["poles"].value)
+    c1, c2 = d1["claim1"], d2["claim1"]
+    assert c1.value.div == c2.value.div and c1.value.maxre == c2.value.maxre
+    strip = lambda blocks: [b[:3] if b[0] == "fig" else b for b in blocks]  # noqa: E731 (paths differ)
+    assert strip(c1.blocks) == strip(c2.blocks) and len(c1.blocks) >= 4
+    assert [(p.quantity, p.computed, p.status) for p in c1.ledger] == \
+        [(p.quantity, p.computed, p.status) for p in c2.ledger]
+    png = "claim1_responses.png"
+    assert (f1 / png).read_bytes() == (f2 / png).read_bytes()
+
+
+def _broken_qpp(cfg, stage, rerun):
+    raise ConvergenceError(f"qpp {stage} of {cfg.name}: Riccati solver did not converge")
+
+
+def test_report_failure_in_a_worker_is_one_line_and_writes_nothing(tmp_path, monkeypatch):
+    import sys
+
+    from typer.testing import CliRunner
+
+    from cli.acmm_app import app
+
+    gather_mod = sys.modules["report.gather"]
+
+    monkeypatch.setattr(gather_mod, "_qpp_task", _broken_qpp)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["report", "--fast", "--jobs", "2", "--out", str(out), "--root",
+                                   str(tmp_path / "runs")])
+    assert res.exit_code == 3, res.output
+    lines = res.output.strip().splitlines()
+    assert lines[-1].startswith("error:") and "did not converge" in lines[-1]
+    assert not any(line.startswith("Traceback") for line in lines)
+    assert not (out / "index.html").exists() and not (out / "report.md").exists()
+    assert not (out / "manifest.json").exists()
+
+
+def test_default_jobs(monkeypatch):
+    import threading
+
+    from report.runner import default_jobs
+
+    monkeypatch.setenv("ACMM_REPORT_JOBS", "3")
+    assert default_jobs() == 3
+    monkeypatch.delenv("ACMM_REPORT_JOBS")
+    assert default_jobs() == (1 if threading.active_count() > 1 else max(1, min(2, os.cpu_count() or 1)))
+    stop = threading.Event()
+    t = threading.Thread(target=stop.wait)
+    t.start()
+    try:
+        assert default_jobs() == 1                    # no fork beside other threads
+    finally:
+        stop.set()
+        t.join()
