@@ -137,14 +137,15 @@ def unit_roles(pts: dict, has_fit: bool) -> dict:
 
 def design_figures(r, s, run_dir: Path, units_system: str) -> None:
     """The pole-map, gain-schedule and path-check figures of a design (settings ``s``: an
-    :class:`acmm.settings.DesignSettings`) in ``run_dir``, gains in the ``units_system``."""
+    :class:`acmm.settings.DesignSettings`) in ``run_dir``, gains in the ``units_system``; each
+    is handed to :func:`acmm.figure_worker.submit` (drawn in the figure worker when one runs)."""
     from acmm import plots
+    from acmm.figure_worker import submit
     from acmm.linearize import STATE_NAMES
 
-    plots.parallel_saves()
     d = s
-    plots.pole_map([p.lqr.poles for p in r.points], r.table.names, s.orbit_rate, d.sector.sigma,
-                   d.sector.half_angle_deg, run_dir / "design_poles.png")
+    submit(plots.pole_map, [p.lqr.poles for p in r.points], r.table.names, s.orbit_rate, d.sector.sigma,
+           d.sector.half_angle_deg, run_dir / "design_poles.png")
     if r.fit is not None:
         fit, gains = r.fit, r.table.gain
         if units_system != "imperial":     # K in the output system (the schedule is linear in K)
@@ -161,12 +162,11 @@ def design_figures(r, s, run_dir: Path, units_system: str) -> None:
             from acmm.units import state_factors
 
             units, torque = [u.replace("*", "·") for u in state_factors(d.drf_mode, units_system)[1]], "N·m"
-        plots.gain_schedule_grid(r.table.tea[:, 1], gains, fit, STATE_NAMES,
-                                 run_dir / "design_gains.png", units=units, torque_unit=torque)
+        submit(plots.gain_schedule_grid, r.table.tea[:, 1], gains, fit, STATE_NAMES,
+               run_dir / "design_gains.png", units=units, torque_unit=torque)
     if r.path_check is not None:
         pc = r.path_check
-        plots.schedule_path_check(pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
-                                  run_dir / "design_path_margins.png")
-        plots.scheduled_pole_map(pc.poles, pc.theta2, s.orbit_rate, d.sector.sigma,
-                                 d.sector.half_angle_deg, run_dir / "design_path_poles.png")
-    plots.wait_saves()
+        submit(plots.schedule_path_check, pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
+               run_dir / "design_path_margins.png")
+        submit(plots.scheduled_pole_map, pc.poles, pc.theta2, s.orbit_rate, d.sector.sigma,
+               d.sector.half_angle_deg, run_dir / "design_path_poles.png")

@@ -7,7 +7,6 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm import dynamics as dyn
 from acmm import tea as tea_mod
 from acmm.config import Config, load_config
 from common.outputs import owns_outputs
@@ -238,23 +237,26 @@ def design_table(points, fit, design_hash: str) -> DesignTable:
 @owns_outputs("design", lambda c: _as_config(c))
 def run_design(config, progress=None, figures: bool | None = None) -> tuple[DesignResult, Path]:
     """Design and write ``runs/<name>/design.h5`` plus the gain-schedule and pole-map figures
-    (:mod:`acmm.design_output` builds both)."""
+    (:mod:`acmm.design_output` builds both; the figures are drawn by :mod:`acmm.figure_worker`
+    while the design is computed and written)."""
     from acmm import design_output as out
+    from acmm import figure_worker
     from acmm.settings import design_settings
 
-    r = compute_design(config, progress)
-    cfg = r.config
-    P = len(r.points)
-    pts = out.point_items(r.points)
-    items = out.table_items(r, pts)
-    if r.fit is not None:
-        items["schedule"] = out.schedule_items(r)
-    items = _in_system(items, cfg, out.unit_roles(pts, r.fit is not None))
-    path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
-                    {"stage": "design", "design_hash": r.table.design_hash, "n_points": P,
-                     "schedule_form": r.table.form})
-    if cfg.output.figures if figures is None else figures:
-        out.design_figures(r, design_settings(cfg), cfg.run_dir(), cfg.output.units)
+    cfg = _as_config(config)
+    want_figures = cfg.output.figures if figures is None else figures
+    with figure_worker.session(want_figures):
+        r = compute_design(cfg, progress)
+        if want_figures:
+            out.design_figures(r, design_settings(cfg), cfg.run_dir(), cfg.output.units)
+        pts = out.point_items(r.points)
+        items = out.table_items(r, pts)
+        if r.fit is not None:
+            items["schedule"] = out.schedule_items(r)
+        items = _in_system(items, cfg, out.unit_roles(pts, r.fit is not None))
+        path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
+                        {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
+                         "schedule_form": r.table.form})
     return r, path
 
 
@@ -330,76 +332,35 @@ class SimulateResult:
 @locked_stage(_as_config)
 @owns_outputs("simulate", lambda c: _as_config(c))
 def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[SimulateResult, Path]:
-    """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures."""
+    """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures
+    (:mod:`acmm.sim_output` builds both; the figures are drawn by :mod:`acmm.figure_worker`
+    while ``sim.h5`` is written)."""
     import time
 
+    from acmm import figure_worker
+    from acmm import sim_output as out
     from acmm import simulate as sim_mod
 
     cfg = _as_config(config)
-    table, note = design_for(cfg, progress, figures)
-    sc = sim_mod.scenario_from_config(cfg, table)
-    t0 = time.perf_counter()
-    r = sim_mod.simulate(sc)
-    wall = time.perf_counter() - t0
-    stats = sim_mod.level_statistics(sc, r)
-    result = SimulateResult(cfg, sc, r, stats, note, wall)
-    n = cfg.orbit_rate
-    orbits = r.t * n / (2 * np.pi)
-    err = sim_mod.attitude_error(sc, r)
-    rel_rate = np.degrees(r.state[:, 0:3] - dyn.lvlh_rate_in_body(r.state[:, 3:6], n))
-    items = {
-        "t": Dataset(r.t, "s", "time", dims=("t",)),
-        "orbits": Dataset(orbits, "orbit", "time in orbits (2π/n)", dims=("t",)),
-        "theta": Dataset(r.state[:, 3:6], "rad", "attitude (roll, pitch, yaw), 2-3-1 from LVLH", AXES,
-                         dims=("t", "axis")),
-        "attitude_error": Dataset(err, "rad", "θ − θ̂* of the level in force", AXES, dims=("t", "axis")),
-        "omega": Dataset(r.state[:, 0:3], "rad/s", "absolute body rate", AXES, dims=("t", "axis")),
-        "rate_rel_lvlh": Dataset(rel_rate, "deg/s", "body rate relative to LVLH", AXES, dims=("t", "axis")),
-        "h": Dataset(r.state[:, 6:9], "ft*lbf*s", "CMG momentum", AXES, dims=("t", "axis")),
-        "int_h": Dataset(r.state[:, 9:12], "ft*lbf*s^2", "momentum integral (controller state)", AXES, dims=("t", "axis")),
-        "drf": Dataset(r.state[:, 12:24], "per-state", "DRF states", sim_mod.PLAIN_STATE_NAMES[12:],
-                       dims=("t", "drf_state")),
-        "u_cmd": Dataset(r.u_cmd, "ft*lbf", "commanded torque −K x (before saturation)", AXES, dims=("t", "axis")),
-        "u": Dataset(r.u, "ft*lbf", "delivered torque (after torque and momentum saturation)", AXES, dims=("t", "axis")),
-        "w": Dataset(r.w, "ft*lbf", "disturbance torque (eq 3.9)", AXES, dims=("t", "axis")),
-        "level": Dataset(r.level, "1", "index of the inertia level in force", dims=("t",)),
-        "torque_saturated": Dataset(r.torque_saturated, "1", "torque clipped per axis", AXES, dims=("t", "axis")),
-        "momentum_saturated": Dataset(r.momentum_saturated, "1", "CMG axis at its momentum limit", AXES, dims=("t", "axis")),
-        "levels": {
-            "start": Dataset(sc.level_start, "s", "start time of each level", dims=("level",)),
-            "inertia": Dataset(sc.inertia, "slug*ft^2", "plant inertia per level", dims=("level", "axis", "axis_col")),
-            "bias": Dataset(sc.bias, "ft*lbf", "bias per level", AXES, dims=("level", "axis")),
-            "tea_estimate": Dataset(sc.theta_est, "rad", "TEA estimate used by the controller", AXES,
-                                    dims=("level", "axis")),
-            "gain": Dataset(sc.gain, "ft*lbf per state unit", "gain in use per level (u = −K x)",
-                            dims=("level", "axis", "state")),
-            "steady_error": Dataset(np.array([s["steady_error_deg"] for s in stats]).reshape(-1, 3), "deg",
-                                    "max |θ − θ̂*| over the second half of each level", AXES, dims=("level", "axis")),
-            "peak_momentum": Dataset(np.array([s["peak_momentum"] for s in stats]), "ft*lbf*s",
-                                     "peak |h_i| over each level",
-                                     dims=("level",) if np.ndim([s["peak_momentum"] for s in stats]) == 1
-                                     else ("level", "axis")),
-        },
-        "wall_time": Dataset(wall, "s", "integration wall time"),
-    }
-    attrs = {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
-             "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
-             "design_hash": table.design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
-    items = _in_system(items, cfg, {"levels/gain": "K", "drf": "drf"})
-    path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
-    if cfg.output.figures if figures is None else figures:
-        from acmm import plots
-
-        plots.parallel_saves()
-        d = cfg.run_dir()
-        title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
-        units = cfg.output.units
-        plots.axis_histories(orbits, np.degrees(err), rel_rate, r.u, r.state[:, 6:9], title, d / "sim_axes.png",
-                             units=units)
-        if len(sc.level_start) > 1:
-            inertia_t = sc.inertia[r.level]
-            plots.inertia_histories(orbits, inertia_t, d / "sim_inertia.png", units=units)
-        plots.summary(orbits, np.degrees(err), r.state[:, 6:9], r.u, stats, r.verdict, cfg.name, d / "sim_summary.png",
-                      units=units)
-        plots.wait_saves()
+    want_figures = cfg.output.figures if figures is None else figures
+    with figure_worker.session(want_figures):
+        if want_figures:
+            out.prepare_sim_figures(cfg)
+        table, note = design_for(cfg, progress, figures)
+        figure_worker._tr("design_for")
+        sc = sim_mod.scenario_from_config(cfg, table)
+        figure_worker._tr("scenario")
+        t0 = time.perf_counter()
+        r = sim_mod.simulate(sc)
+        figure_worker._tr("simulated")
+        wall = time.perf_counter() - t0
+        stats = sim_mod.level_statistics(sc, r)
+        result = SimulateResult(cfg, sc, r, stats, note, wall)
+        items, attrs = out.sim_items(cfg, sc, r, stats, table.design_hash, wall)
+        if want_figures:
+            out.sim_figures(cfg, sc, r, stats, items)
+        items = _in_system(items, cfg, {"levels/gain": "K", "drf": "drf"})
+        figure_worker._tr("items")
+        path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
+        figure_worker._tr("written")
     return result, path
