@@ -35,11 +35,7 @@ import threading
 from pathlib import Path
 
 _HEADER = struct.Struct("<Q")
-import time as _t
-_T0 = float(os.environ.get("FW_T0", "0") or 0)
-def _tr(msg):
-    if _T0:
-        sys.stderr.write(f"[{_t.time() - _T0:6.3f} pid {os.getpid()} cpu {_t.process_time():.3f}] {msg}\n")
+
 _ABORT = 0xFFFFFFFFFFFFFFFF
 _BARRIER = 0xFFFFFFFFFFFFFFFE
 
@@ -83,9 +79,7 @@ def _draw(job: bytes, fd: int) -> None:
     """Grandchild: run one pickled call, send back ("ok", paths) or ("error", message)."""
     try:
         fn, args, kwargs = pickle.loads(job[1:])
-        _tr(f"draw {fn.__name__}")
         res = fn(*args, **kwargs)
-        _tr(f"done {fn.__name__}")
         msg = ("ok", [str(p) for p in (res or [])])
     except BaseException as exc:  # noqa: BLE001 (reported to the stage through the pipe)
         msg = ("error", str(exc) or type(exc).__name__)
@@ -127,10 +121,8 @@ def _serve(jobs: int, status: int) -> None:
             errors.append(val if kind == "error" else "a figure writer process failed")
 
     try:
-        _tr("worker forked")
         try:
             _warm()
-            _tr("warm")
         except Exception:  # noqa: BLE001 (a real failure shows again, and is reported, in the writer)
             pass
         ncpu = os.cpu_count() or 1
@@ -160,7 +152,6 @@ def _serve(jobs: int, status: int) -> None:
                 try:
                     fn, args, kwargs = pickle.loads(job[1:])
                     fn(*args, **kwargs)
-                    _tr(f"prepared {args[:1]}")
                 except Exception:  # noqa: BLE001 (the figure is then built by its writer)
                     pass
                 continue
@@ -288,7 +279,6 @@ def submit(fn, *args, **kwargs) -> None:
     if _WORKER is None:
         fn(*args, **kwargs)
         return
-    _tr(f"submit {fn.__name__}")
     _WORKER.send(_job(b"D", fn, args, kwargs))
 
 
@@ -363,17 +353,14 @@ def session(enabled: bool = True):
     (:func:`finish`) or, when the block raised, :func:`abort` it.  A nested session (the
     design run by ``acmm simulate``) shares the outer one's worker and on leaving waits for
     its own figures (:func:`flush`), so that they are recorded before its stage prunes."""
-    _tr("session")
     owner = start() if enabled else False
     try:
         yield
-        _tr("session body done")
     except BaseException:
         if owner:
             abort()
         raise
     if owner:
         finish()
-        _tr("finished")
     elif enabled:
         flush()

@@ -5,6 +5,7 @@ given path; nothing is shown on screen.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -172,12 +173,31 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
     return fig, axs
 
 
+@dataclass
+class SampledSchedule:
+    """A gain schedule sampled for drawing: ``gains[k]`` (3, 24) at pitch TEA ``theta2[k]`` (rad).
+
+    What :func:`gain_schedule_grid` draws of a schedule; plain arrays, so a figure writer
+    process needs neither the schedule's class nor its imports."""
+
+    form: str
+    theta2: np.ndarray
+    gains: np.ndarray
+
+
+def sample_schedule(fit, theta2, n: int = 60) -> SampledSchedule:
+    """``fit`` (an :class:`acmm.schedule.ScheduleFit`) at ``n`` pitch TEAs spanning ``theta2`` (rad)."""
+    fine = np.linspace(theta2.min(), theta2.max(), n)
+    return SampledSchedule(fit.form, fine, np.array([fit.gain(t) for t in fine]))
+
+
 def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, units=None,
                        torque_unit="ft·lbf"):
-    """K(i, j) versus pitch TEA for all 24 columns (3 rows each), with the fitted curves."""
+    """K(i, j) versus pitch TEA for all 24 columns (3 rows each), with the fitted curves
+    (``fit``: an :class:`acmm.schedule.ScheduleFit` or its :func:`sample_schedule`)."""
     theta2_deg = np.degrees(theta2)
-    fine = np.linspace(theta2.min(), theta2.max(), 60)
-    kf = np.array([fit.gain(t) for t in fine])
+    curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
+    fine, kf = curve.theta2, curve.gains
     units = units or state_units()
     fig, axs = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
     for j, ax in enumerate(axs.flat):
@@ -185,7 +205,7 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
             ax.plot(theta2_deg, gains[:, i, j], "o", ms=3, color=color, label=f"K({i + 1},·) LQR")
             ax.plot(np.degrees(fine), kf[:, i, j], "-", lw=1, color=color)
     axs[0, 0].legend(fontsize=6)
-    fig.suptitle(f"Gain schedule: LQR gains (dots) and the {fit.form} schedule (lines) vs TEA "
+    fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
                  "(cf. Figs 5.3–5.26)")
     return _save(fig, path, vector, tight=False)
 
@@ -353,7 +373,9 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
     a2.semilogy(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
     a2.set_ylabel("disk margin α at u (skew 0)")
     a2.set_xlabel("pitch TEA θ2* (deg)")
-    return _save(fig, path, vector)
+    # a fixed layout: bbox 'tight' draws the figure twice
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
+    return _save(fig, path, vector, tight=False)
 
 
 def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=False):
@@ -362,6 +384,7 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
     plt = _plt()
     p = np.asarray(poles) / n
     fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
     t = np.tan(np.radians(half_angle_deg))
     lo = max(min(p.real.min() * 1.05, -2 * sigma), -60.0)
     x = np.linspace(lo, -sigma, 10)
@@ -380,7 +403,7 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
     ax.set_ylabel("Im λ / n")
     ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
     ax.legend(fontsize=7, loc="upper left")
-    return _save(fig, path, vector)
+    return _save(fig, path, vector, tight=False)
 
 
 _BUILDERS = {"axis_histories": _axis_histories_layout, "inertia_histories": _inertia_layout,

@@ -205,8 +205,9 @@ def design_hash(cfg: Config) -> str:
     return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
 
 
-def compute_design(config, progress=None) -> DesignResult:
-    """Design every point of a config and fit the schedule (when there are ≥ 2 points).
+def compute_design(config, progress=None, on_points=None, on_fit=None) -> DesignResult:
+    """Design every point of a config and fit the schedule (when there are ≥ 2 points);
+    ``on_points``/``on_fit``: see :func:`acmm.design_core.design_schedule`.
 
     The config is read here once (:func:`acmm.settings.design_settings`,
     :func:`acmm.schedule.point_specs`); the core :func:`acmm.design_core.design_schedule` gets
@@ -219,7 +220,8 @@ def compute_design(config, progress=None) -> DesignResult:
 
     cfg = _as_config(config)
     t0 = time.perf_counter()
-    ds = design_schedule(sch.point_specs(cfg), design_settings(cfg), schedule_settings(cfg), progress)
+    ds = design_schedule(sch.point_specs(cfg), design_settings(cfg), schedule_settings(cfg), progress,
+                         on_points, on_fit)
     table = design_table(ds.points, ds.fit, design_hash(cfg))
     return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check)
 
@@ -245,10 +247,15 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
 
     cfg = _as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
+    s, run_dir = design_settings(cfg), cfg.run_dir()
     with figure_worker.session(want_figures):
-        r = compute_design(cfg, progress)
-        if want_figures:
-            out.design_figures(r, design_settings(cfg), cfg.run_dir(), cfg.output.units)
+        if want_figures:       # figures handed to the worker as their data is ready
+            out.prepare_design_figures(s, cfg.output.units)
+            r = compute_design(cfg, progress, lambda pts: out.pole_map_figure(pts, s, run_dir),
+                               lambda pts, fit: out.gain_figure(pts, fit, s, run_dir, cfg.output.units))
+            out.path_figures(r.path_check, s, run_dir)
+        else:
+            r = compute_design(cfg, progress)
         pts = out.point_items(r.points)
         items = out.table_items(r, pts)
         if r.fit is not None:
@@ -353,12 +360,9 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
         if want_figures:
             out.prepare_sim_figures(cfg)
         table, note = design_for(cfg, progress, figures)
-        figure_worker._tr("design_for")
         sc = sim_mod.scenario_from_config(cfg, table)
-        figure_worker._tr("scenario")
         t0 = time.perf_counter()
         r = sim_mod.simulate(sc)
-        figure_worker._tr("simulated")
         wall = time.perf_counter() - t0
         stats = sim_mod.level_statistics(sc, r)
         result = SimulateResult(cfg, sc, r, stats, note, wall)
@@ -366,7 +370,5 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
         if want_figures:
             out.sim_figures(cfg, sc, r, stats, items)
         items = _in_system(items, cfg, {"levels/gain": "K", "drf": "drf"})
-        figure_worker._tr("items")
         path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
-        figure_worker._tr("written")
     return result, path
