@@ -6,7 +6,7 @@ artists and drawing/encoding them.  None of it needs anything back, so ``acmm de
 font caches on the second core while the stage designs or simulates; the stage then hands it
 each figure as a call of a module-level function of :mod:`acmm.plots` on arrays (pickled
 through a pipe by a sender thread, so the stage goes on writing its HDF5 file meanwhile).  The
-worker draws each figure in a forked grandchild (at most one per CPU at a time), so the
+worker draws each figure in a forked grandchild (at most one per CPU, plus one, at a time), so the
 figures are drawn in parallel with each other and with the HDF5 write.
 
     with figure_worker.session(want_figures):   # forks the worker (when possible)
@@ -20,8 +20,10 @@ If the block raises, the worker and its writers are killed (figures are written 
 no partial file is left) and the exception propagates.
 
 The worker is used only where forking is safe and pays: POSIX ``os.fork``, more than one CPU,
-and no other Python thread alive in the process (a notebook kernel, a Dask worker: there every
-call runs in place, as it does without a session).  ``ACMM_FIGURE_WORKER=0`` turns it off.
+and no other Python thread alive in the process but daemon helpers (the terminal progress bar's
+refresh thread; the worker never touches what they hold).  In a process with other threads (a
+Dask worker, a thread pool) every call runs in place, as it does without a session.
+``ACMM_FIGURE_WORKER=0`` turns it off.
 """
 from __future__ import annotations
 
@@ -36,6 +38,7 @@ from pathlib import Path
 
 _HEADER = struct.Struct("<Q")
 
+
 _ABORT = 0xFFFFFFFFFFFFFFFF
 _BARRIER = 0xFFFFFFFFFFFFFFFE
 
@@ -45,8 +48,10 @@ _WORKER: "_Worker | None" = None
 
 def usable() -> bool:
     """Whether a figure worker may be forked here (see the module docstring)."""
+    me = threading.current_thread()
     return (os.environ.get("ACMM_FIGURE_WORKER", "1") != "0" and hasattr(os, "fork")
-            and (os.cpu_count() or 1) > 1 and threading.active_count() == 1)
+            and (os.cpu_count() or 1) > 1
+            and all(t.daemon for t in threading.enumerate() if t is not me))
 
 
 def _read_exact(fd: int, n: int) -> bytes | None:
@@ -103,7 +108,7 @@ def _recv_framed(fd: int):
 
 
 def _serve(jobs: int, status: int) -> None:
-    """The worker: warm up, then fork one writer per job (at most one per CPU at a time)."""
+    """The worker: warm up, then fork one writer per job (at most one per CPU, plus one, at a time)."""
     code = 0
     running: dict[int, int] = {}          # pid → read end of its result pipe
     written: list[str] = []
@@ -121,11 +126,15 @@ def _serve(jobs: int, status: int) -> None:
             errors.append(val if kind == "error" else "a figure writer process failed")
 
     try:
+        from acmm import parallel_figures
+
+        parallel_figures.forget()             # a writer draws in place, never forks again
         try:
             _warm()
         except Exception:  # noqa: BLE001 (a real failure shows again, and is reported, in the writer)
             pass
-        ncpu = os.cpu_count() or 1
+        # one writer per CPU, plus one: the stage itself only writes its HDF5 file meanwhile
+        slots = (os.cpu_count() or 1) + 1
         while True:
             head = _read_exact(jobs, _HEADER.size)
             if head is None:
@@ -155,7 +164,7 @@ def _serve(jobs: int, status: int) -> None:
                 except Exception:  # noqa: BLE001 (the figure is then built by its writer)
                     pass
                 continue
-            while len(running) >= ncpu:
+            while len(running) >= slots:
                 join(next(iter(running)))
             r, w = os.pipe()
             pid = os.fork()

@@ -37,7 +37,15 @@ def enable(enabled: bool = True) -> bool:
 
 
 def active() -> bool:
+    """Whether :func:`run` forks (enabled and not yet waited for)."""
     return _PENDING is not None
+
+
+def forget() -> None:
+    """In a forked process: drop the parent's writers (not this process's children) and run
+    in place from now on."""
+    global _PENDING
+    _PENDING = None
 
 
 def run(fn: Callable[[], object], what: str = "figure") -> None:

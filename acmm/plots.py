@@ -16,21 +16,6 @@ from common.results import save_figure
 AXES = ("roll", "pitch", "yaw")
 
 
-def parallel_saves(enabled: bool = True) -> None:
-    """From now on, :func:`_save` draws and writes each figure in a forked child process while
-    the caller builds the next one (:mod:`acmm.parallel_figures`); :func:`wait_saves` joins them."""
-    from acmm import parallel_figures
-
-    parallel_figures.enable(enabled)
-
-
-def wait_saves() -> None:
-    """Wait for the figure writers (raises :class:`acmm.errors.OutputError` on a failure)."""
-    from acmm import parallel_figures
-
-    parallel_figures.wait()
-
-
 def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Path]:
     path = Path(path)
     out = [path.with_suffix(".png")]

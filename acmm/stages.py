@@ -351,12 +351,13 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
     import time
 
     from acmm import figure_worker
-    from acmm import sim_output as out
-    from acmm import simulate as sim_mod
 
     cfg = _as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
-    with figure_worker.session(want_figures):
+    with figure_worker.session(want_figures):       # first: the worker starts before numba loads
+        from acmm import sim_output as out
+        from acmm import simulate as sim_mod
+
         if want_figures:
             out.prepare_sim_figures(cfg)
         table, note = design_for(cfg, progress, figures)
