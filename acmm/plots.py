@@ -25,6 +25,10 @@ def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Pat
         if vector:
             out.append(path.with_suffix(".pdf"))
         parallel_figures.run(lambda: _save_now(fig, path, [out[0]], vector, tight), str(out[0]))
+        from common.outputs import record_written
+
+        for p in out:               # written by the child: recorded here, or the stage prunes them
+            record_written(p)
         import matplotlib.pyplot as plt
 
         plt.close(fig)
