@@ -107,6 +107,32 @@ def _recv_framed(fd: int):
     return None if data is None else pickle.loads(data)
 
 
+def _fork_writer(job: bytes, close: tuple) -> tuple[int, int]:
+    """Fork a writer for ``job`` (closing the worker's pipes ``close`` in it); returns its pid
+    and the read end of its result pipe."""
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        os.close(r)
+        for fd in close:
+            os.close(fd)
+        try:
+            _draw(job, w)
+        finally:
+            os._exit(0)
+    os.close(w)
+    return pid, r
+
+
+def _prepare(job: bytes) -> None:
+    """Run a prepare job here, for the writers forked later (a failure: the writer builds it)."""
+    try:
+        fn, args, kwargs = pickle.loads(job[1:])
+        fn(*args, **kwargs)
+    except Exception:  # noqa: BLE001
+        pass
+
+
 def _serve(jobs: int, status: int) -> None:
     """The worker: warm up, then fork one writer per job (at most one per CPU, plus one, at a time)."""
     code = 0
@@ -157,27 +183,13 @@ def _serve(jobs: int, status: int) -> None:
             job = _read_exact(jobs, n)
             if job is None:
                 break
-            if job[:1] == b"P":                 # prepare here, for the writers forked later
-                try:
-                    fn, args, kwargs = pickle.loads(job[1:])
-                    fn(*args, **kwargs)
-                except Exception:  # noqa: BLE001 (the figure is then built by its writer)
-                    pass
+            if job[:1] == b"P":
+                _prepare(job)
                 continue
             while len(running) >= slots:
                 join(next(iter(running)))
-            r, w = os.pipe()
-            pid = os.fork()
-            if pid == 0:
-                os.close(r)
-                os.close(jobs)
-                os.close(status)
-                try:
-                    _draw(job, w)
-                finally:
-                    os._exit(0)
-            os.close(w)
-            running[pid] = r
+            pid, fd = _fork_writer(job, (jobs, status))
+            running[pid] = fd
         for pid in list(running):
             join(pid)
         _send_framed(status, (written, errors))
