@@ -251,19 +251,19 @@ class _Worker:
     def close(self, abort: bool = False) -> tuple[list, list, int]:
         """Stop the worker (after the queued jobs, or at once with ``abort``); returns
         (files written, error messages, exit code)."""
+        if self.thread is None:               # never used (the config wants no figures): no wait
+            os.kill(self.pid, signal.SIGKILL)
+            os.close(self.jobs)
+            os.close(self.status)
+            os.waitpid(self.pid, 0)
+            return [], [], 0
         if abort:
             with self.cond:
                 self.queue.clear()
-        if self.thread is not None:
-            self.send(_HEADER.pack(_ABORT) if abort else None)
-            if abort:
-                self.send(None)
-            self.thread.join()
-        elif abort:
-            try:
-                os.write(self.jobs, _HEADER.pack(_ABORT))
-            except OSError:
-                pass
+        self.send(_HEADER.pack(_ABORT) if abort else None)
+        if abort:
+            self.send(None)
+        self.thread.join()
         os.close(self.jobs)
         got = _recv_framed(self.status)
         os.close(self.status)
@@ -371,7 +371,9 @@ def abort() -> None:
 @contextlib.contextmanager
 def session(enabled: bool = True):
     """A stage's figures: fork the worker now (see the module docstring); on leaving, join it
-    (:func:`finish`) or, when the block raised, :func:`abort` it.  A nested session (the
+    (:func:`finish`) or, when the block raised, :func:`abort` it.  The ``acmm`` command opens one
+    around the stage already (the worker then starts before the stage's imports); a worker that
+    was never handed anything is killed at once.  A nested session (the
     design run by ``acmm simulate``) shares the outer one's worker and on leaving waits for
     its own figures (:func:`flush`), so that they are recorded before its stage prunes."""
     owner = start() if enabled else False

@@ -155,9 +155,12 @@ def design(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = 
     """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures.
     With --strict, a scheduled gain with poles outside the sector exits 1."""
 
-    from acmm.stages import run_design
+    from acmm import figure_worker
 
-    r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
+    with figure_worker.session(figures is not False):     # started before the heavy imports
+        from acmm.stages import run_design
+
+        r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
     cfg = r.config
     typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
                f"sector Re <= -{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g} deg "
@@ -191,10 +194,14 @@ def simulate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] 
     """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures.
     With --strict, a DIVERGED verdict exits 1."""
 
-    from acmm.stages import run_simulate
+    from acmm import figure_worker
+
+    with figure_worker.session(figures is not False):     # started before the heavy imports
+        from acmm.stages import run_simulate
+
+        r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
     from common.units import shown
 
-    r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
     cfg, s = r.config, r.sim
     typer.echo(f"{cfg.name}: design {r.design_note}")
     typer.echo(f"  simulated {r.orbits_simulated:.2f} of {cfg.simulation.orbits:g} orbits in "
