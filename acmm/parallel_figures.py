@@ -18,7 +18,7 @@ function in place, so callers need not care.  At most one writer per CPU runs at
 
 The stages (``acmm design``/``simulate``) no longer use it: :mod:`acmm.figure_worker` (one
 pre-importing worker forked when the stage starts, skeletons built ahead) took ``acmm simulate
-staircase`` with figures from 3.3 s to 1.75 s (2 cores, best of 3), where this module's
+staircase`` with figures from 3.5 s to 1.6 s (2 cores, best of 3), where this module's
 fork-per-``savefig`` gave 3.1 s (each writer still paid the drawing after the stage's own
 building of the figure).  It stays opt-in for the report.
 """
