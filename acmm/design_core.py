@@ -42,9 +42,11 @@ class DesignedSchedule:
 
 
 def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | None,
-                    progress=None) -> DesignedSchedule:
+                    progress=None, on_points=None, on_fit=None) -> DesignedSchedule:
     """Design every point of ``specs`` with settings ``s`` and fit the schedule ``sched``
-    (when there are ≥ 2 points); ``progress(name)`` is called after each point.
+    (when there are ≥ 2 points); ``progress(name)`` is called after each point,
+    ``on_points(points)`` once they are all designed and ``on_fit(points, fit)`` once the
+    schedule is final (the stage hands figures to its figure worker meanwhile).
 
     Parameters
     ----------
@@ -56,6 +58,11 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
         The schedule settings (None: order 2 polynomial, no path check).
     progress : callable or None
         Called with each point's name after its design.
+    on_points : callable or None
+        Called with the list of point designs once all are designed.
+    on_fit : callable or None
+        Called with the point designs and the final :class:`acmm.schedule.ScheduleFit`
+        (before its checks; not called with fewer than 2 points).
 
     Returns
     -------
@@ -67,6 +74,8 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
         points.append(sch.design_one(spec, s))
         if progress is not None:
             progress(spec.name)
+    if on_points is not None:
+        on_points(points)
     fit = check = path_check = None
     if len(points) >= 2:
         gains = np.array([p.lqr.K for p in points])
@@ -77,6 +86,8 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
         if path is not None and sched.fit == "closed_loop" and fit.form == "polynomial":
             fit = refit_closed_loop(fit, path, s.orbit_rate,
                                     half_angle_deg=s.sector.half_angle_deg, **REFIT_DEFAULTS)
+        if on_fit is not None:
+            on_fit(points, fit)
         check = sch.check_schedule(fit, points, s)
         if path is not None:
             path_check = check_path(fit.gain, path, s.orbit_rate, s.sector.sigma,

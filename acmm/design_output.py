@@ -184,50 +184,67 @@ def unit_roles(pts: dict, has_fit: bool) -> dict:
     return roles
 
 
-def design_figures(r, s, run_dir: Path, units_system: str) -> None:
-    """The pole-map, gain-schedule and path-check figures of a design (settings ``s``: an
-    :class:`acmm.settings.DesignSettings`) in ``run_dir``, gains in the ``units_system``.
+def gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
+    """(unit of each state as printed, torque unit) for the gain figure's labels."""
+    if units_system == "imperial":
+        from acmm.plots import state_units
 
-    Parameters
-    ----------
-    r : acmm.stages.DesignResult
-        The design.
-    s : acmm.settings.DesignSettings
-        Its settings (orbit rate, sector, DRF mode).
-    run_dir : pathlib.Path
-        Folder of the figures.
-    units_system : str
-        ``"imperial"`` or ``"SI"``.
-    """
-    from acmm import plots
+        return tuple(state_units(drf_mode)), "ft·lbf"
+    from acmm.units import state_factors
+
+    return tuple(u.replace("*", "·") for u in state_factors(drf_mode, units_system)[1]), "N·m"
+
+
+def prepare_design_figures(s, units_system: str) -> None:
+    """Have the figure worker build the gain figure's skeleton while the design is computed
+    (:func:`acmm.plots.prebuild`; nothing without a worker)."""
+    from acmm import figure_worker, plots
     from acmm.linearize import STATE_NAMES
 
-    plots.parallel_saves()
-    d = s
-    plots.pole_map([p.lqr.poles for p in r.points], r.table.names, s.orbit_rate, d.sector.sigma,
-                   d.sector.half_angle_deg, run_dir / "design_poles.png")
-    if r.fit is not None:
-        fit, gains = r.fit, r.table.gain
-        if units_system != "imperial":     # K in the output system (the schedule is linear in K)
-            from dataclasses import replace as _replace
+    figure_worker.prepare(plots.prebuild, "gain_schedule_grid", tuple(STATE_NAMES),
+                          *gain_labels(s.drf_mode, units_system))
 
-            from acmm.units import state_space_in
 
-            conv = lambda K: state_space_in(units_system, d.drf_mode, K=K)["K"]  # noqa: E731
-            gains = conv(gains)
-            fit = _replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
-        if units_system == "imperial":
-            units, torque = plots.state_units(d.drf_mode), "ft·lbf"
-        else:
-            from acmm.units import state_factors
+def pole_map_figure(points, s, run_dir: Path) -> None:
+    """Submit the design points' pole map (:func:`acmm.figure_worker.submit`)."""
+    from acmm import plots
+    from acmm.figure_worker import submit
 
-            units, torque = [u.replace("*", "·") for u in state_factors(d.drf_mode, units_system)[1]], "N·m"
-        plots.gain_schedule_grid(r.table.tea[:, 1], gains, fit, STATE_NAMES,
-                                 run_dir / "design_gains.png", units=units, torque_unit=torque)
-    if r.path_check is not None:
-        pc = r.path_check
-        plots.schedule_path_check(pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
-                                  run_dir / "design_path_margins.png")
-        plots.scheduled_pole_map(pc.poles, pc.theta2, s.orbit_rate, d.sector.sigma,
-                                 d.sector.half_angle_deg, run_dir / "design_path_poles.png")
-    plots.wait_saves()
+    submit(plots.pole_map, [p.lqr.poles for p in points], [p.spec.name for p in points], s.orbit_rate,
+           s.sector.sigma, s.sector.half_angle_deg, run_dir / "design_poles.png")
+
+
+def gain_figure(points, fit, s, run_dir: Path, units_system: str) -> None:
+    """Submit the gain-schedule figure: the points' LQR gains and the schedule ``fit``, in the
+    ``units_system`` (:func:`acmm.figure_worker.submit`)."""
+    from acmm import plots
+    from acmm.figure_worker import submit
+    from acmm.linearize import STATE_NAMES
+
+    gains = np.array([p.lqr.K for p in points])
+    theta2 = np.array([p.tea.theta[1] for p in points])
+    if units_system != "imperial":     # K in the output system (the schedule is linear in K)
+        from dataclasses import replace as _replace
+
+        from acmm.units import state_space_in
+
+        conv = lambda K: state_space_in(units_system, s.drf_mode, K=K)["K"]  # noqa: E731
+        gains = conv(gains)
+        fit = _replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
+    units, torque = gain_labels(s.drf_mode, units_system)
+    submit(plots.gain_schedule_grid, theta2, gains, plots.sample_schedule(fit, theta2), STATE_NAMES,
+           run_dir / "design_gains.png", units=list(units), torque_unit=torque)
+
+
+def path_figures(pc, s, run_dir: Path) -> None:
+    """Submit the path-check figures (margins, scheduled poles) of ``pc`` (an
+    :class:`acmm.path_check.PathCheck`; None: nothing)."""
+    from acmm import plots
+    from acmm.figure_worker import submit
+
+    if pc is None:
+        return
+    submit(plots.schedule_path_check, pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
+           run_dir / "design_path_margins.png")
+    submit(plots.scheduled_pole_map, pc.poles, pc.theta2, s.orbit_rate, s.sector.sigma,
+           s.sector.half_angle_deg, run_dir / "design_path_poles.png")

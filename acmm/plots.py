@@ -6,6 +6,7 @@ stair-case simulation of ch. 6.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -14,27 +15,6 @@ from common.plot_style import stage_pyplot as _plt  # noqa: F401 (acmm.sweep use
 from common.results import save_figure
 
 AXES = ("roll", "pitch", "yaw")
-
-
-def parallel_saves(enabled: bool = True) -> None:
-    """From now on, :func:`_save` draws and writes each figure in a forked child process while
-    the caller builds the next one (:mod:`acmm.parallel_figures`); :func:`wait_saves` joins them.
-
-    Parameters
-    ----------
-    enabled : bool, optional
-        Ask for forked writers (see :func:`acmm.parallel_figures.enable`).
-    """
-    from acmm import parallel_figures
-
-    parallel_figures.enable(enabled)
-
-
-def wait_saves() -> None:
-    """Wait for the figure writers (raises :class:`acmm.errors.OutputError` on a failure)."""
-    from acmm import parallel_figures
-
-    parallel_figures.wait()
 
 
 def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Path]:
@@ -46,24 +26,60 @@ def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Pat
         if vector:
             out.append(path.with_suffix(".pdf"))
         parallel_figures.run(lambda: _save_now(fig, path, [out[0]], vector, tight), str(out[0]))
+        from common.outputs import record_written
+
+        for p in out:               # written by the child: recorded here, or the stage prunes them
+            record_written(p)
         import matplotlib.pyplot as plt
 
         plt.close(fig)
         return out
     _save_now(fig, path, out, vector, tight)
-    fig.clf()
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt         # no fig.clf(): clearing 12 axes cost ~0.15 s, close frees it
 
     plt.close(fig)
     return out
 
 
+#: PNG deflate level: 3 encodes ~1.5x faster than PIL's default 6 for ~8 % larger files (issue 16)
+PNG_COMPRESS_LEVEL = 3
+
+
 def _save_now(fig, path: Path, out: list, vector: bool, tight: bool) -> None:
     bbox = "tight" if tight else None
-    save_figure(fig, out[0], bbox_inches=bbox)
+    save_figure(fig, out[0], bbox_inches=bbox, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
     if vector:
         out.append(path.with_suffix(".pdf"))
         save_figure(fig, out[1], bbox_inches=bbox)
+
+
+#: figure skeletons built ahead (:func:`prebuild`): (kind, parameters) → (figure, axes)
+_LAYOUTS: dict = {}
+
+
+def prebuild(kind: str, *params) -> None:
+    """Build the skeleton of a figure ``kind`` (axes, labels, titles, tick locators and tick
+    artists: everything that does not depend on the data) for the figure function called later
+    with the same parameters.
+
+    The figure worker (:mod:`acmm.figure_worker`) calls this while the stage still computes, so
+    the figure function then only draws the data; without it the skeleton is built on the spot.
+    The result is identical either way.
+    """
+    _LAYOUTS[(kind, params)] = _BUILDERS[kind](*params)
+
+
+def _layout(kind: str, *params):
+    got = _LAYOUTS.pop((kind, params), None)
+    return got if got is not None else _BUILDERS[kind](*params)
+
+
+def _premake_ticks(axes, nx: int = 9, ny: int = 8) -> None:
+    """Create the tick artists now (the costly part of an axis): at draw time the axis reuses
+    the first ones it needs and makes more only if the locator asks for more."""
+    for ax in axes:
+        ax.xaxis.get_major_ticks(nx)
+        ax.yaxis.get_major_ticks(ny)
 
 
 #: lines longer than this are drawn as a min/max envelope per pixel column (issue 16)
@@ -169,6 +185,40 @@ def gain_unit(state_unit: str, torque_unit: str = "ft·lbf") -> str:
     return f"{torque_unit}/({state_unit})" if any(ch in state_unit for ch in "/·") else f"{torque_unit}/{state_unit}"
 
 
+def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
+    plt = _plt()
+    fig, axs = plt.subplots(6, 4, figsize=(13, 15), sharex=True, dpi=80)
+    for j, ax in enumerate(axs.flat):
+        ax.set_title(f"K(i,{j + 1}) — {state_names[j]}", fontsize=8)
+        ax.set_ylabel(f"K(i,{j + 1}) ({gain_unit(units[j], torque_unit)})", fontsize=6)
+        ax.tick_params(labelsize=7)
+        _few_ticks(ax)
+    for ax in axs[-1]:
+        ax.set_xlabel("pitch TEA θ2* (deg)")
+    # a fixed layout: tight_layout/bbox 'tight' on 24 panels costs seconds
+    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.45, hspace=0.35)
+    _premake_ticks(axs.flat, 7, 7)
+    return fig, axs
+
+
+@dataclass
+class SampledSchedule:
+    """A gain schedule sampled for drawing: ``gains[k]`` (3, 24) at pitch TEA ``theta2[k]`` (rad).
+
+    What :func:`gain_schedule_grid` draws of a schedule; plain arrays, so a figure writer
+    process needs neither the schedule's class nor its imports."""
+
+    form: str
+    theta2: np.ndarray
+    gains: np.ndarray
+
+
+def sample_schedule(fit, theta2, n: int = 60) -> SampledSchedule:
+    """``fit`` (an :class:`acmm.schedule.ScheduleFit`) at ``n`` pitch TEAs spanning ``theta2`` (rad)."""
+    fine = np.linspace(theta2.min(), theta2.max(), n)
+    return SampledSchedule(fit.form, fine, np.array([fit.gain(t) for t in fine]))
+
+
 def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, units=None,
                        torque_unit="ft·lbf"):
     """K(i, j) versus pitch TEA for all 24 columns (3 rows each), with the fitted curves.
@@ -179,8 +229,8 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
         Pitch TEA of the design points, rad.
     gains : (P, 3, 24) array
         LQR gains, ``torque_unit`` per state unit.
-    fit : acmm.schedule.ScheduleFit
-        The schedule (same units as ``gains``).
+    fit : acmm.schedule.ScheduleFit or SampledSchedule
+        The schedule, or its samples from :func:`sample_schedule` (same units as ``gains``).
     state_names : list of str
         The 24 state names.
     path : path-like
@@ -197,27 +247,18 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    plt = _plt()
     theta2_deg = np.degrees(theta2)
-    fine = np.linspace(theta2.min(), theta2.max(), 60)
-    kf = np.array([fit.gain(t) for t in fine])
-    fig, axs = plt.subplots(6, 4, figsize=(13, 15), sharex=True, dpi=80)
+    curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
+    fine, kf = curve.theta2, curve.gains
     units = units or state_units()
+    fig, axs = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
     for j, ax in enumerate(axs.flat):
         for i, color in zip(range(3), ("C0", "C1", "C2")):
             ax.plot(theta2_deg, gains[:, i, j], "o", ms=3, color=color, label=f"K({i + 1},·) LQR")
             ax.plot(np.degrees(fine), kf[:, i, j], "-", lw=1, color=color)
-        ax.set_title(f"K(i,{j + 1}) — {state_names[j]}", fontsize=8)
-        ax.set_ylabel(f"K(i,{j + 1}) ({gain_unit(units[j], torque_unit)})", fontsize=6)
-        ax.tick_params(labelsize=7)
-        _few_ticks(ax)
-    for ax in axs[-1]:
-        ax.set_xlabel("pitch TEA θ2* (deg)")
     axs[0, 0].legend(fontsize=6)
-    fig.suptitle(f"Gain schedule: LQR gains (dots) and the {fit.form} schedule (lines) vs TEA "
+    fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
                  "(cf. Figs 5.3–5.26)")
-    # a fixed layout: tight_layout/bbox 'tight' on 24 panels costs seconds
-    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.45, hspace=0.35)
     return _save(fig, path, vector, tight=False)
 
 
@@ -270,6 +311,29 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
     return _save(fig, path, vector, tight=False)
 
 
+def _axis_histories_layout(units: str):
+    from common.units import pretty, shown
+
+    plt = _plt()
+    fig, axs = plt.subplots(4, 3, figsize=(13, 10), sharex=True)
+    uu, hu = shown(1.0, "ft*lbf", units)[1], shown(1.0, "ft*lbf*s", units)[1]
+    labels = ["attitude error θ−θ̂* (deg)", "body rate rel. LVLH (deg/s)",
+              f"control torque ({pretty(uu)})", f"CMG momentum ({pretty(hu)})"]
+    for r, label in enumerate(labels):
+        for a in range(3):
+            ax = axs[r, a]
+            _few_ticks(ax, 6, 4)
+            if r == 0:
+                ax.set_title(AXES[a])
+            ax.set_ylabel(label, fontsize=8 if a == 0 else 7)
+    for ax in axs[-1]:
+        ax.set_xlabel("time (orbits)")
+    # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.06, top=0.93, wspace=0.25, hspace=0.12)
+    _premake_ticks(axs.flat)
+    return fig, axs
+
+
 def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units="imperial"):
     """Angle error, rate, delivered torque and CMG momentum per axis vs orbit (Figs 6.2–6.13, 6.20–6.30).
 
@@ -301,28 +365,36 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
+    from common.units import shown
+
+    fig, axs = _layout("axis_histories", units)
+    u = shown(np.asarray(u), "ft*lbf", units)[0]
+    h = shown(np.asarray(h), "ft*lbf*s", units)[0]
+    for r, data in enumerate((err_deg, rate, u, h)):
+        for a in range(3):
+            axs[r, a].plot(*decimate(orbits, data[:, a]), lw=0.7)
+    fig.suptitle(title)
+    return _save(fig, path, vector, tight=False)
+
+
+def _inertia_layout(units: str):
     from common.units import pretty, shown
 
+    iu = shown(1.0, "slug*ft^2", units)[1]
     plt = _plt()
-    fig, axs = plt.subplots(4, 3, figsize=(13, 10), sharex=True)
-    u, uu = shown(np.asarray(u), "ft*lbf", units)
-    h, hu = shown(np.asarray(h), "ft*lbf*s", units)
-    rows = [(err_deg, "attitude error θ−θ̂* (deg)"), (rate, "body rate rel. LVLH (deg/s)"),
-            (u, f"control torque ({pretty(uu)})"), (h, f"CMG momentum ({pretty(hu)})")]
-    for r, (data, label) in enumerate(rows):
-        for a in range(3):
-            ax = axs[r, a]
-            ax.plot(*decimate(orbits, data[:, a]), lw=0.7)
-            _few_ticks(ax, 6, 4)
-            if r == 0:
-                ax.set_title(AXES[a])
-            ax.set_ylabel(label, fontsize=8 if a == 0 else 7)
+    fig, axs = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
+    for ax, (i, j) in zip(axs.flat, _INERTIA_ELEMENTS):
+        ax.set_title(f"I({i + 1},{j + 1})")
+        ax.set_ylabel(f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})")
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
-    fig.suptitle(title)
-    # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
-    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.06, top=0.93, wspace=0.25, hspace=0.12)
-    return _save(fig, path, vector, tight=False)
+    fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.09, top=0.9, wspace=0.3, hspace=0.25)
+    _premake_ticks(axs.flat)
+    return fig, axs
+
+
+_INERTIA_ELEMENTS = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
 
 
 def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
@@ -346,21 +418,35 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
+    from common.units import shown
+
+    inertia = shown(np.asarray(inertia), "slug*ft^2", units)[0]
+    fig, axs = _layout("inertia_histories", units)
+    for ax, (i, j) in zip(axs.flat, _INERTIA_ELEMENTS):
+        ax.step(orbits, inertia[:, i, j] / 1e6, where="post")
+    return _save(fig, path, vector, tight=False)
+
+
+def _summary_layout(units: str):
     from common.units import pretty, shown
 
-    inertia, iu = shown(np.asarray(inertia), "slug*ft^2", units)
+    hu, uu = shown(1.0, "ft*lbf*s", units)[1], shown(1.0, "ft*lbf", units)[1]
     plt = _plt()
-    fig, axs = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
-    idx = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
-    for ax, (i, j) in zip(axs.flat, idx):
-        ax.step(orbits, inertia[:, i, j] / 1e6, where="post")
-        ax.set_title(f"I({i + 1},{j + 1})")
-        ax.set_ylabel(f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})")
-    for ax in axs[-1]:
+    fig = plt.figure(figsize=(11, 8.5))
+    gs = fig.add_gridspec(3, 2)
+    top = fig.add_subplot(gs[0, :])
+    top.set_ylabel("attitude error (deg)")
+    top.set_xlabel("time (orbits)")
+    mid = []
+    for col, label in enumerate((f"CMG momentum ({pretty(hu)})", f"delivered torque ({pretty(uu)})")):
+        ax = fig.add_subplot(gs[1, col])
+        ax.set_ylabel(label)
         ax.set_xlabel("time (orbits)")
-    fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
-    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.09, top=0.9, wspace=0.3, hspace=0.25)
-    return _save(fig, path, vector, tight=False)
+        mid.append(ax)
+    table = fig.add_subplot(gs[2, :])
+    table.axis("off")
+    _premake_ticks([top, *mid])
+    return fig, (top, mid, table)
 
 
 def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=False, units="imperial"):
@@ -397,35 +483,26 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     from common.units import pretty, shown
 
     h, hu = shown(np.asarray(h), "ft*lbf*s", units)
-    u, uu = shown(np.asarray(u), "ft*lbf", units)
+    u = shown(np.asarray(u), "ft*lbf", units)[0]
     k_h = shown(1.0, "ft*lbf*s", units)[0]
-    plt = _plt()
-    fig = plt.figure(figsize=(11, 8.5))
-    gs = fig.add_gridspec(3, 2)
-    ax = fig.add_subplot(gs[0, :])
+    fig, (ax, mid, tab_ax) = _layout("summary", units)
     for a in range(3):
         ax.plot(*decimate(orbits, err_deg[:, a]), lw=0.7, label=AXES[a])
-    ax.set_ylabel("attitude error (deg)")
-    ax.set_xlabel("time (orbits)")
     ax.legend(fontsize=7)
     ax.set_title(f"{title} — verdict: {verdict}")
-    for col, (data, label) in enumerate(((h, f"CMG momentum ({pretty(hu)})"), (u, f"delivered torque ({pretty(uu)})"))):
-        ax = fig.add_subplot(gs[1, col])
+    for ax, data in zip(mid, (h, u)):
         for a in range(3):
             ax.plot(*decimate(orbits, data[:, a]), lw=0.7, label=AXES[a])
-        ax.set_ylabel(label)
-        ax.set_xlabel("time (orbits)")
         ax.legend(fontsize=7)
-    ax = fig.add_subplot(gs[2, :])
-    ax.axis("off")
     if level_stats:
         header = ["level", "start (orbit)", "θ2* est (deg)", "steady |err| max (deg) r/p/y", f"peak |h| ({pretty(hu)})"]
         rows = [[str(s["level"]), f"{s['start_orbit']:.1f}", f"{s['theta2_deg']:.2f}",
                  " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum'] * k_h:.0f}"]
                 for s in level_stats]
-        tab = ax.table(cellText=rows, colLabels=header, loc="center", cellLoc="center")
+        tab = tab_ax.table(cellText=rows, colLabels=header, loc="center", cellLoc="center")
         tab.auto_set_font_size(False)
         tab.set_fontsize(7)
+    # after the table: its cells are sized on the axes as placed by the default parameters
     fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
     return _save(fig, path, vector, tight=False)
 
@@ -467,7 +544,9 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
     a2.semilogy(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
     a2.set_ylabel("disk margin α at u (skew 0)")
     a2.set_xlabel("pitch TEA θ2* (deg)")
-    return _save(fig, path, vector)
+    # a fixed layout: bbox 'tight' draws the figure twice
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
+    return _save(fig, path, vector, tight=False)
 
 
 def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=False):
@@ -499,6 +578,7 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
     plt = _plt()
     p = np.asarray(poles) / n
     fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
     t = np.tan(np.radians(half_angle_deg))
     lo = max(min(p.real.min() * 1.05, -2 * sigma), -60.0)
     x = np.linspace(lo, -sigma, 10)
@@ -517,4 +597,8 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
     ax.set_ylabel("Im λ / n")
     ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
     ax.legend(fontsize=7, loc="upper left")
-    return _save(fig, path, vector)
+    return _save(fig, path, vector, tight=False)
+
+
+_BUILDERS = {"axis_histories": _axis_histories_layout, "inertia_histories": _inertia_layout,
+             "summary": _summary_layout, "gain_schedule_grid": _gain_grid_layout}

@@ -10,9 +10,10 @@ delivers only the torque that stops |h_i| growing, and the body receives exactly
 CMG absorbs, so I ω̇ + ḣ + ω×(Iω + h) = τ_gg + w holds along every trajectory.
 
 The integrator is an adaptive Dormand–Prince 5(4) pair compiled with numba (``cache=True``: the
-one-time compilation is reused across runs).  :func:`rhs_numpy` is a plain-numpy right-hand side
-of the same model built from :mod:`acmm.dynamics`, used as the independent reference and as the
-``solve_ivp`` baseline of ``make bench``.
+one-time compilation is reused across runs).  :func:`rhs_numpy` (in :mod:`acmm.simulate_reference`,
+re-exported here) is a plain-numpy right-hand side of the same model built from
+:mod:`acmm.dynamics`, used as the independent reference and as the ``solve_ivp`` baseline of
+``make bench``.
 
 Integrated state X (24): ω (rad/s), θ (rad), h (ft·lbf·s), ∫h (ft·lbf·s²), DRF states
 (α̇1, α1, α̇2, α2, α̇3, α3, β̇1, β1, β̇2, β2, β̇3, β3).
@@ -28,6 +29,8 @@ from acmm.linearize import DRF_INPUTS
 from acmm.scenario import (PLAIN_STATE_NAMES, STOP_ANGLE, STOP_NONE, STOP_NONFINITE,  # noqa: F401
                            STOP_REASONS, STOP_SATURATION, STOP_STEP, Scenario, SimResult,
                            attitude_error, level_statistics, plain_scales, scenario_from_config)
+# the plain-numpy reference right-hand side lives in acmm.simulate_reference (issue 12)
+from acmm.simulate_reference import rhs_numpy  # noqa: E402,F401
 
 
 # ----------------------------------------------------------------------------------------------
@@ -361,50 +364,3 @@ def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
          np.asarray(sc.harmonic_a, float), np.asarray(sc.harmonic_b, float), float(sc.n),
          float(sc.torque_limit), float(sc.momentum_limit), drf_idx, out, u, ucmd, flags, scratch_x, scratch_u)
     return out, u, ucmd
-
-
-def rhs_numpy(t: float, X: np.ndarray, sc: Scenario, level: int = 0) -> np.ndarray:
-    """Plain-numpy right-hand side of the same closed loop, from :mod:`acmm.dynamics`.
-
-    The independent reference for the compiled kernel and the ``solve_ivp`` baseline
-    (eqs 3.1, 3.5, 3.8, 3.9, 4.35–4.40 and 5.1; ``docs/ERRATA.md`` § Saturation).
-
-    Parameters
-    ----------
-    t : float
-        Time, s.
-    X : (24,) array
-        Plain state, in the units listed in the module docstring.
-    sc : Scenario
-        The closed loop (units in :class:`Scenario`).
-    level : int
-        Index of the inertia level in force.
-
-    Returns
-    -------
-    (24,) array
-        Ẋ, in the units of X per second.
-    """
-    n = sc.n
-    omega, theta, h = X[0:3], X[3:6], X[6:9]
-    th_est = sc.theta_est[level]
-    om_est = dyn.lvlh_rate_in_body(th_est, n)
-    theta_dot = dyn.attitude_rate(theta, omega, n)
-    x = np.concatenate([[omega[0] - om_est[0], theta_dot[1], omega[2] - om_est[2]],
-                        theta - th_est, X[6:24]])
-    u = np.clip(-sc.gain[level] @ x, -sc.torque_limit, sc.torque_limit)
-    absorbed = np.cross(omega, h)
-    at_limit = (np.abs(h) >= sc.momentum_limit) & ((u - absorbed) * h > 0)
-    u = np.where(at_limit, absorbed, u)
-    w = dyn.disturbance_torque(t, sc.bias[level], sc.harmonic_a, sc.harmonic_b, n)
-    _, omega_dot, h_dot = dyn.plant_rhs(theta, omega, h, sc.inertia[level], n, w, u)
-    drf_in = x[list(DRF_INPUTS[sc.drf_mode])]
-    drf = X[12:24]
-    d_drf = np.empty(12)
-    for j in range(6):
-        wf = n if j < 3 else 2 * n
-        d_drf[2 * j] = -wf * wf * drf[2 * j + 1] + drf_in[j % 3]
-        d_drf[2 * j + 1] = drf[2 * j]
-    return np.concatenate([omega_dot, theta_dot, h_dot, h, d_drf])
-
-

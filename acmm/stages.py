@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm import dynamics as dyn
 from acmm import tea as tea_mod
 from acmm.config import Config, load_config
 from common.outputs import owns_outputs
@@ -367,8 +366,9 @@ def design_hash(cfg: Config) -> str:
     return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
 
 
-def compute_design(config, progress=None) -> DesignResult:
-    """Design every point of a config and fit the schedule (when there are ≥ 2 points).
+def compute_design(config, progress=None, on_points=None, on_fit=None) -> DesignResult:
+    """Design every point of a config and fit the schedule (when there are ≥ 2 points);
+    ``on_points``/``on_fit``: see :func:`acmm.design_core.design_schedule`.
 
     The config is read here once (:func:`acmm.settings.design_settings`,
     :func:`acmm.schedule.point_specs`); the core :func:`acmm.design_core.design_schedule` gets
@@ -394,7 +394,8 @@ def compute_design(config, progress=None) -> DesignResult:
 
     cfg = _as_config(config)
     t0 = time.perf_counter()
-    ds = design_schedule(sch.point_specs(cfg), design_settings(cfg), schedule_settings(cfg), progress)
+    ds = design_schedule(sch.point_specs(cfg), design_settings(cfg), schedule_settings(cfg), progress,
+                         on_points, on_fit)
     table = design_table(ds.points, ds.fit, design_hash(cfg))
     return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check)
 
@@ -444,21 +445,28 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
         (:class:`DesignResult`, pathlib.Path of ``design.h5``).
     """
     from acmm import design_output as out
+    from acmm import figure_worker
     from acmm.settings import design_settings
 
-    r = compute_design(config, progress)
-    cfg = r.config
-    P = len(r.points)
-    pts = out.point_items(r.points)
-    items = out.table_items(r, pts)
-    if r.fit is not None:
-        items["schedule"] = out.schedule_items(r)
-    items = _in_system(items, cfg, out.unit_roles(pts, r.fit is not None))
-    path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
-                    {"stage": "design", "design_hash": r.table.design_hash, "n_points": P,
-                     "schedule_form": r.table.form})
-    if cfg.output.figures if figures is None else figures:
-        out.design_figures(r, design_settings(cfg), cfg.run_dir(), cfg.output.units)
+    cfg = _as_config(config)
+    want_figures = cfg.output.figures if figures is None else figures
+    s, run_dir = design_settings(cfg), cfg.run_dir()
+    with figure_worker.session(want_figures):
+        if want_figures:       # figures handed to the worker as their data is ready
+            out.prepare_design_figures(s, cfg.output.units)
+            r = compute_design(cfg, progress, lambda pts: out.pole_map_figure(pts, s, run_dir),
+                               lambda pts, fit: out.gain_figure(pts, fit, s, run_dir, cfg.output.units))
+            out.path_figures(r.path_check, s, run_dir)
+        else:
+            r = compute_design(cfg, progress)
+        pts = out.point_items(r.points)
+        items = out.table_items(r, pts)
+        if r.fit is not None:
+            items["schedule"] = out.schedule_items(r)
+        items = _in_system(items, cfg, out.unit_roles(pts, r.fit is not None))
+        path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
+                        {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
+                         "schedule_form": r.table.form})
     return r, path
 
 
@@ -475,24 +483,29 @@ def load_design_table(path: Path) -> DesignTable:
     DesignTable
         The arrays in the report's units (slug·ft², ft·lbf, rad).
     """
-    from common.results import read_h5
+    import h5py
 
-    d = read_h5(path)
-    coef = d["schedule"]["coef"] if "schedule" in d else None
-    names = [x.decode() if isinstance(x, bytes) else str(x) for x in d["names"]]
-    inertia, bias, K = d["inertia"], d["bias"], d["K"]
-    if d["attrs"].get("unit_system", "imperial") == "SI":      # back to the report's units
+    def text(v):
+        return v.decode() if isinstance(v, bytes) else v
+
+    with h5py.File(path, "r") as f:
+        attrs = {k: text(f.attrs[k]) for k in ("design_hash", "schedule_form", "unit_system", "config")
+                 if k in f.attrs}
+        coef = f["schedule/coef"][()] if "schedule" in f else None
+        names = [x.decode() if isinstance(x, bytes) else str(x) for x in f["names"][()]]
+        inertia, bias, K, tea = (f[k][()] for k in ("inertia", "bias", "K", "tea"))
+    if attrs.get("unit_system", "imperial") == "SI":      # back to the report's units
         import yaml
 
         from acmm.units import FT_LBF_IN_NM, state_factors
 
-        drf_mode = (yaml.safe_load(d["attrs"]["config"]).get("design") or {}).get("drf_mode", "attitude_hold")
+        drf_mode = (yaml.safe_load(attrs["config"]).get("design") or {}).get("drf_mode", "attitude_hold")
         f, _ = state_factors(drf_mode, "SI")
         inertia, bias = inertia / FT_LBF_IN_NM, bias / FT_LBF_IN_NM
         K = K * f / FT_LBF_IN_NM
         coef = None if coef is None else coef * f / FT_LBF_IN_NM
-    return DesignTable(names, inertia, bias, d["tea"], K, coef, d["attrs"]["design_hash"],
-                       d["attrs"].get("schedule_form", "polynomial"))
+    return DesignTable(names, inertia, bias, tea, K, coef, attrs["design_hash"],
+                       attrs.get("schedule_form", "polynomial"))
 
 
 def _unit_system(path: Path) -> str:
@@ -596,73 +609,26 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
     """
     import time
 
-    from acmm import simulate as sim_mod
+    from acmm import figure_worker
 
     cfg = _as_config(config)
-    table, note = design_for(cfg, progress, figures)
-    sc = sim_mod.scenario_from_config(cfg, table)
-    t0 = time.perf_counter()
-    r = sim_mod.simulate(sc)
-    wall = time.perf_counter() - t0
-    stats = sim_mod.level_statistics(sc, r)
-    result = SimulateResult(cfg, sc, r, stats, note, wall)
-    n = cfg.orbit_rate
-    orbits = r.t * n / (2 * np.pi)
-    err = sim_mod.attitude_error(sc, r)
-    rel_rate = np.degrees(r.state[:, 0:3] - dyn.lvlh_rate_in_body(r.state[:, 3:6], n))
-    items = {
-        "t": Dataset(r.t, "s", "time", dims=("t",)),
-        "orbits": Dataset(orbits, "orbit", "time in orbits (2π/n)", dims=("t",)),
-        "theta": Dataset(r.state[:, 3:6], "rad", "attitude (roll, pitch, yaw), 2-3-1 from LVLH", AXES,
-                         dims=("t", "axis")),
-        "attitude_error": Dataset(err, "rad", "θ − θ̂* of the level in force", AXES, dims=("t", "axis")),
-        "omega": Dataset(r.state[:, 0:3], "rad/s", "absolute body rate", AXES, dims=("t", "axis")),
-        "rate_rel_lvlh": Dataset(rel_rate, "deg/s", "body rate relative to LVLH", AXES, dims=("t", "axis")),
-        "h": Dataset(r.state[:, 6:9], "ft*lbf*s", "CMG momentum", AXES, dims=("t", "axis")),
-        "int_h": Dataset(r.state[:, 9:12], "ft*lbf*s^2", "momentum integral (controller state)", AXES, dims=("t", "axis")),
-        "drf": Dataset(r.state[:, 12:24], "per-state", "DRF states", sim_mod.PLAIN_STATE_NAMES[12:],
-                       dims=("t", "drf_state")),
-        "u_cmd": Dataset(r.u_cmd, "ft*lbf", "commanded torque −K x (before saturation)", AXES, dims=("t", "axis")),
-        "u": Dataset(r.u, "ft*lbf", "delivered torque (after torque and momentum saturation)", AXES, dims=("t", "axis")),
-        "w": Dataset(r.w, "ft*lbf", "disturbance torque (eq 3.9)", AXES, dims=("t", "axis")),
-        "level": Dataset(r.level, "1", "index of the inertia level in force", dims=("t",)),
-        "torque_saturated": Dataset(r.torque_saturated, "1", "torque clipped per axis", AXES, dims=("t", "axis")),
-        "momentum_saturated": Dataset(r.momentum_saturated, "1", "CMG axis at its momentum limit", AXES, dims=("t", "axis")),
-        "levels": {
-            "start": Dataset(sc.level_start, "s", "start time of each level", dims=("level",)),
-            "inertia": Dataset(sc.inertia, "slug*ft^2", "plant inertia per level", dims=("level", "axis", "axis_col")),
-            "bias": Dataset(sc.bias, "ft*lbf", "bias per level", AXES, dims=("level", "axis")),
-            "tea_estimate": Dataset(sc.theta_est, "rad", "TEA estimate used by the controller", AXES,
-                                    dims=("level", "axis")),
-            "gain": Dataset(sc.gain, "ft*lbf per state unit", "gain in use per level (u = −K x)",
-                            dims=("level", "axis", "state")),
-            "steady_error": Dataset(np.array([s["steady_error_deg"] for s in stats]).reshape(-1, 3), "deg",
-                                    "max |θ − θ̂*| over the second half of each level", AXES, dims=("level", "axis")),
-            "peak_momentum": Dataset(np.array([s["peak_momentum"] for s in stats]), "ft*lbf*s",
-                                     "peak |h_i| over each level",
-                                     dims=("level",) if np.ndim([s["peak_momentum"] for s in stats]) == 1
-                                     else ("level", "axis")),
-        },
-        "wall_time": Dataset(wall, "s", "integration wall time"),
-    }
-    attrs = {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
-             "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
-             "design_hash": table.design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
-    items = _in_system(items, cfg, {"levels/gain": "K", "drf": "drf"})
-    path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
-    if cfg.output.figures if figures is None else figures:
-        from acmm import plots
+    want_figures = cfg.output.figures if figures is None else figures
+    with figure_worker.session(want_figures):       # first: the worker starts before numba loads
+        from acmm import sim_output as out
+        from acmm import simulate as sim_mod
 
-        plots.parallel_saves()
-        d = cfg.run_dir()
-        title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
-        units = cfg.output.units
-        plots.axis_histories(orbits, np.degrees(err), rel_rate, r.u, r.state[:, 6:9], title, d / "sim_axes.png",
-                             units=units)
-        if len(sc.level_start) > 1:
-            inertia_t = sc.inertia[r.level]
-            plots.inertia_histories(orbits, inertia_t, d / "sim_inertia.png", units=units)
-        plots.summary(orbits, np.degrees(err), r.state[:, 6:9], r.u, stats, r.verdict, cfg.name, d / "sim_summary.png",
-                      units=units)
-        plots.wait_saves()
+        if want_figures:
+            out.prepare_sim_figures(cfg)
+        table, note = design_for(cfg, progress, figures)
+        sc = sim_mod.scenario_from_config(cfg, table)
+        t0 = time.perf_counter()
+        r = sim_mod.simulate(sc)
+        wall = time.perf_counter() - t0
+        stats = sim_mod.level_statistics(sc, r)
+        result = SimulateResult(cfg, sc, r, stats, note, wall)
+        items, attrs = out.sim_items(cfg, sc, r, stats, table.design_hash, wall)
+        if want_figures:
+            out.sim_figures(cfg, sc, r, stats, items)
+        items = _in_system(items, cfg, {"levels/gain": "K", "drf": "drf"})
+        path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
     return result, path

@@ -34,7 +34,8 @@ RC = {
 }
 
 #: rcParams of the stage figures (``acmm design|simulate``, the sweep).
-STAGE_RC = {"figure.dpi": 110, "axes.grid": True, "grid.alpha": 0.3, "font.size": 9}
+STAGE_RC = {"figure.dpi": 110, "axes.grid": True, "grid.alpha": 0.3, "font.size": 9,
+            "axes.titley": 1.0}
 
 
 def agg_pyplot(force: bool = False):

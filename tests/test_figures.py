@@ -118,3 +118,83 @@ def test_forked_figure_writers_write_and_report_failures(tmp_path, monkeypatch):
         parallel_figures.wait()
     monkeypatch.setenv("ACMM_PARALLEL_FIGURES", "0")
     assert not parallel_figures.enable()
+
+
+def _small_histories(n=300):
+    t = np.linspace(0.0, 3.0, n)
+    x = np.column_stack([np.sin(5 * t), np.cos(3 * t), t]) * 2.0
+    return t, x
+
+
+def test_prebuilt_skeleton_draws_the_same_png(tmp_path):
+    """The figure worker's skeletons (plots.prebuild) change nothing in the image."""
+    t, x = _small_histories()
+    stats = [dict(level=0, start_orbit=0.0, theta2_deg=-44.7, steady_error_deg=[1.0, 0.5, 0.02],
+                  peak_momentum=2600.0)]
+    for pre in (False, True):
+        if pre:
+            for kind in ("axis_histories", "summary"):
+                plots.prebuild(kind, "SI")
+        plots.axis_histories(t, x, x, x, x, "t", tmp_path / f"a{pre}.png", units="SI")
+        plots.summary(t, x, x, x, stats, "BOUNDED", "s", tmp_path / f"s{pre}.png", units="SI")
+    assert not plots._LAYOUTS                        # each skeleton used once
+    for name in ("a", "s"):
+        assert (tmp_path / f"{name}True.png").read_bytes() == (tmp_path / f"{name}False.png").read_bytes()
+
+
+def test_figure_worker_writes_records_and_reports_failures(tmp_path):
+    from acmm import figure_worker
+    from common.errors import OutputError
+    from common.outputs import stage_outputs
+
+    if not figure_worker.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    t, x = _small_histories()
+    run = tmp_path / "run"
+    (run).mkdir()
+    (run / "sim_stale.png").write_bytes(b"old")      # a previous run's figure: pruned
+    with stage_outputs(run, "simulate", config_text="name: x\n") as written:
+        with figure_worker.session():
+            assert figure_worker.active()
+            figure_worker.prepare(plots.prebuild, "axis_histories", "imperial")
+            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", run / "sim_axes.png")
+            figure_worker.submit(plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
+                                 run / "sim_inertia.png")
+        assert not figure_worker.active()
+        assert {p.name for p in written} == {"sim_axes.png", "sim_inertia.png"}
+    assert (run / "sim_axes.png").stat().st_size > 10_000 and not (run / "sim_stale.png").exists()
+    # a writer's failure is the stage's OutputError; no figure is left half-written
+    (tmp_path / "file").write_text("")
+    with pytest.raises(OutputError):
+        with figure_worker.session():
+            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "a.png")
+    assert not figure_worker.active()
+
+
+def test_figure_worker_aborts_with_the_stage(tmp_path):
+    from acmm import figure_worker
+
+    if not figure_worker.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    t, x = _small_histories()
+    with pytest.raises(RuntimeError, match="stage failed"):
+        with figure_worker.session():
+            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "a.png")
+            raise RuntimeError("stage failed")
+    assert not figure_worker.active()
+    assert not list(tmp_path.glob("*.tmp*"))
+
+
+def test_nested_figure_sessions_share_one_worker(tmp_path):
+    """acmm simulate's design: the inner session's figures are written when it ends."""
+    from acmm import figure_worker
+
+    if not figure_worker.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    t, x = _small_histories()
+    with figure_worker.session():
+        with figure_worker.session():
+            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "inner.png")
+        assert (tmp_path / "inner.png").exists() and figure_worker.active()
+        figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "outer.png")
+    assert (tmp_path / "outer.png").exists()

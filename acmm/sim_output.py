@@ -1,0 +1,115 @@
+"""What the simulation stage writes: the ``sim.h5`` items and the simulation figures.
+
+Split from :mod:`acmm.stages` (:func:`acmm.stages.run_simulate` calls these), as
+:mod:`acmm.design_output` is for the design stage.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from acmm import dynamics as dyn
+from common.results import Dataset
+
+AXES = ["roll", "pitch", "yaw"]
+
+
+def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[dict, dict]:
+    """The datasets and root attributes of ``sim.h5`` (imperial units; the stage converts).
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        The run's config (orbit rate n, rad/s).
+    sc : acmm.scenario.Scenario
+        The simulated scenario (levels, gains).
+    r : acmm.scenario.SimResult
+        The trajectory.
+    stats : list of dict
+        :func:`acmm.scenario.level_statistics` of ``r``.
+    design_hash : str
+        Hash of the design the gains come from.
+    wall : float
+        Integration wall time, s.
+
+    Returns
+    -------
+    items : dict
+        Path → :class:`common.results.Dataset` (nested dicts are groups).
+    attrs : dict
+        Root attributes (verdict, stop time, step counts).
+    """
+    from acmm import simulate as sim_mod
+
+    n = cfg.orbit_rate
+    orbits = r.t * n / (2 * np.pi)
+    err = sim_mod.attitude_error(sc, r)
+    rel_rate = np.degrees(r.state[:, 0:3] - dyn.lvlh_rate_in_body(r.state[:, 3:6], n))
+    peak = [s["peak_momentum"] for s in stats]
+    items = {
+        "t": Dataset(r.t, "s", "time", dims=("t",)),
+        "orbits": Dataset(orbits, "orbit", "time in orbits (2π/n)", dims=("t",)),
+        "theta": Dataset(r.state[:, 3:6], "rad", "attitude (roll, pitch, yaw), 2-3-1 from LVLH", AXES,
+                         dims=("t", "axis")),
+        "attitude_error": Dataset(err, "rad", "θ − θ̂* of the level in force", AXES, dims=("t", "axis")),
+        "omega": Dataset(r.state[:, 0:3], "rad/s", "absolute body rate", AXES, dims=("t", "axis")),
+        "rate_rel_lvlh": Dataset(rel_rate, "deg/s", "body rate relative to LVLH", AXES, dims=("t", "axis")),
+        "h": Dataset(r.state[:, 6:9], "ft*lbf*s", "CMG momentum", AXES, dims=("t", "axis")),
+        "int_h": Dataset(r.state[:, 9:12], "ft*lbf*s^2", "momentum integral (controller state)", AXES, dims=("t", "axis")),
+        "drf": Dataset(r.state[:, 12:24], "per-state", "DRF states", sim_mod.PLAIN_STATE_NAMES[12:],
+                       dims=("t", "drf_state")),
+        "u_cmd": Dataset(r.u_cmd, "ft*lbf", "commanded torque −K x (before saturation)", AXES, dims=("t", "axis")),
+        "u": Dataset(r.u, "ft*lbf", "delivered torque (after torque and momentum saturation)", AXES, dims=("t", "axis")),
+        "w": Dataset(r.w, "ft*lbf", "disturbance torque (eq 3.9)", AXES, dims=("t", "axis")),
+        "level": Dataset(r.level, "1", "index of the inertia level in force", dims=("t",)),
+        "torque_saturated": Dataset(r.torque_saturated, "1", "torque clipped per axis", AXES, dims=("t", "axis")),
+        "momentum_saturated": Dataset(r.momentum_saturated, "1", "CMG axis at its momentum limit", AXES, dims=("t", "axis")),
+        "levels": {
+            "start": Dataset(sc.level_start, "s", "start time of each level", dims=("level",)),
+            "inertia": Dataset(sc.inertia, "slug*ft^2", "plant inertia per level", dims=("level", "axis", "axis_col")),
+            "bias": Dataset(sc.bias, "ft*lbf", "bias per level", AXES, dims=("level", "axis")),
+            "tea_estimate": Dataset(sc.theta_est, "rad", "TEA estimate used by the controller", AXES,
+                                    dims=("level", "axis")),
+            "gain": Dataset(sc.gain, "ft*lbf per state unit", "gain in use per level (u = −K x)",
+                            dims=("level", "axis", "state")),
+            "steady_error": Dataset(np.array([s["steady_error_deg"] for s in stats]).reshape(-1, 3), "deg",
+                                    "max |θ − θ̂*| over the second half of each level", AXES, dims=("level", "axis")),
+            "peak_momentum": Dataset(np.array(peak), "ft*lbf*s", "peak |h_i| over each level",
+                                     dims=("level",) if np.ndim(peak) == 1 else ("level", "axis")),
+        },
+        "wall_time": Dataset(wall, "s", "integration wall time"),
+    }
+    attrs = {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
+             "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
+             "design_hash": design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
+    return items, attrs
+
+
+def prepare_sim_figures(cfg) -> None:
+    """Have the figure worker build the simulation figures' skeletons while the stage computes
+    (:func:`acmm.plots.prebuild`; nothing without a worker)."""
+    from acmm import figure_worker, plots
+
+    for kind in ("axis_histories", "summary", "inertia_histories"):
+        figure_worker.prepare(plots.prebuild, kind, cfg.output.units)
+
+
+def sim_figures(cfg, sc, r, stats: list, items: dict) -> None:
+    """Hand the simulation figures (axis histories, summary, inertia steps: the costliest first)
+    to :func:`acmm.figure_worker.submit` (drawn in the figure worker when one runs, else here).
+
+    ``items`` are :func:`sim_items` (imperial units); the figures use ``cfg.output.units``."""
+    from acmm import figure_worker, plots
+
+    d = cfg.run_dir()
+    units = cfg.output.units
+    orbits = items["orbits"].data
+    err_deg = np.degrees(items["attitude_error"].data)
+    h = r.state[:, 6:9]
+    title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
+    figure_worker.submit(plots.axis_histories, orbits, err_deg, items["rate_rel_lvlh"].data, r.u, h, title,
+                         d / "sim_axes.png", units=units)
+    figure_worker.submit(plots.summary, orbits, err_deg, h, r.u, stats, r.verdict, cfg.name,
+                         d / "sim_summary.png", units=units)
+    if len(sc.level_start) > 1:
+        figure_worker.submit(plots.inertia_histories, orbits, sc.inertia[r.level], d / "sim_inertia.png",
+                             units=units)
