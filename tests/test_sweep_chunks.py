@@ -65,3 +65,37 @@ def test_dask_chunked_identical(tmp_path):
         got, csv = _run_bytes(cfg, scheduler=cluster.scheduler_address, chunk=2)
     _assert_same_data(ref, got)
     assert csv == ref_csv
+
+
+def test_background_snapshots_same_table_and_errors_reach_the_caller(tmp_path, monkeypatch):
+    import threading
+
+    import acmm.sweep.run as run
+    from common.errors import OutputError
+
+    cfg = _cfg(tmp_path, "snaps")
+    ref, ref_csv = _run_bytes(cfg, workers=1)
+    real = run.write_results
+    calls = []
+
+    def spy(sweep, records, complete, **kw):
+        calls.append((complete, len(records), threading.current_thread().name))
+        return real(sweep, records, complete, **kw)
+
+    monkeypatch.setattr(run, "write_results", spy)
+    got, csv = _run_bytes(cfg, workers=1, chunk=1, snapshot_interval=0.0)
+    _assert_same_data(ref, got)
+    assert csv == ref_csv
+    partial = [c for c in calls if not c[0]]
+    assert partial and all(name == "acmm-sweep-snapshot" for _, _, name in partial)   # beside the driver
+    assert calls[-1][:2] == (True, 9)                                                # then the final table
+    assert all(n < 9 for _, n, _ in partial)
+
+    def failing(sweep, records, complete, **kw):
+        if threading.current_thread().name == "acmm-sweep-snapshot":
+            raise OutputError("cannot write sweep.h5: No space left on device")
+        return real(sweep, records, complete, **kw)
+
+    monkeypatch.setattr(run, "write_results", failing)
+    with pytest.raises(OutputError, match="No space left"):
+        run_sweep(cfg, workers=1, chunk=1, snapshot_interval=0.0)
