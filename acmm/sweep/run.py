@@ -14,8 +14,8 @@ from common.runlock import locked_stage
 from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
-from acmm.sweep.executors import (SerialExecutor, _call_chunk, _remote_contexts, _scheduler_workers, _task_key,
-                                  _tasks, chunk_size, make_chunks, make_executor)
+from acmm.sweep.executors import (Chunker, SerialExecutor, _call_chunk, _remote_contexts, _scheduler_workers,
+                                  _task_key, _tasks, make_executor)
 from acmm.sweep.journal import GroupCommitJournal, read_journal
 from acmm.sweep.output import _split, write_results
 
@@ -76,8 +76,8 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     executor : concurrent.futures.Executor, optional
         Use this executor instead of making one (it is not shut down).
     chunk : int, optional
-        Cases per task (default :func:`chunk_size`: ~8 tasks per worker, ≤ :data:`MAX_CHUNK`;
-        1 in-process).  The results do not depend on it.
+        Cases per task (default: sized as the chunks are submitted, :class:`Chunker`; 1
+        in-process).  The results do not depend on it.
     """
     if not isinstance(sweep, Sweep):
         sweep = load_sweep(sweep)
@@ -108,10 +108,10 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         raise
     serial = isinstance(executor, SerialExecutor)
     n_workers = 1 if serial else _scheduler_workers(executor, workers)
-    size = chunk if chunk is not None else (1 if serial else chunk_size(len(tasks), n_workers))
+    chunks = Chunker(tasks, n_workers, chunk if chunk is not None else (1 if serial else None))
     window = 1 if serial else max(4, 2 * n_workers)
     remote = _remote_contexts(executor, contexts)
-    n_new = _drive(sweep, executor, close, journal, make_chunks(tasks, size), remote, window, done, total,
+    n_new = _drive(sweep, executor, close, journal, chunks, remote, window, done, total,
                    progress, after_record, snapshot_interval)
     close()
     path, figs = write_results(sweep, list(done.values()), complete=True,
@@ -172,7 +172,7 @@ class _Snapshots:
             self._thread = None
 
 
-def _drive(sweep: Sweep, executor, close, journal, chunks: list, remote: dict, window: int, done: dict,
+def _drive(sweep: Sweep, executor, close, journal, chunks: Chunker, remote: dict, window: int, done: dict,
            total: int, progress, after_record, snapshot_interval: float) -> int:
     """Submit the chunks (at most ``window`` in flight), journal every record as it comes back and
     rebuild ``sweep.h5`` in the background every ``snapshot_interval`` s or more (:class:`_Snapshots`);
@@ -184,11 +184,10 @@ def _drive(sweep: Sweep, executor, close, journal, chunks: list, remote: dict, w
     complete = False
     pending: dict = {}
     try:
-        it = iter(chunks)
         exhausted = False
         while True:
             while not exhausted and len(pending) < window:
-                c = next(it, None)
+                c = chunks.next()
                 if c is None:
                     exhausted = True
                     break
@@ -199,6 +198,7 @@ def _drive(sweep: Sweep, executor, close, journal, chunks: list, remote: dict, w
             for fut in finished:
                 pending.pop(fut)
                 recs = fut.result()
+                chunks.returned(len(recs))
                 journal.append_many(recs)
                 for rec in recs:
                     done[_task_key(rec)] = rec
