@@ -2,11 +2,12 @@
 
 1. one 10-orbit Monte Carlo case over the bare 10-orbit integration of the same plant (≤ 3x);
 2. the same seeded sweep on 1 vs N local worker processes (≥ 1.8x at N = 2 when idle);
-3. a Dask LocalCluster of N single-threaded workers vs the local pool at the same N (≤ 1.15x);
+3. a Dask LocalCluster of N single-threaded workers vs the local pool at the same N (≤ 1.15x),
+   with the CPU time of each run (driver + workers) and the load average beside it;
 4. `acmm simulate staircase` and `acmm design staircase` with figures vs without (≤ 1.5 s with);
 5. `acmm report --fast` (and the full report with ``--full``): wall time per section.
 
-    MPLBACKEND=Agg .venv/bin/python scripts/bench_issue16.py [--workers 2] [--cases 800] [--full]
+    MPLBACKEND=Agg .venv/bin/python scripts/bench_ratios.py [--workers 2] [--cases 3200] [--full]
 
 The machine's load average is printed with each block: on a shared machine compare ratios.
 ``scripts/bench_scaling.py`` prints the scaling table for any list of N (bigger machines).
@@ -44,7 +45,8 @@ def _wall(cmd, cwd, repeat=3) -> float:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
-    ap.add_argument("--cases", type=int, default=800)
+    ap.add_argument("--cases", type=int, default=3200,
+                    help="sweep size of blocks 2-3 (the Dask overhead shows at a few thousand cases)")
     ap.add_argument("--full", action="store_true", help="also the full report (~20 s or more)")
     args = ap.parse_args()
     from bench_scaling import per_case_cost, scaling
