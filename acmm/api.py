@@ -40,14 +40,38 @@ V_NAMES = ["v1", "v2", "v3"]
 
 def load_config(config: str | Path | Config | None = None) -> Config:
     """A validated :class:`acmm.config.Config` from a path, a packaged name (``"mb3"``), or
-    ``None`` (the packaged stair-case); a ``Config`` is returned as is."""
+    ``None`` (the packaged stair-case); a ``Config`` is returned as is.
+
+    Parameters
+    ----------
+    config : str or pathlib.Path or acmm.config.Config or None, optional
+        Config file, packaged name, a config, or None.
+
+    Returns
+    -------
+    acmm.config.Config
+        The validated config.
+    """
     return config if isinstance(config, Config) else _load_config(config)
 
 
 def linearize(config, tea_pitch_deg: float | None = None):
     """The 24-state design model (:class:`acmm.linearize.LinearModel`) of a config at its TEA,
     or of its blended station whose pitch TEA is ``tea_pitch_deg``.  ``.to_statespace()`` gives
-    the python-control system."""
+    the python-control system.
+
+    Parameters
+    ----------
+    config : str or pathlib.Path or acmm.config.Config or None
+        The config (see :func:`load_config`).
+    tea_pitch_deg : float, optional
+        Pitch TEA θ2* of the blended station, deg (default: the config's own TEA).
+
+    Returns
+    -------
+    acmm.linearize.LinearModel
+        The design model (eqs 4.46–4.47), in the report's units.
+    """
     from acmm import linearize as lin
 
     cfg = load_config(config)
@@ -61,14 +85,44 @@ def simulate(config, figures: bool = False):
 
     Returns ``(result, path)``: :class:`acmm.stages.SimulateResult` (``.sim`` holds t, state,
     u, verdict) and the path of ``sim.h5`` (open it with ``xarray.open_dataset(path,
-    engine="h5netcdf")``)."""
+    engine="h5netcdf")``).
+
+    Parameters
+    ----------
+    config : str or pathlib.Path or acmm.config.Config or None
+        The config (see :func:`load_config`).
+    figures : bool, optional
+        Also write the simulation figures.
+
+    Returns
+    -------
+    tuple
+        (:class:`acmm.stages.SimulateResult`, pathlib.Path of ``sim.h5``).
+    """
     from acmm.stages import run_simulate
 
     return run_simulate(load_config(config), figures=figures)
 
 
 def design(config, _compute: bool = True) -> "Design":
-    """Design every point of a config (TEA → linearize → sector LQR) and fit its schedule."""
+    """Design every point of a config (TEA → linearize → sector LQR) and fit its schedule.
+
+    The TEA of eqs 4.1–4.3, the model of eqs 4.46–4.47, the sector LQR of ch. 5.2 and the
+    quadratic schedule of ch. 5.3.
+
+    Parameters
+    ----------
+    config : str or pathlib.Path or acmm.config.Config or None
+        The config (see :func:`load_config`).
+    _compute : bool, optional
+        False: no design is computed (``result`` is None), for :func:`linearize` at a blended
+        station.
+
+    Returns
+    -------
+    Design
+        The config and its design.
+    """
     from acmm.stages import compute_design
 
     cfg = load_config(config)
@@ -83,7 +137,16 @@ def _named(A, B, C, D, states, inputs, outputs, name):
 
 @dataclass
 class Design:
-    """A config's design: per-point LQR gains and the gain schedule, as python-control systems."""
+    """A config's design: per-point LQR gains and the gain schedule, as python-control systems.
+
+    Attributes
+    ----------
+    config : acmm.config.Config
+        The validated config.
+    result : acmm.stages.DesignResult or None
+        Its design (per-point models and LQR results, the schedule table); None for
+        linearize-only use.
+    """
 
     config: Config
     result: object      # acmm.stages.DesignResult (None for linearize-only use)
@@ -91,6 +154,7 @@ class Design:
     # ------------------------------------------------------------------ design points
     @property
     def names(self) -> list[str]:
+        """Names of the design points, in order."""
         return [p.spec.name for p in self.result.points]
 
     def _index(self, point) -> int:
@@ -102,22 +166,72 @@ class Design:
         return int(point)
 
     def gain(self, point=0) -> np.ndarray:
-        """LQR gain K (3×24, ft·lbf per state unit) of design point ``point`` (index or name)."""
+        """LQR gain K (3×24, ft·lbf per state unit) of design point ``point`` (index or name).
+
+        Parameters
+        ----------
+        point : int or str, optional
+            Index or name of the design point.
+
+        Returns
+        -------
+        (3, 24) array
+            K of u = −K x, ft·lbf per unit of each state (rad, rad/s, ft·lbf·s, ...).
+        """
         return self.result.points[self._index(point)].lqr.K
 
     def open_loop(self, point=0):
-        """Open-loop design model of a point: inputs u1..u3, w1..w3; outputs the states."""
+        """Open-loop design model of a point: inputs u1..u3, w1..w3; outputs the states.
+
+        Parameters
+        ----------
+        point : int or str, optional
+            Index or name of the design point.
+
+        Returns
+        -------
+        control.StateSpace
+            The 24-state model of eq 4.46 (inputs in ft·lbf, time in s).
+        """
         p = self.result.points[self._index(point)]
         return p.model.to_statespace()
 
     def closed_loop(self, point=0):
-        """Closed loop of a point with its own LQR gain (see the module docstring)."""
+        """Closed loop of a point with its own LQR gain (see the module docstring).
+
+        Parameters
+        ----------
+        point : int or str, optional
+            Index or name of the design point.
+
+        Returns
+        -------
+        control.StateSpace
+            x' = (A − B K) x + B v + G w; inputs v1..v3, w1..w3 (ft·lbf), outputs the 24
+            states and u1..u3 (ft·lbf).
+        """
         p = self.result.points[self._index(point)]
         return self._closed(p.model, p.lqr.K, f"acmm_closed_loop_{p.spec.name}")
 
     # ------------------------------------------------------------------ scheduled loop
     def plant_at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
-        """(inertia slug·ft², bias ft·lbf) of the blend I(s) = (1−s) I_start + s I_to."""
+        """(inertia slug·ft², bias ft·lbf) of the blend I(s) = (1−s) I_start + s I_to.
+
+        Parameters
+        ----------
+        s : float
+            Blend parameter, dimensionless (0: first blended point, 1: last).
+
+        Returns
+        -------
+        tuple
+            ((3, 3) array inertia, slug·ft²; (3,) array disturbance bias, ft·lbf).
+
+        Raises
+        ------
+        ValueError
+            When the config has fewer than two blended design points.
+        """
         from acmm import schedule as sch
 
         specs = sch.point_specs(self.config)
@@ -137,7 +251,23 @@ class Design:
 
     def blend_for_tea(self, tea_pitch_deg: float) -> float:
         """Blend parameter s whose station has pitch TEA ``tea_pitch_deg`` (deg), by bisection
-        between the design points that bracket it."""
+        between the design points that bracket it.
+
+        Parameters
+        ----------
+        tea_pitch_deg : float
+            Pitch TEA θ2*, deg.
+
+        Returns
+        -------
+        float
+            Blend parameter s, dimensionless, in [0, 1].
+
+        Raises
+        ------
+        ValueError
+            No blend in the config, or the pitch TEA is outside the blend's range.
+        """
         from scipy.optimize import brentq
 
         from acmm import schedule as sch
@@ -161,7 +291,18 @@ class Design:
 
     def model_at(self, tea_pitch_deg: float):
         """Design model (:class:`acmm.linearize.LinearModel`) of the blended station whose
-        pitch TEA is ``tea_pitch_deg``, linearized at its own TEA."""
+        pitch TEA is ``tea_pitch_deg``, linearized at its own TEA.
+
+        Parameters
+        ----------
+        tea_pitch_deg : float
+            Pitch TEA θ2*, deg.
+
+        Returns
+        -------
+        acmm.linearize.LinearModel
+            The 24-state model of eqs 4.46–4.47 at that station.
+        """
         from acmm import linearize as lin
 
         s = self.blend_for_tea(tea_pitch_deg)
@@ -170,19 +311,54 @@ class Design:
         return lin.design_point(inertia, t.theta, self.config.orbit_rate, model=d.model, drf_mode=d.drf_mode)
 
     def scheduled_gain(self, tea_pitch_deg: float) -> np.ndarray:
-        """The scheduled gain K(θ2*) (3×24) at pitch TEA ``tea_pitch_deg`` (deg)."""
+        """The scheduled gain K(θ2*) (3×24) at pitch TEA ``tea_pitch_deg`` (deg).
+
+        Parameters
+        ----------
+        tea_pitch_deg : float
+            Pitch TEA θ2*, deg.
+
+        Returns
+        -------
+        (3, 24) array
+            K(θ2*) of the quadratic schedule (ch. 5.3), ft·lbf per state unit.
+        """
         return self.result.table.gain_at(np.radians(tea_pitch_deg), 0)
 
     def scheduled_closed_loop(self, tea_pitch_deg: float):
         """Closed loop with the scheduled gain at pitch TEA ``tea_pitch_deg`` (deg): the blended
-        station with that TEA, linearized there, under u = −K(θ2*) x + v."""
+        station with that TEA, linearized there, under u = −K(θ2*) x + v.
+
+        Parameters
+        ----------
+        tea_pitch_deg : float
+            Pitch TEA θ2*, deg.
+
+        Returns
+        -------
+        control.StateSpace
+            Inputs v1..v3, w1..w3 (ft·lbf); outputs the 24 states and u1..u3 (ft·lbf).
+        """
         model = self.model_at(tea_pitch_deg)
         K = self.result.table.gain_at(model.theta_star[1], 0)
         return self._closed(model, K, "acmm_scheduled_loop_" + f"{tea_pitch_deg:+.2f}deg".replace(".", "p"))
 
     def loop_transfer(self, point=0, tea_pitch_deg: float | None = None):
         """Loop transfer L = K (sI − A)⁻¹ B at the plant input (u1..u3 → Ku1..Ku3), for
-        ``control.disk_margins(L, omega)``; with ``tea_pitch_deg`` the scheduled loop."""
+        ``control.disk_margins(L, omega)``; with ``tea_pitch_deg`` the scheduled loop.
+
+        Parameters
+        ----------
+        point : int or str, optional
+            Index or name of the design point (when ``tea_pitch_deg`` is None).
+        tea_pitch_deg : float, optional
+            Pitch TEA θ2* of the scheduled loop, deg.
+
+        Returns
+        -------
+        control.StateSpace
+            L from u1..u3 to Ku1..Ku3 (ft·lbf to ft·lbf), time in s.
+        """
         if tea_pitch_deg is None:
             p = self.result.points[self._index(point)]
             model, K = p.model, p.lqr.K

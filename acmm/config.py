@@ -4,178 +4,29 @@ Every field documents its unit.  Numbers may also be written as ``"<number> <uni
 strings (e.g. ``"31.5e6 kg*m^2"``, ``"2 N*m"``); they are converted to the report's units
 (slug·ft², ft·lbf, ft·lbf·s, deg, rad/s, s) on load.  Unknown keys, non-finite numbers,
 impossible inertias and inconsistent sections are rejected with one message naming the
-field (:class:`common.errors.ConfigError`).
+field (:class:`common.errors.ConfigError`).  The sections follow the report: inertia (Table 1,
+eq 3.2), disturbance (eq 3.9), sector LQR design (ch. 5.2), gain schedule (ch. 5.3) and the
+stair-case simulation (ch. 6).  The field types are in :mod:`acmm.config_fields`.
 """
 from __future__ import annotations
 
 import math
-from importlib import resources
 from pathlib import Path
-from typing import Annotated, Literal, Optional
+from typing import Literal, Optional
 
 import numpy as np
 import yaml
-from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, ValidationError,
-                      field_validator, model_validator)
+from pydantic import Field, field_validator, model_validator
 
+from acmm.config_fields import (  # noqa: F401  (re-exported: the old import paths)
+    _CANON, _RANGE, MIN_PRINCIPAL_MOMENT, Angle, AngleVec, InertiaValue, Momentum, Rate, Time, Torque,
+    TorqueVec, WeightTorque, _Model, _plausible, _q, _vec3)
+from acmm.config_station import Actuators, Disturbance, Inertia  # noqa: F401  (re-exported)
 from common.errors import ConfigError
 from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
-from common.units import to_canonical
 from common.configio import (DEFAULT_CONFIG, _UniqueKeyLoader, _format_error,  # noqa: F401
                              check_yaml_structure, packaged_config_path, read_config_text,
                              read_yaml, require_mapping, validate_model)
-
-
-def _finite(x: float) -> float:
-    if not math.isfinite(x):
-        raise ValueError("must be a finite number")
-    return x
-
-
-#: |value| bound per dimension, canonical units (issue 13: no overflow accepted); see
-#: :data:`common.limits.PHYSICAL_MAX` for the reasoning.
-_RANGE = {"inertia": 1e13, "torque": 1e9, "momentum": 1e12, "angle": 3600.0, "rate": 1.0, "time": 1e9}
-_CANON = {"inertia": "slug·ft²", "torque": "ft·lbf", "momentum": "ft·lbf·s", "angle": "deg", "rate": "rad/s",
-          "time": "s"}
-
-
-#: Smallest accepted principal moment of inertia, slug·ft² (a 1 cm, 1 g body is ~1e-8; below
-#: this the linear model's scaling underflows and "uncontrollable" would be reported instead).
-MIN_PRINCIPAL_MOMENT = 1e-6
-
-
-def _plausible(x: float, dimension: str) -> float:
-    bound = _RANGE.get(dimension)
-    if bound is not None and abs(x) > bound:
-        raise ValueError(f"{x:.4g} {_CANON[dimension]} is outside the physically plausible range "
-                         f"|value| ≤ {bound:g} {_CANON[dimension]}")
-    return x
-
-
-def _q(dimension: str):
-    def conv(v):
-        return _plausible(_finite(to_canonical(v, dimension)), dimension)
-    return BeforeValidator(conv)
-
-
-def _vec3(dimension: str):
-    def conv(v):
-        if isinstance(v, (str, int, float)) or not hasattr(v, "__len__"):
-            raise ValueError("must be a list of three values [roll, pitch, yaw]")
-        if len(v) != 3:
-            raise ValueError(f"must have three values [roll, pitch, yaw], got {len(v)}")
-        return [_plausible(_finite(to_canonical(x, dimension)), dimension) for x in v]
-    return BeforeValidator(conv)
-
-
-InertiaValue = Annotated[float, _q("inertia")]
-Torque = Annotated[float, _q("torque")]
-Momentum = Annotated[float, _q("momentum")]
-Angle = Annotated[float, _q("angle")]
-Rate = Annotated[float, _q("rate")]
-Time = Annotated[float, _q("time")]
-TorqueVec = Annotated[list[float], _vec3("torque")]
-AngleVec = Annotated[list[float], _vec3("angle")]
-WeightTorque = Annotated[float, _q("weight_torque")]
-
-
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
-
-class Inertia(_Model):
-    """Inertia matrix about the body control axes (slug·ft²), eq 3.2; I_ij = I_ji."""
-
-    I11: InertiaValue = Field(description="roll moment of inertia, slug·ft²")
-    I22: InertiaValue = Field(description="pitch moment of inertia, slug·ft²")
-    I33: InertiaValue = Field(description="yaw moment of inertia, slug·ft²")
-    I12: InertiaValue = Field(0.0, description="product of inertia I12 = I21, slug·ft²")
-    I13: InertiaValue = Field(0.0, description="product of inertia I13 = I31, slug·ft²")
-    I23: InertiaValue = Field(0.0, description="product of inertia I23 = I32, slug·ft²")
-
-    @model_validator(mode="before")
-    @classmethod
-    def _from_matrix(cls, data):
-        """Accept a 3×3 nested list too; it must then be symmetric."""
-        if isinstance(data, (list, tuple)):
-            try:
-                m = np.array([[to_canonical(x, "inertia") for x in row] for row in data], float)
-            except (TypeError, ValueError) as exc:
-                raise ValueError(f"inertia matrix must be 3×3 numbers: {exc}") from None
-            if m.shape != (3, 3):
-                raise ValueError(f"inertia matrix must be 3×3, got shape {m.shape}")
-            if not np.all(np.isfinite(m)):
-                raise ValueError("inertia matrix must contain finite numbers")
-            for x in m.ravel():
-                _plausible(float(x), "inertia")
-            if not np.allclose(m, m.T, rtol=1e-9, atol=0.0):
-                raise ValueError("inertia matrix is not symmetric (I_ij must equal I_ji)")
-            return {"I11": m[0, 0], "I22": m[1, 1], "I33": m[2, 2],
-                    "I12": m[0, 1], "I13": m[0, 2], "I23": m[1, 2]}
-        return data
-
-    @model_validator(mode="after")
-    def _physical(self):
-        m = self.matrix()
-        eig = np.linalg.eigvalsh(m)
-        if eig[0] <= 0:
-            raise ValueError(
-                f"inertia matrix is not positive definite (smallest principal moment {eig[0]:.4g} slug·ft²)")
-        if eig[0] < MIN_PRINCIPAL_MOMENT:
-            raise ValueError(f"smallest principal moment {eig[0]:.4g} slug·ft² is below the physically plausible "
-                             f"{MIN_PRINCIPAL_MOMENT:g} slug·ft²")
-        a, b, c = eig
-        if a + b < c * (1 - 1e-12):
-            raise ValueError(
-                "principal moments violate the triangle inequality "
-                f"({a:.4g} + {b:.4g} < {c:.4g} slug·ft²): no rigid body has this inertia")
-        return self
-
-    def matrix(self) -> np.ndarray:
-        """The symmetric 3×3 inertia matrix (slug·ft²)."""
-        return np.array([[self.I11, self.I12, self.I13],
-                         [self.I12, self.I22, self.I23],
-                         [self.I13, self.I23, self.I33]])
-
-    def without_cross_products(self) -> "Inertia":
-        """The same body with I12 = I13 = I23 = 0 (the report's ch. 6 design model)."""
-        return Inertia(I11=self.I11, I22=self.I22, I33=self.I33)
-
-
-class Disturbance(_Model):
-    """External torque per body axis, eq 3.9: w_i = bias_i + A_i sin(nt) + B_i sin(2nt) (ft·lbf).
-
-    Give the bias either directly (``bias``) or as ``bias_from_tea``: the attitude (deg) that
-    the bias must make a torque equilibrium (eq 4.1).  Neither means zero bias.
-    """
-
-    bias: Optional[TorqueVec] = Field(None, description="constant torque [roll, pitch, yaw], ft·lbf")
-    bias_from_tea: Optional[AngleVec] = Field(
-        None, description="attitude [roll, pitch, yaw] in deg whose equilibrium bias (eq 4.1) is used")
-    A: TorqueVec = Field([1.0, 2.0, 1.0], description="amplitude of sin(n t) per axis, ft·lbf")
-    B: TorqueVec = Field([0.5, 0.5, 0.5], description="amplitude of sin(2 n t) per axis, ft·lbf")
-
-    @model_validator(mode="after")
-    def _one_bias(self):
-        if self.bias is not None and self.bias_from_tea is not None:
-            raise ValueError("give either 'bias' or 'bias_from_tea', not both")
-        if self.bias_from_tea is not None and any(abs(a) >= 89.0 for a in self.bias_from_tea):
-            raise ValueError("bias_from_tea angles must lie within ±89 deg (eq 3.6 is singular at 90 deg)")
-        return self
-
-
-class Actuators(_Model):
-    """CMG actuator limits (report ch. 5.1)."""
-
-    torque_limit: Torque = Field(150.0, description="control torque limit per axis, ft·lbf")
-    momentum_limit: Momentum = Field(20000.0, description="CMG momentum limit per axis, ft·lbf·s")
-
-    @field_validator("torque_limit", "momentum_limit")
-    @classmethod
-    def _positive(cls, v):
-        if v <= 0:
-            raise ValueError("must be > 0")
-        return v
 
 
 class Sector(_Model):
@@ -196,7 +47,13 @@ class Q0Groups(_Model):
     drf: float = Field(0.0, ge=0, description="weight on the 12 scaled disturbance-rejection-filter states")
 
     def diagonal(self) -> np.ndarray:
-        """The 24 diagonal entries in the state order of eq 4.47."""
+        """The 24 diagonal entries in the state order of eq 4.47.
+
+        Returns
+        -------
+        (24,) ndarray
+            The weights on the scaled states, dimensionless.
+        """
         return np.array([self.rates] * 3 + [self.attitudes] * 3 + [self.momentum] * 3
                         + [self.momentum_integral] * 3 + [self.drf] * 12)
 
@@ -343,31 +200,73 @@ class Config(_Model):
         return self
 
     def n_design_points(self) -> int:
-        """Number of design points (= stair-case levels): the blend points plus the named ones."""
+        """Number of design points (= stair-case levels): the blend points plus the named ones.
+
+        Returns
+        -------
+        int
+            The number of design points.
+        """
         sch = self.schedule
         if sch is None:
             return 1
         return (sch.n_points if sch.to is not None else 1) + len(sch.points)
 
     def run_dir(self) -> Path:
-        """Directory of this run's results (``<output.root>/<name>``)."""
+        """Directory of this run's results.
+
+        Returns
+        -------
+        Path
+            ``<output.root>/<name>``.
+        """
         return Path(self.output.root) / self.name
 
     def to_yaml(self) -> str:
-        """The resolved config (all defaults filled in) as YAML text."""
+        """The resolved config (all defaults filled in) as YAML text.
+
+        Returns
+        -------
+        str
+            The YAML text.
+        """
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
 
 
 def parse_config(data: object, source: str = "config") -> Config:
-    """Validate a mapping (e.g. parsed YAML) into a :class:`Config` (one-line ConfigError)."""
+    """Validate a mapping (e.g. parsed YAML) into a :class:`Config` (one-line ConfigError).
+
+    Parameters
+    ----------
+    data : object
+        The parsed YAML.
+    source : str
+        Where it was read from, for error messages.
+
+    Returns
+    -------
+    Config
+        The validated config.
+    """
     return validate_model(Config, data, source)
 
 
 def load_config(path: str | Path | None = None, overrides: list[str] | None = None) -> Config:
     """Read and validate a YAML config file (``None``: the packaged default stair-case).
 
-    ``overrides`` (``["simulation.orbits=10", ...]``, see :mod:`common.overrides`) are applied to
-    the raw mapping before validation."""
+    Parameters
+    ----------
+    path : path-like, optional
+        A YAML file or a packaged config name; None: the packaged stair-case.
+    overrides : list of str, optional
+        ``["simulation.orbits=10", ...]`` (see :mod:`common.overrides`), applied to the raw
+        mapping before validation.
+
+    Returns
+    -------
+    Config
+        The validated config.
+    """
     from common.overrides import apply_overrides, remember_origin
 
     data, p = read_yaml(path)
@@ -384,6 +283,27 @@ def resolve_references(data: object, base_dir: str | Path = ".", source: str = "
     the name of a packaged config.  The referred config is validated in full; its ``name``,
     ``inertia`` and ``disturbance`` become the mapping ``schedule.to`` of eq 5.3's blend (its
     own ``schedule`` and other sections are not used).
+
+    Parameters
+    ----------
+    data : object
+        The parsed YAML of the referring config.
+    base_dir : path-like
+        The referring file's folder.
+    source : str
+        Where ``data`` was read from, for error messages.
+    _depth : int
+        Nesting depth of references (internal; at most 8).
+
+    Returns
+    -------
+    object
+        ``data`` with ``schedule.to`` replaced by a mapping (unchanged when it is none).
+
+    Raises
+    ------
+    ConfigError
+        The referred config is missing or invalid, or references nest too deep.
     """
     if not isinstance(data, dict) or not isinstance(data.get("schedule"), dict):
         return data

@@ -1,7 +1,8 @@
 """What the design stage writes: the ``design.h5`` items and the design figures.
 
 Split from :mod:`acmm.stages` (:func:`acmm.stages.run_design` calls these); the items are built
-from a :class:`acmm.stages.DesignResult`, the figures from it and the design settings.
+from a :class:`acmm.stages.DesignResult`, the figures from it and the design settings: the
+model of eq 4.46, the sector LQR of ch. 5.2 and the gain schedule of ch. 5.3.
 """
 from __future__ import annotations
 
@@ -15,7 +16,18 @@ AXES = ["roll", "pitch", "yaw"]
 
 
 def point_items(points) -> dict:
-    """The ``points/<k>_<name>`` groups of ``design.h5``: model, weights and LQR of each point."""
+    """The ``points/<k>_<name>`` groups of ``design.h5``: model, weights and LQR of each point.
+
+    Parameters
+    ----------
+    points : list of acmm.schedule.PointDesign
+        The point designs.
+
+    Returns
+    -------
+    dict
+        Group name → {name: :class:`common.results.Dataset`} (report units, stated per dataset).
+    """
     from acmm.linearize import STATE_NAMES
 
     pts = {}
@@ -57,7 +69,20 @@ def point_items(points) -> dict:
 
 
 def table_items(r, pts: dict) -> dict:
-    """The top-level datasets of ``design.h5`` (the table, per-point summaries) around ``pts``."""
+    """The top-level datasets of ``design.h5`` (the table, per-point summaries) around ``pts``.
+
+    Parameters
+    ----------
+    r : acmm.stages.DesignResult
+        The design.
+    pts : dict
+        The point groups of :func:`point_items` (nested under ``points``).
+
+    Returns
+    -------
+    dict
+        Name → :class:`common.results.Dataset` or group (report units, stated per dataset).
+    """
     from acmm.linearize import STATE_NAMES
 
     items = {
@@ -87,7 +112,18 @@ def table_items(r, pts: dict) -> dict:
 
 
 def schedule_items(r) -> dict:
-    """The ``schedule`` group of ``design.h5`` (fit, its checks, the path check); ``r.fit`` set."""
+    """The ``schedule`` group of ``design.h5`` (fit, its checks, the path check); ``r.fit`` set.
+
+    Parameters
+    ----------
+    r : acmm.stages.DesignResult
+        A design with a schedule.
+
+    Returns
+    -------
+    dict
+        Name → :class:`common.results.Dataset` or group (units stated per dataset).
+    """
     sched = {
         "coef": Dataset(r.fit.coef, "K units per rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k",
                         dims=("power", "axis", "state")),
@@ -125,7 +161,20 @@ def schedule_items(r) -> dict:
 
 
 def unit_roles(pts: dict, has_fit: bool) -> dict:
-    """Which datasets of ``design.h5`` are converted to the output unit system, and as what."""
+    """Which datasets of ``design.h5`` are converted to the output unit system, and as what.
+
+    Parameters
+    ----------
+    pts : dict
+        The point groups of :func:`point_items`.
+    has_fit : bool
+        The design has a schedule.
+
+    Returns
+    -------
+    dict
+        Dataset path → role of :func:`acmm.units.state_space_in` (``"K"``, ``"A"``, ...).
+    """
     roles = {"K": "K"}
     for key in pts:
         roles.update({f"points/{key}/{m}": m for m in ("A", "B", "G", "Q", "P", "K")})
@@ -137,7 +186,19 @@ def unit_roles(pts: dict, has_fit: bool) -> dict:
 
 def design_figures(r, s, run_dir: Path, units_system: str) -> None:
     """The pole-map, gain-schedule and path-check figures of a design (settings ``s``: an
-    :class:`acmm.settings.DesignSettings`) in ``run_dir``, gains in the ``units_system``."""
+    :class:`acmm.settings.DesignSettings`) in ``run_dir``, gains in the ``units_system``.
+
+    Parameters
+    ----------
+    r : acmm.stages.DesignResult
+        The design.
+    s : acmm.settings.DesignSettings
+        Its settings (orbit rate, sector, DRF mode).
+    run_dir : pathlib.Path
+        Folder of the figures.
+    units_system : str
+        ``"imperial"`` or ``"SI"``.
+    """
     from acmm import plots
     from acmm.linearize import STATE_NAMES
 

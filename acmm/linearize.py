@@ -22,7 +22,8 @@ with ẋ = A x + B u + G w (eq 4.46).  The model is assembled from closed-form p
   δθ2 and δθ3 drive rows 9 and 11 of x3 (the β̇2, β̇3 rows; printed 4.44 says 10 and 12).
 
 The misprints named here are listed, with the tests that establish them, in ``docs/ERRATA.md``
-§ Linearization and § Momentum balance; the state scaling in § Scaling.
+§ Linearization and § Momentum balance; the state scaling in § Scaling.  The PBH
+controllability test of the model is in :mod:`acmm.controllability` (re-exported here).
 """
 from __future__ import annotations
 
@@ -31,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acmm import dynamics as dyn
+from acmm.controllability import Controllability, controllability  # noqa: F401  (re-exported)
 
 STATE_NAMES = [
     "domega1", "theta2_dot", "domega3", "dtheta1", "dtheta2", "dtheta3",
@@ -343,62 +345,3 @@ def linearize_config(cfg) -> LinearModel:
     return design_point(inertia, t.theta, cfg.orbit_rate, model=cfg.design.model,
                         drf_mode=cfg.design.drf_mode)
 
-
-@dataclass(frozen=True)
-class Controllability:
-    """PBH controllability of the scaled model.
-
-    ``ratios[i]`` = σmin([A − λ_i I, B]) / σmax([A, B]) at each open-loop eigenvalue λ_i (and
-    at s = 0); ``rank`` counts the eigenvalues whose ratio exceeds ``tol``.  See
-    ``docs/ERRATA.md`` § Sector LQR for the nearly uncontrollable cross-inertia-free MB3 model.
-
-    Attributes
-    ----------
-    rank : int
-        Number of eigenvalues whose PBH ratio exceeds ``tol`` (of ``order``).
-    order : int
-        Number of states (24).
-    min_ratio : float
-        Smallest PBH ratio, dimensionless.
-    worst_s : complex
-        Point (eigenvalue of the scaled A, or 0) where the ratio is smallest, 1/s.
-    tol : float
-        Ratio below which an eigenvalue counts as uncontrollable, dimensionless.
-    """
-
-    rank: int
-    order: int
-    min_ratio: float
-    worst_s: complex
-    tol: float
-
-
-def controllability(model: LinearModel, tol: float = 1e-10) -> Controllability:
-    """Popov–Belevitch–Hautus test on the state-scaled (A, B).
-
-    Parameters
-    ----------
-    model : LinearModel
-        Model of eq 4.46; its state-scaled form (:meth:`LinearModel.scaled`) is tested.
-    tol : float
-        PBH ratio below which an eigenvalue counts as uncontrollable, dimensionless.
-
-    Returns
-    -------
-    Controllability
-        Rank, smallest ratio and where it occurs.
-    """
-    a, b, _ = model.scaled()
-    nx = a.shape[0]
-    norm = np.linalg.norm(np.hstack([a, b]), 2)
-    points = list(np.linalg.eigvals(a)) + [0.0]
-    ratios = []
-    for s in points:
-        sv = np.linalg.svd(np.hstack([a - s * np.eye(nx), b]), compute_uv=False)
-        ratios.append(sv[-1] / norm)
-    ratios = np.array(ratios)
-    eig_ratios = ratios[:-1]
-    rank = nx - int(np.sum(eig_ratios <= tol))
-    i = int(np.argmin(ratios))
-    return Controllability(rank=rank, order=nx, min_ratio=float(ratios[i]), worst_s=complex(points[i]),
-                           tol=tol)

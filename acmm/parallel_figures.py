@@ -27,7 +27,18 @@ _PENDING: list | None = None
 
 
 def enable(enabled: bool = True) -> bool:
-    """Start forking figure writers; returns whether it is on."""
+    """Start forking figure writers; returns whether it is on.
+
+    Parameters
+    ----------
+    enabled : bool, optional
+        Ask for forking (granted only with ``ACMM_PARALLEL_FIGURES=1``, ``os.fork`` and > 1 CPU).
+
+    Returns
+    -------
+    bool
+        Forking is on.
+    """
     global _PENDING
     if os.environ.get("ACMM_PARALLEL_FIGURES", "0") != "1":
         enabled = False
@@ -37,11 +48,26 @@ def enable(enabled: bool = True) -> bool:
 
 
 def active() -> bool:
+    """Whether :func:`run` forks (between :func:`enable` and :func:`wait`).
+
+    Returns
+    -------
+    bool
+        Forking is on.
+    """
     return _PENDING is not None
 
 
 def run(fn: Callable[[], object], what: str = "figure") -> None:
-    """``fn()`` in a forked child when enabled, else here."""
+    """``fn()`` in a forked child when enabled, else here.
+
+    Parameters
+    ----------
+    fn : callable
+        Writes one figure; takes no argument.
+    what : str, optional
+        What it writes, for the error message when the child fails.
+    """
     if _PENDING is None:
         fn()
         return

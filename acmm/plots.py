@@ -1,7 +1,8 @@
 """Matplotlib figures for the design and simulation stages (report Figs 5.3–5.26, 6.2–6.30).
 
 Each function takes arrays, draws one figure and saves it as PNG (and PDF when asked) under the
-given path; nothing is shown on screen.
+given path; nothing is shown on screen.  The sector LQR and schedule of ch. 5.2–5.3, the
+stair-case simulation of ch. 6.
 """
 from __future__ import annotations
 
@@ -17,7 +18,13 @@ AXES = ("roll", "pitch", "yaw")
 
 def parallel_saves(enabled: bool = True) -> None:
     """From now on, :func:`_save` draws and writes each figure in a forked child process while
-    the caller builds the next one (:mod:`acmm.parallel_figures`); :func:`wait_saves` joins them."""
+    the caller builds the next one (:mod:`acmm.parallel_figures`); :func:`wait_saves` joins them.
+
+    Parameters
+    ----------
+    enabled : bool, optional
+        Ask for forked writers (see :func:`acmm.parallel_figures.enable`).
+    """
     from acmm import parallel_figures
 
     parallel_figures.enable(enabled)
@@ -68,6 +75,20 @@ def decimate(x, y, max_points: int = MAX_LINE_POINTS):
 
     At figure resolution (a few hundred pixels per axes) the drawn envelope is identical to the
     full line; shorter lines are returned unchanged.
+
+    Parameters
+    ----------
+    x : (N,) array
+        Abscissae, any unit (kept).
+    y : (N,) array
+        Ordinates, any unit (kept).
+    max_points : int, optional
+        Most points kept (about).
+
+    Returns
+    -------
+    tuple
+        (x, y) subsets, in the units given.
     """
     x = np.asarray(x)
     y = np.asarray(y)
@@ -91,7 +112,18 @@ def decimate(x, y, max_points: int = MAX_LINE_POINTS):
 
 
 def state_units(drf_mode: str = "attitude_hold") -> list[str]:
-    """:func:`acmm.linearize.state_units` written for labels (ft·lbf·s², rad·s)."""
+    """:func:`acmm.linearize.state_units` written for labels (ft·lbf·s², rad·s).
+
+    Parameters
+    ----------
+    drf_mode : str, optional
+        DRF mode of the 24 states.
+
+    Returns
+    -------
+    list of str
+        The 24 unit labels.
+    """
     import re
 
     from acmm.linearize import state_units as units
@@ -120,13 +152,51 @@ def _few_ticks(ax, nx: int = 4, ny: int = 4) -> None:
 
 
 def gain_unit(state_unit: str, torque_unit: str = "ft·lbf") -> str:
-    """Unit of a gain column K(i, j): torque (``torque_unit``) per unit of state j."""
+    """Unit of a gain column K(i, j): torque (``torque_unit``) per unit of state j.
+
+    Parameters
+    ----------
+    state_unit : str
+        Unit of state j.
+    torque_unit : str, optional
+        Torque unit.
+
+    Returns
+    -------
+    str
+        The label, e.g. ``ft·lbf/rad``.
+    """
     return f"{torque_unit}/({state_unit})" if any(ch in state_unit for ch in "/·") else f"{torque_unit}/{state_unit}"
 
 
 def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, units=None,
                        torque_unit="ft·lbf"):
-    """K(i, j) versus pitch TEA for all 24 columns (3 rows each), with the fitted curves."""
+    """K(i, j) versus pitch TEA for all 24 columns (3 rows each), with the fitted curves.
+
+    Parameters
+    ----------
+    theta2 : (P,) array
+        Pitch TEA of the design points, rad.
+    gains : (P, 3, 24) array
+        LQR gains, ``torque_unit`` per state unit.
+    fit : acmm.schedule.ScheduleFit
+        The schedule (same units as ``gains``).
+    state_names : list of str
+        The 24 state names.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+    units : list of str, optional
+        The 24 state unit labels (default :func:`state_units`).
+    torque_unit : str, optional
+        Torque unit label of the gains.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
     plt = _plt()
     theta2_deg = np.degrees(theta2)
     fine = np.linspace(theta2.min(), theta2.max(), 60)
@@ -152,7 +222,30 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
 
 
 def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=False):
-    """Closed-loop poles (units of n) of every design point with the sector drawn."""
+    """Closed-loop poles (units of n) of every design point with the sector drawn.
+
+    Parameters
+    ----------
+    poles_per_point : list of (24,) complex array
+        Closed-loop poles per design point, rad/s.
+    names : list of str
+        Design point names.
+    n : float
+        Orbit rate, rad/s.
+    sigma : float
+        Sector shift σ, units of n (Re λ ≤ −σ n).
+    half_angle_deg : float
+        Sector half-angle, deg.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
     plt = _plt()
     fig, ax = plt.subplots(figsize=(6.5, 5.5))
     allp = np.concatenate([np.asarray(p) for p in poles_per_point]) / n
@@ -180,7 +273,34 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
 def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units="imperial"):
     """Angle error, rate, delivered torque and CMG momentum per axis vs orbit (Figs 6.2–6.13, 6.20–6.30).
 
-    ``u`` (ft·lbf) and ``h`` (ft·lbf·s) are shown in the unit system ``units``."""
+    ``u`` (ft·lbf) and ``h`` (ft·lbf·s) are shown in the unit system ``units``.
+
+    Parameters
+    ----------
+    orbits : (N,) array
+        Time, orbits.
+    err_deg : (N, 3) array
+        Attitude error θ − θ̂*, deg.
+    rate : (N, 3) array
+        Body rate relative to LVLH, deg/s.
+    u : (N, 3) array
+        Delivered torque, ft·lbf.
+    h : (N, 3) array
+        CMG momentum, ft·lbf·s.
+    title : str
+        Figure title.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+    units : str, optional
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
     from common.units import pretty, shown
 
     plt = _plt()
@@ -206,7 +326,26 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
 
 
 def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
-    """The six inertia elements vs orbit (Figs 6.14–6.19), in the unit system ``units``."""
+    """The six inertia elements vs orbit (Figs 6.14–6.19), in the unit system ``units``.
+
+    Parameters
+    ----------
+    orbits : (N,) array
+        Time, orbits.
+    inertia : (N, 3, 3) array
+        Inertia in force, slug·ft².
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+    units : str, optional
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
     from common.units import pretty, shown
 
     inertia, iu = shown(np.asarray(inertia), "slug*ft^2", units)
@@ -225,7 +364,36 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
 
 
 def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=False, units="imperial"):
-    """One-page summary: errors, momentum, torque and per-level statistics (``units``: imperial | SI)."""
+    """One-page summary: errors, momentum, torque and per-level statistics (``units``: imperial | SI).
+
+    Parameters
+    ----------
+    orbits : (N,) array
+        Time, orbits.
+    err_deg : (N, 3) array
+        Attitude error, deg.
+    h : (N, 3) array
+        CMG momentum, ft·lbf·s.
+    u : (N, 3) array
+        Delivered torque, ft·lbf.
+    level_stats : list of dict
+        Per-level statistics (:func:`acmm.scenario.level_statistics`).
+    verdict : str
+        The run's verdict.
+    title : str
+        Figure title.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+    units : str, optional
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
     from common.units import pretty, shown
 
     h, hu = shown(np.asarray(h), "ft*lbf*s", units)
@@ -264,7 +432,28 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
 
 def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=False):
     """The scheduled gain on the local model along the path: largest Re λ and worst sector
-    margin (units of n) and the plant-input disk margin α versus pitch TEA."""
+    margin (units of n) and the plant-input disk margin α versus pitch TEA.
+
+    Parameters
+    ----------
+    theta2 : (M,) array
+        Pitch TEA along the path, rad.
+    max_real : (M,) array
+        Largest Re λ of the scheduled local loop, units of n.
+    margin : (M,) array
+        Worst sector margin, units of n.
+    disk_margin : (M,) array
+        Disk margin α at the plant input, dimensionless.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
     plt = _plt()
     th = np.degrees(theta2)
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
@@ -283,7 +472,30 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
 
 def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=False):
     """Closed-loop poles (units of n) of the scheduled loop at every path TEA, coloured by θ2*,
-    with the sector of Fig 5.2."""
+    with the sector of Fig 5.2.
+
+    Parameters
+    ----------
+    poles : (M, 24) complex array
+        Closed-loop poles at each path TEA, rad/s.
+    theta2 : (M,) array
+        Pitch TEA along the path, rad.
+    n : float
+        Orbit rate, rad/s.
+    sigma : float
+        Sector shift σ, units of n.
+    half_angle_deg : float
+        Sector half-angle, deg.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
     plt = _plt()
     p = np.asarray(poles) / n
     fig, ax = plt.subplots(figsize=(6.5, 5.5))

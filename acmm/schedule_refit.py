@@ -3,6 +3,26 @@
 :func:`refit_closed_loop` moves the least-squares coefficients to push the least damped
 closed-loop pole along the whole path to the left (smooth maximum by L-BFGS or its epigraph form
 by SLSQP).  Split from :mod:`acmm.schedule`, which still re-exports every name.
+
+The objective is the smooth maximum ::
+
+    f(c) = (1/β) log Σ_{j,i} exp(β Re λ_i(A_j − B_j K(θ_j; c)) / n)
+
+over the chosen TEAs θ_j; with ``angle_weight`` w > 0 the terms
+w·((|Im λ| cos φ + Re λ sin φ)/n − ``angle_offset``) of the sector's φ lines join the max, so
+strongly oscillatory poles (which carry the smallest disk margins) are pulled back too;
+``re_weight``/``re_offset`` scale and shift the Re λ terms.
+
+Gradient: first-order eigenvalue perturbation ∂λ_i/∂K_ab = −(w_i^H B)_a v_ib (W V = I), chained
+through K = Σ c_k u^k; L-BFGS-B (scipy) on the coefficients relative to the least-squares ones,
+in the normalized variable u = (θ2* − c)/h ∈ [−1, 1], mapped back to powers of θ2*.  The form
+stays the report's: one polynomial of the fit's order per gain element.
+
+``solver="slsqp"`` minimizes the same quantity in its exact (β → ∞) epigraph form, min t subject
+to v ≤ t for the ``top`` largest Re λ terms and the ``top`` largest φ-line terms per TEA (poles
+with Im λ ≥ 0, each conjugate pair once), by SLSQP with the same analytic eigenvalue gradients;
+it reaches a lower worst Re λ in ~10× fewer eigenvalue evaluations than L-BFGS on the smooth
+maximum (README "Gain schedule").
 """
 from __future__ import annotations
 
@@ -10,6 +30,7 @@ import numpy as np
 
 from acmm.path_check import PathModels
 from acmm.schedule import ScheduleFit
+
 
 def _power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
     """Coefficients in powers of θ of Σ_k a[k]·((θ − c)/h)^k (a: (order+1, ...))."""
@@ -40,27 +61,11 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
                       top: int = 3) -> ScheduleFit:
     """Refine a least-squares polynomial schedule against the closed loop along the path.
 
-    The coefficients are moved to minimize the smooth maximum ::
-
-        f(c) = (1/β) log Σ_{j,i} exp(β Re λ_i(A_j − B_j K(θ_j; c)) / n)
-
-    over every ``every``-th TEA of ``path`` (the ends included), i.e. to push the least damped
-    closed-loop pole along the whole path to the left; with ``angle_weight`` w > 0 the terms
-    w·((|Im λ| cos φ + Re λ sin φ)/n − ``angle_offset``) of the sector's φ lines join the max, so
-    strongly oscillatory poles (which carry the smallest disk margins) are pulled back too.
-    ``re_weight``/``re_offset`` scale and shift the Re λ terms.  Gradient: first-order eigenvalue
-    perturbation ∂λ_i/∂K_ab = −(w_i^H B)_a v_ib (W V = I), chained through K = Σ c_k u^k;
-    L-BFGS-B (scipy) on the coefficients relative to the least-squares ones, in the normalized
-    variable u = (θ2* − c)/h ∈ [−1, 1], mapped back to powers of θ2*.  The form stays the
-    report's: one polynomial of the fit's order per gain element.  The result is accepted only
-    if it lowers the largest Re λ on those TEAs; it is re-checked on every TEA by
-    :func:`check_path`.
-
-    ``solver="slsqp"`` minimizes the same quantity in its exact (β → ∞) epigraph form,
-    min t subject to v ≤ t for the ``top`` largest Re λ terms and the ``top`` largest φ-line
-    terms per TEA (poles with Im λ ≥ 0, each conjugate pair once), by SLSQP with the same
-    analytic eigenvalue gradients; it reaches a lower worst Re λ in ~10× fewer eigenvalue
-    evaluations than L-BFGS on the smooth maximum (README "Gain schedule").
+    The coefficients are moved to minimize the smooth maximum f(c) of the module docstring over
+    every ``every``-th TEA of ``path`` (the ends included), pushing the least damped closed-loop
+    pole along the whole path to the left.  The result is accepted only if it lowers the
+    largest Re λ on those TEAs; it is re-checked on every TEA by
+    :func:`acmm.path_check.check_path`.
 
     Parameters
     ----------
@@ -108,34 +113,40 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
         raise ValueError("refit_closed_loop refines a polynomial schedule")
     st = _refit_start(fit, path, every)
     a0, sc, up, shape = st["a0"], st["sc"], st["up"], st["shape"]
-    As, Bs = st["As"], st["Bs"]
-    As_t, Bs_t = np.array(As), np.array(Bs)                          # (T, N, N), (T, N, M)
-    fg = _smooth_max(a0, sc, shape, up, As_t, Bs_t, n, beta, re_weight, re_offset, angle_weight,
-                     angle_offset, half_angle_deg)
-
-    def worst(x):
-        a = a0 + x.reshape(shape) * sc
-        return max(np.max(np.linalg.eigvals(A - B @ np.tensordot(tp, a, axes=1)).real)
-                   for A, B, tp in zip(As, Bs, up)) / n
-
+    As_t, Bs_t = np.array(st["As"]), np.array(st["Bs"])              # (T, N, N), (T, N, M)
     x0 = np.zeros(a0.size)
-    w0 = worst(x0)
+    w0 = _worst_real(st, x0, n)
     if solver == "slsqp":
         res = _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offset,
                              angle_weight, angle_offset, half_angle_deg)
     elif solver == "lbfgs":
+        fg = _smooth_max(a0, sc, shape, up, As_t, Bs_t, n, beta, re_weight, re_offset, angle_weight,
+                         angle_offset, half_angle_deg)
         res = minimize(fg, x0, jac=True, method="L-BFGS-B", options={"maxiter": max_iter})
     else:
         raise ValueError(f"unknown refit solver {solver!r}")
-    w1 = worst(res.x)
+    return _refit_outcome(fit, st, res, w0, _worst_real(st, res.x, n), beta)
+
+
+def _refit_outcome(fit: ScheduleFit, st: dict, res, w0: float, w1: float, beta: float) -> ScheduleFit:
+    """The refitted schedule when the optimizer's result ``res`` lowers the largest Re λ / n
+    (``w0`` → ``w1``), else ``fit`` again; ``refit_info`` records the outcome either way."""
     info = {"beta": beta, "iterations": int(res.nit), "evaluations": int(res.nfev),
             "n_tea": len(st["idx"]), "max_real_before": float(w0), "max_real_after": float(w1),
             "accepted": bool(w1 < w0)}
     if not w1 < w0:
         return ScheduleFit(fit.coef, fit.variable, fit.gains, fit.rms_residual, fit.rel_residual,
                            fit.form, "least_squares", info)
-    a = a0 + res.x.reshape(shape) * sc
+    a = st["a0"] + res.x.reshape(st["shape"]) * st["sc"]
     return _refitted(fit, _power_basis(a, st["c0"], st["h0"]) / st["d"][None, None, :], info)
+
+
+def _worst_real(st: dict, x: np.ndarray, n: float) -> float:
+    """Largest Re λ / n over the refit's TEAs (``st`` from :func:`_refit_start`) with the scaled
+    coefficient change ``x``."""
+    a = st["a0"] + x.reshape(st["shape"]) * st["sc"]
+    return max(np.max(np.linalg.eigvals(A - B @ np.tensordot(tp, a, axes=1)).real)
+               for A, B, tp in zip(st["As"], st["Bs"], st["up"])) / n
 
 
 def _refit_start(fit: ScheduleFit, path: PathModels, every: int) -> dict:

@@ -1,5 +1,9 @@
 """Stage runners: config in, results file out.  The glue between the pure library
-modules and the CLI (I/O at the edge; the mathematics lives in the library modules)."""
+modules and the CLI (I/O at the edge; the mathematics lives in the library modules).
+
+Stages: the TEA (eqs 4.1–4.3), the design model (eqs 4.46–4.47), the sector LQR per design
+point (ch. 5.2) with its gain schedule (ch. 5.3), and the nonlinear simulation (ch. 6).
+"""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -48,6 +52,18 @@ def _in_system(items: dict, cfg: Config, roles: dict) -> dict:
 
 @dataclass
 class TeaResult:
+    """The TEA of a config.
+
+    Attributes
+    ----------
+    config : acmm.config.Config
+        The validated config.
+    tea : acmm.tea.TEA
+        Its torque-equilibrium attitude on the physical branch (θ* in rad, eqs 4.1–4.3).
+    others : list of acmm.tea.TEA
+        Other equilibria (filled by ``run_tea(all_roots=True)``).
+    """
+
     config: Config
     tea: tea_mod.TEA
     others: list = field(default_factory=list)
@@ -58,7 +74,18 @@ def _as_config(config) -> Config:
 
 
 def compute_tea(config) -> TeaResult:
-    """TEA of a config's own inertia and bias (physical branch)."""
+    """TEA of a config's own inertia and bias (physical branch).
+
+    Parameters
+    ----------
+    config : acmm.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+
+    Returns
+    -------
+    TeaResult
+        The config and its TEA.
+    """
     cfg = _as_config(config)
     inertia = cfg.inertia.matrix()
     bias = tea_mod.resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate)
@@ -68,7 +95,20 @@ def compute_tea(config) -> TeaResult:
 @locked_stage(_as_config)
 @owns_outputs("tea", lambda c: _as_config(c))
 def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
-    """Compute the TEA and write ``runs/<name>/tea.h5``."""
+    """Compute the TEA and write ``runs/<name>/tea.h5``.
+
+    Parameters
+    ----------
+    config : acmm.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+    all_roots : bool, optional
+        Also search the other equilibria (multi-start Newton) and write them.
+
+    Returns
+    -------
+    tuple
+        (:class:`TeaResult`, pathlib.Path of ``tea.h5``).
+    """
     result = compute_tea(config)
     cfg, t = result.config, result.tea
     inertia = cfg.inertia.matrix()
@@ -93,6 +133,22 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
 
 @dataclass
 class LinearizeResult:
+    """The design model of a config at its TEA.
+
+    Attributes
+    ----------
+    config : acmm.config.Config
+        The validated config.
+    tea : acmm.tea.TEA
+        Its TEA (θ* in rad).
+    model : acmm.linearize.LinearModel
+        The 24-state model of eqs 4.46–4.47 (report units).
+    controllability : acmm.linearize.Controllability
+        PBH controllability test of the model.
+    eigenvalues : (24,) complex array or None
+        Open-loop eigenvalues of A, rad/s.
+    """
+
     config: Config
     tea: tea_mod.TEA
     model: object
@@ -101,7 +157,13 @@ class LinearizeResult:
     eigenvalues: np.ndarray | None = None
 
     def eigenvalues_over_n(self) -> np.ndarray:
-        """The open-loop eigenvalues divided by the orbit rate n, sorted by real then imaginary part."""
+        """The open-loop eigenvalues divided by the orbit rate n, sorted by real then imaginary part.
+
+        Returns
+        -------
+        (24,) complex array
+            λ / n, dimensionless.
+        """
         eig = self.eigenvalues / self.model.n
         return eig[np.lexsort((eig.imag, eig.real))]
 
@@ -109,7 +171,18 @@ class LinearizeResult:
 @locked_stage(_as_config)
 @owns_outputs("linearize", lambda c: _as_config(c))
 def run_linearize(config) -> tuple[LinearizeResult, Path]:
-    """TEA, then the design model of ``design.model``; writes ``runs/<name>/linearize.h5``."""
+    """TEA, then the design model of ``design.model``; writes ``runs/<name>/linearize.h5``.
+
+    Parameters
+    ----------
+    config : acmm.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+
+    Returns
+    -------
+    tuple
+        (:class:`LinearizeResult`, pathlib.Path of ``linearize.h5``).
+    """
     from acmm import linearize as lin
 
     tr = compute_tea(config)
@@ -151,7 +224,28 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
 # ---------------------------------------------------------------------------------------------
 @dataclass
 class DesignTable:
-    """What a simulation needs from a design, as arrays (one row per design point)."""
+    """What a simulation needs from a design, as arrays (one row per design point).
+
+    Attributes
+    ----------
+    names : list of str
+        Design point names.
+    inertia : (P, 3, 3) array
+        Inertia per point, slug·ft².
+    bias : (P, 3) array
+        Bias torque per point, ft·lbf.
+    tea : (P, 3) array
+        TEA per point, rad.
+    gain : (P, 3, 24) array
+        LQR gain K per point (u = −K x), ft·lbf per state unit.
+    coef : (order+1, 3, 24) array or None
+        Schedule coefficients, lowest power first (units of K per rad^k), or None without a
+        schedule.
+    design_hash : str
+        :func:`design_hash` of the config it was designed from.
+    form : str
+        Schedule form (:func:`acmm.schedule.schedule_gain`), ``"polynomial"`` by default.
+    """
 
     names: list
     inertia: np.ndarray      # (P, 3, 3) slug·ft²
@@ -164,11 +258,35 @@ class DesignTable:
 
     def scheduled_gain(self, k: int) -> np.ndarray:
         """Gain in use at point k: the schedule evaluated at its TEA when there is one, else
-        the point's LQR gain."""
+        the point's LQR gain.
+
+        Parameters
+        ----------
+        k : int
+            Design point index.
+
+        Returns
+        -------
+        (3, 24) array
+            Gain, ft·lbf per state unit.
+        """
         return self.gain_at(self.tea[k, 1], k)
 
     def gain_at(self, theta2: float, k: int) -> np.ndarray:
-        """The schedule at pitch TEA ``theta2`` (rad); without a schedule, point k's LQR gain."""
+        """The schedule at pitch TEA ``theta2`` (rad); without a schedule, point k's LQR gain.
+
+        Parameters
+        ----------
+        theta2 : float
+            Pitch TEA θ2*, rad.
+        k : int
+            Design point whose LQR gain is used when there is no schedule.
+
+        Returns
+        -------
+        (3, 24) array
+            Gain K(θ2*) of the schedule of ch. 5.3, ft·lbf per state unit.
+        """
         from acmm.schedule import schedule_gain
 
         if self.coef is None:
@@ -178,6 +296,26 @@ class DesignTable:
 
 @dataclass
 class DesignResult:
+    """A config's design: point designs, the schedule and its checks, and the table.
+
+    Attributes
+    ----------
+    config : acmm.config.Config
+        The validated config.
+    points : list of acmm.schedule.PointDesign
+        Sector LQR design per point (ch. 5.2).
+    fit : acmm.schedule.ScheduleFit or None
+        The fitted gain schedule (ch. 5.3); None with a single point.
+    check : acmm.schedule.ScheduleCheck or None
+        The schedule checked at the design points and blend midpoints.
+    table : DesignTable
+        The arrays a simulation needs.
+    wall_time : float
+        Design wall time, s.
+    path_check : acmm.path_check.PathCheck or None
+        The schedule checked along the path (``schedule.n_check``).
+    """
+
     config: Config
     points: list
     fit: object
@@ -187,16 +325,39 @@ class DesignResult:
     path_check: object = None
 
     def fastest_over_n(self) -> np.ndarray:
-        """Per design point, the fastest closed-loop pole's decay rate max(−Re s) divided by n."""
+        """Per design point, the fastest closed-loop pole's decay rate max(−Re s) divided by n.
+
+        Returns
+        -------
+        (P,) array
+            max(−Re s) / n, dimensionless.
+        """
         return np.array([np.max(-p.lqr.poles.real) / self.config.orbit_rate for p in self.points])
 
     def worst_check_index(self) -> int | None:
-        """Index of the schedule check with the smallest sector margin (None without a schedule)."""
+        """Index of the schedule check with the smallest sector margin (None without a schedule).
+
+        Returns
+        -------
+        int or None
+            Index into ``check.margin``.
+        """
         return None if self.check is None else int(np.argmin(self.check.margin))
 
 
 def design_hash(cfg: Config) -> str:
-    """Hash of the design-relevant part of a config (inertia, n, disturbance, design, schedule)."""
+    """Hash of the design-relevant part of a config (inertia, n, disturbance, design, schedule).
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        The config.
+
+    Returns
+    -------
+    str
+        :func:`common.results.config_hash` of those sections.
+    """
     import json
 
     from common.results import config_hash
@@ -211,7 +372,20 @@ def compute_design(config, progress=None) -> DesignResult:
 
     The config is read here once (:func:`acmm.settings.design_settings`,
     :func:`acmm.schedule.point_specs`); the core :func:`acmm.design_core.design_schedule` gets
-    only explicit arguments."""
+    only explicit arguments.
+
+    Parameters
+    ----------
+    config : acmm.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+    progress : callable, optional
+        ``progress(name)``, called after each design point.
+
+    Returns
+    -------
+    DesignResult
+        The design.
+    """
     import time
 
     from acmm import schedule as sch
@@ -226,7 +400,22 @@ def compute_design(config, progress=None) -> DesignResult:
 
 
 def design_table(points, fit, design_hash: str) -> DesignTable:
-    """The :class:`DesignTable` of point designs and their schedule fit (None: one point)."""
+    """The :class:`DesignTable` of point designs and their schedule fit (None: one point).
+
+    Parameters
+    ----------
+    points : list of acmm.schedule.PointDesign
+        Point designs.
+    fit : acmm.schedule.ScheduleFit or None
+        Their schedule.
+    design_hash : str
+        Hash of the config they come from (:func:`design_hash`).
+
+    Returns
+    -------
+    DesignTable
+        The arrays (report units).
+    """
     return DesignTable([p.spec.name for p in points], np.array([p.spec.inertia for p in points]),
                        np.array([p.spec.bias for p in points]), np.array([p.tea.theta for p in points]),
                        np.array([p.lqr.K for p in points]),
@@ -238,7 +427,22 @@ def design_table(points, fit, design_hash: str) -> DesignTable:
 @owns_outputs("design", lambda c: _as_config(c))
 def run_design(config, progress=None, figures: bool | None = None) -> tuple[DesignResult, Path]:
     """Design and write ``runs/<name>/design.h5`` plus the gain-schedule and pole-map figures
-    (:mod:`acmm.design_output` builds both)."""
+    (:mod:`acmm.design_output` builds both).
+
+    Parameters
+    ----------
+    config : acmm.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+    progress : callable, optional
+        ``progress(name)``, called after each design point.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+
+    Returns
+    -------
+    tuple
+        (:class:`DesignResult`, pathlib.Path of ``design.h5``).
+    """
     from acmm import design_output as out
     from acmm.settings import design_settings
 
@@ -259,7 +463,18 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
 
 
 def load_design_table(path: Path) -> DesignTable:
-    """Read the arrays a simulation needs back from ``design.h5``."""
+    """Read the arrays a simulation needs back from ``design.h5``.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        A ``design.h5`` (imperial or SI; SI arrays are converted back).
+
+    Returns
+    -------
+    DesignTable
+        The arrays in the report's units (slug·ft², ft·lbf, rad).
+    """
     from common.results import read_h5
 
     d = read_h5(path)
@@ -290,7 +505,22 @@ def _unit_system(path: Path) -> str:
 
 
 def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple[DesignTable, str]:
-    """The design of a config: reused from ``design.h5`` when its hash matches, else computed."""
+    """The design of a config: reused from ``design.h5`` when its hash matches, else computed.
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        The config.
+    progress : callable, optional
+        ``progress(name)``, called after each design point when designing.
+    figures : bool, optional
+        Write the design figures when designing (default: ``output.figures``).
+
+    Returns
+    -------
+    tuple
+        (:class:`DesignTable`, a note saying whether it was reused or designed).
+    """
     path = cfg.run_dir() / "design.h5"
     want = design_hash(cfg)
     if path.exists():
@@ -309,6 +539,24 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple
 # ---------------------------------------------------------------------------------------------
 @dataclass
 class SimulateResult:
+    """A nonlinear closed-loop run (ch. 6).
+
+    Attributes
+    ----------
+    config : acmm.config.Config
+        The validated config.
+    scenario : acmm.scenario.Scenario
+        What was simulated (levels, gains, limits).
+    sim : acmm.scenario.SimResult
+        The run: t (s), state (report units), torques (ft·lbf), verdict.
+    stats : list of dict
+        Per-level statistics (:func:`acmm.scenario.level_statistics`).
+    design_note : str
+        Whether the design was reused or computed.
+    wall_time : float
+        Integration wall time, s.
+    """
+
     config: Config
     scenario: object
     sim: object
@@ -330,7 +578,22 @@ class SimulateResult:
 @locked_stage(_as_config)
 @owns_outputs("simulate", lambda c: _as_config(c))
 def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[SimulateResult, Path]:
-    """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures."""
+    """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures.
+
+    Parameters
+    ----------
+    config : acmm.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+    progress : callable, optional
+        ``progress(name)``, called after each design point when designing.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+
+    Returns
+    -------
+    tuple
+        (:class:`SimulateResult`, pathlib.Path of ``sim.h5``).
+    """
     import time
 
     from acmm import simulate as sim_mod

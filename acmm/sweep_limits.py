@@ -43,7 +43,20 @@ def _physical_fraction(sweep, n: int) -> tuple[int, int]:
 
 
 def check_sweep_work(sweep, source: str = "sweep config") -> None:
-    """Raise a one-line :class:`ConfigError` when a sweep exceeds a work limit."""
+    """Raise a one-line :class:`ConfigError` when a sweep exceeds a work limit.
+
+    Parameters
+    ----------
+    sweep : acmm.sweep.config.Sweep
+        The validated sweep (its ``spec`` and ``bases``).
+    source : str, optional
+        Where the sweep came from, prefixed to the message.
+
+    Raises
+    ------
+    ConfigError
+        No base, or too many cases, orbits, redesigns or expected Monte Carlo draws.
+    """
     spec = sweep.spec
     nb = len(sweep.bases)
     if nb == 0:

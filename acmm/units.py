@@ -22,6 +22,18 @@ def state_factors(drf_mode: str = "attitude_hold", system: str = "imperial"):
     """(factors d, units) of the 24 states of eq 4.47 under ``system``: x_system = d · x_report.
 
     Angles stay in rad, rates in rad/s; momentum-like states become N·m·s (·sⁿ) under SI.
+
+    Parameters
+    ----------
+    drf_mode : str, optional
+        ``"attitude_hold"`` or ``"momentum_hold"`` (:func:`acmm.linearize.state_units`).
+    system : str, optional
+        ``"imperial"`` (the report's units: factors all 1) or ``"SI"``.
+
+    Returns
+    -------
+    tuple
+        ((24,) array of dimensionless factors d, list of the 24 unit strings under ``system``).
     """
     import numpy as np
 
@@ -38,7 +50,28 @@ def state_space_in(system: str, drf_mode: str, **arrays):
     """Per-state matrices of the report's units expressed in ``system`` (x_sys = D x, u_sys = k u):
     A → D A D⁻¹, B, G → D B / k, K (…, 3, 24) → k K D⁻¹, P, Q → D⁻¹ P D⁻¹, R → R / k²,
     x (…, 24) or scales → D x; a DRF block ``drf`` (…, 12) → D[12:] x.  Returns a dict of the
-    arrays given (unchanged under imperial)."""
+    arrays given (unchanged under imperial).
+
+    Parameters
+    ----------
+    system : str
+        ``"imperial"`` or ``"SI"``.
+    drf_mode : str
+        DRF mode of the 24 states (:func:`state_factors`).
+    **arrays : dict
+        Named arrays in the report's units (ft·lbf, rad, s); names A, B, G, K, P, Q, R, x, scales
+        or drf; a None value passes through.
+
+    Returns
+    -------
+    dict
+        The same names, as float arrays in the units of ``system``.
+
+    Raises
+    ------
+    KeyError
+        For an array name not listed above.
+    """
     import numpy as np
 
     d, _ = state_factors(drf_mode, system)

@@ -12,7 +12,18 @@ import time
 
 
 def warm_up(say=print) -> float:
-    """Compile (or load) every numba kernel; returns the wall time (s)."""
+    """Compile (or load) every numba kernel; returns the wall time (s).
+
+    Parameters
+    ----------
+    say : callable, optional
+        Not used (the caller prints).
+
+    Returns
+    -------
+    float
+        Wall time of the warm-up, s.
+    """
     t0 = time.perf_counter()
     import numpy as np
 
@@ -33,6 +44,13 @@ def warm_up(say=print) -> float:
 
 
 def main() -> int:
+    """``python -m acmm.warmup``: warm up and print the time taken.
+
+    Returns
+    -------
+    int
+        Exit code 0.
+    """
     sys.stdout.write("acmm: compiling the numba kernels (simulator, TEA continuation) into the cache "
                      "— one time, ~10–20 s ... ")
     sys.stdout.flush()

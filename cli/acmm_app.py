@@ -210,6 +210,7 @@ def simulate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] 
 
 
 def main() -> None:
+    """Run the command-line app (the console-script entry point); exits with the code of the run."""
     app()
 
 

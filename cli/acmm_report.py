@@ -14,7 +14,13 @@ from cli.common import user_errors
 
 
 def register(app: typer.Typer) -> None:
-    """Add the ``report`` command to ``app``."""
+    """Add the ``report`` command to ``app``.
+
+    Parameters
+    ----------
+    app : typer.Typer
+        The ``acmm`` app.
+    """
 
     @app.command("report")
     @user_errors

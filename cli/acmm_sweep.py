@@ -44,7 +44,13 @@ class _Bar:
 
 
 def register(app: typer.Typer) -> None:
-    """Add the ``sweep`` command to ``app``."""
+    """Add the ``sweep`` command to ``app``.
+
+    Parameters
+    ----------
+    app : typer.Typer
+        The ``acmm`` app.
+    """
 
     @app.command()
     @user_errors

@@ -13,7 +13,21 @@ EXIT_USER_ERROR = EXIT_INPUT
 
 
 def fail(message: str, code: int = EXIT_INPUT) -> None:
-    """Print ``error: message`` on stderr (one line) and exit with ``code`` (no traceback)."""
+    """Print ``error: message`` on stderr (one line) and exit with ``code`` (no traceback).
+
+    Parameters
+    ----------
+    message : str
+        The error; whitespace runs are joined to one space and it is cut to :data:`MAX_MESSAGE`
+        characters.
+    code : int, optional
+        Exit code (:mod:`common.errors`; default ``EXIT_INPUT``, 2).
+
+    Raises
+    ------
+    typer.Exit
+        Always, with ``code``.
+    """
     message = " ".join(str(message).split())
     if len(message) > MAX_MESSAGE:        # e.g. a megabyte-long key echoed in a field name
         message = message[:MAX_MESSAGE - 20] + " … (truncated)"
@@ -57,7 +71,18 @@ def user_errors(fn):
     numpy/scipy warnings are captured: a refused run prints only its error line; a successful
     one a single ``note:`` line counting them.  Numerical exceptions outside the hierarchy
     (``LinAlgError``, ``FloatingPointError``…) exit 3, OS errors 4, a ``RecursionError`` 2, all
-    on one line."""
+    on one line.
+
+    Parameters
+    ----------
+    fn : callable
+        The command function.
+
+    Returns
+    -------
+    callable
+        The wrapped command (same name, docstring and signature, so typer sees the same options).
+    """
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -135,6 +160,27 @@ class ExitCodeGroup(TyperGroup):
     """
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        """Run the app like :meth:`click.Group.main`, mapping click's errors to the exit codes.
+
+        Parameters
+        ----------
+        args : list of str, optional
+            Command-line arguments (default: ``sys.argv[1:]``).
+        prog_name : str, optional
+            Program name shown in usage lines.
+        complete_var : str, optional
+            Environment variable of shell completion.
+        standalone_mode : bool, optional
+            False: click's own behaviour (exceptions propagate, the return value is returned).
+        **extra : dict
+            Passed on to click.
+
+        Returns
+        -------
+        object
+            The command's return value, only when ``standalone_mode`` is False (otherwise the
+            process exits).
+        """
         click = _click()
 
         if not standalone_mode:
@@ -163,7 +209,13 @@ class ExitCodeGroup(TyperGroup):
 
 
 def version_option():
-    """An eager ``--version`` option printing the package version."""
+    """An eager ``--version`` option printing the package version.
+
+    Returns
+    -------
+    typer.models.OptionInfo
+        The option; its callback prints ``acmm-qpp <version>`` and exits 0 (``typer.Exit``).
+    """
 
     def show(value: bool) -> None:
         if value:
@@ -181,7 +233,22 @@ def version_option():
 
 
 def strict_exit(strict: bool, failed: bool, why: str) -> None:
-    """With ``--strict``, a failing verdict exits 1 (``EXIT_VERDICT``) after the output, with one line."""
+    """With ``--strict``, a failing verdict exits 1 (``EXIT_VERDICT``) after the output, with one line.
+
+    Parameters
+    ----------
+    strict : bool
+        The ``--strict`` option was given.
+    failed : bool
+        The run's verdict is failing.
+    why : str
+        The one-line reason printed (``strict: why``) on stderr.
+
+    Raises
+    ------
+    typer.Exit
+        With code 1 when ``strict`` and ``failed``.
+    """
     if strict and failed:
         typer.echo(f"strict: {' '.join(why.split())}", err=True)
         raise typer.Exit(EXIT_VERDICT)

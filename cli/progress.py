@@ -13,7 +13,13 @@ from pathlib import Path
 
 
 def enabled() -> bool:
-    """Progress is shown: stderr is a terminal (or ``ACMM_PROGRESS=1``), and not ``ACMM_PROGRESS=0``."""
+    """Progress is shown: stderr is a terminal (or ``ACMM_PROGRESS=1``), and not ``ACMM_PROGRESS=0``.
+
+    Returns
+    -------
+    bool
+        True when progress output goes to stderr.
+    """
     env = os.environ.get("ACMM_PROGRESS")
     if env is not None and env.strip() in ("0", "1"):
         return env.strip() == "1"
@@ -30,14 +36,26 @@ def _console():
 
 
 def note(message: str) -> None:
-    """One line on stderr when progress is enabled (e.g. the numba first-compile notice)."""
+    """One line on stderr when progress is enabled (e.g. the numba first-compile notice).
+
+    Parameters
+    ----------
+    message : str
+        The line, printed verbatim (no rich markup).
+    """
     if enabled():
         _console().print(message, markup=False, highlight=False)
 
 
 def numba_needs_compile() -> bool:
     """True when the compiled simulator is neither loaded in this process nor in numba's on-disk
-    cache (first run, or the source changed since the cache was written)."""
+    cache (first run, or the source changed since the cache was written).
+
+    Returns
+    -------
+    bool
+        True when the first call will compile; False also when numba's internals cannot be read.
+    """
     try:
         import acmm.simulate as sim_mod
 
@@ -59,7 +77,18 @@ def announce_numba_compile() -> None:
 
 @contextlib.contextmanager
 def status(message: str):
-    """A spinner with ``message`` while the block runs (transient); yields ``update(text)``."""
+    """A spinner with ``message`` while the block runs (transient); yields ``update(text)``.
+
+    Parameters
+    ----------
+    message : str
+        Text shown next to the spinner.
+
+    Yields
+    ------
+    callable
+        ``update(text)`` replaces the text (does nothing when progress is disabled).
+    """
     if not enabled():
         yield lambda text: None
         return
@@ -72,6 +101,15 @@ class Steps:
 
     Use as a context manager; ``advance(text)`` moves one step and shows ``text``; ``describe(text)``
     only changes the text (e.g. "writing figures" after the last step).  Silent when disabled.
+
+    Parameters
+    ----------
+    description : str
+        Text shown before the bar.
+    total : int or None
+        Number of steps (None: unknown, the bar pulses).
+    rate : bool, optional
+        Also show the speed in steps/s.
     """
 
     def __init__(self, description: str, total: int | None, rate: bool = False):
@@ -101,6 +139,15 @@ class Steps:
         return False
 
     def advance(self, text: str | None = None, n: int = 1) -> None:
+        """Move the bar on by ``n`` steps.
+
+        Parameters
+        ----------
+        text : str, optional
+            New text before the bar (default: keep it).
+        n : int, optional
+            Number of steps done.
+        """
         if self._p is None:
             return
         kw = {}
@@ -113,5 +160,12 @@ class Steps:
         self._p.update(self._task, advance=n, **kw)
 
     def describe(self, text: str) -> None:
+        """Change the text before the bar without moving it.
+
+        Parameters
+        ----------
+        text : str
+            New text.
+        """
         if self._p is not None:
             self._p.update(self._task, description=text)

@@ -131,4 +131,5 @@ def simulate(config: Path = ConfigArg, overrides: Optional[list[str]] = Override
 
 
 def main() -> None:
+    """Run the command-line app (the console-script entry point); exits with the code of the run."""
     app()

@@ -54,7 +54,20 @@ def _step(tp, key):
 
 
 def model_at(model_cls: type, loc: tuple) -> type | None:
-    """The pydantic model class at an error location ``loc`` below ``model_cls`` (or None)."""
+    """The pydantic model class at an error location ``loc`` below ``model_cls`` (or None).
+
+    Parameters
+    ----------
+    model_cls : type
+        Root pydantic model (a config class).
+    loc : tuple
+        pydantic error location: field names and list indices, from the root.
+
+    Returns
+    -------
+    type or None
+        The one model class the location leads to; None when unknown or ambiguous.
+    """
     tp = model_cls
     for key in loc:
         tp = _step(tp, key)
@@ -65,20 +78,59 @@ def model_at(model_cls: type, loc: tuple) -> type | None:
 
 
 def valid_keys(model_cls: type, loc: tuple) -> list[str]:
-    """Field names of the model holding ``loc[-1]`` (the parent of an unknown key)."""
+    """Field names of the model holding ``loc[-1]`` (the parent of an unknown key).
+
+    Parameters
+    ----------
+    model_cls : type
+        Root pydantic model.
+    loc : tuple
+        Error location of the unknown key, from the root.
+
+    Returns
+    -------
+    list of str
+        The parent model's field names (empty when it is not known).
+    """
     m = model_at(model_cls, tuple(loc[:-1]))
     return [] if m is None else list(m.model_fields)
 
 
 def closest(word: str, candidates: list[str]) -> str | None:
-    """The candidate closest to ``word`` (case-insensitive difflib ratio ≥ 0.6), or None."""
+    """The candidate closest to ``word`` (case-insensitive difflib ratio ≥ 0.6), or None.
+
+    Parameters
+    ----------
+    word : str
+        The misspelt word.
+    candidates : list of str
+        Valid spellings.
+
+    Returns
+    -------
+    str or None
+        The closest candidate, in its own spelling.
+    """
     lower = {c.lower(): c for c in candidates}
     m = difflib.get_close_matches(str(word).lower(), list(lower), n=1, cutoff=0.6)
     return lower[m[0]] if m else None
 
 
 def unknown_key_hint(model_cls: type, loc: tuple) -> str:
-    """`` (did you mean `x`?)`` or `` (valid keys: a, b, c)`` for an unknown key at ``loc``."""
+    """`` (did you mean `x`?)`` or `` (valid keys: a, b, c)`` for an unknown key at ``loc``.
+
+    Parameters
+    ----------
+    model_cls : type
+        Root pydantic model.
+    loc : tuple
+        Error location of the unknown key.
+
+    Returns
+    -------
+    str
+        The hint, with a leading space; empty when the parent model is not known.
+    """
     keys = valid_keys(model_cls, loc)
     if not keys:
         return ""
@@ -89,7 +141,18 @@ def unknown_key_hint(model_cls: type, loc: tuple) -> str:
 
 
 def prioritize(errors: list[dict]) -> list[dict]:
-    """Errors in reporting order: unknown keys first (they usually cause the 'missing' ones)."""
+    """Errors in reporting order: unknown keys first (they usually cause the 'missing' ones).
+
+    Parameters
+    ----------
+    errors : list of dict
+        pydantic's ``ValidationError.errors()``.
+
+    Returns
+    -------
+    list of dict
+        The same errors, ``extra_forbidden`` ones first (stable order otherwise).
+    """
     return sorted(errors, key=lambda e: 0 if e.get("type") == "extra_forbidden" else 1)
 
 
@@ -97,7 +160,13 @@ def prioritize(errors: list[dict]) -> list[dict]:
 # packaged config names
 # ---------------------------------------------------------------------------------------------
 def packaged_names() -> list[str]:
-    """Names of the configs shipped with the package (without ``.yaml``)."""
+    """Names of the configs shipped with the package (without ``.yaml``).
+
+    Returns
+    -------
+    list of str
+        Sorted names; empty when the data package cannot be read.
+    """
     from importlib import resources
 
     from common import PACKAGED_CONFIGS
@@ -110,7 +179,18 @@ def packaged_names() -> list[str]:
 
 
 def missing_config_message(path) -> str:
-    """``config file not found: x (not a packaged config either; did you mean `mb3`? packaged: ...)``."""
+    """``config file not found: x (not a packaged config either; did you mean `mb3`? packaged: ...)``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The config as the user gave it.
+
+    Returns
+    -------
+    str
+        The one-line message.
+    """
     names = packaged_names()
     msg = f"config file not found: {path}"
     p = Path(str(path))
@@ -151,7 +231,18 @@ _NUMERICAL_HINTS: list[tuple[tuple[str, ...], str]] = [
 
 
 def numerical_hint(message: str) -> str:
-    """A "which setting to change" hint for a numerical failure message (empty if none applies)."""
+    """A "which setting to change" hint for a numerical failure message (empty if none applies).
+
+    Parameters
+    ----------
+    message : str
+        The failure message.
+
+    Returns
+    -------
+    str
+        The first matching hint; empty when none applies or the message already has a hint.
+    """
     low = message.lower()
     if "hint:" in low:
         return ""                      # already has one
@@ -163,7 +254,18 @@ def numerical_hint(message: str) -> str:
 
 def with_hint(exc: Exception) -> str:
     """The message of a user-facing error, with a numerical hint appended when one applies
-    (solver/design failures, exit 3, and a missing equilibrium)."""
+    (solver/design failures, exit 3, and a missing equilibrium).
+
+    Parameters
+    ----------
+    exc : Exception
+        The user-facing error.
+
+    Returns
+    -------
+    str
+        ``str(exc)``, followed by ``; hint: ...`` when one applies.
+    """
     from common.errors import EXIT_NUMERICAL, NoEquilibriumError
 
     msg = str(exc)

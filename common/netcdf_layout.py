@@ -91,16 +91,10 @@ def _coord_values(dim: str, named: Mapping[str, tuple]) -> tuple | None:
     return named.get(dim)
 
 
-def annotate(group, items: Mapping[str, Any], root: bool = True) -> None:
-    """Give the datasets of ``group`` (already written from ``items``) the netCDF layout.
-
-    Recurses into sub-groups.  ``items`` maps names to :class:`common.results.Dataset` or to
-    nested mappings, exactly as passed to :func:`common.results.write_h5`.
-    """
-    import h5py
-
-    if root:
-        group.attrs["Conventions"] = "CF-1.8"
+def _plan_dims(items: Mapping[str, Any]) -> tuple[dict, dict, dict]:
+    """Dimension names of every dataset of one group: (plan: key → dims, sizes: dim → length,
+    named: dim → names of its entries).  A name reused with another length or clashing with a
+    dataset of another shape gets a suffix."""
     sizes: dict[str, int] = {}
     plan: dict[str, list[str]] = {}
     named: dict[str, tuple] = {}
@@ -125,7 +119,14 @@ def annotate(group, items: Mapping[str, Any], root: bool = True) -> None:
         if value.names is not None and len(value.names) == shape[-1] and dims[-1] not in named:
             named[dims[-1]] = tuple(str(x) for x in value.names)
         plan[key] = dims
-    # dimension scales: coordinate variables, string coordinates, or bare dimensions
+    return plan, sizes, named
+
+
+def _dimension_scales(group, sizes: dict, named: dict) -> dict:
+    """One dimension scale per dimension: the coordinate variable when the group has one, else a
+    string coordinate of the entries' names, else a bare netCDF dimension."""
+    import h5py
+
     scales = {}
     for d, n in sizes.items():
         if d in group and isinstance(group[d], h5py.Dataset) and group[d].shape == (n,):
@@ -145,6 +146,33 @@ def annotate(group, items: Mapping[str, Any], root: bool = True) -> None:
                 ds.attrs["units"] = "1"
                 ds.make_scale(f"{NOT_A_VARIABLE}{n:10d}")
         scales[d] = ds
+    return scales
+
+
+def annotate(group, items: Mapping[str, Any], root: bool = True) -> None:
+    """Give the datasets of ``group`` (already written from ``items``) the netCDF layout.
+
+    Recurses into sub-groups.  ``items`` maps names to :class:`common.results.Dataset` or to
+    nested mappings, exactly as passed to :func:`common.results.write_h5`.
+
+    Parameters
+    ----------
+    group : h5py.Group
+        The group (the file's root first) holding the datasets written from ``items``.
+    items : Mapping
+        Dataset name → :class:`common.results.Dataset` or nested mapping (a sub-group).
+    root : bool, optional
+        ``group`` is the file's root (it gets ``Conventions="CF-1.8"``).
+
+    Raises
+    ------
+    ValueError
+        When a dataset's ``dims`` do not match its number of axes.
+    """
+    if root:
+        group.attrs["Conventions"] = "CF-1.8"
+    plan, sizes, named = _plan_dims(items)
+    scales = _dimension_scales(group, sizes, named)
     aux = [a for a in AUX_COORDS if a in plan and plan[a] == [TIME]]
     for key, dims in plan.items():
         ds = group[key]
@@ -165,7 +193,18 @@ def annotate(group, items: Mapping[str, Any], root: bool = True) -> None:
 
 
 def unit_system_of(config_text: str) -> str:
-    """``output.units`` of a resolved config text (``imperial`` when absent or unreadable)."""
+    """``output.units`` of a resolved config text (``imperial`` when absent or unreadable).
+
+    Parameters
+    ----------
+    config_text : str
+        Resolved config, YAML.
+
+    Returns
+    -------
+    str
+        ``"imperial"`` or ``"SI"`` (whatever the config says).
+    """
     import yaml
 
     try:
@@ -177,7 +216,20 @@ def unit_system_of(config_text: str) -> str:
 
 def convert_items(items: Mapping[str, Any], system: str) -> dict:
     """A copy of ``items`` with each dataset in its output unit (:func:`common.units.output_unit`):
-    deg → rad always, imperial → SI under ``SI``.  Units pint does not know are kept."""
+    deg → rad always, imperial → SI under ``SI``.  Units pint does not know are kept.
+
+    Parameters
+    ----------
+    items : Mapping
+        Dataset name → :class:`common.results.Dataset` or nested mapping.
+    system : str
+        Output unit system, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    dict
+        Same structure; float/complex datasets converted with their ``units`` updated.
+    """
     from dataclasses import replace
 
     from common.units import to_system
@@ -204,7 +256,22 @@ def convert_items(items: Mapping[str, Any], system: str) -> dict:
 
 def with_leading_dim(items: Mapping[str, Any], dim: str, n: int) -> dict:
     """``items`` with ``dims`` set on every dataset (recursively) whose first axis has length
-    ``n`` and no dims yet: ``(dim, <inferred rest>)`` — e.g. one row per sweep case."""
+    ``n`` and no dims yet: ``(dim, <inferred rest>)`` — e.g. one row per sweep case.
+
+    Parameters
+    ----------
+    items : Mapping
+        Dataset name → :class:`common.results.Dataset` or nested mapping.
+    dim : str
+        Name of the leading dimension.
+    n : int
+        Its length.
+
+    Returns
+    -------
+    dict
+        Same structure, with ``dims`` set where they apply.
+    """
     from dataclasses import replace
 
     out = {}

@@ -40,7 +40,13 @@ _RECORDERS: list[set] = []
 
 
 def record_written(path) -> None:
-    """Called by :func:`common.results.atomic_path` for each file it completes."""
+    """Called by :func:`common.results.atomic_path` for each file it completes.
+
+    Parameters
+    ----------
+    path : path-like
+        The completed file; recorded (resolved) by every running stage.
+    """
     p = Path(path).resolve()
     for rec in _RECORDERS:
         rec.add(p)
@@ -78,7 +84,22 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
 
 
 def write_config_yaml(run_dir, config=None, config_text: str | None = None) -> Path:
-    """Write ``<run_dir>/config.yaml``: the resolved config headed by its source and overrides."""
+    """Write ``<run_dir>/config.yaml``: the resolved config headed by its source and overrides.
+
+    Parameters
+    ----------
+    run_dir : path-like
+        The run folder.
+    config : model, optional
+        The resolved config (its ``to_yaml()`` and its recorded origin are used).
+    config_text : str, optional
+        The resolved config as YAML; takes precedence over ``config.to_yaml()``.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
     from common.overrides import header, origin_of
     from common.results import write_text
 
@@ -88,7 +109,22 @@ def write_config_yaml(run_dir, config=None, config_text: str | None = None) -> P
 
 
 def prune(run_dir, stage: str, written: set) -> list[Path]:
-    """Remove the files of ``stage`` in ``run_dir`` that are not in ``written``; returns them."""
+    """Remove the files of ``stage`` in ``run_dir`` that are not in ``written``; returns them.
+
+    Parameters
+    ----------
+    run_dir : path-like
+        The run folder (nothing happens when it does not exist).
+    stage : str
+        A key of :data:`STAGE_OUTPUTS`.
+    written : set of pathlib.Path
+        Resolved paths written by this run of the stage (kept).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files removed (a file that cannot be removed is skipped).
+    """
     removed = []
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
@@ -106,7 +142,20 @@ def prune(run_dir, stage: str, written: set) -> list[Path]:
 
 def owns_outputs(stage: str, load):
     """Decorator of a stage runner ``fn(config, ...)``: resolve ``config`` with ``load`` (path →
-    validated config; a config passes through), then run ``fn`` inside :func:`stage_outputs`."""
+    validated config; a config passes through), then run ``fn`` inside :func:`stage_outputs`.
+
+    Parameters
+    ----------
+    stage : str
+        A key of :data:`STAGE_OUTPUTS`.
+    load : callable
+        ``load(config)`` → validated config (with ``run_dir()``).
+
+    Returns
+    -------
+    callable
+        The decorator.
+    """
     import functools
 
     def deco(fn):

@@ -35,7 +35,18 @@ _KEY = re.compile(r"^~?[A-Za-z_][A-Za-z0-9_]*(\.([A-Za-z0-9_]+))*$")
 
 
 def looks_like_override(text: str) -> bool:
-    """True when ``text`` has the form ``dotted.key=value`` or ``~dotted.key``."""
+    """True when ``text`` has the form ``dotted.key=value`` or ``~dotted.key``.
+
+    Parameters
+    ----------
+    text : str
+        A command-line word.
+
+    Returns
+    -------
+    bool
+        It is an override.
+    """
     text = str(text)
     if text.startswith("~"):
         return bool(_KEY.match(text))
@@ -46,10 +57,23 @@ def looks_like_override(text: str) -> bool:
 def parse_override(text: str) -> tuple[list, object, bool]:
     """``"a.b=1"`` → (["a", "b"], 1, False); ``"~a.b"`` → (["a", "b"], None, True).
 
+    Parameters
+    ----------
+    text : str
+        One override.
+
+    Returns
+    -------
+    tuple
+        (key path, list of str and int (digits are list indices); value parsed as YAML;
+        whether it removes the key).
+
     Raises
     ------
+    OverrideSyntaxError
+        The text is not ``dotted.key=value`` / ``~dotted.key`` (exit 64).
     ConfigError
-        The text is not ``dotted.key=value`` / ``~dotted.key``, or the value is not valid YAML.
+        The value is not valid YAML.
     """
     text = str(text)
     if not looks_like_override(text):
@@ -71,7 +95,26 @@ def _part(p: str):
 
 
 def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None) -> object:
-    """A deep copy of the raw mapping ``data`` with every override applied in order."""
+    """A deep copy of the raw mapping ``data`` with every override applied in order.
+
+    Parameters
+    ----------
+    data : object
+        The config as read from YAML (a mapping; anything else is returned unchanged for the
+        loader to report).
+    overrides : list of str or None
+        Overrides, applied left to right.
+
+    Returns
+    -------
+    object
+        The modified copy (``data`` itself when there is nothing to apply).
+
+    Raises
+    ------
+    ConfigError
+        An override goes into a missing list element or inside a scalar value, or is malformed.
+    """
     if not overrides:
         return data
     if not isinstance(data, dict):
@@ -124,7 +167,20 @@ def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None)
 
 def split_overrides(config, overrides) -> tuple[object, list[str]]:
     """Separate a positional CONFIG that is really an override (``acmm simulate a.b=1``, using the
-    packaged default) from the override list: returns (config or None, overrides)."""
+    packaged default) from the override list: returns (config or None, overrides).
+
+    Parameters
+    ----------
+    config : str or path-like or None
+        The positional CONFIG argument.
+    overrides : list of str or None
+        The KEY=VALUE arguments.
+
+    Returns
+    -------
+    tuple
+        (config, or None when it was an override and no such file exists; list of overrides).
+    """
     overrides = list(overrides or [])
     if config is not None and looks_like_override(str(config)):
         from pathlib import Path
@@ -135,7 +191,20 @@ def split_overrides(config, overrides) -> tuple[object, list[str]]:
 
 
 def header(source: str | None, overrides: list[str] | None) -> str:
-    """The comment block heading ``config.yaml``: where the config came from and the overrides."""
+    """The comment block heading ``config.yaml``: where the config came from and the overrides.
+
+    Parameters
+    ----------
+    source : str or None
+        The config file or packaged name.
+    overrides : list of str or None
+        The command-line overrides.
+
+    Returns
+    -------
+    str
+        ``#`` comment lines, ending in a newline.
+    """
     lines = ["# resolved config of this run (every default filled in, numbers in the config's canonical units)"]
     if source:
         lines.append(f"# source: {source}")
@@ -153,7 +222,22 @@ _MAX_ORIGINS = 256
 
 
 def remember_origin(model: object, source: str, overrides: list[str] | None) -> object:
-    """Record the file and the overrides a loaded config came from; returns ``model``."""
+    """Record the file and the overrides a loaded config came from; returns ``model``.
+
+    Parameters
+    ----------
+    model : object
+        The loaded config (kept by identity; the last 256 are remembered).
+    source : str
+        The file or packaged name.
+    overrides : list of str or None
+        The overrides applied.
+
+    Returns
+    -------
+    object
+        ``model``.
+    """
     if len(_ORIGINS) >= _MAX_ORIGINS:
         _ORIGINS.pop(next(iter(_ORIGINS)))
     _ORIGINS[id(model)] = (model, str(source), list(overrides or []))
@@ -161,7 +245,18 @@ def remember_origin(model: object, source: str, overrides: list[str] | None) -> 
 
 
 def origin_of(model: object) -> tuple[str | None, list[str]]:
-    """(source, overrides) recorded by :func:`remember_origin`, or (None, [])."""
+    """(source, overrides) recorded by :func:`remember_origin`, or (None, []).
+
+    Parameters
+    ----------
+    model : object
+        A loaded config.
+
+    Returns
+    -------
+    tuple
+        (source or None, list of overrides).
+    """
     rec = _ORIGINS.get(id(model))
     if rec is None or rec[0] is not model:
         return None, []

@@ -39,10 +39,7 @@ def _inertia_matrix() -> dict:
 class Generator(GenerateJsonSchema):
     """pydantic's schema generator, taught which before-validators widen the accepted input.
 
-    Parameters
-    ----------
-    *args, **kwargs : object
-        Passed on to :class:`pydantic.json_schema.GenerateJsonSchema`.
+    Constructed like :class:`pydantic.json_schema.GenerateJsonSchema` (whose constructor it keeps).
     """
 
     def function_before_schema(self, schema):

@@ -36,7 +36,15 @@ def _watch(parent: int, interval: float) -> None:
 
 
 def die_with_parent(parent: int, interval: float = 1.0) -> None:
-    """Make this (worker) process exit when process ``parent`` dies."""
+    """Make this (worker) process exit when process ``parent`` dies.
+
+    Parameters
+    ----------
+    parent : int
+        Process id of the parent (the pool's owner).
+    interval : float, optional
+        Polling period of the watch thread, s.
+    """
     _set_pdeathsig()
     if os.getppid() != parent:          # the parent died before the prctl took effect
         os._exit(1)

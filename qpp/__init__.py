@@ -1,5 +1,5 @@
 """qpp — quantitative pole placement: L∞ tracking in the sense of spheres for Lure systems.
 
-Implements Part III of NASA CR-185644 (Parlos & Jayasuriya, 1990), chapters 9–14.
+Implements Part III of NASA CR-185644 (Parlos & Jayasuriya, 1990), chapters 9–14 (ch. 9–14).
 """
 __version__ = "0.1.0"

@@ -1,4 +1,6 @@
-"""Validated ``qpp`` configuration (pydantic v2), read from YAML.
+"""Validated ``qpp`` configuration (pydantic v2), read from YAML: the Lure plant and
+servo-compensator (eqs 10.1–10.3), the H∞ design settings (ch. 11), the β thresholds of the
+design procedure (section 12.1) and the simulation of ch. 13/14.
 
 Units: time s, frequency rad/s, the exponential weighting ``a`` 1/s; plant matrices and signals
 are in the user's units (the report's examples: m, rad, kg).  Unknown keys are rejected; a
@@ -20,6 +22,7 @@ from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 from qpp.config_fields import (QPP_MAX, KgM2, Kilograms, Matrix, Metres, OptSeconds,  # noqa: F401
                                PerSecond, Radians, RadPerSecond, Seconds, _finite_matrix,
                                _implausible, _Model, _q)
+from qpp.config_simulation import Scenario, Signal, Simulation, Term  # noqa: F401
 from qpp.config_nonlin import (ExpressionNonlinearity, LibraryForm, Nonlinearity,  # noqa: F401
                                ParameterRange, PolarArmNonlinearity, SinusoidalNonlinearity)
 
@@ -104,44 +107,9 @@ class Design(_Model):
                                    description="W_s = w·S_c scalings tried by the wider search")
 
 
-class Term(_Model):
-    """One additive term of a signal: sin, step (on [t_on, t_off)), or ramp held after t_end."""
-
-    kind: Literal["sin", "step", "ramp"]
-    amplitude: float = Field(1.0, description="sin amplitude / step value / ramp slope (per s)")
-    omega: RadPerSecond = Field(0.0, ge=0, description="sin frequency, rad/s")
-    phase: Radians = Field(0.0, description="sin phase, rad")
-    t_on: OptSeconds = Field(None, description="step/ramp start, s (default: −∞ for a step, 0 for a ramp)")
-    t_off: OptSeconds = Field(None, description="step end / ramp hold time, s (default: never)")
-
-
-Signal = list[list[Term]]   # one list of terms per channel
-
-
-class Scenario(_Model):
-    """A simulation case: r = r_o + delta_r, uncertain parameter value, disturbance impulse."""
-
-    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX)
-    delta_r: Optional[Signal] = Field(None, description="reference perturbation r − r_o per channel")
-    gamma: float = Field(0.0, description="uncertain parameter: γ (sinusoidal) or payload M in kg (polar_arm)")
-    parameters: Optional[dict[str, float]] = Field(None, description="expression kind: parameter values "
-                                                                     "(missing ones nominal)")
-    impulse_time: OptSeconds = Field(None, ge=0, description="time of a disturbance impulse d = I δ(t − t_i), s")
-    impulse: Optional[list[float]] = Field(None, description="impulse size I per disturbance channel (r)")
-
-
-class Simulation(_Model):
-    """Nonlinear closed-loop simulation (ch. 13.4 / 14.5)."""
-
-    t_final: Seconds = Field(10.0, gt=0, le=1e5, description="simulated time, s")
-    n_samples: int = Field(2001, ge=11, le=200001, description="output samples")
-    rtol: float = Field(1e-8, ge=1e-14, lt=1, description="integrator relative tolerance (≥ 1e-14: ~100 ulp)")
-    atol: float = Field(1e-10, ge=1e-20, lt=1, description="integrator absolute tolerance")
-    r_o: Signal = Field(description="nominal reference r_o(t), one list of terms per output")
-    scenarios: list[Scenario] = Field(min_length=1)
-
-
 class Output(_Model):
+    """Where results go."""
+
     root: str = Field("runs", pattern=ROOT_PATTERN, description="results root; files go to <root>/<name>/")
     figures: bool = Field(True, description="write PNG figures next to the HDF5 files")
     units: Literal["SI"] = Field("SI", description="unit system of the results: qpp works in SI (s, rad/s, kg, m); "
@@ -282,14 +250,31 @@ class QppConfig(_Model):
                              "overflows; lower hinf.a or spheres.T")
 
     def lure_plant(self):
-        """The :class:`qpp.lure.LurePlant` of this config."""
+        """The Lure plant of this config (eqs 10.1–10.3).
+
+        Returns
+        -------
+        qpp.lure.LurePlant
+            Plant (A, B, C, G) and servo-compensator (Ac, Bc, Cc), in the user's units.
+        """
         from qpp.lure import LurePlant
 
         p = self.plant
         return LurePlant(p.A, p.B, p.C, p.G, p.Ac, p.Bc, p.Cc)
 
     def expression_model(self):
-        """The compiled :class:`qpp.nonlin.ExpressionModel` of an ``expression`` nonlinearity (cached)."""
+        """The compiled model of an ``expression`` nonlinearity f1 (eq 10.1), cached.
+
+        Returns
+        -------
+        qpp.nonlin.ExpressionModel
+            The compiled expression with its sector and Lipschitz bounds.
+
+        Raises
+        ------
+        TypeError
+            If ``nonlinearity.kind`` is not ``expression``.
+        """
         from qpp.nonlin import ExpressionModel
 
         nl = self.nonlinearity
@@ -307,14 +292,46 @@ class QppConfig(_Model):
         return _EXPR_CACHE[key]
 
     def run_dir(self) -> Path:
+        """The results directory of this run.
+
+        Returns
+        -------
+        pathlib.Path
+            ``<output.root>/<name>``.
+        """
         return Path(self.output.root) / self.name
 
     def to_yaml(self) -> str:
+        """The resolved config as YAML text (what is embedded in every results file).
+
+        Returns
+        -------
+        str
+            YAML document, keys in schema order.
+        """
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
 
 
 def parse_config(data: object, source: str = "config") -> QppConfig:
-    """Validate a mapping into a :class:`QppConfig` (one-line :class:`ConfigError` on failure)."""
+    """Validate a mapping into a :class:`QppConfig`.
+
+    Parameters
+    ----------
+    data : object
+        The parsed YAML (a mapping).
+    source : str, optional
+        Name of the source, used in the error message.
+
+    Returns
+    -------
+    QppConfig
+        The validated config.
+
+    Raises
+    ------
+    common.errors.ConfigError
+        One line naming the offending field.
+    """
     from common.configio import validate_model
 
     return validate_model(QppConfig, data, source)
@@ -322,7 +339,24 @@ def parse_config(data: object, source: str = "config") -> QppConfig:
 
 def load_config(path, overrides: list[str] | None = None) -> QppConfig:
     """Read and validate a YAML file; a bare name (``qpp_siso``) falls back to the packaged configs.
-    ``overrides`` (dotted ``key=value``, :mod:`common.overrides`) apply before validation."""
+
+    Parameters
+    ----------
+    path : str or path-like
+        YAML file, or the name of a packaged config.
+    overrides : list of str, optional
+        Dotted ``key=value`` edits (:mod:`common.overrides`), applied before validation.
+
+    Returns
+    -------
+    QppConfig
+        The validated config.
+
+    Raises
+    ------
+    common.errors.ConfigError
+        A missing or unreadable file, bad YAML or an invalid field (one line).
+    """
     from common.configio import read_yaml
     from common.overrides import apply_overrides, remember_origin
 

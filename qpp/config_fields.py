@@ -6,27 +6,20 @@ Moved out of :mod:`qpp.config` (issue 12), which re-exports every name here.
 """
 from __future__ import annotations
 
-import math
 from typing import Annotated, Optional
 
 import numpy as np
-from pydantic import BaseModel, BeforeValidator, ConfigDict, model_validator
+from pydantic import BaseModel, ConfigDict, model_validator
 
-from common.units import to_canonical
+from common.quantity_fields import quantity
 
 Matrix = list[list[float]]
 
 
 def _q(kind: str):
-    """A number, or a ``"<number> <unit>"`` string converted (pint) to the SI unit of ``kind``."""
-    def conv(v):
-        if v is None:
-            return v
-        x = to_canonical(v, kind)
-        if not math.isfinite(x):
-            raise ValueError("must be a finite number")
-        return x
-    return BeforeValidator(conv)
+    """A number, or a ``"<number> <unit>"`` string converted (pint) to the SI unit of ``kind``;
+    ``None`` passes (optional fields)."""
+    return quantity(kind, allow_none=True)
 
 
 Seconds = Annotated[float, _q("time")]

@@ -122,12 +122,7 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
     P = plant
     Aa, Ba, Ga, _ = augmented(P)
     Ab = Aa + a * np.eye(Aa.shape[0])
-    if weight == "servo":
-        Cw = np.hstack([np.zeros((P.Cc.shape[0], P.n)), P.Cc])
-    elif weight == "output":
-        Cw = np.hstack([P.C, np.zeros((P.p, P.q))])
-    else:
-        raise ValueError(f"weight must be 'servo' or 'output', got {weight!r}")
+    Cw = _state_weight(P, weight)
     Q = Cw.T @ Cw
     Bcomb = np.hstack([Ba, Ga])
     R = np.diag([rho ** 2] * Ba.shape[1] + [-nu ** 2] * Ga.shape[1])
@@ -143,14 +138,7 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
         raise DesignError(f"Riccati 11.1 solution is not k ≥ 0 at rho={rho:g}, nu={nu:g} (step 4)")
     K = -Ba.T @ k / rho ** 2
     n = P.n
-    Af = P.A + a * np.eye(n)
-    GG = P.G @ P.G.T
-    try:
-        h = sla.solve_continuous_are(Af.T, P.C.T, GG, np.eye(P.p))
-    except (np.linalg.LinAlgError, ValueError) as exc:
-        raise DesignError(f"filter Riccati equation has no stabilizing solution: {exc}") from None
-    h = 0.5 * (h + h.T)
-    res_h = _rel_res(Af @ h + h @ Af.T - h @ P.C.T @ P.C @ h + GG, h)
+    h, res_h = _filter_riccati(P, a)
     k11 = k[:n, :n]
     lam = float(np.max(np.real(np.linalg.eigvals(k11 @ h))))
     if observer == "filter":
@@ -160,6 +148,28 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
     else:
         raise ValueError(f"observer must be 'filter' or 'dgkf', got {observer!r}")
     return HinfGains(K[:, :n], K[:, n:], H, k, h, rho, nu, a, res_k, res_h, lam)
+
+
+def _state_weight(P: LurePlant, weight: str) -> np.ndarray:
+    """C_w of the state weight Q = C_wᵀ C_w of :func:`hinf_gains`: ``[0 Cc]`` (servo) or ``[C 0]``
+    (output)."""
+    if weight == "servo":
+        return np.hstack([np.zeros((P.Cc.shape[0], P.n)), P.Cc])
+    if weight == "output":
+        return np.hstack([P.C, np.zeros((P.p, P.q))])
+    raise ValueError(f"weight must be 'servo' or 'output', got {weight!r}")
+
+
+def _filter_riccati(P: LurePlant, a: float):
+    """The filter Riccati solution h∞ of theorem 3 (a-shifted) and its relative residual."""
+    Af = P.A + a * np.eye(P.n)
+    GG = P.G @ P.G.T
+    try:
+        h = sla.solve_continuous_are(Af.T, P.C.T, GG, np.eye(P.p))
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise DesignError(f"filter Riccati equation has no stabilizing solution: {exc}") from None
+    h = 0.5 * (h + h.T)
+    return h, _rel_res(Af @ h + h @ Af.T - h @ P.C.T @ P.C @ h + GG, h)
 
 
 def closed_loop_norm(plant: LurePlant, g: HinfGains, *, bz: str = "eq10.7") -> float:
@@ -269,49 +279,65 @@ def hinf_search(plant: LurePlant, *, rho: float, a: float, nu: float | None = No
     best: HinfGains | None = None
     best_delta = np.inf
     if nu is None:
-        try:
-            g0 = hinf_gains(plant, rho=rho, a=a, nu=1.0, weight=weight, observer=observer, strict=False)
-            nu = closed_loop_norm(plant, g0, bz=bz)
-            if not np.isfinite(nu) or nu <= 0:
-                nu = 1.0
-        except (DesignError, ConvergenceError):
-            nu = 1.0
+        nu = _initial_nu(plant, rho, a, weight, observer, bz)
     nu_min = np.inf
     for _ in range(max_iter):
-        rec = {"rho": rho, "nu": nu, "delta": np.inf, "k_psd": False, "h_psd": False,
-               "lambda_kh_scaled": np.nan, "spectral": False, "admissible": False}
-        try:
-            g = hinf_gains(plant, rho=rho, a=a, nu=nu, weight=weight, observer=observer, strict=False)
-            rec.update(existence_tests(g))
-            rec["delta"] = delta = closed_loop_norm(plant, g, bz=bz)
-        except (DesignError, ConvergenceError):
-            g, delta = None, np.inf
-        ok = g is not None and rec["k_psd"] and rec["h_psd"] and rec["spectral"] and np.isfinite(delta)
-        rec["admissible"] = bool(ok)
+        g, delta, rec = _search_pass(plant, rho, a, nu, weight, observer, bz)
+        ok = rec["admissible"]
         history.append(rec)
         if ok and delta < best_delta:
             best, best_delta = g, delta
-        if ok and target is not None and delta <= target:
-            rec["action"] = "target met"
+        rec["action"], nu, nu_min, rho, stop = _next_step(ok, delta, nu, nu_min, rho, rho_min, rho_factor,
+                                                          target)
+        if stop:
             break
-        if not ok:                                    # steps 4-5
-            if np.isfinite(delta) and delta < nu:
-                rec["action"] = "nu <- delta"
-                nu = delta
-                continue
-        elif delta < nu * (1 - 1e-6):                 # steps 6-7
-            nu = delta
-            if nu < nu_min:
-                nu_min = nu
-                rec["action"] = "nu <- delta (smaller)"
-                continue
-        if rho <= rho_min:                            # step 6: rho <= eps -> step 8
-            rec["action"] = "rho <= eps: stop"
-            break
-        rec["action"] = "rho decreased"
-        rho = max(rho * rho_factor, rho_min)
     if best is None:
         raise DesignError("H∞ search (ch. 11 steps 1-8) found no admissible gains "
                           "(k1 ⪰ 0, h∞ ⪰ 0, λmax(k1 h∞) < ν² failed for every ρ, ν tried)")
     best.history = history
     return best
+
+
+def _initial_nu(plant: LurePlant, rho: float, a: float, weight: str, observer: str, bz: str) -> float:
+    """Step 1 of ch. 11: δ = ‖T_wy‖∞ of the ν = 1 design (1 when that design fails)."""
+    try:
+        g0 = hinf_gains(plant, rho=rho, a=a, nu=1.0, weight=weight, observer=observer, strict=False)
+        nu = closed_loop_norm(plant, g0, bz=bz)
+        if not np.isfinite(nu) or nu <= 0:
+            nu = 1.0
+    except (DesignError, ConvergenceError):
+        nu = 1.0
+    return nu
+
+
+def _search_pass(plant: LurePlant, rho: float, a: float, nu: float, weight: str, observer: str, bz: str):
+    """Steps 2–5 of ch. 11 at (ρ, ν): the gains (None when no solution), δ and the history record
+    (existence tests, ``admissible``)."""
+    rec = {"rho": rho, "nu": nu, "delta": np.inf, "k_psd": False, "h_psd": False,
+           "lambda_kh_scaled": np.nan, "spectral": False, "admissible": False}
+    try:
+        g = hinf_gains(plant, rho=rho, a=a, nu=nu, weight=weight, observer=observer, strict=False)
+        rec.update(existence_tests(g))
+        rec["delta"] = delta = closed_loop_norm(plant, g, bz=bz)
+    except (DesignError, ConvergenceError):
+        g, delta = None, np.inf
+    ok = g is not None and rec["k_psd"] and rec["h_psd"] and rec["spectral"] and np.isfinite(delta)
+    rec["admissible"] = bool(ok)
+    return g, delta, rec
+
+
+def _next_step(ok: bool, delta: float, nu: float, nu_min: float, rho: float, rho_min: float,
+               rho_factor: float, target):
+    """Steps 4–8 of ch. 11 after one pass: (action, ν, smallest ν, ρ, stop)."""
+    if ok and target is not None and delta <= target:
+        return "target met", nu, nu_min, rho, True
+    if not ok:                                    # steps 4-5
+        if np.isfinite(delta) and delta < nu:
+            return "nu <- delta", delta, nu_min, rho, False
+    elif delta < nu * (1 - 1e-6):                 # steps 6-7
+        nu = delta
+        if nu < nu_min:
+            return "nu <- delta (smaller)", nu, nu, rho, False
+    if rho <= rho_min:                            # step 6: rho <= eps -> step 8
+        return "rho <= eps: stop", nu, nu_min, rho, True
+    return "rho decreased", nu, nu_min, max(rho * rho_factor, rho_min), False

@@ -1,15 +1,10 @@
 """General sector-bounded nonlinearities written by the user (CR-185644 ch. 10.1, 10.4, lemma 1).
 
 A channel of the matched nonlinearity f1 (f = B f1, eq 10.1) is an expression in the outputs
-``y1 … yp`` (``y`` when p = 1), the time ``t`` and named uncertain parameters with stated ranges.  The expression is
-parsed **without eval**: Python's :mod:`ast` tree is walked node by node and only numbers, the
-whitelisted symbols and the whitelisted functions below are turned into a :mod:`sympy` expression.
-
-Functions: sin cos tan exp log sqrt tanh atan abs sign min max, and the library forms
-
-* ``sat(x, L)``       saturation  max(−L, min(L, x))  (L = 1 by default),
-* ``deadzone(x, w)``  dead zone   x − sat(x, w),
-* ``cubic(x)``        x³ (sector-bounded only on a bounded set: the stated ``y_range``).
+``y1 … yp`` (``y`` when p = 1), the time ``t`` and named uncertain parameters with stated
+ranges, parsed **without eval** into a :mod:`sympy` expression by :mod:`qpp.expression_parser`
+(whitelisted functions, and the library forms ``sat``, ``deadzone`` and ``cubic`` — the cubic is
+sector-bounded only on a bounded set: the stated ``y_range``).
 
 With θ the parameters and θ° their nominal values, the controller cancels f1o = f1(y, t, θ°) and
 the loop sees φ = N (f1(y, t, θ) − f1(y, t, θ°)) through G (B = G N, assumption iii).  From φ this
@@ -25,7 +20,6 @@ range) raises :class:`common.errors.ConfigError` naming the channel and the caus
 """
 from __future__ import annotations
 
-import ast
 import itertools
 from dataclasses import dataclass
 from functools import cached_property
@@ -33,119 +27,27 @@ from functools import cached_property
 import numpy as np
 
 from common.errors import ConfigError
-
-MAX_LEN = 400           #: longest accepted expression, characters
-MAX_EXPONENT = 64       #: largest |numeric exponent| accepted in ``**``
-
-
-def _sp():
-    import sympy
-
-    return sympy
-
-
-def _functions():
-    sp = _sp()
-
-    def sat(x, L=1):
-        return sp.Max(-L, sp.Min(L, x))
-
-    def deadzone(x, w):
-        return x - sp.Max(-w, sp.Min(w, x))
-
-    return {"sin": sp.sin, "cos": sp.cos, "tan": sp.tan, "exp": sp.exp, "log": sp.log, "sqrt": sp.sqrt,
-            "tanh": sp.tanh, "atan": sp.atan, "abs": sp.Abs, "sign": sp.sign, "min": sp.Min, "max": sp.Max,
-            "sat": sat, "deadzone": deadzone, "cubic": lambda x: x ** 3}
-
-
-FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "tanh", "atan", "abs", "sign", "min", "max",
-             "sat", "deadzone", "cubic")
-
-
-def parse_expression(text: str, symbols: dict, where: str = "expression"):
-    """Safe parse of ``text`` into a sympy expression over ``symbols`` (name → sympy Symbol).
-
-    Only numbers, +, −, *, /, ** (numeric exponent |e| ≤ 64), parentheses, the given symbols,
-    ``pi`` and the functions of :data:`FUNCTIONS` are accepted; everything else raises
-    :class:`ConfigError` naming ``where``.
-    """
-    sp = _sp()
-    if not isinstance(text, str) or not text.strip():
-        raise ConfigError(f"{where}: empty expression")
-    if len(text) > MAX_LEN:
-        raise ConfigError(f"{where}: expression longer than {MAX_LEN} characters")
-    try:
-        tree = ast.parse(text.strip(), mode="eval")
-    except SyntaxError as exc:
-        raise ConfigError(f"{where}: cannot parse {text!r} ({exc.msg})") from None
-    funcs = _functions()
-    binops = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: lambda a, b: a * b,
-              ast.Div: lambda a, b: a / b}
-
-    def conv(node):
-        if isinstance(node, ast.Expression):
-            return conv(node.body)
-        if isinstance(node, ast.Constant) and type(node.value) in (int, float):
-            return sp.Integer(node.value) if isinstance(node.value, int) else sp.Float(node.value)
-        if isinstance(node, ast.Name):
-            if node.id in symbols:
-                return symbols[node.id]
-            if node.id == "pi":
-                return sp.pi
-            if node.id in funcs:
-                raise ConfigError(f"{where}: function {node.id!r} used without arguments")
-            raise ConfigError(f"{where}: unknown symbol {node.id!r} (allowed: "
-                              f"{', '.join(sorted(symbols)) or 'none'}, pi)")
-        if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-            v = conv(node.operand)
-            return -v if isinstance(node.op, ast.USub) else v
-        if isinstance(node, ast.BinOp):
-            a, b = conv(node.left), conv(node.right)
-            if type(node.op) in binops:
-                return binops[type(node.op)](a, b)
-            if isinstance(node.op, ast.Pow):
-                if b.is_number and (not b.is_finite or abs(complex(b)) > MAX_EXPONENT):
-                    raise ConfigError(f"{where}: exponent {b} too large (|e| ≤ {MAX_EXPONENT})")
-                return a ** b
-            raise ConfigError(f"{where}: operator {type(node.op).__name__} not allowed")
-        if isinstance(node, ast.Call):
-            if not isinstance(node.func, ast.Name) or node.func.id not in funcs:
-                name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)[:40]
-                raise ConfigError(f"{where}: unknown function {name!r} (allowed: {', '.join(FUNCTIONS)})")
-            if node.keywords:
-                raise ConfigError(f"{where}: keyword arguments not allowed in {node.func.id}()")
-            args = [conv(x) for x in node.args]
-            try:
-                return funcs[node.func.id](*args)
-            except TypeError:
-                raise ConfigError(f"{where}: wrong number of arguments to {node.func.id}()") from None
-        raise ConfigError(f"{where}: syntax {type(node).__name__} not allowed in {text!r}")
-
-    expr = conv(tree)
-    if expr.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
-        raise ConfigError(f"{where}: expression {text!r} is singular (division by zero)")
-    return expr
-
-
-def library_expression(form: str, output: int, gain: str, level: float | None) -> str:
-    """Expression text of a library form on output ``y<output>``: ``gain·form(y)``."""
-    y = f"y{output}"
-    if form == "saturation":
-        return f"({gain})*sat({y}, {level if level is not None else 1.0})"
-    if form == "dead_zone":
-        if level is None:
-            raise ConfigError("nonlinearity: dead_zone needs level (half-width of the dead zone)")
-        return f"({gain})*deadzone({y}, {level})"
-    if form == "cubic":
-        return f"({gain})*{y}**3"
-    if form == "sin":
-        return f"({gain})*sin({y})"
-    raise ConfigError(f"nonlinearity: unknown library form {form!r}")
+from qpp.expression_parser import (  # noqa: F401  (re-exported: the old import paths)
+    FUNCTIONS, MAX_EXPONENT, MAX_LEN, library_expression, parse_expression, sympy_module)
 
 
 @dataclass
 class SectorInfo:
-    """Sector and derivative bounds of φ computed from the expression."""
+    """Sector and derivative bounds of φ computed from the expression.
+
+    Attributes
+    ----------
+    sector : (r, 2) array
+        The sector [α_i, β_i] of each φ_i, in units of φ per unit of y.
+    slope_bound : (r,) array
+        sup Σ_j |∂φ_i/∂y_j| over the ranges, in units of φ per unit of y.
+    diagonal : (r,) bool array
+        Whether φ_i depends on y_i only.
+    verified : bool
+        Whether the random-point verification passed without widening.
+    n_samples : int
+        Number of sample points used.
+    """
 
     sector: np.ndarray       #: (r, 2) [α_i, β_i]
     slope_bound: np.ndarray  #: (r,) sup Σ_j |∂φ_i/∂y_j| over the ranges
@@ -163,17 +65,22 @@ class ExpressionModel:
         One expression per control channel (m).
     p : int
         Number of outputs (symbols y1 … yp).
-    params : dict name → (min, max, nominal)
+    params : dict
+        name → (min, max, nominal) of each uncertain parameter, in the config's units.
     y_range : (p, 2) array
-        Range of each output on which the sector and slopes are computed.
+        Range of each output on which the sector and slopes are computed, in the units of y.
     N : (r, m) array
-        B = G N (assumption iii).
+        B = G N (assumption iii), dimensionless.
     t_range : float
         Time horizon sampled for the sector, s.
+    n_grid : int
+        Grid points per output axis.
+    n_t : int
+        Time samples on [0, t_range].
     """
 
     def __init__(self, exprs, p, params, y_range, N, t_range, *, n_grid: int = 41, n_t: int = 256):
-        sp = _sp()
+        sp = sympy_module()
         self.p = int(p)
         self.names = list(params)
         self.lo = np.array([params[k][0] for k in self.names], float)
@@ -221,12 +128,42 @@ class ExpressionModel:
         return np.broadcast_to(np.asarray(v, float), np.broadcast(*Y, t, *TH, np.zeros(1)).shape)
 
     def f1(self, y, t, theta) -> np.ndarray:
-        """f1 ∈ R^m at one output y (p,), time t, parameters θ."""
+        """f1 ∈ R^m at one output y (p,), time t, parameters θ.
+
+        Parameters
+        ----------
+        y : (p,) array
+            The output, in the units of y.
+        t : float
+            Time, s.
+        theta : (k,) array or None
+            Parameter values, in the config's units; None: the nominal values.
+
+        Returns
+        -------
+        (m,) ndarray
+            f1, in the units of u.
+        """
         th = self.nom if theta is None else np.atleast_1d(np.asarray(theta, float))
         return np.array([float(np.asarray(fn(*y, t, *th))) for fn in self._f])
 
     def phi_at(self, Y, t, TH) -> np.ndarray:
-        """φ on broadcast arrays: Y list of p arrays, t array, TH list of k arrays → (r, …)."""
+        """φ on broadcast arrays.
+
+        Parameters
+        ----------
+        Y : list of p arrays
+            The outputs, in the units of y.
+        t : array
+            Times, s.
+        TH : list of k arrays
+            Parameter values, in the config's units.
+
+        Returns
+        -------
+        (r, ...) ndarray
+            φ on the broadcast shape, in the units of d.
+        """
         return np.array([self._call(fn, Y, t, TH) for fn in self._phi])
 
     def _grad(self, i, j, Y, t, TH):
@@ -248,7 +185,13 @@ class ExpressionModel:
 
     # ------------------------------------------------------------------ sampling
     def theta_samples(self) -> np.ndarray:
-        """Corners and midpoints of Θ (3^k points, k ≤ 6; else corners and nominal)."""
+        """Corners and midpoints of Θ (3^k points, k ≤ 6; else corners and nominal).
+
+        Returns
+        -------
+        (S, k) ndarray
+            The parameter samples, in the config's units.
+        """
         k = len(self.names)
         if k == 0:
             return np.zeros((1, 0))
@@ -339,7 +282,7 @@ class ExpressionModel:
         """Symbolic check (sympy ``continuous_domain``) that every f1 channel is continuous in each of
         its symbols over the stated range — catches poles the sampling grid steps over (tan at π/2).
         Skipped for large expressions or when sympy cannot decide; the sampling checks still apply."""
-        sp = _sp()
+        sp = sympy_module()
         from sympy.calculus.util import continuous_domain
 
         ranges = {**{s: tuple(r) for s, r in zip(self.ys, self.y_range)}, self.t: (0.0, self.t_range),
@@ -396,7 +339,18 @@ class ExpressionModel:
 
     # ------------------------------------------------------------------ β3, β4
     def beta3(self, T: float) -> float:
-        """β3 (10.54): max_i ‖(sup_{y, θ} Σ_j |∂φ_i/∂y_j|)_T‖₂ (sampled on the grid)."""
+        """β3 (10.54): max_i ‖(sup_{y, θ} Σ_j |∂φ_i/∂y_j|)_T‖₂ (sampled on the grid).
+
+        Parameters
+        ----------
+        T : float
+            Truncation time, s.
+
+        Returns
+        -------
+        float
+            β3, in units of φ per unit of y times s^½.
+        """
         from qpp.spheres import truncated_l2
 
         axes = self._y_grid()
@@ -417,7 +371,22 @@ class ExpressionModel:
         return truncated_l2(tg, g, T)
 
     def beta4(self, t, y_o, T: float) -> float:
-        """β4 (10.53/14.8): sup_θ max_i ‖(φ_i(y_o(t), θ, t))_T‖₂ along the nominal output."""
+        """β4 (10.53/14.8): sup_θ max_i ‖(φ_i(y_o(t), θ, t))_T‖₂ along the nominal output.
+
+        Parameters
+        ----------
+        t : (N,) array
+            Sample times, s.
+        y_o : (p, N) array
+            Nominal output, in the units of y.
+        T : float
+            Truncation time, s.
+
+        Returns
+        -------
+        float
+            β4, in units of φ times s^½.
+        """
         from qpp.spheres import truncated_l2
 
         t = np.asarray(t, float)

@@ -1,4 +1,7 @@
-"""Figures of ``qpp design`` (Figs 13.1, 14.2–14.3) and ``qpp simulate`` (Figs 13.2–13.10, 14.4–14.6)."""
+"""Figures of ``qpp design`` (Figs 13.1, 14.2–14.3) and ``qpp simulate`` (Figs 13.2–13.10, 14.4–14.6).
+
+The examples of ch. 13 (SISO) and ch. 14 (two-link polar arm); the circle criterion of ch. 12.1.
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -10,7 +13,20 @@ from common.results import save_figure
 
 
 def plot_circle(res, path: Path) -> list[Path]:
-    """Gershgorin mean band of H(−a + jω) against the critical disc, one figure per channel."""
+    """Gershgorin mean band of H(−a + jω) against the critical disc, one figure per channel.
+
+    Parameters
+    ----------
+    res : qpp.certificate.DesignResult
+        A design; its ``circle`` (:class:`qpp.circle.CircleResult`) is drawn.
+    path : pathlib.Path
+        Figure path; channel i is written to ``<stem>_ch<i>.png`` beside it.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The figures written, one per channel.
+    """
     from qpp.circle import critical_disc
 
     plt = _plt()
@@ -49,7 +65,22 @@ def plot_circle(res, path: Path) -> list[Path]:
 
 
 def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
-    """r, r_o, y, y_o; tracking error |y − y_o| against β_o; control u."""
+    """r, r_o, y, y_o; tracking error |y − y_o| against β_o; control u.
+
+    Parameters
+    ----------
+    sim : qpp.simulate.SimResult
+        One simulated scenario (time in s, signals in the plant's output and control units).
+    path : pathlib.Path
+        Figure path.
+    cartesian_a : float, optional
+        Not used (the Cartesian load path is :func:`plot_cartesian`); units of the output y1.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     plt = _plt()
     p = sim.y.shape[0]
     fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
@@ -77,7 +108,23 @@ def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
 
 
 def plot_cartesian(sims, a: float, path: Path) -> Path:
-    """Load path Y_A1 = (x1 + a) sin x2, Y_A2 = (x1 + a) cos x2 (Fig 14.5)."""
+    """Load path Y_A1 = (x1 + a) sin x2, Y_A2 = (x1 + a) cos x2 (Fig 14.5).
+
+    Parameters
+    ----------
+    sims : list of qpp.simulate.SimResult
+        Simulated scenarios of the polar arm (y1 radial extension in m, y2 angle in rad); the
+        first one's nominal output y_o is drawn too.
+    a : float
+        Arm offset a of the polar-arm nonlinearity, in the units of y1 (m).
+    path : pathlib.Path
+        Figure path.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     plt = _plt()
     fig, ax = plt.subplots(figsize=(5.5, 6))
     s0 = sims[0]
@@ -95,7 +142,20 @@ def plot_cartesian(sims, a: float, path: Path) -> Path:
 
 
 def plot_iterations(res, path: Path) -> Path:
-    """β1 and the threshold m versus the evaluation index of procedure 12.1 (circle verdict marked)."""
+    """β1 and the threshold m versus the evaluation index of procedure 12.1 (circle verdict marked).
+
+    Parameters
+    ----------
+    res : qpp.certificate.DesignResult
+        A design; its ``iterations`` records are drawn.
+    path : pathlib.Path
+        Figure path.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     plt = _plt()
     its = [it for it in res.iterations if np.isfinite(it.get("beta1", np.nan))]
     fig, ax = plt.subplots(figsize=(7.5, 4.2))

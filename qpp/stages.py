@@ -1,4 +1,8 @@
-"""Stage runners for ``qpp design`` / ``qpp simulate``: config in, HDF5 (+ figures) out."""
+"""Stage runners for ``qpp design`` / ``qpp simulate``: config in, HDF5 (+ figures) out.
+
+The design is procedure 12.1 (ch. 12.1; gains of eqs 10.5–10.6), the simulations those of
+ch. 13–14.
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -24,15 +28,71 @@ def _rel(a, b):
 
 def printed_H_difference(cfg: QppConfig, r: DesignResult) -> float | None:
     """Largest |H − H_printed| / |H_printed| over the non-zero printed entries of the observer gain
-    (dimensionless); None when the config gives no printed H."""
+    (dimensionless); None when the config gives no printed H.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        The config (``published.H``).
+    r : qpp.certificate.DesignResult
+        The design (``H``).
+
+    Returns
+    -------
+    float or None
+        The largest relative difference, dimensionless.
+    """
     pub = cfg.published.H
     if pub is None:
         return None
     return float(_rel(r.H, pub)[np.abs(np.asarray(pub, float)) > 0].max())
 
 
+def _published_certificate_items(pb) -> dict:
+    """Datasets of the certificate of the printed gains (β1 both readings, β3/β4/m, circle)."""
+    return {
+        "beta1_eq10_7": Dataset(pb.beta1["eq10.7"]["value"], "1", "beta1 of the printed gains, B_z eq 10.7"),
+        "beta1_printed": Dataset(pb.beta1["printed"]["value"], "1", "beta1 of the printed gains, printed B_z"),
+        "thresholds": Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in pb.thresholds]), "1",
+                              "β3, β4, m of the printed gains per bookkeeping: "
+                              + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"]),
+        "circle_passed": Dataset(int(pb.circle.passed), "1", "circle criterion with the printed gains"),
+        "T": Dataset(pb.T, "s", "truncation time used"),
+    }
+
+
+def _printed_gain_items(pub, H) -> dict:
+    """Datasets of the printed gains of the config's ``published`` section ({} when absent)."""
+    if pub.K1 is None or pub.Kc is None:
+        return {}
+    items = {
+        "K1": Dataset(np.asarray(pub.K1, float), "1", "printed K1", dims=("input", "state")),
+        "Kc": Dataset(np.asarray(pub.Kc, float), "1", "printed Kc", dims=("input", "servo_state")),
+    }
+    if pub.H is not None:
+        items["H"] = Dataset(np.asarray(pub.H, float), "1", "printed H", dims=("state", "output"))
+        items["H_rel_diff"] = Dataset(
+            np.where(np.abs(np.asarray(pub.H)) > 0, _rel(H, pub.H), 0.0), "1", "|H − H_printed|/|H_printed|",
+            dims=("state", "output"))
+    return items
+
+
 def design_items(cfg: QppConfig, r: DesignResult) -> dict:
-    """Datasets of qpp_design.h5."""
+    """Datasets of qpp_design.h5.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        The config.
+    r : qpp.certificate.DesignResult
+        The design.
+
+    Returns
+    -------
+    dict
+        Name → :class:`common.results.Dataset` (each with its units), for
+        :func:`common.results.write_h5`.
+    """
     items = {
         "K1": Dataset(r.K1, "1", "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
                       dims=("input", "state")),
@@ -65,16 +125,7 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         "ws_scale": Dataset(np.asarray(r.ws_scale or [1.0], float), "1", "W_s = diag(w)·S_c of the gains"),
     }
     if r.published is not None:
-        pb = r.published
-        items["published_certificate"] = {
-            "beta1_eq10_7": Dataset(pb.beta1["eq10.7"]["value"], "1", "beta1 of the printed gains, B_z eq 10.7"),
-            "beta1_printed": Dataset(pb.beta1["printed"]["value"], "1", "beta1 of the printed gains, printed B_z"),
-            "thresholds": Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in pb.thresholds]), "1",
-                                  "β3, β4, m of the printed gains per bookkeeping: "
-                                  + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"]),
-            "circle_passed": Dataset(int(pb.circle.passed), "1", "circle criterion with the printed gains"),
-            "T": Dataset(pb.T, "s", "truncation time used"),
-        }
+        items["published_certificate"] = _published_certificate_items(r.published)
     for reading in r.beta1:
         key = reading.replace(".", "_")
         b = r.beta1[reading]
@@ -96,17 +147,9 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         "encirclements": Dataset(c.encirclements, "1", "N_ci (clockwise)", dims=("channel",)),
         "max_scale": Dataset(c.max_scale, "1", "largest s with sector s·[α, β] passing"),
     }
-    pub = cfg.published
-    if pub.K1 is not None and pub.Kc is not None:
-        items["published"] = {
-            "K1": Dataset(np.asarray(pub.K1, float), "1", "printed K1", dims=("input", "state")),
-            "Kc": Dataset(np.asarray(pub.Kc, float), "1", "printed Kc", dims=("input", "servo_state")),
-        }
-        if pub.H is not None:
-            items["published"]["H"] = Dataset(np.asarray(pub.H, float), "1", "printed H", dims=("state", "output"))
-            items["published"]["H_rel_diff"] = Dataset(
-                np.where(np.abs(np.asarray(pub.H)) > 0, _rel(r.H, pub.H), 0.0), "1", "|H − H_printed|/|H_printed|",
-                dims=("state", "output"))
+    printed = _printed_gain_items(cfg.published, r.H)
+    if printed:
+        items["published"] = printed
     return items
 
 
@@ -134,7 +177,20 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     """Design (ch. 12.1) and write ``<root>/<name>/qpp_design.h5`` (+ circle and iteration figures).
 
     An uncertified design is still written (root attributes ``certified = 0``, ``label =
-    "uncertified"``, ``verdict``); the caller decides the exit code (:class:`DesignError`, 3)."""
+    "uncertified"``, ``verdict``); the caller decides the exit code (:class:`DesignError`, 3).
+
+    Parameters
+    ----------
+    config : qpp.config.QppConfig or path-like or str
+        The config, or a config file / packaged name to load.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+
+    Returns
+    -------
+    tuple
+        (config, :class:`qpp.certificate.DesignResult`, path of ``qpp_design.h5``).
+    """
     cfg = _cfg(config)
     r = design(cfg)
     verdicts = {f"beta1_le_m[{rd},{bk}]": int(v) for (rd, bk), v in r.verdicts().items()}
@@ -155,7 +211,23 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
 def run_simulate(config, figures: bool | None = None, progress=None):
     """Design, simulate every scenario, write ``<root>/<name>/qpp_sim.h5`` (+ figures).
 
-    ``progress(done, total, name)`` is called after each scenario."""
+    ``progress(done, total, name)`` is called after each scenario.
+
+    Parameters
+    ----------
+    config : qpp.config.QppConfig or path-like or str
+        The config, or a config file / packaged name to load.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+    progress : callable, optional
+        ``progress(done, total, name)``.
+
+    Returns
+    -------
+    tuple
+        (config, :class:`qpp.certificate.DesignResult`, list of :class:`qpp.simulate.SimResult`,
+        path of ``qpp_sim.h5``).
+    """
     cfg = _cfg(config)
     r = design(cfg)
     sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)

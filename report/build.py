@@ -1,4 +1,7 @@
-"""``build_report``: gather the results, write every section, render, hash and compare."""
+"""``build_report``: gather the results, write every section, render, hash and compare.
+
+The sections cover Table 1, ch. 5–7 of Part II and ch. 13–14 of Part III.
+"""
 from __future__ import annotations
 
 import json
@@ -29,7 +32,33 @@ from report.sections import table1 as sec_table1
 
 @dataclass
 class ReportResult:
-    """Files written by :func:`build_report` and what they contain."""
+    """Files written by :func:`build_report` and what they contain.
+
+    Attributes
+    ----------
+    out : pathlib.Path
+        Output directory.
+    html : pathlib.Path
+        ``index.html``.
+    markdown : pathlib.Path
+        ``report.md``.
+    manifest : pathlib.Path
+        ``manifest.json``.
+    figures : list of pathlib.Path
+        The PNG figures.
+    stages : list of report.gather.StageRun
+        The results files used.
+    ledger : list of report.ledger.PrintedNumber
+        Every printed number compared.
+    determinism : dict
+        :func:`report.manifest.compare_manifests` with the previous report.
+    wall_time : float
+        Total wall time, s.
+    sections : list of str
+        Section keys.
+    timings : dict
+        Wall time of the gathering, each stage group and each section, s.
+    """
 
     out: Path
     html: Path
@@ -46,6 +75,7 @@ class ReportResult:
 
     @property
     def unexplained(self) -> list:
+        """The ledger entries whose status is ``NOT EXPLAINED``."""
         return [p for p in self.ledger if p.status == STATUS_UNEXPLAINED]
 
 
@@ -67,10 +97,18 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
         Results root for the stages (default: each config's ``output.root``, i.e. ``runs``).
     progress : callable or None
         Called with one line of text per step.
+    robustness : bool
+        Include the ±30 % inertia robustness sweep.
 
     Returns
     -------
     ReportResult
+        The files written and what they contain.
+
+    Raises
+    ------
+    OutputError
+        The output directory cannot be created.
     """
     t_start = time.perf_counter()
     say = progress or (lambda msg: None)

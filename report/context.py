@@ -16,6 +16,17 @@ class SectionWriter:
 
     HDF5 files are read once per report (``results``, shared read-only between sections);
     sections pass values to each other only through explicit arguments and return values.
+
+    Parameters
+    ----------
+    g : report.gather.Gathered
+        The gathered configs and stage results.
+    figdir : pathlib.Path
+        Folder of the figures.
+    fast : bool
+        ``--fast`` mode (shortened runs).
+    results : dict, optional
+        Stage key → read HDF5 file, shared between the sections' writers.
     """
 
     def __init__(self, g: Gathered, figdir: Path, fast: bool, results: dict | None = None):
@@ -25,14 +36,44 @@ class SectionWriter:
         self.ledger: list[PrintedNumber] = []
 
     def section_writer(self) -> "SectionWriter":
-        """A writer for the next section: same inputs, empty document and ledger."""
+        """A writer for the next section: same inputs, empty document and ledger.
+
+        Returns
+        -------
+        SectionWriter
+            The new writer (sharing the read HDF5 files).
+        """
         return SectionWriter(self.g, self.figdir, self.fast, self._results)
 
     def run(self, key):
+        """The stage run ``key`` ("stage:name") of the gathered results.
+
+        Parameters
+        ----------
+        key : str
+            ``"<stage>:<config name>"``.
+
+        Returns
+        -------
+        report.gather.StageRun
+            Its file, config and hashes.
+        """
         return self.g.runs[key]
 
     def data(self, key):
-        """The results file of stage ``key`` ("stage:name") as read by :func:`acmm.results.read_h5`."""
+        """The results file of stage ``key`` ("stage:name") as read by :func:`acmm.results.read_h5`.
+
+        Parameters
+        ----------
+        key : str
+            ``"<stage>:<config name>"``.
+
+        Returns
+        -------
+        dict
+            Dataset name → array (in the file's units), ``attrs`` → root attributes; read once
+            per report.
+        """
         from common.results import read_h5
 
         if key not in self._results:
@@ -40,13 +81,46 @@ class SectionWriter:
         return self._results[key]
 
     def ledger_add(self, *args, **kw) -> PrintedNumber:
+        """Classify a printed number (:func:`report.ledger.check_printed`) and add it to the ledger.
+
+        Parameters
+        ----------
+        *args : tuple
+            Passed on to :func:`report.ledger.check_printed`.
+        **kw : dict
+            Passed on to :func:`report.ledger.check_printed`.
+
+        Returns
+        -------
+        report.ledger.PrintedNumber
+            The entry added.
+        """
         pn = check_printed(*args, **kw)
         self.ledger.append(pn)
         return pn
 
     def status_text(self, pn: PrintedNumber) -> str:
+        """The status of a ledger entry as the tables show it (:func:`report.ledger.status_text`).
+
+        Parameters
+        ----------
+        pn : report.ledger.PrintedNumber
+            The entry.
+
+        Returns
+        -------
+        str
+            Its status (an explained one with its note).
+        """
         return status_text(pn)
 
     def section(self, key):
+        """Start the section ``key`` of :data:`report.constants.SECTIONS` (its heading).
+
+        Parameters
+        ----------
+        key : str
+            Section key.
+        """
         title = dict(SECTIONS)[key]
         self.doc.h(1, title, key)

@@ -35,23 +35,76 @@ def _fmt(x, f="{:.4g}"):
 @dataclass
 class Doc:
     """A list of blocks: ("h", level, text, anchor), ("p", text), ("list", items),
-    ("table", header, rows, caption), ("fig", stem, caption, files)."""
+    ("table", header, rows, caption), ("fig", stem, caption, files).
+
+    Attributes
+    ----------
+    blocks : list of tuple
+        The blocks, in order.
+    """
 
     blocks: list = field(default_factory=list)
 
     def h(self, level, text, anchor=""):
+        """Add a heading.
+
+        Parameters
+        ----------
+        level : int
+            Heading level (1: a section).
+        text : str
+            Heading text.
+        anchor : str, optional
+            HTML anchor (the section key).
+        """
         self.blocks.append(("h", level, text, anchor))
 
     def p(self, text):
+        """Add a paragraph.
+
+        Parameters
+        ----------
+        text : str
+            Its text.
+        """
         self.blocks.append(("p", text))
 
     def ul(self, items):
+        """Add a bullet list.
+
+        Parameters
+        ----------
+        items : iterable of str
+            The items.
+        """
         self.blocks.append(("list", list(items)))
 
     def table(self, header, rows, caption=""):
+        """Add a table (cells turned into str).
+
+        Parameters
+        ----------
+        header : list of str
+            Column titles.
+        rows : list of list
+            Rows of cells.
+        caption : str, optional
+            Table caption.
+        """
         self.blocks.append(("table", list(header), [[str(c) for c in r] for r in rows], caption))
 
     def fig(self, stem, caption, files):
+        """Add a figure.
+
+        Parameters
+        ----------
+        stem : str
+            File name of the figure under ``figures/``, without suffix.
+        caption : str
+            Figure caption.
+        files : dict
+            ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
+        """
         self.blocks.append(("fig", stem, caption, files))
 
 
@@ -66,6 +119,20 @@ def _md_cell(s: str) -> str:
 
 
 def render_markdown(doc: Doc, title: str) -> str:
+    """The document as Markdown (figures linked under ``figures/``).
+
+    Parameters
+    ----------
+    doc : Doc
+        The document.
+    title : str
+        Page title.
+
+    Returns
+    -------
+    str
+        Markdown text.
+    """
     out = [f"# {title}", ""]
     for b in doc.blocks:
         if b[0] == "h":
@@ -100,6 +167,22 @@ def _status_class(text: str) -> str:
 
 
 def render_html(doc: Doc, title: str, figdir: Path) -> str:
+    """The document as one self-contained HTML page (style sheet and PNGs embedded).
+
+    Parameters
+    ----------
+    doc : Doc
+        The document.
+    title : str
+        Page title.
+    figdir : pathlib.Path
+        Folder of the figures.
+
+    Returns
+    -------
+    str
+        HTML text.
+    """
     e = html.escape
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
              f"<title>{e(title)}</title>", '<meta name="viewport" content="width=device-width, initial-scale=1">',

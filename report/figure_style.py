@@ -18,6 +18,15 @@ from common.results import save_figure
 def save(fig, directory: Path, stem: str) -> dict[str, Path]:
     """Save ``fig`` as ``<directory>/<stem>.pdf`` (vector) and ``.png``; close it.
 
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    directory : pathlib.Path
+        Output folder (created).
+    stem : str
+        File name without suffix.
+
     Returns
     -------
     dict

@@ -1,4 +1,6 @@
-"""Every figure of the report (vector PDF + PNG, :mod:`report.figure_style`)."""
+"""Every figure of the report (vector PDF + PNG, :mod:`report.figure_style`): the schedules and
+pole maps of ch. 5, the simulations of ch. 6, the robustness claim of ch. 7 and the QPP examples of
+ch. 13–14."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -11,7 +13,23 @@ AXES = ("roll", "pitch", "yaw")
 
 
 def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
-    """K(i, j) vs pitch TEA for the 24 columns: LQR gains (markers) and the schedule (lines)."""
+    """K(i, j) vs pitch TEA for the 24 columns: LQR gains (markers) and the schedule (lines).
+
+    Parameters
+    ----------
+    design : dict
+        ``design.h5`` as read by :func:`common.results.read_h5` (K in ft·lbf per state unit,
+        tea in rad, the ``schedule`` group).
+    drf_mode : str
+        DRF mode of the 24 states (their units).
+    figdir : pathlib.Path
+        Folder of the figures.
+
+    Returns
+    -------
+    dict
+        ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
+    """
     from acmm.linearize import STATE_NAMES, state_units
     from report.figure_style import COLORS, pyplot, save
     from acmm.schedule import schedule_gain
@@ -55,7 +73,30 @@ def _sector(ax, sigma, half_angle_deg, xmin):
 
 
 def fig_pole_maps(stair: dict, mb3: dict, dec: dict, dec_true_poles, n, sector, figdir: Path):
-    """Closed-loop poles / n: the stair-case schedule points, and the claim-1 designs."""
+    """Closed-loop poles / n: the stair-case schedule points, and the claim-1 designs.
+
+    Parameters
+    ----------
+    stair : dict
+        The stair-case ``design.h5`` (poles in rad/s, tea in rad).
+    mb3 : dict
+        The MB3 ``design.h5``.
+    dec : dict
+        The cross-inertia-free MB3 ``design.h5``.
+    dec_true_poles : (24,) complex array
+        Its gain's poles on the true coupled model, rad/s.
+    n : float
+        Orbit rate, rad/s.
+    sector : tuple of float
+        (σ in units of n, half-angle in deg).
+    figdir : pathlib.Path
+        Folder of the figures.
+
+    Returns
+    -------
+    dict
+        ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
+    """
     from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
@@ -95,7 +136,23 @@ def fig_pole_maps(stair: dict, mb3: dict, dec: dict, dec_true_poles, n, sector, 
 
 
 def fig_claim1(mb3: dict, dec: dict, figdir: Path):
-    """Attitude error, torque and momentum per axis: coupled vs cross-inertia-free (Figs 6.2–6.13)."""
+    """Attitude error, torque and momentum per axis: coupled vs cross-inertia-free (Figs 6.2–6.13).
+
+    Parameters
+    ----------
+    mb3 : dict
+        ``sim.h5`` of the coupled design (orbits, attitude error in rad, u in ft·lbf, h in
+        ft·lbf·s).
+    dec : dict
+        ``sim.h5`` of the cross-inertia-free design (same units).
+    figdir : pathlib.Path
+        Folder of the figures.
+
+    Returns
+    -------
+    dict
+        ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
+    """
     from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
@@ -123,7 +180,21 @@ def fig_claim1(mb3: dict, dec: dict, figdir: Path):
 
 
 def fig_staircase(sim: dict, figdir: Path):
-    """Inertia steps (Figs 6.14–6.19) and the responses (Figs 6.20–6.30)."""
+    """Inertia steps (Figs 6.14–6.19) and the responses (Figs 6.20–6.30).
+
+    Parameters
+    ----------
+    sim : dict
+        The stair-case ``sim.h5`` (t in s, orbits, attitude error in rad, rates in rad/s, u in
+        ft·lbf, h in ft·lbf·s, the ``levels`` group).
+    figdir : pathlib.Path
+        Folder of the figures.
+
+    Returns
+    -------
+    tuple of dict
+        The inertia, response and per-level figures, each ``{"pdf": path, "png": path}``.
+    """
     from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
@@ -178,7 +249,29 @@ def fig_staircase(sim: dict, figdir: Path):
 
 
 def fig_robustness(params: dict, base, verdict, peak, names, figdir: Path):
-    """Peak attitude error (deg) vs max_k |δ_k| per Monte Carlo case, one panel per base."""
+    """Peak attitude error (deg) vs max_k |δ_k| per Monte Carlo case, one panel per base.
+
+    Parameters
+    ----------
+    params : dict
+        Swept parameter → (N,) array (relative inertia changes ``dI11`` … ``dI23``,
+        dimensionless).
+    base : (N,) int array
+        Base index of each case.
+    verdict : (N,) str array
+        Verdict of each case.
+    peak : (N, 3) array
+        Peak attitude error per axis, deg.
+    names : list of str
+        Base names.
+    figdir : pathlib.Path
+        Folder of the figures.
+
+    Returns
+    -------
+    dict
+        ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
+    """
     from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
@@ -208,7 +301,28 @@ def fig_robustness(params: dict, base, verdict, peak, names, figdir: Path):
 
 
 def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path, out_labels):
-    """Per scenario: y and y_o; |y − y_o| against β_o (Figs 13.3–13.9, 14.4)."""
+    """Per scenario: y and y_o; |y − y_o| against β_o (Figs 13.3–13.9, 14.4).
+
+    Parameters
+    ----------
+    sim_path : pathlib.Path
+        ``qpp_sim.h5`` (one group per scenario; t in s, outputs in the plant's units).
+    design : dict
+        ``qpp_design.h5`` as read by :func:`common.results.read_h5` (not used for drawing).
+    beta_o : float
+        Radius β_o of the output sphere, in the output units.
+    name : str
+        Config name (file stem prefix).
+    figdir : pathlib.Path
+        Folder of the figures.
+    out_labels : list of str
+        Label of each output.
+
+    Returns
+    -------
+    dict
+        ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
+    """
     import h5py
 
     from report.figure_style import COLORS, pyplot, save
@@ -242,7 +356,23 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
 
 
 def fig_circle(design: dict, name: str, figdir: Path):
-    """Circle criterion (lemma 1): h_ii(−a + jω) with Gershgorin mean radii and the critical disc."""
+    """Circle criterion (lemma 1): h_ii(−a + jω) with Gershgorin mean radii and the critical disc.
+
+    Parameters
+    ----------
+    design : dict
+        ``qpp_design.h5`` as read by :func:`common.results.read_h5` (its ``circle`` group and
+        ``sector``; h_ii dimensionless).
+    name : str
+        Config name (file stem prefix).
+    figdir : pathlib.Path
+        Folder of the figures.
+
+    Returns
+    -------
+    dict
+        ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
+    """
     from report.figure_style import COLORS, pyplot, save
     from qpp.circle import critical_disc
 

@@ -1,4 +1,8 @@
-"""Gathering the results the report needs: reuse ``<root>/<name>/*.h5`` by hash, else run the stage."""
+"""Gathering the results the report needs: reuse ``<root>/<name>/*.h5`` by hash, else run the stage.
+
+The stages are those of Part II (TEA, design and stair-case simulation, ch. 4–6) and Part III
+(the examples of ch. 13–14).
+"""
 from __future__ import annotations
 
 import os
@@ -14,7 +18,29 @@ from report.constants import FAST_ORBITS
 
 @dataclass
 class StageRun:
-    """One results file the report used."""
+    """One results file the report used.
+
+    Attributes
+    ----------
+    stage : str
+        Stage name (``"acmm design"``, ``"qpp simulate"``, ...).
+    config : str
+        Config name.
+    path : pathlib.Path
+        The HDF5 file.
+    config_hash : str
+        Hash of the resolved config.
+    design_hash : str
+        Hash of the design-relevant config (acmm stages), else empty.
+    reused : bool
+        The file was reused, not recomputed.
+    wall_time : float
+        Time this report spent on the stage, s (0 when reused).
+    created_utc : str
+        The file's creation time.
+    git_commit : str
+        Commit the file was written by.
+    """
 
     stage: str
     config: str
@@ -42,7 +68,22 @@ def _try_attrs(path: Path) -> dict | None:
 
 
 def acmm_config(name: str, root: Path | None = None, *, fast: bool = False):
-    """A packaged acmm config with its results root set to ``root`` (``--fast``: short stair-case)."""
+    """A packaged acmm config with its results root set to ``root`` (``--fast``: short stair-case).
+
+    Parameters
+    ----------
+    name : str
+        Packaged config name.
+    root : pathlib.Path, optional
+        Results root (default: the config's ``output.root``).
+    fast : bool, optional
+        For a config with a schedule: ``<name>_fast`` with :data:`FAST_ORBITS` orbits.
+
+    Returns
+    -------
+    acmm.config.Config
+        The config, figures off.
+    """
     from acmm.config import load_config, parse_config
 
     data = load_config(name).model_dump(mode="json")
@@ -57,7 +98,20 @@ def acmm_config(name: str, root: Path | None = None, *, fast: bool = False):
 
 
 def qpp_config(name: str, root: Path | None = None):
-    """A packaged qpp config with its results root set to ``root``."""
+    """A packaged qpp config with its results root set to ``root``.
+
+    Parameters
+    ----------
+    name : str
+        Packaged config name.
+    root : pathlib.Path, optional
+        Results root (default: the config's ``output.root``).
+
+    Returns
+    -------
+    qpp.config.QppConfig
+        The config, figures off.
+    """
     from qpp.config import load_config, parse_config
 
     data = load_config(name).model_dump(mode="json")
@@ -79,6 +133,20 @@ def ensure_acmm_design(cfg, *, rerun: bool = False, donor_roots=()) -> StageRun:
 
     ``donor_roots``: other run directories whose ``design.h5`` may be copied when its design hash
     matches (the ``--fast`` stair-case reuses the full stair-case's design).
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        The config.
+    rerun : bool, optional
+        Design again even when a matching file exists.
+    donor_roots : iterable of path-like, optional
+        Run directories whose ``design.h5`` may be copied.
+
+    Returns
+    -------
+    StageRun
+        The design file used.
     """
     from common.results import config_hash
     from acmm.stages import design_for, design_hash, run_design
@@ -105,7 +173,20 @@ def ensure_acmm_design(cfg, *, rerun: bool = False, donor_roots=()) -> StageRun:
 
 
 def ensure_acmm_simulation(cfg, *, rerun: bool = False) -> StageRun:
-    """``sim.h5`` of an acmm config: reused when config and design hashes match, else simulated."""
+    """``sim.h5`` of an acmm config: reused when config and design hashes match, else simulated.
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        The config.
+    rerun : bool, optional
+        Simulate again even when a matching file exists.
+
+    Returns
+    -------
+    StageRun
+        The simulation file used.
+    """
     from common.results import config_hash
     from acmm.stages import design_hash, run_simulate
 
@@ -120,7 +201,22 @@ def ensure_acmm_simulation(cfg, *, rerun: bool = False) -> StageRun:
 
 
 def ensure_qpp(cfg, stage: str, *, rerun: bool = False) -> StageRun:
-    """``qpp_design.h5`` (``stage="design"``) or ``qpp_sim.h5`` (``"simulate"``), reused by config hash."""
+    """``qpp_design.h5`` (``stage="design"``) or ``qpp_sim.h5`` (``"simulate"``), reused by config hash.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        The config.
+    stage : {"design", "simulate"}
+        Which stage.
+    rerun : bool, optional
+        Run again even when a matching file exists.
+
+    Returns
+    -------
+    StageRun
+        The file used.
+    """
     from common.results import config_hash
     from qpp import stages as qst
 
@@ -139,7 +235,23 @@ def ensure_qpp(cfg, stage: str, *, rerun: bool = False) -> StageRun:
 
 @dataclass
 class Gathered:
-    """Configs and results files of one report."""
+    """Configs and results files of one report.
+
+    Attributes
+    ----------
+    configs : dict
+        Config name → acmm or qpp config.
+    runs : dict
+        ``"stage:name"`` → :class:`StageRun`.
+    robustness : dict or None
+        The robustness sweep (:func:`robustness_result`), or None.
+    robustness_note : str
+        Where it comes from, or why it is not available.
+    robustness_wall : float
+        Time spent on it, s.
+    timings : dict
+        Group of stages → wall time, s.
+    """
 
     configs: dict
     runs: dict                                   #: key "stage:name" → StageRun
@@ -161,6 +273,15 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
         Short stair-case (:data:`FAST_ORBITS` orbits) and a reduced robustness sweep.
     rerun : bool
         Ignore existing results and recompute every stage.
+    progress : callable or None
+        Called with one line of text per stage.
+    robustness : bool
+        Also run (or reuse) the robustness sweep.
+
+    Returns
+    -------
+    Gathered
+        The configs and the results files.
     """
     say = progress or (lambda msg: None)
     cfgs = {name: acmm_config(name, root, fast=fast and name == "staircase")
@@ -203,11 +324,21 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
 def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bool = False):
     """The ±30 % inertia sweep (issue 7, :mod:`acmm.sweep`), or (None, why not).
 
+    Parameters
+    ----------
+    root : pathlib.Path, optional
+        Results root (default: the sweep config's ``output.root``).
+    fast : bool, optional
+        A reduced sweep (:data:`FAST_SWEEP_RUNS` runs of :data:`FAST_SWEEP_ORBITS` orbits, no
+        margin search).
+    rerun : bool, optional
+        Run the sweep even when a complete matching ``sweep.h5`` exists.
+
     Returns
     -------
     (dict or None, str)
-        ``{"rows": [...], "header": [...], "verdict": str, "summary": str, "files": [paths]}``
-        and a note.  A missing sweep package, or a sweep that fails with an :class:`AcmmError` or an
+        ``{"data": sweep.h5 as read by read_h5, "run": StageRun, "fast", "n_runs", "orbits",
+        "design", "tea_estimate", "seed", "bases"}`` and a note.  A missing sweep package, or a sweep that fails with an :class:`AcmmError` or an
         ``OSError``, makes the section "not available"; programming errors propagate.
     """
     import importlib

@@ -11,7 +11,25 @@ STATUS_UNEXPLAINED = "NOT EXPLAINED"
 
 @dataclass
 class PrintedNumber:
-    """One number printed in CR-185644 and what this run computed for it."""
+    """One number printed in CR-185644 and what this run computed for it.
+
+    Attributes
+    ----------
+    section : str
+        Report section it belongs to.
+    quantity : str
+        What it is.
+    printed : str
+        The number exactly as printed.
+    computed : float or None
+        This run's value, in ``unit`` (None: not computed).
+    unit : str
+        Unit of both numbers.
+    status : str
+        One of the ``STATUS_*`` constants.
+    note : str
+        The explanation of an explained number.
+    """
 
     section: str
     quantity: str
@@ -23,13 +41,37 @@ class PrintedNumber:
 
 
 def printed_decimals(printed: str) -> int:
-    """Number of decimals of a printed number (``"-44.7"`` → 1, ``"1020"`` → 0)."""
+    """Number of decimals of a printed number (``"-44.7"`` → 1, ``"1020"`` → 0).
+
+    Parameters
+    ----------
+    printed : str
+        The number as printed.
+
+    Returns
+    -------
+    int
+        Its decimals (of the mantissa for an exponent form).
+    """
     s = printed.strip().lower().split("e")[0]
     return len(s.split(".")[1]) if "." in s else 0
 
 
 def matches_printed(printed: str, computed: float) -> bool:
-    """|computed − printed| ≤ half a unit of the printed number's last digit."""
+    """|computed − printed| ≤ half a unit of the printed number's last digit.
+
+    Parameters
+    ----------
+    printed : str
+        The number as printed.
+    computed : float
+        This run's value, in the printed number's unit.
+
+    Returns
+    -------
+    bool
+        It matches to printed precision.
+    """
     half = 0.5 * 10.0 ** (-printed_decimals(printed))
     return bool(abs(float(computed) - float(printed)) <= half * (1 + 1e-9) + 1e-15)
 
@@ -40,15 +82,26 @@ def check_printed(section: str, quantity: str, printed: str, computed, unit: str
 
     Parameters
     ----------
+    section : str
+        Report section.
+    quantity : str
+        What the number is.
     printed : str
         The number exactly as printed (its decimals set the precision).
     computed : float or None
-        This run's value (None: not computed, ``explanation`` required).
+        This run's value, in ``unit`` (None: not computed, ``explanation`` required).
+    unit : str, optional
+        Unit of the printed and computed numbers.
     bound : {"upper", None}
         ``"upper"``: the report prints a bound ("less than 0.094"); the value is consistent when
         it is below the bound.
     explanation : str
         Why a number that does not match differs (required for it to count as explained).
+
+    Returns
+    -------
+    PrintedNumber
+        The entry with its status.
     """
     if computed is not None and bound == "upper" and float(computed) < float(printed):
         status = STATUS_BOUND
@@ -67,7 +120,18 @@ def check_printed(section: str, quantity: str, printed: str, computed, unit: str
 
 
 def status_text(pn: PrintedNumber) -> str:
-    """The status of a ledger entry as shown in the tables (explained ones carry their note)."""
+    """The status of a ledger entry as shown in the tables (explained ones carry their note).
+
+    Parameters
+    ----------
+    pn : PrintedNumber
+        The entry.
+
+    Returns
+    -------
+    str
+        The status text.
+    """
     return pn.status if pn.status != STATUS_EXPLAINED else f"{STATUS_EXPLAINED}: {pn.note}"
 
 

@@ -17,6 +17,18 @@ def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> di
 
     Attributes (creation time, commit) and the datasets named in ``exclude`` (timings) are left
     out, so two runs of the same computation hash equal exactly when their numbers are equal.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The HDF5 file.
+    exclude : tuple of str, optional
+        Dataset names left out (any group).
+
+    Returns
+    -------
+    dict
+        Dataset path → hash, sorted by path.
     """
     import h5py
 
@@ -37,6 +49,19 @@ def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> di
 
 
 def build_manifest(g: Gathered) -> dict:
+    """The manifest of a report: every stage file used with its hashes and dataset hashes.
+
+    Parameters
+    ----------
+    g : report.gather.Gathered
+        The gathered stage results.
+
+    Returns
+    -------
+    dict
+        ``created_utc``, ``git_commit`` and ``files`` (stage key → path, config and design
+        hash, creation time, reused flag, :func:`dataset_hashes`).
+    """
     files = {}
     for key, r in g.runs.items():
         files[key] = {"path": str(r.path), "config_hash": r.config_hash, "design_hash": r.design_hash,
@@ -47,6 +72,13 @@ def build_manifest(g: Gathered) -> dict:
 
 def compare_manifests(old: dict | None, new: dict) -> dict:
     """Compare two manifests dataset by dataset.
+
+    Parameters
+    ----------
+    old : dict or None
+        The previous report's manifest (None: there is none).
+    new : dict
+        This report's manifest (:func:`build_manifest`).
 
     Returns
     -------

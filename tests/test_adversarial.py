@@ -292,7 +292,9 @@ def check_one_line_refusal(r, dt, code, rx, before, after):
     assert lines[0].startswith("error: ") and "Traceback" not in r.stderr
     assert re.search(rx, lines[0]), lines[0]
     assert after == before, sorted(after ^ before)
-    assert dt < 10.0
+    # a hang guard, not a speed target (those live in `make bench`): a refusal takes well under a
+    # second alone, but a loaded 2-core CI machine has been seen to stretch it to 40 s
+    assert dt < 120.0
 
 
 @pytest.mark.parametrize("app_name,cmd,config,code,rx", _cases())

@@ -1,22 +1,33 @@
 """Docstring conventions of the public API, enforced (issue 12, item 7).
 
 In the style of python-control's ``control/tests/docstrings_test.py``: every public function,
-class and method of a checked module has a docstring in numpydoc layout, and every parameter in
-its signature is documented in a ``Parameters`` section.  On top of that, for this project:
+class and method (name not starting with ``_``) of every module of the packages ``acmm``,
+``qpp``, ``common``, ``report``, ``configkinds`` and ``cli`` -- found by
+:func:`pkgutil.walk_packages`, so a new module is checked from the moment it exists -- has a
+docstring in numpydoc layout; every parameter in its signature is documented in a ``Parameters``
+section and every name listed there is a parameter (for a class: a constructor parameter).
+Excluded, each with its reason: compatibility shims that only re-export (:data:`SHIMS`, verified
+by :func:`test_exclusions_are_justified`).  On top of that, for this project:
 
 * numeric entries (``float``, ``complex``, arrays) of ``Parameters``, ``Returns`` and
   ``Attributes`` state their unit (or say ``dimensionless`` / name the units they follow);
 * a function that returns a value has a ``Returns`` section, and every exception class it
   raises itself is listed under ``Raises``;
 * a dataclass documents every field under ``Attributes``;
+* a typer command of ``cli`` (a function registered on a ``typer.Typer`` app, also from a
+  ``register(app)`` function) needs a summary line -- it is the command's ``--help`` text -- and
+  a non-empty ``help=`` on every ``typer.Option``/``typer.Argument``: typer documents the
+  parameters in ``--help``, so a numpydoc ``Parameters`` section would only repeat it (one that
+  is present anyway must name real parameters).  Other public functions of ``cli`` follow the
+  numpydoc rules above;
 * each module docstring cites the report's equations or chapters (CR-185644);
 * docstrings cite no file outside the repository (``NOTES.md``, ``shared/reference``, absolute
   paths); conventions and misprints are cited as ``docs/ERRATA.md § <section>`` with a section
   that exists in that document, and any other ``docs/*.md`` cited must exist.
 
 The numpydoc parser is a small one written here (sections, ``name : type`` entries), so the test
-needs no extra dependency.  To bring a module under the test, add it to :data:`CHECKED_MODULES`.
-The checker is exercised on deliberately faulty code in :func:`test_checker_reports_each_defect`.
+needs no extra dependency.  A module without the report's mathematics is listed, with the
+reason, in :data:`NO_REPORT_CITATION`.  The checker is exercised on deliberately faulty code in :func:`test_checker_reports_each_defect`.
 """
 from __future__ import annotations
 
@@ -25,6 +36,7 @@ import dataclasses
 import importlib
 import importlib.util
 import inspect
+import pkgutil
 import re
 import textwrap
 from pathlib import Path
@@ -33,49 +45,50 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 
-#: Modules whose public API is checked.  Other modules join this list as they are brought into
-#: line (issue 12); the checker takes any importable module name.
-CHECKED_MODULES = [
-    "acmm.dynamics",
-    "common.errors",
-    "acmm.linearize",
-    "acmm.simulate",
-    "acmm.tea",
-    "common.schema",
-    "acmm.schema",
-    "qpp.schema",
-    "configkinds",
-    "acmm.matrix_sign",
-    "acmm.riccati",
-    "acmm.care_checks",
-    "acmm.scenario",
-    "qpp.design",
-    "qpp.config_fields",
-    "qpp.config_nonlin",
-    "qpp.certificate",
-    "acmm.sector",
-    "acmm.lqr",
-    "acmm.lqr_methods",
-    "acmm.settings",
-    "acmm.schedule",
-    "acmm.path_check",
-    "acmm.schedule_refit",
-    "acmm.design_core",
-    "acmm.tea_compiled",
-    "qpp.hinf",
-    "qpp.circle",
-    "qpp.spheres",
-    "qpp.simulate",
-    "common.results",
-    "common.units",
-    "common.limits",
-    "common.runlock",
-    "common.configio",
-    "qpp.lure",
-]
+#: The packages whose every module is checked; their modules are found by
+#: :func:`pkgutil.walk_packages` (:func:`discover_modules`), so a new module is checked from the
+#: moment it exists.
+PACKAGES = ["acmm", "qpp", "common", "report", "configkinds", "cli"]
+
+#: Compatibility shims: old import paths that only re-export another module (the code, and so the
+#: docstrings, live in the target, which is checked).  :func:`test_exclusions_are_justified`
+#: verifies that each one's source holds nothing but a docstring, imports and the re-export.
+SHIMS = {
+    "acmm.errors": "common.errors",
+    "acmm.hints": "common.hints",
+    "acmm.limits": "common.limits",
+    "acmm.netcdf_layout": "common.netcdf_layout",
+    "acmm.outputs": "common.outputs",
+    "acmm.overrides": "common.overrides",
+    "acmm.results": "common.results",
+    "acmm.runlock": "common.runlock",
+    "acmm.workers": "common.workers",
+    "acmm.report": "report",
+    "acmm.report_style": "report.figure_style",
+    "acmm.sweep_config": "acmm.sweep.config",
+}
+
+
+
+def discover_modules() -> list:
+    """Every module of :data:`PACKAGES` (the packages themselves included), sorted."""
+    names = []
+    for package in PACKAGES:
+        pkg = importlib.import_module(package)
+        names.append(package)
+        for info in pkgutil.walk_packages(pkg.__path__, prefix=package + "."):
+            names.append(info.name)
+    return sorted(names)
+
+
+#: Modules whose public API is checked: every module of :data:`PACKAGES` but the exclusions.
+CHECKED_MODULES = [m for m in discover_modules() if m not in SHIMS]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
 NO_REPORT_CITATION = {
+    "common.atomic_write": "atomic file writing: no mathematics of the report",
+    "common.provenance": "git commit, config hash and creation time of results: no mathematics of the report",
+    "common.quantity_fields": "unit conversion of config fields (pydantic validators): no mathematics of the report",
     "common.errors": "exception classes and exit codes: no mathematics of the report",
     "common.schema": "JSON-schema generation of config files: no mathematics of the report",
     "acmm.schema": "JSON schemas of config files: no mathematics of the report",
@@ -86,6 +99,33 @@ NO_REPORT_CITATION = {
     "common.limits": "work and size limits of the programs: no mathematics of the report",
     "common.runlock": "per-run-directory file lock: no mathematics of the report",
     "common.configio": "bounded YAML reading and pydantic validation of configs: no mathematics of the report",
+    "common": "the shared base package: no mathematics of the report",
+    "common.hints": "hints attached to error messages: no mathematics of the report",
+    "common.outputs": "which files a stage owns, config.yaml: no mathematics of the report",
+    "common.overrides": "command-line key=value overrides: no mathematics of the report",
+    "common.workers": "worker-process hygiene: no mathematics of the report",
+    "common.plot_style": "matplotlib style of all figures: no mathematics of the report",
+    "acmm.warmup": "compiling the numba kernels ahead of time: no mathematics of the report",
+    "acmm.sweep_limits": "work bounds of a sweep config: no mathematics of the report",
+    "acmm.sweep.cases": "random draws and grid points of a sweep's cases: no mathematics of the report",
+    "acmm.sweep.journal": "the sweep's append-only journal file: no mathematics of the report",
+    "acmm.sweep.output": "the sweep's HDF5/CSV/figure output: no mathematics of the report",
+    "acmm.sweep.run": "the sweep driver (tasks, executor, journal): no mathematics of the report",
+    "acmm.parallel_figures": "writing figures in forked processes: no mathematics of the report",
+    "acmm.sweep.executors": "executors and chunking of the sweep's tasks: no mathematics of the report",
+    "report.constants": "section keys and titles of the report document: no mathematics",
+    "report.context": "what a report section receives and writes: no mathematics",
+    "report.document": "the report's document model and its HTML/Markdown renderers: no mathematics",
+    "report.figure_style": "the report's figure writer: no mathematics",
+    "report.manifest": "dataset hashes and the determinism manifest: no mathematics",
+    "report.sections": "package of the report's sections: no mathematics of its own",
+    "report.sections.determinism": "dataset hashes compared between runs: no mathematics",
+    "report.sections.printed": "the table of every printed number: no mathematics of its own",
+    "report.sections.provenance": "software versions and stage files used: no mathematics",
+    "report.ledger": "comparison of printed and computed numbers: no mathematics of the report",
+    **{m: "command line: parses, calls and prints, no mathematics (the layer rule)" for m in (
+        "cli", "cli.acmm_app", "cli.qpp_app", "cli.acmm_sweep", "cli.acmm_report", "cli.common",
+        "cli.progress")},
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).
@@ -101,7 +141,7 @@ NON_PHYSICAL_RE = re.compile(r"\b(int|bool|str)\s+arrays?\b|\barrays? of (int|bo
 #: What counts as a unit statement.
 UNIT_RE = re.compile(
     r"\brad\b|(?<![\w'’])s\b|ft·lbf|slug·ft²|ft\*lbf|slug\*ft|\bkg\b|N·m|\bdeg\b|°|"
-    r"[Dd]imensionless|\b[Uu]nits?\b")
+    r"[Dd]imensionless|\b[Uu]nits?\b|\borbits\b")
 #: A report citation in a module docstring: an equation, a chapter or a table.
 REPORT_RE = re.compile(r"\beqs?\.? ?\d+\.\d+|\bch\. ?\d+|\bTable \d+")
 #: Citations of files outside the repository.
@@ -215,7 +255,8 @@ def unit_problems(entries: list, section: str) -> list:
 
 def _own_nodes(func_node):
     """AST nodes of a function body, not descending into nested functions or classes."""
-    stack = list(func_node.body)
+    stack = [n for n in func_node.body
+             if not isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))]
     while stack:
         node = stack.pop()
         yield node
@@ -246,7 +287,11 @@ def returns_value(func) -> bool:
 
 
 def raised_names(func) -> set:
-    """Names of the exception classes the function raises itself (``raise Name(...)``)."""
+    """Names of the exception classes the function raises itself (``raise Name(...)``).
+
+    ``raise factory(...)`` with a lower-case name calls a function that builds the exception
+    (e.g. :func:`common.results.output_error`), whose class the AST cannot tell: not counted.
+    """
     node = _function_ast(func)
     out = set()
     for n in (_own_nodes(node) if node is not None else ()):
@@ -256,7 +301,7 @@ def raised_names(func) -> set:
                 out.add(exc.id)
             elif isinstance(exc, ast.Attribute):
                 out.add(exc.attr)
-    return out
+    return {name for name in out if not name[:1].islower()}
 
 
 def function_problems(func, *, method: bool = False) -> list:
@@ -317,6 +362,13 @@ def class_problems(cls) -> list:
         for name in list(inspect.signature(cls.__init__).parameters)[1:]:
             if name not in documented:
                 problems.append(f"constructor parameter {name!r} is not documented")
+    if params:      # what 'Parameters' lists must be a constructor parameter (python-control)
+        try:
+            accepted = set(inspect.signature(cls).parameters)
+        except (TypeError, ValueError):
+            accepted = set()
+        for name in sorted({n for e in params for n in e.names} - accepted):
+            problems.append(f"documents {name!r} under 'Parameters', which is no constructor parameter")
     for name, member in vars(cls).items():
         if name.startswith("_"):
             continue
@@ -332,10 +384,61 @@ def class_problems(cls) -> list:
     return problems
 
 
+def typer_commands(module) -> dict:
+    """{callback: command name} of every command registered on a typer app of ``module``."""
+    import typer
+
+    out = {}
+    for obj in vars(module).values():
+        if isinstance(obj, typer.Typer):
+            for command in obj.registered_commands:
+                out[command.callback] = command.name or command.callback.__name__
+    return out
+
+
+def command_problems(func) -> list:
+    """Problems of a typer command function (the ``cli`` apps' commands).
+
+    A command's docstring is its ``--help`` text and its parameters are documented by typer: each
+    is a ``typer.Option``/``typer.Argument`` whose ``help=`` is printed by ``--help``.  So a
+    command needs a summary line and a non-empty ``help=`` on every parameter, not a numpydoc
+    ``Parameters`` section (which would repeat ``--help``); if it has one anyway, it is checked
+    against the signature like any other.
+    """
+    from typer.models import ParameterInfo
+
+    doc = func.__doc__
+    if not doc or not doc.strip():
+        return ["has no docstring (its summary is the command's --help text)"]
+    sections, problems = parse_sections(doc)
+    if not "".join(sections["Summary"]).strip():
+        problems.append("has no summary line")
+    problems += citation_problems(doc)
+    params = inspect.signature(func).parameters
+    for name, p in params.items():
+        if not isinstance(p.default, ParameterInfo):
+            problems.append(f"parameter {name!r} is no typer Option/Argument (so has no --help text)")
+        elif not (p.default.help or "").strip():
+            problems.append(f"parameter {name!r} has no help= text")
+    if "Parameters" in sections:
+        entries, probs = parse_entries(sections["Parameters"])
+        problems += probs
+        for doc_name in sorted({n for e in entries for n in e.names} - set(params)):
+            problems.append(f"documents {doc_name!r}, which is not in the signature")
+    return problems
+
+
 def module_problems(module) -> list:
-    """Every problem of a module's docstrings, as 'module.object: problem' lines."""
+    """Every problem of a module's docstrings, as 'module.object: problem' lines.
+
+    Functions registered as typer commands on an app of the module are checked by
+    :func:`command_problems` (also those defined inside a ``register(app)`` function elsewhere);
+    every other public function, class and method by :func:`function_problems` /
+    :func:`class_problems`.
+    """
     name = module.__name__
     problems = []
+    commands = typer_commands(module)
     doc = module.__doc__ or ""
     if not doc.strip():
         problems.append(f"{name}: module has no docstring")
@@ -347,11 +450,16 @@ def module_problems(module) -> list:
             continue
         if inspect.isclass(obj):
             found = class_problems(obj)
+        elif obj in commands:
+            found = command_problems(obj)
         elif inspect.isfunction(obj) or inspect.isfunction(getattr(obj, "py_func", None)):
             found = function_problems(obj)
         else:
             continue
         problems += [f"{name}.{attr}: {p}" for p in found]
+    for callback, command in commands.items():
+        if vars(module).get(callback.__name__) is not callback:     # registered from elsewhere
+            problems += [f"{name}: command {command!r}: {p}" for p in command_problems(callback)]
     return problems
 
 
@@ -362,6 +470,43 @@ def module_problems(module) -> list:
 def test_docstrings(module_name):
     problems = module_problems(importlib.import_module(module_name))
     assert not problems, f"{len(problems)} docstring problem(s):\n" + "\n".join(problems)
+
+
+def test_every_module_is_found():
+    """Discovery reaches into subpackages, and the known modules are among those checked."""
+    found = discover_modules()
+    for name in ("acmm.tea", "acmm.sweep.run", "report.sections.errata", "cli.acmm_app",
+                 "configkinds", "common.units", "qpp.lure"):
+        assert name in found
+    assert len(found) >= 100
+
+
+def _only_reexports(path: Path) -> bool:
+    """Does a module's source hold nothing but its docstring, imports and a re-export
+    (``sys.modules[__name__] = ...`` or ``globals().update(...)``)?"""
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            continue
+        if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant):
+            continue                                                     # the docstring
+        if isinstance(node, ast.Assign) and ast.unparse(node.targets[0]) == "sys.modules[__name__]":
+            continue
+        if (isinstance(node, ast.Expr) and isinstance(node.value, ast.Call)
+                and ast.unparse(node.value.func) == "globals().update"):
+            continue
+        return False
+    return True
+
+
+def test_exclusions_are_justified():
+    """Each shim only re-exports a module that is itself checked."""
+    found = set(discover_modules())
+    for shim, target in SHIMS.items():
+        assert shim in found, f"{shim} no longer exists: drop it from SHIMS"
+        parent, _, leaf = shim.rpartition(".")     # not find_spec: some shims replace themselves
+        path = Path(importlib.import_module(parent).__path__[0]) / f"{leaf}.py"   # in sys.modules
+        assert _only_reexports(path), f"{shim} defines code of its own: check it, it is no shim"
+        assert target in CHECKED_MODULES, target
 
 
 def test_errata_sections_are_read():
@@ -446,6 +591,30 @@ def misspelt(a):
 
 class Undocumented:
     pass
+
+
+class WrongParameters:
+    """A class whose 'Parameters' name no constructor parameter.
+
+    Parameters
+    ----------
+    size : int
+        Not a parameter.
+    """
+
+    def __init__(self, n):
+        self.n = n
+
+
+import typer  # noqa: E402
+
+app = typer.Typer()
+
+
+@app.command()
+def helpless(config: str = typer.Argument(..., help="a config"),
+             fast: bool = typer.Option(False, "--fast"), plain=1):
+    """A command."""
 '''
 
 GOOD = '''
@@ -524,6 +693,10 @@ def test_checker_reports_each_defect(tmp_path):
         "misspelt: unknown section 'Parameter'",
         "misspelt: has parameters but no 'Parameters' section",
         "Undocumented: has no docstring",
+        "WrongParameters: constructor parameter 'n' is not documented",
+        "WrongParameters: documents 'size' under 'Parameters', which is no constructor parameter",
+        "helpless: parameter 'fast' has no help= text",
+        "helpless: parameter 'plain' is no typer Option/Argument",
     ]:
         assert expected in problems, f"checker missed: {expected}\n{problems}"
 

@@ -1,5 +1,9 @@
 """Running one case: the base context, the perturbed plant (redesigned when asked), one
-nonlinear closed-loop simulation and its metrics; the margin search of uniform inertia scaling."""
+nonlinear closed-loop simulation and its metrics; the margin search of uniform inertia scaling.
+
+The perturbed plant's TEA is that of eqs 4.1–4.3, its redesign the sector LQR (ch. 5.2) and
+schedule (ch. 5.3) of the pipeline, and its simulation the nonlinear stair-case run of ch. 6.
+"""
 from __future__ import annotations
 
 import dataclasses
@@ -18,7 +22,23 @@ from acmm.sweep.cases import AXES, _why, case_values, perturb_inertia
 # ---------------------------------------------------------------------------------------------
 @dataclass
 class BaseContext:
-    """What a worker needs for every case of one base (picklable)."""
+    """What a worker needs for every case of one base (picklable).
+
+    Attributes
+    ----------
+    label : str
+        The base's label in the sweep's output.
+    config : acmm.config.Config
+        The base config.
+    table : acmm.stages.DesignTable
+        Its nominal design.
+    scenario : acmm.simulate.Scenario
+        Its nominal scenario, over the sweep's orbits.
+    spec : acmm.sweep.config.SweepSpec
+        The sweep specification.
+    orbits : float
+        Simulated length, orbits.
+    """
 
     label: str
     config: object          # acmm.config.Config
@@ -29,7 +49,20 @@ class BaseContext:
 
 
 def prepare_base(base, spec) -> BaseContext:
-    """Design the base config once (nominal design) and build its nominal scenario."""
+    """Design the base config once (nominal design) and build its nominal scenario.
+
+    Parameters
+    ----------
+    base : acmm.sweep.config.Base
+        A base of the sweep (its ``label`` and validated ``config``).
+    spec : acmm.sweep.config.SweepSpec
+        The sweep specification (``orbits`` overrides the config's ``simulation.orbits``).
+
+    Returns
+    -------
+    BaseContext
+        The base's context for every case.
+    """
     from acmm.simulate import scenario_from_config
     from acmm.stages import compute_design
 
@@ -85,7 +118,25 @@ def _empty_row(n_levels: int) -> dict:
 
 
 def simulate_values(ctx: BaseContext, values: dict) -> dict:
-    """Simulate the base with the given parameter values; returns the metrics row (no case info)."""
+    """Simulate the base with the given parameter values; returns the metrics row (no case info).
+
+    Parameters
+    ----------
+    ctx : BaseContext
+        The base.
+    values : dict
+        Parameter name → value (``acmm.sweep.config.PARAMETERS``: relative inertia changes
+        dimensionless, biases ft·lbf, offsets deg, ``inertia_scale``, ``harmonic_scale``).
+
+    Returns
+    -------
+    dict
+        ``verdict``, ``reason`` and the metrics: ``time_to_divergence`` (orbits), peak and steady
+        attitude error (deg, per axis), ``peak_momentum`` (ft·lbf·s, per axis), saturation
+        times (orbits), true and estimated TEA (deg), ``inertia`` (slug·ft²), ``bias``
+        (ft·lbf), ``n_steps``.  An unphysical plant, a missing equilibrium, a failed design or
+        TEA is a verdict, not an exception.
+    """
     from acmm import dynamics as dyn
     from acmm import simulate as sm
     sc0, table, cfg, spec = ctx.scenario, ctx.table, ctx.config, ctx.spec
@@ -180,6 +231,20 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> np.ndarray:
     root, ~100× cheaper; any fold falls back to :func:`acmm.tea.solve_tea` and its errors).  A
     case's TEA depends only on its plant, never on the cases run before, so its row is the same
     whatever executor, chunking or order runs it.
+
+    Parameters
+    ----------
+    sc0 : acmm.simulate.Scenario
+        The nominal scenario (its orbit rate ``n``, rad/s).
+    inertia : (L, 3, 3) array
+        Perturbed inertia per level, slug·ft².
+    bias : (L, 3) array
+        Perturbed bias torque per level, ft·lbf.
+
+    Returns
+    -------
+    (L, 3) array
+        TEA (roll, pitch, yaw) per level, rad.
     """
     from acmm.tea_compiled import solve_tea_fast
 
@@ -187,7 +252,21 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> np.ndarray:
 
 
 def run_case(ctx: BaseContext, index: int) -> dict:
-    """Case ``index`` of a base: draw (or look up) its parameters, simulate, return its row."""
+    """Case ``index`` of a base: draw (or look up) its parameters, simulate, return its row.
+
+    Parameters
+    ----------
+    ctx : BaseContext
+        The base.
+    index : int
+        Case index within the base.
+
+    Returns
+    -------
+    dict
+        The row of :func:`simulate_values` plus ``kind="case"``, ``base``, ``index``,
+        ``values`` and ``n_draws``.
+    """
     values, draws, _ = case_values(ctx.spec, index, ctx.scenario.inertia)
     row = simulate_values(ctx, values)
     row.update(kind="case", base=ctx.label, index=int(index), values=values, n_draws=int(draws))
@@ -204,6 +283,20 @@ def margin_search(ctx: BaseContext, direction: str) -> dict:
     bisection in log s between the last bounded and the first failing point until their ratio is
     below 1 + ``rel_tol``.  Assumes the bounded set is an interval around 1 between scanned
     points (a failure hidden between two bounded scan points would be missed).
+
+    Parameters
+    ----------
+    ctx : BaseContext
+        The base (its ``spec.margin`` settings).
+    direction : {"up", "down"}
+        Search towards larger or smaller inertia.
+
+    Returns
+    -------
+    dict
+        ``kind="margin"``, ``limit`` (largest/smallest bounded s, dimensionless; NaN when the
+        nominal case is not bounded), ``first_failure``, its verdict and reason,
+        ``reached_end``, ``search_end`` and every evaluated s with its verdict.
     """
     m = ctx.spec.margin
     end = m.high if direction == "up" else m.low

@@ -25,6 +25,16 @@ def unphysical_reason(inertia: np.ndarray) -> Optional[str]:
 
     Same test as :class:`acmm.config.Inertia`: positive definite and the principal moments
     satisfy the triangle inequality a + b ≥ c.
+
+    Parameters
+    ----------
+    inertia : (3, 3) array
+        Inertia, slug·ft².
+
+    Returns
+    -------
+    str or None
+        The reason, or None for a physical inertia.
     """
     if not np.all(np.isfinite(inertia)):
         return "non-finite inertia"
@@ -37,7 +47,21 @@ def unphysical_reason(inertia: np.ndarray) -> Optional[str]:
 
 
 def perturb_inertia(inertia: np.ndarray, values: dict) -> np.ndarray:
-    """I_pert = s·(I ∘ (1 + δ)) with δ from ``dI11 … dI23`` and s = ``inertia_scale``."""
+    """I_pert = s·(I ∘ (1 + δ)) with δ from ``dI11 … dI23`` and s = ``inertia_scale``.
+
+    Parameters
+    ----------
+    inertia : (3, 3) array
+        Nominal inertia, slug·ft².
+    values : dict
+        Case parameters; the relative changes ``dI11`` … ``dI23`` and ``inertia_scale`` are
+        dimensionless (missing ones: 0 and 1).
+
+    Returns
+    -------
+    (3, 3) array
+        Perturbed inertia, slug·ft².
+    """
     d = {k: values.get(k, 0.0) for k in ("dI11", "dI22", "dI33", "dI12", "dI13", "dI23")}
     f = np.array([[d["dI11"], d["dI12"], d["dI13"]],
                   [d["dI12"], d["dI22"], d["dI23"]],

@@ -24,6 +24,22 @@ class SerialExecutor(cf.Executor):
     """Runs each task in the calling process when it is submitted (one worker)."""
 
     def submit(self, fn, /, *args, **kwargs):
+        """Run ``fn(*args, **kwargs)`` now; its result or exception goes into the future.
+
+        Parameters
+        ----------
+        fn : callable
+            The task.
+        *args : tuple
+            Its positional arguments.
+        **kwargs : dict
+            Its keyword arguments.
+
+        Returns
+        -------
+        concurrent.futures.Future
+            A completed future (``KeyboardInterrupt`` is raised, not stored).
+        """
         fut: cf.Future = cf.Future()
         try:
             fut.set_result(fn(*args, **kwargs))
@@ -36,6 +52,18 @@ class SerialExecutor(cf.Executor):
 
 def make_executor(workers: int = 1, scheduler: Optional[str] = None):
     """(executor, close) for ``workers`` local processes or a Dask scheduler address.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local worker processes (≤ 1: :class:`SerialExecutor`, in-process).
+    scheduler : str, optional
+        Dask scheduler address (takes precedence over ``workers``).
+
+    Returns
+    -------
+    tuple
+        (concurrent.futures.Executor, callable that shuts it down).
 
     Raises
     ------
@@ -118,6 +146,22 @@ def chunk_size(n_tasks: int, workers: int, case_seconds: Optional[float] = None,
     that take :data:`MIN_TASK_SECONDS` … :data:`MAX_TASK_SECONDS`, and never above
     ⌈``n_total`` / workers⌉ (every worker gets a share of a small sweep; ``n_total``: the tasks of
     the whole sweep, default ``n_tasks``).  See README *Performance* for why this holds at large N.
+
+    Parameters
+    ----------
+    n_tasks : int
+        Tasks still to hand out.
+    workers : int
+        Number of workers.
+    case_seconds : float, optional
+        Measured cost of one case on one worker, s (None: not measured yet).
+    n_total : int, optional
+        Tasks of the whole sweep (default ``n_tasks``).
+
+    Returns
+    -------
+    int
+        Cases per task.
     """
     n_workers = max(1, workers)
     c = -(-n_tasks // (CHUNKS_PER_WORKER * n_workers))
@@ -137,6 +181,15 @@ class Chunker:
     that came back since (the throughput of the whole run, so it includes every per-task cost;
     before every worker can have returned a chunk, unmeasured).  The results do not depend on
     the chunking.
+
+    Parameters
+    ----------
+    tasks : list of tuple
+        Tasks ``("case", base, index)`` or ``("margin", base, direction)``, in order.
+    workers : int
+        Number of workers (Dask: worker threads).
+    size : int, optional
+        Fixed cases per chunk (None: guided, as above).
     """
 
     def __init__(self, tasks: list, workers: int, size: Optional[int] = None):
@@ -148,13 +201,25 @@ class Chunker:
         self._chunks_since = 0
 
     def case_seconds(self) -> Optional[float]:
-        """Measured cost of one case on one worker (s), or None before there is a measure."""
+        """Measured cost of one case on one worker.
+
+        Returns
+        -------
+        float or None
+            Cost of one case, s; None before there is a measure.
+        """
         if self._first_back is None or self._chunks_since < self.workers or self._cases_since == 0:
             return None
         return self.workers * (time.monotonic() - self._first_back) / self._cases_since
 
     def returned(self, n_tasks: int) -> None:
-        """Record that a chunk of ``n_tasks`` tasks came back."""
+        """Record that a chunk came back.
+
+        Parameters
+        ----------
+        n_tasks : int
+            Tasks in the chunk.
+        """
         if self._first_back is None:
             self._first_back = time.monotonic()
         else:
@@ -162,7 +227,13 @@ class Chunker:
             self._cases_since += n_tasks
 
     def next(self) -> Optional[list]:
-        """The next chunk, or None when every task was handed out."""
+        """The next chunk.
+
+        Returns
+        -------
+        list of tuple or None
+            Its tasks, or None when every task was handed out.
+        """
         tasks, pos = self._tasks, self._pos
         if pos >= len(tasks):
             return None
@@ -179,7 +250,20 @@ class Chunker:
 
 
 def make_chunks(tasks: list, size: int) -> list[list]:
-    """Consecutive case tasks of one base in lists of ``size``; each margin search alone."""
+    """Consecutive case tasks of one base in lists of ``size``; each margin search alone.
+
+    Parameters
+    ----------
+    tasks : list of tuple
+        Tasks ``("case", base, index)`` or ``("margin", base, direction)``, in order.
+    size : int
+        Most case tasks per chunk.
+
+    Returns
+    -------
+    list of list
+        The chunks, in order.
+    """
     chunks: list[list] = []
     for t in tasks:
         if (t[0] == "case" and chunks and len(chunks[-1]) < size and chunks[-1][0][0] == "case"

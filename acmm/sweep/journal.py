@@ -22,6 +22,19 @@ class SweepInterrupted(AcmmError):
 def read_journal(path: Path, key: str) -> list[dict]:
     """Records of a journal written for results key ``key`` (a torn last line is ignored).
 
+    Parameters
+    ----------
+    path : pathlib.Path
+        The journal file.
+    key : str
+        Results key of the sweep (:meth:`acmm.sweep.config.Sweep.results_key`); the journal's
+        header must carry the same.
+
+    Returns
+    -------
+    list of dict
+        The records after the header, in order.
+
     Raises
     ------
     ConfigError
@@ -51,7 +64,18 @@ def read_journal(path: Path, key: str) -> list[dict]:
 
 
 class Journal:
-    """Append-only JSON-lines file; each record is flushed and fsynced before returning."""
+    """Append-only JSON-lines file; each record is flushed and fsynced before returning.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The journal file (its folder is created).
+    key : str
+        Results key of the sweep, written in the header line.
+    fresh : bool
+        Start a new journal (atomically replacing an old one); otherwise append to an existing
+        one after dropping a torn last line.
+    """
 
     def __init__(self, path: Path, key: str, fresh: bool):
         try:
@@ -87,6 +111,18 @@ class Journal:
         self._f = open(self.path, "a")
 
     def append(self, record: dict) -> None:
+        """Append one record as a JSON line, flushed and fsynced.
+
+        Parameters
+        ----------
+        record : dict
+            JSON-serialisable record.
+
+        Raises
+        ------
+        OutputError
+            When the write fails (exit 4).
+        """
         try:
             self._f.write(json.dumps(record) + "\n")
             self._f.flush()
@@ -97,6 +133,7 @@ class Journal:
             raise output_error(exc, "the sweep journal", self.path) from None
 
     def close(self) -> None:
+        """Close the file (every record is already on disk)."""
         try:
             self._f.close()
         except OSError:          # every record was already flushed and fsynced
@@ -111,6 +148,15 @@ class GroupCommitJournal(Journal):
     every record, as before; only a machine crash can lose the records of the last
     ``sync_interval``, which ``--resume`` recomputes (a torn line is ignored).  An fsync costs
     ~1–6 ms here, as much as a 10-orbit case, so one per record would dominate a sweep.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The journal file.
+    key : str
+        Results key of the sweep.
+    fresh : bool
+        Start a new journal (see :class:`Journal`).
     """
 
     sync_interval = 0.5
@@ -120,10 +166,23 @@ class GroupCommitJournal(Journal):
         self._last_sync = time.monotonic()
 
     def append(self, record: dict) -> None:
+        """Append one record (see :meth:`append_many`).
+
+        Parameters
+        ----------
+        record : dict
+            JSON-serialisable record.
+        """
         self.append_many([record])
 
     def append_many(self, records: list) -> None:
-        """Append records (one write, one flush; an fsync when the last is older than the interval)."""
+        """Append records (one write, one flush; an fsync when the last is older than the interval).
+
+        Parameters
+        ----------
+        records : list of dict
+            JSON-serialisable records.
+        """
         if not records:
             return
         self._f.write("".join(json.dumps(r) + "\n" for r in records))
@@ -133,6 +192,7 @@ class GroupCommitJournal(Journal):
             self._last_sync = time.monotonic()
 
     def close(self) -> None:
+        """Flush, fsync and close."""
         if not self._f.closed:
             self._f.flush()
             os.fsync(self._f.fileno())

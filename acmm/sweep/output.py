@@ -24,7 +24,22 @@ def _split(sweep: Sweep, records: list[dict]):
 
 
 def table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
-    """Column arrays of the case rows (sorted by base then index)."""
+    """Column arrays of the case rows (sorted by base then index).
+
+    Parameters
+    ----------
+    sweep : acmm.sweep.config.Sweep
+        The sweep.
+    rows : list of dict
+        Case rows (:func:`acmm.sweep.case.run_case`), sorted.
+
+    Returns
+    -------
+    dict
+        Column name → array (N rows) in the rows' units: attitude errors and TEAs deg, momentum
+        ft·lbf·s, times orbits, inertia slug·ft², bias ft·lbf; ``parameters`` a dict of the
+        swept parameters; ``verdict`` and ``reason`` lists of str.
+    """
     names = swept_parameters(sweep.spec)
     labels = [b.label for b in sweep.bases]
     N = len(rows)
@@ -71,15 +86,68 @@ def _nominal_tea_deg(sweep: Sweep) -> dict:
     return out
 
 
+def _margin_items(margins: list, S) -> dict:
+    """Datasets of the margin searches: one group ``<base>_<direction>`` per search."""
+    from common.results import Dataset
+
+    return {
+        m["base"] + "_" + m["direction"]: {
+            "limit": Dataset(m["limit"], "1", "tolerated uniform inertia scaling (bounded up to here)"),
+            "first_failure": Dataset(m["first_failure"], "1", "first failing scaling (NaN: none up to search_end)"),
+            "search_end": Dataset(m["search_end"], "1", "end of the searched range"),
+            "evaluated_s": Dataset(np.array(m["evaluated_s"]), "1", "scalings evaluated, in order",
+                                   dims=("evaluation",)),
+            "evaluated_verdict": Dataset(S(m["evaluated_verdict"]), "1", "verdict at each", dims=("evaluation",)),
+            "failure_reason": Dataset(m["failure_reason"] or "-", "1", "why the first failure failed"),
+        } for m in margins}
+
+
+def _root_attrs(sweep: Sweep, a: dict, labels: list, n_done: int, complete: bool,
+                wall_time: float | None) -> dict:
+    """Root attributes of ``sweep.h5``: what was run, how far, and the verdict counts per base."""
+    spec = sweep.spec
+    summary = {}
+    for k, lab in enumerate(labels):
+        sel = a["base"] == k
+        summary[lab] = {v: int(np.sum(sel & (a["verdict_code"] == j))) for j, v in enumerate(VERDICTS)}
+    attrs = {"stage": "sweep", "sweep_name": sweep.name, "complete": bool(complete),
+             "n_cases_expected": spec.n_cases() * len(labels), "n_cases_done": n_done,
+             "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed,
+             "method": "grid" if spec.grid is not None else "monte_carlo",
+             "verdicts": json.dumps(list(VERDICTS)), "summary": json.dumps(summary),
+             "results_key": sweep.results_key()}
+    if wall_time is not None:
+        attrs["wall_time_s"] = float(wall_time)
+    return attrs
+
+
 def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bool = False,
                   wall_time: float | None = None) -> tuple[Path, list]:
     """Build ``sweep.h5`` (atomically, via :func:`acmm.results.write_h5`) and ``sweep.csv`` from
-    the records; with ``figures`` also the stability map and the peak-error distributions."""
+    the records; with ``figures`` also the stability map and the peak-error distributions.
+
+    Parameters
+    ----------
+    sweep : acmm.sweep.config.Sweep
+        The sweep.
+    records : list of dict
+        Journal records (cases and margin searches).
+    complete : bool
+        Every task is done (root attribute ``complete``; False for a snapshot).
+    figures : bool, optional
+        Also write the figures.
+    wall_time : float, optional
+        Wall time of the sweep so far, s (root attribute ``wall_time_s``).
+
+    Returns
+    -------
+    tuple
+        (pathlib.Path of ``sweep.h5``, list of the figure paths).
+    """
     from common.results import Dataset, write_h5
 
     rows, margins = _split(sweep, records)
     a = table_arrays(sweep, rows)
-    spec = sweep.spec
     labels = [b.label for b in sweep.bases]
     S = lambda xs: np.array([x.encode() for x in xs], dtype="S") if len(xs) else np.zeros(0, "S1")  # noqa: E731
     items = {
@@ -112,28 +180,8 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
         "n_draws": Dataset(a["n_draws"], "1", "Monte Carlo draws used (resampling of unphysical inertia)"),
     }
     if margins:
-        items["margin"] = {
-            m["base"] + "_" + m["direction"]: {
-                "limit": Dataset(m["limit"], "1", "tolerated uniform inertia scaling (bounded up to here)"),
-                "first_failure": Dataset(m["first_failure"], "1", "first failing scaling (NaN: none up to search_end)"),
-                "search_end": Dataset(m["search_end"], "1", "end of the searched range"),
-                "evaluated_s": Dataset(np.array(m["evaluated_s"]), "1", "scalings evaluated, in order",
-                                       dims=("evaluation",)),
-                "evaluated_verdict": Dataset(S(m["evaluated_verdict"]), "1", "verdict at each", dims=("evaluation",)),
-                "failure_reason": Dataset(m["failure_reason"] or "-", "1", "why the first failure failed"),
-            } for m in margins}
-    summary = {}
-    for k, lab in enumerate(labels):
-        sel = a["base"] == k
-        summary[lab] = {v: int(np.sum(sel & (a["verdict_code"] == j))) for j, v in enumerate(VERDICTS)}
-    attrs = {"stage": "sweep", "sweep_name": sweep.name, "complete": bool(complete),
-             "n_cases_expected": spec.n_cases() * len(labels), "n_cases_done": len(rows),
-             "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed,
-             "method": "grid" if spec.grid is not None else "monte_carlo",
-             "verdicts": json.dumps(list(VERDICTS)), "summary": json.dumps(summary),
-             "results_key": sweep.results_key()}
-    if wall_time is not None:
-        attrs["wall_time_s"] = float(wall_time)
+        items["margin"] = _margin_items(margins, S)
+    attrs = _root_attrs(sweep, a, labels, len(rows), complete, wall_time)
     run_dir = sweep.run_dir()
     from common.netcdf_layout import with_leading_dim
 
@@ -172,7 +220,22 @@ def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
 
 
 def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
-    """Stability map over two swept quantities and distributions of the peak attitude error."""
+    """Stability map over two swept quantities and distributions of the peak attitude error.
+
+    Parameters
+    ----------
+    sweep : acmm.sweep.config.Sweep
+        The sweep.
+    a : dict
+        Column arrays of :func:`table_arrays` (their units).
+    run_dir : pathlib.Path
+        Folder of the figures.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The figures written.
+    """
     from acmm.plots import _plt, _save
 
     plt = _plt()

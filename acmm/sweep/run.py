@@ -25,7 +25,29 @@ from acmm.sweep.output import _split, write_results
 # ---------------------------------------------------------------------------------------------
 @dataclass
 class SweepResult:
-    """What :func:`run_sweep` did."""
+    """What :func:`run_sweep` did.
+
+    Attributes
+    ----------
+    sweep : acmm.sweep.config.Sweep
+        The sweep.
+    path : pathlib.Path
+        ``sweep.h5``.
+    rows : list of dict
+        Case rows, sorted by base then index.
+    margins : list of dict
+        Margin-search records.
+    n_new : int
+        Tasks run by this call.
+    n_resumed : int
+        Tasks taken from the journal.
+    wall_time : float
+        Wall time, s.
+    complete : bool
+        Every task is done.
+    figures : list of pathlib.Path
+        Figures written.
+    """
 
     sweep: Sweep
     path: Path
@@ -38,7 +60,13 @@ class SweepResult:
     figures: list = field(default_factory=list)
 
     def summary(self) -> dict:
-        """Per base: counts of cases by verdict."""
+        """Per base: counts of cases by verdict.
+
+        Returns
+        -------
+        dict
+            Base label → {verdict: count, ..., "total": count}.
+        """
         out = {}
         for b in self.sweep.bases:
             rows = [r for r in self.rows if r["base"] == b.label]
@@ -73,11 +101,20 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         Called after each finished task.
     after_record : callable(n_new), optional
         Called after each record is committed (tests use it to interrupt a sweep).
+    figures : bool, optional
+        Write the figures (default: ``output.figures`` of the sweep file).
+    snapshot_interval : float, optional
+        Period of the intermediate ``sweep.h5`` snapshots, s.
     executor : concurrent.futures.Executor, optional
         Use this executor instead of making one (it is not shut down).
     chunk : int, optional
         Cases per task (default: sized as the chunks are submitted, :class:`Chunker`; 1
         in-process).  The results do not depend on it.
+
+    Returns
+    -------
+    SweepResult
+        What was done, with the rows and margins.
     """
     if not isinstance(sweep, Sweep):
         sweep = load_sweep(sweep)

@@ -1,4 +1,4 @@
-"""Section claim 1: MB3 coupled vs cross-inertia-free design (Figs 6.2–6.13)."""
+"""Section claim 1: MB3 coupled vs cross-inertia-free design (Figs 6.2–6.13, ch. 6)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -12,7 +12,19 @@ from report.figures import fig_claim1
 
 @dataclass(frozen=True)
 class Claim1Numbers:
-    """What the errata table quotes from claim 1."""
+    """What the errata table quotes from claim 1.
+
+    Attributes
+    ----------
+    div : float
+        Time at which the cross-inertia-free design diverged, orbits.
+    maxre : float
+        Largest Re λ of its gain on the true coupled model, dimensionless (units of n).
+    first : (3,) array
+        Peak |attitude error| in the first orbit, coupled design, deg.
+    late : (3,) array
+        Peak |attitude error| from orbit 2 on, coupled design, deg (NaN when shorter).
+    """
 
     div: float          #: orbit at which the cross-inertia-free design diverged
     maxre: float        #: largest Re λ of its gain on the true coupled model (units of n)
@@ -21,7 +33,20 @@ class Claim1Numbers:
 
 
 def build(ctx: SectionWriter, dec_true_poles: np.ndarray) -> Claim1Numbers:
-    """Claim 1 on the nonlinear MB3 model; ``dec_true_poles`` from the schedule section."""
+    """Claim 1 on the nonlinear MB3 model; ``dec_true_poles`` from the schedule section.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs and output.
+    dec_true_poles : (24,) complex array
+        Poles of the cross-inertia-free MB3 gain on the true coupled linear model, rad/s.
+
+    Returns
+    -------
+    Claim1Numbers
+        The numbers the errata table quotes.
+    """
     ctx.section("claim1")
     n = ctx.g.configs["mb3"].orbit_rate
     s_c, s_d = ctx.data("acmm simulate:mb3"), ctx.data("acmm simulate:mb3_decoupled")

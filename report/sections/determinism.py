@@ -6,7 +6,17 @@ from report.context import SectionWriter
 
 
 def build(rep: SectionWriter, cmp: dict, manifest: dict) -> None:
-    """The manifest summary and its comparison with the previous report (``cmp``)."""
+    """The manifest summary and its comparison with the previous report (``cmp``).
+
+    Parameters
+    ----------
+    rep : report.context.SectionWriter
+        The section's inputs and output.
+    cmp : dict
+        :func:`report.manifest.compare_manifests` of this and the previous manifest.
+    manifest : dict
+        This report's manifest (:func:`report.manifest.build_manifest`).
+    """
     rep.section("determinism")
     n_ds = sum(len(f["datasets"]) for f in manifest["files"].values())
     rep.doc.p(f"{len(manifest['files'])} HDF5 files, {n_ds} datasets hashed (SHA-256 of dtype, shape and bytes; "

@@ -3,6 +3,8 @@
 The evidence comes from pure functions of explicit inputs that call the library itself (the TEA
 solver, the linearization, the Riccati solvers and :func:`acmm.schedule.sector_design`, the design
 call of the pipeline with the config's R, Q0, sector and solver settings); no second implementation.
+Items: eq 3.6, eqs 4.1–4.3, 4.12–4.14, 4.28–4.34, 4.44, eq 5.6, the sector LQR of ch. 5.2 and
+Part III (ch. 10–14).
 """
 from __future__ import annotations
 
@@ -16,7 +18,19 @@ from report.sections.claim1 import Claim1Numbers
 
 def build(ctx: SectionWriter, tea_mb3: tuple, claim1: Claim1Numbers, beta3: tuple[float, float]) -> None:
     """The errata table; ``tea_mb3`` = (TEA, zero-bias TEA, bias) of MB3 (Table 1 section),
-    ``claim1`` from the claim-1 section, ``beta3`` from the QPP ch. 13 section."""
+    ``claim1`` from the claim-1 section, ``beta3`` from the QPP ch. 13 section.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs and output.
+    tea_mb3 : tuple
+        (TEA, zero-bias TEA, (3,) array bias torque in ft·lbf) of MB3.
+    claim1 : report.sections.claim1.Claim1Numbers
+        The claim-1 numbers.
+    beta3 : tuple of float
+        Ch. 13 β3 with sin 5t and at the nonlinearity's frequency, output units.
+    """
     ctx.section("errata")
     ctx.doc.p("Each misprint or convention of docs/ERRATA.md, the correction used, and the evidence: numbers "
               "computed in this run where the check is cheap, otherwise the test file that confirms it.")
@@ -33,10 +47,29 @@ def errata_rows(cfg, tea_mb3, st, sim, c1: Claim1Numbers, s13, d13, a, beta3) ->
 
     Parameters
     ----------
-    cfg : acmm Config of MB3;  tea_mb3 : (TEA, zero-bias TEA, bias torque ft·lbf) of MB3;
-    st, sim : stair-case ``design.h5`` and ``sim.h5`` (read_h5 dicts);  c1 : claim-1 numbers;
-    s13, d13 : ch. 13 qpp config and ``qpp_design.h5``;  a : ch. 14 qpp config;
-    beta3 : ch. 13 β3 with sin 5t and with sin t.
+    cfg : acmm.config.Config
+        The MB3 config.
+    tea_mb3 : tuple
+        (TEA, zero-bias TEA, (3,) array bias torque in ft·lbf) of MB3.
+    st : dict
+        Stair-case ``design.h5`` (read_h5 dict).
+    sim : dict
+        Stair-case ``sim.h5`` (read_h5 dict; u in ft·lbf, h in ft·lbf·s).
+    c1 : report.sections.claim1.Claim1Numbers
+        The claim-1 numbers.
+    s13 : qpp.config.QppConfig
+        The ch. 13 config.
+    d13 : dict
+        Its ``qpp_design.h5`` (read_h5 dict).
+    a : qpp.config.QppConfig
+        The ch. 14 config.
+    beta3 : tuple of float
+        Ch. 13 β3 with sin 5t and at the nonlinearity's frequency, output units.
+
+    Returns
+    -------
+    list of list of str
+        Table rows: item, printed / claim, correction used, evidence, confirming tests.
     """
     from acmm import linearize as lin
     from acmm.settings import design_settings
@@ -51,7 +84,25 @@ def errata_rows(cfg, tea_mb3, st, sim, c1: Claim1Numbers, s13, d13, a, beta3) ->
 
 def design_on(A, B, m, s) -> str:
     """A sector design (the pipeline's :func:`acmm.schedule.sector_design`, settings ``s``: an
-    :class:`acmm.settings.DesignSettings`) on the model (A, B), judged on the true model ``m``."""
+    :class:`acmm.settings.DesignSettings`) on the model (A, B), judged on the true model ``m``.
+
+    Parameters
+    ----------
+    A : (24, 24) array
+        State matrix designed on, per-state units (eq 4.46).
+    B : (24, 3) array
+        Input matrix designed on, state units per ft·lbf.
+    m : acmm.linearize.LinearModel
+        The true model (its scales, A and B).
+    s : acmm.settings.DesignSettings
+        The pipeline's design settings (orbit rate in rad/s, sector, R, Q0, solver).
+
+    Returns
+    -------
+    str
+        Whether the design is stable on the true model, with its largest Re λ in units of n (or
+        why the design fails).
+    """
     from acmm.schedule import sector_design
 
     n = s.orbit_rate
@@ -65,7 +116,20 @@ def design_on(A, B, m, s) -> str:
 
 
 def kinematics_rows(th, n: float) -> list[list[str]]:
-    """Eq 3.6 (printed f11) against eq 4.2 at the MB3 TEA ``th`` (rad) and a test attitude."""
+    """Eq 3.6 (printed f11) against eq 4.2 at the MB3 TEA ``th`` (rad) and a test attitude.
+
+    Parameters
+    ----------
+    th : (3,) array
+        MB3 TEA, rad.
+    n : float
+        Orbit rate, rad/s.
+
+    Returns
+    -------
+    list of list of str
+        Table rows: item, printed / claim, correction used, evidence, confirming tests.
+    """
     from acmm import dynamics as dyn
 
     rows = []
@@ -90,7 +154,24 @@ def kinematics_rows(th, n: float) -> list[list[str]]:
 
 
 def tea_rows(I, n: float, t0, bias) -> list[list[str]]:
-    """TEA branches of MB3 (zero bias) and the 4 ft·lbf pitch bias without an equilibrium."""
+    """TEA branches of MB3 (zero bias) and the 4 ft·lbf pitch bias without an equilibrium.
+
+    Parameters
+    ----------
+    I : (3, 3) array
+        MB3 inertia, slug·ft².
+    n : float
+        Orbit rate, rad/s.
+    t0 : acmm.tea.TEA
+        Zero-bias TEA of the continuation (θ* in rad).
+    bias : (3,) array
+        Back-solved bias torque of Table 1, ft·lbf.
+
+    Returns
+    -------
+    list of list of str
+        Table rows: item, printed / claim, correction used, evidence, confirming tests.
+    """
     from acmm import tea as tea_mod
     from common.errors import NoEquilibriumError
 
@@ -115,7 +196,26 @@ def tea_rows(I, n: float, t0, bias) -> list[list[str]]:
 
 
 def linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
-    """Eqs 4.12–4.14, 4.28–4.34, 4.44: the Jacobian and the printed signs, with designs on them."""
+    """Eqs 4.12–4.14, 4.28–4.34, 4.44: the Jacobian and the printed signs, with designs on them.
+
+    Parameters
+    ----------
+    I : (3, 3) array
+        MB3 inertia, slug·ft².
+    th : (3,) array
+        MB3 TEA, rad.
+    n : float
+        Orbit rate, rad/s.
+    m : acmm.linearize.LinearModel
+        The coupled MB3 model at ``th``.
+    s : acmm.settings.DesignSettings
+        The pipeline's design settings.
+
+    Returns
+    -------
+    list of list of str
+        Table rows: item, printed / claim, correction used, evidence, confirming tests.
+    """
     from acmm import dynamics as dyn
 
     rows = []
@@ -152,7 +252,22 @@ def linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
 
 
 def riccati_rows(m, d, n: float) -> list[list[str]]:
-    """Eq 5.6 (sign iteration) and state scaling of the Riccati solve on the MB3 model ``m``."""
+    """Eq 5.6 (sign iteration) and state scaling of the Riccati solve on the MB3 model ``m``.
+
+    Parameters
+    ----------
+    m : acmm.linearize.LinearModel
+        The coupled MB3 model.
+    d : acmm.config.Design
+        The config's design section (sector σ in units of n, R).
+    n : float
+        Orbit rate, rad/s.
+
+    Returns
+    -------
+    list of list of str
+        Table rows: item, printed / claim, correction used, evidence, confirming tests.
+    """
     from acmm import riccati as ric
     from common.errors import ConvergenceError
 
@@ -198,7 +313,30 @@ def riccati_rows(m, d, n: float) -> list[list[str]]:
 
 
 def design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str]]:
-    """Sector LQR, saturation and claim 1."""
+    """Sector LQR, saturation and claim 1.
+
+    Parameters
+    ----------
+    I : (3, 3) array
+        MB3 inertia, slug·ft².
+    th : (3,) array
+        MB3 TEA, rad.
+    n : float
+        Orbit rate, rad/s.
+    d : acmm.config.Design
+        The config's design section (DRF mode).
+    st : dict
+        Stair-case ``design.h5`` (read_h5 dict).
+    sim : dict
+        Stair-case ``sim.h5`` (read_h5 dict; u in ft·lbf, h in ft·lbf·s).
+    c1 : report.sections.claim1.Claim1Numbers
+        The claim-1 numbers.
+
+    Returns
+    -------
+    list of list of str
+        Table rows: item, printed / claim, correction used, evidence, confirming tests.
+    """
     from acmm import linearize as lin
 
     rows = []
@@ -222,7 +360,24 @@ def design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str
 
 
 def qpp_rows(s13, d13, a, beta3) -> list[list[str]]:
-    """Part III: signs, B_z, ch. 11 weights, β3 and ch. 14 unknowns."""
+    """Part III: signs, B_z, ch. 11 weights, β3 and ch. 14 unknowns.
+
+    Parameters
+    ----------
+    s13 : qpp.config.QppConfig
+        The ch. 13 config.
+    d13 : dict
+        Its ``qpp_design.h5`` (read_h5 dict).
+    a : qpp.config.QppConfig
+        The ch. 14 config.
+    beta3 : tuple of float
+        Ch. 13 β3 with sin 5t and at the nonlinearity's frequency, output units.
+
+    Returns
+    -------
+    list of list of str
+        Table rows: item, printed / claim, correction used, evidence, confirming tests.
+    """
     rows = []
     # Part III
     rows.append(["signs of 13.6 / Table 14.1", "u = +K x̂, L = −H; plant f sign differs (13.1/14.2 vs 10.1)",

@@ -5,7 +5,15 @@ from report.context import SectionWriter
 
 
 def build(ctx: SectionWriter, ledger: list) -> None:
-    """Every printed number of ``ledger`` (all sections before this one) with its status."""
+    """Every printed number of ``ledger`` (all sections before this one) with its status.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs and output.
+    ledger : list of report.ledger.PrintedNumber
+        The entries of every earlier section.
+    """
     ctx.section("printed")
     counts = {}
     for pn in ledger:

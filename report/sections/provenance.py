@@ -13,7 +13,17 @@ from report.manifest import _git_commit, _git_dirty
 
 
 def build(rep: SectionWriter, g: Gathered, timings: dict) -> None:
-    """Software, machine, wall times and every stage file used."""
+    """Software, machine, wall times and every stage file used.
+
+    Parameters
+    ----------
+    rep : report.context.SectionWriter
+        The section's inputs and output.
+    g : report.gather.Gathered
+        The gathered configs and stage results.
+    timings : dict
+        Step name → wall time, s.
+    """
     import h5py
     import matplotlib
     import scipy

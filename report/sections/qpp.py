@@ -1,4 +1,4 @@
-"""Sections QPP chapters 13 (SISO Lure example) and 14 (two-DOF manipulator)."""
+"""Sections QPP chapters 13 (SISO Lure example) and 14 (two-DOF manipulator): ch. 13–14."""
 from __future__ import annotations
 
 import numpy as np
@@ -170,7 +170,19 @@ def _thresholds(ctx: SectionWriter, chap, cfg, th):
 
 
 def build(ctx: SectionWriter) -> tuple[float, float]:
-    """Chapters 13 and 14; returns ch. 13's β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading."""
+    """Chapters 13 and 14; returns ch. 13's β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs and output.
+
+    Returns
+    -------
+    tuple of float
+        (β3 with sin 5t; β3 at the frequency ω of the config's nonlinearity, the sin t
+        reading), in the units of the output y.
+    """
     why14 = ("μ (arm mass) and the impulse size are not printed; this run uses μ = {mu:g} kg and impulse "
              "{imp} at t = {ti:g} s (configs/qpp_manipulator.yaml), so the error sizes differ; both stay far "
              "inside β_o = 0.14")

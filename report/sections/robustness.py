@@ -1,4 +1,4 @@
-"""Section ±30 % inertia robustness (the sweep of :mod:`acmm.sweep`)."""
+"""Section ±30 % inertia robustness (the sweep of :mod:`acmm.sweep`); the claim of ch. 7."""
 from __future__ import annotations
 
 import numpy as np
@@ -10,7 +10,13 @@ from report.ledger import STATUS_EXPLAINED, PrintedNumber
 
 
 def build(ctx: SectionWriter) -> None:
-    """The ±30 % inertia Monte Carlo (``ctx.g.robustness``), or why it is not available."""
+    """The ±30 % inertia Monte Carlo (``ctx.g.robustness``), or why it is not available.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs and output.
+    """
     ctx.section("robustness")
     ctx.doc.p("The report (ch. 7): 'the closed-loop system remains stable for up to ±30 % variations in "
               "the SSF inertia matrix'. It does not say which variations (elements, scaling), which TEA "

@@ -1,4 +1,4 @@
-"""Section gain schedules and pole maps (Figs 5.3–5.26)."""
+"""Section gain schedules and pole maps (Figs 5.3–5.26; sector LQR and schedule of ch. 5.2–5.3)."""
 from __future__ import annotations
 
 import numpy as np
@@ -10,7 +10,18 @@ from report.figures import fig_gain_schedule, fig_pole_maps
 
 def build(ctx: SectionWriter) -> np.ndarray:
     """Stair-case design summary, gain schedule and pole maps; returns the poles of the
-    cross-inertia-free MB3 gain on the true coupled linear model (claim 1)."""
+    cross-inertia-free MB3 gain on the true coupled linear model (claim 1).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs and output.
+
+    Returns
+    -------
+    (24,) complex array
+        Those closed-loop poles, rad/s.
+    """
     from acmm import linearize as lin
 
     ctx.section("schedule")

@@ -1,4 +1,4 @@
-"""Section claim 2: the MB3 → AC stair-case (Figs 6.14–6.30)."""
+"""Section claim 2: the MB3 → AC stair-case (Figs 6.14–6.30, ch. 6)."""
 from __future__ import annotations
 
 import numpy as np
@@ -9,7 +9,13 @@ from report.figures import fig_staircase
 
 
 def build(ctx: SectionWriter) -> None:
-    """The MB3 → AC stair-case simulation (Figs 6.14–6.30)."""
+    """The MB3 → AC stair-case simulation (Figs 6.14–6.30).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs and output.
+    """
     ctx.section("staircase")
     cfg = ctx.g.configs["staircase"]
     s = ctx.data("acmm simulate:" + cfg.name)

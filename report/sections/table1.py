@@ -15,7 +15,19 @@ TABLE1_PRINTED = {
 
 
 def build(ctx: SectionWriter) -> dict:
-    """Table 1 printed vs computed; returns ``{name: (tea, zero-bias tea, bias)}`` for MB3 and AC."""
+    """Table 1 printed vs computed; returns ``{name: (tea, zero-bias tea, bias)}`` for MB3 and AC.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs and output.
+
+    Returns
+    -------
+    dict
+        ``"mb3"``/``"ac"`` → (:class:`acmm.tea.TEA` with the config's bias, TEA with zero bias,
+        (3,) array bias torque in ft·lbf); TEAs by eqs 4.1–4.3, θ* in rad.
+    """
     from acmm import tea as tea_mod
 
     ctx.section("table1")

@@ -1,0 +1,74 @@
+"""Popov–Belevitch–Hautus controllability of the 24-state design model (eq 4.46, ch. 5.2).
+
+The test runs on the state-scaled (A, B) (:meth:`acmm.linearize.LinearModel.scaled`), so that
+the ratio σmin([A − λI, B]) / σmax([A, B]) does not depend on the states' units.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:                      # acmm.linearize re-exports this module's names
+    from acmm.linearize import LinearModel
+
+
+@dataclass(frozen=True)
+class Controllability:
+    """PBH controllability of the scaled model.
+
+    ``ratios[i]`` = σmin([A − λ_i I, B]) / σmax([A, B]) at each open-loop eigenvalue λ_i (and
+    at s = 0); ``rank`` counts the eigenvalues whose ratio exceeds ``tol``.  See
+    ``docs/ERRATA.md`` § Sector LQR for the nearly uncontrollable cross-inertia-free MB3 model.
+
+    Attributes
+    ----------
+    rank : int
+        Number of eigenvalues whose PBH ratio exceeds ``tol`` (of ``order``).
+    order : int
+        Number of states (24).
+    min_ratio : float
+        Smallest PBH ratio, dimensionless.
+    worst_s : complex
+        Point (eigenvalue of the scaled A, or 0) where the ratio is smallest, 1/s.
+    tol : float
+        Ratio below which an eigenvalue counts as uncontrollable, dimensionless.
+    """
+
+    rank: int
+    order: int
+    min_ratio: float
+    worst_s: complex
+    tol: float
+
+
+def controllability(model: LinearModel, tol: float = 1e-10) -> Controllability:
+    """Popov–Belevitch–Hautus test on the state-scaled (A, B).
+
+    Parameters
+    ----------
+    model : LinearModel
+        Model of eq 4.46; its state-scaled form (:meth:`LinearModel.scaled`) is tested.
+    tol : float
+        PBH ratio below which an eigenvalue counts as uncontrollable, dimensionless.
+
+    Returns
+    -------
+    Controllability
+        Rank, smallest ratio and where it occurs.
+    """
+    a, b, _ = model.scaled()
+    nx = a.shape[0]
+    norm = np.linalg.norm(np.hstack([a, b]), 2)
+    points = list(np.linalg.eigvals(a)) + [0.0]
+    ratios = []
+    for s in points:
+        sv = np.linalg.svd(np.hstack([a - s * np.eye(nx), b]), compute_uv=False)
+        ratios.append(sv[-1] / norm)
+    ratios = np.array(ratios)
+    eig_ratios = ratios[:-1]
+    rank = nx - int(np.sum(eig_ratios <= tol))
+    i = int(np.argmin(ratios))
+    return Controllability(rank=rank, order=nx, min_ratio=float(ratios[i]), worst_s=complex(points[i]),
+                           tol=tol)

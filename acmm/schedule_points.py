@@ -1,0 +1,203 @@
+"""Design points of a gain schedule (CR-185644 ch. 5.3): the configurations a schedule is designed at.
+
+A design point is a station configuration (inertia, bias) on the blend
+I(s) = (1−s)·I_start + s·I_to (bias blended alike) or a named configuration.  The blend's points
+are spaced evenly in s or in pitch TEA θ2* (eqs 4.1–4.3, tracked by Newton continuation).
+:func:`point_specs` is where a config's inertias and biases become :class:`PointSpec` s; the rest
+takes arrays and settings objects.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acmm.tea import resolve_bias, solve_tea, solve_tea_near
+
+
+@dataclass(frozen=True)
+class PointSpec:
+    """A station configuration to design for: name, inertia (slug·ft²), bias (ft·lbf), blend s.
+
+    Attributes
+    ----------
+    name : str
+        Name of the configuration.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    bias : (3,) array
+        Bias torque, ft·lbf.
+    s : float
+        Blend parameter, dimensionless (NaN for a named point off the blend).
+    theta_guess : (3,) array or None
+        Starting guess for its TEA, rad; None: solve from scratch.
+    """
+
+    name: str
+    inertia: np.ndarray
+    bias: np.ndarray
+    s: float = float("nan")
+    theta_guess: np.ndarray | None = None
+
+
+
+def blend_points(start: PointSpec, end: PointSpec, n_points: int) -> list[PointSpec]:
+    """``n_points`` configurations on I(s) = (1−s)·I_start + s·I_end, bias blended alike.
+
+    Parameters
+    ----------
+    start, end : PointSpec
+        The configurations at s = 0 and s = 1.
+    n_points : int
+        Number of points including both ends.
+
+    Returns
+    -------
+    list of PointSpec
+        The configurations at evenly spaced s.
+    """
+    out = []
+    for k, s in enumerate(np.linspace(0.0, 1.0, n_points)):
+        name = start.name if k == 0 else end.name if k == n_points - 1 else f"blend_{s:.3f}"
+        out.append(PointSpec(name, (1 - s) * start.inertia + s * end.inertia,
+                             (1 - s) * start.bias + s * end.bias, float(s)))
+    return out
+
+
+def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
+                     n_track: int = 81) -> list[PointSpec]:
+    """``n_points`` blend configurations whose pitch TEAs are evenly spaced.
+
+    The TEA is tracked along the blend by Newton continuation on ``n_track`` values of s (the
+    physical branch, starting from the start configuration's TEA), then s is interpolated at
+    evenly spaced θ2*.  Falls back to evenly spaced s when θ2*(s) is not monotonic.
+
+    Parameters
+    ----------
+    start, end : PointSpec
+        The configurations at s = 0 and s = 1.
+    n_points : int
+        Number of points including both ends.
+    n : float
+        Orbital rate, rad/s.
+    n_track : int
+        Number of s values on which the TEA is tracked.
+
+    Returns
+    -------
+    list of PointSpec
+        The configurations, with their tracked TEA as ``theta_guess``.
+    """
+    s_grid = np.linspace(0.0, 1.0, n_track)
+    thetas = _tea_track(start, end, n, n_track)
+    th2 = thetas[:, 1]
+    d = np.diff(th2)
+    if not (np.all(d > 0) or np.all(d < 0)):
+        return blend_points(start, end, n_points)
+    order = np.argsort(th2)
+    targets = np.linspace(th2[0], th2[-1], n_points)
+    s_pts = np.interp(targets, th2[order], s_grid[order])
+    s_pts[0], s_pts[-1] = 0.0, 1.0
+    out = []
+    for k, s in enumerate(s_pts):
+        name = start.name if k == 0 else end.name if k == n_points - 1 else f"blend_{s:.3f}"
+        guess = np.array([np.interp(s, s_grid, thetas[:, i]) for i in range(3)])
+        out.append(PointSpec(name, (1 - s) * start.inertia + s * end.inertia,
+                             (1 - s) * start.bias + s * end.bias, float(s), guess))
+    return out
+
+
+_TRACKS: dict = {}
+
+
+def _tea_track(start: PointSpec, end: PointSpec, n: float, n_track: int) -> np.ndarray:
+    """TEA (n_track, 3) along the blend start → end by Newton continuation on evenly spaced s,
+    remembered per (start, end, n, n_track): the design points and the path check of one design
+    track the same blend."""
+    key = tuple(np.asarray(x, dtype=float).tobytes() for x in (start.inertia, start.bias, end.inertia, end.bias)) + (
+        float(n), int(n_track))
+    if key in _TRACKS:
+        return _TRACKS[key].copy()
+    t = solve_tea(start.inertia, n, start.bias).theta
+    thetas = []
+    for s in np.linspace(0.0, 1.0, n_track):
+        t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
+                           t).theta
+        thetas.append(t)
+    thetas = np.array(thetas)
+    if len(_TRACKS) > 16:
+        _TRACKS.clear()
+    _TRACKS[key] = thetas
+    return thetas.copy()
+
+
+def point_specs(cfg) -> list[PointSpec]:
+    """Design points of a config: the blend start → ``schedule.to`` plus ``schedule.points``.
+
+    Without a ``schedule`` section, the config's own configuration is the only point.  This is
+    where the config's inertias and biases become :class:`PointSpec` s (with
+    :func:`acmm.settings.design_settings`, the one reading of the config on the design path).
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        A validated configuration.
+
+    Returns
+    -------
+    list of PointSpec
+        The design points.
+    """
+    from acmm.settings import schedule_settings
+
+    n = cfg.orbit_rate
+    inertia = cfg.inertia.matrix()
+    start = PointSpec(cfg.name, inertia, resolve_bias(cfg.disturbance, inertia, n), 0.0)
+    sch = cfg.schedule
+    if sch is None:
+        return [start]
+    end = None
+    if sch.to is not None:
+        i_to = sch.to.inertia.matrix()
+        end = PointSpec(sch.to.name, i_to, resolve_bias(sch.to.disturbance, i_to, n), 1.0)
+    extras = []
+    for p in sch.points:
+        i_p = p.inertia.matrix()
+        extras.append(PointSpec(p.name, i_p, resolve_bias(p.disturbance, i_p, n)))
+    return schedule_specs(start, end, extras, schedule_settings(cfg), n)
+
+
+def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSpec], sched, n: float
+                   ) -> list[PointSpec]:
+    """The design points: ``start`` alone (``sched`` None), else the blend ``start`` → ``end``
+    (``sched.n_points`` points spaced by ``sched.spacing``; none when ``end`` is None) followed by
+    the named ``extras``.  ``n``: orbital rate, rad/s.
+
+    Parameters
+    ----------
+    start : PointSpec
+        The config's own configuration (s = 0).
+    end : PointSpec or None
+        The end of the blend (s = 1), or None.
+    extras : list of PointSpec
+        Named extra points.
+    sched : ScheduleSettings or None
+        Schedule settings; None: ``start`` only.
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    list of PointSpec
+        The design points.
+    """
+    if sched is None:
+        return [start]
+    specs = [start]
+    if end is not None:
+        if sched.spacing == "tea":
+            specs = tea_spaced_blend(start, end, sched.n_points, n)
+        else:
+            specs = blend_points(start, end, sched.n_points)
+    return specs + list(extras)
+

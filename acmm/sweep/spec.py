@@ -1,0 +1,237 @@
+"""Schema of the ``sweep`` section of a sweep config (pydantic v2, ``extra="forbid"``).
+
+Grid or Monte Carlo distributions of the parameters of :mod:`acmm.sweep.parameters` (inertias of
+Table 1, the eq 3.9 disturbance, initial attitude offsets), the margin search on a uniform
+inertia scaling, and the sweep file (name, description, ``sweep``, ``output``).  Cross-field
+rules: one of grid/Monte Carlo, known parameter names, ranges that keep the plant physical.
+"""
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal, Optional
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+
+from acmm.config import Output
+from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS, SHORTHANDS, parameter_value, to_parameter_unit
+from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+class Dist(_Model):
+    """One distribution: exactly one of ``uniform``, ``normal`` or ``percent``."""
+
+    uniform: Optional[tuple[float, float]] = Field(None, description="[low, high], parameter units")
+    normal: Optional[tuple[float, float]] = Field(None, description="[mean, std], parameter units")
+    percent: Optional[float] = Field(None, gt=0, lt=100,
+                                     description="neutral ± percent/100, uniform (relative/scale parameters)")
+
+    @model_validator(mode="after")
+    def _exactly_one(self):
+        given = [k for k in ("uniform", "normal", "percent") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of 'uniform: [low, high]', 'normal: [mean, std]', 'percent: p'")
+        if self.uniform is not None and not self.uniform[0] <= self.uniform[1]:
+            raise ValueError("uniform: low must be ≤ high")
+        if self.normal is not None and self.normal[1] < 0:
+            raise ValueError("normal: std must be ≥ 0")
+        return self
+
+
+class Margin(_Model):
+    """Search for the range of a uniform inertia scaling s (I → s·I) the design tolerates.
+
+    From s = 1, s is stepped geometrically towards ``high`` (and towards ``low``) in
+    ``scan_points`` steps; the first failing step is refined by bisection (in log s) to a
+    relative width ``rel_tol``.  The result is the largest (smallest) s such that every
+    evaluated point between 1 and s is bounded.
+    """
+
+    low: float = Field(0.2, gt=0, lt=1, description="smallest scaling searched")
+    high: float = Field(10.0, gt=1, le=1000, description="largest scaling searched")
+    scan_points: int = Field(8, ge=1, le=100, description="geometric scan steps each way before bisection")
+    rel_tol: float = Field(0.01, ge=1e-6, lt=0.5, description="relative width of the final bracket")
+
+
+class SweepSpec(_Model):
+    """The ``sweep`` section."""
+
+    base: Optional[str] = Field(None, description="base config: path or packaged name")
+    bases: Optional[list[str]] = Field(None, min_length=1, description="several base configs (same cases each)")
+    monte_carlo: Optional[dict[str, Dist]] = Field(None, description="parameter → distribution")
+    grid: Optional[dict[str, list[float]]] = Field(None, description="parameter → values (Cartesian product)")
+    n_runs: Optional[int] = Field(None, ge=1, le=1_000_000, description="Monte Carlo draws per base")
+    seed: int = Field(0, ge=0, description="root seed; case i uses SeedSequence([seed, i])")
+    design: Literal["fixed", "redesign"] = Field(
+        "fixed", description="fixed: the nominal design for every case; redesign: TEA, LQR and schedule per case")
+    tea_estimate: Annotated[Literal["nominal", "true"], BeforeValidator(
+        lambda v: {True: "true", False: "nominal"}.get(v, v) if isinstance(v, bool) else v)] = Field(
+        "nominal", description="fixed design only: the controller's TEA estimate is the nominal design's TEA "
+                               "(nominal) or the perturbed plant's own TEA (true: exact mass properties)")
+    orbits: Optional[float] = Field(None, gt=0, le=10000, description="orbits per run (default: base config's)")
+    unphysical: Literal["resample", "reject"] = Field(
+        "resample", description="perturbed inertia not positive definite or violating the triangle inequality: "
+                                "draw again (resample) or record the case as 'unphysical' (reject)")
+    max_draws: int = Field(10000, ge=1, description="resample: give up (verdict 'unphysical') after this many draws")
+    settle_deg: float = Field(
+        10.0, gt=0, le=180, description="a run that stays within the divergence bound but whose steady attitude "
+                                        "error from the plant's true TEA exceeds this (deg) gets the verdict "
+                                        "'not_settled' instead of 'bounded'")
+    workers: Optional[int] = Field(None, ge=1, le=1024, description="worker processes (default: CPU count)")
+    margin: Optional[Margin] = Field(None, description="uniform-inertia-scaling margin search per base")
+    map: Optional[list[str]] = Field(None, min_length=2, max_length=2,
+                                     description="two parameters (or tea_shift_*) for the stability-map axes")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _units(cls, data):
+        """Grid values and distribution parameters may carry units (``"2 N*m"``, ``"5 deg"``):
+        converted (pint) to the parameter's unit, a wrong dimension is an error."""
+        if not isinstance(data, dict):
+            return data
+        data = dict(data)
+        if isinstance(data.get("grid"), dict):
+            data["grid"] = {k: [parameter_value(k, x, f"grid.{k}") for x in v] if isinstance(v, list) else v
+                            for k, v in data["grid"].items()}
+        if isinstance(data.get("monte_carlo"), dict):
+            mc = {}
+            for k, dist in data["monte_carlo"].items():
+                if isinstance(dist, dict):
+                    dist = dict(dist)
+                    for kind in ("uniform", "normal"):
+                        if isinstance(dist.get(kind), (list, tuple)):
+                            dist[kind] = [parameter_value(k, x, f"monte_carlo.{k}.{kind}") for x in dist[kind]]
+                mc[k] = dist
+            data["monte_carlo"] = mc
+        if "settle_deg" in data:
+            data["settle_deg"] = to_parameter_unit(data["settle_deg"], "deg", "settle_deg")
+        return data
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        if self.base is not None and self.bases is not None:
+            raise ValueError("give either 'base' or 'bases', not both")
+        if (self.monte_carlo is None) == (self.grid is None):
+            raise ValueError("give exactly one of 'monte_carlo' or 'grid'")
+        if self.monte_carlo is not None:
+            if not self.monte_carlo:
+                raise ValueError("monte_carlo: give at least one parameter")
+            if self.n_runs is None:
+                raise ValueError("monte_carlo needs n_runs")
+            for name, dist in self.monte_carlo.items():
+                _check_name(name)
+                if dist.percent is not None:
+                    for p in SHORTHANDS.get(name, [name]):
+                        if PARAMETERS[p].kind == "absolute":
+                            raise ValueError(f"monte_carlo.{name}: 'percent' applies only to relative or "
+                                             f"scale parameters ({PARAMETERS[p].name} is in {PARAMETERS[p].unit})")
+        if self.grid is not None:
+            if not self.grid:
+                raise ValueError("grid: give at least one parameter")
+            size = 1
+            for name, values in self.grid.items():
+                if name in SHORTHANDS:
+                    raise ValueError(f"grid.{name}: shorthands are for monte_carlo; name the parameters "
+                                     f"({', '.join(SHORTHANDS[name])})")
+                _check_name(name)
+                if not values:
+                    raise ValueError(f"grid.{name}: give at least one value")
+                size *= len(values)
+            if self.n_runs is not None and self.n_runs != size:
+                raise ValueError(f"n_runs ({self.n_runs}) must equal the grid size ({size}) or be omitted")
+        names = swept_parameters(self)
+        if len(set(names)) != len(names):
+            raise ValueError("a parameter is given twice (directly and through a shorthand?)")
+        for name in names:
+            if name == "inertia_scale" and any(v <= 0 for v in _support(self, name)):
+                raise ValueError("inertia_scale must stay > 0")
+            if name.startswith("offset_"):
+                for v in _support(self, name):
+                    if abs(v) >= 89:
+                        raise ValueError(f"{name} must stay within ±89 deg")
+        if self.map is not None:
+            for m in self.map:
+                if m not in names and m not in MAP_EXTRAS:
+                    raise ValueError(f"map: {m!r} is neither a swept parameter ({', '.join(names)}) nor one of "
+                                     f"{', '.join(MAP_EXTRAS)}")
+        return self
+
+    def base_names(self) -> list[str]:
+        """The base configs named by ``base`` or ``bases``.
+
+        Returns
+        -------
+        list of str
+            Paths or packaged names; empty for an inline sweep section.
+        """
+        return list(self.bases) if self.bases is not None else ([self.base] if self.base is not None else [])
+
+    def n_cases(self) -> int:
+        """Cases per base.
+
+        Returns
+        -------
+        int
+            The grid size or ``n_runs``.
+        """
+        if self.grid is not None:
+            return math.prod(len(v) for v in self.grid.values())
+        return int(self.n_runs)
+
+
+def _check_name(name: str) -> None:
+    if name not in PARAMETERS and name not in SHORTHANDS:
+        from common.hints import closest
+
+        known = list(SHORTHANDS) + list(PARAMETERS)
+        best = closest(name, known)
+        raise ValueError(f"unknown parameter {name!r}" + (f" (did you mean `{best}`?)" if best else "")
+                         + f"; known: {', '.join(known)}")
+
+
+def _support(spec: SweepSpec, name: str) -> list[float]:
+    """Extreme values a parameter can take (for range checks)."""
+    if spec.grid is not None:
+        return list(spec.grid.get(name, []))
+    for key, dist in (spec.monte_carlo or {}).items():
+        if name in SHORTHANDS.get(key, [key]):
+            p = PARAMETERS[name]
+            if dist.uniform is not None:
+                return list(dist.uniform)
+            if dist.percent is not None:
+                return [p.neutral - dist.percent / 100, p.neutral + dist.percent / 100]
+            m, s = dist.normal
+            return [m - 8 * s, m + 8 * s] if name != "inertia_scale" else [m]
+    return []
+
+
+def swept_parameters(spec: SweepSpec) -> list[str]:
+    """Names of the swept parameters, shorthands expanded, in canonical order.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+        The ``sweep`` section.
+
+    Returns
+    -------
+    list of str
+        Parameter names (:data:`acmm.sweep.parameters.PARAMETERS` order first).
+    """
+    keys = list(spec.grid or {}) + list(spec.monte_carlo or {})
+    out = []
+    for k in keys:
+        out.extend(SHORTHANDS.get(k, [k]))
+    return [p for p in PARAMETERS if p in out] + [p for p in out if p not in PARAMETERS]
+
+
+class SweepFile(_Model):
+    """A sweep config file: name, description, the ``sweep`` section and ``output``."""
+
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX, description="sweep name; results in <root>/<name>/")
+    description: str = Field("", description="free text")
+    sweep: SweepSpec
+    output: Output = Output()

@@ -1,0 +1,70 @@
+"""Provenance of a results file: git commit, config hash, package version, creation time.
+
+Stored as root attributes of every HDF5 file (:func:`common.results.write_h5`).
+"""
+from __future__ import annotations
+
+import hashlib
+import subprocess
+from datetime import datetime, timezone
+from pathlib import Path
+
+
+def git_commit() -> str:
+    """The git commit of the source tree, or ``"unknown"``.
+
+    Returns
+    -------
+    str
+        The commit hash, or ``"unknown"``.
+    """
+    here = Path(__file__).resolve().parent
+    try:
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, timeout=5
+        )
+        if out.returncode == 0:
+            return out.stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return "unknown"
+
+
+def config_hash(config_text: str) -> str:
+    """SHA-256 of a canonical config text (first 16 hex digits).
+
+    Parameters
+    ----------
+    config_text : str
+        The canonical config text.
+
+    Returns
+    -------
+    str
+        The first 16 hex digits of the hash.
+    """
+    return hashlib.sha256(config_text.encode()).hexdigest()[:16]
+
+
+def provenance(config_text: str) -> dict[str, str]:
+    """Attributes stored on every results file.
+
+    Parameters
+    ----------
+    config_text : str
+        The resolved config as YAML.
+
+    Returns
+    -------
+    dict
+        Package, version, git commit, config hash and creation time (UTC).
+    """
+    from common import __version__
+
+    return {
+        "package": "acmm-qpp",
+        "package_version": __version__,
+        "git_commit": git_commit(),
+        "config_hash": config_hash(config_text),
+        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+    }

@@ -1,0 +1,160 @@
+"""Integration of the nonlinear closed loop of plant, servo-compensator and observer.
+
+State z = [x; x_c; x̂] (eq 10.7).  With f1 the plant nonlinearity and f1o its nominal value
+(γ = nominal), the loop is (sign conventions of ``docs/ERRATA.md`` § QPP signs and :mod:`qpp.lure`):
+
+    u   = K1 x̂ + Kc x_c − f1o                       (eq 10.6, "computed torque" in ch. 14)
+    x'  = A x + B u + G d + B f1(x, y, γ, t)         (eqs 13.1, 14.2)
+    x_c'= Ac x_c + Bc (r − y)                        (eq 10.2)
+    x̂'  = A x̂ + B u + B f1o + L (y − C x̂),  L = −H  (eq 10.5)
+
+A disturbance impulse I δ(t − t_i) is the jump x(t_i⁺) = x(t_i⁻) + G I.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from common.errors import ConvergenceError
+from qpp.config import QppConfig
+from qpp.lure import LurePlant
+
+
+def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
+    """z(0) = [x0; x_c0; x̂0 = x0].
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The validated config.
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+    K1 : (m, n) array
+        Observer-state gain (eq 10.6), in the units of the config's u per unit of x.
+    Kc : (m, q) array
+        Servo-compensator state gain (eq 10.6), in the units of the config's u per unit of x_c.
+
+    Returns
+    -------
+    (2n+q,) ndarray
+        z(0), in the config's units of x and x_c.
+    """
+    n, q = plant.n, plant.q
+    x0 = np.zeros(n) if cfg.plant.x0 is None else np.asarray(cfg.plant.x0, float)
+    if isinstance(cfg.plant.xc0, list):
+        xc0 = np.asarray(cfg.plant.xc0, float)
+    elif cfg.plant.xc0 == "equilibrium":
+        xc0 = np.linalg.lstsq(np.atleast_2d(Kc), -np.atleast_2d(K1) @ x0, rcond=None)[0]
+    else:
+        xc0 = np.zeros(q)
+    return np.concatenate([x0, xc0, x0])
+
+
+def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nominal: float, r_fun,
+                  t_eval, z0, impulse_time=None, impulse=None, rtol=1e-8, atol=1e-10):
+    """Integrate the nonlinear loop; returns (z samples (N_z, N), u samples (m, N)).
+
+    A disturbance impulse I δ(t − t_i) is applied as the jump x(t_i⁺) = x(t_i⁻) + G I.
+
+    Parameters
+    ----------
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+    K1 : (m, n) array
+        Observer-state gain (eq 10.6), in the units of the config's u per unit of x.
+    Kc : (m, q) array
+        Servo-compensator state gain (eq 10.6), in the units of the config's u per unit of x_c.
+    H : (n, p) array
+        Observer gain, printed sign (L = −H), in the units of the config's x per unit of y and s.
+    f1 : callable
+        ``f1(x, t, γ)``, the matched nonlinearity (:func:`qpp.matched_nonlinearity.make_f1`), in the units of u.
+    gamma : float or ndarray
+        The uncertain parameter(s) of the run, in the config's units.
+    gamma_nominal : float or ndarray
+        The nominal parameter(s), used by the observer's f1o, in the config's units.
+    r_fun : callable
+        ``r_fun(t)``, the reference at time t (s), in the units of y.
+    t_eval : (N,) array
+        Sample times, s.
+    z0 : (2n+q,) array
+        Initial state z(0), in the units of x and x_c.
+    impulse_time : float, optional
+        Time of the disturbance impulse, s.
+    impulse : (r,) array, optional
+        Impulse I, in the units of d times s.
+    rtol : float
+        Relative tolerance of the integrator, dimensionless.
+    atol : float
+        Absolute tolerance of the integrator, in the units of z.
+
+    Returns
+    -------
+    Z : (2n+q, N) ndarray
+        Samples of z, in the units of x and x_c.
+    U : (m, N) ndarray
+        Samples of u, in the units of u.
+
+    Raises
+    ------
+    ConvergenceError
+        The integrator failed.
+    """
+    control, rhs = _loop_functions(plant, K1, Kc, H, f1, gamma, gamma_nominal, r_fun)
+    n, G = plant.n, plant.G
+    t_eval = np.asarray(t_eval, float)
+    t0, tf = t_eval[0], t_eval[-1]
+    segments = [(t0, tf)]
+    if impulse_time is not None and t0 < impulse_time < tf:
+        segments = [(t0, impulse_time), (impulse_time, tf)]
+    elif impulse_time is not None and impulse_time <= t0:
+        z0 = z0.copy()
+        z0[:n] += G @ np.asarray(impulse, float)
+    Z = _integrate_segments(rhs, segments, np.asarray(z0, float), t_eval, n, G, impulse, rtol, atol)
+    U = np.array([control(Z[:, i], t)[0] for i, t in enumerate(t_eval)]).T
+    return Z, U
+
+
+def _loop_functions(plant: LurePlant, K1, Kc, H, f1, gamma, gamma_nominal, r_fun):
+    """The control law ``control(z, t) -> (u, f1o)`` and the right-hand side ``rhs(t, z)`` of the
+    loop (eqs 10.2, 10.5, 10.6) for :func:`simulate_loop`."""
+    A, B, C, Ac, Bc = plant.A, plant.B, plant.C, plant.Ac, plant.Bc
+    K1, Kc, L = np.atleast_2d(K1), np.atleast_2d(Kc), -np.atleast_2d(H)
+    n, q = plant.n, plant.q
+
+    def control(z, t):
+        x, xc, xh = z[:n], z[n:n + q], z[n + q:]
+        f1o = f1(x, t, gamma_nominal)
+        return K1 @ xh + Kc @ xc - f1o, f1o
+
+    def rhs(t, z):
+        x, xc, xh = z[:n], z[n:n + q], z[n + q:]
+        y = C @ x
+        u, f1o = control(z, t)
+        dx = A @ x + B @ (u + f1(x, t, gamma))
+        dxc = Ac @ xc + Bc @ (r_fun(t) - y)
+        dxh = A @ xh + B @ (u + f1o) + L @ (y - C @ xh)
+        return np.concatenate([dx, dxc, dxh])
+
+    return control, rhs
+
+
+def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol):
+    """Integrate ``rhs`` over ``segments`` (one, or two split at the impulse time, where
+    x jumps by G I), sampled at ``t_eval`` (s); the samples of z, (2n+q, N)."""
+    t0, tf = t_eval[0], t_eval[-1]
+    zs = []
+    for k, (ta, tb) in enumerate(segments):
+        if k == 1:
+            z = z.copy()
+            z[:n] += G @ np.asarray(impulse, float)
+        mask = (t_eval >= ta) & ((t_eval < tb) if k < len(segments) - 1 else (t_eval <= tb))
+        te = np.concatenate([[ta], t_eval[mask], [tb]])
+        max_step = (tf - t0) / 200
+        sol = solve_ivp(rhs, (ta, tb), z, method="DOP853", t_eval=np.unique(te), rtol=rtol, atol=atol,
+                        max_step=max_step)
+        if not sol.success:
+            raise ConvergenceError(f"simulation failed at t = {sol.t[-1]:.4g} s: {sol.message}")
+        keep = np.isin(sol.t, t_eval[mask])
+        zs.append(sol.y[:, keep])
+        z = sol.y[:, -1]
+    return np.hstack(zs)
