@@ -2,12 +2,13 @@
 
 1. one 10-orbit Monte Carlo case over the bare 10-orbit integration of the same plant (≤ 3x);
 2. the same seeded sweep on 1 vs N local worker processes (≥ 1.8x at N = 2 when idle);
-3. a Dask LocalCluster of N single-threaded workers vs the local pool at the same N (≤ 1.15x);
+3. a Dask LocalCluster of N single-threaded workers vs the local pool at the same N (≤ 1.15x),
+   with the CPU time of each run (driver + workers) and the load average beside it;
 4. `acmm simulate staircase` and `acmm design staircase` with figures vs without (≤ 1.5 s with);
 5. `acmm report --fast` (and the full report with ``--full``): wall and CPU time from a fresh results
    root and again reusing its stage results, per section and per stage (≤ 10 s fast, ≤ 20 s full).
 
-    MPLBACKEND=Agg .venv/bin/python scripts/bench_ratios.py [--workers 2] [--cases 800] [--full]
+    MPLBACKEND=Agg .venv/bin/python scripts/bench_ratios.py [--workers 2] [--cases 3200] [--full]
         [--report-jobs 1 2] [--only-report]
 
 The machine's load average is printed with each block: on a shared machine compare ratios.
@@ -46,7 +47,8 @@ def _wall(cmd, cwd, repeat=3) -> float:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
-    ap.add_argument("--cases", type=int, default=800)
+    ap.add_argument("--cases", type=int, default=3200,
+                    help="sweep size of blocks 2-3 (the Dask overhead shows at a few thousand cases)")
     ap.add_argument("--full", action="store_true", help="also the full report (~20 s or more)")
     ap.add_argument("--report-jobs", type=int, nargs="+", default=[None],
                     help="report processes to compare (default: the report's default, 2 on 2+ CPUs)")

@@ -7,10 +7,12 @@ For each N it runs the same seeded ±30 % inertia Monte Carlo (fixed design, no 
 local worker processes and, when ``distributed`` is installed, on a Dask LocalCluster of N
 single-threaded worker processes (cluster start-up and the one-time kernel load per worker
 excluded: a user starts and warms a cluster once),
-and prints wall time, cases/s, speed-up over 1 worker and Dask / pool; ``--unchunked`` adds a
-Dask run with one case per task (the pre-issue-16 behaviour) to show what chunking buys.  Every
-run's table is compared with the 1-worker table (bit for bit).  Also prints the per-case cost
-over the bare 10-orbit integration of the same plants (one core).
+and prints wall time, the CPU time of the run's processes (driver + workers; with psutil), the
+load average, cases/s, speed-up over 1 worker and Dask / pool; ``--unchunked`` adds a Dask run
+with one case per task (the pre-issue-16 behaviour) to show what chunking buys.  Every run's
+table is compared with the 1-worker table (bit for bit).  Also prints the per-case cost over the
+bare 10-orbit integration of the same plants (one core).  ``--repeat R`` runs the table R times
+back to back (on a shared machine compare the ratios of one repetition).
 """
 from __future__ import annotations
 
@@ -92,19 +94,23 @@ def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool
     except ImportError:
         distributed = None
         dask = unchunked = False
-    times, tables = {}, {}
+    times, tables, cpu = {}, {}, {}
 
     def one(label, n, **kw):
         sw = parse_sweep({"name": f"s_{label}_{n}", "sweep": spec, "output": {"root": str(tmp), "figures": False}})
+        c0 = _tree_cpu()
         t0 = time.perf_counter()
         r = run_sweep(sw, **kw)
         times[label, n] = time.perf_counter() - t0
+        cpu[label, n] = _tree_cpu(c0)
         tables[label, n] = read_h5(r.path)
         return times[label, n]
 
+    load1 = os.getloadavg()[0]
     one("pool", 1, workers=1)
     ref = tables["pool", 1]
-    out(f"  {'executor':<22} {'N':>3} {'wall s':>8} {'cases/s':>8} {'speed-up':>9} {'vs pool':>8}  identical")
+    out(f"  {'executor':<22} {'N':>3} {'wall s':>8} {'cpu s':>7} {'load':>5} {'cases/s':>8} {'speed-up':>9} "
+        f"{'vs pool':>8}  identical")
     for n in workers:
         rows = [("local pool", "pool", {"workers": n})]
         if dask:
@@ -114,7 +120,10 @@ def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool
         for name, label, kw in rows:
             if label == "pool":
                 if n != 1:
+                    load = os.getloadavg()[0]
                     one(label, n, **kw)
+                else:
+                    load = load1
             else:
                 with distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                               dashboard_address=None) as cluster:
@@ -124,12 +133,36 @@ def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool
                         from acmm.sweep import _warm_worker
 
                         client.run(_warm_worker)
+                    load = os.getloadavg()[0]
                     one(label, n, scheduler=cluster.scheduler_address, **kw)
             t = times[label, n]
             vs = f"{t / times['pool', n]:.2f}x" if label != "pool" else "-"
-            out(f"  {name:<22} {n:>3} {t:8.2f} {cases / t:8.1f} {times['pool', 1] / t:8.2f}x {vs:>8}  "
+            c = f"{cpu[label, n]:7.2f}" if cpu[label, n] is not None else f"{'-':>7}"
+            out(f"  {name:<22} {n:>3} {t:8.2f} {c} {load:5.1f} {cases / t:8.1f} {times['pool', 1] / t:8.2f}x {vs:>8}  "
                 f"{_same(ref, tables[label, n])}")
     return times
+
+
+def _tree_cpu(since=None):
+    """user+sys CPU seconds of this process, its finished children and its live descendants
+    (Dask workers); the difference from ``since`` when given; None without psutil."""
+    try:
+        import psutil
+    except ImportError:
+        return None
+    t = os.times()
+    own = t.user + t.system + t.children_user + t.children_system
+    live = {}
+    for p in psutil.Process().children(recursive=True):
+        try:
+            c = p.cpu_times()
+            live[p.pid] = c.user + c.system
+        except psutil.Error:
+            pass
+    if since is None:
+        return own, live
+    own0, live0 = since
+    return own - own0 + sum(v - live0.get(k, 0.0) for k, v in live.items())
 
 
 def main() -> None:
@@ -140,13 +173,19 @@ def main() -> None:
     ap.add_argument("--orbits", type=float, default=10.0)
     ap.add_argument("--no-dask", action="store_true")
     ap.add_argument("--unchunked", action="store_true")
+    ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--no-case-cost", action="store_true", help="skip the per-case / bare integration ratio")
     args = ap.parse_args()
     print(f"{args.cases}-case ±30 % inertia Monte Carlo of {args.base}, {args.orbits:g}-orbit runs, fixed design; "
           f"{os.cpu_count()} CPU(s), load average {os.getloadavg()[0]:.1f}")
-    c, b = per_case_cost(args.base, args.orbits)
-    print(f"  per case {c * 1e3:.2f} ms / bare {args.orbits:g}-orbit integration {b * 1e3:.2f} ms = {c / b:.2f}x "
-          f"(target <= 3x)")
-    scaling(args.workers, args.cases, args.base, args.orbits, dask=not args.no_dask, unchunked=args.unchunked)
+    if not args.no_case_cost:
+        c, b = per_case_cost(args.base, args.orbits)
+        print(f"  per case {c * 1e3:.2f} ms / bare {args.orbits:g}-orbit integration {b * 1e3:.2f} ms = "
+              f"{c / b:.2f}x (target <= 3x; load {os.getloadavg()[0]:.1f})")
+    for k in range(args.repeat):
+        if args.repeat > 1:
+            print(f" repetition {k + 1}/{args.repeat}")
+        scaling(args.workers, args.cases, args.base, args.orbits, dask=not args.no_dask, unchunked=args.unchunked)
 
 
 if __name__ == "__main__":

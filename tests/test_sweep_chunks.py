@@ -7,7 +7,7 @@ import pytest
 import yaml
 
 from common.results import read_h5
-from acmm.sweep import MAX_CHUNK, chunk_size, make_chunks, run_sweep
+from acmm.sweep import MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker, chunk_size, make_chunks, run_sweep
 
 from conftest import CONFIGS
 from test_sweep import _assert_same_data
@@ -34,6 +34,48 @@ def test_chunk_size_and_chunks():
     assert [len(c) for c in chunks] == [2, 2, 1, 2, 1, 1, 1]
     assert [t for c in chunks for t in c] == tasks        # order kept, nothing lost
     assert all(len({t[1] for t in c}) == 1 for c in chunks)
+    fixed = Chunker(tasks, 2, size=2)
+    assert list(iter(fixed.next, None)) == chunks                 # the same chunks, handed out lazily
+
+
+def test_chunk_size_with_a_measured_case_cost():
+    # 3.5 ms per case: tasks of 0.1 … 1 s are 29 … 285 cases
+    lo, hi = -(-MIN_TASK_SECONDS // 0.0035), MAX_TASK_SECONDS // 0.0035
+    assert (lo, hi) == (29, 285)
+    assert chunk_size(3200, 2, 0.0035) == 200                     # 8 per worker, within the bounds
+    assert chunk_size(3200, 16, 0.0035) == 29                     # 8 per worker would be 25: too little work
+    assert chunk_size(10 ** 6, 100, 0.0035) == 285                # 8 per worker would be 1250: too long
+    assert chunk_size(100, 16, 0.0035) == 7                       # every worker still gets a share
+    assert chunk_size(40, 2, 0.0035, n_total=3200) == 29          # the tail of a large sweep: ≥ 0.1 s
+    assert chunk_size(400, 2, 0.09) == 11                         # redesign cases: 25 would be 2.3 s
+    assert chunk_size(5, 2, 10.0) == 1
+
+
+def test_chunker_guided_sizes_and_measure(monkeypatch):
+    import acmm.sweep.executors as ex
+
+    clock = [100.0]
+    monkeypatch.setattr(ex.time, "monotonic", lambda: clock[0])
+    tasks = [("case", "a", i) for i in range(3200)] + [("margin", "a", "up")]
+    ch = Chunker(tasks, 2)
+    sizes = []
+    first = [ch.next(), ch.next()]
+    assert [len(c) for c in first] == [64, 64]                   # unmeasured: MAX_CHUNK
+    assert ch.case_seconds() is None
+    ch.returned(64)                                              # the first chunk back starts the clock
+    clock[0] += 0.112
+    ch.returned(64)
+    assert ch.case_seconds() is None                             # one chunk per worker needed since
+    clock[0] += 0.112
+    ch.returned(64)
+    assert ch.case_seconds() == pytest.approx(0.0035)              # 2 workers × 0.224 s / 128 cases
+    while (c := ch.next()) is not None:
+        sizes.append(len(c))
+    assert sizes[0] == chunk_size(3200 - 128 + 1, 2, 0.0035) == 193
+    assert sizes == sorted(sizes, reverse=True)                  # guided: shrinking towards the end
+    assert min(sizes[:-2]) == 29 and sizes[-1] == 1              # ≥ 0.1 s of work; the margin search alone
+    assert len(sizes) < 50                                       # 25 per worker with 64 per task
+    assert sum(sizes) + 128 == len(tasks)
 
 
 def _run_bytes(path, **kw):
@@ -65,3 +107,53 @@ def test_dask_chunked_identical(tmp_path):
         got, csv = _run_bytes(cfg, scheduler=cluster.scheduler_address, chunk=2)
     _assert_same_data(ref, got)
     assert csv == ref_csv
+
+
+def test_background_snapshots_same_table_and_errors_reach_the_caller(tmp_path, monkeypatch):
+    import threading
+
+    import acmm.sweep.run as run
+    from common.errors import OutputError
+
+    cfg = _cfg(tmp_path, "snaps")
+    ref, ref_csv = _run_bytes(cfg, workers=1)
+    real = run.write_results
+    calls = []
+
+    def spy(sweep, records, complete, **kw):
+        calls.append((complete, len(records), threading.current_thread().name))
+        return real(sweep, records, complete, **kw)
+
+    monkeypatch.setattr(run, "write_results", spy)
+    got, csv = _run_bytes(cfg, workers=1, chunk=1, snapshot_interval=0.0)
+    _assert_same_data(ref, got)
+    assert csv == ref_csv
+    partial = [c for c in calls if not c[0]]
+    assert partial and all(name == "acmm-sweep-snapshot" for _, _, name in partial)   # beside the driver
+    assert calls[-1][:2] == (True, 9)                                                # then the final table
+    assert all(n < 9 for _, n, _ in partial)
+
+    def failing(sweep, records, complete, **kw):
+        if threading.current_thread().name == "acmm-sweep-snapshot":
+            raise OutputError("cannot write sweep.h5: No space left on device")
+        return real(sweep, records, complete, **kw)
+
+    monkeypatch.setattr(run, "write_results", failing)
+    with pytest.raises(OutputError, match="No space left"):
+        run_sweep(cfg, workers=1, chunk=1, snapshot_interval=0.0)
+
+
+def test_chunk_sizes_and_a_process_cluster_identical(tmp_path):
+    # chunks of 7 and 64 cases and guided chunks on a pool; 1 case per task and guided chunks on
+    # a Dask cluster of a spawned worker process (the workers users run: read-only scattered
+    # arrays, Dask's malloc environment): all the same table, bit for bit
+    distributed = pytest.importorskip("distributed", reason="optional extra acmm-qpp[dask] not installed")
+    cfg = _cfg(tmp_path, "sizes")
+    ref, ref_csv = _run_bytes(cfg, workers=1)
+    runs = [_run_bytes(cfg, workers=2, chunk=chunk) for chunk in (7, 64, None)]
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        runs += [_run_bytes(cfg, scheduler=cluster.scheduler_address, chunk=chunk) for chunk in (1, None)]
+    for got, csv in runs:
+        _assert_same_data(ref, got)
+        assert csv == ref_csv

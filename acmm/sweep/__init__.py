@@ -53,16 +53,18 @@ from acmm.sweep.case import (BaseContext, _empty_row, _redesigned_specs, _redesi
                              prepare_base, run_case, simulate_values)
 from acmm.sweep.cases import AXES, VERDICTS, _draw, _why, case_values, perturb_inertia, unphysical_reason
 from acmm.sweep.config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sweep, swept_parameters
-from acmm.sweep.executors import (CHUNKS_PER_WORKER, MAX_CHUNK, SerialExecutor, _call, _call_chunk, _local_context,
-                                  _remote_contexts, _scheduler_workers, _task_key, _tasks, _warm_worker, chunk_size,
-                                  make_chunks, make_executor)
+from acmm.sweep.executors import (CHUNKS_PER_WORKER, MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker,
+                                  SerialExecutor, _call, _call_chunk, _local_context, _remote_contexts,
+                                  _scheduler_workers, _task_key, _tasks, _warm_worker, chunk_size, make_chunks,
+                                  make_executor)
 from acmm.sweep.journal import JOURNAL_VERSION, GroupCommitJournal, Journal, SweepInterrupted, read_journal
 from acmm.sweep.output import _label, _nominal_tea_deg, _split, _write_csv, plot_sweep, table_arrays, write_results
 from acmm.sweep.run import SweepResult, _as_sweep, run_sweep
 
 __all__ = [
-    "AXES", "CHUNKS_PER_WORKER", "JOURNAL_VERSION", "MAP_EXTRAS", "MAX_CHUNK", "PARAMETERS", "SHORTHANDS",
-    "VERDICTS", "BaseContext", "GroupCommitJournal", "Journal", "SerialExecutor", "Sweep", "SweepInterrupted",
+    "AXES", "CHUNKS_PER_WORKER", "JOURNAL_VERSION", "MAP_EXTRAS", "MAX_CHUNK", "MAX_TASK_SECONDS", "MIN_TASK_SECONDS",
+    "PARAMETERS", "SHORTHANDS", "VERDICTS", "BaseContext", "Chunker", "GroupCommitJournal", "Journal",
+    "SerialExecutor", "Sweep", "SweepInterrupted",
     "SweepResult", "case_values", "chunk_size", "load_sweep", "make_chunks", "make_executor", "margin_search",
     "perturb_inertia", "perturbed_tea", "plot_sweep", "prepare_base", "read_journal", "run_case", "run_sweep",
     "simulate_values", "swept_parameters", "table_arrays", "unphysical_reason", "write_results",

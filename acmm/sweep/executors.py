@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import dataclasses
+import math
 import os
 import sys
+import time
 from typing import Optional
 
 import numpy as np
@@ -117,38 +119,134 @@ def _call(task, ctx):
     return run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg)
 
 
-#: most cases in one task: a chunk of ~64 10-orbit cases is ~0.3 s of work, so progress, the
-#: journal and load balancing stay live while the per-task cost (pickling the base context,
-
+#: cases per task while the cost of a case is not yet measured (the first chunk of each worker):
+#: 64 10-orbit cases are ~0.2–2 s of work
 MAX_CHUNK = 64
-#: chunks per worker aimed at, so that the last chunks do not leave workers idle
+#: chunks per worker aimed at over the rest of the sweep (guided: the chunks shrink towards the
+#: end, so that the last ones do not leave workers idle)
 CHUNKS_PER_WORKER = 8
+#: work per task (s) once the cost of a case is measured: at least this, so that the fixed cost
+#: of a task (a few ms of scheduler, client and worker time on Dask) stays a few per cent at any
+#: number of workers and the scheduler sees at most ~10 tasks per second per worker ...
+MIN_TASK_SECONDS = 0.1
+#: ... and at most this, so that progress, the journal and an interruption stay live
+MAX_TASK_SECONDS = 1.0
 
 _WARM = False
 
 
-def chunk_size(n_tasks: int, workers: int) -> int:
-    """Cases per task for ``n_tasks`` cases on ``workers`` workers (a pool or a Dask cluster;
-    the in-process executor runs one case per task).
+def chunk_size(n_tasks: int, workers: int, case_seconds: Optional[float] = None,
+               n_total: Optional[int] = None) -> int:
+    """Cases per task when ``n_tasks`` cases remain for ``workers`` workers (a pool or a Dask
+    cluster; the in-process executor runs one case per task).
 
-    ⌈n / (8·workers)⌉ clipped to [1, :data:`MAX_CHUNK`]: about 8 tasks per worker (the tail
-    imbalance is then ≤ 1/8 of a worker's share) and never more than ~0.3 s per task.  The cost of
-    one task on a scheduler is a fixed few ms, so once a chunk holds more than a few cases that
-    cost is a small fraction whatever the number of workers; see README *Performance*.
+    ⌈n / (8·workers)⌉: about 8 tasks per worker over what remains (the tail imbalance is then
+    ≤ 1/8 of a worker's remaining share).  Without ``case_seconds`` (the cost of one case on one
+    worker, s; not yet measured) it is clipped to [1, :data:`MAX_CHUNK`]; with it, to the cases
+    that take :data:`MIN_TASK_SECONDS` … :data:`MAX_TASK_SECONDS`, and never above
+    ⌈``n_total`` / workers⌉ (every worker gets a share of a small sweep; ``n_total``: the tasks of
+    the whole sweep, default ``n_tasks``).  See README *Performance* for why this holds at large N.
 
     Parameters
     ----------
     n_tasks : int
-        Number of case tasks.
+        Tasks still to hand out.
     workers : int
         Number of workers.
+    case_seconds : float, optional
+        Measured cost of one case on one worker, s (None: not measured yet).
+    n_total : int, optional
+        Tasks of the whole sweep (default ``n_tasks``).
 
     Returns
     -------
     int
         Cases per task.
     """
-    return max(1, min(MAX_CHUNK, -(-n_tasks // (CHUNKS_PER_WORKER * max(1, workers)))))
+    n_workers = max(1, workers)
+    c = -(-n_tasks // (CHUNKS_PER_WORKER * n_workers))
+    if case_seconds is None or not case_seconds > 0:
+        return max(1, min(MAX_CHUNK, c))
+    lo = max(1, math.ceil(MIN_TASK_SECONDS / case_seconds))
+    hi = max(lo, int(MAX_TASK_SECONDS / case_seconds))
+    return max(1, min(max(c, lo), hi, -(-(n_total or n_tasks) // n_workers)))
+
+
+class Chunker:
+    """The tasks handed out in chunks as they are submitted (guided self-scheduling).
+
+    Each chunk holds consecutive case tasks of one base (a margin search alone).  Its size is
+    ``size`` when given, else :func:`chunk_size` of the tasks still to hand out with the cost of
+    a case measured so far: ``workers`` × the time since the first chunk came back / the cases
+    that came back since (the throughput of the whole run, so it includes every per-task cost;
+    before every worker can have returned a chunk, unmeasured).  The results do not depend on
+    the chunking.
+
+    Parameters
+    ----------
+    tasks : list of tuple
+        Tasks ``("case", base, index)`` or ``("margin", base, direction)``, in order.
+    workers : int
+        Number of workers (Dask: worker threads).
+    size : int, optional
+        Fixed cases per chunk (None: guided, as above).
+    """
+
+    def __init__(self, tasks: list, workers: int, size: Optional[int] = None):
+        self._tasks, self._pos = tasks, 0
+        self.workers = max(1, workers)
+        self.size = size
+        self._first_back: Optional[float] = None
+        self._cases_since = 0
+        self._chunks_since = 0
+
+    def case_seconds(self) -> Optional[float]:
+        """Measured cost of one case on one worker.
+
+        Returns
+        -------
+        float or None
+            Cost of one case, s; None before there is a measure.
+        """
+        if self._first_back is None or self._chunks_since < self.workers or self._cases_since == 0:
+            return None
+        return self.workers * (time.monotonic() - self._first_back) / self._cases_since
+
+    def returned(self, n_tasks: int) -> None:
+        """Record that a chunk came back.
+
+        Parameters
+        ----------
+        n_tasks : int
+            Tasks in the chunk.
+        """
+        if self._first_back is None:
+            self._first_back = time.monotonic()
+        else:
+            self._chunks_since += 1
+            self._cases_since += n_tasks
+
+    def next(self) -> Optional[list]:
+        """The next chunk.
+
+        Returns
+        -------
+        list of tuple or None
+            Its tasks, or None when every task was handed out.
+        """
+        tasks, pos = self._tasks, self._pos
+        if pos >= len(tasks):
+            return None
+        size = self.size or chunk_size(len(tasks) - pos, self.workers, self.case_seconds(), len(tasks))
+        chunk = [tasks[pos]]
+        pos += 1
+        if chunk[0][0] == "case":
+            while (pos < len(tasks) and len(chunk) < size and tasks[pos][0] == "case"
+                   and tasks[pos][1] == chunk[0][1]):
+                chunk.append(tasks[pos])
+                pos += 1
+        self._pos = pos
+        return chunk
 
 
 def make_chunks(tasks: list, size: int) -> list[list]:
@@ -176,13 +274,50 @@ def make_chunks(tasks: list, size: int) -> list[list]:
     return chunks
 
 
+#: glibc ``mallopt`` parameter numbers
+M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
+#: fixed mmap threshold set in a worker whose dynamic threshold is off (bytes; glibc's dynamic
+#: threshold ranges from 128 KiB to 32 MiB): a 10-orbit case's largest arrays are well below it.
+#: The trim threshold goes with it to twice that, as glibc's dynamic adjustment itself sets it.
+MMAP_THRESHOLD = 4 << 20
+
+
+def _restore_heap_reuse() -> bool:
+    """Serve a case's short-lived arrays from the heap again where the worker's environment stopped it.
+
+    Dask's nanny starts every worker with ``MALLOC_TRIM_THRESHOLD_=65536`` (config
+    ``distributed.nanny.pre-spawn-environ``) to return freed memory to the system promptly.
+    Setting that variable also switches off glibc's *dynamic* mmap threshold, so every array
+    above 128 KiB — the trajectory arrays of each case — is ``mmap``-ed and unmapped again, case
+    after case: ~45 page faults per 10-orbit case (~2 900 per chunk of 64, against ~8 in a
+    forked pool worker), several per cent of the worker's CPU in the kernel and in cache misses.
+    This sets in such a process (Linux/glibc only, and only when ``MALLOC_MMAP_THRESHOLD_`` was
+    not chosen explicitly) what glibc's dynamic adjustment would have reached: a fixed mmap
+    threshold of :data:`MMAP_THRESHOLD` and a trim threshold of twice that, i.e. a worker keeps
+    at most 8 MiB of freed heap for reuse instead of 64 KiB.  Returns True when it changed them.
+    """
+    if (not sys.platform.startswith("linux") or "MALLOC_TRIM_THRESHOLD_" not in os.environ
+            or "MALLOC_MMAP_THRESHOLD_" in os.environ):
+        return False
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None)
+        return (libc.mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD) == 1
+                and libc.mallopt(M_TRIM_THRESHOLD, 2 * MMAP_THRESHOLD) == 1)
+    except (OSError, AttributeError, TypeError):      # not glibc (e.g. musl): nothing to restore
+        return False
+
+
 def _warm_worker() -> None:
-    """Load the compiled kernels once per worker process (from numba's cache: no compile); a
-    long-lived Dask cluster can be warmed ahead with ``client.run(acmm.sweep._warm_worker)``."""
+    """Once per worker process: load the compiled kernels (from numba's cache: no compile) and
+    restore heap reuse (:func:`_restore_heap_reuse`); a long-lived Dask cluster can be warmed
+    ahead with ``client.run(acmm.sweep._warm_worker)``."""
     global _WARM
     if not _WARM:
         from acmm.warmup import warm_up
 
+        _restore_heap_reuse()
         warm_up()
         _WARM = True
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import os
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -13,8 +14,8 @@ from common.runlock import locked_stage
 from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
-from acmm.sweep.executors import (SerialExecutor, _call_chunk, _remote_contexts, _scheduler_workers, _task_key,
-                                  _tasks, chunk_size, make_chunks, make_executor)
+from acmm.sweep.executors import (Chunker, SerialExecutor, _call_chunk, _remote_contexts, _scheduler_workers,
+                                  _task_key, _tasks, make_executor)
 from acmm.sweep.journal import GroupCommitJournal, read_journal
 from acmm.sweep.output import _split, write_results
 
@@ -107,8 +108,8 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     executor : concurrent.futures.Executor, optional
         Use this executor instead of making one (it is not shut down).
     chunk : int, optional
-        Cases per task (default :func:`chunk_size`: ~8 tasks per worker, ≤ :data:`MAX_CHUNK`;
-        1 in-process).  The results do not depend on it.
+        Cases per task (default: sized as the chunks are submitted, :class:`Chunker`; 1
+        in-process).  The results do not depend on it.
 
     Returns
     -------
@@ -144,10 +145,10 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         raise
     serial = isinstance(executor, SerialExecutor)
     n_workers = 1 if serial else _scheduler_workers(executor, workers)
-    size = chunk if chunk is not None else (1 if serial else chunk_size(len(tasks), n_workers))
+    chunks = Chunker(tasks, n_workers, chunk if chunk is not None else (1 if serial else None))
     window = 1 if serial else max(4, 2 * n_workers)
     remote = _remote_contexts(executor, contexts)
-    n_new = _drive(sweep, executor, close, journal, make_chunks(tasks, size), remote, window, done, total,
+    n_new = _drive(sweep, executor, close, journal, chunks, remote, window, done, total,
                    progress, after_record, snapshot_interval)
     close()
     path, figs = write_results(sweep, list(done.values()), complete=True,
@@ -157,22 +158,73 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     return SweepResult(sweep, path, rows, margins, n_new, n_resumed, time.perf_counter() - t0, True, figs)
 
 
-def _drive(sweep: Sweep, executor, close, journal, chunks: list, remote: dict, window: int, done: dict,
+class _Snapshots:
+    """``sweep.h5``/``sweep.csv`` rebuilt from the records so far, in a background thread.
+
+    A rebuild costs O(records) (~0.1 s per 1 000 cases), so written in the driver thread it would
+    stall the submission of chunks for longer and longer as a sweep grows (workers then idle), and
+    every ``interval`` s it would take a growing share of the driver's CPU.  Here a rebuild runs
+    beside the driver on a copy of the record list, at most one at a time, and the next one starts
+    no sooner than ``interval`` s and :data:`COST_FACTOR` × the last rebuild's duration after the
+    last ended (its share of one core stays ≤ 1/``COST_FACTOR``).  An error of a rebuild (disk
+    full, read-only directory) is raised in the driver by :meth:`check`.
+    """
+
+    COST_FACTOR = 20.0
+
+    def __init__(self, sweep: Sweep, interval: float):
+        self.sweep, self.interval = sweep, interval
+        self._thread: Optional[threading.Thread] = None
+        self._error: Optional[BaseException] = None
+        self._next = time.monotonic() + interval
+
+    def _write(self, records: list) -> None:
+        t0 = time.monotonic()
+        try:
+            write_results(self.sweep, records, complete=False)
+        except BaseException as exc:  # noqa: BLE001 (re-raised in the driver by check())
+            self._error = exc
+        t1 = time.monotonic()
+        self._next = t1 + max(self.interval, self.COST_FACTOR * (t1 - t0))
+
+    def check(self) -> None:
+        """Raise the error of a finished rebuild, if any."""
+        if self._error is not None:
+            err, self._error = self._error, None
+            raise err
+
+    def maybe(self, done: dict) -> None:
+        """Start a rebuild of ``done``'s records if one is due and none is running."""
+        self.check()
+        if time.monotonic() < self._next or (self._thread is not None and self._thread.is_alive()):
+            return
+        self._thread = threading.Thread(target=self._write, args=(list(done.values()),),
+                                        name="acmm-sweep-snapshot", daemon=True)
+        self._thread.start()
+
+    def wait(self) -> None:
+        """Wait for a running rebuild (before the final or partial write of the same files)."""
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
+
+
+def _drive(sweep: Sweep, executor, close, journal, chunks: Chunker, remote: dict, window: int, done: dict,
            total: int, progress, after_record, snapshot_interval: float) -> int:
     """Submit the chunks (at most ``window`` in flight), journal every record as it comes back and
-    snapshot ``sweep.h5`` every ``snapshot_interval`` s; on any exit the journal is closed, and on
-    an interruption the pending tasks are cancelled, the executor closed and a partial
-    ``sweep.h5`` written.  Returns the number of new records (added to ``done``)."""
+    rebuild ``sweep.h5`` in the background every ``snapshot_interval`` s or more (:class:`_Snapshots`);
+    on any exit the journal is closed, and on an interruption the pending tasks are cancelled, the
+    executor closed and a partial ``sweep.h5`` written.  Returns the number of new records (added
+    to ``done``)."""
     n_new = 0
-    last_snap = time.monotonic()
+    snaps = _Snapshots(sweep, snapshot_interval)
     complete = False
     pending: dict = {}
     try:
-        it = iter(chunks)
         exhausted = False
         while True:
             while not exhausted and len(pending) < window:
-                c = next(it, None)
+                c = chunks.next()
                 if c is None:
                     exhausted = True
                     break
@@ -183,6 +235,7 @@ def _drive(sweep: Sweep, executor, close, journal, chunks: list, remote: dict, w
             for fut in finished:
                 pending.pop(fut)
                 recs = fut.result()
+                chunks.returned(len(recs))
                 journal.append_many(recs)
                 for rec in recs:
                     done[_task_key(rec)] = rec
@@ -191,12 +244,13 @@ def _drive(sweep: Sweep, executor, close, journal, chunks: list, remote: dict, w
                         progress(len(done), total, rec)
                     if after_record is not None:
                         after_record(n_new)
-            if time.monotonic() - last_snap > snapshot_interval:
-                write_results(sweep, list(done.values()), complete=False)
-                last_snap = time.monotonic()
+            snaps.maybe(done)
+        snaps.wait()
+        snaps.check()
         complete = True
     finally:
         journal.close()
+        snaps.wait()
         if not complete:
             try:
                 for fut in list(pending):
