@@ -46,7 +46,6 @@ def fig_staircase_inertia(sim: dict, figdir: Path):
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
     from report.figure_style import COLORS, pyplot, save
-    from report.figures import AXES
 
     plt = pyplot()
     o = sim["orbits"]
