@@ -52,7 +52,13 @@ class ReportResult:
     sections : list of str
         Section keys.
     timings : dict
-        Wall time of the gathering, each stage group and each section, s.
+        Wall time of the gathering, each stage group and each section, s, and the total CPU
+        time, s.
+    jobs : int
+        Processes that ran the stages and sections (1: all in this process).
+    tasks : dict
+        Task name of the graph (stages and section parts) → ``(wall s, CPU s)`` of the process
+        that ran it.
     """
 
     out: Path

@@ -11,6 +11,11 @@ import numpy as np
 
 AXES = ("roll", "pitch", "yaw")
 
+# re-exported: the stair-case (ch. 6) and QPP (ch. 13–14) figures live in their own modules
+from report.figures_qpp import fig_circle, fig_qpp  # noqa: E402,F401
+from report.figures_staircase import (fig_staircase, fig_staircase_inertia,  # noqa: E402,F401
+                                      fig_staircase_levels, fig_staircase_responses)
+
 
 def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     """K(i, j) vs pitch TEA for the 24 columns: LQR gains (markers) and the schedule (lines).
@@ -179,80 +184,6 @@ def fig_claim1(mb3: dict, dec: dict, figdir: Path):
     return save(fig, figdir, "claim1_responses")
 
 
-def fig_staircase(sim: dict, figdir: Path):
-    """Inertia steps (Figs 6.14–6.19), the responses (Figs 6.20–6.30) and the per-level statistics."""
-    return fig_staircase_inertia(sim, figdir), fig_staircase_responses(sim, figdir), fig_staircase_levels(sim, figdir)
-
-
-def fig_staircase_inertia(sim: dict, figdir: Path):
-    """Inertia elements vs time (Figs 6.14–6.19)."""
-    from report.figure_style import COLORS, pyplot, save
-
-    plt = pyplot()
-    o = sim["orbits"]
-    inertia = sim["levels"]["inertia"][sim["level"]]
-    fig1, axs = plt.subplots(2, 3, figsize=(11, 5.5), sharex=True)
-    for ax, (i, j) in zip(axs.flat, [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]):
-        ax.step(o, inertia[:, i, j] / 1e6, where="post", color=COLORS[0], label=f"I({i + 1},{j + 1})")
-        ax.set_ylabel(f"I({i + 1},{j + 1}) (10⁶ slug·ft²)")
-        ax.legend(loc="best")
-    for ax in axs[-1]:
-        ax.set_xlabel("time (orbits)")
-    fig1.suptitle("Inertia variation MB3 → AC (Figs 6.14–6.19 analogue)", fontsize=10)
-    fig1.tight_layout()
-    return save(fig1, figdir, "staircase_inertia")
-
-
-def fig_staircase_responses(sim: dict, figdir: Path):
-    """Attitude error, rate, torque and momentum per axis (Figs 6.20–6.30)."""
-    from report.figure_style import COLORS, pyplot, save
-
-    plt = pyplot()
-    o = sim["orbits"]
-    fig2, axs = plt.subplots(4, 3, figsize=(11, 10), sharex=True)
-    rows = [(np.degrees(sim["attitude_error"]), "attitude error θ − θ̂* (deg)"),
-            (np.degrees(sim["rate_rel_lvlh"]), "body rate rel. LVLH (deg/s)"),   # stored in rad/s
-            (sim["u"], "control torque (ft·lbf)"), (sim["h"], "CMG momentum (ft·lbf·s)")]
-    for r, (data, label) in enumerate(rows):
-        for a in range(3):
-            axs[r, a].plot(o, data[:, a], color=COLORS[a], lw=0.6, label=AXES[a])
-            if r == 0:
-                axs[r, a].set_title(AXES[a])
-            if a == 0:
-                axs[r, a].set_ylabel(label)
-            for s in sim["levels"]["start"][1:] * sim["orbits"][-1] / max(sim["t"][-1], 1e-300):
-                axs[r, a].axvline(s, color="0.7", lw=0.4, ls=":")
-        axs[r, 0].legend(loc="upper right")
-    for ax in axs[-1]:
-        ax.set_xlabel("time (orbits)")
-    fig2.suptitle("Gain-scheduled responses, inertia MB3 → AC (Figs 6.20–6.30 analogue; dotted: level changes)",
-                  fontsize=10)
-    fig2.subplots_adjust(left=0.08, right=0.985, bottom=0.055, top=0.94, wspace=0.28, hspace=0.12)  # issue 16
-    return save(fig2, figdir, "staircase_responses")
-
-
-def fig_staircase_levels(sim: dict, figdir: Path):
-    """Steady attitude error and peak momentum per inertia level."""
-    from report.figure_style import COLORS, pyplot, save
-
-    plt = pyplot()
-    fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
-    th = np.degrees(sim["levels"]["tea_estimate"][:, 1])[: len(sim["levels"]["steady_error"])]
-    for a in range(3):
-        axs[0].plot(th, np.degrees(sim["levels"]["steady_error"][:, a]), "o-", color=COLORS[a], label=AXES[a])
-    axs[0].set_xlabel("pitch TEA of the level θ2* (deg)")
-    axs[0].set_ylabel("steady |θ − θ̂*| (deg)")
-    axs[0].set_title("Steady attitude error per level (second half of each dwell)")
-    axs[0].legend()
-    axs[1].plot(th, sim["levels"]["peak_momentum"], "s-", color=COLORS[3], label="peak |h_i| over the level")
-    axs[1].set_xlabel("pitch TEA of the level θ2* (deg)")
-    axs[1].set_ylabel("peak CMG momentum (ft·lbf·s)")
-    axs[1].set_title("Peak momentum per level")
-    axs[1].legend()
-    fig3.tight_layout()
-    return save(fig3, figdir, "staircase_levels")
-
-
 def fig_robustness(params: dict, base, verdict, peak, names, figdir: Path):
     """Peak attitude error (deg) vs max_k |δ_k| per Monte Carlo case, one panel per base.
 
@@ -303,99 +234,6 @@ def fig_robustness(params: dict, base, verdict, peak, names, figdir: Path):
         ax.legend(loc="lower right")
     fig.tight_layout()
     return save(fig, figdir, "robustness")
-
-
-def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path, out_labels):
-    """Per scenario: y and y_o; |y − y_o| against β_o (Figs 13.3–13.9, 14.4).
-
-    Parameters
-    ----------
-    sim_path : pathlib.Path
-        ``qpp_sim.h5`` (one group per scenario; t in s, outputs in the plant's units).
-    design : dict
-        ``qpp_design.h5`` as read by :func:`common.results.read_h5` (not used for drawing).
-    beta_o : float
-        Radius β_o of the output sphere, in the output units.
-    name : str
-        Config name (file stem prefix).
-    figdir : pathlib.Path
-        Folder of the figures.
-    out_labels : list of str
-        Label of each output.
-
-    Returns
-    -------
-    dict
-        ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
-    """
-    import h5py
-
-    from report.figure_style import COLORS, pyplot, save
-
-    plt = pyplot()
-    with h5py.File(sim_path, "r") as f:
-        scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
-        data = {k: {d: f[k][d][()].T for d in ("t", "y", "y_o", "r", "u")} for k in scen}   # stored (t, channel)
-    p = next(iter(data.values()))["y"].shape[0]
-    fig, axs = plt.subplots(2, len(scen), figsize=(3.8 * len(scen) + 1, 6.5), squeeze=False)
-    for c, k in enumerate(scen):
-        d = data[k]
-        for i in range(p):
-            axs[0, c].plot(d["t"], d["y"][i], "-", color=COLORS[i], label=f"y{i + 1} ({out_labels[i]})")
-            axs[0, c].plot(d["t"], d["y_o"][i], "--", color=COLORS[i], lw=0.8, label=f"y_o{i + 1} nominal")
-            axs[1, c].plot(d["t"], np.abs(d["y"][i] - d["y_o"][i]), color=COLORS[i],
-                           label=f"|y{i + 1} − y_o{i + 1}| ({out_labels[i]})")
-        axs[1, c].axhline(beta_o, color="k", ls=":", lw=0.8, label=f"β_o = {beta_o:g}")
-        axs[1, c].set_yscale("log")
-        axs[1, c].set_ylim(beta_o * 1e-5, beta_o * 3)
-        axs[0, c].set_title(f"scenario {k}")
-        axs[0, c].set_ylabel("output")
-        axs[1, c].set_ylabel("tracking error |y − y_o|")
-        for r in range(2):
-            axs[r, c].set_xlabel("time t (s)")
-        axs[0, c].legend(fontsize=6.5)
-        axs[1, c].legend(fontsize=6.5, loc="lower right")
-    fig.suptitle(f"{name}: nonlinear closed loop, output vs nominal output and the output sphere", fontsize=10)
-    fig.tight_layout()
-    return save(fig, figdir, f"{name}_responses")
-
-
-def fig_circle(design: dict, name: str, figdir: Path):
-    """Circle criterion (lemma 1): h_ii(−a + jω) with Gershgorin mean radii and the critical disc."""
-    from matplotlib.collections import PatchCollection
-
-    from report.figure_style import COLORS, pyplot, save
-    from qpp.circle import critical_disc
-
-    plt = pyplot()
-    c = design["circle"]
-    centres, radii, sector = np.atleast_2d(c["centres"]), np.atleast_2d(c["radii"]), design["sector"]
-    m = centres.shape[0]
-    fig, axs = plt.subplots(1, m, figsize=(4.6 * m, 4.4), squeeze=False)
-    for i in range(m):
-        ax = axs[0, i]
-        h = centres[i]
-        # the Gershgorin circles as one collection (one artist instead of 150, issue 16)
-        ax.add_collection(PatchCollection([plt.Circle((h[k].real, h[k].imag), radii[i, k]) for k in
-                                           np.unique(np.linspace(0, h.size - 1, 150).astype(int))],
-                                          facecolor="none", edgecolor="0.7", linewidths=0.3))
-        ax.plot(h.real, h.imag, color=COLORS[0], label="h_ii(−a + jω), ω ≥ 0")
-        ax.plot(h.real, -h.imag, "--", color=COLORS[0], lw=0.7, label="ω ≤ 0")
-        al, be = sector[i]
-        cc, R = critical_disc(al, be)
-        ax.add_patch(plt.Circle((cc, 0), R, fill=False, color=COLORS[1], lw=1.4))
-        ax.plot([], [], color=COLORS[1], label=f"critical disc D({al:g}, {be:g})")
-        lim = 1.1 * max(abs(cc) + R, np.abs(h).max() + radii[i].max())
-        ax.set_xlim(-lim, lim)
-        ax.set_ylim(-lim, lim)
-        ax.set_aspect("equal")
-        ax.set_xlabel("Re h_ii (dimensionless)")
-        ax.set_ylabel("Im h_ii")
-        ax.set_title(f"channel {i + 1}: margin {np.atleast_1d(c['margins'])[i]:.3g}")
-        ax.legend(fontsize=6.5, loc="upper right")
-    fig.suptitle(f"{name}: circle criterion (Figs 13.1, 14.2–14.3 analogue)", fontsize=10)
-    fig.tight_layout()
-    return save(fig, figdir, f"{name}_circle")
 
 
 # =============================================================================================

@@ -6,231 +6,16 @@ The stages are those of Part II (TEA, design and stair-case simulation, ch. 4–
 from __future__ import annotations
 
 import os
-import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
 from common.errors import AcmmError
-from report.constants import FAST_ORBITS
-
-
-@dataclass
-class StageRun:
-    """One results file the report used.
-
-    Attributes
-    ----------
-    stage : str
-        Stage name (``"acmm design"``, ``"qpp simulate"``, ...).
-    config : str
-        Config name.
-    path : pathlib.Path
-        The HDF5 file.
-    config_hash : str
-        Hash of the resolved config.
-    design_hash : str
-        Hash of the design-relevant config (acmm stages), else empty.
-    reused : bool
-        The file was reused, not recomputed.
-    wall_time : float
-        Time this report spent on the stage, s (0 when reused).
-    created_utc : str
-        The file's creation time.
-    git_commit : str
-        Commit the file was written by.
-    """
-
-    stage: str
-    config: str
-    path: Path
-    config_hash: str
-    design_hash: str = ""
-    reused: bool = False
-    wall_time: float = 0.0          #: seconds this report spent on the stage (0 when reused)
-    created_utc: str = ""
-    git_commit: str = ""
-
-
-def _attrs(path: Path) -> dict:
-    import h5py
-
-    with h5py.File(path, "r") as f:
-        return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
-
-
-def _try_attrs(path: Path) -> dict | None:
-    try:
-        return _attrs(path) if path.exists() else None
-    except OSError:
-        return None
-
-
-def acmm_config(name: str, root: Path | None = None, *, fast: bool = False):
-    """A packaged acmm config with its results root set to ``root`` (``--fast``: short stair-case).
-
-    Parameters
-    ----------
-    name : str
-        Packaged config name.
-    root : pathlib.Path, optional
-        Results root (default: the config's ``output.root``).
-    fast : bool, optional
-        For a config with a schedule: ``<name>_fast`` with :data:`FAST_ORBITS` orbits.
-
-    Returns
-    -------
-    acmm.config.Config
-        The config, figures off.
-    """
-    from acmm.config import load_config, parse_config
-
-    data = load_config(name).model_dump(mode="json")
-    if root is not None:
-        data["output"]["root"] = str(root)
-    data["output"]["figures"] = False
-    if fast and data.get("schedule") is not None:
-        data["name"] = f"{data['name']}_fast"
-        data["simulation"]["orbits"] = FAST_ORBITS
-        data["description"] = f"{data['description']} [--fast: {FAST_ORBITS:g} orbits]"
-    return parse_config(data, source=f"packaged config {name}")
-
-
-def qpp_config(name: str, root: Path | None = None):
-    """A packaged qpp config with its results root set to ``root``.
-
-    Parameters
-    ----------
-    name : str
-        Packaged config name.
-    root : pathlib.Path, optional
-        Results root (default: the config's ``output.root``).
-
-    Returns
-    -------
-    qpp.config.QppConfig
-        The config, figures off.
-    """
-    from qpp.config import load_config, parse_config
-
-    data = load_config(name).model_dump(mode="json")
-    if root is not None:
-        data["output"]["root"] = str(root)
-    data["output"]["figures"] = False
-    return parse_config(data, source=f"packaged config {name}")
-
-
-def _record(stage, cfg_name, path, chash, dhash, reused, wall):
-    a = _attrs(path)
-    return StageRun(stage, cfg_name, path, chash, dhash, reused, wall, str(a.get("created_utc", "")),
-                    str(a.get("git_commit", "")))
-
-
-def ensure_acmm_design(cfg, *, rerun: bool = False, donor_roots=()) -> StageRun:
-    """``design.h5`` of an acmm config through :func:`acmm.stages.design_for` (the stages' own
-    reuse by ``design_hash``), or designed again (``rerun``).
-
-    ``donor_roots``: other run directories whose ``design.h5`` may be copied when its design hash
-    matches (the ``--fast`` stair-case reuses the full stair-case's design).
-
-    Parameters
-    ----------
-    cfg : acmm.config.Config
-        The config.
-    rerun : bool, optional
-        Design again even when a matching file exists.
-    donor_roots : iterable of path-like, optional
-        Run directories whose ``design.h5`` may be copied.
-
-    Returns
-    -------
-    StageRun
-        The design file used.
-    """
-    from common.results import config_hash
-    from acmm.stages import design_for, design_hash, run_design
-
-    want = design_hash(cfg)
-    path = cfg.run_dir() / "design.h5"
-    chash = config_hash(cfg.to_yaml())
-    t0 = time.perf_counter()
-    if rerun:
-        _, path = run_design(cfg, figures=False)
-        return _record("acmm design", cfg.name, path, chash, want, False, time.perf_counter() - t0)
-    a = _try_attrs(path)
-    if a is None or a.get("design_hash") != want:
-        for donor in donor_roots:
-            a = _try_attrs(Path(donor) / "design.h5")
-            if a is not None and a.get("design_hash") == want:
-                path.parent.mkdir(parents=True, exist_ok=True)
-                shutil.copy2(Path(donor) / "design.h5", path)
-                break
-    _, note = design_for(cfg, figures=False)
-    reused = note.startswith("reused")
-    return _record("acmm design", cfg.name, path, chash, want, reused,
-                   0.0 if reused else time.perf_counter() - t0)
-
-
-def ensure_acmm_simulation(cfg, *, rerun: bool = False) -> StageRun:
-    """``sim.h5`` of an acmm config: reused when config and design hashes match, else simulated.
-
-    Parameters
-    ----------
-    cfg : acmm.config.Config
-        The config.
-    rerun : bool, optional
-        Simulate again even when a matching file exists.
-
-    Returns
-    -------
-    StageRun
-        The simulation file used.
-    """
-    from common.results import config_hash
-    from acmm.stages import design_hash, run_simulate
-
-    chash, dhash = config_hash(cfg.to_yaml()), design_hash(cfg)
-    path = cfg.run_dir() / "sim.h5"
-    a = None if rerun else _try_attrs(path)
-    if a is not None and a.get("config_hash") == chash and a.get("design_hash") == dhash:
-        return _record("acmm simulate", cfg.name, path, chash, dhash, True, 0.0)
-    t0 = time.perf_counter()
-    _, path = run_simulate(cfg, figures=False)
-    return _record("acmm simulate", cfg.name, path, chash, dhash, False, time.perf_counter() - t0)
-
-
-def ensure_qpp(cfg, stage: str, *, rerun: bool = False) -> StageRun:
-    """``qpp_design.h5`` (``stage="design"``) or ``qpp_sim.h5`` (``"simulate"``), reused by config hash.
-
-    Parameters
-    ----------
-    cfg : qpp.config.QppConfig
-        The config.
-    stage : {"design", "simulate"}
-        Which stage.
-    rerun : bool, optional
-        Run again even when a matching file exists.
-
-    Returns
-    -------
-    StageRun
-        The file used.
-    """
-    from common.results import config_hash
-    from qpp import stages as qst
-
-    chash = config_hash(cfg.to_yaml())
-    path = cfg.run_dir() / ("qpp_design.h5" if stage == "design" else "qpp_sim.h5")
-    a = None if rerun else _try_attrs(path)
-    if a is not None and a.get("config_hash") == chash:
-        return _record(f"qpp {stage}", cfg.name, path, chash, "", True, 0.0)
-    t0 = time.perf_counter()
-    if stage == "design":
-        path = qst.run_design(cfg, figures=False)[2]
-    else:
-        path = qst.run_simulate(cfg, figures=False)[3]
-    return _record(f"qpp {stage}", cfg.name, path, chash, "", False, time.perf_counter() - t0)
+from report.constants import FAST_ORBITS  # noqa: F401 (cited by the docstrings)
+# the results files of one stage (reused by hash, else run): re-exported, the graph below uses them
+from report.stage_results import (StageRun, _record, _try_attrs, acmm_config,  # noqa: F401
+                                  ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, qpp_config)
 
 
 @dataclass
@@ -251,6 +36,9 @@ class Gathered:
         Time spent on it, s.
     timings : dict
         Group of stages → wall time, s.
+    produced_by : dict
+        Run key (``"stage:name"``) → name of the :class:`report.runner.Task` that produced it
+        (used by :func:`order_runs`).
     """
 
     configs: dict
@@ -263,7 +51,21 @@ class Gathered:
 
 
 def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
-    """The six packaged configs of the report, keyed by config name (``--fast``: short stair-case)."""
+    """The six packaged configs of the report, keyed by config name (``--fast``: short stair-case).
+
+    Parameters
+    ----------
+    root : pathlib.Path, optional
+        Results root (default: each config's ``output.root``).
+    fast : bool, optional
+        The stair-case config with :data:`FAST_ORBITS` orbits (:func:`acmm_config`).
+
+    Returns
+    -------
+    dict
+        ``"mb3"``, ``"mb3_decoupled"``, ``"ac"``, ``"staircase"`` → acmm config (Table 1, ch. 5–6);
+        ``"qpp_siso"``, ``"qpp_manipulator"`` → qpp config (ch. 13–14).
+    """
     cfgs = {name: acmm_config(name, root, fast=fast and name == "staircase")
             for name in ("mb3", "mb3_decoupled", "ac", "staircase")}
     cfgs.update({name: qpp_config(name, root) for name in ("qpp_siso", "qpp_manipulator")})
@@ -301,6 +103,28 @@ def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rer
     A simulation waits for the design of its config (it reuses ``design.h5``); a qpp simulation
     waits for the qpp design of its config (one run at a time holds a run directory's lock).
     The robustness sweep runs on one process when the report itself runs ``jobs`` > 1 processes.
+
+    Parameters
+    ----------
+    cfgs : dict
+        Config name → config, as :func:`report_configs` returns.
+    root : pathlib.Path, optional
+        Results root (default: each config's ``output.root``).
+    fast : bool, optional
+        Short stair-case and reduced robustness sweep (:func:`robustness_result`).
+    rerun : bool, optional
+        Recompute every stage instead of reusing matching results.
+    robustness : bool, optional
+        Include the robustness sweep (task ``"sweep"``).
+    jobs : int, optional
+        Processes the report runs on (> 1: the sweep itself uses one worker).
+
+    Returns
+    -------
+    list of report.runner.Task
+        Named ``"design:<name>"``, ``"simulate:<name>"``, ``"qpp design:<name>"``,
+        ``"qpp simulate:<name>"`` and ``"sweep"``; each returns a :class:`StageRun` (the sweep:
+        ``(result, note, wall s)``).
     """
     from report.runner import Task
 
@@ -328,7 +152,20 @@ def _const(*args):
 
 
 def keep_stage(g: "Gathered", name: str, result, say: Callable[[str], None]) -> None:
-    """Record the result of stage task ``name`` in ``g`` (and print one line)."""
+    """Record the result of stage task ``name`` in ``g`` (and print one line).
+
+    Parameters
+    ----------
+    g : Gathered
+        Filled in place: ``runs``, ``produced_by``, ``timings`` and, for the sweep, the
+        ``robustness`` fields.
+    name : str
+        Task name (:func:`stage_tasks`).
+    result : StageRun or tuple
+        The task's result; for ``"sweep"`` ``(robustness dict or None, note, wall s)``.
+    say : callable
+        Called with one line of progress text.
+    """
     if name == "sweep":
         g.robustness, g.robustness_note, g.robustness_wall = result
         g.timings["robustness sweep"] = g.robustness_wall
@@ -347,7 +184,15 @@ def keep_stage(g: "Gathered", name: str, result, say: Callable[[str], None]) -> 
 
 
 def order_runs(g: "Gathered", tasks: list) -> None:
-    """``g.runs`` in the serial order of ``tasks`` (the manifest and provenance list them so)."""
+    """``g.runs`` in the serial order of ``tasks`` (the manifest and provenance list them so).
+
+    Parameters
+    ----------
+    g : Gathered
+        Its ``runs`` are re-ordered in place (by ``produced_by``).
+    tasks : list of report.runner.Task
+        The stage tasks in their serial order (:func:`stage_tasks`).
+    """
     index = {t.name: i for i, t in enumerate(tasks)}
     rank = {key: index.get(name, len(index)) for key, name in g.produced_by.items()}
     g.runs = dict(sorted(g.runs.items(), key=lambda kv: rank.get(kv[0], len(index))))
@@ -414,6 +259,8 @@ def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bo
         margin search).
     rerun : bool, optional
         Run the sweep even when a complete matching ``sweep.h5`` exists.
+    workers : int, optional
+        Worker processes of the sweep (default: min(2, CPUs)).
 
     Returns
     -------

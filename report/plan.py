@@ -22,7 +22,19 @@ from report.sections import claim1, errata, qpp, robustness, schedule, staircase
 
 @dataclass
 class Part:
-    """What one part of a section produced."""
+    """What one part of a section produced.
+
+    Attributes
+    ----------
+    blocks : list
+        Document blocks (of a :class:`report.document.Doc`), in order.
+    ledger : list of report.ledger.PrintedNumber
+        The printed numbers it compared.
+    value : object
+        Its return value, passed on to other parts (e.g. the claim-1 poles in rad/s, β3 of ch. 13).
+    seconds : float
+        Wall time of the part, s.
+    """
 
     blocks: list          #: document blocks (:class:`report.document.Doc`)
     ledger: list          #: printed numbers (:class:`report.ledger.PrintedNumber`)
@@ -33,7 +45,29 @@ class Part:
 def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: dict | None) -> Part:
     """``fn(ctx, *values)`` on a fresh writer; ``results``: HDF5 files already read (None: this
     worker process's cache).  matplotlib's settings are reset first, so a figure looks the same
-    whichever figures the process drew before."""
+    whichever figures the process drew before.
+
+    Parameters
+    ----------
+    fn : callable
+        The part, ``fn(ctx, *values)`` (a function of :data:`PARTS`).
+    g : report.gather.Gathered
+        Configs and results files of the report.
+    figdir : pathlib.Path
+        Folder of the figures.
+    fast : bool
+        ``--fast`` report (short stair-case, reduced sweep).
+    values : tuple
+        Values of the parts this one takes (:attr:`Part.value`).
+    results : dict or None
+        Results files already read (run key ``"stage:name"`` → contents as read by
+        :func:`common.results.read_h5`); None: this worker process's cache.
+
+    Returns
+    -------
+    Part
+        Its blocks, printed numbers, return value and wall time.
+    """
     t0 = time.perf_counter()
     if "matplotlib" in sys.modules:
         sys.modules["matplotlib"].rc_file_defaults()
@@ -84,7 +118,26 @@ def _errata_values(done: dict) -> tuple:
 
 def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, results: dict | None) -> list[Task]:
     """The parts of :data:`PARTS` as tasks; ``stage_names``: the stage tasks of the same graph
-    (a part waits only for those), ``results``: the shared cache of read files when serial."""
+    (a part waits only for those), ``results``: the shared cache of read files when serial.
+
+    Parameters
+    ----------
+    g : report.gather.Gathered
+        Configs and results files; filled by the stage tasks before a part is submitted.
+    figdir : pathlib.Path
+        Folder of the figures.
+    fast : bool
+        ``--fast`` report.
+    stage_names : set of str
+        Names of the stage tasks in the same graph (:func:`report.gather.stage_tasks`).
+    results : dict or None
+        Shared cache of read results files (serial run), or None (each worker's own cache).
+
+    Returns
+    -------
+    list of report.runner.Task
+        One task per part, named as in :data:`PARTS`; each returns a :class:`Part`.
+    """
     tasks = []
     for name, _, fn, stage_deps, value_deps, cost in PARTS:
         values = _errata_values if name == "errata" else _values_of(value_deps)
@@ -106,7 +159,17 @@ def _part_args(fn, values, g, figdir, fast, results):
 
 def assemble(rep: SectionWriter, done: dict, timings: dict) -> None:
     """Append every part's blocks and printed numbers to ``rep`` in section order; per-section wall
-    time (sum of its parts) into ``timings``."""
+    time (sum of its parts) into ``timings``.
+
+    Parameters
+    ----------
+    rep : report.context.SectionWriter
+        The report's writer; its document and ledger are extended in place.
+    done : dict
+        Part name → :class:`Part`, for every part of :data:`PARTS`.
+    timings : dict
+        Section key → wall time, s; each part's time is added to its section's.
+    """
     for name, section, *_ in PARTS:
         part: Part = done[name]
         rep.doc.blocks.extend(part.blocks)

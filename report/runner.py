@@ -34,6 +34,18 @@ from common.errors import AcmmError
 
 
 def _no_args(done: dict) -> tuple:
+    """The default :attr:`Task.args`: a task that takes no arguments.
+
+    Parameters
+    ----------
+    done : dict
+        Name → result of every finished task (unused).
+
+    Returns
+    -------
+    tuple
+        The empty tuple.
+    """
     return ()
 
 
@@ -54,6 +66,9 @@ class Task:
         from ``done`` (name → result of every finished task).
     cost : float
         Rough run time (s) used only to order the ready tasks (longest remaining chain first).
+    priority : float
+        Not an argument: set by :func:`run_tasks` before forking to ``cost`` plus the longest
+        chain (s) of tasks that wait for this one; the ready task of highest priority starts first.
     """
 
     name: str
@@ -67,7 +82,13 @@ class Task:
 def default_jobs() -> int:
     """Worker processes for the report: ``ACMM_REPORT_JOBS`` if set, else min(2, CPUs); 1 without
     ``os.fork`` or when this process runs other threads (forking a multi-threaded process, e.g. one
-    holding a Dask client, can deadlock the child)."""
+    holding a Dask client, can deadlock the child).
+
+    Returns
+    -------
+    int
+        Number of worker processes, at least 1.
+    """
     import threading
 
     if not hasattr(os, "fork"):
@@ -96,6 +117,19 @@ def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str,
         Called once in this process before the workers are forked (imports they all need).
     stats : dict, optional
         Filled with ``name → (wall s, CPU s)`` of each task (CPU of the process that ran it).
+
+    Returns
+    -------
+    dict
+        ``{name: result}`` of every task of ``tasks``.
+
+    Raises
+    ------
+    ValueError
+        If a task's name is repeated or a dependency is not listed before it.
+    common.errors.AcmmError
+        The first error a task raised (re-built with its class and message when it came from a
+        worker); :class:`~common.errors.OutputError` if a worker process died.
     """
     _check(tasks)
     on_done = on_done or (lambda name, result: None)

@@ -122,6 +122,7 @@ NO_REPORT_CITATION = {
     "report.sections.determinism": "dataset hashes compared between runs: no mathematics",
     "report.sections.printed": "the table of every printed number: no mathematics of its own",
     "report.sections.provenance": "software versions and stage files used: no mathematics",
+    "report.runner": "the report's task graph run serially or on forked workers: no mathematics of the report",
     "report.ledger": "comparison of printed and computed numbers: no mathematics of the report",
     **{m: "command line: parses, calls and prints, no mathematics (the layer rule)" for m in (
         "cli", "cli.acmm_app", "cli.qpp_app", "cli.acmm_sweep", "cli.acmm_report", "cli.common",

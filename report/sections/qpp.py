@@ -198,28 +198,67 @@ _OUT13, _OUT14 = ["y"], ["m", "rad"]
 
 
 def text13(ctx: SectionWriter) -> tuple[float, float]:
-    """Chapter 13 without its figures; returns β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading."""
+    """Chapter 13 (SISO Lure example) without its figures: gains, sphere bounds and tracking errors
+    (text, tables and printed numbers); returns β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the ``qpp_siso`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
+
+    Returns
+    -------
+    (float, float)
+        β3 = 0.05‖(sin 5t)_T‖₂ (T = 0.5 s, as the report prints it) and β3 = 0.05‖(sin t)_T‖₂
+        (definition eq 10.54 with the config's ω), both in s^{1/2} (units: square root of
+        seconds; :func:`qpp.spheres.beta3_sinusoidal`).
+    """
     return _chapter(ctx, "qpp13", "qpp_siso", [("step_offset", 0, "0.094", "upper", ""),
                                                ("sin10", 0, "0.16", "upper", "")], _OUT13, figures=False)
 
 
 def figures13(ctx: SectionWriter) -> None:
-    """Chapter 13's figures (:func:`circle13`, :func:`responses13`)."""
+    """Chapter 13's figures (:func:`circle13`, :func:`responses13`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the ``qpp_siso`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     _figures(ctx, "qpp13", "qpp_siso", _OUT13)
 
 
 def circle13(ctx: SectionWriter) -> None:
-    """Chapter 13's circle-criterion figure."""
+    """Chapter 13's circle-criterion figure (Fig 13.1, :func:`report.figures.fig_circle`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the ``qpp_siso`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     _circle_figure(ctx, "qpp13", "qpp_siso")
 
 
 def responses13(ctx: SectionWriter) -> None:
-    """Chapter 13's responses figure."""
+    """Chapter 13's responses figure (Figs 13.3–13.9, :func:`report.figures.fig_qpp`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the ``qpp_siso`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     _responses_figure(ctx, "qpp13", "qpp_siso", _OUT13)
 
 
 def text14(ctx: SectionWriter) -> None:
-    """Chapter 14 without its figures."""
+    """Chapter 14 (two-DOF manipulator) without its figures: gains, sphere bounds and tracking
+    errors (text, tables and printed numbers).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the ``qpp_manipulator`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     c = ctx.g.configs["qpp_manipulator"]
     sc0 = c.simulation.scenarios[0]
     w = _WHY14.format(mu=c.nonlinearity.mu, imp=sc0.impulse, ti=sc0.impulse_time or 0.0)
@@ -228,23 +267,54 @@ def text14(ctx: SectionWriter) -> None:
 
 
 def figures14(ctx: SectionWriter) -> None:
-    """Chapter 14's figures (:func:`circle14`, :func:`responses14`)."""
+    """Chapter 14's figures (:func:`circle14`, :func:`responses14`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the ``qpp_manipulator`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     _figures(ctx, "qpp14", "qpp_manipulator", _OUT14)
 
 
 def circle14(ctx: SectionWriter) -> None:
-    """Chapter 14's circle-criterion figure."""
+    """Chapter 14's circle-criterion figure (Figs 14.2–14.3, :func:`report.figures.fig_circle`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the ``qpp_manipulator`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     _circle_figure(ctx, "qpp14", "qpp_manipulator")
 
 
 def responses14(ctx: SectionWriter) -> None:
-    """Chapter 14's responses figure."""
+    """Chapter 14's responses figure (Fig 14.4, :func:`report.figures.fig_qpp`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the ``qpp_manipulator`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     _responses_figure(ctx, "qpp14", "qpp_manipulator", _OUT14)
 
 
 def build(ctx: SectionWriter) -> tuple[float, float]:
     """Chapters 13 and 14 (:func:`text13`, :func:`figures13`, :func:`text14`, :func:`figures14` in this
-    order); returns ch. 13's β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading."""
+    order); returns ch. 13's β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the two qpp configs and their design and simulation files) and output (document blocks, printed numbers, figures).
+
+    Returns
+    -------
+    (float, float)
+        β3 = 0.05‖(sin 5t)_T‖₂ (T = 0.5 s, as the report prints it) and β3 = 0.05‖(sin t)_T‖₂
+        (definition eq 10.54 with the config's ω), both in s^{1/2} (units: square root of
+        seconds; :func:`qpp.spheres.beta3_sinusoidal`).
+    """
     beta3 = text13(ctx)
     figures13(ctx)
     text14(ctx)

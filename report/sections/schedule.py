@@ -33,7 +33,14 @@ def build(ctx: SectionWriter) -> np.ndarray:
 
 
 def summary(ctx: SectionWriter) -> None:
-    """The section's text and tables (design summary, conditioning, the schedule along the path)."""
+    """The section's text and tables (design summary, conditioning, the schedule along the path;
+    sector LQR and schedule of ch. 5.2–5.3).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
+    """
     ctx.section("schedule")
     d = ctx.data("acmm design:" + ctx.g.configs["staircase"].name)
     cfg = ctx.g.configs["staircase"]
@@ -65,7 +72,21 @@ def summary(ctx: SectionWriter) -> None:
 
 
 def true_poles(ctx: SectionWriter) -> np.ndarray:
-    """Claim 1: poles of the cross-inertia-free MB3 gain on the true coupled linear model (rad/s)."""
+    """Claim 1: poles of the cross-inertia-free MB3 gain on the true coupled linear model (rad/s).
+
+    The coupled linear model (ch. 4) at the TEA of the ``mb3_decoupled`` design, closed with that
+    design's gain: eig(A − B K).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the mb3 config and the ``mb3_decoupled`` ``design.h5``) and output (document blocks, printed numbers, figures).
+
+    Returns
+    -------
+    (24,) complex array
+        The closed-loop poles, rad/s.
+    """
     from acmm import linearize as lin
 
     dec = ctx.data("acmm design:mb3_decoupled")
@@ -76,13 +97,30 @@ def true_poles(ctx: SectionWriter) -> np.ndarray:
 
 
 def figures(ctx: SectionWriter, ev: np.ndarray) -> None:
-    """The gain schedule and the pole maps (``ev``: :func:`true_poles`)."""
+    """The gain schedule and the pole maps (``ev``: :func:`true_poles`): :func:`gain_figure`, then
+    :func:`pole_figure`.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``design.h5``, the mb3 designs) and output (document blocks, printed numbers, figures).
+    ev : (24,) complex array
+        Closed-loop poles of the cross-inertia-free MB3 gain on the true coupled model, rad/s
+        (:func:`true_poles`).
+    """
     gain_figure(ctx)
     pole_figure(ctx, ev)
 
 
 def gain_figure(ctx: SectionWriter) -> None:
-    """The 72 gains of the stair-case design points and their schedule."""
+    """The 72 gains of the stair-case design points and their schedule (Figs 5.3–5.26,
+    :func:`report.figures.fig_gain_schedule`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
+    """
     cfg = ctx.g.configs["staircase"]
     files = fig_gain_schedule(ctx.data("acmm design:" + cfg.name), cfg.design.drf_mode, ctx.figdir)
     ctx.doc.fig("gain_schedule", "Gain schedule: the 72 gains K(i, j) vs pitch TEA (Figs 5.3–5.26 analogue)",
@@ -90,7 +128,17 @@ def gain_figure(ctx: SectionWriter) -> None:
 
 
 def pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:
-    """Pole maps: the stair-case design points; claim 1 with ``ev`` (:func:`true_poles`)."""
+    """Pole maps: the stair-case design points; claim 1 with ``ev`` (:func:`true_poles`), in the
+    sector of Fig 5.2 (:func:`report.figures.fig_pole_maps`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``design.h5``, the mb3 and mb3_decoupled ``design.h5``) and output (document blocks, printed numbers, figures).
+    ev : (24,) complex array
+        Closed-loop poles of the cross-inertia-free MB3 gain on the true coupled model, rad/s
+        (:func:`true_poles`).
+    """
     cfg = ctx.g.configs["staircase"]
     d = ctx.data("acmm design:" + cfg.name)
     mb3 = ctx.data("acmm design:mb3")
@@ -131,7 +179,14 @@ def _conditioning(ctx: SectionWriter, d, pts):
 
 
 def path_figures(ctx: SectionWriter) -> None:
-    """The scheduled gain along the path: margins and poles (figures of :mod:`acmm.plots`)."""
+    """The scheduled gain along the path: margins and poles in the sector of Fig 5.2 (figures of
+    :mod:`acmm.plots`); nothing when the design has no ``schedule/path`` group.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
+    """
     from acmm import plots
 
     cfg = ctx.g.configs["staircase"]

@@ -10,7 +10,13 @@ from report.figures import fig_staircase_inertia, fig_staircase_levels, fig_stai
 
 def build(ctx: SectionWriter) -> None:
     """The MB3 → AC stair-case simulation (Figs 6.14–6.30): :func:`summary` and the three figures
-    (:func:`figure_inertia`, :func:`figure_responses`, :func:`figure_levels`), in this order."""
+    (:func:`figure_inertia`, :func:`figure_responses`, :func:`figure_levels`), in this order.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     summary(ctx)
     figure_inertia(ctx)
     figure_responses(ctx)
@@ -22,7 +28,13 @@ def _sim(ctx: SectionWriter) -> dict:
 
 
 def summary(ctx: SectionWriter) -> None:
-    """Text, per-level table and printed numbers of the stair-case."""
+    """Text, per-level table and printed numbers of the stair-case (claim 2, ch. 6).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     ctx.section("staircase")
     cfg = ctx.g.configs["staircase"]
     s = ctx.data("acmm simulate:" + cfg.name)
@@ -62,15 +74,38 @@ def summary(ctx: SectionWriter) -> None:
 
 
 def figure_inertia(ctx: SectionWriter) -> None:
+    """The inertia elements vs time (Figs 6.14–6.19, :func:`report.figures.fig_staircase_inertia`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     ctx.doc.fig("staircase_inertia", "Inertia elements vs time (Figs 6.14–6.19 analogue)",
                 fig_staircase_inertia(_sim(ctx), ctx.figdir))
 
 
 def figure_responses(ctx: SectionWriter) -> None:
+    """Attitude error, rate, torque and momentum per axis (Figs 6.20–6.30,
+    :func:`report.figures.fig_staircase_responses`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     ctx.doc.fig("staircase_responses", "Attitude error, rate, torque and momentum per axis (Figs 6.20–6.30 "
                 "analogue)", fig_staircase_responses(_sim(ctx), ctx.figdir))
 
 
 def figure_levels(ctx: SectionWriter) -> None:
+    """Steady attitude error and peak momentum per inertia level (ch. 6,
+    :func:`report.figures.fig_staircase_levels`).
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``sim.h5``) and output (document blocks, printed numbers, figures).
+    """
     ctx.doc.fig("staircase_levels", "Per-level steady error and peak momentum vs the level's pitch TEA",
                 fig_staircase_levels(_sim(ctx), ctx.figdir))
