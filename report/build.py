@@ -136,12 +136,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     _add(rep, "printed", sec_printed.build, list(rep.ledger))
     # determinism
     man_path = out / "manifest.json"
-    old = None
-    if man_path.exists():
-        try:
-            old = json.loads(man_path.read_text())
-        except (OSError, ValueError):
-            old = None
+    old = _previous_manifest(man_path)
     manifest = build_manifest(g)
     cmp = compare_manifests(old, manifest)
     _add(rep, "determinism", sec_determinism.build, cmp, manifest)
@@ -164,6 +159,16 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     res.timings = {**timings, "total": res.wall_time, "cpu (all processes)": _cpu() - cpu0}
     res.jobs = jobs
     return res
+
+
+def _previous_manifest(path: Path) -> dict | None:
+    """The manifest of the previous report in the same folder (None: none, or unreadable)."""
+    if not path.exists():
+        return None
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
 
 
 def _cpu() -> float:
