@@ -47,7 +47,14 @@ _WORKER: "_Worker | None" = None
 
 
 def usable() -> bool:
-    """Whether a figure worker may be forked here (see the module docstring)."""
+    """Whether a figure worker may be forked here (see the module docstring).
+
+    Returns
+    -------
+    bool
+        True when ``os.fork`` exists, there is more than one CPU, no non-daemon thread other
+        than this one runs and ``ACMM_FIGURE_WORKER`` is not ``0``.
+    """
     me = threading.current_thread()
     return (os.environ.get("ACMM_FIGURE_WORKER", "1") != "0" and hasattr(os, "fork")
             and (os.cpu_count() or 1) > 1
@@ -294,7 +301,13 @@ class _Worker:
 
 
 def start() -> bool:
-    """Fork the figure worker if :func:`usable` and none is running; True if this call did."""
+    """Fork the figure worker if :func:`usable` and none is running.
+
+    Returns
+    -------
+    bool
+        True if this call started the worker (the caller then owns it).
+    """
     global _WORKER
     if _WORKER is not None or not usable():
         return False
@@ -303,13 +316,29 @@ def start() -> bool:
 
 
 def active() -> bool:
-    """Whether a figure worker is running (then :func:`submit` hands calls to it)."""
+    """Whether a figure worker is running (then :func:`submit` hands calls to it).
+
+    Returns
+    -------
+    bool
+        True while a worker runs in this process.
+    """
     return _WORKER is not None
 
 
 def submit(fn, *args, **kwargs) -> None:
     """``fn(*args, **kwargs)`` (a module-level function that draws and writes one figure and
-    returns the paths written) in the worker when one is running, else here and now."""
+    returns the paths written) in the worker when one is running, else here and now.
+
+    Parameters
+    ----------
+    fn : callable
+        Module-level figure function (picklable by reference), e.g. :func:`acmm.plots.summary`.
+    *args : object
+        Its positional arguments (picklable: arrays, numbers, strings, paths).
+    **kwargs : object
+        Its keyword arguments (picklable).
+    """
     if _WORKER is None:
         fn(*args, **kwargs)
         return
@@ -325,13 +354,28 @@ def prepare(fn, *args, **kwargs) -> None:
     """``fn(*args, **kwargs)`` in the worker itself, before the figures submitted later are
     forked from it (e.g. :func:`acmm.plots.prebuild`: build a figure's skeleton while the stage
     computes); without a worker, nothing.  A failure is ignored (the figure is then built by
-    its writer, which reports errors)."""
+    its writer, which reports errors).
+
+    Parameters
+    ----------
+    fn : callable
+        Module-level function run in the worker (picklable by reference).
+    *args : object
+        Its positional arguments (picklable).
+    **kwargs : object
+        Its keyword arguments (picklable).
+    """
     if _WORKER is not None:
         _WORKER.send(_job(b"P", fn, args, kwargs))
 
 
 def finish() -> list[Path]:
-    """Wait for every submitted figure; returns the files written.
+    """Wait for every submitted figure and stop the worker.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (empty without a worker).
 
     Raises
     ------
@@ -363,6 +407,11 @@ def flush() -> list[Path]:
     """Wait for the figures submitted so far (the worker keeps running); returns the files
     written and records them (:func:`common.outputs.record_written`).
 
+    Returns
+    -------
+    list of pathlib.Path
+        The files written since the last flush (empty without a worker).
+
     Raises
     ------
     OutputError
@@ -388,7 +437,13 @@ def session(enabled: bool = True):
     around the stage already (the worker then starts before the stage's imports); a worker that
     was never handed anything is killed at once.  A nested session (the
     design run by ``acmm simulate``) shares the outer one's worker and on leaving waits for
-    its own figures (:func:`flush`), so that they are recorded before its stage prunes."""
+    its own figures (:func:`flush`), so that they are recorded before its stage prunes.
+
+    Parameters
+    ----------
+    enabled : bool, optional
+        Whether the stage draws figures at all (False: no worker is started or waited for).
+    """
     owner = start() if enabled else False
     try:
         yield

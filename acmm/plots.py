@@ -65,6 +65,16 @@ def prebuild(kind: str, *params) -> None:
     The figure worker (:mod:`acmm.figure_worker`) calls this while the stage still computes, so
     the figure function then only draws the data; without it the skeleton is built on the spot.
     The result is identical either way.
+
+    Parameters
+    ----------
+    kind : str
+        The figure: ``"axis_histories"``, ``"inertia_histories"``, ``"summary"`` or
+        ``"gain_schedule_grid"``.
+    *params : str or tuple
+        The parameters of its skeleton, as the figure function passes them (the unit system
+        ``"imperial"``/``"SI"``; for the gain grid the state names, state unit labels and torque
+        unit label).
     """
     _LAYOUTS[(kind, params)] = _BUILDERS[kind](*params)
 
@@ -206,7 +216,17 @@ class SampledSchedule:
     """A gain schedule sampled for drawing: ``gains[k]`` (3, 24) at pitch TEA ``theta2[k]`` (rad).
 
     What :func:`gain_schedule_grid` draws of a schedule; plain arrays, so a figure writer
-    process needs neither the schedule's class nor its imports."""
+    process needs neither the schedule's class nor its imports.
+
+    Attributes
+    ----------
+    form : str
+        The schedule's form (:attr:`acmm.schedule.ScheduleFit.form`), named in the figure title.
+    theta2 : (n,) array
+        Pitch TEAs of the samples, rad.
+    gains : (n, 3, 24) array
+        Scheduled gain at each sample, torque per state unit (the units of the fitted gains).
+    """
 
     form: str
     theta2: np.ndarray
@@ -214,7 +234,22 @@ class SampledSchedule:
 
 
 def sample_schedule(fit, theta2, n: int = 60) -> SampledSchedule:
-    """``fit`` (an :class:`acmm.schedule.ScheduleFit`) at ``n`` pitch TEAs spanning ``theta2`` (rad)."""
+    """``fit`` (an :class:`acmm.schedule.ScheduleFit`) at ``n`` pitch TEAs spanning ``theta2`` (rad).
+
+    Parameters
+    ----------
+    fit : acmm.schedule.ScheduleFit
+        The gain schedule of ch. 5.3.
+    theta2 : (P,) array
+        Pitch TEAs of the design points, rad (their range is sampled).
+    n : int, optional
+        Number of evenly spaced samples.
+
+    Returns
+    -------
+    SampledSchedule
+        The schedule's gains at the samples (the units of ``fit``'s gains).
+    """
     fine = np.linspace(theta2.min(), theta2.max(), n)
     return SampledSchedule(fit.form, fine, np.array([fit.gain(t) for t in fine]))
 

@@ -380,6 +380,13 @@ def compute_design(config, progress=None, on_points=None, on_fit=None) -> Design
         The config, or a config file / packaged name to load.
     progress : callable, optional
         ``progress(name)``, called after each design point.
+    on_points : callable, optional
+        ``on_points(points)``, called with the list of :class:`acmm.schedule.PointDesign` once
+        every point's sector LQR (ch. 5.2) is designed.
+    on_fit : callable, optional
+        ``on_fit(points, fit)``, called with the point designs and the final
+        :class:`acmm.schedule.ScheduleFit` (ch. 5.3) before its checks; not called with fewer
+        than 2 points.
 
     Returns
     -------

@@ -112,6 +112,7 @@ NO_REPORT_CITATION = {
     "acmm.sweep.output": "the sweep's HDF5/CSV/figure output: no mathematics of the report",
     "acmm.sweep.run": "the sweep driver (tasks, executor, journal): no mathematics of the report",
     "acmm.parallel_figures": "writing figures in forked processes: no mathematics of the report",
+    "acmm.figure_worker": "the forked process that draws a stage's figures: no mathematics of the report",
     "acmm.sweep.executors": "executors and chunking of the sweep's tasks: no mathematics of the report",
     "report.constants": "section keys and titles of the report document: no mathematics",
     "report.context": "what a report section receives and writes: no mathematics",
