@@ -113,6 +113,8 @@ NO_REPORT_CITATION = {
     "acmm.sweep.run": "the sweep driver (tasks, executor, journal): no mathematics of the report",
     "acmm.parallel_figures": "writing figures in forked processes: no mathematics of the report",
     "acmm.figure_worker": "the forked process that draws a stage's figures: no mathematics of the report",
+    "acmm.figure_process": "the figure worker's forked process and pipe framing: no mathematics of the report",
+    "acmm.stage_common": "config reading and output unit conversion shared by the stages: no mathematics of the report",
     "acmm.sweep.executors": "executors and chunking of the sweep's tasks: no mathematics of the report",
     "report.constants": "section keys and titles of the report document: no mathematics",
     "report.context": "what a report section receives and writes: no mathematics",
