@@ -185,7 +185,22 @@ def unit_roles(pts: dict, has_fit: bool) -> dict:
 
 
 def gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
-    """(unit of each state as printed, torque unit) for the gain figure's labels."""
+    """(unit of each state as printed, torque unit) for the gain figure's labels (Figs 5.3–5.26).
+
+    Parameters
+    ----------
+    drf_mode : str
+        DRF mode of the 24 states (:func:`acmm.linearize.state_units`).
+    units_system : str
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    units : tuple of str
+        The 24 state unit labels, as printed.
+    torque_unit : str
+        The torque unit label (``"ft·lbf"`` or ``"N·m"``).
+    """
     if units_system == "imperial":
         from acmm.plots import state_units
 
@@ -197,7 +212,15 @@ def gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
 
 def prepare_design_figures(s, units_system: str) -> None:
     """Have the figure worker build the gain figure's skeleton while the design is computed
-    (:func:`acmm.plots.prebuild`; nothing without a worker)."""
+    (:func:`acmm.plots.prebuild`; nothing without a worker).
+
+    Parameters
+    ----------
+    s : acmm.settings.DesignSettings
+        The design settings (their ``drf_mode`` picks the state units).
+    units_system : str
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+    """
     from acmm import figure_worker, plots
     from acmm.linearize import STATE_NAMES
 
@@ -206,7 +229,17 @@ def prepare_design_figures(s, units_system: str) -> None:
 
 
 def pole_map_figure(points, s, run_dir: Path) -> None:
-    """Submit the design points' pole map (:func:`acmm.figure_worker.submit`)."""
+    """Submit the design points' pole map with the sector of ch. 5.2 (:func:`acmm.figure_worker.submit`).
+
+    Parameters
+    ----------
+    points : list of acmm.schedule.PointDesign
+        The point designs (their closed-loop poles, rad/s).
+    s : acmm.settings.DesignSettings
+        The design settings: orbit rate n (rad/s) and the sector (σ in units of n, half-angle deg).
+    run_dir : pathlib.Path
+        Run directory; the figure is ``design_poles.png`` there.
+    """
     from acmm import plots
     from acmm.figure_worker import submit
 
@@ -216,7 +249,21 @@ def pole_map_figure(points, s, run_dir: Path) -> None:
 
 def gain_figure(points, fit, s, run_dir: Path, units_system: str) -> None:
     """Submit the gain-schedule figure: the points' LQR gains and the schedule ``fit``, in the
-    ``units_system`` (:func:`acmm.figure_worker.submit`)."""
+    ``units_system`` (cf. Figs 5.3–5.26; :func:`acmm.figure_worker.submit`).
+
+    Parameters
+    ----------
+    points : list of acmm.schedule.PointDesign
+        The point designs (gains ft·lbf per state unit, pitch TEA rad).
+    fit : acmm.schedule.ScheduleFit
+        The gain schedule of ch. 5.3, imperial units.
+    s : acmm.settings.DesignSettings
+        The design settings (their ``drf_mode`` picks the state units).
+    run_dir : pathlib.Path
+        Run directory; the figure is ``design_gains.png`` there.
+    units_system : str
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+    """
     from acmm import plots
     from acmm.figure_worker import submit
     from acmm.linearize import STATE_NAMES
@@ -237,8 +284,17 @@ def gain_figure(points, fit, s, run_dir: Path, units_system: str) -> None:
 
 
 def path_figures(pc, s, run_dir: Path) -> None:
-    """Submit the path-check figures (margins, scheduled poles) of ``pc`` (an
-    :class:`acmm.path_check.PathCheck`; None: nothing)."""
+    """Submit the path-check figures (margins, scheduled poles with the sector of Fig 5.2) of ``pc``.
+
+    Parameters
+    ----------
+    pc : acmm.path_check.PathCheck or None
+        The scheduled gain checked along the path (None: nothing is drawn).
+    s : acmm.settings.DesignSettings
+        The design settings: orbit rate n (rad/s) and the sector (σ in units of n, half-angle deg).
+    run_dir : pathlib.Path
+        Run directory; the figures are ``design_path_margins.png`` and ``design_path_poles.png``.
+    """
     from acmm import plots
     from acmm.figure_worker import submit
 

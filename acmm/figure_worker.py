@@ -24,277 +24,47 @@ and no other Python thread alive in the process but daemon helpers (the terminal
 refresh thread; the worker never touches what they hold).  In a process with other threads (a
 Dask worker, a thread pool) every call runs in place, as it does without a session.
 ``ACMM_FIGURE_WORKER=0`` turns it off.
+
+The process side (the worker's loop, its writers, the pipe framing) is in
+:mod:`acmm.figure_process`.
 """
 from __future__ import annotations
 
 import contextlib
 import os
 import pickle
-import signal
-import struct
-import sys
 import threading
 from pathlib import Path
 
-_HEADER = struct.Struct("<Q")
-
-
-_ABORT = 0xFFFFFFFFFFFFFFFF
-_BARRIER = 0xFFFFFFFFFFFFFFFE
+from acmm.figure_process import _HEADER, _Worker
 
 #: the running worker of this process (None: calls run in place)
 _WORKER: "_Worker | None" = None
 
 
 def usable() -> bool:
-    """Whether a figure worker may be forked here (see the module docstring)."""
+    """Whether a figure worker may be forked here (see the module docstring).
+
+    Returns
+    -------
+    bool
+        True when ``os.fork`` exists, there is more than one CPU, no non-daemon thread other
+        than this one runs and ``ACMM_FIGURE_WORKER`` is not ``0``.
+    """
     me = threading.current_thread()
     return (os.environ.get("ACMM_FIGURE_WORKER", "1") != "0" and hasattr(os, "fork")
             and (os.cpu_count() or 1) > 1
             and all(t.daemon for t in threading.enumerate() if t is not me))
 
 
-def _read_exact(fd: int, n: int) -> bytes | None:
-    chunks, got = [], 0
-    while got < n:
-        b = os.read(fd, min(n - got, 1 << 20))
-        if not b:
-            return None
-        chunks.append(b)
-        got += len(b)
-    return b"".join(chunks)
-
-
-def _warm() -> None:
-    """Import matplotlib with the stage style and draw one small figure (fonts, caches)."""
-    import io
-
-    from acmm import plots
-
-    plt = plots._plt()
-    fig, ax = plt.subplots(figsize=(2, 1.5))
-    ax.plot([0.0, 1.0], [0.0, 1.0], lw=0.7)
-    ax.set_title("roll θ (deg)")
-    ax.set_xlabel("time (orbits)")
-    fig.savefig(io.BytesIO(), format="png", dpi=30)
-    plt.close(fig)
-
-
-def _draw(job: bytes, fd: int) -> None:
-    """Grandchild: run one pickled call, send back ("ok", paths) or ("error", message)."""
-    try:
-        fn, args, kwargs = pickle.loads(job[1:])
-        res = fn(*args, **kwargs)
-        msg = ("ok", [str(p) for p in (res or [])])
-    except BaseException as exc:  # noqa: BLE001 (reported to the stage through the pipe)
-        msg = ("error", str(exc) or type(exc).__name__)
-    data = pickle.dumps(msg)
-    os.write(fd, data)
-
-
-def _send_framed(fd: int, obj) -> None:
-    data = pickle.dumps(obj)
-    view = memoryview(_HEADER.pack(len(data)) + data)
-    while view:
-        view = view[os.write(fd, view):]
-
-
-def _recv_framed(fd: int):
-    head = _read_exact(fd, _HEADER.size)
-    if head is None:
-        return None
-    data = _read_exact(fd, _HEADER.unpack(head)[0])
-    return None if data is None else pickle.loads(data)
-
-
-def _fork_writer(job: bytes, close: tuple) -> tuple[int, int]:
-    """Fork a writer for ``job`` (closing the worker's pipes ``close`` in it); returns its pid
-    and the read end of its result pipe."""
-    r, w = os.pipe()
-    pid = os.fork()
-    if pid == 0:
-        os.close(r)
-        for fd in close:
-            os.close(fd)
-        try:
-            _draw(job, w)
-        finally:
-            os._exit(0)
-    os.close(w)
-    return pid, r
-
-
-def _prepare(job: bytes) -> None:
-    """Run a prepare job here, for the writers forked later (a failure: the writer builds it)."""
-    try:
-        fn, args, kwargs = pickle.loads(job[1:])
-        fn(*args, **kwargs)
-    except Exception:  # noqa: BLE001
-        pass
-
-
-def _serve(jobs: int, status: int) -> None:
-    """The worker: warm up, then fork one writer per job (at most one per CPU, plus one, at a time)."""
-    code = 0
-    running: dict[int, int] = {}          # pid → read end of its result pipe
-    written: list[str] = []
-    errors: list[str] = []
-
-    def join(pid: int) -> None:
-        fd = running.pop(pid)
-        with os.fdopen(fd, "rb") as f:
-            data = f.read()
-        _, st = os.waitpid(pid, 0)
-        kind, val = pickle.loads(data) if data else ("error", "a figure writer process failed")
-        if kind == "ok" and os.waitstatus_to_exitcode(st) == 0:
-            written.extend(val)
-        else:
-            errors.append(val if kind == "error" else "a figure writer process failed")
-
-    try:
-        from acmm import parallel_figures
-
-        parallel_figures.forget()             # a writer draws in place, never forks again
-        try:
-            _warm()
-        except Exception:  # noqa: BLE001 (a real failure shows again, and is reported, in the writer)
-            pass
-        # one writer per CPU, plus one: the stage itself only writes its HDF5 file meanwhile
-        slots = (os.cpu_count() or 1) + 1
-        while True:
-            head = _read_exact(jobs, _HEADER.size)
-            if head is None:
-                break
-            (n,) = _HEADER.unpack(head)
-            if n == _BARRIER:                 # report what is done so far (a nested stage ends)
-                for pid in list(running):
-                    join(pid)
-                _send_framed(status, (written, errors))
-                written, errors = [], []
-                continue
-            if n == _ABORT:
-                for pid in running:
-                    os.kill(pid, signal.SIGKILL)
-                for pid in list(running):
-                    os.close(running.pop(pid))
-                    os.waitpid(pid, 0)
-                code = 2
-                break
-            job = _read_exact(jobs, n)
-            if job is None:
-                break
-            if job[:1] == b"P":
-                _prepare(job)
-                continue
-            while len(running) >= slots:
-                join(next(iter(running)))
-            pid, fd = _fork_writer(job, (jobs, status))
-            running[pid] = fd
-        for pid in list(running):
-            join(pid)
-        _send_framed(status, (written, errors))
-    except BaseException:  # noqa: BLE001
-        code = 1
-    finally:
-        os._exit(code)
-
-
-def _grow_pipe(fd: int, size: int = 1 << 20) -> None:
-    """Let the job pipe hold a stage's figure data (~0.7 MB for the stair-case) so that the
-    sender thread writes each job at once instead of chunk by chunk against the stage's own
-    thread (Linux ``F_SETPIPE_SZ``; elsewhere, or refused, the default size)."""
-    try:
-        import fcntl
-
-        fcntl.fcntl(fd, getattr(fcntl, "F_SETPIPE_SZ", 1031), size)
-    except (ImportError, OSError):
-        pass
-
-
-class _Worker:
-    """Parent side: the worker's pid, the job pipe (fed by one sender thread), the status pipe."""
-
-    def __init__(self) -> None:
-        jr, jw = os.pipe()
-        sr, sw = os.pipe()
-        _grow_pipe(jw)
-        sys.stdout.flush()
-        sys.stderr.flush()
-        pid = os.fork()
-        if pid == 0:                                   # the worker: never returns
-            os.close(jw)
-            os.close(sr)
-            _serve(jr, sw)
-        os.close(jr)
-        os.close(sw)
-        self.pid, self.jobs, self.status = pid, jw, sr
-        self.queue: list[bytes | None] = []
-        self.cond = threading.Condition()
-        self.failed: BaseException | None = None
-        self.thread: threading.Thread | None = None
-
-    def _send_loop(self) -> None:
-        while True:
-            with self.cond:
-                while not self.queue:
-                    self.cond.wait()
-                item = self.queue.pop(0)
-            if item is None:
-                return
-            try:
-                self._write_all(item)
-            except OSError as exc:                 # the worker died: reported by finish()
-                self.failed = exc
-                return
-
-    def _write_all(self, data: bytes) -> None:
-        view = memoryview(data)
-        while view:
-            k = os.write(self.jobs, view)
-            view = view[k:]
-
-    def send(self, data: bytes | None) -> None:
-        if self.thread is None:
-            self.thread = threading.Thread(target=self._send_loop, name="acmm-figure-sender", daemon=True)
-            self.thread.start()
-        with self.cond:
-            self.queue.append(data)
-            self.cond.notify()
-
-    def close(self, abort: bool = False) -> tuple[list, list, int]:
-        """Stop the worker (after the queued jobs, or at once with ``abort``); returns
-        (files written, error messages, exit code)."""
-        if self.thread is None:               # never used (the config wants no figures): no wait
-            os.kill(self.pid, signal.SIGKILL)
-            os.close(self.jobs)
-            os.close(self.status)
-            os.waitpid(self.pid, 0)
-            return [], [], 0
-        if abort:
-            with self.cond:
-                self.queue.clear()
-        self.send(_HEADER.pack(_ABORT) if abort else None)
-        if abort:
-            self.send(None)
-        self.thread.join()
-        os.close(self.jobs)
-        got = _recv_framed(self.status)
-        os.close(self.status)
-        _, st = os.waitpid(self.pid, 0)
-        written, errors = got if got is not None else ([], [])
-        return written, errors, os.waitstatus_to_exitcode(st)
-
-    def flush(self) -> tuple[list, list]:
-        """Wait until the jobs sent so far are written; returns (files written, error messages)."""
-        self.send(_HEADER.pack(_BARRIER))
-        got = _recv_framed(self.status)
-        if got is None:
-            return [], ["cannot write the figures: the figure process failed"]
-        return got
-
-
 def start() -> bool:
-    """Fork the figure worker if :func:`usable` and none is running; True if this call did."""
+    """Fork the figure worker if :func:`usable` and none is running.
+
+    Returns
+    -------
+    bool
+        True if this call started the worker (the caller then owns it).
+    """
     global _WORKER
     if _WORKER is not None or not usable():
         return False
@@ -303,13 +73,29 @@ def start() -> bool:
 
 
 def active() -> bool:
-    """Whether a figure worker is running (then :func:`submit` hands calls to it)."""
+    """Whether a figure worker is running (then :func:`submit` hands calls to it).
+
+    Returns
+    -------
+    bool
+        True while a worker runs in this process.
+    """
     return _WORKER is not None
 
 
 def submit(fn, *args, **kwargs) -> None:
     """``fn(*args, **kwargs)`` (a module-level function that draws and writes one figure and
-    returns the paths written) in the worker when one is running, else here and now."""
+    returns the paths written) in the worker when one is running, else here and now.
+
+    Parameters
+    ----------
+    fn : callable
+        Module-level figure function (picklable by reference), e.g. :func:`acmm.plots.summary`.
+    *args : object
+        Its positional arguments (picklable: arrays, numbers, strings, paths).
+    **kwargs : object
+        Its keyword arguments (picklable).
+    """
     if _WORKER is None:
         fn(*args, **kwargs)
         return
@@ -325,13 +111,28 @@ def prepare(fn, *args, **kwargs) -> None:
     """``fn(*args, **kwargs)`` in the worker itself, before the figures submitted later are
     forked from it (e.g. :func:`acmm.plots.prebuild`: build a figure's skeleton while the stage
     computes); without a worker, nothing.  A failure is ignored (the figure is then built by
-    its writer, which reports errors)."""
+    its writer, which reports errors).
+
+    Parameters
+    ----------
+    fn : callable
+        Module-level function run in the worker (picklable by reference).
+    *args : object
+        Its positional arguments (picklable).
+    **kwargs : object
+        Its keyword arguments (picklable).
+    """
     if _WORKER is not None:
         _WORKER.send(_job(b"P", fn, args, kwargs))
 
 
 def finish() -> list[Path]:
-    """Wait for every submitted figure; returns the files written.
+    """Wait for every submitted figure and stop the worker.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (empty without a worker).
 
     Raises
     ------
@@ -363,6 +164,11 @@ def flush() -> list[Path]:
     """Wait for the figures submitted so far (the worker keeps running); returns the files
     written and records them (:func:`common.outputs.record_written`).
 
+    Returns
+    -------
+    list of pathlib.Path
+        The files written since the last flush (empty without a worker).
+
     Raises
     ------
     OutputError
@@ -388,7 +194,13 @@ def session(enabled: bool = True):
     around the stage already (the worker then starts before the stage's imports); a worker that
     was never handed anything is killed at once.  A nested session (the
     design run by ``acmm simulate``) shares the outer one's worker and on leaving waits for
-    its own figures (:func:`flush`), so that they are recorded before its stage prunes."""
+    its own figures (:func:`flush`), so that they are recorded before its stage prunes.
+
+    Parameters
+    ----------
+    enabled : bool, optional
+        Whether the stage draws figures at all (False: no worker is started or waited for).
+    """
     owner = start() if enabled else False
     try:
         yield

@@ -1,7 +1,10 @@
 """What the simulation stage writes: the ``sim.h5`` items and the simulation figures.
 
 Split from :mod:`acmm.stages` (:func:`acmm.stages.run_simulate` calls these), as
-:mod:`acmm.design_output` is for the design stage.
+:mod:`acmm.design_output` is for the design stage.  The outputs are those of the report's ch. 6
+simulations: attitude error, rates, torque and CMG momentum per axis (Figs 6.2–6.13, 6.20–6.30),
+the inertia steps (Figs 6.14–6.19) and the per-level statistics; the disturbance torque is that of
+eq 3.9.
 """
 from __future__ import annotations
 
@@ -86,7 +89,13 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
 
 def prepare_sim_figures(cfg) -> None:
     """Have the figure worker build the simulation figures' skeletons while the stage computes
-    (:func:`acmm.plots.prebuild`; nothing without a worker)."""
+    (:func:`acmm.plots.prebuild`; nothing without a worker).
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        The run's config (its ``output.units``, ``"imperial"`` or ``"SI"``, label the figures).
+    """
     from acmm import figure_worker, plots
 
     for kind in ("axis_histories", "summary", "inertia_histories"):
@@ -97,7 +106,23 @@ def sim_figures(cfg, sc, r, stats: list, items: dict) -> None:
     """Hand the simulation figures (axis histories, summary, inertia steps: the costliest first)
     to :func:`acmm.figure_worker.submit` (drawn in the figure worker when one runs, else here).
 
-    ``items`` are :func:`sim_items` (imperial units); the figures use ``cfg.output.units``."""
+    ``items`` are :func:`sim_items` (imperial units); the figures use ``cfg.output.units``
+    (Figs 6.2–6.30 of ch. 6).
+
+    Parameters
+    ----------
+    cfg : acmm.config.Config
+        The run's config (name, run directory, design model, output unit system).
+    sc : acmm.scenario.Scenario
+        The simulated scenario (level start times s, inertia per level slug·ft²).
+    r : acmm.scenario.SimResult
+        The trajectory (state in rad, rad/s, ft·lbf·s; delivered torque ``u`` in ft·lbf).
+    stats : list of dict
+        :func:`acmm.scenario.level_statistics` of ``r``.
+    items : dict
+        The datasets of :func:`sim_items` (``orbits``, ``attitude_error`` rad,
+        ``rate_rel_lvlh`` deg/s).
+    """
     from acmm import figure_worker, plots
 
     d = cfg.run_dir()

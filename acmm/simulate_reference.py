@@ -1,7 +1,9 @@
 """Plain-numpy right-hand side of the closed loop simulated by :mod:`acmm.simulate`.
 
 Built from :mod:`acmm.dynamics` independently of the compiled kernel: the reference the kernel
-is tested against and the ``solve_ivp`` baseline of ``make bench``.  Split from
+is tested against and the ``solve_ivp`` baseline of ``make bench``.  It is the nonlinear model of
+eqs 3.1–3.9 (rigid-body and CMG dynamics, 2-3-1 kinematics, gravity-gradient and disturbance
+torques) closed by the controller and DRF states of ch. 4–5.  Split from
 :mod:`acmm.simulate` (issue 12), which re-exports :func:`rhs_numpy`.
 """
 from __future__ import annotations

@@ -6,7 +6,7 @@ import re
 import numpy as np
 import pytest
 
-from acmm import plots
+from acmm import design_plots, plots, sim_plots
 from acmm.config import load_config
 from acmm.linearize import STATE_NAMES
 
@@ -22,7 +22,9 @@ def captured(monkeypatch):
         figs.append(fig)
         return [path]
 
-    monkeypatch.setattr(plots, "_save", fake_save)
+    monkeypatch.setattr(plots, "_save", fake_save)             # acmm.sweep imports it from here
+    monkeypatch.setattr(design_plots, "_save", fake_save)      # the figures live in these two
+    monkeypatch.setattr(sim_plots, "_save", fake_save)
     return figs
 
 

@@ -1,0 +1,270 @@
+"""Figures of the design stage: the LQR gains of the design points with the gain schedule of
+ch. 5.3 (cf. Figs 5.3–5.26), the closed-loop poles with the sector of ch. 5.2 (Fig 5.2), and the
+scheduled gain checked along the path.
+
+Each function takes arrays, draws one figure and saves it as PNG (and PDF when asked) under the
+given path.  Split from :mod:`acmm.plots` (issue 12), which re-exports these names.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acmm.plot_base import (
+    _BUILDERS,
+    _few_ticks,
+    _layout,
+    _plt,
+    _premake_ticks,
+    _save,
+    gain_unit,
+    state_units,
+)
+
+
+def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
+    plt = _plt()
+    fig, axs = plt.subplots(6, 4, figsize=(13, 15), sharex=True, dpi=80)
+    for j, ax in enumerate(axs.flat):
+        ax.set_title(f"K(i,{j + 1}) — {state_names[j]}", fontsize=8)
+        ax.set_ylabel(f"K(i,{j + 1}) ({gain_unit(units[j], torque_unit)})", fontsize=6)
+        ax.tick_params(labelsize=7)
+        _few_ticks(ax)
+    for ax in axs[-1]:
+        ax.set_xlabel("pitch TEA θ2* (deg)")
+    # a fixed layout: tight_layout/bbox 'tight' on 24 panels costs seconds
+    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.45, hspace=0.35)
+    _premake_ticks(axs.flat, 7, 7)
+    return fig, axs
+
+
+@dataclass
+class SampledSchedule:
+    """A gain schedule sampled for drawing: ``gains[k]`` (3, 24) at pitch TEA ``theta2[k]`` (rad).
+
+    What :func:`gain_schedule_grid` draws of a schedule; plain arrays, so a figure writer
+    process needs neither the schedule's class nor its imports.
+
+    Attributes
+    ----------
+    form : str
+        The schedule's form (:attr:`acmm.schedule.ScheduleFit.form`), named in the figure title.
+    theta2 : (n,) array
+        Pitch TEAs of the samples, rad.
+    gains : (n, 3, 24) array
+        Scheduled gain at each sample, torque per state unit (the units of the fitted gains).
+    """
+
+    form: str
+    theta2: np.ndarray
+    gains: np.ndarray
+
+
+def sample_schedule(fit, theta2, n: int = 60) -> SampledSchedule:
+    """``fit`` (an :class:`acmm.schedule.ScheduleFit`) at ``n`` pitch TEAs spanning ``theta2`` (rad).
+
+    Parameters
+    ----------
+    fit : acmm.schedule.ScheduleFit
+        The gain schedule of ch. 5.3.
+    theta2 : (P,) array
+        Pitch TEAs of the design points, rad (their range is sampled).
+    n : int, optional
+        Number of evenly spaced samples.
+
+    Returns
+    -------
+    SampledSchedule
+        The schedule's gains at the samples (the units of ``fit``'s gains).
+    """
+    fine = np.linspace(theta2.min(), theta2.max(), n)
+    return SampledSchedule(fit.form, fine, np.array([fit.gain(t) for t in fine]))
+
+
+def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, units=None,
+                       torque_unit="ft·lbf"):
+    """K(i, j) versus pitch TEA for all 24 columns (3 rows each), with the fitted curves.
+
+    Parameters
+    ----------
+    theta2 : (P,) array
+        Pitch TEA of the design points, rad.
+    gains : (P, 3, 24) array
+        LQR gains, ``torque_unit`` per state unit.
+    fit : acmm.schedule.ScheduleFit or SampledSchedule
+        The schedule, or its samples from :func:`sample_schedule` (same units as ``gains``).
+    state_names : list of str
+        The 24 state names.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+    units : list of str, optional
+        The 24 state unit labels (default :func:`state_units`).
+    torque_unit : str, optional
+        Torque unit label of the gains.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    theta2_deg = np.degrees(theta2)
+    curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
+    fine, kf = curve.theta2, curve.gains
+    units = units or state_units()
+    fig, axs = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
+    for j, ax in enumerate(axs.flat):
+        for i, color in zip(range(3), ("C0", "C1", "C2")):
+            ax.plot(theta2_deg, gains[:, i, j], "o", ms=3, color=color, label=f"K({i + 1},·) LQR")
+            ax.plot(np.degrees(fine), kf[:, i, j], "-", lw=1, color=color)
+    axs[0, 0].legend(fontsize=6)
+    fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
+                 "(cf. Figs 5.3–5.26)")
+    return _save(fig, path, vector, tight=False)
+
+
+def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=False):
+    """Closed-loop poles (units of n) of every design point with the sector drawn.
+
+    Parameters
+    ----------
+    poles_per_point : list of (24,) complex array
+        Closed-loop poles per design point, rad/s.
+    names : list of str
+        Design point names.
+    n : float
+        Orbit rate, rad/s.
+    sigma : float
+        Sector shift σ, units of n (Re λ ≤ −σ n).
+    half_angle_deg : float
+        Sector half-angle, deg.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    allp = np.concatenate([np.asarray(p) for p in poles_per_point]) / n
+    rmin = min(allp.real.min() * 1.1, -2 * sigma)
+    x = np.linspace(rmin, -sigma, 10)
+    t = np.tan(np.radians(half_angle_deg))
+    ax.fill_between(x, t * x, -t * x, color="0.9", label="sector")
+    ax.plot([-sigma, -sigma], [-t * sigma, t * sigma], "k-", lw=0.8)
+    ax.plot(x, t * x, "k-", lw=0.8)
+    ax.plot(x, -t * x, "k-", lw=0.8)
+    cmap = plt.get_cmap("viridis")
+    for k, (p, name) in enumerate(zip(poles_per_point, names)):
+        p = np.asarray(p) / n
+        ax.plot(p.real, p.imag, "x", ms=4, color=cmap(k / max(1, len(names) - 1)),
+                label=name if len(names) <= 12 else None)
+    ax.axvline(0, color="k", lw=0.5)
+    ax.set_xlabel("real part Re λ (units of n, the orbit rate)")
+    ax.set_ylabel("imaginary part Im λ (units of n)")
+    ax.set_title(f"Closed-loop poles and the sector (Re λ ≤ −{sigma}n, |Im λ| ≤ tan {half_angle_deg:g}°·|Re λ|)")
+    ax.legend(fontsize=6, ncol=2)
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.1, top=0.92)
+    return _save(fig, path, vector, tight=False)
+
+
+def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=False):
+    """The scheduled gain on the local model along the path: largest Re λ and worst sector
+    margin (units of n) and the plant-input disk margin α versus pitch TEA.
+
+    Parameters
+    ----------
+    theta2 : (M,) array
+        Pitch TEA along the path, rad.
+    max_real : (M,) array
+        Largest Re λ of the scheduled local loop, units of n.
+    margin : (M,) array
+        Worst sector margin, units of n.
+    disk_margin : (M,) array
+        Disk margin α at the plant input, dimensionless.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    plt = _plt()
+    th = np.degrees(theta2)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
+    a1.plot(th, max_real, "-", color="C3", label="largest Re λ / n")
+    a1.plot(th, margin, "-", color="C0", label="worst sector margin / n")
+    a1.axhline(0.0, color="k", lw=0.8)
+    a1.axhline(-0.25, color="C3", lw=0.8, ls="--", label="Re λ = −0.25n")
+    a1.set_ylabel("units of n")
+    a1.legend(fontsize=7)
+    a1.set_title(f"Scheduled gain on the local model at {th.size} TEAs")
+    a2.semilogy(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
+    a2.set_ylabel("disk margin α at u (skew 0)")
+    a2.set_xlabel("pitch TEA θ2* (deg)")
+    # a fixed layout: bbox 'tight' draws the figure twice
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
+    return _save(fig, path, vector, tight=False)
+
+
+def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=False):
+    """Closed-loop poles (units of n) of the scheduled loop at every path TEA, coloured by θ2*,
+    with the sector of Fig 5.2.
+
+    Parameters
+    ----------
+    poles : (M, 24) complex array
+        Closed-loop poles at each path TEA, rad/s.
+    theta2 : (M,) array
+        Pitch TEA along the path, rad.
+    n : float
+        Orbit rate, rad/s.
+    sigma : float
+        Sector shift σ, units of n.
+    half_angle_deg : float
+        Sector half-angle, deg.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    plt = _plt()
+    p = np.asarray(poles) / n
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
+    t = np.tan(np.radians(half_angle_deg))
+    lo = max(min(p.real.min() * 1.05, -2 * sigma), -60.0)
+    x = np.linspace(lo, -sigma, 10)
+    ax.fill_between(x, t * x, -t * x, color="0.9", label="sector")
+    ax.plot(x, t * x, "k-", lw=0.8)
+    ax.plot(x, -t * x, "k-", lw=0.8)
+    ax.plot([-sigma, -sigma], [-t * sigma, t * sigma], "k-", lw=0.8)
+    c = np.repeat(np.degrees(theta2), p.shape[1])
+    sc = ax.scatter(p.real.ravel(), p.imag.ravel(), c=c, s=3, cmap="viridis")
+    fig.colorbar(sc, ax=ax, label="pitch TEA θ2* (deg)")
+    ax.axvline(0.0, color="k", lw=0.5)
+    ax.set_xlim(lo, max(1.0, p.real.max() * 1.1))
+    ylim = min(max(3.0, np.abs(p.imag).max() * 1.05), 60.0)
+    ax.set_ylim(-ylim, ylim)
+    ax.set_xlabel("Re λ / n")
+    ax.set_ylabel("Im λ / n")
+    ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
+    ax.legend(fontsize=7, loc="upper left")
+    return _save(fig, path, vector, tight=False)
+
+
+_BUILDERS.update({"gain_schedule_grid": _gain_grid_layout})

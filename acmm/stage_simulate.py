@@ -1,0 +1,105 @@
+"""The simulation stage: the nonlinear closed loop of eqs 3.1–3.9 under the scheduled gains
+through the stair-case of inertia levels (ch. 6), and its ``sim.h5`` and figures.
+
+Split from :mod:`acmm.stages` (issue 12), which re-exports these names.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from acmm.config import Config
+from acmm.stage_common import _as_config, _in_system
+from acmm.stage_design import design_for
+from common.outputs import owns_outputs
+from common.results import write_h5
+from common.runlock import locked_stage
+
+
+# ---------------------------------------------------------------------------------------------
+# simulation
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class SimulateResult:
+    """A nonlinear closed-loop run (ch. 6).
+
+    Attributes
+    ----------
+    config : acmm.config.Config
+        The validated config.
+    scenario : acmm.scenario.Scenario
+        What was simulated (levels, gains, limits).
+    sim : acmm.scenario.SimResult
+        The run: t (s), state (report units), torques (ft·lbf), verdict.
+    stats : list of dict
+        Per-level statistics (:func:`acmm.scenario.level_statistics`).
+    design_note : str
+        Whether the design was reused or computed.
+    wall_time : float
+        Integration wall time, s.
+    """
+
+    config: Config
+    scenario: object
+    sim: object
+    stats: list
+    design_note: str
+    wall_time: float
+
+    @property
+    def orbits_simulated(self) -> float:
+        """Simulated time in orbits (2π/n)."""
+        return float(self.sim.t[-1] * self.config.orbit_rate / (2 * np.pi))
+
+    @property
+    def stop_orbit(self) -> float:
+        """Time the integration stopped at, in orbits (2π/n)."""
+        return float(self.sim.stop_time * self.config.orbit_rate / (2 * np.pi))
+
+
+@locked_stage(_as_config)
+@owns_outputs("simulate", lambda c: _as_config(c))
+def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[SimulateResult, Path]:
+    """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures.
+
+    Parameters
+    ----------
+    config : acmm.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+    progress : callable, optional
+        ``progress(name)``, called after each design point when designing.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+
+    Returns
+    -------
+    tuple
+        (:class:`SimulateResult`, pathlib.Path of ``sim.h5``).
+    """
+    import time
+
+    from acmm import figure_worker
+
+    cfg = _as_config(config)
+    want_figures = cfg.output.figures if figures is None else figures
+    with figure_worker.session(want_figures):       # first: the worker starts before numba loads
+        from acmm import sim_output as out
+        from acmm import simulate as sim_mod
+
+        if want_figures:
+            out.prepare_sim_figures(cfg)
+        table, note = design_for(cfg, progress, figures)
+        sc = sim_mod.scenario_from_config(cfg, table)
+        t0 = time.perf_counter()
+        r = sim_mod.simulate(sc)
+        wall = time.perf_counter() - t0
+        stats = sim_mod.level_statistics(sc, r)
+        result = SimulateResult(cfg, sc, r, stats, note, wall)
+        items, attrs = out.sim_items(cfg, sc, r, stats, table.design_hash, wall)
+        if want_figures:
+            out.sim_figures(cfg, sc, r, stats, items)
+        items = _in_system(items, cfg, {"levels/gain": "K", "drf": "drf"})
+        path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
+    return result, path
