@@ -370,3 +370,23 @@ def test_override_paths_and_errors():
             apply_overrides(data, bad)
     with pytest.raises(OverrideSyntaxError):
         apply_overrides(data, ["a..b=1"])
+
+
+@pytest.mark.parametrize("closed,args,code", [
+    (">&-", ["tea", "mb3"], 0),                       # stdout closed: the result still counts
+    ("2>&-", ["tea", "no_such_config.yaml"], EXIT_INPUT),
+    (">&- 2>/dev/null", ["tea", "no_such_config.yaml"], EXIT_INPUT),
+])
+def test_console_entry_point_keeps_the_exit_code_with_closed_streams(tmp_path, closed, args, code):
+    """The ``acmm`` console script leaves by ``os._exit`` after flushing; a closed stdout or
+    stderr (``sys.stdout is None``) must neither change the exit code nor print a traceback."""
+    import shlex
+    import subprocess
+    import sys
+
+    exe = Path(sys.executable).parent / "acmm"
+    cmd = f"{shlex.quote(str(exe))} {' '.join(shlex.quote(a) for a in args)} {closed}"
+    p = subprocess.run(["sh", "-c", cmd], cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                       env={**__import__("os").environ, "OPENBLAS_NUM_THREADS": "1", "MPLBACKEND": "Agg"})
+    assert p.returncode == code, (p.returncode, p.stderr)
+    assert "Traceback" not in p.stderr
