@@ -49,3 +49,16 @@ def test_heap_reuse_untouched_without_the_trim_variable():
     before, changed, after = _run({})
     assert changed == 0
     assert after < 0.05 * 200 * 256
+
+
+def test_heap_setting_only_in_dask_worker_processes():
+    # the driver and pool processes keep the user's own MALLOC_* choice; a Dask worker (also in
+    # ``client.run``, where no task is running) gets the heap reuse back
+    from acmm.sweep.executors import _in_dask_worker
+
+    assert not _in_dask_worker()
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        assert list(client.run(_in_dask_worker).values()) == [True]
+        assert client.submit(_in_dask_worker, pure=False).result() is True

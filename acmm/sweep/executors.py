@@ -309,15 +309,29 @@ def _restore_heap_reuse() -> bool:
         return False
 
 
+def _in_dask_worker() -> bool:
+    """Whether this process hosts a Dask worker (also inside ``client.run``, where
+    ``distributed.get_worker`` finds no task)."""
+    if "distributed" not in sys.modules:
+        return False
+    try:
+        from distributed.worker import Worker
+
+        return bool(Worker._instances)
+    except (ImportError, AttributeError):
+        return False
+
+
 def _warm_worker() -> None:
     """Once per worker process: load the compiled kernels (from numba's cache: no compile) and
-    restore heap reuse (:func:`_restore_heap_reuse`); a long-lived Dask cluster can be warmed
+    in a Dask worker restore heap reuse (:func:`_restore_heap_reuse`); a long-lived Dask cluster can be warmed
     ahead with ``client.run(acmm.sweep._warm_worker)``."""
     global _WARM
     if not _WARM:
         from acmm.warmup import warm_up
 
-        _restore_heap_reuse()
+        if _in_dask_worker():        # only the nanny's environment needs it; the user's own
+            _restore_heap_reuse()    # MALLOC_* choice in a driver or pool process is left alone
         warm_up()
         _WARM = True
 
