@@ -304,3 +304,28 @@ def path_figures(pc, s, run_dir: Path) -> None:
            run_dir / "design_path_margins.png")
     submit(plots.scheduled_pole_map, pc.poles, pc.theta2, s.orbit_rate, s.sector.sigma,
            s.sector.half_angle_deg, run_dir / "design_path_poles.png")
+
+
+def design_figures(r, s, run_dir: Path, units_system: str) -> None:
+    """The pole-map, gain-schedule and path-check figures of a finished design (Figs 5.2,
+    5.3–5.26), drawn in place or by the figure worker when one runs.
+
+    The design stage hands each figure over as soon as its data exist
+    (:func:`pole_map_figure`, :func:`gain_figure`, :func:`path_figures`); this draws all of them
+    for a design computed elsewhere.
+
+    Parameters
+    ----------
+    r : acmm.stages.DesignResult
+        The design (its points, schedule fit and path check).
+    s : acmm.settings.DesignSettings
+        Its settings (orbit rate n in rad/s, sector, DRF mode).
+    run_dir : pathlib.Path
+        Folder of the figures.
+    units_system : str
+        ``"imperial"`` or ``"SI"``: unit system of the gains drawn.
+    """
+    pole_map_figure(r.points, s, run_dir)
+    if r.fit is not None:
+        gain_figure(r.points, r.fit, s, run_dir, units_system)
+    path_figures(r.path_check, s, run_dir)

@@ -200,3 +200,18 @@ def test_nested_figure_sessions_share_one_worker(tmp_path):
         assert (tmp_path / "inner.png").exists() and figure_worker.active()
         figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "outer.png")
     assert (tmp_path / "outer.png").exists()
+
+
+def test_design_figures_of_a_finished_design(tmp_path):
+    # the whole-design entry point (kept from before the figure worker) draws the four figures
+    from acmm.config import load_config
+    from acmm.design_output import design_figures
+    from acmm.settings import design_settings
+    from acmm.stages import compute_design
+
+    cfg = load_config("staircase")
+    r = compute_design(cfg)
+    design_figures(r, design_settings(cfg), tmp_path, "imperial")
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["design_gains.png", "design_path_margins.png", "design_path_poles.png", "design_poles.png"]
+    assert all((tmp_path / n).stat().st_size > 10_000 for n in names)
