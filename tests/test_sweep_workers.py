@@ -56,7 +56,10 @@ def test_heap_setting_only_in_dask_worker_processes():
     # ``client.run``, where no task is running) gets the heap reuse back
     from acmm.sweep.executors import _in_dask_worker
 
-    assert not _in_dask_worker()
+    # a fresh process (this one may still hold in-process workers of earlier tests)
+    out = subprocess.run([sys.executable, "-c", "import distributed\nfrom acmm.sweep.executors import "
+                          "_in_dask_worker as f\nprint(f())"], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
