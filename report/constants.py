@@ -1,8 +1,11 @@
-"""Names shared by every part of the report: section keys and titles, ``--fast`` length, timing datasets."""
+"""Names shared by every part of the report: section keys and titles, ``--fast`` length, timing datasets,
+the axis names."""
 from __future__ import annotations
 
 #: stair-case length of ``--fast`` (orbits): one dwell per design point of the 12-point schedule
 FAST_ORBITS = 13.0
+#: names of the three body control axes, in order (x, y, z)
+AXES = ("roll", "pitch", "yaw")
 #: datasets that hold timings, excluded from determinism hashes ("timestamps aside")
 TIMING_DATASETS = ("wall_time",)
 

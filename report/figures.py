@@ -7,13 +7,11 @@ from pathlib import Path
 
 import numpy as np
 
-
-
-AXES = ("roll", "pitch", "yaw")
+from report.constants import AXES
 
 # re-exported: the stair-case (ch. 6) and QPP (ch. 13–14) figures live in their own modules
-from report.figures_qpp import fig_circle, fig_qpp  # noqa: E402,F401
-from report.figures_staircase import (fig_staircase, fig_staircase_inertia,  # noqa: E402,F401
+from report.figures_qpp import fig_circle, fig_qpp  # noqa: F401
+from report.figures_staircase import (fig_staircase, fig_staircase_inertia,  # noqa: F401
                                       fig_staircase_levels, fig_staircase_responses)
 
 

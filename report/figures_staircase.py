@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from report.constants import AXES
+
 
 def fig_staircase(sim: dict, figdir: Path):
     """Inertia steps (Figs 6.14–6.19), the responses (Figs 6.20–6.30) and the per-level statistics.
@@ -80,7 +82,6 @@ def fig_staircase_responses(sim: dict, figdir: Path):
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
     from report.figure_style import COLORS, pyplot, save
-    from report.figures import AXES
 
     plt = pyplot()
     o = sim["orbits"]
@@ -124,7 +125,6 @@ def fig_staircase_levels(sim: dict, figdir: Path):
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
     from report.figure_style import COLORS, pyplot, save
-    from report.figures import AXES
 
     plt = pyplot()
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
