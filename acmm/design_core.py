@@ -82,14 +82,27 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
         teas = np.array([p.tea.theta for p in points])
         fit = sch.fit_schedule(teas[:, 1], gains, sched.order if sched else 2,
                                sched.form if sched else "polynomial")
-        path = path_models(points, s, sched.n_check) if sched is not None else None
-        if path is not None and sched.fit == "closed_loop" and fit.form == "polynomial":
-            fit = refit_closed_loop(fit, path, s.orbit_rate,
-                                    half_angle_deg=s.sector.half_angle_deg, **REFIT_DEFAULTS)
+        if sched is not None and sched.fit == "closed_loop" and fit.form == "polynomial":
+            fit = _refit(fit, points, s, sched.n_check)
         if on_fit is not None:
             on_fit(points, fit)
+        path = path_models(points, s, sched.n_check) if sched is not None else None
         check = sch.check_schedule(fit, points, s)
         if path is not None:
             path_check = check_path(fit.gain, path, s.orbit_rate, s.sector.sigma,
                                     s.sector.half_angle_deg)
     return DesignedSchedule(points, fit, check, path_check)
+
+
+def _refit(fit, points: list, s: DesignSettings, n_check: int):
+    """:func:`acmm.schedule_refit.refit_closed_loop` with :data:`REFIT_DEFAULTS` on the path's
+    every ``REFIT_DEFAULTS["every"]``-th model (the ends included), solved before the others:
+    the schedule (and its figure) is final ~0.1 s sooner, and the result is the same bit for bit
+    as refitting on the whole path with that ``every``."""
+    every = REFIT_DEFAULTS["every"]
+    idx = sorted(set(range(0, n_check, max(1, every))) | {n_check - 1})
+    sub = path_models(points, s, n_check, indices=idx)
+    if sub is None:
+        return fit
+    return refit_closed_loop(fit, sub, s.orbit_rate, half_angle_deg=s.sector.half_angle_deg,
+                             **{**REFIT_DEFAULTS, "every": 1})

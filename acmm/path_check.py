@@ -83,7 +83,8 @@ class PathCheck:
         return float(np.mean(self.margin >= 0.0))
 
 
-def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> PathModels | None:
+def path_models(points: list[PointDesign], s: DesignSettings, n_check: int,
+                indices=None) -> PathModels | None:
     """Design models at ``n_check`` TEAs evenly spaced between the first and last blend point.
 
     None when the config has no blend (``schedule.to``).  The TEA of each model is solved
@@ -98,6 +99,9 @@ def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> P
         The design settings (orbital rate, design model, DRF mode).
     n_check : int
         Number of TEAs along the path.
+    indices : sequence of int, optional
+        Only the models at these positions of the ``n_check`` TEAs (in this order); each model
+        is solved on its own, so they equal the full path's models there bit for bit.
 
     Returns
     -------
@@ -113,6 +117,8 @@ def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> P
     start = PointSpec(start.name, start.inertia, start.bias, 0.0)
     end = PointSpec(end.name, end.inertia, end.bias, 1.0)
     specs = tea_spaced_blend(start, end, n_check, n)
+    if indices is not None:
+        specs = [specs[i] for i in indices]
     th, ss, As, Bs = [], [], [], []
     scales = None
     for sp in specs:

@@ -228,6 +228,7 @@ def main() -> None:
     import sys
     import threading
 
+    _fork_figure_worker_early(sys.argv[1:])
     try:
         app()
     except SystemExit as exc:
@@ -249,6 +250,22 @@ def main() -> None:
             except (OSError, ValueError):
                 pass
         os._exit(code)
+
+
+def _fork_figure_worker_early(args: list[str]) -> None:
+    """Fork the figure worker before typer parses (and imports pydantic for) the command line
+    when the command is a stage that may draw figures (:func:`acmm.figure_worker.start_early`).
+
+    Parameters
+    ----------
+    args : list of str
+        The command-line arguments (``sys.argv[1:]``).
+    """
+    command = next((a for a in args if not a.startswith("-")), None)
+    if command in ("design", "simulate") and not {"--no-figures", "--help", "-h"} & set(args):
+        from acmm import figure_worker
+
+        figure_worker.start_early()
 
 
 def _register_optional_commands() -> None:

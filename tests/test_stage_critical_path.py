@@ -1,0 +1,98 @@
+"""Reorderings that shorten the stair-case stages' critical path (issue 16) change no number:
+the refit on its own models equals the refit on the whole path, and the figure worker forked
+ahead by the command line is adopted by the stage's session or stopped."""
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from acmm import schedule as sch
+from acmm.config import load_config
+from acmm.design_core import _refit
+from acmm.path_check import path_models
+from acmm.schedule_refit import REFIT_DEFAULTS, refit_closed_loop
+from acmm.settings import design_settings
+
+
+@pytest.fixture(scope="module")
+def points_and_fit():
+    cfg = load_config("staircase")
+    s = design_settings(cfg)
+    pts = [sch.design_one(sp, s) for sp in sch.point_specs(cfg)]
+    gains = np.array([p.lqr.K for p in pts])
+    teas = np.array([p.tea.theta for p in pts])
+    return pts, s, sch.fit_schedule(teas[:, 1], gains, 2, "polynomial")
+
+
+@pytest.mark.parametrize("n_check", [37, 12, 2])
+def test_path_models_at_indices_are_the_whole_paths_rows(points_and_fit, n_check):
+    pts, s, _ = points_and_fit
+    full = path_models(pts, s, n_check)
+    idx = [n_check - 1, 0] + list(range(1, n_check - 1, 5))
+    sub = path_models(pts, s, n_check, indices=idx)
+    for name in ("theta2", "s", "A", "B"):
+        assert np.array_equal(getattr(sub, name), getattr(full, name)[idx]), name
+    assert np.array_equal(sub.scales, full.scales)
+
+
+@pytest.mark.parametrize("n_check", [37, 31])
+def test_refit_on_its_own_models_equals_the_refit_on_the_whole_path(points_and_fit, n_check):
+    """37: the last TEA is not one of every 10th; 31: it is."""
+    pts, s, fit = points_and_fit
+    whole = refit_closed_loop(fit, path_models(pts, s, n_check), s.orbit_rate,
+                              half_angle_deg=s.sector.half_angle_deg, **REFIT_DEFAULTS)
+    early = _refit(fit, pts, s, n_check)
+    assert early.method == whole.method
+    assert np.array_equal(early.coef, whole.coef)
+    assert early.refit_info == whole.refit_info
+    assert early.refit_info["n_tea"] == len(set(range(0, n_check, REFIT_DEFAULTS["every"])) | {n_check - 1})
+
+
+_EARLY = textwrap.dedent("""
+    import os, sys, numpy as np
+    from pathlib import Path
+    from acmm import figure_worker, plots
+    out = Path(sys.argv[1])
+    if not figure_worker.usable():
+        print("skip"); sys.exit(0)
+    assert figure_worker.start_early()
+    pid = figure_worker._WORKER.pid
+    if sys.argv[2] == "adopt":
+        t = np.linspace(0.0, 1.0, 50); x = np.zeros((50, 3))
+        with figure_worker.session():
+            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", out / "a.png")
+        assert not figure_worker.active() and (out / "a.png").stat().st_size > 10_000
+    else:
+        figure_worker._drop_unowned()          # what the atexit handler does
+        assert not figure_worker.active()
+    try:
+        os.kill(pid, 0); print("alive")
+    except ProcessLookupError:
+        print("gone")
+""")
+
+
+@pytest.mark.parametrize("mode", ["adopt", "drop"])
+def test_early_figure_worker_is_adopted_or_stopped(tmp_path, mode):
+    p = subprocess.run([sys.executable, "-c", _EARLY, str(tmp_path), mode], capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == 0, p.stderr
+    if p.stdout.strip() == "skip":
+        pytest.skip("no fork or one CPU")
+    assert p.stdout.strip() == "gone"
+
+
+def test_usage_error_with_an_early_worker_leaves_no_process(tmp_path):
+    """``acmm design --bogus`` with the worker forked ahead: exit 64, one line, no output (the
+    worker holds stderr open, so ``run`` returning at all shows it stopped)."""
+    code = ("import sys; from cli.acmm_app import main; sys.argv = ['acmm', 'design', 'staircase', "
+            "'--bogus']; main()")
+    p = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == 64
+    assert p.stderr.count("\n") == 1 and "--bogus" in p.stderr
+    assert not (tmp_path / "runs").exists()
