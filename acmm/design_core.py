@@ -14,9 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm import schedule as sch
-from acmm.path_check import check_path, path_models
+from acmm.path_check import check_path, path_models, path_models_from_specs
 from acmm.schedule_refit import REFIT_DEFAULTS, refit_closed_loop
 from acmm.settings import DesignSettings, ScheduleSettings
+from common.forked import ForkedCall
 
 
 @dataclass
@@ -42,7 +43,7 @@ class DesignedSchedule:
 
 
 def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | None,
-                    progress=None, on_points=None, on_fit=None) -> DesignedSchedule:
+                    progress=None, on_points=None, on_fit=None, fork: bool = False) -> DesignedSchedule:
     """Design every point of ``specs`` with settings ``s`` and fit the schedule ``sched``
     (when there are ≥ 2 points); ``progress(name)`` is called after each point,
     ``on_points(points)`` once they are all designed and ``on_fit(points, fit)`` once the
@@ -63,12 +64,36 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
     on_fit : callable or None
         Called with the point designs and the final :class:`acmm.schedule.ScheduleFit`
         (before its checks; not called with fewer than 2 points).
+    fork : bool, optional
+        Solve the path's models in a forked child while the points are designed
+        (:class:`common.forked.ForkedCall`; the same numbers).  For a command run on its own,
+        not for a process pool's worker.
 
     Returns
     -------
     DesignedSchedule
         The point designs, the schedule and its checks.
     """
+    models = None
+    if fork and sched is not None and len(specs) >= 2:
+        models = ForkedCall(path_models_from_specs, list(specs), s, sched.n_check)
+    try:
+        points = _design_points(specs, s, progress, on_points)
+        fit = check = path_check = None
+        if len(points) >= 2:
+            fit, path = _schedule(points, s, sched, models, on_fit)
+            check = sch.check_schedule(fit, points, s)
+            if path is not None:
+                path_check = check_path(fit.gain, path, s.orbit_rate, s.sector.sigma,
+                                        s.sector.half_angle_deg)
+    finally:
+        if models is not None:
+            models.cancel()
+    return DesignedSchedule(points, fit, check, path_check)
+
+
+def _design_points(specs: list, s: DesignSettings, progress, on_points) -> list:
+    """The sector LQR of every point (ch. 5.2), with the callbacks of :func:`design_schedule`."""
     points = []
     for spec in specs:
         points.append(sch.design_one(spec, s))
@@ -76,22 +101,29 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
             progress(spec.name)
     if on_points is not None:
         on_points(points)
-    fit = check = path_check = None
-    if len(points) >= 2:
-        gains = np.array([p.lqr.K for p in points])
-        teas = np.array([p.tea.theta for p in points])
-        fit = sch.fit_schedule(teas[:, 1], gains, sched.order if sched else 2,
-                               sched.form if sched else "polynomial")
-        if sched is not None and sched.fit == "closed_loop" and fit.form == "polynomial":
-            fit = _refit(fit, points, s, sched.n_check)
-        if on_fit is not None:
-            on_fit(points, fit)
-        path = path_models(points, s, sched.n_check) if sched is not None else None
-        check = sch.check_schedule(fit, points, s)
+    return points
+
+
+def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, models, on_fit):
+    """The schedule of ``points`` (least squares, then the closed-loop refit when configured)
+    and the path's models (from the child ``models`` when one was forked, else solved here: the
+    refit's first, the others after ``on_fit``).  Returns (fit, path models or None)."""
+    gains = np.array([p.lqr.K for p in points])
+    teas = np.array([p.tea.theta for p in points])
+    fit = sch.fit_schedule(teas[:, 1], gains, sched.order if sched else 2,
+                           sched.form if sched else "polynomial")
+    path = models.result() if models is not None and models.forked else None
+    if sched is not None and sched.fit == "closed_loop" and fit.form == "polynomial":
         if path is not None:
-            path_check = check_path(fit.gain, path, s.orbit_rate, s.sector.sigma,
-                                    s.sector.half_angle_deg)
-    return DesignedSchedule(points, fit, check, path_check)
+            fit = refit_closed_loop(fit, path, s.orbit_rate, half_angle_deg=s.sector.half_angle_deg,
+                                    **REFIT_DEFAULTS)
+        else:
+            fit = _refit(fit, points, s, sched.n_check)
+    if on_fit is not None:
+        on_fit(points, fit)
+    if path is None and sched is not None:
+        path = path_models(points, s, sched.n_check)
+    return fit, path
 
 
 def _refit(fit, points: list, s: DesignSettings, n_check: int):

@@ -85,16 +85,41 @@ class PathCheck:
 
 def path_models(points: list[PointDesign], s: DesignSettings, n_check: int,
                 indices=None) -> PathModels | None:
-    """Design models at ``n_check`` TEAs evenly spaced between the first and last blend point.
-
-    None when the config has no blend (``schedule.to``).  The TEA of each model is solved
-    exactly (Newton from the continuation guess), so the θ2* are evenly spaced to within the
-    interpolation of the 81-point continuation track.
+    """Design models at ``n_check`` TEAs evenly spaced between the first and last blend point
+    of the designed ``points`` (:func:`path_models_from_specs` of their specs).
 
     Parameters
     ----------
     points : list of acmm.schedule.PointDesign
         The design points; the first and last blend points bound the path.
+    s : DesignSettings
+        The design settings (orbital rate, design model, DRF mode).
+    n_check : int
+        Number of TEAs along the path.
+    indices : sequence of int, optional
+        Only the models at these positions of the ``n_check`` TEAs (in this order).
+
+    Returns
+    -------
+    PathModels or None
+        The models, None without a blend.
+    """
+    return path_models_from_specs([p.spec for p in points], s, n_check, indices)
+
+
+def path_models_from_specs(specs: list[PointSpec], s: DesignSettings, n_check: int,
+                           indices=None) -> PathModels | None:
+    """Design models at ``n_check`` TEAs evenly spaced between the first and last blend point.
+
+    None when the config has no blend (``schedule.to``).  The TEA of each model is solved
+    exactly (Newton from the continuation guess), so the θ2* are evenly spaced to within the
+    interpolation of the 81-point continuation track.  Only the point specs are needed, not
+    their designs: the design stage solves these models while it designs the points.
+
+    Parameters
+    ----------
+    specs : list of acmm.schedule.PointSpec
+        The design points' specs; the first and last blend points bound the path.
     s : DesignSettings
         The design settings (orbital rate, design model, DRF mode).
     n_check : int
@@ -110,18 +135,18 @@ def path_models(points: list[PointDesign], s: DesignSettings, n_check: int,
     """
     d = s
     n = s.orbit_rate
-    blended = [p for p in points if np.isfinite(p.spec.s)]
+    blended = [p for p in specs if np.isfinite(p.s)]
     if len(blended) < 2:
         return None
-    start, end = blended[0].spec, blended[-1].spec
+    start, end = blended[0], blended[-1]
     start = PointSpec(start.name, start.inertia, start.bias, 0.0)
     end = PointSpec(end.name, end.inertia, end.bias, 1.0)
-    specs = tea_spaced_blend(start, end, n_check, n)
+    track = tea_spaced_blend(start, end, n_check, n)
     if indices is not None:
-        specs = [specs[i] for i in indices]
+        track = [track[i] for i in indices]
     th, ss, As, Bs = [], [], [], []
     scales = None
-    for sp in specs:
+    for sp in track:
         if sp.theta_guess is not None:
             t = solve_tea_near(sp.inertia, n, sp.bias, sp.theta_guess)
         else:

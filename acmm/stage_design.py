@@ -167,7 +167,7 @@ def design_hash(cfg: Config) -> str:
     return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
 
 
-def compute_design(config, progress=None, on_points=None, on_fit=None) -> DesignResult:
+def compute_design(config, progress=None, on_points=None, on_fit=None, fork: bool = False) -> DesignResult:
     """Design every point of a config and fit the schedule (when there are ≥ 2 points);
     ``on_points``/``on_fit``: see :func:`acmm.design_core.design_schedule`.
 
@@ -188,6 +188,9 @@ def compute_design(config, progress=None, on_points=None, on_fit=None) -> Design
         ``on_fit(points, fit)``, called with the point designs and the final
         :class:`acmm.schedule.ScheduleFit` (ch. 5.3) before its checks; not called with fewer
         than 2 points.
+    fork : bool, optional
+        Solve the path's models in a forked child meanwhile (``fork`` of
+        :func:`acmm.design_core.design_schedule`; the same numbers).
 
     Returns
     -------
@@ -203,7 +206,7 @@ def compute_design(config, progress=None, on_points=None, on_fit=None) -> Design
     cfg = _as_config(config)
     t0 = time.perf_counter()
     ds = design_schedule(sch.point_specs(cfg), design_settings(cfg), schedule_settings(cfg), progress,
-                         on_points, on_fit)
+                         on_points, on_fit, fork=fork)
     table = design_table(ds.points, ds.fit, design_hash(cfg))
     return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check)
 
@@ -263,10 +266,11 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
         if want_figures:       # figures handed to the worker as their data is ready
             out.prepare_design_figures(s, cfg.output.units)
             r = compute_design(cfg, progress, lambda pts: out.pole_map_figure(pts, s, run_dir),
-                               lambda pts, fit: out.gain_figure(pts, fit, s, run_dir, cfg.output.units))
+                               lambda pts, fit: out.gain_figure(pts, fit, s, run_dir, cfg.output.units),
+                               fork=True)
             out.path_figures(r.path_check, s, run_dir)
         else:
-            r = compute_design(cfg, progress)
+            r = compute_design(cfg, progress, fork=True)
         pts = out.point_items(r.points)
         items = out.table_items(r, pts)
         if r.fit is not None:

@@ -98,6 +98,7 @@ NO_REPORT_CITATION = {
     "common.units": "unit conversion of config values and outputs (pint): no mathematics of the report",
     "common.limits": "work and size limits of the programs: no mathematics of the report",
     "common.runlock": "per-run-directory file lock: no mathematics of the report",
+    "common.forked": "a call computed in a forked child process: no mathematics of the report",
     "common.configio": "bounded YAML reading and pydantic validation of configs: no mathematics of the report",
     "common": "the shared base package: no mathematics of the report",
     "common.hints": "hints attached to error messages: no mathematics of the report",

@@ -96,3 +96,66 @@ def test_usage_error_with_an_early_worker_leaves_no_process(tmp_path):
     assert p.returncode == 64
     assert p.stderr.count("\n") == 1 and "--bogus" in p.stderr
     assert not (tmp_path / "runs").exists()
+
+
+def _square(x):
+    return x * x
+
+
+def _fail(x):
+    raise ValueError(f"bad {x}")
+
+
+def _die(x):
+    import os
+
+    if os.environ.get("ACMM_TEST_IN_CHILD") == "1":
+        os._exit(3)                               # only the forked child dies
+    return x + 1
+
+
+def test_forked_call_returns_the_childs_result_or_computes_in_place(monkeypatch):
+    from common import forked
+
+    if not forked.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    c = forked.ForkedCall(_square, np.arange(5.0))
+    assert c.forked
+    assert np.array_equal(c.result(), np.arange(5.0) ** 2)
+    assert not forked.ForkedCall(_square, 3, enabled=False).forked
+    assert forked.ForkedCall(_square, 3, enabled=False).result() == 9
+    with pytest.raises(ValueError, match="bad 7"):          # the error is the caller's own
+        forked.ForkedCall(_fail, 7).result()
+    monkeypatch.setenv("ACMM_TEST_IN_CHILD", "1")
+    c = forked.ForkedCall(_die, 1)                           # the child dies: computed here
+    monkeypatch.delenv("ACMM_TEST_IN_CHILD")
+    assert c.forked and c.result() == 2
+    monkeypatch.setenv("ACMM_FORK", "0")
+    assert not forked.usable() and not forked.ForkedCall(_square, 2).forked
+
+
+def test_forked_call_cancel_kills_the_child():
+    import os
+    import time
+
+    from common import forked
+
+    if not forked.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    c = forked.ForkedCall(time.sleep, 60)
+    pid = c._pid
+    t0 = time.perf_counter()
+    c.cancel()
+    assert time.perf_counter() - t0 < 30
+    with pytest.raises(ChildProcessError):
+        os.waitpid(pid, os.WNOHANG)                         # reaped: no zombie left
+
+
+def test_design_with_the_forked_path_equals_the_design_in_place():
+    from acmm.stages import compute_design
+
+    cfg = load_config("staircase", ["schedule.n_check=41"])
+    a, b = compute_design(cfg, fork=True), compute_design(cfg, fork=False)
+    assert np.array_equal(a.fit.coef, b.fit.coef)
+    for name in ("max_real", "margin", "disk_margin", "poles"):
+        assert np.array_equal(getattr(a.path_check, name), getattr(b.path_check, name)), name

@@ -1,0 +1,134 @@
+"""A call computed in a forked child process while the caller goes on (issue 16).
+
+The design stage solves the 201 local models along the stair-case path (~0.1 s) in a child
+while it designs the 12 points, instead of after them::
+
+    models = ForkedCall(path_models_from_specs, specs, settings, 201)
+    ...design the points...
+    path = models.result()          # the child's result, or computed here and now
+
+The child runs the same code on the same inputs, so the result is the same bit for bit as the
+call in place.  :meth:`ForkedCall.result` falls back to calling the function in place when no
+child was forked (no ``os.fork``, one CPU, another non-daemon thread alive, ``ACMM_FORK=0``) or
+when the child failed (so a real error is raised in the caller, with its own type and message).
+:meth:`ForkedCall.cancel` (also on garbage collection) kills a child whose result is not wanted.
+Only for short, pure computations whose result pickles; never inside a process pool's worker
+(the pool already uses every core).
+"""
+from __future__ import annotations
+
+import os
+import pickle
+import signal
+import sys
+import threading
+
+
+def usable() -> bool:
+    """Whether a child may be forked here.
+
+    Returns
+    -------
+    bool
+        True when ``os.fork`` exists, there is more than one CPU, no non-daemon thread other
+        than this one runs and ``ACMM_FORK`` is not ``0``.
+    """
+    me = threading.current_thread()
+    return (os.environ.get("ACMM_FORK", "1") != "0" and hasattr(os, "fork")
+            and (os.cpu_count() or 1) > 1
+            and all(t.daemon for t in threading.enumerate() if t is not me))
+
+
+def _child(fn, args, kwargs, fd: int) -> None:
+    """In the child: compute, send ("ok", value) or ("error", None) through ``fd``, exit."""
+    code = 0
+    try:
+        data = pickle.dumps(("ok", fn(*args, **kwargs)), protocol=pickle.HIGHEST_PROTOCOL)
+    except BaseException:  # noqa: BLE001 (the parent computes again in place and raises)
+        data, code = pickle.dumps(("error", None)), 1
+    try:
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+    finally:
+        os._exit(code)
+
+
+class ForkedCall:
+    """``fn(*args, **kwargs)`` in a forked child, started at construction.
+
+    Parameters
+    ----------
+    fn : callable
+        A pure function whose result pickles.
+    *args : object
+        Its positional arguments.
+    enabled : bool, optional
+        False: no child, :meth:`result` calls ``fn`` in place.
+    **kwargs : object
+        Its keyword arguments.
+
+    Attributes
+    ----------
+    forked : bool
+        Whether a child was started.
+    """
+
+    def __init__(self, fn, *args, enabled: bool = True, **kwargs) -> None:
+        self._call = (fn, args, kwargs)
+        self._pid: int | None = None
+        self._fd: int | None = None
+        if enabled and usable():
+            r, w = os.pipe()
+            for stream in (sys.stdout, sys.stderr):
+                try:
+                    if stream is not None:
+                        stream.flush()
+                except (OSError, ValueError):
+                    pass
+            pid = os.fork()
+            if pid == 0:
+                os.close(r)
+                _child(fn, args, kwargs, w)
+            os.close(w)
+            self._pid, self._fd = pid, r
+        self.forked = self._pid is not None
+
+    def result(self):
+        """The value of the call: the child's, or computed here when there is none or it failed.
+
+        Returns
+        -------
+        object
+            What ``fn(*args, **kwargs)`` returns.
+        """
+        fn, args, kwargs = self._call
+        if self._pid is None:
+            return fn(*args, **kwargs)
+        with os.fdopen(self._fd, "rb") as f:
+            self._fd = None
+            data = f.read()
+        os.waitpid(self._pid, 0)
+        self._pid = None
+        try:
+            kind, value = pickle.loads(data)
+        except Exception:  # noqa: BLE001 (a truncated message: the child died)
+            kind, value = "error", None
+        return value if kind == "ok" else fn(*args, **kwargs)
+
+    def cancel(self) -> None:
+        """Kill the child (if it still runs) and drop its result."""
+        if self._pid is not None:
+            try:
+                os.kill(self._pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            os.waitpid(self._pid, 0)
+            self._pid = None
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+
+    def __del__(self):
+        if getattr(self, "_pid", None) is not None:
+            self.cancel()
