@@ -225,7 +225,7 @@ def prepare_design_figures(s, units_system: str) -> None:
     from acmm.linearize import STATE_NAMES
 
     figure_worker.prepare(plots.prebuild, "gain_schedule_grid", tuple(STATE_NAMES),
-                          *gain_labels(s.drf_mode, units_system))
+                          *gain_labels(s.drf_mode, units_system), for_figure="gain_schedule_grid")
 
 
 def pole_map_figure(points, s, run_dir: Path) -> None:

@@ -73,21 +73,40 @@ def _recv_framed(fd: int):
     return None if data is None else pickle.loads(data)
 
 
-def _fork_writer(job: bytes, close: tuple) -> tuple[int, int]:
-    """Fork a writer for ``job`` (closing the worker's pipes ``close`` in it); returns its pid
-    and the read end of its result pipe."""
+def _fork_writer(job: bytes, close: tuple, prepare: bytes | None = None) -> tuple[int, int, int | None]:
+    """Fork a writer (closing the worker's descriptors ``close`` in it); returns its pid, the read
+    end of its result pipe and, for a *reserved* writer (``prepare`` given), the write end of its
+    job pipe.  A writer draws ``job``; a reserved one first runs ``prepare`` (the figure's
+    skeleton), then waits for its job on that pipe (end of file: it exits having drawn nothing)."""
     r, w = os.pipe()
+    jr = jw = None
+    if prepare is not None:
+        jr, jw = os.pipe()
+        _grow_pipe(jw)
     pid = os.fork()
     if pid == 0:
         os.close(r)
-        for fd in close:
+        for fd in close + ((jw,) if jw is not None else ()):
             os.close(fd)
         try:
-            _draw(job, w)
+            if prepare is not None:
+                _prepare(prepare)
+                job = _recv_raw(jr)
+            if job is None:
+                os.write(w, pickle.dumps(("ok", [])))
+            else:
+                _draw(job, w)
         finally:
             os._exit(0)
     os.close(w)
-    return pid, r
+    if jr is not None:
+        os.close(jr)
+    return pid, r, jw
+
+
+def _recv_raw(fd: int) -> bytes | None:
+    head = _read_exact(fd, _HEADER.size)
+    return None if head is None else _read_exact(fd, _HEADER.unpack(head)[0])
 
 
 def _prepare(job: bytes) -> None:
@@ -99,24 +118,105 @@ def _prepare(job: bytes) -> None:
         pass
 
 
-def _serve(jobs: int, status: int) -> None:
-    """The worker: warm up, then fork one writer per job (at most one per CPU, plus one, at a time)."""
-    code = 0
-    running: dict[int, int] = {}          # pid → read end of its result pipe
-    written: list[str] = []
-    errors: list[str] = []
+def _split(job: bytes) -> tuple[bytes, str | None, bytes]:
+    """(kind, routing key or None, the job as ``kind + pickle``) of a job read from the pipe."""
+    kind = job[:1]
+    if kind not in (b"D", b"R"):
+        return kind, None, job
+    n = int.from_bytes(job[1:3], "little")
+    return kind, job[3:3 + n].decode() or None, kind + job[3 + n:]
 
-    def join(pid: int) -> None:
-        fd = running.pop(pid)
+
+class _Server:
+    """The worker's loop state: its writers, the reserved ones by key, what they wrote."""
+
+    def __init__(self, jobs: int, status: int) -> None:
+        self.jobs, self.status = jobs, status
+        self.running: dict[int, int] = {}          # pid → read end of its result pipe
+        self.reserved: dict[str, tuple[int, int]] = {}   # key → (pid, write end of its job pipe)
+        self.written: list[str] = []
+        self.errors: list[str] = []
+        # one writer per CPU, plus one: the stage itself only writes its HDF5 file meanwhile
+        self.slots = (os.cpu_count() or 1) + 1
+
+    def _close_in_child(self) -> tuple:
+        return ((self.jobs, self.status) + tuple(self.running.values())
+                + tuple(jw for _, jw in self.reserved.values()))
+
+    def _waiting(self) -> set:
+        return {pid for pid, _ in self.reserved.values()}
+
+    def join(self, pid: int, quiet: bool = False) -> None:
+        fd = self.running.pop(pid)
         with os.fdopen(fd, "rb") as f:
             data = f.read()
         _, st = os.waitpid(pid, 0)
         kind, val = pickle.loads(data) if data else ("error", "a figure writer process failed")
         if kind == "ok" and os.waitstatus_to_exitcode(st) == 0:
-            written.extend(val)
-        else:
-            errors.append(val if kind == "error" else "a figure writer process failed")
+            self.written.extend(val)
+        elif not quiet:
+            self.errors.append(val if kind == "error" else "a figure writer process failed")
 
+    def join_drawing(self) -> None:
+        """Join every writer that has its job (not the reserved ones still waiting)."""
+        waiting = self._waiting()
+        for pid in [p for p in self.running if p not in waiting]:
+            self.join(pid)
+
+    def release(self) -> None:
+        """Tell the reserved writers that no job comes (they exit having drawn nothing)."""
+        for _, jw in self.reserved.values():
+            os.close(jw)
+        self.reserved.clear()
+
+    def kill(self) -> None:
+        for pid in self.running:
+            os.kill(pid, signal.SIGKILL)
+        for _, jw in self.reserved.values():
+            os.close(jw)
+        self.reserved.clear()
+        for pid in list(self.running):
+            os.close(self.running.pop(pid))
+            os.waitpid(pid, 0)
+
+    def reserve(self, key: str, job: bytes) -> None:
+        """Fork a writer for the figure ``key`` that builds its skeleton (``job``) now."""
+        if key in self.reserved:
+            return
+        pid, fd, jw = _fork_writer(b"", self._close_in_child(), prepare=job)
+        self.running[pid] = fd
+        self.reserved[key] = (pid, jw)
+
+    def draw(self, key: str | None, job: bytes) -> None:
+        """Hand ``job`` to the writer reserved for ``key``, or fork one (within the slots)."""
+        if key in self.reserved:
+            pid, jw = self.reserved.pop(key)
+            try:
+                _send_raw(jw, job)
+                return
+            except OSError:                        # it died building the skeleton: a fresh one
+                self.join(pid, quiet=True)
+            finally:
+                os.close(jw)
+        waiting = self._waiting()
+        while len(self.running) - len(waiting) >= self.slots:
+            self.join(next(p for p in self.running if p not in waiting))
+        pid, fd, _ = _fork_writer(job, self._close_in_child())
+        self.running[pid] = fd
+
+
+def _send_raw(fd: int, data: bytes) -> None:
+    view = memoryview(_HEADER.pack(len(data)) + data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def _serve(jobs: int, status: int) -> None:
+    """The worker: warm up, then run each job: a prepare here (``P``), a reserved writer that
+    builds a figure's skeleton now (``R``), a figure drawn by its reserved writer or a new one
+    (``D``; at most one per CPU, plus one, drawing at a time)."""
+    code = 0
+    sv = _Server(jobs, status)
     try:
         from acmm import parallel_figures
 
@@ -125,40 +225,34 @@ def _serve(jobs: int, status: int) -> None:
             _warm()
         except Exception:  # noqa: BLE001 (a real failure shows again, and is reported, in the writer)
             pass
-        # one writer per CPU, plus one: the stage itself only writes its HDF5 file meanwhile
-        slots = (os.cpu_count() or 1) + 1
         while True:
             head = _read_exact(jobs, _HEADER.size)
             if head is None:
                 break
             (n,) = _HEADER.unpack(head)
             if n == _BARRIER:                 # report what is done so far (a nested stage ends)
-                for pid in list(running):
-                    join(pid)
-                _send_framed(status, (written, errors))
-                written, errors = [], []
+                sv.join_drawing()
+                _send_framed(status, (sv.written, sv.errors))
+                sv.written, sv.errors = [], []
                 continue
             if n == _ABORT:
-                for pid in running:
-                    os.kill(pid, signal.SIGKILL)
-                for pid in list(running):
-                    os.close(running.pop(pid))
-                    os.waitpid(pid, 0)
+                sv.kill()
                 code = 2
                 break
             job = _read_exact(jobs, n)
             if job is None:
                 break
-            if job[:1] == b"P":
+            kind, key, job = _split(job)
+            if kind == b"P":
                 _prepare(job)
-                continue
-            while len(running) >= slots:
-                join(next(iter(running)))
-            pid, fd = _fork_writer(job, (jobs, status))
-            running[pid] = fd
-        for pid in list(running):
-            join(pid)
-        _send_framed(status, (written, errors))
+            elif kind == b"R":
+                sv.reserve(key, job)
+            else:
+                sv.draw(key, job)
+        sv.release()
+        for pid in list(sv.running):
+            sv.join(pid)
+        _send_framed(status, (sv.written, sv.errors))
     except BaseException:  # noqa: BLE001
         code = 1
     finally:

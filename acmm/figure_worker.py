@@ -136,31 +136,41 @@ def submit(fn, *args, **kwargs) -> None:
     if _WORKER is None:
         fn(*args, **kwargs)
         return
-    _WORKER.send(_job(b"D", fn, args, kwargs))
+    _WORKER.send(_job(b"D", fn, args, kwargs, fn.__name__))
 
 
-def _job(kind: bytes, fn, args, kwargs) -> bytes:
-    data = kind + pickle.dumps((fn, args, kwargs), protocol=pickle.HIGHEST_PROTOCOL)
+def _job(kind: bytes, fn, args, kwargs, key: str | None = None) -> bytes:
+    head = kind
+    if kind in (b"D", b"R"):
+        k = (key or "").encode()
+        head += len(k).to_bytes(2, "little") + k
+    data = head + pickle.dumps((fn, args, kwargs), protocol=pickle.HIGHEST_PROTOCOL)
     return _HEADER.pack(len(data)) + data
 
 
-def prepare(fn, *args, **kwargs) -> None:
-    """``fn(*args, **kwargs)`` in the worker itself, before the figures submitted later are
-    forked from it (e.g. :func:`acmm.plots.prebuild`: build a figure's skeleton while the stage
-    computes); without a worker, nothing.  A failure is ignored (the figure is then built by
-    its writer, which reports errors).
+def prepare(fn, *args, for_figure: str | None = None, **kwargs) -> None:
+    """``fn(*args, **kwargs)`` ahead of a figure (e.g. :func:`acmm.plots.prebuild`: build its
+    skeleton while the stage computes); without a worker, nothing.  A failure is ignored (the
+    figure is then built by its writer, which reports errors).
+
+    With ``for_figure`` (the name of the figure function submitted later) the worker forks that
+    figure's writer now: it runs ``fn`` at once, in parallel with the other figures' skeletons,
+    and then draws the figure as soon as :func:`submit` hands it over.  Without, ``fn`` runs in
+    the worker itself, before the writers forked later.
 
     Parameters
     ----------
     fn : callable
-        Module-level function run in the worker (picklable by reference).
+        Module-level function (picklable by reference).
     *args : object
         Its positional arguments (picklable).
+    for_figure : str, optional
+        ``__name__`` of the figure function whose writer runs ``fn`` (e.g. ``"summary"``).
     **kwargs : object
         Its keyword arguments (picklable).
     """
     if _WORKER is not None:
-        _WORKER.send(_job(b"P", fn, args, kwargs))
+        _WORKER.send(_job(b"R" if for_figure else b"P", fn, args, kwargs, for_figure))
 
 
 def finish() -> list[Path]:

@@ -99,7 +99,7 @@ def prepare_sim_figures(cfg) -> None:
     from acmm import figure_worker, plots
 
     for kind in ("axis_histories", "summary", "inertia_histories"):
-        figure_worker.prepare(plots.prebuild, kind, cfg.output.units)
+        figure_worker.prepare(plots.prebuild, kind, cfg.output.units, for_figure=kind)
 
 
 def sim_figures(cfg, sc, r, stats: list, items: dict) -> None:

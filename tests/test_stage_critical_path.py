@@ -159,3 +159,54 @@ def test_design_with_the_forked_path_equals_the_design_in_place():
     assert np.array_equal(a.fit.coef, b.fit.coef)
     for name in ("max_real", "margin", "disk_margin", "poles"):
         assert np.array_equal(getattr(a.path_check, name), getattr(b.path_check, name)), name
+
+
+def _histories(n=300):
+    t = np.linspace(0.0, 3.0, n)
+    return t, np.column_stack([np.sin(5 * t), np.cos(3 * t), t]) * 2.0
+
+
+def test_reserved_figure_writers_draw_the_same_png_and_never_hang(tmp_path):
+    """A figure whose writer was forked ahead (``prepare(..., for_figure=...)``) is drawn by it,
+    identical to the figure drawn in place; a reserved writer whose figure never comes, across a
+    nested session's flush, ends with the session; a second figure of the same name gets its own
+    writer."""
+    from acmm import figure_worker, plots
+
+    if not figure_worker.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    t, x = _histories()
+    plots.axis_histories(t, x, x, x, x, "t", tmp_path / "here.png")
+    with figure_worker.session():
+        figure_worker.prepare(plots.prebuild, "axis_histories", "imperial", for_figure="axis_histories")
+        figure_worker.prepare(plots.prebuild, "summary", "imperial", for_figure="summary")   # never drawn
+        with figure_worker.session():                                # a nested stage's flush
+            figure_worker.submit(plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
+                                 tmp_path / "inner.png")
+        assert (tmp_path / "inner.png").exists()
+        figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "reserved.png")
+        figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "second.png")
+    assert not figure_worker.active()
+    here = (tmp_path / "here.png").read_bytes()
+    assert (tmp_path / "reserved.png").read_bytes() == here == (tmp_path / "second.png").read_bytes()
+    assert not list(tmp_path.glob("*summary*"))
+
+
+def test_reserved_writers_abort_with_the_stage_and_report_failures(tmp_path):
+    from acmm import figure_worker, plots
+    from common.errors import OutputError
+
+    if not figure_worker.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    t, x = _histories()
+    with pytest.raises(RuntimeError, match="stage failed"):
+        with figure_worker.session():
+            figure_worker.prepare(plots.prebuild, "axis_histories", "imperial", for_figure="axis_histories")
+            raise RuntimeError("stage failed")
+    assert not figure_worker.active()
+    (tmp_path / "file").write_text("")
+    with pytest.raises(OutputError):
+        with figure_worker.session():
+            figure_worker.prepare(plots.prebuild, "axis_histories", "imperial", for_figure="axis_histories")
+            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "a.png")
+    assert not figure_worker.active() and not list(tmp_path.glob("**/*.tmp*"))
