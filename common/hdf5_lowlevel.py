@@ -14,7 +14,9 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+import h5py
 import numpy as np
+from h5py import h5a, h5d, h5ds, h5p, h5s, h5t
 
 #: Kinds of numpy arrays written directly: bool, integers, floats, complex, fixed-length bytes.
 _PLAIN_KINDS = "biufcS"
@@ -31,10 +33,6 @@ class Writer:
     """
 
     def __init__(self, track_order: bool | None = None):
-        import h5py
-        from h5py import h5p, h5s, h5t
-
-        self._h5py = h5py
         self.text = h5py.string_dtype()                   # variable-length UTF-8
         self._text_type = h5t.py_create(self.text, logical=True)
         self._text_mem = h5t.py_create(self.text)
@@ -51,8 +49,6 @@ class Writer:
     def _file_type(self, dtype):
         t = self._types.get(dtype)
         if t is None:
-            from h5py import h5t
-
             t = self._types[dtype] = h5t.py_create(dtype, logical=1)
         return t
 
@@ -80,8 +76,6 @@ class Writer:
         h5py.h5d.DatasetID
             The new dataset (low-level identifier; ``h5py.Dataset(id)`` gives the high-level one).
         """
-        from h5py import h5d, h5s
-
         if not name or "/" in name:          # a path: h5py creates the groups on the way
             return parent.create_dataset(name, shape, dtype, data).id
         if data is not None:
@@ -106,7 +100,7 @@ class Writer:
         if not isinstance(data, np.ndarray):
             return None
         if dtype is not None:
-            info = self._h5py.check_string_dtype(dtype)
+            info = h5py.check_string_dtype(dtype)
             if (info is not None and info.encoding == "utf-8" and info.length is None
                     and data.dtype.kind == "O" and data.size and all(type(x) is str for x in data.flat)):
                 return np.asarray(data, order="C").view(self.text)
@@ -116,7 +110,7 @@ class Writer:
             return np.asarray(data, order="C")
         return None
 
-    def attr(self, obj, name: str, value) -> None:
+    def attr(self, obj, name: str, value, new: bool = False) -> None:
         """Set attribute ``name`` of ``obj`` to ``value``, replacing one of that name; like
         ``obj.attrs[name] = value``.
 
@@ -129,14 +123,14 @@ class Writer:
         value : object
             Its value: a str is written as a scalar variable-length UTF-8 string, anything else
             through ``h5py.AttributeManager`` (in any unit: written as it is).
+        new : bool, optional
+            The caller knows ``obj`` has no attribute ``name`` yet (spares looking for it).
         """
-        from h5py import h5a
-
         bname = name.encode()
         if type(value) is not str:
-            self._h5py.AttributeManager(SimpleNamespace(id=obj))[name] = value
+            h5py.AttributeManager(SimpleNamespace(id=obj))[name] = value
             return
-        if h5a.exists(obj, bname):
+        if not new and h5a.exists(obj, bname):
             h5a.delete(obj, bname)
         aid = h5a.create(obj, bname, self._text_type, self._scalar)
         try:
@@ -163,8 +157,6 @@ class Writer:
         bool
             It has.
         """
-        from h5py import h5a
-
         return h5a.exists(obj, name.encode())
 
     @staticmethod
@@ -178,8 +170,6 @@ class Writer:
         name : str
             The scale's name.
         """
-        from h5py import h5ds
-
         h5ds.set_scale(dsid, name.encode())
 
     @staticmethod
@@ -195,6 +185,4 @@ class Writer:
         axis : int
             The axis (dimensionless index, 0 first).
         """
-        from h5py import h5ds
-
         h5ds.attach_scale(dsid, scale, axis)

@@ -20,7 +20,8 @@ Time is always the first axis: ``(t, channel)``.
 """
 from __future__ import annotations
 
-from typing import Any, Mapping
+from collections.abc import Mapping  # not typing.Mapping: its isinstance check is slow
+from typing import Any
 
 import numpy as np
 
@@ -135,13 +136,13 @@ def _dimension_scales(group, sizes: dict, named: dict, handles: dict, w) -> dict
             values = _coord_values(d, named)
             if values is not None and len(values) == n:
                 ds = w.dataset(group, d, np.array(values, dtype=object), dtype=w.text)
-                w.attr(ds, "units", "1")
+                w.attr(ds, "units", "1", new=True)
                 w.attr(ds, "long_name", {"axis": "body control axis", "axis_col": "body control axis (column)",
-                                         "state": "state of eq 4.47"}.get(d, f"name along {d}"))
+                                         "state": "state of eq 4.47"}.get(d, f"name along {d}"), new=True)
                 w.make_scale(ds, d)
             else:
                 ds = w.dataset(group, d, shape=(n,), dtype="f4")
-                w.attr(ds, "units", "1")
+                w.attr(ds, "units", "1", new=True)
                 w.make_scale(ds, f"{NOT_A_VARIABLE}{n:10d}")
         scales[d] = ds
     return scales
@@ -208,7 +209,7 @@ def annotate(group, items: Mapping[str, Any], root: bool = True, handles: dict |
             sub, sub_handles = handles[key]
             annotate(sub, value, root=False, handles=sub_handles, writer=w)
         elif value.description and not w.has_attr(handles[key], "long_name"):
-            w.attr(handles[key], "long_name", value.description)
+            w.attr(handles[key], "long_name", value.description, new=True)
 
 
 def unit_system_of(config_text: str) -> str:

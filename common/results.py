@@ -9,9 +9,10 @@ provenance attributes come from :mod:`common.provenance`).
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping  # not typing.Mapping: its isinstance check is slow
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -73,11 +74,11 @@ def _write_group(group, items: Mapping[str, Any], writer) -> dict:
             else:
                 ds = writer.dataset(group, key, arr)
         handles[key] = ds
-        writer.attr(ds, "units", value.units)
+        writer.attr(ds, "units", value.units, new=True)         # a new dataset: no attributes yet
         if value.description:
-            writer.attr(ds, "description", value.description)
+            writer.attr(ds, "description", value.description, new=True)
         if value.names is not None:
-            writer.attr(ds, "names", json.dumps(list(value.names)))
+            writer.attr(ds, "names", json.dumps(list(value.names)), new=True)
         for ak, av in value.attrs.items():
             writer.attr(ds, ak, av)
     return handles
