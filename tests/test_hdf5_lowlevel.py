@@ -2,7 +2,9 @@
 
 Each case is written twice, once with h5py's high-level API (``create_dataset``, ``attrs[...] =``,
 the reference) and once with :class:`common.hdf5_lowlevel.Writer`; the stored type and dataspace
-(HDF5's own serialisation), the creation properties and the values must be the same.
+(HDF5's own serialisation), the creation properties and the values must be the same.  Also the
+other savings of ``write_h5``: ``output.units`` read with libyaml's loader, the git commit asked
+once per process.
 """
 from __future__ import annotations
 
@@ -120,3 +122,38 @@ def test_write_h5_overrides_and_layout_without_handles(tmp_path):
                 assert _describe(a[n]) == _describe(b[n]), n
                 assert [[s.name for s in d.values()] for d in a[n].dims] == \
                     [[s.name for s in d.values()] for d in b[n].dims], n
+
+
+@pytest.mark.parametrize("text,system", [
+    ("output: {units: SI}\n", "SI"), ("output:\n  units: imperial\n", "imperial"),
+    ("name: x\n", "imperial"), ("output: {}\n", "imperial"), ("", "imperial"),
+    ("- a\n- b\n", "imperial"),                 # not a mapping
+    ("output: {units: SI\n", "imperial"),       # not YAML
+    ("output: {units: \"\\x00\"}\n", "\x00"),   # whatever the config says
+])
+def test_unit_system_of_config_text(text, system):
+    from common.netcdf_layout import unit_system_of
+
+    assert unit_system_of(text) == system
+
+
+def test_git_commit_asked_once_per_process(monkeypatch):
+    import subprocess
+
+    from common import provenance
+
+    calls = []
+    real = subprocess.run
+
+    def counting(*args, **kwargs):
+        calls.append(args)
+        return real(*args, **kwargs)
+
+    provenance.git_commit.cache_clear()
+    monkeypatch.setattr(subprocess, "run", counting)
+    try:
+        first = provenance.git_commit()
+        assert provenance.git_commit() == first and len(calls) == 1
+        assert provenance.provenance("a: 1\n")["git_commit"] == first and len(calls) == 1
+    finally:
+        provenance.git_commit.cache_clear()
