@@ -20,7 +20,8 @@ Time is always the first axis: ``(t, channel)``.
 """
 from __future__ import annotations
 
-from typing import Any, Mapping
+from collections.abc import Mapping  # not typing.Mapping: its isinstance check is slow
+from typing import Any
 
 import numpy as np
 
@@ -122,34 +123,40 @@ def _plan_dims(items: Mapping[str, Any]) -> tuple[dict, dict, dict]:
     return plan, sizes, named
 
 
-def _dimension_scales(group, sizes: dict, named: dict) -> dict:
+def _dimension_scales(group, sizes: dict, named: dict, handles: dict, w) -> dict:
     """One dimension scale per dimension: the coordinate variable when the group has one, else a
     string coordinate of the entries' names, else a bare netCDF dimension."""
-    import h5py
-
     scales = {}
     for d, n in sizes.items():
-        if d in group and isinstance(group[d], h5py.Dataset) and group[d].shape == (n,):
-            ds = group[d]
-            ds.make_scale(d)
+        own = handles.get(d)
+        if own is not None and not isinstance(own, tuple) and own.shape == (n,):
+            ds = own
+            w.make_scale(ds, d)
         else:
             values = _coord_values(d, named)
             if values is not None and len(values) == n:
-                ds = group.create_dataset(d, data=np.array(values, dtype=object),
-                                          dtype=h5py.string_dtype())
-                ds.attrs["units"] = "1"
-                ds.attrs["long_name"] = {"axis": "body control axis", "axis_col": "body control axis (column)",
-                                         "state": "state of eq 4.47"}.get(d, f"name along {d}")
-                ds.make_scale(d)
+                ds = w.dataset(group, d, np.array(values, dtype=object), dtype=w.text)
+                w.attr(ds, "units", "1", new=True)
+                w.attr(ds, "long_name", {"axis": "body control axis", "axis_col": "body control axis (column)",
+                                         "state": "state of eq 4.47"}.get(d, f"name along {d}"), new=True)
+                w.make_scale(ds, d)
             else:
-                ds = group.create_dataset(d, shape=(n,), dtype="f4")
-                ds.attrs["units"] = "1"
-                ds.make_scale(f"{NOT_A_VARIABLE}{n:10d}")
+                ds = w.dataset(group, d, shape=(n,), dtype="f4")
+                w.attr(ds, "units", "1", new=True)
+                w.make_scale(ds, f"{NOT_A_VARIABLE}{n:10d}")
         scales[d] = ds
     return scales
 
 
-def annotate(group, items: Mapping[str, Any], root: bool = True) -> None:
+def _handles(group, items: Mapping[str, Any]) -> dict:
+    """The handles of the objects written from ``items`` (as :func:`common.results.write_h5` keeps
+    them), looked up by name: dataset identifier, or ``(sub-group, its handles)``."""
+    return {key: (group[key], _handles(group[key], value)) if isinstance(value, Mapping) else group[key].id
+            for key, value in items.items()}
+
+
+def annotate(group, items: Mapping[str, Any], root: bool = True, handles: dict | None = None,
+             writer=None) -> None:
     """Give the datasets of ``group`` (already written from ``items``) the netCDF layout.
 
     Recurses into sub-groups.  ``items`` maps names to :class:`common.results.Dataset` or to
@@ -163,33 +170,46 @@ def annotate(group, items: Mapping[str, Any], root: bool = True) -> None:
         Dataset name → :class:`common.results.Dataset` or nested mapping (a sub-group).
     root : bool, optional
         ``group`` is the file's root (it gets ``Conventions="CF-1.8"``).
+    handles : dict, optional
+        The written objects: name → ``h5py`` dataset identifier, or ``(sub-group, its handles)``
+        (default: looked up in ``group`` by name).
+    writer : common.hdf5_lowlevel.Writer, optional
+        The file's writer (default: a new one).
 
     Raises
     ------
     ValueError
         When a dataset's ``dims`` do not match its number of axes.
     """
+    if writer is None:
+        from common.hdf5_lowlevel import Writer
+
+        writer = Writer()
+    w = writer
+    if handles is None:
+        handles = _handles(group, items)
     if root:
-        group.attrs["Conventions"] = "CF-1.8"
+        w.attr(group.id, "Conventions", "CF-1.8")
     plan, sizes, named = _plan_dims(items)
-    scales = _dimension_scales(group, sizes, named)
+    scales = _dimension_scales(group, sizes, named, handles, w)
     aux = [a for a in AUX_COORDS if a in plan and plan[a] == [TIME]]
     for key, dims in plan.items():
-        ds = group[key]
+        ds = handles[key]
         for i, d in enumerate(dims):
             if key == d:
                 continue
-            ds.dims[i].attach_scale(scales[d])
+            w.attach_scale(ds, scales[d], i)
         if aux and TIME in dims and key not in aux and key != TIME:
-            ds.attrs["coordinates"] = " ".join(aux)
+            w.attr(ds, "coordinates", " ".join(aux))
     if TIME in plan and plan[TIME] == [TIME]:
-        group[TIME].attrs["standard_name"] = "time"
-        group[TIME].attrs["axis"] = "T"
+        w.attr(handles[TIME], "standard_name", "time")
+        w.attr(handles[TIME], "axis", "T")
     for key, value in items.items():
         if isinstance(value, Mapping):
-            annotate(group[key], value, root=False)
-        elif value.description and "long_name" not in group[key].attrs:
-            group[key].attrs["long_name"] = value.description
+            sub, sub_handles = handles[key]
+            annotate(sub, value, root=False, handles=sub_handles, writer=w)
+        elif value.description and not w.has_attr(handles[key], "long_name"):
+            w.attr(handles[key], "long_name", value.description, new=True)
 
 
 def unit_system_of(config_text: str) -> str:
@@ -207,8 +227,8 @@ def unit_system_of(config_text: str) -> str:
     """
     import yaml
 
-    try:
-        data = yaml.safe_load(config_text)
+    try:       # libyaml's loader when PyYAML has it: the same objects, several times faster
+        data = yaml.load(config_text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
         return str(((data or {}).get("output") or {}).get("units") or "imperial")
     except (yaml.YAMLError, AttributeError):
         return "imperial"

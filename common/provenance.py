@@ -7,11 +7,16 @@ from __future__ import annotations
 import hashlib
 import subprocess
 from datetime import datetime, timezone
+from functools import lru_cache
 from pathlib import Path
 
 
+@lru_cache(maxsize=1)
 def git_commit() -> str:
     """The git commit of the source tree, or ``"unknown"``.
+
+    Asked of git once per process (a subprocess per results file cost milliseconds each, and the
+    code running is the one imported at start).
 
     Returns
     -------

@@ -9,9 +9,10 @@ provenance attributes come from :mod:`common.provenance`).
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping  # not typing.Mapping: its isinstance check is slow
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -51,31 +52,36 @@ class Dataset:
     dims: tuple[str, ...] | None = None
 
 
-def _write_group(group, items: Mapping[str, Any]) -> None:
+def _write_group(group, items: Mapping[str, Any], writer) -> dict:
+    """Write ``items`` into ``group`` with ``writer`` (:class:`common.hdf5_lowlevel.Writer`);
+    return the handles :func:`common.netcdf_layout.annotate` takes: name → dataset identifier,
+    or → ``(sub-group, its handles)``."""
+    handles: dict[str, Any] = {}
     for key, value in items.items():
         if isinstance(value, Mapping):
-            _write_group(group.create_group(key), value)
+            sub = group.create_group(key)
+            handles[key] = (sub, _write_group(sub, value, writer))
             continue
         if not isinstance(value, Dataset):
             raise TypeError(f"results item {key!r} must be a Dataset or a mapping")
         data = value.data
         if isinstance(data, str):
-            ds = group.create_dataset(key, data=data)
+            ds = writer.dataset(group, key, data)
         else:
             arr = np.asarray(data)
             if arr.dtype.kind in "OU":   # text arrays: variable-length UTF-8 strings
-                import h5py
-
-                ds = group.create_dataset(key, data=arr.astype(object), dtype=h5py.string_dtype())
+                ds = writer.dataset(group, key, arr.astype(object), dtype=writer.text)
             else:
-                ds = group.create_dataset(key, data=arr)
-        ds.attrs["units"] = value.units
+                ds = writer.dataset(group, key, arr)
+        handles[key] = ds
+        writer.attr(ds, "units", value.units, new=True)         # a new dataset: no attributes yet
         if value.description:
-            ds.attrs["description"] = value.description
+            writer.attr(ds, "description", value.description, new=True)
         if value.names is not None:
-            ds.attrs["names"] = json.dumps(list(value.names))
+            writer.attr(ds, "names", json.dumps(list(value.names)), new=True)
         for ak, av in value.attrs.items():
-            ds.attrs[ak] = av
+            writer.attr(ds, ak, av)
+    return handles
 
 
 #: Run names (acmm, qpp and sweep configs, qpp scenarios): a single path component of letters,
@@ -111,22 +117,23 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
     Path
         ``path``.
     """
+    from common.hdf5_lowlevel import Writer
     from common.netcdf_layout import annotate, convert_items, unit_system_of
     import h5py
 
     path = Path(path)
     with in_memory(path) as tmp:
         with h5py.File(tmp, "w") as f:
-            f.attrs["config"] = config_text
+            w, root = Writer(), f.id
+            w.attr(root, "config", config_text)
             for k, v in provenance(config_text).items():
-                f.attrs[k] = v
+                w.attr(root, k, v)
             for k, v in (attrs or {}).items():
-                f.attrs[k] = v
+                w.attr(root, k, v)
             system = units or unit_system_of(config_text)
             items = convert_items(items, system)
-            f.attrs["unit_system"] = system
-            _write_group(f, items)
-            annotate(f, items)
+            w.attr(root, "unit_system", system)
+            annotate(f, items, handles=_write_group(f, items, w), writer=w)
     return path
 
 

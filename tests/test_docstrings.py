@@ -95,6 +95,7 @@ NO_REPORT_CITATION = {
     "qpp.schema": "JSON schema of config files: no mathematics of the report",
     "configkinds": "config-kind dispatch: no mathematics of the report",
     "common.results": "atomic HDF5/text/figure writing and provenance: no mathematics of the report",
+    "common.hdf5_lowlevel": "HDF5 datasets and attributes through h5py's low-level API: no mathematics of the report",
     "common.units": "unit conversion of config values and outputs (pint): no mathematics of the report",
     "common.limits": "work and size limits of the programs: no mathematics of the report",
     "common.runlock": "per-run-directory file lock: no mathematics of the report",
