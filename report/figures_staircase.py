@@ -47,7 +47,7 @@ def fig_staircase_inertia(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
-    from report.figure_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, fixed_layout, pyplot, save
 
     plt = pyplot()
     o = sim["orbits"]
@@ -60,7 +60,7 @@ def fig_staircase_inertia(sim: dict, figdir: Path):
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
     fig1.suptitle("Inertia variation MB3 → AC (Figs 6.14–6.19 analogue)", fontsize=10)
-    fig1.tight_layout()
+    fixed_layout(fig1, left=0.72, bottom=0.54, top=0.44, wspace=0.27, hspace=0.09)
     return save(fig1, figdir, "staircase_inertia")
 
 
@@ -124,7 +124,7 @@ def fig_staircase_levels(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
-    from report.figure_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, fixed_layout, pyplot, save
 
     plt = pyplot()
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
@@ -140,5 +140,5 @@ def fig_staircase_levels(sim: dict, figdir: Path):
     axs[1].set_ylabel("peak CMG momentum (ft·lbf·s)")
     axs[1].set_title("Peak momentum per level")
     axs[1].legend()
-    fig3.tight_layout()
+    fixed_layout(fig3, left=0.62, bottom=0.54, top=0.33, wspace=0.16)
     return save(fig3, figdir, "staircase_levels")
