@@ -33,6 +33,8 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
+    from matplotlib.ticker import MaxNLocator
+
     from acmm.linearize import STATE_NAMES, state_units
     from report.figure_style import COLORS, pyplot, save
     from acmm.schedule import schedule_gain
@@ -54,6 +56,8 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
         ax.set_title(f"K(i,{j + 1}): {STATE_NAMES[j]}", fontsize=8)
         ax.set_ylabel(f"ft·lbf / ({units[j]})", fontsize=6.5)
         ax.tick_params(labelsize=6.5)
+        # ≤ 6 gain ticks (the default gives up to 9): each tick costs a label and a grid line (issue 16)
+        ax.yaxis.set_major_locator(MaxNLocator(5, steps=[1, 2, 2.5, 5, 10]))
     for ax in axs[-1]:
         ax.set_xlabel("pitch TEA θ2* (deg)")
     handles, _ = axs[0, 0].get_legend_handles_labels()
