@@ -69,9 +69,11 @@ def fixed_layout(fig, left: float, bottom: float, top: float, right: float = 0.1
     fig : matplotlib.figure.Figure
         The figure.
     left, bottom, top, right : float
-        Margins between the figure's edges and the axes grid, inches.
+        Margins between the figure's edges and the axes grid, in inches (the unit of the figure
+        size).
     wspace, hspace : float
-        Space between the columns / rows, fraction of the mean axes width / height.
+        Space between the columns / rows, dimensionless: a fraction of the mean axes width /
+        height.
     """
     w, h = fig.get_size_inches()
     fig.subplots_adjust(left=left / w, right=1 - right / w, bottom=bottom / h, top=1 - top / h,
