@@ -39,21 +39,26 @@ def warm() -> None:
     """Draw one small figure to PDF and PNG (in memory) so that a process forked afterwards finds
     the fonts loaded, the glyph caches filled and the mathtext parser of the log-axis tick labels
     built (issue 16): each report worker would otherwise pay 0.2–0.5 s of CPU for them in its first
-    figure.  Nothing is written; the rcParams are reset by each part (:func:`report.plan.run_part`).
+    figure.  Nothing is written, and this process's rcParams are left as they were.
     """
     import io
 
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(2.0, 1.5))
-    ax.plot([1.0, 2.0], [1e-5, 1.0], "o-", label="θ − θ*")
-    ax.set_yscale("log")
-    ax.set_xlabel("time (orbits)")
-    ax.set_title("warm-up")
-    ax.legend()
-    fig.suptitle("warm-up")
-    for fmt in ("pdf", "png"):
-        fig.savefig(io.BytesIO(), format=fmt)
-    plt.close(fig)
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    with matplotlib.rc_context({**RC, **SPEED_RC}):   # no pyplot: the backend is left alone too
+        fig = Figure(figsize=(2.0, 1.5))
+        FigureCanvasAgg(fig)
+        ax = fig.subplots()
+        ax.plot([1.0, 2.0], [1e-5, 1.0], "o-", label="θ − θ*")
+        ax.set_yscale("log")
+        ax.set_xlabel("time (orbits)")
+        ax.set_title("warm-up")
+        ax.legend()
+        fig.suptitle("warm-up")
+        for fmt in ("pdf", "png"):
+            fig.savefig(io.BytesIO(), format=fmt)
 
 
 def fixed_layout(fig, left: float, bottom: float, top: float, right: float = 0.14, wspace: float = 0.2,
