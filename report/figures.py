@@ -33,6 +33,8 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
+    from matplotlib.ticker import MaxNLocator
+
     from acmm.linearize import STATE_NAMES, state_units
     from report.figure_style import COLORS, pyplot, save
     from acmm.schedule import schedule_gain
@@ -54,6 +56,8 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
         ax.set_title(f"K(i,{j + 1}): {STATE_NAMES[j]}", fontsize=8)
         ax.set_ylabel(f"ft·lbf / ({units[j]})", fontsize=6.5)
         ax.tick_params(labelsize=6.5)
+        # ≤ 6 gain ticks (the default gives up to 9): each tick costs a label and a grid line (issue 16)
+        ax.yaxis.set_major_locator(MaxNLocator(5, steps=[1, 2, 2.5, 5, 10]))
     for ax in axs[-1]:
         ax.set_xlabel("pitch TEA θ2* (deg)")
     handles, _ = axs[0, 0].get_legend_handles_labels()
@@ -100,7 +104,7 @@ def fig_pole_maps(stair: dict, mb3: dict, dec: dict, dec_true_poles, n, sector, 
     dict
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
-    from report.figure_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, fixed_layout, pyplot, save
 
     plt = pyplot()
     sigma, phi = sector
@@ -134,7 +138,7 @@ def fig_pole_maps(stair: dict, mb3: dict, dec: dict, dec_true_poles, n, sector, 
     ax.set_ylabel("Im λ / n")
     ax.set_title("Claim 1 (MB3): closed-loop poles")
     ax.legend(loc="upper left")
-    fig.tight_layout()
+    fixed_layout(fig, left=0.72, bottom=0.54, top=0.34, wspace=0.16)
     return save(fig, figdir, "pole_maps")
 
 
@@ -156,7 +160,7 @@ def fig_claim1(mb3: dict, dec: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
-    from report.figure_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, fixed_layout, pyplot, save
 
     plt = pyplot()
     fig, axs = plt.subplots(4, 3, figsize=(11, 10))
@@ -178,7 +182,7 @@ def fig_claim1(mb3: dict, dec: dict, figdir: Path):
     axs[3, 0].set_ylabel("CMG momentum (ft·lbf·s)")
     axs[0, 0].legend()
     fig.suptitle("Claim 1, MB3: fully coupled vs cross-inertia-free design on the nonlinear model", fontsize=10)
-    fig.tight_layout()
+    fixed_layout(fig, left=0.8, bottom=0.54, top=0.61, wspace=0.24, hspace=0.32)
     return save(fig, figdir, "claim1_responses")
 
 
@@ -206,7 +210,7 @@ def fig_robustness(params: dict, base, verdict, peak, names, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
-    from report.figure_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, fixed_layout, pyplot, save
 
     plt = pyplot()
     keys = [k for k in ("dI11", "dI22", "dI33", "dI12", "dI13", "dI23") if k in params]
@@ -230,7 +234,7 @@ def fig_robustness(params: dict, base, verdict, peak, names, figdir: Path):
         ax.set_ylabel("peak attitude error, worst axis (deg)")
         ax.set_title(f"{lab.upper()}: {int(ok.sum())}/{int(sel.sum())} bounded")
         ax.legend(loc="lower right")
-    fig.tight_layout()
+    fixed_layout(fig, left=0.72, bottom=0.54, top=0.33, wspace=0.2)
     return save(fig, figdir, "robustness")
 
 

@@ -32,8 +32,9 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
     import h5py
+    from matplotlib.ticker import NullLocator
 
-    from report.figure_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, fixed_layout, pyplot, save
 
     plt = pyplot()
     with h5py.File(sim_path, "r") as f:
@@ -50,6 +51,8 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
                            label=f"|y{i + 1} − y_o{i + 1}| ({out_labels[i]})")
         axs[1, c].axhline(beta_o, color="k", ls=":", lw=0.8, label=f"β_o = {beta_o:g}")
         axs[1, c].set_yscale("log")
+        # decades only: ~45 unlabelled minor ticks per axis cost a sixth of the figure (issue 16)
+        axs[1, c].yaxis.set_minor_locator(NullLocator())
         axs[1, c].set_ylim(beta_o * 1e-5, beta_o * 3)
         axs[0, c].set_title(f"scenario {k}")
         axs[0, c].set_ylabel("output")
@@ -59,7 +62,7 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
         axs[0, c].legend(fontsize=6.5)
         axs[1, c].legend(fontsize=6.5, loc="lower right")
     fig.suptitle(f"{name}: nonlinear closed loop, output vs nominal output and the output sphere", fontsize=10)
-    fig.tight_layout()
+    fixed_layout(fig, left=0.74, bottom=0.54, top=0.6, wspace=0.22, hspace=0.23)
     return save(fig, figdir, f"{name}_responses")
 
 
@@ -85,7 +88,7 @@ def fig_circle(design: dict, name: str, figdir: Path):
     """
     from matplotlib.collections import PatchCollection
 
-    from report.figure_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, fixed_layout, pyplot, save
     from qpp.circle import critical_disc
 
     plt = pyplot()
@@ -115,5 +118,5 @@ def fig_circle(design: dict, name: str, figdir: Path):
         ax.set_title(f"channel {i + 1}: margin {np.atleast_1d(c['margins'])[i]:.3g}")
         ax.legend(fontsize=6.5, loc="upper right")
     fig.suptitle(f"{name}: circle criterion (Figs 13.1, 14.2–14.3 analogue)", fontsize=10)
-    fig.tight_layout()
+    fixed_layout(fig, left=0.72, bottom=0.5, top=0.6, wspace=0.2)
     return save(fig, figdir, f"{name}_circle")

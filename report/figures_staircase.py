@@ -47,7 +47,7 @@ def fig_staircase_inertia(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
-    from report.figure_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, fixed_layout, pyplot, save
 
     plt = pyplot()
     o = sim["orbits"]
@@ -60,7 +60,7 @@ def fig_staircase_inertia(sim: dict, figdir: Path):
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
     fig1.suptitle("Inertia variation MB3 → AC (Figs 6.14–6.19 analogue)", fontsize=10)
-    fig1.tight_layout()
+    fixed_layout(fig1, left=0.72, bottom=0.54, top=0.44, wspace=0.27, hspace=0.09)
     return save(fig1, figdir, "staircase_inertia")
 
 
@@ -81,6 +81,8 @@ def fig_staircase_responses(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
+    from matplotlib.collections import LineCollection
+
     from report.figure_style import COLORS, pyplot, save
 
     plt = pyplot()
@@ -89,6 +91,7 @@ def fig_staircase_responses(sim: dict, figdir: Path):
     rows = [(np.degrees(sim["attitude_error"]), "attitude error θ − θ̂* (deg)"),
             (np.degrees(sim["rate_rel_lvlh"]), "body rate rel. LVLH (deg/s)"),   # stored in rad/s
             (sim["u"], "control torque (ft·lbf)"), (sim["h"], "CMG momentum (ft·lbf·s)")]
+    changes = sim["levels"]["start"][1:] * sim["orbits"][-1] / max(sim["t"][-1], 1e-300)   # orbits
     for r, (data, label) in enumerate(rows):
         for a in range(3):
             axs[r, a].plot(o, data[:, a], color=COLORS[a], lw=0.6, label=AXES[a])
@@ -96,8 +99,10 @@ def fig_staircase_responses(sim: dict, figdir: Path):
                 axs[r, a].set_title(AXES[a])
             if a == 0:
                 axs[r, a].set_ylabel(label)
-            for s in sim["levels"]["start"][1:] * sim["orbits"][-1] / max(sim["t"][-1], 1e-300):
-                axs[r, a].axvline(s, color="0.7", lw=0.4, ls=":")
+            # the level changes as one collection per panel, full height, not 11 axvline artists (issue 16)
+            axs[r, a].add_collection(LineCollection([[(s, 0.0), (s, 1.0)] for s in changes], colors="0.7",
+                                                    linewidths=0.4, linestyles=":",
+                                                    transform=axs[r, a].get_xaxis_transform()), autolim=False)
         axs[r, 0].legend(loc="upper right")
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
@@ -124,7 +129,7 @@ def fig_staircase_levels(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`report.figure_style.save`).
     """
-    from report.figure_style import COLORS, pyplot, save
+    from report.figure_style import COLORS, fixed_layout, pyplot, save
 
     plt = pyplot()
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
@@ -140,5 +145,5 @@ def fig_staircase_levels(sim: dict, figdir: Path):
     axs[1].set_ylabel("peak CMG momentum (ft·lbf·s)")
     axs[1].set_title("Peak momentum per level")
     axs[1].legend()
-    fig3.tight_layout()
+    fixed_layout(fig3, left=0.62, bottom=0.54, top=0.33, wspace=0.16)
     return save(fig3, figdir, "staircase_levels")

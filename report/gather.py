@@ -233,7 +233,8 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
 
 
 def warm_workers() -> None:
-    """Imports (and the compiled simulator) every worker needs, done once before forking them."""
+    """Imports (and the compiled simulator, a first figure's fonts and caches) every worker needs,
+    done once before forking them."""
     import h5py  # noqa: F401
     import matplotlib.pyplot  # noqa: F401
     import scipy.linalg  # noqa: F401
@@ -242,8 +243,10 @@ def warm_workers() -> None:
     import acmm.sweep  # noqa: F401
     import qpp.stages  # noqa: F401
     from acmm.warmup import warm_up
+    from report.figure_style import warm
 
     warm_up(lambda *a: None)
+    warm()
 
 
 def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bool = False,

@@ -23,6 +23,7 @@ output only after :func:`run_tasks` returned.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import gc
 import importlib
 import os
 import sys
@@ -145,7 +146,14 @@ def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str,
     _prioritize(tasks)
     if warm is not None:
         warm()
-    _run_pool(tasks, jobs, done, on_done, stats)
+    # what this process holds is not garbage: frozen, the workers' collections skip it and do not
+    # copy its pages on write (issue 16: ~40 % fewer page faults per worker); thawed afterwards
+    gc.collect()
+    gc.freeze()
+    try:
+        _run_pool(tasks, jobs, done, on_done, stats)
+    finally:
+        gc.unfreeze()
     return done
 
 

@@ -66,6 +66,34 @@ def test_parallel_and_serial_give_the_same_results(tmp_path):
     assert set(stats) == set(serial) and all(w >= 0 and c >= 0 for w, c in stats.values())
 
 
+def test_pool_leaves_the_garbage_collector_as_it_was(tmp_path):
+    """The parent's objects are frozen only while the workers run (gc.freeze around the pool)."""
+    import gc
+
+    assert gc.get_freeze_count() == 0
+    out = run_tasks(_graph(tmp_path), 2)
+    assert out["sum2"] == 25 and gc.get_freeze_count() == 0
+
+
+def test_figure_warm_up_and_fixed_layout():
+    """The pre-fork warm-up figure leaves the caller's backend and rcParams alone; fixed margins
+    are inches of the figure, spacings fractions."""
+    import matplotlib
+
+    from report.figure_style import fixed_layout, pyplot, warm
+
+    backend, rc = matplotlib.get_backend(), dict(matplotlib.rcParams)
+    warm()
+    assert matplotlib.get_backend() == backend and dict(matplotlib.rcParams) == rc
+    plt = pyplot()
+    fig, _ = plt.subplots(2, 2, figsize=(10.0, 5.0))
+    fixed_layout(fig, left=1.0, bottom=0.5, top=0.25, right=0.2, wspace=0.3, hspace=0.1)
+    p = fig.subplotpars
+    assert np.allclose([p.left, p.right, p.bottom, p.top, p.wspace, p.hspace],
+                       [0.1, 0.98, 0.1, 0.95, 0.3, 0.1])
+    plt.close(fig)
+
+
 def test_a_dependency_must_come_first():
     with pytest.raises(ValueError, match="'x'"):
         run_tasks([Task("x", _square, ("y",)), Task("y", _square)], 2)
