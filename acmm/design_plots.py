@@ -13,30 +13,65 @@ import numpy as np
 
 from acmm.plot_base import (
     _BUILDERS,
-    _few_ticks,
+    _bake_texts,
+    _compact_formatter,
+    _data_limits,
+    _fixed_label_positions,
     _layout,
     _plt,
     _premake_ticks,
     _save,
+    _unbake,
     gain_unit,
     state_units,
 )
 
 
 def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
+    """The 24 panels with their (empty) lines, titles, units and legend; the data only set later.
+
+    Cost-cut (issue 16): no shared x axes (24 shared axes re-resolve their view limits and
+    measure their siblings' tick labels at each draw; the limits are set once per panel
+    instead), the gain's unit in the panel title (no rotated 6-pt y label), x ticks only on
+    the bottom row (above it the vertical grid lines at the same TEAs are one line collection
+    per panel, not five ticks of five artists each), fixed label positions, and the legend once
+    for the figure (no 'best' placement search).
+    """
+    import matplotlib as mpl
+    from matplotlib.collections import LineCollection
+    from matplotlib.ticker import MaxNLocator, NullLocator
+
     plt = _plt()
-    fig, axs = plt.subplots(6, 4, figsize=(13, 15), sharex=True, dpi=80)
+    fig = plt.figure(figsize=(13, 15), dpi=80)
+    axs = fig.subplots(6, 4)
+    lines, grids = [], []
     for j, ax in enumerate(axs.flat):
-        ax.set_title(f"K(i,{j + 1}) — {state_names[j]}", fontsize=8)
-        ax.set_ylabel(f"K(i,{j + 1}) ({gain_unit(units[j], torque_unit)})", fontsize=6)
+        ax.set_title(f"K(i,{j + 1}) — {state_names[j]} ({gain_unit(units[j], torque_unit)})", fontsize=8)
         ax.tick_params(labelsize=7)
-        _few_ticks(ax)
+        ax.xaxis.set_major_locator(MaxNLocator(4))
+        ax.yaxis.set_major_locator(MaxNLocator(4))
+        ax.yaxis.set_major_formatter(_compact_formatter())
+        if j < 20:
+            ax.xaxis.set_major_locator(NullLocator())
+            grids.append(ax.add_collection(LineCollection(
+                [], colors=mpl.rcParams["grid.color"], linewidths=mpl.rcParams["grid.linewidth"],
+                alpha=mpl.rcParams["grid.alpha"], transform=ax.get_xaxis_transform(), zorder=1.5),
+                autolim=False))
+        _fixed_label_positions(ax, -0.13, -0.2)
+        lines.append([(ax.plot([], [], "o", ms=3, color=c, label=f"K({i + 1},·): LQR gain (dots), schedule (line)")[0],
+                       ax.plot([], [], "-", lw=1, color=c)[0])
+                      for i, c in enumerate(("C0", "C1", "C2"))])
     for ax in axs[-1]:
         ax.set_xlabel("pitch TEA θ2* (deg)")
+    fig.legend(handles=[d for d, _ in lines[0]], loc="upper center", bbox_to_anchor=(0.5, 0.978),
+               ncol=3, fontsize=7, frameon=False)
     # a fixed layout: tight_layout/bbox 'tight' on 24 panels costs seconds
-    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.45, hspace=0.35)
-    _premake_ticks(axs.flat, 7, 7)
-    return fig, axs
+    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.38, hspace=0.3)
+    _premake_ticks(axs.flat[20:], 6, 6)
+    _premake_ticks(axs.flat[:20], 0, 6)
+    baked = _bake_texts(fig, [*(ax.title for ax in axs.flat), *(ax.xaxis.label for ax in axs[-1]),
+                              *fig.legends])
+    return fig, axs, lines, grids, baked
 
 
 @dataclass
@@ -112,16 +147,26 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     """
     theta2_deg = np.degrees(theta2)
     curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
-    fine, kf = curve.theta2, curve.gains
+    fine, kf = np.degrees(curve.theta2), curve.gains
     units = units or state_units()
-    fig, axs = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
+    fig, axs, lines, grids, baked = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
+    xlim = _data_limits(theta2_deg, fine)
+    if xlim is not None:           # the bottom row's x ticks, as grid lines in the panels above
+        xt = [x for x in axs[-1, 0].xaxis.get_major_locator().tick_values(*xlim) if xlim[0] <= x <= xlim[1]]
+        for grid in grids:
+            grid.set_segments([[(x, 0.0), (x, 1.0)] for x in xt])
     for j, ax in enumerate(axs.flat):
-        for i, color in zip(range(3), ("C0", "C1", "C2")):
-            ax.plot(theta2_deg, gains[:, i, j], "o", ms=3, color=color, label=f"K({i + 1},·) LQR")
-            ax.plot(np.degrees(fine), kf[:, i, j], "-", lw=1, color=color)
-    axs[0, 0].legend(fontsize=6)
+        for i, (dots, line) in enumerate(lines[j]):
+            dots.set_data(theta2_deg, gains[:, i, j])
+            line.set_data(fine, kf[:, i, j])
+        ylim = _data_limits(gains[:, :, j], kf[:, :, j])
+        for lim, setter in ((xlim, ax.set_xlim), (ylim, ax.set_ylim)):
+            if lim is not None:
+                setter(lim)
     fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
-                 "(cf. Figs 5.3–5.26)")
+                 "(cf. Figs 5.3–5.26)", y=0.995)
+    if vector:
+        _unbake(baked)
     return _save(fig, path, vector, tight=False)
 
 

@@ -87,6 +87,77 @@ def _layout(kind: str, *params):
     return got if got is not None else _BUILDERS[kind](*params)
 
 
+def _bake_texts(fig, texts) -> list:
+    """Render data-independent ``texts`` (titles, axis labels, a legend: artists already placed
+    by a fixed layout) now, into small transparent images at the figure's resolution that take
+    their place; the texts themselves are hidden.
+
+    Laying out and rasterizing text is the costliest part of drawing a stage figure (each glyph
+    is rendered on its own); a skeleton built ahead (:func:`prebuild`) thus pays it before the
+    data exist.  The PNG differs from drawing the texts at save time only by rounding of the
+    anti-aliased edges.  :func:`_unbake` undoes it (a PDF keeps its text as text).
+
+    Returns
+    -------
+    list
+        ``[images, texts]`` for :func:`_unbake`.
+    """
+    from matplotlib.backends.backend_agg import RendererAgg
+
+    w, h = (int(round(v)) for v in fig.bbox.size)
+    renderer = RendererAgg(w, h, fig.dpi)
+    texts = [t for t in texts if t.get_visible()]
+    for t in texts:
+        t.draw(renderer)
+        t.set_visible(False)
+    rgba = np.asarray(renderer.buffer_rgba())
+    ink = rgba[..., 3] > 0
+    tiles = []
+    for r0, r1 in _runs(ink.any(axis=1), 0):
+        for c0, c1 in _runs(ink[r0:r1].any(axis=0), 8):
+            tiles.append((c0, h - r1, rgba[r1 - 1:r0 - 1 if r0 else None:-1, c0:c1].copy()))
+    return [fig.add_artist(_tiles_artist(tiles)), texts]
+
+
+def _tiles_artist(tiles: list):
+    """An artist blending pre-rendered RGBA ``tiles`` ``(x, y, array)`` (pixels from the lower
+    left, rows bottom first) onto a raster renderer as they are, without resampling."""
+    from matplotlib.artist import Artist
+
+    class Tiles(Artist):
+        zorder = 3
+
+        def draw(self, renderer) -> None:
+            if not self.get_visible():
+                return
+            gc = renderer.new_gc()
+            for x, y, im in tiles:
+                renderer.draw_image(gc, x, y, im)
+            gc.restore()
+            self.stale = False
+
+    return Tiles()
+
+
+def _runs(mask, gap: int) -> list:
+    """(start, stop) of the runs of True in ``mask``, runs closer than ``gap`` merged."""
+    idx = np.flatnonzero(mask)
+    if idx.size == 0:
+        return []
+    cut = np.flatnonzero(np.diff(idx) > gap + 1)
+    starts = np.concatenate([[idx[0]], idx[cut + 1]])
+    stops = np.concatenate([idx[cut], [idx[-1]]]) + 1
+    return list(zip(starts.tolist(), stops.tolist()))
+
+
+def _unbake(baked) -> None:
+    """Put the texts of :func:`_bake_texts` back and drop their images (vector output)."""
+    tiles, texts = baked
+    tiles.remove()
+    for t in texts:
+        t.set_visible(True)
+
+
 def _premake_ticks(axes, nx: int = 9, ny: int = 8) -> None:
     """Create the tick artists now (the costly part of an axis): at draw time the axis reuses
     the first ones it needs and makes more only if the locator asks for more."""
@@ -178,6 +249,69 @@ def _few_ticks(ax, nx: int = 4, ny: int = 4) -> None:
 
     ax.xaxis.set_major_locator(MaxNLocator(nx))
     ax.yaxis.set_major_locator(MaxNLocator(ny))
+
+
+def _fixed_label_positions(ax, x=None, y=None) -> None:
+    """Place the axis labels at fixed axes coordinates (x label at ``x`` below, y label at ``y``
+    left of the axes): the automatic placement measures every tick label a second time per axis."""
+    if x is not None:
+        ax.xaxis.set_label_coords(0.5, x)
+    if y is not None:
+        ax.yaxis.set_label_coords(y, 0.5)
+
+
+def _compact_formatter():
+    """A tick formatter writing each value in full and short (``−7.5e6``, ``0.0045``, ``−1.5e-5``)
+    with the fewest significant digits that keep the labels distinct and exact: no offset or
+    ×10ⁿ text above the axes (it collides with the panel titles and is one more text per axis)."""
+    from matplotlib.ticker import Formatter
+
+    class Compact(Formatter):
+        @staticmethod
+        def _label(v: float, d: int, sci: bool) -> str:
+            if v == 0:
+                return "0"
+            if sci:
+                m, e = f"{v:.{d}e}".split("e")
+                s = f"{m.rstrip('0').rstrip('.') if '.' in m else m}e{int(e)}"
+            else:
+                s = f"{v:.{d}f}"
+            return s.replace("-", "\N{MINUS SIGN}")
+
+        def format_ticks(self, values):
+            values = [float(v) for v in values]
+            big = max((abs(v) for v in values), default=0.0)
+            sci = big >= 1e5 or 0 < big < 1e-3
+            step = min((abs(b - a) for a, b in zip(values, values[1:]) if b != a), default=0.0)
+            for d in range(0, 10):
+                labels = [self._label(v, d, sci) for v in values]
+                if all(abs(float(lab.replace("\N{MINUS SIGN}", "-")) - v) <= 1e-6 * step
+                       for lab, v in zip(labels, values)):
+                    return labels
+            return labels
+
+        def __call__(self, x, pos=None):
+            return self.format_ticks([x])[0]
+
+    return Compact()
+
+
+def _data_limits(*arrays, margin: float = 0.05):
+    """(lo, hi) of the finite values of ``arrays`` widened by ``margin`` of the span on each side
+    (matplotlib's autoscale margins), or None when there is none; set on an axis directly this
+    replaces the data-limit bookkeeping of the plotting calls."""
+    lo, hi = np.inf, -np.inf
+    for a in arrays:
+        a = np.asarray(a, dtype=float)
+        a = a[np.isfinite(a)]
+        if a.size:
+            lo, hi = min(lo, float(a.min())), max(hi, float(a.max()))
+    if lo > hi:
+        return None
+    pad = (hi - lo) * margin
+    if pad <= 1e-12 * max(abs(lo), abs(hi)):         # one value: ±5 % of it (or ±0.05 about 0)
+        pad = 0.05 * abs(lo) if lo else 0.05
+    return lo - pad, hi + pad
 
 
 def gain_unit(state_unit: str, torque_unit: str = "ft·lbf") -> str:
