@@ -21,7 +21,6 @@ from acmm.plot_base import (
     _plt,
     _premake_ticks,
     _save,
-    _unbake,
     gain_unit,
     state_units,
 )
@@ -69,9 +68,9 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
     fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.38, hspace=0.3)
     _premake_ticks(axs.flat[20:], 6, 6)
     _premake_ticks(axs.flat[:20], 0, 6)
-    baked = _bake_texts(fig, [*(ax.title for ax in axs.flat), *(ax.xaxis.label for ax in axs[-1]),
+    _bake_texts(fig, [*(ax.title for ax in axs.flat), *(ax.xaxis.label for ax in axs[-1]),
                               *fig.legends])
-    return fig, axs, lines, grids, baked
+    return fig, axs, lines, grids
 
 
 @dataclass
@@ -149,7 +148,7 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
     fine, kf = np.degrees(curve.theta2), curve.gains
     units = units or state_units()
-    fig, axs, lines, grids, baked = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
+    fig, axs, lines, grids = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
     xlim = _data_limits(theta2_deg, fine)
     if xlim is not None:           # the bottom row's x ticks, as grid lines in the panels above
         xt = [x for x in axs[-1, 0].xaxis.get_major_locator().tick_values(*xlim) if xlim[0] <= x <= xlim[1]]
@@ -165,8 +164,6 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
                 setter(lim)
     fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
                  "(cf. Figs 5.3–5.26)", y=0.995)
-    if vector:
-        _unbake(baked)
     return _save(fig, path, vector, tight=False)
 
 

@@ -87,7 +87,7 @@ def _layout(kind: str, *params):
     return got if got is not None else _BUILDERS[kind](*params)
 
 
-def _bake_texts(fig, texts) -> list:
+def _bake_texts(fig, texts) -> None:
     """Render data-independent ``texts`` (titles, axis labels, a legend: artists already placed
     by a fixed layout) now, into small transparent images at the figure's resolution that take
     their place; the texts themselves are hidden.
@@ -95,12 +95,8 @@ def _bake_texts(fig, texts) -> list:
     Laying out and rasterizing text is the costliest part of drawing a stage figure (each glyph
     is rendered on its own); a skeleton built ahead (:func:`prebuild`) thus pays it before the
     data exist.  The PNG differs from drawing the texts at save time only by rounding of the
-    anti-aliased edges.  :func:`_unbake` undoes it (a PDF keeps its text as text).
-
-    Returns
-    -------
-    list
-        ``[images, texts]`` for :func:`_unbake`.
+    anti-aliased edges.  Drawn on any other canvas (a PDF, another size or resolution, a
+    'tight' bounding box) the texts are drawn as texts instead.
     """
     from matplotlib.backends.backend_agg import RendererAgg
 
@@ -115,20 +111,28 @@ def _bake_texts(fig, texts) -> list:
     tiles = []
     for r0, r1 in _runs(ink.any(axis=1), 0):
         for c0, c1 in _runs(ink[r0:r1].any(axis=0), 8):
-            tiles.append((c0, h - r1, rgba[r1 - 1:r0 - 1 if r0 else None:-1, c0:c1].copy()))
-    return [fig.add_artist(_tiles_artist(tiles)), texts]
+            tiles.append((c0, h - r1, rgba[r0:r1, c0:c1][::-1].copy()))   # rows bottom first
+    fig.add_artist(_tiles_artist(tiles, texts, (w, h, fig.dpi)))
 
 
-def _tiles_artist(tiles: list):
+def _tiles_artist(tiles: list, texts: list, canvas: tuple):
     """An artist blending pre-rendered RGBA ``tiles`` ``(x, y, array)`` (pixels from the lower
-    left, rows bottom first) onto a raster renderer as they are, without resampling."""
+    left, rows bottom first) onto an Agg renderer of ``canvas`` (width, height, dpi) as they
+    are, without resampling; on any other renderer it draws the hidden ``texts`` instead."""
     from matplotlib.artist import Artist
+    from matplotlib.backends.backend_agg import RendererAgg
 
     class Tiles(Artist):
         zorder = 3
 
         def draw(self, renderer) -> None:
             if not self.get_visible():
+                return
+            if not (isinstance(renderer, RendererAgg) and (renderer.width, renderer.height, renderer.dpi) == canvas):
+                for t in texts:
+                    t.set_visible(True)
+                    t.draw(renderer)
+                    t.set_visible(False)
                 return
             gc = renderer.new_gc()
             for x, y, im in tiles:
@@ -148,14 +152,6 @@ def _runs(mask, gap: int) -> list:
     starts = np.concatenate([[idx[0]], idx[cut + 1]])
     stops = np.concatenate([idx[cut], [idx[-1]]]) + 1
     return list(zip(starts.tolist(), stops.tolist()))
-
-
-def _unbake(baked) -> None:
-    """Put the texts of :func:`_bake_texts` back and drop their images (vector output)."""
-    tiles, texts = baked
-    tiles.remove()
-    for t in texts:
-        t.set_visible(True)
 
 
 def _premake_ticks(axes, nx: int = 9, ny: int = 8) -> None:

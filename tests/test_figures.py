@@ -257,9 +257,9 @@ def test_design_figures_of_a_finished_design(tmp_path):
     assert all((tmp_path / n).stat().st_size > 10_000 for n in names)
 
 
-def test_baked_texts_draw_as_the_live_texts(tmp_path):
+def test_baked_texts_draw_as_the_live_texts(tmp_path, monkeypatch):
     """The skeleton's pre-rendered titles, labels and legend (plot_base._bake_texts) give the PNG
-    the live texts give (a PDF gets them live), to anti-aliasing rounding."""
+    the live texts give, to anti-aliasing rounding; a PDF gets them as text."""
     from PIL import Image
 
     names, units = list(STATE_NAMES), plots.state_units()
@@ -267,10 +267,29 @@ def test_baked_texts_draw_as_the_live_texts(tmp_path):
     gains = np.sin(np.arange(12 * 3 * 24).reshape(12, 3, 24)) * np.logspace(-8, 6, 24)
     sched = design_plots.SampledSchedule("polynomial", np.linspace(theta2[0], theta2[-1], 60),
                                          np.cos(np.arange(60 * 3 * 24).reshape(60, 3, 24)))
-    baked = plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "b.png", units=units)
-    live = plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "l.png", units=units, vector=True)
-    assert [p.name for p in baked] == ["b.png"] and [p.name for p in live] == ["l.png", "l.pdf"]
+    baked = plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "b.png", units=units, vector=True)
+    assert [p.name for p in baked] == ["b.png", "b.pdf"]
+    monkeypatch.setattr(design_plots, "_bake_texts", lambda fig, texts: None)
+    plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "l.png", units=units)
     a, b = (np.asarray(Image.open(tmp_path / n), dtype=int) for n in ("b.png", "l.png"))
     assert a.shape == b.shape and np.abs(a - b).max() <= 2
     # the baked text is there: the title band is not blank
     assert (a[:40, :, :3] < 100).any()
+
+
+
+def test_baked_texts_are_text_in_a_pdf():
+    import io
+
+    from acmm import plot_base
+
+    fig, axs, _, _ = plot_base._BUILDERS["gain_schedule_grid"](tuple(STATE_NAMES), tuple(plots.state_units()),
+                                                               "ft·lbf")
+    title = axs[0, 0].title
+    drawn, draw = [], title.draw
+    title.draw = lambda renderer: (title.get_visible() and drawn.append(type(renderer).__name__), draw(renderer))
+    fig.savefig(io.BytesIO(), format="png")
+    assert drawn == [] and not title.get_visible()          # the PNG blends the baked tile
+    fig.savefig(io.BytesIO(), format="pdf")
+    assert drawn == ["MixedModeRenderer"] and not title.get_visible()   # the PDF draws the text
+    plots._plt().close(fig)
