@@ -17,10 +17,13 @@ from acmm.plot_base import (
     _compact_formatter,
     _data_limits,
     _fixed_label_positions,
+    _in_view_locator,
     _layout,
     _plt,
     _premake_ticks,
     _save,
+    _set_limits,
+    _x_grid,
     gain_unit,
     state_units,
 )
@@ -36,10 +39,6 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
     per panel, not five ticks of five artists each), fixed label positions, and the legend once
     for the figure (no 'best' placement search).
     """
-    import matplotlib as mpl
-    from matplotlib.collections import LineCollection
-    from matplotlib.ticker import MaxNLocator, NullLocator
-
     plt = _plt()
     fig = plt.figure(figsize=(13, 15), dpi=80)
     axs = fig.subplots(6, 4)
@@ -47,15 +46,11 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
     for j, ax in enumerate(axs.flat):
         ax.set_title(f"K(i,{j + 1}) — {state_names[j]} ({gain_unit(units[j], torque_unit)})", fontsize=8)
         ax.tick_params(labelsize=7)
-        ax.xaxis.set_major_locator(MaxNLocator(4))
-        ax.yaxis.set_major_locator(MaxNLocator(4))
+        ax.xaxis.set_major_locator(_in_view_locator(4))
+        ax.yaxis.set_major_locator(_in_view_locator(3))
         ax.yaxis.set_major_formatter(_compact_formatter())
         if j < 20:
-            ax.xaxis.set_major_locator(NullLocator())
-            grids.append(ax.add_collection(LineCollection(
-                [], colors=mpl.rcParams["grid.color"], linewidths=mpl.rcParams["grid.linewidth"],
-                alpha=mpl.rcParams["grid.alpha"], transform=ax.get_xaxis_transform(), zorder=1.5),
-                autolim=False))
+            grids.append(_x_grid(ax))
         _fixed_label_positions(ax, -0.13, -0.2)
         lines.append([(ax.plot([], [], "o", ms=3, color=c, label=f"K({i + 1},·): LQR gain (dots), schedule (line)")[0],
                        ax.plot([], [], "-", lw=1, color=c)[0])
@@ -66,8 +61,8 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
                ncol=3, fontsize=7, frameon=False)
     # a fixed layout: tight_layout/bbox 'tight' on 24 panels costs seconds
     fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.38, hspace=0.3)
-    _premake_ticks(axs.flat[20:], 6, 6)
-    _premake_ticks(axs.flat[:20], 0, 6)
+    _premake_ticks(axs.flat[20:], 5, 4)
+    _premake_ticks(axs.flat[:20], 0, 4)
     _bake_texts(fig, [*(ax.title for ax in axs.flat), *(ax.xaxis.label for ax in axs[-1]),
                               *fig.legends])
     return fig, axs, lines, grids
@@ -150,18 +145,12 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     units = units or state_units()
     fig, axs, lines, grids = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
     xlim = _data_limits(theta2_deg, fine)
-    if xlim is not None:           # the bottom row's x ticks, as grid lines in the panels above
-        xt = [x for x in axs[-1, 0].xaxis.get_major_locator().tick_values(*xlim) if xlim[0] <= x <= xlim[1]]
-        for grid in grids:
-            grid.set_segments([[(x, 0.0), (x, 1.0)] for x in xt])
     for j, ax in enumerate(axs.flat):
         for i, (dots, line) in enumerate(lines[j]):
             dots.set_data(theta2_deg, gains[:, i, j])
             line.set_data(fine, kf[:, i, j])
-        ylim = _data_limits(gains[:, :, j], kf[:, :, j])
-        for lim, setter in ((xlim, ax.set_xlim), (ylim, ax.set_ylim)):
-            if lim is not None:
-                setter(lim)
+        _set_limits([ax], xlim, gains[:, :, j], kf[:, :, j])
+    _set_limits([], xlim, grids=grids, ticks_of=axs[-1, 0])     # the bottom row's TEA ticks above
     fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
                  "(cf. Figs 5.3–5.26)", y=0.995)
     return _save(fig, path, vector, tight=False)
@@ -211,7 +200,8 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
     ax.set_xlabel("real part Re λ (units of n, the orbit rate)")
     ax.set_ylabel("imaginary part Im λ (units of n)")
     ax.set_title(f"Closed-loop poles and the sector (Re λ ≤ −{sigma}n, |Im λ| ≤ tan {half_angle_deg:g}°·|Re λ|)")
-    ax.legend(fontsize=6, ncol=2)
+    # a fixed place, not 'best' (a search over every pole): the corner outside the sector
+    ax.legend(fontsize=6, ncol=2, loc="upper right")
     fig.subplots_adjust(left=0.12, right=0.97, bottom=0.1, top=0.92)
     return _save(fig, path, vector, tight=False)
 
@@ -251,6 +241,12 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
     a1.legend(fontsize=7)
     a1.set_title(f"Scheduled gain on the local model at {th.size} TEAs")
     a2.semilogy(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
+    # plain tick labels (0.6, 1, 1e-05): the default 10ⁿ labels start the mathtext parser, which
+    # is the costliest part of this figure in a fresh figure writer
+    from matplotlib.ticker import LogFormatter
+
+    a2.yaxis.set_major_formatter(LogFormatter())
+    a2.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False))
     a2.set_ylabel("disk margin α at u (skew 0)")
     a2.set_xlabel("pitch TEA θ2* (deg)")
     # a fixed layout: bbox 'tight' draws the figure twice

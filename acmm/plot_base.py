@@ -41,8 +41,8 @@ def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Pat
     return out
 
 
-#: PNG deflate level: 3 encodes ~1.5x faster than PIL's default 6 for ~8 % larger files (issue 16)
-PNG_COMPRESS_LEVEL = 3
+#: PNG deflate level: 1 encodes ~1.7x faster than PIL's default 6 for ~10 % larger files (issue 16)
+PNG_COMPRESS_LEVEL = 1
 
 
 def _save_now(fig, path: Path, out: list, vector: bool, tight: bool) -> None:
@@ -290,6 +290,52 @@ def _compact_formatter():
             return self.format_ticks([x])[0]
 
     return Compact()
+
+
+def _in_view_locator(nbins: int = 4):
+    """At most ``nbins`` + 1 "nice" ticks inside the view (at least three): matplotlib's
+    :class:`~matplotlib.ticker.MaxNLocator` also returns the ticks just outside it, and the axis
+    makes (five artists) and updates a tick for each before dropping them."""
+    from matplotlib.ticker import MaxNLocator
+
+    class InView(MaxNLocator):
+        def __call__(self):
+            lo, hi = sorted(self.axis.get_view_interval())
+            tol = 1e-9 * max(hi - lo, abs(hi), abs(lo), 1e-300)
+            return [v for v in self.tick_values(lo, hi) if lo - tol <= v <= hi + tol]
+
+    return InView(nbins, min_n_ticks=3)
+
+
+def _x_grid(ax):
+    """No x ticks on ``ax``, only vertical grid lines, as one line collection placed at the x
+    ticks of another panel by :func:`_set_x_grid` (a panel above the bottom row of a grid: five
+    ticks of five artists each become one artist)."""
+    import matplotlib as mpl
+    from matplotlib.collections import LineCollection
+    from matplotlib.ticker import NullLocator
+
+    ax.xaxis.set_major_locator(NullLocator())
+    rc = mpl.rcParams
+    return ax.add_collection(LineCollection([], colors=rc["grid.color"], linewidths=rc["grid.linewidth"],
+                                            alpha=rc["grid.alpha"], transform=ax.get_xaxis_transform(),
+                                            zorder=1.5), autolim=False)
+
+
+def _set_limits(axs, xlim, *ys, grids=(), ticks_of=None) -> None:
+    """Set the x limits ``xlim`` of ``axs`` (and, with ``ys``, their common y limits, the data's
+    range with matplotlib's margins); ``grids`` (:func:`_x_grid`) get the x ticks of ``ticks_of``."""
+    ylim = _data_limits(*ys) if ys else None
+    for ax in axs:
+        if xlim is not None:
+            ax.set_xlim(xlim)
+        if ylim is not None:
+            ax.set_ylim(ylim)
+    if grids and xlim is not None:
+        xt = [x for x in ticks_of.xaxis.get_major_locator().tick_values(*xlim) if xlim[0] <= x <= xlim[1]]
+        # (ticks_of's locator: the tick values it would draw within xlim)
+        for grid in grids:
+            grid.set_segments([[(x, 0.0), (x, 1.0)] for x in xt])
 
 
 def _data_limits(*arrays, margin: float = 0.05):
