@@ -241,12 +241,6 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
     a1.legend(fontsize=7)
     a1.set_title(f"Scheduled gain on the local model at {th.size} TEAs")
     a2.semilogy(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
-    # plain tick labels (0.6, 1, 1e-05): the default 10ⁿ labels start the mathtext parser, which
-    # is the costliest part of this figure in a fresh figure writer
-    from matplotlib.ticker import LogFormatter
-
-    a2.yaxis.set_major_formatter(LogFormatter())
-    a2.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False))
     a2.set_ylabel("disk margin α at u (skew 0)")
     a2.set_xlabel("pitch TEA θ2* (deg)")
     # a fixed layout: bbox 'tight' draws the figure twice
