@@ -263,9 +263,12 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     rows = [(str(s["level"]), f"{s['start_orbit']:.1f}", f"{s['theta2_deg']:.2f}",
              " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum'] * k_h:.0f}")
             for s in level_stats]
-    if rows:     # the columns, each one text; the font shrinks to fit many levels
-        px = body[0].axes.bbox.height * 0.9 / len(rows)
-        size = min(8.0, px / 1.45 * 72 / fig.dpi)
+    if rows:     # the columns, each one text; the font shrinks to fit many levels (down to 6 pt)
+        px = body[0].axes.bbox.height * 0.9
+        fit = max(2, int(px / (6.0 * fig.dpi / 72 * 1.45)))
+        if len(rows) > fit:
+            rows = rows[:fit - 1] + [("…", f"{len(rows) - fit + 1} more levels", "in sim.h5", "", "")]
+        size = min(8.0, px / len(rows) / 1.45 * 72 / fig.dpi)
         for text, column in zip(body, zip(*rows)):
             text.set_text("\n".join(column))
             text.set_fontsize(size)

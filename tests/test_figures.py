@@ -75,6 +75,28 @@ def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_p
     grid = captured[0]
     assert "ft·lbf/(rad/s)" in grid.axes[0].get_title() and "ft·lbf/rad)" in grid.axes[3].get_title()
     _check_gain_grid(grid, r)
+    _check_sim_figures(captured[2:], orbits, err, sm.level_statistics(sc, res))
+
+
+def _check_sim_figures(figs, orbits, err, stats):
+    """Every state drawn over the whole run, one legend, one table row per level."""
+    axes_fig, inertia_fig, summary_fig = figs
+    assert len(axes_fig.axes) == 12 and [ax.get_title() for ax in axes_fig.axes[:3]] == ["roll", "pitch", "yaw"]
+    for k, ax in enumerate(axes_fig.axes):
+        (line,) = ax.lines
+        assert line.get_xdata()[0] == orbits[0] and line.get_xdata()[-1] == orbits[-1]
+        lo, hi = ax.get_ylim()
+        assert lo <= np.nanmin(line.get_ydata()) and np.nanmax(line.get_ydata()) <= hi
+    np.testing.assert_array_equal(axes_fig.axes[1].lines[0].get_ydata(), err[:, 1])   # pitch error
+    assert len(inertia_fig.axes) == 6 and all(len(ax.lines) == 1 for ax in inertia_fig.axes)
+    top, *mid, table = summary_fig.axes
+    assert [len(ax.lines) for ax in (top, *mid)] == [3, 3, 3]
+    (legend,) = summary_fig.legends
+    assert [t.get_text() for t in legend.get_texts()] == ["roll", "pitch", "yaw"]
+    assert "verdict" in top.get_title()
+    columns = [t.get_text().split("\n") for t in table.texts if t.get_position()[1] < 0.95]   # below the header
+    assert len(columns) == 5 and all(len(c) == len(stats) for c in columns)
+    assert columns[0] == [str(s["level"]) for s in stats]
 
 
 def _check_gain_grid(grid, r):
