@@ -239,14 +239,6 @@ def state_units(drf_mode: str = "attitude_hold") -> list[str]:
     return [pretty(u) for u in units(drf_mode)]
 
 
-def _few_ticks(ax, nx: int = 4, ny: int = 4) -> None:
-    """At most ~``nx``/``ny`` major ticks: every tick is four artists to create and draw."""
-    from matplotlib.ticker import MaxNLocator
-
-    ax.xaxis.set_major_locator(MaxNLocator(nx))
-    ax.yaxis.set_major_locator(MaxNLocator(ny))
-
-
 def _fixed_label_positions(ax, x=None, y=None) -> None:
     """Place the axis labels at fixed axes coordinates (x label at ``x`` below, y label at ``y``
     left of the axes): the automatic placement measures every tick label a second time per axis."""
