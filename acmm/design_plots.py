@@ -13,6 +13,7 @@ import numpy as np
 
 from acmm.plot_base import (
     _BUILDERS,
+    FAST_TEXT_RC,
     _bake_texts,
     _compact_formatter,
     _data_limits,
@@ -153,7 +154,7 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     _set_limits([], xlim, grids=grids, ticks_of=axs[-1, 0])     # the bottom row's TEA ticks above
     fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
                  "(cf. Figs 5.3–5.26)", y=0.995)
-    return _save(fig, path, vector, tight=False)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=False):
@@ -203,7 +204,7 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
     # a fixed place, not 'best' (a search over every pole): the corner outside the sector
     ax.legend(fontsize=6, ncol=2, loc="upper right")
     fig.subplots_adjust(left=0.12, right=0.97, bottom=0.1, top=0.92)
-    return _save(fig, path, vector, tight=False)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=False):

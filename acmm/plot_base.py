@@ -17,7 +17,13 @@ from common.results import save_figure
 AXES = ("roll", "pitch", "yaw")
 
 
-def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Path]:
+#: rcParams of the cost-cut stage figures (issue 16), applied only while they are laid out and
+#: drawn (:func:`_save` with ``rc``, :func:`_bake_texts`), never set globally (the report draws
+#: its own figures, and two of these, in the same process): unhinted glyphs render ~40 % faster
+FAST_TEXT_RC = {"text.hinting": "none"}
+
+
+def _save(fig, path: Path, vector: bool = False, tight: bool = True, rc: dict | None = None) -> list[Path]:
     path = Path(path)
     out = [path.with_suffix(".png")]
     from acmm import parallel_figures
@@ -25,7 +31,7 @@ def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Pat
     if parallel_figures.active():
         if vector:
             out.append(path.with_suffix(".pdf"))
-        parallel_figures.run(lambda: _save_now(fig, path, [out[0]], vector, tight), str(out[0]))
+        parallel_figures.run(lambda: _save_now(fig, path, [out[0]], vector, tight, rc), str(out[0]))
         from common.outputs import record_written
 
         for p in out:               # written by the child: recorded here, or the stage prunes them
@@ -34,7 +40,7 @@ def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Pat
 
         plt.close(fig)
         return out
-    _save_now(fig, path, out, vector, tight)
+    _save_now(fig, path, out, vector, tight, rc)
     import matplotlib.pyplot as plt  # no fig.clf(): clearing 12 axes cost ~0.15 s, close frees it
 
     plt.close(fig)
@@ -45,12 +51,15 @@ def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Pat
 PNG_COMPRESS_LEVEL = 1
 
 
-def _save_now(fig, path: Path, out: list, vector: bool, tight: bool) -> None:
+def _save_now(fig, path: Path, out: list, vector: bool, tight: bool, rc: dict | None = None) -> None:
+    import matplotlib
+
     bbox = "tight" if tight else None
-    save_figure(fig, out[0], bbox_inches=bbox, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
-    if vector:
-        out.append(path.with_suffix(".pdf"))
-        save_figure(fig, out[1], bbox_inches=bbox)
+    with matplotlib.rc_context(rc or {}):
+        save_figure(fig, out[0], bbox_inches=bbox, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
+        if vector:
+            out.append(path.with_suffix(".pdf"))
+            save_figure(fig, out[1], bbox_inches=bbox)
 
 
 #: figure skeletons built ahead (:func:`prebuild`): (kind, parameters) → (figure, axes)
@@ -98,14 +107,16 @@ def _bake_texts(fig, texts) -> None:
     anti-aliased edges.  Drawn on any other canvas (a PDF, another size or resolution, a
     'tight' bounding box) the texts are drawn as texts instead.
     """
+    import matplotlib
     from matplotlib.backends.backend_agg import RendererAgg
 
-    w, h = (int(round(v)) for v in fig.bbox.size)
+    w, h = (round(float(v)) for v in fig.bbox.size)
     renderer = RendererAgg(w, h, fig.dpi)
     texts = [t for t in texts if t.get_visible()]
-    for t in texts:
-        t.draw(renderer)
-        t.set_visible(False)
+    with matplotlib.rc_context(FAST_TEXT_RC):
+        for t in texts:
+            t.draw(renderer)
+            t.set_visible(False)
     rgba = np.asarray(renderer.buffer_rgba())
     ink = rgba[..., 3] > 0
     tiles = []
@@ -252,6 +263,8 @@ def _compact_formatter():
     """A tick formatter writing each value in full and short (``−7.5e6``, ``0.0045``, ``−1.5e-5``)
     with the fewest significant digits that keep the labels distinct and exact: no offset or
     ×10ⁿ text above the axes (it collides with the panel titles and is one more text per axis)."""
+    import itertools
+
     from matplotlib.ticker import Formatter
 
     class Compact(Formatter):
@@ -270,8 +283,8 @@ def _compact_formatter():
             values = [float(v) for v in values]
             big = max((abs(v) for v in values), default=0.0)
             sci = big >= 1e5 or 0 < big < 1e-3
-            step = min((abs(b - a) for a, b in zip(values, values[1:]) if b != a), default=0.0)
-            for d in range(0, 10):
+            step = min((abs(b - a) for a, b in itertools.pairwise(values) if b != a), default=0.0)
+            for d in range(10):
                 labels = [self._label(v, d, sci) for v in values]
                 if all(abs(float(lab.replace("\N{MINUS SIGN}", "-")) - v) <= 1e-6 * step
                        for lab, v in zip(labels, values)):

@@ -12,6 +12,7 @@ import numpy as np
 from acmm.plot_base import (
     _BUILDERS,
     AXES,
+    FAST_TEXT_RC,
     _bake_texts,
     _compact_formatter,
     _data_limits,
@@ -112,7 +113,7 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
             _set_limits([axs[r, a]], xlim, data[:, a])
     _set_limits([], xlim, grids=grids, ticks_of=axs[-1, 0])
     fig.suptitle(title)
-    return _save(fig, path, vector, tight=False)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 def _inertia_layout(units: str):
@@ -172,7 +173,7 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
         line.set_data(orbits, inertia[:, i, j] / 1e6)
         _set_limits([ax], xlim, inertia[:, i, j] / 1e6)
     _set_limits([], xlim, grids=grids, ticks_of=axs[-1, 0])
-    return _save(fig, path, vector, tight=False)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 #: the per-level table of the summary: column headers (the last takes the momentum unit)
@@ -272,7 +273,7 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
         for text, column in zip(body, zip(*rows)):
             text.set_text("\n".join(column))
             text.set_fontsize(size)
-    return _save(fig, path, vector, tight=False)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 _BUILDERS.update({"axis_histories": _axis_histories_layout, "inertia_histories": _inertia_layout,

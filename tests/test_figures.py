@@ -17,8 +17,11 @@ UNIT = re.compile(r"^(?P<quantity>.{3,}?)\s*\((?P<unit>[^()]*(\([^()]*\))?[^()]*
 def captured(monkeypatch):
     figs = []
 
-    def fake_save(fig, path, vector=False, tight=True):
-        fig.canvas.draw()                      # renders: a figure that cannot draw fails here
+    def fake_save(fig, path, vector=False, tight=True, rc=None):
+        import matplotlib
+
+        with matplotlib.rc_context(rc or {}):
+            fig.canvas.draw()                  # renders: a figure that cannot draw fails here
         figs.append(fig)
         return [path]
 
