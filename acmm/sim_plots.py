@@ -132,11 +132,11 @@ def _inertia_layout(units: str):
         lines.append(ax.plot([], [], drawstyle="steps-post")[0])
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
-    fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
+    title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
     fig.subplots_adjust(left=0.07, right=0.98, bottom=0.09, top=0.9, wspace=0.3, hspace=0.25)
     _premake_ticks(axs[-1], 7, 5)
     _premake_ticks(axs[0], 0, 5)
-    _bake_texts(fig, [fig._suptitle, *(t for ax in axs.flat for t in (ax.title, ax.xaxis.label, ax.yaxis.label))])
+    _bake_texts(fig, [title, *(t for ax in axs.flat for t in (ax.title, ax.xaxis.label, ax.yaxis.label))])
     return fig, axs, lines, grids
 
 
