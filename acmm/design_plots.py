@@ -20,6 +20,7 @@ from acmm.plot_base import (
     _fixed_label_positions,
     _in_view_locator,
     _layout,
+    _line,
     _plt,
     _premake_ticks,
     _save,
@@ -53,8 +54,9 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
         if j < 20:
             grids.append(_x_grid(ax))
         _fixed_label_positions(ax, -0.13, -0.2)
-        lines.append([(ax.plot([], [], "o", ms=3, color=c, label=f"K({i + 1},·): LQR gain (dots), schedule (line)")[0],
-                       ax.plot([], [], "-", lw=1, color=c)[0])
+        lines.append([(_line(ax, marker="o", ls="none", ms=3, color=c,
+                             label=f"K({i + 1},·): LQR gain (dots), schedule (line)"),
+                       _line(ax, lw=1, color=c))
                       for i, c in enumerate(("C0", "C1", "C2"))])
     for ax in axs[-1]:
         ax.set_xlabel("pitch TEA θ2* (deg)")

@@ -19,6 +19,7 @@ from acmm.plot_base import (
     _fixed_label_positions,
     _in_view_locator,
     _layout,
+    _line,
     _plt,
     _premake_ticks,
     _save,
@@ -59,7 +60,7 @@ def _axis_histories_layout(units: str):
             if r == 0:
                 ax.set_title(AXES[a])
             ax.set_ylabel(label, fontsize=8 if a == 0 else 7)
-            lines.append(ax.plot([], [], lw=0.7)[0])
+            lines.append(_line(ax, lw=0.7, color="C0"))
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
     # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
@@ -129,7 +130,7 @@ def _inertia_layout(units: str):
         _panel_axes(ax, k >= 3, grids)
         ax.set_title(f"I({i + 1},{j + 1})")
         ax.set_ylabel(f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})")
-        lines.append(ax.plot([], [], drawstyle="steps-post")[0])
+        lines.append(_line(ax, drawstyle="steps-post", color="C0"))
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
     title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
@@ -199,7 +200,7 @@ def _summary_layout(units: str):
         _panel_axes(ax, True, [])
         ax.set_xlabel("time (orbits)")
         _fixed_label_positions(ax, -0.1 if ax is top else -0.12, -0.06 if ax is top else -0.12)
-        lines.append([ax.plot([], [], lw=0.7, label=AXES[a])[0] for a in range(3)])
+        lines.append([_line(ax, lw=0.7, color=f"C{a}", label=AXES[a]) for a in range(3)])
     # one legend for the three panels, above them: no 'best' placement search over the data
     fig.legend(handles=lines[0], loc="upper right", bbox_to_anchor=(0.98, 0.995), ncol=3, fontsize=8,
                frameon=False)
