@@ -29,10 +29,10 @@ from acmm.plot_base import (
 )
 
 
-def _panel_axes(ax, bottom: bool, grids: list, nx: int = 6) -> None:
+def _panel_axes(ax, bottom: bool, grids: list, nx: int = 5) -> None:
     """A history panel's axes: few y ticks written short; x ticks on the bottom row only
     (vertical grid lines above, :func:`acmm.plot_base._x_grid`); labels at fixed places."""
-    ax.yaxis.set_major_locator(_in_view_locator(4))
+    ax.yaxis.set_major_locator(_in_view_locator(3))
     ax.yaxis.set_major_formatter(_compact_formatter())
     ax.tick_params(labelsize=8)
     if bottom:
@@ -65,8 +65,8 @@ def _axis_histories_layout(units: str):
         ax.set_xlabel("time (orbits)")
     # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
     fig.subplots_adjust(left=0.07, right=0.98, bottom=0.06, top=0.93, wspace=0.25, hspace=0.12)
-    _premake_ticks(axs[-1], 7, 5)
-    _premake_ticks(axs[:-1].flat, 0, 5)
+    _premake_ticks(axs[-1], 6, 4)
+    _premake_ticks(axs[:-1].flat, 0, 4)
     _bake_texts(fig, [t for ax in axs.flat for t in (ax.title, ax.xaxis.label, ax.yaxis.label)])
     return fig, axs, lines, grids
 
@@ -135,8 +135,8 @@ def _inertia_layout(units: str):
         ax.set_xlabel("time (orbits)")
     title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
     fig.subplots_adjust(left=0.07, right=0.98, bottom=0.09, top=0.9, wspace=0.3, hspace=0.25)
-    _premake_ticks(axs[-1], 7, 5)
-    _premake_ticks(axs[0], 0, 5)
+    _premake_ticks(axs[-1], 6, 4)
+    _premake_ticks(axs[0], 0, 4)
     _bake_texts(fig, [title, *(t for ax in axs.flat for t in (ax.title, ax.xaxis.label, ax.yaxis.label))])
     return fig, axs, lines, grids
 
@@ -213,7 +213,7 @@ def _summary_layout(units: str):
     body = [table.text((k + 0.5) / 5, 0.91, "", ha="center", va="top", fontsize=8, linespacing=1.45,
                        transform=table.transAxes) for k in range(5)]
     fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
-    _premake_ticks([top, *mid], 7, 5)
+    _premake_ticks([top, *mid], 6, 4)
     _bake_texts(fig, [*head, *rules, *fig.legends,
                       *(t for ax in (top, *mid) for t in (ax.xaxis.label, ax.yaxis.label))])
     return fig, (top, mid, lines, body)
