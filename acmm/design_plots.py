@@ -209,6 +209,22 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
     return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
+def _path_check_layout():
+    """The path check's two axes with their labels and log scale (data-independent; the same
+    artists in the same order as drawing them after the data: the PNG is identical)."""
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
+    a1.set_ylabel("units of n")
+    a2.set_yscale("log")
+    a2.set_ylabel("disk margin α at u (skew 0)")
+    a2.set_xlabel("pitch TEA θ2* (deg)")
+    # a fixed layout: bbox 'tight' draws the figure twice
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
+    _premake_ticks([a1, a2], 10, 11)
+    a2.yaxis.get_minor_ticks(12)
+    return fig, (a1, a2)
+
+
 def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=False):
     """The scheduled gain on the local model along the path: largest Re λ and worst sector
     margin (units of n) and the plant-input disk margin α versus pitch TEA.
@@ -233,22 +249,29 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    plt = _plt()
     th = np.degrees(theta2)
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
+    fig, (a1, a2) = _layout("schedule_path_check")
     a1.plot(th, max_real, "-", color="C3", label="largest Re λ / n")
     a1.plot(th, margin, "-", color="C0", label="worst sector margin / n")
     a1.axhline(0.0, color="k", lw=0.8)
     a1.axhline(-0.25, color="C3", lw=0.8, ls="--", label="Re λ = −0.25n")
-    a1.set_ylabel("units of n")
     a1.legend(fontsize=7)
     a1.set_title(f"Scheduled gain on the local model at {th.size} TEAs")
-    a2.semilogy(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
-    a2.set_ylabel("disk margin α at u (skew 0)")
-    a2.set_xlabel("pitch TEA θ2* (deg)")
-    # a fixed layout: bbox 'tight' draws the figure twice
-    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
+    a2.plot(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
     return _save(fig, path, vector, tight=False)
+
+
+def _scheduled_poles_layout():
+    """The scheduled pole map's axes with labels and title (data-independent; the PNG is
+    identical to drawing them after the data)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
+    ax.set_xlabel("Re λ / n")
+    ax.set_ylabel("Im λ / n")
+    ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
+    _premake_ticks([ax], 10, 10)
+    return fig, ax
 
 
 def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=False):
@@ -277,10 +300,8 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    plt = _plt()
     p = np.asarray(poles) / n
-    fig, ax = plt.subplots(figsize=(6.5, 5.5))
-    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
+    fig, ax = _layout("scheduled_pole_map")
     t = np.tan(np.radians(half_angle_deg))
     lo = max(min(p.real.min() * 1.05, -2 * sigma), -60.0)
     x = np.linspace(lo, -sigma, 10)
@@ -295,11 +316,9 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
     ax.set_xlim(lo, max(1.0, p.real.max() * 1.1))
     ylim = min(max(3.0, np.abs(p.imag).max() * 1.05), 60.0)
     ax.set_ylim(-ylim, ylim)
-    ax.set_xlabel("Re λ / n")
-    ax.set_ylabel("Im λ / n")
-    ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
     ax.legend(fontsize=7, loc="upper left")
     return _save(fig, path, vector, tight=False)
 
 
-_BUILDERS.update({"gain_schedule_grid": _gain_grid_layout})
+_BUILDERS.update({"gain_schedule_grid": _gain_grid_layout, "schedule_path_check": _path_check_layout,
+                  "scheduled_pole_map": _scheduled_poles_layout})

@@ -81,8 +81,8 @@ def prebuild(kind: str, *params) -> None:
     Parameters
     ----------
     kind : str
-        The figure: ``"axis_histories"``, ``"inertia_histories"``, ``"summary"`` or
-        ``"gain_schedule_grid"``.
+        The figure: ``"axis_histories"``, ``"inertia_histories"``, ``"summary"``,
+        ``"gain_schedule_grid"``, ``"schedule_path_check"`` or ``"scheduled_pole_map"``.
     *params : str or tuple
         The parameters of its skeleton, as the figure function passes them (the unit system
         ``"imperial"``/``"SI"``; for the gain grid the state names, state unit labels and torque

@@ -201,11 +201,18 @@ def test_prebuilt_skeleton_draws_the_same_png(tmp_path):
             for kind in ("axis_histories", "summary"):
                 plots.prebuild(kind, "SI")
             plots.prebuild("gain_schedule_grid", names, units, "ft·lbf")
+            plots.prebuild("schedule_path_check")
+            plots.prebuild("scheduled_pole_map")
         plots.axis_histories(t, x, x, x, x, "t", tmp_path / f"a{pre}.png", units="SI")
         plots.summary(t, x, x, x, stats, "BOUNDED", "s", tmp_path / f"s{pre}.png", units="SI")
         plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / f"g{pre}.png", units=list(units))
+        # the path figures (the report draws them too, without a skeleton: the same pixels)
+        plots.schedule_path_check(theta2, -0.5 - x[:12, 0] ** 2, -1 - x[:12, 1] ** 2, 0.5 + x[:12, 2] ** 2,
+                                  tmp_path / f"m{pre}.png")
+        poles = (-1.0 - np.arange(24.0) + 1j * np.sin(np.arange(24.0)))[None, :] * (1 + theta2[:, None])
+        plots.scheduled_pole_map(poles * 0.001, theta2, 0.001, 0.5, 45.0, tmp_path / f"p{pre}.png")
     assert not plots._LAYOUTS                        # each skeleton used once
-    for name in ("a", "s", "g"):
+    for name in ("a", "s", "g", "m", "p"):
         assert (tmp_path / f"{name}True.png").read_bytes() == (tmp_path / f"{name}False.png").read_bytes()
 
 
