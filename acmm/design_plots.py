@@ -222,6 +222,11 @@ def _path_check_layout():
     fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
     _premake_ticks([a1, a2], 10, 11)
     a2.yaxis.get_minor_ticks(12)
+    # the log axis' 10ⁿ tick labels are mathtext: its parser (a grammar built on first use, the
+    # costliest step of this figure in a fresh figure writer) is built here, ahead
+    from matplotlib.mathtext import MathTextParser
+
+    MathTextParser("agg").parse(r"$\mathdefault{10^{0}}$", fig.dpi)
     return fig, (a1, a2)
 
 
