@@ -2,6 +2,14 @@
 forked writer when :mod:`acmm.parallel_figures` is active), figure skeletons built ahead
 (:func:`prebuild`), tick and line thinning, and the unit labels of the 24 states of eq 4.46.
 
+Drawing cost (issue 16): a skeleton holds everything that does not depend on the data (axes,
+empty lines, legend, tick artists) and its fixed texts already rasterized (:func:`_bake_texts`);
+the figure function then sets the data and the limits (:func:`_set_limits`, no autoscaling
+bookkeeping) and saves.  Panels above the bottom row of a grid have vertical grid lines instead
+of x ticks (:func:`_x_grid`), tick labels are few and short (:func:`_in_view_locator`,
+:func:`_compact_formatter`) and text is unhinted while these figures are drawn
+(:data:`FAST_TEXT_RC`).
+
 Split from :mod:`acmm.plots` (issue 12), which re-exports these names; the figures themselves
 are in :mod:`acmm.design_plots` and :mod:`acmm.sim_plots`.
 """
