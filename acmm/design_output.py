@@ -226,6 +226,8 @@ def prepare_design_figures(s, units_system: str) -> None:
 
     figure_worker.prepare(plots.prebuild, "gain_schedule_grid", tuple(STATE_NAMES),
                           *gain_labels(s.drf_mode, units_system), for_figure="gain_schedule_grid")
+    for kind in ("schedule_path_check", "scheduled_pole_map"):   # the path figures' axes (issue 16)
+        figure_worker.prepare(plots.prebuild, kind, for_figure=kind)
 
 
 def pole_map_figure(points, s, run_dir: Path) -> None:

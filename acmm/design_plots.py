@@ -13,30 +13,62 @@ import numpy as np
 
 from acmm.plot_base import (
     _BUILDERS,
-    _few_ticks,
+    FAST_TEXT_RC,
+    _bake_texts,
+    _compact_formatter,
+    _data_limits,
+    _fixed_label_positions,
+    _in_view_locator,
     _layout,
+    _line,
     _plt,
     _premake_ticks,
     _save,
+    _set_limits,
+    _x_grid,
     gain_unit,
     state_units,
 )
 
 
 def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
+    """The 24 panels with their (empty) lines, titles, units and legend; the data only set later.
+
+    Cost-cut (issue 16): no shared x axes (24 shared axes re-resolve their view limits and
+    measure their siblings' tick labels at each draw; the limits are set once per panel
+    instead), the gain's unit in the panel title (no rotated 6-pt y label), x ticks only on
+    the bottom row (above it the vertical grid lines at the same TEAs are one line collection
+    per panel, not five ticks of five artists each), fixed label positions, and the legend once
+    for the figure (no 'best' placement search).
+    """
     plt = _plt()
-    fig, axs = plt.subplots(6, 4, figsize=(13, 15), sharex=True, dpi=80)
+    fig = plt.figure(figsize=(13, 15), dpi=80)
+    axs = fig.subplots(6, 4)
+    lines, grids = [], []
     for j, ax in enumerate(axs.flat):
-        ax.set_title(f"K(i,{j + 1}) — {state_names[j]}", fontsize=8)
-        ax.set_ylabel(f"K(i,{j + 1}) ({gain_unit(units[j], torque_unit)})", fontsize=6)
+        ax.set_title(f"K(i,{j + 1}) — {state_names[j]} ({gain_unit(units[j], torque_unit)})", fontsize=8)
         ax.tick_params(labelsize=7)
-        _few_ticks(ax)
+        ax.xaxis.set_major_locator(_in_view_locator(4))
+        ax.yaxis.set_major_locator(_in_view_locator(3))
+        ax.yaxis.set_major_formatter(_compact_formatter())
+        if j < 20:
+            grids.append(_x_grid(ax))
+        _fixed_label_positions(ax, -0.13, -0.2)
+        lines.append([(_line(ax, marker="o", ls="none", ms=3, color=c,
+                             label=f"K({i + 1},·): LQR gain (dots), schedule (line)"),
+                       _line(ax, lw=1, color=c))
+                      for i, c in enumerate(("C0", "C1", "C2"))])
     for ax in axs[-1]:
         ax.set_xlabel("pitch TEA θ2* (deg)")
+    fig.legend(handles=[d for d, _ in lines[0]], loc="upper center", bbox_to_anchor=(0.5, 0.978),
+               ncol=3, fontsize=7, frameon=False)
     # a fixed layout: tight_layout/bbox 'tight' on 24 panels costs seconds
-    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.45, hspace=0.35)
-    _premake_ticks(axs.flat, 7, 7)
-    return fig, axs
+    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.38, hspace=0.3)
+    _premake_ticks(axs.flat[20:], 5, 4)
+    _premake_ticks(axs.flat[:20], 0, 4)
+    _bake_texts(fig, [*(ax.title for ax in axs.flat), *(ax.xaxis.label for ax in axs[-1]),
+                              *fig.legends])
+    return fig, axs, lines, grids
 
 
 @dataclass
@@ -112,17 +144,19 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     """
     theta2_deg = np.degrees(theta2)
     curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
-    fine, kf = curve.theta2, curve.gains
+    fine, kf = np.degrees(curve.theta2), curve.gains
     units = units or state_units()
-    fig, axs = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
+    fig, axs, lines, grids = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
+    xlim = _data_limits(theta2_deg, fine)
     for j, ax in enumerate(axs.flat):
-        for i, color in zip(range(3), ("C0", "C1", "C2")):
-            ax.plot(theta2_deg, gains[:, i, j], "o", ms=3, color=color, label=f"K({i + 1},·) LQR")
-            ax.plot(np.degrees(fine), kf[:, i, j], "-", lw=1, color=color)
-    axs[0, 0].legend(fontsize=6)
+        for i, (dots, line) in enumerate(lines[j]):
+            dots.set_data(theta2_deg, gains[:, i, j])
+            line.set_data(fine, kf[:, i, j])
+        _set_limits([ax], xlim, gains[:, :, j], kf[:, :, j])
+    _set_limits([], xlim, grids=grids, ticks_of=axs[-1, 0])     # the bottom row's TEA ticks above
     fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
-                 "(cf. Figs 5.3–5.26)")
-    return _save(fig, path, vector, tight=False)
+                 "(cf. Figs 5.3–5.26)", y=0.995)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=False):
@@ -169,9 +203,31 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
     ax.set_xlabel("real part Re λ (units of n, the orbit rate)")
     ax.set_ylabel("imaginary part Im λ (units of n)")
     ax.set_title(f"Closed-loop poles and the sector (Re λ ≤ −{sigma}n, |Im λ| ≤ tan {half_angle_deg:g}°·|Re λ|)")
-    ax.legend(fontsize=6, ncol=2)
+    # a fixed place, not 'best' (a search over every pole): the corner outside the sector
+    ax.legend(fontsize=6, ncol=2, loc="upper right")
     fig.subplots_adjust(left=0.12, right=0.97, bottom=0.1, top=0.92)
-    return _save(fig, path, vector, tight=False)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+
+
+def _path_check_layout():
+    """The path check's two axes with their labels and log scale (data-independent; the same
+    artists in the same order as drawing them after the data: the PNG is identical)."""
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
+    a1.set_ylabel("units of n")
+    a2.set_yscale("log")
+    a2.set_ylabel("disk margin α at u (skew 0)")
+    a2.set_xlabel("pitch TEA θ2* (deg)")
+    # a fixed layout: bbox 'tight' draws the figure twice
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
+    _premake_ticks([a1, a2], 10, 11)
+    a2.yaxis.get_minor_ticks(12)
+    # the log axis' 10ⁿ tick labels are mathtext: its parser (a grammar built on first use, the
+    # costliest step of this figure in a fresh figure writer) is built here, ahead
+    from matplotlib.mathtext import MathTextParser
+
+    MathTextParser("agg").parse(r"$\mathdefault{10^{0}}$", fig.dpi)
+    return fig, (a1, a2)
 
 
 def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=False):
@@ -198,22 +254,29 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    plt = _plt()
     th = np.degrees(theta2)
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
+    fig, (a1, a2) = _layout("schedule_path_check")
     a1.plot(th, max_real, "-", color="C3", label="largest Re λ / n")
     a1.plot(th, margin, "-", color="C0", label="worst sector margin / n")
     a1.axhline(0.0, color="k", lw=0.8)
     a1.axhline(-0.25, color="C3", lw=0.8, ls="--", label="Re λ = −0.25n")
-    a1.set_ylabel("units of n")
     a1.legend(fontsize=7)
     a1.set_title(f"Scheduled gain on the local model at {th.size} TEAs")
-    a2.semilogy(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
-    a2.set_ylabel("disk margin α at u (skew 0)")
-    a2.set_xlabel("pitch TEA θ2* (deg)")
-    # a fixed layout: bbox 'tight' draws the figure twice
-    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
+    a2.plot(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
     return _save(fig, path, vector, tight=False)
+
+
+def _scheduled_poles_layout():
+    """The scheduled pole map's axes with labels and title (data-independent; the PNG is
+    identical to drawing them after the data)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
+    ax.set_xlabel("Re λ / n")
+    ax.set_ylabel("Im λ / n")
+    ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
+    _premake_ticks([ax], 10, 10)
+    return fig, ax
 
 
 def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=False):
@@ -242,10 +305,8 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    plt = _plt()
     p = np.asarray(poles) / n
-    fig, ax = plt.subplots(figsize=(6.5, 5.5))
-    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
+    fig, ax = _layout("scheduled_pole_map")
     t = np.tan(np.radians(half_angle_deg))
     lo = max(min(p.real.min() * 1.05, -2 * sigma), -60.0)
     x = np.linspace(lo, -sigma, 10)
@@ -260,11 +321,9 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
     ax.set_xlim(lo, max(1.0, p.real.max() * 1.1))
     ylim = min(max(3.0, np.abs(p.imag).max() * 1.05), 60.0)
     ax.set_ylim(-ylim, ylim)
-    ax.set_xlabel("Re λ / n")
-    ax.set_ylabel("Im λ / n")
-    ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
     ax.legend(fontsize=7, loc="upper left")
     return _save(fig, path, vector, tight=False)
 
 
-_BUILDERS.update({"gain_schedule_grid": _gain_grid_layout})
+_BUILDERS.update({"gain_schedule_grid": _gain_grid_layout, "schedule_path_check": _path_check_layout,
+                  "scheduled_pole_map": _scheduled_poles_layout})

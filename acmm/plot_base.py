@@ -2,6 +2,14 @@
 forked writer when :mod:`acmm.parallel_figures` is active), figure skeletons built ahead
 (:func:`prebuild`), tick and line thinning, and the unit labels of the 24 states of eq 4.46.
 
+Drawing cost (issue 16): a skeleton holds everything that does not depend on the data (axes,
+empty lines, legend, tick artists) and its fixed texts already rasterized (:func:`_bake_texts`);
+the figure function then sets the data and the limits (:func:`_set_limits`, no autoscaling
+bookkeeping) and saves.  Panels above the bottom row of a grid have vertical grid lines instead
+of x ticks (:func:`_x_grid`), tick labels are few and short (:func:`_in_view_locator`,
+:func:`_compact_formatter`) and text is unhinted while these figures are drawn
+(:data:`FAST_TEXT_RC`).
+
 Split from :mod:`acmm.plots` (issue 12), which re-exports these names; the figures themselves
 are in :mod:`acmm.design_plots` and :mod:`acmm.sim_plots`.
 """
@@ -17,7 +25,13 @@ from common.results import save_figure
 AXES = ("roll", "pitch", "yaw")
 
 
-def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Path]:
+#: rcParams of the cost-cut stage figures (issue 16), applied only while they are laid out and
+#: drawn (:func:`_save` with ``rc``, :func:`_bake_texts`), never set globally (the report draws
+#: its own figures, and two of these, in the same process): unhinted glyphs render ~40 % faster
+FAST_TEXT_RC = {"text.hinting": "none"}
+
+
+def _save(fig, path: Path, vector: bool = False, tight: bool = True, rc: dict | None = None) -> list[Path]:
     path = Path(path)
     out = [path.with_suffix(".png")]
     from acmm import parallel_figures
@@ -25,7 +39,7 @@ def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Pat
     if parallel_figures.active():
         if vector:
             out.append(path.with_suffix(".pdf"))
-        parallel_figures.run(lambda: _save_now(fig, path, [out[0]], vector, tight), str(out[0]))
+        parallel_figures.run(lambda: _save_now(fig, path, [out[0]], vector, tight, rc), str(out[0]))
         from common.outputs import record_written
 
         for p in out:               # written by the child: recorded here, or the stage prunes them
@@ -34,23 +48,26 @@ def _save(fig, path: Path, vector: bool = False, tight: bool = True) -> list[Pat
 
         plt.close(fig)
         return out
-    _save_now(fig, path, out, vector, tight)
+    _save_now(fig, path, out, vector, tight, rc)
     import matplotlib.pyplot as plt  # no fig.clf(): clearing 12 axes cost ~0.15 s, close frees it
 
     plt.close(fig)
     return out
 
 
-#: PNG deflate level: 3 encodes ~1.5x faster than PIL's default 6 for ~8 % larger files (issue 16)
-PNG_COMPRESS_LEVEL = 3
+#: PNG deflate level: 1 encodes ~1.7x faster than PIL's default 6 for ~10 % larger files (issue 16)
+PNG_COMPRESS_LEVEL = 1
 
 
-def _save_now(fig, path: Path, out: list, vector: bool, tight: bool) -> None:
+def _save_now(fig, path: Path, out: list, vector: bool, tight: bool, rc: dict | None = None) -> None:
+    import matplotlib
+
     bbox = "tight" if tight else None
-    save_figure(fig, out[0], bbox_inches=bbox, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
-    if vector:
-        out.append(path.with_suffix(".pdf"))
-        save_figure(fig, out[1], bbox_inches=bbox)
+    with matplotlib.rc_context(rc or {}):
+        save_figure(fig, out[0], bbox_inches=bbox, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
+        if vector:
+            out.append(path.with_suffix(".pdf"))
+            save_figure(fig, out[1], bbox_inches=bbox)
 
 
 #: figure skeletons built ahead (:func:`prebuild`): (kind, parameters) → (figure, axes)
@@ -72,8 +89,8 @@ def prebuild(kind: str, *params) -> None:
     Parameters
     ----------
     kind : str
-        The figure: ``"axis_histories"``, ``"inertia_histories"``, ``"summary"`` or
-        ``"gain_schedule_grid"``.
+        The figure: ``"axis_histories"``, ``"inertia_histories"``, ``"summary"``,
+        ``"gain_schedule_grid"``, ``"schedule_path_check"`` or ``"scheduled_pole_map"``.
     *params : str or tuple
         The parameters of its skeleton, as the figure function passes them (the unit system
         ``"imperial"``/``"SI"``; for the gain grid the state names, state unit labels and torque
@@ -85,6 +102,75 @@ def prebuild(kind: str, *params) -> None:
 def _layout(kind: str, *params):
     got = _LAYOUTS.pop((kind, params), None)
     return got if got is not None else _BUILDERS[kind](*params)
+
+
+def _bake_texts(fig, texts) -> None:
+    """Render data-independent ``texts`` (titles, axis labels, a legend: artists already placed
+    by a fixed layout) now, into small transparent images at the figure's resolution that take
+    their place; the texts themselves are hidden.
+
+    Laying out and rasterizing text is the costliest part of drawing a stage figure (each glyph
+    is rendered on its own); a skeleton built ahead (:func:`prebuild`) thus pays it before the
+    data exist.  The PNG differs from drawing the texts at save time only by rounding of the
+    anti-aliased edges.  Drawn on any other canvas (a PDF, another size or resolution, a
+    'tight' bounding box) the texts are drawn as texts instead.
+    """
+    import matplotlib
+    from matplotlib.backends.backend_agg import RendererAgg
+
+    w, h = (round(float(v)) for v in fig.bbox.size)
+    renderer = RendererAgg(w, h, fig.dpi)
+    texts = [t for t in texts if t.get_visible()]
+    with matplotlib.rc_context(FAST_TEXT_RC):
+        for t in texts:
+            t.draw(renderer)
+            t.set_visible(False)
+    rgba = np.asarray(renderer.buffer_rgba())
+    ink = rgba[..., 3] > 0
+    tiles = []
+    for r0, r1 in _runs(ink.any(axis=1), 0):
+        for c0, c1 in _runs(ink[r0:r1].any(axis=0), 8):
+            tiles.append((c0, h - r1, rgba[r0:r1, c0:c1][::-1].copy()))   # rows bottom first
+    fig.add_artist(_tiles_artist(tiles, texts, (w, h, fig.dpi)))
+
+
+def _tiles_artist(tiles: list, texts: list, canvas: tuple):
+    """An artist blending pre-rendered RGBA ``tiles`` ``(x, y, array)`` (pixels from the lower
+    left, rows bottom first) onto an Agg renderer of ``canvas`` (width, height, dpi) as they
+    are, without resampling; on any other renderer it draws the hidden ``texts`` instead."""
+    from matplotlib.artist import Artist
+    from matplotlib.backends.backend_agg import RendererAgg
+
+    class Tiles(Artist):
+        zorder = 3
+
+        def draw(self, renderer) -> None:
+            if not self.get_visible():
+                return
+            if not (isinstance(renderer, RendererAgg) and (renderer.width, renderer.height, renderer.dpi) == canvas):
+                for t in texts:
+                    t.set_visible(True)
+                    t.draw(renderer)
+                    t.set_visible(False)
+                return
+            gc = renderer.new_gc()
+            for x, y, im in tiles:
+                renderer.draw_image(gc, x, y, im)
+            gc.restore()
+            self.stale = False
+
+    return Tiles()
+
+
+def _runs(mask, gap: int) -> list:
+    """(start, stop) of the runs of True in ``mask``, runs closer than ``gap`` merged."""
+    idx = np.flatnonzero(mask)
+    if idx.size == 0:
+        return []
+    cut = np.flatnonzero(np.diff(idx) > gap + 1)
+    starts = np.concatenate([[idx[0]], idx[cut + 1]])
+    stops = np.concatenate([idx[cut], [idx[-1]]]) + 1
+    return list(zip(starts.tolist(), stops.tolist()))
 
 
 def _premake_ticks(axes, nx: int = 9, ny: int = 8) -> None:
@@ -172,12 +258,123 @@ def state_units(drf_mode: str = "attitude_hold") -> list[str]:
     return [pretty(u) for u in units(drf_mode)]
 
 
-def _few_ticks(ax, nx: int = 4, ny: int = 4) -> None:
-    """At most ~``nx``/``ny`` major ticks: every tick is four artists to create and draw."""
+def _fixed_label_positions(ax, x=None, y=None) -> None:
+    """Place the axis labels at fixed axes coordinates (x label at ``x`` below, y label at ``y``
+    left of the axes): the automatic placement measures every tick label a second time per axis."""
+    if x is not None:
+        ax.xaxis.set_label_coords(0.5, x)
+    if y is not None:
+        ax.yaxis.set_label_coords(y, 0.5)
+
+
+def _compact_formatter():
+    """A tick formatter writing each value in full and short (``−7.5e6``, ``0.0045``, ``−1.5e-5``)
+    with the fewest significant digits that keep the labels distinct and exact: no offset or
+    ×10ⁿ text above the axes (it collides with the panel titles and is one more text per axis)."""
+    import itertools
+
+    from matplotlib.ticker import Formatter
+
+    class Compact(Formatter):
+        @staticmethod
+        def _label(v: float, d: int, sci: bool) -> str:
+            if v == 0:
+                return "0"
+            if sci:
+                m, e = f"{v:.{d}e}".split("e")
+                s = f"{m.rstrip('0').rstrip('.') if '.' in m else m}e{int(e)}"
+            else:
+                s = f"{v:.{d}f}"
+            return s.replace("-", "\N{MINUS SIGN}")
+
+        def format_ticks(self, values):
+            values = [float(v) for v in values]
+            big = max((abs(v) for v in values), default=0.0)
+            sci = big >= 1e5 or 0 < big < 1e-3
+            step = min((abs(b - a) for a, b in itertools.pairwise(values) if b != a), default=0.0)
+            for d in range(10):
+                labels = [self._label(v, d, sci) for v in values]
+                if all(abs(float(lab.replace("\N{MINUS SIGN}", "-")) - v) <= 1e-6 * step
+                       for lab, v in zip(labels, values)):
+                    return labels
+            return labels
+
+        def __call__(self, x, pos=None):
+            return self.format_ticks([x])[0]
+
+    return Compact()
+
+
+def _in_view_locator(nbins: int = 4):
+    """At most ``nbins`` + 1 "nice" ticks inside the view (at least three): matplotlib's
+    :class:`~matplotlib.ticker.MaxNLocator` also returns the ticks just outside it, and the axis
+    makes (five artists) and updates a tick for each before dropping them."""
     from matplotlib.ticker import MaxNLocator
 
-    ax.xaxis.set_major_locator(MaxNLocator(nx))
-    ax.yaxis.set_major_locator(MaxNLocator(ny))
+    class InView(MaxNLocator):
+        def __call__(self):
+            lo, hi = sorted(self.axis.get_view_interval())
+            tol = 1e-9 * max(hi - lo, abs(hi), abs(lo), 1e-300)
+            return [v for v in self.tick_values(lo, hi) if lo - tol <= v <= hi + tol]
+
+    return InView(nbins, min_n_ticks=3)
+
+
+def _line(ax, **kw):
+    """An empty :class:`~matplotlib.lines.Line2D` with ``kw`` added to ``ax`` (its data set later
+    with ``set_data``; ~40 % cheaper than ``ax.plot``'s argument handling)."""
+    from matplotlib.lines import Line2D
+
+    return ax.add_line(Line2D([], [], **kw))
+
+
+def _x_grid(ax):
+    """No x ticks on ``ax``, only vertical grid lines, as one line collection placed at the x
+    ticks of another panel by :func:`_set_x_grid` (a panel above the bottom row of a grid: five
+    ticks of five artists each become one artist)."""
+    import matplotlib as mpl
+    from matplotlib.collections import LineCollection
+    from matplotlib.ticker import NullLocator
+
+    ax.xaxis.set_major_locator(NullLocator())
+    rc = mpl.rcParams
+    return ax.add_collection(LineCollection([], colors=rc["grid.color"], linewidths=rc["grid.linewidth"],
+                                            alpha=rc["grid.alpha"], transform=ax.get_xaxis_transform(),
+                                            zorder=1.5), autolim=False)
+
+
+def _set_limits(axs, xlim, *ys, grids=(), ticks_of=None) -> None:
+    """Set the x limits ``xlim`` of ``axs`` (and, with ``ys``, their common y limits, the data's
+    range with matplotlib's margins); ``grids`` (:func:`_x_grid`) get the x ticks of ``ticks_of``."""
+    ylim = _data_limits(*ys) if ys else None
+    for ax in axs:
+        if xlim is not None:
+            ax.set_xlim(xlim)
+        if ylim is not None:
+            ax.set_ylim(ylim)
+    if grids and xlim is not None:
+        xt = [x for x in ticks_of.xaxis.get_major_locator().tick_values(*xlim) if xlim[0] <= x <= xlim[1]]
+        # (ticks_of's locator: the tick values it would draw within xlim)
+        for grid in grids:
+            grid.set_segments([[(x, 0.0), (x, 1.0)] for x in xt])
+
+
+def _data_limits(*arrays, margin: float = 0.05):
+    """(lo, hi) of the finite values of ``arrays`` widened by ``margin`` of the span on each side
+    (matplotlib's autoscale margins), or None when there is none; set on an axis directly this
+    replaces the data-limit bookkeeping of the plotting calls."""
+    lo, hi = np.inf, -np.inf
+    for a in arrays:
+        a = np.asarray(a, dtype=float)
+        a = a[np.isfinite(a)]
+        if a.size:
+            lo, hi = min(lo, float(a.min())), max(hi, float(a.max()))
+    if lo > hi:
+        return None
+    pad = (hi - lo) * margin
+    if pad <= 1e-12 * max(abs(lo), abs(hi)):         # one value: ±5 % of it (or ±0.05 about 0)
+        pad = 0.05 * abs(lo) if lo else 0.05
+    return lo - pad, hi + pad
 
 
 def gain_unit(state_unit: str, torque_unit: str = "ft·lbf") -> str:

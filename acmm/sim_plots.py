@@ -12,36 +12,63 @@ import numpy as np
 from acmm.plot_base import (
     _BUILDERS,
     AXES,
-    _few_ticks,
+    FAST_TEXT_RC,
+    _bake_texts,
+    _compact_formatter,
+    _data_limits,
+    _fixed_label_positions,
+    _in_view_locator,
     _layout,
+    _line,
     _plt,
     _premake_ticks,
     _save,
+    _set_limits,
+    _x_grid,
     decimate,
 )
 
 
+def _panel_axes(ax, bottom: bool, grids: list, nx: int = 5) -> None:
+    """A history panel's axes: few y ticks written short; x ticks on the bottom row only
+    (vertical grid lines above, :func:`acmm.plot_base._x_grid`); labels at fixed places."""
+    ax.yaxis.set_major_locator(_in_view_locator(3))
+    ax.yaxis.set_major_formatter(_compact_formatter())
+    ax.tick_params(labelsize=8)
+    if bottom:
+        ax.xaxis.set_major_locator(_in_view_locator(nx))
+    else:
+        grids.append(_x_grid(ax))
+    _fixed_label_positions(ax, -0.12, -0.18)
+
+
 def _axis_histories_layout(units: str):
+    """The 12 panels with their (empty) lines, titles and labels (pre-rendered: _bake_texts)."""
     from common.units import pretty, shown
 
     plt = _plt()
-    fig, axs = plt.subplots(4, 3, figsize=(13, 10), sharex=True)
+    fig = plt.figure(figsize=(13, 10))
+    axs = fig.subplots(4, 3)
     uu, hu = shown(1.0, "ft*lbf", units)[1], shown(1.0, "ft*lbf*s", units)[1]
     labels = ["attitude error θ−θ̂* (deg)", "body rate rel. LVLH (deg/s)",
               f"control torque ({pretty(uu)})", f"CMG momentum ({pretty(hu)})"]
+    grids, lines = [], []
     for r, label in enumerate(labels):
         for a in range(3):
             ax = axs[r, a]
-            _few_ticks(ax, 6, 4)
+            _panel_axes(ax, r == 3, grids)
             if r == 0:
                 ax.set_title(AXES[a])
             ax.set_ylabel(label, fontsize=8 if a == 0 else 7)
+            lines.append(_line(ax, lw=0.7, color="C0"))
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
     # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
     fig.subplots_adjust(left=0.07, right=0.98, bottom=0.06, top=0.93, wspace=0.25, hspace=0.12)
-    _premake_ticks(axs.flat)
-    return fig, axs
+    _premake_ticks(axs[-1], 6, 4)
+    _premake_ticks(axs[:-1].flat, 0, 4)
+    _bake_texts(fig, [t for ax in axs.flat for t in (ax.title, ax.xaxis.label, ax.yaxis.label)])
+    return fig, axs, lines, grids
 
 
 def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units="imperial"):
@@ -77,31 +104,41 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     """
     from common.units import shown
 
-    fig, axs = _layout("axis_histories", units)
+    fig, axs, lines, grids = _layout("axis_histories", units)
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
+    xlim = _data_limits(orbits)
     for r, data in enumerate((err_deg, rate, u, h)):
         for a in range(3):
-            axs[r, a].plot(*decimate(orbits, data[:, a]), lw=0.7)
+            lines[3 * r + a].set_data(*decimate(orbits, data[:, a]))
+            _set_limits([axs[r, a]], xlim, data[:, a])
+    _set_limits([], xlim, grids=grids, ticks_of=axs[-1, 0])
     fig.suptitle(title)
-    return _save(fig, path, vector, tight=False)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 def _inertia_layout(units: str):
+    """The six panels with their (empty) step lines, titles and labels (pre-rendered)."""
     from common.units import pretty, shown
 
     iu = shown(1.0, "slug*ft^2", units)[1]
     plt = _plt()
-    fig, axs = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
-    for ax, (i, j) in zip(axs.flat, _INERTIA_ELEMENTS):
+    fig = plt.figure(figsize=(12, 6))
+    axs = fig.subplots(2, 3)
+    grids, lines = [], []
+    for k, (ax, (i, j)) in enumerate(zip(axs.flat, _INERTIA_ELEMENTS)):
+        _panel_axes(ax, k >= 3, grids)
         ax.set_title(f"I({i + 1},{j + 1})")
         ax.set_ylabel(f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})")
+        lines.append(_line(ax, drawstyle="steps-post", color="C0"))
     for ax in axs[-1]:
         ax.set_xlabel("time (orbits)")
-    fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
+    title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
     fig.subplots_adjust(left=0.07, right=0.98, bottom=0.09, top=0.9, wspace=0.3, hspace=0.25)
-    _premake_ticks(axs.flat)
-    return fig, axs
+    _premake_ticks(axs[-1], 6, 4)
+    _premake_ticks(axs[0], 0, 4)
+    _bake_texts(fig, [title, *(t for ax in axs.flat for t in (ax.title, ax.xaxis.label, ax.yaxis.label))])
+    return fig, axs, lines, grids
 
 
 _INERTIA_ELEMENTS = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
@@ -131,13 +168,22 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
     from common.units import shown
 
     inertia = shown(np.asarray(inertia), "slug*ft^2", units)[0]
-    fig, axs = _layout("inertia_histories", units)
-    for ax, (i, j) in zip(axs.flat, _INERTIA_ELEMENTS):
-        ax.step(orbits, inertia[:, i, j] / 1e6, where="post")
-    return _save(fig, path, vector, tight=False)
+    fig, axs, lines, grids = _layout("inertia_histories", units)
+    xlim = _data_limits(orbits)
+    for ax, line, (i, j) in zip(axs.flat, lines, _INERTIA_ELEMENTS):
+        line.set_data(orbits, inertia[:, i, j] / 1e6)
+        _set_limits([ax], xlim, inertia[:, i, j] / 1e6)
+    _set_limits([], xlim, grids=grids, ticks_of=axs[-1, 0])
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+
+
+#: the per-level table of the summary: column headers (the last takes the momentum unit)
+_TABLE_HEADER = ("level", "start (orbit)", "θ2* est (deg)", "steady |err| max (deg) r/p/y", "peak |h| ({})")
 
 
 def _summary_layout(units: str):
+    """The three panels with their (empty) lines, one legend, the table's header and empty
+    columns; titles, labels, legend and header pre-rendered (_bake_texts)."""
     from common.units import pretty, shown
 
     hu, uu = shown(1.0, "ft*lbf*s", units)[1], shown(1.0, "ft*lbf", units)[1]
@@ -146,17 +192,31 @@ def _summary_layout(units: str):
     gs = fig.add_gridspec(3, 2)
     top = fig.add_subplot(gs[0, :])
     top.set_ylabel("attitude error (deg)")
-    top.set_xlabel("time (orbits)")
-    mid = []
-    for col, label in enumerate((f"CMG momentum ({pretty(hu)})", f"delivered torque ({pretty(uu)})")):
-        ax = fig.add_subplot(gs[1, col])
+    mid = [fig.add_subplot(gs[1, col]) for col in range(2)]
+    for ax, label in zip(mid, (f"CMG momentum ({pretty(hu)})", f"delivered torque ({pretty(uu)})")):
         ax.set_ylabel(label)
+    lines = []
+    for ax in (top, *mid):
+        _panel_axes(ax, True, [])
         ax.set_xlabel("time (orbits)")
-        mid.append(ax)
+        _fixed_label_positions(ax, -0.1 if ax is top else -0.12, -0.06 if ax is top else -0.12)
+        lines.append([_line(ax, lw=0.7, color=f"C{a}", label=AXES[a]) for a in range(3)])
+    # one legend for the three panels, above them: no 'best' placement search over the data
+    fig.legend(handles=lines[0], loc="upper right", bbox_to_anchor=(0.98, 0.995), ncol=3, fontsize=8,
+               frameon=False)
     table = fig.add_subplot(gs[2, :])
     table.axis("off")
-    _premake_ticks([top, *mid])
-    return fig, (top, mid, table)
+    head = [table.text((k + 0.5) / 5, 1.0, h.format(pretty(hu)), ha="center", va="top", fontsize=8,
+                       transform=table.transAxes) for k, h in enumerate(_TABLE_HEADER)]
+    rules = [table.plot([0, 1], [y, y], transform=table.transAxes, color="k", lw=lw, clip_on=False)[0]
+             for y, lw in ((1.02, 0.9), (0.93, 0.6))]
+    body = [table.text((k + 0.5) / 5, 0.91, "", ha="center", va="top", fontsize=8, linespacing=1.45,
+                       transform=table.transAxes) for k in range(5)]
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
+    _premake_ticks([top, *mid], 6, 4)
+    _bake_texts(fig, [*head, *rules, *fig.legends,
+                      *(t for ax in (top, *mid) for t in (ax.xaxis.label, ax.yaxis.label))])
+    return fig, (top, mid, lines, body)
 
 
 def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=False, units="imperial"):
@@ -190,31 +250,31 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    from common.units import pretty, shown
+    from common.units import shown
 
-    h, hu = shown(np.asarray(h), "ft*lbf*s", units)
+    h = shown(np.asarray(h), "ft*lbf*s", units)[0]
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     k_h = shown(1.0, "ft*lbf*s", units)[0]
-    fig, (ax, mid, tab_ax) = _layout("summary", units)
-    for a in range(3):
-        ax.plot(*decimate(orbits, err_deg[:, a]), lw=0.7, label=AXES[a])
-    ax.legend(fontsize=7)
-    ax.set_title(f"{title} — verdict: {verdict}")
-    for ax, data in zip(mid, (h, u)):
+    fig, (top, mid, lines, body) = _layout("summary", units)
+    xlim = _data_limits(orbits)
+    for ax, panel, data in zip((top, *mid), lines, (err_deg, h, u)):
         for a in range(3):
-            ax.plot(*decimate(orbits, data[:, a]), lw=0.7, label=AXES[a])
-        ax.legend(fontsize=7)
-    if level_stats:
-        header = ["level", "start (orbit)", "θ2* est (deg)", "steady |err| max (deg) r/p/y", f"peak |h| ({pretty(hu)})"]
-        rows = [[str(s["level"]), f"{s['start_orbit']:.1f}", f"{s['theta2_deg']:.2f}",
-                 " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum'] * k_h:.0f}"]
-                for s in level_stats]
-        tab = tab_ax.table(cellText=rows, colLabels=header, loc="center", cellLoc="center")
-        tab.auto_set_font_size(False)
-        tab.set_fontsize(7)
-    # after the table: its cells are sized on the axes as placed by the default parameters
-    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
-    return _save(fig, path, vector, tight=False)
+            panel[a].set_data(*decimate(orbits, data[:, a]))
+        _set_limits([ax], xlim, data)
+    top.set_title(f"{title} — verdict: {verdict}")
+    rows = [(str(s["level"]), f"{s['start_orbit']:.1f}", f"{s['theta2_deg']:.2f}",
+             " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum'] * k_h:.0f}")
+            for s in level_stats]
+    if rows:     # the columns, each one text; the font shrinks to fit many levels (down to 6 pt)
+        px = body[0].axes.bbox.height * 0.9
+        fit = max(2, int(px / (6.0 * fig.dpi / 72 * 1.45)))
+        if len(rows) > fit:
+            rows = rows[:fit - 1] + [("…", f"{len(rows) - fit + 1} more levels", "in sim.h5", "", "")]
+        size = min(8.0, px / len(rows) / 1.45 * 72 / fig.dpi)
+        for text, column in zip(body, zip(*rows)):
+            text.set_text("\n".join(column))
+            text.set_fontsize(size)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 _BUILDERS.update({"axis_histories": _axis_histories_layout, "inertia_histories": _inertia_layout,

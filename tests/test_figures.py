@@ -17,8 +17,11 @@ UNIT = re.compile(r"^(?P<quantity>.{3,}?)\s*\((?P<unit>[^()]*(\([^()]*\))?[^()]*
 def captured(monkeypatch):
     figs = []
 
-    def fake_save(fig, path, vector=False, tight=True):
-        fig.canvas.draw()                      # renders: a figure that cannot draw fails here
+    def fake_save(fig, path, vector=False, tight=True, rc=None):
+        import matplotlib
+
+        with matplotlib.rc_context(rc or {}):
+            fig.canvas.draw()                  # renders: a figure that cannot draw fails here
         figs.append(fig)
         return [path]
 
@@ -28,13 +31,20 @@ def captured(monkeypatch):
     return figs
 
 
+def _same_column(fig, ax):
+    x0 = ax.get_position().x0
+    return [a for a in fig.axes if a.axison and abs(a.get_position().x0 - x0) < 1e-6]
+
+
 def _check_labels(fig):
     axes = [ax for ax in fig.axes if ax.axison]
     assert axes
     for ax in axes:
-        m = UNIT.match(ax.get_ylabel())
-        assert m and m["unit"].strip(), f"y label without quantity and unit: {ax.get_ylabel()!r}"
-        siblings = ax.get_shared_x_axes().get_siblings(ax)
+        # the y quantity and unit: the y label, or the panel title when there is no y label
+        ylab = ax.get_ylabel() or ax.get_title()
+        m = UNIT.match(ylab)
+        assert m and m["unit"].strip(), f"y label (or title) without quantity and unit: {ylab!r}"
+        siblings = set(ax.get_shared_x_axes().get_siblings(ax)) | set(_same_column(fig, ax))
         labelled = [a.get_xlabel() for a in siblings if a.get_xlabel()]
         assert labelled, f"no x label on the column of {ax.get_title()!r}"
         for lab in labelled:
@@ -66,7 +76,55 @@ def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_p
         _check_labels(fig)
     # the gain panels carry the gain's unit: torque per unit of the state
     grid = captured[0]
-    assert "ft·lbf/(rad/s)" in grid.axes[0].get_ylabel() and "ft·lbf/rad" in grid.axes[3].get_ylabel()
+    assert "ft·lbf/(rad/s)" in grid.axes[0].get_title() and "ft·lbf/rad)" in grid.axes[3].get_title()
+    _check_gain_grid(grid, r)
+    _check_sim_figures(captured[2:], orbits, err, sm.level_statistics(sc, res))
+
+
+def _check_sim_figures(figs, orbits, err, stats):
+    """Every state drawn over the whole run, one legend, one table row per level."""
+    axes_fig, inertia_fig, summary_fig = figs
+    assert len(axes_fig.axes) == 12 and [ax.get_title() for ax in axes_fig.axes[:3]] == ["roll", "pitch", "yaw"]
+    for k, ax in enumerate(axes_fig.axes):
+        (line,) = ax.lines
+        assert line.get_xdata()[0] == orbits[0] and line.get_xdata()[-1] == orbits[-1]
+        lo, hi = ax.get_ylim()
+        assert lo <= np.nanmin(line.get_ydata()) and np.nanmax(line.get_ydata()) <= hi
+    np.testing.assert_array_equal(axes_fig.axes[1].lines[0].get_ydata(), err[:, 1])   # pitch error
+    assert len(inertia_fig.axes) == 6 and all(len(ax.lines) == 1 for ax in inertia_fig.axes)
+    top, *mid, table = summary_fig.axes
+    assert [len(ax.lines) for ax in (top, *mid)] == [3, 3, 3]
+    (legend,) = summary_fig.legends
+    assert [t.get_text() for t in legend.get_texts()] == ["roll", "pitch", "yaw"]
+    assert "verdict" in top.get_title()
+    columns = [t.get_text().split("\n") for t in table.texts if t.get_position()[1] < 0.95]   # below the header
+    assert len(columns) == 5 and all(len(c) == len(stats) for c in columns)
+    assert columns[0] == [str(s["level"]) for s in stats]
+
+
+def _check_gain_grid(grid, r):
+    """Every design point and the schedule's curve, per gain row, in each of the 24 panels."""
+    theta2_deg = np.degrees(r.table.tea[:, 1])
+    assert len(grid.axes) == 24
+    for j, ax in enumerate(grid.axes):
+        assert ax.get_title().startswith(f"K(i,{j + 1}) — {STATE_NAMES[j]} (")
+        dots = [ln for ln in ax.lines if ln.get_marker() == "o"]
+        curves = [ln for ln in ax.lines if ln.get_linestyle() == "-"]
+        assert len(dots) == 3 and len(curves) == 3
+        lo, hi = sorted(ax.get_ylim())
+        for i, ln in enumerate(dots):
+            assert np.array_equal(ln.get_xdata(), theta2_deg)
+            assert np.array_equal(ln.get_ydata(), r.table.gain[:, i, j])
+            assert lo <= np.min(ln.get_ydata()) and np.max(ln.get_ydata()) <= hi
+        for ln in curves:
+            assert len(ln.get_xdata()) >= 50
+            xlo, xhi = sorted(ax.get_xlim())
+            assert xlo <= ln.get_xdata().min() and ln.get_xdata().max() <= xhi
+        # tick labels on the y axis of every panel, on the x axis of the bottom row
+        assert len(ax.get_yticks()) >= 3 and (j < 20 or len(ax.get_xticks()) >= 3)
+    assert [a.get_xlabel() for a in grid.axes[20:]] == ["pitch TEA θ2* (deg)"] * 4
+    (legend,) = grid.legends
+    assert [t.get_text()[:6] for t in legend.get_texts()] == ["K(1,·)", "K(2,·)", "K(3,·)"]
 
 
 def test_sweep_figures_have_quantities_and_units(captured, tmp_path):
@@ -133,14 +191,28 @@ def test_prebuilt_skeleton_draws_the_same_png(tmp_path):
     t, x = _small_histories()
     stats = [dict(level=0, start_orbit=0.0, theta2_deg=-44.7, steady_error_deg=[1.0, 0.5, 0.02],
                   peak_momentum=2600.0)]
+    names, units = tuple(STATE_NAMES), tuple(plots.state_units())
+    theta2 = np.radians(np.linspace(-45, -5, 12))
+    gains = np.sin(np.arange(12 * 3 * 24).reshape(12, 3, 24)) * np.logspace(-8, 6, 24)
+    sched = design_plots.SampledSchedule("polynomial", np.linspace(theta2[0], theta2[-1], 60),
+                                         np.cos(np.arange(60 * 3 * 24).reshape(60, 3, 24)))
     for pre in (False, True):
         if pre:
             for kind in ("axis_histories", "summary"):
                 plots.prebuild(kind, "SI")
+            plots.prebuild("gain_schedule_grid", names, units, "ft·lbf")
+            plots.prebuild("schedule_path_check")
+            plots.prebuild("scheduled_pole_map")
         plots.axis_histories(t, x, x, x, x, "t", tmp_path / f"a{pre}.png", units="SI")
         plots.summary(t, x, x, x, stats, "BOUNDED", "s", tmp_path / f"s{pre}.png", units="SI")
+        plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / f"g{pre}.png", units=list(units))
+        # the path figures (the report draws them too, without a skeleton: the same pixels)
+        plots.schedule_path_check(theta2, -0.5 - x[:12, 0] ** 2, -1 - x[:12, 1] ** 2, 0.5 + x[:12, 2] ** 2,
+                                  tmp_path / f"m{pre}.png")
+        poles = (-1.0 - np.arange(24.0) + 1j * np.sin(np.arange(24.0)))[None, :] * (1 + theta2[:, None])
+        plots.scheduled_pole_map(poles * 0.001, theta2, 0.001, 0.5, 45.0, tmp_path / f"p{pre}.png")
     assert not plots._LAYOUTS                        # each skeleton used once
-    for name in ("a", "s"):
+    for name in ("a", "s", "g", "m", "p"):
         assert (tmp_path / f"{name}True.png").read_bytes() == (tmp_path / f"{name}False.png").read_bytes()
 
 
@@ -215,3 +287,41 @@ def test_design_figures_of_a_finished_design(tmp_path):
     names = sorted(p.name for p in tmp_path.iterdir())
     assert names == ["design_gains.png", "design_path_margins.png", "design_path_poles.png", "design_poles.png"]
     assert all((tmp_path / n).stat().st_size > 10_000 for n in names)
+
+
+def test_baked_texts_draw_as_the_live_texts(tmp_path, monkeypatch):
+    """The skeleton's pre-rendered titles, labels and legend (plot_base._bake_texts) give the PNG
+    the live texts give, to anti-aliasing rounding; a PDF gets them as text."""
+    from PIL import Image
+
+    names, units = list(STATE_NAMES), plots.state_units()
+    theta2 = np.radians(np.linspace(-45, -5, 12))
+    gains = np.sin(np.arange(12 * 3 * 24).reshape(12, 3, 24)) * np.logspace(-8, 6, 24)
+    sched = design_plots.SampledSchedule("polynomial", np.linspace(theta2[0], theta2[-1], 60),
+                                         np.cos(np.arange(60 * 3 * 24).reshape(60, 3, 24)))
+    baked = plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "b.png", units=units, vector=True)
+    assert [p.name for p in baked] == ["b.png", "b.pdf"]
+    monkeypatch.setattr(design_plots, "_bake_texts", lambda fig, texts: None)
+    plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "l.png", units=units)
+    a, b = (np.asarray(Image.open(tmp_path / n), dtype=int) for n in ("b.png", "l.png"))
+    assert a.shape == b.shape and np.abs(a - b).max() <= 2
+    # the baked text is there: the title band is not blank
+    assert (a[:40, :, :3] < 100).any()
+
+
+
+def test_baked_texts_are_text_in_a_pdf():
+    import io
+
+    from acmm import plot_base
+
+    fig, axs, _, _ = plot_base._BUILDERS["gain_schedule_grid"](tuple(STATE_NAMES), tuple(plots.state_units()),
+                                                               "ft·lbf")
+    title = axs[0, 0].title
+    drawn, draw = [], title.draw
+    title.draw = lambda renderer: (title.get_visible() and drawn.append(type(renderer).__name__), draw(renderer))
+    fig.savefig(io.BytesIO(), format="png")
+    assert drawn == [] and not title.get_visible()          # the PNG blends the baked tile
+    fig.savefig(io.BytesIO(), format="pdf")
+    assert drawn == ["MixedModeRenderer"] and not title.get_visible()   # the PDF draws the text
+    plots._plt().close(fig)
