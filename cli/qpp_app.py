@@ -106,13 +106,14 @@ def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesA
 def simulate(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
              strict: bool = StrictOpt) -> None:
     """Nonlinear closed loop per scenario and the sphere check ‖y − y_o‖∞ ≤ β_o → qpp_sim.h5.
-    The gains are designed first (as `qpp design`). With --strict, an output outside the sphere exits 1."""
+    The gains are those `qpp design` wrote for this config, else designed first. With --strict, an
+    output outside the sphere exits 1."""
     from cli.progress import status
     from qpp.stages import run_simulate
 
     cfg = _load(config, overrides)
     n = len(cfg.simulation.scenarios)
-    with status(f"{cfg.name}: designing the gains (ch. 12.1), then simulating the nominal loop and "
+    with status(f"{cfg.name}: designing (or reusing) the gains (ch. 12.1), then simulating the nominal loop and "
                 f"{n} scenario(s) over {cfg.simulation.t_final:g} s ...") as update:
         def tick(done, total, name):
             update(f"{cfg.name}: simulated {done}/{total} scenario(s) (last: {name}) ...")

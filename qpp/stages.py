@@ -209,9 +209,13 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
 @locked_stage(_cfg)
 @owns_outputs("qpp simulate", lambda c: _cfg(c))
 def run_simulate(config, figures: bool | None = None, progress=None):
-    """Design, simulate every scenario, write ``<root>/<name>/qpp_sim.h5`` (+ figures).
+    """Design (or reuse the design), simulate every scenario, write ``<root>/<name>/qpp_sim.h5``
+    (+ figures).
 
-    ``progress(done, total, name)`` is called after each scenario.
+    The gains of ``qpp_design.h5`` in the run directory are used when ``qpp design`` wrote it from
+    the same resolved config with this code (:func:`qpp.stored_design.load_stored_design`);
+    otherwise the design of ch. 12.1 runs first.  ``progress(done, total, name)`` is called after
+    each scenario.
 
     Parameters
     ----------
@@ -225,11 +229,15 @@ def run_simulate(config, figures: bool | None = None, progress=None):
     Returns
     -------
     tuple
-        (config, :class:`qpp.certificate.DesignResult`, list of :class:`qpp.simulate.SimResult`,
-        path of ``qpp_sim.h5``).
+        (config, the design — :class:`qpp.certificate.DesignResult`, or
+        :class:`qpp.stored_design.StoredDesign` when reused; both have ``K1``, ``Kc``, ``H``,
+        ``certified``, ``verdict`` —, list of :class:`qpp.simulate.SimResult`, path of
+        ``qpp_sim.h5``).
     """
+    from qpp.stored_design import load_stored_design
+
     cfg = _cfg(config)
-    r = design(cfg)
+    r = load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()) or design(cfg)
     sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
     items = {"K1": Dataset(r.K1, "1", "gain K1 used", dims=("input", "state")),
              "Kc": Dataset(r.Kc, "1", "gain Kc used", dims=("input", "servo_state")),

@@ -210,3 +210,28 @@ def test_reserved_writers_abort_with_the_stage_and_report_failures(tmp_path):
             figure_worker.prepare(plots.prebuild, "axis_histories", "imperial", for_figure="axis_histories")
             figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "a.png")
     assert not figure_worker.active() and not list(tmp_path.glob("**/*.tmp*"))
+
+
+def test_qpp_simulate_reuses_the_gains_qpp_design_wrote(tmp_path, monkeypatch):
+    """Same config and code: the stored K1, Kc, H (no second ch. 12.1 design) and a qpp_sim.h5
+    identical to the one a simulation designing for itself writes; another config: a design."""
+    from qpp import stages
+    from qpp.config import load_config as qpp_config
+    from qpp.stored_design import StoredDesign
+    from report.manifest import dataset_hashes
+
+    over = [f"output.root={tmp_path}", "simulation.t_final=3.0"]
+    alone = stages.run_simulate(qpp_config("qpp_siso", over + ["name=alone"]), figures=False)
+    cfg = qpp_config("qpp_siso", over + ["name=pair"])
+    _, designed, _ = stages.run_design(cfg, figures=False)
+    real_design = stages.design
+    monkeypatch.setattr(stages, "design", lambda c: pytest.fail("designed again"))
+    _, reused, _, path = stages.run_simulate(cfg, figures=False)
+    assert isinstance(reused, StoredDesign) and reused.verdict == designed.verdict
+    for name in ("K1", "Kc", "H"):
+        assert np.array_equal(getattr(reused, name), getattr(designed, name))
+    assert dataset_hashes(path) == dataset_hashes(alone[3])
+    called = []
+    monkeypatch.setattr(stages, "design", lambda c: called.append(1) or real_design(c))
+    stages.run_simulate(qpp_config("qpp_siso", over + ["name=pair", "simulation.t_final=2.0"]), figures=False)
+    assert called == [1]                       # the config changed: designed

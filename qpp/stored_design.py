@@ -1,0 +1,80 @@
+"""The gains of a ``qpp design`` run read back for ``qpp simulate`` (issue 16).
+
+``qpp simulate`` used to run the whole design procedure of ch. 12.1 again (the H∞ search of
+ch. 11 included) before simulating, even right after ``qpp design`` wrote the same gains.  It now
+takes K1, Kc and H (eqs 10.5–10.6) from ``<run>/qpp_design.h5`` when that file was written from
+the same resolved config (``config_hash``) by the same package version and git commit, exactly
+as ``acmm simulate`` reuses ``design.h5``; otherwise it designs.  The gains are stored as float64,
+so the simulation is the same bit for bit either way.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclass
+class StoredDesign:
+    """A design read back from ``qpp_design.h5``: what a simulation needs of it.
+
+    Attributes
+    ----------
+    K1 : (m, n) array
+        State-feedback gain (eq 10.6), plant input units per state unit.
+    Kc : (m, q) array
+        Compensator gain (eq 10.6), plant input units per compensator-state unit.
+    H : (n, p) array
+        Observer gain (eq 10.5, report's sign), state units per output unit per s.
+    certified : bool
+        Whether the design was certified (β1 ≤ m and the circle criterion).
+    verdict : str
+        The design's verdict line.
+    path : pathlib.Path
+        The file read.
+    """
+
+    K1: np.ndarray
+    Kc: np.ndarray
+    H: np.ndarray
+    certified: bool
+    verdict: str
+    path: Path
+
+
+def load_stored_design(path: Path, config_text: str) -> StoredDesign | None:
+    """The gains in ``path`` when it was written from ``config_text`` by this code, else None.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        A ``qpp_design.h5`` (it may not exist).
+    config_text : str
+        The resolved config as YAML (:meth:`qpp.config.QppConfig.to_yaml`).
+
+    Returns
+    -------
+    StoredDesign or None
+        None when the file is missing, unreadable, from another config, version or commit.
+    """
+    import h5py
+
+    from common import __version__
+    from common.provenance import config_hash, git_commit
+
+    if not Path(path).is_file():
+        return None
+    try:
+        with h5py.File(path, "r") as f:
+            a = f.attrs
+            same = (a.get("stage") == "qpp design" and a.get("config_hash") == config_hash(config_text)
+                    and a.get("package_version") == __version__
+                    and a.get("git_commit") == git_commit())
+            if not same:
+                return None
+            return StoredDesign(np.array(f["K1"][()], dtype=float), np.array(f["Kc"][()], dtype=float),
+                                np.array(f["H"][()], dtype=float), bool(a["certified"]), str(a["verdict"]),
+                                Path(path))
+    except (OSError, KeyError, ValueError):
+        return None
