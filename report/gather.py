@@ -92,7 +92,7 @@ def _sweep_task(root, fast, rerun, workers):
 
 #: rough run times (s) of the stages on one idle core, only to order the parallel tasks
 _COST = {"design:staircase": 1.2, "simulate:staircase": 0.4, "qpp design:qpp_siso": 2.0,
-         "qpp simulate:qpp_siso": 1.9, "qpp design:qpp_manipulator": 1.8, "qpp simulate:qpp_manipulator": 1.4,
+         "qpp simulate:qpp_siso": 1.0, "qpp design:qpp_manipulator": 1.8, "qpp simulate:qpp_manipulator": 1.0,
          "sweep": 2.7}
 
 
