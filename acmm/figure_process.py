@@ -154,7 +154,10 @@ class _Server:
         with os.fdopen(fd, "rb") as f:
             data = f.read()
         _, st = os.waitpid(pid, 0)
-        kind, val = pickle.loads(data) if data else ("error", "a figure writer process failed")
+        try:
+            kind, val = pickle.loads(data) if data else ("error", "a figure writer process failed")
+        except Exception:  # noqa: BLE001 (a writer killed while it sent its result)
+            kind, val = "error", "a figure writer process failed"
         if kind == "ok" and os.waitstatus_to_exitcode(st) == 0:
             self.written.extend(val)
         elif not quiet:
@@ -197,7 +200,7 @@ class _Server:
             try:
                 _send_raw(jw, job)
                 return
-            except OSError:                        # it died building the skeleton: a fresh one
+            except OSError:     # it died before its job was sent: a fresh writer (after: an error)
                 self.join(pid, quiet=True)
             finally:
                 os.close(jw)
@@ -264,6 +267,10 @@ def _serve(jobs: int, status: int) -> None:
         _send_framed(status, (sv.written, sv.errors))
     except BaseException:  # noqa: BLE001
         code = 1
+        try:
+            sv.kill()             # no writer outlives a failed worker
+        except BaseException:  # noqa: BLE001
+            pass
     finally:
         os._exit(code)
 
@@ -280,6 +287,27 @@ def _grow_pipe(fd: int, size: int = 1 << 20) -> None:
         pass
 
 
+def _own_group(pid: int = 0) -> None:
+    """Put the worker (``pid``; 0: this process) in a process group of its own, which its writers
+    inherit, so that an abort kills all of them at once (both sides call it: no race)."""
+    try:
+        os.setpgid(pid, pid)
+    except OSError:              # already done by the other side, or the worker has exited
+        pass
+
+
+def _kill_group(pid: int) -> None:
+    """SIGKILL the worker's process group (the worker and its writers); the worker alone if the
+    group is not there."""
+    try:
+        os.killpg(pid, signal.SIGKILL)
+    except OSError:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
+
+
 class _Worker:
     """Parent side: the worker's pid, the job pipe (fed by one sender thread), the status pipe."""
 
@@ -287,13 +315,19 @@ class _Worker:
         jr, jw = os.pipe()
         sr, sw = os.pipe()
         _grow_pipe(jw)
-        sys.stdout.flush()
-        sys.stderr.flush()
+        for stream in (sys.stdout, sys.stderr):       # None when the descriptor is closed (>&-)
+            try:
+                if stream is not None:
+                    stream.flush()
+            except (OSError, ValueError):
+                pass
         pid = os.fork()
         if pid == 0:                                   # the worker: never returns
             os.close(jw)
             os.close(sr)
+            _own_group()
             _serve(jr, sw)
+        _own_group(pid)
         os.close(jr)
         os.close(sw)
         self.pid, self.jobs, self.status = pid, jw, sr
@@ -334,17 +368,16 @@ class _Worker:
         """Stop the worker (after the queued jobs, or at once with ``abort``); returns
         (files written, error messages, exit code)."""
         if self.thread is None:               # never used (the config wants no figures): no wait
-            os.kill(self.pid, signal.SIGKILL)
+            _kill_group(self.pid)
             os.close(self.jobs)
             os.close(self.status)
             os.waitpid(self.pid, 0)
             return [], [], 0
-        if abort:
+        if abort:                 # at once: the worker may be waiting for its writers
             with self.cond:
                 self.queue.clear()
-        self.send(_HEADER.pack(_ABORT) if abort else None)
-        if abort:
-            self.send(None)
+            _kill_group(self.pid)
+        self.send(None)
         self.thread.join()
         os.close(self.jobs)
         got = _recv_framed(self.status)

@@ -228,7 +228,11 @@ def main() -> None:
     import sys
     import threading
 
-    _fork_figure_worker_early(sys.argv[1:])
+    try:
+        _fork_figure_worker_early(sys.argv[1:])
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        os._exit(130)
     try:
         app()
     except SystemExit as exc:

@@ -108,8 +108,8 @@ class ForkedCall:
         with os.fdopen(self._fd, "rb") as f:
             self._fd = None
             data = f.read()
-        os.waitpid(self._pid, 0)
-        self._pid = None
+        pid, self._pid = self._pid, None
+        os.waitpid(pid, 0)
         try:
             kind, value = pickle.loads(data)
         except Exception:  # noqa: BLE001 (a truncated message: the child died)
@@ -119,12 +119,12 @@ class ForkedCall:
     def cancel(self) -> None:
         """Kill the child (if it still runs) and drop its result."""
         if self._pid is not None:
+            pid, self._pid = self._pid, None
             try:
-                os.kill(self._pid, signal.SIGKILL)
-            except ProcessLookupError:
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
+            except (ProcessLookupError, ChildProcessError):
                 pass
-            os.waitpid(self._pid, 0)
-            self._pid = None
         if self._fd is not None:
             os.close(self._fd)
             self._fd = None

@@ -73,3 +73,26 @@ def provenance(config_text: str) -> dict[str, str]:
         "config_hash": config_hash(config_text),
         "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
     }
+
+
+def source_unchanged() -> bool:
+    """Whether the code running is exactly a commit: the source tree is a git checkout whose
+    tracked files have no uncommitted change (``git status --porcelain --untracked-files=no``).
+
+    A stage may reuse another stage's results only then (:mod:`qpp.stored_design`): an edited
+    or unknown source may compute something else.
+
+    Returns
+    -------
+    bool
+        True for a clean checkout; False when dirty, not a checkout, or git is missing.
+    """
+    if git_commit() == "unknown":
+        return False
+    here = Path(__file__).resolve().parent
+    try:
+        out = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here,
+                             capture_output=True, text=True, timeout=5)
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return out.returncode == 0 and not out.stdout.strip()

@@ -14,6 +14,7 @@ from common.results import Dataset, write_h5
 from common.runlock import locked_stage
 from qpp.config import PolarArmNonlinearity, QppConfig, load_config
 from qpp.design import DesignResult, design
+from qpp.stored_design import gains_sha256
 from qpp.simulate import simulate
 
 
@@ -197,7 +198,8 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
                     {"stage": "qpp design", "circle_passed": int(r.circle.passed), **verdicts,
                      "certified": int(r.certified), "label": "certified" if r.certified else "uncertified",
-                     "verdict": r.verdict, "bookkeeping": r.bookkeeping})
+                     "verdict": r.verdict, "bookkeeping": r.bookkeeping,
+                     "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
     if cfg.output.figures if figures is None else figures:
         from qpp.plots import plot_circle, plot_iterations
 

@@ -3,9 +3,11 @@
 ``qpp simulate`` used to run the whole design procedure of ch. 12.1 again (the H∞ search of
 ch. 11 included) before simulating, even right after ``qpp design`` wrote the same gains.  It now
 takes K1, Kc and H (eqs 10.5–10.6) from ``<run>/qpp_design.h5`` when that file was written from
-the same resolved config (``config_hash``) by the same package version and git commit, exactly
-as ``acmm simulate`` reuses ``design.h5``; otherwise it designs.  The gains are stored as float64,
-so the simulation is the same bit for bit either way.
+the same resolved config (``config_hash``) by the same package version and git commit, the
+source is that commit unchanged (:func:`common.provenance.source_unchanged`), and the gains read
+back hash to the ``gains_sha256`` the design stored with them (an edited file is designed
+again); otherwise it designs.  The gains are stored as float64, so the simulation is the same bit
+for bit either way.
 """
 from __future__ import annotations
 
@@ -61,7 +63,7 @@ def load_stored_design(path: Path, config_text: str) -> StoredDesign | None:
     import h5py
 
     from common import __version__
-    from common.provenance import config_hash, git_commit
+    from common.provenance import config_hash, git_commit, source_unchanged
 
     if not Path(path).is_file():
         return None
@@ -71,10 +73,34 @@ def load_stored_design(path: Path, config_text: str) -> StoredDesign | None:
             same = (a.get("stage") == "qpp design" and a.get("config_hash") == config_hash(config_text)
                     and a.get("package_version") == __version__
                     and a.get("git_commit") == git_commit())
-            if not same:
+            if not same or not source_unchanged():
                 return None
-            return StoredDesign(np.array(f["K1"][()], dtype=float), np.array(f["Kc"][()], dtype=float),
-                                np.array(f["H"][()], dtype=float), bool(a["certified"]), str(a["verdict"]),
-                                Path(path))
+            K1, Kc, H = (np.array(f[k][()], dtype=float) for k in ("K1", "Kc", "H"))
+            if a.get("gains_sha256") != gains_sha256(K1, Kc, H):
+                return None
+            return StoredDesign(K1, Kc, H, bool(a["certified"]), str(a["verdict"]), Path(path))
     except (OSError, KeyError, ValueError):
         return None
+
+
+def gains_sha256(K1, Kc, H) -> str:
+    """SHA-256 of the gains' float64 bytes (with their shapes), stored by ``qpp design``.
+
+    Parameters
+    ----------
+    K1, Kc, H : arrays
+        The gains of eqs 10.5–10.6 (any units: the bytes are hashed).
+
+    Returns
+    -------
+    str
+        Hex digest.
+    """
+    import hashlib
+
+    h = hashlib.sha256()
+    for g in (K1, Kc, H):
+        g = np.ascontiguousarray(g, dtype=float)
+        h.update(f"{g.shape}|".encode())
+        h.update(g.tobytes())
+    return h.hexdigest()

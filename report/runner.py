@@ -215,6 +215,7 @@ def _worker_init(parent: int) -> None:
     from common.workers import die_with_parent
 
     WORKER_CACHE.clear()
+    os.environ["ACMM_FORK"] = "0"      # the pool uses the cores: no stage forks a child of its own
     die_with_parent(parent)
 
 
