@@ -326,6 +326,10 @@ class _Worker:
             os.close(jw)
             os.close(sr)
             _own_group()
+            try:                 # a background group writing a warning to a `stty tostop` terminal
+                signal.signal(signal.SIGTTOU, signal.SIG_IGN)
+            except (AttributeError, OSError, ValueError):
+                pass
             _serve(jr, sw)
         _own_group(pid)
         os.close(jr)
