@@ -10,8 +10,9 @@ import os
 import pickle
 import signal
 import struct
-import sys
 import threading
+
+from common.forked import flush_std_streams
 
 _HEADER = struct.Struct("<Q")
 
@@ -19,7 +20,6 @@ _HEADER = struct.Struct("<Q")
 #: niceness added to the figure worker and its writers (measured on 2 cores: 5 beat 0 and 10)
 FIGURE_NICE = 5
 
-_ABORT = 0xFFFFFFFFFFFFFFFF
 _BARRIER = 0xFFFFFFFFFFFFFFFE
 
 
@@ -62,17 +62,11 @@ def _draw(job: bytes, fd: int) -> None:
 
 
 def _send_framed(fd: int, obj) -> None:
-    data = pickle.dumps(obj)
-    view = memoryview(_HEADER.pack(len(data)) + data)
-    while view:
-        view = view[os.write(fd, view):]
+    _send_raw(fd, pickle.dumps(obj))
 
 
 def _recv_framed(fd: int):
-    head = _read_exact(fd, _HEADER.size)
-    if head is None:
-        return None
-    data = _read_exact(fd, _HEADER.unpack(head)[0])
+    data = _recv_raw(fd)
     return None if data is None else pickle.loads(data)
 
 
@@ -247,10 +241,6 @@ def _serve(jobs: int, status: int) -> None:
                 _send_framed(status, (sv.written, sv.errors))
                 sv.written, sv.errors = [], []
                 continue
-            if n == _ABORT:
-                sv.kill()
-                code = 2
-                break
             job = _read_exact(jobs, n)
             if job is None:
                 break
@@ -315,12 +305,7 @@ class _Worker:
         jr, jw = os.pipe()
         sr, sw = os.pipe()
         _grow_pipe(jw)
-        for stream in (sys.stdout, sys.stderr):       # None when the descriptor is closed (>&-)
-            try:
-                if stream is not None:
-                    stream.flush()
-            except (OSError, ValueError):
-                pass
+        flush_std_streams()
         pid = os.fork()
         if pid == 0:                                   # the worker: never returns
             os.close(jw)

@@ -33,7 +33,6 @@ from __future__ import annotations
 import contextlib
 import os
 import pickle
-import threading
 from pathlib import Path
 
 from acmm.figure_process import _HEADER, _Worker
@@ -48,13 +47,13 @@ def usable() -> bool:
     Returns
     -------
     bool
-        True when ``os.fork`` exists, there is more than one CPU, no non-daemon thread other
-        than this one runs and ``ACMM_FIGURE_WORKER`` is not ``0``.
+        True when :func:`common.forked.usable` (``os.fork``, more than one CPU, no non-daemon
+        thread other than this one, ``ACMM_FORK`` not ``0``) and ``ACMM_FIGURE_WORKER`` is not
+        ``0``.
     """
-    me = threading.current_thread()
-    return (os.environ.get("ACMM_FIGURE_WORKER", "1") != "0" and hasattr(os, "fork")
-            and (os.cpu_count() or 1) > 1
-            and all(t.daemon for t in threading.enumerate() if t is not me))
+    from common.forked import usable as fork_usable
+
+    return os.environ.get("ACMM_FIGURE_WORKER", "1") != "0" and fork_usable()
 
 
 #: True while the running worker was forked ahead by :func:`start_early` and no session owns it yet

@@ -246,13 +246,10 @@ def main() -> None:
             code = 0 if code is None else 1
         import atexit
 
+        from common.forked import flush_std_streams
+
         atexit._run_exitfuncs()
-        for stream in (sys.stdout, sys.stderr):      # None when the descriptor was closed (>&-)
-            try:
-                if stream is not None:
-                    stream.flush()
-            except (OSError, ValueError):
-                pass
+        flush_std_streams()
         os._exit(code)
 
 

@@ -39,6 +39,18 @@ def usable() -> bool:
             and all(t.daemon for t in threading.enumerate() if t is not me))
 
 
+def flush_std_streams() -> None:
+    """Flush ``sys.stdout`` and ``sys.stderr`` before a fork or ``os._exit`` (a child must not
+    write the parent's buffered output again); a stream closed by the shell (``>&-``, then
+    ``None``) or failing to flush is skipped."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            if stream is not None:
+                stream.flush()
+        except (OSError, ValueError):
+            pass
+
+
 def _child(fn, args, kwargs, fd: int) -> None:
     """In the child: compute, send ("ok", value) or ("error", None) through ``fd``, exit."""
     code = 0
@@ -80,12 +92,7 @@ class ForkedCall:
         self._fd: int | None = None
         if enabled and usable():
             r, w = os.pipe()
-            for stream in (sys.stdout, sys.stderr):
-                try:
-                    if stream is not None:
-                        stream.flush()
-                except (OSError, ValueError):
-                    pass
+            flush_std_streams()
             pid = os.fork()
             if pid == 0:
                 os.close(r)

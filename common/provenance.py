@@ -23,16 +23,18 @@ def git_commit() -> str:
     str
         The commit hash, or ``"unknown"``.
     """
-    here = Path(__file__).resolve().parent
+    out = _git("rev-parse", "HEAD")
+    return out.strip() if out is not None else "unknown"
+
+
+def _git(*args: str) -> str | None:
+    """Standard output of ``git <args>`` run in the source tree, or None when git fails."""
     try:
-        out = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, timeout=5
-        )
-        if out.returncode == 0:
-            return out.stdout.strip()
+        out = subprocess.run(["git", *args], cwd=Path(__file__).resolve().parent,
+                             capture_output=True, text=True, timeout=5)
     except (OSError, subprocess.SubprocessError):
-        pass
-    return "unknown"
+        return None
+    return out.stdout if out.returncode == 0 else None
 
 
 def config_hash(config_text: str) -> str:
@@ -89,10 +91,5 @@ def source_unchanged() -> bool:
     """
     if git_commit() == "unknown":
         return False
-    here = Path(__file__).resolve().parent
-    try:
-        out = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here,
-                             capture_output=True, text=True, timeout=5)
-    except (OSError, subprocess.SubprocessError):
-        return False
-    return out.returncode == 0 and not out.stdout.strip()
+    out = _git("status", "--porcelain", "--untracked-files=no")
+    return out is not None and not out.strip()
