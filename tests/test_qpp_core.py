@@ -185,3 +185,40 @@ def test_mimo_circle_manipulator(arm):
     Az, Bz, Cz = closed_loop(arm.lure_plant(), *_pub(arm))
     r = circle_criterion(Az, Bz[:, 2:], Cz, [[-0.5, 0.5], [-0.5, 0.5]], a=1e-9)
     assert r.passed and r.centres.shape[0] == 2
+
+
+def test_hinf_norm_slycot_is_control_linfnorm_bit_for_bit():
+    """hinf_norm(method="slycot") calls SLICOT AB13DD itself (no python-control import, issue 16):
+    the same numbers as control.linfnorm, bit for bit, and the Hamiltonian bisection agrees."""
+    import control as ct
+
+    rng = np.random.default_rng(7)
+    systems = []
+    for n, m, p in ((1, 1, 1), (4, 2, 3), (6, 3, 2), (9, 1, 1)):
+        A = rng.standard_normal((n, n))
+        A -= (np.abs(np.linalg.eigvals(A).real).max() + 0.3) * np.eye(n)     # stable
+        systems.append((A, rng.standard_normal((n, m)), rng.standard_normal((p, n)), np.zeros((p, m))))
+    A, B, C, _ = systems[1]
+    systems.append((A, B, C, rng.standard_normal((3, 2))))                    # feed-through
+    systems.append((A + np.diag([3.0, 0, 0, 0]), B, C, np.zeros((3, 2))))   # L∞ of an unstable one
+    cfg = load_config("qpp_manipulator")
+    Az, Bz, Cz = closed_loop(cfg.lure_plant(), *_pub(cfg))
+    systems.append((Az + 1e-9 * np.eye(len(Az)), Bz, Cz, np.zeros((Cz.shape[0], Bz.shape[1]))))
+    for A, B, C, D in systems:
+        got = spheres.hinf_norm(A, B, C, D)
+        ref = ct.linfnorm(ct.ss(A, B, C, D))
+        assert got == (float(ref[0]), float(ref[1]))
+        if not np.any(D) and np.linalg.eigvals(A).real.max() < 0:
+            ham, _ = spheres.hinf_norm(A, B, C, D, method="hamiltonian")
+            assert got[0] == pytest.approx(ham, rel=1e-7)
+    assert spheres.hinf_norm(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), [[3.0, 4.0]]) == (5.0, 0.0)
+
+
+def test_hinf_norm_slycot_pole_on_the_axis_is_unbounded_like_control():
+    import control as ct
+
+    for A in ([[0.0]], [[0.0, 1.0], [-1.0, 0.0]]):
+        n = len(A)
+        got = spheres.hinf_norm(A, np.ones((n, 1)), np.ones((1, n)))
+        assert got[0] == np.inf
+        assert got == tuple(float(v) for v in ct.linfnorm(ct.ss(A, np.ones((n, 1)), np.ones((1, n)), 0)))
