@@ -10,6 +10,9 @@ figures).  :func:`run_tasks` runs such a graph
   depends on have finished, longest remaining chain first.  Only the task's function, its
   arguments (built in this process from the results of its dependencies) and its return value
   cross the process boundary; everything a task writes (HDF5 files, figures) is a file.
+  The workers are forked after a warm-up (imports every worker needs, done once); while this
+  process warms up on one core, the ready task of highest priority already runs on a child of
+  its own (:class:`_EarlyTask`), so that the other core is not idle for those 1–2 s.
 
 The results are the same either way: every task is a deterministic function of its arguments and
 of files its dependencies wrote completely before it starts.
@@ -144,16 +147,22 @@ def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str,
             on_done(t.name, done[t.name])
         return done
     _prioritize(tasks)
-    if warm is not None:
-        warm()
-    # what this process holds is not garbage: frozen, the workers' collections skip it and do not
-    # copy its pages on write (issue 16: ~40 % fewer page faults per worker); thawed afterwards
-    gc.collect()
-    gc.freeze()
+    # the warm-up below runs on one core: the first task runs meanwhile on a child of its own
+    early = _EarlyTask.start(tasks, done)
     try:
-        _run_pool(tasks, jobs, done, on_done, stats)
+        if warm is not None:
+            warm()
+        # what this process holds is not garbage: frozen, the workers' collections skip it and do
+        # not copy its pages on write (issue 16: ~40 % fewer page faults per worker); thawed after
+        gc.collect()
+        gc.freeze()
+        try:
+            _run_pool(tasks, jobs, done, on_done, stats, early)
+        finally:
+            gc.unfreeze()
     finally:
-        gc.unfreeze()
+        if early is not None:
+            early.cancel()
     return done
 
 
@@ -176,32 +185,154 @@ def _prioritize(tasks: list[Task]) -> None:
         t.priority = t.cost + max((s.priority for s in after[t.name]), default=0.0)
 
 
-def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict) -> None:
+def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
+              early: Optional["_EarlyTask"] = None) -> None:
     import multiprocessing
 
-    waiting = list(tasks)
+    waiting = [t for t in tasks if early is None or t is not early.task]
     pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("fork"),
                                   initializer=_worker_init, initargs=(os.getpid(),))
     running: dict[cf.Future, Task] = {}
+
+    def finish(t: Task, out: tuple) -> None:
+        stats[t.name] = out[-2:]
+        done[t.name] = _unwrap_value(out)
+        on_done(t.name, done[t.name])
+
     try:
-        while waiting or running:
+        while waiting or running or early is not None:
             ready = sorted((t for t in waiting if all(d in done for d in t.deps)), key=lambda t: -t.priority)
             for t in ready[: max(0, jobs - len(running))]:
                 waiting.remove(t)
                 sys.stdout.flush()
                 sys.stderr.flush()
                 running[pool.submit(_call, t.fn, t.args(done))] = t
-            finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
+            finished: set = set()
+            if early is None:
+                finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
+            else:          # poll the pool's futures and the early child's pipe in turn
+                if running:
+                    finished, _ = cf.wait(list(running), timeout=0.01, return_when=cf.FIRST_COMPLETED)
+                if early.ready(0.0 if running else None):
+                    task, out = early.task, early.result()
+                    early = None
+                    finish(task, out)
             for fut in finished:
-                t = running.pop(fut)
-                out = _result(fut)
-                stats[t.name] = out[-2:]
-                done[t.name] = _unwrap_value(out)
-                on_done(t.name, done[t.name])
+                finish(running.pop(fut), _result(fut))
     except BaseException:
         pool.shutdown(wait=True, cancel_futures=True)
         raise
     pool.shutdown(wait=True)
+
+
+class _EarlyTask:
+    """The ready task of highest priority, run on a child forked before the pool's warm-up (which
+    takes ~1–2 s of one core in the report: imports, the compiled simulator, a first figure)
+    so that the other core is not idle meanwhile (issue 16).
+
+    The child starts like a pool worker (:func:`_worker_init`), runs the task through
+    :func:`_call` and sends its result through a pipe; an exception that is not an
+    :class:`~common.errors.AcmmError` is raised here again with the child's traceback, and a child
+    that dies is the same :class:`~common.errors.OutputError` as a pool worker that dies.
+    """
+
+    def __init__(self, task: Task, pid: int, fd: int) -> None:
+        self.task, self._pid, self._fd = task, pid, fd
+
+    @classmethod
+    def start(cls, tasks: list[Task], done: dict) -> Optional["_EarlyTask"]:
+        """Fork the child for the ready task of highest priority (the first of equals, as the
+        pool would pick it); None when nothing is ready or no child may be forked
+        (:func:`common.forked.usable`)."""
+        from common.forked import flush_std_streams, usable
+
+        ready = [t for t in tasks if not t.deps]
+        if not ready or not usable():
+            return None
+        task = max(ready, key=lambda t: t.priority)
+        args = task.args(done)
+        parent = os.getpid()
+        r, w = os.pipe()
+        flush_std_streams()
+        pid = os.fork()
+        if pid == 0:                                     # pragma: no cover (the child)
+            os.close(r)
+            _early_child(parent, task.fn, args, w)
+        os.close(w)
+        return cls(task, pid, r)
+
+    def ready(self, timeout: Optional[float]) -> bool:
+        """Whether the child has written (or died); waits up to ``timeout`` s (None: until then)."""
+        import select
+
+        return bool(select.select([self._fd], [], [], timeout)[0])
+
+    def result(self) -> tuple:
+        """The :func:`_call` tuple of the task (waits for the child)."""
+        import pickle
+
+        with os.fdopen(self._fd, "rb") as f:
+            self._fd = None
+            data = f.read()
+        pid, self._pid = self._pid, None
+        os.waitpid(pid, 0)
+        try:
+            kind, *value = pickle.loads(data)
+        except Exception:  # noqa: BLE001 (nothing or a truncated message: the child died)
+            from common.errors import OutputError
+
+            raise OutputError("a report worker process died (killed, or out of memory); nothing was written") from None
+        if kind == "raise":
+            exc, tb = value
+            raise exc from _ChildTraceback(tb)
+        return value[0]
+
+    def cancel(self) -> None:
+        """Kill the child if it still runs (a failure elsewhere) and close the pipe."""
+        import signal
+
+        if self._pid is not None:
+            pid, self._pid = self._pid, None
+            try:
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
+            except (ProcessLookupError, ChildProcessError):
+                pass
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+
+
+class _ChildTraceback(Exception):
+    """The traceback of an exception raised in the early task's child (its text)."""
+
+    def __str__(self) -> str:
+        return "\n" + self.args[0]
+
+
+def _early_child(parent: int, fn, args, fd: int) -> None:  # pragma: no cover (runs in the child)
+    """In :class:`_EarlyTask`'s child: start as a worker, run, send ("out", result tuple) or
+    ("raise", exception, traceback text), exit."""
+    import pickle
+    import traceback
+
+    code = 0
+    try:
+        _worker_init(parent)
+        msg = ("out", _call(fn, args))
+        data = pickle.dumps(msg, protocol=pickle.HIGHEST_PROTOCOL)
+    except BaseException as exc:  # noqa: BLE001 (raised again in the parent)
+        code, tb = 1, traceback.format_exc()
+        try:
+            data = pickle.dumps(("raise", exc, tb), protocol=pickle.HIGHEST_PROTOCOL)
+        except Exception:  # noqa: BLE001 (an exception that does not pickle)
+            data = pickle.dumps(("raise", RuntimeError(repr(exc)), tb), protocol=pickle.HIGHEST_PROTOCOL)
+    try:
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+    finally:
+        os._exit(code)
 
 
 # ---------------------------------------------------------------------------------------------

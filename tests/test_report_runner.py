@@ -115,6 +115,76 @@ def test_a_worker_that_dies_is_one_clear_error():
         run_tasks([Task("die", _die), Task("ok", _square, (), lambda d: (2,))], 2)
 
 
+def _stamp(path, delay):
+    """Write (pid, start time) to ``path`` and return them after ``delay`` s."""
+    start = time.time()
+    with open(path, "w") as f:
+        f.write(f"{os.getpid()} {start}")
+    time.sleep(delay)
+    return os.getpid(), start
+
+
+def _fail_after(delay, msg):
+    time.sleep(delay)
+    raise ConvergenceError(msg)
+
+
+def _raise_key():
+    raise KeyError("not an AcmmError")
+
+
+def test_first_task_runs_on_its_own_child_during_the_warm_up(tmp_path):
+    """The ready task of highest priority starts on a forked child before the (one-core) warm-up
+    ends; the others run on the pool's workers; the results are the serial ones."""
+    marks = {}
+
+    def warm():
+        marks["warm_start"] = time.time()
+        time.sleep(0.4)
+        marks["warm_end"] = time.time()
+
+    tasks = [Task("a", _square, (), lambda d: (3,)),
+             Task("first", _stamp, (), lambda d: (tmp_path / "first", 0.1), cost=5),
+             Task("other", _stamp, (), lambda d: (tmp_path / "other", 0.0), cost=2),
+             Task("sum", _add, ("a", "first"), lambda d: (d["a"], d["first"][0] * 0))]
+    stats: dict = {}
+    out = run_tasks(tasks, 2, warm=warm, stats=stats)
+    first_pid, first_start = out["first"]
+    other_pid, other_start = out["other"]
+    assert first_start < marks["warm_end"] and other_start >= marks["warm_end"]
+    assert os.getpid() not in (first_pid, other_pid) and first_pid != other_pid
+    assert out["a"] == 9 and out["sum"] == 9 and set(stats) == {t.name for t in tasks}
+    assert stats["first"][0] >= 0.1
+    with pytest.raises(ChildProcessError):                 # the child was reaped
+        os.waitpid(first_pid, os.WNOHANG)
+
+
+def test_early_task_errors_are_the_pools_errors(tmp_path):
+    """In the early child: an AcmmError comes back as the same class and message, another
+    exception as itself with the child's traceback, a dying child as one OutputError."""
+    with pytest.raises(ConvergenceError, match="^no convergence: field y$"):
+        run_tasks([Task("bad", _fail, (), lambda d: ("no convergence: field y",), cost=9),
+                   Task("ok", _square, (), lambda d: (2,))], 2)
+    with pytest.raises(KeyError) as exc:
+        run_tasks([Task("key", _raise_key, cost=9), Task("ok", _square, (), lambda d: (2,))], 2)
+    assert "_raise_key" in str(exc.value.__cause__)
+    with pytest.raises(OutputError, match="worker process died"):
+        run_tasks([Task("die", _die, cost=9), Task("ok", _square, (), lambda d: (2,))], 2)
+
+
+def test_a_failure_elsewhere_kills_the_early_child(tmp_path):
+    """A pool task that fails while the early task still runs: the error at once, no child left."""
+    t0 = time.time()
+    with pytest.raises(ConvergenceError):
+        run_tasks([Task("long", _stamp, (), lambda d: (tmp_path / "long", 30.0), cost=9),
+                   Task("bad", _fail_after, (), lambda d: (0.5, "x"))], 2)
+    assert time.time() - t0 < 10
+    pid = int((tmp_path / "long").read_text().split()[0])
+    time.sleep(0.05)
+    with pytest.raises(ProcessLookupError):
+        os.kill(pid, 0)
+
+
 # ----------------------------------------------------------------------------- the report's graph
 def _claim1_graph(root, figdir, jobs):
     """The MB3 stages and the parts that read them (claim-1 poles and section), as in build_report."""
