@@ -66,6 +66,11 @@ def _child(fn, args, kwargs, fd: int) -> None:
         os._exit(code)
 
 
+class ChildDied(RuntimeError):
+    """The child of a :class:`ForkedCall` made with ``fallback=False`` died (or its result could
+    not be sent) before it delivered a result."""
+
+
 class ForkedCall:
     """``fn(*args, **kwargs)`` in a forked child, started at construction.
 
@@ -77,6 +82,9 @@ class ForkedCall:
         Its positional arguments.
     enabled : bool, optional
         False: no child, :meth:`result` calls ``fn`` in place.
+    fallback : bool, optional
+        True: :meth:`result` calls ``fn`` in place when the child failed; False: it raises
+        :class:`ChildDied` instead (for a call that must not run twice).
     **kwargs : object
         Its keyword arguments.
 
@@ -86,8 +94,9 @@ class ForkedCall:
         Whether a child was started.
     """
 
-    def __init__(self, fn, *args, enabled: bool = True, **kwargs) -> None:
+    def __init__(self, fn, *args, enabled: bool = True, fallback: bool = True, **kwargs) -> None:
         self._call = (fn, args, kwargs)
+        self._fallback = fallback
         self._pid: int | None = None
         self._fd: int | None = None
         if enabled and usable():
@@ -121,7 +130,31 @@ class ForkedCall:
             kind, value = pickle.loads(data)
         except Exception:  # noqa: BLE001 (a truncated message: the child died)
             kind, value = "error", None
-        return value if kind == "ok" else fn(*args, **kwargs)
+        if kind == "ok":
+            return value
+        if not self._fallback:
+            raise ChildDied(f"the child computing {getattr(fn, '__name__', fn)} died before it sent a result")
+        return fn(*args, **kwargs)
+
+    def ready(self, timeout: float | None = 0.0) -> bool:
+        """Whether :meth:`result` would not wait: the child has sent its result or died (True
+        also when there is no child).
+
+        Parameters
+        ----------
+        timeout : float or None, optional
+            Wait up to this many seconds for it (None: until it happens).
+
+        Returns
+        -------
+        bool
+            Whether the result (or the child's end) is there.
+        """
+        import select
+
+        if self._fd is None:
+            return True
+        return bool(select.select([self._fd], [], [], timeout)[0])
 
     def cancel(self) -> None:
         """Kill the child (if it still runs) and drop its result."""

@@ -230,57 +230,41 @@ class _EarlyTask:
     takes ~1–2 s of one core in the report: imports, the compiled simulator, a first figure)
     so that the other core is not idle meanwhile (issue 16).
 
-    The child starts like a pool worker (:func:`_worker_init`), runs the task through
-    :func:`_call` and sends its result through a pipe; an exception that is not an
+    The child (:class:`common.forked.ForkedCall`, never computed twice) starts like a pool worker
+    (:func:`_worker_init`) and runs the task through :func:`_call`; an exception that is not an
     :class:`~common.errors.AcmmError` is raised here again with the child's traceback, and a child
     that dies is the same :class:`~common.errors.OutputError` as a pool worker that dies.
     """
 
-    def __init__(self, task: Task, pid: int, fd: int) -> None:
-        self.task, self._pid, self._fd = task, pid, fd
+    def __init__(self, task: Task, call) -> None:
+        self.task, self.call = task, call
 
     @classmethod
     def start(cls, tasks: list[Task], done: dict) -> Optional["_EarlyTask"]:
         """Fork the child for the ready task of highest priority (the first of equals, as the
         pool would pick it); None when nothing is ready or no child may be forked
         (:func:`common.forked.usable`)."""
-        from common.forked import flush_std_streams, usable
+        from common.forked import ForkedCall, usable
 
         ready = [t for t in tasks if not t.deps]
         if not ready or not usable():
             return None
         task = max(ready, key=lambda t: t.priority)
-        args = task.args(done)
-        parent = os.getpid()
-        r, w = os.pipe()
-        flush_std_streams()
-        pid = os.fork()
-        if pid == 0:                                     # pragma: no cover (the child)
-            os.close(r)
-            _early_child(parent, task.fn, args, w)
-        os.close(w)
-        return cls(task, pid, r)
+        call = ForkedCall(_early_call, os.getpid(), task.fn, task.args(done), fallback=False)
+        return cls(task, call) if call.forked else None
 
     def ready(self, timeout: Optional[float]) -> bool:
-        """Whether the child has written (or died); waits up to ``timeout`` s (None: until then)."""
-        import select
-
-        return bool(select.select([self._fd], [], [], timeout)[0])
+        """Whether the child has sent its result (or died); waits up to ``timeout`` s (None: until then)."""
+        return self.call.ready(timeout)
 
     def result(self) -> tuple:
         """The :func:`_call` tuple of the task (waits for the child)."""
-        import pickle
+        from common.errors import OutputError
+        from common.forked import ChildDied
 
-        with os.fdopen(self._fd, "rb") as f:
-            self._fd = None
-            data = f.read()
-        pid, self._pid = self._pid, None
-        os.waitpid(pid, 0)
         try:
-            kind, *value = pickle.loads(data)
-        except Exception:  # noqa: BLE001 (nothing or a truncated message: the child died)
-            from common.errors import OutputError
-
+            kind, *value = self.call.result()
+        except ChildDied:
             raise OutputError("a report worker process died (killed, or out of memory); nothing was written") from None
         if kind == "raise":
             exc, tb = value
@@ -288,19 +272,8 @@ class _EarlyTask:
         return value[0]
 
     def cancel(self) -> None:
-        """Kill the child if it still runs (a failure elsewhere) and close the pipe."""
-        import signal
-
-        if self._pid is not None:
-            pid, self._pid = self._pid, None
-            try:
-                os.kill(pid, signal.SIGKILL)
-                os.waitpid(pid, 0)
-            except (ProcessLookupError, ChildProcessError):
-                pass
-        if self._fd is not None:
-            os.close(self._fd)
-            self._fd = None
+        """Kill the child if it still runs (a failure elsewhere)."""
+        self.call.cancel()
 
 
 class _ChildTraceback(Exception):
@@ -310,29 +283,23 @@ class _ChildTraceback(Exception):
         return "\n" + self.args[0]
 
 
-def _early_child(parent: int, fn, args, fd: int) -> None:  # pragma: no cover (runs in the child)
-    """In :class:`_EarlyTask`'s child: start as a worker, run, send ("out", result tuple) or
-    ("raise", exception, traceback text), exit."""
+def _early_call(parent: int, fn, args) -> tuple:
+    """In :class:`_EarlyTask`'s child: start as a worker and run ``fn(*args)``; ("out", the
+    :func:`_call` tuple), or ("raise", exception, traceback text) for any other exception."""
     import pickle
     import traceback
 
-    code = 0
-    try:
+    if os.getpid() != parent:
         _worker_init(parent)
-        msg = ("out", _call(fn, args))
-        data = pickle.dumps(msg, protocol=pickle.HIGHEST_PROTOCOL)
-    except BaseException as exc:  # noqa: BLE001 (raised again in the parent)
-        code, tb = 1, traceback.format_exc()
-        try:
-            data = pickle.dumps(("raise", exc, tb), protocol=pickle.HIGHEST_PROTOCOL)
-        except Exception:  # noqa: BLE001 (an exception that does not pickle)
-            data = pickle.dumps(("raise", RuntimeError(repr(exc)), tb), protocol=pickle.HIGHEST_PROTOCOL)
     try:
-        view = memoryview(data)
-        while view:
-            view = view[os.write(fd, view):]
-    finally:
-        os._exit(code)
+        return ("out", _call(fn, args))
+    except BaseException as exc:  # noqa: BLE001 (raised again in the parent)
+        tb = traceback.format_exc()
+        try:
+            pickle.dumps(exc)
+        except Exception:  # noqa: BLE001 (an exception that does not pickle)
+            exc = RuntimeError(repr(exc))
+        return ("raise", exc, tb)
 
 
 # ---------------------------------------------------------------------------------------------
