@@ -117,6 +117,11 @@ class ForkedCall:
         -------
         object
             What ``fn(*args, **kwargs)`` returns.
+
+        Raises
+        ------
+        ChildDied
+            With ``fallback=False``: the child died before it sent a result.
         """
         fn, args, kwargs = self._call
         if self._pid is None:
@@ -143,7 +148,7 @@ class ForkedCall:
         Parameters
         ----------
         timeout : float or None, optional
-            Wait up to this many seconds for it (None: until it happens).
+            Longest wait for it, s (None: until it happens).
 
         Returns
         -------
