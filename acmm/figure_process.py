@@ -9,29 +9,19 @@ from __future__ import annotations
 import os
 import pickle
 import signal
-import struct
 import threading
 
+from common.forked import FRAME_HEADER as _HEADER  # the framing of every pipe message
 from common.forked import flush_std_streams
-
-_HEADER = struct.Struct("<Q")
+from common.forked import read_exact as _read_exact
+from common.forked import recv_frame as _recv_raw
+from common.forked import send_frame as _send_raw
 
 
 #: niceness added to the figure worker and its writers (measured on 2 cores: 5 beat 0 and 10)
 FIGURE_NICE = 5
 
 _BARRIER = 0xFFFFFFFFFFFFFFFE
-
-
-def _read_exact(fd: int, n: int) -> bytes | None:
-    chunks, got = [], 0
-    while got < n:
-        b = os.read(fd, min(n - got, 1 << 20))
-        if not b:
-            return None
-        chunks.append(b)
-        got += len(b)
-    return b"".join(chunks)
 
 
 def _warm() -> None:
@@ -99,11 +89,6 @@ def _fork_writer(job: bytes, close: tuple, prepare: bytes | None = None) -> tupl
     if jr is not None:
         os.close(jr)
     return pid, r, jw
-
-
-def _recv_raw(fd: int) -> bytes | None:
-    head = _read_exact(fd, _HEADER.size)
-    return None if head is None else _read_exact(fd, _HEADER.unpack(head)[0])
 
 
 def _prepare(job: bytes) -> None:
@@ -203,12 +188,6 @@ class _Server:
             self.join(next(p for p in self.running if p not in waiting))
         pid, fd, _ = _fork_writer(job, self._close_in_child())
         self.running[pid] = fd
-
-
-def _send_raw(fd: int, data: bytes) -> None:
-    view = memoryview(_HEADER.pack(len(data)) + data)
-    while view:
-        view = view[os.write(fd, view):]
 
 
 def _serve(jobs: int, status: int) -> None:

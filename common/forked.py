@@ -8,18 +8,23 @@ while it designs the 12 points, instead of after them::
     path = models.result()          # the child's result, or computed here and now
 
 The child runs the same code on the same inputs, so the result is the same bit for bit as the
-call in place.  :meth:`ForkedCall.result` falls back to calling the function in place when no
-child was forked (no ``os.fork``, one CPU, another non-daemon thread alive, ``ACMM_FORK=0``) or
-when the child failed (so a real error is raised in the caller, with its own type and message).
-:meth:`ForkedCall.cancel` (also on garbage collection) kills a child whose result is not wanted.
-Only for short, pure computations whose result pickles; never inside a process pool's worker
-(the pool already uses every core).
+call in place.  :meth:`ForkedCall.result` calls the function in place when no child was forked
+(no ``os.fork``, one CPU, another non-daemon thread alive, ``ACMM_FORK=0``) and, by default, when
+the child failed (so a real error is raised in the caller, with its own type and message); with
+``fallback=False`` a failed child raises :class:`ChildDied` instead (for a call that must not run
+twice: the report's first task, :mod:`report.runner`).  :meth:`ForkedCall.cancel` (also on
+garbage collection) kills a child whose result is not wanted.  For computations whose result
+pickles; never inside a process pool's worker (the pool already uses every core).
+
+The result travels as one length-prefixed pickle through a pipe: the parent reads exactly that
+many bytes, so a grandchild that inherited the pipe cannot hold the parent up.
 """
 from __future__ import annotations
 
 import os
 import pickle
 import signal
+import struct
 import sys
 import threading
 
@@ -51,17 +56,79 @@ def flush_std_streams() -> None:
             pass
 
 
+#: the length prefix of a framed message (unsigned 64-bit, little-endian)
+FRAME_HEADER = struct.Struct("<Q")
+
+
+def read_exact(fd: int, size: int) -> bytes | None:
+    """Exactly ``size`` bytes from ``fd``; None at end of file before that (the writer died).
+
+    Parameters
+    ----------
+    fd : int
+        A readable file descriptor (a pipe's read end).
+    size : int
+        Number of bytes, B.
+
+    Returns
+    -------
+    bytes or None
+        The bytes, or None.
+    """
+    chunks, got = [], 0
+    while got < size:
+        chunk = os.read(fd, min(size - got, 1 << 20))
+        if not chunk:
+            return None
+        chunks.append(chunk)
+        got += len(chunk)
+    return b"".join(chunks)
+
+
+def send_frame(fd: int, data: bytes) -> None:
+    """Write ``data`` to ``fd`` after its length (:data:`FRAME_HEADER`), all of it.
+
+    Parameters
+    ----------
+    fd : int
+        A writable file descriptor (a pipe's write end).
+    data : bytes
+        The message.
+    """
+    view = memoryview(FRAME_HEADER.pack(len(data)) + data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def recv_frame(fd: int) -> bytes | None:
+    """One message written by :func:`send_frame`: exactly its bytes (so that a process that
+    inherited the write end cannot hold the reader up); None when the writer died first.
+
+    Parameters
+    ----------
+    fd : int
+        A readable file descriptor.
+
+    Returns
+    -------
+    bytes or None
+        The message, or None.
+    """
+    head = read_exact(fd, FRAME_HEADER.size)
+    return None if head is None else read_exact(fd, FRAME_HEADER.unpack(head)[0])
+
+
 def _child(fn, args, kwargs, fd: int) -> None:
-    """In the child: compute, send ("ok", value) or ("error", None) through ``fd``, exit."""
+    """In the child: compute, send ("ok", value) or ("error", None) through ``fd`` as one
+    frame, flush what it printed, exit."""
     code = 0
     try:
         data = pickle.dumps(("ok", fn(*args, **kwargs)), protocol=pickle.HIGHEST_PROTOCOL)
     except BaseException:  # noqa: BLE001 (the parent computes again in place and raises)
         data, code = pickle.dumps(("error", None)), 1
     try:
-        view = memoryview(data)
-        while view:
-            view = view[os.write(fd, view):]
+        flush_std_streams()                 # os._exit does not: what the call printed is kept
+        send_frame(fd, data)
     finally:
         os._exit(code)
 
@@ -126,9 +193,11 @@ class ForkedCall:
         fn, args, kwargs = self._call
         if self._pid is None:
             return fn(*args, **kwargs)
-        with os.fdopen(self._fd, "rb") as f:
-            self._fd = None
-            data = f.read()
+        fd, self._fd = self._fd, None
+        try:
+            data = recv_frame(fd) or b""
+        finally:
+            os.close(fd)
         pid, self._pid = self._pid, None
         os.waitpid(pid, 0)
         try:
@@ -142,8 +211,8 @@ class ForkedCall:
         return fn(*args, **kwargs)
 
     def ready(self, timeout: float | None = 0.0) -> bool:
-        """Whether :meth:`result` would not wait: the child has sent its result or died (True
-        also when there is no child).
+        """Whether the child has begun to send its result (its computation is over) or died;
+        True also when there is no child.  :meth:`result` then waits only for the transfer.
 
         Parameters
         ----------
@@ -159,7 +228,9 @@ class ForkedCall:
 
         if self._fd is None:
             return True
-        return bool(select.select([self._fd], [], [], timeout)[0])
+        poller = select.poll()              # not select.select: any fd number (≥ 1024 too)
+        poller.register(self._fd, select.POLLIN | select.POLLHUP | select.POLLERR)
+        return bool(poller.poll(None if timeout is None else max(0, int(timeout * 1000))))
 
     def cancel(self) -> None:
         """Kill the child (if it still runs) and drop its result."""

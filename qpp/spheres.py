@@ -63,7 +63,9 @@ def _hinf_ab13dd(A, B, C, D) -> tuple[float, float]:
 
     n, m, p = A.shape[0], B.shape[1], C.shape[0]
     if n == 0:             # AB13DD takes no empty system; a static gain's norm is its σ_max
-        return float(np.linalg.svd(D, compute_uv=False)[0]), 0.0
+        from scipy.linalg import svdvals       # as control.linfnorm computes it
+
+        return float(svdvals(D)[0]), 0.0
     jobd = "Z" if not np.any(D) else "D"
     try:
         gpeak, fpeak = ab13dd("C", "I", "S", jobd, n, m, p, A, np.eye(n), B, C, D, AB13DD_TOL)

@@ -161,8 +161,8 @@ def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str,
         finally:
             gc.unfreeze()
     finally:
-        if early is not None:
-            early.cancel()
+        if early is not None:       # a failure elsewhere: let it finish, like a pool worker's task
+            early.finish()
     return done
 
 
@@ -202,7 +202,7 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
     try:
         while waiting or running or early is not None:
             ready = sorted((t for t in waiting if all(d in done for d in t.deps)), key=lambda t: -t.priority)
-            for t in ready[: max(0, jobs - len(running))]:
+            for t in ready[: max(0, jobs - len(running) - (early is not None))]:
                 waiting.remove(t)
                 sys.stdout.flush()
                 sys.stderr.flush()
@@ -212,7 +212,7 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
                 finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
             else:          # poll the pool's futures and the early child's pipe in turn
                 if running:
-                    finished, _ = cf.wait(list(running), timeout=0.01, return_when=cf.FIRST_COMPLETED)
+                    finished, _ = cf.wait(list(running), timeout=0.05, return_when=cf.FIRST_COMPLETED)
                 if early.ready(0.0 if running else None):
                     task, out = early.task, early.result()
                     early = None
@@ -233,7 +233,9 @@ class _EarlyTask:
     The child (:class:`common.forked.ForkedCall`, never computed twice) starts like a pool worker
     (:func:`_worker_init`) and runs the task through :func:`_call`; an exception that is not an
     :class:`~common.errors.AcmmError` is raised here again with the child's traceback, and a child
-    that dies is the same :class:`~common.errors.OutputError` as a pool worker that dies.
+    that dies is the same :class:`~common.errors.OutputError` as a pool worker that dies.  It
+    counts as one of the ``jobs`` processes (the pool runs one task fewer while it runs), and a
+    failure elsewhere waits for it as for the pool's running tasks.
     """
 
     def __init__(self, task: Task, call) -> None:
@@ -271,9 +273,13 @@ class _EarlyTask:
             raise exc from _ChildTraceback(tb)
         return value[0]
 
-    def cancel(self) -> None:
-        """Kill the child if it still runs (a failure elsewhere)."""
-        self.call.cancel()
+    def finish(self) -> None:
+        """Wait until the child's task is over (its files written: a failure elsewhere, like the
+        pool's running tasks), then reap it; killed at once if that wait is interrupted."""
+        try:
+            self.call.ready(None)
+        finally:
+            self.call.cancel()
 
 
 class _ChildTraceback(Exception):
@@ -292,7 +298,9 @@ def _early_call(parent: int, fn, args) -> tuple:
     if os.getpid() != parent:
         _worker_init(parent)
     try:
-        return ("out", _call(fn, args))
+        out = ("out", _call(fn, args))
+        pickle.dumps(out)                 # a result that does not pickle: its own error, not a death
+        return out
     except BaseException as exc:  # noqa: BLE001 (raised again in the parent)
         tb = traceback.format_exc()
         try:

@@ -101,18 +101,20 @@ def test_a_dependency_must_come_first():
 
 def test_error_in_a_worker_is_the_same_error_and_stops_the_graph(tmp_path):
     log = tmp_path / "log"
-    tasks = [Task("bad", _fail, (), lambda d: ("solver did not converge: field x",), cost=10),
+    tasks = [Task("decoy", _square, (), lambda d: (1,), cost=20),     # the early child's task
+             Task("bad", _fail, (), lambda d: ("solver did not converge: field x",), cost=10),
              Task("slow", _pid_after, (), lambda d: (log, 0.2)),
              Task("after", _pid_after, ("bad",), lambda d: (log, 0.0))]
     with pytest.raises(ConvergenceError, match="^solver did not converge: field x$") as exc:
         run_tasks(tasks, 2)
     assert exc.value.exit_code == 3
-    assert len(log.read_text().split()) <= 1          # "after" never ran; "slow" was waited for
+    ran = log.read_text().split() if log.exists() else []
+    assert len(ran) <= 1                              # "after" never ran; "slow", if started, was waited for
 
 
 def test_a_worker_that_dies_is_one_clear_error():
     with pytest.raises(OutputError, match="worker process died"):
-        run_tasks([Task("die", _die), Task("ok", _square, (), lambda d: (2,))], 2)
+        run_tasks([Task("die", _die), Task("ok", _square, (), lambda d: (2,), cost=9)], 2)   # "die" on the pool
 
 
 def _stamp(path, delay):
@@ -129,26 +131,49 @@ def _fail_after(delay, msg):
     raise ConvergenceError(msg)
 
 
-def _raise_key():
-    raise KeyError("not an AcmmError")
+def _stamp_then(path, what):
+    """Write this process's start time to ``path``, then fail in the way ``what`` names."""
+    with open(path, "w") as f:
+        f.write(f"{os.getpid()} {time.time()}")
+    if what == "acmm":
+        raise ConvergenceError("no convergence: field y")
+    if what == "key":
+        raise KeyError("not an AcmmError")
+    if what == "die":
+        os._exit(9)
+    if what == "unpicklable":
+        return lambda: None
+    if what == "env":
+        return os.environ.get("ACMM_FORK")
+    raise AssertionError(what)
+
+
+def _sleeper(path, delay):
+    start = time.time()
+    time.sleep(delay)
+    with open(path, "a") as f:
+        f.write(f"{start} {time.time()}\n")
+    return delay
+
+
+def _warm_for(seconds, marks):
+    def warm():
+        time.sleep(seconds)
+        marks["warm_end"] = time.time()
+    return warm
 
 
 def test_first_task_runs_on_its_own_child_during_the_warm_up(tmp_path):
     """The ready task of highest priority starts on a forked child before the (one-core) warm-up
-    ends; the others run on the pool's workers; the results are the serial ones."""
-    marks = {}
-
-    def warm():
-        marks["warm_start"] = time.time()
-        time.sleep(0.4)
-        marks["warm_end"] = time.time()
-
+    ends, started like a pool worker (ACMM_FORK=0); the others run on the pool's workers; the
+    results are the serial ones."""
+    marks: dict = {}
     tasks = [Task("a", _square, (), lambda d: (3,)),
              Task("first", _stamp, (), lambda d: (tmp_path / "first", 0.1), cost=5),
              Task("other", _stamp, (), lambda d: (tmp_path / "other", 0.0), cost=2),
              Task("sum", _add, ("a", "first"), lambda d: (d["a"], d["first"][0] * 0))]
     stats: dict = {}
-    out = run_tasks(tasks, 2, warm=warm, stats=stats)
+    out = run_tasks(tasks, 2, warm=_warm_for(0.4, marks), stats=stats)
     first_pid, first_start = out["first"]
     other_pid, other_start = out["other"]
     assert first_start < marks["warm_end"] and other_start >= marks["warm_end"]
@@ -157,32 +182,87 @@ def test_first_task_runs_on_its_own_child_during_the_warm_up(tmp_path):
     assert stats["first"][0] >= 0.1
     with pytest.raises(ChildProcessError):                 # the child was reaped
         os.waitpid(first_pid, os.WNOHANG)
+    env = run_tasks([Task("e", _stamp_then, (), lambda d: (tmp_path / "e", "env"), cost=9),
+                     Task("ok", _square, (), lambda d: (2,))], 2, warm=_warm_for(0.2, marks))
+    assert env["e"] == "0" and os.environ.get("ACMM_FORK") != "0"
 
 
-def test_early_task_errors_are_the_pools_errors(tmp_path):
-    """In the early child: an AcmmError comes back as the same class and message, another
-    exception as itself with the child's traceback, a dying child as one OutputError."""
-    with pytest.raises(ConvergenceError, match="^no convergence: field y$"):
-        run_tasks([Task("bad", _fail, (), lambda d: ("no convergence: field y",), cost=9),
-                   Task("ok", _square, (), lambda d: (2,))], 2)
-    with pytest.raises(KeyError) as exc:
-        run_tasks([Task("key", _raise_key, cost=9), Task("ok", _square, (), lambda d: (2,))], 2)
-    assert "_raise_key" in str(exc.value.__cause__)
-    with pytest.raises(OutputError, match="worker process died"):
-        run_tasks([Task("die", _die, cost=9), Task("ok", _square, (), lambda d: (2,))], 2)
+@pytest.mark.parametrize("what,error,match", [
+    ("acmm", ConvergenceError, "^no convergence: field y$"),
+    ("key", KeyError, "not an AcmmError"),
+    ("die", OutputError, "worker process died"),
+    ("unpicklable", Exception, "pickle|local object"),
+])
+def test_early_task_errors_are_the_pools_errors(tmp_path, what, error, match):
+    """In the early child (it started before the warm-up ended): an AcmmError comes back as the
+    same class and message, another exception as itself with the child's traceback, a dying
+    child as one OutputError, a result that does not pickle as the pickling error."""
+    marks: dict = {}
+    with pytest.raises(error, match=match) as exc:
+        run_tasks([Task("bad", _stamp_then, (), lambda d: (tmp_path / "bad", what), cost=9),
+                   Task("ok", _square, (), lambda d: (2,))], 2, warm=_warm_for(0.3, marks))
+    assert not isinstance(exc.value, OutputError) or what == "die"
+    pid, start = (tmp_path / "bad").read_text().split()
+    assert float(start) < marks["warm_end"] and int(pid) != os.getpid()
+    if what == "key":
+        assert "_stamp_then" in str(exc.value.__cause__)
 
 
-def test_a_failure_elsewhere_kills_the_early_child(tmp_path):
-    """A pool task that fails while the early task still runs: the error at once, no child left."""
+def test_the_early_task_counts_as_one_of_the_jobs(tmp_path):
+    log = tmp_path / "spans"
+    run_tasks([Task(f"s{i}", _sleeper, (), lambda d: (log, 0.3), cost=5 - i) for i in range(5)], 2)
+    spans = sorted(tuple(map(float, line.split())) for line in log.read_text().split("\n") if line)
+    most = max(sum(1 for a, b in spans if a <= t < b) for t, _ in spans)
+    assert len(spans) == 5 and most <= 2
+
+
+def test_a_failure_elsewhere_waits_for_the_early_task(tmp_path):
+    """A pool task fails while the early task still runs: the early task ends first (its files
+    complete, as the pool's running tasks), then the error; no child is left."""
+    log = tmp_path / "spans"
     t0 = time.time()
     with pytest.raises(ConvergenceError):
-        run_tasks([Task("long", _stamp, (), lambda d: (tmp_path / "long", 30.0), cost=9),
-                   Task("bad", _fail_after, (), lambda d: (0.5, "x"))], 2)
-    assert time.time() - t0 < 10
-    pid = int((tmp_path / "long").read_text().split()[0])
-    time.sleep(0.05)
-    with pytest.raises(ProcessLookupError):
-        os.kill(pid, 0)
+        run_tasks([Task("long", _sleeper, (), lambda d: (log, 1.0), cost=9),
+                   Task("bad", _fail_after, (), lambda d: (0.2, "x"))], 2)
+    assert time.time() - t0 >= 1.0 and len(log.read_text().split("\n")) == 2
+
+
+def test_the_early_tasks_output_is_not_lost(tmp_path):
+    """What the early task prints reaches a piped stdout even without PYTHONUNBUFFERED."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "s.py"
+    script.write_text("import sys\nsys.path.insert(0, %r)\n" % str(os.getcwd()) +
+                      "from report.runner import Task, run_tasks\n"
+                      "def say(x):\n    print('from task', x)\n    return x\n"
+                      "if __name__ == '__main__':\n"
+                      "    print(run_tasks([Task('p1', say, (), lambda d: (1,), cost=9),"
+                      " Task('p2', say, (), lambda d: (2,))], 2))\n")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env,
+                         cwd=os.getcwd(), timeout=120).stdout
+    assert "from task 1" in out and "from task 2" in out and "'p1': 1" in out
+
+
+def test_the_early_task_with_many_open_files(tmp_path):
+    """No select(): the early child's pipe may be any descriptor number (≥ 1024 too)."""
+    import resource
+
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if hard != resource.RLIM_INFINITY and hard < 1200:
+        pytest.skip("cannot open 1 100 files here")
+    resource.setrlimit(resource.RLIMIT_NOFILE, (max(soft, 1200) if hard == resource.RLIM_INFINITY
+                                                else min(hard, max(soft, 1200)), hard))
+    fds = [os.open(os.devnull, os.O_RDONLY) for _ in range(1100)]
+    try:
+        out = run_tasks([Task("a", _square, (), lambda d: (3,), cost=9),
+                         Task("b", _square, (), lambda d: (4,))], 2)
+        assert out == {"a": 9, "b": 16}
+    finally:
+        for fd in fds:
+            os.close(fd)
+        resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
 
 
 # ----------------------------------------------------------------------------- the report's graph
