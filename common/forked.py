@@ -9,15 +9,16 @@ while it designs the 12 points, instead of after them::
 
 The child runs the same code on the same inputs, so the result is the same bit for bit as the
 call in place.  :meth:`ForkedCall.result` calls the function in place when no child was forked
-(no ``os.fork``, one CPU, another non-daemon thread alive, ``ACMM_FORK=0``) and, by default, when
-the child failed (so a real error is raised in the caller, with its own type and message); with
-``fallback=False`` a failed child raises :class:`ChildDied` instead (for a call that must not run
-twice: the report's first task, :mod:`report.runner`).  :meth:`ForkedCall.cancel` (also on
-garbage collection) kills a child whose result is not wanted.  For computations whose result
-pickles; never inside a process pool's worker (the pool already uses every core).
+(no ``os.fork``, one CPU, another non-daemon thread alive, ``ACMM_FORK=0``) or when the child
+failed (so a real error is raised in the caller, with its own type and message).
+:meth:`ForkedCall.cancel` (also on garbage collection) kills a child whose result is not wanted.
+For pure computations whose result pickles; never inside a process pool's worker (the pool
+already uses every core).
 
-The result travels as one length-prefixed pickle through a pipe: the parent reads exactly that
-many bytes, so a grandchild that inherited the pipe cannot hold the parent up.
+The result travels as one length-prefixed pickle through a pipe (:func:`send_frame`,
+:func:`recv_frame`, also the framing of the figure worker's and the report's early worker's
+pipes): the reader takes exactly that many bytes, so a grandchild that inherited the pipe cannot
+hold it up.
 """
 from __future__ import annotations
 
@@ -133,11 +134,6 @@ def _child(fn, args, kwargs, fd: int) -> None:
         os._exit(code)
 
 
-class ChildDied(RuntimeError):
-    """The child of a :class:`ForkedCall` made with ``fallback=False`` died (or its result could
-    not be sent) before it delivered a result."""
-
-
 class ForkedCall:
     """``fn(*args, **kwargs)`` in a forked child, started at construction.
 
@@ -149,9 +145,6 @@ class ForkedCall:
         Its positional arguments.
     enabled : bool, optional
         False: no child, :meth:`result` calls ``fn`` in place.
-    fallback : bool, optional
-        True: :meth:`result` calls ``fn`` in place when the child failed; False: it raises
-        :class:`ChildDied` instead (for a call that must not run twice).
     **kwargs : object
         Its keyword arguments.
 
@@ -161,9 +154,8 @@ class ForkedCall:
         Whether a child was started.
     """
 
-    def __init__(self, fn, *args, enabled: bool = True, fallback: bool = True, **kwargs) -> None:
+    def __init__(self, fn, *args, enabled: bool = True, **kwargs) -> None:
         self._call = (fn, args, kwargs)
-        self._fallback = fallback
         self._pid: int | None = None
         self._fd: int | None = None
         if enabled and usable():
@@ -184,11 +176,6 @@ class ForkedCall:
         -------
         object
             What ``fn(*args, **kwargs)`` returns.
-
-        Raises
-        ------
-        ChildDied
-            With ``fallback=False``: the child died before it sent a result.
         """
         fn, args, kwargs = self._call
         if self._pid is None:
@@ -204,33 +191,7 @@ class ForkedCall:
             kind, value = pickle.loads(data)
         except Exception:  # noqa: BLE001 (a truncated message: the child died)
             kind, value = "error", None
-        if kind == "ok":
-            return value
-        if not self._fallback:
-            raise ChildDied(f"the child computing {getattr(fn, '__name__', fn)} died before it sent a result")
-        return fn(*args, **kwargs)
-
-    def ready(self, timeout: float | None = 0.0) -> bool:
-        """Whether the child has begun to send its result (its computation is over) or died;
-        True also when there is no child.  :meth:`result` then waits only for the transfer.
-
-        Parameters
-        ----------
-        timeout : float or None, optional
-            Longest wait for it, s (None: until it happens).
-
-        Returns
-        -------
-        bool
-            Whether the result (or the child's end) is there.
-        """
-        import select
-
-        if self._fd is None:
-            return True
-        poller = select.poll()              # not select.select: any fd number (≥ 1024 too)
-        poller.register(self._fd, select.POLLIN | select.POLLHUP | select.POLLERR)
-        return bool(poller.poll(None if timeout is None else max(0, int(timeout * 1000))))
+        return value if kind == "ok" else fn(*args, **kwargs)
 
     def cancel(self) -> None:
         """Kill the child (if it still runs) and drop its result."""

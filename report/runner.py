@@ -11,8 +11,8 @@ figures).  :func:`run_tasks` runs such a graph
   arguments (built in this process from the results of its dependencies) and its return value
   cross the process boundary; everything a task writes (HDF5 files, figures) is a file.
   The workers are forked after a warm-up (imports every worker needs, done once); while this
-  process warms up on one core, the ready task of highest priority already runs on a child of
-  its own (:class:`_EarlyTask`), so that the other core is not idle for those 1–2 s.
+  process warms up on one core, a child of its own already runs the ready tasks
+  (:class:`_EarlyWorker`), so that the other core is not idle for those 1–2 s.
 
 The results are the same either way: every task is a deterministic function of its arguments and
 of files its dependencies wrote completely before it starts.
@@ -147,8 +147,8 @@ def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str,
             on_done(t.name, done[t.name])
         return done
     _prioritize(tasks)
-    # the warm-up below runs on one core: the first task runs meanwhile on a child of its own
-    early = _EarlyTask.start(tasks, done)
+    # the warm-up below runs on one core: meanwhile a child of its own runs the ready tasks
+    early = _EarlyWorker.start(tasks, done)
     try:
         if warm is not None:
             warm()
@@ -161,7 +161,7 @@ def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str,
         finally:
             gc.unfreeze()
     finally:
-        if early is not None:       # a failure elsewhere: let it finish, like a pool worker's task
+        if early is not None:       # a failure elsewhere: let its task finish, like the pool's
             early.finish()
     return done
 
@@ -186,10 +186,12 @@ def _prioritize(tasks: list[Task]) -> None:
 
 
 def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
-              early: Optional["_EarlyTask"] = None) -> None:
+              early: Optional["_EarlyWorker"] = None) -> None:
     import multiprocessing
 
-    waiting = [t for t in tasks if early is None or t is not early.task]
+    owned = early.seal() if early is not None else set()     # what the early child runs or ran
+    waiting = [t for t in tasks if t.name not in owned]
+    by_name = {t.name: t for t in tasks}
     pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("fork"),
                                   initializer=_worker_init, initargs=(os.getpid(),))
     running: dict[cf.Future, Task] = {}
@@ -200,23 +202,24 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
         on_done(t.name, done[t.name])
 
     try:
-        while waiting or running or early is not None:
+        while waiting or running or (early is not None and early.busy):
+            busy = early is not None and early.busy          # the early child counts as one job
             ready = sorted((t for t in waiting if all(d in done for d in t.deps)), key=lambda t: -t.priority)
-            for t in ready[: max(0, jobs - len(running) - (early is not None))]:
+            for t in ready[: max(0, jobs - len(running) - busy)]:
                 waiting.remove(t)
                 sys.stdout.flush()
                 sys.stderr.flush()
                 running[pool.submit(_call, t.fn, t.args(done))] = t
             finished: set = set()
-            if early is None:
+            if not busy:
                 finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
             else:          # poll the pool's futures and the early child's pipe in turn
                 if running:
                     finished, _ = cf.wait(list(running), timeout=0.05, return_when=cf.FIRST_COMPLETED)
                 if early.ready(0.0 if running else None):
-                    task, out = early.task, early.result()
-                    early = None
-                    finish(task, out)
+                    got = early.next_result()
+                    if got is not None:
+                        finish(by_name[got[0]], got[1])
             for fut in finished:
                 finish(running.pop(fut), _result(fut))
     except BaseException:
@@ -225,89 +228,179 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
     pool.shutdown(wait=True)
 
 
-class _EarlyTask:
-    """The ready task of highest priority, run on a child forked before the pool's warm-up (which
-    takes ~1–2 s of one core in the report: imports, the compiled simulator, a first figure)
-    so that the other core is not idle meanwhile (issue 16).
+class _EarlyWorker:
+    """A child forked before the pool's warm-up (which takes ~1–2 s of one core in the report:
+    imports, the compiled simulator, a first figure) that runs ready tasks meanwhile, so that the
+    other core is not idle (issue 16).
 
-    The child (:class:`common.forked.ForkedCall`, never computed twice) starts like a pool worker
-    (:func:`_worker_init`) and runs the task through :func:`_call`; an exception that is not an
-    :class:`~common.errors.AcmmError` is raised here again with the child's traceback, and a child
-    that dies is the same :class:`~common.errors.OutputError` as a pool worker that dies.  It
-    counts as one of the ``jobs`` processes (the pool runs one task fewer while it runs), and a
-    failure elsewhere waits for it as for the pool's running tasks.
+    The child starts like a pool worker (:func:`_worker_init`) and runs, one after the other and
+    highest priority first, tasks that depend on none (their arguments are what this process
+    would build for them: a task's arguments may rest on what ``on_done`` recorded here), each
+    claimed in shared memory under a lock; :meth:`seal` (when the pool starts) ends the claiming, and the
+    child exits after its current task.  Each result comes back as one frame through a pipe
+    (:func:`common.forked.send_frame`); an :class:`~common.errors.AcmmError` is rebuilt with its
+    class and message, another exception is raised again with the child's traceback, and a child
+    that dies is the same :class:`~common.errors.OutputError` as a pool worker that dies.  While
+    it works it counts as one of the ``jobs`` processes; a failure elsewhere waits for its current
+    task, as for the pool's running tasks.
     """
 
-    def __init__(self, task: Task, call) -> None:
-        self.task, self.call = task, call
+    def __init__(self, pid: int, fd: int, tasks: list[Task], claims, lock, sealed) -> None:
+        self._pid, self._fd = pid, fd
+        self._tasks, self._claims, self._lock, self._sealed = tasks, claims, lock, sealed
+        self._owned: Optional[set] = None          # set by seal()
+        self._reported: set = set()
 
     @classmethod
-    def start(cls, tasks: list[Task], done: dict) -> Optional["_EarlyTask"]:
-        """Fork the child for the ready task of highest priority (the first of equals, as the
-        pool would pick it); None when nothing is ready or no child may be forked
+    def start(cls, tasks: list[Task], done: dict) -> Optional["_EarlyWorker"]:
+        """Fork the child; None when no task is ready or no child may be forked
         (:func:`common.forked.usable`)."""
-        from common.forked import ForkedCall, usable
+        import multiprocessing
 
-        ready = [t for t in tasks if not t.deps]
-        if not ready or not usable():
+        from common.forked import flush_std_streams, usable
+
+        if not any(not t.deps for t in tasks) or not usable():
             return None
-        task = max(ready, key=lambda t: t.priority)
-        call = ForkedCall(_early_call, os.getpid(), task.fn, task.args(done), fallback=False)
-        return cls(task, call) if call.forked else None
+        ctx = multiprocessing.get_context("fork")
+        claims, lock, sealed = ctx.RawArray("b", len(tasks)), ctx.Lock(), ctx.RawValue("b", 0)
+        parent = os.getpid()
+        r, w = os.pipe()
+        flush_std_streams()
+        pid = os.fork()
+        if pid == 0:                                     # pragma: no cover (the child)
+            os.close(r)
+            _early_worker(parent, tasks, dict(done), claims, lock, sealed, w)
+        os.close(w)
+        return cls(pid, r, tasks, claims, lock, sealed)
+
+    def seal(self) -> set:
+        """Stop the child from claiming more tasks; the names of those it has claimed."""
+        with self._lock:
+            self._sealed.value = 1
+            self._owned = {t.name for i, t in enumerate(self._tasks) if self._claims[i] == 1}
+        return set(self._owned)
+
+    @property
+    def busy(self) -> bool:
+        """Whether a task it claimed has not been reported yet (after :meth:`seal`)."""
+        return self._fd is not None and bool(self._owned - self._reported)
 
     def ready(self, timeout: Optional[float]) -> bool:
-        """Whether the child has sent its result (or died); waits up to ``timeout`` s (None: until then)."""
-        return self.call.ready(timeout)
+        """Whether a frame (or the child's end) is there; waits up to ``timeout`` s (None: until then)."""
+        import select
 
-    def result(self) -> tuple:
-        """The :func:`_call` tuple of the task (waits for the child)."""
+        poller = select.poll()              # not select.select: any fd number (≥ 1024 too)
+        poller.register(self._fd, select.POLLIN | select.POLLHUP | select.POLLERR)
+        return bool(poller.poll(None if timeout is None else max(0, int(timeout * 1000))))
+
+    def next_result(self) -> Optional[tuple]:
+        """The next (task name, :func:`_call` tuple) from the child, or None at its normal end.
+
+        Raises
+        ------
+        common.errors.OutputError
+            The child died before it reported every task it claimed.
+        Exception
+            A task's exception that is not an :class:`~common.errors.AcmmError` (with the child's
+            traceback as its cause).
+        """
+        import pickle
+
         from common.errors import OutputError
-        from common.forked import ChildDied
+        from common.forked import recv_frame
 
-        try:
-            kind, *value = self.call.result()
-        except ChildDied:
-            raise OutputError("a report worker process died (killed, or out of memory); nothing was written") from None
+        data = recv_frame(self._fd)
+        msg = pickle.loads(data) if data else None
+        if msg is None:
+            self._close()
+            if self._owned is not None and self._owned - self._reported:
+                raise OutputError("a report worker process died (killed, or out of memory); nothing was written")
+            return None
+        name, (kind, *value) = msg
+        self._reported.add(name)
         if kind == "raise":
             exc, tb = value
             raise exc from _ChildTraceback(tb)
-        return value[0]
+        return name, value[0]
 
     def finish(self) -> None:
-        """Wait until the child's task is over (its files written: a failure elsewhere, like the
-        pool's running tasks), then reap it; killed at once if that wait is interrupted."""
+        """After a failure (or at the end): seal, let the current task finish (its files
+        complete), then reap the child; killed at once if that wait is interrupted."""
         try:
-            self.call.ready(None)
+            if self._owned is None:
+                self.seal()
+            while self._fd is not None:
+                try:
+                    if self.next_result() is None:
+                        break
+                except Exception:  # noqa: BLE001 (the first error is already on its way)
+                    pass
         finally:
-            self.call.cancel()
+            self._close(kill=True)
+
+    def _close(self, kill: bool = False) -> None:
+        import signal
+
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+        if self._pid is not None:
+            pid, self._pid = self._pid, None
+            try:
+                if kill:
+                    os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
+            except (ProcessLookupError, ChildProcessError):
+                pass
 
 
 class _ChildTraceback(Exception):
-    """The traceback of an exception raised in the early task's child (its text)."""
+    """The traceback of an exception raised in the early worker's child (its text)."""
 
     def __str__(self) -> str:
         return "\n" + self.args[0]
 
 
-def _early_call(parent: int, fn, args) -> tuple:
-    """In :class:`_EarlyTask`'s child: start as a worker and run ``fn(*args)``; ("out", the
-    :func:`_call` tuple), or ("raise", exception, traceback text) for any other exception."""
+def _early_worker(parent: int, tasks: list[Task], done: dict, claims, lock, sealed, fd: int) -> None:  # pragma: no cover (the child)
+    """In :class:`_EarlyWorker`'s child: start as a worker; claim and run the tasks without
+    dependencies until sealed, none is left or one fails; send one frame per task, then
+    ``None``; exit."""
     import pickle
     import traceback
 
-    if os.getpid() != parent:
-        _worker_init(parent)
+    from common.forked import flush_std_streams, send_frame
+
+    code = 0
     try:
-        out = ("out", _call(fn, args))
-        pickle.dumps(out)                 # a result that does not pickle: its own error, not a death
-        return out
-    except BaseException as exc:  # noqa: BLE001 (raised again in the parent)
-        tb = traceback.format_exc()
-        try:
-            pickle.dumps(exc)
-        except Exception:  # noqa: BLE001 (an exception that does not pickle)
-            exc = RuntimeError(repr(exc))
-        return ("raise", exc, tb)
+        _worker_init(parent)
+        while True:
+            with lock:
+                ready = [i for i, t in enumerate(tasks) if claims[i] == 0 and not t.deps]
+                if sealed.value or not ready:
+                    break
+                i = max(ready, key=lambda i: tasks[i].priority)     # the first of equals
+                claims[i] = 1
+            t = tasks[i]
+            try:
+                out = _call(t.fn, t.args(done))
+                msg = pickle.dumps((t.name, ("out", out)), protocol=pickle.HIGHEST_PROTOCOL)
+            except BaseException as exc:  # noqa: BLE001 (raised again in the parent)
+                tb = traceback.format_exc()
+                try:
+                    msg = pickle.dumps((t.name, ("raise", exc, tb)), protocol=pickle.HIGHEST_PROTOCOL)
+                except Exception:  # noqa: BLE001 (an exception that does not pickle)
+                    msg = pickle.dumps((t.name, ("raise", RuntimeError(repr(exc)), tb)))
+                out = None
+            flush_std_streams()
+            send_frame(fd, msg)
+            if out is None or out[0] != "ok":
+                break                                   # a failure: the parent stops the graph
+        send_frame(fd, pickle.dumps(None))
+    except BaseException:  # noqa: BLE001 (the parent sees the frames stop: a dead worker)
+        code = 1
+    finally:
+        flush_std_streams()
+        os._exit(code)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -164,22 +164,23 @@ def _warm_for(seconds, marks):
 
 
 def test_first_task_runs_on_its_own_child_during_the_warm_up(tmp_path):
-    """The ready task of highest priority starts on a forked child before the (one-core) warm-up
-    ends, started like a pool worker (ACMM_FORK=0); the others run on the pool's workers; the
-    results are the serial ones."""
+    """During the (one-core) warm-up a forked child runs the tasks without dependencies, highest
+    priority first, one after the other, started like a pool worker (ACMM_FORK=0); what it has
+    not claimed when the pool starts runs on the pool's workers; the results are the serial ones."""
     marks: dict = {}
     tasks = [Task("a", _square, (), lambda d: (3,)),
-             Task("first", _stamp, (), lambda d: (tmp_path / "first", 0.1), cost=5),
-             Task("other", _stamp, (), lambda d: (tmp_path / "other", 0.0), cost=2),
+             Task("first", _stamp, (), lambda d: (tmp_path / "first", 0.15), cost=5),
+             Task("second", _stamp, (), lambda d: (tmp_path / "second", 0.6), cost=4),
+             Task("late", _stamp, (), lambda d: (tmp_path / "late", 0.0), cost=2),
              Task("sum", _add, ("a", "first"), lambda d: (d["a"], d["first"][0] * 0))]
     stats: dict = {}
     out = run_tasks(tasks, 2, warm=_warm_for(0.4, marks), stats=stats)
-    first_pid, first_start = out["first"]
-    other_pid, other_start = out["other"]
-    assert first_start < marks["warm_end"] and other_start >= marks["warm_end"]
-    assert os.getpid() not in (first_pid, other_pid) and first_pid != other_pid
+    (first_pid, first_start), (second_pid, second_start) = out["first"], out["second"]
+    late_pid, late_start = out["late"]
+    assert first_start < second_start < marks["warm_end"] <= late_start   # 0.15 < 0.4 < 0.15 + 0.6
+    assert first_pid == second_pid != late_pid and os.getpid() not in (first_pid, late_pid)
     assert out["a"] == 9 and out["sum"] == 9 and set(stats) == {t.name for t in tasks}
-    assert stats["first"][0] >= 0.1
+    assert stats["first"][0] >= 0.15
     with pytest.raises(ChildProcessError):                 # the child was reaped
         os.waitpid(first_pid, os.WNOHANG)
     env = run_tasks([Task("e", _stamp_then, (), lambda d: (tmp_path / "e", "env"), cost=9),

@@ -134,24 +134,6 @@ def test_forked_call_returns_the_childs_result_or_computes_in_place(monkeypatch)
     assert not forked.usable() and not forked.ForkedCall(_square, 2).forked
 
 
-def test_forked_call_without_fallback_reports_a_dead_child_and_says_when_ready(monkeypatch):
-    import time
-
-    from common import forked
-
-    if not forked.usable():
-        pytest.skip("no fork, one CPU or other threads alive")
-    monkeypatch.setenv("ACMM_TEST_IN_CHILD", "1")
-    c = forked.ForkedCall(_die, 1, fallback=False)
-    monkeypatch.delenv("ACMM_TEST_IN_CHILD")
-    assert c.ready(None)                                     # the child's end counts as ready
-    with pytest.raises(forked.ChildDied, match="_die"):       # not computed a second time here
-        c.result()
-    slow = forked.ForkedCall(time.sleep, 0.5, fallback=False)
-    assert not slow.ready(0.0) and slow.ready(None) and slow.result() is None
-    assert forked.ForkedCall(_square, 3, enabled=False).ready(0.0)
-
-
 def test_forked_call_cancel_kills_the_child():
     import os
     import time
