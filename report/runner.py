@@ -12,7 +12,7 @@ figures).  :func:`run_tasks` runs such a graph
   cross the process boundary; everything a task writes (HDF5 files, figures) is a file.
   The workers are forked after a warm-up (imports every worker needs, done once); while this
   process warms up on one core, a child of its own already runs the ready tasks
-  (:class:`_EarlyWorker`), so that the other core is not idle for those 1–2 s.
+  (:class:`report.early_worker.EarlyWorker`), so that the other core is not idle for those 1–2 s.
 
 The results are the same either way: every task is a deterministic function of its arguments and
 of files its dependencies wrote completely before it starts.
@@ -148,7 +148,9 @@ def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str,
         return done
     _prioritize(tasks)
     # the warm-up below runs on one core: meanwhile a child of its own runs the ready tasks
-    early = _EarlyWorker.start(tasks, done)
+    from report.early_worker import EarlyWorker
+
+    early = EarlyWorker.start(tasks, done)
     try:
         if warm is not None:
             warm()
@@ -186,7 +188,7 @@ def _prioritize(tasks: list[Task]) -> None:
 
 
 def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
-              early: Optional["_EarlyWorker"] = None) -> None:
+              early=None) -> None:
     import multiprocessing
 
     owned = early.seal() if early is not None else set()     # what the early child runs or ran
@@ -203,6 +205,10 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
 
     try:
         while waiting or running or (early is not None and early.busy):
+            while early is not None and early.busy and early.ready(0.0):   # its results first
+                got = early.next_result()           # (a failure raises before anything starts)
+                if got is not None:
+                    finish(by_name[got[0]], got[1])
             busy = early is not None and early.busy          # the early child counts as one job
             ready = sorted((t for t in waiting if all(d in done for d in t.deps)), key=lambda t: -t.priority)
             for t in ready[: max(0, jobs - len(running) - busy)]:
@@ -213,194 +219,16 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
             finished: set = set()
             if not busy:
                 finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
-            else:          # poll the pool's futures and the early child's pipe in turn
-                if running:
-                    finished, _ = cf.wait(list(running), timeout=0.05, return_when=cf.FIRST_COMPLETED)
-                if early.ready(0.0 if running else None):
-                    got = early.next_result()
-                    if got is not None:
-                        finish(by_name[got[0]], got[1])
+            elif running:  # poll the pool's futures and (above) the early child's pipe in turn
+                finished, _ = cf.wait(list(running), timeout=0.05, return_when=cf.FIRST_COMPLETED)
+            else:
+                early.ready(None)
             for fut in finished:
                 finish(running.pop(fut), _result(fut))
     except BaseException:
         pool.shutdown(wait=True, cancel_futures=True)
         raise
     pool.shutdown(wait=True)
-
-
-class _EarlyWorker:
-    """A child forked before the pool's warm-up (which takes ~1–2 s of one core in the report:
-    imports, the compiled simulator, a first figure) that runs ready tasks meanwhile, so that the
-    other core is not idle (issue 16).
-
-    The child starts like a pool worker (:func:`_worker_init`) and runs, one after the other and
-    highest priority first, tasks that depend on none (their arguments are what this process
-    would build for them: a task's arguments may rest on what ``on_done`` recorded here), each
-    claimed in shared memory under a lock; :meth:`seal` (when the pool starts) ends the claiming, and the
-    child exits after its current task.  Each result comes back as one frame through a pipe
-    (:func:`common.forked.send_frame`); an :class:`~common.errors.AcmmError` is rebuilt with its
-    class and message, another exception is raised again with the child's traceback, and a child
-    that dies is the same :class:`~common.errors.OutputError` as a pool worker that dies.  While
-    it works it counts as one of the ``jobs`` processes; a failure elsewhere waits for its current
-    task, as for the pool's running tasks.
-    """
-
-    def __init__(self, pid: int, fd: int, tasks: list[Task], claims, lock, sealed) -> None:
-        self._pid, self._fd = pid, fd
-        self._tasks, self._claims, self._lock, self._sealed = tasks, claims, lock, sealed
-        self._owned: Optional[set] = None          # set by seal()
-        self._reported: set = set()
-
-    @classmethod
-    def start(cls, tasks: list[Task], done: dict) -> Optional["_EarlyWorker"]:
-        """Fork the child; None when no task is ready or no child may be forked
-        (:func:`common.forked.usable`)."""
-        import multiprocessing
-
-        from common.forked import flush_std_streams, usable
-
-        if not any(not t.deps for t in tasks) or not usable():
-            return None
-        ctx = multiprocessing.get_context("fork")
-        claims, lock, sealed = ctx.RawArray("b", len(tasks)), ctx.Lock(), ctx.RawValue("b", 0)
-        parent = os.getpid()
-        r, w = os.pipe()
-        flush_std_streams()
-        pid = os.fork()
-        if pid == 0:                                     # pragma: no cover (the child)
-            os.close(r)
-            _early_worker(parent, tasks, dict(done), claims, lock, sealed, w)
-        os.close(w)
-        return cls(pid, r, tasks, claims, lock, sealed)
-
-    def seal(self) -> set:
-        """Stop the child from claiming more tasks; the names of those it has claimed."""
-        with self._lock:
-            self._sealed.value = 1
-            self._owned = {t.name for i, t in enumerate(self._tasks) if self._claims[i] == 1}
-        return set(self._owned)
-
-    @property
-    def busy(self) -> bool:
-        """Whether a task it claimed has not been reported yet (after :meth:`seal`)."""
-        return self._fd is not None and bool(self._owned - self._reported)
-
-    def ready(self, timeout: Optional[float]) -> bool:
-        """Whether a frame (or the child's end) is there; waits up to ``timeout`` s (None: until then)."""
-        import select
-
-        poller = select.poll()              # not select.select: any fd number (≥ 1024 too)
-        poller.register(self._fd, select.POLLIN | select.POLLHUP | select.POLLERR)
-        return bool(poller.poll(None if timeout is None else max(0, int(timeout * 1000))))
-
-    def next_result(self) -> Optional[tuple]:
-        """The next (task name, :func:`_call` tuple) from the child, or None at its normal end.
-
-        Raises
-        ------
-        common.errors.OutputError
-            The child died before it reported every task it claimed.
-        Exception
-            A task's exception that is not an :class:`~common.errors.AcmmError` (with the child's
-            traceback as its cause).
-        """
-        import pickle
-
-        from common.errors import OutputError
-        from common.forked import recv_frame
-
-        data = recv_frame(self._fd)
-        msg = pickle.loads(data) if data else None
-        if msg is None:
-            self._close()
-            if self._owned is not None and self._owned - self._reported:
-                raise OutputError("a report worker process died (killed, or out of memory); nothing was written")
-            return None
-        name, (kind, *value) = msg
-        self._reported.add(name)
-        if kind == "raise":
-            exc, tb = value
-            raise exc from _ChildTraceback(tb)
-        return name, value[0]
-
-    def finish(self) -> None:
-        """After a failure (or at the end): seal, let the current task finish (its files
-        complete), then reap the child; killed at once if that wait is interrupted."""
-        try:
-            if self._owned is None:
-                self.seal()
-            while self._fd is not None:
-                try:
-                    if self.next_result() is None:
-                        break
-                except Exception:  # noqa: BLE001 (the first error is already on its way)
-                    pass
-        finally:
-            self._close(kill=True)
-
-    def _close(self, kill: bool = False) -> None:
-        import signal
-
-        if self._fd is not None:
-            os.close(self._fd)
-            self._fd = None
-        if self._pid is not None:
-            pid, self._pid = self._pid, None
-            try:
-                if kill:
-                    os.kill(pid, signal.SIGKILL)
-                os.waitpid(pid, 0)
-            except (ProcessLookupError, ChildProcessError):
-                pass
-
-
-class _ChildTraceback(Exception):
-    """The traceback of an exception raised in the early worker's child (its text)."""
-
-    def __str__(self) -> str:
-        return "\n" + self.args[0]
-
-
-def _early_worker(parent: int, tasks: list[Task], done: dict, claims, lock, sealed, fd: int) -> None:  # pragma: no cover (the child)
-    """In :class:`_EarlyWorker`'s child: start as a worker; claim and run the tasks without
-    dependencies until sealed, none is left or one fails; send one frame per task, then
-    ``None``; exit."""
-    import pickle
-    import traceback
-
-    from common.forked import flush_std_streams, send_frame
-
-    code = 0
-    try:
-        _worker_init(parent)
-        while True:
-            with lock:
-                ready = [i for i, t in enumerate(tasks) if claims[i] == 0 and not t.deps]
-                if sealed.value or not ready:
-                    break
-                i = max(ready, key=lambda i: tasks[i].priority)     # the first of equals
-                claims[i] = 1
-            t = tasks[i]
-            try:
-                out = _call(t.fn, t.args(done))
-                msg = pickle.dumps((t.name, ("out", out)), protocol=pickle.HIGHEST_PROTOCOL)
-            except BaseException as exc:  # noqa: BLE001 (raised again in the parent)
-                tb = traceback.format_exc()
-                try:
-                    msg = pickle.dumps((t.name, ("raise", exc, tb)), protocol=pickle.HIGHEST_PROTOCOL)
-                except Exception:  # noqa: BLE001 (an exception that does not pickle)
-                    msg = pickle.dumps((t.name, ("raise", RuntimeError(repr(exc)), tb)))
-                out = None
-            flush_std_streams()
-            send_frame(fd, msg)
-            if out is None or out[0] != "ok":
-                break                                   # a failure: the parent stops the graph
-        send_frame(fd, pickle.dumps(None))
-    except BaseException:  # noqa: BLE001 (the parent sees the frames stop: a dead worker)
-        code = 1
-    finally:
-        flush_std_streams()
-        os._exit(code)
 
 
 # ---------------------------------------------------------------------------------------------

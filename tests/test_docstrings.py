@@ -128,6 +128,7 @@ NO_REPORT_CITATION = {
     "report.sections.printed": "the table of every printed number: no mathematics of its own",
     "report.sections.provenance": "software versions and stage files used: no mathematics",
     "report.runner": "the report's task graph run serially or on forked workers: no mathematics of the report",
+    "report.early_worker": "a child running the report's first tasks during the warm-up: no mathematics of the report",
     "report.ledger": "comparison of printed and computed numbers: no mathematics of the report",
     **{m: "command line: parses, calls and prints, no mathematics (the layer rule)" for m in (
         "cli", "cli.acmm_app", "cli.qpp_app", "cli.acmm_sweep", "cli.acmm_report", "cli.common",

@@ -60,7 +60,7 @@ def test_parallel_and_serial_give_the_same_results(tmp_path):
     assert {k: v for k, v in par.items() if not k.startswith("slow")} == \
         {k: v for k, v in serial.items() if not k.startswith("slow")} == {"a": 9, "b": 16, "sum": 25, "sum2": 25}
     # ran in two other processes at the same time, each task once, after its dependencies
-    assert par["slow1"] != par["slow2"] and os.getpid() not in (par["slow1"], par["slow2"])
+    assert os.getpid() not in (par["slow1"], par["slow2"])            # in other processes
     assert sorted(order) == sorted(serial) and order.index("sum") > max(order.index("a"), order.index("b"))
     assert order.index("sum2") > order.index("slow1")
     assert set(stats) == set(serial) and all(w >= 0 and c >= 0 for w, c in stats.values())
@@ -145,6 +145,9 @@ def _stamp_then(path, what):
         return lambda: None
     if what == "env":
         return os.environ.get("ACMM_FORK")
+    if what == "exit":
+        time.sleep(0.5)
+        raise SystemExit(3)
     raise AssertionError(what)
 
 
@@ -170,14 +173,14 @@ def test_first_task_runs_on_its_own_child_during_the_warm_up(tmp_path):
     marks: dict = {}
     tasks = [Task("a", _square, (), lambda d: (3,)),
              Task("first", _stamp, (), lambda d: (tmp_path / "first", 0.15), cost=5),
-             Task("second", _stamp, (), lambda d: (tmp_path / "second", 0.6), cost=4),
+             Task("second", _stamp, (), lambda d: (tmp_path / "second", 1.5), cost=4),
              Task("late", _stamp, (), lambda d: (tmp_path / "late", 0.0), cost=2),
              Task("sum", _add, ("a", "first"), lambda d: (d["a"], d["first"][0] * 0))]
     stats: dict = {}
     out = run_tasks(tasks, 2, warm=_warm_for(0.4, marks), stats=stats)
     (first_pid, first_start), (second_pid, second_start) = out["first"], out["second"]
     late_pid, late_start = out["late"]
-    assert first_start < second_start < marks["warm_end"] <= late_start   # 0.15 < 0.4 < 0.15 + 0.6
+    assert first_start < second_start < marks["warm_end"] <= late_start   # 0.15 < 0.4 < 0.15 + 1.5
     assert first_pid == second_pid != late_pid and os.getpid() not in (first_pid, late_pid)
     assert out["a"] == 9 and out["sum"] == 9 and set(stats) == {t.name for t in tasks}
     assert stats["first"][0] >= 0.15
@@ -207,6 +210,24 @@ def test_early_task_errors_are_the_pools_errors(tmp_path, what, error, match):
     assert float(start) < marks["warm_end"] and int(pid) != os.getpid()
     if what == "key":
         assert "_stamp_then" in str(exc.value.__cause__)
+
+
+def test_a_failure_in_the_early_child_starts_nothing_more(tmp_path):
+    """The early child's task failed during the warm-up: the error comes before the pool starts
+    any task."""
+    log = tmp_path / "spans"
+    t0 = time.time()
+    with pytest.raises(ConvergenceError, match="field y"):
+        run_tasks([Task("bad", _stamp_then, (), lambda d: (tmp_path / "bad", "acmm"), cost=9),
+                   Task("slow", _sleeper, (), lambda d: (log, 2.0))], 2, warm=_warm_for(0.3, {}))
+    assert time.time() - t0 < 1.5 and not log.exists()
+
+
+def test_the_first_error_is_the_one_raised(tmp_path):
+    """A pool task fails while the early child's task ends with SystemExit: the pool's error."""
+    with pytest.raises(ConvergenceError, match="^x$"):
+        run_tasks([Task("exit", _stamp_then, (), lambda d: (tmp_path / "exit", "exit"), cost=9),
+                   Task("bad", _fail_after, (), lambda d: (0.1, "x"))], 2)
 
 
 def test_the_early_task_counts_as_one_of_the_jobs(tmp_path):
