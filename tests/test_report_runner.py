@@ -146,7 +146,7 @@ def _stamp_then(path, what):
     if what == "env":
         return os.environ.get("ACMM_FORK")
     if what == "exit":
-        time.sleep(0.5)
+        time.sleep(2.0)             # still running when the pool's task fails
         raise SystemExit(3)
     raise AssertionError(what)
 
