@@ -216,11 +216,10 @@ def test_a_failure_in_the_early_child_starts_nothing_more(tmp_path):
     """The early child's task failed during the warm-up: the error comes before the pool starts
     any task."""
     log = tmp_path / "spans"
-    t0 = time.time()
     with pytest.raises(ConvergenceError, match="field y"):
         run_tasks([Task("bad", _stamp_then, (), lambda d: (tmp_path / "bad", "acmm"), cost=9),
                    Task("slow", _sleeper, (), lambda d: (log, 2.0))], 2, warm=_warm_for(0.3, {}))
-    assert time.time() - t0 < 1.5 and not log.exists()
+    assert not log.exists()            # "slow" never started (it would have been waited for)
 
 
 def test_the_first_error_is_the_one_raised(tmp_path):
