@@ -221,7 +221,8 @@ def prepare_design_figures(s, units_system: str) -> None:
     units_system : str
         Unit system of the figure, ``"imperial"`` or ``"SI"``.
     """
-    from acmm import figure_worker, plots
+    from acmm import plots
+    from common import figure_worker
     from acmm.linearize import STATE_NAMES
 
     figure_worker.prepare(plots.prebuild, "gain_schedule_grid", tuple(STATE_NAMES),
@@ -231,7 +232,7 @@ def prepare_design_figures(s, units_system: str) -> None:
 
 
 def pole_map_figure(points, s, run_dir: Path) -> None:
-    """Submit the design points' pole map with the sector of ch. 5.2 (:func:`acmm.figure_worker.submit`).
+    """Submit the design points' pole map with the sector of ch. 5.2 (:func:`common.figure_worker.submit`).
 
     Parameters
     ----------
@@ -243,7 +244,7 @@ def pole_map_figure(points, s, run_dir: Path) -> None:
         Run directory; the figure is ``design_poles.png`` there.
     """
     from acmm import plots
-    from acmm.figure_worker import submit
+    from common.figure_worker import submit
 
     submit(plots.pole_map, [p.lqr.poles for p in points], [p.spec.name for p in points], s.orbit_rate,
            s.sector.sigma, s.sector.half_angle_deg, run_dir / "design_poles.png")
@@ -251,7 +252,7 @@ def pole_map_figure(points, s, run_dir: Path) -> None:
 
 def gain_figure(points, fit, s, run_dir: Path, units_system: str) -> None:
     """Submit the gain-schedule figure: the points' LQR gains and the schedule ``fit``, in the
-    ``units_system`` (cf. Figs 5.3–5.26; :func:`acmm.figure_worker.submit`).
+    ``units_system`` (cf. Figs 5.3–5.26; :func:`common.figure_worker.submit`).
 
     Parameters
     ----------
@@ -267,7 +268,7 @@ def gain_figure(points, fit, s, run_dir: Path, units_system: str) -> None:
         Unit system of the figure, ``"imperial"`` or ``"SI"``.
     """
     from acmm import plots
-    from acmm.figure_worker import submit
+    from common.figure_worker import submit
     from acmm.linearize import STATE_NAMES
 
     gains = np.array([p.lqr.K for p in points])
@@ -298,7 +299,7 @@ def path_figures(pc, s, run_dir: Path) -> None:
         Run directory; the figures are ``design_path_margins.png`` and ``design_path_poles.png``.
     """
     from acmm import plots
-    from acmm.figure_worker import submit
+    from common.figure_worker import submit
 
     if pc is None:
         return

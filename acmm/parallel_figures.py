@@ -16,7 +16,7 @@ font and glyph caches and there was no idle core — and forking a process that 
 machine it overlaps the figure writing with the next figure.  Otherwise :func:`run` calls the
 function in place, so callers need not care.  At most one writer per CPU runs at a time.
 
-The stages (``acmm design``/``simulate``) no longer use it: :mod:`acmm.figure_worker` (one
+The stages (``acmm design``/``simulate``) no longer use it: :mod:`common.figure_worker` (one
 pre-importing worker forked when the stage starts, skeletons built ahead) took ``acmm simulate
 staircase`` with figures from 3.5 s to 1.6 s (2 cores, best of 3), where this module's
 fork-per-``savefig`` gave 3.1 s (each writer still paid the drawing after the stage's own

@@ -82,7 +82,7 @@ def prebuild(kind: str, *params) -> None:
     artists: everything that does not depend on the data) for the figure function called later
     with the same parameters.
 
-    The figure worker (:mod:`acmm.figure_worker`) calls this while the stage still computes, so
+    The figure worker (:mod:`common.figure_worker`) calls this while the stage still computes, so
     the figure function then only draws the data; without it the skeleton is built on the spot.
     The result is identical either way.
 

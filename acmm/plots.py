@@ -32,3 +32,22 @@ from acmm.plot_base import (  # noqa: F401  (re-exported; acmm.sweep uses plots.
     state_units,
 )
 from acmm.sim_plots import axis_histories, inertia_histories, summary  # noqa: F401  (re-exported)
+
+
+def warm_figure_worker() -> None:
+    """The figure worker's warm-up for the acmm stages (:data:`acmm.stage_common.FIGURE_WARM`,
+    :func:`common.figure_worker.start`): matplotlib with the stage style and one
+    small figure drawn (fonts, caches); the report's opt-in forked writers are turned off there
+    (a writer draws in place, never forks again)."""
+    import io
+
+    from acmm import parallel_figures
+
+    parallel_figures.forget()
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(2, 1.5))
+    ax.plot([0.0, 1.0], [0.0, 1.0], lw=0.7)
+    ax.set_title("roll θ (deg)")
+    ax.set_xlabel("time (orbits)")
+    fig.savefig(io.BytesIO(), format="png", dpi=30)
+    plt.close(fig)

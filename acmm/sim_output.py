@@ -96,7 +96,8 @@ def prepare_sim_figures(cfg) -> None:
     cfg : acmm.config.Config
         The run's config (its ``output.units``, ``"imperial"`` or ``"SI"``, label the figures).
     """
-    from acmm import figure_worker, plots
+    from acmm import plots
+    from common import figure_worker
 
     for kind in ("axis_histories", "summary", "inertia_histories"):
         figure_worker.prepare(plots.prebuild, kind, cfg.output.units, for_figure=kind)
@@ -104,7 +105,7 @@ def prepare_sim_figures(cfg) -> None:
 
 def sim_figures(cfg, sc, r, stats: list, items: dict) -> None:
     """Hand the simulation figures (axis histories, summary, inertia steps: the costliest first)
-    to :func:`acmm.figure_worker.submit` (drawn in the figure worker when one runs, else here).
+    to :func:`common.figure_worker.submit` (drawn in the figure worker when one runs, else here).
 
     ``items`` are :func:`sim_items` (imperial units); the figures use ``cfg.output.units``
     (Figs 6.2–6.30 of ch. 6).
@@ -123,7 +124,8 @@ def sim_figures(cfg, sc, r, stats: list, items: dict) -> None:
         The datasets of :func:`sim_items` (``orbits``, ``attitude_error`` rad,
         ``rate_rel_lvlh`` deg/s).
     """
-    from acmm import figure_worker, plots
+    from acmm import plots
+    from common import figure_worker
 
     d = cfg.run_dir()
     units = cfg.output.units

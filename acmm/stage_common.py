@@ -10,6 +10,11 @@ import numpy as np
 
 from acmm.config import Config, load_config
 
+#: the figure worker's warm-up for the acmm stages, :func:`acmm.plots.warm_figure_worker`, named
+#: as :func:`common.figure_worker.start` takes it (a string: the worker imports it, this process
+#: need not)
+FIGURE_WARM = "acmm.plots:warm_figure_worker"
+
 
 def _in_system(items: dict, cfg: Config, roles: dict) -> dict:
     """Per-state arrays of ``items`` (path → role of :func:`acmm.units.state_space_in`) in the

@@ -256,13 +256,14 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
         (:class:`DesignResult`, pathlib.Path of ``design.h5``).
     """
     from acmm import design_output as out
-    from acmm import figure_worker
+    from acmm.stage_common import FIGURE_WARM
+    from common import figure_worker
     from acmm.settings import design_settings
 
     cfg = _as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
     s, run_dir = design_settings(cfg), cfg.run_dir()
-    with figure_worker.session(want_figures):
+    with figure_worker.session(want_figures, FIGURE_WARM):
         if want_figures:       # figures handed to the worker as their data is ready
             out.prepare_design_figures(s, cfg.output.units)
             r = compute_design(cfg, progress, lambda pts: out.pole_map_figure(pts, s, run_dir),

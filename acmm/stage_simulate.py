@@ -80,11 +80,12 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
     """
     import time
 
-    from acmm import figure_worker
+    from acmm.stage_common import FIGURE_WARM
+    from common import figure_worker
 
     cfg = _as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
-    with figure_worker.session(want_figures):       # first: the worker starts before numba loads
+    with figure_worker.session(want_figures, FIGURE_WARM):       # first: the worker starts before numba loads
         from acmm import sim_output as out
         from acmm import simulate as sim_mod
 

@@ -15,6 +15,10 @@ import typer
 
 from cli.common import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
 
+#: the acmm stages' figure-worker warm-up, :data:`acmm.stage_common.FIGURE_WARM` (a string here: the
+#: worker is forked before anything of acmm is imported; a test checks that the two agree)
+FIGURE_WARM = "acmm.plots:warm_figure_worker"
+
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
                   help="Space Station attitude control / momentum management (CR-185644 Part II).",
                   epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
@@ -155,9 +159,9 @@ def design(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = 
     """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures.
     With --strict, a scheduled gain with poles outside the sector exits 1."""
 
-    from acmm import figure_worker
+    from common import figure_worker
 
-    with figure_worker.session(figures is not False):     # started before the heavy imports
+    with figure_worker.session(figures is not False, FIGURE_WARM):     # started before the heavy imports
         from acmm.stages import run_design
 
         r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
@@ -194,9 +198,9 @@ def simulate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] 
     """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures.
     With --strict, a DIVERGED verdict exits 1."""
 
-    from acmm import figure_worker
+    from common import figure_worker
 
-    with figure_worker.session(figures is not False):     # started before the heavy imports
+    with figure_worker.session(figures is not False, FIGURE_WARM):     # started before the heavy imports
         from acmm.stages import run_simulate
 
         r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
@@ -255,7 +259,7 @@ def main() -> None:
 
 def _fork_figure_worker_early(args: list[str]) -> None:
     """Fork the figure worker before typer parses (and imports pydantic for) the command line
-    when the command is a stage that may draw figures (:func:`acmm.figure_worker.start_early`).
+    when the command is a stage that may draw figures (:func:`common.figure_worker.start_early`).
 
     Parameters
     ----------
@@ -264,9 +268,9 @@ def _fork_figure_worker_early(args: list[str]) -> None:
     """
     command = next((a for a in args if not a.startswith("-")), None)
     if command in ("design", "simulate") and not {"--no-figures", "--help", "-h"} & set(args):
-        from acmm import figure_worker
+        from common import figure_worker
 
-        figure_worker.start_early()
+        figure_worker.start_early(FIGURE_WARM)
 
 
 def _register_optional_commands() -> None:

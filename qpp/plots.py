@@ -12,6 +12,25 @@ from common.plot_style import agg_pyplot as _plt
 from common.results import save_figure
 
 
+#: the figure worker's warm-up for the qpp stages (:func:`common.figure_worker.start`)
+FIGURE_WARM = "qpp.plots:warm_figure_worker"
+
+
+def warm_figure_worker() -> None:
+    """The figure worker's warm-up for the qpp stages: matplotlib on Agg with its rcParams left
+    as they are (the figures look as when drawn in the stage's own process) and one small figure
+    drawn (fonts, caches)."""
+    import io
+
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(2, 1.5))
+    ax.plot([0.0, 1.0], [0.0, 1.0], lw=0.7)
+    ax.set_title("‖y − y_o‖ (rad)")
+    ax.set_xlabel("t (s)")
+    fig.savefig(io.BytesIO(), format="png", dpi=30)
+    plt.close(fig)
+
+
 def plot_circle(res, path: Path) -> list[Path]:
     """Gershgorin mean band of H(−a + jω) against the critical disc, one figure per channel.
 

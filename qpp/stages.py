@@ -192,19 +192,24 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     tuple
         (config, :class:`qpp.certificate.DesignResult`, path of ``qpp_design.h5``).
     """
-    cfg = _cfg(config)
-    r = design(cfg)
-    verdicts = {f"beta1_le_m[{rd},{bk}]": int(v) for (rd, bk), v in r.verdicts().items()}
-    path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
-                    {"stage": "qpp design", "circle_passed": int(r.circle.passed), **verdicts,
-                     "certified": int(r.certified), "label": "certified" if r.certified else "uncertified",
-                     "verdict": r.verdict, "bookkeeping": r.bookkeeping,
-                     "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
-    if cfg.output.figures if figures is None else figures:
-        from qpp.plots import plot_circle, plot_iterations
+    from common import figure_worker
+    from qpp.plots import FIGURE_WARM, plot_circle, plot_iterations
 
-        plot_circle(r, cfg.run_dir() / "qpp_circle.png")
-        plot_iterations(r, cfg.run_dir() / "qpp_iterations.png")
+    cfg = _cfg(config)
+    want_figures = cfg.output.figures if figures is None else figures
+    # the figure worker imports matplotlib while the design runs, then draws both figures at
+    # once while the HDF5 file is written (common.figure_worker; in place where it cannot fork)
+    with figure_worker.session(want_figures, FIGURE_WARM):
+        r = design(cfg)
+        if want_figures:
+            figure_worker.submit(plot_circle, r, cfg.run_dir() / "qpp_circle.png")
+            figure_worker.submit(plot_iterations, r, cfg.run_dir() / "qpp_iterations.png")
+        verdicts = {f"beta1_le_m[{rd},{bk}]": int(v) for (rd, bk), v in r.verdicts().items()}
+        path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
+                        {"stage": "qpp design", "circle_passed": int(r.circle.passed), **verdicts,
+                         "certified": int(r.certified), "label": "certified" if r.certified else "uncertified",
+                         "verdict": r.verdict, "bookkeeping": r.bookkeeping,
+                         "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
     return cfg, r, path
 
 
@@ -236,11 +241,30 @@ def run_simulate(config, figures: bool | None = None, progress=None):
         ``certified``, ``verdict`` —, list of :class:`qpp.simulate.SimResult`, path of
         ``qpp_sim.h5``).
     """
+    from common import figure_worker
+    from qpp.plots import FIGURE_WARM
     from qpp.stored_design import load_stored_design
 
     cfg = _cfg(config)
-    r = load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()) or design(cfg)
+    want_figures = cfg.output.figures if figures is None else figures
+    with figure_worker.session(want_figures, FIGURE_WARM):     # see run_design
+        r, sims, path = _simulate_and_write(cfg, want_figures, progress,
+                                            load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()))
+    return cfg, r, sims, path
+
+
+def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
+    """The body of :func:`run_simulate` (in its figure session): (design, simulations, path)."""
+    r = stored or design(cfg)
     sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
+    if want_figures:
+        from common.figure_worker import submit
+        from qpp.plots import plot_cartesian, plot_scenario
+
+        for s in sims:
+            submit(plot_scenario, s, cfg.run_dir() / f"qpp_sim_{s.name}.png")
+        if isinstance(cfg.nonlinearity, PolarArmNonlinearity):
+            submit(plot_cartesian, sims, cfg.nonlinearity.a, cfg.run_dir() / "qpp_sim_cartesian.png")
     items = {"K1": Dataset(r.K1, "1", "gain K1 used", dims=("input", "state")),
              "Kc": Dataset(r.Kc, "1", "gain Kc used", dims=("input", "servo_state")),
              "H": Dataset(r.H, "1", "observer gain H used (report's sign)", dims=("state", "output"))}
@@ -262,11 +286,4 @@ def run_simulate(config, figures: bool | None = None, progress=None):
     path = write_h5(cfg.run_dir() / "qpp_sim.h5", items, cfg.to_yaml(),
                     {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims)),
                      "design_certified": int(r.certified), "design_verdict": r.verdict})
-    if cfg.output.figures if figures is None else figures:
-        from qpp.plots import plot_cartesian, plot_scenario
-
-        for s in sims:
-            plot_scenario(s, cfg.run_dir() / f"qpp_sim_{s.name}.png")
-        if isinstance(cfg.nonlinearity, PolarArmNonlinearity):
-            plot_cartesian(sims, cfg.nonlinearity.a, cfg.run_dir() / "qpp_sim_cartesian.png")
-    return cfg, r, sims, path
+    return r, sims, path

@@ -217,7 +217,7 @@ def test_prebuilt_skeleton_draws_the_same_png(tmp_path):
 
 
 def test_figure_worker_writes_records_and_reports_failures(tmp_path):
-    from acmm import figure_worker
+    from common import figure_worker
     from common.errors import OutputError
     from common.outputs import stage_outputs
 
@@ -246,7 +246,7 @@ def test_figure_worker_writes_records_and_reports_failures(tmp_path):
 
 
 def test_figure_worker_aborts_with_the_stage(tmp_path):
-    from acmm import figure_worker
+    from common import figure_worker
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")
@@ -261,7 +261,7 @@ def test_figure_worker_aborts_with_the_stage(tmp_path):
 
 def test_nested_figure_sessions_share_one_worker(tmp_path):
     """acmm simulate's design: the inner session's figures are written when it ends."""
-    from acmm import figure_worker
+    from common import figure_worker
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")

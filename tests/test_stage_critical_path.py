@@ -55,7 +55,8 @@ def test_refit_on_its_own_models_equals_the_refit_on_the_whole_path(points_and_f
 _EARLY = textwrap.dedent("""
     import os, sys, numpy as np
     from pathlib import Path
-    from acmm import figure_worker, plots
+    from acmm import plots
+    from common import figure_worker
     out = Path(sys.argv[1])
     if not figure_worker.usable():
         print("skip"); sys.exit(0)
@@ -171,7 +172,8 @@ def test_reserved_figure_writers_draw_the_same_png_and_never_hang(tmp_path):
     identical to the figure drawn in place; a reserved writer whose figure never comes, across a
     nested session's flush, ends with the session; a second figure of the same name gets its own
     writer."""
-    from acmm import figure_worker, plots
+    from acmm import plots
+    from common import figure_worker
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")
@@ -193,7 +195,8 @@ def test_reserved_figure_writers_draw_the_same_png_and_never_hang(tmp_path):
 
 
 def test_reserved_writers_abort_with_the_stage_and_report_failures(tmp_path):
-    from acmm import figure_worker, plots
+    from acmm import plots
+    from common import figure_worker
     from common.errors import OutputError
 
     if not figure_worker.usable():

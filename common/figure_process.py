@@ -1,8 +1,8 @@
 """The figure worker's process side: the forked worker that pre-imports matplotlib, reads the
 stage's pickled figure calls from a pipe and draws each in a forked writer (issue 16).
 
-Split from :mod:`acmm.figure_worker` (issue 12), which holds the stage's side (:func:`~acmm.figure_worker.submit`,
-:func:`~acmm.figure_worker.session`, ...); see its module docstring for the design.
+Split from :mod:`common.figure_worker` (issue 12), which holds the stage's side (:func:`~common.figure_worker.submit`,
+:func:`~common.figure_worker.session`, ...); see its module docstring for the design.
 """
 from __future__ import annotations
 
@@ -24,17 +24,24 @@ FIGURE_NICE = 5
 _BARRIER = 0xFFFFFFFFFFFFFFFE
 
 
-def _warm() -> None:
-    """Import matplotlib with the stage style and draw one small figure (fonts, caches)."""
+def _warm(spec: str | None) -> None:
+    """Run the worker's warm-up: ``spec`` names a function as ``"module:function"`` (the
+    product's own: its style, its font caches); None draws one small figure on Agg with the
+    rcParams left as they are."""
+    if spec:
+        import importlib
+
+        module, _, name = spec.partition(":")
+        getattr(importlib.import_module(module), name)()
+        return
     import io
 
-    from acmm import plots
+    from common.plot_style import agg_pyplot
 
-    plt = plots._plt()
+    plt = agg_pyplot(force=True)
     fig, ax = plt.subplots(figsize=(2, 1.5))
     ax.plot([0.0, 1.0], [0.0, 1.0], lw=0.7)
-    ax.set_title("roll θ (deg)")
-    ax.set_xlabel("time (orbits)")
+    ax.set_title("warm-up (deg)")
     fig.savefig(io.BytesIO(), format="png", dpi=30)
     plt.close(fig)
 
@@ -43,8 +50,8 @@ def _draw(job: bytes, fd: int) -> None:
     """Grandchild: run one pickled call, send back ("ok", paths) or ("error", message)."""
     try:
         fn, args, kwargs = pickle.loads(job[1:])
-        res = fn(*args, **kwargs)
-        msg = ("ok", [str(p) for p in (res or [])])
+        res = fn(*args, **kwargs)              # the path written, or a list of them
+        msg = ("ok", [str(p) for p in ([res] if isinstance(res, (str, os.PathLike)) else (res or []))])
     except BaseException as exc:  # noqa: BLE001 (reported to the stage through the pipe)
         msg = ("error", str(exc) or type(exc).__name__)
     data = pickle.dumps(msg)
@@ -190,7 +197,7 @@ class _Server:
         self.running[pid] = fd
 
 
-def _serve(jobs: int, status: int) -> None:
+def _serve(jobs: int, status: int, warm: str | None = None) -> None:
     """The worker: warm up, then run each job: a prepare here (``P``), a reserved writer that
     builds a figure's skeleton now (``R``), a figure drawn by its reserved writer or a new one
     (``D``; at most one per CPU, plus one, drawing at a time)."""
@@ -203,11 +210,8 @@ def _serve(jobs: int, status: int) -> None:
             os.nice(FIGURE_NICE)
         except (AttributeError, OSError):
             pass
-        from acmm import parallel_figures
-
-        parallel_figures.forget()             # a writer draws in place, never forks again
         try:
-            _warm()
+            _warm(warm)
         except Exception:  # noqa: BLE001 (a real failure shows again, and is reported, in the writer)
             pass
         while True:
@@ -280,7 +284,7 @@ def _kill_group(pid: int) -> None:
 class _Worker:
     """Parent side: the worker's pid, the job pipe (fed by one sender thread), the status pipe."""
 
-    def __init__(self) -> None:
+    def __init__(self, warm: str | None = None) -> None:
         jr, jw = os.pipe()
         sr, sw = os.pipe()
         _grow_pipe(jw)
@@ -294,7 +298,7 @@ class _Worker:
                 signal.signal(signal.SIGTTOU, signal.SIG_IGN)
             except (AttributeError, OSError, ValueError):
                 pass
-            _serve(jr, sw)
+            _serve(jr, sw, warm)
         _own_group(pid)
         os.close(jr)
         os.close(sw)
@@ -326,7 +330,7 @@ class _Worker:
 
     def send(self, data: bytes | None) -> None:
         if self.thread is None:
-            self.thread = threading.Thread(target=self._send_loop, name="acmm-figure-sender", daemon=True)
+            self.thread = threading.Thread(target=self._send_loop, name="figure-sender", daemon=True)
             self.thread.start()
         with self.cond:
             self.queue.append(data)

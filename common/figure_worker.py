@@ -1,10 +1,12 @@
 """Stage figures drawn by a pre-importing child process while the stage computes (issue 16).
 
 A stage's figures cost three things: importing matplotlib (~0.5 s of CPU), building the
-artists and drawing/encoding them.  None of it needs anything back, so ``acmm design`` and
-``acmm simulate`` fork one *figure worker* when they start: it imports matplotlib and warms the
+artists and drawing/encoding them.  None of it needs anything back, so the stages (``acmm
+design``/``simulate``, ``qpp design``/``simulate``) fork one *figure worker* when they start
+(the shared base of both products: each passes its own warm-up, ``"module:function"``, e.g.
+:func:`acmm.plots.warm_figure_worker`): it imports matplotlib and warms the
 font caches on the second core while the stage designs or simulates; the stage then hands it
-each figure as a call of a module-level function of :mod:`acmm.plots` on arrays (pickled
+each figure as a call of a module-level function (e.g. of :mod:`acmm.plots`) on arrays (pickled
 through a pipe by a sender thread, so the stage goes on writing its HDF5 file meanwhile).  The
 worker draws each figure in a forked grandchild (at most one per CPU, plus one, at a time), so the
 figures are drawn in parallel with each other and with the HDF5 write.
@@ -26,7 +28,7 @@ Dask worker, a thread pool) every call runs in place, as it does without a sessi
 ``ACMM_FIGURE_WORKER=0`` turns it off.
 
 The process side (the worker's loop, its writers, the pipe framing) is in
-:mod:`acmm.figure_process`.
+:mod:`common.figure_process`.
 """
 from __future__ import annotations
 
@@ -35,7 +37,7 @@ import os
 import pickle
 from pathlib import Path
 
-from acmm.figure_process import _HEADER, _Worker
+from common.figure_process import _HEADER, _Worker
 
 #: the running worker of this process (None: calls run in place)
 _WORKER: "_Worker | None" = None
@@ -60,9 +62,15 @@ def usable() -> bool:
 _UNOWNED = False
 
 
-def start() -> bool:
+def start(warm: str | None = None) -> bool:
     """Fork the figure worker if :func:`usable` and none is running, or adopt the one forked
     ahead by :func:`start_early`.
+
+    Parameters
+    ----------
+    warm : str, optional
+        The worker's warm-up, ``"module:function"`` (imported and called in the worker before
+        its first figure: the product's style and font caches); None: one small figure on Agg.
 
     Returns
     -------
@@ -75,15 +83,20 @@ def start() -> bool:
         return True
     if _WORKER is not None or not usable():
         return False
-    _WORKER = _Worker()
+    _WORKER = _Worker(warm)
     return True
 
 
-def start_early() -> bool:
+def start_early(warm: str | None = None) -> bool:
     """Fork the worker now, before the command's own imports and argument parsing (the ``acmm``
     entry point calls this for ``design``/``simulate``), so that matplotlib is imported on the
     second core ~0.2 s sooner; the stage's :func:`session` adopts it.  A worker that no session
     adopts (a usage error, ``--help``) is killed when the process exits.
+
+    Parameters
+    ----------
+    warm : str, optional
+        The worker's warm-up (see :func:`start`).
 
     Returns
     -------
@@ -91,7 +104,7 @@ def start_early() -> bool:
         True if a worker was forked.
     """
     global _UNOWNED
-    if not start():
+    if not start(warm):
         return False
     _UNOWNED = True
     import atexit
@@ -121,7 +134,7 @@ def active() -> bool:
 
 def submit(fn, *args, **kwargs) -> None:
     """``fn(*args, **kwargs)`` (a module-level function that draws and writes one figure and
-    returns the paths written) in the worker when one is running, else here and now.
+    returns the path or paths written) in the worker when one is running, else here and now.
 
     Parameters
     ----------
@@ -234,7 +247,7 @@ def abort() -> None:
 
 
 @contextlib.contextmanager
-def session(enabled: bool = True):
+def session(enabled: bool = True, warm: str | None = None):
     """A stage's figures: fork the worker now (see the module docstring); on leaving, join it
     (:func:`finish`) or, when the block raised, :func:`abort` it.  The ``acmm`` command opens one
     around the stage already (the worker then starts before the stage's imports); a worker that
@@ -246,8 +259,10 @@ def session(enabled: bool = True):
     ----------
     enabled : bool, optional
         Whether the stage draws figures at all (False: no worker is started or waited for).
+    warm : str, optional
+        The worker's warm-up when this session starts it (see :func:`start`).
     """
-    owner = start() if enabled else False
+    owner = start(warm) if enabled else False
     try:
         yield
     except BaseException:
