@@ -39,15 +39,8 @@ def warm_figure_worker() -> None:
     :func:`common.figure_worker.start`): matplotlib with the stage style and one
     small figure drawn (fonts, caches); the report's opt-in forked writers are turned off there
     (a writer draws in place, never forks again)."""
-    import io
-
     from acmm import parallel_figures
+    from common.plot_style import draw_warm_up_figure
 
     parallel_figures.forget()
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(2, 1.5))
-    ax.plot([0.0, 1.0], [0.0, 1.0], lw=0.7)
-    ax.set_title("roll θ (deg)")
-    ax.set_xlabel("time (orbits)")
-    fig.savefig(io.BytesIO(), format="png", dpi=30)
-    plt.close(fig)
+    draw_warm_up_figure(_plt(), "roll θ (deg)", "time (orbits)")

@@ -34,16 +34,9 @@ def _warm(spec: str | None) -> None:
         module, _, name = spec.partition(":")
         getattr(importlib.import_module(module), name)()
         return
-    import io
+    from common.plot_style import agg_pyplot, draw_warm_up_figure
 
-    from common.plot_style import agg_pyplot
-
-    plt = agg_pyplot(force=True)
-    fig, ax = plt.subplots(figsize=(2, 1.5))
-    ax.plot([0.0, 1.0], [0.0, 1.0], lw=0.7)
-    ax.set_title("warm-up (deg)")
-    fig.savefig(io.BytesIO(), format="png", dpi=30)
-    plt.close(fig)
+    draw_warm_up_figure(agg_pyplot(force=True))
 
 
 def _draw(job: bytes, fd: int) -> None:

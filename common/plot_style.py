@@ -86,3 +86,26 @@ def pyplot():
     plt.rcParams.update(RC)
     plt.rcParams["axes.prop_cycle"] = cycler(color=list(COLORS))
     return plt
+
+
+def draw_warm_up_figure(plt, title: str = "warm-up (deg)", xlabel: str = "time") -> None:
+    """Draw one small figure to memory with ``plt`` (a figure process's warm-up: fonts and glyph
+    caches loaded before its first real figure); nothing is written, no rcParam is changed.
+
+    Parameters
+    ----------
+    plt : module
+        ``matplotlib.pyplot`` as the caller set it up (backend, style).
+    title : str, optional
+        Title text (its glyphs are cached).
+    xlabel : str, optional
+        Axis label text (its glyphs are cached).
+    """
+    import io
+
+    fig, ax = plt.subplots(figsize=(2, 1.5))
+    ax.plot([0.0, 1.0], [0.0, 1.0], lw=0.7)
+    ax.set_title(title)
+    ax.set_xlabel(xlabel)
+    fig.savefig(io.BytesIO(), format="png", dpi=30)
+    plt.close(fig)

@@ -20,15 +20,9 @@ def warm_figure_worker() -> None:
     """The figure worker's warm-up for the qpp stages: matplotlib on Agg with its rcParams left
     as they are (the figures look as when drawn in the stage's own process) and one small figure
     drawn (fonts, caches)."""
-    import io
+    from common.plot_style import draw_warm_up_figure
 
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(2, 1.5))
-    ax.plot([0.0, 1.0], [0.0, 1.0], lw=0.7)
-    ax.set_title("‖y − y_o‖ (rad)")
-    ax.set_xlabel("t (s)")
-    fig.savefig(io.BytesIO(), format="png", dpi=30)
-    plt.close(fig)
+    draw_warm_up_figure(_plt(), "‖y − y_o‖ (rad)", "t (s)")
 
 
 def plot_circle(res, path: Path) -> list[Path]:
