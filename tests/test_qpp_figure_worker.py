@@ -39,15 +39,25 @@ def test_qpp_figures_in_the_worker_are_the_figures_drawn_in_place(tmp_path, monk
     assert out["worker"] == out["in_place"]
 
 
-def test_a_qpp_figure_that_cannot_be_written_is_one_output_error(tmp_path):
+@pytest.mark.parametrize("mode", ["worker", "in_place"])
+def test_a_qpp_figure_that_cannot_be_written_is_one_output_error(tmp_path, monkeypatch, mode):
+    """With or without the worker: one OutputError, the results file and the other figures
+    written, nothing left running."""
     from qpp import stages
 
+    if mode == "in_place":
+        monkeypatch.setenv("ACMM_FIGURE_WORKER", "0")
     cfg = _cfg(tmp_path)
     (cfg.run_dir() / "qpp_iterations.png").mkdir(parents=True)      # a directory in its place
     with pytest.raises(OutputError, match="qpp_iterations"):
         stages.run_design(cfg, figures=True)
     assert not figure_worker.active()
+    assert (cfg.run_dir() / "qpp_design.h5").exists()
     assert (cfg.run_dir() / "qpp_circle_ch1.png").exists()              # the other figure was drawn
+    (cfg.run_dir() / "qpp_sim_sin10.png").mkdir()
+    with pytest.raises(OutputError, match="qpp_sim_sin10"):
+        stages.run_simulate(cfg, figures=True)
+    assert (cfg.run_dir() / "qpp_sim.h5").exists() and (cfg.run_dir() / "qpp_sim_step_offset.png").exists()
     left = [int(p) for p in os.listdir("/proc") if p.isdigit()] if os.path.isdir("/proc") else []
     assert not [p for p in left if _parent(p) == os.getpid()]          # no worker or writer left
 
