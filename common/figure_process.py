@@ -11,11 +11,7 @@ import pickle
 import signal
 import threading
 
-from common.forked import FRAME_HEADER as _HEADER  # the framing of every pipe message
-from common.forked import flush_std_streams
-from common.forked import read_exact as _read_exact
-from common.forked import recv_frame as _recv_raw
-from common.forked import send_frame as _send_raw
+from common.forked import FRAME_HEADER, flush_std_streams, read_exact, recv_frame, send_frame, write_all
 
 
 #: niceness added to the figure worker and its writers (measured on 2 cores: 5 beat 0 and 10)
@@ -47,16 +43,15 @@ def _draw(job: bytes, fd: int) -> None:
         msg = ("ok", [str(p) for p in ([res] if isinstance(res, (str, os.PathLike)) else (res or []))])
     except BaseException as exc:  # noqa: BLE001 (reported to the stage through the pipe)
         msg = ("error", str(exc) or type(exc).__name__)
-    data = pickle.dumps(msg)
-    os.write(fd, data)
+    write_all(fd, pickle.dumps(msg))
 
 
 def _send_framed(fd: int, obj) -> None:
-    _send_raw(fd, pickle.dumps(obj))
+    send_frame(fd, pickle.dumps(obj))
 
 
 def _recv_framed(fd: int):
-    data = _recv_raw(fd)
+    data = recv_frame(fd)
     return None if data is None else pickle.loads(data)
 
 
@@ -78,7 +73,7 @@ def _fork_writer(job: bytes, close: tuple, prepare: bytes | None = None) -> tupl
         try:
             if prepare is not None:
                 _prepare(prepare)
-                job = _recv_raw(jr)
+                job = recv_frame(jr)
             if job is None:
                 os.write(w, pickle.dumps(("ok", [])))
             else:
@@ -177,7 +172,7 @@ class _Server:
         if key in self.reserved:
             pid, jw = self.reserved.pop(key)
             try:
-                _send_raw(jw, job)
+                send_frame(jw, job)
                 return
             except OSError:     # it died before its job was sent: a fresh writer (after: an error)
                 self.join(pid, quiet=True)
@@ -208,16 +203,16 @@ def _serve(jobs: int, status: int, warm: str | None = None) -> None:
         except Exception:  # noqa: BLE001 (a real failure shows again, and is reported, in the writer)
             pass
         while True:
-            head = _read_exact(jobs, _HEADER.size)
+            head = read_exact(jobs, FRAME_HEADER.size)
             if head is None:
                 break
-            (n,) = _HEADER.unpack(head)
+            (n,) = FRAME_HEADER.unpack(head)
             if n == _BARRIER:                 # report what is done so far (a nested stage ends)
                 sv.join_drawing()
                 _send_framed(status, (sv.written, sv.errors))
                 sv.written, sv.errors = [], []
                 continue
-            job = _read_exact(jobs, n)
+            job = read_exact(jobs, n)
             if job is None:
                 break
             kind, key, job = _split(job)
@@ -310,16 +305,10 @@ class _Worker:
             if item is None:
                 return
             try:
-                self._write_all(item)
+                write_all(self.jobs, item)
             except OSError as exc:                 # the worker died: reported by finish()
                 self.failed = exc
                 return
-
-    def _write_all(self, data: bytes) -> None:
-        view = memoryview(data)
-        while view:
-            k = os.write(self.jobs, view)
-            view = view[k:]
 
     def send(self, data: bytes | None) -> None:
         if self.thread is None:
@@ -353,7 +342,7 @@ class _Worker:
 
     def flush(self) -> tuple[list, list]:
         """Wait until the jobs sent so far are written; returns (files written, error messages)."""
-        self.send(_HEADER.pack(_BARRIER))
+        self.send(FRAME_HEADER.pack(_BARRIER))
         got = _recv_framed(self.status)
         if got is None:
             return [], ["cannot write the figures: the figure process failed"]

@@ -37,10 +37,14 @@ import os
 import pickle
 from pathlib import Path
 
-from common.figure_process import _HEADER, _Worker
+from common.figure_process import _Worker
+from common.forked import frame
 
 #: the running worker of this process (None: calls run in place)
 _WORKER: "_Worker | None" = None
+
+#: without a worker: the figure calls of each open session, innermost last (drawn when it ends)
+_DEFERRED: list = []
 
 
 def usable() -> bool:
@@ -134,7 +138,9 @@ def active() -> bool:
 
 def submit(fn, *args, **kwargs) -> None:
     """``fn(*args, **kwargs)`` (a module-level function that draws and writes one figure and
-    returns the path or paths written) in the worker when one is running, else here and now.
+    returns the path or paths written) in the worker when one is running; else when the
+    innermost :func:`session` ends (after the stage wrote its results, as the worker would
+    finish), or here and now outside any session.
 
     Parameters
     ----------
@@ -146,7 +152,10 @@ def submit(fn, *args, **kwargs) -> None:
         Its keyword arguments (picklable).
     """
     if _WORKER is None:
-        fn(*args, **kwargs)
+        if _DEFERRED:
+            _DEFERRED[-1].append((fn, args, kwargs))
+        else:
+            fn(*args, **kwargs)
         return
     _WORKER.send(_job(b"D", fn, args, kwargs, fn.__name__))
 
@@ -157,7 +166,7 @@ def _job(kind: bytes, fn, args, kwargs, key: str | None = None) -> bytes:
         k = (key or "").encode()
         head += len(k).to_bytes(2, "little") + k
     data = head + pickle.dumps((fn, args, kwargs), protocol=pickle.HIGHEST_PROTOCOL)
-    return _HEADER.pack(len(data)) + data
+    return frame(data)
 
 
 def prepare(fn, *args, for_figure: str | None = None, **kwargs) -> None:
@@ -254,6 +263,9 @@ def session(enabled: bool = True, warm: str | None = None):
     was never handed anything is killed at once.  A nested session (the
     design run by ``acmm simulate``) shares the outer one's worker and on leaving waits for
     its own figures (:func:`flush`), so that they are recorded before its stage prunes.
+    Without a worker (no fork possible, ``ACMM_FIGURE_WORKER=0``) the session's figures are
+    drawn here when it ends, all of them even if one fails (the first failure is raised): as
+    with a worker, a figure that cannot be written leaves the stage's results written.
 
     Parameters
     ----------
@@ -263,13 +275,31 @@ def session(enabled: bool = True, warm: str | None = None):
         The worker's warm-up when this session starts it (see :func:`start`).
     """
     owner = start(warm) if enabled else False
+    deferred = enabled and _WORKER is None
+    if deferred:
+        _DEFERRED.append([])
     try:
         yield
     except BaseException:
         if owner:
             abort()
         raise
+    finally:
+        calls = _DEFERRED.pop() if deferred else []
     if owner:
         finish()
     elif enabled:
         flush()
+    _draw_in_place(calls)
+
+
+def _draw_in_place(calls: list) -> None:
+    """Draw deferred figure calls in order; the first failure is raised after the others."""
+    first = None
+    for fn, args, kwargs in calls:
+        try:
+            fn(*args, **kwargs)
+        except Exception as exc:  # noqa: BLE001 (raised once the others are drawn)
+            first = first or exc
+    if first is not None:
+        raise first

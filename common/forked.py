@@ -86,8 +86,39 @@ def read_exact(fd: int, size: int) -> bytes | None:
     return b"".join(chunks)
 
 
+def frame(data: bytes) -> bytes:
+    """``data`` after its length (:data:`FRAME_HEADER`): one message for :func:`recv_frame`.
+
+    Parameters
+    ----------
+    data : bytes
+        The message.
+
+    Returns
+    -------
+    bytes
+        The framed message.
+    """
+    return FRAME_HEADER.pack(len(data)) + data
+
+
+def write_all(fd: int, data: bytes) -> None:
+    """Write all of ``data`` to ``fd`` (a pipe takes a large write in several parts).
+
+    Parameters
+    ----------
+    fd : int
+        A writable file descriptor.
+    data : bytes
+        The bytes.
+    """
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
 def send_frame(fd: int, data: bytes) -> None:
-    """Write ``data`` to ``fd`` after its length (:data:`FRAME_HEADER`), all of it.
+    """Write ``data`` to ``fd`` as one framed message (:func:`frame`), all of it.
 
     Parameters
     ----------
@@ -96,9 +127,7 @@ def send_frame(fd: int, data: bytes) -> None:
     data : bytes
         The message.
     """
-    view = memoryview(FRAME_HEADER.pack(len(data)) + data)
-    while view:
-        view = view[os.write(fd, view):]
+    write_all(fd, frame(data))
 
 
 def recv_frame(fd: int) -> bytes | None:

@@ -5,7 +5,6 @@ ch. 13–14.
 """
 from __future__ import annotations
 
-import contextlib
 from pathlib import Path
 
 import numpy as np
@@ -202,31 +201,16 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     # once while the HDF5 file is written (common.figure_worker; in place where it cannot fork)
     with figure_worker.session(want_figures, FIGURE_WARM):
         r = design(cfg)
-        figures = [(plot_circle, r, cfg.run_dir() / "qpp_circle.png"),
-                   (plot_iterations, r, cfg.run_dir() / "qpp_iterations.png")] if want_figures else []
-        with _figures_around_the_write(figures):
-            verdicts = {f"beta1_le_m[{rd},{bk}]": int(v) for (rd, bk), v in r.verdicts().items()}
-            path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
-                            {"stage": "qpp design", "circle_passed": int(r.circle.passed), **verdicts,
-                             "certified": int(r.certified), "label": "certified" if r.certified else "uncertified",
-                             "verdict": r.verdict, "bookkeeping": r.bookkeeping,
-                             "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
+        if want_figures:          # drawn while the HDF5 file is written (in place: after it)
+            figure_worker.submit(plot_circle, r, cfg.run_dir() / "qpp_circle.png")
+            figure_worker.submit(plot_iterations, r, cfg.run_dir() / "qpp_iterations.png")
+        verdicts = {f"beta1_le_m[{rd},{bk}]": int(v) for (rd, bk), v in r.verdicts().items()}
+        path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
+                        {"stage": "qpp design", "circle_passed": int(r.circle.passed), **verdicts,
+                         "certified": int(r.certified), "label": "certified" if r.certified else "uncertified",
+                         "verdict": r.verdict, "bookkeeping": r.bookkeeping,
+                         "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
     return cfg, r, path
-
-
-@contextlib.contextmanager
-def _figures_around_the_write(figures: list):
-    """Hand ``figures`` ((function, *args) each) to the figure worker before the block (they are
-    drawn while it writes the HDF5 file) or, without a worker, draw them here after it (so that a
-    figure that cannot be written leaves the results file written, as with a worker)."""
-    from common import figure_worker
-
-    early = figure_worker.active()
-    for fn, *args in figures if early else ():
-        figure_worker.submit(fn, *args)
-    yield
-    for fn, *args in () if early else figures:
-        fn(*args)
 
 
 @locked_stage(_cfg)
@@ -271,20 +255,16 @@ def run_simulate(config, figures: bool | None = None, progress=None):
 
 def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
     """The body of :func:`run_simulate` (in its figure session): (design, simulations, path)."""
-    from qpp.plots import plot_cartesian, plot_scenario
-
     r = stored or design(cfg)
     sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
-    figures = [(plot_scenario, s, cfg.run_dir() / f"qpp_sim_{s.name}.png") for s in sims] if want_figures else []
-    if want_figures and isinstance(cfg.nonlinearity, PolarArmNonlinearity):
-        figures.append((plot_cartesian, sims, cfg.nonlinearity.a, cfg.run_dir() / "qpp_sim_cartesian.png"))
-    with _figures_around_the_write(figures):
-        path = _write_sim(cfg, r, sims)
-    return r, sims, path
+    if want_figures:
+        from common.figure_worker import submit
+        from qpp.plots import plot_cartesian, plot_scenario
 
-
-def _write_sim(cfg: QppConfig, r, sims) -> Path:
-    """``qpp_sim.h5`` of :func:`run_simulate`: the gains used and every scenario."""
+        for s in sims:
+            submit(plot_scenario, s, cfg.run_dir() / f"qpp_sim_{s.name}.png")
+        if isinstance(cfg.nonlinearity, PolarArmNonlinearity):
+            submit(plot_cartesian, sims, cfg.nonlinearity.a, cfg.run_dir() / "qpp_sim_cartesian.png")
     items = {"K1": Dataset(r.K1, "1", "gain K1 used", dims=("input", "state")),
              "Kc": Dataset(r.Kc, "1", "gain Kc used", dims=("input", "servo_state")),
              "H": Dataset(r.H, "1", "observer gain H used (report's sign)", dims=("state", "output"))}
@@ -303,6 +283,7 @@ def _write_sim(cfg: QppConfig, r, sims) -> Path:
                                         **{f"param_{k}": v for k, v in (s.parameters or {}).items()}}),
             "error_per_output": Dataset(s.error_per_output, "output units", "sup_t |y_i − y_oi|", dims=("output",)),
         }
-    return write_h5(cfg.run_dir() / "qpp_sim.h5", items, cfg.to_yaml(),
+    path = write_h5(cfg.run_dir() / "qpp_sim.h5", items, cfg.to_yaml(),
                     {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims)),
                      "design_certified": int(r.certified), "design_verdict": r.verdict})
+    return r, sims, path

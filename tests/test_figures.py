@@ -245,6 +245,35 @@ def test_figure_worker_writes_records_and_reports_failures(tmp_path):
     assert not figure_worker.active()
 
 
+def test_without_a_worker_a_sessions_figures_are_drawn_when_it_ends(tmp_path, monkeypatch):
+    """In place (no fork): each session's figures are drawn when it ends, in order, after what
+    the stage wrote in it; all of them even if one fails (that failure is raised); none when the
+    stage itself failed; outside a session, at once."""
+    from common import figure_worker
+    from common.errors import OutputError
+
+    monkeypatch.setenv("ACMM_FIGURE_WORKER", "0")
+    t, x = _small_histories()
+    (tmp_path / "file").write_text("")
+    with pytest.raises(OutputError):
+        with figure_worker.session():
+            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "bad.png")
+            with figure_worker.session():                      # a nested stage: its own, at its end
+                figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "inner.png")
+            assert (tmp_path / "inner.png").exists()
+            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "after.png")
+            assert not (tmp_path / "after.png").exists()
+            (tmp_path / "results.h5").write_text("written first")
+    assert (tmp_path / "after.png").exists() and (tmp_path / "results.h5").exists()
+    with pytest.raises(RuntimeError, match="stage failed"):
+        with figure_worker.session():
+            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "dropped.png")
+            raise RuntimeError("stage failed")
+    assert not (tmp_path / "dropped.png").exists() and not figure_worker._DEFERRED
+    figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "now.png")
+    assert (tmp_path / "now.png").exists()
+
+
 def test_figure_worker_aborts_with_the_stage(tmp_path):
     from common import figure_worker
 
