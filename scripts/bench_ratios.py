@@ -3,7 +3,8 @@
 1. one 10-orbit Monte Carlo case over the bare 10-orbit integration of the same plant (≤ 3x);
 2. the same seeded sweep on 1 vs N local worker processes (≥ 1.8x at N = 2 when idle);
 3. a Dask LocalCluster of N single-threaded workers vs the local pool at the same N (≤ 1.15x),
-   with the CPU time of each run (driver + workers) and the load average beside it;
+   with Dask's default configuration and with ``acmm.sweep.dask_settings.DASK_SETTINGS``, with
+   the CPU time of each run (driver + workers) and the load average beside it;
 4. `acmm simulate staircase` and `acmm design staircase` with figures vs without (≤ 1.5 s with);
 5. `acmm report --fast` (and the full report with ``--full``): wall and CPU time from a fresh results
    root and again reusing its stage results, per section and per stage (≤ 10 s fast, ≤ 20 s full).

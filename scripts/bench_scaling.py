@@ -5,8 +5,9 @@
 
 For each N it runs the same seeded ±30 % inertia Monte Carlo (fixed design, no figures) on N
 local worker processes and, when ``distributed`` is installed, on a Dask LocalCluster of N
-single-threaded worker processes (cluster start-up and the one-time kernel load per worker
-excluded: a user starts and warms a cluster once),
+single-threaded worker processes, once with Dask's default configuration and once with
+:data:`acmm.sweep.dask_settings.DASK_SETTINGS` (cluster start-up and the one-time kernel load per
+worker excluded: a user starts and warms a cluster once),
 and prints wall time, the CPU time of the run's processes (driver + workers; with psutil), the
 load average, cases/s, speed-up over 1 worker and Dask / pool; ``--unchunked`` adds a Dask run
 with one case per task (the pre-issue-16 behaviour) to show what chunking buys.  Every run's
@@ -115,6 +116,7 @@ def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool
         rows = [("local pool", "pool", {"workers": n})]
         if dask:
             rows.append(("Dask LocalCluster", "dask", {}))
+            rows.append(("Dask, acmm settings", "dask_acmm", {}))
         if unchunked:
             rows.append(("Dask, 1 case/task", "dask1", {"chunk": 1}))
         for name, label, kw in rows:
@@ -125,8 +127,14 @@ def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool
                 else:
                     load = load1
             else:
-                with distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                              dashboard_address=None) as cluster:
+                import dask
+
+                from acmm.sweep.dask_settings import DASK_SETTINGS
+
+                # Dask's defaults, and the settings acmm recommends for a sweep cluster
+                settings = DASK_SETTINGS if label == "dask_acmm" else {}
+                with dask.config.set(settings), distributed.LocalCluster(
+                        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
                     # start-up and the one-time kernel load per worker are not timed: a cluster
                     # serving many sweeps pays them once (a forked pool inherits them)
                     with distributed.Client(cluster) as client:

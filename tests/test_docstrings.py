@@ -118,6 +118,7 @@ NO_REPORT_CITATION = {
     "common.figure_process": "the figure worker's forked process and pipe framing: no mathematics of the report",
     "acmm.stage_common": "config reading and output unit conversion shared by the stages: no mathematics of the report",
     "acmm.sweep.executors": "executors and chunking of the sweep's tasks: no mathematics of the report",
+    "acmm.sweep.dask_settings": "Dask configuration for a sweep cluster: no mathematics of the report",
     "report.constants": "section keys and titles of the report document: no mathematics",
     "report.context": "what a report section receives and writes: no mathematics",
     "report.document": "the report's document model and its HTML/Markdown renderers: no mathematics",

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 import yaml
@@ -151,9 +152,51 @@ def test_chunk_sizes_and_a_process_cluster_identical(tmp_path):
     cfg = _cfg(tmp_path, "sizes")
     ref, ref_csv = _run_bytes(cfg, workers=1)
     runs = [_run_bytes(cfg, workers=2, chunk=chunk) for chunk in (7, 64, None)]
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+    import dask
+
+    from acmm.sweep.dask_settings import DASK_SETTINGS
+
+    # the cluster under the recommended settings (README "Performance"): in force in the spawned
+    # worker, and the table unchanged
+    with dask.config.set(DASK_SETTINGS), distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            seen = client.run(lambda: {k: dask.config.get(k) for k in DASK_SETTINGS})
+        assert list(seen.values()) == [DASK_SETTINGS]
         runs += [_run_bytes(cfg, scheduler=cluster.scheduler_address, chunk=chunk) for chunk in (1, None)]
     for got, csv in runs:
         _assert_same_data(ref, got)
         assert csv == ref_csv
+
+
+def test_dask_settings_are_dask_keys_and_their_yaml_says_the_same():
+    # a misspelt key would be accepted by dask.config.set and do nothing: each must be one of
+    # distributed's own keys, with a value of the default's kind; the YAML file text nests the
+    # same keys and values, and the README shows that text
+    pytest.importorskip("distributed", reason="optional extra acmm-qpp[dask] not installed")
+    import dask
+    from dask.utils import parse_timedelta
+
+    from acmm.sweep.dask_settings import DASK_SETTINGS, dask_settings_yaml
+
+    assert DASK_SETTINGS
+    for key, value in DASK_SETTINGS.items():
+        default = dask.config.get(key)            # KeyError for a key distributed does not have
+        if isinstance(default, bool):
+            assert isinstance(value, bool) and value != default, key
+        else:
+            assert parse_timedelta(value) > parse_timedelta(default), key
+    tree = yaml.safe_load(dask_settings_yaml())
+    flat = {}
+
+    def walk(node, prefix):
+        for k, v in node.items():
+            if isinstance(v, dict):
+                walk(v, prefix + k + ".")
+            else:
+                flat[prefix + k] = v
+
+    walk(tree, "")
+    assert flat == DASK_SETTINGS
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    assert dask_settings_yaml().strip() in readme

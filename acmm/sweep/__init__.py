@@ -44,6 +44,7 @@ Package layout
     :mod:`~acmm.sweep.config` (the sweep file and its validation), :mod:`~acmm.sweep.cases`
     (pure case generation: draws, grids, perturbation), :mod:`~acmm.sweep.case` (running one case
     and the margin search), :mod:`~acmm.sweep.executors` (executors, tasks, chunking),
+    :mod:`~acmm.sweep.dask_settings` (the recommended Dask configuration of a sweep cluster),
     :mod:`~acmm.sweep.journal` (the group-commit journal), :mod:`~acmm.sweep.output` (HDF5, CSV,
     figures) and :mod:`~acmm.sweep.run` (the driver).  Every name is re-exported here.
 """
@@ -53,6 +54,7 @@ from acmm.sweep.case import (BaseContext, _empty_row, _redesigned_specs, _redesi
                              prepare_base, run_case, simulate_values)
 from acmm.sweep.cases import AXES, VERDICTS, _draw, _why, case_values, perturb_inertia, unphysical_reason
 from acmm.sweep.config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sweep, swept_parameters
+from acmm.sweep.dask_settings import DASK_SETTINGS, dask_settings_yaml
 from acmm.sweep.executors import (CHUNKS_PER_WORKER, MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker,
                                   SerialExecutor, _call, _call_chunk, _local_context, _remote_contexts,
                                   _scheduler_workers, _task_key, _tasks, _warm_worker, chunk_size, make_chunks,
@@ -62,10 +64,11 @@ from acmm.sweep.output import _label, _nominal_tea_deg, _split, _write_csv, plot
 from acmm.sweep.run import SweepResult, _as_sweep, run_sweep
 
 __all__ = [
-    "AXES", "CHUNKS_PER_WORKER", "JOURNAL_VERSION", "MAP_EXTRAS", "MAX_CHUNK", "MAX_TASK_SECONDS", "MIN_TASK_SECONDS",
-    "PARAMETERS", "SHORTHANDS", "VERDICTS", "BaseContext", "Chunker", "GroupCommitJournal", "Journal",
-    "SerialExecutor", "Sweep", "SweepInterrupted",
-    "SweepResult", "case_values", "chunk_size", "load_sweep", "make_chunks", "make_executor", "margin_search",
-    "perturb_inertia", "perturbed_tea", "plot_sweep", "prepare_base", "read_journal", "run_case", "run_sweep",
-    "simulate_values", "swept_parameters", "table_arrays", "unphysical_reason", "write_results",
+    "AXES", "CHUNKS_PER_WORKER", "DASK_SETTINGS", "JOURNAL_VERSION", "MAP_EXTRAS", "MAX_CHUNK",
+    "MAX_TASK_SECONDS", "MIN_TASK_SECONDS", "PARAMETERS", "SHORTHANDS", "VERDICTS", "BaseContext", "Chunker",
+    "GroupCommitJournal", "Journal", "SerialExecutor", "Sweep", "SweepInterrupted", "SweepResult",
+    "case_values", "chunk_size", "dask_settings_yaml", "load_sweep", "make_chunks", "make_executor",
+    "margin_search", "perturb_inertia", "perturbed_tea", "plot_sweep", "prepare_base", "read_journal",
+    "run_case", "run_sweep", "simulate_values", "swept_parameters", "table_arrays", "unphysical_reason",
+    "write_results",
 ]
