@@ -87,7 +87,8 @@ def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesA
     c = r.circle
     typer.echo(f"  circle criterion (lemma 1) on H(-a+jw), sector {np.round(r.sector, 6).tolist()}: "
                f"{'PASS' if c.passed else 'FAIL'}; margins {np.round(c.margins, 4).tolist()}; "
-               f"P0 = {c.P0}; largest admissible scale {c.max_scale:.4g}")
+               f"P0 = {c.P0}; largest admissible scale {c.max_scale:.4g}"
+               + (f", smallest {c.min_scale:.4g}" if c.min_scale > 0 else ""))
     if r.published is not None:
         pb = r.published
         typer.echo("  printed gains: beta1 " + ", ".join(f"[{rd}] {b['value']:.6f}" for rd, b in pb.beta1.items())

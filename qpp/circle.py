@@ -10,8 +10,12 @@ Conditions checked, per channel i:
 * 0 < α_i < β_i (or α_i < β_i < 0): the band avoids the disc and Σ N_ci = −P_0, with N_ci the
   clockwise encirclements of the disc by h_ii (counted as the winding number of h_ii about the
   disc centre along ω = −∞…∞) and P_0 the poles of H(s − a) in the closed right half plane;
-* α_i < 0 < β_i: the band lies inside the disc and P_0 = 0;
-* α_i = 0 < β_i: the band lies in the half plane Re s > −1/β_i and P_0 = 0.
+* α_i < 0 < β_i: the band lies inside the disc (so it does not encircle it: N_ci = 0);
+* α_i = 0 < β_i: the band lies in the half plane Re s > −1/β_i (N_ci = 0);
+
+and, over all channels, Σ N_ci = −P_0 (eq 9.3).  With every channel of the second or third
+kind that is P_0 = 0; channels of different kinds may be mixed (e.g. a decoupled H(s) is m
+independent SISO circle criteria).
 
 The check is made on a dense frequency grid (default 0 and 6000 log-spaced points
 spanning the pole magnitudes), which is exact for the encirclement count and accurate to the
@@ -152,7 +156,12 @@ class CircleResult:
     beta : (m,) ndarray
         Upper sector gains, dimensionless.
     max_scale : float
-        Largest s with [s α, s β] passing (grid), inf if unbounded; dimensionless.
+        Largest s with [s α, s β] passing (grid), inf if unbounded, 0 if none passes;
+        dimensionless.
+    min_scale : float
+        Smallest s with [s α, s β] passing: 0 when every small sector passes (a stable H), > 0
+        when the sector must be wide enough to stabilize an unstable H, nan if none passes;
+        dimensionless.
     """
 
     passed: bool
@@ -165,6 +174,7 @@ class CircleResult:
     alpha: np.ndarray
     beta: np.ndarray
     max_scale: float           #: largest s with [s α, s β] passing (grid), inf if unbounded
+    min_scale: float = 0.0     #: smallest s with [s α, s β] passing (0: all small ones pass)
 
 
 def _winding(z: np.ndarray, c: float) -> int:
@@ -191,12 +201,44 @@ def _check(centres, radii, full_centres, alpha, beta, P0):
             c, R = critical_disc(al, be)
             margins[i] = np.min(np.abs(centres[i] - c) - radii[i] - R)
             N[i] = -_winding(full_centres[i], c)   # clockwise count
-    same_sign = np.array([a * b > 0 for a, b in zip(alpha, beta)])
-    if same_sign.any():
-        ok_count = int(N.sum()) == -P0 if same_sign.all() else False
+    # eq 9.3 over all channels; a band inside its disc or half plane counts N_ci = 0
+    return bool(np.all(margins > 0) and int(N.sum()) == -P0), margins, N
+
+
+#: sector scales tried by :func:`_passing_scales` before refining (4 per decade, and s = 1)
+_SCALES = np.unique(np.concatenate([np.logspace(-12, 12, 97), [1.0]]))
+
+
+def _passing_scales(ok) -> tuple[float, float]:
+    """(smallest, largest) s > 0 with ``ok(s)`` (the sector s·[α, β] passing): each end refined by
+    bisection between a passing and a failing scale of :data:`_SCALES`; 0.0 for the smallest when
+    the smallest scale tried passes, inf for the largest when the largest passes; (nan, nan) when
+    none passes.  For a stable H the passing scales run from 0 up; for an unstable one (P_0 > 0,
+    a sector that must stabilize) they start above 0."""
+    good = np.array([ok(s) for s in _SCALES])
+    if not good.any():
+        return float("nan"), float("nan")
+    i, j = int(np.argmax(good)), int(len(good) - 1 - np.argmax(good[::-1]))
+
+    def refine(lo, hi, want_lo):        # ok(lo) != ok(hi); returns the passing side
+        for _ in range(200):
+            mid = np.sqrt(lo * hi)
+            if ok(mid) == want_lo:
+                lo = mid
+            else:
+                hi = mid
+            if hi / lo < 1 + 1e-9:
+                break
+        return lo if want_lo else hi
+
+    smin = 0.0 if i == 0 else refine(_SCALES[i - 1], _SCALES[i], False)
+    if j == len(good) - 1:
+        smax = np.inf
+    elif i == 0 and good[:j + 1].all():     # passing from 0 up to one end: bisect it over the
+        smax = refine(_SCALES[0], _SCALES[-1], True)   # whole range (the numbers of before)
     else:
-        ok_count = P0 == 0
-    return bool(np.all(margins > 0) and ok_count), margins, N
+        smax = refine(_SCALES[j], _SCALES[j + 1], True)
+    return float(smin), float(smax)
 
 
 def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None) -> CircleResult:
@@ -242,16 +284,7 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None) -> CircleResul
     def ok(s):
         return _check(centres, radii, full, s * alpha, s * beta, P0)[0]
 
-    if not ok(1e-12):
+    smin, smax = _passing_scales(ok)
+    if np.isnan(smax):
         smax = 0.0
-    elif ok(1e12):
-        smax = np.inf
-    else:
-        lo, hi = 1e-12, 1e12
-        for _ in range(200):
-            mid = np.sqrt(lo * hi)
-            lo, hi = (mid, hi) if ok(mid) else (lo, mid)
-            if hi / lo < 1 + 1e-9:
-                break
-        smax = lo
-    return CircleResult(passed, margins, N, P0, omega, centres, radii, alpha, beta, float(smax))
+    return CircleResult(passed, margins, N, P0, omega, centres, radii, alpha, beta, smax, smin)

@@ -284,8 +284,14 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
     """
     sp = cfg.spheres
     if not res.circle.passed:
-        return (f"circle criterion fails for every a tried (largest admissible sector scale "
-                f"{res.circle.max_scale:.3g} < 1 at a = {res.a:g})")
+        c = res.circle
+        if c.min_scale > 1.0:       # an unstable H(s): the sector must be wide enough to stabilize
+            why = f"smallest admissible sector scale {c.min_scale:.3g} > 1"
+        elif c.max_scale < 1.0:
+            why = f"largest admissible sector scale {c.max_scale:.3g} < 1"
+        else:
+            why = f"admissible sector scales {c.min_scale:.3g} … {c.max_scale:.3g}, but not 1"
+        return f"circle criterion fails for every a tried ({why} at a = {res.a:g})"
     t = res.threshold(res.bookkeeping)
     terms = {"β_ri": sp.beta_ri, "‖d‖∞": sp.d_inf, "β_o·β3": sp.beta_o * t.beta3, "β4": t.beta4}
     dom = max(terms, key=terms.get)

@@ -147,6 +147,8 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         "margins": Dataset(c.margins, "1", "distance of band to disc boundary (>0 passes)", dims=("channel",)),
         "encirclements": Dataset(c.encirclements, "1", "N_ci (clockwise)", dims=("channel",)),
         "max_scale": Dataset(c.max_scale, "1", "largest s with sector s·[α, β] passing"),
+        "min_scale": Dataset(c.min_scale, "1", "smallest s with sector s·[α, β] passing (0: every "
+                             "smaller sector passes; > 0: an unstable H(s) needs a sector this wide)"),
     }
     printed = _printed_gain_items(cfg.published, r.H)
     if printed:

@@ -181,6 +181,40 @@ def test_circle_encirclement_count():
     assert not r2.passed
 
 
+def test_circle_criterion_decoupled_mimo_is_its_siso_criteria():
+    # a diagonal H(s) is m independent Lure loops: lemma 1 must pass exactly when every channel's
+    # SISO circle criterion passes, whatever the mix of sector kinds (α > 0, α = 0, α < 0 < β)
+    rng = np.random.default_rng(185644)
+    kinds = [(0.1, 1.0), (0.0, 1.0), (-0.2, 0.2), (0.5, 4.0), (-1.5, 1.5), (0.0, 6.0)]
+    seen = set()
+    for _ in range(40):
+        poles = -rng.uniform(0.2, 3.0, 2)
+        gains = rng.uniform(0.3, 3.0, 2) * rng.choice([-1.0, 1.0], 2)
+        sector = [kinds[k] for k in rng.choice(len(kinds), 2, replace=False)]
+        A, B, C = np.diag(poles), np.diag(gains), np.eye(2)
+        siso = [circle_criterion([[poles[i]]], [[gains[i]]], [[1.0]], [sector[i]]).passed for i in range(2)]
+        mimo = circle_criterion(A, B, C, sector)
+        assert mimo.passed == all(siso), (poles, gains, sector)
+        seen.add((all(siso), (sector[0][0] > 0) != (sector[1][0] > 0)))
+    assert (True, True) in seen and (False, True) in seen      # mixed kinds, passing and failing
+
+
+def test_circle_scales_of_an_unstable_plant():
+    # H(s) = 1/(s − 1): its Nyquist plot is the circle on [−1, 0], travelled once anticlockwise
+    # (P0 = 1).  A sector s·[α, β] with 0 < α passes when its disc [−1/(sα), −1/(sβ)] lies
+    # inside that circle: s > 1/α.  So the passing scales start above 0 (the old bisection
+    # assumed [0, s_max] and reported 0) and run up to the grid's resolution near the origin.
+    for alpha, beta in ((2.0, 3.0), (0.1, 0.2)):
+        r = circle_criterion([[1.0]], [[1.0]], [[1.0]], [[alpha, beta]])
+        assert r.P0 == 1
+        assert r.min_scale == pytest.approx(1.0 / alpha, rel=1e-6)
+        assert r.max_scale > 1e4 / alpha
+        assert r.passed is (1.0 > 1.0 / alpha)
+    # a stable plant: every small sector passes
+    r = circle_criterion([[-1.0]], [[1.0]], [[1.0]], [[-0.5, 0.5]])
+    assert r.min_scale == 0.0 and r.max_scale == pytest.approx(2.0, rel=1e-3)   # 1/||H||∞ = 1 → s·0.5 ≤ 1
+
+
 def test_mimo_circle_manipulator(arm):
     Az, Bz, Cz = closed_loop(arm.lure_plant(), *_pub(arm))
     r = circle_criterion(Az, Bz[:, 2:], Cz, [[-0.5, 0.5], [-0.5, 0.5]], a=1e-9)
