@@ -139,8 +139,8 @@ def path_models_from_specs(specs: list[PointSpec], s: DesignSettings, n_check: i
     if len(blended) < 2:
         return None
     start, end = blended[0], blended[-1]
-    start = PointSpec(start.name, start.inertia, start.bias, 0.0)
-    end = PointSpec(end.name, end.inertia, end.bias, 1.0)
+    start = PointSpec(start.name, start.inertia, start.bias, 0.0, expected=start.expected)
+    end = PointSpec(end.name, end.inertia, end.bias, 1.0, expected=end.expected)
     track = tea_spaced_blend(start, end, n_check, n)
     if indices is not None:
         track = [track[i] for i in indices]
@@ -150,7 +150,7 @@ def path_models_from_specs(specs: list[PointSpec], s: DesignSettings, n_check: i
         if sp.theta_guess is not None:
             t = solve_tea_near(sp.inertia, n, sp.bias, sp.theta_guess)
         else:
-            t = solve_tea(sp.inertia, n, sp.bias)
+            t = solve_tea(sp.inertia, n, sp.bias, expected=sp.expected)
         m = lin.design_point(sp.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
         th.append(t.theta[1])
         ss.append(sp.s)

@@ -195,7 +195,7 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     if spec.theta_guess is not None:
         t = solve_tea_near(spec.inertia, n, spec.bias, spec.theta_guess)
     else:
-        t = solve_tea(spec.inertia, n, spec.bias)
+        t = solve_tea(spec.inertia, n, spec.bias, expected=spec.expected)
     model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
     res = sector_design(model.A, model.B, model.scales, s)
     return PointDesign(spec, t, model, res)

@@ -31,6 +31,9 @@ class PointSpec:
         Blend parameter, dimensionless (NaN for a named point off the blend).
     theta_guess : (3,) array or None
         Starting guess for its TEA, rad; None: solve from scratch.
+    expected : (3,) array or None
+        The TEA its config asks for (``bias_from_tea``, rad): the ``expected`` of
+        :func:`acmm.tea.solve_tea`; None: the continuation's.
     """
 
     name: str
@@ -38,6 +41,7 @@ class PointSpec:
     bias: np.ndarray
     s: float = float("nan")
     theta_guess: np.ndarray | None = None
+    expected: np.ndarray | None = None
 
 
 
@@ -60,8 +64,14 @@ def blend_points(start: PointSpec, end: PointSpec, n_points: int) -> list[PointS
     for k, s in enumerate(np.linspace(0.0, 1.0, n_points)):
         name = start.name if k == 0 else end.name if k == n_points - 1 else f"blend_{s:.3f}"
         out.append(PointSpec(name, (1 - s) * start.inertia + s * end.inertia,
-                             (1 - s) * start.bias + s * end.bias, float(s)))
+                             (1 - s) * start.bias + s * end.bias, float(s),
+                             expected=_end_expected(k, n_points, start, end)))
     return out
+
+
+def _end_expected(k: int, n_points: int, start: PointSpec, end: PointSpec):
+    """The ``expected`` TEA of blend point ``k`` of ``n_points``: the start's, the end's, else None."""
+    return start.expected if k == 0 else end.expected if k == n_points - 1 else None
 
 
 def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
@@ -103,7 +113,8 @@ def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
         name = start.name if k == 0 else end.name if k == n_points - 1 else f"blend_{s:.3f}"
         guess = np.array([np.interp(s, s_grid, thetas[:, i]) for i in range(3)])
         out.append(PointSpec(name, (1 - s) * start.inertia + s * end.inertia,
-                             (1 - s) * start.bias + s * end.bias, float(s), guess))
+                             (1 - s) * start.bias + s * end.bias, float(s), guess,
+                             _end_expected(k, n_points, start, end)))
     return out
 
 
@@ -115,10 +126,10 @@ def _tea_track(start: PointSpec, end: PointSpec, n: float, n_track: int) -> np.n
     remembered per (start, end, n, n_track): the design points and the path check of one design
     track the same blend."""
     key = tuple(np.asarray(x, dtype=float).tobytes() for x in (start.inertia, start.bias, end.inertia, end.bias)) + (
-        float(n), int(n_track))
+        float(n), int(n_track), None if start.expected is None else np.asarray(start.expected, float).tobytes())
     if key in _TRACKS:
         return _TRACKS[key].copy()
-    t = solve_tea(start.inertia, n, start.bias).theta
+    t = solve_tea(start.inertia, n, start.bias, expected=start.expected).theta
     thetas = []
     for s in np.linspace(0.0, 1.0, n_track):
         t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
@@ -152,19 +163,28 @@ def point_specs(cfg) -> list[PointSpec]:
 
     n = cfg.orbit_rate
     inertia = cfg.inertia.matrix()
-    start = PointSpec(cfg.name, inertia, resolve_bias(cfg.disturbance, inertia, n), 0.0)
+    start = PointSpec(cfg.name, inertia, resolve_bias(cfg.disturbance, inertia, n), 0.0,
+                      expected=_expected(cfg.disturbance))
     sch = cfg.schedule
     if sch is None:
         return [start]
     end = None
     if sch.to is not None:
         i_to = sch.to.inertia.matrix()
-        end = PointSpec(sch.to.name, i_to, resolve_bias(sch.to.disturbance, i_to, n), 1.0)
+        end = PointSpec(sch.to.name, i_to, resolve_bias(sch.to.disturbance, i_to, n), 1.0,
+                        expected=_expected(sch.to.disturbance))
     extras = []
     for p in sch.points:
         i_p = p.inertia.matrix()
-        extras.append(PointSpec(p.name, i_p, resolve_bias(p.disturbance, i_p, n)))
+        extras.append(PointSpec(p.name, i_p, resolve_bias(p.disturbance, i_p, n),
+                                expected=_expected(p.disturbance)))
     return schedule_specs(start, end, extras, schedule_settings(cfg), n)
+
+
+def _expected(disturbance):
+    """The TEA a config's disturbance section asks for (``bias_from_tea``, rad), or None."""
+    tea = getattr(disturbance, "bias_from_tea", None)
+    return None if tea is None else np.radians(np.asarray(tea, float))
 
 
 def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSpec], sched, n: float

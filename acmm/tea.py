@@ -168,8 +168,16 @@ def _continue(theta, path, n, max_jump=np.radians(5.0), min_step=1e-7):
     return theta, None
 
 
-def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
+def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) -> TEA:
     """The physical-branch TEA by continuation (eqs 4.1–4.3).
+
+    Fallbacks: with ``expected`` (an attitude known to be an equilibrium, e.g. the config's
+    ``bias_from_tea``), when the continuation fails or ends more than 1e-6 rad from it, the
+    equilibrium at ``expected`` (Newton from it): the TEA a config asks for is the TEA it gets.
+    When the continuation in the products of inertia fails (I11 = I33: every pitch balances
+    the diagonal body, no unique start; a branch turning beyond ±89.5°), the smallest-|θ| root
+    of :func:`all_equilibria`.  A fold of the bias continuation is an error (no equilibrium on
+    the branch continued from LVLH; distant branches: :func:`all_equilibria`).
 
     Parameters
     ----------
@@ -179,6 +187,8 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
         Orbital rate, rad/s.
     bias : (3,) array
         Constant disturbance torque, ft·lbf.
+    expected : (3,) array, optional
+        An attitude (rad) known to be an equilibrium for this inertia and bias (see above).
 
     Returns
     -------
@@ -191,10 +201,38 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
         When the bias continuation folds: the message gives the largest bias (same direction)
         that still has an equilibrium on this branch (``docs/ERRATA.md`` § TEA).
     ConvergenceError
-        When the continuation in the products of inertia fails (no LVLH-near equilibrium).
+        The products continuation fails and no equilibrium lies within ±85°.
     """
     inertia = np.asarray(inertia, float)
     bias = np.asarray(bias, float)
+    at = None if expected is None else _at_expected(inertia, n, bias, expected)
+    try:
+        t = _solve_by_continuation(inertia, n, bias)
+    except NoEquilibriumError:
+        if at is None:
+            raise
+        return at
+    except ConvergenceError:
+        if at is not None:
+            return at
+        found = all_equilibria(inertia, n, bias)
+        if not found:
+            raise
+        return found[0]
+    if at is not None and np.max(np.abs(t.theta - at.theta)) > 1e-6:
+        return at
+    return t
+
+
+def _at_expected(inertia, n, bias, expected) -> TEA | None:
+    """The equilibrium within 1e-6 rad of ``expected`` (rad) by Newton from it, or None."""
+    theta = _newton(np.asarray(expected, float), inertia, n, bias, max_step=0.05)
+    ok = theta is not None and np.max(np.abs(theta - expected)) <= 1e-6
+    return make_tea(theta, inertia, n, bias) if ok else None
+
+
+def _solve_by_continuation(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
+    """:func:`solve_tea`'s continuation (diagonal body at LVLH → products → bias) and its errors."""
     diag = np.diag(np.diag(inertia))
 
     def inertia_path(lam):

@@ -229,3 +229,47 @@ def test_equilibrium_jacobian_against_central_differences(seed):
     np.testing.assert_allclose(tea.equilibrium_jacobian(th, inertia, N), ref, atol=1e-10 * scale)
     np.testing.assert_allclose(tea.equilibrium_residual(th, inertia, N, bias),
                                residual_ref(th, inertia, N, bias), atol=1e-12 * scale)
+
+
+# ----------------------------------------------------------------- stations the continuation cannot follow
+def test_symmetric_station_i11_equal_i33_finds_the_nearest_equilibrium():
+    # I11 = I33: every pitch balances the diagonal body, so the continuation has no start; the
+    # products then put the principal axes at ±45° in pitch.  The TEA is the equilibrium of
+    # smallest |θ|: an exact root (independent residual) at ±45° pitch, the nearer one.
+    inertia = MB3_INERTIA.copy()
+    inertia[2, 2] = inertia[0, 0]
+    t = tea.solve_tea(inertia, N, np.zeros(3))
+    scale = 3 * N**2 * np.abs(inertia).max()
+    assert np.max(np.abs(residual_ref(t.theta, inertia, N, np.zeros(3)))) < 1e-12 * scale
+    assert abs(abs(np.degrees(t.theta[1])) - 45.0) < 0.01
+    roots = [fsolve(residual_ref, np.radians([0, p, 0]), args=(inertia, N, np.zeros(3)), xtol=1e-13)
+             for p in (-45.0, 45.0)]
+    assert np.linalg.norm(t.theta) <= min(np.linalg.norm(r) for r in roots) + 1e-9
+
+
+def test_station_whose_branch_leaves_the_range_finds_the_lvlh_near_root():
+    # principal axes ~3° off the body axes with I11 ≈ I33: the continuation in the products
+    # turns past ±89.5° before reaching the full products, while an exact equilibrium lies
+    # within 3° of LVLH (found independently by fsolve from LVLH)
+    inertia = np.array([[14764757., 377503., 17488.], [377503., 26536835., 545632.],
+                        [17488., 545632., 14775172.]])
+    ref = fsolve(residual_ref, np.zeros(3), args=(inertia, N, np.zeros(3)), xtol=1e-13)
+    t = tea.solve_tea(inertia, N, np.zeros(3))
+    np.testing.assert_allclose(t.theta, ref, atol=1e-9)
+    assert np.max(np.abs(np.degrees(t.theta))) < 3.0
+
+
+@pytest.mark.parametrize("asked", [(0.0, 20.0, 0.0), (0.62, 3.39, 4.14), (-5.0, -60.0, 10.0)])
+def test_bias_from_tea_gives_the_asked_attitude(asked):
+    # the bias of bias_from_tea makes the asked attitude an exact equilibrium; the continuation
+    # from LVLH may end on another root (MB3 with pitch +20°: −19.4°), so the stage's TEA is the
+    # asked one, and the design's first point is designed about it
+    cfg = load_config(CONFIGS / "mb3.yaml", [f"disturbance.bias_from_tea=[{asked[0]},{asked[1]},{asked[2]}]"])
+    t = compute_tea(cfg).tea
+    np.testing.assert_allclose(np.degrees(t.theta), asked, atol=1e-9)
+    assert np.max(np.abs(residual_ref(t.theta, cfg.inertia.matrix(), N, t.bias))) < 1e-9
+    from acmm.schedule import design_one, point_specs
+    from acmm.settings import design_settings
+
+    spec = point_specs(cfg)[0]
+    np.testing.assert_allclose(np.degrees(design_one(spec, design_settings(cfg)).tea.theta), asked, atol=1e-9)
