@@ -27,6 +27,7 @@ from functools import cached_property
 import numpy as np
 
 from common.errors import ConfigError
+from qpp.sector_bounds import refine, verify
 from qpp.expression_parser import (  # noqa: F401  (re-exported: the old import paths)
     FUNCTIONS, MAX_EXPONENT, MAX_LEN, library_expression, parse_expression, sympy_module)
 
@@ -232,6 +233,7 @@ class ExpressionModel:
         if r != self.p:
             diag[:] = False
         n = 0
+        starts = [{} for _ in range(r)]                       # the grid point of each bound
         mesh = np.meshgrid(*axes, indexing="ij")
         Yf = [m.ravel()[:, None] for m in mesh]              # (Ny, 1)
         tt = tg[None, :]                                      # (1, Nt)
@@ -247,6 +249,9 @@ class ExpressionModel:
                     if any(self.dep[i]) else np.zeros_like(ph[i])
                 if not np.all(np.isfinite(gsum)):
                     raise ConfigError(f"{where}: not sector-bounded (unbounded slope) on the stated ranges")
+                if any(self.dep[i]) and float(np.max(gsum)) > slope[i]:
+                    gb = np.broadcast_to(gsum, ph[i].shape)
+                    starts[i]["slope"] = self._point(Yf, tg, th, np.argmax(gb), gb.shape)
                 slope[i] = max(slope[i], float(np.max(gsum)))
                 y0 = np.all([np.abs(Y) == 0 for Y in Yf], axis=0)[:, 0]
                 if y0.any():
@@ -257,6 +262,11 @@ class ExpressionModel:
                     yi = np.broadcast_to(Yf[i], ph[i].shape)
                     nz = np.abs(yi) > 0
                     ratio = ph[i][nz] / yi[nz]
+                    full = np.where(nz, ph[i] / np.where(nz, yi, 1.0), np.nan)
+                    if float(ratio.min()) < alpha[i]:
+                        starts[i]["alpha"] = self._point(Yf, tg, th, np.nanargmin(full), full.shape)
+                    if float(ratio.max()) > beta[i]:
+                        starts[i]["beta"] = self._point(Yf, tg, th, np.nanargmax(full), full.shape)
                     alpha[i] = min(alpha[i], float(ratio.min()))
                     beta[i] = max(beta[i], float(ratio.max()))
                     span = float(np.ptp(self.y_range[i]))
@@ -268,15 +278,28 @@ class ExpressionModel:
                         if rs > 3.0 * rm + 1e-12 * max(1.0, slope[i]):
                             raise ConfigError(f"{where}: not sector-bounded near y = 0 "
                                               f"(φ/y grows from {rm:.3g} to {rs:.3g} as y → 0)")
-        for i in range(r):
+        for i in range(r):            # grid extrema → local extrema (widened only)
+            kinds = {k: x for k, x in starts[i].items() if k == "slope" or diag[i]}
+            got = refine(self, i, kinds, {"alpha": alpha[i], "beta": beta[i], "slope": slope[i]})
+            alpha[i], beta[i], slope[i] = got["alpha"], got["beta"], got["slope"]
             if not diag[i]:
                 alpha[i], beta[i] = -slope[i], slope[i]
-        verified = self._verify(alpha, beta, slope, diag)
+        verified = verify(self, alpha, beta, slope, diag)
         for i in range(r):
             if not alpha[i] < beta[i]:
                 c = 0.5 * (alpha[i] + beta[i])
                 alpha[i], beta[i] = c - 1e-12, c + 1e-12
         return SectorInfo(np.column_stack([alpha, beta]), slope, diag, verified, n)
+
+    def _point(self, Yf, tg, th, flat: int, shape: tuple) -> np.ndarray:
+        """x = (y, t, θ) of grid entry ``flat`` of an (Ny, Nt) array (:func:`qpp.sector_bounds.refine`)."""
+        iy, it = np.unravel_index(int(flat), shape)
+        return np.concatenate([[Y[iy, 0] for Y in Yf], [tg[it]], np.asarray(th, float)])
+
+    @property
+    def t_varies(self) -> bool:
+        """Whether φ depends on the time t (else its time grid is t = 0 alone)."""
+        return any(self.t in ph.free_symbols for ph in self.phi)
 
     def _check_continuity(self) -> None:
         """Symbolic check (sympy ``continuous_domain``) that every f1 channel is continuous in each of
@@ -302,40 +325,6 @@ class ExpressionModel:
                 if dom != iv and not iv.is_subset(dom):
                     raise ConfigError(f"nonlinearity.f1[{k}]: singular on the stated range: {self.texts[k]!r} is "
                                       f"not continuous in {sym} on [{lo:g}, {hi:g}] (continuous on {dom})")
-
-    def _verify(self, alpha, beta, slope, diag) -> bool:
-        """Random points of Y × Θ × [0, t_range]: φ_i inside [α_i y_i, β_i y_i] (or the slope bound);
-        on a violation the bounds are widened in place to cover it (+1 %) and False is returned."""
-        rng = np.random.default_rng(20240529)
-        K = 4000
-        Y = [rng.uniform(lo, hi, K) for lo, hi in self.y_range]
-        t = rng.uniform(0.0, self.t_range, K)
-        TH = [rng.uniform(lo, hi, K) for lo, hi in zip(self.lo, self.hi)]
-        ph = self.phi_at(Y, t, TH)
-        ok = True
-        for i in range(len(self.phi)):
-            if not np.all(np.isfinite(ph[i])):
-                raise ConfigError(f"nonlinearity.f1 (φ channel {i + 1}): singular (non-finite value) on the "
-                                  "stated ranges")
-            if diag[i]:
-                yi = Y[i]
-                nz = np.abs(yi) > 1e-12
-                ratio = ph[i][nz] / yi[nz]
-                lo, hi = ratio.min(), ratio.max()
-                tol = 1e-9 * max(1.0, abs(alpha[i]), abs(beta[i]))
-                if lo < alpha[i] - tol or hi > beta[i] + tol:
-                    ok = False
-                    w = 0.01 * max(abs(beta[i] - alpha[i]), 1e-12)
-                    alpha[i] = min(alpha[i], lo - w)
-                    beta[i] = max(beta[i], hi + w)
-            else:
-                ymax = np.max(np.abs(np.array(Y)), axis=0)
-                nz = ymax > 1e-12
-                k = np.max(np.abs(ph[i][nz]) / ymax[nz]) if nz.any() else 0.0
-                if k > slope[i] * (1 + 1e-9) + 1e-12:
-                    ok = False
-                    alpha[i], beta[i] = -1.01 * k, 1.01 * k
-        return ok
 
     # ------------------------------------------------------------------ β3, β4
     def beta3(self, T: float) -> float:

@@ -92,6 +92,21 @@ def test_sector_beta3_from_expression_against_closed_forms():
     assert u.beta3(T) == pytest.approx(0.05 * q, rel=1e-4)
 
 
+def test_sampled_sector_climbs_to_the_supremum_between_grid_points():
+    # a sector too small by any amount is no certificate: the grid's best points are refined to
+    # the local extrema (qpp.sector_bounds.refine), in t and in the parameters
+    from qpp.nonlin import ExpressionModel
+
+    m = ExpressionModel(["dm*y*sin(2*t)"], 1, {"dm": (-0.1, 0.1, 0.0)}, [[-2, 2]], [[1.0]], 100.0)
+    assert np.max(np.abs(np.sin(2 * m._t_grid()))) < 1 - 1e-6        # the grid alone: ±0.0999998
+    np.testing.assert_allclose(m.sector_info.sector, [[-0.1, 0.1]], rtol=1e-12)
+    assert m.sector_info.slope_bound[0] == pytest.approx(0.1, rel=1e-12)
+    # extremum inside the parameter range: φ = y·(sin k − sin 0), k ∈ [0, 3] sampled at 0, 1.5, 3
+    m = ExpressionModel(["y*sin(k)"], 1, {"k": (0.0, 3.0, 0.0)}, [[-1, 1]], [[1.0]], 1.0)
+    lo, hi = m.sector_info.sector[0]
+    assert lo == pytest.approx(0.0, abs=1e-12) and hi == pytest.approx(1.0, rel=1e-12)
+
+
 def test_library_forms_and_stated_overrides(tmp_path):
     d = _cfg("qpp_saturation", tmp_path)
     d["nonlinearity"]["f1"] = [{"form": "dead_zone", "output": 1, "gain": "-k", "level": 0.3}]

@@ -1,0 +1,147 @@
+"""The sampled sector bounds of a user's nonlinearity made tight and checked (ch. 10.1, lemma 1).
+
+:meth:`qpp.nonlin.ExpressionNonlinearity.sector_info` samples φ on a grid of Y × Θ × [0, t_range];
+a grid under-estimates a supremum that falls between its points (φ = δm·y·sin 2t, |δm| ≤ 0.1
+sampled on 256 times gives the sector ±0.09999976 instead of ±0.1), and a sector that is too
+small by any amount is not a certificate.  :func:`refine` therefore climbs from the best grid
+points of each bound to the local extremum (Nelder–Mead within the stated box, scipy) and widens
+the bound to what it finds; :func:`verify` then checks the bounds at random points and widens
+them again (+1 %) on a violation.  Bounds are only ever widened, never narrowed.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: Nelder–Mead iterations per variable for each start point of :func:`refine`
+REFINE_ITER_PER_DIM = 200
+
+
+def _box(model) -> tuple[list, np.ndarray]:
+    """The variables x = (y_1 … y_p, t, θ_1 … θ_k) that vary: their (lo, hi) and a mask of x."""
+    ranges = [tuple(r) for r in model.y_range] + [(0.0, model.t_range if model.t_varies else 0.0)]
+    ranges += list(zip(model.lo, model.hi))
+    free = np.array([hi > lo for lo, hi in ranges])
+    return ranges, free
+
+
+def _split(model, x):
+    p = model.p
+    Y = [np.full((1, 1), v) for v in x[:p]]
+    return Y, np.full((1, 1), x[p]), [np.full((1, 1), v) for v in x[p + 1:]]
+
+
+def refine(model, i: int, starts: dict, bounds: dict) -> dict:
+    """Climb from the grid's best points of channel ``i`` to the local extrema and widen the
+    bounds to them.
+
+    Parameters
+    ----------
+    model : qpp.nonlin.ExpressionNonlinearity
+        The nonlinearity (its φ, gradients and ranges).
+    i : int
+        The φ channel.
+    starts : dict
+        ``kind → x`` (x = (y, t, θ) in the config's units), the grid point of each bound:
+        ``"alpha"`` (smallest φ_i/y_i), ``"beta"`` (largest φ_i/y_i), ``"slope"`` (largest
+        Σ_j |∂φ_i/∂y_j|); a kind absent is not refined.
+    bounds : dict
+        ``kind → value`` on the grid (dimensionless gains, in the units of d per unit of y).
+
+    Returns
+    -------
+    dict
+        The same kinds, each value widened to the best extremum found (never narrowed).
+    """
+    from scipy.optimize import minimize
+
+    ranges, free = _box(model)
+    span_i = float(np.ptp(model.y_range[i])) if i < model.p else 1.0
+    sign = {"alpha": -1.0, "beta": 1.0, "slope": 1.0}
+    out = dict(bounds)
+    for kind, x0 in starts.items():
+        x0 = np.asarray(x0, float)
+        base = x0.copy()
+
+        def value(z, kind=kind, base=base):
+            x = base.copy()
+            x[free] = z
+            Y, t, TH = _split(model, x)
+            if kind == "slope":
+                v = sum(np.abs(model._grad(i, j, Y, t, TH)) for j in range(model.p) if model.dep[i][j])
+                return float(np.asarray(v).ravel()[0])
+            yi = x[i]
+            if abs(yi) <= 1e-9 * span_i:             # φ/y undefined at y_i = 0: no step there
+                return np.nan
+            return float(model.phi_at(Y, t, TH)[i].ravel()[0] / yi)
+
+        def cost(z, kind=kind):
+            v = value(z)
+            return np.inf if not np.isfinite(v) else -sign[kind] * v
+
+        if not free.any():
+            continue
+        lo_hi = [r for r, f in zip(ranges, free) if f]
+        res = minimize(cost, x0[free], method="Nelder-Mead", bounds=lo_hi,
+                       options={"maxiter": REFINE_ITER_PER_DIM * int(free.sum()), "xatol": 1e-12,
+                                "fatol": 1e-15})
+        if np.isfinite(res.fun):
+            found = -sign[kind] * res.fun
+            out[kind] = min(out[kind], found) if kind == "alpha" else max(out[kind], found)
+    return out
+
+
+def verify(model, alpha, beta, slope, diag) -> bool:
+    """Random points of Y × Θ × [0, t_range]: φ_i inside [α_i y_i, β_i y_i] (or the slope bound);
+    on a violation the bounds are widened in place to cover it (+1 %) and False is returned.
+
+    Parameters
+    ----------
+    model : qpp.nonlin.ExpressionNonlinearity
+        The nonlinearity.
+    alpha, beta, slope : (r,) ndarray
+        The bounds (widened in place on a violation), dimensionless gains.
+    diag : (r,) bool ndarray
+        Whether φ_i depends on y_i only (ratio bounds) or not (slope bound), dimensionless.
+
+    Returns
+    -------
+    bool
+        True when no random point violates the bounds.
+
+    Raises
+    ------
+    ConfigError
+        φ is not finite at a random point (singular on the stated ranges).
+    """
+    from common.errors import ConfigError
+
+    rng = np.random.default_rng(20240529)
+    K = 4000
+    Y = [rng.uniform(lo, hi, K) for lo, hi in model.y_range]
+    t = rng.uniform(0.0, model.t_range, K)
+    TH = [rng.uniform(lo, hi, K) for lo, hi in zip(model.lo, model.hi)]
+    ph = model.phi_at(Y, t, TH)
+    ok = True
+    for i in range(len(model.phi)):
+        if not np.all(np.isfinite(ph[i])):
+            raise ConfigError(f"nonlinearity.f1 (φ channel {i + 1}): singular (non-finite value) on the "
+                              "stated ranges")
+        if diag[i]:
+            yi = Y[i]
+            nz = np.abs(yi) > 1e-12
+            ratio = ph[i][nz] / yi[nz]
+            lo, hi = ratio.min(), ratio.max()
+            tol = 1e-9 * max(1.0, abs(alpha[i]), abs(beta[i]))
+            if lo < alpha[i] - tol or hi > beta[i] + tol:
+                ok = False
+                w = 0.01 * max(abs(beta[i] - alpha[i]), 1e-12)
+                alpha[i] = min(alpha[i], lo - w)
+                beta[i] = max(beta[i], hi + w)
+        else:
+            ymax = np.max(np.abs(np.array(Y)), axis=0)
+            nz = ymax > 1e-12
+            k = np.max(np.abs(ph[i][nz]) / ymax[nz]) if nz.any() else 0.0
+            if k > slope[i] * (1 + 1e-9) + 1e-12:
+                ok = False
+                alpha[i], beta[i] = -1.01 * k, 1.01 * k
+    return ok
