@@ -95,7 +95,8 @@ def user_errors(fn):
             except AcmmError as exc:
                 from common.hints import with_hint
 
-                fail(with_hint(exc), exc.exit_code)
+                product = "qpp" if fn.__module__.endswith("qpp_app") else "acmm"
+                fail(with_hint(exc, product), exc.exit_code)
             except KeyboardInterrupt:
                 typer.echo("interrupted", err=True)
                 sys.exit(EXIT_INTERRUPTED)

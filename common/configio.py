@@ -161,14 +161,47 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
                 raise ConfigError(missing_config_message(path))
     text = read_config_text(p)
     try:
-        check_yaml_structure(text, p)
-        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
+        data = load_yaml_text(text, p)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         what = getattr(exc, "problem", None) or "not valid YAML"
         raise ConfigError(f"{p}: not valid YAML: {what}{where}") from None
     return data, p
+
+
+def load_yaml_text(text: str, source: object = "config") -> object:
+    """YAML text → Python objects, within the bounds of :func:`check_yaml_structure` and without
+    duplicate keys; what PyYAML itself fails on besides syntax (a list or mapping as a key, an
+    integer of more than 4300 digits) is a one-line :class:`ConfigError`.
+
+    Parameters
+    ----------
+    text : str
+        The YAML text (a file, or the value of an override).
+    source : object
+        Name of the file or override, for the message.
+
+    Returns
+    -------
+    object
+        The parsed data.
+
+    Raises
+    ------
+    ConfigError
+        Too deep, too many nodes, a cyclic alias, an unhashable key or an over-long integer.
+    yaml.YAMLError
+        A syntax error or a duplicate key.
+    """
+    check_yaml_structure(text, source)
+    try:
+        return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
+    except TypeError as exc:          # e.g. "unhashable type: 'list'" for ? [a, b]
+        raise ConfigError(f"{source}: not valid as a config: a key must be a plain value, not a list or a "
+                          f"mapping ({exc})") from None
+    except ValueError as exc:         # Python's int-string limit: "Exceeds the limit (4300 digits) ..."
+        raise ConfigError(f"{source}: not valid as a config: {str(exc).split(';')[0]}") from None
 
 
 def read_config_text(p: Path) -> str:

@@ -206,37 +206,42 @@ def missing_config_message(path) -> str:
 # ---------------------------------------------------------------------------------------------
 # numerical failures
 # ---------------------------------------------------------------------------------------------
-#: (words that must all occur in the message, hint) — first match wins; case-insensitive.
-_NUMERICAL_HINTS: list[tuple[tuple[str, ...], str]] = [
-    (("riccati 11.1",), "change hinf.rho or hinf.nu (larger values relax the H∞ problem), "
-                        "or set hinf.search: true"),
-    (("residual",), "raise design.residual_tol or try design.riccati_method: scipy; a nearly "
-                    "uncontrollable model (see `acmm linearize`) needs another design.model or design.drf_mode"),
-    (("matrix sign",), "use design.riccati_method: scipy (the sign iteration needs a well-conditioned model)"),
-    (("sector lqr", "riccati", "failed"), "lower design.sector.sigma (the shift α asked of the LQR may be "
-                                          "too large), or try another design.riccati_method (scipy, sign, slycot)"),
-    (("riccati",), "try another design.riccati_method (scipy, sign or slycot)"),
-    (("uncontrollable",), "no gain moves that pole: lower design.sector.sigma, or change design.model / "
-                          "design.drf_mode"),
-    (("not positive semidefinite",), "change design.Q0 or design.R"),
-    (("sector",), "lower design.sector.sigma, widen design.sector.half_angle_deg, or try "
-                  "design.pole_method: uniform / shift"),
-    (("no torque-equilibrium",), "reduce disturbance.bias (or use disturbance.bias_from_tea with the "
-                                 "attitude you want)"),
-    (("tea continuation",), "check the products of inertia (inertia.I12, I13, I23) or give the bias as "
-                            "disturbance.bias_from_tea"),
-    (("converge",), "loosen the tolerance (design.residual_tol, simulation.rtol) or change "
-                    "design.riccati_method"),
+#: (product, words that must all occur in the message, hint) — first match of the product's
+#: entries wins; case-insensitive.  Each hint names settings of that product's configs only.
+_NUMERICAL_HINTS: list[tuple[str, tuple[str, ...], str]] = [
+    ("qpp", ("riccati 11.1",), "change hinf.rho or hinf.nu (larger values relax the H∞ problem), "
+                               "or set hinf.search: true"),
+    ("qpp", ("converge",), "change hinf.rho or hinf.nu, or loosen simulation.rtol / simulation.atol"),
+    ("acmm", ("residual",), "raise design.residual_tol or try design.riccati_method: scipy; a nearly "
+                            "uncontrollable model (see `acmm linearize`) needs another design.model or design.drf_mode"),
+    ("acmm", ("matrix sign",), "use design.riccati_method: scipy (the sign iteration needs a well-conditioned model)"),
+    ("acmm", ("sector lqr", "riccati", "failed"), "lower design.sector.sigma (the shift α asked of the LQR may "
+                                                  "be too large), or try another design.riccati_method (scipy, "
+                                                  "sign, slycot)"),
+    ("acmm", ("riccati",), "try another design.riccati_method (scipy, sign or slycot)"),
+    ("acmm", ("uncontrollable",), "no gain moves that pole: lower design.sector.sigma, or change design.model / "
+                                  "design.drf_mode"),
+    ("acmm", ("not positive semidefinite",), "change design.Q0 or design.R"),
+    ("acmm", ("sector",), "lower design.sector.sigma, widen design.sector.half_angle_deg, or try "
+                          "design.pole_method: uniform / shift"),
+    ("acmm", ("no torque-equilibrium",), "reduce disturbance.bias (or use disturbance.bias_from_tea with the "
+                                         "attitude you want)"),
+    ("acmm", ("tea continuation",), "check the products of inertia (inertia.I12, I13, I23) or give the bias as "
+                                    "disturbance.bias_from_tea"),
+    ("acmm", ("converge",), "loosen the tolerance (design.residual_tol, simulation.rtol) or change "
+                            "design.riccati_method"),
 ]
 
 
-def numerical_hint(message: str) -> str:
+def numerical_hint(message: str, product: str = "acmm") -> str:
     """A "which setting to change" hint for a numerical failure message (empty if none applies).
 
     Parameters
     ----------
     message : str
         The failure message.
+    product : {"acmm", "qpp"}, optional
+        The command that failed: only its own settings are suggested.
 
     Returns
     -------
@@ -246,13 +251,13 @@ def numerical_hint(message: str) -> str:
     low = message.lower()
     if "hint:" in low:
         return ""                      # already has one
-    for words, hint in _NUMERICAL_HINTS:
-        if all(w in low for w in words):
+    for prod, words, hint in _NUMERICAL_HINTS:
+        if prod == product and all(w in low for w in words):
             return hint
     return ""
 
 
-def with_hint(exc: Exception) -> str:
+def with_hint(exc: Exception, product: str = "acmm") -> str:
     """The message of a user-facing error, with a numerical hint appended when one applies
     (solver/design failures, exit 3, and a missing equilibrium).
 
@@ -260,6 +265,8 @@ def with_hint(exc: Exception) -> str:
     ----------
     exc : Exception
         The user-facing error.
+    product : {"acmm", "qpp"}, optional
+        The command that failed (:func:`numerical_hint`).
 
     Returns
     -------
@@ -270,7 +277,7 @@ def with_hint(exc: Exception) -> str:
 
     msg = str(exc)
     if getattr(exc, "exit_code", None) == EXIT_NUMERICAL or isinstance(exc, NoEquilibriumError):
-        hint = numerical_hint(msg)
+        hint = numerical_hint(msg, product)
         if hint:
             msg = f"{msg}; hint: {hint}"
     return msg

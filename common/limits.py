@@ -17,6 +17,8 @@ QPP_PERIODS            10 000        periods of a qpp signal or nonlinearity (ω
 QPP_WORK               50 000        qpp simulation work: t_final × fastest closed-loop rate (1/s)
                                      × (scenarios + 1); ~2.4 ms per unit, so ~2 min at the limit
 QPP_SAMPLES            2 000 000     qpp output samples × (scenarios + 1)
+QPP_SECTOR_POINTS      5 000 000     points at which a qpp expression's sector is sampled
+                                     (parameter samples × output grid × times; ~3 µs each)
 SWEEP_DRAWS            2 000 000     expected Monte Carlo draws of a sweep (resampling included)
 SWEEP_CASES            1 000 000     cases of a sweep (all bases)
 SWEEP_ORBITS           100 000       simulated orbits of a sweep (cases × orbits per run)
@@ -37,6 +39,7 @@ DEFAULTS: dict[str, float] = {
     "QPP_PERIODS": 10_000,
     "QPP_WORK": 50_000,
     "QPP_SAMPLES": 2_000_000,
+    "QPP_SECTOR_POINTS": 5_000_000,
     "SWEEP_DRAWS": 2_000_000,
     "SWEEP_CASES": 1_000_000,
     "SWEEP_ORBITS": 100_000,

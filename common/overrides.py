@@ -82,8 +82,10 @@ def parse_override(text: str) -> tuple[list, object, bool]:
     if text.startswith("~"):
         return [_part(p) for p in text[1:].split(".")], None, True
     key, _, raw = text.partition("=")
-    try:
-        value = yaml.safe_load(raw) if raw.strip() else None
+    from common.configio import load_yaml_text
+
+    try:   # the bounds of a config file (depth, nodes with aliases expanded) apply here too
+        value = load_yaml_text(raw, f"override {key}") if raw.strip() else None
     except yaml.YAMLError as exc:
         what = getattr(exc, "problem", None) or "not valid YAML"
         raise ConfigError(f"override {key}: value {raw!r} is not valid YAML ({what})") from None

@@ -8,7 +8,6 @@ validation error becomes one :class:`common.errors.ConfigError` line naming the 
 """
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Literal, Optional, Union
 
@@ -19,6 +18,7 @@ from pydantic import Field, field_validator, model_validator
 from common.errors import ConfigError
 from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 # field types and the nonlinearity sections moved out (issue 12), re-exported here
+from qpp.config_checks import _check_periods, _check_sample_count, _check_sector
 from qpp.config_fields import (QPP_MAX, KgM2, Kilograms, Matrix, Metres, OptSeconds,  # noqa: F401
                                PerSecond, Radians, RadPerSecond, Seconds, _finite_matrix,
                                _implausible, _Model, _q)
@@ -119,15 +119,6 @@ class Output(_Model):
 _EXPR_CACHE: dict = {}
 
 
-def _check_periods(field: str, omega: float, t_final: float) -> None:
-    from common.limits import how_to_raise, limit
-
-    periods = omega * t_final / (2 * math.pi)
-    if periods > limit("QPP_PERIODS"):
-        raise ValueError(f"{field}: {omega:g} rad/s over simulation.t_final = {t_final:g} s is {periods:.3g} "
-                         f"periods to integrate; lower the frequency or t_final ({how_to_raise('QPP_PERIODS')})")
-
-
 class QppConfig(_Model):
     """A complete ``qpp`` configuration."""
 
@@ -181,6 +172,8 @@ class QppConfig(_Model):
                     raise ValueError(f"nonlinearity.f1: output {e.output} > p = {P.p}")
             if nl.sector is not None and np.shape(nl.sector) != (P.r, 2):
                 raise ValueError(f"nonlinearity.sector must be {P.r} pairs [alpha, beta]")
+            _check_sector("nonlinearity.sector", nl.sector)
+            _check_sample_count(nl, P.p)
             try:
                 self.expression_model().sector_info      # parse, check singular / sector-bounded
             except ConfigError as exc:
@@ -216,6 +209,16 @@ class QppConfig(_Model):
                 raise ValueError(f"scenario {s.name}: give both impulse and impulse_time")
         if self.design.sector is not None and np.shape(self.design.sector) != (P.r, 2):
             raise ValueError(f"design.sector must be {P.r} pairs [alpha, beta]")
+        _check_sector("design.sector", self.design.sector)
+        names = [s.name for s in self.simulation.scenarios]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ValueError(f"simulation.scenarios: duplicate name {dup[0]!r} (each run is stored under its name)")
+        d = self.design
+        if d.rho_min >= d.rho_max:
+            raise ValueError(f"design.rho_min = {d.rho_min:g} must be below design.rho_max = {d.rho_max:g}")
+        if d.a_min is not None and d.a_max is not None and d.a_min > d.a_max:
+            raise ValueError(f"design.a_min = {d.a_min:g} must not exceed design.a_max = {d.a_max:g}")
         if self.design.gains == "published" and any(
                 x is None for x in (self.published.K1, self.published.Kc, self.published.H)):
             raise ValueError("design.gains = published needs published.K1, Kc and H")

@@ -67,6 +67,7 @@ class _Procedure:
         self.records: list[dict] = []
         self.hist: list[dict] = []
         self.best: DesignResult | None = None
+        self.work = 0.0          # integration work of the nominal loops so far (qpp.simulate.check_work)
 
     # -- gains -----------------------------------------------------------------
     def gains(self, rho, a, ws, target=None, observer=None) -> HinfGains | None:
@@ -114,6 +115,7 @@ class _Procedure:
 
     def evaluate(self, g: HinfGains, a, T, ws, stage) -> DesignResult:
         """Step 1/3: β1, m (recomputed at this a, T and these gains), circle criterion."""
+        self._budget(g, T)
         res = certify(self.cfg, g.K1, g.Kc, g.H, a, "hinf", g, T=T)
         res.ws_scale = [float(x) for x in np.atleast_1d(ws)]
         from qpp.hinf import closed_loop_norm
@@ -124,6 +126,25 @@ class _Procedure:
         if self.best is None or _score(res) < _score(self.best):
             self.best = res
         return res
+
+    def _budget(self, g: HinfGains, T) -> None:
+        """Each evaluation integrates the nominal loop over max(T, simulation.t_final) (for its
+        thresholds): the work of all of them is bounded by ``QPP_WORK`` (issue 13), so that a long
+        horizon is refused in seconds instead of running for hours through the wider search."""
+        from common.errors import ConfigError
+        from common.limits import how_to_raise, limit
+        from qpp.simulate import check_work
+
+        horizon = max(float(T), self.cfg.simulation.t_final)
+        try:
+            self.work += check_work(self.cfg, g.K1, g.Kc, g.H, runs=1, horizon=horizon)
+        except ConfigError:
+            self.work = np.inf
+        if self.work > limit("QPP_WORK"):
+            raise ConfigError(f"simulation.t_final: {self.cfg.simulation.t_final:g} s is too long for the design: "
+                              f"each of its candidate loops is integrated over max(spheres.T, t_final) = "
+                              f"{horizon:g} s, {len(self.records) + 1} so far (work {self.work:.3g}); shorten "
+                              f"t_final or spheres.T ({how_to_raise('QPP_WORK')})")
 
     def adapt_T(self, g, a, T, ws, res, stage) -> tuple[DesignResult, float]:
         """Step 3: T ← settling time of the closed loop until they agree within 10 %."""

@@ -140,7 +140,7 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
                      float(err.max()), err, cfg.spheres.beta_o, pars)
 
 
-def check_work(cfg: QppConfig, K1, Kc, H) -> float:
+def check_work(cfg: QppConfig, K1, Kc, H, runs: int | None = None, horizon: float | None = None) -> float:
     """Refuse a simulation that would run for minutes (issue 13), before integrating.
 
     An explicit integrator needs a number of steps proportional to t_final × (the fastest rate
@@ -159,6 +159,10 @@ def check_work(cfg: QppConfig, K1, Kc, H) -> float:
         Servo-compensator state gain (eq 10.6), in the units of the config's u per unit of x_c.
     H : (n, p) array
         Observer gain, printed sign (L = −H), in the units of the config's x per unit of y and s.
+    runs : int, optional
+        Loops integrated (default: the scenarios + the nominal loop).
+    horizon : float, optional
+        Time integrated, s (default ``simulation.t_final``).
 
     Returns
     -------
@@ -188,10 +192,12 @@ def check_work(cfg: QppConfig, K1, Kc, H) -> float:
         rate += gain * float(np.linalg.norm(B, 2) * np.linalg.norm(C, 2)) + nl.omega
     omegas = [t.omega for sig in [sim.r_o] + [s.delta_r or [] for s in sim.scenarios] for ch in sig for t in ch]
     rate = max([rate] + omegas)
-    work = sim.t_final * rate * (len(sim.scenarios) + 1)
+    runs = len(sim.scenarios) + 1 if runs is None else int(runs)
+    horizon = sim.t_final if horizon is None else float(horizon)
+    work = horizon * rate * runs
     if not work <= limit("QPP_WORK"):
-        raise ConfigError(f"simulation.t_final: {sim.t_final:g} s × the loop's fastest rate {rate:.4g} 1/s × "
-                          f"{len(sim.scenarios) + 1} runs needs too many integrator steps (work {work:.3g}); "
+        raise ConfigError(f"simulation.t_final: {horizon:g} s × the loop's fastest rate {rate:.4g} 1/s × "
+                          f"{runs} run(s) needs too many integrator steps (work {work:.3g}); "
                           f"shorten t_final, use fewer scenarios or slower gains ({how_to_raise('QPP_WORK')})")
     return work
 

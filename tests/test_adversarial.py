@@ -149,6 +149,12 @@ QPP_BAD = [
     ("signal_omega_1e12", {"simulation.r_o": [[{"kind": "sin", "amplitude": 1.0, "omega": 1e12}]]},
      r"r_o.*QPP_PERIODS"),
     ("sector_shape", {"design.sector": [[1]]}, r"design\.sector"),
+    ("sector_inverted", {"design.sector": [[0.5, -0.5]]}, r"design\.sector.*alpha < beta"),
+    ("sector_degenerate", {"design.sector": [[0.5, 0.5]]}, r"design\.sector.*alpha < beta"),
+    ("scenario_names_duplicate", {"simulation.scenarios": [{"name": "same"}, {"name": "same"}]},
+     r"simulation\.scenarios: duplicate name 'same'"),
+    ("rho_bracket_inverted", {"design.rho_min": 10.0, "design.rho_max": 1e-3}, r"design\.rho_min.*rho_max"),
+    ("a_bracket_inverted", {"design.a_min": 1.0, "design.a_max": 1e-3}, r"design\.a_min.*a_max"),
     ("x0_length", {"plant.x0": [1]}, r"plant\.x0"),
     ("root_empty", {"output.root": ""}, r"output\.root"),
     ("key_newline", {"bad\nkey": 1}, r"bad key: unknown key"),
@@ -177,6 +183,7 @@ SWEEP_BAD = [
     ("settle_zero", {"sweep.settle_deg": 0}, r"sweep\.settle_deg"),
     ("map_unknown", {"sweep.map": ["x", "y"]}, r"map"),
     ("seed_negative", {"sweep.seed": -1}, r"sweep\.seed"),
+    ("seed_2_64", {"sweep.seed": 2**64}, r"sweep\.seed"),
     ("offset_100", {"sweep.monte_carlo.offset_pitch": {"uniform": [-100, 100]}}, r"89"),
     ("root_nul", {"output.root": "a\x00b"}, r"output\.root"),
     ("no_sweep", {"sweep": DELETE}, r"sweep"),
@@ -234,6 +241,8 @@ FILE_BAD = [
     ("python_tag", _w("name: !!python/object:os.system x\n"), r"not valid YAML"),
     ("two_documents", _w("name: a\n---\nname: b\n"), r"not valid YAML"),
     ("long_file_name", lambda tmp: tmp / ("y" * 300 + ".yaml"), r"(name too long|not found)"),
+    ("list_as_key", _w("name: k\n? [a, b]\n: 1\n"), r"key must be a plain value"),
+    ("integer_5000_digits", _w("name: k\norbit_rate: " + "9" * 5000 + "\n"), r"4300 digits"),
 ]
 FILE_COMMANDS = [("acmm", ["validate"]), ("acmm", ["tea"]), ("qpp", ["design"]), ("acmm", ["sweep"])]
 
@@ -406,3 +415,64 @@ def test_read_only_root_refused_exit_4(tmp_runs, readonly_dir, app_name, cmd, ba
     before = _snapshot(tmp_runs)
     r, dt = _invoke(app_name, [cmd, path, *extra])
     check_one_line_refusal(r, dt, 4, r"Read-only file system", before, _snapshot(tmp_runs))
+
+
+@pytest.mark.parametrize("app_name,args,rx", [
+    ("acmm", ["validate", "mb3", "simulation.orbits=" + "1" * 5000], r"override simulation\.orbits.*4300 digits"),
+    ("qpp", ["design", "qpp_siso", "plant.A=[&r [" + ",".join(["0"] * 300) + "], " + ", ".join(["*r"] * 100) + "]"],
+     r"override plant\.A.*ACMM_LIMIT_YAML_NODES"),
+])
+def test_hostile_override_refused_in_one_line(tmp_runs, app_name, args, rx):
+    # an override's value is YAML read with the same bounds as a config file
+    before = _snapshot(tmp_runs)
+    r, dt = _invoke(app_name, args)
+    check_one_line_refusal(r, dt, 2, rx, before, _snapshot(tmp_runs))
+
+
+def test_each_numerical_hint_names_settings_of_its_own_product():
+    # a qpp failure must not suggest acmm settings (design.sector.sigma …) and vice versa: every
+    # dotted key a hint names resolves in its product's config schema
+    import re
+
+    from acmm.config import Config
+    from common.errors import ConvergenceError
+    from common.hints import _NUMERICAL_HINTS, model_at, with_hint
+    from qpp.config import QppConfig
+
+    schema = {"acmm": Config, "qpp": QppConfig}
+    for product, _words, hint in _NUMERICAL_HINTS:
+        for key in re.findall(r"\b[a-z_]+(?:\.[A-Za-z_0-9]+)+", hint):
+            *parents, leaf = key.split(".")
+            m = model_at(schema[product], tuple(parents))
+            assert m is not None and leaf in m.model_fields, (product, key)
+    exc = ConvergenceError("circle criterion fails for every a tried (largest admissible sector scale 0 < 1)")
+    assert "design.sector.sigma" in with_hint(exc, "acmm")
+    assert "design.sector.sigma" not in with_hint(exc, "qpp")
+
+
+def test_design_work_bound_refuses_a_long_horizon(tmp_runs, monkeypatch):
+    # each candidate of procedure 12.1 integrates the nominal loop over max(T, t_final): their
+    # total work is bounded (t_final = 2500 s on qpp_saturation ran for hours through the wider
+    # search); a small limit makes the default horizon "long"
+    monkeypatch.setenv("ACMM_LIMIT_QPP_WORK", "20")
+    before = _snapshot(tmp_runs)
+    r, dt = _invoke("qpp", ["design", "qpp_siso"])
+    check_one_line_refusal(r, dt, 2, r"simulation\.t_final.*too long for the design.*ACMM_LIMIT_QPP_WORK",
+                           before, _snapshot(tmp_runs))
+
+
+def test_many_uncertain_parameters_refused_before_sampling(tmp_runs):
+    # the sector of an expression is sampled at every parameter corner: 2^k of them; 30
+    # parameters took 24 GB before this bound
+    cfg = _load("qpp_cubic2")
+    params = {f"p{i}": {"min": 0.0, "max": 0.001} for i in range(30)}
+    params.update(cfg["nonlinearity"]["parameters"])
+    edits = {"nonlinearity.parameters": params,
+             "nonlinearity.f1": ["-c*cubic(y1) + y1*(" + "+".join(f"p{i}" for i in range(30)) + ")", "0"]}
+    path = tmp_runs / "cfg.yaml"
+    path.write_text(yaml.safe_dump(_mutate(cfg, edits)))
+    before = _snapshot(tmp_runs)
+    r, dt = _invoke("qpp", ["design", path])
+    check_one_line_refusal(r, dt, 2, r"nonlinearity\.parameters: 31 uncertain parameters.*ACMM_LIMIT_QPP_SECTOR_POINTS",
+                           before, _snapshot(tmp_runs))
+    assert dt < 30

@@ -119,6 +119,8 @@ NO_REPORT_CITATION = {
     "acmm.stage_common": "config reading and output unit conversion shared by the stages: no mathematics of the report",
     "acmm.sweep.executors": "executors and chunking of the sweep's tasks: no mathematics of the report",
     "acmm.sweep.dask_settings": "Dask configuration for a sweep cluster: no mathematics of the report",
+    "qpp.config_checks": "validation of a qpp config's fields and work bounds: no mathematics of the report",
+    "acmm.sweep.journal_records": "the fields of a sweep journal's records: no mathematics of the report",
     "report.constants": "section keys and titles of the report document: no mathematics",
     "report.context": "what a report section receives and writes: no mathematics",
     "report.document": "the report's document model and its HTML/Markdown renderers: no mathematics",

@@ -19,7 +19,7 @@ class SweepInterrupted(AcmmError):
 # ---------------------------------------------------------------------------------------------
 # journal (append-only, one JSON line per finished task)
 # ---------------------------------------------------------------------------------------------
-def read_journal(path: Path, key: str) -> list[dict]:
+def read_journal(path: Path, key: str, bases: set | None = None) -> list[dict]:
     """Records of a journal written for results key ``key`` (a torn last line is ignored).
 
     Parameters
@@ -29,6 +29,8 @@ def read_journal(path: Path, key: str) -> list[dict]:
     key : str
         Results key of the sweep (:meth:`acmm.sweep.config.Sweep.results_key`); the journal's
         header must carry the same.
+    bases : set of str, optional
+        The sweep's base labels: a record of another base is a corrupt line.
 
     Returns
     -------
@@ -38,8 +40,11 @@ def read_journal(path: Path, key: str) -> list[dict]:
     Raises
     ------
     ConfigError
-        The journal belongs to a different sweep configuration.
+        The journal belongs to a different sweep configuration, or a line (other than a torn
+        last one) is not a record the sweep wrote (:func:`acmm.sweep.journal_records.record_problem`).
     """
+    from acmm.sweep.journal_records import record_problem
+
     records = []
     with open(path, "rb") as f:
         lines = f.read().split(b"\n")
@@ -59,6 +64,9 @@ def read_journal(path: Path, key: str) -> list[dict]:
                 raise ConfigError(f"{path}: the journal was written by a different sweep configuration; "
                                   "run without --resume to start over")
             continue
+        why = record_problem(rec, bases)
+        if why is not None:
+            raise ConfigError(f"{path}: corrupt journal line {k + 1} ({why}); delete it or run without --resume")
         records.append(rec)
     return records
 

@@ -125,7 +125,7 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     jpath = run_dir / "sweep.journal"
     done: dict[tuple, dict] = {}
     if resume and jpath.exists():
-        for rec in read_journal(jpath, key):
+        for rec in read_journal(jpath, key, {b.label for b in sweep.bases}):
             done[_task_key(rec)] = rec
     n_resumed = len(done)
     tasks = [t for t in _tasks(sweep) if t not in done]

@@ -64,7 +64,8 @@ class SweepSpec(_Model):
     monte_carlo: Optional[dict[str, Dist]] = Field(None, description="parameter → distribution")
     grid: Optional[dict[str, list[float]]] = Field(None, description="parameter → values (Cartesian product)")
     n_runs: Optional[int] = Field(None, ge=1, le=1_000_000, description="Monte Carlo draws per base")
-    seed: int = Field(0, ge=0, description="root seed; case i uses SeedSequence([seed, i])")
+    seed: int = Field(0, ge=0, le=2**63 - 1, description="root seed (< 2⁶³: stored as an HDF5 int64); case i "
+                                                      "uses SeedSequence([seed, i])")
     design: Literal["fixed", "redesign"] = Field(
         "fixed", description="fixed: the nominal design for every case; redesign: TEA, LQR and schedule per case")
     tea_estimate: Annotated[Literal["nominal", "true"], BeforeValidator(

@@ -1,0 +1,89 @@
+"""What a sweep journal record must hold, checked when a sweep is resumed from its journal.
+
+A journal line that is valid JSON but not a record the sweep wrote (edited, or from another
+version) would otherwise fail later, deep in the table builder, with a traceback.
+:func:`record_problem` names the first missing or mistyped field instead.
+"""
+from __future__ import annotations
+
+import math
+
+_NUMBER = (int, float)
+
+#: case record fields: name → (kind, shape); kind "num" (a number or NaN), "int", "str"
+CASE_FIELDS = {
+    "base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ()), "n_steps": ("int", ()),
+    "reason": ("str", ()), "verdict": ("str", ()),
+    "time_to_divergence": ("num", ()), "torque_saturation_time": ("num", ()),
+    "momentum_saturation_time": ("num", ()),
+    "peak_attitude_error": ("num", (3,)), "steady_attitude_error": ("num", (3,)),
+    "peak_momentum": ("num", (3,)), "tea_true": ("num", (3,)), "tea_estimate": ("num", (3,)),
+    "bias": ("num", (3,)), "inertia": ("num", (3, 3)),
+}
+
+#: margin-search record fields, as :data:`CASE_FIELDS` ("bool": true/false; shape None: a list)
+MARGIN_FIELDS = {
+    "base": ("str", ()), "direction": ("str", ()), "limit": ("num", ()), "first_failure": ("num", ()),
+    "failure_verdict": ("str", ()), "failure_reason": ("str", ()), "reached_end": ("bool", ()),
+    "search_end": ("num", ()), "evaluated_s": ("num", None), "evaluated_verdict": ("str", None),
+}
+
+
+def _is(kind: str, v) -> bool:
+    if kind == "num":
+        return isinstance(v, _NUMBER) and not isinstance(v, bool) and (math.isfinite(v) or math.isnan(v))
+    if kind == "int":
+        return isinstance(v, int) and not isinstance(v, bool) and v >= 0
+    if kind == "bool":
+        return isinstance(v, bool)
+    return isinstance(v, str)
+
+
+def _shaped(kind: str, v, shape) -> bool:
+    if shape is None:
+        return isinstance(v, list) and all(_is(kind, x) for x in v)
+    if not shape:
+        return _is(kind, v)
+    return (isinstance(v, list) and len(v) == shape[0]
+            and all(_shaped(kind, x, shape[1:]) for x in v))
+
+
+def record_problem(rec: object, bases: set | None = None) -> str | None:
+    """What is wrong with a journal record, or None when it is one the sweep wrote.
+
+    Parameters
+    ----------
+    rec : object
+        A parsed journal line (after the header).
+    bases : set of str, optional
+        The sweep's base labels (a record of another base is wrong).
+
+    Returns
+    -------
+    str or None
+        The first problem (a missing or mistyped field, an unknown verdict, kind or base).
+    """
+    from acmm.sweep.cases import VERDICTS
+
+    if not isinstance(rec, dict):
+        return "not a record (a JSON object)"
+    kind = rec.get("kind")
+    fields = {"case": CASE_FIELDS, "margin": MARGIN_FIELDS}.get(kind)
+    if fields is None:
+        return f"unknown record kind {kind!r}"
+    for name, (k, shape) in fields.items():
+        if name not in rec:
+            return f"{kind} record without {name!r}"
+        if not _shaped(k, rec[name], shape):
+            return f"{kind} record with a malformed {name!r}"
+    if kind == "case":
+        if rec["verdict"] not in VERDICTS:
+            return f"unknown verdict {rec['verdict']!r}"
+        values = rec.get("values")
+        if not isinstance(values, dict) or not all(_is("num", v) for v in values.values()):
+            return "case record with a malformed 'values'"
+    elif rec["direction"] not in ("up", "down"):
+        return f"unknown margin direction {rec['direction']!r}"
+    if bases is not None and rec["base"] not in bases:
+        return f"record of base {rec['base']!r}, which the sweep does not have"
+    return None
