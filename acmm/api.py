@@ -244,9 +244,14 @@ class Design:
     def _tea_at(self, s: float, guess=None):
         from acmm.tea import solve_tea, solve_tea_near
 
+        from acmm import schedule as sch
+
         inertia, bias = self.plant_at(s)
         n = self.config.orbit_rate
-        t = solve_tea_near(inertia, n, bias, guess) if guess is not None else solve_tea(inertia, n, bias)
+        blended = [p for p in sch.point_specs(self.config) if np.isfinite(p.s)]
+        expected = blended[0].expected if s == 0 else blended[-1].expected if s == 1 else None   # bias_from_tea
+        t = (solve_tea_near(inertia, n, bias, guess, expected=expected) if guess is not None
+             else solve_tea(inertia, n, bias, expected=expected))
         return inertia, t
 
     def blend_for_tea(self, tea_pitch_deg: float) -> float:

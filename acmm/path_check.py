@@ -148,7 +148,7 @@ def path_models_from_specs(specs: list[PointSpec], s: DesignSettings, n_check: i
     scales = None
     for sp in track:
         if sp.theta_guess is not None:
-            t = solve_tea_near(sp.inertia, n, sp.bias, sp.theta_guess)
+            t = solve_tea_near(sp.inertia, n, sp.bias, sp.theta_guess, expected=sp.expected)
         else:
             t = solve_tea(sp.inertia, n, sp.bias, expected=sp.expected)
         m = lin.design_point(sp.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)

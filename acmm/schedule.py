@@ -193,7 +193,7 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     """
     n = s.orbit_rate
     if spec.theta_guess is not None:
-        t = solve_tea_near(spec.inertia, n, spec.bias, spec.theta_guess)
+        t = solve_tea_near(spec.inertia, n, spec.bias, spec.theta_guess, expected=spec.expected)
     else:
         t = solve_tea(spec.inertia, n, spec.bias, expected=spec.expected)
     model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)

@@ -8,7 +8,6 @@ means no equilibrium exists for the full bias.
 """
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -215,6 +214,8 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) ->
     except ConvergenceError:
         if at is not None:
             return at
+        from acmm.tea_roots import all_equilibria
+
         found = all_equilibria(inertia, n, bias)
         if not found:
             raise
@@ -259,10 +260,13 @@ def _solve_by_continuation(inertia: np.ndarray, n: float, bias: np.ndarray) -> T
     return make_tea(theta, inertia, n, bias)
 
 
-def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess: np.ndarray) -> TEA:
+def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess: np.ndarray,
+                   expected=None) -> TEA:
     """The equilibrium nearest a guess (rad) by damped Newton, e.g. along a continuation path.
 
-    Falls back to :func:`solve_tea` when Newton does not converge within 5° of the guess.
+    Falls back to :func:`solve_tea` when Newton does not converge within 5° of the guess; with
+    ``expected`` (see :func:`solve_tea`) a root more than 1e-6 rad from it is replaced by the
+    equilibrium at ``expected``.
 
     Parameters
     ----------
@@ -274,6 +278,8 @@ def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess:
         Constant disturbance torque, ft·lbf.
     theta_guess : (3,) array
         Starting attitude, rad.
+    expected : (3,) array, optional
+        An attitude (rad) known to be an equilibrium (the config's ``bias_from_tea``).
 
     Returns
     -------
@@ -289,7 +295,11 @@ def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess:
     bias = np.asarray(bias, float)
     theta = _newton(theta_guess, inertia, n, bias, max_step=0.05)
     if theta is None or np.max(np.abs(theta - theta_guess)) > np.radians(5.0):
-        return solve_tea(inertia, n, bias)
+        return solve_tea(inertia, n, bias, expected=expected)
+    if expected is not None and np.max(np.abs(theta - expected)) > 1e-6:
+        at = _at_expected(inertia, n, bias, expected)
+        if at is not None:
+            return at
     return make_tea(theta, inertia, n, bias)
 
 
@@ -331,46 +341,6 @@ def make_tea(theta, inertia, n, bias) -> TEA:
                residual=res)
 
 
-def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: float = 30.0,
-                   limit_deg: float = 85.0) -> list[TEA]:
-    """Every equilibrium found by Newton from a grid of starts in |θ_i| < ``limit_deg``.
-
-    Distinct roots (to 1e-6 rad) sorted by |θ|; useful to see the other branches (e.g. the
-    two principal-axis alignments of MB3 at pitch −44.70° and +45.30°; ``docs/ERRATA.md``
-    § TEA).
-
-    Parameters
-    ----------
-    inertia : (3, 3) array
-        Inertia matrix, slug·ft².
-    n : float
-        Orbital rate, rad/s.
-    bias : (3,) array
-        Constant disturbance torque, ft·lbf.
-    grid_deg : float
-        Spacing of the grid of starting attitudes, deg.
-    limit_deg : float
-        Largest |θ_i| searched and accepted, deg.
-
-    Returns
-    -------
-    list of TEA
-        The distinct equilibria of eqs 4.1–4.3, smallest |θ| first.
-    """
-    inertia = np.asarray(inertia, float)
-    bias = np.asarray(bias, float)
-    starts = np.radians(np.arange(-limit_deg + grid_deg / 2, limit_deg, grid_deg))
-    roots: list[np.ndarray] = []
-    for t0 in itertools.product(starts, repeat=3):
-        th = _newton(np.array(t0), inertia, n, bias, max_iter=100, max_step=0.2)
-        if th is None or np.max(np.abs(th)) > np.radians(limit_deg):
-            continue
-        if not any(np.max(np.abs(th - r)) < 1e-6 for r in roots):
-            roots.append(th)
-    roots.sort(key=lambda r: float(np.linalg.norm(r)))
-    return [make_tea(r, inertia, n, bias) for r in roots]
-
-
 def resolve_bias(disturbance, inertia: np.ndarray, n: float) -> np.ndarray:
     """The bias (ft·lbf) a :class:`acmm.config.Disturbance` asks for (``bias_from_tea`` resolved).
 
@@ -396,3 +366,12 @@ def resolve_bias(disturbance, inertia: np.ndarray, n: float) -> np.ndarray:
     if disturbance.bias is not None:
         return np.asarray(disturbance.bias, float)
     return np.zeros(3)
+
+
+def __getattr__(name: str):
+    """``all_equilibria`` lives in :mod:`acmm.tea_roots` (re-exported here, imported on use)."""
+    if name == "all_equilibria":
+        from acmm.tea_roots import all_equilibria
+
+        return all_equilibria
+    raise AttributeError(f"module 'acmm.tea' has no attribute {name!r}")

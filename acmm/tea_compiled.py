@@ -279,15 +279,14 @@ def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
         The bias continuation folds; same message as :func:`acmm.tea.solve_tea` (the largest
         bias with an equilibrium, from the same bisection).
     ConvergenceError
-        The continuation in the products of inertia folds (same message).
+        The continuation in the products of inertia folds and :func:`acmm.tea.solve_tea`'s
+        fallback finds no equilibrium either (its message).
     """
     inertia = np.ascontiguousarray(inertia, float)
     bias = np.ascontiguousarray(bias, float)
     theta, status, lam = _solve_tea_compiled(inertia, float(n), bias, RESIDUAL_TOL)
-    if status == 1:
-        raise ConvergenceError(
-            "TEA continuation in the products of inertia failed at "
-            f"{100 * lam:.3g}% of their values (the inertia may have no LVLH-near equilibrium)")
+    if status == 1:     # the products continuation failed: solve_tea's grid-search fallback (or its error)
+        return solve_tea(inertia, n, bias)
     if status == 2:
         b = lam * bias
         raise NoEquilibriumError(

@@ -205,17 +205,21 @@ def _check(centres, radii, full_centres, alpha, beta, P0):
     return bool(np.all(margins > 0) and int(N.sum()) == -P0), margins, N
 
 
-#: sector scales tried by :func:`_passing_scales` before refining (4 per decade, and s = 1)
+#: sector scales tried by :func:`_passing_scales` before refining (4 per decade, and s = 1) ...
 _SCALES = np.unique(np.concatenate([np.logspace(-12, 12, 97), [1.0]]))
+#: ... and for an unstable H, whose passing scales may be a window away from 0 (48 per decade)
+_FINE_SCALES = np.unique(np.concatenate([np.logspace(-12, 12, 1153), [1.0]]))
 
 
-def _passing_scales(ok) -> tuple[float, float]:
+def _passing_scales(ok, fine: bool = False) -> tuple[float, float]:
     """(smallest, largest) s > 0 with ``ok(s)`` (the sector s·[α, β] passing): each end refined by
-    bisection between a passing and a failing scale of :data:`_SCALES`; 0.0 for the smallest when
-    the smallest scale tried passes, inf for the largest when the largest passes; (nan, nan) when
-    none passes.  For a stable H the passing scales run from 0 up; for an unstable one (P_0 > 0,
-    a sector that must stabilize) they start above 0."""
-    good = np.array([ok(s) for s in _SCALES])
+    bisection between a passing and a failing scale of :data:`_SCALES` (``fine``:
+    :data:`_FINE_SCALES`, a window narrower than a factor 1.05 is missed); 0.0 for the smallest
+    when the smallest scale tried passes, inf for the largest when the largest passes; (nan, nan)
+    when none passes.  For a stable H the passing scales run from 0 up; for an unstable one
+    (P_0 > 0, a sector that must stabilize) they start above 0."""
+    scales = _FINE_SCALES if fine else _SCALES
+    good = np.array([ok(s) for s in scales])
     if not good.any():
         return float("nan"), float("nan")
     i, j = int(np.argmax(good)), int(len(good) - 1 - np.argmax(good[::-1]))
@@ -231,13 +235,13 @@ def _passing_scales(ok) -> tuple[float, float]:
                 break
         return lo if want_lo else hi
 
-    smin = 0.0 if i == 0 else refine(_SCALES[i - 1], _SCALES[i], False)
+    smin = 0.0 if i == 0 else refine(scales[i - 1], scales[i], False)
     if j == len(good) - 1:
         smax = np.inf
     elif i == 0 and good[:j + 1].all():     # passing from 0 up to one end: bisect it over the
-        smax = refine(_SCALES[0], _SCALES[-1], True)   # whole range (the numbers of before)
+        smax = refine(scales[0], scales[-1], True)     # whole range (the numbers of before)
     else:
-        smax = refine(_SCALES[j], _SCALES[j + 1], True)
+        smax = refine(scales[j], scales[j + 1], True)
     return float(smin), float(smax)
 
 
@@ -284,7 +288,7 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None) -> CircleResul
     def ok(s):
         return _check(centres, radii, full, s * alpha, s * beta, P0)[0]
 
-    smin, smax = _passing_scales(ok)
+    smin, smax = _passing_scales(ok, fine=P0 > 0)
     if np.isnan(smax):
         smax = 0.0
     return CircleResult(passed, margins, N, P0, omega, centres, radii, alpha, beta, smax, smin)

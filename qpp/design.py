@@ -306,7 +306,9 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
     sp = cfg.spheres
     if not res.circle.passed:
         c = res.circle
-        if c.min_scale > 1.0:       # an unstable H(s): the sector must be wide enough to stabilize
+        if np.isnan(c.min_scale):
+            why = "no sector scale s·[α, β] passes (scanned 1e-12 … 1e12)"
+        elif c.min_scale > 1.0:     # an unstable H(s): the sector must be wide enough to stabilize
             why = f"smallest admissible sector scale {c.min_scale:.3g} > 1"
         elif c.max_scale < 1.0:
             why = f"largest admissible sector scale {c.max_scale:.3g} < 1"

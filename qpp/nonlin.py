@@ -328,7 +328,8 @@ class ExpressionModel:
 
     # ------------------------------------------------------------------ β3, β4
     def beta3(self, T: float) -> float:
-        """β3 (10.54): max_i ‖(sup_{y, θ} Σ_j |∂φ_i/∂y_j|)_T‖₂ (sampled on the grid).
+        """β3 (10.54): max_i ‖(sup_{y, θ} Σ_j |∂φ_i/∂y_j|)_T‖₂ (sampled on the grid; for a φ
+        independent of t, the slope bound of :attr:`sector_info`, refined between grid points).
 
         Parameters
         ----------
@@ -355,8 +356,8 @@ class ExpressionModel:
                     continue
                 s = sum(np.abs(self._grad(i, j, Yf, tt, TH)) for j in range(self.p) if self.dep[i][j])
                 g[i] = np.maximum(g[i], np.max(np.broadcast_to(s, (Yf[0].shape[0], tg.size)), axis=0))
-        if tg.size == 1:
-            return float(np.max(g) * np.sqrt(T))
+        if tg.size == 1:    # φ independent of t: g_i is its slope bound, refined beyond the grid
+            return float(max(np.max(g), np.max(self.sector_info.slope_bound)) * np.sqrt(T))
         return truncated_l2(tg, g, T)
 
     def beta4(self, t, y_o, T: float) -> float:

@@ -5,7 +5,7 @@ a grid under-estimates a supremum that falls between its points (φ = δm·y·si
 sampled on 256 times gives the sector ±0.09999976 instead of ±0.1), and a sector that is too
 small by any amount is not a certificate.  :func:`refine` therefore climbs from the best grid
 points of each bound to the local extremum (Nelder–Mead within the stated box, scipy) and widens
-the bound to what it finds; :func:`verify` then checks the bounds at random points and widens
+the bound to what it finds (beyond round-off); :func:`verify` then checks the bounds at random points and widens
 them again (+1 %) on a violation.  Bounds are only ever widened, never narrowed.
 """
 from __future__ import annotations
@@ -86,7 +86,11 @@ def refine(model, i: int, starts: dict, bounds: dict) -> dict:
                                 "fatol": 1e-15})
         if np.isfinite(res.fun):
             found = -sign[kind] * res.fun
-            out[kind] = min(out[kind], found) if kind == "alpha" else max(out[kind], found)
+            # a widening by round-off (the grid point already is the extremum) is not taken:
+            # only what exceeds the bound by 1e-12 of the bounds' size
+            tol = 1e-12 * max([abs(v) for v in bounds.values() if np.isfinite(v)] + [1e-300])
+            if (found < out[kind] - tol) if kind == "alpha" else (found > out[kind] + tol):
+                out[kind] = found
     return out
 
 

@@ -215,6 +215,19 @@ def test_circle_scales_of_an_unstable_plant():
     assert r.min_scale == 0.0 and r.max_scale == pytest.approx(2.0, rel=1e-3)   # 1/||H||∞ = 1 → s·0.5 ≤ 1
 
 
+def test_circle_scales_window_between_coarse_grid_points():
+    # an unstable H whose passing scales are a narrow window, [~1.03, ~1.68], between two points
+    # of a 4-per-decade grid (1.0 and 1.78 fail): found, and each end separates pass from fail
+    A, B, C = np.diag([1.157, -0.898, -3.716]), np.ones((3, 1)), np.array([[0.896, -0.134, -1.105]])
+    sector = np.array([[1.0, 1.909]])
+    r = circle_criterion(A, B, C, sector)
+    assert r.P0 == 1 and not r.passed
+    assert 1.0 < r.min_scale < 1.1 and 1.6 < r.max_scale < 1.778
+    for s, want in ((r.min_scale * 0.999, False), (r.min_scale * 1.001, True),
+                    (r.max_scale * 0.999, True), (r.max_scale * 1.001, False)):
+        assert circle_criterion(A, B, C, s * sector).passed is want, s
+
+
 def test_mimo_circle_manipulator(arm):
     Az, Bz, Cz = closed_loop(arm.lure_plant(), *_pub(arm))
     r = circle_criterion(Az, Bz[:, 2:], Cz, [[-0.5, 0.5], [-0.5, 0.5]], a=1e-9)

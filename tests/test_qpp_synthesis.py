@@ -105,6 +105,7 @@ def test_sampled_sector_climbs_to_the_supremum_between_grid_points():
     m = ExpressionModel(["y*sin(k)"], 1, {"k": (0.0, 3.0, 0.0)}, [[-1, 1]], [[1.0]], 1.0)
     lo, hi = m.sector_info.sector[0]
     assert lo == pytest.approx(0.0, abs=1e-12) and hi == pytest.approx(1.0, rel=1e-12)
+    assert m.beta3(1.0) == pytest.approx(1.0, rel=1e-12)        # φ independent of t: the slope bound
 
 
 def test_library_forms_and_stated_overrides(tmp_path):

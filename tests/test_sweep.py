@@ -114,6 +114,26 @@ def test_no_equilibrium_is_a_verdict_not_a_crash(tmp_path):
     assert simulate_values(ctx, {"bias_pitch": 1.0})["verdict"] != "no_equilibrium"
 
 
+def test_base_with_an_asked_tea_off_the_continuation_branch_stays_on_it(tmp_path):
+    # MB3 asked to sit at +20° pitch (bias_from_tea): the continuation from LVLH ends at −19.4°;
+    # the design is made about +20°, so the unperturbed case's plant is there too (not 39° from
+    # the controller's estimate), a 1 % change of I22 stays within a degree of it, and the sweep's
+    # nominal TEA says +20°
+    base = yaml.safe_load((CONFIGS / "mb3.yaml").read_text())
+    base["disturbance"]["bias_from_tea"] = [0.0, 20.0, 0.0]
+    (tmp_path / "mb3_20.yaml").write_text(yaml.safe_dump(base))
+    sw = load_sweep(_sweep_yaml(tmp_path, "asked", base=str(tmp_path / "mb3_20.yaml")))
+    ctx = prepare_base(sw.bases[0], sw.spec)
+    row = simulate_values(ctx, {})
+    np.testing.assert_allclose(row["tea_true"], [0.0, 20.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(row["tea_estimate"], [0.0, 20.0, 0.0], atol=1e-9)
+    near = simulate_values(ctx, {"dI22": 0.01})
+    assert abs(near["tea_true"][1] - 20.0) < 1.0
+    from acmm.sweep.output import _nominal_tea_deg
+
+    np.testing.assert_allclose(_nominal_tea_deg(sw)[sw.bases[0].label], [0.0, 20.0, 0.0], atol=1e-9)
+
+
 # --------------------------------------------------------------------------------------------
 # whole sweeps
 # --------------------------------------------------------------------------------------------

@@ -273,3 +273,17 @@ def test_bias_from_tea_gives_the_asked_attitude(asked):
 
     spec = point_specs(cfg)[0]
     np.testing.assert_allclose(np.degrees(design_one(spec, design_settings(cfg)).tea.theta), asked, atol=1e-9)
+
+
+def test_schedule_end_point_gets_its_asked_attitude():
+    # the `to` station of a TEA-spaced schedule is designed about the TEA its bias_from_tea asks
+    # for, even though its starting guess comes from the blend's track (which ends elsewhere)
+    from acmm.schedule import design_one, point_specs
+    from acmm.settings import design_settings
+
+    cfg = load_config(CONFIGS / "staircase.yaml", ["schedule.to.disturbance.bias_from_tea=[0,-60,0]"])
+    end = point_specs(cfg)[-1]
+    assert end.theta_guess is not None and abs(np.degrees(end.theta_guess[1]) + 60) > 5
+    t = design_one(end, design_settings(cfg)).tea
+    np.testing.assert_allclose(np.degrees(t.theta), [0.0, -60.0, 0.0], atol=1e-9)
+    assert np.max(np.abs(residual_ref(t.theta, end.inertia, N, end.bias))) < 1e-9

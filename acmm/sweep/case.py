@@ -229,8 +229,11 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> np.ndarray:
 
     The continuation of :func:`acmm.tea.solve_tea`, compiled (:mod:`acmm.tea_compiled`: same
     root, ~100× cheaper; any fold falls back to :func:`acmm.tea.solve_tea` and its errors).  A
-    case's TEA depends only on its plant, never on the cases run before, so its row is the same
-    whatever executor, chunking or order runs it.
+    level whose design TEA is not that continuation's root for the nominal plant (a config whose
+    ``bias_from_tea`` asks for another root) is solved by Newton from its design TEA instead
+    (:func:`acmm.tea.solve_tea_near`), so the case stays on the design's branch.  A case's TEA
+    depends only on its plant, never on the cases run before, so its row is the same whatever
+    executor, chunking or order runs it.
 
     Parameters
     ----------
@@ -246,9 +249,38 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> np.ndarray:
     (L, 3) array
         TEA (roll, pitch, yaw) per level, rad.
     """
+    from acmm.tea import solve_tea_near
     from acmm.tea_compiled import solve_tea_fast
 
-    return np.array([solve_tea_fast(inertia[k], sc0.n, bias[k]).theta for k in range(inertia.shape[0])])
+    off = _off_branch(sc0)
+    return np.array([solve_tea_near(inertia[k], sc0.n, bias[k], sc0.theta_est[k]).theta if off[k]
+                     else solve_tea_fast(inertia[k], sc0.n, bias[k]).theta for k in range(inertia.shape[0])])
+
+
+_OFF_BRANCH: dict = {}
+
+
+def _off_branch(sc0) -> np.ndarray:
+    """Per level of the nominal scenario: whether its design TEA is not the continuation's root of
+    the nominal plant (a config whose ``bias_from_tea`` asks for another root): such a level's
+    perturbed plants are solved by Newton from the design TEA, on the design's branch.  Cached
+    per nominal scenario (one compiled solve per level, once)."""
+    from acmm.tea_compiled import solve_tea_fast
+
+    key = tuple(np.asarray(x, float).tobytes() for x in (sc0.inertia, sc0.bias, sc0.theta_est)) + (float(sc0.n),)
+    got = _OFF_BRANCH.get(key)
+    if got is None:
+        got = np.zeros(len(sc0.theta_est), bool)
+        for k in range(len(sc0.theta_est)):
+            try:
+                root = solve_tea_fast(sc0.inertia[k], sc0.n, sc0.bias[k]).theta
+                got[k] = np.max(np.abs(root - sc0.theta_est[k])) > 1e-6
+            except Exception:          # noqa: BLE001 (no continuation root: the design's branch)
+                got[k] = True
+        if len(_OFF_BRANCH) > 16:
+            _OFF_BRANCH.clear()
+        _OFF_BRANCH[key] = got
+    return got
 
 
 def run_case(ctx: BaseContext, index: int) -> dict:

@@ -80,7 +80,7 @@ def _nominal_tea_deg(sweep: Sweep) -> dict:
     for b in sweep.bases:
         s = point_specs(b.config)[0]
         try:
-            out[b.label] = np.degrees(solve_tea(s.inertia, b.config.orbit_rate, s.bias).theta)
+            out[b.label] = np.degrees(solve_tea(s.inertia, b.config.orbit_rate, s.bias, expected=s.expected).theta)
         except AcmmError:
             out[b.label] = np.full(3, np.nan)
     return out
