@@ -110,6 +110,12 @@ def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, m
     refit's first, the others after ``on_fit``).  Returns (fit, path models or None)."""
     gains = np.array([p.lqr.K for p in points])
     teas = np.array([p.tea.theta for p in points])
+    if np.ptp(teas[:, 1]) < 1e-6:
+        from common.errors import ConfigError
+
+        raise ConfigError(f"schedule: the {len(points)} design points all have the pitch TEA "
+                          f"{np.degrees(teas[0, 1]):.4g} deg: a gain schedule in θ2* needs stations whose TEAs "
+                          "differ (is schedule.to the same station as the config itself?)")
     fit = sch.fit_schedule(teas[:, 1], gains, sched.order if sched else 2,
                            sched.form if sched else "polynomial")
     path = models.result() if models is not None and models.forked else None

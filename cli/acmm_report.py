@@ -32,7 +32,7 @@ def register(app: typer.Typer) -> None:
                                                           "same config hash exist (determinism check)"),
         root: Optional[Path] = typer.Option(None, "--root", help="results root of the stages "
                                                                  "(default: each config's output.root, 'runs')"),
-        jobs: Optional[int] = typer.Option(None, "--jobs", min=1, help="processes running the stages and "
+        jobs: Optional[int] = typer.Option(None, "--jobs", min=1, max=1024, help="processes running the stages and "
                                            "sections (default: 2 on a multi-core machine, or ACMM_REPORT_JOBS); "
                                            "1: one after the other; the output is the same"),
     ) -> None:

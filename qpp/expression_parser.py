@@ -134,6 +134,17 @@ _BINOPS = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: l
            ast.Div: lambda a, b: a / b}
 
 
+def _float_sized(a, b) -> bool:
+    """Whether the constant a**b stays within floating point (1e-300 ≤ |value| ≤ 1e300, or 0)."""
+    import math
+
+    try:
+        x, e = abs(complex(a)), abs(complex(b))
+    except (OverflowError, TypeError, ValueError):
+        return False
+    return x == 0 or math.isfinite(x) and e * abs(math.log10(x)) <= 300
+
+
 def _to_sympy(node, symbols: dict, funcs: dict, where: str, text: str):
     """The sympy expression of one node of the expression's :mod:`ast` tree (recursive), or a
     :class:`ConfigError` for anything not whitelisted (:func:`parse_expression`)."""
@@ -165,6 +176,11 @@ def _to_sympy(node, symbols: dict, funcs: dict, where: str, text: str):
         if isinstance(node.op, ast.Pow):
             if b.is_number and (not b.is_finite or abs(complex(b)) > MAX_EXPONENT):
                 raise ConfigError(f"{where}: exponent {b} too large (|e| ≤ {MAX_EXPONENT})")
+            if a.is_number and b.is_number and not _float_sized(a, b):
+                # a constant power is computed exactly: (9**64)**64 nested would build numbers of
+                # thousands of digits (and take minutes) before any check on the values
+                raise ConfigError(f"{where}: the constant power in {text!r} is beyond floating point "
+                                  f"(|value| outside 1e-300 … 1e300)")
             return a ** b
         raise ConfigError(f"{where}: operator {type(node.op).__name__} not allowed")
     if isinstance(node, ast.Call):

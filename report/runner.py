@@ -139,6 +139,7 @@ def run_tasks(tasks: list[Task], jobs: int = 1, on_done: Optional[Callable[[str,
     on_done = on_done or (lambda name, result: None)
     stats = {} if stats is None else stats
     done: dict[str, object] = {}
+    jobs = min(int(jobs), len(tasks))        # never more processes than tasks
     if jobs <= 1 or len(tasks) <= 1 or not hasattr(os, "fork"):
         for t in tasks:              # errors propagate unchanged
             t0, c0 = time.perf_counter(), time.process_time()

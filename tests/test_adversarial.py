@@ -476,3 +476,14 @@ def test_many_uncertain_parameters_refused_before_sampling(tmp_runs):
     check_one_line_refusal(r, dt, 2, r"nonlinearity\.parameters: 31 uncertain parameters.*ACMM_LIMIT_QPP_SECTOR_POINTS",
                            before, _snapshot(tmp_runs))
     assert dt < 30
+
+
+def test_schedule_blending_a_station_into_itself_is_refused(tmp_runs):
+    # schedule.to = the config's own station: every design point has the same TEA, so there is no
+    # θ2* to schedule against (the refit divided by the zero TEA span: a NaN failure, exit 3)
+    path = tmp_runs / "cfg.yaml"
+    path.write_text(yaml.safe_dump(_mutate(_load("staircase"), {"schedule.to": "mb3", "output.figures": False})))
+    before = _snapshot(tmp_runs)
+    r, dt = _invoke("acmm", ["design", path])
+    check_one_line_refusal(r, dt, 2, r"schedule: the 12 design points all have the pitch TEA", before,
+                           _snapshot(tmp_runs))

@@ -58,6 +58,7 @@ def _sup_gain(A, B, C, a):
     ("__import__('os')", "unknown function '__import__'"),
     ("y1.real*k", "Attribute not allowed"),
     ("k*y1**99999", "exponent"),
+    ("(((((9**64)**64)**64)**64)**64)*y1", "beyond floating point"),
     ("k*[y1][0]", "not allowed"),
 ])
 def test_bad_expression_one_line_exit_2_nothing_written(tmp_path, expr, words):
