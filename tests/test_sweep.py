@@ -269,3 +269,26 @@ def test_bad_sweep_config_exits_2_with_one_line(tmp_runs, run_acmm, sweep, messa
     assert r.exit_code == 2
     assert message in r.stderr and r.stderr.count("\n") == 1 and "Traceback" not in r.output
     assert not (tmp_runs / "runs").exists()
+
+
+def test_journal_record_checks(tmp_path):
+    # what --resume accepts: the records a sweep writes (NaN and ±inf included); a line that is
+    # JSON but not such a record is named, field by field, instead of failing in the table builder
+    import json
+
+    from acmm.sweep.journal_records import record_problem
+
+    sw = load_sweep(_sweep_yaml(tmp_path, "rec", n_runs=2, orbits=0.2))
+    run_sweep(sw, workers=1)
+    lines = (sw.run_dir() / "sweep.journal").read_text().splitlines()[1:]
+    recs = [json.loads(x) for x in lines]
+    assert recs and all(record_problem(r, {"ac"}) is None for r in recs)
+    case = next(r for r in recs if r["kind"] == "case")
+    assert record_problem({**case, "time_to_divergence": float("inf")}) is None
+    for bad, words in (({**case, "verdict": 123}, "malformed 'verdict'"), ({**case, "verdict": "fine"}, "unknown verdict"),
+                       ({k: v for k, v in case.items() if k != "bias"}, "without 'bias'"),
+                       ({**case, "inertia": [[1, 2, 3]] * 2}, "malformed 'inertia'"),
+                       ({**case, "index": True}, "malformed 'index'"), ({**case, "kind": "x"}, "unknown record kind"),
+                       ([1, 2], "not a record")):
+        assert words in record_problem(bad, {"ac"})
+    assert "base 'ac'" in record_problem(case, {"mb3"})

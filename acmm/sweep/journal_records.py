@@ -6,11 +6,9 @@ version) would otherwise fail later, deep in the table builder, with a traceback
 """
 from __future__ import annotations
 
-import math
-
 _NUMBER = (int, float)
 
-#: case record fields: name → (kind, shape); kind "num" (a number or NaN), "int", "str"
+#: case record fields: name → (kind, shape); kind "num" (a number, NaN or ±inf), "int", "str"
 CASE_FIELDS = {
     "base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ()), "n_steps": ("int", ()),
     "reason": ("str", ()), "verdict": ("str", ()),
@@ -30,8 +28,8 @@ MARGIN_FIELDS = {
 
 
 def _is(kind: str, v) -> bool:
-    if kind == "num":
-        return isinstance(v, _NUMBER) and not isinstance(v, bool) and (math.isfinite(v) or math.isnan(v))
+    if kind == "num":            # any float the sweep writes: finite, NaN or ±inf
+        return isinstance(v, _NUMBER) and not isinstance(v, bool)
     if kind == "int":
         return isinstance(v, int) and not isinstance(v, bool) and v >= 0
     if kind == "bool":
