@@ -232,24 +232,24 @@ class Design:
         ValueError
             When the config has fewer than two blended design points.
         """
+        return _mix(*self._blend_ends(), s)
+
+    def _blend_ends(self):
+        """The first and last blended design points (:class:`acmm.schedule.PointSpec`)."""
         from acmm import schedule as sch
 
-        specs = sch.point_specs(self.config)
-        blended = [p for p in specs if np.isfinite(p.s)]
+        blended = [p for p in sch.point_specs(self.config) if np.isfinite(p.s)]
         if len(blended) < 2:
             raise ValueError("the config has no schedule.to blend")
-        a, b = blended[0], blended[-1]
-        return (1 - s) * a.inertia + s * b.inertia, (1 - s) * a.bias + s * b.bias
+        return blended[0], blended[-1]
 
     def _tea_at(self, s: float, guess=None):
         from acmm.tea import solve_tea, solve_tea_near
 
-        from acmm import schedule as sch
-
-        inertia, bias = self.plant_at(s)
+        a, b = self._blend_ends()
+        inertia, bias = _mix(a, b, s)
         n = self.config.orbit_rate
-        blended = [p for p in sch.point_specs(self.config) if np.isfinite(p.s)]
-        expected = blended[0].expected if s == 0 else blended[-1].expected if s == 1 else None   # bias_from_tea
+        expected = a.expected if s == 0 else b.expected if s == 1 else None   # their bias_from_tea
         t = (solve_tea_near(inertia, n, bias, guess, expected=expected) if guess is not None
              else solve_tea(inertia, n, bias, expected=expected))
         return inertia, t
@@ -385,3 +385,8 @@ class Design:
         D = np.vstack([np.zeros((24, 6)), np.hstack([np.eye(3), np.zeros((3, 3))])])
         return _named(A, B, C, D, model.state_names, V_NAMES + DISTURBANCE_NAMES,
                       list(model.state_names) + INPUT_NAMES, name)
+
+
+def _mix(a, b, s: float) -> tuple[np.ndarray, np.ndarray]:
+    """(inertia, bias) of the blend (1 − s)·a + s·b of two :class:`acmm.schedule.PointSpec`."""
+    return (1 - s) * a.inertia + s * b.inertia, (1 - s) * a.bias + s * b.bias

@@ -173,9 +173,10 @@ class QppConfig(_Model):
             if nl.sector is not None and np.shape(nl.sector) != (P.r, 2):
                 raise ValueError(f"nonlinearity.sector must be {P.r} pairs [alpha, beta]")
             _check_sector("nonlinearity.sector", nl.sector)
-            _check_sample_count(nl, P.p)
             try:
-                self.expression_model().sector_info      # parse, check singular / sector-bounded
+                model = self.expression_model()
+                _check_sample_count(model.sector_points(), len(nl.parameters))
+                model.sector_info                        # parse, check singular / sector-bounded
             except ConfigError as exc:
                 raise ValueError(str(exc)) from None
             self._check_expression_scenarios(nl)

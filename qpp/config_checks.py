@@ -23,22 +23,12 @@ def _check_sector(field: str, sector) -> None:
             raise ValueError(f"{field}: pair {i + 1} is [{a:g}, {b:g}]; a sector needs alpha < beta")
 
 
-def _check_sample_count(nl, p: int) -> None:
-    """The points at which :meth:`qpp.nonlin.ExpressionModel.sector_info` samples φ (parameter
-    samples × output grid × time grid) stay within the ``QPP_SECTOR_POINTS`` limit."""
+def _check_sample_count(points: int, k: int) -> None:
+    """The ``points`` at which :meth:`qpp.nonlin.ExpressionModel.sector_info` samples φ (its
+    :meth:`~qpp.nonlin.ExpressionModel.sector_points`, with ``k`` uncertain parameters) stay
+    within the ``QPP_SECTOR_POINTS`` limit."""
     from common.limits import how_to_raise, limit
 
-    k = len(nl.parameters)
-    if k <= 6:
-        samples = math.prod(len({r.min, r.max, 0.5 * (r.min + r.max), r.nominal_value})
-                            for r in nl.parameters.values())
-    else:
-        samples = 2 ** k
-    per = nl.n_grid if p <= 2 else max(5, int(20000 ** (1.0 / p)))
-    import re
-
-    times = 256 if any(re.search(r"\bt\b", e) for e in nl.texts()) else 1    # t in φ: its time grid
-    points = samples * (per + 5) ** p * times
     if points > limit("QPP_SECTOR_POINTS"):
         raise ValueError(f"nonlinearity.parameters: {k} uncertain parameters sample φ at {points:.3g} points "
                          f"(parameter samples × y grid × times) to find its sector; use fewer parameters "

@@ -21,6 +21,7 @@ range) raises :class:`common.errors.ConfigError` naming the channel and the caus
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -193,14 +194,25 @@ class ExpressionModel:
         (S, k) ndarray
             The parameter samples, in the config's units.
         """
-        k = len(self.names)
-        if k == 0:
+        if not self.names:
             return np.zeros((1, 0))
-        if k <= 6:
-            pts = [np.unique([lo, 0.5 * (lo + hi), hi, nm]) for lo, hi, nm in zip(self.lo, self.hi, self.nom)]
-        else:
-            pts = [np.array([lo, hi]) for lo, hi in zip(self.lo, self.hi)]
-        return np.array(list(itertools.product(*pts)))
+        return np.array(list(itertools.product(*self._theta_axes())))
+
+    def _theta_axes(self) -> list:
+        """The values sampled of each parameter: ends, midpoint and nominal (k ≤ 6), else ends."""
+        if len(self.names) <= 6:
+            return [np.unique([lo, 0.5 * (lo + hi), hi, nm]) for lo, hi, nm in zip(self.lo, self.hi, self.nom)]
+        return [np.array([lo, hi]) for lo, hi in zip(self.lo, self.hi)]
+
+    def sector_points(self) -> int:
+        """Points at which :attr:`sector_info` samples φ (parameter samples × y grid × times).
+
+        Returns
+        -------
+        int
+            The number of points (counted, not built), dimensionless.
+        """
+        return math.prod(len(a) for a in self._theta_axes() + self._y_grid()) * self._t_grid().size
 
     def _y_grid(self):
         per = self.n_grid if self.p <= 2 else max(5, int(20000 ** (1.0 / self.p)))

@@ -7,7 +7,6 @@ schedule (ch. 5.3) of the pipeline, and its simulation the nonlinear stair-case 
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from dataclasses import dataclass
 
@@ -38,6 +37,9 @@ class BaseContext:
         The sweep specification.
     orbits : float
         Simulated length, orbits.
+    off_branch : (L,) bool array or None
+        Per level: its design TEA is not the continuation's root of the nominal plant
+        (:func:`perturbed_tea`); None: no level is.
     """
 
     label: str
@@ -46,6 +48,7 @@ class BaseContext:
     scenario: object        # acmm.simulate.Scenario of the nominal config (orbits of the sweep)
     spec: object            # SweepSpec
     orbits: float
+    off_branch: object = None
 
 
 def prepare_base(base, spec) -> BaseContext:
@@ -70,7 +73,7 @@ def prepare_base(base, spec) -> BaseContext:
     orbits = spec.orbits if spec.orbits is not None else cfg.simulation.orbits
     table = compute_design(cfg).table
     sc = scenario_from_config(cfg, table, orbits=orbits)
-    return BaseContext(base.label, cfg, table, sc, spec, float(orbits))
+    return BaseContext(base.label, cfg, table, sc, spec, float(orbits), _off_branch(sc))
 
 
 def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
@@ -164,7 +167,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
             # levels are the perturbed design points
             sc = dataclasses.replace(sc, harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
         else:
-            true = perturbed_tea(sc0, inertia, bias)
+            true = perturbed_tea(sc0, inertia, bias, ctx.off_branch)
             if spec.tea_estimate == "true":
                 est = true
                 gain = np.array([table.gain_at(true[k, 1], k) for k in range(L)])
@@ -224,7 +227,7 @@ def _metrics(row: dict, r, sc, true: np.ndarray, n: float, spec) -> dict:
     return row
 
 
-def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> np.ndarray:
+def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray, off_branch=None) -> np.ndarray:
     """The perturbed plant's TEA per level (rad) on the physical branch of :mod:`acmm.tea`.
 
     The continuation of :func:`acmm.tea.solve_tea`, compiled (:mod:`acmm.tea_compiled`: same
@@ -243,6 +246,8 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> np.ndarray:
         Perturbed inertia per level, slug·ft².
     bias : (L, 3) array
         Perturbed bias torque per level, ft·lbf.
+    off_branch : (L,) bool array, optional
+        The levels solved from their design TEA (:attr:`BaseContext.off_branch`); default none.
 
     Returns
     -------
@@ -252,35 +257,26 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> np.ndarray:
     from acmm.tea import solve_tea_near
     from acmm.tea_compiled import solve_tea_fast
 
-    off = _off_branch(sc0)
+    off = np.zeros(inertia.shape[0], bool) if off_branch is None else off_branch
     return np.array([solve_tea_near(inertia[k], sc0.n, bias[k], sc0.theta_est[k]).theta if off[k]
                      else solve_tea_fast(inertia[k], sc0.n, bias[k]).theta for k in range(inertia.shape[0])])
-
-
-_OFF_BRANCH: dict = {}
 
 
 def _off_branch(sc0) -> np.ndarray:
     """Per level of the nominal scenario: whether its design TEA is not the continuation's root of
     the nominal plant (a config whose ``bias_from_tea`` asks for another root): such a level's
-    perturbed plants are solved by Newton from the design TEA, on the design's branch.  Cached
-    per nominal scenario (one compiled solve per level, once)."""
+    perturbed plants are solved by Newton from the design TEA, on the design's branch
+    (:func:`perturbed_tea`; computed once per base, by :func:`prepare_base`)."""
     from acmm.tea_compiled import solve_tea_fast
 
-    key = tuple(np.asarray(x, float).tobytes() for x in (sc0.inertia, sc0.bias, sc0.theta_est)) + (float(sc0.n),)
-    got = _OFF_BRANCH.get(key)
-    if got is None:
-        got = np.zeros(len(sc0.theta_est), bool)
-        for k in range(len(sc0.theta_est)):
-            try:
-                root = solve_tea_fast(sc0.inertia[k], sc0.n, sc0.bias[k]).theta
-                got[k] = np.max(np.abs(root - sc0.theta_est[k])) > 1e-6
-            except Exception:          # noqa: BLE001 (no continuation root: the design's branch)
-                got[k] = True
-        if len(_OFF_BRANCH) > 16:
-            _OFF_BRANCH.clear()
-        _OFF_BRANCH[key] = got
-    return got
+    off = np.zeros(len(sc0.theta_est), bool)
+    for k in range(len(sc0.theta_est)):
+        try:
+            root = solve_tea_fast(sc0.inertia[k], sc0.n, sc0.bias[k]).theta
+            off[k] = np.max(np.abs(root - sc0.theta_est[k])) > 1e-6
+        except (ConvergenceError, NoEquilibriumError):    # no continuation root: the design's branch
+            off[k] = True
+    return off
 
 
 def run_case(ctx: BaseContext, index: int) -> dict:

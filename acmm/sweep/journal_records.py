@@ -6,20 +6,29 @@ version) would otherwise fail later, deep in the table builder, with a traceback
 """
 from __future__ import annotations
 
+import functools
+
+import numpy as np
+
 _NUMBER = (int, float)
 
-#: case record fields: name → (kind, shape); kind "num" (a number, NaN or ±inf), "int", "str"
-CASE_FIELDS = {
-    "base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ()), "n_steps": ("int", ()),
-    "reason": ("str", ()), "verdict": ("str", ()),
-    "time_to_divergence": ("num", ()), "torque_saturation_time": ("num", ()),
-    "momentum_saturation_time": ("num", ()),
-    "peak_attitude_error": ("num", (3,)), "steady_attitude_error": ("num", (3,)),
-    "peak_momentum": ("num", (3,)), "tea_true": ("num", (3,)), "tea_estimate": ("num", (3,)),
-    "bias": ("num", (3,)), "inertia": ("num", (3, 3)),
-}
+#: the fields a case record adds to its metrics row (:func:`acmm.sweep.case._empty_row`)
+CASE_KEYS = {"base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ())}
 
-#: margin-search record fields, as :data:`CASE_FIELDS` ("bool": true/false; shape None: a list)
+
+@functools.cache
+def case_fields() -> dict:
+    """Case record fields: name → (kind, shape), kind "num" (a number, NaN or ±inf), "int" or
+    "str": :data:`CASE_KEYS` and the metrics row's fields, read off its empty row."""
+    from acmm.sweep.case import _empty_row
+
+    fields = dict(CASE_KEYS)
+    for k, v in _empty_row(1).items():
+        fields[k] = ("str" if isinstance(v, str) else "int" if isinstance(v, int) else "num", np.shape(v))
+    return fields
+
+
+#: margin-search record fields, as :func:`case_fields` ("bool": true/false; shape None: a list)
 MARGIN_FIELDS = {
     "base": ("str", ()), "direction": ("str", ()), "limit": ("num", ()), "first_failure": ("num", ()),
     "failure_verdict": ("str", ()), "failure_reason": ("str", ()), "reached_end": ("bool", ()),
@@ -66,7 +75,7 @@ def record_problem(rec: object, bases: set | None = None) -> str | None:
     if not isinstance(rec, dict):
         return "not a record (a JSON object)"
     kind = rec.get("kind")
-    fields = {"case": CASE_FIELDS, "margin": MARGIN_FIELDS}.get(kind)
+    fields = case_fields() if kind == "case" else MARGIN_FIELDS if kind == "margin" else None
     if fields is None:
         return f"unknown record kind {kind!r}"
     for name, (k, shape) in fields.items():
