@@ -175,7 +175,7 @@ class QppConfig(_Model):
             _check_sector("nonlinearity.sector", nl.sector)
             try:
                 model = self.expression_model()
-                _check_sample_count(model.sector_points(), len(nl.parameters))
+                _check_sample_count(model)
                 model.sector_info                        # parse, check singular / sector-bounded
             except ConfigError as exc:
                 raise ValueError(str(exc)) from None

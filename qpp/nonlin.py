@@ -20,17 +20,16 @@ range) raises :class:`common.errors.ConfigError` naming the channel and the caus
 """
 from __future__ import annotations
 
-import itertools
-import math
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
 from common.errors import ConfigError
-from qpp.sector_bounds import refine, verify
 from qpp.expression_parser import (  # noqa: F401  (re-exported: the old import paths)
     FUNCTIONS, MAX_EXPONENT, MAX_LEN, library_expression, parse_expression, sympy_module)
+from qpp.sector_bounds import refine, verify
+from qpp.sector_grid import SampleGrid
 
 
 @dataclass
@@ -58,7 +57,7 @@ class SectorInfo:
     n_samples: int
 
 
-class ExpressionModel:
+class ExpressionModel(SampleGrid):
     """Compiled f1(y, t, θ) and φ(y, t, θ) of an expression nonlinearity.
 
     Parameters
@@ -185,111 +184,48 @@ class ExpressionModel:
             g = (self._call(self._phi[i], Yp, t, TH) - self._call(self._phi[i], Ym, t, TH)) / (2 * h)
         return g
 
-    # ------------------------------------------------------------------ sampling
-    def theta_samples(self) -> np.ndarray:
-        """Corners and midpoints of Θ (3^k points, k ≤ 6; else corners and nominal).
-
-        Returns
-        -------
-        (S, k) ndarray
-            The parameter samples, in the config's units.
-        """
-        if not self.names:
-            return np.zeros((1, 0))
-        return np.array(list(itertools.product(*self._theta_axes())))
-
-    def _theta_axes(self) -> list:
-        """The values sampled of each parameter: ends, midpoint and nominal (k ≤ 6), else ends."""
-        if len(self.names) <= 6:
-            return [np.unique([lo, 0.5 * (lo + hi), hi, nm]) for lo, hi, nm in zip(self.lo, self.hi, self.nom)]
-        return [np.array([lo, hi]) for lo, hi in zip(self.lo, self.hi)]
-
-    def sector_points(self) -> int:
-        """Points at which :attr:`sector_info` samples φ (parameter samples × y grid × times).
-
-        Returns
-        -------
-        int
-            The number of points (counted, not built), dimensionless.
-        """
-        return math.prod(len(a) for a in self._theta_axes() + self._y_grid()) * self._t_grid().size
-
-    def _y_grid(self):
-        per = self.n_grid if self.p <= 2 else max(5, int(20000 ** (1.0 / self.p)))
-        axes = []
-        for lo, hi in self.y_range:
-            g = np.linspace(lo, hi, per)
-            span = max(hi - lo, 1e-12)
-            extra = [x for x in (0.0, 1e-6 * span, -1e-6 * span, 1e-9 * span, -1e-9 * span) if lo <= x <= hi]
-            axes.append(np.unique(np.concatenate([g, extra])))
-        return axes
-
-    def _t_grid(self, T=None):
-        T = self.t_range if T is None else T
-        if all(self.t not in ph.free_symbols for ph in self.phi):
-            return np.array([0.0])
-        return np.linspace(0.0, T, self.n_t)
-
+    # ------------------------------------------------------------------ sector
     @cached_property
     def sector_info(self) -> SectorInfo:
         """Sector [α_i, β_i] and slope bounds of φ (see module docstring); raises ConfigError."""
         self._check_continuity()
-        axes = self._y_grid()
         tg = self._t_grid()
         ths = self.theta_samples()
         r = len(self.phi)
         alpha = np.full(r, np.inf)
         beta = np.full(r, -np.inf)
         slope = np.zeros(r)
-        diag = np.array([all(not d for j, d in enumerate(dep) if j != i) for i, dep in enumerate(self.dep)])
-        if r != self.p:
-            diag[:] = False
+        diag = self.diagonal
         n = 0
         starts = [{} for _ in range(r)]                       # the grid point of each bound
-        mesh = np.meshgrid(*axes, indexing="ij")
-        Yf = [m.ravel()[:, None] for m in mesh]              # (Ny, 1)
         tt = tg[None, :]                                      # (1, Nt)
-        for th in ths:
-            TH = [np.full((1, 1), v) for v in th]
-            ph = self.phi_at(Yf, tt, TH)                      # (r, Ny, Nt)
-            n += ph[0].size
-            for i in range(r):
-                where = f"nonlinearity.f1 (φ channel {i + 1}: {self.phi[i]})"
-                if not np.all(np.isfinite(ph[i])):
+        for i in range(r):
+            Yf = self._channel_grid(i)                        # (Ny, 1) or (1, 1) each
+            outs = self.channel_outputs(i)
+            where = f"nonlinearity.f1 (φ channel {i + 1}: {self.phi[i]})"
+            for th in ths:
+                TH = [np.full((1, 1), v) for v in th]
+                ph = self._call(self._phi[i], Yf, tt, TH)     # (Ny, Nt)
+                n += ph.size
+                if not np.all(np.isfinite(ph)):
                     raise ConfigError(f"{where}: singular (non-finite value) on the stated ranges")
                 gsum = sum(np.abs(self._grad(i, j, Yf, tt, TH)) for j in range(self.p) if self.dep[i][j]) \
-                    if any(self.dep[i]) else np.zeros_like(ph[i])
+                    if any(self.dep[i]) else np.zeros_like(ph)
                 if not np.all(np.isfinite(gsum)):
                     raise ConfigError(f"{where}: not sector-bounded (unbounded slope) on the stated ranges")
                 if any(self.dep[i]) and float(np.max(gsum)) > slope[i]:
-                    gb = np.broadcast_to(gsum, ph[i].shape)
+                    gb = np.broadcast_to(gsum, ph.shape)
                     starts[i]["slope"] = self._point(Yf, tg, th, np.argmax(gb), gb.shape)
                 slope[i] = max(slope[i], float(np.max(gsum)))
-                y0 = np.all([np.abs(Y) == 0 for Y in Yf], axis=0)[:, 0]
+                y0 = np.ones(ph.shape[0], bool)               # the channel's outputs all 0
+                for j in outs:
+                    y0 &= np.broadcast_to(Yf[j][:, 0] == 0, y0.shape)
                 if y0.any():
-                    v0 = np.abs(ph[i][y0]).max()
-                    if v0 > 1e-9 * max(1.0, np.abs(ph[i]).max()):
+                    v0 = np.abs(ph[y0]).max()
+                    if v0 > 1e-9 * max(1.0, np.abs(ph).max()):
                         raise ConfigError(f"{where}: not sector-bounded: φ(y = 0) = {v0:.3g} ≠ 0")
                 if diag[i]:
-                    yi = np.broadcast_to(Yf[i], ph[i].shape)
-                    nz = np.abs(yi) > 0
-                    ratio = ph[i][nz] / yi[nz]
-                    full = np.where(nz, ph[i] / np.where(nz, yi, 1.0), np.nan)
-                    if float(ratio.min()) < alpha[i]:
-                        starts[i]["alpha"] = self._point(Yf, tg, th, np.nanargmin(full), full.shape)
-                    if float(ratio.max()) > beta[i]:
-                        starts[i]["beta"] = self._point(Yf, tg, th, np.nanargmax(full), full.shape)
-                    alpha[i] = min(alpha[i], float(ratio.min()))
-                    beta[i] = max(beta[i], float(ratio.max()))
-                    span = float(np.ptp(self.y_range[i]))
-                    small = nz & (np.abs(yi) <= 2e-9 * span)
-                    mid = (np.abs(yi) > 2e-9 * span) & (np.abs(yi) <= 2e-6 * span)
-                    if small.any() and mid.any():
-                        rs = np.abs(ph[i][small] / yi[small]).max()
-                        rm = np.abs(ph[i][mid] / yi[mid]).max()
-                        if rs > 3.0 * rm + 1e-12 * max(1.0, slope[i]):
-                            raise ConfigError(f"{where}: not sector-bounded near y = 0 "
-                                              f"(φ/y grows from {rm:.3g} to {rs:.3g} as y → 0)")
+                    self._ratio_bounds(i, ph, Yf, tg, th, alpha, beta, slope, starts[i], where)
         for i in range(r):            # grid extrema → local extrema (widened only)
             kinds = {k: x for k, x in starts[i].items() if k == "slope" or diag[i]}
             got = refine(self, i, kinds, {"alpha": alpha[i], "beta": beta[i], "slope": slope[i]})
@@ -303,15 +239,34 @@ class ExpressionModel:
                 alpha[i], beta[i] = c - 1e-12, c + 1e-12
         return SectorInfo(np.column_stack([alpha, beta]), slope, diag, verified, n)
 
+    def _ratio_bounds(self, i, ph, Yf, tg, th, alpha, beta, slope, starts, where) -> None:
+        """Widen α_i, β_i (in place) to the ratios φ_i / y_i of one parameter sample ``ph``
+        (Ny, Nt) on channel ``i``'s grid ``Yf``, recording the grid point of each new bound in
+        ``starts``; raises ConfigError when φ_i / y_i grows without bound as y_i → 0."""
+        yi = np.broadcast_to(Yf[i], ph.shape)
+        nz = np.abs(yi) > 0
+        ratio = ph[nz] / yi[nz]
+        full = np.where(nz, ph / np.where(nz, yi, 1.0), np.nan)
+        if float(ratio.min()) < alpha[i]:
+            starts["alpha"] = self._point(Yf, tg, th, np.nanargmin(full), full.shape)
+        if float(ratio.max()) > beta[i]:
+            starts["beta"] = self._point(Yf, tg, th, np.nanargmax(full), full.shape)
+        alpha[i] = min(alpha[i], float(ratio.min()))
+        beta[i] = max(beta[i], float(ratio.max()))
+        span = float(np.ptp(self.y_range[i]))
+        small = nz & (np.abs(yi) <= 2e-9 * span)
+        mid = (np.abs(yi) > 2e-9 * span) & (np.abs(yi) <= 2e-6 * span)
+        if small.any() and mid.any():
+            rs = np.abs(ph[small] / yi[small]).max()
+            rm = np.abs(ph[mid] / yi[mid]).max()
+            if rs > 3.0 * rm + 1e-12 * max(1.0, slope[i]):
+                raise ConfigError(f"{where}: not sector-bounded near y = 0 "
+                                  f"(φ/y grows from {rm:.3g} to {rs:.3g} as y → 0)")
+
     def _point(self, Yf, tg, th, flat: int, shape: tuple) -> np.ndarray:
         """x = (y, t, θ) of grid entry ``flat`` of an (Ny, Nt) array (:func:`qpp.sector_bounds.refine`)."""
         iy, it = np.unravel_index(int(flat), shape)
-        return np.concatenate([[Y[iy, 0] for Y in Yf], [tg[it]], np.asarray(th, float)])
-
-    @property
-    def t_varies(self) -> bool:
-        """Whether φ depends on the time t (else its time grid is t = 0 alone)."""
-        return any(self.t in ph.free_symbols for ph in self.phi)
+        return np.concatenate([[Y[min(iy, Y.shape[0] - 1), 0] for Y in Yf], [tg[it]], np.asarray(th, float)])
 
     def _check_continuity(self) -> None:
         """Symbolic check (sympy ``continuous_domain``) that every f1 channel is continuous in each of
@@ -355,19 +310,18 @@ class ExpressionModel:
         """
         from qpp.spheres import truncated_l2
 
-        axes = self._y_grid()
         tg = self._t_grid(T)
-        mesh = np.meshgrid(*axes, indexing="ij")
-        Yf = [m.ravel()[:, None] for m in mesh]
         tt = tg[None, :]
         g = np.zeros((len(self.phi), tg.size))
-        for th in self.theta_samples():
-            TH = [np.full((1, 1), v) for v in th]
-            for i in range(len(self.phi)):
-                if not any(self.dep[i]):
-                    continue
+        for i in range(len(self.phi)):
+            if not any(self.dep[i]):
+                continue
+            Yf = self._channel_grid(i)
+            ny = max(Y.shape[0] for Y in Yf)
+            for th in self.theta_samples():
+                TH = [np.full((1, 1), v) for v in th]
                 s = sum(np.abs(self._grad(i, j, Yf, tt, TH)) for j in range(self.p) if self.dep[i][j])
-                g[i] = np.maximum(g[i], np.max(np.broadcast_to(s, (Yf[0].shape[0], tg.size)), axis=0))
+                g[i] = np.maximum(g[i], np.max(np.broadcast_to(s, (ny, tg.size)), axis=0))
         if tg.size == 1:    # φ independent of t: g_i is its slope bound, refined beyond the grid
             return float(max(np.max(g), np.max(self.sector_info.slope_bound)) * np.sqrt(T))
         return truncated_l2(tg, g, T)

@@ -77,6 +77,19 @@ def plot_circle(res, path: Path) -> list[Path]:
     return out
 
 
+#: beyond this many outputs (controls) a scenario figure's legend names line styles, not channels
+MAX_LABELLED_CHANNELS = 4
+
+
+def _scenario_values(sim) -> str:
+    """The scenario's uncertain values for a title: the expression kind's parameters by name
+    (at most four), else γ."""
+    if sim.parameters:
+        items = [f"{k} = {v:g}" for k, v in sim.parameters.items()]
+        return ", ".join(items[:4]) + (", …" if len(items) > 4 else "")
+    return f"γ = {sim.gamma:g}"
+
+
 def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
     """r, r_o, y, y_o; tracking error |y − y_o| against β_o; control u.
 
@@ -95,26 +108,44 @@ def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
         ``path``.
     """
     plt = _plt()
-    p = sim.y.shape[0]
+    p, m = sim.y.shape[0], sim.u.shape[0]
     fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
+    many = p > MAX_LABELLED_CHANNELS        # a legend of line styles, not of every channel's four lines
     for i in range(p):
-        axes[0].plot(sim.t, sim.r[i], "g:", label=f"r{i + 1}")
-        axes[0].plot(sim.t, sim.r_o[i], "k--", lw=0.8, label=f"r_o{i + 1}")
-        axes[0].plot(sim.t, sim.y[i], "b-", label=f"y{i + 1}")
-        axes[0].plot(sim.t, sim.y_o[i], "r-", lw=0.8, label=f"y_o{i + 1}")
-        axes[1].plot(sim.t, np.abs(sim.y[i] - sim.y_o[i]), label=f"|y{i + 1} − y_o{i + 1}|")
+        if many:
+            names = [f"{s} (all outputs)" for s in ("r", "r_o", "y", "y_o")] if i == 0 else [None] * 4
+        else:
+            names = [f"{s}{i + 1}" for s in ("r", "r_o", "y", "y_o")]
+        axes[0].plot(sim.t, sim.r[i], "g:", label=names[0])
+        axes[0].plot(sim.t, sim.r_o[i], "k--", lw=0.8, label=names[1])
+        axes[0].plot(sim.t, sim.y[i], "b-", label=names[2])
+        axes[0].plot(sim.t, sim.y_o[i], "r-", lw=0.8, label=names[3])
+    worst = int(np.argmax(sim.error_per_output))
+    first_other = 1 if worst == 0 else 0
+    for i in range(p):
+        err = np.abs(sim.y[i] - sim.y_o[i])
+        if not many:
+            axes[1].plot(sim.t, err, label=f"|y{i + 1} − y_o{i + 1}|")
+        elif i != worst:
+            axes[1].plot(sim.t, err, color="0.6", lw=0.7, label="other outputs" if i == first_other else None)
+    if many:                                # the output that sets ‖y − y_o‖∞, drawn last, named
+        axes[1].plot(sim.t, np.abs(sim.y[worst] - sim.y_o[worst]), "C0",
+                     label=f"|y{worst + 1} − y_o{worst + 1}| (largest)")
     axes[0].legend(fontsize=7, ncol=2)
     axes[0].set_ylabel("reference / output")
     axes[1].axhline(sim.beta_o, color="r", ls="--", label=f"β_o = {sim.beta_o:g}")
     axes[1].set_ylabel("tracking error")
     axes[1].set_title(f"‖y − y_o‖∞ = {sim.error_inf:.4g} ({'within' if sim.passed else 'OUTSIDE'} the sphere)")
     axes[1].legend(fontsize=7)
-    for j in range(sim.u.shape[0]):
-        axes[2].plot(sim.t, sim.u[j], label=f"u{j + 1}")
+    for j in range(m):
+        if m > MAX_LABELLED_CHANNELS:
+            axes[2].plot(sim.t, sim.u[j], lw=0.8, label=f"u1 … u{m}" if j == 0 else None)
+        else:
+            axes[2].plot(sim.t, sim.u[j], label=f"u{j + 1}")
     axes[2].set_ylabel("control u")
     axes[2].set_xlabel("t, s")
     axes[2].legend(fontsize=7)
-    fig.suptitle(f"scenario {sim.name} (γ = {sim.gamma:g})")
+    fig.suptitle(f"scenario {sim.name} ({_scenario_values(sim)})")
     save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path

@@ -16,11 +16,14 @@ import numpy as np
 REFINE_ITER_PER_DIM = 200
 
 
-def _box(model) -> tuple[list, np.ndarray]:
-    """The variables x = (y_1 … y_p, t, θ_1 … θ_k) that vary: their (lo, hi) and a mask of x."""
+def _box(model, i: int) -> tuple[list, np.ndarray]:
+    """The variables x = (y_1 … y_p, t, θ_1 … θ_k) that vary for φ channel ``i``: their
+    (lo, hi) and a mask of x (the outputs of :meth:`~qpp.sector_grid.SampleGrid.channel_outputs`;
+    the others cannot change φ_i)."""
     ranges = [tuple(r) for r in model.y_range] + [(0.0, model.t_range if model.t_varies else 0.0)]
     ranges += list(zip(model.lo, model.hi))
     free = np.array([hi > lo for lo, hi in ranges])
+    free[:model.p] &= np.isin(np.arange(model.p), model.channel_outputs(i))
     return ranges, free
 
 
@@ -54,7 +57,7 @@ def refine(model, i: int, starts: dict, bounds: dict) -> dict:
     """
     from scipy.optimize import minimize
 
-    ranges, free = _box(model)
+    ranges, free = _box(model, i)
     span_i = float(np.ptp(model.y_range[i])) if i < model.p else 1.0
     sign = {"alpha": -1.0, "beta": 1.0, "slope": 1.0}
     out = dict(bounds)
