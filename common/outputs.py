@@ -79,8 +79,22 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
         del _RECORDERS[next(i for i, r in enumerate(_RECORDERS) if r is written)]
     run_dir = Path(run_dir)
     if config is not None or config_text is not None:
-        write_config_yaml(run_dir, config, config_text)
+        try:
+            write_config_yaml(run_dir, config, config_text)
+        except BaseException:
+            _discard(written)      # results without the config.yaml that says what they are of
+            raise
     prune(run_dir, stage, written)
+
+
+def _discard(written: set) -> None:
+    """Remove the files a stage wrote (a run that cannot be completed leaves none of them)."""
+    for p in written:
+        try:
+            if p.is_file():
+                p.unlink()
+        except OSError:
+            pass
 
 
 def write_config_yaml(run_dir, config=None, config_text: str | None = None) -> Path:

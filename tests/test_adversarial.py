@@ -142,6 +142,7 @@ QPP_BAD = [
     ("n_samples_5", {"simulation.n_samples": 5}, r"simulation\.n_samples"),
     ("rtol_below_precision", {"simulation.rtol": 1e-300}, r"simulation\.rtol"),
     ("t_final_1e6", {"simulation.t_final": 1e6}, r"simulation\.t_final"),
+    ("t_final_1e-300", {"simulation.t_final": 1e-300}, r"simulation\.t_final.*greater than or equal"),
     ("t_final_1e5_samples_2e5", {"simulation.t_final": 1e5, "simulation.n_samples": 200000},
      r"QPP_PERIODS|QPP_WORK|QPP_SAMPLES"),
     ("r_o_channels", {"simulation.r_o": []}, r"simulation\.r_o"),
@@ -368,8 +369,9 @@ def _output_case(tmp: Path, base: str, how: str, target: str) -> tuple[Path, str
         (tmp / "afile").write_text("x")
         edits["output.root"] = "afile"
         rx = r"Not a directory"
-    elif how == "target_is_dir":
-        (tmp / "runs" / name / target).mkdir(parents=True)
+    elif how in ("target_is_dir", "config_is_dir"):
+        # config.yaml is written last: the results already written are then removed again
+        (tmp / "runs" / name / (target if how == "target_is_dir" else "config.yaml")).mkdir(parents=True)
         rx = r"(directory|Is a directory)"
     else:  # a root path component longer than the file system allows
         edits["output.root"] = "r" * 300
@@ -379,13 +381,15 @@ def _output_case(tmp: Path, base: str, how: str, target: str) -> tuple[Path, str
     return path, rx
 
 
-@pytest.mark.parametrize("how", ["root_is_file", "target_is_dir", "name_too_long"])
+@pytest.mark.parametrize("how", ["root_is_file", "target_is_dir", "config_is_dir", "name_too_long"])
 @pytest.mark.parametrize("app_name,cmd,base,target", OUTPUT_COMMANDS, ids=[f"{a}-{c}" for a, c, *_ in OUTPUT_COMMANDS])
 def test_output_place_refused_exit_4(tmp_runs, app_name, cmd, base, target, how):
     path, rx = _output_case(tmp_runs, base, how, target)
     extra = ["-j", "1"] if cmd == "sweep" else []
     before = _snapshot(tmp_runs)
     r, dt = _invoke(app_name, [cmd, path, *extra])
+    if cmd == "sweep" and how == "config_is_dir":   # a finished sweep's journal: --resume completes it
+        before.add(f"runs/{_load(base)['name']}/sweep.journal")
     check_one_line_refusal(r, dt, 4, rx, before, _snapshot(tmp_runs))
 
 
