@@ -268,6 +268,8 @@ def _fork_figure_worker_early(args: list[str]) -> None:
     """
     command = next((a for a in args if not a.startswith("-")), None)
     if command in ("design", "simulate") and not {"--no-figures", "--help", "-h"} & set(args):
+        import numpy  # noqa: F401  (imported once, before the fork: both processes need it)
+
         from common import figure_worker
 
         figure_worker.start_early(FIGURE_WARM)
