@@ -67,7 +67,7 @@ def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesA
     """H∞ gains (ch. 11), β1, thresholds m and the circle criterion (ch. 12.1) → qpp_design.h5.
     With --strict, a failed circle criterion or β1 > m (for design.bz and design.bookkeeping) exits 1."""
     from cli.progress import status
-    from qpp.stages import printed_H_difference, run_design
+    from qpp.stages import printed_H_difference, run_design, sector_verified
 
     cfg = _load(config, overrides)
     with status(f"{cfg.name}: designing (ch. 12.1: H∞ gains, β1, thresholds, circle criterion) ..."):
@@ -89,6 +89,9 @@ def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesA
                f"{'PASS' if c.passed else 'FAIL'}; margins {np.round(c.margins, 4).tolist()}; "
                f"P0 = {c.P0}; largest admissible scale {c.max_scale:.4g}"
                + (f", smallest {c.min_scale:.4g}" if c.min_scale > 0 else ""))
+    if sector_verified(cfg) is False:
+        typer.echo("  sector of φ: random check points lay beyond the grid's bounds; the sector was widened to "
+                   "the extremum climbed from them (a finer nonlinearity.n_grid samples φ more closely)")
     if r.published is not None:
         pb = r.published
         typer.echo("  printed gains: beta1 " + ", ".join(f"[{rd}] {b['value']:.6f}" for rd, b in pb.beta1.items())

@@ -18,7 +18,8 @@ QPP_WORK               50 000        qpp simulation work: t_final × fastest clo
                                      × (scenarios + 1); ~2.4 ms per unit, so ~2 min at the limit
 QPP_SAMPLES            2 000 000     qpp output samples × (scenarios + 1)
 QPP_SECTOR_POINTS      5 000 000     points at which a qpp expression's sector is sampled
-                                     (parameter samples × output grid × times; ~3 µs each)
+                                     (per channel: parameter samples × the grid of the outputs
+                                     it depends on × times; ~3 µs each)
 SWEEP_DRAWS            2 000 000     expected Monte Carlo draws of a sweep (resampling included)
 SWEEP_CASES            1 000 000     cases of a sweep (all bases)
 SWEEP_ORBITS           100 000       simulated orbits of a sweep (cases × orbits per run)

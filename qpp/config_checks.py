@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 
 def _check_periods(field: str, omega: float, t_final: float) -> None:
     from common.limits import how_to_raise, limit
@@ -26,22 +28,27 @@ def _check_sector(field: str, sector) -> None:
 def _check_sample_count(model) -> None:
     """The points at which :meth:`qpp.nonlin.ExpressionModel.sector_info` samples φ (its
     :meth:`~qpp.sector_grid.SampleGrid.sector_points`) stay within the ``QPP_SECTOR_POINTS``
-    limit; the message names what makes them many: the uncertain parameters (their samples) or
-    the outputs a channel depends on (its grid)."""
+    limit; the message gives the factors and what the config can lower."""
     from common.limits import how_to_raise, limit
 
     points = model.sector_points()
     if points <= limit("QPP_SECTOR_POINTS"):
         return
-    k, n_theta = len(model.names), model.theta_sample_count()
-    widest = max(range(len(model.phi)), key=model.sector_grid_size)
-    n_y = model.sector_grid_size(widest)
+    r, k = len(model.phi), len(model.names)
+    n_theta, n_t = model.theta_sample_count(), model.time_sample_count()
+    sizes = [model.sector_grid_size(i) for i in range(r)]
+    widest = int(np.argmax(sizes))
     d = len(model.channel_outputs(widest))
-    coarser = " or a coarser nonlinearity.n_grid" if d <= 2 else ""   # n_grid sets 1- and 2-output grids
-    if n_theta >= n_y:
-        cause = (f"nonlinearity.parameters: {k} uncertain parameters sample φ at {points:.3g} points "
-                 f"({n_theta:.3g} parameter samples × y grid × times); use fewer parameters{coarser}")
-    else:
-        cause = (f"nonlinearity.f1: channel {widest + 1} depends on {d} outputs, a grid of {n_y:.3g} points; "
-                 f"φ is sampled at {points:.3g} points to find its sector; use fewer outputs per channel{coarser}")
-    raise ValueError(f"{cause} ({how_to_raise('QPP_SECTOR_POINTS')})")
+    factors = (f"{r} channel{'s' * (r != 1)} × {n_theta:.3g} samples of {k} uncertain parameter{'s' * (k != 1)} × "
+               f"up to {max(sizes):.3g} output-grid points (channel {widest + 1}, on {d} output{'s' * (d != 1)})"
+               + (f" × {n_t} times (φ depends on t)" if n_t > 1 else ""))
+    # what the config can lower: the parameters (a factor of every point), and whichever grids hold
+    # most of the points: those of channels on three or more outputs, or the n_grid-point ones
+    wide = sum(n for i, n in enumerate(sizes) if len(model.channel_outputs(i)) >= 3)
+    advice = ["fewer uncertain parameters (nonlinearity.parameters)"] if n_theta > 1 else []
+    if 2 * wide >= sum(sizes):
+        advice.append("fewer outputs per channel (nonlinearity.f1)")
+    elif model.n_grid > 5:
+        advice.append(f"a coarser nonlinearity.n_grid (now {model.n_grid})")
+    raise ValueError(f"nonlinearity: finding the sector samples φ at {points:.3g} points ({factors}); "
+                     f"use {' or '.join(advice) or 'fewer channels'} ({how_to_raise('QPP_SECTOR_POINTS')})")

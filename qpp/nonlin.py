@@ -232,7 +232,13 @@ class ExpressionModel(SampleGrid):
             alpha[i], beta[i], slope[i] = got["alpha"], got["beta"], got["slope"]
             if not diag[i]:
                 alpha[i], beta[i] = -slope[i], slope[i]
-        verified = verify(self, alpha, beta, slope, diag)
+        verified, missed = verify(self, alpha, beta, slope, diag)
+        for i, kinds in enumerate(missed):   # climb from the random points the grid's bounds missed
+            if kinds:
+                got = refine(self, i, kinds, {"alpha": alpha[i], "beta": beta[i], "slope": slope[i]})
+                alpha[i], beta[i], slope[i] = got["alpha"], got["beta"], got["slope"]
+                if not diag[i]:
+                    alpha[i], beta[i] = min(alpha[i], -slope[i]), max(beta[i], slope[i])
         for i in range(r):
             if not alpha[i] < beta[i]:
                 c = 0.5 * (alpha[i] + beta[i])

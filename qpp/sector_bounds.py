@@ -5,8 +5,9 @@ a grid under-estimates a supremum that falls between its points (φ = δm·y·si
 sampled on 256 times gives the sector ±0.09999976 instead of ±0.1), and a sector that is too
 small by any amount is not a certificate.  :func:`refine` therefore climbs from the best grid
 points of each bound to the local extremum (Nelder–Mead within the stated box, scipy) and widens
-the bound to what it finds (beyond round-off); :func:`verify` then checks the bounds at random points and widens
-them again (+1 %) on a violation.  Bounds are only ever widened, never narrowed.
+the bound to what it finds (beyond round-off); :func:`verify` then checks the bounds at random points and, on a
+violation, widens them (+1 %) and returns the violating points, from which the model climbs again
+to the extremum the grid missed.  Bounds are only ever widened, never narrowed.
 """
 from __future__ import annotations
 
@@ -97,9 +98,11 @@ def refine(model, i: int, starts: dict, bounds: dict) -> dict:
     return out
 
 
-def verify(model, alpha, beta, slope, diag) -> bool:
+def verify(model, alpha, beta, slope, diag) -> tuple[bool, list]:
     """Random points of Y × Θ × [0, t_range]: φ_i inside [α_i y_i, β_i y_i] (or the slope bound);
-    on a violation the bounds are widened in place to cover it (+1 %) and False is returned.
+    on a violation the bounds are widened in place to cover it (+1 %) and the violating point is
+    returned, for :func:`refine` to climb from (the random point only lies near the extremum the
+    grid missed).
 
     Parameters
     ----------
@@ -112,8 +115,11 @@ def verify(model, alpha, beta, slope, diag) -> bool:
 
     Returns
     -------
-    bool
+    ok : bool
         True when no random point violates the bounds.
+    starts : list of dict
+        Per channel, ``kind → x`` (x = (y, t, θ) in the config's units) of the worst violating
+        point of each violated bound (``"alpha"``, ``"beta"`` or ``"slope"``); empty when none.
 
     Raises
     ------
@@ -128,7 +134,8 @@ def verify(model, alpha, beta, slope, diag) -> bool:
     t = rng.uniform(0.0, model.t_range, K)
     TH = [rng.uniform(lo, hi, K) for lo, hi in zip(model.lo, model.hi)]
     ph = model.phi_at(Y, t, TH)
-    ok = True
+    X = np.column_stack([*Y, t, *TH])                     # the points as x = (y, t, θ)
+    starts: list = [{} for _ in range(len(model.phi))]
     for i in range(len(model.phi)):
         if not np.all(np.isfinite(ph[i])):
             raise ConfigError(f"nonlinearity.f1 (φ channel {i + 1}): singular (non-finite value) on the "
@@ -136,19 +143,23 @@ def verify(model, alpha, beta, slope, diag) -> bool:
         if diag[i]:
             yi = Y[i]
             nz = np.abs(yi) > 1e-12
-            ratio = ph[i][nz] / yi[nz]
-            lo, hi = ratio.min(), ratio.max()
+            ratio = np.where(nz, ph[i] / np.where(nz, yi, 1.0), np.nan)
+            lo, hi = np.nanmin(ratio), np.nanmax(ratio)
             tol = 1e-9 * max(1.0, abs(alpha[i]), abs(beta[i]))
-            if lo < alpha[i] - tol or hi > beta[i] + tol:
-                ok = False
+            if lo < alpha[i] - tol:
+                starts[i]["alpha"] = X[np.nanargmin(ratio)]
+            if hi > beta[i] + tol:
+                starts[i]["beta"] = X[np.nanargmax(ratio)]
+            if starts[i]:
                 w = 0.01 * max(abs(beta[i] - alpha[i]), 1e-12)
                 alpha[i] = min(alpha[i], lo - w)
                 beta[i] = max(beta[i], hi + w)
         else:
             ymax = np.max(np.abs(np.array(Y)), axis=0)
             nz = ymax > 1e-12
-            k = np.max(np.abs(ph[i][nz]) / ymax[nz]) if nz.any() else 0.0
+            gain = np.where(nz, np.abs(ph[i]) / np.where(nz, ymax, 1.0), 0.0)
+            k = float(gain.max())
             if k > slope[i] * (1 + 1e-9) + 1e-12:
-                ok = False
+                starts[i]["slope"] = X[int(np.argmax(gain))]
                 alpha[i], beta[i] = -1.01 * k, 1.01 * k
-    return ok
+    return not any(starts), starts

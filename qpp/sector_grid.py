@@ -83,7 +83,17 @@ class SampleGrid:
             The number of points (counted, not built), dimensionless.
         """
         per_channel = sum(self.sector_grid_size(i) for i in range(len(self.phi)))
-        return self.theta_sample_count() * per_channel * self._t_grid().size
+        return self.theta_sample_count() * per_channel * self.time_sample_count()
+
+    def time_sample_count(self) -> int:
+        """The number of times at which the sector is sampled (1 when φ does not depend on t).
+
+        Returns
+        -------
+        int
+            The number of time samples, dimensionless.
+        """
+        return self._t_grid().size
 
     def sector_grid_size(self, i: int) -> int:
         """Points of φ channel ``i``'s output grid (the mesh of :meth:`channel_outputs`).
@@ -101,15 +111,20 @@ class SampleGrid:
         return math.prod(len(a) for a in self._y_grid(self.channel_outputs(i)))
 
     def _y_grid(self, outputs: list) -> list:
-        """The grid axis of each output in ``outputs`` (n_grid points for up to two outputs, fewer
-        per axis beyond: ~20 000 points in all), with points near 0 added."""
-        per = self.n_grid if len(outputs) <= 2 else max(5, int(20000 ** (1.0 / len(outputs))))
+        """The grid axis of each output in ``outputs``, with points near 0 added: ``n_grid``
+        points for a channel of one or two outputs, max(5, ⌊20000^(1/d)⌋) for d outputs beyond;
+        each axis also holds the points of the grid over all p outputs, whose axes had
+        ``n_grid`` points up to p = 2 and max(5, ⌊20000^(1/p)⌋) beyond, so a channel's grid is
+        never coarser than that one (a small ``n_grid`` on a plant of three or more outputs)."""
+        def per(d: int) -> int:
+            return self.n_grid if d <= 2 else max(5, int(20000 ** (1.0 / d)))
+
+        counts = sorted({per(len(outputs)), per(self.p)})
         axes = []
         for lo, hi in self.y_range[outputs]:
-            g = np.linspace(lo, hi, per)
             span = max(hi - lo, 1e-12)
             extra = [x for x in (0.0, 1e-6 * span, -1e-6 * span, 1e-9 * span, -1e-9 * span) if lo <= x <= hi]
-            axes.append(np.unique(np.concatenate([g, extra])))
+            axes.append(np.unique(np.concatenate([*(np.linspace(lo, hi, c) for c in counts), extra])))
         return axes
 
     def _channel_grid(self, i: int) -> list:

@@ -78,6 +78,40 @@ def _printed_gain_items(pub, H) -> dict:
     return items
 
 
+def sector_verified(cfg: QppConfig) -> bool | None:
+    """Whether the sector computed for an ``expression`` nonlinearity held at the random check
+    points (:func:`qpp.sector_bounds.verify`; False: the grid missed part of φ's range and the
+    sector was widened to the extremum climbed from them); None when the sector is not computed
+    from an expression.
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        The config.
+
+    Returns
+    -------
+    bool or None
+        The verification's outcome.
+    """
+    from qpp.config import ExpressionNonlinearity
+
+    nl = cfg.nonlinearity
+    if cfg.design.sector is not None or not isinstance(nl, ExpressionNonlinearity) or nl.sector is not None:
+        return None
+    return bool(cfg.expression_model().sector_info.verified)
+
+
+def _sector_check_items(cfg: QppConfig) -> dict:
+    """``sector_verified`` of a sector computed from an expression (:func:`sector_verified`)."""
+    verified = sector_verified(cfg)
+    if verified is None:
+        return {}
+    return {"sector_verified": Dataset(int(verified), "1", "1: φ within the grid's sector at 4000 random points "
+                                       "of the ranges; 0: some were outside, and the sector was widened to the "
+                                       "extremum climbed from them")}
+
+
 def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     """Datasets of qpp_design.h5.
 
@@ -139,6 +173,7 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     items["thresholds"] = Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in r.thresholds]),
                                   "1", "β3, β4, m (12.1) per bookkeeping: " + ", ".join(t.name for t in r.thresholds),
                                   ["half_width", "beta3", "beta4", "m"], dims=("bookkeeping", "threshold"))
+    items.update(_sector_check_items(cfg))
     c = r.circle
     items["circle"] = {
         "omega": Dataset(c.omega, "rad/s", "frequency grid", dims=("omega",)),

@@ -57,8 +57,8 @@ def test_channel_depending_on_many_outputs_refused_naming_f1():
     p = 12
     exprs = ["0.01*c*sin(" + "+".join(f"y{i + 1}" for i in range(p)) + ")"] + ["0"] * (p - 1)
     m = ExpressionModel(exprs, p, {"c": (0.9, 1.1, 1.0)}, [[-1.0, 1.0]] * p, np.eye(p), 1.0)
-    with pytest.raises(ValueError, match=r"nonlinearity\.f1: channel 1 depends on 12 outputs.*"
-                                         r"ACMM_LIMIT_QPP_SECTOR_POINTS") as exc:
+    with pytest.raises(ValueError, match=r"nonlinearity: .*channel 1, on 12 outputs.*fewer outputs per channel "
+                                         r"\(nonlinearity\.f1\).*ACMM_LIMIT_QPP_SECTOR_POINTS") as exc:
         _check_sample_count(m)
     assert "n_grid" not in str(exc.value)          # n_grid sets only 1- and 2-output grids
 
@@ -113,3 +113,30 @@ def test_scenario_figure_of_many_outputs_keeps_a_short_legend(monkeypatch, tmp_p
     assert texts[1] == ["other outputs", "|y12 − y_o12| (largest)", "β_o = 0.3"]
     assert texts[2] == ["u1 … u12"]
     assert fig._suptitle.get_text() == "scenario a (c = 0.9)"
+
+
+def test_small_n_grid_on_three_outputs_not_coarser_than_the_joint_grid():
+    """A narrow bump on y1 in a 3-output plant: the channel's grid holds the points of the grid
+    over all three outputs (27 per axis), so n_grid = 5 still finds it."""
+    bump = "c*y1*(1 + 3*exp(-((y1 - 0.3)/0.01)**2))"
+    m = ExpressionModel([bump, "0", "0"], 3, {"c": (0.9, 1.1, 1.0)}, [[-1.0, 1.0]] * 3, np.eye(3), 1.0, n_grid=5)
+    grid = m._y_grid(m.channel_outputs(0))[0]
+    assert set(np.linspace(-1.0, 1.0, 27)) <= set(grid) and set(np.linspace(-1.0, 1.0, 5)) <= set(grid)
+    # the ratio (c − 1)(1 + 3 e^…) reaches 0.1 · 4 at y1 = 0.3: the 27-point axis has a point
+    # 0.008 from it (the 5-point one none nearer than 0.2), from which the refinement climbs
+    lo, hi = _brute_ratio(lambda y: y * (1 + 3 * np.exp(-((y - 0.3) / 0.01) ** 2)), (-1.0, 1.0), n=400001)
+    want = 0.1 * max(abs(lo), abs(hi))
+    np.testing.assert_allclose(m.sector_info.sector[0], [-want, want], rtol=1e-6)
+
+
+def test_sample_count_message_names_what_can_be_lowered():
+    from qpp.config_checks import _check_sample_count
+
+    exprs = [f"c*e*y{i + 1}**3*cos(t)" for i in range(12)]
+    m = ExpressionModel(exprs, 12, {"c": (0.9, 1.1, 1.0), "e": (0.9, 1.1, 1.0)}, [[-1.0, 1.0]] * 12, np.eye(12),
+                        1.0, n_grid=201)
+    with pytest.raises(ValueError) as exc:
+        _check_sample_count(m)
+    msg = str(exc.value)
+    assert "12 channels" in msg and "× 256 times (φ depends on t)" in msg and "on 1 output)" in msg
+    assert "a coarser nonlinearity.n_grid (now 201)" in msg and "outputs per channel" not in msg

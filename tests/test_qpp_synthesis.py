@@ -109,6 +109,33 @@ def test_sampled_sector_climbs_to_the_supremum_between_grid_points():
     assert m.beta3(1.0) == pytest.approx(1.0, rel=1e-12)        # φ independent of t: the slope bound
 
 
+def test_extremum_missed_by_the_grid_is_climbed_from_the_random_check(tmp_path):
+    """A bump narrower than the grid's spacing: a random check point lands near it, and the
+    sector is climbed from there to the bump's peak (the 1 % widening alone stayed at 0.209
+    where the ratio reaches 0.291); the design says so, in its output and in qpp_design.h5."""
+    import h5py
+
+    from qpp.nonlin import ExpressionModel
+
+    bump = "-c*y1**3 + (c - 1)*y1*3*exp(-((y1 - 0.3)/0.002)**2)"
+    m = ExpressionModel([bump], 1, {"c": (0.9, 1.1, 1.0)}, [[-1, 1]], [[1.0]], 1.0, n_grid=5)
+    y = np.linspace(-1, 1, 2_000_001)                     # brute force: (c − 1)(−y² + 3e^…), |c − 1| ≤ 0.1
+    peak = 0.1 * np.max(np.abs(-y ** 2 + 3 * np.exp(-((y - 0.3) / 0.002) ** 2)))
+    assert not m.sector_info.verified
+    lo, hi = m.sector_info.sector[0]            # contains the brute force's peak, and is tight
+    assert -peak * (1 + 1e-6) <= lo <= -peak and peak <= hi <= peak * (1 + 1e-6)
+    cfg = _cfg("qpp_cubic2", tmp_path)
+    cfg["nonlinearity"].update(f1=[bump, "0"], n_grid=5)
+    path = tmp_path / "bump.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    r = runner.invoke(app, ["design", str(path)])
+    assert r.exit_code == 0, r.output
+    assert "sector of φ: random check points" in r.output
+    with h5py.File(tmp_path / "runs" / "qpp_cubic2" / "qpp_design.h5") as f:
+        assert f["sector_verified"][()] == 0
+        np.testing.assert_array_equal(f["sector"][0], [lo, hi])
+
+
 def test_library_forms_and_stated_overrides(tmp_path):
     d = _cfg("qpp_saturation", tmp_path)
     d["nonlinearity"]["f1"] = [{"form": "dead_zone", "output": 1, "gain": "-k", "level": 0.3}]
