@@ -67,3 +67,8 @@ class OutputError(AcmmError, OSError):
     or the run folder is locked by another run (exit 4)."""
 
     exit_code = EXIT_OUTPUT
+
+
+class FigureError(OutputError):
+    """A stage's figure cannot be written, its results were (exit 4; the run keeps its results
+    and its ``config.yaml``, :mod:`common.outputs`)."""

@@ -218,13 +218,13 @@ def finish() -> list[Path]:
 
 
 def _report(written: list, errors: list) -> list[Path]:
-    from common.errors import OutputError
+    from common.errors import FigureError
     from common.outputs import record_written
 
     for p in written:
         record_written(p)
     if errors:
-        raise OutputError(errors[0])
+        raise FigureError(errors[0])
     return [Path(p) for p in written]
 
 
@@ -295,11 +295,15 @@ def session(enabled: bool = True, warm: str | None = None):
 
 def _draw_in_place(calls: list) -> None:
     """Draw deferred figure calls in order; the first failure is raised after the others."""
+    from common.errors import FigureError
+
     first = None
     for fn, args, kwargs in calls:
         try:
             fn(*args, **kwargs)
         except Exception as exc:  # noqa: BLE001 (raised once the others are drawn)
             first = first or exc
+    if isinstance(first, OSError) and not isinstance(first, FigureError):   # a file not written
+        raise FigureError(str(first)) from first
     if first is not None:
         raise first

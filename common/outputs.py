@@ -12,14 +12,21 @@ stage runs is recorded, and when the stage finishes successfully
    cannot be mistaken for a result of this one.
 
 Files of other stages are left alone (``acmm simulate`` does not remove ``design.h5``; the sweep
-journal survives for ``--resume``).  A stage that fails removes nothing and writes no
-``config.yaml``.
+journal survives for ``--resume``).  A stage that fails, while it runs or while it writes its
+``config.yaml``, writes no ``config.yaml`` and removes the files it wrote in its run folder, so no
+result is left beside a ``config.yaml`` of another run; it removes nothing else (the files of
+earlier runs stay, and so do those of a stage it ran that finished, with their ``config.yaml``).
+Two exceptions: a stage whose results are written and only a figure fails
+(:class:`common.errors.FigureError`, exit 4) finishes as above, results and ``config.yaml`` kept;
+and a stage in :data:`KEEPS_PARTIAL_RESULTS` keeps its files: the sweep's tables are snapshots of
+its journal that say whether they are complete and hold their config, kept for ``--resume``.
 """
 from __future__ import annotations
 
 import contextlib
 from pathlib import Path
 
+from common.errors import FigureError
 from common.results import WRITTEN_HOOKS
 
 #: stage → glob patterns (relative to the run folder) of the files the stage owns.
@@ -35,8 +42,12 @@ STAGE_OUTPUTS: dict[str, tuple[str, ...]] = {
 
 CONFIG_FILE = "config.yaml"
 
-#: Stack of the recorders of the stages running in this process (nested: simulate → design).
-_RECORDERS: list[set] = []
+#: stages whose files survive a failure (self-describing snapshots: ``sweep.h5`` has ``complete``)
+KEEPS_PARTIAL_RESULTS = frozenset({"sweep"})
+
+#: Stack of the recorders of the stages running in this process (nested: simulate → design):
+#: (files written while the stage runs, those of them written by nested stages that completed).
+_RECORDERS: list[tuple[set, set]] = []
 
 
 def record_written(path) -> None:
@@ -48,8 +59,8 @@ def record_written(path) -> None:
         The completed file; recorded (resolved) by every running stage.
     """
     p = Path(path).resolve()
-    for rec in _RECORDERS:
-        rec.add(p)
+    for written, _ in _RECORDERS:
+        written.add(p)
 
 
 WRITTEN_HOOKS.append(record_written)
@@ -71,27 +82,51 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
     config_text : str, optional
         The resolved config as YAML, when ``config`` has no ``to_yaml``.
     """
-    written: set = set()
-    _RECORDERS.append(written)
-    try:
-        yield written
-    finally:
-        del _RECORDERS[next(i for i, r in enumerate(_RECORDERS) if r is written)]
+    entry = written, kept = set(), set()
     run_dir = Path(run_dir)
-    if config is not None or config_text is not None:
+    _RECORDERS.append(entry)
+    try:
         try:
-            write_config_yaml(run_dir, config, config_text)
-        except BaseException:
-            _discard(written)      # results without the config.yaml that says what they are of
+            yield written
+        except FigureError as exc:
+            if getattr(exc, "finished_stage", None) is not None:   # a nested stage's figure failed
+                raise
+            _finish(run_dir, stage, written, config, config_text)  # the results stay, with config.yaml
+            exc.finished_stage = entry
             raise
+        _finish(run_dir, stage, written, config, config_text)
+    except BaseException as exc:
+        if getattr(exc, "finished_stage", None) is entry:
+            _keep_in_outer_stages(written)
+        elif stage not in KEEPS_PARTIAL_RESULTS:
+            _discard(written - kept, run_dir)
+        raise
+    finally:
+        del _RECORDERS[next(i for i, r in enumerate(_RECORDERS) if r is entry)]
+    _keep_in_outer_stages(written)
+
+
+def _keep_in_outer_stages(written: set) -> None:
+    """A stage that finished (its ``config.yaml`` written): if a stage that ran it fails, these
+    files stay."""
+    for _, outer_kept in _RECORDERS:
+        outer_kept |= written
+
+
+def _finish(run_dir: Path, stage: str, written: set, config, config_text) -> None:
+    """A stage's end: its ``config.yaml``, then its files of earlier runs removed."""
+    if config is not None or config_text is not None:
+        write_config_yaml(run_dir, config, config_text)
     prune(run_dir, stage, written)
 
 
-def _discard(written: set) -> None:
-    """Remove the files a stage wrote (a run that cannot be completed leaves none of them)."""
-    for p in written:
+def _discard(paths: set, run_dir: Path) -> None:
+    """Remove the files among ``paths`` (resolved) that lie in ``run_dir`` (a stage running in
+    another thread records its files here too; they are not this stage's to remove)."""
+    root = run_dir.resolve()
+    for p in paths:
         try:
-            if p.is_file():
+            if p.is_relative_to(root) and p.is_file():
                 p.unlink()
         except OSError:
             pass

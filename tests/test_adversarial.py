@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import copy
 import os
+import re
 import time
 from pathlib import Path
 
@@ -388,9 +389,29 @@ def test_output_place_refused_exit_4(tmp_runs, app_name, cmd, base, target, how)
     extra = ["-j", "1"] if cmd == "sweep" else []
     before = _snapshot(tmp_runs)
     r, dt = _invoke(app_name, [cmd, path, *extra])
-    if cmd == "sweep" and how == "config_is_dir":   # a finished sweep's journal: --resume completes it
-        before.add(f"runs/{_load(base)['name']}/sweep.journal")
+    if cmd == "sweep" and how == "config_is_dir":   # a sweep's journal and tables stay (--resume)
+        before |= {f"runs/{_load(base)['name']}/{f}" for f in ("sweep.journal", "sweep.h5", "sweep.csv")}
     check_one_line_refusal(r, dt, 4, rx, before, _snapshot(tmp_runs))
+
+
+@pytest.mark.parametrize("app_name,base,figure", [("acmm", "mb3", "design_poles.png"),
+                                                  ("qpp", "qpp_siso", "qpp_iterations.png")])
+def test_figure_place_refused_after_the_results_keeps_them_with_their_config(tmp_runs, app_name, base, figure):
+    """The results are written before a figure fails: exit 4 with one line, and the run keeps
+    its results beside the config.yaml of this run (not one of an earlier run)."""
+    cfg = _load(base)
+    edits = {"output.figures": True, "description": "this run"}
+    if base == "qpp_siso":
+        edits.update({"simulation.n_samples": 201, "simulation.t_final": 2.0})
+    run = tmp_runs / "runs" / cfg["name"]
+    (run / figure).mkdir(parents=True)
+    (run / "config.yaml").write_text("description: an earlier run\n")
+    path = tmp_runs / "cfg.yaml"
+    path.write_text(yaml.safe_dump(_mutate(cfg, edits)))
+    r, dt = _invoke(app_name, ["design", path])
+    assert r.exit_code == 4 and r.stderr.count("\n") == 1 and re.search(r"(directory|Is a directory)", r.stderr)
+    assert (run / ("design.h5" if app_name == "acmm" else "qpp_design.h5")).is_file()
+    assert "description: this run" in (run / "config.yaml").read_text()
 
 
 @pytest.fixture
@@ -477,7 +498,7 @@ def test_many_uncertain_parameters_refused_before_sampling(tmp_runs):
     path.write_text(yaml.safe_dump(_mutate(cfg, edits)))
     before = _snapshot(tmp_runs)
     r, dt = _invoke("qpp", ["design", path])
-    check_one_line_refusal(r, dt, 2, r"nonlinearity\.parameters: 31 uncertain parameters.*ACMM_LIMIT_QPP_SECTOR_POINTS",
+    check_one_line_refusal(r, dt, 2, r"nonlinearity: .*31 uncertain parameters.*nonlinearity\.parameters.*ACMM_LIMIT_QPP_SECTOR_POINTS",
                            before, _snapshot(tmp_runs))
     assert dt < 30
 
