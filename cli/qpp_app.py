@@ -65,7 +65,8 @@ def _mat(a) -> str:
 def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
            strict: bool = StrictOpt) -> None:
     """H∞ gains (ch. 11), β1, thresholds m and the circle criterion (ch. 12.1) → qpp_design.h5.
-    With --strict, a failed circle criterion or β1 > m (for design.bz and design.bookkeeping) exits 1."""
+    With --strict, a failed circle criterion or β1 > m (for design.bz and design.bookkeeping), or a
+    computed sector of φ that its random check had to widen, exits 1."""
     from cli.progress import status
     from qpp.stages import printed_H_difference, run_design, sector_verified
 
@@ -103,6 +104,8 @@ def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesA
     typer.echo(f"  wrote {path}")
     if not r.certified:
         raise DesignError(r.verdict + " (best design written, labelled uncertified)")
+    strict_exit(strict, sector_verified(cfg) is False,
+                f"{cfg.name}: the sector of φ rests on a grid its random check found too coarse")
 
 
 @app.command()

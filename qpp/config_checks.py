@@ -39,16 +39,18 @@ def _check_sample_count(model) -> None:
     sizes = [model.sector_grid_size(i) for i in range(r)]
     widest = int(np.argmax(sizes))
     d = len(model.channel_outputs(widest))
-    factors = (f"{r} channel{'s' * (r != 1)} × {n_theta:.3g} samples of {k} uncertain parameter{'s' * (k != 1)} × "
-               f"up to {max(sizes):.3g} output-grid points (channel {widest + 1}, on {d} output{'s' * (d != 1)})"
-               + (f" × {n_t} times (φ depends on t)" if n_t > 1 else ""))
+    factors = (f"over {r} channel{'s' * (r != 1)}: {n_theta:.3g} samples of {k} uncertain parameter"
+               f"{'s' * (k != 1)} × the channel's output grid, {sum(sizes):.3g} points in all, the largest "
+               f"{max(sizes):.3g} (channel {widest + 1}, on {d} output{'s' * (d != 1)})"
+               + (f", × {n_t} times (φ depends on t)" if n_t > 1 else ""))
     # what the config can lower: the parameters (a factor of every point), and whichever grids hold
     # most of the points: those of channels on three or more outputs, or the n_grid-point ones
     wide = sum(n for i, n in enumerate(sizes) if len(model.channel_outputs(i)) >= 3)
-    advice = ["fewer uncertain parameters (nonlinearity.parameters)"] if n_theta > 1 else []
+    advice = ["fewer uncertain parameters (nonlinearity.parameters)"] if k > 1 else []
     if 2 * wide >= sum(sizes):
         advice.append("fewer outputs per channel (nonlinearity.f1)")
     elif model.n_grid > 5:
         advice.append(f"a coarser nonlinearity.n_grid (now {model.n_grid})")
     raise ValueError(f"nonlinearity: finding the sector samples φ at {points:.3g} points ({factors}); "
-                     f"use {' or '.join(advice) or 'fewer channels'} ({how_to_raise('QPP_SECTOR_POINTS')})")
+                     f"use {' or '.join(advice) or 'fewer nonlinear channels'} "
+                     f"({how_to_raise('QPP_SECTOR_POINTS')})")

@@ -28,7 +28,7 @@ import numpy as np
 from common.errors import ConfigError
 from qpp.expression_parser import (  # noqa: F401  (re-exported: the old import paths)
     FUNCTIONS, MAX_EXPONENT, MAX_LEN, library_expression, parse_expression, sympy_module)
-from qpp.sector_bounds import refine, verify
+from qpp.sector_bounds import climb_from, refine, verify
 from qpp.sector_grid import SampleGrid
 
 
@@ -233,12 +233,20 @@ class ExpressionModel(SampleGrid):
             if not diag[i]:
                 alpha[i], beta[i] = -slope[i], slope[i]
         verified, missed = verify(self, alpha, beta, slope, diag)
-        for i, kinds in enumerate(missed):   # climb from the random points the grid's bounds missed
-            if kinds:
-                got = refine(self, i, kinds, {"alpha": alpha[i], "beta": beta[i], "slope": slope[i]})
-                alpha[i], beta[i], slope[i] = got["alpha"], got["beta"], got["slope"]
-                if not diag[i]:
-                    alpha[i], beta[i] = min(alpha[i], -slope[i]), max(beta[i], slope[i])
+        for i, kinds in enumerate(missed):
+            if kinds:    # the grid missed a feature: climb every bound from the point that found it
+                got = climb_from(self, i, next(iter(kinds.values())),
+                                 ("alpha", "beta", "slope") if diag[i] else ("slope", "gain"),
+                                 {"alpha": alpha[i], "beta": beta[i], "slope": slope[i], "gain": slope[i]})
+                alpha[i], beta[i], slope[i] = got["alpha"], got["beta"], max(got["slope"], got["gain"])
+        for i in range(r):
+            # φ(0) = 0, so sup Σ_j |∂φ_i/∂y_j| ≥ sup |φ_i| / ‖y‖∞: the slope bound (β3) is never below
+            # the sector (beyond round-off), and the sector of a coupled channel is ±slope
+            half = max(abs(alpha[i]), abs(beta[i]))
+            if half > slope[i] * (1 + 1e-9):
+                slope[i] = half
+            if not diag[i]:
+                alpha[i], beta[i] = -slope[i], slope[i]
         for i in range(r):
             if not alpha[i] < beta[i]:
                 c = 0.5 * (alpha[i] + beta[i])

@@ -34,7 +34,68 @@ def _split(model, x):
     return Y, np.full((1, 1), x[p]), [np.full((1, 1), v) for v in x[p + 1:]]
 
 
-def refine(model, i: int, starts: dict, bounds: dict) -> dict:
+#: which way each bound is climbed: α down, β, the slope and the gain up
+_SIGN = {"alpha": -1.0, "beta": 1.0, "slope": 1.0, "gain": 1.0}
+
+
+def _value(model, i: int, kind: str, x) -> float:
+    """φ_i / y_i (``"alpha"``, ``"beta"``), Σ_j |∂φ_i/∂y_j| (``"slope"``) or |φ_i| / ‖y‖∞
+    (``"gain"``, a lower bound of the slope since φ(0) = 0) at x = (y, t, θ); NaN for a ratio
+    at y_i ≈ 0 or a gain at y ≈ 0."""
+    Y, t, TH = _split(model, x)
+    if kind == "slope":
+        v = sum(np.abs(model._grad(i, j, Y, t, TH)) for j in range(model.p) if model.dep[i][j])
+        return float(np.asarray(v).ravel()[0])
+    if kind == "gain":
+        ymax = float(np.max(np.abs(x[:model.p])))
+        return abs(float(model.phi_at(Y, t, TH)[i].ravel()[0])) / ymax if ymax > 1e-12 else np.nan
+    yi = x[i]
+    if abs(yi) <= 1e-9 * float(np.ptp(model.y_range[i])):     # φ/y undefined at y_i = 0: no step there
+        return np.nan
+    return float(model.phi_at(Y, t, TH)[i].ravel()[0] / yi)
+
+
+def climb_from(model, i: int, x, kinds: tuple, bounds: dict) -> dict:
+    """:func:`refine` the bounds ``kinds`` of channel ``i`` from a point ``x`` = (y, t, θ) near a
+    feature the grid missed: each from x with θ set to the parameter sample (of
+    :meth:`~qpp.sector_grid.SampleGrid.theta_samples`, or x's own) that is best for that bound
+    there (the random point that found the feature drew θ for one bound; the other bound of the
+    same bump usually lies at another corner of Θ).
+
+    Parameters
+    ----------
+    model : qpp.nonlin.ExpressionModel
+        The nonlinearity.
+    i : int
+        The φ channel.
+    x : (p + 1 + k,) array
+        The point, in the config's units.
+    kinds : tuple of str
+        The bounds to climb: ``"alpha"``, ``"beta"``, ``"slope"``, ``"gain"`` (|φ_i| / ‖y‖∞).
+    bounds : dict
+        ``kind → value`` so far (dimensionless gains).
+
+    Returns
+    -------
+    dict
+        The bounds, each widened to the best extremum found (never narrowed).
+    """
+    x = np.asarray(x, float)
+    p1 = model.p + 1
+    candidates = [x] + [np.concatenate([x[:p1], th]) for th in model.theta_samples()] if model.names else [x]
+    starts = {}
+    for kind in kinds:
+        vals = [_SIGN[kind] * _value(model, i, kind, c) for c in candidates]
+        vals = [v if np.isfinite(v) else -np.inf for v in vals]
+        starts[kind] = candidates[int(np.argmax(vals))]
+    at: dict = {}
+    out = refine(model, i, starts, bounds, at)
+    if "slope" in kinds and "gain" in at:     # the largest |φ|/‖y‖ lies by a steep part: climb the slope there too
+        out = refine(model, i, {"slope": at["gain"]}, out)
+    return out
+
+
+def refine(model, i: int, starts: dict, bounds: dict, at: dict | None = None) -> dict:
     """Climb from the grid's best points of channel ``i`` to the local extrema and widen the
     bounds to them.
 
@@ -50,6 +111,8 @@ def refine(model, i: int, starts: dict, bounds: dict) -> dict:
         Σ_j |∂φ_i/∂y_j|); a kind absent is not refined.
     bounds : dict
         ``kind → value`` on the grid (dimensionless gains, in the units of d per unit of y).
+    at : dict, optional
+        Filled with ``kind → x`` of each extremum found (whether it widened the bound or not).
 
     Returns
     -------
@@ -59,8 +122,6 @@ def refine(model, i: int, starts: dict, bounds: dict) -> dict:
     from scipy.optimize import minimize
 
     ranges, free = _box(model, i)
-    span_i = float(np.ptp(model.y_range[i])) if i < model.p else 1.0
-    sign = {"alpha": -1.0, "beta": 1.0, "slope": 1.0}
     out = dict(bounds)
     for kind, x0 in starts.items():
         x0 = np.asarray(x0, float)
@@ -69,18 +130,11 @@ def refine(model, i: int, starts: dict, bounds: dict) -> dict:
         def value(z, kind=kind, base=base):
             x = base.copy()
             x[free] = z
-            Y, t, TH = _split(model, x)
-            if kind == "slope":
-                v = sum(np.abs(model._grad(i, j, Y, t, TH)) for j in range(model.p) if model.dep[i][j])
-                return float(np.asarray(v).ravel()[0])
-            yi = x[i]
-            if abs(yi) <= 1e-9 * span_i:             # φ/y undefined at y_i = 0: no step there
-                return np.nan
-            return float(model.phi_at(Y, t, TH)[i].ravel()[0] / yi)
+            return _value(model, i, kind, x)
 
         def cost(z, kind=kind):
             v = value(z)
-            return np.inf if not np.isfinite(v) else -sign[kind] * v
+            return np.inf if not np.isfinite(v) else -_SIGN[kind] * v
 
         if not free.any():
             continue
@@ -89,7 +143,10 @@ def refine(model, i: int, starts: dict, bounds: dict) -> dict:
                        options={"maxiter": REFINE_ITER_PER_DIM * int(free.sum()), "xatol": 1e-12,
                                 "fatol": 1e-15})
         if np.isfinite(res.fun):
-            found = -sign[kind] * res.fun
+            if at is not None:
+                at[kind] = base.copy()
+                at[kind][free] = res.x
+            found = -_SIGN[kind] * res.fun
             # a widening by round-off (the grid point already is the extremum) is not taken:
             # only what exceeds the bound by 1e-12 of the bounds' size
             tol = 1e-12 * max([abs(v) for v in bounds.values() if np.isfinite(v)] + [1e-300])

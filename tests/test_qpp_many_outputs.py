@@ -138,5 +138,8 @@ def test_sample_count_message_names_what_can_be_lowered():
     with pytest.raises(ValueError) as exc:
         _check_sample_count(m)
     msg = str(exc.value)
-    assert "12 channels" in msg and "× 256 times (φ depends on t)" in msg and "on 1 output)" in msg
+    # the factors: Σ over the channels of 3² parameter samples × 205 grid points, × 256 times
+    assert "over 12 channels: 9 samples of 2 uncertain parameters" in msg and "2.46e+03 points in all" in msg
+    assert "× 256 times (φ depends on t)" in msg and "on 1 output)" in msg
+    assert m.sector_points() == 9 * 12 * 205 * 256
     assert "a coarser nonlinearity.n_grid (now 201)" in msg and "outputs per channel" not in msg

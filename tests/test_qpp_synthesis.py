@@ -112,7 +112,8 @@ def test_sampled_sector_climbs_to_the_supremum_between_grid_points():
 def test_extremum_missed_by_the_grid_is_climbed_from_the_random_check(tmp_path):
     """A bump narrower than the grid's spacing: a random check point lands near it, and the
     sector is climbed from there to the bump's peak (the 1 % widening alone stayed at 0.209
-    where the ratio reaches 0.291); the design says so, in its output and in qpp_design.h5."""
+    where the ratio reaches 0.291), the slope (β3) to its flank; the design says so, in its
+    output and in qpp_design.h5."""
     import h5py
 
     from qpp.nonlin import ExpressionModel
@@ -129,11 +130,41 @@ def test_extremum_missed_by_the_grid_is_climbed_from_the_random_check(tmp_path):
     path = tmp_path / "bump.yaml"
     path.write_text(yaml.safe_dump(cfg))
     r = runner.invoke(app, ["design", str(path)])
-    assert r.exit_code == 0, r.output
+    # β3 is now the bump's slope (~37, was the grid's 0.5): no certificate (it was "certified")
+    assert r.exit_code == EXIT_NUMERICAL and "no certified design" in r.output, r.output
     assert "sector of φ: random check points" in r.output
     with h5py.File(tmp_path / "runs" / "qpp_cubic2" / "qpp_design.h5") as f:
         assert f["sector_verified"][()] == 0
         np.testing.assert_array_equal(f["sector"][0], [lo, hi])
+
+
+def test_random_check_climbs_both_bounds_and_the_slope_of_a_missed_feature():
+    """From the random point that found a feature the grid missed: the other bound of the same
+    bump (at the other parameter corner), the slope (β3 ≥ the steepest flank), and for a coupled
+    channel the slope of a narrow step; brute-force references on fine grids."""
+    from qpp.nonlin import ExpressionModel
+
+    y = np.linspace(-1, 1, 2_000_001)
+    bump = lambda v: v * (1 + 3 * np.exp(-((v - 0.7071) / 0.001) ** 2))      # noqa: E731
+    m = ExpressionModel(["c*y*(1 + 3*exp(-((y - 0.7071)/0.001)**2))"], 1, {"c": (0.9, 1.1, 1.0)}, [[-1, 1]],
+                        [[1.0]], 1.0)
+    assert not m.sector_info.verified
+    peak = 0.1 * np.max(bump(y[y != 0]) / y[y != 0])                     # (c − 1) ∈ [−0.1, 0.1]
+    lo, hi = m.sector_info.sector[0]
+    assert lo <= -peak * (1 - 1e-9) and hi >= peak * (1 - 1e-9)          # both sides of the bump
+    # the slope is climbed on the flank next to the random point: the bump's other flank is 0.1 %
+    # steeper (a sampled bound; the design says so: sector_verified = 0, --strict fails)
+    steepest = 0.1 * np.max(np.abs(np.gradient(bump(y), y)))
+    assert m.sector_info.slope_bound[0] >= steepest * (1 - 1e-2)
+    assert m.beta3(1.0) >= steepest * (1 - 1e-2)
+    # a coupled channel with a step 0.0005 wide in y1: its slope is the step's, 60
+    step = "c*(y2 + 0.3*tanh((y1 - 0.325)/0.0005) + 0.3*tanh(0.325/0.0005))"
+    m = ExpressionModel([step, "0"], 2, {"c": (0.9, 1.1, 1.0)}, [[-1, 1], [-1, 1]], np.eye(2), 1.0)
+    assert not m.sector_info.diagonal[0] and not m.sector_info.verified
+    want = 0.1 * 0.3 / 0.0005 + 0.1                       # |c − 1|·(∂/∂y1 at the step + ∂/∂y2)
+    assert m.sector_info.slope_bound[0] >= want * (1 - 1e-6)
+    np.testing.assert_array_equal(m.sector_info.sector[0], [-m.sector_info.slope_bound[0],
+                                                            m.sector_info.slope_bound[0]])
 
 
 def test_library_forms_and_stated_overrides(tmp_path):
