@@ -262,7 +262,9 @@ def session(enabled: bool = True, warm: str | None = None):
     around the stage already (the worker then starts before the stage's imports); a worker that
     was never handed anything is killed at once.  A nested session (the
     design run by ``acmm simulate``) shares the outer one's worker and on leaving waits for
-    its own figures (:func:`flush`), so that they are recorded before its stage prunes.
+    its own figures (:func:`flush`), so that they are recorded before its stage prunes; when
+    its block raises it stops the shared worker too (the command fails), so that no figure
+    lands after its stage removed what it wrote.
     Without a worker (no fork possible, ``ACMM_FIGURE_WORKER=0``) the session's figures are
     drawn here when it ends, all of them even if one fails (the first failure is raised): as
     with a worker, a figure that cannot be written leaves the stage's results written.
@@ -281,7 +283,9 @@ def session(enabled: bool = True, warm: str | None = None):
     try:
         yield
     except BaseException:
-        if owner:
+        # the stage fails: its figures stop now, also in a nested session (the design run by
+        # `acmm simulate`), before the stage removes what it wrote (common.outputs)
+        if owner or (enabled and _WORKER is not None):
             abort()
         raise
     finally:
@@ -303,7 +307,7 @@ def _draw_in_place(calls: list) -> None:
             fn(*args, **kwargs)
         except Exception as exc:  # noqa: BLE001 (raised once the others are drawn)
             first = first or exc
-    if isinstance(first, OSError) and not isinstance(first, FigureError):   # a file not written
-        raise FigureError(str(first)) from first
-    if first is not None:
+    if isinstance(first, FigureError):
         raise first
+    if first is not None:     # as a writer of the worker reports it: the results are written
+        raise FigureError(str(first) or type(first).__name__) from first

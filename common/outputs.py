@@ -36,7 +36,7 @@ STAGE_OUTPUTS: dict[str, tuple[str, ...]] = {
     "design": ("design.h5", "design_*.png"),
     "simulate": ("sim.h5", "sim_*.png"),
     "sweep": ("sweep.h5", "sweep.csv", "sweep_*.png"),
-    "qpp design": ("qpp_design.h5", "qpp_circle*.png"),
+    "qpp design": ("qpp_design.h5", "qpp_circle*.png", "qpp_iterations.png"),
     "qpp simulate": ("qpp_sim.h5", "qpp_sim_*.png"),
 }
 
@@ -59,7 +59,7 @@ def record_written(path) -> None:
         The completed file; recorded (resolved) by every running stage.
     """
     p = Path(path).resolve()
-    for written, _ in _RECORDERS:
+    for written, _ in list(_RECORDERS):      # a copy: a stage of another thread may end meanwhile
         written.add(p)
 
 
@@ -84,6 +84,7 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
     """
     entry = written, kept = set(), set()
     run_dir = Path(run_dir)
+    before = _stage_files(run_dir, stage)
     _RECORDERS.append(entry)
     try:
         try:
@@ -99,7 +100,8 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
         if getattr(exc, "finished_stage", None) is entry:
             _keep_in_outer_stages(written)
         elif stage not in KEEPS_PARTIAL_RESULTS:
-            _discard(written - kept, run_dir)
+            now = _stage_files(run_dir, stage)          # with those a figure writer completed unrecorded
+            _discard((written | {p for p, sig in now.items() if before.get(p) != sig}) - kept, run_dir)
         raise
     finally:
         del _RECORDERS[next(i for i, r in enumerate(_RECORDERS) if r is entry)]
@@ -109,7 +111,7 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
 def _keep_in_outer_stages(written: set) -> None:
     """A stage that finished (its ``config.yaml`` written): if a stage that ran it fails, these
     files stay."""
-    for _, outer_kept in _RECORDERS:
+    for _, outer_kept in list(_RECORDERS):
         outer_kept |= written
 
 
@@ -118,6 +120,22 @@ def _finish(run_dir: Path, stage: str, written: set, config, config_text) -> Non
     if config is not None or config_text is not None:
         write_config_yaml(run_dir, config, config_text)
     prune(run_dir, stage, written)
+
+
+def _stage_files(run_dir: Path, stage: str) -> dict:
+    """The stage's files in ``run_dir`` (its patterns), each with (inode, modification time):
+    a file the stage writes (atomically: a new inode) differs from the one there before."""
+    out = {}
+    if run_dir.is_dir():
+        for pattern in STAGE_OUTPUTS[stage]:
+            for p in run_dir.glob(pattern):
+                try:
+                    st = p.stat()
+                    if p.is_file():
+                        out[p.resolve()] = (st.st_ino, st.st_mtime_ns)
+                except OSError:
+                    pass
+    return out
 
 
 def _discard(paths: set, run_dir: Path) -> None:

@@ -101,3 +101,92 @@ def test_a_nested_stage_figure_failing_does_not_finish_the_outer_stage(tmp_path)
     # and the earlier sim.h5 is not pruned as if it had finished
     assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5", "sim.h5"]
     assert (run / "sim.h5").read_text() == "an earlier run's simulation"
+
+
+def test_a_figure_completed_but_not_yet_recorded_is_removed_too(tmp_path):
+    """A figure writer of the worker may complete a file the stage records only when it joins
+    the worker; a stage that fails before then still removes it (it is new or replaced), and
+    leaves the earlier run's files it did not touch."""
+    run = tmp_path / "run"
+    _earlier_run(run)
+    with pytest.raises(_Boom):
+        with stage_outputs(run, "design", config_text="name: new\n"):
+            tmp = run / ".design_poles.png.tmp"
+            tmp.write_text("a writer's figure")               # not through common.results: unrecorded
+            tmp.replace(run / "design_poles.png")
+            raise _Boom
+    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5", "design_gains.png"]
+
+
+def test_a_failed_stage_leaves_no_figure_its_worker_completed(tmp_path):
+    """As under the `acmm` command: the worker is the command's (an outer session), the stage's
+    session nested.  The stage fails after its figure was written by the worker (not yet
+    recorded): the figure is removed, and no writer is left to write one afterwards."""
+    import time
+
+    import numpy as np
+
+    from acmm import plots
+    from common import figure_worker
+
+    if not figure_worker.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    run = tmp_path / "run"
+    run.mkdir()
+    t = np.linspace(0.0, 1.0, 50)
+    with pytest.raises(_Boom):
+        with figure_worker.session():                                   # the command's
+            with stage_outputs(run, "simulate", config_text="name: x\n"):
+                with figure_worker.session():                           # the stage's
+                    figure_worker.submit(plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
+                                         run / "sim_inertia.png")
+                    deadline = time.monotonic() + 60
+                    while not (run / "sim_inertia.png").exists() and time.monotonic() < deadline:
+                        time.sleep(0.01)
+                    assert (run / "sim_inertia.png").exists()
+                    raise _Boom                                         # e.g. sim.h5 cannot be written
+    assert not figure_worker.active()
+    assert list(run.iterdir()) == []
+
+
+def test_any_figure_failure_drawn_in_place_is_a_figure_error(monkeypatch):
+    """Without a worker a figure that fails in any way is reported as a worker's writer reports
+    it: a FigureError (exit 4), the stage's results kept."""
+    from common import figure_worker
+    from common.errors import FigureError
+
+    monkeypatch.setenv("ACMM_FIGURE_WORKER", "0")
+
+    def bad_figure():
+        raise ValueError("Axis limits cannot be NaN or Inf")
+
+    with pytest.raises(FigureError, match="Axis limits"):
+        with figure_worker.session():
+            figure_worker.submit(bad_figure)
+
+
+def test_a_sweep_whose_figure_fails_finishes_with_its_config(tmp_runs):
+    """The sweep's tables are written before its figures: a figure in the way is exit 4 with
+    this run's config.yaml, and the earlier run's other figure pruned."""
+    import yaml
+    from typer.testing import CliRunner
+
+    from cli.acmm_app import app
+    from conftest import CONFIGS
+
+    cfg = yaml.safe_load((CONFIGS / "sweep_smoke.yaml").read_text())
+    cfg["sweep"].pop("margin", None)
+    cfg["sweep"].update(n_runs=2, orbits=0.5)
+    cfg["output"] = {"root": str(tmp_runs / "runs"), "figures": True}
+    path = tmp_runs / "sw.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(app, ["sweep", str(path), "-j", "1"])
+    assert r.exit_code == 0, r.output
+    run = tmp_runs / "runs" / cfg["name"]
+    (run / "sweep_map.png").unlink()
+    (run / "sweep_map.png").mkdir()
+    r = CliRunner().invoke(app, ["sweep", str(path), "-j", "1", "sweep.n_runs=3"])
+    assert r.exit_code == 4, r.output
+    assert "n_runs: 3" in (run / "config.yaml").read_text()
+    # the map is drawn first and failed; the earlier run's peak-error figure is not this run's
+    assert not (run / "sweep_peak_error.png").exists()

@@ -190,7 +190,12 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
     if figures and rows:
-        figs = plot_sweep(sweep, a, run_dir)
+        from common.errors import FigureError
+
+        try:
+            figs = plot_sweep(sweep, a, run_dir)
+        except OSError as exc:        # the tables are written: only a figure failed (exit 4)
+            raise (exc if isinstance(exc, FigureError) else FigureError(str(exc))) from exc
     return path, figs
 
 
