@@ -71,12 +71,9 @@ def frequency_response(A, B, C, a: float, omega) -> np.ndarray:
     (N, p, k) complex ndarray
         H(−a + jω), in the units of the output per unit of input.
     """
-    A, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C))
-    n = A.shape[0]
-    I = np.eye(n)
-    omega = np.asarray(omega, float)
-    M = (-a + 1j * omega)[:, None, None] * I[None] - A[None]
-    return C[None] @ np.linalg.solve(M, np.broadcast_to(B.astype(complex), (omega.size,) + B.shape))
+    from qpp.transfer import transfer_on_grid
+
+    return transfer_on_grid(A, B, C, -a + 1j * np.asarray(omega, float))
 
 
 def gershgorin_bands(Hw: np.ndarray):

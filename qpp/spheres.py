@@ -137,11 +137,10 @@ def grid_norm(A, B, C, omega) -> tuple[float, float]:
     omega_peak : float
         Grid frequency of that largest value, rad/s.
     """
-    A, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C))
+    from qpp.transfer import transfer_on_grid
+
     omega = np.asarray(omega, float)
-    n = A.shape[0]
-    M = 1j * omega[:, None, None] * np.eye(n)[None] - A[None]          # batched (jωI − A)
-    G = C[None] @ np.linalg.solve(M, np.broadcast_to(B, (omega.size,) + B.shape))
+    G = transfer_on_grid(A, B, C, 1j * omega)
     vals = np.linalg.svd(G, compute_uv=False)[:, 0]
     i = int(np.argmax(vals))
     return float(vals[i]), float(omega[i])
