@@ -90,7 +90,8 @@ def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesA
                f"{'PASS' if c.passed else 'FAIL'}; margins {np.round(c.margins, 4).tolist()}; "
                f"P0 = {c.P0}; largest admissible scale {c.max_scale:.4g}"
                + (f", smallest {c.min_scale:.4g}" if c.min_scale > 0 else ""))
-    if sector_verified(cfg) is False:
+    widened = sector_verified(cfg) is False
+    if widened:
         typer.echo("  sector of φ: random check points lay beyond the grid's bounds; the sector was widened to "
                    "the extremum climbed from them (a finer nonlinearity.n_grid samples φ more closely)")
     if r.published is not None:
@@ -104,8 +105,7 @@ def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesA
     typer.echo(f"  wrote {path}")
     if not r.certified:
         raise DesignError(r.verdict + " (best design written, labelled uncertified)")
-    strict_exit(strict, sector_verified(cfg) is False,
-                f"{cfg.name}: the sector of φ rests on a grid its random check found too coarse")
+    strict_exit(strict, widened, f"{cfg.name}: the sector of φ rests on a grid its random check found too coarse")
 
 
 @app.command()

@@ -72,3 +72,19 @@ class OutputError(AcmmError, OSError):
 class FigureError(OutputError):
     """A stage's figure cannot be written, its results were (exit 4; the run keeps its results
     and its ``config.yaml``, :mod:`common.outputs`)."""
+
+    @classmethod
+    def of(cls, exc: BaseException) -> "FigureError":
+        """``exc`` (raised while drawing a figure) as a FigureError, with its message.
+
+        Parameters
+        ----------
+        exc : BaseException
+            What the figure function raised.
+
+        Returns
+        -------
+        FigureError
+            ``exc`` itself when it is one.
+        """
+        return exc if isinstance(exc, cls) else cls(str(exc) or type(exc).__name__)

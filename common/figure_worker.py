@@ -307,7 +307,6 @@ def _draw_in_place(calls: list) -> None:
             fn(*args, **kwargs)
         except Exception as exc:  # noqa: BLE001 (raised once the others are drawn)
             first = first or exc
-    if isinstance(first, FigureError):
-        raise first
     if first is not None:     # as a writer of the worker reports it: the results are written
-        raise FigureError(str(first) or type(first).__name__) from first
+        err = FigureError.of(first)
+        raise err from (None if err is first else first)

@@ -247,8 +247,7 @@ class ExpressionModel(SampleGrid):
                 slope[i] = half
             if not diag[i]:
                 alpha[i], beta[i] = -slope[i], slope[i]
-        for i in range(r):
-            if not alpha[i] < beta[i]:
+            if not alpha[i] < beta[i]:        # φ_i ≡ 0: a sector of width 2e-12 about its value
                 c = 0.5 * (alpha[i] + beta[i])
                 alpha[i], beta[i] = c - 1e-12, c + 1e-12
         return SectorInfo(np.column_stack([alpha, beta]), slope, diag, verified, n)

@@ -138,10 +138,9 @@ class SampleGrid:
         return Y
 
     def _t_grid(self, T=None):
-        T = self.t_range if T is None else T
-        if all(self.t not in ph.free_symbols for ph in self.phi):
+        if not self.t_varies:
             return np.array([0.0])
-        return np.linspace(0.0, T, self.n_t)
+        return np.linspace(0.0, self.t_range if T is None else T, self.n_t)
 
     @property
     def t_varies(self) -> bool:

@@ -195,7 +195,8 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
         try:
             figs = plot_sweep(sweep, a, run_dir)
         except OSError as exc:        # the tables are written: only a figure failed (exit 4)
-            raise (exc if isinstance(exc, FigureError) else FigureError(str(exc))) from exc
+            err = FigureError.of(exc)
+            raise err from (None if err is exc else exc)
     return path, figs
 
 
