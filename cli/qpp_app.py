@@ -86,7 +86,9 @@ def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesA
         v = ", ".join(f"{rd}: {'beta1 <= m' if verdicts[(rd, t.name)] else 'beta1 > m'}" for rd in r.beta1)
         typer.echo(f"  m [{t.name:10s}] = {t.m:.5f} (beta3 {t.beta3:.5g}, beta4 {t.beta4:.5g}) -> {v}")
     c = r.circle
-    typer.echo(f"  circle criterion (lemma 1) on H(-a+jw), sector {np.round(r.sector, 6).tolist()}: "
+    form = ("lemma 1" if c.method == "gershgorin" else
+            f"small-gain form for a coupled phi: rho = {c.gain_bound:.4g}, sup sigma(H_c) = {c.peak_gain:.4g}")
+    typer.echo(f"  circle criterion ({form}) on H(-a+jw), sector {np.round(r.sector, 6).tolist()}: "
                f"{'PASS' if c.passed else 'FAIL'}; margins {np.round(c.margins, 4).tolist()}; "
                f"P0 = {c.P0}; largest admissible scale {c.max_scale:.4g}"
                + (f", smallest {c.min_scale:.4g}" if c.min_scale > 0 else ""))
@@ -130,8 +132,11 @@ def simulate(config: Path = ConfigArg, overrides: Optional[list[str]] = Override
     for s in sims:
         g = (", ".join(f"{k} = {v:g}" for k, v in s.parameters.items()) if s.parameters
              else f"gamma = {s.gamma:<8g}")
-        typer.echo(f"  {s.name:12s} {g} ||y - y_o||inf = {s.error_inf:.5f} "
-                   f"(per output {np.round(s.error_per_output, 5).tolist()}) "
+        if s.diverged_at is not None:
+            typer.echo(f"  {s.name:12s} {g} DIVERGED at t = {s.diverged_at:.4g} s: OUTSIDE the output sphere")
+            continue
+        typer.echo(f"  {s.name:12s} {g} ||y - y_o||inf = {s.error_inf:.5g} "
+                   f"(per output {[float(f'{e:.5g}') for e in s.error_per_output]}) "
                    f"{'within' if s.passed else 'OUTSIDE'} the output sphere")
     typer.echo(f"  wrote {path}")
     out = [s.name for s in sims if not s.passed]

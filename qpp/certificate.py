@@ -181,6 +181,34 @@ def default_sector(cfg: QppConfig) -> np.ndarray:
     raise DesignError("design.sector must be given for a polar_arm nonlinearity")
 
 
+def sector_coupling(cfg: QppConfig) -> np.ndarray:
+    """Per φ channel, whether φ_i depends on outputs other than y_i (the circle check then takes
+    its small-gain form, :mod:`qpp.circle`): for an ``expression`` its symbolic dependence
+    (:attr:`qpp.nonlin.SectorInfo.diagonal`), for the ``sinusoidal`` kind the off-diagonal entries
+    of N·F_unc; a ``polar_arm`` sector is the config's own, stated per channel (diagonal).
+
+    Parameters
+    ----------
+    cfg : qpp.config.QppConfig
+        Validated config.
+
+    Returns
+    -------
+    (r,) bool ndarray
+        True for a coupled channel (dimensionless flags).
+    """
+    nl = cfg.nonlinearity
+    r = cfg.lure_plant().r
+    if isinstance(nl, ExpressionNonlinearity):
+        return ~np.asarray(cfg.expression_model().sector_info.diagonal, bool)
+    if isinstance(nl, SinusoidalNonlinearity):
+        M = cfg.lure_plant().N() @ np.asarray(nl.F_unc, float)
+        off = M.copy()
+        np.fill_diagonal(off, 0.0)
+        return np.any(off != 0.0, axis=1)
+    return np.zeros(r, bool)
+
+
 def settling_time(t, y_o, r_o, band: float) -> float:
     """Settling time of the nominal loop, s: the last time |y_o − r_o| (largest channel) exceeds
     ``band`` × its peak; 0 when the loop tracks from the start, t[-1] when it never settles.
@@ -250,7 +278,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
         b1[reading] = spheres.beta1(Az, Bz, Cz, a)
     sector = default_sector(cfg)
     _, dcols = channels(P)
-    circ = circle_mod.circle_criterion(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a)
+    circ = circle_mod.circle_criterion(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=sector_coupling(cfg))
     T = cfg.spheres.T if T is None else float(T)
     horizon = max(T, cfg.simulation.t_final)
     n = int(min(20001, max(801, 801 * horizon / T)))

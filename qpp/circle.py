@@ -1,21 +1,37 @@
 """Multivariable circle criterion (Cook 1972; lemma 1, ch. 9.2) on H_a(jω) = H(−a + jω).
 
 H(s) = C_z (sI − A_z)⁻¹ B_φ is the square transfer matrix from the sector nonlinearity φ (the
-disturbance columns of B_z, eq 10.7) to y.  The i-th Gershgorin mean band is swept by discs
-centred at h_ii with radius (d_i + d'_i)/2 (row and column off-diagonal sums, definition 3);
-the i-th critical disc has the diameter [−1/α_i, −1/β_i].
+disturbance columns of B_z, eq 10.7) to y.  The loop is ż = A_z z + B_φ φ(y): φ enters with +,
+as in eqs 13.1 and 14.2 (see ``docs/ERRATA.md`` § QPP signs and § QPP circle sign).  Lemma 1 as
+printed is for φ entering with − (eq 10.1), whose critical disc D(α, β) has the diameter
+[−1/α, −1/β]; for the loop as built, −H takes the place of H, i.e. h_ii is compared with the
+mirror image of that disc, the disc with the diameter [1/α, 1/β] (:func:`critical_disc`).  A
+constant gain k_i ∈ [α_i, β_i] on each channel is one member of the sector, so a passing sector
+never holds a destabilizing constant diagonal gain (tested).
 
+**Diagonal φ** (φ_i depends on y_i only): the i-th Gershgorin mean band is swept by discs
+centred at h_ii with radius (d_i + d'_i)/2 (row and column off-diagonal sums, definition 3).
 Conditions checked, per channel i:
 
 * 0 < α_i < β_i (or α_i < β_i < 0): the band avoids the disc and Σ N_ci = −P_0, with N_ci the
   clockwise encirclements of the disc by h_ii (counted as the winding number of h_ii about the
   disc centre along ω = −∞…∞) and P_0 the poles of H(s − a) in the closed right half plane;
 * α_i < 0 < β_i: the band lies inside the disc (so it does not encircle it: N_ci = 0);
-* α_i = 0 < β_i: the band lies in the half plane Re s > −1/β_i (N_ci = 0);
+* α_i = 0 < β_i: the band lies in the half plane Re s < 1/β_i (α_i < β_i = 0: Re s > 1/α_i;
+  N_ci = 0);
 
 and, over all channels, Σ N_ci = −P_0 (eq 9.3).  With every channel of the second or third
 kind that is P_0 = 0; channels of different kinds may be mixed (e.g. a decoupled H(s) is m
 independent SISO circle criteria).
+
+**Coupled φ** (some φ_i depends on other outputs, ``coupled``): the criterion above assumes a
+diagonal φ and does not apply.  The small-gain form of the circle criterion is checked instead
+(Desoer & Vidyasagar, *Feedback Systems*, ch. VI): φ = C_0 y + Δ(y, t) with C_0 = diag(c_i),
+c_i the centre (α_i + β_i)/2 of a diagonal channel and 0 for a coupled one, and
+‖Δ(y, t)‖₂ ≤ ρ ‖y‖₂ with ρ² = max_{diagonal i} r_i² + Σ_{coupled i} r_i² (r_i the half-width
+of the sector; for a coupled channel the sector is ±sup Σ_j |∂φ_i/∂y_j| ≥ |φ_i| / ‖y‖∞).  The
+loop is exponentially stable with rate a when A_z + B_φ C_0 C_z + aI is Hurwitz (P_0 = 0, P_0
+counted on that centred loop) and ρ · sup_ω σ̄(H_c(−a + jω)) < 1, H_c = (I − H C_0)⁻¹ H.
 
 The check is made on a dense frequency grid (default 0 and 6000 log-spaced points
 spanning the pole magnitudes), which is exact for the encirclement count and accurate to the
@@ -108,7 +124,9 @@ def gershgorin_bands(Hw: np.ndarray):
 
 
 def critical_disc(alpha: float, beta: float) -> tuple[float, float]:
-    """Centre and radius of D(α, β), the disc with diameter [−1/α, −1/β] (α ≠ 0).
+    """Centre and radius of the critical disc of h_ii for the loop ż = A z + B φ(y) (φ entering
+    with +): the disc with diameter [1/α, 1/β] (α, β ≠ 0), the mirror image of the report's
+    D(α, β) (diameter [−1/α, −1/β], for φ entering with −, eq 10.1).
 
     Parameters
     ----------
@@ -124,7 +142,7 @@ def critical_disc(alpha: float, beta: float) -> tuple[float, float]:
     radius : float
         Radius of the disc, dimensionless.
     """
-    p1, p2 = -1.0 / alpha, -1.0 / beta
+    p1, p2 = 1.0 / alpha, 1.0 / beta
     return 0.5 * (p1 + p2), 0.5 * abs(p1 - p2)
 
 
@@ -159,6 +177,13 @@ class CircleResult:
         Smallest s with [s α, s β] passing: 0 when every small sector passes (a stable H), > 0
         when the sector must be wide enough to stabilize an unstable H, nan if none passes;
         dimensionless.
+    method : str
+        ``"gershgorin"`` (diagonal φ: the bands and discs) or ``"small_gain"`` (some φ_i coupled:
+        the margins are 1 − ρ·sup σ̄(H_c), the same for every channel).
+    gain_bound : float
+        ρ of the small-gain form, ‖Δ‖₂ ≤ ρ‖y‖₂ (nan for ``"gershgorin"``); dimensionless.
+    peak_gain : float
+        sup_ω σ̄(H_c(−a + jω)) at the sector itself (nan for ``"gershgorin"``); dimensionless.
     """
 
     passed: bool
@@ -172,6 +197,9 @@ class CircleResult:
     beta: np.ndarray
     max_scale: float           #: largest s with [s α, s β] passing (grid), inf if unbounded
     min_scale: float = 0.0     #: smallest s with [s α, s β] passing (0: all small ones pass)
+    method: str = "gershgorin"  #: "gershgorin" (diagonal φ) or "small_gain" (coupled φ)
+    gain_bound: float = float("nan")   #: ρ of the small-gain form (nan for "gershgorin")
+    peak_gain: float = float("nan")    #: sup_ω σ̄(H_c(−a + jω)) at s = 1 (nan for "gershgorin")
 
 
 def _winding(z: np.ndarray, c: float) -> int:
@@ -190,10 +218,10 @@ def _check(centres, radii, full_centres, alpha, beta, P0):
         if al < 0 < be:
             c, R = critical_disc(al, be)
             margins[i] = np.min(R - (np.abs(centres[i] - c) + radii[i]))
-        elif al == 0:
-            margins[i] = np.min(centres[i].real - radii[i] + 1.0 / be)
-        elif be == 0:
-            margins[i] = np.min(-centres[i].real - radii[i] - 1.0 / al)
+        elif al == 0:          # φ_i ∈ [0, β_i] entering with +: the band left of 1/β_i
+            margins[i] = np.min(1.0 / be - centres[i].real - radii[i])
+        elif be == 0:          # φ_i ∈ [α_i, 0]: the band right of 1/α_i
+            margins[i] = np.min(centres[i].real - radii[i] - 1.0 / al)
         else:
             c, R = critical_disc(al, be)
             margins[i] = np.min(np.abs(centres[i] - c) - radii[i] - R)
@@ -242,7 +270,7 @@ def _passing_scales(ok, fine: bool = False) -> tuple[float, float]:
     return float(smin), float(smax)
 
 
-def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None) -> CircleResult:
+def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None, coupled=None) -> CircleResult:
     """Lemma 1 on ω ↦ H(−a + jω), H(s) = C (sI − A)⁻¹ B square.
 
     Parameters
@@ -256,6 +284,9 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None) -> CircleResul
         Exponential weighting, 1/s (lemma 2).
     omega : array, optional
         Non-negative grid, rad/s (default :func:`default_grid`).
+    coupled : sequence of bool, optional
+        Per channel, whether φ_i depends on outputs other than y_i (then the small-gain form of
+        the module docstring is checked; default: none, the Gershgorin form).
 
     Returns
     -------
@@ -280,6 +311,12 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None) -> CircleResul
     # full contour ω = −∞ … ∞ (h(−jω) = conj h(jω)); strictly proper → closes at 0
     full = np.concatenate([np.conj(centres[:, ::-1]), centres], axis=1)
     P0 = int(np.sum(np.linalg.eigvals(A + a * np.eye(A.shape[0])).real >= 0))
+    coupled = np.zeros(alpha.size, bool) if coupled is None else np.asarray(coupled, bool)
+    if coupled.any():
+        if not np.all(alpha < beta):
+            bad = int(np.argmin(alpha < beta))
+            raise ValueError(f"sector {bad + 1}: need alpha < beta, got [{alpha[bad]}, {beta[bad]}]")
+        return _small_gain_result(Hw, A, B, C, a, omega, centres, radii, alpha, beta, coupled, P0)
     passed, margins, N = _check(centres, radii, full, alpha, beta, P0)
 
     def ok(s):
@@ -289,3 +326,42 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None) -> CircleResul
     if np.isnan(smax):
         smax = 0.0
     return CircleResult(passed, margins, N, P0, omega, centres, radii, alpha, beta, smax, smin)
+
+
+def _small_gain_terms(alpha, beta, coupled) -> tuple[np.ndarray, float]:
+    """(C_0 diagonal, ρ) of the small-gain form (module docstring) for the sector [α, β]."""
+    centre = np.where(coupled, 0.0, 0.5 * (alpha + beta))
+    half = np.where(coupled, np.maximum(np.abs(alpha), np.abs(beta)), 0.5 * (beta - alpha))
+    diag_part = float(np.max(half[~coupled] ** 2)) if (~coupled).any() else 0.0
+    return centre, float(np.sqrt(diag_part + np.sum(half[coupled] ** 2)))
+
+
+def _small_gain_at(Hw, A, B, C, a, alpha, beta, coupled, s) -> tuple[bool, float, int, float]:
+    """(passed, margin 1 − ρ·peak, P_0 of the centred loop, peak σ̄ of H_c) at sector scale s."""
+    centre, rho = _small_gain_terms(s * alpha, s * beta, coupled)
+    n = A.shape[0]
+    P0 = int(np.sum(np.linalg.eigvals(A + B @ (centre[:, None] * C) + a * np.eye(n)).real >= 0))
+    Hc = Hw
+    if np.any(centre):
+        try:
+            Hc = np.linalg.solve(np.eye(Hw.shape[1])[None] - Hw * centre[None, None, :], Hw)
+        except np.linalg.LinAlgError:           # I − H C_0 singular on the grid: not certified
+            return False, -np.inf, P0, np.inf
+    peak = float(np.max(np.linalg.norm(Hc, ord=2, axis=(1, 2))))
+    margin = 1.0 - rho * peak
+    return bool(P0 == 0 and margin > 0), margin, P0, peak
+
+
+def _small_gain_result(Hw, A, B, C, a, omega, centres, radii, alpha, beta, coupled, P0_open) -> CircleResult:
+    """:func:`circle_criterion` for a coupled φ (the small-gain form of the module docstring)."""
+    passed, margin, P0, peak = _small_gain_at(Hw, A, B, C, a, alpha, beta, coupled, 1.0)
+    centre, rho = _small_gain_terms(alpha, beta, coupled)
+    if not np.any(centre):          # H_c = H at every scale: s·ρ·peak < 1 in closed form
+        smin, smax = (0.0, (np.inf if rho * peak == 0 else 1.0 / (rho * peak))) if P0 == 0 else (np.nan, 0.0)
+    else:
+        smin, smax = _passing_scales(lambda s: _small_gain_at(Hw, A, B, C, a, alpha, beta, coupled, s)[0],
+                                     fine=P0_open > 0)
+        smax = 0.0 if np.isnan(smax) else smax
+    m = alpha.size
+    return CircleResult(passed, np.full(m, margin), np.zeros(m, dtype=int), P0, omega, centres, radii,
+                        alpha, beta, smax, smin, "small_gain", rho, peak)

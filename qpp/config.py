@@ -18,7 +18,7 @@ from pydantic import Field, field_validator, model_validator
 from common.errors import ConfigError
 from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 # field types and the nonlinearity sections moved out (issue 12), re-exported here
-from qpp.config_checks import _check_periods, _check_sample_count, _check_sector
+from qpp.config_checks import _check_periods, _check_sample_count, _check_sector, _check_stated_sector
 from qpp.config_fields import (QPP_MAX, KgM2, Kilograms, Matrix, Metres, OptSeconds,  # noqa: F401
                                PerSecond, Radians, RadPerSecond, Seconds, _finite_matrix,
                                _implausible, _Model, _q)
@@ -155,18 +155,19 @@ class QppConfig(_Model):
     def _check_nonlinearity(self, P):
         """Shapes of the nonlinearity section against the plant P; its parameters per scenario."""
         nl = self.nonlinearity
+        if P.r != P.p:
+            raise ValueError(f"nonlinearity.kind {nl.kind} needs as many disturbance channels as outputs "
+                             f"(G has {P.r} columns, C {P.p} rows) for the circle criterion")
         if isinstance(nl, SinusoidalNonlinearity):
             for nm in ("F0", "F1", "F_unc"):
                 if np.shape(getattr(nl, nm)) != (P.m, P.p):
                     raise ValueError(f"nonlinearity.{nm} must be {P.m}×{P.p}")
+            self._check_gamma_scenarios(nl.kind, -nl.gamma_max, nl.gamma_max)
         elif isinstance(nl, ExpressionNonlinearity):
             if len(nl.f1) != P.m:
                 raise ValueError(f"nonlinearity.f1 must have {P.m} entries (one per control input)")
             if np.shape(nl.y_range) != (P.p, 2) or any(lo >= hi for lo, hi in nl.y_range):
                 raise ValueError(f"nonlinearity.y_range must be {P.p} pairs [lo, hi] with lo < hi")
-            if P.r != P.p:
-                raise ValueError(f"nonlinearity.kind expression needs as many disturbance channels as outputs "
-                                 f"(G has {P.r} columns, C {P.p} rows) for the circle criterion")
             for e in nl.f1:
                 if isinstance(e, LibraryForm) and e.output > P.p:
                     raise ValueError(f"nonlinearity.f1: output {e.output} > p = {P.p}")
@@ -176,12 +177,27 @@ class QppConfig(_Model):
             try:
                 model = self.expression_model()
                 _check_sample_count(model)
-                model.sector_info                        # parse, check singular / sector-bounded
+                info = model.sector_info                 # parse, check singular / sector-bounded
             except ConfigError as exc:
                 raise ValueError(str(exc)) from None
+            for field, stated in (("nonlinearity.sector", nl.sector), ("design.sector", self.design.sector)):
+                if stated is not None:
+                    _check_stated_sector(field, stated, info.sector)
             self._check_expression_scenarios(nl)
         elif (P.n, P.m, P.p) != (4, 2, 2):
             raise ValueError("nonlinearity.kind polar_arm needs n=4, m=2, p=2 (eq 14.2)")
+        else:
+            self._check_gamma_scenarios(nl.kind, nl.M_min, nl.M_max)
+
+    def _check_gamma_scenarios(self, kind: str, lo: float, hi: float):
+        """The scenarios of a ``sinusoidal`` (γ = Δm) or ``polar_arm`` (γ = M, kg) nonlinearity set
+        γ within [lo, hi] and no expression parameters."""
+        for s in self.simulation.scenarios:
+            if s.parameters:
+                raise ValueError(f"scenario {s.name}: nonlinearity.kind {kind} takes gamma, not parameters")
+            if not lo <= s.gamma <= hi:
+                raise ValueError(f"scenario {s.name}: gamma = {s.gamma:g} outside [{lo:g}, {hi:g}] "
+                                 f"(nonlinearity.kind {kind})")
 
     def _check_expression_scenarios(self, nl):
         """The scenarios of an ``expression`` nonlinearity set its parameters within their ranges."""

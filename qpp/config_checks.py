@@ -25,6 +25,23 @@ def _check_sector(field: str, sector) -> None:
             raise ValueError(f"{field}: pair {i + 1} is [{a:g}, {b:g}]; a sector needs alpha < beta")
 
 
+#: how far (fraction of the computed half-width) a stated sector may lie inside the computed one:
+#: the computed bounds can exceed φ's own by the 1 % widening of a random check that found a point
+STATED_SECTOR_SLACK = 0.02
+
+
+def _check_stated_sector(field: str, stated, computed) -> None:
+    """A sector stated for an ``expression`` nonlinearity holds φ's sector computed on the stated
+    ranges (to :data:`STATED_SECTOR_SLACK`): the circle check and the thresholds of a narrower one
+    would certify another nonlinearity."""
+    for i, ((a, b), (ca, cb)) in enumerate(zip(np.asarray(stated, float), np.asarray(computed, float))):
+        slack = STATED_SECTOR_SLACK * max(0.5 * (cb - ca), 1e-12)
+        if a > ca + slack or b < cb - slack:
+            raise ValueError(f"{field}: pair {i + 1} [{a:g}, {b:g}] does not hold φ_{i + 1}, whose sector on the "
+                             f"stated ranges is [{ca:.6g}, {cb:.6g}]; a certificate for a narrower sector is not one "
+                             "for this nonlinearity (widen the pair, or leave the sector out to use the computed one)")
+
+
 def _check_sample_count(model) -> None:
     """The points at which :meth:`qpp.nonlin.ExpressionModel.sector_info` samples φ (its
     :meth:`~qpp.sector_grid.SampleGrid.sector_points`) stay within the ``QPP_SECTOR_POINTS``

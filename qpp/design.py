@@ -27,7 +27,7 @@ from qpp import circle as circle_mod
 from qpp import spheres
 # the certificate of fixed gains moved to qpp.certificate (issue 12), re-exported here
 from qpp.certificate import (DesignResult, Thresholds, _arm_betas, certify,  # noqa: F401
-                             default_sector, nominal_output, pick_bookkeeping, settling_time,
+                             default_sector, nominal_output, pick_bookkeeping, sector_coupling, settling_time,
                              thresholds)
 from qpp.config import QppConfig
 from qpp.hinf import HinfGains, hinf_gains, hinf_search
@@ -164,12 +164,12 @@ class _Procedure:
         current a on a geometric grid of [a_min, a_max] (nearest first); None when none passes."""
         _, dcols = channels(self.P)
         Az, Bz, Cz = closed_loop(self.P, g.K1, g.Kc, g.H, bz="eq10.7")
-        sector = default_sector(self.cfg)
+        sector, coupled = default_sector(self.cfg), sector_coupling(self.cfg)
         lo = max(self.a_min, 1e-14)
         grid = np.unique(np.concatenate([np.geomspace(lo, max(self.a_max, lo), 13), [self.a_min, self.a_max]]))
         grid = sorted(grid[grid != a], key=lambda x: abs(np.log(max(x, 1e-300)) - np.log(max(a, 1e-300))))
         for cand in grid:
-            ok = circle_mod.circle_criterion(Az, Bz[:, dcols], Cz, sector, a=float(cand)).passed
+            ok = circle_mod.circle_criterion(Az, Bz[:, dcols], Cz, sector, a=float(cand), coupled=coupled).passed
             self.records.append(self._rec("circle a", g.rho, g.nu, cand, np.nan, np.nan, np.nan, np.nan, ok,
                                           False, [1.0], note="circle criterion with fixed gains"))
             if ok:
@@ -366,7 +366,11 @@ def design(cfg: QppConfig) -> DesignResult:
     if res is None:
         res = proc.best
     if res is None:
-        raise DesignError("procedure 12.1: no stabilizing H∞ gains for any rho, a or weight tried")
+        from qpp.lure import structural_obstacles
+
+        why = structural_obstacles(cfg.lure_plant())
+        raise DesignError("procedure 12.1: no stabilizing H∞ gains for any rho, a or weight tried"
+                          + (f": {'; '.join(why)}" if why else ""))
     res.iterations = proc.records
     res.hinf_history = proc.hist
     _finish(cfg, res)

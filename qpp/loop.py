@@ -50,11 +50,19 @@ def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
     return np.concatenate([x0, xc0, x0])
 
 
+#: a loop whose state exceeds this many times max(1, ‖z(0)‖∞) has diverged (``stop_if_diverged``)
+DIVERGED_FACTOR = 1e6
+
+
 def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nominal: float, r_fun,
-                  t_eval, z0, impulse_time=None, impulse=None, rtol=1e-8, atol=1e-10):
+                  t_eval, z0, impulse_time=None, impulse=None, rtol=1e-8, atol=1e-10,
+                  stop_if_diverged: bool = False):
     """Integrate the nonlinear loop; returns (z samples (N_z, N), u samples (m, N)).
 
-    A disturbance impulse I δ(t − t_i) is applied as the jump x(t_i⁺) = x(t_i⁻) + G I.
+    A disturbance impulse I δ(t − t_i) is applied as the jump x(t_i⁺) = x(t_i⁻) + G I.  With
+    ``stop_if_diverged`` a loop that diverges (‖z‖∞ beyond :data:`DIVERGED_FACTOR` times its
+    initial size, or growing until the integrator cannot follow it) is a result: the samples
+    after that time are NaN.
 
     Parameters
     ----------
@@ -86,18 +94,20 @@ def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nomina
         Relative tolerance of the integrator, dimensionless.
     atol : float
         Absolute tolerance of the integrator, in the units of z.
+    stop_if_diverged : bool, optional
+        A diverging loop is a result (NaN samples after it diverged), not an error.
 
     Returns
     -------
     Z : (2n+q, N) ndarray
-        Samples of z, in the units of x and x_c.
+        Samples of z, in the units of x and x_c (NaN after a divergence).
     U : (m, N) ndarray
-        Samples of u, in the units of u.
+        Samples of u, in the units of u (NaN after a divergence).
 
     Raises
     ------
     ConvergenceError
-        The integrator failed.
+        The integrator failed (on a loop that had not diverged).
     """
     control, rhs = _loop_functions(plant, K1, Kc, H, f1, gamma, gamma_nominal, r_fun)
     n, G = plant.n, plant.G
@@ -109,8 +119,10 @@ def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nomina
     elif impulse_time is not None and impulse_time <= t0:
         z0 = z0.copy()
         z0[:n] += G @ np.asarray(impulse, float)
-    Z = _integrate_segments(rhs, segments, np.asarray(z0, float), t_eval, n, G, impulse, rtol, atol)
-    U = np.array([control(Z[:, i], t)[0] for i, t in enumerate(t_eval)]).T
+    limit = DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0)))) if stop_if_diverged else None
+    Z = _integrate_segments(rhs, segments, np.asarray(z0, float), t_eval, n, G, impulse, rtol, atol, limit)
+    U = np.array([control(Z[:, i], t)[0] if np.all(np.isfinite(Z[:, i])) else np.full(plant.m, np.nan)
+                  for i, t in enumerate(t_eval)]).T
     return Z, U
 
 
@@ -138,11 +150,18 @@ def _loop_functions(plant: LurePlant, K1, Kc, H, f1, gamma, gamma_nominal, r_fun
     return control, rhs
 
 
-def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol):
+def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, limit=None):
     """Integrate ``rhs`` over ``segments`` (one, or two split at the impulse time, where
-    x jumps by G I), sampled at ``t_eval`` (s); the samples of z, (2n+q, N)."""
+    x jumps by G I), sampled at ``t_eval`` (s); the samples of z, (2n+q, N).  With ``limit``
+    (‖z‖∞ of a diverged loop) the integration stops when the loop diverges, the later samples NaN."""
     t0, tf = t_eval[0], t_eval[-1]
     zs = []
+    events = None
+    if limit is not None:
+        def diverged(t, zz):
+            return limit - np.max(np.abs(zz))
+        diverged.terminal = True
+        events = diverged
     for k, (ta, tb) in enumerate(segments):
         if k == 1:
             z = z.copy()
@@ -150,11 +169,18 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol):
         mask = (t_eval >= ta) & ((t_eval < tb) if k < len(segments) - 1 else (t_eval <= tb))
         te = np.concatenate([[ta], t_eval[mask], [tb]])
         max_step = (tf - t0) / 200
-        sol = solve_ivp(rhs, (ta, tb), z, method="DOP853", t_eval=np.unique(te), rtol=rtol, atol=atol,
-                        max_step=max_step)
-        if not sol.success:
+        with np.errstate(all="ignore"):
+            sol = solve_ivp(rhs, (ta, tb), z, method="DOP853", t_eval=np.unique(te), rtol=rtol, atol=atol,
+                            max_step=max_step, events=events)
+        stopped = limit is not None and (sol.status == 1 or (
+            not sol.success and np.max(np.abs(sol.y[:, -1] if sol.y.size else z)) > 1e-3 * limit))
+        if not sol.success and not stopped:
             raise ConvergenceError(f"simulation failed at t = {sol.t[-1]:.4g} s: {sol.message}")
         keep = np.isin(sol.t, t_eval[mask])
-        zs.append(sol.y[:, keep])
+        got = sol.y[:, keep]
+        zs.append(got)
+        if stopped:                 # diverged: the samples from here on are NaN
+            done = np.hstack(zs)
+            return np.hstack([done, np.full((done.shape[0], t_eval.size - done.shape[1]), np.nan)])
         z = sol.y[:, -1]
     return np.hstack(zs)

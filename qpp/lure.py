@@ -115,6 +115,13 @@ class LurePlant:
         N, *_ = np.linalg.lstsq(self.G, self.B, rcond=None)
         if not np.allclose(self.G @ N, self.B, atol=1e-10 * max(1.0, np.abs(self.B).max())):
             raise ConfigError("plant: B is not G·N for any N (assumption (iii) of ch. 10.1 fails)")
+        # entries at the level of the solve's round-off are zeros (B = G N exactly with them zeroed):
+        # kept, a 1e-16 would couple a φ channel to every output (the circle test, the sector grid)
+        tiny = np.abs(N) <= 1e-13 * np.abs(N).max(initial=0.0)
+        if tiny.any():
+            N0 = np.where(tiny, 0.0, N)
+            if np.allclose(self.G @ N0, self.B, atol=1e-10 * max(1.0, np.abs(self.B).max())):
+                N = N0
         return N
 
 
@@ -139,6 +146,49 @@ def augmented(plant: LurePlant):
     Ga = np.block([[np.zeros((n, p)), P.G], [P.Bc, np.zeros((q, r))]])
     Ca = np.hstack([P.C, np.zeros((p, q))])
     return Aa, Ba, Ga, Ca
+
+
+def structural_obstacles(plant: LurePlant, tol: float = 1e-9) -> list[str]:
+    """Why no output feedback of eqs 10.5–10.6 can stabilize the loop, if the structure says so
+    (PBH tests at the closed right-half-plane eigenvalues): an unstable mode of A that u cannot
+    move or y does not see, or a servo-compensator pole that the augmented plant (eqs 10.3–10.4)
+    cannot move (a plant zero at a servo pole, or more servo channels than inputs can serve).
+
+    Parameters
+    ----------
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+    tol : float, optional
+        Relative rank tolerance of the PBH tests (singular values below ``tol`` times the
+        largest are zero), dimensionless.
+
+    Returns
+    -------
+    list of str
+        One sentence per obstacle found (empty: none; the failure is then numerical).
+    """
+    def deficient(M, size: int) -> bool:
+        return np.linalg.matrix_rank(M, tol * max(1.0, float(np.abs(M).max()))) < size
+
+    out = []
+    n = plant.n
+    for lam in np.linalg.eigvals(plant.A):
+        if lam.real < -1e-12:
+            continue
+        shifted = plant.A - lam * np.eye(n)
+        if deficient(np.hstack([shifted, plant.B]), n):
+            out.append(f"the plant's mode at s = {lam:.4g} is not controllable from u (PBH test)")
+        if deficient(np.vstack([shifted, plant.C]), n):
+            out.append(f"the plant's mode at s = {lam:.4g} is not observable from y (PBH test)")
+    Aa, Ba, _, _ = augmented(plant)
+    na = Aa.shape[0]
+    for lam in np.linalg.eigvals(plant.Ac):
+        if lam.real < -1e-12:
+            continue
+        if deficient(np.hstack([Aa - lam * np.eye(na), Ba]), na):
+            out.append(f"the servo-compensator's pole at s = {lam:.4g} cannot be moved by u: the plant has a "
+                       "transmission zero there, or fewer inputs than servo channels (eqs 10.3–10.4)")
+    return list(dict.fromkeys(out))
 
 
 def closed_loop(plant: LurePlant, K1, Kc, H, *, bz: str = "eq10.7"):

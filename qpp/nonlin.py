@@ -28,7 +28,7 @@ import numpy as np
 from common.errors import ConfigError
 from qpp.expression_parser import (  # noqa: F401  (re-exported: the old import paths)
     FUNCTIONS, MAX_EXPONENT, MAX_LEN, library_expression, parse_expression, sympy_module)
-from qpp.sector_bounds import climb_from, refine, verify
+from qpp.sector_bounds import climb_from, global_search, refine, verify
 from qpp.sector_grid import SampleGrid
 
 
@@ -229,6 +229,7 @@ class ExpressionModel(SampleGrid):
         for i in range(r):            # grid extrema → local extrema (widened only)
             kinds = {k: x for k, x in starts[i].items() if k == "slope" or diag[i]}
             got = refine(self, i, kinds, {"alpha": alpha[i], "beta": beta[i], "slope": slope[i]})
+            got = global_search(self, i, tuple(kinds), got)
             alpha[i], beta[i], slope[i] = got["alpha"], got["beta"], got["slope"]
             if not diag[i]:
                 alpha[i], beta[i] = -slope[i], slope[i]
@@ -272,9 +273,18 @@ class ExpressionModel(SampleGrid):
         if small.any() and mid.any():
             rs = np.abs(ph[small] / yi[small]).max()
             rm = np.abs(ph[mid] / yi[mid]).max()
-            if rs > 3.0 * rm + 1e-12 * max(1.0, slope[i]):
+            # growing towards 0 over the grid's last decades: unbounded only if it goes on growing
+            # three decades deeper (a saturation's corner between the two grid points is not that)
+            if rs > 3.0 * rm + 1e-12 * max(1.0, slope[i]) and self._ratio_at(i, 1e-12 * span, tg, th) > 3.0 * rs:
                 raise ConfigError(f"{where}: not sector-bounded near y = 0 "
                                   f"(φ/y grows from {rm:.3g} to {rs:.3g} as y → 0)")
+
+    def _ratio_at(self, i: int, y: float, tg, th) -> float:
+        """max |φ_i / y_i| at y_i = ±``y`` (the other outputs 0) over the times ``tg``, parameters ``th``."""
+        Y = [np.zeros((2, 1)) for _ in range(self.p)]
+        Y[i] = np.array([[y], [-y]])
+        ph = self._call(self._phi[i], Y, tg[None, :], [np.full((1, 1), v) for v in th])
+        return float(np.max(np.abs(np.broadcast_to(ph, (2, tg.size)) / Y[i])))
 
     def _point(self, Yf, tg, th, flat: int, shape: tuple) -> np.ndarray:
         """x = (y, t, θ) of grid entry ``flat`` of an (Ny, Nt) array (:func:`qpp.sector_bounds.refine`)."""

@@ -72,8 +72,9 @@ def plot_circle(res, path: Path) -> list[Path]:
         ax.axvline(0, color="k", lw=0.5)
         ax.set_xlabel("Re")
         ax.set_ylabel("Im")
+        form = "" if c.method == "gershgorin" else "\n(coupled φ: decided by the small-gain form, not this disc)"
         ax.set_title(f"Circle criterion, channel {i + 1}: {'pass' if c.passed else 'FAIL'} "
-                     f"(margin {c.margins[i]:.3g})")
+                     f"(margin {c.margins[i]:.3g}){form}")
         ax.legend(fontsize=7, loc="upper right")
         p = path.with_name(f"{path.stem}_ch{i + 1}.png")
         save_figure(fig, p, dpi=110, bbox_inches="tight")

@@ -5,7 +5,8 @@ a grid under-estimates a supremum that falls between its points (φ = δm·y·si
 sampled on 256 times gives the sector ±0.09999976 instead of ±0.1), and a sector that is too
 small by any amount is not a certificate.  :func:`refine` therefore climbs from the best grid
 points of each bound to the local extremum (Nelder–Mead within the stated box, scipy) and widens
-the bound to what it finds (beyond round-off); :func:`verify` then checks the bounds at random points and, on a
+the bound to what it finds (beyond round-off); :func:`global_search` searches the whole box as well
+(a global maximum in a basin the grid's best point does not lead to); :func:`verify` then checks the bounds at random points and, on a
 violation, widens them (+1 %) and returns the violating points, from which the model climbs again
 to the extremum the grid missed.  Bounds are only ever widened, never narrowed.
 """
@@ -53,6 +54,76 @@ def _value(model, i: int, kind: str, x) -> float:
     if abs(yi) <= 1e-9 * float(np.ptp(model.y_range[i])):     # φ/y undefined at y_i = 0: no step there
         return np.nan
     return float(model.phi_at(Y, t, TH)[i].ravel()[0] / yi)
+
+
+def _values(model, i: int, kind: str, X) -> np.ndarray:
+    """:func:`_value` at the columns of X (p + 1 + k, S), vectorized (NaN where undefined)."""
+    p = model.p
+    Y, t, TH = [X[j] for j in range(p)], X[p], [X[k] for k in range(p + 1, X.shape[0])]
+    S = X.shape[1]
+    with np.errstate(all="ignore"):
+        if kind == "slope":
+            return np.broadcast_to(sum((np.abs(model._grad(i, j, Y, t, TH)) for j in range(p) if model.dep[i][j]),
+                                       np.zeros(S)), (S,)).astype(float)
+        ph = np.broadcast_to(model.phi_at(Y, t, TH)[i], (S,))
+        if kind == "gain":
+            ymax = np.max(np.abs(X[:p]), axis=0)
+            return np.where(ymax > 1e-12, np.abs(ph) / np.where(ymax > 1e-12, ymax, 1.0), np.nan)
+        yi = X[i]
+        ok = np.abs(yi) > 1e-9 * float(np.ptp(model.y_range[i]))
+        return np.where(ok, ph / np.where(ok, yi, 1.0), np.nan)
+
+
+#: generations and population (per free variable) of :func:`global_search`'s differential evolution
+GLOBAL_GENERATIONS, GLOBAL_POPULATION = 60, 15
+
+
+def global_search(model, i: int, kinds: tuple, bounds: dict) -> dict:
+    """Search the whole box of channel ``i``'s variables (y, t, θ) for each bound in ``kinds``
+    (differential evolution, vectorized, a fixed seed: the same numbers every run), then climb
+    from the best point found (:func:`refine`): an extremum in a basin the grid's best point
+    does not lead to (φ/y = −(c − 1)y² + (sin wt − sin 2t)/2 peaks at one (w, t) among many
+    local maxima) is found, and the bounds widened to it.
+
+    Parameters
+    ----------
+    model : qpp.nonlin.ExpressionModel
+        The nonlinearity.
+    i : int
+        The φ channel.
+    kinds : tuple of str
+        The bounds to search: ``"alpha"``, ``"beta"``, ``"slope"``.
+    bounds : dict
+        ``kind → value`` so far (dimensionless gains).
+
+    Returns
+    -------
+    dict
+        The bounds, each widened to the best extremum found (never narrowed).
+    """
+    from scipy.optimize import differential_evolution
+
+    ranges, free = _box(model, i)
+    if not free.any():
+        return dict(bounds)
+    lo_hi = [r for r, f in zip(ranges, free) if f]
+    base = np.array([0.5 * (lo + hi) for lo, hi in ranges])
+    out = dict(bounds)
+    for kind in kinds:
+        def cost(Z, kind=kind):
+            X = np.repeat(base[:, None], Z.shape[1], axis=1)
+            X[free] = Z
+            c = -_SIGN[kind] * _values(model, i, kind, X)
+            return np.where(np.isfinite(c), c, np.inf)
+
+        res = differential_evolution(cost, lo_hi, vectorized=True, updating="deferred", seed=185644,
+                                     maxiter=GLOBAL_GENERATIONS, popsize=GLOBAL_POPULATION, tol=0.0,
+                                     polish=False, init="sobol")
+        if np.isfinite(res.fun):
+            x = base.copy()
+            x[free] = res.x
+            out = refine(model, i, {kind: x}, out)
+    return out
 
 
 def climb_from(model, i: int, x, kinds: tuple, bounds: dict) -> dict:

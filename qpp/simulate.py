@@ -62,6 +62,9 @@ class SimResult:
         Sphere radius β_o (eq 10.35), in the config's units of y.
     parameters : dict or None
         Expression kind: parameter values of the scenario.
+    diverged_at : float or None
+        Time the loop diverged (its samples after it are NaN, ``error_inf`` is inf), s; None
+        when it did not.
     """
 
     name: str
@@ -79,6 +82,7 @@ class SimResult:
     error_per_output: np.ndarray
     beta_o: float
     parameters: dict = None   #: expression kind: parameter values of the scenario
+    diverged_at: float | None = None   #: time the loop diverged, s (None: it did not)
 
     @property
     def passed(self) -> bool:
@@ -126,10 +130,12 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
     Zo, Uo = nominal
     Z, U = simulate_loop(plant, K1, Kc, H, f1, gamma=gam, gamma_nominal=g_nom, r_fun=r_fun,
                          t_eval=t, z0=z0, impulse_time=scenario.impulse_time, impulse=scenario.impulse,
-                         rtol=sim.rtol, atol=sim.atol)
+                         rtol=sim.rtol, atol=sim.atol, stop_if_diverged=True)
     n = plant.n
     y, yo = plant.C @ Z[:n], plant.C @ Zo[:n]
-    err = np.max(np.abs(y - yo), axis=1)
+    lost = ~np.all(np.isfinite(Z), axis=0)
+    diverged_at = float(t[np.argmax(lost)]) if lost.any() else None
+    err = np.max(np.abs(y - yo), axis=1) if diverged_at is None else np.full(plant.p, np.inf)
     R = np.array([r_fun(tt) for tt in t]).T
     Ro = np.array([r_o_fun(tt) for tt in t]).T
     pars = None
@@ -137,7 +143,7 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
         pars = dict(zip(cfg.nonlinearity.parameters, map(float, np.atleast_1d(gam))))
     g_scalar = float(np.atleast_1d(gam)[0]) if np.size(gam) else 0.0
     return SimResult(scenario.name, t, R, Ro, y, yo, U, Uo, Z[:n], Zo[:n], g_scalar,
-                     float(err.max()), err, cfg.spheres.beta_o, pars)
+                     float(err.max()), err, cfg.spheres.beta_o, pars, diverged_at)
 
 
 def check_work(cfg: QppConfig, K1, Kc, H, runs: int | None = None, horizon: float | None = None) -> float:

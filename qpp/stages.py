@@ -41,10 +41,10 @@ def printed_H_difference(cfg: QppConfig, r: DesignResult) -> float | None:
     Returns
     -------
     float or None
-        The largest relative difference, dimensionless.
+        The largest relative difference, dimensionless (None also when every printed entry is 0).
     """
     pub = cfg.published.H
-    if pub is None:
+    if pub is None or not np.any(np.asarray(pub, float)):
         return None
     return float(_rel(r.H, pub)[np.abs(np.asarray(pub, float)) > 0].max())
 
@@ -174,8 +174,16 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
                                   "1", "β3, β4, m (12.1) per bookkeeping: " + ", ".join(t.name for t in r.thresholds),
                                   ["half_width", "beta3", "beta4", "m"], dims=("bookkeeping", "threshold"))
     items.update(_sector_check_items(cfg))
-    c = r.circle
-    items["circle"] = {
+    items["circle"] = _circle_items(r.circle)
+    printed = _printed_gain_items(cfg.published, r.H)
+    if printed:
+        items["published"] = printed
+    return items
+
+
+def _circle_items(c) -> dict:
+    """The circle check's datasets (grid, bands, margins, scales; the small-gain terms of a coupled φ)."""
+    out = {
         "omega": Dataset(c.omega, "rad/s", "frequency grid", dims=("omega",)),
         "centres": Dataset(c.centres, "1", "h_ii(−a + jω), complex", dims=("channel", "omega")),
         "radii": Dataset(c.radii, "1", "Gershgorin mean radii (d_i + d'_i)/2", dims=("channel", "omega")),
@@ -185,10 +193,12 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         "min_scale": Dataset(c.min_scale, "1", "smallest s with sector s·[α, β] passing (0: every "
                              "smaller sector passes; > 0: an unstable H(s) needs a sector this wide)"),
     }
-    printed = _printed_gain_items(cfg.published, r.H)
-    if printed:
-        items["published"] = printed
-    return items
+    if c.method == "small_gain":          # a coupled φ: the small-gain form (qpp.circle)
+        out["margins"] = Dataset(c.margins, "1", "1 − ρ·sup σ̄(H_c), small-gain form for a coupled φ "
+                                             "(>0 passes)", dims=("channel",))
+        out["gain_bound"] = Dataset(c.gain_bound, "1", "ρ: ‖φ − C_0 y‖₂ ≤ ρ‖y‖₂ (small-gain form)")
+        out["peak_gain"] = Dataset(c.peak_gain, "1", "sup_ω σ̄(H_c(−a + jω)), H_c = (I − H C_0)⁻¹ H")
+    return out
 
 
 _ITER_KEYS = ["rho", "nu", "a", "T", "delta", "beta1", "m", "circle", "certified"]
@@ -317,6 +327,7 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
             "x": Dataset(np.asarray(s.x).T, "state units", "plant state", dims=("t", "state")),
             "error_inf": Dataset(s.error_inf, "output units", "‖y − y_o‖∞",
                                  attrs={"beta_o": s.beta_o, "passed": int(s.passed), "gamma": s.gamma,
+                                        **({} if s.diverged_at is None else {"diverged_at_s": s.diverged_at}),
                                         **{f"param_{k}": v for k, v in (s.parameters or {}).items()}}),
             "error_per_output": Dataset(s.error_per_output, "output units", "sup_t |y_i − y_oi|", dims=("output",)),
         }

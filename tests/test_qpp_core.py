@@ -174,10 +174,12 @@ def test_circle_criterion_siso_and_independent_sector(siso):
 
 
 def test_circle_encirclement_count():
-    # H(s) = 2/(s - 1): one unstable pole; sector [1, 3] -> disc [-1, -1/3]; Nyquist circles it once ccw
-    r = circle_criterion([[1.0]], [[2.0]], [[1.0]], [[1.0, 3.0]], a=0.0)
+    # H(s) = 2/(s - 1), φ = k y fed back with + (ẋ = (1 + 2k) x): one unstable pole, stable for
+    # k < -1/2; sector [-3, -1] -> disc with diameter [1/α, 1/β] = [-1/3, -1]; Nyquist circles it once ccw
+    r = circle_criterion([[1.0]], [[2.0]], [[1.0]], [[-3.0, -1.0]], a=0.0)
     assert r.P0 == 1 and r.encirclements[0] == -1 and r.passed
-    r2 = circle_criterion([[1.0]], [[2.0]], [[1.0]], [[0.1, 0.2]], a=0.0)   # disc [-10, -5]: not encircled
+    assert not circle_criterion([[1.0]], [[2.0]], [[1.0]], [[1.0, 3.0]], a=0.0).passed      # 1 + 2k > 0
+    r2 = circle_criterion([[1.0]], [[2.0]], [[1.0]], [[-0.2, -0.1]], a=0.0)  # disc [-10, -5]: not encircled
     assert not r2.passed
 
 
@@ -200,12 +202,13 @@ def test_circle_criterion_decoupled_mimo_is_its_siso_criteria():
 
 
 def test_circle_scales_of_an_unstable_plant():
-    # H(s) = 1/(s − 1): its Nyquist plot is the circle on [−1, 0], travelled once anticlockwise
-    # (P0 = 1).  A sector s·[α, β] with 0 < α passes when its disc [−1/(sα), −1/(sβ)] lies
-    # inside that circle: s > 1/α.  So the passing scales start above 0 (the old bisection
-    # assumed [0, s_max] and reported 0) and run up to the grid's resolution near the origin.
+    # H(s) = 1/(s − 1), φ fed back with + (ẋ = (1 + k) x: stable for k < −1): its Nyquist plot
+    # is the circle on [−1, 0], travelled once anticlockwise (P0 = 1).  A sector s·[−β, −α] with
+    # 0 < α passes when its disc (diameter [−1/(sα), −1/(sβ)]) lies inside that circle: s > 1/α.
+    # So the passing scales start above 0 (the old bisection assumed [0, s_max] and reported 0)
+    # and run up to the grid's resolution near the origin.
     for alpha, beta in ((2.0, 3.0), (0.1, 0.2)):
-        r = circle_criterion([[1.0]], [[1.0]], [[1.0]], [[alpha, beta]])
+        r = circle_criterion([[1.0]], [[1.0]], [[1.0]], [[-beta, -alpha]])
         assert r.P0 == 1
         assert r.min_scale == pytest.approx(1.0 / alpha, rel=1e-6)
         assert r.max_scale > 1e4 / alpha
@@ -219,7 +222,7 @@ def test_circle_scales_window_between_coarse_grid_points():
     # an unstable H whose passing scales are a narrow window, [~1.03, ~1.68], between two points
     # of a 4-per-decade grid (1.0 and 1.78 fail): found, and each end separates pass from fail
     A, B, C = np.diag([1.157, -0.898, -3.716]), np.ones((3, 1)), np.array([[0.896, -0.134, -1.105]])
-    sector = np.array([[1.0, 1.909]])
+    sector = np.array([[-1.909, -1.0]])            # fed back with +: the mirror of [1, 1.909] with −
     r = circle_criterion(A, B, C, sector)
     assert r.P0 == 1 and not r.passed
     assert 1.0 < r.min_scale < 1.1 and 1.6 < r.max_scale < 1.778

@@ -1,0 +1,120 @@
+"""The circle criterion against the loop as built: φ enters ż = A z + B φ(y) with + (eqs 13.1,
+14.2), so a passing sector never holds a destabilizing constant gain; a coupled φ is checked in
+the small-gain form (qpp.circle)."""
+import itertools
+
+import numpy as np
+
+from qpp.circle import circle_criterion
+from qpp.lure import LurePlant, closed_loop
+
+W = np.concatenate([[0.0], np.logspace(-3, 3, 1500)])
+
+
+def _max_re(A, B, C, Phi):
+    return float(np.linalg.eigvals(A + B @ Phi @ C).real.max())
+
+
+def _one_sided_loop():
+    """The SISO loop of the review: stable for φ = k y with k ≤ 1.426 only (k < 0 all stable)."""
+    P = LurePlant([[0, 1], [-1, -0.5]], [[0], [1]], [[1, 0]], [[0], [1]], [[0]], [[1]], [[1]])
+    Az, Bz, Cz = closed_loop(P, np.array([[-4.0, -3.0]]), np.array([[3.0]]), np.array([[-4.0], [-4.0]]))
+    return Az, Bz[:, 1:], Cz
+
+
+def test_one_sided_sectors_follow_the_sign_of_the_loop():
+    A, B, C = _one_sided_loop()
+    ks = np.linspace(-20, 5, 2501)
+    stable = np.array([_max_re(A, B, C, np.array([[k]])) < 0 for k in ks])
+    k_max = ks[stable].max()
+    assert 1.40 < k_max < 1.45 and stable[ks < 0].all()            # independent: eigenvalues
+    assert circle_criterion(A, B, C, [[0.0, 0.9]], a=1e-4).passed
+    assert not circle_criterion(A, B, C, [[0.0, 3.0]], a=1e-4).passed   # k = 3 diverges
+    assert not circle_criterion(A, B, C, [[0.0, 1.5]], a=1e-4).passed
+    assert circle_criterion(A, B, C, [[-3.1, 0.0]], a=1e-4).passed
+    c = circle_criterion(A, B, C, [[0.0, 1.0]], a=1e-4)
+    assert c.max_scale * 1.0 <= k_max * 1.001                       # sufficient, never beyond stability
+
+
+def test_passing_sectors_hold_no_destabilizing_constant_gain():
+    """400 random stable 2×2 loops, one-sided, two-sided and positive sectors scaled to 0.99× the
+    largest admissible scale: every constant diagonal gain at a corner of the sector (and at
+    random inside) leaves the loop stable."""
+    rng = np.random.default_rng(7)
+    checked = 0
+    for _ in range(400):
+        A = rng.normal(size=(3, 3))
+        A -= (np.linalg.eigvals(A).real.max() + rng.uniform(0.2, 1.0)) * np.eye(3)
+        B, C = rng.normal(size=(3, 2)), rng.normal(size=(2, 3))
+        lo, hi = sorted(rng.choice([-2.0, -1.0, 0.0, 0.5, 1.0, 2.0], 2, replace=False))
+        sector = np.array([[lo, hi], [min(lo, 0.0), max(hi, 0.5)]])
+        c = circle_criterion(A, B, C, sector, omega=W)
+        s = 0.99 * c.max_scale
+        if not np.isfinite(s) or s <= 0 or c.min_scale > 0:
+            continue
+        checked += 1
+        corners = [np.diag(d) for d in itertools.product(*(s * sector))]
+        inside = [np.diag(s * (sector[:, 0] + rng.uniform(size=2) * np.ptp(sector, axis=1))) for _ in range(4)]
+        assert max(_max_re(A, B, C, K) for K in corners + inside) < 1e-9
+    assert checked > 200
+
+
+def _cross_counterexample():
+    rng = np.random.default_rng(1)
+    for _ in range(300):
+        A = rng.normal(size=(4, 4))
+        A -= (np.linalg.eigvals(A).real.max() + rng.uniform(0.1, 1)) * np.eye(4)
+        B, C = rng.normal(size=(4, 2)), rng.normal(size=(2, 4))
+        diag_scale = circle_criterion(A, B, C, [[-1, 1], [-1, 1]], omega=W).max_scale
+        s = 0.98 * diag_scale
+        if not np.isfinite(s) or s == 0:
+            continue
+        Phi = s * np.array([[0.0, 1.0], [1.0, 0.0]])
+        for sg in itertools.product([-1, 1], repeat=2):
+            P = Phi * np.array([[1, sg[0]], [sg[1], 1]])
+            if _max_re(A, B, C, P) > 0:
+                return A, B, C, s
+    raise AssertionError("no counterexample to the diagonal test found")
+
+
+def test_coupled_channels_take_the_small_gain_form():
+    """φ_1 = k y_2, φ_2 = k y_1 inside the sector ±s of each channel can destabilize a loop the
+    diagonal (Gershgorin) form passes; the coupled form does not pass it."""
+    A, B, C, s = _cross_counterexample()
+    sector = [[-s, s], [-s, s]]
+    assert circle_criterion(A, B, C, sector, omega=W).passed                # the diagonal form: unsound here
+    c = circle_criterion(A, B, C, sector, omega=W, coupled=[True, True])
+    assert not c.passed and c.method == "small_gain"
+    assert np.isclose(c.gain_bound, np.sqrt(2) * s)
+
+
+def test_coupled_small_gain_is_sufficient_on_random_loops():
+    """Below the small-gain form's largest admissible scale, constant gain matrices with row sums
+    |Φ_i1| + |Φ_i2| ≤ s (a coupled channel's bound) never destabilize; a diagonal channel mixed in
+    keeps its own centre."""
+    rng = np.random.default_rng(3)
+    checked = 0
+    for _ in range(200):
+        A = rng.normal(size=(4, 4))
+        A -= (np.linalg.eigvals(A).real.max() + rng.uniform(0.1, 1)) * np.eye(4)
+        B, C = rng.normal(size=(4, 2)), rng.normal(size=(2, 4))
+        sector = np.array([[-1.0, 1.0], [0.0, 1.0]])
+        c = circle_criterion(A, B, C, sector, omega=W, coupled=[True, False])
+        s = 0.99 * c.max_scale
+        if not np.isfinite(s) or s <= 0:
+            continue
+        checked += 1
+        for _k in range(12):
+            w = rng.uniform(size=2)
+            row1 = s * rng.choice([-1, 1], 2) * w / w.sum()
+            k2 = s * rng.uniform(0.0, 1.0)
+            assert _max_re(A, B, C, np.array([row1, [0.0, k2]])) < 1e-9
+    assert checked > 100
+
+
+def test_symmetric_sectors_are_unchanged_by_the_sign():
+    """A symmetric sector's disc is centred at 0: its verdict and margins do not depend on the sign."""
+    A, B, C = _one_sided_loop()
+    c1 = circle_criterion(A, B, C, [[-0.5, 0.5]], a=1e-4)
+    c2 = circle_criterion(A, -B, C, [[-0.5, 0.5]], a=1e-4)
+    assert c1.passed == c2.passed and np.allclose(c1.margins, c2.margins)

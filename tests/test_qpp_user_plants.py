@@ -1,0 +1,172 @@
+"""qpp on plants of the user's own (a review's findings): stated sectors that do not hold φ,
+channel counts the circle criterion cannot take, scenario parameters out of range, round-off in
+N = G⁺B, a printed H of zeros."""
+import numpy as np
+import pytest
+import yaml
+
+from common.errors import ConfigError
+from qpp.config import load_config, parse_config
+
+
+def _base(**edits):
+    data = {
+        "name": "base",
+        "plant": {"A": [[0, 1], [2, -1]], "B": [[0], [1]], "C": [[2, -1]], "G": [[0], [1]],
+                  "Ac": [[0]], "Bc": [[1]], "Cc": [[1]]},
+        "nonlinearity": {"kind": "expression", "f1": ["k*sat(y1, 0.5)"],
+                         "parameters": {"k": {"min": -0.3, "max": 0.3, "nominal": 0.0}},
+                         "y_range": [[-2, 2]]},
+        "hinf": {"rho": 1e-2, "a": 1e-4, "search": True},
+        "spheres": {"beta_o": 0.5, "beta_ri": 0.05, "T": 1.0},
+        "design": {},
+        "simulation": {"t_final": 10.0, "n_samples": 101, "r_o": [[{"kind": "step", "amplitude": 0.3}]],
+                       "scenarios": [{"name": "kmax", "parameters": {"k": 0.3}}]},
+        "output": {"root": "runs", "figures": False},
+    }
+    for path, value in edits.items():
+        node = data
+        keys = path.split(".")
+        for k in keys[:-1]:
+            node = node[k]
+        node[keys[-1]] = value
+    return data
+
+
+@pytest.mark.parametrize("field", ["nonlinearity.sector", "design.sector"])
+def test_a_stated_sector_narrower_than_phi_is_refused(field):
+    # φ = k·sat(y, 0.5), |k| ≤ 0.3: its sector is ±0.3 (exactly, at |y| ≤ 0.5)
+    with pytest.raises(ConfigError, match=r"does not hold φ_1.*\[-0\.3, 0\.3\]"):
+        parse_config(_base(**{field: [[-0.01, 0.01]]}))
+    parse_config(_base(**{field: [[-0.3, 0.3]]}))            # the exact sector, stated: accepted
+    parse_config(_base(**{field: [[-0.5, 0.4]]}))            # wider: accepted
+
+
+def test_a_sinusoidal_plant_needs_as_many_phi_channels_as_outputs():
+    data = _base(**{"plant.A": [[0, 1, 0], [0, 0, 1], [-1, -2, -2]], "plant.B": [[0], [0], [1]],
+                    "plant.C": [[1, 0, 0], [0, 1, 0]], "plant.G": [[0], [0], [1]], "plant.Bc": [[1, 0]],
+                    "nonlinearity": {"kind": "sinusoidal", "F0": [[0.0, 0.0]], "F1": [[0.1, 0.0]],
+                                     "F_unc": [[1.0, 0.0]], "omega": 1.0, "gamma_max": 0.05},
+                    "simulation.r_o": [[{"kind": "step", "amplitude": 0.5}], [{"kind": "step", "amplitude": 0.0}]],
+                    "simulation.scenarios": [{"name": "g", "gamma": 0.05}]})
+    with pytest.raises(ConfigError, match="as many disturbance channels as outputs"):
+        parse_config(data)
+
+
+@pytest.mark.parametrize("name, gamma, ok", [("qpp_siso", 5.0, False), ("qpp_siso", -0.05, True),
+                                             ("qpp_manipulator", 0.0, False), ("qpp_manipulator", 1000.0, False),
+                                             ("qpp_manipulator", 50.0, True)])
+def test_scenario_gamma_within_the_nonlinearity_range(name, gamma, ok):
+    over = [f"simulation.scenarios.0.gamma={gamma}"]
+    if ok:
+        load_config(name, over)
+    else:
+        with pytest.raises(ConfigError, match="gamma .* outside"):
+            load_config(name, over)
+    with pytest.raises(ConfigError, match="takes gamma, not parameters"):
+        load_config(name, ["simulation.scenarios.0.parameters={dm: 1}"])
+
+
+def test_round_off_in_N_does_not_couple_the_phi_channels():
+    """B = G with a column that lstsq returns with 1e-16 off-diagonal entries: N is I exactly, so
+    each φ_i depends on its own output only (one-sided sectors stay one-sided)."""
+    data = _base(**{"plant.A": [[0, 1, 0, 0], [-2, -1, 0, 0], [0, 0, 0, 1], [0, 0, -3, -2]],
+                    "plant.B": [[0, 0], [0, 0], [1, 0.5], [0, 1]], "plant.G": [[0, 0], [0, 0], [1, 0.5], [0, 1]],
+                    "plant.C": [[1, 0, 0, 0], [0, 0, 1, 0]], "plant.Ac": [[0, 0], [0, 0]],
+                    "plant.Bc": [[1, 0], [0, 1]], "plant.Cc": [[1, 0], [0, 1]],
+                    "nonlinearity.f1": ["k*sat(y1, 0.4)", "k*sat(y2, 0.4)"],
+                    "nonlinearity.parameters": {"k": {"min": 0.0, "max": 0.5, "nominal": 0.0}},
+                    "nonlinearity.y_range": [[-2, 2], [-2, 2]],
+                    "simulation.r_o": [[{"kind": "step", "amplitude": 0.1}], [{"kind": "step", "amplitude": 0.0}]]})
+    cfg = parse_config(data)
+    N = cfg.lure_plant().N()
+    np.testing.assert_array_equal(N, np.eye(2))
+    info = cfg.expression_model().sector_info
+    assert info.diagonal.all()
+    np.testing.assert_allclose(info.sector, [[0.0, 0.5], [0.0, 0.5]], atol=1e-9)
+
+
+def test_a_printed_H_of_zeros_is_no_difference_to_report(tmp_path):
+    from typer.testing import CliRunner
+
+    from cli.qpp_app import app
+
+    r = CliRunner().invoke(app, ["design", "qpp_siso", f"output.root={tmp_path}", "--no-figures",
+                                 "published.H=[[0],[0]]"])
+    assert r.exit_code in (0, 3), r.output
+    assert "Traceback" not in r.output and r.exception is None or isinstance(r.exception, SystemExit)
+    assert (tmp_path / "qpp_siso" / "qpp_design.h5").is_file()
+    assert yaml.safe_load((tmp_path / "qpp_siso" / "config.yaml").read_text())["name"] == "qpp_siso"
+
+
+def test_a_saturation_on_a_wide_output_range_is_sector_bounded():
+    """k·sat(y, 0.5) on |y| ≤ 1e6: φ/y steps from 0.3 (|y| < 0.5) down between the grid's points
+    near 0; that is a corner, not growth without bound (√|y| still is refused)."""
+    info = parse_config(_base(**{"nonlinearity.y_range": [[-1e6, 1e6]]})).expression_model().sector_info
+    np.testing.assert_allclose(info.sector, [[-0.3, 0.3]], atol=1e-9)
+    for rng in ([[-2, 2]], [[-1e6, 1e6]]):
+        with pytest.raises(ConfigError, match="not sector-bounded near y = 0"):
+            parse_config(_base(**{"nonlinearity.y_range": rng, "nonlinearity.f1": ["k*sign(y1)*abs(y1)**0.5"]}))
+
+
+def test_a_supremum_in_a_basin_the_grid_does_not_lead_to_is_found():
+    """φ/y = −(c − 1)y² + (sin wt − sin 2t)/2 (f1 = −c y³ + y sin(wt)/2, nominal c = 1, w = 2):
+    its supremum 1.125 + 1 = 2.125 at y = ±1.5, c = 0.5, sin wt = 1 = −sin 2t (w = 10/7,
+    t = 7π/4) lies among many local maxima in (w, t); the grid's best point climbed to 2.078."""
+    data = _base(**{"plant.A": [[0, 1], [-1, -0.5]], "plant.C": [[1, 0]],
+                    "nonlinearity.f1": ["-c*y1**3 + 0.5*y1*sin(w*t)"],
+                    "nonlinearity.parameters": {"c": {"min": 0.5, "max": 1.5, "nominal": 1.0},
+                                                "w": {"min": 1.0, "max": 3.0, "nominal": 2.0}},
+                    "nonlinearity.y_range": [[-1.5, 1.5]], "nonlinearity.t_range": 10.0,
+                    "simulation.scenarios": [{"name": "c05", "parameters": {"c": 0.5, "w": 1.4285714}}]})
+    info = parse_config(data).expression_model().sector_info
+    exact = 0.5 * 1.5 ** 2 + 1.0
+    np.testing.assert_allclose(info.sector, [[-exact, exact]], rtol=1e-7)
+
+
+def test_a_diverging_scenario_is_a_result_not_a_failure(tmp_path):
+    """φ = 3·y fed back with + destabilizes the loop (eigenvalue check): a long run diverges; the
+    scenario is reported OUTSIDE with the time it diverged, the other scenario as usual."""
+    from cli.qpp_app import app
+    from typer.testing import CliRunner
+    from qpp.lure import closed_loop
+
+    data = _base(**{"plant.A": [[0, 1], [-1, -0.5]], "plant.C": [[1, 0]], "nonlinearity.f1": ["k*y1"],
+                    "nonlinearity.parameters": {"k": {"min": 0.0, "max": 3.0, "nominal": 0.0}},
+                    "design": {"gains": "published"},
+                    "published": {"K1": [[-4.0, -3.0]], "Kc": [[3.0]], "H": [[-4.0], [-4.0]]},
+                    "simulation.t_final": 3000.0, "simulation.n_samples": 3001,
+                    "simulation.scenarios": [{"name": "k3", "parameters": {"k": 3.0}},
+                                             {"name": "k1", "parameters": {"k": 1.0}}],
+                    "output.root": str(tmp_path)})
+    cfg = parse_config(data)
+    Az, Bz, Cz = closed_loop(cfg.lure_plant(), *(np.array(v, float) for v in ([[-4, -3]], [[3]], [[-4], [-4]])))
+    assert np.linalg.eigvals(Az + 3.0 * Bz[:, 1:] @ Cz).real.max() > 0       # k = 3: unstable
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(data))
+    r = CliRunner().invoke(app, ["simulate", str(tmp_path / "c.yaml"), "--no-figures"])
+    assert r.exit_code == 0, r.output
+    assert "k3" in r.output and "DIVERGED at t =" in r.output and "OUTSIDE" in r.output
+    import h5py
+
+    with h5py.File(tmp_path / "base" / "qpp_sim.h5", "r") as f:
+        assert np.isinf(f["k3/error_inf"][()]) and 0 < f["k3/error_inf"].attrs["diverged_at_s"] < 3000
+        assert not f["k3/error_inf"].attrs["passed"]
+        assert np.isfinite(f["k1/error_inf"][()]) and "diverged_at_s" not in f["k1/error_inf"].attrs
+
+
+@pytest.mark.parametrize("plant, words", [
+    (([[1, 0], [0, -2]], [[0], [1]], [[1, 1]]), "not controllable from u"),
+    (([[1, 0], [0, -2]], [[1], [1]], [[0, 1]]), "not observable from y"),
+    (([[0, 1], [2, -1]], [[0], [1]], [[1, -1]]), "not observable from y"),        # zero cancels the pole
+    (([[0, 1], [-1, -0.5]], [[0], [1]], [[0, 1]]), "servo-compensator's pole at s = 0"),
+])
+def test_a_structurally_impossible_plant_names_its_obstacle(plant, words):
+    """No gains of eqs 10.5–10.6 exist: the failure says why (PBH tests), not only that none was found."""
+    from qpp.lure import LurePlant, structural_obstacles
+
+    A, B, C = plant
+    why = structural_obstacles(LurePlant(A, B, C, B, [[0]], [[1]], [[1]]))
+    assert len(why) == 1 and words in why[0]
+    # the same structure without the obstacle (C = [2, −1]: observable, no zero at 0) has none
+    assert structural_obstacles(LurePlant([[0, 1], [2, -1]], [[0], [1]], [[2, -1]], [[0], [1]],
+                                          [[0]], [[1]], [[1]])) == []
