@@ -211,7 +211,11 @@ def finish() -> list[Path]:
     w, _WORKER = _WORKER, None
     if w is None:
         return []
-    written, errors, code = w.close()
+    try:
+        written, errors, code = w.close()
+    except BaseException:       # interrupted while waiting: no figure may land after the stage
+        _kill_worker(w)         # rolls its folder back (common.outputs)
+        raise
     if not errors and (code != 0 or w.failed is not None):
         errors = ["cannot write the figures: the figure process failed"]
     return _report(written, errors)
@@ -242,9 +246,29 @@ def flush() -> list[Path]:
     OutputError
         A figure could not be written (the first failure's message).
     """
-    if _WORKER is None:
+    global _WORKER
+    w = _WORKER
+    if w is None:
         return []
-    return _report(*_WORKER.flush())
+    try:
+        got = w.flush()
+    except BaseException:       # interrupted while waiting: stop the shared worker (see finish)
+        _WORKER = None
+        _kill_worker(w)
+        raise
+    return _report(*got)
+
+
+def _kill_worker(w) -> None:
+    """SIGKILL a worker's process group (its writers with it) and reap it; never raises."""
+    from common.figure_process import _kill_group
+
+    _kill_group(w.pid)
+    try:
+        os.waitpid(w.pid, 0)
+    except OSError:
+        pass
+
 
 
 def abort() -> None:

@@ -12,10 +12,15 @@ stage runs is recorded, and when the stage finishes successfully
    cannot be mistaken for a result of this one.
 
 Files of other stages are left alone (``acmm simulate`` does not remove ``design.h5``; the sweep
-journal survives for ``--resume``).  A stage that fails, while it runs or while it writes its
-``config.yaml``, writes no ``config.yaml`` and removes the files it wrote in its run folder, so no
-result is left beside a ``config.yaml`` of another run; it removes nothing else (the files of
-earlier runs stay, and so do those of a stage it ran that finished, with their ``config.yaml``).
+journal survives for ``--resume``).  A stage that fails or is interrupted, while it runs or while
+it writes its ``config.yaml``, rolls its run folder back: the files it wrote are removed and the
+files of the earlier run that it replaced are put back (hard links to them are kept in a hidden
+``.rollback-<pid>-<n>`` folder while the stage runs, :class:`_Rollback`), so the folder holds
+the earlier run's results with their ``config.yaml``, as before the command, and no result of
+this run sits beside a ``config.yaml`` of another.  When a stage it ran (``acmm simulate`` →
+design) finished first, that stage's files stay with its new ``config.yaml``, and the earlier
+run's files of the failed stage, which no longer match it, are removed instead of put back.  A
+second Ctrl-C does not interrupt the rollback.
 Two exceptions: a stage whose results are written and only a figure fails
 (:class:`common.errors.FigureError`, exit 4) finishes as above, results and ``config.yaml`` kept;
 and a stage in :data:`KEEPS_PARTIAL_RESULTS` keeps its files: the sweep's tables are snapshots of
@@ -85,6 +90,7 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
     entry = written, kept = set(), set()
     run_dir = Path(run_dir)
     before = _stage_files(run_dir, stage)
+    rollback = _Rollback(run_dir, [*before, run_dir / CONFIG_FILE]) if stage not in KEEPS_PARTIAL_RESULTS else None
     _RECORDERS.append(entry)
     try:
         try:
@@ -97,15 +103,113 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
             raise
         _finish(run_dir, stage, written, config, config_text)
     except BaseException as exc:
-        if getattr(exc, "finished_stage", None) is entry:
-            _keep_in_outer_stages(written)
-        elif stage not in KEEPS_PARTIAL_RESULTS:
-            now = _stage_files(run_dir, stage)          # with those a figure writer completed unrecorded
-            _discard((written | {p for p, sig in now.items() if before.get(p) != sig}) - kept, run_dir)
+        with _no_interrupts():
+            if getattr(exc, "finished_stage", None) is entry:
+                _keep_in_outer_stages(written)
+            elif rollback is not None:
+                now = _stage_files(run_dir, stage)          # with those a figure writer completed unrecorded
+                _discard((written | {p for p, sig in now.items() if before.get(p) != sig}) - kept, run_dir)
+                rollback.restore(skip=kept, stale=bool(kept))
+            if rollback is not None:
+                rollback.drop()
         raise
     finally:
         del _RECORDERS[next(i for i, r in enumerate(_RECORDERS) if r is entry)]
+    if rollback is not None:
+        rollback.drop()
     _keep_in_outer_stages(written)
+
+
+class _Rollback:
+    """Hard links to the files a stage may replace (its files and ``config.yaml`` in the run
+    folder), in a hidden folder of the run folder, so that a failed stage can put them back.
+
+    A hard link costs no copy; where the file system has none, the file is copied.  A folder left
+    by a killed process is removed by the next stage that starts there.
+    """
+
+    _count = 0
+
+    def __init__(self, run_dir: Path, paths: list) -> None:
+        import os
+        import shutil
+
+        _Rollback._count += 1
+        self.run_dir = run_dir
+        self.dir = run_dir / f".rollback-{os.getpid()}-{_Rollback._count}"
+        self.saved: list[Path] = []
+        if not run_dir.is_dir():
+            return
+        _remove_stale_rollbacks(run_dir)
+        for p in paths:
+            p = Path(p)
+            if not p.is_file():
+                continue
+            try:
+                self.dir.mkdir(exist_ok=True)
+                try:
+                    os.link(p, self.dir / p.name)
+                except OSError:
+                    shutil.copy2(p, self.dir / p.name)
+                self.saved.append(p.resolve())
+            except OSError:         # no room for the copy: that file is not restored on failure
+                pass
+
+    def restore(self, skip: set, stale: bool) -> None:
+        """Put the saved files back (except ``skip``); with ``stale`` (a stage run by this one
+        finished and wrote its ``config.yaml``) remove them instead: they belong to the earlier
+        run of this stage, which the new config.yaml no longer describes."""
+        import os
+
+        for p in self.saved:
+            if p in skip or p.name == CONFIG_FILE and stale:
+                continue
+            try:
+                if stale:
+                    p.unlink(missing_ok=True)
+                else:
+                    os.replace(self.dir / p.name, p)
+            except OSError:
+                pass
+
+    def drop(self) -> None:
+        """Remove the hidden folder (the stage finished, or its files are restored)."""
+        import shutil
+
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def _remove_stale_rollbacks(run_dir: Path) -> None:
+    """Remove ``.rollback-<pid>-*`` folders of processes that no longer run (killed by ``kill -9``)."""
+    import os
+    import shutil
+
+    for d in run_dir.glob(".rollback-*-*"):
+        try:
+            pid = int(d.name.split("-")[1])
+            if pid != os.getpid():
+                os.kill(pid, 0)
+        except ProcessLookupError:
+            shutil.rmtree(d, ignore_errors=True)
+        except (ValueError, OSError):
+            pass
+
+
+@contextlib.contextmanager
+def _no_interrupts():
+    """SIGINT ignored while a failed stage rolls its folder back (in the main thread; a second
+    Ctrl-C would leave the folder half restored)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def _keep_in_outer_stages(written: set) -> None:

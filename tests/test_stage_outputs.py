@@ -26,9 +26,11 @@ def test_a_stage_failing_after_writing_removes_what_it_wrote(tmp_path):
             write_text(run / "design.h5", "new results")      # replaces the earlier run's file
             write_text(run / "design_poles.png", "new figure")
             raise _Boom                                         # e.g. the next figure cannot be written
-    # nothing of the failed run is left; the earlier run's untouched files and config.yaml stay
-    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design_gains.png"]
+    # nothing of the failed run is left; the earlier run's files, the one it replaced included,
+    # and its config.yaml are as before the command
+    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5", "design_gains.png"]
     assert (run / "config.yaml").read_text() == "name: old\n"
+    assert (run / "design.h5").read_text() == "old results"
 
 
 def test_a_stage_whose_config_yaml_cannot_be_written_removes_its_results(tmp_path):
@@ -97,10 +99,10 @@ def test_a_nested_stage_figure_failing_does_not_finish_the_outer_stage(tmp_path)
             with stage_outputs(run, "design", config_text="name: sim\n"):
                 write_text(run / "design.h5", "design results")
                 raise FigureError("cannot write design_poles.png")
-    # the design finished (results, config.yaml); the simulation did not: its own file is removed
-    # and the earlier sim.h5 is not pruned as if it had finished
-    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5", "sim.h5"]
-    assert (run / "sim.h5").read_text() == "an earlier run's simulation"
+    # the design finished (results, config.yaml); the simulation did not: its own file is removed,
+    # and so is the earlier sim.h5, which the new config.yaml no longer describes
+    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5"]
+    assert (run / "config.yaml").read_text().endswith("name: sim\n")
 
 
 def test_a_figure_completed_but_not_yet_recorded_is_removed_too(tmp_path):
@@ -190,3 +192,92 @@ def test_a_sweep_whose_figure_fails_finishes_with_its_config(tmp_runs):
     assert "n_runs: 3" in (run / "config.yaml").read_text()
     # the map is drawn first and failed; the earlier run's peak-error figure is not this run's
     assert not (run / "sweep_peak_error.png").exists()
+
+
+def test_an_interrupted_stage_puts_back_every_file_it_replaced(tmp_path):
+    """Ctrl-C after the new results replaced the old ones (while the figures or config.yaml are
+    written): the folder is as before the command, byte for byte, and no hidden folder is left."""
+    run = tmp_path / "run"
+    _earlier_run(run)
+    write_text(run / "design_poles.png", "old poles")
+    before = {p.name: p.read_bytes() for p in run.iterdir()}
+    with pytest.raises(KeyboardInterrupt):
+        with stage_outputs(run, "design", config_text="name: new\n"):
+            write_text(run / "design.h5", "new results")
+            write_text(run / "design_gains.png", "new figure")
+            (run / "design_poles.png").unlink()         # whatever the stage did to its own files
+            raise KeyboardInterrupt
+    assert {p.name: p.read_bytes() for p in run.iterdir()} == before
+
+
+def test_a_stage_that_fails_in_its_config_yaml_puts_the_old_one_back(tmp_path, monkeypatch):
+    import common.outputs as outputs
+
+    run = tmp_path / "run"
+    _earlier_run(run)
+
+    def prune_fails(*a, **k):                      # config.yaml written, then the end fails
+        raise OSError("disk full")
+
+    monkeypatch.setattr(outputs, "prune", prune_fails)
+    with pytest.raises(OSError):
+        with stage_outputs(run, "design", config_text="name: new\n"):
+            write_text(run / "design.h5", "new results")
+    assert (run / "config.yaml").read_text() == "name: old\n"
+    assert (run / "design.h5").read_text() == "old results"
+
+
+def test_a_finished_stage_leaves_no_rollback_folder_and_a_killed_ones_is_removed(tmp_path):
+    import subprocess
+    import sys
+
+    run = tmp_path / "run"
+    _earlier_run(run)
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True).stdout.strip()
+    (run / f".rollback-{dead}-1").mkdir()              # left by a process killed with kill -9
+    write_text(run / f".rollback-{dead}-1" / "design.h5", "older")
+    with stage_outputs(run, "design", config_text="name: new\n"):
+        write_text(run / "design.h5", "new results")
+    assert not [p for p in run.iterdir() if p.name.startswith(".rollback")]
+    assert (run / "design.h5").read_text() == "new results"
+
+
+def _slow_figure(path):
+    """A figure writer that takes 1 s (module level: the worker calls it by reference)."""
+    import time
+
+    time.sleep(1.0)
+    write_text(path, "a figure landing late")
+    return path
+
+
+def test_ctrl_c_while_the_figures_are_awaited_stops_the_writers(tmp_path):
+    """Ctrl-C while the stage waits for its figure worker (the results written): the writers are
+    killed before the folder is rolled back, so no figure of the interrupted run lands later."""
+    import signal
+    import time
+
+    from common import figure_worker
+
+    if not figure_worker.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    run = tmp_path / "run"
+    run.mkdir()
+
+    def interrupt(*_):
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with stage_outputs(run, "simulate", config_text="name: x\n"):
+                with figure_worker.session():
+                    figure_worker.submit(_slow_figure, run / "sim_axes.png")
+                    signal.setitimer(signal.ITIMER_REAL, 0.3)      # fires while the session waits
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, old)
+    time.sleep(1.5)
+    assert not figure_worker.active()
+    assert list(run.iterdir()) == []
