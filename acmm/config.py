@@ -110,6 +110,13 @@ class Schedule(_Model):
     n_check: int = Field(201, ge=2, le=2001, description="TEAs evenly spaced along the blend path at which "
                                                          "the scheduled gain is checked on the local model")
 
+    @model_validator(mode="after")
+    def _fit_of_the_form(self):
+        if self.form == "table" and self.fit == "closed_loop":
+            raise ValueError("fit: closed_loop refines a polynomial schedule; form: table interpolates the "
+                             "design points' gains themselves (give one or the other)")
+        return self
+
 
 class Simulation(_Model):
     """Nonlinear closed-loop simulation (ch. 6)."""

@@ -110,6 +110,17 @@ class Disturbance(_Model):
             raise ValueError("bias_from_tea angles must lie within ±89 deg (eq 3.6 is singular at 90 deg)")
         return self
 
+    def requested_tea(self) -> np.ndarray | None:
+        """The TEA this section asks for (``bias_from_tea``), the ``expected`` root of
+        :func:`acmm.tea.solve_tea` (its bias may have several equilibria; this one is meant).
+
+        Returns
+        -------
+        (3,) ndarray or None
+            The attitude, rad; None without ``bias_from_tea``.
+        """
+        return None if self.bias_from_tea is None else np.radians(np.asarray(self.bias_from_tea, float))
+
 
 class Actuators(_Model):
     """CMG actuator limits (report ch. 5.1)."""

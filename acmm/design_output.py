@@ -52,7 +52,8 @@ def point_items(points) -> dict:
             "scales": Dataset(p.model.scales, "per-state", "state scaling used for the Riccati solve",
                               STATE_NAMES),
             "eig_condition": Dataset(res.eig_condition, "1",
-                                     "eigenvalue condition number of each pole (order of 'poles'), scaled states"),
+                                     "eigenvalue condition number of each pole (order of 'poles'), scaled states",
+                                     dims=("pole",)),
             "max_eig_condition": Dataset(res.max_eig_condition, "1",
                                          "largest eigenvalue condition number of A - B K, scaled states"),
             "robustness_radius": Dataset(res.robustness_radius, "1",
@@ -97,16 +98,18 @@ def table_items(r, pts: dict) -> dict:
         "state_names": Dataset(np.array(STATE_NAMES, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
         "wall_time": Dataset(r.wall_time, "s", "design wall time"),
         "sector_margin": Dataset(np.array([p.lqr.margin for p in r.points]), "n",
-                                 "worst pole distance into the sector per point (>0 inside)"),
+                                 "worst pole distance into the sector per point (>0 inside)", dims=("point",)),
         "max_eig_condition": Dataset(np.array([p.lqr.max_eig_condition for p in r.points]), "1",
-                                     "largest eigenvalue condition number of A - B K per point, scaled states"),
+                                     "largest eigenvalue condition number of A - B K per point, scaled states",
+                                     dims=("point",)),
         "robustness_radius": Dataset(np.array([p.lqr.robustness_radius for p in r.points]), "1",
-                                     "sector robustness radius per point (relative gain error, normwise, scaled)"),
+                                     "sector robustness radius per point (relative gain error, normwise, scaled)",
+                                     dims=("point",)),
         "robustness_radius_elementwise": Dataset(
             np.array([p.lqr.robustness_radius_elementwise for p in r.points]), "1",
-            "sector robustness radius per point (elementwise relative gain error)"),
+            "sector robustness radius per point (elementwise relative gain error)", dims=("point",)),
         "riccati_condition": Dataset(np.array([p.lqr.riccati_condition for p in r.points]), "1",
-                                     "CARE condition estimate per point"),
+                                     "CARE condition estimate per point", dims=("point",)),
     }
     return items
 
@@ -125,8 +128,9 @@ def schedule_items(r) -> dict:
         Name → :class:`common.results.Dataset` or group (units stated per dataset).
     """
     sched = {
-        "coef": Dataset(r.fit.coef, "K units per rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k",
-                        dims=("power", "axis", "state")),
+        "coef": Dataset(r.fit.coef, "K units per rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k" if r.fit.form == "polynomial"
+                        else "least-squares polynomial of the gains, for reference (form table: K linear in θ2* "
+                             "between the design points)", dims=("power", "axis", "state")),
         "variable": Dataset(r.fit.variable, "rad", "scheduling variable: pitch TEA θ2* per point", dims=("point",)),
         "rms_residual": Dataset(r.fit.rms_residual, "K units", "RMS fit residual per element", dims=("axis", "state")),
         "rel_residual": Dataset(r.fit.rel_residual, "1", "RMS residual / max |K_ij|", dims=("axis", "state")),

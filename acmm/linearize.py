@@ -341,7 +341,8 @@ def linearize_config(cfg) -> LinearModel:
     from acmm.tea import resolve_bias, solve_tea
 
     inertia = cfg.inertia.matrix()
-    t = solve_tea(inertia, cfg.orbit_rate, resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate))
+    t = solve_tea(inertia, cfg.orbit_rate, resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate),
+                  expected=cfg.disturbance.requested_tea())        # the root bias_from_tea names
     return design_point(inertia, t.theta, cfg.orbit_rate, model=cfg.design.model,
                         drf_mode=cfg.design.drf_mode)
 

@@ -164,7 +164,7 @@ def point_specs(cfg) -> list[PointSpec]:
     n = cfg.orbit_rate
     inertia = cfg.inertia.matrix()
     start = PointSpec(cfg.name, inertia, resolve_bias(cfg.disturbance, inertia, n), 0.0,
-                      expected=_expected(cfg.disturbance))
+                      expected=cfg.disturbance.requested_tea())
     sch = cfg.schedule
     if sch is None:
         return [start]
@@ -172,19 +172,13 @@ def point_specs(cfg) -> list[PointSpec]:
     if sch.to is not None:
         i_to = sch.to.inertia.matrix()
         end = PointSpec(sch.to.name, i_to, resolve_bias(sch.to.disturbance, i_to, n), 1.0,
-                        expected=_expected(sch.to.disturbance))
+                        expected=sch.to.disturbance.requested_tea())
     extras = []
     for p in sch.points:
         i_p = p.inertia.matrix()
         extras.append(PointSpec(p.name, i_p, resolve_bias(p.disturbance, i_p, n),
-                                expected=_expected(p.disturbance)))
+                                expected=p.disturbance.requested_tea()))
     return schedule_specs(start, end, extras, schedule_settings(cfg), n)
-
-
-def _expected(disturbance):
-    """The TEA a config's disturbance section asks for (``bias_from_tea``, rad), or None."""
-    tea = getattr(disturbance, "bias_from_tea", None)
-    return None if tea is None else np.radians(np.asarray(tea, float))
 
 
 def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSpec], sched, n: float

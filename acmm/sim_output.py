@@ -47,7 +47,14 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
     orbits = r.t * n / (2 * np.pi)
     err = sim_mod.attitude_error(sc, r)
     rel_rate = np.degrees(r.state[:, 0:3] - dyn.lvlh_rate_in_body(r.state[:, 3:6], n))
-    peak = [s["peak_momentum"] for s in stats]
+    # one row per level of the stair-case: NaN for a level never reached (a diverged run), and
+    # a steady error only for a level that reached the second half of its dwell
+    n_levels = len(sc.level_start)
+    steady = np.full((n_levels, 3), np.nan)
+    for st in stats:
+        steady[st["level"]] = st["steady_error_deg"]
+    hmag = np.abs(r.state[:, 6:9])
+    peak = np.array([hmag[r.level == k].max() if np.any(r.level == k) else np.nan for k in range(n_levels)])
     items = {
         "t": Dataset(r.t, "s", "time", dims=("t",)),
         "orbits": Dataset(orbits, "orbit", "time in orbits (2π/n)", dims=("t",)),
@@ -74,10 +81,10 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
                                     dims=("level", "axis")),
             "gain": Dataset(sc.gain, "ft*lbf per state unit", "gain in use per level (u = −K x)",
                             dims=("level", "axis", "state")),
-            "steady_error": Dataset(np.array([s["steady_error_deg"] for s in stats]).reshape(-1, 3), "deg",
-                                    "max |θ − θ̂*| over the second half of each level", AXES, dims=("level", "axis")),
-            "peak_momentum": Dataset(np.array(peak), "ft*lbf*s", "peak |h_i| over each level",
-                                     dims=("level",) if np.ndim(peak) == 1 else ("level", "axis")),
+            "steady_error": Dataset(steady, "deg", "max |θ − θ̂*| over the second half of each level "
+                                    "(NaN: the run ended before it)", AXES, dims=("level", "axis")),
+            "peak_momentum": Dataset(peak, "ft*lbf*s", "peak |h_i| over each level (NaN: not reached)",
+                                     dims=("level",)),
         },
         "wall_time": Dataset(wall, "s", "integration wall time"),
     }

@@ -72,9 +72,8 @@ def compute_tea(config) -> TeaResult:
     cfg = _as_config(config)
     inertia = cfg.inertia.matrix()
     bias = tea_mod.resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate)
-    asked = cfg.disturbance.bias_from_tea          # the TEA the config asks for, if any
     return TeaResult(cfg, tea_mod.solve_tea(inertia, cfg.orbit_rate, bias,
-                                            expected=None if asked is None else np.radians(asked)))
+                                            expected=cfg.disturbance.requested_tea()))
 
 
 @locked_stage(_as_config)

@@ -15,8 +15,28 @@ import numpy as np
 from acmm import dynamics as dyn
 from common.errors import ConvergenceError, NoEquilibriumError
 
-#: Largest residual (ft·lbf) accepted for an equilibrium.
+#: Largest residual (ft·lbf) accepted for an equilibrium; for a station whose gravity-gradient
+#: torque scale 3n²·max|I| is below 10 ft·lbf, 1e-13 of that scale instead (an absolute 1e-12
+#: would accept a 3 % residual on a model-sized station), and never below 1e-15 of it (round-off).
 RESIDUAL_TOL = 1e-12
+
+
+def residual_threshold(scale: float, tol: float = RESIDUAL_TOL) -> float:
+    """The residual accepted for an equilibrium (see :data:`RESIDUAL_TOL`).
+
+    Parameters
+    ----------
+    scale : float
+        Gravity-gradient torque scale 3n²·max|I|, ft·lbf.
+    tol : float, optional
+        Absolute tolerance, ft·lbf.
+
+    Returns
+    -------
+    float
+        max(min(tol, 1e-13·scale), 1e-15·scale), ft·lbf.
+    """
+    return max(min(tol, 1e-13 * scale), 1e-15 * scale)
 
 
 @dataclass(frozen=True)
@@ -122,7 +142,7 @@ def _newton(theta0, inertia, n, bias, tol=RESIDUAL_TOL, max_iter=50, max_step=0.
     scale = max(3 * n * n * np.abs(inertia).max(), 1e-300)
     for _ in range(max_iter):
         r = equilibrium_residual(theta, inertia, n, bias)
-        if np.max(np.abs(r)) <= max(tol, 1e-15 * scale):
+        if np.max(np.abs(r)) <= residual_threshold(scale, tol):
             return theta
         jac = equilibrium_jacobian(theta, inertia, n)
         try:
@@ -138,7 +158,7 @@ def _newton(theta0, inertia, n, bias, tol=RESIDUAL_TOL, max_iter=50, max_step=0.
         if np.max(np.abs(theta)) > np.radians(89.5):
             return None
     r = equilibrium_residual(theta, inertia, n, bias)
-    return theta if np.max(np.abs(r)) <= max(tol, 1e-15 * scale) else None
+    return theta if np.max(np.abs(r)) <= residual_threshold(scale, tol) else None
 
 
 def _continue(theta, path, n, max_jump=np.radians(5.0), min_step=1e-7):
@@ -207,9 +227,11 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) ->
     at = None if expected is None else _at_expected(inertia, n, bias, expected)
     try:
         t = _solve_by_continuation(inertia, n, bias)
-    except NoEquilibriumError:
+    except NoEquilibriumError as exc:
         if at is None:
-            raise
+            from acmm.tea_roots import with_other_roots
+
+            raise with_other_roots(exc, inertia, n, bias) from None
         return at
     except ConvergenceError:
         if at is not None:
@@ -252,11 +274,9 @@ def _solve_by_continuation(inertia: np.ndarray, n: float, bias: np.ndarray) -> T
     if fold is not None:
         lam_max = _fold_location(theta, fold, inertia, n, bias)
         b = lam_max * bias
-        raise NoEquilibriumError(
-            "no torque-equilibrium attitude exists for bias "
-            f"[{bias[0]:.4g}, {bias[1]:.4g}, {bias[2]:.4g}] ft·lbf: the gravity-gradient torque "
-            f"cannot balance it; the largest bias in this direction with an equilibrium is "
-            f"[{b[0]:.4g}, {b[1]:.4g}, {b[2]:.4g}] ft·lbf ({100 * lam_max:.1f}% of the given bias)")
+        from acmm.tea_roots import fold_message
+
+        raise NoEquilibriumError(fold_message(bias, lam_max))
     return make_tea(theta, inertia, n, bias)
 
 

@@ -31,7 +31,8 @@ import numpy as np
 from numba import njit
 
 from common.errors import ConvergenceError, NoEquilibriumError
-from acmm.tea import RESIDUAL_TOL, TEA, equilibrium_residual, make_tea, solve_tea
+from acmm.tea import RESIDUAL_TOL, TEA, equilibrium_residual, make_tea, residual_threshold, solve_tea
+from acmm.tea_roots import fold_message
 
 _MAX_JUMP = math.radians(5.0)
 _THETA_LIMIT = math.radians(89.5)
@@ -150,7 +151,8 @@ def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out):
     for i in range(3):
         for j in range(3):
             amax = max(amax, abs(inertia[i, j]))
-    thr = max(tol, 1e-15 * max(3.0 * n * n * amax, 1e-300))
+    scale = max(3.0 * n * n * amax, 1e-300)
+    thr = max(min(tol, 1e-13 * scale), 1e-15 * scale)          # acmm.tea.residual_threshold
     r = np.empty(3)
     jac = np.empty((3, 3))
     step = np.empty(3)
@@ -288,16 +290,11 @@ def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
     if status == 1:     # the products continuation failed: solve_tea's grid-search fallback (or its error)
         return solve_tea(inertia, n, bias)
     if status == 2:
-        b = lam * bias
-        raise NoEquilibriumError(
-            "no torque-equilibrium attitude exists for bias "
-            f"[{bias[0]:.4g}, {bias[1]:.4g}, {bias[2]:.4g}] ft·lbf: the gravity-gradient torque "
-            f"cannot balance it; the largest bias in this direction with an equilibrium is "
-            f"[{b[0]:.4g}, {b[1]:.4g}, {b[2]:.4g}] ft·lbf ({100 * lam:.1f}% of the given bias)")
+        raise NoEquilibriumError(fold_message(bias, lam))
     if status == 0:
         scale = max(3 * n * n * np.abs(inertia).max(), 1e-300)
         res = np.max(np.abs(equilibrium_residual(theta, inertia, n, bias)))
-        if res <= 10 * max(RESIDUAL_TOL, 1e-15 * scale):
+        if res <= 10 * residual_threshold(scale):
             return make_tea(theta, inertia, n, bias)
     return solve_tea(inertia, n, bias)
 

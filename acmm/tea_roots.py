@@ -11,6 +11,7 @@ import itertools
 import numpy as np
 
 from acmm.tea import TEA, _newton, make_tea
+from common.errors import NoEquilibriumError
 
 
 def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: float = 30.0,
@@ -51,3 +52,59 @@ def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: fl
             roots.append(th)
     roots.sort(key=lambda r: float(np.linalg.norm(r)))
     return [make_tea(r, inertia, n, bias) for r in roots]
+
+
+def fold_message(bias: np.ndarray, lam_max: float) -> str:
+    """The message of a bias continuation that folds at ``lam_max`` of ``bias`` (ft·lbf).
+
+    Parameters
+    ----------
+    bias : (3,) array
+        The bias asked for, ft·lbf.
+    lam_max : float
+        Largest fraction of it reached on the branch continued from LVLH, dimensionless.
+
+    Returns
+    -------
+    str
+        One sentence naming the bias and the fold.
+    """
+    b = lam_max * bias
+    return ("no torque-equilibrium attitude on the branch continued from LVLH for bias "
+            f"[{bias[0]:.4g}, {bias[1]:.4g}, {bias[2]:.4g}] ft·lbf: the gravity-gradient torque along "
+            f"that branch cannot balance it; the branch ends (folds) at bias "
+            f"[{b[0]:.4g}, {b[1]:.4g}, {b[2]:.4g}] ft·lbf ({100 * lam_max:.1f}% of the given bias)")
+
+
+def with_other_roots(exc: NoEquilibriumError, inertia, n, bias) -> NoEquilibriumError:
+    """The fold of the branch continued from LVLH (``exc``), with the equilibria that exist at
+    the full bias on other branches (:func:`all_equilibria`) named, or the grid search's
+    confirmation that none lies within ±85°.
+
+    Parameters
+    ----------
+    exc : NoEquilibriumError
+        The fold (:func:`fold_message`).
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        Constant disturbance torque, ft·lbf.
+
+    Returns
+    -------
+    NoEquilibriumError
+        The error to raise (one line).
+    """
+    found = all_equilibria(inertia, n, bias)
+    if not found:
+        return NoEquilibriumError(f"{exc}; no other equilibrium lies within ±85° either (Newton from a "
+                                  "30° grid of attitudes)")
+    roots = "; ".join("[" + ", ".join(f"{v:.4f}" for v in r.theta_deg) + "]" for r in found[:3])
+    more = f" (and {len(found) - 3} more)" if len(found) > 3 else ""
+    first = ", ".join(f"{v:.4f}" for v in found[0].theta_deg)
+    return NoEquilibriumError(
+        f"{exc}. Equilibria on other branches do exist for this bias, at θ = {roots} deg{more}: "
+        f"name the one meant with disturbance.bias_from_tea (e.g. bias_from_tea=[{first}] "
+        "gives this bias and that attitude)")

@@ -98,7 +98,7 @@ def tea(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = Ove
 
     sys_ = result.config.output.units
     bias, tu = shown(t.bias, "ft*lbf", sys_)
-    typer.echo(f"  bias used                  = {_fmt(bias, '{:+.5f}')} {tu}")
+    typer.echo(f"  bias used                  = {_fmt(bias, '{:+.6g}')} {tu}")
     typer.echo(f"  residual max|eq 4.1|       = {shown(t.residual, 'ft*lbf', sys_)[0]:.2e} {tu}")
     for k, other in enumerate(result.others):
         typer.echo(f"  other root {k + 1}: theta = {_fmt(other.theta_deg)} deg (residual {other.residual:.1e})")
@@ -174,7 +174,9 @@ def design(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = 
         res = p.lqr
         typer.echo(f"  {p.spec.name:<14} {_fmt(p.tea.theta_deg, '{:+.2f}'):<28} {res.margin:>10.3f} "
                    f"{res.residual:>9.1e} {fastest:>9.2f}")
-    if r.fit is not None:
+    if r.fit is not None and r.fit.form == "table":
+        typer.echo(f"  schedule: table, K linear in theta2* between the {len(r.points)} design points")
+    elif r.fit is not None:
         typer.echo(f"  schedule: order {r.fit.order} in theta2*; worst relative fit residual "
                    f"{r.fit.rel_residual.max():.2e}")
         c = r.check

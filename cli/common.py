@@ -64,6 +64,21 @@ def _note_warnings(caught) -> None:
                f"{first.category.__name__}: {' '.join(str(first.message).split())}", err=True)
 
 
+#: exit code when the reader of standard output closed it (128 + SIGPIPE, as a C tool killed by it)
+EXIT_PIPE_CLOSED = 141
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null, so that flushing it at exit raises nothing more."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
 def user_errors(fn):
     """Decorator for typer commands: turn :class:`AcmmError` into one line on stderr and the
     error's ``exit_code``.
@@ -100,6 +115,9 @@ def user_errors(fn):
             except KeyboardInterrupt:
                 typer.echo("interrupted", err=True)
                 sys.exit(EXIT_INTERRUPTED)
+            except BrokenPipeError:     # the reader of stdout went away (`| head`): not an I/O failure
+                _quiet_stdout()         # of the results, which the stage wrote before printing
+                sys.exit(EXIT_PIPE_CLOSED)
             except Exception as exc:  # noqa: BLE001 (re-raised unless a known kind of failure)
                 plain = _plain_failure(exc)
                 if plain is None:

@@ -123,8 +123,9 @@ def packaged_config_path(name: str = DEFAULT_CONFIG) -> Path:
 def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
     """Read a YAML config file (``None``: the packaged default); returns (data, path).
 
-    A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working directory is
-    looked up among the packaged configs.  Duplicate keys are rejected.
+    A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working directory (absent,
+    or a folder: a results root holds run folders named like the configs) is looked up among the
+    packaged configs.  Duplicate keys are rejected.
 
     Parameters
     ----------
@@ -151,10 +152,13 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
             present = p.exists()
         except (OSError, ValueError) as exc:   # name too long, NUL byte, ...
             raise ConfigError(f"cannot read config file {str(path)[:200]}: {getattr(exc, 'strerror', None) or exc}") from None
-        if not present:
+        if not present or (p.is_dir() and len(p.parts) == 1):
+            # a bare name not a file here (absent, or a folder such as a run folder named like it)
             candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml")
             if len(p.parts) == 1 and candidate.exists():
                 p = candidate
+            elif present:
+                raise ConfigError(f"config path is a directory, not a file: {p}")
             else:
                 from common.hints import missing_config_message
 

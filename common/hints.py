@@ -212,13 +212,12 @@ _NUMERICAL_HINTS: list[tuple[str, tuple[str, ...], str]] = [
     ("qpp", ("riccati 11.1",), "change hinf.rho or hinf.nu (larger values relax the H∞ problem), "
                                "or set hinf.search: true"),
     ("qpp", ("converge",), "change hinf.rho or hinf.nu, or loosen simulation.rtol / simulation.atol"),
-    ("acmm", ("residual",), "raise design.residual_tol or try design.riccati_method: scipy; a nearly "
+    ("acmm", ("residual",), "raise design.residual_tol or try design.riccati_method: {other}; a nearly "
                             "uncontrollable model (see `acmm linearize`) needs another design.model or design.drf_mode"),
-    ("acmm", ("matrix sign",), "use design.riccati_method: scipy (the sign iteration needs a well-conditioned model)"),
+    ("acmm", ("matrix sign",), "use design.riccati_method: {other} (the sign iteration needs a well-conditioned model)"),
     ("acmm", ("sector lqr", "riccati", "failed"), "lower design.sector.sigma (the shift α asked of the LQR may "
-                                                  "be too large), or try another design.riccati_method (scipy, "
-                                                  "sign, slycot)"),
-    ("acmm", ("riccati",), "try another design.riccati_method (scipy, sign or slycot)"),
+                                                  "be too large), or try another design.riccati_method ({other})"),
+    ("acmm", ("riccati",), "try another design.riccati_method ({other})"),
     ("acmm", ("uncontrollable",), "no gain moves that pole: lower design.sector.sigma, or change design.model / "
                                   "design.drf_mode"),
     ("acmm", ("not positive semidefinite",), "change design.Q0 or design.R"),
@@ -229,7 +228,7 @@ _NUMERICAL_HINTS: list[tuple[str, tuple[str, ...], str]] = [
     ("acmm", ("tea continuation",), "check the products of inertia (inertia.I12, I13, I23) or give the bias as "
                                     "disturbance.bias_from_tea"),
     ("acmm", ("converge",), "loosen the tolerance (design.residual_tol, simulation.rtol) or change "
-                            "design.riccati_method"),
+                            "design.riccati_method ({other})"),
 ]
 
 
@@ -253,8 +252,21 @@ def numerical_hint(message: str, product: str = "acmm") -> str:
         return ""                      # already has one
     for prod, words, hint in _NUMERICAL_HINTS:
         if prod == product and all(w in low for w in words):
-            return hint
+            return hint.replace("{other}", _other_riccati_methods(low))
     return ""
+
+
+#: the values of design.riccati_method
+_RICCATI_METHODS = ("scipy", "sign", "slycot")
+
+
+def _other_riccati_methods(low_message: str) -> str:
+    """The Riccati methods to suggest: all but the one the message says failed (``method='…'``)."""
+    import re
+
+    m = re.search(r"method='(\w+)'", low_message)
+    used = m.group(1) if m else None
+    return " or ".join(x for x in _RICCATI_METHODS if x != used)
 
 
 def with_hint(exc: Exception, product: str = "acmm") -> str:

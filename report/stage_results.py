@@ -85,8 +85,10 @@ def acmm_config(name: str, root: Path | None = None, *, fast: bool = False):
         The config, figures off.
     """
     from acmm.config import load_config, parse_config
+    from common.configio import packaged_config_path
 
-    data = load_config(name).model_dump(mode="json")
+    # the packaged file itself: a file or folder named like it in the working directory is not it
+    data = load_config(packaged_config_path(f"{name}.yaml")).model_dump(mode="json")
     if root is not None:
         data["output"]["root"] = str(root)
     data["output"]["figures"] = False
@@ -112,9 +114,10 @@ def qpp_config(name: str, root: Path | None = None):
     qpp.config.QppConfig
         The config, figures off.
     """
+    from common.configio import packaged_config_path
     from qpp.config import load_config, parse_config
 
-    data = load_config(name).model_dump(mode="json")
+    data = load_config(packaged_config_path(f"{name}.yaml")).model_dump(mode="json")
     if root is not None:
         data["output"]["root"] = str(root)
     data["output"]["figures"] = False

@@ -257,3 +257,15 @@ def test_stale_temp_files_of_killed_runs_are_removed(tmp_runs):
     r = CliRunner().invoke(app, ["tea", "mb3"])
     assert r.exit_code == 0, r.stderr
     assert sorted(p.name for p in d.iterdir()) == ["config.yaml", "keep.txt", "tea.h5"]
+
+
+def test_a_closed_stdout_is_not_an_output_failure(tmp_path):
+    """`acmm tea mb3 | true`: the reader is gone when the command prints its summary; the results
+    are written and kept, nothing is printed to stderr, exit 141 (128 + SIGPIPE), not 4."""
+    proc = subprocess.Popen([ACMM, "tea", "mb3", f"output.root={tmp_path}"], env=ENV, cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert proc.wait(timeout=120) == 141, err
+    assert err == b""
+    assert (tmp_path / "mb3" / "tea.h5").is_file() and (tmp_path / "mb3" / "config.yaml").is_file()

@@ -390,3 +390,15 @@ def test_console_entry_point_keeps_the_exit_code_with_closed_streams(tmp_path, c
                        env={**__import__("os").environ, "OPENBLAS_NUM_THREADS": "1", "MPLBACKEND": "Agg"})
     assert p.returncode == code, (p.returncode, p.stderr)
     assert "Traceback" not in p.stderr
+
+
+def test_a_riccati_hint_never_suggests_the_method_that_failed():
+    from common.hints import numerical_hint
+
+    for used in ("scipy", "sign", "slycot"):
+        for msg in (f"Riccati solve (method='{used}') residual 3e-6 above design.residual_tol",
+                    f"sector LQR: Riccati solve (method='{used}') failed",
+                    f"Riccati solve (method='{used}') did not converge"):
+            hint = numerical_hint(msg)
+            assert "riccati_method" in hint and used not in hint.split("riccati_method", 1)[1].split(")")[0], hint
+    assert "scipy or sign or slycot" in numerical_hint("Riccati solve failed")

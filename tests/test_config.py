@@ -291,3 +291,27 @@ def test_error_message_names_nested_field_directly():
         parse_config(cfg_with(actuators__torque_limit=-1))
     assert "actuators.torque_limit" in str(exc.value)
     assert "\n" not in str(exc.value)
+
+
+def test_a_run_folder_named_like_a_packaged_config_does_not_hide_it(tmp_path, monkeypatch):
+    """Inside a results root (run folders mb3/, ac/, …) a bare packaged name still loads the
+    packaged config; the report loads its packaged configs even past a local file of that name."""
+    from report.stage_results import acmm_config
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mb3").mkdir()
+    (tmp_path / "staircase").write_text("not: a config\n")
+    assert load_config("mb3").name == "mb3"
+    assert acmm_config("staircase").schedule is not None            # not the local file
+    (tmp_path / "mine").mkdir()
+    with pytest.raises(ConfigError, match="directory"):
+        load_config("mine")
+
+
+def test_a_table_schedule_takes_no_closed_loop_refit():
+    """The closed-loop refit refines a polynomial; a table passes through the points' gains: asking
+    for both is refused (it used to drop the refit silently and label the table a polynomial)."""
+    with pytest.raises(ConfigError, match="schedule: fit: closed_loop refines a polynomial"):
+        load_config("staircase", ["schedule.form=table"])              # the packaged fit is closed_loop
+    cfg = load_config("staircase", ["schedule.form=table", "schedule.fit=least_squares"])
+    assert cfg.schedule.form == "table"

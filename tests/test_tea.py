@@ -181,7 +181,8 @@ def test_mb3_4ftlbf_pitch_bias_has_no_equilibrium():
         tea.solve_tea(MB3_INERTIA, N, np.array([0.0, 4.0, 0.0]))
     msg = str(exc.value)
     assert "\n" not in msg
-    m = re.search(r"largest bias[^\[]*\[([^\]]+)\]", msg)
+    m = re.search(r"folds\) at bias \[([^\]]+)\]", msg)
+    assert "no other equilibrium lies within" in msg
     assert m, msg
     largest = np.array([float(x) for x in m.group(1).split(",")])
     np.testing.assert_allclose(largest[[0, 2]], 0.0, atol=1e-12)
@@ -273,6 +274,10 @@ def test_bias_from_tea_gives_the_asked_attitude(asked):
 
     spec = point_specs(cfg)[0]
     np.testing.assert_allclose(np.degrees(design_one(spec, design_settings(cfg)).tea.theta), asked, atol=1e-9)
+    # the Python API's linear model too (it used to continue from LVLH to the other root)
+    import acmm
+
+    np.testing.assert_allclose(np.degrees(acmm.linear_model(cfg).theta_star), asked, atol=1e-9)
 
 
 def test_schedule_end_point_gets_its_asked_attitude():
@@ -287,3 +292,37 @@ def test_schedule_end_point_gets_its_asked_attitude():
     t = design_one(end, design_settings(cfg)).tea
     np.testing.assert_allclose(np.degrees(t.theta), [0.0, -60.0, 0.0], atol=1e-9)
     assert np.max(np.abs(residual_ref(t.theta, end.inertia, N, end.bias))) < 1e-9
+
+
+@pytest.mark.parametrize("scale", [1e-12, 1e-6, 1e3])
+def test_tea_is_scale_invariant(scale):
+    """Eq 4.1 is homogeneous in (I, bias): a station scaled by any factor has the same TEA (a
+    residual tolerance absolute in ft·lbf accepted a 3 % residual at 1e-12 and a TEA 9° off)."""
+    from acmm.tea_compiled import solve_tea_fast
+
+    inertia = np.array([[5e6, 0.3e6, -0.5e6], [0.3e6, 2e6, 0.2e6], [-0.5e6, 0.2e6, 6e6]])
+    bias, n = np.array([0.3, -0.5, 0.2]), 0.00113
+    ref = fsolve(residual_ref, np.zeros(3), args=(inertia, n, bias), xtol=1e-14)
+    for solver in (tea.solve_tea, solve_tea_fast):
+        t = solver(inertia * scale, n, bias * scale)
+        np.testing.assert_allclose(t.theta, ref, atol=1e-10)
+        assert np.max(np.abs(residual_ref(t.theta, inertia, n, bias))) < 1e-9
+
+
+def test_a_fold_names_the_equilibria_of_other_branches():
+    """The branch continued from LVLH folds at 5.6 % of this bias, but equilibria exist at the full
+    bias on other branches: the refusal says so and names them (it used to say none exists)."""
+    inertia = np.array([[2989922.6, -196292.5, 1371916.1], [-196292.5, 6311364.4, 81755.5],
+                        [1371916.1, 81755.5, 5983482.4]])
+    bias = np.array([-0.309042, 0.026471, 0.028073])
+    root = fsolve(residual_ref, np.radians([18.0, -19.0, -11.0]), args=(inertia, 0.0011, bias), xtol=1e-14)
+    assert np.max(np.abs(residual_ref(root, inertia, 0.0011, bias))) < 1e-9      # one exists
+    with pytest.raises(NoEquilibriumError) as exc:
+        tea.solve_tea(inertia, 0.0011, bias)
+    msg = str(exc.value)
+    assert "folds" in msg and "do exist" in msg and "\n" not in msg
+    listed = [np.array([float(v) for v in m.split(",")]) for m in re.findall(r"\[([-\d., ]+)\]", msg.split("exist")[1])]
+    assert any(np.max(np.abs(r - np.degrees(root))) < 1e-3 for r in listed), msg
+    # naming it with bias_from_tea gives that attitude
+    t = tea.solve_tea(inertia, 0.0011, tea.bias_for_attitude(root, inertia, 0.0011), expected=root)
+    np.testing.assert_allclose(t.theta, root, atol=1e-9)

@@ -37,7 +37,9 @@ def test_compiled_continuation_matches_solve_tea_on_perturbed_plants(name):
         ref = _outcome(tea.solve_tea, inertia, n, spec.bias)
         got = _outcome(solve_tea_fast, inertia, n, spec.bias)
         if isinstance(ref, str):
-            assert got == ref              # same error, same message (same fold bisection)
+            # same error, same fold (same bisection); solve_tea goes on to name the roots of other
+            # branches (a grid search the sweep's per-case path does not pay for)
+            assert isinstance(got, str) and ref.startswith(got), (ref, got)
             continue
         assert not isinstance(got, str)
         assert np.max(np.abs(got - ref)) <= 1e-12
@@ -55,7 +57,8 @@ def test_compiled_no_equilibrium_message_matches():
         tea.solve_tea(inertia, cfg.orbit_rate, bias)
     with pytest.raises(AcmmError) as got:
         solve_tea_fast(inertia, cfg.orbit_rate, bias)
-    assert type(got.value) is type(ref.value) and str(got.value) == str(ref.value)
+    assert type(got.value) is type(ref.value) and str(ref.value).startswith(str(got.value))
+    assert "no other equilibrium lies within ±85°" in str(ref.value)
 
 
 def test_warm_newton_from_nominal_would_change_mb3_roots():
