@@ -56,7 +56,8 @@ def _published_certificate_items(pb) -> dict:
         "beta1_printed": Dataset(pb.beta1["printed"]["value"], "1", "beta1 of the printed gains, printed B_z"),
         "thresholds": Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in pb.thresholds]), "1",
                               "β3, β4, m of the printed gains per bookkeeping: "
-                              + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"]),
+                              + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"],
+                              dims=("bookkeeping", "threshold")),
         "circle_passed": Dataset(int(pb.circle.passed), "1", "circle criterion with the printed gains"),
         "T": Dataset(pb.T, "s", "truncation time used"),
     }
@@ -150,14 +151,15 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         items["hinf_search"] = Dataset(np.array([[float(h.get(k, np.nan)) for k in keys] for h in r.hinf_history]),
                                        "mixed", "ch. 11 passes: rho, nu, delta = ||T_wy||inf (a-shifted, = beta1), "
                                        "tests k1 >= 0, h >= 0, lambda_max(k1 h)/nu^2 < 1 (1 = true), admissible, "
-                                       "a (1/s), mean W_s scale", keys,
+                                       "a (1/s), mean W_s scale", keys, dims=("hinf_pass", "hinf_quantity"),
                                        attrs={"actions": "; ".join(str(h.get("action", "")) for h in r.hinf_history)})
     items["certificate"] = {
         "certified": Dataset(int(r.certified), "1", "1: beta1 <= m and circle criterion (theorem 2, lemma 1)"),
         "beta1": Dataset(r.beta1_ref, "1", f"beta1 of the design inequality (B_z {r.bz})"),
         "m": Dataset(r.m_ref, "1", f"threshold m (12.1), bookkeeping {r.bookkeeping}"),
         "T_settle": Dataset(r.T_settle, "s", "settling time of the nominal closed loop"),
-        "ws_scale": Dataset(np.asarray(r.ws_scale or [1.0], float), "1", "W_s = diag(w)·S_c of the gains"),
+        "ws_scale": Dataset(np.asarray(r.ws_scale or [1.0], float), "1", "W_s = diag(w)·S_c of the gains",
+                            dims=("ws_entry",)),
     }
     if r.published is not None:
         items["published_certificate"] = _published_certificate_items(r.published)
