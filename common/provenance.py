@@ -12,6 +12,20 @@ from pathlib import Path
 
 
 @lru_cache(maxsize=1)
+def _git_state() -> tuple[str, bool | None]:
+    """(commit, whether tracked files have uncommitted changes) of the source tree, from one
+    ``git status --porcelain=v2 --branch`` run once per process; ("unknown", None) outside a
+    checkout or without git."""
+    out = _git("status", "--porcelain=v2", "--branch", "--untracked-files=no")
+    if out is None:
+        return "unknown", None
+    lines = out.splitlines()
+    oid = next((ln.split()[2] for ln in lines if ln.startswith("# branch.oid ")), "unknown")
+    if oid == "(initial)":
+        oid = "unknown"
+    return oid, any(not ln.startswith("#") for ln in lines if ln.strip())
+
+
 def git_commit() -> str:
     """The git commit of the source tree, or ``"unknown"``.
 
@@ -23,8 +37,20 @@ def git_commit() -> str:
     str
         The commit hash, or ``"unknown"``.
     """
-    out = _git("rev-parse", "HEAD")
-    return out.strip() if out is not None else "unknown"
+    return _git_state()[0]
+
+
+def git_dirty() -> str:
+    """Whether the source tree differs from :func:`git_commit` in tracked files.
+
+    Returns
+    -------
+    str
+        ``"yes"`` (uncommitted changes: the commit alone does not say what code ran), ``"no"``,
+        or ``"unknown"`` (not a git checkout, or no git).
+    """
+    dirty = _git_state()[1]
+    return "unknown" if dirty is None else ("yes" if dirty else "no")
 
 
 def _git(*args: str) -> str | None:
@@ -72,6 +98,7 @@ def provenance(config_text: str) -> dict[str, str]:
         "package": "acmm-qpp",
         "package_version": __version__,
         "git_commit": git_commit(),
+        "git_dirty": git_dirty(),
         "config_hash": config_hash(config_text),
         "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
     }
@@ -89,7 +116,4 @@ def source_unchanged() -> bool:
     bool
         True for a clean checkout; False when dirty, not a checkout, or git is missing.
     """
-    if git_commit() == "unknown":
-        return False
-    out = _git("status", "--porcelain", "--untracked-files=no")
-    return out is not None and not out.strip()
+    return git_commit() != "unknown" and _git_state()[1] is False

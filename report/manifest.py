@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import hashlib
-import subprocess
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -119,11 +118,6 @@ def _git_commit() -> str:
 
 
 def _git_dirty() -> str:
-    try:
-        out = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
-                             cwd=Path(__file__).resolve().parent, capture_output=True, text=True, timeout=5)
-        if out.returncode == 0:
-            return "modified files present" if out.stdout.strip() else "clean"
-    except (OSError, subprocess.SubprocessError):
-        pass
-    return "unknown"
+    from common.provenance import git_dirty
+
+    return {"yes": "modified files present", "no": "clean"}.get(git_dirty(), "unknown")
