@@ -167,6 +167,10 @@ class ExpressionModel(SampleGrid):
         """
         return np.array([self._call(fn, Y, t, TH) for fn in self._phi])
 
+    def _phi_i(self, i, Y, t, TH):
+        """φ_i alone on broadcast arrays (the sector's climbs need one channel, not all r)."""
+        return self._call(self._phi[i], Y, t, TH)
+
     def _grad(self, i, j, Y, t, TH):
         fn = self._dphi[i][j]
         g = None

@@ -49,11 +49,11 @@ def _value(model, i: int, kind: str, x) -> float:
         return float(np.asarray(v).ravel()[0])
     if kind == "gain":
         ymax = float(np.max(np.abs(x[:model.p])))
-        return abs(float(model.phi_at(Y, t, TH)[i].ravel()[0])) / ymax if ymax > 1e-12 else np.nan
+        return abs(float(model._phi_i(i, Y, t, TH).ravel()[0])) / ymax if ymax > 1e-12 else np.nan
     yi = x[i]
     if abs(yi) <= 1e-9 * float(np.ptp(model.y_range[i])):     # φ/y undefined at y_i = 0: no step there
         return np.nan
-    return float(model.phi_at(Y, t, TH)[i].ravel()[0] / yi)
+    return float(model._phi_i(i, Y, t, TH).ravel()[0] / yi)
 
 
 def _values(model, i: int, kind: str, X) -> np.ndarray:
@@ -65,7 +65,7 @@ def _values(model, i: int, kind: str, X) -> np.ndarray:
         if kind == "slope":
             return np.broadcast_to(sum((np.abs(model._grad(i, j, Y, t, TH)) for j in range(p) if model.dep[i][j]),
                                        np.zeros(S)), (S,)).astype(float)
-        ph = np.broadcast_to(model.phi_at(Y, t, TH)[i], (S,))
+        ph = np.broadcast_to(model._phi_i(i, Y, t, TH), (S,))
         if kind == "gain":
             ymax = np.max(np.abs(X[:p]), axis=0)
             return np.where(ymax > 1e-12, np.abs(ph) / np.where(ymax > 1e-12, ymax, 1.0), np.nan)
