@@ -110,6 +110,7 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
                 now = _stage_files(run_dir, stage)          # with those a figure writer completed unrecorded
                 _discard((written | {p for p, sig in now.items() if before.get(p) != sig}) - kept, run_dir)
                 rollback.restore(skip=kept, stale=bool(kept))
+                _forget_in_outer_stages(entry, written)
             if rollback is not None:
                 rollback.drop()
         raise
@@ -210,6 +211,14 @@ def _no_interrupts():
         yield
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+def _forget_in_outer_stages(entry: tuple, written: set) -> None:
+    """A nested stage that failed has removed its files and put back those it replaced: the
+    stages that ran it must not remove them again (the earlier run's restored files)."""
+    for rec in list(_RECORDERS):
+        if rec is not entry:
+            rec[0].difference_update(written)
 
 
 def _keep_in_outer_stages(written: set) -> None:

@@ -281,3 +281,22 @@ def test_ctrl_c_while_the_figures_are_awaited_stops_the_writers(tmp_path):
     time.sleep(1.5)
     assert not figure_worker.active()
     assert list(run.iterdir()) == []
+
+
+def test_a_nested_stage_interrupted_keeps_the_earlier_run_whole(tmp_path):
+    """acmm simulate → design, both of an earlier complete run on disk; the new design is
+    interrupted: the design puts back its earlier design.h5, and the simulation that ran it does
+    not then remove that restored file as one it wrote (it did: the earlier design.h5 was lost)."""
+    d = tmp_path / "run"
+    d.mkdir()
+    with stage_outputs(d, "simulate", config_text="cfg: A\n"):
+        with stage_outputs(d, "design", config_text="cfg: A\n"):
+            write_text(d / "design.h5", "design A")
+        write_text(d / "sim.h5", "sim A")
+    before = {p.name: p.read_text() for p in d.iterdir()}
+    with pytest.raises(KeyboardInterrupt):
+        with stage_outputs(d, "simulate", config_text="cfg: B\n"):
+            with stage_outputs(d, "design", config_text="cfg: B\n"):
+                write_text(d / "design.h5", "design B")
+                raise KeyboardInterrupt
+    assert {p.name: p.read_text() for p in d.iterdir()} == before
