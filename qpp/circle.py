@@ -33,8 +33,9 @@ of the sector; for a coupled channel the sector is ±sup Σ_j |∂φ_i/∂y_j| �
 loop is exponentially stable with rate a when A_z + B_φ C_0 C_z + aI is Hurwitz (P_0 = 0, P_0
 counted on that centred loop) and ρ · sup_ω σ̄(H_c(−a + jω)) < 1, H_c = (I − H C_0)⁻¹ H.
 
-The check is made on a dense frequency grid (default 0 and 6000 log-spaced points
-spanning the pole magnitudes), which is exact for the encirclement count and accurate to the
+The check is made on a dense frequency grid (default 0 and 6000 log-spaced points spanning the
+pole magnitudes, extended until the Nyquist tail lies within 1 % of the critical sets; a sector
+the grid does not resolve is not certified): exact for the encirclement count, accurate to the
 grid for the distance margins.
 """
 from __future__ import annotations
@@ -302,12 +303,14 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None, coupled=None) 
     sector = np.atleast_2d(np.asarray(sector, float))
     alpha, beta = sector[:, 0], sector[:, 1]
     if omega is None:
-        omega = default_grid(A)
-    omega = np.asarray(omega, float)
-    Hw = frequency_response(A, B, C, a, omega)
+        omega, Hw = _grid_past_the_tail(A, B, C, a, default_grid(A), alpha, beta)
+    else:
+        omega = np.asarray(omega, float)
+        Hw = frequency_response(A, B, C, a, omega)
     centres, radii = gershgorin_bands(Hw)
     if centres.shape[0] != alpha.size:
         raise ValueError(f"sector has {alpha.size} channels, H(s) has {centres.shape[0]}")
+    tail = np.abs(centres[:, -1]) + radii[:, -1]
     # full contour ω = −∞ … ∞ (h(−jω) = conj h(jω)); strictly proper → closes at 0
     full = np.concatenate([np.conj(centres[:, ::-1]), centres], axis=1)
     P0 = int(np.sum(np.linalg.eigvals(A + a * np.eye(A.shape[0])).real >= 0))
@@ -316,11 +319,14 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None, coupled=None) 
         if not np.all(alpha < beta):
             bad = int(np.argmin(alpha < beta))
             raise ValueError(f"sector {bad + 1}: need alpha < beta, got [{alpha[bad]}, {beta[bad]}]")
-        return _small_gain_result(Hw, A, B, C, a, omega, centres, radii, alpha, beta, coupled, P0)
-    passed, margins, N = _check(centres, radii, full, alpha, beta, P0)
+        from qpp.circle_small_gain import small_gain_result
 
-    def ok(s):
-        return _check(centres, radii, full, s * alpha, s * beta, P0)[0]
+        return small_gain_result(Hw, A, B, C, a, omega, centres, radii, alpha, beta, coupled, P0)
+    passed, margins, N = _check(centres, radii, full, alpha, beta, P0)
+    passed = passed and _resolved(tail, alpha, beta)
+
+    def ok(s):        # a scale whose critical set the grid does not resolve is not certified
+        return _resolved(tail, s * alpha, s * beta) and _check(centres, radii, full, s * alpha, s * beta, P0)[0]
 
     smin, smax = _passing_scales(ok, fine=P0 > 0)
     if np.isnan(smax):
@@ -328,40 +334,34 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None, coupled=None) 
     return CircleResult(passed, margins, N, P0, omega, centres, radii, alpha, beta, smax, smin)
 
 
-def _small_gain_terms(alpha, beta, coupled) -> tuple[np.ndarray, float]:
-    """(C_0 diagonal, ρ) of the small-gain form (module docstring) for the sector [α, β]."""
-    centre = np.where(coupled, 0.0, 0.5 * (alpha + beta))
-    half = np.where(coupled, np.maximum(np.abs(alpha), np.abs(beta)), 0.5 * (beta - alpha))
-    diag_part = float(np.max(half[~coupled] ** 2)) if (~coupled).any() else 0.0
-    return centre, float(np.sqrt(diag_part + np.sum(half[coupled] ** 2)))
+#: the band at the grid's last frequency lies within this fraction of the distance 1 / max(|α_i|,
+#: |β_i|) from 0 to each critical set: the tail beyond it, down to h(±j∞) = 0, cannot reach it
+TAIL_FRACTION = 0.01
 
 
-def _small_gain_at(Hw, A, B, C, a, alpha, beta, coupled, s) -> tuple[bool, float, int, float]:
-    """(passed, margin 1 − ρ·peak, P_0 of the centred loop, peak σ̄ of H_c) at sector scale s."""
-    centre, rho = _small_gain_terms(s * alpha, s * beta, coupled)
-    n = A.shape[0]
-    P0 = int(np.sum(np.linalg.eigvals(A + B @ (centre[:, None] * C) + a * np.eye(n)).real >= 0))
-    Hc = Hw
-    if np.any(centre):
-        try:
-            Hc = np.linalg.solve(np.eye(Hw.shape[1])[None] - Hw * centre[None, None, :], Hw)
-        except np.linalg.LinAlgError:           # I − H C_0 singular on the grid: not certified
-            return False, -np.inf, P0, np.inf
-    peak = float(np.max(np.linalg.norm(Hc, ord=2, axis=(1, 2))))
-    margin = 1.0 - rho * peak
-    return bool(P0 == 0 and margin > 0), margin, P0, peak
+def _resolved(tail, alpha, beta) -> bool:
+    """Whether the grid ends where the bands (``tail``: |h_ii| + r_i at the last frequency) are
+    within :data:`TAIL_FRACTION` of every critical set of the sector [α, β]."""
+    return bool(np.all(tail * np.maximum(np.abs(alpha), np.abs(beta)) <= TAIL_FRACTION))
 
 
-def _small_gain_result(Hw, A, B, C, a, omega, centres, radii, alpha, beta, coupled, P0_open) -> CircleResult:
-    """:func:`circle_criterion` for a coupled φ (the small-gain form of the module docstring)."""
-    passed, margin, P0, peak = _small_gain_at(Hw, A, B, C, a, alpha, beta, coupled, 1.0)
-    centre, rho = _small_gain_terms(alpha, beta, coupled)
-    if not np.any(centre):          # H_c = H at every scale: s·ρ·peak < 1 in closed form
-        smin, smax = (0.0, (np.inf if rho * peak == 0 else 1.0 / (rho * peak))) if P0 == 0 else (np.nan, 0.0)
-    else:
-        smin, smax = _passing_scales(lambda s: _small_gain_at(Hw, A, B, C, a, alpha, beta, coupled, s)[0],
-                                     fine=P0_open > 0)
-        smax = 0.0 if np.isnan(smax) else smax
-    m = alpha.size
-    return CircleResult(passed, np.full(m, margin), np.zeros(m, dtype=int), P0, omega, centres, radii,
-                        alpha, beta, smax, smin, "small_gain", rho, peak)
+#: the default grid resolves sectors up to this many times the one checked (so that max_scale is
+#: not a limit of the grid below it)
+RESOLVED_SCALE = 1e3
+
+
+def _grid_past_the_tail(A, B, C, a, omega, alpha, beta, max_decades: int = 12):
+    """(ω, H(−a + jω)) on :func:`default_grid`, extended by decades (50 points each) until the
+    critical sets of the sector scaled by :data:`RESOLVED_SCALE` are resolved (:func:`_resolved`;
+    at most ``max_decades`` more).  A larger scale the grid does not resolve is not certified."""
+    Hw = frequency_response(A, B, C, a, omega)
+    if Hw.shape[1] != Hw.shape[2] or Hw.shape[1] != np.size(alpha):
+        return omega, Hw                  # refused by the caller, with its message
+    for _ in range(max_decades):
+        centres, radii = gershgorin_bands(Hw[-1:])
+        if _resolved(np.abs(centres[:, -1]) + radii[:, -1], RESOLVED_SCALE * alpha, RESOLVED_SCALE * beta):
+            break
+        more = np.logspace(np.log10(omega[-1]), np.log10(omega[-1]) + 1, 51)[1:]
+        omega = np.concatenate([omega, more])
+        Hw = np.concatenate([Hw, frequency_response(A, B, C, a, more)])
+    return omega, Hw

@@ -50,19 +50,19 @@ def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
     return np.concatenate([x0, xc0, x0])
 
 
-#: a loop whose state exceeds this many times max(1, ‖z(0)‖∞) has diverged (``stop_if_diverged``)
+#: a scenario's loop whose state exceeds this many times the size of the nominal loop's (and of
+#: z(0), and 1) has diverged (:func:`qpp.simulate.simulate_scenario`)
 DIVERGED_FACTOR = 1e6
 
 
 def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nominal: float, r_fun,
                   t_eval, z0, impulse_time=None, impulse=None, rtol=1e-8, atol=1e-10,
-                  stop_if_diverged: bool = False):
+                  diverged_beyond: float | None = None):
     """Integrate the nonlinear loop; returns (z samples (N_z, N), u samples (m, N)).
 
     A disturbance impulse I δ(t − t_i) is applied as the jump x(t_i⁺) = x(t_i⁻) + G I.  With
-    ``stop_if_diverged`` a loop that diverges (‖z‖∞ beyond :data:`DIVERGED_FACTOR` times its
-    initial size, or growing until the integrator cannot follow it) is a result: the samples
-    after that time are NaN.
+    ``diverged_beyond`` a loop that diverges (‖z‖∞ beyond it, or beyond a thousandth of it and
+    growing until the integrator cannot follow) is a result: the samples after that time are NaN.
 
     Parameters
     ----------
@@ -94,8 +94,8 @@ def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nomina
         Relative tolerance of the integrator, dimensionless.
     atol : float
         Absolute tolerance of the integrator, in the units of z.
-    stop_if_diverged : bool, optional
-        A diverging loop is a result (NaN samples after it diverged), not an error.
+    diverged_beyond : float, optional
+        ‖z‖∞ of a diverged loop, in the units of z (None: a failing integration is an error).
 
     Returns
     -------
@@ -119,8 +119,8 @@ def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nomina
     elif impulse_time is not None and impulse_time <= t0:
         z0 = z0.copy()
         z0[:n] += G @ np.asarray(impulse, float)
-    limit = DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0)))) if stop_if_diverged else None
-    Z = _integrate_segments(rhs, segments, np.asarray(z0, float), t_eval, n, G, impulse, rtol, atol, limit)
+    Z = _integrate_segments(rhs, segments, np.asarray(z0, float), t_eval, n, G, impulse, rtol, atol,
+                            diverged_beyond)
     U = np.array([control(Z[:, i], t)[0] if np.all(np.isfinite(Z[:, i])) else np.full(plant.m, np.nan)
                   for i, t in enumerate(t_eval)]).T
     return Z, U

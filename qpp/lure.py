@@ -172,15 +172,17 @@ def structural_obstacles(plant: LurePlant, tol: float = 1e-9) -> list[str]:
 
     out = []
     n = plant.n
-    for lam in np.linalg.eigvals(plant.A):
+    A, B, C = _balanced(plant.A, plant.B, plant.C)          # a rank test blind to state scaling
+    for lam in np.linalg.eigvals(A):
         if lam.real < -1e-12:
             continue
-        shifted = plant.A - lam * np.eye(n)
-        if deficient(np.hstack([shifted, plant.B]), n):
+        shifted = A - lam * np.eye(n)
+        if deficient(np.hstack([shifted, B]), n):
             out.append(f"the plant's mode at s = {lam:.4g} is not controllable from u (PBH test)")
-        if deficient(np.vstack([shifted, plant.C]), n):
+        if deficient(np.vstack([shifted, C]), n):
             out.append(f"the plant's mode at s = {lam:.4g} is not observable from y (PBH test)")
-    Aa, Ba, _, _ = augmented(plant)
+    Aa, Ba, _, Ca = augmented(plant)
+    Aa, Ba, _ = _balanced(Aa, Ba, Ca)
     na = Aa.shape[0]
     for lam in np.linalg.eigvals(plant.Ac):
         if lam.real < -1e-12:
@@ -189,6 +191,21 @@ def structural_obstacles(plant: LurePlant, tol: float = 1e-9) -> list[str]:
             out.append(f"the servo-compensator's pole at s = {lam:.4g} cannot be moved by u: the plant has a "
                        "transmission zero there, or fewer inputs than servo channels (eqs 10.3–10.4)")
     return list(dict.fromkeys(out))
+
+
+def _balanced(A, B, C):
+    """(D⁻¹AD, D⁻¹B, CD) with D the diagonal balancing of A (LAPACK gebal, scipy), the columns
+    of B and the rows of C then of unit norm: the same controllability and observability, with
+    the magnitudes that make a relative rank tolerance meaningful."""
+    from scipy.linalg import matrix_balance
+
+    _, (scale, _) = matrix_balance(np.asarray(A, float), permute=False, separate=True)
+    Ab = A / scale[:, None] * scale[None, :]
+    Bb = np.asarray(B, float) / scale[:, None]
+    Cb = np.asarray(C, float) * scale[None, :]
+    Bb = Bb / np.maximum(np.linalg.norm(Bb, axis=0, keepdims=True), 1e-300)
+    Cb = Cb / np.maximum(np.linalg.norm(Cb, axis=1, keepdims=True), 1e-300)
+    return Ab, Bb, Cb
 
 
 def closed_loop(plant: LurePlant, K1, Kc, H, *, bz: str = "eq10.7"):

@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from qpp.config import ExpressionNonlinearity, QppConfig, Scenario
-from qpp.loop import initial_state, simulate_loop  # noqa: F401  (re-exported: the old import paths)
+from qpp.loop import DIVERGED_FACTOR, initial_state, simulate_loop  # noqa: F401  (re-exported: the old import paths)
 from qpp.matched_nonlinearity import (  # noqa: F401  (re-exported: the old import paths)
     config_f1, make_f1, scenario_gamma)
 from qpp.signals import eval_signal, eval_terms  # noqa: F401  (re-exported: the old import paths)
@@ -130,7 +130,9 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
     Zo, Uo = nominal
     Z, U = simulate_loop(plant, K1, Kc, H, f1, gamma=gam, gamma_nominal=g_nom, r_fun=r_fun,
                          t_eval=t, z0=z0, impulse_time=scenario.impulse_time, impulse=scenario.impulse,
-                         rtol=sim.rtol, atol=sim.atol, stop_if_diverged=True)
+                         rtol=sim.rtol, atol=sim.atol,
+                         diverged_beyond=DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0))),
+                                                               float(np.nanmax(np.abs(Zo)))))
     n = plant.n
     y, yo = plant.C @ Z[:n], plant.C @ Zo[:n]
     lost = ~np.all(np.isfinite(Z), axis=0)

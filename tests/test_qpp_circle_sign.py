@@ -118,3 +118,21 @@ def test_symmetric_sectors_are_unchanged_by_the_sign():
     c1 = circle_criterion(A, B, C, [[-0.5, 0.5]], a=1e-4)
     c2 = circle_criterion(A, -B, C, [[-0.5, 0.5]], a=1e-4)
     assert c1.passed == c2.passed and np.allclose(c1.margins, c2.margins)
+
+
+def test_a_sector_the_grid_does_not_resolve_is_not_certified():
+    """A huge sector's critical disc lies near 0, inside the Nyquist tail beyond the default grid's
+    last frequency: the grid is extended until the tail is resolved, and a scale it cannot
+    resolve is not certified (a wide sector passed although every constant gain in it
+    destabilized the loop, and max_scale was reported infinite for a bounded sector)."""
+    B, C = np.array([[0.0], [1.0]]), np.array([[2.0, 1.0]])
+    A_unstable = np.array([[0.0, 1.0], [10.0, -9.0]])            # h = (s + 2)/((s − 1)(s + 10))
+    c = circle_criterion(A_unstable, B, C, [[1e7, 3e7]])
+    assert min(_max_re(A_unstable, B, C, np.array([[k]])) for k in (1e7, 2e7, 3e7)) > 0
+    assert not c.passed
+    A_stable = np.array([[0.0, 1.0], [-10.0, -11.0]])
+    for sector, k_unstable in (([[1.0, 3.0]], 5.0), ([[1e7, 3e7]], 1e7)):
+        assert _max_re(A_stable, B, C, np.array([[k_unstable * 1.01]])) > 0
+        c = circle_criterion(A_stable, B, C, sector)
+        assert np.isfinite(c.max_scale) and c.max_scale * sector[0][1] <= k_unstable * 1.001
+        assert c.passed is (sector[0][1] < k_unstable)

@@ -202,16 +202,18 @@ def test_circle_criterion_decoupled_mimo_is_its_siso_criteria():
 
 
 def test_circle_scales_of_an_unstable_plant():
+    from qpp.circle import RESOLVED_SCALE
+
     # H(s) = 1/(s − 1), φ fed back with + (ẋ = (1 + k) x: stable for k < −1): its Nyquist plot
     # is the circle on [−1, 0], travelled once anticlockwise (P0 = 1).  A sector s·[−β, −α] with
     # 0 < α passes when its disc (diameter [−1/(sα), −1/(sβ)]) lies inside that circle: s > 1/α.
     # So the passing scales start above 0 (the old bisection assumed [0, s_max] and reported 0)
-    # and run up to the grid's resolution near the origin.
+    # and run up to the grid's resolution near the origin (at least RESOLVED_SCALE times the sector).
     for alpha, beta in ((2.0, 3.0), (0.1, 0.2)):
         r = circle_criterion([[1.0]], [[1.0]], [[1.0]], [[-beta, -alpha]])
         assert r.P0 == 1
         assert r.min_scale == pytest.approx(1.0 / alpha, rel=1e-6)
-        assert r.max_scale > 1e4 / alpha
+        assert r.max_scale >= RESOLVED_SCALE          # every larger sector passes: the grid's resolved range
         assert r.passed is (1.0 > 1.0 / alpha)
     # a stable plant: every small sector passes
     r = circle_criterion([[-1.0]], [[1.0]], [[1.0]], [[-0.5, 0.5]])

@@ -170,3 +170,25 @@ def test_a_structurally_impossible_plant_names_its_obstacle(plant, words):
     # the same structure without the obstacle (C = [2, −1]: observable, no zero at 0) has none
     assert structural_obstacles(LurePlant([[0, 1], [2, -1]], [[0], [1]], [[2, -1]], [[0], [1]],
                                           [[0]], [[1]], [[1]])) == []
+
+
+def test_a_large_reference_is_not_a_divergence(tmp_path):
+    """The ch. 13 loop tracking r_o = 1e7·sin 5t: a stable loop with large signals, not a divergence
+    (the threshold is relative to the nominal loop's size, not 1e6 in the output's units)."""
+    from qpp.simulate import simulate
+
+    big = load_config("qpp_siso", ["simulation.r_o=[[{kind: sin, amplitude: 1.0e7, omega: 5.0}]]",
+                                   "simulation.n_samples=201"])
+    p = big.published
+    for s in simulate(big, p.K1, p.Kc, p.H):
+        assert s.diverged_at is None and np.isfinite(s.error_inf) and np.all(np.isfinite(s.y))
+
+
+def test_a_badly_scaled_plant_has_no_false_obstacle():
+    """A = [[0, 1e6], [0, 0]], B = [0; 1e-4]: controllable (rank 2), observable from y = x1, no
+    zero at the integrator's pole; a rank test relative to max|A| called it uncontrollable."""
+    from qpp.lure import LurePlant, structural_obstacles
+
+    A, B, C = np.array([[0.0, 1e6], [0.0, 0.0]]), np.array([[0.0], [1e-4]]), np.array([[1.0, 0.0]])
+    assert np.linalg.matrix_rank(np.hstack([B, A @ B])) == 2                   # independent: Kalman rank
+    assert structural_obstacles(LurePlant(A, B, C, B, [[0]], [[1]], [[1]])) == []
