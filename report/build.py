@@ -123,16 +123,25 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     say = progress or (lambda msg: None)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     out = Path(out)
+    figdir = out / "figures"
+    created = [d for d in (out, figdir) if not d.exists()]
     try:
         out.mkdir(parents=True, exist_ok=True)
-        figdir = out / "figures"
         figdir.mkdir(exist_ok=True)
     except OSError as exc:
         raise OutputError(f"cannot create the report directory {out}: {exc.strerror or exc}") from None
     say(f"gathering results and writing sections ({'fast' if fast else 'full'} mode, root "
         f"{root or 'from configs'}, {jobs} process{'es' if jobs > 1 else ''})")
-    g, rep, timings = _run_graph(Path(root) if root is not None else None, figdir, fast, rerun, robustness,
-                                 jobs, say)
+    try:
+        g, rep, timings = _run_graph(Path(root) if root is not None else None, figdir, fast, rerun, robustness,
+                                     jobs, say)
+    except BaseException:
+        for d in reversed(created):          # a refused or failed report leaves no empty folders behind
+            try:
+                d.rmdir()
+            except OSError:
+                pass
+        raise
     _add(rep, "printed", sec_printed.build, list(rep.ledger))
     # determinism
     man_path = out / "manifest.json"

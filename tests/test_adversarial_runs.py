@@ -269,3 +269,14 @@ def test_a_closed_stdout_is_not_an_output_failure(tmp_path):
     assert proc.wait(timeout=120) == 141, err
     assert err == b""
     assert (tmp_path / "mb3" / "tea.h5").is_file() and (tmp_path / "mb3" / "config.yaml").is_file()
+
+
+def test_a_refused_report_leaves_no_empty_output_folder(tmp_path):
+    """`acmm report --out new/` whose stages cannot write (the results root is a file): one line,
+    exit 4, and the folders it had created for the report are gone again."""
+    (tmp_path / "afile").write_text("")
+    r = subprocess.run([ACMM, "report", "--fast", "--root", str(tmp_path / "afile"), "--out", str(tmp_path / "out")],
+                       env=ENV, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    errors = [ln for ln in r.stderr.splitlines() if ln.startswith("error:")]
+    assert r.returncode == 4 and len(errors) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert not (tmp_path / "out").exists()
