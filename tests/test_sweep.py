@@ -292,3 +292,14 @@ def test_journal_record_checks(tmp_path):
                        ([1, 2], "not a record")):
         assert words in record_problem(bad, {"ac"})
     assert "base 'ac'" in record_problem(case, {"mb3"})
+
+
+@pytest.mark.parametrize("section", [
+    {"monte_carlo": {"inertia": {"percent": 1}, "dI11": {"uniform": [0.5, 0.6]}}},
+    {"monte_carlo": {"offset": {"uniform": [-1, 1]}, "offset_pitch": {"uniform": [-2, 2]}}},
+])
+def test_a_parameter_given_twice_is_refused(section):
+    """A parameter given directly and through a shorthand: refused naming both (the later key
+    used to win silently, both drawing random numbers)."""
+    with pytest.raises(ConfigError, match="given twice"):
+        parse_sweep({"name": "dup", "sweep": {"base": "mb3", "n_runs": 2, "orbits": 1, **section}})

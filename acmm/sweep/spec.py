@@ -144,8 +144,11 @@ class SweepSpec(_Model):
             if self.n_runs is not None and self.n_runs != size:
                 raise ValueError(f"n_runs ({self.n_runs}) must equal the grid size ({size}) or be omitted")
         names = swept_parameters(self)
-        if len(set(names)) != len(names):
-            raise ValueError("a parameter is given twice (directly and through a shorthand?)")
+        given = [p for k in list(self.grid or {}) + list(self.monte_carlo or {}) for p in SHORTHANDS.get(k, [k])]
+        twice = sorted({p for p in given if given.count(p) > 1})
+        if twice:
+            raise ValueError(f"parameter {', '.join(twice)} is given twice (directly and through a shorthand: "
+                             f"{', '.join(k for k in SHORTHANDS if set(SHORTHANDS[k]) & set(twice))})")
         for name in names:
             if name == "inertia_scale" and any(v <= 0 for v in _support(self, name)):
                 raise ValueError("inertia_scale must stay > 0")
