@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm.config import Config
+from common.errors import ConfigError
 from acmm.config import load_config as _load_config
 
 __all__ = ["load_config", "design", "simulate", "linearize", "Design"]
@@ -52,7 +53,18 @@ def load_config(config: str | Path | Config | None = None) -> Config:
     acmm.config.Config
         The validated config.
     """
-    return config if isinstance(config, Config) else _load_config(config)
+    if isinstance(config, Config):
+        return config
+    if config is not None and not isinstance(config, (str, Path)):
+        raise ConfigError(f"config must be a path, a packaged config's name or a Config, not {type(config).__name__}")
+    return _load_config(config)
+
+
+class UnknownPoint(ConfigError, KeyError, IndexError):
+    """A design point that the design does not have (by name or index); also a KeyError and an
+    IndexError, as a lookup in a list or mapping of the points would raise."""
+
+    __str__ = Exception.__str__
 
 
 def linearize(config, tea_pitch_deg: float | None = None):
@@ -158,12 +170,14 @@ class Design:
         return [p.spec.name for p in self.result.points]
 
     def _index(self, point) -> int:
+        names = self.names
         if isinstance(point, str):
-            try:
-                return self.names.index(point)
-            except ValueError:
-                raise KeyError(f"no design point {point!r} (points: {', '.join(self.names)})") from None
-        return int(point)
+            if point in names:
+                return names.index(point)
+        elif isinstance(point, (int, np.integer)) and -len(names) <= int(point) < len(names):
+            return int(point) % len(names)
+        raise UnknownPoint(f"no design point {point!r}: give an index 0…{len(names) - 1} or a name "
+                           f"({', '.join(names)})")
 
     def gain(self, point=0) -> np.ndarray:
         """LQR gain K (3×24, ft·lbf per state unit) of design point ``point`` (index or name).
@@ -229,8 +243,8 @@ class Design:
 
         Raises
         ------
-        ValueError
-            When the config has fewer than two blended design points.
+        ConfigError
+            When the config has no blend (``schedule.to``).
         """
         return _mix(*self._blend_ends(), s)
 
@@ -240,7 +254,7 @@ class Design:
 
         blended = [p for p in sch.point_specs(self.config) if np.isfinite(p.s)]
         if len(blended) < 2:
-            raise ValueError("the config has no schedule.to blend")
+            raise ConfigError("the config has no gain schedule (no schedule.to blend): give a config with one")
         return blended[0], blended[-1]
 
     def _tea_at(self, s: float, guess=None):
@@ -270,7 +284,7 @@ class Design:
 
         Raises
         ------
-        ValueError
+        ConfigError
             No blend in the config, or the pitch TEA is outside the blend's range.
         """
         from scipy.optimize import brentq
@@ -279,7 +293,7 @@ class Design:
 
         specs = [p for p in sch.point_specs(self.config) if np.isfinite(p.s)]
         if len(specs) < 2:
-            raise ValueError("the config has no schedule.to blend")
+            raise ConfigError("the config has no gain schedule (no schedule.to blend): give a config with one")
         target = np.radians(tea_pitch_deg)
         grid = np.linspace(0.0, 1.0, max(len(specs), 3))
         teas = [self._tea_at(s)[1].theta for s in grid]
@@ -292,7 +306,7 @@ class Design:
                 return float(brentq(lambda s: self._tea_at(s, guess)[1].theta[1] - target,
                                     grid[k], grid[k + 1], xtol=1e-12))
         lo, hi = np.degrees(min(t[1] for t in teas)), np.degrees(max(t[1] for t in teas))
-        raise ValueError(f"pitch TEA {tea_pitch_deg:g} deg is outside the blend ({lo:.2f} … {hi:.2f} deg)")
+        raise ConfigError(f"pitch TEA {tea_pitch_deg:g} deg is outside the blend ({lo:.2f} … {hi:.2f} deg)")
 
     def model_at(self, tea_pitch_deg: float):
         """Design model (:class:`acmm.linearize.LinearModel`) of the blended station whose

@@ -288,3 +288,23 @@ def test_unit_strings_in_acmm_sweep_and_qpp_configs():
     q["spheres"]["T"] = "2 kg"
     with pytest.raises(ValueError, match="spheres.T"):
         QppConfig.model_validate(q)
+
+
+def test_api_misuse_raises_the_documented_errors():
+    """A design point that is not there, a schedule a config does not have, a config of the wrong
+    type: AcmmError subclasses naming what is valid (they were IndexError, KeyError, ValueError and
+    TypeError); a missing point is still a KeyError/IndexError for code that caught those."""
+    import acmm
+    from common.errors import AcmmError, ConfigError
+
+    d = acmm.design(acmm.load_config("mb3"))
+    for bad in (5, "zzz", 1.5):
+        with pytest.raises(ConfigError, match="no design point") as exc:
+            d.closed_loop(bad)
+        assert isinstance(exc.value, (KeyError, IndexError)) and "mb3" in str(exc.value)
+    np.testing.assert_array_equal(d.gain(-1), d.gain("mb3"))
+    for call in (lambda: d.scheduled_closed_loop(-20.0), lambda: d.loop_transfer(tea_pitch_deg=-20.0)):
+        with pytest.raises(ConfigError, match="no gain schedule"):
+            call()
+    with pytest.raises(AcmmError, match="not int"):
+        acmm.load_config(42)
