@@ -12,16 +12,12 @@ ft·lbf·s, ft·lbf·s², DRF states), control u (ft·lbf) enters ω' as −u an
 disturbance w (ft·lbf) enters ω' as +w; the LQR law is u = −K x.  Every system here is in the
 report's (imperial) units whatever ``output.units`` says; time is in s.
 
-Systems
--------
-* :meth:`Design.open_loop` — inputs u1..u3, w1..w3; outputs the 24 states;
-* :meth:`Design.closed_loop` — point k with its own LQR gain: x' = (A − B K) x + B v + G w,
-  inputs v1..v3 (a torque added to −K x) and w1..w3, outputs the 24 states and u1..u3;
-* :meth:`Design.scheduled_closed_loop` — the same at any pitch TEA along the blend, with the
-  scheduled gain K(θ2*) (what the nonlinear simulation uses) and the plant linearized at the
-  blended station's own TEA;
-* :meth:`Design.loop_transfer` — L = K (sI − A)⁻¹ B broken at the plant input (for
-  ``control.disk_margins``; negative feedback).
+Systems: :meth:`Design.open_loop` (inputs u1..u3, w1..w3; outputs the 24 states);
+:meth:`Design.closed_loop` (point k with its own LQR gain: x' = (A − B K) x + B v + G w, inputs
+v1..v3, a torque added to −K x, and w1..w3, outputs the 24 states and u1..u3);
+:meth:`Design.scheduled_closed_loop` (the same at any pitch TEA along the blend, with the scheduled
+gain K(θ2*) and the plant linearized at the blended station's own TEA); :meth:`Design.loop_transfer`
+(L = K (sI − A)⁻¹ B broken at the plant input, for ``control.disk_margins``; negative feedback).
 """
 from __future__ import annotations
 
@@ -31,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm.config import Config
-from common.errors import ConfigError
+from common.errors import ConfigError, UnknownPointError
 from acmm.config import load_config as _load_config
 
 __all__ = ["load_config", "design", "simulate", "linearize", "Design"]
@@ -52,19 +48,17 @@ def load_config(config: str | Path | Config | None = None) -> Config:
     -------
     acmm.config.Config
         The validated config.
+
+    Raises
+    ------
+    ConfigError
+        Not a path, name or Config; or the config is invalid.
     """
     if isinstance(config, Config):
         return config
     if config is not None and not isinstance(config, (str, Path)):
         raise ConfigError(f"config must be a path, a packaged config's name or a Config, not {type(config).__name__}")
     return _load_config(config)
-
-
-class UnknownPoint(ConfigError, KeyError, IndexError):
-    """A design point that the design does not have (by name or index); also a KeyError and an
-    IndexError, as a lookup in a list or mapping of the points would raise."""
-
-    __str__ = Exception.__str__
 
 
 def linearize(config, tea_pitch_deg: float | None = None):
@@ -176,7 +170,7 @@ class Design:
                 return names.index(point)
         elif isinstance(point, (int, np.integer)) and -len(names) <= int(point) < len(names):
             return int(point) % len(names)
-        raise UnknownPoint(f"no design point {point!r}: give an index 0…{len(names) - 1} or a name "
+        raise UnknownPointError(f"no design point {point!r}: give an index 0…{len(names) - 1} or a name "
                            f"({', '.join(names)})")
 
     def gain(self, point=0) -> np.ndarray:

@@ -122,8 +122,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     cpu0 = _cpu()
     say = progress or (lambda msg: None)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
-    out = Path(out)
-    figdir = out / "figures"
+    out, figdir = Path(out), Path(out) / "figures"
     created = [d for d in (out, figdir) if not d.exists()]
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -136,11 +135,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
         g, rep, timings = _run_graph(Path(root) if root is not None else None, figdir, fast, rerun, robustness,
                                      jobs, say)
     except BaseException:
-        for d in reversed(created):          # a refused or failed report leaves no empty folders behind
-            try:
-                d.rmdir()
-            except OSError:
-                pass
+        _remove_empty(created)               # a refused or failed report leaves no empty folders behind
         raise
     _add(rep, "printed", sec_printed.build, list(rep.ledger))
     # determinism
@@ -235,3 +230,12 @@ def _add(rep: SectionWriter, key: str, build, *args):
     rep.doc.blocks.extend(w.doc.blocks)
     rep.ledger.extend(w.ledger)
     return result
+
+
+def _remove_empty(dirs: list) -> None:
+    """Remove the folders ``dirs`` (innermost last in the list) that are empty."""
+    for d in reversed(dirs):
+        try:
+            d.rmdir()
+        except OSError:
+            pass
