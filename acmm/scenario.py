@@ -284,16 +284,35 @@ def level_statistics(sc: Scenario, r: SimResult) -> list[dict]:
         (ft·lbf·s).
     """
     err = np.degrees(attitude_error(sc, r))
-    hmag = np.abs(r.state[:, 6:9])
+    peaks = level_peak_momentum(sc, r)
     out = []
     ends = np.append(sc.level_start[1:], sc.t_end)
     orbit = 2 * np.pi / sc.n
     for k, (t0, t1) in enumerate(zip(sc.level_start, ends)):
-        in_level = r.level == k
-        steady = in_level & (r.t >= 0.5 * (t0 + t1))
+        steady = (r.level == k) & (r.t >= 0.5 * (t0 + t1))
         if not steady.any():
             continue
         out.append({"level": k, "start_orbit": t0 / orbit, "theta2_deg": float(np.degrees(sc.theta_est[k, 1])),
                     "steady_error_deg": np.abs(err[steady]).max(axis=0),
-                    "peak_momentum": float(hmag[in_level].max())})
+                    "peak_momentum": float(peaks[k])})
     return out
+
+
+def level_peak_momentum(sc: Scenario, r: SimResult) -> np.ndarray:
+    """Peak CMG momentum max_i |h_i| over each level of the stair-case (ch. 6).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The simulated scenario (its levels).
+    r : SimResult
+        Its result.
+
+    Returns
+    -------
+    (L,) ndarray
+        Per level, ft·lbf·s; NaN for a level the run did not reach.
+    """
+    hmag = np.abs(r.state[:, 6:9])
+    return np.array([hmag[r.level == k].max() if np.any(r.level == k) else np.nan
+                     for k in range(len(sc.level_start))])

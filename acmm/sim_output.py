@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from acmm import dynamics as dyn
+from acmm.scenario import level_peak_momentum
 from common.results import Dataset
 
 AXES = ["roll", "pitch", "yaw"]
@@ -53,8 +54,7 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
     steady = np.full((n_levels, 3), np.nan)
     for st in stats:
         steady[st["level"]] = st["steady_error_deg"]
-    hmag = np.abs(r.state[:, 6:9])
-    peak = np.array([hmag[r.level == k].max() if np.any(r.level == k) else np.nan for k in range(n_levels)])
+    peak = level_peak_momentum(sc, r)
     items = {
         "t": Dataset(r.t, "s", "time", dims=("t",)),
         "orbits": Dataset(orbits, "orbit", "time in orbits (2π/n)", dims=("t",)),

@@ -136,7 +136,6 @@ class _Rollback:
         import shutil
 
         _Rollback._count += 1
-        self.run_dir = run_dir
         self.dir = run_dir / f".rollback-{os.getpid()}-{_Rollback._count}"
         self.saved: list[Path] = []
         if not run_dir.is_dir():

@@ -198,15 +198,13 @@ def sector_coupling(cfg: QppConfig) -> np.ndarray:
         True for a coupled channel (dimensionless flags).
     """
     nl = cfg.nonlinearity
-    r = cfg.lure_plant().r
     if isinstance(nl, ExpressionNonlinearity):
         return ~np.asarray(cfg.expression_model().sector_info.diagonal, bool)
+    P = cfg.lure_plant()
     if isinstance(nl, SinusoidalNonlinearity):
-        M = cfg.lure_plant().N() @ np.asarray(nl.F_unc, float)
-        off = M.copy()
-        np.fill_diagonal(off, 0.0)
-        return np.any(off != 0.0, axis=1)
-    return np.zeros(r, bool)
+        M = P.N() @ np.asarray(nl.F_unc, float)
+        return np.any((M != 0.0) & ~np.eye(*M.shape, dtype=bool), axis=1)
+    return np.zeros(P.r, bool)
 
 
 def settling_time(t, y_o, r_o, band: float) -> float:

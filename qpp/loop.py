@@ -150,16 +150,17 @@ def _loop_functions(plant: LurePlant, K1, Kc, H, f1, gamma, gamma_nominal, r_fun
     return control, rhs
 
 
-def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, limit=None):
+def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, diverged_beyond=None):
     """Integrate ``rhs`` over ``segments`` (one, or two split at the impulse time, where
-    x jumps by G I), sampled at ``t_eval`` (s); the samples of z, (2n+q, N).  With ``limit``
-    (‖z‖∞ of a diverged loop) the integration stops when the loop diverges, the later samples NaN."""
+    x jumps by G I), sampled at ``t_eval`` (s); the samples of z, (2n+q, N).  With
+    ``diverged_beyond`` (see :func:`simulate_loop`) the integration stops when the loop diverges,
+    the later samples NaN."""
     t0, tf = t_eval[0], t_eval[-1]
     zs = []
     events = None
-    if limit is not None:
+    if diverged_beyond is not None:
         def diverged(t, zz):
-            return limit - np.max(np.abs(zz))
+            return diverged_beyond - np.max(np.abs(zz))
         diverged.terminal = True
         events = diverged
     for k, (ta, tb) in enumerate(segments):
@@ -172,8 +173,9 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, lim
         with np.errstate(all="ignore"):
             sol = solve_ivp(rhs, (ta, tb), z, method="DOP853", t_eval=np.unique(te), rtol=rtol, atol=atol,
                             max_step=max_step, events=events)
-        stopped = limit is not None and (sol.status == 1 or (
-            not sol.success and np.max(np.abs(sol.y[:, -1] if sol.y.size else z)) > 1e-3 * limit))
+        last = sol.y[:, -1] if sol.y.size else z          # the last sample reached
+        stopped = diverged_beyond is not None and (sol.status == 1 or (
+            not sol.success and np.max(np.abs(last)) > 1e-3 * diverged_beyond))
         if not sol.success and not stopped:
             raise ConvergenceError(f"simulation failed at t = {sol.t[-1]:.4g} s: {sol.message}")
         keep = np.isin(sol.t, t_eval[mask])

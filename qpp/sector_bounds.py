@@ -29,12 +29,6 @@ def _box(model, i: int) -> tuple[list, np.ndarray]:
     return ranges, free
 
 
-def _split(model, x):
-    p = model.p
-    Y = [np.full((1, 1), v) for v in x[:p]]
-    return Y, np.full((1, 1), x[p]), [np.full((1, 1), v) for v in x[p + 1:]]
-
-
 #: which way each bound is climbed: α down, β, the slope and the gain up
 _SIGN = {"alpha": -1.0, "beta": 1.0, "slope": 1.0, "gain": 1.0}
 
@@ -42,22 +36,12 @@ _SIGN = {"alpha": -1.0, "beta": 1.0, "slope": 1.0, "gain": 1.0}
 def _value(model, i: int, kind: str, x) -> float:
     """φ_i / y_i (``"alpha"``, ``"beta"``), Σ_j |∂φ_i/∂y_j| (``"slope"``) or |φ_i| / ‖y‖∞
     (``"gain"``, a lower bound of the slope since φ(0) = 0) at x = (y, t, θ); NaN for a ratio
-    at y_i ≈ 0 or a gain at y ≈ 0."""
-    Y, t, TH = _split(model, x)
-    if kind == "slope":
-        v = sum(np.abs(model._grad(i, j, Y, t, TH)) for j in range(model.p) if model.dep[i][j])
-        return float(np.asarray(v).ravel()[0])
-    if kind == "gain":
-        ymax = float(np.max(np.abs(x[:model.p])))
-        return abs(float(model._phi_i(i, Y, t, TH).ravel()[0])) / ymax if ymax > 1e-12 else np.nan
-    yi = x[i]
-    if abs(yi) <= 1e-9 * float(np.ptp(model.y_range[i])):     # φ/y undefined at y_i = 0: no step there
-        return np.nan
-    return float(model._phi_i(i, Y, t, TH).ravel()[0] / yi)
+    at y_i ≈ 0 or a gain at y ≈ 0 (:func:`_values` at one point)."""
+    return float(_values(model, i, kind, np.asarray(x, float)[:, None])[0])
 
 
 def _values(model, i: int, kind: str, X) -> np.ndarray:
-    """:func:`_value` at the columns of X (p + 1 + k, S), vectorized (NaN where undefined)."""
+    """:func:`_value` at each column x = (y, t, θ) of X (p + 1 + k, S) (NaN where undefined)."""
     p = model.p
     Y, t, TH = [X[j] for j in range(p)], X[p], [X[k] for k in range(p + 1, X.shape[0])]
     S = X.shape[1]

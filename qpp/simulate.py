@@ -19,7 +19,8 @@ import math
 import numpy as np
 
 from qpp.config import ExpressionNonlinearity, QppConfig, Scenario
-from qpp.loop import DIVERGED_FACTOR, initial_state, simulate_loop  # noqa: F401  (re-exported: the old import paths)
+from qpp.loop import DIVERGED_FACTOR
+from qpp.loop import initial_state, simulate_loop  # noqa: F401  (re-exported: the old import paths)
 from qpp.matched_nonlinearity import (  # noqa: F401  (re-exported: the old import paths)
     config_f1, make_f1, scenario_gamma)
 from qpp.signals import eval_signal, eval_terms  # noqa: F401  (re-exported: the old import paths)

@@ -15,6 +15,13 @@ def _max_re(A, B, C, Phi):
     return float(np.linalg.eigvals(A + B @ Phi @ C).real.max())
 
 
+def _random_stable_loop(rng, n: int, least_decay: float):
+    """A random stable (n, n) A (its eigenvalues shifted to Re ≤ −U(least_decay, 1)), B (n, 2), C (2, n)."""
+    A = rng.normal(size=(n, n))
+    A -= (np.linalg.eigvals(A).real.max() + rng.uniform(least_decay, 1.0)) * np.eye(n)
+    return A, rng.normal(size=(n, 2)), rng.normal(size=(2, n))
+
+
 def _one_sided_loop():
     """The SISO loop of the review: stable for φ = k y with k ≤ 1.426 only (k < 0 all stable)."""
     P = LurePlant([[0, 1], [-1, -0.5]], [[0], [1]], [[1, 0]], [[0], [1]], [[0]], [[1]], [[1]])
@@ -43,9 +50,7 @@ def test_passing_sectors_hold_no_destabilizing_constant_gain():
     rng = np.random.default_rng(7)
     checked = 0
     for _ in range(400):
-        A = rng.normal(size=(3, 3))
-        A -= (np.linalg.eigvals(A).real.max() + rng.uniform(0.2, 1.0)) * np.eye(3)
-        B, C = rng.normal(size=(3, 2)), rng.normal(size=(2, 3))
+        A, B, C = _random_stable_loop(rng, 3, 0.2)
         lo, hi = sorted(rng.choice([-2.0, -1.0, 0.0, 0.5, 1.0, 2.0], 2, replace=False))
         sector = np.array([[lo, hi], [min(lo, 0.0), max(hi, 0.5)]])
         c = circle_criterion(A, B, C, sector, omega=W)
@@ -62,9 +67,7 @@ def test_passing_sectors_hold_no_destabilizing_constant_gain():
 def _cross_counterexample():
     rng = np.random.default_rng(1)
     for _ in range(300):
-        A = rng.normal(size=(4, 4))
-        A -= (np.linalg.eigvals(A).real.max() + rng.uniform(0.1, 1)) * np.eye(4)
-        B, C = rng.normal(size=(4, 2)), rng.normal(size=(2, 4))
+        A, B, C = _random_stable_loop(rng, 4, 0.1)
         diag_scale = circle_criterion(A, B, C, [[-1, 1], [-1, 1]], omega=W).max_scale
         s = 0.98 * diag_scale
         if not np.isfinite(s) or s == 0:
@@ -95,9 +98,7 @@ def test_coupled_small_gain_is_sufficient_on_random_loops():
     rng = np.random.default_rng(3)
     checked = 0
     for _ in range(200):
-        A = rng.normal(size=(4, 4))
-        A -= (np.linalg.eigvals(A).real.max() + rng.uniform(0.1, 1)) * np.eye(4)
-        B, C = rng.normal(size=(4, 2)), rng.normal(size=(2, 4))
+        A, B, C = _random_stable_loop(rng, 4, 0.1)
         sector = np.array([[-1.0, 1.0], [0.0, 1.0]])
         c = circle_criterion(A, B, C, sector, omega=W, coupled=[True, False])
         s = 0.99 * c.max_scale
