@@ -1,4 +1,4 @@
-"""Compiled TEA continuation for sweeps (issue 16): :func:`acmm.tea.solve_tea`'s algorithm in numba.
+"""Compiled TEA continuations for sweeps (issue 16): :func:`acmm.tea.solve_tea`'s algorithm in numba.
 
 A Monte Carlo case of a sweep re-solves the perturbed plant's TEA (eqs 4.1–4.3).  The
 continuation of :func:`acmm.tea.solve_tea` (diagonal body at LVLH → products of inertia →
@@ -9,12 +9,17 @@ fold below 1e-7), same acceptance tests (Newton converged to the residual tolera
 ≤ 5°, unchanged sign of det ∂r/∂θ), same Newton (damped to 0.5 rad, |θ| < 89.5°), same fold bisection — compiled, in
 ~0.1–0.5 ms.
 
-Why not Newton warm-started at the nominal TEA?  It was measured on the packaged ±30 % sweep:
-for AC it lands on the continuation's root in every case, but for MB3 (I11 ≈ I33, a nearly
-planar body) the continuation of a perturbed plant ends on a root ~90° away from the nominal
-TEA in about half of the cases — even when another equilibrium lies within 5° of the nominal
-one — so a warm start would change which equilibrium a case is simulated about.  The compiled
-continuation keeps the physical-branch definition of :mod:`acmm.tea` and so every case's root.
+A sweep case's plant, though, is a perturbation of the plant the controller was designed for, so
+its TEA is the equilibrium *connected to the design TEA* (:func:`solve_tea_connected`: the same
+continuation, from the design TEA along the straight line from the nominal plant to the perturbed
+one; a few steps, ~0.1 ms).  The root the continuation from LVLH reaches is not that one for a
+nearly planar body: for MB3 (I11 ≈ I33) a 0.5 % smaller I33 flips it from −44.7° to +41.8° pitch,
+while the design TEA's equilibrium moves to −48.2°; in the packaged ±30 % Monte Carlo 95 of MB3's
+200 cases had the LVLH root on the other principal alignment.  A plain Newton step from the
+nominal TEA is not used either: on such plants it may land on a root of another branch.  Where the
+design TEA's branch folds before the perturbed plant (AC: 81 of 200 cases, as I33 − I11 shrinks),
+the sweep falls back to :func:`solve_tea_fast`, the continuation from LVLH (:mod:`acmm.tea`'s
+physical branch).
 
 The arithmetic is written out in scalars (closed-form residual and Jacobian, 3×3 Gaussian
 elimination with partial pivoting), so results agree with :func:`acmm.tea.solve_tea` to
@@ -258,6 +263,65 @@ def _solve_tea_compiled(inertia, n, bias, tol):
     return th, 0, 1.0
 
 
+@njit(cache=True)
+def _connected_compiled(theta0, i0, b0, i1, b1, n, tol):
+    """(θ, ok): the root of (i1, b1) on the branch through the root of (i0, b0) nearest θ0."""
+    start = np.empty(3)
+    if not _newton(theta0, i0, n, b0, tol, 50, 0.05, start):
+        return theta0.copy(), False
+    jump = 0.0
+    for i in range(3):
+        jump = max(jump, abs(start[i] - theta0[i]))
+    if jump > _MAX_JUMP:
+        return start, False
+    th, lam, fold = _continue(start, i0, i1, b0, b1, n, tol, 1e-7)
+    return th, not fold
+
+
+def _verified(theta: np.ndarray, inertia: np.ndarray, n: float, bias: np.ndarray) -> bool:
+    """Whether ``theta`` (rad) passes the numpy residual check of :mod:`acmm.tea` for the plant."""
+    scale = max(3 * n * n * np.abs(inertia).max(), 1e-300)
+    res = np.max(np.abs(equilibrium_residual(theta, inertia, n, bias)))
+    return bool(res <= 10 * residual_threshold(scale))
+
+
+def solve_tea_connected(theta0: np.ndarray, inertia0: np.ndarray, bias0: np.ndarray,
+                        inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA | None:
+    """The plant's TEA on the branch continuously connected to a known equilibrium of another plant.
+
+    A Monte Carlo case perturbs the plant a controller was designed for; the station sits at the
+    equilibrium it reaches as the plant moves from the nominal one to the perturbed one, not at
+    whichever root a continuation from LVLH happens to end on (for a nearly planar body such as
+    MB3, I11 ≈ I33, that root can lie ~90° from the design TEA while a connected one exists).
+    Damped Newton first polishes ``theta0`` as a root of the nominal plant (≤ 5° away), then the
+    continuation of :func:`acmm.tea.solve_tea` (same step control and acceptance tests) follows
+    it along I = I0 + λ(I − I0), bias = b0 + λ(b − b0), λ: 0 → 1.
+
+    Parameters
+    ----------
+    theta0 : (3,) array
+        An equilibrium (or a guess within 5° of one) of the nominal plant, rad.
+    inertia0, bias0 : (3, 3) array, (3,) array
+        The nominal plant: inertia, slug·ft²; constant disturbance torque, ft·lbf.
+    inertia, bias : (3, 3) array, (3,) array
+        The perturbed plant, same units.
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    acmm.tea.TEA or None
+        The connected equilibrium (eqs 4.1–4.3), θ in rad; None when ``theta0`` is not near an
+        equilibrium of the nominal plant, the branch folds between the two plants, or the root
+        fails the residual check of :mod:`acmm.tea`.
+    """
+    args = [np.ascontiguousarray(a, float) for a in (theta0, inertia0, bias0, inertia, bias)]
+    theta, ok = _connected_compiled(args[0], args[1], args[2], args[3], args[4], float(n), RESIDUAL_TOL)
+    if not ok or not _verified(theta, args[3], n, args[4]):
+        return None
+    return make_tea(theta, args[3], n, args[4])
+
+
 def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
     """The physical-branch TEA (same root as :func:`acmm.tea.solve_tea`), compiled.
 
@@ -291,14 +355,13 @@ def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
         return solve_tea(inertia, n, bias)
     if status == 2:
         raise NoEquilibriumError(fold_message(bias, lam))
-    if status == 0:
-        scale = max(3 * n * n * np.abs(inertia).max(), 1e-300)
-        res = np.max(np.abs(equilibrium_residual(theta, inertia, n, bias)))
-        if res <= 10 * residual_threshold(scale):
-            return make_tea(theta, inertia, n, bias)
+    if status == 0 and _verified(theta, inertia, n, bias):
+        return make_tea(theta, inertia, n, bias)
     return solve_tea(inertia, n, bias)
 
 
 def warm_up() -> None:
     """Compile (or load from numba's cache) the kernels of this module."""
-    solve_tea_fast(np.diag([2.0e7, 1.0e6, 2.5e7]), 0.0011, np.array([0.0, 0.1, 0.0]))
+    inertia, bias = np.diag([2.0e7, 1.0e6, 2.5e7]), np.array([0.0, 0.1, 0.0])
+    root = solve_tea_fast(inertia, 0.0011, bias)
+    solve_tea_connected(root.theta, inertia, bias, 1.01 * inertia, 0.0011, bias)

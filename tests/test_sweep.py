@@ -134,6 +134,23 @@ def test_base_with_an_asked_tea_off_the_continuation_branch_stays_on_it(tmp_path
     np.testing.assert_allclose(_nominal_tea_deg(sw)[sw.bases[0].label], [0.0, 20.0, 0.0], atol=1e-9)
 
 
+def test_a_case_starts_at_the_equilibrium_connected_to_the_design_tea(tmp_path):
+    # MB3 (I11 ≈ I33) with I33 0.5 % smaller: the root continued from LVLH flips to +41.8° pitch,
+    # 86° from the controller's estimate, and such a case used to diverge at once; the station
+    # follows the design TEA's own equilibrium to −48.2° and the fixed design holds it
+    sw = load_sweep(_sweep_yaml(tmp_path, "connected", base=str(CONFIGS / "mb3.yaml"), orbits=2.0))
+    ctx = prepare_base(sw.bases[0], sw.spec)
+    rows = [simulate_values(ctx, {"dI33": d}) for d in (-0.005, 0.0, 0.005)]
+    assert [r["verdict"] for r in rows] == ["bounded"] * 3
+    assert [round(r["tea_true"][1], 2) for r in rows] == [-48.17, -44.7, -41.24]
+    assert all("LVLH" not in r["reason"] for r in rows)
+    # AC with I11 20 % larger: the design TEA's branch folds before the perturbed plant, another
+    # equilibrium exists (+24.5° pitch); the case starts there and its reason says why
+    sw = load_sweep(_sweep_yaml(tmp_path, "folded", orbits=2.0))
+    row = simulate_values(prepare_base(sw.bases[0], sw.spec), {"dI11": 0.2})
+    assert "design TEA's equilibrium folds" in row["reason"] and abs(row["tea_true"][1] - 24.5) < 0.1
+
+
 # --------------------------------------------------------------------------------------------
 # whole sweeps
 # --------------------------------------------------------------------------------------------

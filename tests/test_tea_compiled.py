@@ -1,5 +1,6 @@
-"""The compiled TEA continuation of sweeps (issue 16) finds the root :func:`acmm.tea.solve_tea`
-finds and raises the same errors, on perturbed plants where a Newton warm start would not."""
+"""The compiled TEA continuations of sweeps (issue 16): from LVLH, the root :func:`acmm.tea.solve_tea`
+finds with the same errors; from the design TEA, the equilibrium connected to it (checked against
+an independent fine-step continuation)."""
 from __future__ import annotations
 
 import numpy as np
@@ -61,23 +62,75 @@ def test_compiled_no_equilibrium_message_matches():
     assert "no other equilibrium lies within ±85°" in str(ref.value)
 
 
-def test_warm_newton_from_nominal_would_change_mb3_roots():
-    """Why sweeps do not warm-start Newton at the nominal TEA: for perturbed MB3 plants the
-    continuation's root is often another equilibrium than the one Newton reaches from nominal."""
-    cfg = load_config("mb3")
+def _fine_path(theta, i0, b0, i1, b1, n, steps=200):
+    """An independent connected root: numpy Newton (:func:`acmm.tea._newton`) in `steps` equal
+    small steps from the nominal root, with the Jacobian's determinant watched for a fold;
+    None when the branch folds or a step jumps."""
+    det0 = np.sign(np.linalg.det(tea.equilibrium_jacobian(theta, i0, n)))
+    for lam in np.linspace(0, 1, steps + 1)[1:]:
+        inertia, bias = i0 + lam * (i1 - i0), b0 + lam * (b1 - b0)
+        new = tea._newton(theta, inertia, n, bias, max_step=0.01)
+        if new is None or np.max(np.abs(new - theta)) > np.radians(2):
+            return None
+        if np.sign(np.linalg.det(tea.equilibrium_jacobian(new, inertia, n))) != det0:
+            return None
+        theta = new
+    return theta
+
+
+@pytest.mark.parametrize("name", ["mb3", "ac"])
+def test_connected_root_is_the_fine_continuation_of_the_design_tea(name):
+    """A case's plant follows the equilibrium connected to the design TEA
+    (:func:`acmm.tea_compiled.solve_tea_connected`): the same root as an independent fine-step
+    numpy continuation, and None exactly where that one folds too."""
+    from acmm.tea_compiled import solve_tea_connected
+
+    cfg = load_config(name)
     spec = point_specs(cfg)[0]
     n = cfg.orbit_rate
     nominal = tea.solve_tea(spec.inertia, n, spec.bias).theta
     rng = np.random.default_rng(7)
-    differ = checked = 0
+    checked = agreed_none = differ_from_lvlh = 0
     while checked < 20:
         d = rng.uniform(-0.3, 0.3, 6)
-        values = dict(zip(["dI11", "dI22", "dI33", "dI12", "dI13", "dI23"], d))
-        inertia = perturb_inertia(spec.inertia, values)
+        inertia = perturb_inertia(spec.inertia, dict(zip(["dI11", "dI22", "dI33", "dI12", "dI13", "dI23"], d)))
         if unphysical_reason(inertia) is not None:
             continue
         checked += 1
-        ref = tea.solve_tea(inertia, n, spec.bias).theta
-        warm = tea._newton(nominal, inertia, n, spec.bias, max_step=0.05)
-        differ += warm is None or np.max(np.abs(warm - ref)) > 1e-6
-    assert differ > 0
+        got = solve_tea_connected(nominal, spec.inertia, spec.bias, inertia, n, spec.bias)
+        ref = _fine_path(nominal, spec.inertia, spec.bias, inertia, spec.bias, n)
+        if ref is None or got is None:
+            assert ref is None and got is None, (d, ref, got)
+            agreed_none += 1
+            continue
+        np.testing.assert_allclose(got.theta, ref, atol=1e-9)
+        assert np.max(np.abs(tea.equilibrium_residual(got.theta, inertia, n, spec.bias))) <= 1e-11
+        lvlh = _outcome(solve_tea_fast, inertia, n, spec.bias)
+        differ_from_lvlh += isinstance(lvlh, str) or np.max(np.abs(lvlh - got.theta)) > np.radians(5)
+    # MB3 (I11 ≈ I33): connected roots the LVLH continuation does not reach; AC: design branches
+    # that fold (the pitch bias's equilibrium is lost as I33 − I11 shrinks)
+    assert differ_from_lvlh > 0 if name == "mb3" else 0 < agreed_none < checked
+
+
+def test_connected_root_moves_continuously_where_the_lvlh_root_flips():
+    """MB3 with I33 0.5 % smaller: the root continued from LVLH flips ~86° to the other principal
+    alignment (−44.7° → +41.8° pitch), the design-connected one moves 3.5° (−48.2°)."""
+    from acmm.tea_compiled import solve_tea_connected
+
+    cfg = load_config("mb3")
+    spec = point_specs(cfg)[0]
+    n = cfg.orbit_rate
+    nominal = tea.solve_tea(spec.inertia, n, spec.bias).theta
+    prev = nominal
+    for d in np.linspace(0, -0.03, 31)[1:]:
+        inertia = perturb_inertia(spec.inertia, {"dI33": d})
+        got = solve_tea_connected(nominal, spec.inertia, spec.bias, inertia, n, spec.bias).theta
+        assert np.max(np.abs(got - prev)) < np.radians(1.5)
+        prev = got
+    inertia = perturb_inertia(spec.inertia, {"dI33": -0.005})
+    lvlh = solve_tea_fast(inertia, n, spec.bias).theta
+    connected = solve_tea_connected(nominal, spec.inertia, spec.bias, inertia, n, spec.bias).theta
+    assert abs(np.degrees(lvlh[1] - nominal[1])) > 80
+    assert abs(np.degrees(connected[1]) - (-48.17)) < 0.01
+    # a guess that is no equilibrium of the nominal plant is refused, not continued
+    assert solve_tea_connected(nominal + np.radians(20), spec.inertia, spec.bias, inertia, n, spec.bias) is None

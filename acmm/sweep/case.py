@@ -37,9 +37,6 @@ class BaseContext:
         The sweep specification.
     orbits : float
         Simulated length, orbits.
-    off_branch : (L,) bool array or None
-        Per level: its design TEA is not the continuation's root of the nominal plant
-        (:func:`perturbed_tea`); None: no level is.
     """
 
     label: str
@@ -48,7 +45,6 @@ class BaseContext:
     scenario: object        # acmm.simulate.Scenario of the nominal config (orbits of the sweep)
     spec: object            # SweepSpec
     orbits: float
-    off_branch: object = None
 
 
 def prepare_base(base, spec) -> BaseContext:
@@ -73,7 +69,7 @@ def prepare_base(base, spec) -> BaseContext:
     orbits = spec.orbits if spec.orbits is not None else cfg.simulation.orbits
     table = compute_design(cfg).table
     sc = scenario_from_config(cfg, table, orbits=orbits)
-    return BaseContext(base.label, cfg, table, sc, spec, float(orbits), _off_branch(sc))
+    return BaseContext(base.label, cfg, table, sc, spec, float(orbits))
 
 
 def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
@@ -157,6 +153,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
     hs = values.get("harmonic_scale", 1.0)
     offset = np.radians(np.asarray(cfg.simulation.initial_offset)
                         + np.array([values.get(f"offset_{a}", 0.0) for a in AXES]))
+    tea_note = ""
     try:
         if spec.design == "redesign":
             ptable = _redesigned_table(cfg, values, bias)
@@ -167,7 +164,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
             # levels are the perturbed design points
             sc = dataclasses.replace(sc, harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
         else:
-            true = perturbed_tea(sc0, inertia, bias, ctx.off_branch)
+            true, tea_note = perturbed_tea(sc0, inertia, bias)
             if spec.tea_estimate == "true":
                 est = true
                 gain = np.array([table.gain_at(true[k, 1], k) for k in range(L)])
@@ -188,7 +185,9 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
     x0 = np.concatenate([dyn.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
     sc = dataclasses.replace(sc, x0=x0)
     r = sm.simulate(sc)
-    return _metrics(row, r, sc, true, n, spec)
+    row = _metrics(row, r, sc, true, n, spec)
+    row["reason"] += tea_note
+    return row
 
 
 def _metrics(row: dict, r, sc, true: np.ndarray, n: float, spec) -> dict:
@@ -227,56 +226,55 @@ def _metrics(row: dict, r, sc, true: np.ndarray, n: float, spec) -> dict:
     return row
 
 
-def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray, off_branch=None) -> np.ndarray:
-    """The perturbed plant's TEA per level (rad) on the physical branch of :mod:`acmm.tea`.
+def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarray, str]:
+    """The perturbed plant's TEA per level (rad): the equilibrium connected to the design's.
 
-    The continuation of :func:`acmm.tea.solve_tea`, compiled (:mod:`acmm.tea_compiled`: same
-    root, ~100× cheaper; any fold falls back to :func:`acmm.tea.solve_tea` and its errors).  A
-    level whose design TEA is not that continuation's root for the nominal plant (a config whose
-    ``bias_from_tea`` asks for another root) is solved by Newton from its design TEA instead
-    (:func:`acmm.tea.solve_tea_near`), so the case stays on the design's branch.  A case's TEA
-    depends only on its plant, never on the cases run before, so its row is the same whatever
-    executor, chunking or order runs it.
+    Each level's plant moves from the nominal one (its design TEA ``sc0.theta_est[k]``) to the
+    perturbed one, and the station follows the equilibrium continuously connected to the design
+    TEA (:func:`acmm.tea_compiled.solve_tea_connected`, compiled, ~0.1 ms).  Only where that
+    branch folds between the two plants (no equilibrium near the design TEA survives the
+    perturbation) is the case started at the root continued from LVLH
+    (:func:`acmm.tea_compiled.solve_tea_fast`, the physical branch of :mod:`acmm.tea`, whose
+    errors it raises), and the returned note says so.  A case's TEA depends only on its plant and
+    the nominal design, never on the cases run before, so its row is the same whatever executor,
+    chunking or order runs it.
 
     Parameters
     ----------
     sc0 : acmm.simulate.Scenario
-        The nominal scenario (its orbit rate ``n``, rad/s).
+        The nominal scenario: orbit rate ``n`` (rad/s), and per level the nominal ``inertia``
+        (slug·ft²), ``bias`` (ft·lbf) and design TEA ``theta_est`` (rad).
     inertia : (L, 3, 3) array
         Perturbed inertia per level, slug·ft².
     bias : (L, 3) array
         Perturbed bias torque per level, ft·lbf.
-    off_branch : (L,) bool array, optional
-        The levels solved from their design TEA (:attr:`BaseContext.off_branch`); default none.
 
     Returns
     -------
-    (L, 3) array
+    theta : (L, 3) array
         TEA (roll, pitch, yaw) per level, rad.
+    note : str
+        ``""``, or which levels' design branch folded (appended to the case's reason).
+
+    Raises
+    ------
+    NoEquilibriumError, ConvergenceError
+        A level whose design branch folds has no root continued from LVLH either.
     """
-    from acmm.tea import solve_tea_near
-    from acmm.tea_compiled import solve_tea_fast
+    from acmm.tea_compiled import solve_tea_connected, solve_tea_fast
 
-    off = np.zeros(inertia.shape[0], bool) if off_branch is None else off_branch
-    return np.array([solve_tea_near(inertia[k], sc0.n, bias[k], sc0.theta_est[k]).theta if off[k]
-                     else solve_tea_fast(inertia[k], sc0.n, bias[k]).theta for k in range(inertia.shape[0])])
-
-
-def _off_branch(sc0) -> np.ndarray:
-    """Per level of the nominal scenario: whether its design TEA is not the continuation's root of
-    the nominal plant (a config whose ``bias_from_tea`` asks for another root): such a level's
-    perturbed plants are solved by Newton from the design TEA, on the design's branch
-    (:func:`perturbed_tea`; computed once per base, by :func:`prepare_base`)."""
-    from acmm.tea_compiled import solve_tea_fast
-
-    off = np.zeros(len(sc0.theta_est), bool)
-    for k in range(len(sc0.theta_est)):
-        try:
-            root = solve_tea_fast(sc0.inertia[k], sc0.n, sc0.bias[k]).theta
-            off[k] = np.max(np.abs(root - sc0.theta_est[k])) > 1e-6
-        except (ConvergenceError, NoEquilibriumError):    # no continuation root: the design's branch
-            off[k] = True
-    return off
+    theta, folded = [], []
+    for k in range(inertia.shape[0]):
+        tea = solve_tea_connected(sc0.theta_est[k], sc0.inertia[k], sc0.bias[k], inertia[k], sc0.n, bias[k])
+        if tea is None:
+            folded.append(str(k))
+            tea = solve_tea_fast(inertia[k], sc0.n, bias[k])
+        theta.append(tea.theta)
+    note = ""
+    if folded:
+        note = (f" [level {', '.join(folded)}: the design TEA's equilibrium folds between the nominal "
+                "and this plant; started at the root continued from LVLH]")
+    return np.array(theta), note
 
 
 def run_case(ctx: BaseContext, index: int) -> dict:
