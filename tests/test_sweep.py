@@ -232,6 +232,19 @@ def test_resume_refuses_a_journal_of_another_config(tmp_path):
         run_sweep(_sweep_yaml(tmp_path, "other", n_runs=2, seed=12), workers=1, resume=True)
 
 
+def test_resume_refuses_a_journal_of_an_earlier_case_model(tmp_path, monkeypatch):
+    # a journal written before cases started at the design TEA's equilibrium (case model 1) must
+    # not be completed with rows of the current model
+    import acmm.sweep.config as sweep_config
+
+    cfg = _sweep_yaml(tmp_path, "model", n_runs=2)
+    monkeypatch.setattr(sweep_config, "CASE_MODEL", 1)
+    run_sweep(cfg, workers=1)
+    monkeypatch.setattr(sweep_config, "CASE_MODEL", 2)
+    with pytest.raises(ConfigError, match="computed cases differently"):
+        run_sweep(cfg, workers=1, resume=True)
+
+
 def test_dask_local_cluster_gives_the_same_table(tmp_path):
     distributed = pytest.importorskip("distributed", reason="optional extra acmm-qpp[dask] not installed")
     cfg = _sweep_yaml(tmp_path, "dask", n_runs=4)

@@ -45,6 +45,11 @@ from acmm.sweep.spec import (  # noqa: F401  (re-exported: the old import paths)
     Dist, Margin, SweepFile, SweepSpec, swept_parameters)
 from common.errors import ConfigError
 
+#: Version of how a case is computed, part of :meth:`Sweep.results_key` so that ``--resume`` never
+#: mixes rows of two versions: 2 (2026-11-30): a case starts at the equilibrium connected to the
+#: design TEA (:func:`acmm.sweep.case.perturbed_tea`); 1: at the root continued from LVLH.
+CASE_MODEL = 2
+
 
 @dataclass(frozen=True)
 class Base:
@@ -137,7 +142,7 @@ class Sweep:
             c.pop("output", None)
             c.pop("description", None)
             bases[b.label] = c
-        return config_hash(json.dumps({"file": f, "bases": bases}, sort_keys=True))
+        return config_hash(json.dumps({"file": f, "bases": bases, "case_model": CASE_MODEL}, sort_keys=True))
 
 
 def _resolve_base(ref: str, directory: Path) -> Base:

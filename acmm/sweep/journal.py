@@ -61,7 +61,8 @@ def read_journal(path: Path, key: str, bases: set | None = None) -> list[dict]:
             if rec.get("kind") != "header" or rec.get("version") != JOURNAL_VERSION:
                 raise ConfigError(f"{path}: not a sweep journal; delete it or run without --resume")
             if rec.get("key") != key:
-                raise ConfigError(f"{path}: the journal was written by a different sweep configuration; "
+                raise ConfigError(f"{path}: the journal was written by a different sweep configuration "
+                                  "(or by a version of acmm that computed cases differently); "
                                   "run without --resume to start over")
             continue
         why = record_problem(rec, bases)
