@@ -96,18 +96,18 @@ class Schedule(_Model):
         None, description="end configuration of the blend I(s) = (1−s)·I_start + s·I_to (bias blended alike): "
                           "a mapping, or a config file (path relative to the referring file) or packaged name "
                           "whose name, inertia and disturbance are used")
-    n_points: int = Field(12, ge=3, le=200, description="number of blend points including both ends")
+    n_points: int = Field(12, strict=True, ge=3, le=200, description="number of blend points including both ends")
     spacing: Literal["tea", "blend"] = Field(
         "tea", description="blend points evenly spaced in pitch TEA (tea) or in the blend parameter s (blend)")
     form: Literal["polynomial", "table"] = Field(
         "polynomial", description="gain schedule: least-squares polynomial in θ2* (report ch. 5.3) or "
                                   "table look-up, linear in θ2* between design points (ch. 7 alternative)")
     points: list[DesignPoint] = Field([], description="additional named design points")
-    order: int = Field(2, ge=1, le=4, description="polynomial order of K_ij(θ2*) (the report uses 2)")
+    order: int = Field(2, strict=True, ge=1, le=4, description="polynomial order of K_ij(θ2*) (the report uses 2)")
     fit: Literal["least_squares", "closed_loop"] = Field(
         "least_squares", description="polynomial fit: least squares on the gains, or least squares refined "
                                      "against the closed loop along the path (acmm.schedule.refit_closed_loop)")
-    n_check: int = Field(201, ge=2, le=2001, description="TEAs evenly spaced along the blend path at which "
+    n_check: int = Field(201, strict=True, ge=2, le=2001, description="TEAs evenly spaced along the blend path at which "
                                                          "the scheduled gain is checked on the local model")
 
     @model_validator(mode="after")

@@ -95,7 +95,7 @@ class Design(_Model):
     bz: Literal["eq10.7", "printed"] = Field("eq10.7", description="B_z reading for the design loop")
     bookkeeping: Literal["printed", "report", "circle", "trajectory"] = Field(
         "report", description="threshold m the design iterates against (see qpp.design)")
-    max_iter: int = Field(8, ge=1, le=100, description="iterations of ch. 12.1 (ρ ← ρ·rho_factor when β1 > m)")
+    max_iter: int = Field(8, strict=True, ge=1, le=100, description="iterations of ch. 12.1 (ρ ← ρ·rho_factor when β1 > m)")
     rho_factor: float = Field(0.5, gt=0, lt=1, description="ρ reduction per iteration")
     a_factor: float = Field(0.1, gt=0, lt=1, description="a reduction when the circle criterion fails")
     a_min: Optional[float] = Field(None, ge=0, description="smallest a tried, 1/s (default a·1e-4)")

@@ -78,7 +78,7 @@ class LibraryForm(_Model):
     """A library nonlinearity on one output: gain·form(y_output) (qpp.nonlin.library_expression)."""
 
     form: Literal["saturation", "dead_zone", "cubic", "sin"]
-    output: int = Field(1, ge=1, description="output index (1-based) the form acts on")
+    output: int = Field(1, strict=True, ge=1, description="output index (1-based) the form acts on")
     gain: Union[float, str] = Field(1.0, description="number or an expression in the parameters, e.g. 'k'")
     level: Optional[float] = Field(None, gt=0, description="saturation level / dead-zone half-width")
 
@@ -100,7 +100,7 @@ class ExpressionNonlinearity(_Model):
     sector: Optional[Matrix] = Field(None, description="stated sector [[α, β], ...] of φ (overrides the computed one)")
     beta3: Optional[float] = Field(None, ge=0, description="stated β3 (overrides the computed one)")
     beta4: Optional[float] = Field(None, ge=0, description="stated β4 (overrides the computed one)")
-    n_grid: int = Field(41, ge=5, le=401, description="grid points per output for the sampled bounds")
+    n_grid: int = Field(41, strict=True, ge=5, le=401, description="grid points per output for the sampled bounds")
 
     @field_validator("parameters")
     @classmethod

@@ -42,7 +42,7 @@ class Simulation(_Model):
     """Nonlinear closed-loop simulation (ch. 13.4 / 14.5)."""
 
     t_final: Seconds = Field(10.0, ge=1e-9, le=1e5, description="simulated time, s (1 ns … 1e5 s)")
-    n_samples: int = Field(2001, ge=11, le=200001, description="output samples")
+    n_samples: int = Field(2001, strict=True, ge=11, le=200001, description="output samples")
     rtol: float = Field(1e-8, ge=1e-14, lt=1, description="integrator relative tolerance (≥ 1e-14: ~100 ulp)")
     atol: float = Field(1e-10, ge=1e-20, lt=1, description="integrator absolute tolerance")
     r_o: Signal = Field(description="nominal reference r_o(t), one list of terms per output")

@@ -100,6 +100,7 @@ def test_bad_config_one_line_exit_2(tmp_path):
     (lambda c: c["spheres"].__setitem__("T", float("inf")), "spheres.T"),
     (lambda c: c["spheres"].__setitem__("T", 1e9), "spheres.T"),
     (lambda c: c["plant"].__setitem__("x0", [float("nan"), 0.0]), "plant.x0"),
+    (lambda c: c["simulation"].__setitem__("n_samples", True), "simulation.n_samples"),   # no count
 ])
 def test_non_finite_or_huge_values_rejected_before_any_work(tmp_path, edit, field):
     cfg = _random_config(tmp_path)

@@ -291,6 +291,9 @@ def test_cli_smoke_sweep(tmp_runs, run_acmm):
     ({"base": "nonexistent_base.yaml", "grid": {"inertia_scale": [1.0]}}, "config file not found"),
     ({"base": "ac", "grid": {"inertia_scale": [1.0, -0.5]}}, "inertia_scale must stay > 0"),
     ({"base": "ac", "monte_carlo": {"dI11": {"uniform": [0.1, -0.1]}}, "n_runs": 2}, "low must be"),
+    # a YAML boolean is no count (it used to run one case)
+    ({"base": "ac", "monte_carlo": {"inertia": {"percent": 10}}, "n_runs": True}, "sweep.n_runs: Input should be a valid integer"),
+    ({"base": "ac", "monte_carlo": {"inertia": {"percent": 10}}, "n_runs": 2, "seed": False}, "sweep.seed: Input should be"),
 ])
 def test_bad_sweep_config_exits_2_with_one_line(tmp_runs, run_acmm, sweep, message):
     p = tmp_runs / "bad.yaml"

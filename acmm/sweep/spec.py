@@ -52,7 +52,7 @@ class Margin(_Model):
 
     low: float = Field(0.2, gt=0, lt=1, description="smallest scaling searched")
     high: float = Field(10.0, gt=1, le=1000, description="largest scaling searched")
-    scan_points: int = Field(8, ge=1, le=100, description="geometric scan steps each way before bisection")
+    scan_points: int = Field(8, strict=True, ge=1, le=100, description="geometric scan steps each way before bisection")
     rel_tol: float = Field(0.01, ge=1e-6, lt=0.5, description="relative width of the final bracket")
 
 
@@ -63,8 +63,8 @@ class SweepSpec(_Model):
     bases: Optional[list[str]] = Field(None, min_length=1, description="several base configs (same cases each)")
     monte_carlo: Optional[dict[str, Dist]] = Field(None, description="parameter → distribution")
     grid: Optional[dict[str, list[float]]] = Field(None, description="parameter → values (Cartesian product)")
-    n_runs: Optional[int] = Field(None, ge=1, le=1_000_000, description="Monte Carlo draws per base")
-    seed: int = Field(0, ge=0, le=2**63 - 1, description="root seed (< 2⁶³: stored as an HDF5 int64); case i "
+    n_runs: Optional[int] = Field(None, strict=True, ge=1, le=1_000_000, description="Monte Carlo draws per base")
+    seed: int = Field(0, strict=True, ge=0, le=2**63 - 1, description="root seed (< 2⁶³: stored as an HDF5 int64); case i "
                                                       "uses SeedSequence([seed, i])")
     design: Literal["fixed", "redesign"] = Field(
         "fixed", description="fixed: the nominal design for every case; redesign: TEA, LQR and schedule per case")
@@ -76,12 +76,12 @@ class SweepSpec(_Model):
     unphysical: Literal["resample", "reject"] = Field(
         "resample", description="perturbed inertia not positive definite or violating the triangle inequality: "
                                 "draw again (resample) or record the case as 'unphysical' (reject)")
-    max_draws: int = Field(10000, ge=1, description="resample: give up (verdict 'unphysical') after this many draws")
+    max_draws: int = Field(10000, strict=True, ge=1, description="resample: give up (verdict 'unphysical') after this many draws")
     settle_deg: float = Field(
         10.0, gt=0, le=180, description="a run that stays within the divergence bound but whose steady attitude "
                                         "error from the plant's true TEA exceeds this (deg) gets the verdict "
                                         "'not_settled' instead of 'bounded'")
-    workers: Optional[int] = Field(None, ge=1, le=1024, description="worker processes (default: CPU count)")
+    workers: Optional[int] = Field(None, strict=True, ge=1, le=1024, description="worker processes (default: CPU count)")
     margin: Optional[Margin] = Field(None, description="uniform-inertia-scaling margin search per base")
     map: Optional[list[str]] = Field(None, min_length=2, max_length=2,
                                      description="two parameters (or tea_shift_*) for the stability-map axes")
