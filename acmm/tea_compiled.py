@@ -10,9 +10,13 @@ fold below 1e-7), same acceptance tests (Newton converged to the residual tolera
 ~0.1–0.5 ms.
 
 A sweep case's plant, though, is a perturbation of the plant the controller was designed for, so
-its TEA is the equilibrium *connected to the design TEA* (:func:`solve_tea_connected`: the same
+its TEA is the equilibrium *connected to the design TEA* (:func:`acmm.tea_connected.solve_tea_connected`: the same
 continuation, from the design TEA along the straight line from the nominal plant to the perturbed
-one; a few steps, ~0.1 ms).  The root the continuation from LVLH reaches is not that one for a
+one; a few steps, median 0.14 ms on MB3; a branch that folds ~1 ms before the fallback), with two
+differences: only yaw is boxed at ±89.5° (the singular angle of the 2-3-1 sequence), and a step
+across which det ∂r/∂θ changes sign is accepted when the trapezoidal rule of the branch's tangents
+reproduces it (:func:`_smooth_step`): a pitchfork of a station symmetric about the orbit plane,
+through which the branch goes on, rather than a jump between the two roots of a fold.  The root the continuation from LVLH reaches is not that one for a
 nearly planar body: for MB3 (I11 ≈ I33) a 0.5 % smaller I33 flips it from −44.7° to +41.8° pitch,
 while the design TEA's equilibrium moves to −48.2°; in the packaged ±30 % Monte Carlo 95 of MB3's
 200 cases had the LVLH root on the other principal alignment.  A plain Newton step from the
@@ -149,8 +153,11 @@ def _solve3(a, b, x):
 
 
 @njit(cache=True)
-def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out):
-    """Damped Newton on eq 4.1 from ``theta0``; the root in ``out``, True when converged."""
+def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out, yaw_only=False):
+    """Damped Newton on eq 4.1 from ``theta0``; the root in ``out``, True when converged.
+
+    An iterate beyond 89.5° fails: in any angle (as :mod:`acmm.tea`), or with ``yaw_only`` in yaw
+    θ3 alone, the one singular angle of the 2-3-1 sequence."""
     th = theta0.copy()
     amax = 0.0
     for i in range(3):
@@ -178,7 +185,7 @@ def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out):
                 step[i] *= max_step / norm
         for i in range(3):
             th[i] += step[i]
-        if max(abs(th[0]), abs(th[1]), abs(th[2])) > _THETA_LIMIT:
+        if abs(th[2]) > _THETA_LIMIT or (not yaw_only and max(abs(th[0]), abs(th[1])) > _THETA_LIMIT):
             return False
     _residual_jac(th, inertia, n, bias, r, jac, False)
     if max(abs(r[0]), abs(r[1]), abs(r[2])) <= thr:
@@ -188,10 +195,13 @@ def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out):
 
 
 @njit(cache=True)
-def _continue(theta, i0, i1, b0, b1, n, tol, min_step):
+def _continue(theta, i0, i1, b0, b1, n, tol, min_step, connected=False):
     """Follow θ(λ) along I = i0 + λ(i1 − i0), bias = b0 + λ(b1 − b0) from λ = 0 to 1.
 
-    Returns (θ, λ reached, folded) with the step control of :func:`acmm.tea._continue`.
+    Returns (θ, λ reached, folded) with the step control of :func:`acmm.tea._continue`.  With
+    ``connected`` (:func:`acmm.tea_connected.solve_tea_connected`) Newton is boxed in yaw only, and a step across
+    which det ∂r/∂θ changes sign is accepted when it is smooth (:func:`_smooth_step`): the branch
+    passes a symmetry-breaking (pitchfork) point, not a fold.
     """
     lam, step = 0.0, 0.05
     jac = np.empty((3, 3))
@@ -204,7 +214,7 @@ def _continue(theta, i0, i1, b0, b1, n, tol, min_step):
         trial = min(1.0, lam + step)
         inertia = i0 + trial * (i1 - i0)
         bias = b0 + trial * (b1 - b0)
-        ok = _newton(th, inertia, n, bias, tol, 50, 0.5, new)
+        ok = _newton(th, inertia, n, bias, tol, 50, 0.5, new, connected)
         if ok:
             jump = 0.0
             for i in range(3):
@@ -212,7 +222,10 @@ def _continue(theta, i0, i1, b0, b1, n, tol, min_step):
             ok = jump <= _MAX_JUMP
         if ok:
             _residual_jac(new, inertia, n, bias, r, jac, True)
-            ok = np.sign(_det3(jac)) == det0
+            det = np.sign(_det3(jac))
+            if det != det0 and connected and _smooth_step(th, new, lam, trial, i0, i1, b0, b1, n):
+                det0 = det
+            ok = det == det0
         if ok:
             th[:] = new
             lam = trial
@@ -222,6 +235,34 @@ def _continue(theta, i0, i1, b0, b1, n, tol, min_step):
             if step < min_step:
                 return th, lam, True
     return th, lam, False
+
+
+@njit(cache=True)
+def _tangent(th, lam, i0, i1, b0, b1, n, out):
+    """dθ/dλ = −(∂r/∂θ)⁻¹ ∂r/∂λ on the path of :func:`_continue`; r is linear in the inertia and
+    the bias, so ∂r/∂λ is r of the difference plant (i1 − i0, b1 − b0)."""
+    r = np.empty(3)
+    jac = np.empty((3, 3))
+    _residual_jac(th, i0 + lam * (i1 - i0), n, b0 + lam * (b1 - b0), r, jac, True)
+    _residual_jac(th, i1 - i0, n, b1 - b0, r, np.empty((3, 3)), False)
+    return _solve3(jac, -r, out)
+
+
+@njit(cache=True)
+def _smooth_step(th, new, lam, trial, i0, i1, b0, b1, n):
+    """Whether the step θ(λ) → θ(trial) follows one smooth branch: the trapezoidal rule of the
+    tangents at both ends reproduces it to 5 % (at a fold the two roots' tangents point apart)."""
+    ta = np.empty(3)
+    tb = np.empty(3)
+    if not (_tangent(th, lam, i0, i1, b0, b1, n, ta) and _tangent(new, trial, i0, i1, b0, b1, n, tb)):
+        return False
+    h = trial - lam
+    err = 0.0
+    size = 0.0
+    for i in range(3):
+        err = max(err, abs(new[i] - th[i] - 0.5 * h * (ta[i] + tb[i])))
+        size = max(size, abs(new[i] - th[i]))
+    return err <= 0.05 * size + 1e-12
 
 
 @njit(cache=True)
@@ -263,63 +304,11 @@ def _solve_tea_compiled(inertia, n, bias, tol):
     return th, 0, 1.0
 
 
-@njit(cache=True)
-def _connected_compiled(theta0, i0, b0, i1, b1, n, tol):
-    """(θ, ok): the root of (i1, b1) on the branch through the root of (i0, b0) nearest θ0."""
-    start = np.empty(3)
-    if not _newton(theta0, i0, n, b0, tol, 50, 0.05, start):
-        return theta0.copy(), False
-    jump = 0.0
-    for i in range(3):
-        jump = max(jump, abs(start[i] - theta0[i]))
-    if jump > _MAX_JUMP:
-        return start, False
-    th, lam, fold = _continue(start, i0, i1, b0, b1, n, tol, 1e-7)
-    return th, not fold
-
-
 def _verified(theta: np.ndarray, inertia: np.ndarray, n: float, bias: np.ndarray) -> bool:
     """Whether ``theta`` (rad) passes the numpy residual check of :mod:`acmm.tea` for the plant."""
     scale = max(3 * n * n * np.abs(inertia).max(), 1e-300)
     res = np.max(np.abs(equilibrium_residual(theta, inertia, n, bias)))
     return bool(res <= 10 * residual_threshold(scale))
-
-
-def solve_tea_connected(theta0: np.ndarray, inertia0: np.ndarray, bias0: np.ndarray,
-                        inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA | None:
-    """The plant's TEA on the branch continuously connected to a known equilibrium of another plant.
-
-    A Monte Carlo case perturbs the plant a controller was designed for; the station sits at the
-    equilibrium it reaches as the plant moves from the nominal one to the perturbed one, not at
-    whichever root a continuation from LVLH happens to end on (for a nearly planar body such as
-    MB3, I11 ≈ I33, that root can lie ~90° from the design TEA while a connected one exists).
-    Damped Newton first polishes ``theta0`` as a root of the nominal plant (≤ 5° away), then the
-    continuation of :func:`acmm.tea.solve_tea` (same step control and acceptance tests) follows
-    it along I = I0 + λ(I − I0), bias = b0 + λ(b − b0), λ: 0 → 1.
-
-    Parameters
-    ----------
-    theta0 : (3,) array
-        An equilibrium (or a guess within 5° of one) of the nominal plant, rad.
-    inertia0, bias0 : (3, 3) array, (3,) array
-        The nominal plant: inertia, slug·ft²; constant disturbance torque, ft·lbf.
-    inertia, bias : (3, 3) array, (3,) array
-        The perturbed plant, same units.
-    n : float
-        Orbital rate, rad/s.
-
-    Returns
-    -------
-    acmm.tea.TEA or None
-        The connected equilibrium (eqs 4.1–4.3), θ in rad; None when ``theta0`` is not near an
-        equilibrium of the nominal plant, the branch folds between the two plants, or the root
-        fails the residual check of :mod:`acmm.tea`.
-    """
-    args = [np.ascontiguousarray(a, float) for a in (theta0, inertia0, bias0, inertia, bias)]
-    theta, ok = _connected_compiled(args[0], args[1], args[2], args[3], args[4], float(n), RESIDUAL_TOL)
-    if not ok or not _verified(theta, args[3], n, args[4]):
-        return None
-    return make_tea(theta, args[3], n, args[4])
 
 
 def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
@@ -362,6 +351,4 @@ def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
 
 def warm_up() -> None:
     """Compile (or load from numba's cache) the kernels of this module."""
-    inertia, bias = np.diag([2.0e7, 1.0e6, 2.5e7]), np.array([0.0, 0.1, 0.0])
-    root = solve_tea_fast(inertia, 0.0011, bias)
-    solve_tea_connected(root.theta, inertia, bias, 1.01 * inertia, 0.0011, bias)
+    solve_tea_fast(np.diag([2.0e7, 1.0e6, 2.5e7]), 0.0011, np.array([0.0, 0.1, 0.0]))

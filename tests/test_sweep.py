@@ -147,8 +147,13 @@ def test_a_case_starts_at_the_equilibrium_connected_to_the_design_tea(tmp_path):
     # AC with I11 20 % larger: the design TEA's branch folds before the perturbed plant, another
     # equilibrium exists (+24.5° pitch); the case starts there and its reason says why
     sw = load_sweep(_sweep_yaml(tmp_path, "folded", orbits=2.0))
-    row = simulate_values(prepare_base(sw.bases[0], sw.spec), {"dI11": 0.2})
+    ctx = prepare_base(sw.bases[0], sw.spec)
+    row = simulate_values(ctx, {"dI11": 0.2})
     assert "design TEA's equilibrium folds" in row["reason"] and abs(row["tea_true"][1] - 24.5) < 0.1
+    # I11 15 % larger: no equilibrium on either branch; the reason says the design's folded first
+    row = simulate_values(ctx, {"dI11": 0.15})
+    assert row["verdict"] == "no_equilibrium"
+    assert row["reason"].startswith("the design TEA's equilibrium folds") and "continued from LVLH" in row["reason"]
 
 
 # --------------------------------------------------------------------------------------------

@@ -17,8 +17,11 @@ Perturbed plant
     that is not positive definite or violates the triangle inequality is redrawn (``unphysical:
     resample``; the number of draws is recorded) or recorded as verdict ``unphysical``.  The bias
     *torque* (ft·lbf) is external and is held at its nominal value (plus ``bias_*``), so the
-    plant's true TEA moves with the inertia; it is re-solved on the physical branch
-    (:func:`acmm.tea.solve_tea`).  No equilibrium → verdict ``no_equilibrium`` (not simulated).
+    plant's true TEA moves with the inertia: at each level it is the equilibrium connected to
+    the level's design TEA as the plant moves from nominal to perturbed
+    (:func:`acmm.sweep.case.perturbed_tea`); where that branch folds, the root continued from
+    LVLH (:func:`acmm.tea.solve_tea`'s physical branch).  No equilibrium → verdict
+    ``no_equilibrium`` (not simulated).
 
 Controller
     ``design: fixed`` keeps the nominal gain schedule.  Its TEA estimate θ̂* is the nominal one

@@ -231,7 +231,7 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarra
 
     Each level's plant moves from the nominal one (its design TEA ``sc0.theta_est[k]``) to the
     perturbed one, and the station follows the equilibrium continuously connected to the design
-    TEA (:func:`acmm.tea_compiled.solve_tea_connected`, compiled, ~0.1 ms).  Only where that
+    TEA (:func:`acmm.tea_connected.solve_tea_connected`, compiled, ~0.1–1 ms).  Only where that
     branch folds between the two plants (no equilibrium near the design TEA survives the
     perturbation) is the case started at the root continued from LVLH
     (:func:`acmm.tea_compiled.solve_tea_fast`, the physical branch of :mod:`acmm.tea`, whose
@@ -259,16 +259,22 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarra
     Raises
     ------
     NoEquilibriumError, ConvergenceError
-        A level whose design branch folds has no root continued from LVLH either.
+        A level whose design branch folds has no root continued from LVLH either (the
+        NoEquilibriumError names the fold and the level first).
     """
-    from acmm.tea_compiled import solve_tea_connected, solve_tea_fast
+    from acmm.tea_compiled import solve_tea_fast
+    from acmm.tea_connected import solve_tea_connected
 
-    theta, folded = [], []
+    theta, folded = [], []    # a fallback's NoEquilibriumError says the design branch folded first
     for k in range(inertia.shape[0]):
         tea = solve_tea_connected(sc0.theta_est[k], sc0.inertia[k], sc0.bias[k], inertia[k], sc0.n, bias[k])
         if tea is None:
             folded.append(str(k))
-            tea = solve_tea_fast(inertia[k], sc0.n, bias[k])
+            try:
+                tea = solve_tea_fast(inertia[k], sc0.n, bias[k])
+            except NoEquilibriumError as exc:
+                raise NoEquilibriumError(f"the design TEA's equilibrium folds between the nominal and this "
+                                         f"plant (level {k}), and there is {exc}") from None
         theta.append(tea.theta)
     note = ""
     if folded:

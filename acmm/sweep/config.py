@@ -45,9 +45,10 @@ from acmm.sweep.spec import (  # noqa: F401  (re-exported: the old import paths)
     Dist, Margin, SweepFile, SweepSpec, swept_parameters)
 from common.errors import ConfigError
 
-#: Version of how a case is computed, part of :meth:`Sweep.results_key` so that ``--resume`` never
-#: mixes rows of two versions: 2 (2026-11-30): a case starts at the equilibrium connected to the
-#: design TEA (:func:`acmm.sweep.case.perturbed_tea`); 1: at the root continued from LVLH.
+#: Version of how a ``design: fixed`` case is computed, part of :meth:`Sweep.results_key` so that
+#: ``--resume`` never mixes rows of two versions: 2 (2026-11-30): a case starts at the equilibrium
+#: connected to the design TEA (:func:`acmm.sweep.case.perturbed_tea`); 1: at the root continued
+#: from LVLH.  (A redesigned case is designed about its own plant's TEA, as before.)
 CASE_MODEL = 2
 
 
@@ -142,7 +143,10 @@ class Sweep:
             c.pop("output", None)
             c.pop("description", None)
             bases[b.label] = c
-        return config_hash(json.dumps({"file": f, "bases": bases, "case_model": CASE_MODEL}, sort_keys=True))
+        key = {"file": f, "bases": bases}
+        if self.spec.design == "fixed":        # a redesigned case is computed as before
+            key["case_model"] = CASE_MODEL
+        return config_hash(json.dumps(key, sort_keys=True))
 
 
 def _resolve_base(ref: str, directory: Path) -> Base:

@@ -37,13 +37,17 @@ def build(ctx: SectionWriter) -> None:
     if r["fast"]:
         ctx.doc.p(f"FAST MODE: reduced sweep, {r['n_runs']} Monte Carlo runs per base of {r['orbits']:g} orbits, "
                   "no margin search. Run without --fast for the 200-run sweep of configs/sweep_inertia30.yaml.")
-    start = ("each case starts at its plant's equilibrium connected to the design TEA (README, Sweeps: "
-             "Perturbed plant)" if r["design"] == "fixed" else "each case redesigned about its plant's TEA")
-    knows = "does not know" if r["tea_estimate"] == "nominal" and r["design"] == "fixed" else "knows"
+    start = ("each case starts at its plant's equilibrium connected to the design TEA, or at the root "
+             "continued from LVLH where that branch folds (README, Sweeps: Perturbed plant)"
+             if r["design"] == "fixed" else "each case redesigned about its plant's TEA")
+    knows = ("does not know the perturbation" if r["tea_estimate"] == "nominal" else
+             "knows the perturbed plant's TEA, not its inertia")
+    if r["design"] != "fixed":
+        knows = "is redesigned for the perturbed plant"
     ctx.doc.p(f"Sweep {r['run'].config}: every inertia element multiplied by (1 + δ), δ ~ U(−0.3, 0.3) "
               f"independently (unphysical draws redrawn), seed {r['seed']}, {r['n_runs']} runs per base, "
               f"{r['orbits']:g} orbits each; design '{r['design']}', TEA estimate '{r['tea_estimate']}' "
-              f"(the controller {knows} the perturbation); bias torque held at its nominal value; {start}.")
+              f"(the controller {knows}); bias torque held at its nominal value; {start}.")
     rows, fracs = [], {}
     for k, lab in enumerate(names):
         sel = base == k
