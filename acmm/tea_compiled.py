@@ -13,16 +13,18 @@ A sweep case's plant, though, is a perturbation of the plant the controller was 
 its TEA is the equilibrium *connected to the design TEA* (:func:`acmm.tea_connected.solve_tea_connected`: the same
 continuation, from the design TEA along the straight line from the nominal plant to the perturbed
 one; a few steps, median 0.14 ms on MB3; a branch that folds ~1 ms before the fallback), with two
-differences: only yaw is boxed at ±89.5° (the singular angle of the 2-3-1 sequence), and a step
-across which det ∂r/∂θ changes sign is accepted when the trapezoidal rule of the branch's tangents
-reproduces it (:func:`_smooth_step`): a pitchfork of a station symmetric about the orbit plane,
-through which the branch goes on, rather than a jump between the two roots of a fold.  The root the continuation from LVLH reaches is not that one for a
+differences: only yaw is boxed at ±89.5° (the singular angle of the 2-3-1 sequence), and on a
+path exactly symmetric about the orbit plane (no I12, I23, roll or yaw bias; roll = yaw = 0) a
+step across which det ∂r/∂θ changes sign is accepted when ∂r2/∂θ2 keeps its sign and the
+trapezoidal rule of the branch's tangents reproduces it (:func:`_smooth_step`): a pitchfork,
+through which the branch goes on, rather than a jump between the two roots of a fold (a nearly
+symmetric station has such a fold there, and it is one).  The root the continuation from LVLH reaches is not that one for a
 nearly planar body: for MB3 (I11 ≈ I33) a 0.5 % smaller I33 flips it from −44.7° to +41.8° pitch,
 while the design TEA's equilibrium moves to −48.2°; in the packaged ±30 % Monte Carlo 95 of MB3's
 200 cases had the LVLH root on the other principal alignment.  A plain Newton step from the
 nominal TEA is not used either: on such plants it may land on a root of another branch.  Where the
-design TEA's branch folds before the perturbed plant (AC: 81 of 200 cases, as I33 − I11 shrinks),
-the sweep falls back to :func:`solve_tea_fast`, the continuation from LVLH (:mod:`acmm.tea`'s
+design TEA's branch folds before the perturbed plant (AC: 102 of 200 cases, as I33 − I11 shrinks;
+21 of them have no root continued from LVLH either), the sweep falls back to :func:`solve_tea_fast`, the continuation from LVLH (:mod:`acmm.tea`'s
 physical branch).
 
 The arithmetic is written out in scalars (closed-form residual and Jacobian, 3×3 Gaussian
@@ -199,15 +201,19 @@ def _continue(theta, i0, i1, b0, b1, n, tol, min_step, connected=False):
     """Follow θ(λ) along I = i0 + λ(i1 − i0), bias = b0 + λ(b1 − b0) from λ = 0 to 1.
 
     Returns (θ, λ reached, folded) with the step control of :func:`acmm.tea._continue`.  With
-    ``connected`` (:func:`acmm.tea_connected.solve_tea_connected`) Newton is boxed in yaw only, and a step across
-    which det ∂r/∂θ changes sign is accepted when it is smooth (:func:`_smooth_step`): the branch
-    passes a symmetry-breaking (pitchfork) point, not a fold.
+    ``connected`` (:func:`acmm.tea_connected.solve_tea_connected`) Newton is boxed in yaw only, and
+    on a path exactly symmetric about the orbit plane (:func:`_symmetric_path`) a step across
+    which det ∂r/∂θ changes sign is accepted when ∂r2/∂θ2 keeps its sign and the step is smooth
+    (:func:`_smooth_step`): the branch passes a pitchfork (the roll/yaw stiffness changes sign),
+    not a fold.  A nearly symmetric station has a fold there instead, and it is treated as one.
     """
     lam, step = 0.0, 0.05
     jac = np.empty((3, 3))
     r = np.empty(3)
     _residual_jac(theta, i0, n, b0, r, jac, True)
     det0 = np.sign(_det3(jac))
+    pitch0 = np.sign(jac[1, 1])
+    symmetric = connected and _symmetric_path(theta, i0, i1, b0, b1)
     new = np.empty(3)
     th = theta.copy()
     while lam < 1.0:
@@ -223,7 +229,8 @@ def _continue(theta, i0, i1, b0, b1, n, tol, min_step, connected=False):
         if ok:
             _residual_jac(new, inertia, n, bias, r, jac, True)
             det = np.sign(_det3(jac))
-            if det != det0 and connected and _smooth_step(th, new, lam, trial, i0, i1, b0, b1, n):
+            if (det != det0 and symmetric and np.sign(jac[1, 1]) == pitch0 and new[0] == 0.0
+                    and new[2] == 0.0 and _smooth_step(th, new, lam, trial, i0, i1, b0, b1, n)):
                 det0 = det
             ok = det == det0
         if ok:
@@ -235,6 +242,15 @@ def _continue(theta, i0, i1, b0, b1, n, tol, min_step, connected=False):
             if step < min_step:
                 return th, lam, True
     return th, lam, False
+
+
+@njit(cache=True)
+def _symmetric_path(theta, i0, i1, b0, b1):
+    """Whether the path of :func:`_continue` stays exactly in the plane-symmetric subspace: no
+    I12, I23, roll or yaw bias in either plant, and θ1 = θ3 = 0 (Newton keeps them exactly 0)."""
+    return (theta[0] == 0.0 and theta[2] == 0.0 and i0[0, 1] == 0.0 and i0[1, 2] == 0.0
+            and i1[0, 1] == 0.0 and i1[1, 2] == 0.0 and b0[0] == 0.0 and b0[2] == 0.0
+            and b1[0] == 0.0 and b1[2] == 0.0)
 
 
 @njit(cache=True)

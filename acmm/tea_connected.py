@@ -9,25 +9,22 @@ and not the continuation from LVLH or one Newton step).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from acmm.tea import RESIDUAL_TOL, TEA, make_tea
 from acmm.tea_compiled import _MAX_JUMP, _continue, _newton, _verified
 
 
-@njit(cache=True)
 def _connected_compiled(theta0, i0, b0, i1, b1, n, tol):
     """(θ, ok): the root of (i1, b1) on the branch through the root of (i0, b0) that damped
-    Newton reaches from θ0 (within 5°)."""
+    Newton reaches from θ0 (within 5°).  Plain Python over the compiled kernels of
+    :mod:`acmm.tea_compiled`: a cached numba function calling another module's kernels would keep
+    their old machine code when only that module changes (numba's cache tracks one file)."""
     start = np.empty(3)
     if not _newton(theta0, i0, n, b0, tol, 50, 0.05, start):
         return theta0.copy(), False
-    jump = 0.0
-    for i in range(3):
-        jump = max(jump, abs(start[i] - theta0[i]))
-    if jump > _MAX_JUMP:
+    if np.max(np.abs(start - theta0)) > _MAX_JUMP:
         return start, False
-    th, lam, fold = _continue(start, i0, i1, b0, b1, n, tol, 1e-7, True)
+    th, _, fold = _continue(start, i0, i1, b0, b1, n, tol, 1e-7, True)
     return th, not fold
 
 

@@ -157,6 +157,17 @@ def test_connected_root_passes_a_pitchfork_of_a_symmetric_station():
     dets = [np.linalg.det(tea.equilibrium_jacobian(t, i, n))
             for t, i in ((th, i0), (got.theta, i1))]
     assert dets[0] * dets[1] < 0                  # the sign did change on the way
+    # the same station with I23 = 40 slug·ft² (1e-5 relative) is no longer symmetric: its
+    # pitchfork breaks, and the branch from −60° turns back at λ ≈ 0.478 (a pseudo-arclength
+    # continuation, in review), leaving the plane (roll −0.001° at λ = 0.4, −0.03° at 0.475 on
+    # the independent path); it is a fold, not a branch to step across
+    j0, j1 = i0.copy(), i1.copy()
+    j0[1, 2] = j0[2, 1] = j1[1, 2] = j1[2, 1] = 40.0
+    bj = tea.bias_for_attitude(th, j0, n)
+    assert solve_tea_connected(th, j0, bj, j1, n, bj) is None
+    lam = 0.475
+    near = _fine_path(th, j0, bj, j0 + lam * (j1 - j0), bj, n, steps=950)
+    assert abs(np.degrees(near[0])) > 0.02
     rng = np.random.default_rng(3)
     crossed = 0
     for _ in range(25):
