@@ -9,23 +9,24 @@ fold below 1e-7), same acceptance tests (Newton converged to the residual tolera
 ≤ 5°, unchanged sign of det ∂r/∂θ), same Newton (damped to 0.5 rad, |θ| < 89.5°), same fold bisection — compiled, in
 ~0.1–0.5 ms.
 
-A sweep case's plant, though, is a perturbation of the plant the controller was designed for, so
-its TEA is the equilibrium *connected to the design TEA* (:func:`acmm.tea_connected.solve_tea_connected`: the same
-continuation, from the design TEA along the straight line from the nominal plant to the perturbed
-one; a few steps, median 0.14 ms on MB3; a branch that folds ~1 ms before the fallback), with two
-differences: only yaw is boxed at ±89.5° (the singular angle of the 2-3-1 sequence), and on a
-path exactly symmetric about the orbit plane (no I12, I23, roll or yaw bias; roll = yaw = 0) a
-step across which det ∂r/∂θ changes sign is accepted when ∂r2/∂θ2 keeps its sign and the
-trapezoidal rule of the branch's tangents reproduces it (:func:`_smooth_step`): a pitchfork,
-through which the branch goes on, rather than a jump between the two roots of a fold (a nearly
-symmetric station has such a fold there, and it is one).  The root the continuation from LVLH reaches is not that one for a
-nearly planar body: for MB3 (I11 ≈ I33) a 0.5 % smaller I33 flips it from −44.7° to +41.8° pitch,
-while the design TEA's equilibrium moves to −48.2°; in the packaged ±30 % Monte Carlo 95 of MB3's
-200 cases had the LVLH root on the other principal alignment.  A plain Newton step from the
-nominal TEA is not used either: on such plants it may land on a root of another branch.  Where the
-design TEA's branch folds before the perturbed plant (AC: 102 of 200 cases, as I33 − I11 shrinks;
-21 of them have no root continued from LVLH either), the sweep falls back to :func:`solve_tea_fast`, the continuation from LVLH (:mod:`acmm.tea`'s
-physical branch).
+A sweep case's plant, though, is a perturbation of the plant the controller was designed for, so its
+TEA is the equilibrium *connected to the design TEA*
+(:func:`acmm.tea_connected.solve_tea_connected`: the same continuation, from the design TEA along
+the straight line from the nominal plant to the perturbed one; a few steps, median 0.14 ms on MB3; a
+branch that folds ~1 ms before the fallback), with two differences: only yaw is boxed at ±89.5° (the
+singular angle of the 2-3-1 sequence), and on a path exactly symmetric about the orbit plane (no
+I12, I23, roll or yaw bias; roll = yaw = 0) a step across which det ∂r/∂θ changes sign is accepted
+when ∂r2/∂θ2 keeps its sign and the trapezoidal rule of the branch's tangents reproduces it
+(:func:`_smooth_step`): a pitchfork, through which the branch goes on, rather than a jump between
+the two roots of a fold (a nearly symmetric station has such a fold there, and it is one).  The root
+the continuation from LVLH reaches is not that one for a nearly planar body: for MB3 (I11 ≈ I33) a
+0.5 % smaller I33 flips it from −44.7° to +41.8° pitch, while the design TEA's equilibrium moves to
+−48.2°; in the packaged ±30 % Monte Carlo 95 of MB3's 200 cases had the LVLH root on the other
+principal alignment.  A plain Newton step from the nominal TEA is not used either: on such plants it
+may land on a root of another branch.  Where the design TEA's branch folds before the perturbed
+plant (AC: 102 of 200 cases, as I33 − I11 shrinks; 21 of them have no root continued from LVLH
+either), the sweep falls back to :func:`solve_tea_fast`, the continuation from LVLH
+(:mod:`acmm.tea`'s physical branch).
 
 The arithmetic is written out in scalars (closed-form residual and Jacobian, 3×3 Gaussian
 elimination with partial pivoting), so results agree with :func:`acmm.tea.solve_tea` to

@@ -14,7 +14,7 @@ from acmm.tea import RESIDUAL_TOL, TEA, make_tea
 from acmm.tea_compiled import _MAX_JUMP, _continue, _newton, _verified
 
 
-def _connected_compiled(theta0, i0, b0, i1, b1, n, tol):
+def _continue_from(theta0, i0, b0, i1, b1, n, tol):
     """(θ, ok): the root of (i1, b1) on the branch through the root of (i0, b0) that damped
     Newton reaches from θ0 (within 5°).  Plain Python over the compiled kernels of
     :mod:`acmm.tea_compiled`: a cached numba function calling another module's kernels would keep
@@ -62,7 +62,7 @@ def solve_tea_connected(theta0: np.ndarray, inertia0: np.ndarray, bias0: np.ndar
         passed, and roll or pitch may go beyond ±90°.
     """
     args = [np.ascontiguousarray(a, float) for a in (theta0, inertia0, bias0, inertia, bias)]
-    theta, ok = _connected_compiled(args[0], args[1], args[2], args[3], args[4], float(n), RESIDUAL_TOL)
+    theta, ok = _continue_from(args[0], args[1], args[2], args[3], args[4], float(n), RESIDUAL_TOL)
     if not ok or not _verified(theta, args[3], n, args[4]):
         return None
     return make_tea(theta, args[3], n, args[4])

@@ -40,10 +40,9 @@ def build(ctx: SectionWriter) -> None:
     start = ("each case starts at its plant's equilibrium connected to the design TEA, or at the root "
              "continued from LVLH where that branch folds (README, Sweeps: Perturbed plant)"
              if r["design"] == "fixed" else "each case redesigned about its plant's TEA")
-    knows = ("does not know the perturbation" if r["tea_estimate"] == "nominal" else
+    knows = ("is redesigned for the perturbed plant" if r["design"] != "fixed" else
+             "does not know the perturbation" if r["tea_estimate"] == "nominal" else
              "knows the perturbed plant's TEA, not its inertia")
-    if r["design"] != "fixed":
-        knows = "is redesigned for the perturbed plant"
     ctx.doc.p(f"Sweep {r['run'].config}: every inertia element multiplied by (1 + δ), δ ~ U(−0.3, 0.3) "
               f"independently (unphysical draws redrawn), seed {r['seed']}, {r['n_runs']} runs per base, "
               f"{r['orbits']:g} orbits each; design '{r['design']}', TEA estimate '{r['tea_estimate']}' "
