@@ -17,58 +17,42 @@ from acmm.plot_base import (
     _bake_texts,
     _compact_formatter,
     _data_limits,
-    _fixed_label_positions,
-    _in_view_locator,
     _layout,
-    _line,
     _plt,
     _premake_ticks,
     _save,
-    _set_limits,
-    _x_grid,
     gain_unit,
     state_units,
 )
 
 
 def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
-    """The 24 panels with their (empty) lines, titles, units and legend; the data only set later.
+    """The 24 panels (:class:`acmm.panel_grid.PanelGrid`: frames, titles with the gain's unit,
+    the TEA label under the bottom row, the legend once for the figure) and the six series (LQR
+    gains as dots, the schedule as a line, per gain row); the data, limits and ticks are set later.
 
-    Cost-cut (issue 16): no shared x axes (24 shared axes re-resolve their view limits and
-    measure their siblings' tick labels at each draw; the limits are set once per panel
-    instead), the gain's unit in the panel title (no rotated 6-pt y label), x ticks only on
-    the bottom row (above it the vertical grid lines at the same TEAs are one line collection
-    per panel, not five ticks of five artists each), fixed label positions, and the legend once
-    for the figure (no 'best' placement search).
+    Cost-cut (issue 16): no Axes per panel (24 Axes with their axis and tick artists took
+    ~0.65 s to build and draw), a fixed layout (tight_layout/bbox 'tight' on 24 panels costs
+    seconds), the legend at a fixed place, the fixed texts rendered ahead (:func:`_bake_texts`).
     """
+    from acmm.panel_grid import PanelGrid
+
     plt = _plt()
     fig = plt.figure(figsize=(13, 15), dpi=80)
-    axs = fig.subplots(6, 4)
-    lines, grids = [], []
-    for j, ax in enumerate(axs.flat):
-        ax.set_title(f"K(i,{j + 1}) — {state_names[j]} ({gain_unit(units[j], torque_unit)})", fontsize=8)
-        ax.tick_params(labelsize=7)
-        ax.xaxis.set_major_locator(_in_view_locator(4))
-        ax.yaxis.set_major_locator(_in_view_locator(3))
-        ax.yaxis.set_major_formatter(_compact_formatter())
-        if j < 20:
-            grids.append(_x_grid(ax))
-        _fixed_label_positions(ax, -0.13, -0.2)
-        lines.append([(_line(ax, marker="o", ls="none", ms=3, color=c,
-                             label=f"K({i + 1},·): LQR gain (dots), schedule (line)"),
-                       _line(ax, lw=1, color=c))
-                      for i, c in enumerate(("C0", "C1", "C2"))])
-    for ax in axs[-1]:
-        ax.set_xlabel("pitch TEA θ2* (deg)")
-    fig.legend(handles=[d for d, _ in lines[0]], loc="upper center", bbox_to_anchor=(0.5, 0.978),
+    colors = ("C0", "C1", "C2")
+    series = ([{"marker": "o", "ls": "none", "ms": 3, "color": c,
+                "label": f"K({i + 1},·): LQR gain (dots), schedule (line)"} for i, c in enumerate(colors)]
+              + [{"lw": 1, "color": c} for c in colors])
+    grid = PanelGrid(fig, 6, 4, series, {"left": 0.06, "right": 0.98, "bottom": 0.04, "top": 0.95,
+                                         "wspace": 0.38, "hspace": 0.3})
+    for j in range(24):
+        grid.set_title(j, f"K(i,{j + 1}) — {state_names[j]} ({gain_unit(units[j], torque_unit)})")
+    for j in range(20, 24):
+        grid.set_xlabel(j, "pitch TEA θ2* (deg)")
+    fig.legend(handles=grid.lines[:3], loc="upper center", bbox_to_anchor=(0.5, 0.978),
                ncol=3, fontsize=7, frameon=False)
-    # a fixed layout: tight_layout/bbox 'tight' on 24 panels costs seconds
-    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.04, top=0.95, wspace=0.38, hspace=0.3)
-    _premake_ticks(axs.flat[20:], 5, 4)
-    _premake_ticks(axs.flat[:20], 0, 4)
-    _bake_texts(fig, [*(ax.title for ax in axs.flat), *(ax.xaxis.label for ax in axs[-1]),
-                              *fig.legends])
-    return fig, axs, lines, grids
+    _bake_texts(fig, [*grid.titles, *grid.xlabels, *fig.legends])
+    return fig, grid
 
 
 @dataclass
@@ -142,18 +126,22 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
+    from acmm.panel_grid import in_view_ticks
+
     theta2_deg = np.degrees(theta2)
     curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
     fine, kf = np.degrees(curve.theta2), curve.gains
     units = units or state_units()
-    fig, axs, lines, grids = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
+    fig, grid = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
     xlim = _data_limits(theta2_deg, fine)
-    for j, ax in enumerate(axs.flat):
-        for i, (dots, line) in enumerate(lines[j]):
-            dots.set_data(theta2_deg, gains[:, i, j])
-            line.set_data(fine, kf[:, i, j])
-        _set_limits([ax], xlim, gains[:, :, j], kf[:, :, j])
-    _set_limits([], xlim, grids=grids, ticks_of=axs[-1, 0])     # the bottom row's TEA ticks above
+    xticks = in_view_ticks(*xlim, 4)
+    for j in range(24):
+        for i in range(3):
+            grid.set_data(j, i, theta2_deg, gains[:, i, j])
+            grid.set_data(j, 3 + i, fine, kf[:, i, j])
+        ylim = _data_limits(gains[:, :, j], kf[:, :, j])
+        grid.set_limits(j, xlim, ylim, xticks, in_view_ticks(*ylim, 3))
+    grid.draw_data(_compact_formatter().format_ticks)
     fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
                  "(cf. Figs 5.3–5.26)", y=0.995)
     return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)

@@ -36,7 +36,24 @@ def _same_column(fig, ax):
     return [a for a in fig.axes if a.axison and abs(a.get_position().x0 - x0) < 1e-6]
 
 
+def _check_panel_labels(grid):
+    """A panel grid (acmm.panel_grid): each title names the quantity and its unit, each column
+    has an x label with its unit."""
+    for p in grid.panels:
+        m = UNIT.match(p.title)
+        assert m and m["unit"].strip(), f"panel title without quantity and unit: {p.title!r}"
+    for c in range(grid.cols):
+        labels = [p.xlabel for p in grid.panels[c::grid.cols] if p.xlabel]
+        assert labels, f"no x label in column {c}"
+        for lab in labels:
+            m = UNIT.match(lab)
+            assert m and m["unit"].strip(), f"x label without quantity and unit: {lab!r}"
+
+
 def _check_labels(fig):
+    if hasattr(fig, "panel_grid"):
+        _check_panel_labels(fig.panel_grid)
+        return
     axes = [ax for ax in fig.axes if ax.axison]
     assert axes
     for ax in axes:
@@ -75,9 +92,9 @@ def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_p
     for fig in captured:
         _check_labels(fig)
     # the gain panels carry the gain's unit: torque per unit of the state
-    grid = captured[0]
-    assert "ft·lbf/(rad/s)" in grid.axes[0].get_title() and "ft·lbf/rad)" in grid.axes[3].get_title()
-    _check_gain_grid(grid, r)
+    grid = captured[0].panel_grid
+    assert "ft·lbf/(rad/s)" in grid.panels[0].title and "ft·lbf/rad)" in grid.panels[3].title
+    _check_gain_grid(captured[0], r)
     _check_sim_figures(captured[2:], orbits, err, sm.level_statistics(sc, res))
 
 
@@ -102,28 +119,48 @@ def _check_sim_figures(figs, orbits, err, stats):
     assert columns[0] == [str(s["level"]) for s in stats]
 
 
-def _check_gain_grid(grid, r):
-    """Every design point and the schedule's curve, per gain row, in each of the 24 panels."""
+def _check_gain_grid(fig, r):
+    """Every design point and the schedule's curve, per gain row, in each of the 24 panels, and
+    the artists draw exactly that, inside the panel's frame."""
+    grid = fig.panel_grid
     theta2_deg = np.degrees(r.table.tea[:, 1])
-    assert len(grid.axes) == 24
-    for j, ax in enumerate(grid.axes):
-        assert ax.get_title().startswith(f"K(i,{j + 1}) — {STATE_NAMES[j]} (")
-        dots = [ln for ln in ax.lines if ln.get_marker() == "o"]
-        curves = [ln for ln in ax.lines if ln.get_linestyle() == "-"]
-        assert len(dots) == 3 and len(curves) == 3
-        lo, hi = sorted(ax.get_ylim())
-        for i, ln in enumerate(dots):
-            assert np.array_equal(ln.get_xdata(), theta2_deg)
-            assert np.array_equal(ln.get_ydata(), r.table.gain[:, i, j])
-            assert lo <= np.min(ln.get_ydata()) and np.max(ln.get_ydata()) <= hi
-        for ln in curves:
-            assert len(ln.get_xdata()) >= 50
-            xlo, xhi = sorted(ax.get_xlim())
-            assert xlo <= ln.get_xdata().min() and ln.get_xdata().max() <= xhi
+    assert len(grid.panels) == 24 and len(grid.lines) == 6
+    n_labels = 0
+    for j, p in enumerate(grid.panels):
+        assert p.title.startswith(f"K(i,{j + 1}) — {STATE_NAMES[j]} (")
+        lo, hi = p.ylim
+        for i in range(3):
+            x, y = p.data[i]                                  # the LQR gains: dots
+            assert np.array_equal(x, theta2_deg) and np.array_equal(y, r.table.gain[:, i, j])
+            assert lo <= y.min() and y.max() <= hi
+            xc, yc = p.data[3 + i]                            # the schedule: a line
+            assert len(xc) >= 50 and p.xlim[0] <= xc.min() and xc.max() <= p.xlim[1]
+            assert lo <= yc.min() and yc.max() <= hi
         # tick labels on the y axis of every panel, on the x axis of the bottom row
-        assert len(ax.get_yticks()) >= 3 and (j < 20 or len(ax.get_xticks()) >= 3)
-    assert [a.get_xlabel() for a in grid.axes[20:]] == ["pitch TEA θ2* (deg)"] * 4
-    (legend,) = grid.legends
+        assert len(p.yticks) >= 3 and all(lo <= v <= hi for v in p.yticks)
+        assert j < 20 or len(p.xticks) >= 3
+        n_labels += len(p.yticks) + (len(p.xticks) if j >= 20 else 0)
+    assert len(grid.tick_labels) == n_labels
+    # what is drawn: series s of panel j, mapped onto the panel's box, NaN-separated per panel
+    for s, line in enumerate(grid.lines):
+        fx, fy = np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float)
+        cut = np.flatnonzero(np.isnan(fx))
+        assert len(cut) == 24
+        for j, (a, b) in enumerate(zip(np.r_[0, cut[:-1] + 1], cut)):
+            p = grid.panels[j]
+            ex, ey = p.to_figure(*p.data[s])
+            np.testing.assert_allclose(fx[a:b], ex)
+            np.testing.assert_allclose(fy[a:b], ey)
+            x0, y0, w, h = p.box
+            assert x0 <= ex.min() and ex.max() <= x0 + w and y0 <= ey.min() and ey.max() <= y0 + h
+        # the dots at the design points' TEAs: the extreme TEAs sit at 1/22 and 21/22 of the first
+        # panel's width (5 % margins each side of the TEA range)
+        if s == 0:
+            x0, _, w, _ = grid.panels[0].box
+            first = (fx[:cut[0]] - x0) / w
+            np.testing.assert_allclose([first.min(), first.max()], [1 / 22, 21 / 22], atol=1e-9)
+    assert [p.xlabel for p in grid.panels[20:]] == ["pitch TEA θ2* (deg)"] * 4
+    (legend,) = fig.legends
     assert [t.get_text()[:6] for t in legend.get_texts()] == ["K(1,·)", "K(2,·)", "K(3,·)"]
 
 
@@ -344,9 +381,9 @@ def test_baked_texts_are_text_in_a_pdf():
 
     from acmm import plot_base
 
-    fig, axs, _, _ = plot_base._BUILDERS["gain_schedule_grid"](tuple(STATE_NAMES), tuple(plots.state_units()),
-                                                               "ft·lbf")
-    title = axs[0, 0].title
+    fig, grid = plot_base._BUILDERS["gain_schedule_grid"](tuple(STATE_NAMES), tuple(plots.state_units()),
+                                                          "ft·lbf")
+    title = grid.titles[0]
     drawn, draw = [], title.draw
     title.draw = lambda renderer: (title.get_visible() and drawn.append(type(renderer).__name__), draw(renderer))
     fig.savefig(io.BytesIO(), format="png")
