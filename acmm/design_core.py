@@ -65,48 +65,81 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
         Called with the point designs and the final :class:`acmm.schedule.ScheduleFit`
         (before its checks; not called with fewer than 2 points).
     fork : bool, optional
-        Solve the path's models in a forked child while the points are designed
-        (:class:`common.forked.ForkedCall`; the same numbers).  For a command run on its own,
-        not for a process pool's worker.
+        Design the second half of the points, then solve the path's models, in a forked child
+        while this process designs the first half (:class:`common.forked.ForkedCall`; the same
+        numbers bit for bit).  For a command run on its own, not for a process pool's worker.
 
     Returns
     -------
     DesignedSchedule
         The point designs, the schedule and its checks.
     """
-    models = None
-    if fork and sched is not None and len(specs) >= 2:
-        models = ForkedCall(path_models_from_specs, list(specs), s, sched.n_check)
+    helper, first = (_fork_helper(specs, s, sched) if fork else (None, len(specs)))
     try:
-        points = _design_points(specs, s, progress, on_points)
+        points, path = _design_points(specs, first, helper, s, sched, progress, on_points)
         fit = check = path_check = None
         if len(points) >= 2:
-            fit, path = _schedule(points, s, sched, models, on_fit)
+            fit, path = _schedule(points, s, sched, path, on_fit)
             check = sch.check_schedule(fit, points, s)
             if path is not None:
                 path_check = check_path(fit.gain, path, s.orbit_rate, s.sector.sigma,
                                         s.sector.half_angle_deg)
     finally:
-        if models is not None:
-            models.cancel()
+        if helper is not None:
+            helper.cancel()
     return DesignedSchedule(points, fit, check, path_check)
 
 
-def _design_points(specs: list, s: DesignSettings, progress, on_points) -> list:
-    """The sector LQR of every point (ch. 5.2), with the callbacks of :func:`design_schedule`."""
-    points = []
-    for spec in specs:
+def _helper_part(specs: list, first: int, s: DesignSettings, n_check: int | None):
+    """What the forked helper computes: the designs of ``specs[first:]`` (the same code as in
+    place, so the same numbers bit for bit) and the path's models (None without ``n_check``, or
+    when solving them fails: they are then solved again in place, where the error is raised at
+    the same step as without the helper)."""
+    points = [sch.design_one(spec, s) for spec in specs[first:]]
+    try:
+        path = path_models_from_specs(specs, s, n_check) if n_check is not None else None
+    except Exception:  # noqa: BLE001
+        path = None
+    return points, path
+
+
+def _fork_helper(specs: list, s: DesignSettings, sched: ScheduleSettings | None):
+    """Fork the helper of :func:`design_schedule` (``fork=True``): it designs the second half of
+    the points and then solves the path's models while this process designs the first half.
+    Returns (the :class:`common.forked.ForkedCall` or None, index of the first point it designs)."""
+    if len(specs) < 2:
+        return None, len(specs)
+    first = (len(specs) + 1) // 2
+    helper = ForkedCall(_helper_part, list(specs), first, s, sched.n_check if sched is not None else None)
+    return (helper, first) if helper.forked else (None, len(specs))
+
+
+def _design_points(specs: list, first: int, helper, s: DesignSettings, sched: ScheduleSettings | None,
+                   progress, on_points) -> tuple[list, object]:
+    """The sector LQR of every point (ch. 5.2): ``specs[:first]`` here, the others by ``helper``
+    (None: all here); with the callbacks of :func:`design_schedule`.  Returns (the point designs
+    in the order of ``specs``, the path's models when the helper solved them, else None)."""
+    points, path = [], None
+    for spec in specs[:first]:
         points.append(sch.design_one(spec, s))
         if progress is not None:
             progress(spec.name)
+    if helper is not None:
+        if sched is not None and sched.fit == "closed_loop":
+            import scipy.optimize  # noqa: F401  (the refit's SLSQP: imported while the helper finishes)
+        rest, path = helper.result()
+        points += rest
+        if progress is not None:
+            for p in rest:
+                progress(p.spec.name)
     if on_points is not None:
         on_points(points)
-    return points
+    return points, path
 
 
-def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, models, on_fit):
+def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, path, on_fit):
     """The schedule of ``points`` (least squares, then the closed-loop refit when configured)
-    and the path's models (from the child ``models`` when one was forked, else solved here: the
+    and the path's models (``path`` when the forked helper solved them, else solved here: the
     refit's first, the others after ``on_fit``).  Returns (fit, path models or None)."""
     gains = np.array([p.lqr.K for p in points])
     teas = np.array([p.tea.theta for p in points])
@@ -118,7 +151,6 @@ def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, m
                           "differ (is schedule.to the same station as the config itself?)")
     fit = sch.fit_schedule(teas[:, 1], gains, sched.order if sched else 2,
                            sched.form if sched else "polynomial")
-    path = models.result() if models is not None and models.forked else None
     if sched is not None and sched.fit == "closed_loop" and fit.form == "polynomial":
         if path is not None:
             fit = refit_closed_loop(fit, path, s.orbit_rate, half_angle_deg=s.sector.half_angle_deg,

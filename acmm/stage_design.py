@@ -189,8 +189,8 @@ def compute_design(config, progress=None, on_points=None, on_fit=None, fork: boo
         :class:`acmm.schedule.ScheduleFit` (ch. 5.3) before its checks; not called with fewer
         than 2 points.
     fork : bool, optional
-        Solve the path's models in a forked child meanwhile (``fork`` of
-        :func:`acmm.design_core.design_schedule`; the same numbers).
+        Design half the points and solve the path's models in a forked child meanwhile
+        (``fork`` of :func:`acmm.design_core.design_schedule`; the same numbers).
 
     Returns
     -------

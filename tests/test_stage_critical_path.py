@@ -3,6 +3,7 @@ the refit on its own models equals the refit on the whole path, and the figure w
 ahead by the command line is adopted by the stage's session or stopped."""
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import textwrap
@@ -156,10 +157,51 @@ def test_design_with_the_forked_path_equals_the_design_in_place():
     from acmm.stages import compute_design
 
     cfg = load_config("staircase", ["schedule.n_check=41"])
-    a, b = compute_design(cfg, fork=True), compute_design(cfg, fork=False)
+    seen = []
+    a, b = compute_design(cfg, seen.append, fork=True), compute_design(cfg, fork=False)
+    # the forked helper designed the second half of the points: the same points, in order
+    assert seen == [p.spec.name for p in b.points] and [p.spec.name for p in a.points] == seen
+    for pa, pb in zip(a.points, b.points):
+        assert np.array_equal(pa.lqr.K, pb.lqr.K) and np.array_equal(pa.tea.theta, pb.tea.theta)
+        assert np.array_equal(pa.lqr.poles, pb.lqr.poles)
     assert np.array_equal(a.fit.coef, b.fit.coef)
     for name in ("max_real", "margin", "disk_margin", "poles"):
         assert np.array_equal(getattr(a.path_check, name), getattr(b.path_check, name)), name
+
+
+def test_forked_design_helper_failures_act_as_in_place(monkeypatch):
+    """A point the helper designs fails: the same error as in place; the helper's path models
+    fail: they are solved again here, and the design is the same."""
+    from acmm import design_core, schedule
+    from acmm.stages import compute_design
+    from common.errors import ConvergenceError
+
+    cfg = load_config("staircase", ["schedule.n_check=21"])
+    reference = compute_design(cfg, fork=False)
+    last = reference.points[-1].spec.name
+    design_one = schedule.design_one
+
+    def failing(spec, s):
+        if spec.name == last:
+            raise ConvergenceError(f"sector LQR did not converge at {spec.name}")
+        return design_one(spec, s)
+
+    monkeypatch.setattr(schedule, "design_one", failing)
+    for fork in (True, False):
+        with pytest.raises(ConvergenceError, match=f"at {last}$"):
+            compute_design(cfg, fork=fork)
+    monkeypatch.setattr(schedule, "design_one", design_one)
+    parent, models = os.getpid(), design_core.path_models_from_specs
+
+    def models_fail_in_the_child(*args, **kwargs):
+        if os.getpid() != parent:
+            raise RuntimeError("the helper's path models failed")
+        return models(*args, **kwargs)
+
+    monkeypatch.setattr(design_core, "path_models_from_specs", models_fail_in_the_child)
+    again = compute_design(cfg, fork=True)
+    assert np.array_equal(again.fit.coef, reference.fit.coef)
+    assert np.array_equal(again.path_check.poles, reference.path_check.poles)
 
 
 def _histories(n=300):
