@@ -126,21 +126,18 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    from acmm.panel_grid import in_view_ticks
+    from acmm.plot_base import in_view_ticks
 
     theta2_deg = np.degrees(theta2)
     curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
     fine, kf = np.degrees(curve.theta2), curve.gains
     units = units or state_units()
     fig, grid = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
-    xlim = _data_limits(theta2_deg, fine)
+    xlim = _data_limits(theta2_deg, fine) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 4)
     for j in range(24):
-        for i in range(3):
-            grid.set_data(j, i, theta2_deg, gains[:, i, j])
-            grid.set_data(j, 3 + i, fine, kf[:, i, j])
-        ylim = _data_limits(gains[:, :, j], kf[:, :, j])
-        grid.set_limits(j, xlim, ylim, xticks, in_view_ticks(*ylim, 3))
+        grid.show(j, xlim, [(i, theta2_deg, gains[:, i, j]) for i in range(3)]
+                  + [(3 + i, fine, kf[:, i, j]) for i in range(3)], xticks)
     grid.draw_data(_compact_formatter().format_ticks)
     fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
                  "(cf. Figs 5.3–5.26)", y=0.995)

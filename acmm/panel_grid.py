@@ -2,7 +2,8 @@
 
 The gain-schedule figure of ch. 5.3 has 24 panels (cf. Figs 5.3–5.26).  As 24 matplotlib Axes it is ~1 500
 artists (each Axes has two Axis objects, each tick five artists), and building and drawing them
-was the costliest figure of the design stage (issue 16).  A :class:`PanelGrid` draws the same
+was the costliest figure of the design stage (issue 16); the simulation's 12 histories per axis
+(ch. 6, Figs 6.2–6.13) and 6 inertia panels are drawn the same way.  A :class:`PanelGrid` draws the same
 picture — frames, tick marks, grid lines, tick labels, titles and the data — with one line
 collection for all frames, one for all tick marks, one for all grid lines, one line (or marker
 set) per series for all panels, and the texts: ~130 artists.  Everything lives in figure
@@ -35,8 +36,8 @@ class Panel:
     xticks, yticks : list of float
         Tick values, units of the data; x ticks are labelled on the bottom row only, and drawn as grid
         lines everywhere.
-    xlabel : str
-        Label under the panel (bottom row), or "".
+    xlabel, ylabel : str
+        Label under the panel (bottom row) and left of it, or "".
     data : dict
         Series index → (x, y) arrays drawn in this panel, units of the data.
     """
@@ -48,6 +49,7 @@ class Panel:
     xticks: list = field(default_factory=list)
     yticks: list = field(default_factory=list)
     xlabel: str = ""
+    ylabel: str = ""
     data: dict = field(default_factory=dict)
 
     def to_figure(self, x, y) -> tuple[np.ndarray, np.ndarray]:
@@ -86,11 +88,12 @@ class PanelGrid:
         ``left``, ``right``, ``bottom``, ``top``, ``wspace``, ``hspace`` (units of the figure's
         size and of the mean panel size, as :meth:`matplotlib.figure.Figure.subplots_adjust`).
     title_size, tick_size : float
-        Font sizes, units of points (1/72 in).
+        Font sizes, units of points (1/72 in); ``title_size`` may also be a matplotlib size name
+        (``"large"``).
     """
 
     def __init__(self, fig, rows: int, cols: int, series: list, adjust: dict,
-                 title_size: float = 8.0, tick_size: float = 7.0) -> None:
+                 title_size: float | str = 8.0, tick_size: float = 7.0) -> None:
         import matplotlib as mpl
         from matplotlib.collections import LineCollection
         from matplotlib.gridspec import GridSpec
@@ -118,6 +121,7 @@ class PanelGrid:
         self.lines = [fig.add_artist(Line2D([], [], transform=tf, zorder=2, **style)) for style in series]
         self.tick_labels: list = []
         self.xlabels: list = []
+        self.ylabels: list = []
         fig.panel_grid = self
 
     @staticmethod
@@ -155,6 +159,27 @@ class PanelGrid:
         p.xlabel = text
         self.xlabels.append(self.fig.text(x0 + w / 2, y0 - offset * h, text, ha="center", va="top"))
 
+    def set_ylabel(self, k: int, text: str, offset: float = 0.18, fontsize: float | None = None) -> None:
+        """Put a vertical label left of a panel (its baseline ``offset`` left of the frame, as an
+        Axes' y label placed with ``set_label_coords(-offset, 0.5)``).
+
+        Parameters
+        ----------
+        k : int
+            Panel index (row by row).
+        text : str
+            The label.
+        offset : float, optional
+            Distance left of the frame, units of the panel's width.
+        fontsize : float, optional
+            Font size, units of points (default: the axes label size).
+        """
+        p = self.panels[k]
+        x0, y0, w, h = p.box
+        p.ylabel = text
+        self.ylabels.append(self.fig.text(x0 - offset * w, y0 + h / 2, text, rotation=90, rotation_mode="anchor",
+                                          ha="center", va="bottom", fontsize=fontsize))
+
     def set_data(self, k: int, series: int, x, y) -> None:
         """Set one series of a panel (drawn by :meth:`draw_data`).
 
@@ -184,6 +209,31 @@ class PanelGrid:
         p = self.panels[k]
         p.xlim, p.ylim = tuple(map(float, xlim)), tuple(map(float, ylim))
         p.xticks, p.yticks = [float(v) for v in xticks], [float(v) for v in yticks]
+
+    def show(self, k: int, xlim, data: list, xticks, nbins: int = 3) -> None:
+        """Set a panel from its data: series ``s`` of ``data`` as (s, x, y), the y limits the
+        data's finite range with 5 % margins (0 to 1 when there is none), at most ``nbins`` + 1
+        y ticks inside them.
+
+        Parameters
+        ----------
+        k : int
+            Panel index (row by row).
+        xlim : tuple of float
+            (low, high) of x, units of the data.
+        data : list of tuple
+            (series index, x, y) of each series drawn in the panel, units of the data.
+        xticks : sequence of float
+            x tick values, units of the data.
+        nbins : int, optional
+            Most intervals between y ticks.
+        """
+        from acmm.plot_base import _data_limits, in_view_ticks
+
+        for s, x, y in data:
+            self.set_data(k, s, x, y)
+        ylim = _data_limits(*(y for _, _, y in data)) or (0.0, 1.0)
+        self.set_limits(k, xlim, ylim, xticks, in_view_ticks(*ylim, nbins))
 
     def draw_data(self, formatter, x_labelled=None) -> None:
         """Put every panel's series, grid lines, tick marks and tick labels in place.
@@ -231,25 +281,3 @@ class PanelGrid:
         for lab, xi, yi in zip(labels, xs, ys):
             self.tick_labels.append(self.fig.text(xi, yi, lab, fontsize=self.tick_size, **align))
 
-
-def in_view_ticks(lo: float, hi: float, nbins: int) -> list:
-    """At most ``nbins`` + 1 "nice" tick values inside [lo, hi] (at least three), as
-    :func:`acmm.plot_base._in_view_locator` places them on an axis.
-
-    Parameters
-    ----------
-    lo, hi : float
-        The view, units of the data.
-    nbins : int
-        Most intervals between ticks.
-
-    Returns
-    -------
-    list of float
-        The tick values, units of the data.
-    """
-    from matplotlib.ticker import MaxNLocator
-
-    lo, hi = sorted((lo, hi))
-    tol = 1e-9 * max(hi - lo, abs(hi), abs(lo), 1e-300)
-    return [v for v in MaxNLocator(nbins, min_n_ticks=3).tick_values(lo, hi) if lo - tol <= v <= hi + tol]

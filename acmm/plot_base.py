@@ -5,8 +5,8 @@ forked writer when :mod:`acmm.parallel_figures` is active), figure skeletons bui
 Drawing cost (issue 16): a skeleton holds everything that does not depend on the data (axes,
 empty lines, legend, tick artists) and its fixed texts already rasterized (:func:`_bake_texts`);
 the figure function then sets the data and the limits (:func:`_set_limits`, no autoscaling
-bookkeeping) and saves.  Panels above the bottom row of a grid have vertical grid lines instead
-of x ticks (:func:`_x_grid`), tick labels are few and short (:func:`_in_view_locator`,
+bookkeeping) and saves.  Grids of panels are drawn without an Axes each
+(:mod:`acmm.panel_grid`), tick labels are few and short (:func:`_in_view_locator`,
 :func:`_compact_formatter`) and text is unhinted while these figures are drawn
 (:data:`FAST_TEXT_RC`).
 
@@ -305,17 +305,37 @@ def _compact_formatter():
     return Compact()
 
 
+def in_view_ticks(lo: float, hi: float, nbins: int) -> list:
+    """At most ``nbins`` + 1 "nice" tick values inside [lo, hi] (at least three): matplotlib's
+    :class:`~matplotlib.ticker.MaxNLocator` also returns the ticks just outside the view, and an
+    axis makes (five artists) and updates a tick for each before dropping them.
+
+    Parameters
+    ----------
+    lo, hi : float
+        The view, units of the data.
+    nbins : int
+        Most intervals between ticks.
+
+    Returns
+    -------
+    list of float
+        The tick values, units of the data.
+    """
+    from matplotlib.ticker import MaxNLocator
+
+    lo, hi = sorted((lo, hi))
+    tol = 1e-9 * max(hi - lo, abs(hi), abs(lo), 1e-300)
+    return [v for v in MaxNLocator(nbins, min_n_ticks=3).tick_values(lo, hi) if lo - tol <= v <= hi + tol]
+
+
 def _in_view_locator(nbins: int = 4):
-    """At most ``nbins`` + 1 "nice" ticks inside the view (at least three): matplotlib's
-    :class:`~matplotlib.ticker.MaxNLocator` also returns the ticks just outside it, and the axis
-    makes (five artists) and updates a tick for each before dropping them."""
+    """An axis locator placing :func:`in_view_ticks` in the axis' view."""
     from matplotlib.ticker import MaxNLocator
 
     class InView(MaxNLocator):
         def __call__(self):
-            lo, hi = sorted(self.axis.get_view_interval())
-            tol = 1e-9 * max(hi - lo, abs(hi), abs(lo), 1e-300)
-            return [v for v in self.tick_values(lo, hi) if lo - tol <= v <= hi + tol]
+            return in_view_ticks(*self.axis.get_view_interval(), nbins)
 
     return InView(nbins, min_n_ticks=3)
 
@@ -328,35 +348,15 @@ def _line(ax, **kw):
     return ax.add_line(Line2D([], [], **kw))
 
 
-def _x_grid(ax):
-    """No x ticks on ``ax``, only vertical grid lines, as one line collection placed at the x
-    ticks of another panel by :func:`_set_x_grid` (a panel above the bottom row of a grid: five
-    ticks of five artists each become one artist)."""
-    import matplotlib as mpl
-    from matplotlib.collections import LineCollection
-    from matplotlib.ticker import NullLocator
-
-    ax.xaxis.set_major_locator(NullLocator())
-    rc = mpl.rcParams
-    return ax.add_collection(LineCollection([], colors=rc["grid.color"], linewidths=rc["grid.linewidth"],
-                                            alpha=rc["grid.alpha"], transform=ax.get_xaxis_transform(),
-                                            zorder=1.5), autolim=False)
-
-
-def _set_limits(axs, xlim, *ys, grids=(), ticks_of=None) -> None:
+def _set_limits(axs, xlim, *ys) -> None:
     """Set the x limits ``xlim`` of ``axs`` (and, with ``ys``, their common y limits, the data's
-    range with matplotlib's margins); ``grids`` (:func:`_x_grid`) get the x ticks of ``ticks_of``."""
+    range with matplotlib's margins)."""
     ylim = _data_limits(*ys) if ys else None
     for ax in axs:
         if xlim is not None:
             ax.set_xlim(xlim)
         if ylim is not None:
             ax.set_ylim(ylim)
-    if grids and xlim is not None:
-        xt = [x for x in ticks_of.xaxis.get_major_locator().tick_values(*xlim) if xlim[0] <= x <= xlim[1]]
-        # (ticks_of's locator: the tick values it would draw within xlim)
-        for grid in grids:
-            grid.set_segments([[(x, 0.0), (x, 1.0)] for x in xt])
 
 
 def _data_limits(*arrays, margin: float = 0.05):

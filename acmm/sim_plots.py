@@ -24,51 +24,44 @@ from acmm.plot_base import (
     _premake_ticks,
     _save,
     _set_limits,
-    _x_grid,
     decimate,
 )
 
 
-def _panel_axes(ax, bottom: bool, grids: list, nx: int = 5) -> None:
-    """A history panel's axes: few y ticks written short; x ticks on the bottom row only
-    (vertical grid lines above, :func:`acmm.plot_base._x_grid`); labels at fixed places."""
+def _panel_axes(ax) -> None:
+    """A summary panel's axes: few y ticks written short, at most six x ticks."""
     ax.yaxis.set_major_locator(_in_view_locator(3))
     ax.yaxis.set_major_formatter(_compact_formatter())
     ax.tick_params(labelsize=8)
-    if bottom:
-        ax.xaxis.set_major_locator(_in_view_locator(nx))
-    else:
-        grids.append(_x_grid(ax))
-    _fixed_label_positions(ax, -0.12, -0.18)
+    ax.xaxis.set_major_locator(_in_view_locator(5))
 
 
 def _axis_histories_layout(units: str):
-    """The 12 panels with their (empty) lines, titles and labels (pre-rendered: _bake_texts)."""
+    """The 12 panels (:class:`acmm.panel_grid.PanelGrid`) with the axis names over the top row,
+    the quantity left of each row, the time under the bottom row (pre-rendered: _bake_texts) and
+    one line series for all panels."""
+    import matplotlib as mpl
+
+    from acmm.panel_grid import PanelGrid
     from common.units import pretty, shown
 
     plt = _plt()
     fig = plt.figure(figsize=(13, 10))
-    axs = fig.subplots(4, 3)
     uu, hu = shown(1.0, "ft*lbf", units)[1], shown(1.0, "ft*lbf*s", units)[1]
     labels = ["attitude error θ−θ̂* (deg)", "body rate rel. LVLH (deg/s)",
               f"control torque ({pretty(uu)})", f"CMG momentum ({pretty(hu)})"]
-    grids, lines = [], []
+    # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
+    grid = PanelGrid(fig, 4, 3, [{"lw": 0.7, "color": "C0"}],
+                     {"left": 0.07, "right": 0.98, "bottom": 0.06, "top": 0.93, "wspace": 0.25, "hspace": 0.12},
+                     title_size=mpl.rcParams["axes.titlesize"], tick_size=8)
     for r, label in enumerate(labels):
         for a in range(3):
-            ax = axs[r, a]
-            _panel_axes(ax, r == 3, grids)
-            if r == 0:
-                ax.set_title(AXES[a])
-            ax.set_ylabel(label, fontsize=8 if a == 0 else 7)
-            lines.append(_line(ax, lw=0.7, color="C0"))
-    for ax in axs[-1]:
-        ax.set_xlabel("time (orbits)")
-    # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
-    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.06, top=0.93, wspace=0.25, hspace=0.12)
-    _premake_ticks(axs[-1], 6, 4)
-    _premake_ticks(axs[:-1].flat, 0, 4)
-    _bake_texts(fig, [t for ax in axs.flat for t in (ax.title, ax.xaxis.label, ax.yaxis.label)])
-    return fig, axs, lines, grids
+            grid.set_ylabel(3 * r + a, label, fontsize=8 if a == 0 else 7)
+    for a in range(3):
+        grid.set_title(a, AXES[a])
+        grid.set_xlabel(9 + a, "time (orbits)", offset=0.12)
+    _bake_texts(fig, [*grid.titles, *grid.xlabels, *grid.ylabels])
+    return fig, grid
 
 
 def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units="imperial"):
@@ -102,43 +95,44 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
+    from acmm.plot_base import in_view_ticks
     from common.units import shown
 
-    fig, axs, lines, grids = _layout("axis_histories", units)
+    fig, grid = _layout("axis_histories", units)
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
-    xlim = _data_limits(orbits)
+    xlim = _data_limits(orbits) or (0.0, 1.0)
+    xticks = in_view_ticks(*xlim, 5)
     for r, data in enumerate((err_deg, rate, u, h)):
         for a in range(3):
-            lines[3 * r + a].set_data(*decimate(orbits, data[:, a]))
-            _set_limits([axs[r, a]], xlim, data[:, a])
-    _set_limits([], xlim, grids=grids, ticks_of=axs[-1, 0])
+            grid.show(3 * r + a, xlim, [(0, *decimate(orbits, data[:, a]))], xticks)
+    grid.draw_data(_compact_formatter().format_ticks)
     fig.suptitle(title)
     return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 def _inertia_layout(units: str):
-    """The six panels with their (empty) step lines, titles and labels (pre-rendered)."""
+    """The six panels (:class:`acmm.panel_grid.PanelGrid`) with titles, labels (pre-rendered)
+    and one step-line series for all panels."""
+    import matplotlib as mpl
+
+    from acmm.panel_grid import PanelGrid
     from common.units import pretty, shown
 
     iu = shown(1.0, "slug*ft^2", units)[1]
     plt = _plt()
     fig = plt.figure(figsize=(12, 6))
-    axs = fig.subplots(2, 3)
-    grids, lines = [], []
-    for k, (ax, (i, j)) in enumerate(zip(axs.flat, _INERTIA_ELEMENTS)):
-        _panel_axes(ax, k >= 3, grids)
-        ax.set_title(f"I({i + 1},{j + 1})")
-        ax.set_ylabel(f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})")
-        lines.append(_line(ax, drawstyle="steps-post", color="C0"))
-    for ax in axs[-1]:
-        ax.set_xlabel("time (orbits)")
+    grid = PanelGrid(fig, 2, 3, [{"drawstyle": "steps-post", "color": "C0"}],
+                     {"left": 0.07, "right": 0.98, "bottom": 0.09, "top": 0.9, "wspace": 0.3, "hspace": 0.25},
+                     title_size=mpl.rcParams["axes.titlesize"], tick_size=8)
+    for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
+        grid.set_title(k, f"I({i + 1},{j + 1})")
+        grid.set_ylabel(k, f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})")
+    for k in range(3, 6):
+        grid.set_xlabel(k, "time (orbits)", offset=0.12)
     title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
-    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.09, top=0.9, wspace=0.3, hspace=0.25)
-    _premake_ticks(axs[-1], 6, 4)
-    _premake_ticks(axs[0], 0, 4)
-    _bake_texts(fig, [title, *(t for ax in axs.flat for t in (ax.title, ax.xaxis.label, ax.yaxis.label))])
-    return fig, axs, lines, grids
+    _bake_texts(fig, [title, *grid.titles, *grid.xlabels, *grid.ylabels])
+    return fig, grid
 
 
 _INERTIA_ELEMENTS = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
@@ -168,12 +162,14 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
     from common.units import shown
 
     inertia = shown(np.asarray(inertia), "slug*ft^2", units)[0]
-    fig, axs, lines, grids = _layout("inertia_histories", units)
-    xlim = _data_limits(orbits)
-    for ax, line, (i, j) in zip(axs.flat, lines, _INERTIA_ELEMENTS):
-        line.set_data(orbits, inertia[:, i, j] / 1e6)
-        _set_limits([ax], xlim, inertia[:, i, j] / 1e6)
-    _set_limits([], xlim, grids=grids, ticks_of=axs[-1, 0])
+    from acmm.plot_base import in_view_ticks
+
+    fig, grid = _layout("inertia_histories", units)
+    xlim = _data_limits(orbits) or (0.0, 1.0)
+    xticks = in_view_ticks(*xlim, 5)
+    for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
+        grid.show(k, xlim, [(0, orbits, inertia[:, i, j] / 1e6)], xticks)
+    grid.draw_data(_compact_formatter().format_ticks)
     return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
@@ -197,7 +193,7 @@ def _summary_layout(units: str):
         ax.set_ylabel(label)
     lines = []
     for ax in (top, *mid):
-        _panel_axes(ax, True, [])
+        _panel_axes(ax)
         ax.set_xlabel("time (orbits)")
         _fixed_label_positions(ax, -0.1 if ax is top else -0.12, -0.06 if ax is top else -0.12)
         lines.append([_line(ax, lw=0.7, color=f"C{a}", label=AXES[a]) for a in range(3)])

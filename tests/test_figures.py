@@ -37,11 +37,12 @@ def _same_column(fig, ax):
 
 
 def _check_panel_labels(grid):
-    """A panel grid (acmm.panel_grid): each title names the quantity and its unit, each column
-    has an x label with its unit."""
+    """A panel grid (acmm.panel_grid): each panel's y label (or its title when it has none)
+    names the quantity and its unit, each column has an x label with its unit."""
     for p in grid.panels:
-        m = UNIT.match(p.title)
-        assert m and m["unit"].strip(), f"panel title without quantity and unit: {p.title!r}"
+        ylab = p.ylabel or p.title
+        m = UNIT.match(ylab)
+        assert m and m["unit"].strip(), f"panel y label (or title) without quantity and unit: {ylab!r}"
     for c in range(grid.cols):
         labels = [p.xlabel for p in grid.panels[c::grid.cols] if p.xlabel]
         assert labels, f"no x label in column {c}"
@@ -101,14 +102,18 @@ def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_p
 def _check_sim_figures(figs, orbits, err, stats):
     """Every state drawn over the whole run, one legend, one table row per level."""
     axes_fig, inertia_fig, summary_fig = figs
-    assert len(axes_fig.axes) == 12 and [ax.get_title() for ax in axes_fig.axes[:3]] == ["roll", "pitch", "yaw"]
-    for k, ax in enumerate(axes_fig.axes):
-        (line,) = ax.lines
-        assert line.get_xdata()[0] == orbits[0] and line.get_xdata()[-1] == orbits[-1]
-        lo, hi = ax.get_ylim()
-        assert lo <= np.nanmin(line.get_ydata()) and np.nanmax(line.get_ydata()) <= hi
-    np.testing.assert_array_equal(axes_fig.axes[1].lines[0].get_ydata(), err[:, 1])   # pitch error
-    assert len(inertia_fig.axes) == 6 and all(len(ax.lines) == 1 for ax in inertia_fig.axes)
+    grid = axes_fig.panel_grid
+    assert len(grid.panels) == 12 and [p.title for p in grid.panels[:3]] == ["roll", "pitch", "yaw"]
+    for p in grid.panels:
+        ((x, y),) = p.data.values()
+        assert x[0] == orbits[0] and x[-1] == orbits[-1]
+        lo, hi = p.ylim
+        assert lo <= np.nanmin(y) and np.nanmax(y) <= hi
+    np.testing.assert_array_equal(grid.panels[1].data[0][1], err[:, 1])                # pitch error
+    _check_drawn(grid)
+    inertia = inertia_fig.panel_grid
+    assert len(inertia.panels) == 6 and all(len(p.data) == 1 for p in inertia.panels)
+    _check_drawn(inertia)
     top, *mid, table = summary_fig.axes
     assert [len(ax.lines) for ax in (top, *mid)] == [3, 3, 3]
     (legend,) = summary_fig.legends
@@ -117,6 +122,26 @@ def _check_sim_figures(figs, orbits, err, stats):
     columns = [t.get_text().split("\n") for t in table.texts if t.get_position()[1] < 0.95]   # below the header
     assert len(columns) == 5 and all(len(c) == len(stats) for c in columns)
     assert columns[0] == [str(s["level"]) for s in stats]
+
+
+def _check_drawn(grid):
+    """What a panel grid draws: each series of each panel mapped onto the panel's box, inside
+    it, NaN-separated per panel, in panel order; a y tick label per y tick."""
+    for s, line in enumerate(grid.lines):
+        fx, fy = np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float)
+        cut = np.flatnonzero(np.isnan(fx))
+        drawn = [p for p in grid.panels if s in p.data]
+        assert len(cut) == len(drawn)
+        for p, a, b in zip(drawn, np.r_[0, cut[:-1] + 1], cut):
+            ex, ey = p.to_figure(*p.data[s])
+            np.testing.assert_allclose(fx[a:b], ex)
+            np.testing.assert_allclose(fy[a:b], ey)
+            x0, y0, w, h = p.box
+            ok = np.isfinite(ey)
+            assert x0 <= ex.min() and ex.max() <= x0 + w
+            assert not ok.any() or (y0 <= ey[ok].min() and ey[ok].max() <= y0 + h)
+    labels = {t.get_text() for t in grid.tick_labels}
+    assert all(len(p.yticks) >= 3 for p in grid.panels) and len(labels) >= 3
 
 
 def _check_gain_grid(fig, r):
@@ -141,24 +166,13 @@ def _check_gain_grid(fig, r):
         assert j < 20 or len(p.xticks) >= 3
         n_labels += len(p.yticks) + (len(p.xticks) if j >= 20 else 0)
     assert len(grid.tick_labels) == n_labels
-    # what is drawn: series s of panel j, mapped onto the panel's box, NaN-separated per panel
-    for s, line in enumerate(grid.lines):
-        fx, fy = np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float)
-        cut = np.flatnonzero(np.isnan(fx))
-        assert len(cut) == 24
-        for j, (a, b) in enumerate(zip(np.r_[0, cut[:-1] + 1], cut)):
-            p = grid.panels[j]
-            ex, ey = p.to_figure(*p.data[s])
-            np.testing.assert_allclose(fx[a:b], ex)
-            np.testing.assert_allclose(fy[a:b], ey)
-            x0, y0, w, h = p.box
-            assert x0 <= ex.min() and ex.max() <= x0 + w and y0 <= ey.min() and ey.max() <= y0 + h
-        # the dots at the design points' TEAs: the extreme TEAs sit at 1/22 and 21/22 of the first
-        # panel's width (5 % margins each side of the TEA range)
-        if s == 0:
-            x0, _, w, _ = grid.panels[0].box
-            first = (fx[:cut[0]] - x0) / w
-            np.testing.assert_allclose([first.min(), first.max()], [1 / 22, 21 / 22], atol=1e-9)
+    _check_drawn(grid)
+    # the dots at the design points' TEAs: the extreme TEAs sit at 1/22 and 21/22 of the first
+    # panel's width (5 % margins each side of the TEA range)
+    fx = np.asarray(grid.lines[0].get_xdata(), float)
+    x0, _, w, _ = grid.panels[0].box
+    first = (fx[:np.flatnonzero(np.isnan(fx))[0]] - x0) / w
+    np.testing.assert_allclose([first.min(), first.max()], [1 / 22, 21 / 22], atol=1e-9)
     assert [p.xlabel for p in grid.panels[20:]] == ["pitch TEA θ2* (deg)"] * 4
     (legend,) = fig.legends
     assert [t.get_text()[:6] for t in legend.get_texts()] == ["K(1,·)", "K(2,·)", "K(3,·)"]
@@ -424,3 +438,23 @@ def test_log_axis_labels_are_plain_text_of_the_tick_values():
                 assert value(got) == pytest.approx(v, rel=1e-12), (v, got)
     assert design_plots._plain_math(r"$\mathdefault{6\times10^{-1}}$") == "6×10⁻¹"
     plots._plt().close(fig)
+
+
+def test_history_panels_of_a_diverged_run(captured, tmp_path):
+    """NaN and ±inf states (a run that diverged) draw as gaps: a panel with no finite value has
+    the limits 0 to 1 and draws nothing; the others' limits cover their finite values."""
+    t = np.linspace(0.0, 3.0, 300)
+    x = np.column_stack([np.sin(t), np.full(300, np.nan), t])
+    x[100:, 2] = np.inf
+    plots.axis_histories(t, x, x, x, x, "t", tmp_path / "a.png")
+    grid = captured[0].panel_grid
+    _check_labels(captured[0])
+    _check_drawn(grid)
+    for r in range(4):
+        roll, pitch, yaw = grid.panels[3 * r:3 * r + 3]
+        assert pitch.ylim == (0.0, 1.0) and np.isnan(pitch.data[0][1]).all()
+        lo, hi = yaw.ylim
+        assert lo <= 0.0 and t[99] <= hi < 1.2 * t[99]          # the finite part only
+        assert roll.ylim[0] <= np.sin(t).min() and np.sin(t).max() <= roll.ylim[1]
+    fy = np.asarray(grid.lines[0].get_ydata(), float)
+    assert np.isinf(fy).sum() == 4 * 200                       # the inf samples: gaps, not clipped
