@@ -21,7 +21,7 @@ $(STAMP): pyproject.toml
 install: $(STAMP) bytecode
 
 bytecode: $(STAMP)
-	@$(BIN)/python -m compileall -q $(PACKAGES) >/dev/null
+	@$(BIN)/python -m compileall -q $(PACKAGES)
 
 run: $(STAMP) bytecode
 	OPENBLAS_NUM_THREADS=1 $(BIN)/acmm simulate

@@ -10,6 +10,7 @@ eqs 5.2–5.4); then the gain schedule and its checks (ch. 5.3).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -74,7 +75,7 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
     DesignedSchedule
         The point designs, the schedule and its checks.
     """
-    helper, first = (_fork_helper(specs, s, sched) if fork else (None, len(specs)))
+    helper, first = (_fork_helper(specs, s, sched, progress) if fork else (None, len(specs)))
     try:
         points, path = _design_points(specs, first, helper, s, sched, progress, on_points)
         fit = check = path_check = None
@@ -90,12 +91,17 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
     return DesignedSchedule(points, fit, check, path_check)
 
 
-def _helper_part(specs: list, first: int, s: DesignSettings, n_check: int | None):
+def _helper_part(specs: list, first: int, s: DesignSettings, n_check: int | None, progress=None):
     """What the forked helper computes: the designs of ``specs[first:]`` (the same code as in
     place, so the same numbers bit for bit) and the path's models (None without ``n_check``, or
     when solving them fails: they are then solved again in place, where the error is raised at
-    the same step as without the helper)."""
-    points = [sch.design_one(spec, s) for spec in specs[first:]]
+    the same step as without the helper).  Run in place (the helper failed), ``progress`` is
+    called after each point."""
+    points = []
+    for spec in specs[first:]:
+        points.append(sch.design_one(spec, s))
+        if progress is not None:
+            progress(spec.name)
     try:
         path = path_models_from_specs(specs, s, n_check) if n_check is not None else None
     except Exception:  # noqa: BLE001
@@ -103,14 +109,16 @@ def _helper_part(specs: list, first: int, s: DesignSettings, n_check: int | None
     return points, path
 
 
-def _fork_helper(specs: list, s: DesignSettings, sched: ScheduleSettings | None):
+def _fork_helper(specs: list, s: DesignSettings, sched: ScheduleSettings | None, progress):
     """Fork the helper of :func:`design_schedule` (``fork=True``): it designs the second half of
-    the points and then solves the path's models while this process designs the first half.
-    Returns (the :class:`common.forked.ForkedCall` or None, index of the first point it designs)."""
+    the points and then solves the path's models while this process designs the first half (if
+    it fails, that half is designed here, with ``progress``).  Returns (the
+    :class:`common.forked.ForkedCall` or None, index of the first point it designs)."""
     if len(specs) < 2:
         return None, len(specs)
     first = (len(specs) + 1) // 2
-    helper = ForkedCall(_helper_part, list(specs), first, s, sched.n_check if sched is not None else None)
+    helper = ForkedCall(_helper_part, list(specs), first, s, sched.n_check if sched is not None else None,
+                        in_place=partial(_helper_part, progress=progress))
     return (helper, first) if helper.forked else (None, len(specs))
 
 
@@ -129,7 +137,7 @@ def _design_points(specs: list, first: int, helper, s: DesignSettings, sched: Sc
             import scipy.optimize  # noqa: F401  (the refit's SLSQP: imported while the helper finishes)
         rest, path = helper.result()
         points += rest
-        if progress is not None:
+        if progress is not None and helper.from_child:        # (in place: called meanwhile)
             for p in rest:
                 progress(p.spec.name)
     if on_points is not None:

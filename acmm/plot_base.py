@@ -325,7 +325,7 @@ def in_view_ticks(lo: float, hi: float, nbins: int) -> list:
     from matplotlib.ticker import MaxNLocator
 
     lo, hi = sorted((lo, hi))
-    tol = 1e-9 * max(hi - lo, abs(hi), abs(lo), 1e-300)
+    tol = 1e-10 * (hi - lo)              # as an axis keeps a tick (relative to the view's span)
     return [v for v in MaxNLocator(nbins, min_n_ticks=3).tick_values(lo, hi) if lo - tol <= v <= hi + tol]
 
 
@@ -374,7 +374,9 @@ def _data_limits(*arrays, margin: float = 0.05):
     pad = (hi - lo) * margin
     if pad <= 1e-12 * max(abs(lo), abs(hi)):         # one value: ±5 % of it (or ±0.05 about 0)
         pad = 0.05 * abs(lo) if lo else 0.05
-    return lo - pad, hi + pad
+    lo, hi = lo - pad, hi + pad
+    # values below ~2e-287, or a span lost to underflow: ±0.05, as an Axes widens such a view
+    return (lo, hi) if hi > lo and max(abs(lo), abs(hi)) >= 1e21 * np.finfo(float).tiny else (-0.05, 0.05)
 
 
 def gain_unit(state_unit: str, torque_unit: str = "ft·lbf") -> str:

@@ -149,13 +149,25 @@ def recv_frame(fd: int) -> bytes | None:
 
 
 def _child(fn, args, kwargs, fd: int) -> None:
-    """In the child: compute, send ("ok", value) or ("error", None) through ``fd`` as one
-    frame, flush what it printed, exit."""
+    """In the child: compute, send ("ok", value, warnings) or ("error", None, []) through ``fd``
+    as one frame, flush what it printed, exit.  The warnings the call raised (under the filters
+    inherited from the parent) travel as (message, category, filename, lineno) for the parent to
+    raise again: a caller recording warnings (the CLI's ``note:``) sees them as if computed in
+    place."""
+    import warnings
+
     code = 0
     try:
-        data = pickle.dumps(("ok", fn(*args, **kwargs)), protocol=pickle.HIGHEST_PROTOCOL)
+        with warnings.catch_warnings(record=True) as caught:
+            value = fn(*args, **kwargs)
+        raised = [(w.message, w.category, w.filename, w.lineno) for w in caught]
+        try:
+            data = pickle.dumps(("ok", value, raised), protocol=pickle.HIGHEST_PROTOCOL)
+        except Exception:  # noqa: BLE001 (a warning that does not pickle: its text instead)
+            raised = [(str(m), c, f, n) for m, c, f, n in raised]
+            data = pickle.dumps(("ok", value, raised), protocol=pickle.HIGHEST_PROTOCOL)
     except BaseException:  # noqa: BLE001 (the parent computes again in place and raises)
-        data, code = pickle.dumps(("error", None)), 1
+        data, code = pickle.dumps(("error", None, [])), 1
     try:
         flush_std_streams()                 # os._exit does not: what the call printed is kept
         send_frame(fd, data)
@@ -174,6 +186,9 @@ class ForkedCall:
         Its positional arguments.
     enabled : bool, optional
         False: no child, :meth:`result` calls ``fn`` in place.
+    in_place : callable, optional
+        What :meth:`result` calls, with the same arguments, when no child was forked or it
+        failed (default ``fn``; e.g. ``fn`` with a progress callback the child could not call).
     **kwargs : object
         Its keyword arguments.
 
@@ -181,10 +196,13 @@ class ForkedCall:
     ----------
     forked : bool
         Whether a child was started.
+    from_child : bool
+        After :meth:`result`: whether the value is the child's (False: computed in place).
     """
 
-    def __init__(self, fn, *args, enabled: bool = True, **kwargs) -> None:
-        self._call = (fn, args, kwargs)
+    def __init__(self, fn, *args, enabled: bool = True, in_place=None, **kwargs) -> None:
+        self._call = (in_place or fn, args, kwargs)
+        self.from_child = False
         self._pid: int | None = None
         self._fd: int | None = None
         if enabled and usable():
@@ -217,10 +235,17 @@ class ForkedCall:
         pid, self._pid = self._pid, None
         os.waitpid(pid, 0)
         try:
-            kind, value = pickle.loads(data)
+            kind, value, raised = pickle.loads(data)
         except Exception:  # noqa: BLE001 (a truncated message: the child died)
-            kind, value = "error", None
-        return value if kind == "ok" else fn(*args, **kwargs)
+            kind, value, raised = "error", None, []
+        if kind != "ok":
+            return fn(*args, **kwargs)
+        import warnings
+
+        for message, category, filename, lineno in raised:
+            warnings.warn_explicit(message, category, filename, lineno)
+        self.from_child = True
+        return value
 
     def cancel(self) -> None:
         """Kill the child (if it still runs) and drop its result."""

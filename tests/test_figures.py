@@ -142,6 +142,14 @@ def _check_drawn(grid):
             assert not ok.any() or (y0 <= ey[ok].min() and ey[ok].max() <= y0 + h)
     labels = {t.get_text() for t in grid.tick_labels}
     assert all(len(p.yticks) >= 3 for p in grid.panels) and len(labels) >= 3
+    for p in grid.panels:                  # every tick (mark, grid line, label) inside its panel
+        assert all(p.ylim[0] <= v <= p.ylim[1] for v in p.yticks)
+        assert all(p.xlim[0] <= v <= p.xlim[1] for v in p.xticks)
+    x0s = [p.box[0] for p in grid.panels]
+    for t in grid.tick_labels:
+        x, y = t.get_position()
+        assert any(p.box[1] - 0.05 <= y <= p.box[1] + p.box[3] + 1e-9 for p in grid.panels)
+        assert min(x0s) - 0.06 <= x
 
 
 def _check_gain_grid(fig, r):
@@ -458,3 +466,26 @@ def test_history_panels_of_a_diverged_run(captured, tmp_path):
         assert roll.ylim[0] <= np.sin(t).min() and np.sin(t).max() <= roll.ylim[1]
     fy = np.asarray(grid.lines[0].get_ydata(), float)
     assert np.isinf(fy).sum() == 4 * 200                       # the inf samples: gaps, not clipped
+
+
+@pytest.mark.parametrize("offset, spread", [(1e6, 1e-4), (0.0, 1e-295), (5e-324, 0.0), (-3.0, 0.0)])
+def test_history_panels_of_nearly_constant_series(captured, tmp_path, offset, spread):
+    """A series whose spread is lost beside its size, values below ~1e-287 and constants: the
+    ticks stay inside the panel (as an Axes keeps them), three of them at least."""
+    t = np.linspace(0.0, 3.0, 300)
+    x = offset + spread * np.column_stack([np.sin(t), np.cos(t), t])
+    plots.axis_histories(t, x, x, x, x, "t", tmp_path / "a.png")
+    grid = captured[0].panel_grid
+    _check_drawn(grid)
+    for p in grid.panels:
+        assert p.ylim[0] < p.ylim[1] and len(p.yticks) >= 3
+
+
+def test_scheduled_pole_map_colours_ignore_a_nan_tea(captured, tmp_path):
+    theta2 = np.radians(np.linspace(-45.0, -5.0, 41))
+    theta2[7] = np.nan
+    poles = (-1.0 - np.arange(24.0) + 1j * np.sin(np.arange(24.0)))[None, :] * (1 + theta2[:, None] ** 2)
+    plots.scheduled_pole_map(poles * 1e-3, theta2, 1e-3, 0.5, 45.0, tmp_path / "p.png")
+    (sc,) = [c for c in captured[0].axes[0].collections if c.get_array() is not None]
+    np.testing.assert_allclose(sc.get_clim(), [-45.0, -5.0])
+    assert len(sc.get_offsets()) == 41 * 24

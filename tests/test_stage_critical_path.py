@@ -132,8 +132,38 @@ def test_forked_call_returns_the_childs_result_or_computes_in_place(monkeypatch)
     c = forked.ForkedCall(_die, 1)                           # the child dies: computed here
     monkeypatch.delenv("ACMM_TEST_IN_CHILD")
     assert c.forked and c.result() == 2
+    assert not c.from_child
     monkeypatch.setenv("ACMM_FORK", "0")
     assert not forked.usable() and not forked.ForkedCall(_square, 2).forked
+
+
+def _warn_twice(x):
+    import warnings
+
+    warnings.warn(f"first {x}", RuntimeWarning, stacklevel=1)
+    warnings.warn(f"second {x}", UserWarning, stacklevel=1)
+    return -x
+
+
+def test_forked_call_raises_the_childs_warnings_here_and_falls_back_in_place():
+    import warnings
+
+    from common import forked
+
+    if not forked.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    with warnings.catch_warnings(record=True) as here:
+        warnings.simplefilter("always")
+        assert _warn_twice(4) == -4
+    with warnings.catch_warnings(record=True) as forked_warnings:
+        warnings.simplefilter("always")
+        c = forked.ForkedCall(_warn_twice, 4)
+        assert c.result() == -4 and c.from_child
+    assert [(type(w.message), str(w.message), w.lineno) for w in forked_warnings] == \
+        [(type(w.message), str(w.message), w.lineno) for w in here]
+    calls = []
+    c = forked.ForkedCall(_fail, 5, in_place=lambda x: calls.append(x) or x * 10)   # the child fails
+    assert c.result() == 50 and calls == [5] and not c.from_child
 
 
 def test_forked_call_cancel_kills_the_child():
@@ -187,9 +217,29 @@ def test_forked_design_helper_failures_act_as_in_place(monkeypatch):
         return design_one(spec, s)
 
     monkeypatch.setattr(schedule, "design_one", failing)
+    seen = {}
     for fork in (True, False):
+        seen[fork] = []
         with pytest.raises(ConvergenceError, match=f"at {last}$"):
+            compute_design(cfg, seen[fork].append, fork=fork)
+    assert seen[True] == seen[False] == [p.spec.name for p in reference.points[:-1]]
+
+    def warning(spec, s):
+        import warnings
+
+        warnings.warn(f"ill-conditioned at {spec.name}", RuntimeWarning, stacklevel=1)
+        return design_one(spec, s)
+
+    monkeypatch.setattr(schedule, "design_one", warning)
+    caught = {}
+    for fork in (True, False):
+        import warnings
+
+        with warnings.catch_warnings(record=True) as caught[fork]:
+            warnings.simplefilter("always")
             compute_design(cfg, fork=fork)
+    assert sorted(str(w.message) for w in caught[True]) == sorted(str(w.message) for w in caught[False])
+    assert len(caught[True]) >= len(reference.points)
     monkeypatch.setattr(schedule, "design_one", design_one)
     parent, models = os.getpid(), design_core.path_models_from_specs
 
