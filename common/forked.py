@@ -148,24 +148,58 @@ def recv_frame(fd: int) -> bytes | None:
     return None if head is None else read_exact(fd, FRAME_HEADER.unpack(head)[0])
 
 
+def _portable(caught) -> list:
+    """The child's recorded warnings as (message, category, filename, lineno), each checked to
+    come back out of a pickle; one that does not (a class defined in a function, arguments its
+    class cannot be rebuilt from) travels as its text with the nearest built-in category."""
+    out = []
+    for w in caught:
+        item = (w.message, w.category, w.filename, w.lineno)
+        try:
+            pickle.loads(pickle.dumps(item[:2], protocol=pickle.HIGHEST_PROTOCOL))
+        except Exception:  # noqa: BLE001
+            base = next(c for c in w.category.__mro__ if c.__module__ == "builtins" and issubclass(c, Warning))
+            item = (str(w.message), base, w.filename, w.lineno)
+        out.append(item)
+    return out
+
+
+def _raise_again(raised: list) -> None:
+    """Raise the child's warnings here, each as from the module it came from (its filters and
+    its ``__warningregistry__``: a warning this process already showed under "default" or
+    "once" is not shown again, as computing in place would not)."""
+    import warnings
+
+    if not raised:
+        return
+    by_file = {}
+    for mod in list(sys.modules.values()):
+        f = getattr(mod, "__file__", None)
+        if isinstance(f, str):
+            by_file.setdefault(os.path.realpath(f), mod)
+    for message, category, filename, lineno in raised:
+        mod = by_file.get(os.path.realpath(filename)) if isinstance(filename, str) else None
+        if mod is None:
+            warnings.warn_explicit(message, category, filename, lineno)
+        else:
+            warnings.warn_explicit(message, category, filename, lineno, module=mod.__name__,
+                                   registry=mod.__dict__.setdefault("__warningregistry__", {}),
+                                   module_globals=mod.__dict__)
+
+
 def _child(fn, args, kwargs, fd: int) -> None:
     """In the child: compute, send ("ok", value, warnings) or ("error", None, []) through ``fd``
     as one frame, flush what it printed, exit.  The warnings the call raised (under the filters
-    inherited from the parent) travel as (message, category, filename, lineno) for the parent to
-    raise again: a caller recording warnings (the CLI's ``note:``) sees them as if computed in
-    place."""
+    inherited from the parent) travel along (:func:`_portable`) for the parent to raise again
+    (:func:`_raise_again`): a caller recording warnings (the CLI's ``note:``) sees them as if
+    computed in place."""
     import warnings
 
     code = 0
     try:
         with warnings.catch_warnings(record=True) as caught:
             value = fn(*args, **kwargs)
-        raised = [(w.message, w.category, w.filename, w.lineno) for w in caught]
-        try:
-            data = pickle.dumps(("ok", value, raised), protocol=pickle.HIGHEST_PROTOCOL)
-        except Exception:  # noqa: BLE001 (a warning that does not pickle: its text instead)
-            raised = [(str(m), c, f, n) for m, c, f, n in raised]
-            data = pickle.dumps(("ok", value, raised), protocol=pickle.HIGHEST_PROTOCOL)
+        data = pickle.dumps(("ok", value, _portable(caught)), protocol=pickle.HIGHEST_PROTOCOL)
     except BaseException:  # noqa: BLE001 (the parent computes again in place and raises)
         data, code = pickle.dumps(("error", None, [])), 1
     try:
@@ -225,6 +259,7 @@ class ForkedCall:
             What ``fn(*args, **kwargs)`` returns.
         """
         fn, args, kwargs = self._call
+        self.from_child = False
         if self._pid is None:
             return fn(*args, **kwargs)
         fd, self._fd = self._fd, None
@@ -240,11 +275,8 @@ class ForkedCall:
             kind, value, raised = "error", None, []
         if kind != "ok":
             return fn(*args, **kwargs)
-        import warnings
-
-        for message, category, filename, lineno in raised:
-            warnings.warn_explicit(message, category, filename, lineno)
         self.from_child = True
+        _raise_again(raised)
         return value
 
     def cancel(self) -> None:

@@ -166,6 +166,57 @@ def test_forked_call_raises_the_childs_warnings_here_and_falls_back_in_place():
     assert c.result() == 50 and calls == [5] and not c.from_child
 
 
+def _warn_once_here(x):
+    import warnings
+
+    warnings.warn("the same warning from the same line", RuntimeWarning, stacklevel=1)
+    return x
+
+
+class _TwoArgWarning(UserWarning):
+    def __init__(self, a, b):
+        super().__init__(f"{a} and {b}")
+
+
+def _odd_warnings(x):
+    import warnings
+
+    class Local(UserWarning):
+        pass
+
+    warnings.warn(Local("a class defined in a function"), stacklevel=1)
+    warnings.warn(_TwoArgWarning(1, 2), stacklevel=1)        # pickles, but cannot be rebuilt
+    return x + 1
+
+
+@pytest.mark.parametrize("action", ["default", "once"])
+def test_forked_call_warnings_are_shown_as_often_as_in_place(action):
+    """Under "default" or "once" a warning raised here and by the child from the same line is
+    shown once, as in place; a warning that cannot travel as itself arrives as its text."""
+    import warnings
+
+    from common import forked
+
+    if not forked.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    counts = []
+    for fork in (False, True):
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter(action)
+            c = forked.ForkedCall(_warn_once_here, 1, enabled=fork)
+            _warn_once_here(0)
+            assert c.result() == 1 and c.from_child == fork
+            _warn_once_here(2)
+        counts.append(len(got))
+    assert counts == [1, 1]
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        c = forked.ForkedCall(_odd_warnings, 1)
+        assert c.result() == 2 and c.from_child                  # the child's value, not redone
+    assert [(w.category, str(w.message)) for w in got] == [
+        (UserWarning, "a class defined in a function"), (UserWarning, "1 and 2")]
+
+
 def test_forked_call_cancel_kills_the_child():
     import os
     import time
