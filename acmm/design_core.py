@@ -133,7 +133,7 @@ def _design_points(specs: list, first: int, helper, s: DesignSettings, sched: Sc
         if progress is not None:
             progress(spec.name)
     if helper is not None:
-        if sched is not None and sched.fit == "closed_loop":
+        if sched is not None and sched.fit == "closed_loop" and sched.form == "polynomial":
             import scipy.optimize  # noqa: F401  (the refit's SLSQP: imported while the helper finishes)
         rest, path = helper.result()
         points += rest
