@@ -213,8 +213,10 @@ def test_forked_call_warnings_are_shown_as_often_as_in_place(action):
         warnings.simplefilter("always")
         c = forked.ForkedCall(_odd_warnings, 1)
         assert c.result() == 2 and c.from_child                  # the child's value, not redone
-    assert [(w.category, str(w.message)) for w in got] == [
-        (UserWarning, "a class defined in a function"), (UserWarning, "1 and 2")]
+    # each as itself when it survives a pickle (Dask's tblib, once imported, makes the second
+    # one do so), else as its text with the nearest built-in category
+    assert [str(w.message) for w in got] == ["a class defined in a function", "1 and 2"]
+    assert got[0].category is UserWarning and got[1].category in (UserWarning, _TwoArgWarning)
 
 
 def test_forked_call_cancel_kills_the_child():
