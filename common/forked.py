@@ -148,10 +148,23 @@ def recv_frame(fd: int) -> bytes | None:
     return None if head is None else read_exact(fd, FRAME_HEADER.unpack(head)[0])
 
 
-def _portable(caught) -> list:
-    """The child's recorded warnings as (message, category, filename, lineno), each checked to
-    come back out of a pickle; one that does not (a class defined in a function, arguments its
-    class cannot be rebuilt from) travels as its text with the nearest built-in category."""
+def portable_warnings(caught) -> list:
+    """Warnings recorded in a child process, ready to send to its parent.
+
+    Each is checked to come back out of a pickle; one that does not (a class defined in a
+    function, arguments its class cannot be rebuilt from) travels as its text with the nearest
+    built-in category.
+
+    Parameters
+    ----------
+    caught : list of warnings.WarningMessage
+        What ``warnings.catch_warnings(record=True)`` recorded.
+
+    Returns
+    -------
+    list of tuple
+        (message, category, filename, lineno) of each, for :func:`raise_warnings_again`.
+    """
     out = []
     for w in caught:
         item = (w.message, w.category, w.filename, w.lineno)
@@ -164,10 +177,17 @@ def _portable(caught) -> list:
     return out
 
 
-def _raise_again(raised: list) -> None:
-    """Raise the child's warnings here, each as from the module it came from (its filters and
-    its ``__warningregistry__``: a warning this process already showed under "default" or
-    "once" is not shown again, as computing in place would not)."""
+def raise_warnings_again(raised: list) -> None:
+    """Raise a child's warnings (:func:`portable_warnings`) in this process, each as from the
+    module it came from: its filters and its ``__warningregistry__`` apply, so a warning this
+    process already showed under "default" or "once" is not shown again, as computing in place
+    would not.
+
+    Parameters
+    ----------
+    raised : list of tuple
+        (message, category, filename, lineno) of each warning, in the order raised.
+    """
     import warnings
 
     if not raised:
@@ -190,8 +210,8 @@ def _raise_again(raised: list) -> None:
 def _child(fn, args, kwargs, fd: int) -> None:
     """In the child: compute, send ("ok", value, warnings) or ("error", None, []) through ``fd``
     as one frame, flush what it printed, exit.  The warnings the call raised (under the filters
-    inherited from the parent) travel along (:func:`_portable`) for the parent to raise again
-    (:func:`_raise_again`): a caller recording warnings (the CLI's ``note:``) sees them as if
+    inherited from the parent) travel along (:func:`portable_warnings`) for the parent to raise
+    again (:func:`raise_warnings_again`): a caller recording warnings (the CLI's ``note:``) sees them as if
     computed in place."""
     import warnings
 
@@ -199,7 +219,7 @@ def _child(fn, args, kwargs, fd: int) -> None:
     try:
         with warnings.catch_warnings(record=True) as caught:
             value = fn(*args, **kwargs)
-        data = pickle.dumps(("ok", value, _portable(caught)), protocol=pickle.HIGHEST_PROTOCOL)
+        data = pickle.dumps(("ok", value, portable_warnings(caught)), protocol=pickle.HIGHEST_PROTOCOL)
     except BaseException:  # noqa: BLE001 (the parent computes again in place and raises)
         data, code = pickle.dumps(("error", None, [])), 1
     try:
@@ -276,7 +296,7 @@ class ForkedCall:
         if kind != "ok":
             return fn(*args, **kwargs)
         self.from_child = True
-        _raise_again(raised)
+        raise_warnings_again(raised)
         return value
 
     def cancel(self) -> None:

@@ -200,7 +200,10 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
     running: dict[cf.Future, Task] = {}
 
     def finish(t: Task, out: tuple) -> None:
+        from common.forked import raise_warnings_again
+
         stats[t.name] = out[-2:]
+        raise_warnings_again(out[-3])        # as the serial run raises them
         done[t.name] = _unwrap_value(out)
         on_done(t.name, done[t.name])
 
@@ -248,15 +251,22 @@ def _worker_init(parent: int) -> None:
 
 
 def _call(fn, args):
-    """Run ``fn(*args)``: ``("ok", result, wall, cpu)``, or an :class:`AcmmError` as data
-    ``("error", module, class name, message, exit code, wall, cpu)`` (its class may not pickle)."""
+    """Run ``fn(*args)``: ``("ok", result, warnings, wall, cpu)``, or an :class:`AcmmError` as
+    data ``("error", module, class name, message, exit code, warnings, wall, cpu)`` (its class may
+    not pickle); the warnings it raised travel for the parent to raise again
+    (:func:`common.forked.portable_warnings`)."""
+    import warnings
+
+    from common.forked import portable_warnings
+
     t0, c0 = time.perf_counter(), time.process_time()
-    try:
-        out = ("ok", fn(*args))
-    except AcmmError as exc:
-        cls = type(exc)
-        out = ("error", cls.__module__, cls.__qualname__, str(exc), getattr(exc, "exit_code", None))
-    return out + (time.perf_counter() - t0, time.process_time() - c0)
+    with warnings.catch_warnings(record=True) as caught:
+        try:
+            out = ("ok", fn(*args))
+        except AcmmError as exc:
+            cls = type(exc)
+            out = ("error", cls.__module__, cls.__qualname__, str(exc), getattr(exc, "exit_code", None))
+    return out + (portable_warnings(caught), time.perf_counter() - t0, time.process_time() - c0)
 
 
 def _result(fut: cf.Future) -> tuple:

@@ -384,3 +384,28 @@ def test_default_jobs(monkeypatch):
     finally:
         stop.set()
         t.join()
+
+
+def _warns():
+    import warnings
+
+    warnings.warn("numerical trouble", RuntimeWarning, stacklevel=1)
+    return 1
+
+
+@pytest.mark.parametrize("action, expected", [("default", 1), ("always", 3)])
+def test_worker_warnings_reach_the_caller_as_in_a_serial_run(action, expected):
+    """A task's warnings raised in a pool worker or the early child are raised again in the
+    caller, counted as the serial run counts them (the CLI's note: line)."""
+    import warnings
+
+    from report.runner import Task, run_tasks
+
+    counts = []
+    for jobs in (1, 2):
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter(action)
+            out = run_tasks([Task("a", _warns), Task("b", _warns), Task("c", _warns)], jobs=jobs)
+        assert out == {"a": 1, "b": 1, "c": 1}
+        counts.append(sum(str(w.message) == "numerical trouble" for w in got))
+    assert counts == [expected, expected]
