@@ -211,8 +211,8 @@ def _child(fn, args, kwargs, fd: int) -> None:
     """In the child: compute, send ("ok", value, warnings) or ("error", None, []) through ``fd``
     as one frame, flush what it printed, exit.  The warnings the call raised (under the filters
     inherited from the parent) travel along (:func:`portable_warnings`) for the parent to raise
-    again (:func:`raise_warnings_again`): a caller recording warnings (the CLI's ``note:``) sees them as if
-    computed in place."""
+    again (:func:`raise_warnings_again`): a caller recording warnings (the CLI's ``note:``)
+    sees them as if computed in place."""
     import warnings
 
     code = 0
