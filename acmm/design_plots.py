@@ -48,10 +48,10 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
     for j in range(24):
         grid.set_title(j, f"K(i,{j + 1}) — {state_names[j]} ({gain_unit(units[j], torque_unit)})")
     for j in range(20, 24):
-        grid.set_xlabel(j, "pitch TEA θ2* (deg)")
+        grid.set_label(j, "pitch TEA θ2* (deg)", "below")
     fig.legend(handles=grid.lines[:3], loc="upper center", bbox_to_anchor=(0.5, 0.978),
                ncol=3, fontsize=7, frameon=False)
-    _bake_texts(fig, [*grid.titles, *grid.xlabels, *fig.legends])
+    _bake_texts(fig, [*grid.titles, *grid.labels, *fig.legends])
     return fig, grid
 
 

@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acmm.plot_base import _data_limits, in_view_ticks
+
 
 @dataclass
 class Panel:
@@ -120,8 +122,7 @@ class PanelGrid:
                                                    linewidths=rc["ytick.major.width"], transform=tf, zorder=2.5))
         self.lines = [fig.add_artist(Line2D([], [], transform=tf, zorder=2, **style)) for style in series]
         self.tick_labels: list = []
-        self.xlabels: list = []
-        self.ylabels: list = []
+        self.labels: list = []
         fig.panel_grid = self
 
     @staticmethod
@@ -142,25 +143,10 @@ class PanelGrid:
         self.panels[k].title = text
         self.titles[k].set_text(text)
 
-    def set_xlabel(self, k: int, text: str, offset: float = 0.13) -> None:
-        """Put a label under a panel (its top ``offset`` below the frame).
-
-        Parameters
-        ----------
-        k : int
-            Panel index (row by row).
-        text : str
-            The label.
-        offset : float, optional
-            Distance below the frame, units of the panel's height.
-        """
-        p = self.panels[k]
-        x0, y0, w, h = p.box
-        p.xlabel = text
-        self.xlabels.append(self.fig.text(x0 + w / 2, y0 - offset * h, text, ha="center", va="top"))
-
-    def set_ylabel(self, k: int, text: str, offset: float = 0.18, fontsize: float | None = None) -> None:
-        """Put a vertical label left of a panel (its baseline ``offset`` left of the frame, as an
+    def set_label(self, k: int, text: str, side: str, offset: float | None = None,
+                  fontsize: float | None = None) -> None:
+        """Put a label under a panel (``side="below"``: its top ``offset`` below the frame) or
+        left of it (``side="left"``: vertical, its baseline ``offset`` left of the frame, as an
         Axes' y label placed with ``set_label_coords(-offset, 0.5)``).
 
         Parameters
@@ -169,16 +155,31 @@ class PanelGrid:
             Panel index (row by row).
         text : str
             The label.
+        side : {"below", "left"}
+            Where it goes.
         offset : float, optional
-            Distance left of the frame, units of the panel's width.
+            Distance from the frame, units of the panel's height (below, default 0.13) or width
+            (left, default 0.18).
         fontsize : float, optional
             Font size, units of points (default: the axes label size).
+
+        Raises
+        ------
+        ValueError
+            ``side`` is neither "below" nor "left".
         """
         p = self.panels[k]
         x0, y0, w, h = p.box
-        p.ylabel = text
-        self.ylabels.append(self.fig.text(x0 - offset * w, y0 + h / 2, text, rotation=90, rotation_mode="anchor",
-                                          ha="center", va="bottom", fontsize=fontsize))
+        if side == "below":
+            p.xlabel = text
+            kw = {"x": x0 + w / 2, "y": y0 - (0.13 if offset is None else offset) * h, "va": "top"}
+        elif side == "left":
+            p.ylabel = text
+            kw = {"x": x0 - (0.18 if offset is None else offset) * w, "y": y0 + h / 2, "va": "bottom",
+                  "rotation": 90, "rotation_mode": "anchor"}
+        else:
+            raise ValueError(f"side must be 'below' or 'left', not {side!r}")
+        self.labels.append(self.fig.text(s=text, ha="center", fontsize=fontsize, **kw))
 
     def set_data(self, k: int, series: int, x, y) -> None:
         """Set one series of a panel (drawn by :meth:`draw_data`).
@@ -228,8 +229,6 @@ class PanelGrid:
         nbins : int, optional
             Most intervals between y ticks.
         """
-        from acmm.plot_base import _data_limits, in_view_ticks
-
         for s, x, y in data:
             self.set_data(k, s, x, y)
         ylim = _data_limits(*(y for _, _, y in data)) or (0.0, 1.0)

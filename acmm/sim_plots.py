@@ -56,11 +56,11 @@ def _axis_histories_layout(units: str):
                      title_size=mpl.rcParams["axes.titlesize"], tick_size=8)
     for r, label in enumerate(labels):
         for a in range(3):
-            grid.set_ylabel(3 * r + a, label, fontsize=8 if a == 0 else 7)
+            grid.set_label(3 * r + a, label, "left", fontsize=8 if a == 0 else 7)
     for a in range(3):
         grid.set_title(a, AXES[a])
-        grid.set_xlabel(9 + a, "time (orbits)", offset=0.12)
-    _bake_texts(fig, [*grid.titles, *grid.xlabels, *grid.ylabels])
+        grid.set_label(9 + a, "time (orbits)", "below", offset=0.12)
+    _bake_texts(fig, [*grid.titles, *grid.labels])
     return fig, grid
 
 
@@ -127,11 +127,11 @@ def _inertia_layout(units: str):
                      title_size=mpl.rcParams["axes.titlesize"], tick_size=8)
     for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
         grid.set_title(k, f"I({i + 1},{j + 1})")
-        grid.set_ylabel(k, f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})")
+        grid.set_label(k, f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})", "left")
     for k in range(3, 6):
-        grid.set_xlabel(k, "time (orbits)", offset=0.12)
+        grid.set_label(k, "time (orbits)", "below", offset=0.12)
     title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
-    _bake_texts(fig, [title, *grid.titles, *grid.xlabels, *grid.ylabels])
+    _bake_texts(fig, [title, *grid.titles, *grid.labels])
     return fig, grid
 
 

@@ -133,10 +133,12 @@ def _check_drawn(grid):
         drawn = [p for p in grid.panels if s in p.data]
         assert len(cut) == len(drawn)
         for p, a, b in zip(drawn, np.r_[0, cut[:-1] + 1], cut):
-            ex, ey = p.to_figure(*p.data[s])
+            x0, y0, w, h = p.box                 # the data's limits mapped onto the panel's box
+            (xlo, xhi), (ylo, yhi) = p.xlim, p.ylim
+            x, y = p.data[s]
+            ex, ey = x0 + (x - xlo) / (xhi - xlo) * w, y0 + (y - ylo) / (yhi - ylo) * h
             np.testing.assert_allclose(fx[a:b], ex)
             np.testing.assert_allclose(fy[a:b], ey)
-            x0, y0, w, h = p.box
             ok = np.isfinite(ey)
             assert x0 <= ex.min() and ex.max() <= x0 + w
             assert not ok.any() or (y0 <= ey[ok].min() and ey[ok].max() <= y0 + h)
