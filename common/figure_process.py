@@ -1,4 +1,5 @@
-"""The figure worker's process side: the forked worker that pre-imports matplotlib, reads the
+"""The figure worker's process side: the forked worker that pre-imports matplotlib (without the
+property tables of its docstrings: :func:`common.plot_style.import_pyplot_to_draw_only`), reads the
 stage's pickled figure calls from a pipe and draws each in a forked writer (issue 16).
 
 Split from :mod:`common.figure_worker` (issue 12), which holds the stage's side (:func:`~common.figure_worker.submit`,
@@ -12,6 +13,7 @@ import signal
 import threading
 
 from common.forked import FRAME_HEADER, flush_std_streams, read_exact, recv_frame, send_frame, write_all
+from common.plot_style import import_pyplot_to_draw_only
 
 
 #: niceness added to the figure worker and its writers (measured on 2 cores: 5 beat 0 and 10)
@@ -199,6 +201,7 @@ def _serve(jobs: int, status: int, warm: str | None = None) -> None:
         except (AttributeError, OSError):
             pass
         try:
+            import_pyplot_to_draw_only()        # this process only draws: no property tables
             _warm(warm)
         except Exception:  # noqa: BLE001 (a real failure shows again, and is reported, in the writer)
             pass

@@ -109,3 +109,47 @@ def draw_warm_up_figure(plt, title: str = "warm-up (deg)", xlabel: str = "time")
     ax.set_xlabel(xlabel)
     fig.savefig(io.BytesIO(), format="png", dpi=30)
     plt.close(fig)
+
+
+def _no_property_table(artist) -> str:
+    """Stand-in for ``matplotlib.artist.kwdoc`` while a drawing-only process imports matplotlib."""
+    return "Properties: (not listed in this figure process)"
+
+
+def import_pyplot_to_draw_only() -> bool:
+    """Import ``matplotlib.pyplot`` on Agg in a process that exists only to draw figures (a
+    forked figure worker), without the property tables matplotlib writes into docstrings.
+
+    When an Artist class is created, matplotlib writes the table of all its settable properties
+    into the docstring of its ``set`` method, and several modules interpolate the same tables
+    into others (``matplotlib.artist.kwdoc``, called ~120 times at import).  That text is for
+    ``help()`` and the documentation only, yet it is ~0.7 G of the ~2 G instructions of
+    importing pyplot (valgrind; ~0.15 s of CPU).  Here ``kwdoc`` returns one short line while
+    pyplot and the modules it imports are loaded, and is restored afterwards; the signatures of
+    the ``set`` methods and everything that draws are untouched.  Only for a process whose
+    docstrings nobody reads: the stage's own process (or a user's) never calls this.
+
+    Returns
+    -------
+    bool
+        True when pyplot was imported here with the short docstrings; False when matplotlib
+        was already imported (nothing is changed) or ``kwdoc`` is not there (a plain import).
+    """
+    import sys
+
+    if "matplotlib.artist" in sys.modules:       # its classes exist already: nothing to gain
+        agg_pyplot(force=True)
+        return False
+    from matplotlib import artist
+
+    kwdoc = getattr(artist, "kwdoc", None)
+    if not callable(kwdoc):
+        agg_pyplot(force=True)
+        return False
+    artist.kwdoc = _no_property_table
+    try:
+        agg_pyplot(force=True)
+        import matplotlib.backends.backend_agg  # noqa: F401  (what every figure then saves with)
+    finally:
+        artist.kwdoc = kwdoc
+    return True
