@@ -202,6 +202,9 @@ def _serve(jobs: int, status: int, warm: str | None = None) -> None:
             pass
         try:
             import_pyplot_to_draw_only()        # this process only draws: no property tables
+        except Exception:  # noqa: BLE001 (the warm-up below imports matplotlib as it is)
+            pass
+        try:
             _warm(warm)
         except Exception:  # noqa: BLE001 (a real failure shows again, and is reported, in the writer)
             pass

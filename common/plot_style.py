@@ -126,8 +126,11 @@ def import_pyplot_to_draw_only() -> bool:
     ``help()`` and the documentation only, yet it is ~0.7 G of the ~2 G instructions of
     importing pyplot (valgrind; ~0.15 s of CPU).  Here ``kwdoc`` returns one short line while
     pyplot and the modules it imports are loaded, and is restored afterwards; the signatures of
-    the ``set`` methods and everything that draws are untouched.  Only for a process whose
-    docstrings nobody reads: the stage's own process (or a user's) never calls this.
+    the ``set`` methods, the property aliases and everything that draws are untouched.  The
+    short line also stays in matplotlib's docstring-interpolation cache (``%(Line2D:kwdoc)s``
+    and the like), so a module imported later in this process gets it in its docstrings too.
+    Only for a process whose docstrings nobody reads: the stage's own process (or a user's)
+    never calls this.
 
     Returns
     -------

@@ -39,6 +39,27 @@ def test_the_draw_only_import_skips_the_property_tables_and_restores_kwdoc(tmp_p
     assert got == ["True", "False", "agg", "True", "True", "True", "True", "3.0"]
 
 
+def test_kwdoc_is_restored_when_the_import_fails(tmp_path):
+    got = _run("""
+        import sys
+
+        class Refuse:                                   # matplotlib.legend cannot be imported
+            def find_spec(self, name, path=None, target=None):
+                if name == "matplotlib.legend":
+                    raise ImportError("refused")
+
+        sys.meta_path.insert(0, Refuse())
+        from common.plot_style import import_pyplot_to_draw_only
+        try:
+            import_pyplot_to_draw_only()
+        except ImportError as exc:
+            print("raised", exc)
+        import matplotlib.artist as a
+        print(a.kwdoc.__module__ == "matplotlib.artist" and a.kwdoc.__name__ == "kwdoc")
+    """, tmp_path)
+    assert got == ["raised", "refused", "True"]
+
+
 def test_an_imported_matplotlib_is_left_alone(tmp_path):
     got = _run("""
         import matplotlib.lines as l
@@ -75,7 +96,8 @@ def test_the_figure_worker_draws_the_same_pixels_with_it(tmp_path):
         pytest.skip("the figure worker needs fork and two CPUs")
     script = tmp_path / "draw.py"
     script.write_text(textwrap.dedent(code))
-    for name, env in (("worker", {}), ("in_place", {"ACMM_FIGURE_WORKER": "0"})):
+    for name, env in (("worker", {"ACMM_FIGURE_WORKER": "1", "ACMM_FORK": "1"}),
+                      ("in_place", {"ACMM_FIGURE_WORKER": "0"})):
         out = subprocess.run([sys.executable, str(script), str(tmp_path / f"{name}.png")], cwd=tmp_path,
                              capture_output=True, check=False, text=True, timeout=120,
                              env={**os.environ, "PYTHONPATH": str(ROOT), **env})
