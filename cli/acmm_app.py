@@ -6,7 +6,6 @@ mathematics lives here.  User errors print one line and exit with code 2.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 from typing import Optional
 
 import enum
@@ -51,7 +50,7 @@ def _fmt(v, fmt="{:+.4f}"):
 
 @app.command()
 @user_errors
-def validate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def validate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
              show: bool = typer.Option(False, "--show", help="print the resolved config (all defaults, canonical units)")) -> None:
     """Check a config of any kind (acmm run, sweep or qpp; detected from its sections); exit 2
     naming the offending field when it is invalid."""
@@ -84,7 +83,7 @@ def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="conf
 
 @app.command()
 @user_errors
-def tea(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
         all_roots: bool = typer.Option(False, "--all", help="also list every other equilibrium found")) -> None:
     """Torque-equilibrium attitude (eqs 4.1–4.3); writes runs/<name>/tea.h5."""
     from acmm.stages import run_tea
@@ -107,7 +106,7 @@ def tea(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = Ove
 
 @app.command()
 @user_errors
-def linearize(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg) -> None:
+def linearize(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg) -> None:
     """24-state linearization about the TEA (eqs 4.4-4.50); writes runs/<name>/linearize.h5."""
     import numpy as np
 
@@ -154,7 +153,7 @@ def _run_with_progress(runner, cfg, figures, what: str):
 
 @app.command()
 @user_errors
-def design(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def design(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
            figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
     """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures.
     With --strict, a scheduled gain with poles outside the sector exits 1."""
@@ -195,7 +194,7 @@ def design(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = 
 
 @app.command(short_help="Nonlinear closed-loop simulation (ch 6); designs first if needed; writes sim.h5 + figures.")
 @user_errors
-def simulate(config: Optional[Path] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
              figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
     """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures.
     With --strict, a DIVERGED verdict exits 1."""

@@ -5,7 +5,6 @@ the command so that ``acmm --help`` stays fast.
 """
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Optional
 
 import typer
@@ -54,7 +53,7 @@ def register(app: typer.Typer) -> None:
 
     @app.command()
     @user_errors
-    def sweep(config: Path = typer.Argument(..., help="sweep config YAML (see configs/sweep_smoke.yaml)"),
+    def sweep(config: str = typer.Argument(..., help="sweep config YAML (see configs/sweep_smoke.yaml)"),
               overrides: Optional[list[str]] = OverridesArg,
               workers: Optional[int] = typer.Option(None, "--workers", "-j",
                                                     help="local worker processes (1: in-process; "

@@ -5,7 +5,6 @@ one line and exit with code 2.
 """
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Optional
 
 import numpy as np
@@ -36,7 +35,7 @@ def _load(config, overrides):
 
 @app.command()
 @user_errors
-def validate(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def validate(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
              show: bool = typer.Option(False, "--show", help="print the resolved config")) -> None:
     """Check a config of any kind (qpp, acmm run or sweep; detected from its sections)."""
     from configkinds import load_any
@@ -62,7 +61,7 @@ def _mat(a) -> str:
 
 @app.command(short_help="H-infinity gains (ch 11), beta1, thresholds m and the circle criterion (ch 12.1).")
 @user_errors
-def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
+def design(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
            strict: bool = StrictOpt) -> None:
     """H∞ gains (ch. 11), β1, thresholds m and the circle criterion (ch. 12.1) → qpp_design.h5.
     With --strict, a failed circle criterion or β1 > m (for design.bz and design.bookkeeping), or a
@@ -112,7 +111,7 @@ def design(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesA
 
 @app.command()
 @user_errors
-def simulate(config: Path = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
+def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
              strict: bool = StrictOpt) -> None:
     """Nonlinear closed loop per scenario and the sphere check ‖y − y_o‖∞ ≤ β_o → qpp_sim.h5.
     The gains are those `qpp design` wrote for this config, else designed first. With --strict, an

@@ -7,6 +7,7 @@ failure becomes one :class:`~common.errors.ConfigError` line naming the file, fi
 """
 from __future__ import annotations
 
+import os
 from importlib import resources
 from pathlib import Path
 
@@ -125,7 +126,8 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
 
     A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working directory (absent,
     or a folder: a results root holds run folders named like the configs) is looked up among the
-    packaged configs.  Duplicate keys are rejected.
+    packaged configs; a path (``./mb3``, ``dir/mb3.yaml``) is only ever that file.  Duplicate keys
+    are rejected.
 
     Parameters
     ----------
@@ -152,13 +154,17 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
             present = p.exists()
         except (OSError, ValueError) as exc:   # name too long, NUL byte, ...
             raise ConfigError(f"cannot read config file {str(path)[:200]}: {getattr(exc, 'strerror', None) or exc}") from None
-        if not present or (p.is_dir() and len(p.parts) == 1):
+        # a bare name (``mb3``, not ``./mb3`` or ``dir/mb3``: Path drops the ``./``)
+        bare = len(p.parts) == 1 and not any(sep and sep in str(path) for sep in ("/", os.sep, os.altsep))
+        if present and not bare and p.is_dir():
+            raise ConfigError(f"config path is a directory, not a file: {str(path)[:200]}")
+        if not present or (p.is_dir() and bare):
             # a bare name not a file here (absent, or a folder such as a run folder named like it)
             candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml")
-            if len(p.parts) == 1 and candidate.exists():
+            if bare and candidate.exists():
                 p = candidate
             elif present:
-                raise ConfigError(f"config path is a directory, not a file: {p}")
+                raise ConfigError(f"config path is a directory, not a file: {str(path)[:200]}")
             else:
                 from common.hints import missing_config_message
 

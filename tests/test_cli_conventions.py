@@ -255,6 +255,19 @@ def test_missing_packaged_name_lists_the_packaged_configs(tmp_runs):
         assert name in r.stderr
 
 
+def test_a_typed_path_is_never_taken_for_a_packaged_name(tmp_runs):
+    """``./mb3`` next to a run folder ``mb3`` is that folder (one line, exit 2, nothing written),
+    for every command taking a config; the bare ``mb3`` is the packaged config."""
+    (tmp_runs / "mb3").mkdir()
+    for run, args in ((acmm, ("design", "./mb3", "--no-figures")), (acmm, ("validate", "./mb3")),
+                      (qpp, ("design", "./mb3")), (acmm, ("sweep", "./mb3"))):
+        r = run(*args)
+        assert r.exit_code == EXIT_INPUT and one_line(r), (args, r.output)
+        assert "directory, not a file: ./mb3" in r.stderr
+    assert not (tmp_runs / "runs").exists()
+    assert acmm("tea", "mb3").exit_code == 0
+
+
 def test_numerical_failure_says_which_setting_to_change(tmp_runs):
     r = acmm("design", "mb3", "design.residual_tol=1e-40", "--no-figures")
     assert r.exit_code == EXIT_NUMERICAL and one_line(r)

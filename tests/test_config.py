@@ -310,6 +310,21 @@ def test_a_run_folder_named_like_a_packaged_config_does_not_hide_it(tmp_path, mo
         load_config("mine")
 
 
+@pytest.mark.parametrize("given", ["./mb3", "./mb3.yaml", "sub/mb3", "./staircase"])
+def test_a_path_is_only_ever_that_file_never_a_packaged_config(tmp_path, monkeypatch, given):
+    """``./mb3`` (a folder here, or nothing) is the path the user typed, not the packaged ``mb3``:
+    one line naming it; the bare name still finds the packaged config."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mb3").mkdir()
+    (tmp_path / "sub" / "mb3").mkdir(parents=True)
+    with pytest.raises(ConfigError) as exc:
+        load_config(given)
+    msg = str(exc.value)
+    assert given in msg and "\n" not in msg
+    assert ("directory" in msg) == (given in ("./mb3", "sub/mb3"))
+    assert load_config(given.removeprefix("./").removeprefix("sub/")).name == given.split("/")[-1].removesuffix(".yaml")
+
+
 def test_a_table_schedule_takes_no_closed_loop_refit():
     """The closed-loop refit refines a polynomial; a table passes through the points' gains: asking
     for both is refused (it used to drop the refit silently and label the table a polynomial)."""
