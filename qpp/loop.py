@@ -57,12 +57,15 @@ DIVERGED_FACTOR = 1e6
 
 def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nominal: float, r_fun,
                   t_eval, z0, impulse_time=None, impulse=None, rtol=1e-8, atol=1e-10,
-                  diverged_beyond: float | None = None):
+                  diverged_beyond: float | None = None, failed_beyond: float | None = None):
     """Integrate the nonlinear loop; returns (z samples (N_z, N), u samples (m, N)).
 
     A disturbance impulse I δ(t − t_i) is applied as the jump x(t_i⁺) = x(t_i⁻) + G I.  With
     ``diverged_beyond`` a loop that diverges (‖z‖∞ beyond it, or beyond a thousandth of it and
     growing until the integrator cannot follow) is a result: the samples after that time are NaN.
+    With only ``failed_beyond`` the loop is never stopped early (a stable loop is integrated as
+    without it), but an integrator failure after ‖z‖∞ has passed a thousandth of it is that
+    result too (the nominal loop of an unstable design).
 
     Parameters
     ----------
@@ -96,6 +99,9 @@ def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nomina
         Absolute tolerance of the integrator, in the units of z.
     diverged_beyond : float, optional
         ‖z‖∞ of a diverged loop, in the units of z (None: a failing integration is an error).
+    failed_beyond : float, optional
+        Without ``diverged_beyond``: ‖z‖∞ (units of z) a thousandth of which, passed before the
+        integrator fails, makes the failure a divergence.
 
     Returns
     -------
@@ -120,7 +126,7 @@ def simulate_loop(plant: LurePlant, K1, Kc, H, f1, *, gamma: float, gamma_nomina
         z0 = z0.copy()
         z0[:n] += G @ np.asarray(impulse, float)
     Z = _integrate_segments(rhs, segments, np.asarray(z0, float), t_eval, n, G, impulse, rtol, atol,
-                            diverged_beyond)
+                            diverged_beyond, failed_beyond)
     U = np.array([control(Z[:, i], t)[0] if np.all(np.isfinite(Z[:, i])) else np.full(plant.m, np.nan)
                   for i, t in enumerate(t_eval)]).T
     return Z, U
@@ -150,11 +156,40 @@ def _loop_functions(plant: LurePlant, K1, Kc, H, f1, gamma, gamma_nominal, r_fun
     return control, rhs
 
 
-def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, diverged_beyond=None):
+def nominal_diverged_beyond(r_o, t: np.ndarray, z0: np.ndarray) -> float:
+    """The ``failed_beyond`` of a nominal loop (:func:`simulate_loop`): :data:`DIVERGED_FACTOR`
+    times the larger of 1, the initial state and the reference r_o over the samples ``t``, all in
+    the config's units.  The nominal loop of an unstable design, which grows until the integrator
+    fails, is then a result (its samples NaN from there on), not an integrator error; a stable
+    one is integrated as before.
+
+    Parameters
+    ----------
+    r_o : list of qpp.config.Term
+        The nominal reference r_o(t) (config ``simulation.r_o``), output units.
+    t : (N,) array
+        Sample times, s.
+    z0 : array
+        Initial loop state, the units of z.
+
+    Returns
+    -------
+    float
+        The threshold, the units of z.
+    """
+    from qpp.signals import eval_signal
+
+    step = max(1, t.size // 200)
+    r_peak = max((float(np.max(np.abs(eval_signal(r_o, tt)), initial=0.0)) for tt in t[::step]), default=0.0)
+    return DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0), initial=0.0)), r_peak)
+
+
+def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, diverged_beyond=None,
+                        failed_beyond=None):
     """Integrate ``rhs`` over ``segments`` (one, or two split at the impulse time, where
     x jumps by G I), sampled at ``t_eval`` (s); the samples of z, (2n+q, N).  With
-    ``diverged_beyond`` (see :func:`simulate_loop`) the integration stops when the loop diverges,
-    the later samples NaN."""
+    ``diverged_beyond`` or ``failed_beyond`` (see :func:`simulate_loop`) the integration stops
+    when the loop diverges, the later samples NaN."""
     t0, tf = t_eval[0], t_eval[-1]
     zs = []
     events = None
@@ -173,9 +208,12 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, div
         with np.errstate(all="ignore"):
             sol = solve_ivp(rhs, (ta, tb), z, method="DOP853", t_eval=np.unique(te), rtol=rtol, atol=atol,
                             max_step=max_step, events=events)
-        last = sol.y[:, -1] if sol.y.size else z          # the last sample reached
-        stopped = diverged_beyond is not None and (sol.status == 1 or (
-            not sol.success and np.max(np.abs(last)) > 1e-3 * diverged_beyond))
+        # the largest finite |z| of the samples reached (a loop can leap from large to inf or NaN
+        # within one step, past the event, and fail the integrator there)
+        reached = np.abs(np.column_stack([z, sol.y]) if sol.y.size else z)
+        peak = float(np.max(reached, initial=0.0, where=np.isfinite(reached)))
+        limit = diverged_beyond if diverged_beyond is not None else failed_beyond
+        stopped = limit is not None and (sol.status == 1 or (not sol.success and peak > 1e-3 * limit))
         if not sol.success and not stopped:
             raise ConvergenceError(f"simulation failed at t = {sol.t[-1]:.4g} s: {sol.message}")
         keep = np.isin(sol.t, t_eval[mask])

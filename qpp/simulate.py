@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from qpp.config import ExpressionNonlinearity, QppConfig, Scenario
-from qpp.loop import DIVERGED_FACTOR
+from qpp.loop import DIVERGED_FACTOR, nominal_diverged_beyond
 from qpp.loop import initial_state, simulate_loop  # noqa: F401  (re-exported: the old import paths)
 from qpp.matched_nonlinearity import (  # noqa: F401  (re-exported: the old import paths)
     config_f1, make_f1, scenario_gamma)
@@ -127,16 +127,19 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
         r_fun = lambda tt: r_o_fun(tt) + eval_signal(scenario.delta_r, tt)  # noqa: E731
     if nominal is None:
         nominal = simulate_loop(plant, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom, r_fun=r_o_fun,
-                                t_eval=t, z0=z0, rtol=sim.rtol, atol=sim.atol)
+                                t_eval=t, z0=z0, rtol=sim.rtol, atol=sim.atol,
+                                failed_beyond=nominal_diverged_beyond(sim.r_o, t, z0))
     Zo, Uo = nominal
+    if np.all(np.isfinite(Zo)):        # diverged: DIVERGED_FACTOR × the nominal loop's size
+        beyond = DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0))), float(np.max(np.abs(Zo))))
+    else:                              # the nominal loop itself diverged (an unstable design)
+        beyond = nominal_diverged_beyond(sim.r_o, t, z0)
     Z, U = simulate_loop(plant, K1, Kc, H, f1, gamma=gam, gamma_nominal=g_nom, r_fun=r_fun,
                          t_eval=t, z0=z0, impulse_time=scenario.impulse_time, impulse=scenario.impulse,
-                         rtol=sim.rtol, atol=sim.atol,
-                         diverged_beyond=DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0))),
-                                                               float(np.nanmax(np.abs(Zo)))))
+                         rtol=sim.rtol, atol=sim.atol, diverged_beyond=beyond)
     n = plant.n
     y, yo = plant.C @ Z[:n], plant.C @ Zo[:n]
-    lost = ~np.all(np.isfinite(Z), axis=0)
+    lost = ~(np.all(np.isfinite(Z), axis=0) & np.all(np.isfinite(Zo), axis=0))   # either loop
     diverged_at = float(t[np.argmax(lost)]) if lost.any() else None
     err = np.max(np.abs(y - yo), axis=1) if diverged_at is None else np.full(plant.p, np.inf)
     R = np.array([r_fun(tt) for tt in t]).T
@@ -241,7 +244,7 @@ def simulate(cfg: QppConfig, K1, Kc, H, progress=None) -> list[SimResult]:
     f1, g_nom = config_f1(cfg, plant)
     nominal = simulate_loop(plant, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom,
                             r_fun=lambda tt: eval_signal(sim.r_o, tt), t_eval=t, z0=z0,
-                            rtol=sim.rtol, atol=sim.atol)
+                            rtol=sim.rtol, atol=sim.atol, failed_beyond=nominal_diverged_beyond(sim.r_o, t, z0))
     out = []
     for s in sim.scenarios:
         out.append(simulate_scenario(cfg, K1, Kc, H, s, nominal))

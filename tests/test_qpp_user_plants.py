@@ -154,6 +154,26 @@ def test_a_diverging_scenario_is_a_result_not_a_failure(tmp_path):
         assert np.isfinite(f["k1/error_inf"][()]) and "diverged_at_s" not in f["k1/error_inf"].attrs
 
 
+def test_an_unstable_nominal_loop_is_a_result_not_an_integrator_error(tmp_runs):
+    """The ch. 13 gains on a plant with a pole at +120 rad/s: the nominal loop itself grows until
+    the integrator fails (it used to exit 3, "Required step size ..."); now every scenario is
+    DIVERGED, exit 0 (1 with --strict), the results written with the time each diverged."""
+    import h5py
+    from typer.testing import CliRunner
+
+    from cli.qpp_app import app
+
+    args = ["simulate", "qpp_siso", "design.gains=published", "plant.A=[[0,1],[0,120]]", "--no-figures"]
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 0, r.output
+    assert r.output.count("DIVERGED at t =") == 2 and "Traceback" not in r.output
+    with h5py.File(tmp_runs / "runs" / "qpp_siso" / "qpp_sim.h5", "r") as f:
+        for name in ("step_offset", "sin10"):
+            assert np.isinf(f[f"{name}/error_inf"][()]) and not f[f"{name}/error_inf"].attrs["passed"]
+            assert 0 < f[f"{name}/error_inf"].attrs["diverged_at_s"] < 1.0
+    assert CliRunner().invoke(app, args + ["--strict"]).exit_code == 1
+
+
 @pytest.mark.parametrize("plant, words", [
     (([[1, 0], [0, -2]], [[0], [1]], [[1, 1]]), "not controllable from u"),
     (([[1, 0], [0, -2]], [[1], [1]], [[0, 1]]), "not observable from y"),
