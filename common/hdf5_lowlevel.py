@@ -49,7 +49,11 @@ class Writer:
     def _file_type(self, dtype):
         t = self._types.get(dtype)
         if t is None:
-            t = self._types[dtype] = h5t.py_create(dtype, logical=1)
+            t = h5t.py_create(dtype, logical=1)
+            if dtype.kind == "S":       # fixed-length text is UTF-8 (a sweep's reasons say ft·lbf);
+                t = t.copy()            # declared ASCII, asstr() and netCDF readers refuse it
+                t.set_cset(h5t.CSET_UTF8)
+            self._types[dtype] = t
         return t
 
     def dataset(self, parent, name: str, data=None, shape: tuple | None = None,
@@ -90,7 +94,7 @@ class Writer:
         ftype = self._text_type if dtype.kind == "O" else self._file_type(dtype)
         dsid = h5d.create(parent.id, name.encode(), ftype, space, dcpl=self._dcpl)
         if data is not None:
-            dsid.write(h5s.ALL, h5s.ALL, data)
+            dsid.write(h5s.ALL, h5s.ALL, data, mtype=ftype if dtype.kind == "S" else None)
         return dsid
 
     def _plain(self, data, dtype):

@@ -63,6 +63,23 @@ def test_write_h5_units_provenance_and_round_trip(tmp_path):
     assert _leftovers(target.parent, {"r.h5"}) == []
 
 
+def test_fixed_length_text_is_utf8_and_decodes(tmp_path):
+    """Fixed-length text (names, a sweep's verdicts and reasons) is declared UTF-8: non-ASCII
+    reasons ("ft·lbf") decode with h5py's asstr() and with netCDF-C as text; ASCII keeps its bytes."""
+    import netCDF4
+
+    words = ["bounded", "no equilibrium for bias [1, 2, 3] ft·lbf", ""]
+    items = {"reason": Dataset(np.array([w.encode() for w in words], dtype="S"), "1", dims=("case",)),
+             "names": Dataset(np.array(["mb3", "ac"], dtype="S"), "1", dims=("point",))}
+    target = write_h5(tmp_path / "t.h5", items, CONFIG_TEXT, {"stage": "unit-test"})
+    with h5py.File(target, "r") as f:
+        assert f["reason"].dtype.kind == "S" and list(f["reason"].asstr()[()]) == words
+        assert f["names"][()].tolist() == [b"mb3", b"ac"]           # the same bytes as before
+        assert f["reason"].id.get_type().get_cset() == h5py.h5t.CSET_UTF8
+    with netCDF4.Dataset(target) as nc:
+        assert list(nc["reason"][...]) == words
+
+
 def test_write_h5_failure_leaves_no_file_and_keeps_old_one(tmp_path):
     target = tmp_path / "r.h5"
     with pytest.raises(TypeError):

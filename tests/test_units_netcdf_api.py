@@ -112,6 +112,13 @@ def _open_all(path):
     groups = [None]
     with h5py.File(path, "r") as f:
         f.visit(lambda n: groups.append(n) if isinstance(f[n], h5py.Group) else None)
+        # fixed-length text is declared UTF-8 (a sweep's reasons hold "ft·lbf"): h5py's asstr()
+        # and netCDF-C decode it
+        texts = []
+        f.visititems(lambda n, o: texts.append(o) if isinstance(o, h5py.Dataset) and o.dtype.kind == "S" else None)
+        for o in texts:
+            assert o.id.get_type().get_cset() == h5py.h5t.CSET_UTF8, (path, o.name)
+            o.asstr()[()]
     out = {}
     for g in groups:
         ds = xr.open_dataset(path, engine="h5netcdf", group=g)
