@@ -63,11 +63,11 @@ def detect_kind(data: object) -> str:
     Returns
     -------
     str
-        ``sweep`` (has a ``sweep`` section), ``qpp`` (has a plant / nonlinearity / hinf /
+        ``sweep`` (has a ``sweep`` section, or is the resolved form with ``sweep_file``), ``qpp`` (has a plant / nonlinearity / hinf /
         spheres section) or ``acmm``.
     """
     if isinstance(data, dict):
-        if "sweep" in data:
+        if "sweep" in data or "sweep_file" in data:      # a sweep file, or its resolved form
             return "sweep"
         if any(k in data for k in ("plant", "nonlinearity", "hinf", "spheres")):
             return "qpp"

@@ -49,6 +49,31 @@ def _assert_same_data(a: dict, b: dict):
 # --------------------------------------------------------------------------------------------
 # case generation
 # --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["sweep_smoke", "sweep_inertia30", "inline"])
+def test_the_resolved_sweep_it_writes_runs_again_as_the_same_sweep(tmp_path, name):
+    """``runs/<name>/config.yaml`` (and sweep.h5's ``config``) of a sweep is a sweep config itself:
+    the same results key and text, no base file needed; a bad one is one line."""
+    from configkinds import detect_kind
+
+    if name == "inline":                    # a sweep section inside a run config
+        data = yaml.safe_load((CONFIGS / "mb3.yaml").read_text())
+        data["sweep"] = {"monte_carlo": {"inertia": {"percent": 10}}, "n_runs": 2}
+        sw = parse_sweep(data, directory=CONFIGS)
+    else:
+        sw = load_sweep(name)
+    resolved = yaml.safe_load(sw.to_yaml())
+    assert detect_kind(resolved) == "sweep"
+    again = parse_sweep(resolved, directory=tmp_path)          # no file next to it
+    assert again.results_key() == sw.results_key() and again.to_yaml() == sw.to_yaml()
+    assert [b.label for b in again.bases] == [b.label for b in sw.bases]
+    for bad, words in (({**resolved, "extra": 1}, "extra: not a key"),
+                       ({"sweep_file": resolved["sweep_file"]}, "bases: missing"),
+                       ({**resolved, "bases": {"x": next(iter(resolved["bases"].values()))}}, "bases.x")):
+        with pytest.raises(ConfigError, match=words) as exc:
+            parse_sweep(bad)
+        assert "\n" not in str(exc.value)
+
+
 def test_unphysical_reason_agrees_with_config_validator():
     from pydantic import ValidationError
 

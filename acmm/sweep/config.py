@@ -183,6 +183,8 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
         One line naming the offending field.
     """
     require_mapping(data, source)
+    if "sweep" not in data and "sweep_file" in data:
+        return _parse_resolved(data, source)
     if "sweep" not in data:
         raise ConfigError(f"{source}: sweep: missing (a sweep config needs a 'sweep' section)")
     directory = Path(".") if directory is None else directory
@@ -204,6 +206,36 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
     if len(set(labels)) != len(labels):
         raise ConfigError(f"{source}: sweep.bases: two base configs share the name "
                           f"{next(x for x in labels if labels.count(x) > 1)!r}")
+    sweep = Sweep(sf, bases, source)
+    from acmm.sweep_limits import check_sweep_work
+
+    check_sweep_work(sweep, source)
+    return sweep
+
+
+def _parse_resolved(data: dict, source: str) -> Sweep:
+    """The resolved form a sweep writes next to its results (:meth:`Sweep.to_yaml`, ``config.yaml``
+    and the ``config`` attribute of ``sweep.h5``): ``sweep_file`` (the sweep file) and ``bases``
+    (every base config, by name, in order), parsed as they are: the same sweep, the same
+    :meth:`Sweep.results_key`, without the files it was first read from."""
+    extra = sorted(set(data) - {"sweep_file", "bases"})
+    if extra:
+        raise ConfigError(f"{source}: {extra[0]}: not a key of a resolved sweep (sweep_file, bases)")
+    bases_data = data.get("bases")
+    if not isinstance(bases_data, dict) or not bases_data:
+        raise ConfigError(f"{source}: bases: missing or empty (the resolved base configs, by name)")
+    file_data = data["sweep_file"]
+    require_mapping(file_data, f"{source}: sweep_file")
+    sf = validate_model(SweepFile, file_data, f"{source}: sweep_file")
+    bases = tuple(Base(str(label), parse_config(cfg, source=f"{source}: bases.{label}"), source)
+                  for label, cfg in bases_data.items())
+    for b in bases:
+        if b.label != b.config.name:
+            raise ConfigError(f"{source}: bases.{b.label}: its name is {b.config.name!r}")
+    expected = len(sf.sweep.base_names()) or 1            # an inline sweep: its one config
+    if len(bases) != expected:
+        raise ConfigError(f"{source}: bases: {len(bases)} config(s) for the {expected} base(s) of "
+                          "sweep_file.sweep")
     sweep = Sweep(sf, bases, source)
     from acmm.sweep_limits import check_sweep_work
 
