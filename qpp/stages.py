@@ -68,11 +68,11 @@ def _printed_gain_items(pub, H) -> dict:
     if pub.K1 is None or pub.Kc is None:
         return {}
     items = {
-        "K1": Dataset(np.asarray(pub.K1, float), "1", "printed K1", dims=("input", "state")),
-        "Kc": Dataset(np.asarray(pub.Kc, float), "1", "printed Kc", dims=("input", "servo_state")),
+        "K1": Dataset(np.asarray(pub.K1, float), "input units per state unit", "printed K1", dims=("input", "state")),
+        "Kc": Dataset(np.asarray(pub.Kc, float), "input units per servo-state unit", "printed Kc", dims=("input", "servo_state")),
     }
     if pub.H is not None:
-        items["H"] = Dataset(np.asarray(pub.H, float), "1", "printed H", dims=("state", "output"))
+        items["H"] = Dataset(np.asarray(pub.H, float), "state units per output unit per s", "printed H", dims=("state", "output"))
         items["H_rel_diff"] = Dataset(
             np.where(np.abs(np.asarray(pub.H)) > 0, _rel(H, pub.H), 0.0), "1", "|H − H_printed|/|H_printed|",
             dims=("state", "output"))
@@ -130,11 +130,11 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         :func:`common.results.write_h5`.
     """
     items = {
-        "K1": Dataset(r.K1, "1", "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
+        "K1": Dataset(r.K1, "input units per state unit", "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
                       dims=("input", "state")),
-        "Kc": Dataset(r.Kc, "1", "servo-state gain Kc (eq 10.6)", dims=("input", "servo_state")),
-        "H": Dataset(r.H, "1", "observer gain H, report's sign (L = −H, eq 10.5)", dims=("state", "output")),
-        "Cz": Dataset(r.Cz, "1", "C_z (eq 10.7)", dims=("output", "loop_state")),
+        "Kc": Dataset(r.Kc, "input units per servo-state unit", "servo-state gain Kc (eq 10.6)", dims=("input", "servo_state")),
+        "H": Dataset(r.H, "state units per output unit per s", "observer gain H, report's sign (L = −H, eq 10.5)", dims=("state", "output")),
+        "Cz": Dataset(r.Cz, "output units per loop-state unit", "C_z (eq 10.7)", dims=("output", "loop_state")),
         "a": Dataset(r.a, "1/s", "exponential weighting a (10.27)"),
         "T": Dataset(r.T, "s", "truncation time T"),
         "E": Dataset(r.E, "s^0.5", "E = [(e^{2aT} − 1)/(2a)]^{1/2} (10.44)"),
@@ -166,7 +166,7 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     for reading in r.beta1:
         key = reading.replace(".", "_")
         b = r.beta1[reading]
-        items[f"Bz_{key}"] = Dataset(r.Bz[reading], "1", f"B_z, {reading} reading (columns [r, d])",
+        items[f"Bz_{key}"] = Dataset(r.Bz[reading], "loop-state units per s per exogenous unit", f"B_z, {reading} reading (columns [r, d])",
                                      dims=("loop_state", "exogenous"))
         items[f"beta1_{key}"] = Dataset(b["value"], "1", f"β1 exact (SLICOT L∞ norm), B_z {reading}",
                                         attrs={"omega_peak_rad_s": b["omega_peak"], "grid_value": b["grid_value"]})
@@ -314,9 +314,9 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
             submit(plot_scenario, s, cfg.run_dir() / f"qpp_sim_{s.name}.png")
         if isinstance(cfg.nonlinearity, PolarArmNonlinearity):
             submit(plot_cartesian, sims, cfg.nonlinearity.a, cfg.run_dir() / "qpp_sim_cartesian.png")
-    items = {"K1": Dataset(r.K1, "1", "gain K1 used", dims=("input", "state")),
-             "Kc": Dataset(r.Kc, "1", "gain Kc used", dims=("input", "servo_state")),
-             "H": Dataset(r.H, "1", "observer gain H used (report's sign)", dims=("state", "output"))}
+    items = {"K1": Dataset(r.K1, "input units per state unit", "gain K1 used", dims=("input", "state")),
+             "Kc": Dataset(r.Kc, "input units per servo-state unit", "gain Kc used", dims=("input", "servo_state")),
+             "H": Dataset(r.H, "state units per output unit per s", "observer gain H used (report's sign)", dims=("state", "output"))}
     for s in sims:
         # time first: (t, channel), as in acmm's files
         items[s.name] = {

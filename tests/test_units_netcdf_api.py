@@ -164,7 +164,10 @@ def test_results_open_in_xarray_with_named_dimensions_and_time(tmp_path):
     scen = q[sims[0].name]
     assert scen["y"].dims == ("t", "output") and "t" in scen.coords and scen["t"].attrs["units"] == "s"
     np.testing.assert_allclose(scen["y"].values[:, 0], sims[0].y[0])
-    _open_all(qdes)
+    qd = _open_all(qdes)["/"]           # the gains carry their units (not "1": m, rad, N in ch. 14)
+    assert qd["K1"].attrs["units"] == "input units per state unit"
+    assert qd["Kc"].attrs["units"] == "input units per servo-state unit"
+    assert qd["H"].attrs["units"] == "state units per output unit per s"
 
 
 def test_sweep_h5_opens_in_xarray(tmp_path):
