@@ -58,11 +58,13 @@ def _describe(obj):
 
 @pytest.mark.parametrize("name,data,dtype,shape", DATASETS, ids=[c[0] for c in DATASETS])
 def test_dataset_is_what_h5py_high_level_writes(tmp_path, name, data, dtype, shape):
-    # fixed-length text is declared UTF-8: what h5py writes for string_dtype("utf-8", length)
-    ref_dtype = (h5py.string_dtype("utf-8", data.dtype.itemsize) if data is not None and data.dtype.kind == "S"
-                 else dtype)
     with h5py.File(tmp_path / "ref.h5", "w") as ref, h5py.File(tmp_path / "low.h5", "w") as low:
-        a = ref.create_dataset(name, shape, ref_dtype, data)
+        if isinstance(data, np.ndarray) and data.dtype.kind == "S":
+            # fixed-length text is declared UTF-8: h5py's string_dtype("utf-8", length), its bytes as they are
+            a = ref.create_dataset(name, data.shape, h5py.string_dtype("utf-8", data.dtype.itemsize))
+            a.id.write(h5py.h5s.ALL, h5py.h5s.ALL, data, mtype=a.id.get_type())
+        else:
+            a = ref.create_dataset(name, shape, dtype, data)
         b = h5py.Dataset(Writer().dataset(low, name, data, shape, dtype))
         assert b.name == f"/{name}"
         assert _describe(b) == _describe(a)
