@@ -89,8 +89,12 @@ def run(fn: Callable[[], object], what: str = "figure") -> None:
     sys.stdout.flush()
     sys.stderr.flush()
     r, w = os.pipe()
+    parent = os.getpid()
     pid = os.fork()
     if pid == 0:                                      # child: write, report, leave without cleanup
+        from common.signals import die_with_parent
+
+        die_with_parent(parent)
         os.close(r)
         code = 0
         try:

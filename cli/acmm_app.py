@@ -233,11 +233,15 @@ def main() -> None:
     import sys
     import threading
 
+    from common.signals import terminate_like_ctrl_c
+
+    terminate_like_ctrl_c()           # SIGTERM, SIGHUP: rolled back like Ctrl-C
     try:
         _fork_figure_worker_early(sys.argv[1:])
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        os._exit(130)
+    except KeyboardInterrupt as exc:
+        code = getattr(exc, "exit_code", 130)
+        print("interrupted" if code == 130 else f"terminated by signal {code - 128}", file=sys.stderr)
+        os._exit(code)
     try:
         app()
     except SystemExit as exc:

@@ -112,9 +112,8 @@ def user_errors(fn):
 
                 product = "qpp" if fn.__module__.endswith("qpp_app") else "acmm"
                 fail(with_hint(exc, product), exc.exit_code)
-            except KeyboardInterrupt:
-                typer.echo("interrupted", err=True)
-                sys.exit(EXIT_INTERRUPTED)
+            except KeyboardInterrupt as exc:
+                interrupted(exc)
             except BrokenPipeError:     # the reader of stdout went away (`| head`): not an I/O failure
                 _quiet_stdout()         # of the results, which the stage wrote before printing
                 sys.exit(EXIT_PIPE_CLOSED)
@@ -168,6 +167,23 @@ def _one_line_usage(exc) -> str:
     return msg
 
 
+def interrupted(exc: BaseException) -> None:
+    """Report Ctrl-C ("interrupted", exit 130) or SIGTERM/SIGHUP (:class:`common.errors.Terminated`:
+    "terminated by signal N", exit 128 + N) on one line and exit.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The ``KeyboardInterrupt`` (or ``typer.Abort``) caught.
+    """
+    code = getattr(exc, "exit_code", None)
+    if isinstance(code, int):
+        typer.echo(f"terminated by signal {code - 128}", err=True)
+        sys.exit(code)
+    typer.echo("interrupted", err=True)
+    sys.exit(EXIT_INTERRUPTED)
+
+
 class ExitCodeGroup(TyperGroup):
     """The apps' click group: click's own errors get the documented exit codes, on one line.
 
@@ -175,7 +191,7 @@ class ExitCodeGroup(TyperGroup):
       (``EXIT_USAGE``);
     * a bad *value* of an option or argument (``-j 0``, ``--kind foo``) → 2 (``EXIT_INPUT``, like a
       bad value in a config file);
-    * Ctrl-C → 130.
+    * Ctrl-C → 130; SIGTERM / SIGHUP → 143 / 129 (:func:`common.signals.terminate_like_ctrl_c`).
     """
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
@@ -221,9 +237,8 @@ class ExitCodeGroup(TyperGroup):
         except click.exceptions.ClickException as exc:
             typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
             sys.exit(exc.exit_code)
-        except (typer.Abort, KeyboardInterrupt):
-            typer.echo("interrupted", err=True)
-            sys.exit(EXIT_INTERRUPTED)
+        except (typer.Abort, KeyboardInterrupt) as exc:
+            interrupted(exc)
         sys.exit(rv if isinstance(rv, int) else 0)
 
 

@@ -17,6 +17,7 @@ code  meaning
       or another run holds the lock on ``runs/<name>``
 64    command-line usage (unknown option, missing argument) — EX_USAGE of sysexits.h
 130   interrupted (Ctrl-C)
+143   terminated (SIGTERM; 129 for SIGHUP): cleaned up like Ctrl-C
 ====  =====================================================================================
 """
 
@@ -27,6 +28,27 @@ EXIT_NUMERICAL = 3
 EXIT_OUTPUT = 4
 EXIT_USAGE = 64
 EXIT_INTERRUPTED = 130
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP received by a command (:func:`common.forked.terminate_like_ctrl_c`): it
+    unwinds like Ctrl-C (rollback of the stage's outputs, its helper processes killed) and exits
+    with 128 + the signal number.
+
+    Parameters
+    ----------
+    signum : int
+        The signal received.
+    """
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)
+
+    @property
+    def exit_code(self) -> int:
+        """128 + the signal number (143 for SIGTERM, 129 for SIGHUP)."""
+        return 128 + self.signum
 
 
 class AcmmError(Exception):

@@ -14,6 +14,7 @@ import threading
 
 from common.forked import FRAME_HEADER, flush_std_streams, read_exact, recv_frame, send_frame, write_all
 from common.plot_style import import_pyplot_to_draw_only
+from common.signals import die_with_parent
 
 
 #: niceness added to the figure worker and its writers (measured on 2 cores: 5 beat 0 and 10)
@@ -67,8 +68,10 @@ def _fork_writer(job: bytes, close: tuple, prepare: bytes | None = None) -> tupl
     if prepare is not None:
         jr, jw = os.pipe()
         _grow_pipe(jw)
+    parent = os.getpid()
     pid = os.fork()
     if pid == 0:
+        die_with_parent(parent)
         os.close(r)
         for fd in close + ((jw,) if jw is not None else ()):
             os.close(fd)
@@ -283,8 +286,10 @@ class _Worker:
         sr, sw = os.pipe()
         _grow_pipe(jw)
         flush_std_streams()
+        parent = os.getpid()
         pid = os.fork()
         if pid == 0:                                   # the worker: never returns
+            die_with_parent(parent)
             os.close(jw)
             os.close(sr)
             _own_group()

@@ -262,8 +262,12 @@ class ForkedCall:
         if enabled and usable():
             r, w = os.pipe()
             flush_std_streams()
+            parent = os.getpid()
             pid = os.fork()
             if pid == 0:
+                from common.signals import die_with_parent
+
+                die_with_parent(parent)
                 os.close(r)
                 _child(fn, args, kwargs, w)
             os.close(w)

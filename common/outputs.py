@@ -33,6 +33,7 @@ from pathlib import Path
 
 from common.errors import FigureError
 from common.results import WRITTEN_HOOKS
+from common.signals import hold_interrupts, release_interrupts
 
 #: stage → glob patterns (relative to the run folder) of the files the stage owns.
 STAGE_OUTPUTS: dict[str, tuple[str, ...]] = {
@@ -89,11 +90,17 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
     """
     entry = written, kept = set(), set()
     run_dir = Path(run_dir)
-    before = _stage_files(run_dir, stage)
-    rollback = _Rollback(run_dir, [*before, run_dir / CONFIG_FILE]) if stage not in KEEPS_PARTIAL_RESULTS else None
-    _RECORDERS.append(entry)
+    held = hold_interrupts()        # Ctrl-C, SIGTERM, SIGHUP: delivered inside the try below
+    try:
+        before = _stage_files(run_dir, stage)
+        rollback = _Rollback(run_dir, [*before, run_dir / CONFIG_FILE]) if stage not in KEEPS_PARTIAL_RESULTS else None
+        _RECORDERS.append(entry)
+    except BaseException:
+        release_interrupts(held)
+        raise
     try:
         try:
+            release_interrupts(held)
             yield written
         except FigureError as exc:
             if getattr(exc, "finished_stage", None) is not None:   # a nested stage's figure failed
@@ -116,9 +123,13 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
         raise
     finally:
         del _RECORDERS[next(i for i, r in enumerate(_RECORDERS) if r is entry)]
-    if rollback is not None:
-        rollback.drop()
-    _keep_in_outer_stages(written)
+    held = hold_interrupts()        # the finished stage's rollback folder goes whole
+    try:
+        if rollback is not None:
+            rollback.drop()
+        _keep_in_outer_stages(written)
+    finally:
+        release_interrupts(held)
 
 
 class _Rollback:
@@ -198,7 +209,7 @@ def _remove_stale_rollbacks(run_dir: Path) -> None:
 @contextlib.contextmanager
 def _no_interrupts():
     """SIGINT ignored while a failed stage rolls its folder back (in the main thread; a second
-    Ctrl-C would leave the folder half restored)."""
+    Ctrl-C would leave the folder half restored); SIGTERM and SIGHUP held until it is done."""
     import signal
     import threading
 
@@ -206,10 +217,12 @@ def _no_interrupts():
         yield
         return
     old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    held = hold_interrupts()
     try:
         yield
     finally:
         signal.signal(signal.SIGINT, old)
+        release_interrupts(held)
 
 
 def _forget_in_outer_stages(entry: tuple, written: set) -> None:

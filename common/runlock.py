@@ -24,6 +24,7 @@ from pathlib import Path
 
 from common.errors import OutputError
 from common.results import make_dirs, output_error, remove_empty_dirs
+from common.signals import hold_interrupts, release_interrupts
 
 LOCK_NAME = ".lock"
 _TEMP = re.compile(r"^\..+\.tmp$")
@@ -70,6 +71,43 @@ def remove_stale_temps(directory: Path) -> list[str]:
     return removed
 
 
+def _take(lock: Path, d: Path) -> int:
+    """Create and lock the file ``lock`` of run folder ``d`` (its pid written); returns its
+    descriptor.  Another holder: :class:`OutputError`; an I/O failure: ``OSError`` (the file
+    dropped when it was ours)."""
+    fd = -1
+    try:
+        while True:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o666)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                who = _holder(fd)
+                os.close(fd)
+                fd = -1
+                raise OutputError(f"{d} is in use by another run ({who}); wait for it to finish "
+                                  "or give this run another name") from None
+            try:                          # the holder we waited for may have unlinked the file
+                same = os.stat(lock).st_ino == os.fstat(fd).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
+            os.close(fd)
+            fd = -1
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+    except OSError:
+        if fd >= 0:                       # we hold the lock (writing the pid failed): drop the file
+            try:
+                os.unlink(lock)
+            except OSError:
+                pass
+            os.close(fd)
+        raise
+    return fd
+
+
 @contextmanager
 def run_lock(run_dir: str | Path):
     """Hold the exclusive run lock of ``run_dir`` (created if needed) for the ``with`` block.
@@ -107,49 +145,33 @@ def run_lock(run_dir: str | Path):
     except OSError as exc:
         raise output_error(exc, "the run directory", d) from None
     lock = d / LOCK_NAME
-    fd = -1
+    held = hold_interrupts()              # an interrupt is handled once the lock is released below
     try:
-        while True:
-            fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o666)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                who = _holder(fd)
-                os.close(fd)
-                fd = -1
-                raise OutputError(f"{d} is in use by another run ({who}); wait for it to finish "
-                                  "or give this run another name") from None
-            try:                          # the holder we waited for may have unlinked the file
-                same = os.stat(lock).st_ino == os.fstat(fd).st_ino
-            except FileNotFoundError:
-                same = False
-            if same:
-                break
-            os.close(fd)
-            fd = -1
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        fd = _take(lock, d)
     except OSError as exc:
-        if fd >= 0:                       # we hold the lock (writing the pid failed): drop the file
+        remove_empty_dirs(created)
+        release_interrupts(held)
+        raise output_error(exc, "the run lock", lock) from None
+    except BaseException:
+        release_interrupts(held)
+        raise
+    _held[key] = [fd, 1, os.getpid()]
+    try:
+        release_interrupts(held)
+        remove_stale_temps(d)
+        yield d
+    finally:
+        held = hold_interrupts()          # the lock goes whole, whatever arrives meanwhile
+        try:
+            del _held[key]
             try:
                 os.unlink(lock)
             except OSError:
                 pass
             os.close(fd)
-        remove_empty_dirs(created)
-        raise output_error(exc, "the run lock", lock) from None
-    remove_stale_temps(d)
-    _held[key] = [fd, 1, os.getpid()]
-    try:
-        yield d
-    finally:
-        del _held[key]
-        try:
-            os.unlink(lock)
-        except OSError:
-            pass
-        os.close(fd)
-        remove_empty_dirs(created)
+            remove_empty_dirs(created)
+        finally:
+            release_interrupts(held)
 
 
 def locked_stage(as_config):

@@ -8,24 +8,10 @@ thread polls ``os.getppid()`` once a second and exits the worker when the parent
 from __future__ import annotations
 
 import os
-import signal
-import sys
 import threading
 import time
 
-PR_SET_PDEATHSIG = 1
-
-
-def _set_pdeathsig() -> bool:
-    if not sys.platform.startswith("linux"):
-        return False
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        return libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
-    except (OSError, AttributeError):
-        return False
+from common.signals import die_with_parent as _die_with_parent
 
 
 def _watch(parent: int, interval: float) -> None:
@@ -45,7 +31,5 @@ def die_with_parent(parent: int, interval: float = 1.0) -> None:
     interval : float, optional
         Polling period of the watch thread, s.
     """
-    _set_pdeathsig()
-    if os.getppid() != parent:          # the parent died before the prctl took effect
-        os._exit(1)
+    _die_with_parent(parent)            # PR_SET_PDEATHSIG; SIGTERM/SIGHUP back to their defaults
     threading.Thread(target=_watch, args=(parent, interval), daemon=True, name="parent-watch").start()

@@ -77,6 +77,9 @@ class EarlyWorker:
         flush_std_streams()
         pid = os.fork()
         if pid == 0:                                     # pragma: no cover (the child)
+            from common.signals import die_with_parent
+
+            die_with_parent(parent)
             os.close(r)
             _early_worker(parent, tasks, dict(done), claims, lock, sealed, w)
         os.close(w)
