@@ -132,7 +132,10 @@ def to_canonical(value: object, dimension: str) -> float:
     if isinstance(value, bool):
         raise ValueError("expected a number, got a boolean")
     if isinstance(value, (int, float)):
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:                # an integer beyond the float range
+            raise ValueError(f"{str(value)[:20]}... ({len(str(value))} digits) is beyond the range of a float") from None
     if not isinstance(value, str):
         raise ValueError(f"expected a number or a '<number> <unit>' string, got {value!r}")
     m = _QUANTITY.match(value)

@@ -310,6 +310,16 @@ def test_a_run_folder_named_like_a_packaged_config_does_not_hide_it(tmp_path, mo
         load_config("mine")
 
 
+@pytest.mark.parametrize("field", ["inertia.I11", "orbit_rate", "simulation.initial_offset", "actuators.torque_limit"])
+def test_an_integer_beyond_the_float_range_names_its_field(field):
+    """A 401-digit integer in a dimensional field is bad input naming the field (it was an
+    OverflowError reported as a numerical failure, exit 3)."""
+    huge = "1" + "0" * 400
+    value = f"[{huge}, 0, 0]" if field == "simulation.initial_offset" else huge
+    with pytest.raises(ConfigError, match=field.replace(".", r"\.") + r".*beyond the range of a float"):
+        load_config("mb3", [f"{field}={value}"])
+
+
 @pytest.mark.parametrize("given", ["./mb3", "./mb3.yaml", "sub/mb3", "./staircase"])
 def test_a_path_is_only_ever_that_file_never_a_packaged_config(tmp_path, monkeypatch, given):
     """``./mb3`` (a folder here, or nothing) is the path the user typed, not the packaged ``mb3``:
