@@ -154,6 +154,22 @@ def test_a_diverging_scenario_is_a_result_not_a_failure(tmp_path):
         assert np.isfinite(f["k1/error_inf"][()]) and "diverged_at_s" not in f["k1/error_inf"].attrs
 
 
+@pytest.mark.parametrize("f1, codes", [("k*y1*0", (0,)), ("k*y1*1e-318", (0, 4))])
+def test_a_zero_or_denormal_nonlinearity_is_designed_without_a_traceback(tmp_runs, f1, codes):
+    """φ ≡ 0 samples to the sector [0, 0], φ = 1e-318·k·y to a denormal one that scales to
+    [-0, 0]: both used to end in "ValueError: need alpha < beta" with a traceback.  The flat
+    sector is widened by 1e-12 (as a zero sinusoidal one); a scale that underflows is not a
+    sector.  The results are written (exit 4 at most: a figure of the denormal case)."""
+    from typer.testing import CliRunner
+
+    from cli.qpp_app import app
+
+    r = CliRunner().invoke(app, ["design", "qpp_saturation", f'nonlinearity.f1=["{f1}"]'])
+    assert r.exit_code in codes, r.output
+    assert "Traceback" not in r.output and r.exception is None or isinstance(r.exception, SystemExit)
+    assert (tmp_runs / "runs" / "qpp_saturation" / "qpp_design.h5").is_file()
+
+
 def test_an_unstable_nominal_loop_is_a_result_not_an_integrator_error(tmp_runs):
     """The ch. 13 gains on a plant with a pole at +120 rad/s: the nominal loop itself grows until
     the integrator fails (it used to exit 3, "Required step size ..."); now every scenario is
