@@ -111,5 +111,8 @@ def load_any(path, overrides=None):
 
         model = parse_qpp(data, source=str(p))
     else:
-        model = parse_config(data, source=str(p))
+        from acmm.config import resolve_references
+
+        # schedule.to and the like relative to the config's folder, as `acmm tea|design|...` read them
+        model = parse_config(resolve_references(data, p.parent, str(p)), source=str(p))
     return kind, remember_origin(model, str(p), overrides)

@@ -268,6 +268,20 @@ def test_a_typed_path_is_never_taken_for_a_packaged_name(tmp_runs):
     assert acmm("tea", "mb3").exit_code == 0
 
 
+def test_validate_reads_schedule_to_from_the_configs_folder(tmp_runs):
+    """``schedule.to: ends/acv.yaml`` is relative to the config's folder for ``acmm validate`` as
+    for the stages (validate read it from the working directory: a good config refused)."""
+    folder = tmp_runs / "x"
+    (folder / "ends").mkdir(parents=True)
+    (folder / "ends" / "acv.yaml").write_text((CONFIGS / "ac.yaml").read_text())
+    data = yaml.safe_load((CONFIGS / "staircase.yaml").read_text())
+    data["schedule"]["to"] = "ends/acv.yaml"
+    (folder / "sub.yaml").write_text(yaml.safe_dump(data))
+    r = acmm("validate", str(folder / "sub.yaml"))
+    assert r.exit_code == 0, r.output
+    assert acmm("tea", str(folder / "sub.yaml")).exit_code == 0
+
+
 def test_numerical_failure_says_which_setting_to_change(tmp_runs):
     r = acmm("design", "mb3", "design.residual_tol=1e-40", "--no-figures")
     assert r.exit_code == EXIT_NUMERICAL and one_line(r)
