@@ -212,7 +212,8 @@ def header(source: str | None, overrides: list[str] | None) -> str:
         lines.append(f"# source: {source}")
     if overrides:
         lines.append("# command-line overrides: " + " ".join(overrides))
-    return "\n".join(lines) + "\n"
+    # a line break inside a path or an override stays inside the comment
+    return "\n".join(line.replace("\r", "\\r").replace("\n", "\n#   ") for line in lines) + "\n"
 
 
 # ---------------------------------------------------------------------------------------------

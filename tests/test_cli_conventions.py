@@ -268,6 +268,15 @@ def test_a_typed_path_is_never_taken_for_a_packaged_name(tmp_runs):
     assert acmm("tea", "mb3").exit_code == 0
 
 
+def test_an_override_with_a_line_break_keeps_config_yaml_valid(tmp_runs):
+    """The overrides are echoed in config.yaml's comment header: a line break inside one used to
+    end the comment and break the file."""
+    r = acmm("tea", "mb3", 'description="x\n  name: evil"')
+    assert r.exit_code == 0, r.output
+    cfg = load_config(str(tmp_runs / "runs" / "mb3" / "config.yaml"))
+    assert cfg.name == "mb3" and cfg.description == "x name: evil"
+
+
 def test_validate_reads_schedule_to_from_the_configs_folder(tmp_runs):
     """``schedule.to: ends/acv.yaml`` is relative to the config's folder for ``acmm validate`` as
     for the stages (validate read it from the working directory: a good config refused)."""
