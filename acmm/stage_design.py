@@ -349,7 +349,7 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple
     """
     path = cfg.run_dir() / "design.h5"
     want = design_hash(cfg)
-    if path.exists():
+    if path.is_file():          # a regular file (a FIFO or a device there would block or never end)
         try:
             table = load_design_table(path)
             if table.design_hash == want and _unit_system(path) == cfg.output.units:   # one system per run folder

@@ -74,6 +74,21 @@ def test_the_resolved_sweep_it_writes_runs_again_as_the_same_sweep(tmp_path, nam
         assert "\n" not in str(exc.value)
 
 
+@pytest.mark.parametrize("kind", ["fifo", "dev_zero"])
+def test_a_journal_that_is_not_a_regular_file_is_one_line_not_a_hang(tmp_path, kind):
+    """--resume reads the journal: a FIFO there hung for ever, a symlink to /dev/zero filled the
+    memory; both are one ConfigError now, the sweep's files as they were."""
+    from acmm.sweep.journal import read_journal
+
+    journal = tmp_path / "sweep.journal"
+    if kind == "fifo":
+        os.mkfifo(journal)
+    else:
+        journal.symlink_to("/dev/zero")
+    with pytest.raises(ConfigError, match="not a regular file"):
+        read_journal(journal, "key")
+
+
 def test_unphysical_reason_agrees_with_config_validator():
     from pydantic import ValidationError
 
@@ -378,3 +393,19 @@ def test_a_parameter_given_twice_is_refused(section):
     used to win silently, both drawing random numbers)."""
     with pytest.raises(ConfigError, match="given twice"):
         parse_sweep({"name": "dup", "sweep": {"base": "mb3", "n_runs": 2, "orbits": 1, **section}})
+
+
+def test_a_fifo_in_place_of_design_h5_is_designed_again_not_a_hang(tmp_path, monkeypatch):
+    """``acmm simulate`` reuses ``design.h5`` when it matches: a FIFO (or a device) there used to
+    block it for ever; it is not a design file, so the stage designs again and replaces it."""
+    from acmm.config import load_config
+    from acmm.stage_design import design_for
+
+    monkeypatch.chdir(tmp_path)
+    cfg = load_config("mb3", ["output.figures=false"])
+    run = cfg.run_dir()
+    run.mkdir(parents=True)
+    os.mkfifo(run / "design.h5")
+    table, note = design_for(cfg)
+    assert note.startswith("designed") and (run / "design.h5").is_file()
+    assert design_for(cfg)[1].startswith("reused")
