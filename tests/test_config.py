@@ -246,6 +246,21 @@ def test_dot_names_rejected(tmp_runs, run_acmm, name):
     _assert_clean_failure(run_acmm("tea", "bad.yaml"), ["name"], tmp_runs)
 
 
+def test_yaml_merge_keys_are_read_and_duplicates_still_refused(tmp_path):
+    """``<<: *anchor`` (a YAML merge key) is read as PyYAML's safe loader reads it, the keys
+    written next to it overriding the merged ones; a key written twice is still refused (the
+    merge key used to be refused: "could not determine a constructor")."""
+    from common.configio import read_yaml
+
+    p = tmp_path / "m.yaml"
+    p.write_text("ref: &I {I11: 21970000, I22: 13320000, I33: 32130000}\ninertia: {<<: *I, I11: 24000000}\n")
+    got, _ = read_yaml(p)
+    assert got["inertia"] == {"I11": 24000000, "I22": 13320000, "I33": 32130000}
+    p.write_text("inertia: {<<: {I11: 1.0}, I22: 2.0, I22: 3.0}\n")
+    with pytest.raises(ConfigError, match="duplicate key 'I22'"):
+        read_yaml(p)
+
+
 def test_duplicate_keys_rejected(tmp_runs, run_acmm):
     (tmp_runs / "bad.yaml").write_text(
         "name: t\ninertia:\n  I11: 23.22e6\n  I22: 1.30e6\n  I33: 23.23e6\n  I11: 23.0e6\n")
