@@ -231,6 +231,9 @@ class QppConfig(_Model):
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise ValueError(f"simulation.scenarios: duplicate name {dup[0]!r} (each run is stored under its name)")
+        if "cartesian" in names and getattr(self.nonlinearity, "kind", None) == "polar_arm":
+            raise ValueError("simulation.scenarios: the name 'cartesian' is the polar arm's cartesian figure "
+                             "(qpp_sim_cartesian.png); give the scenario another name")
         d = self.design
         if d.rho_min >= d.rho_max:
             raise ValueError(f"design.rho_min = {d.rho_min:g} must be below design.rho_max = {d.rho_max:g}")

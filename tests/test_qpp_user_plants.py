@@ -154,6 +154,14 @@ def test_a_diverging_scenario_is_a_result_not_a_failure(tmp_path):
         assert np.isfinite(f["k1/error_inf"][()]) and "diverged_at_s" not in f["k1/error_inf"].attrs
 
 
+def test_a_scenario_cannot_take_the_cartesian_figures_name():
+    """The polar arm writes qpp_sim_cartesian.png beside qpp_sim_<scenario>.png: a scenario named
+    'cartesian' lost one of the two figures silently; it is refused, elsewhere allowed."""
+    with pytest.raises(ConfigError, match="'cartesian' is the polar arm's cartesian figure"):
+        load_config("qpp_manipulator", ["simulation.scenarios.0.name=cartesian"])
+    assert load_config("qpp_siso", ["simulation.scenarios.0.name=cartesian"]).simulation.scenarios[0].name == "cartesian"
+
+
 @pytest.mark.parametrize("f1, codes", [("k*y1*0", (0,)), ("k*y1*1e-318", (0, 4))])
 def test_a_zero_or_denormal_nonlinearity_is_designed_without_a_traceback(tmp_runs, f1, codes):
     """φ ≡ 0 samples to the sector [0, 0], φ = 1e-318·k·y to a denormal one that scales to
