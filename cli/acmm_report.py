@@ -25,7 +25,7 @@ def register(app: typer.Typer) -> None:
     @app.command("report")
     @user_errors
     def report(
-        out: Path = typer.Option(Path("runs/report"), "--out", help="output directory (index.html, report.md, "
+        out: str = typer.Option("runs/report", "--out", help="output directory (index.html, report.md, "
                                                                      "figures/, manifest.json)"),
         fast: bool = typer.Option(False, "--fast", help="CI mode: a 13-orbit stair-case instead of 130 orbits"),
         rerun: bool = typer.Option(False, "--rerun", help="recompute every stage even when results with the "
@@ -46,7 +46,11 @@ def register(app: typer.Typer) -> None:
             sys.stderr.write(msg + "\n")
             sys.stderr.flush()
 
-        r = build_report(out, fast=fast, rerun=rerun, root=root, progress=say, jobs=jobs)
+        if not out.strip():              # Path("") would be the working directory itself
+            from common.errors import ConfigError
+
+            raise ConfigError("--out: empty; give the report's output directory")
+        r = build_report(Path(out), fast=fast, rerun=rerun, root=root, progress=say, jobs=jobs)
         counts: dict[str, int] = {}
         for p in r.ledger:
             counts[p.status] = counts.get(p.status, 0) + 1

@@ -150,6 +150,8 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
     """
     if path is None:
         p = packaged_config_path()
+    elif not str(path).strip():
+        raise ConfigError("config path is empty: give a YAML file or the name of a packaged config")
     else:
         p = Path(path)
         try:

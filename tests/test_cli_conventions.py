@@ -268,6 +268,16 @@ def test_a_typed_path_is_never_taken_for_a_packaged_name(tmp_runs):
     assert acmm("tea", "mb3").exit_code == 0
 
 
+def test_an_empty_config_path_or_report_folder_is_one_line(tmp_runs):
+    """``acmm tea ""`` said "config path is a directory, not a file:" and nothing more;
+    ``acmm report --out ""`` wrote the report into the working directory."""
+    r = acmm("tea", "")
+    assert r.exit_code == EXIT_INPUT and one_line(r) and "config path is empty" in r.stderr
+    r = acmm("report", "--out", "")
+    assert r.exit_code == EXIT_INPUT and one_line(r) and "--out: empty" in r.stderr
+    assert sorted(p.name for p in tmp_runs.iterdir()) == []
+
+
 def test_an_override_with_a_line_break_keeps_config_yaml_valid(tmp_runs):
     """The overrides are echoed in config.yaml's comment header: a line break inside one used to
     end the comment and break the file."""
