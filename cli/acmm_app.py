@@ -239,9 +239,9 @@ def main() -> None:
     try:
         _fork_figure_worker_early(sys.argv[1:])
     except KeyboardInterrupt as exc:
-        code = getattr(exc, "exit_code", 130)
-        print("interrupted" if code == 130 else f"terminated by signal {code - 128}", file=sys.stderr)
-        os._exit(code)
+        from cli.common import interrupted
+
+        interrupted(exc)
     try:
         app()
     except SystemExit as exc:

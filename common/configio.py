@@ -158,21 +158,19 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
             present = p.exists()
         except (OSError, ValueError) as exc:   # name too long, NUL byte, ...
             raise ConfigError(f"cannot read config file {str(path)[:200]}: {getattr(exc, 'strerror', None) or exc}") from None
-        # a bare name (``mb3``, not ``./mb3`` or ``dir/mb3``: Path drops the ``./``)
+        # a bare name (``mb3``, not ``./mb3`` or ``dir/mb3``: Path drops the ``./``) that is not a
+        # file here (absent, or a folder such as a run folder named like it): a packaged config
         bare = len(p.parts) == 1 and not any(sep and sep in str(path) for sep in ("/", os.sep, os.altsep))
-        if present and not bare and p.is_dir():
-            raise ConfigError(f"config path is a directory, not a file: {str(path)[:200]}")
-        if not present or (p.is_dir() and bare):
-            # a bare name not a file here (absent, or a folder such as a run folder named like it)
+        if bare and (not present or p.is_dir()):
             candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml")
-            if bare and candidate.exists():
-                p = candidate
-            elif present:
-                raise ConfigError(f"config path is a directory, not a file: {str(path)[:200]}")
-            else:
-                from common.hints import missing_config_message
+            if candidate.exists():
+                p, present = candidate, True
+        if present and p.is_dir():
+            raise ConfigError(f"config path is a directory, not a file: {str(path)[:200]}")
+        if not present:
+            from common.hints import missing_config_message
 
-                raise ConfigError(missing_config_message(path))
+            raise ConfigError(missing_config_message(path))
     text = read_config_text(p)
     try:
         data = load_yaml_text(text, p)
@@ -218,10 +216,68 @@ def load_yaml_text(text: str, source: object = "config") -> object:
         raise ConfigError(f"{source}: not valid as a config: {str(exc).split(';')[0]}") from None
 
 
+def read_regular_file(p: Path, what: str = "config", cap: int | None = None,
+                      raise_how: str = "") -> bytes:
+    """The bytes of ``p``, read with bounds (issue 13): only a regular file (a FIFO, a device
+    such as ``/dev/zero`` or a directory is refused without blocking), at most ``cap`` bytes.
+
+    Parameters
+    ----------
+    p : Path
+        The file.
+    what : str, optional
+        What the file is, for the messages (``"config"``, ``"sweep journal"``).
+    cap : int, optional
+        Largest size accepted, bytes (None: any size a regular file has).
+    raise_how : str, optional
+        How to raise ``cap``, added to the "too large" message.
+
+    Returns
+    -------
+    bytes
+        Its contents.
+
+    Raises
+    ------
+    ConfigError
+        Not a readable regular file, or larger than ``cap``.
+    """
+    import os
+    import stat
+
+    too_large = f"{what} file {p} is too large: {{}} bytes" + (f" ({raise_how})" if raise_how else "")
+    try:
+        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
+    except OSError as exc:
+        raise ConfigError(f"cannot read {what} file {p}: {exc.strerror or exc}") from None
+    try:
+        st = os.fstat(fd)
+        if stat.S_ISDIR(st.st_mode):
+            raise ConfigError(f"{what} path is a directory, not a file: {p}")
+        if not stat.S_ISREG(st.st_mode):
+            raise ConfigError(f"{what} path is not a regular file (a FIFO, device or socket): {p}")
+        if cap is not None and st.st_size > cap:
+            raise ConfigError(too_large.format(st.st_size))
+        chunks, size = [], 0
+        while True:
+            chunk = os.read(fd, 1 << 16)
+            if not chunk:
+                break
+            size += len(chunk)
+            if cap is not None and size > cap:          # grew while being read
+                raise ConfigError(too_large.format(f"over {cap}"))
+            chunks.append(chunk)
+    except OSError as exc:
+        raise ConfigError(f"cannot read {what} file {p}: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+    return b"".join(chunks)
+
+
 def read_config_text(p: Path) -> str:
-    """The text of config file ``p``, read with bounds (issue 13): only a regular file (a FIFO,
-    a device such as ``/dev/zero`` or a directory is refused without blocking), at most
-    ``CONFIG_BYTES`` bytes (:mod:`common.limits`), UTF-8.  One-line :class:`ConfigError` otherwise.
+    """The text of config file ``p``, read with bounds (:func:`read_regular_file`, at most
+    ``CONFIG_BYTES`` bytes of :mod:`common.limits`), UTF-8.  One-line :class:`ConfigError`
+    otherwise.
 
     Parameters
     ----------
@@ -238,39 +294,11 @@ def read_config_text(p: Path) -> str:
     ConfigError
         Not a readable regular file, too large, or not UTF-8.
     """
-    import os
-    import stat
-
     from common.limits import how_to_raise, limit
 
-    cap = int(limit("CONFIG_BYTES"))
+    data = read_regular_file(p, "config", int(limit("CONFIG_BYTES")), how_to_raise("CONFIG_BYTES"))
     try:
-        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
-    except OSError as exc:
-        raise ConfigError(f"cannot read config file {p}: {exc.strerror or exc}") from None
-    try:
-        st = os.fstat(fd)
-        if stat.S_ISDIR(st.st_mode):
-            raise ConfigError(f"config path is a directory, not a file: {p}")
-        if not stat.S_ISREG(st.st_mode):
-            raise ConfigError(f"config path is not a regular file (a FIFO, device or socket): {p}")
-        if st.st_size > cap:
-            raise ConfigError(f"config file {p} is too large: {st.st_size} bytes ({how_to_raise('CONFIG_BYTES')})")
-        chunks, size = [], 0
-        while True:
-            chunk = os.read(fd, 1 << 16)
-            if not chunk:
-                break
-            size += len(chunk)
-            if size > cap:
-                raise ConfigError(f"config file {p} is too large: over {cap} bytes ({how_to_raise('CONFIG_BYTES')})")
-            chunks.append(chunk)
-    except OSError as exc:
-        raise ConfigError(f"cannot read config file {p}: {exc.strerror or exc}") from None
-    finally:
-        os.close(fd)
-    try:
-        return b"".join(chunks).decode("utf-8")
+        return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(f"cannot read config file {p}: not UTF-8 text (byte {exc.start})") from None
 

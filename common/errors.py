@@ -31,7 +31,7 @@ EXIT_INTERRUPTED = 130
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM or SIGHUP received by a command (:func:`common.forked.terminate_like_ctrl_c`): it
+    """SIGTERM or SIGHUP received by a command (:func:`common.signals.terminate_like_ctrl_c`): it
     unwinds like Ctrl-C (rollback of the stage's outputs, its helper processes killed) and exits
     with 128 + the signal number.
 

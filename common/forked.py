@@ -29,6 +29,8 @@ import struct
 import sys
 import threading
 
+from common.signals import die_with_parent
+
 
 def usable() -> bool:
     """Whether a child may be forked here.
@@ -265,8 +267,6 @@ class ForkedCall:
             parent = os.getpid()
             pid = os.fork()
             if pid == 0:
-                from common.signals import die_with_parent
-
                 die_with_parent(parent)
                 os.close(r)
                 _child(fn, args, kwargs, w)

@@ -140,19 +140,17 @@ def import_pyplot_to_draw_only() -> bool:
     """
     import sys
 
-    if "matplotlib.artist" in sys.modules:       # its classes exist already: nothing to gain
-        agg_pyplot(force=True)
-        return False
-    from matplotlib import artist
+    if "matplotlib.artist" not in sys.modules:   # (else its classes exist already: nothing to gain)
+        from matplotlib import artist
 
-    kwdoc = getattr(artist, "kwdoc", None)
-    if not callable(kwdoc):
-        agg_pyplot(force=True)
-        return False
-    artist.kwdoc = _no_property_table
-    try:
-        agg_pyplot(force=True)
-        import matplotlib.backends.backend_agg  # noqa: F401  (what every figure then saves with)
-    finally:
-        artist.kwdoc = kwdoc
-    return True
+        kwdoc = getattr(artist, "kwdoc", None)
+        if callable(kwdoc):
+            artist.kwdoc = _no_property_table
+            try:
+                agg_pyplot(force=True)
+                import matplotlib.backends.backend_agg  # noqa: F401  (what every figure saves with)
+            finally:
+                artist.kwdoc = kwdoc
+            return True
+    agg_pyplot(force=True)
+    return False

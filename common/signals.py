@@ -50,18 +50,17 @@ def set_parent_death_signal() -> bool:
 _HELD = {"depth": 0, "pending": []}
 
 
-def _interrupt(signum: int):
-    """The exception of signal ``signum``: KeyboardInterrupt for SIGINT, else Terminated."""
-    from common.errors import Terminated
-
-    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
-
-
 def _raise_terminated(signum, frame) -> None:
+    """The handler: KeyboardInterrupt for SIGINT, :class:`common.errors.Terminated` for the
+    others; recorded instead while :func:`hold_interrupts` is in force."""
     if _HELD["depth"]:                       # in a step that must not stop halfway: later
         _HELD["pending"].append(int(signum))
         return
-    raise _interrupt(signum)
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
+    from common.errors import Terminated
+
+    raise Terminated(signum)
 
 
 def hold_interrupts():
@@ -83,7 +82,7 @@ def hold_interrupts():
             mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, *TERMINATING})
         except (OSError, ValueError):
             mask = None
-    return ("held", mask)
+    return (mask,)
 
 
 def release_interrupts(held) -> None:
@@ -104,17 +103,14 @@ def release_interrupts(held) -> None:
     """
     if held is None:
         return
+    (mask,) = held
     _HELD["depth"] -= 1
-    if held[1] is not None:
-        signal.pthread_sigmask(signal.SIG_SETMASK, held[1])
+    if mask is not None:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
     if not _HELD["depth"] and _HELD["pending"]:
         signum = _HELD["pending"][0]
         _HELD["pending"].clear()
-        if signum == signal.SIGINT:
-            raise KeyboardInterrupt
-        from common.errors import Terminated
-
-        raise Terminated(signum)
+        _raise_terminated(signum, None)      # the handler's exception, now
 
 
 def terminate_like_ctrl_c() -> list[int]:

@@ -231,7 +231,7 @@ class QppConfig(_Model):
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise ValueError(f"simulation.scenarios: duplicate name {dup[0]!r} (each run is stored under its name)")
-        if "cartesian" in names and getattr(self.nonlinearity, "kind", None) == "polar_arm":
+        if "cartesian" in names and isinstance(self.nonlinearity, PolarArmNonlinearity):
             raise ValueError("simulation.scenarios: the name 'cartesian' is the polar arm's cartesian figure "
                              "(qpp_sim_cartesian.png); give the scenario another name")
         d = self.design

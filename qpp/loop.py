@@ -156,6 +156,45 @@ def _loop_functions(plant: LurePlant, K1, Kc, H, f1, gamma, gamma_nominal, r_fun
     return control, rhs
 
 
+def simulate_nominal(plant: LurePlant, K1, Kc, H, f1, gamma_nominal, r_o, t_eval, z0, rtol: float, atol: float):
+    """The nominal loop (γ = γ_nominal, r = r_o, no disturbance) of :func:`simulate_loop`, whose
+    growth until the integrator fails is a divergence (``failed_beyond`` =
+    :func:`nominal_diverged_beyond`): the gains of an unstable design give a result, not an error.
+
+    Parameters
+    ----------
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+    K1, Kc, H : arrays
+        The gains (eqs 10.5–10.6), in the units of the config's u per unit of x and of x_c, and
+        of x per unit of y and s.
+    f1 : callable
+        ``f1(x, t, γ)``, the matched nonlinearity, in the units of u.
+    gamma_nominal : float or ndarray
+        The nominal parameter(s), in the config's units.
+    r_o : list of qpp.config.Term
+        The nominal reference (config ``simulation.r_o``), output units.
+    t_eval : (N,) array
+        Sample times, s.
+    z0 : (2n+q,) array
+        Initial state z(0), in the units of x and x_c.
+    rtol, atol : float
+        Integrator tolerances (dimensionless; the units of z).
+
+    Returns
+    -------
+    tuple of ndarray
+        (Z, U) as :func:`simulate_loop` returns them: z in the units of x and x_c, u in the
+        units of u (NaN after a divergence).
+    """
+    from qpp.signals import eval_signal
+
+    t_eval = np.asarray(t_eval, float)
+    return simulate_loop(plant, K1, Kc, H, f1, gamma=gamma_nominal, gamma_nominal=gamma_nominal,
+                         r_fun=lambda tt: eval_signal(r_o, tt), t_eval=t_eval, z0=z0, rtol=rtol, atol=atol,
+                         failed_beyond=nominal_diverged_beyond(r_o, t_eval, z0))
+
+
 def nominal_diverged_beyond(r_o, t: np.ndarray, z0: np.ndarray) -> float:
     """The ``failed_beyond`` of a nominal loop (:func:`simulate_loop`): :data:`DIVERGED_FACTOR`
     times the larger of 1, the initial state and the reference r_o over the samples ``t``, all in

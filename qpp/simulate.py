@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from qpp.config import ExpressionNonlinearity, QppConfig, Scenario
-from qpp.loop import DIVERGED_FACTOR, nominal_diverged_beyond
+from qpp.loop import DIVERGED_FACTOR, nominal_diverged_beyond, simulate_nominal
 from qpp.loop import initial_state, simulate_loop  # noqa: F401  (re-exported: the old import paths)
 from qpp.matched_nonlinearity import (  # noqa: F401  (re-exported: the old import paths)
     config_f1, make_f1, scenario_gamma)
@@ -126,9 +126,7 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
     else:
         r_fun = lambda tt: r_o_fun(tt) + eval_signal(scenario.delta_r, tt)  # noqa: E731
     if nominal is None:
-        nominal = simulate_loop(plant, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom, r_fun=r_o_fun,
-                                t_eval=t, z0=z0, rtol=sim.rtol, atol=sim.atol,
-                                failed_beyond=nominal_diverged_beyond(sim.r_o, t, z0))
+        nominal = simulate_nominal(plant, K1, Kc, H, f1, g_nom, sim.r_o, t, z0, sim.rtol, sim.atol)
     Zo, Uo = nominal
     if np.all(np.isfinite(Zo)):        # diverged: DIVERGED_FACTOR × the nominal loop's size
         beyond = DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0))), float(np.max(np.abs(Zo))))
@@ -242,9 +240,7 @@ def simulate(cfg: QppConfig, K1, Kc, H, progress=None) -> list[SimResult]:
     t = np.linspace(0.0, sim.t_final, sim.n_samples)
     z0 = initial_state(cfg, plant, K1, Kc)
     f1, g_nom = config_f1(cfg, plant)
-    nominal = simulate_loop(plant, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom,
-                            r_fun=lambda tt: eval_signal(sim.r_o, tt), t_eval=t, z0=z0,
-                            rtol=sim.rtol, atol=sim.atol, failed_beyond=nominal_diverged_beyond(sim.r_o, t, z0))
+    nominal = simulate_nominal(plant, K1, Kc, H, f1, g_nom, sim.r_o, t, z0, sim.rtol, sim.atol)
     out = []
     for s in sim.scenarios:
         out.append(simulate_scenario(cfg, K1, Kc, H, s, nominal))

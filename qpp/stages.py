@@ -18,6 +18,10 @@ from qpp.stored_design import gains_sha256
 from qpp.simulate import simulate
 
 
+#: units of the gains of eq 10.5–10.6 in the results (text: the config's own units, not UDUNITS)
+GAIN_UNITS = {"K1": "input units per state unit", "Kc": "input units per servo-state unit",
+              "H": "state units per output unit per s"}
+
 def _cfg(config) -> QppConfig:
     return config if isinstance(config, QppConfig) else load_config(config)
 
@@ -68,11 +72,11 @@ def _printed_gain_items(pub, H) -> dict:
     if pub.K1 is None or pub.Kc is None:
         return {}
     items = {
-        "K1": Dataset(np.asarray(pub.K1, float), "input units per state unit", "printed K1", dims=("input", "state")),
-        "Kc": Dataset(np.asarray(pub.Kc, float), "input units per servo-state unit", "printed Kc", dims=("input", "servo_state")),
+        "K1": Dataset(np.asarray(pub.K1, float), GAIN_UNITS["K1"], "printed K1", dims=("input", "state")),
+        "Kc": Dataset(np.asarray(pub.Kc, float), GAIN_UNITS["Kc"], "printed Kc", dims=("input", "servo_state")),
     }
     if pub.H is not None:
-        items["H"] = Dataset(np.asarray(pub.H, float), "state units per output unit per s", "printed H", dims=("state", "output"))
+        items["H"] = Dataset(np.asarray(pub.H, float), GAIN_UNITS["H"], "printed H", dims=("state", "output"))
         items["H_rel_diff"] = Dataset(
             np.where(np.abs(np.asarray(pub.H)) > 0, _rel(H, pub.H), 0.0), "1", "|H − H_printed|/|H_printed|",
             dims=("state", "output"))
@@ -130,10 +134,10 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         :func:`common.results.write_h5`.
     """
     items = {
-        "K1": Dataset(r.K1, "input units per state unit", "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
+        "K1": Dataset(r.K1, GAIN_UNITS["K1"], "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
                       dims=("input", "state")),
-        "Kc": Dataset(r.Kc, "input units per servo-state unit", "servo-state gain Kc (eq 10.6)", dims=("input", "servo_state")),
-        "H": Dataset(r.H, "state units per output unit per s", "observer gain H, report's sign (L = −H, eq 10.5)", dims=("state", "output")),
+        "Kc": Dataset(r.Kc, GAIN_UNITS["Kc"], "servo-state gain Kc (eq 10.6)", dims=("input", "servo_state")),
+        "H": Dataset(r.H, GAIN_UNITS["H"], "observer gain H, report's sign (L = −H, eq 10.5)", dims=("state", "output")),
         "Cz": Dataset(r.Cz, "output units per loop-state unit", "C_z (eq 10.7)", dims=("output", "loop_state")),
         "a": Dataset(r.a, "1/s", "exponential weighting a (10.27)"),
         "T": Dataset(r.T, "s", "truncation time T"),
@@ -314,9 +318,9 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
             submit(plot_scenario, s, cfg.run_dir() / f"qpp_sim_{s.name}.png")
         if isinstance(cfg.nonlinearity, PolarArmNonlinearity):
             submit(plot_cartesian, sims, cfg.nonlinearity.a, cfg.run_dir() / "qpp_sim_cartesian.png")
-    items = {"K1": Dataset(r.K1, "input units per state unit", "gain K1 used", dims=("input", "state")),
-             "Kc": Dataset(r.Kc, "input units per servo-state unit", "gain Kc used", dims=("input", "servo_state")),
-             "H": Dataset(r.H, "state units per output unit per s", "observer gain H used (report's sign)", dims=("state", "output"))}
+    items = {"K1": Dataset(r.K1, GAIN_UNITS["K1"], "gain K1 used", dims=("input", "state")),
+             "Kc": Dataset(r.Kc, GAIN_UNITS["Kc"], "gain Kc used", dims=("input", "servo_state")),
+             "H": Dataset(r.H, GAIN_UNITS["H"], "observer gain H used (report's sign)", dims=("state", "output"))}
     for s in sims:
         # time first: (t, channel), as in acmm's files
         items[s.name] = {

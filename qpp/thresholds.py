@@ -14,9 +14,8 @@ import numpy as np
 
 from qpp import spheres
 from qpp.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinearity
-from qpp.loop import initial_state, nominal_diverged_beyond, simulate_loop
+from qpp.loop import initial_state, simulate_nominal
 from qpp.matched_nonlinearity import config_f1
-from qpp.signals import eval_signal
 
 
 @dataclass
@@ -71,11 +70,8 @@ def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801):
     P = cfg.lure_plant()
     f1, g_nom = config_f1(cfg, P)
     t = np.linspace(0.0, T, n)
-    z0 = initial_state(cfg, P, K1, Kc)
-    Z, _ = simulate_loop(P, K1, Kc, H, f1, gamma=g_nom, gamma_nominal=g_nom,
-                         r_fun=lambda tt: eval_signal(cfg.simulation.r_o, tt), t_eval=t,
-                         z0=z0, rtol=1e-9, atol=1e-11,
-                         failed_beyond=nominal_diverged_beyond(cfg.simulation.r_o, t, z0))
+    Z, _ = simulate_nominal(P, K1, Kc, H, f1, g_nom, cfg.simulation.r_o, t, initial_state(cfg, P, K1, Kc),
+                            rtol=1e-9, atol=1e-11)
     return t, P.C @ Z[:P.n], Z[:P.n]
 
 

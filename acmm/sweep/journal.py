@@ -19,22 +19,6 @@ class SweepInterrupted(AcmmError):
 # ---------------------------------------------------------------------------------------------
 # journal (append-only, one JSON line per finished task)
 # ---------------------------------------------------------------------------------------------
-def _read_regular(path: Path) -> bytes:
-    """The bytes of ``path`` if it is a regular file (opened without blocking: a FIFO or a device
-    in its place, e.g. a symlink to /dev/zero, is refused instead of hanging or filling memory)."""
-    import stat
-
-    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
-    try:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise ConfigError(f"{path}: the sweep journal is not a regular file; delete it or run without --resume")
-        with os.fdopen(fd, "rb", closefd=False) as f:
-            return f.read(st.st_size)
-    finally:
-        os.close(fd)
-
-
 def read_journal(path: Path, key: str, bases: set | None = None) -> list[dict]:
     """Records of a journal written for results key ``key`` (a torn last line is ignored).
 
@@ -60,9 +44,13 @@ def read_journal(path: Path, key: str, bases: set | None = None) -> list[dict]:
         last one) is not a record the sweep wrote (:func:`acmm.sweep.journal_records.record_problem`).
     """
     from acmm.sweep.journal_records import record_problem
+    from common.configio import read_regular_file
 
     records = []
-    lines = _read_regular(path).split(b"\n")
+    try:            # a FIFO or a device there (a symlink to /dev/zero) would hang or fill memory
+        lines = read_regular_file(path, "sweep journal").split(b"\n")
+    except ConfigError as exc:
+        raise ConfigError(f"{exc}; delete it or run without --resume") from None
     for k, line in enumerate(lines):
         if not line.strip():
             continue
