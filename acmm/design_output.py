@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from acmm.stage_common import UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE
 from common.results import Dataset
 
 AXES = ["roll", "pitch", "yaw"]
@@ -37,19 +38,19 @@ def point_items(points) -> dict:
             "inertia": Dataset(p.spec.inertia, "slug*ft^2", "inertia of the design point", AXES),
             "bias": Dataset(p.spec.bias, "ft*lbf", "bias torque", AXES),
             "tea": Dataset(p.tea.theta, "rad", "torque-equilibrium attitude", AXES),
-            "A": Dataset(p.model.A, "per-state", "design model state matrix (eq 4.46)", STATE_NAMES,
+            "A": Dataset(p.model.A, UNIT_A, "design model state matrix (eq 4.46)", STATE_NAMES,
                          dims=("state", "state_col")),
-            "B": Dataset(p.model.B, "per-state per ft*lbf", "input matrix", STATE_NAMES, dims=("state", "axis")),
-            "G": Dataset(p.model.G, "per-state per ft*lbf", "disturbance matrix", STATE_NAMES, dims=("state", "axis")),
-            "Q": Dataset(res.Q, "per-state^-2 (shifted problem)", "state weight for which K is the exact LQR gain",
+            "B": Dataset(p.model.B, UNIT_B, "input matrix", STATE_NAMES, dims=("state", "axis")),
+            "G": Dataset(p.model.G, UNIT_B, "disturbance matrix", STATE_NAMES, dims=("state", "axis")),
+            "Q": Dataset(res.Q, UNIT_Q, "state weight for which K is the exact LQR gain",
                          dims=("state", "state_col")),
             "R": Dataset(res.R, "1/(ft*lbf)^2", "control weight", dims=("axis", "axis_col")),
-            "P": Dataset(res.P, "per-state", "Riccati solution (physical units)", dims=("state", "state_col")),
-            "K": Dataset(res.K, "ft*lbf per state unit", "LQR gain, u = -K x", STATE_NAMES, dims=("axis", "state")),
+            "P": Dataset(res.P, UNIT_P, "Riccati solution (physical units)", dims=("state", "state_col")),
+            "K": Dataset(res.K, UNIT_K, "LQR gain, u = -K x", STATE_NAMES, dims=("axis", "state")),
             "poles": Dataset(res.poles, "rad/s", "closed-loop poles of A - B K", dims=("pole",)),
             "sector_margin": Dataset(res.margin, "n", "worst pole distance into the sector (>0 inside)"),
             "riccati_residual": Dataset(res.residual, "1", "relative CARE residual, scaled coordinates"),
-            "scales": Dataset(p.model.scales, "per-state", "state scaling used for the Riccati solve",
+            "scales": Dataset(p.model.scales, UNIT_STATE, "state scaling used for the Riccati solve",
                               STATE_NAMES),
             "eig_condition": Dataset(res.eig_condition, "1",
                                      "eigenvalue condition number of each pole (order of 'poles'), scaled states",
@@ -93,9 +94,11 @@ def table_items(r, pts: dict) -> dict:
         "inertia": Dataset(r.table.inertia, "slug*ft^2", "inertia per point", dims=("point", "axis", "axis_col")),
         "bias": Dataset(r.table.bias, "ft*lbf", "bias per point", AXES, dims=("point", "axis")),
         "tea": Dataset(r.table.tea, "rad", "TEA per point", AXES, dims=("point", "axis")),
-        "K": Dataset(r.table.gain, "ft*lbf per state unit", "LQR gain per point (u = -K x)",
+        "K": Dataset(r.table.gain, UNIT_K, "LQR gain per point (u = -K x)",
                      dims=("point", "axis", "state")),
         "state_names": Dataset(np.array(STATE_NAMES, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
+        "state_units": Dataset(np.array(r.points[0].model.state_units, dtype="S"), "1",
+                               "unit of each state (the state_units of the unit strings)", dims=("state",)),
         "wall_time": Dataset(r.wall_time, "s", "design wall time"),
         "sector_margin": Dataset(np.array([p.lqr.margin for p in r.points]), "n",
                                  "worst pole distance into the sector per point (>0 inside)", dims=("point",)),
@@ -128,11 +131,11 @@ def schedule_items(r) -> dict:
         Name → :class:`common.results.Dataset` or group (units stated per dataset).
     """
     sched = {
-        "coef": Dataset(r.fit.coef, "K units per rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k" if r.fit.form == "polynomial"
+        "coef": Dataset(r.fit.coef, UNIT_K + "/rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k" if r.fit.form == "polynomial"
                         else "least-squares polynomial of the gains, for reference (form table: K linear in θ2* "
                              "between the design points)", dims=("power", "axis", "state")),
         "variable": Dataset(r.fit.variable, "rad", "scheduling variable: pitch TEA θ2* per point", dims=("point",)),
-        "rms_residual": Dataset(r.fit.rms_residual, "K units", "RMS fit residual per element", dims=("axis", "state")),
+        "rms_residual": Dataset(r.fit.rms_residual, UNIT_K, "RMS fit residual per element", dims=("axis", "state")),
         "rel_residual": Dataset(r.fit.rel_residual, "1", "RMS residual / max |K_ij|", dims=("axis", "state")),
         "check_names": Dataset(np.array(r.check.names, dtype="S"), "1", "where the scheduled gain was checked",
                                dims=("check",)),

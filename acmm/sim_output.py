@@ -12,6 +12,7 @@ import numpy as np
 
 from acmm import dynamics as dyn
 from acmm.scenario import level_peak_momentum
+from acmm.stage_common import UNIT_K, UNIT_STATE
 from common.results import Dataset
 
 AXES = ["roll", "pitch", "yaw"]
@@ -65,7 +66,7 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
         "rate_rel_lvlh": Dataset(rel_rate, "deg/s", "body rate relative to LVLH", AXES, dims=("t", "axis")),
         "h": Dataset(r.state[:, 6:9], "ft*lbf*s", "CMG momentum", AXES, dims=("t", "axis")),
         "int_h": Dataset(r.state[:, 9:12], "ft*lbf*s^2", "momentum integral (controller state)", AXES, dims=("t", "axis")),
-        "drf": Dataset(r.state[:, 12:24], "per-state", "DRF states", sim_mod.PLAIN_STATE_NAMES[12:],
+        "drf": Dataset(r.state[:, 12:24], UNIT_STATE, "DRF states", sim_mod.PLAIN_STATE_NAMES[12:],
                        dims=("t", "drf_state")),
         "u_cmd": Dataset(r.u_cmd, "ft*lbf", "commanded torque −K x (before saturation)", AXES, dims=("t", "axis")),
         "u": Dataset(r.u, "ft*lbf", "delivered torque (after torque and momentum saturation)", AXES, dims=("t", "axis")),
@@ -79,7 +80,7 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
             "bias": Dataset(sc.bias, "ft*lbf", "bias per level", AXES, dims=("level", "axis")),
             "tea_estimate": Dataset(sc.theta_est, "rad", "TEA estimate used by the controller", AXES,
                                     dims=("level", "axis")),
-            "gain": Dataset(sc.gain, "ft*lbf per state unit", "gain in use per level (u = −K x)",
+            "gain": Dataset(sc.gain, UNIT_K, "gain in use per level (u = −K x)",
                             dims=("level", "axis", "state")),
             "steady_error": Dataset(steady, "deg", "max |θ − θ̂*| over the second half of each level "
                                     "(NaN: the run ended before it)", AXES, dims=("level", "axis")),

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm.config import Config
-from acmm.stage_common import _as_config, _in_system
+from acmm.stage_common import _as_config, _define_units, _in_system
 from common.outputs import owns_outputs
 from common.results import write_h5
 from common.runlock import locked_stage
@@ -276,7 +276,7 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
         items = out.table_items(r, pts)
         if r.fit is not None:
             items["schedule"] = out.schedule_items(r)
-        items = _in_system(items, cfg, out.unit_roles(pts, r.fit is not None))
+        items = _define_units(_in_system(items, cfg, out.unit_roles(pts, r.fit is not None)), cfg.orbit_rate)
         path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
                         {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
                          "schedule_form": r.table.form})

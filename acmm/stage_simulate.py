@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm.config import Config
-from acmm.stage_common import _as_config, _in_system
+from acmm.stage_common import _as_config, _define_units, _in_system
 from acmm.stage_design import design_for
 from common.outputs import owns_outputs
 from common.results import write_h5
@@ -101,6 +101,6 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
         items, attrs = out.sim_items(cfg, sc, r, stats, table.design_hash, wall)
         if want_figures:
             out.sim_figures(cfg, sc, r, stats, items)
-        items = _in_system(items, cfg, {"levels/gain": "K", "drf": "drf"})
+        items = _define_units(_in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
         path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
     return result, path

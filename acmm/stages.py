@@ -17,7 +17,7 @@ import numpy as np
 
 from acmm import tea as tea_mod
 from acmm.config import Config
-from acmm.stage_common import _as_config, _in_system
+from acmm.stage_common import UNIT_A, UNIT_B, UNIT_STATE, _as_config, _in_system
 from acmm.stage_design import (  # noqa: F401  (re-exported)
     DesignResult,
     DesignTable,
@@ -179,14 +179,14 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
     eig = np.linalg.eigvals(model.A)
     result.eigenvalues = eig
     items = {
-        "A": Dataset(model.A, "per-state (see state_units)", "state matrix of eq 4.46 (x' = A x + B u + G w)",
-                     names, {"state_units": np.array(model.state_units, dtype="S")}, dims=("state", "state_col")),
-        "B": Dataset(model.B, "state unit per ft*lbf", "control input matrix (u enters ω' as −u, h' as +u)",
+        "A": Dataset(model.A, UNIT_A, "state matrix of eq 4.46 (x' = A x + B u + G w)",
+                     names, dims=("state", "state_col")),
+        "B": Dataset(model.B, UNIT_B, "control input matrix (u enters ω' as −u, h' as +u)",
                      names, dims=("state", "axis")),
-        "G": Dataset(model.G, "state unit per ft*lbf", "disturbance input matrix", names, dims=("state", "axis")),
+        "G": Dataset(model.G, UNIT_B, "disturbance input matrix", names, dims=("state", "axis")),
         "state_names": Dataset(np.array(names, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
         "state_units": Dataset(np.array(model.state_units, dtype="S"), "1", "unit of each state", dims=("state",)),
-        "scales": Dataset(model.scales, "per-state (see state_units)", "nominal state magnitudes", names),
+        "scales": Dataset(model.scales, UNIT_STATE, "nominal state magnitudes", names),
         "theta_star": Dataset(model.theta_star, "rad", "linearization attitude", AXES),
         "omega_star": Dataset(model.omega_star, "rad/s", "ω* at the linearization attitude (eq 4.3)", AXES),
         "tea": Dataset(tr.tea.theta, "rad", "TEA of the full inertia", AXES),

@@ -121,6 +121,15 @@ def _root_attrs(sweep: Sweep, a: dict, labels: list, n_done: int, complete: bool
     return attrs
 
 
+def _orbit_defined(items: dict, sweep) -> dict:
+    """``items`` with the unit ``orbit`` defined (:func:`acmm.stage_common._define_units`) when
+    every base config has the same orbit rate (else an orbit's length differs between cases)."""
+    from acmm.stage_common import _define_units
+
+    rates = {b.config.orbit_rate for b in sweep.bases}
+    return _define_units(items, rates.pop()) if len(rates) == 1 else items
+
+
 def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bool = False,
                   wall_time: float | None = None) -> tuple[Path, list]:
     """Build ``sweep.h5`` (atomically, via :func:`acmm.results.write_h5`) and ``sweep.csv`` from
@@ -186,6 +195,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     from common.netcdf_layout import with_leading_dim
 
     items = with_leading_dim(items, "case", len(a["case"]))   # one row per case (netCDF dimension)
+    items = _orbit_defined(items, sweep)
     path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units)
     _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
