@@ -10,8 +10,9 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict
+from pydantic import BeforeValidator
 
+from common.config_model import StrictModel
 from common.quantity_fields import quantity, quantity_value
 
 
@@ -61,7 +62,6 @@ AngleVec = Annotated[list[float], _vec3("angle")]
 WeightTorque = Annotated[float, _q("weight_torque")]
 
 
-class _Model(BaseModel):
-    """Strict base of every config section: unknown keys, NaN and infinity refused."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+class _Model(StrictModel):
+    """Strict base of every config section: unknown keys, NaN, infinity and booleans given as
+    numbers refused (:class:`common.config_model.StrictModel`)."""

@@ -35,10 +35,14 @@ class _UniqueKeyLoader(yaml.SafeLoader):
 
 
 def _format_error(exc: ValidationError, model_cls=None) -> str:
+    from common.config_model import BOOLEAN_AS_NUMBER
     from common.hints import prioritize, unknown_key_hint
 
     err = prioritize(exc.errors())[0]
-    loc = ".".join(str(p) for p in err["loc"]) or "config"
+    loc = ".".join(str(p) for p in err["loc"])
+    if err["type"] == BOOLEAN_AS_NUMBER:                     # a model-level check naming its field
+        loc = f"{loc}.{err['ctx']['field']}" if loc else err["ctx"]["field"]
+    loc = loc or "config"
     msg = err["msg"]
     for prefix in ("Value error, ", "Assertion failed, "):
         if msg.startswith(prefix):

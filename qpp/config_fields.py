@@ -9,8 +9,9 @@ from __future__ import annotations
 from typing import Annotated, Optional
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, model_validator
+from pydantic import BaseModel, model_validator
 
+from common.config_model import StrictModel
 from common.quantity_fields import quantity
 
 Matrix = list[list[float]]
@@ -49,8 +50,7 @@ def _implausible(v):
     return None
 
 
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+class _Model(StrictModel):
 
     @model_validator(mode="after")
     def _plausible_magnitudes(self):

@@ -150,7 +150,7 @@ MALFORMED = [
     ("text_for_number", "name: t\ninertia: {I11: heavy, I22: 1.0e6, I33: 1.0e6}\n", ["inertia.I11"]),
     ("boolean_for_number", "name: t\ninertia: {I11: true, I22: 1.0e6, I33: 1.0e6}\n", ["inertia.I11"]),
     ("boolean_for_count", BASE + "schedule: {to: {name: ac, inertia: {I11: 3.0e6, I22: 1.0e6, I33: 3.5e6}}, "
-     "n_points: true}\n", ["schedule.n_points", "valid integer"]),
+     "n_points: true}\n", ["schedule.n_points", "expected a number, got a boolean"]),
     ("list_for_name", "name: [a, b]\ninertia: {I11: 2.0e6, I22: 2.0e6, I33: 2.0e6}\n", ["name"]),
     ("string_for_section", BASE + "actuators: strong\n", ["actuators"]),
     ("bias_and_bias_from_tea", BASE + "disturbance: {bias: [0, 1, 0], bias_from_tea: [0, -5, 0]}\n",

@@ -101,6 +101,7 @@ NO_REPORT_CITATION = {
     "common.runlock": "per-run-directory file lock: no mathematics of the report",
     "common.forked": "a call computed in a forked child process: no mathematics of the report",
     "common.signals": "termination signals and the death of forked children: no mathematics of the report",
+    "common.config_model": "the strict pydantic base of the config sections: no mathematics of the report",
     "common.configio": "bounded YAML reading and pydantic validation of configs: no mathematics of the report",
     "common": "the shared base package: no mathematics of the report",
     "common.hints": "hints attached to error messages: no mathematics of the report",

@@ -349,8 +349,8 @@ def test_cli_smoke_sweep(tmp_runs, run_acmm):
     ({"base": "ac", "grid": {"inertia_scale": [1.0, -0.5]}}, "inertia_scale must stay > 0"),
     ({"base": "ac", "monte_carlo": {"dI11": {"uniform": [0.1, -0.1]}}, "n_runs": 2}, "low must be"),
     # a YAML boolean is no count (it used to run one case)
-    ({"base": "ac", "monte_carlo": {"inertia": {"percent": 10}}, "n_runs": True}, "sweep.n_runs: Input should be a valid integer"),
-    ({"base": "ac", "monte_carlo": {"inertia": {"percent": 10}}, "n_runs": 2, "seed": False}, "sweep.seed: Input should be"),
+    ({"base": "ac", "monte_carlo": {"inertia": {"percent": 10}}, "n_runs": True}, "sweep.n_runs: expected a number, got a boolean"),
+    ({"base": "ac", "monte_carlo": {"inertia": {"percent": 10}}, "n_runs": 2, "seed": False}, "sweep.seed: expected a number, got a boolean"),
 ])
 def test_bad_sweep_config_exits_2_with_one_line(tmp_runs, run_acmm, sweep, message):
     p = tmp_runs / "bad.yaml"

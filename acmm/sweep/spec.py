@@ -10,15 +10,16 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal, Optional
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic import BeforeValidator, Field, model_validator
 
 from acmm.config import Output
 from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS, SHORTHANDS, parameter_value, to_parameter_unit
+from common.config_model import StrictModel
 from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN
 
 
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+class _Model(StrictModel):
+    """Strict base of the sweep sections (:class:`common.config_model.StrictModel`)."""
 
 
 class Dist(_Model):
