@@ -21,6 +21,36 @@ def _small_gain_terms(alpha, beta, coupled) -> tuple[np.ndarray, float]:
     return centre, float(np.sqrt(diag_part + np.sum(half[coupled] ** 2)))
 
 
+def spectral_norms(H: np.ndarray) -> np.ndarray:
+    """σ̄(H_k), the largest singular value of each matrix of a stack (N, m, m).
+
+    For m ≤ 2 in closed form (the larger eigenvalue of the 2×2 Hermitian Hᴴ H), which is
+    ~10× faster than numpy's batched SVD on a frequency grid; otherwise ``numpy.linalg.norm``.
+
+    Parameters
+    ----------
+    H : (N, m, m) complex array
+        The matrices, in any unit.
+
+    Returns
+    -------
+    (N,) float array
+        Their spectral norms, in the unit of H.
+    """
+    m = H.shape[-1]
+    if H.shape[-2] != m or m > 2:
+        return np.linalg.norm(H, ord=2, axis=(-2, -1))
+    if m == 1:
+        return np.abs(H[..., 0, 0])
+    big = np.max(np.abs(H), axis=(-2, -1))             # scaled to 1: no over- or underflow
+    d = np.where(big > 0, big, 1.0)[..., None, None]
+    G = H.real / d + 1j * (H.imag / d) if np.iscomplexobj(H) else H / d   # no 1/big (denormal big)
+    col = np.sum(np.abs(G) ** 2, axis=-2)              # diagonal of Gᴴ G
+    off = np.sum(np.conj(G[..., :, 0]) * G[..., :, 1], axis=-1)
+    mean, half = 0.5 * (col[..., 0] + col[..., 1]), 0.5 * (col[..., 0] - col[..., 1])
+    return big * np.sqrt(mean + np.hypot(half, np.abs(off)))
+
+
 def _small_gain_at(Hw, A, B, C, a, alpha, beta, coupled, s) -> tuple[bool, float, int, float]:
     """(passed, margin 1 − ρ·peak, P_0 of the centred loop, peak σ̄ of H_c) at sector scale s."""
     centre, rho = _small_gain_terms(s * alpha, s * beta, coupled)
@@ -32,7 +62,7 @@ def _small_gain_at(Hw, A, B, C, a, alpha, beta, coupled, s) -> tuple[bool, float
             Hc = np.linalg.solve(np.eye(Hw.shape[1])[None] - Hw * centre[None, None, :], Hw)
         except np.linalg.LinAlgError:           # I − H C_0 singular on the grid: not certified
             return False, -np.inf, P0, np.inf
-    peak = float(np.max(np.linalg.norm(Hc, ord=2, axis=(1, 2))))
+    peak = float(np.max(spectral_norms(Hc)))
     margin = 1.0 - rho * peak
     return bool(P0 == 0 and margin > 0), margin, P0, peak
 

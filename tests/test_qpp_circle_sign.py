@@ -4,6 +4,7 @@ the small-gain form (qpp.circle)."""
 import itertools
 
 import numpy as np
+import pytest
 
 from qpp.circle import circle_criterion
 from qpp.lure import LurePlant, closed_loop
@@ -137,3 +138,23 @@ def test_a_sector_the_grid_does_not_resolve_is_not_certified():
         c = circle_criterion(A_stable, B, C, sector)
         assert np.isfinite(c.max_scale) and c.max_scale * sector[0][1] <= k_unstable * 1.001
         assert c.passed is (sector[0][1] < k_unstable)
+
+
+@pytest.mark.parametrize("m", [1, 2, 3])
+def test_spectral_norms_equal_numpy_svd_including_extreme_magnitudes(m):
+    """The closed-form σ̄ of the small-gain peak (m ≤ 2) against numpy's SVD, with zero, tiny,
+    huge, denormal and nearly rank-one matrices in the stack."""
+    from qpp.circle_small_gain import spectral_norms
+
+    rng = np.random.default_rng(m)
+    H = rng.normal(size=(400, m, m)) + 1j * rng.normal(size=(400, m, m))
+    H[0] = 0.0
+    H[1] *= 1e-200
+    H[2] *= 1e300
+    H[3] *= 1e-310
+    H[4] = 1.0 + 1e-12 * np.eye(m)
+    for stack in (H, H.real.copy()):
+        ref = np.linalg.norm(stack, ord=2, axis=(1, 2))
+        got = spectral_norms(stack)
+        assert got[0] == 0.0
+        np.testing.assert_allclose(got[1:], ref[1:], rtol=1e-13, atol=0)
