@@ -182,7 +182,8 @@ def _to_sympy(node, symbols: dict, funcs: dict, where: str, text: str):
                 raise ConfigError(f"{where}: the constant power in {text!r} is beyond floating point "
                                   f"(|value| outside 1e-300 … 1e300)")
             return a ** b
-        raise ConfigError(f"{where}: operator {type(node.op).__name__} not allowed")
+        hint = " (powers are written **)" if isinstance(node.op, ast.BitXor) else ""
+        raise ConfigError(f"{where}: operator {type(node.op).__name__} not allowed{hint}")
     if isinstance(node, ast.Call):
         if not isinstance(node.func, ast.Name) or node.func.id not in funcs:
             name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)[:40]
@@ -190,6 +191,8 @@ def _to_sympy(node, symbols: dict, funcs: dict, where: str, text: str):
         if node.keywords:
             raise ConfigError(f"{where}: keyword arguments not allowed in {node.func.id}()")
         args = [conv(x) for x in node.args]
+        if not args and node.func.id in ("min", "max"):      # sympy's Max() is −∞, Min() +∞
+            raise ConfigError(f"{where}: {node.func.id}() needs at least one argument")
         try:
             return funcs[node.func.id](*args)
         except TypeError:

@@ -60,6 +60,8 @@ def _sup_gain(A, B, C, a):
     ("k*y1**99999", "exponent"),
     ("(((((9**64)**64)**64)**64)**64)*y1", "beyond floating point"),
     ("k*[y1][0]", "not allowed"),
+    ("k*max()", "max() needs at least one argument"),          # sympy's Max() is −∞: no "division by zero"
+    ("k*y1^3", "powers are written **"),
 ])
 def test_bad_expression_one_line_exit_2_nothing_written(tmp_path, expr, words):
     d = _cfg("qpp_saturation", tmp_path)
