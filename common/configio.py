@@ -7,6 +7,7 @@ failure becomes one :class:`~common.errors.ConfigError` line naming the file, fi
 """
 from __future__ import annotations
 
+import errno
 import os
 from importlib import resources
 from pathlib import Path
@@ -171,6 +172,8 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
                 p, present = candidate, True
         if present and p.is_dir():
             raise ConfigError(f"config path is a directory, not a file: {str(path)[:200]}")
+        if not present and p.is_symlink():     # a link to nothing, or a loop of links
+            raise ConfigError(f"cannot read config file {str(path)[:200]}: {_link_problem(p)}")
         if not present:
             from common.hints import missing_config_message
 
@@ -184,6 +187,17 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
         what = getattr(exc, "problem", None) or "not valid YAML"
         raise ConfigError(f"{p}: not valid YAML: {what}{where}") from None
     return data, p
+
+
+def _link_problem(p: Path) -> str:
+    """Why the symbolic link ``p`` leads to no file: a loop, or a target that does not exist."""
+    try:
+        os.stat(p)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "a loop of symbolic links"
+        return f"symbolic link to a missing target ({os.readlink(p)[:200]})"
+    return "symbolic link to no file"
 
 
 def load_yaml_text(text: str, source: object = "config") -> object:
