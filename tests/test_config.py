@@ -223,11 +223,14 @@ def test_binary_file_fails_cleanly(tmp_runs, run_acmm, command):
 @pytest.mark.parametrize("command", ["validate", "tea"])
 def test_symlink_loop_and_dangling_link_name_their_cause(tmp_runs, run_acmm, command):
     """They read as 'config file not found' (Path.exists() is False for both)."""
-    (tmp_runs / "a.yaml").symlink_to("b.yaml")
-    (tmp_runs / "b.yaml").symlink_to("a.yaml")
-    (tmp_runs / "d.yaml").symlink_to("gone.yaml")
-    _assert_clean_failure(run_acmm(command, "a.yaml"), ["a.yaml", "a loop of symbolic links"], tmp_runs)
-    _assert_clean_failure(run_acmm(command, "d.yaml"), ["d.yaml", "missing target", "gone.yaml"], tmp_runs)
+    links = tmp_runs.parent / f"links_{command}"
+    links.mkdir()
+    (links / "a.yaml").symlink_to("b.yaml")
+    (links / "b.yaml").symlink_to("a.yaml")
+    (links / "d.yaml").symlink_to("gone.yaml")
+    _assert_clean_failure(run_acmm(command, str(links / "a.yaml")), ["a.yaml", "a loop of symbolic links"], tmp_runs)
+    _assert_clean_failure(run_acmm(command, str(links / "d.yaml")), ["d.yaml", "missing target", "gone.yaml"],
+                          tmp_runs)
 
 
 def test_at_least_twenty_malformed_cases():
