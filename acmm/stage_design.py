@@ -357,4 +357,8 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple
         except (OSError, KeyError, ValueError):
             pass
     r, path = run_design(cfg, progress, figures)
+    if cfg.output.units != "imperial":
+        # the table as a later run reuses it: converted to SI and back, so that a simulation is
+        # the same bit for bit whether its design was just made or read from design.h5
+        return load_design_table(path), f"designed, wrote {path}"
     return r.table, f"designed, wrote {path}"

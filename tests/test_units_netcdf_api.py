@@ -260,6 +260,21 @@ def test_si_design_h5_is_the_imperial_design_in_si_and_is_reused_exactly(tmp_pat
     np.testing.assert_allclose(tb.inertia, ta.inertia, rtol=1e-12)
 
 
+def test_si_simulation_is_the_same_whether_its_design_was_just_made_or_reused(tmp_path):
+    """The SI design.h5 holds K in SI; a run that reuses it converts it back (rounding at 1e-16),
+    so a fresh run uses the table as read back too: sim.h5 identical bit for bit."""
+    from acmm.stages import run_simulate
+    from report.manifest import dataset_hashes
+
+    cfg = _short("mb3", tmp_path, units="SI")
+    _, fresh = run_simulate(cfg)
+    first = dataset_hashes(fresh)
+    fresh.unlink()
+    r, again = run_simulate(cfg)
+    assert "reused" in r.design_note
+    assert dataset_hashes(again) == first
+
+
 # ---------------------------------------------------------------- unit strings everywhere
 def test_unit_strings_in_acmm_sweep_and_qpp_configs():
     from acmm.sweep.config import SweepSpec
