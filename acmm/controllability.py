@@ -1,7 +1,9 @@
 """Popov–Belevitch–Hautus controllability of the 24-state design model (eq 4.46, ch. 5.2).
 
-The test runs on the state-scaled (A, B) (:meth:`acmm.linearize.LinearModel.scaled`), so that
-the ratio σmin([A − λI, B]) / σmax([A, B]) does not depend on the states' units.
+The test runs on the state-scaled (A, B) (:meth:`acmm.linearize.LinearModel.scaled`), the
+torque in the unit of :func:`acmm.linearize.torque_scale`, so that the ratio
+σmin([A − λI, B]) / σmax([A, B]) depends on neither the states' units nor the station's size: a
+station 1e-8 times the size of Space Station Freedom was otherwise "uncontrollable" at 3e-13.
 """
 from __future__ import annotations
 
@@ -58,17 +60,38 @@ def controllability(model: LinearModel, tol: float = 1e-10) -> Controllability:
     Controllability
         Rank, smallest ratio and where it occurs.
     """
+    from acmm.linearize import torque_scale
+
     a, b, _ = model.scaled()
+    b = b * torque_scale(model.scales)            # 1.0 within the band: the report's stations
     nx = a.shape[0]
-    norm = np.linalg.norm(np.hstack([a, b]), 2)
     points = list(np.linalg.eigvals(a)) + [0.0]
-    ratios = []
-    for s in points:
-        sv = np.linalg.svd(np.hstack([a - s * np.eye(nx), b]), compute_uv=False)
-        ratios.append(sv[-1] / norm)
-    ratios = np.array(ratios)
+    ratios = pbh_ratios(a, b, points)
     eig_ratios = ratios[:-1]
     rank = nx - int(np.sum(eig_ratios <= tol))
     i = int(np.argmin(ratios))
     return Controllability(rank=rank, order=nx, min_ratio=float(ratios[i]), worst_s=complex(points[i]),
                            tol=tol)
+
+
+def pbh_ratios(a: np.ndarray, b: np.ndarray, points) -> np.ndarray:
+    """σmin([A − sI, B]) / ‖[A, B]‖₂ at each ``s`` of ``points``.
+
+    Parameters
+    ----------
+    a : (nx, nx) array
+        State matrix (scaled states), 1/s.
+    b : (nx, nu) array
+        Input matrix, in the input unit of the solve (:func:`acmm.linearize.torque_scale`).
+    points : sequence of complex
+        Where to evaluate, 1/s.
+
+    Returns
+    -------
+    array
+        The ratios, dimensionless.
+    """
+    nx = a.shape[0]
+    norm = np.linalg.norm(np.hstack([a, b]), 2)
+    return np.array([np.linalg.svd(np.hstack([a - s * np.eye(nx), b]), compute_uv=False)[-1] / norm
+                     for s in points])

@@ -33,6 +33,8 @@ import numpy as np
 
 from acmm import dynamics as dyn
 from acmm.controllability import Controllability, controllability  # noqa: F401  (re-exported)
+from acmm.state_scaling import (  # noqa: F401  (re-exported)
+    MOMENTUM_BAND, NOMINAL_ANGLE, NOMINAL_MOMENTUM, momentum_scale, torque_scale)
 
 STATE_NAMES = [
     "domega1", "theta2_dot", "domega3", "dtheta1", "dtheta2", "dtheta3",
@@ -48,12 +50,6 @@ DRF_INPUTS = {
     "attitude_hold": (6, 4, 5),   # h1, δθ2, δθ3
     "momentum_hold": (6, 7, 5),   # h1, h2, δθ3
 }
-
-#: nominal magnitudes used to scale the states (rad, ft·lbf·s): a 0.01 rad attitude error and
-#: 1000 ft·lbf·s of CMG momentum.
-NOMINAL_ANGLE = 0.01
-NOMINAL_MOMENTUM = 1000.0
-
 
 @dataclass(frozen=True)
 class LinearModel:
@@ -173,11 +169,12 @@ def kinematics_jacobian(theta: np.ndarray, n: float) -> np.ndarray:
     return np.array([[0.0, 0.0, n / c3], [0.0, 0.0, -n * s3 / c3], [-n * c3, 0.0, 0.0]])
 
 
-def state_scales(n: float, drf_mode: str = "attitude_hold") -> np.ndarray:
+def state_scales(n: float, drf_mode: str = "attitude_hold", inertia=None) -> np.ndarray:
     """Nominal magnitude of every state (same units as the state).
 
-    Angles 0.01 rad, rates n·0.01 rad/s, momentum 1000 ft·lbf·s, its integral 1000/n, and each
-    DRF state its input's scale divided by (filter frequency)^k (``docs/ERRATA.md`` § Scaling).
+    Angles 0.01 rad, rates n·0.01 rad/s, momentum 1000 ft·lbf·s (:func:`momentum_scale`: scaled
+    with the station beyond :data:`MOMENTUM_BAND`), its integral that over n, and each DRF state
+    its input's scale divided by (filter frequency)^k (``docs/ERRATA.md`` § Scaling).
 
     Parameters
     ----------
@@ -185,13 +182,15 @@ def state_scales(n: float, drf_mode: str = "attitude_hold") -> np.ndarray:
         Orbital rate, rad/s.
     drf_mode : {"attitude_hold", "momentum_hold"}
         DRF inputs (h1, δθ2, δθ3) or (h1, h2, δθ3).
+    inertia : (3, 3) or (L, 3, 3) array, optional
+        The station's inertia, slug·ft² (:func:`momentum_scale`).
 
     Returns
     -------
     (24,) array
         Nominal magnitudes, in the units of :func:`state_units` for the same ``drf_mode``.
     """
-    ang, mom = NOMINAL_ANGLE, NOMINAL_MOMENTUM
+    ang, mom = NOMINAL_ANGLE, momentum_scale(n, inertia)
     s = np.empty(24)
     s[0:3] = n * ang
     s[3:6] = ang
@@ -277,7 +276,7 @@ def linearize(inertia: np.ndarray, theta_star: np.ndarray, n: float, *,
             A[k + 1, k] = 1.0
             k += 2
     return LinearModel(A=A, B=B, G=G, n=n, theta_star=theta, omega_star=omega, inertia=inertia,
-                       variant=variant, drf_mode=drf_mode, scales=state_scales(n, drf_mode))
+                       variant=variant, drf_mode=drf_mode, scales=state_scales(n, drf_mode, inertia))
 
 
 def design_point(inertia_full: np.ndarray, theta_tea: np.ndarray, n: float, *,

@@ -53,7 +53,8 @@ from acmm.sector import (  # noqa: F401 (re-exported: the sector, the result typ
 def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float = 45.0,
                Q0=None, scale=None, method: str = "shift", riccati_method: str = "scipy",
                residual_tol: float = 1e-9, min_margin: float = 0.01,
-               max_uniform_shift: float = 100.0, line_spacing: float = 0.0) -> SectorLQR:
+               max_uniform_shift: float = 100.0, line_spacing: float = 0.0,
+               input_scale: float = 1.0) -> SectorLQR:
     """LQR gain with every closed-loop pole in the sector of Fig 5.2 (module docstring).
 
     Parameters
@@ -93,6 +94,11 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
         a group stay clustered); δ > 0 mirrors them one real-Schur block at a time, the k-th
         about h + kδn (raised further until it lands ≥ δn from every other pole), so the
         moved poles are distinct (units of n).
+    input_scale : float
+        Unit of the input in which the problem is solved, in units of the input (e.g. ft·lbf):
+        B·e and R·e², K and R mapped back.  The stations of :func:`acmm.linearize.momentum_scale`
+        beyond its band pass their momentum scale over the nominal one, so that a station k
+        times smaller (torques k times, R 1/k² times) is the same scaled problem.
 
     Returns
     -------
@@ -112,8 +118,10 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
         raise ValueError(f"method must be 'shift' or 'uniform', got {method!r}")
     if not (n > 0 and sigma > 0 and 0 < half_angle_deg < 90 and min_margin >= 0):
         raise ValueError("need n > 0, sigma > 0, 0 < half_angle_deg < 90 and min_margin ≥ 0")
+    if not (0 < input_scale < float("inf")):
+        raise ValueError("need input_scale > 0")
     p = _problem(A, B, R, n, sigma, half_angle_deg, Q0, scale, method, riccati_method, residual_tol,
-                 min_margin)
+                 min_margin, input_scale)
     if method == "uniform":
         return _sector_uniform(p, max_uniform_shift)
     return _sector_shift(p, line_spacing)

@@ -33,6 +33,7 @@ class _SectorProblem:
     residual_tol: float
     method: str
     riccati_method: str
+    e: float = 1.0              # input unit of the solve: Bs and R are B·e and R·e²
 
     @property
     def alpha(self) -> float:
@@ -50,13 +51,13 @@ class _SectorProblem:
     def finish(self, Qs, Ps, shift, mirror_shifts) -> SectorLQR:
         return _finish(self.As, self.Bs, Qs, self.R, Ps, shift, self.n, self.sigma, self.half_angle_deg,
                        self.d, self.min_margin, self.residual_tol, self.method, self.riccati_method,
-                       mirror_shifts)
+                       mirror_shifts, self.e)
 
 
 def _problem(A, B, R, n, sigma, half_angle_deg, Q0, scale, method, riccati_method, residual_tol,
-             min_margin) -> _SectorProblem:
-    """The arguments of :func:`sector_lqr` as a :class:`_SectorProblem` (scaled, Q0 as a matrix,
-    every pole checked movable)."""
+             min_margin, input_scale: float = 1.0) -> _SectorProblem:
+    """The arguments of :func:`sector_lqr` as a :class:`_SectorProblem` (scaled, the input in
+    units of ``input_scale``, Q0 as a matrix, every pole checked movable)."""
     A = np.asarray(A, dtype=float)
     B = np.asarray(B, dtype=float)
     nx, m = B.shape
@@ -72,9 +73,11 @@ def _problem(A, B, R, n, sigma, half_angle_deg, Q0, scale, method, riccati_metho
     else:
         d = None
         As, Bs = A, B
+    if input_scale != 1.0:
+        Bs, R = Bs * input_scale, R * input_scale ** 2
     _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin)
     return _SectorProblem(As, Bs, Q0s, R, d, n, sigma, half_angle_deg, min_margin, residual_tol, method,
-                          riccati_method)
+                          riccati_method, float(input_scale))
 
 
 def _sector_uniform(p: _SectorProblem, max_uniform_shift: float) -> SectorLQR:

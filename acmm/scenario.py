@@ -161,7 +161,7 @@ class SimResult:
 
 
 
-def plain_scales(n: float, drf_mode: str) -> np.ndarray:
+def plain_scales(n: float, drf_mode: str, inertia=None) -> np.ndarray:
     """Nominal magnitudes of the plain state X (for absolute tolerances).
 
     The scales of :func:`acmm.linearize.state_scales` (``docs/ERRATA.md`` § Scaling) with ω2
@@ -173,13 +173,15 @@ def plain_scales(n: float, drf_mode: str) -> np.ndarray:
         Orbital rate, rad/s.
     drf_mode : {"attitude_hold", "momentum_hold"}
         DRF inputs (h1, δθ2, δθ3) or (h1, h2, δθ3).
+    inertia : (3, 3) or (L, 3, 3) array, optional
+        The station's inertia (or its levels'), slug·ft² (:func:`acmm.linearize.momentum_scale`).
 
     Returns
     -------
     (24,) array
         Nominal magnitudes, in the units of X (module docstring).
     """
-    s = state_scales(n, drf_mode).copy()
+    s = state_scales(n, drf_mode, inertia).copy()
     s[1] = s[0]            # ω2 instead of θ̇2: same rate scale
     return s
 
@@ -239,7 +241,7 @@ def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float
         harmonic_a=np.asarray(cfg.disturbance.A), harmonic_b=np.asarray(cfg.disturbance.B), n=n,
         torque_limit=cfg.actuators.torque_limit, momentum_limit=cfg.actuators.momentum_limit,
         drf_mode=cfg.design.drf_mode, t_end=t_end, sample_times=samples, x0=x0,
-        rtol=sim.rtol if rtol is None else rtol, atol=plain_scales(n, cfg.design.drf_mode) * sim.atol_scale,
+        rtol=sim.rtol if rtol is None else rtol, atol=plain_scales(n, cfg.design.drf_mode, table.inertia[idx]) * sim.atol_scale,
         divergence=np.radians(sim.divergence_deg), max_saturation=sim.max_saturation_orbits * orbit)
 
 

@@ -227,7 +227,7 @@ def sector_design(A, B, scales, s: DesignSettings):
                           Q0=s.q0_weight(A.shape[0]),   # on the scaled states
                           scale=scales, method=s.pole_method, riccati_method=s.riccati_method,
                           residual_tol=s.residual_tol, min_margin=s.min_margin,
-                          line_spacing=s.line_spacing)
+                          line_spacing=s.line_spacing, input_scale=lin.torque_scale(scales))
 
 
 def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: str = "polynomial",

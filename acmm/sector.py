@@ -250,7 +250,7 @@ def _group(h: np.ndarray, rel_gap: float = 0.02) -> list[tuple[float, float]]:
     return groups
 
 
-#: PBH ratio σmin([A − λI, B]) / ‖[A, B]‖₂ below which a mode counts as uncontrollable.
+#: PBH ratio of :func:`acmm.controllability.pbh_ratios` below which a mode counts as uncontrollable.
 UNCONTROLLABLE_RATIO = 1e-12
 
 
@@ -260,19 +260,19 @@ def _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin):
     outside = lam[sector_margin(lam, n, sigma, half_angle_deg) < min_margin]
     if outside.size == 0:
         return
-    nx = As.shape[0]
-    norm = np.linalg.norm(np.hstack([As, Bs]), 2)
-    for z in outside:
-        smin = np.linalg.svd(np.hstack([As - z * np.eye(nx), Bs]), compute_uv=False)[-1]
-        if smin <= UNCONTROLLABLE_RATIO * norm:
+    from acmm.controllability import pbh_ratios
+
+    for z, ratio in zip(outside, pbh_ratios(As, Bs, outside)):
+        if ratio <= UNCONTROLLABLE_RATIO:
             raise DesignError(
                 f"sector LQR: open-loop pole λ/n = {complex(z / n):.4g} lies outside the sector "
-                f"and is uncontrollable (PBH ratio {smin / norm:.2e}); no feedback can move it")
+                f"and is uncontrollable (PBH ratio {ratio:.2e}); no feedback can move it")
 
 
 def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, residual_tol,
-            method, riccati_method, mirror_shifts) -> SectorLQR:
-    """Verify a design in scaled coordinates and map it back to physical units."""
+            method, riccati_method, mirror_shifts, e: float = 1.0) -> SectorLQR:
+    """Verify a design in scaled coordinates (the input in units of ``e``: B·e, R·e²) and map
+    it back to physical units."""
     Ps = 0.5 * (Ps + Ps.T)
     Qs = 0.5 * (Qs + Qs.T)
     Ks = np.linalg.solve(R, Bs.T @ Ps)
@@ -305,6 +305,8 @@ def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, r
         Q = Qs / d[:, None] / d[None, :]
     else:
         K, P, Q = Ks, Ps, Qs
+    if e != 1.0:                        # u = e·ũ: K = e·K̃, R = R̃ / e²
+        K, R = K * e, R / e ** 2
     return SectorLQR(K=K, P=P, Q=Q, R=R, poles=poles, margin=margin, residual=res, shift=alpha,
                      mirror_shifts=tuple(mirror_shifts), method=method,
                      riccati_method=riccati_method, scale=d, eig_condition=kappa,

@@ -82,7 +82,8 @@ def compare_manifests(old: dict | None, new: dict) -> dict:
     Returns
     -------
     dict
-        ``status`` ("no previous report" | "identical" | "different"), ``compared`` (number of
+        ``status`` ("no previous report" | "identical" | "different" | "nothing comparable":
+        no dataset of the previous report has this one's file and config), ``compared`` (number of
         datasets compared), ``recomputed`` (files recomputed since the previous report, i.e.
         with a different creation time), ``differences`` (list of "file: dataset"), ``missing``.
     """
@@ -103,7 +104,9 @@ def compare_manifests(old: dict | None, new: dict) -> dict:
                 compared += 1
                 if o["datasets"][ds] != h:
                     diffs.append(f"{key}: {ds}")
-    return {"status": "identical" if not diffs else "different", "compared": compared,
+    # nothing in common (other results root, every config changed): no verdict to give
+    status = "different" if diffs else "identical" if compared else "nothing comparable"
+    return {"status": status, "compared": compared,
             "recomputed": recomputed, "differences": diffs, "missing": missing,
             "previous": old.get("created_utc")}
 

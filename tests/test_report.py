@@ -295,6 +295,13 @@ def test_two_runs_give_identical_datasets(fast_report, tmp_path):
     diff = rp.compare_manifests(manifest, changed)
     assert diff["status"] == "different" and diff["differences"] == [f"{key}: {ds}"]
     assert rp.compare_manifests(None, manifest)["status"] == "no previous report"
+    # a previous report of other results (another root: other config hashes) is no evidence:
+    # it said "identical (0 datasets compared)"
+    other = json.loads(json.dumps(manifest))
+    for f in other["files"].values():
+        f["config_hash"] = "x" + f["config_hash"]
+    none = rp.compare_manifests(other, manifest)
+    assert none["status"] == "nothing comparable" and none["compared"] == 0
 
 
 def test_dataset_hashes_ignore_timing_and_attributes(tmp_path):

@@ -32,5 +32,6 @@ def build(rep: SectionWriter, cmp: dict, manifest: dict) -> None:
                   f"({'the others reused, identical by construction' if rec < len(manifest['files']) else 'none reused'}). "
                   f"Result: {cmp['status'].upper()}"
                   + (f" ({len(cmp['differences'])} datasets differ: {', '.join(cmp['differences'][:10])})"
-                     if cmp["differences"] else " — every dataset has the same hash.")
+                     if cmp["differences"] else " — every dataset has the same hash." if cmp["compared"]
+                     else " — no file of the previous report has the same name and config.")
                   + (f" Not compared (new or changed config): {', '.join(cmp['missing'][:10])}." if cmp["missing"] else ""))
