@@ -241,6 +241,28 @@ def settling_time(t, y_o, r_o, band: float) -> float:
     return float(t[idx[-1]]) if idx.size else 0.0
 
 
+def modal_settling_time(Az, band: float) -> float:
+    """Time for the slowest mode of the closed loop to decay to ``band`` of its start, s:
+    ln(1/band) / min(−Re λ(Az)); 0 when a mode does not decay (an unstable loop is refused
+    elsewhere).  The settling time of a nominal loop with nothing to track (r_o ≡ 0), whose
+    :func:`settling_time` is 0 although a perturbation still takes this long to die out.
+
+    Parameters
+    ----------
+    Az : (N, N) array
+        Closed-loop state matrix (eq 10.7), 1/s.
+    band : float
+        Settling band, dimensionless fraction.
+
+    Returns
+    -------
+    float
+        Settling time, s.
+    """
+    decay = float(np.min(-np.linalg.eigvals(np.asarray(Az, float)).real))
+    return float(np.log(1.0 / band) / decay) if decay > 0 else 0.0
+
+
 def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
             hinf: HinfGains | None = None, T: float | None = None) -> DesignResult:
     """β1 for both B_z readings, thresholds at T (default ``spheres.T``), the circle criterion and
@@ -289,6 +311,8 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     t, y_o, x_o = nominal_output(cfg, K1, Kc, H, horizon, n)
     r_o = np.array([eval_signal(cfg.simulation.r_o, tt) for tt in t]).T
     Ts = settling_time(t, y_o, r_o, cfg.spheres.settle_band)
+    if Ts == 0.0:   # the nominal loop tracks from the start (r_o ≡ 0, say): its modes still settle
+        Ts = min(modal_settling_time(Azd["eq10.7"], cfg.spheres.settle_band), float(t[-1]))
     keep = t <= T + 1e-12
     th = thresholds(cfg, t, y_o, x_o, sector, T)
     res = DesignResult(K1, Kc, H, gains_source, hinf, a, T, Azd, Bzd, Cz, b1, th, circ, sector,

@@ -236,3 +236,39 @@ def test_a_badly_scaled_plant_has_no_false_obstacle():
     A, B, C = np.array([[0.0, 1e6], [0.0, 0.0]]), np.array([[0.0], [1e-4]]), np.array([[1.0, 0.0]])
     assert np.linalg.matrix_rank(np.hstack([B, A @ B])) == 2                   # independent: Kalman rank
     assert structural_obstacles(LurePlant(A, B, C, B, [[0]], [[1]], [[1]])) == []
+
+
+def test_nothing_to_track_is_no_reason_for_a_vanishing_T(tmp_runs):
+    """r_o ≡ 0: the nominal loop 'settles' at t = 0, T fell to 1e-3·t_final, β3 = k‖(1)_T‖₂ to ~0
+    and a design was certified whose simulation leaves the output sphere (a review's case: k at
+    the end of its range, ‖δr‖∞ = β_ri, ‖y − y_o‖∞ = 0.0072 > β_o = 0.006).  T is now the
+    settling time of the loop's slowest mode: no certificate, and the simulation agrees."""
+    import h5py
+    from typer.testing import CliRunner
+
+    from cli.qpp_app import app
+
+    cfg = {
+        "name": "regulate",
+        "plant": {"A": [[0, 1], [0, -0.5]], "B": [[0], [1]], "C": [[1, 0]], "G": [[0], [1]],
+                  "Ac": [[0]], "Bc": [[1]], "Cc": [[1]]},
+        "nonlinearity": {"kind": "expression", "f1": ["k*y1"],
+                         "parameters": {"k": {"min": -0.8, "max": 0.8, "nominal": 0}}, "y_range": [[-3, 3]]},
+        "hinf": {"rho": 0.1, "a": 1.0e-4},
+        "spheres": {"beta_o": 0.006, "beta_ri": 0.004, "T": 1.0},
+        "design": {"a_max": 1.0e-2, "rho_min": 0.05, "wider_search": False},
+        "simulation": {"t_final": 8.0, "n_samples": 401, "r_o": [[{"kind": "step", "amplitude": 0.0}]],
+                       "scenarios": [{"name": "kmax", "parameters": {"k": 0.8},
+                                      "delta_r": [[{"kind": "sin", "amplitude": 0.004, "omega": 1.0}]]}]},
+        "output": {"root": "runs", "figures": False},
+    }
+    (tmp_runs / "reg.yaml").write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(app, ["design", "reg.yaml"])
+    CliRunner().invoke(app, ["simulate", "reg.yaml"])
+    with h5py.File(tmp_runs / "runs" / "regulate" / "qpp_design.h5") as f:
+        certified, T = int(f.attrs["certified"]), float(f["certificate/T_settle"][()])
+    with h5py.File(tmp_runs / "runs" / "regulate" / "qpp_sim.h5") as f:
+        err = float(f["kmax/error_inf"][()])
+    assert err > 0.006                        # the simulation leaves the sphere ...
+    assert certified == 0, r.output           # ... so no certificate may claim it
+    assert T > 1.0                            # the slowest mode's settling time, not 0.008 s
