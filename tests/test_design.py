@@ -191,3 +191,30 @@ def test_config_q0_groups_are_diagonal_weights_on_the_scaled_states():
     q_scaled = p.lqr.Q * d[:, None] * d[None, :]
     q_scaled = 0.5 * (q_scaled + q_scaled.T)
     assert np.linalg.eigvalsh(q_scaled - np.diag(g.diagonal())).min() > -1e-9 * np.abs(q_scaled).max()
+
+
+def test_a_blend_whose_end_is_on_another_branch_of_equilibria_is_refused(tmp_runs, run_acmm):
+    """TEA-spaced points follow the branch continued from the start (it reaches −35° at the end
+    station); the end station asks for −55° (bias_from_tea), a root of another branch: the points
+    jumped −36.25° → −55° and a polynomial was fitted across the jump, exit 0 (a review's case)."""
+    from acmm.tea import solve_tea, solve_tea_near, bias_for_attitude
+
+    end_inertia = np.diag([10e6, 3e6, 12e6])
+    n = 0.0011
+    # independent: continuation from the start's −40° root along the blend ends far from −55°
+    start_inertia = np.diag([10e6, 3e6, 11e6])
+    b0 = bias_for_attitude(np.radians([0, -40, 0]), start_inertia, n)
+    b1 = bias_for_attitude(np.radians([0, -55, 0]), end_inertia, n)
+    t = solve_tea(start_inertia, n, b0, expected=np.radians([0, -40, 0])).theta
+    for s in np.linspace(0, 1, 81):
+        t = solve_tea_near((1 - s) * start_inertia + s * end_inertia, n, (1 - s) * b0 + s * b1, t).theta
+    assert abs(np.degrees(t[1]) + 55) > 5
+    (tmp_runs / "fold.yaml").write_text(
+        "name: fold\ninertia: {I11: 10.0e6, I22: 3.0e6, I33: 11.0e6}\norbit_rate: 0.0011\n"
+        "disturbance: {bias_from_tea: [0, -40.0, 0]}\n"
+        "schedule:\n  to: {name: fend, inertia: {I11: 10.0e6, I22: 3.0e6, I33: 12.0e6}, "
+        "disturbance: {bias_from_tea: [0, -55.0, 0]}}\n  n_points: 5\noutput: {figures: false}\n")
+    r = run_acmm("design", "fold.yaml")
+    assert r.exit_code == 2, r.output
+    assert "schedule.to:" in r.stderr and "not on the branch" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not (tmp_runs / "runs" / "fold").exists()
