@@ -295,3 +295,7 @@ def _register_optional_commands() -> None:
 
 
 _register_optional_commands()
+
+
+if __name__ == "__main__":     # python -m cli.acmm_app
+    main()

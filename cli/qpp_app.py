@@ -149,3 +149,7 @@ def main() -> None:
 
     terminate_like_ctrl_c()
     app()
+
+
+if __name__ == "__main__":     # python -m cli.qpp_app
+    main()

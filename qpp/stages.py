@@ -332,7 +332,10 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
             "u": Dataset(np.asarray(s.u).T, "control units", "control u = K1 x̂ + Kc x_c − f1o", dims=("t", "input")),
             "x": Dataset(np.asarray(s.x).T, "state units", "plant state", dims=("t", "state")),
             "error_inf": Dataset(s.error_inf, "output units", "‖y − y_o‖∞",
-                                 attrs={"beta_o": s.beta_o, "passed": int(s.passed), "gamma": s.gamma,
+                                 # γ of the sinusoidal kind, the payload of the polar arm; an
+                                 # expression's parameters are param_<name> (not "gamma")
+                                 attrs={"beta_o": s.beta_o, "passed": int(s.passed),
+                                        **({} if s.parameters else {"gamma": s.gamma}),
                                         **({} if s.diverged_at is None else {"diverged_at_s": s.diverged_at}),
                                         **{f"param_{k}": v for k, v in (s.parameters or {}).items()}}),
             "error_per_output": Dataset(s.error_per_output, "output units", "sup_t |y_i − y_oi|", dims=("output",)),

@@ -112,3 +112,35 @@ def test_non_finite_or_huge_values_rejected_before_any_work(tmp_path, edit, fiel
         assert r.exit_code == 2, r.output
         assert field in r.output and "Traceback" not in r.output
     assert not (tmp_path / "runs").exists()
+
+
+def test_expression_scenarios_store_their_parameters_not_a_gamma(tmp_runs):
+    """An expression's scenario stored ``gamma`` = its first parameter beside ``param_k`` (a
+    review: γ = 4.2 for k = 4.2); γ belongs to the sinusoidal kind only."""
+    import h5py
+
+    from cli.qpp_app import app
+
+    r = runner.invoke(app, ["simulate", "qpp_saturation", "--no-figures", "simulation.n_samples=201",
+                            "simulation.t_final=4"])
+    assert r.exit_code == 0, r.output
+    with h5py.File(tmp_runs / "runs" / "qpp_saturation" / "qpp_sim.h5") as f:
+        attrs = dict(f["k_max_step/error_inf"].attrs)
+    assert "gamma" not in attrs and attrs["param_k"] == pytest.approx(4.2)
+
+
+def test_the_horizon_too_long_names_the_field_that_set_it(tmp_runs):
+    from cli.qpp_app import app
+
+    r = runner.invoke(app, ["design", "qpp_saturation", "spheres.T=1e4", "spheres.adapt_T=false"])
+    assert r.exit_code == 2 and r.output.strip().startswith("error: spheres.T: 10000 s is too long"), r.output
+
+
+def test_the_apps_run_as_modules(tmp_path):
+    import subprocess
+    import sys
+
+    for mod, conf in (("cli.acmm_app", "mb3"), ("cli.qpp_app", "qpp_siso")):
+        p = subprocess.run([sys.executable, "-m", mod, "validate", conf], capture_output=True, text=True,
+                           cwd=tmp_path, timeout=120)
+        assert p.returncode == 0 and "valid" in p.stdout, (mod, p.stdout, p.stderr)
