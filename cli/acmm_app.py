@@ -178,6 +178,7 @@ def design(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = O
     elif r.fit is not None:
         typer.echo(f"  schedule: order {r.fit.order} in theta2*; worst relative fit residual "
                    f"{r.fit.rel_residual.max():.2e}")
+    if r.fit is not None and r.check is not None:      # either form: what --strict judges
         c = r.check
         worst = r.worst_check_index()
         verdict = "all in the sector" if c.worst > 0 else "NOT all in the sector"

@@ -218,3 +218,11 @@ def test_a_blend_whose_end_is_on_another_branch_of_equilibria_is_refused(tmp_run
     assert r.exit_code == 2, r.output
     assert "schedule.to:" in r.stderr and "not on the branch" in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert not (tmp_runs / "runs" / "fold").exists()
+
+
+def test_table_form_prints_the_check_that_strict_judges(tmp_runs, run_acmm):
+    """schedule.form: table printed no check lines, yet --strict failed on the check's margin."""
+    r = run_acmm("design", "staircase", "schedule.form=table", "schedule.fit=least_squares",
+                 "schedule.n_points=4", "--no-figures")
+    assert r.exit_code == 0, r.output
+    assert "scheduled gain (table) on the local models" in r.stdout and "scheduled closed loops:" in r.stdout
