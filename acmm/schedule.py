@@ -194,7 +194,6 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     n = s.orbit_rate
     if spec.theta_guess is not None:
         t = solve_tea_near(spec.inertia, n, spec.bias, spec.theta_guess, expected=spec.expected)
-        _check_on_branch(spec, t.theta)
     else:
         t = solve_tea(spec.inertia, n, spec.bias, expected=spec.expected)
     model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
@@ -202,22 +201,27 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     return PointDesign(spec, t, model, res)
 
 
-def _check_on_branch(spec, theta) -> None:
-    """ConfigError when the end of a TEA-spaced blend (s = 1) is not on the branch of equilibria
-    continued from the start (its guess): the blend crosses a fold, the points between follow one
-    branch and the end sits on another, and a schedule fitted across the jump means nothing."""
-    from common.errors import ConfigError
+def off_branch_gap(spec, theta) -> float:
+    """How far (rad, largest angle) the TEA ``theta`` of the end of a TEA-spaced blend (s = 1)
+    lies from the branch of equilibria continued from the start (its guess); 0 for any other
+    point.  Above ~1e-6 rad the blend crosses a fold: the points between follow one branch,
+    the end (its ``bias_from_tea``) sits on another, and the schedule is fitted across the jump.
 
+    Parameters
+    ----------
+    spec : PointSpec
+        The design point.
+    theta : (3,) array
+        Its TEA, rad.
+
+    Returns
+    -------
+    float
+        The gap, rad.
+    """
     if spec.s != 1.0 or spec.theta_guess is None:
-        return
-    gap = np.abs((np.asarray(theta) - spec.theta_guess + np.pi) % (2 * np.pi) - np.pi)
-    if np.max(gap) > 1e-6:
-        deg = lambda v: "[" + ", ".join(f"{x:+.2f}" for x in np.degrees(v)) + "] deg"  # noqa: E731
-        raise ConfigError(
-            f"schedule.to: the end station's TEA {deg(theta)} is not on the branch of equilibria "
-            f"continued from the start, which reaches {deg(spec.theta_guess)} at the end station: "
-            "the blend crosses a fold of the equilibria; give schedule.to the TEA of that branch "
-            "(disturbance.bias_from_tea) or schedule between stations on one branch")
+        return 0.0
+    return float(np.max(np.abs((np.asarray(theta) - spec.theta_guess + np.pi) % (2 * np.pi) - np.pi)))
 
 
 def sector_design(A, B, scales, s: DesignSettings):

@@ -134,6 +134,22 @@ class DesignResult:
         """
         return np.array([np.max(-p.lqr.poles.real) / self.config.orbit_rate for p in self.points])
 
+    def end_off_branch(self):
+        """(TEA of the blend's end, where the branch continued from the start reaches there), rad,
+        when they differ by more than 1e-6 rad (:func:`acmm.schedule.off_branch_gap`), else None.
+
+        Returns
+        -------
+        tuple of (3,) arrays or None
+            The two attitudes, rad.
+        """
+        from acmm.schedule import off_branch_gap
+
+        for p in self.points:
+            if off_branch_gap(p.spec, p.tea.theta) > 1e-6:
+                return p.tea.theta, p.spec.theta_guess
+        return None
+
     def worst_check_index(self) -> int | None:
         """Index of the schedule check with the smallest sector margin (None without a schedule).
 

@@ -229,8 +229,11 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) ->
         t = _solve_by_continuation(inertia, n, bias)
     except NoEquilibriumError as exc:
         if at is None:
-            from acmm.tea_roots import with_other_roots
+            from acmm.tea_roots import non_isolated_equilibrium, with_other_roots
 
+            family = non_isolated_equilibrium(inertia, n, bias)   # axisymmetric: a curve of roots
+            if family is not None:
+                return family
             raise with_other_roots(exc, inertia, n, bias) from None
         return at
     except ConvergenceError:

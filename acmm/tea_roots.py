@@ -108,3 +108,53 @@ def with_other_roots(exc: NoEquilibriumError, inertia, n, bias) -> NoEquilibrium
         f"{exc}. Equilibria on other branches do exist for this bias, at θ = {roots} deg{more}: "
         f"name the one meant with disturbance.bias_from_tea (e.g. bias_from_tea=[{first}] "
         "gives this bias and that attitude)")
+
+
+#: σmin/σmax of the eq 4.1 Jacobian below which an equilibrium is not isolated
+SINGULAR_JACOBIAN = 1e-9
+
+
+def non_isolated_equilibrium(inertia: np.ndarray, n: float, bias: np.ndarray,
+                             max_iter: int = 100) -> TEA | None:
+    """An equilibrium of a family (singular Jacobian), nearest LVLH, or None.
+
+    An axisymmetric station (I11 = I22, say) balances a bias on a whole curve of attitudes: the
+    Jacobian of eq 4.1 is singular on it, so the continuation and Newton's method fail and the
+    station was reported to have no equilibrium.  Gauss–Newton with the minimum-norm step
+    (least squares) from LVLH reaches the member of the family nearest LVLH; it is accepted only
+    when its residual vanishes (:func:`acmm.tea._newton`'s test) and the Jacobian there is
+    singular — an isolated root is the continuation's to find, not this function's.
+
+    Parameters
+    ----------
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        Constant disturbance torque, ft·lbf.
+    max_iter : int
+        Gauss–Newton iterations.
+
+    Returns
+    -------
+    TEA or None
+        The equilibrium (its attitude in rad), or None.
+    """
+    from acmm.tea import RESIDUAL_TOL, equilibrium_jacobian, equilibrium_residual, residual_threshold
+
+    theta = np.zeros(3)
+    scale = max(3 * n * n * np.abs(inertia).max(), 1e-300)
+    for _ in range(max_iter):
+        r = equilibrium_residual(theta, inertia, n, bias)
+        if np.max(np.abs(r)) <= residual_threshold(scale, RESIDUAL_TOL):
+            sv = np.linalg.svd(equilibrium_jacobian(theta, inertia, n), compute_uv=False)
+            return make_tea(theta, inertia, n, bias) if sv[-1] <= SINGULAR_JACOBIAN * sv[0] else None
+        step = np.linalg.lstsq(equilibrium_jacobian(theta, inertia, n), -r, rcond=1e-10)[0]
+        norm = np.max(np.abs(step))
+        if not np.isfinite(norm):
+            return None
+        theta = theta + (step * (0.05 / norm) if norm > 0.05 else step)
+        if np.max(np.abs(theta)) > np.radians(85.0):
+            return None
+    return None

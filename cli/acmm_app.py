@@ -6,6 +6,7 @@ mathematics lives here.  User errors print one line and exit with code 2.
 from __future__ import annotations
 
 import json
+import math
 from typing import Optional
 
 import enum
@@ -186,7 +187,14 @@ def design(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = O
                    f"worst margin {c.worst:+.3f} n at {c.names[worst]} ({c.kind[worst]})")
         stable = "stable at every check" if c.max_real.max() < 0 else "UNSTABLE at some checks"
         typer.echo(f"  scheduled closed loops: {stable}; largest Re(pole) = {c.max_real.max():+.3f} n")
+    jump = r.end_off_branch()
+    if jump is not None:
+        typer.echo(f"  warning: the end station's TEA {_fmt([math.degrees(x) for x in jump[0]], '{:+.2f}')} deg (as asked) is not "
+                   f"on the branch of equilibria continued from the start, which reaches "
+                   f"{_fmt([math.degrees(x) for x in jump[1]], '{:+.2f}')} deg there: the blend crosses a fold and the "
+                   f"schedule is fitted across the jump")
     typer.echo(f"  wrote {path}")
+    strict_exit(strict, jump is not None, f"{cfg.name}: the blend's end is on another branch of equilibria")
     if r.check is not None:
         strict_exit(strict, r.check.worst <= 0,
                     f"{cfg.name}: the scheduled gain puts poles outside the sector "

@@ -326,3 +326,27 @@ def test_a_fold_names_the_equilibria_of_other_branches():
     # naming it with bias_from_tea gives that attitude
     t = tea.solve_tea(inertia, 0.0011, tea.bias_for_attitude(root, inertia, 0.0011), expected=root)
     np.testing.assert_allclose(t.theta, root, atol=1e-9)
+
+
+def test_axisymmetric_station_has_a_family_of_equilibria_not_none():
+    """I11 = I22: the gravity gradient has no yaw stiffness, every yaw of a curve balances the
+    bias and the Jacobian of eq 4.1 is singular there; the continuation failed and the station
+    was reported to have no equilibrium (a review's case).  The member nearest LVLH is returned;
+    an independent least-squares solve (scipy) confirms it is an equilibrium."""
+    from scipy.optimize import least_squares
+
+    from acmm.tea import equilibrium_jacobian, equilibrium_residual, solve_tea
+
+    inertia, n, bias = np.diag([20e6, 20e6, 5e6]), 0.0011, np.array([0.1, 0.2, 0.0])
+    t = solve_tea(inertia, n, bias)
+    assert np.max(np.abs(equilibrium_residual(t.theta, inertia, n, bias))) < 1e-9
+    sv = np.linalg.svd(equilibrium_jacobian(t.theta, inertia, n), compute_uv=False)
+    assert sv[-1] < 1e-9 * sv[0]                                   # not isolated
+    ref = least_squares(lambda th: equilibrium_residual(th, inertia, n, bias), np.zeros(3),
+                        xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    assert np.max(np.abs(ref.fun)) < 1e-9
+    # the family is a curve (roll and pitch move with yaw): ours is the member nearest LVLH
+    assert np.linalg.norm(t.theta) <= np.linalg.norm(ref.x) + 1e-9 and abs(t.theta[2]) < 1e-6
+    # the same station 1e-9 from axisymmetric has an isolated root, next to ours
+    near = solve_tea(np.diag([20e6, 20e6 * (1 + 1e-9), 5e6]), n, bias)
+    assert np.max(np.abs(equilibrium_residual(near.theta, inertia, n, bias))) < 1e-6
