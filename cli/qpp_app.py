@@ -128,15 +128,18 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = Overrides
 
         cfg, r, sims, path = run_simulate(cfg, figures, progress=tick)
     typer.echo(f"{cfg.name}: beta_o = {cfg.spheres.beta_o:g}; design {r.verdict}")
+    y_range = getattr(cfg.nonlinearity, "y_range", None)
     for s in sims:
         g = (", ".join(f"{k} = {v:g}" for k, v in s.parameters.items()) if s.parameters
              else f"gamma = {s.gamma:<8g}")
+        broken = s.broken_premises(cfg.spheres.beta_ri, y_range)
+        note = f" (outside the certificate's premises: {'; '.join(broken)})" if broken else ""
         if s.diverged_at is not None:
-            typer.echo(f"  {s.name:12s} {g} DIVERGED at t = {s.diverged_at:.4g} s: OUTSIDE the output sphere")
+            typer.echo(f"  {s.name:12s} {g} DIVERGED at t = {s.diverged_at:.4g} s: OUTSIDE the output sphere{note}")
             continue
         typer.echo(f"  {s.name:12s} {g} ||y - y_o||inf = {s.error_inf:.5g} "
                    f"(per output {[float(f'{e:.5g}') for e in s.error_per_output]}) "
-                   f"{'within' if s.passed else 'OUTSIDE'} the output sphere")
+                   f"{'within' if s.passed else 'OUTSIDE'} the output sphere{note}")
     typer.echo(f"  wrote {path}")
     out = [s.name for s in sims if not s.passed]
     strict_exit(strict, bool(out), f"{cfg.name}: outside the output sphere in {', '.join(out)}")

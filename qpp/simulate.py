@@ -90,6 +90,36 @@ class SimResult:
         """Whether ‖y − y_o‖∞ ≤ β_o (eq 10.35)."""
         return bool(self.error_inf <= self.beta_o)
 
+    def broken_premises(self, beta_ri: float, y_range=None) -> list[str]:
+        """The premises of the certificate this run breaks: ‖r − r_o‖∞ ≤ β_ri (eq 10.52) and, for
+        an expression nonlinearity, y within ``y_range`` (where its sector holds).  A run that
+        breaks one is outside what the certificate speaks about, whatever its error.
+
+        Parameters
+        ----------
+        beta_ri : float
+            Reference sphere radius, output units.
+        y_range : list of [lo, hi] or None
+            The outputs' range of the sector, output units; None: not checked.
+
+        Returns
+        -------
+        list of str
+            One phrase per broken premise (empty: none).
+        """
+        out = []
+        dr = float(np.nanmax(np.abs(np.asarray(self.r) - np.asarray(self.r_o)))) if np.size(self.r) else 0.0
+        if dr > beta_ri * (1 + 1e-9) + 1e-15:
+            out.append(f"||r - r_o||inf = {dr:.4g} > beta_ri = {beta_ri:g}")
+        if y_range is not None:
+            y = np.asarray(self.y, float)
+            for i, (lo, hi) in enumerate(y_range):
+                yi = y[i][np.isfinite(y[i])]
+                if yi.size and (yi.min() < lo or yi.max() > hi):
+                    out.append(f"y{i + 1} leaves y_range [{lo:g}, {hi:g}] (reaches "
+                               f"{yi.min() if yi.min() < lo else yi.max():.4g})")
+        return out
+
 
 def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=None) -> SimResult:
     """Run one scenario and its nominal loop; compare ‖y − y_o‖∞ with β_o.

@@ -335,6 +335,8 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
                                  # γ of the sinusoidal kind, the payload of the polar arm; an
                                  # expression's parameters are param_<name> (not "gamma")
                                  attrs={"beta_o": s.beta_o, "passed": int(s.passed),
+                                        "premises_held": int(not s.broken_premises(
+                                            cfg.spheres.beta_ri, getattr(cfg.nonlinearity, "y_range", None))),
                                         **({} if s.parameters else {"gamma": s.gamma}),
                                         **({} if s.diverged_at is None else {"diverged_at_s": s.diverged_at}),
                                         **{f"param_{k}": v for k, v in (s.parameters or {}).items()}}),

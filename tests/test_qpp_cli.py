@@ -144,3 +144,24 @@ def test_the_apps_run_as_modules(tmp_path):
         p = subprocess.run([sys.executable, "-m", mod, "validate", conf], capture_output=True, text=True,
                            cwd=tmp_path, timeout=120)
         assert p.returncode == 0 and "valid" in p.stdout, (mod, p.stdout, p.stderr)
+
+
+def test_a_scenario_outside_the_premises_says_so(tmp_runs):
+    """‖δr‖∞ = 5 ≫ β_ri and y beyond y_range: the run leaves the sphere, and the output says
+    the certificate never spoke about it (it read like a broken certificate; review)."""
+    import h5py
+
+    from cli.qpp_app import app
+
+    big = "simulation.scenarios=[{name: big, parameters: {k: 4.2}, delta_r: [[{kind: step, amplitude: 5.0, t_on: 3.0}]]}]"
+    r = runner.invoke(app, ["simulate", "qpp_saturation", "--no-figures", "simulation.n_samples=401", big])
+    assert r.exit_code == 0, r.output
+    line = next(ln for ln in r.output.splitlines() if ln.strip().startswith("big"))
+    assert "OUTSIDE the output sphere (outside the certificate's premises: ||r - r_o||inf = 5 > beta_ri = 0.05" in line
+    assert "y1 leaves y_range [-3, 3]" in line
+    with h5py.File(tmp_runs / "runs" / "qpp_saturation" / "qpp_sim.h5") as f:
+        assert f["big/error_inf"].attrs["premises_held"] == 0
+    r = runner.invoke(app, ["simulate", "qpp_saturation", "--no-figures", "simulation.n_samples=401"])
+    assert "premises" not in r.output
+    with h5py.File(tmp_runs / "runs" / "qpp_saturation" / "qpp_sim.h5") as f:
+        assert all(f[k]["error_inf"].attrs["premises_held"] == 1 for k in f if isinstance(f[k], h5py.Group))
