@@ -70,6 +70,8 @@ class DesignResult:
         B_z reading of the design inequality.
     T_settle : float
         Settling time of the nominal loop, s.
+    settled : bool
+        Whether the nominal loop settles within its horizon (else ``T_settle`` is the horizon).
     certified : bool
         β1 ≤ m (bookkeeping, bz) and circle criterion.
     verdict : str
@@ -105,6 +107,7 @@ class DesignResult:
     bookkeeping: str = ""             #: threshold the design iterates against
     bz: str = "eq10.7"                #: B_z reading of the design inequality
     T_settle: float = np.nan          #: settling time of the nominal loop, s
+    settled: bool = True              #: the nominal loop settles within its horizon (else T_settle is the horizon)
     certified: bool = False           #: β1 ≤ m (bookkeeping, bz) and circle criterion
     verdict: str = ""
     limiting: str = ""
@@ -318,6 +321,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     res = DesignResult(K1, Kc, H, gains_source, hinf, a, T, Azd, Bzd, Cz, b1, th, circ, sector,
                        spheres.E_factor(a, T), t[keep], y_o[:, keep])
     res.T_settle = Ts
+    res.settled = bool(Ts < float(t[-1]))
     res.bookkeeping = pick_bookkeeping(cfg, [x.name for x in th])
     res.bz = cfg.design.bz
     res.certified = bool(res.beta1_ref <= res.m_ref and circ.passed)

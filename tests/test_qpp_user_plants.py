@@ -272,3 +272,29 @@ def test_nothing_to_track_is_no_reason_for_a_vanishing_T(tmp_runs):
     assert err > 0.006                        # the simulation leaves the sphere ...
     assert certified == 0, r.output           # ... so no certificate may claim it
     assert T > 1.0                            # the slowest mode's settling time, not 0.008 s
+
+
+def test_a_nominal_loop_that_never_settles_is_named(tmp_runs):
+    """A servo-compensator that does not model the step r_o (Ac = −1): the nominal loop never
+    settles, T took the horizon and the certificate silently depended on t_final (review)."""
+    from typer.testing import CliRunner
+
+    from cli.qpp_app import app
+
+    plant = {"A": [[0, 1], [2, -1]], "B": [[0], [1]], "C": [[1, 0]], "G": [[0], [1]], "Ac": [[-1]],
+             "Bc": [[1]], "Cc": [[1]]}
+    cfg = {"name": "nosettle", "plant": plant,
+           "nonlinearity": {"kind": "expression", "f1": ["-k*sat(y1, 0.5)"],
+                            "parameters": {"k": {"min": 0.8, "max": 1.2}}, "y_range": [[-3, 3]]},
+           "hinf": {"rho": 0.1, "a": 1.0e-4, "search": True},
+           "spheres": {"beta_o": 0.3, "beta_ri": 0.05, "T": 1.0}, "design": {"a_max": 1.0e-2},
+           "simulation": {"t_final": 5.0, "n_samples": 201, "r_o": [[{"kind": "step", "amplitude": 1.0}]],
+                          "scenarios": [{"name": "kmin", "parameters": {"k": 0.8}}]},
+           "output": {"root": "runs", "figures": False}}
+    (tmp_runs / "ns.yaml").write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(app, ["design", "ns.yaml"])
+    assert "warning: the nominal loop does not settle within 5 s" in r.output, r.output
+    cfg["plant"]["Ac"] = [[0]]                        # an integrator models the step: it settles
+    (tmp_runs / "ns.yaml").write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(app, ["design", "ns.yaml"])
+    assert "does not settle" not in r.output, r.output
