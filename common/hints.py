@@ -212,12 +212,19 @@ _NUMERICAL_HINTS: list[tuple[str, tuple[str, ...], str]] = [
     ("qpp", ("riccati 11.1",), "change hinf.rho or hinf.nu (larger values relax the H∞ problem), "
                                "or set hinf.search: true"),
     ("qpp", ("converge",), "change hinf.rho or hinf.nu, or loosen simulation.rtol / simulation.atol"),
+    ("acmm", ("cannot shift the poles",), "widen design.sector.half_angle_deg or lower design.sector.sigma "
+                                          "(a narrow sector leaves the moved poles a sliver of the plane), or "
+                                          "try design.pole_method: uniform; a nearly uncontrollable model (see "
+                                          "`acmm linearize`) needs another design.model or design.drf_mode"),
     ("acmm", ("residual",), "raise design.residual_tol or try design.riccati_method: {other}; a nearly "
                             "uncontrollable model (see `acmm linearize`) needs another design.model or design.drf_mode"),
     ("acmm", ("matrix sign",), "use design.riccati_method: {other} (the sign iteration needs a well-conditioned model)"),
     ("acmm", ("sector lqr", "riccati", "failed"), "lower design.sector.sigma (the shift α asked of the LQR may "
                                                   "be too large), or try another design.riccati_method ({other})"),
     ("acmm", ("riccati",), "try another design.riccati_method ({other})"),
+    ("acmm", ("uncontrollable", "λ/n = 0+0j"), "no gain moves that pole and no sector (σ > 0) holds λ = 0: "
+                                               "change design.model or design.drf_mode (an axisymmetric "
+                                               "station's neutral mode, say)"),
     ("acmm", ("uncontrollable",), "no gain moves that pole: lower design.sector.sigma, or change design.model / "
                                   "design.drf_mode"),
     ("acmm", ("not positive semidefinite",), "change design.Q0 or design.R"),
