@@ -195,7 +195,10 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     if spec.theta_guess is not None:
         t = solve_tea_near(spec.inertia, n, spec.bias, spec.theta_guess, expected=spec.expected)
     else:
-        t = solve_tea(spec.inertia, n, spec.bias, expected=spec.expected)
+        from acmm.schedule_points import blend_context
+
+        with blend_context("its end" if spec.s != 1.0 else spec.name, spec.s if spec.s > 0 else 0.0):
+            t = solve_tea(spec.inertia, n, spec.bias, expected=spec.expected)
     model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
     res = sector_design(model.A, model.B, model.scales, s)
     return PointDesign(spec, t, model, res)

@@ -8,6 +8,8 @@ takes arrays and settings objects.
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -118,6 +120,35 @@ def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
     return out
 
 
+@contextmanager
+def blend_context(end_name: str, s: float):
+    """A missing equilibrium on the blend names where it is: the blend toward ``schedule.to``,
+    at s, whose inertia and bias are (1 − s)·start + s·end (the bias in the message is that blend,
+    not a bias the user wrote).
+
+    Parameters
+    ----------
+    end_name : str
+        Name of the blend's end station.
+    s : float
+        Blend parameter, dimensionless (0: the start, whose errors pass unchanged).
+
+    Raises
+    ------
+    NoEquilibriumError
+        The one raised inside, its message prefixed with the place on the blend.
+    """
+    from common.errors import NoEquilibriumError
+
+    try:
+        yield
+    except NoEquilibriumError as exc:
+        if s > 0:
+            raise NoEquilibriumError(f"on the blend toward schedule.to ({end_name}) at s = {s:.3g}, inertia "
+                                     f"and bias (1 − s)·start + s·end: {exc}") from None
+        raise
+
+
 _TRACKS: dict = {}
 
 
@@ -132,8 +163,9 @@ def _tea_track(start: PointSpec, end: PointSpec, n: float, n_track: int) -> np.n
     t = solve_tea(start.inertia, n, start.bias, expected=start.expected).theta
     thetas = []
     for s in np.linspace(0.0, 1.0, n_track):
-        t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
-                           t).theta
+        with blend_context(end.name, s):
+            t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
+                               t).theta
         thetas.append(t)
     thetas = np.array(thetas)
     if len(_TRACKS) > 16:

@@ -230,6 +230,9 @@ _NUMERICAL_HINTS: list[tuple[str, tuple[str, ...], str]] = [
     ("acmm", ("not positive semidefinite",), "change design.Q0 or design.R"),
     ("acmm", ("sector",), "lower design.sector.sigma, widen design.sector.half_angle_deg, or try "
                           "design.pole_method: uniform / shift"),
+    ("acmm", ("blend toward schedule.to", "no torque-equilibrium"),
+     "reduce the bias of disturbance or of schedule.to (their blend must balance at every s), or "
+     "give each as its bias_from_tea"),
     ("acmm", ("no torque-equilibrium",), "reduce disturbance.bias (or use disturbance.bias_from_tea with the "
                                          "attitude you want)"),
     ("acmm", ("tea continuation",), "check the products of inertia (inertia.I12, I13, I23) or give the bias as "

@@ -230,3 +230,18 @@ def test_table_form_prints_the_check_that_strict_judges(tmp_runs, run_acmm):
                  "schedule.n_points=4", "--no-figures")
     assert r.exit_code == 0, r.output
     assert "scheduled gain (table) on the local models" in r.stdout and "scheduled closed loops:" in r.stdout
+
+
+@pytest.mark.parametrize("spacing", ["tea", "blend"])
+def test_no_equilibrium_on_the_blend_names_the_blend(tmp_runs, run_acmm, spacing):
+    """The message gave a blended bias the user never wrote and hinted at disturbance.bias only."""
+    (tmp_runs / "s.yaml").write_text(
+        "name: s\ninertia: {I11: 10.0e6, I22: 3.0e6, I33: 11.0e6}\norbit_rate: 0.0011\n"
+        "disturbance: {bias_from_tea: [1.0, -30.0, 1.5]}\n"
+        "schedule:\n  to: {name: endst, inertia: {I11: 30.0e6, I22: 9.0e6, I33: 36.0e6}, "
+        f"disturbance: {{bias: [0, 500, 0]}}}}\n  n_points: 5\n  spacing: {spacing}\noutput: {{figures: false}}\n")
+    r = run_acmm("design", "s.yaml")
+    assert r.exit_code == 2, r.output
+    assert "on the blend toward schedule.to" in r.stderr and "no torque-equilibrium" in r.stderr
+    assert "hint: reduce the bias of disturbance or of schedule.to" in r.stderr
+    assert not (tmp_runs / "runs").exists()
