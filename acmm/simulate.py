@@ -200,9 +200,24 @@ def _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time):
 
 
 @njit(cache=True)
+def _track_level(X, t, level, tl, level_mid, peak_h, steady):
+    """Per-level extremes at every accepted step (not only at the output samples): peak
+    max_i |h_i| over the level, and max |θ_i − θ̂*_i| from the middle of its dwell on."""
+    hm = max(abs(X[6]), abs(X[7]), abs(X[8]))
+    if not (peak_h[level] >= hm):          # NaN (not reached yet) or smaller
+        peak_h[level] = hm
+    if t >= level_mid[level] - 1e-9:
+        for i in range(3):
+            e = abs(X[3 + i] - tl[i])
+            if not (steady[level, i] >= e):
+                steady[level, i] = e
+
+
+@njit(cache=True)
 def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est, omega_est, gain,
                ha, hb, n, tmax, hmax, drf_idx, x0, rtol, atol, divergence, max_sat,
-               C, A, B5, E, out_state, out_ucmd, out_u, out_flags, out_level):
+               C, A, B5, E, out_state, out_ucmd, out_u, out_flags, out_level,
+               level_mid, out_peak_h, out_steady):
     nx = 24
     L = level_start.shape[0]
     X = x0.copy()
@@ -228,6 +243,7 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
     out_ucmd[0] = ucmd
     out_flags[0] = flags
     out_level[0] = 0
+    _track_level(X, t, 0, theta_est[0], level_mid, out_peak_h, out_steady)
     n_samples = sample_times.shape[0]
     last = 0
     for s in range(1, n_samples):
@@ -250,6 +266,7 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
                 for i in range(nx):
                     X[i] = tmp[i]
                 n_steps += 1
+                _track_level(X, t, level, tl, level_mid, out_peak_h, out_steady)
                 fac = 0.9 * err ** (-0.2) if err > 0 else 5.0
                 dt = h * min(5.0, max(0.2, fac))
                 stop = _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time)
@@ -312,6 +329,10 @@ def simulate(sc: Scenario) -> SimResult:
     out_u = np.full((S, 3), np.nan)
     out_flags = np.zeros((S, 6))
     out_level = np.zeros(S, dtype=np.int64)
+    ends = np.append(np.asarray(sc.level_start, float)[1:], sc.t_end)
+    level_mid = 0.5 * (np.asarray(sc.level_start, float) + ends)
+    out_peak_h = np.full(L, np.nan)
+    out_steady = np.full((L, 3), np.nan)
     last, stop, t_stop, n_steps, n_rej = _integrate(
         np.ascontiguousarray(sc.sample_times, float), np.ascontiguousarray(sc.level_start, float),
         inertia, inertia_inv, np.ascontiguousarray(sc.bias, float),
@@ -319,7 +340,8 @@ def simulate(sc: Scenario) -> SimResult:
         np.asarray(sc.harmonic_a, float), np.asarray(sc.harmonic_b, float), float(sc.n),
         float(sc.torque_limit), float(sc.momentum_limit), drf_idx, np.asarray(sc.x0, float),
         float(sc.rtol), np.asarray(sc.atol, float), float(sc.divergence), float(sc.max_saturation),
-        _C, _A, _B5, _E, out_state, out_ucmd, out_u, out_flags, out_level)
+        _C, _A, _B5, _E, out_state, out_ucmd, out_u, out_flags, out_level,
+        level_mid, out_peak_h, out_steady)
     k = last + 1
     t = sc.sample_times[:k].copy()
     if stop != STOP_NONE:
@@ -328,7 +350,8 @@ def simulate(sc: Scenario) -> SimResult:
     return SimResult(t=t, state=out_state[:k], u_cmd=out_ucmd[:k], u=out_u[:k], w=w,
                      level=out_level[:k], torque_saturated=out_flags[:k, :3] > 0,
                      momentum_saturated=out_flags[:k, 3:] > 0, stop_code=int(stop),
-                     stop_time=float(t_stop), n_steps=int(n_steps), n_rejected=int(n_rej))
+                     stop_time=float(t_stop), n_steps=int(n_steps), n_rejected=int(n_rej),
+                     level_peak_momentum=out_peak_h, level_steady_error=out_steady)
 
 
 def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):

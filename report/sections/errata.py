@@ -351,7 +351,8 @@ def design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str
                  f"PBH σmin/σmax = {ctrb.min_ratio:.1e} (nearly uncontrollable)", "tests/test_lqr.py, tests/test_design.py"])
     rows.append(["saturation", "±150 ft·lbf, 20 000 ft·lbf·s", "CMG at its limit delivers only the torque that stops "
                  "|h_i| growing", f"stair-case: peak |u| {np.abs(sim['u']).max():.1f} ft·lbf, peak |h| "
-                 f"{np.abs(sim['h']).max():.0f} ft·lbf·s", "tests/test_simulate.py"])
+                 f"{np.nanmax(sim['levels']['peak_momentum']):.0f} ft·lbf·s (every integrator step)",
+                 "tests/test_simulate.py"])
     rows.append(["claim 1", "cross-inertia-free design unstable within 0.1 orbit",
                  "design: minimum-energy shifted LQR (Q0 = 0, R = I/(100 ft·lbf)²) + pole shifting of the DRF poles",
                  f"diverges at {c1.div:.3f} orbit; its gain on the true linear model: max Re λ = {c1.maxre:+.3f} n; "

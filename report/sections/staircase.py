@@ -61,8 +61,9 @@ def summary(ctx: SectionWriter) -> None:
     tsat = float(np.mean(np.any(s["torque_saturated"] > 0, axis=1)))
     msat = float(np.mean(np.any(s["momentum_saturated"] > 0, axis=1)))
     ctx.doc.p(f"Samples with a torque-saturated axis: {100 * tsat:.2f} %; with a momentum-saturated axis: "
-              f"{100 * msat:.2f} %. Peak |u| = {np.abs(s['u']).max():.1f} ft·lbf, peak |h| = "
-              f"{np.abs(s['h']).max():.0f} ft·lbf·s.")
+              f"{100 * msat:.2f} %. Peak |u| = {np.abs(s['u']).max():.1f} ft·lbf (samples), peak |h| = "
+              f"{np.nanmax(lv['peak_momentum']):.0f} ft·lbf·s (every integrator step; the samples show "
+              f"{np.abs(s['h']).max():.0f}).")
     if not ctx.fast:
         ctx.ledger_add("Claim 2", "stair-case length", "130", o[-1], "orbit")
     i0, i1 = lv["inertia"][0], lv["inertia"][-1] if len(lv["inertia"]) else lv["inertia"][0]
