@@ -59,7 +59,7 @@ def _check_sample_count(model) -> None:
     factors = (f"over {r} channel{'s' * (r != 1)}: {n_theta:.3g} samples of {k} uncertain parameter"
                f"{'s' * (k != 1)} × the channel's output grid, {sum(sizes):.3g} points in all, the largest "
                f"{max(sizes):.3g} (channel {widest + 1}, on {d} output{'s' * (d != 1)})"
-               + (f", × {n_t} times (φ depends on t)" if n_t > 1 else ""))
+               + (f", × {n_t} times on the channels that depend on t" if n_t > 1 else ""))
     # what the config can lower: the parameters (a factor of every point), and whichever grids hold
     # most of the points: those of channels on three or more outputs, or the n_grid-point ones
     wide = sum(n for i, n in enumerate(sizes) if len(model.channel_outputs(i)) >= 3)

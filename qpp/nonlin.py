@@ -202,8 +202,11 @@ class ExpressionModel(SampleGrid):
         diag = self.diagonal
         n = 0
         starts = [{} for _ in range(r)]                       # the grid point of each bound
-        tt = tg[None, :]                                      # (1, Nt)
         for i in range(r):
+            # a channel without t is the same at every time: sampled at t = 0 only (the count of
+            # sector_points, which the QPP_SECTOR_POINTS budget bounds)
+            tg_i = tg if self.t in self.phi[i].free_symbols else tg[:1]
+            tt = tg_i[None, :]                                # (1, Nt)
             Yf = self._channel_grid(i)                        # (Ny, 1) or (1, 1) each
             outs = self.channel_outputs(i)
             where = f"nonlinearity.f1 (φ channel {i + 1}: {self.phi[i]})"
@@ -219,7 +222,7 @@ class ExpressionModel(SampleGrid):
                     raise ConfigError(f"{where}: not sector-bounded (unbounded slope) on the stated ranges")
                 if any(self.dep[i]) and float(np.max(gsum)) > slope[i]:
                     gb = np.broadcast_to(gsum, ph.shape)
-                    starts[i]["slope"] = self._point(Yf, tg, th, np.argmax(gb), gb.shape)
+                    starts[i]["slope"] = self._point(Yf, tg_i, th, np.argmax(gb), gb.shape)
                 slope[i] = max(slope[i], float(np.max(gsum)))
                 y0 = np.ones(ph.shape[0], bool)               # the channel's outputs all 0
                 for j in outs:
@@ -229,7 +232,7 @@ class ExpressionModel(SampleGrid):
                     if v0 > 1e-9 * max(1.0, np.abs(ph).max()):
                         raise ConfigError(f"{where}: not sector-bounded: φ(y = 0) = {v0:.3g} ≠ 0")
                 if diag[i]:
-                    self._ratio_bounds(i, ph, Yf, tg, th, alpha, beta, slope, starts[i], where)
+                    self._ratio_bounds(i, ph, Yf, tg_i, th, alpha, beta, slope, starts[i], where)
         for i in range(r):            # grid extrema → local extrema (widened only)
             kinds = {k: x for k, x in starts[i].items() if k == "slope" or diag[i]}
             got = refine(self, i, kinds, {"alpha": alpha[i], "beta": beta[i], "slope": slope[i]})

@@ -75,15 +75,18 @@ class SampleGrid:
 
     def sector_points(self) -> int:
         """Points at which :attr:`sector_info` samples φ: over the channels, parameter samples ×
-        the grid of the channel's outputs (:meth:`channel_outputs`) × times.
+        the grid of the channel's outputs (:meth:`channel_outputs`) × times (for a channel that
+        depends on t; the others are evaluated once per output point).
 
         Returns
         -------
         int
             The number of points (counted, not built), dimensionless.
         """
-        per_channel = sum(self.sector_grid_size(i) for i in range(len(self.phi)))
-        return self.theta_sample_count() * per_channel * self.time_sample_count()
+        n_t = self.time_sample_count()
+        per_channel = sum(self.sector_grid_size(i) * (n_t if self.t in self.phi[i].free_symbols else 1)
+                          for i in range(len(self.phi)))
+        return self.theta_sample_count() * per_channel
 
     def time_sample_count(self) -> int:
         """The number of times at which the sector is sampled (1 when φ does not depend on t).

@@ -140,6 +140,19 @@ def test_sample_count_message_names_what_can_be_lowered():
     msg = str(exc.value)
     # the factors: Σ over the channels of 3² parameter samples × 205 grid points, × 256 times
     assert "over 12 channels: 9 samples of 2 uncertain parameters" in msg and "2.46e+03 points in all" in msg
-    assert "× 256 times (φ depends on t)" in msg and "on 1 output)" in msg
+    assert "× 256 times on the channels that depend on t" in msg and "on 1 output)" in msg
     assert m.sector_points() == 9 * 12 * 205 * 256
     assert "a coarser nonlinearity.n_grid (now 201)" in msg and "outputs per channel" not in msg
+
+
+def test_only_the_channels_that_depend_on_t_count_their_time_samples():
+    """The sample budget multiplied every channel's grid by the time samples when any one channel
+    depended on t, so a design that runs in seconds was refused at every n_grid (review).  The
+    count now follows the work: φ_i without t is evaluated once per output point."""
+    m = ExpressionModel(["c*y1**3", "0.1*c*y2*sin(t)", "c*sat(y3)"], 3, {"c": (0.9, 1.1, 1.0)},
+                        [[-1.0, 1.0]] * 3, np.eye(3), 10.0, n_grid=21, n_t=256)
+    sizes = [m.sector_grid_size(i) for i in range(3)]
+    assert m.time_sample_count() == 256
+    assert m.sector_points() == m.theta_sample_count() * (sizes[0] + 256 * sizes[1] + sizes[2])
+    # and the count is the work done: sector_info evaluates φ at exactly these points
+    assert m.sector_info.n_samples == m.sector_points()
