@@ -37,9 +37,13 @@ def _functions():
     sp = sympy_module()
 
     def sat(x, L=1):
+        if sp.sympify(L).is_negative:          # max(−L, min(L, x)) would be the constant L
+            raise ValueError(f"sat(x, L): the level L must be ≥ 0, got {L}")
         return sp.Max(-L, sp.Min(L, x))
 
     def deadzone(x, w):
+        if sp.sympify(w).is_negative:          # x − sat(x, w) would be x − w
+            raise ValueError(f"deadzone(x, w): the half-width w must be ≥ 0, got {w}")
         return x - sp.Max(-w, sp.Min(w, x))
 
     return {"sin": sp.sin, "cos": sp.cos, "tan": sp.tan, "exp": sp.exp, "log": sp.log, "sqrt": sp.sqrt,
@@ -197,4 +201,6 @@ def _to_sympy(node, symbols: dict, funcs: dict, where: str, text: str):
             return funcs[node.func.id](*args)
         except TypeError:
             raise ConfigError(f"{where}: wrong number of arguments to {node.func.id}()") from None
+        except ValueError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
     raise ConfigError(f"{where}: syntax {type(node).__name__} not allowed in {text!r}")

@@ -62,6 +62,8 @@ def _sup_gain(A, B, C, a):
     ("k*[y1][0]", "not allowed"),
     ("k*max()", "max() needs at least one argument"),          # sympy's Max() is −∞: no "division by zero"
     ("k*y1^3", "powers are written **"),
+    ("k*sat(y1, -1)", "the level L must be ≥ 0"),                 # it read as φ(0) = 0.2 ≠ 0
+    ("k*deadzone(y1, -0.5)", "the half-width w must be ≥ 0"),      # silently y − w
 ])
 def test_bad_expression_one_line_exit_2_nothing_written(tmp_path, expr, words):
     d = _cfg("qpp_saturation", tmp_path)
