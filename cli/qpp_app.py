@@ -102,7 +102,7 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesAr
                                       for t in pb.thresholds))
     typer.echo(f"  procedure 12.1: {len(r.iterations)} evaluations, rho = {r.hinf.rho if r.hinf else float('nan'):g}, "
                f"W_s scale {r.ws_scale or [1.0]}, T settle {r.T_settle:.4g} s")
-    if not r.settled:
+    if not r.settled and np.isfinite(r.beta1_ref):    # (an unstable loop is named by the verdict)
         typer.echo(f"  warning: the nominal loop does not settle within {r.T_settle:.4g} s (max(spheres.T, "
                    f"simulation.t_final)): T adapts to that horizon, so the certificate depends on t_final; "
                    f"does the servo-compensator (plant.Ac) model r_o?")

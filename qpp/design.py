@@ -306,6 +306,10 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
         The failing condition (circle criterion, or β1 > m of eq 12.1 with its largest term).
     """
     sp = cfg.spheres
+    worst = float(np.max(np.linalg.eigvals(res.Az["eq10.7"]).real))
+    if worst >= 0:                  # nothing else matters: the loop of these gains diverges
+        return (f"the closed loop of these gains is unstable (largest Re λ(A_z) = {worst:.4g} 1/s): β1 is "
+                f"infinite and no circle criterion holds")
     if not res.circle.passed:
         c = res.circle
         if np.isnan(c.min_scale):

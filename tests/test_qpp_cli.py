@@ -165,3 +165,16 @@ def test_a_scenario_outside_the_premises_says_so(tmp_runs):
     assert "premises" not in r.output
     with h5py.File(tmp_runs / "runs" / "qpp_saturation" / "qpp_sim.h5") as f:
         assert all(f[k]["error_inf"].attrs["premises_held"] == 1 for k in f if isinstance(f[k], h5py.Group))
+
+
+def test_gains_that_destabilize_the_loop_are_named_as_such(tmp_runs):
+    """Published gains K1 = [1, 1], Kc = [1, 1], H = [1; 1] on the ch. 13 plant: the verdict blamed
+    'the circle criterion for every a tried' (one a was tried) and a loop that 'does not settle'
+    (review); the cause is a closed loop with a pole in the right half plane."""
+    from cli.qpp_app import app
+
+    r = runner.invoke(app, ["design", "qpp_siso", "design.gains=published", "published.K1=[[1,1]]",
+                            "published.Kc=[[1,1]]", "published.H=[[1],[1]]"])
+    assert r.exit_code == 3, r.output
+    assert "limiting factor: the closed loop of these gains is unstable (largest Re λ(A_z) = " in r.output
+    assert "does not settle" not in r.output
