@@ -212,6 +212,19 @@ _NUMERICAL_HINTS: list[tuple[str, tuple[str, ...], str]] = [
     ("qpp", ("riccati 11.1",), "change hinf.rho or hinf.nu (larger values relax the H∞ problem), "
                                "or set hinf.search: true"),
     ("qpp", ("converge",), "change hinf.rho or hinf.nu, or loosen simulation.rtol / simulation.atol"),
+    ("qpp", ("closed loop of these gains is unstable",),
+     "these gains do not stabilize the plant: let the procedure find gains (design.gains: design)"),
+    ("qpp", ("no certified design", "m < 1"), "no tracking loop meets these spheres: widen spheres.beta_o or "
+                                              "narrow spheres.beta_ri"),
+    ("qpp", ("no certified design", "β1 > m"), "widen spheres.beta_o, narrow spheres.beta_ri or the "
+                                               "nonlinearity's parameter ranges, or allow a smaller "
+                                               "design.rho_min (with design.wider_search)"),
+    ("qpp", ("no certified design", "circle criterion"), "narrow the nonlinearity's sector (its parameter "
+                                                         "ranges or y_range), or widen the search of a "
+                                                         "(design.a_min, design.a_max)"),
+    ("qpp", ("no stabilizing",), "change hinf.rho or hinf.nu, or set hinf.search: true"),
+    ("qpp", ("required step size",), "the loop is stiff or escapes: check the gains, or loosen "
+                                     "simulation.rtol / simulation.atol"),
     ("acmm", ("cannot shift the poles",), "widen design.sector.half_angle_deg or lower design.sector.sigma "
                                           "(a narrow sector leaves the moved poles a sliver of the plane), or "
                                           "try design.pole_method: uniform; a nearly uncontrollable model (see "

@@ -178,3 +178,4 @@ def test_gains_that_destabilize_the_loop_are_named_as_such(tmp_runs):
     assert r.exit_code == 3, r.output
     assert "limiting factor: the closed loop of these gains is unstable (largest Re λ(A_z) = " in r.output
     assert "does not settle" not in r.output
+    assert "hint: these gains do not stabilize the plant" in r.output      # exit 3 ends with a hint

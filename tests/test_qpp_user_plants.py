@@ -264,6 +264,7 @@ def test_nothing_to_track_is_no_reason_for_a_vanishing_T(tmp_runs):
     }
     (tmp_runs / "reg.yaml").write_text(yaml.safe_dump(cfg))
     r = CliRunner().invoke(app, ["design", "reg.yaml"])
+    assert r.exit_code == 3 and "hint: no tracking loop meets these spheres" in r.output, r.output
     CliRunner().invoke(app, ["simulate", "reg.yaml"])
     with h5py.File(tmp_runs / "runs" / "regulate" / "qpp_design.h5") as f:
         certified, T = int(f.attrs["certified"]), float(f["certificate/T_settle"][()])
