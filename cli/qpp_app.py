@@ -102,6 +102,10 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesAr
                                       for t in pb.thresholds))
     typer.echo(f"  procedure 12.1: {len(r.iterations)} evaluations, rho = {r.hinf.rho if r.hinf else float('nan'):g}, "
                f"W_s scale {r.ws_scale or [1.0]}, T settle {r.T_settle:.4g} s")
+    if r.late_slope is not None:
+        typer.echo(f"  warning: the nonlinearity is stiffer after T = {r.T:.4g} s (slope bound {r.late_slope[1]:.4g}) "
+                   f"than within it ({r.late_slope[0]:.4g}): beta3 and beta4 see it only up to T (eqs 10.53-10.54), "
+                   f"so the certificate says nothing of the simulation beyond T")
     if not r.settled and np.isfinite(r.beta1_ref):    # (an unstable loop is named by the verdict)
         typer.echo(f"  warning: the nominal loop does not settle within {r.T_settle:.4g} s (max(spheres.T, "
                    f"simulation.t_final)): T adapts to that horizon, so the certificate depends on t_final; "

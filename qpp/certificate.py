@@ -72,6 +72,9 @@ class DesignResult:
         Settling time of the nominal loop, s.
     settled : bool
         Whether the nominal loop settles within its horizon (else ``T_settle`` is the horizon).
+    late_slope : tuple or None
+        (sup slope of φ on [0, T], sup after T up to the horizon), units of φ per unit of y, when
+        φ is markedly stiffer after T than within it (:func:`late_slope`); else None.
     certified : bool
         β1 ≤ m (bookkeeping, bz) and circle criterion.
     verdict : str
@@ -108,6 +111,7 @@ class DesignResult:
     bz: str = "eq10.7"                #: B_z reading of the design inequality
     T_settle: float = np.nan          #: settling time of the nominal loop, s
     settled: bool = True              #: the nominal loop settles within its horizon (else T_settle is the horizon)
+    late_slope: tuple | None = None   #: (sup slope on [0, T], sup slope after T) when φ is stiffer after T
     certified: bool = False           #: β1 ≤ m (bookkeeping, bz) and circle criterion
     verdict: str = ""
     limiting: str = ""
@@ -266,6 +270,38 @@ def modal_settling_time(Az, band: float) -> float:
     return float(np.log(1.0 / band) / decay) if decay > 0 else 0.0
 
 
+def late_slope(cfg: QppConfig, T: float, horizon: float) -> tuple | None:
+    """(sup slope on [0, T], sup slope on (T, horizon]) of an expression φ that depends on t, when
+    the later one exceeds the earlier by half; else None.  β3 and β4 (10.53–10.54) see φ only up
+    to T: a nonlinearity that stiffens (or switches on) after T gives a certificate the
+    simulation beyond T may contradict (a review's φ = k·y·(sat(10(t − 3)) + 1)/2 with T = 2.3 s).
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The config.
+    T : float
+        Truncation time, s.
+    horizon : float
+        End of the simulation, s.
+
+    Returns
+    -------
+    tuple or None
+        The two slope bounds, units of φ per unit of y; or None.
+    """
+    if not isinstance(cfg.nonlinearity, ExpressionNonlinearity) or horizon <= T:
+        return None
+    M = cfg.expression_model()
+    if not M.t_varies:
+        return None
+    tg, g = M.slope_profile(horizon)
+    g = np.max(g, axis=0)
+    before = float(np.max(g[tg <= T], initial=0.0))
+    after = float(np.max(g[tg > T], initial=0.0))
+    return (before, after) if after > 1.5 * before + 1e-12 else None
+
+
 def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
             hinf: HinfGains | None = None, T: float | None = None) -> DesignResult:
     """β1 for both B_z readings, thresholds at T (default ``spheres.T``), the circle criterion and
@@ -322,6 +358,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
                        spheres.E_factor(a, T), t[keep], y_o[:, keep])
     res.T_settle = Ts
     res.settled = bool(Ts < float(t[-1]))
+    res.late_slope = late_slope(cfg, T, horizon)
     res.bookkeeping = pick_bookkeeping(cfg, [x.name for x in th])
     res.bz = cfg.design.bz
     res.certified = bool(res.beta1_ref <= res.m_ref and circ.passed)

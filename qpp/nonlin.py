@@ -339,7 +339,25 @@ class ExpressionModel(SampleGrid):
             β3, in units of φ per unit of y times s^½.
         """
         from qpp.spheres import truncated_l2
+        tg, g = self.slope_profile(T)
+        if tg.size == 1:    # φ independent of t: g_i is its slope bound, refined beyond the grid
+            return float(max(np.max(g), np.max(self.sector_info.slope_bound)) * np.sqrt(T))
+        return truncated_l2(tg, g, T)
 
+    def slope_profile(self, T: float):
+        """(t, g): g_i(t) = sup_{y, θ} Σ_j |∂φ_i/∂y_j| on the time grid of [0, T] (t = 0 alone for a
+        φ without t), the integrand of β3 (10.54).
+
+        Parameters
+        ----------
+        T : float
+            End of the time grid, s.
+
+        Returns
+        -------
+        tuple
+            ((N,) times in s, (r, N) slopes in units of φ per unit of y).
+        """
         tg = self._t_grid(T)
         tt = tg[None, :]
         g = np.zeros((len(self.phi), tg.size))
@@ -352,9 +370,7 @@ class ExpressionModel(SampleGrid):
                 TH = [np.full((1, 1), v) for v in th]
                 s = sum(np.abs(self._grad(i, j, Yf, tt, TH)) for j in range(self.p) if self.dep[i][j])
                 g[i] = np.maximum(g[i], np.max(np.broadcast_to(s, (ny, tg.size)), axis=0))
-        if tg.size == 1:    # φ independent of t: g_i is its slope bound, refined beyond the grid
-            return float(max(np.max(g), np.max(self.sector_info.slope_bound)) * np.sqrt(T))
-        return truncated_l2(tg, g, T)
+        return tg, g
 
     def beta4(self, t, y_o, T: float) -> float:
         """β4 (10.53/14.8): sup_θ max_i ‖(φ_i(y_o(t), θ, t))_T‖₂ along the nominal output.

@@ -299,3 +299,32 @@ def test_a_nominal_loop_that_never_settles_is_named(tmp_runs):
     (tmp_runs / "ns.yaml").write_text(yaml.safe_dump(cfg))
     r = CliRunner().invoke(app, ["design", "ns.yaml"])
     assert "does not settle" not in r.output, r.output
+
+
+def test_a_nonlinearity_that_switches_on_after_T_is_named(tmp_runs):
+    """φ = k·y·(sat(10(t − 3)) + 1)/2 is off on [0, T] and on after 3 s: β3 = β4 = 0 and a
+    certificate that the simulation beyond T contradicted (26 β_o; review).  The design now warns
+    that the certificate (on [0, T], eqs 10.53–10.54) does not reach beyond T; a periodic φ (the
+    ch. 13 form, sin t) is as stiff within T as after it: no warning."""
+    from typer.testing import CliRunner
+
+    from cli.qpp_app import app
+    from qpp.certificate import late_slope
+    from qpp.config import load_config
+
+    cfg = {"name": "late",
+           "plant": {"A": [[0, 1], [0, -0.5]], "B": [[0], [1]], "C": [[1, 0]], "G": [[0], [1]],
+                     "Ac": [[0]], "Bc": [[1]], "Cc": [[1]]},
+           "nonlinearity": {"kind": "expression", "f1": ["k*y1*(sat(10*(t-3), 1) + 1)/2"],
+                            "parameters": {"k": {"min": -0.8, "max": 0.8, "nominal": 0}}, "y_range": [[-3, 3]]},
+           "hinf": {"rho": 0.1, "a": 1.0e-4}, "spheres": {"beta_o": 0.02, "beta_ri": 0.004, "T": 1.0},
+           "design": {"a_max": 1.0e-2, "rho_min": 0.05, "wider_search": False},
+           "simulation": {"t_final": 8.0, "n_samples": 401, "r_o": [[{"kind": "step", "amplitude": 1.0}]],
+                          "scenarios": [{"name": "kmax", "parameters": {"k": 0.8}}]},
+           "output": {"root": "runs", "figures": False}}
+    (tmp_runs / "late.yaml").write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(app, ["design", "late.yaml"])
+    assert "warning: the nonlinearity is stiffer after T" in r.output, r.output
+    before, after = late_slope(load_config(str(tmp_runs / "late.yaml")), 2.0, 8.0)
+    assert before == pytest.approx(0.0, abs=1e-9) and after == pytest.approx(0.8, rel=1e-6)
+    assert late_slope(load_config("qpp_unstable"), 2.0, 10.0) is None
