@@ -2,7 +2,8 @@
 
 The test runs on the state-scaled (A, B) (:meth:`acmm.linearize.LinearModel.scaled`), the
 torque in the unit of :func:`acmm.linearize.torque_scale`, so that the ratio
-σmin([A − λI, B]) / σmax([A, B]) depends on neither the states' units nor the station's size: a
+σmin([A − λI, B]) / σmax([A, B]) depends neither on the states' units nor, beyond the band of
+:data:`acmm.linearize.MOMENTUM_BAND`, on the station's size (within it the fixed scales stand): a
 station 1e-8 times the size of Space Station Freedom was otherwise "uncontrollable" at 3e-13.
 """
 from __future__ import annotations

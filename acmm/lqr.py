@@ -98,7 +98,7 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
         Unit of the input in which the problem is solved, in units of the input (e.g. ft·lbf):
         B·e and R·e², K and R mapped back.  The stations of :func:`acmm.linearize.momentum_scale`
         beyond its band pass their momentum scale over the nominal one, so that a station k
-        times smaller (torques k times, R 1/k² times) is the same scaled problem.
+        times smaller (torques k times smaller, R k² times larger) is the same scaled problem.
 
     Returns
     -------

@@ -134,7 +134,7 @@ class SimResult:
         not reached); None: from the samples.
     level_steady_error : (L, 3) array or None
         Per level, max |θ − θ̂*| over the accepted steps of the second half of its dwell, rad
-        (NaN: not reached); None: from the samples.
+        (NaN: the run did not reach the middle of that dwell); None: from the samples.
     """
 
     t: np.ndarray
@@ -300,12 +300,13 @@ def level_statistics(sc: Scenario, r: SimResult) -> list[dict]:
     orbit = 2 * np.pi / sc.n
     for k, (t0, t1) in enumerate(zip(sc.level_start, ends)):
         steady = (r.level == k) & (r.t >= 0.5 * (t0 + t1))
-        if not steady.any():
-            continue
-        if r.level_steady_error is not None and np.all(np.isfinite(r.level_steady_error[k])):
-            worst = np.degrees(r.level_steady_error[k])       # every integrator step, not the samples
-        else:
+        tracked = r.level_steady_error is not None and bool(np.all(np.isfinite(r.level_steady_error[k])))
+        if tracked:          # every integrator step, not the samples (a level may have no sample there)
+            worst = np.degrees(r.level_steady_error[k])
+        elif steady.any():
             worst = np.abs(err[steady]).max(axis=0)
+        else:
+            continue
         out.append({"level": k, "start_orbit": t0 / orbit, "theta2_deg": float(np.degrees(sc.theta_est[k, 1])),
                     "steady_error_deg": worst, "peak_momentum": float(peaks[k])})
     return out

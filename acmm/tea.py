@@ -227,24 +227,12 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) ->
     at = None if expected is None else _at_expected(inertia, n, bias, expected)
     try:
         t = _solve_by_continuation(inertia, n, bias)
-    except NoEquilibriumError as exc:
-        if at is None:
-            from acmm.tea_roots import non_isolated_equilibrium, with_other_roots
-
-            family = non_isolated_equilibrium(inertia, n, bias)   # axisymmetric: a curve of roots
-            if family is not None:
-                return family
-            raise with_other_roots(exc, inertia, n, bias) from None
-        return at
-    except ConvergenceError:
+    except (NoEquilibriumError, ConvergenceError) as exc:
         if at is not None:
             return at
-        from acmm.tea_roots import all_equilibria
+        from acmm.tea_roots import without_continuation
 
-        found = all_equilibria(inertia, n, bias)
-        if not found:
-            raise
-        return found[0]
+        return without_continuation(exc, inertia, n, bias)
     if at is not None and np.max(np.abs(t.theta - at.theta)) > 1e-6:
         return at
     return t

@@ -158,3 +158,48 @@ def non_isolated_equilibrium(inertia: np.ndarray, n: float, bias: np.ndarray,
         if np.max(np.abs(theta)) > np.radians(85.0):
             return None
     return None
+
+
+def without_continuation(exc, inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
+    """The TEA when :func:`acmm.tea.solve_tea`'s continuation failed with ``exc``.
+
+    A fold of the bias continuation (NoEquilibriumError): a family of equilibria
+    (:func:`non_isolated_equilibrium`), else the error naming the roots of other branches.  A
+    failed products-of-inertia continuation (ConvergenceError): the smallest-|θ| root of
+    :func:`all_equilibria`, else a family, else the error.
+
+    Parameters
+    ----------
+    exc : NoEquilibriumError or ConvergenceError
+        What the continuation raised.
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        Constant disturbance torque, ft·lbf.
+
+    Returns
+    -------
+    TEA
+        The equilibrium (rad).
+
+    Raises
+    ------
+    NoEquilibriumError
+        No equilibrium on the branch continued from LVLH, nor a family (other roots named).
+    ConvergenceError
+        The products continuation failed and no equilibrium was found otherwise.
+    """
+    if isinstance(exc, NoEquilibriumError):
+        family = non_isolated_equilibrium(inertia, n, bias)     # axisymmetric: a curve of roots
+        if family is not None:
+            return family
+        raise with_other_roots(exc, inertia, n, bias) from None
+    found = all_equilibria(inertia, n, bias)
+    if found:
+        return found[0]
+    family = non_isolated_equilibrium(inertia, n, bias)         # a symmetry axis off the body axes
+    if family is not None:
+        return family
+    raise exc

@@ -157,7 +157,8 @@ def _run_with_progress(runner, cfg, figures, what: str):
 def design(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
            figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
     """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures.
-    With --strict, a scheduled gain with poles outside the sector exits 1."""
+    With --strict, a scheduled gain with poles outside the sector, or a blend whose end lies on
+    another branch of equilibria, exits 1."""
 
     from common import figure_worker
 

@@ -107,9 +107,12 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesAr
                    f"than within it ({r.late_slope[0]:.4g}): beta3 and beta4 see it only up to T (eqs 10.53-10.54), "
                    f"so the certificate says nothing of the simulation beyond T")
     if not r.settled and np.isfinite(r.beta1_ref):    # (an unstable loop is named by the verdict)
+        cause = (f"the loop's slowest mode settles in {r.T_modal:.4g} s (r_o leaves it unexcited): lengthen "
+                 f"simulation.t_final or speed the loop up" if r.T_modal is not None
+                 else "does the servo-compensator (plant.Ac) model r_o?")
         typer.echo(f"  warning: the nominal loop does not settle within {r.T_settle:.4g} s (max(spheres.T, "
                    f"simulation.t_final)): T adapts to that horizon, so the certificate depends on t_final; "
-                   f"does the servo-compensator (plant.Ac) model r_o?")
+                   f"{cause}")
     typer.echo(f"  {r.verdict}")
     typer.echo(f"  wrote {path}")
     if not r.certified:

@@ -36,6 +36,9 @@ def _kinds(annotation: Any) -> tuple[set, list]:
         return scalars, elements
     if origin in (list, tuple, set, frozenset):
         return set(), [a for a in typing.get_args(annotation) if a is not Ellipsis]
+    if origin is dict:                                 # the values' annotation
+        args = typing.get_args(annotation)
+        return set(), [args[1]] if len(args) == 2 else []
     return ({annotation} if isinstance(annotation, type) else set()), []
 
 
@@ -47,18 +50,21 @@ def boolean_as_number(annotation: Any, value: Any) -> bool:
     ----------
     annotation : type or typing form
         The field's annotation (``float``, ``Optional[float]``, ``tuple[float, float]``,
-        ``list[list[float]]``, …).
+        ``list[list[float]]``, ``dict[str, float]``, …).
     value : object
         The value as read from the config.
 
     Returns
     -------
     bool
-        True when a boolean stands where only a number (int, float, complex) is admitted.
+        True when a boolean stands where only a number (int, float, complex) is admitted (in
+        a list, tuple or the values of a mapping too).
     """
     scalars, elements = _kinds(annotation)
     if isinstance(value, bool):
         return bool(scalars & set(_NUMBERS)) and bool not in scalars
+    if isinstance(value, dict) and elements:
+        return any(boolean_as_number(elements[0], v) for v in value.values())
     if isinstance(value, (list, tuple)) and elements:
         if len(elements) == len(value) and len(elements) > 1:        # a fixed tuple
             return any(boolean_as_number(a, v) for a, v in zip(elements, value))

@@ -72,6 +72,9 @@ class DesignResult:
         Settling time of the nominal loop, s.
     settled : bool
         Whether the nominal loop settles within its horizon (else ``T_settle`` is the horizon).
+    T_modal : float or None
+        Settling time of the loop's slowest mode (:func:`modal_settling_time`), s, when it gave
+        ``T_settle`` (a nominal loop with nothing to track); None otherwise.
     late_slope : tuple or None
         (sup slope of φ on [0, T], sup after T up to the horizon), units of φ per unit of y, when
         φ is markedly stiffer after T than within it (:func:`late_slope`); else None.
@@ -112,6 +115,7 @@ class DesignResult:
     T_settle: float = np.nan          #: settling time of the nominal loop, s
     settled: bool = True              #: the nominal loop settles within its horizon (else T_settle is the horizon)
     late_slope: tuple | None = None   #: (sup slope on [0, T], sup slope after T) when φ is stiffer after T
+    T_modal: float | None = None      #: settling time of the slowest mode, s, when it set T_settle
     certified: bool = False           #: β1 ≤ m (bookkeeping, bz) and circle criterion
     verdict: str = ""
     limiting: str = ""
@@ -349,15 +353,17 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     n = int(min(20001, max(801, 801 * horizon / T)))
     t, y_o, x_o = nominal_output(cfg, K1, Kc, H, horizon, n)
     r_o = np.array([eval_signal(cfg.simulation.r_o, tt) for tt in t]).T
-    Ts = settling_time(t, y_o, r_o, cfg.spheres.settle_band)
+    Ts, T_modal = settling_time(t, y_o, r_o, cfg.spheres.settle_band), None
     if Ts == 0.0:   # the nominal loop tracks from the start (r_o ≡ 0, say): its modes still settle
-        Ts = min(modal_settling_time(Azd["eq10.7"], cfg.spheres.settle_band), float(t[-1]))
+        T_modal = modal_settling_time(Azd["eq10.7"], cfg.spheres.settle_band)
+        Ts = min(T_modal, float(t[-1]))
     keep = t <= T + 1e-12
     th = thresholds(cfg, t, y_o, x_o, sector, T)
     res = DesignResult(K1, Kc, H, gains_source, hinf, a, T, Azd, Bzd, Cz, b1, th, circ, sector,
                        spheres.E_factor(a, T), t[keep], y_o[:, keep])
     res.T_settle = Ts
     res.settled = bool(Ts < float(t[-1]))
+    res.T_modal = T_modal
     res.late_slope = late_slope(cfg, T, horizon)
     res.bookkeeping = pick_bookkeeping(cfg, [x.name for x in th])
     res.bz = cfg.design.bz

@@ -141,9 +141,10 @@ class _Procedure:
         except ConfigError:
             self.work = np.inf
         if self.work > limit("QPP_WORK"):
-            field, value = (("spheres.T", float(T)) if float(T) > self.cfg.simulation.t_final
-                            else ("simulation.t_final", self.cfg.simulation.t_final))
-            raise ConfigError(f"{field}: {value:g} s is too long for the design: "
+            given, tf = self.cfg.spheres.T, self.cfg.simulation.t_final
+            field, value = (("spheres.T", f"{given:g} s" + (f" (adapted to {T:g} s)" if T != given else ""))
+                            if T > tf else ("simulation.t_final", f"{tf:g} s"))
+            raise ConfigError(f"{field}: {value} is too long for the design: "
                               f"each of its candidate loops is integrated over max(spheres.T, t_final) = "
                               f"{horizon:g} s, {len(self.records) + 1} so far (work {self.work:.3g}); shorten "
                               f"t_final or spheres.T ({how_to_raise('QPP_WORK')})")

@@ -24,6 +24,10 @@ from conftest import invoke
     (str, True, False),                  # pydantic refuses it itself
     (tuple[str, float], ["x", True], True),
     (tuple[str, float], ["x", 2.0], False),
+    (dict[str, float], {"c": True}, True),                      # mappings' values too (review)
+    (dict[str, list[float]], {"bias_roll": [True, 0.0]}, True),
+    (dict[str, float], {"c": 1.0}, False),
+    (Optional[dict[str, bool]], {"c": True}, False),
 ])
 def test_boolean_as_number(annotation, value, refused):
     assert boolean_as_number(annotation, value) is refused
@@ -40,6 +44,7 @@ def test_boolean_as_number(annotation, value, refused):
     ("qpp", "qpp_siso", "plant.A=[[true, 1], [0, -1]]", "plant.A"),
     ("qpp", "qpp_siso", "design.sector=[[false, 0.5]]", "design.sector"),
     ("qpp", "qpp_siso", "nonlinearity.omega=true", "omega"),
+    ("qpp", "qpp_cubic2", "simulation.scenarios.0.parameters={c: true}", "simulation.scenarios.0.parameters"),
 ])
 def test_boolean_in_a_number_field_is_one_error_line(tmp_runs, app, config, override, field):
     if app == "acmm":

@@ -328,3 +328,16 @@ def test_a_nonlinearity_that_switches_on_after_T_is_named(tmp_runs):
     before, after = late_slope(load_config(str(tmp_runs / "late.yaml")), 2.0, 8.0)
     assert before == pytest.approx(0.0, abs=1e-9) and after == pytest.approx(0.8, rel=1e-6)
     assert late_slope(load_config("qpp_unstable"), 2.0, 10.0) is None
+
+
+def test_a_slow_mode_beyond_the_horizon_is_named_with_nothing_to_track(tmp_runs):
+    """r_o ≡ 0 on the ch. 13 loop: T is its slowest mode's settling time, ln 20/0.1005 = 29.8 s,
+    beyond the 10 s horizon; the warning blamed the servo-compensator (review)."""
+    from typer.testing import CliRunner
+
+    from cli.qpp_app import app
+
+    r = CliRunner().invoke(app, ["design", "qpp_siso", "spheres.adapt_T=true",
+                                 "simulation.r_o=[[{kind: step, amplitude: 0.0}]]"])
+    assert "the loop's slowest mode settles in 29.8" in r.output, r.output
+    assert "plant.Ac" not in r.output

@@ -223,3 +223,16 @@ def test_level_statistics_do_not_depend_on_the_output_sampling(tmp_path):
     half = tt >= 0.5 * sc.t_end
     steady = np.degrees(np.abs(X[3:6, half] - sc.theta_est[0][:, None]).max(axis=1))
     np.testing.assert_allclose(stats[60.0][0], steady, rtol=2e-2, atol=1e-4)
+
+
+def test_a_level_without_a_sample_in_its_second_half_keeps_its_statistics(tmp_path):
+    """Levels of 0.3 orbit sampled every 3000 s: level 0 has no sample in the second half of its
+    dwell; its steady error was dropped (NaN, 'the run ended before it') although the kernel had
+    tracked it (review)."""
+    res, path = run_simulate(load_config("staircase", [
+        "name=sparse", "schedule.n_points=3", "schedule.fit=least_squares", "schedule.n_check=2",
+        "simulation.orbits=1", "simulation.levels=[0, 0.3, 0.6]", "simulation.sample_interval=3000",
+        "output.figures=false", f"output.root={tmp_path}"]))
+    assert [s["level"] for s in res.stats] == [0, 1, 2]
+    with h5py.File(path) as f:
+        assert np.all(np.isfinite(f["levels/steady_error"][()]))

@@ -1,6 +1,6 @@
 """Stations far from Space Station Freedom's size (``docs/ERRATA.md`` § Scaling): beyond the band
 of :data:`acmm.linearize.MOMENTUM_BAND` the momentum scale and the torque unit of the solve follow
-the station, so a station k times smaller — torques and limits k times, R 1/k² times — is the
+the station, so a station k times smaller — torques and limits k times smaller, R k² times larger — is the
 same scaled problem: the same poles (in n), gains in proportion, the same PBH ratio.  With fixed
 scales a 0.05 slug·ft² station was "uncontrollable" (PBH 3e-13) and 1e-5 of SSF had no
 accurate Riccati solution."""

@@ -347,6 +347,17 @@ def test_axisymmetric_station_has_a_family_of_equilibria_not_none():
     assert np.max(np.abs(ref.fun)) < 1e-9
     # the family is a curve (roll and pitch move with yaw): ours is the member nearest LVLH
     assert np.linalg.norm(t.theta) <= np.linalg.norm(ref.x) + 1e-9 and abs(t.theta[2]) < 1e-6
+    # the symmetry axis need not be a body axis: rotated, the products-of-inertia continuation
+    # fails first (ConvergenceError), and the family is found all the same (review)
+    from scipy.spatial.transform import Rotation
+
+    for seed in range(3):
+        R = Rotation.from_euler("xyz", np.random.default_rng(seed).uniform(-0.3, 0.3, 3)).as_matrix()
+        rotated = R @ inertia @ R.T
+        b = np.cross(R[:, 2], [0.0, 1.0, 0.0])
+        b = 0.2 * b / np.linalg.norm(b)
+        tr = solve_tea(rotated, n, b)
+        assert np.max(np.abs(equilibrium_residual(tr.theta, rotated, n, b))) < 1e-9
     # the same station 1e-9 from axisymmetric has an isolated root, next to ours
     near = solve_tea(np.diag([20e6, 20e6 * (1 + 1e-9), 5e6]), n, bias)
     assert np.max(np.abs(equilibrium_residual(near.theta, inertia, n, bias))) < 1e-6
