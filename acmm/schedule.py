@@ -197,7 +197,7 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     else:
         from acmm.schedule_points import blend_context
 
-        with blend_context("its end" if spec.s != 1.0 else spec.name, spec.s if spec.s > 0 else 0.0):
+        with blend_context(spec.name if spec.s == 1.0 else None, spec.s if spec.s > 0 else 0.0):
             t = solve_tea(spec.inertia, n, spec.bias, expected=spec.expected)
     model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
     res = sector_design(model.A, model.B, model.scales, s)

@@ -121,15 +121,15 @@ def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
 
 
 @contextmanager
-def blend_context(end_name: str, s: float):
+def blend_context(end_name: str | None, s: float):
     """A missing equilibrium on the blend names where it is: the blend toward ``schedule.to``,
     at s, whose inertia and bias are (1 − s)·start + s·end (the bias in the message is that blend,
     not a bias the user wrote).
 
     Parameters
     ----------
-    end_name : str
-        Name of the blend's end station.
+    end_name : str or None
+        Name of the blend's end station (None: not known where the error arises).
     s : float
         Blend parameter, dimensionless (0: the start, whose errors pass unchanged).
 
@@ -144,8 +144,8 @@ def blend_context(end_name: str, s: float):
         yield
     except NoEquilibriumError as exc:
         if s > 0:
-            raise NoEquilibriumError(f"on the blend toward schedule.to ({end_name}) at s = {s:.3g}, inertia "
-                                     f"and bias (1 − s)·start + s·end: {exc}") from None
+            raise NoEquilibriumError(f"on the blend toward schedule.to{f' ({end_name})' if end_name else ''} "
+                                     f"at s = {s:.3g}, inertia and bias (1 − s)·start + s·end: {exc}") from None
         raise
 
 

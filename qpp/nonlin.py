@@ -21,7 +21,7 @@ range) raises :class:`common.errors.ConfigError` naming the channel and the caus
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -344,9 +344,9 @@ class ExpressionModel(SampleGrid):
             return float(max(np.max(g), np.max(self.sector_info.slope_bound)) * np.sqrt(T))
         return truncated_l2(tg, g, T)
 
+    @lru_cache(maxsize=8)    # each evaluation of 12.1 asks again (β3, the late-slope check)
     def slope_profile(self, T: float):
-        """(t, g): g_i(t) = sup_{y, θ} Σ_j |∂φ_i/∂y_j| on the time grid of [0, T] (t = 0 alone for a
-        φ without t), the integrand of β3 (10.54).
+        """(t, g), read-only: g_i(t) = sup_{y, θ} Σ_j |∂φ_i/∂y_j| on the time grid of [0, T], the β3 integrand.
 
         Parameters
         ----------
@@ -359,7 +359,6 @@ class ExpressionModel(SampleGrid):
             ((N,) times in s, (r, N) slopes in units of φ per unit of y).
         """
         tg = self._t_grid(T)
-        tt = tg[None, :]
         g = np.zeros((len(self.phi), tg.size))
         for i in range(len(self.phi)):
             if not any(self.dep[i]):
@@ -368,8 +367,9 @@ class ExpressionModel(SampleGrid):
             ny = max(Y.shape[0] for Y in Yf)
             for th in self.theta_samples():
                 TH = [np.full((1, 1), v) for v in th]
-                s = sum(np.abs(self._grad(i, j, Yf, tt, TH)) for j in range(self.p) if self.dep[i][j])
+                s = sum(np.abs(self._grad(i, j, Yf, tg[None, :], TH)) for j in range(self.p) if self.dep[i][j])
                 g[i] = np.maximum(g[i], np.max(np.broadcast_to(s, (ny, tg.size)), axis=0))
+        tg.flags.writeable = g.flags.writeable = False
         return tg, g
 
     def beta4(self, t, y_o, T: float) -> float:

@@ -238,6 +238,22 @@ def test_a_badly_scaled_plant_has_no_false_obstacle():
     assert structural_obstacles(LurePlant(A, B, C, B, [[0]], [[1]], [[1]])) == []
 
 
+def _mass_on_integrator(name, f1, *, beta_o, step, delta_r=None):
+    """A review's plant: a damped mass tracking a step of ``step`` through an integrator servo,
+    φ = ``f1`` with k ∈ [−0.8, 0.8], β_ri = 0.004, simulated 8 s, one scenario at k = 0.8."""
+    scenario = {"name": "kmax", "parameters": {"k": 0.8}, **({"delta_r": delta_r} if delta_r else {})}
+    return {"name": name,
+            "plant": {"A": [[0, 1], [0, -0.5]], "B": [[0], [1]], "C": [[1, 0]], "G": [[0], [1]],
+                      "Ac": [[0]], "Bc": [[1]], "Cc": [[1]]},
+            "nonlinearity": {"kind": "expression", "f1": [f1],
+                             "parameters": {"k": {"min": -0.8, "max": 0.8, "nominal": 0}}, "y_range": [[-3, 3]]},
+            "hinf": {"rho": 0.1, "a": 1.0e-4}, "spheres": {"beta_o": beta_o, "beta_ri": 0.004, "T": 1.0},
+            "design": {"a_max": 1.0e-2, "rho_min": 0.05, "wider_search": False},
+            "simulation": {"t_final": 8.0, "n_samples": 401, "r_o": [[{"kind": "step", "amplitude": step}]],
+                           "scenarios": [scenario]},
+            "output": {"root": "runs", "figures": False}}
+
+
 def test_nothing_to_track_is_no_reason_for_a_vanishing_T(tmp_runs):
     """r_o ≡ 0: the nominal loop 'settles' at t = 0, T fell to 1e-3·t_final, β3 = k‖(1)_T‖₂ to ~0
     and a design was certified whose simulation leaves the output sphere (a review's case: k at
@@ -248,20 +264,8 @@ def test_nothing_to_track_is_no_reason_for_a_vanishing_T(tmp_runs):
 
     from cli.qpp_app import app
 
-    cfg = {
-        "name": "regulate",
-        "plant": {"A": [[0, 1], [0, -0.5]], "B": [[0], [1]], "C": [[1, 0]], "G": [[0], [1]],
-                  "Ac": [[0]], "Bc": [[1]], "Cc": [[1]]},
-        "nonlinearity": {"kind": "expression", "f1": ["k*y1"],
-                         "parameters": {"k": {"min": -0.8, "max": 0.8, "nominal": 0}}, "y_range": [[-3, 3]]},
-        "hinf": {"rho": 0.1, "a": 1.0e-4},
-        "spheres": {"beta_o": 0.006, "beta_ri": 0.004, "T": 1.0},
-        "design": {"a_max": 1.0e-2, "rho_min": 0.05, "wider_search": False},
-        "simulation": {"t_final": 8.0, "n_samples": 401, "r_o": [[{"kind": "step", "amplitude": 0.0}]],
-                       "scenarios": [{"name": "kmax", "parameters": {"k": 0.8},
-                                      "delta_r": [[{"kind": "sin", "amplitude": 0.004, "omega": 1.0}]]}]},
-        "output": {"root": "runs", "figures": False},
-    }
+    cfg = _mass_on_integrator("regulate", "k*y1", beta_o=0.006, step=0.0,
+                              delta_r=[[{"kind": "sin", "amplitude": 0.004, "omega": 1.0}]])
     (tmp_runs / "reg.yaml").write_text(yaml.safe_dump(cfg))
     r = CliRunner().invoke(app, ["design", "reg.yaml"])
     assert r.exit_code == 3 and "hint: no tracking loop meets these spheres" in r.output, r.output
@@ -312,16 +316,7 @@ def test_a_nonlinearity_that_switches_on_after_T_is_named(tmp_runs):
     from qpp.certificate import late_slope
     from qpp.config import load_config
 
-    cfg = {"name": "late",
-           "plant": {"A": [[0, 1], [0, -0.5]], "B": [[0], [1]], "C": [[1, 0]], "G": [[0], [1]],
-                     "Ac": [[0]], "Bc": [[1]], "Cc": [[1]]},
-           "nonlinearity": {"kind": "expression", "f1": ["k*y1*(sat(10*(t-3), 1) + 1)/2"],
-                            "parameters": {"k": {"min": -0.8, "max": 0.8, "nominal": 0}}, "y_range": [[-3, 3]]},
-           "hinf": {"rho": 0.1, "a": 1.0e-4}, "spheres": {"beta_o": 0.02, "beta_ri": 0.004, "T": 1.0},
-           "design": {"a_max": 1.0e-2, "rho_min": 0.05, "wider_search": False},
-           "simulation": {"t_final": 8.0, "n_samples": 401, "r_o": [[{"kind": "step", "amplitude": 1.0}]],
-                          "scenarios": [{"name": "kmax", "parameters": {"k": 0.8}}]},
-           "output": {"root": "runs", "figures": False}}
+    cfg = _mass_on_integrator("late", "k*y1*(sat(10*(t-3), 1) + 1)/2", beta_o=0.02, step=1.0)
     (tmp_runs / "late.yaml").write_text(yaml.safe_dump(cfg))
     r = CliRunner().invoke(app, ["design", "late.yaml"])
     assert "warning: the nonlinearity is stiffer after T" in r.output, r.output
