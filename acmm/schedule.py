@@ -204,29 +204,6 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     return PointDesign(spec, t, model, res)
 
 
-def off_branch_gap(spec, theta) -> float:
-    """How far (rad, largest angle) the TEA ``theta`` of the end of a TEA-spaced blend (s = 1)
-    lies from the branch of equilibria continued from the start (its guess); 0 for any other
-    point.  Above ~1e-6 rad the blend crosses a fold: the points between follow one branch,
-    the end (its ``bias_from_tea``) sits on another, and the schedule is fitted across the jump.
-
-    Parameters
-    ----------
-    spec : PointSpec
-        The design point.
-    theta : (3,) array
-        Its TEA, rad.
-
-    Returns
-    -------
-    float
-        The gap, rad.
-    """
-    if spec.s != 1.0 or spec.theta_guess is None:
-        return 0.0
-    return float(np.max(np.abs((np.asarray(theta) - spec.theta_guess + np.pi) % (2 * np.pi) - np.pi)))
-
-
 def sector_design(A, B, scales, s: DesignSettings):
     """The sector LQR of one linear model with the design settings ``s`` (R, Q0, sector, pole
     method, Riccati solver, tolerances; orbital rate ``s.orbit_rate``) — the one call the

@@ -247,3 +247,85 @@ def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSp
             specs = blend_points(start, end, sched.n_points)
     return specs + list(extras)
 
+
+
+@dataclass(frozen=True)
+class BranchJump:
+    """A blend design point whose TEA is not on the branch of equilibria continued from the
+    blend's start (:func:`off_branch_point`).
+
+    Attributes
+    ----------
+    name : str
+        The design point.
+    s : float
+        Its blend parameter, dimensionless.
+    theta : (3,) array
+        Its TEA, rad.
+    branch : (3,) array or None
+        Where the branch continued from the start is at that s, rad; None where that branch
+        ends (folds) before reaching it.
+    asked : bool
+        Whether the point's TEA is the one its config asks for (``bias_from_tea``).
+    """
+
+    name: str
+    s: float
+    theta: np.ndarray
+    branch: np.ndarray | None
+    asked: bool
+
+
+def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6,
+                     n_track: int = 81) -> BranchJump | None:
+    """The first blend point whose TEA lies off the branch continued from the blend's start.
+
+    The points of a gain schedule (ch. 5.3) should lie on one branch of equilibria
+    (eqs 4.1–4.3): the station moves along it as it is assembled.  A point solved on its own
+    (blend spacing: each from LVLH; an end that asks for its TEA) can land on another branch
+    where the blend crosses a fold; the points then jump and the schedule is fitted across the
+    jump.  Here the branch is continued from the start over ``n_track`` evenly spaced s (the
+    track the TEA spacing and the path check use) and Newton-solved at each point's s.
+
+    Parameters
+    ----------
+    specs : list of PointSpec
+        The design points; those with a finite ``s`` form the blend.
+    thetas : sequence of (3,) arrays
+        Their TEAs, rad, in the order of ``specs``.
+    n : float
+        Orbital rate, rad/s.
+    tol : float, optional
+        Largest angle (rad) by which a point may differ from the branch.
+    n_track : int, optional
+        Number of s values of the continuation.
+
+    Returns
+    -------
+    BranchJump or None
+        The first point off the branch, None when all are on it (or without a blend).
+    """
+    from common.errors import ConvergenceError, NoEquilibriumError
+
+    blend = [(sp, np.asarray(th, float)) for sp, th in zip(specs, thetas) if np.isfinite(sp.s)]
+    if len(blend) < 2:
+        return None
+    first, last = blend[0][0], blend[-1][0]
+    start = PointSpec(first.name, first.inertia, first.bias, 0.0, expected=first.expected)
+    end = PointSpec(last.name, last.inertia, last.bias, 1.0, expected=last.expected)
+    try:
+        track = _tea_track(start, end, n, n_track)
+    except (NoEquilibriumError, ConvergenceError):
+        track = None
+    grid = np.linspace(0.0, 1.0, n_track)
+    for sp, th in blend:
+        branch = None
+        if track is not None:
+            guess = np.array([np.interp(sp.s, grid, track[:, i]) for i in range(3)])
+            try:
+                branch = solve_tea_near(sp.inertia, n, sp.bias, guess).theta
+            except (NoEquilibriumError, ConvergenceError):
+                branch = None
+        if branch is None or np.max(np.abs((th - branch + np.pi) % (2 * np.pi) - np.pi)) > tol:
+            return BranchJump(sp.name, float(sp.s), th, branch, sp.expected is not None)
+    return None

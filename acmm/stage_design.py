@@ -134,21 +134,19 @@ class DesignResult:
         """
         return np.array([np.max(-p.lqr.poles.real) / self.config.orbit_rate for p in self.points])
 
-    def end_off_branch(self):
-        """(TEA of the blend's end, where the branch continued from the start reaches there), rad,
-        when they differ by more than 1e-6 rad (:func:`acmm.schedule.off_branch_gap`), else None.
+    def off_branch(self):
+        """The first blend point whose TEA is not on the branch of equilibria continued from the
+        blend's start (:func:`acmm.schedule_points.off_branch_point`), else None.
 
         Returns
         -------
-        tuple of (3,) arrays or None
-            The two attitudes, rad.
+        acmm.schedule_points.BranchJump or None
+            The point, its TEA and the branch's there, rad.
         """
-        from acmm.schedule import off_branch_gap
+        from acmm.schedule_points import off_branch_point
 
-        for p in self.points:
-            if off_branch_gap(p.spec, p.tea.theta) > 1e-6:
-                return p.tea.theta, p.spec.theta_guess
-        return None
+        return off_branch_point([p.spec for p in self.points], [p.tea.theta for p in self.points],
+                                self.config.orbit_rate)
 
     def worst_check_index(self) -> int | None:
         """Index of the schedule check with the smallest sector margin (None without a schedule).

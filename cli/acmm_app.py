@@ -188,18 +188,28 @@ def design(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = O
                    f"worst margin {c.worst:+.3f} n at {c.names[worst]} ({c.kind[worst]})")
         stable = "stable at every check" if c.max_real.max() < 0 else "UNSTABLE at some checks"
         typer.echo(f"  scheduled closed loops: {stable}; largest Re(pole) = {c.max_real.max():+.3f} n")
-    jump = r.end_off_branch()
+    jump = r.off_branch()
     if jump is not None:
-        typer.echo(f"  warning: the end station's TEA {_fmt([math.degrees(x) for x in jump[0]], '{:+.2f}')} deg (as asked) is not "
-                   f"on the branch of equilibria continued from the start, which reaches "
-                   f"{_fmt([math.degrees(x) for x in jump[1]], '{:+.2f}')} deg there: the blend crosses a fold and the "
-                   f"schedule is fitted across the jump")
+        typer.echo("  warning: " + _branch_jump_text(jump))
     typer.echo(f"  wrote {path}")
-    strict_exit(strict, jump is not None, f"{cfg.name}: the blend's end is on another branch of equilibria")
+    strict_exit(strict, jump is not None, f"{cfg.name}: the blend's design point {jump.name if jump else ''} "
+                "is on another branch of equilibria")
     if r.check is not None:
         strict_exit(strict, r.check.worst <= 0,
                     f"{cfg.name}: the scheduled gain puts poles outside the sector "
                     f"(worst margin {r.check.worst:+.3f} n)")
+
+
+def _branch_jump_text(jump) -> str:
+    """The warning for a blend point off the start's branch of equilibria (a BranchJump)."""
+    who = ("the end station's TEA" if jump.s == 1.0 else f"the TEA of design point {jump.name} (s = {jump.s:.3g})")
+    tea = _fmt([math.degrees(x) for x in jump.theta], "{:+.2f}") + " deg" + (" (as asked)" if jump.asked else "")
+    if jump.branch is None:
+        where = "which folds (ends) before reaching it"
+    else:
+        where = f"which reaches {_fmt([math.degrees(x) for x in jump.branch], '{:+.2f}')} deg there"
+    return (f"{who} {tea} is not on the branch of equilibria continued from the start, {where}: "
+            "the blend crosses a fold and the schedule is fitted across the jump")
 
 
 @app.command(short_help="Nonlinear closed-loop simulation (ch 6); designs first if needed; writes sim.h5 + figures.")

@@ -4,6 +4,8 @@ Every pole is re-checked against the sector with an independent formula, and K i
 from the returned Q with scipy's CARE solver directly (not through acmm.riccati).
 """
 import h5py
+import re
+
 import numpy as np
 import pytest
 import scipy.linalg as sla
@@ -193,7 +195,8 @@ def test_config_q0_groups_are_diagonal_weights_on_the_scaled_states():
     assert np.linalg.eigvalsh(q_scaled - np.diag(g.diagonal())).min() > -1e-9 * np.abs(q_scaled).max()
 
 
-def test_a_blend_whose_end_is_on_another_branch_of_equilibria_is_flagged(tmp_runs, run_acmm):
+@pytest.mark.parametrize("spacing", ["tea", "blend"])
+def test_a_blend_whose_end_is_on_another_branch_of_equilibria_is_flagged(tmp_runs, run_acmm, spacing):
     """TEA-spaced points follow the branch continued from the start (it reaches −35° at the end
     station); the end station asks for −55° (bias_from_tea), a root of another branch: the points
     jumped −36.25° → −55° and a polynomial was fitted across the jump without a word (a review's
@@ -215,11 +218,14 @@ def test_a_blend_whose_end_is_on_another_branch_of_equilibria_is_flagged(tmp_run
         "name: fold\ninertia: {I11: 10.0e6, I22: 3.0e6, I33: 11.0e6}\norbit_rate: 0.0011\n"
         "disturbance: {bias_from_tea: [0, -40.0, 0]}\n"
         "schedule:\n  to: {name: fend, inertia: {I11: 10.0e6, I22: 3.0e6, I33: 12.0e6}, "
-        "disturbance: {bias_from_tea: [0, -55.0, 0]}}\n  n_points: 5\noutput: {figures: false}\n")
+        f"disturbance: {{bias_from_tea: [0, -55.0, 0]}}}}\n  n_points: 5\n  spacing: {spacing}\n"
+        "output: {figures: false}\n")
     r = run_acmm("design", "fold.yaml")
     assert r.exit_code == 0, r.output         # the end keeps the TEA it asks for (a result) ...
     assert "warning: the end station's TEA [+0.00, -55.00, +0.00] deg (as asked) is not on the branch" in r.stdout
     assert "fitted across the jump" in r.stdout
+    branch = re.search(r"which reaches \[([^]]*)\] deg there", r.stdout).group(1)
+    assert np.allclose([float(x) for x in branch.split(",")], np.degrees(t), atol=0.006)
     r = run_acmm("design", "fold.yaml", "--strict")
     assert r.exit_code == 1 and "another branch of equilibria" in r.output      # ... failed by --strict
 
