@@ -73,6 +73,9 @@ class Scenario:
         A run stops as diverged when |θ_i − θ̂*_i| exceeds this bound.
     max_saturation : float, s
         A run stops as diverged when a CMG axis stays saturated longer than this.
+    theta_ref : (L, 3) array or None, rad
+        Attitude per level that :class:`RunExtremes` measures the error from (a sweep: the
+        perturbed plant's true TEA); None: ``theta_est``.
     """
 
     level_start: np.ndarray
@@ -93,7 +96,34 @@ class Scenario:
     atol: np.ndarray
     divergence: float
     max_saturation: float
+    theta_ref: np.ndarray | None = None
 
+
+
+@dataclass(frozen=True)
+class RunExtremes:
+    """Extremes of a run over every accepted integrator step (not only its output samples).
+
+    Attributes
+    ----------
+    peak_momentum : (3,) array
+        max |h_i| per axis, ft·lbf·s.
+    peak_error : (3,) array
+        max |θ_i − θ_ref,i| per axis (``Scenario.theta_ref`` of the level in force), rad.
+    steady_error : (3,) array
+        The same over the steps at t ≥ t_end / 2, rad (NaN: the run stopped before).
+    torque_saturation_time : float
+        Time with the commanded torque clipped on any axis, s (each accepted step counted by
+        its end state).
+    momentum_saturation_time : float
+        Time with any CMG axis at its momentum limit, s (likewise).
+    """
+
+    peak_momentum: np.ndarray
+    peak_error: np.ndarray
+    steady_error: np.ndarray
+    torque_saturation_time: float
+    momentum_saturation_time: float
 
 
 @dataclass(frozen=True)
@@ -135,6 +165,8 @@ class SimResult:
     level_steady_error : (L, 3) array or None
         Per level, max |θ − θ̂*| over the accepted steps of the second half of its dwell, rad
         (NaN: the run did not reach the middle of that dwell); None: from the samples.
+    run_extremes : RunExtremes or None
+        The run's extremes over every accepted step; None: not tracked.
     """
 
     t: np.ndarray
@@ -151,6 +183,7 @@ class SimResult:
     n_rejected: int
     level_peak_momentum: np.ndarray | None = None
     level_steady_error: np.ndarray | None = None
+    run_extremes: RunExtremes | None = None
 
     @property
     def diverged(self) -> bool:

@@ -27,10 +27,10 @@ from acmm import dynamics as dyn
 from acmm.linearize import DRF_INPUTS
 # moved to acmm.scenario (issue 12), re-exported here
 from acmm.scenario import (PLAIN_STATE_NAMES, STOP_ANGLE, STOP_NONE, STOP_NONFINITE,  # noqa: F401
-                           STOP_REASONS, STOP_SATURATION, STOP_STEP, Scenario, SimResult,
+                           STOP_REASONS, STOP_SATURATION, STOP_STEP, RunExtremes, Scenario, SimResult,
                            attitude_error, level_statistics, plain_scales, scenario_from_config)
 # the plain-numpy reference right-hand side lives in acmm.simulate_reference (issue 12)
-from acmm.simulate_reference import rhs_numpy  # noqa: E402,F401
+from acmm.simulate_reference import kernel_rhs, rhs_numpy  # noqa: E402,F401
 
 
 # ----------------------------------------------------------------------------------------------
@@ -200,41 +200,67 @@ def _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time):
 
 
 @njit(cache=True)
-def _track_level(X, t, level, tl, level_mid, peak_h, steady):
-    """Per-level extremes at every accepted step (not only at the output samples): peak
-    max_i |h_i| over the level, and max |θ_i − θ̂*_i| from the middle of its dwell on."""
+def _track(X, t, level, tl, rl, level_mid, run_mid, peak_h, steady, run, flags, step_len):
+    """Extremes at every accepted step (not only at the output samples).  Per level: peak
+    max_i |h_i|, and max |θ_i − θ̂*_i| from the middle of its dwell on.  Over the run (``run``):
+    peak |h_i|, peak |θ_i − θ_ref,i| and the same from ``run_mid`` on, per axis; then the time
+    with any axis torque-saturated and any axis momentum-saturated (the step's end state)."""
     hm = max(abs(X[6]), abs(X[7]), abs(X[8]))
     if not (peak_h[level] >= hm):          # NaN (not reached yet) or smaller
         peak_h[level] = hm
-    if t >= level_mid[level] - 1e-9:
-        for i in range(3):
-            e = abs(X[3 + i] - tl[i])
-            if not (steady[level, i] >= e):
-                steady[level, i] = e
+    for i in range(3):
+        e = abs(X[3 + i] - tl[i])
+        if t >= level_mid[level] - 1e-9 and not (steady[level, i] >= e):
+            steady[level, i] = e
+        a = abs(X[6 + i])
+        if not (run[i] >= a):
+            run[i] = a
+        e = abs(X[3 + i] - rl[i])
+        if not (run[3 + i] >= e):
+            run[3 + i] = e
+        if t >= run_mid - 1e-9 and not (run[6 + i] >= e):
+            run[6 + i] = e
+    if flags[0] > 0.0 or flags[1] > 0.0 or flags[2] > 0.0:
+        run[9] += step_len
+    if flags[3] > 0.0 or flags[4] > 0.0 or flags[5] > 0.0:
+        run[10] += step_len
+
+
+@njit(cache=True)
+def _window_entry(X0, K, X1, t0, h, mid, ref, worst):
+    """Where the step (t0, X0) → (t0 + h, X1) crosses ``mid`` (a window of :func:`_track` opens),
+    |θ_i(mid) − ref_i| into ``worst`` (max), θ(mid) by the cubic Hermite interpolant of the
+    step's end states and slopes (``K[0]``, ``K[6]``: Dormand–Prince's first and last stage), so
+    that a window does not open only at the first step end after ``mid``."""
+    if not (t0 < mid - 1e-9 and mid < t0 + h - 1e-9):
+        return
+    s = (mid - t0) / h
+    h00, h10 = 2 * s ** 3 - 3 * s ** 2 + 1, s ** 3 - 2 * s ** 2 + s
+    h01, h11 = -2 * s ** 3 + 3 * s ** 2, s ** 3 - s ** 2
+    for i in range(3):
+        th = h00 * X0[3 + i] + h10 * h * K[0, 3 + i] + h01 * X1[3 + i] + h11 * h * K[6, 3 + i]
+        e = abs(th - ref[i])
+        if not (worst[i] >= e):
+            worst[i] = e
 
 
 @njit(cache=True)
 def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est, omega_est, gain,
                ha, hb, n, tmax, hmax, drf_idx, x0, rtol, atol, divergence, max_sat,
                C, A, B5, E, out_state, out_ucmd, out_u, out_flags, out_level,
-               level_mid, out_peak_h, out_steady):
+               level_mid, out_peak_h, out_steady, theta_ref, run_mid, out_run):
     nx = 24
     L = level_start.shape[0]
     X = x0.copy()
     K = np.empty((7, nx))
     tmp = np.empty(nx)
-    u = np.empty(3)
-    ucmd = np.empty(3)
+    u, ucmd, us = np.empty(3), np.empty(3), np.empty(3)
     flags = np.zeros(6)
     xs = np.empty(24)
-    us = np.empty(3)
     sat_time = np.zeros(3)
     t = sample_times[0]
     dt = 10.0
-    n_steps = 0
-    n_rej = 0
-    stop = 0
-    level = 0
+    n_steps, n_rej, stop, level = 0, 0, 0, 0
     # record the first sample
     _rhs(t, X, inertia[0], inertia_inv[0], bias[0], theta_est[0], omega_est[0], gain[0], ha, hb,
          n, tmax, hmax, drf_idx, tmp, u, ucmd, flags, xs, us)
@@ -243,7 +269,7 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
     out_ucmd[0] = ucmd
     out_flags[0] = flags
     out_level[0] = 0
-    _track_level(X, t, 0, theta_est[0], level_mid, out_peak_h, out_steady)
+    _track(X, t, 0, theta_est[0], theta_ref[0], level_mid, run_mid, out_peak_h, out_steady, out_run, flags, 0.0)
     n_samples = sample_times.shape[0]
     last = 0
     for s in range(1, n_samples):
@@ -251,7 +277,7 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
         while level + 1 < L and level_start[level + 1] <= t + 1e-9:
             level += 1
         Il, Iil, bl = inertia[level], inertia_inv[level], bias[level]
-        tl, ol, gl = theta_est[level], omega_est[level], gain[level]
+        tl, ol, gl, rl = theta_est[level], omega_est[level], gain[level], theta_ref[level]
         while t < t_target - 1e-9:
             h = min(dt, t_target - t)
             err, finite = _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
@@ -262,11 +288,13 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
             if err <= 1.0:
                 # accept
                 step_len = h
+                _window_entry(X, K, tmp, t, h, level_mid[level], tl, out_steady[level])
+                _window_entry(X, K, tmp, t, h, run_mid, rl, out_run[6:9])
                 t += h
                 for i in range(nx):
                     X[i] = tmp[i]
                 n_steps += 1
-                _track_level(X, t, level, tl, level_mid, out_peak_h, out_steady)
+                _track(X, t, level, tl, rl, level_mid, run_mid, out_peak_h, out_steady, out_run, flags, step_len)
                 fac = 0.9 * err ** (-0.2) if err > 0 else 5.0
                 dt = h * min(5.0, max(0.2, fac))
                 stop = _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time)
@@ -333,6 +361,8 @@ def simulate(sc: Scenario) -> SimResult:
     level_mid = 0.5 * (np.asarray(sc.level_start, float) + ends)
     out_peak_h = np.full(L, np.nan)
     out_steady = np.full((L, 3), np.nan)
+    out_run = np.append(np.full(9, np.nan), np.zeros(2))
+    theta_ref = np.ascontiguousarray(sc.theta_est if sc.theta_ref is None else sc.theta_ref, float)
     last, stop, t_stop, n_steps, n_rej = _integrate(
         np.ascontiguousarray(sc.sample_times, float), np.ascontiguousarray(sc.level_start, float),
         inertia, inertia_inv, np.ascontiguousarray(sc.bias, float),
@@ -341,7 +371,7 @@ def simulate(sc: Scenario) -> SimResult:
         float(sc.torque_limit), float(sc.momentum_limit), drf_idx, np.asarray(sc.x0, float),
         float(sc.rtol), np.asarray(sc.atol, float), float(sc.divergence), float(sc.max_saturation),
         _C, _A, _B5, _E, out_state, out_ucmd, out_u, out_flags, out_level,
-        level_mid, out_peak_h, out_steady)
+        level_mid, out_peak_h, out_steady, theta_ref.reshape(L, 3), 0.5 * float(sc.t_end), out_run)
     k = last + 1
     t = sc.sample_times[:k].copy()
     if stop != STOP_NONE:
@@ -351,39 +381,5 @@ def simulate(sc: Scenario) -> SimResult:
                      level=out_level[:k], torque_saturated=out_flags[:k, :3] > 0,
                      momentum_saturated=out_flags[:k, 3:] > 0, stop_code=int(stop),
                      stop_time=float(t_stop), n_steps=int(n_steps), n_rejected=int(n_rej),
-                     level_peak_momentum=out_peak_h, level_steady_error=out_steady)
-
-
-def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
-    """The compiled right-hand side at one state: returns (Ẋ, u delivered, u commanded).
-
-    Parameters
-    ----------
-    sc : Scenario
-        The closed loop (units in :class:`Scenario`).
-    t : float
-        Time, s.
-    X : (24,) array
-        Plain state, in the units listed in the module docstring.
-    level : int
-        Index of the inertia level in force.
-
-    Returns
-    -------
-    X_dot : (24,) array
-        Ẋ, in the units of X per second.
-    u : (3,) array
-        Torque delivered after saturation, ft·lbf.
-    u_cmd : (3,) array
-        Commanded torque −K x (eq 5.1), ft·lbf.
-    """
-    inertia = np.ascontiguousarray(sc.inertia[level], float)
-    omega_est = dyn.lvlh_rate_in_body(sc.theta_est[level], sc.n)
-    drf_idx = _drf_index(sc.drf_mode)
-    out, u, ucmd, flags = np.empty(24), np.empty(3), np.empty(3), np.zeros(6)
-    scratch_x, scratch_u = np.empty(24), np.empty(3)
-    _rhs(t, np.asarray(X, float), inertia, np.linalg.inv(inertia), np.asarray(sc.bias[level], float),
-         np.asarray(sc.theta_est[level], float), omega_est, np.ascontiguousarray(sc.gain[level], float),
-         np.asarray(sc.harmonic_a, float), np.asarray(sc.harmonic_b, float), float(sc.n),
-         float(sc.torque_limit), float(sc.momentum_limit), drf_idx, out, u, ucmd, flags, scratch_x, scratch_u)
-    return out, u, ucmd
+                     level_peak_momentum=out_peak_h, level_steady_error=out_steady,
+                     run_extremes=RunExtremes(out_run[0:3], out_run[3:6], out_run[6:9], out_run[9], out_run[10]))

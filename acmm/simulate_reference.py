@@ -1,10 +1,11 @@
 """Plain-numpy right-hand side of the closed loop simulated by :mod:`acmm.simulate`.
 
 Built from :mod:`acmm.dynamics` independently of the compiled kernel: the reference the kernel
-is tested against and the ``solve_ivp`` baseline of ``make bench``.  It is the nonlinear model of
+is tested against and the ``solve_ivp`` baseline of ``make bench``; and :func:`kernel_rhs`, the
+compiled right-hand side called at one state (for tests and the warm-up).  It is the nonlinear model of
 eqs 3.1–3.9 (rigid-body and CMG dynamics, 2-3-1 kinematics, gravity-gradient and disturbance
 torques) closed by the controller and DRF states of ch. 4–5.  Split from
-:mod:`acmm.simulate` (issue 12), which re-exports :func:`rhs_numpy`.
+:mod:`acmm.simulate` (issue 12), which re-exports both.
 """
 from __future__ import annotations
 
@@ -60,3 +61,38 @@ def rhs_numpy(t: float, X: np.ndarray, sc: Scenario, level: int = 0) -> np.ndarr
     return np.concatenate([omega_dot, theta_dot, h_dot, h, d_drf])
 
 
+def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
+    """The compiled right-hand side at one state: returns (Ẋ, u delivered, u commanded).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The closed loop (units in :class:`Scenario`).
+    t : float
+        Time, s.
+    X : (24,) array
+        Plain state, in the units listed in the module docstring.
+    level : int
+        Index of the inertia level in force.
+
+    Returns
+    -------
+    X_dot : (24,) array
+        Ẋ, in the units of X per second.
+    u : (3,) array
+        Torque delivered after saturation, ft·lbf.
+    u_cmd : (3,) array
+        Commanded torque −K x (eq 5.1), ft·lbf.
+    """
+    from acmm.simulate import _drf_index, _rhs
+
+    inertia = np.ascontiguousarray(sc.inertia[level], float)
+    omega_est = dyn.lvlh_rate_in_body(sc.theta_est[level], sc.n)
+    drf_idx = _drf_index(sc.drf_mode)
+    out, u, ucmd, flags = np.empty(24), np.empty(3), np.empty(3), np.zeros(6)
+    scratch_x, scratch_u = np.empty(24), np.empty(3)
+    _rhs(t, np.asarray(X, float), inertia, np.linalg.inv(inertia), np.asarray(sc.bias[level], float),
+         np.asarray(sc.theta_est[level], float), omega_est, np.ascontiguousarray(sc.gain[level], float),
+         np.asarray(sc.harmonic_a, float), np.asarray(sc.harmonic_b, float), float(sc.n),
+         float(sc.torque_limit), float(sc.momentum_limit), drf_idx, out, u, ucmd, flags, scratch_x, scratch_u)
+    return out, u, ucmd

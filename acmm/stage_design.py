@@ -15,6 +15,7 @@ from acmm.stage_common import _as_config, _define_units, _in_system
 from common.outputs import owns_outputs
 from common.results import write_h5
 from common.runlock import locked_stage
+from acmm.design_file import _stored_digest, _unit_system, load_design_table, table_sha256  # noqa: F401
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -293,55 +294,8 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
         items = _define_units(_in_system(items, cfg, out.unit_roles(pts, r.fit is not None)), cfg.orbit_rate)
         path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
                         {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
-                         "schedule_form": r.table.form})
+                         "schedule_form": r.table.form, "table_sha256": _stored_digest(items, cfg.output.units)})
     return r, path
-
-
-def load_design_table(path: Path) -> DesignTable:
-    """Read the arrays a simulation needs back from ``design.h5``.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        A ``design.h5`` (imperial or SI; SI arrays are converted back).
-
-    Returns
-    -------
-    DesignTable
-        The arrays in the report's units (slug·ft², ft·lbf, rad).
-    """
-    import h5py
-
-    def text(v):
-        return v.decode() if isinstance(v, bytes) else v
-
-    with h5py.File(path, "r") as f:
-        attrs = {k: text(f.attrs[k]) for k in ("design_hash", "schedule_form", "unit_system", "config")
-                 if k in f.attrs}
-        coef = f["schedule/coef"][()] if "schedule" in f else None
-        names = [x.decode() if isinstance(x, bytes) else str(x) for x in f["names"][()]]
-        inertia, bias, K, tea = (f[k][()] for k in ("inertia", "bias", "K", "tea"))
-    if attrs.get("unit_system", "imperial") == "SI":      # back to the report's units
-        import yaml
-
-        from acmm.units import FT_LBF_IN_NM, state_factors
-
-        drf_mode = (yaml.safe_load(attrs["config"]).get("design") or {}).get("drf_mode", "attitude_hold")
-        f, _ = state_factors(drf_mode, "SI")
-        inertia, bias = inertia / FT_LBF_IN_NM, bias / FT_LBF_IN_NM
-        K = K * f / FT_LBF_IN_NM
-        coef = None if coef is None else coef * f / FT_LBF_IN_NM
-    return DesignTable(names, inertia, bias, tea, K, coef, attrs["design_hash"],
-                       attrs.get("schedule_form", "polynomial"))
-
-
-def _unit_system(path: Path) -> str:
-    """``unit_system`` root attribute of a results file (files before issue 14: imperial)."""
-    import h5py
-
-    with h5py.File(path, "r") as f:
-        v = f.attrs.get("unit_system", "imperial")
-    return v.decode() if isinstance(v, bytes) else str(v)
 
 
 def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple[DesignTable, str]:

@@ -137,6 +137,35 @@ def test_fit_recovers_a_known_quadratic_and_table_is_exact_at_nodes():
     assert np.allclose(schedule_gain("table", fit.coef, th, gains, mid), 0.5 * (gains[2] + gains[3]))
 
 
+@pytest.mark.parametrize("units", ["imperial", "SI"])
+@pytest.mark.parametrize("edit", ["K of another shape", "K scaled", "K non-finite", "a coefficient changed"])
+def test_an_edited_design_h5_is_designed_again_not_simulated(tmp_runs, run_acmm, edit, units):
+    """A review: a design.h5 whose K had another shape reached the compiled simulator (a numba
+    traceback, exit 1); one whose K was scaled by 1e6 under the right design_hash was simulated
+    (52 M steps).  The design is now reused only when its arrays have the points' shapes, are
+    finite and match the digest written with them; else it is designed again."""
+    r = run_acmm("design", "staircase", f"output.units={units}", "--no-figures")
+    assert r.exit_code == 0, r.output
+    path = tmp_runs / "runs" / "staircase" / "design.h5"
+    with h5py.File(path, "r") as f:
+        K0 = f["K"][()]
+    assert design_for(load_config("staircase", [f"output.units={units}"]))[1].startswith("reused")
+    with h5py.File(path, "r+") as f:
+        if edit == "K of another shape":
+            del f["K"]
+            f["K"] = np.zeros((2, 5))
+        elif edit == "K scaled":
+            f["K"][...] = K0 * 1e6
+        elif edit == "K non-finite":
+            f["K"][0, 0, 0] = np.nan
+        else:
+            f["schedule/coef"][0, 0, 0] += 1e-9
+    r = run_acmm("simulate", "staircase", f"output.units={units}", "simulation.orbits=1", "--no-figures")
+    assert r.exit_code == 0 and "Traceback" not in r.output, r.output
+    with h5py.File(path, "r") as f:
+        np.testing.assert_array_equal(f["K"][()], K0)            # designed again, the same gains
+
+
 def test_design_h5_is_self_describing_and_reused(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     cfg = load_config("ac")

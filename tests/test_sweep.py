@@ -28,13 +28,13 @@ DATA_KEYS = ("case", "base", "index", "verdict", "verdict_code", "reason", "stab
              "momentum_saturation_time", "tea_true", "tea_estimate", "inertia", "bias", "n_draws")
 
 
-def _sweep_yaml(tmp: Path, name: str, **over) -> Path:
+def _sweep_yaml(tmp: Path, name: str, sort_keys: bool = True, **over) -> Path:
     spec = {"base": str(CONFIGS / "ac.yaml"), "monte_carlo": {"inertia": {"percent": 10}},
             "n_runs": 6, "seed": 11, "orbits": 1.0}
     spec.update(over)
     data = {"name": name, "sweep": spec, "output": {"root": str(tmp / "runs"), "figures": False}}
     p = tmp / f"{name}.yaml"
-    p.write_text(yaml.safe_dump(data))
+    p.write_text(yaml.safe_dump(data, sort_keys=sort_keys))
     return p
 
 
@@ -139,11 +139,48 @@ def test_grid_order_and_unperturbed_case_equals_plain_simulation(tmp_path):
     ctx = prepare_base(sw.bases[0], sw.spec)
     row = simulate_values(ctx, got[0])
     assert row["verdict"] == r.verdict == "bounded"
-    np.testing.assert_allclose(row["peak_attitude_error"],
-                               np.degrees(np.abs(sm.attitude_error(
-                                   sm.scenario_from_config(cfg, ctx.table, orbits=1.0), r))).max(axis=0),
-                               rtol=0, atol=1e-9)
-    np.testing.assert_allclose(row["peak_momentum"], np.abs(r.state[:, 6:9]).max(axis=0), rtol=1e-12)
+    # the same run, so the same extremes over every step; the samples see no more than the steps
+    sampled_err = np.degrees(np.abs(sm.attitude_error(sm.scenario_from_config(cfg, ctx.table, orbits=1.0), r)))
+    np.testing.assert_allclose(row["peak_attitude_error"], np.degrees(r.run_extremes.peak_error), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(row["peak_momentum"], r.run_extremes.peak_momentum, rtol=1e-12)
+    assert np.all(np.array(row["peak_attitude_error"]) >= sampled_err.max(axis=0) - 1e-12)
+    assert np.all(np.array(row["peak_momentum"]) >= np.abs(r.state[:, 6:9]).max(axis=0))
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.8])
+def test_case_metrics_are_taken_over_every_step_not_the_output_samples(scale):
+    """A review: at the default 60 s samples (300 s in the stair-case) a case's peak momentum,
+    steady error and saturation times came from the samples (a stair-case's peak |h| 3 986
+    against 6 645 ft·lbf·s; a CMG saturation missed).  Reference: the same case sampled every
+    second, its metrics computed here from the samples.  MB3, 3 orbits: nominal (bounded), and
+    inertia ×0.8 (saturates and diverges)."""
+    import dataclasses
+
+    from acmm import simulate as sm
+    from acmm.config import load_config
+    from acmm.stages import compute_design
+
+    cfg = load_config(CONFIGS / "mb3.yaml")
+    sc = sm.scenario_from_config(cfg, compute_design(cfg).table, orbits=3.0)
+    sc = dataclasses.replace(sc, inertia=sc.inertia * scale)
+    coarse = sm.simulate(dataclasses.replace(sc, sample_times=np.arange(0.0, sc.t_end, 120.0)))
+    dense = sm.simulate(dataclasses.replace(sc, sample_times=np.arange(0.0, sc.t_end + 0.5, 1.0)))
+    assert coarse.verdict == dense.verdict == ("bounded" if scale == 1.0 else "diverged")
+    ext = coarse.run_extremes
+    err = np.abs(dense.state[:, 3:6] - sc.theta_est[dense.level])
+    np.testing.assert_allclose(ext.peak_momentum, np.abs(dense.state[:, 6:9]).max(axis=0), rtol=1e-4)
+    dt = np.diff(dense.t)
+    assert abs(ext.torque_saturation_time - dt @ dense.torque_saturated[:-1].any(axis=1)) <= 5.0       # s
+    assert abs(ext.momentum_saturation_time - dt @ dense.momentum_saturated[:-1].any(axis=1)) <= 5.0
+    if scale == 1.0:
+        np.testing.assert_allclose(ext.peak_error, err.max(axis=0), rtol=2e-4)   # (diverged: the overshoot)
+        # the window t >= t_end/2 opens mid-step (Hermite-interpolated there; the first 1 s sample
+        # is 0.02 s later): the error still decays there
+        np.testing.assert_allclose(ext.steady_error, err[dense.t >= sc.t_end / 2].max(axis=0), rtol=1e-4)
+        old = np.abs(coarse.state[:, 3:6] - sc.theta_est[0])[coarse.t >= sc.t_end / 2].max(axis=0)
+        assert np.max(ext.steady_error / old) > 1.005            # what the 120 s samples said
+    else:
+        assert ext.momentum_saturation_time > 600.0               # s: ~0.13 orbit at a CMG limit
 
 
 def test_no_equilibrium_is_a_verdict_not_a_crash(tmp_path):
@@ -287,6 +324,25 @@ def test_resume_refuses_a_journal_of_another_config(tmp_path):
     run_sweep(_sweep_yaml(tmp_path, "other", n_runs=2), workers=1)
     with pytest.raises(ConfigError, match="different sweep configuration"):
         run_sweep(_sweep_yaml(tmp_path, "other", n_runs=2, seed=12), workers=1, resume=True)
+
+
+@pytest.mark.parametrize("section, a, b", [
+    ("grid", {"dI11": [-0.05, 0.05], "bias_pitch": [-1.0, 1.0]}, {"bias_pitch": [-1.0, 1.0], "dI11": [-0.05, 0.05]}),
+    ("monte_carlo", {"inertia": {"percent": 10}, "bias_pitch": {"uniform": [-1, 1]}},
+     {"bias_pitch": {"uniform": [-1, 1]}, "inertia": {"percent": 10}})])
+def test_resume_refuses_a_journal_whose_parameters_came_in_another_order(tmp_path, section, a, b):
+    """The order of the parameters decides which values case i gets (the grid's product, the
+    draws), but the results key hashed the config with sorted keys: resuming one order's journal
+    with the other mixed the cases without a word (a review: one grid point twice, one never)."""
+    over = {"monte_carlo": None, "n_runs": None} if section == "grid" else {"n_runs": 2}
+    sa, sb = (load_sweep(_sweep_yaml(tmp_path, "ord", False, **{**over, section: x})) for x in (a, b))
+    values = [[case_values(sw.spec, i, sw.bases[0].config.inertia.matrix()[None])[0] for i in range(2)]
+              for sw in (sa, sb)]
+    assert values[0] != values[1]                     # the orders give case 0 and 1 other values
+    assert sa.results_key() != sb.results_key()
+    run_sweep(_sweep_yaml(tmp_path, "ord", False, **{**over, section: a}), workers=1)
+    with pytest.raises(ConfigError, match="different sweep configuration"):
+        run_sweep(_sweep_yaml(tmp_path, "ord", False, **{**over, section: b}), workers=1, resume=True)
 
 
 def test_resume_refuses_a_journal_of_an_earlier_case_model(tmp_path, monkeypatch):

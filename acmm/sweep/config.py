@@ -51,6 +51,11 @@ from common.errors import ConfigError
 #: from LVLH.  (A redesigned case is designed about its own plant's TEA, as before.)
 CASE_MODEL = 2
 
+#: Version of a case's metrics, part of :meth:`Sweep.results_key` for every sweep: 2 (2026-11-30):
+#: peaks, steady errors and saturation times over every accepted integrator step
+#: (:class:`acmm.scenario.RunExtremes`); 1: over the output samples.
+METRICS_MODEL = 2
+
 
 @dataclass(frozen=True)
 class Base:
@@ -143,7 +148,10 @@ class Sweep:
             c.pop("output", None)
             c.pop("description", None)
             bases[b.label] = c
-        key = {"file": f, "bases": bases}
+        # the order of the grid's and the Monte Carlo's parameters decides which values case i
+        # gets (product order, draw order), and sort_keys below would lose it
+        order = {k: list(f["sweep"].get(k) or {}) for k in ("grid", "monte_carlo")}
+        key = {"file": f, "bases": bases, "parameter_order": order, "metrics": METRICS_MODEL}
         if self.spec.design == "fixed":        # a redesigned case is computed as before
             key["case_model"] = CASE_MODEL
         return config_hash(json.dumps(key, sort_keys=True))
