@@ -71,7 +71,9 @@ def _infer_dims(key: str, value, shape: tuple) -> list[str]:
     if names is not None and len(names) == shape[-1]:
         if names == AXES:
             dims[-1] = "axis"
-            if len(shape) >= 2 and shape[-2] == 3:
+            # an axis × axis matrix only where the key says so (inertia): a (3 cases, 3 axes)
+            # array was labelled (axis, axis_col), its dims then depending on the case count
+            if len(shape) >= 2 and shape[-2] == 3 and "inertia" in key:
                 dims[-2], dims[-1] = "axis", "axis_col"
         elif names == _state_names():
             dims[-1] = "state"

@@ -170,13 +170,16 @@ def test_results_open_in_xarray_with_named_dimensions_and_time(tmp_path):
     assert qd["H"].attrs["units"] == "state units per output unit per s"
 
 
-def test_sweep_h5_opens_in_xarray(tmp_path):
+@pytest.mark.parametrize("n_runs", [2, 3])
+def test_sweep_h5_opens_in_xarray(tmp_path, n_runs):
+    """With 3 cases, the (case, axis) arrays were labelled (axis, axis_col) (a review):
+    ``.sel(axis="pitch")`` failed for that case count only."""
     from acmm.sweep import run_sweep
     from acmm.sweep.config import load_sweep
 
     data = yaml.safe_load((CONFIGS / "sweep_smoke.yaml").read_text())
     data["output"] = {"root": str(tmp_path / "runs"), "figures": False}
-    data["sweep"]["n_runs"] = 2
+    data["sweep"]["n_runs"] = n_runs
     data["sweep"].pop("margin", None)
     data["sweep"]["bases"] = [str(CONFIGS / "ac.yaml")] if "bases" in data["sweep"] else None
     if data["sweep"]["bases"] is None:
@@ -185,7 +188,10 @@ def test_sweep_h5_opens_in_xarray(tmp_path):
     (tmp_path / "s.yaml").write_text(yaml.safe_dump(data))
     r = run_sweep(load_sweep(tmp_path / "s.yaml"), workers=1)
     sw = _open_all(r.path)["/"]
-    assert sw["peak_attitude_error"].dims == ("case", "axis")
+    for k in ("peak_attitude_error", "steady_attitude_error", "peak_momentum", "tea_true", "tea_estimate", "bias"):
+        assert sw[k].dims == ("case", "axis"), k
+        assert sw[k].sel(axis="pitch").shape == (sw.sizes["case"],)
+    assert sw["inertia"].dims == ("case", "axis", "axis_col")
     assert sw["peak_attitude_error"].attrs["units"] == "rad"      # one angle unit in every file
     sw[["peak_attitude_error"]].to_dataframe()
 
