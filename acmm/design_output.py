@@ -42,7 +42,7 @@ def point_items(points) -> dict:
                          dims=("state", "state_col")),
             "B": Dataset(p.model.B, UNIT_B, "input matrix", STATE_NAMES, dims=("state", "axis")),
             "G": Dataset(p.model.G, UNIT_B, "disturbance matrix", STATE_NAMES, dims=("state", "axis")),
-            "Q": Dataset(res.Q, UNIT_Q, "state weight for which K is the exact LQR gain",
+            "Q": Dataset(res.Q, UNIT_Q, "state weight for which K is the exact LQR gain of the shifted problem",
                          dims=("state", "state_col")),
             "R": Dataset(res.R, "1/(ft*lbf)^2", "control weight", dims=("axis", "axis_col")),
             "P": Dataset(res.P, UNIT_P, "Riccati solution (physical units)", dims=("state", "state_col")),

@@ -24,7 +24,7 @@ UNIT_STATE = "state_units[i]"
 UNIT_A = "state_units[i]/(state_units[j]*s)"
 UNIT_B = "state_units[i]/(s*ft*lbf)"
 UNIT_K = "ft*lbf/state_units[j]"
-UNIT_Q = "1/(state_units[i]*state_units[j]) (shifted problem)"
+UNIT_Q = "1/(state_units[i]*state_units[j])"
 UNIT_P = "s/(state_units[i]*state_units[j])"
 
 

@@ -37,7 +37,7 @@ def _element_units(ureg, units, su, shape, vector=False):
     """The pint unit of every element of a dataset of ``shape`` whose unit string uses
     ``state_units[i]`` and ``state_units[j]``: row and column of a matrix (its last two axes),
     or the last axis of a ``vector`` of states."""
-    text = units.replace(" (shifted problem)", "")
+    text = units
     out = np.empty(shape, dtype=object)
     for idx in np.ndindex(*shape):
         i, j = (idx[-1], idx[-1]) if vector else (idx[-2], idx[-1])
