@@ -148,7 +148,23 @@ def to_canonical(value: object, dimension: str) -> float:
         parse_unit(unit)
     except ValueError:
         raise ValueError(f"unknown unit {unit!r} (expected a unit of {canonical})") from None
+    _check_angle(unit, canonical)
     return number * _factor(unit, canonical)
+
+
+def _check_angle(unit: str, canonical: str) -> None:
+    """pint takes the radian as dimensionless, so it converts 1 Hz to 1 rad/s (not 2π) and 5 deg
+    to the pure number 0.087: a ValueError for a cycle frequency (Hz) where an angular rate is
+    asked, and for an angle where a pure number is."""
+    def radian_power(u: str) -> float:
+        return float(dict(registry().get_root_units(parse_unit(u))[1]._units).get("radian", 0.0))
+
+    names = [str(k) for k in getattr(parse_unit(unit), "_units", {})]
+    if radian_power(canonical) != 0 and any(k.endswith("hertz") for k in names):
+        raise ValueError(f"{unit!r} is cycles per second and this value an angular rate ({canonical}): "
+                         f"give rad/s, deg/s, rpm or cycle/s (1 Hz = 2π rad/s)")
+    if canonical == "1" and radian_power(unit) != 0:
+        raise ValueError(f"unit {unit!r} is an angle, but this value is a pure number")
 
 
 def convert(value, unit: str, target: str):

@@ -104,6 +104,32 @@ def test_angle_and_rate_units():
     assert cfg.orbit_rate == pytest.approx(np.radians(0.063), rel=1e-14)
 
 
+def test_a_cycle_frequency_is_not_taken_as_an_angular_rate(run_acmm):
+    """pint reads the radian as dimensionless: "0.000175 Hz" became 0.000175 rad/s (a 2π error,
+    a review) while "0.0105 rpm" and "1 cycle/day" converted right.  Hz is refused naming the
+    field; the angular units still convert (2π from the cycle, here and in qpp)."""
+    with pytest.raises(ConfigError, match=r"orbit_rate: 'Hz' is cycles per second.*2π"):
+        parse_config(cfg_with(orbit_rate="0.000175 Hz"))
+    assert parse_config(cfg_with(orbit_rate="0.0105 rpm")).orbit_rate == pytest.approx(0.0105 * 2 * np.pi / 60)
+    assert parse_config(cfg_with(orbit_rate="1 cycle/day")).orbit_rate == pytest.approx(2 * np.pi / 86400)
+    r = run_acmm("validate", "qpp_cubic2", "simulation.r_o.1.0.omega=0.3 Hz")
+    assert r.exit_code == 2 and "omega" in r.output and "Hz" in r.output, r.output
+    r = run_acmm("validate", "qpp_cubic2", "simulation.r_o.1.0.omega=0.3 cycle/s")
+    assert r.exit_code == 0, r.output
+
+
+def test_an_angle_is_not_taken_as_a_pure_number(tmp_path):
+    """A sweep's relative inertia perturbation dI11 given as "5 deg" was read as 0.087."""
+    from acmm.sweep.config import load_sweep
+
+    p = tmp_path / "s.yaml"
+    p.write_text("name: s\nsweep:\n  base: ac\n  grid: {dI11: ['5 deg']}\n")
+    with pytest.raises(ConfigError, match="dI11.*angle"):
+        load_sweep(p)
+    p.write_text("name: s\nsweep:\n  base: ac\n  grid: {dI11: ['5 percent']}\n")
+    assert load_sweep(p).spec.grid["dI11"] == [pytest.approx(0.05)]
+
+
 def test_yaml_exponent_without_sign_is_read_as_number():
     # PyYAML reads "23.22e6" as a string; it must still be the number 23.22e6.
     cfg = Config.model_validate(yaml.safe_load("name: x\ninertia: {I11: 23.22e6, I22: 1.3e6, I33: 23.23e6}"))
