@@ -3,7 +3,7 @@
 Every limit has a default here and can be changed without editing code through an environment
 variable ``ACMM_LIMIT_<NAME>`` (e.g. ``ACMM_LIMIT_CONFIG_BYTES=4000000``).  A config that would
 exceed a limit is refused at validation with one line naming the field, the limit and the
-variable that raises it.
+variable that raises it (QPP_RHS_EVALS, which only the integration can see, when it is reached).
 
 =====================  ============  ==========================================================
 name                   default       what it bounds
@@ -16,6 +16,10 @@ DESIGN_POINTS          400           design points of one acmm schedule (one sec
 QPP_PERIODS            10 000        periods of a qpp signal or nonlinearity (ω·t_final/2π)
 QPP_WORK               50 000        qpp simulation work: t_final × fastest closed-loop rate (1/s)
                                      × (scenarios + 1); ~2.4 ms per unit, so ~2 min at the limit
+QPP_RHS_EVALS          3 000 000     evaluations of a qpp loop's right-hand side in one run (~40 µs
+                                     each, so ~2 min): the runtime bound where QPP_WORK cannot see
+                                     the rate (a t inside an expression nonlinearity); the shipped
+                                     examples take ~15 000
 QPP_SAMPLES            2 000 000     qpp output samples × (scenarios + 1)
 QPP_SECTOR_POINTS      5 000 000     points at which a qpp expression's sector is sampled
                                      (per channel: parameter samples × the grid of the outputs
@@ -39,6 +43,7 @@ DEFAULTS: dict[str, float] = {
     "DESIGN_POINTS": 400,
     "QPP_PERIODS": 10_000,
     "QPP_WORK": 50_000,
+    "QPP_RHS_EVALS": 3_000_000,
     "QPP_SAMPLES": 2_000_000,
     "QPP_SECTOR_POINTS": 5_000_000,
     "SWEEP_DRAWS": 2_000_000,

@@ -223,6 +223,26 @@ def nominal_diverged_beyond(r_o, t: np.ndarray, z0: np.ndarray) -> float:
     return DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0), initial=0.0)), r_peak)
 
 
+class _TooManyEvaluations(Exception):
+    """Raised inside the integrator by :func:`_counted` (caught in :func:`_integrate_segments`)."""
+
+
+def _counted(rhs):
+    """``rhs`` refusing to be evaluated more than ``QPP_RHS_EVALS`` times (common.limits): the
+    static work bound (t_final × the loop's rates) cannot see a fast t inside an expression
+    nonlinearity, e.g. sin(1e6·t), whose run never ended (a review)."""
+    from common.limits import limit
+
+    budget, count = limit("QPP_RHS_EVALS"), [0]
+
+    def counted(t, z):
+        count[0] += 1
+        if count[0] > budget:
+            raise _TooManyEvaluations(t)
+        return rhs(t, z)
+    return counted
+
+
 def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, diverged_beyond=None,
                         failed_beyond=None):
     """Integrate ``rhs`` over ``segments`` (one, or two split at the impulse time, where
@@ -230,6 +250,7 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, div
     ``diverged_beyond`` or ``failed_beyond`` (see :func:`simulate_loop`) the integration stops
     when the loop diverges, the later samples NaN."""
     t0, tf = t_eval[0], t_eval[-1]
+    rhs = _counted(rhs)
     zs = []
     events = None
     if diverged_beyond is not None:
@@ -245,8 +266,18 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, div
         te = np.concatenate([[ta], t_eval[mask], [tb]])
         max_step = (tf - t0) / 200
         with np.errstate(all="ignore"):
-            sol = solve_ivp(rhs, (ta, tb), z, method="DOP853", t_eval=np.unique(te), rtol=rtol, atol=atol,
-                            max_step=max_step, events=events)
+            try:
+                sol = solve_ivp(rhs, (ta, tb), z, method="DOP853", t_eval=np.unique(te), rtol=rtol, atol=atol,
+                                max_step=max_step, events=events)
+            except _TooManyEvaluations as exc:
+                from common.errors import ConfigError
+                from common.limits import how_to_raise, limit
+
+                raise ConfigError(
+                    f"simulation.t_final: the integration reached t = {float(exc.args[0]):.4g} s of {tf:g} s "
+                    f"after {limit('QPP_RHS_EVALS'):.3g} evaluations of the loop: something in it varies much "
+                    "faster than its closed-loop rates (a t inside a nonlinearity's expression, e.g. "
+                    f"sin(1e6*t)?); shorten t_final or slow it down ({how_to_raise('QPP_RHS_EVALS')})") from None
         # the largest finite |z| of the samples reached (a loop can leap from large to inf or NaN
         # within one step, past the event, and fail the integrator there)
         reached = np.abs(np.column_stack([z, sol.y]) if sol.y.size else z)

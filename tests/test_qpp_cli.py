@@ -136,6 +136,24 @@ def test_the_horizon_too_long_names_the_field_that_set_it(tmp_runs):
     assert r.exit_code == 2 and r.output.strip().startswith("error: spheres.T: 10000 s is too long"), r.output
 
 
+def test_a_nonlinearity_faster_than_the_work_bound_can_see_is_stopped(tmp_runs, monkeypatch):
+    """A t inside an expression nonlinearity (sin(1e6·t)) escaped the static work bound
+    (t_final × the loop's rates): the simulation ran on for minutes (a review).  The integration
+    now counts its right-hand-side evaluations against QPP_RHS_EVALS (here lowered to 40 000;
+    the example itself takes ~15 000, so it still runs under it)."""
+    from cli.qpp_app import app
+
+    monkeypatch.setenv("ACMM_LIMIT_QPP_RHS_EVALS", "40000")
+    r = runner.invoke(app, ["simulate", "qpp_cubic2", "--no-figures"])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["simulate", "qpp_cubic2", "name=fast_t", "--no-figures",
+                            'nonlinearity.f1=["-c*y1*sin(1e6*t)", "0"]'])
+    assert r.exit_code == 2, r.output
+    assert r.output.strip().startswith("error: simulation.t_final: the integration reached t =")
+    assert "ACMM_LIMIT_QPP_RHS_EVALS" in r.output and len(r.output.strip().splitlines()) == 1
+    assert not (tmp_runs / "runs" / "fast_t").exists()
+
+
 def test_the_apps_run_as_modules(tmp_path):
     import subprocess
     import sys
