@@ -108,6 +108,12 @@ def test_unphysical_reason_agrees_with_config_validator():
         assert (unphysical_reason(m) is None) == ok
         seen.add(ok)
     assert seen == {True, False}      # both outcomes were exercised
+    # a scale beyond the physical range (a review: inertia_scale 1e160 overflowed the redesign)
+    for scale in (1e6, 1e160, 1e200):
+        m = perturb_inertia(base, {"inertia_scale": scale})
+        with pytest.raises(ValidationError):
+            Inertia.model_validate(m.tolist())
+        assert "physical range" in unphysical_reason(m)
 
 
 def test_case_draws_follow_seedsequence_contract(tmp_path):
@@ -181,6 +187,17 @@ def test_case_metrics_are_taken_over_every_step_not_the_output_samples(scale):
         assert np.max(ext.steady_error / old) > 1.005            # what the 120 s samples said
     else:
         assert ext.momentum_saturation_time > 600.0               # s: ~0.13 orbit at a CMG limit
+
+
+def test_a_redesign_that_fails_is_design_failed_and_an_impossible_scale_unphysical(tmp_path):
+    """A review: inertia_scale 1e5 (TEA found, Riccati refused) was labelled tea_failed; 1e200
+    overflowed in the sector LQR and ended the whole sweep (exit 3)."""
+    sw = load_sweep(_sweep_yaml(tmp_path, "rd", base=str(CONFIGS / "mb3.yaml"), monte_carlo=None, n_runs=None,
+                                design="redesign", grid={"inertia_scale": [1e5, 1e200]}, orbits=0.1))
+    rows = [simulate_values(prepare_base(sw.bases[0], sw.spec), v) for v in
+            (case_values(sw.spec, i, sw.bases[0].config.inertia.matrix()[None])[0] for i in range(2))]
+    assert rows[0]["verdict"] == "design_failed" and "Riccati" in rows[0]["reason"], rows[0]["reason"]
+    assert rows[1]["verdict"] == "unphysical" and "physical range" in rows[1]["reason"]
 
 
 def test_no_equilibrium_is_a_verdict_not_a_crash(tmp_path):
@@ -404,6 +421,9 @@ def test_cli_smoke_sweep(tmp_runs, run_acmm):
     ({"base": "nonexistent_base.yaml", "grid": {"inertia_scale": [1.0]}}, "config file not found"),
     ({"base": "ac", "grid": {"inertia_scale": [1.0, -0.5]}}, "inertia_scale must stay > 0"),
     ({"base": "ac", "monte_carlo": {"dI11": {"uniform": [0.1, -0.1]}}, "n_runs": 2}, "low must be"),
+    # numpy cannot draw from a range whose width overflows (it was exit 3 with a journal left)
+    ({"base": "ac", "monte_carlo": {"bias_pitch": {"uniform": [-1.7e308, 1.7e308]}}, "n_runs": 2},
+     "sweep.monte_carlo.bias_pitch: uniform: high − low overflows"),
     # a YAML boolean is no count (it used to run one case)
     ({"base": "ac", "monte_carlo": {"inertia": {"percent": 10}}, "n_runs": True}, "sweep.n_runs: expected a number, got a boolean"),
     ({"base": "ac", "monte_carlo": {"inertia": {"percent": 10}}, "n_runs": 2, "seed": False}, "sweep.seed: expected a number, got a boolean"),

@@ -179,7 +179,9 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
         row.update(verdict="design_failed", reason=str(exc)[:200])
         return row
     except ConvergenceError as exc:
-        row.update(verdict="tea_failed", reason=str(exc)[:200])
+        # the TEA's own failures say "TEA ..."; a redesign's Riccati or sector LQR is the design's
+        tea = spec.design != "redesign" or str(exc).startswith("TEA")
+        row.update(verdict="tea_failed" if tea else "design_failed", reason=str(exc)[:200])
         return row
     theta0 = true[0] + offset
     x0 = np.concatenate([dyn.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])

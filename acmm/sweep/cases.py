@@ -23,8 +23,9 @@ VERDICTS = ("bounded", "not_settled", "diverged", "no_equilibrium", "unphysical"
 def unphysical_reason(inertia: np.ndarray) -> Optional[str]:
     """Why a symmetric 3×3 inertia (slug·ft²) is not a rigid body's, or ``None`` if it is.
 
-    Same test as :class:`acmm.config.Inertia`: positive definite and the principal moments
-    satisfy the triangle inequality a + b ≥ c.
+    Same test as :class:`acmm.config.Inertia`: finite, within the physical range
+    (:data:`common.limits.PHYSICAL_MAX`), positive definite, and the principal moments satisfy the
+    triangle inequality a + b ≥ c.
 
     Parameters
     ----------
@@ -36,8 +37,12 @@ def unphysical_reason(inertia: np.ndarray) -> Optional[str]:
     str or None
         The reason, or None for a physical inertia.
     """
+    from common.limits import PHYSICAL_MAX
+
     if not np.all(np.isfinite(inertia)):
         return "non-finite inertia"
+    if np.max(np.abs(inertia)) > PHYSICAL_MAX["inertia"]:     # as the config refuses it
+        return f"beyond the physical range (an element {np.max(np.abs(inertia)):.3g} > {PHYSICAL_MAX['inertia']:.0e} slug·ft²)"
     eig = np.linalg.eigvalsh(inertia)
     if eig[0] <= 0:
         return f"not positive definite (smallest principal moment {eig[0]:.4g})"

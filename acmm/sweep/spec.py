@@ -37,6 +37,8 @@ class Dist(_Model):
             raise ValueError("give exactly one of 'uniform: [low, high]', 'normal: [mean, std]', 'percent: p'")
         if self.uniform is not None and not self.uniform[0] <= self.uniform[1]:
             raise ValueError("uniform: low must be ≤ high")
+        if self.uniform is not None and not math.isfinite(self.uniform[1] - self.uniform[0]):
+            raise ValueError("uniform: high − low overflows a float (numpy cannot draw from that range)")
         if self.normal is not None and self.normal[1] < 0:
             raise ValueError("normal: std must be ≥ 0")
         return self
