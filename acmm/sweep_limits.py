@@ -1,7 +1,9 @@
 """Work bounds of a sweep, checked when the sweep config is validated (issue 13: nothing hangs).
 
 * ``SWEEP_CASES``: cases of all bases together (a grid's Cartesian product can be enormous).
-* ``SWEEP_ORBITS``: simulated orbits of all cases together (cases × orbits per run).
+* ``SWEEP_ORBITS``: simulated orbits of all cases together (cases × orbits per run), the margin
+  searches' simulations included.
+* ``SIM_SAMPLES``: output samples of one run at the sweep's ``orbits`` (as for ``acmm simulate``).
 * ``SWEEP_DRAWS``: expected Monte Carlo draws, resampling of unphysical inertias included.  When
   the worst case (cases × ``max_draws``) exceeds the limit, a pilot of :data:`PILOT` draws (its
   own random stream, so the cases' draws are untouched) estimates the fraction p of physical
@@ -16,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from common.errors import ConfigError
-from common.limits import how_to_raise, limit
+from common.limits import PHYSICAL_MAX, how_to_raise, limit
 
 PILOT = 1000
 
@@ -38,8 +40,48 @@ def _physical_fraction(sweep, n: int) -> tuple[int, int]:
                 m[~fin] = np.eye(3)
                 eig = np.linalg.eigvalsh(m)
             good = fin & (eig[:, 0] > 0) & (eig[:, 0] + eig[:, 1] >= eig[:, 2] * (1 - 1e-12))
+            good &= np.max(np.abs(m), axis=(1, 2)) <= PHYSICAL_MAX["inertia"]
             ok &= good
     return int(ok.sum()), n
+
+
+def margin_evaluations(margin) -> int:
+    """Most simulations of the two margin searches of one base (:func:`acmm.sweep.case.margin_search`):
+    the nominal, the scan and the bisection to ``rel_tol``, each way; 0 without a search.
+
+    Parameters
+    ----------
+    margin : acmm.sweep.spec.Margin or None
+        The search settings.
+
+    Returns
+    -------
+    int
+        Upper bound of the simulations.
+    """
+    import math
+
+    if margin is None:
+        return 0
+    total = 0
+    for end in (margin.high, margin.low):
+        step = abs(math.log(end)) / margin.scan_points          # log-width of the bracket bisected
+        total += 1 + margin.scan_points + max(0, math.ceil(math.log2(step / math.log1p(margin.rel_tol)))) + 1
+    return total
+
+
+def _check_samples(sweep, source: str) -> None:
+    """The per-run output-sample limit (``SIM_SAMPLES``) at the sweep's own ``orbits``."""
+    import math
+
+    for b in sweep.bases:
+        sim = b.config.simulation
+        orbits = sweep.spec.orbits if sweep.spec.orbits is not None else sim.orbits
+        samples = orbits * 2 * math.pi / b.config.orbit_rate / sim.sample_interval
+        if samples > limit("SIM_SAMPLES"):
+            raise ConfigError(f"{source}: sweep.orbits: {orbits:g} orbits of {b.label} at its sample_interval "
+                              f"{sim.sample_interval:g} s give {samples:.3g} output samples per run; lower "
+                              f"sweep.orbits or raise simulation.sample_interval ({how_to_raise('SIM_SAMPLES')})")
 
 
 def check_sweep_work(sweep, source: str = "sweep config") -> None:
@@ -71,13 +113,17 @@ def check_sweep_work(sweep, source: str = "sweep config") -> None:
     if cases > limit("SWEEP_CASES"):
         raise ConfigError(f"{source}: sweep: {cases:.3g} cases over {nb} base(s); use fewer grid values or "
                           f"n_runs ({how_to_raise('SWEEP_CASES')})")
+    _check_samples(sweep, source)
+    runs = cases // nb + margin_evaluations(spec.margin)        # per base
     orbits = sum(spec.orbits if spec.orbits is not None else b.config.simulation.orbits for b in sweep.bases)
-    total_orbits = orbits * (cases // nb)
+    total_orbits = orbits * runs
     if total_orbits > limit("SWEEP_ORBITS"):
-        raise ConfigError(f"{source}: sweep.orbits: {cases} cases simulate {total_orbits:.3g} orbits in all; "
-                          f"lower sweep.orbits or the number of cases ({how_to_raise('SWEEP_ORBITS')})")
+        raise ConfigError(f"{source}: sweep.orbits: {cases} cases"
+                          f"{' and the margin searches' if spec.margin is not None else ''} simulate "
+                          f"{total_orbits:.3g} orbits in all; lower sweep.orbits, the number of cases or "
+                          f"margin.scan_points ({how_to_raise('SWEEP_ORBITS')})")
     if spec.design == "redesign":
-        designs = (cases // nb) * sum(b.config.n_design_points() for b in sweep.bases)
+        designs = runs * sum(b.config.n_design_points() for b in sweep.bases)
         if designs > limit("SWEEP_DESIGNS"):
             raise ConfigError(f"{source}: sweep.design: redesign runs {designs} sector-LQR designs ({cases} cases "
                               f"× design points); use design: fixed or fewer cases ({how_to_raise('SWEEP_DESIGNS')})")

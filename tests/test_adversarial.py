@@ -174,6 +174,10 @@ SWEEP_BAD = [
     ("parameter_unknown", {"sweep.monte_carlo.wobble": {"percent": 5}}, r"wobble"),
     ("orbits_zero", {"sweep.orbits": 0}, r"sweep\.orbits"),
     ("orbits_budget", {"sweep.orbits": 10000, "sweep.n_runs": 1000}, r"ACMM_LIMIT_SWEEP_ORBITS"),
+    # the margin searches' runs count (a review: 1 case + a 100-point scan each way was accepted)
+    ("orbits_budget_margin", {"sweep.orbits": 1000, "sweep.n_runs": 1,
+                              "sweep.margin": {"low": 0.001, "high": 1000, "scan_points": 100, "rel_tol": 1e-6}},
+     r"margin searches.*ACMM_LIMIT_SWEEP_ORBITS"),
     ("grid_huge", {"sweep.monte_carlo": DELETE, "sweep.n_runs": DELETE,
                    "sweep.grid": {"dI11": [0.0] * 200, "dI22": [0.0] * 200, "dI33": [0.0] * 200}},
      r"ACMM_LIMIT_SWEEP_CASES"),

@@ -200,6 +200,29 @@ def test_a_redesign_that_fails_is_design_failed_and_an_impossible_scale_unphysic
     assert rows[1]["verdict"] == "unphysical" and "physical range" in rows[1]["reason"]
 
 
+def test_the_per_run_sample_limit_applies_at_the_sweeps_own_orbits(tmp_path, monkeypatch):
+    """Only the base's simulation.orbits was checked against SIM_SAMPLES (a review: 20 sweep
+    orbits at 60 s samples ran under a limit of 1 000 that `acmm simulate` applies)."""
+    monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", "1000")
+    load_sweep(_sweep_yaml(tmp_path, "sl", orbits=5.0, margin=None))           # 476 samples per run
+    with pytest.raises(ConfigError, match=r"sweep\.orbits: 20 orbits of ac .* output samples per run"):
+        load_sweep(_sweep_yaml(tmp_path, "sl", orbits=20.0, margin=None))
+
+
+def test_the_margin_searches_stay_within_the_runs_counted_for_them(tmp_path):
+    """The work bound counts the margin searches (sweep_limits.margin_evaluations): the searches
+    actually run no more simulations than that."""
+    from acmm.sweep.case import margin_search
+    from acmm.sweep_limits import margin_evaluations
+
+    for margin in ({"low": 0.5, "high": 2.0, "scan_points": 3, "rel_tol": 0.01},
+                   {"low": 0.05, "high": 50.0, "scan_points": 1, "rel_tol": 1e-4}):
+        sw = load_sweep(_sweep_yaml(tmp_path, "mw", n_runs=1, margin=margin, orbits=0.3))
+        ctx = prepare_base(sw.bases[0], sw.spec)
+        done = sum(len(margin_search(ctx, d)["evaluated_s"]) for d in ("up", "down"))
+        assert 4 <= done <= margin_evaluations(sw.spec.margin)
+
+
 def test_no_equilibrium_is_a_verdict_not_a_crash(tmp_path):
     # docs/ERRATA.md § TEA: MB3's gravity-gradient pitch capacity is ≈ 1.73 ft·lbf, so +4 ft·lbf pitch bias has no TEA
     sw = load_sweep(_sweep_yaml(tmp_path, "noeq", base=str(CONFIGS / "mb3.yaml")))
