@@ -481,6 +481,11 @@ def test_journal_record_checks(tmp_path):
                        ([1, 2], "not a record")):
         assert words in record_problem(bad, {"ac"})
     assert "base 'ac'" in record_problem(case, {"mb3"})
+    # a record of a case the sweep does not have (a review: --resume gave 161 rows of 160)
+    with open(sw.run_dir() / "sweep.journal", "a") as f:
+        f.write(json.dumps({**case, "index": 99999}) + "\n")
+    with pytest.raises(ConfigError, match=r"case 99999 of ac, which this sweep does not have"):
+        run_sweep(sw, workers=1, resume=True)
 
 
 @pytest.mark.parametrize("section", [

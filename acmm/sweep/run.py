@@ -17,6 +17,7 @@ from acmm.sweep.cases import VERDICTS
 from acmm.sweep.executors import (Chunker, SerialExecutor, _call_chunk, _remote_contexts, _scheduler_workers,
                                   _task_key, _tasks, make_executor)
 from acmm.sweep.journal import GroupCommitJournal, read_journal
+from common.errors import ConfigError
 from acmm.sweep.output import _split, write_results
 
 
@@ -125,8 +126,14 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     jpath = run_dir / "sweep.journal"
     done: dict[tuple, dict] = {}
     if resume and jpath.exists():
+        n_cases = spec.n_cases()
         for rec in read_journal(jpath, key, {b.label for b in sweep.bases}):
-            done[_task_key(rec)] = rec
+            task = _task_key(rec)
+            if (task[0] == "case" and not 0 <= task[2] < n_cases) or (task[0] == "margin" and spec.margin is None):
+                raise ConfigError(f"{jpath}: a record of {task[0]} {task[2]!r} of {task[1]}, which this sweep "
+                                  f"does not have ({n_cases} cases per base); delete the journal or run without "
+                                  "--resume")
+            done[task] = rec
     n_resumed = len(done)
     tasks = [t for t in _tasks(sweep) if t not in done]
     total = n_resumed + len(tasks)
