@@ -193,6 +193,9 @@ SWEEP_BAD = [
     ("offset_100", {"sweep.monte_carlo.offset_pitch": {"uniform": [-100, 100]}}, r"89"),
     ("root_nul", {"output.root": "a\x00b"}, r"output\.root"),
     ("no_sweep", {"sweep": DELETE}, r"sweep"),
+    # a misspelt base made the sweep an inline one and said "inertia: Field required" (a review)
+    ("base_misspelt", {"sweep.bsae": "ac", "sweep.base": DELETE}, r"sweep\.base: missing.*sweep\.bsae.*'base'"),
+    ("sweep_list", {"sweep": [1, 2]}, r"sweep: expected a mapping"),
 ]
 
 # config *files* that are hostile as files: (id, writer(tmp) -> path, regex)

@@ -197,7 +197,19 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
         raise ConfigError(f"{source}: sweep: missing (a sweep config needs a 'sweep' section)")
     directory = Path(".") if directory is None else directory
     raw = data["sweep"]
-    inline = not (isinstance(raw, dict) and ("base" in raw or "bases" in raw))
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{source}: sweep: expected a mapping (base or bases, then monte_carlo or grid), "
+                          f"got {type(raw).__name__}")
+    inline = "base" not in raw and "bases" not in raw
+    if inline and "inertia" not in data:     # neither a base nor an inline acmm config around it
+        import difflib
+
+        unknown = [k for k in raw if k not in SweepSpec.model_fields]
+        close = [m for k in unknown for m in difflib.get_close_matches(str(k), ["base", "bases"], n=1)]
+        hint = (f" (sweep.{unknown[0]}: unknown key" + (f"; did you mean {close[0]!r}?)" if close else ")")
+                if unknown else "")
+        raise ConfigError(f"{source}: sweep.base: missing: give the base config (sweep.base: NAME or "
+                          f"sweep.bases: [...]), or write the sweep inside a full acmm config{hint}")
     if inline:
         rest = {k: v for k, v in data.items() if k != "sweep"}
         base_cfg = parse_config(rest, source=source)
