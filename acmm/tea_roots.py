@@ -55,7 +55,8 @@ def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: fl
 
 
 def fold_message(bias: np.ndarray, lam_max: float) -> str:
-    """The message of a bias continuation that folds at ``lam_max`` of ``bias`` (ft·lbf).
+    """The message of a bias continuation that folds at ``lam_max`` of ``bias`` (ft·lbf), the
+    torques given in ft·lbf and N·m (an SI run's message printed ft·lbf only).
 
     Parameters
     ----------
@@ -69,11 +70,16 @@ def fold_message(bias: np.ndarray, lam_max: float) -> str:
     str
         One sentence naming the bias and the fold.
     """
+    from common.units import FT_LBF_IN_NM
+
+    def torque(v) -> str:      # both systems: the core does not know which one the run prints
+        return (f"[{v[0]:.4g}, {v[1]:.4g}, {v[2]:.4g}] ft·lbf "
+                f"(= [{v[0] * FT_LBF_IN_NM:.4g}, {v[1] * FT_LBF_IN_NM:.4g}, {v[2] * FT_LBF_IN_NM:.4g}] N·m)")
+
     b = lam_max * bias
     return ("no torque-equilibrium attitude on the branch continued from LVLH for bias "
-            f"[{bias[0]:.4g}, {bias[1]:.4g}, {bias[2]:.4g}] ft·lbf: the gravity-gradient torque along "
-            f"that branch cannot balance it; the branch ends (folds) at bias "
-            f"[{b[0]:.4g}, {b[1]:.4g}, {b[2]:.4g}] ft·lbf ({100 * lam_max:.1f}% of the given bias)")
+            f"{torque(bias)}: the gravity-gradient torque along that branch cannot balance it; the "
+            f"branch ends (folds) at bias {torque(b)} ({100 * lam_max:.1f}% of the given bias)")
 
 
 def with_other_roots(exc: NoEquilibriumError, inertia, n, bias) -> NoEquilibriumError:

@@ -223,6 +223,23 @@ def test_the_margin_searches_stay_within_the_runs_counted_for_them(tmp_path):
         assert 4 <= done <= margin_evaluations(sw.spec.margin)
 
 
+def test_an_si_sweeps_no_equilibrium_reason_gives_the_bias_in_n_m(tmp_path):
+    """The reason of a no_equilibrium case printed the bias in ft·lbf only, next to a bias
+    dataset in N·m (a review); it now gives both, and the N·m agree with the stored bias."""
+    import re
+
+    _sweep_yaml(tmp_path, "si", base=str(CONFIGS / "ac.yaml"), monte_carlo=None, n_runs=None,
+                grid={"bias_pitch": [0.0, 40.0]}, orbits=0.2)
+    text = (tmp_path / "si.yaml").read_text().replace("figures: false", "figures: false\n  units: SI")
+    (tmp_path / "si.yaml").write_text(text)
+    r = run_sweep(load_sweep(tmp_path / "si.yaml"), workers=1)
+    h = read_h5(r.path)
+    assert h["attrs"]["unit_system"] == "SI"
+    k = [v.decode() for v in h["verdict"]].index("no_equilibrium")
+    m = re.search(r"\(= \[([^]]*)\] N·m\)", h["reason"][k].decode())
+    np.testing.assert_allclose([float(x) for x in m.group(1).split(",")], h["bias"][k], rtol=1e-3)
+
+
 def test_no_equilibrium_is_a_verdict_not_a_crash(tmp_path):
     # docs/ERRATA.md § TEA: MB3's gravity-gradient pitch capacity is ≈ 1.73 ft·lbf, so +4 ft·lbf pitch bias has no TEA
     sw = load_sweep(_sweep_yaml(tmp_path, "noeq", base=str(CONFIGS / "mb3.yaml")))
