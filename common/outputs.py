@@ -33,6 +33,7 @@ from pathlib import Path
 
 from common.errors import FigureError
 from common.results import WRITTEN_HOOKS
+from common.runlock import remove_stale_temps
 from common.signals import hold_interrupts, release_interrupts
 
 #: stage → glob patterns (relative to the run folder) of the files the stage owns.
@@ -118,6 +119,9 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
                 _discard((written | {p for p, sig in now.items() if before.get(p) != sig}) - kept, run_dir)
                 rollback.restore(skip=kept, stale=bool(kept))
                 _forget_in_outer_stages(entry, written)
+                # a figure writer killed with its worker (abort) mid-write left its temporary
+                # file; every stage holds the run lock, so no live writer owns one
+                remove_stale_temps(run_dir)
             if rollback is not None:
                 rollback.drop()
         raise

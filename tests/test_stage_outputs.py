@@ -120,6 +120,20 @@ def test_a_figure_completed_but_not_yet_recorded_is_removed_too(tmp_path):
     assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5", "design_gains.png"]
 
 
+def test_a_writer_killed_mid_write_leaves_no_temporary_file(tmp_path):
+    """Ctrl-C while a figure writer was inside its atomic write: the writer, killed with its
+    worker, left ``.sim_inertia.png.<random>.tmp`` beside the rolled-back folder (a review);
+    only the next run removed it.  The rollback removes it (the stage holds the run lock)."""
+    run = tmp_path / "run"
+    _earlier_run(run)
+    before = sorted(p.name for p in run.iterdir())
+    with pytest.raises(_Boom):
+        with stage_outputs(run, "simulate", config_text="name: new\n"):
+            (run / ".sim_inertia.png.x7k2q9.tmp").write_bytes(b"half a PNG")   # a killed writer's
+            raise _Boom
+    assert sorted(p.name for p in run.iterdir()) == before
+
+
 def test_a_failed_stage_leaves_no_figure_its_worker_completed(tmp_path):
     """As under the `acmm` command: the worker is the command's (an outer session), the stage's
     session nested.  The stage fails after its figure was written by the worker (not yet
