@@ -13,7 +13,7 @@ import enum
 
 import typer
 
-from cli.common import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
+from cli.common import ExitCodeGroup, OverridesArg, StrictOpt, run_app, strict_exit, user_errors, version_option
 
 #: the acmm stages' figure-worker warm-up, :data:`acmm.stage_common.FIGURE_WARM` (a string here: the
 #: worker is forked before anything of acmm is imported; a test checks that the two agree)
@@ -249,9 +249,7 @@ def main() -> None:
     ``acmm simulate``.  Every result is written (atomically) before the command returns; the
     atexit handlers still run and the output is flushed; only then ``os._exit``.  With another
     non-daemon thread alive (a Dask client) the usual exit is kept."""
-    import os
     import sys
-    import threading
 
     from common.signals import terminate_like_ctrl_c
 
@@ -262,24 +260,7 @@ def main() -> None:
         from cli.common import interrupted
 
         interrupted(exc)
-    try:
-        app()
-    except SystemExit as exc:
-        others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
-        if others or threading.current_thread() is not threading.main_thread():
-            raise
-        code = exc.code
-        if not isinstance(code, int):
-            if code is not None:
-                print(code, file=sys.stderr)
-            code = 0 if code is None else 1
-        import atexit
-
-        from common.forked import flush_std_streams
-
-        atexit._run_exitfuncs()
-        flush_std_streams()
-        os._exit(code)
+    run_app(app)
 
 
 def _fork_figure_worker_early(args: list[str]) -> None:

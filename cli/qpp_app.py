@@ -159,10 +159,11 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = Overrides
 def main() -> None:
     """Run the command-line app (the console-script entry point); exits with the code of the run
     (SIGTERM and SIGHUP roll back like Ctrl-C: :func:`common.signals.terminate_like_ctrl_c`)."""
+    from cli.common import run_app
     from common.signals import terminate_like_ctrl_c
 
     terminate_like_ctrl_c()
-    app()
+    run_app(app)
 
 
 if __name__ == "__main__":     # python -m cli.qpp_app

@@ -96,3 +96,34 @@ def test_a_forked_child_dies_with_its_parent_even_under_sigkill(tmp_path):
         time.sleep(0.02)
     os.kill(child, signal.SIGKILL)
     pytest.fail("the child outlived its parent")
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_after_the_run_finished_neither_prints_a_traceback_nor_kills_it(tmp_path, sig):
+    """A Ctrl-C landing in the exit path of a finished run (an atexit handler, the teardown)
+    printed a KeyboardInterrupt traceback with exit 0, or killed the finished run by the signal
+    (a review, rarely).  The signal arrives here inside an atexit handler, deterministically."""
+    script = tmp_path / "app.py"
+    script.write_text(textwrap.dedent(f"""
+        import atexit, os, signal, time, typer
+        from cli.common import run_app
+        from common.signals import terminate_like_ctrl_c
+
+        app = typer.Typer()
+
+        @app.command()
+        def run() -> None:
+            def late():
+                os.kill(os.getpid(), {int(sig)})
+                time.sleep(0.2)                     # the signal is handled here, if at all
+                print("atexit done", flush=True)
+            atexit.register(late)
+            print("finished", flush=True)
+
+        terminate_like_ctrl_c()
+        run_app(app)
+        """))
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    p = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=60)
+    assert p.returncode == 0, (p.returncode, p.stderr)
+    assert p.stdout.split() == ["finished", "atexit", "done"] and "Traceback" not in p.stderr, p.stderr
