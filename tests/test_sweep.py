@@ -530,3 +530,26 @@ def test_a_fifo_in_place_of_design_h5_is_designed_again_not_a_hang(tmp_path, mon
     table, note = design_for(cfg)
     assert note.startswith("designed") and (run / "design.h5").is_file()
     assert design_for(cfg)[1].startswith("reused")
+
+
+def test_a_full_disk_under_the_journal_names_the_journal(tmp_path):
+    """A full disk gave "I/O error: No space left on device" without a file (a review, on a
+    20 kB tmpfs)."""
+    import errno
+
+    from acmm.sweep.journal import GroupCommitJournal
+    from common.errors import OutputError
+
+    class _Full:
+        closed = False
+
+        def write(self, text):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        flush = close = lambda self: None
+
+    j = GroupCommitJournal(tmp_path / "sweep.journal", "key", fresh=True)
+    j._f.close()
+    j._f = _Full()
+    with pytest.raises(OutputError, match=r"cannot write the sweep journal .*sweep\.journal: No space left"):
+        j.append({"kind": "case"})

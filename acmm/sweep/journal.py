@@ -197,17 +197,27 @@ class GroupCommitJournal(Journal):
         """
         if not records:
             return
-        self._f.write("".join(json.dumps(r) + "\n" for r in records))
-        self._f.flush()
-        if time.monotonic() - self._last_sync >= self.sync_interval:
-            os.fsync(self._f.fileno())
-            self._last_sync = time.monotonic()
+        try:
+            self._f.write("".join(json.dumps(r) + "\n" for r in records))
+            self._f.flush()
+            if time.monotonic() - self._last_sync >= self.sync_interval:
+                os.fsync(self._f.fileno())
+                self._last_sync = time.monotonic()
+        except OSError as exc:           # disk full: name the file (it said "No space left" only)
+            from common.results import output_error
+
+            raise output_error(exc, "the sweep journal", self.path) from None
 
     def close(self) -> None:
         """Flush, fsync and close."""
-        if not self._f.closed:
-            self._f.flush()
-            os.fsync(self._f.fileno())
+        try:
+            if not self._f.closed:
+                self._f.flush()
+                os.fsync(self._f.fileno())
+        except OSError as exc:
+            from common.results import output_error
+
+            raise output_error(exc, "the sweep journal", self.path) from None
         super().close()
 
 
