@@ -305,6 +305,30 @@ def test_a_case_starts_at_the_equilibrium_connected_to_the_design_tea(tmp_path):
 # --------------------------------------------------------------------------------------------
 # whole sweeps
 # --------------------------------------------------------------------------------------------
+def test_an_interrupted_rerun_does_not_sit_beside_the_earlier_runs_config_and_figures(tmp_path):
+    """Seed A ran to the end (figures, config.yaml); seed B, interrupted, left its partial results
+    beside A's config.yaml and figures (a review).  A sweep started afresh now writes its own
+    config.yaml first and removes the earlier run's results and figures."""
+    class _Stop(Exception):
+        pass
+
+    def stop(n_new):
+        if n_new == 2:
+            raise _Stop
+
+    run_sweep(_sweep_yaml(tmp_path, "rerun", seed=1, margin=None), workers=1, figures=True)
+    run = tmp_path / "runs" / "rerun"
+    assert list(run.glob("sweep_*.png")) and "seed: 1" in (run / "config.yaml").read_text()
+    with pytest.raises(_Stop):
+        run_sweep(_sweep_yaml(tmp_path, "rerun", seed=2, margin=None), workers=1, figures=True,
+                  after_record=stop, snapshot_interval=0.0)
+    assert not list(run.glob("sweep_*.png"))
+    assert "seed: 2" in (run / "config.yaml").read_text()
+    if (run / "sweep.h5").exists():
+        h = read_h5(run / "sweep.h5")
+        assert not h["attrs"]["complete"] and "seed: 2" in h["attrs"]["config"]
+
+
 def test_same_config_and_seed_give_identical_data_serial_and_pool(tmp_path):
     cfg = _sweep_yaml(tmp_path, "same", margin={"low": 0.8, "high": 1.25, "scan_points": 1, "rel_tol": 0.1})
     r1 = run_sweep(cfg, workers=1)

@@ -146,6 +146,8 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     if executor is None and tasks:        # before the journal: an unreachable scheduler writes nothing
         executor, close = make_executor(workers if not scheduler else 0, scheduler)
     try:
+        if not (resume and jpath.exists()):
+            _start_afresh(sweep, run_dir)
         journal = GroupCommitJournal(jpath, key, fresh=not resume)
     except BaseException:
         close()
@@ -163,6 +165,18 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
                                wall_time=time.perf_counter() - t0)
     rows, margins = _split(sweep, list(done.values()))
     return SweepResult(sweep, path, rows, margins, n_new, n_resumed, time.perf_counter() - t0, True, figs)
+
+
+def _start_afresh(sweep: Sweep, run_dir: Path) -> None:
+    """A sweep started afresh (not resumed) keeps partial results when interrupted, so it must not
+    sit beside an earlier run's: that run's ``sweep.h5``, ``sweep.csv`` and figures are removed
+    (its journal is replaced next) and this sweep's ``config.yaml`` is written first.  An
+    interrupted re-run with another seed left its results beside the earlier run's config.yaml
+    and figures (a review)."""
+    from common.outputs import prune, write_config_yaml
+
+    prune(run_dir, "sweep", set())
+    write_config_yaml(run_dir, sweep)
 
 
 class _Snapshots:
