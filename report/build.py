@@ -5,6 +5,9 @@ The sections cover Table 1, ch. 5–7 of Part II and ch. 13–14 of Part III.
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -12,6 +15,7 @@ from typing import Callable
 
 from common.errors import OutputError
 from common.results import write_text
+from common.signals import hold_interrupts, release_interrupts
 from report.constants import SECTIONS
 from report.context import SectionWriter
 from report.document import render_html, render_markdown
@@ -127,16 +131,39 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     try:
         out.mkdir(parents=True, exist_ok=True)
         figdir.mkdir(exist_ok=True)
+        _remove_dead_staging(out)
+        staged = Path(tempfile.mkdtemp(prefix=f".figures-{os.getpid()}-", dir=out))
     except OSError as exc:
         raise OutputError(f"cannot create the report directory {out}: {exc.strerror or exc}") from None
     say(f"gathering results and writing sections ({'fast' if fast else 'full'} mode, root "
         f"{root or 'from configs'}, {jobs} process{'es' if jobs > 1 else ''})")
     try:
-        g, rep, timings = _run_graph(Path(root) if root is not None else None, figdir, fast, rerun, robustness,
-                                     jobs, say)
+        return _build_into(out, figdir, staged, root, fast, rerun, robustness, jobs, say, t_start, cpu0)
     except BaseException:
         _remove_empty(created)               # a refused or failed report leaves no empty folders behind
         raise
+    finally:
+        shutil.rmtree(staged, ignore_errors=True)
+
+
+def _remove_dead_staging(out: Path) -> None:
+    """Remove the figure staging folders (``.figures-<pid>-*``) of reports whose process is gone."""
+    for d in out.glob(".figures-*-*"):
+        try:
+            pid = int(d.name.split("-")[1])
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            shutil.rmtree(d, ignore_errors=True)
+        except (ValueError, IndexError, PermissionError, OSError):
+            continue
+
+
+def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robustness, jobs, say, t_start, cpu0):
+    """The report, its figures drawn into ``staged`` and moved into ``figdir`` only with the
+    pages: an interrupted or failed report leaves ``--out`` as it was (its figures were written
+    as their tasks finished, beside the previous report's pages: a review)."""
+    g, rep, timings = _run_graph(Path(root) if root is not None else None, staged, fast, rerun, robustness,
+                                 jobs, say)
     _add(rep, "printed", sec_printed.build, list(rep.ledger))
     # determinism
     man_path = out / "manifest.json"
@@ -150,11 +177,17 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
         f"stages and sections ({jobs} process{'es' if jobs > 1 else ''})": timings["graph"], "total": total})
     title = "CR-185644 regenerated: ACMM (Part II) and QPP (Part III)" + (" — fast mode" if fast else "")
     md = render_markdown(rep.doc, title)
-    page = render_html(rep.doc, title, figdir)
+    page = render_html(rep.doc, title, staged)          # (embeds the PNGs it reads there)
     manifest["determinism"] = {k: v for k, v in cmp.items() if k != "differences"}
-    write_text(man_path, json.dumps(manifest, indent=1))
-    write_text(out / "report.md", md)
-    write_text(out / "index.html", page)
+    held = hold_interrupts()                           # the figures and the pages go together
+    try:
+        for f in sorted(staged.iterdir()):
+            os.replace(f, figdir / f.name)
+        write_text(man_path, json.dumps(manifest, indent=1))
+        write_text(out / "report.md", md)
+        write_text(out / "index.html", page)
+    finally:
+        release_interrupts(held)
     figs = sorted(figdir.glob("*.png"))
     say(f"wrote {out / 'index.html'} ({len(figs)} figures) in {time.perf_counter() - t_start:.1f} s")
     res = ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),

@@ -365,6 +365,33 @@ def test_report_failure_in_a_worker_is_one_line_and_writes_nothing(tmp_path, mon
     assert not any(line.startswith("Traceback") for line in lines)
     assert not (out / "index.html").exists() and not (out / "report.md").exists()
     assert not (out / "manifest.json").exists()
+    assert not [p for p in out.rglob("*") if p.is_file()], sorted(out.rglob("*"))
+
+
+def test_an_interrupted_report_leaves_out_as_it_was(tmp_path, monkeypatch):
+    """Ctrl-C after every section was drawn (here: in the printed-values section, which runs
+    last): the figures had been written into --out/figures as their tasks finished, beside the
+    previous report's pages (a review).  They are drawn in a staging folder now and moved in only
+    with the pages."""
+    import sys
+
+    from typer.testing import CliRunner
+
+    from cli.acmm_app import app
+
+    out = tmp_path / "out"
+    (out / "figures").mkdir(parents=True)
+    (out / "index.html").write_text("the previous report")
+    build_mod = sys.modules["report.build"]
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(build_mod.sec_printed, "build", interrupted)
+    res = CliRunner().invoke(app, ["report", "--fast", "--out", str(out), "--root", str(tmp_path / "runs")])
+    assert res.exit_code == 130, res.output
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == ["figures", "index.html"]
+    assert (out / "index.html").read_text() == "the previous report"
 
 
 def test_default_jobs(monkeypatch):
