@@ -19,7 +19,7 @@ from common.signals import hold_interrupts, release_interrupts
 from report.constants import SECTIONS
 from report.context import SectionWriter
 from report.document import render_html, render_markdown
-from report.gather import Gathered, keep_stage, order_runs, report_configs, stage_tasks, warm_workers
+from report.gather import Gathered, changed_runs, keep_stage, order_runs, report_configs, stage_tasks, warm_workers
 from report.ledger import STATUS_UNEXPLAINED
 from report.manifest import build_manifest, compare_manifests
 from report.plan import assemble, section_tasks
@@ -179,6 +179,10 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
     md = render_markdown(rep.doc, title)
     page = render_html(rep.doc, title, staged)          # (embeds the PNGs it reads there)
     manifest["determinism"] = {k: v for k, v in cmp.items() if k != "differences"}
+    changed = changed_runs(g)
+    if changed:     # the stages' locks are not held while sections read: another run rewrote one
+        raise OutputError(f"{changed[0]}: its results file {g.runs[changed[0]].path} was rewritten while the "
+                          "report ran (another run of that name?); nothing was written: run the report again")
     held = hold_interrupts()                           # the figures and the pages go together
     try:
         for f in sorted(staged.iterdir()):

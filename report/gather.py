@@ -39,6 +39,9 @@ class Gathered:
     produced_by : dict
         Run key (``"stage:name"``) → name of the :class:`report.runner.Task` that produced it
         (used by :func:`order_runs`).
+    identities : dict
+        Run key → :func:`file_identity` of its results file when the report took it; checked
+        before the report writes its pages (:func:`changed_runs`).
     """
 
     configs: dict
@@ -48,6 +51,7 @@ class Gathered:
     robustness_wall: float = 0.0
     timings: dict = field(default_factory=dict)   #: wall time (s) per stage
     produced_by: dict = field(default_factory=dict)   #: run key → name of the task that made it
+    identities: dict = field(default_factory=dict)    #: run key → file_identity when taken
 
 
 def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
@@ -151,6 +155,46 @@ def _const(*args):
     return lambda done: args
 
 
+def file_identity(path) -> tuple | None:
+    """(device, inode, modification time in ns, size) of a file, None when it cannot be read: a
+    results file rewritten (atomically: a new inode) has another identity.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+
+    Returns
+    -------
+    tuple or None
+        The identity.
+    """
+    import os
+
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size
+
+
+def changed_runs(g: "Gathered") -> list[str]:
+    """Run keys whose results file is no longer the one the report took (another run of that
+    name wrote it meanwhile: the report's sections may have read either).
+
+    Parameters
+    ----------
+    g : Gathered
+        The gathered results.
+
+    Returns
+    -------
+    list of str
+        The changed run keys.
+    """
+    return [k for k, ident in g.identities.items() if file_identity(g.runs[k].path) != ident]
+
+
 def keep_stage(g: "Gathered", name: str, result, say: Callable[[str], None]) -> None:
     """Record the result of stage task ``name`` in ``g`` (and print one line).
 
@@ -173,12 +217,14 @@ def keep_stage(g: "Gathered", name: str, result, say: Callable[[str], None]) -> 
             r = g.robustness["run"]
             g.runs[f"{r.stage}:{r.config}"] = r
             g.produced_by[f"{r.stage}:{r.config}"] = name
+            g.identities[f"{r.stage}:{r.config}"] = file_identity(r.path)
         say(f"  robustness     {'available' if g.robustness else 'not available'} "
             f"({g.robustness_wall:.1f} s) {g.robustness_note}")
         return
     r: StageRun = result
     g.runs[f"{r.stage}:{r.config}"] = r
     g.produced_by[f"{r.stage}:{r.config}"] = name
+    g.identities[f"{r.stage}:{r.config}"] = file_identity(r.path)
     g.timings[f"{r.stage} {r.config}"] = r.wall_time
     say(f"  {r.stage:<14} {r.config:<16} {'reused' if r.reused else f'{r.wall_time:6.1f} s'}  {r.path}")
 

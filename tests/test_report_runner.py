@@ -436,3 +436,32 @@ def test_worker_warnings_reach_the_caller_as_in_a_serial_run(action, expected):
         assert out == {"a": 1, "b": 1, "c": 1}
         counts.append(sum(str(w.message) == "numerical trouble" for w in got))
     assert counts == [expected, expected]
+
+
+def test_a_results_file_rewritten_while_the_report_runs_is_refused(tmp_path, monkeypatch):
+    """The report holds no run lock while its sections read the stages' files: a user's
+    `acmm design staircase_fast schedule.n_points=3` during the report gave a report whose
+    schedule section spoke of 3 points and whose errata row of 12 (a review).  A results file
+    rewritten after the report took it is now named, and nothing is written."""
+    import shutil
+    import sys
+
+    from typer.testing import CliRunner
+
+    from cli.acmm_app import app
+
+    out = tmp_path / "out"
+    build_mod = sys.modules["report.build"]
+    original = build_mod.sec_printed.build
+
+    def rewrite_then_build(rep, *args, **kwargs):
+        path = next(r.path for k, r in rep.g.runs.items() if k.startswith("acmm design:"))
+        shutil.copy2(path, path.with_name("copy.h5"))
+        path.with_name("copy.h5").replace(path)              # another run's atomic write
+        return original(rep, *args, **kwargs)
+
+    monkeypatch.setattr(build_mod.sec_printed, "build", rewrite_then_build)
+    res = CliRunner().invoke(app, ["report", "--fast", "--out", str(out), "--root", str(tmp_path / "runs")])
+    assert res.exit_code == 4, res.output
+    assert res.output.strip().splitlines()[-1].startswith("error: acmm design:") and "rewritten" in res.output
+    assert not [p for p in out.rglob("*") if p.is_file()]
