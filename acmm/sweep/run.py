@@ -145,11 +145,15 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     close = lambda: None  # noqa: E731
     if executor is None and tasks:        # before the journal: an unreachable scheduler writes nothing
         executor, close = make_executor(workers if not scheduler else 0, scheduler)
+    afresh = not (resume and jpath.exists())
+    journal = None
     try:
-        if not (resume and jpath.exists()):
-            _start_afresh(sweep, run_dir)
         journal = GroupCommitJournal(jpath, key, fresh=not resume)
+        if afresh:              # after the journal: a journal that cannot be written changes nothing
+            _start_afresh(sweep, run_dir)
     except BaseException:
+        if journal is not None:
+            journal.close()
         close()
         raise
     serial = isinstance(executor, SerialExecutor)
