@@ -25,7 +25,7 @@ def table_sha256(names, arrays, coef) -> str:
     arrays : sequence of arrays
         inertia, bias, tea and K as stored (the file's units).
     coef : array or None
-        The schedule's coefficients as stored, or None.
+        The schedule's coefficients as stored (the file's units), or None.
 
     Returns
     -------

@@ -313,15 +313,15 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
     first, last = blend[0][0], blend[-1][0]
     start = PointSpec(first.name, first.inertia, first.bias, 0.0, expected=first.expected)
     end = PointSpec(last.name, last.inertia, last.bias, 1.0, expected=last.expected)
+    grid = np.linspace(0.0, 1.0, n_track)
     try:
         track = _tea_track(start, end, n, n_track)
     except (NoEquilibriumError, ConvergenceError):
-        track = None
-    grid = np.linspace(0.0, 1.0, n_track)
+        track = _track_to_fold(start, end, n, grid)       # the points before the fold are checked
     for sp, th in blend:
         branch = None
-        if track is not None:
-            guess = np.array([np.interp(sp.s, grid, track[:, i]) for i in range(3)])
+        if sp.s <= grid[len(track) - 1] + 1e-12:
+            guess = np.array([np.interp(sp.s, grid[:len(track)], track[:, i]) for i in range(3)])
             try:
                 branch = solve_tea_near(sp.inertia, n, sp.bias, guess).theta
             except (NoEquilibriumError, ConvergenceError):
@@ -329,3 +329,20 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
         if branch is None or np.max(np.abs((th - branch + np.pi) % (2 * np.pi) - np.pi)) > tol:
             return BranchJump(sp.name, float(sp.s), th, branch, sp.expected is not None)
     return None
+
+
+def _track_to_fold(start: PointSpec, end: PointSpec, n: float, grid: np.ndarray) -> np.ndarray:
+    """TEA (k, 3), rad, continued from the start over ``grid`` (s values) up to the last s before
+    the branch folds (at least the start's)."""
+    from common.errors import ConvergenceError, NoEquilibriumError
+
+    t = solve_tea(start.inertia, n, start.bias, expected=start.expected).theta
+    out = [t]
+    for s in grid[1:]:
+        try:
+            t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
+                               t).theta
+        except (NoEquilibriumError, ConvergenceError):
+            break
+        out.append(t)
+    return np.array(out)

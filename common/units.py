@@ -160,7 +160,7 @@ def _check_angle(unit: str, canonical: str) -> None:
         return float(dict(registry().get_root_units(parse_unit(u))[1]._units).get("radian", 0.0))
 
     names = [str(k) for k in getattr(parse_unit(unit), "_units", {})]
-    if radian_power(canonical) != 0 and any(k.endswith("hertz") for k in names):
+    if radian_power(canonical) != 0 and radian_power(unit) == 0 and any(k.endswith("hertz") for k in names):
         raise ValueError(f"{unit!r} is cycles per second and this value an angular rate ({canonical}): "
                          f"give rad/s, deg/s, rpm or cycle/s (1 Hz = 2π rad/s)")
     if canonical == "1" and radian_power(unit) != 0:

@@ -277,7 +277,8 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, div
                     f"simulation.t_final: the integration reached t = {float(exc.args[0]):.4g} s of {tf:g} s "
                     f"after {limit('QPP_RHS_EVALS'):.3g} evaluations of the loop: something in it varies much "
                     "faster than its closed-loop rates (a t inside a nonlinearity's expression, e.g. "
-                    f"sin(1e6*t)?); shorten t_final or slow it down ({how_to_raise('QPP_RHS_EVALS')})") from None
+                    "sin(1e6*t)?), or simulation.rtol / atol are very tight; shorten t_final, slow it down or "
+                    f"loosen the tolerances ({how_to_raise('QPP_RHS_EVALS')})") from None
         # the largest finite |z| of the samples reached (a loop can leap from large to inf or NaN
         # within one step, past the event, and fail the integrator there)
         reached = np.abs(np.column_stack([z, sol.y]) if sol.y.size else z)

@@ -140,6 +140,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     try:
         return _build_into(out, figdir, staged, root, fast, rerun, robustness, jobs, say, t_start, cpu0)
     except BaseException:
+        shutil.rmtree(staged, ignore_errors=True)
         _remove_empty(created)               # a refused or failed report leaves no empty folders behind
         raise
     finally:

@@ -112,6 +112,7 @@ def test_a_cycle_frequency_is_not_taken_as_an_angular_rate(run_acmm):
         parse_config(cfg_with(orbit_rate="0.000175 Hz"))
     assert parse_config(cfg_with(orbit_rate="0.0105 rpm")).orbit_rate == pytest.approx(0.0105 * 2 * np.pi / 60)
     assert parse_config(cfg_with(orbit_rate="1 cycle/day")).orbit_rate == pytest.approx(2 * np.pi / 86400)
+    assert parse_config(cfg_with(orbit_rate="0.0011 Hz*rad")).orbit_rate == pytest.approx(0.0011)   # = rad/s
     r = run_acmm("validate", "qpp_cubic2", "simulation.r_o.1.0.omega=0.3 Hz")
     assert r.exit_code == 2 and "omega" in r.output and "Hz" in r.output, r.output
     r = run_acmm("validate", "qpp_cubic2", "simulation.r_o.1.0.omega=0.3 cycle/s")

@@ -280,3 +280,32 @@ def test_no_equilibrium_on_the_blend_names_the_blend(tmp_runs, run_acmm, spacing
     assert "on the blend toward schedule.to" in r.stderr and "no torque-equilibrium" in r.stderr
     assert "hint: reduce the bias of disturbance or of schedule.to" in r.stderr
     assert not (tmp_runs / "runs").exists()
+
+
+def test_a_branch_that_folds_on_the_blend_blames_the_first_point_beyond_the_fold(monkeypatch):
+    """When the continuation from the start failed, every point was judged against no branch,
+    so the warning named the blend's start (s = 0) (a review).  The points before the fold are
+    checked against the branch up to it; the first point beyond is named."""
+    import acmm.schedule_points as sp_mod
+    from acmm.schedule_points import off_branch_point, point_specs
+
+    cfg = load_config("staircase")
+    n = cfg.orbit_rate
+    specs = point_specs(cfg)
+    teas = [compute_design(cfg).points[k].tea.theta for k in range(len(specs))]
+    assert off_branch_point(specs, teas, n) is None
+    blend = [p for p in specs if np.isfinite(p.s)]
+    i0, i1 = blend[0].inertia[0, 0], blend[-1].inertia[0, 0]
+    real = sp_mod.solve_tea_near
+
+    def folds_at_0_6(inertia, n_, bias, guess, **kw):          # no equilibrium beyond s = 0.6
+        if (inertia[0, 0] - i0) / (i1 - i0) > 0.6:
+            from common.errors import NoEquilibriumError
+            raise NoEquilibriumError("folds")
+        return real(inertia, n_, bias, guess, **kw)
+
+    monkeypatch.setattr(sp_mod, "_TRACKS", {})
+    monkeypatch.setattr(sp_mod, "solve_tea_near", folds_at_0_6)
+    jump = off_branch_point(specs, teas, n)
+    first_beyond = next(p for p in blend if p.s > 0.6)
+    assert jump is not None and jump.name == first_beyond.name and jump.branch is None

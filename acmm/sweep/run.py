@@ -124,16 +124,7 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     key = sweep.results_key()
     run_dir = sweep.run_dir()
     jpath = run_dir / "sweep.journal"
-    done: dict[tuple, dict] = {}
-    if resume and jpath.exists():
-        n_cases = spec.n_cases()
-        for rec in read_journal(jpath, key, {b.label for b in sweep.bases}):
-            task = _task_key(rec)
-            if (task[0] == "case" and not 0 <= task[2] < n_cases) or (task[0] == "margin" and spec.margin is None):
-                raise ConfigError(f"{jpath}: a record of {task[0]} {task[2]!r} of {task[1]}, which this sweep "
-                                  f"does not have ({n_cases} cases per base); delete the journal or run without "
-                                  "--resume")
-            done[task] = rec
+    done = _resumed(sweep, jpath, key) if resume and jpath.exists() else {}
     n_resumed = len(done)
     tasks = [t for t in _tasks(sweep) if t not in done]
     total = n_resumed + len(tasks)
@@ -169,6 +160,27 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
                                wall_time=time.perf_counter() - t0)
     rows, margins = _split(sweep, list(done.values()))
     return SweepResult(sweep, path, rows, margins, n_new, n_resumed, time.perf_counter() - t0, True, figs)
+
+
+def _resumed(sweep: Sweep, jpath: Path, key: str) -> dict:
+    """The finished tasks of the journal ``jpath`` (task key → record) for ``--resume``.
+
+    Raises
+    ------
+    ConfigError
+        The journal is another sweep's, a line is corrupt, or a record is of a case index or
+        margin search this sweep does not have (it added a 161st row to 160).
+    """
+    spec, done = sweep.spec, {}
+    n_cases = spec.n_cases()
+    for rec in read_journal(jpath, key, {b.label for b in sweep.bases}):
+        task = _task_key(rec)
+        if (task[0] == "case" and not 0 <= task[2] < n_cases) or (task[0] == "margin" and spec.margin is None):
+            raise ConfigError(f"{jpath}: a record of {task[0]} {task[2]!r} of {task[1]}, which this sweep "
+                              f"does not have ({n_cases} cases per base); delete the journal or run without "
+                              "--resume")
+        done[task] = rec
+    return done
 
 
 def _start_afresh(sweep: Sweep, run_dir: Path) -> None:
