@@ -76,6 +76,9 @@ def register(app: typer.Typer) -> None:
 
         if workers is not None and not 1 <= workers <= 1024:
             fail(f"--workers: must be between 1 and 1024 (got {workers})", EXIT_INPUT)
+        if scheduler is not None and not scheduler.strip():
+            fail("--scheduler: an empty address (give host:port of a Dask scheduler, or leave the option out "
+                 "to run on local processes)", EXIT_INPUT)
         sw = load_sweep(config, overrides)
         no_journal = resume and not (sw.run_dir() / "sweep.journal").exists()
         announce_numba_compile()

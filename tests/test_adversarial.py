@@ -188,6 +188,7 @@ SWEEP_BAD = [
     ("margin_rel_tol_tiny", {"sweep.margin.rel_tol": 1e-300}, r"sweep\.margin\.rel_tol"),
     ("settle_zero", {"sweep.settle_deg": 0}, r"sweep\.settle_deg"),
     ("map_unknown", {"sweep.map": ["x", "y"]}, r"map"),
+    ("map_twice", {"sweep.map": ["dI11", "dI11"]}, r"map: the two axes are both 'dI11'"),
     ("seed_negative", {"sweep.seed": -1}, r"sweep\.seed"),
     ("seed_2_64", {"sweep.seed": 2**64}, r"sweep\.seed"),
     ("offset_100", {"sweep.monte_carlo.offset_pitch": {"uniform": [-100, 100]}}, r"89"),

@@ -577,3 +577,10 @@ def test_a_full_disk_under_the_journal_names_the_journal(tmp_path):
     j._f = _Full()
     with pytest.raises(OutputError, match=r"cannot write the sweep journal .*sweep\.journal: No space left"):
         j.append({"kind": "case"})
+
+
+def test_an_empty_scheduler_address_is_refused_not_run_locally(tmp_runs, run_acmm):
+    """`--scheduler ""` ran the sweep on local processes without a word (a review)."""
+    r = run_acmm("sweep", "sweep_smoke", "--scheduler", "", "sweep.n_runs=2")
+    assert r.exit_code == 2 and r.output.strip().startswith("error: --scheduler: an empty address"), r.output
+    assert not (tmp_runs / "runs").exists()

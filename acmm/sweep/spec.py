@@ -160,6 +160,8 @@ class SweepSpec(_Model):
                     if abs(v) >= 89:
                         raise ValueError(f"{name} must stay within ±89 deg")
         if self.map is not None:
+            if self.map[0] == self.map[1]:
+                raise ValueError(f"map: the two axes are both {self.map[0]!r}; give two different parameters")
             for m in self.map:
                 if m not in names and m not in MAP_EXTRAS:
                     raise ValueError(f"map: {m!r} is neither a swept parameter ({', '.join(names)}) nor one of "
