@@ -98,7 +98,9 @@ def _margin_items(margins: list, S) -> dict:
             "evaluated_s": Dataset(np.array(m["evaluated_s"]), "1", "scalings evaluated, in order",
                                    dims=("evaluation",)),
             "evaluated_verdict": Dataset(S(m["evaluated_verdict"]), "1", "verdict at each", dims=("evaluation",)),
-            "failure_reason": Dataset(m["failure_reason"] or "-", "1", "why the first failure failed"),
+            # fixed-length UTF-8 like every other text variable (a scalar str became variable-length)
+            "failure_reason": Dataset(np.array((m["failure_reason"] or "-").encode(), dtype="S"), "1",
+                                      "why the first failure failed"),
         } for m in margins}
 
 
