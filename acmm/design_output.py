@@ -64,7 +64,7 @@ def point_items(points) -> dict:
                                                      "same for elementwise relative errors max|dK_ij/K_ij|"),
             "riccati_condition": Dataset(res.riccati_condition, "1",
                                          "relative condition estimate of the shifted CARE (acmm.riccati)"),
-            "riccati_ill_conditioned": Dataset(int(res.riccati_ill_conditioned), "1",
+            "riccati_ill_conditioned": Dataset(np.int8(res.riccati_ill_conditioned), "1",
                                                "1 if the CARE condition exceeds 1/sqrt(eps)"),
         }
     return pts

@@ -125,12 +125,15 @@ class Writer:
         name : str
             Attribute name.
         value : object
-            Its value: a str is written as a scalar variable-length UTF-8 string, anything else
-            through ``h5py.AttributeManager`` (in any unit: written as it is).
+            Its value: a str is written as a scalar variable-length UTF-8 string, a bool as int8
+            0/1 (the flags of every file alike), anything else through ``h5py.AttributeManager``
+            (in any unit: written as it is).
         new : bool, optional
             The caller knows ``obj`` has no attribute ``name`` yet (spares looking for it).
         """
         bname = name.encode()
+        if isinstance(value, (bool, np.bool_)):      # one kind of flag in every file: int8 0/1
+            value = np.int8(value)
         if type(value) is not str:
             h5py.AttributeManager(SimpleNamespace(id=obj))[name] = value
             return

@@ -62,7 +62,7 @@ def _published_certificate_items(pb) -> dict:
                               "β3, β4, m of the printed gains per bookkeeping: "
                               + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"],
                               dims=("bookkeeping", "threshold")),
-        "circle_passed": Dataset(int(pb.circle.passed), "1", "circle criterion with the printed gains"),
+        "circle_passed": Dataset(np.int8(pb.circle.passed), "1", "circle criterion with the printed gains (1: passed)"),
         "T": Dataset(pb.T, "s", "truncation time used"),
     }
 
@@ -257,10 +257,10 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
         if want_figures:          # drawn while the HDF5 file is written (in place: after it)
             figure_worker.submit(plot_circle, r, cfg.run_dir() / "qpp_circle.png")
             figure_worker.submit(plot_iterations, r, cfg.run_dir() / "qpp_iterations.png")
-        verdicts = {f"beta1_le_m[{rd},{bk}]": int(v) for (rd, bk), v in r.verdicts().items()}
+        verdicts = {f"beta1_le_m[{rd},{bk}]": bool(v) for (rd, bk), v in r.verdicts().items()}
         path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
-                        {"stage": "qpp design", "circle_passed": int(r.circle.passed), **verdicts,
-                         "certified": int(r.certified), "label": "certified" if r.certified else "uncertified",
+                        {"stage": "qpp design", "circle_passed": bool(r.circle.passed), **verdicts,
+                         "certified": bool(r.certified), "label": "certified" if r.certified else "uncertified",
                          "verdict": r.verdict, "bookkeeping": r.bookkeeping,
                          "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
     return cfg, r, path
@@ -334,8 +334,8 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
             "error_inf": Dataset(s.error_inf, "output units", "‖y − y_o‖∞",
                                  # γ of the sinusoidal kind, the payload of the polar arm; an
                                  # expression's parameters are param_<name> (not "gamma")
-                                 attrs={"beta_o": s.beta_o, "passed": int(s.passed),
-                                        "premises_held": int(not s.broken_premises(
+                                 attrs={"beta_o": s.beta_o, "passed": bool(s.passed),
+                                        "premises_held": bool(not s.broken_premises(
                                             cfg.spheres.beta_ri, getattr(cfg.nonlinearity, "y_range", None))),
                                         **({} if s.parameters else {"gamma": s.gamma}),
                                         **({} if s.diverged_at is None else {"diverged_at_s": s.diverged_at}),

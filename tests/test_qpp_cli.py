@@ -183,6 +183,12 @@ def test_a_scenario_outside_the_premises_says_so(tmp_runs):
     assert "premises" not in r.output
     with h5py.File(tmp_runs / "runs" / "qpp_saturation" / "qpp_sim.h5") as f:
         assert all(f[k]["error_inf"].attrs["premises_held"] == 1 for k in f if isinstance(f[k], h5py.Group))
+        # one kind of flag in every file (they were numpy bools, int64 and HDF5 enums): int8 0/1
+        flags = [f[k]["error_inf"].attrs[a] for k in f if isinstance(f[k], h5py.Group) for a in ("passed", "premises_held")]
+    assert runner.invoke(app, ["design", "qpp_saturation", "--no-figures"]).exit_code == 0
+    with h5py.File(tmp_runs / "runs" / "qpp_saturation" / "qpp_design.h5") as f:
+        flags += [f.attrs[a] for a in f.attrs if a in ("certified", "circle_passed") or a.startswith("beta1_le_m")]
+    assert len(flags) > 4 and all(np.asarray(v).dtype == np.int8 for v in flags), [np.asarray(v).dtype for v in flags]
 
 
 def test_gains_that_destabilize_the_loop_are_named_as_such(tmp_runs):

@@ -201,6 +201,7 @@ def test_sweep_h5_opens_in_xarray(tmp_path, n_runs):
             assert info.length is not None and info.encoding == "utf-8", name
     with h5py.File(r.path) as f:
         f.visititems(fixed_length_text)
+        assert f.attrs["complete"].dtype == np.int8 and f.attrs["complete"] == 1     # a flag: int8 0/1
     assert sw["peak_attitude_error"].attrs["units"] == "rad"      # one angle unit in every file
     sw[["peak_attitude_error"]].to_dataframe()
 
