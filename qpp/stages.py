@@ -153,10 +153,11 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     if r.hinf_history:
         keys = ["rho", "nu", "delta", "k_psd", "h_psd", "lambda_kh_scaled", "spectral", "admissible", "a", "ws"]
         items["hinf_search"] = Dataset(np.array([[float(h.get(k, np.nan)) for k in keys] for h in r.hinf_history]),
-                                       "mixed", "ch. 11 passes: rho, nu, delta = ||T_wy||inf (a-shifted, = beta1), "
+                                       "column_units[j]", "ch. 11 passes: rho, nu, delta = ||T_wy||inf (a-shifted, = beta1), "
                                        "tests k1 >= 0, h >= 0, lambda_max(k1 h)/nu^2 < 1 (1 = true), admissible, "
                                        "a (1/s), mean W_s scale", keys, dims=("hinf_pass", "hinf_quantity"),
-                                       attrs={"actions": "; ".join(str(h.get("action", "")) for h in r.hinf_history)})
+                                       attrs={"actions": "; ".join(str(h.get("action", "")) for h in r.hinf_history),
+                                              "column_units": ",".join("1/s" if k == "a" else "1" for k in keys)})
     items["certificate"] = {
         "certified": Dataset(int(r.certified), "1", "1: beta1 <= m and circle criterion (theorem 2, lemma 1)"),
         "beta1": Dataset(r.beta1_ref, "1", f"beta1 of the design inequality (B_z {r.bz})"),
@@ -208,12 +209,13 @@ def _circle_items(c) -> dict:
 
 
 _ITER_KEYS = ["rho", "nu", "a", "T", "delta", "beta1", "m", "circle", "certified"]
-_ITER_UNITS = ["1", "1", "1/s", "s", "1", "1", "1", "bool", "bool"]
+#: per column (units "column_units[j]", like the per-state arrays' state_units[j]); flags 1/0
+_ITER_UNITS = ["1", "1", "1/s", "s", "1", "1", "1", "1", "1"]
 
 
 def _iterations(r: DesignResult) -> Dataset:
     rows = [[float(it.get(k, np.nan)) for k in _ITER_KEYS] for it in r.iterations]
-    return Dataset(np.array(rows) if rows else np.zeros((0, len(_ITER_KEYS))), "mixed",
+    return Dataset(np.array(rows) if rows else np.zeros((0, len(_ITER_KEYS))), "column_units[j]",
                    "procedure 12.1, one row per evaluation: rho, nu, a (1/s), T (s), delta = ||T_wy||inf, "
                    "beta1, m (recomputed), circle passed, certified",
                    _ITER_KEYS, dims=("iteration", "quantity"),

@@ -188,6 +188,16 @@ def test_a_scenario_outside_the_premises_says_so(tmp_runs):
     assert runner.invoke(app, ["design", "qpp_saturation", "--no-figures"]).exit_code == 0
     with h5py.File(tmp_runs / "runs" / "qpp_saturation" / "qpp_design.h5") as f:
         flags += [f.attrs[a] for a in f.attrs if a in ("certified", "circle_passed") or a.startswith("beta1_le_m")]
+        # tables of mixed columns: units per column that pint parses (they said "mixed", "bool")
+        from common.units import parse_unit
+
+        for name in ("iterations", "hinf_search"):
+            if name in f:
+                d = f[name]
+                units = d.attrs["column_units"]
+                units = (units.decode() if isinstance(units, bytes) else units).split(",")
+                assert d.attrs["units"] == "column_units[j]" and len(units) == d.shape[1]
+                [parse_unit(u) for u in units]
     assert len(flags) > 4 and all(np.asarray(v).dtype == np.int8 for v in flags), [np.asarray(v).dtype for v in flags]
 
 
