@@ -584,3 +584,25 @@ def test_an_empty_scheduler_address_is_refused_not_run_locally(tmp_runs, run_acm
     r = run_acmm("sweep", "sweep_smoke", "--scheduler", "", "sweep.n_runs=2")
     assert r.exit_code == 2 and r.output.strip().startswith("error: --scheduler: an empty address"), r.output
     assert not (tmp_runs / "runs").exists()
+
+
+def test_orbits_are_defined_per_case_when_bases_differ_in_orbit_rate(tmp_path):
+    """With bases of different orbit rates the unit 'orbit' had no definition in sweep.h5 (a
+    review): each case's orbit is now its base's period (orbit_period, s), and the datasets in
+    orbits say so; with one rate the pint definition is there as before."""
+    data = yaml.safe_load((CONFIGS / "ac.yaml").read_text())
+    data.update(name="ac_slow", orbit_rate=0.001)
+    (tmp_path / "ac_slow.yaml").write_text(yaml.safe_dump(data))
+    p = _sweep_yaml(tmp_path, "rates", monte_carlo=None, n_runs=None, grid={"dI11": [0.0]}, orbits=0.1)
+    d = yaml.safe_load(p.read_text())
+    d["sweep"].pop("base")
+    d["sweep"]["bases"] = [str(CONFIGS / "ac.yaml"), str(tmp_path / "ac_slow.yaml")]
+    p.write_text(yaml.safe_dump(d))
+    h = read_h5(run_sweep(load_sweep(p), workers=1).path)
+    rates = [load_sweep(p).bases[int(b)].config.orbit_rate for b in h["base"]]
+    np.testing.assert_allclose(h["orbit_period"], 2 * np.pi / np.array(rates), rtol=1e-15)
+    import h5py
+
+    with h5py.File(tmp_path / "runs" / "rates" / "sweep.h5") as f:
+        attrs = f["time_to_divergence"].attrs
+        assert "units_definition" not in attrs and attrs["units_per_case"] == "orbit = orbit_period[case] * s"

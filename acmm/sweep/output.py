@@ -125,11 +125,18 @@ def _root_attrs(sweep: Sweep, a: dict, labels: list, n_done: int, complete: bool
 
 def _orbit_defined(items: dict, sweep) -> dict:
     """``items`` with the unit ``orbit`` defined (:func:`acmm.stage_common._define_units`) when
-    every base config has the same orbit rate (else an orbit's length differs between cases)."""
+    every base config has the same orbit rate; else an orbit's length differs between cases and
+    each dataset in orbits says that its case's orbit is ``orbit_period[case]`` s."""
     from acmm.stage_common import _define_units
 
+    from dataclasses import replace
+
     rates = {b.config.orbit_rate for b in sweep.bases}
-    return _define_units(items, rates.pop()) if len(rates) == 1 else items
+    if len(rates) == 1:
+        return _define_units(items, rates.pop())
+    # bases of different orbit rates: no one definition; each case's orbit is its orbit_period
+    return {k: replace(v, attrs={**v.attrs, "units_per_case": "orbit = orbit_period[case] * s"})
+            if getattr(v, "units", None) == "orbit" else v for k, v in items.items()}
 
 
 def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bool = False,
@@ -190,6 +197,8 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
                            dims=("case", "axis", "axis_col")),
         "bias": Dataset(a["bias"], "ft*lbf", "bias torque (first level)", list(AXES), dims=("case", "axis")),
         "n_draws": Dataset(a["n_draws"], "1", "Monte Carlo draws used (resampling of unphysical inertia)"),
+        "orbit_period": Dataset(np.array([2 * np.pi / sweep.bases[int(k)].config.orbit_rate for k in a["base"]]),
+                                "s", "orbital period of the case's base: the length of its 'orbit'"),
     }
     if margins:
         items["margin"] = _margin_items(margins, S)
