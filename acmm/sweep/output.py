@@ -206,8 +206,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     run_dir = sweep.run_dir()
     from common.netcdf_layout import with_leading_dim
 
-    items = with_leading_dim(items, "case", len(a["case"]))   # one row per case (netCDF dimension)
-    items = _orbit_defined(items, sweep)
+    items = _orbit_defined(with_leading_dim(items, "case", len(a["case"])), sweep)   # one row per case
     path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units)
     _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
