@@ -199,12 +199,29 @@ class Config(_Model):
         if self.n_design_points() > limit("DESIGN_POINTS"):
             raise ValueError(f"schedule: {self.n_design_points()} design points (one sector LQR each); use fewer "
                              f"schedule.n_points or schedule.points ({how_to_raise('DESIGN_POINTS')})")
-        samples = sim.orbits * 2 * math.pi / self.orbit_rate / sim.sample_interval
+        samples = self.output_samples()
         if samples > limit("SIM_SAMPLES"):
             raise ValueError(f"simulation.sample_interval: {sim.sample_interval:g} s gives {samples:.3g} output "
                              f"samples over {sim.orbits:g} orbits; raise sample_interval or lower orbits "
                              f"({how_to_raise('SIM_SAMPLES')})")
         return self
+
+    def output_samples(self, orbits: float | None = None) -> float:
+        """Output samples of one simulation of ``orbits`` (default ``simulation.orbits``) at
+        ``simulation.sample_interval``: what the ``SIM_SAMPLES`` limit bounds.
+
+        Parameters
+        ----------
+        orbits : float, optional
+            Orbits simulated (a sweep's own ``sweep.orbits``), dimensionless.
+
+        Returns
+        -------
+        float
+            Number of samples, dimensionless.
+        """
+        sim = self.simulation
+        return (sim.orbits if orbits is None else orbits) * 2 * math.pi / self.orbit_rate / sim.sample_interval
 
     def n_design_points(self) -> int:
         """Number of design points (= stair-case levels): the blend points plus the named ones.

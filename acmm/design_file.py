@@ -48,8 +48,7 @@ def _stored_digest(items: dict, system: str) -> str:
 
     st = convert_items({k: items[k] for k in _TABLE_KEYS} | {"schedule": items.get("schedule", {})}, system)
     coef = st["schedule"]["coef"].data if "coef" in st["schedule"] else None
-    names = [x.decode() if isinstance(x, bytes) else str(x) for x in np.atleast_1d(items["names"].data)]
-    return table_sha256(names, [st[k].data for k in _TABLE_KEYS], coef)
+    return table_sha256(_texts(items["names"].data), [st[k].data for k in _TABLE_KEYS], coef)
 
 
 def _check_table(names, inertia, bias, tea, K, coef, stored_digest) -> None:
@@ -91,14 +90,11 @@ def load_design_table(path: Path) -> DesignTable:
 
     from acmm.stage_design import DesignTable
 
-    def text(v):
-        return v.decode() if isinstance(v, bytes) else v
-
     with h5py.File(path, "r") as f:
-        attrs = {k: text(f.attrs[k]) for k in ("design_hash", "schedule_form", "unit_system", "config",
+        attrs = {k: _text(f.attrs[k]) for k in ("design_hash", "schedule_form", "unit_system", "config",
                                                 "table_sha256") if k in f.attrs}
         coef = np.asarray(f["schedule/coef"][()], float) if "schedule" in f else None
-        names = [x.decode() if isinstance(x, bytes) else str(x) for x in np.atleast_1d(f["names"][()])]
+        names = _texts(f["names"][()])
         inertia, bias, K, tea = (np.asarray(f[k][()], float) for k in ("inertia", "bias", "K", "tea"))
     _check_table(names, inertia, bias, tea, K, coef, attrs.get("table_sha256"))
     if attrs.get("unit_system", "imperial") == "SI":      # back to the report's units
@@ -120,5 +116,14 @@ def _unit_system(path: Path) -> str:
     import h5py
 
     with h5py.File(path, "r") as f:
-        v = f.attrs.get("unit_system", "imperial")
+        return _text(f.attrs.get("unit_system", "imperial"))
+
+
+def _text(v) -> str:
+    """An HDF5 string (bytes of a fixed-length one, or str) as str."""
     return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def _texts(values) -> list[str]:
+    """The strings of an HDF5 text array (or a scalar) as a list of str."""
+    return [_text(x) for x in np.atleast_1d(values)]

@@ -152,6 +152,18 @@ def blend_context(end_name: str | None, s: float):
 _TRACKS: dict = {}
 
 
+def _continue_blend(start: PointSpec, end: PointSpec, n: float, grid):
+    """Yield the TEA (3,), rad, at each s of ``grid`` along the blend start → end, Newton-continued
+    from the start's equilibrium; where the branch folds, the error is raised naming the blend
+    (:func:`blend_context`)."""
+    t = solve_tea(start.inertia, n, start.bias, expected=start.expected).theta
+    for s in grid:
+        with blend_context(end.name, s):
+            t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
+                               t).theta
+        yield t
+
+
 def _tea_track(start: PointSpec, end: PointSpec, n: float, n_track: int) -> np.ndarray:
     """TEA (n_track, 3) along the blend start → end by Newton continuation on evenly spaced s,
     remembered per (start, end, n, n_track): the design points and the path check of one design
@@ -160,14 +172,7 @@ def _tea_track(start: PointSpec, end: PointSpec, n: float, n_track: int) -> np.n
         float(n), int(n_track), None if start.expected is None else np.asarray(start.expected, float).tobytes())
     if key in _TRACKS:
         return _TRACKS[key].copy()
-    t = solve_tea(start.inertia, n, start.bias, expected=start.expected).theta
-    thetas = []
-    for s in np.linspace(0.0, 1.0, n_track):
-        with blend_context(end.name, s):
-            t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
-                               t).theta
-        thetas.append(t)
-    thetas = np.array(thetas)
+    thetas = np.array(list(_continue_blend(start, end, n, np.linspace(0.0, 1.0, n_track))))
     if len(_TRACKS) > 16:
         _TRACKS.clear()
     _TRACKS[key] = thetas
@@ -318,9 +323,10 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
         track = _tea_track(start, end, n, n_track)
     except (NoEquilibriumError, ConvergenceError):
         track = _track_to_fold(start, end, n, grid)       # the points before the fold are checked
+    reach = grid[len(track) - 1] if len(track) else -1.0       # the last s the branch reaches
     for sp, th in blend:
         branch = None
-        if sp.s <= grid[len(track) - 1] + 1e-12:
+        if sp.s <= reach + 1e-12:
             guess = np.array([np.interp(sp.s, grid[:len(track)], track[:, i]) for i in range(3)])
             try:
                 branch = solve_tea_near(sp.inertia, n, sp.bias, guess).theta
@@ -332,17 +338,14 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
 
 
 def _track_to_fold(start: PointSpec, end: PointSpec, n: float, grid: np.ndarray) -> np.ndarray:
-    """TEA (k, 3), rad, continued from the start over ``grid`` (s values) up to the last s before
-    the branch folds (at least the start's)."""
+    """TEA (k, 3), rad, of :func:`_continue_blend` over ``grid`` up to the last s before the
+    branch folds (k = 0 when even the start has none)."""
     from common.errors import ConvergenceError, NoEquilibriumError
 
-    t = solve_tea(start.inertia, n, start.bias, expected=start.expected).theta
-    out = [t]
-    for s in grid[1:]:
-        try:
-            t = solve_tea_near((1 - s) * start.inertia + s * end.inertia, n, (1 - s) * start.bias + s * end.bias,
-                               t).theta
-        except (NoEquilibriumError, ConvergenceError):
-            break
-        out.append(t)
-    return np.array(out)
+    out = []
+    try:
+        for t in _continue_blend(start, end, n, grid):
+            out.append(t)
+    except (NoEquilibriumError, ConvergenceError):
+        pass
+    return np.array(out).reshape(-1, 3)

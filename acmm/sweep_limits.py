@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from common.errors import ConfigError
-from common.limits import PHYSICAL_MAX, how_to_raise, limit
+from common.limits import how_to_raise, limit
 
 PILOT = 1000
 
@@ -27,6 +27,7 @@ def _physical_fraction(sweep, n: int) -> tuple[int, int]:
     """(physical draws, draws) of a pilot of ``n`` draws at every level of every base."""
     from acmm.schedule import point_specs
     from acmm.sweep import _draw, perturb_inertia
+    from acmm.sweep.cases import physical_mask
 
     spec = sweep.spec
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, 0x9E3779B9]))
@@ -34,14 +35,7 @@ def _physical_fraction(sweep, n: int) -> tuple[int, int]:
     ok = np.ones(n, bool)
     for b in sweep.bases:
         for s in point_specs(b.config):
-            m = np.array([perturb_inertia(s.inertia, d) for d in draws])
-            with np.errstate(all="ignore"):
-                fin = np.all(np.isfinite(m), axis=(1, 2))
-                m[~fin] = np.eye(3)
-                eig = np.linalg.eigvalsh(m)
-            good = fin & (eig[:, 0] > 0) & (eig[:, 0] + eig[:, 1] >= eig[:, 2] * (1 - 1e-12))
-            good &= np.max(np.abs(m), axis=(1, 2)) <= PHYSICAL_MAX["inertia"]
-            ok &= good
+            ok &= physical_mask(np.array([perturb_inertia(s.inertia, d) for d in draws]))
     return int(ok.sum()), n
 
 
@@ -72,12 +66,10 @@ def margin_evaluations(margin) -> int:
 
 def _check_samples(sweep, source: str) -> None:
     """The per-run output-sample limit (``SIM_SAMPLES``) at the sweep's own ``orbits``."""
-    import math
-
     for b in sweep.bases:
         sim = b.config.simulation
         orbits = sweep.spec.orbits if sweep.spec.orbits is not None else sim.orbits
-        samples = orbits * 2 * math.pi / b.config.orbit_rate / sim.sample_interval
+        samples = b.config.output_samples(orbits)
         if samples > limit("SIM_SAMPLES"):
             raise ConfigError(f"{source}: sweep.orbits: {orbits:g} orbits of {b.label} at its sample_interval "
                               f"{sim.sample_interval:g} s give {samples:.3g} output samples per run; lower "

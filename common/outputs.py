@@ -251,19 +251,40 @@ def _finish(run_dir: Path, stage: str, written: set, config, config_text) -> Non
     prune(run_dir, stage, written)
 
 
+def file_identity(path) -> tuple | None:
+    """(device, inode, modification time in ns, size) of a regular file, None when there is none
+    (or it cannot be read): a file written again (atomically: a new inode) has another identity.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+
+    Returns
+    -------
+    tuple or None
+        The identity.
+    """
+    import os
+    import stat
+
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size) if stat.S_ISREG(st.st_mode) else None
+
+
 def _stage_files(run_dir: Path, stage: str) -> dict:
-    """The stage's files in ``run_dir`` (its patterns), each with (inode, modification time):
-    a file the stage writes (atomically: a new inode) differs from the one there before."""
+    """The stage's files in ``run_dir`` (its patterns), each with its :func:`file_identity`: a
+    file the stage writes differs from the one there before."""
     out = {}
     if run_dir.is_dir():
         for pattern in STAGE_OUTPUTS[stage]:
             for p in run_dir.glob(pattern):
-                try:
-                    st = p.stat()
-                    if p.is_file():
-                        out[p.resolve()] = (st.st_ino, st.st_mtime_ns)
-                except OSError:
-                    pass
+                ident = file_identity(p)
+                if ident is not None:
+                    out[p.resolve()] = ident
     return out
 
 

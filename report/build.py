@@ -138,13 +138,13 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     say(f"gathering results and writing sections ({'fast' if fast else 'full'} mode, root "
         f"{root or 'from configs'}, {jobs} process{'es' if jobs > 1 else ''})")
     try:
-        return _build_into(out, figdir, staged, root, fast, rerun, robustness, jobs, say, t_start, cpu0)
+        res = _build_into(out, figdir, staged, root, fast, rerun, robustness, jobs, say, t_start, cpu0)
     except BaseException:
         shutil.rmtree(staged, ignore_errors=True)
         _remove_empty(created)               # a refused or failed report leaves no empty folders behind
         raise
-    finally:
-        shutil.rmtree(staged, ignore_errors=True)
+    shutil.rmtree(staged, ignore_errors=True)
+    return res
 
 
 def _remove_dead_staging(out: Path) -> None:

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Callable
 
 from common.errors import AcmmError
+from common.outputs import file_identity
 from report.constants import FAST_ORBITS  # noqa: F401 (cited by the docstrings)
 # the results files of one stage (reused by hash, else run): re-exported, the graph below uses them
 from report.stage_results import (StageRun, _record, _try_attrs, acmm_config,  # noqa: F401
@@ -40,8 +41,8 @@ class Gathered:
         Run key (``"stage:name"``) → name of the :class:`report.runner.Task` that produced it
         (used by :func:`order_runs`).
     identities : dict
-        Run key → :func:`file_identity` of its results file when the report took it; checked
-        before the report writes its pages (:func:`changed_runs`).
+        Run key → :func:`common.outputs.file_identity` of its results file when the report
+        took it; checked before the report writes its pages (:func:`changed_runs`).
     """
 
     configs: dict
@@ -153,29 +154,6 @@ def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rer
 
 def _const(*args):
     return lambda done: args
-
-
-def file_identity(path) -> tuple | None:
-    """(device, inode, modification time in ns, size) of a file, None when it cannot be read: a
-    results file rewritten (atomically: a new inode) has another identity.
-
-    Parameters
-    ----------
-    path : path-like
-        The file.
-
-    Returns
-    -------
-    tuple or None
-        The identity.
-    """
-    import os
-
-    try:
-        st = os.stat(path)
-    except OSError:
-        return None
-    return st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size
 
 
 def changed_runs(g: "Gathered") -> list[str]:

@@ -19,6 +19,7 @@ from common.errors import ConfigError
 from common.results import read_h5
 from acmm.sweep import (case_values, perturb_inertia, run_sweep, simulate_values, unphysical_reason,
                         prepare_base)
+from acmm.sweep.cases import physical_mask
 from acmm.sweep.config import load_sweep, parse_sweep
 
 from conftest import CONFIGS
@@ -105,7 +106,7 @@ def test_unphysical_reason_agrees_with_config_validator():
             ok = True
         except ValidationError:
             ok = False
-        assert (unphysical_reason(m) is None) == ok
+        assert (unphysical_reason(m) is None) == ok == physical_mask(m[None])[0]     # the pilot's twin
         seen.add(ok)
     assert seen == {True, False}      # both outcomes were exercised
     # a scale beyond the physical range (a review: inertia_scale 1e160 overflowed the redesign)
@@ -113,7 +114,7 @@ def test_unphysical_reason_agrees_with_config_validator():
         m = perturb_inertia(base, {"inertia_scale": scale})
         with pytest.raises(ValidationError):
             Inertia.model_validate(m.tolist())
-        assert "physical range" in unphysical_reason(m)
+        assert "physical range" in unphysical_reason(m) and not physical_mask(m[None])[0]
 
 
 def test_case_draws_follow_seedsequence_contract(tmp_path):

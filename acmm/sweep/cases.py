@@ -51,6 +51,30 @@ def unphysical_reason(inertia: np.ndarray) -> Optional[str]:
     return None
 
 
+def physical_mask(inertias: np.ndarray) -> np.ndarray:
+    """:func:`unphysical_reason` is None, for a stack of inertias at once (the sweep's draw pilot).
+
+    Parameters
+    ----------
+    inertias : (k, 3, 3) array
+        Symmetric inertias, slug·ft².
+
+    Returns
+    -------
+    (k,) bool array
+        True where the inertia is a rigid body's within the physical range.
+    """
+    from common.limits import PHYSICAL_MAX
+
+    m = np.array(inertias, dtype=float)
+    with np.errstate(all="ignore"):
+        ok = np.all(np.isfinite(m), axis=(1, 2))
+        m[~ok] = np.eye(3)
+        ok &= np.max(np.abs(m), axis=(1, 2)) <= PHYSICAL_MAX["inertia"]
+        eig = np.linalg.eigvalsh(m)
+    return ok & (eig[:, 0] > 0) & (eig[:, 0] + eig[:, 1] >= eig[:, 2] * (1 - 1e-12))
+
+
 def perturb_inertia(inertia: np.ndarray, values: dict) -> np.ndarray:
     """I_pert = s·(I ∘ (1 + δ)) with δ from ``dI11 … dI23`` and s = ``inertia_scale``.
 

@@ -1,6 +1,8 @@
 """The sweep journal: one JSON line per finished case, flushed and fsynced (group commit)."""
 from __future__ import annotations
 
+import contextlib
+
 import json
 import os
 import time
@@ -75,6 +77,17 @@ def read_journal(path: Path, key: str, bases: set | None = None) -> list[dict]:
     return records
 
 
+@contextlib.contextmanager
+def _journal_errors(path):
+    """An OS error while writing the journal at ``path`` as one :class:`OutputError` naming it."""
+    try:
+        yield
+    except OSError as exc:
+        from common.results import output_error
+
+        raise output_error(exc, "the sweep journal", path) from None
+
+
 class Journal:
     """Append-only JSON-lines file; each record is flushed and fsynced before returning.
 
@@ -90,12 +103,8 @@ class Journal:
     """
 
     def __init__(self, path: Path, key: str, fresh: bool):
-        try:
+        with _journal_errors(path):
             self._open(path, key, fresh)
-        except OSError as exc:
-            from common.results import output_error
-
-            raise output_error(exc, "the sweep journal", path) from None
 
     def _open(self, path: Path, key: str, fresh: bool) -> None:
         self.path = Path(path)
@@ -135,14 +144,10 @@ class Journal:
         OutputError
             When the write fails (exit 4).
         """
-        try:
+        with _journal_errors(self.path):
             self._f.write(json.dumps(record) + "\n")
             self._f.flush()
             os.fsync(self._f.fileno())
-        except OSError as exc:
-            from common.results import output_error
-
-            raise output_error(exc, "the sweep journal", self.path) from None
 
     def close(self) -> None:
         """Close the file (every record is already on disk)."""
@@ -197,27 +202,19 @@ class GroupCommitJournal(Journal):
         """
         if not records:
             return
-        try:
+        with _journal_errors(self.path):     # disk full: name the file (it said "No space left" only)
             self._f.write("".join(json.dumps(r) + "\n" for r in records))
             self._f.flush()
             if time.monotonic() - self._last_sync >= self.sync_interval:
                 os.fsync(self._f.fileno())
                 self._last_sync = time.monotonic()
-        except OSError as exc:           # disk full: name the file (it said "No space left" only)
-            from common.results import output_error
-
-            raise output_error(exc, "the sweep journal", self.path) from None
 
     def close(self) -> None:
         """Flush, fsync and close."""
-        try:
+        with _journal_errors(self.path):
             if not self._f.closed:
                 self._f.flush()
                 os.fsync(self._f.fileno())
-        except OSError as exc:
-            from common.results import output_error
-
-            raise output_error(exc, "the sweep journal", self.path) from None
         super().close()
 
 
