@@ -107,6 +107,7 @@ def stage_outputs(run_dir, stage: str, config=None, config_text: str | None = No
             if getattr(exc, "finished_stage", None) is not None:   # a nested stage's figure failed
                 raise
             _finish(run_dir, stage, written, config, config_text)  # the results stay, with config.yaml
+            remove_stale_temps(run_dir)     # of a writer killed mid-figure; the others have ended
             exc.finished_stage = entry
             raise
         _finish(run_dir, stage, written, config, config_text)

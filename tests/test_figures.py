@@ -306,6 +306,40 @@ def test_figure_worker_writes_records_and_reports_failures(tmp_path):
     assert not figure_worker.active()
 
 
+def _killed_mid_write(path):
+    """A figure writer killed (SIGKILL) after it opened its temporary file."""
+    import os
+    import signal
+    from pathlib import Path
+
+    path = Path(path)
+    (path.parent / f".{path.name}.x1y2z3.tmp").write_bytes(b"half a PNG")
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def test_a_writer_killed_mid_figure_leaves_no_temporary_file(tmp_path):
+    """The stage fails with exit 4 and keeps its results (a figure failure), but the killed
+    writer's temporary file goes with it; the figure written before stays."""
+    from common import figure_worker
+    from common.errors import FigureError
+    from common.outputs import record_written, stage_outputs
+
+    if not figure_worker.usable():
+        pytest.skip("no fork, one CPU or other threads alive")
+    t, x = _small_histories()
+    run = tmp_path / "run"
+    run.mkdir()
+    with pytest.raises(FigureError, match="figure"):
+        with stage_outputs(run, "simulate", config_text="name: x\n"):
+            with figure_worker.session():
+                figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", run / "sim_axes.png")
+                figure_worker.submit(_killed_mid_write, run / "sim_summary.png")
+                (run / "sim.h5").write_bytes(b"results")
+                record_written(run / "sim.h5")
+    assert not figure_worker.active()
+    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "sim.h5", "sim_axes.png"]
+
+
 def test_without_a_worker_a_sessions_figures_are_drawn_when_it_ends(tmp_path, monkeypatch):
     """In place (no fork): each session's figures are drawn when it ends, in order, after what
     the stage wrote in it; all of them even if one fails (that failure is raised); none when the
