@@ -181,7 +181,8 @@ def read_h5(path: str | Path) -> dict[str, Any]:
 def save_figure(fig, path: str | Path, **kwargs) -> Path:
     """``fig.savefig`` atomically: to a temporary file beside ``path``, then renamed into place.
 
-    The format is taken from ``path``'s suffix; ``kwargs`` go to ``savefig``.
+    The format is taken from ``path``'s suffix; ``kwargs`` go to ``savefig``.  Vector files carry
+    no creation date (unless ``metadata`` gives one), so that the same figure is the same file.
 
     Parameters
     ----------
@@ -198,6 +199,13 @@ def save_figure(fig, path: str | Path, **kwargs) -> Path:
         ``path``.
     """
     path = Path(path)
+    fmt = path.suffix.lstrip(".").lower() or "png"
+    if fmt in _DATED_FORMATS:           # the same figure gives the same bytes: no creation date
+        kwargs["metadata"] = {_DATED_FORMATS[fmt]: None, **(kwargs.get("metadata") or {})}
     with in_memory(path, "figure") as tmp:
-        fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", **kwargs)
+        fig.savefig(tmp, format=fmt, **kwargs)
     return path
+
+
+#: vector formats whose files matplotlib dates by default → the metadata key of that date
+_DATED_FORMATS = {"pdf": "CreationDate", "svg": "Date", "ps": "CreationDate", "eps": "CreationDate"}

@@ -525,3 +525,19 @@ def test_scheduled_pole_map_colours_ignore_a_nan_tea(captured, tmp_path):
     (sc,) = [c for c in captured[0].axes[0].collections if c.get_array() is not None]
     np.testing.assert_allclose(sc.get_clim(), [-45.0, -5.0])
     assert len(sc.get_offsets()) == 41 * 24
+
+
+def test_a_vector_figure_drawn_twice_is_the_same_file(tmp_path):
+    """No creation date in the PDFs (the report's path-check figures differed between runs)."""
+    import time
+
+    th = np.linspace(-20.0, -5.0, 9)
+    args = (th, -0.1 + 0.01 * np.sin(th), 0.2 + 0.01 * th, 0.5 + 0.0 * th)
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    first = plots.schedule_path_check(*args, tmp_path / "a" / "f", vector=True)
+    time.sleep(1.1)                         # a PDF date has a resolution of one second
+    second = plots.schedule_path_check(*args, tmp_path / "b" / "f", vector=True)
+    pdfs = [p for p in (*first, *second) if p.suffix == ".pdf"]
+    assert len(pdfs) == 2 and b"CreationDate" not in pdfs[0].read_bytes()
+    assert pdfs[0].read_bytes() == pdfs[1].read_bytes()
