@@ -239,7 +239,66 @@ class ExitCodeGroup(TyperGroup):
             sys.exit(exc.exit_code)
         except (typer.Abort, KeyboardInterrupt) as exc:
             interrupted(exc)
+        except _Interrupted as exc:
+            interrupted(exc.signal)
         sys.exit(rv if isinstance(rv, int) else 0)
+
+    def make_context(self, *args, **kwargs):
+        """Click's :meth:`make_context`, a signal while it parses passed on as :class:`_Interrupted`
+        (typer turned it into a silent exit 130, a SIGTERM included).
+
+        Parameters
+        ----------
+        *args, **kwargs : object
+            Passed on to click.
+
+        Returns
+        -------
+        click.Context
+            The group's context.
+
+        Raises
+        ------
+        _Interrupted
+            Ctrl-C, SIGTERM or SIGHUP arrived meanwhile.
+        """
+        try:
+            return super().make_context(*args, **kwargs)
+        except KeyboardInterrupt as exc:
+            raise _Interrupted(exc) from exc
+
+    def invoke(self, ctx):
+        """Click's :meth:`invoke` (the subcommand's parsing, then the command), a signal outside
+        the command's own handling passed on as :class:`_Interrupted`.
+
+        Parameters
+        ----------
+        ctx : click.Context
+            The group's context.
+
+        Returns
+        -------
+        object
+            The command's return value.
+
+        Raises
+        ------
+        _Interrupted
+            Ctrl-C, SIGTERM or SIGHUP arrived meanwhile.
+        """
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt as exc:
+            raise _Interrupted(exc) from exc
+
+
+class _Interrupted(Exception):
+    """A Ctrl-C / SIGTERM / SIGHUP that arrived while click parsed, carried past typer (which
+    maps a ``KeyboardInterrupt`` there to exit 130 without a word) to :func:`interrupted`."""
+
+    def __init__(self, signal: KeyboardInterrupt) -> None:
+        super().__init__(str(signal))
+        self.signal = signal
 
 
 def version_option():
@@ -307,7 +366,10 @@ def run_app(app) -> None:
     import threading
 
     try:
-        app()
+        try:
+            app()
+        except KeyboardInterrupt as exc:    # while typer built the command, before the group's main
+            interrupted(exc)
     except SystemExit as exc:
         others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
         if others or threading.current_thread() is not threading.main_thread():

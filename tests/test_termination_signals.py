@@ -127,3 +127,32 @@ def test_a_signal_after_the_run_finished_neither_prints_a_traceback_nor_kills_it
     p = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=60)
     assert p.returncode == 0, (p.returncode, p.stderr)
     assert p.stdout.split() == ["finished", "atexit", "done"] and "Traceback" not in p.stderr, p.stderr
+
+
+_SIGNAL_IN = {
+    # typer builds the command before the group's main runs
+    "building": "import typer.main as tm\n"
+                "def build(app):\n    raise Terminated(signal.SIGTERM)\n"
+                "tm.get_command = build\n",
+    # click parses the subcommand's options (typer mapped this to a silent exit 130)
+    "parsing": "try:\n    import typer._click.core as cc\nexcept ImportError:\n    import click.core as cc\n"
+               "parse = cc.Command.parse_args\n"
+               "def parse_then_signal(self, ctx, args):\n"
+               "    if self.name == 'validate':\n        raise Terminated(signal.SIGHUP)\n"
+               "    return parse(self, ctx, args)\n"
+               "cc.Command.parse_args = parse_then_signal\n",
+}
+
+
+@pytest.mark.parametrize("app", ["acmm", "qpp"])
+@pytest.mark.parametrize("where, code", [("building", 143), ("parsing", 129)])
+def test_a_signal_before_the_command_runs_is_one_line_and_its_exit_code(tmp_path, app, where, code):
+    """A SIGTERM/SIGHUP that arrives while the command line is still being turned into a command
+    (a review: a traceback with exit 1, or exit 130 without a word) exits 128 + N with one line."""
+    script = ("import signal\nfrom common.errors import Terminated\n" + _SIGNAL_IN[where]
+              + f"from cli.{app}_app import main\nmain()\n")
+    done = subprocess.run([sys.executable, "-c", script, "validate", "qpp_siso" if app == "qpp" else "mb3"],
+                          cwd=tmp_path, capture_output=True, text=True, env=ENV, timeout=120, check=False)
+    assert done.returncode == code, done.stderr
+    assert done.stderr.strip() == f"terminated by signal {code - 128}"
+    assert not list(tmp_path.iterdir())
