@@ -23,6 +23,7 @@ from report.gather import Gathered, changed_runs, keep_stage, order_runs, report
 from report.ledger import STATUS_UNEXPLAINED
 from report.manifest import build_manifest, compare_manifests
 from report.plan import assemble, section_tasks
+from report.publish import publish
 from report.runner import default_jobs, run_tasks
 from report.sections import determinism as sec_determinism
 from report.sections import printed as sec_printed
@@ -184,13 +185,17 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
     if changed:     # the stages' locks are not held while sections read: another run rewrote one
         raise OutputError(f"{changed[0]}: its results file {g.runs[changed[0]].path} was rewritten while the "
                           "report ran (another run of that name?); nothing was written: run the report again")
+    pairs = [(f, figdir / f.name) for f in sorted(staged.iterdir())]
+    pages = staged / ".pages"          # written beside the figures first: a full disk changes nothing
+    try:
+        pages.mkdir()
+    except OSError as exc:
+        raise OutputError(f"cannot write the report in {out}: {exc.strerror or exc}; nothing was written") from None
+    for name, text in (("manifest.json", json.dumps(manifest, indent=1)), ("report.md", md), ("index.html", page)):
+        pairs.append((write_text(pages / name, text), out / name))
     held = hold_interrupts()                           # the figures and the pages go together
     try:
-        for f in sorted(staged.iterdir()):
-            os.replace(f, figdir / f.name)
-        write_text(man_path, json.dumps(manifest, indent=1))
-        write_text(out / "report.md", md)
-        write_text(out / "index.html", page)
+        publish(pairs, staged / ".replaced")
     finally:
         release_interrupts(held)
     figs = sorted(figdir.glob("*.png"))

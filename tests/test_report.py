@@ -333,3 +333,27 @@ def test_headless_chromium_screenshot(fast_report, tmp_path):
 
     img = imread(shot)
     assert img.shape[0] >= 1000 and np.std(img[..., :3]) > 0.05        # not a blank page
+
+
+def test_a_report_that_cannot_be_written_leaves_out_as_it_was(fast_report, tmp_path):
+    """A directory in the way of one page: the figures, the manifest and the other pages stay
+    the previous report's (they were replaced before the failing write: a review)."""
+    import hashlib
+    import shutil
+
+    from common.errors import OutputError
+
+    base, r = fast_report
+    out = tmp_path / "out"
+    shutil.copytree(r.out, out)
+    (out / "report.md").unlink()
+    (out / "report.md").mkdir()
+
+    def tree():
+        return {p.relative_to(out).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else "/"
+                for p in sorted(out.rglob("*"))}
+
+    before = tree()
+    with pytest.raises(OutputError, match="report.md: a directory of that name is in the way"):
+        rp.build_report(out, fast=True, root=base / "runs")
+    assert tree() == before
