@@ -124,6 +124,7 @@ NO_REPORT_CITATION = {
     "qpp.config_checks": "validation of a qpp config's fields and work bounds: no mathematics of the report",
     "acmm.sweep.journal_records": "the fields of a sweep journal's records: no mathematics of the report",
     "report.constants": "section keys and titles of the report document: no mathematics",
+    "report.publish": "moving a finished report's files into place: no mathematics",
     "report.context": "what a report section receives and writes: no mathematics",
     "report.document": "the report's document model and its HTML/Markdown renderers: no mathematics",
     "report.figure_style": "the report's figure writer: no mathematics",
