@@ -21,9 +21,9 @@ Integrated state X (24): ω (rad/s), θ (rad), h (ft·lbf·s), ∫h (ft·lbf·s�
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from acmm import dynamics as dyn
+from acmm.compiled_cache import njit_cached
 from acmm.linearize import DRF_INPUTS
 # moved to acmm.scenario (issue 12), re-exported here
 from acmm.scenario import (PLAIN_STATE_NAMES, STOP_ANGLE, STOP_NONE, STOP_NONFINITE,  # noqa: F401
@@ -36,7 +36,7 @@ from acmm.simulate_reference import kernel_rhs, rhs_numpy  # noqa: E402,F401
 # ----------------------------------------------------------------------------------------------
 # compiled kernel
 # ----------------------------------------------------------------------------------------------
-@njit(cache=True, fastmath=False)
+@njit_cached(fastmath=False)
 def _torque(X, th2d, theta_est, omega_est, gain, tmax, hmax, ucmd_out, u_out, flags, x, u):
     """Controller state x (eq 4.47) into ``x``, commanded and delivered torque (eq 5.1, saturation)
     into ``ucmd_out``, ``u_out`` and ``u``; returns ω × h."""
@@ -82,7 +82,7 @@ def _torque(X, th2d, theta_est, omega_est, gain, tmax, hmax, ucmd_out, u_out, fl
     return wxh0, wxh1, wxh2
 
 
-@njit(cache=True, fastmath=False)
+@njit_cached(fastmath=False)
 def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n,
          tmax, hmax, drf_idx, out, u_out, ucmd_out, flags, x, u):
     """Closed-loop Ẋ into ``out``; ``x`` (24) and ``u`` (3) are scratch buffers."""
@@ -149,7 +149,7 @@ _B4 = np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 /
 _E = _B5 - _B4
 
 
-@njit(cache=True)
+@njit_cached()
 def _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx, rtol, atol,
                 C, A, B5, E, K, tmp, u, ucmd, flags, xs, us):
     """One Dormand–Prince 5(4) step of length h from (t, X): stages into ``K``, the 5th-order
@@ -182,7 +182,7 @@ def _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx
     return err, finite
 
 
-@njit(cache=True)
+@njit_cached()
 def _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time):
     """Divergence checks after an accepted step: 1 (attitude bound), 2 (saturated too long) or 0;
     updates the saturation clocks ``sat_time``."""
@@ -199,7 +199,7 @@ def _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time):
     return stop
 
 
-@njit(cache=True)
+@njit_cached()
 def _track(X, t, level, tl, rl, level_mid, run_mid, peak_h, steady, run, flags, step_len):
     """Extremes at every accepted step (not only at the output samples).  Per level: peak
     max_i |h_i|, and max |θ_i − θ̂*_i| from the middle of its dwell on.  Over the run (``run``):
@@ -226,7 +226,7 @@ def _track(X, t, level, tl, rl, level_mid, run_mid, peak_h, steady, run, flags, 
         run[10] += step_len
 
 
-@njit(cache=True)
+@njit_cached()
 def _window_entry(X0, K, X1, t0, h, mid, ref, worst):
     """Where the step (t0, X0) → (t0 + h, X1) crosses ``mid`` (a window of :func:`_track` opens),
     |θ_i(mid) − ref_i| into ``worst`` (max), θ(mid) by the cubic Hermite interpolant of the
@@ -244,7 +244,7 @@ def _window_entry(X0, K, X1, t0, h, mid, ref, worst):
             worst[i] = e
 
 
-@njit(cache=True)
+@njit_cached()
 def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est, omega_est, gain,
                ha, hb, n, tmax, hmax, drf_idx, x0, rtol, atol, divergence, max_sat,
                C, A, B5, E, out_state, out_ucmd, out_u, out_flags, out_level,

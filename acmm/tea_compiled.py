@@ -40,17 +40,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from common.errors import ConvergenceError, NoEquilibriumError
+from acmm.compiled_cache import njit_cached
 from acmm.tea import RESIDUAL_TOL, TEA, equilibrium_residual, make_tea, residual_threshold, solve_tea
 from acmm.tea_roots import fold_message
+from common.errors import ConvergenceError, NoEquilibriumError
 
 _MAX_JUMP = math.radians(5.0)
 _THETA_LIMIT = math.radians(89.5)
 
 
-@njit(cache=True)
+@njit_cached()
 def _mv(a, v):
     out = np.empty(3)
     for i in range(3):
@@ -58,7 +58,7 @@ def _mv(a, v):
     return out
 
 
-@njit(cache=True)
+@njit_cached()
 def _residual_jac(th, inertia, n, bias, r, jac, want_jac):
     """r = τ_gyro(ω*(θ)) + τ_gg(θ) + bias (ft·lbf) and, with ``want_jac``, ∂r/∂θ (eq 4.1, 4.3)."""
     s1, s2, s3 = math.sin(th[0]), math.sin(th[1]), math.sin(th[2])
@@ -119,14 +119,14 @@ def _residual_jac(th, inertia, n, bias, r, jac, want_jac):
             jac[i, j] += gj[i, 0] * dw[0, j] + gj[i, 1] * dw[1, j] + gj[i, 2] * dw[2, j]
 
 
-@njit(cache=True)
+@njit_cached()
 def _det3(a):
     return (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
             - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
             + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
 
 
-@njit(cache=True)
+@njit_cached()
 def _solve3(a, b, x):
     """x = a⁻¹ b by Gaussian elimination with partial pivoting; False when singular."""
     m = a.copy()
@@ -155,7 +155,7 @@ def _solve3(a, b, x):
     return True
 
 
-@njit(cache=True)
+@njit_cached()
 def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out, yaw_only=False):
     """Damped Newton on eq 4.1 from ``theta0``; the root in ``out``, True when converged.
 
@@ -197,7 +197,7 @@ def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out, yaw_only=Fal
     return False
 
 
-@njit(cache=True)
+@njit_cached()
 def _continue(theta, i0, i1, b0, b1, n, tol, min_step, connected=False):
     """Follow θ(λ) along I = i0 + λ(i1 − i0), bias = b0 + λ(b1 − b0) from λ = 0 to 1.
 
@@ -245,7 +245,7 @@ def _continue(theta, i0, i1, b0, b1, n, tol, min_step, connected=False):
     return th, lam, False
 
 
-@njit(cache=True)
+@njit_cached()
 def _symmetric_path(theta, i0, i1, b0, b1):
     """Whether the path of :func:`_continue` stays exactly in the plane-symmetric subspace: no
     I12, I23, roll or yaw bias in either plant, and θ1 = θ3 = 0 (Newton keeps them exactly 0)."""
@@ -254,7 +254,7 @@ def _symmetric_path(theta, i0, i1, b0, b1):
             and b1[0] == 0.0 and b1[2] == 0.0)
 
 
-@njit(cache=True)
+@njit_cached()
 def _tangent(th, lam, i0, i1, b0, b1, n, out):
     """dθ/dλ = −(∂r/∂θ)⁻¹ ∂r/∂λ on the path of :func:`_continue`; r is linear in the inertia and
     the bias, so ∂r/∂λ is r of the difference plant (i1 − i0, b1 − b0)."""
@@ -265,7 +265,7 @@ def _tangent(th, lam, i0, i1, b0, b1, n, out):
     return _solve3(jac, -r, out)
 
 
-@njit(cache=True)
+@njit_cached()
 def _smooth_step(th, new, lam, trial, i0, i1, b0, b1, n):
     """Whether the step θ(λ) → θ(trial) follows one smooth branch: the trapezoidal rule of the
     tangents at both ends reproduces it to 5 % (at a fold the two roots' tangents point apart)."""
@@ -282,7 +282,7 @@ def _smooth_step(th, new, lam, trial, i0, i1, b0, b1, n):
     return err <= 0.05 * size + 1e-12
 
 
-@njit(cache=True)
+@njit_cached()
 def _fold_location(theta, lam, inertia, n, bias, tol):
     """The largest λ whose equilibrium exists (bisection as :func:`acmm.tea._fold_location`)."""
     lo, hi = lam, 1.0
@@ -304,7 +304,7 @@ def _fold_location(theta, lam, inertia, n, bias, tol):
     return lo
 
 
-@njit(cache=True)
+@njit_cached()
 def _solve_tea_compiled(inertia, n, bias, tol):
     """(θ, status, λ): status 0 solved, 1 fold in the products of inertia (λ reached), 2 fold
     in the bias (λ: the largest bias fraction with an equilibrium)."""

@@ -53,11 +53,20 @@ def main() -> int:
     int
         Exit code 0.
     """
+    from acmm import simulate  # noqa: F401 (defines the kernels: whether they can be cached is known)
+    from acmm import tea_compiled  # noqa: F401
+    from acmm.compiled_cache import uncached_note, write_error_notes
+
+    if uncached_note() is not None:
+        print(f"acmm: nothing compiled ahead: {uncached_note()}")
+        return 0
     sys.stdout.write("acmm: compiling the numba kernels (simulator, TEA continuation) into the cache "
                      "— one time, ~10–20 s ... ")
     sys.stdout.flush()
     dt = warm_up()
     print(f"done in {dt:.1f} s")
+    for line in write_error_notes():
+        print(f"acmm: note: {line}")
     return 0
 
 

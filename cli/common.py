@@ -9,8 +9,6 @@ import typer
 
 from common.errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_NUMERICAL, EXIT_OUTPUT, AcmmError
 
-EXIT_USER_ERROR = EXIT_INPUT
-
 
 def fail(message: str, code: int = EXIT_INPUT) -> None:
     """Print ``error: message`` on stderr (one line) and exit with ``code`` (no traceback).
@@ -62,6 +60,13 @@ def _note_warnings(caught) -> None:
     first = caught[0]
     typer.echo(f"note: {len(caught)} distinct numerical warning(s) during the run; first: "
                f"{first.category.__name__}: {' '.join(str(first.message).split())}", err=True)
+
+
+def _note_compiled_cache() -> None:
+    """A ``note:`` line for each reason numba could not save a kernel it compiled in this run."""
+    cache = sys.modules.get("acmm.compiled_cache")       # (not imported: nothing was compiled)
+    for line in cache.write_error_notes() if cache is not None else []:
+        typer.echo(f"note: {line}", err=True)
 
 
 #: exit code when the reader of standard output closed it (128 + SIGPIPE, as a C tool killed by it)
@@ -124,6 +129,7 @@ def user_errors(fn):
                 fail(*plain)
         _note_warnings([w for w in caught if not issubclass(w.category, (DeprecationWarning,
                                                                            PendingDeprecationWarning))])
+        _note_compiled_cache()
         return out
 
     return wrapper
@@ -244,8 +250,8 @@ class ExitCodeGroup(TyperGroup):
         sys.exit(rv if isinstance(rv, int) else 0)
 
     def make_context(self, *args, **kwargs):
-        """Click's :meth:`make_context`, a signal while it parses passed on as :class:`_Interrupted`
-        (typer turned it into a silent exit 130, a SIGTERM included).
+        """Click's ``make_context``; a signal while it parses is raised as :class:`_Interrupted`
+        (typer made it a silent exit 130, a SIGTERM included).
 
         Parameters
         ----------
@@ -260,7 +266,7 @@ class ExitCodeGroup(TyperGroup):
         Raises
         ------
         _Interrupted
-            Ctrl-C, SIGTERM or SIGHUP arrived meanwhile.
+            Ctrl-C, SIGTERM or SIGHUP meanwhile.
         """
         try:
             return super().make_context(*args, **kwargs)
@@ -268,8 +274,8 @@ class ExitCodeGroup(TyperGroup):
             raise _Interrupted(exc) from exc
 
     def invoke(self, ctx):
-        """Click's :meth:`invoke` (the subcommand's parsing, then the command), a signal outside
-        the command's own handling passed on as :class:`_Interrupted`.
+        """Click's ``invoke`` (the subcommand's parsing, then the command), a signal outside the
+        command's own handling raised as :class:`_Interrupted`.
 
         Parameters
         ----------
@@ -284,7 +290,7 @@ class ExitCodeGroup(TyperGroup):
         Raises
         ------
         _Interrupted
-            Ctrl-C, SIGTERM or SIGHUP arrived meanwhile.
+            Ctrl-C, SIGTERM or SIGHUP meanwhile.
         """
         try:
             return super().invoke(ctx)

@@ -70,7 +70,15 @@ def numba_needs_compile() -> bool:
 
 
 def announce_numba_compile() -> None:
-    """Announce numba's first compile of the simulator (~8–12 s, cached afterwards)."""
+    """Announce numba's first compile of the simulator (~8–12 s, cached afterwards); say always
+    (progress or not) when numba has no cache folder, so that every run compiles."""
+    from acmm import simulate  # noqa: F401 (defines the kernels: whether they are cached is known)
+    from acmm.compiled_cache import uncached_note
+
+    why = uncached_note()
+    if why is not None:
+        print(f"note: {why}", file=sys.stderr, flush=True)
+        return
     if enabled() and numba_needs_compile():
         note("compiling the closed-loop simulator with numba (first run only, ~10 s; cached afterwards) ...")
 

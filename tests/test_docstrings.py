@@ -110,6 +110,7 @@ NO_REPORT_CITATION = {
     "common.workers": "worker-process hygiene: no mathematics of the report",
     "common.plot_style": "matplotlib style of all figures: no mathematics of the report",
     "acmm.warmup": "compiling the numba kernels ahead of time: no mathematics of the report",
+    "acmm.compiled_cache": "numba's on-disk cache of the compiled kernels: no mathematics of the report",
     "acmm.sweep_limits": "work bounds of a sweep config: no mathematics of the report",
     "acmm.sweep.cases": "random draws and grid points of a sweep's cases: no mathematics of the report",
     "acmm.sweep.journal": "the sweep's append-only journal file: no mathematics of the report",
