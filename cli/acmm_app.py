@@ -251,9 +251,11 @@ def main() -> None:
     non-daemon thread alive (a Dask client) the usual exit is kept."""
     import sys
 
+    from common.plot_style import files_only_backend
     from common.signals import terminate_like_ctrl_c
 
     terminate_like_ctrl_c()           # SIGTERM, SIGHUP: rolled back like Ctrl-C
+    files_only_backend()
     try:
         _fork_figure_worker_early(sys.argv[1:])
     except KeyboardInterrupt as exc:

@@ -160,9 +160,11 @@ def main() -> None:
     """Run the command-line app (the console-script entry point); exits with the code of the run
     (SIGTERM and SIGHUP roll back like Ctrl-C: :func:`common.signals.terminate_like_ctrl_c`)."""
     from cli.common import run_app
+    from common.plot_style import files_only_backend
     from common.signals import terminate_like_ctrl_c
 
     terminate_like_ctrl_c()
+    files_only_backend()
     run_app(app)
 
 

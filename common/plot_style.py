@@ -38,6 +38,20 @@ STAGE_RC = {"figure.dpi": 110, "axes.grid": True, "grid.alpha": 0.3, "font.size"
             "axes.titley": 1.0}
 
 
+def files_only_backend() -> None:
+    """The commands draw figures into files only: matplotlib's backend is Agg whatever
+    ``MPLBACKEND`` says.  An invalid or an interactive one (Jupyter's
+    ``module://matplotlib_inline.backend_inline``) made ``import matplotlib`` itself fail, a
+    traceback in ``acmm report``/``sweep`` (a review).  Call it before anything imports
+    matplotlib or forks a process that will; the variable is inherited by those processes."""
+    import os
+    import sys
+
+    os.environ["MPLBACKEND"] = "Agg"
+    if "matplotlib" in sys.modules:
+        sys.modules["matplotlib"].use("Agg", force=True)
+
+
 def agg_pyplot(force: bool = False):
     """``matplotlib.pyplot`` on the Agg backend, rcParams untouched (the qpp stage figures).
 

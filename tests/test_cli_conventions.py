@@ -463,3 +463,20 @@ def test_hints_for_an_uncontrollable_pole_at_zero_and_a_narrow_sector_can_help()
     narrow = numerical_hint("sector LQR (shift): cannot shift the poles λ/n = [(-2.3+0.8j)] (uncontrollable?): "
                             "Riccati solve (method='scipy'): relative residual 1.2e-07 exceeds tolerance 1.0e-09")
     assert narrow.startswith("widen design.sector.half_angle_deg")
+
+
+@pytest.mark.parametrize("backend", ["nonexistent", "module://matplotlib_inline.backend_inline", "TkAgg"])
+def test_any_mplbackend_still_writes_the_figures(tmp_path, backend):
+    """The commands draw into files only: an invalid or interactive MPLBACKEND (Jupyter's) made
+    ``import matplotlib`` fail, a traceback in the sweep and the report (a review)."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "MPLBACKEND": backend,
+           "OPENBLAS_NUM_THREADS": "1"}
+    done = subprocess.run([sys.executable, "-m", "cli.acmm_app", "sweep", "sweep_smoke", "sweep.n_runs=2",
+                           "sweep.orbits=0.5"], cwd=tmp_path, capture_output=True, text=True, env=env,
+                          timeout=300, check=False)
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+    assert list((tmp_path / "runs").glob("*/sweep_*.png")), sorted((tmp_path / "runs").rglob("*"))
