@@ -42,6 +42,34 @@ class _Bar:
             self.steps = None
 
 
+def _check_executor_options(workers: Optional[int], scheduler: Optional[str]) -> None:
+    """Refuse a bad ``-j``/``--scheduler`` (one line, exit 2); with a scheduler, quiet its
+    client's log (a lost scheduler is then the sweep's one line, not distributed's tracebacks)."""
+    if workers is not None and not 1 <= workers <= 1024:
+        fail(f"--workers: must be between 1 and 1024 (got {workers})", EXIT_INPUT)
+    if scheduler is not None and workers is not None:
+        fail("--workers and --scheduler: give one (with --scheduler the cluster's workers run the cases)",
+             EXIT_INPUT)
+    if scheduler is not None and not scheduler.strip():
+        fail("--scheduler: an empty address (give host:port of a Dask scheduler, or leave the option out "
+             "to run on local processes)", EXIT_INPUT)
+    if scheduler is not None:
+        _quiet_dask_client()
+
+
+def _quiet_dask_client() -> None:
+    """Silence the Dask client's error log (its tracebacks while it reconnects to a lost
+    scheduler); the sweep reports that loss on one line.  After ``import distributed``, which
+    sets its loggers' levels from its config."""
+    import logging
+
+    try:
+        import distributed  # noqa: F401
+    except ImportError:        # reported by the sweep (--scheduler needs acmm-qpp[dask])
+        return
+    logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
+
+
 def register(app: typer.Typer) -> None:
     """Add the ``sweep`` command to ``app``.
 
@@ -74,11 +102,7 @@ def register(app: typer.Typer) -> None:
 
         from cli.progress import announce_numba_compile
 
-        if workers is not None and not 1 <= workers <= 1024:
-            fail(f"--workers: must be between 1 and 1024 (got {workers})", EXIT_INPUT)
-        if scheduler is not None and not scheduler.strip():
-            fail("--scheduler: an empty address (give host:port of a Dask scheduler, or leave the option out "
-                 "to run on local processes)", EXIT_INPUT)
+        _check_executor_options(workers, scheduler)
         sw = load_sweep(config, overrides)
         no_journal = resume and not (sw.run_dir() / "sweep.journal").exists()
         announce_numba_compile()

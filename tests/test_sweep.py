@@ -607,3 +607,9 @@ def test_orbits_are_defined_per_case_when_bases_differ_in_orbit_rate(tmp_path):
     with h5py.File(tmp_path / "runs" / "rates" / "sweep.h5") as f:
         attrs = f["time_to_divergence"].attrs
         assert "units_definition" not in attrs and attrs["units_per_case"] == "orbit = orbit_period[case] * s"
+
+
+def test_workers_and_a_scheduler_together_are_refused(tmp_runs, run_acmm):
+    """-j was silently ignored beside --scheduler (a review)."""
+    r = run_acmm("sweep", "sweep_smoke", "-j", "2", "--scheduler", "tcp://127.0.0.1:1", "sweep.n_runs=2")
+    assert r.exit_code == 2 and r.output.strip().startswith("error: --workers and --scheduler: give one"), r.output

@@ -53,7 +53,7 @@ def test_chunk_size_with_a_measured_case_cost():
 
 
 def test_chunker_guided_sizes_and_measure(monkeypatch):
-    import acmm.sweep.executors as ex
+    import acmm.sweep.chunking as ex
 
     clock = [100.0]
     monkeypatch.setattr(ex.time, "monotonic", lambda: clock[0])

@@ -65,3 +65,95 @@ def test_heap_setting_only_in_dask_worker_processes():
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         assert list(client.run(_in_dask_worker).values()) == [True]
         assert client.submit(_in_dask_worker, pure=False).result() is True
+
+
+# ---------------------------------------------------------------------------------------------
+# a lost worker, a repeated interrupt, a cluster running other code (a review)
+# ---------------------------------------------------------------------------------------------
+_BIG = ["sweep", "sweep_inertia30", "sweep.n_runs=600", "sweep.orbits=3", "--no-figures", "-j", "2"]
+
+
+def _start_sweep(tmp_path):
+    from pathlib import Path
+
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "MPLBACKEND": "Agg",
+           "OPENBLAS_NUM_THREADS": "1"}
+    p = subprocess.Popen([sys.executable, "-m", "cli.acmm_app", *_BIG], cwd=tmp_path, env=env, text=True,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+    journal = tmp_path / "runs" / "sweep_inertia30" / "sweep.journal"
+    import time
+
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 120 and p.poll() is None:      # cases are coming back
+        if journal.exists() and journal.read_text().count("\n") >= 3:
+            break
+        time.sleep(0.02)
+    assert p.poll() is None, p.stderr.read()
+    return p, env, journal
+
+
+def _children(pid):
+    with open(f"/proc/{pid}/task/{pid}/children") as f:
+        return [int(x) for x in f.read().split()]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc, fork")
+def test_a_killed_pool_worker_is_one_line_and_the_sweep_resumes(tmp_path):
+    """It was a 93-line BrokenProcessPool traceback with exit 1 (the code of --strict)."""
+    import signal
+
+    p, env, journal = _start_sweep(tmp_path)
+    os.kill(_children(p.pid)[0], signal.SIGKILL)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 4, err
+    assert err.strip().splitlines() == ["error: a sweep worker process died (killed, or out of memory); the "
+                                        "finished cases are kept in the journal: run the sweep again with --resume"]
+    again = subprocess.run([sys.executable, "-m", "cli.acmm_app", *_BIG, "--resume"], cwd=tmp_path, env=env,
+                           capture_output=True, text=True, timeout=300, check=False)
+    assert again.returncode == 0, again.stderr
+    import json
+
+    records = [json.loads(line) for line in journal.read_text().splitlines()[1:]]
+    cases = [(r["base"], r["index"]) for r in records if r["kind"] == "case"]
+    assert len(cases) == len(set(cases)) == 2 * 600                # each base's cases, once
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process groups")
+@pytest.mark.parametrize("gap", [0.0, 0.05])
+def test_a_second_ctrl_c_does_not_hang_the_sweep(tmp_path, gap):
+    """Ctrl-C twice to the terminal's process group (the driver and its pool): the second one broke
+    the pool's shutdown and the sweep hung in multiprocessing's exit handler (a review)."""
+    import signal
+    import time
+
+    p, _, _ = _start_sweep(tmp_path)
+    os.killpg(p.pid, signal.SIGINT)
+    time.sleep(gap)
+    os.killpg(p.pid, signal.SIGINT)
+    try:
+        _, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        raise
+    assert p.returncode == 130 and err.strip() == "interrupted", err
+
+
+def test_a_dask_worker_running_other_code_is_refused():
+    from acmm.sweep.executors import _call_chunk, same_code
+    from common.errors import ConfigError
+    from common.provenance import code_identity
+
+    with pytest.raises(ConfigError, match="--scheduler: a Dask worker runs other acmm code"):
+        _call_chunk([], None, "0.0.0+000000000000")         # before anything else of the chunk
+    same_code(code_identity())
+    assert len(code_identity().rsplit("+", 1)[1]) == 12
+
+
+@pytest.mark.parametrize("address", ["tls://127.0.0.1:1", "ucx://127.0.0.1:1"])
+def test_a_scheduler_address_dask_cannot_use_is_one_line(address):
+    pytest.importorskip("distributed")
+    from acmm.sweep.executors import make_executor
+    from common.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=f"--scheduler: cannot connect to the Dask scheduler at {address}"):
+        make_executor(0, address)

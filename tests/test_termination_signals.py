@@ -156,3 +156,30 @@ def test_a_signal_before_the_command_runs_is_one_line_and_its_exit_code(tmp_path
     assert done.returncode == code, done.stderr
     assert done.stderr.strip() == f"terminated by signal {code - 128}"
     assert not list(tmp_path.iterdir())
+
+
+def test_a_second_interrupt_waits_for_the_cleanup_and_a_late_one_stops_at_once(tmp_path):
+    """Once the command unwinds from one interrupt, another soon after is dropped (raised inside
+    the cleanup it broke a lock: 'RuntimeError: release unlocked lock', or hung a pool's shutdown);
+    one after FORCE_AFTER s stops the process at once."""
+    script = textwrap.dedent("""
+        import os, signal, time
+        from common import signals
+        signals.terminate_like_ctrl_c()
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)
+        except KeyboardInterrupt as exc:
+            print("unwinding from", type(exc).__name__, flush=True)
+        os.kill(os.getpid(), signal.SIGINT)          # at once: dropped, the cleanup goes on
+        time.sleep(0.2)
+        print("cleanup finished", flush=True)
+        signals.FORCE_AFTER = 0.0
+        os.kill(os.getpid(), signal.SIGINT)          # later: stops at once
+        time.sleep(5)
+        print("not reached", flush=True)
+    """)
+    done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, env=ENV,
+                          timeout=60, check=False)
+    assert done.stdout.splitlines() == ["unwinding from Terminated", "cleanup finished"], done.stdout
+    assert done.returncode == 130 and done.stderr == "interrupted again while cleaning up: stopped at once\n"

@@ -58,10 +58,10 @@ from acmm.sweep.case import (BaseContext, _empty_row, _redesigned_specs, _redesi
 from acmm.sweep.cases import AXES, VERDICTS, _draw, _why, case_values, perturb_inertia, unphysical_reason
 from acmm.sweep.config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sweep, swept_parameters
 from acmm.sweep.dask_settings import DASK_SETTINGS, dask_settings_yaml
-from acmm.sweep.executors import (CHUNKS_PER_WORKER, MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker,
-                                  SerialExecutor, _call, _call_chunk, _local_context, _remote_contexts,
-                                  _scheduler_workers, _task_key, _tasks, _warm_worker, chunk_size, make_chunks,
-                                  make_executor)
+from acmm.sweep.chunking import (CHUNKS_PER_WORKER, MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker,
+                                 chunk_size, make_chunks)
+from acmm.sweep.executors import (SerialExecutor, _call, _call_chunk, _local_context, _remote_contexts,
+                                  _scheduler_workers, _task_key, _tasks, _warm_worker, make_executor)
 from acmm.sweep.journal import JOURNAL_VERSION, GroupCommitJournal, Journal, SweepInterrupted, read_journal
 from acmm.sweep.output import _label, _nominal_tea_deg, _split, _write_csv, plot_sweep, table_arrays, write_results
 from acmm.sweep.run import SweepResult, _as_sweep, run_sweep

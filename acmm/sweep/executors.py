@@ -1,13 +1,12 @@
-"""Executors (in-process, process pool, Dask) and the tasks they run: case and margin tasks,
-chunking, worker warm-up and base contexts made local or scattered."""
+"""Executors (in-process, process pool, Dask) and the tasks they run: case and margin tasks
+(cut into chunks by :mod:`acmm.sweep.chunking`), worker warm-up and base contexts made local or
+scattered."""
 from __future__ import annotations
 
 import concurrent.futures as cf
 import dataclasses
-import math
 import os
 import sys
-import time
 from typing import Optional
 
 import numpy as np
@@ -79,8 +78,9 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
             from common.limits import limit
 
             client = distributed.Client(scheduler, timeout=f"{limit('DASK_CONNECT_SECONDS'):g}s")
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise ConfigError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
+        except Exception as exc:  # noqa: BLE001 (tls:// without a context, ucx:// without ucx…: a bad address)
+            raise ConfigError(f"--scheduler: cannot connect to the Dask scheduler at {scheduler}: "
+                              f"{type(exc).__name__}: {exc}") from None
         return client.get_executor(pure=False), client.close
     if workers <= 1:
         return SerialExecutor(), lambda: None
@@ -89,9 +89,46 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
     ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
     from common.workers import die_with_parent
 
-    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=die_with_parent,
+    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_worker,
                                   initargs=(os.getpid(),))
     return pool, lambda: pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _pool_worker(parent: int) -> None:
+    """Initializer of a local pool's worker: it dies with the driver, and Ctrl-C (sent to the
+    whole process group by a terminal) is the driver's alone, which stops the pool; a worker
+    interrupted too broke the pool's shutdown (a review: a traceback, or a hang)."""
+    import signal
+
+    from common.workers import die_with_parent
+
+    die_with_parent(parent)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def lost_worker(exc: BaseException) -> Optional[str]:
+    """What went wrong when a task's future raised ``exc`` because its worker, not its case,
+    failed (None: the task's own error).
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception of ``future.result()``.
+
+    Returns
+    -------
+    str or None
+        One line for the user.
+    """
+    if isinstance(exc, cf.BrokenExecutor):
+        what = "a sweep worker process died (killed, or out of memory)"
+    elif type(exc).__name__ == "KilledWorker":
+        what = f"the Dask workers that ran a task died too often (KilledWorker: {exc})"
+    elif isinstance(exc, cf.CancelledError):
+        what = "the Dask cluster dropped a task (its scheduler or workers went away)"
+    else:
+        return None
+    return what + "; the finished cases are kept in the journal: run the sweep again with --resume"
 
 
 
@@ -119,159 +156,7 @@ def _call(task, ctx):
     return run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg)
 
 
-#: cases per task while the cost of a case is not yet measured (the first chunk of each worker):
-#: 64 10-orbit cases are ~0.2–2 s of work
-MAX_CHUNK = 64
-#: chunks per worker aimed at over the rest of the sweep (guided: the chunks shrink towards the
-#: end, so that the last ones do not leave workers idle)
-CHUNKS_PER_WORKER = 8
-#: work per task (s) once the cost of a case is measured: at least this, so that the fixed cost
-#: of a task (a few ms of scheduler, client and worker time on Dask) stays a few per cent at any
-#: number of workers and the scheduler sees at most ~10 tasks per second per worker ...
-MIN_TASK_SECONDS = 0.1
-#: ... and at most this, so that progress, the journal and an interruption stay live
-MAX_TASK_SECONDS = 1.0
-
 _WARM = False
-
-
-def chunk_size(n_tasks: int, workers: int, case_seconds: Optional[float] = None,
-               n_total: Optional[int] = None) -> int:
-    """Cases per task when ``n_tasks`` cases remain for ``workers`` workers (a pool or a Dask
-    cluster; the in-process executor runs one case per task).
-
-    ⌈n / (8·workers)⌉: about 8 tasks per worker over what remains (the tail imbalance is then
-    ≤ 1/8 of a worker's remaining share).  Without ``case_seconds`` (the cost of one case on one
-    worker, s; not yet measured) it is clipped to [1, :data:`MAX_CHUNK`]; with it, to the cases
-    that take :data:`MIN_TASK_SECONDS` … :data:`MAX_TASK_SECONDS`, and never above
-    ⌈``n_total`` / workers⌉ (every worker gets a share of a small sweep; ``n_total``: the tasks of
-    the whole sweep, default ``n_tasks``).  See README *Performance* for why this holds at large N.
-
-    Parameters
-    ----------
-    n_tasks : int
-        Tasks still to hand out.
-    workers : int
-        Number of workers.
-    case_seconds : float, optional
-        Measured cost of one case on one worker, s (None: not measured yet).
-    n_total : int, optional
-        Tasks of the whole sweep (default ``n_tasks``).
-
-    Returns
-    -------
-    int
-        Cases per task.
-    """
-    n_workers = max(1, workers)
-    c = -(-n_tasks // (CHUNKS_PER_WORKER * n_workers))
-    if case_seconds is None or not case_seconds > 0:
-        return max(1, min(MAX_CHUNK, c))
-    lo = max(1, math.ceil(MIN_TASK_SECONDS / case_seconds))
-    hi = max(lo, int(MAX_TASK_SECONDS / case_seconds))
-    return max(1, min(max(c, lo), hi, -(-(n_total or n_tasks) // n_workers)))
-
-
-class Chunker:
-    """The tasks handed out in chunks as they are submitted (guided self-scheduling).
-
-    Each chunk holds consecutive case tasks of one base (a margin search alone).  Its size is
-    ``size`` when given, else :func:`chunk_size` of the tasks still to hand out with the cost of
-    a case measured so far: ``workers`` × the time since the first chunk came back / the cases
-    that came back since (the throughput of the whole run, so it includes every per-task cost;
-    before every worker can have returned a chunk, unmeasured).  The results do not depend on
-    the chunking.
-
-    Parameters
-    ----------
-    tasks : list of tuple
-        Tasks ``("case", base, index)`` or ``("margin", base, direction)``, in order.
-    workers : int
-        Number of workers (Dask: worker threads).
-    size : int, optional
-        Fixed cases per chunk (None: guided, as above).
-    """
-
-    def __init__(self, tasks: list, workers: int, size: Optional[int] = None):
-        self._tasks, self._pos = tasks, 0
-        self.workers = max(1, workers)
-        self.size = size
-        self._first_back: Optional[float] = None
-        self._cases_since = 0
-        self._chunks_since = 0
-
-    def case_seconds(self) -> Optional[float]:
-        """Measured cost of one case on one worker.
-
-        Returns
-        -------
-        float or None
-            Cost of one case, s; None before there is a measure.
-        """
-        if self._first_back is None or self._chunks_since < self.workers or self._cases_since == 0:
-            return None
-        return self.workers * (time.monotonic() - self._first_back) / self._cases_since
-
-    def returned(self, n_tasks: int) -> None:
-        """Record that a chunk came back.
-
-        Parameters
-        ----------
-        n_tasks : int
-            Tasks in the chunk.
-        """
-        if self._first_back is None:
-            self._first_back = time.monotonic()
-        else:
-            self._chunks_since += 1
-            self._cases_since += n_tasks
-
-    def next(self) -> Optional[list]:
-        """The next chunk.
-
-        Returns
-        -------
-        list of tuple or None
-            Its tasks, or None when every task was handed out.
-        """
-        tasks, pos = self._tasks, self._pos
-        if pos >= len(tasks):
-            return None
-        size = self.size or chunk_size(len(tasks) - pos, self.workers, self.case_seconds(), len(tasks))
-        chunk = [tasks[pos]]
-        pos += 1
-        if chunk[0][0] == "case":
-            while (pos < len(tasks) and len(chunk) < size and tasks[pos][0] == "case"
-                   and tasks[pos][1] == chunk[0][1]):
-                chunk.append(tasks[pos])
-                pos += 1
-        self._pos = pos
-        return chunk
-
-
-def make_chunks(tasks: list, size: int) -> list[list]:
-    """Consecutive case tasks of one base in lists of ``size``; each margin search alone.
-
-    Parameters
-    ----------
-    tasks : list of tuple
-        Tasks ``("case", base, index)`` or ``("margin", base, direction)``, in order.
-    size : int
-        Most case tasks per chunk.
-
-    Returns
-    -------
-    list of list
-        The chunks, in order.
-    """
-    chunks: list[list] = []
-    for t in tasks:
-        if (t[0] == "case" and chunks and len(chunks[-1]) < size and chunks[-1][0][0] == "case"
-                and chunks[-1][0][1] == t[1]):
-            chunks[-1].append(t)
-        else:
-            chunks.append([t])
-    return chunks
 
 
 #: glibc ``mallopt`` parameter numbers
@@ -359,11 +244,35 @@ def _local_context(ctx: BaseContext) -> BaseContext:
     return local
 
 
-def _call_chunk(chunk, ctx) -> list[dict]:
-    """Run the tasks of one chunk in order; returns their records."""
+def _call_chunk(chunk, ctx, code: Optional[str] = None) -> list[dict]:
+    """Run the tasks of one chunk in order; returns their records.  ``code``: the driver's
+    :func:`common.provenance.code_identity`, checked on a Dask worker (started elsewhere, it may
+    run other acmm code, whose rows would enter the table unnoticed: a review)."""
+    if code is not None:
+        same_code(code)
     _warm_worker()
     ctx = _local_context(ctx)
     return [_call(t, ctx) for t in chunk]
+
+
+def same_code(code: str) -> None:
+    """Check that this (worker) process runs the code of the driver.
+
+    Parameters
+    ----------
+    code : str
+        The driver's :func:`common.provenance.code_identity`.
+
+    Raises
+    ------
+    ConfigError
+        This process runs other code.
+    """
+    from common.provenance import code_identity
+
+    if code != code_identity():
+        raise ConfigError(f"--scheduler: a Dask worker runs other acmm code ({code_identity()}) than this "
+                          f"command ({code}): start the workers from the same installation")
 
 
 def _scheduler_workers(executor, default: int) -> int:

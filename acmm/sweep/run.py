@@ -14,10 +14,12 @@ from common.runlock import locked_stage
 from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
-from acmm.sweep.executors import (Chunker, SerialExecutor, _call_chunk, _remote_contexts, _scheduler_workers,
-                                  _task_key, _tasks, make_executor)
+from acmm.sweep.chunking import Chunker
+from acmm.sweep.executors import (SerialExecutor, _call_chunk, _remote_contexts, _scheduler_workers,
+                                  _task_key, _tasks, lost_worker, make_executor)
 from acmm.sweep.journal import GroupCommitJournal, read_journal
-from common.errors import ConfigError
+from common.errors import ConfigError, OutputError
+from common.signals import hold_interrupts, release_interrupts
 from acmm.sweep.output import _split, write_results
 
 
@@ -151,7 +153,7 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     n_workers = 1 if serial else _scheduler_workers(executor, workers)
     chunks = Chunker(tasks, n_workers, chunk if chunk is not None else (1 if serial else None))
     window = 1 if serial else max(4, 2 * n_workers)
-    remote = _remote_contexts(executor, contexts)
+    remote = _task_arguments(executor, contexts)
     n_new = _drive(sweep, executor, close, journal, chunks, remote, window, done, total,
                    progress, after_record, snapshot_interval)
     close()
@@ -160,6 +162,17 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
                                wall_time=time.perf_counter() - t0)
     rows, margins = _split(sweep, list(done.values()))
     return SweepResult(sweep, path, rows, margins, n_new, n_resumed, time.perf_counter() - t0, True, figs)
+
+
+def _task_arguments(executor, contexts: dict) -> dict:
+    """Base label → the arguments of its chunks' tasks after the chunk: the base context (on
+    Dask scattered) and, on Dask, whose workers may run other code, this code's identity."""
+    remote = _remote_contexts(executor, contexts)
+    if getattr(executor, "_client", None) is None:
+        return {k: (v,) for k, v in remote.items()}
+    from common.provenance import code_identity
+
+    return {k: (v, code_identity()) for k, v in remote.items()}
 
 
 def _resumed(sweep: Sweep, jpath: Path, key: str) -> dict:
@@ -265,13 +278,13 @@ def _drive(sweep: Sweep, executor, close, journal, chunks: Chunker, remote: dict
                 if c is None:
                     exhausted = True
                     break
-                pending[executor.submit(_call_chunk, c, remote[c[0][1]])] = c
+                pending[executor.submit(_call_chunk, c, *remote[c[0][1]])] = c
             if not pending:
                 break
             finished, _ = cf.wait(list(pending), return_when=cf.FIRST_COMPLETED)
             for fut in finished:
                 pending.pop(fut)
-                recs = fut.result()
+                recs = _records(fut)
                 chunks.returned(len(recs))
                 journal.append_many(recs)
                 for rec in recs:
@@ -286,14 +299,30 @@ def _drive(sweep: Sweep, executor, close, journal, chunks: Chunker, remote: dict
         snaps.check()
         complete = True
     finally:
-        journal.close()
-        snaps.wait()
-        if not complete:
-            try:
-                for fut in list(pending):
-                    fut.cancel()
-            finally:
-                close()
-                if done:
-                    write_results(sweep, list(done.values()), complete=False)
+        held = hold_interrupts()   # a second Ctrl-C broke the pool's shutdown: it hung (a review)
+        try:
+            journal.close()
+            snaps.wait()
+            if not complete:
+                try:
+                    for fut in list(pending):
+                        fut.cancel()
+                finally:
+                    close()
+                    if done:
+                        write_results(sweep, list(done.values()), complete=False)
+        finally:
+            release_interrupts(held)
     return n_new
+
+
+def _records(fut) -> list:
+    """The records of a finished chunk; a worker lost under it (not the case's own error) is
+    one clear :class:`OutputError`."""
+    try:
+        return fut.result()
+    except BaseException as exc:
+        why = lost_worker(exc)
+        if why is None:
+            raise
+        raise OutputError(why) from None
