@@ -77,16 +77,26 @@ def limit(name: str) -> float:
     -------
     float
         The limit, in the unit of the table above (bytes, samples, 1, s, ...).
+
+    Raises
+    ------
+    ConfigError
+        The variable is set to something else than a positive finite number (it was ignored
+        without a word: a review).
     """
     raw = os.environ.get(f"ACMM_LIMIT_{name}")
-    if raw is not None:
-        try:
-            value = float(raw)
-            if value > 0:
-                return value
-        except ValueError:
-            pass
-    return DEFAULTS[name]
+    if raw is None or not raw.strip():
+        return DEFAULTS[name]
+    try:
+        value = float(raw)
+    except ValueError:
+        value = float("nan")
+    if not 0 < value < float("inf"):
+        from common.errors import ConfigError
+
+        raise ConfigError(f"ACMM_LIMIT_{name}: must be a positive number (got {raw!r}); unset it for the "
+                          f"default {DEFAULTS[name]:.6g}")
+    return value
 
 
 def how_to_raise(name: str) -> str:

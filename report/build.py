@@ -166,6 +166,7 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
     as their tasks finished, beside the previous report's pages: a review)."""
     g, rep, timings = _run_graph(Path(root) if root is not None else None, staged, fast, rerun, robustness,
                                  jobs, say)
+    jobs = timings.pop("processes")
     _add(rep, "printed", sec_printed.build, list(rep.ledger))
     # determinism
     man_path = out / "manifest.json"
@@ -263,6 +264,7 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
     timings.update(g.timings)
     timings.update({f"section {k}": v for k, v in sections.items()})
     timings["tasks"] = stats
+    timings["processes"] = min(jobs, len(stages) + len(parts))      # run_tasks forks no more
     return g, rep, timings
 
 

@@ -92,13 +92,23 @@ def default_jobs() -> int:
     -------
     int
         Number of worker processes, at least 1.
+
+    Raises
+    ------
+    ConfigError
+        ``ACMM_REPORT_JOBS`` is set to something else than a whole number 1–1024.
     """
     import threading
 
+    env = os.environ.get("ACMM_REPORT_JOBS", "").strip()
+    if env and not (env.isdigit() and 1 <= int(env) <= 1024):
+        from common.errors import ConfigError
+
+        raise ConfigError(f"ACMM_REPORT_JOBS: must be a whole number from 1 to 1024 (got {env!r}); unset it for "
+                          "the default")
     if not hasattr(os, "fork"):
         return 1
-    env = os.environ.get("ACMM_REPORT_JOBS", "").strip()
-    if env.isdigit() and int(env) > 0:
+    if env:
         return int(env)
     if threading.active_count() > 1:
         return 1

@@ -3,6 +3,7 @@ forked worker processes as one after the other, and one clear error with no outp
 from __future__ import annotations
 
 import os
+import re
 import time
 
 import numpy as np
@@ -401,6 +402,12 @@ def test_default_jobs(monkeypatch):
 
     monkeypatch.setenv("ACMM_REPORT_JOBS", "3")
     assert default_jobs() == 3
+    from common.errors import ConfigError
+
+    for bad in ("0", "abc", "-1", "1.5", "5000"):         # were ignored without a word (a review)
+        monkeypatch.setenv("ACMM_REPORT_JOBS", bad)
+        with pytest.raises(ConfigError, match=f"ACMM_REPORT_JOBS: must be a whole number from 1 to 1024 \\(got '{re.escape(bad)}'\\)"):
+            default_jobs()
     monkeypatch.delenv("ACMM_REPORT_JOBS")
     assert default_jobs() == (1 if threading.active_count() > 1 else max(1, min(2, os.cpu_count() or 1)))
     stop = threading.Event()
@@ -465,3 +472,18 @@ def test_a_results_file_rewritten_while_the_report_runs_is_refused(tmp_path, mon
     assert res.exit_code == 4, res.output
     assert res.output.strip().splitlines()[-1].startswith("error: acmm design:") and "rewritten" in res.output
     assert not [p for p in out.rglob("*") if p.is_file()]
+
+
+def test_a_work_limit_variable_that_is_no_number_is_refused(monkeypatch):
+    """ACMM_LIMIT_* set to a non-number, zero, a negative or infinity was ignored without a word."""
+    from common.errors import ConfigError
+    from common.limits import DEFAULTS, limit
+
+    monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", "5e6")
+    assert limit("SIM_SAMPLES") == 5e6
+    for bad in ("lots", "0", "-3", "inf", "nan"):
+        monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", bad)
+        with pytest.raises(ConfigError, match=f"ACMM_LIMIT_SIM_SAMPLES: must be a positive number \\(got '{bad}'\\)"):
+            limit("SIM_SAMPLES")
+    monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", " ")
+    assert limit("SIM_SAMPLES") == DEFAULTS["SIM_SAMPLES"]
