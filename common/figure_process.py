@@ -115,6 +115,7 @@ class _Server:
     def __init__(self, jobs: int, status: int) -> None:
         self.jobs, self.status = jobs, status
         self.running: dict[int, int] = {}          # pid → read end of its result pipe
+        self.figure: dict[int, str] = {}           # pid → the figure (function) it draws
         self.reserved: dict[str, tuple[int, int]] = {}   # key → (pid, write end of its job pipe)
         self.written: list[str] = []
         self.errors: list[str] = []
@@ -133,14 +134,17 @@ class _Server:
         with os.fdopen(fd, "rb") as f:
             data = f.read()
         _, st = os.waitpid(pid, 0)
+        code = os.waitstatus_to_exitcode(st)
+        how = f"killed by signal {-code}" if code < 0 else f"exit {code}"
+        failed = f"a figure writer process failed ({self.figure.pop(pid, 'figure')}: {how})"
         try:
-            kind, val = pickle.loads(data) if data else ("error", "a figure writer process failed")
+            kind, val = pickle.loads(data) if data else ("error", failed)
         except Exception:  # noqa: BLE001 (a writer killed while it sent its result)
-            kind, val = "error", "a figure writer process failed"
-        if kind == "ok" and os.waitstatus_to_exitcode(st) == 0:
+            kind, val = "error", failed
+        if kind == "ok" and code == 0:
             self.written.extend(val)
         elif not quiet:
-            self.errors.append(val if kind == "error" else "a figure writer process failed")
+            self.errors.append(val if kind == "error" else failed)
 
     def join_drawing(self) -> None:
         """Join every writer that has its job (not the reserved ones still waiting)."""
@@ -176,6 +180,7 @@ class _Server:
         """Hand ``job`` to the writer reserved for ``key``, or fork one (within the slots)."""
         if key in self.reserved:
             pid, jw = self.reserved.pop(key)
+            self.figure[pid] = key
             try:
                 send_frame(jw, job)
                 return
@@ -188,6 +193,7 @@ class _Server:
             self.join(next(p for p in self.running if p not in waiting))
         pid, fd, _ = _fork_writer(job, self._close_in_child())
         self.running[pid] = fd
+        self.figure[pid] = key or "figure"
 
 
 def _serve(jobs: int, status: int, warm: str | None = None) -> None:

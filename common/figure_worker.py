@@ -217,7 +217,8 @@ def finish() -> list[Path]:
         _kill_worker(w)         # rolls its folder back (common.outputs)
         raise
     if not errors and (code != 0 or w.failed is not None):
-        errors = ["cannot write the figures: the figure process failed"]
+        how = f" (killed by signal {-code})" if code < 0 else (f" (exit {code})" if code else "")
+        errors = [f"cannot write the figures: the figure process failed{how}"]
     if errors:
         _stop_writers(w.pid)    # a killed worker's writers may still run: none may land later
     return _report(written, errors)
