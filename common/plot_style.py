@@ -50,6 +50,49 @@ def files_only_backend() -> None:
     os.environ["MPLBACKEND"] = "Agg"
     if "matplotlib" in sys.modules:
         sys.modules["matplotlib"].use("Agg", force=True)
+    elif "MPLCONFIGDIR" not in os.environ and not _writable_dir(_default_config_dir()):
+        # no writable home: matplotlib made a new /tmp/matplotlib-* folder in every process
+        # (never removed: the forked figure processes leave through os._exit) and warned twice;
+        # one folder per user, kept, holds its font cache across runs
+        import tempfile
+
+        own = os.path.join(tempfile.gettempdir(), f"acmm-matplotlib-{os.getuid() if hasattr(os, 'getuid') else 0}")
+        if _writable_dir(own, private=True):
+            os.environ["MPLCONFIGDIR"] = own
+
+
+def _default_config_dir() -> str:
+    """matplotlib's configuration folder on this machine when ``MPLCONFIGDIR`` is not set."""
+    import os
+    import sys
+    from pathlib import Path
+
+    try:
+        home = Path.home()
+    except (KeyError, RuntimeError):                  # no home in the password database
+        return ""
+    if sys.platform.startswith(("linux", "freebsd")):
+        return os.path.join(os.environ.get("XDG_CONFIG_HOME") or str(home / ".config"), "matplotlib")
+    return str(home / ".matplotlib")
+
+
+def _writable_dir(path: str, private: bool = False) -> bool:
+    """Whether ``path`` is (made) a writable folder; ``private``: made with mode 0700 and owned
+    by this user (a shared temporary folder)."""
+    import os
+
+    if not path:
+        return False
+    try:
+        os.makedirs(path, mode=0o700 if private else 0o777, exist_ok=True)
+        st = os.lstat(path)
+    except OSError:
+        return False
+    import stat
+
+    if private and (not stat.S_ISDIR(st.st_mode) or (hasattr(os, "getuid") and st.st_uid != os.getuid())):
+        return False
+    return os.access(path, os.W_OK)
 
 
 def agg_pyplot(force: bool = False):

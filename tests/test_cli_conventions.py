@@ -480,3 +480,23 @@ def test_any_mplbackend_still_writes_the_figures(tmp_path, backend):
                           timeout=300, check=False)
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
     assert list((tmp_path / "runs").glob("*/sweep_*.png")), sorted((tmp_path / "runs").rglob("*"))
+
+
+def test_without_a_writable_home_matplotlib_leaves_no_folder_per_run(tmp_path):
+    """matplotlib made a /tmp/matplotlib-* folder in every run (the forked figure processes
+    leave without its cleanup) and warned twice; one private folder per user is used instead."""
+    import os
+    import subprocess
+    import sys
+
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    env = {k: v for k, v in os.environ.items() if k not in ("MPLCONFIGDIR", "XDG_CONFIG_HOME", "XDG_CACHE_HOME")}
+    env.update({"PYTHONPATH": str(Path(__file__).resolve().parents[1]), "HOME": "/proc/nonexistent",
+                "TMPDIR": str(tmp), "OPENBLAS_NUM_THREADS": "1"})
+    for name in ("a", "b"):
+        done = subprocess.run([sys.executable, "-m", "cli.acmm_app", "design", "mb3", f"name={name}"], cwd=tmp_path,
+                              capture_output=True, text=True, env=env, timeout=300, check=False)
+        assert done.returncode == 0 and done.stderr == "", done.stderr
+        assert (tmp_path / "runs" / name / "design_poles.png").exists()
+    assert [p.name for p in tmp.iterdir()] == [f"acmm-matplotlib-{os.getuid()}"]
