@@ -404,7 +404,7 @@ def test_sigkill_then_resume_equals_uninterrupted(tmp_path):
 
 def test_resume_refuses_a_journal_of_another_config(tmp_path):
     run_sweep(_sweep_yaml(tmp_path, "other", n_runs=2), workers=1)
-    with pytest.raises(ConfigError, match="different sweep configuration"):
+    with pytest.raises(ConfigError, match=r"different sweep configuration.*\(changed since: sweep\.seed: \d+ → 12\)$"):
         run_sweep(_sweep_yaml(tmp_path, "other", n_runs=2, seed=12), workers=1, resume=True)
 
 

@@ -126,6 +126,33 @@ class Sweep:
              "bases": {b.label: b.config.model_dump(mode="json") for b in self.bases}}
         return yaml.safe_dump(d, sort_keys=False)
 
+    def changed_since(self, config_yaml: Path) -> list[str]:
+        """The settings that differ from an earlier run's ``config.yaml`` (``key: old → new``),
+        leaving out those that do not change the cases (workers, description, output).
+
+        Parameters
+        ----------
+        config_yaml : Path
+            The run folder's ``config.yaml`` of the earlier run.
+
+        Returns
+        -------
+        list of str
+            The differences, in the order of the config (empty: the file is unreadable, or the
+            same settings).
+        """
+        try:
+            old = yaml.safe_load(Path(config_yaml).read_text(encoding="utf-8"))
+        except (OSError, ValueError, yaml.YAMLError):
+            return []
+        new = yaml.safe_load(self.to_yaml())
+        flat_old, flat_new = _flatten(old), _flatten(new)
+        ignored = ("sweep_file.sweep.workers", "sweep_file.description", "sweep_file.output")
+        keys = list(dict.fromkeys([*flat_new, *flat_old]))
+        return [f"{k.replace('sweep_file.', '', 1)}: {flat_old.get(k, '(unset)')!s} → {flat_new.get(k, '(unset)')!s}"
+                for k in keys if flat_old.get(k) != flat_new.get(k) and not k.startswith(ignored)
+                and "output" not in k.split(".")[2:3] and not k.endswith(".description")]
+
     def results_key(self) -> str:
         """Hash of everything that determines the case results (not workers, figures, description).
 
@@ -285,3 +312,13 @@ def load_sweep(path: str | Path, overrides: list[str] | None = None) -> Sweep:
     data, p = read_yaml(path)
     sw = parse_sweep(apply_overrides(data, overrides), source=str(p), directory=p.parent)
     return remember_origin(sw, str(p), overrides)
+
+
+def _flatten(tree, prefix: str = "") -> dict:
+    """``{"a.b.c": value}`` of a nested mapping (lists are values)."""
+    if not isinstance(tree, dict):
+        return {prefix: tree} if prefix else {}
+    out: dict = {}
+    for k, v in tree.items():
+        out.update(_flatten(v, f"{prefix}.{k}" if prefix else str(k)))
+    return out

@@ -186,7 +186,15 @@ def _resumed(sweep: Sweep, jpath: Path, key: str) -> dict:
     """
     spec, done = sweep.spec, {}
     n_cases = spec.n_cases()
-    for rec in read_journal(jpath, key, {b.label for b in sweep.bases}):
+    try:
+        records = read_journal(jpath, key, {b.label for b in sweep.bases})
+    except ConfigError as exc:
+        if "different sweep configuration" not in str(exc):
+            raise
+        changed = sweep.changed_since(jpath.parent / "config.yaml")
+        raise ConfigError(f"{exc} (changed since: {'; '.join(changed[:4])}{' …' if len(changed) > 4 else ''})"
+                          if changed else str(exc)) from None
+    for rec in records:
         task = _task_key(rec)
         if (task[0] == "case" and not 0 <= task[2] < n_cases) or (task[0] == "margin" and spec.margin is None):
             raise ConfigError(f"{jpath}: a record of {task[0]} {task[2]!r} of {task[1]}, which this sweep "
