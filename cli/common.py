@@ -7,7 +7,9 @@ import sys
 
 import typer
 
-from common.errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_NUMERICAL, EXIT_OUTPUT, AcmmError
+from cli.failures import (EXIT_PIPE_CLOSED, _interrupt_behind, _note_compiled_cache, _note_warnings,
+                          _plain_failure, _quiet_stdout)
+from common.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError
 
 
 def fail(message: str, code: int = EXIT_INPUT) -> None:
@@ -34,54 +36,6 @@ def fail(message: str, code: int = EXIT_INPUT) -> None:
 
 
 MAX_MESSAGE = 600
-
-
-def _plain_failure(exc: BaseException):
-    """(message, exit code) for an exception that is not an :class:`AcmmError` but still a
-    user-facing failure; ``None`` for a genuine bug (left to propagate)."""
-    import numpy as np
-
-    if isinstance(exc, RecursionError):
-        return "input nested too deeply to process", EXIT_INPUT
-    if isinstance(exc, MemoryError):
-        return "out of memory (reduce the problem size)", EXIT_OUTPUT
-    if isinstance(exc, (FloatingPointError, OverflowError, ZeroDivisionError, np.linalg.LinAlgError)):
-        return f"numerical failure: {type(exc).__name__}: {exc}", EXIT_NUMERICAL
-    if isinstance(exc, OSError):
-        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
-        return f"I/O error: {exc.strerror or exc}{where}", EXIT_OUTPUT
-    return None
-
-
-def _note_warnings(caught) -> None:
-    """One summary line for the numpy/scipy warnings a successful command raised (never raw)."""
-    if not caught:
-        return
-    first = caught[0]
-    typer.echo(f"note: {len(caught)} distinct numerical warning(s) during the run; first: "
-               f"{first.category.__name__}: {' '.join(str(first.message).split())}", err=True)
-
-
-def _note_compiled_cache() -> None:
-    """A ``note:`` line for each reason numba could not save a kernel it compiled in this run."""
-    cache = sys.modules.get("acmm.compiled_cache")       # (not imported: nothing was compiled)
-    for line in cache.write_error_notes() if cache is not None else []:
-        typer.echo(f"note: {line}", err=True)
-
-
-#: exit code when the reader of standard output closed it (128 + SIGPIPE, as a C tool killed by it)
-EXIT_PIPE_CLOSED = 141
-
-
-def _quiet_stdout() -> None:
-    """Point stdout at /dev/null, so that flushing it at exit raises nothing more."""
-    import os
-
-    try:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-    except (OSError, ValueError):
-        pass
 
 
 def user_errors(fn):
@@ -123,6 +77,9 @@ def user_errors(fn):
                 _quiet_stdout()         # of the results, which the stage wrote before printing
                 sys.exit(EXIT_PIPE_CLOSED)
             except Exception as exc:  # noqa: BLE001 (re-raised unless a known kind of failure)
+                signal = _interrupt_behind(exc)
+                if signal is not None:      # Python wrapped it (a Ctrl-C in a class body: RuntimeError)
+                    interrupted(signal)
                 plain = _plain_failure(exc)
                 if plain is None:
                     raise
@@ -225,7 +182,10 @@ class ExitCodeGroup(TyperGroup):
         click = _click()
 
         if not standalone_mode:
-            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+            try:
+                return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+            except _Interrupted as exc:          # the caller's own KeyboardInterrupt, as click gives it
+                raise exc.signal from None
         try:
             rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except click.exceptions.NoArgsIsHelpError as exc:
@@ -298,7 +258,7 @@ class ExitCodeGroup(TyperGroup):
             raise _Interrupted(exc) from exc
 
 
-class _Interrupted(Exception):
+class _Interrupted(BaseException):
     """A Ctrl-C / SIGTERM / SIGHUP that arrived while click parsed, carried past typer (which
     maps a ``KeyboardInterrupt`` there to exit 130 without a word) to :func:`interrupted`."""
 

@@ -353,6 +353,8 @@ class _Worker:
         os.close(self.jobs)
         got = _recv_framed(self.status)
         os.close(self.status)
+        if got is None:         # the worker died (killed): its writers, orphaned, may still write;
+            _kill_group(self.pid)   # its pid is not reaped yet, so the group is still this one
         _, st = os.waitpid(self.pid, 0)
         written, errors = got if got is not None else ([], [])
         return written, errors, os.waitstatus_to_exitcode(st)
@@ -361,6 +363,7 @@ class _Worker:
         """Wait until the jobs sent so far are written; returns (files written, error messages)."""
         self.send(FRAME_HEADER.pack(_BARRIER))
         got = _recv_framed(self.status)
-        if got is None:
+        if got is None:         # the worker died (not reaped yet): no orphaned writer may land later
+            _kill_group(self.pid)
             return [], ["cannot write the figures: the figure process failed"]
         return got

@@ -219,8 +219,6 @@ def finish() -> list[Path]:
     if not errors and (code != 0 or w.failed is not None):
         how = f" (killed by signal {-code})" if code < 0 else (f" (exit {code})" if code else "")
         errors = [f"cannot write the figures: the figure process failed{how}"]
-    if errors:
-        _stop_writers(w.pid)    # a killed worker's writers may still run: none may land later
     return _report(written, errors)
 
 
@@ -259,21 +257,7 @@ def flush() -> list[Path]:
         _WORKER = None
         _kill_worker(w)
         raise
-    if got[1]:
-        _stop_writers(w.pid)
     return _report(*got)
-
-
-def _stop_writers(pid: int) -> None:
-    """SIGKILL what is left of a worker's process group once a figure failed (never raises): a
-    writer orphaned by a killed worker would otherwise finish its figure after the stage ended
-    (its temporary file is then removed with the stage's, :func:`common.outputs.stage_outputs`)."""
-    import signal
-
-    try:
-        os.killpg(pid, signal.SIGKILL)
-    except OSError:             # the group is gone: every writer has ended
-        pass
 
 
 def _kill_worker(w) -> None:

@@ -47,33 +47,31 @@ def set_parent_death_signal() -> bool:
 
 
 #: interrupts received while held (:func:`hold_interrupts`), handled at the release;
-#: ``unwinding``: the time (monotonic s) an interrupt was raised, the command then unwinding
-_HELD = {"depth": 0, "pending": [], "unwinding": None}
+#: ``raised``: when (monotonic s) the handler last raised one
+_HELD = {"depth": 0, "pending": [], "raised": None}
 
-#: an interrupt this long (s) after the one the command is unwinding from stops it at once
-FORCE_AFTER = 2.0
+#: an interrupt this soon (s) after the one raised before it is dropped
+REPEAT_WINDOW = 2.0
 
 
 def _raise_terminated(signum, frame) -> None:
     """The handler: KeyboardInterrupt for SIGINT, :class:`common.errors.Terminated` for the
     others; recorded instead while :func:`hold_interrupts` is in force.
 
-    Once one is raised the command unwinds (rollback, its pool shut down) and exits: a second
-    one soon after is dropped — raised inside that cleanup (in ``threading``'s lock handling,
-    in a pool's shutdown) it broke it, a ``RuntimeError`` traceback or a hang (a review) — and
-    one more than :data:`FORCE_AFTER` s later stops the process at once, as a user pressing
-    Ctrl-C again expects."""
+    One arriving within :data:`REPEAT_WINDOW` s of the last one raised is dropped: the command is
+    unwinding from that one, and a second exception raised inside its cleanup (in
+    ``threading``'s lock handling, in a pool's shutdown) broke it — "RuntimeError: release
+    unlocked lock", or a hang (a review).  A later one is raised as usual (also when the first
+    was swallowed somewhere, e.g. in an at-fork hook, and the command went on)."""
     import time
 
-    if _HELD["unwinding"] is not None:
-        if time.monotonic() - _HELD["unwinding"] < FORCE_AFTER:
-            return
-        os.write(2, b"interrupted again while cleaning up: stopped at once\n")
-        os._exit(128 + int(signum))
     if _HELD["depth"]:                       # in a step that must not stop halfway: later
         _HELD["pending"].append(int(signum))
         return
-    _HELD["unwinding"] = time.monotonic()
+    now = time.monotonic()
+    if _HELD["raised"] is not None and now - _HELD["raised"] < REPEAT_WINDOW:
+        return
+    _HELD["raised"] = now
     if signum == signal.SIGINT:
         raise KeyboardInterrupt
     from common.errors import Terminated

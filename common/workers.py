@@ -33,3 +33,44 @@ def die_with_parent(parent: int, interval: float = 1.0) -> None:
     """
     _die_with_parent(parent)            # PR_SET_PDEATHSIG; SIGTERM/SIGHUP back to their defaults
     threading.Thread(target=_watch, args=(parent, interval), daemon=True, name="parent-watch").start()
+
+
+def pool_worker(parent: int) -> None:
+    """Set up a local pool's worker (the sweep's, the report's; call it first in the pool's
+    ``initializer``): Ctrl-C, which a terminal sends to the whole process group, is the parent's
+    alone, which then stops the pool (a worker interrupted too printed a traceback or broke the
+    pool's shutdown: a review), and the worker dies with the parent (:func:`die_with_parent`).
+    The parent forks it with the interrupts held (:func:`common.signals.hold_interrupts`, a mask
+    that a fork inherits), so no Ctrl-C reaches it before this; they are unblocked here.
+
+    Parameters
+    ----------
+    parent : int
+        Process id of the parent (the pool's owner).
+    """
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent(parent)             # SIGTERM and SIGHUP back to their default action
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
+
+
+def stop_pool(pool, abort: bool = False) -> None:
+    """Shut a ``ProcessPoolExecutor`` down; with ``abort`` (the parent was interrupted or failed)
+    its workers are killed first instead of finishing tasks whose results nobody will read.
+
+    Parameters
+    ----------
+    pool : concurrent.futures.ProcessPoolExecutor
+        The pool.
+    abort : bool, optional
+        Kill the running tasks.
+    """
+    if abort:
+        for p in list((getattr(pool, "_processes", None) or {}).values()):
+            try:
+                p.kill()
+            except (OSError, ValueError, AttributeError):   # already gone, or closed
+                pass
+    pool.shutdown(wait=True, cancel_futures=True)

@@ -52,16 +52,24 @@ def publish(pairs: list[tuple[Path, Path]], backup: Path) -> None:
                 done.append((target, old, False))
             os.replace(staged, target)
         except OSError as exc:
-            _undo(done)
-            raise OutputError(f"cannot write {target}: {exc.strerror or exc}; the report folder was left as "
-                              "it was") from None
+            if _undo(done):
+                raise OutputError(f"cannot write {target}: {exc.strerror or exc}; the report folder was left "
+                                  "as it was") from None
+            kept = backup.parent.parent / f".previous-report-{os.getpid()}"
+            try:                        # out of the staging folder, which the caller removes
+                os.replace(backup, kept)
+            except OSError:
+                kept = backup
+            raise OutputError(f"cannot write {target}: {exc.strerror or exc}; and not every file of the previous "
+                              f"report could be put back: they are in {kept}") from None
         if old is None:
             done.append((target, None, True))
 
 
-def _undo(done: list[tuple[Path, Path | None, bool]]) -> None:
+def _undo(done: list[tuple[Path, Path | None, bool]]) -> bool:
     """Put the replaced files back (newest first); a new file whose target had none is removed.
-    Best effort: a file that cannot be restored stays in the backup folder."""
+    Returns False when a previous file could not be put back (it stays in the backup folder)."""
+    whole = True
     for target, old, placed in reversed(done):
         try:
             if old is not None:
@@ -69,4 +77,5 @@ def _undo(done: list[tuple[Path, Path | None, bool]]) -> None:
             elif placed:
                 os.unlink(target)
         except OSError:
-            pass
+            whole = whole and old is None
+    return whole

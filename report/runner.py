@@ -35,6 +35,8 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 from common.errors import AcmmError
+from common.signals import hold_interrupts, release_interrupts
+from common.workers import stop_pool
 
 
 def _no_args(done: dict) -> tuple:
@@ -229,7 +231,11 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
                 waiting.remove(t)
                 sys.stdout.flush()
                 sys.stderr.flush()
-                running[pool.submit(_call, t.fn, t.args(done))] = t
+                held = hold_interrupts()    # a worker forked by this submit inherits the held mask
+                try:
+                    running[pool.submit(_call, t.fn, t.args(done))] = t
+                finally:
+                    release_interrupts(held)
             finished: set = set()
             if not busy:
                 finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
@@ -240,7 +246,11 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
             for fut in finished:
                 finish(running.pop(fut), _result(fut))
     except BaseException:
-        pool.shutdown(wait=True, cancel_futures=True)
+        held = hold_interrupts()           # a second Ctrl-C must not break the shutdown
+        try:
+            stop_pool(pool, abort=True)
+        finally:
+            release_interrupts(held)
         raise
     pool.shutdown(wait=True)
 
@@ -253,11 +263,11 @@ WORKER_CACHE: dict = {}
 
 
 def _worker_init(parent: int) -> None:
-    from common.workers import die_with_parent
+    from common.workers import pool_worker
 
+    pool_worker(parent)                # Ctrl-C is the parent's; dies with it
     WORKER_CACHE.clear()
     os.environ["ACMM_FORK"] = "0"      # the pool uses the cores: no stage forks a child of its own
-    die_with_parent(parent)
 
 
 def _call(fn, args):

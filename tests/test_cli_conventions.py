@@ -500,3 +500,51 @@ def test_without_a_writable_home_matplotlib_leaves_no_folder_per_run(tmp_path):
         assert done.returncode == 0 and done.stderr == "", done.stderr
         assert (tmp_path / "runs" / name / "design_poles.png").exists()
     assert [p.name for p in tmp.iterdir()] == [f"acmm-matplotlib-{os.getuid()}"]
+
+
+def _interrupting_app():
+    import typer
+
+    from cli.common import ExitCodeGroup, user_errors
+
+    app = typer.Typer(cls=ExitCodeGroup, add_completion=False)
+
+    def interrupt_while_parsing(value):
+        if value == "now":
+            raise KeyboardInterrupt
+        return value
+
+    @app.command()
+    @user_errors
+    def wrapped(when: str = typer.Option("later", callback=interrupt_while_parsing)) -> None:
+        """Python wraps a Ctrl-C that lands in a class body (``__set_name__``) in a RuntimeError."""
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise RuntimeError("Error calling __set_name__ on '_deprecated_property'") from exc
+
+    @app.command()
+    def other() -> None:
+        """A second command, so that the first is a subcommand."""
+
+    return app
+
+
+def test_an_interrupt_wrapped_in_another_exception_is_still_an_interrupt():
+    """A Ctrl-C at ~0.3 s of `acmm report` (matplotlib's import) gave a traceback with exit 1."""
+    from typer.testing import CliRunner
+
+    res = CliRunner().invoke(_interrupting_app(), ["wrapped"])
+    assert res.exit_code == 130 and res.output.strip() == "interrupted", res.output
+
+
+def test_an_interrupt_while_parsing_reaches_a_non_standalone_caller_as_keyboardinterrupt():
+    """ExitCodeGroup carries it past typer as _Interrupted; a caller of main(standalone_mode=False)
+    gets the KeyboardInterrupt back (not an Exception its `except Exception` would swallow)."""
+    from typer.main import get_command
+
+    with pytest.raises(KeyboardInterrupt):
+        get_command(_interrupting_app()).main(["wrapped", "--when", "now"], standalone_mode=False)
+    with pytest.raises(SystemExit) as stop:
+        get_command(_interrupting_app()).main(["wrapped", "--when", "now"])
+    assert stop.value.code == 130

@@ -44,17 +44,25 @@ def test_without_a_cache_folder_the_kernel_is_compiled_uncached(tmp_path, monkey
 
 
 def test_a_cache_that_cannot_be_written_leaves_the_kernel_running(tmp_path, monkeypatch):
+    """numba writes the index, then the machine code; the disk fills up in between: the run
+    goes on with a note, and the next process, finding an index entry without its data, compiles
+    and saves again (numba treats the missing file as a miss)."""
     monkeypatch.setattr(compiled_cache, "CACHE_WRITE_ERRORS", [])
     mod = _kernel_module(tmp_path, "kernel_disk_full")
+    cache_file = mod.plus_one._cache._cache_file
 
-    def disk_full(sig, data):
+    def disk_full(name, data):
         raise OSError(28, "No space left on device")
 
-    mod.plus_one._cache._save_overload = disk_full
+    cache_file._save_data = disk_full
     assert mod.plus_one(2.0) == 3.0
     notes = compiled_cache.write_error_notes()
     assert len(notes) == 1 and "No space left on device" in notes[0]
-    assert not list(tmp_path.glob("__pycache__/*.nbi"))
+    cache = tmp_path / "__pycache__"
+    assert list(cache.glob("kernel_disk_full.plus_one-*.nbi")) and not list(cache.glob("*.nbc"))
+    again = _kernel_module(tmp_path, "kernel_disk_full")          # a later run: a fresh dispatcher
+    assert again.plus_one(4.0) == 5.0
+    assert list(cache.glob("kernel_disk_full.plus_one-*.nbc")) and len(compiled_cache.CACHE_WRITE_ERRORS) == 1
 
 
 def test_acmm_simulate_without_a_cache_folder_runs_and_says_why_it_compiles(tmp_path):

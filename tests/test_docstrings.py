@@ -140,7 +140,7 @@ NO_REPORT_CITATION = {
     "report.ledger": "comparison of printed and computed numbers: no mathematics of the report",
     **{m: "command line: parses, calls and prints, no mathematics (the layer rule)" for m in (
         "cli", "cli.acmm_app", "cli.qpp_app", "cli.acmm_sweep", "cli.acmm_report", "cli.common",
-        "cli.progress")},
+        "cli.progress", "cli.failures")},
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).

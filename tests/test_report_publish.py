@@ -71,3 +71,23 @@ def test_a_directory_in_the_way_changes_nothing(tmp_path):
     with pytest.raises(OutputError, match="report.md: a directory of that name is in the way"):
         publish_mod.publish(pairs, staged / ".replaced")
     assert _tree(out) == before
+
+
+def test_a_previous_file_that_cannot_be_put_back_is_kept_and_named(tmp_path, monkeypatch):
+    """The undo itself fails: the old file must not go with the staging folder (a review)."""
+    out, staged, pairs = _setup(tmp_path)
+    replace, calls = os.replace, []
+
+    def failing(src, dst):
+        calls.append((src, dst))
+        if len(calls) == 4 or (len(calls) > 4 and str(src).endswith(os.sep + "0")):
+            raise OSError(28, "No space left on device")     # the 4th move, then a.png's way back
+        return replace(src, dst)
+
+    monkeypatch.setattr(publish_mod.os, "replace", failing)
+    with pytest.raises(OutputError, match=r"not every file of the previous report could be put back: they are in "
+                                          r".*\.previous-report-\d+"):
+        publish_mod.publish(pairs, staged / ".replaced")
+    monkeypatch.setattr(publish_mod.os, "replace", replace)
+    kept = next(out.glob(".previous-report-*"))
+    assert (kept / "0").read_text() == "old figures/a.png"

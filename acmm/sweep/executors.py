@@ -74,36 +74,25 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
             import distributed
         except ImportError:
             raise ConfigError("--scheduler needs the optional Dask dependency: pip install 'acmm-qpp[dask]'") from None
-        try:
-            from common.limits import limit
+        from common.limits import limit
 
-            client = distributed.Client(scheduler, timeout=f"{limit('DASK_CONNECT_SECONDS'):g}s")
+        timeout = f"{limit('DASK_CONNECT_SECONDS'):g}s"        # (its own error, not the address's)
+        try:
+            client = distributed.Client(scheduler, timeout=timeout)
         except Exception as exc:  # noqa: BLE001 (tls:// without a context, ucx:// without ucx…: a bad address)
             raise ConfigError(f"--scheduler: cannot connect to the Dask scheduler at {scheduler}: "
                               f"{type(exc).__name__}: {exc}") from None
-        return client.get_executor(pure=False), client.close
+        return client.get_executor(pure=False), lambda abort=False: client.close()
     if workers <= 1:
-        return SerialExecutor(), lambda: None
+        return SerialExecutor(), lambda abort=False: None
     import multiprocessing
 
     ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
-    from common.workers import die_with_parent
+    from common.workers import pool_worker, stop_pool
 
-    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_worker,
+    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=pool_worker,
                                   initargs=(os.getpid(),))
-    return pool, lambda: pool.shutdown(wait=True, cancel_futures=True)
-
-
-def _pool_worker(parent: int) -> None:
-    """Initializer of a local pool's worker: it dies with the driver, and Ctrl-C (sent to the
-    whole process group by a terminal) is the driver's alone, which stops the pool; a worker
-    interrupted too broke the pool's shutdown (a review: a traceback, or a hang)."""
-    import signal
-
-    from common.workers import die_with_parent
-
-    die_with_parent(parent)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return pool, lambda abort=False: stop_pool(pool, abort)
 
 
 def lost_worker(exc: BaseException) -> Optional[str]:

@@ -135,7 +135,7 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         simulate_values(ctx, {})
     if workers is None:
         workers = spec.workers or os.cpu_count() or 1
-    close = lambda: None  # noqa: E731
+    close = lambda abort=False: None  # noqa: E731
     if executor is None and tasks:        # before the journal: an unreachable scheduler writes nothing
         executor, close = make_executor(workers if not scheduler else 0, scheduler)
     afresh = not (resume and jpath.exists())
@@ -286,7 +286,12 @@ def _drive(sweep: Sweep, executor, close, journal, chunks: Chunker, remote: dict
                 if c is None:
                     exhausted = True
                     break
-                pending[executor.submit(_call_chunk, c, *remote[c[0][1]])] = c
+                # a pool worker forked by this submit inherits the held mask (it ignores Ctrl-C)
+                held = hold_interrupts() if isinstance(executor, cf.ProcessPoolExecutor) else None
+                try:
+                    pending[executor.submit(_call_chunk, c, *remote[c[0][1]])] = c
+                finally:
+                    release_interrupts(held)
             if not pending:
                 break
             finished, _ = cf.wait(list(pending), return_when=cf.FIRST_COMPLETED)
@@ -316,7 +321,7 @@ def _drive(sweep: Sweep, executor, close, journal, chunks: Chunker, remote: dict
                     for fut in list(pending):
                         fut.cancel()
                 finally:
-                    close()
+                    close(abort=True)
                     if done:
                         write_results(sweep, list(done.values()), complete=False)
         finally:
