@@ -60,7 +60,7 @@ def _tolerate_write_errors(dispatcher) -> None:
         try:
             save(sig, data)
         except OSError as exc:
-            where = getattr(getattr(cache, "_cache_path", None), "__str__", lambda: "")()
+            where = getattr(cache, "_cache_path", "")
             reason = f"{exc.strerror or exc}" + (f" in {where}" if where else "")
             if reason not in CACHE_WRITE_ERRORS:
                 CACHE_WRITE_ERRORS.append(reason)

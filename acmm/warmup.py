@@ -57,8 +57,9 @@ def main() -> int:
     from acmm import tea_compiled  # noqa: F401
     from acmm.compiled_cache import uncached_note, write_error_notes
 
-    if uncached_note() is not None:
-        print(f"acmm: nothing compiled ahead: {uncached_note()}")
+    why = uncached_note()
+    if why is not None:
+        print(f"acmm: nothing compiled ahead: {why}")
         return 0
     sys.stdout.write("acmm: compiling the numba kernels (simulator, TEA continuation) into the cache "
                      "— one time, ~10–20 s ... ")

@@ -1,6 +1,7 @@
 """Worker-process hygiene for local process pools (issue 13: a killed sweep leaves no orphans).
 
-:func:`die_with_parent` is the ``initializer`` of the sweep's ``ProcessPoolExecutor``: on Linux
+:func:`pool_worker` is the ``initializer`` of the sweep's and the report's ``ProcessPoolExecutor``
+(submitted to with :func:`submit`, stopped with :func:`stop_pool`); its :func:`die_with_parent`: on Linux
 it asks the kernel to send SIGKILL to the worker when its parent dies (``prctl(PR_SET_PDEATHSIG)``,
 which covers ``kill -9`` of the parent); elsewhere, and as a second line of defence, a daemon
 thread polls ``os.getppid()`` once a second and exits the worker when the parent is gone.
@@ -12,6 +13,7 @@ import threading
 import time
 
 from common.signals import die_with_parent as _die_with_parent
+from common.signals import hold_interrupts, release_interrupts
 
 
 def _watch(parent: int, interval: float) -> None:
@@ -56,9 +58,38 @@ def pool_worker(parent: int) -> None:
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
 
 
+def submit(executor, fn, *args):
+    """``executor.submit(fn, *args)``; for a process pool with the interrupts held, so that a
+    worker it forks now inherits the held mask and no Ctrl-C reaches it before
+    :func:`pool_worker` (other executors fork nothing).
+
+    Parameters
+    ----------
+    executor : concurrent.futures.Executor
+        The executor.
+    fn : callable
+        The task.
+    *args : object
+        Its arguments.
+
+    Returns
+    -------
+    concurrent.futures.Future
+        The task's future.
+    """
+    import concurrent.futures as cf
+
+    held = hold_interrupts() if isinstance(executor, cf.ProcessPoolExecutor) else None
+    try:
+        return executor.submit(fn, *args)
+    finally:
+        release_interrupts(held)
+
+
 def stop_pool(pool, abort: bool = False) -> None:
-    """Shut a ``ProcessPoolExecutor`` down; with ``abort`` (the parent was interrupted or failed)
-    its workers are killed first instead of finishing tasks whose results nobody will read.
+    """Shut a ``ProcessPoolExecutor`` down, the interrupts held (a second Ctrl-C broke the
+    shutdown: a hang); with ``abort`` (the parent was interrupted or failed) its workers are
+    killed first instead of finishing tasks whose results nobody will read.
 
     Parameters
     ----------
@@ -67,10 +98,14 @@ def stop_pool(pool, abort: bool = False) -> None:
     abort : bool, optional
         Kill the running tasks.
     """
-    if abort:
-        for p in list((getattr(pool, "_processes", None) or {}).values()):
-            try:
-                p.kill()
-            except (OSError, ValueError, AttributeError):   # already gone, or closed
-                pass
-    pool.shutdown(wait=True, cancel_futures=True)
+    held = hold_interrupts()
+    try:
+        if abort:
+            for p in list((getattr(pool, "_processes", None) or {}).values()):
+                try:
+                    p.kill()
+                except (OSError, ValueError, AttributeError):   # already gone, or closed
+                    pass
+        pool.shutdown(wait=True, cancel_futures=True)
+    finally:
+        release_interrupts(held)

@@ -43,13 +43,13 @@ def publish(pairs: list[tuple[Path, Path]], backup: Path) -> None:
     except OSError as exc:
         raise OutputError(f"cannot write the report in {backup.parent}: {exc.strerror or exc}; nothing was "
                           "written") from None
-    done: list[tuple[Path, Path | None, bool]] = []      # (target, its previous file, new one placed)
+    done: list[tuple[Path, Path | None]] = []       # (target, its previous file in the backup)
     for i, (staged, target) in enumerate(pairs):
         old = backup / str(i) if os.path.lexists(target) else None
         try:
             if old is not None:
                 os.replace(target, old)
-                done.append((target, old, False))
+                done.append((target, old))      # restored over the new file, placed or not
             os.replace(staged, target)
         except OSError as exc:
             if _undo(done):
@@ -63,18 +63,18 @@ def publish(pairs: list[tuple[Path, Path]], backup: Path) -> None:
             raise OutputError(f"cannot write {target}: {exc.strerror or exc}; and not every file of the previous "
                               f"report could be put back: they are in {kept}") from None
         if old is None:
-            done.append((target, None, True))
+            done.append((target, None))         # a new file where there was none: removed
 
 
-def _undo(done: list[tuple[Path, Path | None, bool]]) -> bool:
+def _undo(done: list[tuple[Path, Path | None]]) -> bool:
     """Put the replaced files back (newest first); a new file whose target had none is removed.
     Returns False when a previous file could not be put back (it stays in the backup folder)."""
     whole = True
-    for target, old, placed in reversed(done):
+    for target, old in reversed(done):
         try:
             if old is not None:
                 os.replace(old, target)
-            elif placed:
+            else:
                 os.unlink(target)
         except OSError:
             whole = whole and old is None

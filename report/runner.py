@@ -35,8 +35,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 from common.errors import AcmmError
-from common.signals import hold_interrupts, release_interrupts
-from common.workers import stop_pool
+from common.workers import stop_pool, submit
 
 
 def _no_args(done: dict) -> tuple:
@@ -231,11 +230,7 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
                 waiting.remove(t)
                 sys.stdout.flush()
                 sys.stderr.flush()
-                held = hold_interrupts()    # a worker forked by this submit inherits the held mask
-                try:
-                    running[pool.submit(_call, t.fn, t.args(done))] = t
-                finally:
-                    release_interrupts(held)
+                running[submit(pool, _call, t.fn, t.args(done))] = t
             finished: set = set()
             if not busy:
                 finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
@@ -246,11 +241,7 @@ def _run_pool(tasks: list[Task], jobs: int, done: dict, on_done, stats: dict,
             for fut in finished:
                 finish(running.pop(fut), _result(fut))
     except BaseException:
-        held = hold_interrupts()           # a second Ctrl-C must not break the shutdown
-        try:
-            stop_pool(pool, abort=True)
-        finally:
-            release_interrupts(held)
+        stop_pool(pool, abort=True)
         raise
     pool.shutdown(wait=True)
 

@@ -145,13 +145,18 @@ class Sweep:
             old = yaml.safe_load(Path(config_yaml).read_text(encoding="utf-8"))
         except (OSError, ValueError, yaml.YAMLError):
             return []
-        new = yaml.safe_load(self.to_yaml())
-        flat_old, flat_new = _flatten(old), _flatten(new)
-        ignored = ("sweep_file.sweep.workers", "sweep_file.description", "sweep_file.output")
+        if not isinstance(old, dict):
+            return []
+        flat_old = _flatten(_case_settings(old.get("sweep_file"), old.get("bases")))
+        flat_new = _flatten(self._case_settings())
         keys = list(dict.fromkeys([*flat_new, *flat_old]))
-        return [f"{k.replace('sweep_file.', '', 1)}: {flat_old.get(k, '(unset)')!s} → {flat_new.get(k, '(unset)')!s}"
-                for k in keys if flat_old.get(k) != flat_new.get(k) and not k.startswith(ignored)
-                and "output" not in k.split(".")[2:3] and not k.endswith(".description")]
+        return [f"{k.removeprefix('file.')}: {flat_old.get(k, '(unset)')!s} → {flat_new.get(k, '(unset)')!s}"
+                for k in keys if flat_old.get(k) != flat_new.get(k)]
+
+    def _case_settings(self) -> dict:
+        """The resolved sweep file and base configs without what does not change the cases."""
+        return _case_settings(self.file.model_dump(mode="json", exclude_none=True),
+                              {b.label: b.config.model_dump(mode="json") for b in self.bases})
 
     def results_key(self) -> str:
         """Hash of everything that determines the case results (not workers, figures, description).
@@ -165,16 +170,8 @@ class Sweep:
 
         from common.results import config_hash
 
-        f = self.file.model_dump(mode="json", exclude_none=True)
-        f["sweep"].pop("workers", None)
-        f.pop("description", None)
-        f.pop("output", None)
-        bases = {}
-        for b in self.bases:
-            c = b.config.model_dump(mode="json")
-            c.pop("output", None)
-            c.pop("description", None)
-            bases[b.label] = c
+        settings = self._case_settings()
+        f, bases = settings["file"], settings["bases"]
         # the order of the grid's and the Monte Carlo's parameters decides which values case i
         # gets (product order, draw order), and sort_keys below would lose it
         order = {k: list(f["sweep"].get(k) or {}) for k in ("grid", "monte_carlo")}
@@ -312,6 +309,18 @@ def load_sweep(path: str | Path, overrides: list[str] | None = None) -> Sweep:
     data, p = read_yaml(path)
     sw = parse_sweep(apply_overrides(data, overrides), source=str(p), directory=p.parent)
     return remember_origin(sw, str(p), overrides)
+
+
+def _case_settings(file: object, bases: object) -> dict:
+    """``{"file": …, "bases": {label: …}}``: a sweep file and its base configs as mappings (dumped,
+    or read back from a run's ``config.yaml``) without the settings that do not change the cases
+    (the sweep's workers; descriptions and outputs)."""
+    f = {k: v for k, v in (file if isinstance(file, dict) else {}).items() if k not in ("description", "output")}
+    if isinstance(f.get("sweep"), dict):
+        f["sweep"] = {k: v for k, v in f["sweep"].items() if k != "workers"}
+    bases = {label: {k: v for k, v in c.items() if k not in ("output", "description")} if isinstance(c, dict) else c
+             for label, c in (bases if isinstance(bases, dict) else {}).items()}
+    return {"file": f, "bases": bases}
 
 
 def _flatten(tree, prefix: str = "") -> dict:

@@ -20,6 +20,7 @@ from acmm.sweep.executors import (SerialExecutor, _call_chunk, _remote_contexts,
 from acmm.sweep.journal import GroupCommitJournal, read_journal
 from common.errors import ConfigError, OutputError
 from common.signals import hold_interrupts, release_interrupts
+from common.workers import submit
 from acmm.sweep.output import _split, write_results
 
 
@@ -286,12 +287,7 @@ def _drive(sweep: Sweep, executor, close, journal, chunks: Chunker, remote: dict
                 if c is None:
                     exhausted = True
                     break
-                # a pool worker forked by this submit inherits the held mask (it ignores Ctrl-C)
-                held = hold_interrupts() if isinstance(executor, cf.ProcessPoolExecutor) else None
-                try:
-                    pending[executor.submit(_call_chunk, c, *remote[c[0][1]])] = c
-                finally:
-                    release_interrupts(held)
+                pending[submit(executor, _call_chunk, c, *remote[c[0][1]])] = c
             if not pending:
                 break
             finished, _ = cf.wait(list(pending), return_when=cf.FIRST_COMPLETED)
@@ -312,7 +308,7 @@ def _drive(sweep: Sweep, executor, close, journal, chunks: Chunker, remote: dict
         snaps.check()
         complete = True
     finally:
-        held = hold_interrupts()   # a second Ctrl-C broke the pool's shutdown: it hung (a review)
+        held = hold_interrupts()   # the cleanup whole: a second Ctrl-C in it hung the sweep (a review)
         try:
             journal.close()
             snaps.wait()
