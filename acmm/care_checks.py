@@ -1,6 +1,7 @@
 """Verification of a solution of the continuous algebraic Riccati equation (eq 5.4, CR-185644
 ch. 5): the relative residual, the existence check on the Hamiltonian (eq 5.5) and the condition
-estimate κ_CARE, as described in :mod:`acmm.riccati` (which re-exports every name here).
+estimate κ_CARE, and the backward error that decides acceptance, as described in
+:mod:`acmm.riccati` (which re-exports every name here).
 
 Moved out of :mod:`acmm.riccati` (issue 12).
 """
@@ -106,6 +107,55 @@ def care_residual(A, B, Q, R, P) -> float:
     if den == 0.0:
         return 0.0 if num == 0.0 else float("inf")
     return float(num / den)
+
+
+def care_backward_error(A, B, Q, R, P) -> float:
+    """Backward error of a candidate solution P of eq 5.4, normwise with absolute terms::
+
+        ω = ‖A'P + PA − PGP + Q‖ / ‖ |A|ᵀ|P| + |P||A| + |P||G||P| + |Q| ‖,   G = B R⁻¹ B',
+
+    (Frobenius norms, |·| elementwise).  The denominator is the size of the terms as floating
+    point evaluates them: when large entries of P·G·P cancel (a nearly uncontrollable mode makes
+    P span many orders of magnitude), even the correctly rounded exact solution has a residual of
+    ε times this sum, while :func:`care_residual` divides by the size of the cancelled result
+    and so can exceed any fixed tolerance for a solution that is exact to working precision.
+    ω is a normwise relative backward error: P solves eq 5.4 exactly for data whose terms are
+    perturbed by about ω of their absolute sizes (the residual form of the Oettli–Prager
+    backward error, taken in the Frobenius norm); the error of P itself is about κ_CARE·ω
+    (:func:`care_condition`).
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix (units of the chosen coordinates, 1/s for rates).
+    B : (N, M) array
+        Input matrix, same coordinates (state units per s per input unit).
+    Q : (N, N) array or float
+        State weight (a float q means q·I), same coordinates.
+    R : (M, M) array or float
+        Control weight (a float r means r·I), 1 / input unit² per s.
+    P : (N, N) array
+        Candidate solution, units of Q times s.
+
+    Returns
+    -------
+    float
+        ω, dimensionless (0 when P = Q = 0; ``inf`` when the denominator vanishes but the
+        residual does not).
+    """
+    A, B, P = (np.asarray(x, dtype=float) for x in (A, B, P))
+    Q = _as_Q(Q, A.shape[0])
+    R = _as_R(R, B.shape[1])
+    G = B @ np.linalg.solve(R, B.T)
+    G = 0.5 * (G + G.T)
+    AtP = A.T @ P
+    res = AtP + AtP.T - P @ G @ P + Q
+    aP = np.abs(A).T @ np.abs(P)
+    den = float(np.linalg.norm(aP + aP.T + np.abs(P) @ np.abs(G) @ np.abs(P) + np.abs(Q)))
+    num = float(np.linalg.norm(0.5 * (res + res.T)))
+    if den == 0.0:
+        return 0.0 if num == 0.0 else float("inf")
+    return num / den
 
 
 def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:

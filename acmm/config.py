@@ -71,7 +71,8 @@ class Design(_Model):
     riccati_method: Literal["sign", "scipy", "slycot"] = Field("scipy", description="CARE solver")
     pole_method: Literal["shift", "uniform"] = Field(
         "shift", description="sector enforcement: optimal pole shifting of the stray poles, or a uniform shift")
-    residual_tol: float = Field(1e-9, gt=0, lt=1, description="largest accepted relative Riccati residual (scaled)")
+    residual_tol: float = Field(1e-12, gt=0, lt=1, description="largest accepted Riccati backward error after "
+                                                                 "refinement (acmm.riccati.care_backward_error)")
     Q0_groups: Optional[Q0Groups] = Field(
         None, description="per-group diagonal weights on the scaled states, added to Q0·I (dimensionless)")
     min_margin: float = Field(0.01, ge=0, lt=10, description="required sector margin of every design pole, units of n")

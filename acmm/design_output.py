@@ -50,6 +50,8 @@ def point_items(points) -> dict:
             "poles": Dataset(res.poles, "rad/s", "closed-loop poles of A - B K", dims=("pole",)),
             "sector_margin": Dataset(res.margin, "n", "worst pole distance into the sector (>0 inside)"),
             "riccati_residual": Dataset(res.residual, "1", "relative CARE residual, scaled coordinates"),
+            "riccati_backward_error": Dataset(res.backward_error, "1",
+                                              "CARE backward error after refinement (accepted quantity)"),
             "scales": Dataset(p.model.scales, UNIT_STATE, "state scaling used for the Riccati solve",
                               STATE_NAMES),
             "eig_condition": Dataset(res.eig_condition, "1",
@@ -148,7 +150,8 @@ def schedule_items(r) -> dict:
                               "least_squares, or closed_loop (least squares refined on the path)"),
     }
     for key, val in r.fit.refit_info.items():
-        sched[f"refit_{key}"] = Dataset(float(val), "n" if key.startswith("max_real") else "1",
+        value = np.array(val, dtype="S") if isinstance(val, str) else float(val)
+        sched[f"refit_{key}"] = Dataset(value, "n" if key.startswith("max_real") else "1",
                                         f"closed-loop refit: {key.replace('_', ' ')}")
     pc = r.path_check
     if pc is not None:

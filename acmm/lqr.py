@@ -52,7 +52,7 @@ from acmm.sector import (  # noqa: F401 (re-exported: the sector, the result typ
 
 def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float = 45.0,
                Q0=None, scale=None, method: str = "shift", riccati_method: str = "scipy",
-               residual_tol: float = 1e-9, min_margin: float = 0.01,
+               residual_tol: float = 1e-12, min_margin: float = 0.01,
                max_uniform_shift: float = 100.0, line_spacing: float = 0.0,
                input_scale: float = 1.0) -> SectorLQR:
     """LQR gain with every closed-loop pole in the sector of Fig 5.2 (module docstring).
@@ -83,7 +83,8 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
     riccati_method : {"scipy", "sign", "slycot"}
         Solver used for every Riccati equation (:func:`acmm.riccati.solve_care`).
     residual_tol : float
-        Largest accepted relative Riccati residual (scaled coordinates), dimensionless.
+        Largest accepted Riccati backward error after refinement
+        (:func:`acmm.riccati.care_backward_error`), dimensionless.
     min_margin : float
         Required :func:`sector_margin` of every pole, units of n; moved poles are placed with
         1.5× this margin.
@@ -112,7 +113,7 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
     DesignError
         A pole cannot be brought into the sector (or Q would be indefinite).
     ConvergenceError
-        A Riccati solve failed or its residual exceeds ``residual_tol``.
+        A Riccati solve failed or its backward error exceeds ``residual_tol``.
     """
     if method not in ("shift", "uniform"):
         raise ValueError(f"method must be 'shift' or 'uniform', got {method!r}")

@@ -30,8 +30,16 @@ works on Ã = D⁻¹AD, B̃ = D⁻¹B, Q̃ = DQD and maps back P = D⁻¹P̃D⁻
 the 24 ACMM states span ~12 orders of magnitude; unscaled, every method loses most digits
 (``docs/ERRATA.md`` § Scaling).
 
-Every solve computes its relative residual (see :func:`care_residual`) in the scaled
-coordinates and raises :class:`common.errors.ConvergenceError` above ``tol``.
+Refinement and acceptance: every solver's answer is refined by Newton–Kleinman steps with exact
+line search (:func:`refine_care`; Kleinman 1968, Benner & Byers 1998): each step solves the
+Lyapunov equation A_c'Δ + ΔA_c = −ℛ(P) of the closed loop A_c = A − GP for the residual ℛ(P)
+and moves P by tΔ, t ∈ (0, 2] minimizing ‖ℛ(P + tΔ)‖.  The refinement stops when a step no
+longer halves the backward error ω (:func:`care_backward_error`), i.e. at working accuracy,
+not after a fixed count.  The solution is accepted when ω ≤ ``tol``: ω measures the residual
+against the size of the terms as floating point evaluates them, so a nearly uncontrollable
+model (whose P spans many orders of magnitude, with large cancelling terms in PGP) is judged by
+what working precision can give, the same for every method.  The relative residual of
+:func:`care_residual` is still computed and reported; the error of P is about κ_CARE·ω.
 
 Existence check (every method): before solving, the eigenvalues λ_i of the (scaled) Hamiltonian
 H = [[A, −G], [−Q, −A']] are computed, after balancing (H_b = T⁻¹HT, LAPACK GEBAL with
@@ -66,12 +74,18 @@ import numpy as np
 import scipy.linalg as sla
 
 from acmm.care_checks import (ILL_CONDITIONED, IMAG_AXIS_RTOL, _as_Q, _as_R,  # noqa: F401
-                              _as_square, _refusal, _refuse, care_condition, care_residual,
-                              hamiltonian_check, scale_problem)
+                              _as_square, _refusal, _refuse, care_backward_error, care_condition,
+                              care_residual, hamiltonian_check, scale_problem)
 from acmm.matrix_sign import _PF, SignResult, matrix_sign  # noqa: F401  (moved, issue 12)
 from common.errors import ConvergenceError
 
 METHODS = ("scipy", "sign", "slycot")
+
+#: Guard on the refinement steps of :func:`refine_care`.  The refinement stops on its criterion
+#: (a step that no longer halves the backward error) after 1–5 steps on every packaged problem;
+#: the guard only bounds the work on a pathological one, whose answer is then judged by its
+#: backward error like any other.
+REFINE_GUARD = 50
 
 
 @dataclass(frozen=True)
@@ -88,7 +102,7 @@ class CareResult:
         of x.
     residual : float
         Relative residual of :func:`care_residual`, evaluated in the scaled coordinates
-        (dimensionless).
+        (dimensionless), after refinement.
     method : str
         ``"scipy"``, ``"sign"`` or ``"slycot"``.
     iterations : int
@@ -105,6 +119,11 @@ class CareResult:
     hamiltonian_gap : float
         min_i |Re λ_i(H)| / ‖H_b‖_F (balanced H): relative distance of the Hamiltonian spectrum
         from the axis, dimensionless.
+    backward_error : float
+        Backward error ω of :func:`care_backward_error` after refinement (the accepted quantity),
+        dimensionless.
+    refinement_steps : int
+        Newton–Kleinman steps taken by :func:`refine_care`.
     """
 
     P: np.ndarray
@@ -117,6 +136,78 @@ class CareResult:
     condition: float = float("nan")
     ill_conditioned: bool = False
     hamiltonian_gap: float = float("nan")
+    backward_error: float = float("nan")
+    refinement_steps: int = 0
+
+
+def refine_care(A, B, Q, R, P) -> tuple[np.ndarray, int]:
+    """Refine a stabilizing approximate solution of eq 5.4 to working accuracy.
+
+    Newton–Kleinman steps with exact line search (Benner & Byers 1998): with A_c = A − GP and
+    ℛ(P) = A'P + PA − PGP + Q, solve A_c'Δ + ΔA_c = −ℛ(P); then ℛ(P + tΔ) = (1 − t)ℛ(P) − t²ΔGΔ,
+    and t ∈ (0, 2] minimizes its Frobenius norm (a root of a cubic).  Stops when a step no
+    longer halves the backward error ω (:func:`care_backward_error`); the last step is kept only
+    if it lowers ω.  A P that is not stabilizing, or a step whose Lyapunov solve fails, ends the
+    refinement with the best P so far (:func:`solve_care` then judges it).
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix, 1/s for rates (any consistent units).
+    B : (N, M) array
+        Input matrix, same units.
+    Q : (N, N) array
+        State weight, same units.
+    R : (M, M) array
+        Control weight, 1 / input unit² per s.
+    P : (N, N) array
+        Approximate stabilizing solution, units of Q times s.
+
+    Returns
+    -------
+    tuple
+        (P, steps): the refined symmetric solution and the number of steps kept.
+    """
+    G = B @ np.linalg.solve(R, B.T)
+    G = 0.5 * (G + G.T)
+    P = 0.5 * (P + P.T)
+    omega = care_backward_error(A, B, Q, R, P)
+    steps = 0
+    for _ in range(REFINE_GUARD):
+        if not omega > 0.0:
+            break
+        Ac = A - G @ P
+        if not np.all(np.isfinite(Ac)) or np.max(np.linalg.eigvals(Ac).real) >= 0.0:
+            break
+        AtP = A.T @ P
+        Res = AtP + AtP.T - P @ G @ P + Q
+        Res = 0.5 * (Res + Res.T)
+        try:
+            D = sla.solve_continuous_lyapunov(Ac.T, -Res)
+        except (np.linalg.LinAlgError, ValueError):
+            break
+        D = 0.5 * (D + D.T)
+        Pn = P + _line_search(Res, D @ G @ D) * D
+        Pn = 0.5 * (Pn + Pn.T)
+        wn = care_backward_error(A, B, Q, R, Pn) if np.all(np.isfinite(Pn)) else np.inf
+        if wn < omega:
+            P, steps = Pn, steps + 1
+        if not wn <= 0.5 * omega:
+            break
+        omega = wn
+    return P, steps
+
+
+def _line_search(Res: np.ndarray, V: np.ndarray) -> float:
+    """t ∈ (0, 2] minimizing f(t) = ‖(1 − t)Res − t²V‖²_F (Benner & Byers 1998)."""
+    a, b, c = float(np.sum(Res * Res)), float(np.sum(Res * V)), float(np.sum(V * V))
+    f = lambda t: a * (1 - t) ** 2 - 2 * b * (1 - t) * t ** 2 + c * t ** 4  # noqa: E731
+    # f'(t) = 4c t³ + 6b t² + (2a − 4b) t − 2a
+    cand = [1.0, 2.0]
+    if c > 0.0 or b != 0.0:
+        cand += [float(r.real) for r in np.roots([4 * c, 6 * b, 2 * a - 4 * b, -2 * a])
+                 if abs(r.imag) <= 1e-12 * max(1.0, abs(r)) and 0.0 < r.real <= 2.0]
+    return min(cand, key=f)
 
 
 def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign_tol=1e-13,
@@ -204,7 +295,7 @@ def solve_unverified(A, B, Q, R, *, method: str = "scipy", sign_scaling: str = "
     return P, iterations
 
 
-def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e-9,
+def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e-12,
                sign_scaling: str = "det", sign_evaluation: str = "partial_fraction",
                max_iter: int = 60) -> CareResult:
     """Stabilizing solution of A'P + PA − PBR⁻¹B'P + Q = 0 (eq 5.4), verified.
@@ -224,9 +315,8 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     scale : (N,) array or None
         Nominal state magnitudes d, in the units of the states; the solve is done on x̃ = D⁻¹x and mapped back.
     tol : float
-        Largest acceptable relative residual (:func:`care_residual`, scaled coordinates),
-        dimensionless.
-        ``np.inf`` disables the refusal (for comparisons).
+        Largest acceptable backward error ω of the refined solution (:func:`care_backward_error`),
+        dimensionless.  ``np.inf`` disables the refusal (for comparisons).
     sign_scaling : {"det", "norm", None}
         Acceleration of the sign iteration (``method="sign"`` only).
     sign_evaluation : {"partial_fraction", "polynomial"}
@@ -237,7 +327,8 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     Returns
     -------
     CareResult
-        P and K in physical coordinates, the scaled relative residual, method, iterations.
+        P and K in physical coordinates, the scaled relative residual, the backward error,
+        method, iterations.
 
     Raises
     ------
@@ -246,7 +337,7 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     ConvergenceError
         The Hamiltonian has an eigenvalue on or within rounding of the imaginary axis (no
         stabilizing solution), the solver failed, the sign iteration did not converge, the
-        residual exceeds ``tol``, or A − BK is not stable.
+        backward error of the refined solution exceeds ``tol``, or A − BK is not stable.
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -259,7 +350,11 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
                                       sign_evaluation=sign_evaluation, max_iter=max_iter)
     seconds = time.perf_counter() - t0
     Ps = 0.5 * (Ps + Ps.T)
-    Ks, res = _verified_gain(As, Bs, Qs, R, Ps, method=method, tol=tol, scaled=d is not None)
+    if np.all(np.isfinite(Ps)):
+        Ps, steps = refine_care(As, Bs, Qs, R, Ps)
+    else:
+        steps = 0
+    Ks, res, omega = _verified_gain(As, Bs, Qs, R, Ps, method=method, tol=tol, scaled=d is not None)
     cond = care_condition(As, Bs, Qs, R, Ps)
     if d is not None:
         P = Ps / d[:, None] / d[None, :]
@@ -268,7 +363,8 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
         P, K = Ps, Ks
     return CareResult(P=P, K=K, residual=res, method=method, iterations=iterations,
                       scale=d, seconds=seconds, condition=cond,
-                      ill_conditioned=bool(not cond <= ILL_CONDITIONED), hamiltonian_gap=gap)
+                      ill_conditioned=bool(not cond <= ILL_CONDITIONED), hamiltonian_gap=gap,
+                      backward_error=omega, refinement_steps=steps)
 
 
 def _as_problem(A, B, Q, R, scale):
@@ -285,17 +381,20 @@ def _as_problem(A, B, Q, R, scale):
 
 
 def _verified_gain(As, Bs, Qs, R, Ps, *, method, tol, scaled):
-    """(K̃, residual) of a solution P̃, refused if non-finite, inaccurate or not stabilizing."""
+    """(K̃, relative residual, backward error) of a refined solution P̃, refused if non-finite,
+    inaccurate (backward error above ``tol``) or not stabilizing."""
     if not np.all(np.isfinite(Ps)):
         raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values")
     res = care_residual(As, Bs, Qs, R, Ps)
-    if not res <= tol:
+    omega = care_backward_error(As, Bs, Qs, R, Ps)
+    if not omega <= tol:
         _refuse(f"Riccati solve (method={method!r}{', state-scaled' if scaled else ''}"
-                       f"): relative residual {res:.3e} exceeds tolerance {tol:.1e}", method, res)
+                f"): backward error {omega:.3e} after refinement exceeds tolerance {tol:.1e} "
+                f"(relative residual {res:.3e})", method, omega)
     Ks = np.linalg.solve(R, Bs.T @ Ps)
     worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
     if not worst < 0.0:
         _refuse(f"Riccati solve (method={method!r}): solution is not stabilizing "
                        f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
                        f"{res:.3e})", method, res)
-    return Ks, res
+    return Ks, res, omega

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from common.errors import ConvergenceError, DesignError
-from acmm.riccati import ILL_CONDITIONED, care_condition, care_residual
+from acmm.riccati import ILL_CONDITIONED, care_backward_error, care_condition, care_residual
 
 
 
@@ -96,7 +96,7 @@ class SectorLQR:
         Worst :func:`sector_margin` over the poles, units of n (> 0: all inside).
     residual : float
         Relative Riccati residual (:func:`acmm.riccati.care_residual`) of (A + shift·I, B, Q, R, P)
-        in the scaled coordinates, dimensionless.
+        in the scaled coordinates, dimensionless (reported; acceptance is by ``backward_error``).
     shift : float
         α (rad/s): K is the LQR gain of (A + αI, B, Q, R).
     mirror_shifts : tuple of float
@@ -117,6 +117,9 @@ class SectorLQR:
         dimensionless.
     riccati_ill_conditioned : bool
         κ_CARE above :data:`acmm.riccati.ILL_CONDITIONED`.
+    backward_error : float
+        Backward error ω (:func:`acmm.riccati.care_backward_error`) of (A + shift·I, B, Q, R, P),
+        the accepted quantity (≤ ``residual_tol``), dimensionless.
     """
 
     K: np.ndarray
@@ -136,6 +139,7 @@ class SectorLQR:
     robustness_radius_elementwise: float = float("nan")
     riccati_condition: float = float("nan")
     riccati_ill_conditioned: bool = False
+    backward_error: float = float("nan")
 
     @property
     def max_eig_condition(self) -> float:
@@ -273,22 +277,25 @@ def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, r
             method, riccati_method, mirror_shifts, e: float = 1.0) -> SectorLQR:
     """Verify a design in scaled coordinates (the input in units of ``e``: B·e, R·e²) and map
     it back to physical units."""
-    Ps = 0.5 * (Ps + Ps.T)
     Qs = 0.5 * (Qs + Qs.T)
+    nx = As.shape[0]
+    Ash = As + alpha * np.eye(nx)
+    Ps = 0.5 * (Ps + Ps.T)
     Ks = np.linalg.solve(R, Bs.T @ Ps)
     poles = np.linalg.eigvals(As - Bs @ Ks)
     poles = poles[np.lexsort((poles.imag, poles.real))]
     margins = sector_margin(poles, n, sigma, half_angle_deg)
     margin = float(np.min(margins))
-    nx = As.shape[0]
     qmin = float(np.min(np.linalg.eigvalsh(Qs))) if nx else 0.0
     if qmin < -1e-12 * max(1.0, np.linalg.norm(Qs, 2)):
         raise DesignError(f"sector LQR ({method}): Q is not positive semidefinite "
                           f"(smallest eigenvalue {qmin:.3e})")
-    res = care_residual(As + alpha * np.eye(nx), Bs, Qs, R, Ps)
-    if not res <= residual_tol:
-        raise ConvergenceError(f"sector LQR ({method}, Riccati method {riccati_method!r}): relative "
-                               f"Riccati residual {res:.3e} exceeds tolerance {residual_tol:.1e}")
+    res = care_residual(Ash, Bs, Qs, R, Ps)
+    omega = care_backward_error(Ash, Bs, Qs, R, Ps)
+    if not omega <= residual_tol:
+        raise ConvergenceError(f"sector LQR ({method}, Riccati method {riccati_method!r}): Riccati "
+                               f"backward error {omega:.3e} exceeds tolerance {residual_tol:.1e} "
+                               f"(relative residual {res:.3e})")
     if margin < min_margin:
         bad = poles[margins < min_margin]
         raise DesignError(
@@ -298,7 +305,7 @@ def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, r
     lam_c, _, _, kappa = eigen_conditioning(As - Bs @ Ks)
     kappa = kappa[np.lexsort((lam_c.imag, lam_c.real))]
     e_norm, e_elem = sector_robustness(As, Bs, Ks, n, sigma, half_angle_deg)
-    kcare = care_condition(As + alpha * np.eye(nx), Bs, Qs, R, Ps)
+    kcare = care_condition(Ash, Bs, Qs, R, Ps)
     if d is not None:
         K = Ks / d[None, :]
         P = Ps / d[:, None] / d[None, :]
@@ -307,7 +314,8 @@ def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, r
         K, P, Q = Ks, Ps, Qs
     if e != 1.0:                        # u = e·ũ: K = e·K̃, R = R̃ / e²
         K, R = K * e, R / e ** 2
-    return SectorLQR(K=K, P=P, Q=Q, R=R, poles=poles, margin=margin, residual=res, shift=alpha,
+    return SectorLQR(K=K, P=P, Q=Q, R=R, poles=poles, margin=margin, residual=res,
+                     backward_error=omega, shift=alpha,
                      mirror_shifts=tuple(mirror_shifts), method=method,
                      riccati_method=riccati_method, scale=d, eig_condition=kappa,
                      robustness_radius=e_norm, robustness_radius_elementwise=e_elem,

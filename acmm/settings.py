@@ -58,7 +58,8 @@ class DesignSettings:
     riccati_method : str
         ``"sign"``, ``"scipy"`` or ``"slycot"``.
     residual_tol : float
-        Largest accepted relative Riccati residual, dimensionless.
+        Largest accepted Riccati backward error after refinement
+        (:func:`acmm.riccati.care_backward_error`), dimensionless.
     min_margin : float
         Required sector margin of every pole, units of n.
     line_spacing : float
