@@ -58,7 +58,7 @@ test-latest:
 # Refresh $(LOCK): the newest releases within pyproject.toml's bounds (main dependencies and the
 # test extra), for every platform and every Python from 3.10 (pyproject's requires-python) on,
 # with the hashes of every file.  Commit the new lock together with the README's table
-# (`python scripts/lock_table.py`; tests/test_lock.py fails until they agree).
+# (`python scripts/lock_table.py --write`; tests/test_lock.py fails until they agree).
 $(UV_VENV)/.uv-$(UV_VERSION):
 	$(PYTHON) -m venv $(UV_VENV)
 	$(UV_VENV)/bin/python -m pip install --quiet uv==$(UV_VERSION)
