@@ -3,18 +3,28 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+# exact versions with hashes of every package the project and its tests use (`make lock` refreshes it)
+LOCK   := requirements.lock
+# `make lock` runs uv at this version, from a venv of its own (not the project's)
+UV_VERSION := 0.13.9
+UV_VENV    := .venv-uv
+# `make test-latest`: the newest releases instead of the lock, in a venv of their own
+LATEST     := .venv-latest
 
-.PHONY: run test bench report report-fast browser install bytecode clean
+.PHONY: run test test-latest lock bench report report-fast browser install bytecode clean
 
 # the package's own modules as bytecode: with PYTHONDONTWRITEBYTECODE set (as on CI machines) an
 # editable install would otherwise compile them from source at every command (~0.1 s a run;
 # compileall only rewrites what changed)
 PACKAGES := acmm qpp common cli report configkinds
 
-$(STAMP): pyproject.toml
+# the dependencies exactly as locked (pip refuses any file whose hash is not in the lock), then the
+# project itself without resolving anything
+$(STAMP): pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/python -m pip install --quiet --require-hashes -r $(LOCK)
+	$(BIN)/python -m pip install --quiet --no-deps -e .
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m acmm.warmup
 	touch $(STAMP)
 
@@ -28,8 +38,35 @@ run: $(STAMP) bytecode
 
 # In CI (CI=true) the report test also opens the page in a real headless Chromium (Debian's
 # package); elsewhere that test is skipped unless /usr/bin/chromium exists.
+# --durations: the slowest tests are printed at the end of every run (CI's output included).
 test: $(STAMP) bytecode $(if $(CI),browser)
-	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest --durations=25
+
+# The suite against the newest releases within pyproject.toml's bounds, in $(LATEST) (re-resolved at
+# every call; not part of CI): what the next `make lock` would bring.  The numba cache beside the
+# sources is shared with .venv: after a run here with another numba, the next `make test`
+# compiles the kernels once again.
+test-latest:
+	$(PYTHON) -m venv $(LATEST)
+	$(LATEST)/bin/python -m pip install --quiet --upgrade pip
+	$(LATEST)/bin/python -m pip install --quiet --upgrade -e '.[test]'
+	$(LATEST)/bin/python -m pip list --format=freeze | grep -iE '^(numpy|scipy|control|slycot|numba)=='
+	OPENBLAS_NUM_THREADS=1 $(LATEST)/bin/python -m acmm.warmup
+	@$(LATEST)/bin/python -m compileall -q $(PACKAGES)
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(LATEST)/bin/python -m pytest --durations=25
+
+# Refresh $(LOCK): the newest releases within pyproject.toml's bounds (main dependencies and the
+# test extra), for every platform and every Python from 3.10 (pyproject's requires-python) on,
+# with the hashes of every file.  Commit the new lock together with the README's table
+# (`python scripts/lock_table.py --write`; tests/test_lock.py fails until they agree).
+$(UV_VENV)/.uv-$(UV_VERSION):
+	$(PYTHON) -m venv $(UV_VENV)
+	$(UV_VENV)/bin/python -m pip install --quiet uv==$(UV_VERSION)
+	touch $@
+
+lock: $(UV_VENV)/.uv-$(UV_VERSION)
+	UV_CUSTOM_COMPILE_COMMAND="make lock" $(UV_VENV)/bin/uv pip compile pyproject.toml --extra test \
+	  --universal --python-version 3.10 --generate-hashes --upgrade --quiet -o $(LOCK)
 
 browser:
 	@test -x /usr/bin/chromium || { command -v apt-get >/dev/null && [ "$$(id -u)" = 0 ] && \
@@ -49,4 +86,4 @@ report-fast: $(STAMP) bytecode
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/acmm report --fast
 
 clean:
-	rm -rf $(VENV) runs build *.egg-info
+	rm -rf $(VENV) $(LATEST) $(UV_VENV) runs build *.egg-info

@@ -62,7 +62,7 @@ def main() -> int:
         print(f"acmm: nothing compiled ahead: {why}")
         return 0
     sys.stdout.write("acmm: compiling the numba kernels (simulator, TEA continuation) into the cache "
-                     "— one time, ~10–20 s ... ")
+                     "— one time, ~20–60 s, longer on a busy machine ... ")
     sys.stdout.flush()
     dt = warm_up()
     print(f"done in {dt:.1f} s")
