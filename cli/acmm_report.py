@@ -30,14 +30,16 @@ def register(app: typer.Typer) -> None:
         fast: bool = typer.Option(False, "--fast", help="CI mode: a 13-orbit stair-case instead of 130 orbits"),
         rerun: bool = typer.Option(False, "--rerun", help="recompute every stage even when results with the "
                                                           "same config hash exist (determinism check)"),
-        root: Optional[Path] = typer.Option(None, "--root", help="results root of the stages "
-                                                                 "(default: each config's output.root, 'runs')"),
+        root: Optional[Path] = typer.Option(None, "--root", help="results root the report computes its stages in, "
+                                            "figures off, replacing files there (default: <out>/results, its own; "
+                                            "never your runs/)"),
         jobs: Optional[int] = typer.Option(None, "--jobs", min=1, max=1024, help="processes running the stages and "
                                            "sections (default: 2 on a multi-core machine, or ACMM_REPORT_JOBS); "
                                            "1: one after the other; the output is the same"),
     ) -> None:
         """Every figure and table of CR-185644 regenerated and compared with the printed values;
-        writes <out>/index.html (self-contained) and <out>/report.md."""
+        writes <out>/index.html (self-contained) and <out>/report.md; a failed section is shown there
+        with its error and the command exits with that error's code."""
         import sys
 
         from report import build_report
@@ -64,3 +66,11 @@ def register(app: typer.Typer) -> None:
                     if d["status"] != "no previous report" else ""))
         typer.echo(f"  wrote {r.html}")
         typer.echo(f"  wrote {r.markdown}")
+        if r.failures:                   # the report is written, with each failure in its section
+            from common.errors import AcmmError
+
+            section, first = r.failures[0]
+            err = AcmmError(f"report incomplete: {len(r.failures)} failed section part(s), first in section "
+                            f"{section}: {first.text()} (see {r.html})")
+            err.exit_code = first.exit_code
+            raise err

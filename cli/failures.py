@@ -1,5 +1,6 @@
 """How a command's failures and side notes become one line each (used by :func:`cli.common.user_errors`):
-exceptions outside the :class:`common.errors.AcmmError` hierarchy, an interrupt that Python
+exceptions outside the :class:`common.errors.AcmmError` hierarchy (:func:`common.errors.plain_failure`,
+shared with the report's failed sections), an interrupt that Python
 wrapped in another exception, the numerical warnings and numba's cache notes of a run, a closed
 standard output."""
 from __future__ import annotations
@@ -8,24 +9,7 @@ import sys
 
 import typer
 
-from common.errors import EXIT_INPUT, EXIT_NUMERICAL, EXIT_OUTPUT
-
-
-def _plain_failure(exc: BaseException):
-    """(message, exit code) for an exception that is not an :class:`AcmmError` but still a
-    user-facing failure; ``None`` for a genuine bug (left to propagate)."""
-    import numpy as np
-
-    if isinstance(exc, RecursionError):
-        return "input nested too deeply to process", EXIT_INPUT
-    if isinstance(exc, MemoryError):
-        return "out of memory (reduce the problem size)", EXIT_OUTPUT
-    if isinstance(exc, (FloatingPointError, OverflowError, ZeroDivisionError, np.linalg.LinAlgError)):
-        return f"numerical failure: {type(exc).__name__}: {exc}", EXIT_NUMERICAL
-    if isinstance(exc, OSError):
-        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
-        return f"I/O error: {exc.strerror or exc}{where}", EXIT_OUTPUT
-    return None
+from common.errors import plain_failure as _plain_failure  # noqa: F401 (cli.common's name for it)
 
 
 def _interrupt_behind(exc: BaseException):

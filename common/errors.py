@@ -117,3 +117,52 @@ class FigureError(OutputError):
             ``exc`` itself when it is one.
         """
         return exc if isinstance(exc, cls) else cls(str(exc) or type(exc).__name__)
+
+
+def plain_failure(exc: BaseException):
+    """(one-line message, exit code) of an exception that is not an :class:`AcmmError` but still a
+    user-facing failure (out of memory, a numerical error, an I/O error); None for a genuine bug.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception caught.
+
+    Returns
+    -------
+    tuple of (str, int) or None
+        The message and the exit code (:data:`EXIT_INPUT`, :data:`EXIT_NUMERICAL` or
+        :data:`EXIT_OUTPUT`), or None: a bug, to be left to propagate.
+    """
+    import numpy as np
+
+    if isinstance(exc, RecursionError):
+        return "input nested too deeply to process", EXIT_INPUT
+    if isinstance(exc, MemoryError):
+        return "out of memory (reduce the problem size)", EXIT_OUTPUT
+    if isinstance(exc, (FloatingPointError, OverflowError, ZeroDivisionError, np.linalg.LinAlgError)):
+        return f"numerical failure: {type(exc).__name__}: {exc}", EXIT_NUMERICAL
+    if isinstance(exc, OSError):
+        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+        return f"I/O error: {exc.strerror or exc}{where}", EXIT_OUTPUT
+    return None
+
+
+def failure_line(exc: BaseException):
+    """(one-line message, exit code) of any user-facing failure: an :class:`AcmmError` (its
+    message and class's ``exit_code``) or a :func:`plain_failure`; None for a genuine bug.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception caught.
+
+    Returns
+    -------
+    tuple of (str, int) or None
+        The message on one line and the exit code, or None.
+    """
+    if isinstance(exc, AcmmError):
+        return " ".join(str(exc).split()) or type(exc).__name__, int(getattr(exc, "exit_code", EXIT_INPUT))
+    plain = plain_failure(exc)
+    return None if plain is None else (" ".join(plain[0].split()), plain[1])

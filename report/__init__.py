@@ -5,7 +5,8 @@ it imports both, neither imports it.
 
 :func:`build_report` gathers the results it needs (:mod:`report.gather`: reusing
 ``<root>/<name>/*.h5`` whose ``design_hash`` / ``config_hash`` match the packaged configs, else
-running the stage), writes one section per module of :mod:`report.sections` (each with declared
+running the stage; ``root`` is the report's own, ``<out>/results`` by default, never a user's
+``runs/<name>/``), writes one section per module of :mod:`report.sections` (each with declared
 inputs), keeps the printed-number ledger (:mod:`report.ledger`), draws the figures
 (:mod:`report.figures`, style :mod:`report.figure_style`: vector PDF + PNG) and writes
 

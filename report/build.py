@@ -19,10 +19,11 @@ from common.signals import hold_interrupts, release_interrupts
 from report.constants import SECTIONS
 from report.context import SectionWriter
 from report.document import render_html, render_markdown
-from report.gather import Gathered, changed_runs, keep_stage, order_runs, report_configs, stage_tasks, warm_workers
+from report.gather import (Gathered, changed_runs, failed, keep_stage, order_runs, report_configs, stage_tasks,
+                           warm_workers)
 from report.ledger import STATUS_UNEXPLAINED
 from report.manifest import build_manifest, compare_manifests
-from report.plan import assemble, section_tasks
+from report.plan import assemble, failure_blocks, section_tasks
 from report.publish import publish
 from report.runner import default_jobs, run_tasks
 from report.sections import determinism as sec_determinism
@@ -64,6 +65,11 @@ class ReportResult:
     tasks : dict
         Task name of the graph (stages and section parts) → ``(wall s, CPU s)`` of the process
         that ran it.
+    failures : list of (str, report.gather.Failed)
+        Section key and failure of each part or section that failed, in section order (shown in
+        the report; ``acmm report`` then exits with the first one's exit code).
+    root : pathlib.Path or None
+        The results root the stages ran in.
     """
 
     out: Path
@@ -81,6 +87,9 @@ class ReportResult:
     jobs: int = 1                   #: processes that ran the stages and sections
     #: per task of the graph (stages and section parts): (wall s, CPU s of the process that ran it)
     tasks: dict = field(default_factory=dict)
+    #: (section key, Failed) of each failed part or section, in section order
+    failures: list = field(default_factory=list)
+    root: Path | None = None        #: the results root of the stages
 
     @property
     def unexplained(self) -> list:
@@ -103,7 +112,9 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
         Recompute every stage even when matching results exist (to check determinism against the
         previous report in ``out``).
     root : path or None
-        Results root for the stages (default: each config's ``output.root``, i.e. ``runs``).
+        Results root of the stages, which the report computes in (``<root>/<name>/``, figures
+        off; files there are replaced); default ``<out>/results``, the report's own, so a
+        user's ``runs/<name>/`` is never written.
     progress : callable or None
         Called with one line of text per step.
     robustness : bool
@@ -116,7 +127,10 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     Returns
     -------
     ReportResult
-        The files written and what they contain.
+        The files written and what they contain.  A stage, part or section that raised a
+        user-facing error (:func:`common.errors.failure_line`) is shown in its section with that
+        error, the others complete, and it is listed in :attr:`ReportResult.failures`; a bug
+        propagates and nothing is written.
 
     Raises
     ------
@@ -128,6 +142,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     say = progress or (lambda msg: None)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     out, figdir = Path(out), Path(out) / "figures"
+    root = out / "results" if root is None else Path(root)      # its own: never a user's runs/<name>/
     created = [d for d in (out, figdir) if not d.exists()]
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -137,7 +152,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     except OSError as exc:
         raise OutputError(f"cannot create the report directory {out}: {exc.strerror or exc}") from None
     say(f"gathering results and writing sections ({'fast' if fast else 'full'} mode, root "
-        f"{root or 'from configs'}, {jobs} process{'es' if jobs > 1 else ''})")
+        f"{root}, {jobs} process{'es' if jobs > 1 else ''})")
     try:
         res = _build_into(out, figdir, staged, root, fast, rerun, robustness, jobs, say, t_start, cpu0)
     except BaseException:
@@ -164,20 +179,21 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
     """The report, its figures drawn into ``staged`` and moved into ``figdir`` only with the
     pages: an interrupted or failed report leaves ``--out`` as it was (its figures were written
     as their tasks finished, beside the previous report's pages: a review)."""
-    g, rep, timings = _run_graph(Path(root) if root is not None else None, staged, fast, rerun, robustness,
-                                 jobs, say)
+    g, rep, timings = _run_graph(root, staged, fast, rerun, robustness, jobs, say)
     jobs = timings.pop("processes")
-    _add(rep, "printed", sec_printed.build, list(rep.ledger))
+    failures = timings.pop("failures")
+    _add(rep, "printed", sec_printed.build, list(rep.ledger), failures=failures)
     # determinism
     man_path = out / "manifest.json"
     old = _previous_manifest(man_path)
     manifest = build_manifest(g)
     cmp = compare_manifests(old, manifest)
-    _add(rep, "determinism", sec_determinism.build, cmp, manifest)
+    _add(rep, "determinism", sec_determinism.build, cmp, manifest, failures=failures)
     total = time.perf_counter() - t_start
     _add(rep, "provenance", sec_provenance.build, g, {
         "stages (until the last one finished)": timings["stages"],
-        f"stages and sections ({jobs} process{'es' if jobs > 1 else ''})": timings["graph"], "total": total})
+        f"stages and sections ({jobs} process{'es' if jobs > 1 else ''})": timings["graph"], "total": total},
+         failures=failures)
     title = "CR-185644 regenerated: ACMM (Part II) and QPP (Part III)" + (" — fast mode" if fast else "")
     md = render_markdown(rep.doc, title)
     page = render_html(rep.doc, title, staged)          # (embeds the PNGs it reads there)
@@ -205,7 +221,9 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
                        rep.ledger, cmp, time.perf_counter() - t_start)
     res.tasks = timings.pop("tasks")
     res.timings = {**timings, "total": res.wall_time, "cpu (all processes)": _cpu() - cpu0}
-    res.jobs = jobs
+    res.jobs, res.failures, res.root = jobs, failures, root
+    for section, f in failures:
+        say(f"  section {section}: {f.text()}")
     return res
 
 
@@ -258,20 +276,34 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
     timings["graph"] = time.perf_counter() - t0
     order_runs(g, stages)
     sections: dict[str, float] = {}
-    assemble(rep, done, sections)
+    failures: list = []
+    assemble(rep, done, sections, failures)
     for key, sec in sections.items():
         say(f"  section {key:<12} {sec:6.2f} s")
     timings.update(g.timings)
     timings.update({f"section {k}": v for k, v in sections.items()})
     timings["tasks"] = stats
     timings["processes"] = min(jobs, len(stages) + len(parts))      # run_tasks forks no more
+    timings["failures"] = failures
     return g, rep, timings
 
 
-def _add(rep: SectionWriter, key: str, build, *args):
-    """Run one section's ``build`` in a fresh writer and append its blocks and ledger to ``rep``."""
+def _add(rep: SectionWriter, key: str, build, *args, failures: list | None = None):
+    """Run one section's ``build`` in a fresh writer and append its blocks and ledger to ``rep``;
+    a user-facing error it raises is shown as the section (its heading and the error) and
+    appended to ``failures`` as ``(key, Failed)``."""
     w = rep.section_writer()
-    result = build(w, *args)
+    try:
+        result = build(w, *args)
+    except Exception as exc:  # noqa: BLE001 (re-raised unless a user-facing failure)
+        f = failed(key, exc)
+        if f is None:
+            raise
+        w = rep.section_writer()
+        failure_blocks(w, key, f)
+        if failures is not None:
+            failures.append((key, f))
+        result = None
     rep.doc.blocks.extend(w.doc.blocks)
     rep.ledger.extend(w.ledger)
     return result

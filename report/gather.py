@@ -15,8 +15,9 @@ from common.errors import AcmmError
 from common.outputs import file_identity
 from report.constants import FAST_ORBITS  # noqa: F401 (cited by the docstrings)
 # the results files of one stage (reused by hash, else run): re-exported, the graph below uses them
-from report.stage_results import (StageRun, _record, _try_attrs, acmm_config,  # noqa: F401
-                                  ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, qpp_config)
+from report.stage_results import (Failed, StageRun, _record, _try_attrs, acmm_config,  # noqa: F401
+                                  blocked, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, failed,
+                                  qpp_config)
 
 
 @dataclass
@@ -43,6 +44,9 @@ class Gathered:
     identities : dict
         Run key → :func:`common.outputs.file_identity` of its results file when the report
         took it; checked before the report writes its pages (:func:`changed_runs`).
+    failed : dict
+        Task name → :class:`Failed` of each stage that failed (or was not run because the
+        stage it waits for failed); the sections reading it show the error.
     """
 
     configs: dict
@@ -53,6 +57,7 @@ class Gathered:
     timings: dict = field(default_factory=dict)   #: wall time (s) per stage
     produced_by: dict = field(default_factory=dict)   #: run key → name of the task that made it
     identities: dict = field(default_factory=dict)    #: run key → file_identity when taken
+    failed: dict = field(default_factory=dict)        #: stage task name → Failed
 
 
 def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
@@ -87,6 +92,27 @@ def _simulate_task(cfg, rerun):
 
 def _qpp_task(cfg, stage, rerun):
     return ensure_qpp(cfg, stage, rerun=rerun)
+
+
+def _guarded(name, fn, not_run, *args):
+    """``fn(*args)`` of stage task ``name``, or its :class:`Failed` (``not_run``: a stage it waits
+    for failed; a user-facing error it raises); a bug propagates."""
+    if not_run is not None:
+        return not_run
+    try:
+        return fn(*args)
+    except Exception as exc:  # noqa: BLE001 (re-raised unless a user-facing failure)
+        f = failed(name, exc)
+        if f is None:
+            raise
+        return f
+
+
+def _stage(name, fn, deps, args, cost):
+    """The stage ``name`` as a task of :func:`_guarded`."""
+    from report.runner import Task
+
+    return Task(name, _guarded, deps, lambda done: (name, fn, blocked(name, done, deps), *args), cost)
 
 
 def _sweep_task(root, fast, rerun, workers):
@@ -129,31 +155,26 @@ def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rer
     list of report.runner.Task
         Named ``"design:<name>"``, ``"simulate:<name>"``, ``"qpp design:<name>"``,
         ``"qpp simulate:<name>"`` and ``"sweep"``; each returns a :class:`StageRun` (the sweep:
-        ``(result, note, wall s)``).
+        ``(result, note, wall s)``), or a :class:`Failed` when it raised a user-facing error or
+        the stage it waits for failed (a bug propagates).
     """
-    from report.runner import Task
-
     full = acmm_config("staircase", root)
     tasks = []
     for name in ("mb3", "mb3_decoupled", "ac", "staircase"):
         donors = [full.run_dir()] if cfgs[name].name != full.name else []
-        tasks.append(Task(f"design:{name}", _design_task, (), _const(cfgs[name], rerun, donors),
-                          _COST.get(f"design:{name}", 0.1)))
+        tasks.append(_stage(f"design:{name}", _design_task, (), (cfgs[name], rerun, donors),
+                            _COST.get(f"design:{name}", 0.1)))
     for name in ("mb3", "mb3_decoupled", "staircase"):
-        tasks.append(Task(f"simulate:{name}", _simulate_task, (f"design:{name}",), _const(cfgs[name], rerun),
-                          _COST.get(f"simulate:{name}", 0.1) if not fast else 0.1))
+        tasks.append(_stage(f"simulate:{name}", _simulate_task, (f"design:{name}",), (cfgs[name], rerun),
+                            _COST.get(f"simulate:{name}", 0.1) if not fast else 0.1))
     for name in ("qpp_siso", "qpp_manipulator"):
         for stage, deps in (("design", ()), ("simulate", (f"qpp design:{name}",))):
-            tasks.append(Task(f"qpp {stage}:{name}", _qpp_task, deps, _const(cfgs[name], stage, rerun),
-                              _COST[f"qpp {stage}:{name}"]))
+            tasks.append(_stage(f"qpp {stage}:{name}", _qpp_task, deps, (cfgs[name], stage, rerun),
+                                _COST[f"qpp {stage}:{name}"]))
     if robustness:
-        tasks.append(Task("sweep", _sweep_task, (), _const(root, fast, rerun, 1 if jobs > 1 else None),
-                          0.5 if fast else _COST["sweep"]))
+        tasks.append(_stage("sweep", _sweep_task, (), (root, fast, rerun, 1 if jobs > 1 else None),
+                            0.5 if fast else _COST["sweep"]))
     return tasks
-
-
-def _const(*args):
-    return lambda done: args
 
 
 def changed_runs(g: "Gathered") -> list[str]:
@@ -183,11 +204,18 @@ def keep_stage(g: "Gathered", name: str, result, say: Callable[[str], None]) -> 
         ``robustness`` fields.
     name : str
         Task name (:func:`stage_tasks`).
-    result : StageRun or tuple
-        The task's result; for ``"sweep"`` ``(robustness dict or None, note, wall s)``.
+    result : StageRun, tuple or Failed
+        The task's result; for ``"sweep"`` ``(robustness dict or None, note, wall s)``; a
+        :class:`Failed` goes into ``g.failed``.
     say : callable
         Called with one line of progress text.
     """
+    if isinstance(result, Failed):
+        g.failed[name] = result
+        if name == "sweep":
+            g.robustness_note = f"the sweep failed: {result.message}"
+        say(f"  {result.text()}")
+        return
     if name == "sweep":
         g.robustness, g.robustness_note, g.robustness_wall = result
         g.timings["robustness sweep"] = g.robustness_wall

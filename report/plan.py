@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from report.context import SectionWriter
-from report.gather import Gathered
+from report.gather import Failed, Gathered, blocked, failed
 from report.runner import WORKER_CACHE, Task
 from report.sections import claim1, errata, qpp, robustness, schedule, staircase, table1
 
@@ -34,18 +34,44 @@ class Part:
         Its return value, passed on to other parts (e.g. the claim-1 poles in rad/s, β3 of ch. 13).
     seconds : float
         Wall time of the part, s.
+    failed : report.gather.Failed or None
+        The part failed (or was not run, a stage or part it reads having failed): its blocks are
+        the section's heading (first part) and the one-line error; ``value`` is None.
     """
 
     blocks: list          #: document blocks (:class:`report.document.Doc`)
     ledger: list          #: printed numbers (:class:`report.ledger.PrintedNumber`)
     value: object         #: its return value (passed on to other parts)
     seconds: float        #: wall time of the part
+    failed: Failed | None = None     #: the part's failure, shown in its section
 
 
-def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: dict | None) -> Part:
+def failure_blocks(ctx: SectionWriter, section: str | None, f: Failed) -> None:
+    """Write failure ``f`` into ``ctx`` (a fresh writer): the heading of ``section`` when the
+    failed part is the one that writes it, then the error on one line.
+
+    Parameters
+    ----------
+    ctx : report.context.SectionWriter
+        An empty writer.
+    section : str or None
+        Section key whose heading the failed part would have written, or None.
+    f : report.gather.Failed
+        The failure.
+    """
+    if section is not None:
+        ctx.section(section)
+    ctx.doc.p(f"FAILED — {f.text()}. (The other sections are complete; acmm report exits with code "
+              f"{f.exit_code}.)")
+
+
+def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: dict | None,
+             name: str = "", heading: str | None = None, not_run: Failed | None = None) -> Part:
     """``fn(ctx, *values)`` on a fresh writer; ``results``: HDF5 files already read (None: this
     worker process's cache).  matplotlib's settings are reset first, so a figure looks the same
-    whichever figures the process drew before.
+    whichever figures the process drew before.  A user-facing error it raises
+    (:func:`common.errors.failure_line`) becomes the part's :attr:`Part.failed` and its one-line
+    text; a bug propagates.
 
     Parameters
     ----------
@@ -62,18 +88,35 @@ def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: 
     results : dict or None
         Results files already read (run key ``"stage:name"`` → contents as read by
         :func:`common.results.read_h5`); None: this worker process's cache.
+    name : str, optional
+        Task name of the part (in its failure's message).
+    heading : str or None, optional
+        Section key whose heading this part writes (shown above its failure), or None.
+    not_run : report.gather.Failed or None, optional
+        A stage or part it reads failed: the part is not run and shows that failure.
 
     Returns
     -------
     Part
-        Its blocks, printed numbers, return value and wall time.
+        Its blocks, printed numbers, return value and wall time (and failure).
     """
     t0 = time.perf_counter()
-    if "matplotlib" in sys.modules:
-        sys.modules["matplotlib"].rc_file_defaults()
-    ctx = SectionWriter(g, figdir, fast, WORKER_CACHE if results is None else results)
-    value = fn(ctx, *values)
-    return Part(ctx.doc.blocks, ctx.ledger, value, time.perf_counter() - t0)
+    cache = WORKER_CACHE if results is None else results
+    f = not_run
+    if f is None:
+        if "matplotlib" in sys.modules:
+            sys.modules["matplotlib"].rc_file_defaults()
+        ctx = SectionWriter(g, figdir, fast, cache)
+        try:
+            value = fn(ctx, *values)
+            return Part(ctx.doc.blocks, ctx.ledger, value, time.perf_counter() - t0)
+        except Exception as exc:  # noqa: BLE001 (re-raised unless a user-facing failure)
+            f = failed(name or getattr(fn, "__name__", "part"), exc)
+            if f is None:
+                raise
+    ctx = SectionWriter(g, figdir, fast, cache)
+    failure_blocks(ctx, heading, f)
+    return Part(ctx.doc.blocks, ctx.ledger, None, time.perf_counter() - t0, f)
 
 
 def _design(c):
@@ -139,11 +182,14 @@ def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, resul
     list of report.runner.Task
         One task per part, named as in :data:`PARTS`; each returns a :class:`Part`.
     """
-    tasks = []
-    for name, _, fn, stage_deps, value_deps, cost in PARTS:
+    tasks, headed = [], set()
+    for name, section, fn, stage_deps, value_deps, cost in PARTS:
         values = _errata_values if name == "errata" else _values_of(value_deps)
         deps = tuple(d for d in stage_deps if d in stage_names) + value_deps
-        tasks.append(Task(name, run_part, deps, _part_args(fn, values, g, figdir, fast, results), cost))
+        heading = None if section in headed else section      # the first part of a section writes it
+        headed.add(section)
+        tasks.append(Task(name, run_part, deps, _part_args(fn, values, g, figdir, fast, results, name, heading,
+                                                           deps), cost))
     return tasks
 
 
@@ -152,15 +198,20 @@ def _values_of(deps: tuple):
     return lambda done: tuple(done[d].value for d in deps)
 
 
-def _part_args(fn, values, g, figdir, fast, results):
+def _part_args(fn, values, g, figdir, fast, results, name="", heading=None, deps=()):
     """``done → arguments of run_part`` (built when the part is submitted: ``g`` then holds the
-    stages it reads)."""
-    return lambda done: (fn, g, figdir, fast, values(done), results)
+    stages it reads); a part whose stage or part in ``deps`` failed is not run."""
+    def args(done):
+        not_run = blocked(name, done, deps)
+        return (fn, g, figdir, fast, () if not_run else values(done), results, name, heading, not_run)
+
+    return args
 
 
-def assemble(rep: SectionWriter, done: dict, timings: dict) -> None:
+def assemble(rep: SectionWriter, done: dict, timings: dict, failures: list | None = None) -> None:
     """Append every part's blocks and printed numbers to ``rep`` in section order; per-section wall
-    time (sum of its parts) into ``timings``.
+    time (sum of its parts) into ``timings``; ``(section, Failed)`` of each failed part into
+    ``failures``.
 
     Parameters
     ----------
@@ -170,9 +221,13 @@ def assemble(rep: SectionWriter, done: dict, timings: dict) -> None:
         Part name → :class:`Part`, for every part of :data:`PARTS`.
     timings : dict
         Section key → wall time, s; each part's time is added to its section's.
+    failures : list, optional
+        Appended ``(section key, report.gather.Failed)`` of each failed part, in section order.
     """
     for name, section, *_ in PARTS:
         part: Part = done[name]
+        if part.failed is not None and failures is not None:
+            failures.append((section, part.failed))
         rep.doc.blocks.extend(part.blocks)
         rep.ledger.extend(part.ledger)
         timings[section] = timings.get(section, 0.0) + part.seconds

@@ -53,6 +53,88 @@ class StageRun:
     git_commit: str = ""
 
 
+@dataclass
+class Failed:
+    """A stage or section part of the report that failed with a user-facing error: the report
+    shows it in its section, the other sections complete, and ``acmm report`` exits non-zero.
+
+    Attributes
+    ----------
+    name : str
+        Task name (``"qpp design:qpp_siso"``, ``"qpp13/circle"``, ``"printed"``, ...).
+    message : str
+        The error on one line.
+    exit_code : int
+        The error's exit code (:mod:`common.errors`: 2 input, 3 numerical, 4 output).
+    cause : str
+        The task whose failure kept this one from running (its message is that task's); empty
+        when this task itself failed.
+    """
+
+    name: str
+    message: str
+    exit_code: int
+    cause: str = ""
+
+    def text(self) -> str:
+        """The failure as the report prints it.
+
+        Returns
+        -------
+        str
+            ``"<name> failed: <message>"``, or ``"<name> not computed: <cause> failed: <message>"``.
+        """
+        if self.cause:
+            return f"{self.name} not computed: {self.cause} failed: {self.message}"
+        return f"{self.name} failed: {self.message}"
+
+
+def failed(name: str, exc: BaseException) -> Failed | None:
+    """``exc`` raised by task ``name`` as a :class:`Failed`, or None for a bug (to propagate).
+
+    Parameters
+    ----------
+    name : str
+        Task name.
+    exc : BaseException
+        What it raised.
+
+    Returns
+    -------
+    Failed or None
+        Its one-line message and exit code (:func:`common.errors.failure_line`), or None.
+    """
+    from common.errors import failure_line
+
+    line = failure_line(exc) if isinstance(exc, Exception) else None
+    return None if line is None else Failed(name, *line)
+
+
+def blocked(name: str, done: dict, deps) -> Failed | None:
+    """The :class:`Failed` of task ``name`` when one of its dependencies failed (it is not run).
+
+    Parameters
+    ----------
+    name : str
+        Task name.
+    done : dict
+        Task name → result (a :class:`Failed`, or an object with a ``failed`` attribute).
+    deps : iterable of str
+        Its dependencies.
+
+    Returns
+    -------
+    Failed or None
+        The first failed dependency's message, exit code and origin; None: none failed.
+    """
+    for d in deps:
+        f = done.get(d)
+        f = f if isinstance(f, Failed) else getattr(f, "failed", None)
+        if isinstance(f, Failed):
+            return Failed(name, f.message, f.exit_code, f.cause or f.name)
+    return None
+
+
 def _attrs(path: Path) -> dict:
     import h5py
 

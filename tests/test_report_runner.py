@@ -347,7 +347,10 @@ def _broken_qpp(cfg, stage, rerun):
     raise ConvergenceError(f"qpp {stage} of {cfg.name}: Riccati solver did not converge")
 
 
-def test_report_failure_in_a_worker_is_one_line_and_writes_nothing(tmp_path, monkeypatch):
+def test_report_failure_in_a_worker_is_one_line_and_shown_in_its_sections(tmp_path, monkeypatch):
+    """Every qpp stage raising in a worker: one ``error:`` line, exit 3, no traceback; the report
+    is written (issue 30: it stopped with nothing written), its qpp sections show the error and the
+    acmm sections are complete."""
     import sys
 
     from typer.testing import CliRunner
@@ -364,9 +367,11 @@ def test_report_failure_in_a_worker_is_one_line_and_writes_nothing(tmp_path, mon
     lines = res.output.strip().splitlines()
     assert lines[-1].startswith("error:") and "did not converge" in lines[-1]
     assert not any(line.startswith("Traceback") for line in lines)
-    assert not (out / "index.html").exists() and not (out / "report.md").exists()
-    assert not (out / "manifest.json").exists()
-    assert not [p for p in out.rglob("*") if p.is_file()], sorted(out.rglob("*"))
+    md = (out / "report.md").read_text(encoding="utf-8")
+    assert "FAILED — qpp13 not computed: qpp design:qpp_siso failed: qpp design of qpp_siso: Riccati" in md
+    assert "FAILED" not in md.split("## QPP chapter 13")[0]
+    assert (out / "index.html").is_file() and (out / "manifest.json").is_file()
+    assert not (tmp_path / "runs" / "qpp_siso").exists()
 
 
 def test_an_interrupted_report_leaves_out_as_it_was(tmp_path, monkeypatch):
