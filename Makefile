@@ -87,3 +87,9 @@ report-fast: $(STAMP) bytecode
 
 clean:
 	rm -rf $(VENV) $(LATEST) $(UV_VENV) runs build *.egg-info
+
+# The README's generated tables (<!-- generated:NAME --> blocks) from a fresh run of the packaged
+# configs in a temporary results root (scripts/readme_numbers.py; tests/test_readme_numbers.py checks them)
+.PHONY: readme
+readme: $(STAMP) bytecode
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/readme_numbers.py
