@@ -80,7 +80,7 @@ def uncached_note() -> str | None:
         return None
     return ("numba has no writable folder for its cache of the compiled kernels (neither __pycache__ beside "
             "the package nor the user's cache folder; set NUMBA_CACHE_DIR to a writable folder): they are "
-            "compiled in every run (~10-20 s)")
+            "compiled in every run (~20–60 s, longer on a busy machine)")
 
 
 def write_error_notes() -> list[str]:

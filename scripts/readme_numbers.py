@@ -350,19 +350,26 @@ def block_schedule_path(r: dict) -> str:
     th = np.degrees(np.asarray(pa["theta2"]))
     mr, mg, dm = (np.asarray(pa[k]) for k in ("max_real", "sector_margin", "disk_margin"))
     i = int(np.argmin(dm))
-    rows = [
-        ["least-squares fit before the refit: largest Re λ over the refit's "
-         f"{int(sc['refit_n_tea'])} TEAs", f"{fixed(sc['refit_max_real_before'], 2, sign=True)}n"],
-        ["closed-loop refit (SLSQP iterations)", str(int(sc["refit_iterations"]))],
+    form = _text(d["attrs"]["schedule_form"]) if "attrs" in d and "schedule_form" in d["attrs"] else (
+        "polynomial" if "refit_iterations" in sc else "table")
+    rows = [["schedule form", "table look-up, K linear in θ2* between the design points" if form == "table"
+             else "2nd-order polynomial in θ2*"]]
+    if "refit_iterations" in sc:
+        rows += [
+            ["least-squares fit before the refit: largest Re λ over the refit's "
+             f"{int(sc['refit_n_tea'])} TEAs", f"{fixed(sc['refit_max_real_before'], 2, sign=True)}n"],
+            ["closed-loop refit (SLSQP iterations to convergence)", str(int(sc["refit_iterations"]))]]
+    rows += [
         ["largest Re λ of the scheduled local loop", f"**{fixed(mr.max())}n**"],
         ["worst sector margin", f"{fixed(mg.min(), 2)}n"],
         ["fraction of the path with every pole in the sector", fixed(np.mean(mg >= 0))],
         ["smallest disk margin α at the plant input (skew 0)",
          f"{fixed(dm[i])} at θ2* = {fixed(th[i], 1)}° (±{sig(pa['disk_gain_margin'][i], 2)} dB, "
          f"±{sig(np.degrees(pa['disk_phase_margin'][i]), 2)}°)"],
-        ["largest RMS deviation of a refined polynomial from the LQR gains, / max\\|K_ij\\| "
-         "(`schedule/rel_residual`)", sig(np.max(sc["rel_residual"]), 2)],
     ]
+    if "refit_iterations" in sc:
+        rows.append(["largest RMS deviation of a refined polynomial from the LQR gains, / max\\|K_ij\\| "
+                     "(`schedule/rel_residual`)", sig(np.max(sc["rel_residual"]), 2)])
     return table([f"along the path ({th.size} TEAs, {fixed(th[0], 1)}° … {fixed(th[-1], 1)}°)", "value"], rows)
 
 
