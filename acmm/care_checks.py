@@ -131,7 +131,7 @@ def care_backward_error(A, B, Q, R, P) -> float:
     B : (N, M) array
         Input matrix, same coordinates (state units per s per input unit).
     Q : (N, N) array or float
-        State weight (a float q means q·I), same coordinates.
+        State weight (a float q means q·I), same coordinates (units of 1/s per state unit²).
     R : (M, M) array or float
         Control weight (a float r means r·I), 1 / input unit² per s.
     P : (N, N) array

@@ -135,7 +135,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     Raises
     ------
     OutputError
-        The output directory cannot be created.
+        The output directory cannot be created, or the results root is not a directory.
     """
     t_start = time.perf_counter()
     cpu0 = _cpu()
@@ -143,6 +143,8 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     out, figdir = Path(out), Path(out) / "figures"
     root = out / "results" if root is None else Path(root)      # its own: never a user's runs/<name>/
+    if root.exists() and not root.is_dir():     # every stage would fail: refused before anything is written
+        raise OutputError(f"--root: the results root {root} is not a directory")
     created = [d for d in (out, figdir) if not d.exists()]
     try:
         out.mkdir(parents=True, exist_ok=True)

@@ -394,6 +394,6 @@ def test_a_table_schedule_takes_no_closed_loop_refit():
     """The closed-loop refit refines a polynomial; a table passes through the points' gains: asking
     for both is refused (it used to drop the refit silently and label the table a polynomial)."""
     with pytest.raises(ConfigError, match="schedule: fit: closed_loop refines a polynomial"):
-        load_config("staircase", ["schedule.form=table"])              # the packaged fit is closed_loop
+        load_config("staircase", ["schedule.form=table", "schedule.fit=closed_loop"])
     cfg = load_config("staircase", ["schedule.form=table", "schedule.fit=least_squares"])
     assert cfg.schedule.form == "table"

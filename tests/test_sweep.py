@@ -190,12 +190,23 @@ def test_case_metrics_are_taken_over_every_step_not_the_output_samples(scale):
         assert ext.momentum_saturation_time > 600.0               # s: ~0.13 orbit at a CMG limit
 
 
-def test_a_redesign_that_fails_is_design_failed_and_an_impossible_scale_unphysical(tmp_path):
-    """A review: inertia_scale 1e5 (TEA found, Riccati refused) was labelled tea_failed; 1e200
-    overflowed in the sector LQR and ended the whole sweep (exit 3)."""
+def test_a_redesign_that_fails_is_design_failed_and_an_impossible_scale_unphysical(tmp_path, monkeypatch):
+    """A review: a case whose TEA is found but whose Riccati solve is refused was labelled
+    tea_failed (then inertia_scale 1e5; since Riccati solutions are accepted on their backward
+    error that station designs, so the refusal is injected here); 1e200 overflowed in the sector
+    LQR and ended the whole sweep (exit 3)."""
+    import acmm.riccati as ric
+    from common.errors import ConvergenceError
+
     sw = load_sweep(_sweep_yaml(tmp_path, "rd", base=str(CONFIGS / "mb3.yaml"), monte_carlo=None, n_runs=None,
                                 design="redesign", grid={"inertia_scale": [1e5, 1e200]}, orbits=0.1))
-    rows = [simulate_values(prepare_base(sw.bases[0], sw.spec), v) for v in
+    base = prepare_base(sw.bases[0], sw.spec)
+
+    def refused(*args, **kwargs):
+        raise ConvergenceError("Riccati solve (method='scipy') failed: refused for the test")
+
+    monkeypatch.setattr(ric, "solve_unverified", refused)
+    rows = [simulate_values(base, v) for v in
             (case_values(sw.spec, i, sw.bases[0].config.inertia.matrix()[None])[0] for i in range(2))]
     assert rows[0]["verdict"] == "design_failed" and "Riccati" in rows[0]["reason"], rows[0]["reason"]
     assert rows[1]["verdict"] == "unphysical" and "physical range" in rows[1]["reason"]

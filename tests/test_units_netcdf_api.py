@@ -56,8 +56,11 @@ def test_scheduled_closed_loop_equals_independent_linearization():
     theta = tea(s).theta
     assert np.degrees(theta[1]) == pytest.approx(-20.0, abs=1e-8)
     m = lin.linearize((1 - s) * i0 + s * i1, theta, n)
-    coef = d.result.fit.coef                       # K_ij(θ2*) = Σ_k coef[k,i,j] θ2*^k (ch. 5.3)
-    K = sum(coef[k] * theta[1] ** k for k in range(coef.shape[0]))
+    # the packaged table look-up: each K_ij linear in θ2* between the design points' own gains
+    assert d.result.fit.form == "table"
+    th = np.array([p.tea.theta[1] for p in d.result.points])
+    Ks = np.array([p.lqr.K for p in d.result.points])
+    K = np.array([[np.interp(theta[1], th, Ks[:, i, j]) for j in range(24)] for i in range(3)])
     scale = max(np.abs(m.A).max(), np.abs(m.B @ K).max())
     np.testing.assert_allclose(cl.A, m.A - m.B @ K, rtol=0, atol=1e-9 * scale)
     np.testing.assert_allclose(cl.B, np.hstack([m.B, m.G]), rtol=0, atol=1e-12)
