@@ -11,7 +11,7 @@ UV_VENV    := .venv-uv
 # `make test-latest`: the newest releases instead of the lock, in a venv of their own
 LATEST     := .venv-latest
 
-.PHONY: run test test-latest lock bench report report-fast browser install bytecode clean
+.PHONY: run test test-slow test-latest lock bench report report-fast browser install bytecode clean
 
 # the package's own modules as bytecode: with PYTHONDONTWRITEBYTECODE set (as on CI machines) an
 # editable install would otherwise compile them from source at every command (~0.1 s a run;
@@ -39,8 +39,13 @@ run: $(STAMP) bytecode
 # In CI (CI=true) the report test also opens the page in a real headless Chromium (Debian's
 # package); elsewhere that test is skipped unless /usr/bin/chromium exists.
 # --durations: the slowest tests are printed at the end of every run (CI's output included).
+# `make test` leaves out the system tests marked slow (whole reports, the cross-kernel runs, timed
+# signals: ~3 min more); `make test-slow` runs them, and CI (.ci/run) runs both.
 test: $(STAMP) bytecode $(if $(CI),browser)
-	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest --durations=25
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -m "not slow" --durations=25
+
+test-slow: $(STAMP) bytecode
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -m slow --durations=10
 
 # The suite against the newest releases within pyproject.toml's bounds, in $(LATEST) (re-resolved at
 # every call; not part of CI): what the next `make lock` would bring.  The numba cache beside the

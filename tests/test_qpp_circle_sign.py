@@ -92,6 +92,7 @@ def test_coupled_channels_take_the_small_gain_form():
     assert np.isclose(c.gain_bound, np.sqrt(2) * s)
 
 
+@pytest.mark.slow
 def test_coupled_small_gain_is_sufficient_on_random_loops():
     """Below the small-gain form's largest admissible scale, constant gain matrices with row sums
     |Φ_i1| + |Φ_i2| ≤ s (a coupled channel's bound) never destabilize; a diagonal channel mixed in

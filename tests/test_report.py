@@ -337,6 +337,7 @@ def test_headless_chromium_screenshot(fast_report, tmp_path):
     assert img.shape[0] >= 1000 and np.std(img[..., :3]) > 0.05        # not a blank page
 
 
+@pytest.mark.slow
 def test_a_report_that_cannot_be_written_leaves_out_as_it_was(fast_report, tmp_path):
     """A directory in the way of one page: the figures, the manifest and the other pages stay
     the previous report's (they were replaced before the failing write: a review)."""

@@ -347,6 +347,7 @@ def _broken_qpp(cfg, stage, rerun):
     raise ConvergenceError(f"qpp {stage} of {cfg.name}: Riccati solver did not converge")
 
 
+@pytest.mark.slow
 def test_report_failure_in_a_worker_is_one_line_and_shown_in_its_sections(tmp_path, monkeypatch):
     """Every qpp stage raising in a worker: one ``error:`` line, exit 3, no traceback; the report
     is written (issue 30: it stopped with nothing written), its qpp sections show the error and the
@@ -374,6 +375,7 @@ def test_report_failure_in_a_worker_is_one_line_and_shown_in_its_sections(tmp_pa
     assert not (tmp_path / "runs" / "qpp_siso").exists()
 
 
+@pytest.mark.slow
 def test_an_interrupted_report_leaves_out_as_it_was(tmp_path, monkeypatch):
     """Ctrl-C after every section was drawn (here: in the printed-values section, which runs
     last): the figures had been written into --out/figures as their tasks finished, beside the
@@ -450,6 +452,7 @@ def test_worker_warnings_reach_the_caller_as_in_a_serial_run(action, expected):
     assert counts == [expected, expected]
 
 
+@pytest.mark.slow
 def test_a_results_file_rewritten_while_the_report_runs_is_refused(tmp_path, monkeypatch):
     """The report holds no run lock while its sections read the stages' files: a user's
     `acmm design staircase_fast schedule.n_points=3` during the report gave a report whose

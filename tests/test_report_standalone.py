@@ -11,8 +11,12 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+import pytest
+
 from common.errors import ConvergenceError
 from conftest import invoke
+
+pytestmark = pytest.mark.slow      # three `acmm report --fast` runs: `make test-slow`
 
 
 def _tree(folder: Path) -> dict:

@@ -33,6 +33,7 @@ def _digest(folder: Path) -> dict:
 
 @pytest.mark.parametrize("sig, delay", [(signal.SIGTERM, 0.0), (signal.SIGTERM, 0.4), (signal.SIGTERM, 1.2),
                                         (signal.SIGHUP, 0.2)])
+@pytest.mark.slow
 def test_a_terminated_run_rolls_back_like_ctrl_c_and_leaves_no_process(tmp_path, sig, delay):
     first = subprocess.run([sys.executable, "-c", "from cli.acmm_app import main; main()", "simulate", "staircase",
                             "simulation.orbits=20"], cwd=tmp_path, capture_output=True, text=True, env=ENV,
