@@ -46,8 +46,11 @@ REPO = Path(__file__).resolve().parent.parent
 README = REPO / "README.md"
 
 #: the blocks this script writes, in README order
-BLOCKS = ("claims", "staircase_levels", "design_points", "schedule_path", "sweep_monte_carlo",
-          "sweep_diverged", "sweep_margin")
+BLOCKS = ("table1_tea", "qpp_bullet", "claims", "staircase_levels", "design_points", "schedule_path", "sweep_monte_carlo",
+          "sweep_diverged", "sweep_margin", "qpp_reproduced", "qpp_examples")
+
+#: the qpp configs the README quotes: the report's two chapters and the three shipped examples
+QPP_CONFIGS = ("qpp_siso", "qpp_manipulator", "qpp_unstable", "qpp_saturation", "qpp_cubic2")
 
 MINUS = "\u2212"
 _BLOCK_RE = re.compile(r"<!-- generated:(?P<name>[a-z0-9_]+) -->\n(?P<body>.*?)<!-- /generated:(?P=name) -->",
@@ -187,12 +190,16 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
     dict
         ``"design:<name>"`` (mb3, mb3_decoupled, ac, staircase), ``"simulate:<name>"`` (mb3,
         mb3_decoupled, staircase), ``"sweep"`` (``sweep_inertia30``) → the file as read by
-        :func:`common.results.read_h5`; ``"config:<name>"`` → the acmm config.
+        :func:`common.results.read_h5`; ``"config:<name>"`` → the acmm config;
+        ``"qpp_design:<name>"`` (:data:`QPP_CONFIGS`) → ``qpp_design.h5`` as read by ``read_h5``,
+        ``"qpp_sim:<name>"`` → :func:`_qpp_scenarios` of ``qpp_sim.h5``, ``"qpp_config:<name>"`` →
+        the qpp config.
     """
     from common.errors import AcmmError
     from common.results import read_h5
     from report.gather import robustness_result
-    from report.stage_results import acmm_config, ensure_acmm_design, ensure_acmm_simulation
+    from report.stage_results import (acmm_config, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp,
+                                      qpp_config)
 
     use_this_trees_configs()
     out: dict = {}
@@ -202,6 +209,11 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
         out[f"design:{name}"] = read_h5(ensure_acmm_design(cfg).path)
         if name != "ac":
             out[f"simulate:{name}"] = read_h5(ensure_acmm_simulation(cfg).path)
+    for name in QPP_CONFIGS:
+        qcfg = qpp_config(name, root)
+        out[f"qpp_config:{name}"] = qcfg
+        out[f"qpp_design:{name}"] = read_h5(ensure_qpp(qcfg, "design").path)
+        out[f"qpp_sim:{name}"] = _qpp_scenarios(ensure_qpp(qcfg, "simulate").path)
     res, note = robustness_result(root, workers=workers)
     if res is None:
         raise AcmmError(f"the sweep for the README did not run: {note}")
@@ -209,7 +221,289 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
     return out
 
 
+def _qpp_scenarios(path: Path) -> dict:
+    """The scenarios of a ``qpp_sim.h5``: their errors and sphere verdicts (dataset attributes,
+    which :func:`common.results.read_h5` does not return).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The ``qpp_sim.h5`` file.
+
+    Returns
+    -------
+    dict
+        Scenario name (file order) → ``{"error_inf": float, "per_output": array, "passed": bool,
+        "beta_o": float}``.
+    """
+    import h5py
+
+    out = {}
+    with h5py.File(path, "r") as f:
+        for k in f:
+            if isinstance(f[k], h5py.Group) and "error_inf" in f[k]:
+                e = f[k]["error_inf"]
+                out[k] = {"error_inf": float(e[()]), "per_output": np.atleast_1d(f[k]["error_per_output"][()]),
+                          "passed": bool(e.attrs["passed"]), "beta_o": float(e.attrs["beta_o"])}
+    return out
+
+
 # ------------------------------------------------------------------------------ blocks
+
+def _wie_pitch_fold(cfg, pitch_bias: float = 4.0) -> float | None:
+    """The largest pitch bias (ft·lbf) on the branch the TEA continuation follows from LVLH, for
+    a pure pitch bias of ``pitch_bias`` that has no equilibrium; None when it has one.
+
+    The same steps as :func:`acmm.tea.solve_tea` (products of inertia, then the bias) and its fold
+    refinement, i.e. the bias its ``NoEquilibriumError`` names.
+    """
+    from acmm import tea
+    from common.errors import NoEquilibriumError
+
+    inertia, n = cfg.inertia.matrix(), cfg.orbit_rate
+    bias = np.array([0.0, pitch_bias, 0.0])
+    try:
+        tea.solve_tea(inertia, n, bias)
+        return None
+    except NoEquilibriumError:
+        pass
+    diag = np.diag(np.diag(inertia))
+    theta, _ = tea._continue(np.zeros(3), lambda lam: (diag + lam * (inertia - diag), np.zeros(3)), n)
+    theta, fold = tea._continue(theta, lambda lam: (inertia, lam * bias), n)
+    return float(tea._fold_location(theta, fold, inertia, n, bias) * pitch_bias)
+
+
+def block_table1_tea(r: dict) -> str:
+    """The Table 1 TEA bullet: MB3 and AC TEAs, their residuals, MB3's zero-bias roots and the
+    largest pitch bias with an MB3 equilibrium.
+
+    Parameters
+    ----------
+    r : dict
+        :func:`run_stages`.
+
+    Returns
+    -------
+    str
+        One Markdown bullet.
+    """
+    from acmm import tea
+    from acmm.stages import compute_tea
+
+    def angles(t):
+        return "(" + ", ".join(fixed(v, 2) for v in t.theta_deg) + ")°"
+
+    t = {k: compute_tea(r[f"config:{k}"]).tea for k in ("mb3", "ac")}
+    cfg = r["config:mb3"]
+    roots = tea.all_equilibria(cfg.inertia.matrix(), cfg.orbit_rate, np.zeros(3))
+    zero = tea.solve_tea(cfg.inertia.matrix(), cfg.orbit_rate, np.zeros(3))
+    other = [x for x in roots if np.max(np.abs(x.theta - zero.theta)) > 1e-6]
+    fold = _wie_pitch_fold(cfg)
+
+    def bound(x):
+        return "≤ " + sci(10.0 ** math.ceil(math.log10(max(x, 1e-300))), 1)
+    text = ("* **Table 1 TEA** (bias back-solved from eq 4.1 at the printed attitude, continuation branch):\n"
+            f"  MB3 {angles(t['mb3'])}, residual {bound(t['mb3'].residual)} ft·lbf; "
+            f"AC {angles(t['ac'])}, residual {bound(t['ac'].residual)} ft·lbf.\n"
+            f"  MB3 with zero bias: {fixed(zero.theta_deg[1], 2)}° pitch")
+    if other:
+        text += (f" ({fixed(other[0].theta_deg[1], 2, sign=True)}° is the other principal-axis root, "
+                 "`acmm tea mb3 --all`)")
+    text += ".\n"
+    text += ("  The 4 ft·lbf pitch bias of Wie et al. has " + (
+        f"no MB3 equilibrium: largest pitch bias {sig(fold, 4)} ft·lbf.\n" if fold is not None
+        else "an MB3 equilibrium.\n"))
+    return text
+
+
+def _decimals(p: float) -> int:
+    """Decimals of a printed value (the fewest that give it back)."""
+    return next(d for d in range(12) if abs(round(p, d) - p) <= 1e-12 * max(1.0, abs(p)))
+
+
+def _gains(printed, computed, extra: int) -> tuple[str, bool]:
+    """Computed gains at the printed decimals + ``extra`` (non-zero printed entries, rows by " / "),
+    and whether every one rounds to its printed value."""
+    rows, ok = [], True
+    for pr, co in zip(np.atleast_2d(printed), np.atleast_2d(computed)):
+        cells = []
+        for p, c in zip(pr, co):
+            if p != 0.0:
+                d = _decimals(p)
+                ok &= bool(abs(c - p) <= 0.5 * 10.0 ** -d * (1 + 1e-9))
+                cells.append(fixed(c, d + extra))
+        rows.append(", ".join(cells))
+    return " / ".join(rows), ok
+
+
+def _printed(printed) -> str:
+    return " / ".join(", ".join(fixed(p, _decimals(p)) for p in row if p != 0.0)
+                      for row in np.atleast_2d(printed))
+
+
+def _qpp_summary(r: dict, name: str) -> dict:
+    """What the README says about one report chapter's design (``qpp_design.h5``, ``qpp_sim.h5``)."""
+    d, cfg, sims = r[f"qpp_design:{name}"], r[f"qpp_config:{name}"], r[f"qpp_sim:{name}"]
+    pub, pc = d["published"], d["published_certificate"]
+    k = np.concatenate([np.ravel(pub["K1"]), np.ravel(pub["Kc"])])
+    kc = np.concatenate([np.ravel(d["K1"]), np.ravel(d["Kc"])])
+    _, k_ok = _gains(k[None, :], kc[None, :], 0)
+    hp = np.ravel(pub["H"])
+    rel = np.ravel(pub["H_rel_diff"])[hp != 0]
+    m = float(np.atleast_2d(d["thresholds"])[0, 3])          # printed β3, β4 (row 0: printed bookkeeping)
+    return {"d": d, "cfg": cfg, "sims": sims, "k_ok": k_ok, "h_rel": rel, "m": m,
+            "b1": (float(pc["beta1_eq10_7"]), float(pc["beta1_printed"]))}
+
+
+def block_qpp_bullet(r: dict) -> str:
+    """The QPP bullet of "What the tool reproduces": gains, H, m, β1 and the spheres of ch. 13, 14.
+
+    Parameters
+    ----------
+    r : dict
+        :func:`run_stages`.
+
+    Returns
+    -------
+    str
+        One Markdown bullet.
+    """
+    s = [_qpp_summary(r, n) for n in ("qpp_siso", "qpp_manipulator")]
+    k = ("published K reproduced to the printed digits" if all(x["k_ok"] for x in s)
+         else "published K **not** reproduced to the printed digits")
+    rel = np.concatenate([x["h_rel"] for x in s]) * 100
+    holds = [[b <= x["m"] for b in x["b1"]] for x in s]
+    which = {(True, True): "both readings", (True, False): "the eq 10.7 reading only",
+             (False, True): "the printed reading only", (False, False): "neither reading"}
+    spheres = all(v["passed"] for x in s for v in x["sims"].values())
+    return (f"* **QPP** (ch. 13, 14): {k}, H within {sig(rel.min(), 2)}–{sig(rel.max(), 2)} %, "
+            f"m = {fixed(s[0]['m'], 5)}\n  and {fixed(s[1]['m'], 5)}, β1 exact for both B_z readings (the SISO "
+            f"certificate β1 ≤ m holds for\n  {which[tuple(holds[0])]}; the manipulator's for "
+            f"{which[tuple(holds[1])]}), simulated errors "
+            f"{'within' if spheres else '**not** all within'} the output spheres (see *qpp*).\n")
+
+
+def block_qpp_reproduced(r: dict) -> str:
+    """The qpp section's "Reproduced vs printed" table (ch. 13 SISO, ch. 14 manipulator).
+
+    Parameters
+    ----------
+    r : dict
+        :func:`run_stages`.
+
+    Returns
+    -------
+    str
+        A Markdown table.
+    """
+    from qpp import spheres
+
+    so, ma = _qpp_summary(r, "qpp_siso"), _qpp_summary(r, "qpp_manipulator")
+    rows = [["SISO A_z (13.6), Table 14.1 A_z/B_z", "—", "rebuilt from printed gains, equal at printed precision"]]
+    for lab, x, rho_a in (("SISO K1, Kc", so, None), ("manip. K1 / Kc", ma, None)):
+        d, pub, h = x["d"], x["d"]["published"], x["cfg"].hinf
+        if lab.startswith("SISO"):
+            pr = f"[{_printed(pub['K1'])}], [{_printed(pub['Kc'])}]"
+            co = f"[{_gains(pub['K1'], d['K1'], 2)[0]}], [{_gains(pub['Kc'], d['Kc'], 2)[0]}]"
+        else:
+            pr = f"{_printed(np.ravel(pub['K1'])[None, :])} / {_printed(np.ravel(pub['Kc'])[None, :])}"
+            co = (f"{_gains(np.ravel(pub['K1'])[None, :], np.ravel(d['K1'])[None, :], 2)[0]} / "
+                  f"{_gains(np.ravel(pub['Kc'])[None, :], np.ravel(d['Kc'])[None, :], 2)[0]}")
+        rows.append([f"{lab} (ρ={sci(h.rho, 1)}, a={sci(h.a, 1)})", pr, co])
+        hp, hc = np.ravel(pub["H"])[None, :], np.ravel(d["H"])[None, :]
+        rel = ", ".join(f"{sig(100 * v, 2)} %" for v in x["h_rel"])
+        rows.append([f"{lab.split()[0]} H", _printed(hp), f"{_gains(hp, hc, 1)[0]} (rel. diff {rel})"])
+    cfg_s, cfg_m = so["cfg"], ma["cfg"]
+    rows.append(["m SISO / manip. (printed β3, β4)", f"{cfg_s.published.m:g} / {cfg_m.published.m:g}",
+                 f"{fixed(so['m'], 5)} / {fixed(ma['m'], 5)}"])
+    for lab, x, cfg in (("SISO", so, cfg_s), ("manip.", ma, cfg_m)):
+        e, p = x["b1"]
+        mark = ["(< m ✓)" if v <= x["m"] else "(> m ✗)" for v in (e, p)]
+        rows.append([f"β1 {lab} (printed gains)", f"{cfg.published.beta1:g}",
+                     f"eq 10.7: {fixed(e, 6)} {mark[0]}; printed B_z: {fixed(p, 6)} {mark[1]}"])
+    T = cfg_s.spheres.T
+    rows.append(["SISO β3", f"{cfg_s.published.beta3:g}",
+                 f"0.05‖(sin 5t)_{T:g}‖₂ = {fixed(spheres.beta3_sinusoidal(0.05, 5.0, T), 6)}; with sin t (10.54): "
+                 f"{fixed(spheres.beta3_sinusoidal(0.05, cfg_s.nonlinearity.omega, T), 6)}"])
+    th = np.atleast_2d(so["d"]["thresholds"])
+    rows.append(["SISO ‖(y_o)_T‖₂", "0.363", f"{fixed(th[1, 2] / 0.05, 4)} (designed gains)"])
+    circ = []
+    for x in (so, ma):
+        c, sec = x["d"]["circle"], np.atleast_2d(x["d"]["sector"])
+        hw = float(np.max(np.abs(sec)))
+        circ.append(("pass" if int(x["d"]["attrs"]["circle_passed"]) else "FAIL", hw, hw * float(c["max_scale"])))
+    rows.append(["circle criterion", "satisfied",
+                 f"SISO {circ[0][0]}, sector [{fixed(-circ[0][1], 1)}, {fixed(circ[0][1], 1)}], largest half-width "
+                 f"{sig(circ[0][2])}; manip. {circ[1][0]} for ±{circ[1][1]:g} (largest ±{sig(circ[1][2])})"])
+    ss = so["sims"]
+    rows.append(["SISO ‖y − y_o‖∞ (Δm = 0.05)", "< 0.094, < 0.16",
+                 ", ".join(sig(ss[k]["error_inf"]) for k in ("step_offset", "sin10"))
+                 + f" (sphere {cfg_s.spheres.beta_o:g} {'✓' if all(v['passed'] for v in ss.values()) else '✗'})"])
+    ms = ma["sims"]
+    rows.append(["manip. ‖y − y_o‖∞, M = " + "/".join(k[1:] for k in ms) + " kg", "0.006 m, 0.0015 rad (M = 45)",
+                 " / ".join(sig(v["error_inf"], 2) for v in ms.values())
+                 + f" (sphere {cfg_m.spheres.beta_o:g} {'✓' if all(v['passed'] for v in ms.values()) else '✗'})"])
+    return table(["quantity", "printed", "reproduced"], rows)
+
+
+#: plant / nonlinearity of the shipped examples (their configs' inputs, not results)
+QPP_EXAMPLES = {
+    "qpp_unstable": "poles +1, −2, r_o = sin 3t; f1 = 2y + (1.5 + dm) y sin t, \\|dm\\| ≤ 0.05, G = B",
+    "qpp_saturation": "mass, damping 0.5, step r_o; f1 = −k sat(y, 0.5), k ∈ [3.8, 4.2]",
+    "qpp_cubic2": "two coupled masses, 2 inputs/outputs, step + sin 2t; f1 = [−c y1³, 0], c ∈ [0.9, 1.1], "
+                  "\\|y\\| ≤ 1",
+}
+
+
+def _path(values, fmt) -> str:
+    """``a → b → c`` of the successive distinct values (first and last kept)."""
+    out = []
+    for v in values:
+        t = fmt(v)
+        if not out or out[-1] != t:
+            out.append(t)
+    return " → ".join(out)
+
+
+def block_qpp_examples(r: dict) -> str:
+    """The worked example's table of the three shipped qpp examples (design path, certificate,
+    simulated errors).
+
+    Parameters
+    ----------
+    r : dict
+        :func:`run_stages`.
+
+    Returns
+    -------
+    str
+        A Markdown table.
+    """
+    rows = []
+    for name, plant in QPP_EXAMPLES.items():
+        d, sims = r[f"qpp_design:{name}"], r[f"qpp_sim:{name}"]
+        it = np.atleast_2d(d["iterations"])          # rho, nu, a, T, delta, beta1, m, circle, certified
+        cert = d["certificate"]
+        ws = np.atleast_1d(cert["ws_scale"])
+        final = it[np.flatnonzero(it[:, 8] == 1)[-1]] if np.any(it[:, 8] == 1) else it[-1]
+        design = []
+        for lab, col, fmt, unit in (("ρ", 0, lambda v: sig(v, 2), ""), ("T", 3, lambda v: sig(v, 3), " s"),
+                                    ("a", 2, lambda v: sci(v, 1), "")):
+            path = _path(it[:, col], fmt)
+            kept = "" if path.endswith(fmt(final[col])) else f" (kept {fmt(final[col])})"
+            design.append(f"{lab} {path}{unit}{kept}")
+        if np.any(ws != 1.0):
+            design.append("W_s = " + ("·".join(sorted({f"{w:g}" for w in ws})) + "·S_c"))
+        ok = int(cert["certified"])
+        b1, m = float(cert["beta1"]), float(cert["m"])
+        beta_o = next(iter(sims.values()))["beta_o"]
+        rows.append([f"`{name}`", plant, "; ".join(design),
+                     f"{fixed(b1, 4)} {'≤' if b1 <= m else '>'} {fixed(m, 4)}" + ("" if ok else " (not certified)"),
+                     ", ".join(sig(v["error_inf"], 2) for v in sims.values()) + f" ({beta_o:g})"])
+    return table(["config", "plant / nonlinearity", "design (12.1): ρ, T, a along the iterations",
+                  "β1 ≤ m", "‖y − y_o‖∞ per scenario (β_o)"], rows)
+
+
 def block_claims(r: dict) -> str:
     """Claims 1 and 2 of ch. 6, the sector designs, the schedule along the path, the ±30 % sweep.
 

@@ -2,8 +2,9 @@
 
 ``scripts/readme_numbers.py`` writes the ``<!-- generated:NAME -->`` blocks of README.md from the
 stages' results; here the same blocks are computed from a fresh run into a temporary results root
-(designs of mb3, mb3_decoupled, ac and the stair-case, their simulations, the 400-case
-``sweep_inertia30`` Monte Carlo and margin search: ~10 s on 2 cores, once per module) and compared
+(designs of mb3, mb3_decoupled, ac and the stair-case, their simulations, the qpp designs and
+simulations of the two report chapters and the three shipped examples, the 400-case
+``sweep_inertia30`` Monte Carlo and margin search, once per module) and compared
 with the README, so a code change that moves a number fails here until ``make readme`` is run.
 """
 from __future__ import annotations
