@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow      # runs every packaged config (~40 s): `make test-slow`, run by CI
+
 REPO = Path(__file__).resolve().parent.parent
 
 
