@@ -11,7 +11,7 @@ path, the ±30 % Monte Carlo counts and the inertia-scaling margins) sits in a b
 
 and is written by this script from the stages' results files.  The stages are run into a
 temporary results root (never the user's ``runs/``) through the report's own functions
-(:mod:`report.stage_results`, :func:`report.gather.robustness_result`), figures off.
+(:mod:`acmm.report.stage_results`, :func:`acmm.report.gather.robustness_result`), figures off.
 
 Numbers are rounded to the digits that mean something (3 significant digits for momenta and
 attitude errors, 3 decimals for margins in units of n, 2 significant digits for condition numbers
@@ -187,12 +187,12 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
     dict
         ``"design:<name>"`` (mb3, mb3_decoupled, ac, staircase), ``"simulate:<name>"`` (mb3,
         mb3_decoupled, staircase), ``"sweep"`` (``sweep_inertia30``) → the file as read by
-        :func:`common.results.read_h5`; ``"config:<name>"`` → the acmm config.
+        :func:`acmm_qpp.results.read_h5`; ``"config:<name>"`` → the acmm config.
     """
-    from common.errors import AcmmError
-    from common.results import read_h5
-    from report.gather import robustness_result
-    from report.stage_results import acmm_config, ensure_acmm_design, ensure_acmm_simulation
+    from acmm_qpp.errors import AcmmError
+    from acmm_qpp.results import read_h5
+    from acmm.report.gather import robustness_result
+    from acmm.report.stage_results import acmm_config, ensure_acmm_design, ensure_acmm_simulation
 
     use_this_trees_configs()
     out: dict = {}
