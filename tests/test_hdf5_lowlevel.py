@@ -179,14 +179,14 @@ def test_provenance_flags_uncommitted_changes(tmp_path):
     if shutil.which("git") is None:
         pytest.skip("no git")
     repo = tmp_path / "repo"
-    shutil.copytree(Path(__file__).resolve().parents[1] / "common", repo / "common",
+    shutil.copytree(Path(__file__).resolve().parents[1] / "acmm_qpp", repo / "acmm_qpp",
                     ignore=shutil.ignore_patterns("__pycache__"))
     git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-c", "init.defaultBranch=main"]
     subprocess.run(git + ["init", "-q"], cwd=repo, check=True)
     subprocess.run(git + ["add", "-A"], cwd=repo, check=True)
     subprocess.run(git + ["commit", "-q", "-m", "x"], cwd=repo, check=True)
     head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True).stdout.strip()
-    probe = "from common import provenance as p; print(p.git_commit(), p.git_dirty(), p.source_unchanged())"
+    probe = "from acmm_qpp import provenance as p; print(p.git_commit(), p.git_dirty(), p.source_unchanged())"
     env = {**os.environ, "PYTHONPATH": str(repo)}
 
     def state():
@@ -195,6 +195,6 @@ def test_provenance_flags_uncommitted_changes(tmp_path):
         return r.stdout.split()
 
     assert state() == [head, "no", "True"]
-    with open(repo / "common" / "units.py", "a") as f:
+    with open(repo / "acmm_qpp" / "units.py", "a") as f:
         f.write("# edited\n")
     assert state() == [head, "yes", "False"]

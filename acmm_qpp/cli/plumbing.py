@@ -69,7 +69,7 @@ def user_errors(fn):
             except AcmmError as exc:
                 from acmm_qpp.hints import with_hint
 
-                product = "qpp" if fn.__module__.endswith("qpp_app") else "acmm"
+                product = "qpp" if fn.__module__.split(".")[0] == "qpp" else "acmm"
                 fail(with_hint(exc, product), exc.exit_code)
             except KeyboardInterrupt as exc:
                 interrupted(exc)
