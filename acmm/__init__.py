@@ -13,7 +13,7 @@ Subpackages: :mod:`acmm.model` (the plant), :mod:`acmm.design` (the controller),
 """
 __version__ = "0.1.0"
 
-from acmm_qpp.netcdf_layout import register_state_names as _register_state_names
+from acmm_qpp.state_names import register_state_names as _register_state_names
 
 
 def _state_names():

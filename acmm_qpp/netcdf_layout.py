@@ -25,6 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from acmm_qpp.state_names import state_names as _state_names
+
 #: Attribute value netCDF-C gives a dimension scale that is not a variable.
 NOT_A_VARIABLE = "This is a netCDF dimension but not a netCDF variable."
 AXES = ("roll", "pitch", "yaw")
@@ -32,28 +34,6 @@ AXES = ("roll", "pitch", "yaw")
 #: ``coordinates`` attribute of every variable along ``t``.
 AUX_COORDS = ("orbits",)
 TIME = "t"
-
-
-#: Provider of the names of the ``state`` dimension (a callable returning a sequence of names);
-#: set by :func:`register_state_names` (acmm registers the 24 states of eq 4.47 on import).
-_STATE_NAMES_PROVIDER = None
-
-
-def register_state_names(provider) -> None:
-    """Declare the entry names of the ``state`` dimension.
-
-    Parameters
-    ----------
-    provider : callable
-        Called without arguments when a layout is built; returns the state names (str).  A
-        callable, so that the package declaring them is imported only when a file is written.
-    """
-    global _STATE_NAMES_PROVIDER
-    _STATE_NAMES_PROVIDER = provider
-
-
-def _state_names() -> tuple:
-    return tuple(_STATE_NAMES_PROVIDER()) if _STATE_NAMES_PROVIDER is not None else ()
 
 
 def _shape(value) -> tuple:

@@ -7,11 +7,13 @@ from __future__ import annotations
 
 from typing import Optional
 
-import numpy as np
-import typer
-
-from acmm_qpp.errors import DesignError
+# first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
 from acmm_qpp.cli.plumbing import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
+
+import numpy as np  # noqa: E402
+import typer  # noqa: E402
+
+from acmm_qpp.errors import DesignError  # noqa: E402
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
                   help="Quantitative pole placement for Lure systems (CR-185644 Part III).",
