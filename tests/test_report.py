@@ -266,6 +266,7 @@ class _Robustness(SectionWriter):
 
 def test_robustness_absent_renders_not_available(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "acmm.sweep", None)        # import now raises ImportError
+    monkeypatch.setitem(sys.modules, "acmm.sweep.run", None)    # (also when already imported)
     res, note = gather_mod.robustness_result(tmp_path)
     assert res is None and "not installed" in note
     g = gather_mod.Gathered(configs={}, runs={}, robustness=None, robustness_note=note)
