@@ -16,7 +16,7 @@ LATEST     := .venv-latest
 # the package's own modules as bytecode: with PYTHONDONTWRITEBYTECODE set (as on CI machines) an
 # editable install would otherwise compile them from source at every command (~0.1 s a run;
 # compileall only rewrites what changed)
-PACKAGES := acmm qpp common cli report configkinds
+PACKAGES := acmm qpp acmm_qpp
 
 # the dependencies exactly as locked (pip refuses any file whose hash is not in the lock), then the
 # project itself without resolving anything
@@ -25,7 +25,7 @@ $(STAMP): pyproject.toml $(LOCK)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet --require-hashes -r $(LOCK)
 	$(BIN)/python -m pip install --quiet --no-deps -e .
-	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m acmm.warmup
+	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m acmm.simulate.warmup
 	touch $(STAMP)
 
 install: $(STAMP) bytecode
@@ -56,7 +56,7 @@ test-latest:
 	$(LATEST)/bin/python -m pip install --quiet --upgrade pip
 	$(LATEST)/bin/python -m pip install --quiet --upgrade -e '.[test]'
 	$(LATEST)/bin/python -m pip list --format=freeze | grep -iE '^(numpy|scipy|control|slycot|numba)=='
-	OPENBLAS_NUM_THREADS=1 $(LATEST)/bin/python -m acmm.warmup
+	OPENBLAS_NUM_THREADS=1 $(LATEST)/bin/python -m acmm.simulate.warmup
 	@$(LATEST)/bin/python -m compileall -q $(PACKAGES)
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(LATEST)/bin/python -m pytest --durations=25
 

@@ -1,13 +1,14 @@
 """A small Python API: load a config, design, simulate, linearize — results as python-control
 ``StateSpace`` objects with named states, inputs and outputs.
 
->>> import acmm, control
->>> cfg = acmm.load_config("staircase")
->>> d = acmm.design(cfg)                        # sector LQR per design point + gain schedule
+>>> import control
+>>> from acmm import api
+>>> cfg = api.load_config("staircase")
+>>> d = api.design(cfg)                        # sector LQR per design point + gain schedule
 >>> cl = d.scheduled_closed_loop(tea_pitch_deg=-20.0)
 >>> control.step_response(cl, T=20000.0)        # doctest: +SKIP
 
-Conventions (eq 4.46): x = the 24 states of :data:`acmm.linearize.STATE_NAMES` (rad, rad/s,
+Conventions (eq 4.46): x = the 24 states of :data:`acmm.model.linearize.STATE_NAMES` (rad, rad/s,
 ft·lbf·s, ft·lbf·s², DRF states), control u (ft·lbf) enters ω' as −u and h' as +u, the
 disturbance w (ft·lbf) enters ω' as +w; the LQR law is u = −K x.  Every system here is in the
 report's (imperial) units whatever ``output.units`` says; time is in s.
@@ -26,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm.config import Config
-from common.errors import ConfigError, UnknownPointError
-from acmm.config import load_config as _load_config
+from acmm.io.config import Config
+from acmm_qpp.errors import ConfigError, UnknownPointError
+from acmm.io.config import load_config as _load_config
 
 __all__ = ["load_config", "design", "simulate", "linearize", "Design"]
 
@@ -36,17 +37,17 @@ V_NAMES = ["v1", "v2", "v3"]
 
 
 def load_config(config: str | Path | Config | None = None) -> Config:
-    """A validated :class:`acmm.config.Config` from a path, a packaged name (``"mb3"``), or
+    """A validated :class:`acmm.io.config.Config` from a path, a packaged name (``"mb3"``), or
     ``None`` (the packaged stair-case); a ``Config`` is returned as is.
 
     Parameters
     ----------
-    config : str or pathlib.Path or acmm.config.Config or None, optional
+    config : str or pathlib.Path or acmm.io.config.Config or None, optional
         Config file, packaged name, a config, or None.
 
     Returns
     -------
-    acmm.config.Config
+    acmm.io.config.Config
         The validated config.
 
     Raises
@@ -62,23 +63,23 @@ def load_config(config: str | Path | Config | None = None) -> Config:
 
 
 def linearize(config, tea_pitch_deg: float | None = None):
-    """The 24-state design model (:class:`acmm.linearize.LinearModel`) of a config at its TEA,
+    """The 24-state design model (:class:`acmm.model.linearize.LinearModel`) of a config at its TEA,
     or of its blended station whose pitch TEA is ``tea_pitch_deg``.  ``.to_statespace()`` gives
     the python-control system.
 
     Parameters
     ----------
-    config : str or pathlib.Path or acmm.config.Config or None
+    config : str or pathlib.Path or acmm.io.config.Config or None
         The config (see :func:`load_config`).
     tea_pitch_deg : float, optional
         Pitch TEA θ2* of the blended station, deg (default: the config's own TEA).
 
     Returns
     -------
-    acmm.linearize.LinearModel
+    acmm.model.linearize.LinearModel
         The design model (eqs 4.46–4.47), in the report's units.
     """
-    from acmm import linearize as lin
+    from acmm.model import linearize as lin
 
     cfg = load_config(config)
     if tea_pitch_deg is None:
@@ -89,13 +90,13 @@ def linearize(config, tea_pitch_deg: float | None = None):
 def simulate(config, figures: bool = False):
     """Design (or reuse ``design.h5``), run the nonlinear closed loop and write ``sim.h5``.
 
-    Returns ``(result, path)``: :class:`acmm.stages.SimulateResult` (``.sim`` holds t, state,
+    Returns ``(result, path)``: :class:`acmm.stages.runners.SimulateResult` (``.sim`` holds t, state,
     u, verdict) and the path of ``sim.h5`` (open it with ``xarray.open_dataset(path,
     engine="h5netcdf")``).
 
     Parameters
     ----------
-    config : str or pathlib.Path or acmm.config.Config or None
+    config : str or pathlib.Path or acmm.io.config.Config or None
         The config (see :func:`load_config`).
     figures : bool, optional
         Also write the simulation figures.
@@ -103,9 +104,9 @@ def simulate(config, figures: bool = False):
     Returns
     -------
     tuple
-        (:class:`acmm.stages.SimulateResult`, pathlib.Path of ``sim.h5``).
+        (:class:`acmm.stages.runners.SimulateResult`, pathlib.Path of ``sim.h5``).
     """
-    from acmm.stages import run_simulate
+    from acmm.stages.simulate import run_simulate
 
     return run_simulate(load_config(config), figures=figures)
 
@@ -118,7 +119,7 @@ def design(config, _compute: bool = True) -> "Design":
 
     Parameters
     ----------
-    config : str or pathlib.Path or acmm.config.Config or None
+    config : str or pathlib.Path or acmm.io.config.Config or None
         The config (see :func:`load_config`).
     _compute : bool, optional
         False: no design is computed (``result`` is None), for :func:`linearize` at a blended
@@ -129,7 +130,7 @@ def design(config, _compute: bool = True) -> "Design":
     Design
         The config and its design.
     """
-    from acmm.stages import compute_design
+    from acmm.stages.design import compute_design
 
     cfg = load_config(config)
     return Design(cfg, compute_design(cfg) if _compute else None)
@@ -147,15 +148,15 @@ class Design:
 
     Attributes
     ----------
-    config : acmm.config.Config
+    config : acmm.io.config.Config
         The validated config.
-    result : acmm.stages.DesignResult or None
+    result : acmm.stages.runners.DesignResult or None
         Its design (per-point models and LQR results, the schedule table); None for
         linearize-only use.
     """
 
     config: Config
-    result: object      # acmm.stages.DesignResult (None for linearize-only use)
+    result: object      # acmm.stages.runners.DesignResult (None for linearize-only use)
 
     # ------------------------------------------------------------------ design points
     @property
@@ -243,16 +244,17 @@ class Design:
         return _mix(*self._blend_ends(), s)
 
     def _blend_ends(self):
-        """The first and last blended design points (:class:`acmm.schedule.PointSpec`)."""
-        from acmm import schedule as sch
+        """The first and last blended design points (:class:`acmm.design.schedule.PointSpec`)."""
+        from acmm.design import schedule as sch
+        from acmm.design import schedule_points as sp
 
-        blended = [p for p in sch.point_specs(self.config) if np.isfinite(p.s)]
+        blended = [p for p in sp.point_specs(self.config) if np.isfinite(p.s)]
         if len(blended) < 2:
             raise ConfigError("the config has no gain schedule (no schedule.to blend): give a config with one")
         return blended[0], blended[-1]
 
     def _tea_at(self, s: float, guess=None):
-        from acmm.tea import solve_tea, solve_tea_near
+        from acmm.model.tea import solve_tea, solve_tea_near
 
         a, b = self._blend_ends()
         inertia, bias = _mix(a, b, s)
@@ -283,9 +285,10 @@ class Design:
         """
         from scipy.optimize import brentq
 
-        from acmm import schedule as sch
+        from acmm.design import schedule as sch
+        from acmm.design import schedule_points as sp
 
-        specs = [p for p in sch.point_specs(self.config) if np.isfinite(p.s)]
+        specs = [p for p in sp.point_specs(self.config) if np.isfinite(p.s)]
         if len(specs) < 2:
             raise ConfigError("the config has no gain schedule (no schedule.to blend): give a config with one")
         target = np.radians(tea_pitch_deg)
@@ -303,7 +306,7 @@ class Design:
         raise ConfigError(f"pitch TEA {tea_pitch_deg:g} deg is outside the blend ({lo:.2f} … {hi:.2f} deg)")
 
     def model_at(self, tea_pitch_deg: float):
-        """Design model (:class:`acmm.linearize.LinearModel`) of the blended station whose
+        """Design model (:class:`acmm.model.linearize.LinearModel`) of the blended station whose
         pitch TEA is ``tea_pitch_deg``, linearized at its own TEA.
 
         Parameters
@@ -313,10 +316,10 @@ class Design:
 
         Returns
         -------
-        acmm.linearize.LinearModel
+        acmm.model.linearize.LinearModel
             The 24-state model of eqs 4.46–4.47 at that station.
         """
-        from acmm import linearize as lin
+        from acmm.model import linearize as lin
 
         s = self.blend_for_tea(tea_pitch_deg)
         inertia, t = self._tea_at(s)
@@ -378,14 +381,14 @@ class Design:
         else:
             model = self.model_at(tea_pitch_deg)
             K = self.result.table.gain_at(model.theta_star[1], 0)
-        from acmm.linearize import INPUT_NAMES
+        from acmm.model.linearize import INPUT_NAMES
 
         return _named(model.A, model.B, K, np.zeros((3, 3)), model.state_names, INPUT_NAMES,
                       [f"K{u}" for u in INPUT_NAMES], "acmm_loop_transfer")
 
     @staticmethod
     def _closed(model, K, name):
-        from acmm.linearize import DISTURBANCE_NAMES, INPUT_NAMES
+        from acmm.model.linearize import DISTURBANCE_NAMES, INPUT_NAMES
 
         A = model.A - model.B @ K
         B = np.hstack([model.B, model.G])
@@ -396,5 +399,5 @@ class Design:
 
 
 def _mix(a, b, s: float) -> tuple[np.ndarray, np.ndarray]:
-    """(inertia, bias) of the blend (1 − s)·a + s·b of two :class:`acmm.schedule.PointSpec`."""
+    """(inertia, bias) of the blend (1 − s)·a + s·b of two :class:`acmm.design.schedule.PointSpec`."""
     return (1 - s) * a.inertia + s * b.inertia, (1 - s) * a.bias + s * b.bias

@@ -8,11 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
-from common.plot_style import agg_pyplot as _plt
-from common.results import save_figure
+from acmm_qpp.plot_style import agg_pyplot as _plt
+from acmm_qpp.results import save_figure
 
 
-#: the figure worker's warm-up for the qpp stages (:func:`common.figure_worker.start`)
+#: the figure worker's warm-up for the qpp stages (:func:`acmm_qpp.figure_worker.start`)
 FIGURE_WARM = "qpp.plots:warm_figure_worker"
 
 
@@ -20,7 +20,7 @@ def warm_figure_worker() -> None:
     """The figure worker's warm-up for the qpp stages: matplotlib on Agg with its rcParams left
     as they are (the figures look as when drawn in the stage's own process) and one small figure
     drawn (fonts, caches)."""
-    from common.plot_style import draw_warm_up_figure
+    from acmm_qpp.plot_style import draw_warm_up_figure
 
     draw_warm_up_figure(_plt(), "‖y − y_o‖ (rad)", "t (s)")
 
@@ -30,8 +30,8 @@ def plot_circle(res, path: Path) -> list[Path]:
 
     Parameters
     ----------
-    res : qpp.certificate.DesignResult
-        A design; its ``circle`` (:class:`qpp.circle.CircleResult`) is drawn.
+    res : qpp.design.certificate.DesignResult
+        A design; its ``circle`` (:class:`qpp.design.circle.CircleResult`) is drawn.
     path : pathlib.Path
         Figure path; channel i is written to ``<stem>_ch<i>.png`` beside it.
 
@@ -42,7 +42,7 @@ def plot_circle(res, path: Path) -> list[Path]:
     """
     from matplotlib.collections import EllipseCollection
 
-    from qpp.circle import critical_disc
+    from qpp.design.circle import critical_disc
 
     plt = _plt()
     c = res.circle
@@ -101,7 +101,7 @@ def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
 
     Parameters
     ----------
-    sim : qpp.simulate.SimResult
+    sim : qpp.simulate.closed_loop.SimResult
         One simulated scenario (time in s, signals in the plant's output and control units).
     path : pathlib.Path
         Figure path.
@@ -162,7 +162,7 @@ def plot_cartesian(sims, a: float, path: Path) -> Path:
 
     Parameters
     ----------
-    sims : list of qpp.simulate.SimResult
+    sims : list of qpp.simulate.closed_loop.SimResult
         Simulated scenarios of the polar arm (y1 radial extension in m, y2 angle in rad); the
         first one's nominal output y_o is drawn too.
     a : float
@@ -196,7 +196,7 @@ def plot_iterations(res, path: Path) -> Path:
 
     Parameters
     ----------
-    res : qpp.certificate.DesignResult
+    res : qpp.design.certificate.DesignResult
         A design; its ``iterations`` records are drawn.
     path : pathlib.Path
         Figure path.

@@ -23,9 +23,11 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.integrate import solve_ivp  # noqa: E402
 
-from acmm import simulate as sm  # noqa: E402
-from acmm.config import load_config  # noqa: E402
-from acmm.stages import compute_design  # noqa: E402
+from acmm.simulate import kernel as sm  # noqa: E402
+from acmm.simulate import scenario as scen
+from acmm.simulate import reference  # noqa: E402
+from acmm.io.config import load_config  # noqa: E402
+from acmm.stages.design import compute_design
 
 BIN = Path(sys.executable).parent
 
@@ -43,13 +45,13 @@ def _row(name, value, target, ok):
     print(f"  {name:<52} {value:>14}   target {target:<12} {'ok' if ok else 'MISSED'}")
 
 
-def baseline_solve_ivp(sc: sm.Scenario, rtol=1e-8):
+def baseline_solve_ivp(sc: scen.Scenario, rtol=1e-8):
     """The same closed loop, level by level, with scipy's RK45 and the numpy right-hand side."""
     x = sc.x0.copy()
     ends = np.append(sc.level_start[1:], sc.t_end)
     steps = 0
     for k, (t0, t1) in enumerate(zip(sc.level_start, ends)):
-        sol = solve_ivp(lambda t, y: sm.rhs_numpy(t, y, sc, k), (t0, t1), x, method="RK45",
+        sol = solve_ivp(lambda t, y: reference.rhs_numpy(t, y, sc, k), (t0, t1), x, method="RK45",
                         rtol=rtol, atol=sc.atol)
         x = sol.y[:, -1]
         steps += sol.t.size
@@ -73,7 +75,7 @@ def main() -> int:
     t_design = time.perf_counter() - t0
     _row("staircase design in-process (12 points + 11 checks)", f"{t_design:.2f} s", "-", True)
 
-    sc = sm.scenario_from_config(cfg, table)
+    sc = scen.scenario_from_config(cfg, table)
     t0 = time.perf_counter()
     sm.simulate(sc)                       # compile or load the cached machine code
     t_first = time.perf_counter() - t0
@@ -93,7 +95,7 @@ def main() -> int:
     _row(f"same model, solve_ivp RK45 rtol 1e-8 + numpy rhs ({steps} steps)", f"{t_base:.2f} s", "-", True)
     ratio = t_base / t_sim
     _row("speed-up over the solve_ivp baseline", f"{ratio:.0f}x", ">= 15x", ratio >= 15)
-    scale = sm.plain_scales(sc.n, sc.drf_mode)
+    scale = scen.plain_scales(sc.n, sc.drf_mode)
     diff = np.max(np.abs(r.state[-1] - x_ref) / (scale * 1e-6 + 1e-6 * np.abs(x_ref)))
     _row("final-state agreement with the baseline (in 1e-6 units)", f"{diff:.2f}", "-", True)
 

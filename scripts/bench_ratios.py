@@ -86,7 +86,7 @@ def _blocks_1_to_4(args) -> None:
 _REPORT = """
 import json, sys
 from pathlib import Path
-from report import build_report
+from acmm.report.build import build_report
 jobs = None if sys.argv[4] == "default" else int(sys.argv[4])
 r = build_report(Path(sys.argv[1]), fast=sys.argv[3] == "fast", root=Path(sys.argv[2]), jobs=jobs)
 print(json.dumps({"wall": r.wall_time, "jobs": r.jobs, "timings": r.timings, "tasks": r.tasks,

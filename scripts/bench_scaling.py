@@ -43,9 +43,11 @@ def _same(a, b) -> bool:
 
 def per_case_cost(base: str, orbits: float, n: int = 60) -> tuple[float, float]:
     """(seconds per sweep case, seconds per bare integration of the same perturbed plants)."""
-    from acmm import dynamics as dyn
-    from acmm import simulate as sm
-    from acmm.sweep import case_values, perturb_inertia, prepare_base, run_case, simulate_values
+    from acmm.model import dynamics as dyn
+    from acmm.model import kinematics as kin
+    from acmm.simulate import kernel as sm
+    from acmm.sweep.cases import case_values, perturb_inertia
+    from acmm.sweep.case import prepare_base, run_case, simulate_values
     from acmm.sweep.config import parse_sweep
 
     sw = parse_sweep({"name": "bench_case", "sweep": {"base": base, "monte_carlo": {"inertia": {"percent": 30}},
@@ -64,7 +66,7 @@ def per_case_cost(base: str, orbits: float, n: int = 60) -> tuple[float, float]:
         if row["verdict"] in ("no_equilibrium", "unphysical"):
             continue
         true = np.radians(np.array(row["tea_true"]))
-        x0 = np.concatenate([dyn.lvlh_rate_in_body(true, sc0.n), true, np.zeros(18)])
+        x0 = np.concatenate([kin.lvlh_rate_in_body(true, sc0.n), true, np.zeros(18)])
         inertia = np.array([perturb_inertia(m, values) for m in sc0.inertia])
         scenarios.append((i, dataclasses.replace(sc0, inertia=inertia, x0=x0)))
     best_case, best_bare = np.inf, np.inf
@@ -83,8 +85,8 @@ def per_case_cost(base: str, orbits: float, n: int = 60) -> tuple[float, float]:
 def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool = True,
             unchunked: bool = False, out=print) -> dict:
     """Run the table; returns {(executor, N): seconds} and prints rows through ``out``."""
-    from common.results import read_h5
-    from acmm.sweep import run_sweep
+    from acmm_qpp.results import read_h5
+    from acmm.sweep.run import run_sweep
     from acmm.sweep.config import parse_sweep
 
     tmp = Path(tempfile.mkdtemp(prefix="bench_scaling_"))
@@ -138,7 +140,7 @@ def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool
                     # start-up and the one-time kernel load per worker are not timed: a cluster
                     # serving many sweeps pays them once (a forked pool inherits them)
                     with distributed.Client(cluster) as client:
-                        from acmm.sweep import _warm_worker
+                        from acmm.sweep.executors import _warm_worker
 
                         client.run(_warm_worker)
                     load = os.getloadavg()[0]

@@ -25,8 +25,8 @@ def main() -> None:
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     args = ap.parse_args()
 
-    from common.results import read_h5
-    from acmm.sweep import run_sweep
+    from acmm_qpp.results import read_h5
+    from acmm.sweep.run import run_sweep
     from acmm.sweep.config import parse_sweep
 
     tmp = Path(tempfile.mkdtemp(prefix="bench_sweep_"))

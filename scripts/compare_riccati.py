@@ -1,7 +1,7 @@
 #!/usr/bin/env python
-"""Compare the Riccati solvers of acmm.riccati on the MB3 and AC design problems.
+"""Compare the Riccati solvers of acmm.design.riccati on the MB3 and AC design problems.
 
-For each configuration two Riccati equations of the sector LQR (acmm.lqr, ch. 5.2) are solved:
+For each configuration two Riccati equations of the sector LQR (acmm.design.lqr, ch. 5.2) are solved:
 
 * **step 1** — the minimum-energy LQR on A + σn·I (Q = 0, R = I/(100 ft·lbf)²), the solve
   every design starts from;
@@ -11,7 +11,7 @@ For each configuration two Riccati equations of the sector LQR (acmm.lqr, ch. 5.
 Each is solved by the sign function (eq 5.6 corrected, partial-fraction evaluation), scipy and
 Slycot, on the state-scaled problem (x = D x̃, D = diag(LinearModel.scales)) and on the raw
 physical-unit problem.  The residual is always evaluated the same way: the relative residual of
-acmm.riccati.care_residual in the *scaled* coordinates (the unscaled P is mapped by P̃ = DPD).
+acmm.design.riccati.care_residual in the *scaled* coordinates (the unscaled P is mapped by P̃ = DPD).
 "!" marks a solution that is not stabilizing; "fail" a solver that returned nothing.  Time is
 the median wall time of the solve alone (no verification) over ``--repeat`` runs, with
 single-threaded BLAS.
@@ -32,12 +32,13 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from acmm.config import load_config
-from common.errors import ConvergenceError
-from acmm.linearize import linearize_config
-from acmm.lqr import sector_lqr
-from acmm.riccati import care_condition, care_residual, scale_problem, solve_unverified
-from acmm.settings import design_settings
+from acmm.io.config import load_config
+from acmm_qpp.errors import ConvergenceError
+from acmm.model.linearize import linearize_config
+from acmm.design.lqr import sector_lqr
+from acmm.design.care_checks import care_condition, care_residual, scale_problem
+from acmm.design.riccati import solve_unverified
+from acmm.design.settings import design_settings
 
 SOLVERS = [("sign", {}), ("sign (polynomial eval.)", {"sign_evaluation": "polynomial"}),
            ("scipy", {}), ("slycot", {})]
@@ -60,7 +61,7 @@ def problems(name):
 
 
 def conditions(repeat=1) -> str:
-    """κ_CARE (acmm.riccati.care_condition, scaled) of each problem, from scipy's solution."""
+    """κ_CARE (acmm.design.riccati.care_condition, scaled) of each problem, from scipy's solution."""
     cells = []
     for name in ("mb3", "ac"):
         d, R, probs = problems(name)
@@ -127,7 +128,7 @@ def main():
     a = ap.parse_args()
     t = table(a.repeat)
     print(t)
-    print("\nrelative residual (acmm.riccati.care_residual, scaled coordinates) / median solve time;"
+    print("\nrelative residual (acmm.design.riccati.care_residual, scaled coordinates) / median solve time;"
           " '!' = not stabilizing, 'fail' = no solution")
     print(conditions())
     if a.out:

@@ -11,7 +11,7 @@ path, the ±30 % Monte Carlo counts and the inertia-scaling margins) sits in a b
 
 and is written by this script from the stages' results files.  The stages are run into a
 temporary results root (never the user's ``runs/``) through the report's own functions
-(:mod:`report.stage_results`, :func:`report.gather.robustness_result`), figures off.
+(:mod:`acmm.report.stage_results`, :func:`acmm.report.gather.robustness_result`), figures off.
 
 Numbers are rounded to the digits that mean something (3 significant digits for momenta and
 attitude errors, 3 decimals for margins in units of n, 2 significant digits for condition numbers
@@ -190,16 +190,16 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
     dict
         ``"design:<name>"`` (mb3, mb3_decoupled, ac, staircase), ``"simulate:<name>"`` (mb3,
         mb3_decoupled, staircase), ``"sweep"`` (``sweep_inertia30``) → the file as read by
-        :func:`common.results.read_h5`; ``"config:<name>"`` → the acmm config;
+        :func:`acmm_qpp.results.read_h5`; ``"config:<name>"`` → the acmm config;
         ``"qpp_design:<name>"`` (:data:`QPP_CONFIGS`) → ``qpp_design.h5`` as read by ``read_h5``,
         ``"qpp_sim:<name>"`` → :func:`_qpp_scenarios` of ``qpp_sim.h5``, ``"qpp_config:<name>"`` →
         the qpp config.
     """
-    from common.errors import AcmmError
-    from common.results import read_h5
-    from report.gather import robustness_result
-    from report.stage_results import (acmm_config, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp,
-                                      qpp_config)
+    from acmm_qpp.errors import AcmmError
+    from acmm_qpp.results import read_h5
+    from acmm.report.gather import robustness_result
+    from acmm.report.stage_results import (acmm_config, ensure_acmm_design, ensure_acmm_simulation,
+                                           ensure_qpp, qpp_config)
 
     use_this_trees_configs()
     out: dict = {}
@@ -223,7 +223,7 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
 
 def _qpp_scenarios(path: Path) -> dict:
     """The scenarios of a ``qpp_sim.h5``: their errors and sphere verdicts (dataset attributes,
-    which :func:`common.results.read_h5` does not return).
+    which :func:`acmm_qpp.results.read_h5` does not return).
 
     Parameters
     ----------
@@ -257,8 +257,8 @@ def _wie_pitch_fold(cfg, pitch_bias: float = 4.0) -> float | None:
     The same steps as :func:`acmm.tea.solve_tea` (products of inertia, then the bias) and its fold
     refinement, i.e. the bias its ``NoEquilibriumError`` names.
     """
-    from acmm import tea
-    from common.errors import NoEquilibriumError
+    from acmm.model import tea
+    from acmm_qpp.errors import NoEquilibriumError
 
     inertia, n = cfg.inertia.matrix(), cfg.orbit_rate
     bias = np.array([0.0, pitch_bias, 0.0])
@@ -287,8 +287,8 @@ def block_table1_tea(r: dict) -> str:
     str
         One Markdown bullet.
     """
-    from acmm import tea
-    from acmm.stages import compute_tea
+    from acmm.model import tea
+    from acmm.stages.runners import compute_tea
 
     def angles(t):
         return "(" + ", ".join(fixed(v, 2) for v in t.theta_deg) + ")°"
@@ -396,7 +396,7 @@ def block_qpp_reproduced(r: dict) -> str:
     str
         A Markdown table.
     """
-    from qpp import spheres
+    from qpp.design import spheres
 
     so, ma = _qpp_summary(r, "qpp_siso"), _qpp_summary(r, "qpp_manipulator")
     rows = [["SISO A_z (13.6), Table 14.1 A_z/B_z", "—", "rebuilt from printed gains, equal at printed precision"]]

@@ -31,6 +31,6 @@ def invoke(app, *args: str):
 @pytest.fixture
 def run_acmm():
     """``run_acmm("tea", "configs/mb3.yaml")`` runs the ``acmm`` CLI in-process."""
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     return lambda *args: invoke(app, *args)

@@ -286,9 +286,9 @@ def _snapshot(root: Path) -> set:
 
 def _app(name):
     if name == "acmm":
-        from cli.acmm_app import app
+        from acmm.cli.app import app
     else:
-        from cli.qpp_app import app
+        from qpp.cli import app
     return app
 
 
@@ -468,10 +468,10 @@ def test_each_numerical_hint_names_settings_of_its_own_product():
     # dotted key a hint names resolves in its product's config schema
     import re
 
-    from acmm.config import Config
-    from common.errors import ConvergenceError
-    from common.hints import _NUMERICAL_HINTS, model_at, with_hint
-    from qpp.config import QppConfig
+    from acmm.io.config import Config
+    from acmm_qpp.errors import ConvergenceError
+    from acmm_qpp.hints import _NUMERICAL_HINTS, model_at, with_hint
+    from qpp.io.config import QppConfig
 
     schema = {"acmm": Config, "qpp": QppConfig}
     for product, _words, hint in _NUMERICAL_HINTS:

@@ -23,7 +23,7 @@ from hypothesis import strategies as st  # noqa: E402
 
 from conftest import CONFIGS  # noqa: E402
 
-from common.errors import AcmmError, ConfigError  # noqa: E402
+from acmm_qpp.errors import AcmmError, ConfigError  # noqa: E402
 
 HOSTILE = st.one_of(
     st.none(), st.booleans(),
@@ -93,8 +93,8 @@ def _strict(fn, *args, **kwargs):
 @FUZZ
 @given(mutated("mb3"))
 def test_fuzz_acmm_config_accepts_or_refuses_cleanly(data):
-    from acmm.config import parse_config
-    from acmm.stages import compute_tea
+    from acmm.io.config import parse_config
+    from acmm.stages.runners import compute_tea
 
     try:
         cfg = _strict(parse_config, data)
@@ -112,7 +112,7 @@ def test_fuzz_acmm_config_accepts_or_refuses_cleanly(data):
 @settings(FUZZ, max_examples=300)
 @given(mutated("qpp_siso"))
 def test_fuzz_qpp_config_accepts_or_refuses_cleanly(data):
-    from qpp.config import parse_config
+    from qpp.io.config import parse_config
 
     try:
         _strict(parse_config, data)
@@ -136,7 +136,7 @@ def test_fuzz_sweep_config_accepts_or_refuses_cleanly(data):
 def test_fuzz_cli_sample_one_line(data):
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     with tempfile.TemporaryDirectory() as tmp:
         p = Path(tmp) / "c.yaml"

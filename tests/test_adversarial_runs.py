@@ -21,7 +21,7 @@ ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
 
 HOLD_LOCK = """
 import sys, time
-from common.runlock import run_lock
+from acmm_qpp.runlock import run_lock
 with run_lock(sys.argv[1]):
     print("locked", flush=True)
     sys.stdin.read()
@@ -78,7 +78,7 @@ def _temps(directory: Path) -> list[str]:
 def test_kill9_at_random_instants_then_resume_reproduces_uninterrupted(tmp_runs):
     """Workers die with their parent; every .h5 opens after each kill; resume gives the very
     data of an uninterrupted sweep."""
-    from acmm.sweep import run_sweep
+    from acmm.sweep.run import run_sweep
 
     cfg = _sweep_config(tmp_runs, n_runs=48)
     ref_dir = tmp_runs / "ref"
@@ -126,7 +126,7 @@ def test_kill9_at_random_instants_then_resume_reproduces_uninterrupted(tmp_runs)
 def test_second_run_of_same_name_refused_naming_the_holder(tmp_runs):
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     holder = subprocess.Popen([sys.executable, "-c", HOLD_LOCK, str(tmp_runs / "runs" / "mb3")], env=ENV,
                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
@@ -148,7 +148,7 @@ def test_second_run_of_same_name_refused_naming_the_holder(tmp_runs):
 def test_lock_of_a_killed_holder_does_not_block(tmp_runs):
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     holder = subprocess.Popen([sys.executable, "-c", HOLD_LOCK, str(tmp_runs / "runs" / "mb3")], env=ENV,
                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
@@ -163,7 +163,7 @@ def test_lock_of_a_killed_holder_does_not_block(tmp_runs):
 
 HOLD_SWEEP = """
 import sys
-from acmm.sweep import run_sweep
+from acmm.sweep.run import run_sweep
 paused = []
 def pause(done, total, rec):
     if not paused:                      # hold the run (and its lock) after the first case
@@ -246,7 +246,7 @@ def test_full_disk_one_line_exit_4_no_temp_no_crash(tmp_runs, small_tmpfs):
 def test_stale_temp_files_of_killed_runs_are_removed(tmp_runs):
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     d = tmp_runs / "runs" / "mb3"
     d.mkdir(parents=True)

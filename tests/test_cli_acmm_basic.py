@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from common.results import read_h5
+from acmm_qpp.results import read_h5
 
 from conftest import CONFIGS
 

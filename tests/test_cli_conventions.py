@@ -9,21 +9,21 @@ import numpy as np
 import pytest
 import yaml
 
-from acmm.config import load_config, parse_config
-from common.errors import EXIT_INPUT, EXIT_NUMERICAL, EXIT_USAGE, EXIT_VERDICT, ConfigError
-from common.results import read_h5
+from acmm.io.config import load_config, parse_config
+from acmm_qpp.errors import EXIT_INPUT, EXIT_NUMERICAL, EXIT_USAGE, EXIT_VERDICT, ConfigError
+from acmm_qpp.results import read_h5
 
 from conftest import CONFIGS, invoke
 
 
 def acmm(*args):
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     return invoke(app, *args)
 
 
 def qpp(*args):
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     return invoke(app, *args)
 
@@ -92,7 +92,7 @@ def test_bad_override_key_is_reported_like_the_file(tmp_runs):
 
 def test_overrides_for_qpp_and_sweep(tmp_runs):
     from acmm.sweep.config import load_sweep
-    from qpp.config import load_config as load_qpp
+    from qpp.io.config import load_config as load_qpp
 
     assert load_qpp("qpp_siso", ["hinf.rho=2e-4"]).hinf.rho == 2e-4
     sw = load_sweep("sweep_smoke", ["sweep.n_runs=3", "sweep.orbits=1"])
@@ -144,7 +144,8 @@ def schemas():
 
 
 def test_every_packaged_config_validates_against_its_schema(schemas):
-    from acmm.schema import detect_kind, load_any
+    from acmm.cli.configkinds import load_any
+    from acmm_qpp.configio import detect_kind
 
     paths = sorted(CONFIGS.glob("*.yaml"))
     assert len(paths) >= 9
@@ -202,7 +203,7 @@ def _variants_bad():
 
 
 def test_schema_accepts_what_the_loader_accepts(schemas, tmp_path):
-    from acmm.schema import load_any
+    from acmm.cli.configkinds import load_any
 
     for k, (kind, data) in enumerate(_variants_ok()):
         assert [e.message for e in schemas[kind].iter_errors(data)] == [], (k, kind)
@@ -219,10 +220,14 @@ def test_schema_accepts_what_the_loader_accepts(schemas, tmp_path):
 
 def test_validate_detects_every_kind(tmp_runs):
     for name, kind in (("mb3", "acmm"), ("sweep_smoke", "sweep"), ("qpp_siso", "qpp")):
-        for run in (acmm, qpp):
-            r = run("validate", name)
-            assert r.exit_code == 0, r.output
-            assert f"valid ({kind} config)" in r.stdout
+        r = acmm("validate", name)
+        assert r.exit_code == 0, r.output
+        assert f"valid ({kind} config)" in r.stdout
+    r = qpp("validate", "qpp_siso")
+    assert r.exit_code == 0 and "valid (qpp config)" in r.stdout, r.output
+    for name, kind in (("mb3", "acmm"), ("sweep_smoke", "sweep")):   # qpp imports nothing of acmm
+        r = qpp("validate", name)
+        assert r.exit_code == EXIT_INPUT and f"an {kind} config" in r.stderr and "acmm validate" in r.stderr
     r = acmm("validate", CONFIGS / "sweep_smoke.yaml", "sweep.map=[dI11]")
     assert r.exit_code == EXIT_INPUT and "sweep.map" in r.stderr and one_line(r)
 
@@ -239,7 +244,7 @@ def test_unknown_key_hints(tmp_path):
     d["simulaton"] = {"orbits": 2}
     with pytest.raises(ConfigError, match=r"simulaton: unknown key \(did you mean `simulation`\?\)"):
         parse_config(d)
-    from qpp.config import parse_config as parse_qpp
+    from qpp.io.config import parse_config as parse_qpp
 
     q = yaml.safe_load((CONFIGS / "qpp_siso.yaml").read_text())
     q["nonlinearity"]["omgea"] = 1.0
@@ -398,13 +403,13 @@ def test_progress_silent_without_terminal_and_shown_when_forced(tmp_runs, monkey
 
 
 def test_numba_compile_detection_does_not_fail():
-    from cli.progress import numba_needs_compile
+    from acmm.cli.compile_note import numba_needs_compile
 
     assert numba_needs_compile() in (True, False)
 
 
 def test_override_paths_and_errors():
-    from common.overrides import OverrideSyntaxError, apply_overrides
+    from acmm_qpp.overrides import OverrideSyntaxError, apply_overrides
 
     data = {"a": {"b": [1, 2, 3]}, "c": 1}
     out = apply_overrides(data, ["a.b.1=5", "d.e=x", "~c", "~no.such", "a.f="])
@@ -439,7 +444,7 @@ def test_console_entry_point_keeps_the_exit_code_with_closed_streams(tmp_path, c
 
 
 def test_a_riccati_hint_never_suggests_the_method_that_failed():
-    from common.hints import numerical_hint
+    from acmm_qpp.hints import numerical_hint
 
     for used in ("scipy", "sign", "slycot"):
         for msg in (f"Riccati solve (method='{used}') residual 3e-6 above design.residual_tol",
@@ -453,7 +458,7 @@ def test_a_riccati_hint_never_suggests_the_method_that_failed():
 def test_hints_for_an_uncontrollable_pole_at_zero_and_a_narrow_sector_can_help():
     """'lower design.sector.sigma' cannot help an uncontrollable pole at 0 (no sector σ > 0 holds
     it), nor 'uncontrollable?' a controllable plant in a 1° sector (review)."""
-    from common.hints import numerical_hint
+    from acmm_qpp.hints import numerical_hint
 
     at0 = numerical_hint("sector LQR: open-loop pole λ/n = 0+0j lies outside the sector and is uncontrollable "
                          "(PBH ratio 3.2e-18); no feedback can move it")
@@ -475,7 +480,7 @@ def test_any_mplbackend_still_writes_the_figures(tmp_path, backend):
 
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "MPLBACKEND": backend,
            "OPENBLAS_NUM_THREADS": "1"}
-    done = subprocess.run([sys.executable, "-m", "cli.acmm_app", "sweep", "sweep_smoke", "sweep.n_runs=2",
+    done = subprocess.run([sys.executable, "-m", "acmm.cli.app", "sweep", "sweep_smoke", "sweep.n_runs=2",
                            "sweep.orbits=0.5"], cwd=tmp_path, capture_output=True, text=True, env=env,
                           timeout=300, check=False)
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
@@ -495,7 +500,7 @@ def test_without_a_writable_home_matplotlib_leaves_no_folder_per_run(tmp_path):
     env.update({"PYTHONPATH": str(Path(__file__).resolve().parents[1]), "HOME": "/proc/nonexistent",
                 "TMPDIR": str(tmp), "OPENBLAS_NUM_THREADS": "1"})
     for name in ("a", "b"):
-        done = subprocess.run([sys.executable, "-m", "cli.acmm_app", "design", "mb3", f"name={name}"], cwd=tmp_path,
+        done = subprocess.run([sys.executable, "-m", "acmm.cli.app", "design", "mb3", f"name={name}"], cwd=tmp_path,
                               capture_output=True, text=True, env=env, timeout=300, check=False)
         assert done.returncode == 0 and done.stderr == "", done.stderr
         assert (tmp_path / "runs" / name / "design_poles.png").exists()
@@ -505,7 +510,7 @@ def test_without_a_writable_home_matplotlib_leaves_no_folder_per_run(tmp_path):
 def _interrupting_app():
     import typer
 
-    from cli.common import ExitCodeGroup, user_errors
+    from acmm_qpp.cli.plumbing import ExitCodeGroup, user_errors
 
     app = typer.Typer(cls=ExitCodeGroup, add_completion=False)
 

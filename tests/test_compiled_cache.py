@@ -1,4 +1,4 @@
-"""The compiled kernels where numba cannot cache them (acmm.compiled_cache): a read-only install
+"""The compiled kernels where numba cannot cache them (acmm.simulate.compiled_cache): a read-only install
 for a user without a home crashed at import with numba's "no locator available" traceback, and a
 full disk under NUMBA_CACHE_DIR failed the run with "I/O error: No space left on device"."""
 from __future__ import annotations
@@ -12,11 +12,11 @@ from pathlib import Path
 
 import numba.core.caching as numba_caching
 
-from acmm import compiled_cache
+from acmm.simulate import compiled_cache
 
 ROOT = Path(__file__).resolve().parents[1]
 KERNEL = textwrap.dedent("""
-    from acmm.compiled_cache import njit_cached
+    from acmm.simulate.compiled_cache import njit_cached
 
     @njit_cached()
     def plus_one(x):
@@ -69,7 +69,7 @@ def test_acmm_simulate_without_a_cache_folder_runs_and_says_why_it_compiles(tmp_
     """End to end, numba's cache locators all refusing (as on a read-only install whose user
     has no home): the run succeeds and one note says why every run compiles."""
     script = ("import numba.core.caching as c\nc.CacheImpl._locator_classes = []\n"
-              "from cli.acmm_app import main\nmain()\n")
+              "from acmm.cli.app import main\nmain()\n")
     env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg", "OPENBLAS_NUM_THREADS": "1"}
     done = subprocess.run([sys.executable, "-c", script, "simulate", "mb3", "simulation.orbits=0.2",
                            "--no-figures"], cwd=tmp_path, capture_output=True, text=True, env=env,
@@ -77,7 +77,7 @@ def test_acmm_simulate_without_a_cache_folder_runs_and_says_why_it_compiles(tmp_
     assert done.returncode == 0, done.stderr
     assert done.stderr.count("note: numba has no writable folder") == 1, done.stderr
     assert "Traceback" not in done.stderr and (tmp_path / "runs" / "mb3" / "sim.h5").exists()
-    warm = subprocess.run([sys.executable, "-c", script.replace("from cli.acmm_app import main\nmain()",
-                                                                "from acmm.warmup import main\nmain()")],
+    warm = subprocess.run([sys.executable, "-c", script.replace("from acmm.cli.app import main\nmain()",
+                                                                "from acmm.simulate.warmup import main\nmain()")],
                           cwd=tmp_path, capture_output=True, text=True, env=env, timeout=120, check=False)
     assert warm.returncode == 0 and "nothing compiled ahead" in warm.stdout, warm.stdout + warm.stderr

@@ -1,4 +1,4 @@
-"""Config schema (acmm.config): shipped configs, unit conversion, and malformed configs.
+"""Config schema (acmm.io.config): shipped configs, unit conversion, and malformed configs.
 
 Each malformed config must end, for both ``acmm validate`` and ``acmm tea``, in exit code 2,
 one line on stderr naming the offending field, no traceback and no file written.
@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 import yaml
 
-from acmm.config import Config, load_config, parse_config
-from common.configio import packaged_config_path
-from common.errors import ConfigError
+from acmm.io.config import Config, load_config, parse_config
+from acmm_qpp.configio import packaged_config_path
+from acmm_qpp.errors import ConfigError
 
 from conftest import CONFIGS
 
@@ -290,7 +290,7 @@ def test_yaml_merge_keys_are_read_and_duplicates_still_refused(tmp_path):
     """``<<: *anchor`` (a YAML merge key) is read as PyYAML's safe loader reads it, the keys
     written next to it overriding the merged ones; a key written twice is still refused (the
     merge key used to be refused: "could not determine a constructor")."""
-    from common.configio import read_yaml
+    from acmm_qpp.configio import read_yaml
 
     p = tmp_path / "m.yaml"
     p.write_text("ref: &I {I11: 21970000, I22: 13320000, I33: 32130000}\ninertia: {<<: *I, I11: 24000000}\n")
@@ -353,7 +353,7 @@ def test_error_message_names_nested_field_directly():
 def test_a_run_folder_named_like_a_packaged_config_does_not_hide_it(tmp_path, monkeypatch):
     """Inside a results root (run folders mb3/, ac/, …) a bare packaged name still loads the
     packaged config; the report loads its packaged configs even past a local file of that name."""
-    from report.stage_results import acmm_config
+    from acmm.report.stage_results import acmm_config
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "mb3").mkdir()

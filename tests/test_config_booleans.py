@@ -6,7 +6,7 @@ from typing import Literal, Optional, Union
 
 import pytest
 
-from common.config_model import boolean_as_number
+from acmm_qpp.config_model import boolean_as_number
 from conftest import invoke
 
 
@@ -48,9 +48,9 @@ def test_boolean_as_number(annotation, value, refused):
 ])
 def test_boolean_in_a_number_field_is_one_error_line(tmp_runs, app, config, override, field):
     if app == "acmm":
-        from cli.acmm_app import app as typer_app
+        from acmm.cli.app import app as typer_app
     else:
-        from cli.qpp_app import app as typer_app
+        from qpp.cli import app as typer_app
     r = invoke(typer_app, "validate", config, override)
     assert r.exit_code == 2, r.output
     lines = [ln for ln in r.output.splitlines() if ln.strip()]
@@ -60,8 +60,8 @@ def test_boolean_in_a_number_field_is_one_error_line(tmp_runs, app, config, over
 
 
 def test_booleans_still_accepted_where_the_field_is_a_switch(tmp_runs):
-    from cli.acmm_app import app as acmm_app
-    from cli.qpp_app import app as qpp_app
+    from acmm.cli.app import app as acmm_app
+    from qpp.cli import app as qpp_app
 
     assert invoke(acmm_app, "validate", "mb3", "output.figures=false").exit_code == 0
     assert invoke(qpp_app, "validate", "qpp_siso", "spheres.adapt_T=true").exit_code == 0

@@ -1,7 +1,7 @@
 """Design stage (issue 4): sector LQR at every stair-case point, the gain schedule, design.h5.
 
 Every pole is re-checked against the sector with an independent formula, and K is re-derived
-from the returned Q with scipy's CARE solver directly (not through acmm.riccati).
+from the returned Q with scipy's CARE solver directly (not through acmm.design.riccati).
 """
 import h5py
 import re
@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from acmm.config import load_config
-from acmm.schedule import fit_schedule, schedule_gain
-from acmm.settings import design_settings
-from acmm.stages import compute_design, design_for, load_design_table, run_design
+from acmm.io.config import load_config
+from acmm.design.schedule import fit_schedule, schedule_gain
+from acmm.design.settings import design_settings
+from acmm.stages.design import compute_design, design_for, run_design
+from acmm.io.design_file import load_design_table
 
 N = 0.0011
 
@@ -78,8 +79,8 @@ def test_design_points_well_conditioned_with_margin(staircase):
 def _worst_on_own_blend(r, gain_at):
     """Largest Re λ / n of the scheduled local loop at 25 blend points of our own: TEA of the
     blended inertia, local model, ``gain_at(θ2*)``, numpy eigenvalues."""
-    from acmm import linearize as lin
-    from acmm.tea import solve_tea_near
+    from acmm.model import linearize as lin
+    from acmm.model.tea import solve_tea_near
 
     cfg = r.config
     a, b = r.points[0].spec, r.points[-1].spec
@@ -139,17 +140,18 @@ def test_path_disk_margin_agrees_with_python_control(staircase):
     AB13MD) on the same local loops, in the scaled realization."""
     import control
 
-    from acmm import schedule as sch
+    from acmm.design import schedule as sch
+    from acmm.design import path_check as path_check_mod
 
     if not hasattr(control, "disk_margins"):       # python-control < 0.10.2
         pytest.skip("this python-control has no disk_margins")
     pc = staircase.path_check
-    path = sch.path_models(staircase.points, design_settings(staircase.config), pc.theta2.size)
+    path = path_check_mod.path_models(staircase.points, design_settings(staircase.config), pc.theta2.size)
     d = path.scales
     for j in (0, pc.theta2.size // 2, pc.theta2.size - 1):
         K = staircase.fit.gain(pc.theta2[j]) * d[None, :]
         L = control.ss(path.A[j] / d[:, None] * d[None, :], path.B[j] / d[:, None], K, np.zeros((3, 3)))
-        dm, dgm, dpm = control.disk_margins(L, N * sch.DISK_OMEGA_N)
+        dm, dgm, dpm = control.disk_margins(L, N * path_check_mod.DISK_OMEGA_N)
         assert pc.disk_margin[j] == pytest.approx(dm, rel=1e-3)
         assert pc.disk_gain_margin_db[j] == pytest.approx(dgm, rel=1e-3)
         assert pc.disk_phase_margin_deg[j] == pytest.approx(dpm, rel=1e-3)
@@ -228,7 +230,8 @@ def test_design_h5_is_self_describing_and_reused(tmp_path, monkeypatch):
 def test_config_q0_is_a_weight_on_the_scaled_states():
     """design.Q0 = q means Q̃ = q·I on x̃ = D⁻¹x: the returned physical Q satisfies D Q D ⪰ q I
     (pole shifting only adds positive semidefinite terms)."""
-    from acmm.schedule import design_one, point_specs
+    from acmm.design.schedule import design_one
+    from acmm.design.schedule_points import point_specs
 
     cfg = load_config("ac")
     cfg = cfg.model_copy(update={"design": cfg.design.model_copy(
@@ -243,8 +246,9 @@ def test_config_q0_is_a_weight_on_the_scaled_states():
 def test_config_q0_groups_are_diagonal_weights_on_the_scaled_states():
     """Q0_groups = per-group diagonal on x̃ = D⁻¹x: D Q D − diag(groups) ⪰ 0 (pole shifting only
     adds positive semidefinite terms), and the groups sit on the right states."""
-    from acmm.config import Q0Groups
-    from acmm.schedule import design_one, point_specs
+    from acmm.io.config import Q0Groups
+    from acmm.design.schedule import design_one
+    from acmm.design.schedule_points import point_specs
 
     g = Q0Groups(rates=1e-5, attitudes=2e-6, momentum=3e-6, momentum_integral=4e-5, drf=5e-7)
     np.testing.assert_array_equal(g.diagonal()[[0, 3, 6, 9, 12, 23]], [1e-5, 2e-6, 3e-6, 4e-5, 5e-7, 5e-7])
@@ -264,7 +268,7 @@ def test_a_blend_whose_end_is_on_another_branch_of_equilibria_is_flagged(tmp_run
     jumped −36.25° → −55° and a polynomial was fitted across the jump without a word (a review's
     case).  The end keeps its asked TEA (test_tea: the schedule's end gets its asked attitude);
     the design says so, and --strict fails it."""
-    from acmm.tea import solve_tea, solve_tea_near, bias_for_attitude
+    from acmm.model.tea import solve_tea, solve_tea_near, bias_for_attitude
 
     end_inertia = np.diag([10e6, 3e6, 12e6])
     n = 0.0011
@@ -319,8 +323,9 @@ def test_a_branch_that_folds_on_the_blend_blames_the_first_point_beyond_the_fold
     """When the continuation from the start failed, every point was judged against no branch,
     so the warning named the blend's start (s = 0) (a review).  The points before the fold are
     checked against the branch up to it; the first point beyond is named."""
-    import acmm.schedule_points as sp_mod
-    from acmm.schedule_points import off_branch_point, point_specs
+    import acmm.design.schedule_points as sp_mod
+    from acmm.model import tea as tea_mod
+    from acmm.design.schedule_points import off_branch_point, point_specs
 
     cfg = load_config("staircase")
     n = cfg.orbit_rate
@@ -329,11 +334,11 @@ def test_a_branch_that_folds_on_the_blend_blames_the_first_point_beyond_the_fold
     assert off_branch_point(specs, teas, n) is None
     blend = [p for p in specs if np.isfinite(p.s)]
     i0, i1 = blend[0].inertia[0, 0], blend[-1].inertia[0, 0]
-    real = sp_mod.solve_tea_near
+    real = tea_mod.solve_tea_near
 
     def folds_at_0_6(inertia, n_, bias, guess, **kw):          # no equilibrium beyond s = 0.6
         if (inertia[0, 0] - i0) / (i1 - i0) > 0.6:
-            from common.errors import NoEquilibriumError
+            from acmm_qpp.errors import NoEquilibriumError
             raise NoEquilibriumError("folds")
         return real(inertia, n_, bias, guess, **kw)
 

@@ -53,7 +53,7 @@ def _run(tmp_path: Path, kernel: str, threads: int) -> Path:
            "MPLBACKEND": "Agg"}
     env.pop("OPENBLAS_L2_SIZE", None)
     for name in ("staircase", "mb3_decoupled"):
-        r = subprocess.run([sys.executable, "-m", "cli.acmm_app", "simulate", name, "--no-figures"],
+        r = subprocess.run([sys.executable, "-m", "acmm.cli.app", "simulate", name, "--no-figures"],
                            cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
         assert r.returncode == 0, (kernel, threads, name, r.stderr[-2000:])
     return cwd / "runs"

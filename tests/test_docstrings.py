@@ -2,7 +2,7 @@
 
 In the style of python-control's ``control/tests/docstrings_test.py``: every public function,
 class and method (name not starting with ``_``) of every module of the packages ``acmm``,
-``qpp``, ``common``, ``report``, ``configkinds`` and ``cli`` -- found by
+``qpp`` and ``acmm_qpp`` -- found by
 :func:`pkgutil.walk_packages`, so a new module is checked from the moment it exists -- has a
 docstring in numpydoc layout; every parameter in its signature is documented in a ``Parameters``
 section and every name listed there is a parameter (for a class: a constructor parameter).
@@ -48,25 +48,12 @@ REPO = Path(__file__).resolve().parents[1]
 #: The packages whose every module is checked; their modules are found by
 #: :func:`pkgutil.walk_packages` (:func:`discover_modules`), so a new module is checked from the
 #: moment it exists.
-PACKAGES = ["acmm", "qpp", "common", "report", "configkinds", "cli"]
+PACKAGES = ["acmm", "qpp", "acmm_qpp"]
 
 #: Compatibility shims: old import paths that only re-export another module (the code, and so the
 #: docstrings, live in the target, which is checked).  :func:`test_exclusions_are_justified`
 #: verifies that each one's source holds nothing but a docstring, imports and the re-export.
-SHIMS = {
-    "acmm.errors": "common.errors",
-    "acmm.hints": "common.hints",
-    "acmm.limits": "common.limits",
-    "acmm.netcdf_layout": "common.netcdf_layout",
-    "acmm.outputs": "common.outputs",
-    "acmm.overrides": "common.overrides",
-    "acmm.results": "common.results",
-    "acmm.runlock": "common.runlock",
-    "acmm.workers": "common.workers",
-    "acmm.report": "report",
-    "acmm.report_style": "report.figure_style",
-    "acmm.sweep_config": "acmm.sweep.config",
-}
+SHIMS: dict = {}
 
 
 
@@ -86,61 +73,65 @@ CHECKED_MODULES = [m for m in discover_modules() if m not in SHIMS]
 
 #: Modules whose docstring need not cite the report's equations, with the reason.
 NO_REPORT_CITATION = {
-    "common.atomic_write": "atomic file writing: no mathematics of the report",
-    "common.provenance": "git commit, config hash and creation time of results: no mathematics of the report",
-    "common.quantity_fields": "unit conversion of config fields (pydantic validators): no mathematics of the report",
-    "common.errors": "exception classes and exit codes: no mathematics of the report",
-    "common.schema": "JSON-schema generation of config files: no mathematics of the report",
-    "acmm.schema": "JSON schemas of config files: no mathematics of the report",
-    "qpp.schema": "JSON schema of config files: no mathematics of the report",
-    "configkinds": "config-kind dispatch: no mathematics of the report",
-    "common.results": "atomic HDF5/text/figure writing and provenance: no mathematics of the report",
-    "common.hdf5_lowlevel": "HDF5 datasets and attributes through h5py's low-level API: no mathematics of the report",
-    "common.units": "unit conversion of config values and outputs (pint): no mathematics of the report",
-    "common.limits": "work and size limits of the programs: no mathematics of the report",
-    "common.runlock": "per-run-directory file lock: no mathematics of the report",
-    "common.forked": "a call computed in a forked child process: no mathematics of the report",
-    "common.signals": "termination signals and the death of forked children: no mathematics of the report",
-    "common.config_model": "the strict pydantic base of the config sections: no mathematics of the report",
-    "common.configio": "bounded YAML reading and pydantic validation of configs: no mathematics of the report",
-    "common": "the shared base package: no mathematics of the report",
-    "common.hints": "hints attached to error messages: no mathematics of the report",
-    "common.outputs": "which files a stage owns, config.yaml: no mathematics of the report",
-    "common.overrides": "command-line key=value overrides: no mathematics of the report",
-    "common.workers": "worker-process hygiene: no mathematics of the report",
-    "common.plot_style": "matplotlib style of all figures: no mathematics of the report",
-    "acmm.warmup": "compiling the numba kernels ahead of time: no mathematics of the report",
-    "acmm.compiled_cache": "numba's on-disk cache of the compiled kernels: no mathematics of the report",
-    "acmm.sweep_limits": "work bounds of a sweep config: no mathematics of the report",
+    "acmm_qpp.atomic_write": "atomic file writing: no mathematics of the report",
+    "acmm_qpp.provenance": "git commit, config hash and creation time of results: no mathematics of the report",
+    "acmm_qpp.quantity_fields": "unit conversion of config fields (pydantic validators): no mathematics of the report",
+    "acmm_qpp.errors": "exception classes and exit codes: no mathematics of the report",
+    "acmm_qpp.schema": "JSON-schema generation of config files: no mathematics of the report",
+    "acmm.io.schema": "JSON schemas of config files: no mathematics of the report",
+    "qpp.io.schema": "JSON schema of config files: no mathematics of the report",
+    "acmm.cli.configkinds": "config-kind dispatch: no mathematics of the report",
+    "acmm_qpp.results": "atomic HDF5/text/figure writing and provenance: no mathematics of the report",
+    "acmm_qpp.hdf5_lowlevel": "HDF5 datasets and attributes through h5py's low-level API: no mathematics of the report",
+    "acmm_qpp.units": "unit conversion of config values and outputs (pint): no mathematics of the report",
+    "acmm_qpp.limits": "work and size limits of the programs: no mathematics of the report",
+    "acmm_qpp.runlock": "per-run-directory file lock: no mathematics of the report",
+    "acmm_qpp.forked": "a call computed in a forked child process: no mathematics of the report",
+    "acmm_qpp.signals": "termination signals and the death of forked children: no mathematics of the report",
+    "acmm_qpp.config_model": "the strict pydantic base of the config sections: no mathematics of the report",
+    "acmm_qpp.configio": "bounded YAML reading and pydantic validation of configs: no mathematics of the report",
+    "acmm_qpp": "the shared base package: no mathematics of the report",
+    "acmm_qpp.cli": "the shared command-line plumbing package: no mathematics of the report",
+    "acmm.io": "package of configs, schemas and stage files: no mathematics of its own",
+    "acmm.plots": "package of the stage figures: no mathematics of its own",
+    "acmm.stages": "package of the stages: no mathematics of its own",
+    "qpp.io": "package of the qpp config, schema and stage runners: no mathematics of its own",
+    "acmm_qpp.hints": "hints attached to error messages: no mathematics of the report",
+    "acmm_qpp.outputs": "which files a stage owns, config.yaml: no mathematics of the report",
+    "acmm_qpp.overrides": "command-line key=value overrides: no mathematics of the report",
+    "acmm_qpp.workers": "worker-process hygiene: no mathematics of the report",
+    "acmm_qpp.plot_style": "matplotlib style of all figures: no mathematics of the report",
+    "acmm.simulate.warmup": "compiling the numba kernels ahead of time: no mathematics of the report",
+    "acmm.simulate.compiled_cache": "numba's on-disk cache of the compiled kernels: no mathematics of the report",
+    "acmm.sweep.limits": "work bounds of a sweep config: no mathematics of the report",
     "acmm.sweep.cases": "random draws and grid points of a sweep's cases: no mathematics of the report",
     "acmm.sweep.journal": "the sweep's append-only journal file: no mathematics of the report",
     "acmm.sweep.output": "the sweep's HDF5/CSV/figure output: no mathematics of the report",
     "acmm.sweep.run": "the sweep driver (tasks, executor, journal): no mathematics of the report",
-    "acmm.parallel_figures": "writing figures in forked processes: no mathematics of the report",
-    "common.figure_worker": "the forked process that draws a stage's figures: no mathematics of the report",
-    "common.figure_process": "the figure worker's forked process and pipe framing: no mathematics of the report",
-    "acmm.stage_common": "config reading and output unit conversion shared by the stages: no mathematics of the report",
+    "acmm.plots.parallel_figures": "writing figures in forked processes: no mathematics of the report",
+    "acmm_qpp.figure_worker": "the forked process that draws a stage's figures: no mathematics of the report",
+    "acmm_qpp.figure_process": "the figure worker's forked process and pipe framing: no mathematics of the report",
+    "acmm.stages.common": "config reading and output unit conversion shared by the stages: no mathematics of the report",
     "acmm.sweep.executors": "executors of the sweep's tasks: no mathematics of the report",
     "acmm.sweep.chunking": "chunk sizes of the sweep's tasks: no mathematics of the report",
     "acmm.sweep.dask_settings": "Dask configuration for a sweep cluster: no mathematics of the report",
-    "qpp.config_checks": "validation of a qpp config's fields and work bounds: no mathematics of the report",
+    "qpp.io.config_checks": "validation of a qpp config's fields and work bounds: no mathematics of the report",
     "acmm.sweep.journal_records": "the fields of a sweep journal's records: no mathematics of the report",
-    "report.constants": "section keys and titles of the report document: no mathematics",
-    "report.publish": "moving a finished report's files into place: no mathematics",
-    "report.context": "what a report section receives and writes: no mathematics",
-    "report.document": "the report's document model and its HTML/Markdown renderers: no mathematics",
-    "report.figure_style": "the report's figure writer: no mathematics",
-    "report.manifest": "dataset hashes and the determinism manifest: no mathematics",
-    "report.sections": "package of the report's sections: no mathematics of its own",
-    "report.sections.determinism": "dataset hashes compared between runs: no mathematics",
-    "report.sections.printed": "the table of every printed number: no mathematics of its own",
-    "report.sections.provenance": "software versions and stage files used: no mathematics",
-    "report.runner": "the report's task graph run serially or on forked workers: no mathematics of the report",
-    "report.early_worker": "a child running the report's first tasks during the warm-up: no mathematics of the report",
-    "report.ledger": "comparison of printed and computed numbers: no mathematics of the report",
+    "acmm.report.constants": "section keys and titles of the report document: no mathematics",
+    "acmm.report.publish": "moving a finished report's files into place: no mathematics",
+    "acmm.report.context": "what a report section receives and writes: no mathematics",
+    "acmm.report.document": "the report's document model and its HTML/Markdown renderers: no mathematics",
+    "acmm.report.figure_style": "the report's figure writer: no mathematics",
+    "acmm.report.manifest": "dataset hashes and the determinism manifest: no mathematics",
+    "acmm.report.sections": "package of the report's sections: no mathematics of its own",
+    "acmm.report.sections.determinism": "dataset hashes compared between runs: no mathematics",
+    "acmm.report.sections.printed": "the table of every printed number: no mathematics of its own",
+    "acmm.report.sections.provenance": "software versions and stage files used: no mathematics",
+    "acmm.report.runner": "the report's task graph run serially or on forked workers: no mathematics of the report",
+    "acmm.report.ledger": "comparison of printed and computed numbers: no mathematics of the report",
     **{m: "command line: parses, calls and prints, no mathematics (the layer rule)" for m in (
-        "cli", "cli.acmm_app", "cli.qpp_app", "cli.acmm_sweep", "cli.acmm_report", "cli.common",
-        "cli.progress", "cli.failures")},
+        "acmm.cli", "acmm.cli.compile_note", "acmm.cli.configkinds", "acmm.cli.app", "qpp.cli", "acmm.cli.sweep", "acmm.cli.report", "acmm_qpp.cli.plumbing",
+        "acmm_qpp.cli.progress", "acmm_qpp.cli.failures")},
 }
 
 #: Section headers numpydoc knows (a misspelt header is reported).
@@ -305,7 +296,7 @@ def raised_names(func) -> set:
     """Names of the exception classes the function raises itself (``raise Name(...)``).
 
     ``raise factory(...)`` with a lower-case name calls a function that builds the exception
-    (e.g. :func:`common.results.output_error`), whose class the AST cannot tell: not counted.
+    (e.g. :func:`acmm_qpp.results.output_error`), whose class the AST cannot tell: not counted.
     """
     node = _function_ast(func)
     out = set()
@@ -490,8 +481,8 @@ def test_docstrings(module_name):
 def test_every_module_is_found():
     """Discovery reaches into subpackages, and the known modules are among those checked."""
     found = discover_modules()
-    for name in ("acmm.tea", "acmm.sweep.run", "report.sections.errata", "cli.acmm_app",
-                 "configkinds", "common.units", "qpp.lure"):
+    for name in ("acmm.model.tea", "acmm.sweep.run", "acmm.report.sections.errata", "acmm.cli.app",
+                 "acmm.cli.configkinds", "acmm_qpp.units", "qpp.model.lure"):
         assert name in found
     assert len(found) >= 100
 

@@ -1,5 +1,5 @@
 """The figure worker imports matplotlib without the property tables of its docstrings (issue 16):
-``common.plot_style.import_pyplot_to_draw_only``.  Each check runs in a fresh interpreter, as the
+``acmm_qpp.plot_style.import_pyplot_to_draw_only``.  Each check runs in a fresh interpreter, as the
 stage commands do (the test process has matplotlib imported already)."""
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ def _run(code: str, tmp_path: Path, **env) -> list[str]:
 def test_the_draw_only_import_skips_the_property_tables_and_restores_kwdoc(tmp_path):
     got = _run("""
         import inspect
-        from common.plot_style import import_pyplot_to_draw_only
+        from acmm_qpp.plot_style import import_pyplot_to_draw_only
         first = import_pyplot_to_draw_only()
         import matplotlib, matplotlib.artist as a, matplotlib.lines as l, matplotlib.pyplot as plt
         print(first, import_pyplot_to_draw_only(), matplotlib.get_backend().lower())
@@ -49,7 +49,7 @@ def test_kwdoc_is_restored_when_the_import_fails(tmp_path):
                     raise ImportError("refused")
 
         sys.meta_path.insert(0, Refuse())
-        from common.plot_style import import_pyplot_to_draw_only
+        from acmm_qpp.plot_style import import_pyplot_to_draw_only
         try:
             import_pyplot_to_draw_only()
         except ImportError as exc:
@@ -63,7 +63,7 @@ def test_kwdoc_is_restored_when_the_import_fails(tmp_path):
 def test_an_imported_matplotlib_is_left_alone(tmp_path):
     got = _run("""
         import matplotlib.lines as l
-        from common.plot_style import import_pyplot_to_draw_only
+        from acmm_qpp.plot_style import import_pyplot_to_draw_only
         print(import_pyplot_to_draw_only(), "linewidth" in l.Line2D.set.__doc__,
               "not listed" in l.Line2D.set.__doc__)
     """, tmp_path)
@@ -77,7 +77,7 @@ def test_the_figure_worker_draws_the_same_pixels_with_it(tmp_path):
         import sys
         import numpy as np
         from pathlib import Path
-        from common import figure_worker
+        from acmm_qpp import figure_worker
 
         def docs(path):
             import matplotlib.lines as l
@@ -85,11 +85,11 @@ def test_the_figure_worker_draws_the_same_pixels_with_it(tmp_path):
             return path
 
         if __name__ == "__main__":
-            from acmm import plots
+            from acmm.plots import design as design_plots
             poles = [np.array([-1 + 1j, -1 - 1j, -2.0, -3 + 0.5j, -3 - 0.5j]) * 1e-3] * 2
             with figure_worker.session():
                 print(figure_worker.active())
-                figure_worker.submit(plots.pole_map, poles, ["a", "b"], 1e-3, 0.5, 45.0, Path(sys.argv[1]))
+                figure_worker.submit(design_plots.pole_map, poles, ["a", "b"], 1e-3, 0.5, 45.0, Path(sys.argv[1]))
                 figure_worker.submit(docs, sys.argv[1] + ".txt")
     """
     if sys.platform == "win32" or (os.cpu_count() or 1) < 2:

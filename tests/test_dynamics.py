@@ -1,4 +1,4 @@
-"""acmm.dynamics (CR-185644 eqs 3.1-3.9) against independent computations.
+"""acmm.model.dynamics (CR-185644 eqs 3.1-3.9) against independent computations.
 
 Every reference value here is built from first principles inside this file: the
 direction-cosine matrix from elementary rotations, the gravity-gradient torque from a
@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from acmm import dynamics as dyn
+from acmm.model import dynamics as dyn
+from acmm.model import kinematics as kin
 
 N = 0.0011  # rad/s
 RNG_SEED = 20240502
@@ -79,7 +80,7 @@ CASES = list(range(8))
 @pytest.mark.parametrize("case", CASES)
 def test_dcm_is_pitch_yaw_roll_sequence(case):
     th = random_theta(np.random.default_rng(RNG_SEED + case))
-    c = dyn.dcm_body_from_lvlh(th)
+    c = kin.dcm_body_from_lvlh(th)
     np.testing.assert_allclose(c, dcm(th), atol=1e-15)
     np.testing.assert_allclose(c @ c.T, np.eye(3), atol=1e-14)
     assert np.linalg.det(c) == pytest.approx(1.0, abs=1e-14)
@@ -88,21 +89,21 @@ def test_dcm_is_pitch_yaw_roll_sequence(case):
 @pytest.mark.parametrize("case", CASES)
 def test_nadir_vector_is_third_column_of_dcm(case):
     th = random_theta(np.random.default_rng(RNG_SEED + case))
-    np.testing.assert_allclose(dyn.nadir_vector(th), dcm(th)[:, 2], atol=1e-15)
-    assert np.linalg.norm(dyn.nadir_vector(th)) == pytest.approx(1.0, abs=1e-15)
+    np.testing.assert_allclose(kin.nadir_vector(th), dcm(th)[:, 2], atol=1e-15)
+    assert np.linalg.norm(kin.nadir_vector(th)) == pytest.approx(1.0, abs=1e-15)
 
 
 def test_nadir_vector_at_lvlh_and_pure_pitch():
     # At LVLH the body z axis points to nadir; a pitch θ2 tilts nadir to (−sin θ2, 0, cos θ2).
-    np.testing.assert_allclose(dyn.nadir_vector(np.zeros(3)), [0, 0, 1], atol=0)
+    np.testing.assert_allclose(kin.nadir_vector(np.zeros(3)), [0, 0, 1], atol=0)
     t = np.radians(30.0)
-    np.testing.assert_allclose(dyn.nadir_vector([0, t, 0]), [-np.sin(t), 0, np.cos(t)], atol=1e-16)
+    np.testing.assert_allclose(kin.nadir_vector([0, t, 0]), [-np.sin(t), 0, np.cos(t)], atol=1e-16)
 
 
 @pytest.mark.parametrize("case", CASES)
 def test_lvlh_rate_is_dcm_times_minus_n_y(case):
     th = random_theta(np.random.default_rng(RNG_SEED + case))
-    np.testing.assert_allclose(dyn.lvlh_rate_in_body(th, N), dcm(th) @ [0, -N, 0], atol=1e-18)
+    np.testing.assert_allclose(kin.lvlh_rate_in_body(th, N), dcm(th) @ [0, -N, 0], atol=1e-18)
 
 
 def test_vectorized_functions_match_loops():
@@ -115,8 +116,8 @@ def test_vectorized_functions_match_loops():
     u = rng.normal(size=(5, 3)) * 10
     rhs = dyn.plant_rhs(th, om, h, inertia, N, w, u)
     for i in range(5):
-        np.testing.assert_allclose(dyn.nadir_vector(th)[i], dcm(th[i])[:, 2], atol=1e-15)
-        np.testing.assert_allclose(dyn.lvlh_rate_in_body(th, N)[i], dcm(th[i]) @ [0, -N, 0], atol=1e-18)
+        np.testing.assert_allclose(kin.nadir_vector(th)[i], dcm(th[i])[:, 2], atol=1e-15)
+        np.testing.assert_allclose(kin.lvlh_rate_in_body(th, N)[i], dcm(th[i]) @ [0, -N, 0], atol=1e-18)
         np.testing.assert_allclose(dyn.gravity_gradient_torque(th, inertia, N)[i],
                                    gg_torque_ref(th[i], inertia, N), rtol=1e-12, atol=1e-12)
         np.testing.assert_allclose(dyn.gyroscopic_torque(om, inertia)[i],
@@ -129,8 +130,8 @@ def test_vectorized_functions_match_loops():
 def test_skew_is_cross_product():
     rng = np.random.default_rng(1)
     a, b = rng.normal(size=3), rng.normal(size=3)
-    np.testing.assert_allclose(dyn.skew(a) @ b, np.cross(a, b), atol=1e-15)
-    np.testing.assert_allclose(dyn.skew(a), cross_matrix(a), atol=0)
+    np.testing.assert_allclose(kin.skew(a) @ b, np.cross(a, b), atol=1e-15)
+    np.testing.assert_allclose(kin.skew(a), cross_matrix(a), atol=0)
 
 
 # ----------------------------------------------------------------- torques (eqs 3.2, 3.3)
@@ -217,7 +218,7 @@ def printed_f(theta):
 def kinematics_defect(theta, omega, n, f=None):
     """‖dC_BL/dt + [ω_rel×] C_BL‖ with θ̇ from eq 3.5 and a central difference in time."""
     if f is None:
-        thdot = dyn.attitude_rate(theta, omega, n)
+        thdot = kin.attitude_rate(theta, omega, n)
     else:
         thdot = f(theta) @ omega + np.array([0, n, 0])
     dt = 1e-4 / max(np.abs(thdot).max(), 1e-300)
@@ -234,8 +235,8 @@ def test_kinematics_from_differentiated_rotation(case):
     for n, om in ((N, rng.normal(size=3) * 1e-3), (0.4, rng.normal(size=3))):
         defect, size = kinematics_defect(th, om, n)
         assert defect < 1e-7 * size, (defect, size)
-        np.testing.assert_allclose(dyn.attitude_rate(th, om, n),
-                                   dyn.kinematics_matrix(th) @ om + [0, n, 0], rtol=1e-12, atol=1e-18)
+        np.testing.assert_allclose(kin.attitude_rate(th, om, n),
+                                   kin.kinematics_matrix(th) @ om + [0, n, 0], rtol=1e-12, atol=1e-18)
 
 
 def test_printed_eq_3_6_fails_differentiated_rotation():
@@ -247,15 +248,15 @@ def test_printed_eq_3_6_fails_differentiated_rotation():
 def test_kinematics_f11_is_one():
     rng = np.random.default_rng(7)
     for _ in range(5):
-        assert dyn.kinematics_matrix(random_theta(rng))[0, 0] == pytest.approx(1.0, abs=1e-15)
+        assert kin.kinematics_matrix(random_theta(rng))[0, 0] == pytest.approx(1.0, abs=1e-15)
 
 
 @pytest.mark.parametrize("case", CASES)
 def test_eq_4_2_holds_with_corrected_f(case):
     th = random_theta(np.random.default_rng(RNG_SEED + case))
     om_star = dcm(th) @ [0, -N, 0]
-    np.testing.assert_allclose(dyn.kinematics_matrix(th) @ om_star + [0, N, 0], 0, atol=1e-17)
-    np.testing.assert_allclose(dyn.attitude_rate(th, om_star, N), 0, atol=1e-17)
+    np.testing.assert_allclose(kin.kinematics_matrix(th) @ om_star + [0, N, 0], 0, atol=1e-17)
+    np.testing.assert_allclose(kin.attitude_rate(th, om_star, N), 0, atol=1e-17)
 
 
 def test_eq_4_2_fails_with_printed_f():
@@ -272,14 +273,14 @@ def test_eq_4_2_fails_with_printed_f():
 def test_nadir_vector_jacobian(case):
     th = random_theta(np.random.default_rng(RNG_SEED + case))
     ref = num_jac(lambda x: dcm(x)[:, 2], th, 1e-3)
-    np.testing.assert_allclose(dyn.nadir_vector_jacobian(th), ref, atol=1e-11)
+    np.testing.assert_allclose(kin.nadir_vector_jacobian(th), ref, atol=1e-11)
 
 
 @pytest.mark.parametrize("case", CASES)
 def test_lvlh_rate_jacobian(case):
     th = random_theta(np.random.default_rng(RNG_SEED + case))
     ref = num_jac(lambda x: dcm(x) @ [0, -N, 0], th, 1e-3)
-    np.testing.assert_allclose(dyn.lvlh_rate_jacobian(th, N), ref, atol=1e-11 * N)
+    np.testing.assert_allclose(kin.lvlh_rate_jacobian(th, N), ref, atol=1e-11 * N)
 
 
 @pytest.mark.parametrize("case", CASES)

@@ -6,9 +6,16 @@ import re
 import numpy as np
 import pytest
 
-from acmm import design_plots, plots, sim_plots
-from acmm.config import load_config
-from acmm.linearize import STATE_NAMES
+from acmm.plots import design as design_plots
+
+from acmm.plots import base as plot_base
+from acmm_qpp import plot_style as plot_style_mod
+
+from acmm.plots import simulation as sim_plots
+from acmm.plots import design as design_plots
+from acmm.plots import simulation as sim_plots
+from acmm.io.config import load_config
+from acmm.model.linearize import STATE_NAMES
 
 UNIT = re.compile(r"^(?P<quantity>.{3,}?)\s*\((?P<unit>[^()]*(\([^()]*\))?[^()]*)\)\s*$")
 
@@ -25,7 +32,7 @@ def captured(monkeypatch):
         figs.append(fig)
         return [path]
 
-    monkeypatch.setattr(plots, "_save", fake_save)             # acmm.sweep imports it from here
+    monkeypatch.setattr(plot_base, "_save", fake_save)         # acmm.sweep.output imports it from there
     monkeypatch.setattr(design_plots, "_save", fake_save)      # the figures live in these two
     monkeypatch.setattr(sim_plots, "_save", fake_save)
     return figs
@@ -37,7 +44,7 @@ def _same_column(fig, ax):
 
 
 def _check_panel_labels(grid):
-    """A panel grid (acmm.panel_grid): each panel's y label (or its title when it has none)
+    """A panel grid (acmm.plots.panel_grid): each panel's y label (or its title when it has none)
     names the quantity and its unit, each column has an x label with its unit."""
     for p in grid.panels:
         ylab = p.ylabel or p.title
@@ -73,21 +80,22 @@ def _check_labels(fig):
 
 
 def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_path):
-    from acmm import simulate as sm
-    from acmm.stages import compute_design
+    from acmm.simulate import kernel as sm
+    from acmm.simulate import scenario as scen
+    from acmm.stages.design import compute_design
 
     cfg = load_config("staircase")
     r = compute_design(cfg)
-    plots.gain_schedule_grid(r.table.tea[:, 1], r.table.gain, r.fit, STATE_NAMES, tmp_path / "g.png",
-                             units=plots.state_units(cfg.design.drf_mode))
-    plots.pole_map([p.lqr.poles for p in r.points], r.table.names, cfg.orbit_rate, 0.5, 45, tmp_path / "p.png")
-    sc = sm.scenario_from_config(cfg, r.table, orbits=12)
+    design_plots.gain_schedule_grid(r.table.tea[:, 1], r.table.gain, r.fit, STATE_NAMES, tmp_path / "g.png",
+                             units=plot_base.state_units(cfg.design.drf_mode))
+    design_plots.pole_map([p.lqr.poles for p in r.points], r.table.names, cfg.orbit_rate, 0.5, 45, tmp_path / "p.png")
+    sc = scen.scenario_from_config(cfg, r.table, orbits=12)
     res = sm.simulate(sc)
     orbits = res.t * cfg.orbit_rate / (2 * np.pi)
-    err = np.degrees(sm.attitude_error(sc, res))
-    plots.axis_histories(orbits, err, err, res.u, res.state[:, 6:9], "t", tmp_path / "a.png")
-    plots.inertia_histories(orbits, sc.inertia[res.level], tmp_path / "i.png")
-    plots.summary(orbits, err, res.state[:, 6:9], res.u, sm.level_statistics(sc, res), res.verdict, "x",
+    err = np.degrees(scen.attitude_error(sc, res))
+    sim_plots.axis_histories(orbits, err, err, res.u, res.state[:, 6:9], "t", tmp_path / "a.png")
+    sim_plots.inertia_histories(orbits, sc.inertia[res.level], tmp_path / "i.png")
+    sim_plots.summary(orbits, err, res.state[:, 6:9], res.u, scen.level_statistics(sc, res), res.verdict, "x",
                   tmp_path / "s.png")
     assert len(captured) == 5
     for fig in captured:
@@ -96,7 +104,7 @@ def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_p
     grid = captured[0].panel_grid
     assert "ft·lbf/(rad/s)" in grid.panels[0].title and "ft·lbf/rad)" in grid.panels[3].title
     _check_gain_grid(captured[0], r)
-    _check_sim_figures(captured[2:], orbits, err, sm.level_statistics(sc, res))
+    _check_sim_figures(captured[2:], orbits, err, scen.level_statistics(sc, res))
 
 
 def _check_sim_figures(figs, orbits, err, stats):
@@ -191,7 +199,7 @@ def _check_gain_grid(fig, r):
 def test_sweep_figures_have_quantities_and_units(captured, tmp_path):
     import yaml
 
-    from acmm.sweep import run_sweep
+    from acmm.sweep.run import run_sweep
 
     from conftest import CONFIGS
 
@@ -209,27 +217,27 @@ def test_sweep_figures_have_quantities_and_units(captured, tmp_path):
 def test_decimate_keeps_the_envelope():
     x = np.linspace(0, 1, 100_001)
     y = np.sin(200 * x) + (x > 0.5) * 3
-    xd, yd = plots.decimate(x, y, 2000)
+    xd, yd = plot_base.decimate(x, y, 2000)
     assert len(xd) <= 2000 and np.all(np.diff(xd) > 0)
     assert yd.max() == y.max() and yd.min() == y.min()
     short = np.arange(10.0)
-    assert plots.decimate(short, short)[0] is short or np.array_equal(plots.decimate(short, short)[0], short)
+    assert plot_base.decimate(short, short)[0] is short or np.array_equal(plot_base.decimate(short, short)[0], short)
 
 
 def test_forked_figure_writers_write_and_report_failures(tmp_path, monkeypatch):
-    from acmm import parallel_figures
-    from common.errors import OutputError
+    from acmm.plots import parallel_figures
+    from acmm_qpp.errors import OutputError
 
     monkeypatch.setenv("ACMM_PARALLEL_FIGURES", "1")
     if not parallel_figures.enable():
         pytest.skip("no fork or one CPU")
-    plt = plots._plt()
+    plt = plot_style_mod.stage_pyplot()
     for k in range(3):
         fig, ax = plt.subplots()
         ax.plot([0, 1], [k, 1])
         ax.set_xlabel("time (s)")
         ax.set_ylabel("angle (deg)")
-        plots._save(fig, tmp_path / f"f{k}.png", tight=False)
+        plot_base._save(fig, tmp_path / f"f{k}.png", tight=False)
     parallel_figures.wait()
     assert all((tmp_path / f"f{k}.png").stat().st_size > 1000 for k in range(3))
     assert not parallel_figures.active()
@@ -248,11 +256,11 @@ def _small_histories(n=300):
 
 
 def test_prebuilt_skeleton_draws_the_same_png(tmp_path):
-    """The figure worker's skeletons (plots.prebuild) change nothing in the image."""
+    """The figure worker's skeletons (plot_base.prebuild) change nothing in the image."""
     t, x = _small_histories()
     stats = [dict(level=0, start_orbit=0.0, theta2_deg=-44.7, steady_error_deg=[1.0, 0.5, 0.02],
                   peak_momentum=2600.0)]
-    names, units = tuple(STATE_NAMES), tuple(plots.state_units())
+    names, units = tuple(STATE_NAMES), tuple(plot_base.state_units())
     theta2 = np.radians(np.linspace(-45, -5, 12))
     gains = np.sin(np.arange(12 * 3 * 24).reshape(12, 3, 24)) * np.logspace(-8, 6, 24)
     sched = design_plots.SampledSchedule("polynomial", np.linspace(theta2[0], theta2[-1], 60),
@@ -260,27 +268,27 @@ def test_prebuilt_skeleton_draws_the_same_png(tmp_path):
     for pre in (False, True):
         if pre:
             for kind in ("axis_histories", "summary"):
-                plots.prebuild(kind, "SI")
-            plots.prebuild("gain_schedule_grid", names, units, "ft·lbf")
-            plots.prebuild("schedule_path_check")
-            plots.prebuild("scheduled_pole_map")
-        plots.axis_histories(t, x, x, x, x, "t", tmp_path / f"a{pre}.png", units="SI")
-        plots.summary(t, x, x, x, stats, "BOUNDED", "s", tmp_path / f"s{pre}.png", units="SI")
-        plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / f"g{pre}.png", units=list(units))
+                plot_base.prebuild(kind, "SI")
+            plot_base.prebuild("gain_schedule_grid", names, units, "ft·lbf")
+            plot_base.prebuild("schedule_path_check")
+            plot_base.prebuild("scheduled_pole_map")
+        sim_plots.axis_histories(t, x, x, x, x, "t", tmp_path / f"a{pre}.png", units="SI")
+        sim_plots.summary(t, x, x, x, stats, "BOUNDED", "s", tmp_path / f"s{pre}.png", units="SI")
+        design_plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / f"g{pre}.png", units=list(units))
         # the path figures (the report draws them too, without a skeleton: the same pixels)
-        plots.schedule_path_check(theta2, -0.5 - x[:12, 0] ** 2, -1 - x[:12, 1] ** 2, 0.5 + x[:12, 2] ** 2,
+        design_plots.schedule_path_check(theta2, -0.5 - x[:12, 0] ** 2, -1 - x[:12, 1] ** 2, 0.5 + x[:12, 2] ** 2,
                                   tmp_path / f"m{pre}.png")
         poles = (-1.0 - np.arange(24.0) + 1j * np.sin(np.arange(24.0)))[None, :] * (1 + theta2[:, None])
-        plots.scheduled_pole_map(poles * 0.001, theta2, 0.001, 0.5, 45.0, tmp_path / f"p{pre}.png")
-    assert not plots._LAYOUTS                        # each skeleton used once
+        design_plots.scheduled_pole_map(poles * 0.001, theta2, 0.001, 0.5, 45.0, tmp_path / f"p{pre}.png")
+    assert not plot_base._LAYOUTS                        # each skeleton used once
     for name in ("a", "s", "g", "m", "p"):
         assert (tmp_path / f"{name}True.png").read_bytes() == (tmp_path / f"{name}False.png").read_bytes()
 
 
 def test_figure_worker_writes_records_and_reports_failures(tmp_path):
-    from common import figure_worker
-    from common.errors import OutputError
-    from common.outputs import stage_outputs
+    from acmm_qpp import figure_worker
+    from acmm_qpp.errors import OutputError
+    from acmm_qpp.outputs import stage_outputs
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")
@@ -291,9 +299,9 @@ def test_figure_worker_writes_records_and_reports_failures(tmp_path):
     with stage_outputs(run, "simulate", config_text="name: x\n") as written:
         with figure_worker.session():
             assert figure_worker.active()
-            figure_worker.prepare(plots.prebuild, "axis_histories", "imperial")
-            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", run / "sim_axes.png")
-            figure_worker.submit(plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
+            figure_worker.prepare(plot_base.prebuild, "axis_histories", "imperial")
+            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", run / "sim_axes.png")
+            figure_worker.submit(sim_plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
                                  run / "sim_inertia.png")
         assert not figure_worker.active()
         assert {p.name for p in written} == {"sim_axes.png", "sim_inertia.png"}
@@ -302,7 +310,7 @@ def test_figure_worker_writes_records_and_reports_failures(tmp_path):
     (tmp_path / "file").write_text("")
     with pytest.raises(OutputError):
         with figure_worker.session():
-            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "a.png")
+            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "a.png")
     assert not figure_worker.active()
 
 
@@ -320,9 +328,9 @@ def _killed_mid_write(path):
 def test_a_writer_killed_mid_figure_leaves_no_temporary_file(tmp_path):
     """The stage fails with exit 4 and keeps its results (a figure failure), but the killed
     writer's temporary file goes with it; the figure written before stays."""
-    from common import figure_worker
-    from common.errors import FigureError
-    from common.outputs import record_written, stage_outputs
+    from acmm_qpp import figure_worker
+    from acmm_qpp.errors import FigureError
+    from acmm_qpp.outputs import record_written, stage_outputs
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")
@@ -332,7 +340,7 @@ def test_a_writer_killed_mid_figure_leaves_no_temporary_file(tmp_path):
     with pytest.raises(FigureError, match=r"a figure writer process failed \(_killed_mid_write: killed by signal 9\)"):
         with stage_outputs(run, "simulate", config_text="name: x\n"):
             with figure_worker.session():
-                figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", run / "sim_axes.png")
+                figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", run / "sim_axes.png")
                 figure_worker.submit(_killed_mid_write, run / "sim_summary.png")
                 (run / "sim.h5").write_bytes(b"results")
                 record_written(run / "sim.h5")
@@ -344,40 +352,40 @@ def test_without_a_worker_a_sessions_figures_are_drawn_when_it_ends(tmp_path, mo
     """In place (no fork): each session's figures are drawn when it ends, in order, after what
     the stage wrote in it; all of them even if one fails (that failure is raised); none when the
     stage itself failed; outside a session, at once."""
-    from common import figure_worker
-    from common.errors import OutputError
+    from acmm_qpp import figure_worker
+    from acmm_qpp.errors import OutputError
 
     monkeypatch.setenv("ACMM_FIGURE_WORKER", "0")
     t, x = _small_histories()
     (tmp_path / "file").write_text("")
     with pytest.raises(OutputError):
         with figure_worker.session():
-            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "bad.png")
+            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "bad.png")
             with figure_worker.session():                      # a nested stage: its own, at its end
-                figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "inner.png")
+                figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "inner.png")
             assert (tmp_path / "inner.png").exists()
-            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "after.png")
+            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "after.png")
             assert not (tmp_path / "after.png").exists()
             (tmp_path / "results.h5").write_text("written first")
     assert (tmp_path / "after.png").exists() and (tmp_path / "results.h5").exists()
     with pytest.raises(RuntimeError, match="stage failed"):
         with figure_worker.session():
-            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "dropped.png")
+            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "dropped.png")
             raise RuntimeError("stage failed")
     assert not (tmp_path / "dropped.png").exists() and not figure_worker._DEFERRED
-    figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "now.png")
+    figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "now.png")
     assert (tmp_path / "now.png").exists()
 
 
 def test_figure_worker_aborts_with_the_stage(tmp_path):
-    from common import figure_worker
+    from acmm_qpp import figure_worker
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")
     t, x = _small_histories()
     with pytest.raises(RuntimeError, match="stage failed"):
         with figure_worker.session():
-            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "a.png")
+            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "a.png")
             raise RuntimeError("stage failed")
     assert not figure_worker.active()
     assert not list(tmp_path.glob("*.tmp*"))
@@ -385,25 +393,25 @@ def test_figure_worker_aborts_with_the_stage(tmp_path):
 
 def test_nested_figure_sessions_share_one_worker(tmp_path):
     """acmm simulate's design: the inner session's figures are written when it ends."""
-    from common import figure_worker
+    from acmm_qpp import figure_worker
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")
     t, x = _small_histories()
     with figure_worker.session():
         with figure_worker.session():
-            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "inner.png")
+            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "inner.png")
         assert (tmp_path / "inner.png").exists() and figure_worker.active()
-        figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "outer.png")
+        figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "outer.png")
     assert (tmp_path / "outer.png").exists()
 
 
 def test_design_figures_of_a_finished_design(tmp_path):
     # the whole-design entry point (kept from before the figure worker) draws the four figures
-    from acmm.config import load_config
-    from acmm.design_output import design_figures
-    from acmm.settings import design_settings
-    from acmm.stages import compute_design
+    from acmm.io.config import load_config
+    from acmm.stages.design_output import design_figures
+    from acmm.design.settings import design_settings
+    from acmm.stages.design import compute_design
 
     cfg = load_config("staircase")
     r = compute_design(cfg)
@@ -418,15 +426,15 @@ def test_baked_texts_draw_as_the_live_texts(tmp_path, monkeypatch):
     the live texts give, to anti-aliasing rounding; a PDF gets them as text."""
     from PIL import Image
 
-    names, units = list(STATE_NAMES), plots.state_units()
+    names, units = list(STATE_NAMES), plot_base.state_units()
     theta2 = np.radians(np.linspace(-45, -5, 12))
     gains = np.sin(np.arange(12 * 3 * 24).reshape(12, 3, 24)) * np.logspace(-8, 6, 24)
     sched = design_plots.SampledSchedule("polynomial", np.linspace(theta2[0], theta2[-1], 60),
                                          np.cos(np.arange(60 * 3 * 24).reshape(60, 3, 24)))
-    baked = plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "b.png", units=units, vector=True)
+    baked = design_plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "b.png", units=units, vector=True)
     assert [p.name for p in baked] == ["b.png", "b.pdf"]
     monkeypatch.setattr(design_plots, "_bake_texts", lambda fig, texts: None)
-    plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "l.png", units=units)
+    design_plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "l.png", units=units)
     a, b = (np.asarray(Image.open(tmp_path / n), dtype=int) for n in ("b.png", "l.png"))
     assert a.shape == b.shape and np.abs(a - b).max() <= 2
     # the baked text is there: the title band is not blank
@@ -437,9 +445,10 @@ def test_baked_texts_draw_as_the_live_texts(tmp_path, monkeypatch):
 def test_baked_texts_are_text_in_a_pdf():
     import io
 
-    from acmm import plot_base
+    from acmm.plots import base as plot_base
+    from acmm_qpp import plot_style as plot_style_mod
 
-    fig, grid = plot_base._BUILDERS["gain_schedule_grid"](tuple(STATE_NAMES), tuple(plots.state_units()),
+    fig, grid = plot_base._BUILDERS["gain_schedule_grid"](tuple(STATE_NAMES), tuple(plot_base.state_units()),
                                                           "ft·lbf")
     title = grid.titles[0]
     drawn, draw = [], title.draw
@@ -448,7 +457,7 @@ def test_baked_texts_are_text_in_a_pdf():
     assert drawn == [] and not title.get_visible()          # the PNG blends the baked tile
     fig.savefig(io.BytesIO(), format="pdf")
     assert drawn == ["MixedModeRenderer"] and not title.get_visible()   # the PDF draws the text
-    plots._plt().close(fig)
+    plot_style_mod.stage_pyplot().close(fig)
 
 
 def test_log_axis_labels_are_plain_text_of_the_tick_values():
@@ -464,7 +473,7 @@ def test_log_axis_labels_are_plain_text_of_the_tick_values():
             return float(label)
         return float(coeff.rstrip("×") or 1) * 10.0 ** int(power.translate(sup))
 
-    fig, (_, a2) = plots._plt().subplots(2, 1)
+    fig, (_, a2) = plot_style_mod.stage_pyplot().subplots(2, 1)
     a2.set_yscale("log")
     a2.set_ylim(0.3, 3.0)                                 # one decade: minor ticks labelled too
     fig.canvas.draw()
@@ -481,7 +490,7 @@ def test_log_axis_labels_are_plain_text_of_the_tick_values():
             if got:
                 assert value(got) == pytest.approx(v, rel=1e-12), (v, got)
     assert design_plots._plain_math(r"$\mathdefault{6\times10^{-1}}$") == "6×10⁻¹"
-    plots._plt().close(fig)
+    plot_style_mod.stage_pyplot().close(fig)
 
 
 def test_history_panels_of_a_diverged_run(captured, tmp_path):
@@ -490,7 +499,7 @@ def test_history_panels_of_a_diverged_run(captured, tmp_path):
     t = np.linspace(0.0, 3.0, 300)
     x = np.column_stack([np.sin(t), np.full(300, np.nan), t])
     x[100:, 2] = np.inf
-    plots.axis_histories(t, x, x, x, x, "t", tmp_path / "a.png")
+    sim_plots.axis_histories(t, x, x, x, x, "t", tmp_path / "a.png")
     grid = captured[0].panel_grid
     _check_labels(captured[0])
     _check_drawn(grid)
@@ -510,7 +519,7 @@ def test_history_panels_of_nearly_constant_series(captured, tmp_path, offset, sp
     ticks stay inside the panel (as an Axes keeps them), three of them at least."""
     t = np.linspace(0.0, 3.0, 300)
     x = offset + spread * np.column_stack([np.sin(t), np.cos(t), t])
-    plots.axis_histories(t, x, x, x, x, "t", tmp_path / "a.png")
+    sim_plots.axis_histories(t, x, x, x, x, "t", tmp_path / "a.png")
     grid = captured[0].panel_grid
     _check_drawn(grid)
     for p in grid.panels:
@@ -521,7 +530,7 @@ def test_scheduled_pole_map_colours_ignore_a_nan_tea(captured, tmp_path):
     theta2 = np.radians(np.linspace(-45.0, -5.0, 41))
     theta2[7] = np.nan
     poles = (-1.0 - np.arange(24.0) + 1j * np.sin(np.arange(24.0)))[None, :] * (1 + theta2[:, None] ** 2)
-    plots.scheduled_pole_map(poles * 1e-3, theta2, 1e-3, 0.5, 45.0, tmp_path / "p.png")
+    design_plots.scheduled_pole_map(poles * 1e-3, theta2, 1e-3, 0.5, 45.0, tmp_path / "p.png")
     (sc,) = [c for c in captured[0].axes[0].collections if c.get_array() is not None]
     np.testing.assert_allclose(sc.get_clim(), [-45.0, -5.0])
     assert len(sc.get_offsets()) == 41 * 24
@@ -535,9 +544,9 @@ def test_a_vector_figure_drawn_twice_is_the_same_file(tmp_path):
     args = (th, -0.1 + 0.01 * np.sin(th), 0.2 + 0.01 * th, 0.5 + 0.0 * th)
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
-    first = plots.schedule_path_check(*args, tmp_path / "a" / "f", vector=True)
+    first = design_plots.schedule_path_check(*args, tmp_path / "a" / "f", vector=True)
     time.sleep(1.1)                         # a PDF date has a resolution of one second
-    second = plots.schedule_path_check(*args, tmp_path / "b" / "f", vector=True)
+    second = design_plots.schedule_path_check(*args, tmp_path / "b" / "f", vector=True)
     pdfs = [p for p in (*first, *second) if p.suffix == ".pdf"]
     assert len(pdfs) == 2 and b"CreationDate" not in pdfs[0].read_bytes()
     assert pdfs[0].read_bytes() == pdfs[1].read_bytes()

@@ -1,7 +1,7 @@
-"""common.hdf5_lowlevel makes exactly the HDF5 objects h5py's high-level calls make (issue 16).
+"""acmm_qpp.hdf5_lowlevel makes exactly the HDF5 objects h5py's high-level calls make (issue 16).
 
 Each case is written twice, once with h5py's high-level API (``create_dataset``, ``attrs[...] =``,
-the reference) and once with :class:`common.hdf5_lowlevel.Writer`; the stored type and dataspace
+the reference) and once with :class:`acmm_qpp.hdf5_lowlevel.Writer`; the stored type and dataspace
 (HDF5's own serialisation), the creation properties and the values must be the same.  Also the
 other savings of ``write_h5``: ``output.units`` read with libyaml's loader, the git commit asked
 once per process.
@@ -14,8 +14,8 @@ import h5py
 import numpy as np
 import pytest
 
-from common.hdf5_lowlevel import Writer
-from common.results import Dataset, write_h5
+from acmm_qpp.hdf5_lowlevel import Writer
+from acmm_qpp.results import Dataset, write_h5
 
 TEXT = h5py.string_dtype()
 
@@ -99,7 +99,7 @@ def test_path_names_and_failures_as_h5py(tmp_path):
 def test_write_h5_overrides_and_layout_without_handles(tmp_path):
     """Dataset attributes replace the defaults as before (units, a coordinates attribute that the
     layout then sets), and annotating by name lookup gives the same file as with the handles."""
-    from common.netcdf_layout import annotate
+    from acmm_qpp.netcdf_layout import annotate
 
     items = {"t": Dataset(np.arange(3.0), "s", "time", dims=("t",)),
              "orbits": Dataset(np.arange(3.0) / 2, "1", "orbit count", dims=("t",)),
@@ -115,7 +115,7 @@ def test_write_h5_overrides_and_layout_without_handles(tmp_path):
         assert f["orbits"].dims[0][0].name == "/t"
         assert f["t"].attrs["standard_name"] == "time" and f["grp/k"].dims[1][0].name == "/grp/axis"
     # the same layout, annotated by looking the datasets up by name
-    from common.results import _write_group
+    from acmm_qpp.results import _write_group
 
     with h5py.File(tmp_path / "b.h5", "w") as f:
         _write_group(f, items, Writer())
@@ -138,7 +138,7 @@ def test_write_h5_overrides_and_layout_without_handles(tmp_path):
     ("output: {units: \"\\x00\"}\n", "\x00"),   # whatever the config says
 ])
 def test_unit_system_of_config_text(text, system):
-    from common.netcdf_layout import unit_system_of
+    from acmm_qpp.netcdf_layout import unit_system_of
 
     assert unit_system_of(text) == system
 
@@ -146,7 +146,7 @@ def test_unit_system_of_config_text(text, system):
 def test_git_commit_asked_once_per_process(monkeypatch):
     import subprocess
 
-    from common import provenance
+    from acmm_qpp import provenance
 
     calls = []
     real = subprocess.run
@@ -179,14 +179,14 @@ def test_provenance_flags_uncommitted_changes(tmp_path):
     if shutil.which("git") is None:
         pytest.skip("no git")
     repo = tmp_path / "repo"
-    shutil.copytree(Path(__file__).resolve().parents[1] / "common", repo / "common",
+    shutil.copytree(Path(__file__).resolve().parents[1] / "acmm_qpp", repo / "acmm_qpp",
                     ignore=shutil.ignore_patterns("__pycache__"))
     git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-c", "init.defaultBranch=main"]
     subprocess.run(git + ["init", "-q"], cwd=repo, check=True)
     subprocess.run(git + ["add", "-A"], cwd=repo, check=True)
     subprocess.run(git + ["commit", "-q", "-m", "x"], cwd=repo, check=True)
     head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True).stdout.strip()
-    probe = "from common import provenance as p; print(p.git_commit(), p.git_dirty(), p.source_unchanged())"
+    probe = "from acmm_qpp import provenance as p; print(p.git_commit(), p.git_dirty(), p.source_unchanged())"
     env = {**os.environ, "PYTHONPATH": str(repo)}
 
     def state():
@@ -195,6 +195,6 @@ def test_provenance_flags_uncommitted_changes(tmp_path):
         return r.stdout.split()
 
     assert state() == [head, "no", "True"]
-    with open(repo / "common" / "units.py", "a") as f:
+    with open(repo / "acmm_qpp" / "units.py", "a") as f:
         f.write("# edited\n")
     assert state() == [head, "yes", "False"]

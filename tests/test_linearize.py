@@ -8,11 +8,12 @@ A = T'(X*) J_X T'(X*)⁻¹ exactly, with both Jacobians taken by complex step (n
 import numpy as np
 import pytest
 
-from acmm import dynamics as dyn
-from acmm.config import load_config
-from acmm.linearize import (DRF_INPUTS, controllability, design_point, linearize,
-                            linearize_config, state_scales)
-from acmm.tea import bias_for_attitude, resolve_bias, solve_tea
+from acmm.model import dynamics as dyn
+from acmm.model import kinematics as kin
+from acmm.io.config import load_config
+from acmm.model.linearize import DRF_INPUTS, design_point, linearize, linearize_config, state_scales
+from acmm.model.controllability import controllability
+from acmm.model.tea import bias_for_attitude, resolve_bias, solve_tea
 
 N = 0.0011
 
@@ -36,7 +37,7 @@ def _plain_rhs(X, u, w, inertia, n, theta_star, drf_mode):
 def _to_report_coords(X, n, omega_star, theta_star):
     """x = T(X): (δω1, θ̇2, δω3, δθ, h, ∫h, DRF) with θ̇2 from the nonlinear kinematics (eq 3.5)."""
     omega, theta = X[0:3], X[3:6]
-    theta2_dot = dyn.attitude_rate(theta, omega, n)[1]
+    theta2_dot = kin.attitude_rate(theta, omega, n)[1]
     return np.concatenate([[omega[0] - omega_star[0], theta2_dot, omega[2] - omega_star[2]],
                            theta - theta_star, X[6:]])
 
@@ -53,7 +54,7 @@ def _complex_jacobian(fun, x0, scales):
 
 
 def reference_model(inertia, theta_star, n, bias, drf_mode="attitude_hold"):
-    omega_star = dyn.lvlh_rate_in_body(theta_star, n)
+    omega_star = kin.lvlh_rate_in_body(theta_star, n)
     X0 = np.concatenate([omega_star, theta_star, np.zeros(18)])
     sc = state_scales(n, drf_mode)
     plain_scales = sc.copy()

@@ -2,14 +2,15 @@
 
 Every design is re-checked independently: poles recomputed from the physical A − BK, Q ⪰ 0 by
 its eigenvalues, and K reproduced by scipy's Riccati solver (called directly, not through
-acmm.riccati) on the shifted problem (A + shift·I, B, Q, R).
+acmm.design.riccati) on the shifted problem (A + shift·I, B, Q, R).
 """
 import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from common.errors import DesignError
-from acmm.lqr import in_sector, sector_lqr, sector_margin
+from acmm_qpp.errors import DesignError
+from acmm.design.sector import in_sector, sector_margin
+from acmm.design.lqr import sector_lqr
 
 N = 0.0011  # rad/s
 
@@ -172,12 +173,12 @@ def test_uncontrollable_pole_inside_sector_is_fine():
     assert np.min(np.abs(res.poles + 2 * N)) < 1e-9 * N
 
 
-# --- the real problems (acmm.linearize) ----------------------------------------------------
+# --- the real problems (acmm.model.linearize) ----------------------------------------------------
 
 @pytest.fixture(scope="module")
 def models():
-    from acmm.config import load_config
-    from acmm.linearize import linearize_config
+    from acmm.io.config import load_config
+    from acmm.model.linearize import linearize_config
 
     return {name: (load_config(name), linearize_config(load_config(name))) for name in ("mb3", "ac")}
 

@@ -1,13 +1,13 @@
 """The circle criterion against the loop as built: φ enters ż = A z + B φ(y) with + (eqs 13.1,
 14.2), so a passing sector never holds a destabilizing constant gain; a coupled φ is checked in
-the small-gain form (qpp.circle)."""
+the small-gain form (qpp.design.circle)."""
 import itertools
 
 import numpy as np
 import pytest
 
-from qpp.circle import circle_criterion
-from qpp.lure import LurePlant, closed_loop
+from qpp.design.circle import circle_criterion
+from qpp.model.lure import LurePlant, closed_loop
 
 W = np.concatenate([[0.0], np.logspace(-3, 3, 1500)])
 
@@ -145,7 +145,7 @@ def test_a_sector_the_grid_does_not_resolve_is_not_certified():
 def test_spectral_norms_equal_numpy_svd_including_extreme_magnitudes(m):
     """The closed-form σ̄ of the small-gain peak (m ≤ 2) against numpy's SVD, with zero, tiny,
     huge, denormal and nearly rank-one matrices in the stack."""
-    from qpp.circle_small_gain import spectral_norms
+    from qpp.design.circle import spectral_norms
 
     rng = np.random.default_rng(m)
     H = rng.normal(size=(400, m, m)) + 1j * rng.normal(size=(400, m, m))

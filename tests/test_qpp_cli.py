@@ -4,11 +4,11 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from common.errors import ConfigError
-from common.results import read_h5
-from cli.qpp_app import app
-from qpp.config import load_config, parse_config
-from qpp.simulate import simulate
+from acmm_qpp.errors import ConfigError
+from acmm_qpp.results import read_h5
+from qpp.cli import app
+from qpp.io.config import load_config, parse_config
+from qpp.simulate.closed_loop import simulate
 
 runner = CliRunner()
 
@@ -119,7 +119,7 @@ def test_expression_scenarios_store_their_parameters_not_a_gamma(tmp_runs):
     review: γ = 4.2 for k = 4.2); γ belongs to the sinusoidal kind only."""
     import h5py
 
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     r = runner.invoke(app, ["simulate", "qpp_saturation", "--no-figures", "simulation.n_samples=201",
                             "simulation.t_final=4"])
@@ -130,7 +130,7 @@ def test_expression_scenarios_store_their_parameters_not_a_gamma(tmp_runs):
 
 
 def test_the_horizon_too_long_names_the_field_that_set_it(tmp_runs):
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     r = runner.invoke(app, ["design", "qpp_saturation", "spheres.T=1e4", "spheres.adapt_T=false"])
     assert r.exit_code == 2 and r.output.strip().startswith("error: spheres.T: 10000 s is too long"), r.output
@@ -141,7 +141,7 @@ def test_a_nonlinearity_faster_than_the_work_bound_can_see_is_stopped(tmp_runs, 
     (t_final × the loop's rates): the simulation ran on for minutes (a review).  The integration
     now counts its right-hand-side evaluations against QPP_RHS_EVALS (here lowered to 40 000;
     the example itself takes ~15 000, so it still runs under it)."""
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     monkeypatch.setenv("ACMM_LIMIT_QPP_RHS_EVALS", "40000")
     r = runner.invoke(app, ["simulate", "qpp_cubic2", "--no-figures"])
@@ -158,7 +158,7 @@ def test_the_apps_run_as_modules(tmp_path):
     import subprocess
     import sys
 
-    for mod, conf in (("cli.acmm_app", "mb3"), ("cli.qpp_app", "qpp_siso")):
+    for mod, conf in (("acmm.cli.app", "mb3"), ("qpp.cli", "qpp_siso")):
         p = subprocess.run([sys.executable, "-m", mod, "validate", conf], capture_output=True, text=True,
                            cwd=tmp_path, timeout=120)
         assert p.returncode == 0 and "valid" in p.stdout, (mod, p.stdout, p.stderr)
@@ -169,7 +169,7 @@ def test_a_scenario_outside_the_premises_says_so(tmp_runs):
     the certificate never spoke about it (it read like a broken certificate; review)."""
     import h5py
 
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     big = "simulation.scenarios=[{name: big, parameters: {k: 4.2}, delta_r: [[{kind: step, amplitude: 5.0, t_on: 3.0}]]}]"
     r = runner.invoke(app, ["simulate", "qpp_saturation", "--no-figures", "simulation.n_samples=401", big])
@@ -189,7 +189,7 @@ def test_a_scenario_outside_the_premises_says_so(tmp_runs):
     with h5py.File(tmp_runs / "runs" / "qpp_saturation" / "qpp_design.h5") as f:
         flags += [f.attrs[a] for a in f.attrs if a in ("certified", "circle_passed") or a.startswith("beta1_le_m")]
         # tables of mixed columns: units per column that pint parses (they said "mixed", "bool")
-        from common.units import parse_unit
+        from acmm_qpp.units import parse_unit
 
         for name in ("iterations", "hinf_search"):
             if name in f:
@@ -205,7 +205,7 @@ def test_gains_that_destabilize_the_loop_are_named_as_such(tmp_runs):
     """Published gains K1 = [1, 1], Kc = [1, 1], H = [1; 1] on the ch. 13 plant: the verdict blamed
     'the circle criterion for every a tried' (one a was tried) and a loop that 'does not settle'
     (review); the cause is a closed loop with a pole in the right half plane."""
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     r = runner.invoke(app, ["design", "qpp_siso", "design.gains=published", "published.K1=[[1,1]]",
                             "published.Kc=[[1,1]]", "published.H=[[1],[1]]"])

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 import scipy.integrate as si
 
-from qpp import spheres
-from qpp.circle import circle_criterion
-from qpp.config import load_config
-from qpp.hinf import hinf_gains, hinf_search
-from qpp.lure import closed_loop
+from qpp.design import spheres
+from qpp.design.circle import circle_criterion
+from qpp.io.config import load_config
+from qpp.design.hinf import hinf_gains, hinf_search
+from qpp.model.lure import closed_loop
 
 SISO_AZ = np.array([  # eq 13.6 as printed
     [0., 1., 0., 0., 0., 0.],
@@ -76,7 +76,7 @@ def test_chapter11_reproduces_published_K(name, rho, a, digits):
     np.testing.assert_array_equal(np.round(g.K1, digits) + 0.0, K1)
     np.testing.assert_array_equal(np.round(g.Kc, digits) + 0.0, Kc)
     # independent check: residual of 11.1 recomputed here, closed loop A + B K stable
-    from qpp.lure import augmented
+    from qpp.model.lure import augmented
     Aa, Ba, Ga, _ = augmented(P)
     Ab = Aa + a * np.eye(len(Aa))
     Q = np.hstack([np.zeros((P.Cc.shape[0], P.n)), P.Cc])
@@ -87,7 +87,7 @@ def test_chapter11_reproduces_published_K(name, rho, a, digits):
     rel = np.abs(g.H - H)[H != 0] / np.abs(H[H != 0])
     assert rel.max() < (0.01 if name == "qpp_siso" else 0.025)
     # printed [C 0] weight: no admissible solution at nu = 1, or clearly different gains (docs/ERRATA.md § QPP chapter 11)
-    from common.errors import AcmmError
+    from acmm_qpp.errors import AcmmError
     try:
         g2 = hinf_gains(P, rho=rho, a=a, weight="output")
     except AcmmError:
@@ -99,7 +99,7 @@ def test_hinf_search_does_not_worsen():
     cfg = load_config("qpp_siso")
     P = cfg.lure_plant()
     g0 = hinf_gains(P, rho=1e-2, a=1e-8)
-    from qpp.hinf import closed_loop_norm
+    from qpp.design.hinf import closed_loop_norm
     g = hinf_search(P, rho=1e-2, a=1e-8, max_iter=6)
     assert closed_loop_norm(P, g) <= closed_loop_norm(P, g0) + 1e-9
 
@@ -124,7 +124,7 @@ def test_signal_norms_against_quadrature():
 
 def _peak_gain_independent(A, B, C):
     """sup_ω σmax(C (jωI − A)⁻¹ B) by a dense log grid refined with scipy's bounded search —
-    written here, independent of qpp.spheres."""
+    written here, independent of qpp.design.spheres."""
     from scipy.optimize import minimize_scalar
 
     n = len(A)
@@ -202,7 +202,7 @@ def test_circle_criterion_decoupled_mimo_is_its_siso_criteria():
 
 
 def test_circle_scales_of_an_unstable_plant():
-    from qpp.circle import RESOLVED_SCALE
+    from qpp.design.circle import RESOLVED_SCALE
 
     # H(s) = 1/(s − 1), φ fed back with + (ẋ = (1 + k) x: stable for k < −1): its Nyquist plot
     # is the circle on [−1, 0], travelled once anticlockwise (P0 = 1).  A sector s·[−β, −α] with

@@ -1,5 +1,5 @@
 """The qpp stages draw their figures in the shared figure worker (issue 16,
-:mod:`common.figure_worker`): the same PNG bytes as drawn in place, and a figure that cannot be
+:mod:`acmm_qpp.figure_worker`): the same PNG bytes as drawn in place, and a figure that cannot be
 written is one OutputError with nothing left running."""
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import os
 
 import pytest
 
-from common import figure_worker
-from common.errors import OutputError
-from qpp.config import load_config
+from acmm_qpp import figure_worker
+from acmm_qpp.errors import OutputError
+from qpp.io.config import load_config
 
 pytestmark = pytest.mark.skipif(not figure_worker.usable(), reason="no fork, one CPU or other threads")
 
@@ -23,7 +23,7 @@ def _pngs(folder):
 
 
 def test_qpp_figures_in_the_worker_are_the_figures_drawn_in_place(tmp_path, monkeypatch):
-    from qpp import stages
+    from qpp.io import stages
 
     out = {}
     for mode in ("worker", "in_place"):
@@ -43,7 +43,7 @@ def test_qpp_figures_in_the_worker_are_the_figures_drawn_in_place(tmp_path, monk
 def test_a_qpp_figure_that_cannot_be_written_is_one_output_error(tmp_path, monkeypatch, mode):
     """With or without the worker: one OutputError, the results file and the other figures
     written, nothing left running."""
-    from qpp import stages
+    from qpp.io import stages
 
     if mode == "in_place":
         monkeypatch.setenv("ACMM_FIGURE_WORKER", "0")
@@ -77,9 +77,9 @@ def test_the_warm_ups_are_named_right():
 
     import matplotlib
 
-    from acmm import stage_common
-    from cli import acmm_app
-    from common.figure_process import _warm
+    from acmm.stages import common as stage_common
+    from acmm.cli import app as acmm_app
+    from acmm_qpp.figure_process import _warm
     from qpp import plots
 
     assert acmm_app.FIGURE_WARM == stage_common.FIGURE_WARM

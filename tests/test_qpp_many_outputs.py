@@ -1,12 +1,12 @@
 """Plants with many outputs.  The sector of an expression nonlinearity is sampled per channel,
-over the outputs that channel depends on (qpp.sector_grid): a 12-output plant with one
+over the outputs that channel depends on (qpp.model.sector_grid): a 12-output plant with one
 nonlinearity per channel validates, with the bounds of an independent brute-force evaluation or
 of the same φ in a one-output model; its scenario figure keeps a legend one can read."""
 import numpy as np
 import pytest
 import yaml
 
-from qpp.nonlin import ExpressionModel
+from qpp.model.nonlin import ExpressionModel
 
 from conftest import CONFIGS
 
@@ -52,7 +52,7 @@ def test_partial_dependence_matches_the_joint_grid():
 
 
 def test_channel_depending_on_many_outputs_refused_naming_f1():
-    from qpp.config_checks import _check_sample_count
+    from qpp.io.config_checks import _check_sample_count
 
     p = 12
     exprs = ["0.01*c*sin(" + "+".join(f"y{i + 1}" for i in range(p)) + ")"] + ["0"] * (p - 1)
@@ -66,7 +66,7 @@ def test_channel_depending_on_many_outputs_refused_naming_f1():
 def test_twelve_output_plant_with_one_nonlinearity_per_channel_validates(tmp_path):
     """Twelve masses, a cubic spring of uncertain stiffness on the first: the config validates
     (its sector found on twelve one-output grids) with the sector of the one-mass case."""
-    from qpp.config import load_config
+    from qpp.io.config import load_config
 
     k = 12
     A = np.zeros((2 * k, 2 * k))
@@ -96,7 +96,7 @@ def test_scenario_figure_of_many_outputs_keeps_a_short_legend(monkeypatch, tmp_p
     """Twelve outputs: the legend names the line styles and the output with the largest error
     (not 48 + 12 + 12 entries), and the title the scenario's parameters by name."""
     from qpp import plots
-    from qpp.simulate import SimResult
+    from qpp.simulate.closed_loop import SimResult
 
     figs = []
     monkeypatch.setattr(plots, "save_figure", lambda fig, path, **kw: figs.append(fig))
@@ -130,7 +130,7 @@ def test_small_n_grid_on_three_outputs_not_coarser_than_the_joint_grid():
 
 
 def test_sample_count_message_names_what_can_be_lowered():
-    from qpp.config_checks import _check_sample_count
+    from qpp.io.config_checks import _check_sample_count
 
     exprs = [f"c*e*y{i + 1}**3*cos(t)" for i in range(12)]
     m = ExpressionModel(exprs, 12, {"c": (0.9, 1.1, 1.0), "e": (0.9, 1.1, 1.0)}, [[-1.0, 1.0]] * 12, np.eye(12),

@@ -8,11 +8,11 @@ import scipy.integrate as si
 import yaml
 from typer.testing import CliRunner
 
-from common.errors import EXIT_INPUT, EXIT_NUMERICAL, ConfigError
-from common.results import read_h5
-from cli.qpp_app import app
-from qpp.config import load_config, parse_config
-from qpp.simulate import simulate
+from acmm_qpp.errors import EXIT_INPUT, EXIT_NUMERICAL, ConfigError
+from acmm_qpp.results import read_h5
+from qpp.cli import app
+from qpp.io.config import load_config, parse_config
+from qpp.simulate.closed_loop import simulate
 
 runner = CliRunner()
 NEW = ("qpp_unstable", "qpp_saturation", "qpp_cubic2")
@@ -28,7 +28,7 @@ def _cfg(name, tmp_path, **edits):
 
 def _sup_gain(A, B, C, a):
     """sup_ω σmax(C ((jω − a)I − A)⁻¹ B) on a dense grid refined by a bounded search — written here,
-    independent of qpp.spheres."""
+    independent of qpp.design.spheres."""
     from scipy.optimize import minimize_scalar
 
     n = len(A)
@@ -99,8 +99,8 @@ def test_sector_beta3_from_expression_against_closed_forms():
 
 def test_sampled_sector_climbs_to_the_supremum_between_grid_points():
     # a sector too small by any amount is no certificate: the grid's best points are refined to
-    # the local extrema (qpp.sector_bounds.refine), in t and in the parameters
-    from qpp.nonlin import ExpressionModel
+    # the local extrema (qpp.model.sector_bounds.refine), in t and in the parameters
+    from qpp.model.nonlin import ExpressionModel
 
     m = ExpressionModel(["dm*y*sin(2*t)"], 1, {"dm": (-0.1, 0.1, 0.0)}, [[-2, 2]], [[1.0]], 100.0)
     assert np.max(np.abs(np.sin(2 * m._t_grid()))) < 1 - 1e-6        # the grid alone: ±0.0999998
@@ -120,7 +120,7 @@ def test_extremum_missed_by_the_grid_is_climbed_from_the_random_check(tmp_path):
     output and in qpp_design.h5."""
     import h5py
 
-    from qpp.nonlin import ExpressionModel
+    from qpp.model.nonlin import ExpressionModel
 
     bump = "-c*y1**3 + (c - 1)*y1*3*exp(-((y1 - 0.3)/0.002)**2)"
     m = ExpressionModel([bump], 1, {"c": (0.9, 1.1, 1.0)}, [[-1, 1]], [[1.0]], 1.0, n_grid=5)
@@ -149,11 +149,11 @@ def test_random_check_climbs_both_bounds_and_the_slope_of_a_missed_feature(globa
     channel the slope of a narrow step; brute-force references on fine grids.  Without the global
     search (the random check's own climb) and with it (which finds the features before the random
     check: then nothing is left for it to find)."""
-    import qpp.nonlin
-    from qpp.nonlin import ExpressionModel
+    import qpp.model.nonlin
+    from qpp.model.nonlin import ExpressionModel
 
     if not global_search:
-        monkeypatch.setattr(qpp.nonlin, "global_search", lambda model, i, kinds, bounds: dict(bounds))
+        monkeypatch.setattr(qpp.model.nonlin, "global_search", lambda model, i, kinds, bounds: dict(bounds))
 
     y = np.linspace(-1, 1, 2_000_001)
     bump = lambda v: v * (1 + 3 * np.exp(-((v - 0.7071) / 0.001) ** 2))      # noqa: E731
@@ -198,7 +198,7 @@ def test_library_forms_and_stated_overrides(tmp_path):
     d["simulation"]["scenarios"][0]["gamma"] = 0.0
     d["nonlinearity"].update({"sector": [[-0.7, 0.7]], "beta3": 0.01, "beta4": 0.02})
     d["simulation"]["t_final"] = 2.0
-    from qpp.design import certify, default_sector
+    from qpp.design.certificate import certify, default_sector
 
     cfg = parse_config(d)
     np.testing.assert_array_equal(default_sector(cfg), [[-0.7, 0.7]])
@@ -226,8 +226,8 @@ def test_cross_coupled_channel_gets_the_slope_sector(tmp_path):
 # ---------------------------------------------------------------------- new examples
 @pytest.mark.parametrize("name", NEW)
 def test_new_example_certified_and_confirmed_by_simulation(tmp_path, name):
-    from qpp.lure import channels, closed_loop
-    from qpp.stages import run_design
+    from qpp.model.lure import channels, closed_loop
+    from qpp.io.stages import run_design
 
     cfg = parse_config(_cfg(name, tmp_path))
     cfg, r, path = run_design(cfg, figures=(name == "qpp_cubic2"))
@@ -243,7 +243,7 @@ def test_new_example_certified_and_confirmed_by_simulation(tmp_path, name):
     m = sp.beta_o / (sp.beta_ri + sp.d_inf + sp.beta_o * t.beta3 + t.beta4)
     assert b1 <= m and m == pytest.approx(r.m_ref, rel=1e-12)
     # circle criterion re-checked at the final a on an independent grid
-    from qpp.circle import circle_criterion
+    from qpp.design.circle import circle_criterion
 
     _, dc = channels(P)
     assert circle_criterion(Az, Bz[:, dc], Cz, r.sector, a=r.a, omega=np.linspace(0, 300, 20001)).passed
@@ -287,7 +287,7 @@ def _issue_case(tmp_path, **design):
 
 
 def test_issue_case_rescued_by_the_wider_search(tmp_path):
-    from qpp.design import design
+    from qpp.design.procedure import design
 
     r = design(parse_config(_issue_case(tmp_path)))
     first = r.iterations[0]
@@ -320,7 +320,7 @@ def test_no_certified_design_exit_3_best_written(tmp_path):
 
 
 def test_hinf_search_steps_and_tests_recorded():
-    from qpp.hinf import existence_tests, hinf_gains, hinf_search
+    from qpp.design.hinf import existence_tests, hinf_gains, hinf_search
 
     P = load_config("qpp_unstable").lure_plant()
     g = hinf_search(P, rho=1e-2, a=1e-6, max_iter=12)
@@ -341,7 +341,7 @@ def test_hinf_search_steps_and_tests_recorded():
 
 # ---------------------------------------------------------------------- report examples
 def test_report_examples_keep_published_gains_and_certify_printed_gains():
-    from qpp.design import design
+    from qpp.design.procedure import design
 
     for name in ("qpp_siso", "qpp_manipulator"):
         cfg = load_config(name)
@@ -359,7 +359,7 @@ def test_manipulator_beta3_beta4_bookkeeping():
     """β4 = 0.056 is reached along the trajectory for an arm mass μ* (φ = N(f1 − f1o), N = 10: μ* ≈ 1.19 kg;
     without N: μ* ≈ 30.4 kg), but β3 = ‖[∂φ/∂y1]_T‖₂ vanishes along any trajectory with x3 = 0:
     R/(μ+M) = x1 + aM/(μ+M) makes φ1 independent of x1 and φ2 ∝ x3 — so 0.018 is reached by none."""
-    from qpp.design import _arm_betas, nominal_output
+    from qpp.design.thresholds import _arm_betas, nominal_output
 
     base = load_config("qpp_manipulator").model_dump(mode="json")
     p = base["published"]

@@ -1,10 +1,10 @@
-"""qpp.transfer: the modal frequency response agrees with the direct solves (an independent
+"""qpp.model.transfer: the modal frequency response agrees with the direct solves (an independent
 computation per point), the direct one is what the report's small examples keep, and an
 ill-conditioned or defective A falls back to the direct solves."""
 import numpy as np
 import pytest
 
-from qpp.transfer import MODAL_MIN_ORDER, transfer_on_grid
+from qpp.model.transfer import MODAL_MIN_ORDER, transfer_on_grid
 
 
 def _stable(n, m, p, seed):

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 import yaml
 
-from common.errors import ConfigError
-from qpp.config import load_config, parse_config
+from acmm_qpp.errors import ConfigError
+from qpp.io.config import load_config, parse_config
 
 
 def _base(**edits):
@@ -89,7 +89,7 @@ def test_round_off_in_N_does_not_couple_the_phi_channels():
 def test_a_printed_H_of_zeros_is_no_difference_to_report(tmp_path):
     from typer.testing import CliRunner
 
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     r = CliRunner().invoke(app, ["design", "qpp_siso", f"output.root={tmp_path}", "--no-figures",
                                  "published.H=[[0],[0]]"])
@@ -127,9 +127,9 @@ def test_a_supremum_in_a_basin_the_grid_does_not_lead_to_is_found():
 def test_a_diverging_scenario_is_a_result_not_a_failure(tmp_path):
     """φ = 3·y fed back with + destabilizes the loop (eigenvalue check): a long run diverges; the
     scenario is reported OUTSIDE with the time it diverged, the other scenario as usual."""
-    from cli.qpp_app import app
+    from qpp.cli import app
     from typer.testing import CliRunner
-    from qpp.lure import closed_loop
+    from qpp.model.lure import closed_loop
 
     data = _base(**{"plant.A": [[0, 1], [-1, -0.5]], "plant.C": [[1, 0]], "nonlinearity.f1": ["k*y1"],
                     "nonlinearity.parameters": {"k": {"min": 0.0, "max": 3.0, "nominal": 0.0}},
@@ -170,7 +170,7 @@ def test_a_zero_or_denormal_nonlinearity_is_designed_without_a_traceback(tmp_run
     sector.  The results are written (exit 4 at most: a figure of the denormal case)."""
     from typer.testing import CliRunner
 
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     r = CliRunner().invoke(app, ["design", "qpp_saturation", f'nonlinearity.f1=["{f1}"]'])
     assert r.exit_code in codes, r.output
@@ -185,7 +185,7 @@ def test_an_unstable_nominal_loop_is_a_result_not_an_integrator_error(tmp_runs):
     import h5py
     from typer.testing import CliRunner
 
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     args = ["simulate", "qpp_siso", "design.gains=published", "plant.A=[[0,1],[0,120]]", "--no-figures"]
     r = CliRunner().invoke(app, args)
@@ -206,7 +206,7 @@ def test_an_unstable_nominal_loop_is_a_result_not_an_integrator_error(tmp_runs):
 ])
 def test_a_structurally_impossible_plant_names_its_obstacle(plant, words):
     """No gains of eqs 10.5–10.6 exist: the failure says why (PBH tests), not only that none was found."""
-    from qpp.lure import LurePlant, structural_obstacles
+    from qpp.model.lure import LurePlant, structural_obstacles
 
     A, B, C = plant
     why = structural_obstacles(LurePlant(A, B, C, B, [[0]], [[1]], [[1]]))
@@ -219,7 +219,7 @@ def test_a_structurally_impossible_plant_names_its_obstacle(plant, words):
 def test_a_large_reference_is_not_a_divergence(tmp_path):
     """The ch. 13 loop tracking r_o = 1e7·sin 5t: a stable loop with large signals, not a divergence
     (the threshold is relative to the nominal loop's size, not 1e6 in the output's units)."""
-    from qpp.simulate import simulate
+    from qpp.simulate.closed_loop import simulate
 
     big = load_config("qpp_siso", ["simulation.r_o=[[{kind: sin, amplitude: 1.0e7, omega: 5.0}]]",
                                    "simulation.n_samples=201"])
@@ -231,7 +231,7 @@ def test_a_large_reference_is_not_a_divergence(tmp_path):
 def test_a_badly_scaled_plant_has_no_false_obstacle():
     """A = [[0, 1e6], [0, 0]], B = [0; 1e-4]: controllable (rank 2), observable from y = x1, no
     zero at the integrator's pole; a rank test relative to max|A| called it uncontrollable."""
-    from qpp.lure import LurePlant, structural_obstacles
+    from qpp.model.lure import LurePlant, structural_obstacles
 
     A, B, C = np.array([[0.0, 1e6], [0.0, 0.0]]), np.array([[0.0], [1e-4]]), np.array([[1.0, 0.0]])
     assert np.linalg.matrix_rank(np.hstack([B, A @ B])) == 2                   # independent: Kalman rank
@@ -262,7 +262,7 @@ def test_nothing_to_track_is_no_reason_for_a_vanishing_T(tmp_runs):
     import h5py
     from typer.testing import CliRunner
 
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     cfg = _mass_on_integrator("regulate", "k*y1", beta_o=0.006, step=0.0,
                               delta_r=[[{"kind": "sin", "amplitude": 0.004, "omega": 1.0}]])
@@ -284,7 +284,7 @@ def test_a_nominal_loop_that_never_settles_is_named(tmp_runs):
     settles, T took the horizon and the certificate silently depended on t_final (review)."""
     from typer.testing import CliRunner
 
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     plant = {"A": [[0, 1], [2, -1]], "B": [[0], [1]], "C": [[1, 0]], "G": [[0], [1]], "Ac": [[-1]],
              "Bc": [[1]], "Cc": [[1]]}
@@ -312,9 +312,9 @@ def test_a_nonlinearity_that_switches_on_after_T_is_named(tmp_runs):
     ch. 13 form, sin t) is as stiff within T as after it: no warning."""
     from typer.testing import CliRunner
 
-    from cli.qpp_app import app
-    from qpp.certificate import late_slope
-    from qpp.config import load_config
+    from qpp.cli import app
+    from qpp.design.certificate import late_slope
+    from qpp.io.config import load_config
 
     cfg = _mass_on_integrator("late", "k*y1*(sat(10*(t-3), 1) + 1)/2", beta_o=0.02, step=1.0)
     (tmp_runs / "late.yaml").write_text(yaml.safe_dump(cfg))
@@ -330,7 +330,7 @@ def test_a_slow_mode_beyond_the_horizon_is_named_with_nothing_to_track(tmp_runs)
     beyond the 10 s horizon; the warning blamed the servo-compensator (review)."""
     from typer.testing import CliRunner
 
-    from cli.qpp_app import app
+    from qpp.cli import app
 
     import re
 

@@ -18,7 +18,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import report as rp
+from acmm.report.context import SectionWriter
+from acmm.report import build as build_mod
+from acmm.report import constants as constants_mod
+from acmm.report import document as document_mod
+from acmm.report import gather as gather_mod
+from acmm.report import ledger as ledger_mod
+from acmm.report import manifest as manifest_mod
+from acmm.report import stage_results as stage_results_mod
 
 N = 0.0011
 MB3 = np.array([[23.22e6, -0.023e6, 0.477e6], [-0.023e6, 1.30e6, -0.011e6], [0.477e6, -0.011e6, 23.23e6]])
@@ -71,7 +78,7 @@ class PageParser(HTMLParser):
 @pytest.fixture(scope="module")
 def fast_report(tmp_path_factory):
     base = tmp_path_factory.mktemp("report")
-    r = rp.build_report(base / "out", fast=True, root=base / "runs")
+    r = build_mod.build_report(base / "out", fast=True, root=base / "runs")
     return base, r
 
 
@@ -93,10 +100,10 @@ def _table(page, caption_start):
 # ----------------------------------------------------------------------------- structure
 def test_every_section_present_in_html_and_markdown(fast_report, page):
     _, r = fast_report
-    keys = [k for k, _ in rp.SECTIONS]
+    keys = [k for k, _ in constants_mod.SECTIONS]
     assert page.ids == keys
     md = r.markdown.read_text(encoding="utf-8")
-    for _, title in rp.SECTIONS:
+    for _, title in constants_mod.SECTIONS:
         assert f"## {title}" in md
     assert page._stack == []                      # every tag closed
 
@@ -123,7 +130,7 @@ def test_every_image_is_embedded_or_exists(fast_report, page):
 def test_cli_report_command_registered_and_user_error(tmp_path):
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     res = CliRunner().invoke(app, ["report", "--help"])
     assert res.exit_code == 0 and "--out" in res.output and "--fast" in res.output
@@ -150,7 +157,7 @@ def test_table1_computed_teas_round_to_printed(page):
             dec = len(row[ip].split(".")[1])
             assert float(row[ip]) == want
             assert round(float(row[ic]), dec) == pytest.approx(want, abs=1e-12)
-            assert row[ist] == rp.STATUS_MATCHED
+            assert row[ist] == ledger_mod.STATUS_MATCHED
             seen += 1
         else:
             assert float(row[ic]) == pytest.approx(float(row[ip]), abs=1e-12)
@@ -166,27 +173,27 @@ def test_qpp_gains_match_printed_to_one_decimal(page):
         for k, v in printed.items():
             assert float(rows[k][1]) == v
             assert abs(float(rows[k][2]) - v) <= 0.05 + 1e-9
-            assert rows[k][3] == rp.STATUS_MATCHED
+            assert rows[k][3] == ledger_mod.STATUS_MATCHED
 
 
 def test_every_printed_number_matched_or_explained(fast_report, page):
     _, r = fast_report
     assert r.unexplained == []
     statuses = [p.status for p in r.ledger]
-    assert statuses.count(rp.STATUS_MATCHED) >= 25
+    assert statuses.count(ledger_mod.STATUS_MATCHED) >= 25
     ledger_rows = [t for t in page.tables if t["rows"] and t["rows"][0][:3] == ["section", "quantity", "printed"]]
     assert len(ledger_rows) == 1 and len(ledger_rows[0]["rows"]) - 1 == len(r.ledger)
     for row in ledger_rows[0]["rows"][1:]:
-        assert row[-1].startswith((rp.STATUS_MATCHED, rp.STATUS_BOUND, rp.STATUS_EXPLAINED + ": ")), row
+        assert row[-1].startswith((ledger_mod.STATUS_MATCHED, ledger_mod.STATUS_BOUND, ledger_mod.STATUS_EXPLAINED + ": ")), row
 
 
 def test_matches_printed_precision_rule():
-    assert rp.matches_printed("-44.7", -44.7499)
-    assert not rp.matches_printed("-44.7", -44.7501)
-    assert rp.matches_printed("1005.9", 1005.855)
-    assert not rp.matches_printed("0.02727", 0.0272922)
-    assert rp.check_printed("s", "q", "0.094", 0.09189, bound="upper").status == rp.STATUS_BOUND
-    assert rp.check_printed("s", "q", "0.094", 0.1, bound="upper").status == rp.STATUS_UNEXPLAINED
+    assert ledger_mod.matches_printed("-44.7", -44.7499)
+    assert not ledger_mod.matches_printed("-44.7", -44.7501)
+    assert ledger_mod.matches_printed("1005.9", 1005.855)
+    assert not ledger_mod.matches_printed("0.02727", 0.0272922)
+    assert ledger_mod.check_printed("s", "q", "0.094", 0.09189, bound="upper").status == ledger_mod.STATUS_BOUND
+    assert ledger_mod.check_printed("s", "q", "0.094", 0.1, bound="upper").status == ledger_mod.STATUS_UNEXPLAINED
 
 
 def test_claim1_numbers_come_from_the_simulation(fast_report, page):
@@ -245,22 +252,32 @@ def test_robustness_section(fast_report, page, monkeypatch):
         assert [x[0] for x in rows[1:]] == ["MB3", "AC"]
         for x in rows[1:]:
             nb, tot = map(int, re.match(r"(\d+)/(\d+)", x[1]).groups())
-            assert tot == rp.FAST_SWEEP_RUNS and 0 <= nb <= tot
+            assert tot == gather_mod.FAST_SWEEP_RUNS and 0 <= nb <= tot
     else:
         assert "Not available in this run" in md
 
 
+class _Robustness(SectionWriter):
+    """A writer that runs the robustness section alone (it needs no other section's output)."""
+
+    def robustness(self):
+        from acmm.report.sections import robustness
+
+        robustness.build(self)
+
+
 def test_robustness_absent_renders_not_available(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "acmm.sweep", None)        # import now raises ImportError
-    res, note = rp.robustness_result(tmp_path)
+    monkeypatch.setitem(sys.modules, "acmm.sweep.run", None)    # (also when already imported)
+    res, note = gather_mod.robustness_result(tmp_path)
     assert res is None and "not installed" in note
-    g = rp.Gathered(configs={}, runs={}, robustness=None, robustness_note=note)
-    rep = rp._Report(g, tmp_path, fast=True)
+    g = gather_mod.Gathered(configs={}, runs={}, robustness=None, robustness_note=note)
+    rep = _Robustness(g, tmp_path, fast=True)
     rep.robustness()
-    md = rp.render_markdown(rep.doc, "t")
+    md = document_mod.render_markdown(rep.doc, "t")
     assert "Not available in this run" in md and "## ±30 % inertia robustness" in md
-    assert rep.ledger[-1].status == rp.STATUS_EXPLAINED
-    html = rp.render_html(rep.doc, "t", tmp_path)
+    assert rep.ledger[-1].status == ledger_mod.STATUS_EXPLAINED
+    html = document_mod.render_html(rep.doc, "t", tmp_path)
     p = PageParser()
     p.feed(html)
     assert "robustness" in p.ids
@@ -273,47 +290,47 @@ def test_two_runs_give_identical_datasets(fast_report, tmp_path):
 
     _, r = fast_report
     manifest = json.loads(r.manifest.read_text())
-    cfgs = {n: rp.acmm_config(n, tmp_path) for n in ("mb3", "mb3_decoupled")}
-    fresh = [rp.ensure_acmm_design(cfgs["mb3"], rerun=True), rp.ensure_acmm_simulation(cfgs["mb3"], rerun=True),
-             rp.ensure_acmm_simulation(cfgs["mb3_decoupled"], rerun=True)]
-    q = rp.qpp_config("qpp_siso", tmp_path)
-    fresh += [rp.ensure_qpp(q, "design", rerun=True), rp.ensure_qpp(q, "simulate", rerun=True)]
+    cfgs = {n: stage_results_mod.acmm_config(n, tmp_path) for n in ("mb3", "mb3_decoupled")}
+    fresh = [stage_results_mod.ensure_acmm_design(cfgs["mb3"], rerun=True), stage_results_mod.ensure_acmm_simulation(cfgs["mb3"], rerun=True),
+             stage_results_mod.ensure_acmm_simulation(cfgs["mb3_decoupled"], rerun=True)]
+    q = stage_results_mod.qpp_config("qpp_siso", tmp_path)
+    fresh += [stage_results_mod.ensure_qpp(q, "design", rerun=True), stage_results_mod.ensure_qpp(q, "simulate", rerun=True)]
     compared = 0
     for run in fresh:
         assert not run.reused
         old = manifest["files"][f"{run.stage}:{run.config}"]
         # (config hashes differ: the resolved config records its results root)
-        new = rp.dataset_hashes(run.path)
+        new = manifest_mod.dataset_hashes(run.path)
         assert new == old["datasets"]
         compared += len(new)
     assert compared > 100
     # the comparison the report prints: identical, then a changed dataset is reported
-    same = rp.compare_manifests(manifest, manifest)
+    same = manifest_mod.compare_manifests(manifest, manifest)
     assert same["status"] == "identical" and same["compared"] > compared
     changed = json.loads(json.dumps(manifest))
     key = "acmm simulate:mb3"
     ds = sorted(changed["files"][key]["datasets"])[0]
     changed["files"][key]["datasets"][ds] = "0" * 16
-    diff = rp.compare_manifests(manifest, changed)
+    diff = manifest_mod.compare_manifests(manifest, changed)
     assert diff["status"] == "different" and diff["differences"] == [f"{key}: {ds}"]
-    assert rp.compare_manifests(None, manifest)["status"] == "no previous report"
+    assert manifest_mod.compare_manifests(None, manifest)["status"] == "no previous report"
     # a previous report of other results (another root: other config hashes) is no evidence:
     # it said "identical (0 datasets compared)"
     other = json.loads(json.dumps(manifest))
     for f in other["files"].values():
         f["config_hash"] = "x" + f["config_hash"]
-    none = rp.compare_manifests(other, manifest)
+    none = manifest_mod.compare_manifests(other, manifest)
     assert none["status"] == "nothing comparable" and none["compared"] == 0
 
 
 def test_dataset_hashes_ignore_timing_and_attributes(tmp_path):
-    from common.results import Dataset, write_h5
+    from acmm_qpp.results import Dataset, write_h5
 
     a = write_h5(tmp_path / "a.h5", {"x": Dataset(np.arange(3.0), "1"), "wall_time": Dataset(1.0, "s")}, "c: 1")
     b = write_h5(tmp_path / "b.h5", {"x": Dataset(np.arange(3.0), "1"), "wall_time": Dataset(2.0, "s")}, "c: 1")
     c = write_h5(tmp_path / "c.h5", {"x": Dataset(np.arange(3.0) + 1e-15, "1")}, "c: 1")
-    assert rp.dataset_hashes(a) == rp.dataset_hashes(b) and list(rp.dataset_hashes(a)) == ["x"]
-    assert rp.dataset_hashes(a) != rp.dataset_hashes(c)
+    assert manifest_mod.dataset_hashes(a) == manifest_mod.dataset_hashes(b) and list(manifest_mod.dataset_hashes(a)) == ["x"]
+    assert manifest_mod.dataset_hashes(a) != manifest_mod.dataset_hashes(c)
 
 
 # ----------------------------------------------------------------------------- real browser
@@ -344,7 +361,7 @@ def test_a_report_that_cannot_be_written_leaves_out_as_it_was(fast_report, tmp_p
     import hashlib
     import shutil
 
-    from common.errors import OutputError
+    from acmm_qpp.errors import OutputError
 
     base, r = fast_report
     out = tmp_path / "out"
@@ -358,5 +375,5 @@ def test_a_report_that_cannot_be_written_leaves_out_as_it_was(fast_report, tmp_p
 
     before = tree()
     with pytest.raises(OutputError, match="report.md: a directory of that name is in the way"):
-        rp.build_report(out, fast=True, root=base / "runs")
+        build_mod.build_report(out, fast=True, root=base / "runs")
     assert tree() == before

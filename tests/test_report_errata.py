@@ -7,12 +7,12 @@ import re
 import numpy as np
 import pytest
 
-from acmm import linearize as lin
-from acmm import schedule
-from acmm.settings import design_settings
-from acmm import tea
-from acmm.config import load_config
-from report.sections import errata
+from acmm.model import linearize as lin
+from acmm.design import schedule
+from acmm.design.settings import design_settings
+from acmm.model import tea
+from acmm.io.config import load_config
+from acmm.report.sections import errata
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""A report's files go into --out all together or not at all (report.publish): a review's disk
+"""A report's files go into --out all together or not at all (acmm.report.publish): a review's disk
 filled up while the report moved its figures and wrote its pages, which left the new figures and
 manifest beside the previous page."""
 from __future__ import annotations
@@ -7,8 +7,8 @@ import os
 
 import pytest
 
-from common.errors import OutputError
-from report import publish as publish_mod
+from acmm_qpp.errors import OutputError
+from acmm.report import publish as publish_mod
 
 
 def _tree(root):

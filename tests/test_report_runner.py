@@ -1,4 +1,4 @@
-"""The report's task graph (issue 16, :mod:`report.runner`, :mod:`report.plan`): the same results on
+"""The report's task graph (issue 16, :mod:`acmm.report.runner`, :mod:`acmm.report.plan`): the same results on
 forked worker processes as one after the other, and one clear error with no output on a failure."""
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import time
 import numpy as np
 import pytest
 
-from common.errors import ConvergenceError, OutputError
-from report.runner import Task, run_tasks
+from acmm_qpp.errors import ConvergenceError, OutputError
+from acmm.report.runner import Task, run_tasks
 
 pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="worker processes are forked")
 
@@ -81,7 +81,7 @@ def test_figure_warm_up_and_fixed_layout():
     are inches of the figure, spacings fractions."""
     import matplotlib
 
-    from report.figure_style import fixed_layout, pyplot, warm
+    from acmm.report.figure_style import fixed_layout, pyplot, warm
 
     backend, rc = matplotlib.get_backend(), dict(matplotlib.rcParams)
     warm()
@@ -256,7 +256,7 @@ def test_the_early_tasks_output_is_not_lost(tmp_path):
 
     script = tmp_path / "s.py"
     script.write_text("import sys\nsys.path.insert(0, %r)\n" % str(os.getcwd()) +
-                      "from report.runner import Task, run_tasks\n"
+                      "from acmm.report.runner import Task, run_tasks\n"
                       "def say(x):\n    print('from task', x)\n    return x\n"
                       "if __name__ == '__main__':\n"
                       "    print(run_tasks([Task('p1', say, (), lambda d: (1,), cost=9),"
@@ -290,8 +290,8 @@ def test_the_early_task_with_many_open_files(tmp_path):
 # ----------------------------------------------------------------------------- the report's graph
 def _claim1_graph(root, figdir, jobs):
     """The MB3 stages and the parts that read them (claim-1 poles and section), as in build_report."""
-    from report.context import SectionWriter
-    from report.gather import (
+    from acmm.report.context import SectionWriter
+    from acmm.report.gather import (
         Gathered,
         keep_stage,
         order_runs,
@@ -299,7 +299,7 @@ def _claim1_graph(root, figdir, jobs):
         stage_tasks,
         warm_workers,
     )
-    from report.plan import PARTS, _part_args, _values_of, run_part
+    from acmm.report.plan import PARTS, _part_args, _values_of, run_part
 
     g = Gathered(report_configs(root), {})
     stages = [t for t in stage_tasks(g.configs, root, robustness=False, jobs=jobs)
@@ -319,7 +319,7 @@ def _claim1_graph(root, figdir, jobs):
 def test_report_graph_in_workers_matches_serial(tmp_path):
     """The claim-1 branch of the report (4 stages, 2 parts) on 2 processes and on 1: the same
     datasets (hashes), run order, document blocks, printed numbers and figure bytes."""
-    from report.manifest import dataset_hashes
+    from acmm.report.manifest import dataset_hashes
 
     out = {}
     for jobs in (1, 2):
@@ -356,9 +356,9 @@ def test_report_failure_in_a_worker_is_one_line_and_shown_in_its_sections(tmp_pa
 
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
-    gather_mod = sys.modules["report.gather"]
+    gather_mod = sys.modules["acmm.report.gather"]
 
     monkeypatch.setattr(gather_mod, "_qpp_task", _broken_qpp)
     out = tmp_path / "out"
@@ -385,12 +385,12 @@ def test_an_interrupted_report_leaves_out_as_it_was(tmp_path, monkeypatch):
 
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     out = tmp_path / "out"
     (out / "figures").mkdir(parents=True)
     (out / "index.html").write_text("the previous report")
-    build_mod = sys.modules["report.build"]
+    build_mod = sys.modules["acmm.report.build"]
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
@@ -405,11 +405,11 @@ def test_an_interrupted_report_leaves_out_as_it_was(tmp_path, monkeypatch):
 def test_default_jobs(monkeypatch):
     import threading
 
-    from report.runner import default_jobs
+    from acmm.report.runner import default_jobs
 
     monkeypatch.setenv("ACMM_REPORT_JOBS", "3")
     assert default_jobs() == 3
-    from common.errors import ConfigError
+    from acmm_qpp.errors import ConfigError
 
     for bad in ("0", "abc", "-1", "1.5", "5000"):         # were ignored without a word (a review)
         monkeypatch.setenv("ACMM_REPORT_JOBS", bad)
@@ -440,7 +440,7 @@ def test_worker_warnings_reach_the_caller_as_in_a_serial_run(action, expected):
     caller, counted as the serial run counts them (the CLI's note: line)."""
     import warnings
 
-    from report.runner import Task, run_tasks
+    from acmm.report.runner import Task, run_tasks
 
     counts = []
     for jobs in (1, 2):
@@ -463,10 +463,10 @@ def test_a_results_file_rewritten_while_the_report_runs_is_refused(tmp_path, mon
 
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     out = tmp_path / "out"
-    build_mod = sys.modules["report.build"]
+    build_mod = sys.modules["acmm.report.build"]
     original = build_mod.sec_printed.build
 
     def rewrite_then_build(rep, *args, **kwargs):
@@ -484,8 +484,8 @@ def test_a_results_file_rewritten_while_the_report_runs_is_refused(tmp_path, mon
 
 def test_a_work_limit_variable_that_is_no_number_is_refused(monkeypatch):
     """ACMM_LIMIT_* set to a non-number, zero, a negative or infinity was ignored without a word."""
-    from common.errors import ConfigError
-    from common.limits import DEFAULTS, limit
+    from acmm_qpp.errors import ConfigError
+    from acmm_qpp.limits import DEFAULTS, limit
 
     monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", "5e6")
     assert limit("SIM_SAMPLES") == 5e6

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from common.errors import ConvergenceError
+from acmm_qpp.errors import ConvergenceError
 from conftest import invoke
 
 pytestmark = pytest.mark.slow      # three `acmm report --fast` runs: `make test-slow`
@@ -29,8 +29,8 @@ def test_report_leaves_the_users_run_folders_byte_identical(tmp_runs):
     """A user's ``runs/qpp_siso/`` with figures (``qpp design`` and ``qpp simulate`` as the user
     runs them): after ``acmm report --fast`` every file there is the same, none added or removed,
     and no other ``runs/<name>/`` appeared; the report's stages ran in ``runs/report/results``."""
-    from cli.acmm_app import app as acmm_app
-    from cli.qpp_app import app as qpp_app
+    from acmm.cli.app import app as acmm_app
+    from qpp.cli import app as qpp_app
 
     for stage in ("design", "simulate"):
         res = invoke(qpp_app, stage, "qpp_siso")
@@ -56,9 +56,9 @@ def test_a_failed_section_is_shown_and_the_others_complete(tmp_path, monkeypatch
     report is written, that section shows its heading and the one-line error, every other
     section is there with its content, and the command exits with the error's code (3) on one
     ``error:`` line."""
-    import report.plan as plan
-    from cli.acmm_app import app
-    from report.constants import SECTIONS
+    import acmm.report.plan as plan
+    from acmm.cli.app import app
+    from acmm.report.constants import SECTIONS
 
     parts = [(p[0], p[1], _failing_text14, *p[3:]) if p[0] == "qpp14" else p for p in plan.PARTS]
     monkeypatch.setattr(plan, "PARTS", parts)
@@ -82,7 +82,7 @@ def test_a_failed_section_is_shown_and_the_others_complete(tmp_path, monkeypatch
 def _broken_qpp_design(cfg, stage, rerun):
     if stage == "design" and cfg.name == "qpp_manipulator":
         raise ConvergenceError("injected: qpp design of qpp_manipulator did not converge")
-    from report.gather import ensure_qpp
+    from acmm.report.stage_results import ensure_qpp
 
     return ensure_qpp(cfg, stage, rerun=rerun)
 
@@ -92,9 +92,9 @@ def test_a_failed_stage_fails_only_the_sections_that_read_it(tmp_path, monkeypat
     chapter-14 parts show the error, chapter 13 and the rest are complete, exit 3."""
     import sys
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
-    gather_mod = sys.modules["report.gather"]     # (report.gather the attribute is the function)
+    gather_mod = sys.modules["acmm.report.gather"]     # (acmm.report.gather the attribute is the function)
     monkeypatch.setattr(gather_mod, "_qpp_task", _broken_qpp_design)
     out = tmp_path / "out"
     res = invoke(app, "report", "--fast", "--jobs", "2", "--out", out)

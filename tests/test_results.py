@@ -1,4 +1,4 @@
-"""HDF5 results (common.results) and the tea.h5 written by the TEA stage."""
+"""HDF5 results (acmm_qpp.results) and the tea.h5 written by the TEA stage."""
 from __future__ import annotations
 
 import hashlib
@@ -11,9 +11,9 @@ import pytest
 import yaml
 
 import acmm
-from acmm.config import load_config, parse_config
-from common.results import Dataset, read_h5, write_h5
-from acmm.stages import run_tea
+from acmm.io.config import load_config, parse_config
+from acmm_qpp.results import Dataset, read_h5, write_h5
+from acmm.stages.runners import run_tea
 
 from conftest import CONFIGS
 
@@ -21,7 +21,7 @@ CONFIG_TEXT = "name: demo\ninertia: {I11: 1.0, I22: 1.0, I33: 1.0}\n"
 
 
 def _all_datasets(path):
-    """Datasets other than the netCDF dimension scales added by common.netcdf_layout."""
+    """Datasets other than the netCDF dimension scales added by acmm_qpp.netcdf_layout."""
     found = {}
     with h5py.File(path, "r") as f:
         f.visititems(lambda name, obj: found.__setitem__(name, dict(obj.attrs))
@@ -134,7 +134,8 @@ def test_results_are_readable_by_others_not_mkstemp_0600(tmp_path):
     import os
     import stat
 
-    from common.results import Dataset, write_h5, write_text
+    from acmm_qpp.results import Dataset, write_h5
+    from acmm_qpp.atomic_write import write_text
 
     old = os.umask(0o022)
     try:

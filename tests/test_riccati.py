@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from common.errors import ConvergenceError
-from acmm.riccati import METHODS, care_residual, matrix_sign, solve_care
+from acmm_qpp.errors import ConvergenceError
+from acmm.design.riccati import METHODS, solve_care
+from acmm.design.care_checks import care_residual
+from acmm.design.matrix_sign import matrix_sign
 
 # SLICOT SB02PD documentation example: A'X + XA − XGX + Q = 0 with G = diag(0, 1) = B R⁻¹ B'.
 SB02PD_A = np.array([[0.0, 1.0], [0.0, 0.0]])
@@ -249,7 +251,7 @@ def test_ill_conditioned_solution_is_flagged():
 # --- refinement and the backward error that decides acceptance (issue 30) --------------------
 
 def _backward_error_by_hand(A, B, Q, R, P):
-    """ω of acmm.care_checks.care_backward_error written out: ‖ℛ(P)‖ over the size of the terms
+    """ω of acmm.design.care_checks.care_backward_error written out: ‖ℛ(P)‖ over the size of the terms
     as floating point evaluates them, |A|ᵀ|P| + |P||A| + |P||G||P| + |Q| (Frobenius)."""
     G = B @ np.linalg.inv(R) @ B.T
     res = A.T @ P + P @ A - P @ G @ P + Q
@@ -258,9 +260,9 @@ def _backward_error_by_hand(A, B, Q, R, P):
 
 
 def test_refinement_recovers_a_perturbed_solution():
-    """Newton–Kleinman refinement (acmm.riccati.refine_care) from scipy's answer perturbed by
+    """Newton–Kleinman refinement (acmm.design.riccati.refine_care) from scipy's answer perturbed by
     1e-6 relative returns to scipy's answer to 1e-12, with a residual at rounding level."""
-    from acmm.riccati import refine_care
+    from acmm.design.riccati import refine_care
 
     rng = np.random.default_rng(11)
     A, B, Q, R = _random_problem(rng, nx=8, m=3)
@@ -277,9 +279,9 @@ def test_refinement_recovers_a_perturbed_solution():
 def _claim1_problem():
     """The α-shifted CARE of the cross-inertia-free MB3 model (claim 1, ch. 6) in the design's
     state scaling: nearly uncontrollable (PBH ratio ~3e-8 at s = 0)."""
-    from acmm import linearize as lin
+    from acmm.model import linearize as lin
     from acmm.api import load_config
-    from acmm.stages import compute_tea
+    from acmm.stages.runners import compute_tea
 
     cfg = load_config("mb3_decoupled")
     n = cfg.orbit_rate

@@ -4,13 +4,19 @@ import inspect
 import numpy as np
 import pytest
 
-from acmm import design_core, lqr, schedule
-from acmm.config import load_config
-from acmm.settings import DesignSettings, ScheduleSettings, Sector, design_settings, schedule_settings
+from acmm.design import design_core
+from acmm.design import lqr
+from acmm.design import sector as sector_mod
+from acmm.design import schedule
+from acmm.design import path_check as pc
+from acmm.design import schedule_refit, disk_margin
+from acmm.design import schedule_points as sp
+from acmm.io.config import load_config
+from acmm.design.settings import DesignSettings, ScheduleSettings, Sector, design_settings, schedule_settings
 
-CORE = [schedule.design_one, schedule.sector_design, schedule.check_schedule, schedule.path_models,
-        schedule.schedule_specs, schedule.fit_schedule, schedule.check_path, schedule.refit_closed_loop,
-        schedule.disk_margin_input, design_core.design_schedule, lqr.sector_lqr, lqr.sector_margin]
+CORE = [schedule.design_one, schedule.sector_design, schedule.check_schedule, pc.path_models,
+        sp.schedule_specs, schedule.fit_schedule, pc.check_path, schedule_refit.refit_closed_loop,
+        disk_margin.disk_margin_input, design_core.design_schedule, lqr.sector_lqr, sector_mod.sector_margin]
 
 
 @pytest.mark.parametrize("fn", CORE, ids=lambda f: f.__name__)
@@ -40,7 +46,7 @@ class _Bare:
 def test_sector_design_reads_only_the_settings():
     cfg = load_config("mb3")
     s = design_settings(cfg)
-    spec = schedule.point_specs(cfg)[0]
+    spec = sp.point_specs(cfg)[0]
     p = schedule.design_one(spec, s)
     r = schedule.sector_design(p.model.A, p.model.B, p.model.scales, s)
     np.testing.assert_array_equal(r.K, p.lqr.K)

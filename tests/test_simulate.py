@@ -7,10 +7,13 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from acmm import dynamics as dyn
-from acmm import simulate as sm
-from acmm.config import load_config
-from acmm.stages import compute_design, run_simulate
+from acmm.model import dynamics as dyn
+from acmm.simulate import kernel as sm
+from acmm.simulate import scenario as scen
+from acmm.simulate import reference
+from acmm.io.config import load_config
+from acmm.stages.design import compute_design
+from acmm.stages.simulate import run_simulate
 
 ORBIT = 2 * np.pi / 0.0011
 
@@ -29,28 +32,28 @@ def _saturating(sc):
 
 def test_kernel_matches_numpy_rhs_including_saturation(mb3):
     cfg, table = mb3
-    sc = _saturating(sm.scenario_from_config(cfg, table, orbits=1.0))
+    sc = _saturating(scen.scenario_from_config(cfg, table, orbits=1.0))
     rng = np.random.default_rng(3)
-    scale = sm.plain_scales(sc.n, sc.drf_mode)
+    scale = scen.plain_scales(sc.n, sc.drf_mode)
     for _ in range(50):
         X = sc.x0 + rng.normal(size=24) * scale * 50
         X[6:9] = rng.uniform(-3000, 3000, 3)      # some axes beyond the 2500 limit
         t = rng.uniform(0, ORBIT)
-        fast, _, _ = sm.kernel_rhs(sc, t, X)
-        ref = sm.rhs_numpy(t, X, sc)
+        fast, _, _ = reference.kernel_rhs(sc, t, X)
+        ref = reference.rhs_numpy(t, X, sc)
         assert np.allclose(fast, ref, rtol=1e-10, atol=1e-14 * np.abs(ref).max())
 
 
 def test_momentum_balance_along_saturated_trajectory(mb3):
     cfg, table = mb3
-    sc = _saturating(sm.scenario_from_config(cfg, table, orbits=1.0))
+    sc = _saturating(scen.scenario_from_config(cfg, table, orbits=1.0))
     r = sm.simulate(sc)
     assert r.torque_saturated.any() and r.momentum_saturated.any()
     inertia = sc.inertia[0]
     worst = 0.0
     for k in range(0, len(r.t), 3):
         X = r.state[k]
-        dX, u, _ = sm.kernel_rhs(sc, r.t[k], X)
+        dX, u, _ = reference.kernel_rhs(sc, r.t[k], X)
         omega, theta, h = X[0:3], X[3:6], X[6:9]
         lhs = inertia @ dX[0:3] + dX[6:9] + np.cross(omega, inertia @ omega + h)
         w = dyn.disturbance_torque(r.t[k], sc.bias[0], sc.harmonic_a, sc.harmonic_b, sc.n)
@@ -63,8 +66,8 @@ def test_momentum_balance_along_saturated_trajectory(mb3):
 
 def test_final_state_within_config_tolerance_of_tight_run(mb3):
     cfg, table = mb3
-    loose = sm.scenario_from_config(cfg, table, orbits=0.5)          # rtol from the config (1e-8)
-    tight = sm.scenario_from_config(cfg, table, orbits=0.5, rtol=1e-10)
+    loose = scen.scenario_from_config(cfg, table, orbits=0.5)          # rtol from the config (1e-8)
+    tight = scen.scenario_from_config(cfg, table, orbits=0.5, rtol=1e-10)
     a, b = sm.simulate(loose).state[-1], sm.simulate(tight).state[-1]
     weight = loose.atol + loose.rtol * np.abs(b)
     assert np.max(np.abs(a - b) / weight) <= 10.0
@@ -73,10 +76,10 @@ def test_final_state_within_config_tolerance_of_tight_run(mb3):
 def test_compiled_integrator_matches_scipy_on_the_numpy_model(mb3):
     """Independent integrator (DOP853) on the independent right-hand side."""
     cfg, table = mb3
-    sc = sm.scenario_from_config(cfg, table, orbits=0.25, rtol=1e-10)
+    sc = scen.scenario_from_config(cfg, table, orbits=0.25, rtol=1e-10)
     ours = sm.simulate(sc).state[-1]
-    scale = sm.plain_scales(sc.n, sc.drf_mode)
-    ref = solve_ivp(lambda t, x: sm.rhs_numpy(t, x, sc), (0.0, sc.sample_times[-1]), sc.x0,
+    scale = scen.plain_scales(sc.n, sc.drf_mode)
+    ref = solve_ivp(lambda t, x: reference.rhs_numpy(t, x, sc), (0.0, sc.sample_times[-1]), sc.x0,
                     method="DOP853", rtol=1e-11, atol=scale * 1e-12).y[:, -1]
     assert np.max(np.abs(ours - ref) / (scale * 1e-8 + 1e-9 * np.abs(ref))) <= 10.0
 
@@ -86,18 +89,18 @@ def test_claim1_cross_inertia_free_design_diverges_quickly(method):
     """Claim 1 with every Riccati method: the nearly uncontrollable model is designed (its
     solutions accepted on their backward error) and the design diverges within 0.1 orbit."""
     cfg = load_config("mb3_decoupled", [f"design.riccati_method={method}"])
-    sc = sm.scenario_from_config(cfg, compute_design(cfg).table)
+    sc = scen.scenario_from_config(cfg, compute_design(cfg).table)
     r = sm.simulate(sc)
-    assert r.verdict == "diverged" and r.stop_code == sm.STOP_ANGLE
+    assert r.verdict == "diverged" and r.stop_code == scen.STOP_ANGLE
     assert r.stop_time < 0.1 * ORBIT
 
 
 def test_claim1_coupled_design_stays_bounded(mb3):
     cfg, table = mb3
-    sc = sm.scenario_from_config(cfg, table, orbits=5.0)
+    sc = scen.scenario_from_config(cfg, table, orbits=5.0)
     r = sm.simulate(sc)
     assert r.verdict == "bounded" and r.t[-1] == pytest.approx(5 * ORBIT)
-    err = np.degrees(np.abs(sm.attitude_error(sc, r)))
+    err = np.degrees(np.abs(scen.attitude_error(sc, r)))
     # docs/ERRATA.md § Claim 1 (coupled design bounded): peak pitch error ≈ 21° in the first
     # orbit, < 2° on every axis from the third
     assert 10 < err[:, 1].max() < 30
@@ -143,7 +146,7 @@ def test_claim2_staircase_130_orbits(tmp_path, monkeypatch):
 def test_divergence_is_a_result_not_a_crash(tmp_path, monkeypatch):
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     monkeypatch.chdir(tmp_path)
     out = CliRunner().invoke(app, ["simulate", "mb3_decoupled"])
@@ -161,9 +164,9 @@ def test_divergence_is_a_result_not_a_crash(tmp_path, monkeypatch):
 def test_simulate_rejects_inconsistent_simulation_before_writing(tmp_path, monkeypatch, extra, field):
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
-    from common.configio import packaged_config_path
+    from acmm_qpp.configio import packaged_config_path
 
     monkeypatch.chdir(tmp_path)
     text = packaged_config_path("mb3.yaml").read_text()
@@ -178,7 +181,7 @@ def test_simulate_rejects_inconsistent_simulation_before_writing(tmp_path, monke
 def test_simulate_no_figures_writes_no_figures(tmp_path, monkeypatch):
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
 
     monkeypatch.chdir(tmp_path)
     out = CliRunner().invoke(app, ["simulate", "ac", "--no-figures"])
@@ -189,7 +192,7 @@ def test_simulate_no_figures_writes_no_figures(tmp_path, monkeypatch):
 
 def test_sample_at_a_level_start_belongs_to_the_new_level():
     cfg = load_config("staircase")
-    sc = sm.scenario_from_config(cfg, compute_design(cfg).table, orbits=1.2)
+    sc = scen.scenario_from_config(cfg, compute_design(cfg).table, orbits=1.2)
     r = sm.simulate(sc)
     at_start = np.isin(r.t, sc.level_start)
     assert at_start.sum() == len(sc.level_start)
@@ -203,7 +206,8 @@ def test_level_statistics_do_not_depend_on_the_output_sampling(tmp_path):
     them from below."""
     from scipy.integrate import solve_ivp
 
-    import acmm.simulate as sm
+    import acmm.simulate.kernel as sm
+    from acmm.simulate import scenario as scen
 
     cfg = load_config("mb3", ["simulation.orbits=2", "output.figures=false", f"output.root={tmp_path}"])
     stats = {}
@@ -217,7 +221,7 @@ def test_level_statistics_do_not_depend_on_the_output_sampling(tmp_path):
     # independent: dense RK45 on the kernel's rhs over the same 2 orbits
     res, _ = run_simulate(cfg)
     sc = res.scenario
-    sol = solve_ivp(lambda t, x: sm.kernel_rhs(sc, t, x)[0], (0.0, sc.t_end), sc.x0, rtol=1e-9,
+    sol = solve_ivp(lambda t, x: reference.kernel_rhs(sc, t, x)[0], (0.0, sc.t_end), sc.x0, rtol=1e-9,
                     atol=sc.atol * 1e-2, dense_output=True, max_step=50.0)
     tt = np.linspace(0.0, sc.t_end, 20001)
     X = sol.sol(tt)

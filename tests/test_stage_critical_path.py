@@ -11,19 +11,20 @@ import textwrap
 import numpy as np
 import pytest
 
-from acmm import schedule as sch
-from acmm.config import load_config
-from acmm.design_core import _refit
-from acmm.path_check import path_models
-from acmm.schedule_refit import REFIT_DEFAULTS, refit_closed_loop
-from acmm.settings import design_settings
+from acmm.design import schedule as sch
+from acmm.design import schedule_points as sp
+from acmm.io.config import load_config
+from acmm.design.design_core import _refit
+from acmm.design.path_check import path_models
+from acmm.design.schedule_refit import REFIT_DEFAULTS, refit_closed_loop
+from acmm.design.settings import design_settings
 
 
 @pytest.fixture(scope="module")
 def points_and_fit():
     cfg = load_config("staircase")
     s = design_settings(cfg)
-    pts = [sch.design_one(sp, s) for sp in sch.point_specs(cfg)]
+    pts = [sch.design_one(sp, s) for sp in sp.point_specs(cfg)]
     gains = np.array([p.lqr.K for p in pts])
     teas = np.array([p.tea.theta for p in pts])
     return pts, s, sch.fit_schedule(teas[:, 1], gains, 2, "polynomial")
@@ -56,8 +57,9 @@ def test_refit_on_its_own_models_equals_the_refit_on_the_whole_path(points_and_f
 _EARLY = textwrap.dedent("""
     import os, sys, numpy as np
     from pathlib import Path
-    from acmm import plots
-    from common import figure_worker
+    from acmm.plots import base as plot_base
+    from acmm.plots import simulation as sim_plots
+    from acmm_qpp import figure_worker
     out = Path(sys.argv[1])
     if not figure_worker.usable():
         print("skip"); sys.exit(0)
@@ -66,7 +68,7 @@ _EARLY = textwrap.dedent("""
     if sys.argv[2] == "adopt":
         t = np.linspace(0.0, 1.0, 50); x = np.zeros((50, 3))
         with figure_worker.session():
-            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", out / "a.png")
+            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", out / "a.png")
         assert not figure_worker.active() and (out / "a.png").stat().st_size > 10_000
     else:
         figure_worker._drop_unowned()          # what the atexit handler does
@@ -91,7 +93,7 @@ def test_early_figure_worker_is_adopted_or_stopped(tmp_path, mode):
 def test_usage_error_with_an_early_worker_leaves_no_process(tmp_path):
     """``acmm design --bogus`` with the worker forked ahead: exit 64, one line, no output (the
     worker holds stderr open, so ``run`` returning at all shows it stopped)."""
-    code = ("import sys; from cli.acmm_app import main; sys.argv = ['acmm', 'design', 'staircase', "
+    code = ("import sys; from acmm.cli.app import main; sys.argv = ['acmm', 'design', 'staircase', "
             "'--bogus']; main()")
     p = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
                        timeout=120)
@@ -117,7 +119,7 @@ def _die(x):
 
 
 def test_forked_call_returns_the_childs_result_or_computes_in_place(monkeypatch):
-    from common import forked
+    from acmm_qpp import forked
 
     if not forked.usable():
         pytest.skip("no fork, one CPU or other threads alive")
@@ -148,7 +150,7 @@ def _warn_twice(x):
 def test_forked_call_raises_the_childs_warnings_here_and_falls_back_in_place():
     import warnings
 
-    from common import forked
+    from acmm_qpp import forked
 
     if not forked.usable():
         pytest.skip("no fork, one CPU or other threads alive")
@@ -195,7 +197,7 @@ def test_forked_call_warnings_are_shown_as_often_as_in_place(action):
     shown once, as in place; a warning that cannot travel as itself arrives as its text."""
     import warnings
 
-    from common import forked
+    from acmm_qpp import forked
 
     if not forked.usable():
         pytest.skip("no fork, one CPU or other threads alive")
@@ -223,7 +225,7 @@ def test_forked_call_cancel_kills_the_child():
     import os
     import time
 
-    from common import forked
+    from acmm_qpp import forked
 
     if not forked.usable():
         pytest.skip("no fork, one CPU or other threads alive")
@@ -237,7 +239,7 @@ def test_forked_call_cancel_kills_the_child():
 
 
 def test_design_with_the_forked_path_equals_the_design_in_place():
-    from acmm.stages import compute_design
+    from acmm.stages.design import compute_design
 
     cfg = load_config("staircase", ["schedule.n_check=41"])
     seen = []
@@ -255,9 +257,11 @@ def test_design_with_the_forked_path_equals_the_design_in_place():
 def test_forked_design_helper_failures_act_as_in_place(monkeypatch):
     """A point the helper designs fails: the same error as in place; the helper's path models
     fail: they are solved again here, and the design is the same."""
-    from acmm import design_core, schedule
-    from acmm.stages import compute_design
-    from common.errors import ConvergenceError
+    from acmm.design import design_core
+    from acmm.design import path_check as pc
+    from acmm.design import schedule
+    from acmm.stages.design import compute_design
+    from acmm_qpp.errors import ConvergenceError
 
     cfg = load_config("staircase", ["schedule.n_check=21"])
     reference = compute_design(cfg, fork=False)
@@ -294,7 +298,7 @@ def test_forked_design_helper_failures_act_as_in_place(monkeypatch):
     assert sorted(str(w.message) for w in caught[True]) == sorted(str(w.message) for w in caught[False])
     assert len(caught[True]) >= len(reference.points)
     monkeypatch.setattr(schedule, "design_one", design_one)
-    parent, models = os.getpid(), design_core.path_models_from_specs
+    parent, models = os.getpid(), pc.path_models_from_specs
 
     def models_fail_in_the_child(*args, **kwargs):
         if os.getpid() != parent:
@@ -317,22 +321,23 @@ def test_reserved_figure_writers_draw_the_same_png_and_never_hang(tmp_path):
     identical to the figure drawn in place; a reserved writer whose figure never comes, across a
     nested session's flush, ends with the session; a second figure of the same name gets its own
     writer."""
-    from acmm import plots
-    from common import figure_worker
+    from acmm.plots import base as plot_base
+    from acmm.plots import simulation as sim_plots
+    from acmm_qpp import figure_worker
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")
     t, x = _histories()
-    plots.axis_histories(t, x, x, x, x, "t", tmp_path / "here.png")
+    sim_plots.axis_histories(t, x, x, x, x, "t", tmp_path / "here.png")
     with figure_worker.session():
-        figure_worker.prepare(plots.prebuild, "axis_histories", "imperial", for_figure="axis_histories")
-        figure_worker.prepare(plots.prebuild, "summary", "imperial", for_figure="summary")   # never drawn
+        figure_worker.prepare(plot_base.prebuild, "axis_histories", "imperial", for_figure="axis_histories")
+        figure_worker.prepare(plot_base.prebuild, "summary", "imperial", for_figure="summary")   # never drawn
         with figure_worker.session():                                # a nested stage's flush
-            figure_worker.submit(plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
+            figure_worker.submit(sim_plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
                                  tmp_path / "inner.png")
         assert (tmp_path / "inner.png").exists()
-        figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "reserved.png")
-        figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "second.png")
+        figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "reserved.png")
+        figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "second.png")
     assert not figure_worker.active()
     here = (tmp_path / "here.png").read_bytes()
     assert (tmp_path / "reserved.png").read_bytes() == here == (tmp_path / "second.png").read_bytes()
@@ -340,43 +345,45 @@ def test_reserved_figure_writers_draw_the_same_png_and_never_hang(tmp_path):
 
 
 def test_reserved_writers_abort_with_the_stage_and_report_failures(tmp_path):
-    from acmm import plots
-    from common import figure_worker
-    from common.errors import OutputError
+    from acmm.plots import base as plot_base
+    from acmm.plots import simulation as sim_plots
+    from acmm_qpp import figure_worker
+    from acmm_qpp.errors import OutputError
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")
     t, x = _histories()
     with pytest.raises(RuntimeError, match="stage failed"):
         with figure_worker.session():
-            figure_worker.prepare(plots.prebuild, "axis_histories", "imperial", for_figure="axis_histories")
+            figure_worker.prepare(plot_base.prebuild, "axis_histories", "imperial", for_figure="axis_histories")
             raise RuntimeError("stage failed")
     assert not figure_worker.active()
     (tmp_path / "file").write_text("")
     with pytest.raises(OutputError):
         with figure_worker.session():
-            figure_worker.prepare(plots.prebuild, "axis_histories", "imperial", for_figure="axis_histories")
-            figure_worker.submit(plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "a.png")
+            figure_worker.prepare(plot_base.prebuild, "axis_histories", "imperial", for_figure="axis_histories")
+            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "a.png")
     assert not figure_worker.active() and not list(tmp_path.glob("**/*.tmp*"))
 
 
 def test_qpp_simulate_reuses_the_gains_qpp_design_wrote(tmp_path, monkeypatch):
     """Same config and code: the stored K1, Kc, H (no second ch. 12.1 design) and a qpp_sim.h5
     identical to the one a simulation designing for itself writes; another config: a design."""
-    from qpp import stages
-    from qpp.config import load_config as qpp_config
-    from qpp.stored_design import StoredDesign
-    from report.manifest import dataset_hashes
+    from qpp.io import stages
+    from qpp.design import procedure as procedure_mod
+    from qpp.io.config import load_config as qpp_config
+    from qpp.io.stored_design import StoredDesign
+    from acmm.report.manifest import dataset_hashes
 
     import h5py
 
-    from common import provenance
+    from acmm_qpp import provenance
 
     over = [f"output.root={tmp_path}", "simulation.t_final=3.0"]
     alone = stages.run_simulate(qpp_config("qpp_siso", over + ["name=alone"]), figures=False)
     cfg = qpp_config("qpp_siso", over + ["name=pair"])
     _, designed, dpath = stages.run_design(cfg, figures=False)
-    real_design = stages.design
+    real_design = procedure_mod.design
     monkeypatch.setattr(provenance, "source_unchanged", lambda: True)     # as in a clean checkout
     monkeypatch.setattr(stages, "design", lambda c: pytest.fail("designed again"))
     _, reused, _, path = stages.run_simulate(cfg, figures=False)

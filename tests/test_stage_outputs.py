@@ -1,10 +1,10 @@
-"""What a stage leaves in its run folder when it fails (common.outputs): no result beside a
+"""What a stage leaves in its run folder when it fails (acmm_qpp.outputs): no result beside a
 config.yaml of another run; files of earlier runs, of other run folders and of nested stages that
 completed are left alone; the sweep keeps its self-describing partial tables."""
 import pytest
 
-from common.outputs import stage_outputs
-from common.results import write_text
+from acmm_qpp.outputs import stage_outputs
+from acmm_qpp.atomic_write import write_text
 
 
 class _Boom(Exception):
@@ -74,7 +74,7 @@ def test_a_failed_sweep_keeps_its_partial_tables(tmp_path):
 
 
 def test_only_a_figure_failing_keeps_the_results_with_their_config(tmp_path):
-    from common.errors import FigureError
+    from acmm_qpp.errors import FigureError
 
     run = tmp_path / "run"
     _earlier_run(run)
@@ -88,7 +88,7 @@ def test_only_a_figure_failing_keeps_the_results_with_their_config(tmp_path):
 
 
 def test_a_nested_stage_figure_failing_does_not_finish_the_outer_stage(tmp_path):
-    from common.errors import FigureError
+    from acmm_qpp.errors import FigureError
 
     run = tmp_path / "run"
     run.mkdir()
@@ -114,7 +114,7 @@ def test_a_figure_completed_but_not_yet_recorded_is_removed_too(tmp_path):
     with pytest.raises(_Boom):
         with stage_outputs(run, "design", config_text="name: new\n"):
             tmp = run / ".design_poles.png.tmp"
-            tmp.write_text("a writer's figure")               # not through common.results: unrecorded
+            tmp.write_text("a writer's figure")               # not through acmm_qpp.results: unrecorded
             tmp.replace(run / "design_poles.png")
             raise _Boom
     assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5", "design_gains.png"]
@@ -142,8 +142,8 @@ def test_a_failed_stage_leaves_no_figure_its_worker_completed(tmp_path):
 
     import numpy as np
 
-    from acmm import plots
-    from common import figure_worker
+    from acmm.plots import simulation as sim_plots
+    from acmm_qpp import figure_worker
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")
@@ -154,7 +154,7 @@ def test_a_failed_stage_leaves_no_figure_its_worker_completed(tmp_path):
         with figure_worker.session():                                   # the command's
             with stage_outputs(run, "simulate", config_text="name: x\n"):
                 with figure_worker.session():                           # the stage's
-                    figure_worker.submit(plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
+                    figure_worker.submit(sim_plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
                                          run / "sim_inertia.png")
                     deadline = time.monotonic() + 60
                     while not (run / "sim_inertia.png").exists() and time.monotonic() < deadline:
@@ -168,8 +168,8 @@ def test_a_failed_stage_leaves_no_figure_its_worker_completed(tmp_path):
 def test_any_figure_failure_drawn_in_place_is_a_figure_error(monkeypatch):
     """Without a worker a figure that fails in any way is reported as a worker's writer reports
     it: a FigureError (exit 4), the stage's results kept."""
-    from common import figure_worker
-    from common.errors import FigureError
+    from acmm_qpp import figure_worker
+    from acmm_qpp.errors import FigureError
 
     monkeypatch.setenv("ACMM_FIGURE_WORKER", "0")
 
@@ -187,7 +187,7 @@ def test_a_sweep_whose_figure_fails_finishes_with_its_config(tmp_runs):
     import yaml
     from typer.testing import CliRunner
 
-    from cli.acmm_app import app
+    from acmm.cli.app import app
     from conftest import CONFIGS
 
     cfg = yaml.safe_load((CONFIGS / "sweep_smoke.yaml").read_text())
@@ -225,7 +225,7 @@ def test_an_interrupted_stage_puts_back_every_file_it_replaced(tmp_path):
 
 
 def test_a_stage_that_fails_in_its_config_yaml_puts_the_old_one_back(tmp_path, monkeypatch):
-    import common.outputs as outputs
+    import acmm_qpp.outputs as outputs
 
     run = tmp_path / "run"
     _earlier_run(run)
@@ -272,7 +272,7 @@ def test_ctrl_c_while_the_figures_are_awaited_stops_the_writers(tmp_path):
     import signal
     import time
 
-    from common import figure_worker
+    from acmm_qpp import figure_worker
 
     if not figure_worker.usable():
         pytest.skip("no fork, one CPU or other threads alive")

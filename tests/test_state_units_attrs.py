@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from acmm.config import load_config, parse_config
+from acmm.io.config import load_config, parse_config
 
 
 def _short(tmp_path, units):
@@ -22,7 +22,7 @@ def _short(tmp_path, units):
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    from acmm.stages import run_simulate
+    from acmm.stages.simulate import run_simulate
 
     tmp = tmp_path_factory.mktemp("su")
     out = {}

@@ -1,5 +1,5 @@
 """Stations far from Space Station Freedom's size (``docs/ERRATA.md`` § Scaling): beyond the band
-of :data:`acmm.linearize.MOMENTUM_BAND` the momentum scale and the torque unit of the solve follow
+of :data:`acmm.model.linearize.MOMENTUM_BAND` the momentum scale and the torque unit of the solve follow
 the station, so a station k times smaller — torques and limits k times smaller, R k² times larger — is the
 same scaled problem: the same poles (in n), gains in proportion, the same PBH ratio.  With fixed
 scales a 0.05 slug·ft² station was "uncontrollable" (PBH 3e-13) and 1e-5 of SSF had no
@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from acmm.config import parse_config
+from acmm.io.config import parse_config
 
 N = 0.00115
 
@@ -27,9 +27,9 @@ def _station(k: float):
 
 
 def _design(k):
-    from acmm.design_core import design_schedule
-    from acmm.schedule_points import point_specs
-    from acmm.settings import design_settings
+    from acmm.design.design_core import design_schedule
+    from acmm.design.schedule_points import point_specs
+    from acmm.design.settings import design_settings
 
     cfg = _station(k)
     return design_schedule(point_specs(cfg), design_settings(cfg), None).points[0]
@@ -41,7 +41,7 @@ def designs():
 
 
 def test_small_stations_design_and_are_the_same_scaled_problem(designs):
-    from acmm.linearize import MOMENTUM_BAND, NOMINAL_ANGLE, NOMINAL_MOMENTUM
+    from acmm.model.state_scaling import MOMENTUM_BAND, NOMINAL_ANGLE, NOMINAL_MOMENTUM
 
     a, b = designs[1e-4], designs[1e-8]
     for p, k in ((a, 1e-4), (b, 1e-8)):
@@ -63,7 +63,8 @@ def test_small_stations_design_and_are_the_same_scaled_problem(designs):
 
 
 def test_pbh_ratio_does_not_depend_on_the_station_size():
-    from acmm.linearize import controllability, linearize_config
+    from acmm.model.controllability import controllability
+    from acmm.model.linearize import linearize_config
 
     ratios = [controllability(linearize_config(_station(k))).min_ratio for k in (1e-4, 1e-8)]
     assert ratios[0] > 1e-6
@@ -73,8 +74,9 @@ def test_pbh_ratio_does_not_depend_on_the_station_size():
 def test_report_sized_stations_keep_the_fixed_scales():
     """Within the band nothing changes: MB3 to AC (and ±30 % of them) keep 1000 ft·lbf·s and the
     ft·lbf torque unit, so the report's numbers are untouched."""
-    from acmm.config import load_config
-    from acmm.linearize import momentum_scale, state_scales, torque_scale
+    from acmm.io.config import load_config
+    from acmm.model.state_scaling import momentum_scale, torque_scale
+    from acmm.model.linearize import state_scales
 
     for name in ("mb3", "ac"):
         cfg = load_config(name)

@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 import yaml
 
-from common.errors import ConfigError
-from common.results import read_h5
-from acmm.sweep import (case_values, perturb_inertia, run_sweep, simulate_values, unphysical_reason,
-                        prepare_base)
+from acmm_qpp.errors import ConfigError
+from acmm_qpp.results import read_h5
+from acmm.sweep.cases import case_values, perturb_inertia, unphysical_reason
+from acmm.sweep.run import run_sweep
+from acmm.sweep.case import simulate_values, prepare_base
 from acmm.sweep.cases import physical_mask
 from acmm.sweep.config import load_sweep, parse_sweep
 
@@ -54,7 +55,7 @@ def _assert_same_data(a: dict, b: dict):
 def test_the_resolved_sweep_it_writes_runs_again_as_the_same_sweep(tmp_path, name):
     """``runs/<name>/config.yaml`` (and sweep.h5's ``config``) of a sweep is a sweep config itself:
     the same results key and text, no base file needed; a bad one is one line."""
-    from configkinds import detect_kind
+    from acmm_qpp.configio import detect_kind
 
     if name == "inline":                    # a sweep section inside a run config
         data = yaml.safe_load((CONFIGS / "mb3.yaml").read_text())
@@ -93,7 +94,7 @@ def test_a_journal_that_is_not_a_regular_file_is_one_line_not_a_hang(tmp_path, k
 def test_unphysical_reason_agrees_with_config_validator():
     from pydantic import ValidationError
 
-    from acmm.config import Inertia
+    from acmm.io.config_station import Inertia
 
     rng = np.random.default_rng(0)
     base = np.array([[23.22e6, -0.023e6, 0.477e6], [-0.023e6, 1.30e6, -0.011e6], [0.477e6, -0.011e6, 23.23e6]])
@@ -129,9 +130,10 @@ def test_case_draws_follow_seedsequence_contract(tmp_path):
 
 
 def test_grid_order_and_unperturbed_case_equals_plain_simulation(tmp_path):
-    from acmm import simulate as sm
-    from acmm.config import load_config
-    from acmm.stages import compute_design
+    from acmm.simulate import kernel as sm
+    from acmm.simulate import scenario as scen
+    from acmm.io.config import load_config
+    from acmm.stages.design import compute_design
 
     sw = load_sweep(_sweep_yaml(tmp_path, "grid", monte_carlo=None, n_runs=None,
                                 grid={"inertia_scale": [1.0, 0.9], "offset_pitch": [0.0, 1.0, -1.0]}))
@@ -142,12 +144,12 @@ def test_grid_order_and_unperturbed_case_equals_plain_simulation(tmp_path):
     assert got == want
     # case 0 perturbs nothing: it must reproduce the ordinary simulation of the base config
     cfg = load_config(CONFIGS / "ac.yaml")
-    r = sm.simulate(sm.scenario_from_config(cfg, compute_design(cfg).table, orbits=1.0))
+    r = sm.simulate(scen.scenario_from_config(cfg, compute_design(cfg).table, orbits=1.0))
     ctx = prepare_base(sw.bases[0], sw.spec)
     row = simulate_values(ctx, got[0])
     assert row["verdict"] == r.verdict == "bounded"
     # the same run, so the same extremes over every step; the samples see no more than the steps
-    sampled_err = np.degrees(np.abs(sm.attitude_error(sm.scenario_from_config(cfg, ctx.table, orbits=1.0), r)))
+    sampled_err = np.degrees(np.abs(scen.attitude_error(scen.scenario_from_config(cfg, ctx.table, orbits=1.0), r)))
     np.testing.assert_allclose(row["peak_attitude_error"], np.degrees(r.run_extremes.peak_error), rtol=0, atol=1e-9)
     np.testing.assert_allclose(row["peak_momentum"], r.run_extremes.peak_momentum, rtol=1e-12)
     assert np.all(np.array(row["peak_attitude_error"]) >= sampled_err.max(axis=0) - 1e-12)
@@ -163,12 +165,13 @@ def test_case_metrics_are_taken_over_every_step_not_the_output_samples(scale):
     inertia ×0.8 (saturates and diverges)."""
     import dataclasses
 
-    from acmm import simulate as sm
-    from acmm.config import load_config
-    from acmm.stages import compute_design
+    from acmm.simulate import kernel as sm
+    from acmm.simulate import scenario as scen
+    from acmm.io.config import load_config
+    from acmm.stages.design import compute_design
 
     cfg = load_config(CONFIGS / "mb3.yaml")
-    sc = sm.scenario_from_config(cfg, compute_design(cfg).table, orbits=3.0)
+    sc = scen.scenario_from_config(cfg, compute_design(cfg).table, orbits=3.0)
     sc = dataclasses.replace(sc, inertia=sc.inertia * scale)
     coarse = sm.simulate(dataclasses.replace(sc, sample_times=np.arange(0.0, sc.t_end, 120.0)))
     dense = sm.simulate(dataclasses.replace(sc, sample_times=np.arange(0.0, sc.t_end + 0.5, 1.0)))
@@ -195,8 +198,8 @@ def test_a_redesign_that_fails_is_design_failed_and_an_impossible_scale_unphysic
     tea_failed (then inertia_scale 1e5; since Riccati solutions are accepted on their backward
     error that station designs, so the refusal is injected here); 1e200 overflowed in the sector
     LQR and ended the whole sweep (exit 3)."""
-    import acmm.riccati as ric
-    from common.errors import ConvergenceError
+    import acmm.design.riccati as ric
+    from acmm_qpp.errors import ConvergenceError
 
     sw = load_sweep(_sweep_yaml(tmp_path, "rd", base=str(CONFIGS / "mb3.yaml"), monte_carlo=None, n_runs=None,
                                 design="redesign", grid={"inertia_scale": [1e5, 1e200]}, orbits=0.1))
@@ -222,10 +225,10 @@ def test_the_per_run_sample_limit_applies_at_the_sweeps_own_orbits(tmp_path, mon
 
 
 def test_the_margin_searches_stay_within_the_runs_counted_for_them(tmp_path):
-    """The work bound counts the margin searches (sweep_limits.margin_evaluations): the searches
+    """The work bound counts the margin searches (acmm.sweep.limits.margin_evaluations): the searches
     actually run no more simulations than that."""
     from acmm.sweep.case import margin_search
-    from acmm.sweep_limits import margin_evaluations
+    from acmm.sweep.limits import margin_evaluations
 
     for margin in ({"low": 0.5, "high": 2.0, "scan_points": 3, "rel_tol": 0.01},
                    {"low": 0.05, "high": 50.0, "scan_points": 1, "rel_tol": 1e-4}):
@@ -286,8 +289,8 @@ def test_a_case_starts_at_the_equilibrium_connected_to_the_design_tea(tmp_path):
     # follows the design TEA's own equilibrium to −48.2° and the fixed design holds it
     sw = load_sweep(_sweep_yaml(tmp_path, "connected", base=str(CONFIGS / "mb3.yaml"), orbits=2.0))
     ctx = prepare_base(sw.bases[0], sw.spec)
-    from acmm import tea
-    from acmm.tea_connected import solve_tea_connected     # checked against an independent path
+    from acmm.model import tea
+    from acmm.model.tea_connected import solve_tea_connected     # checked against an independent path
                                                             # in tests/test_tea_compiled.py
     sc0 = ctx.scenario
     rows = [simulate_values(ctx, {"dI33": d}) for d in (-0.005, 0.0, 0.005)]
@@ -394,7 +397,7 @@ def test_interrupted_then_resumed_equals_uninterrupted(tmp_path):
 def test_sigkill_then_resume_equals_uninterrupted(tmp_path):
     cfg = _sweep_yaml(tmp_path, "killed", n_runs=16, orbits=40.0)
     journal = tmp_path / "runs" / "killed" / "sweep.journal"
-    proc = subprocess.Popen([sys.executable, "-c", "from cli.acmm_app import main; main()", "sweep", str(cfg),
+    proc = subprocess.Popen([sys.executable, "-c", "from acmm.cli.app import main; main()", "sweep", str(cfg),
                              "--workers", "1"], cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             env={**os.environ, "MPLBACKEND": "Agg"})
     deadline = time.monotonic() + 60
@@ -555,8 +558,8 @@ def test_a_parameter_given_twice_is_refused(section):
 def test_a_fifo_in_place_of_design_h5_is_designed_again_not_a_hang(tmp_path, monkeypatch):
     """``acmm simulate`` reuses ``design.h5`` when it matches: a FIFO (or a device) there used to
     block it for ever; it is not a design file, so the stage designs again and replaces it."""
-    from acmm.config import load_config
-    from acmm.stage_design import design_for
+    from acmm.io.config import load_config
+    from acmm.stages.design import design_for
 
     monkeypatch.chdir(tmp_path)
     cfg = load_config("mb3", ["output.figures=false"])
@@ -574,7 +577,7 @@ def test_a_full_disk_under_the_journal_names_the_journal(tmp_path):
     import errno
 
     from acmm.sweep.journal import GroupCommitJournal
-    from common.errors import OutputError
+    from acmm_qpp.errors import OutputError
 
     class _Full:
         closed = False

@@ -7,8 +7,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from common.results import read_h5
-from acmm.sweep import MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker, chunk_size, make_chunks, run_sweep
+from acmm_qpp.results import read_h5
+from acmm.sweep.chunking import (MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker, chunk_size, make_chunks)
+from acmm.sweep.run import run_sweep
 
 from conftest import CONFIGS
 from test_sweep import _assert_same_data
@@ -114,11 +115,12 @@ def test_background_snapshots_same_table_and_errors_reach_the_caller(tmp_path, m
     import threading
 
     import acmm.sweep.run as run
-    from common.errors import OutputError
+    from acmm.sweep import output as sweep_output
+    from acmm_qpp.errors import OutputError
 
     cfg = _cfg(tmp_path, "snaps")
     ref, ref_csv = _run_bytes(cfg, workers=1)
-    real = run.write_results
+    real = sweep_output.write_results
     calls = []
 
     def spy(sweep, records, complete, **kw):

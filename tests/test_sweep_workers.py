@@ -78,7 +78,7 @@ def _start_sweep(tmp_path):
 
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "MPLBACKEND": "Agg",
            "OPENBLAS_NUM_THREADS": "1"}
-    p = subprocess.Popen([sys.executable, "-m", "cli.acmm_app", *_BIG], cwd=tmp_path, env=env, text=True,
+    p = subprocess.Popen([sys.executable, "-m", "acmm.cli.app", *_BIG], cwd=tmp_path, env=env, text=True,
                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
     journal = tmp_path / "runs" / "sweep_inertia30" / "sweep.journal"
     import time
@@ -108,7 +108,7 @@ def test_a_killed_pool_worker_is_one_line_and_the_sweep_resumes(tmp_path):
     assert p.returncode == 4, err
     assert err.strip().splitlines() == ["error: a sweep worker process died (killed, or out of memory); the "
                                         "finished cases are kept in the journal: run the sweep again with --resume"]
-    again = subprocess.run([sys.executable, "-m", "cli.acmm_app", *_BIG, "--resume"], cwd=tmp_path, env=env,
+    again = subprocess.run([sys.executable, "-m", "acmm.cli.app", *_BIG, "--resume"], cwd=tmp_path, env=env,
                            capture_output=True, text=True, timeout=300, check=False)
     assert again.returncode == 0, again.stderr
     import json
@@ -140,8 +140,8 @@ def test_a_second_ctrl_c_does_not_hang_the_sweep(tmp_path, gap):
 
 def test_a_dask_worker_running_other_code_is_refused():
     from acmm.sweep.executors import _call_chunk, same_code
-    from common.errors import ConfigError
-    from common.provenance import code_identity
+    from acmm_qpp.errors import ConfigError
+    from acmm_qpp.provenance import code_identity
 
     with pytest.raises(ConfigError, match="--scheduler: a Dask worker runs other acmm code"):
         _call_chunk([], None, "0.0.0+000000000000")         # before anything else of the chunk
@@ -153,7 +153,7 @@ def test_a_dask_worker_running_other_code_is_refused():
 def test_a_scheduler_address_dask_cannot_use_is_one_line(address):
     pytest.importorskip("distributed")
     from acmm.sweep.executors import make_executor
-    from common.errors import ConfigError
+    from acmm_qpp.errors import ConfigError
 
     with pytest.raises(ConfigError, match=f"--scheduler: cannot connect to the Dask scheduler at {address}"):
         make_executor(0, address)

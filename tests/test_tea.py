@@ -12,10 +12,11 @@ import numpy as np
 import pytest
 from scipy.optimize import fsolve, minimize_scalar
 
-from acmm import tea
-from acmm.config import Disturbance, load_config
-from common.errors import NoEquilibriumError
-from acmm.stages import compute_tea
+from acmm.model import tea
+from acmm.io.config_station import Disturbance
+from acmm.io.config import load_config
+from acmm_qpp.errors import NoEquilibriumError
+from acmm.stages.runners import compute_tea
 
 from conftest import CONFIGS
 
@@ -39,7 +40,7 @@ def _rot(axis, a):
 
 
 def dcm(theta):
-    """C_BL = C1(θ1) C3(θ3) C2(θ2), built here independently of acmm.dynamics."""
+    """C_BL = C1(θ1) C3(θ3) C2(θ2), built here independently of acmm.model.dynamics."""
     return _rot(0, theta[0]) @ _rot(2, theta[2]) @ _rot(1, theta[1])
 
 
@@ -269,22 +270,24 @@ def test_bias_from_tea_gives_the_asked_attitude(asked):
     t = compute_tea(cfg).tea
     np.testing.assert_allclose(np.degrees(t.theta), asked, atol=1e-9)
     assert np.max(np.abs(residual_ref(t.theta, cfg.inertia.matrix(), N, t.bias))) < 1e-9
-    from acmm.schedule import design_one, point_specs
-    from acmm.settings import design_settings
+    from acmm.design.schedule import design_one
+    from acmm.design.schedule_points import point_specs
+    from acmm.design.settings import design_settings
 
     spec = point_specs(cfg)[0]
     np.testing.assert_allclose(np.degrees(design_one(spec, design_settings(cfg)).tea.theta), asked, atol=1e-9)
     # the Python API's linear model too (it used to continue from LVLH to the other root)
-    import acmm
+    import acmm.api
 
-    np.testing.assert_allclose(np.degrees(acmm.linear_model(cfg).theta_star), asked, atol=1e-9)
+    np.testing.assert_allclose(np.degrees(acmm.api.linearize(cfg).theta_star), asked, atol=1e-9)
 
 
 def test_schedule_end_point_gets_its_asked_attitude():
     # the `to` station of a TEA-spaced schedule is designed about the TEA its bias_from_tea asks
     # for, even though its starting guess comes from the blend's track (which ends elsewhere)
-    from acmm.schedule import design_one, point_specs
-    from acmm.settings import design_settings
+    from acmm.design.schedule import design_one
+    from acmm.design.schedule_points import point_specs
+    from acmm.design.settings import design_settings
 
     cfg = load_config(CONFIGS / "staircase.yaml", ["schedule.to.disturbance.bias_from_tea=[0,-60,0]"])
     end = point_specs(cfg)[-1]
@@ -298,7 +301,7 @@ def test_schedule_end_point_gets_its_asked_attitude():
 def test_tea_is_scale_invariant(scale):
     """Eq 4.1 is homogeneous in (I, bias): a station scaled by any factor has the same TEA (a
     residual tolerance absolute in ft·lbf accepted a 3 % residual at 1e-12 and a TEA 9° off)."""
-    from acmm.tea_compiled import solve_tea_fast
+    from acmm.model.tea_compiled import solve_tea_fast
 
     inertia = np.array([[5e6, 0.3e6, -0.5e6], [0.3e6, 2e6, 0.2e6], [-0.5e6, 0.2e6, 6e6]])
     bias, n = np.array([0.3, -0.5, 0.2]), 0.00113
@@ -335,7 +338,7 @@ def test_axisymmetric_station_has_a_family_of_equilibria_not_none():
     an independent least-squares solve (scipy) confirms it is an equilibrium."""
     from scipy.optimize import least_squares
 
-    from acmm.tea import equilibrium_jacobian, equilibrium_residual, solve_tea
+    from acmm.model.tea import equilibrium_jacobian, equilibrium_residual, solve_tea
 
     inertia, n, bias = np.diag([20e6, 20e6, 5e6]), 0.0011, np.array([0.1, 0.2, 0.0])
     t = solve_tea(inertia, n, bias)

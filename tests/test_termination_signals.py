@@ -1,5 +1,5 @@
 """SIGTERM and SIGHUP unwind a command like Ctrl-C; the tool's forked processes die with their
-parent (``common.signals``).  Before: SIGTERM killed the command at once, its figure worker lived
+parent (``acmm_qpp.signals``).  Before: SIGTERM killed the command at once, its figure worker lived
 on and wrote the new run's figures beside the old run's results, and ``.lock``/``.rollback-*``
 stayed behind."""
 from __future__ import annotations
@@ -22,7 +22,7 @@ pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PO
 
 
 def _acmm(*args, cwd):
-    return subprocess.Popen([sys.executable, "-c", "from cli.acmm_app import main; main()", *args], cwd=cwd,
+    return subprocess.Popen([sys.executable, "-c", "from acmm.cli.app import main; main()", *args], cwd=cwd,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=ENV)
 
 
@@ -35,7 +35,7 @@ def _digest(folder: Path) -> dict:
                                         (signal.SIGHUP, 0.2)])
 @pytest.mark.slow
 def test_a_terminated_run_rolls_back_like_ctrl_c_and_leaves_no_process(tmp_path, sig, delay):
-    first = subprocess.run([sys.executable, "-c", "from cli.acmm_app import main; main()", "simulate", "staircase",
+    first = subprocess.run([sys.executable, "-c", "from acmm.cli.app import main; main()", "simulate", "staircase",
                             "simulation.orbits=20"], cwd=tmp_path, capture_output=True, text=True, env=ENV,
                            timeout=300, check=False)
     assert first.returncode == 0, first.stderr
@@ -73,7 +73,7 @@ def test_a_forked_child_dies_with_its_parent_even_under_sigkill(tmp_path):
     parent (no cleanup at all) still stops them."""
     code = textwrap.dedent("""
         import os, sys, time
-        from common.signals import die_with_parent
+        from acmm_qpp.signals import die_with_parent
         parent = os.getpid()
         pid = os.fork()
         if pid == 0:
@@ -107,8 +107,8 @@ def test_a_signal_after_the_run_finished_neither_prints_a_traceback_nor_kills_it
     script = tmp_path / "app.py"
     script.write_text(textwrap.dedent(f"""
         import atexit, os, signal, time, typer
-        from cli.common import run_app
-        from common.signals import terminate_like_ctrl_c
+        from acmm_qpp.cli.plumbing import run_app
+        from acmm_qpp.signals import terminate_like_ctrl_c
 
         app = typer.Typer()
 
@@ -150,8 +150,8 @@ _SIGNAL_IN = {
 def test_a_signal_before_the_command_runs_is_one_line_and_its_exit_code(tmp_path, app, where, code):
     """A SIGTERM/SIGHUP that arrives while the command line is still being turned into a command
     (a review: a traceback with exit 1, or exit 130 without a word) exits 128 + N with one line."""
-    script = ("import signal\nfrom common.errors import Terminated\n" + _SIGNAL_IN[where]
-              + f"from cli.{app}_app import main\nmain()\n")
+    script = ("import signal\nfrom acmm_qpp.errors import Terminated\n" + _SIGNAL_IN[where]
+              + f"from {'acmm.cli.app' if app == 'acmm' else 'qpp.cli'} import main\nmain()\n")
     done = subprocess.run([sys.executable, "-c", script, "validate", "qpp_siso" if app == "qpp" else "mb3"],
                           cwd=tmp_path, capture_output=True, text=True, env=ENV, timeout=120, check=False)
     assert done.returncode == code, done.stderr
@@ -167,7 +167,7 @@ def test_a_second_interrupt_soon_after_is_dropped_and_a_later_one_raised(tmp_pat
     held step still holds it."""
     script = textwrap.dedent("""
         import os, signal, time
-        from common import signals
+        from acmm_qpp import signals
         signals.terminate_like_ctrl_c()
         try:
             os.kill(os.getpid(), signal.SIGTERM)

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 import yaml
 
-from acmm.config import load_config, parse_config
-from common.errors import ConfigError
+from acmm.io.config import load_config, parse_config
+from acmm_qpp.errors import ConfigError
 from conftest import CONFIGS
 
 
@@ -40,12 +40,12 @@ def test_scheduled_closed_loop_equals_independent_linearization():
     import control
     from scipy.optimize import brentq
 
-    import acmm
-    from acmm import linearize as lin
-    from acmm.tea import resolve_bias, solve_tea
+    from acmm import api
+    from acmm.model import linearize as lin
+    from acmm.model.tea import resolve_bias, solve_tea
 
-    cfg = acmm.load_config("staircase")
-    d = acmm.design(cfg)
+    cfg = api.load_config("staircase")
+    d = api.design(cfg)
     cl = d.scheduled_closed_loop(-20.0)
     # independent: the blend station with pitch TEA −20°, its TEA, the 24-state model, K(θ2*)
     n = cfg.orbit_rate
@@ -136,9 +136,10 @@ def _open_all(path):
 
 
 def test_results_open_in_xarray_with_named_dimensions_and_time(tmp_path):
-    from acmm.stages import run_linearize, run_simulate, run_tea
-    from qpp.stages import run_design as qpp_design
-    from qpp.stages import run_simulate as qpp_simulate
+    from acmm.stages.runners import run_linearize, run_tea
+    from acmm.stages.simulate import run_simulate
+    from qpp.io.stages import run_design as qpp_design
+    from qpp.io.stages import run_simulate as qpp_simulate
 
     cfg = _short("mb3", tmp_path)
     _, sim_path = run_simulate(cfg)
@@ -177,7 +178,7 @@ def test_results_open_in_xarray_with_named_dimensions_and_time(tmp_path):
 def test_sweep_h5_opens_in_xarray(tmp_path, n_runs):
     """With 3 cases, the (case, axis) arrays were labelled (axis, axis_col) (a review):
     ``.sel(axis="pitch")`` failed for that case count only."""
-    from acmm.sweep import run_sweep
+    from acmm.sweep.run import run_sweep
     from acmm.sweep.config import load_sweep
 
     data = yaml.safe_load((CONFIGS / "sweep_smoke.yaml").read_text())
@@ -213,8 +214,8 @@ def test_si_config_round_trips(tmp_path):
     """Input in SI, output in SI = the imperial run's numbers converted."""
     import h5py
 
-    from acmm.stages import run_simulate
-    from common.units import FT_LBF_IN_NM
+    from acmm.stages.simulate import run_simulate
+    from acmm_qpp.units import FT_LBF_IN_NM
 
     imp = _short("mb3", tmp_path / "imp")
     d = imp.model_dump(mode="json")
@@ -250,8 +251,9 @@ def test_si_design_h5_is_the_imperial_design_in_si_and_is_reused_exactly(tmp_pat
     unchanged; the SI design.h5 read back equals the imperial design."""
     import h5py
 
-    from acmm.stages import load_design_table, run_design
-    from common.units import FT_LBF_IN_NM as k
+    from acmm.io.design_file import load_design_table
+    from acmm.stages.design import run_design
+    from acmm_qpp.units import FT_LBF_IN_NM as k
 
     imp = _short("ac", tmp_path / "imp")
     d = imp.model_dump(mode="json")
@@ -282,8 +284,8 @@ def test_si_design_h5_is_the_imperial_design_in_si_and_is_reused_exactly(tmp_pat
 def test_si_simulation_is_the_same_whether_its_design_was_just_made_or_reused(tmp_path):
     """The SI design.h5 holds K in SI; a run that reuses it converts it back (rounding at 1e-16),
     so a fresh run uses the table as read back too: sim.h5 identical bit for bit."""
-    from acmm.stages import run_simulate
-    from report.manifest import dataset_hashes
+    from acmm.stages.simulate import run_simulate
+    from acmm.report.manifest import dataset_hashes
 
     cfg = _short("mb3", tmp_path, units="SI")
     _, fresh = run_simulate(cfg)
@@ -296,9 +298,9 @@ def test_si_simulation_is_the_same_whether_its_design_was_just_made_or_reused(tm
 
 # ---------------------------------------------------------------- unit strings everywhere
 def test_unit_strings_in_acmm_sweep_and_qpp_configs():
-    from acmm.sweep.config import SweepSpec
-    from common.units import FT_LBF_IN_NM as k
-    from qpp.config import QppConfig
+    from acmm.sweep.spec import SweepSpec
+    from acmm_qpp.units import FT_LBF_IN_NM as k
+    from qpp.io.config import QppConfig
 
     base = yaml.safe_load((CONFIGS / "mb3.yaml").read_text())
     plain = parse_config(base)
@@ -338,10 +340,10 @@ def test_api_misuse_raises_the_documented_errors():
     """A design point that is not there, a schedule a config does not have, a config of the wrong
     type: AcmmError subclasses naming what is valid (they were IndexError, KeyError, ValueError and
     TypeError); a missing point is still a KeyError/IndexError for code that caught those."""
-    import acmm
-    from common.errors import AcmmError, ConfigError
+    from acmm import api
+    from acmm_qpp.errors import AcmmError, ConfigError
 
-    d = acmm.design(acmm.load_config("mb3"))
+    d = api.design(api.load_config("mb3"))
     for bad in (5, "zzz", 1.5):
         with pytest.raises(ConfigError, match="no design point") as exc:
             d.closed_loop(bad)
@@ -351,4 +353,4 @@ def test_api_misuse_raises_the_documented_errors():
         with pytest.raises(ConfigError, match="no gain schedule"):
             call()
     with pytest.raises(AcmmError, match="not int"):
-        acmm.load_config(42)
+        api.load_config(42)

@@ -20,7 +20,7 @@ Perturbed plant
     plant's true TEA moves with the inertia: at each level it is the equilibrium connected to
     the level's design TEA as the plant moves from nominal to perturbed
     (:func:`acmm.sweep.case.perturbed_tea`); where that branch folds, the root continued from
-    LVLH (:func:`acmm.tea.solve_tea`'s physical branch).  No equilibrium → verdict
+    LVLH (:func:`acmm.model.tea.solve_tea`'s physical branch).  No equilibrium → verdict
     ``no_equilibrium`` (not simulated).
 
 Controller
@@ -49,29 +49,5 @@ Package layout
     and the margin search), :mod:`~acmm.sweep.executors` (executors, tasks, chunking),
     :mod:`~acmm.sweep.dask_settings` (the recommended Dask configuration of a sweep cluster),
     :mod:`~acmm.sweep.journal` (the group-commit journal), :mod:`~acmm.sweep.output` (HDF5, CSV,
-    figures) and :mod:`~acmm.sweep.run` (the driver).  Every name is re-exported here.
+    figures) and :mod:`~acmm.sweep.run` (the driver).
 """
-from __future__ import annotations
-
-from acmm.sweep.case import (BaseContext, _empty_row, _redesigned_specs, _redesigned_table, margin_search, perturbed_tea,
-                             prepare_base, run_case, simulate_values)
-from acmm.sweep.cases import AXES, VERDICTS, _draw, _why, case_values, perturb_inertia, unphysical_reason
-from acmm.sweep.config import MAP_EXTRAS, PARAMETERS, SHORTHANDS, Sweep, load_sweep, swept_parameters
-from acmm.sweep.dask_settings import DASK_SETTINGS, dask_settings_yaml
-from acmm.sweep.chunking import (CHUNKS_PER_WORKER, MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker,
-                                 chunk_size, make_chunks)
-from acmm.sweep.executors import (SerialExecutor, _call, _call_chunk, _local_context, _remote_contexts,
-                                  _scheduler_workers, _task_key, _tasks, _warm_worker, make_executor)
-from acmm.sweep.journal import JOURNAL_VERSION, GroupCommitJournal, Journal, SweepInterrupted, read_journal
-from acmm.sweep.output import _label, _nominal_tea_deg, _split, _write_csv, plot_sweep, table_arrays, write_results
-from acmm.sweep.run import SweepResult, _as_sweep, run_sweep
-
-__all__ = [
-    "AXES", "CHUNKS_PER_WORKER", "DASK_SETTINGS", "JOURNAL_VERSION", "MAP_EXTRAS", "MAX_CHUNK",
-    "MAX_TASK_SECONDS", "MIN_TASK_SECONDS", "PARAMETERS", "SHORTHANDS", "VERDICTS", "BaseContext", "Chunker",
-    "GroupCommitJournal", "Journal", "SerialExecutor", "Sweep", "SweepInterrupted", "SweepResult",
-    "case_values", "chunk_size", "dask_settings_yaml", "load_sweep", "make_chunks", "make_executor",
-    "margin_search", "perturb_inertia", "perturbed_tea", "plot_sweep", "prepare_base", "read_journal",
-    "run_case", "run_sweep", "simulate_values", "swept_parameters", "table_arrays", "unphysical_reason",
-    "write_results",
-]

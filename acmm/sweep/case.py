@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from common.errors import ConvergenceError, DesignError, NoEquilibriumError
+from acmm_qpp.errors import ConvergenceError, DesignError, NoEquilibriumError
 from acmm.sweep.cases import AXES, _why, case_values, perturb_inertia
 
 
@@ -27,11 +27,11 @@ class BaseContext:
     ----------
     label : str
         The base's label in the sweep's output.
-    config : acmm.config.Config
+    config : acmm.io.config.Config
         The base config.
-    table : acmm.stages.DesignTable
+    table : acmm.stages.runners.DesignTable
         Its nominal design.
-    scenario : acmm.simulate.Scenario
+    scenario : acmm.simulate.kernel.Scenario
         Its nominal scenario, over the sweep's orbits.
     spec : acmm.sweep.config.SweepSpec
         The sweep specification.
@@ -40,9 +40,9 @@ class BaseContext:
     """
 
     label: str
-    config: object          # acmm.config.Config
-    table: object           # acmm.stages.DesignTable (nominal design)
-    scenario: object        # acmm.simulate.Scenario of the nominal config (orbits of the sweep)
+    config: object          # acmm.io.config.Config
+    table: object           # acmm.stages.runners.DesignTable (nominal design)
+    scenario: object        # acmm.simulate.kernel.Scenario of the nominal config (orbits of the sweep)
     spec: object            # SweepSpec
     orbits: float
 
@@ -62,8 +62,8 @@ def prepare_base(base, spec) -> BaseContext:
     BaseContext
         The base's context for every case.
     """
-    from acmm.simulate import scenario_from_config
-    from acmm.stages import compute_design
+    from acmm.simulate.scenario import scenario_from_config
+    from acmm.stages.design import compute_design
 
     cfg = base.config
     orbits = spec.orbits if spec.orbits is not None else cfg.simulation.orbits
@@ -76,9 +76,9 @@ def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
     """The design points of the base config with the perturbed inertia and explicit (held) bias
     torques: ``biases[0]`` at the start, each other configuration's own bias plus the same
     added torque (``biases[0]`` minus the start's nominal bias)."""
-    from acmm.schedule import PointSpec, schedule_specs
-    from acmm.settings import schedule_settings
-    from acmm.tea import resolve_bias
+    from acmm.design.schedule_points import PointSpec, schedule_specs
+    from acmm.design.settings import schedule_settings
+    from acmm.model.tea import resolve_bias
 
     n = cfg.orbit_rate
     start = PointSpec(cfg.name, perturb_inertia(cfg.inertia.matrix(), values),
@@ -97,11 +97,11 @@ def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
 
 
 def _redesigned_table(cfg, values: dict, biases: np.ndarray):
-    """The design table of the perturbed plant: the core (:func:`acmm.design_core.design_schedule`)
+    """The design table of the perturbed plant: the core (:func:`acmm.design.design_core.design_schedule`)
     called directly on the perturbed design points with the base config's settings."""
-    from acmm.design_core import design_schedule
-    from acmm.settings import design_settings, schedule_settings
-    from acmm.stages import design_table
+    from acmm.design.design_core import design_schedule
+    from acmm.design.settings import design_settings, schedule_settings
+    from acmm.stages.design import design_table
 
     ds = design_schedule(_redesigned_specs(cfg, values, biases), design_settings(cfg), schedule_settings(cfg))
     return design_table(ds.points, ds.fit, "")
@@ -136,8 +136,10 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
         (ft·lbf), ``n_steps``.  An unphysical plant, a missing equilibrium, a failed design or
         TEA is a verdict, not an exception.
     """
-    from acmm import dynamics as dyn
-    from acmm import simulate as sm
+    from acmm.model import dynamics as dyn
+    from acmm.model import kinematics as kin
+    from acmm.simulate import kernel as sm
+    from acmm.simulate import scenario as scen
     sc0, table, cfg, spec = ctx.scenario, ctx.table, ctx.config, ctx.spec
     L = sc0.inertia.shape[0]
     row = _empty_row(L)
@@ -158,7 +160,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
         if spec.design == "redesign":
             ptable = _redesigned_table(cfg, values, bias)
             # only the inertia and bias differ from the base config, and those come from the table
-            sc = sm.scenario_from_config(cfg, ptable, orbits=ctx.orbits)
+            sc = scen.scenario_from_config(cfg, ptable, orbits=ctx.orbits)
             true = sc.theta_est.copy()
             # the redesign's bias per point is the held nominal bias (+ offsets); the schedule's
             # levels are the perturbed design points
@@ -184,7 +186,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
         row.update(verdict="tea_failed" if tea else "design_failed", reason=str(exc)[:200])
         return row
     theta0 = true[0] + offset
-    x0 = np.concatenate([dyn.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
+    x0 = np.concatenate([kin.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
     sc = dataclasses.replace(sc, x0=x0, theta_ref=true)
     r = sm.simulate(sc)
     row = _metrics(row, r, sc, true, n, spec)
@@ -196,9 +198,10 @@ def _metrics(row: dict, r, sc, true: np.ndarray, n: float, spec) -> dict:
     """Fill ``row`` with the verdict and metrics of the simulation ``r`` of scenario ``sc``;
     ``true``: the plant's TEA per level (rad; the scenario's ``theta_ref``); ``n``: orbit rate
     (rad/s).  Peaks, steady errors and saturation times are taken over every accepted integrator
-    step (:class:`acmm.scenario.RunExtremes`), not over the output samples, which under-reported
+    step (:class:`acmm.simulate.scenario.RunExtremes`), not over the output samples, which under-reported
     them (by 2.3x for a stair-case's peak momentum at 300 s samples)."""
-    from acmm import simulate as sm
+    from acmm.simulate import kernel as sm
+    from acmm.simulate import scenario as scen
 
     ext = r.run_extremes
     steady = np.degrees(ext.steady_error)
@@ -207,7 +210,7 @@ def _metrics(row: dict, r, sc, true: np.ndarray, n: float, spec) -> dict:
     orbit = 2 * np.pi / n
     reason = r.reason
     gap = np.abs(true - sc.theta_est).max()
-    if r.stop_code == sm.STOP_ANGLE and gap >= sc.divergence:
+    if r.stop_code == scen.STOP_ANGLE and gap >= sc.divergence:
         reason += f" (the plant's TEA is {np.degrees(gap):.1f} deg from the controller's estimate)"
     verdict = r.verdict
     if verdict == "bounded" and steady.max() > spec.settle_deg:
@@ -233,17 +236,17 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarra
 
     Each level's plant moves from the nominal one (its design TEA ``sc0.theta_est[k]``) to the
     perturbed one, and the station follows the equilibrium continuously connected to the design
-    TEA (:func:`acmm.tea_connected.solve_tea_connected`, compiled, ~0.1–1 ms).  Only where that
+    TEA (:func:`acmm.model.tea_connected.solve_tea_connected`, compiled, ~0.1–1 ms).  Only where that
     branch folds between the two plants (no equilibrium near the design TEA survives the
     perturbation) is the case started at the root continued from LVLH
-    (:func:`acmm.tea_compiled.solve_tea_fast`, the physical branch of :mod:`acmm.tea`, whose
+    (:func:`acmm.model.tea_compiled.solve_tea_fast`, the physical branch of :mod:`acmm.model.tea`, whose
     errors it raises), and the returned note says so.  A case's TEA depends only on its plant and
     the nominal design, never on the cases run before, so its row is the same whatever executor,
     chunking or order runs it.
 
     Parameters
     ----------
-    sc0 : acmm.simulate.Scenario
+    sc0 : acmm.simulate.kernel.Scenario
         The nominal scenario: orbit rate ``n`` (rad/s), and per level the nominal ``inertia``
         (slug·ft²), ``bias`` (ft·lbf) and design TEA ``theta_est`` (rad).
     inertia : (L, 3, 3) array
@@ -264,8 +267,8 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarra
         A level whose design branch folds has no root continued from LVLH either (the
         NoEquilibriumError names the fold and the level first).
     """
-    from acmm.tea_compiled import solve_tea_fast
-    from acmm.tea_connected import solve_tea_connected
+    from acmm.model.tea_compiled import solve_tea_fast
+    from acmm.model.tea_connected import solve_tea_connected
 
     theta, folded = [], []    # a fallback's NoEquilibriumError says the design branch folded first
     for k in range(inertia.shape[0]):

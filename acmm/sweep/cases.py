@@ -6,7 +6,7 @@ from typing import Optional
 
 import numpy as np
 
-from acmm.sweep.config import PARAMETERS, SHORTHANDS
+from acmm.sweep.parameters import PARAMETERS, SHORTHANDS
 
 
 AXES = ("roll", "pitch", "yaw")
@@ -23,8 +23,8 @@ VERDICTS = ("bounded", "not_settled", "diverged", "no_equilibrium", "unphysical"
 def unphysical_reason(inertia: np.ndarray) -> Optional[str]:
     """Why a symmetric 3×3 inertia (slug·ft²) is not a rigid body's, or ``None`` if it is.
 
-    Same test as :class:`acmm.config.Inertia`: finite, within the physical range
-    (:data:`common.limits.PHYSICAL_MAX`), positive definite, and the principal moments satisfy the
+    Same test as :class:`acmm.io.config.Inertia`: finite, within the physical range
+    (:data:`acmm_qpp.limits.PHYSICAL_MAX`), positive definite, and the principal moments satisfy the
     triangle inequality a + b ≥ c.
 
     Parameters
@@ -37,7 +37,7 @@ def unphysical_reason(inertia: np.ndarray) -> Optional[str]:
     str or None
         The reason, or None for a physical inertia.
     """
-    from common.limits import PHYSICAL_MAX
+    from acmm_qpp.limits import PHYSICAL_MAX
 
     if not np.all(np.isfinite(inertia)):
         return "non-finite inertia"
@@ -64,7 +64,7 @@ def physical_mask(inertias: np.ndarray) -> np.ndarray:
     (k,) bool array
         True where the inertia is a rigid body's within the physical range.
     """
-    from common.limits import PHYSICAL_MAX
+    from acmm_qpp.limits import PHYSICAL_MAX
 
     m = np.array(inertias, dtype=float)
     with np.errstate(all="ignore"):

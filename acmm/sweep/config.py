@@ -38,12 +38,10 @@ from pathlib import Path
 
 import yaml
 
-from acmm.config import Config, load_config, parse_config, require_mapping, validate_model
-from acmm.sweep.parameters import (  # noqa: F401  (re-exported: the old import paths)
-    MAP_EXTRAS, PARAMETERS, SHORTHANDS, Parameter, parameter_value, to_parameter_unit)
-from acmm.sweep.spec import (  # noqa: F401  (re-exported: the old import paths)
-    Dist, Margin, SweepFile, SweepSpec, swept_parameters)
-from common.errors import ConfigError
+from acmm.io.config import Config, load_config, parse_config
+from acmm_qpp.configio import require_mapping, validate_model
+from acmm.sweep.spec import SweepFile, SweepSpec
+from acmm_qpp.errors import ConfigError
 
 #: Version of how a ``design: fixed`` case is computed, part of :meth:`Sweep.results_key` so that
 #: ``--resume`` never mixes rows of two versions: 2 (2026-11-30): a case starts at the equilibrium
@@ -53,7 +51,7 @@ CASE_MODEL = 2
 
 #: Version of a case's metrics, part of :meth:`Sweep.results_key` for every sweep: 2 (2026-11-30):
 #: peaks, steady errors and saturation times over every accepted integrator step
-#: (:class:`acmm.scenario.RunExtremes`); 1: over the output samples.
+#: (:class:`acmm.simulate.scenario.RunExtremes`); 1: over the output samples.
 METRICS_MODEL = 2
 
 
@@ -65,7 +63,7 @@ class Base:
     ----------
     label : str
         The config's name.
-    config : acmm.config.Config
+    config : acmm.io.config.Config
         The validated config.
     source : str
         Where it was read from (a path or a packaged name).
@@ -164,11 +162,11 @@ class Sweep:
         Returns
         -------
         str
-            16 hex digits (:func:`common.provenance.config_hash`).
+            16 hex digits (:func:`acmm_qpp.provenance.config_hash`).
         """
         import json
 
-        from common.results import config_hash
+        from acmm_qpp.provenance import config_hash
 
         settings = self._case_settings()
         f, bases = settings["file"], settings["bases"]
@@ -251,7 +249,7 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
         raise ConfigError(f"{source}: sweep.bases: two base configs share the name "
                           f"{next(x for x in labels if labels.count(x) > 1)!r}")
     sweep = Sweep(sf, bases, source)
-    from acmm.sweep_limits import check_sweep_work
+    from acmm.sweep.limits import check_sweep_work
 
     check_sweep_work(sweep, source)
     return sweep
@@ -281,7 +279,7 @@ def _parse_resolved(data: dict, source: str) -> Sweep:
         raise ConfigError(f"{source}: bases: {len(bases)} config(s) for the {expected} base(s) of "
                           "sweep_file.sweep")
     sweep = Sweep(sf, bases, source)
-    from acmm.sweep_limits import check_sweep_work
+    from acmm.sweep.limits import check_sweep_work
 
     check_sweep_work(sweep, source)
     return sweep
@@ -295,7 +293,7 @@ def load_sweep(path: str | Path, overrides: list[str] | None = None) -> Sweep:
     path : path-like
         The sweep file, or a packaged config name.
     overrides : list of str, optional
-        Dotted ``key=value`` overrides (:mod:`common.overrides`), applied before validation,
+        Dotted ``key=value`` overrides (:mod:`acmm_qpp.overrides`), applied before validation,
         e.g. ``sweep.n_runs=20``.
 
     Returns
@@ -303,8 +301,8 @@ def load_sweep(path: str | Path, overrides: list[str] | None = None) -> Sweep:
     Sweep
         The validated sweep.
     """
-    from acmm.config import read_yaml
-    from common.overrides import apply_overrides, remember_origin
+    from acmm_qpp.configio import read_yaml
+    from acmm_qpp.overrides import apply_overrides, remember_origin
 
     data, p = read_yaml(path)
     sw = parse_sweep(apply_overrides(data, overrides), source=str(p), directory=p.parent)

@@ -11,7 +11,7 @@ from typing import Optional
 
 import numpy as np
 
-from common.errors import ConfigError
+from acmm_qpp.errors import ConfigError
 from acmm.sweep.config import Sweep
 from acmm.sweep.case import BaseContext, margin_search, run_case
 
@@ -74,7 +74,7 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
             import distributed
         except ImportError:
             raise ConfigError("--scheduler needs the optional Dask dependency: pip install 'acmm-qpp[dask]'") from None
-        from common.limits import limit
+        from acmm_qpp.limits import limit
 
         timeout = f"{limit('DASK_CONNECT_SECONDS'):g}s"        # (its own error, not the address's)
         try:
@@ -88,7 +88,7 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
     import multiprocessing
 
     ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
-    from common.workers import pool_worker, stop_pool
+    from acmm_qpp.workers import pool_worker, stop_pool
 
     pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=pool_worker,
                                   initargs=(os.getpid(),))
@@ -202,7 +202,7 @@ def _warm_worker() -> None:
     ahead with ``client.run(acmm.sweep._warm_worker)``."""
     global _WARM
     if not _WARM:
-        from acmm.warmup import warm_up
+        from acmm.simulate.warmup import warm_up
 
         if _in_dask_worker():        # only the nanny's environment needs it; the user's own
             _restore_heap_reuse()    # MALLOC_* choice in a driver or pool process is left alone
@@ -235,7 +235,7 @@ def _local_context(ctx: BaseContext) -> BaseContext:
 
 def _call_chunk(chunk, ctx, code: Optional[str] = None) -> list[dict]:
     """Run the tasks of one chunk in order; returns their records.  ``code``: the driver's
-    :func:`common.provenance.code_identity`, checked on a Dask worker (started elsewhere, it may
+    :func:`acmm_qpp.provenance.code_identity`, checked on a Dask worker (started elsewhere, it may
     run other acmm code, whose rows would enter the table unnoticed: a review)."""
     if code is not None:
         same_code(code)
@@ -250,14 +250,14 @@ def same_code(code: str) -> None:
     Parameters
     ----------
     code : str
-        The driver's :func:`common.provenance.code_identity`.
+        The driver's :func:`acmm_qpp.provenance.code_identity`.
 
     Raises
     ------
     ConfigError
         This process runs other code.
     """
-    from common.provenance import code_identity
+    from acmm_qpp.provenance import code_identity
 
     if code != code_identity():
         raise ConfigError(f"--scheduler: a Dask worker runs other acmm code ({code_identity()}) than this "

@@ -8,7 +8,7 @@ import os
 import time
 from pathlib import Path
 
-from common.errors import AcmmError, ConfigError
+from acmm_qpp.errors import AcmmError, ConfigError
 
 
 JOURNAL_VERSION = 1
@@ -46,7 +46,7 @@ def read_journal(path: Path, key: str, bases: set | None = None) -> list[dict]:
         last one) is not a record the sweep wrote (:func:`acmm.sweep.journal_records.record_problem`).
     """
     from acmm.sweep.journal_records import record_problem
-    from common.configio import read_regular_file
+    from acmm_qpp.configio import read_regular_file
 
     records = []
     try:            # a FIFO or a device there (a symlink to /dev/zero) would hang or fill memory
@@ -83,7 +83,7 @@ def _journal_errors(path):
     try:
         yield
     except OSError as exc:
-        from common.results import output_error
+        from acmm_qpp.atomic_write import output_error
 
         raise output_error(exc, "the sweep journal", path) from None
 

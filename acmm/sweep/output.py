@@ -6,10 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from common.errors import AcmmError
-from common.results import write_text
+from acmm_qpp.errors import AcmmError
+from acmm_qpp.atomic_write import write_text
 from acmm.sweep.cases import AXES, VERDICTS
-from acmm.sweep.config import MAP_EXTRAS, PARAMETERS, Sweep, swept_parameters
+from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS
+from acmm.sweep.config import Sweep
+from acmm.sweep.spec import swept_parameters
 
 
 # ---------------------------------------------------------------------------------------------
@@ -73,8 +75,8 @@ def table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
 
 
 def _nominal_tea_deg(sweep: Sweep) -> dict:
-    from acmm.schedule import point_specs
-    from acmm.tea import solve_tea
+    from acmm.design.schedule_points import point_specs
+    from acmm.model.tea import solve_tea
 
     out = {}
     for b in sweep.bases:
@@ -88,7 +90,7 @@ def _nominal_tea_deg(sweep: Sweep) -> dict:
 
 def _margin_items(margins: list, S) -> dict:
     """Datasets of the margin searches: one group ``<base>_<direction>`` per search."""
-    from common.results import Dataset
+    from acmm_qpp.results import Dataset
 
     return {
         m["base"] + "_" + m["direction"]: {
@@ -124,10 +126,10 @@ def _root_attrs(sweep: Sweep, a: dict, labels: list, n_done: int, complete: bool
 
 
 def _orbit_defined(items: dict, sweep) -> dict:
-    """``items`` with the unit ``orbit`` defined (:func:`acmm.stage_common._define_units`) when
+    """``items`` with the unit ``orbit`` defined (:func:`acmm.stages.common._define_units`) when
     every base config has the same orbit rate; else an orbit's length differs between cases and
     each dataset in orbits says that its case's orbit is ``orbit_period[case]`` s."""
-    from acmm.stage_common import _define_units
+    from acmm.stages.common import _define_units
 
     from dataclasses import replace
 
@@ -141,7 +143,7 @@ def _orbit_defined(items: dict, sweep) -> dict:
 
 def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bool = False,
                   wall_time: float | None = None) -> tuple[Path, list]:
-    """Build ``sweep.h5`` (atomically, via :func:`acmm.results.write_h5`) and ``sweep.csv`` from
+    """Build ``sweep.h5`` (atomically, via :func:`acmm_qpp.results.write_h5`) and ``sweep.csv`` from
     the records; with ``figures`` also the stability map and the peak-error distributions.
 
     Parameters
@@ -162,7 +164,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     tuple
         (pathlib.Path of ``sweep.h5``, list of the figure paths).
     """
-    from common.results import Dataset, write_h5
+    from acmm_qpp.results import Dataset, write_h5
 
     rows, margins = _split(sweep, records)
     a = table_arrays(sweep, rows)
@@ -204,14 +206,14 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
         items["margin"] = _margin_items(margins, S)
     attrs = _root_attrs(sweep, a, labels, len(rows), complete, wall_time)
     run_dir = sweep.run_dir()
-    from common.netcdf_layout import with_leading_dim
+    from acmm_qpp.netcdf_layout import with_leading_dim
 
     items = _orbit_defined(with_leading_dim(items, "case", len(a["case"])), sweep)   # one row per case
     path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units)
     _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
     if figures and rows:
-        from common.errors import FigureError
+        from acmm_qpp.errors import FigureError
 
         try:
             figs = plot_sweep(sweep, a, run_dir)
@@ -222,7 +224,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
 
 
 def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
-    from acmm.units import display_unit, shown
+    from acmm_qpp.units import display_unit, shown
 
     cols = ["case", "base", "index"] + [f"{k}[{display_unit(PARAMETERS[k].unit, units)}]" for k in a["parameters"]] + [
         "verdict", "time_to_divergence[orbit]"]
@@ -263,7 +265,8 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
     list of pathlib.Path
         The figures written.
     """
-    from acmm.plots import _plt, _save
+    from acmm.plots.base import _save
+    from acmm_qpp.plot_style import stage_pyplot as _plt
 
     plt = _plt()
     labels = [b.label for b in sweep.bases]
@@ -271,7 +274,7 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
     axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
     nominal = _nominal_tea_deg(sweep)
 
-    from acmm.units import shown
+    from acmm_qpp.units import shown
 
     system = sweep.file.output.units
 
@@ -332,7 +335,7 @@ def _label(name: str, units: str = "imperial") -> str:
             return f"{name}: relative change of {name[1:]} (1, 0.1 = +10 %)"
         if p.kind == "scale":
             return f"{name}: {p.description.split(':')[0].split('(')[0].strip()} (1, × nominal)"
-        from acmm.units import display_unit
+        from acmm_qpp.units import display_unit
 
         unit = display_unit(p.unit, units).replace("*", "·")
         return f"{name}: {p.description.split('(')[0].split(',')[0].strip()} ({unit})"

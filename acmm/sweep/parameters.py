@@ -87,7 +87,7 @@ def to_parameter_unit(v, unit: str, where: str):
     ValueError
         The unit is malformed or of the wrong dimension (pydantic turns it into a field error).
     """
-    from acmm.units import to_canonical, DIMENSIONS
+    from acmm_qpp.units import to_canonical, DIMENSIONS
 
     if not isinstance(v, str):
         return v

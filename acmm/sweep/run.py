@@ -9,8 +9,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
-from common.outputs import owns_outputs
-from common.runlock import locked_stage
+from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.runlock import locked_stage
 from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
@@ -18,9 +18,9 @@ from acmm.sweep.chunking import Chunker
 from acmm.sweep.executors import (SerialExecutor, _call_chunk, _remote_contexts, _scheduler_workers,
                                   _task_key, _tasks, lost_worker, make_executor)
 from acmm.sweep.journal import GroupCommitJournal, read_journal
-from common.errors import ConfigError, OutputError
-from common.signals import hold_interrupts, release_interrupts
-from common.workers import submit
+from acmm_qpp.errors import ConfigError, OutputError
+from acmm_qpp.signals import hold_interrupts, release_interrupts
+from acmm_qpp.workers import submit
 from acmm.sweep.output import _split, write_results
 
 
@@ -171,7 +171,7 @@ def _task_arguments(executor, contexts: dict) -> dict:
     remote = _remote_contexts(executor, contexts)
     if getattr(executor, "_client", None) is None:
         return {k: (v,) for k, v in remote.items()}
-    from common.provenance import code_identity
+    from acmm_qpp.provenance import code_identity
 
     return {k: (v, code_identity()) for k, v in remote.items()}
 
@@ -211,7 +211,7 @@ def _start_afresh(sweep: Sweep, run_dir: Path) -> None:
     (its journal is replaced next) and this sweep's ``config.yaml`` is written first.  An
     interrupted re-run with another seed left its results beside the earlier run's config.yaml
     and figures (a review)."""
-    from common.outputs import prune, write_config_yaml
+    from acmm_qpp.outputs import prune, write_config_yaml
 
     prune(run_dir, "sweep", set())
     write_config_yaml(run_dir, sweep)

@@ -7,19 +7,22 @@ rules: one of grid/Monte Carlo, known parameter names, ranges that keep the plan
 """
 from __future__ import annotations
 
+import copy
+
 import math
 from typing import Annotated, Literal, Optional
 
 from pydantic import BeforeValidator, Field, model_validator
 
-from acmm.config import Output
+from acmm.io.config import Output
 from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS, SHORTHANDS, parameter_value, to_parameter_unit
-from common.config_model import StrictModel
-from common.results import RUN_NAME_MAX, RUN_NAME_PATTERN
+from acmm_qpp.config_model import StrictModel
+from acmm_qpp.schema import _fix_alternatives, _Generator, _header
+from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN
 
 
 class _Model(StrictModel):
-    """Strict base of the sweep sections (:class:`common.config_model.StrictModel`)."""
+    """Strict base of the sweep sections (:class:`acmm_qpp.config_model.StrictModel`)."""
 
 
 class Dist(_Model):
@@ -193,7 +196,7 @@ class SweepSpec(_Model):
 
 def _check_name(name: str) -> None:
     if name not in PARAMETERS and name not in SHORTHANDS:
-        from common.hints import closest
+        from acmm_qpp.hints import closest
 
         known = list(SHORTHANDS) + list(PARAMETERS)
         best = closest(name, known)
@@ -244,3 +247,39 @@ class SweepFile(_Model):
     description: str = Field("", description="free text")
     sweep: SweepSpec
     output: Output = Output()
+
+
+def sweep_schema() -> dict:
+    """Schema of a sweep config: a sweep file, or an acmm config with an inline ``sweep`` section.
+
+    Returns
+    -------
+    dict
+        JSON schema (draft 2020-12) with ``anyOf`` the two forms.
+    """
+    from pydantic.json_schema import models_json_schema
+
+    from acmm.io.config import Config
+
+    keys, top = models_json_schema([(SweepFile, "validation"), (Config, "validation"),
+                                    (SweepSpec, "validation")], schema_generator=_Generator)
+    defs = _fix_alternatives(top)["$defs"]
+    ref_file = keys[(SweepFile, "validation")]["$ref"]
+    ref_cfg = keys[(Config, "validation")]["$ref"]
+    ref_spec = keys[(SweepSpec, "validation")]["$ref"]
+    cfg_name = ref_cfg.split("/")[-1]
+    inline = copy.deepcopy(defs[cfg_name])
+    inline["title"] = "Config with an inline sweep section"
+    inline["properties"]["sweep"] = {
+        "allOf": [{"$ref": ref_spec},
+                  {"not": {"anyOf": [{"required": ["base"]}, {"required": ["bases"]}]}}],
+        "description": "sweep over this very config (no base/bases)"}
+    inline["required"] = sorted(set(inline.get("required", [])) | {"sweep"})
+    defs["InlineSweepConfig"] = inline
+    file_name = ref_file.split("/")[-1]
+    file_def = defs[file_name]
+    # the file form needs a base: the loader reads a `sweep` without base/bases as inline
+    file_def["properties"]["sweep"] = {"allOf": [file_def["properties"]["sweep"],
+                                                 {"anyOf": [{"required": ["base"]}, {"required": ["bases"]}]}]}
+    schema = {"anyOf": [{"$ref": ref_file}, {"$ref": "#/$defs/InlineSweepConfig"}], "$defs": defs}
+    return _header(schema, "sweep", "acmm sweep config")

@@ -1,0 +1,1 @@
+"""The ``acmm`` command line (typer): parse arguments, call the stages, print."""

@@ -1,0 +1,305 @@
+"""``acmm`` command line: one command per stage (CR-185644 Part II).
+
+Commands parse arguments, call the ``acmm`` library, print, and write results; no
+mathematics lives here.  User errors print one line and exit with code 2.
+"""
+from __future__ import annotations
+
+import json
+import math
+from typing import Optional
+
+import enum
+
+import typer
+
+from acmm_qpp.cli.plumbing import ExitCodeGroup, OverridesArg, StrictOpt, run_app, strict_exit, user_errors, version_option
+
+#: the acmm stages' figure-worker warm-up, :data:`acmm.stages.common.FIGURE_WARM` (a string here: the
+#: worker is forked before anything of acmm is imported; a test checks that the two agree)
+FIGURE_WARM = "acmm.plots.base:warm_figure_worker"
+
+app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
+                  help="Space Station attitude control / momentum management (CR-185644 Part II).",
+                  epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
+                         "or option value), 3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
+
+
+@app.callback()
+def _root(version: bool = version_option()) -> None:
+    """Space Station attitude control / momentum management (CR-185644 Part II)."""
+
+
+def _load(config, overrides):
+    """The validated acmm config of CONFIG plus KEY=VALUE overrides (a CONFIG that is itself an
+    override means: the packaged default with that override)."""
+    from acmm.io.config import load_config
+    from acmm_qpp.overrides import split_overrides
+
+    return load_config(*split_overrides(config, overrides))
+
+ConfigArg = typer.Argument(None, help="YAML config file (or the name of a packaged config); "
+                                      "default: the packaged stair-case config")
+
+
+FiguresOpt = typer.Option(None, "--figures/--no-figures", help="write figures (default: output.figures)")
+
+
+def _fmt(v, fmt="{:+.4f}"):
+    return "[" + ", ".join(fmt.format(x) for x in v) + "]"
+
+
+@app.command()
+@user_errors
+def validate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+             show: bool = typer.Option(False, "--show", help="print the resolved config (all defaults, canonical units)")) -> None:
+    """Check a config of any kind (acmm run, sweep or qpp; detected from its sections); exit 2
+    naming the offending field when it is invalid."""
+    from acmm_qpp.overrides import split_overrides
+    from acmm.cli.configkinds import load_any
+
+    config, overrides = split_overrides(config, overrides)
+    kind, cfg = load_any(config, overrides)
+    typer.echo(f"{cfg.name}: valid ({kind} config)")
+    if show:
+        typer.echo(cfg.to_yaml())
+
+
+class ConfigKind(str, enum.Enum):
+    """The three config kinds."""
+
+    acmm = "acmm"
+    sweep = "sweep"
+    qpp = "qpp"
+
+
+@app.command()
+@user_errors
+def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="config kind")) -> None:
+    """Print the JSON schema of a config kind (for editors: see README, 'Config format')."""
+    from acmm.cli.configkinds import schema_json
+
+    typer.echo(schema_json(kind.value))
+
+
+@app.command()
+@user_errors
+def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+        all_roots: bool = typer.Option(False, "--all", help="also list every other equilibrium found")) -> None:
+    """Torque-equilibrium attitude (eqs 4.1–4.3); writes runs/<name>/tea.h5."""
+    from acmm.stages.runners import run_tea
+
+    result, path = run_tea(_load(config, overrides), all_roots=all_roots)
+    t = result.tea
+    typer.echo(f"{result.config.name}: torque-equilibrium attitude (eqs 4.1-4.3)")
+    typer.echo(f"  theta* [roll, pitch, yaw]  = {_fmt(t.theta_deg)} deg")
+    typer.echo(f"  omega*                     = {_fmt(t.omega, '{:+.6e}')} rad/s")
+    from acmm_qpp.units import shown
+
+    sys_ = result.config.output.units
+    bias, tu = shown(t.bias, "ft*lbf", sys_)
+    typer.echo(f"  bias used                  = {_fmt(bias, '{:+.6g}')} {tu}")
+    typer.echo(f"  residual max|eq 4.1|       = {shown(t.residual, 'ft*lbf', sys_)[0]:.2e} {tu}")
+    for k, other in enumerate(result.others):
+        typer.echo(f"  other root {k + 1}: theta = {_fmt(other.theta_deg)} deg (residual {other.residual:.1e})")
+    typer.echo(f"  wrote {path}")
+
+
+@app.command()
+@user_errors
+def linearize(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg) -> None:
+    """24-state linearization about the TEA (eqs 4.4-4.50); writes runs/<name>/linearize.h5."""
+    import numpy as np
+
+    from acmm.stages.runners import run_linearize
+
+    r, path = run_linearize(_load(config, overrides))
+    m, c = r.model, r.controllability
+    typer.echo(f"{r.config.name}: {m.variant} model, {m.drf_mode}, about theta* = "
+               f"{_fmt(np.degrees(m.theta_star), '{:+.3f}')} deg")
+    eig = r.eigenvalues_over_n()
+    typer.echo("  open-loop eigenvalues / n:")
+    for k in range(0, len(eig), 4):
+        typer.echo("    " + "  ".join(f"{e.real:+9.4f}{e.imag:+9.4f}j" for e in eig[k:k + 4]))
+    typer.echo(f"  controllability (PBH, scaled): rank {c.rank}/{c.order} at tol {c.tol:g}; "
+               f"smallest sigma ratio {c.min_ratio:.2e} at s = {c.worst_s.real / m.n:+.3f}{c.worst_s.imag / m.n:+.3f}j n")
+    if c.min_ratio < 1e-6:
+        typer.echo(f"  warning: the model is nearly uncontrollable (sigma ratio {c.min_ratio:.1e} < 1e-6);"
+                   " expect poor Riccati residuals", err=True)
+    typer.echo(f"  wrote {path}")
+
+
+def _run_with_progress(runner, cfg, figures, what: str):
+    """Call a stage runner with terminal progress (acmm_qpp.cli.progress: a bar over the design points,
+    then the remaining work; silent when stderr is not a terminal)."""
+    from acmm.cli import compile_note
+    from acmm_qpp.cli import progress as prog
+
+    total = cfg.n_design_points()
+    if what == "simulate":
+        compile_note.announce_numba_compile()
+    with_figures = cfg.output.figures if figures is None else figures
+    after = ("simulating, writing results" if what == "simulate" else
+             "fitting the schedule, checking it, writing results") + (" and figures" if with_figures else "")
+    with prog.Steps(f"{cfg.name}: designing", total) as bar:
+        count = [0]
+
+        def tick(name):
+            count[0] += 1
+            bar.advance(f"{cfg.name}: designed {name}" if count[0] < total else f"{cfg.name}: {after}")
+
+        if what == "simulate":
+            bar.describe(f"{cfg.name}: design (or reuse), {after}")
+        return runner(cfg, progress=tick, figures=figures)
+
+
+@app.command()
+@user_errors
+def design(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+           figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
+    """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures.
+    With --strict, a scheduled gain with poles outside the sector, or a blend whose end lies on
+    another branch of equilibria, exits 1."""
+
+    from acmm_qpp import figure_worker
+
+    with figure_worker.session(figures is not False, FIGURE_WARM):     # started before the heavy imports
+        from acmm.stages.design import run_design
+
+        r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
+    cfg = r.config
+    typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
+               f"sector Re <= -{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g} deg "
+               f"({r.wall_time:.2f} s)")
+    typer.echo(f"  {'point':<14} {'TEA r/p/y (deg)':<28} {'margin (n)':>10} {'residual':>9} {'fastest/n':>9}")
+    for p, fastest in zip(r.points, r.fastest_over_n()):
+        res = p.lqr
+        typer.echo(f"  {p.spec.name:<14} {_fmt(p.tea.theta_deg, '{:+.2f}'):<28} {res.margin:>10.3f} "
+                   f"{res.residual:>9.1e} {fastest:>9.2f}")
+    if r.fit is not None and r.fit.form == "table":
+        typer.echo(f"  schedule: table, K linear in theta2* between the {len(r.points)} design points")
+    elif r.fit is not None:
+        typer.echo(f"  schedule: order {r.fit.order} in theta2*; worst relative fit residual "
+                   f"{r.fit.rel_residual.max():.2e}")
+    if r.fit is not None and r.check is not None:      # either form: what --strict judges
+        c = r.check
+        worst = r.worst_check_index()
+        verdict = "all in the sector" if c.worst > 0 else "NOT all in the sector"
+        typer.echo(f"  scheduled gain ({r.fit.form}) on the local models ({len(c.names)} checks): {verdict}; "
+                   f"worst margin {c.worst:+.3f} n at {c.names[worst]} ({c.kind[worst]})")
+        stable = "stable at every check" if c.max_real.max() < 0 else "UNSTABLE at some checks"
+        typer.echo(f"  scheduled closed loops: {stable}; largest Re(pole) = {c.max_real.max():+.3f} n")
+    jump = r.off_branch()
+    if jump is not None:
+        typer.echo("  warning: " + _branch_jump_text(jump))
+    typer.echo(f"  wrote {path}")
+    strict_exit(strict, jump is not None, f"{cfg.name}: the blend's design point {jump.name if jump else ''} "
+                "is on another branch of equilibria")
+    if r.check is not None:
+        strict_exit(strict, r.check.worst <= 0,
+                    f"{cfg.name}: the scheduled gain puts poles outside the sector "
+                    f"(worst margin {r.check.worst:+.3f} n)")
+
+
+def _branch_jump_text(jump) -> str:
+    """The warning for a blend point off the start's branch of equilibria (a BranchJump)."""
+    who = ("the end station's TEA" if jump.s == 1.0 else f"the TEA of design point {jump.name} (s = {jump.s:.3g})")
+    tea = _fmt([math.degrees(x) for x in jump.theta], "{:+.2f}") + " deg" + (" (as asked)" if jump.asked else "")
+    if jump.branch is None:
+        where = "which folds (ends) before reaching it"
+    else:
+        where = f"which reaches {_fmt([math.degrees(x) for x in jump.branch], '{:+.2f}')} deg there"
+    return (f"{who} {tea} is not on the branch of equilibria continued from the start, {where}: "
+            "the blend crosses a fold and the schedule is fitted across the jump")
+
+
+@app.command(short_help="Nonlinear closed-loop simulation (ch 6); designs first if needed; writes sim.h5 + figures.")
+@user_errors
+def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+             figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
+    """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures.
+    With --strict, a DIVERGED verdict exits 1."""
+
+    from acmm_qpp import figure_worker
+
+    with figure_worker.session(figures is not False, FIGURE_WARM):     # started before the heavy imports
+        from acmm.stages.simulate import run_simulate
+
+        r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
+    from acmm_qpp.units import shown
+
+    cfg, s = r.config, r.sim
+    typer.echo(f"{cfg.name}: design {r.design_note}")
+    typer.echo(f"  simulated {r.orbits_simulated:.2f} of {cfg.simulation.orbits:g} orbits in "
+               f"{r.wall_time:.2f} s ({s.n_steps} steps, {s.n_rejected} rejected)")
+    typer.echo(f"  verdict: {s.verdict.upper()} ({s.reason}" +
+               (f" at {r.stop_orbit:.3f} orbit)" if s.diverged else ")"))
+    for st in r.stats:
+        typer.echo(f"  level {st['level']:>2} from orbit {st['start_orbit']:6.1f}: theta2* {st['theta2_deg']:+7.2f} deg, "
+                   f"steady |err| {_fmt(st['steady_error_deg'], '{:.3f}')} deg, peak |h| "
+                   "{:.0f} {}".format(*shown(st['peak_momentum'], "ft*lbf*s", cfg.output.units)))
+    typer.echo(f"  wrote {path}")
+    strict_exit(strict, s.verdict != "bounded", f"{cfg.name}: verdict {s.verdict.upper()} ({s.reason})")
+
+
+def main() -> None:
+    """Console entry point (``acmm``): run the app, then leave without the interpreter's
+    teardown when nothing else is running (issue 16).
+
+    Finalizing numba's compiled code and the loaded modules took ~0.2 s of a ~1.2 s
+    ``acmm simulate``.  Every result is written (atomically) before the command returns; the
+    atexit handlers still run and the output is flushed; only then ``os._exit``.  With another
+    non-daemon thread alive (a Dask client) the usual exit is kept."""
+    import sys
+
+    from acmm_qpp.plot_style import files_only_backend
+    from acmm_qpp.signals import terminate_like_ctrl_c
+
+    terminate_like_ctrl_c()           # SIGTERM, SIGHUP: rolled back like Ctrl-C
+    files_only_backend()
+    try:
+        _fork_figure_worker_early(sys.argv[1:])
+    except KeyboardInterrupt as exc:
+        from acmm_qpp.cli.plumbing import interrupted
+
+        interrupted(exc)
+    run_app(app)
+
+
+def _fork_figure_worker_early(args: list[str]) -> None:
+    """Fork the figure worker before typer parses (and imports pydantic for) the command line
+    when the command is a stage that may draw figures (:func:`acmm_qpp.figure_worker.start_early`).
+
+    Parameters
+    ----------
+    args : list of str
+        The command-line arguments (``sys.argv[1:]``).
+    """
+    command = next((a for a in args if not a.startswith("-")), None)
+    if command in ("design", "simulate") and not {"--no-figures", "--help", "-h"} & set(args):
+        import numpy  # noqa: F401  (imported once, before the fork: both processes need it)
+
+        from acmm_qpp import figure_worker
+
+        figure_worker.start_early(FIGURE_WARM)
+
+
+def _register_optional_commands() -> None:
+    """Commands that live in their own CLI modules (``register(app)`` adds them)."""
+    import importlib
+
+    for mod in ("acmm.cli.sweep", "acmm.cli.report"):
+        try:
+            module = importlib.import_module(mod)
+        except ModuleNotFoundError as exc:
+            if exc.name != mod:
+                raise
+            continue
+        module.register(app)
+
+
+_register_optional_commands()
+
+
+if __name__ == "__main__":     # python -m acmm.cli.app
+    main()

@@ -1,0 +1,76 @@
+"""``acmm report``: regenerate every table and figure of CR-185644 into one HTML page.
+
+Registered on the ``acmm`` app by :func:`register` (called from ``acmm.cli.app``).  Imports of
+the report machinery stay inside the command so ``acmm --help`` stays fast.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from acmm_qpp.cli.plumbing import user_errors
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``report`` command to ``app``.
+
+    Parameters
+    ----------
+    app : typer.Typer
+        The ``acmm`` app.
+    """
+
+    @app.command("report")
+    @user_errors
+    def report(
+        out: str = typer.Option("runs/report", "--out", help="output directory (index.html, report.md, "
+                                                                     "figures/, manifest.json)"),
+        fast: bool = typer.Option(False, "--fast", help="CI mode: a 13-orbit stair-case instead of 130 orbits"),
+        rerun: bool = typer.Option(False, "--rerun", help="recompute every stage even when results with the "
+                                                          "same config hash exist (determinism check)"),
+        root: Optional[Path] = typer.Option(None, "--root", help="results root the report computes its stages in, "
+                                            "figures off, replacing files there (default: <out>/results, its own; "
+                                            "never your runs/)"),
+        jobs: Optional[int] = typer.Option(None, "--jobs", min=1, max=1024, help="processes running the stages and "
+                                           "sections (default: 2 on a multi-core machine, or ACMM_REPORT_JOBS); "
+                                           "1: one after the other; the output is the same"),
+    ) -> None:
+        """Every figure and table of CR-185644 regenerated and compared with the printed values;
+        writes <out>/index.html (self-contained) and <out>/report.md; a failed section is shown there
+        with its error and the command exits with that error's code."""
+        import sys
+
+        from acmm.report.build import build_report
+
+        def say(msg: str) -> None:
+            sys.stderr.write(msg + "\n")
+            sys.stderr.flush()
+
+        if not out.strip():              # Path("") would be the working directory itself
+            from acmm_qpp.errors import ConfigError
+
+            raise ConfigError("--out: empty; give the report's output directory")
+        r = build_report(Path(out), fast=fast, rerun=rerun, root=root, progress=say, jobs=jobs)
+        counts: dict[str, int] = {}
+        for p in r.ledger:
+            counts[p.status] = counts.get(p.status, 0) + 1
+        typer.echo(f"report: {len(r.sections)} sections, {len(r.figures)} figures, "
+                   f"{len(r.stages)} result files ({sum(s.reused for s in r.stages)} reused) in {r.wall_time:.1f} s "
+                   f"({r.jobs} process{'es' if r.jobs > 1 else ''})")
+        typer.echo("  printed numbers: " + "; ".join(f"{v} {k}" for k, v in sorted(counts.items())))
+        d = r.determinism
+        typer.echo(f"  determinism: {d['status']}" +
+                   (f" ({d['compared']} datasets compared, {d['recomputed']} files recomputed)"
+                    if d["status"] != "no previous report" else ""))
+        typer.echo(f"  wrote {r.html}")
+        typer.echo(f"  wrote {r.markdown}")
+        if r.failures:                   # the report is written, with each failure in its section
+            from acmm_qpp.errors import AcmmError
+
+            section, first = r.failures[0]
+            err = AcmmError(f"report incomplete: {len(r.failures)} failed section part(s), first in section "
+                            f"{section}: {first.text()} (see {r.html})")
+            err.exit_code = first.exit_code
+            raise err

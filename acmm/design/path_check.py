@@ -1,0 +1,236 @@
+"""The scheduled gain judged on the closed loop along the whole path (CR-185644 ch. 5.3).
+
+Design models at ``schedule.n_check`` TEAs evenly spaced along the blend (:func:`path_models`),
+the disk margin at the plant input (:func:`acmm.design.disk_margin.disk_margin_input`, batched over
+the path) and the
+path check itself (:func:`check_path`: largest Re λ, worst sector margin, disk margin).  Split
+from :mod:`acmm.design.schedule`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acmm.model import linearize as lin
+from acmm.design import sector as sector_mod
+from acmm.design.disk_margin import DISK_OMEGA_N, _disk_alpha_batch, _disk_parts, disk_gain_phase
+from acmm.design.schedule import PointDesign
+from acmm.design.schedule_points import PointSpec, tea_spaced_blend
+from acmm.design.settings import DesignSettings
+from acmm.model.tea import solve_tea, solve_tea_near
+
+@dataclass
+class PathModels:
+    """Local design models at TEAs evenly spaced along the blend path (``schedule.n_check``).
+
+    Attributes
+    ----------
+    theta2 : (P,) array
+        Pitch TEA of each model, rad.
+    s : (P,) array
+        Blend parameter of each model, dimensionless.
+    A : (P, N, N) array
+        State matrices, physical units (1/s).
+    B : (P, N, M) array
+        Control input matrices, state units per ft·lbf.
+    scales : (N,) array
+        State scaling of the design models, in the units of each state.
+    """
+
+    theta2: np.ndarray          # (P,) pitch TEA, rad
+    s: np.ndarray               # (P,) blend parameter
+    A: np.ndarray               # (P, N, N) physical units
+    B: np.ndarray               # (P, N, M)
+    scales: np.ndarray          # (N,) state scaling of the design models
+
+
+@dataclass
+class PathCheck:
+    """The scheduled gain on the local model at every TEA of a :class:`PathModels`.
+
+    Attributes
+    ----------
+    theta2 : (P,) array
+        Pitch TEA, rad.
+    s : (P,) array
+        Blend parameter, dimensionless.
+    max_real : (P,) array
+        Largest Re λ(A − BK(θ2*)), units of n.
+    margin : (P,) array
+        Worst :func:`acmm.design.lqr.sector_margin`, units of n (> 0: every pole in the sector).
+    disk_margin : (P,) array
+        Balanced (skew 0) multiloop disk margin α at the plant input (loop broken at u),
+        dimensionless (:func:`disk_margin_input`).
+    disk_gain_margin_db, disk_phase_margin_deg : (P,) arrays
+        The gain (dB) and phase (deg) variations that α guarantees simultaneously in all loops.
+    poles : (P, N) complex array
+        Closed-loop poles, rad/s.
+    """
+
+    theta2: np.ndarray
+    s: np.ndarray
+    max_real: np.ndarray
+    margin: np.ndarray
+    disk_margin: np.ndarray
+    disk_gain_margin_db: np.ndarray
+    disk_phase_margin_deg: np.ndarray
+    poles: np.ndarray
+
+    @property
+    def fraction_in_sector(self) -> float:
+        """Fraction of the TEAs at which every pole lies in the sector, dimensionless."""
+        return float(np.mean(self.margin >= 0.0))
+
+
+def path_models(points: list[PointDesign], s: DesignSettings, n_check: int,
+                indices=None) -> PathModels | None:
+    """Design models at ``n_check`` TEAs evenly spaced between the first and last blend point
+    of the designed ``points`` (:func:`path_models_from_specs` of their specs).
+
+    Parameters
+    ----------
+    points : list of acmm.design.schedule.PointDesign
+        The design points; the first and last blend points bound the path.
+    s : DesignSettings
+        The design settings (orbital rate, design model, DRF mode).
+    n_check : int
+        Number of TEAs along the path.
+    indices : sequence of int, optional
+        Only the models at these positions of the ``n_check`` TEAs (in this order).
+
+    Returns
+    -------
+    PathModels or None
+        The models, None without a blend.
+    """
+    return path_models_from_specs([p.spec for p in points], s, n_check, indices)
+
+
+def path_models_from_specs(specs: list[PointSpec], s: DesignSettings, n_check: int,
+                           indices=None) -> PathModels | None:
+    """Design models at ``n_check`` TEAs evenly spaced between the first and last blend point.
+
+    None when the config has no blend (``schedule.to``).  The TEA of each model is solved
+    exactly (Newton from the continuation guess), so the θ2* are evenly spaced to within the
+    interpolation of the 81-point continuation track.  Only the point specs are needed, not
+    their designs: the design stage solves these models while it designs the points.
+
+    Parameters
+    ----------
+    specs : list of acmm.design.schedule.PointSpec
+        The design points' specs; the first and last blend points bound the path.
+    s : DesignSettings
+        The design settings (orbital rate, design model, DRF mode).
+    n_check : int
+        Number of TEAs along the path.
+    indices : sequence of int, optional
+        Only the models at these positions of the ``n_check`` TEAs (in this order); each model
+        is solved on its own, so they equal the full path's models there bit for bit.
+
+    Returns
+    -------
+    PathModels or None
+        The models, None without a blend.
+    """
+    d = s
+    n = s.orbit_rate
+    blended = [p for p in specs if np.isfinite(p.s)]
+    if len(blended) < 2:
+        return None
+    start, end = blended[0], blended[-1]
+    start = PointSpec(start.name, start.inertia, start.bias, 0.0, expected=start.expected)
+    end = PointSpec(end.name, end.inertia, end.bias, 1.0, expected=end.expected)
+    track = tea_spaced_blend(start, end, n_check, n)
+    if indices is not None:
+        track = [track[i] for i in indices]
+    th, ss, As, Bs = [], [], [], []
+    scales = None
+    for sp in track:
+        if sp.theta_guess is not None:
+            t = solve_tea_near(sp.inertia, n, sp.bias, sp.theta_guess, expected=sp.expected)
+        else:
+            t = solve_tea(sp.inertia, n, sp.bias, expected=sp.expected)
+        m = lin.design_point(sp.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
+        th.append(t.theta[1])
+        ss.append(sp.s)
+        As.append(m.A)
+        Bs.append(m.B)
+        scales = m.scales
+    return PathModels(np.array(th), np.array(ss), np.array(As), np.array(Bs), scales)
+
+
+def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
+               half_angle_deg: float = 45.0, disk: bool = True) -> PathCheck:
+    """Largest Re λ, worst sector margin and disk margin of the scheduled gain along a path.
+
+    ``gain_at(θ2*)`` returns the scheduled K (physical units) at pitch TEA θ2* (rad).
+
+    Parameters
+    ----------
+    gain_at : callable
+        θ2* (rad) → scheduled K (3, N), physical units.
+    path : PathModels
+        The local models along the path.
+    n : float
+        Orbital rate, rad/s.
+    sigma : float
+        Minimum decay rate σ, in units of n.
+    half_angle_deg : float
+        Sector half-angle φ, deg.
+    disk : bool
+        Also compute the disk margins (else NaN).
+
+    Returns
+    -------
+    PathCheck
+        The closed-loop measures at every TEA of the path.
+    """
+    P = path.theta2.size
+    mr, mg, dm, dg, dp = (np.full(P, np.nan) for _ in range(5))
+    poles, parts = [], []
+    d = path.scales
+    Ks = np.array([gain_at(path.theta2[j]) for j in range(P)]) * d[None, None, :]
+    As = path.A / d[None, :, None] * d[None, None, :]
+    Bs = path.B / d[None, :, None]
+    # one batched eigendecomposition of every closed loop, reused by the disk margin
+    lam_all, V_all = np.linalg.eig(As - Bs @ Ks)
+    if disk:
+        condV = np.linalg.cond(V_all)
+        try:
+            W_all = np.linalg.inv(V_all)
+        except np.linalg.LinAlgError:
+            W_all = None
+    for j in range(P):
+        lam = lam_all[j]
+        lam = lam[np.lexsort((lam.imag, lam.real))]
+        poles.append(lam)
+        mr[j] = np.max(lam.real) / n
+        mg[j] = np.min(sector_mod.sector_margin(lam, n, sigma, half_angle_deg))
+    if disk:
+        # S(jω) − I/2 of every stable, well-conditioned loop in one modal evaluation
+        # (as in _disk_parts); the others one by one
+        fast = (np.max(lam_all.real, axis=1) < 0) & (condV < 1e8) & (W_all is not None)
+        parts = [None] * P
+        if np.any(fast):
+            idx = np.flatnonzero(fast)
+            w = n * DISK_OMEGA_N
+            m = Bs.shape[2]
+            KV = Ks[idx] @ V_all[idx]                                   # (Q, M, N)
+            WB = W_all[idx] @ Bs[idx]                                   # (Q, N, M)
+            res = 1.0 / (1j * w[None, :, None] - lam_all[idx][:, None, :])   # (Q, F, N)
+            M_all = (0.5 * np.eye(m))[None, None] - np.einsum("qak,qfk,qkb->qfab", KV, res, WB,
+                                                                optimize=True)
+            aM = np.abs(M_all)
+            cheap = np.sqrt(aM.sum(axis=2).max(axis=2) * aM.sum(axis=3).max(axis=2))
+            for r, j in enumerate(idx):
+                parts[j] = (M_all[r], cheap[r])
+        for j in np.flatnonzero(~fast):
+            eig = (lam_all[j], V_all[j], None if W_all is None else W_all[j], condV[j])
+            parts[j] = _disk_parts(As[j], Bs[j], Ks[j], n, eig=eig)
+    if disk:
+        # batched branch and bound over every TEA's frequencies
+        dm[:] = _disk_alpha_batch(parts)
+        for j in range(P):
+            dg[j], dp[j] = disk_gain_phase(dm[j]) if dm[j] > 0 else (0.0, 0.0)
+    return PathCheck(path.theta2.copy(), path.s.copy(), mr, mg, dm, dg, dp, np.array(poles))

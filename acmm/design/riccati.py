@@ -1,0 +1,400 @@
+"""Continuous algebraic Riccati equation (eq 5.4) with a verified residual.
+
+Solves ::
+
+    A'P + P A − P B R⁻¹ B' P + Q = 0                                       (eq 5.4)
+
+for the stabilizing solution P = P' (A − B K stable, K = R⁻¹ B' P, eq 5.3) by one of three
+methods behind :func:`solve_care`:
+
+``"scipy"``
+    :func:`scipy.linalg.solve_continuous_are` (generalized Schur of the extended pencil, with
+    balancing).
+``"sign"``
+    The matrix sign function of the Hamiltonian (eq 5.5) by the fifth-order iteration of eq 5.6
+    with the *corrected* denominator (``docs/ERRATA.md`` § Riccati sign function)::
+
+        S(k+1) = S(k) [5I + 10S²(k) + S⁴(k)] [I + 10S²(k) + 5S⁴(k)]⁻¹,   S(0) = H,
+
+    evaluated in partial fractions (the same rational map, conditioned like κ(S) instead of
+    κ(S)⁴) and accelerated by determinantal (or norm) scaling; [I; P] then spans the stable
+    invariant subspace of H = [[A, −G], [−Q, −A']], G = BR⁻¹B', which is the range of the
+    projector (I − sign H)/2: an orthonormal basis [U1; U2] of it from a column-pivoted QR
+    factorization gives P = U2 U1⁻¹.  (Solving (sign H + I)[I; P] = 0 by least squares instead
+    loses up to ten digits on the nearly uncontrollable claim-1 model: backward error 3e-6
+    against 1e-16.)  The printed denominator I + 10S + 5S⁴ does not converge to the
+    sign (from the left half-line it either ends at +1 or wanders near −2); it is kept as
+    ``form="printed"`` of :func:`matrix_sign` only so that tests can show it.
+``"slycot"``
+    SLICOT SB02MD (Schur vectors of the Hamiltonian) via :func:`slycot.sb02md`.
+
+State scaling: with nominal state magnitudes d (``scale``), x = D x̃, D = diag(d), the solver
+works on Ã = D⁻¹AD, B̃ = D⁻¹B, Q̃ = DQD and maps back P = D⁻¹P̃D⁻¹, K = K̃D⁻¹.  In physical units
+the 24 ACMM states span ~12 orders of magnitude; unscaled, every method loses most digits
+(``docs/ERRATA.md`` § Scaling).
+
+Refinement and acceptance: every solver's answer is refined by Newton–Kleinman steps with exact
+line search (:func:`refine_care`; Kleinman 1968, Benner & Byers 1998): each step solves the
+Lyapunov equation A_c'Δ + ΔA_c = −ℛ(P) of the closed loop A_c = A − GP for the residual ℛ(P)
+and moves P by tΔ, t ∈ (0, 2] minimizing ‖ℛ(P + tΔ)‖.  The refinement stops when a step no
+longer halves the backward error ω (:func:`care_backward_error`), i.e. at working accuracy,
+not after a fixed count.  The solution is accepted when ω ≤ ``tol``: ω measures the residual
+against the size of the terms as floating point evaluates them, so a nearly uncontrollable
+model (whose P spans many orders of magnitude, with large cancelling terms in PGP) is judged by
+what working precision can give, the same for every method.  The relative residual of
+:func:`care_residual` is still computed and reported; the error of P is about κ_CARE·ω.
+
+Existence check (every method): before solving, the eigenvalues λ_i of the (scaled) Hamiltonian
+H = [[A, −G], [−Q, −A']] are computed, after balancing (H_b = T⁻¹HT, LAPACK GEBAL with
+permutation), with their condition numbers κ_i (left/right eigenvectors of H_b).  A stabilizing
+solution exists only if no λ_i lies on the imaginary axis; a computed λ_i is indistinguishable
+from the axis when |Re λ_i| ≤ δ_i, ::
+
+    δ_i = min(IMAG_AXIS_RTOL · κ_i · ε,  √ε) · ‖H_b‖_F,
+
+(ε = machine epsilon): IMAG_AXIS_RTOL·κ_i·ε‖H_b‖ bounds the rounding error of a simple
+eigenvalue; the √ε‖H_b‖ cap is the O(√ε) split of a defective (Jordan) pair by rounding, and
+keeps a cluster of benign repeated eigenvalues (whose individual κ_i are huge) from being
+rejected.  Such a problem is refused (``ConvergenceError`` naming the eigenvalue) instead of
+returning "stabilizing" closed-loop poles at −1e-8.
+
+Condition estimate: every solution carries ::
+
+    κ_CARE = ‖Ω⁻¹‖₂ (‖Q‖₂ + 2‖A‖₂‖P‖₂ + ‖G‖₂‖P‖₂²) / ‖P‖₂,        Ω(X) = A_c'X + XA_c,
+
+(A_c = A − GP, scaled coordinates), the relative condition number of the Riccati equation
+(Kenney & Hewer 1990; Byers 1985), with ‖Ω⁻¹‖₂ = ‖Y‖₂ for A_c'Y + YA_c = −I (Hewer & Kenney
+1988: exact for stable A_c), i.e. one extra Lyapunov solve.  A solution with
+κ_CARE > ``ILL_CONDITIONED`` (1/√ε ≈ 6.7e7: fewer than half the digits of P can be trusted) is
+flagged (``CareResult.ill_conditioned``) and the flag is written to the design output.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+
+from acmm.design.care_checks import (ILL_CONDITIONED, _as_Q, _as_R, _refuse, care_backward_error, care_condition, care_residual, hamiltonian_check, scale_problem)
+from acmm.design.matrix_sign import matrix_sign
+from acmm_qpp.errors import ConvergenceError
+
+METHODS = ("scipy", "sign", "slycot")
+
+#: Guard on the refinement steps of :func:`refine_care`.  The refinement stops on its criterion
+#: (a step that no longer halves the backward error) after 1–5 steps on every packaged problem;
+#: the guard only bounds the work on a pathological one, whose answer is then judged by its
+#: backward error like any other.
+REFINE_GUARD = 50
+
+
+@dataclass(frozen=True)
+class CareResult:
+    """Stabilizing solution of eq 5.4.
+
+    Attributes
+    ----------
+    P : (N, N) array
+        Stabilizing solution in the caller's (physical) coordinates, symmetric; units of
+        Q times s (the cost x'Px has the units of ∫x'Qx dt).
+    K : (M, N) array
+        Optimal gain K = R⁻¹B'P (u = −K x, eq 5.3), physical coordinates: units of u per unit
+        of x.
+    residual : float
+        Relative residual of :func:`care_residual`, evaluated in the scaled coordinates
+        (dimensionless), after refinement.
+    method : str
+        ``"scipy"``, ``"sign"`` or ``"slycot"``.
+    iterations : int
+        Sign-function iterations (0 for the direct methods).
+    scale : (N,) array or None
+        The state scaling d used (x = diag(d) x̃), in the units of the states.
+    seconds : float
+        Wall time of the solve proper (excluding the residual check), s.
+    condition : float
+        Relative condition estimate κ_CARE of the (scaled) Riccati equation (module docstring),
+        dimensionless.
+    ill_conditioned : bool
+        κ_CARE > :data:`ILL_CONDITIONED`.
+    hamiltonian_gap : float
+        min_i |Re λ_i(H)| / ‖H_b‖_F (balanced H): relative distance of the Hamiltonian spectrum
+        from the axis, dimensionless.
+    backward_error : float
+        Backward error ω of :func:`care_backward_error` after refinement (the accepted quantity),
+        dimensionless.
+    refinement_steps : int
+        Newton–Kleinman steps taken by :func:`refine_care`.
+    """
+
+    P: np.ndarray
+    K: np.ndarray
+    residual: float
+    method: str
+    iterations: int = 0
+    scale: np.ndarray | None = field(default=None)
+    seconds: float = 0.0
+    condition: float = float("nan")
+    ill_conditioned: bool = False
+    hamiltonian_gap: float = float("nan")
+    backward_error: float = float("nan")
+    refinement_steps: int = 0
+
+
+def refine_care(A, B, Q, R, P) -> tuple[np.ndarray, int]:
+    """Refine a stabilizing approximate solution of eq 5.4 to working accuracy.
+
+    Newton–Kleinman steps with exact line search (Benner & Byers 1998): with A_c = A − GP and
+    ℛ(P) = A'P + PA − PGP + Q, solve A_c'Δ + ΔA_c = −ℛ(P); then ℛ(P + tΔ) = (1 − t)ℛ(P) − t²ΔGΔ,
+    and t ∈ (0, 2] minimizes its Frobenius norm (a root of a cubic).  Stops when a step no
+    longer halves the backward error ω (:func:`care_backward_error`); the last step is kept only
+    if it lowers ω.  A P that is not stabilizing, or a step whose Lyapunov solve fails, ends the
+    refinement with the best P so far (:func:`solve_care` then judges it).
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix, 1/s for rates (any consistent units).
+    B : (N, M) array
+        Input matrix, same units.
+    Q : (N, N) array
+        State weight, same units.
+    R : (M, M) array
+        Control weight, 1 / input unit² per s.
+    P : (N, N) array
+        Approximate stabilizing solution, units of Q times s.
+
+    Returns
+    -------
+    tuple
+        (P, steps): the refined symmetric solution and the number of steps kept.
+    """
+    G = B @ np.linalg.solve(R, B.T)
+    G = 0.5 * (G + G.T)
+    P = 0.5 * (P + P.T)
+    omega = care_backward_error(A, B, Q, R, P)
+    steps = 0
+    for _ in range(REFINE_GUARD):
+        if not omega > 0.0:
+            break
+        Ac = A - G @ P
+        if not np.all(np.isfinite(Ac)) or np.max(np.linalg.eigvals(Ac).real) >= 0.0:
+            break
+        AtP = A.T @ P
+        Res = AtP + AtP.T - P @ G @ P + Q
+        Res = 0.5 * (Res + Res.T)
+        try:
+            D = sla.solve_continuous_lyapunov(Ac.T, -Res)
+        except (np.linalg.LinAlgError, ValueError):
+            break
+        D = 0.5 * (D + D.T)
+        Pn = P + _line_search(Res, D @ G @ D) * D
+        Pn = 0.5 * (Pn + Pn.T)
+        wn = care_backward_error(A, B, Q, R, Pn) if np.all(np.isfinite(Pn)) else np.inf
+        if wn < omega:
+            P, steps = Pn, steps + 1
+        if not wn <= 0.5 * omega:
+            break
+        omega = wn
+    return P, steps
+
+
+def _line_search(Res: np.ndarray, V: np.ndarray) -> float:
+    """t ∈ (0, 2] minimizing f(t) = ‖(1 − t)Res − t²V‖²_F (Benner & Byers 1998)."""
+    a, b, c = float(np.sum(Res * Res)), float(np.sum(Res * V)), float(np.sum(V * V))
+    f = lambda t: a * (1 - t) ** 2 - 2 * b * (1 - t) * t ** 2 + c * t ** 4  # noqa: E731
+    # f'(t) = 4c t³ + 6b t² + (2a − 4b) t − 2a
+    cand = [1.0, 2.0]
+    if c > 0.0 or b != 0.0:
+        cand += [float(r.real) for r in np.roots([4 * c, 6 * b, 2 * a - 4 * b, -2 * a])
+                 if abs(r.imag) <= 1e-12 * max(1.0, abs(r)) and 0.0 < r.real <= 2.0]
+    return min(cand, key=f)
+
+
+def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign_tol=1e-13,
+               max_iter=60):
+    n = A.shape[0]
+    G = B @ np.linalg.solve(R, B.T)
+    G = 0.5 * (G + G.T)
+    H = np.block([[A, -G], [-Q, -A.T]])
+    sr = matrix_sign(H, scaling=scaling, evaluation=evaluation, tol=sign_tol, max_iter=max_iter)
+    # range(I − sign H) is the stable invariant subspace span[I; P] of H
+    Z, _, _ = sla.qr(np.eye(2 * n) - sr.S, pivoting=True)
+    U1, U2 = Z[:n, :n], Z[n:, :n]
+    P = np.linalg.solve(U1.T, U2.T).T
+    return P, sr.iterations
+
+
+def _care_slycot(A, B, Q, R):
+    try:
+        from slycot import sb02md
+    except ImportError as exc:  # pragma: no cover - slycot is a declared dependency
+        raise ConvergenceError("method='slycot' needs the slycot package") from exc
+    n = A.shape[0]
+    G = B @ np.linalg.solve(R, B.T)
+    G = 0.5 * (G + G.T)
+    try:
+        out = sb02md(n, A.copy(), G, Q.copy(), "C", scal="N", sort="S")
+    except Exception as exc:  # slycot raises SlycotArithmeticError / ValueError
+        raise ConvergenceError(f"Riccati solve (method='slycot', SB02MD) failed: {exc}") from exc
+    return out[0]
+
+
+def solve_unverified(A, B, Q, R, *, method: str = "scipy", sign_scaling: str = "det",
+                     sign_evaluation: str = "partial_fraction", max_iter: int = 60):
+    """The raw solver behind :func:`solve_care`: (P, iterations), no scaling, no checks.
+
+    For comparisons only (``scripts/compare_riccati.py``); use :func:`solve_care`.  Solver
+    failures raise :class:`ConvergenceError`.  Q and R must be arrays.
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix, 1/s for rates (any consistent units).
+    B : (N, M) array
+        Input matrix, same units.
+    Q : (N, N) array
+        State weight, same units.
+    R : (M, M) array
+        Control weight, 1 / input unit² per s.
+    method : {"scipy", "sign", "slycot"}
+        Algorithm (module docstring).
+    sign_scaling : {"det", "norm", None}
+        Acceleration of the sign iteration (``method="sign"`` only).
+    sign_evaluation : {"partial_fraction", "polynomial"}
+        Evaluation of eq 5.6 (``method="sign"`` only).
+    max_iter : int
+        Iteration limit of the sign iteration.
+
+    Returns
+    -------
+    tuple
+        (P, iterations): the unverified solution (units of Q times s) and the sign-function
+        iterations (0 for the direct methods).
+
+    Raises
+    ------
+    ValueError
+        An unknown ``method``.
+    ConvergenceError
+        The solver failed.
+    """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    iterations = 0
+    try:
+        if method == "scipy":
+            P = sla.solve_continuous_are(A, B, Q, R)
+        elif method == "sign":
+            P, iterations = _care_sign(A, B, Q, R, scaling=sign_scaling,
+                                       evaluation=sign_evaluation, max_iter=max_iter)
+        else:
+            P = _care_slycot(A, B, Q, R)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ConvergenceError(f"Riccati solve (method={method!r}) failed: {exc}") from exc
+    return P, iterations
+
+
+def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e-12,
+               sign_scaling: str = "det", sign_evaluation: str = "partial_fraction",
+               max_iter: int = 60) -> CareResult:
+    """Stabilizing solution of A'P + PA − PBR⁻¹B'P + Q = 0 (eq 5.4), verified.
+
+    Parameters
+    ----------
+    A : (N, N) array
+        State matrix (physical units, e.g. 1/s).
+    B : (N, M) array
+        Input matrix (physical units: state units per s per input unit).
+    Q : (N, N) array or float
+        State weight, symmetric positive semidefinite (a float q means q·I), physical units.
+    R : (M, M) array or float
+        Control weight, symmetric positive definite (a float r means r·I), e.g. 1/(ft·lbf)².
+    method : {"scipy", "sign", "slycot"}
+        Algorithm (module docstring).
+    scale : (N,) array or None
+        Nominal state magnitudes d, in the units of the states; the solve is done on x̃ = D⁻¹x and mapped back.
+    tol : float
+        Largest acceptable backward error ω of the refined solution (:func:`care_backward_error`),
+        dimensionless.  ``np.inf`` disables the refusal (for comparisons).
+    sign_scaling : {"det", "norm", None}
+        Acceleration of the sign iteration (``method="sign"`` only).
+    sign_evaluation : {"partial_fraction", "polynomial"}
+        Evaluation of eq 5.6 (:func:`matrix_sign`; ``method="sign"`` only).
+    max_iter : int
+        Iteration limit of the sign iteration.
+
+    Returns
+    -------
+    CareResult
+        P and K in physical coordinates, the scaled relative residual, the backward error,
+        method, iterations.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``method`` or mismatched shapes.
+    ConvergenceError
+        The Hamiltonian has an eigenvalue on or within rounding of the imaginary axis (no
+        stabilizing solution), the solver failed, the sign iteration did not converge, the
+        backward error of the refined solution exceeds ``tol``, or A − BK is not stable.
+    """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    A, B, Q, R, d = _as_problem(A, B, Q, R, scale)
+    As, Bs, Qs = scale_problem(A, B, Q, d) if d is not None else (A, B, Q)
+
+    gap = hamiltonian_check(As, Bs, Qs, R, method=method)
+    t0 = time.perf_counter()
+    Ps, iterations = solve_unverified(As, Bs, Qs, R, method=method, sign_scaling=sign_scaling,
+                                      sign_evaluation=sign_evaluation, max_iter=max_iter)
+    seconds = time.perf_counter() - t0
+    Ps = 0.5 * (Ps + Ps.T)
+    if np.all(np.isfinite(Ps)):
+        Ps, steps = refine_care(As, Bs, Qs, R, Ps)
+    else:
+        steps = 0
+    Ks, res, omega = _verified_gain(As, Bs, Qs, R, Ps, method=method, tol=tol, scaled=d is not None)
+    cond = care_condition(As, Bs, Qs, R, Ps)
+    if d is not None:
+        P = Ps / d[:, None] / d[None, :]
+        K = Ks / d[None, :]
+    else:
+        P, K = Ps, Ks
+    return CareResult(P=P, K=K, residual=res, method=method, iterations=iterations,
+                      scale=d, seconds=seconds, condition=cond,
+                      ill_conditioned=bool(not cond <= ILL_CONDITIONED), hamiltonian_gap=gap,
+                      backward_error=omega, refinement_steps=steps)
+
+
+def _as_problem(A, B, Q, R, scale):
+    """Arrays (A, B, Q, R) of matching shapes, and the scale d as an array (or None)."""
+    A = np.asarray(A, dtype=float)
+    B = np.asarray(B, dtype=float)
+    if B.ndim == 1:
+        B = B[:, None]
+    n, m = B.shape
+    if A.shape != (n, n):
+        raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
+    d = np.asarray(scale, dtype=float) if scale is not None else None
+    return A, B, _as_Q(Q, n), _as_R(R, m), d
+
+
+def _verified_gain(As, Bs, Qs, R, Ps, *, method, tol, scaled):
+    """(K̃, relative residual, backward error) of a refined solution P̃, refused if non-finite,
+    inaccurate (backward error above ``tol``) or not stabilizing."""
+    if not np.all(np.isfinite(Ps)):
+        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values")
+    res = care_residual(As, Bs, Qs, R, Ps)
+    omega = care_backward_error(As, Bs, Qs, R, Ps)
+    if not omega <= tol:
+        _refuse(f"Riccati solve (method={method!r}{', state-scaled' if scaled else ''}"
+                f"): backward error {omega:.3e} after refinement exceeds tolerance {tol:.1e} "
+                f"(relative residual {res:.3e})", method, omega)
+    Ks = np.linalg.solve(R, Bs.T @ Ps)
+    worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
+    if not worst < 0.0:
+        _refuse(f"Riccati solve (method={method!r}): solution is not stabilizing "
+                       f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
+                       f"{res:.3e})", method, res)
+    return Ks, res, omega

@@ -1,0 +1,344 @@
+"""Validated run configuration (pydantic v2), read from YAML.
+
+Every field documents its unit.  Numbers may also be written as ``"<number> <unit>"``
+strings (e.g. ``"31.5e6 kg*m^2"``, ``"2 N*m"``); they are converted to the report's units
+(slug·ft², ft·lbf, ft·lbf·s, deg, rad/s, s) on load.  Unknown keys, non-finite numbers,
+impossible inertias and inconsistent sections are rejected with one message naming the
+field (:class:`acmm_qpp.errors.ConfigError`).  The sections follow the report: inertia (Table 1,
+eq 3.2), disturbance (eq 3.9), sector LQR design (ch. 5.2), gain schedule (ch. 5.3) and the
+stair-case simulation (ch. 6).  The field types are in :mod:`acmm.io.config_fields`.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Literal, Optional
+
+import numpy as np
+import yaml
+from pydantic import Field, field_validator, model_validator
+
+from acmm.io.config_fields import Angle, AngleVec, Rate, Time, WeightTorque, _Model
+from acmm.io.config_station import Actuators, Disturbance, Inertia
+from acmm_qpp.errors import ConfigError
+from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
+from acmm_qpp.configio import read_yaml, validate_model
+
+
+class Sector(_Model):
+    """Closed-loop pole region of ch. 5.2: Re λ ≤ −sigma·n and |Im λ| ≤ tan(half_angle)·|Re λ|."""
+
+    sigma: float = Field(0.5, gt=0, le=1000, description="minimum decay rate in units of the orbital rate n")
+    half_angle_deg: Angle = Field(45.0, gt=0, lt=90, description="sector half-angle about the negative real axis, deg")
+
+
+class Q0Groups(_Model):
+    """Diagonal initial state weight on the *scaled* states (dimensionless), one value per state
+    group (x̃ = D⁻¹x, :func:`acmm.model.linearize.state_scales`); added to ``Q0``·I."""
+
+    rates: float = Field(0.0, ge=0, description="weight on the scaled body-rate errors δω1, θ̇2, δω3")
+    attitudes: float = Field(0.0, ge=0, description="weight on the scaled attitude errors δθ1..3")
+    momentum: float = Field(0.0, ge=0, description="weight on the scaled CMG momentum h1..3")
+    momentum_integral: float = Field(0.0, ge=0, description="weight on the scaled momentum integrals ∫h1..3")
+    drf: float = Field(0.0, ge=0, description="weight on the 12 scaled disturbance-rejection-filter states")
+
+    def diagonal(self) -> np.ndarray:
+        """The 24 diagonal entries in the state order of eq 4.47.
+
+        Returns
+        -------
+        (24,) ndarray
+            The weights on the scaled states, dimensionless.
+        """
+        return np.array([self.rates] * 3 + [self.attitudes] * 3 + [self.momentum] * 3
+                        + [self.momentum_integral] * 3 + [self.drf] * 12)
+
+
+class Design(_Model):
+    """Linear design model (eq 4.46) and the sector LQR (ch. 5.2)."""
+
+    model: Literal["coupled", "no_cross_inertia", "small_angle"] = Field(
+        "coupled", description="design model: fully coupled (eq 4.46), I12=I13=I23=0, or theta*=0 (LVLH)")
+    drf_mode: Literal["attitude_hold", "momentum_hold"] = Field(
+        "attitude_hold", description="DRF inputs: (h1, θ2, θ3) or (h1, h2, θ3), filters at n and 2n")
+    sector: Sector = Sector()
+    R: WeightTorque = Field(1e-4, ge=1e-20, le=1e12, description="control weight R = r·I, 1/(ft·lbf)²")
+    Q0: float = Field(0.0, ge=0, le=1e12, description="state weight Q0 = q·I on the scaled states (dimensionless)")
+    riccati_method: Literal["sign", "scipy", "slycot"] = Field("scipy", description="CARE solver")
+    pole_method: Literal["shift", "uniform"] = Field(
+        "shift", description="sector enforcement: optimal pole shifting of the stray poles, or a uniform shift")
+    residual_tol: float = Field(1e-12, gt=0, lt=1, description="largest accepted Riccati backward error after "
+                                                                 "refinement (acmm.design.riccati.care_backward_error)")
+    Q0_groups: Optional[Q0Groups] = Field(
+        None, description="per-group diagonal weights on the scaled states, added to Q0·I (dimensionless)")
+    min_margin: float = Field(0.01, ge=0, lt=10, description="required sector margin of every design pole, units of n")
+    line_spacing: float = Field(0.0, ge=0, lt=10, description="pole shifting: 0 mirrors a group of stray poles about one "
+                                                          "line; > 0 one pole at a time about distinct lines, units of n")
+
+
+class DesignPoint(_Model):
+    """A named station configuration used as a design point of the gain schedule."""
+
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX, description="name of the design point")
+    inertia: Inertia
+    disturbance: Disturbance = Disturbance()
+
+
+class Schedule(_Model):
+    """Design points of the gain schedule (ch. 5.3)."""
+
+    # a string is resolved to the mapping by Config's before-validator (resolve_references), so
+    # the validated type stays DesignPoint; a JSON schema should allow a string here too
+    to: Optional[DesignPoint] = Field(
+        None, description="end configuration of the blend I(s) = (1−s)·I_start + s·I_to (bias blended alike): "
+                          "a mapping, or a config file (path relative to the referring file) or packaged name "
+                          "whose name, inertia and disturbance are used")
+    n_points: int = Field(12, strict=True, ge=3, le=200, description="number of blend points including both ends")
+    spacing: Literal["tea", "blend"] = Field(
+        "tea", description="blend points evenly spaced in pitch TEA (tea) or in the blend parameter s (blend)")
+    form: Literal["polynomial", "table"] = Field(
+        "polynomial", description="gain schedule: least-squares polynomial in θ2* (report ch. 5.3) or "
+                                  "table look-up, linear in θ2* between design points (ch. 7 alternative)")
+    points: list[DesignPoint] = Field([], description="additional named design points")
+    order: int = Field(2, strict=True, ge=1, le=4, description="polynomial order of K_ij(θ2*) (the report uses 2)")
+    fit: Literal["least_squares", "closed_loop"] = Field(
+        "least_squares", description="polynomial fit: least squares on the gains, or least squares refined "
+                                     "against the closed loop along the path (acmm.design.schedule.refit_closed_loop)")
+    n_check: int = Field(201, strict=True, ge=2, le=2001, description="TEAs evenly spaced along the blend path at which "
+                                                         "the scheduled gain is checked on the local model")
+
+    @model_validator(mode="after")
+    def _fit_of_the_form(self):
+        if self.form == "table" and self.fit == "closed_loop":
+            raise ValueError("fit: closed_loop refines a polynomial schedule; form: table interpolates the "
+                             "design points' gains themselves (give one or the other)")
+        return self
+
+
+class Simulation(_Model):
+    """Nonlinear closed-loop simulation (ch. 6)."""
+
+    orbits: float = Field(5.0, gt=0, le=10000, description="simulated time, orbits (2π/n s each)")
+    levels: Optional[list[float]] = Field(
+        None, description="orbit at which each schedule design point starts (default: equal dwell)")
+    initial_offset: AngleVec = Field([0.0, 0.0, 0.0], description="initial attitude minus TEA, deg")
+    sample_interval: Time = Field(60.0, gt=0, description="output sample interval, s")
+    rtol: float = Field(1e-8, ge=1e-14, lt=1, description="integrator relative tolerance (≥ 1e-14: ~100 ulp)")
+    atol_scale: float = Field(1e-8, ge=1e-20, lt=1, description="absolute tolerance relative to state scales")
+    divergence_deg: Angle = Field(60.0, gt=0, description="stop as diverged when an angle error exceeds this, deg")
+    max_saturation_orbits: float = Field(
+        1.0, gt=0, description="stop as diverged when a CMG axis stays saturated this long, orbits")
+
+
+class Output(_Model):
+    """Where results go."""
+
+    root: str = Field("runs", pattern=ROOT_PATTERN, description="results root; files go to <root>/<name>/")
+    figures: bool = Field(True, description="write matplotlib figures next to the HDF5 files")
+    units: Literal["imperial", "SI"] = Field(
+        "imperial", description="unit system of the HDF5 values and units attributes, prints, CSV and figures: "
+                                "imperial (the report's slug·ft², ft·lbf, ft·lbf·s) or SI (kg·m², N·m, N·m·s); "
+                                "angles are stored in rad in both")
+
+
+#: Largest number of output samples a simulation may ask for (memory guard).
+MAX_SAMPLES = 2_000_000
+
+
+class Config(_Model):
+    """A complete acmm run configuration."""
+
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX,
+                      description="run name (letters, digits, _ . -; not starting with a dot); results go to runs/<name>/")
+    description: str = Field("", description="free text describing the run")
+    inertia: Inertia
+    orbit_rate: Rate = Field(0.0011, description="circular orbit rate n, rad/s")
+    disturbance: Disturbance = Disturbance()
+    actuators: Actuators = Actuators()
+    design: Design = Design()
+    schedule: Optional[Schedule] = None
+    simulation: Simulation = Simulation()
+    output: Output = Output()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _references(cls, data):
+        """``schedule.to`` naming a file (relative to the working directory here; to the
+        referring file through :func:`load_config`) or a packaged config."""
+        try:
+            return resolve_references(data, ".")
+        except ConfigError as exc:
+            raise ValueError(str(exc)) from None
+
+    @field_validator("orbit_rate")
+    @classmethod
+    def _n_positive(cls, v):
+        if v <= 0:
+            raise ValueError("must be > 0 rad/s")
+        if v > 0.01:
+            raise ValueError("must be ≤ 0.01 rad/s (below low-Earth-orbit rates ~0.0011 rad/s)")
+        return v
+
+    @model_validator(mode="after")
+    def _simulation_consistent(self):
+        sim = self.simulation
+        lv = sim.levels
+        if lv is not None:
+            if any(b <= a for a, b in zip(lv, lv[1:])) or (lv and lv[0] != 0):
+                raise ValueError("simulation.levels must start at 0 and increase")
+            if lv and lv[-1] >= sim.orbits:
+                raise ValueError("simulation.levels must all start before simulation.orbits")
+            if len(lv) != self.n_design_points():
+                raise ValueError(f"simulation.levels has {len(lv)} entries but the design has "
+                                 f"{self.n_design_points()} point(s), one level each")
+        from acmm_qpp.limits import how_to_raise, limit
+
+        if self.n_design_points() > limit("DESIGN_POINTS"):
+            raise ValueError(f"schedule: {self.n_design_points()} design points (one sector LQR each); use fewer "
+                             f"schedule.n_points or schedule.points ({how_to_raise('DESIGN_POINTS')})")
+        samples = self.output_samples()
+        if samples > limit("SIM_SAMPLES"):
+            raise ValueError(f"simulation.sample_interval: {sim.sample_interval:g} s gives {samples:.3g} output "
+                             f"samples over {sim.orbits:g} orbits; raise sample_interval or lower orbits "
+                             f"({how_to_raise('SIM_SAMPLES')})")
+        return self
+
+    def output_samples(self, orbits: float | None = None) -> float:
+        """Output samples of one simulation of ``orbits`` (default ``simulation.orbits``) at
+        ``simulation.sample_interval``: what the ``SIM_SAMPLES`` limit bounds.
+
+        Parameters
+        ----------
+        orbits : float, optional
+            Orbits simulated (a sweep's own ``sweep.orbits``), dimensionless.
+
+        Returns
+        -------
+        float
+            Number of samples, dimensionless.
+        """
+        sim = self.simulation
+        return (sim.orbits if orbits is None else orbits) * 2 * math.pi / self.orbit_rate / sim.sample_interval
+
+    def n_design_points(self) -> int:
+        """Number of design points (= stair-case levels): the blend points plus the named ones.
+
+        Returns
+        -------
+        int
+            The number of design points.
+        """
+        sch = self.schedule
+        if sch is None:
+            return 1
+        return (sch.n_points if sch.to is not None else 1) + len(sch.points)
+
+    def run_dir(self) -> Path:
+        """Directory of this run's results.
+
+        Returns
+        -------
+        Path
+            ``<output.root>/<name>``.
+        """
+        return Path(self.output.root) / self.name
+
+    def to_yaml(self) -> str:
+        """The resolved config (all defaults filled in) as YAML text.
+
+        Returns
+        -------
+        str
+            The YAML text.
+        """
+        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+
+
+def parse_config(data: object, source: str = "config") -> Config:
+    """Validate a mapping (e.g. parsed YAML) into a :class:`Config` (one-line ConfigError).
+
+    Parameters
+    ----------
+    data : object
+        The parsed YAML.
+    source : str
+        Where it was read from, for error messages.
+
+    Returns
+    -------
+    Config
+        The validated config.
+    """
+    return validate_model(Config, data, source)
+
+
+def load_config(path: str | Path | None = None, overrides: list[str] | None = None) -> Config:
+    """Read and validate a YAML config file (``None``: the packaged default stair-case).
+
+    Parameters
+    ----------
+    path : path-like, optional
+        A YAML file or a packaged config name; None: the packaged stair-case.
+    overrides : list of str, optional
+        ``["simulation.orbits=10", ...]`` (see :mod:`acmm_qpp.overrides`), applied to the raw
+        mapping before validation.
+
+    Returns
+    -------
+    Config
+        The validated config.
+    """
+    from acmm_qpp.overrides import apply_overrides, remember_origin
+
+    data, p = read_yaml(path)
+    data = resolve_references(apply_overrides(data, overrides), p.parent, str(p))
+    cfg = parse_config(data, source=str(p))
+    return remember_origin(cfg, str(p), overrides)
+
+
+def resolve_references(data: object, base_dir: str | Path = ".", source: str = "config",
+                       _depth: int = 0) -> object:
+    """Replace ``schedule.to: <file or packaged name>`` by that config's end point.
+
+    The string is a YAML path relative to ``base_dir`` (the referring file's folder), else
+    the name of a packaged config.  The referred config is validated in full; its ``name``,
+    ``inertia`` and ``disturbance`` become the mapping ``schedule.to`` of eq 5.3's blend (its
+    own ``schedule`` and other sections are not used).
+
+    Parameters
+    ----------
+    data : object
+        The parsed YAML of the referring config.
+    base_dir : path-like
+        The referring file's folder.
+    source : str
+        Where ``data`` was read from, for error messages.
+    _depth : int
+        Nesting depth of references (internal; at most 8).
+
+    Returns
+    -------
+    object
+        ``data`` with ``schedule.to`` replaced by a mapping (unchanged when it is none).
+
+    Raises
+    ------
+    ConfigError
+        The referred config is missing or invalid, or references nest too deep.
+    """
+    if not isinstance(data, dict) or not isinstance(data.get("schedule"), dict):
+        return data
+    ref = data["schedule"].get("to")
+    if not isinstance(ref, (str, Path)):
+        return data
+    p = Path(base_dir) / ref
+    try:
+        sub, sub_path = read_yaml(p if p.is_file() else ref)
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: schedule.to: {exc}") from None
+    if _depth >= 8:
+        raise ConfigError(f"{source}: schedule.to: references nest deeper than 8 files (a cycle?)")
+    sub = resolve_references(sub, sub_path.parent, str(sub_path), _depth + 1)
+    other = parse_config(sub, source=str(sub_path))
+    end = {"name": other.name, "inertia": sub["inertia"], "disturbance": sub.get("disturbance", {})}
+    return {**data, "schedule": {**data["schedule"], "to": end}}

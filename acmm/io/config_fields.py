@@ -1,0 +1,67 @@
+"""Field types of the acmm configuration: quantities in the report's units (CR-185644 Table 1, eq 3.9).
+
+A number may be written as ``"<number> <unit>"`` (:mod:`acmm_qpp.quantity_fields`); it is
+converted to the report's units (slug·ft², ft·lbf, ft·lbf·s, deg, rad/s, s) and must lie
+within a physically plausible range.  Also the strict base model of every section.
+
+Moved out of :mod:`acmm.io.config` (issue 12).
+"""
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import BeforeValidator
+
+from acmm_qpp.config_model import StrictModel
+from acmm_qpp.quantity_fields import quantity, quantity_value
+
+
+#: |value| bound per dimension, canonical units (issue 13: no overflow accepted); see
+#: :data:`acmm_qpp.limits.PHYSICAL_MAX` for the reasoning.
+_RANGE = {"inertia": 1e13, "torque": 1e9, "momentum": 1e12, "angle": 3600.0, "rate": 1.0, "time": 1e9}
+_CANON = {"inertia": "slug·ft²", "torque": "ft·lbf", "momentum": "ft·lbf·s", "angle": "deg", "rate": "rad/s",
+          "time": "s"}
+
+
+#: Smallest accepted principal moment of inertia, slug·ft² (a 1 cm, 1 g body is ~1e-8; below
+#: this the linear model's scaling underflows and "uncontrollable" would be reported instead).
+MIN_PRINCIPAL_MOMENT = 1e-6
+
+
+def _plausible(x: float, dimension: str) -> float:
+    bound = _RANGE.get(dimension)
+    if bound is not None and abs(x) > bound:
+        raise ValueError(f"{x:.4g} {_CANON[dimension]} is outside the physically plausible range "
+                         f"|value| ≤ {bound:g} {_CANON[dimension]}")
+    return x
+
+
+def _q(dimension: str):
+    """The quantity validator of the acmm config: finite and within :data:`_RANGE`."""
+    return quantity(dimension, _plausible)
+
+
+def _vec3(dimension: str):
+    def conv(v):
+        if isinstance(v, (str, int, float)) or not hasattr(v, "__len__"):
+            raise ValueError("must be a list of three values [roll, pitch, yaw]")
+        if len(v) != 3:
+            raise ValueError(f"must have three values [roll, pitch, yaw], got {len(v)}")
+        return [quantity_value(x, dimension, _plausible) for x in v]
+    return BeforeValidator(conv)
+
+
+InertiaValue = Annotated[float, _q("inertia")]
+Torque = Annotated[float, _q("torque")]
+Momentum = Annotated[float, _q("momentum")]
+Angle = Annotated[float, _q("angle")]
+Rate = Annotated[float, _q("rate")]
+Time = Annotated[float, _q("time")]
+TorqueVec = Annotated[list[float], _vec3("torque")]
+AngleVec = Annotated[list[float], _vec3("angle")]
+WeightTorque = Annotated[float, _q("weight_torque")]
+
+
+class _Model(StrictModel):
+    """Strict base of every config section: unknown keys, NaN, infinity and booleans given as
+    numbers refused (:class:`acmm_qpp.config_model.StrictModel`)."""

@@ -1,0 +1,203 @@
+"""Reading a design back from ``design.h5`` (ch. 5.2–5.3 results): the table a simulation needs,
+checked against the digest the design stage wrote with it.
+
+Split from :mod:`acmm.stages.design`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+
+_TABLE_KEYS = ("inertia", "bias", "tea", "K")
+
+
+def table_sha256(names, arrays, coef) -> str:
+    """SHA-256 of a design table as stored in ``design.h5`` (names, then the float64 bytes and
+    shapes of inertia, bias, tea, K and the schedule's coefficients): written by the design
+    stage, checked before a design is reused.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Design point names.
+    arrays : sequence of arrays
+        inertia, bias, tea and K as stored (the file's units).
+    coef : array or None
+        The schedule's coefficients as stored (the file's units), or None.
+
+    Returns
+    -------
+    str
+        Hex digest.
+    """
+    import hashlib
+
+    h = hashlib.sha256("\x1f".join(names).encode())
+    for a in (*arrays, np.zeros(0) if coef is None else coef):
+        a = np.ascontiguousarray(a, dtype=float)
+        h.update(f"|{a.shape}|".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _stored_digest(items: dict, system: str) -> str:
+    """:func:`table_sha256` of ``items`` as :func:`acmm_qpp.results.write_h5` stores them."""
+    from acmm_qpp.netcdf_layout import convert_items
+
+    st = convert_items({k: items[k] for k in _TABLE_KEYS} | {"schedule": items.get("schedule", {})}, system)
+    coef = st["schedule"]["coef"].data if "coef" in st["schedule"] else None
+    return table_sha256(_texts(items["names"].data), [st[k].data for k in _TABLE_KEYS], coef)
+
+
+def _check_table(names, inertia, bias, tea, K, coef, stored_digest) -> None:
+    """ValueError unless the arrays of a ``design.h5`` have the shapes of ``len(names)`` points,
+    are finite and match the digest written with them (an edited or foreign file is designed
+    again rather than simulated: a K of the wrong shape reached the compiled simulator)."""
+    P = len(names)
+    want = {"inertia": (P, 3, 3), "bias": (P, 3), "tea": (P, 3), "K": (P, 3, 24)}
+    for k, a in zip(_TABLE_KEYS, (inertia, bias, tea, K)):
+        if a.shape != want[k] or not np.all(np.isfinite(a)):
+            raise ValueError(f"design.h5: {k} has shape {a.shape} or non-finite values ({P} points)")
+    if coef is not None and (coef.ndim != 3 or coef.shape[1:] != (3, 24) or not np.all(np.isfinite(coef))):
+        raise ValueError(f"design.h5: schedule/coef has shape {coef.shape} or non-finite values")
+    if P < 1 or (stored_digest is not None
+                 and stored_digest != table_sha256(names, (inertia, bias, tea, K), coef)):
+        raise ValueError("design.h5: its arrays do not match the digest written with them")
+
+
+def load_design_table(path: Path) -> DesignTable:
+    """Read the arrays a simulation needs back from ``design.h5``.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        A ``design.h5`` (imperial or SI; SI arrays are converted back).
+
+    Returns
+    -------
+    DesignTable
+        The arrays in the report's units (slug·ft², ft·lbf, rad).
+
+    Raises
+    ------
+    ValueError
+        Arrays of the wrong shape, non-finite, or not those written with the file's
+        ``table_sha256`` (:func:`design_for` then designs again).
+    """
+    import h5py
+
+
+
+    with h5py.File(path, "r") as f:
+        attrs = {k: _text(f.attrs[k]) for k in ("design_hash", "schedule_form", "unit_system", "config",
+                                                "table_sha256") if k in f.attrs}
+        coef = np.asarray(f["schedule/coef"][()], float) if "schedule" in f else None
+        names = _texts(f["names"][()])
+        inertia, bias, K, tea = (np.asarray(f[k][()], float) for k in ("inertia", "bias", "K", "tea"))
+    _check_table(names, inertia, bias, tea, K, coef, attrs.get("table_sha256"))
+    if attrs.get("unit_system", "imperial") == "SI":      # back to the report's units
+        import yaml
+
+        from acmm_qpp.units import FT_LBF_IN_NM
+        from acmm.io.units import state_factors
+
+        drf_mode = (yaml.safe_load(attrs["config"]).get("design") or {}).get("drf_mode", "attitude_hold")
+        f, _ = state_factors(drf_mode, "SI")
+        inertia, bias = inertia / FT_LBF_IN_NM, bias / FT_LBF_IN_NM
+        K = K * f / FT_LBF_IN_NM
+        coef = None if coef is None else coef * f / FT_LBF_IN_NM
+    return DesignTable(names, inertia, bias, tea, K, coef, attrs["design_hash"],
+                       attrs.get("schedule_form", "polynomial"))
+
+
+def _unit_system(path: Path) -> str:
+    """``unit_system`` root attribute of a results file (files before issue 14: imperial)."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        return _text(f.attrs.get("unit_system", "imperial"))
+
+
+def _text(v) -> str:
+    """An HDF5 string (bytes of a fixed-length one, or str) as str."""
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def _texts(values) -> list[str]:
+    """The strings of an HDF5 text array (or a scalar) as a list of str."""
+    return [_text(x) for x in np.atleast_1d(values)]
+
+
+@dataclass
+class DesignTable:
+    """What a simulation needs from a design, as arrays (one row per design point).
+
+    Attributes
+    ----------
+    names : list of str
+        Design point names.
+    inertia : (P, 3, 3) array
+        Inertia per point, slug·ft².
+    bias : (P, 3) array
+        Bias torque per point, ft·lbf.
+    tea : (P, 3) array
+        TEA per point, rad.
+    gain : (P, 3, 24) array
+        LQR gain K per point (u = −K x), ft·lbf per state unit.
+    coef : (order+1, 3, 24) array or None
+        Schedule coefficients, lowest power first (units of K per rad^k), or None without a
+        schedule.
+    design_hash : str
+        :func:`design_hash` of the config it was designed from.
+    form : str
+        Schedule form (:func:`acmm.design.schedule.schedule_gain`), ``"polynomial"`` by default.
+    """
+
+    names: list
+    inertia: np.ndarray      # (P, 3, 3) slug·ft²
+    bias: np.ndarray         # (P, 3) ft·lbf
+    tea: np.ndarray          # (P, 3) rad
+    gain: np.ndarray         # (P, 3, 24) LQR gains
+    coef: np.ndarray | None  # (order+1, 3, 24) schedule coefficients, or None
+    design_hash: str
+    form: str = "polynomial"
+
+    def scheduled_gain(self, k: int) -> np.ndarray:
+        """Gain in use at point k: the schedule evaluated at its TEA when there is one, else
+        the point's LQR gain.
+
+        Parameters
+        ----------
+        k : int
+            Design point index.
+
+        Returns
+        -------
+        (3, 24) array
+            Gain, ft·lbf per state unit.
+        """
+        return self.gain_at(self.tea[k, 1], k)
+
+    def gain_at(self, theta2: float, k: int) -> np.ndarray:
+        """The schedule at pitch TEA ``theta2`` (rad); without a schedule, point k's LQR gain.
+
+        Parameters
+        ----------
+        theta2 : float
+            Pitch TEA θ2*, rad.
+        k : int
+            Design point whose LQR gain is used when there is no schedule.
+
+        Returns
+        -------
+        (3, 24) array
+            Gain K(θ2*) of the schedule of ch. 5.3, ft·lbf per state unit.
+        """
+        from acmm.design.schedule import schedule_gain
+
+        if self.coef is None:
+            return self.gain[k]
+        return schedule_gain(self.form, self.coef, self.tea[:, 1], self.gain, theta2)

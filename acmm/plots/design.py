@@ -1,0 +1,340 @@
+"""Figures of the design stage: the LQR gains of the design points with the gain schedule of
+ch. 5.3 (cf. Figs 5.3–5.26), the closed-loop poles with the sector of ch. 5.2 (Fig 5.2), and the
+scheduled gain checked along the path.
+
+Each function takes arrays, draws one figure and saves it as PNG (and PDF when asked) under the
+given path.  Split from :mod:`acmm.plots` (issue 12).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acmm.plots.base import (_BUILDERS, FAST_TEXT_RC, _bake_texts, _compact_formatter, _data_limits, _layout, _premake_ticks, _save, gain_unit, state_units)
+from acmm_qpp.plot_style import stage_pyplot as _plt
+
+
+def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
+    """The 24 panels (:class:`acmm.plots.panel_grid.PanelGrid`: frames, titles with the gain's unit,
+    the TEA label under the bottom row, the legend once for the figure) and the six series (LQR
+    gains as dots, the schedule as a line, per gain row); the data, limits and ticks are set later.
+
+    Cost-cut (issue 16): no Axes per panel (24 Axes with their axis and tick artists took
+    ~0.65 s to build and draw), a fixed layout (tight_layout/bbox 'tight' on 24 panels costs
+    seconds), the legend at a fixed place, the fixed texts rendered ahead (:func:`_bake_texts`).
+    """
+    from acmm.plots.panel_grid import PanelGrid
+
+    plt = _plt()
+    fig = plt.figure(figsize=(13, 15), dpi=80)
+    colors = ("C0", "C1", "C2")
+    series = ([{"marker": "o", "ls": "none", "ms": 3, "color": c,
+                "label": f"K({i + 1},·): LQR gain (dots), schedule (line)"} for i, c in enumerate(colors)]
+              + [{"lw": 1, "color": c} for c in colors])
+    grid = PanelGrid(fig, 6, 4, series, {"left": 0.06, "right": 0.98, "bottom": 0.04, "top": 0.95,
+                                         "wspace": 0.38, "hspace": 0.3})
+    for j in range(24):
+        grid.set_title(j, f"K(i,{j + 1}) — {state_names[j]} ({gain_unit(units[j], torque_unit)})")
+    for j in range(20, 24):
+        grid.set_label(j, "pitch TEA θ2* (deg)", "below")
+    fig.legend(handles=grid.lines[:3], loc="upper center", bbox_to_anchor=(0.5, 0.978),
+               ncol=3, fontsize=7, frameon=False)
+    _bake_texts(fig, [*grid.titles, *grid.labels, *fig.legends])
+    return fig, grid
+
+
+@dataclass
+class SampledSchedule:
+    """A gain schedule sampled for drawing: ``gains[k]`` (3, 24) at pitch TEA ``theta2[k]`` (rad).
+
+    What :func:`gain_schedule_grid` draws of a schedule; plain arrays, so a figure writer
+    process needs neither the schedule's class nor its imports.
+
+    Attributes
+    ----------
+    form : str
+        The schedule's form (:attr:`acmm.design.schedule.ScheduleFit.form`), named in the figure title.
+    theta2 : (n,) array
+        Pitch TEAs of the samples, rad.
+    gains : (n, 3, 24) array
+        Scheduled gain at each sample, torque per state unit (the units of the fitted gains).
+    """
+
+    form: str
+    theta2: np.ndarray
+    gains: np.ndarray
+
+
+def sample_schedule(fit, theta2, n: int = 60) -> SampledSchedule:
+    """``fit`` (an :class:`acmm.design.schedule.ScheduleFit`) at ``n`` pitch TEAs spanning ``theta2`` (rad).
+
+    Parameters
+    ----------
+    fit : acmm.design.schedule.ScheduleFit
+        The gain schedule of ch. 5.3.
+    theta2 : (P,) array
+        Pitch TEAs of the design points, rad (their range is sampled).
+    n : int, optional
+        Number of evenly spaced samples.
+
+    Returns
+    -------
+    SampledSchedule
+        The schedule's gains at the samples (the units of ``fit``'s gains).
+    """
+    fine = np.linspace(theta2.min(), theta2.max(), n)
+    return SampledSchedule(fit.form, fine, np.array([fit.gain(t) for t in fine]))
+
+
+def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, units=None,
+                       torque_unit="ft·lbf"):
+    """K(i, j) versus pitch TEA for all 24 columns (3 rows each), with the fitted curves.
+
+    Parameters
+    ----------
+    theta2 : (P,) array
+        Pitch TEA of the design points, rad.
+    gains : (P, 3, 24) array
+        LQR gains, ``torque_unit`` per state unit.
+    fit : acmm.design.schedule.ScheduleFit or SampledSchedule
+        The schedule, or its samples from :func:`sample_schedule` (same units as ``gains``).
+    state_names : list of str
+        The 24 state names.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+    units : list of str, optional
+        The 24 state unit labels (default :func:`state_units`).
+    torque_unit : str, optional
+        Torque unit label of the gains.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    from acmm.plots.base import in_view_ticks
+
+    theta2_deg = np.degrees(theta2)
+    curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
+    fine, kf = np.degrees(curve.theta2), curve.gains
+    units = units or state_units()
+    fig, grid = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
+    xlim = _data_limits(theta2_deg, fine) or (0.0, 1.0)
+    xticks = in_view_ticks(*xlim, 4)
+    for j in range(24):
+        grid.show(j, xlim, [(i, theta2_deg, gains[:, i, j]) for i in range(3)]
+                  + [(3 + i, fine, kf[:, i, j]) for i in range(3)], xticks)
+    grid.draw_data(_compact_formatter().format_ticks)
+    fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
+                 "(cf. Figs 5.3–5.26)", y=0.995)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+
+
+def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=False):
+    """Closed-loop poles (units of n) of every design point with the sector drawn.
+
+    Parameters
+    ----------
+    poles_per_point : list of (24,) complex array
+        Closed-loop poles per design point, rad/s.
+    names : list of str
+        Design point names.
+    n : float
+        Orbit rate, rad/s.
+    sigma : float
+        Sector shift σ, units of n (Re λ ≤ −σ n).
+    half_angle_deg : float
+        Sector half-angle, deg.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    allp = np.concatenate([np.asarray(p) for p in poles_per_point]) / n
+    rmin = min(allp.real.min() * 1.1, -2 * sigma)
+    x = np.linspace(rmin, -sigma, 10)
+    t = np.tan(np.radians(half_angle_deg))
+    ax.fill_between(x, t * x, -t * x, color="0.9", label="sector")
+    ax.plot([-sigma, -sigma], [-t * sigma, t * sigma], "k-", lw=0.8)
+    ax.plot(x, t * x, "k-", lw=0.8)
+    ax.plot(x, -t * x, "k-", lw=0.8)
+    cmap = plt.get_cmap("viridis")
+    for k, (p, name) in enumerate(zip(poles_per_point, names)):
+        p = np.asarray(p) / n
+        ax.plot(p.real, p.imag, "x", ms=4, color=cmap(k / max(1, len(names) - 1)),
+                label=name if len(names) <= 12 else None)
+    ax.axvline(0, color="k", lw=0.5)
+    ax.set_xlabel("real part Re λ (units of n, the orbit rate)")
+    ax.set_ylabel("imaginary part Im λ (units of n)")
+    ax.set_title(f"Closed-loop poles and the sector (Re λ ≤ −{sigma}n, |Im λ| ≤ tan {half_angle_deg:g}°·|Re λ|)")
+    # a fixed place, not 'best' (a search over every pole): the corner outside the sector
+    ax.legend(fontsize=6, ncol=2, loc="upper right")
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.1, top=0.92)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+
+
+#: superscript digits and minus for the log axis' tick labels
+_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
+
+
+def _plain_math(label: str) -> str:
+    """A log axis' mathtext tick label (``$\\mathdefault{6\\times10^{-1}}$``) as plain text with
+    Unicode superscripts (``6×10⁻¹``); anything else is returned unchanged."""
+    import re
+
+    m = re.fullmatch(r"\$\\mathdefault\{(.*)\}\$", label)
+    if not m:
+        return label
+    body = m.group(1).replace(r"\times", "×")
+    body = re.sub(r"\^\{(-?\d+)\}", lambda g: g.group(1).translate(_SUPERSCRIPT), body)
+    return label if "\\" in body or "{" in body else body.replace("-", "\N{MINUS SIGN}")
+
+
+def _plain_log_formatter(**kw):
+    """matplotlib's log-axis formatter (:class:`~matplotlib.ticker.LogFormatterSciNotation`, the
+    same ticks labelled) writing its labels as plain text (:func:`_plain_math`): no mathtext,
+    whose parser is built on first use (~0.07 s of CPU in each figure writer) and whose labels
+    are laid out glyph by glyph."""
+    from matplotlib.ticker import LogFormatterSciNotation
+
+    class PlainSciNotation(LogFormatterSciNotation):
+        def __call__(self, x, pos=None):
+            return _plain_math(super().__call__(x, pos))
+
+    return PlainSciNotation(**kw)
+
+
+def _path_check_layout():
+    """The path check's two axes with their labels and log scale (data-independent; the same
+    artists in the same order as drawing them after the data: the PNG is identical)."""
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
+    a1.set_ylabel("units of n")
+    a2.set_yscale("log")
+    # the labels LogScale gives its axis, as plain text (10⁰, 6×10⁻¹)
+    a2.yaxis.set_major_formatter(_plain_log_formatter(base=10))
+    a2.yaxis.set_minor_formatter(_plain_log_formatter(base=10, labelOnlyBase=False))
+    a2.set_ylabel("disk margin α at u (skew 0)")
+    a2.set_xlabel("pitch TEA θ2* (deg)")
+    # a fixed layout: bbox 'tight' draws the figure twice
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
+    _premake_ticks([a1, a2], 10, 11)
+    a2.yaxis.get_minor_ticks(12)
+    return fig, (a1, a2)
+
+
+def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=False):
+    """The scheduled gain on the local model along the path: largest Re λ and worst sector
+    margin (units of n) and the plant-input disk margin α versus pitch TEA.
+
+    Parameters
+    ----------
+    theta2 : (M,) array
+        Pitch TEA along the path, rad.
+    max_real : (M,) array
+        Largest Re λ of the scheduled local loop, units of n.
+    margin : (M,) array
+        Worst sector margin, units of n.
+    disk_margin : (M,) array
+        Disk margin α at the plant input, dimensionless.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    th = np.degrees(theta2)
+    fig, (a1, a2) = _layout("schedule_path_check")
+    a1.plot(th, max_real, "-", color="C3", label="largest Re λ / n")
+    a1.plot(th, margin, "-", color="C0", label="worst sector margin / n")
+    a1.axhline(0.0, color="k", lw=0.8)
+    a1.axhline(-0.25, color="C3", lw=0.8, ls="--", label="Re λ = −0.25n")
+    a1.legend(fontsize=7)
+    a1.set_title(f"Scheduled gain on the local model at {th.size} TEAs")
+    a2.plot(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
+    return _save(fig, path, vector, tight=False)
+
+
+def _scheduled_poles_layout():
+    """The scheduled pole map's axes with labels and title, its (empty) scatter and the colour
+    bar (data-independent: the PNG is identical to drawing them after the data; the colour bar's
+    axes and ticks were the costliest part of drawing this figure after the data)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
+    ax.set_xlabel("Re λ / n")
+    ax.set_ylabel("Im λ / n")
+    ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
+    # above the sector's fill (1), below its boundary lines (2)
+    sc = ax.scatter(np.empty(0), np.empty(0), c=np.empty(0), s=3, cmap="viridis", zorder=1.5)
+    cbar = fig.colorbar(sc, ax=ax, label="pitch TEA θ2* (deg)")
+    _premake_ticks([ax], 10, 10)
+    cbar.ax.yaxis.get_major_ticks(10)
+    return fig, ax, sc
+
+
+def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=False):
+    """Closed-loop poles (units of n) of the scheduled loop at every path TEA, coloured by θ2*,
+    with the sector of Fig 5.2.
+
+    Parameters
+    ----------
+    poles : (M, 24) complex array
+        Closed-loop poles at each path TEA, rad/s.
+    theta2 : (M,) array
+        Pitch TEA along the path, rad.
+    n : float
+        Orbit rate, rad/s.
+    sigma : float
+        Sector shift σ, units of n.
+    half_angle_deg : float
+        Sector half-angle, deg.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    p = np.asarray(poles) / n
+    fig, ax, sc = _layout("scheduled_pole_map")
+    t = np.tan(np.radians(half_angle_deg))
+    fin = p[np.isfinite(p)]                  # limits from the finite poles (a failed eig: NaN)
+    fin = fin if fin.size else np.zeros(1, complex)
+    lo = max(min(fin.real.min() * 1.05, -2 * sigma), -60.0)
+    x = np.linspace(lo, -sigma, 10)
+    ax.fill_between(x, t * x, -t * x, color="0.9", label="sector")
+    ax.plot(x, t * x, "k-", lw=0.8)
+    ax.plot(x, -t * x, "k-", lw=0.8)
+    ax.plot([-sigma, -sigma], [-t * sigma, t * sigma], "k-", lw=0.8)
+    c = np.repeat(np.degrees(theta2), p.shape[1])
+    sc.set_offsets(np.column_stack([p.real.ravel(), p.imag.ravel()]))
+    sc.set_array(c)
+    sc.autoscale()                       # the colour limits of the finite TEAs, as scatter(c=...) sets them
+    ax.axvline(0.0, color="k", lw=0.5)
+    ax.set_xlim(lo, max(1.0, fin.real.max() * 1.1))
+    ylim = min(max(3.0, np.abs(fin.imag).max() * 1.05), 60.0)
+    ax.set_ylim(-ylim, ylim)
+    ax.legend(fontsize=7, loc="upper left")
+    return _save(fig, path, vector, tight=False)
+
+
+_BUILDERS.update({"gain_schedule_grid": _gain_grid_layout, "schedule_path_check": _path_check_layout,
+                  "scheduled_pole_map": _scheduled_poles_layout})

@@ -1,0 +1,262 @@
+"""Figures of the simulation stage (ch. 6): attitude error, rate, torque and CMG momentum per axis
+(Figs 6.2–6.13, 6.20–6.30), the inertia steps of the stair-case (Figs 6.14–6.19) and a one-page
+summary with the per-level statistics.
+
+Each function takes arrays, draws one figure and saves it as PNG (and PDF when asked) under the
+given path.  Split from :mod:`acmm.plots` (issue 12).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from acmm.plots.base import (_BUILDERS, AXES, FAST_TEXT_RC, _bake_texts, _compact_formatter, _data_limits, _fixed_label_positions, _in_view_locator, _layout, _line, _premake_ticks, _save, _set_limits, decimate)
+from acmm_qpp.plot_style import stage_pyplot as _plt
+
+
+def _panel_axes(ax) -> None:
+    """A summary panel's axes: few y ticks written short, at most six x ticks."""
+    ax.yaxis.set_major_locator(_in_view_locator(3))
+    ax.yaxis.set_major_formatter(_compact_formatter())
+    ax.tick_params(labelsize=8)
+    ax.xaxis.set_major_locator(_in_view_locator(5))
+
+
+def _axis_histories_layout(units: str):
+    """The 12 panels (:class:`acmm.plots.panel_grid.PanelGrid`) with the axis names over the top row,
+    the quantity left of each row, the time under the bottom row (pre-rendered: _bake_texts) and
+    one line series for all panels."""
+    import matplotlib as mpl
+
+    from acmm.plots.panel_grid import PanelGrid
+    from acmm_qpp.units import pretty, shown
+
+    plt = _plt()
+    fig = plt.figure(figsize=(13, 10))
+    uu, hu = shown(1.0, "ft*lbf", units)[1], shown(1.0, "ft*lbf*s", units)[1]
+    labels = ["attitude error θ−θ̂* (deg)", "body rate rel. LVLH (deg/s)",
+              f"control torque ({pretty(uu)})", f"CMG momentum ({pretty(hu)})"]
+    # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
+    grid = PanelGrid(fig, 4, 3, [{"lw": 0.7, "color": "C0"}],
+                     {"left": 0.07, "right": 0.98, "bottom": 0.06, "top": 0.93, "wspace": 0.25, "hspace": 0.12},
+                     title_size=mpl.rcParams["axes.titlesize"], tick_size=8)
+    for r, label in enumerate(labels):
+        for a in range(3):
+            grid.set_label(3 * r + a, label, "left", fontsize=8 if a == 0 else 7)
+    for a in range(3):
+        grid.set_title(a, AXES[a])
+        grid.set_label(9 + a, "time (orbits)", "below", offset=0.12)
+    _bake_texts(fig, [*grid.titles, *grid.labels])
+    return fig, grid
+
+
+def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units="imperial"):
+    """Angle error, rate, delivered torque and CMG momentum per axis vs orbit (Figs 6.2–6.13, 6.20–6.30).
+
+    ``u`` (ft·lbf) and ``h`` (ft·lbf·s) are shown in the unit system ``units``.
+
+    Parameters
+    ----------
+    orbits : (N,) array
+        Time, orbits.
+    err_deg : (N, 3) array
+        Attitude error θ − θ̂*, deg.
+    rate : (N, 3) array
+        Body rate relative to LVLH, deg/s.
+    u : (N, 3) array
+        Delivered torque, ft·lbf.
+    h : (N, 3) array
+        CMG momentum, ft·lbf·s.
+    title : str
+        Figure title.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+    units : str, optional
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    from acmm.plots.base import in_view_ticks
+    from acmm_qpp.units import shown
+
+    fig, grid = _layout("axis_histories", units)
+    u = shown(np.asarray(u), "ft*lbf", units)[0]
+    h = shown(np.asarray(h), "ft*lbf*s", units)[0]
+    xlim = _data_limits(orbits) or (0.0, 1.0)
+    xticks = in_view_ticks(*xlim, 5)
+    for r, data in enumerate((err_deg, rate, u, h)):
+        for a in range(3):
+            grid.show(3 * r + a, xlim, [(0, *decimate(orbits, data[:, a]))], xticks)
+    grid.draw_data(_compact_formatter().format_ticks)
+    fig.suptitle(title)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+
+
+def _inertia_layout(units: str):
+    """The six panels (:class:`acmm.plots.panel_grid.PanelGrid`) with titles, labels (pre-rendered)
+    and one step-line series for all panels."""
+    import matplotlib as mpl
+
+    from acmm.plots.panel_grid import PanelGrid
+    from acmm_qpp.units import pretty, shown
+
+    iu = shown(1.0, "slug*ft^2", units)[1]
+    plt = _plt()
+    fig = plt.figure(figsize=(12, 6))
+    grid = PanelGrid(fig, 2, 3, [{"drawstyle": "steps-post", "color": "C0"}],
+                     {"left": 0.07, "right": 0.98, "bottom": 0.09, "top": 0.9, "wspace": 0.3, "hspace": 0.25},
+                     title_size=mpl.rcParams["axes.titlesize"], tick_size=8)
+    for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
+        grid.set_title(k, f"I({i + 1},{j + 1})")
+        grid.set_label(k, f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})", "left")
+    for k in range(3, 6):
+        grid.set_label(k, "time (orbits)", "below", offset=0.12)
+    title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
+    _bake_texts(fig, [title, *grid.titles, *grid.labels])
+    return fig, grid
+
+
+_INERTIA_ELEMENTS = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+
+
+def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
+    """The six inertia elements vs orbit (Figs 6.14–6.19), in the unit system ``units``.
+
+    Parameters
+    ----------
+    orbits : (N,) array
+        Time, orbits.
+    inertia : (N, 3, 3) array
+        Inertia in force, slug·ft².
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+    units : str, optional
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    from acmm_qpp.units import shown
+
+    inertia = shown(np.asarray(inertia), "slug*ft^2", units)[0]
+    from acmm.plots.base import in_view_ticks
+
+    fig, grid = _layout("inertia_histories", units)
+    xlim = _data_limits(orbits) or (0.0, 1.0)
+    xticks = in_view_ticks(*xlim, 5)
+    for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
+        grid.show(k, xlim, [(0, orbits, inertia[:, i, j] / 1e6)], xticks)
+    grid.draw_data(_compact_formatter().format_ticks)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+
+
+#: the per-level table of the summary: column headers (the last takes the momentum unit)
+_TABLE_HEADER = ("level", "start (orbit)", "θ2* est (deg)", "steady |err| max (deg) r/p/y", "peak |h| ({})")
+
+
+def _summary_layout(units: str):
+    """The three panels with their (empty) lines, one legend, the table's header and empty
+    columns; titles, labels, legend and header pre-rendered (_bake_texts)."""
+    from acmm_qpp.units import pretty, shown
+
+    hu, uu = shown(1.0, "ft*lbf*s", units)[1], shown(1.0, "ft*lbf", units)[1]
+    plt = _plt()
+    fig = plt.figure(figsize=(11, 8.5))
+    gs = fig.add_gridspec(3, 2)
+    top = fig.add_subplot(gs[0, :])
+    top.set_ylabel("attitude error (deg)")
+    mid = [fig.add_subplot(gs[1, col]) for col in range(2)]
+    for ax, label in zip(mid, (f"CMG momentum ({pretty(hu)})", f"delivered torque ({pretty(uu)})")):
+        ax.set_ylabel(label)
+    lines = []
+    for ax in (top, *mid):
+        _panel_axes(ax)
+        ax.set_xlabel("time (orbits)")
+        _fixed_label_positions(ax, -0.1 if ax is top else -0.12, -0.06 if ax is top else -0.12)
+        lines.append([_line(ax, lw=0.7, color=f"C{a}", label=AXES[a]) for a in range(3)])
+    # one legend for the three panels, above them: no 'best' placement search over the data
+    fig.legend(handles=lines[0], loc="upper right", bbox_to_anchor=(0.98, 0.995), ncol=3, fontsize=8,
+               frameon=False)
+    table = fig.add_subplot(gs[2, :])
+    table.axis("off")
+    head = [table.text((k + 0.5) / 5, 1.0, h.format(pretty(hu)), ha="center", va="top", fontsize=8,
+                       transform=table.transAxes) for k, h in enumerate(_TABLE_HEADER)]
+    rules = [table.plot([0, 1], [y, y], transform=table.transAxes, color="k", lw=lw, clip_on=False)[0]
+             for y, lw in ((1.02, 0.9), (0.93, 0.6))]
+    body = [table.text((k + 0.5) / 5, 0.91, "", ha="center", va="top", fontsize=8, linespacing=1.45,
+                       transform=table.transAxes) for k in range(5)]
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
+    _premake_ticks([top, *mid], 6, 4)
+    _bake_texts(fig, [*head, *rules, *fig.legends,
+                      *(t for ax in (top, *mid) for t in (ax.xaxis.label, ax.yaxis.label))])
+    return fig, (top, mid, lines, body)
+
+
+def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=False, units="imperial"):
+    """One-page summary: errors, momentum, torque and per-level statistics (``units``: imperial | SI).
+
+    Parameters
+    ----------
+    orbits : (N,) array
+        Time, orbits.
+    err_deg : (N, 3) array
+        Attitude error, deg.
+    h : (N, 3) array
+        CMG momentum, ft·lbf·s.
+    u : (N, 3) array
+        Delivered torque, ft·lbf.
+    level_stats : list of dict
+        Per-level statistics (:func:`acmm.simulate.scenario.level_statistics`).
+    verdict : str
+        The run's verdict.
+    title : str
+        Figure title.
+    path : path-like
+        Figure path (suffix replaced).
+    vector : bool, optional
+        Also write a PDF.
+    units : str, optional
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written (``.png``, and ``.pdf`` with ``vector``).
+    """
+    from acmm_qpp.units import shown
+
+    h = shown(np.asarray(h), "ft*lbf*s", units)[0]
+    u = shown(np.asarray(u), "ft*lbf", units)[0]
+    k_h = shown(1.0, "ft*lbf*s", units)[0]
+    fig, (top, mid, lines, body) = _layout("summary", units)
+    xlim = _data_limits(orbits)
+    for ax, panel, data in zip((top, *mid), lines, (err_deg, h, u)):
+        for a in range(3):
+            panel[a].set_data(*decimate(orbits, data[:, a]))
+        _set_limits([ax], xlim, data)
+    top.set_title(f"{title} — verdict: {verdict}")
+    rows = [(str(s["level"]), f"{s['start_orbit']:.1f}", f"{s['theta2_deg']:.2f}",
+             " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum'] * k_h:.0f}")
+            for s in level_stats]
+    if rows:     # the columns, each one text; the font shrinks to fit many levels (down to 6 pt)
+        px = body[0].axes.bbox.height * 0.9
+        fit = max(2, int(px / (6.0 * fig.dpi / 72 * 1.45)))
+        if len(rows) > fit:
+            rows = rows[:fit - 1] + [("…", f"{len(rows) - fit + 1} more levels", "in sim.h5", "", "")]
+        size = min(8.0, px / len(rows) / 1.45 * 72 / fig.dpi)
+        for text, column in zip(body, zip(*rows)):
+            text.set_text("\n".join(column))
+            text.set_fontsize(size)
+    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+
+
+_BUILDERS.update({"axis_histories": _axis_histories_layout, "inertia_histories": _inertia_layout,
+                  "summary": _summary_layout})

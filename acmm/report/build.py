@@ -1,0 +1,320 @@
+"""``build_report``: gather the results, write every section, render, hash and compare.
+
+The sections cover Table 1, ch. 5–7 of Part II and ch. 13–14 of Part III.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from acmm_qpp.errors import OutputError
+from acmm_qpp.atomic_write import write_text
+from acmm_qpp.signals import hold_interrupts, release_interrupts
+from acmm.report.constants import SECTIONS
+from acmm.report.context import SectionWriter
+from acmm.report.document import render_html, render_markdown
+from acmm.report.gather import (Gathered, changed_runs, keep_stage, order_runs, report_configs, stage_tasks, warm_workers)
+from acmm.report.stage_results import failed
+from acmm.report.ledger import STATUS_UNEXPLAINED
+from acmm.report.manifest import build_manifest, compare_manifests
+from acmm.report.plan import assemble, failure_blocks, section_tasks
+from acmm.report.publish import publish
+from acmm.report.runner import default_jobs, run_tasks
+from acmm.report.sections import determinism as sec_determinism
+from acmm.report.sections import printed as sec_printed
+from acmm.report.sections import provenance as sec_provenance
+
+
+@dataclass
+class ReportResult:
+    """Files written by :func:`build_report` and what they contain.
+
+    Attributes
+    ----------
+    out : pathlib.Path
+        Output directory.
+    html : pathlib.Path
+        ``index.html``.
+    markdown : pathlib.Path
+        ``report.md``.
+    manifest : pathlib.Path
+        ``manifest.json``.
+    figures : list of pathlib.Path
+        The PNG figures.
+    stages : list of acmm.report.gather.StageRun
+        The results files used.
+    ledger : list of acmm.report.ledger.PrintedNumber
+        Every printed number compared.
+    determinism : dict
+        :func:`acmm.report.manifest.compare_manifests` with the previous report.
+    wall_time : float
+        Total wall time, s.
+    sections : list of str
+        Section keys.
+    timings : dict
+        Wall time of the gathering, each stage group and each section, s, and the total CPU
+        time, s.
+    jobs : int
+        Processes that ran the stages and sections (1: all in this process).
+    tasks : dict
+        Task name of the graph (stages and section parts) → ``(wall s, CPU s)`` of the process
+        that ran it.
+    failures : list of (str, acmm.report.gather.Failed)
+        Section key and failure of each part or section that failed, in section order (shown in
+        the report; ``acmm report`` then exits with the first one's exit code).
+    root : pathlib.Path or None
+        The results root the stages ran in.
+    """
+
+    out: Path
+    html: Path
+    markdown: Path
+    manifest: Path
+    figures: list
+    stages: list
+    ledger: list
+    determinism: dict
+    wall_time: float
+    sections: list = field(default_factory=lambda: [k for k, _ in SECTIONS])
+    #: wall time (s) of the stages, of each stage and of each section, and the total CPU (issue 16)
+    timings: dict = field(default_factory=dict)
+    jobs: int = 1                   #: processes that ran the stages and sections
+    #: per task of the graph (stages and section parts): (wall s, CPU s of the process that ran it)
+    tasks: dict = field(default_factory=dict)
+    #: (section key, Failed) of each failed part or section, in section order
+    failures: list = field(default_factory=list)
+    root: Path | None = None        #: the results root of the stages
+
+    @property
+    def unexplained(self) -> list:
+        """The ledger entries whose status is ``NOT EXPLAINED``."""
+        return [p for p in self.ledger if p.status == STATUS_UNEXPLAINED]
+
+
+def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: bool = False,
+                 root: Path | str | None = None, progress: Callable[[str], None] | None = None,
+                 robustness: bool = True, jobs: int | None = None) -> ReportResult:
+    """Gather (or reuse) every result and write ``index.html``, ``report.md``, figures and manifest.
+
+    Parameters
+    ----------
+    out : path
+        Output directory (created).
+    fast : bool
+        CI mode: stair-case of :data:`FAST_ORBITS` orbits.
+    rerun : bool
+        Recompute every stage even when matching results exist (to check determinism against the
+        previous report in ``out``).
+    root : path or None
+        Results root of the stages, which the report computes in (``<root>/<name>/``, figures
+        off; files there are replaced); default ``<out>/results``, the report's own, so a
+        user's ``runs/<name>/`` is never written.
+    progress : callable or None
+        Called with one line of text per step.
+    robustness : bool
+        Include the ±30 % inertia robustness sweep.
+    jobs : int or None
+        Processes that run the stages and the section parts (:mod:`acmm.report.runner`); default
+        :func:`acmm.report.runner.default_jobs` (2 on a multi-core POSIX machine); 1: one after the
+        other in this process.  The output is the same.
+
+    Returns
+    -------
+    ReportResult
+        The files written and what they contain.  A stage, part or section that raised a
+        user-facing error (:func:`acmm_qpp.errors.failure_line`) is shown in its section with that
+        error, the others complete, and it is listed in :attr:`ReportResult.failures`; a bug
+        propagates and nothing is written.
+
+    Raises
+    ------
+    OutputError
+        The output directory cannot be created, or the results root is not a directory.
+    """
+    t_start = time.perf_counter()
+    cpu0 = _cpu()
+    say = progress or (lambda msg: None)
+    jobs = default_jobs() if jobs is None else max(1, int(jobs))
+    out, figdir = Path(out), Path(out) / "figures"
+    root = out / "results" if root is None else Path(root)      # its own: never a user's runs/<name>/
+    if root.exists() and not root.is_dir():     # every stage would fail: refused before anything is written
+        raise OutputError(f"--root: the results root {root} is not a directory")
+    created = [d for d in (out, figdir) if not d.exists()]
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        figdir.mkdir(exist_ok=True)
+        _remove_dead_staging(out)
+        staged = Path(tempfile.mkdtemp(prefix=f".figures-{os.getpid()}-", dir=out))
+    except OSError as exc:
+        raise OutputError(f"cannot create the report directory {out}: {exc.strerror or exc}") from None
+    say(f"gathering results and writing sections ({'fast' if fast else 'full'} mode, root "
+        f"{root}, {jobs} process{'es' if jobs > 1 else ''})")
+    try:
+        res = _build_into(out, figdir, staged, root, fast, rerun, robustness, jobs, say, t_start, cpu0)
+    except BaseException:
+        shutil.rmtree(staged, ignore_errors=True)
+        _remove_empty(created)               # a refused or failed report leaves no empty folders behind
+        raise
+    shutil.rmtree(staged, ignore_errors=True)
+    return res
+
+
+def _remove_dead_staging(out: Path) -> None:
+    """Remove the figure staging folders (``.figures-<pid>-*``) of reports whose process is gone."""
+    for d in out.glob(".figures-*-*"):
+        try:
+            pid = int(d.name.split("-")[1])
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            shutil.rmtree(d, ignore_errors=True)
+        except (ValueError, IndexError, PermissionError, OSError):
+            continue
+
+
+def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robustness, jobs, say, t_start, cpu0):
+    """The report, its figures drawn into ``staged`` and moved into ``figdir`` only with the
+    pages: an interrupted or failed report leaves ``--out`` as it was (its figures were written
+    as their tasks finished, beside the previous report's pages: a review)."""
+    g, rep, timings = _run_graph(root, staged, fast, rerun, robustness, jobs, say)
+    jobs = timings.pop("processes")
+    failures = timings.pop("failures")
+    _add(rep, "printed", sec_printed.build, list(rep.ledger), failures=failures)
+    # determinism
+    man_path = out / "manifest.json"
+    old = _previous_manifest(man_path)
+    manifest = build_manifest(g)
+    cmp = compare_manifests(old, manifest)
+    _add(rep, "determinism", sec_determinism.build, cmp, manifest, failures=failures)
+    total = time.perf_counter() - t_start
+    _add(rep, "provenance", sec_provenance.build, g, {
+        "stages (until the last one finished)": timings["stages"],
+        f"stages and sections ({jobs} process{'es' if jobs > 1 else ''})": timings["graph"], "total": total},
+         failures=failures)
+    title = "CR-185644 regenerated: ACMM (Part II) and QPP (Part III)" + (" — fast mode" if fast else "")
+    md = render_markdown(rep.doc, title)
+    page = render_html(rep.doc, title, staged)          # (embeds the PNGs it reads there)
+    manifest["determinism"] = {k: v for k, v in cmp.items() if k != "differences"}
+    changed = changed_runs(g)
+    if changed:     # the stages' locks are not held while sections read: another run rewrote one
+        raise OutputError(f"{changed[0]}: its results file {g.runs[changed[0]].path} was rewritten while the "
+                          "report ran (another run of that name?); nothing was written: run the report again")
+    pairs = [(f, figdir / f.name) for f in sorted(staged.iterdir())]
+    pages = staged / ".pages"          # written beside the figures first: a full disk changes nothing
+    try:
+        pages.mkdir()
+    except OSError as exc:
+        raise OutputError(f"cannot write the report in {out}: {exc.strerror or exc}; nothing was written") from None
+    for name, text in (("manifest.json", json.dumps(manifest, indent=1)), ("report.md", md), ("index.html", page)):
+        pairs.append((write_text(pages / name, text), out / name))
+    held = hold_interrupts()                           # the figures and the pages go together
+    try:
+        publish(pairs, staged / ".replaced")
+    finally:
+        release_interrupts(held)
+    figs = sorted(figdir.glob("*.png"))
+    say(f"wrote {out / 'index.html'} ({len(figs)} figures) in {time.perf_counter() - t_start:.1f} s")
+    res = ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),
+                       rep.ledger, cmp, time.perf_counter() - t_start)
+    res.tasks = timings.pop("tasks")
+    res.timings = {**timings, "total": res.wall_time, "cpu (all processes)": _cpu() - cpu0}
+    res.jobs, res.failures, res.root = jobs, failures, root
+    for section, f in failures:
+        say(f"  section {section}: {f.text()}")
+    return res
+
+
+def _previous_manifest(path: Path) -> dict | None:
+    """The manifest of the previous report in the same folder (None: none, or unreadable)."""
+    if not path.exists():
+        return None
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def _cpu() -> float:
+    """User + system CPU time (s) of this process and of its finished children."""
+    import resource
+
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jobs: int, say):
+    """Stages and section parts as one task graph (:mod:`acmm.report.runner`); returns the gathered
+    results, the writer holding every content section, and the wall times."""
+    t0 = time.perf_counter()
+    g = Gathered(report_configs(root, fast=fast), {})
+    rep = SectionWriter(g, figdir, fast)
+    stages = stage_tasks(g.configs, root, fast=fast, rerun=rerun, robustness=robustness, jobs=jobs)
+    names = {t.name for t in stages}
+    parts = section_tasks(g, figdir, fast, names, rep._results if jobs == 1 else None)
+    timings: dict[str, float] = {"stages": 0.0}
+    stats: dict[str, tuple] = {}
+
+    def on_done(name, result):
+        if name in names:
+            keep_stage(g, name, result, say)
+            timings["stages"] = time.perf_counter() - t0
+        else:
+            say(f"  part {name:<20} {result.seconds:6.2f} s")
+
+    if jobs == 1:
+        from acmm.plots import parallel_figures
+
+        parallel_figures.enable()        # opt-in (ACMM_PARALLEL_FIGURES=1): forked figure writers
+    try:
+        done = run_tasks(stages + parts, jobs, on_done, warm=warm_workers, stats=stats)
+    finally:
+        if jobs == 1:
+            parallel_figures.wait()
+    timings["graph"] = time.perf_counter() - t0
+    order_runs(g, stages)
+    sections: dict[str, float] = {}
+    failures: list = []
+    assemble(rep, done, sections, failures)
+    for key, sec in sections.items():
+        say(f"  section {key:<12} {sec:6.2f} s")
+    timings.update(g.timings)
+    timings.update({f"section {k}": v for k, v in sections.items()})
+    timings["tasks"] = stats
+    timings["processes"] = min(jobs, len(stages) + len(parts))      # run_tasks forks no more
+    timings["failures"] = failures
+    return g, rep, timings
+
+
+def _add(rep: SectionWriter, key: str, build, *args, failures: list | None = None):
+    """Run one section's ``build`` in a fresh writer and append its blocks and ledger to ``rep``;
+    a user-facing error it raises is shown as the section (its heading and the error) and
+    appended to ``failures`` as ``(key, Failed)``."""
+    w = rep.section_writer()
+    try:
+        result = build(w, *args)
+    except Exception as exc:  # noqa: BLE001 (re-raised unless a user-facing failure)
+        f = failed(key, exc)
+        if f is None:
+            raise
+        w = rep.section_writer()
+        failure_blocks(w, key, f)
+        if failures is not None:
+            failures.append((key, f))
+        result = None
+    rep.doc.blocks.extend(w.doc.blocks)
+    rep.ledger.extend(w.ledger)
+    return result
+
+
+def _remove_empty(dirs: list) -> None:
+    """Remove the folders ``dirs`` (innermost last in the list) that are empty."""
+    for d in reversed(dirs):
+        try:
+            d.rmdir()
+        except OSError:
+            pass

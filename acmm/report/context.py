@@ -1,0 +1,126 @@
+"""What every report section receives: the gathered results, the figure directory and the mode,
+and where it writes: its own document blocks and printed-number ledger entries."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from acmm.report.constants import SECTIONS
+from acmm.report.document import Doc
+from acmm.report.gather import Gathered
+from acmm.report.ledger import PrintedNumber, check_printed, status_text
+
+
+class SectionWriter:
+    """Inputs of a section (``g``: the gathered results, ``figdir``, ``fast``) and its output:
+    ``doc`` (its text, tables and figures) and ``ledger`` (its printed numbers).
+
+    HDF5 files are read once per report (``results``, shared read-only between sections);
+    sections pass values to each other only through explicit arguments and return values.
+
+    Parameters
+    ----------
+    g : acmm.report.gather.Gathered
+        The gathered configs and stage results.
+    figdir : pathlib.Path
+        Folder of the figures.
+    fast : bool
+        ``--fast`` mode (shortened runs).
+    results : dict, optional
+        Stage key → read HDF5 file, shared between the sections' writers.
+    """
+
+    def __init__(self, g: Gathered, figdir: Path, fast: bool, results: dict | None = None):
+        self.g, self.figdir, self.fast = g, figdir, fast
+        self._results = {} if results is None else results
+        self.doc = Doc()
+        self.ledger: list[PrintedNumber] = []
+
+    def section_writer(self) -> "SectionWriter":
+        """A writer for the next section: same inputs, empty document and ledger.
+
+        Returns
+        -------
+        SectionWriter
+            The new writer (sharing the read HDF5 files).
+        """
+        return SectionWriter(self.g, self.figdir, self.fast, self._results)
+
+    def run(self, key):
+        """The stage run ``key`` ("stage:name") of the gathered results.
+
+        Parameters
+        ----------
+        key : str
+            ``"<stage>:<config name>"``.
+
+        Returns
+        -------
+        acmm.report.gather.StageRun
+            Its file, config and hashes.
+        """
+        return self.g.runs[key]
+
+    def data(self, key):
+        """The results file of stage ``key`` ("stage:name") as read by :func:`acmm_qpp.results.read_h5`.
+
+        Parameters
+        ----------
+        key : str
+            ``"<stage>:<config name>"``.
+
+        Returns
+        -------
+        dict
+            Dataset name → array (in the file's units), ``attrs`` → root attributes; read once
+            per report.
+        """
+        from acmm_qpp.results import read_h5
+
+        if key not in self._results:
+            self._results[key] = read_h5(self.run(key).path)
+        return self._results[key]
+
+    def ledger_add(self, *args, **kw) -> PrintedNumber:
+        """Classify a printed number (:func:`acmm.report.ledger.check_printed`) and add it to the ledger.
+
+        Parameters
+        ----------
+        *args : tuple
+            Passed on to :func:`acmm.report.ledger.check_printed`.
+        **kw : dict
+            Passed on to :func:`acmm.report.ledger.check_printed`.
+
+        Returns
+        -------
+        acmm.report.ledger.PrintedNumber
+            The entry added.
+        """
+        pn = check_printed(*args, **kw)
+        self.ledger.append(pn)
+        return pn
+
+    def status_text(self, pn: PrintedNumber) -> str:
+        """The status of a ledger entry as the tables show it (:func:`acmm.report.ledger.status_text`).
+
+        Parameters
+        ----------
+        pn : acmm.report.ledger.PrintedNumber
+            The entry.
+
+        Returns
+        -------
+        str
+            Its status (an explained one with its note).
+        """
+        return status_text(pn)
+
+    def section(self, key):
+        """Start the section ``key`` of :data:`acmm.report.constants.SECTIONS` (its heading).
+
+        Parameters
+        ----------
+        key : str
+            Section key.
+        """
+        title = dict(SECTIONS)[key]
+        self.doc.h(1, title, key)

@@ -1,0 +1,240 @@
+"""The report's sections as tasks of :mod:`acmm.report.runner` (issue 16).
+
+Each section is one or more *parts* (its text and tables, then figures) run in section order when
+serial, or concurrently on worker processes.  A part is a function ``fn(ctx, *values)`` of a fresh
+:class:`~acmm.report.context.SectionWriter`; values other sections computed (the MB3 TEA of Table 1,
+the claim-1 poles and numbers, β3 of ch. 13) are passed explicitly.  Its blocks and printed numbers
+come back as a :class:`Part` and are put together in the order of :data:`PARTS`, so the document
+is the same whichever process wrote which part.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from acmm.report.context import SectionWriter
+from acmm.report.stage_results import Failed, blocked, failed
+from acmm.report.gather import Gathered
+from acmm.report.runner import WORKER_CACHE, Task
+from acmm.report.sections import claim1
+from acmm.report.sections import errata
+from acmm.report.sections import qpp
+from acmm.report.sections import robustness
+from acmm.report.sections import schedule
+from acmm.report.sections import staircase
+from acmm.report.sections import table1
+
+
+@dataclass
+class Part:
+    """What one part of a section produced.
+
+    Attributes
+    ----------
+    blocks : list
+        Document blocks (of a :class:`acmm.report.document.Doc`), in order.
+    ledger : list of acmm.report.ledger.PrintedNumber
+        The printed numbers it compared.
+    value : object
+        Its return value, passed on to other parts (e.g. the claim-1 poles in rad/s, β3 of ch. 13).
+    seconds : float
+        Wall time of the part, s.
+    failed : acmm.report.gather.Failed or None
+        The part failed (or was not run, a stage or part it reads having failed): its blocks are
+        the section's heading (first part) and the one-line error; ``value`` is None.
+    """
+
+    blocks: list          #: document blocks (:class:`acmm.report.document.Doc`)
+    ledger: list          #: printed numbers (:class:`acmm.report.ledger.PrintedNumber`)
+    value: object         #: its return value (passed on to other parts)
+    seconds: float        #: wall time of the part
+    failed: Failed | None = None     #: the part's failure, shown in its section
+
+
+def failure_blocks(ctx: SectionWriter, section: str | None, f: Failed) -> None:
+    """Write failure ``f`` into ``ctx`` (a fresh writer): the heading of ``section`` when the
+    failed part is the one that writes it, then the error on one line.
+
+    Parameters
+    ----------
+    ctx : acmm.report.context.SectionWriter
+        An empty writer.
+    section : str or None
+        Section key whose heading the failed part would have written, or None.
+    f : acmm.report.gather.Failed
+        The failure.
+    """
+    if section is not None:
+        ctx.section(section)
+    ctx.doc.p(f"FAILED — {f.text()}. (The other sections are complete; acmm report exits with code "
+              f"{f.exit_code}.)")
+
+
+def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: dict | None,
+             name: str = "", heading: str | None = None, not_run: Failed | None = None) -> Part:
+    """``fn(ctx, *values)`` on a fresh writer; ``results``: HDF5 files already read (None: this
+    worker process's cache).  matplotlib's settings are reset first, so a figure looks the same
+    whichever figures the process drew before.  A user-facing error it raises
+    (:func:`acmm_qpp.errors.failure_line`) becomes the part's :attr:`Part.failed` and its one-line
+    text; a bug propagates.
+
+    Parameters
+    ----------
+    fn : callable
+        The part, ``fn(ctx, *values)`` (a function of :data:`PARTS`).
+    g : acmm.report.gather.Gathered
+        Configs and results files of the report.
+    figdir : pathlib.Path
+        Folder of the figures.
+    fast : bool
+        ``--fast`` report (short stair-case, reduced sweep).
+    values : tuple
+        Values of the parts this one takes (:attr:`Part.value`).
+    results : dict or None
+        Results files already read (run key ``"stage:name"`` → contents as read by
+        :func:`acmm_qpp.results.read_h5`); None: this worker process's cache.
+    name : str, optional
+        Task name of the part (in its failure's message).
+    heading : str or None, optional
+        Section key whose heading this part writes (shown above its failure), or None.
+    not_run : acmm.report.gather.Failed or None, optional
+        A stage or part it reads failed: the part is not run and shows that failure.
+
+    Returns
+    -------
+    Part
+        Its blocks, printed numbers, return value and wall time (and failure).
+    """
+    t0 = time.perf_counter()
+    cache = WORKER_CACHE if results is None else results
+    f = not_run
+    if f is None:
+        if "matplotlib" in sys.modules:
+            sys.modules["matplotlib"].rc_file_defaults()
+        ctx = SectionWriter(g, figdir, fast, cache)
+        try:
+            value = fn(ctx, *values)
+            return Part(ctx.doc.blocks, ctx.ledger, value, time.perf_counter() - t0)
+        except Exception as exc:  # noqa: BLE001 (re-raised unless a user-facing failure)
+            f = failed(name or getattr(fn, "__name__", "part"), exc)
+            if f is None:
+                raise
+    ctx = SectionWriter(g, figdir, fast, cache)
+    failure_blocks(ctx, heading, f)
+    return Part(ctx.doc.blocks, ctx.ledger, None, time.perf_counter() - t0, f)
+
+
+def _design(c):
+    return f"design:{c}"
+
+
+def _simulate(c):
+    return f"simulate:{c}"
+
+
+#: (task name, section, function, stage tasks it reads, parts whose values it takes, rough cost in s:
+#: CPU of the part in a warmed worker on the 2-core machine, issue 16)
+_STAIR, _MB3, _DEC = _design("staircase"), _design("mb3"), _design("mb3_decoupled")
+_SIM = _simulate("staircase")
+_Q13 = ("qpp design:qpp_siso", "qpp simulate:qpp_siso")
+_Q14 = ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator")
+PARTS = [
+    ("table1", "table1", table1.build, (), (), 0.1),
+    ("schedule", "schedule", schedule.summary, (_STAIR,), (), 0.2),
+    ("schedule/paths", "schedule", schedule.path_figures, (_STAIR,), (), 0.75),
+    ("poles", "schedule", schedule.true_poles, (_MB3, _DEC), (), 0.05),
+    ("schedule/gains", "schedule", schedule.gain_figure, (_STAIR,), (), 1.6),
+    ("schedule/poles", "schedule", schedule.pole_figure, (_STAIR, _MB3, _DEC), ("poles",), 0.3),
+    ("claim1", "claim1", claim1.build, (_MB3, _DEC, _simulate("mb3"), _simulate("mb3_decoupled")), ("poles",), 0.85),
+    ("staircase", "staircase", staircase.summary, (_SIM,), (), 0.1),
+    ("staircase/inertia", "staircase", staircase.figure_inertia, (_SIM,), (), 0.5),
+    ("staircase/responses", "staircase", staircase.figure_responses, (_SIM,), (), 0.95),
+    ("staircase/levels", "staircase", staircase.figure_levels, (_SIM,), (), 0.3),
+    ("robustness", "robustness", robustness.build, ("sweep",), (), 0.55),
+    ("qpp13", "qpp13", qpp.text13, _Q13, (), 0.1),
+    ("qpp13/circle", "qpp13", qpp.circle13, _Q13, (), 0.25),
+    ("qpp13/responses", "qpp13", qpp.responses13, _Q13, (), 0.5),
+    ("qpp14", "qpp14", qpp.text14, _Q14, (), 0.1),
+    ("qpp14/circle", "qpp14", qpp.circle14, _Q14, (), 0.35),
+    ("qpp14/responses", "qpp14", qpp.responses14, _Q14, (), 0.85),
+    ("errata", "errata", errata.build, (_STAIR, _SIM, "qpp design:qpp_siso"), ("table1", "claim1", "qpp13"), 0.3),
+]
+
+
+def _errata_values(done: dict) -> tuple:
+    return done["table1"].value["mb3"], done["claim1"].value, done["qpp13"].value
+
+
+def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, results: dict | None) -> list[Task]:
+    """The parts of :data:`PARTS` as tasks; ``stage_names``: the stage tasks of the same graph
+    (a part waits only for those), ``results``: the shared cache of read files when serial.
+
+    Parameters
+    ----------
+    g : acmm.report.gather.Gathered
+        Configs and results files; filled by the stage tasks before a part is submitted.
+    figdir : pathlib.Path
+        Folder of the figures.
+    fast : bool
+        ``--fast`` report.
+    stage_names : set of str
+        Names of the stage tasks in the same graph (:func:`acmm.report.gather.stage_tasks`).
+    results : dict or None
+        Shared cache of read results files (serial run), or None (each worker's own cache).
+
+    Returns
+    -------
+    list of acmm.report.runner.Task
+        One task per part, named as in :data:`PARTS`; each returns a :class:`Part`.
+    """
+    tasks, headed = [], set()
+    for name, section, fn, stage_deps, value_deps, cost in PARTS:
+        values = _errata_values if name == "errata" else _values_of(value_deps)
+        deps = tuple(d for d in stage_deps if d in stage_names) + value_deps
+        heading = None if section in headed else section      # the first part of a section writes it
+        headed.add(section)
+        tasks.append(Task(name, run_part, deps, _part_args(fn, values, g, figdir, fast, results, name, heading,
+                                                           deps), cost))
+    return tasks
+
+
+def _values_of(deps: tuple):
+    """``done → (value of each part in deps)``."""
+    return lambda done: tuple(done[d].value for d in deps)
+
+
+def _part_args(fn, values, g, figdir, fast, results, name="", heading=None, deps=()):
+    """``done → arguments of run_part`` (built when the part is submitted: ``g`` then holds the
+    stages it reads); a part whose stage or part in ``deps`` failed is not run."""
+    def args(done):
+        not_run = blocked(name, done, deps)
+        return (fn, g, figdir, fast, () if not_run else values(done), results, name, heading, not_run)
+
+    return args
+
+
+def assemble(rep: SectionWriter, done: dict, timings: dict, failures: list | None = None) -> None:
+    """Append every part's blocks and printed numbers to ``rep`` in section order; per-section wall
+    time (sum of its parts) into ``timings``; ``(section, Failed)`` of each failed part into
+    ``failures``.
+
+    Parameters
+    ----------
+    rep : acmm.report.context.SectionWriter
+        The report's writer; its document and ledger are extended in place.
+    done : dict
+        Part name → :class:`Part`, for every part of :data:`PARTS`.
+    timings : dict
+        Section key → wall time, s; each part's time is added to its section's.
+    failures : list, optional
+        Appended ``(section key, acmm.report.gather.Failed)`` of each failed part, in section order.
+    """
+    for name, section, *_ in PARTS:
+        part: Part = done[name]
+        if part.failed is not None and failures is not None:
+            failures.append((section, part.failed))
+        rep.doc.blocks.extend(part.blocks)
+        rep.ledger.extend(part.ledger)
+        timings[section] = timings.get(section, 0.0) + part.seconds

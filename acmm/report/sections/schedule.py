@@ -1,0 +1,213 @@
+"""Section gain schedules and pole maps (Figs 5.3–5.26; sector LQR and schedule of ch. 5.2–5.3)."""
+from __future__ import annotations
+
+import numpy as np
+
+from acmm.report.context import SectionWriter
+from acmm.report.document import _decode
+from acmm.report.figures import fig_gain_schedule, fig_pole_maps
+
+
+def build(ctx: SectionWriter) -> np.ndarray:
+    """Stair-case design summary, gain schedule and pole maps; returns the poles of the
+    cross-inertia-free MB3 gain on the true coupled linear model (claim 1).
+
+    The same as its parts in order: :func:`summary`, :func:`path_figures`, :func:`true_poles`,
+    :func:`figures` (the report runs them as separate tasks).
+
+    Parameters
+    ----------
+    ctx : acmm.report.context.SectionWriter
+        The section's inputs and output.
+
+    Returns
+    -------
+    (24,) complex array
+        Those closed-loop poles, rad/s.
+    """
+    summary(ctx)
+    path_figures(ctx)
+    ev = true_poles(ctx)
+    figures(ctx, ev)
+    return ev
+
+
+def summary(ctx: SectionWriter) -> None:
+    """The section's text and tables (design summary, conditioning, the schedule along the path;
+    sector LQR and schedule of ch. 5.2–5.3).
+
+    Parameters
+    ----------
+    ctx : acmm.report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
+    """
+    ctx.section("schedule")
+    d = ctx.data("acmm design:" + ctx.g.configs["staircase"].name)
+    cfg = ctx.g.configs["staircase"]
+    sc = d["schedule"]
+    form = d["attrs"].get("schedule_form", "polynomial")
+    order = sc["coef"].shape[0] - 1
+    pts = [d["points"][k] for k in sorted(d["points"])]
+    margins = np.array([float(p["sector_margin"]) for p in pts])
+    resid = np.array([float(p["riccati_residual"]) for p in pts])
+    backward = [float(p["riccati_backward_error"]) for p in pts if "riccati_backward_error" in p]
+    if form == "table":
+        how = ("then a table look-up schedule, each gain linear in θ2* between the design points (the form "
+               "the report names beside its order-2 polynomial for claim 2, ch. 6)")
+    else:
+        how = (f"then an order-{order} polynomial schedule in θ2* (the report uses order 2), fitted by "
+               f"{_decode(sc.get('fit_method', b'least_squares'))}")
+    ctx.doc.p(f"{len(pts)} design points along the MB3 → AC blend, evenly spaced in pitch TEA from "
+              f"{np.degrees(d['tea'][0, 1]):.2f}° to {np.degrees(d['tea'][-1, 1]):.2f}°; sector LQR "
+              f"(Re λ ≤ −{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g}°) per point, "
+              f"{how} (README, 'Gain schedule').")
+    cm = np.asarray(sc["check_margin"])
+    ctx.doc.table(["quantity", "value"], [
+        ["worst sector margin of the LQR gains (units of n, > 0 inside)", f"{margins.min():+.4f}"],
+        ["worst relative Riccati residual (scaled coordinates)", f"{resid.max():.2e}"],
+    ] + ([["worst Riccati backward error after refinement (the accepted quantity)", f"{max(backward):.1e}"]]
+         if backward else []) + ([
+        ["worst relative schedule fit residual (RMS / max|K_ij|)", f"{np.max(sc['rel_residual']):.3f}"]]
+         if form != "table" else []) + [
+        [f"scheduled gain on the local models: worst sector margin over {cm.size} checks (points and "
+         "midpoints, units of n)",
+         f"{cm.min():+.4f} ({'all in the sector' if cm.min() > 0 else 'NOT all in the 45° sector'})"],
+    ] + ([["scheduled gain on the local models: largest closed-loop Re λ over the checks (units of n)",
+           f"{np.max(sc['check_max_real']):+.4f} "
+           f"({'stable at every check' if np.max(sc['check_max_real']) < 0 else 'UNSTABLE at some check'})"]]
+         if "check_max_real" in sc else []), "Stair-case design summary")
+    _conditioning(ctx, d, pts)
+
+
+def true_poles(ctx: SectionWriter) -> np.ndarray:
+    """Claim 1: poles of the cross-inertia-free MB3 gain on the true coupled linear model (rad/s).
+
+    The coupled linear model (ch. 4) at the TEA of the ``mb3_decoupled`` design, closed with that
+    design's gain: eig(A − B K).
+
+    Parameters
+    ----------
+    ctx : acmm.report.context.SectionWriter
+        The section's inputs (the mb3 config and the ``mb3_decoupled`` ``design.h5``) and output (document blocks, printed numbers, figures).
+
+    Returns
+    -------
+    (24,) complex array
+        The closed-loop poles, rad/s.
+    """
+    from acmm.model import linearize as lin
+
+    dec = ctx.data("acmm design:mb3_decoupled")
+    cfg_m = ctx.g.configs["mb3"]
+    true = lin.design_point(cfg_m.inertia.matrix(), dec["tea"][0], cfg_m.orbit_rate, model="coupled",
+                            drf_mode=cfg_m.design.drf_mode)
+    return np.linalg.eigvals(true.A - true.B @ dec["K"][0])
+
+
+def figures(ctx: SectionWriter, ev: np.ndarray) -> None:
+    """The gain schedule and the pole maps (``ev``: :func:`true_poles`): :func:`gain_figure`, then
+    :func:`pole_figure`.
+
+    Parameters
+    ----------
+    ctx : acmm.report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``design.h5``, the mb3 designs) and output (document blocks, printed numbers, figures).
+    ev : (24,) complex array
+        Closed-loop poles of the cross-inertia-free MB3 gain on the true coupled model, rad/s
+        (:func:`true_poles`).
+    """
+    gain_figure(ctx)
+    pole_figure(ctx, ev)
+
+
+def gain_figure(ctx: SectionWriter) -> None:
+    """The 72 gains of the stair-case design points and their schedule (Figs 5.3–5.26,
+    :func:`acmm.report.figures.fig_gain_schedule`).
+
+    Parameters
+    ----------
+    ctx : acmm.report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
+    """
+    cfg = ctx.g.configs["staircase"]
+    files = fig_gain_schedule(ctx.data("acmm design:" + cfg.name), cfg.design.drf_mode, ctx.figdir)
+    ctx.doc.fig("gain_schedule", "Gain schedule: the 72 gains K(i, j) vs pitch TEA (Figs 5.3–5.26 analogue)",
+                files)
+
+
+def pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:
+    """Pole maps: the stair-case design points; claim 1 with ``ev`` (:func:`true_poles`), in the
+    sector of Fig 5.2 (:func:`acmm.report.figures.fig_pole_maps`).
+
+    Parameters
+    ----------
+    ctx : acmm.report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``design.h5``, the mb3 and mb3_decoupled ``design.h5``) and output (document blocks, printed numbers, figures).
+    ev : (24,) complex array
+        Closed-loop poles of the cross-inertia-free MB3 gain on the true coupled model, rad/s
+        (:func:`true_poles`).
+    """
+    cfg = ctx.g.configs["staircase"]
+    d = ctx.data("acmm design:" + cfg.name)
+    mb3 = ctx.data("acmm design:mb3")
+    dec = ctx.data("acmm design:mb3_decoupled")
+    files = fig_pole_maps(d, mb3, dec, ev, cfg.orbit_rate,
+                          (cfg.design.sector.sigma, cfg.design.sector.half_angle_deg), ctx.figdir)
+    ctx.doc.fig("pole_maps", "Closed-loop poles (units of n) and the sector of Fig 5.2: every stair-case "
+                "design point (left); the claim-1 designs and the cross-inertia-free gain on the true "
+                "coupled MB3 model (right)", files)
+
+
+def _conditioning(ctx: SectionWriter, d, pts):
+    """Per-point conditioning and robustness; the scheduled gain along the whole path (tables)."""
+    if "max_eig_condition" in pts[0]:
+        rows = []
+        for name, p in zip(d["names"], pts):
+            rows.append([_decode(name), f"{np.degrees(float(p['tea'][1])):.2f}",
+                         f"{float(p['sector_margin']):+.3f}", f"{float(p['max_eig_condition']):.2e}",
+                         f"{float(p['robustness_radius']):.1e}",
+                         f"{float(p['robustness_radius_elementwise']):.1e}",
+                         f"{float(p['riccati_condition']):.1e}"])
+        ctx.doc.table(["point", "θ2* (deg)", "sector margin (n)", "max eigenvalue condition (scaled)",
+                       "sector robustness radius ‖δK‖/‖K‖", "radius, elementwise", "CARE condition"],
+                       rows, "Design points: conditioning of the closed loop and the estimated smallest "
+                             "relative gain error that moves a pole out of the sector (first order)")
+    sc = d["schedule"]
+    if "path" not in sc:
+        return
+    pa = sc["path"]
+    mr, mg, dm = (np.asarray(pa[k]) for k in ("max_real", "sector_margin", "disk_margin"))
+    ctx.doc.table(["quantity along the path", "value"], [
+        ["TEAs checked (evenly spaced, first to last design point)", f"{mr.size}"],
+        ["largest Re λ of the scheduled local loop (units of n)", f"{mr.max():+.3f}"],
+        ["worst sector margin (units of n)", f"{mg.min():+.3f}"],
+        ["fraction of the path with every pole in the sector", f"{float(np.mean(mg >= 0)):.3f}"],
+        ["smallest disk margin α at the plant input (skew 0)", f"{dm.min():.3f}"],
+    ], f"The {'table look-up' if d['attrs'].get('schedule_form') == 'table' else 'order-2'} schedule "
+       "judged on the closed loop at every path TEA")
+
+
+def path_figures(ctx: SectionWriter) -> None:
+    """The scheduled gain along the path: margins and poles in the sector of Fig 5.2 (figures of
+    :mod:`acmm.plots`); nothing when the design has no ``schedule/path`` group.
+
+    Parameters
+    ----------
+    ctx : acmm.report.context.SectionWriter
+        The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
+    """
+    from acmm.plots import design as design_plots
+    cfg = ctx.g.configs["staircase"]
+    pa = ctx.data("acmm design:" + cfg.name)["schedule"].get("path")
+    if pa is None:
+        return
+    mr, mg, dm = (np.asarray(pa[k]) for k in ("max_real", "sector_margin", "disk_margin"))
+    f1 = design_plots.schedule_path_check(pa["theta2"], mr, mg, dm, ctx.figdir / "schedule_path_margins", vector=True)
+    ctx.doc.fig("schedule_path_margins", "Scheduled gain on the local model along the path: largest Re λ, "
+                "worst sector margin and disk margin at the plant input vs pitch TEA",
+                {"png": f1[0], "pdf": f1[1]})
+    f2 = design_plots.scheduled_pole_map(pa["poles"], pa["theta2"], cfg.orbit_rate, cfg.design.sector.sigma,
+                                  cfg.design.sector.half_angle_deg, ctx.figdir / "schedule_path_poles",
+                                  vector=True)
+    ctx.doc.fig("schedule_path_poles", "Poles of the scheduled loop at every path TEA with the sector of "
+                "Fig 5.2", {"png": f2[0], "pdf": f2[1]})

@@ -1,0 +1,100 @@
+"""Plain-numpy right-hand side of the closed loop simulated by :mod:`acmm.simulate.kernel`.
+
+Built from :mod:`acmm.model.dynamics` independently of the compiled kernel: the reference the kernel
+is tested against and the ``solve_ivp`` baseline of ``make bench``; and :func:`kernel_rhs`, the
+compiled right-hand side called at one state (for tests and the warm-up).  It is the nonlinear model of
+eqs 3.1–3.9 (rigid-body and CMG dynamics, 2-3-1 kinematics, gravity-gradient and disturbance
+torques) closed by the controller and DRF states of ch. 4–5.  Split from
+:mod:`acmm.simulate.kernel` (issue 12).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from acmm.model import dynamics as dyn
+from acmm.model import kinematics as kin
+from acmm.model.linearize import DRF_INPUTS
+from acmm.simulate.kernel import _drf_index, _rhs
+from acmm.simulate.scenario import Scenario
+
+
+def rhs_numpy(t: float, X: np.ndarray, sc: Scenario, level: int = 0) -> np.ndarray:
+    """Plain-numpy right-hand side of the same closed loop, from :mod:`acmm.model.dynamics`.
+
+    The independent reference for the compiled kernel and the ``solve_ivp`` baseline
+    (eqs 3.1, 3.5, 3.8, 3.9, 4.35–4.40 and 5.1; ``docs/ERRATA.md`` § Saturation).
+
+    Parameters
+    ----------
+    t : float
+        Time, s.
+    X : (24,) array
+        Plain state, in the units listed in the module docstring.
+    sc : Scenario
+        The closed loop (units in :class:`Scenario`).
+    level : int
+        Index of the inertia level in force.
+
+    Returns
+    -------
+    (24,) array
+        Ẋ, in the units of X per second.
+    """
+    n = sc.n
+    omega, theta, h = X[0:3], X[3:6], X[6:9]
+    th_est = sc.theta_est[level]
+    om_est = kin.lvlh_rate_in_body(th_est, n)
+    theta_dot = kin.attitude_rate(theta, omega, n)
+    x = np.concatenate([[omega[0] - om_est[0], theta_dot[1], omega[2] - om_est[2]],
+                        theta - th_est, X[6:24]])
+    u = np.clip(-sc.gain[level] @ x, -sc.torque_limit, sc.torque_limit)
+    absorbed = np.cross(omega, h)
+    at_limit = (np.abs(h) >= sc.momentum_limit) & ((u - absorbed) * h > 0)
+    u = np.where(at_limit, absorbed, u)
+    w = dyn.disturbance_torque(t, sc.bias[level], sc.harmonic_a, sc.harmonic_b, n)
+    _, omega_dot, h_dot = dyn.plant_rhs(theta, omega, h, sc.inertia[level], n, w, u)
+    drf_in = x[list(DRF_INPUTS[sc.drf_mode])]
+    drf = X[12:24]
+    d_drf = np.empty(12)
+    for j in range(6):
+        wf = n if j < 3 else 2 * n
+        d_drf[2 * j] = -wf * wf * drf[2 * j + 1] + drf_in[j % 3]
+        d_drf[2 * j + 1] = drf[2 * j]
+    return np.concatenate([omega_dot, theta_dot, h_dot, h, d_drf])
+
+
+def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
+    """The compiled right-hand side at one state: returns (Ẋ, u delivered, u commanded).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The closed loop (units in :class:`Scenario`).
+    t : float
+        Time, s.
+    X : (24,) array
+        Plain state, in the units listed in the module docstring.
+    level : int
+        Index of the inertia level in force.
+
+    Returns
+    -------
+    X_dot : (24,) array
+        Ẋ, in the units of X per second.
+    u : (3,) array
+        Torque delivered after saturation, ft·lbf.
+    u_cmd : (3,) array
+        Commanded torque −K x (eq 5.1), ft·lbf.
+    """
+
+
+    inertia = np.ascontiguousarray(sc.inertia[level], float)
+    omega_est = kin.lvlh_rate_in_body(sc.theta_est[level], sc.n)
+    drf_idx = _drf_index(sc.drf_mode)
+    out, u, ucmd, flags = np.empty(24), np.empty(3), np.empty(3), np.zeros(6)
+    scratch_x, scratch_u = np.empty(24), np.empty(3)
+    _rhs(t, np.asarray(X, float), inertia, np.linalg.inv(inertia), np.asarray(sc.bias[level], float),
+         np.asarray(sc.theta_est[level], float), omega_est, np.ascontiguousarray(sc.gain[level], float),
+         np.asarray(sc.harmonic_a, float), np.asarray(sc.harmonic_b, float), float(sc.n),
+         float(sc.torque_limit), float(sc.momentum_limit), drf_idx, out, u, ucmd, flags, scratch_x, scratch_u)
+    return out, u, ucmd

@@ -1,0 +1,1 @@
+"""The stages: config in, results file out (the glue between the library and its files)."""

@@ -1,0 +1,90 @@
+"""What every stage shares: the config it is given (object, file or packaged name) and the
+conversion of its per-state output arrays into the config's unit system.
+
+Used by :mod:`acmm.stages.runners`, :mod:`acmm.stages.design` and :mod:`acmm.stages.simulate`.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from acmm.io.config import Config, load_config
+
+#: the figure worker's warm-up for the acmm stages, :func:`acmm.plots.base.warm_figure_worker`, named
+#: as :func:`acmm_qpp.figure_worker.start` takes it (a string: the worker imports it, this process
+#: need not)
+FIGURE_WARM = "acmm.plots.base:warm_figure_worker"
+
+
+#: Units of the per-state arrays, element by element: ``state_units[i]`` is the unit of state
+#: ``i``, given by the dataset's ``state_units`` attribute (set by :func:`_in_system`); under
+#: ``output.units: SI`` ft*lbf reads N*m.  x' = A x + B u + G w (eq 4.46), u = −K x, and the
+#: LQR cost ∫ (x'Q x + u'R u) dt = x0'P x0 with R in 1/(ft*lbf)^2 (ch. 5.2).
+UNIT_STATE = "state_units[i]"
+UNIT_A = "state_units[i]/(state_units[j]*s)"
+UNIT_B = "state_units[i]/(s*ft*lbf)"
+UNIT_K = "ft*lbf/state_units[j]"
+UNIT_Q = "1/(state_units[i]*state_units[j])"
+UNIT_P = "s/(state_units[i]*state_units[j])"
+
+
+def _in_system(items: dict, cfg: Config, roles: dict) -> dict:
+    """Per-state arrays of ``items`` (path → role of :func:`acmm.io.units.state_space_in`) in the
+    config's ``output.units``, each with a ``state_units`` attribute (the 24 state units, or the
+    12 of the DRF block for role ``drf``) that its unit string refers to (:data:`UNIT_A`, …); a
+    top-level ``state_units`` dataset follows too.  Other datasets are converted by unit string
+    in :func:`acmm_qpp.results.write_h5`."""
+    from dataclasses import replace
+
+    from acmm.io.units import state_factors, state_space_in
+
+    system = cfg.output.units
+    _, su = state_factors(cfg.design.drf_mode, system)
+    for path, role in roles.items():
+        *groups, key = path.split("/")
+        g = items
+        for name in groups:
+            g = g[name]
+        ds = g[key]
+        attrs = dict(ds.attrs, state_units=np.array(su[12:] if role == "drf" else su, dtype="S"))
+        if system == "imperial":
+            g[key] = replace(ds, attrs=attrs)
+            continue
+        new = state_space_in(system, cfg.design.drf_mode, **{role: ds.data})[role]
+        g[key] = replace(ds, data=new, units=ds.units.replace("ft*lbf", "N*m"), attrs=attrs)
+    if "state_units" in items:
+        items["state_units"] = replace(items["state_units"], data=np.array(su, dtype="S"))
+    return items
+
+
+def _define_units(items: dict, orbit_rate: float) -> dict:
+    """``items`` with a ``units_definition`` attribute on every dataset in units of the orbit
+    rate (``n``) or of orbits (``orbit``): the unit in pint's definition syntax, e.g.
+    ``n = 0.0011313 * rad / s``, so ``pint.UnitRegistry().define(...)`` reads the file.
+
+    Parameters
+    ----------
+    items : dict
+        Name → :class:`acmm_qpp.results.Dataset` or nested dict (changed in place).
+    orbit_rate : float
+        The orbit rate n, rad/s.
+
+    Returns
+    -------
+    dict
+        ``items``.
+    """
+    from dataclasses import replace
+
+    period = 2 * np.pi / orbit_rate
+    definitions = {"n": f"n = {float(orbit_rate)!r} * rad / s",
+                   "orbit": f"orbit = {float(period)!r} * s"}
+    for key, ds in items.items():
+        if isinstance(ds, dict):
+            _define_units(ds, orbit_rate)
+        elif getattr(ds, "units", None) in definitions:
+            items[key] = replace(ds, attrs=dict(ds.attrs, units_definition=definitions[ds.units]))
+    return items
+
+
+def _as_config(config) -> Config:
+    return config if isinstance(config, Config) else load_config(config)

@@ -1,0 +1,263 @@
+"""The design stage: TEA → design model (eqs 4.46–4.47) → sector LQR per design point
+(ch. 5.2) → gain schedule (ch. 5.3), its ``design.h5`` and the reuse of a design already written.
+
+Split from :mod:`acmm.stages.runners` (issue 12).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from acmm.io.config import Config
+from acmm.stages.common import _as_config, _define_units, _in_system
+from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.results import write_h5
+from acmm_qpp.runlock import locked_stage
+from acmm.io.design_file import DesignTable, _stored_digest, _unit_system, load_design_table, table_sha256
+
+AXES = ["roll", "pitch", "yaw"]
+
+
+# ---------------------------------------------------------------------------------------------
+# design: TEA → linearize → sector LQR per point → schedule
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass
+class DesignResult:
+    """A config's design: point designs, the schedule and its checks, and the table.
+
+    Attributes
+    ----------
+    config : acmm.io.config.Config
+        The validated config.
+    points : list of acmm.design.schedule.PointDesign
+        Sector LQR design per point (ch. 5.2).
+    fit : acmm.design.schedule.ScheduleFit or None
+        The fitted gain schedule (ch. 5.3); None with a single point.
+    check : acmm.design.schedule.ScheduleCheck or None
+        The schedule checked at the design points and blend midpoints.
+    table : DesignTable
+        The arrays a simulation needs.
+    wall_time : float
+        Design wall time, s.
+    path_check : acmm.design.path_check.PathCheck or None
+        The schedule checked along the path (``schedule.n_check``).
+    """
+
+    config: Config
+    points: list
+    fit: object
+    check: object
+    table: DesignTable
+    wall_time: float
+    path_check: object = None
+
+    def fastest_over_n(self) -> np.ndarray:
+        """Per design point, the fastest closed-loop pole's decay rate max(−Re s) divided by n.
+
+        Returns
+        -------
+        (P,) array
+            max(−Re s) / n, dimensionless.
+        """
+        return np.array([np.max(-p.lqr.poles.real) / self.config.orbit_rate for p in self.points])
+
+    def off_branch(self):
+        """The first blend point whose TEA is not on the branch of equilibria continued from the
+        blend's start (:func:`acmm.design.schedule_points.off_branch_point`), else None.
+
+        Returns
+        -------
+        acmm.design.schedule_points.BranchJump or None
+            The point, its TEA and the branch's there, rad.
+        """
+        from acmm.design.schedule_points import off_branch_point
+
+        return off_branch_point([p.spec for p in self.points], [p.tea.theta for p in self.points],
+                                self.config.orbit_rate)
+
+    def worst_check_index(self) -> int | None:
+        """Index of the schedule check with the smallest sector margin (None without a schedule).
+
+        Returns
+        -------
+        int or None
+            Index into ``check.margin``.
+        """
+        return None if self.check is None else int(np.argmin(self.check.margin))
+
+
+def design_hash(cfg: Config) -> str:
+    """Hash of the design-relevant part of a config (inertia, n, disturbance, design, schedule).
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The config.
+
+    Returns
+    -------
+    str
+        :func:`acmm_qpp.results.config_hash` of those sections.
+    """
+    import json
+
+    from acmm_qpp.provenance import config_hash
+
+    d = cfg.model_dump(mode="json")
+    keys = ("inertia", "orbit_rate", "disturbance", "design", "schedule")
+    return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
+
+
+def compute_design(config, progress=None, on_points=None, on_fit=None, fork: bool = False) -> DesignResult:
+    """Design every point of a config and fit the schedule (when there are ≥ 2 points);
+    ``on_points``/``on_fit``: see :func:`acmm.design.design_core.design_schedule`.
+
+    The config is read here once (:func:`acmm.design.settings.design_settings`,
+    :func:`acmm.design.schedule.point_specs`); the core :func:`acmm.design.design_core.design_schedule` gets
+    only explicit arguments.
+
+    Parameters
+    ----------
+    config : acmm.io.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+    progress : callable, optional
+        ``progress(name)``, called after each design point.
+    on_points : callable, optional
+        ``on_points(points)``, called with the list of :class:`acmm.design.schedule.PointDesign` once
+        every point's sector LQR (ch. 5.2) is designed.
+    on_fit : callable, optional
+        ``on_fit(points, fit)``, called with the point designs and the final
+        :class:`acmm.design.schedule.ScheduleFit` (ch. 5.3) before its checks; not called with fewer
+        than 2 points.
+    fork : bool, optional
+        Design half the points and solve the path's models in a forked child meanwhile
+        (``fork`` of :func:`acmm.design.design_core.design_schedule`; the same numbers).
+
+    Returns
+    -------
+    DesignResult
+        The design.
+    """
+    import time
+
+    from acmm.design import schedule as sch
+    from acmm.design import schedule_points as sp
+    from acmm.design.design_core import design_schedule
+    from acmm.design.settings import design_settings, schedule_settings
+
+    cfg = _as_config(config)
+    t0 = time.perf_counter()
+    ds = design_schedule(sp.point_specs(cfg), design_settings(cfg), schedule_settings(cfg), progress,
+                         on_points, on_fit, fork=fork)
+    table = design_table(ds.points, ds.fit, design_hash(cfg))
+    return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check)
+
+
+def design_table(points, fit, design_hash: str) -> DesignTable:
+    """The :class:`DesignTable` of point designs and their schedule fit (None: one point).
+
+    Parameters
+    ----------
+    points : list of acmm.design.schedule.PointDesign
+        Point designs.
+    fit : acmm.design.schedule.ScheduleFit or None
+        Their schedule.
+    design_hash : str
+        Hash of the config they come from (:func:`design_hash`).
+
+    Returns
+    -------
+    DesignTable
+        The arrays (report units).
+    """
+    return DesignTable([p.spec.name for p in points], np.array([p.spec.inertia for p in points]),
+                       np.array([p.spec.bias for p in points]), np.array([p.tea.theta for p in points]),
+                       np.array([p.lqr.K for p in points]),
+                       None if fit is None else fit.coef, design_hash,
+                       "polynomial" if fit is None else fit.form)
+
+
+@locked_stage(_as_config)
+@owns_outputs("design", lambda c: _as_config(c))
+def run_design(config, progress=None, figures: bool | None = None) -> tuple[DesignResult, Path]:
+    """Design and write ``runs/<name>/design.h5`` plus the gain-schedule and pole-map figures
+    (:mod:`acmm.stages.design_output` builds both).
+
+    Parameters
+    ----------
+    config : acmm.io.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+    progress : callable, optional
+        ``progress(name)``, called after each design point.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+
+    Returns
+    -------
+    tuple
+        (:class:`DesignResult`, pathlib.Path of ``design.h5``).
+    """
+    from acmm.stages import design_output as out
+    from acmm.stages.common import FIGURE_WARM
+    from acmm_qpp import figure_worker
+    from acmm.design.settings import design_settings
+
+    cfg = _as_config(config)
+    want_figures = cfg.output.figures if figures is None else figures
+    s, run_dir = design_settings(cfg), cfg.run_dir()
+    with figure_worker.session(want_figures, FIGURE_WARM):
+        if want_figures:       # figures handed to the worker as their data is ready
+            out.prepare_design_figures(s, cfg.output.units)
+            r = compute_design(cfg, progress, lambda pts: out.pole_map_figure(pts, s, run_dir),
+                               lambda pts, fit: out.gain_figure(pts, fit, s, run_dir, cfg.output.units),
+                               fork=True)
+            out.path_figures(r.path_check, s, run_dir)
+        else:
+            r = compute_design(cfg, progress, fork=True)
+        pts = out.point_items(r.points)
+        items = out.table_items(r, pts)
+        if r.fit is not None:
+            items["schedule"] = out.schedule_items(r)
+        items = _define_units(_in_system(items, cfg, out.unit_roles(pts, r.fit is not None)), cfg.orbit_rate)
+        path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
+                        {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
+                         "schedule_form": r.table.form, "table_sha256": _stored_digest(items, cfg.output.units)})
+    return r, path
+
+
+def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple[DesignTable, str]:
+    """The design of a config: reused from ``design.h5`` when its hash matches, else computed.
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The config.
+    progress : callable, optional
+        ``progress(name)``, called after each design point when designing.
+    figures : bool, optional
+        Write the design figures when designing (default: ``output.figures``).
+
+    Returns
+    -------
+    tuple
+        (:class:`DesignTable`, a note saying whether it was reused or designed).
+    """
+    path = cfg.run_dir() / "design.h5"
+    want = design_hash(cfg)
+    if path.is_file():          # a regular file (a FIFO or a device there would block or never end)
+        try:
+            table = load_design_table(path)
+            if table.design_hash == want and _unit_system(path) == cfg.output.units:   # one system per run folder
+                return table, f"reused {path}"
+        except (OSError, KeyError, ValueError):
+            pass
+    r, path = run_design(cfg, progress, figures)
+    if cfg.output.units != "imperial":
+        # the table as a later run reuses it: converted to SI and back, so that a simulation is
+        # the same bit for bit whether its design was just made or read from design.h5
+        return load_design_table(path), f"designed, wrote {path}"
+    return r.table, f"designed, wrote {path}"

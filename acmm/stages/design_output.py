@@ -1,0 +1,348 @@
+"""What the design stage writes: the ``design.h5`` items and the design figures.
+
+Split from :mod:`acmm.stages.runners` (:func:`acmm.stages.runners.run_design` calls these); the items are built
+from a :class:`acmm.stages.runners.DesignResult`, the figures from it and the design settings: the
+model of eq 4.46, the sector LQR of ch. 5.2 and the gain schedule of ch. 5.3.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from acmm.stages.common import UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE
+from acmm_qpp.results import Dataset
+
+AXES = ["roll", "pitch", "yaw"]
+
+
+def point_items(points) -> dict:
+    """The ``points/<k>_<name>`` groups of ``design.h5``: model, weights and LQR of each point.
+
+    Parameters
+    ----------
+    points : list of acmm.design.schedule.PointDesign
+        The point designs.
+
+    Returns
+    -------
+    dict
+        Group name → {name: :class:`acmm_qpp.results.Dataset`} (report units, stated per dataset).
+    """
+    from acmm.model.linearize import STATE_NAMES
+
+    pts = {}
+    for k, p in enumerate(points):
+        res = p.lqr
+        pts[f"{k:03d}_{p.spec.name}"] = {
+            "inertia": Dataset(p.spec.inertia, "slug*ft^2", "inertia of the design point", AXES),
+            "bias": Dataset(p.spec.bias, "ft*lbf", "bias torque", AXES),
+            "tea": Dataset(p.tea.theta, "rad", "torque-equilibrium attitude", AXES),
+            "A": Dataset(p.model.A, UNIT_A, "design model state matrix (eq 4.46)", STATE_NAMES,
+                         dims=("state", "state_col")),
+            "B": Dataset(p.model.B, UNIT_B, "input matrix", STATE_NAMES, dims=("state", "axis")),
+            "G": Dataset(p.model.G, UNIT_B, "disturbance matrix", STATE_NAMES, dims=("state", "axis")),
+            "Q": Dataset(res.Q, UNIT_Q, "state weight for which K is the exact LQR gain of the shifted problem",
+                         dims=("state", "state_col")),
+            "R": Dataset(res.R, "1/(ft*lbf)^2", "control weight", dims=("axis", "axis_col")),
+            "P": Dataset(res.P, UNIT_P, "Riccati solution (physical units)", dims=("state", "state_col")),
+            "K": Dataset(res.K, UNIT_K, "LQR gain, u = -K x", STATE_NAMES, dims=("axis", "state")),
+            "poles": Dataset(res.poles, "rad/s", "closed-loop poles of A - B K", dims=("pole",)),
+            "sector_margin": Dataset(res.margin, "n", "worst pole distance into the sector (>0 inside)"),
+            "riccati_residual": Dataset(res.residual, "1", "relative CARE residual, scaled coordinates"),
+            "riccati_backward_error": Dataset(res.backward_error, "1",
+                                              "CARE backward error after refinement (accepted quantity)"),
+            "scales": Dataset(p.model.scales, UNIT_STATE, "state scaling used for the Riccati solve",
+                              STATE_NAMES),
+            "eig_condition": Dataset(res.eig_condition, "1",
+                                     "eigenvalue condition number of each pole (order of 'poles'), scaled states",
+                                     dims=("pole",)),
+            "max_eig_condition": Dataset(res.max_eig_condition, "1",
+                                         "largest eigenvalue condition number of A - B K, scaled states"),
+            "robustness_radius": Dataset(res.robustness_radius, "1",
+                                         "estimated smallest relative gain error ||dK||/||K|| (scaled) moving a pole "
+                                         "out of the sector (first order)"),
+            "robustness_radius_elementwise": Dataset(res.robustness_radius_elementwise, "1",
+                                                     "same for elementwise relative errors max|dK_ij/K_ij|"),
+            "riccati_condition": Dataset(res.riccati_condition, "1",
+                                         "relative condition estimate of the shifted CARE (acmm.design.riccati)"),
+            "riccati_ill_conditioned": Dataset(np.int8(res.riccati_ill_conditioned), "1",
+                                               "1 if the CARE condition exceeds 1/sqrt(eps)"),
+        }
+    return pts
+
+
+def table_items(r, pts: dict) -> dict:
+    """The top-level datasets of ``design.h5`` (the table, per-point summaries) around ``pts``.
+
+    Parameters
+    ----------
+    r : acmm.stages.runners.DesignResult
+        The design.
+    pts : dict
+        The point groups of :func:`point_items` (nested under ``points``).
+
+    Returns
+    -------
+    dict
+        Name → :class:`acmm_qpp.results.Dataset` or group (report units, stated per dataset).
+    """
+    from acmm.model.linearize import STATE_NAMES
+
+    items = {
+        "points": pts,
+        "names": Dataset(np.array(r.table.names, dtype="S"), "1", "design point names in order", dims=("point",)),
+        "point": Dataset(np.array(r.table.names, dtype=object), "1", "design point name", dims=("point",)),
+        "inertia": Dataset(r.table.inertia, "slug*ft^2", "inertia per point", dims=("point", "axis", "axis_col")),
+        "bias": Dataset(r.table.bias, "ft*lbf", "bias per point", AXES, dims=("point", "axis")),
+        "tea": Dataset(r.table.tea, "rad", "TEA per point", AXES, dims=("point", "axis")),
+        "K": Dataset(r.table.gain, UNIT_K, "LQR gain per point (u = -K x)",
+                     dims=("point", "axis", "state")),
+        "state_names": Dataset(np.array(STATE_NAMES, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
+        "state_units": Dataset(np.array(r.points[0].model.state_units, dtype="S"), "1",
+                               "unit of each state (the state_units of the unit strings)", dims=("state",)),
+        "wall_time": Dataset(r.wall_time, "s", "design wall time"),
+        "sector_margin": Dataset(np.array([p.lqr.margin for p in r.points]), "n",
+                                 "worst pole distance into the sector per point (>0 inside)", dims=("point",)),
+        "max_eig_condition": Dataset(np.array([p.lqr.max_eig_condition for p in r.points]), "1",
+                                     "largest eigenvalue condition number of A - B K per point, scaled states",
+                                     dims=("point",)),
+        "robustness_radius": Dataset(np.array([p.lqr.robustness_radius for p in r.points]), "1",
+                                     "sector robustness radius per point (relative gain error, normwise, scaled)",
+                                     dims=("point",)),
+        "robustness_radius_elementwise": Dataset(
+            np.array([p.lqr.robustness_radius_elementwise for p in r.points]), "1",
+            "sector robustness radius per point (elementwise relative gain error)", dims=("point",)),
+        "riccati_condition": Dataset(np.array([p.lqr.riccati_condition for p in r.points]), "1",
+                                     "CARE condition estimate per point", dims=("point",)),
+    }
+    return items
+
+
+def schedule_items(r) -> dict:
+    """The ``schedule`` group of ``design.h5`` (fit, its checks, the path check); ``r.fit`` set.
+
+    Parameters
+    ----------
+    r : acmm.stages.runners.DesignResult
+        A design with a schedule.
+
+    Returns
+    -------
+    dict
+        Name → :class:`acmm_qpp.results.Dataset` or group (units stated per dataset).
+    """
+    sched = {
+        "coef": Dataset(r.fit.coef, UNIT_K + "/rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k" if r.fit.form == "polynomial"
+                        else "least-squares polynomial of the gains, for reference (form table: K linear in θ2* "
+                             "between the design points)", dims=("power", "axis", "state")),
+        "variable": Dataset(r.fit.variable, "rad", "scheduling variable: pitch TEA θ2* per point", dims=("point",)),
+        "rms_residual": Dataset(r.fit.rms_residual, UNIT_K, "RMS fit residual per element", dims=("axis", "state")),
+        "rel_residual": Dataset(r.fit.rel_residual, "1", "RMS residual / max |K_ij|", dims=("axis", "state")),
+        "check_names": Dataset(np.array(r.check.names, dtype="S"), "1", "where the scheduled gain was checked",
+                               dims=("check",)),
+        "check_theta2": Dataset(r.check.theta2, "rad", "pitch TEA of each check", dims=("check",)),
+        "check_margin": Dataset(r.check.margin, "n", "sector margin of the scheduled gain (>0 inside)",
+                                dims=("check",)),
+        "check_max_real": Dataset(r.check.max_real, "n", "largest closed-loop Re λ with the scheduled gain",
+                                  dims=("check",)),
+        "fit_method": Dataset(np.array(r.fit.method, dtype="S"), "1",
+                              "least_squares, or closed_loop (least squares refined on the path)"),
+    }
+    for key, val in r.fit.refit_info.items():
+        value = np.array(val, dtype="S") if isinstance(val, str) else float(val)
+        sched[f"refit_{key}"] = Dataset(value, "n" if key.startswith("max_real") else "1",
+                                        f"closed-loop refit: {key.replace('_', ' ')}")
+    pc = r.path_check
+    if pc is not None:
+        sched["path"] = {
+            "theta2": Dataset(pc.theta2, "rad", "pitch TEA of each path check (evenly spaced)", dims=("path",)),
+            "s": Dataset(pc.s, "1", "blend parameter of each path check", dims=("path",)),
+            "max_real": Dataset(pc.max_real, "n", "largest Re λ of the scheduled local loop", dims=("path",)),
+            "sector_margin": Dataset(pc.margin, "n", "worst sector margin of the scheduled local loop (>0 inside)", dims=("path",)),
+            "disk_margin": Dataset(pc.disk_margin, "1",
+                                   "balanced multiloop disk margin alpha at the plant input (loop broken at u)", dims=("path",)),
+            "disk_gain_margin": Dataset(pc.disk_gain_margin_db, "dB", "gain variation guaranteed by the disk", dims=("path",)),
+            "disk_phase_margin": Dataset(np.deg2rad(pc.disk_phase_margin_deg), "rad", "phase variation guaranteed by the disk", dims=("path",)),
+            "poles": Dataset(pc.poles, "rad/s", "closed-loop poles of the scheduled local loop", dims=("path", "pole")),
+            "fraction_in_sector": Dataset(pc.fraction_in_sector, "1", "fraction of path TEAs with every pole in the sector"),
+        }
+    return sched
+
+
+def unit_roles(pts: dict, has_fit: bool) -> dict:
+    """Which datasets of ``design.h5`` are converted to the output unit system, and as what.
+
+    Parameters
+    ----------
+    pts : dict
+        The point groups of :func:`point_items`.
+    has_fit : bool
+        The design has a schedule.
+
+    Returns
+    -------
+    dict
+        Dataset path → role of :func:`acmm.io.units.state_space_in` (``"K"``, ``"A"``, ...).
+    """
+    roles = {"K": "K"}
+    for key in pts:
+        roles.update({f"points/{key}/{m}": m for m in ("A", "B", "G", "Q", "P", "K")})
+        roles[f"points/{key}/scales"] = "scales"
+    if has_fit:
+        roles.update({"schedule/coef": "K", "schedule/rms_residual": "K"})
+    return roles
+
+
+def gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
+    """(unit of each state as printed, torque unit) for the gain figure's labels (Figs 5.3–5.26).
+
+    Parameters
+    ----------
+    drf_mode : str
+        DRF mode of the 24 states (:func:`acmm.model.linearize.state_units`).
+    units_system : str
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    units : tuple of str
+        The 24 state unit labels, as printed.
+    torque_unit : str
+        The torque unit label (``"ft·lbf"`` or ``"N·m"``).
+    """
+    if units_system == "imperial":
+        from acmm.plots.base import state_units
+
+        return tuple(state_units(drf_mode)), "ft·lbf"
+    from acmm.io.units import state_factors
+
+    return tuple(u.replace("*", "·") for u in state_factors(drf_mode, units_system)[1]), "N·m"
+
+
+def prepare_design_figures(s, units_system: str) -> None:
+    """Have the figure worker build the gain figure's skeleton while the design is computed
+    (:func:`acmm.plots.prebuild`; nothing without a worker).
+
+    Parameters
+    ----------
+    s : acmm.design.settings.DesignSettings
+        The design settings (their ``drf_mode`` picks the state units).
+    units_system : str
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+    """
+    from acmm.plots import design as design_plots
+    from acmm.plots import base as plot_base
+    from acmm_qpp import figure_worker
+    from acmm.model.linearize import STATE_NAMES
+
+    figure_worker.prepare(plot_base.prebuild, "gain_schedule_grid", tuple(STATE_NAMES),
+                          *gain_labels(s.drf_mode, units_system), for_figure="gain_schedule_grid")
+    for kind in ("schedule_path_check", "scheduled_pole_map"):   # the path figures' axes (issue 16)
+        figure_worker.prepare(plot_base.prebuild, kind, for_figure=kind)
+
+
+def pole_map_figure(points, s, run_dir: Path) -> None:
+    """Submit the design points' pole map with the sector of ch. 5.2 (:func:`acmm_qpp.figure_worker.submit`).
+
+    Parameters
+    ----------
+    points : list of acmm.design.schedule.PointDesign
+        The point designs (their closed-loop poles, rad/s).
+    s : acmm.design.settings.DesignSettings
+        The design settings: orbit rate n (rad/s) and the sector (σ in units of n, half-angle deg).
+    run_dir : pathlib.Path
+        Run directory; the figure is ``design_poles.png`` there.
+    """
+    from acmm.plots import design as design_plots
+    from acmm.plots import base as plot_base
+    from acmm_qpp.figure_worker import submit
+
+    submit(design_plots.pole_map, [p.lqr.poles for p in points], [p.spec.name for p in points], s.orbit_rate,
+           s.sector.sigma, s.sector.half_angle_deg, run_dir / "design_poles.png")
+
+
+def gain_figure(points, fit, s, run_dir: Path, units_system: str) -> None:
+    """Submit the gain-schedule figure: the points' LQR gains and the schedule ``fit``, in the
+    ``units_system`` (cf. Figs 5.3–5.26; :func:`acmm_qpp.figure_worker.submit`).
+
+    Parameters
+    ----------
+    points : list of acmm.design.schedule.PointDesign
+        The point designs (gains ft·lbf per state unit, pitch TEA rad).
+    fit : acmm.design.schedule.ScheduleFit
+        The gain schedule of ch. 5.3, imperial units.
+    s : acmm.design.settings.DesignSettings
+        The design settings (their ``drf_mode`` picks the state units).
+    run_dir : pathlib.Path
+        Run directory; the figure is ``design_gains.png`` there.
+    units_system : str
+        Unit system of the figure, ``"imperial"`` or ``"SI"``.
+    """
+    from acmm.plots import design as design_plots
+    from acmm.plots import base as plot_base
+    from acmm_qpp.figure_worker import submit
+    from acmm.model.linearize import STATE_NAMES
+
+    gains = np.array([p.lqr.K for p in points])
+    theta2 = np.array([p.tea.theta[1] for p in points])
+    if units_system != "imperial":     # K in the output system (the schedule is linear in K)
+        from dataclasses import replace as _replace
+
+        from acmm.io.units import state_space_in
+
+        conv = lambda K: state_space_in(units_system, s.drf_mode, K=K)["K"]  # noqa: E731
+        gains = conv(gains)
+        fit = _replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
+    units, torque = gain_labels(s.drf_mode, units_system)
+    submit(design_plots.gain_schedule_grid, theta2, gains, design_plots.sample_schedule(fit, theta2), STATE_NAMES,
+           run_dir / "design_gains.png", units=list(units), torque_unit=torque)
+
+
+def path_figures(pc, s, run_dir: Path) -> None:
+    """Submit the path-check figures (margins, scheduled poles with the sector of Fig 5.2) of ``pc``.
+
+    Parameters
+    ----------
+    pc : acmm.design.path_check.PathCheck or None
+        The scheduled gain checked along the path (None: nothing is drawn).
+    s : acmm.design.settings.DesignSettings
+        The design settings: orbit rate n (rad/s) and the sector (σ in units of n, half-angle deg).
+    run_dir : pathlib.Path
+        Run directory; the figures are ``design_path_margins.png`` and ``design_path_poles.png``.
+    """
+    from acmm.plots import design as design_plots
+    from acmm.plots import base as plot_base
+    from acmm_qpp.figure_worker import submit
+
+    if pc is None:
+        return
+    submit(design_plots.schedule_path_check, pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
+           run_dir / "design_path_margins.png")
+    submit(design_plots.scheduled_pole_map, pc.poles, pc.theta2, s.orbit_rate, s.sector.sigma,
+           s.sector.half_angle_deg, run_dir / "design_path_poles.png")
+
+
+def design_figures(r, s, run_dir: Path, units_system: str) -> None:
+    """The pole-map, gain-schedule and path-check figures of a finished design (Figs 5.2,
+    5.3–5.26), drawn in place or by the figure worker when one runs.
+
+    The design stage hands each figure over as soon as its data exist
+    (:func:`pole_map_figure`, :func:`gain_figure`, :func:`path_figures`); this draws all of them
+    for a design computed elsewhere.
+
+    Parameters
+    ----------
+    r : acmm.stages.runners.DesignResult
+        The design (its points, schedule fit and path check).
+    s : acmm.design.settings.DesignSettings
+        Its settings (orbit rate n in rad/s, sector, DRF mode).
+    run_dir : pathlib.Path
+        Folder of the figures.
+    units_system : str
+        ``"imperial"`` or ``"SI"``: unit system of the gains drawn.
+    """
+    pole_map_figure(r.points, s, run_dir)
+    if r.fit is not None:
+        gain_figure(r.points, r.fit, s, run_dir, units_system)
+    path_figures(r.path_check, s, run_dir)

@@ -1,0 +1,192 @@
+"""Stage runners: config in, results file out.  The glue between the pure library
+modules and the CLI (I/O at the edge; the mathematics lives in the library modules).
+
+Stages: the TEA (eqs 4.1–4.3), the design model (eqs 4.46–4.47), the sector LQR per design
+point (ch. 5.2) with its gain schedule (ch. 5.3), and the nonlinear simulation (ch. 6).
+
+The TEA and linearize stages live here; the design stage in :mod:`acmm.stages.design` and the
+simulation stage in :mod:`acmm.stages.simulate`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from acmm.model import tea as tea_mod
+from acmm.io.config import Config
+from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, _as_config, _in_system
+from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.results import Dataset, write_h5
+from acmm_qpp.runlock import locked_stage
+
+AXES = ["roll", "pitch", "yaw"]
+
+
+@dataclass
+class TeaResult:
+    """The TEA of a config.
+
+    Attributes
+    ----------
+    config : acmm.io.config.Config
+        The validated config.
+    tea : acmm.model.tea.TEA
+        Its torque-equilibrium attitude on the physical branch (θ* in rad, eqs 4.1–4.3).
+    others : list of acmm.model.tea.TEA
+        Other equilibria (filled by ``run_tea(all_roots=True)``).
+    """
+
+    config: Config
+    tea: tea_mod.TEA
+    others: list = field(default_factory=list)
+
+
+
+def compute_tea(config) -> TeaResult:
+    """TEA of a config's own inertia and bias (physical branch).
+
+    Parameters
+    ----------
+    config : acmm.io.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+
+    Returns
+    -------
+    TeaResult
+        The config and its TEA.
+    """
+    cfg = _as_config(config)
+    inertia = cfg.inertia.matrix()
+    bias = tea_mod.resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate)
+    return TeaResult(cfg, tea_mod.solve_tea(inertia, cfg.orbit_rate, bias,
+                                            expected=cfg.disturbance.requested_tea()))
+
+
+@locked_stage(_as_config)
+@owns_outputs("tea", lambda c: _as_config(c))
+def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
+    """Compute the TEA and write ``runs/<name>/tea.h5``.
+
+    Parameters
+    ----------
+    config : acmm.io.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+    all_roots : bool, optional
+        Also search the other equilibria (multi-start Newton) and write them.
+
+    Returns
+    -------
+    tuple
+        (:class:`TeaResult`, pathlib.Path of ``tea.h5``).
+    """
+    result = compute_tea(config)
+    cfg, t = result.config, result.tea
+    inertia = cfg.inertia.matrix()
+    if all_roots:
+        result.others = [r for r in tea_mod.all_equilibria(inertia, cfg.orbit_rate, t.bias)
+                         if np.max(np.abs(r.theta - t.theta)) > 1e-6]
+    items = {
+        "theta": Dataset(t.theta, "rad", "torque-equilibrium attitude θ* (eq 4.1)", AXES),
+        "omega": Dataset(t.omega, "rad/s", "ω* at θ* (eq 4.3)", AXES),
+        "bias": Dataset(t.bias, "ft*lbf", "bias torque balanced at θ* (eq 4.1)", AXES),
+        "inertia": Dataset(inertia, "slug*ft^2", "inertia matrix (eq 3.2)", AXES),
+        "orbit_rate": Dataset(cfg.orbit_rate, "rad/s", "orbital rate n"),
+        "residual": Dataset(t.residual, "ft*lbf", "max |τ_gyro + τ_gg + bias| at θ*"),
+    }
+    if result.others:
+        items["other_roots"] = Dataset(np.array([o.theta for o in result.others]), "rad",
+                                       "other equilibria found by multi-start Newton", AXES,
+                                       dims=("root", "axis"))
+    path = write_h5(cfg.run_dir() / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"})
+    return result, path
+
+
+@dataclass
+class LinearizeResult:
+    """The design model of a config at its TEA.
+
+    Attributes
+    ----------
+    config : acmm.io.config.Config
+        The validated config.
+    tea : acmm.model.tea.TEA
+        Its TEA (θ* in rad).
+    model : acmm.model.linearize.LinearModel
+        The 24-state model of eqs 4.46–4.47 (report units).
+    controllability : acmm.model.linearize.Controllability
+        PBH controllability test of the model.
+    eigenvalues : (24,) complex array or None
+        Open-loop eigenvalues of A, rad/s.
+    """
+
+    config: Config
+    tea: tea_mod.TEA
+    model: object
+    controllability: object
+    #: open-loop eigenvalues of A (rad/s), as written to ``linearize.h5``
+    eigenvalues: np.ndarray | None = None
+
+    def eigenvalues_over_n(self) -> np.ndarray:
+        """The open-loop eigenvalues divided by the orbit rate n, sorted by real then imaginary part.
+
+        Returns
+        -------
+        (24,) complex array
+            λ / n, dimensionless.
+        """
+        eig = self.eigenvalues / self.model.n
+        return eig[np.lexsort((eig.imag, eig.real))]
+
+
+@locked_stage(_as_config)
+@owns_outputs("linearize", lambda c: _as_config(c))
+def run_linearize(config) -> tuple[LinearizeResult, Path]:
+    """TEA, then the design model of ``design.model``; writes ``runs/<name>/linearize.h5``.
+
+    Parameters
+    ----------
+    config : acmm.io.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+
+    Returns
+    -------
+    tuple
+        (:class:`LinearizeResult`, pathlib.Path of ``linearize.h5``).
+    """
+    from acmm.model import linearize as lin
+    from acmm.model import controllability as ctrb_mod
+
+    tr = compute_tea(config)
+    cfg = tr.config
+    model = lin.design_point(cfg.inertia.matrix(), tr.tea.theta, cfg.orbit_rate,
+                             model=cfg.design.model, drf_mode=cfg.design.drf_mode)
+    ctrb = ctrb_mod.controllability(model)
+    result = LinearizeResult(cfg, tr.tea, model, ctrb)
+    names = list(model.state_names)
+    eig = np.linalg.eigvals(model.A)
+    result.eigenvalues = eig
+    items = {
+        "A": Dataset(model.A, UNIT_A, "state matrix of eq 4.46 (x' = A x + B u + G w)",
+                     names, dims=("state", "state_col")),
+        "B": Dataset(model.B, UNIT_B, "control input matrix (u enters ω' as −u, h' as +u)",
+                     names, dims=("state", "axis")),
+        "G": Dataset(model.G, UNIT_B, "disturbance input matrix", names, dims=("state", "axis")),
+        "state_names": Dataset(np.array(names, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
+        "state_units": Dataset(np.array(model.state_units, dtype="S"), "1", "unit of each state", dims=("state",)),
+        "scales": Dataset(model.scales, UNIT_STATE, "nominal state magnitudes", names),
+        "theta_star": Dataset(model.theta_star, "rad", "linearization attitude", AXES),
+        "omega_star": Dataset(model.omega_star, "rad/s", "ω* at the linearization attitude (eq 4.3)", AXES),
+        "tea": Dataset(tr.tea.theta, "rad", "TEA of the full inertia", AXES),
+        "inertia_design": Dataset(model.inertia, "slug*ft^2", "inertia of the design model", AXES),
+        "inertia": Dataset(cfg.inertia.matrix(), "slug*ft^2", "full inertia", AXES),
+        "eigenvalues": Dataset(eig, "rad/s", "open-loop eigenvalues of A", dims=("eigenvalue",)),
+        "controllability_min_ratio": Dataset(ctrb.min_ratio, "1",
+                                             "min σmin([A−sI, B])/σmax over eigenvalues and s=0, scaled"),
+        "controllability_rank": Dataset(ctrb.rank, "1", f"PBH rank with tolerance {ctrb.tol:g}"),
+    }
+    items = _in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
+    path = write_h5(cfg.run_dir() / "linearize.h5", items, cfg.to_yaml(),
+                    {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
+    return result, path

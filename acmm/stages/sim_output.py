@@ -1,0 +1,153 @@
+"""What the simulation stage writes: the ``sim.h5`` items and the simulation figures.
+
+Split from :mod:`acmm.stages.runners` (:func:`acmm.stages.runners.run_simulate` calls these), as
+:mod:`acmm.stages.design_output` is for the design stage.  The outputs are those of the report's ch. 6
+simulations: attitude error, rates, torque and CMG momentum per axis (Figs 6.2–6.13, 6.20–6.30),
+the inertia steps (Figs 6.14–6.19) and the per-level statistics; the disturbance torque is that of
+eq 3.9.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from acmm.model import kinematics as kin
+from acmm.simulate.scenario import level_peak_momentum
+from acmm.stages.common import UNIT_K, UNIT_STATE
+from acmm_qpp.results import Dataset
+
+AXES = ["roll", "pitch", "yaw"]
+
+
+def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[dict, dict]:
+    """The datasets and root attributes of ``sim.h5`` (imperial units; the stage converts).
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The run's config (orbit rate n, rad/s).
+    sc : acmm.simulate.scenario.Scenario
+        The simulated scenario (levels, gains).
+    r : acmm.simulate.scenario.SimResult
+        The trajectory.
+    stats : list of dict
+        :func:`acmm.simulate.scenario.level_statistics` of ``r``.
+    design_hash : str
+        Hash of the design the gains come from.
+    wall : float
+        Integration wall time, s.
+
+    Returns
+    -------
+    items : dict
+        Path → :class:`acmm_qpp.results.Dataset` (nested dicts are groups).
+    attrs : dict
+        Root attributes (verdict, stop time, step counts).
+    """
+    from acmm.simulate import kernel as sim_mod
+    from acmm.simulate import scenario as scen
+
+    n = cfg.orbit_rate
+    orbits = r.t * n / (2 * np.pi)
+    err = scen.attitude_error(sc, r)
+    rel_rate = np.degrees(r.state[:, 0:3] - kin.lvlh_rate_in_body(r.state[:, 3:6], n))
+    # one row per level of the stair-case: NaN for a level never reached (a diverged run), and
+    # a steady error only for a level that reached the second half of its dwell
+    n_levels = len(sc.level_start)
+    steady = np.full((n_levels, 3), np.nan)
+    for st in stats:
+        steady[st["level"]] = st["steady_error_deg"]
+    peak = level_peak_momentum(sc, r)
+    items = {
+        "t": Dataset(r.t, "s", "time", dims=("t",)),
+        "orbits": Dataset(orbits, "orbit", "time in orbits (2π/n)", dims=("t",)),
+        "theta": Dataset(r.state[:, 3:6], "rad", "attitude (roll, pitch, yaw), 2-3-1 from LVLH", AXES,
+                         dims=("t", "axis")),
+        "attitude_error": Dataset(err, "rad", "θ − θ̂* of the level in force", AXES, dims=("t", "axis")),
+        "omega": Dataset(r.state[:, 0:3], "rad/s", "absolute body rate", AXES, dims=("t", "axis")),
+        "rate_rel_lvlh": Dataset(rel_rate, "deg/s", "body rate relative to LVLH", AXES, dims=("t", "axis")),
+        "h": Dataset(r.state[:, 6:9], "ft*lbf*s", "CMG momentum", AXES, dims=("t", "axis")),
+        "int_h": Dataset(r.state[:, 9:12], "ft*lbf*s^2", "momentum integral (controller state)", AXES, dims=("t", "axis")),
+        "drf": Dataset(r.state[:, 12:24], UNIT_STATE, "DRF states", scen.PLAIN_STATE_NAMES[12:],
+                       dims=("t", "drf_state")),
+        "u_cmd": Dataset(r.u_cmd, "ft*lbf", "commanded torque −K x (before saturation)", AXES, dims=("t", "axis")),
+        "u": Dataset(r.u, "ft*lbf", "delivered torque (after torque and momentum saturation)", AXES, dims=("t", "axis")),
+        "w": Dataset(r.w, "ft*lbf", "disturbance torque (eq 3.9)", AXES, dims=("t", "axis")),
+        "level": Dataset(r.level, "1", "index of the inertia level in force", dims=("t",)),
+        "torque_saturated": Dataset(r.torque_saturated, "1", "torque clipped per axis", AXES, dims=("t", "axis")),
+        "momentum_saturated": Dataset(r.momentum_saturated, "1", "CMG axis at its momentum limit", AXES, dims=("t", "axis")),
+        "levels": {
+            "start": Dataset(sc.level_start, "s", "start time of each level", dims=("level",)),
+            "inertia": Dataset(sc.inertia, "slug*ft^2", "plant inertia per level", dims=("level", "axis", "axis_col")),
+            "bias": Dataset(sc.bias, "ft*lbf", "bias per level", AXES, dims=("level", "axis")),
+            "tea_estimate": Dataset(sc.theta_est, "rad", "TEA estimate used by the controller", AXES,
+                                    dims=("level", "axis")),
+            "gain": Dataset(sc.gain, UNIT_K, "gain in use per level (u = −K x)",
+                            dims=("level", "axis", "state")),
+            "steady_error": Dataset(steady, "deg", "max |θ − θ̂*| over the second half of each level "
+                                    "(NaN: the run ended before it)", AXES, dims=("level", "axis")),
+            "peak_momentum": Dataset(peak, "ft*lbf*s", "peak |h_i| over each level (NaN: not reached)",
+                                     dims=("level",)),
+        },
+        "wall_time": Dataset(wall, "s", "integration wall time"),
+    }
+    attrs = {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
+             "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
+             "design_hash": design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
+    return items, attrs
+
+
+def prepare_sim_figures(cfg) -> None:
+    """Have the figure worker build the simulation figures' skeletons while the stage computes
+    (:func:`acmm.plots.prebuild`; nothing without a worker).
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The run's config (its ``output.units``, ``"imperial"`` or ``"SI"``, label the figures).
+    """
+    from acmm.plots import base as plot_base
+    from acmm.plots import simulation as sim_plots
+    from acmm_qpp import figure_worker
+
+    for kind in ("axis_histories", "summary", "inertia_histories"):
+        figure_worker.prepare(plot_base.prebuild, kind, cfg.output.units, for_figure=kind)
+
+
+def sim_figures(cfg, sc, r, stats: list, items: dict) -> None:
+    """Hand the simulation figures (axis histories, summary, inertia steps: the costliest first)
+    to :func:`acmm_qpp.figure_worker.submit` (drawn in the figure worker when one runs, else here).
+
+    ``items`` are :func:`sim_items` (imperial units); the figures use ``cfg.output.units``
+    (Figs 6.2–6.30 of ch. 6).
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The run's config (name, run directory, design model, output unit system).
+    sc : acmm.simulate.scenario.Scenario
+        The simulated scenario (level start times s, inertia per level slug·ft²).
+    r : acmm.simulate.scenario.SimResult
+        The trajectory (state in rad, rad/s, ft·lbf·s; delivered torque ``u`` in ft·lbf).
+    stats : list of dict
+        :func:`acmm.simulate.scenario.level_statistics` of ``r``.
+    items : dict
+        The datasets of :func:`sim_items` (``orbits``, ``attitude_error`` rad,
+        ``rate_rel_lvlh`` deg/s).
+    """
+    from acmm.plots import base as plot_base
+    from acmm.plots import simulation as sim_plots
+    from acmm_qpp import figure_worker
+
+    d = cfg.run_dir()
+    units = cfg.output.units
+    orbits = items["orbits"].data
+    err_deg = np.degrees(items["attitude_error"].data)
+    h = r.state[:, 6:9]
+    title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
+    figure_worker.submit(sim_plots.axis_histories, orbits, err_deg, items["rate_rel_lvlh"].data, r.u, h, title,
+                         d / "sim_axes.png", units=units)
+    figure_worker.submit(sim_plots.summary, orbits, err_deg, h, r.u, stats, r.verdict, cfg.name,
+                         d / "sim_summary.png", units=units)
+    if len(sc.level_start) > 1:
+        figure_worker.submit(sim_plots.inertia_histories, orbits, sc.inertia[r.level], d / "sim_inertia.png",
+                             units=units)

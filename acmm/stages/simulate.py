@@ -1,0 +1,107 @@
+"""The simulation stage: the nonlinear closed loop of eqs 3.1–3.9 under the scheduled gains
+through the stair-case of inertia levels (ch. 6), and its ``sim.h5`` and figures.
+
+Split from :mod:`acmm.stages.runners` (issue 12).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from acmm.io.config import Config
+from acmm.stages.common import _as_config, _define_units, _in_system
+from acmm.stages.design import design_for
+from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.results import write_h5
+from acmm_qpp.runlock import locked_stage
+
+
+# ---------------------------------------------------------------------------------------------
+# simulation
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class SimulateResult:
+    """A nonlinear closed-loop run (ch. 6).
+
+    Attributes
+    ----------
+    config : acmm.io.config.Config
+        The validated config.
+    scenario : acmm.simulate.scenario.Scenario
+        What was simulated (levels, gains, limits).
+    sim : acmm.simulate.scenario.SimResult
+        The run: t (s), state (report units), torques (ft·lbf), verdict.
+    stats : list of dict
+        Per-level statistics (:func:`acmm.simulate.scenario.level_statistics`).
+    design_note : str
+        Whether the design was reused or computed.
+    wall_time : float
+        Integration wall time, s.
+    """
+
+    config: Config
+    scenario: object
+    sim: object
+    stats: list
+    design_note: str
+    wall_time: float
+
+    @property
+    def orbits_simulated(self) -> float:
+        """Simulated time in orbits (2π/n)."""
+        return float(self.sim.t[-1] * self.config.orbit_rate / (2 * np.pi))
+
+    @property
+    def stop_orbit(self) -> float:
+        """Time the integration stopped at, in orbits (2π/n)."""
+        return float(self.sim.stop_time * self.config.orbit_rate / (2 * np.pi))
+
+
+@locked_stage(_as_config)
+@owns_outputs("simulate", lambda c: _as_config(c))
+def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[SimulateResult, Path]:
+    """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures.
+
+    Parameters
+    ----------
+    config : acmm.io.config.Config or path-like or str
+        The config, or a config file / packaged name to load.
+    progress : callable, optional
+        ``progress(name)``, called after each design point when designing.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+
+    Returns
+    -------
+    tuple
+        (:class:`SimulateResult`, pathlib.Path of ``sim.h5``).
+    """
+    import time
+
+    from acmm.stages.common import FIGURE_WARM
+    from acmm_qpp import figure_worker
+
+    cfg = _as_config(config)
+    want_figures = cfg.output.figures if figures is None else figures
+    with figure_worker.session(want_figures, FIGURE_WARM):       # first: the worker starts before numba loads
+        from acmm.stages import sim_output as out
+        from acmm.simulate import kernel as sim_mod
+        from acmm.simulate import scenario as scen
+
+        if want_figures:
+            out.prepare_sim_figures(cfg)
+        table, note = design_for(cfg, progress, figures)
+        sc = scen.scenario_from_config(cfg, table)
+        t0 = time.perf_counter()
+        r = sim_mod.simulate(sc)
+        wall = time.perf_counter() - t0
+        stats = scen.level_statistics(sc, r)
+        result = SimulateResult(cfg, sc, r, stats, note, wall)
+        items, attrs = out.sim_items(cfg, sc, r, stats, table.design_hash, wall)
+        if want_figures:
+            out.sim_figures(cfg, sc, r, stats, items)
+        items = _define_units(_in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
+        path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
+    return result, path

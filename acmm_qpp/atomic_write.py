@@ -1,0 +1,239 @@
+"""Atomic file writing: a temporary file beside the target, renamed into place on success.
+
+An interrupted or failed write never leaves a partial file nor the directories created for it;
+an OS error (read-only, not a directory, no space, name too long) becomes one
+:class:`~acmm_qpp.errors.OutputError` line (exit 4).  Bytes are written with plain ``os.write``
+calls (HDF5 files and figures are built in memory first, :func:`in_memory`).
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+#: Called with the path of each file :func:`atomic_path` completes (:mod:`acmm_qpp.outputs` adds
+#: its recorder on import, so this module need not import it).
+WRITTEN_HOOKS: list = []
+
+
+def make_dirs(directory: str | Path) -> list[Path]:
+    """Create ``directory`` and its missing parents; return the ones created (outermost first),
+    so that a refused run can remove them again (:func:`remove_empty_dirs`).
+
+    Parameters
+    ----------
+    directory : path-like
+        The directory to create.
+
+    Returns
+    -------
+    list of Path
+        The directories created, outermost first.
+
+    Raises
+    ------
+    NotADirectoryError
+        ``directory`` exists but is not a directory.
+    """
+    d = Path(directory)
+    missing = []
+    while not os.path.lexists(d) and d != d.parent:
+        missing.append(d)
+        d = d.parent
+    created = []
+    try:
+        for q in reversed(missing):
+            try:
+                os.mkdir(q)
+            except FileExistsError:
+                if not os.path.isdir(q):
+                    raise
+                continue
+            created.append(q)
+    except BaseException:
+        remove_empty_dirs(created)
+        raise
+    if not os.path.isdir(directory):
+        raise NotADirectoryError(20, "Not a directory", str(directory))
+    return created
+
+
+def remove_empty_dirs(created: list[Path]) -> None:
+    """Remove the directories of :func:`make_dirs` again, innermost first, while they are empty.
+
+    Parameters
+    ----------
+    created : list of Path
+        Directories as returned by :func:`make_dirs`.
+    """
+    for q in reversed(created):
+        try:
+            os.rmdir(q)
+        except OSError:
+            break
+
+
+def output_error(exc: OSError, what: str, where: str | Path):
+    """A one-line :class:`~acmm_qpp.errors.OutputError` (exit 4) for an OS error while writing.
+
+    Parameters
+    ----------
+    exc : OSError
+        The error (an OutputError is returned as it is).
+    what : str
+        What was being written ("results", "figure", ...).
+    where : path-like
+        Where it was being written.
+
+    Returns
+    -------
+    OutputError
+        The error to raise.
+    """
+    from acmm_qpp.errors import OutputError
+
+    if isinstance(exc, OutputError):
+        return exc
+    why = exc.strerror or str(exc)
+    return OutputError(f"cannot write {what} {where}: {why}")
+
+
+@contextmanager
+def atomic_path(path: str | Path, what: str = "results"):
+    """Yield a temporary path beside ``path``; on success it is renamed onto ``path``.
+
+    The file gets the usual permissions (0666 & ~umask, not mkstemp's 0600); on any error the
+    temporary file is removed, directories created for it are removed again, ``path`` is left
+    as it was, and an OS error (read-only, not a directory, no space, name too long, a
+    directory where the file should go) becomes one :class:`~acmm_qpp.errors.OutputError` line.
+
+    Parameters
+    ----------
+    path : path-like
+        The target file.
+    what : str
+        What is written, for error messages.
+
+    Yields
+    ------
+    Path
+        The temporary path to write to.
+
+    Raises
+    ------
+    OutputError
+        A directory of that name is in the way, or an OS error occurred.
+    output_error
+        (the :class:`~acmm_qpp.errors.OutputError` built by :func:`output_error` from an OS error)
+    """
+    from acmm_qpp.errors import OutputError
+
+    path = Path(path)
+    created: list[Path] = []
+    try:
+        created = make_dirs(path.parent)
+        if os.path.isdir(path):
+            remove_empty_dirs(created)
+            raise OutputError(f"cannot write {what} {path}: a directory of that name is in the way")
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        remove_empty_dirs(created)
+        raise output_error(exc, what, path) from None
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+        for hook in WRITTEN_HOOKS:
+            hook(path)
+    except BaseException as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        remove_empty_dirs(created)
+        if isinstance(exc, OSError):
+            raise output_error(exc, what, path) from None
+        raise
+
+
+def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
+    """Write ``data`` atomically with plain ``os.write`` calls and an fsync (see
+    :func:`atomic_path`): a full disk is then an ordinary OSError → OutputError, never a crash
+    inside a C library, and no temporary file survives.
+
+    Parameters
+    ----------
+    path : path-like
+        The target file.
+    data : bytes-like
+        The content.
+    what : str
+        What is written, for error messages.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    with atomic_path(path, what) as tmp:
+        fd = os.open(tmp, os.O_WRONLY | os.O_TRUNC | getattr(os, "O_CLOEXEC", 0))
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    return Path(path)
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write a text file atomically (see :func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : path-like
+        The target file.
+    text : str
+        The content, written as UTF-8.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    return write_bytes(path, text.encode("utf-8"), "text")
+
+
+@contextmanager
+def in_memory(path: Path, what: str = "results"):
+    """Yield a :class:`io.BytesIO`; afterwards its bytes are written to ``path`` atomically.
+
+    HDF5 files and figures are built in memory so that the libraries (HDF5 segfaults on ENOSPC)
+    never write to the disk themselves.
+
+    Parameters
+    ----------
+    path : path-like
+        The target file.
+    what : str
+        What is written, for error messages.
+
+    Yields
+    ------
+    io.BytesIO
+        The buffer to write to.
+    """
+    import io
+
+    buf = io.BytesIO()
+    yield buf
+    view = buf.getbuffer()                # no copy of a large file
+    try:
+        write_bytes(path, view, what)
+    finally:
+        view.release()

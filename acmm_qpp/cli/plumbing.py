@@ -1,0 +1,359 @@
+"""Shared CLI plumbing: one clear message and a documented exit code for every user error
+(:mod:`acmm_qpp.errors` lists the codes)."""
+from __future__ import annotations
+
+import functools
+import sys
+
+import typer
+
+from acmm_qpp.cli.failures import (EXIT_PIPE_CLOSED, _interrupt_behind, _note_compiled_cache, _note_warnings, _quiet_stdout)
+from acmm_qpp.errors import plain_failure as _plain_failure
+from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError
+
+
+def fail(message: str, code: int = EXIT_INPUT) -> None:
+    """Print ``error: message`` on stderr (one line) and exit with ``code`` (no traceback).
+
+    Parameters
+    ----------
+    message : str
+        The error; whitespace runs are joined to one space and it is cut to :data:`MAX_MESSAGE`
+        characters.
+    code : int, optional
+        Exit code (:mod:`acmm_qpp.errors`; default ``EXIT_INPUT``, 2).
+
+    Raises
+    ------
+    typer.Exit
+        Always, with ``code``.
+    """
+    message = " ".join(str(message).split())
+    if len(message) > MAX_MESSAGE:        # e.g. a megabyte-long key echoed in a field name
+        message = message[:MAX_MESSAGE - 20] + " … (truncated)"
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code)
+
+
+MAX_MESSAGE = 600
+
+
+def user_errors(fn):
+    """Decorator for typer commands: turn :class:`AcmmError` into one line on stderr and the
+    error's ``exit_code``.
+
+    numpy/scipy warnings are captured: a refused run prints only its error line; a successful
+    one a single ``note:`` line counting them.  Numerical exceptions outside the hierarchy
+    (``LinAlgError``, ``FloatingPointError``…) exit 3, OS errors 4, a ``RecursionError`` 2, all
+    on one line.
+
+    Parameters
+    ----------
+    fn : callable
+        The command function.
+
+    Returns
+    -------
+    callable
+        The wrapped command (same name, docstring and signature, so typer sees the same options).
+    """
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        import warnings
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")      # each distinct warning once (a hot loop stays cheap)
+            try:
+                out = fn(*args, **kwargs)
+            except AcmmError as exc:
+                from acmm_qpp.hints import with_hint
+
+                product = "qpp" if fn.__module__.split(".")[0] == "qpp" else "acmm"
+                fail(with_hint(exc, product), exc.exit_code)
+            except KeyboardInterrupt as exc:
+                interrupted(exc)
+            except BrokenPipeError:     # the reader of stdout went away (`| head`): not an I/O failure
+                _quiet_stdout()         # of the results, which the stage wrote before printing
+                sys.exit(EXIT_PIPE_CLOSED)
+            except Exception as exc:  # noqa: BLE001 (re-raised unless a known kind of failure)
+                signal = _interrupt_behind(exc)
+                if signal is not None:      # Python wrapped it (a Ctrl-C in a class body: RuntimeError)
+                    interrupted(signal)
+                plain = _plain_failure(exc)
+                if plain is None:
+                    raise
+                fail(*plain)
+        _note_warnings([w for w in caught if not issubclass(w.category, (DeprecationWarning,
+                                                                           PendingDeprecationWarning))])
+        _note_compiled_cache()
+        return out
+
+    return wrapper
+
+
+# ---------------------------------------------------------------------------------------------
+# command-line conventions (issue 14): exit codes of click errors, --version, overrides, --strict
+# ---------------------------------------------------------------------------------------------
+from typer.core import TyperGroup  # noqa: E402
+
+from acmm_qpp.errors import EXIT_USAGE, EXIT_VERDICT  # noqa: E402
+
+#: Positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm_qpp.overrides`).
+OverridesArg = typer.Argument(None, metavar="KEY=VALUE",
+                              help="overrides of config values, dotted: simulation.orbits=10 "
+                                   "design.sector.sigma=0.6 (validated like the file; ~key removes one)",
+                              show_default=False)
+StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes with a failing verdict "
+                                                 "(for CI)")
+
+
+def _click():
+    """The click that typer uses: recent typer vendors it as ``typer._click``, older ones use click."""
+    import types
+
+    try:
+        from typer._click import exceptions
+    except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
+        from click import exceptions
+    return types.SimpleNamespace(exceptions=exceptions)
+
+
+def _one_line_usage(exc) -> str:
+    """A click usage error as one line: the message and where to get help."""
+    click = _click()
+
+    msg = " ".join(exc.format_message().replace("Value error, ", "").split())
+    ctx = getattr(exc, "ctx", None)
+    if ctx is not None and not isinstance(exc, click.exceptions.NoArgsIsHelpError):
+        msg += f" (see '{ctx.command_path} --help')"
+    return msg
+
+
+def interrupted(exc: BaseException) -> None:
+    """Report Ctrl-C ("interrupted", exit 130) or SIGTERM/SIGHUP (:class:`acmm_qpp.errors.Terminated`:
+    "terminated by signal N", exit 128 + N) on one line and exit.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The ``KeyboardInterrupt`` (or ``typer.Abort``) caught.
+    """
+    code = getattr(exc, "exit_code", None)
+    if isinstance(code, int):
+        typer.echo(f"terminated by signal {code - 128}", err=True)
+        sys.exit(code)
+    typer.echo("interrupted", err=True)
+    sys.exit(EXIT_INTERRUPTED)
+
+
+class ExitCodeGroup(TyperGroup):
+    """The apps' click group: click's own errors get the documented exit codes, on one line.
+
+    * a usage error (unknown option or command, missing argument, extra argument) → 64
+      (``EXIT_USAGE``);
+    * a bad *value* of an option or argument (``-j 0``, ``--kind foo``) → 2 (``EXIT_INPUT``, like a
+      bad value in a config file);
+    * Ctrl-C → 130; SIGTERM / SIGHUP → 143 / 129 (:func:`acmm_qpp.signals.terminate_like_ctrl_c`).
+    """
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        """Run the app like :meth:`click.Group.main`, mapping click's errors to the exit codes.
+
+        Parameters
+        ----------
+        args : list of str, optional
+            Command-line arguments (default: ``sys.argv[1:]``).
+        prog_name : str, optional
+            Program name shown in usage lines.
+        complete_var : str, optional
+            Environment variable of shell completion.
+        standalone_mode : bool, optional
+            False: click's own behaviour (exceptions propagate, the return value is returned).
+        **extra : dict
+            Passed on to click.
+
+        Returns
+        -------
+        object
+            The command's return value, only when ``standalone_mode`` is False (otherwise the
+            process exits).
+        """
+        click = _click()
+
+        if not standalone_mode:
+            try:
+                return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+            except _Interrupted as exc:          # the caller's own KeyboardInterrupt, as click gives it
+                raise exc.signal from None
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.exceptions.NoArgsIsHelpError as exc:
+            typer.echo(exc.ctx.get_help() if exc.ctx is not None else exc.format_message(), err=True)
+            sys.exit(EXIT_USAGE)
+        except click.exceptions.MissingParameter as exc:
+            typer.echo(f"error: {_one_line_usage(exc)}", err=True)
+            sys.exit(EXIT_USAGE)
+        except click.exceptions.BadParameter as exc:
+            typer.echo(f"error: {_one_line_usage(exc)}", err=True)
+            sys.exit(EXIT_INPUT)
+        except click.exceptions.UsageError as exc:
+            typer.echo(f"error: {_one_line_usage(exc)}", err=True)
+            sys.exit(EXIT_USAGE)
+        except click.exceptions.ClickException as exc:
+            typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
+            sys.exit(exc.exit_code)
+        except (typer.Abort, KeyboardInterrupt) as exc:
+            interrupted(exc)
+        except _Interrupted as exc:
+            interrupted(exc.signal)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+    def make_context(self, *args, **kwargs):
+        """Click's ``make_context``; a signal while it parses is raised as :class:`_Interrupted`
+        (typer made it a silent exit 130, a SIGTERM included).
+
+        Parameters
+        ----------
+        *args, **kwargs : object
+            Passed on to click.
+
+        Returns
+        -------
+        click.Context
+            The group's context.
+
+        Raises
+        ------
+        _Interrupted
+            Ctrl-C, SIGTERM or SIGHUP meanwhile.
+        """
+        try:
+            return super().make_context(*args, **kwargs)
+        except KeyboardInterrupt as exc:
+            raise _Interrupted(exc) from exc
+
+    def invoke(self, ctx):
+        """Click's ``invoke`` (the subcommand's parsing, then the command), a signal outside the
+        command's own handling raised as :class:`_Interrupted`.
+
+        Parameters
+        ----------
+        ctx : click.Context
+            The group's context.
+
+        Returns
+        -------
+        object
+            The command's return value.
+
+        Raises
+        ------
+        _Interrupted
+            Ctrl-C, SIGTERM or SIGHUP meanwhile.
+        """
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt as exc:
+            raise _Interrupted(exc) from exc
+
+
+class _Interrupted(BaseException):
+    """A Ctrl-C / SIGTERM / SIGHUP that arrived while click parsed, carried past typer (which
+    maps a ``KeyboardInterrupt`` there to exit 130 without a word) to :func:`interrupted`."""
+
+    def __init__(self, signal: KeyboardInterrupt) -> None:
+        super().__init__(str(signal))
+        self.signal = signal
+
+
+def version_option():
+    """An eager ``--version`` option printing the package version.
+
+    Returns
+    -------
+    typer.models.OptionInfo
+        The option; its callback prints ``acmm-qpp <version>`` and exits 0 (``typer.Exit``).
+    """
+
+    def show(value: bool) -> None:
+        if value:
+            from importlib.metadata import PackageNotFoundError, version
+
+            try:
+                v = version("acmm-qpp")
+            except PackageNotFoundError:  # pragma: no cover (source tree without install)
+                v = "unknown (not installed)"
+            typer.echo(f"acmm-qpp {v}")
+            raise typer.Exit(0)
+
+    return typer.Option(False, "--version", callback=show, is_eager=True,
+                        help="print the version and exit")
+
+
+def strict_exit(strict: bool, failed: bool, why: str) -> None:
+    """With ``--strict``, a failing verdict exits 1 (``EXIT_VERDICT``) after the output, with one line.
+
+    Parameters
+    ----------
+    strict : bool
+        The ``--strict`` option was given.
+    failed : bool
+        The run's verdict is failing.
+    why : str
+        The one-line reason printed (``strict: why``) on stderr.
+
+    Raises
+    ------
+    typer.Exit
+        With code 1 when ``strict`` and ``failed``.
+    """
+    if strict and failed:
+        typer.echo(f"strict: {' '.join(why.split())}", err=True)
+        raise typer.Exit(EXIT_VERDICT)
+
+
+def run_app(app) -> None:
+    """Run a typer ``app`` and leave (the console entry points, issue 16): the atexit handlers
+    run and the output is flushed, then ``os._exit`` skips the interpreter's teardown (numba's
+    ~0.2 s).  From the moment the app has returned, SIGINT, SIGTERM and SIGHUP are ignored: the
+    run is finished and written, and a Ctrl-C landing in the exit path gave a KeyboardInterrupt
+    traceback with exit 0, or killed a finished run by the signal (a review).  With another
+    non-daemon thread alive (a Dask client) the usual exit is kept.
+
+    Parameters
+    ----------
+    app : typer.Typer
+        The application.
+    """
+    import os
+    import signal
+    import sys
+    import threading
+
+    try:
+        try:
+            app()
+        except KeyboardInterrupt as exc:    # while typer built the command, before the group's main
+            interrupted(exc)
+    except SystemExit as exc:
+        others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
+        if others or threading.current_thread() is not threading.main_thread():
+            raise
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            try:
+                signal.signal(sig, signal.SIG_IGN)
+            except (OSError, ValueError):
+                pass
+        code = exc.code
+        if not isinstance(code, int):
+            if code is not None:
+                print(code, file=sys.stderr)
+            code = 0 if code is None else 1
+        import atexit
+
+        from acmm_qpp.forked import flush_std_streams
+
+        atexit._run_exitfuncs()
+        flush_std_streams()
+        os._exit(code)

@@ -1,0 +1,147 @@
+"""Terminal progress for the command lines (rich), on stderr and only on an interactive terminal.
+
+When stderr is not a TTY (a pipe, a CI log, a test) every function here is silent, so errors
+stay one line and captured output is unchanged.  ``ACMM_PROGRESS=0`` silences it on a terminal
+too, ``ACMM_PROGRESS=1`` forces it (for demonstrations).
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from pathlib import Path
+
+
+def enabled() -> bool:
+    """Progress is shown: stderr is a terminal (or ``ACMM_PROGRESS=1``), and not ``ACMM_PROGRESS=0``.
+
+    Returns
+    -------
+    bool
+        True when progress output goes to stderr.
+    """
+    env = os.environ.get("ACMM_PROGRESS")
+    if env is not None and env.strip() in ("0", "1"):
+        return env.strip() == "1"
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+def _console():
+    from rich.console import Console
+
+    return Console(stderr=True, force_terminal=True if os.environ.get("ACMM_PROGRESS") == "1" else None)
+
+
+def note(message: str) -> None:
+    """One line on stderr when progress is enabled (e.g. the numba first-compile notice).
+
+    Parameters
+    ----------
+    message : str
+        The line, printed verbatim (no rich markup).
+    """
+    if enabled():
+        _console().print(message, markup=False, highlight=False)
+
+
+
+
+
+
+@contextlib.contextmanager
+def status(message: str):
+    """A spinner with ``message`` while the block runs (transient); yields ``update(text)``.
+
+    Parameters
+    ----------
+    message : str
+        Text shown next to the spinner.
+
+    Yields
+    ------
+    callable
+        ``update(text)`` replaces the text (does nothing when progress is disabled).
+    """
+    if not enabled():
+        yield lambda text: None
+        return
+    with _console().status(message) as st:
+        yield lambda text: st.update(text)
+
+
+class Steps:
+    """A progress bar over ``total`` steps with elapsed time and ETA (``rate`` adds steps/s).
+
+    Use as a context manager; ``advance(text)`` moves one step and shows ``text``; ``describe(text)``
+    only changes the text (e.g. "writing figures" after the last step).  Silent when disabled.
+
+    Parameters
+    ----------
+    description : str
+        Text shown before the bar.
+    total : int or None
+        Number of steps (None: unknown, the bar pulses).
+    rate : bool, optional
+        Also show the speed in steps/s.
+    """
+
+    def __init__(self, description: str, total: int | None, rate: bool = False):
+        self.description = description
+        self.total = total
+        self.rate = rate
+        self._p = None
+        self._task = None
+
+    def __enter__(self):
+        if enabled():
+            from rich.progress import (BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn,
+                                       TimeElapsedColumn, TimeRemainingColumn)
+
+            cols = [SpinnerColumn(), TextColumn("{task.description}", markup=False), BarColumn(),
+                    MofNCompleteColumn(), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn()]
+            if self.rate:
+                cols.insert(4, TextColumn("{task.fields[rate]}", markup=False))
+            self._p = Progress(*cols, console=_console(), transient=True)
+            self._p.__enter__()
+            self._task = self._p.add_task(self.description, total=self.total, rate="")
+        return self
+
+    def __exit__(self, *exc):
+        if self._p is not None:
+            self._p.__exit__(*exc)
+        return False
+
+    def advance(self, text: str | None = None, n: int = 1) -> None:
+        """Move the bar on by ``n`` steps.
+
+        Parameters
+        ----------
+        text : str, optional
+            New text before the bar (default: keep it).
+        n : int, optional
+            Number of steps done.
+        """
+        if self._p is None:
+            return
+        kw = {}
+        if text is not None:
+            kw["description"] = text
+        if self.rate:
+            t = self._p.tasks[0]
+            speed = t.finished_speed or t.speed
+            kw["rate"] = f"{speed:.2f}/s" if speed else ""
+        self._p.update(self._task, advance=n, **kw)
+
+    def describe(self, text: str) -> None:
+        """Change the text before the bar without moving it.
+
+        Parameters
+        ----------
+        text : str
+            New text.
+        """
+        if self._p is not None:
+            self._p.update(self._task, description=text)

@@ -1,0 +1,400 @@
+"""YAML config files: bounded reading, structure checks, duplicate keys, pydantic validation.
+
+Shared by the acmm and qpp configs (:mod:`acmm.io.config`, :mod:`qpp.io.config`) and the sweep spec:
+:func:`read_yaml` reads a file (or a config packaged with the distribution) with the bounds of
+:mod:`acmm_qpp.limits`, :func:`validate_model` turns a mapping into a pydantic model, and any
+failure becomes one :class:`~acmm_qpp.errors.ConfigError` line naming the file, field or cause.
+"""
+from __future__ import annotations
+
+import errno
+import os
+from importlib import resources
+from pathlib import Path
+
+import yaml
+from pydantic import ValidationError
+
+from acmm_qpp import PACKAGED_CONFIGS
+from acmm_qpp.errors import ConfigError
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """SafeLoader that rejects duplicate keys (PyYAML silently keeps the last one)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = set()
+        for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":     # `<<: *anchor`, merged by SafeLoader
+                continue                                       # (its keys may be overridden here)
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r}", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep)
+
+
+def _format_error(exc: ValidationError, model_cls=None) -> str:
+    from acmm_qpp.config_model import BOOLEAN_AS_NUMBER
+    from acmm_qpp.hints import prioritize, unknown_key_hint
+
+    err = prioritize(exc.errors())[0]
+    loc = ".".join(str(p) for p in err["loc"])
+    if err["type"] == BOOLEAN_AS_NUMBER:                     # a model-level check naming its field
+        loc = f"{loc}.{err['ctx']['field']}" if loc else err["ctx"]["field"]
+    loc = loc or "config"
+    msg = err["msg"]
+    for prefix in ("Value error, ", "Assertion failed, "):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix):]
+    if err["type"] == "extra_forbidden":
+        msg = "unknown key" + (unknown_key_hint(model_cls, tuple(err["loc"])) if model_cls else "")
+    extra = f" (and {len(exc.errors()) - 1} more)" if len(exc.errors()) > 1 else ""
+    return f"{loc}: {msg}{extra}"
+
+
+def require_mapping(data: object, source: str = "config") -> dict:
+    """``data`` if it is a mapping, else a one-line :class:`ConfigError`.
+
+    Parameters
+    ----------
+    data : object
+        Parsed YAML.
+    source : str
+        Name of the file or section, for the message.
+
+    Returns
+    -------
+    dict
+        ``data``.
+
+    Raises
+    ------
+    ConfigError
+        ``data`` is not a mapping.
+    """
+    if not isinstance(data, dict):
+        raise ConfigError(f"{source}: the top level must be a mapping of keys to values")
+    return data
+
+
+def validate_model(model_cls, data: object, source: str = "config"):
+    """Validate a mapping (e.g. parsed YAML) into a pydantic ``model_cls``; a
+    :class:`ConfigError` naming the offending field otherwise.
+
+    Parameters
+    ----------
+    model_cls : type
+        The pydantic model class.
+    data : object
+        The mapping to validate.
+    source : str
+        Name of the file or section, for the message.
+
+    Returns
+    -------
+    pydantic.BaseModel
+        The validated ``model_cls`` instance.
+
+    Raises
+    ------
+    ConfigError
+        ``data`` is not a mapping or fails validation.
+    """
+    require_mapping(data, source)
+    try:
+        return model_cls.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(f"{source}: {_format_error(exc, model_cls)}") from None
+
+
+DEFAULT_CONFIG = "staircase.yaml"
+
+
+def packaged_config_path(name: str = DEFAULT_CONFIG) -> Path:
+    """Path of a config shipped inside the distribution (``configs/`` in the source tree).
+
+    Parameters
+    ----------
+    name : str
+        File name of the config.
+
+    Returns
+    -------
+    Path
+        Its path (which need not exist).
+    """
+    return Path(str(resources.files(PACKAGED_CONFIGS).joinpath(name)))
+
+
+def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
+    """Read a YAML config file (``None``: the packaged default); returns (data, path).
+
+    A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working directory (absent,
+    or a folder: a results root holds run folders named like the configs) is looked up among the
+    packaged configs; a path (``./mb3``, ``dir/mb3.yaml``) is only ever that file.  Duplicate keys
+    are rejected.
+
+    Parameters
+    ----------
+    path : path-like or None
+        The config file, a packaged config's name, or None for the packaged default.
+
+    Returns
+    -------
+    data : object
+        The parsed YAML.
+    path : Path
+        The file read.
+
+    Raises
+    ------
+    ConfigError
+        Missing or unreadable file, or invalid YAML (with line and column).
+    """
+    if path is None:
+        p = packaged_config_path()
+    elif not str(path).strip():
+        raise ConfigError("config path is empty: give a YAML file or the name of a packaged config")
+    else:
+        p = Path(path)
+        try:
+            present = p.exists()
+        except (OSError, ValueError) as exc:   # name too long, NUL byte, ...
+            raise ConfigError(f"cannot read config file {str(path)[:200]}: {getattr(exc, 'strerror', None) or exc}") from None
+        # a bare name (``mb3``, not ``./mb3`` or ``dir/mb3``: Path drops the ``./``) that is not a
+        # file here (absent, or a folder such as a run folder named like it): a packaged config
+        bare = len(p.parts) == 1 and not any(sep and sep in str(path) for sep in ("/", os.sep, os.altsep))
+        if bare and (not present or p.is_dir()):
+            candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml")
+            if candidate.exists():
+                p, present = candidate, True
+        if present and p.is_dir():
+            raise ConfigError(f"config path is a directory, not a file: {str(path)[:200]}")
+        if not present and p.is_symlink():     # a link to nothing, or a loop of links
+            raise ConfigError(f"cannot read config file {str(path)[:200]}: {_link_problem(p)}")
+        if not present:
+            from acmm_qpp.hints import missing_config_message
+
+            raise ConfigError(missing_config_message(path))
+    text = read_config_text(p)
+    try:
+        data = load_yaml_text(text, p)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        what = getattr(exc, "problem", None) or "not valid YAML"
+        raise ConfigError(f"{p}: not valid YAML: {what}{where}") from None
+    return data, p
+
+
+def _link_problem(p: Path) -> str:
+    """Why the symbolic link ``p`` leads to no file: a loop, or a target that does not exist."""
+    try:
+        os.stat(p)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "a loop of symbolic links"
+        return f"symbolic link to a missing target ({os.readlink(p)[:200]})"
+    return "symbolic link to no file"
+
+
+def load_yaml_text(text: str, source: object = "config") -> object:
+    """YAML text → Python objects, within the bounds of :func:`check_yaml_structure` and without
+    duplicate keys; what PyYAML itself fails on besides syntax (a list or mapping as a key, an
+    integer of more than 4300 digits) is a one-line :class:`ConfigError`.
+
+    Parameters
+    ----------
+    text : str
+        The YAML text (a file, or the value of an override).
+    source : object
+        Name of the file or override, for the message.
+
+    Returns
+    -------
+    object
+        The parsed data.
+
+    Raises
+    ------
+    ConfigError
+        Too deep, too many nodes, a cyclic alias, an unhashable key or an over-long integer.
+    yaml.YAMLError
+        A syntax error or a duplicate key.
+    """
+    check_yaml_structure(text, source)
+    try:
+        return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
+    except TypeError as exc:          # e.g. "unhashable type: 'list'" for ? [a, b]
+        raise ConfigError(f"{source}: not valid as a config: a key must be a plain value, not a list or a "
+                          f"mapping ({exc})") from None
+    except ValueError as exc:         # Python's int-string limit: "Exceeds the limit (4300 digits) ..."
+        raise ConfigError(f"{source}: not valid as a config: {str(exc).split(';')[0]}") from None
+
+
+def read_regular_file(p: Path, what: str = "config", cap: int | None = None,
+                      raise_how: str = "") -> bytes:
+    """The bytes of ``p``, read with bounds (issue 13): only a regular file (a FIFO, a device
+    such as ``/dev/zero`` or a directory is refused without blocking), at most ``cap`` bytes.
+
+    Parameters
+    ----------
+    p : Path
+        The file.
+    what : str, optional
+        What the file is, for the messages (``"config"``, ``"sweep journal"``).
+    cap : int, optional
+        Largest size accepted, bytes (None: any size a regular file has).
+    raise_how : str, optional
+        How to raise ``cap``, added to the "too large" message.
+
+    Returns
+    -------
+    bytes
+        Its contents.
+
+    Raises
+    ------
+    ConfigError
+        Not a readable regular file, or larger than ``cap``.
+    """
+    import os
+    import stat
+
+    too_large = f"{what} file {p} is too large: {{}} bytes" + (f" ({raise_how})" if raise_how else "")
+    try:
+        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
+    except OSError as exc:
+        raise ConfigError(f"cannot read {what} file {p}: {exc.strerror or exc}") from None
+    try:
+        st = os.fstat(fd)
+        if stat.S_ISDIR(st.st_mode):
+            raise ConfigError(f"{what} path is a directory, not a file: {p}")
+        if not stat.S_ISREG(st.st_mode):
+            raise ConfigError(f"{what} path is not a regular file (a FIFO, device or socket): {p}")
+        if cap is not None and st.st_size > cap:
+            raise ConfigError(too_large.format(st.st_size))
+        chunks, size = [], 0
+        while True:
+            chunk = os.read(fd, 1 << 16)
+            if not chunk:
+                break
+            size += len(chunk)
+            if cap is not None and size > cap:          # grew while being read
+                raise ConfigError(too_large.format(f"over {cap}"))
+            chunks.append(chunk)
+    except OSError as exc:
+        raise ConfigError(f"cannot read {what} file {p}: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+    return b"".join(chunks)
+
+
+def read_config_text(p: Path) -> str:
+    """The text of config file ``p``, read with bounds (:func:`read_regular_file`, at most
+    ``CONFIG_BYTES`` bytes of :mod:`acmm_qpp.limits`), UTF-8.  One-line :class:`ConfigError`
+    otherwise.
+
+    Parameters
+    ----------
+    p : Path
+        The config file.
+
+    Returns
+    -------
+    str
+        Its text.
+
+    Raises
+    ------
+    ConfigError
+        Not a readable regular file, too large, or not UTF-8.
+    """
+    from acmm_qpp.limits import how_to_raise, limit
+
+    data = read_regular_file(p, "config", int(limit("CONFIG_BYTES")), how_to_raise("CONFIG_BYTES"))
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"cannot read config file {p}: not UTF-8 text (byte {exc.start})") from None
+
+
+def check_yaml_structure(text: str, source: object = "config") -> None:
+    """Refuse YAML that would be expensive or recursive to build, before building it.
+
+    Scans the parser's event stream (iterative, so deep nesting cannot overflow the stack):
+    nesting deeper than ``YAML_DEPTH``, more than ``YAML_NODES`` nodes with aliases expanded
+    (so "billion laughs" alias bombs count at their expanded size) or an alias to a collection
+    that contains it (a cycle) raise :class:`ConfigError`.  Syntax errors raise
+    :class:`yaml.YAMLError` as :func:`yaml.load` would.
+
+    Parameters
+    ----------
+    text : str
+        The YAML text.
+    source : object
+        Name of the file, for the message.
+
+    Raises
+    ------
+    ConfigError
+        Too deep, too many nodes, or a cyclic alias.
+    """
+    from acmm_qpp.limits import how_to_raise, limit
+
+    max_depth, max_nodes = int(limit("YAML_DEPTH")), int(limit("YAML_NODES"))
+    stack: list[tuple[str | None, int]] = []
+    sizes: dict[str, int] = {}
+    open_anchors: set[str] = set()
+    count = 0
+    for ev in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(ev, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+            count += 1
+            stack.append((ev.anchor, count))
+            if ev.anchor:
+                open_anchors.add(ev.anchor)
+            if len(stack) > max_depth:
+                line = ev.start_mark.line + 1 if ev.start_mark else "?"
+                raise ConfigError(f"{source}: YAML nested deeper than {max_depth} levels at line {line} "
+                                  f"({how_to_raise('YAML_DEPTH')})")
+        elif isinstance(ev, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+            anchor, start = stack.pop()
+            if anchor:
+                sizes[anchor] = count - start + 1
+                open_anchors.discard(anchor)
+        elif isinstance(ev, yaml.ScalarEvent):
+            count += 1
+            if ev.anchor:
+                sizes[ev.anchor] = 1
+        elif isinstance(ev, yaml.AliasEvent):
+            if ev.anchor in open_anchors:
+                raise ConfigError(f"{source}: YAML alias *{ev.anchor} refers to a collection that contains it "
+                                  "(a cycle)")
+            count += sizes.get(ev.anchor, 1)
+        if count > max_nodes:
+            raise ConfigError(f"{source}: YAML has more than {max_nodes} values (aliases expanded) "
+                              f"({how_to_raise('YAML_NODES')})")
+
+
+def detect_kind(data: object) -> str:
+    """The kind of a parsed config mapping.
+
+    Parameters
+    ----------
+    data : object
+        Parsed YAML document.
+
+    Returns
+    -------
+    str
+        ``sweep`` (has a ``sweep`` section, or is the resolved form with ``sweep_file``), ``qpp`` (has a plant / nonlinearity / hinf /
+        spheres section) or ``acmm``.
+    """
+    if isinstance(data, dict):
+        if "sweep" in data or "sweep_file" in data:      # a sweep file, or its resolved form
+            return "sweep"
+        if any(k in data for k in ("plant", "nonlinearity", "hinf", "spheres")):
+            return "qpp"
+    return "acmm"

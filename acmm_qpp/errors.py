@@ -1,0 +1,168 @@
+"""The package's small exception hierarchy and the exit code of each kind of failure.
+
+Every error a user can trigger with a config, a file or a numerical problem derives from
+:class:`AcmmError`; the command-line apps catch it, print its message on one line on stderr and
+exit with the class's ``exit_code``:
+
+====  =====================================================================================
+code  meaning
+====  =====================================================================================
+0     success (a diverged run or a sector violation is a *result*: 0 unless ``--strict``)
+1     ``--strict``: the run finished but its verdict is a failure (diverged, outside the
+      output sphere, pole outside the sector, no certified design)
+2     bad input: config missing, unreadable, malformed, inconsistent or physically impossible;
+      a bad command-line value
+3     numerical failure: a solver did not converge, a design cannot meet its specification
+4     output / I/O: the results cannot be written (not a directory, read-only, disk full),
+      or another run holds the lock on ``runs/<name>``
+64    command-line usage (unknown option, missing argument) — EX_USAGE of sysexits.h
+130   interrupted (Ctrl-C)
+143   terminated (SIGTERM; 129 for SIGHUP): cleaned up like Ctrl-C
+====  =====================================================================================
+"""
+
+EXIT_OK = 0
+EXIT_VERDICT = 1
+EXIT_INPUT = 2
+EXIT_NUMERICAL = 3
+EXIT_OUTPUT = 4
+EXIT_USAGE = 64
+EXIT_INTERRUPTED = 130
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP received by a command (:func:`acmm_qpp.signals.terminate_like_ctrl_c`): it
+    unwinds like Ctrl-C (rollback of the stage's outputs, its helper processes killed) and exits
+    with 128 + the signal number.
+
+    Parameters
+    ----------
+    signum : int
+        The signal received.
+    """
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)
+
+    @property
+    def exit_code(self) -> int:
+        """128 + the signal number (143 for SIGTERM, 129 for SIGHUP)."""
+        return 128 + self.signum
+
+
+class AcmmError(Exception):
+    """Base class of every error the tool reports to a user."""
+
+    exit_code = EXIT_INPUT
+
+
+class ConfigError(AcmmError, ValueError):
+    """A config file is missing, unreadable, malformed or physically impossible (exit 2)."""
+
+    exit_code = EXIT_INPUT
+
+
+class UnknownPointError(ConfigError, KeyError, IndexError):
+    """A design point that a design does not have (by name or index, :mod:`acmm.api`); also a
+    KeyError and an IndexError, as a lookup in a list or mapping of the points would raise."""
+
+    __str__ = Exception.__str__
+
+
+class ConvergenceError(AcmmError, ArithmeticError):
+    """A numerical solver did not converge or its result failed verification (exit 3)."""
+
+    exit_code = EXIT_NUMERICAL
+
+
+class NoEquilibriumError(AcmmError):
+    """No torque-equilibrium attitude exists for the given inertia and bias (eqs 4.1–4.3).
+
+    A property of the configured plant, so it is an input error (exit 2); see
+    ``docs/ERRATA.md`` § TEA."""
+
+    exit_code = EXIT_INPUT
+
+
+class DesignError(AcmmError):
+    """A control design cannot meet its specification, e.g. poles outside the sector (exit 3)."""
+
+    exit_code = EXIT_NUMERICAL
+
+
+class OutputError(AcmmError, OSError):
+    """A results file or figure cannot be written (e.g. the output root is not a directory),
+    or the run folder is locked by another run (exit 4)."""
+
+    exit_code = EXIT_OUTPUT
+
+
+class FigureError(OutputError):
+    """A stage's figure cannot be written, its results were (exit 4; the run keeps its results
+    and its ``config.yaml``, :mod:`acmm_qpp.outputs`)."""
+
+    @classmethod
+    def of(cls, exc: BaseException) -> "FigureError":
+        """``exc`` (raised while drawing a figure) as a FigureError, with its message.
+
+        Parameters
+        ----------
+        exc : BaseException
+            What the figure function raised.
+
+        Returns
+        -------
+        FigureError
+            ``exc`` itself when it is one.
+        """
+        return exc if isinstance(exc, cls) else cls(str(exc) or type(exc).__name__)
+
+
+def plain_failure(exc: BaseException):
+    """(one-line message, exit code) of an exception that is not an :class:`AcmmError` but still a
+    user-facing failure (out of memory, a numerical error, an I/O error); None for a genuine bug.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception caught.
+
+    Returns
+    -------
+    tuple of (str, int) or None
+        The message and the exit code (:data:`EXIT_INPUT`, :data:`EXIT_NUMERICAL` or
+        :data:`EXIT_OUTPUT`), or None: a bug, to be left to propagate.
+    """
+    import numpy as np
+
+    if isinstance(exc, RecursionError):
+        return "input nested too deeply to process", EXIT_INPUT
+    if isinstance(exc, MemoryError):
+        return "out of memory (reduce the problem size)", EXIT_OUTPUT
+    if isinstance(exc, (FloatingPointError, OverflowError, ZeroDivisionError, np.linalg.LinAlgError)):
+        return f"numerical failure: {type(exc).__name__}: {exc}", EXIT_NUMERICAL
+    if isinstance(exc, OSError):
+        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+        return f"I/O error: {exc.strerror or exc}{where}", EXIT_OUTPUT
+    return None
+
+
+def failure_line(exc: BaseException):
+    """(one-line message, exit code) of any user-facing failure: an :class:`AcmmError` (its
+    message and class's ``exit_code``) or a :func:`plain_failure`; None for a genuine bug.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception caught.
+
+    Returns
+    -------
+    tuple of (str, int) or None
+        The message on one line and the exit code, or None.
+    """
+    if isinstance(exc, AcmmError):
+        return " ".join(str(exc).split()) or type(exc).__name__, int(getattr(exc, "exit_code", EXIT_INPUT))
+    plain = plain_failure(exc)
+    return None if plain is None else (" ".join(plain[0].split()), plain[1])

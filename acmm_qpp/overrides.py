@@ -1,0 +1,266 @@
+"""Command-line overrides in the dotted ``key=value`` style of Hydra / OmegaConf.
+
+``acmm simulate mb3 simulation.orbits=10 design.sector.sigma=0.6`` reads ``mb3``, sets the two
+values in the raw mapping and only then validates it, so an override is checked exactly like
+the same value written in the file (a misspelt key gets the file's "unknown key (did you mean
+…)" message).  Rules:
+
+* ``a.b.c=value`` sets ``c`` inside ``a.b``; missing intermediate mappings are created (the
+  file may rely on a section's defaults), an integer element addresses a list item
+  (``simulation.initial_offset.1=5``);
+* the value is parsed as YAML: ``10`` is an int, ``0.6`` a float, ``true`` a bool, ``null`` (or
+  nothing after ``=``) is null, ``"2 N*m"`` or ``2 N*m`` a unit string, ``[0, 5, 0]`` a list;
+* ``~a.b`` removes ``b`` from ``a`` (back to its default).
+
+The overrides, in order, are kept with the loaded config (``override_list``) and written as a
+comment heading the run folder's ``config.yaml``.
+"""
+from __future__ import annotations
+
+import copy
+import re
+
+import yaml
+
+from acmm_qpp.errors import EXIT_USAGE, ConfigError
+
+
+class OverrideSyntaxError(ConfigError):
+    """A command-line word that is not ``dotted.key=value`` / ``~dotted.key``: a usage error
+    (exit 64), unlike a bad key or value, which is reported like the same error in the file (2)."""
+
+    exit_code = EXIT_USAGE
+
+_KEY = re.compile(r"^~?[A-Za-z_][A-Za-z0-9_]*(\.([A-Za-z0-9_]+))*$")
+
+
+def looks_like_override(text: str) -> bool:
+    """True when ``text`` has the form ``dotted.key=value`` or ``~dotted.key``.
+
+    Parameters
+    ----------
+    text : str
+        A command-line word.
+
+    Returns
+    -------
+    bool
+        It is an override.
+    """
+    text = str(text)
+    if text.startswith("~"):
+        return bool(_KEY.match(text))
+    key, eq, _ = text.partition("=")
+    return bool(eq) and bool(_KEY.match(key)) and not key.startswith("~")
+
+
+def parse_override(text: str) -> tuple[list, object, bool]:
+    """``"a.b=1"`` → (["a", "b"], 1, False); ``"~a.b"`` → (["a", "b"], None, True).
+
+    Parameters
+    ----------
+    text : str
+        One override.
+
+    Returns
+    -------
+    tuple
+        (key path, list of str and int (digits are list indices); value parsed as YAML;
+        whether it removes the key).
+
+    Raises
+    ------
+    OverrideSyntaxError
+        The text is not ``dotted.key=value`` / ``~dotted.key`` (exit 64).
+    ConfigError
+        The value is not valid YAML.
+    """
+    text = str(text)
+    if not looks_like_override(text):
+        raise OverrideSyntaxError(f"unexpected argument {text!r}: an override must read dotted.key=value (e.g. simulation.orbits=10) "
+                          "or ~dotted.key to remove a key")
+    if text.startswith("~"):
+        return [_part(p) for p in text[1:].split(".")], None, True
+    key, _, raw = text.partition("=")
+    from acmm_qpp.configio import load_yaml_text
+
+    try:   # the bounds of a config file (depth, nodes with aliases expanded) apply here too
+        value = load_yaml_text(raw, f"override {key}") if raw.strip() else None
+    except yaml.YAMLError as exc:
+        what = getattr(exc, "problem", None) or "not valid YAML"
+        raise ConfigError(f"override {key}: value {raw!r} is not valid YAML ({what})") from None
+    return [_part(p) for p in key.split(".")], value, False
+
+
+def _part(p: str):
+    return int(p) if p.isdigit() else p
+
+
+def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None) -> object:
+    """A deep copy of the raw mapping ``data`` with every override applied in order.
+
+    Parameters
+    ----------
+    data : object
+        The config as read from YAML (a mapping; anything else is returned unchanged for the
+        loader to report).
+    overrides : list of str or None
+        Overrides, applied left to right.
+
+    Returns
+    -------
+    object
+        The modified copy (``data`` itself when there is nothing to apply).
+
+    Raises
+    ------
+    ConfigError
+        An override goes into a missing list element or inside a scalar value, or is malformed.
+    """
+    if not overrides:
+        return data
+    if not isinstance(data, dict):
+        return data                       # the loader reports the malformed top level itself
+    out = copy.deepcopy(data)
+    for text in overrides:
+        path, value, delete = parse_override(text)
+        node = out
+        for depth, key in enumerate(path[:-1]):
+            where = ".".join(str(p) for p in path[:depth + 1])
+            if isinstance(node, list):
+                if not isinstance(key, int) or not -len(node) <= key < len(node):
+                    raise ConfigError(f"override {text}: {where}: no such list element "
+                                      f"(the list has {len(node)})")
+                node = node[key]
+                continue
+            if not isinstance(node, dict):
+                raise ConfigError(f"override {text}: {where}: cannot go inside a "
+                                  f"{type(node).__name__} value")
+            if key not in node or node[key] is None:
+                if delete:
+                    node = None
+                    break
+                if isinstance(path[depth + 1], int):
+                    raise ConfigError(f"override {text}: {where} is not set in the file, so it has no element "
+                                      f"{path[depth + 1]}; give the whole list ({where}=[...])")
+                node[key] = {}
+            node = node[key]
+        if node is None:
+            continue                       # removing something that is not there: nothing to do
+        last = path[-1]
+        if isinstance(node, list):
+            if not isinstance(last, int) or not -len(node) <= last < len(node):
+                raise ConfigError(f"override {text}: {'.'.join(map(str, path))}: no such list element "
+                                  f"(the list has {len(node)})")
+            if delete:
+                del node[last]
+            else:
+                node[last] = value
+        elif isinstance(node, dict):
+            if delete:
+                node.pop(last, None)
+            else:
+                node[last] = value
+        else:
+            raise ConfigError(f"override {text}: {'.'.join(map(str, path[:-1]))}: cannot go inside a "
+                              f"{type(node).__name__} value")
+    return out
+
+
+def split_overrides(config, overrides) -> tuple[object, list[str]]:
+    """Separate a positional CONFIG that is really an override (``acmm simulate a.b=1``, using the
+    packaged default) from the override list: returns (config or None, overrides).
+
+    Parameters
+    ----------
+    config : str or path-like or None
+        The positional CONFIG argument.
+    overrides : list of str or None
+        The KEY=VALUE arguments.
+
+    Returns
+    -------
+    tuple
+        (config, or None when it was an override and no such file exists; list of overrides).
+    """
+    overrides = list(overrides or [])
+    if config is not None and looks_like_override(str(config)):
+        from pathlib import Path
+
+        if not Path(str(config)).exists():
+            return None, [str(config)] + overrides
+    return config, overrides
+
+
+def header(source: str | None, overrides: list[str] | None) -> str:
+    """The comment block heading ``config.yaml``: where the config came from and the overrides.
+
+    Parameters
+    ----------
+    source : str or None
+        The config file or packaged name.
+    overrides : list of str or None
+        The command-line overrides.
+
+    Returns
+    -------
+    str
+        ``#`` comment lines, ending in a newline.
+    """
+    lines = ["# resolved config of this run (every default filled in, numbers in the config's canonical units)"]
+    if source:
+        lines.append(f"# source: {source}")
+    if overrides:
+        lines.append("# command-line overrides: " + " ".join(overrides))
+    # a line break inside a path or an override stays inside the comment
+    return "\n".join(line.replace("\r", "\\r").replace("\n", "\n#   ") for line in lines) + "\n"
+
+
+# ---------------------------------------------------------------------------------------------
+# where a loaded config came from (for the config.yaml header); kept outside the frozen models so
+# that equality and hashing of configs are unchanged
+# ---------------------------------------------------------------------------------------------
+_ORIGINS: "dict[int, tuple[object, str, list[str]]]" = {}
+_MAX_ORIGINS = 256
+
+
+def remember_origin(model: object, source: str, overrides: list[str] | None) -> object:
+    """Record the file and the overrides a loaded config came from; returns ``model``.
+
+    Parameters
+    ----------
+    model : object
+        The loaded config (kept by identity; the last 256 are remembered).
+    source : str
+        The file or packaged name.
+    overrides : list of str or None
+        The overrides applied.
+
+    Returns
+    -------
+    object
+        ``model``.
+    """
+    if len(_ORIGINS) >= _MAX_ORIGINS:
+        _ORIGINS.pop(next(iter(_ORIGINS)))
+    _ORIGINS[id(model)] = (model, str(source), list(overrides or []))
+    return model
+
+
+def origin_of(model: object) -> tuple[str | None, list[str]]:
+    """(source, overrides) recorded by :func:`remember_origin`, or (None, []).
+
+    Parameters
+    ----------
+    model : object
+        A loaded config.
+
+    Returns
+    -------
+    tuple
+        (source or None, list of overrides).
+    """
+    rec = _ORIGINS.get(id(model))
+    if rec is None or rec[0] is not model:
+        return None, []
+    return rec[1], rec[2]

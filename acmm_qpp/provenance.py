@@ -1,0 +1,146 @@
+"""Provenance of a results file: git commit, config hash, package version, creation time.
+
+Stored as root attributes of every HDF5 file (:func:`acmm_qpp.results.write_h5`).
+"""
+from __future__ import annotations
+
+import hashlib
+import subprocess
+from datetime import datetime, timezone
+from functools import lru_cache
+from pathlib import Path
+
+
+@lru_cache(maxsize=1)
+def _git_state() -> tuple[str, bool | None]:
+    """(commit, whether tracked files have uncommitted changes) of the source tree, from one
+    ``git status --porcelain=v2 --branch`` run once per process; ("unknown", None) outside a
+    checkout or without git."""
+    out = _git("status", "--porcelain=v2", "--branch", "--untracked-files=no")
+    if out is None:
+        return "unknown", None
+    lines = out.splitlines()
+    oid = next((ln.split()[2] for ln in lines if ln.startswith("# branch.oid ")), "unknown")
+    if oid == "(initial)":
+        oid = "unknown"
+    return oid, any(not ln.startswith("#") for ln in lines if ln.strip())
+
+
+def git_commit() -> str:
+    """The git commit of the source tree, or ``"unknown"``.
+
+    Asked of git once per process (a subprocess per results file cost milliseconds each, and the
+    code running is the one imported at start).
+
+    Returns
+    -------
+    str
+        The commit hash, or ``"unknown"``.
+    """
+    return _git_state()[0]
+
+
+def git_dirty() -> str:
+    """Whether the source tree differs from :func:`git_commit` in tracked files.
+
+    Returns
+    -------
+    str
+        ``"yes"`` (uncommitted changes: the commit alone does not say what code ran), ``"no"``,
+        or ``"unknown"`` (not a git checkout, or no git).
+    """
+    dirty = _git_state()[1]
+    return "unknown" if dirty is None else ("yes" if dirty else "no")
+
+
+def _git(*args: str) -> str | None:
+    """Standard output of ``git <args>`` run in the source tree, or None when git fails."""
+    try:
+        out = subprocess.run(["git", *args], cwd=Path(__file__).resolve().parent,
+                             capture_output=True, text=True, timeout=5)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout if out.returncode == 0 else None
+
+
+def config_hash(config_text: str) -> str:
+    """SHA-256 of a canonical config text (first 16 hex digits).
+
+    Parameters
+    ----------
+    config_text : str
+        The canonical config text.
+
+    Returns
+    -------
+    str
+        The first 16 hex digits of the hash.
+    """
+    return hashlib.sha256(config_text.encode()).hexdigest()[:16]
+
+
+def provenance(config_text: str) -> dict[str, str]:
+    """Attributes stored on every results file.
+
+    Parameters
+    ----------
+    config_text : str
+        The resolved config as YAML.
+
+    Returns
+    -------
+    dict
+        Package, version, git commit, config hash and creation time (UTC).
+    """
+    from acmm_qpp import __version__
+
+    return {
+        "package": "acmm-qpp",
+        "package_version": __version__,
+        "git_commit": git_commit(),
+        "git_dirty": git_dirty(),
+        "config_hash": config_hash(config_text),
+        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+    }
+
+
+def source_unchanged() -> bool:
+    """Whether the code running is exactly a commit: the source tree is a git checkout whose
+    tracked files have no uncommitted change (``git status --porcelain --untracked-files=no``).
+
+    A stage may reuse another stage's results only then (:mod:`qpp.io.stored_design`): an edited
+    or unknown source may compute something else.
+
+    Returns
+    -------
+    bool
+        True for a clean checkout; False when dirty, not a checkout, or git is missing.
+    """
+    return git_commit() != "unknown" and _git_state()[1] is False
+
+
+_CODE: list = []
+
+
+def code_identity() -> str:
+    """The package version and a hash of the project's Python sources (``acmm``, ``common``,
+    ``qpp``), computed once per process: two processes with the same identity run the same code.
+
+    Returns
+    -------
+    str
+        ``<version>+<12 hex digits>``.
+    """
+    if not _CODE:
+        import hashlib
+        from pathlib import Path
+
+        from acmm_qpp import __version__
+
+        root = Path(__file__).resolve().parents[1]
+        h = hashlib.sha256()
+        for package in ("acmm", "common", "qpp"):
+            for f in sorted((root / package).rglob("*.py")):
+                h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
+        _CODE.append(f"{__version__}+{h.hexdigest()[:12]}")
+    return _CODE[0]

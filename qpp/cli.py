@@ -1,0 +1,181 @@
+"""``qpp`` command line (Part III of CR-185644).
+
+Commands parse arguments, call the ``qpp`` library, print, and write results; user errors print
+one line and exit with code 2.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+# first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
+from acmm_qpp.cli.plumbing import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
+
+import numpy as np  # noqa: E402
+import typer  # noqa: E402
+
+from acmm_qpp.errors import DesignError  # noqa: E402
+
+app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
+                  help="Quantitative pole placement for Lure systems (CR-185644 Part III).",
+                  epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
+                         "or option value), 3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
+
+ConfigArg = typer.Argument(..., help="YAML config file (or the name of a packaged config, e.g. qpp_siso)")
+FigOpt = typer.Option(None, "--figures/--no-figures", help="override output.figures")
+
+
+@app.callback()
+def _root(version: bool = version_option()) -> None:
+    """Quantitative pole placement for Lure systems (CR-185644 Part III)."""
+
+
+def _load(config, overrides):
+    from qpp.io.config import load_config
+
+    return load_config(config, overrides)
+
+
+@app.command()
+@user_errors
+def validate(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+             show: bool = typer.Option(False, "--show", help="print the resolved config")) -> None:
+    """Check a qpp config (an acmm run or sweep config is named as such: ``acmm validate`` checks it)."""
+    from acmm_qpp.configio import detect_kind, read_yaml
+    from acmm_qpp.errors import ConfigError
+
+    data, path = read_yaml(config)
+    kind = detect_kind(data)
+    if kind != "qpp":
+        raise ConfigError(f"{path}: an {kind} config, not a qpp config: check it with `acmm validate`")
+    cfg = _load(config, overrides)
+    typer.echo(f"{cfg.name}: valid ({kind} config)")
+    if show:
+        typer.echo(cfg.to_yaml())
+
+
+@app.command()
+@user_errors
+def schema() -> None:
+    """Print the JSON schema of the qpp config format (`acmm schema --kind ...` for the others)."""
+    import json
+
+    from qpp.io.schema import qpp_schema
+
+    typer.echo(json.dumps(qpp_schema(), indent=2, ensure_ascii=False))
+
+
+def _mat(a) -> str:
+    return np.array2string(np.asarray(a), precision=4, suppress_small=True, max_line_width=120)
+
+
+@app.command(short_help="H-infinity gains (ch 11), beta1, thresholds m and the circle criterion (ch 12.1).")
+@user_errors
+def design(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
+           strict: bool = StrictOpt) -> None:
+    """H∞ gains (ch. 11), β1, thresholds m and the circle criterion (ch. 12.1) → qpp_design.h5.
+    With --strict, a failed circle criterion or β1 > m (for design.bz and design.bookkeeping), or a
+    computed sector of φ that its random check had to widen, exits 1."""
+    from acmm_qpp.cli.progress import status
+    from qpp.io.stages import printed_H_difference, run_design, sector_verified
+
+    cfg = _load(config, overrides)
+    with status(f"{cfg.name}: designing (ch. 12.1: H∞ gains, β1, thresholds, circle criterion) ..."):
+        cfg, r, path = run_design(cfg, figures)
+    typer.echo(f"{cfg.name}: gains from {r.gains_source} (a = {r.a:g} 1/s, T = {r.T:g} s)")
+    typer.echo(f"  K1 = {_mat(r.K1)}\n  Kc = {_mat(r.Kc)}\n  H  = {_mat(r.H.T)}ᵀ")
+    h_diff = printed_H_difference(cfg, r)
+    if h_diff is not None:
+        typer.echo(f"  H vs printed: max relative difference {h_diff:.2%}")
+    for rd, b in r.beta1.items():
+        typer.echo(f"  beta1 [{rd:8s}] = {b['value']:.6f} exact (peak at {b['omega_peak']:.4g} rad/s; "
+                   f"grid {b['grid_value']:.6f})")
+    verdicts = r.verdicts()
+    for t in r.thresholds:
+        v = ", ".join(f"{rd}: {'beta1 <= m' if verdicts[(rd, t.name)] else 'beta1 > m'}" for rd in r.beta1)
+        typer.echo(f"  m [{t.name:10s}] = {t.m:.5f} (beta3 {t.beta3:.5g}, beta4 {t.beta4:.5g}) -> {v}")
+    c = r.circle
+    form = ("lemma 1" if c.method == "gershgorin" else
+            f"small-gain form for a coupled phi: rho = {c.gain_bound:.4g}, sup sigma(H_c) = {c.peak_gain:.4g}")
+    typer.echo(f"  circle criterion ({form}) on H(-a+jw), sector {np.round(r.sector, 6).tolist()}: "
+               f"{'PASS' if c.passed else 'FAIL'}; margins {np.round(c.margins, 4).tolist()}; "
+               f"P0 = {c.P0}; largest admissible scale {c.max_scale:.4g}"
+               + (f", smallest {c.min_scale:.4g}" if c.min_scale > 0 else ""))
+    widened = sector_verified(cfg) is False
+    if widened:
+        typer.echo("  sector of φ: random check points lay beyond the grid's bounds; the sector was widened to "
+                   "the extremum climbed from them (a finer nonlinearity.n_grid samples φ more closely)")
+    if r.published is not None:
+        pb = r.published
+        typer.echo("  printed gains: beta1 " + ", ".join(f"[{rd}] {b['value']:.6f}" for rd, b in pb.beta1.items())
+                   + "; " + "; ".join(f"m [{t.name}] = {t.m:.5f} (beta3 {t.beta3:.5g}, beta4 {t.beta4:.5g})"
+                                      for t in pb.thresholds))
+    typer.echo(f"  procedure 12.1: {len(r.iterations)} evaluations, rho = {r.hinf.rho if r.hinf else float('nan'):g}, "
+               f"W_s scale {r.ws_scale or [1.0]}, T settle {r.T_settle:.4g} s")
+    if r.late_slope is not None:
+        typer.echo(f"  warning: the nonlinearity is stiffer after T = {r.T:.4g} s (slope bound {r.late_slope[1]:.4g}) "
+                   f"than within it ({r.late_slope[0]:.4g}): beta3 and beta4 see it only up to T (eqs 10.53-10.54), "
+                   f"so the certificate says nothing of the simulation beyond T")
+    if not r.settled and np.isfinite(r.beta1_ref):    # (an unstable loop is named by the verdict)
+        cause = (f"the loop's slowest mode settles in {r.T_modal:.4g} s (r_o leaves it unexcited): lengthen "
+                 f"simulation.t_final or speed the loop up" if r.T_modal is not None
+                 else "does the servo-compensator (plant.Ac) model r_o?")
+        typer.echo(f"  warning: the nominal loop does not settle within {r.T_settle:.4g} s (max(spheres.T, "
+                   f"simulation.t_final)): T adapts to that horizon, so the certificate depends on t_final; "
+                   f"{cause}")
+    typer.echo(f"  {r.verdict}")
+    typer.echo(f"  wrote {path}")
+    if not r.certified:
+        raise DesignError(r.verdict + " (best design written, labelled uncertified)")
+    strict_exit(strict, widened, f"{cfg.name}: the sector of φ rests on a grid its random check found too coarse")
+
+
+@app.command()
+@user_errors
+def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
+             strict: bool = StrictOpt) -> None:
+    """Nonlinear closed loop per scenario and the sphere check ‖y − y_o‖∞ ≤ β_o → qpp_sim.h5.
+    The gains are those `qpp design` wrote for this config, else designed first. With --strict, an
+    output outside the sphere exits 1."""
+    from acmm_qpp.cli.progress import status
+    from qpp.io.stages import run_simulate
+
+    cfg = _load(config, overrides)
+    n = len(cfg.simulation.scenarios)
+    with status(f"{cfg.name}: designing (or reusing) the gains (ch. 12.1), then simulating the nominal loop and "
+                f"{n} scenario(s) over {cfg.simulation.t_final:g} s ...") as update:
+        def tick(done, total, name):
+            update(f"{cfg.name}: simulated {done}/{total} scenario(s) (last: {name}) ...")
+
+        cfg, r, sims, path = run_simulate(cfg, figures, progress=tick)
+    typer.echo(f"{cfg.name}: beta_o = {cfg.spheres.beta_o:g}; design {r.verdict}")
+    y_range = getattr(cfg.nonlinearity, "y_range", None)
+    for s in sims:
+        g = (", ".join(f"{k} = {v:g}" for k, v in s.parameters.items()) if s.parameters
+             else f"gamma = {s.gamma:<8g}")
+        broken = s.broken_premises(cfg.spheres.beta_ri, y_range)
+        note = f" (outside the certificate's premises: {'; '.join(broken)})" if broken else ""
+        if s.diverged_at is not None:
+            typer.echo(f"  {s.name:12s} {g} DIVERGED at t = {s.diverged_at:.4g} s: OUTSIDE the output sphere{note}")
+            continue
+        typer.echo(f"  {s.name:12s} {g} ||y - y_o||inf = {s.error_inf:.5g} "
+                   f"(per output {[float(f'{e:.5g}') for e in s.error_per_output]}) "
+                   f"{'within' if s.passed else 'OUTSIDE'} the output sphere{note}")
+    typer.echo(f"  wrote {path}")
+    out = [s.name for s in sims if not s.passed]
+    strict_exit(strict, bool(out), f"{cfg.name}: outside the output sphere in {', '.join(out)}")
+
+
+def main() -> None:
+    """Run the command-line app (the console-script entry point); exits with the code of the run
+    (SIGTERM and SIGHUP roll back like Ctrl-C: :func:`acmm_qpp.signals.terminate_like_ctrl_c`)."""
+    from acmm_qpp.cli.plumbing import run_app
+    from acmm_qpp.plot_style import files_only_backend
+    from acmm_qpp.signals import terminate_like_ctrl_c
+
+    terminate_like_ctrl_c()
+    files_only_backend()
+    run_app(app)
+
+
+if __name__ == "__main__":     # python -m qpp.cli
+    main()

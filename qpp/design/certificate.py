@@ -1,0 +1,371 @@
+"""Guarantee certificate of fixed gains (CR-185644 ch. 12.1, theorem 2, lemma 1): β1 for both
+B_z readings, the threshold m of eq 12.1 in each bookkeeping, the circle criterion and the
+settling time of the nominal loop.  The bookkeepings are described in :mod:`qpp.design.procedure`
+(``docs/ERRATA.md`` § QPP thresholds).
+
+The thresholds m and β3, β4 along the nominal loop are computed by :mod:`qpp.design.thresholds`.
+Moved out of :mod:`qpp.design.procedure` (issue 12) and runs the design
+procedure of ch. 12.1 on top of :func:`certify`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from acmm_qpp.errors import DesignError
+from qpp.design import circle as circle_mod
+from qpp.design import spheres
+from qpp.io.config_nonlin import ExpressionNonlinearity, SinusoidalNonlinearity
+from qpp.io.config import QppConfig
+from qpp.design.hinf import HinfGains
+from qpp.model.lure import channels, closed_loop
+from qpp.simulate.signals import eval_signal
+from qpp.design.thresholds import Thresholds, nominal_output, pick_bookkeeping, thresholds
+
+
+@dataclass
+class DesignResult:
+    """Everything ``qpp design`` reports and stores.
+
+    Attributes
+    ----------
+    K1 : (m, n) array
+        State-feedback gain, plant input units per state unit.
+    Kc : (m, q) array
+        Compensator gain, plant input units per compensator-state unit.
+    H : (n, p) array
+        Observer gain, state units per output unit per s.
+    gains_source : str
+        Where the gains come from (``given``, ``published``, ``hinf``, ...).
+    hinf : qpp.design.hinf.HinfGains or None
+        The ch. 11 solution the gains come from, if any.
+    a : float
+        Exponential weighting a, 1/s (10.27).
+    T : float
+        Truncation time T, s.
+    Az, Bz : dict
+        B_z reading (``eq10.7``, ``printed``) → closed-loop A_z (1/s) and B_z matrices.
+    Cz : (k, N) array
+        Closed-loop output matrix, units of the output per state unit.
+    beta1 : dict
+        B_z reading → :func:`qpp.design.spheres.beta1` (``value`` dimensionless, ``omega_peak`` rad/s).
+    thresholds : list of Thresholds
+        m (12.1) in each bookkeeping.
+    circle : qpp.design.circle.CircleResult
+        Circle criterion on H(−a + jω).
+    sector : (r, 2) array
+        Sector [α, β] per channel used in the circle check, dimensionless gains.
+    E : float
+        E = [(e^{2aT} − 1)/(2a)]^½ of eq 10.44, units of s^½.
+    y_o_t : (S,) array
+        Sample times of the nominal output on [0, T], s.
+    y_o : (p, S) array
+        Nominal output on [0, T], in the plant's output units.
+    iterations : list of dict
+        Every evaluation of the procedure.
+    bookkeeping : str
+        Threshold the design iterates against.
+    bz : str
+        B_z reading of the design inequality.
+    T_settle : float
+        Settling time of the nominal loop, s.
+    settled : bool
+        Whether the nominal loop settles within its horizon (else ``T_settle`` is the horizon).
+    T_modal : float or None
+        Settling time of the loop's slowest mode (:func:`modal_settling_time`), s, when it gave
+        ``T_settle`` (a nominal loop with nothing to track); None otherwise.
+    late_slope : tuple or None
+        (sup slope of φ on [0, T], sup after T up to the horizon), units of φ per unit of y, when
+        φ is markedly stiffer after T than within it (:func:`late_slope`); else None.
+    certified : bool
+        β1 ≤ m (bookkeeping, bz) and circle criterion.
+    verdict : str
+        The outcome in words.
+    limiting : str
+        Why an uncertified design fails (:func:`qpp.design.procedure.limiting_factor`).
+    ws_scale : list of float
+        Weights w of W_s = diag(w)·S_c of the gains, dimensionless.
+    hinf_history : list of dict
+        ch. 11 passes (ρ, ν, δ, tests).
+    published : DesignResult or None
+        Certificate of the printed gains (report examples).
+    """
+
+    K1: np.ndarray
+    Kc: np.ndarray
+    H: np.ndarray
+    gains_source: str
+    hinf: HinfGains | None
+    a: float
+    T: float
+    Az: dict                      #: reading → A_z (same for both readings)
+    Bz: dict                      #: reading → B_z
+    Cz: np.ndarray
+    beta1: dict                   #: reading → dict of spheres.beta1
+    thresholds: list
+    circle: circle_mod.CircleResult
+    sector: np.ndarray
+    E: float
+    y_o_t: np.ndarray
+    y_o: np.ndarray
+    iterations: list = field(default_factory=list)
+    bookkeeping: str = ""             #: threshold the design iterates against
+    bz: str = "eq10.7"                #: B_z reading of the design inequality
+    T_settle: float = np.nan          #: settling time of the nominal loop, s
+    settled: bool = True              #: the nominal loop settles within its horizon (else T_settle is the horizon)
+    late_slope: tuple | None = None   #: (sup slope on [0, T], sup slope after T) when φ is stiffer after T
+    T_modal: float | None = None      #: settling time of the slowest mode, s, when it set T_settle
+    certified: bool = False           #: β1 ≤ m (bookkeeping, bz) and circle criterion
+    verdict: str = ""
+    limiting: str = ""
+    ws_scale: list = field(default_factory=list)   #: W_s = diag(w)·S_c of the gains
+    hinf_history: list = field(default_factory=list)  #: ch. 11 passes (ρ, ν, δ, tests)
+    published: "DesignResult | None" = None  #: certificate of the printed gains (report examples)
+
+    @property
+    def m_ref(self) -> float:
+        """Threshold m of the design's bookkeeping, dimensionless."""
+        return self.threshold(self.bookkeeping).m
+
+    @property
+    def beta1_ref(self) -> float:
+        """β1 of the design's B_z reading, dimensionless."""
+        return float(self.beta1[self.bz]["value"])
+
+    def threshold(self, name: str) -> Thresholds:
+        """The thresholds of one bookkeeping.
+
+        Parameters
+        ----------
+        name : str
+            Bookkeeping name (:class:`Thresholds`).
+
+        Returns
+        -------
+        Thresholds
+            The first entry of ``thresholds`` with that name.
+        """
+        return next(t for t in self.thresholds if t.name == name)
+
+    def verdicts(self) -> dict:
+        """(reading, bookkeeping) → β1 ≤ m.
+
+        Returns
+        -------
+        dict
+            ``{(reading, bookkeeping): bool}`` for every B_z reading and bookkeeping.
+        """
+        return {(r, t.name): bool(self.beta1[r]["value"] <= t.m) for r in self.beta1 for t in self.thresholds}
+
+
+def default_sector(cfg: QppConfig) -> np.ndarray:
+    """Sector of φ = N (f1 − f1o) for the circle check: config value, else ±N·γ_max·|F_unc| (diagonal).
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+
+    Returns
+    -------
+    (r, 2) array
+        [α, β] per disturbance channel, dimensionless gains.
+
+    Raises
+    ------
+    DesignError
+        A polar-arm nonlinearity without ``design.sector``.
+    """
+    if cfg.design.sector is not None:
+        return np.asarray(cfg.design.sector, float)
+    nl = cfg.nonlinearity
+    if isinstance(nl, SinusoidalNonlinearity):
+        P = cfg.lure_plant()
+        k = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        k = np.where(k > 0, k, 1e-12)
+        return np.column_stack([-k, k])
+    if isinstance(nl, ExpressionNonlinearity):
+        if nl.sector is not None:
+            return np.asarray(nl.sector, float)
+        s = cfg.expression_model().sector_info.sector.copy()
+        flat = ~(s[:, 0] < s[:, 1])        # a sampled φ ≡ 0 (or exactly linear): [α, α]
+        if flat.any():                     # widened by 1e-12 (as a zero sinusoidal one, above)
+            pad = 1e-12 * np.maximum(1.0, np.abs(s[flat]).max(axis=1))
+            s[flat, 0] -= pad
+            s[flat, 1] += pad
+        return s
+    raise DesignError("design.sector must be given for a polar_arm nonlinearity")
+
+
+def sector_coupling(cfg: QppConfig) -> np.ndarray:
+    """Per φ channel, whether φ_i depends on outputs other than y_i (the circle check then takes
+    its small-gain form, :mod:`qpp.design.circle`): for an ``expression`` its symbolic dependence
+    (:attr:`qpp.model.nonlin.SectorInfo.diagonal`), for the ``sinusoidal`` kind the off-diagonal entries
+    of N·F_unc; a ``polar_arm`` sector is the config's own, stated per channel (diagonal).
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config.
+
+    Returns
+    -------
+    (r,) bool ndarray
+        True for a coupled channel (dimensionless flags).
+    """
+    nl = cfg.nonlinearity
+    if isinstance(nl, ExpressionNonlinearity):
+        return ~np.asarray(cfg.expression_model().sector_info.diagonal, bool)
+    P = cfg.lure_plant()
+    if isinstance(nl, SinusoidalNonlinearity):
+        M = P.N() @ np.asarray(nl.F_unc, float)
+        return np.any((M != 0.0) & ~np.eye(*M.shape, dtype=bool), axis=1)
+    return np.zeros(P.r, bool)
+
+
+def settling_time(t, y_o, r_o, band: float) -> float:
+    """Settling time of the nominal loop, s: the last time |y_o − r_o| (largest channel) exceeds
+    ``band`` × its peak; 0 when the loop tracks from the start, t[-1] when it never settles.
+
+    Parameters
+    ----------
+    t : (S,) array
+        Sample times, s.
+    y_o : (p, S) array
+        Nominal output, output units.
+    r_o : (p, S) array
+        Reference, output units.
+    band : float
+        Settling band as a fraction of the peak error, dimensionless.
+
+    Returns
+    -------
+    float
+        Settling time, s.
+    """
+    e = np.max(np.abs(np.atleast_2d(y_o) - np.atleast_2d(r_o)), axis=0)
+    peak = float(e.max()) if e.size else 0.0
+    if peak <= 1e-12:
+        return 0.0
+    idx = np.nonzero(e > band * peak)[0]
+    return float(t[idx[-1]]) if idx.size else 0.0
+
+
+def modal_settling_time(Az, band: float) -> float:
+    """Time for the slowest mode of the closed loop to decay to ``band`` of its start, s:
+    ln(1/band) / min(−Re λ(Az)); 0 when a mode does not decay (an unstable loop is refused
+    elsewhere).  The settling time of a nominal loop with nothing to track (r_o ≡ 0), whose
+    :func:`settling_time` is 0 although a perturbation still takes this long to die out.
+
+    Parameters
+    ----------
+    Az : (N, N) array
+        Closed-loop state matrix (eq 10.7), 1/s.
+    band : float
+        Settling band, dimensionless fraction.
+
+    Returns
+    -------
+    float
+        Settling time, s.
+    """
+    decay = float(np.min(-np.linalg.eigvals(np.asarray(Az, float)).real))
+    return float(np.log(1.0 / band) / decay) if decay > 0 else 0.0
+
+
+def late_slope(cfg: QppConfig, T: float, horizon: float) -> tuple | None:
+    """(sup slope on [0, T], sup slope on (T, horizon]) of an expression φ that depends on t, when
+    the later one exceeds the earlier by half; else None.  β3 and β4 (10.53–10.54) see φ only up
+    to T: a nonlinearity that stiffens (or switches on) after T gives a certificate the
+    simulation beyond T may contradict (a review's φ = k·y·(sat(10(t − 3)) + 1)/2 with T = 2.3 s).
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The config.
+    T : float
+        Truncation time, s.
+    horizon : float
+        End of the simulation, s.
+
+    Returns
+    -------
+    tuple or None
+        The two slope bounds, units of φ per unit of y; or None.
+    """
+    if not isinstance(cfg.nonlinearity, ExpressionNonlinearity) or horizon <= T:
+        return None
+    M = cfg.expression_model()
+    if not M.t_varies:
+        return None
+    tg, g = M.slope_profile(horizon)
+    g = np.max(g, axis=0)
+    before = float(np.max(g[tg <= T], initial=0.0))
+    after = float(np.max(g[tg > T], initial=0.0))
+    return (before, after) if after > 1.5 * before + 1e-12 else None
+
+
+def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
+            hinf: HinfGains | None = None, T: float | None = None) -> DesignResult:
+    """β1 for both B_z readings, thresholds at T (default ``spheres.T``), the circle criterion and
+    the settling time of the nominal loop, for fixed gains.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config (units: s, rad/s, the plant's own units).
+    K1 : (m, n) array
+        State-feedback gain, input units per state unit.
+    Kc : (m, q) array
+        Compensator gain, input units per compensator-state unit.
+    H : (n, p) array
+        Observer gain, state units per output unit per s.
+    a : float
+        Exponential weighting a, 1/s (10.27).
+    gains_source : str
+        Label of the gains' origin, stored in the result.
+    hinf : qpp.design.hinf.HinfGains, optional
+        The ch. 11 solution the gains come from.
+    T : float, optional
+        Truncation time, s (default ``spheres.T``).
+
+    Returns
+    -------
+    DesignResult
+        The certificate (``certified``: β1 ≤ m and circle criterion).
+    """
+    P = cfg.lure_plant()
+    K1 = np.atleast_2d(np.asarray(K1, float))
+    Kc = np.atleast_2d(np.asarray(Kc, float))
+    H = np.asarray(H, float).reshape(P.n, P.p)
+    Az = Bz = Cz = None
+    Azd, Bzd, b1 = {}, {}, {}
+    for reading in ("eq10.7", "printed"):
+        Az, Bz, Cz = closed_loop(P, K1, Kc, H, bz=reading)
+        Azd[reading], Bzd[reading] = Az, Bz
+        b1[reading] = spheres.beta1(Az, Bz, Cz, a)
+    sector = default_sector(cfg)
+    _, dcols = channels(P)
+    circ = circle_mod.circle_criterion(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=sector_coupling(cfg))
+    T = cfg.spheres.T if T is None else float(T)
+    horizon = max(T, cfg.simulation.t_final)
+    n = int(min(20001, max(801, 801 * horizon / T)))
+    t, y_o, x_o = nominal_output(cfg, K1, Kc, H, horizon, n)
+    r_o = np.array([eval_signal(cfg.simulation.r_o, tt) for tt in t]).T
+    Ts, T_modal = settling_time(t, y_o, r_o, cfg.spheres.settle_band), None
+    if Ts == 0.0:   # the nominal loop tracks from the start (r_o ≡ 0, say): its modes still settle
+        T_modal = modal_settling_time(Azd["eq10.7"], cfg.spheres.settle_band)
+        Ts = min(T_modal, float(t[-1]))
+    keep = t <= T + 1e-12
+    th = thresholds(cfg, t, y_o, x_o, sector, T)
+    res = DesignResult(K1, Kc, H, gains_source, hinf, a, T, Azd, Bzd, Cz, b1, th, circ, sector,
+                       spheres.E_factor(a, T), t[keep], y_o[:, keep])
+    res.T_settle = Ts
+    res.settled = bool(Ts < float(t[-1]))
+    res.T_modal = T_modal
+    res.late_slope = late_slope(cfg, T, horizon)
+    res.bookkeeping = pick_bookkeeping(cfg, [x.name for x in th])
+    res.bz = cfg.design.bz
+    res.certified = bool(res.beta1_ref <= res.m_ref and circ.passed)
+    return res

@@ -1,0 +1,397 @@
+"""Design procedure of ch. 12.1 and the guarantee certificate (theorem 2, lemma 1).
+
+Steps (the iteration target is the bookkeeping ``design.bookkeeping``), see :func:`design`:
+(1) a, T and the threshold m from β_o, β_ri, ‖d‖∞, β3, β4 (12.1); (2) H∞ gains (ch. 11, with the
+steps 1–8 search when ``hinf.search``) and β1 = ‖C_z (sI − A_n)⁻¹ B_z‖∞; (3) T adapted to the
+closed loop's settling time, m recomputed; β1 > m → ρ decreased; (4) circle criterion on
+H(−a + jω), a adjusted both ways within [a_min, a_max] when it fails; (5) repeat until β1 ≤ m and
+the circle criterion holds.  When that loop fails, a wider search (other W_s = w·S_c weights, a
+bracketing search over ρ) runs before the verdict "no certified design".
+
+Thresholds are reported in three bookkeepings (``docs/ERRATA.md`` § QPP thresholds):
+
+* ``"printed"``: the report's printed β3, β4 (when given in the config);
+* ``"report"``: the report's arithmetic — sector half-width without the factor N of B = G N
+  (0.05 in ch. 13), β3 = k‖(sin ωt)_T‖₂ (10.54), β4 = k‖(y_o)_T‖₂ (10.55);
+* ``"circle"``: the same formulas with the half-width of the sector used in the circle check
+  (N·γ_max = 0.5 in ch. 13), i.e. one consistent sector for both conditions.
+For the polar arm, β3 and β4 are evaluated along the nominal trajectory (sup over M at the
+bounds) by central differences; ``"report"`` and ``"circle"`` then coincide.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from acmm_qpp.errors import ConvergenceError, DesignError
+from qpp.design import circle as circle_mod
+from qpp.design import spheres
+from qpp.design.certificate import DesignResult, certify, default_sector, sector_coupling
+from qpp.io.config import QppConfig
+from qpp.design.hinf import HinfGains, hinf_gains, hinf_search
+from qpp.model.lure import LurePlant, channels, closed_loop
+
+
+# ---------------------------------------------------------------------- procedure 12.1
+def weighted_plant(P: LurePlant, ws) -> LurePlant:
+    """The plant with the H∞ output weight W_s = diag(ws)·S_c (z = [ρu; W_s e], eq 13.5).
+
+    Parameters
+    ----------
+    P : qpp.model.lure.LurePlant
+        Lure plant with servo-compensator (eqs 10.1, 13.1), in the config's units.
+    ws : float or (k,) array
+        Weight w per compensator output, dimensionless (a scalar applies to all).
+
+    Returns
+    -------
+    qpp.model.lure.LurePlant
+        The same plant with the compensator output matrix C_c replaced by diag(w)·C_c.
+    """
+    w = np.broadcast_to(np.asarray(ws, float), (P.Cc.shape[0],))
+    return LurePlant(P.A, P.B, P.C, P.G, P.Ac, P.Bc, np.diag(w) @ P.Cc)
+
+
+class _Procedure:
+    """State of one run of procedure 12.1 (every evaluation is recorded)."""
+
+    def __init__(self, cfg: QppConfig):
+        self.cfg = cfg
+        self.hc, self.dc = cfg.hinf, cfg.design
+        self.P = cfg.lure_plant()
+        a0 = self.hc.a
+        self.a_min = min(a0, self.dc.a_min if self.dc.a_min is not None else a0 * 1e-4)
+        self.a_max = max(a0, self.dc.a_max if self.dc.a_max is not None else a0)
+        self.records: list[dict] = []
+        self.hist: list[dict] = []
+        self.best: DesignResult | None = None
+        self.work = 0.0          # integration work of the nominal loops so far (qpp.simulate.closed_loop.check_work)
+
+    # -- gains -----------------------------------------------------------------
+    def gains(self, rho, a, ws, target=None, observer=None) -> HinfGains | None:
+        hc, dc = self.hc, self.dc
+        Pw = weighted_plant(self.P, ws)
+        obs = observer or hc.observer
+        try:
+            if hc.search:
+                g = hinf_search(Pw, rho=rho, a=a, nu=None, weight=hc.weight, observer=obs, bz=dc.bz,
+                                rho_factor=dc.rho_factor, rho_min=dc.rho_min, target=target)
+                for h in g.history:
+                    self.hist.append({**h, "a": a, "ws": float(np.mean(ws))})
+            else:
+                g = hinf_gains(Pw, rho=rho, a=a, nu=hc.nu, weight=hc.weight, observer=obs)
+                from qpp.design.hinf import closed_loop_norm, existence_tests
+
+                tests = existence_tests(g)
+                self.hist.append({"rho": rho, "nu": hc.nu, "delta": closed_loop_norm(Pw, g, bz=dc.bz), **tests,
+                                  "admissible": bool(tests["k_psd"] and tests["h_psd"] and tests["spectral"]),
+                                  "action": "fixed nu", "a": a, "ws": float(np.mean(ws))})
+            return g
+        except (DesignError, ConvergenceError) as exc:
+            self.records.append(self._rec("riccati", rho, np.nan, a, np.nan, np.nan, np.nan, np.nan, False,
+                                          False, ws, note=str(exc)))
+            return None
+
+    def beta1_only(self, rho, a, ws) -> float:
+        """β1 of the fixed-ν gains at (ρ, a, W_s) — cheap, for the bracketing search."""
+        try:
+            g = hinf_gains(weighted_plant(self.P, ws), rho=rho, a=a, nu=self.hc.nu, weight=self.hc.weight,
+                           observer=self.hc.observer)
+            Az, Bz, Cz = closed_loop(self.P, g.K1, g.Kc, g.H, bz=self.dc.bz)
+            if np.linalg.eigvals(Az + a * np.eye(len(Az))).real.max() >= 0:
+                return np.inf
+            return spheres.hinf_norm(Az + a * np.eye(len(Az)), Bz, Cz)[0]
+        except Exception:                              # noqa: BLE001 - any failure: not a candidate
+            return np.inf
+
+    # -- evaluation --------------------------------------------------------------
+    @staticmethod
+    def _rec(stage, rho, nu, a, T, delta, b1, m, circle, cert, ws, note=""):
+        return {"stage": stage, "rho": float(rho), "nu": float(nu), "a": float(a), "T": float(T),
+                "delta": float(delta), "beta1": float(b1), "m": float(m), "circle": bool(circle),
+                "certified": bool(cert), "ws": [float(x) for x in np.atleast_1d(ws)], "note": note}
+
+    def evaluate(self, g: HinfGains, a, T, ws, stage) -> DesignResult:
+        """Step 1/3: β1, m (recomputed at this a, T and these gains), circle criterion."""
+        self._budget(g, T)
+        res = certify(self.cfg, g.K1, g.Kc, g.H, a, "hinf", g, T=T)
+        res.ws_scale = [float(x) for x in np.atleast_1d(ws)]
+        from qpp.design.hinf import closed_loop_norm
+
+        delta = closed_loop_norm(weighted_plant(self.P, ws), g, bz=self.dc.bz)
+        self.records.append(self._rec(stage, g.rho, g.nu, a, T, delta, res.beta1_ref, res.m_ref,
+                                      res.circle.passed, res.certified, ws))
+        if self.best is None or _score(res) < _score(self.best):
+            self.best = res
+        return res
+
+    def _budget(self, g: HinfGains, T) -> None:
+        """Each evaluation integrates the nominal loop over max(T, simulation.t_final) (for its
+        thresholds): the work of all of them is bounded by ``QPP_WORK`` (issue 13), so that a long
+        horizon is refused in seconds instead of running for hours through the wider search."""
+        from acmm_qpp.errors import ConfigError
+        from acmm_qpp.limits import how_to_raise, limit
+        from qpp.simulate.closed_loop import check_work
+
+        horizon = max(float(T), self.cfg.simulation.t_final)
+        try:
+            self.work += check_work(self.cfg, g.K1, g.Kc, g.H, runs=1, horizon=horizon)
+        except ConfigError:
+            self.work = np.inf
+        if self.work > limit("QPP_WORK"):
+            given, tf = self.cfg.spheres.T, self.cfg.simulation.t_final
+            field, value = (("spheres.T", f"{given:g} s" + (f" (adapted to {T:g} s)" if T != given else ""))
+                            if T > tf else ("simulation.t_final", f"{tf:g} s"))
+            raise ConfigError(f"{field}: {value} is too long for the design: "
+                              f"each of its candidate loops is integrated over max(spheres.T, t_final) = "
+                              f"{horizon:g} s, {len(self.records) + 1} so far (work {self.work:.3g}); shorten "
+                              f"t_final or spheres.T ({how_to_raise('QPP_WORK')})")
+
+    def adapt_T(self, g, a, T, ws, res, stage) -> tuple[DesignResult, float]:
+        """Step 3: T ← settling time of the closed loop until they agree within 10 %."""
+        if not self.cfg.spheres.adapt_T:
+            return res, T
+        T_hi = max(self.cfg.simulation.t_final, self.cfg.spheres.T)
+        for _ in range(4):
+            Ts = float(np.clip(res.T_settle, 1e-3 * T_hi, T_hi))
+            if abs(Ts - T) <= 0.1 * T:
+                break
+            T = Ts
+            res = self.evaluate(g, a, T, ws, stage + " T")
+        return res, T
+
+    def circle_a(self, g, a) -> float | None:
+        """Step 4: an a passing the circle criterion with these gains, searched both ways from the
+        current a on a geometric grid of [a_min, a_max] (nearest first); None when none passes."""
+        _, dcols = channels(self.P)
+        Az, Bz, Cz = closed_loop(self.P, g.K1, g.Kc, g.H, bz="eq10.7")
+        sector, coupled = default_sector(self.cfg), sector_coupling(self.cfg)
+        lo = max(self.a_min, 1e-14)
+        grid = np.unique(np.concatenate([np.geomspace(lo, max(self.a_max, lo), 13), [self.a_min, self.a_max]]))
+        grid = sorted(grid[grid != a], key=lambda x: abs(np.log(max(x, 1e-300)) - np.log(max(a, 1e-300))))
+        for cand in grid:
+            ok = circle_mod.circle_criterion(Az, Bz[:, dcols], Cz, sector, a=float(cand), coupled=coupled).passed
+            self.records.append(self._rec("circle a", g.rho, g.nu, cand, np.nan, np.nan, np.nan, np.nan, ok,
+                                          False, [1.0], note="circle criterion with fixed gains"))
+            if ok:
+                return float(cand)
+        return None
+
+    # -- the loops -----------------------------------------------------------------
+    def report_loop(self, ws=(1.0,), stage="12.1") -> DesignResult | None:
+        """Steps 1–5 of 12.1 from the configured ρ, a, T."""
+        dc = self.dc
+        rho, a, T = self.hc.rho, self.hc.a, self.cfg.spheres.T
+        ws = np.asarray(ws, float)
+        prev_b1, m_est = np.inf, None
+        tried_a = set()
+        if self.hc.search:                                      # step 1: m from a first fixed-nu design
+            try:
+                g0 = hinf_gains(weighted_plant(self.P, ws), rho=rho, a=a, nu=self.hc.nu, weight=self.hc.weight,
+                                observer=self.hc.observer)
+                r0 = self.evaluate(g0, a, T, ws, stage + " step 1")
+                r0, T = self.adapt_T(g0, a, T, ws, r0, stage + " step 1")
+                m_est = r0.m_ref
+            except (DesignError, ConvergenceError):
+                m_est = None
+        for _ in range(dc.max_iter):
+            g = self.gains(rho, a, ws, target=m_est)
+            if g is None:
+                rho *= dc.rho_factor
+                if rho < dc.rho_min:
+                    return None
+                continue
+            res = self.evaluate(g, a, T, ws, stage)
+            res, T = self.adapt_T(g, a, T, ws, res, stage)
+            m_est = res.m_ref
+            if res.beta1_ref > res.m_ref:                      # step 3: decrease rho
+                if res.beta1_ref >= prev_b1 * (1 - 1e-9) or g.rho * dc.rho_factor < dc.rho_min:
+                    return None
+                prev_b1 = res.beta1_ref
+                rho = g.rho * dc.rho_factor
+                continue
+            if not res.circle.passed:                           # step 4: adjust a, back to step 1
+                tried_a.add(a)
+                a_new = self.circle_a(g, a)
+                if a_new is None or a_new in tried_a:
+                    return None
+                a = a_new
+                continue
+            return self.raise_a(g, res, a, T, ws, stage)       # certified (step 5)
+        return None
+
+    def raise_a(self, g, res, a, T, ws, stage) -> DesignResult:
+        """'a adjusted both ways': with a certified design, try a larger a (a faster guaranteed
+        exponential rate, 10.27) up to a_max while β1 ≤ m and the circle criterion still hold."""
+        while a < self.a_max * (1 - 1e-12):
+            a_up = min(self.a_max, max(a, 1e-12) / self.dc.a_factor)
+            g2 = self.gains(g.rho, a_up, ws, target=res.m_ref)
+            if g2 is None:
+                break
+            r2 = self.evaluate(g2, a_up, T, ws, stage + " a up")
+            if not r2.certified:
+                break
+            g, res, a = g2, r2, a_up
+        return res
+
+    def wider(self) -> DesignResult | None:
+        """Other W_s weights and a bracketing (golden-section on log ρ) search for the ρ minimizing β1."""
+        dc, p_w = self.dc, self.P.Cc.shape[0]
+        weights = [np.full(p_w, w) for w in dc.ws_scales]
+        if p_w > 1:
+            for i in range(p_w):
+                for w in (3.0, 1 / 3.0):
+                    v = np.ones(p_w)
+                    v[i] = w
+                    weights.append(v)
+        a = self.best.a if self.best is not None else self.hc.a
+        for ws in weights:
+            lr = np.linspace(np.log10(dc.rho_min), np.log10(dc.rho_max), 21)
+            vals = np.array([self.beta1_only(10 ** x, a, ws) for x in lr])
+            if not np.isfinite(vals).any():
+                self.records.append(self._rec("wider", np.nan, np.nan, a, np.nan, np.nan, np.inf, np.nan, False,
+                                              False, ws, note="no stabilizing gains for any rho"))
+                continue
+            k = int(np.argmin(vals))
+            lo, hi = lr[max(k - 1, 0)], lr[min(k + 1, lr.size - 1)]
+            gr = (np.sqrt(5) - 1) / 2
+            x1, x2 = hi - gr * (hi - lo), lo + gr * (hi - lo)
+            f1, f2 = self.beta1_only(10 ** x1, a, ws), self.beta1_only(10 ** x2, a, ws)
+            for _ in range(10):
+                if f1 <= f2:
+                    hi, x2, f2 = x2, x1, f1
+                    x1 = hi - gr * (hi - lo)
+                    f1 = self.beta1_only(10 ** x1, a, ws)
+                else:
+                    lo, x1, f1 = x1, x2, f2
+                    x2 = lo + gr * (hi - lo)
+                    f2 = self.beta1_only(10 ** x2, a, ws)
+            cand = [(vals[k], lr[k]), (f1, x1), (f2, x2)]
+            rho = 10 ** min(cand)[1]
+            g = self.gains(rho, a, ws, target=self.best.m_ref if self.best is not None else None)
+            if g is None:
+                continue
+            res = self.evaluate(g, a, self.best.T if self.best is not None else self.cfg.spheres.T, ws, "wider")
+            res, T = self.adapt_T(g, a, res.T, ws, res, "wider")
+            if res.beta1_ref <= res.m_ref and not res.circle.passed:
+                a_new = self.circle_a(g, a)
+                if a_new is not None:
+                    g2 = self.gains(rho, a_new, ws)
+                    if g2 is not None:
+                        res = self.evaluate(g2, a_new, T, ws, "wider a")
+            if res.certified:
+                return res
+        return None
+
+
+def _score(res: DesignResult) -> tuple:
+    """Order of designs: certified first, then circle passed, then smaller β1/m."""
+    return (not res.certified, not res.circle.passed, res.beta1_ref / max(res.m_ref, 1e-300))
+
+
+def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
+    """Why the best design is not certified, in words and numbers.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        The config (its ``spheres`` section: β_o, β_ri, ‖d‖∞ in the config's units).
+    res : DesignResult
+        The best, uncertified design.
+
+    Returns
+    -------
+    str
+        The failing condition (circle criterion, or β1 > m of eq 12.1 with its largest term).
+    """
+    sp = cfg.spheres
+    worst = float(np.max(np.linalg.eigvals(res.Az["eq10.7"]).real))
+    if worst >= 0:                  # nothing else matters: the loop of these gains diverges
+        return (f"the closed loop of these gains is unstable (largest Re λ(A_z) = {worst:.4g} 1/s): β1 is "
+                f"infinite and no circle criterion holds")
+    if not res.circle.passed:
+        c = res.circle
+        if np.isnan(c.min_scale):
+            why = "no sector scale s·[α, β] passes (scanned 1e-12 … 1e12)"
+        elif c.min_scale > 1.0:     # an unstable H(s): the sector must be wide enough to stabilize
+            why = f"smallest admissible sector scale {c.min_scale:.3g} > 1"
+        elif c.max_scale < 1.0:
+            why = f"largest admissible sector scale {c.max_scale:.3g} < 1"
+        else:
+            why = f"admissible sector scales {c.min_scale:.3g} … {c.max_scale:.3g}, but not 1"
+        return f"circle criterion fails for every a tried ({why} at a = {res.a:g})"
+    t = res.threshold(res.bookkeeping)
+    terms = {"β_ri": sp.beta_ri, "‖d‖∞": sp.d_inf, "β_o·β3": sp.beta_o * t.beta3, "β4": t.beta4}
+    dom = max(terms, key=terms.get)
+    txt = (f"β1 > m: m = β_o/(β_ri + ‖d‖∞ + β_o·β3 + β4) = {sp.beta_o:g}/("
+           + " + ".join(f"{v:.4g}" for v in terms.values()) + f"), largest term {dom} = {terms[dom]:.4g}")
+    if t.m < 1.0:
+        txt += ("; m < 1 at this T while β1 ≥ 1 for a loop that tracks r_o (gain 1 at the servo "
+                "frequencies)")
+    return txt
+
+
+def design(cfg: QppConfig) -> DesignResult:
+    """Procedure 12.1 (or certification of the printed gains when ``design.gains = published``).
+
+    Steps: (1) a, T, m; (2) gains from ch. 11 (fixed ν, or the steps 1–8 search with all of its
+    tests when ``hinf.search``); (3) T ← settling time of the nominal closed loop (within 10 %),
+    m recomputed, β1 > m → ρ ← ρ·rho_factor; (4) circle criterion, else a adjusted both ways on a
+    geometric grid of [a_min, a_max] and back to step 1; (5) stop at the first certified design,
+    then try to raise a towards a_max.  If the loop fails: the wider search over W_s weights and ρ.
+    Every evaluation is in ``iterations``; the result's ``certified``/``verdict`` say the outcome.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config (plant, nonlinearity, ``hinf``, ``spheres``, ``design`` sections).
+
+    Returns
+    -------
+    DesignResult
+        The certified design, or the best uncertified one (``certified`` False, ``limiting``).
+
+    Raises
+    ------
+    DesignError
+        No stabilizing H∞ gains for any ρ, a or weight tried.
+    """
+    hc, dc = cfg.hinf, cfg.design
+    if dc.gains == "published":
+        p = cfg.published
+        res = certify(cfg, p.K1, p.Kc, p.H, hc.a, "published")
+        res.iterations = [_Procedure._rec("published", np.nan, np.nan, hc.a, res.T, np.nan, res.beta1_ref,
+                                          res.m_ref, res.circle.passed, res.certified, [1.0])]
+        _finish(cfg, res)
+        return res
+    proc = _Procedure(cfg)
+    res = proc.report_loop()
+    if res is None and dc.wider_search and proc.best is not None:
+        res = proc.wider()
+    if res is None:
+        res = proc.best
+    if res is None:
+        from qpp.model.lure import structural_obstacles
+
+        why = structural_obstacles(cfg.lure_plant())
+        raise DesignError("procedure 12.1: no stabilizing H∞ gains for any rho, a or weight tried"
+                          + (f": {'; '.join(why)}" if why else ""))
+    res.iterations = proc.records
+    res.hinf_history = proc.hist
+    _finish(cfg, res)
+    pub = cfg.published
+    if pub.K1 is not None and pub.Kc is not None and pub.H is not None:
+        res.published = certify(cfg, pub.K1, pub.Kc, pub.H, res.a, "published", T=res.T)
+    return res
+
+
+def _finish(cfg: QppConfig, res: DesignResult) -> None:
+    res.certified = bool(res.beta1_ref <= res.m_ref and res.circle.passed)
+    if res.certified:
+        res.verdict = (f"certified: beta1 = {res.beta1_ref:.5g} <= m = {res.m_ref:.5g} ({res.bookkeeping}), "
+                       f"circle criterion satisfied at a = {res.a:g}, T = {res.T:.4g} s")
+        res.limiting = ""
+    else:
+        res.limiting = limiting_factor(cfg, res)
+        res.verdict = (f"no certified design: best beta1 = {res.beta1_ref:.5g}, m = {res.m_ref:.5g} "
+                       f"({res.bookkeeping}), circle {'passed' if res.circle.passed else 'failed'}, "
+                       f"limiting factor: {res.limiting}")

@@ -1,0 +1,1 @@
+"""The qpp config, its schema, the stored design and the stage runners."""

@@ -1,0 +1,72 @@
+"""Field types of the ``qpp`` configuration (CR-185644 Part III, ch. 10–14 examples): numbers
+that may be written as ``"<number> <unit>"`` strings and are converted to SI on load, the bound
+on plausible magnitudes, and the strict base model of every section.
+
+Moved out of :mod:`qpp.io.config` (issue 12).
+"""
+from __future__ import annotations
+
+from typing import Annotated, Optional
+
+import numpy as np
+from pydantic import BaseModel, model_validator
+
+from acmm_qpp.config_model import StrictModel
+from acmm_qpp.quantity_fields import quantity
+
+Matrix = list[list[float]]
+
+
+def _q(kind: str):
+    """A number, or a ``"<number> <unit>"`` string converted (pint) to the SI unit of ``kind``;
+    ``None`` passes (optional fields)."""
+    return quantity(kind, allow_none=True)
+
+
+Seconds = Annotated[float, _q("time")]
+OptSeconds = Annotated[Optional[float], _q("time")]
+RadPerSecond = Annotated[float, _q("frequency")]
+PerSecond = Annotated[float, _q("inverse_time")]
+Kilograms = Annotated[float, _q("mass")]
+Metres = Annotated[float, _q("length")]
+KgM2 = Annotated[float, _q("si_inertia")]
+Radians = Annotated[float, _q("angle_rad")]
+#: Largest magnitude accepted for any number of a qpp config (matrix entry, gain, weight,
+#: amplitude, time); beyond it products in the design and the simulation overflow (issue 13).
+QPP_MAX = 1e12
+
+
+def _implausible(v):
+    """The first number in ``v`` (scalar or nested list) with |x| > QPP_MAX, else ``None``."""
+    if isinstance(v, bool) or isinstance(v, BaseModel):
+        return None
+    if isinstance(v, (int, float)):
+        return v if abs(v) > QPP_MAX else None
+    if isinstance(v, (list, tuple)):
+        for x in v:
+            bad = _implausible(x)
+            if bad is not None:
+                return bad
+    return None
+
+
+class _Model(StrictModel):
+
+    @model_validator(mode="after")
+    def _plausible_magnitudes(self):
+        for name in type(self).model_fields:
+            bad = _implausible(getattr(self, name))
+            if bad is not None:
+                raise ValueError(f"{name}: {bad:.4g} is outside the plausible range |value| ≤ {QPP_MAX:g}")
+        return self
+
+
+def _finite_matrix(v):
+    if not isinstance(v, list) or not v or not all(isinstance(r, list) for r in v):
+        raise ValueError("must be a non-empty matrix (list of rows)")
+    if len({len(r) for r in v}) != 1 or not v[0]:
+        raise ValueError(f"rows must all have the same, non-zero length (got row lengths {[len(r) for r in v]})")
+    a = np.asarray(v, float)
+    if not np.all(np.isfinite(a)):
+        raise ValueError("must contain finite numbers")
+    return v

@@ -1,0 +1,19 @@
+"""JSON schema of a qpp config (CR-185644 Part III), generated from :class:`qpp.io.config.QppConfig` with the generic machinery of
+:mod:`acmm_qpp.schema`.  ``qpp schema`` prints it."""
+from __future__ import annotations
+
+from acmm_qpp.schema import header, model_schema
+
+
+def qpp_schema() -> dict:
+    """Schema of a qpp config (:class:`qpp.io.config.QppConfig`).
+
+    Returns
+    -------
+    dict
+        JSON schema (draft 2020-12); dimensional fields accept a number or a quantity string in
+        any unit of the field's dimension.
+    """
+    from qpp.io.config import QppConfig
+
+    return header(model_schema(QppConfig), "qpp", "qpp config (CR-185644 Part III)")

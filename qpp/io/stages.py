@@ -1,0 +1,352 @@
+"""Stage runners for ``qpp design`` / ``qpp simulate``: config in, HDF5 (+ figures) out.
+
+The design is procedure 12.1 (ch. 12.1; gains of eqs 10.5–10.6), the simulations those of
+ch. 13–14.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.results import Dataset, write_h5
+from acmm_qpp.runlock import locked_stage
+from qpp.io.config_nonlin import PolarArmNonlinearity
+from qpp.io.config import QppConfig, load_config
+from qpp.design.certificate import DesignResult
+from qpp.design.procedure import design
+from qpp.io.stored_design import gains_sha256
+from qpp.simulate.closed_loop import simulate
+
+
+#: units of the gains of eq 10.5–10.6 in the results (text: the config's own units, not UDUNITS)
+GAIN_UNITS = {"K1": "input units per state unit", "Kc": "input units per servo-state unit",
+              "H": "state units per output unit per s"}
+
+def _cfg(config) -> QppConfig:
+    return config if isinstance(config, QppConfig) else load_config(config)
+
+
+def _rel(a, b):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return np.abs(a - b) / np.maximum(np.abs(b), 1e-12)
+
+
+def printed_H_difference(cfg: QppConfig, r: DesignResult) -> float | None:
+    """Largest |H − H_printed| / |H_printed| over the non-zero printed entries of the observer gain
+    (dimensionless); None when the config gives no printed H.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        The config (``published.H``).
+    r : qpp.design.certificate.DesignResult
+        The design (``H``).
+
+    Returns
+    -------
+    float or None
+        The largest relative difference, dimensionless (None also when every printed entry is 0).
+    """
+    pub = cfg.published.H
+    if pub is None or not np.any(np.asarray(pub, float)):
+        return None
+    return float(_rel(r.H, pub)[np.abs(np.asarray(pub, float)) > 0].max())
+
+
+def _published_certificate_items(pb) -> dict:
+    """Datasets of the certificate of the printed gains (β1 both readings, β3/β4/m, circle)."""
+    return {
+        "beta1_eq10_7": Dataset(pb.beta1["eq10.7"]["value"], "1", "beta1 of the printed gains, B_z eq 10.7"),
+        "beta1_printed": Dataset(pb.beta1["printed"]["value"], "1", "beta1 of the printed gains, printed B_z"),
+        "thresholds": Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in pb.thresholds]), "1",
+                              "β3, β4, m of the printed gains per bookkeeping: "
+                              + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"],
+                              dims=("bookkeeping", "threshold")),
+        "circle_passed": Dataset(np.int8(pb.circle.passed), "1", "circle criterion with the printed gains (1: passed)"),
+        "T": Dataset(pb.T, "s", "truncation time used"),
+    }
+
+
+def _printed_gain_items(pub, H) -> dict:
+    """Datasets of the printed gains of the config's ``published`` section ({} when absent)."""
+    if pub.K1 is None or pub.Kc is None:
+        return {}
+    items = {
+        "K1": Dataset(np.asarray(pub.K1, float), GAIN_UNITS["K1"], "printed K1", dims=("input", "state")),
+        "Kc": Dataset(np.asarray(pub.Kc, float), GAIN_UNITS["Kc"], "printed Kc", dims=("input", "servo_state")),
+    }
+    if pub.H is not None:
+        items["H"] = Dataset(np.asarray(pub.H, float), GAIN_UNITS["H"], "printed H", dims=("state", "output"))
+        items["H_rel_diff"] = Dataset(
+            np.where(np.abs(np.asarray(pub.H)) > 0, _rel(H, pub.H), 0.0), "1", "|H − H_printed|/|H_printed|",
+            dims=("state", "output"))
+    return items
+
+
+def sector_verified(cfg: QppConfig) -> bool | None:
+    """Whether the sector computed for an ``expression`` nonlinearity held at the random check
+    points (:func:`qpp.model.sector_bounds.verify`; False: the grid missed part of φ's range and the
+    sector was widened to the extremum climbed from them); None when the sector is not computed
+    from an expression.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        The config.
+
+    Returns
+    -------
+    bool or None
+        The verification's outcome.
+    """
+    from qpp.io.config_nonlin import ExpressionNonlinearity
+
+    nl = cfg.nonlinearity
+    if cfg.design.sector is not None or not isinstance(nl, ExpressionNonlinearity) or nl.sector is not None:
+        return None
+    return bool(cfg.expression_model().sector_info.verified)
+
+
+def _sector_check_items(cfg: QppConfig) -> dict:
+    """``sector_verified`` of a sector computed from an expression (:func:`sector_verified`)."""
+    verified = sector_verified(cfg)
+    if verified is None:
+        return {}
+    return {"sector_verified": Dataset(int(verified), "1", "1: φ within the grid's sector at 4000 random points "
+                                       "of the ranges; 0: some were outside, and the sector was widened to the "
+                                       "extremum climbed from them")}
+
+
+def design_items(cfg: QppConfig, r: DesignResult) -> dict:
+    """Datasets of qpp_design.h5.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        The config.
+    r : qpp.design.certificate.DesignResult
+        The design.
+
+    Returns
+    -------
+    dict
+        Name → :class:`acmm_qpp.results.Dataset` (each with its units), for
+        :func:`acmm_qpp.results.write_h5`.
+    """
+    items = {
+        "K1": Dataset(r.K1, GAIN_UNITS["K1"], "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
+                      dims=("input", "state")),
+        "Kc": Dataset(r.Kc, GAIN_UNITS["Kc"], "servo-state gain Kc (eq 10.6)", dims=("input", "servo_state")),
+        "H": Dataset(r.H, GAIN_UNITS["H"], "observer gain H, report's sign (L = −H, eq 10.5)", dims=("state", "output")),
+        "Cz": Dataset(r.Cz, "output units per loop-state unit", "C_z (eq 10.7)", dims=("output", "loop_state")),
+        "a": Dataset(r.a, "1/s", "exponential weighting a (10.27)"),
+        "T": Dataset(r.T, "s", "truncation time T"),
+        "E": Dataset(r.E, "s^0.5", "E = [(e^{2aT} − 1)/(2a)]^{1/2} (10.44)"),
+        "sector": Dataset(r.sector, "1", "sector [α_i, β_i] of φ for the circle check", ["alpha", "beta"],
+                          dims=("channel", "bound")),
+        "y_o_T": {"t": Dataset(r.y_o_t, "s", "time on [0, T]", dims=("t",)),
+                  "y_o": Dataset(np.asarray(r.y_o).T if np.ndim(r.y_o) == 2 and np.shape(r.y_o)[-1] == np.size(r.y_o_t)
+                                 else r.y_o, "output units", "nominal output y_o on [0, T], (t, output)",
+                                 dims=("t", "output") if np.ndim(r.y_o) == 2 else ("t",))},
+        "iterations": _iterations(r),
+    }
+    if r.hinf_history:
+        keys = ["rho", "nu", "delta", "k_psd", "h_psd", "lambda_kh_scaled", "spectral", "admissible", "a", "ws"]
+        items["hinf_search"] = Dataset(np.array([[float(h.get(k, np.nan)) for k in keys] for h in r.hinf_history]),
+                                       "column_units[j]", "ch. 11 passes: rho, nu, delta = ||T_wy||inf (a-shifted, = beta1), "
+                                       "tests k1 >= 0, h >= 0, lambda_max(k1 h)/nu^2 < 1 (1 = true), admissible, "
+                                       "a (1/s), mean W_s scale", keys, dims=("hinf_pass", "hinf_quantity"),
+                                       attrs={"actions": "; ".join(str(h.get("action", "")) for h in r.hinf_history),
+                                              "column_units": ",".join("1/s" if k == "a" else "1" for k in keys)})
+    items["certificate"] = {
+        "certified": Dataset(int(r.certified), "1", "1: beta1 <= m and circle criterion (theorem 2, lemma 1)"),
+        "beta1": Dataset(r.beta1_ref, "1", f"beta1 of the design inequality (B_z {r.bz})"),
+        "m": Dataset(r.m_ref, "1", f"threshold m (12.1), bookkeeping {r.bookkeeping}"),
+        "T_settle": Dataset(r.T_settle, "s", "settling time of the nominal closed loop"),
+        "ws_scale": Dataset(np.asarray(r.ws_scale or [1.0], float), "1", "W_s = diag(w)·S_c of the gains",
+                            dims=("ws_entry",)),
+    }
+    if r.published is not None:
+        items["published_certificate"] = _published_certificate_items(r.published)
+    for reading in r.beta1:
+        key = reading.replace(".", "_")
+        b = r.beta1[reading]
+        items[f"Bz_{key}"] = Dataset(r.Bz[reading], "loop-state units per s per exogenous unit", f"B_z, {reading} reading (columns [r, d])",
+                                     dims=("loop_state", "exogenous"))
+        items[f"beta1_{key}"] = Dataset(b["value"], "1", f"β1 exact (SLICOT L∞ norm), B_z {reading}",
+                                        attrs={"omega_peak_rad_s": b["omega_peak"], "grid_value": b["grid_value"]})
+    items["Az"] = Dataset(r.Az["eq10.7"], "1/s", "A_z (eq 10.7; 13.6 / Table 14.1)",
+                         dims=("loop_state", "loop_state_col"))
+    items["thresholds"] = Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in r.thresholds]),
+                                  "1", "β3, β4, m (12.1) per bookkeeping: " + ", ".join(t.name for t in r.thresholds),
+                                  ["half_width", "beta3", "beta4", "m"], dims=("bookkeeping", "threshold"))
+    items.update(_sector_check_items(cfg))
+    items["circle"] = _circle_items(r.circle)
+    printed = _printed_gain_items(cfg.published, r.H)
+    if printed:
+        items["published"] = printed
+    return items
+
+
+def _circle_items(c) -> dict:
+    """The circle check's datasets (grid, bands, margins, scales; the small-gain terms of a coupled φ)."""
+    out = {
+        "omega": Dataset(c.omega, "rad/s", "frequency grid", dims=("omega",)),
+        "centres": Dataset(c.centres, "1", "h_ii(−a + jω), complex", dims=("channel", "omega")),
+        "radii": Dataset(c.radii, "1", "Gershgorin mean radii (d_i + d'_i)/2", dims=("channel", "omega")),
+        "margins": Dataset(c.margins, "1", "distance of band to disc boundary (>0 passes)", dims=("channel",)),
+        "encirclements": Dataset(c.encirclements, "1", "N_ci (clockwise)", dims=("channel",)),
+        "max_scale": Dataset(c.max_scale, "1", "largest s with sector s·[α, β] passing"),
+        "min_scale": Dataset(c.min_scale, "1", "smallest s with sector s·[α, β] passing (0: every "
+                             "smaller sector passes; > 0: an unstable H(s) needs a sector this wide)"),
+    }
+    if c.method == "small_gain":          # a coupled φ: the small-gain form (qpp.design.circle)
+        out["margins"] = Dataset(c.margins, "1", "1 − ρ·sup σ̄(H_c), small-gain form for a coupled φ "
+                                             "(>0 passes)", dims=("channel",))
+        out["gain_bound"] = Dataset(c.gain_bound, "1", "ρ: ‖φ − C_0 y‖₂ ≤ ρ‖y‖₂ (small-gain form)")
+        out["peak_gain"] = Dataset(c.peak_gain, "1", "sup_ω σ̄(H_c(−a + jω)), H_c = (I − H C_0)⁻¹ H")
+    return out
+
+
+_ITER_KEYS = ["rho", "nu", "a", "T", "delta", "beta1", "m", "circle", "certified"]
+#: per column (units "column_units[j]", like the per-state arrays' state_units[j]); flags 1/0
+_ITER_UNITS = ["1", "1", "1/s", "s", "1", "1", "1", "1", "1"]
+
+
+def _iterations(r: DesignResult) -> Dataset:
+    rows = [[float(it.get(k, np.nan)) for k in _ITER_KEYS] for it in r.iterations]
+    return Dataset(np.array(rows) if rows else np.zeros((0, len(_ITER_KEYS))), "column_units[j]",
+                   "procedure 12.1, one row per evaluation: rho, nu, a (1/s), T (s), delta = ||T_wy||inf, "
+                   "beta1, m (recomputed), circle passed, certified",
+                   _ITER_KEYS, dims=("iteration", "quantity"),
+                   attrs={"column_units": ",".join(_ITER_UNITS),
+                                      "stages": ";".join(str(it.get("stage", "")) for it in r.iterations),
+                                      "ws": ";".join(",".join(f"{w:g}" for w in it.get("ws", [1.0]))
+                                                     for it in r.iterations),
+                                      "notes": ";".join(str(it.get("note", "")).replace(";", ",")
+                                                        for it in r.iterations)})
+
+
+@locked_stage(_cfg)
+@owns_outputs("qpp design", lambda c: _cfg(c))
+def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignResult, Path]:
+    """Design (ch. 12.1) and write ``<root>/<name>/qpp_design.h5`` (+ circle and iteration figures).
+
+    An uncertified design is still written (root attributes ``certified = 0``, ``label =
+    "uncertified"``, ``verdict``); the caller decides the exit code (:class:`DesignError`, 3).
+
+    Parameters
+    ----------
+    config : qpp.io.config.QppConfig or path-like or str
+        The config, or a config file / packaged name to load.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+
+    Returns
+    -------
+    tuple
+        (config, :class:`qpp.design.certificate.DesignResult`, path of ``qpp_design.h5``).
+    """
+    from acmm_qpp import figure_worker
+    from qpp.plots import FIGURE_WARM, plot_circle, plot_iterations
+
+    cfg = _cfg(config)
+    want_figures = cfg.output.figures if figures is None else figures
+    # the figure worker imports matplotlib while the design runs, then draws both figures at
+    # once while the HDF5 file is written (acmm_qpp.figure_worker; in place where it cannot fork)
+    with figure_worker.session(want_figures, FIGURE_WARM):
+        r = design(cfg)
+        if want_figures:          # drawn while the HDF5 file is written (in place: after it)
+            figure_worker.submit(plot_circle, r, cfg.run_dir() / "qpp_circle.png")
+            figure_worker.submit(plot_iterations, r, cfg.run_dir() / "qpp_iterations.png")
+        verdicts = {f"beta1_le_m[{rd},{bk}]": bool(v) for (rd, bk), v in r.verdicts().items()}
+        path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
+                        {"stage": "qpp design", "circle_passed": bool(r.circle.passed), **verdicts,
+                         "certified": bool(r.certified), "label": "certified" if r.certified else "uncertified",
+                         "verdict": r.verdict, "bookkeeping": r.bookkeeping,
+                         "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
+    return cfg, r, path
+
+
+@locked_stage(_cfg)
+@owns_outputs("qpp simulate", lambda c: _cfg(c))
+def run_simulate(config, figures: bool | None = None, progress=None):
+    """Design (or reuse the design), simulate every scenario, write ``<root>/<name>/qpp_sim.h5``
+    (+ figures).
+
+    The gains of ``qpp_design.h5`` in the run directory are used when ``qpp design`` wrote it from
+    the same resolved config with this code (:func:`qpp.io.stored_design.load_stored_design`);
+    otherwise the design of ch. 12.1 runs first.  ``progress(done, total, name)`` is called after
+    each scenario.
+
+    Parameters
+    ----------
+    config : qpp.io.config.QppConfig or path-like or str
+        The config, or a config file / packaged name to load.
+    figures : bool, optional
+        Write the figures (default: ``output.figures``).
+    progress : callable, optional
+        ``progress(done, total, name)``.
+
+    Returns
+    -------
+    tuple
+        (config, the design — :class:`qpp.design.certificate.DesignResult`, or
+        :class:`qpp.io.stored_design.StoredDesign` when reused; both have ``K1``, ``Kc``, ``H``,
+        ``certified``, ``verdict`` —, list of :class:`qpp.simulate.closed_loop.SimResult`, path of
+        ``qpp_sim.h5``).
+    """
+    from acmm_qpp import figure_worker
+    from qpp.plots import FIGURE_WARM
+    from qpp.io.stored_design import load_stored_design
+
+    cfg = _cfg(config)
+    want_figures = cfg.output.figures if figures is None else figures
+    with figure_worker.session(want_figures, FIGURE_WARM):     # see run_design
+        r, sims, path = _simulate_and_write(cfg, want_figures, progress,
+                                            load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()))
+    return cfg, r, sims, path
+
+
+def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
+    """The body of :func:`run_simulate` (in its figure session): (design, simulations, path)."""
+    r = stored or design(cfg)
+    sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
+    if want_figures:
+        from acmm_qpp.figure_worker import submit
+        from qpp.plots import plot_cartesian, plot_scenario
+
+        for s in sims:
+            submit(plot_scenario, s, cfg.run_dir() / f"qpp_sim_{s.name}.png")
+        if isinstance(cfg.nonlinearity, PolarArmNonlinearity):
+            submit(plot_cartesian, sims, cfg.nonlinearity.a, cfg.run_dir() / "qpp_sim_cartesian.png")
+    items = {"K1": Dataset(r.K1, GAIN_UNITS["K1"], "gain K1 used", dims=("input", "state")),
+             "Kc": Dataset(r.Kc, GAIN_UNITS["Kc"], "gain Kc used", dims=("input", "servo_state")),
+             "H": Dataset(r.H, GAIN_UNITS["H"], "observer gain H used (report's sign)", dims=("state", "output"))}
+    for s in sims:
+        # time first: (t, channel), as in acmm's files
+        items[s.name] = {
+            "t": Dataset(s.t, "s", "time", dims=("t",)),
+            "r": Dataset(np.asarray(s.r).T, "output units", "reference r", dims=("t", "output")),
+            "r_o": Dataset(np.asarray(s.r_o).T, "output units", "nominal reference r_o", dims=("t", "output")),
+            "y": Dataset(np.asarray(s.y).T, "output units", "output y", dims=("t", "output")),
+            "y_o": Dataset(np.asarray(s.y_o).T, "output units", "nominal output y_o (eq 10.29)", dims=("t", "output")),
+            "u": Dataset(np.asarray(s.u).T, "control units", "control u = K1 x̂ + Kc x_c − f1o", dims=("t", "input")),
+            "x": Dataset(np.asarray(s.x).T, "state units", "plant state", dims=("t", "state")),
+            "error_inf": Dataset(s.error_inf, "output units", "‖y − y_o‖∞",
+                                 # γ of the sinusoidal kind, the payload of the polar arm; an
+                                 # expression's parameters are param_<name> (not "gamma")
+                                 attrs={"beta_o": s.beta_o, "passed": bool(s.passed),
+                                        "premises_held": bool(not s.broken_premises(
+                                            cfg.spheres.beta_ri, getattr(cfg.nonlinearity, "y_range", None))),
+                                        **({} if s.parameters else {"gamma": s.gamma}),
+                                        **({} if s.diverged_at is None else {"diverged_at_s": s.diverged_at}),
+                                        **{f"param_{k}": v for k, v in (s.parameters or {}).items()}}),
+            "error_per_output": Dataset(s.error_per_output, "output units", "sup_t |y_i − y_oi|", dims=("output",)),
+        }
+    path = write_h5(cfg.run_dir() / "qpp_sim.h5", items, cfg.to_yaml(),
+                    {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims)),
+                     "design_certified": int(r.certified), "design_verdict": r.verdict})
+    return r, sims, path

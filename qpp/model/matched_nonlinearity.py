@@ -1,0 +1,110 @@
+"""The matched nonlinearity f1 (f = B f1, eq 10.1) of a qpp config as a function f1(x, t, γ).
+
+Three kinds (CR-185644 ch. 13–14 and ch. 10.4): a user expression in the outputs
+(:mod:`qpp.model.nonlin`), the sinusoidally varying output feedback of ch. 13 and the polar
+manipulator arm of ch. 14 (eq 14.2).  Also the value of the uncertain parameter(s) γ of one
+scenario.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from qpp.io.config_nonlin import ExpressionNonlinearity, PolarArmNonlinearity, SinusoidalNonlinearity
+from qpp.io.config import QppConfig
+from qpp.io.config_simulation import Scenario
+from qpp.model.lure import LurePlant
+
+
+def make_f1(nl, plant: LurePlant, model=None):
+    """Matched nonlinearity f1(x, t, γ) ∈ R^m (f = B f1) of the config's kind and the nominal γ.
+
+    For ``kind: expression`` γ is the vector of parameter values and ``model`` the config's
+    :meth:`~qpp.io.config.QppConfig.expression_model`.
+
+    Parameters
+    ----------
+    nl : ExpressionNonlinearity or SinusoidalNonlinearity or PolarArmNonlinearity
+        The config's nonlinearity section.
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+    model : object, optional
+        The compiled expression model (``kind: expression`` only).
+
+    Returns
+    -------
+    f1 : callable
+        ``f1(x, t, γ)``, in the units of the config's u.
+    gamma_nominal : float or ndarray
+        The nominal γ (M for the polar arm, the parameter vector for expressions), in the
+        config's units.
+
+    Raises
+    ------
+    TypeError
+        ``nl`` is of no known kind.
+    """
+    if isinstance(nl, ExpressionNonlinearity):
+        C = plant.C
+
+        def f1(x, t, g):
+            return model.f1(C @ x, t, g)
+        return f1, model.nom.copy()
+    if isinstance(nl, SinusoidalNonlinearity):
+        F0, F1, Fu = (np.asarray(getattr(nl, k), float) for k in ("F0", "F1", "F_unc"))
+        C = plant.C
+
+        def f1(x, t, g):
+            y = C @ x
+            return F0 @ y + (F1 + g * Fu) @ y * np.sin(nl.omega * t)
+        return f1, 0.0
+    if isinstance(nl, PolarArmNonlinearity):
+        mu, J, a = nl.mu, nl.J1 + nl.J2, nl.a
+
+        def f1(x, t, M):
+            x1, _, x3, x4 = x
+            R = mu * x1 + M * (x1 + a)
+            I = J + mu * x1 ** 2 + M * (x1 + a) ** 2
+            return np.array([R / (mu + M) * x4 ** 2, -2.0 * R * x3 * x4 / I])
+        return f1, nl.M_nominal
+    raise TypeError(f"unknown nonlinearity {type(nl).__name__}")
+
+
+def config_f1(cfg: QppConfig, plant: LurePlant):
+    """:func:`make_f1` of a config (compiles the expression model when needed).
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The validated config.
+    plant : LurePlant
+        The Lure plant and servo-compensator.
+
+    Returns
+    -------
+    tuple
+        ``(f1, gamma_nominal)`` as returned by :func:`make_f1`.
+    """
+    nl = cfg.nonlinearity
+    return make_f1(nl, plant, cfg.expression_model() if isinstance(nl, ExpressionNonlinearity) else None)
+
+
+def scenario_gamma(cfg: QppConfig, scenario: Scenario):
+    """Value of the uncertain parameter(s) in a scenario: γ, M, or the parameter vector.
+
+    Parameters
+    ----------
+    cfg : QppConfig
+        The validated config.
+    scenario : Scenario
+        One scenario of the config.
+
+    Returns
+    -------
+    float or ndarray
+        γ, M or the parameter vector, in the config's units.
+    """
+    nl = cfg.nonlinearity
+    if not isinstance(nl, ExpressionNonlinearity):
+        return scenario.gamma
+    vals = scenario.parameters or {}
+    return np.array([vals.get(k, r.nominal_value) for k, r in nl.parameters.items()], float)
