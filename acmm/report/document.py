@@ -18,7 +18,7 @@ from acmm.report.ledger import STATUS_BOUND, STATUS_EXPLAINED, STATUS_MATCHED, S
 
 def _css() -> str:
     """The page style sheet (``acmm/report/style.css``)."""
-    return resources.files("report").joinpath("style.css").read_text(encoding="utf-8")
+    return resources.files("acmm.report").joinpath("style.css").read_text(encoding="utf-8")
 
 
 def _fmt(x, f="{:.4g}"):
