@@ -306,5 +306,6 @@ def test_nearly_uncontrollable_claim1_model_solves_with_every_method(method):
     # κ_CARE of this problem is astronomically large (flagged): the methods' gains differ by
     # ~1e-4 relative (measured 1.0e-4–1.2e-4 under the Haswell kernel), not by rounding
     assert r.ill_conditioned
-    ref = solve_care(A, B, Q, R, method="scipy", scale=d).K
+    Rs = sla.solve_continuous_are(As, Bs, Q, R)              # scipy itself, unrefined, unchecked
+    ref = np.linalg.solve(R, Bs.T @ Rs) / d[None, :]
     assert np.linalg.norm(r.K - ref) <= 1e-3 * np.linalg.norm(ref)

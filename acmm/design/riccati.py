@@ -148,8 +148,8 @@ def refine_care(A, B, Q, R, P) -> tuple[np.ndarray, int]:
     ℛ(P) = A'P + PA − PGP + Q, solve A_c'Δ + ΔA_c = −ℛ(P); then ℛ(P + tΔ) = (1 − t)ℛ(P) − t²ΔGΔ,
     and t ∈ (0, 2] minimizes its Frobenius norm (a root of a cubic).  Stops when a step no
     longer halves the backward error ω (:func:`care_backward_error`); the last step is kept only
-    if it lowers ω.  A P that is not stabilizing, or a step whose Lyapunov solve fails, ends the
-    refinement with the best P so far (:func:`solve_care` then judges it).
+    if it lowers ω and keeps A − GP stable.  A P that is not stabilizing, or a step whose Lyapunov
+    solve fails, ends the refinement with the best P so far (:func:`solve_care` then judges it).
 
     Parameters
     ----------
@@ -190,7 +190,9 @@ def refine_care(A, B, Q, R, P) -> tuple[np.ndarray, int]:
         D = 0.5 * (D + D.T)
         Pn = P + _line_search(Res, D @ G @ D) * D
         Pn = 0.5 * (Pn + Pn.T)
-        wn = care_backward_error(A, B, Q, R, Pn) if np.all(np.isfinite(Pn)) else np.inf
+        if not np.all(np.isfinite(Pn)) or np.max(np.linalg.eigvals(A - G @ Pn).real) >= 0.0:
+            break                        # a step that loses stability is never kept
+        wn = care_backward_error(A, B, Q, R, Pn)
         if wn < omega:
             P, steps = Pn, steps + 1
         if not wn <= 0.5 * omega:
