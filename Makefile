@@ -40,7 +40,8 @@ run: $(STAMP) bytecode
 # package); elsewhere that test is skipped unless /usr/bin/chromium exists.
 # --durations: the slowest tests are printed at the end of every run (CI's output included).
 # `make test` leaves out the system tests marked slow (whole reports, the cross-kernel runs, timed
-# signals: ~3 min more); `make test-slow` runs them, and CI (.ci/run) runs both.
+# signals, the README's regeneration, the longest subprocess and fuzz runs); `make test-slow` runs
+# them, and CI (.ci/run) runs both.
 test: $(STAMP) bytecode $(if $(CI),browser)
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -m "not slow" --durations=25
 

@@ -512,6 +512,7 @@ def test_many_uncertain_parameters_refused_before_sampling(tmp_runs):
     assert dt < 30
 
 
+@pytest.mark.slow
 def test_schedule_blending_a_station_into_itself_is_refused(tmp_runs):
     # schedule.to = the config's own station: every design point has the same TEA, so there is no
     # θ2* to schedule against (the refit divided by the zero TEA span: a NaN failure, exit 3)

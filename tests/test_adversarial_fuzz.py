@@ -90,6 +90,7 @@ def _strict(fn, *args, **kwargs):
         return fn(*args, **kwargs)
 
 
+@pytest.mark.slow
 @FUZZ
 @given(mutated("mb3"))
 def test_fuzz_acmm_config_accepts_or_refuses_cleanly(data):
@@ -109,6 +110,7 @@ def test_fuzz_acmm_config_accepts_or_refuses_cleanly(data):
     assert np.all(np.isfinite(t.theta)) and math.isfinite(t.residual)
 
 
+@pytest.mark.slow
 @settings(FUZZ, max_examples=300)
 @given(mutated("qpp_siso"))
 def test_fuzz_qpp_config_accepts_or_refuses_cleanly(data):

@@ -378,6 +378,7 @@ def test_strict_sector_violation(tmp_runs):
     assert r.exit_code == 0, r.output
 
 
+@pytest.mark.slow
 def test_strict_sphere_violation(tmp_runs):
     args = ("simulate", "qpp_siso", "spheres.beta_o=0.03", "simulation.t_final=2",
             "simulation.n_samples=401", f"output.root={tmp_runs / 'runs'}", "--no-figures")

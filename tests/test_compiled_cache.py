@@ -11,6 +11,7 @@ import textwrap
 from pathlib import Path
 
 import numba.core.caching as numba_caching
+import pytest
 
 from acmm.simulate import compiled_cache
 
@@ -65,6 +66,7 @@ def test_a_cache_that_cannot_be_written_leaves_the_kernel_running(tmp_path, monk
     assert list(cache.glob("kernel_disk_full.plus_one-*.nbc")) and len(compiled_cache.CACHE_WRITE_ERRORS) == 1
 
 
+@pytest.mark.slow
 def test_acmm_simulate_without_a_cache_folder_runs_and_says_why_it_compiles(tmp_path):
     """End to end, numba's cache locators all refusing (as on a read-only install whose user
     has no home): the run succeeds and one note says why every run compiles."""

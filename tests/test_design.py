@@ -319,6 +319,7 @@ def test_no_equilibrium_on_the_blend_names_the_blend(tmp_runs, run_acmm, spacing
     assert not (tmp_runs / "runs").exists()
 
 
+@pytest.mark.slow
 def test_a_branch_that_folds_on_the_blend_blames_the_first_point_beyond_the_fold(monkeypatch):
     """When the continuation from the start failed, every point was judged against no branch,
     so the warning named the blend's start (s = 0) (a review).  The points before the fold are

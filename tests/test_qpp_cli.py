@@ -136,6 +136,7 @@ def test_the_horizon_too_long_names_the_field_that_set_it(tmp_runs):
     assert r.exit_code == 2 and r.output.strip().startswith("error: spheres.T: 10000 s is too long"), r.output
 
 
+@pytest.mark.slow
 def test_a_nonlinearity_faster_than_the_work_bound_can_see_is_stopped(tmp_runs, monkeypatch):
     """A t inside an expression nonlinearity (sin(1e6·t)) escaped the static work bound
     (t_final × the loop's rates): the simulation ran on for minutes (a review).  The integration
@@ -164,6 +165,7 @@ def test_the_apps_run_as_modules(tmp_path):
         assert p.returncode == 0 and "valid" in p.stdout, (mod, p.stdout, p.stderr)
 
 
+@pytest.mark.slow
 def test_a_scenario_outside_the_premises_says_so(tmp_runs):
     """‖δr‖∞ = 5 ≫ β_ri and y beyond y_range: the run leaves the sphere, and the output says
     the certificate never spoke about it (it read like a broken certificate; review)."""

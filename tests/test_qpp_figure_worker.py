@@ -22,6 +22,7 @@ def _pngs(folder):
     return {p.name: p.read_bytes() for p in sorted(folder.glob("*.png"))}
 
 
+@pytest.mark.slow
 def test_qpp_figures_in_the_worker_are_the_figures_drawn_in_place(tmp_path, monkeypatch):
     from qpp.io import stages
 

@@ -113,6 +113,7 @@ def test_sampled_sector_climbs_to_the_supremum_between_grid_points():
     assert m.beta3(1.0) == pytest.approx(1.0, rel=1e-12)        # φ independent of t: the slope bound
 
 
+@pytest.mark.slow
 def test_extremum_missed_by_the_grid_is_climbed_from_the_random_check(tmp_path):
     """A bump narrower than the grid's spacing: a random check point lands near it, and the
     sector is climbed from there to the bump's peak (the 1 % widening alone stayed at 0.209
@@ -224,6 +225,7 @@ def test_cross_coupled_channel_gets_the_slope_sector(tmp_path):
 
 
 # ---------------------------------------------------------------------- new examples
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NEW)
 def test_new_example_certified_and_confirmed_by_simulation(tmp_path, name):
     from qpp.model.lure import channels, closed_loop

@@ -162,6 +162,7 @@ def test_a_scenario_cannot_take_the_cartesian_figures_name():
     assert load_config("qpp_siso", ["simulation.scenarios.0.name=cartesian"]).simulation.scenarios[0].name == "cartesian"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("f1, codes", [("k*y1*0", (0,)), ("k*y1*1e-318", (0, 4))])
 def test_a_zero_or_denormal_nonlinearity_is_designed_without_a_traceback(tmp_runs, f1, codes):
     """φ ≡ 0 samples to the sector [0, 0], φ = 1e-318·k·y to a denormal one that scales to

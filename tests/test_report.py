@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.slow      # a whole `acmm report --fast` per session: `make test-slow`
+
 from acmm.report.context import SectionWriter
 from acmm.report import build as build_mod
 from acmm.report import constants as constants_mod

@@ -366,6 +366,7 @@ def test_reserved_writers_abort_with_the_stage_and_report_failures(tmp_path):
     assert not figure_worker.active() and not list(tmp_path.glob("**/*.tmp*"))
 
 
+@pytest.mark.slow
 def test_qpp_simulate_reuses_the_gains_qpp_design_wrote(tmp_path, monkeypatch):
     """Same config and code: the stored K1, Kc, H (no second ch. 12.1 design) and a qpp_sim.h5
     identical to the one a simulation designing for itself writes; another config: a design."""

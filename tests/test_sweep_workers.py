@@ -97,6 +97,7 @@ def _children(pid):
         return [int(x) for x in f.read().split()]
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc, fork")
 def test_a_killed_pool_worker_is_one_line_and_the_sweep_resumes(tmp_path):
     """It was a 93-line BrokenProcessPool traceback with exit 1 (the code of --strict)."""

@@ -21,6 +21,7 @@ def _outcome(fn, inertia, n, bias):
         return f"{type(exc).__name__}: {exc}"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["mb3", "ac"])
 def test_compiled_continuation_matches_solve_tea_on_perturbed_plants(name):
     cfg = load_config(name)

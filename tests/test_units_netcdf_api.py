@@ -135,6 +135,7 @@ def _open_all(path):
     return out
 
 
+@pytest.mark.slow
 def test_results_open_in_xarray_with_named_dimensions_and_time(tmp_path):
     from acmm.stages.runners import run_linearize, run_tea
     from acmm.stages.simulate import run_simulate
