@@ -36,7 +36,7 @@ from acmm.io.config import load_config
 from acmm_qpp.errors import ConvergenceError
 from acmm.model.linearize import linearize_config
 from acmm.design.lqr import sector_lqr
-from acmm.design.care_checks import care_condition, care_residual, scale_problem
+from acmm.design.riccati import care_condition, care_residual, scale_problem
 from acmm.design.riccati import solve_unverified
 from acmm.design.settings import design_settings
 

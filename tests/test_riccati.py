@@ -9,8 +9,7 @@ import pytest
 import scipy.linalg as sla
 
 from acmm_qpp.errors import ConvergenceError
-from acmm.design.riccati import METHODS, solve_care
-from acmm.design.care_checks import care_residual
+from acmm.design.riccati import METHODS, care_residual, solve_care
 from acmm.design.matrix_sign import matrix_sign
 
 # SLICOT SB02PD documentation example: A'X + XA − XGX + Q = 0 with G = diag(0, 1) = B R⁻¹ B'.
@@ -251,7 +250,7 @@ def test_ill_conditioned_solution_is_flagged():
 # --- refinement and the backward error that decides acceptance (issue 30) --------------------
 
 def _backward_error_by_hand(A, B, Q, R, P):
-    """ω of acmm.design.care_checks.care_backward_error written out: ‖ℛ(P)‖ over the size of the terms
+    """ω of acmm.design.riccati.care_backward_error written out: ‖ℛ(P)‖ over the size of the terms
     as floating point evaluates them, |A|ᵀ|P| + |P||A| + |P||G||P| + |Q| (Frobenius)."""
     G = B @ np.linalg.inv(R) @ B.T
     res = A.T @ P + P @ A - P @ G @ P + Q

@@ -14,8 +14,7 @@ import scipy.linalg as sla
 
 from acmm_qpp.errors import ConvergenceError, DesignError
 from acmm.design.sector import SectorLQR, _check_movable, _finish, _group, _required_h, sector_margin
-from acmm.design.care_checks import _as_R, scale_problem
-from acmm.design.riccati import solve_care
+from acmm.design.riccati import _as_R, scale_problem, solve_care
 
 
 @dataclass

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acmm_qpp.errors import ConvergenceError, DesignError
-from acmm.design.care_checks import ILL_CONDITIONED, care_backward_error, care_condition, care_residual
+from acmm.design.riccati import ILL_CONDITIONED, care_backward_error, care_condition, care_residual
 
 
 

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm_qpp.errors import AcmmError
+from acmm.design import matrix_sign as msign
+from acmm.design import riccati as ric
+from acmm_qpp.errors import AcmmError, ConvergenceError
 from acmm.report.context import SectionWriter
 from acmm.report.document import _fmt
 from acmm.report.sections.claim1 import Claim1Numbers
@@ -272,15 +274,10 @@ def riccati_rows(m, d, n: float) -> list[list[str]]:
     list of list of str
         Table rows: item, printed / claim, correction used, evidence, confirming tests.
     """
-    from acmm.design import riccati as ric
-    from acmm.design import care_checks as checks
-    from acmm.design import matrix_sign as msign
-    from acmm_qpp.errors import ConvergenceError
-
     rows = []
     # eq 5.6
     alpha = d.sector.sigma * n
-    As, Bs, Qs = checks.scale_problem(m.A + alpha * np.eye(24), m.B, np.zeros((24, 24)), m.scales)
+    As, Bs, Qs = ric.scale_problem(m.A + alpha * np.eye(24), m.B, np.zeros((24, 24)), m.scales)
     Rm = d.R * np.eye(3)
     Ham = np.block([[As, -Bs @ np.linalg.solve(Rm, Bs.T)], [-Qs, -As.T]])
     try:
@@ -300,7 +297,7 @@ def riccati_rows(m, d, n: float) -> list[list[str]]:
     for meth in ("scipy", "slycot", "sign"):
         try:
             P, _ = ric.solve_unverified(m.A + alpha * np.eye(24), m.B, np.zeros((24, 24)), Rm, method=meth)
-            sc_rows.append(f"{meth} {checks.care_residual(As, Bs, Qs, Rm, D @ P @ D):.1e}")
+            sc_rows.append(f"{meth} {ric.care_residual(As, Bs, Qs, Rm, D @ P @ D):.1e}")
         except (ConvergenceError, ImportError) as exc:
             sc_rows.append(f"{meth} failed ({type(exc).__name__})")
     scaled = []
