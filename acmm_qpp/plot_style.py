@@ -33,8 +33,9 @@ RC = {
     "pdf.fonttype": 3,           # subsetted Type 3 fonts: small, fast, still vector text
 }
 
-#: rcParams of the stage figures (``acmm design|simulate``, the sweep).
-STAGE_RC = {"figure.dpi": 110, "axes.grid": True, "grid.alpha": 0.3, "font.size": 9,
+#: rcParams of the stage figures (``acmm design|simulate``, the sweep); saved at the figure's own
+#: resolution also in a process that drew the report's figures (:data:`RC` sets ``savefig.dpi``)
+STAGE_RC = {"figure.dpi": 110, "savefig.dpi": "figure", "axes.grid": True, "grid.alpha": 0.3, "font.size": 9,
             "axes.titley": 1.0}
 
 
@@ -43,7 +44,7 @@ def files_only_backend() -> None:
     ``MPLBACKEND`` says.  An invalid or an interactive one (Jupyter's
     ``module://matplotlib_inline.backend_inline``) made ``import matplotlib`` itself fail, a
     traceback in ``acmm report``/``sweep`` (a review).  Call it before anything imports
-    matplotlib or forks a process that will; the variable is inherited by those processes."""
+    matplotlib or starts a process that will; the variable is inherited by those processes."""
     import os
     import sys
 
@@ -52,7 +53,7 @@ def files_only_backend() -> None:
         sys.modules["matplotlib"].use("Agg", force=True)
     elif "MPLCONFIGDIR" not in os.environ and not _writable_dir(_default_config_dir()):
         # no writable home: matplotlib made a new /tmp/matplotlib-* folder in every process
-        # (never removed: the forked figure processes leave through os._exit) and warned twice;
+        # and warned twice;
         # one folder per user, kept, holds its font cache across runs
         import tempfile
 
@@ -143,71 +144,3 @@ def pyplot():
     plt.rcParams.update(RC)
     plt.rcParams["axes.prop_cycle"] = cycler(color=list(COLORS))
     return plt
-
-
-def draw_warm_up_figure(plt, title: str = "warm-up (deg)", xlabel: str = "time") -> None:
-    """Draw one small figure to memory with ``plt`` (a figure process's warm-up: fonts and glyph
-    caches loaded before its first real figure); nothing is written, no rcParam is changed.
-
-    Parameters
-    ----------
-    plt : module
-        ``matplotlib.pyplot`` as the caller set it up (backend, style).
-    title : str, optional
-        Title text (its glyphs are cached).
-    xlabel : str, optional
-        Axis label text (its glyphs are cached).
-    """
-    import io
-
-    fig, ax = plt.subplots(figsize=(2, 1.5))
-    ax.plot([0.0, 1.0], [0.0, 1.0], lw=0.7)
-    ax.set_title(title)
-    ax.set_xlabel(xlabel)
-    fig.savefig(io.BytesIO(), format="png", dpi=30)
-    plt.close(fig)
-
-
-def _no_property_table(artist) -> str:
-    """Stand-in for ``matplotlib.artist.kwdoc`` while a drawing-only process imports matplotlib."""
-    return "Properties: (not listed in this figure process)"
-
-
-def import_pyplot_to_draw_only() -> bool:
-    """Import ``matplotlib.pyplot`` on Agg in a process that exists only to draw figures (a
-    forked figure worker), without the property tables matplotlib writes into docstrings.
-
-    When an Artist class is created, matplotlib writes the table of all its settable properties
-    into the docstring of its ``set`` method, and several modules interpolate the same tables
-    into others (``matplotlib.artist.kwdoc``, called ~120 times at import).  That text is for
-    ``help()`` and the documentation only, yet it is ~0.7 G of the ~2 G instructions of
-    importing pyplot (valgrind; ~0.15 s of CPU).  Here ``kwdoc`` returns one short line while
-    pyplot and the modules it imports are loaded, and is restored afterwards; the signatures of
-    the ``set`` methods, the property aliases and everything that draws are untouched.  The
-    short line also stays in matplotlib's docstring-interpolation cache (``%(Line2D:kwdoc)s``
-    and the like), so a module imported later in this process gets it in its docstrings too.
-    Only for a process whose docstrings nobody reads: the stage's own process (or a user's)
-    never calls this.
-
-    Returns
-    -------
-    bool
-        True when pyplot was imported here with the short docstrings; False when matplotlib
-        was already imported (nothing is changed) or ``kwdoc`` is not there (a plain import).
-    """
-    import sys
-
-    if "matplotlib.artist" not in sys.modules:   # (else its classes exist already: nothing to gain)
-        from matplotlib import artist
-
-        kwdoc = getattr(artist, "kwdoc", None)
-        if callable(kwdoc):
-            artist.kwdoc = _no_property_table
-            try:
-                agg_pyplot(force=True)
-                import matplotlib.backends.backend_agg  # noqa: F401  (what every figure saves with)
-            finally:
-                artist.kwdoc = kwdoc
-            return True
-    agg_pyplot(force=True)
-    return False

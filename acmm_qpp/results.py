@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from acmm_qpp.atomic_write import in_memory
+from acmm_qpp.errors import FigureError
 from acmm_qpp.provenance import provenance
 
 
@@ -203,6 +204,33 @@ def save_figure(fig, path: str | Path, **kwargs) -> Path:
     with in_memory(path, "figure") as tmp:
         fig.savefig(tmp, format=fmt, **kwargs)
     return path
+
+
+def draw_figures(calls) -> None:
+    """Draw a stage's figures, in this process, after its results are written: every call is
+    made even if one fails, and the first failure is raised then as a
+    :class:`acmm_qpp.errors.FigureError` (exit 4: the results stay written).
+
+    Parameters
+    ----------
+    calls : iterable of callable
+        The figures, each a call without arguments (e.g. a ``functools.partial`` of a figure
+        function that writes its file with :func:`save_figure`).
+
+    Raises
+    ------
+    acmm_qpp.errors.FigureError
+        A figure could not be drawn or written (the first failure's message).
+    """
+    first = None
+    for call in calls:
+        try:
+            call()
+        except Exception as exc:  # noqa: BLE001 (raised once the others are drawn)
+            first = first or exc
+    if first is not None:
+        err = FigureError.of(first)
+        raise err from (None if err is first else first)
 
 
 #: vector formats whose files matplotlib dates by default → the metadata key of that date

@@ -1,50 +1,23 @@
-"""Termination signals and the tool's own child processes (issue 13: nothing half-written).
+"""Termination signals unwind like Ctrl-C (issue 13: nothing half-written), for both products.
 
-Two rules, shared by both products:
-
-* a command that receives SIGTERM or SIGHUP (``kill``, ``timeout``, a closed terminal, a batch
-  system's time limit) unwinds like Ctrl-C: :func:`terminate_like_ctrl_c` makes the signal raise
-  :class:`acmm_qpp.errors.Terminated` (a ``KeyboardInterrupt``), so the stage rolls its outputs
-  back and kills its helpers exactly as for Ctrl-C, and the command exits with 128 + the signal
-  number.  Without it the process died at once, its rollback undone and its forked figure
-  worker left alive, writing the new run's figures next to the old run's results;
-* a process forked by the tool (the design helper, the figure worker and its writers, the
-  report's early worker) dies with its parent (:func:`die_with_parent`, Linux
-  ``PR_SET_PDEATHSIG``), even when the parent is killed with SIGKILL, where no cleanup runs.
+A command that receives SIGTERM or SIGHUP (``kill``, ``timeout``, a closed terminal, a batch
+system's time limit) unwinds like Ctrl-C: :func:`terminate_like_ctrl_c` makes the signal raise
+:class:`acmm_qpp.errors.Terminated` (a ``KeyboardInterrupt``), so Python's own interrupt path runs:
+the stage rolls its outputs back (:mod:`acmm_qpp.outputs`), a pool is stopped
+(:func:`acmm_qpp.pool.stop_pool`), and the command exits with 128 + the signal number.  Steps
+that must not stop halfway (a run lock taken, a rollback folder built or dropped) hold the
+interrupts (:func:`hold_interrupts`) and take them at their end (:func:`release_interrupts`).
 """
 from __future__ import annotations
 
-import os
 import signal
-import sys
 import threading
+import time
+
+from acmm_qpp.errors import Terminated
 
 #: the signals :func:`terminate_like_ctrl_c` turns into :class:`acmm_qpp.errors.Terminated`
 TERMINATING = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
-
-#: prctl(2) option: the signal a process gets when its parent thread exits (Linux)
-PR_SET_PDEATHSIG = 1
-
-
-def set_parent_death_signal() -> bool:
-    """Ask the kernel (Linux ``prctl(PR_SET_PDEATHSIG)``) to send SIGKILL to this process when
-    the thread that forked it exits, however it exits (``kill -9`` included).
-
-    Returns
-    -------
-    bool
-        True when set (False elsewhere than Linux, or without ``prctl``).
-    """
-    if not sys.platform.startswith("linux"):
-        return False
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        return libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
-    except (OSError, AttributeError):
-        return False
-
 
 #: interrupts received while held (:func:`hold_interrupts`), handled at the release;
 #: ``raised``: when (monotonic s) the handler last raised one
@@ -63,8 +36,6 @@ def _raise_terminated(signum, frame) -> None:
     ``threading``'s lock handling, in a pool's shutdown) broke it — "RuntimeError: release
     unlocked lock", or a hang (a review).  A later one is raised as usual (also when the first
     was swallowed somewhere, e.g. in an at-fork hook, and the command went on)."""
-    import time
-
     if _HELD["depth"]:                       # in a step that must not stop halfway: later
         _HELD["pending"].append(int(signum))
         return
@@ -74,8 +45,6 @@ def _raise_terminated(signum, frame) -> None:
     _HELD["raised"] = now
     if signum == signal.SIGINT:
         raise KeyboardInterrupt
-    from acmm_qpp.errors import Terminated
-
     raise Terminated(signum)
 
 
@@ -151,23 +120,3 @@ def terminate_like_ctrl_c() -> list[int]:
         except (OSError, ValueError):        # not settable here
             pass
     return done
-
-
-def die_with_parent(parent: int) -> None:
-    """In a process just forked by the tool: be killed (SIGKILL) when ``parent`` exits, however
-    it exits; exit at once if it is already gone.  The default handlers of SIGTERM and SIGHUP
-    are restored (a child is stopped by its parent, or by the signal itself).
-
-    Parameters
-    ----------
-    parent : int
-        The pid of the process that forked this one.
-    """
-    for sig in TERMINATING:
-        try:
-            signal.signal(sig, signal.SIG_DFL)
-        except (OSError, ValueError):
-            pass
-    set_parent_death_signal()
-    if os.getppid() != parent:               # the parent died before the line above
-        os._exit(1)

@@ -8,7 +8,9 @@ from __future__ import annotations
 from typing import Optional
 
 # first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
-from acmm_qpp.cli.plumbing import ExitCodeGroup, OverridesArg, StrictOpt, strict_exit, user_errors, version_option
+from acmm_qpp.cli.plumbing import ExitCodeGroup, OverridesArg, StrictOpt, run_app, strict_exit, user_errors, version_option
+from acmm_qpp.plot_style import files_only_backend
+from acmm_qpp.signals import terminate_like_ctrl_c
 
 import numpy as np  # noqa: E402
 import typer  # noqa: E402
@@ -168,10 +170,6 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = Overrides
 def main() -> None:
     """Run the command-line app (the console-script entry point); exits with the code of the run
     (SIGTERM and SIGHUP roll back like Ctrl-C: :func:`acmm_qpp.signals.terminate_like_ctrl_c`)."""
-    from acmm_qpp.cli.plumbing import run_app
-    from acmm_qpp.plot_style import files_only_backend
-    from acmm_qpp.signals import terminate_like_ctrl_c
-
     terminate_like_ctrl_c()
     files_only_backend()
     run_app(app)

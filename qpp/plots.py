@@ -12,19 +12,6 @@ from acmm_qpp.plot_style import agg_pyplot as _plt
 from acmm_qpp.results import save_figure
 
 
-#: the figure worker's warm-up for the qpp stages (:func:`acmm_qpp.figure_worker.start`)
-FIGURE_WARM = "qpp.plots:warm_figure_worker"
-
-
-def warm_figure_worker() -> None:
-    """The figure worker's warm-up for the qpp stages: matplotlib on Agg with its rcParams left
-    as they are (the figures look as when drawn in the stage's own process) and one small figure
-    drawn (fonts, caches)."""
-    from acmm_qpp.plot_style import draw_warm_up_figure
-
-    draw_warm_up_figure(_plt(), "‖y − y_o‖ (rad)", "t (s)")
-
-
 def plot_circle(res, path: Path) -> list[Path]:
     """Gershgorin mean band of H(−a + jω) against the critical disc, one figure per channel.
 

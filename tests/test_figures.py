@@ -6,14 +6,10 @@ import re
 import numpy as np
 import pytest
 
-from acmm.plots import design as design_plots
-
 from acmm.plots import base as plot_base
-from acmm_qpp import plot_style as plot_style_mod
-
-from acmm.plots import simulation as sim_plots
 from acmm.plots import design as design_plots
 from acmm.plots import simulation as sim_plots
+from acmm_qpp import plot_style as plot_style_mod
 from acmm.io.config import load_config
 from acmm.model.linearize import STATE_NAMES
 
@@ -224,94 +220,10 @@ def test_decimate_keeps_the_envelope():
     assert plot_base.decimate(short, short)[0] is short or np.array_equal(plot_base.decimate(short, short)[0], short)
 
 
-def test_forked_figure_writers_write_and_report_failures(tmp_path, monkeypatch):
-    from acmm.plots import parallel_figures
-    from acmm_qpp.errors import OutputError
-
-    monkeypatch.setenv("ACMM_PARALLEL_FIGURES", "1")
-    if not parallel_figures.enable():
-        pytest.skip("no fork or one CPU")
-    plt = plot_style_mod.stage_pyplot()
-    for k in range(3):
-        fig, ax = plt.subplots()
-        ax.plot([0, 1], [k, 1])
-        ax.set_xlabel("time (s)")
-        ax.set_ylabel("angle (deg)")
-        plot_base._save(fig, tmp_path / f"f{k}.png", tight=False)
-    parallel_figures.wait()
-    assert all((tmp_path / f"f{k}.png").stat().st_size > 1000 for k in range(3))
-    assert not parallel_figures.active()
-    parallel_figures.enable()
-    parallel_figures.run(lambda: (_ for _ in ()).throw(OSError("disk full")), "x.png")
-    with pytest.raises(OutputError, match="disk full"):
-        parallel_figures.wait()
-    monkeypatch.setenv("ACMM_PARALLEL_FIGURES", "0")
-    assert not parallel_figures.enable()
-
-
 def _small_histories(n=300):
     t = np.linspace(0.0, 3.0, n)
     x = np.column_stack([np.sin(5 * t), np.cos(3 * t), t]) * 2.0
     return t, x
-
-
-def test_prebuilt_skeleton_draws_the_same_png(tmp_path):
-    """The figure worker's skeletons (plot_base.prebuild) change nothing in the image."""
-    t, x = _small_histories()
-    stats = [dict(level=0, start_orbit=0.0, theta2_deg=-44.7, steady_error_deg=[1.0, 0.5, 0.02],
-                  peak_momentum=2600.0)]
-    names, units = tuple(STATE_NAMES), tuple(plot_base.state_units())
-    theta2 = np.radians(np.linspace(-45, -5, 12))
-    gains = np.sin(np.arange(12 * 3 * 24).reshape(12, 3, 24)) * np.logspace(-8, 6, 24)
-    sched = design_plots.SampledSchedule("polynomial", np.linspace(theta2[0], theta2[-1], 60),
-                                         np.cos(np.arange(60 * 3 * 24).reshape(60, 3, 24)))
-    for pre in (False, True):
-        if pre:
-            for kind in ("axis_histories", "summary"):
-                plot_base.prebuild(kind, "SI")
-            plot_base.prebuild("gain_schedule_grid", names, units, "ft·lbf")
-            plot_base.prebuild("schedule_path_check")
-            plot_base.prebuild("scheduled_pole_map")
-        sim_plots.axis_histories(t, x, x, x, x, "t", tmp_path / f"a{pre}.png", units="SI")
-        sim_plots.summary(t, x, x, x, stats, "BOUNDED", "s", tmp_path / f"s{pre}.png", units="SI")
-        design_plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / f"g{pre}.png", units=list(units))
-        # the path figures (the report draws them too, without a skeleton: the same pixels)
-        design_plots.schedule_path_check(theta2, -0.5 - x[:12, 0] ** 2, -1 - x[:12, 1] ** 2, 0.5 + x[:12, 2] ** 2,
-                                  tmp_path / f"m{pre}.png")
-        poles = (-1.0 - np.arange(24.0) + 1j * np.sin(np.arange(24.0)))[None, :] * (1 + theta2[:, None])
-        design_plots.scheduled_pole_map(poles * 0.001, theta2, 0.001, 0.5, 45.0, tmp_path / f"p{pre}.png")
-    assert not plot_base._LAYOUTS                        # each skeleton used once
-    for name in ("a", "s", "g", "m", "p"):
-        assert (tmp_path / f"{name}True.png").read_bytes() == (tmp_path / f"{name}False.png").read_bytes()
-
-
-def test_figure_worker_writes_records_and_reports_failures(tmp_path):
-    from acmm_qpp import figure_worker
-    from acmm_qpp.errors import OutputError
-    from acmm_qpp.outputs import stage_outputs
-
-    if not figure_worker.usable():
-        pytest.skip("no fork, one CPU or other threads alive")
-    t, x = _small_histories()
-    run = tmp_path / "run"
-    (run).mkdir()
-    (run / "sim_stale.png").write_bytes(b"old")      # a previous run's figure: pruned
-    with stage_outputs(run, "simulate", config_text="name: x\n") as written:
-        with figure_worker.session():
-            assert figure_worker.active()
-            figure_worker.prepare(plot_base.prebuild, "axis_histories", "imperial")
-            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", run / "sim_axes.png")
-            figure_worker.submit(sim_plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
-                                 run / "sim_inertia.png")
-        assert not figure_worker.active()
-        assert {p.name for p in written} == {"sim_axes.png", "sim_inertia.png"}
-    assert (run / "sim_axes.png").stat().st_size > 10_000 and not (run / "sim_stale.png").exists()
-    # a writer's failure is the stage's OutputError; no figure is left half-written
-    (tmp_path / "file").write_text("")
-    with pytest.raises(OutputError):
-        with figure_worker.session():
-            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "a.png")
-    assert not figure_worker.active()
 
 
 def _killed_mid_write(path):
@@ -325,97 +237,54 @@ def _killed_mid_write(path):
     os.kill(os.getpid(), signal.SIGKILL)
 
 
-def test_a_writer_killed_mid_figure_leaves_no_temporary_file(tmp_path):
-    """The stage fails with exit 4 and keeps its results (a figure failure), but the killed
-    writer's temporary file goes with it; the figure written before stays."""
-    from acmm_qpp import figure_worker
+def test_draw_figures_draws_every_figure_and_raises_the_first_failure(tmp_path):
+    """A stage's figures are drawn in order in this process after its results; all of them even
+    if one fails, and that first failure is raised then, as a FigureError (exit 4)."""
+    from functools import partial
+
     from acmm_qpp.errors import FigureError
-    from acmm_qpp.outputs import record_written, stage_outputs
+    from acmm_qpp.results import draw_figures
 
-    if not figure_worker.usable():
-        pytest.skip("no fork, one CPU or other threads alive")
-    t, x = _small_histories()
-    run = tmp_path / "run"
-    run.mkdir()
-    with pytest.raises(FigureError, match=r"a figure writer process failed \(_killed_mid_write: killed by signal 9\)"):
-        with stage_outputs(run, "simulate", config_text="name: x\n"):
-            with figure_worker.session():
-                figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", run / "sim_axes.png")
-                figure_worker.submit(_killed_mid_write, run / "sim_summary.png")
-                (run / "sim.h5").write_bytes(b"results")
-                record_written(run / "sim.h5")
-    assert not figure_worker.active()
-    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "sim.h5", "sim_axes.png"]
-
-
-def test_without_a_worker_a_sessions_figures_are_drawn_when_it_ends(tmp_path, monkeypatch):
-    """In place (no fork): each session's figures are drawn when it ends, in order, after what
-    the stage wrote in it; all of them even if one fails (that failure is raised); none when the
-    stage itself failed; outside a session, at once."""
-    from acmm_qpp import figure_worker
-    from acmm_qpp.errors import OutputError
-
-    monkeypatch.setenv("ACMM_FIGURE_WORKER", "0")
     t, x = _small_histories()
     (tmp_path / "file").write_text("")
-    with pytest.raises(OutputError):
-        with figure_worker.session():
-            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "bad.png")
-            with figure_worker.session():                      # a nested stage: its own, at its end
-                figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "inner.png")
-            assert (tmp_path / "inner.png").exists()
-            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "after.png")
-            assert not (tmp_path / "after.png").exists()
-            (tmp_path / "results.h5").write_text("written first")
-    assert (tmp_path / "after.png").exists() and (tmp_path / "results.h5").exists()
-    with pytest.raises(RuntimeError, match="stage failed"):
-        with figure_worker.session():
-            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "dropped.png")
-            raise RuntimeError("stage failed")
-    assert not (tmp_path / "dropped.png").exists() and not figure_worker._DEFERRED
-    figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "now.png")
-    assert (tmp_path / "now.png").exists()
+    calls = [partial(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "bad.png"),
+             partial(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "after.png"),
+             lambda: (_ for _ in ()).throw(ValueError("Axis limits cannot be NaN or Inf"))]
+    with pytest.raises(FigureError, match="bad.png") as got:
+        draw_figures(calls)
+    assert got.value.exit_code == 4
+    assert (tmp_path / "after.png").stat().st_size > 10_000 and not (tmp_path / "file" / "bad.png").exists()
+    with pytest.raises(FigureError, match="Axis limits"):
+        draw_figures(calls[2:])
+    draw_figures([])
 
 
-def test_figure_worker_aborts_with_the_stage(tmp_path):
-    from acmm_qpp import figure_worker
+def _interrupting_figure():
+    raise KeyboardInterrupt
 
-    if not figure_worker.usable():
-        pytest.skip("no fork, one CPU or other threads alive")
+
+def test_ctrl_c_while_a_figure_is_drawn_is_an_interrupt_not_a_figure_error(tmp_path):
+    from acmm_qpp.results import draw_figures
+
     t, x = _small_histories()
-    with pytest.raises(RuntimeError, match="stage failed"):
-        with figure_worker.session():
-            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "a.png")
-            raise RuntimeError("stage failed")
-    assert not figure_worker.active()
-    assert not list(tmp_path.glob("*.tmp*"))
+    from functools import partial
 
-
-def test_nested_figure_sessions_share_one_worker(tmp_path):
-    """acmm simulate's design: the inner session's figures are written when it ends."""
-    from acmm_qpp import figure_worker
-
-    if not figure_worker.usable():
-        pytest.skip("no fork, one CPU or other threads alive")
-    t, x = _small_histories()
-    with figure_worker.session():
-        with figure_worker.session():
-            figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "inner.png")
-        assert (tmp_path / "inner.png").exists() and figure_worker.active()
-        figure_worker.submit(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "outer.png")
-    assert (tmp_path / "outer.png").exists()
+    with pytest.raises(KeyboardInterrupt):
+        draw_figures([_interrupting_figure, partial(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "a.png")])
+    assert not (tmp_path / "a.png").exists()
 
 
 def test_design_figures_of_a_finished_design(tmp_path):
-    # the whole-design entry point (kept from before the figure worker) draws the four figures
+    # the four figures of a finished design, drawn by the stage after design.h5
     from acmm.io.config import load_config
     from acmm.stages.design_output import design_figures
+    from acmm_qpp.results import draw_figures
     from acmm.design.settings import design_settings
     from acmm.stages.design import compute_design
 
     cfg = load_config("staircase")
     r = compute_design(cfg)
-    design_figures(r, design_settings(cfg), tmp_path, "imperial")
+    draw_figures(design_figures(r, design_settings(cfg), tmp_path, "imperial"))
     names = sorted(p.name for p in tmp_path.iterdir())
     assert names == ["design_gains.png", "design_path_margins.png", "design_path_poles.png", "design_poles.png"]
     assert all((tmp_path / n).stat().st_size > 10_000 for n in names)
@@ -439,7 +308,6 @@ def test_baked_texts_draw_as_the_live_texts(tmp_path, monkeypatch):
     assert a.shape == b.shape and np.abs(a - b).max() <= 2
     # the baked text is there: the title band is not blank
     assert (a[:40, :, :3] < 100).any()
-
 
 
 def test_baked_texts_are_text_in_a_pdf():

@@ -1,5 +1,5 @@
 """The report's task graph (issue 16, :mod:`acmm.report.runner`, :mod:`acmm.report.plan`): the same results on
-forked worker processes as one after the other, and one clear error with no output on a failure."""
+worker processes as one after the other, and one clear error with no output on a failure."""
 from __future__ import annotations
 
 import os
@@ -44,8 +44,8 @@ def _graph(tmp_path):
     return [
         Task("a", _square, (), lambda d: (3,)),
         Task("b", _square, (), lambda d: (4,)),
-        Task("slow1", _pid_after, (), lambda d: (log, 0.3), cost=5),
-        Task("slow2", _pid_after, (), lambda d: (log, 0.3), cost=5),
+        Task("slow1", _pid_after, (), lambda d: (log, 0.0), cost=5),
+        Task("slow2", _pid_after, (), lambda d: (log, 0.0), cost=5),
         Task("sum", _add, ("a", "b"), lambda d: (d["a"], d["b"])),
         Task("sum2", _add, ("sum", "slow1"), lambda d: (d["sum"], 0)),
     ]
@@ -65,15 +65,6 @@ def test_parallel_and_serial_give_the_same_results(tmp_path):
     assert sorted(order) == sorted(serial) and order.index("sum") > max(order.index("a"), order.index("b"))
     assert order.index("sum2") > order.index("slow1")
     assert set(stats) == set(serial) and all(w >= 0 and c >= 0 for w, c in stats.values())
-
-
-def test_pool_leaves_the_garbage_collector_as_it_was(tmp_path):
-    """The parent's objects are frozen only while the workers run (gc.freeze around the pool)."""
-    import gc
-
-    assert gc.get_freeze_count() == 0
-    out = run_tasks(_graph(tmp_path), 2)
-    assert out["sum2"] == 25 and gc.get_freeze_count() == 0
 
 
 def test_figure_warm_up_and_fixed_layout():
@@ -102,7 +93,7 @@ def test_a_dependency_must_come_first():
 
 def test_error_in_a_worker_is_the_same_error_and_stops_the_graph(tmp_path):
     log = tmp_path / "log"
-    tasks = [Task("decoy", _square, (), lambda d: (1,), cost=20),     # the early child's task
+    tasks = [Task("decoy", _square, (), lambda d: (1,), cost=20),     # the first to start
              Task("bad", _fail, (), lambda d: ("solver did not converge: field x",), cost=10),
              Task("slow", _pid_after, (), lambda d: (log, 0.2)),
              Task("after", _pid_after, ("bad",), lambda d: (log, 0.0))]
@@ -118,20 +109,6 @@ def test_a_worker_that_dies_is_one_clear_error():
         run_tasks([Task("die", _die), Task("ok", _square, (), lambda d: (2,), cost=9)], 2)   # "die" on the pool
 
 
-def _stamp(path, delay):
-    """Write (pid, start time) to ``path`` and return them after ``delay`` s."""
-    start = time.time()
-    with open(path, "w") as f:
-        f.write(f"{os.getpid()} {start}")
-    time.sleep(delay)
-    return os.getpid(), start
-
-
-def _fail_after(delay, msg):
-    time.sleep(delay)
-    raise ConvergenceError(msg)
-
-
 def _stamp_then(path, what):
     """Write this process's start time to ``path``, then fail in the way ``what`` names."""
     with open(path, "w") as f:
@@ -144,52 +121,7 @@ def _stamp_then(path, what):
         os._exit(9)
     if what == "unpicklable":
         return lambda: None
-    if what == "env":
-        return os.environ.get("ACMM_FORK")
-    if what == "exit":
-        time.sleep(2.0)             # still running when the pool's task fails
-        raise SystemExit(3)
     raise AssertionError(what)
-
-
-def _sleeper(path, delay):
-    start = time.time()
-    time.sleep(delay)
-    with open(path, "a") as f:
-        f.write(f"{start} {time.time()}\n")
-    return delay
-
-
-def _warm_for(seconds, marks):
-    def warm():
-        time.sleep(seconds)
-        marks["warm_end"] = time.time()
-    return warm
-
-
-def test_first_task_runs_on_its_own_child_during_the_warm_up(tmp_path):
-    """During the (one-core) warm-up a forked child runs the tasks without dependencies, highest
-    priority first, one after the other, started like a pool worker (ACMM_FORK=0); what it has
-    not claimed when the pool starts runs on the pool's workers; the results are the serial ones."""
-    marks: dict = {}
-    tasks = [Task("a", _square, (), lambda d: (3,)),
-             Task("first", _stamp, (), lambda d: (tmp_path / "first", 0.15), cost=5),
-             Task("second", _stamp, (), lambda d: (tmp_path / "second", 1.5), cost=4),
-             Task("late", _stamp, (), lambda d: (tmp_path / "late", 0.0), cost=2),
-             Task("sum", _add, ("a", "first"), lambda d: (d["a"], d["first"][0] * 0))]
-    stats: dict = {}
-    out = run_tasks(tasks, 2, warm=_warm_for(0.4, marks), stats=stats)
-    (first_pid, first_start), (second_pid, second_start) = out["first"], out["second"]
-    late_pid, late_start = out["late"]
-    assert first_start < second_start < marks["warm_end"] <= late_start   # 0.15 < 0.4 < 0.15 + 1.5
-    assert first_pid == second_pid != late_pid and os.getpid() not in (first_pid, late_pid)
-    assert out["a"] == 9 and out["sum"] == 9 and set(stats) == {t.name for t in tasks}
-    assert stats["first"][0] >= 0.15
-    with pytest.raises(ChildProcessError):                 # the child was reaped
-        os.waitpid(first_pid, os.WNOHANG)
-    env = run_tasks([Task("e", _stamp_then, (), lambda d: (tmp_path / "e", "env"), cost=9),
-                     Task("ok", _square, (), lambda d: (2,))], 2, warm=_warm_for(0.2, marks))
-    assert env["e"] == "0" and os.environ.get("ACMM_FORK") != "0"
 
 
 @pytest.mark.parametrize("what,error,match", [
@@ -198,93 +130,43 @@ def test_first_task_runs_on_its_own_child_during_the_warm_up(tmp_path):
     ("die", OutputError, "worker process died"),
     ("unpicklable", Exception, "pickle|local object"),
 ])
-def test_early_task_errors_are_the_pools_errors(tmp_path, what, error, match):
-    """In the early child (it started before the warm-up ended): an AcmmError comes back as the
-    same class and message, another exception as itself with the child's traceback, a dying
-    child as one OutputError, a result that does not pickle as the pickling error."""
-    marks: dict = {}
+def test_a_pool_tasks_error_is_raised_here(tmp_path, what, error, match):
+    """On the pool: an AcmmError comes back as the same class and message, another exception as
+    itself with the worker's traceback, a dying worker as one OutputError, a result that does not
+    pickle as the pickling error; the task ran in another process."""
     with pytest.raises(error, match=match) as exc:
         run_tasks([Task("bad", _stamp_then, (), lambda d: (tmp_path / "bad", what), cost=9),
-                   Task("ok", _square, (), lambda d: (2,))], 2, warm=_warm_for(0.3, marks))
-    assert not isinstance(exc.value, OutputError) or what == "die"
-    pid, start = (tmp_path / "bad").read_text().split()
-    assert float(start) < marks["warm_end"] and int(pid) != os.getpid()
+                   Task("ok", _square, (), lambda d: (2,))], 2)
+    pid, _ = (tmp_path / "bad").read_text().split()
+    assert int(pid) != os.getpid()
     if what == "key":
         assert "_stamp_then" in str(exc.value.__cause__)
 
 
-def test_a_failure_in_the_early_child_starts_nothing_more(tmp_path):
-    """The early child's task failed during the warm-up: the error comes before the pool starts
-    any task."""
-    log = tmp_path / "spans"
-    with pytest.raises(ConvergenceError, match="field y"):
-        run_tasks([Task("bad", _stamp_then, (), lambda d: (tmp_path / "bad", "acmm"), cost=9),
-                   Task("slow", _sleeper, (), lambda d: (log, 2.0))], 2, warm=_warm_for(0.3, {}))
-    assert not log.exists()            # "slow" never started (it would have been waited for)
+def _blocked_until(event_path, marker):
+    """Write ``marker`` then wait until ``event_path`` exists (at most 60 s)."""
+    marker.write_text(str(os.getpid()))
+    deadline = time.monotonic() + 60
+    while not event_path.exists() and time.monotonic() < deadline:
+        time.sleep(0.005)
+    return os.getpid()
 
 
-def test_the_first_error_is_the_one_raised(tmp_path):
-    """A pool task fails while the early child's task ends with SystemExit: the pool's error."""
-    with pytest.raises(ConvergenceError, match="^x$"):
-        run_tasks([Task("exit", _stamp_then, (), lambda d: (tmp_path / "exit", "exit"), cost=9),
-                   Task("bad", _fail_after, (), lambda d: (0.1, "x"))], 2)
+def _release(event_path, marker):
+    """Wait until the other task has started (``marker``), then let it go (``event_path``)."""
+    deadline = time.monotonic() + 60
+    while not marker.exists() and time.monotonic() < deadline:
+        time.sleep(0.005)
+    event_path.write_text("go")
+    return os.getpid()
 
 
-def test_the_early_task_counts_as_one_of_the_jobs(tmp_path):
-    log = tmp_path / "spans"
-    run_tasks([Task(f"s{i}", _sleeper, (), lambda d: (log, 0.3), cost=5 - i) for i in range(5)], 2)
-    spans = sorted(tuple(map(float, line.split())) for line in log.read_text().split("\n") if line)
-    most = max(sum(1 for a, b in spans if a <= t < b) for t, _ in spans)
-    assert len(spans) == 5 and most <= 2
-
-
-def test_a_failure_elsewhere_waits_for_the_early_task(tmp_path):
-    """A pool task fails while the early task still runs: the early task ends first (its files
-    complete, as the pool's running tasks), then the error; no child is left."""
-    log = tmp_path / "spans"
-    t0 = time.time()
-    with pytest.raises(ConvergenceError):
-        run_tasks([Task("long", _sleeper, (), lambda d: (log, 1.0), cost=9),
-                   Task("bad", _fail_after, (), lambda d: (0.2, "x"))], 2)
-    assert time.time() - t0 >= 1.0 and len(log.read_text().split("\n")) == 2
-
-
-def test_the_early_tasks_output_is_not_lost(tmp_path):
-    """What the early task prints reaches a piped stdout even without PYTHONUNBUFFERED."""
-    import subprocess
-    import sys
-
-    script = tmp_path / "s.py"
-    script.write_text("import sys\nsys.path.insert(0, %r)\n" % str(os.getcwd()) +
-                      "from acmm.report.runner import Task, run_tasks\n"
-                      "def say(x):\n    print('from task', x)\n    return x\n"
-                      "if __name__ == '__main__':\n"
-                      "    print(run_tasks([Task('p1', say, (), lambda d: (1,), cost=9),"
-                      " Task('p2', say, (), lambda d: (2,))], 2))\n")
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
-    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env,
-                         cwd=os.getcwd(), timeout=120).stdout
-    assert "from task 1" in out and "from task 2" in out and "'p1': 1" in out
-
-
-def test_the_early_task_with_many_open_files(tmp_path):
-    """No select(): the early child's pipe may be any descriptor number (≥ 1024 too)."""
-    import resource
-
-    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
-    if hard != resource.RLIM_INFINITY and hard < 1200:
-        pytest.skip("cannot open 1 100 files here")
-    resource.setrlimit(resource.RLIMIT_NOFILE, (max(soft, 1200) if hard == resource.RLIM_INFINITY
-                                                else min(hard, max(soft, 1200)), hard))
-    fds = [os.open(os.devnull, os.O_RDONLY) for _ in range(1100)]
-    try:
-        out = run_tasks([Task("a", _square, (), lambda d: (3,), cost=9),
-                         Task("b", _square, (), lambda d: (4,))], 2)
-        assert out == {"a": 9, "b": 16}
-    finally:
-        for fd in fds:
-            os.close(fd)
-        resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
+def test_two_jobs_run_two_tasks_at_once_in_two_workers(tmp_path):
+    """Each task waits for the other to have started: this ends only when both run at once."""
+    ev, marker = tmp_path / "go", tmp_path / "started"
+    out = run_tasks([Task("wait", _blocked_until, (), lambda d: (ev, marker)),
+                     Task("release", _release, (), lambda d: (ev, marker))], 2)
+    assert len({out["wait"], out["release"], os.getpid()}) == 3
 
 
 # ----------------------------------------------------------------------------- the report's graph
@@ -436,7 +318,7 @@ def _warns():
 
 @pytest.mark.parametrize("action, expected", [("default", 1), ("always", 3)])
 def test_worker_warnings_reach_the_caller_as_in_a_serial_run(action, expected):
-    """A task's warnings raised in a pool worker or the early child are raised again in the
+    """A task's warnings raised in a pool worker are raised again in the
     caller, counted as the serial run counts them (the CLI's note: line)."""
     import warnings
 

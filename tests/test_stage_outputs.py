@@ -134,51 +134,23 @@ def test_a_writer_killed_mid_write_leaves_no_temporary_file(tmp_path):
     assert sorted(p.name for p in run.iterdir()) == before
 
 
-def test_a_failed_stage_leaves_no_figure_its_worker_completed(tmp_path):
-    """As under the `acmm` command: the worker is the command's (an outer session), the stage's
-    session nested.  The stage fails after its figure was written by the worker (not yet
-    recorded): the figure is removed, and no writer is left to write one afterwards."""
-    import time
+def test_ctrl_c_while_the_figures_are_drawn_rolls_the_stage_back(tmp_path):
+    """Ctrl-C while the stage draws its figures (its results written): Python's interrupt path
+    rolls the whole folder back, the results and the figures drawn so far included."""
+    from acmm_qpp.results import draw_figures
 
-    import numpy as np
-
-    from acmm.plots import simulation as sim_plots
-    from acmm_qpp import figure_worker
-
-    if not figure_worker.usable():
-        pytest.skip("no fork, one CPU or other threads alive")
     run = tmp_path / "run"
-    run.mkdir()
-    t = np.linspace(0.0, 1.0, 50)
-    with pytest.raises(_Boom):
-        with figure_worker.session():                                   # the command's
-            with stage_outputs(run, "simulate", config_text="name: x\n"):
-                with figure_worker.session():                           # the stage's
-                    figure_worker.submit(sim_plots.inertia_histories, t, np.tile(np.eye(3) * 1e6, (t.size, 1, 1)),
-                                         run / "sim_inertia.png")
-                    deadline = time.monotonic() + 60
-                    while not (run / "sim_inertia.png").exists() and time.monotonic() < deadline:
-                        time.sleep(0.01)
-                    assert (run / "sim_inertia.png").exists()
-                    raise _Boom                                         # e.g. sim.h5 cannot be written
-    assert not figure_worker.active()
-    assert list(run.iterdir()) == []
+    _earlier_run(run)
+    before = {p.name: p.read_bytes() for p in run.iterdir()}
 
+    def interrupted_figure():
+        raise KeyboardInterrupt
 
-def test_any_figure_failure_drawn_in_place_is_a_figure_error(monkeypatch):
-    """Without a worker a figure that fails in any way is reported as a worker's writer reports
-    it: a FigureError (exit 4), the stage's results kept."""
-    from acmm_qpp import figure_worker
-    from acmm_qpp.errors import FigureError
-
-    monkeypatch.setenv("ACMM_FIGURE_WORKER", "0")
-
-    def bad_figure():
-        raise ValueError("Axis limits cannot be NaN or Inf")
-
-    with pytest.raises(FigureError, match="Axis limits"):
-        with figure_worker.session():
-            figure_worker.submit(bad_figure)
+    with pytest.raises(KeyboardInterrupt):
+        with stage_outputs(run, "design", config_text="name: new\n"):
+            write_text(run / "design.h5", "new results")
+            draw_figures([lambda: write_text(run / "design_poles.png", "a new figure"), interrupted_figure])
+    assert {p.name: p.read_bytes() for p in run.iterdir()} == before
 
 
 def test_a_sweep_whose_figure_fails_finishes_with_its_config(tmp_runs):
@@ -264,37 +236,6 @@ def _slow_figure(path):
     time.sleep(1.0)
     write_text(path, "a figure landing late")
     return path
-
-
-def test_ctrl_c_while_the_figures_are_awaited_stops_the_writers(tmp_path):
-    """Ctrl-C while the stage waits for its figure worker (the results written): the writers are
-    killed before the folder is rolled back, so no figure of the interrupted run lands later."""
-    import signal
-    import time
-
-    from acmm_qpp import figure_worker
-
-    if not figure_worker.usable():
-        pytest.skip("no fork, one CPU or other threads alive")
-    run = tmp_path / "run"
-    run.mkdir()
-
-    def interrupt(*_):
-        raise KeyboardInterrupt
-
-    old = signal.signal(signal.SIGALRM, interrupt)
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            with stage_outputs(run, "simulate", config_text="name: x\n"):
-                with figure_worker.session():
-                    figure_worker.submit(_slow_figure, run / "sim_axes.png")
-                    signal.setitimer(signal.ITIMER_REAL, 0.3)      # fires while the session waits
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0.0)
-        signal.signal(signal.SIGALRM, old)
-    time.sleep(1.5)
-    assert not figure_worker.active()
-    assert list(run.iterdir()) == []
 
 
 def test_a_nested_stage_interrupted_keeps_the_earlier_run_whole(tmp_path):

@@ -1,7 +1,6 @@
-"""SIGTERM and SIGHUP unwind a command like Ctrl-C; the tool's forked processes die with their
-parent (``acmm_qpp.signals``).  Before: SIGTERM killed the command at once, its figure worker lived
-on and wrote the new run's figures beside the old run's results, and ``.lock``/``.rollback-*``
-stayed behind."""
+"""SIGTERM and SIGHUP unwind a command like Ctrl-C (:mod:`acmm_qpp.signals`); the pool's workers
+die with their parent (:mod:`acmm_qpp.pool`).  Before: SIGTERM killed the command at once, and
+``.lock``/``.rollback-*`` stayed behind."""
 from __future__ import annotations
 
 import hashlib
@@ -31,72 +30,87 @@ def _digest(folder: Path) -> dict:
             for p in sorted(folder.iterdir())}
 
 
-@pytest.mark.parametrize("sig, delay", [(signal.SIGTERM, 0.0), (signal.SIGTERM, 0.4), (signal.SIGTERM, 1.2),
-                                        (signal.SIGHUP, 0.2)])
-@pytest.mark.slow
-def test_a_terminated_run_rolls_back_like_ctrl_c_and_leaves_no_process(tmp_path, sig, delay):
-    first = subprocess.run([sys.executable, "-c", "from acmm.cli.app import main; main()", "simulate", "staircase",
-                            "simulation.orbits=20"], cwd=tmp_path, capture_output=True, text=True, env=ENV,
+#: a run that stops at a named point of the stage, says so on stdout and waits there (on stdin)
+#: for the test's signal: each point is reached deterministically, no timing involved
+_STOP_AT = textwrap.dedent("""
+    import sys
+    point = sys.argv[1]
+
+    def stop(*args, **kwargs):
+        print("at", point, flush=True)
+        sys.stdin.readline()                        # the signal arrives while this waits
+        raise SystemExit("the signal never came")
+
+    if point == "design":
+        from acmm.design import schedule as target; name = "design_one"
+    elif point == "simulation":
+        from acmm.simulate import kernel as target; name = "simulate"
+    elif point == "figures":
+        from acmm.plots import simulation as target; name = "summary"
+    else:
+        from acmm.stages import simulate as target; name = "write_h5"
+    setattr(target, name, stop)
+    sys.argv = ["acmm", *sys.argv[2:]]
+    from acmm.cli.app import main
+    main()
+""")
+
+
+@pytest.mark.parametrize("sig, point", [(signal.SIGTERM, "design"), (signal.SIGTERM, "simulation"),
+                                        (signal.SIGTERM, "figures"), (signal.SIGHUP, "results")])
+def test_a_terminated_run_rolls_back_like_ctrl_c_and_leaves_no_process(tmp_path, sig, point):
+    """SIGTERM/SIGHUP at each step of ``acmm simulate`` (designing, integrating, drawing, writing
+    the results) exits 128 + N with one line and leaves no lock, no rollback folder, no half
+    file: the earlier complete run as it was, or the new design stage whole."""
+    first = subprocess.run([sys.executable, "-c", "from acmm.cli.app import main; main()", "simulate", "mb3",
+                            "simulation.orbits=1"], cwd=tmp_path, capture_output=True, text=True, env=ENV,
                            timeout=300, check=False)
     assert first.returncode == 0, first.stderr
-    run = tmp_path / "runs" / "staircase"
+    run = tmp_path / "runs" / "mb3"
     before = _digest(run)
-    # another design (sector σ): the 12-point design runs (its helper, its figure worker and
-    # writers), then the 130-orbit simulation, when the signal comes
-    proc = _acmm("simulate", "staircase", "design.sector.sigma=0.6", cwd=tmp_path)
-    deadline = time.monotonic() + 60
-    while not (run / ".lock").exists() and proc.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.002)
-    time.sleep(delay)                                   # while it builds its rollback, designs, draws
+    proc = subprocess.Popen([sys.executable, "-c", _STOP_AT, point, "simulate", "mb3", "simulation.orbits=1",
+                             "design.sector.sigma=0.6"], cwd=tmp_path, stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+    assert proc.stdout.readline().split() == ["at", point]
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=120)
-    # (about 1 signal in 10 sent in the first ~0.1 s of the design is not acted on and the run
-    # completes, exit 0: cause not found; README "Reliability")
-    assert proc.returncode in (128 + sig, 0), err
-    if proc.returncode:
-        assert err.strip().splitlines()[-1] == f"terminated by signal {int(sig)}" and "Traceback" not in err
+    assert proc.returncode == 128 + sig, err
+    assert err.strip().splitlines()[-1] == f"terminated by signal {int(sig)}" and "Traceback" not in err
     after = _digest(run)
-    time.sleep(2.0)                                     # a surviving writer would write by now
-    assert _digest(run) == after
-    assert not [n for n in after if n.startswith(".")]  # no lock, no rollback folder left
-    # the earlier run whole, or (the design stage had finished: README "Run folders") the new
-    # design with its config.yaml and no simulation results beside it
-    if proc.returncode == 0:                            # the run completed: its results, whole
-        assert after["design.h5"] != before["design.h5"] and after["sim.h5"] != before["sim.h5"]
-    else:
-        assert after == before or (after["design.h5"] != before["design.h5"]
-                                   and not [n for n in after if n.startswith("sim")]), sorted(after)
+    if point == "design":
+        assert after == before
+    else:       # the nested design stage had finished (README "Run folders"): kept, whole, with its
+        # config.yaml; the simulation's files are gone (the earlier ones described the old design)
+        assert after["design.h5"] != before["design.h5"] and after["config.yaml"] != before["config.yaml"]
+        assert sorted(after) == ["config.yaml", "design.h5", "design_poles.png"], sorted(after)
+    assert not [p for p in tmp_path.rglob("*") if p.name.startswith(".")]
 
 
-def test_a_forked_child_dies_with_its_parent_even_under_sigkill(tmp_path):
-    """The helper, figure worker and writers call die_with_parent right after fork: SIGKILL of the
-    parent (no cleanup at all) still stops them."""
+def test_a_pool_worker_dies_with_its_parent_even_under_sigkill(tmp_path):
+    """The workers of :func:`acmm_qpp.pool.process_pool` (the sweep's, the report's) are stopped
+    when their parent is killed with SIGKILL, where no cleanup of the parent runs."""
     code = textwrap.dedent("""
-        import os, sys, time
-        from acmm_qpp.signals import die_with_parent
-        parent = os.getpid()
-        pid = os.fork()
-        if pid == 0:
-            die_with_parent(parent)
-            time.sleep(60)
-            os._exit(0)
-        print(pid, flush=True)
-        time.sleep(60)
+        import os, sys
+        from acmm_qpp.pool import process_pool
+        pool = process_pool(1)
+        print(pool.submit(os.getpid).result(), flush=True)
+        sys.stdin.readline()
     """)
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, env=ENV)
-    child = int(proc.stdout.readline())
+    proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            text=True, env=ENV)
+    worker = int(proc.stdout.readline())
     proc.kill()
     proc.wait(timeout=30)
-    deadline = time.monotonic() + 10
-    while time.monotonic() < deadline:
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:          # waits for the kernel's SIGKILL of the worker
         try:                            # gone, or a zombie waiting for its new parent to reap it
-            if Path(f"/proc/{child}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z":
+            if Path(f"/proc/{worker}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z":
                 return
         except (FileNotFoundError, ProcessLookupError):
             return
         time.sleep(0.02)
-    os.kill(child, signal.SIGKILL)
-    pytest.fail("the child outlived its parent")
+    os.kill(worker, signal.SIGKILL)
+    pytest.fail("the pool worker outlived its parent")
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])

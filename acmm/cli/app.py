@@ -14,10 +14,8 @@ import enum
 import typer
 
 from acmm_qpp.cli.plumbing import ExitCodeGroup, OverridesArg, StrictOpt, run_app, strict_exit, user_errors, version_option
-
-#: the acmm stages' figure-worker warm-up, :data:`acmm.stages.common.FIGURE_WARM` (a string here: the
-#: worker is forked before anything of acmm is imported; a test checks that the two agree)
-FIGURE_WARM = "acmm.plots.base:warm_figure_worker"
+from acmm_qpp.plot_style import files_only_backend
+from acmm_qpp.signals import terminate_like_ctrl_c
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
                   help="Space Station attitude control / momentum management (CR-185644 Part II).",
@@ -161,12 +159,9 @@ def design(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = O
     With --strict, a scheduled gain with poles outside the sector, or a blend whose end lies on
     another branch of equilibria, exits 1."""
 
-    from acmm_qpp import figure_worker
+    from acmm.stages.design import run_design
 
-    with figure_worker.session(figures is not False, FIGURE_WARM):     # started before the heavy imports
-        from acmm.stages.design import run_design
-
-        r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
+    r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
     cfg = r.config
     typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
                f"sector Re <= -{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g} deg "
@@ -220,12 +215,9 @@ def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] =
     """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures.
     With --strict, a DIVERGED verdict exits 1."""
 
-    from acmm_qpp import figure_worker
+    from acmm.stages.simulate import run_simulate
 
-    with figure_worker.session(figures is not False, FIGURE_WARM):     # started before the heavy imports
-        from acmm.stages.simulate import run_simulate
-
-        r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
+    r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
     from acmm_qpp.units import shown
 
     cfg, s = r.config, r.sim
@@ -243,45 +235,11 @@ def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] =
 
 
 def main() -> None:
-    """Console entry point (``acmm``): run the app, then leave without the interpreter's
-    teardown when nothing else is running (issue 16).
-
-    Finalizing numba's compiled code and the loaded modules took ~0.2 s of a ~1.2 s
-    ``acmm simulate``.  Every result is written (atomically) before the command returns; the
-    atexit handlers still run and the output is flushed; only then ``os._exit``.  With another
-    non-daemon thread alive (a Dask client) the usual exit is kept."""
-    import sys
-
-    from acmm_qpp.plot_style import files_only_backend
-    from acmm_qpp.signals import terminate_like_ctrl_c
-
-    terminate_like_ctrl_c()           # SIGTERM, SIGHUP: rolled back like Ctrl-C
+    """Console entry point (``acmm``): SIGTERM and SIGHUP unwind like Ctrl-C
+    (:func:`acmm_qpp.signals.terminate_like_ctrl_c`), figures go to files only, then the app runs."""
+    terminate_like_ctrl_c()
     files_only_backend()
-    try:
-        _fork_figure_worker_early(sys.argv[1:])
-    except KeyboardInterrupt as exc:
-        from acmm_qpp.cli.plumbing import interrupted
-
-        interrupted(exc)
     run_app(app)
-
-
-def _fork_figure_worker_early(args: list[str]) -> None:
-    """Fork the figure worker before typer parses (and imports pydantic for) the command line
-    when the command is a stage that may draw figures (:func:`acmm_qpp.figure_worker.start_early`).
-
-    Parameters
-    ----------
-    args : list of str
-        The command-line arguments (``sys.argv[1:]``).
-    """
-    command = next((a for a in args if not a.startswith("-")), None)
-    if command in ("design", "simulate") and not {"--no-figures", "--help", "-h"} & set(args):
-        import numpy  # noqa: F401  (imported once, before the fork: both processes need it)
-
-        from acmm_qpp import figure_worker
-
-        figure_worker.start_early(FIGURE_WARM)
 
 
 def _register_optional_commands() -> None:

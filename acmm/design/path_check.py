@@ -83,10 +83,13 @@ class PathCheck:
         return float(np.mean(self.margin >= 0.0))
 
 
-def path_models(points: list[PointDesign], s: DesignSettings, n_check: int,
-                indices=None) -> PathModels | None:
+def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> PathModels | None:
     """Design models at ``n_check`` TEAs evenly spaced between the first and last blend point
-    of the designed ``points`` (:func:`path_models_from_specs` of their specs).
+    of the designed ``points``.
+
+    None when the config has no blend (``schedule.to``).  The TEA of each model is solved
+    exactly (Newton from the continuation guess), so the θ2* are evenly spaced to within the
+    interpolation of the 81-point continuation track.
 
     Parameters
     ----------
@@ -96,43 +99,13 @@ def path_models(points: list[PointDesign], s: DesignSettings, n_check: int,
         The design settings (orbital rate, design model, DRF mode).
     n_check : int
         Number of TEAs along the path.
-    indices : sequence of int, optional
-        Only the models at these positions of the ``n_check`` TEAs (in this order).
 
     Returns
     -------
     PathModels or None
         The models, None without a blend.
     """
-    return path_models_from_specs([p.spec for p in points], s, n_check, indices)
-
-
-def path_models_from_specs(specs: list[PointSpec], s: DesignSettings, n_check: int,
-                           indices=None) -> PathModels | None:
-    """Design models at ``n_check`` TEAs evenly spaced between the first and last blend point.
-
-    None when the config has no blend (``schedule.to``).  The TEA of each model is solved
-    exactly (Newton from the continuation guess), so the θ2* are evenly spaced to within the
-    interpolation of the 81-point continuation track.  Only the point specs are needed, not
-    their designs: the design stage solves these models while it designs the points.
-
-    Parameters
-    ----------
-    specs : list of acmm.design.schedule.PointSpec
-        The design points' specs; the first and last blend points bound the path.
-    s : DesignSettings
-        The design settings (orbital rate, design model, DRF mode).
-    n_check : int
-        Number of TEAs along the path.
-    indices : sequence of int, optional
-        Only the models at these positions of the ``n_check`` TEAs (in this order); each model
-        is solved on its own, so they equal the full path's models there bit for bit.
-
-    Returns
-    -------
-    PathModels or None
-        The models, None without a blend.
-    """
+    specs = [p.spec for p in points]
     d = s
     n = s.orbit_rate
     blended = [p for p in specs if np.isfinite(p.s)]
@@ -142,8 +115,6 @@ def path_models_from_specs(specs: list[PointSpec], s: DesignSettings, n_check: i
     start = PointSpec(start.name, start.inertia, start.bias, 0.0, expected=start.expected)
     end = PointSpec(end.name, end.inertia, end.bias, 1.0, expected=end.expected)
     track = tea_spaced_blend(start, end, n_check, n)
-    if indices is not None:
-        track = [track[i] for i in indices]
     th, ss, As, Bs = [], [], [], []
     scales = None
     for sp in track:

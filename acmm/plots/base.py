@@ -1,6 +1,6 @@
-"""What every stage figure shares (report Figs 5.3–5.26, 6.2–6.30): saving a figure (PNG/PDF, in a
-forked writer when :mod:`acmm.plots.parallel_figures` is active), figure skeletons built ahead
-(:func:`prebuild`), tick and line thinning, and the unit labels of the 24 states of eq 4.46.
+"""What every stage figure shares (report Figs 5.3–5.26, 6.2–6.30): saving a figure (PNG/PDF,
+atomically), figure skeletons (:func:`_layout`), tick and line thinning, and the unit labels of
+the 24 states of eq 4.46.
 
 Drawing cost (issue 16): a skeleton holds everything that does not depend on the data (axes,
 empty lines, legend, tick artists) and its fixed texts already rasterized (:func:`_bake_texts`);
@@ -10,7 +10,7 @@ bookkeeping) and saves.  Grids of panels are drawn without an Axes each
 :func:`_compact_formatter`) and text is unhinted while these figures are drawn
 (:data:`FAST_TEXT_RC`).
 
-Split from :mod:`acmm.plots` (issue 12); the figures themselves
+The figures themselves
 are in :mod:`acmm.plots.design` and :mod:`acmm.plots.simulation`.
 """
 from __future__ import annotations
@@ -32,26 +32,12 @@ FAST_TEXT_RC = {"text.hinting": "none"}
 
 
 def _save(fig, path: Path, vector: bool = False, tight: bool = True, rc: dict | None = None) -> list[Path]:
+    """Write ``fig`` as PNG (and PDF with ``vector``) beside ``path``'s stem, atomically, and
+    close it; returns the files written."""
     path = Path(path)
     out = [path.with_suffix(".png")]
-    from acmm.plots import parallel_figures
-
-    if parallel_figures.active():
-        if vector:
-            out.append(path.with_suffix(".pdf"))
-        parallel_figures.run(lambda: _save_now(fig, path, [out[0]], vector, tight, rc), str(out[0]))
-        from acmm_qpp.outputs import record_written
-
-        for p in out:               # written by the child: recorded here, or the stage prunes them
-            record_written(p)
-        import matplotlib.pyplot as plt
-
-        plt.close(fig)
-        return out
     _save_now(fig, path, out, vector, tight, rc)
-    import matplotlib.pyplot as plt  # no fig.clf(): clearing 12 axes cost ~0.15 s, close frees it
-
-    plt.close(fig)
+    _plt().close(fig)       # no fig.clf(): clearing 12 axes cost ~0.15 s, close frees it
     return out
 
 
@@ -70,38 +56,14 @@ def _save_now(fig, path: Path, out: list, vector: bool, tight: bool, rc: dict | 
             save_figure(fig, out[1], bbox_inches=bbox)
 
 
-#: figure skeletons built ahead (:func:`prebuild`): (kind, parameters) → (figure, axes)
-_LAYOUTS: dict = {}
-
 #: figure kind → skeleton builder; filled by :mod:`acmm.plots.design` and :mod:`acmm.plots.simulation`
 _BUILDERS: dict = {}
 
 
-def prebuild(kind: str, *params) -> None:
-    """Build the skeleton of a figure ``kind`` (axes, labels, titles, tick locators and tick
-    artists: everything that does not depend on the data) for the figure function called later
-    with the same parameters.
-
-    The figure worker (:mod:`acmm_qpp.figure_worker`) calls this while the stage still computes, so
-    the figure function then only draws the data; without it the skeleton is built on the spot.
-    The result is identical either way.
-
-    Parameters
-    ----------
-    kind : str
-        The figure: ``"axis_histories"``, ``"inertia_histories"``, ``"summary"``,
-        ``"gain_schedule_grid"``, ``"schedule_path_check"`` or ``"scheduled_pole_map"``.
-    *params : str or tuple
-        The parameters of its skeleton, as the figure function passes them (the unit system
-        ``"imperial"``/``"SI"``; for the gain grid the state names, state unit labels and torque
-        unit label).
-    """
-    _LAYOUTS[(kind, params)] = _BUILDERS[kind](*params)
-
-
 def _layout(kind: str, *params):
-    got = _LAYOUTS.pop((kind, params), None)
-    return got if got is not None else _BUILDERS[kind](*params)
+    """A new skeleton of the figure ``kind`` (axes, labels, titles, tick artists: everything that
+    does not depend on the data) for the parameters ``params`` (e.g. the unit system)."""
+    return _BUILDERS[kind](*params)
 
 
 def _bake_texts(fig, texts) -> None:
@@ -110,7 +72,7 @@ def _bake_texts(fig, texts) -> None:
     their place; the texts themselves are hidden.
 
     Laying out and rasterizing text is the costliest part of drawing a stage figure (each glyph
-    is rendered on its own); a skeleton built ahead (:func:`prebuild`) thus pays it before the
+    is rendered on its own); a skeleton (:func:`_layout`) pays it before the
     data exist.  The PNG differs from drawing the texts at save time only by rounding of the
     anti-aliased edges.  Drawn on any other canvas (a PDF, another size or resolution, a
     'tight' bounding box) the texts are drawn as texts instead.
@@ -395,17 +357,3 @@ def gain_unit(state_unit: str, torque_unit: str = "ft·lbf") -> str:
         The label, e.g. ``ft·lbf/rad``.
     """
     return f"{torque_unit}/({state_unit})" if any(ch in state_unit for ch in "/·") else f"{torque_unit}/{state_unit}"
-
-
-
-
-def warm_figure_worker() -> None:
-    """The figure worker's warm-up for the acmm stages (:data:`acmm.stages.common.FIGURE_WARM`,
-    :func:`acmm_qpp.figure_worker.start`): matplotlib with the stage style and one
-    small figure drawn (fonts, caches); the report's opt-in forked writers are turned off there
-    (a writer draws in place, never forks again)."""
-    from acmm.plots import parallel_figures
-    from acmm_qpp.plot_style import draw_warm_up_figure
-
-    parallel_figures.forget()
-    draw_warm_up_figure(_plt(), "roll θ (deg)", "time (orbits)")

@@ -266,15 +266,7 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
         else:
             say(f"  part {name:<20} {result.seconds:6.2f} s")
 
-    if jobs == 1:
-        from acmm.plots import parallel_figures
-
-        parallel_figures.enable()        # opt-in (ACMM_PARALLEL_FIGURES=1): forked figure writers
-    try:
-        done = run_tasks(stages + parts, jobs, on_done, warm=warm_workers, stats=stats)
-    finally:
-        if jobs == 1:
-            parallel_figures.wait()
+    done = run_tasks(stages + parts, jobs, on_done, warm=warm_workers, stats=stats)
     timings["graph"] = time.perf_counter() - t0
     order_runs(g, stages)
     sections: dict[str, float] = {}

@@ -113,14 +113,8 @@ def save(fig, directory: Path, stem: str) -> dict[str, Path]:
     out = {"pdf": directory / f"{stem}.pdf", "png": directory / f"{stem}.png"}
     # layouts are fixed (fixed_layout, no bbox_inches="tight": it costs a second draw);
     # fixed metadata: the same data give byte-identical PDFs (no creation date)
-    from acmm.plots import parallel_figures
-
-    def write():
-        save_figure(fig, out["pdf"], metadata={"CreationDate": None, "Creator": "acmm report"})
-        save_figure(fig, out["png"], metadata={"Software": "acmm report"},
-                    pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
-
-    # in a forked writer when the report enabled it (acmm.plots.parallel_figures), else here
-    parallel_figures.run(write, str(out["png"]))
+    save_figure(fig, out["pdf"], metadata={"CreationDate": None, "Creator": "acmm report"})
+    save_figure(fig, out["png"], metadata={"Software": "acmm report"},
+                pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
     plt.close(fig)
     return out

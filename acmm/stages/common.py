@@ -9,12 +9,6 @@ import numpy as np
 
 from acmm.io.config import Config, load_config
 
-#: the figure worker's warm-up for the acmm stages, :func:`acmm.plots.base.warm_figure_worker`, named
-#: as :func:`acmm_qpp.figure_worker.start` takes it (a string: the worker imports it, this process
-#: need not)
-FIGURE_WARM = "acmm.plots.base:warm_figure_worker"
-
-
 #: Units of the per-state arrays, element by element: ``state_units[i]`` is the unit of state
 #: ``i``, given by the dataset's ``state_units`` attribute (set by :func:`_in_system`); under
 #: ``output.units: SI`` ft*lbf reads N*m.  x' = A x + B u + G w (eq 4.46), u = −K x, and the

@@ -13,7 +13,7 @@ import numpy as np
 from acmm.io.config import Config
 from acmm.stages.common import _as_config, _define_units, _in_system
 from acmm_qpp.outputs import owns_outputs
-from acmm_qpp.results import write_h5
+from acmm_qpp.results import draw_figures, write_h5
 from acmm_qpp.runlock import locked_stage
 from acmm.io.design_file import DesignTable, _stored_digest, _unit_system, load_design_table, table_sha256
 
@@ -112,9 +112,8 @@ def design_hash(cfg: Config) -> str:
     return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
 
 
-def compute_design(config, progress=None, on_points=None, on_fit=None, fork: bool = False) -> DesignResult:
-    """Design every point of a config and fit the schedule (when there are ≥ 2 points);
-    ``on_points``/``on_fit``: see :func:`acmm.design.design_core.design_schedule`.
+def compute_design(config, progress=None) -> DesignResult:
+    """Design every point of a config and fit the schedule (when there are ≥ 2 points).
 
     The config is read here once (:func:`acmm.design.settings.design_settings`,
     :func:`acmm.design.schedule.point_specs`); the core :func:`acmm.design.design_core.design_schedule` gets
@@ -126,16 +125,6 @@ def compute_design(config, progress=None, on_points=None, on_fit=None, fork: boo
         The config, or a config file / packaged name to load.
     progress : callable, optional
         ``progress(name)``, called after each design point.
-    on_points : callable, optional
-        ``on_points(points)``, called with the list of :class:`acmm.design.schedule.PointDesign` once
-        every point's sector LQR (ch. 5.2) is designed.
-    on_fit : callable, optional
-        ``on_fit(points, fit)``, called with the point designs and the final
-        :class:`acmm.design.schedule.ScheduleFit` (ch. 5.3) before its checks; not called with fewer
-        than 2 points.
-    fork : bool, optional
-        Design half the points and solve the path's models in a forked child meanwhile
-        (``fork`` of :func:`acmm.design.design_core.design_schedule`; the same numbers).
 
     Returns
     -------
@@ -151,8 +140,7 @@ def compute_design(config, progress=None, on_points=None, on_fit=None, fork: boo
 
     cfg = _as_config(config)
     t0 = time.perf_counter()
-    ds = design_schedule(sp.point_specs(cfg), design_settings(cfg), schedule_settings(cfg), progress,
-                         on_points, on_fit, fork=fork)
+    ds = design_schedule(sp.point_specs(cfg), design_settings(cfg), schedule_settings(cfg), progress)
     table = design_table(ds.points, ds.fit, design_hash(cfg))
     return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check)
 
@@ -202,30 +190,22 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
         (:class:`DesignResult`, pathlib.Path of ``design.h5``).
     """
     from acmm.stages import design_output as out
-    from acmm.stages.common import FIGURE_WARM
-    from acmm_qpp import figure_worker
     from acmm.design.settings import design_settings
 
     cfg = _as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
     s, run_dir = design_settings(cfg), cfg.run_dir()
-    with figure_worker.session(want_figures, FIGURE_WARM):
-        if want_figures:       # figures handed to the worker as their data is ready
-            out.prepare_design_figures(s, cfg.output.units)
-            r = compute_design(cfg, progress, lambda pts: out.pole_map_figure(pts, s, run_dir),
-                               lambda pts, fit: out.gain_figure(pts, fit, s, run_dir, cfg.output.units),
-                               fork=True)
-            out.path_figures(r.path_check, s, run_dir)
-        else:
-            r = compute_design(cfg, progress, fork=True)
-        pts = out.point_items(r.points)
-        items = out.table_items(r, pts)
-        if r.fit is not None:
-            items["schedule"] = out.schedule_items(r)
-        items = _define_units(_in_system(items, cfg, out.unit_roles(pts, r.fit is not None)), cfg.orbit_rate)
-        path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
-                        {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
-                         "schedule_form": r.table.form, "table_sha256": _stored_digest(items, cfg.output.units)})
+    r = compute_design(cfg, progress)
+    pts = out.point_items(r.points)
+    items = out.table_items(r, pts)
+    if r.fit is not None:
+        items["schedule"] = out.schedule_items(r)
+    items = _define_units(_in_system(items, cfg, out.unit_roles(pts, r.fit is not None)), cfg.orbit_rate)
+    path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
+                    {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
+                     "schedule_form": r.table.form, "table_sha256": _stored_digest(items, cfg.output.units)})
+    if want_figures:
+        draw_figures(out.design_figures(r, s, run_dir, cfg.output.units))
     return r, path
 
 

@@ -1,15 +1,21 @@
 """What the design stage writes: the ``design.h5`` items and the design figures.
 
-Split from :mod:`acmm.stages.runners` (:func:`acmm.stages.runners.run_design` calls these); the items are built
-from a :class:`acmm.stages.runners.DesignResult`, the figures from it and the design settings: the
+:func:`acmm.stages.design.run_design` calls these; the items are built from a
+:class:`acmm.stages.design.DesignResult`, the figures from it and the design settings: the
 model of eq 4.46, the sector LQR of ch. 5.2 and the gain schedule of ch. 5.3.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
+from acmm.io.units import state_factors, state_space_in
+from acmm.model.linearize import STATE_NAMES
+from acmm.plots import design as design_plots
+from acmm.plots.base import state_units
 from acmm.stages.common import UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE
 from acmm_qpp.results import Dataset
 
@@ -29,8 +35,6 @@ def point_items(points) -> dict:
     dict
         Group name → {name: :class:`acmm_qpp.results.Dataset`} (report units, stated per dataset).
     """
-    from acmm.model.linearize import STATE_NAMES
-
     pts = {}
     for k, p in enumerate(points):
         res = p.lqr
@@ -87,8 +91,6 @@ def table_items(r, pts: dict) -> dict:
     dict
         Name → :class:`acmm_qpp.results.Dataset` or group (report units, stated per dataset).
     """
-    from acmm.model.linearize import STATE_NAMES
-
     items = {
         "points": pts,
         "names": Dataset(np.array(r.table.names, dtype="S"), "1", "design point names in order", dims=("point",)),
@@ -212,137 +214,54 @@ def gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
         The torque unit label (``"ft·lbf"`` or ``"N·m"``).
     """
     if units_system == "imperial":
-        from acmm.plots.base import state_units
-
         return tuple(state_units(drf_mode)), "ft·lbf"
-    from acmm.io.units import state_factors
-
     return tuple(u.replace("*", "·") for u in state_factors(drf_mode, units_system)[1]), "N·m"
 
 
-def prepare_design_figures(s, units_system: str) -> None:
-    """Have the figure worker build the gain figure's skeleton while the design is computed
-    (:func:`acmm.plots.prebuild`; nothing without a worker).
+def design_figures(r, s, run_dir: Path, units_system: str) -> list:
+    """The figures of a design: the points' pole map with the sector of ch. 5.2 (Fig 5.2), the
+    gain schedule (Figs 5.3–5.26) and the path check (margins, scheduled poles), each a call
+    for :func:`acmm_qpp.results.draw_figures`.
 
     Parameters
     ----------
-    s : acmm.design.settings.DesignSettings
-        The design settings (their ``drf_mode`` picks the state units).
-    units_system : str
-        Unit system of the figure, ``"imperial"`` or ``"SI"``.
-    """
-    from acmm.plots import design as design_plots
-    from acmm.plots import base as plot_base
-    from acmm_qpp import figure_worker
-    from acmm.model.linearize import STATE_NAMES
-
-    figure_worker.prepare(plot_base.prebuild, "gain_schedule_grid", tuple(STATE_NAMES),
-                          *gain_labels(s.drf_mode, units_system), for_figure="gain_schedule_grid")
-    for kind in ("schedule_path_check", "scheduled_pole_map"):   # the path figures' axes (issue 16)
-        figure_worker.prepare(plot_base.prebuild, kind, for_figure=kind)
-
-
-def pole_map_figure(points, s, run_dir: Path) -> None:
-    """Submit the design points' pole map with the sector of ch. 5.2 (:func:`acmm_qpp.figure_worker.submit`).
-
-    Parameters
-    ----------
-    points : list of acmm.design.schedule.PointDesign
-        The point designs (their closed-loop poles, rad/s).
-    s : acmm.design.settings.DesignSettings
-        The design settings: orbit rate n (rad/s) and the sector (σ in units of n, half-angle deg).
-    run_dir : pathlib.Path
-        Run directory; the figure is ``design_poles.png`` there.
-    """
-    from acmm.plots import design as design_plots
-    from acmm.plots import base as plot_base
-    from acmm_qpp.figure_worker import submit
-
-    submit(design_plots.pole_map, [p.lqr.poles for p in points], [p.spec.name for p in points], s.orbit_rate,
-           s.sector.sigma, s.sector.half_angle_deg, run_dir / "design_poles.png")
-
-
-def gain_figure(points, fit, s, run_dir: Path, units_system: str) -> None:
-    """Submit the gain-schedule figure: the points' LQR gains and the schedule ``fit``, in the
-    ``units_system`` (cf. Figs 5.3–5.26; :func:`acmm_qpp.figure_worker.submit`).
-
-    Parameters
-    ----------
-    points : list of acmm.design.schedule.PointDesign
-        The point designs (gains ft·lbf per state unit, pitch TEA rad).
-    fit : acmm.design.schedule.ScheduleFit
-        The gain schedule of ch. 5.3, imperial units.
-    s : acmm.design.settings.DesignSettings
-        The design settings (their ``drf_mode`` picks the state units).
-    run_dir : pathlib.Path
-        Run directory; the figure is ``design_gains.png`` there.
-    units_system : str
-        Unit system of the figure, ``"imperial"`` or ``"SI"``.
-    """
-    from acmm.plots import design as design_plots
-    from acmm.plots import base as plot_base
-    from acmm_qpp.figure_worker import submit
-    from acmm.model.linearize import STATE_NAMES
-
-    gains = np.array([p.lqr.K for p in points])
-    theta2 = np.array([p.tea.theta[1] for p in points])
-    if units_system != "imperial":     # K in the output system (the schedule is linear in K)
-        from dataclasses import replace as _replace
-
-        from acmm.io.units import state_space_in
-
-        conv = lambda K: state_space_in(units_system, s.drf_mode, K=K)["K"]  # noqa: E731
-        gains = conv(gains)
-        fit = _replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
-    units, torque = gain_labels(s.drf_mode, units_system)
-    submit(design_plots.gain_schedule_grid, theta2, gains, design_plots.sample_schedule(fit, theta2), STATE_NAMES,
-           run_dir / "design_gains.png", units=list(units), torque_unit=torque)
-
-
-def path_figures(pc, s, run_dir: Path) -> None:
-    """Submit the path-check figures (margins, scheduled poles with the sector of Fig 5.2) of ``pc``.
-
-    Parameters
-    ----------
-    pc : acmm.design.path_check.PathCheck or None
-        The scheduled gain checked along the path (None: nothing is drawn).
-    s : acmm.design.settings.DesignSettings
-        The design settings: orbit rate n (rad/s) and the sector (σ in units of n, half-angle deg).
-    run_dir : pathlib.Path
-        Run directory; the figures are ``design_path_margins.png`` and ``design_path_poles.png``.
-    """
-    from acmm.plots import design as design_plots
-    from acmm.plots import base as plot_base
-    from acmm_qpp.figure_worker import submit
-
-    if pc is None:
-        return
-    submit(design_plots.schedule_path_check, pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
-           run_dir / "design_path_margins.png")
-    submit(design_plots.scheduled_pole_map, pc.poles, pc.theta2, s.orbit_rate, s.sector.sigma,
-           s.sector.half_angle_deg, run_dir / "design_path_poles.png")
-
-
-def design_figures(r, s, run_dir: Path, units_system: str) -> None:
-    """The pole-map, gain-schedule and path-check figures of a finished design (Figs 5.2,
-    5.3–5.26), drawn in place or by the figure worker when one runs.
-
-    The design stage hands each figure over as soon as its data exist
-    (:func:`pole_map_figure`, :func:`gain_figure`, :func:`path_figures`); this draws all of them
-    for a design computed elsewhere.
-
-    Parameters
-    ----------
-    r : acmm.stages.runners.DesignResult
+    r : acmm.stages.design.DesignResult
         The design (its points, schedule fit and path check).
     s : acmm.design.settings.DesignSettings
-        Its settings (orbit rate n in rad/s, sector, DRF mode).
+        Its settings (orbit rate n in rad/s, sector σ in units of n and half-angle in deg, DRF mode).
     run_dir : pathlib.Path
-        Folder of the figures.
+        Folder of the figures: ``design_poles.png``, ``design_gains.png``,
+        ``design_path_margins.png``, ``design_path_poles.png``.
     units_system : str
         ``"imperial"`` or ``"SI"``: unit system of the gains drawn.
+
+    Returns
+    -------
+    list of functools.partial
+        The figure calls.
     """
-    pole_map_figure(r.points, s, run_dir)
+    calls = [partial(design_plots.pole_map, [p.lqr.poles for p in r.points], [p.spec.name for p in r.points],
+                     s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg, run_dir / "design_poles.png")]
     if r.fit is not None:
-        gain_figure(r.points, r.fit, s, run_dir, units_system)
-    path_figures(r.path_check, s, run_dir)
+        calls.append(_gain_figure(r.points, r.fit, s, run_dir / "design_gains.png", units_system))
+    pc = r.path_check
+    if pc is not None:
+        calls.append(partial(design_plots.schedule_path_check, pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
+                             run_dir / "design_path_margins.png"))
+        calls.append(partial(design_plots.scheduled_pole_map, pc.poles, pc.theta2, s.orbit_rate, s.sector.sigma,
+                             s.sector.half_angle_deg, run_dir / "design_path_poles.png"))
+    return calls
+
+
+def _gain_figure(points, fit, s, path: Path, units_system: str):
+    """The gain-schedule figure's call: the points' LQR gains and the schedule ``fit`` (imperial
+    units, converted to ``units_system``: the schedule is linear in K)."""
+    gains = np.array([p.lqr.K for p in points])
+    theta2 = np.array([p.tea.theta[1] for p in points])
+    if units_system != "imperial":
+        conv = lambda K: state_space_in(units_system, s.drf_mode, K=K)["K"]  # noqa: E731
+        gains = conv(gains)
+        fit = replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
+    units, torque = gain_labels(s.drf_mode, units_system)
+    return partial(design_plots.gain_schedule_grid, theta2, gains, design_plots.sample_schedule(fit, theta2),
+                   STATE_NAMES, path, units=list(units), torque_unit=torque)

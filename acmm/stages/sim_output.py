@@ -1,17 +1,20 @@
 """What the simulation stage writes: the ``sim.h5`` items and the simulation figures.
 
-Split from :mod:`acmm.stages.runners` (:func:`acmm.stages.runners.run_simulate` calls these), as
-:mod:`acmm.stages.design_output` is for the design stage.  The outputs are those of the report's ch. 6
+:func:`acmm.stages.simulate.run_simulate` calls these, as :mod:`acmm.stages.design_output` does for
+the design stage.  The outputs are those of the report's ch. 6
 simulations: attitude error, rates, torque and CMG momentum per axis (Figs 6.2–6.13, 6.20–6.30),
 the inertia steps (Figs 6.14–6.19) and the per-level statistics; the disturbance torque is that of
 eq 3.9.
 """
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from acmm.model import kinematics as kin
-from acmm.simulate.scenario import level_peak_momentum
+from acmm.plots import simulation as sim_plots
+from acmm.simulate import scenario as scen
 from acmm.stages.common import UNIT_K, UNIT_STATE
 from acmm_qpp.results import Dataset
 
@@ -43,9 +46,6 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
     attrs : dict
         Root attributes (verdict, stop time, step counts).
     """
-    from acmm.simulate import kernel as sim_mod
-    from acmm.simulate import scenario as scen
-
     n = cfg.orbit_rate
     orbits = r.t * n / (2 * np.pi)
     err = scen.attitude_error(sc, r)
@@ -56,7 +56,7 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
     steady = np.full((n_levels, 3), np.nan)
     for st in stats:
         steady[st["level"]] = st["steady_error_deg"]
-    peak = level_peak_momentum(sc, r)
+    peak = scen.level_peak_momentum(sc, r)
     items = {
         "t": Dataset(r.t, "s", "time", dims=("t",)),
         "orbits": Dataset(orbits, "orbit", "time in orbits (2π/n)", dims=("t",)),
@@ -96,26 +96,9 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
     return items, attrs
 
 
-def prepare_sim_figures(cfg) -> None:
-    """Have the figure worker build the simulation figures' skeletons while the stage computes
-    (:func:`acmm.plots.prebuild`; nothing without a worker).
-
-    Parameters
-    ----------
-    cfg : acmm.io.config.Config
-        The run's config (its ``output.units``, ``"imperial"`` or ``"SI"``, label the figures).
-    """
-    from acmm.plots import base as plot_base
-    from acmm.plots import simulation as sim_plots
-    from acmm_qpp import figure_worker
-
-    for kind in ("axis_histories", "summary", "inertia_histories"):
-        figure_worker.prepare(plot_base.prebuild, kind, cfg.output.units, for_figure=kind)
-
-
-def sim_figures(cfg, sc, r, stats: list, items: dict) -> None:
-    """Hand the simulation figures (axis histories, summary, inertia steps: the costliest first)
-    to :func:`acmm_qpp.figure_worker.submit` (drawn in the figure worker when one runs, else here).
+def sim_figures(cfg, sc, r, stats: list, items: dict) -> list:
+    """The simulation figures (axis histories, summary, inertia steps), each a call for
+    :func:`acmm_qpp.results.draw_figures`.
 
     ``items`` are :func:`sim_items` (imperial units); the figures use ``cfg.output.units``
     (Figs 6.2–6.30 of ch. 6).
@@ -133,21 +116,24 @@ def sim_figures(cfg, sc, r, stats: list, items: dict) -> None:
     items : dict
         The datasets of :func:`sim_items` (``orbits``, ``attitude_error`` rad,
         ``rate_rel_lvlh`` deg/s).
-    """
-    from acmm.plots import base as plot_base
-    from acmm.plots import simulation as sim_plots
-    from acmm_qpp import figure_worker
 
+    Returns
+    -------
+    list of functools.partial
+        The figure calls: ``sim_axes.png``, ``sim_summary.png`` and, with more than one
+        inertia level, ``sim_inertia.png`` in the run folder.
+    """
     d = cfg.run_dir()
     units = cfg.output.units
     orbits = items["orbits"].data
     err_deg = np.degrees(items["attitude_error"].data)
     h = r.state[:, 6:9]
     title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
-    figure_worker.submit(sim_plots.axis_histories, orbits, err_deg, items["rate_rel_lvlh"].data, r.u, h, title,
-                         d / "sim_axes.png", units=units)
-    figure_worker.submit(sim_plots.summary, orbits, err_deg, h, r.u, stats, r.verdict, cfg.name,
-                         d / "sim_summary.png", units=units)
+    calls = [partial(sim_plots.axis_histories, orbits, err_deg, items["rate_rel_lvlh"].data, r.u, h, title,
+                     d / "sim_axes.png", units=units),
+             partial(sim_plots.summary, orbits, err_deg, h, r.u, stats, r.verdict, cfg.name,
+                     d / "sim_summary.png", units=units)]
     if len(sc.level_start) > 1:
-        figure_worker.submit(sim_plots.inertia_histories, orbits, sc.inertia[r.level], d / "sim_inertia.png",
-                             units=units)
+        calls.append(partial(sim_plots.inertia_histories, orbits, sc.inertia[r.level], d / "sim_inertia.png",
+                             units=units))
+    return calls

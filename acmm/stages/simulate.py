@@ -1,7 +1,5 @@
 """The simulation stage: the nonlinear closed loop of eqs 3.1–3.9 under the scheduled gains
 through the stair-case of inertia levels (ch. 6), and its ``sim.h5`` and figures.
-
-Split from :mod:`acmm.stages.runners` (issue 12).
 """
 from __future__ import annotations
 
@@ -10,11 +8,16 @@ from pathlib import Path
 
 import numpy as np
 
+import time
+
 from acmm.io.config import Config
+from acmm.simulate import kernel as sim_mod
+from acmm.simulate import scenario as scen
+from acmm.stages import sim_output as out
 from acmm.stages.common import _as_config, _define_units, _in_system
 from acmm.stages.design import design_for
 from acmm_qpp.outputs import owns_outputs
-from acmm_qpp.results import write_h5
+from acmm_qpp.results import draw_figures, write_h5
 from acmm_qpp.runlock import locked_stage
 
 
@@ -78,30 +81,18 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
     tuple
         (:class:`SimulateResult`, pathlib.Path of ``sim.h5``).
     """
-    import time
-
-    from acmm.stages.common import FIGURE_WARM
-    from acmm_qpp import figure_worker
-
     cfg = _as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
-    with figure_worker.session(want_figures, FIGURE_WARM):       # first: the worker starts before numba loads
-        from acmm.stages import sim_output as out
-        from acmm.simulate import kernel as sim_mod
-        from acmm.simulate import scenario as scen
-
-        if want_figures:
-            out.prepare_sim_figures(cfg)
-        table, note = design_for(cfg, progress, figures)
-        sc = scen.scenario_from_config(cfg, table)
-        t0 = time.perf_counter()
-        r = sim_mod.simulate(sc)
-        wall = time.perf_counter() - t0
-        stats = scen.level_statistics(sc, r)
-        result = SimulateResult(cfg, sc, r, stats, note, wall)
-        items, attrs = out.sim_items(cfg, sc, r, stats, table.design_hash, wall)
-        if want_figures:
-            out.sim_figures(cfg, sc, r, stats, items)
-        items = _define_units(_in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
-        path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
+    table, note = design_for(cfg, progress, figures)
+    sc = scen.scenario_from_config(cfg, table)
+    t0 = time.perf_counter()
+    r = sim_mod.simulate(sc)
+    wall = time.perf_counter() - t0
+    stats = scen.level_statistics(sc, r)
+    result = SimulateResult(cfg, sc, r, stats, note, wall)
+    items, attrs = out.sim_items(cfg, sc, r, stats, table.design_hash, wall)
+    figures_to_draw = out.sim_figures(cfg, sc, r, stats, items) if want_figures else []
+    items = _define_units(_in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
+    path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
+    draw_figures(figures_to_draw)
     return result, path

@@ -12,6 +12,7 @@ from typing import Optional
 import numpy as np
 
 from acmm_qpp.errors import ConfigError
+from acmm_qpp.pool import process_pool, stop_pool
 from acmm.sweep.config import Sweep
 from acmm.sweep.case import BaseContext, margin_search, run_case
 
@@ -85,13 +86,7 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
         return client.get_executor(pure=False), lambda abort=False: client.close()
     if workers <= 1:
         return SerialExecutor(), lambda abort=False: None
-    import multiprocessing
-
-    ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
-    from acmm_qpp.workers import pool_worker, stop_pool
-
-    pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=pool_worker,
-                                  initargs=(os.getpid(),))
+    pool = process_pool(workers)
     return pool, lambda abort=False: stop_pool(pool, abort)
 
 

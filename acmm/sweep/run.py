@@ -20,7 +20,7 @@ from acmm.sweep.executors import (SerialExecutor, _call_chunk, _remote_contexts,
 from acmm.sweep.journal import GroupCommitJournal, read_journal
 from acmm_qpp.errors import ConfigError, OutputError
 from acmm_qpp.signals import hold_interrupts, release_interrupts
-from acmm_qpp.workers import submit
+from acmm_qpp.pool import submit
 from acmm.sweep.output import _split, write_results
 
 

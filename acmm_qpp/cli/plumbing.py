@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import functools
+import signal
 import sys
+import threading
 
 import typer
 
@@ -314,46 +316,26 @@ def strict_exit(strict: bool, failed: bool, why: str) -> None:
 
 
 def run_app(app) -> None:
-    """Run a typer ``app`` and leave (the console entry points, issue 16): the atexit handlers
-    run and the output is flushed, then ``os._exit`` skips the interpreter's teardown (numba's
-    ~0.2 s).  From the moment the app has returned, SIGINT, SIGTERM and SIGHUP are ignored: the
-    run is finished and written, and a Ctrl-C landing in the exit path gave a KeyboardInterrupt
-    traceback with exit 0, or killed a finished run by the signal (a review).  With another
-    non-daemon thread alive (a Dask client) the usual exit is kept.
+    """Run a typer ``app`` (the console entry points) and leave with its exit code.  From the
+    moment the app has returned, SIGINT, SIGTERM and SIGHUP are ignored: the run is finished and
+    written, and a Ctrl-C landing in the exit path gave a KeyboardInterrupt traceback with exit 0,
+    or killed a finished run by the signal (a review).
 
     Parameters
     ----------
     app : typer.Typer
         The application.
     """
-    import os
-    import signal
-    import sys
-    import threading
-
     try:
         try:
             app()
         except KeyboardInterrupt as exc:    # while typer built the command, before the group's main
             interrupted(exc)
-    except SystemExit as exc:
-        others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
-        if others or threading.current_thread() is not threading.main_thread():
-            raise
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
-            try:
-                signal.signal(sig, signal.SIG_IGN)
-            except (OSError, ValueError):
-                pass
-        code = exc.code
-        if not isinstance(code, int):
-            if code is not None:
-                print(code, file=sys.stderr)
-            code = 0 if code is None else 1
-        import atexit
-
-        from acmm_qpp.forked import flush_std_streams
-
-        atexit._run_exitfuncs()
-        flush_std_streams()
-        os._exit(code)
+    except SystemExit:
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+                try:
+                    signal.signal(sig, signal.SIG_IGN)
+                except (OSError, ValueError):
+                    pass
+        raise

@@ -5,18 +5,20 @@ ch. 13–14.
 """
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 from acmm_qpp.outputs import owns_outputs
-from acmm_qpp.results import Dataset, write_h5
+from acmm_qpp.results import Dataset, draw_figures, write_h5
 from acmm_qpp.runlock import locked_stage
 from qpp.io.config_nonlin import PolarArmNonlinearity
 from qpp.io.config import QppConfig, load_config
 from qpp.design.certificate import DesignResult
 from qpp.design.procedure import design
-from qpp.io.stored_design import gains_sha256
+from qpp.io.stored_design import gains_sha256, load_stored_design
+from qpp.plots import plot_cartesian, plot_circle, plot_iterations, plot_scenario
 from qpp.simulate.closed_loop import simulate
 
 
@@ -249,24 +251,18 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     tuple
         (config, :class:`qpp.design.certificate.DesignResult`, path of ``qpp_design.h5``).
     """
-    from acmm_qpp import figure_worker
-    from qpp.plots import FIGURE_WARM, plot_circle, plot_iterations
-
     cfg = _cfg(config)
     want_figures = cfg.output.figures if figures is None else figures
-    # the figure worker imports matplotlib while the design runs, then draws both figures at
-    # once while the HDF5 file is written (acmm_qpp.figure_worker; in place where it cannot fork)
-    with figure_worker.session(want_figures, FIGURE_WARM):
-        r = design(cfg)
-        if want_figures:          # drawn while the HDF5 file is written (in place: after it)
-            figure_worker.submit(plot_circle, r, cfg.run_dir() / "qpp_circle.png")
-            figure_worker.submit(plot_iterations, r, cfg.run_dir() / "qpp_iterations.png")
-        verdicts = {f"beta1_le_m[{rd},{bk}]": bool(v) for (rd, bk), v in r.verdicts().items()}
-        path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
-                        {"stage": "qpp design", "circle_passed": bool(r.circle.passed), **verdicts,
-                         "certified": bool(r.certified), "label": "certified" if r.certified else "uncertified",
-                         "verdict": r.verdict, "bookkeeping": r.bookkeeping,
-                         "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
+    r = design(cfg)
+    verdicts = {f"beta1_le_m[{rd},{bk}]": bool(v) for (rd, bk), v in r.verdicts().items()}
+    path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
+                    {"stage": "qpp design", "circle_passed": bool(r.circle.passed), **verdicts,
+                     "certified": bool(r.certified), "label": "certified" if r.certified else "uncertified",
+                     "verdict": r.verdict, "bookkeeping": r.bookkeeping,
+                     "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
+    if want_figures:
+        draw_figures([partial(plot_circle, r, cfg.run_dir() / "qpp_circle.png"),
+                      partial(plot_iterations, r, cfg.run_dir() / "qpp_iterations.png")])
     return cfg, r, path
 
 
@@ -298,30 +294,23 @@ def run_simulate(config, figures: bool | None = None, progress=None):
         ``certified``, ``verdict`` —, list of :class:`qpp.simulate.closed_loop.SimResult`, path of
         ``qpp_sim.h5``).
     """
-    from acmm_qpp import figure_worker
-    from qpp.plots import FIGURE_WARM
-    from qpp.io.stored_design import load_stored_design
-
     cfg = _cfg(config)
     want_figures = cfg.output.figures if figures is None else figures
-    with figure_worker.session(want_figures, FIGURE_WARM):     # see run_design
-        r, sims, path = _simulate_and_write(cfg, want_figures, progress,
-                                            load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()))
+    r, sims, path = _simulate_and_write(cfg, want_figures, progress,
+                                        load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()))
     return cfg, r, sims, path
 
 
 def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
-    """The body of :func:`run_simulate` (in its figure session): (design, simulations, path)."""
+    """The body of :func:`run_simulate`: (design, simulations, path); the figures are drawn
+    after the HDF5 file is written."""
     r = stored or design(cfg)
     sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
+    figures = []
     if want_figures:
-        from acmm_qpp.figure_worker import submit
-        from qpp.plots import plot_cartesian, plot_scenario
-
-        for s in sims:
-            submit(plot_scenario, s, cfg.run_dir() / f"qpp_sim_{s.name}.png")
+        figures = [partial(plot_scenario, s, cfg.run_dir() / f"qpp_sim_{s.name}.png") for s in sims]
         if isinstance(cfg.nonlinearity, PolarArmNonlinearity):
-            submit(plot_cartesian, sims, cfg.nonlinearity.a, cfg.run_dir() / "qpp_sim_cartesian.png")
+            figures.append(partial(plot_cartesian, sims, cfg.nonlinearity.a, cfg.run_dir() / "qpp_sim_cartesian.png"))
     items = {"K1": Dataset(r.K1, GAIN_UNITS["K1"], "gain K1 used", dims=("input", "state")),
              "Kc": Dataset(r.Kc, GAIN_UNITS["Kc"], "gain Kc used", dims=("input", "servo_state")),
              "H": Dataset(r.H, GAIN_UNITS["H"], "observer gain H used (report's sign)", dims=("state", "output"))}
@@ -349,4 +338,5 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
     path = write_h5(cfg.run_dir() / "qpp_sim.h5", items, cfg.to_yaml(),
                     {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims)),
                      "design_certified": int(r.certified), "design_verdict": r.verdict})
+    draw_figures(figures)
     return r, sims, path

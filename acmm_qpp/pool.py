@@ -1,0 +1,213 @@
+"""The one local process pool of both products (the sweep's cases, the report's tasks).
+
+:func:`process_pool` is a standard :class:`concurrent.futures.ProcessPoolExecutor` whose workers
+leave Ctrl-C to the parent (a terminal sends it to the whole process group: a worker interrupted
+too printed a traceback or broke the pool's shutdown) and die with it (Linux
+``prctl(PR_SET_PDEATHSIG)``, and elsewhere a daemon thread that watches ``os.getppid()``), so a
+killed sweep or report leaves no orphans.  :func:`submit` forks new workers with the interrupts
+held, so none arrives before a worker's set-up; :func:`stop_pool` shuts the pool down, killing its
+workers first when the parent was interrupted.  The warnings a task raised travel back with its
+result (:func:`portable_warnings`) and are raised again in the parent as if computed there
+(:func:`raise_warnings_again`).
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import multiprocessing
+import os
+import pickle
+import signal
+import sys
+import threading
+import time
+import warnings
+
+from acmm_qpp.signals import TERMINATING, hold_interrupts, release_interrupts
+
+#: prctl(2) option: the signal a process gets when its parent thread exits (Linux)
+PR_SET_PDEATHSIG = 1
+
+
+def set_parent_death_signal() -> bool:
+    """Ask the kernel (Linux ``prctl(PR_SET_PDEATHSIG)``) to send SIGKILL to this process when
+    the thread that forked it exits, however it exits (``kill -9`` included).
+
+    Returns
+    -------
+    bool
+        True when set (False elsewhere than Linux, or without ``prctl``).
+    """
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        return libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def process_pool(workers: int, initializer=None) -> cf.ProcessPoolExecutor:
+    """A process pool of ``workers`` processes set up by :func:`_pool_worker`.
+
+    Parameters
+    ----------
+    workers : int
+        Number of worker processes.
+    initializer : callable, optional
+        Called (without arguments) in each worker after its set-up (e.g. to empty a cache).
+
+    Returns
+    -------
+    concurrent.futures.ProcessPoolExecutor
+        The pool (Linux: forked workers, which inherit this process's imports).
+    """
+    ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
+    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_worker,
+                                  initargs=(os.getpid(), initializer))
+
+
+def die_with_parent(parent: int) -> None:
+    """In a pool worker: be killed (SIGKILL) when ``parent`` exits, however
+    it exits; exit at once if it is already gone.  The default handlers of SIGTERM and SIGHUP
+    are restored (a child is stopped by its parent, or by the signal itself).
+
+    Parameters
+    ----------
+    parent : int
+        The pid of the process that forked this one.
+    """
+    for sig in TERMINATING:
+        try:
+            signal.signal(sig, signal.SIG_DFL)
+        except (OSError, ValueError):
+            pass
+    set_parent_death_signal()
+    if os.getppid() != parent:               # the parent died before the line above
+        os._exit(1)
+
+
+def _watch(parent: int, interval: float) -> None:
+    while True:
+        time.sleep(interval)
+        if os.getppid() != parent:
+            os._exit(1)
+
+
+def _pool_worker(parent: int, initializer=None, interval: float = 1.0) -> None:
+    """A pool worker's set-up: Ctrl-C is the parent's alone; SIGTERM and SIGHUP take their default
+    action; the worker dies with ``parent`` (:func:`acmm_qpp.signals.die_with_parent`, and a watch
+    thread polling every ``interval`` s where ``PR_SET_PDEATHSIG`` does not exist); the interrupts
+    that :func:`submit` held while forking are unblocked; then ``initializer()``."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent(parent)
+    threading.Thread(target=_watch, args=(parent, interval), daemon=True, name="parent-watch").start()
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
+    if initializer is not None:
+        initializer()
+
+
+def submit(executor, fn, *args):
+    """``executor.submit(fn, *args)``; for a process pool with the interrupts held, so that a
+    worker it forks now inherits the held mask and no Ctrl-C reaches it before its set-up
+    (other executors fork nothing).
+
+    Parameters
+    ----------
+    executor : concurrent.futures.Executor
+        The executor.
+    fn : callable
+        The task.
+    *args : object
+        Its arguments.
+
+    Returns
+    -------
+    concurrent.futures.Future
+        The task's future.
+    """
+    held = hold_interrupts() if isinstance(executor, cf.ProcessPoolExecutor) else None
+    try:
+        return executor.submit(fn, *args)
+    finally:
+        release_interrupts(held)
+
+
+def stop_pool(pool: cf.ProcessPoolExecutor, abort: bool = False) -> None:
+    """Shut a pool down, the interrupts held (a second Ctrl-C broke the shutdown: a hang); with
+    ``abort`` (the parent was interrupted or failed) its workers are killed first instead of
+    finishing tasks whose results nobody will read.
+
+    Parameters
+    ----------
+    pool : concurrent.futures.ProcessPoolExecutor
+        The pool.
+    abort : bool, optional
+        Kill the running tasks.
+    """
+    held = hold_interrupts()
+    try:
+        if abort:
+            for p in list((getattr(pool, "_processes", None) or {}).values()):
+                try:
+                    p.kill()
+                except (OSError, ValueError, AttributeError):   # already gone, or closed
+                    pass
+        pool.shutdown(wait=True, cancel_futures=True)
+    finally:
+        release_interrupts(held)
+
+
+def portable_warnings(caught) -> list:
+    """Warnings recorded in a worker, ready to send to the parent: each is checked to come back
+    out of a pickle; one that does not travels as its text with the nearest built-in category.
+
+    Parameters
+    ----------
+    caught : list of warnings.WarningMessage
+        What ``warnings.catch_warnings(record=True)`` recorded.
+
+    Returns
+    -------
+    list of tuple
+        (message, category, filename, lineno) of each, for :func:`raise_warnings_again`.
+    """
+    out = []
+    for w in caught:
+        item = (w.message, w.category, w.filename, w.lineno)
+        try:
+            pickle.loads(pickle.dumps(item[:2], protocol=pickle.HIGHEST_PROTOCOL))
+        except Exception:  # noqa: BLE001
+            base = next(c for c in w.category.__mro__ if c.__module__ == "builtins" and issubclass(c, Warning))
+            item = (str(w.message), base, w.filename, w.lineno)
+        out.append(item)
+    return out
+
+
+def raise_warnings_again(raised: list) -> None:
+    """Raise a worker's warnings (:func:`portable_warnings`) in this process, each as from the
+    module it came from: its filters and its ``__warningregistry__`` apply, so a warning already
+    shown under "default" or "once" is not shown again, as computing in place would not.
+
+    Parameters
+    ----------
+    raised : list of tuple
+        (message, category, filename, lineno) of each warning, in the order raised.
+    """
+    if not raised:
+        return
+    by_file = {}
+    for mod in list(sys.modules.values()):
+        f = getattr(mod, "__file__", None)
+        if isinstance(f, str):
+            by_file.setdefault(os.path.realpath(f), mod)
+    for message, category, filename, lineno in raised:
+        mod = by_file.get(os.path.realpath(filename)) if isinstance(filename, str) else None
+        if mod is None:
+            warnings.warn_explicit(message, category, filename, lineno)
+        else:
+            warnings.warn_explicit(message, category, filename, lineno, module=mod.__name__,
+                                   registry=mod.__dict__.setdefault("__warningregistry__", {}),
+                                   module_globals=mod.__dict__)

@@ -1,0 +1,46 @@
+"""``qpp simulate`` reuses the gains ``qpp design`` stored for the same config and code
+(:func:`qpp.io.stored_design.load_stored_design`)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+
+@pytest.mark.slow
+def test_qpp_simulate_reuses_the_gains_qpp_design_wrote(tmp_path, monkeypatch):
+    """Same config and code: the stored K1, Kc, H (no second ch. 12.1 design) and a qpp_sim.h5
+    identical to the one a simulation designing for itself writes; another config: a design."""
+    from qpp.io import stages
+    from qpp.design import procedure as procedure_mod
+    from qpp.io.config import load_config as qpp_config
+    from qpp.io.stored_design import StoredDesign
+    from acmm.report.manifest import dataset_hashes
+
+    import h5py
+
+    from acmm_qpp import provenance
+
+    over = [f"output.root={tmp_path}", "simulation.t_final=3.0"]
+    alone = stages.run_simulate(qpp_config("qpp_siso", over + ["name=alone"]), figures=False)
+    cfg = qpp_config("qpp_siso", over + ["name=pair"])
+    _, designed, dpath = stages.run_design(cfg, figures=False)
+    real_design = procedure_mod.design
+    monkeypatch.setattr(provenance, "source_unchanged", lambda: True)     # as in a clean checkout
+    monkeypatch.setattr(stages, "design", lambda c: pytest.fail("designed again"))
+    _, reused, _, path = stages.run_simulate(cfg, figures=False)
+    assert isinstance(reused, StoredDesign) and reused.verdict == designed.verdict
+    for name in ("K1", "Kc", "H"):
+        assert np.array_equal(getattr(reused, name), getattr(designed, name))
+    assert dataset_hashes(path) == dataset_hashes(alone[3])
+    called = []
+    monkeypatch.setattr(stages, "design", lambda c: called.append(1) or real_design(c))
+    stages.run_simulate(qpp_config("qpp_siso", over + ["name=pair", "simulation.t_final=2.0"]), figures=False)
+    assert called == [1]                       # the config changed: designed
+    monkeypatch.setattr(provenance, "source_unchanged", lambda: False)    # edited source: designed
+    stages.run_simulate(cfg, figures=False)
+    assert called == [1, 1]
+    monkeypatch.setattr(provenance, "source_unchanged", lambda: True)
+    with h5py.File(dpath, "r+") as f:          # gains edited in the file: designed
+        f["K1"][0, 0] = 50.0 * f["K1"][0, 0]
+    stages.run_simulate(cfg, figures=False)
+    assert called == [1, 1, 1]
