@@ -31,6 +31,20 @@ from qpp.design.hinf import HinfGains, hinf_gains, hinf_search
 from qpp.model.lure import LurePlant, channels, closed_loop
 
 
+# ---------------------------------------------------------------------- the wider search
+#: Points of the wider search's scan of log10 ρ over [design.rho_min, design.rho_max]: the grid
+#: point of smallest β1 and its two neighbours bracket the ρ minimizing β1.
+WIDER_GRID_POINTS = 21
+#: Golden-section steps refining that bracket, a fixed count (no tolerance test): 10 steps shrink
+#: the bracket (two grid cells, one at an end of the grid) by 0.618¹⁰ ≈ 0.008, to about 8e-4 of
+#: the scanned range of log10 ρ.
+GOLDEN_STEPS = 10
+#: Factors of the per-channel weightings tried when the servo-compensator has several outputs.
+CHANNEL_FACTORS = (3.0, 1 / 3.0)
+#: The inverse golden ratio (√5 − 1)/2 ≈ 0.618 of the golden-section interior points.
+_INV_GOLDEN = (np.sqrt(5) - 1) / 2
+
+
 # ---------------------------------------------------------------------- procedure 12.1
 def weighted_plant(P: LurePlant, ws) -> LurePlant:
     """The plant with the H∞ output weight W_s = diag(ws)·S_c (z = [ρu; W_s e], eq 13.5).
@@ -234,53 +248,189 @@ class _Procedure:
         return res
 
     def wider(self) -> DesignResult | None:
-        """Other W_s weights and a bracketing (golden-section on log ρ) search for the ρ minimizing β1."""
-        dc, p_w = self.dc, self.P.Cc.shape[0]
-        weights = [np.full(p_w, w) for w in dc.ws_scales]
-        if p_w > 1:
-            for i in range(p_w):
-                for w in (3.0, 1 / 3.0):
-                    v = np.ones(p_w)
-                    v[i] = w
-                    weights.append(v)
+        """The wider search after steps 1–5 of procedure 12.1 failed: other W_s, the ρ minimizing β1.
+
+        The report's conclusions (ch. 15): a controller is found whenever the minimum H∞-norm over
+        an appropriate set of ρ and W_s is smaller than the threshold m (12.1).  For each weighting
+        W_s = diag(w)·S_c of :func:`_ws_candidates`, the ρ minimizing β1 is bracketed and refined
+        (:meth:`_rho_minimizing_beta1`), and the design at that ρ is finished by steps 2–4 of 12.1
+        (:meth:`_finish_candidate`).  All at the a of the best design so far.
+
+        Returns
+        -------
+        DesignResult or None
+            The first certified design, in the order of the weightings; None when none is.
+        """
         a = self.best.a if self.best is not None else self.hc.a
-        for ws in weights:
-            lr = np.linspace(np.log10(dc.rho_min), np.log10(dc.rho_max), 21)
-            vals = np.array([self.beta1_only(10 ** x, a, ws) for x in lr])
-            if not np.isfinite(vals).any():
+        for ws in _ws_candidates(self.P.Cc.shape[0], self.dc.ws_scales):
+            rho = self._rho_minimizing_beta1(a, ws)
+            if rho is None:
                 self.records.append(self._rec("wider", np.nan, np.nan, a, np.nan, np.nan, np.inf, np.nan, False,
                                               False, ws, note="no stabilizing gains for any rho"))
                 continue
-            k = int(np.argmin(vals))
-            lo, hi = lr[max(k - 1, 0)], lr[min(k + 1, lr.size - 1)]
-            gr = (np.sqrt(5) - 1) / 2
-            x1, x2 = hi - gr * (hi - lo), lo + gr * (hi - lo)
-            f1, f2 = self.beta1_only(10 ** x1, a, ws), self.beta1_only(10 ** x2, a, ws)
-            for _ in range(10):
-                if f1 <= f2:
-                    hi, x2, f2 = x2, x1, f1
-                    x1 = hi - gr * (hi - lo)
-                    f1 = self.beta1_only(10 ** x1, a, ws)
-                else:
-                    lo, x1, f1 = x1, x2, f2
-                    x2 = lo + gr * (hi - lo)
-                    f2 = self.beta1_only(10 ** x2, a, ws)
-            cand = [(vals[k], lr[k]), (f1, x1), (f2, x2)]
-            rho = 10 ** min(cand)[1]
-            g = self.gains(rho, a, ws, target=self.best.m_ref if self.best is not None else None)
-            if g is None:
-                continue
-            res = self.evaluate(g, a, self.best.T if self.best is not None else self.cfg.spheres.T, ws, "wider")
-            res, T = self.adapt_T(g, a, res.T, ws, res, "wider")
-            if res.beta1_ref <= res.m_ref and not res.circle.passed:
-                a_new = self.circle_a(g, a)
-                if a_new is not None:
-                    g2 = self.gains(rho, a_new, ws)
-                    if g2 is not None:
-                        res = self.evaluate(g2, a_new, T, ws, "wider a")
-            if res.certified:
+            res = self._finish_candidate(rho, a, ws)
+            if res is not None and res.certified:
                 return res
         return None
+
+    def _rho_minimizing_beta1(self, a, ws) -> float | None:
+        """Step 2 of procedure 12.1 over all ρ: the ρ of smallest β1 for one weighting W_s.
+
+        β1 = ‖C_z (sI − A_n)⁻¹ B_z‖∞ of the fixed-ν gains (:meth:`beta1_only`) is scanned on
+        :data:`WIDER_GRID_POINTS` points of log10 ρ over [rho_min, rho_max]; the grid point of
+        smallest β1 and its two neighbours bracket the minimum, which :func:`_golden_section`
+        refines.  The smallest β1 evaluated (grid point or the two last interior points) wins.
+
+        Parameters
+        ----------
+        a : float
+            Exponential rate a of the weighting (10.27), 1/s.
+        ws : (k,) array
+            Weight w per compensator output of W_s = diag(w)·S_c, dimensionless.
+
+        Returns
+        -------
+        float or None
+            The ρ (weight of the control input in z = [ρu; W_s e], dimensionless); None when no ρ of
+            the grid gives stabilizing gains (β1 infinite everywhere).
+        """
+        dc = self.dc
+        lr = np.linspace(np.log10(dc.rho_min), np.log10(dc.rho_max), WIDER_GRID_POINTS)
+        vals = np.array([self.beta1_only(10 ** x, a, ws) for x in lr])
+        if not np.isfinite(vals).any():
+            return None
+        k = int(np.argmin(vals))
+        lo, hi = lr[max(k - 1, 0)], lr[min(k + 1, lr.size - 1)]
+        refined = _golden_section(lambda x: self.beta1_only(10 ** x, a, ws), lo, hi)
+        return 10 ** min([(vals[k], lr[k]), *refined])[1]
+
+    def _finish_candidate(self, rho, a, ws) -> DesignResult | None:
+        """Steps 2–4 of procedure 12.1 once, for the ρ and W_s found by the wider search.
+
+        Step 2: the H∞ gains at (ρ, a, W_s) (:meth:`gains`, with the best design's m as target);
+        step 3: β1 and m evaluated from the best design's T, T adapted to the settling time
+        (:meth:`adapt_T`); step 4: when β1 ≤ m but the circle criterion fails, one retry at another
+        a (:meth:`_retry_circle`).
+
+        Parameters
+        ----------
+        rho : float
+            Weight ρ of the control input, dimensionless.
+        a : float
+            Exponential rate a (10.27), 1/s.
+        ws : (k,) array
+            Weight w per compensator output of W_s = diag(w)·S_c, dimensionless.
+
+        Returns
+        -------
+        DesignResult or None
+            The evaluated design (certified or not); None when no gains exist at this ρ.
+        """
+        g = self.gains(rho, a, ws, target=self.best.m_ref if self.best is not None else None)
+        if g is None:
+            return None
+        res = self.evaluate(g, a, self.best.T if self.best is not None else self.cfg.spheres.T, ws, "wider")
+        res, T = self.adapt_T(g, a, res.T, ws, res, "wider")
+        if res.beta1_ref <= res.m_ref and not res.circle.passed:
+            res = self._retry_circle(g, res, rho, a, T, ws)
+        return res
+
+    def _retry_circle(self, g, res, rho, a, T, ws) -> DesignResult:
+        """Step 4 of procedure 12.1 in the wider search: "otherwise adjust a" and redesign once.
+
+        An a passing the circle criterion with the gains g (:meth:`circle_a`); the gains are then
+        recomputed at (ρ, that a, W_s) and evaluated at T (step 1's m at the new a).
+
+        Parameters
+        ----------
+        g : qpp.design.hinf.HinfGains
+            The gains whose closed loop fails the circle criterion at a.
+        res : DesignResult
+            Their evaluation (β1 ≤ m, circle criterion failed).
+        rho : float
+            Weight ρ of the control input, dimensionless.
+        a : float
+            The current exponential rate a (10.27), 1/s.
+        T : float
+            Horizon T of the thresholds β3, β4 (10.54, 10.55), s.
+        ws : (k,) array
+            Weight w per compensator output of W_s = diag(w)·S_c, dimensionless.
+
+        Returns
+        -------
+        DesignResult
+            The design at the new a, or ``res`` unchanged when no a passes or no gains exist there.
+        """
+        a_new = self.circle_a(g, a)
+        if a_new is None:
+            return res
+        g2 = self.gains(rho, a_new, ws)
+        if g2 is None:
+            return res
+        return self.evaluate(g2, a_new, T, ws, "wider a")
+
+
+def _ws_candidates(p_w: int, ws_scales) -> list[np.ndarray]:
+    """The weightings W_s = diag(w)·S_c of the wider search (procedure 12.1, conclusions of ch. 15).
+
+    First w·(1, …, 1) for each scale of ``design.ws_scales``; for p_w > 1 compensator outputs also
+    each channel alone weighted by each factor of :data:`CHANNEL_FACTORS` (the others 1).
+
+    Parameters
+    ----------
+    p_w : int
+        Number of compensator outputs (rows of C_c).
+    ws_scales : list of float
+        The scalar weights w of ``design.ws_scales``, dimensionless.
+
+    Returns
+    -------
+    list of (p_w,) array
+        The weights w per compensator output, dimensionless, in the order they are tried.
+    """
+    weights = [np.full(p_w, w) for w in ws_scales]
+    if p_w > 1:
+        for i in range(p_w):
+            for w in CHANNEL_FACTORS:
+                v = np.ones(p_w)
+                v[i] = w
+                weights.append(v)
+    return weights
+
+
+def _golden_section(f, lo, hi, steps: int = GOLDEN_STEPS) -> tuple[tuple, tuple]:
+    """Golden-section refinement of a bracketed minimum of β1 over log10 ρ (procedure 12.1, step 2).
+
+    Two interior points at the golden ratio of [lo, hi]; each of ``steps`` steps drops the part of
+    the bracket beyond the worse point (ties keep the lower one) and evaluates one new point.  A
+    fixed number of steps, no tolerance test: always 2 + ``steps`` evaluations of ``f``.
+
+    Parameters
+    ----------
+    f : callable
+        β1 as a function of x = log10 ρ (dimensionless), ``f(x) -> float``.
+    lo, hi : float
+        The bracket of x = log10 ρ, dimensionless.
+    steps : int
+        Number of refinement steps (one evaluation each, after the first two).
+
+    Returns
+    -------
+    tuple of (float, float)
+        The two last interior points as (β1, x) pairs, dimensionless: ``(f1, x1), (f2, x2)``.
+    """
+    x1, x2 = hi - _INV_GOLDEN * (hi - lo), lo + _INV_GOLDEN * (hi - lo)
+    f1, f2 = f(x1), f(x2)
+    for _ in range(steps):
+        if f1 <= f2:
+            hi, x2, f2 = x2, x1, f1
+            x1 = hi - _INV_GOLDEN * (hi - lo)
+            f1 = f(x1)
+        else:
+            lo, x1, f1 = x1, x2, f2
+            x2 = lo + _INV_GOLDEN * (hi - lo)
+            f2 = f(x2)
+    return (f1, x1), (f2, x2)
 
 
 def _score(res: DesignResult) -> tuple:
