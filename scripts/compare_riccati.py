@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Compare the Riccati solvers of acmm.design.riccati on the MB3 and AC design problems.
 
-For each configuration two Riccati equations of the sector LQR (acmm.design.lqr, ch. 5.2) are solved:
+For each configuration two Riccati equations of the sector LQR (acmm.design.sector_lqr, ch. 5.2) are solved:
 
 * **step 1** — the minimum-energy LQR on A + σn·I (Q = 0, R = I/(100 ft·lbf)²), the solve
   every design starts from;
@@ -35,7 +35,7 @@ import numpy as np  # noqa: E402
 from acmm.io.config import load_config
 from acmm_qpp.errors import ConvergenceError
 from acmm.model.linearize import linearize_config
-from acmm.design.lqr import sector_lqr
+from acmm.design.sector_lqr import sector_lqr
 from acmm.design.riccati import care_condition, care_residual, scale_problem
 from acmm.design.riccati import solve_unverified
 from acmm.design.settings import design_settings

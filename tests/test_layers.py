@@ -11,6 +11,7 @@ inside functions included, so that a lazy import cannot hide a dependency.
 from __future__ import annotations
 
 import ast
+import sys
 import tomllib
 from pathlib import Path
 
@@ -239,3 +240,41 @@ def test_sources_cite_no_file_outside_the_repository():
                 if forbidden.search(line):
                     bad.append(f"{rel}:{k}: {line.strip()}")
     assert bad == []
+
+
+def _readme_module_rows() -> list[str]:
+    """The rows of the README's module tables (``| `path` | content | … |``)."""
+    return [line for line in (REPO / "README.md").read_text(encoding="utf-8").splitlines()
+            if line.startswith("| `") and ("acmm" in line or "qpp" in line)]
+
+
+def test_the_readme_module_map_names_every_module_and_no_missing_one():
+    """The README's module map matches the tree: every module file it names exists, and every
+    module of the three packages is named, by its path or, in a row naming its folder
+    (``acmm/sweep/``), by its module name."""
+    import re
+
+    rows = _readme_module_rows()
+    text = "\n".join(rows)
+    named = set(re.findall(r"`((?:acmm|qpp|acmm_qpp)/[\w/]+\.py)`", text))
+    assert sorted(p for p in named if not (REPO / p).is_file()) == []
+    missing = []
+    for path in _modules().values():
+        rel = path.relative_to(REPO).as_posix()
+        if path.name == "__init__.py" or rel in named:
+            continue
+        folder = rel.rsplit("/", 1)[0] + "/"
+        in_folder_rows = [r for r in rows if f"`{folder}`" in r or f"`{folder}" in r.split("|")[1]]
+        parent = folder.rstrip("/").rsplit("/", 1)
+        star = [r for r in rows if len(parent) == 2 and f"`{parent[1]}/*`" in r and f"`{parent[0]}/`" in r]
+        if not any(f"`{path.stem}`" in r or f"`{path.name}`" in r for r in in_folder_rows) and not star:
+            missing.append(rel)
+    assert missing == []
+
+
+def test_the_readme_module_map_check_fails_on_a_missing_or_unknown_module(tmp_path, monkeypatch):
+    rows = _readme_module_rows()
+    monkeypatch.setattr(sys.modules[__name__], "_readme_module_rows",
+                        lambda: [r.replace("`acmm/design/sector_lqr.py`", "`acmm/design/lqr.py`") for r in rows])
+    with pytest.raises(AssertionError):
+        test_the_readme_module_map_names_every_module_and_no_missing_one()

@@ -9,8 +9,8 @@ import pytest
 import scipy.linalg as sla
 
 from acmm_qpp.errors import DesignError
-from acmm.design.sector import in_sector, sector_margin
-from acmm.design.lqr import sector_lqr
+from acmm.design.sector_lqr import in_sector, sector_margin
+from acmm.design.sector_lqr import sector_lqr
 
 N = 0.0011  # rad/s
 

@@ -5,8 +5,7 @@ import numpy as np
 import pytest
 
 from acmm.design import design_core
-from acmm.design import lqr
-from acmm.design import sector as sector_mod
+from acmm.design import sector_lqr
 from acmm.design import schedule
 from acmm.design import path_check as pc
 from acmm.design import schedule_refit, disk_margin
@@ -16,7 +15,7 @@ from acmm.design.settings import DesignSettings, ScheduleSettings, Sector, desig
 
 CORE = [schedule.design_one, schedule.sector_design, schedule.check_schedule, pc.path_models,
         sp.schedule_specs, schedule.fit_schedule, pc.check_path, schedule_refit.refit_closed_loop,
-        disk_margin.disk_margin_input, design_core.design_schedule, lqr.sector_lqr, sector_mod.sector_margin]
+        disk_margin.disk_margin_input, design_core.design_schedule, sector_lqr.sector_lqr, sector_lqr.sector_margin]
 
 
 @pytest.mark.parametrize("fn", CORE, ids=lambda f: f.__name__)

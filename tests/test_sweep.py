@@ -290,7 +290,7 @@ def test_a_case_starts_at_the_equilibrium_connected_to_the_design_tea(tmp_path):
     sw = load_sweep(_sweep_yaml(tmp_path, "connected", base=str(CONFIGS / "mb3.yaml"), orbits=2.0))
     ctx = prepare_base(sw.bases[0], sw.spec)
     from acmm.model import tea
-    from acmm.model.tea_connected import solve_tea_connected     # checked against an independent path
+    from acmm.model.tea_compiled import solve_tea_connected     # checked against an independent path
                                                             # in tests/test_tea_compiled.py
     sc0 = ctx.scenario
     rows = [simulate_values(ctx, {"dI33": d}) for d in (-0.005, 0.0, 0.005)]

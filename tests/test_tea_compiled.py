@@ -85,9 +85,9 @@ def _fine_path(theta, i0, b0, i1, b1, n, steps=200):
 @pytest.mark.parametrize("name", ["mb3", "ac"])
 def test_connected_root_is_the_fine_continuation_of_the_design_tea(name):
     """A case's plant follows the equilibrium connected to the design TEA
-    (:func:`acmm.model.tea_connected.solve_tea_connected`): the same root as an independent fine-step
+    (:func:`acmm.model.tea_compiled.solve_tea_connected`): the same root as an independent fine-step
     numpy continuation, and None exactly where that one folds too."""
-    from acmm.model.tea_connected import solve_tea_connected
+    from acmm.model.tea_compiled import solve_tea_connected
 
     cfg = load_config(name)
     spec = point_specs(cfg)[0]
@@ -119,7 +119,7 @@ def test_connected_root_is_the_fine_continuation_of_the_design_tea(name):
 def test_connected_root_moves_continuously_where_the_lvlh_root_flips():
     """MB3 with I33 0.5 % smaller: the root continued from LVLH flips ~86° to the other principal
     alignment (−44.7° → +41.8° pitch), the design-connected one moves 3.5° (−48.2°)."""
-    from acmm.model.tea_connected import solve_tea_connected
+    from acmm.model.tea_compiled import solve_tea_connected
 
     cfg = load_config("mb3")
     spec = point_specs(cfg)[0]
@@ -148,7 +148,7 @@ def test_connected_root_passes_a_pitchfork_of_a_symmetric_station():
     pitchfork, not a fold); the connected root follows it (−60° → −65.0°), as the independent
     path does, instead of falling back to the LVLH root (−25°).  Random symmetric stations agree
     with the independent path too."""
-    from acmm.model.tea_connected import solve_tea_connected
+    from acmm.model.tea_compiled import solve_tea_connected
 
     n = 0.0011
     i0, i1 = np.diag([7.2e6, 3.8e6, 4.9e6]), np.diag([6.2e6, 4.8e6, 3.6e6])
@@ -195,7 +195,7 @@ def test_connected_root_may_pass_90_degrees_of_pitch():
     """Only yaw ±90° is singular in the 2-3-1 sequence: MB3 with +1.8 ft·lbf of pitch bias and
     I33 3 % smaller has its design TEA's equilibrium at −91.6° pitch (the independent path agrees);
     it used to be called a fold and the case started at +55.8°."""
-    from acmm.model.tea_connected import solve_tea_connected
+    from acmm.model.tea_compiled import solve_tea_connected
 
     cfg = load_config("mb3")
     spec = point_specs(cfg)[0]

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm.model import linearize as lin
-from acmm.design import sector as sector_mod
+from acmm.design import sector_lqr
 from acmm.design.disk_margin import DISK_OMEGA_N, _disk_alpha_batch, _disk_parts, disk_gain_phase
 from acmm.design.schedule import PointDesign
 from acmm.design.schedule_points import PointSpec, tea_spaced_blend
@@ -58,7 +58,7 @@ class PathCheck:
     max_real : (P,) array
         Largest Re λ(A − BK(θ2*)), units of n.
     margin : (P,) array
-        Worst :func:`acmm.design.lqr.sector_margin`, units of n (> 0: every pole in the sector).
+        Worst :func:`acmm.design.sector_lqr.sector_margin`, units of n (> 0: every pole in the sector).
     disk_margin : (P,) array
         Balanced (skew 0) multiloop disk margin α at the plant input (loop broken at u),
         dimensionless (:func:`disk_margin_input`).
@@ -177,7 +177,7 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
         lam = lam[np.lexsort((lam.imag, lam.real))]
         poles.append(lam)
         mr[j] = np.max(lam.real) / n
-        mg[j] = np.min(sector_mod.sector_margin(lam, n, sigma, half_angle_deg))
+        mg[j] = np.min(sector_lqr.sector_margin(lam, n, sigma, half_angle_deg))
     if disk:
         # S(jω) − I/2 of every stable, well-conditioned loop in one modal evaluation
         # (as in _disk_parts); the others one by one

@@ -19,8 +19,7 @@ import numpy as np
 
 from acmm.model import linearize as lin
 from acmm.model import state_scaling as scaling
-from acmm.design import lqr
-from acmm.design import sector as sector_mod
+from acmm.design import sector_lqr
 from acmm.design.settings import DesignSettings
 from acmm.design.schedule_points import PointSpec
 from acmm.model.tea import TEA, solve_tea, solve_tea_near
@@ -38,7 +37,7 @@ class PointDesign:
         Its torque equilibrium attitude (eqs 4.1–4.3).
     model : acmm.model.linearize.LinearModel
         Its design model (eq 4.46).
-    lqr : acmm.design.lqr.SectorLQR
+    lqr : acmm.design.sector_lqr.SectorLQR
         Its sector-LQR design (ch. 5.2).
     """
 
@@ -222,10 +221,10 @@ def sector_design(A, B, scales, s: DesignSettings):
 
     Returns
     -------
-    acmm.design.lqr.SectorLQR
+    acmm.design.sector_lqr.SectorLQR
         The verified design.
     """
-    return lqr.sector_lqr(A, B, s.R * np.eye(3), s.orbit_rate, sigma=s.sector.sigma,
+    return sector_lqr.sector_lqr(A, B, s.R * np.eye(3), s.orbit_rate, sigma=s.sector.sigma,
                           half_angle_deg=s.sector.half_angle_deg,
                           Q0=s.q0_weight(A.shape[0]),   # on the scaled states
                           scale=scales, method=s.pole_method, riccati_method=s.riccati_method,
@@ -297,7 +296,7 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
         names.append(name)
         th2.append(theta2)
         kinds.append(kind)
-        margins.append(np.min(sector_mod.sector_margin(poles, n, d.sector.sigma, d.sector.half_angle_deg)))
+        margins.append(np.min(sector_lqr.sector_margin(poles, n, d.sector.sigma, d.sector.half_angle_deg)))
         max_real.append(np.max(poles.real) / n)
 
     for p in points:

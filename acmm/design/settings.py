@@ -1,7 +1,7 @@
 """The design settings the numerical core takes, built from a Config at one place.
 
 The core (:mod:`acmm.design.schedule`, :mod:`acmm.design.path_check`, :mod:`acmm.design.schedule_refit`,
-:mod:`acmm.design.lqr`) takes arrays and these small frozen objects, never the whole Config:
+:mod:`acmm.design.sector_lqr`) takes arrays and these small frozen objects, never the whole Config:
 :func:`design_settings` and :func:`schedule_settings` are the only readers of ``cfg.design`` and
 ``cfg.schedule``'s numerical settings on the design path.  Following ``design.sector.sigma``:
 YAML → :class:`acmm.io.config.Config` → :func:`design_settings` → :class:`Sector` →
@@ -54,7 +54,7 @@ class DesignSettings:
     sector : Sector
         The pole sector.
     pole_method : str
-        ``"shift"`` or ``"uniform"`` (:func:`acmm.design.lqr.sector_lqr`).
+        ``"shift"`` or ``"uniform"`` (:func:`acmm.design.sector_lqr.sector_lqr`).
     riccati_method : str
         ``"sign"``, ``"scipy"`` or ``"slycot"``.
     residual_tol : float

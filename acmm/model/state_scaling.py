@@ -56,7 +56,7 @@ def torque_scale(scales: np.ndarray) -> float:
     """The torque unit in which a station's LQR is solved, ft·lbf: its momentum scale over
     :data:`NOMINAL_MOMENTUM` (1 for the stations within :data:`MOMENTUM_BAND`), so that beyond
     the band a station k times smaller, with torques k times smaller and R k² times larger,
-    is the same scaled problem (:func:`acmm.design.lqr.sector_lqr`, ``input_scale``).
+    is the same scaled problem (:func:`acmm.design.sector_lqr.sector_lqr`, ``input_scale``).
 
     Parameters
     ----------

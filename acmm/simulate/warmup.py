@@ -31,10 +31,8 @@ def warm_up(say=print) -> float:
     from acmm.simulate import scenario as scen
     from acmm.simulate import reference
     from acmm.model.tea_compiled import warm_up as warm_tea
-    from acmm.model.tea_connected import warm_up as warm_connected
 
     warm_tea()
-    warm_connected()
     n = 0.0011
     inertia = np.diag([2.0e7, 1.0e6, 2.1e7])[None]
     sc = scen.Scenario(level_start=np.zeros(1), inertia=inertia, bias=np.zeros((1, 3)), theta_est=np.zeros((1, 3)),

@@ -236,7 +236,7 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarra
 
     Each level's plant moves from the nominal one (its design TEA ``sc0.theta_est[k]``) to the
     perturbed one, and the station follows the equilibrium continuously connected to the design
-    TEA (:func:`acmm.model.tea_connected.solve_tea_connected`, compiled, ~0.1–1 ms).  Only where that
+    TEA (:func:`acmm.model.tea_compiled.solve_tea_connected`, compiled, ~0.1–1 ms).  Only where that
     branch folds between the two plants (no equilibrium near the design TEA survives the
     perturbation) is the case started at the root continued from LVLH
     (:func:`acmm.model.tea_compiled.solve_tea_fast`, the physical branch of :mod:`acmm.model.tea`, whose
@@ -268,7 +268,7 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarra
         NoEquilibriumError names the fold and the level first).
     """
     from acmm.model.tea_compiled import solve_tea_fast
-    from acmm.model.tea_connected import solve_tea_connected
+    from acmm.model.tea_compiled import solve_tea_connected
 
     theta, folded = [], []    # a fallback's NoEquilibriumError says the design branch folded first
     for k in range(inertia.shape[0]):
