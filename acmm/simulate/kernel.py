@@ -19,22 +19,244 @@ Integrated state X (24): ω (rad/s), θ (rad), h (ft·lbf·s), ∫h (ft·lbf·s�
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from acmm.model import dynamics as dyn
 from acmm.model import kinematics as kin
 from acmm.simulate.compiled_cache import njit_cached
 from acmm.model.linearize import DRF_INPUTS
-from acmm.simulate.scenario import STOP_NONE, RunExtremes, Scenario, SimResult
+from acmm.simulate.scenario import (STOP_ANGLE, STOP_NONE, STOP_NONFINITE, STOP_SATURATION, STOP_STEP,
+                                    RunExtremes, Scenario, SimResult)
 
 
 # ----------------------------------------------------------------------------------------------
-# compiled kernel
+# the bundles the compiled kernel takes (numba types a NamedTuple of arrays and floats)
 # ----------------------------------------------------------------------------------------------
-@njit_cached(fastmath=False)
-def _torque(X, th2d, theta_est, omega_est, gain, tmax, hmax, ucmd_out, u_out, flags, x, u):
-    """Controller state x (eq 4.47) into ``x``, commanded and delivered torque (eq 5.1, saturation)
-    into ``ucmd_out``, ``u_out`` and ``u``; returns ω × h."""
+class LevelSchedule(NamedTuple):
+    """The per-level arrays of a run (one row per inertia level of the stair-case, ch. 6).
+
+    Attributes
+    ----------
+    level_start : (L,) array, s
+        Start time of each level (the first is 0).
+    level_mid : (L,) array, s
+        Middle of each level's dwell: its steady error is measured from there on.
+    inertia : (L, 3, 3) array, slug·ft²
+        True plant inertia per level (eq 3.1).
+    inertia_inv : (L, 3, 3) array, 1/(slug·ft²)
+        Its inverse.
+    bias : (L, 3) array, ft·lbf
+        Bias torque per level (eq 3.9).
+    theta_est : (L, 3) array, rad
+        TEA estimate θ̂* the controller linearizes about (eq 4.47).
+    omega_est : (L, 3) array, rad/s
+        Body rate of the LVLH frame at θ̂* (eq 3.5).
+    gain : (L, 3, 24) array
+        Gain K per level (u = −K x, eq 5.1), in the units of eq 4.47.
+    theta_ref : (L, 3) array, rad
+        Attitude the run's extremes are measured from (:class:`~acmm.simulate.scenario.RunExtremes`).
+    run_mid : float, s
+        t_end / 2: the run's steady error is measured from there on.
+    """
+
+    level_start: np.ndarray
+    level_mid: np.ndarray
+    inertia: np.ndarray
+    inertia_inv: np.ndarray
+    bias: np.ndarray
+    theta_est: np.ndarray
+    omega_est: np.ndarray
+    gain: np.ndarray
+    theta_ref: np.ndarray
+    run_mid: float
+
+
+class Level(NamedTuple):
+    """The rows of :class:`LevelSchedule` of the level in force (built by :func:`_level`).
+
+    Attributes
+    ----------
+    inertia : (3, 3) array, slug·ft²
+        True plant inertia (eq 3.1).
+    inertia_inv : (3, 3) array, 1/(slug·ft²)
+        Its inverse.
+    bias : (3,) array, ft·lbf
+        Bias torque (eq 3.9).
+    theta_est : (3,) array, rad
+        TEA estimate θ̂* (eq 4.47).
+    omega_est : (3,) array, rad/s
+        Body rate of the LVLH frame at θ̂* (eq 3.5).
+    gain : (3, 24) array
+        Gain K (eq 5.1), in the units of eq 4.47.
+    theta_ref : (3,) array, rad
+        Attitude the run's extremes are measured from.
+    mid : float, s
+        Middle of the level's dwell.
+    """
+
+    inertia: np.ndarray
+    inertia_inv: np.ndarray
+    bias: np.ndarray
+    theta_est: np.ndarray
+    omega_est: np.ndarray
+    gain: np.ndarray
+    theta_ref: np.ndarray
+    mid: float
+
+
+class LoopConstants(NamedTuple):
+    """The constants of the plant, controller and integrator (the same at every level).
+
+    Attributes
+    ----------
+    ha, hb : (3,) array, ft·lbf
+        Amplitudes of the disturbance's sin(nt) and sin(2nt) (eq 3.9).
+    n : float, rad/s
+        Orbital rate.
+    tmax : float, ft·lbf
+        Torque limit per axis (ch. 5.1).
+    hmax : float, ft·lbf·s
+        CMG momentum limit per axis (ch. 5.1).
+    drf_idx : (6,) int array
+        Index in x (eq 4.47) of each DRF's input (eqs 4.35–4.40; :func:`_drf_index`).
+    rtol : float
+        Relative tolerance of the integrator, dimensionless.
+    atol : (24,) array
+        Absolute tolerance per component of X, in the units of X.
+    divergence : float, rad
+        The run stops (:data:`~acmm.simulate.scenario.STOP_ANGLE`) when |θ_i − θ̂*_i| exceeds it.
+    max_sat : float, s
+        The run stops (:data:`~acmm.simulate.scenario.STOP_SATURATION`) when a CMG axis stays
+        saturated longer.
+    C : (7,) array
+        Dormand–Prince 5(4) nodes, dimensionless.
+    A : (7, 6) array
+        Dormand–Prince 5(4) stage coefficients, dimensionless.
+    B5 : (7,) array
+        Weights of the 5th-order solution, dimensionless.
+    E : (7,) array
+        Weights of the error estimate (5th minus 4th order), dimensionless.
+    """
+
+    ha: np.ndarray
+    hb: np.ndarray
+    n: float
+    tmax: float
+    hmax: float
+    drf_idx: np.ndarray
+    rtol: float
+    atol: np.ndarray
+    divergence: float
+    max_sat: float
+    C: np.ndarray
+    A: np.ndarray
+    B5: np.ndarray
+    E: np.ndarray
+
+
+class KernelOutputs(NamedTuple):
+    """What the kernel writes: the output samples and the extremes over every accepted step.
+
+    Attributes
+    ----------
+    state : (S, 24) array
+        Plain state X at each sample, in the units of the module docstring (NaN after a stop).
+    u_cmd : (S, 3) array, ft·lbf
+        Commanded torque −K x (eq 5.1).
+    u : (S, 3) array, ft·lbf
+        Torque the CMGs deliver after saturation (ch. 5.1).
+    flags : (S, 6) array
+        1.0 where an axis is torque-saturated (first 3) or at its momentum limit (last 3), else
+        0.0, dimensionless.
+    level : (S,) int array
+        Level in force at each sample.
+    peak_h : (L,) array, ft·lbf·s
+        Per level, max_i |h_i| (NaN: not reached).
+    steady : (L, 3) array, rad
+        Per level, max |θ_i − θ̂*_i| from the middle of its dwell on (NaN: not reached).
+    run : (11,) array
+        Over the run: peak |h_i| (ft·lbf·s), peak |θ_i − θ_ref,i| (rad), the same from t_end / 2
+        on (rad), the time with any axis torque-saturated (s), the time with any axis
+        momentum-saturated (s).
+    """
+
+    state: np.ndarray
+    u_cmd: np.ndarray
+    u: np.ndarray
+    flags: np.ndarray
+    level: np.ndarray
+    peak_h: np.ndarray
+    steady: np.ndarray
+    run: np.ndarray
+
+
+class Workspace(NamedTuple):
+    """Scratch buffers of the kernel (built by :func:`_workspace`).
+
+    Attributes
+    ----------
+    K : (7, 24) array
+        Dormand–Prince stages Ẋ, in the units of X per s.
+    y : (24,) array
+        A stage's state, then the step's 5th-order solution, in the units of X.
+    x : (24,) array
+        Controller state x of eq 4.47, in its units.
+    u : (3,) array, ft·lbf
+        Torque delivered after saturation (ch. 5.1).
+    u_cmd : (3,) array, ft·lbf
+        Commanded torque −K x (eq 5.1).
+    flags : (6,) array
+        Saturation flags, as :attr:`KernelOutputs.flags`, dimensionless.
+    sat_time : (3,) array, s
+        How long each CMG axis has been at its momentum limit.
+    """
+
+    K: np.ndarray
+    y: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    u_cmd: np.ndarray
+    flags: np.ndarray
+    sat_time: np.ndarray
+
+
+# ----------------------------------------------------------------------------------------------
+# compiled kernel.  The right-hand side (:func:`_rhs`, :func:`_torque`) is inlined into its
+# callers (``inline="always"``, numba's own inlining: the arithmetic is unchanged): called
+# apart, it re-reads the bundles' arrays at every stage with their reference counts, ~15 % of
+# the integration time.
+# ----------------------------------------------------------------------------------------------
+@njit_cached()
+def _workspace():
+    """Fresh scratch buffers (:class:`Workspace`)."""
+    return Workspace(np.empty((7, 24)), np.empty(24), np.empty(24), np.empty(3), np.empty(3),
+                     np.zeros(6), np.zeros(3))
+
+
+@njit_cached()
+def _level(sched, level):
+    """The rows of ``sched`` (:class:`LevelSchedule`) of level ``level``, as a :class:`Level`."""
+    return Level(sched.inertia[level], sched.inertia_inv[level], sched.bias[level], sched.theta_est[level],
+                 sched.omega_est[level], sched.gain[level], sched.theta_ref[level], sched.level_mid[level])
+
+
+@njit_cached()
+def _level_at(sched, level, t):
+    """The level in force at t, from ``level`` on: a time at a level start belongs to the new level."""
+    while level + 1 < sched.level_start.shape[0] and sched.level_start[level + 1] <= t + 1e-9:
+        level += 1
+    return level
+
+
+@njit_cached(fastmath=False, inline="always")
+def _torque(X, th2d, lv, loop, w):
+    """Controller state x (eq 4.47) into ``w.x``, commanded and delivered torque (eq 5.1,
+    saturation) into ``w.u_cmd`` and ``w.u``, saturation flags into ``w.flags``; returns ω × h."""
+    x, u, u_cmd, flags = w.x, w.u, w.u_cmd, w.flags
+    theta_est, omega_est, gain = lv.theta_est, lv.omega_est, lv.gain
+    tmax, hmax = loop.tmax, loop.hmax
     w1, w2, w3 = X[0], X[1], X[2]
     t1, t2, t3 = X[3], X[4], X[5]
     h1, h2, h3 = X[6], X[7], X[8]
@@ -51,7 +273,7 @@ def _torque(X, th2d, theta_est, omega_est, gain, tmax, hmax, ucmd_out, u_out, fl
         acc = 0.0
         for j in range(24):
             acc -= gain[i, j] * x[j]
-        ucmd_out[i] = acc
+        u_cmd[i] = acc
         if acc > tmax:
             acc = tmax
             flags[i] = 1.0
@@ -73,14 +295,16 @@ def _torque(X, th2d, theta_est, omega_est, gain, tmax, hmax, ucmd_out, u_out, fl
             flags[3 + i] = 1.0
             if (u[i] - wxh[i]) * hh[i] > 0.0:
                 u[i] = wxh[i]
-        u_out[i] = u[i]
     return wxh0, wxh1, wxh2
 
 
-@njit_cached(fastmath=False)
-def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n,
-         tmax, hmax, drf_idx, out, u_out, ucmd_out, flags, x, u):
-    """Closed-loop Ẋ into ``out``; ``x`` (24) and ``u`` (3) are scratch buffers."""
+@njit_cached(fastmath=False, inline="always")
+def _rhs(t, X, lv, loop, out, w):
+    """Closed-loop Ẋ at (t, X) into ``out`` (eqs 3.1, 3.5, 3.8, 3.9, 4.35–4.40, 5.1) at the level
+    ``lv`` (:class:`Level`); x, u, u_cmd and the flags into ``w`` (:class:`Workspace`)."""
+    inertia, inertia_inv, bias = lv.inertia, lv.inertia_inv, lv.bias
+    ha, hb, n, drf_idx = loop.ha, loop.hb, loop.n, loop.drf_idx
+    x, u = w.x, w.u
     w1, w2, w3 = X[0], X[1], X[2]
     t1, t2, t3 = X[3], X[4], X[5]
     h1, h2, h3 = X[6], X[7], X[8]
@@ -92,8 +316,7 @@ def _rhs(t, X, inertia, inertia_inv, bias, theta_est, omega_est, gain, ha, hb, n
     th1d = w1 - s3 * d2
     th2d = d2 + n
     th3d = s1 * w2 + c1 * w3
-    wxh0, wxh1, wxh2 = _torque(X, th2d, theta_est, omega_est, gain, tmax, hmax, ucmd_out, u_out,
-                               flags, x, u)
+    wxh0, wxh1, wxh2 = _torque(X, th2d, lv, loop, w)
     # disturbance, eq 3.9
     sn, s2n = np.sin(n * t), np.sin(2.0 * n * t)
     # gravity gradient, eqs 3.3-3.4
@@ -145,20 +368,20 @@ _E = _B5 - _B4
 
 
 @njit_cached()
-def _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx, rtol, atol,
-                C, A, B5, E, K, tmp, u, ucmd, flags, xs, us):
-    """One Dormand–Prince 5(4) step of length h from (t, X): stages into ``K``, the 5th-order
-    solution into ``tmp``; returns (RMS of the scaled error estimate, all finite)."""
+def _dp_attempt(X, t, h, lv, loop, w):
+    """One Dormand–Prince 5(4) step of length h from (t, X): stages into ``w.K``, the 5th-order
+    solution into ``w.y``; returns (RMS of the scaled error estimate, all finite)."""
     nx = 24
+    K, y, C, A, B5, E = w.K, w.y, loop.C, loop.A, loop.B5, loop.E
+    atol, rtol = loop.atol, loop.rtol
     # stages
     for st in range(7):
         for i in range(nx):
             acc = X[i]
             for j in range(st):
                 acc += h * A[st, j] * K[j, i]
-            tmp[i] = acc
-        _rhs(t + C[st] * h, tmp, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
-             K[st], u, ucmd, flags, xs, us)
+            y[i] = acc
+        _rhs(t + C[st] * h, y, lv, loop, K[st], w)
     # error estimate (RMS of scaled error)
     err = 0.0
     finite = True
@@ -168,7 +391,7 @@ def _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx
         for j in range(7):
             y5 += h * B5[j] * K[j, i]
             e += h * E[j] * K[j, i]
-        tmp[i] = y5
+        y[i] = y5
         sc = atol[i] + rtol * max(abs(X[i]), abs(y5))
         err += (e / sc) ** 2
         if not np.isfinite(y5):
@@ -178,39 +401,43 @@ def _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx
 
 
 @njit_cached()
-def _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time):
-    """Divergence checks after an accepted step: 1 (attitude bound), 2 (saturated too long) or 0;
-    updates the saturation clocks ``sat_time``."""
-    stop = 0
+def _bounds_stop(X, theta_est, loop, step_len, sat_time):
+    """Divergence checks after an accepted step: :data:`STOP_ANGLE` (|θ_i − θ̂*_i| above
+    ``loop.divergence``), :data:`STOP_SATURATION` (a CMG axis at its limit longer than
+    ``loop.max_sat``; it wins over the angle) or :data:`STOP_NONE`; updates the saturation clocks
+    ``sat_time``."""
+    stop = STOP_NONE
     for i in range(3):
-        if abs(X[3 + i] - tl[i]) > divergence:
-            stop = 1
-        if abs(X[6 + i]) >= hmax * (1.0 - 1e-9):
+        if abs(X[3 + i] - theta_est[i]) > loop.divergence:
+            stop = STOP_ANGLE
+        if abs(X[6 + i]) >= loop.hmax * (1.0 - 1e-9):
             sat_time[i] += step_len
-            if sat_time[i] > max_sat:
-                stop = 2
+            if sat_time[i] > loop.max_sat:
+                stop = STOP_SATURATION
         else:
             sat_time[i] = 0.0
     return stop
 
 
 @njit_cached()
-def _track(X, t, level, tl, rl, level_mid, run_mid, peak_h, steady, run, flags, step_len):
-    """Extremes at every accepted step (not only at the output samples).  Per level: peak
-    max_i |h_i|, and max |θ_i − θ̂*_i| from the middle of its dwell on.  Over the run (``run``):
-    peak |h_i|, peak |θ_i − θ_ref,i| and the same from ``run_mid`` on, per axis; then the time
-    with any axis torque-saturated and any axis momentum-saturated (the step's end state)."""
+def _track(X, t, level, lv, run_mid, out, flags, step_len):
+    """Extremes at every accepted step (not only at the output samples) into ``out``
+    (:class:`KernelOutputs`).  Per level: peak max_i |h_i|, and max |θ_i − θ̂*_i| from the middle
+    of its dwell on.  Over the run (``out.run``): peak |h_i|, peak |θ_i − θ_ref,i| and the same
+    from ``run_mid`` on, per axis; then the time with any axis torque-saturated and any axis
+    momentum-saturated (the step's end state)."""
+    peak_h, steady, run = out.peak_h, out.steady, out.run
     hm = max(abs(X[6]), abs(X[7]), abs(X[8]))
     if not (peak_h[level] >= hm):          # NaN (not reached yet) or smaller
         peak_h[level] = hm
     for i in range(3):
-        e = abs(X[3 + i] - tl[i])
-        if t >= level_mid[level] - 1e-9 and not (steady[level, i] >= e):
+        e = abs(X[3 + i] - lv.theta_est[i])
+        if t >= lv.mid - 1e-9 and not (steady[level, i] >= e):
             steady[level, i] = e
         a = abs(X[6 + i])
         if not (run[i] >= a):
             run[i] = a
-        e = abs(X[3 + i] - rl[i])
+        e = abs(X[3 + i] - lv.theta_ref[i])
         if not (run[3 + i] >= e):
             run[3 + i] = e
         if t >= run_mid - 1e-9 and not (run[6 + i] >= e):
@@ -240,81 +467,95 @@ def _window_entry(X0, K, X1, t0, h, mid, ref, worst):
 
 
 @njit_cached()
-def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est, omega_est, gain,
-               ha, hb, n, tmax, hmax, drf_idx, x0, rtol, atol, divergence, max_sat,
-               C, A, B5, E, out_state, out_ucmd, out_u, out_flags, out_level,
-               level_mid, out_peak_h, out_steady, theta_ref, run_mid, out_run):
-    nx = 24
-    L = level_start.shape[0]
+def _record(out, s, t, X, lv, loop, level, w):
+    """Sample ``s`` of ``out`` (:class:`KernelOutputs`): the state X at t, the torques and
+    saturation flags of the closed loop there (:func:`_rhs` at the level ``lv``) and the level in
+    force."""
+    _rhs(t, X, lv, loop, w.y, w)
+    out.state[s] = X
+    out.u[s] = w.u
+    out.u_cmd[s] = w.u_cmd
+    out.flags[s] = w.flags
+    out.level[s] = level
+
+
+@njit_cached()
+def _integrate(sample_times, x0, sched, loop, out):
+    """Integrate the closed loop from (sample_times[0], x0) by adaptive Dormand–Prince 5(4) steps,
+    recording every sample time, until the last one or a stop.
+
+    Parameters
+    ----------
+    sample_times : (S,) array, s
+        Output times (they include 0 and every level start: no step crosses a level start).
+    x0 : (24,) array
+        Initial plain state X, in the units of the module docstring.
+    sched : LevelSchedule
+        The per-level arrays (units in :class:`LevelSchedule`).
+    loop : LoopConstants
+        Plant, controller and integrator constants (units in :class:`LoopConstants`).
+    out : KernelOutputs
+        Written: the samples up to the stop and the extremes over every accepted step.
+
+    Returns
+    -------
+    last : int
+        Index of the last sample written.
+    stop : int
+        One of the ``STOP_*`` codes of :mod:`acmm.simulate.scenario` (``STOP_NONE``: completed).
+    t : float
+        Time reached, s.
+    n_steps, n_rejected : int
+        Accepted and rejected steps.
+    """
     X = x0.copy()
-    K = np.empty((7, nx))
-    tmp = np.empty(nx)
-    u, ucmd, us = np.empty(3), np.empty(3), np.empty(3)
-    flags = np.zeros(6)
-    xs = np.empty(24)
-    sat_time = np.zeros(3)
+    w = _workspace()
     t = sample_times[0]
     dt = 10.0
-    n_steps, n_rej, stop, level = 0, 0, 0, 0
-    # record the first sample
-    _rhs(t, X, inertia[0], inertia_inv[0], bias[0], theta_est[0], omega_est[0], gain[0], ha, hb,
-         n, tmax, hmax, drf_idx, tmp, u, ucmd, flags, xs, us)
-    out_state[0] = X
-    out_u[0] = u
-    out_ucmd[0] = ucmd
-    out_flags[0] = flags
-    out_level[0] = 0
-    _track(X, t, 0, theta_est[0], theta_ref[0], level_mid, run_mid, out_peak_h, out_steady, out_run, flags, 0.0)
-    n_samples = sample_times.shape[0]
+    n_steps, n_rej, stop = 0, 0, STOP_NONE
+    # sample 0, at level 0 (an int64, not the literal 0, for which numba would compile each helper
+    # once more)
+    first = level = np.int64(0)
+    lv = _level(sched, level)
+    _record(out, first, t, X, lv, loop, level, w)
+    _track(X, t, level, lv, sched.run_mid, out, w.flags, 0.0)
     last = 0
-    for s in range(1, n_samples):
+    for s in range(1, sample_times.shape[0]):
         t_target = sample_times[s]
-        while level + 1 < L and level_start[level + 1] <= t + 1e-9:
-            level += 1
-        Il, Iil, bl = inertia[level], inertia_inv[level], bias[level]
-        tl, ol, gl, rl = theta_est[level], omega_est[level], gain[level], theta_ref[level]
+        level = _level_at(sched, level, t)
+        lv = _level(sched, level)
         while t < t_target - 1e-9:
             h = min(dt, t_target - t)
-            err, finite = _dp_attempt(X, t, h, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx,
-                                      rtol, atol, C, A, B5, E, K, tmp, u, ucmd, flags, xs, us)
+            err, finite = _dp_attempt(X, t, h, lv, loop, w)
             if not finite:
-                stop = 3
+                stop = STOP_NONFINITE
                 break
             if err <= 1.0:
                 # accept
-                step_len = h
-                _window_entry(X, K, tmp, t, h, level_mid[level], tl, out_steady[level])
-                _window_entry(X, K, tmp, t, h, run_mid, rl, out_run[6:9])
+                _window_entry(X, w.K, w.y, t, h, lv.mid, lv.theta_est, out.steady[level])
+                _window_entry(X, w.K, w.y, t, h, sched.run_mid, lv.theta_ref, out.run[6:9])
                 t += h
-                for i in range(nx):
-                    X[i] = tmp[i]
+                X[:] = w.y
                 n_steps += 1
-                _track(X, t, level, tl, rl, level_mid, run_mid, out_peak_h, out_steady, out_run, flags, step_len)
+                _track(X, t, level, lv, sched.run_mid, out, w.flags, h)
                 fac = 0.9 * err ** (-0.2) if err > 0 else 5.0
                 dt = h * min(5.0, max(0.2, fac))
-                stop = _bounds_stop(X, tl, divergence, hmax, max_sat, step_len, sat_time)
-                if stop != 0:
+                stop = _bounds_stop(X, lv.theta_est, loop, h, w.sat_time)
+                if stop != STOP_NONE:
                     break
             else:
                 n_rej += 1
                 dt = h * max(0.1, 0.9 * err ** (-0.25))
                 if dt < 1e-6:
-                    stop = 4
+                    stop = STOP_STEP
                     break
         # record the sample (the last state reached, also when stopping) with the level in force
         # from t on: a sample at a level start belongs to the new level
-        while level + 1 < L and level_start[level + 1] <= t + 1e-9:
-            level += 1
-        Il, Iil, bl = inertia[level], inertia_inv[level], bias[level]
-        tl, ol, gl = theta_est[level], omega_est[level], gain[level]
-        _rhs(t, X, Il, Iil, bl, tl, ol, gl, ha, hb, n, tmax, hmax, drf_idx, tmp, u, ucmd, flags, xs, us)
-        out_state[s] = X
-        out_u[s] = u
-        out_ucmd[s] = ucmd
-        out_flags[s] = flags
-        out_level[s] = level
+        level = _level_at(sched, level, t)
+        lv = _level(sched, level)
+        _record(out, s, t, X, lv, loop, level, w)
         last = s
-        if stop != 0:
+        if stop != STOP_NONE:
             break
     return last, stop, t, n_steps, n_rej
 
@@ -322,6 +563,40 @@ def _integrate(sample_times, level_start, inertia, inertia_inv, bias, theta_est,
 def _drf_index(drf_mode: str) -> np.ndarray:
     """Index in x (eq 4.47) of the input of each of the six DRFs (n filters, then 2n)."""
     return np.array([DRF_INPUTS[drf_mode][j % 3] for j in range(6)], dtype=np.int64)
+
+
+def _schedule(sc: Scenario) -> LevelSchedule:
+    """The per-level arrays of ``sc`` for the kernel (contiguous float64)."""
+    L = sc.level_start.shape[0]
+    level_start = np.ascontiguousarray(sc.level_start, float)
+    inertia = np.ascontiguousarray(sc.inertia, float)
+    omega_est = np.array([kin.lvlh_rate_in_body(th, sc.n) for th in sc.theta_est]).reshape(L, 3)
+    ends = np.append(np.asarray(sc.level_start, float)[1:], sc.t_end)
+    theta_ref = np.ascontiguousarray(sc.theta_est if sc.theta_ref is None else sc.theta_ref, float)
+    return LevelSchedule(level_start=level_start, level_mid=0.5 * (np.asarray(sc.level_start, float) + ends),
+                         inertia=inertia, inertia_inv=np.linalg.inv(inertia),
+                         bias=np.ascontiguousarray(sc.bias, float),
+                         theta_est=np.ascontiguousarray(sc.theta_est, float), omega_est=omega_est,
+                         gain=np.ascontiguousarray(sc.gain, float), theta_ref=theta_ref.reshape(L, 3),
+                         run_mid=0.5 * float(sc.t_end))
+
+
+def _loop_constants(sc: Scenario) -> LoopConstants:
+    """The plant, controller and integrator constants of ``sc`` for the kernel."""
+    return LoopConstants(ha=np.asarray(sc.harmonic_a, float), hb=np.asarray(sc.harmonic_b, float), n=float(sc.n),
+                         tmax=float(sc.torque_limit), hmax=float(sc.momentum_limit),
+                         drf_idx=_drf_index(sc.drf_mode), rtol=float(sc.rtol), atol=np.asarray(sc.atol, float),
+                         divergence=float(sc.divergence), max_sat=float(sc.max_saturation),
+                         C=_C, A=_A, B5=_B5, E=_E)
+
+
+def _outputs(n_samples: int, n_levels: int) -> KernelOutputs:
+    """Output buffers: samples NaN (flags 0) until written, extremes NaN until reached, the
+    saturation times 0."""
+    return KernelOutputs(state=np.full((n_samples, 24), np.nan), u_cmd=np.full((n_samples, 3), np.nan),
+                         u=np.full((n_samples, 3), np.nan), flags=np.zeros((n_samples, 6)),
+                         level=np.zeros(n_samples, dtype=np.int64), peak_h=np.full(n_levels, np.nan),
+                         steady=np.full((n_levels, 3), np.nan), run=np.append(np.full(9, np.nan), np.zeros(2)))
 
 
 def simulate(sc: Scenario) -> SimResult:
@@ -341,40 +616,19 @@ def simulate(sc: Scenario) -> SimResult:
     SimResult
         Sampled trajectory (up to the stop) and verdict.
     """
-    L = sc.level_start.shape[0]
-    inertia = np.ascontiguousarray(sc.inertia, float)
-    inertia_inv = np.linalg.inv(inertia)
-    omega_est = np.array([kin.lvlh_rate_in_body(th, sc.n) for th in sc.theta_est]).reshape(L, 3)
-    drf_idx = _drf_index(sc.drf_mode)
-    S = sc.sample_times.shape[0]
-    out_state = np.full((S, 24), np.nan)
-    out_ucmd = np.full((S, 3), np.nan)
-    out_u = np.full((S, 3), np.nan)
-    out_flags = np.zeros((S, 6))
-    out_level = np.zeros(S, dtype=np.int64)
-    ends = np.append(np.asarray(sc.level_start, float)[1:], sc.t_end)
-    level_mid = 0.5 * (np.asarray(sc.level_start, float) + ends)
-    out_peak_h = np.full(L, np.nan)
-    out_steady = np.full((L, 3), np.nan)
-    out_run = np.append(np.full(9, np.nan), np.zeros(2))
-    theta_ref = np.ascontiguousarray(sc.theta_est if sc.theta_ref is None else sc.theta_ref, float)
+    out = _outputs(sc.sample_times.shape[0], sc.level_start.shape[0])
     last, stop, t_stop, n_steps, n_rej = _integrate(
-        np.ascontiguousarray(sc.sample_times, float), np.ascontiguousarray(sc.level_start, float),
-        inertia, inertia_inv, np.ascontiguousarray(sc.bias, float),
-        np.ascontiguousarray(sc.theta_est, float), omega_est, np.ascontiguousarray(sc.gain, float),
-        np.asarray(sc.harmonic_a, float), np.asarray(sc.harmonic_b, float), float(sc.n),
-        float(sc.torque_limit), float(sc.momentum_limit), drf_idx, np.asarray(sc.x0, float),
-        float(sc.rtol), np.asarray(sc.atol, float), float(sc.divergence), float(sc.max_saturation),
-        _C, _A, _B5, _E, out_state, out_ucmd, out_u, out_flags, out_level,
-        level_mid, out_peak_h, out_steady, theta_ref.reshape(L, 3), 0.5 * float(sc.t_end), out_run)
+        np.ascontiguousarray(sc.sample_times, float), np.asarray(sc.x0, float), _schedule(sc),
+        _loop_constants(sc), out)
     k = last + 1
     t = sc.sample_times[:k].copy()
     if stop != STOP_NONE:
         t[-1] = t_stop
-    w = np.asarray(sc.bias)[out_level[:k]] + dyn.disturbance_torque(t, 0.0, sc.harmonic_a, sc.harmonic_b, sc.n)
-    return SimResult(t=t, state=out_state[:k], u_cmd=out_ucmd[:k], u=out_u[:k], w=w,
-                     level=out_level[:k], torque_saturated=out_flags[:k, :3] > 0,
-                     momentum_saturated=out_flags[:k, 3:] > 0, stop_code=int(stop),
+    w = np.asarray(sc.bias)[out.level[:k]] + dyn.disturbance_torque(t, 0.0, sc.harmonic_a, sc.harmonic_b, sc.n)
+    run = out.run
+    return SimResult(t=t, state=out.state[:k], u_cmd=out.u_cmd[:k], u=out.u[:k], w=w,
+                     level=out.level[:k], torque_saturated=out.flags[:k, :3] > 0,
+                     momentum_saturated=out.flags[:k, 3:] > 0, stop_code=int(stop),
                      stop_time=float(t_stop), n_steps=int(n_steps), n_rejected=int(n_rej),
-                     level_peak_momentum=out_peak_h, level_steady_error=out_steady,
-                     run_extremes=RunExtremes(out_run[0:3], out_run[3:6], out_run[6:9], out_run[9], out_run[10]))
+                     level_peak_momentum=out.peak_h, level_steady_error=out.steady,
+                     run_extremes=RunExtremes(run[0:3], run[3:6], run[6:9], run[9], run[10]))

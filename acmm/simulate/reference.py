@@ -14,7 +14,7 @@ import numpy as np
 from acmm.model import dynamics as dyn
 from acmm.model import kinematics as kin
 from acmm.model.linearize import DRF_INPUTS
-from acmm.simulate.kernel import _drf_index, _rhs
+from acmm.simulate.kernel import Level, _loop_constants, _rhs, _workspace
 from acmm.simulate.scenario import Scenario
 
 
@@ -86,15 +86,14 @@ def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
     u_cmd : (3,) array
         Commanded torque −K x (eq 5.1), ft·lbf.
     """
-
-
+    # one level's rows only (the whole schedule costs ~0.1 ms a call, and solve_ivp calls often);
+    # _rhs reads neither theta_ref nor mid
     inertia = np.ascontiguousarray(sc.inertia[level], float)
-    omega_est = kin.lvlh_rate_in_body(sc.theta_est[level], sc.n)
-    drf_idx = _drf_index(sc.drf_mode)
-    out, u, ucmd, flags = np.empty(24), np.empty(3), np.empty(3), np.zeros(6)
-    scratch_x, scratch_u = np.empty(24), np.empty(3)
-    _rhs(t, np.asarray(X, float), inertia, np.linalg.inv(inertia), np.asarray(sc.bias[level], float),
-         np.asarray(sc.theta_est[level], float), omega_est, np.ascontiguousarray(sc.gain[level], float),
-         np.asarray(sc.harmonic_a, float), np.asarray(sc.harmonic_b, float), float(sc.n),
-         float(sc.torque_limit), float(sc.momentum_limit), drf_idx, out, u, ucmd, flags, scratch_x, scratch_u)
-    return out, u, ucmd
+    theta_est = np.ascontiguousarray(sc.theta_est[level], float)
+    lv = Level(inertia=inertia, inertia_inv=np.linalg.inv(inertia), bias=np.ascontiguousarray(sc.bias[level], float),
+               theta_est=theta_est, omega_est=np.ascontiguousarray(kin.lvlh_rate_in_body(theta_est, sc.n), float),
+               gain=np.ascontiguousarray(sc.gain[level], float), theta_ref=theta_est, mid=0.0)
+    w = _workspace()
+    out = np.empty(24)
+    _rhs(t, np.asarray(X, float), lv, _loop_constants(sc), out, w)
+    return out, w.u.copy(), w.u_cmd.copy()

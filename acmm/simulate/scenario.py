@@ -23,7 +23,20 @@ PLAIN_STATE_NAMES = ["omega1", "omega2", "omega3", "theta1", "theta2", "theta3",
                      "alpha1_dot", "alpha1", "alpha2_dot", "alpha2", "alpha3_dot", "alpha3",
                      "beta1_dot", "beta1", "beta2_dot", "beta2", "beta3_dot", "beta3"]
 
-STOP_NONE, STOP_ANGLE, STOP_SATURATION, STOP_NONFINITE, STOP_STEP = 0, 1, 2, 3, 4
+# Why a simulation stopped (:attr:`SimResult.stop_code`), returned by the compiled integrator of
+# :mod:`acmm.simulate.kernel`.  Callers compare ``stop_code`` with these names; numba
+# compiles their values into that module's cached machine code (its cache follows only that
+# file): keep them.
+#: ran to t_end
+STOP_NONE = 0
+#: |θ_i − θ̂*_i| exceeded ``Scenario.divergence`` after an accepted step
+STOP_ANGLE = 1
+#: a CMG axis stayed at its momentum limit longer than ``Scenario.max_saturation``
+STOP_SATURATION = 2
+#: a Dormand–Prince step produced a non-finite state
+STOP_NONFINITE = 3
+#: the step size fell below 1e-6 s after a rejected step
+STOP_STEP = 4
 STOP_REASONS = {
     STOP_NONE: "completed",
     STOP_ANGLE: "attitude error exceeded the divergence bound",
