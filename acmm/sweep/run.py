@@ -155,8 +155,8 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     chunks = Chunker(tasks, n_workers, chunk if chunk is not None else (1 if serial else None))
     window = 1 if serial else max(4, 2 * n_workers)
     remote = _task_arguments(executor, contexts)
-    n_new = _drive(sweep, executor, close, journal, chunks, remote, window, done, total,
-                   progress, after_record, snapshot_interval)
+    feed = _Feed(executor, chunks, remote, window, journal, done, total, progress, after_record)
+    n_new = _drive(sweep, feed, close, snapshot_interval)
     close()
     path, figs = write_results(sweep, list(done.values()), complete=True,
                                figures=sweep.file.output.figures if figures is None else figures,
@@ -268,61 +268,109 @@ class _Snapshots:
             self._thread = None
 
 
-def _drive(sweep: Sweep, executor, close, journal, chunks: Chunker, remote: dict, window: int, done: dict,
-           total: int, progress, after_record, snapshot_interval: float) -> int:
-    """Submit the chunks (at most ``window`` in flight), journal every record as it comes back and
-    rebuild ``sweep.h5`` in the background every ``snapshot_interval`` s or more (:class:`_Snapshots`);
-    on any exit the journal is closed, and on an interruption the pending tasks are cancelled, the
-    executor closed and a partial ``sweep.h5`` written.  Returns the number of new records (added
-    to ``done``)."""
-    n_new = 0
+@dataclass
+class _Feed:
+    """The chunks in flight on the executor and what came back (:func:`_drive`).
+
+    Attributes
+    ----------
+    executor : concurrent.futures.Executor
+        Where the chunks run (the serial executor, the process pool or Dask's).
+    chunks : acmm.sweep.chunking.Chunker
+        The chunks still to submit (sizes guided by what came back).
+    remote : dict
+        Base label → the arguments after the chunk of each task (:func:`_task_arguments`).
+    window : int
+        At most this many chunks in flight.
+    journal : acmm.sweep.journal.GroupCommitJournal
+        Every record is appended as it comes back.
+    done : dict
+        Task key → record: the finished tasks (resumed ones included); filled here.
+    total : int
+        Number of tasks of the sweep (for ``progress``).
+    progress, after_record : callable or None
+        ``progress(done, total, record)`` and ``after_record(n_new)``, called per record.
+    """
+
+    executor: object
+    chunks: Chunker
+    remote: dict
+    window: int
+    journal: object
+    done: dict
+    total: int
+    progress: Optional[Callable] = None
+    after_record: Optional[Callable] = None
+    pending: dict = field(default_factory=dict)
+    n_new: int = 0
+
+    def fill(self) -> None:
+        """Submit chunks until ``window`` are in flight or none is left."""
+        while len(self.pending) < self.window:
+            c = self.chunks.next()
+            if c is None:
+                return
+            self.pending[submit(self.executor, _call_chunk, c, *self.remote[c[0][1]])] = c
+
+    def take(self, fut) -> None:
+        """Journal and record the records of a finished chunk."""
+        self.pending.pop(fut)
+        recs = _records(fut)
+        self.chunks.returned(len(recs))
+        self.journal.append_many(recs)
+        for rec in recs:
+            self.done[_task_key(rec)] = rec
+            self.n_new += 1
+            if self.progress is not None:
+                self.progress(len(self.done), self.total, rec)
+            if self.after_record is not None:
+                self.after_record(self.n_new)
+
+
+def _drive(sweep: Sweep, feed: _Feed, close, snapshot_interval: float) -> int:
+    """Keep ``feed``'s window of chunks in flight, take each chunk as it finishes, and rebuild
+    ``sweep.h5`` in the background every ``snapshot_interval`` s or more (:class:`_Snapshots`).
+
+    On any exit the journal is closed; on an interruption or a failure the chunks in flight are
+    cancelled, the executor is closed (``close(abort=True)``) and a partial ``sweep.h5`` is
+    written from the records so far.  Returns the number of new records (added to ``feed.done``).
+    """
     snaps = _Snapshots(sweep, snapshot_interval)
     complete = False
-    pending: dict = {}
     try:
-        exhausted = False
-        while True:
-            while not exhausted and len(pending) < window:
-                c = chunks.next()
-                if c is None:
-                    exhausted = True
-                    break
-                pending[submit(executor, _call_chunk, c, *remote[c[0][1]])] = c
-            if not pending:
-                break
-            finished, _ = cf.wait(list(pending), return_when=cf.FIRST_COMPLETED)
+        feed.fill()
+        while feed.pending:
+            finished, _ = cf.wait(list(feed.pending), return_when=cf.FIRST_COMPLETED)
             for fut in finished:
-                pending.pop(fut)
-                recs = _records(fut)
-                chunks.returned(len(recs))
-                journal.append_many(recs)
-                for rec in recs:
-                    done[_task_key(rec)] = rec
-                    n_new += 1
-                    if progress is not None:
-                        progress(len(done), total, rec)
-                    if after_record is not None:
-                        after_record(n_new)
-            snaps.maybe(done)
+                feed.take(fut)
+            snaps.maybe(feed.done)
+            feed.fill()
         snaps.wait()
         snaps.check()
         complete = True
     finally:
-        held = hold_interrupts()   # the cleanup whole: a second Ctrl-C in it hung the sweep (a review)
-        try:
-            journal.close()
-            snaps.wait()
-            if not complete:
-                try:
-                    for fut in list(pending):
-                        fut.cancel()
-                finally:
-                    close(abort=True)
-                    if done:
-                        write_results(sweep, list(done.values()), complete=False)
-        finally:
-            release_interrupts(held)
-    return n_new
+        _close_feed(sweep, feed, close, snaps, complete)
+    return feed.n_new
+
+
+def _close_feed(sweep: Sweep, feed: _Feed, close, snaps: _Snapshots, complete: bool) -> None:
+    """The end of :func:`_drive`, interrupts held (a second Ctrl-C in this cleanup hung the sweep:
+    a review): the journal closed, the background rebuild awaited and, when the sweep did not
+    complete, the chunks in flight cancelled, the executor aborted and the partial results written."""
+    held = hold_interrupts()
+    try:
+        feed.journal.close()
+        snaps.wait()
+        if not complete:
+            try:
+                for fut in list(feed.pending):
+                    fut.cancel()
+            finally:
+                close(abort=True)
+                if feed.done:
+                    write_results(sweep, list(feed.done.values()), complete=False)
+    finally:
+        release_interrupts(held)
 
 
 def _records(fut) -> list:
