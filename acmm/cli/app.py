@@ -208,6 +208,28 @@ def _branch_jump_text(jump) -> str:
             "the blend crosses a fold and the schedule is fitted across the jump")
 
 
+@app.command(short_help="Dwell-time stability certificate of the stair-case (switched linear system).")
+@user_errors
+def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+            strict: bool = StrictOpt) -> None:
+    """Dwell-time stability certificate of the stair-case: per-level Lyapunov functions of the
+    frozen closed loops, the worst jump ratio between levels (both ways), the certified minimum
+    dwell against each level's dwell, and the bound on each TEA step's transient against the torque
+    and momentum limits (designs first if needed; `acmm design` stores it in design.h5).
+    With --strict, a stair-case that is not certified exits 1."""
+    from acmm.stages.certify import certificate_lines, compute_certificate
+    from acmm.stages.design import design_for
+
+    cfg = _load(config, overrides)
+    table, note = design_for(cfg)
+    sc = compute_certificate(cfg, table)
+    typer.echo(f"{cfg.name}: design {note}")
+    for line in certificate_lines(sc):
+        typer.echo(line)
+    strict_exit(strict, not sc.certificate.certified,
+                f"{cfg.name}: the stair-case is not certified by a dwell time")
+
+
 @app.command(short_help="Nonlinear closed-loop simulation (ch 6); designs first if needed; writes sim.h5 + figures.")
 @user_errors
 def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,

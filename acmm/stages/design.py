@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from acmm.io.config import Config
+from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
+from acmm.stages.certify import certificate_items, compute_certificate
 from acmm.stages.common import _as_config, _define_units, _in_system
 from acmm_qpp.outputs import owns_outputs
 from acmm_qpp.results import draw_figures, write_h5
@@ -200,7 +202,9 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
     items = out.table_items(r, pts)
     if r.fit is not None:
         items["schedule"] = out.schedule_items(r)
-    items = _define_units(_in_system(items, cfg, out.unit_roles(pts, r.fit is not None)), cfg.orbit_rate)
+    items["dwell"] = certificate_items(compute_certificate(cfg, r.table))
+    roles = {**out.unit_roles(pts, r.fit is not None), **CERTIFICATE_ROLES}
+    items = _define_units(_in_system(items, cfg, roles), cfg.orbit_rate)
     path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
                     {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
                      "schedule_form": r.table.form, "table_sha256": _stored_digest(items, cfg.output.units)})

@@ -1,0 +1,201 @@
+"""The stair-case's dwell-time certificate of a config (report ch. 5.3, ch. 6): its levels' frozen
+closed loops gathered from the scenario (:func:`acmm.simulate.scenario.scenario_from_config`), the
+certificate of :mod:`acmm.design.dwell`, and its ``design.h5`` group ``dwell``.
+
+The plant of each level is the coupled linearization (eq 4.46) about the level's TEA
+(eqs 4.1–4.3) — the station itself, whatever design model variant the gains were designed on —
+closed by the gain in use there (the scheduled gain, eq 5.1).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acmm.design.dwell import NOT_COVERED, DwellCertificate, dwell_certificate
+from acmm.io.config import Config
+from acmm.io.design_file import DesignTable
+from acmm.model import kinematics as kin
+from acmm.model import linearize as lin
+from acmm.simulate.scenario import scenario_from_config
+from acmm.stages.common import UNIT_A, UNIT_STATE
+from acmm_qpp.results import Dataset
+
+#: the ``design.h5`` datasets of the ``dwell`` group converted per state (:func:`acmm.stages.common._in_system`)
+UNIT_ROLES = {"dwell/closed_loop": "A", "dwell/scale": "scales", "dwell/jump": "x"}
+
+#: indices of h1, h2, h3 and of δω1, δω3, δθ1..3 in the state of eq 4.47
+H_INDEX = (6, 7, 8)
+_RATE_INDEX = (0, 2)
+_ATTITUDE_INDEX = (3, 4, 5)
+
+
+@dataclass(frozen=True)
+class StairCertificate:
+    """A config's dwell-time certificate and the levels it is about.
+
+    Attributes
+    ----------
+    certificate : acmm.design.dwell.DwellCertificate
+        The certificate.
+    names : list of str
+        The design point of each level.
+    theta2 : (L,) array
+        Pitch TEA of each level, rad.
+    closed_loops : (L, 24, 24) array
+        A_k − B_k K_k of each level, 1/s (physical units of eq 4.46).
+    jumps : (L-1, 24) array
+        Change of the equilibrium state at each switch, state units.
+    n : float
+        Orbital rate, rad/s.
+    """
+
+    certificate: DwellCertificate
+    names: list
+    theta2: np.ndarray
+    closed_loops: np.ndarray
+    jumps: np.ndarray
+    n: float
+
+    @property
+    def orbit(self) -> float:
+        """One orbit, s."""
+        return 2 * np.pi / self.n
+
+
+def level_closed_loops(cfg: Config, table: DesignTable) -> tuple:
+    """The frozen closed loops of the config's stair-case levels and the equilibrium jumps.
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The config (orbit rate, DRF mode, the levels of ``simulation``).
+    table : acmm.io.design_file.DesignTable
+        Its design.
+
+    Returns
+    -------
+    Acl : (L, 24, 24) array
+        A_k − B_k K_k, 1/s.
+    gains : (L, 3, 24) array
+        K_k, ft·lbf per state unit.
+    scale : (24,) array
+        State magnitudes of the first level (the certificate's common scaling), state units.
+    dwell : (L-1,) array
+        Time each level but the last is held, s.
+    jumps : (L-1, 24) array
+        The equilibrium state of level k minus that of level k+1, in level k+1's coordinates
+        (state units: rad, rad/s).
+    idx : (L,) array of int
+        The design point of each level.
+    scenario : acmm.simulate.scenario.Scenario
+        The scenario the levels come from (its torque and momentum limits).
+    """
+    sc = scenario_from_config(cfg, table)
+    n = sc.n
+    models = [lin.design_point(sc.inertia[k], sc.theta_est[k], n, model="coupled", drf_mode=sc.drf_mode)
+              for k in range(len(sc.level_start))]
+    Acl = np.array([m.A - m.B @ sc.gain[k] for k, m in enumerate(models)])
+    jumps = np.zeros((len(models) - 1, Acl.shape[1]))
+    for k in range(len(models) - 1):
+        th0, th1 = sc.theta_est[k], sc.theta_est[k + 1]
+        jumps[k, list(_ATTITUDE_INDEX)] = th0 - th1
+        dw = kin.lvlh_rate_in_body(th0, n) - kin.lvlh_rate_in_body(th1, n)
+        jumps[k, list(_RATE_INDEX)] = dw[[0, 2]]
+    idx = [int(np.argmin([np.max(np.abs(t - th)) for t in table.tea])) for th in sc.theta_est]
+    return Acl, sc.gain, models[0].scales, np.diff(sc.level_start), jumps, np.array(idx), sc
+
+
+def compute_certificate(cfg: Config, table: DesignTable) -> StairCertificate:
+    """The dwell-time certificate of a config's stair-case (:func:`acmm.design.dwell.dwell_certificate`).
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The config.
+    table : acmm.io.design_file.DesignTable
+        Its design.
+
+    Returns
+    -------
+    StairCertificate
+        The certificate with its levels.
+    """
+    Acl, gains, scale, dwell, jumps, idx, sc = level_closed_loops(cfg, table)
+    cert = dwell_certificate(Acl, gains, scale, dwell, jumps, H_INDEX, sc.torque_limit, sc.momentum_limit)
+    return StairCertificate(cert, [table.names[i] for i in idx], sc.theta_est[:, 1], Acl, jumps, sc.n)
+
+
+def certificate_items(sc: StairCertificate) -> dict:
+    """The ``dwell`` group of ``design.h5``: everything an independent check needs (the closed
+    loops, the scaling, the Lyapunov matrices, λ) and the certificate's numbers.
+
+    Parameters
+    ----------
+    sc : StairCertificate
+        The certificate.
+
+    Returns
+    -------
+    dict
+        Name → :class:`acmm_qpp.results.Dataset` (imperial units, stated per dataset).
+    """
+    c = sc.certificate
+    orbit = sc.orbit
+    level = ("level",)
+    return {
+        "closed_loop": Dataset(sc.closed_loops, UNIT_A, "A_k - B_k K_k of each level's frozen loop (eq 4.46, coupled, "
+                               "about the level's TEA)", dims=("level", "state", "state_col")),
+        "scale": Dataset(c.scale, UNIT_STATE, "state scaling D of the Lyapunov matrices (x = D x~)", dims=("state",)),
+        "lyapunov": Dataset(c.P, "1", "P_k: (A~_k + lambda I)' P_k + P_k (A~_k + lambda I) = -I, scaled states",
+                            dims=("level", "state", "state_col")),
+        "jump": Dataset(sc.jumps, UNIT_STATE, "equilibrium state of level k minus that of level k+1",
+                        dims=("switch", "state")),
+        "decay_rate": Dataset(c.decay, "1/s", "common decay rate lambda of the levels' Lyapunov functions"),
+        "jump_up": Dataset(c.jump_up, "1", "mu(k+1 <- k) = lambda_max(P_k^-1 P_k+1)", dims=("switch",)),
+        "jump_down": Dataset(c.jump_down, "1", "mu(k <- k+1) = lambda_max(P_k+1^-1 P_k)", dims=("switch",)),
+        "tau_star": Dataset(c.tau_star / orbit if np.isfinite(c.tau_star) else np.inf, "orbit",
+                            "certified minimum dwell time ln(mu)/(2 lambda)",
+                            attrs={"certified": bool(c.certified), "within_limits": bool(c.within_limits),
+                                   "unstable_levels": list(c.unstable_levels), "not_covered": NOT_COVERED,
+                                   "statement": "certificate of the linearized switched system"}),
+        "dwell": Dataset(c.dwell / orbit, "orbit", "time each level but the last is held", dims=("switch",)),
+        "transient": Dataset(c.transient, "1", "bound on sqrt(V_k) of the deviation while level k holds", dims=level),
+        "u_bound": Dataset(c.u_bound, "ft*lbf", "bound on |u| while each level holds", ["roll", "pitch", "yaw"],
+                           dims=("level", "axis")),
+        "h_bound": Dataset(c.h_bound, "ft*lbf*s", "bound on the deviation of |h| while each level holds",
+                           ["roll", "pitch", "yaw"], dims=("level", "axis")),
+    }
+
+
+def certificate_lines(sc: StairCertificate) -> list[str]:
+    """The certificate in words, one line each (what ``acmm certify`` prints).
+
+    Parameters
+    ----------
+    sc : StairCertificate
+        The certificate.
+
+    Returns
+    -------
+    list of str
+        The lines.
+    """
+    c = sc.certificate
+    L = len(sc.names)
+    if c.unstable_levels:
+        bad = ", ".join(sc.names[k] for k in c.unstable_levels)
+        return [f"  no certificate: the frozen closed loop of level(s) {bad} is not stable"]
+    n = sc.n
+    lines = [f"  {L} level(s); common decay rate lambda = {c.decay / n:.3f} n"]
+    if L > 1:
+        shortest = float(np.min(c.dwell)) / sc.orbit
+        lines.append(f"  worst jump ratio mu = {c.mu:.3g} (switches checked both ways); certified minimum dwell "
+                     f"tau* = ln(mu)/(2 lambda) = {c.tau_star / sc.orbit:.3f} orbit; shortest level "
+                     f"{shortest:.2f} orbit: {'CERTIFIED' if c.certified else 'NOT certified'}")
+    if L > 1:
+        lines.append(f"  TEA-step transient: |u| <= {np.max(c.u_bound):.3g} ft*lbf (limit {c.torque_limit:g}), "
+                     f"|h - h*| <= {np.max(c.h_bound):.4g} ft*lbf*s (limit {c.momentum_limit:g}): "
+                     f"{'within the limits' if c.within_limits else 'NOT within the limits (the ellipsoid bound is conservative)'}")
+    lines.append("  a certificate of the linearized switched system; not covered: " + NOT_COVERED)
+    return lines
