@@ -46,7 +46,8 @@ REPO = Path(__file__).resolve().parent.parent
 README = REPO / "README.md"
 
 #: the blocks this script writes, in README order
-BLOCKS = ("table1_tea", "qpp_bullet", "claims", "staircase_levels", "design_points", "schedule_path", "sweep_monte_carlo",
+BLOCKS = ("table1_tea", "qpp_bullet", "claims", "staircase_levels", "design_points", "schedule_path",
+          "dwell_certificate", "sweep_monte_carlo",
           "sweep_diverged", "sweep_margin", "qpp_reproduced", "qpp_examples")
 
 #: the qpp configs the README quotes: the report's two chapters and the three shipped examples
@@ -665,6 +666,34 @@ def block_schedule_path(r: dict) -> str:
         rows.append(["largest RMS deviation of a refined polynomial from the LQR gains, / max\\|K_ij\\| "
                      "(`schedule/rel_residual`)", sig(np.max(sc["rel_residual"]), 2)])
     return table([f"along the path ({th.size} TEAs, {fixed(th[0], 1)}° … {fixed(th[-1], 1)}°)", "value"], rows)
+
+
+def block_dwell_certificate(r: dict) -> str:
+    """The stair-case's dwell-time certificate (``design.h5: dwell/*``, :mod:`acmm.design.dwell`).
+
+    Parameters
+    ----------
+    r : dict
+        :func:`run_stages`.
+
+    Returns
+    -------
+    str
+        A Markdown table.
+    """
+    g = r["design:staircase"]["dwell"]
+    n = r["config:staircase"].orbit_rate
+    dwell, tau = np.asarray(g["dwell"]), float(g["tau_star"])
+    mu = max(np.max(g["jump_up"]), np.max(g["jump_down"]))
+    rows = [["levels (frozen closed loops: coupled model about each TEA, scheduled gain)", str(dwell.size + 1)],
+            ["common decay rate λ of the Lyapunov functions", f"{fixed(float(g['decay_rate']) / n)}n"],
+            ["worst jump ratio μ between neighbouring levels (both directions)", sig(mu)],
+            ["certified minimum dwell τ* = ln μ / (2λ)", f"**{fixed(tau)} orbit**"],
+            ["shortest dwell of a level in the scenario", f"{fixed(dwell.min(), 2)} orbit"],
+            ["verdict", "certified: every level is held longer than τ*" if np.all(dwell > tau) else "NOT certified"],
+            ["TEA-step transient bound (certified ellipsoids): \\|u\\|, \\|h − h*\\|",
+             f"{sig(np.max(g['u_bound']))} ft·lbf, {sig(np.max(g['h_bound']))} ft·lbf·s"]]
+    return table(["dwell-time certificate (`acmm certify staircase`)", "value"], rows)
 
 
 def block_sweep_monte_carlo(r: dict) -> str:

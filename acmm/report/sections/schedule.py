@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from acmm.design.dwell import NOT_COVERED
 from acmm.report.context import SectionWriter
 from acmm.report.document import _decode
 from acmm.report.figures import fig_gain_schedule, fig_pole_maps
@@ -77,6 +78,32 @@ def summary(ctx: SectionWriter) -> None:
            f"({'stable at every check' if np.max(sc['check_max_real']) < 0 else 'UNSTABLE at some check'})"]]
          if "check_max_real" in sc else []), "Stair-case design summary")
     _conditioning(ctx, d, pts)
+    if "dwell" in d:
+        _dwell(ctx, d["dwell"], cfg.orbit_rate)
+
+
+def _dwell(ctx: SectionWriter, g: dict, n: float) -> None:
+    """The stair-case's dwell-time certificate (``design.h5`` group ``dwell``,
+    :mod:`acmm.design.dwell`): the systematic procedure ch. 5.3 says does not exist, for the
+    linearized switched system."""
+    lam = float(g["decay_rate"])
+    tau, dwell = float(g["tau_star"]), np.asarray(g["dwell"])
+    mu = max(np.max(g["jump_up"]), np.max(g["jump_down"]))
+    certified = bool(np.all(dwell > tau))
+    ctx.doc.p("The stair-case as a switched system (README, 'Dwell-time certificate'): each level's frozen "
+              "closed loop (the coupled model of eq 4.46 about the level's TEA, with the scheduled gain) has a "
+              "Lyapunov function decaying at one rate λ; the worst ratio μ between the Lyapunov functions of "
+              "neighbouring levels, switches checked both ways, gives the certified minimum dwell "
+              f"τ* = ln μ/(2λ). A certificate of the linearized switched system; not covered: {NOT_COVERED}.")
+    ctx.doc.table(["quantity", "value"], [
+        ["common decay rate λ (units of n)", f"{lam / n:.3f}"],
+        ["worst jump ratio μ (both directions)", f"{mu:.3g}"],
+        ["certified minimum dwell τ* (orbits)", f"{tau:.3f}"],
+        ["shortest dwell of a level (orbits)", f"{dwell.min():.2f}"],
+        ["verdict", "certified: every level is held longer than τ*" if certified else "NOT certified"],
+        ["TEA-step transient bound, |u| (ft·lbf) / |h − h*| (ft·lbf·s)",
+         f"{np.max(g['u_bound']):.3g} / {np.max(g['h_bound']):.4g}"],
+    ], "Dwell-time certificate of the stair-case")
 
 
 def true_poles(ctx: SectionWriter) -> np.ndarray:
