@@ -35,12 +35,59 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep)
 
 
-def _format_error(exc: ValidationError, model_cls=None) -> str:
+#: the type names pydantic puts in an error's location for the members of a union
+_UNION_MEMBERS = frozenset({"str", "float", "int", "bool", "list", "dict", "none", "bytes"})
+
+
+def user_path(loc: tuple, data: object) -> tuple:
+    """The part of a pydantic error location that names the user's field: the steps pydantic adds
+    for its own validators (``function-after[…]``, ``tagged-union[…]``, a union member's type
+    name) and a discriminated union's tag value (``expression`` of ``kind: expression``) are left
+    out, so ``nonlinearity.expression.f1.0.function-after[…, LibraryForm].bogus`` reads
+    ``nonlinearity.f1.0.bogus``.
+
+    Parameters
+    ----------
+    loc : tuple
+        The error's ``loc``.
+    data : object
+        The validated input (parsed YAML).
+
+    Returns
+    -------
+    tuple
+        The user's path.
+    """
+    out, cur = [], data
+    for p in loc:
+        if isinstance(p, str) and any(c in p for c in "[](),"):
+            continue                                        # a validator's own step
+        if p in _UNION_MEMBERS and not (isinstance(cur, dict) and p in cur):
+            continue                                        # a union member's type (str | float | …)
+        if isinstance(cur, dict):
+            if p in cur:
+                out.append(p)
+                cur = cur[p]
+            elif p not in cur.values():                     # (a tag value: not the user's key)
+                out.append(p)
+                cur = None
+        elif isinstance(cur, list) and isinstance(p, int) and 0 <= p < len(cur):
+            out.append(p)
+            cur = cur[p]
+        elif cur is None or not (isinstance(p, str) and p[:1].isupper()):   # (a union member's class)
+            out.append(p)
+            cur = None
+    return tuple(out)
+
+
+def _format_error(exc: ValidationError, model_cls=None, data: object = None) -> str:
     from acmm_qpp.config_model import BOOLEAN_AS_NUMBER
     from acmm_qpp.hints import prioritize, unknown_key_hint
 
-    err = prioritize(exc.errors())[0]
-    loc = ".".join(str(p) for p in err["loc"])
+    errors = prioritize(exc.errors())
+    err = errors[0]
+    path = user_path(tuple(err["loc"]), data)
+    loc = ".".join(str(p) for p in path)
     if err["type"] == BOOLEAN_AS_NUMBER:                     # a model-level check naming its field
         loc = f"{loc}.{err['ctx']['field']}" if loc else err["ctx"]["field"]
     loc = loc or "config"
@@ -48,9 +95,12 @@ def _format_error(exc: ValidationError, model_cls=None) -> str:
     for prefix in ("Value error, ", "Assertion failed, "):
         if msg.startswith(prefix):
             msg = msg[len(prefix):]
-    if err["type"] == "extra_forbidden":
-        msg = "unknown key" + (unknown_key_hint(model_cls, tuple(err["loc"])) if model_cls else "")
-    extra = f" (and {len(exc.errors()) - 1} more)" if len(exc.errors()) > 1 else ""
+    if err["type"] == "extra_forbidden" and path:    # the mapping that has it, then the key
+        loc = ".".join(str(p) for p in path[:-1]) or "config"
+        msg = f"unknown key {path[-1]!r}" + (unknown_key_hint(model_cls, tuple(err["loc"])) if model_cls else "")
+    # other fields in error (the union's other members at the same place are not other errors)
+    others = {q for q in (user_path(tuple(e["loc"]), data) for e in errors[1:]) if q != path[:len(q)]}
+    extra = f" (and {len(others)} more)" if others else ""
     return f"{loc}: {msg}{extra}"
 
 
@@ -106,7 +156,7 @@ def validate_model(model_cls, data: object, source: str = "config"):
     try:
         return model_cls.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(f"{source}: {_format_error(exc, model_cls)}") from None
+        raise ConfigError(f"{source}: {_format_error(exc, model_cls, data)}") from None
 
 
 DEFAULT_CONFIG = "staircase.yaml"

@@ -18,6 +18,7 @@ from acmm_qpp.errors import ConfigError
 
 MAX_LEN = 400           #: longest accepted expression, characters
 MAX_EXPONENT = 64       #: largest |numeric exponent| accepted in ``**``
+MAX_CONSTANT = 1e300    #: largest |constant| accepted, written or computed (1e308*1e308 is not)
 
 
 def sympy_module():
@@ -90,9 +91,12 @@ def parse_expression(text: str, symbols: dict, where: str = "expression"):
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as exc:
         raise ConfigError(f"{where}: cannot parse {text!r} ({exc.msg})") from None
-    expr = _to_sympy(tree, symbols, _functions(), where, text)
-    if expr.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
+    expr = _to_sympy(tree, symbols, _functions(), where, text.strip())
+    if expr.has(sp.zoo, sp.nan):
         raise ConfigError(f"{where}: expression {text!r} is singular (division by zero)")
+    if expr.has(sp.oo, -sp.oo) or any(abs(float(c)) > MAX_CONSTANT for c in expr.atoms(sp.Float)):
+        raise ConfigError(f"{where}: overflow: expression {text!r} has a constant beyond floating point "
+                          f"(|c| ≤ {MAX_CONSTANT:.0e})")
     return expr
 
 
@@ -160,6 +164,9 @@ def _to_sympy(node, symbols: dict, funcs: dict, where: str, text: str):
     if isinstance(node, ast.Expression):
         return conv(node.body)
     if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+        if not abs(node.value) <= MAX_CONSTANT:          # 1e400 is inf as a float
+            raise ConfigError(f"{where}: overflow: the constant {ast.get_source_segment(text, node) or node.value} "
+                              f"in {text!r} is beyond floating point (|c| ≤ {MAX_CONSTANT:.0e})")
         return sp.Integer(node.value) if isinstance(node.value, int) else sp.Float(node.value)
     if isinstance(node, ast.Name):
         if node.id in symbols:

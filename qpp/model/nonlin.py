@@ -100,7 +100,7 @@ class ExpressionModel(SampleGrid):
             if k in FUNCTIONS or k in ("pi", "t", "y") or (k.startswith("y") and k[1:].isdigit()):
                 raise ConfigError(f"nonlinearity.parameters: name {k!r} is reserved")
         self.texts = list(exprs)
-        self.f = [parse_expression(e, syms, f"nonlinearity.f1[{i}]") for i, e in enumerate(exprs)]
+        self.f = [parse_expression(e, syms, f"nonlinearity.f1.{i}") for i, e in enumerate(exprs)]
         nom_sub = dict(zip(self.th, [sp.Float(v) for v in self.nom]))
         dphi = [fi - fi.subs(nom_sub) for fi in self.f]
         self.phi = [sum(self.N[i, k] * dphi[k] for k in range(len(dphi))) for i in range(self.N.shape[0])]
@@ -298,29 +298,46 @@ class ExpressionModel(SampleGrid):
         return np.concatenate([[Y[min(iy, Y.shape[0] - 1), 0] for Y in Yf], [tg[it]], np.asarray(th, float)])
 
     def _check_continuity(self) -> None:
-        """Symbolic check (sympy ``continuous_domain``) that every f1 channel is continuous in each of
-        its symbols over the stated range — catches poles the sampling grid steps over (tan at π/2).
-        Skipped for large expressions or when sympy cannot decide; the sampling checks still apply."""
-        sp = sympy_module()
-        from sympy.calculus.util import continuous_domain
+        """Every f1 channel continuous and finite on the stated ranges, decided in bounded time.
 
+        Each sub-expression that can make f1 singular — a denominator (a negative power), the
+        cosine under ``tan``, the argument of ``log`` and of a fractional power — is evaluated on a
+        grid of at most :data:`SINGULARITY_POINTS` points over the ranges of its symbols (y, t,
+        θ); a zero or a change of sign along an axis (a pole between grid points: tan at π/2), or a
+        negative argument of a root or a logarithm, is refused naming the symbol.  Then f1 itself
+        is evaluated on the grid: a value that is not finite or beyond :data:`VALUE_LIMIT` is
+        refused as an overflow.  (sympy's ``continuous_domain`` decided this symbolically, but
+        took minutes for ``tan(100*y1)``.)
+        """
+        sp = sympy_module()
         ranges = {**{s: tuple(r) for s, r in zip(self.ys, self.y_range)}, self.t: (0.0, self.t_range),
                   **{s: (lo, hi) for s, lo, hi in zip(self.th, self.lo, self.hi)}}
         for k, f in enumerate(self.f):
-            if sp.count_ops(f) > 60:
-                continue
-            for sym in sorted(f.free_symbols & set(ranges), key=str):
-                lo, hi = ranges[sym]
-                if lo == hi:
+            where = f"nonlinearity.f1.{k}"
+            for node in sp.preorder_traversal(f):
+                check = _singular_argument(sp, node)
+                if check is None:
                     continue
-                iv = sp.Interval(sp.Float(lo), sp.Float(hi))
-                try:
-                    dom = continuous_domain(f, sym, iv)
-                except Exception:                         # noqa: BLE001 - undecided: rely on sampling
+                arg, kind = check
+                syms = sorted(arg.free_symbols & set(ranges), key=str)
+                if not syms:
                     continue
-                if dom != iv and not iv.is_subset(dom):
-                    raise ConfigError(f"nonlinearity.f1[{k}]: singular on the stated range: {self.texts[k]!r} is "
-                                      f"not continuous in {sym} on [{lo:g}, {hi:g}] (continuous on {dom})")
+                grid, vals = _on_grid(sp, arg, syms, ranges)
+                bad = _singular_axis(vals, kind)
+                if bad is not None:
+                    sym = syms[bad]
+                    lo, hi = ranges[sym]
+                    raise ConfigError(f"{where}: singular on the stated range: {self.texts[k]!r} is not continuous "
+                                      f"in {sym} on [{lo:g}, {hi:g}] ({_WHY[kind]} {arg})")
+            syms = sorted(f.free_symbols & set(ranges), key=str)
+            if syms:
+                grid, vals = _on_grid(sp, f, syms, ranges)
+                big = ~np.isfinite(vals) | (np.abs(np.nan_to_num(vals, nan=np.inf)) > VALUE_LIMIT)
+                if big.any():
+                    at = ", ".join(f"{s} = {g.reshape(-1)[int(np.argmax(big.reshape(-1)))]:.4g}"
+                                   for s, g in zip(syms, grid))
+                    raise ConfigError(f"{where}: overflow: {self.texts[k]!r} is not a finite number below "
+                                      f"{VALUE_LIMIT:.0e} on the stated ranges (at {at})")
 
     # ------------------------------------------------------------------ β3, β4
     def beta3(self, T: float) -> float:
@@ -397,3 +414,63 @@ class ExpressionModel(SampleGrid):
             ph = self.phi_at([y_o[j] for j in range(self.p)], t, [np.full(t.shape, v) for v in th])
             best = max(best, truncated_l2(t, ph, T))
         return best
+
+
+#: evaluations of one sub-expression by the continuity check (:meth:`ExpressionModel._check_continuity`)
+SINGULARITY_POINTS = 2 ** 18
+
+#: largest |f1| accepted on the stated ranges: beyond it products of f1 overflow floating point
+VALUE_LIMIT = 1e150
+
+_WHY = {"pole": "zero of the denominator", "tan": "pole of tan where cos is 0:",
+        "log": "logarithm of a non-positive value:", "root": "fractional power of a negative value:"}
+
+
+def _singular_argument(sp, node):
+    """(argument, kind) of a sub-expression that is singular where its argument is 0 (``pole``,
+    ``tan``) or negative (``log``, ``root``); None for one that is continuous everywhere."""
+    if isinstance(node, sp.Pow) and node.exp.is_number:
+        if node.exp.is_negative:
+            return node.base, "pole"
+        if not node.exp.is_integer:
+            return node.base, "root"
+    elif isinstance(node, sp.tan):
+        return sp.cos(node.args[0]), "tan"
+    elif isinstance(node, sp.log):
+        return node.args[0], "log"
+    return None
+
+
+def _on_grid(sp, expr, syms, ranges):
+    """``expr`` on a grid of at most :data:`SINGULARITY_POINTS` points spanning the ranges of
+    ``syms`` (each axis the same number of points, the ends included): (grid arrays, values)."""
+    per_axis = max(3, int(SINGULARITY_POINTS ** (1.0 / len(syms))))
+    axes = [np.linspace(*ranges[s], per_axis) for s in syms]
+    grid = np.meshgrid(*axes, indexing="ij")
+    fn = sp.lambdify(syms, expr, modules="numpy")
+    with np.errstate(all="ignore"):
+        vals = np.broadcast_to(np.asarray(fn(*grid), dtype=float), grid[0].shape)
+    return grid, vals
+
+
+def _singular_axis(vals: np.ndarray, kind: str):
+    """The axis along which ``vals`` shows a singularity of ``kind`` — a zero, a non-finite value
+    or a change of sign for a pole, a negative value (zero too for a logarithm) for a logarithm or
+    a root — else None."""
+    nonfinite = ~np.isfinite(vals)
+    if kind in ("log", "root"):
+        bad = nonfinite | ((vals <= 0) if kind == "log" else (vals < 0))
+        return _varying_axis(vals) if bad.any() else None
+    if nonfinite.any() or np.any(vals == 0):
+        return _varying_axis(vals)
+    for ax in range(vals.ndim):
+        v = np.moveaxis(vals, ax, 0)
+        if np.any(np.sign(v[1:]) != np.sign(v[:-1])):
+            return ax
+    return None
+
+
+def _varying_axis(vals: np.ndarray) -> int:
+    """The axis along which ``vals`` varies most (the symbol a singularity is named after)."""
+    v = np.nan_to_num(vals, nan=0.0, posinf=1e300, neginf=-1e300)
+    return int(np.argmax([np.max(np.ptp(np.moveaxis(v, ax, 0), axis=0)) for ax in range(v.ndim)]))
