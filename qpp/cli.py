@@ -137,7 +137,7 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = Overrides
              strict: bool = StrictOpt) -> None:
     """Nonlinear closed loop per scenario and the sphere check ‖y − y_o‖∞ ≤ β_o → qpp_sim.h5.
     The gains are those `qpp design` wrote for this config, else designed first. With --strict, an
-    output outside the sphere exits 1."""
+    output outside the sphere, or an uncertified design, exits 1."""
     from acmm_qpp.cli.progress import status
     from qpp.io.stages import run_simulate
 
@@ -150,6 +150,9 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = Overrides
 
         cfg, r, sims, path = run_simulate(cfg, figures, progress=tick)
     typer.echo(f"{cfg.name}: beta_o = {cfg.spheres.beta_o:g}; design {r.verdict}")
+    if not r.certified:
+        typer.echo("  these are simulations of an UNCERTIFIED design: staying inside the sphere here is "
+                   "measured on these scenarios only, not guaranteed")
     y_range = getattr(cfg.nonlinearity, "y_range", None)
     for s in sims:
         g = (", ".join(f"{k} = {v:g}" for k, v in s.parameters.items()) if s.parameters
@@ -165,6 +168,7 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = Overrides
     typer.echo(f"  wrote {path}")
     out = [s.name for s in sims if not s.passed]
     strict_exit(strict, bool(out), f"{cfg.name}: outside the output sphere in {', '.join(out)}")
+    strict_exit(strict, not r.certified, f"{cfg.name}: the design is not certified ({r.verdict})")
 
 
 def main() -> None:
