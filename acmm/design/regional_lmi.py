@@ -42,7 +42,8 @@ coordinates x̃ = T z: first T = chol(X₀) with X₀ the Lyapunov matrix of a r
 (the sector LQR's gain, shifted by σ, driven by G̃G̃ᵀ + 10⁻³I), then again with T ← T chol(X)
 from the first solution and the input columns scaled to unit gain-row norms, the objective divided
 by the first optimum — the same problem, but with its optimum near X = I, Y, W = O(1), where
-Clarabel converges to its full tolerances (status "optimal"; the first pass usually stops at
+Clarabel reaches status "optimal" at gap and feasibility tolerance 1e-7 (``tol``; at 1e-8 AC stops
+"optimal_inaccurate"); the first pass usually stops at
 "optimal_inaccurate", which is accepted only as a pre-conditioner).
 """
 from __future__ import annotations
