@@ -117,7 +117,7 @@ class RegionalLMI:
     X : (N, N) array
         Lyapunov certificate of the regions in the scaled coordinates x̃ (dimensionless, time in 1/n).
     X2 : (N, N) array
-        The H2 matrix X₂ ⪰ W_c (scaled coordinates).
+        The H2 matrix X₂ ⪰ W_c (scaled coordinates), dimensionless.
     poles : (N,) complex array
         Eigenvalues of A − BK, rad/s, sorted by real part.
     margin : float
@@ -128,7 +128,7 @@ class RegionalLMI:
         eigenvalues), units of n.
     eig_condition : (N,) array
         Eigenvalue condition numbers of Ã − B̃K̃ (:func:`~acmm.design.sector_lqr.eigen_conditioning`),
-        same order as ``poles``.
+        same order as ``poles``, dimensionless.
     robustness_radius, robustness_radius_elementwise : float
         First-order sector robustness radii (:func:`~acmm.design.sector_lqr.sector_robustness`),
         normwise in the scaled coordinates and elementwise, dimensionless.
@@ -138,7 +138,7 @@ class RegionalLMI:
     energy : float
         :func:`control_energy` of K, in (input_scale)² (time unit 1/n).
     cost_bound : float
-        tr W, the certified upper bound of ``energy``.
+        tr W, the certified upper bound of ``energy``, in the units of ``energy``.
     status : str
         cvxpy status of the accepted pass ("optimal").
     tol : float
@@ -211,11 +211,11 @@ def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0, G=No
     n : float
         Orbital rate, rad/s (time unit 1/n).
     scale : (N,) array or None
-        State scales.
+        State scales D, units of each state.
     input_scale : float
         Input unit e.
     G : (N, p) array or None
-        Disturbance input, physical; None = −B (torque disturbance at the input).
+        Disturbance input, state units per s per ft·lbf; None = −B (torque disturbance at the input).
 
     Returns
     -------
@@ -347,13 +347,13 @@ def certified_margin(As, Bs, Ks, X, sigma: float, half_angle_deg: float, min_mar
     Parameters
     ----------
     As, Bs, Ks : arrays
-        Scaled model and gain (time in 1/n).
+        Scaled model and gain (time in 1/n), dimensionless.
     X : (N, N) array
-        The certificate in the same coordinates.
+        The certificate in the same coordinates, dimensionless.
     sigma, half_angle_deg : float
-        The sector.
+        The sector (units of n, deg).
     min_margin : float
-        μ (unused in the value; kept for the signature of the settings).
+        μ, units of n (unused in the value; kept for the signature of the settings).
 
     Returns
     -------
@@ -395,7 +395,7 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
     input_scale : float
         Input unit e, ft·lbf (:func:`acmm.model.state_scaling.torque_scale`).
     G : (N, p) array or None
-        Disturbance input, physical; None = −B.
+        Disturbance input, state units per s per ft·lbf; None = −B.
 
     Returns
     -------

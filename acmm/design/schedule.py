@@ -13,13 +13,14 @@ input).  The config is read only by :func:`acmm.design.schedule_points.point_spe
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace, field
 
 import numpy as np
 
 from acmm.model import linearize as lin
 from acmm.model import state_scaling as scaling
 from acmm.design import sector_lqr
+from acmm.design.regional_lmi import regional_lmi
 from acmm.design.settings import DesignSettings
 from acmm.design.schedule_points import PointSpec
 from acmm.model.tea import TEA, solve_tea, solve_tea_near
@@ -224,12 +225,21 @@ def sector_design(A, B, scales, s: DesignSettings):
     acmm.design.sector_lqr.SectorLQR
         The verified design.
     """
-    return sector_lqr.sector_lqr(A, B, s.R * np.eye(3), s.orbit_rate, sigma=s.sector.sigma,
-                          half_angle_deg=s.sector.half_angle_deg,
-                          Q0=s.q0_weight(A.shape[0]),   # on the scaled states
-                          scale=scales, method=s.pole_method, riccati_method=s.riccati_method,
-                          residual_tol=s.residual_tol, min_margin=s.min_margin,
-                          line_spacing=s.line_spacing, input_scale=scaling.torque_scale(scales))
+    res = sector_lqr.sector_lqr(A, B, s.R * np.eye(3), s.orbit_rate, sigma=s.sector.sigma,
+                                half_angle_deg=s.sector.half_angle_deg,
+                                Q0=s.q0_weight(A.shape[0]),   # on the scaled states
+                                scale=scales, method="shift" if s.pole_method == "lmi" else s.pole_method,
+                                riccati_method=s.riccati_method, residual_tol=s.residual_tol,
+                                min_margin=s.min_margin, line_spacing=s.line_spacing,
+                                input_scale=scaling.torque_scale(scales))
+    if s.pole_method != "lmi":
+        return res
+    # the regional LMI design, its coordinates pre-conditioned by the sector LQR's closed loop;
+    # the result keeps that reference design's Riccati data (P, Q, residuals) beside its own
+    lmi = regional_lmi(A, B, s.orbit_rate, res.K, s.lmi, scale=scales, input_scale=scaling.torque_scale(scales))
+    return replace(res, K=lmi.K, poles=lmi.poles, margin=lmi.margin, eig_condition=lmi.eig_condition,
+                   robustness_radius=lmi.robustness_radius,
+                   robustness_radius_elementwise=lmi.robustness_radius_elementwise, method="lmi", lmi=lmi)
 
 
 def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: str = "polynomial",

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acmm.design.regional_lmi import RegionalLMISettings
+
 
 @dataclass(frozen=True)
 class Sector:
@@ -54,7 +56,8 @@ class DesignSettings:
     sector : Sector
         The pole sector.
     pole_method : str
-        ``"shift"`` or ``"uniform"`` (:func:`acmm.design.sector_lqr.sector_lqr`).
+        ``"shift"`` or ``"uniform"`` (:func:`acmm.design.sector_lqr.sector_lqr`), or ``"lmi"``
+        (:func:`acmm.design.regional_lmi.regional_lmi`, pre-conditioned by the ``"shift"`` design).
     riccati_method : str
         ``"sign"``, ``"scipy"`` or ``"slycot"``.
     residual_tol : float
@@ -68,6 +71,8 @@ class DesignSettings:
         Design model (eq 4.46 or a simplification).
     drf_mode : str
         ``"attitude_hold"`` or ``"momentum_hold"``.
+    lmi : acmm.design.regional_lmi.RegionalLMISettings or None
+        The regional LMI design's settings (``pole_method="lmi"``), else None.
     """
 
     orbit_rate: float                 # rad/s
@@ -75,13 +80,14 @@ class DesignSettings:
     Q0: float                         # scaled-state weight q (dimensionless)
     Q0_groups: np.ndarray | None      # (nx,) diagonal added to Q0 on the scaled states, or None
     sector: Sector
-    pole_method: str                  # "shift" or "uniform"
+    pole_method: str                  # "shift", "uniform" or "lmi"
     riccati_method: str               # "sign", "scipy" or "slycot"
     residual_tol: float
     min_margin: float                 # units of n
     line_spacing: float
     model: str                        # design model (eq 4.46 or a simplification)
     drf_mode: str                     # "attitude_hold" or "momentum_hold"
+    lmi: RegionalLMISettings | None = None
 
     def q0_weight(self, nx: int):
         """The initial state weight on the scaled states: Q0·I plus ``Q0_groups`` on the
@@ -159,7 +165,11 @@ def design_settings(cfg) -> DesignSettings:
         Q0_groups=None if d.Q0_groups is None else d.Q0_groups.diagonal(),
         sector=Sector(d.sector.sigma, d.sector.half_angle_deg),
         pole_method=d.pole_method, riccati_method=d.riccati_method, residual_tol=d.residual_tol,
-        min_margin=d.min_margin, line_spacing=d.line_spacing, model=d.model, drf_mode=d.drf_mode)
+        min_margin=d.min_margin, line_spacing=d.line_spacing, model=d.model, drf_mode=d.drf_mode,
+        lmi=None if d.pole_method != "lmi" else RegionalLMISettings(
+            sigma=d.sector.sigma, half_angle_deg=d.sector.half_angle_deg, min_margin=d.min_margin,
+            backoff=d.lmi.backoff, disk_radius=d.lmi.disk_radius, dilation=d.lmi.dilation, tol=d.lmi.tol,
+            n_random=d.lmi.n_random, seed=d.lmi.seed))
 
 
 def schedule_settings(cfg) -> ScheduleSettings | None:

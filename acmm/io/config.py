@@ -54,6 +54,19 @@ class Q0Groups(_Model):
                         + [self.momentum_integral] * 3 + [self.drf] * 12)
 
 
+class RegionalLMI(_Model):
+    """The regional pole placement by LMIs (``pole_method: lmi``, :mod:`acmm.design.regional_lmi`)."""
+
+    dilation: float = Field(0.35, gt=0, le=100, description="β of the dilated H2 energy bound, units of 1/n")
+    tol: float = Field(1e-7, ge=1e-10, le=1e-3, description="Clarabel's gap and feasibility tolerance of the final pass")
+    backoff: float = Field(0.002, ge=0, le=1, description="the regions are imposed with margin min_margin + backoff, "
+                                                          "units of n (so the certificate proves min_margin)")
+    disk_radius: float = Field(0.0, ge=0, le=1e4, description="> 0: also |λ| ≤ disk_radius·n (fastest pole); 0: none")
+    n_random: int = Field(100, strict=True, ge=0, le=100000, description="random gain perturbations of the "
+                                                                          "robustness re-check")
+    seed: int = Field(0, strict=True, ge=0, description="seed of those perturbations")
+
+
 class Design(_Model):
     """Linear design model (eq 4.46) and the sector LQR (ch. 5.2)."""
 
@@ -65,8 +78,10 @@ class Design(_Model):
     R: WeightTorque = Field(1e-4, ge=1e-20, le=1e12, description="control weight R = r·I, 1/(ft·lbf)²")
     Q0: float = Field(0.0, ge=0, le=1e12, description="state weight Q0 = q·I on the scaled states (dimensionless)")
     riccati_method: Literal["sign", "scipy", "slycot"] = Field("scipy", description="CARE solver")
-    pole_method: Literal["shift", "uniform"] = Field(
-        "shift", description="sector enforcement: optimal pole shifting of the stray poles, or a uniform shift")
+    pole_method: Literal["shift", "uniform", "lmi"] = Field(
+        "shift", description="sector enforcement: optimal pole shifting of the stray poles, a uniform shift, or "
+                             "regional pole placement by LMIs with an H2 energy bound (design.lmi)")
+    lmi: RegionalLMI = RegionalLMI()
     residual_tol: float = Field(1e-12, gt=0, lt=1, description="largest accepted Riccati backward error after "
                                                                  "refinement (acmm.design.riccati.care_backward_error)")
     Q0_groups: Optional[Q0Groups] = Field(

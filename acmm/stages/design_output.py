@@ -73,7 +73,30 @@ def point_items(points) -> dict:
             "riccati_ill_conditioned": Dataset(np.int8(res.riccati_ill_conditioned), "1",
                                                "1 if the CARE condition exceeds 1/sqrt(eps)"),
         }
+        if res.lmi is not None:
+            pts[f"{k:03d}_{p.spec.name}"]["lmi"] = _lmi_items(res.lmi)
+            for key in ("Q", "P", "riccati_residual", "riccati_backward_error", "riccati_condition"):
+                ds = pts[f"{k:03d}_{p.spec.name}"][key]
+                pts[f"{k:03d}_{p.spec.name}"][key] = replace(
+                    ds, description=ds.description + " of the reference sector LQR (the LMI design's pre-conditioner)")
     return pts
+
+
+def _lmi_items(r) -> dict:
+    """The ``points/<k>/lmi`` group: the regional LMI design of a point (:mod:`acmm.design.regional_lmi`)."""
+    return {
+        "X": Dataset(r.X, "1", "Lyapunov certificate of the regions, scaled states, time in 1/n",
+                     dims=("state", "state_col")),
+        "X2": Dataset(r.X2, "1", "H2 matrix of the dilated energy bound, scaled states", dims=("state", "state_col")),
+        "certified_margin": Dataset(r.certified_margin, "n", "sector margin proved by X"),
+        "random_radius": Dataset(r.random_radius, "1", "smallest relative elementwise gain error found to move a "
+                                 "pole out of the sector (random re-check)"),
+        "energy": Dataset(r.energy, "1", "H2 control energy tr(K W Kt), scaled input, time in 1/n"),
+        "cost_bound": Dataset(r.cost_bound, "1", "tr W, the certified upper bound of the energy"),
+        "solver_tolerance": Dataset(r.tol, "1", "Clarabel gap and feasibility tolerance reached",
+                                    attrs={"status": r.status, "iterations": list(r.iterations)}),
+        "solve_time": Dataset(r.solve_time, "s", "wall time of the LMI passes"),
+    }
 
 
 def table_items(r, pts: dict) -> dict:
