@@ -47,7 +47,7 @@ README = REPO / "README.md"
 
 #: the blocks this script writes, in README order
 BLOCKS = ("table1_tea", "qpp_bullet", "claims", "staircase_levels", "design_points", "schedule_path",
-          "dwell_certificate", "sweep_monte_carlo",
+          "dwell_certificate", "design_routes", "sweep_monte_carlo",
           "sweep_diverged", "sweep_margin", "qpp_reproduced", "qpp_examples")
 
 #: the qpp configs the README quotes: the report's two chapters and the three shipped examples
@@ -219,6 +219,40 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
     if res is None:
         raise AcmmError(f"the sweep for the README did not run: {note}")
     out["sweep"] = res["data"]
+    out.update(_lmi_route(root, workers))
+    return out
+
+
+def _lmi_route(root: Path, workers: int | None) -> dict:
+    """MB3 and AC designed by the regional LMI route (``design.pole_method: lmi``) and the packaged
+    ±30 % sweep of those fixed gains on the same draws: ``"design:<name>_lmi"``, ``"sweep_lmi"``."""
+    import os
+
+    import yaml
+
+    from acmm_qpp.configio import packaged_config_path
+    from acmm_qpp.results import read_h5
+    from acmm.io.config import load_config
+    from acmm.report.stage_results import ensure_acmm_design
+    from acmm.sweep.config import parse_sweep
+    from acmm.sweep.run import run_sweep
+
+    out, bases = {}, []
+    for name in ("mb3", "ac"):
+        data = yaml.safe_load(packaged_config_path(f"{name}.yaml").read_text())
+        data["name"] = f"{name}_lmi"
+        data.setdefault("design", {})["pole_method"] = "lmi"
+        path = root / f"{name}_lmi.yaml"
+        path.write_text(yaml.safe_dump(data, sort_keys=False))
+        bases.append(str(path))
+        out[f"design:{name}_lmi"] = read_h5(ensure_acmm_design(load_config(str(path), [f"output.root={root}"])).path)
+    p = packaged_config_path("sweep_inertia30.yaml")
+    data = yaml.safe_load(p.read_text())
+    data["name"], data["sweep"]["bases"] = "sweep_inertia30_lmi", bases
+    data["output"] = {"root": str(root), "figures": False}
+    sweep = parse_sweep(data, source=str(p), directory=p.parent)
+    out["sweep_lmi"] = read_h5(run_sweep(sweep, workers=workers or max(1, min(2, os.cpu_count() or 1)),
+                                         figures=False).path)
     return out
 
 
@@ -694,6 +728,57 @@ def block_dwell_certificate(r: dict) -> str:
             ["TEA-step transient bound (certified ellipsoids): \\|u\\|, \\|h − h*\\|",
              f"{sig(np.max(g['u_bound']))} ft·lbf, {sig(np.max(g['h_bound']))} ft·lbf·s"]]
     return table(["dwell-time certificate (`acmm certify staircase`)", "value"], rows)
+
+
+def block_design_routes(r: dict) -> str:
+    """The LQR route (sector LQR, the report's method) and the regional LMI route side by side at
+    MB3 and AC: margin, conditioning, robustness, energy, fastest pole, and the ±30 % Monte Carlo
+    and inertia-scaling margin of each fixed gain on the same draws.
+
+    Parameters
+    ----------
+    r : dict
+        :func:`run_stages`.
+
+    Returns
+    -------
+    str
+        A Markdown table.
+    """
+    from acmm.design.regional_lmi import control_energy, random_gain_radius
+    from acmm.model.state_scaling import torque_scale
+
+    def point(d):
+        return d["points"][sorted(d["points"])[0]]
+
+    def counts(sw, label):
+        names = [_text(x) for x in np.atleast_1d(sw["base_names"])]
+        verdict = np.array([_text(x) for x in np.atleast_1d(sw["verdict"])])
+        v = verdict[np.atleast_1d(sw["base"]) == names.index(label)]
+        return int(np.sum(v == "bounded")), v.size
+
+    def margin_range(sw, label):
+        lo, hi = sw["margin"][f"{label}_down"], sw["margin"][f"{label}_up"]
+        return f"{fixed(lo['limit'])} … {fixed(hi['limit'])}"
+
+    rows = []
+    for name, label in (("mb3", "MB3"), ("ac", "AC")):
+        n = r[f"config:{name}"].orbit_rate
+        for route, d, sw, base in (("sector LQR", r[f"design:{name}"], r["sweep"], name),
+                                   ("regional LMI", r[f"design:{name}_lmi"], r["sweep_lmi"], f"{name}_lmi")):
+            p = point(d)
+            A, B, K, sc = (np.asarray(p[k]) for k in ("A", "B", "K", "scales"))
+            e = torque_scale(sc)
+            fastest = float(np.max(-np.real(np.asarray(p["poles"])))) / n
+            rr = float(p["lmi"]["random_radius"]) if "lmi" in p else random_gain_radius(A, B, K, n)
+            ok, tot = counts(sw, base)
+            rows.append([f"{label}, {route}", fixed(float(p["sector_margin"])), sig(float(p["max_eig_condition"]), 2),
+                         sci(float(p["robustness_radius_elementwise"])), sci(rr),
+                         sig(control_energy(A, B, K, n, sc, e), 3), fixed(fastest, 1), f"{ok}/{tot}",
+                         margin_range(sw, base)])
+    return table(["station, route", "margin (n)", "κ max", "radius (first order, elementwise)",
+                  "radius (random re-check)", "energy", "fastest pole (n)", "±30 % bounded and settled",
+                  "tolerated inertia scaling s"], rows)
 
 
 def block_sweep_monte_carlo(r: dict) -> str:
