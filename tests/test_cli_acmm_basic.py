@@ -13,7 +13,7 @@ import pytest
 
 from acmm_qpp.results import read_h5
 
-from conftest import CONFIGS
+from tests.conftest import CONFIGS
 
 
 def _numbers(line):

@@ -13,7 +13,8 @@ from acmm.io.config import load_config, parse_config
 from acmm_qpp.errors import EXIT_INPUT, EXIT_NUMERICAL, EXIT_USAGE, EXIT_VERDICT, ConfigError
 from acmm_qpp.results import read_h5
 
-from conftest import CONFIGS, invoke
+from tests.conftest import CONFIGS, invoke
+from tests.conftest import REPO
 
 
 def acmm(*args):
@@ -479,7 +480,7 @@ def test_any_mplbackend_still_writes_the_figures(tmp_path, backend):
     import subprocess
     import sys
 
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "MPLBACKEND": backend,
+    env = {**os.environ, "PYTHONPATH": str(REPO), "MPLBACKEND": backend,
            "OPENBLAS_NUM_THREADS": "1"}
     done = subprocess.run([sys.executable, "-m", "acmm.cli.app", "sweep", "sweep_smoke", "sweep.n_runs=2",
                            "sweep.orbits=0.5"], cwd=tmp_path, capture_output=True, text=True, env=env,
@@ -498,7 +499,7 @@ def test_without_a_writable_home_matplotlib_leaves_no_folder_per_run(tmp_path):
     tmp = tmp_path / "tmp"
     tmp.mkdir()
     env = {k: v for k, v in os.environ.items() if k not in ("MPLCONFIGDIR", "XDG_CONFIG_HOME", "XDG_CACHE_HOME")}
-    env.update({"PYTHONPATH": str(Path(__file__).resolve().parents[1]), "HOME": "/proc/nonexistent",
+    env.update({"PYTHONPATH": str(REPO), "HOME": "/proc/nonexistent",
                 "TMPDIR": str(tmp), "OPENBLAS_NUM_THREADS": "1"})
     for name in ("a", "b"):
         done = subprocess.run([sys.executable, "-m", "acmm.cli.app", "design", "mb3", f"name={name}"], cwd=tmp_path,

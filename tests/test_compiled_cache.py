@@ -8,14 +8,14 @@ import os
 import subprocess
 import sys
 import textwrap
-from pathlib import Path
 
 import numba.core.caching as numba_caching
 import pytest
 
 from acmm.simulate import compiled_cache
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.conftest import REPO as ROOT
+
 KERNEL = textwrap.dedent("""
     from acmm.simulate.compiled_cache import njit_cached
 

@@ -7,7 +7,7 @@ from typing import Literal, Optional, Union
 import pytest
 
 from acmm_qpp.config_model import boolean_as_number
-from conftest import invoke
+from tests.conftest import invoke
 
 
 @pytest.mark.parametrize("annotation, value, refused", [

@@ -197,7 +197,7 @@ def test_sweep_figures_have_quantities_and_units(captured, tmp_path):
 
     from acmm.sweep.run import run_sweep
 
-    from conftest import CONFIGS
+    from tests.conftest import CONFIGS
 
     p = tmp_path / "s.yaml"
     p.write_text(yaml.safe_dump({"name": "figs", "sweep": {

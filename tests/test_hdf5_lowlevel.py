@@ -17,6 +17,8 @@ import pytest
 from acmm_qpp.hdf5_lowlevel import Writer
 from acmm_qpp.results import Dataset, write_h5
 
+from tests.conftest import REPO
+
 TEXT = h5py.string_dtype()
 
 #: (name, data, dtype, shape): the plain cases and ones h5py is left to decide.
@@ -174,12 +176,11 @@ def test_provenance_flags_uncommitted_changes(tmp_path):
     import shutil
     import subprocess
     import sys
-    from pathlib import Path
 
     if shutil.which("git") is None:
         pytest.skip("no git")
     repo = tmp_path / "repo"
-    shutil.copytree(Path(__file__).resolve().parents[1] / "acmm_qpp", repo / "acmm_qpp",
+    shutil.copytree(REPO / "acmm_qpp", repo / "acmm_qpp",
                     ignore=shutil.ignore_patterns("__pycache__"))
     git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-c", "init.defaultBranch=main"]
     subprocess.run(git + ["init", "-q"], cwd=repo, check=True)

@@ -8,7 +8,7 @@ import yaml
 
 from qpp.model.nonlin import ExpressionModel
 
-from conftest import CONFIGS
+from tests.conftest import CONFIGS
 
 
 def _brute_ratio(fn, y_range, n=2001):

@@ -14,6 +14,8 @@ from qpp.cli import app
 from qpp.io.config import load_config, parse_config
 from qpp.simulate.closed_loop import simulate
 
+from tests.conftest import REPO
+
 runner = CliRunner()
 NEW = ("qpp_unstable", "qpp_saturation", "qpp_cubic2")
 
@@ -378,7 +380,6 @@ def test_manipulator_beta3_beta4_bookkeeping():
 
 
 def test_every_shipped_qpp_config_is_covered_by_a_design_test():
-    from pathlib import Path
 
-    shipped = {p.stem for p in (Path(__file__).resolve().parents[1] / "configs").glob("qpp_*.yaml")}
+    shipped = {p.stem for p in (REPO / "configs").glob("qpp_*.yaml")}
     assert shipped == set(NEW) | {"qpp_siso", "qpp_manipulator"}

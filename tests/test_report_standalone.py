@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from acmm_qpp.errors import ConvergenceError
-from conftest import invoke
+from tests.conftest import invoke
 
 pytestmark = pytest.mark.slow      # three `acmm report --fast` runs: `make test-slow`
 

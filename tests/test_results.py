@@ -15,7 +15,7 @@ from acmm.io.config import load_config, parse_config
 from acmm_qpp.results import Dataset, read_h5, write_h5
 from acmm.stages.runners import run_tea
 
-from conftest import CONFIGS
+from tests.conftest import CONFIGS
 
 CONFIG_TEXT = "name: demo\ninertia: {I11: 1.0, I22: 1.0, I33: 1.0}\n"
 

@@ -160,7 +160,7 @@ def test_a_sweep_whose_figure_fails_finishes_with_its_config(tmp_runs):
     from typer.testing import CliRunner
 
     from acmm.cli.app import app
-    from conftest import CONFIGS
+    from tests.conftest import CONFIGS
 
     cfg = yaml.safe_load((CONFIGS / "sweep_smoke.yaml").read_text())
     cfg["sweep"].pop("margin", None)

@@ -23,7 +23,7 @@ from acmm.sweep.case import simulate_values, prepare_base
 from acmm.sweep.cases import physical_mask
 from acmm.sweep.config import load_sweep, parse_sweep
 
-from conftest import CONFIGS
+from tests.conftest import CONFIGS
 
 DATA_KEYS = ("case", "base", "index", "verdict", "verdict_code", "reason", "stable", "time_to_divergence",
              "peak_attitude_error", "steady_attitude_error", "peak_momentum", "torque_saturation_time",

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 import pytest
 import yaml
@@ -11,8 +10,9 @@ from acmm_qpp.results import read_h5
 from acmm.sweep.chunking import (MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker, chunk_size, make_chunks)
 from acmm.sweep.run import run_sweep
 
-from conftest import CONFIGS
-from test_sweep import _assert_same_data
+from tests.conftest import CONFIGS
+from tests.test_sweep import _assert_same_data
+from tests.conftest import REPO
 
 
 def _cfg(tmp, name="chunks", n_runs=7):
@@ -200,5 +200,5 @@ def test_dask_settings_are_dask_keys_and_their_yaml_says_the_same():
 
     walk(tree, "")
     assert flat == DASK_SETTINGS
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
     assert dask_settings_yaml().strip() in readme

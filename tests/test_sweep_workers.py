@@ -7,6 +7,8 @@ import sys
 
 import pytest
 
+from tests.conftest import REPO
+
 _PROBE = r"""
 import resource, sys
 import numpy as np
@@ -74,9 +76,8 @@ _BIG = ["sweep", "sweep_inertia30", "sweep.n_runs=600", "sweep.orbits=3", "--no-
 
 
 def _start_sweep(tmp_path):
-    from pathlib import Path
 
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "MPLBACKEND": "Agg",
+    env = {**os.environ, "PYTHONPATH": str(REPO), "MPLBACKEND": "Agg",
            "OPENBLAS_NUM_THREADS": "1"}
     p = subprocess.Popen([sys.executable, "-m", "acmm.cli.app", *_BIG], cwd=tmp_path, env=env, text=True,
                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)

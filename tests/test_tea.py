@@ -18,7 +18,7 @@ from acmm.io.config import load_config
 from acmm_qpp.errors import NoEquilibriumError
 from acmm.stages.runners import compute_tea
 
-from conftest import CONFIGS
+from tests.conftest import CONFIGS
 
 N = 0.0011
 TABLE1 = {"mb3": (1.3, -44.7, 2.1), "ac": (0.19, -5.0, 0.56)}

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.conftest import REPO as ROOT
+
 ENV = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals, Linux prctl")
@@ -138,7 +139,7 @@ def test_a_signal_after_the_run_finished_neither_prints_a_traceback_nor_kills_it
         terminate_like_ctrl_c()
         run_app(app)
         """))
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
     p = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=60)
     assert p.returncode == 0, (p.returncode, p.stderr)
     assert p.stdout.split() == ["finished", "atexit", "done"] and "Traceback" not in p.stderr, p.stderr

@@ -7,7 +7,7 @@ import yaml
 
 from acmm.io.config import load_config, parse_config
 from acmm_qpp.errors import ConfigError
-from conftest import CONFIGS
+from tests.conftest import CONFIGS
 
 
 # ---------------------------------------------------------------- schedule.to by reference
