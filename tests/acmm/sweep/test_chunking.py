@@ -11,7 +11,7 @@ from acmm.sweep.chunking import (MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, 
 from acmm.sweep.run import run_sweep
 
 from tests.conftest import CONFIGS
-from tests.test_sweep import _assert_same_data
+from tests.acmm.sweep.test_run import _assert_same_data
 from tests.conftest import REPO
 
 
