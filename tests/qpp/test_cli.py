@@ -1,42 +1,21 @@
-"""qpp simulations (sphere checks of 13.4 and 14.5) and the CLI end to end."""
+"""The ``qpp`` command line end to end (qpp.cli): user configs designed and simulated, bad
+configs in one line with exit 2, usage exit codes and --strict, scenarios outside the premises."""
+from __future__ import annotations
+
 import numpy as np
 import pytest
 import yaml
 from typer.testing import CliRunner
 
-from acmm_qpp.errors import ConfigError
+from acmm_qpp.errors import EXIT_USAGE, EXIT_VERDICT, ConfigError
 from acmm_qpp.results import read_h5
 from qpp.cli import app
-from qpp.io.config import load_config, parse_config
-from qpp.simulate.closed_loop import simulate
+from qpp.io.config import parse_config
+
+from tests.conftest import invoke
+
 
 runner = CliRunner()
-
-
-def test_siso_scenarios_meet_output_sphere():
-    cfg = load_config("qpp_siso")
-    p = cfg.published
-    res = {r.name: r for r in simulate(cfg, p.K1, p.Kc, p.H)}
-    # report: < 0.094 (Fig 13.5) and < 0.16 (Fig 13.9); sphere 0.2
-    assert res["step_offset"].error_inf < 0.094
-    assert res["sin10"].error_inf < 0.16
-    assert all(r.passed for r in res.values())
-    # the perturbation really is in the input sphere: ||r - r_o||inf = 0.1
-    for r in res.values():
-        assert np.max(np.abs(r.r - r.r_o)) == pytest.approx(0.1, abs=1e-3)
-
-
-def test_manipulator_masses_meet_output_sphere():
-    cfg = load_config("qpp_manipulator")
-    p = cfg.published
-    res = simulate(cfg, p.K1, p.Kc, p.H)
-    assert [r.gamma for r in res] == [45.0, 50.0, 55.0]
-    for r in res:
-        assert r.error_inf <= 0.14
-    # the path ends near Cartesian [0, -1.5] m with Y_A1 = (x1 + a) sin x2, Y_A2 = (x1 + a) cos x2
-    y = res[1].y_o[:, -1]
-    assert (y[0] + 1.0) * np.sin(y[1]) == pytest.approx(0.0, abs=0.02)
-    assert (y[0] + 1.0) * np.cos(y[1]) == pytest.approx(-1.5, abs=0.02)
 
 
 def _random_config(tmp_path, seed=3):
@@ -215,3 +194,44 @@ def test_gains_that_destabilize_the_loop_are_named_as_such(tmp_runs):
     assert "limiting factor: the closed loop of these gains is unstable (largest Re λ(A_z) = " in r.output
     assert "does not settle" not in r.output
     assert "hint: these gains do not stabilize the plant" in r.output      # exit 3 ends with a hint
+
+
+def qpp(*args):
+    from qpp.cli import app
+
+    return invoke(app, *args)
+
+
+def one_line(r):
+    err = r.stderr.strip()
+    return err.count("\n") == 0 and "Traceback" not in r.output
+
+
+def test_qpp_usage_exit_codes():
+    r = qpp("design")
+    assert r.exit_code == EXIT_USAGE and one_line(r)
+    r = qpp("design", "qpp_siso", "--nope")
+    assert r.exit_code == EXIT_USAGE and one_line(r)
+
+
+@pytest.mark.slow
+def test_strict_sphere_violation(tmp_runs):
+    args = ("simulate", "qpp_siso", "spheres.beta_o=0.03", "simulation.t_final=2",
+            "simulation.n_samples=401", f"output.root={tmp_runs / 'runs'}", "--no-figures")
+    r = qpp(*args)
+    assert r.exit_code == 0 and "OUTSIDE the output sphere" in r.stdout
+    r = qpp(*args, "--strict")
+    assert r.exit_code == EXIT_VERDICT and one_line(r) and "outside the output sphere" in r.stderr
+
+
+def test_a_printed_H_of_zeros_is_no_difference_to_report(tmp_path):
+    from typer.testing import CliRunner
+
+    from qpp.cli import app
+
+    r = CliRunner().invoke(app, ["design", "qpp_siso", f"output.root={tmp_path}", "--no-figures",
+                                 "published.H=[[0],[0]]"])
+    assert r.exit_code in (0, 3), r.output
+    assert "Traceback" not in r.output and (r.exception is None or isinstance(r.exception, SystemExit))
+    assert (tmp_path / "qpp_siso" / "qpp_design.h5").is_file()
+    assert yaml.safe_load((tmp_path / "qpp_siso" / "config.yaml").read_text())["name"] == "qpp_siso"

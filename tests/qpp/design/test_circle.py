@@ -1,6 +1,7 @@
-"""The circle criterion against the loop as built: φ enters ż = A z + B φ(y) with + (eqs 13.1,
-14.2), so a passing sector never holds a destabilizing constant gain; a coupled φ is checked in
-the small-gain form (qpp.design.circle)."""
+"""The circle criterion (qpp.design.circle) against the loop as built and against independent
+computations: φ enters ż = A z + B φ(y) with + (eqs 13.1, 14.2), so a passing sector never holds a
+destabilizing constant gain; a coupled φ is checked in the small-gain form; the encirclement
+count, the passing scales of an unstable plant, the SISO and MIMO report examples."""
 import itertools
 
 import numpy as np
@@ -8,6 +9,10 @@ import pytest
 
 from qpp.design.circle import circle_criterion
 from qpp.model.lure import LurePlant, closed_loop
+from qpp.design import spheres
+
+from tests.qpp.conftest import _pub
+
 
 W = np.concatenate([[0.0], np.logspace(-3, 3, 1500)])
 
@@ -159,3 +164,79 @@ def test_spectral_norms_equal_numpy_svd_including_extreme_magnitudes(m):
         got = spectral_norms(stack)
         assert got[0] == 0.0
         np.testing.assert_allclose(got[1:], ref[1:], rtol=1e-13, atol=0)
+
+
+def test_circle_criterion_siso_and_independent_sector(siso):
+    Az, Bz, Cz = closed_loop(siso.lure_plant(), *_pub(siso))
+    r = circle_criterion(Az, Bz[:, 1:], Cz, [[-0.5, 0.5]], a=1e-8)
+    assert r.passed and r.P0 == 0
+    # SISO symmetric sector: the largest half-width is 1/||H||inf (independent exact norm)
+    hinf, _ = spheres.hinf_norm(Az + 1e-8 * np.eye(6), Bz[:, 1:], Cz)
+    assert 0.5 * r.max_scale == pytest.approx(1 / hinf, rel=1e-4)
+    assert not circle_criterion(Az, Bz[:, 1:], Cz, [[-1.4, 1.4]], a=1e-8).passed
+
+
+def test_circle_encirclement_count():
+    # H(s) = 2/(s - 1), φ = k y fed back with + (ẋ = (1 + 2k) x): one unstable pole, stable for
+    # k < -1/2; sector [-3, -1] -> disc with diameter [1/α, 1/β] = [-1/3, -1]; Nyquist circles it once ccw
+    r = circle_criterion([[1.0]], [[2.0]], [[1.0]], [[-3.0, -1.0]], a=0.0)
+    assert r.P0 == 1 and r.encirclements[0] == -1 and r.passed
+    assert not circle_criterion([[1.0]], [[2.0]], [[1.0]], [[1.0, 3.0]], a=0.0).passed      # 1 + 2k > 0
+    r2 = circle_criterion([[1.0]], [[2.0]], [[1.0]], [[-0.2, -0.1]], a=0.0)  # disc [-10, -5]: not encircled
+    assert not r2.passed
+
+
+def test_circle_criterion_decoupled_mimo_is_its_siso_criteria():
+    # a diagonal H(s) is m independent Lure loops: lemma 1 must pass exactly when every channel's
+    # SISO circle criterion passes, whatever the mix of sector kinds (α > 0, α = 0, α < 0 < β)
+    rng = np.random.default_rng(185644)
+    kinds = [(0.1, 1.0), (0.0, 1.0), (-0.2, 0.2), (0.5, 4.0), (-1.5, 1.5), (0.0, 6.0)]
+    seen = set()
+    for _ in range(40):
+        poles = -rng.uniform(0.2, 3.0, 2)
+        gains = rng.uniform(0.3, 3.0, 2) * rng.choice([-1.0, 1.0], 2)
+        sector = [kinds[k] for k in rng.choice(len(kinds), 2, replace=False)]
+        A, B, C = np.diag(poles), np.diag(gains), np.eye(2)
+        siso = [circle_criterion([[poles[i]]], [[gains[i]]], [[1.0]], [sector[i]]).passed for i in range(2)]
+        mimo = circle_criterion(A, B, C, sector)
+        assert mimo.passed == all(siso), (poles, gains, sector)
+        seen.add((all(siso), (sector[0][0] > 0) != (sector[1][0] > 0)))
+    assert (True, True) in seen and (False, True) in seen      # mixed kinds, passing and failing
+
+
+def test_circle_scales_of_an_unstable_plant():
+    from qpp.design.circle import RESOLVED_SCALE
+
+    # H(s) = 1/(s − 1), φ fed back with + (ẋ = (1 + k) x: stable for k < −1): its Nyquist plot
+    # is the circle on [−1, 0], travelled once anticlockwise (P0 = 1).  A sector s·[−β, −α] with
+    # 0 < α passes when its disc (diameter [−1/(sα), −1/(sβ)]) lies inside that circle: s > 1/α.
+    # So the passing scales start above 0 (the old bisection assumed [0, s_max] and reported 0)
+    # and run up to the grid's resolution near the origin (at least RESOLVED_SCALE times the sector).
+    for alpha, beta in ((2.0, 3.0), (0.1, 0.2)):
+        r = circle_criterion([[1.0]], [[1.0]], [[1.0]], [[-beta, -alpha]])
+        assert r.P0 == 1
+        assert r.min_scale == pytest.approx(1.0 / alpha, rel=1e-6)
+        assert r.max_scale >= RESOLVED_SCALE          # every larger sector passes: the grid's resolved range
+        assert r.passed is (1.0 > 1.0 / alpha)
+    # a stable plant: every small sector passes
+    r = circle_criterion([[-1.0]], [[1.0]], [[1.0]], [[-0.5, 0.5]])
+    assert r.min_scale == 0.0 and r.max_scale == pytest.approx(2.0, rel=1e-3)   # 1/||H||∞ = 1 → s·0.5 ≤ 1
+
+
+def test_circle_scales_window_between_coarse_grid_points():
+    # an unstable H whose passing scales are a narrow window, [~1.03, ~1.68], between two points
+    # of a 4-per-decade grid (1.0 and 1.78 fail): found, and each end separates pass from fail
+    A, B, C = np.diag([1.157, -0.898, -3.716]), np.ones((3, 1)), np.array([[0.896, -0.134, -1.105]])
+    sector = np.array([[-1.909, -1.0]])            # fed back with +: the mirror of [1, 1.909] with −
+    r = circle_criterion(A, B, C, sector)
+    assert r.P0 == 1 and not r.passed
+    assert 1.0 < r.min_scale < 1.1 and 1.6 < r.max_scale < 1.778
+    for s, want in ((r.min_scale * 0.999, False), (r.min_scale * 1.001, True),
+                    (r.max_scale * 0.999, True), (r.max_scale * 1.001, False)):
+        assert circle_criterion(A, B, C, s * sector).passed is want, s
+
+
+def test_mimo_circle_manipulator(arm):
+    Az, Bz, Cz = closed_loop(arm.lure_plant(), *_pub(arm))
+    r = circle_criterion(Az, Bz[:, 2:], Cz, [[-0.5, 0.5], [-0.5, 0.5]], a=1e-9)
+    assert r.passed and r.centres.shape[0] == 2

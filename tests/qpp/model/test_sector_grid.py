@@ -1,14 +1,9 @@
-"""Plants with many outputs.  The sector of an expression nonlinearity is sampled per channel,
-over the outputs that channel depends on (qpp.model.sector_grid): a 12-output plant with one
-nonlinearity per channel validates, with the bounds of an independent brute-force evaluation or
-of the same φ in a one-output model; its scenario figure keeps a legend one can read."""
+"""Plants with many outputs: the sector of an expression nonlinearity is sampled per channel, over
+the outputs that channel depends on (qpp.model.sector_grid), with the bounds of an independent
+brute-force evaluation or of the same φ in a one-output model."""
 import numpy as np
-import pytest
-import yaml
 
 from qpp.model.nonlin import ExpressionModel
-
-from tests.conftest import CONFIGS
 
 
 def _brute_ratio(fn, y_range, n=2001):
@@ -51,70 +46,6 @@ def test_partial_dependence_matches_the_joint_grid():
     np.testing.assert_allclose(three.sector_info.sector[1], [-0.04, 0.04], rtol=1e-9)
 
 
-def test_channel_depending_on_many_outputs_refused_naming_f1():
-    from qpp.io.config_checks import _check_sample_count
-
-    p = 12
-    exprs = ["0.01*c*sin(" + "+".join(f"y{i + 1}" for i in range(p)) + ")"] + ["0"] * (p - 1)
-    m = ExpressionModel(exprs, p, {"c": (0.9, 1.1, 1.0)}, [[-1.0, 1.0]] * p, np.eye(p), 1.0)
-    with pytest.raises(ValueError, match=r"nonlinearity: .*channel 1, on 12 outputs.*fewer outputs per channel "
-                                         r"\(nonlinearity\.f1\).*ACMM_LIMIT_QPP_SECTOR_POINTS") as exc:
-        _check_sample_count(m)
-    assert "n_grid" not in str(exc.value)          # n_grid sets only 1- and 2-output grids
-
-
-def test_twelve_output_plant_with_one_nonlinearity_per_channel_validates(tmp_path):
-    """Twelve masses, a cubic spring of uncertain stiffness on the first: the config validates
-    (its sector found on twelve one-output grids) with the sector of the one-mass case."""
-    from qpp.io.config import load_config
-
-    k = 12
-    A = np.zeros((2 * k, 2 * k))
-    A[:k, k:] = np.eye(k)
-    A[k:, :k] = -2 * np.eye(k)
-    A[k:, k:] = -0.2 * np.eye(k)
-    B = np.vstack([np.zeros((k, k)), np.eye(k)])
-    C = np.hstack([np.eye(k), np.zeros((k, k))])
-    base = yaml.safe_load((CONFIGS / "qpp_cubic2.yaml").read_text())
-    base["name"] = "twelve"
-    base["plant"] = {"A": A.tolist(), "B": B.tolist(), "C": C.tolist(), "G": B.tolist(),
-                     "Ac": np.zeros((k, k)).tolist(), "Bc": np.eye(k).tolist(), "Cc": np.eye(k).tolist()}
-    base["nonlinearity"]["f1"] = [{"form": "cubic", "output": 1, "gain": "-c"}] + ["0"] * (k - 1)
-    base["nonlinearity"]["y_range"] = [[-1.0, 1.0]] * k
-    base["simulation"]["r_o"] = [[{"kind": "step", "amplitude": 0.5, "t_on": 0.0}]] * k
-    base["simulation"]["scenarios"] = [{"name": "c_min", "parameters": {"c": 0.9}}]
-    path = tmp_path / "twelve.yaml"
-    path.write_text(yaml.safe_dump(base))
-    cfg = load_config(path)
-    si = cfg.expression_model().sector_info
-    # φ_1 = −(c − 1)·y1³ on |y1| ≤ 1, c ∈ [0.9, 1.1]: the sector [−0.1, 0.1]; the others are 0
-    np.testing.assert_allclose(si.sector[0], [-0.1, 0.1], rtol=1e-12)
-    assert np.all(np.abs(si.sector[1:]) <= 1e-12)
-
-
-def test_scenario_figure_of_many_outputs_keeps_a_short_legend(monkeypatch, tmp_path):
-    """Twelve outputs: the legend names the line styles and the output with the largest error
-    (not 48 + 12 + 12 entries), and the title the scenario's parameters by name."""
-    from qpp import plots
-    from qpp.simulate.closed_loop import SimResult
-
-    figs = []
-    monkeypatch.setattr(plots, "save_figure", lambda fig, path, **kw: figs.append(fig))
-    p, N = 12, 50
-    t = np.linspace(0, 1, N)
-    y = np.outer(np.arange(1, p + 1), t) * 0.01
-    y_o = np.zeros((p, N))
-    err = np.abs(y - y_o).max(axis=1)
-    sim = SimResult("a", t, y, y, y, y_o, y, y, y, y, 0.9, float(err.max()), err, 0.3, {"c": 0.9})
-    plots.plot_scenario(sim, tmp_path / "s.png")
-    (fig,) = figs
-    texts = [[t.get_text() for t in ax.get_legend().get_texts()] for ax in fig.axes]
-    assert len(texts[0]) == 4 and all("all outputs" in s for s in texts[0])
-    assert texts[1] == ["other outputs", "|y12 − y_o12| (largest)", "β_o = 0.3"]
-    assert texts[2] == ["u1 … u12"]
-    assert fig._suptitle.get_text() == "scenario a (c = 0.9)"
-
-
 def test_small_n_grid_on_three_outputs_not_coarser_than_the_joint_grid():
     """A narrow bump on y1 in a 3-output plant: the channel's grid holds the points of the grid
     over all three outputs (27 per axis), so n_grid = 5 still finds it."""
@@ -127,22 +58,6 @@ def test_small_n_grid_on_three_outputs_not_coarser_than_the_joint_grid():
     lo, hi = _brute_ratio(lambda y: y * (1 + 3 * np.exp(-((y - 0.3) / 0.01) ** 2)), (-1.0, 1.0), n=400001)
     want = 0.1 * max(abs(lo), abs(hi))
     np.testing.assert_allclose(m.sector_info.sector[0], [-want, want], rtol=1e-6)
-
-
-def test_sample_count_message_names_what_can_be_lowered():
-    from qpp.io.config_checks import _check_sample_count
-
-    exprs = [f"c*e*y{i + 1}**3*cos(t)" for i in range(12)]
-    m = ExpressionModel(exprs, 12, {"c": (0.9, 1.1, 1.0), "e": (0.9, 1.1, 1.0)}, [[-1.0, 1.0]] * 12, np.eye(12),
-                        1.0, n_grid=201)
-    with pytest.raises(ValueError) as exc:
-        _check_sample_count(m)
-    msg = str(exc.value)
-    # the factors: Σ over the channels of 3² parameter samples × 205 grid points, × 256 times
-    assert "over 12 channels: 9 samples of 2 uncertain parameters" in msg and "2.46e+03 points in all" in msg
-    assert "× 256 times on the channels that depend on t" in msg and "on 1 output)" in msg
-    assert m.sector_points() == 9 * 12 * 205 * 256
-    assert "a coarser nonlinearity.n_grid (now 201)" in msg and "outputs per channel" not in msg
 
 
 def test_only_the_channels_that_depend_on_t_count_their_time_samples():
