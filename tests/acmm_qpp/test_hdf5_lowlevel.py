@@ -2,24 +2,19 @@
 
 Each case is written twice, once with h5py's high-level API (``create_dataset``, ``attrs[...] =``,
 the reference) and once with :class:`acmm_qpp.hdf5_lowlevel.Writer`; the stored type and dataspace
-(HDF5's own serialisation), the creation properties and the values must be the same.  Also the
-other savings of ``write_h5``: ``output.units`` read with libyaml's loader, the git commit asked
-once per process.
+(HDF5's own serialisation), the creation properties and the values must be the same.
 """
 from __future__ import annotations
-
-import json
 
 import h5py
 import numpy as np
 import pytest
 
 from acmm_qpp.hdf5_lowlevel import Writer
-from acmm_qpp.results import Dataset, write_h5
 
-from tests.conftest import REPO
 
 TEXT = h5py.string_dtype()
+
 
 #: (name, data, dtype, shape): the plain cases and ones h5py is left to decide.
 DATASETS = [
@@ -38,6 +33,7 @@ DATASETS = [
     ("empty_text", np.array([], dtype=object), TEXT, None),
     ("bare", None, "f4", (5,)),
 ]
+
 
 #: Attribute values: str fast, the rest through h5py.
 ATTRS = [("units", "ft*lbf"), ("ünit", "grad"), ("n", 12), ("x", 0.5), ("v", np.arange(3.0)),
@@ -96,106 +92,3 @@ def test_path_names_and_failures_as_h5py(tmp_path):
         w.dataset(low, "y", np.asarray([2.0]))
         with pytest.raises(ValueError):
             w.dataset(low, "y", np.asarray([3.0]))
-
-
-def test_write_h5_overrides_and_layout_without_handles(tmp_path):
-    """Dataset attributes replace the defaults as before (units, a coordinates attribute that the
-    layout then sets), and annotating by name lookup gives the same file as with the handles."""
-    from acmm_qpp.netcdf_layout import annotate
-
-    items = {"t": Dataset(np.arange(3.0), "s", "time", dims=("t",)),
-             "orbits": Dataset(np.arange(3.0) / 2, "1", "orbit count", dims=("t",)),
-             "w": Dataset(np.ones((3, 3)), "rad/s", "rate", ["roll", "pitch", "yaw"],
-                          attrs={"units": "deg/s", "coordinates": "mine", "long_name": "own"}, dims=("t", "axis")),
-             "grp": {"k": Dataset(np.ones((2, 3)), "1", "gain", ["roll", "pitch", "yaw"])}}
-    path = write_h5(tmp_path / "a.h5", items, "name: x\n")
-    with h5py.File(path, "r") as f:
-        w = f["w"]
-        assert w.attrs["units"] == "deg/s" and w.attrs["coordinates"] == "orbits"
-        assert w.attrs["long_name"] == "own" and json.loads(w.attrs["names"]) == ["roll", "pitch", "yaw"]
-        assert [d[0].name for d in w.dims] == ["/t", "/axis"]
-        assert f["orbits"].dims[0][0].name == "/t"
-        assert f["t"].attrs["standard_name"] == "time" and f["grp/k"].dims[1][0].name == "/grp/axis"
-    # the same layout, annotated by looking the datasets up by name
-    from acmm_qpp.results import _write_group
-
-    with h5py.File(tmp_path / "b.h5", "w") as f:
-        _write_group(f, items, Writer())
-        annotate(f, items)
-    with h5py.File(path, "r") as a, h5py.File(tmp_path / "b.h5", "r") as b:
-        names = []
-        a.visit(names.append)
-        for n in names:
-            if isinstance(a[n], h5py.Dataset):
-                assert _describe(a[n]) == _describe(b[n]), n
-                assert [[s.name for s in d.values()] for d in a[n].dims] == \
-                    [[s.name for s in d.values()] for d in b[n].dims], n
-
-
-@pytest.mark.parametrize("text,system", [
-    ("output: {units: SI}\n", "SI"), ("output:\n  units: imperial\n", "imperial"),
-    ("name: x\n", "imperial"), ("output: {}\n", "imperial"), ("", "imperial"),
-    ("- a\n- b\n", "imperial"),                 # not a mapping
-    ("output: {units: SI\n", "imperial"),       # not YAML
-    ("output: {units: \"\\x00\"}\n", "\x00"),   # whatever the config says
-])
-def test_unit_system_of_config_text(text, system):
-    from acmm_qpp.netcdf_layout import unit_system_of
-
-    assert unit_system_of(text) == system
-
-
-def test_git_commit_asked_once_per_process(monkeypatch):
-    import subprocess
-
-    from acmm_qpp import provenance
-
-    calls = []
-    real = subprocess.run
-
-    def counting(*args, **kwargs):
-        calls.append(args)
-        return real(*args, **kwargs)
-
-    provenance._git_state.cache_clear()
-    monkeypatch.setattr(subprocess, "run", counting)
-    try:
-        first = provenance.git_commit()
-        assert provenance.git_commit() == first and len(calls) == 1
-        prov = provenance.provenance("a: 1\n")
-        assert prov["git_commit"] == first and prov["git_dirty"] in ("yes", "no") and len(calls) == 1
-        assert provenance.source_unchanged() == (prov["git_dirty"] == "no") and len(calls) == 1
-    finally:
-        provenance._git_state.cache_clear()
-
-
-def test_provenance_flags_uncommitted_changes(tmp_path):
-    """A results file written by an edited checkout says so (git_dirty = yes): the commit alone
-    does not say what code ran.  A git repository of its own holds a copy of this package."""
-    import os
-    import shutil
-    import subprocess
-    import sys
-
-    if shutil.which("git") is None:
-        pytest.skip("no git")
-    repo = tmp_path / "repo"
-    shutil.copytree(REPO / "acmm_qpp", repo / "acmm_qpp",
-                    ignore=shutil.ignore_patterns("__pycache__"))
-    git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-c", "init.defaultBranch=main"]
-    subprocess.run(git + ["init", "-q"], cwd=repo, check=True)
-    subprocess.run(git + ["add", "-A"], cwd=repo, check=True)
-    subprocess.run(git + ["commit", "-q", "-m", "x"], cwd=repo, check=True)
-    head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True).stdout.strip()
-    probe = "from acmm_qpp import provenance as p; print(p.git_commit(), p.git_dirty(), p.source_unchanged())"
-    env = {**os.environ, "PYTHONPATH": str(repo)}
-
-    def state():
-        r = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=env, capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr
-        return r.stdout.split()
-
-    assert state() == [head, "no", "True"]
-    with open(repo / "acmm_qpp" / "units.py", "a") as f:
-        f.write("# edited\n")
-    assert state() == [head, "yes", "False"]

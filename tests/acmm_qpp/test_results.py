@@ -1,4 +1,5 @@
-"""HDF5 results (acmm_qpp.results) and the tea.h5 written by the TEA stage."""
+"""Self-describing HDF5 results written atomically (acmm_qpp.results), and a stage's figures drawn
+after its results (acmm_qpp.results.draw_figures)."""
 from __future__ import annotations
 
 import hashlib
@@ -8,14 +9,11 @@ import re
 import h5py
 import numpy as np
 import pytest
-import yaml
 
 import acmm
-from acmm.io.config import load_config, parse_config
 from acmm_qpp.results import Dataset, read_h5, write_h5
-from acmm.stages.runners import run_tea
+from acmm.plots import simulation as sim_plots
 
-from tests.conftest import CONFIGS
 
 CONFIG_TEXT = "name: demo\ninertia: {I11: 1.0, I22: 1.0, I33: 1.0}\n"
 
@@ -99,37 +97,6 @@ def test_config_hash_changes_with_config(tmp_path):
     assert read_h5(a)["attrs"]["config_hash"] != read_h5(b)["attrs"]["config_hash"]
 
 
-def test_tea_h5_contents(tmp_runs):
-    result, path = run_tea(CONFIGS / "mb3.yaml")
-    assert path.resolve() == (tmp_runs / "runs" / "mb3" / "tea.h5").resolve()
-    ds = _all_datasets(path)
-    assert {"theta", "omega", "bias", "inertia"} <= set(ds)
-    for name, attrs in ds.items():
-        assert attrs.get("units"), f"dataset {name} has no units attribute"
-    assert ds["theta"]["units"] == "rad" and ds["omega"]["units"] == "rad/s"
-    assert ds["bias"]["units"] == "ft*lbf" and ds["inertia"]["units"] == "slug*ft^2"
-    back = read_h5(path)
-    np.testing.assert_allclose(np.degrees(back["theta"]), [1.3, -44.7, 2.1], atol=0.01)
-    np.testing.assert_array_equal(back["inertia"], load_config(CONFIGS / "mb3.yaml").inertia.matrix())
-    np.testing.assert_array_equal(back["bias"], result.tea.bias)
-    np.testing.assert_array_equal(back["omega"], result.tea.omega)
-    attrs = back["attrs"]
-    # the embedded config is the resolved config and re-validates to the same run
-    assert parse_config(yaml.safe_load(attrs["config"])) == result.config
-    assert attrs["config_hash"] == hashlib.sha256(attrs["config"].encode()).hexdigest()[:16]
-    assert attrs["package_version"] == acmm.__version__
-    assert "git_commit" in attrs
-    assert _leftovers(path.parent, {"tea.h5", "config.yaml"}) == []
-
-
-def test_tea_h5_overwrite_is_atomic_and_clean(tmp_runs):
-    _, p1 = run_tea(CONFIGS / "ac.yaml")
-    _, p2 = run_tea(CONFIGS / "ac.yaml")
-    assert p1 == p2
-    assert _leftovers(p1.parent, {"tea.h5", "config.yaml"}) == []
-    np.testing.assert_allclose(np.degrees(read_h5(p2)["theta"]), [0.19, -5.0, 0.56], atol=0.01)
-
-
 def test_results_are_readable_by_others_not_mkstemp_0600(tmp_path):
     import os
     import stat
@@ -145,3 +112,46 @@ def test_results_are_readable_by_others_not_mkstemp_0600(tmp_path):
         os.umask(old)
     for p in (h5, txt):
         assert stat.S_IMODE(p.stat().st_mode) == 0o644
+
+
+def _small_histories(n=300):
+    t = np.linspace(0.0, 3.0, n)
+    x = np.column_stack([np.sin(5 * t), np.cos(3 * t), t]) * 2.0
+    return t, x
+
+
+def test_draw_figures_draws_every_figure_and_raises_the_first_failure(tmp_path):
+    """A stage's figures are drawn in order in this process after its results; all of them even
+    if one fails, and that first failure is raised then, as a FigureError (exit 4)."""
+    from functools import partial
+
+    from acmm_qpp.errors import FigureError
+    from acmm_qpp.results import draw_figures
+
+    t, x = _small_histories()
+    (tmp_path / "file").write_text("")
+    calls = [partial(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "bad.png"),
+             partial(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "after.png"),
+             lambda: (_ for _ in ()).throw(ValueError("Axis limits cannot be NaN or Inf"))]
+    with pytest.raises(FigureError, match="bad.png") as got:
+        draw_figures(calls)
+    assert got.value.exit_code == 4
+    assert (tmp_path / "after.png").stat().st_size > 10_000 and not (tmp_path / "file" / "bad.png").exists()
+    with pytest.raises(FigureError, match="Axis limits"):
+        draw_figures(calls[2:])
+    draw_figures([])
+
+
+def _interrupting_figure():
+    raise KeyboardInterrupt
+
+
+def test_ctrl_c_while_a_figure_is_drawn_is_an_interrupt_not_a_figure_error(tmp_path):
+    from acmm_qpp.results import draw_figures
+
+    t, x = _small_histories()
+    from functools import partial
+
+    with pytest.raises(KeyboardInterrupt):
+        draw_figures([_interrupting_figure, partial(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "a.png")])
+    assert not (tmp_path / "a.png").exists()

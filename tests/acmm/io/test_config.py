@@ -1,4 +1,5 @@
-"""Config schema (acmm.io.config): shipped configs, unit conversion, and malformed configs.
+"""Config schema (acmm.io.config): shipped configs, unit conversion, malformed configs, and
+``schedule.to`` by reference.
 
 Each malformed config must end, for both ``acmm validate`` and ``acmm tea``, in exit code 2,
 one line on stderr naming the offending field, no traceback and no file written.
@@ -17,13 +18,13 @@ from acmm_qpp.errors import ConfigError
 
 from tests.conftest import CONFIGS
 
+
 # Independent unit constants (exact definitions): 1 ft = 0.3048 m, 1 lbm = 0.45359237 kg,
 # g0 = 9.80665 m/s²; 1 lbf = lbm·g0; 1 slug = 1 lbf·s²/ft.
 LBF_N = 0.45359237 * 9.80665
 FT_LBF_NM = LBF_N * 0.3048
 SLUG_KG = LBF_N / 0.3048
 SLUG_FT2_KGM2 = SLUG_KG * 0.3048**2
-
 MIN = {"name": "t", "inertia": {"I11": 23.22e6, "I22": 1.30e6, "I33": 23.23e6}}
 
 
@@ -149,6 +150,7 @@ BASE = """\
 name: t
 inertia: {I11: 23.22e6, I22: 1.30e6, I33: 23.23e6}
 """
+
 
 # (id, file text, substrings that must all appear in the one-line message)
 MALFORMED = [
@@ -286,21 +288,6 @@ def test_dot_names_rejected(tmp_runs, run_acmm, name):
     _assert_clean_failure(run_acmm("tea", "bad.yaml"), ["name"], tmp_runs)
 
 
-def test_yaml_merge_keys_are_read_and_duplicates_still_refused(tmp_path):
-    """``<<: *anchor`` (a YAML merge key) is read as PyYAML's safe loader reads it, the keys
-    written next to it overriding the merged ones; a key written twice is still refused (the
-    merge key used to be refused: "could not determine a constructor")."""
-    from acmm_qpp.configio import read_yaml
-
-    p = tmp_path / "m.yaml"
-    p.write_text("ref: &I {I11: 21970000, I22: 13320000, I33: 32130000}\ninertia: {<<: *I, I11: 24000000}\n")
-    got, _ = read_yaml(p)
-    assert got["inertia"] == {"I11": 24000000, "I22": 13320000, "I33": 32130000}
-    p.write_text("inertia: {<<: {I11: 1.0}, I22: 2.0, I22: 3.0}\n")
-    with pytest.raises(ConfigError, match="duplicate key 'I22'"):
-        read_yaml(p)
-
-
 def test_duplicate_keys_rejected(tmp_runs, run_acmm):
     (tmp_runs / "bad.yaml").write_text(
         "name: t\ninertia:\n  I11: 23.22e6\n  I22: 1.30e6\n  I33: 23.23e6\n  I11: 23.0e6\n")
@@ -397,3 +384,28 @@ def test_a_table_schedule_takes_no_closed_loop_refit():
         load_config("staircase", ["schedule.form=table", "schedule.fit=closed_loop"])
     cfg = load_config("staircase", ["schedule.form=table", "schedule.fit=least_squares"])
     assert cfg.schedule.form == "table"
+
+
+# ---------------------------------------------------------------- schedule.to by reference
+def _staircase_data():
+    return yaml.safe_load((CONFIGS / "staircase.yaml").read_text())
+
+
+def test_schedule_to_file_relative_to_referring_file_or_packaged_name(tmp_path, monkeypatch):
+    inline = load_config(CONFIGS / "staircase.yaml")
+    sub = tmp_path / "cfgs" / "ends"
+    sub.mkdir(parents=True)
+    (sub / "end.yaml").write_text((CONFIGS / "ac.yaml").read_text())
+    data = _staircase_data()
+    data["schedule"]["to"] = "ends/end.yaml"          # relative to the referring file, not the cwd
+    (tmp_path / "cfgs" / "main.yaml").write_text(yaml.safe_dump(data))
+    monkeypatch.chdir(tmp_path)
+    by_file = load_config(tmp_path / "cfgs" / "main.yaml")
+    data["schedule"]["to"] = "ac"                     # a packaged name
+    by_name = parse_config(data)
+    for cfg in (by_file, by_name):
+        assert cfg.schedule.to == inline.schedule.to
+        assert cfg.n_design_points() == inline.n_design_points()
+    data["schedule"]["to"] = "nowhere.yaml"
+    with pytest.raises(ConfigError, match="schedule.to: config file not found"):
+        parse_config(data)
