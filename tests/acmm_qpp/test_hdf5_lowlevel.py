@@ -12,7 +12,6 @@ import pytest
 
 from acmm_qpp.hdf5_lowlevel import Writer
 
-
 TEXT = h5py.string_dtype()
 
 

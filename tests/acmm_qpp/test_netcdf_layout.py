@@ -18,7 +18,7 @@ from tests.conftest import CONFIGS
 from tests.acmm_qpp.test_hdf5_lowlevel import _describe
 
 
-# ---------------------------------------------------------------- netCDF layout, SI output
+# ---------------------------------------------------------------- netCDF layout: xarray, netCDF-C
 def _short(name, tmp_path, **output):
     data = load_config(name).model_dump(mode="json")
     data["simulation"]["orbits"] = 1.0

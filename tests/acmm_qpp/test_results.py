@@ -14,7 +14,6 @@ import acmm
 from acmm_qpp.results import Dataset, read_h5, write_h5
 from acmm.plots import simulation as sim_plots
 
-
 CONFIG_TEXT = "name: demo\ninertia: {I11: 1.0, I22: 1.0, I33: 1.0}\n"
 
 

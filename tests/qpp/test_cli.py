@@ -14,7 +14,6 @@ from qpp.io.config import parse_config
 
 from tests.conftest import invoke
 
-
 runner = CliRunner()
 
 

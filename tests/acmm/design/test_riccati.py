@@ -1,8 +1,7 @@
-"""Riccati solvers (eq 5.4) and the matrix sign function (eqs 5.5–5.6).
+"""Riccati solvers (eq 5.4), acmm.design.riccati.
 
-References are independent of the code under test: SLICOT SB02PD's published example, the
-spectral definition of sign(M) through an eigendecomposition, the residual of eq 5.4 written out
-in the test, and scipy's solver called directly.
+References are independent of the code under test: SLICOT SB02PD's published example, the residual
+of eq 5.4 written out in the test, and scipy's solver called directly.
 """
 import numpy as np
 import pytest
@@ -10,35 +9,8 @@ import scipy.linalg as sla
 
 from acmm_qpp.errors import ConvergenceError
 from acmm.design.riccati import METHODS, care_residual, solve_care
-from acmm.design.matrix_sign import matrix_sign
 
-# SLICOT SB02PD documentation example: A'X + XA − XGX + Q = 0 with G = diag(0, 1) = B R⁻¹ B'.
-SB02PD_A = np.array([[0.0, 1.0], [0.0, 0.0]])
-SB02PD_B = np.array([[0.0], [1.0]])
-SB02PD_Q = np.diag([1.0, 2.0])
-SB02PD_X = np.array([[2.0, 1.0], [1.0, 2.0]])
-
-
-def _hamiltonian(A, G, Q):
-    return np.block([[A, -G], [-Q, -A.T]])
-
-
-def _sign_by_eig(M):
-    w, V = np.linalg.eig(M)
-    return ((V * np.sign(w.real)) @ np.linalg.inv(V)).real
-
-
-def _random_problem(rng, nx=6, m=2, unstable=True):
-    """Stabilizable (A, B) (B generic), Q ⪰ 0 with (Q, A) detectable, R ≻ 0."""
-    A = rng.standard_normal((nx, nx))
-    if not unstable:
-        A -= (np.max(np.linalg.eigvals(A).real) + 0.5) * np.eye(nx)
-    B = rng.standard_normal((nx, m))
-    C = rng.standard_normal((nx, nx))
-    Q = C @ C.T
-    L = rng.standard_normal((m, m))
-    R = L @ L.T + m * np.eye(m)
-    return A, B, Q, R
+from tests.acmm.design.conftest import SB02PD_A, SB02PD_B, SB02PD_Q, SB02PD_X, _hamiltonian, _random_problem
 
 
 def _residual_by_hand(A, B, Q, R, P):
@@ -105,64 +77,6 @@ def test_scaling_maps_back_to_physical_units():
                                    atol=1e-9 * np.linalg.norm(Xt))
         assert r.residual == pytest.approx(care_residual(At, Bt, Qt, R, r.P * np.outer(d, d)),
                                            rel=1e-6, abs=1e-15)
-
-
-def test_sign_iteration_matches_spectral_definition():
-    rng = np.random.default_rng(5)
-    A, B, Q, R = _random_problem(rng, nx=8)
-    H = _hamiltonian(A, B @ np.linalg.solve(R, B.T), Q)
-    ref = _sign_by_eig(H)
-    for scaling in ("det", "norm", None):
-        for evaluation in ("partial_fraction", "polynomial"):
-            s = matrix_sign(H, scaling=scaling, evaluation=evaluation)
-            np.testing.assert_allclose(s.S, ref, atol=1e-9 * np.linalg.norm(ref))
-            assert s.iterations < 15
-
-
-def test_partial_fraction_is_the_rational_map_of_eq_5_6():
-    """One unscaled step in both evaluations is the same matrix (corrected eq 5.6)."""
-    rng = np.random.default_rng(2)
-    S = rng.standard_normal((5, 5)) + 3 * np.eye(5)
-    one_pf = matrix_sign(S, scaling=None, max_iter=1, tol=np.inf)
-    one_poly = matrix_sign(S, scaling=None, max_iter=1, tol=np.inf, evaluation="polynomial")
-    I = np.eye(5)
-    S2 = S @ S
-    expect = S @ (5 * I + 10 * S2 + S2 @ S2) @ np.linalg.inv(I + 10 * S2 + 5 * S2 @ S2)
-    np.testing.assert_allclose(one_pf.S, expect, rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(one_poly.S, expect, rtol=1e-12, atol=1e-12)
-
-
-def test_printed_denominator_of_eq_5_6_does_not_give_the_sign():
-    """docs/ERRATA.md § Riccati sign function: the printed I + 10S + 5S⁴ never converges to the sign function."""
-    f = lambda x: x * (5 + 10 * x**2 + x**4) / (1 + 10 * x + 5 * x**4)   # noqa: E731
-    # scalar: −1 is not a fixed point (sign(−1) = −1 but f(−1) = 4) ...
-    assert f(-1.0) == pytest.approx(4.0)
-    # ... and iterates from the left half-line either end at +1 (wrong) or wander near −2
-    x = -0.5
-    for _ in range(100):
-        x = f(x)
-    assert x == pytest.approx(1.0)
-    xs = [-3.0]
-    for _ in range(200):
-        xs.append(f(xs[-1]))
-    assert np.ptp(xs[-20:]) > 0.1 and max(xs[-20:]) < 0
-    # matrix: SB02PD's Hamiltonian, with and without scaling
-    H = _hamiltonian(SB02PD_A, SB02PD_B @ SB02PD_B.T, SB02PD_Q)
-    for scaling in ("det", None):
-        with pytest.raises(ConvergenceError, match="printed"):
-            matrix_sign(H, form="printed", scaling=scaling, max_iter=300)
-    # the corrected iteration converges, to the spectral sign
-    np.testing.assert_allclose(matrix_sign(H).S, _sign_by_eig(H), atol=1e-12)
-    # a random Hamiltonian
-    A, B, Q, R = _random_problem(np.random.default_rng(1))
-    H = _hamiltonian(A, B @ np.linalg.solve(R, B.T), Q)
-    with pytest.raises(ConvergenceError):
-        matrix_sign(H, form="printed", max_iter=300)
-
-
-def test_sign_of_matrix_with_imaginary_eigenvalues_fails():
-    with pytest.raises(ConvergenceError, match="matrix sign"):
-        matrix_sign(np.array([[0.0, 1.0], [-1.0, 0.0]]), max_iter=40)
 
 
 def test_not_stabilizable_refuses():

@@ -18,7 +18,6 @@ from acmm_qpp.errors import ConfigError
 
 from tests.conftest import CONFIGS
 
-
 # Independent unit constants (exact definitions): 1 ft = 0.3048 m, 1 lbm = 0.45359237 kg,
 # g0 = 9.80665 m/s²; 1 lbf = lbm·g0; 1 slug = 1 lbf·s²/ft.
 LBF_N = 0.45359237 * 9.80665

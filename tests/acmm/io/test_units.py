@@ -8,7 +8,7 @@ import pytest
 from acmm.io.config import load_config, parse_config
 
 
-# ---------------------------------------------------------------- netCDF layout, SI output
+# ---------------------------------------------------------------- SI output
 def _short(name, tmp_path, **output):
     data = load_config(name).model_dump(mode="json")
     data["simulation"]["orbits"] = 1.0

@@ -1,7 +1,7 @@
-"""Every acmm figure kind renders and every axis names a quantity and a unit (issues 14, 16)."""
+"""The simulation figures (acmm.plots.simulation) — with the design figures of the same run, every
+acmm figure kind renders and every axis names a quantity and a unit (issues 14, 16); the panel
+grids draw exactly their data, a diverged or nearly constant history included."""
 from __future__ import annotations
-
-import re
 
 import numpy as np
 import pytest
@@ -9,70 +9,10 @@ import pytest
 from acmm.plots import base as plot_base
 from acmm.plots import design as design_plots
 from acmm.plots import simulation as sim_plots
-from acmm_qpp import plot_style as plot_style_mod
 from acmm.io.config import load_config
 from acmm.model.linearize import STATE_NAMES
 
-UNIT = re.compile(r"^(?P<quantity>.{3,}?)\s*\((?P<unit>[^()]*(\([^()]*\))?[^()]*)\)\s*$")
-
-
-@pytest.fixture
-def captured(monkeypatch):
-    figs = []
-
-    def fake_save(fig, path, vector=False, tight=True, rc=None):
-        import matplotlib
-
-        with matplotlib.rc_context(rc or {}):
-            fig.canvas.draw()                  # renders: a figure that cannot draw fails here
-        figs.append(fig)
-        return [path]
-
-    monkeypatch.setattr(plot_base, "_save", fake_save)         # acmm.sweep.output imports it from there
-    monkeypatch.setattr(design_plots, "_save", fake_save)      # the figures live in these two
-    monkeypatch.setattr(sim_plots, "_save", fake_save)
-    return figs
-
-
-def _same_column(fig, ax):
-    x0 = ax.get_position().x0
-    return [a for a in fig.axes if a.axison and abs(a.get_position().x0 - x0) < 1e-6]
-
-
-def _check_panel_labels(grid):
-    """A panel grid (acmm.plots.panel_grid): each panel's y label (or its title when it has none)
-    names the quantity and its unit, each column has an x label with its unit."""
-    for p in grid.panels:
-        ylab = p.ylabel or p.title
-        m = UNIT.match(ylab)
-        assert m and m["unit"].strip(), f"panel y label (or title) without quantity and unit: {ylab!r}"
-    for c in range(grid.cols):
-        labels = [p.xlabel for p in grid.panels[c::grid.cols] if p.xlabel]
-        assert labels, f"no x label in column {c}"
-        for lab in labels:
-            m = UNIT.match(lab)
-            assert m and m["unit"].strip(), f"x label without quantity and unit: {lab!r}"
-
-
-def _check_labels(fig):
-    if hasattr(fig, "panel_grid"):
-        _check_panel_labels(fig.panel_grid)
-        return
-    axes = [ax for ax in fig.axes if ax.axison]
-    assert axes
-    for ax in axes:
-        # the y quantity and unit: the y label, or the panel title when there is no y label
-        ylab = ax.get_ylabel() or ax.get_title()
-        m = UNIT.match(ylab)
-        assert m and m["unit"].strip(), f"y label (or title) without quantity and unit: {ylab!r}"
-        siblings = set(ax.get_shared_x_axes().get_siblings(ax)) | set(_same_column(fig, ax))
-        labelled = [a.get_xlabel() for a in siblings if a.get_xlabel()]
-        assert labelled, f"no x label on the column of {ax.get_title()!r}"
-        for lab in labelled:
-            m = UNIT.match(lab)
-            assert m and m["unit"].strip(), f"x label without quantity and unit: {lab!r}"
-        for lab in (ax.get_xlabel(), ax.get_ylabel()):
-            assert "[1]" not in lab
+from tests.acmm.conftest import _check_labels
 
 
 def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_path):
@@ -192,175 +132,6 @@ def _check_gain_grid(fig, r):
     assert [t.get_text()[:6] for t in legend.get_texts()] == ["K(1,·)", "K(2,·)", "K(3,·)"]
 
 
-def test_sweep_figures_have_quantities_and_units(captured, tmp_path):
-    import yaml
-
-    from acmm.sweep.run import run_sweep
-
-    from tests.conftest import CONFIGS
-
-    p = tmp_path / "s.yaml"
-    p.write_text(yaml.safe_dump({"name": "figs", "sweep": {
-        "base": str(CONFIGS / "ac.yaml"), "grid": {"dI22": [-0.1, 0.1], "bias_pitch": [0.0, 0.2]},
-        "orbits": 0.5}, "output": {"root": str(tmp_path / "runs"), "figures": True}}))
-    run_sweep(p, workers=1)
-    assert len(captured) == 2
-    for fig in captured:
-        _check_labels(fig)
-    assert "relative change of I22" in captured[0].axes[0].get_xlabel()
-
-
-def test_decimate_keeps_the_envelope():
-    x = np.linspace(0, 1, 100_001)
-    y = np.sin(200 * x) + (x > 0.5) * 3
-    xd, yd = plot_base.decimate(x, y, 2000)
-    assert len(xd) <= 2000 and np.all(np.diff(xd) > 0)
-    assert yd.max() == y.max() and yd.min() == y.min()
-    short = np.arange(10.0)
-    assert plot_base.decimate(short, short)[0] is short or np.array_equal(plot_base.decimate(short, short)[0], short)
-
-
-def _small_histories(n=300):
-    t = np.linspace(0.0, 3.0, n)
-    x = np.column_stack([np.sin(5 * t), np.cos(3 * t), t]) * 2.0
-    return t, x
-
-
-def _killed_mid_write(path):
-    """A figure writer killed (SIGKILL) after it opened its temporary file."""
-    import os
-    import signal
-    from pathlib import Path
-
-    path = Path(path)
-    (path.parent / f".{path.name}.x1y2z3.tmp").write_bytes(b"half a PNG")
-    os.kill(os.getpid(), signal.SIGKILL)
-
-
-def test_draw_figures_draws_every_figure_and_raises_the_first_failure(tmp_path):
-    """A stage's figures are drawn in order in this process after its results; all of them even
-    if one fails, and that first failure is raised then, as a FigureError (exit 4)."""
-    from functools import partial
-
-    from acmm_qpp.errors import FigureError
-    from acmm_qpp.results import draw_figures
-
-    t, x = _small_histories()
-    (tmp_path / "file").write_text("")
-    calls = [partial(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "file" / "bad.png"),
-             partial(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "after.png"),
-             lambda: (_ for _ in ()).throw(ValueError("Axis limits cannot be NaN or Inf"))]
-    with pytest.raises(FigureError, match="bad.png") as got:
-        draw_figures(calls)
-    assert got.value.exit_code == 4
-    assert (tmp_path / "after.png").stat().st_size > 10_000 and not (tmp_path / "file" / "bad.png").exists()
-    with pytest.raises(FigureError, match="Axis limits"):
-        draw_figures(calls[2:])
-    draw_figures([])
-
-
-def _interrupting_figure():
-    raise KeyboardInterrupt
-
-
-def test_ctrl_c_while_a_figure_is_drawn_is_an_interrupt_not_a_figure_error(tmp_path):
-    from acmm_qpp.results import draw_figures
-
-    t, x = _small_histories()
-    from functools import partial
-
-    with pytest.raises(KeyboardInterrupt):
-        draw_figures([_interrupting_figure, partial(sim_plots.axis_histories, t, x, x, x, x, "t", tmp_path / "a.png")])
-    assert not (tmp_path / "a.png").exists()
-
-
-def test_design_figures_of_a_finished_design(tmp_path):
-    # the four figures of a finished design, drawn by the stage after design.h5
-    from acmm.io.config import load_config
-    from acmm.stages.design_output import design_figures
-    from acmm_qpp.results import draw_figures
-    from acmm.design.settings import design_settings
-    from acmm.stages.design import compute_design
-
-    cfg = load_config("staircase")
-    r = compute_design(cfg)
-    draw_figures(design_figures(r, design_settings(cfg), tmp_path, "imperial"))
-    names = sorted(p.name for p in tmp_path.iterdir())
-    assert names == ["design_gains.png", "design_path_margins.png", "design_path_poles.png", "design_poles.png"]
-    assert all((tmp_path / n).stat().st_size > 10_000 for n in names)
-
-
-def test_baked_texts_draw_as_the_live_texts(tmp_path, monkeypatch):
-    """The skeleton's pre-rendered titles, labels and legend (plot_base._bake_texts) give the PNG
-    the live texts give, to anti-aliasing rounding; a PDF gets them as text."""
-    from PIL import Image
-
-    names, units = list(STATE_NAMES), plot_base.state_units()
-    theta2 = np.radians(np.linspace(-45, -5, 12))
-    gains = np.sin(np.arange(12 * 3 * 24).reshape(12, 3, 24)) * np.logspace(-8, 6, 24)
-    sched = design_plots.SampledSchedule("polynomial", np.linspace(theta2[0], theta2[-1], 60),
-                                         np.cos(np.arange(60 * 3 * 24).reshape(60, 3, 24)))
-    baked = design_plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "b.png", units=units, vector=True)
-    assert [p.name for p in baked] == ["b.png", "b.pdf"]
-    monkeypatch.setattr(design_plots, "_bake_texts", lambda fig, texts: None)
-    design_plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "l.png", units=units)
-    a, b = (np.asarray(Image.open(tmp_path / n), dtype=int) for n in ("b.png", "l.png"))
-    assert a.shape == b.shape and np.abs(a - b).max() <= 2
-    # the baked text is there: the title band is not blank
-    assert (a[:40, :, :3] < 100).any()
-
-
-def test_baked_texts_are_text_in_a_pdf():
-    import io
-
-    from acmm.plots import base as plot_base
-    from acmm_qpp import plot_style as plot_style_mod
-
-    fig, grid = plot_base._BUILDERS["gain_schedule_grid"](tuple(STATE_NAMES), tuple(plot_base.state_units()),
-                                                          "ft·lbf")
-    title = grid.titles[0]
-    drawn, draw = [], title.draw
-    title.draw = lambda renderer: (title.get_visible() and drawn.append(type(renderer).__name__), draw(renderer))
-    fig.savefig(io.BytesIO(), format="png")
-    assert drawn == [] and not title.get_visible()          # the PNG blends the baked tile
-    fig.savefig(io.BytesIO(), format="pdf")
-    assert drawn == ["MixedModeRenderer"] and not title.get_visible()   # the PDF draws the text
-    plot_style_mod.stage_pyplot().close(fig)
-
-
-def test_log_axis_labels_are_plain_text_of_the_tick_values():
-    """The path check's log axis labels its ticks as matplotlib does, in plain text (no mathtext
-    parser in the figure writers): each label read back is the tick's value."""
-    from matplotlib.ticker import LogFormatterSciNotation
-
-    sup = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻", "0123456789-")
-
-    def value(label):
-        coeff, _, power = label.replace("\N{MINUS SIGN}", "-").rpartition("10")
-        if not power:                                     # a plain number (min_exponent)
-            return float(label)
-        return float(coeff.rstrip("×") or 1) * 10.0 ** int(power.translate(sup))
-
-    fig, (_, a2) = plot_style_mod.stage_pyplot().subplots(2, 1)
-    a2.set_yscale("log")
-    a2.set_ylim(0.3, 3.0)                                 # one decade: minor ticks labelled too
-    fig.canvas.draw()
-    ticks = [v for v in a2.get_yticks(minor=True) if 0.3 <= v <= 3.0]
-    for labelled_only_base in (True, False):
-        plain = design_plots._plain_log_formatter(base=10, labelOnlyBase=labelled_only_base)
-        mathtext = LogFormatterSciNotation(base=10, labelOnlyBase=labelled_only_base)
-        for f in (plain, mathtext):
-            f.set_axis(a2.yaxis)
-            f.set_locs(ticks)
-        for v in [*ticks, 1e-12, 1e-3, 0.01, 10.0, 2e3]:
-            want, got = mathtext(v), plain(v)
-            assert (want == "") == (got == "") and "$" not in got
-            if got:
-                assert value(got) == pytest.approx(v, rel=1e-12), (v, got)
-    assert design_plots._plain_math(r"$\mathdefault{6\times10^{-1}}$") == "6×10⁻¹"
-    plot_style_mod.stage_pyplot().close(fig)
-
-
 def test_history_panels_of_a_diverged_run(captured, tmp_path):
     """NaN and ±inf states (a run that diverged) draw as gaps: a panel with no finite value has
     the limits 0 to 1 and draws nothing; the others' limits cover their finite values."""
@@ -392,29 +163,3 @@ def test_history_panels_of_nearly_constant_series(captured, tmp_path, offset, sp
     _check_drawn(grid)
     for p in grid.panels:
         assert p.ylim[0] < p.ylim[1] and len(p.yticks) >= 3
-
-
-def test_scheduled_pole_map_colours_ignore_a_nan_tea(captured, tmp_path):
-    theta2 = np.radians(np.linspace(-45.0, -5.0, 41))
-    theta2[7] = np.nan
-    poles = (-1.0 - np.arange(24.0) + 1j * np.sin(np.arange(24.0)))[None, :] * (1 + theta2[:, None] ** 2)
-    design_plots.scheduled_pole_map(poles * 1e-3, theta2, 1e-3, 0.5, 45.0, tmp_path / "p.png")
-    (sc,) = [c for c in captured[0].axes[0].collections if c.get_array() is not None]
-    np.testing.assert_allclose(sc.get_clim(), [-45.0, -5.0])
-    assert len(sc.get_offsets()) == 41 * 24
-
-
-def test_a_vector_figure_drawn_twice_is_the_same_file(tmp_path):
-    """No creation date in the PDFs (the report's path-check figures differed between runs)."""
-    import time
-
-    th = np.linspace(-20.0, -5.0, 9)
-    args = (th, -0.1 + 0.01 * np.sin(th), 0.2 + 0.01 * th, 0.5 + 0.0 * th)
-    (tmp_path / "a").mkdir()
-    (tmp_path / "b").mkdir()
-    first = design_plots.schedule_path_check(*args, tmp_path / "a" / "f", vector=True)
-    time.sleep(1.1)                         # a PDF date has a resolution of one second
-    second = design_plots.schedule_path_check(*args, tmp_path / "b" / "f", vector=True)
-    pdfs = [p for p in (*first, *second) if p.suffix == ".pdf"]
-    assert len(pdfs) == 2 and b"CreationDate" not in pdfs[0].read_bytes()
-    assert pdfs[0].read_bytes() == pdfs[1].read_bytes()

@@ -67,25 +67,6 @@ def test_parallel_and_serial_give_the_same_results(tmp_path):
     assert set(stats) == set(serial) and all(w >= 0 and c >= 0 for w, c in stats.values())
 
 
-def test_figure_warm_up_and_fixed_layout():
-    """The pre-fork warm-up figure leaves the caller's backend and rcParams alone; fixed margins
-    are inches of the figure, spacings fractions."""
-    import matplotlib
-
-    from acmm.report.figure_style import fixed_layout, pyplot, warm
-
-    backend, rc = matplotlib.get_backend(), dict(matplotlib.rcParams)
-    warm()
-    assert matplotlib.get_backend() == backend and dict(matplotlib.rcParams) == rc
-    plt = pyplot()
-    fig, _ = plt.subplots(2, 2, figsize=(10.0, 5.0))
-    fixed_layout(fig, left=1.0, bottom=0.5, top=0.25, right=0.2, wspace=0.3, hspace=0.1)
-    p = fig.subplotpars
-    assert np.allclose([p.left, p.right, p.bottom, p.top, p.wspace, p.hspace],
-                       [0.1, 0.98, 0.1, 0.95, 0.3, 0.1])
-    plt.close(fig)
-
-
 def test_a_dependency_must_come_first():
     with pytest.raises(ValueError, match="'x'"):
         run_tasks([Task("x", _square, ("y",)), Task("y", _square)], 2)
@@ -362,18 +343,3 @@ def test_a_results_file_rewritten_while_the_report_runs_is_refused(tmp_path, mon
     assert res.exit_code == 4, res.output
     assert res.output.strip().splitlines()[-1].startswith("error: acmm design:") and "rewritten" in res.output
     assert not [p for p in out.rglob("*") if p.is_file()]
-
-
-def test_a_work_limit_variable_that_is_no_number_is_refused(monkeypatch):
-    """ACMM_LIMIT_* set to a non-number, zero, a negative or infinity was ignored without a word."""
-    from acmm_qpp.errors import ConfigError
-    from acmm_qpp.limits import DEFAULTS, limit
-
-    monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", "5e6")
-    assert limit("SIM_SAMPLES") == 5e6
-    for bad in ("lots", "0", "-3", "inf", "nan"):
-        monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", bad)
-        with pytest.raises(ConfigError, match=f"ACMM_LIMIT_SIM_SAMPLES: must be a positive number \\(got '{bad}'\\)"):
-            limit("SIM_SAMPLES")
-    monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", " ")
-    assert limit("SIM_SAMPLES") == DEFAULTS["SIM_SAMPLES"]

@@ -1,27 +1,24 @@
-"""Design stage (issue 4): sector LQR at every stair-case point, the gain schedule, design.h5.
+"""The design stage (acmm.stages.design, issue 4): sector LQR at every stair-case point, the gain
+schedule along the whole path, design.h5 written, reused and designed again.
 
 Every pole is re-checked against the sector with an independent formula, and K is re-derived
 from the returned Q with scipy's CARE solver directly (not through acmm.design.riccati).
 """
-import h5py
+from __future__ import annotations
+
+import os
 import re
 
+import h5py
 import numpy as np
 import pytest
 import scipy.linalg as sla
 
 from acmm.io.config import load_config
-from acmm.design.schedule import fit_schedule, schedule_gain
-from acmm.design.settings import design_settings
 from acmm.stages.design import compute_design, design_for, run_design
 from acmm.io.design_file import load_design_table
 
 N = 0.0011
-
-
-@pytest.fixture(scope="module")
-def staircase():
-    return compute_design(load_config("staircase"))
 
 
 def _inside_sector(poles, n, sigma=0.5, half_angle_deg=45.0):
@@ -135,43 +132,6 @@ def test_quadratic_schedule_is_stable_along_the_whole_path(staircase_polynomial)
     assert _worst_on_own_blend(r, poly) <= -0.25
 
 
-def test_path_disk_margin_agrees_with_python_control(staircase):
-    """Disk margin at the plant input (loop broken at u) against control.disk_margins (SLICOT
-    AB13MD) on the same local loops, in the scaled realization."""
-    import control
-
-    from acmm.design import schedule as sch
-    from acmm.design import path_check as path_check_mod
-
-    if not hasattr(control, "disk_margins"):       # python-control < 0.10.2
-        pytest.skip("this python-control has no disk_margins")
-    pc = staircase.path_check
-    path = path_check_mod.path_models(staircase.points, design_settings(staircase.config), pc.theta2.size)
-    d = path.scales
-    for j in (0, pc.theta2.size // 2, pc.theta2.size - 1):
-        K = staircase.fit.gain(pc.theta2[j]) * d[None, :]
-        L = control.ss(path.A[j] / d[:, None] * d[None, :], path.B[j] / d[:, None], K, np.zeros((3, 3)))
-        dm, dgm, dpm = control.disk_margins(L, N * path_check_mod.DISK_OMEGA_N)
-        assert pc.disk_margin[j] == pytest.approx(dm, rel=1e-3)
-        assert pc.disk_gain_margin_db[j] == pytest.approx(dgm, rel=1e-3)
-        assert pc.disk_phase_margin_deg[j] == pytest.approx(dpm, rel=1e-3)
-    assert pc.disk_margin.min() > 0
-
-
-def test_fit_recovers_a_known_quadratic_and_table_is_exact_at_nodes():
-    rng = np.random.default_rng(1)
-    th = np.radians(np.linspace(-45, -5, 9))
-    coef = rng.normal(size=(3, 3, 24))
-    gains = np.array([coef[0] + coef[1] * t + coef[2] * t * t for t in th])
-    fit = fit_schedule(th, gains, 2)
-    assert np.allclose(fit.coef, coef, rtol=1e-9, atol=1e-9)
-    assert fit.rel_residual.max() < 1e-10
-    for k, t in enumerate(th):
-        assert np.allclose(schedule_gain("table", fit.coef, th, gains, t), gains[k])
-    mid = 0.5 * (th[2] + th[3])
-    assert np.allclose(schedule_gain("table", fit.coef, th, gains, mid), 0.5 * (gains[2] + gains[3]))
-
-
 @pytest.mark.parametrize("units", ["imperial", "SI"])
 @pytest.mark.parametrize("edit", ["K of another shape", "K scaled", "K non-finite", "a coefficient changed"])
 def test_an_edited_design_h5_is_designed_again_not_simulated(tmp_runs, run_acmm, edit, units):
@@ -227,75 +187,6 @@ def test_design_h5_is_self_describing_and_reused(tmp_path, monkeypatch):
     assert note2.startswith("designed")
 
 
-def test_config_q0_is_a_weight_on_the_scaled_states():
-    """design.Q0 = q means Q̃ = q·I on x̃ = D⁻¹x: the returned physical Q satisfies D Q D ⪰ q I
-    (pole shifting only adds positive semidefinite terms)."""
-    from acmm.design.schedule import design_one
-    from acmm.design.schedule_points import point_specs
-
-    cfg = load_config("ac")
-    cfg = cfg.model_copy(update={"design": cfg.design.model_copy(
-        update={"Q0": 1e-3, "Q0_groups": None, "min_margin": 0.01})})
-    p = design_one(point_specs(cfg)[0], design_settings(cfg))
-    d = p.model.scales
-    q_scaled = p.lqr.Q * d[:, None] * d[None, :]
-    assert np.linalg.eigvalsh(0.5 * (q_scaled + q_scaled.T) - 1e-3 * np.eye(24)).min() > -1e-9
-    assert np.linalg.eigvalsh(q_scaled).max() < 10.0      # not the 1/d² blow-up of a physical q·I
-
-
-def test_config_q0_groups_are_diagonal_weights_on_the_scaled_states():
-    """Q0_groups = per-group diagonal on x̃ = D⁻¹x: D Q D − diag(groups) ⪰ 0 (pole shifting only
-    adds positive semidefinite terms), and the groups sit on the right states."""
-    from acmm.io.config import Q0Groups
-    from acmm.design.schedule import design_one
-    from acmm.design.schedule_points import point_specs
-
-    g = Q0Groups(rates=1e-5, attitudes=2e-6, momentum=3e-6, momentum_integral=4e-5, drf=5e-7)
-    np.testing.assert_array_equal(g.diagonal()[[0, 3, 6, 9, 12, 23]], [1e-5, 2e-6, 3e-6, 4e-5, 5e-7, 5e-7])
-    cfg = load_config("ac")
-    cfg = cfg.model_copy(update={"design": cfg.design.model_copy(update={"Q0_groups": g})})
-    p = design_one(point_specs(cfg)[0], design_settings(cfg))
-    d = p.model.scales
-    q_scaled = p.lqr.Q * d[:, None] * d[None, :]
-    q_scaled = 0.5 * (q_scaled + q_scaled.T)
-    assert np.linalg.eigvalsh(q_scaled - np.diag(g.diagonal())).min() > -1e-9 * np.abs(q_scaled).max()
-
-
-@pytest.mark.parametrize("spacing", ["tea", "blend"])
-def test_a_blend_whose_end_is_on_another_branch_of_equilibria_is_flagged(tmp_runs, run_acmm, spacing):
-    """TEA-spaced points follow the branch continued from the start (it reaches −35° at the end
-    station); the end station asks for −55° (bias_from_tea), a root of another branch: the points
-    jumped −36.25° → −55° and a polynomial was fitted across the jump without a word (a review's
-    case).  The end keeps its asked TEA (test_tea: the schedule's end gets its asked attitude);
-    the design says so, and --strict fails it."""
-    from acmm.model.tea import solve_tea, solve_tea_near, bias_for_attitude
-
-    end_inertia = np.diag([10e6, 3e6, 12e6])
-    n = 0.0011
-    # independent: continuation from the start's −40° root along the blend ends far from −55°
-    start_inertia = np.diag([10e6, 3e6, 11e6])
-    b0 = bias_for_attitude(np.radians([0, -40, 0]), start_inertia, n)
-    b1 = bias_for_attitude(np.radians([0, -55, 0]), end_inertia, n)
-    t = solve_tea(start_inertia, n, b0, expected=np.radians([0, -40, 0])).theta
-    for s in np.linspace(0, 1, 81):
-        t = solve_tea_near((1 - s) * start_inertia + s * end_inertia, n, (1 - s) * b0 + s * b1, t).theta
-    assert abs(np.degrees(t[1]) + 55) > 5
-    (tmp_runs / "fold.yaml").write_text(
-        "name: fold\ninertia: {I11: 10.0e6, I22: 3.0e6, I33: 11.0e6}\norbit_rate: 0.0011\n"
-        "disturbance: {bias_from_tea: [0, -40.0, 0]}\n"
-        "schedule:\n  to: {name: fend, inertia: {I11: 10.0e6, I22: 3.0e6, I33: 12.0e6}, "
-        f"disturbance: {{bias_from_tea: [0, -55.0, 0]}}}}\n  n_points: 5\n  spacing: {spacing}\n"
-        "output: {figures: false}\n")
-    r = run_acmm("design", "fold.yaml")
-    assert r.exit_code == 0, r.output         # the end keeps the TEA it asks for (a result) ...
-    assert "warning: the end station's TEA [+0.00, -55.00, +0.00] deg (as asked) is not on the branch" in r.stdout
-    assert "fitted across the jump" in r.stdout
-    branch = re.search(r"which reaches \[([^]]*)\] deg there", r.stdout).group(1)
-    assert np.allclose([float(x) for x in branch.split(",")], np.degrees(t), atol=0.006)
-    r = run_acmm("design", "fold.yaml", "--strict")
-    assert r.exit_code == 1 and "another branch of equilibria" in r.output      # ... failed by --strict
-
-
 def test_table_form_prints_the_check_that_strict_judges(tmp_runs, run_acmm):
     """schedule.form: table printed no check lines, yet --strict failed on the check's margin."""
     r = run_acmm("design", "staircase", "schedule.form=table", "schedule.fit=least_squares",
@@ -304,47 +195,17 @@ def test_table_form_prints_the_check_that_strict_judges(tmp_runs, run_acmm):
     assert "scheduled gain (table) on the local models" in r.stdout and "scheduled closed loops:" in r.stdout
 
 
-@pytest.mark.parametrize("spacing", ["tea", "blend"])
-def test_no_equilibrium_on_the_blend_names_the_blend(tmp_runs, run_acmm, spacing):
-    """The message gave a blended bias the user never wrote and hinted at disturbance.bias only."""
-    (tmp_runs / "s.yaml").write_text(
-        "name: s\ninertia: {I11: 10.0e6, I22: 3.0e6, I33: 11.0e6}\norbit_rate: 0.0011\n"
-        "disturbance: {bias_from_tea: [1.0, -30.0, 1.5]}\n"
-        "schedule:\n  to: {name: endst, inertia: {I11: 30.0e6, I22: 9.0e6, I33: 36.0e6}, "
-        f"disturbance: {{bias: [0, 500, 0]}}}}\n  n_points: 5\n  spacing: {spacing}\noutput: {{figures: false}}\n")
-    r = run_acmm("design", "s.yaml")
-    assert r.exit_code == 2, r.output
-    assert "on the blend toward schedule.to" in r.stderr and "no torque-equilibrium" in r.stderr
-    assert "hint: reduce the bias of disturbance or of schedule.to" in r.stderr
-    assert not (tmp_runs / "runs").exists()
+def test_a_fifo_in_place_of_design_h5_is_designed_again_not_a_hang(tmp_path, monkeypatch):
+    """``acmm simulate`` reuses ``design.h5`` when it matches: a FIFO (or a device) there used to
+    block it for ever; it is not a design file, so the stage designs again and replaces it."""
+    from acmm.io.config import load_config
+    from acmm.stages.design import design_for
 
-
-@pytest.mark.slow
-def test_a_branch_that_folds_on_the_blend_blames_the_first_point_beyond_the_fold(monkeypatch):
-    """When the continuation from the start failed, every point was judged against no branch,
-    so the warning named the blend's start (s = 0) (a review).  The points before the fold are
-    checked against the branch up to it; the first point beyond is named."""
-    import acmm.design.schedule_points as sp_mod
-    from acmm.model import tea as tea_mod
-    from acmm.design.schedule_points import off_branch_point, point_specs
-
-    cfg = load_config("staircase")
-    n = cfg.orbit_rate
-    specs = point_specs(cfg)
-    teas = [compute_design(cfg).points[k].tea.theta for k in range(len(specs))]
-    assert off_branch_point(specs, teas, n) is None
-    blend = [p for p in specs if np.isfinite(p.s)]
-    i0, i1 = blend[0].inertia[0, 0], blend[-1].inertia[0, 0]
-    real = tea_mod.solve_tea_near
-
-    def folds_at_0_6(inertia, n_, bias, guess, **kw):          # no equilibrium beyond s = 0.6
-        if (inertia[0, 0] - i0) / (i1 - i0) > 0.6:
-            from acmm_qpp.errors import NoEquilibriumError
-            raise NoEquilibriumError("folds")
-        return real(inertia, n_, bias, guess, **kw)
-
-    monkeypatch.setattr(sp_mod, "_TRACKS", {})
-    monkeypatch.setattr(sp_mod, "solve_tea_near", folds_at_0_6)
-    jump = off_branch_point(specs, teas, n)
-    first_beyond = next(p for p in blend if p.s > 0.6)
-    assert jump is not None and jump.name == first_beyond.name and jump.branch is None
+    monkeypatch.chdir(tmp_path)
+    cfg = load_config("mb3", ["output.figures=false"])
+    run = cfg.run_dir()
+    run.mkdir(parents=True)
+    os.mkfifo(run / "design.h5")
+    table, note = design_for(cfg)
+    assert note.startswith("designed") and (run / "design.h5").is_file()
+    assert design_for(cfg)[1].startswith("reused")

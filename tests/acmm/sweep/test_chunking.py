@@ -1,28 +1,13 @@
-"""Sweep tasks in chunks (issue 16): the tables do not depend on chunking or executor."""
+"""Sweep tasks in chunks (acmm.sweep.chunking, issue 16): the chunk sizes, and tables that do not
+depend on chunking or executor."""
 from __future__ import annotations
 
-import os
-
 import pytest
-import yaml
 
-from acmm_qpp.results import read_h5
-from acmm.sweep.chunking import (MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker, chunk_size, make_chunks)
-from acmm.sweep.run import run_sweep
+from acmm.sweep.chunking import (MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker, chunk_size,
+                                 make_chunks)
 
-from tests.conftest import CONFIGS
-from tests.acmm.sweep.test_run import _assert_same_data
-from tests.conftest import REPO
-
-
-def _cfg(tmp, name="chunks", n_runs=7):
-    spec = {"base": str(CONFIGS / "ac.yaml"), "monte_carlo": {"inertia": {"percent": 10}},
-            "n_runs": n_runs, "seed": 16, "orbits": 1.0,
-            "margin": {"low": 0.8, "high": 1.25, "scan_points": 1, "rel_tol": 0.1}}
-    p = tmp / f"{name}.yaml"
-    p.write_text(yaml.safe_dump({"name": name, "sweep": spec,
-                                 "output": {"root": str(tmp / "runs"), "figures": False}}))
-    return p
+from tests.acmm.sweep.conftest import _assert_same_data, _cfg, _run_bytes
 
 
 def test_chunk_size_and_chunks():
@@ -80,14 +65,6 @@ def test_chunker_guided_sizes_and_measure(monkeypatch):
     assert sum(sizes) + 128 == len(tasks)
 
 
-def _run_bytes(path, **kw):
-    r = run_sweep(path, **kw)
-    data = read_h5(r.path)
-    csv = (r.path.parent / "sweep.csv").read_bytes()
-    os.replace(r.path, r.path.with_name(f"sweep_{len(os.listdir(r.path.parent))}.h5"))
-    return data, csv
-
-
 def test_pool_chunked_unchunked_and_serial_identical(tmp_path):
     cfg = _cfg(tmp_path)
     ref, ref_csv = _run_bytes(cfg, workers=1)
@@ -109,41 +86,6 @@ def test_dask_chunked_identical(tmp_path):
         got, csv = _run_bytes(cfg, scheduler=cluster.scheduler_address, chunk=2)
     _assert_same_data(ref, got)
     assert csv == ref_csv
-
-
-def test_background_snapshots_same_table_and_errors_reach_the_caller(tmp_path, monkeypatch):
-    import threading
-
-    import acmm.sweep.run as run
-    from acmm.sweep import output as sweep_output
-    from acmm_qpp.errors import OutputError
-
-    cfg = _cfg(tmp_path, "snaps")
-    ref, ref_csv = _run_bytes(cfg, workers=1)
-    real = sweep_output.write_results
-    calls = []
-
-    def spy(sweep, records, complete, **kw):
-        calls.append((complete, len(records), threading.current_thread().name))
-        return real(sweep, records, complete, **kw)
-
-    monkeypatch.setattr(run, "write_results", spy)
-    got, csv = _run_bytes(cfg, workers=1, chunk=1, snapshot_interval=0.0)
-    _assert_same_data(ref, got)
-    assert csv == ref_csv
-    partial = [c for c in calls if not c[0]]
-    assert partial and all(name == "acmm-sweep-snapshot" for _, _, name in partial)   # beside the driver
-    assert calls[-1][:2] == (True, 9)                                                # then the final table
-    assert all(n < 9 for _, n, _ in partial)
-
-    def failing(sweep, records, complete, **kw):
-        if threading.current_thread().name == "acmm-sweep-snapshot":
-            raise OutputError("cannot write sweep.h5: No space left on device")
-        return real(sweep, records, complete, **kw)
-
-    monkeypatch.setattr(run, "write_results", failing)
-    with pytest.raises(OutputError, match="No space left"):
-        run_sweep(cfg, workers=1, chunk=1, snapshot_interval=0.0)
 
 
 def test_chunk_sizes_and_a_process_cluster_identical(tmp_path):
@@ -169,36 +111,3 @@ def test_chunk_sizes_and_a_process_cluster_identical(tmp_path):
     for got, csv in runs:
         _assert_same_data(ref, got)
         assert csv == ref_csv
-
-
-def test_dask_settings_are_dask_keys_and_their_yaml_says_the_same():
-    # a misspelt key would be accepted by dask.config.set and do nothing: each must be one of
-    # distributed's own keys, with a value of the default's kind; the YAML file text nests the
-    # same keys and values, and the README shows that text
-    pytest.importorskip("distributed", reason="optional extra acmm-qpp[dask] not installed")
-    import dask
-    from dask.utils import parse_timedelta
-
-    from acmm.sweep.dask_settings import DASK_SETTINGS, dask_settings_yaml
-
-    assert DASK_SETTINGS
-    for key, value in DASK_SETTINGS.items():
-        default = dask.config.get(key)            # KeyError for a key distributed does not have
-        if isinstance(default, bool):
-            assert isinstance(value, bool) and value != default, key
-        else:
-            assert parse_timedelta(value) > parse_timedelta(default), key
-    tree = yaml.safe_load(dask_settings_yaml())
-    flat = {}
-
-    def walk(node, prefix):
-        for k, v in node.items():
-            if isinstance(v, dict):
-                walk(v, prefix + k + ".")
-            else:
-                flat[prefix + k] = v
-
-    walk(tree, "")
-    assert flat == DASK_SETTINGS
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
-    assert dask_settings_yaml().strip() in readme

@@ -13,7 +13,6 @@ from qpp.design import spheres
 
 from tests.qpp.conftest import _pub
 
-
 W = np.concatenate([[0.0], np.logspace(-3, 3, 1500)])
 
 

@@ -15,7 +15,6 @@ from qpp.simulate.closed_loop import simulate
 from tests.conftest import REPO
 from tests.qpp.conftest import _cfg
 
-
 runner = CliRunner()
 NEW = ("qpp_unstable", "qpp_saturation", "qpp_cubic2")
 

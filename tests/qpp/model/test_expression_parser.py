@@ -9,7 +9,6 @@ from qpp.cli import app
 
 from tests.qpp.conftest import _cfg
 
-
 runner = CliRunner()
 
 

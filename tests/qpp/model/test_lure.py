@@ -8,7 +8,6 @@ from qpp.io.config import parse_config
 
 from tests.qpp.conftest import _base, _pub
 
-
 SISO_AZ = np.array([  # eq 13.6 as printed
     [0., 1., 0., 0., 0., 0.],
     [0., -1., 2506.2, 1937.1, -299.9, -23.5],

@@ -11,7 +11,6 @@ from qpp.io.config import parse_config
 
 from tests.qpp.conftest import _base, _cfg
 
-
 runner = CliRunner()
 
 
