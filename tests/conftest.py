@@ -1,4 +1,7 @@
-"""Shared test fixtures: a scratch working directory and a CLI runner."""
+"""Shared test fixtures: a scratch working directory and a CLI runner; the repository's root.
+
+Test modules import the constants and helpers of this file as ``from tests.conftest import REPO``
+(``tests`` is a package: see ``tests/__init__.py``)."""
 from __future__ import annotations
 
 import os
@@ -8,7 +11,8 @@ import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-#: Root of the source tree (the directory holding ``configs/``).
+#: Root of the source tree (the directory holding ``configs/``, ``README.md`` and the packages),
+#: whatever the depth of the test file that needs it.
 REPO = Path(__file__).resolve().parent.parent
 CONFIGS = REPO / "configs"
 

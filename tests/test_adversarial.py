@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from conftest import CONFIGS
+from tests.conftest import CONFIGS
 
 DELETE = object()
 

@@ -21,7 +21,7 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from conftest import CONFIGS  # noqa: E402
+from tests.conftest import CONFIGS  # noqa: E402
 
 from acmm_qpp.errors import AcmmError, ConfigError  # noqa: E402
 

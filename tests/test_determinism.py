@@ -24,9 +24,9 @@ import h5py
 import numpy as np
 import pytest
 
-pytestmark = pytest.mark.slow
+from tests.conftest import REPO as ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.slow
 
 
 def _needs_two_kernels() -> None:

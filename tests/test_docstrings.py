@@ -43,7 +43,8 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+from tests.conftest import REPO
+
 
 #: The packages whose every module is checked; their modules are found by
 #: :func:`pkgutil.walk_packages` (:func:`discover_modules`), so a new module is checked from the
@@ -54,7 +55,6 @@ PACKAGES = ["acmm", "qpp", "acmm_qpp"]
 #: docstrings, live in the target, which is checked).  :func:`test_exclusions_are_justified`
 #: verifies that each one's source holds nothing but a docstring, imports and the re-export.
 SHIMS: dict = {}
-
 
 
 def discover_modules() -> list:

@@ -7,7 +7,8 @@ import ast
 import re
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.conftest import REPO as ROOT
+
 ERRATA = ROOT / "docs" / "ERRATA.md"
 
 
@@ -20,7 +21,7 @@ def _evidence() -> list[tuple[str, str]]:
     """(file, test) pairs named in the document; a bare test name belongs to the last file named."""
     pairs, current = [], None
     for token in re.findall(r"`([^`]+)`", ERRATA.read_text(encoding="utf-8")):
-        m = re.fullmatch(r"(tests/test_\w+\.py)::(test_\w+)", token)
+        m = re.fullmatch(r"(tests/(?:\w+/)*test_\w+\.py)::(test_\w+)", token)
         if m:
             current = m.group(1)
             pairs.append((current, m.group(2)))

@@ -6,7 +6,9 @@ inside functions included, so that a lazy import cannot hide a dependency.
   ``acmm.sweep``, ``acmm.api``, ``qpp.io.stages``) → cores (``model``, ``design``, ``simulate``,
   ``plots``, ``io``) → the shared base ``acmm_qpp``; ``qpp`` imports nothing of ``acmm``;
 * no alias module (a module whose body is only imports), no module ``__getattr__``;
-* the installed top-level import names (pyproject's packages list) are this project's own.
+* the installed top-level import names (pyproject's packages list) are this project's own;
+* the tests mirror the packages (``tests/acmm/design/test_sector_lqr.py`` tests
+  ``acmm/design/sector_lqr.py``), and every test file the documents and sources cite exists.
 """
 from __future__ import annotations
 
@@ -17,7 +19,8 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+from tests.conftest import REPO
+
 PACKAGES = ("acmm", "qpp", "acmm_qpp")
 
 
@@ -278,3 +281,55 @@ def test_the_readme_module_map_check_fails_on_a_missing_or_unknown_module(tmp_pa
                         lambda: [r.replace("`acmm/design/sector_lqr.py`", "`acmm/design/lqr.py`") for r in rows])
     with pytest.raises(AssertionError):
         test_the_readme_module_map_names_every_module_and_no_missing_one()
+
+
+#: The test folders that mirror a package; a file directly in ``tests/`` is about the project as a
+#: whole (the layers, the lock, the docstrings, the README's numbers, the adversarial suites, ...).
+MIRRORED = PACKAGES
+
+
+def _misnamed_test_files(files: list[str]) -> list[str]:
+    """The test files (paths relative to the repository) that do not mirror a module: under
+    ``tests/<package>/<folder>/`` only ``__init__.py``, ``conftest.py`` and ``test_<module>.py``
+    for a module ``<package>/<folder>/<module>.py``; in ``tests/`` itself no other folder."""
+    bad = []
+    for rel in files:
+        parts = rel.split("/")
+        if parts[0] != "tests" or len(parts) == 2:
+            continue                              # tests/test_layers.py etc.: about the project
+        folder, name = "/".join(parts[1:-1]), parts[-1]
+        if parts[1] not in MIRRORED or not (REPO / folder).is_dir():
+            bad.append(f"{rel}: tests/{folder} mirrors no package folder")
+        elif name in ("__init__.py", "conftest.py"):
+            continue
+        elif not name.startswith("test_"):
+            bad.append(f"{rel}: not test_<module>.py")
+        elif not (REPO / folder / name[5:]).is_file():
+            bad.append(f"{rel}: no module {folder}/{name[5:]} of that name")
+    return bad
+
+
+def test_test_files_mirror_the_modules_and_every_cited_test_file_exists():
+    """tests/acmm/design/test_sector_lqr.py tests acmm/design/sector_lqr.py (python-control's
+    layout): every file under tests/acmm, tests/qpp and tests/acmm_qpp is named after a module of
+    the package folder it mirrors; the test files the README, docs/ERRATA.md, the sources, the
+    scripts, the Makefile and the tests themselves cite exist (a moved test leaves no stale path)."""
+    import re
+
+    files = sorted(p.relative_to(REPO).as_posix() for p in (REPO / "tests").rglob("*.py")
+                   if "__pycache__" not in p.parts)
+    assert len(files) > 100 and _misnamed_test_files(files) == []
+    assert _misnamed_test_files(["tests/acmm/design/test_lqr.py", "tests/acmm/desing/test_riccati.py",
+                                 "tests/qpp/test_qpp_core.py", "tests/acmm/design/helpers.py",
+                                 "tests/acmm/design/test_riccati.py", "tests/test_whole_project.py"]) == [
+        "tests/acmm/design/test_lqr.py: no module acmm/design/lqr.py of that name",
+        "tests/acmm/desing/test_riccati.py: tests/acmm/desing mirrors no package folder",
+        "tests/qpp/test_qpp_core.py: no module qpp/qpp_core.py of that name",
+        "tests/acmm/design/helpers.py: not test_<module>.py"]
+    citing = [REPO / "README.md", REPO / "docs" / "ERRATA.md", REPO / "Makefile"]
+    for folder in PACKAGES + ("scripts", "tests"):
+        citing += sorted(p for p in (REPO / folder).rglob("*.py") if p.name != "test_layers.py")   # (examples above)
+    cited = {(path.relative_to(REPO).as_posix(), m) for path in citing
+             for m in re.findall(r"\btests/(?:\w+/)*test_\w+\.py", path.read_text(encoding="utf-8"))}
+    assert len(cited) > 30
+    assert sorted(f"{src} cites {m}" for src, m in cited if not (REPO / m).is_file()) == []

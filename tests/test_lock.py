@@ -1,12 +1,12 @@
 """requirements.lock pins every direct dependency of pyproject.toml, with hashes, within its bounds,
 and the README's dependency table says the versions the lock holds (``scripts/lock_table.py``)."""
 import importlib.util
-from pathlib import Path
 
 from packaging.markers import Marker, default_environment
 from packaging.utils import canonicalize_name
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.conftest import REPO as ROOT
+
 _spec = importlib.util.spec_from_file_location("lock_table", ROOT / "scripts" / "lock_table.py")
 lock_table = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(lock_table)

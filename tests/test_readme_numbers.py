@@ -10,13 +10,12 @@ with the README, so a code change that moves a number fails here until ``make re
 from __future__ import annotations
 
 import importlib.util
-from pathlib import Path
 
 import pytest
 
-pytestmark = pytest.mark.slow      # runs every packaged config (~40 s): `make test-slow`, run by CI
+from tests.conftest import REPO
 
-REPO = Path(__file__).resolve().parent.parent
+pytestmark = pytest.mark.slow      # runs every packaged config (~40 s): `make test-slow`, run by CI
 
 
 def _script():

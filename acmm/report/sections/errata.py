@@ -152,9 +152,10 @@ def kinematics_rows(th, n: float) -> list[list[str]]:
     rows.append(["eq 3.6 (1,1) entry", "1 inside the bracket", "cos θ3 (so f11 = 1; eq 4.4 already uses it)",
                  f"printed f violates eq 4.2 (θ̇ = 0 at θ*) by {r_mb3:.2e} rad/s at the MB3 TEA and {r_test:.2e} rad/s "
                  f"({r_test / n:.3f} n) at θ = (10°, −30°, 25°); corrected f: {r_ok:.1e} rad/s",
-                 "tests/test_dynamics.py"])
+                 "tests/acmm/model/test_kinematics.py"])
     rows.append(["eqs 3.1, 3.8 momentum", "—", "I ω̇ + ḣ + ω×(Iω + h) = τgg + w holds exactly, also saturated",
-                 "checked along a saturated trajectory", "tests/test_dynamics.py, tests/test_simulate.py"])
+                 "checked along a saturated trajectory",
+                 "tests/acmm/model/test_dynamics.py, tests/acmm/simulate/test_kernel.py"])
     return rows
 
 
@@ -187,7 +188,7 @@ def tea_rows(I, n: float, t0, bias) -> list[list[str]]:
     rows.append(["TEA roots (eqs 4.1–4.3)", "one TEA per configuration", "continuation from LVLH picks the "
                  "physical branch", f"MB3, zero bias: {len(roots)} equilibria found, pitch {pitches} deg; "
                  f"continuation gives {t0.theta_deg[1]:+.2f}°; Table 1 TEAs reproduced with back-solved bias "
-                 f"{_fmt(bias, '{:+.4f}')} ft·lbf", "tests/test_tea.py"])
+                 f"{_fmt(bias, '{:+.4f}')} ft·lbf", "tests/acmm/model/test_tea.py"])
     cap = 3 * n ** 2 * np.hypot((I[2, 2] - I[0, 0]) / 2, I[0, 2])
     try:
         tea_mod.solve_tea(I, n, np.array([0.0, 4.0, 0.0]))
@@ -196,7 +197,7 @@ def tea_rows(I, n: float, t0, bias) -> list[list[str]]:
         msg = "no equilibrium: " + str(exc).split(":", 1)[-1].strip()
     rows.append(["4 ft·lbf pitch bias (Wie et al. 1989)", "used with MB3", "MB3 has no TEA for it",
                  f"largest gravity-gradient pitch torque of MB3 = {cap:.3f} ft·lbf < 4; solve_tea: {msg}",
-                 "tests/test_tea.py"])
+                 "tests/acmm/model/test_tea.py"])
     return rows
 
 
@@ -237,23 +238,26 @@ def linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
                  f"closed form vs central differences at the MB3 TEA: max difference "
                  f"{np.abs(num - ana).max():.1e} ft·lbf/rad (entries up to {np.abs(ana).max():.2f}); "
                  f"with the printed sign: {np.abs(num + ana).max():.2f} ft·lbf/rad",
-                 "tests/test_linearize.py (numerical Jacobian of the nonlinear model, 50 random cases)"])
+                 "tests/acmm/model/test_linearize.py (numerical Jacobian of the nonlinear model, 50 random cases)"])
     rows.append(["eq 4.28 E1", "1/cos θ1 scales all of E1", "rows 1–3 only; rows 4–6 identity", "—",
-                 "tests/test_linearize.py"])
-    rows.append(["eq 4.29 column 6", "τgg² term in rows 1–3", "τgyr²·n·sin θ3 (units)", "—", "tests/test_linearize.py"])
+                 "tests/acmm/model/test_linearize.py"])
+    rows.append(["eq 4.29 column 6", "τgg² term in rows 1–3", "τgyr²·n·sin θ3 (units)", "—",
+                 "tests/acmm/model/test_linearize.py"])
     rows.append(["eqs 4.30, 4.33, 4.49 signs", "u, w signs", "u enters ω̇ as −u and ḣ as +u; w enters ω̇ as +w",
-                 "input sign reversed: " + design_on(m.A, -m.B, m, s), "tests/test_dynamics.py, tests/test_linearize.py"])
+                 "input sign reversed: " + design_on(m.A, -m.B, m, s),
+                 "tests/acmm/model/test_dynamics.py, tests/acmm/model/test_linearize.py"])
     a2 = m.A[6:9, 6:9]
     Ap = m.A.copy()
     Ap[8, 6] = -Ap[8, 6]
     rows.append(["eq 4.34 A2(3,1)", "+n cos θ1 cos θ3", "−n cos θ1 cos θ3 (block −[ω*×] skew-symmetric)",
                  f"A2(3,1) = {a2[2, 0]:+.4e} rad/s; printed sign gives |A2 + A2ᵀ|max = {2 * abs(a2[2, 0]):.3e} rad/s "
-                 f"(ours {np.abs(a2 + a2.T).max():.1e}); " + design_on(Ap, m.B, m, s), "tests/test_linearize.py"])
+                 f"(ours {np.abs(a2 + a2.T).max():.1e}); " + design_on(Ap, m.B, m, s),
+                 "tests/acmm/model/test_linearize.py"])
     Aq = m.A.copy()
     for src, good, bad in ((4, 20, 21), (5, 22, 23)):
         Aq[bad, src], Aq[good, src] = Aq[good, src], 0.0
     rows.append(["eq 4.44 DRF input rows", "θ2, θ3 drive rows 10, 12 of x3", "rows 9, 11 (β̇2, β̇3)",
-                 "printed rows: " + design_on(Aq, m.B, m, s), "tests/test_linearize.py"])
+                 "printed rows: " + design_on(Aq, m.B, m, s), "tests/acmm/model/test_linearize.py"])
     return rows
 
 
@@ -290,7 +294,7 @@ def riccati_rows(m, d, n: float) -> list[list[str]]:
     rows.append(["eq 5.6 sign iteration", "denominator I + 10S + 5S⁴", "I + 10S² + 5S⁴",
                  f"scalar: printed map sends −1 to {f(-1.0):g} (sign(−1) is not a fixed point); MB3 scaled "
                  f"Hamiltonian (48×48): printed form — {pr}; corrected form converges in {ok.iterations} iterations",
-                 "tests/test_riccati.py"])
+                 "tests/acmm/design/test_matrix_sign.py"])
     # scaling
     D = np.diag(m.scales)
     sc_rows = []
@@ -311,7 +315,7 @@ def riccati_rows(m, d, n: float) -> list[list[str]]:
     rows.append(["state scaling", "Riccati solved in physical units", "scale states by nominal magnitudes; "
                  "residual checked scaled", f"MB3 state scales span {m.scales.max() / m.scales.min():.1e}; "
                  f"relative residual (scaled coordinates), unscaled solve: {', '.join(sc_rows)}; scaled solve: "
-                 f"{', '.join(scaled)}", "tests/test_riccati.py"])
+                 f"{', '.join(scaled)}", "tests/acmm/design/test_riccati.py"])
     return rows
 
 
@@ -351,14 +355,15 @@ def design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str
                  "shifting of the DRF poles (Amin 1985); K exact LQR gain of a Q ⪰ 0",
                  f"{len(pts)} stair-case points: worst margin {min(float(p['sector_margin']) for p in pts):+.4f} n, "
                  f"worst residual {max(float(p['riccati_residual']) for p in pts):.1e}; cross-inertia-free MB3 model "
-                 f"PBH σmin/σmax = {ctrb.min_ratio:.1e} (nearly uncontrollable)", "tests/test_lqr.py, tests/test_design.py"])
+                 f"PBH σmin/σmax = {ctrb.min_ratio:.1e} (nearly uncontrollable)",
+                 "tests/acmm/design/test_sector_lqr.py, tests/acmm/stages/test_design.py"])
     rows.append(["saturation", "±150 ft·lbf, 20 000 ft·lbf·s", "CMG at its limit delivers only the torque that stops "
                  "|h_i| growing", f"stair-case: peak |u| {np.abs(sim['u']).max():.1f} ft·lbf, peak |h| "
                  f"{np.nanmax(sim['levels']['peak_momentum']):.0f} ft·lbf·s (every integrator step)",
-                 "tests/test_simulate.py"])
+                 "tests/acmm/simulate/test_kernel.py"])
     rows.append(["claim 1", "cross-inertia-free design unstable within 0.1 orbit",
                  "design: minimum-energy shifted LQR (Q0 = 0, R = I/(100 ft·lbf)²) + pole shifting of the DRF poles",
                  f"diverges at {c1.div:.3f} orbit; its gain on the true linear model: max Re λ = {c1.maxre:+.3f} n; "
                  f"coupled design bounded, peak error first orbit {_fmt(c1.first, '{:.1f}')} deg, from orbit 2 "
-                 f"{_fmt(c1.late, '{:.2f}')} deg", "tests/test_simulate.py"])
+                 f"{_fmt(c1.late, '{:.2f}')} deg", "tests/acmm/simulate/test_kernel.py"])
     return rows

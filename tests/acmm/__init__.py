@@ -1,0 +1,1 @@
+"""Tests of :mod:`acmm`: ``test_<module>.py`` tests ``acmm/<module>.py``."""

@@ -1,0 +1,1 @@
+"""Tests of :mod:`acmm.model`: ``test_<module>.py`` tests ``acmm/model/<module>.py``."""

@@ -1,0 +1,1 @@
+"""Tests of :mod:`acmm.report.sections`: ``test_<module>.py`` tests ``acmm/report/sections/<module>.py``."""

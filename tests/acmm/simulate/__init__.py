@@ -1,0 +1,1 @@
+"""Tests of :mod:`acmm.simulate`: ``test_<module>.py`` tests ``acmm/simulate/<module>.py``."""

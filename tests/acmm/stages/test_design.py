@@ -1,0 +1,211 @@
+"""The design stage (acmm.stages.design, issue 4): sector LQR at every stair-case point, the gain
+schedule along the whole path, design.h5 written, reused and designed again.
+
+Every pole is re-checked against the sector with an independent formula, and K is re-derived
+from the returned Q with scipy's CARE solver directly (not through acmm.design.riccati).
+"""
+from __future__ import annotations
+
+import os
+import re
+
+import h5py
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from acmm.io.config import load_config
+from acmm.stages.design import compute_design, design_for, run_design
+from acmm.io.design_file import load_design_table
+
+N = 0.0011
+
+
+def _inside_sector(poles, n, sigma=0.5, half_angle_deg=45.0):
+    re, im = poles.real, np.abs(poles.imag)
+    return bool(np.all(re <= -sigma * n) and np.all(im <= np.tan(np.radians(half_angle_deg)) * -re))
+
+
+def test_staircase_points_span_the_report_range(staircase):
+    th2 = np.degrees(staircase.table.tea[:, 1])
+    assert len(th2) >= 10
+    assert th2[0] == pytest.approx(-44.7, abs=0.01) and th2[-1] == pytest.approx(-5.0, abs=0.01)
+    # evenly spaced in pitch TEA (schedule.spacing: tea; s interpolated on an 81-point track)
+    assert np.allclose(np.diff(th2), np.diff(th2).mean(), rtol=1e-2)
+
+
+def test_every_design_point_in_sector_with_exact_lqr_gain(staircase):
+    for p in staircase.points:
+        m, res = p.model, p.lqr
+        poles = np.linalg.eigvals(m.A - m.B @ res.K)
+        assert _inside_sector(poles, N), p.spec.name
+        assert res.residual <= 1e-9
+        # Q is PSD and K is the exact LQR gain of the 0.5n-shifted problem with that Q:
+        d = m.scales
+        a = m.A * (1 / d)[:, None] * d[None, :] + 0.5 * N * np.eye(24)
+        b = m.B / d[:, None]
+        q = res.Q * d[:, None] * d[None, :]
+        q = 0.5 * (q + q.T)
+        assert np.linalg.eigvalsh(q).min() >= -1e-9 * np.abs(q).max()
+        x = sla.solve_continuous_are(a, b, q, res.R)
+        k_again = np.linalg.solve(res.R, b.T @ x) / d[None, :]
+        assert np.max(np.abs(k_again - res.K)) <= 1e-8 * np.max(np.abs(res.K))
+
+
+def test_design_points_well_conditioned_with_margin(staircase):
+    """Every stair-case point (MB3 and AC are its ends): every pole ≥ 0.1n inside the sector and
+    the largest eigenvalue condition number in the stored state scaling ≤ 1e5, both recomputed
+    with scipy's left/right eigenvectors."""
+    ours, theirs = [], []
+    for p in staircase.points:
+        m, res = p.model, p.lqr
+        d = m.scales
+        acl = (m.A - m.B @ res.K) / d[:, None] * d[None, :]
+        w, vl, vr = sla.eig(acl, left=True, right=True)
+        vl, vr = vl / np.linalg.norm(vl, axis=0), vr / np.linalg.norm(vr, axis=0)
+        kappa = 1.0 / np.abs(np.sum(vl.conj() * vr, axis=0))
+        assert kappa.max() <= 1e5, (p.spec.name, kappa.max())
+        ours.append(res.max_eig_condition)
+        theirs.append(kappa.max())
+        assert _inside_sector(w, N, 0.5 + 0.1) and _inside_sector(w + 0.1 * np.sqrt(2) * N, N), p.spec.name
+        assert 0 < res.robustness_radius < 1 and 0 < res.robustness_radius_elementwise < 1
+    # κ of nearly clustered poles moves by ~10-20 % with the rounding of A − BK; the maxima agree
+    assert max(ours) == pytest.approx(max(theirs), rel=0.05) and max(ours) <= 1e5
+
+
+def _worst_on_own_blend(r, gain_at):
+    """Largest Re λ / n of the scheduled local loop at 25 blend points of our own: TEA of the
+    blended inertia, local model, ``gain_at(θ2*)``, numpy eigenvalues."""
+    from acmm.model import linearize as lin
+    from acmm.model.tea import solve_tea_near
+
+    cfg = r.config
+    a, b = r.points[0].spec, r.points[-1].spec
+    theta = r.points[0].tea.theta
+    worst = -np.inf
+    for s in np.linspace(0.0, 1.0, 25):
+        inertia = (1 - s) * a.inertia + s * b.inertia
+        bias = (1 - s) * a.bias + s * b.bias
+        theta = solve_tea_near(inertia, N, bias, theta).theta
+        m = lin.design_point(inertia, theta, N, model=cfg.design.model, drf_mode=cfg.design.drf_mode)
+        worst = max(worst, np.linalg.eigvals(m.A - m.B @ gain_at(theta[1])).real.max() / N)
+    return worst
+
+
+def test_table_schedule_is_stable_along_the_whole_path(staircase):
+    """The shipped schedule is the table look-up (K linear in θ2* between the 12 design points,
+    report ch. 6); with it every local loop has Re λ ≤ −0.25n at ≥ 200 TEAs.  Recomputed here
+    with np.interp of the point gains at 25 blend points of our own."""
+    r = staircase
+    assert r.fit.form == "table"
+    pc = r.path_check
+    assert pc.theta2.size >= 200 and pc.max_real.max() <= -0.25
+    assert np.allclose(np.diff(pc.theta2), np.diff(pc.theta2).mean(), rtol=0.05)
+    th = np.array([p.tea.theta[1] for p in r.points])
+    Ks = np.array([p.lqr.K for p in r.points])
+    assert np.all(np.diff(th) > 0)
+
+    def table(t2):
+        return np.array([[np.interp(t2, th, Ks[:, i, j]) for j in range(24)] for i in range(3)])
+
+    assert _worst_on_own_blend(r, table) <= -0.25
+
+
+@pytest.fixture(scope="module")
+def staircase_polynomial():
+    return compute_design(load_config("staircase", ["schedule.form=polynomial", "schedule.fit=closed_loop"]))
+
+
+def test_quadratic_schedule_is_stable_along_the_whole_path(staircase_polynomial):
+    """The report's form (order 2 in θ2*, refined against the closed loop until SLSQP's own
+    convergence test): every local loop has Re λ ≤ −0.25n at ≥ 200 TEAs, recomputed here with
+    np.polyval at 25 blend points of our own."""
+    r = staircase_polynomial
+    assert r.fit.order == 2 and r.fit.coef.shape[0] == 3
+    assert r.fit.refit_info["accepted"] and r.fit.refit_info["iterations"] < 2000
+    pc = r.path_check
+    assert pc.theta2.size >= 200 and pc.max_real.max() <= -0.25
+
+    def poly(t2):
+        return np.array([[np.polyval(r.fit.coef[::-1, i, j], t2) for j in range(24)] for i in range(3)])
+
+    assert _worst_on_own_blend(r, poly) <= -0.25
+
+
+@pytest.mark.parametrize("units", ["imperial", "SI"])
+@pytest.mark.parametrize("edit", ["K of another shape", "K scaled", "K non-finite", "a coefficient changed"])
+def test_an_edited_design_h5_is_designed_again_not_simulated(tmp_runs, run_acmm, edit, units):
+    """A review: a design.h5 whose K had another shape reached the compiled simulator (a numba
+    traceback, exit 1); one whose K was scaled by 1e6 under the right design_hash was simulated
+    (52 M steps).  The design is now reused only when its arrays have the points' shapes, are
+    finite and match the digest written with them; else it is designed again."""
+    r = run_acmm("design", "staircase", f"output.units={units}", "--no-figures")
+    assert r.exit_code == 0, r.output
+    path = tmp_runs / "runs" / "staircase" / "design.h5"
+    with h5py.File(path, "r") as f:
+        K0 = f["K"][()]
+    assert design_for(load_config("staircase", [f"output.units={units}"]))[1].startswith("reused")
+    with h5py.File(path, "r+") as f:
+        if edit == "K of another shape":
+            del f["K"]
+            f["K"] = np.zeros((2, 5))
+        elif edit == "K scaled":
+            f["K"][...] = K0 * 1e6
+        elif edit == "K non-finite":
+            f["K"][0, 0, 0] = np.nan
+        else:
+            f["schedule/coef"][0, 0, 0] += 1e-9
+    r = run_acmm("simulate", "staircase", f"output.units={units}", "simulation.orbits=1", "--no-figures")
+    assert r.exit_code == 0 and "Traceback" not in r.output, r.output
+    with h5py.File(path, "r") as f:
+        np.testing.assert_array_equal(f["K"][()], K0)            # designed again, the same gains
+
+
+def test_design_h5_is_self_describing_and_reused(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    cfg = load_config("ac")
+    r, path = run_design(cfg, figures=True)
+    assert path.resolve() == tmp_path / "runs" / "ac" / "design.h5"
+    assert (tmp_path / "runs" / "ac" / "design_poles.png").exists()
+    with h5py.File(path) as f:
+        missing = []
+        f.visititems(lambda name, obj: missing.append(name)
+                     if isinstance(obj, h5py.Dataset) and "units" not in obj.attrs else None)
+        assert not missing
+        assert f.attrs["design_hash"] and f.attrs["config"] and f.attrs["package_version"]
+    table = load_design_table(path)
+    with h5py.File(path) as f:
+        k = sorted(f["points"])[0]
+        assert f[f"points/{k}/max_eig_condition"][()] == pytest.approx(r.points[0].lqr.max_eig_condition)
+        assert f[f"points/{k}/robustness_radius"].attrs["units"] == "1"
+    assert np.array_equal(table.gain[0], r.points[0].lqr.K)
+    _, note = design_for(cfg)
+    assert note.startswith("reused")
+    # a design-relevant change invalidates the cached design
+    cfg2 = cfg.model_copy(update={"design": cfg.design.model_copy(update={"R": 2e-4})})
+    _, note2 = design_for(cfg2)
+    assert note2.startswith("designed")
+
+
+def test_table_form_prints_the_check_that_strict_judges(tmp_runs, run_acmm):
+    """schedule.form: table printed no check lines, yet --strict failed on the check's margin."""
+    r = run_acmm("design", "staircase", "schedule.form=table", "schedule.fit=least_squares",
+                 "schedule.n_points=4", "--no-figures")
+    assert r.exit_code == 0, r.output
+    assert "scheduled gain (table) on the local models" in r.stdout and "scheduled closed loops:" in r.stdout
+
+
+def test_a_fifo_in_place_of_design_h5_is_designed_again_not_a_hang(tmp_path, monkeypatch):
+    """``acmm simulate`` reuses ``design.h5`` when it matches: a FIFO (or a device) there used to
+    block it for ever; it is not a design file, so the stage designs again and replaces it."""
+    from acmm.io.config import load_config
+    from acmm.stages.design import design_for
+
+    monkeypatch.chdir(tmp_path)
+    cfg = load_config("mb3", ["output.figures=false"])
+    run = cfg.run_dir()
+    run.mkdir(parents=True)
+    os.mkfifo(run / "design.h5")
+    table, note = design_for(cfg)
+    assert note.startswith("designed") and (run / "design.h5").is_file()
+    assert design_for(cfg)[1].startswith("reused")

@@ -1,0 +1,204 @@
+"""Whole sweeps (acmm.sweep.run, issue 7): the same table serial and on a pool or a Dask
+cluster, kill and resume, a resume refused for another config, background snapshots."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import yaml
+
+from acmm_qpp.errors import ConfigError
+from acmm_qpp.results import read_h5
+from acmm.sweep.cases import case_values, perturb_inertia, unphysical_reason
+from acmm.sweep.run import run_sweep
+from acmm.sweep.config import load_sweep, parse_sweep
+
+from tests.acmm.conftest import _sweep_yaml
+from tests.acmm.sweep.conftest import _assert_same_data, _cfg, _run_bytes
+
+
+# --------------------------------------------------------------------------------------------
+# whole sweeps
+# --------------------------------------------------------------------------------------------
+def test_an_interrupted_rerun_does_not_sit_beside_the_earlier_runs_config_and_figures(tmp_path):
+    """Seed A ran to the end (figures, config.yaml); seed B, interrupted, left its partial results
+    beside A's config.yaml and figures (a review).  A sweep started afresh now writes its own
+    config.yaml first and removes the earlier run's results and figures."""
+    class _Stop(Exception):
+        pass
+
+    def stop(n_new):
+        if n_new == 2:
+            raise _Stop
+
+    run_sweep(_sweep_yaml(tmp_path, "rerun", seed=1, margin=None), workers=1, figures=True)
+    run = tmp_path / "runs" / "rerun"
+    assert list(run.glob("sweep_*.png")) and "seed: 1" in (run / "config.yaml").read_text()
+    with pytest.raises(_Stop):
+        run_sweep(_sweep_yaml(tmp_path, "rerun", seed=2, margin=None), workers=1, figures=True,
+                  after_record=stop, snapshot_interval=0.0)
+    assert not list(run.glob("sweep_*.png"))
+    assert "seed: 2" in (run / "config.yaml").read_text()
+    if (run / "sweep.h5").exists():
+        h = read_h5(run / "sweep.h5")
+        assert not h["attrs"]["complete"] and "seed: 2" in h["attrs"]["config"]
+
+
+def test_same_config_and_seed_give_identical_data_serial_and_pool(tmp_path):
+    cfg = _sweep_yaml(tmp_path, "same", margin={"low": 0.8, "high": 1.25, "scan_points": 1, "rel_tol": 0.1})
+    r1 = run_sweep(cfg, workers=1)
+    a = read_h5(r1.path)
+    os.replace(r1.path, tmp_path / "first.h5")
+    r2 = run_sweep(cfg, workers=2)
+    b = read_h5(r2.path)
+    _assert_same_data(read_h5(tmp_path / "first.h5"), b)
+    assert a["attrs"]["complete"] and a["attrs"]["n_cases_done"] == 6
+    assert a["parameters"]["dI11"].shape == (6,) and a["peak_attitude_error"].shape == (6, 3)
+    assert a["attrs"]["results_key"] == b["attrs"]["results_key"]
+    # the stored inertia is the perturbation of the base inertia by the stored parameters
+    base = parse_sweep(yaml.safe_load(cfg.read_text())).bases[0].config.inertia.matrix()
+    for i in range(6):
+        f = {k: a["parameters"][k][i] for k in a["parameters"]}
+        np.testing.assert_allclose(a["inertia"][i], perturb_inertia(base, f), rtol=1e-15)
+        assert unphysical_reason(a["inertia"][i]) is None
+    # margin: the reported limit is bounded and the first failure (when found) is not
+    for key, m in a["margin"].items():
+        v = dict(zip(m["evaluated_s"], m["evaluated_verdict"]))
+        assert v[m["limit"]] == b"bounded"
+        if np.isfinite(m["first_failure"]):
+            assert v[m["first_failure"]] != b"bounded"
+
+
+class _Kill(Exception):
+    pass
+
+
+def test_interrupted_then_resumed_equals_uninterrupted(tmp_path):
+    cfg = _sweep_yaml(tmp_path, "resume", n_runs=8)
+    ref = read_h5(run_sweep(cfg, workers=1).path)
+
+    def boom(n):
+        if n == 3:
+            raise _Kill
+    with pytest.raises(_Kill):
+        run_sweep(cfg, workers=1, after_record=boom)
+    part = read_h5(tmp_path / "runs" / "resume" / "sweep.h5")
+    assert not part["attrs"]["complete"] and part["attrs"]["n_cases_done"] == 3
+    # a torn line left by a killed writer is ignored on resume
+    with open(tmp_path / "runs" / "resume" / "sweep.journal", "a") as f:
+        f.write('{"kind": "case", "base": "ac", "ind')
+    r = run_sweep(cfg, workers=1, resume=True)
+    assert r.n_resumed == 3 and r.n_new == 5
+    _assert_same_data(ref, read_h5(r.path))
+    # resuming a complete sweep runs nothing
+    assert run_sweep(cfg, workers=1, resume=True).n_new == 0
+
+
+def test_sigkill_then_resume_equals_uninterrupted(tmp_path):
+    cfg = _sweep_yaml(tmp_path, "killed", n_runs=16, orbits=40.0)
+    journal = tmp_path / "runs" / "killed" / "sweep.journal"
+    proc = subprocess.Popen([sys.executable, "-c", "from acmm.cli.app import main; main()", "sweep", str(cfg),
+                             "--workers", "1"], cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            env={**os.environ, "MPLBACKEND": "Agg"})
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and proc.poll() is None:
+        if journal.exists() and journal.read_text().count('"kind": "case"') >= 3:
+            break
+        time.sleep(0.005)
+    proc.send_signal(signal.SIGKILL)
+    assert proc.wait(10) == -signal.SIGKILL, "the sweep finished before it could be killed"
+    n_before = journal.read_text().count('"kind": "case"')
+    assert 3 <= n_before < 16
+    r = run_sweep(cfg, workers=2, resume=True)
+    assert r.n_resumed == n_before and r.n_new == 16 - n_before
+    resumed = read_h5(r.path)
+    os.replace(r.path, tmp_path / "resumed.h5")
+    _assert_same_data(read_h5(run_sweep(cfg, workers=1).path), resumed)
+
+
+def test_resume_refuses_a_journal_of_another_config(tmp_path):
+    run_sweep(_sweep_yaml(tmp_path, "other", n_runs=2), workers=1)
+    with pytest.raises(ConfigError, match=r"different sweep configuration.*\(changed since: sweep\.seed: \d+ → 12\)$"):
+        run_sweep(_sweep_yaml(tmp_path, "other", n_runs=2, seed=12), workers=1, resume=True)
+
+
+@pytest.mark.parametrize("section, a, b", [
+    ("grid", {"dI11": [-0.05, 0.05], "bias_pitch": [-1.0, 1.0]}, {"bias_pitch": [-1.0, 1.0], "dI11": [-0.05, 0.05]}),
+    ("monte_carlo", {"inertia": {"percent": 10}, "bias_pitch": {"uniform": [-1, 1]}},
+     {"bias_pitch": {"uniform": [-1, 1]}, "inertia": {"percent": 10}})])
+def test_resume_refuses_a_journal_whose_parameters_came_in_another_order(tmp_path, section, a, b):
+    """The order of the parameters decides which values case i gets (the grid's product, the
+    draws), but the results key hashed the config with sorted keys: resuming one order's journal
+    with the other mixed the cases without a word (a review: one grid point twice, one never)."""
+    over = {"monte_carlo": None, "n_runs": None} if section == "grid" else {"n_runs": 2}
+    sa, sb = (load_sweep(_sweep_yaml(tmp_path, "ord", False, **{**over, section: x})) for x in (a, b))
+    values = [[case_values(sw.spec, i, sw.bases[0].config.inertia.matrix()[None])[0] for i in range(2)]
+              for sw in (sa, sb)]
+    assert values[0] != values[1]                     # the orders give case 0 and 1 other values
+    assert sa.results_key() != sb.results_key()
+    run_sweep(_sweep_yaml(tmp_path, "ord", False, **{**over, section: a}), workers=1)
+    with pytest.raises(ConfigError, match="different sweep configuration"):
+        run_sweep(_sweep_yaml(tmp_path, "ord", False, **{**over, section: b}), workers=1, resume=True)
+
+
+def test_resume_refuses_a_journal_of_an_earlier_case_model(tmp_path, monkeypatch):
+    # a journal written before cases started at the design TEA's equilibrium (case model 1) must
+    # not be completed with rows of the current model
+    import acmm.sweep.config as sweep_config
+
+    cfg = _sweep_yaml(tmp_path, "model", n_runs=2)
+    monkeypatch.setattr(sweep_config, "CASE_MODEL", 1)
+    run_sweep(cfg, workers=1)
+    monkeypatch.setattr(sweep_config, "CASE_MODEL", 2)
+    with pytest.raises(ConfigError, match="computed cases differently"):
+        run_sweep(cfg, workers=1, resume=True)
+
+
+def test_dask_local_cluster_gives_the_same_table(tmp_path):
+    distributed = pytest.importorskip("distributed", reason="optional extra acmm-qpp[dask] not installed")
+    cfg = _sweep_yaml(tmp_path, "dask", n_runs=4)
+    ref = read_h5(run_sweep(cfg, workers=1).path)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        r = run_sweep(cfg, scheduler=cluster.scheduler_address)
+    _assert_same_data(ref, read_h5(r.path))
+
+
+def test_background_snapshots_same_table_and_errors_reach_the_caller(tmp_path, monkeypatch):
+    import threading
+
+    import acmm.sweep.run as run
+    from acmm.sweep import output as sweep_output
+    from acmm_qpp.errors import OutputError
+
+    cfg = _cfg(tmp_path, "snaps")
+    ref, ref_csv = _run_bytes(cfg, workers=1)
+    real = sweep_output.write_results
+    calls = []
+
+    def spy(sweep, records, complete, **kw):
+        calls.append((complete, len(records), threading.current_thread().name))
+        return real(sweep, records, complete, **kw)
+
+    monkeypatch.setattr(run, "write_results", spy)
+    got, csv = _run_bytes(cfg, workers=1, chunk=1, snapshot_interval=0.0)
+    _assert_same_data(ref, got)
+    assert csv == ref_csv
+    partial = [c for c in calls if not c[0]]
+    assert partial and all(name == "acmm-sweep-snapshot" for _, _, name in partial)   # beside the driver
+    assert calls[-1][:2] == (True, 9)                                                # then the final table
+    assert all(n < 9 for _, n, _ in partial)
+
+    def failing(sweep, records, complete, **kw):
+        if threading.current_thread().name == "acmm-sweep-snapshot":
+            raise OutputError("cannot write sweep.h5: No space left on device")
+        return real(sweep, records, complete, **kw)
+
+    monkeypatch.setattr(run, "write_results", failing)
+    with pytest.raises(OutputError, match="No space left"):
+        run_sweep(cfg, workers=1, chunk=1, snapshot_interval=0.0)

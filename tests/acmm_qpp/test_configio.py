@@ -1,0 +1,22 @@
+"""YAML config files (acmm_qpp.configio): merge keys are read as PyYAML's safe loader reads them,
+a key written twice is still refused."""
+from __future__ import annotations
+
+import pytest
+
+from acmm_qpp.errors import ConfigError
+
+
+def test_yaml_merge_keys_are_read_and_duplicates_still_refused(tmp_path):
+    """``<<: *anchor`` (a YAML merge key) is read as PyYAML's safe loader reads it, the keys
+    written next to it overriding the merged ones; a key written twice is still refused (the
+    merge key used to be refused: "could not determine a constructor")."""
+    from acmm_qpp.configio import read_yaml
+
+    p = tmp_path / "m.yaml"
+    p.write_text("ref: &I {I11: 21970000, I22: 13320000, I33: 32130000}\ninertia: {<<: *I, I11: 24000000}\n")
+    got, _ = read_yaml(p)
+    assert got["inertia"] == {"I11": 24000000, "I22": 13320000, "I33": 32130000}
+    p.write_text("inertia: {<<: {I11: 1.0}, I22: 2.0, I22: 3.0}\n")
+    with pytest.raises(ConfigError, match="duplicate key 'I22'"):
+        read_yaml(p)

@@ -1,0 +1,1 @@
+"""Tests of :mod:`qpp`: ``test_<module>.py`` tests ``qpp/<module>.py``."""

@@ -1,0 +1,1 @@
+"""Tests of :mod:`qpp.design`: ``test_<module>.py`` tests ``qpp/design/<module>.py``."""

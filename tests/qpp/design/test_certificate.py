@@ -1,0 +1,116 @@
+"""What the certificate covers (qpp.design.certificate): the horizon T of a loop with nothing to
+track or that never settles, a nonlinearity stiffer after T, a slow mode beyond the horizon."""
+import numpy as np
+import pytest
+import yaml
+
+from qpp.io.config import load_config
+
+
+def _mass_on_integrator(name, f1, *, beta_o, step, delta_r=None):
+    """A review's plant: a damped mass tracking a step of ``step`` through an integrator servo,
+    φ = ``f1`` with k ∈ [−0.8, 0.8], β_ri = 0.004, simulated 8 s, one scenario at k = 0.8."""
+    scenario = {"name": "kmax", "parameters": {"k": 0.8}, **({"delta_r": delta_r} if delta_r else {})}
+    return {"name": name,
+            "plant": {"A": [[0, 1], [0, -0.5]], "B": [[0], [1]], "C": [[1, 0]], "G": [[0], [1]],
+                      "Ac": [[0]], "Bc": [[1]], "Cc": [[1]]},
+            "nonlinearity": {"kind": "expression", "f1": [f1],
+                             "parameters": {"k": {"min": -0.8, "max": 0.8, "nominal": 0}}, "y_range": [[-3, 3]]},
+            "hinf": {"rho": 0.1, "a": 1.0e-4}, "spheres": {"beta_o": beta_o, "beta_ri": 0.004, "T": 1.0},
+            "design": {"a_max": 1.0e-2, "rho_min": 0.05, "wider_search": False},
+            "simulation": {"t_final": 8.0, "n_samples": 401, "r_o": [[{"kind": "step", "amplitude": step}]],
+                           "scenarios": [scenario]},
+            "output": {"root": "runs", "figures": False}}
+
+
+def test_nothing_to_track_is_no_reason_for_a_vanishing_T(tmp_runs):
+    """r_o ≡ 0: the nominal loop 'settles' at t = 0, T fell to 1e-3·t_final, β3 = k‖(1)_T‖₂ to ~0
+    and a design was certified whose simulation leaves the output sphere (a review's case: k at
+    the end of its range, ‖δr‖∞ = β_ri, ‖y − y_o‖∞ = 0.0072 > β_o = 0.006).  T is now the
+    settling time of the loop's slowest mode: no certificate, and the simulation agrees."""
+    import h5py
+    from typer.testing import CliRunner
+
+    from qpp.cli import app
+
+    cfg = _mass_on_integrator("regulate", "k*y1", beta_o=0.006, step=0.0,
+                              delta_r=[[{"kind": "sin", "amplitude": 0.004, "omega": 1.0}]])
+    (tmp_runs / "reg.yaml").write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(app, ["design", "reg.yaml"])
+    assert r.exit_code == 3 and "hint: no tracking loop meets these spheres" in r.output, r.output
+    CliRunner().invoke(app, ["simulate", "reg.yaml"])
+    with h5py.File(tmp_runs / "runs" / "regulate" / "qpp_design.h5") as f:
+        certified, T = int(f.attrs["certified"]), float(f["certificate/T_settle"][()])
+    with h5py.File(tmp_runs / "runs" / "regulate" / "qpp_sim.h5") as f:
+        err = float(f["kmax/error_inf"][()])
+    assert err > 0.006                        # the simulation leaves the sphere ...
+    assert certified == 0, r.output           # ... so no certificate may claim it
+    assert T > 1.0                            # the slowest mode's settling time, not 0.008 s
+
+
+def test_a_nominal_loop_that_never_settles_is_named(tmp_runs):
+    """A servo-compensator that does not model the step r_o (Ac = −1): the nominal loop never
+    settles, T took the horizon and the certificate silently depended on t_final (review)."""
+    from typer.testing import CliRunner
+
+    from qpp.cli import app
+
+    plant = {"A": [[0, 1], [2, -1]], "B": [[0], [1]], "C": [[1, 0]], "G": [[0], [1]], "Ac": [[-1]],
+             "Bc": [[1]], "Cc": [[1]]}
+    cfg = {"name": "nosettle", "plant": plant,
+           "nonlinearity": {"kind": "expression", "f1": ["-k*sat(y1, 0.5)"],
+                            "parameters": {"k": {"min": 0.8, "max": 1.2}}, "y_range": [[-3, 3]]},
+           "hinf": {"rho": 0.1, "a": 1.0e-4, "search": True},
+           "spheres": {"beta_o": 0.3, "beta_ri": 0.05, "T": 1.0}, "design": {"a_max": 1.0e-2},
+           "simulation": {"t_final": 5.0, "n_samples": 201, "r_o": [[{"kind": "step", "amplitude": 1.0}]],
+                          "scenarios": [{"name": "kmin", "parameters": {"k": 0.8}}]},
+           "output": {"root": "runs", "figures": False}}
+    (tmp_runs / "ns.yaml").write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(app, ["design", "ns.yaml"])
+    assert "warning: the nominal loop does not settle within 5 s" in r.output, r.output
+    cfg["plant"]["Ac"] = [[0]]                        # an integrator models the step: it settles
+    (tmp_runs / "ns.yaml").write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(app, ["design", "ns.yaml"])
+    assert "does not settle" not in r.output, r.output
+
+
+def test_a_nonlinearity_that_switches_on_after_T_is_named(tmp_runs):
+    """φ = k·y·(sat(10(t − 3)) + 1)/2 is off on [0, T] and on after 3 s: β3 = β4 = 0 and a
+    certificate that the simulation beyond T contradicted (26 β_o; review).  The design now warns
+    that the certificate (on [0, T], eqs 10.53–10.54) does not reach beyond T; a periodic φ (the
+    ch. 13 form, sin t) is as stiff within T as after it: no warning."""
+    from typer.testing import CliRunner
+
+    from qpp.cli import app
+    from qpp.design.certificate import late_slope
+    from qpp.io.config import load_config
+
+    cfg = _mass_on_integrator("late", "k*y1*(sat(10*(t-3), 1) + 1)/2", beta_o=0.02, step=1.0)
+    (tmp_runs / "late.yaml").write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(app, ["design", "late.yaml"])
+    assert "warning: the nonlinearity is stiffer after T" in r.output, r.output
+    before, after = late_slope(load_config(str(tmp_runs / "late.yaml")), 2.0, 8.0)
+    assert before == pytest.approx(0.0, abs=1e-9) and after == pytest.approx(0.8, rel=1e-6)
+    assert late_slope(load_config("qpp_unstable"), 2.0, 10.0) is None
+
+
+def test_a_slow_mode_beyond_the_horizon_is_named_with_nothing_to_track(tmp_runs):
+    """r_o ≡ 0 on the ch. 13 loop: T is its slowest mode's settling time, ln 20/0.1005 = 29.8 s,
+    beyond the 10 s horizon; the warning blamed the servo-compensator (review)."""
+    from typer.testing import CliRunner
+
+    from qpp.cli import app
+
+    import re
+
+    import h5py
+
+    r = CliRunner().invoke(app, ["design", "qpp_siso", "spheres.adapt_T=true",
+                                 "simulation.r_o=[[{kind: step, amplitude: 0.0}]]"])
+    said = re.search(r"the loop's slowest mode settles in ([0-9.]+) s", r.output)
+    assert said and "plant.Ac" not in r.output, r.output
+    # independent: ln(1/band)/min(−Re λ) of the stored closed loop, eigenvalues by numpy
+    with h5py.File(tmp_runs / "runs" / "qpp_siso" / "qpp_design.h5") as f:
+        decay = float(np.min(-np.linalg.eigvals(f["Az"][()]).real))
+    assert float(said.group(1)) == pytest.approx(np.log(20.0) / decay, rel=1e-3)
+    assert float(said.group(1)) > 10.0                        # beyond the 10 s horizon

@@ -1,0 +1,1 @@
+"""Tests of :mod:`qpp.io`: ``test_<module>.py`` tests ``qpp/io/<module>.py``."""

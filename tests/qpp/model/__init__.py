@@ -1,0 +1,1 @@
+"""Tests of :mod:`qpp.model`: ``test_<module>.py`` tests ``qpp/model/<module>.py``."""
