@@ -95,9 +95,8 @@ def _format_error(exc: ValidationError, model_cls=None, data: object = None) -> 
     for prefix in ("Value error, ", "Assertion failed, "):
         if msg.startswith(prefix):
             msg = msg[len(prefix):]
-    if err["type"] == "extra_forbidden" and path:    # the mapping that has it, then the key
-        loc = ".".join(str(p) for p in path[:-1]) or "config"
-        msg = f"unknown key {path[-1]!r}" + (unknown_key_hint(model_cls, tuple(err["loc"])) if model_cls else "")
+    if err["type"] == "extra_forbidden":
+        msg = "unknown key" + (unknown_key_hint(model_cls, tuple(err["loc"])) if model_cls else "")
     # other fields in error (the union's other members at the same place are not other errors)
     others = {q for q in (user_path(tuple(e["loc"]), data) for e in errors[1:]) if q != path[:len(q)]}
     extra = f" (and {len(others)} more)" if others else ""

@@ -22,7 +22,7 @@ from acmm.stages.common import UNIT_A, UNIT_STATE
 from acmm_qpp.results import Dataset
 
 #: the ``design.h5`` datasets of the ``dwell`` group converted per state (:func:`acmm.stages.common._in_system`)
-UNIT_ROLES = {"dwell/closed_loop": "A", "dwell/scale": "scales", "dwell/jump": "x"}
+UNIT_ROLES = {"dwell/closed_loop": "A", "dwell/scales": "scales", "dwell/jump": "x"}
 
 #: indices of h1, h2, h3 and of δω1, δω3, δθ1..3 in the state of eq 4.47
 H_INDEX = (6, 7, 8)
@@ -143,13 +143,13 @@ def certificate_items(sc: StairCertificate) -> dict:
     c = sc.certificate
     orbit = sc.orbit
     level = ("level",)
-    return {
+    items = {
         "closed_loop": Dataset(sc.closed_loops, UNIT_A, "A_k - B_k K_k of each level's frozen loop (eq 4.46, coupled, "
                                "about the level's TEA)", dims=("level", "state", "state_col")),
-        "scale": Dataset(c.scale, UNIT_STATE, "state scaling D of the Lyapunov matrices (x = D x~)", dims=("state",)),
+        "scales": Dataset(c.scale, UNIT_STATE, "state scaling D of the Lyapunov matrices (x = D x~)", dims=("state",)),
         "lyapunov": Dataset(c.P, "1", "P_k: (A~_k + lambda I)' P_k + P_k (A~_k + lambda I) = -I, scaled states",
                             dims=("level", "state", "state_col")),
-        "jump": Dataset(sc.jumps, UNIT_STATE, "equilibrium state of level k minus that of level k+1",
+        "jump": Dataset(sc.jumps, "state_units[j]", "equilibrium state of level k minus that of level k+1",
                         dims=("switch", "state")),
         "decay_rate": Dataset(c.decay, "1/s", "common decay rate lambda of the levels' Lyapunov functions"),
         "jump_up": Dataset(c.jump_up, "1", "mu(k+1 <- k) = lambda_max(P_k^-1 P_k+1)", dims=("switch",)),
@@ -166,6 +166,10 @@ def certificate_items(sc: StairCertificate) -> dict:
         "h_bound": Dataset(c.h_bound, "ft*lbf*s", "bound on the deviation of |h| while each level holds",
                            ["roll", "pitch", "yaw"], dims=("level", "axis")),
     }
+    if not len(sc.jumps):          # one level: no switch, no jump, no ratios
+        for key in ("jump", "jump_up", "jump_down", "dwell"):
+            del items[key]
+    return items
 
 
 def certificate_lines(sc: StairCertificate) -> list[str]:

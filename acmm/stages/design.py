@@ -203,7 +203,8 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
     if r.fit is not None:
         items["schedule"] = out.schedule_items(r)
     items["dwell"] = certificate_items(compute_certificate(cfg, r.table))
-    roles = {**out.unit_roles(pts, r.fit is not None), **CERTIFICATE_ROLES}
+    roles = {**out.unit_roles(pts, r.fit is not None),
+             **{k: v for k, v in CERTIFICATE_ROLES.items() if k.split("/")[1] in items["dwell"]}}
     items = _define_units(_in_system(items, cfg, roles), cfg.orbit_rate)
     path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
                     {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),

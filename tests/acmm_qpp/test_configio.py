@@ -20,3 +20,23 @@ def test_yaml_merge_keys_are_read_and_duplicates_still_refused(tmp_path):
     p.write_text("inertia: {<<: {I11: 1.0}, I22: 2.0, I22: 3.0}\n")
     with pytest.raises(ConfigError, match="duplicate key 'I22'"):
         read_yaml(p)
+
+
+def test_an_unknown_key_of_a_library_form_names_the_users_field():
+    from qpp.io.config import load_config
+    from acmm_qpp.errors import ConfigError
+
+    with pytest.raises(ConfigError) as got:
+        load_config("qpp_saturation", ["nonlinearity.f1.0={form: saturation, output: 1, gain: k, bogus: 1}"])
+    assert str(got.value).endswith("nonlinearity.f1.0.bogus: unknown key")
+    assert "function-after" not in str(got.value) and "more)" not in str(got.value)
+
+
+def test_user_path_leaves_out_pydantics_own_steps():
+    from acmm_qpp.configio import user_path
+
+    data = {"nonlinearity": {"kind": "expression", "f1": [{"form": "saturation", "bogus": 1}]}}
+    loc = ("nonlinearity", "expression", "f1", 0, "function-after[_plausible_magnitudes(), LibraryForm]", "bogus")
+    assert user_path(loc, data) == ("nonlinearity", "f1", 0, "bogus")
+    assert user_path(("nonlinearity", "expression", "f1", 0, "str"), data) == ("nonlinearity", "f1", 0)
+    assert user_path(("design", "sector", "sigma"), {"design": {"sector": {}}}) == ("design", "sector", "sigma")

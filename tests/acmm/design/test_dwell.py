@@ -42,7 +42,7 @@ def _kron_lyapunov(A, lam):
 def test_the_stored_certificate_holds_when_recomputed_independently(staircase_h5):
     cfg, g = staircase_h5
     n = cfg.orbit_rate
-    d = g["scale"]
+    d = g["scales"]
     As = g["closed_loop"] / d[None, :, None] * d[None, None, :]
     lam, P = float(g["decay_rate"]), g["lyapunov"]
     assert P.shape == (12, 24, 24) and lam > 0
@@ -67,7 +67,7 @@ def test_the_stored_certificate_holds_when_recomputed_independently(staircase_h5
 def test_the_decay_rate_minimizes_the_dwell_time(staircase_h5):
     """λ is the minimizer of τ*(λ): a nearby λ on either side gives a longer certified dwell."""
     cfg, g = staircase_h5
-    d = g["scale"]
+    d = g["scales"]
     As = g["closed_loop"] / d[None, :, None] * d[None, None, :]
     lam = float(g["decay_rate"])
 
@@ -82,7 +82,7 @@ def test_the_transient_bound_holds_on_the_exact_linear_response(staircase_h5):
     """The exact response of the linear switched stair-case (levels held as in the scenario,
     the equilibrium jumping at each switch) stays inside the certified bounds on √V, |u| and |h|."""
     cfg, g = staircase_h5
-    d = g["scale"]
+    d = g["scales"]
     Acl, P, jumps, dwell = g["closed_loop"], g["lyapunov"], g["jump"], g["dwell"] * 2 * np.pi / cfg.orbit_rate
     from acmm.stages.certify import level_closed_loops
     from acmm.stages.design import compute_design

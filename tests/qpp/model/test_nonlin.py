@@ -59,3 +59,34 @@ def test_a_zero_or_denormal_nonlinearity_is_designed_without_a_traceback(tmp_run
     assert r.exit_code in codes, r.output
     assert "Traceback" not in r.output and (r.exception is None or isinstance(r.exception, SystemExit))
     assert (tmp_runs / "runs" / "qpp_saturation" / "qpp_design.h5").is_file()
+
+
+# ----------------------------------------------------------------------------- hostile expressions (issue 33)
+_HOSTILE = [
+    ("tan(1000*y1)", "nonlinearity.f1.0: singular on the stated range: 'tan(1000*y1)' is not continuous in y1"),
+    ("exp(1000*y1)", "nonlinearity.f1.0: overflow: 'exp(1000*y1)' is not a finite number"),
+    ("1e308*y1*1e308", "nonlinearity.f1.0: overflow: the constant 1e308"),
+    ("max(y1, 1e400)", "nonlinearity.f1.0: overflow: the constant 1e400"),
+    ("y1/(y1 - 0.5)", "nonlinearity.f1.0: singular on the stated range: 'y1/(y1 - 0.5)' is not continuous in y1"),
+]
+
+
+@pytest.mark.parametrize("expr, message", _HOSTILE)
+def test_a_hostile_expression_is_refused_in_one_line_within_seconds(tmp_path, expr, message):
+    """Each refusal is one line naming the user's field, exit 2, before any design (tan(100*y1)
+    took 54 s in sympy's continuous_domain; tan(1000*y1) hung; exp(1000*y1) and 1e308*y1*1e308
+    reached the design; 1e400 was called a division by zero).  The check's work is bounded by
+    construction (SINGULARITY_POINTS evaluations per sub-expression); the timeout guards a hang."""
+    import subprocess
+    import sys
+
+    from tests.conftest import REPO
+
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text((REPO / "configs" / "qpp_saturation.yaml").read_text().replace(
+        '  f1: [{form: saturation, output: 1, gain: "-k", level: 0.5}]', '  f1: ["-k*sat(y1, 0.5)"]'))
+    done = subprocess.run([sys.executable, "-m", "qpp.cli", "design", str(cfg), f"nonlinearity.f1.0={expr}",
+                           f"output.root={tmp_path}", "--no-figures"], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert message in done.stderr and "Traceback" not in done.stderr
+    assert not (tmp_path / "qpp_saturation").exists()
