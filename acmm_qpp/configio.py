@@ -60,17 +60,19 @@ def user_path(loc: tuple, data: object) -> tuple:
     """
     out, cur = [], data
     for p in loc:
+        if isinstance(cur, dict) and p in cur:               # the user's own key, whatever it looks like
+            out.append(p)
+            cur = cur[p]
+            continue
         if isinstance(p, str) and any(c in p for c in "[](),"):
             continue                                        # a validator's own step
-        if p in _UNION_MEMBERS and not (isinstance(cur, dict) and p in cur):
+        if p in _UNION_MEMBERS:
             continue                                        # a union member's type (str | float | …)
         if isinstance(cur, dict):
-            if p in cur:
-                out.append(p)
-                cur = cur[p]
-            elif p not in cur.values():                     # (a tag value: not the user's key)
-                out.append(p)
-                cur = None
+            if p == cur.get("kind"):                        # a discriminated union's tag value
+                continue
+            out.append(p)                                   # a key the user did not write (missing)
+            cur = None
         elif isinstance(cur, list) and isinstance(p, int) and 0 <= p < len(cur):
             out.append(p)
             cur = cur[p]
@@ -87,6 +89,13 @@ def _format_error(exc: ValidationError, model_cls=None, data: object = None) -> 
     errors = prioritize(exc.errors())
     err = errors[0]
     path = user_path(tuple(err["loc"]), data)
+    # a mapping where a union also allows a string or a number: the mapping member's own error,
+    # deeper in the user's data, says more than "should be a valid string"
+    deeper = [e for e in errors[1:] if len(user_path(tuple(e["loc"]), data)) > len(path)
+              and user_path(tuple(e["loc"]), data)[:len(path)] == path]
+    if deeper and err["type"] in ("string_type", "float_type", "int_type", "float_parsing", "bool_type"):
+        err = deeper[0]
+        path = user_path(tuple(err["loc"]), data)
     loc = ".".join(str(p) for p in path)
     if err["type"] == BOOLEAN_AS_NUMBER:                     # a model-level check naming its field
         loc = f"{loc}.{err['ctx']['field']}" if loc else err["ctx"]["field"]

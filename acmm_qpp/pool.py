@@ -6,9 +6,9 @@ too printed a traceback or broke the pool's shutdown) and die with it (Linux
 ``prctl(PR_SET_PDEATHSIG)``, and elsewhere a daemon thread that watches ``os.getppid()``), so a
 killed sweep or report leaves no orphans.  :func:`submit` forks new workers with the interrupts
 held, so none arrives before a worker's set-up; :func:`stop_pool` shuts the pool down, killing its
-workers first when the parent was interrupted.  The warnings a task raised travel back with its
-result (:func:`portable_warnings`) and are raised again in the parent as if computed there
-(:func:`raise_warnings_again`).
+workers first when the parent was interrupted.  A caller whose tasks' warnings matter (the
+report's) sends them back with each result (:func:`portable_warnings`) and raises them again in
+the parent as if computed there (:func:`raise_warnings_again`); the sweep's workers print theirs.
 """
 from __future__ import annotations
 

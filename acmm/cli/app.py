@@ -166,6 +166,9 @@ def design(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = O
     typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
                f"sector Re <= -{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g} deg "
                f"({r.wall_time:.2f} s)")
+    if cfg.design.pole_method == "lmi":
+        typer.echo("  pole_method lmi: regional LMI gains; 'residual' is that of the reference sector LQR "
+                   "(the LMI's pre-conditioner)")
     typer.echo(f"  {'point':<14} {'TEA r/p/y (deg)':<28} {'margin (n)':>10} {'residual':>9} {'fastest/n':>9}")
     for p, fastest in zip(r.points, r.fastest_over_n()):
         res = p.lqr

@@ -15,12 +15,14 @@ Geromel & Colaneri 2006 in spirit):
    μ_{j←i} = λ_max(P_i⁻¹ P_j) (V_j ≤ μ_{j←i} V_i): both directions, because a one-way chain can be
    rescaled to any μ and certifies nothing;
 3. the certified minimum dwell time τ* = ln μ / (2λ), μ the worst ratio: every switching sequence
-   whose levels are each held longer than τ* is exponentially stable; λ is the one minimizing τ*
-   (a bounded scalar minimization to a stated tolerance);
+   between neighbouring levels (either way) whose levels are each held longer than τ* is
+   exponentially stable; λ is the local minimizer of τ* a bounded Brent search finds (the
+   certificate holds for any λ in the range; the search only makes τ* small);
 4. the transient caused by each level's TEA step: at the switch into level j the state's deviation
    from the new equilibrium jumps by δ_j (the change of the TEA in the attitude states and of the
    LVLH rate ω* = C_BL(0, −n, 0) in the rate states), so s_j = √V_j after the switch obeys
-   s_j ≤ √μ_{j←i} e^{−λ τ_i} s_i + √V_j(δ_j), s_0 = 0 (the run starts at its first equilibrium);
+   s_j ≤ √μ_{j←i} e^{−λ τ_i} s_i + √V_j(δ_j), s_0 = √V_0 of the initial state's deviation from
+   the first equilibrium (``simulation.initial_offset``; 0 when the run starts there);
    while level j holds |u_a| ≤ s_j √(K_a P_j⁻¹ K_aᵀ) and |h_a| ≤ s_j √((P_j⁻¹)_aa), checked
    against the torque and momentum limits.
 
@@ -183,8 +185,8 @@ def best_decay(Acl: np.ndarray) -> float:
 
 
 def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: np.ndarray, jumps: np.ndarray,
-                      h_index, torque_limit: float, momentum_limit: float, decay: float | None = None
-                      ) -> DwellCertificate:
+                      h_index, torque_limit: float, momentum_limit: float, decay: float | None = None,
+                      start=None) -> DwellCertificate:
     """The dwell-time certificate of a stair-case of frozen closed loops (steps 1–4).
 
     Parameters
@@ -205,6 +207,9 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
         |u| limit (ft·lbf) and |h| limit (ft·lbf·s).
     decay : float, optional
         λ (1/s); default :func:`best_decay`.
+    start : (N,) array, optional
+        The initial state's deviation from the first level's equilibrium, state units (default:
+        the run starts at that equilibrium).
 
     Returns
     -------
@@ -228,6 +233,9 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
     mu = float(max(np.max(up, initial=1.0), np.max(down, initial=1.0)))
     tau = float(np.log(mu) / (2 * lam)) if L > 1 else 0.0
     s = np.zeros(L)
+    if start is not None:
+        z0 = np.asarray(start, float) * Dinv
+        s[0] = np.sqrt(z0 @ P[0] @ z0)
     for k in range(1, L):
         dj = np.asarray(jumps[k - 1], float) * Dinv
         s[k] = np.sqrt(up[k - 1]) * np.exp(-lam * dwell[k - 1]) * s[k - 1] + np.sqrt(dj @ P[k] @ dj)

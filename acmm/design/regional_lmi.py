@@ -58,8 +58,8 @@ import scipy.linalg as sla
 from acmm.design.sector_lqr import eigen_conditioning, sector_margin, sector_robustness
 from acmm_qpp.errors import DesignError
 
-_RELAX = ("relax design.sector.min_margin, design.sector.sigma or design.sector.half_angle_deg "
-          "(or the cost weights: design.lmi.dilation, design.R)")
+_RELAX = ("relax design.min_margin, design.sector.sigma, design.sector.half_angle_deg or "
+          "design.lmi.disk_radius (or the cost weights: design.lmi.dilation, design.R)")
 
 
 @dataclass(frozen=True)
@@ -460,6 +460,10 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
     if margin < st.min_margin or cert < st.min_margin:
         raise DesignError(f"regional LMI: worst sector margin {margin:.4g}n (certified {cert:.4g}n) "
                           f"below {st.min_margin}n; " + _RELAX)
+    fastest = float(np.max(np.abs(poles))) / n
+    if st.disk_radius > 0 and fastest > st.disk_radius * (1 + 1e-6):
+        raise DesignError(f"regional LMI: the fastest pole |λ| = {fastest:.4g}n is outside the disk of radius "
+                          f"design.lmi.disk_radius = {st.disk_radius}n; " + _RELAX)
     K = Ks / d[None, :] * input_scale
     e_norm, e_elem = sector_robustness(A, B, K, n, st.sigma, st.half_angle_deg, scale=d)
     rr = random_gain_radius(A, B, K, n, st.sigma, st.half_angle_deg, st.n_random, st.seed)

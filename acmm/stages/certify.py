@@ -96,14 +96,20 @@ def level_closed_loops(cfg: Config, table: DesignTable) -> tuple:
     models = [lin.design_point(sc.inertia[k], sc.theta_est[k], n, model="coupled", drf_mode=sc.drf_mode)
               for k in range(len(sc.level_start))]
     Acl = np.array([m.A - m.B @ sc.gain[k] for k, m in enumerate(models)])
-    jumps = np.zeros((len(models) - 1, Acl.shape[1]))
-    for k in range(len(models) - 1):
-        th0, th1 = sc.theta_est[k], sc.theta_est[k + 1]
-        jumps[k, list(_ATTITUDE_INDEX)] = th0 - th1
-        dw = kin.lvlh_rate_in_body(th0, n) - kin.lvlh_rate_in_body(th1, n)
-        jumps[k, list(_RATE_INDEX)] = dw[[0, 2]]
+    jumps = np.array([_deviation(sc.theta_est[k], sc.theta_est[k + 1], n, Acl.shape[1])
+                      for k in range(len(models) - 1)]).reshape(len(models) - 1, Acl.shape[1])
     idx = [int(np.argmin([np.max(np.abs(t - th)) for t in table.tea])) for th in sc.theta_est]
     return Acl, sc.gain, models[0].scales, np.diff(sc.level_start), jumps, np.array(idx), sc
+
+
+def _deviation(theta: np.ndarray, theta_eq: np.ndarray, n: float, nx: int) -> np.ndarray:
+    """The state of eq 4.47 of a body at rest in LVLH at attitude ``theta`` about the equilibrium
+    at ``theta_eq``: δθ = θ − θ*, δω1 and δω3 the change of the LVLH rate C_BL(0, −n, 0)
+    (θ̇2 = 0, and h, ∫h and the filter states are zero at every equilibrium)."""
+    x = np.zeros(nx)
+    x[list(_ATTITUDE_INDEX)] = np.asarray(theta, float) - np.asarray(theta_eq, float)
+    x[list(_RATE_INDEX)] = (kin.lvlh_rate_in_body(theta, n) - kin.lvlh_rate_in_body(theta_eq, n))[[0, 2]]
+    return x
 
 
 def compute_certificate(cfg: Config, table: DesignTable) -> StairCertificate:
@@ -122,7 +128,8 @@ def compute_certificate(cfg: Config, table: DesignTable) -> StairCertificate:
         The certificate with its levels.
     """
     Acl, gains, scale, dwell, jumps, idx, sc = level_closed_loops(cfg, table)
-    cert = dwell_certificate(Acl, gains, scale, dwell, jumps, H_INDEX, sc.torque_limit, sc.momentum_limit)
+    cert = dwell_certificate(Acl, gains, scale, dwell, jumps, H_INDEX, sc.torque_limit, sc.momentum_limit,
+                             start=_deviation(sc.x0[3:6], sc.theta_est[0], sc.n, Acl.shape[1]))
     return StairCertificate(cert, [table.names[i] for i in idx], sc.theta_est[:, 1], Acl, jumps, sc.n)
 
 
@@ -162,9 +169,10 @@ def certificate_items(sc: StairCertificate) -> dict:
         "dwell": Dataset(c.dwell / orbit, "orbit", "time each level but the last is held", dims=("switch",)),
         "transient": Dataset(c.transient, "1", "bound on sqrt(V_k) of the deviation while level k holds", dims=level),
         "u_bound": Dataset(c.u_bound, "ft*lbf", "bound on |u| while each level holds", ["roll", "pitch", "yaw"],
-                           dims=("level", "axis")),
+                           dims=("level", "axis"), attrs={"torque_limit_ft_lbf": c.torque_limit}),
         "h_bound": Dataset(c.h_bound, "ft*lbf*s", "bound on the deviation of |h| while each level holds",
-                           ["roll", "pitch", "yaw"], dims=("level", "axis")),
+                           ["roll", "pitch", "yaw"], dims=("level", "axis"),
+                           attrs={"momentum_limit_ft_lbf_s": c.momentum_limit}),
     }
     if not len(sc.jumps):          # one level: no switch, no jump, no ratios
         for key in ("jump", "jump_up", "jump_down", "dwell"):

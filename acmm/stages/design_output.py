@@ -50,7 +50,8 @@ def point_items(points) -> dict:
                          dims=("state", "state_col")),
             "R": Dataset(res.R, "1/(ft*lbf)^2", "control weight", dims=("axis", "axis_col")),
             "P": Dataset(res.P, UNIT_P, "Riccati solution (physical units)", dims=("state", "state_col")),
-            "K": Dataset(res.K, UNIT_K, "LQR gain, u = -K x", STATE_NAMES, dims=("axis", "state")),
+            "K": Dataset(res.K, UNIT_K, ("regional LMI gain" if res.lmi is not None else "LQR gain") + ", u = -K x",
+                         STATE_NAMES, dims=("axis", "state")),
             "poles": Dataset(res.poles, "rad/s", "closed-loop poles of A - B K", dims=("pole",)),
             "sector_margin": Dataset(res.margin, "n", "worst pole distance into the sector (>0 inside)"),
             "riccati_residual": Dataset(res.residual, "1", "relative CARE residual, scaled coordinates"),
@@ -75,7 +76,8 @@ def point_items(points) -> dict:
         }
         if res.lmi is not None:
             pts[f"{k:03d}_{p.spec.name}"]["lmi"] = _lmi_items(res.lmi)
-            for key in ("Q", "P", "riccati_residual", "riccati_backward_error", "riccati_condition"):
+            for key in ("Q", "P", "riccati_residual", "riccati_backward_error", "riccati_condition",
+                        "riccati_ill_conditioned"):
                 ds = pts[f"{k:03d}_{p.spec.name}"][key]
                 pts[f"{k:03d}_{p.spec.name}"][key] = replace(
                     ds, description=ds.description + " of the reference sector LQR (the LMI design's pre-conditioner)")
@@ -121,7 +123,7 @@ def table_items(r, pts: dict) -> dict:
         "inertia": Dataset(r.table.inertia, "slug*ft^2", "inertia per point", dims=("point", "axis", "axis_col")),
         "bias": Dataset(r.table.bias, "ft*lbf", "bias per point", AXES, dims=("point", "axis")),
         "tea": Dataset(r.table.tea, "rad", "TEA per point", AXES, dims=("point", "axis")),
-        "K": Dataset(r.table.gain, UNIT_K, "LQR gain per point (u = -K x)",
+        "K": Dataset(r.table.gain, UNIT_K, "design gain per point (u = -K x; sector LQR or regional LMI: design.pole_method)",
                      dims=("point", "axis", "state")),
         "state_names": Dataset(np.array(STATE_NAMES, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
         "state_units": Dataset(np.array(r.points[0].model.state_units, dtype="S"), "1",
@@ -139,7 +141,10 @@ def table_items(r, pts: dict) -> dict:
             np.array([p.lqr.robustness_radius_elementwise for p in r.points]), "1",
             "sector robustness radius per point (elementwise relative gain error)", dims=("point",)),
         "riccati_condition": Dataset(np.array([p.lqr.riccati_condition for p in r.points]), "1",
-                                     "CARE condition estimate per point", dims=("point",)),
+                                     "CARE condition estimate per point" + (
+                                         " (of the reference sector LQR, the LMI design's pre-conditioner)"
+                                         if any(p.lqr.lmi is not None for p in r.points) else ""),
+                                     dims=("point",)),
     }
     return items
 

@@ -94,10 +94,19 @@ def parse_expression(text: str, symbols: dict, where: str = "expression"):
     expr = _to_sympy(tree, symbols, _functions(), where, text.strip())
     if expr.has(sp.zoo, sp.nan):
         raise ConfigError(f"{where}: expression {text!r} is singular (division by zero)")
-    if expr.has(sp.oo, -sp.oo) or any(abs(float(c)) > MAX_CONSTANT for c in expr.atoms(sp.Float)):
+    if expr.has(sp.oo, -sp.oo) or any(_beyond_float(c) for c in expr.atoms(sp.Number)):
         raise ConfigError(f"{where}: overflow: expression {text!r} has a constant beyond floating point "
                           f"(|c| ≤ {MAX_CONSTANT:.0e})")
     return expr
+
+
+def _beyond_float(c) -> bool:
+    """Whether the sympy number ``c`` (exact integers and rationals included) is beyond
+    :data:`MAX_CONSTANT` in magnitude."""
+    try:
+        return not abs(float(c)) <= MAX_CONSTANT
+    except (OverflowError, TypeError, ValueError):
+        return True
 
 
 def library_expression(form: str, output: int, gain: str, level: float | None) -> str:

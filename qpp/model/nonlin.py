@@ -324,6 +324,8 @@ class ExpressionModel(SampleGrid):
                     continue
                 grid, vals = _on_grid(sp, arg, syms, ranges)
                 bad = _singular_axis(vals, kind)
+                if bad is None and kind in ("pole", "tan"):
+                    bad = _touches_zero(sp, arg, syms, ranges, grid, vals)
                 if bad is not None:
                     sym = syms[bad]
                     lo, hi = ranges[sym]
@@ -419,6 +421,11 @@ class ExpressionModel(SampleGrid):
 #: evaluations of one sub-expression by the continuity check (:meth:`ExpressionModel._check_continuity`)
 SINGULARITY_POINTS = 2 ** 18
 
+#: a denominator (or the cosine under tan) whose refined local minimum is this small relative to its
+#: largest value on the range is taken to reach 0 there (a double root, |y − c|; Brent's search
+#: locates the minimum to ~1e-8 relative, so an exact zero shows as ≲ 1e-9)
+NEAR_ZERO = 1e-7
+
 #: largest |f1| accepted on the stated ranges: beyond it products of f1 overflow floating point
 VALUE_LIMIT = 1e150
 
@@ -443,10 +450,22 @@ def _singular_argument(sp, node):
 
 def _on_grid(sp, expr, syms, ranges):
     """``expr`` on a grid of at most :data:`SINGULARITY_POINTS` points spanning the ranges of
-    ``syms`` (each axis the same number of points, the ends included): (grid arrays, values)."""
-    per_axis = max(3, int(SINGULARITY_POINTS ** (1.0 / len(syms))))
-    axes = [np.linspace(*ranges[s], per_axis) for s in syms]
-    grid = np.meshgrid(*axes, indexing="ij")
+    ``syms`` (each axis the same number of points, the ends included): (grid arrays, values).
+    With more symbols than a grid of 3 points per axis allows, a scrambled Sobol sample of
+    :data:`SINGULARITY_POINTS` points (seeded: the same every run) plus the box's corners if they
+    fit, as one axis (zeros and signs are then judged pointwise)."""
+    d = len(syms)
+    per_axis = int(SINGULARITY_POINTS ** (1.0 / d))
+    if per_axis >= 3:
+        axes = [np.linspace(*ranges[s], per_axis) for s in syms]
+        grid = np.meshgrid(*axes, indexing="ij")
+    else:
+        from scipy.stats import qmc
+
+        u = qmc.Sobol(d, scramble=True, seed=0).random(SINGULARITY_POINTS)
+        lo = np.array([ranges[s][0] for s in syms], float)
+        hi = np.array([ranges[s][1] for s in syms], float)
+        grid = list((lo + u * (hi - lo)).T)
     fn = sp.lambdify(syms, expr, modules="numpy")
     with np.errstate(all="ignore"):
         vals = np.broadcast_to(np.asarray(fn(*grid), dtype=float), grid[0].shape)
@@ -474,3 +493,35 @@ def _varying_axis(vals: np.ndarray) -> int:
     """The axis along which ``vals`` varies most (the symbol a singularity is named after)."""
     v = np.nan_to_num(vals, nan=0.0, posinf=1e300, neginf=-1e300)
     return int(np.argmax([np.max(np.ptp(np.moveaxis(v, ax, 0), axis=0)) for ax in range(v.ndim)]))
+
+
+def _touches_zero(sp, arg, syms, ranges, grid, vals):
+    """The axis (index into ``syms``) along which ``arg`` reaches 0 between grid points without
+    changing sign — a double root, |y − c|: its local minimum nearest 0 refined along each axis by
+    a bounded Brent search — else None."""
+    from scipy.optimize import minimize_scalar
+
+    a = np.abs(vals)
+    top = float(np.max(a)) if a.size else 0.0
+    if not top > 0:
+        return None
+    at = np.unravel_index(int(np.argmin(a)), a.shape)
+    point = [float(g[at]) for g in grid]
+    fn = sp.lambdify(syms, sp.Abs(arg), modules="numpy")
+    for ax, sym in enumerate(syms):
+        lo, hi = ranges[sym]
+        n = a.shape[ax] if a.ndim == len(syms) else 2 ** 10
+        h = (hi - lo) / max(n - 1, 1)
+        x0 = point[ax]
+
+        def f(x, ax=ax):
+            q = list(point)
+            q[ax] = x
+            with np.errstate(all="ignore"):
+                return float(np.asarray(fn(*q), dtype=float))
+
+        got = minimize_scalar(f, bounds=(max(lo, x0 - h), min(hi, x0 + h)), method="bounded",
+                              options={"xatol": 1e-15 * max(1.0, abs(x0))})
+        if got.fun <= NEAR_ZERO * top:
+            return ax
+    return None

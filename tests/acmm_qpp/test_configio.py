@@ -40,3 +40,14 @@ def test_user_path_leaves_out_pydantics_own_steps():
     assert user_path(loc, data) == ("nonlinearity", "f1", 0, "bogus")
     assert user_path(("nonlinearity", "expression", "f1", 0, "str"), data) == ("nonlinearity", "f1", 0)
     assert user_path(("design", "sector", "sigma"), {"design": {"sector": {}}}) == ("design", "sector", "sigma")
+
+
+def test_user_path_keeps_a_users_key_that_looks_like_a_validator_step():
+    """A key with brackets, a key named like a type, a key whose sibling's value is its name: all
+    the user's (a review found each dropped)."""
+    from acmm_qpp.configio import user_path
+
+    data = {"parameters": {"k(2)": {"min": 1}}, "to": {"name": "inertia"}, "str": 1}
+    assert user_path(("parameters", "k(2)", "nominal"), data) == ("parameters", "k(2)", "nominal")
+    assert user_path(("to", "inertia"), data) == ("to", "inertia")
+    assert user_path(("str",), data) == ("str",)

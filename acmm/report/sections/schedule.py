@@ -78,7 +78,7 @@ def summary(ctx: SectionWriter) -> None:
            f"({'stable at every check' if np.max(sc['check_max_real']) < 0 else 'UNSTABLE at some check'})"]]
          if "check_max_real" in sc else []), "Stair-case design summary")
     _conditioning(ctx, d, pts)
-    if "dwell" in d:
+    if "dwell" in d and "jump_up" in d["dwell"]:       # (a single level has no switch to certify)
         _dwell(ctx, d["dwell"], cfg.orbit_rate)
 
 

@@ -138,3 +138,17 @@ def test_acmm_certify_prints_the_certificate_and_strict_fails_an_unstable_claim_
     assert ok.exit_code == 0 and "CERTIFIED" in ok.stdout and "linearized switched system" in ok.stdout, ok.output
     bad = run("mb3_decoupled", "--strict")
     assert bad.exit_code == 1 and "not stable" in bad.stdout and "strict:" in bad.output
+
+
+def test_an_initial_offset_enters_the_transient_bound():
+    """A run that does not start at the first level's equilibrium (simulation.initial_offset) has
+    a non-zero bound from the first level on, and larger ones after (a review: it was ignored)."""
+    from acmm.stages.certify import compute_certificate
+    from acmm.stages.design import compute_design
+
+    cfg = load_config("staircase")
+    table = compute_design(cfg).table
+    at_rest = compute_certificate(cfg, table).certificate
+    offset = compute_certificate(load_config("staircase", ["simulation.initial_offset=[3,3,3]"]), table).certificate
+    assert at_rest.transient[0] == 0 and offset.transient[0] > 0
+    assert np.all(offset.transient[1:] >= at_rest.transient[1:]) and offset.tau_star == at_rest.tau_star

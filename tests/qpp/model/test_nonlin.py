@@ -68,6 +68,11 @@ _HOSTILE = [
     ("1e308*y1*1e308", "nonlinearity.f1.0: overflow: the constant 1e308"),
     ("max(y1, 1e400)", "nonlinearity.f1.0: overflow: the constant 1e400"),
     ("y1/(y1 - 0.5)", "nonlinearity.f1.0: singular on the stated range: 'y1/(y1 - 0.5)' is not continuous in y1"),
+    # a denominator that reaches 0 without changing sign (a review): a double root, an absolute value
+    ("k*y1/(y1**2 - 0.62*y1 + 0.0961)", "is not continuous in y1"),
+    ("k*y1/abs(y1-0.3)", "is not continuous in y1"),
+    # an exact integer beyond floating point (it ended as an OverflowError, exit 3)
+    ("9**64*9**64*9**64*9**64*9**64*9**64*k*y1", "overflow: expression"),
 ]
 
 
