@@ -56,6 +56,7 @@ _STOP_AT = textwrap.dedent("""
 """)
 
 
+@pytest.mark.slow           # two `acmm simulate` subprocesses each, 4–6 s
 @pytest.mark.parametrize("sig, point", [(signal.SIGTERM, "design"), (signal.SIGTERM, "simulation"),
                                         (signal.SIGTERM, "figures"), (signal.SIGHUP, "results")])
 def test_a_terminated_run_rolls_back_like_ctrl_c_and_leaves_no_process(tmp_path, sig, point):
