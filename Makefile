@@ -35,6 +35,8 @@ bytecode: $(STAMP)
 
 run: $(STAMP) bytecode
 	OPENBLAS_NUM_THREADS=1 $(BIN)/acmm simulate
+	@echo "figures: runs/staircase/sim_summary.png (and the other runs/staircase/*.png)"
+	@echo "to use acmm and qpp from this shell: source $(VENV)/bin/activate"
 
 # In CI (CI=true) the report test also opens the page in a real headless Chromium (Debian's
 # package); elsewhere that test is skipped unless /usr/bin/chromium exists.

@@ -153,7 +153,15 @@ class Output(_Model):
     units: Literal["imperial", "SI"] = Field(
         "imperial", description="unit system of the HDF5 values and units attributes, prints, CSV and figures: "
                                 "imperial (the report's slug·ft², ft·lbf, ft·lbf·s) or SI (kg·m², N·m, N·m·s); "
-                                "angles are stored in rad in both")
+                                "angles are stored in rad in both (the name in any case: si, Imperial)")
+
+    @field_validator("units", mode="before")
+    @classmethod
+    def _unit_system_in_any_case(cls, v):
+        """``si``, ``Si``, ``IMPERIAL``: the unit system's name, whatever its case."""
+        if isinstance(v, str):
+            return {"si": "SI", "imperial": "imperial"}.get(v.strip().lower(), v)
+        return v
 
 
 #: Largest number of output samples a simulation may ask for (memory guard).

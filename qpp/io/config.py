@@ -112,6 +112,12 @@ class Output(_Model):
     units: Literal["SI"] = Field("SI", description="unit system of the results: qpp works in SI (s, rad/s, kg, m); "
                                                    "plant signals are in the user's units")
 
+    @field_validator("units", mode="before")
+    @classmethod
+    def _unit_system_in_any_case(cls, v):
+        """``si`` or ``Si``: the unit system's name, whatever its case."""
+        return "SI" if isinstance(v, str) and v.strip().lower() == "si" else v
+
 
 _EXPR_CACHE: dict = {}
 

@@ -408,3 +408,19 @@ def test_schedule_to_file_relative_to_referring_file_or_packaged_name(tmp_path, 
     data["schedule"]["to"] = "nowhere.yaml"
     with pytest.raises(ConfigError, match="schedule.to: config file not found"):
         parse_config(data)
+
+
+@pytest.mark.parametrize("given, stored", [("si", "SI"), ("Si", "SI"), ("SI", "SI"), ("Imperial", "imperial"),
+                                           ("IMPERIAL", "imperial")])
+def test_the_unit_system_is_named_in_any_case(given, stored):
+    from acmm.io.config import load_config
+
+    assert load_config("mb3", [f"output.units={given}"]).output.units == stored
+
+
+def test_an_unknown_unit_system_is_refused_naming_the_field():
+    from acmm.io.config import load_config
+    from acmm_qpp.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"output\.units: Input should be 'imperial' or 'SI'"):
+        load_config("mb3", ["output.units=metric"])
