@@ -147,11 +147,16 @@ def jump_ratios(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return up, down
 
 
+def _dwell_bound(P: np.ndarray, decay: float) -> tuple:
+    """(μ_{k+1←k}, μ_{k←k+1}, worst μ, τ* = ln μ/(2λ) in s) of Lyapunov matrices ``P`` (step 3);
+    one level: no switch, μ = 1, τ* = 0."""
+    up, down = jump_ratios(P) if len(P) > 1 else (np.zeros(0), np.zeros(0))
+    mu = float(max(np.max(up, initial=1.0), np.max(down, initial=1.0)))
+    return up, down, mu, float(np.log(mu) / (2.0 * decay))
+
+
 def _tau_star(Acl: np.ndarray, decay: float) -> float:
-    if len(Acl) < 2:
-        return 0.0
-    up, down = jump_ratios(lyapunov_matrices(Acl, decay))
-    return float(np.log(max(np.max(up), np.max(down), 1.0)) / (2.0 * decay))
+    return _dwell_bound(lyapunov_matrices(Acl, decay), decay)[3]
 
 
 def best_decay(Acl: np.ndarray) -> float:
@@ -229,9 +234,7 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
                                 float(torque_limit), float(momentum_limit), False, unstable)
     lam = best_decay(As) if decay is None else float(decay)
     P = lyapunov_matrices(As, lam)
-    up, down = jump_ratios(P) if L > 1 else (np.zeros(0), np.zeros(0))
-    mu = float(max(np.max(up, initial=1.0), np.max(down, initial=1.0)))
-    tau = float(np.log(mu) / (2 * lam)) if L > 1 else 0.0
+    up, down, mu, tau = _dwell_bound(P, lam)
     s = np.zeros(L)
     if start is not None:
         z0 = np.asarray(start, float) * Dinv
