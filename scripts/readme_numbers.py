@@ -47,7 +47,7 @@ README = REPO / "README.md"
 
 #: the blocks this script writes, in README order
 BLOCKS = ("table1_tea", "qpp_bullet", "claims", "staircase_levels", "design_points", "schedule_path",
-          "dwell_certificate", "design_routes", "sweep_monte_carlo",
+          "dwell_certificate", "design_routes", "staircase_routes", "sweep_monte_carlo",
           "sweep_diverged", "sweep_margin", "qpp_reproduced", "qpp_examples")
 
 #: the qpp configs the README quotes: the report's two chapters and the three shipped examples
@@ -223,29 +223,53 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
     return out
 
 
+def _variant(root: Path, base: str, name: str, patch: dict):
+    """A packaged acmm config ``base`` renamed ``name``, its sections updated by ``patch``
+    (``{section: {key: value}}``), written into ``root`` and loaded with results under ``root``."""
+    import yaml
+
+    from acmm_qpp.configio import packaged_config_path
+    from acmm.io.config import load_config
+
+    data = yaml.safe_load(packaged_config_path(f"{base}.yaml").read_text())
+    data["name"] = name
+    for section, values in patch.items():
+        data.setdefault(section, {}).update(values)
+    path = root / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path, load_config(str(path), [f"output.root={root}", "output.figures=false"])
+
+
+#: the stair-case variants of the routes table (``block_staircase_routes``): the packaged one judged on
+#: a 1 001-TEA path, the same with the regional LMI route, and the report's quadratic form refit on
+#: the closed loops from the LQR points
+STAIRCASE_VARIANTS = {
+    "staircase_dense": {"schedule": {"n_check": 1001}},
+    "staircase_lmi": {"design": {"pole_method": "lmi"}, "schedule": {"n_check": 1001}},
+    "staircase_quadratic": {"schedule": {"form": "polynomial", "fit": "closed_loop", "n_check": 1001}},
+}
+
+
 def _lmi_route(root: Path, workers: int | None) -> dict:
     """MB3 and AC designed by the regional LMI route (``design.pole_method: lmi``) and the packaged
-    ±30 % sweep of those fixed gains on the same draws: ``"design:<name>_lmi"``, ``"sweep_lmi"``."""
+    ±30 % sweep of those fixed gains on the same draws (``"design:<name>_lmi"``, ``"sweep_lmi"``),
+    and the stair-case variants of :data:`STAIRCASE_VARIANTS`, designed and simulated
+    (``"design:<variant>"``, ``"simulate:<variant>"``, ``"config:<variant>"``)."""
     import os
 
     import yaml
 
     from acmm_qpp.configio import packaged_config_path
     from acmm_qpp.results import read_h5
-    from acmm.io.config import load_config
-    from acmm.report.stage_results import ensure_acmm_design
+    from acmm.report.stage_results import ensure_acmm_design, ensure_acmm_simulation
     from acmm.sweep.config import parse_sweep
     from acmm.sweep.run import run_sweep
 
     out, bases = {}, []
     for name in ("mb3", "ac"):
-        data = yaml.safe_load(packaged_config_path(f"{name}.yaml").read_text())
-        data["name"] = f"{name}_lmi"
-        data.setdefault("design", {})["pole_method"] = "lmi"
-        path = root / f"{name}_lmi.yaml"
-        path.write_text(yaml.safe_dump(data, sort_keys=False))
+        path, cfg = _variant(root, name, f"{name}_lmi", {"design": {"pole_method": "lmi"}})
         bases.append(str(path))
-        out[f"design:{name}_lmi"] = read_h5(ensure_acmm_design(load_config(str(path), [f"output.root={root}"])).path)
+        out[f"design:{name}_lmi"] = read_h5(ensure_acmm_design(cfg).path)
     p = packaged_config_path("sweep_inertia30.yaml")
     data = yaml.safe_load(p.read_text())
     data["name"], data["sweep"]["bases"] = "sweep_inertia30_lmi", bases
@@ -253,6 +277,11 @@ def _lmi_route(root: Path, workers: int | None) -> dict:
     sweep = parse_sweep(data, source=str(p), directory=p.parent)
     out["sweep_lmi"] = read_h5(run_sweep(sweep, workers=workers or max(1, min(2, os.cpu_count() or 1)),
                                          figures=False).path)
+    for name, patch in STAIRCASE_VARIANTS.items():
+        _, cfg = _variant(root, "staircase", name, patch)
+        out[f"config:{name}"] = cfg
+        out[f"design:{name}"] = read_h5(ensure_acmm_design(cfg).path)
+        out[f"simulate:{name}"] = read_h5(ensure_acmm_simulation(cfg).path)
     return out
 
 
@@ -779,6 +808,55 @@ def block_design_routes(r: dict) -> str:
     return table(["station, route", "margin (n)", "κ max", "radius (first order, elementwise)",
                   "radius (random re-check)", "energy", "fastest pole (n)", "±30 % bounded and settled",
                   "tolerated inertia scaling s"], rows)
+
+
+def block_staircase_routes(r: dict) -> str:
+    """The stair-case by each route and schedule form, judged on a 1 001-TEA path
+    (:data:`STAIRCASE_VARIANTS`): path stability and sector, disk margin, the point designs'
+    conditioning, robustness and energy, the nonlinear run's peak CMG momentum and the dwell-time
+    certificate.
+
+    Parameters
+    ----------
+    r : dict
+        :func:`run_stages`.
+
+    Returns
+    -------
+    str
+        A Markdown table.
+    """
+    from acmm.design.regional_lmi import control_energy
+    from acmm.model.state_scaling import torque_scale
+
+    labels = {"staircase_dense": "sector LQR points, table (packaged)",
+              "staircase_lmi": "regional LMI points, table",
+              "staircase_quadratic": "sector LQR points, quadratic refit on the closed loops"}
+    rows = []
+    for name, label in labels.items():
+        d, sim = r[f"design:{name}"], r[f"simulate:{name}"]
+        n = r[f"config:{name}"].orbit_rate
+        pa, sc, g = d["schedule"]["path"], d["schedule"], d.get("dwell")
+        energy = []
+        for key in sorted(d["points"]):
+            p = d["points"][key]
+            A, B, K, scales = (np.asarray(p[k]) for k in ("A", "B", "K", "scales"))
+            energy.append(control_energy(A, B, K, n, scales, torque_scale(scales)))
+        tau = "no certificate" if g is None or "tau_star" not in g else (
+            f"{fixed(float(g['tau_star']), 2)} orbit" + ("" if np.all(np.asarray(g["dwell"]) > float(g["tau_star"]))
+                                                         else " (NOT certified)"))
+        refit = ""
+        if "refit_converged" in sc:
+            refit = " (SLSQP " + ("converged" if float(sc["refit_converged"]) else "stopped: " + _text(sc["refit_message"])) + ")"
+        rows.append([label + refit, f"{np.asarray(pa['theta2']).size}",
+                     f"{fixed(np.max(pa['max_real']))}n", f"{fixed(np.min(pa['sector_margin']), 2)}n",
+                     fixed(np.min(pa["disk_margin"])), sig(np.max(d["max_eig_condition"]), 2),
+                     sci(np.min(d["robustness_radius_elementwise"])), sig(max(energy), 3),
+                     sig(np.max(sim["levels"]["peak_momentum"])), tau])
+    return table(["stair-case (route, schedule)", "path TEAs", "largest Re λ on the path",
+                  "worst sector margin on the path", "smallest disk margin", "κ max (points)",
+                  "radius (first order, elementwise, min over points)", "energy (max over points)",
+                  "peak \\|h\\| (ft·lbf·s)", "τ* (dwell 10.8 orbit)"], rows)
 
 
 def block_sweep_monte_carlo(r: dict) -> str:
