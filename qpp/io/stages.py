@@ -398,7 +398,7 @@ def figure_calls_from_file(path: Path, out_dir: Path) -> list:
             for it in iterations:
                 it["circle"], it["certified"] = bool(it["circle"]), bool(it["certified"])
             res = types.SimpleNamespace(circle=circle, iterations=iterations, certified=bool(f.attrs["certified"]),
-                                        beta1_ref=float(f["beta1"][()]), m_ref=float(f["m"][()]))
+                                        beta1_ref=float(f["certificate/beta1"][()]), m_ref=float(f["certificate/m"][()]))
             return [partial(plot_circle, res, out_dir / "qpp_circle.png"),
                     partial(plot_iterations, res, out_dir / "qpp_iterations.png")]
         order = [sc.name for sc in cfg.simulation.scenarios]
