@@ -162,15 +162,18 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
 _TABLE_HEADER = ("level", "start (orbit)", "θ2* est (deg)", "steady |err| max (deg) r/p/y", "peak |h| ({})")
 
 
-def _summary_layout(units: str):
+def _summary_layout(units: str, n_rows: int = 12):
     """The three panels with their (empty) lines, one legend, the table's header and empty
-    columns; titles, labels, legend and header pre-rendered (_bake_texts)."""
+    columns; titles, labels, legend and header pre-rendered (_bake_texts).  The table's height
+    follows its ``n_rows`` rows (at most 12 lines of full height): a one-level run leaves no
+    blank third of the page."""
     from acmm_qpp.units import pretty, shown
 
     hu, uu = shown(1.0, "ft*lbf*s", units)[1], shown(1.0, "ft*lbf", units)[1]
     plt = _plt()
-    fig = plt.figure(figsize=(11, 8.5))
-    gs = fig.add_gridspec(3, 2)
+    table_ratio = min(1.0, 0.1 + 0.075 * max(1, n_rows))
+    fig = plt.figure(figsize=(11, 8.5 * (2 + table_ratio) / 3))
+    gs = fig.add_gridspec(3, 2, height_ratios=(1.0, 1.0, table_ratio))
     top = fig.add_subplot(gs[0, :])
     top.set_ylabel("attitude error (deg)")
     mid = [fig.add_subplot(gs[1, col]) for col in range(2)]
@@ -236,7 +239,7 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     k_h = shown(1.0, "ft*lbf*s", units)[0]
-    fig, (top, mid, lines, body) = _layout("summary", units)
+    fig, (top, mid, lines, body) = _layout("summary", units, min(len(level_stats), 12))
     xlim = _data_limits(orbits)
     for ax, panel, data in zip((top, *mid), lines, (err_deg, h, u)):
         for a in range(3):

@@ -310,6 +310,11 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
         ax.set_xlabel(_label(axes_names[0], system))
         ax.set_ylabel(_label(axes_names[1], system) if len(axes_names) > 1 else "peak attitude error (deg)")
         ax.set_title(f"{lab}: {int(np.sum(verdicts == 'bounded'))}/{int(sel.sum())} bounded")
+        from matplotlib.ticker import MaxNLocator
+
+        ax.xaxis.set_major_locator(MaxNLocator(5))       # fewer ticks, turned: they do not crowd
+        ax.yaxis.set_major_locator(MaxNLocator(6))
+        ax.tick_params(axis="x", labelrotation=30)
         ax.legend(fontsize=7)
     fig.suptitle(f"{sweep.name}: stability map ({sweep.spec.design} design)")
     out = _save(fig, run_dir / "sweep_map.png")
