@@ -27,8 +27,12 @@ def figs(monkeypatch):
     for mod in (base, design, simulation):
         monkeypatch.setattr(mod, "_save", keep)
     monkeypatch.setattr(qplots, "save_figure", keep)
-    monkeypatch.setattr(qplots._plt(), "close", lambda fig=None: None)
-    return out
+    plt = qplots._plt()
+    monkeypatch.setattr(plt, "close", lambda fig=None: None)
+    yield out
+    monkeypatch.undo()
+    for fig in out:
+        plt.close(fig)
 
 
 def _has_artists(ax) -> bool:
