@@ -388,7 +388,8 @@ def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
         verdict = [text(v) for v in f["verdict"][()]]
         a = {"base": np.asarray(f["base"][()], np.int64), "verdict": verdict,
              "stable": np.array([v == "bounded" for v in verdict], bool),
-             "parameters": {k: stored_in(f, f"parameters/{k}", PARAMETERS[k].unit) for k in f["parameters"]},
+             "parameters": {k: stored_in(f, f"parameters/{k}", PARAMETERS[k].unit) for k in f["parameters"]
+                            if k in PARAMETERS},
              "peak_attitude_error": stored_in(f, "peak_attitude_error", "deg"),
              "tea_true": stored_in(f, "tea_true", "deg")}
         nominal = (dict(zip(labels, stored_in(f, "nominal_tea", "deg"))) if "nominal_tea" in f else None)
