@@ -160,6 +160,14 @@ class Design:
 
     # ------------------------------------------------------------------ design points
     @property
+    def points(self) -> list:
+        """The design points, in order: each an :class:`acmm.design.schedule.PointDesign` with
+        ``spec`` (name, inertia slug·ft², bias ft·lbf, blend parameter s), ``tea`` (θ* in rad),
+        ``model`` (the linear model of eq 4.46) and ``lqr`` (gain ``K``, closed-loop ``poles``
+        in rad/s, sector ``margin`` in units of n)."""
+        return list(self.result.points)
+
+    @property
     def names(self) -> list[str]:
         """Names of the design points, in order."""
         return [p.spec.name for p in self.result.points]
@@ -205,22 +213,26 @@ class Design:
         p = self.result.points[self._index(point)]
         return p.model.to_statespace()
 
-    def closed_loop(self, point=0):
+    def closed_loop(self, point=0, outputs=None, inputs=None):
         """Closed loop of a point with its own LQR gain (see the module docstring).
 
         Parameters
         ----------
         point : int or str, optional
             Index or name of the design point.
+        outputs, inputs : list of str, optional
+            Only these channels, by name (``["dtheta2"]``, ``["w2"]``): the system keeps its plain
+            name, where indexing it (``sys[["dtheta2"], ["w2"]]``) appends python-control's
+            ``$indexed``.
 
         Returns
         -------
         control.StateSpace
             x' = (A − B K) x + B v + G w; inputs v1..v3, w1..w3 (ft·lbf), outputs the 24
-            states and u1..u3 (ft·lbf).
+            states and u1..u3 (ft·lbf); named ``closed loop at <point>``.
         """
         p = self.result.points[self._index(point)]
-        return self._closed(p.model, p.lqr.K, f"acmm_closed_loop_{p.spec.name}")
+        return _select(self._closed(p.model, p.lqr.K, f"closed loop at {p.spec.name}".replace(".", ",")), outputs, inputs)
 
     # ------------------------------------------------------------------ scheduled loop
     def plant_at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -341,7 +353,7 @@ class Design:
         """
         return self.result.table.gain_at(np.radians(tea_pitch_deg), 0)
 
-    def scheduled_closed_loop(self, tea_pitch_deg: float):
+    def scheduled_closed_loop(self, tea_pitch_deg: float, outputs=None, inputs=None):
         """Closed loop with the scheduled gain at pitch TEA ``tea_pitch_deg`` (deg): the blended
         station with that TEA, linearized there, under u = −K(θ2*) x + v.
 
@@ -349,15 +361,18 @@ class Design:
         ----------
         tea_pitch_deg : float
             Pitch TEA θ2*, deg.
+        outputs, inputs : list of str, optional
+            Only these channels, by name (as in :meth:`closed_loop`).
 
         Returns
         -------
         control.StateSpace
-            Inputs v1..v3, w1..w3 (ft·lbf); outputs the 24 states and u1..u3 (ft·lbf).
+            Inputs v1..v3, w1..w3 (ft·lbf); outputs the 24 states and u1..u3 (ft·lbf); named
+            ``scheduled loop at theta2* -20,00 deg`` (python-control allows no ``.`` in a name).
         """
         model = self.model_at(tea_pitch_deg)
         K = self.result.table.gain_at(model.theta_star[1], 0)
-        return self._closed(model, K, "acmm_scheduled_loop_" + f"{tea_pitch_deg:+.2f}deg".replace(".", "p"))
+        return _select(self._closed(model, K, f"scheduled loop at theta2* {tea_pitch_deg:+.2f} deg".replace(".", ",")), outputs, inputs)
 
     def loop_transfer(self, point=0, tea_pitch_deg: float | None = None):
         """Loop transfer L = K (sI − A)⁻¹ B at the plant input (u1..u3 → Ku1..Ku3), for
@@ -384,7 +399,9 @@ class Design:
         from acmm.model.linearize import INPUT_NAMES
 
         return _named(model.A, model.B, K, np.zeros((3, 3)), model.state_names, INPUT_NAMES,
-                      [f"K{u}" for u in INPUT_NAMES], "acmm_loop_transfer")
+                      [f"K{u}" for u in INPUT_NAMES], ("loop transfer at " + (
+                          self.names[self._index(point)] if tea_pitch_deg is None
+                          else f"theta2* {tea_pitch_deg:+.2f} deg")).replace(".", ","))
 
     @staticmethod
     def _closed(model, K, name):
@@ -396,6 +413,15 @@ class Design:
         D = np.vstack([np.zeros((24, 6)), np.hstack([np.eye(3), np.zeros((3, 3))])])
         return _named(A, B, C, D, model.state_names, V_NAMES + DISTURBANCE_NAMES,
                       list(model.state_names) + INPUT_NAMES, name)
+
+
+def _select(sys, outputs=None, inputs=None):
+    """``sys`` restricted to the named ``outputs`` and ``inputs`` (None: all), under its own name."""
+    if outputs is None and inputs is None:
+        return sys
+    sub = sys[list(outputs if outputs is not None else sys.output_labels),
+              list(inputs if inputs is not None else sys.input_labels)]
+    return _named(sub.A, sub.B, sub.C, sub.D, sub.state_labels, sub.input_labels, sub.output_labels, sys.name)
 
 
 def _mix(a, b, s: float) -> tuple[np.ndarray, np.ndarray]:

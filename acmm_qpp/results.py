@@ -233,5 +233,98 @@ def draw_figures(calls) -> None:
         raise err from (None if err is first else first)
 
 
+#: result file → the stage that writes it (root attribute ``stage``), in the order a run folder's
+#: figures are redrawn
+FIGURE_SOURCES = {"design.h5": "design", "sim.h5": "simulate", "sweep.h5": "sweep",
+                  "qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
+
+
+def stored_results(target: str | Path, stages: tuple) -> list[tuple[Path, str]]:
+    """The result files a figure redraw (``acmm plot`` / ``qpp plot``) reads: ``target`` itself
+    (an ``.h5`` written by one of ``stages``) or, for a run folder, every file of
+    :data:`FIGURE_SOURCES` in it written by one of ``stages``.
+
+    Parameters
+    ----------
+    target : path-like
+        A run folder or a results file.
+    stages : tuple of str
+        The stages (root attribute ``stage``) whose files the caller draws.
+
+    Returns
+    -------
+    list of (pathlib.Path, str)
+        Each file and its stage.
+
+    Raises
+    ------
+    acmm_qpp.errors.ConfigError
+        ``target`` does not exist, is not a results file of those stages, or is a folder with
+        none.
+    """
+    import h5py
+
+    from acmm_qpp.errors import ConfigError
+
+    p = Path(target)
+    if not str(target).strip() or not p.exists():
+        raise ConfigError(f"{target}: no such run folder or results file")
+
+    def stage_of(f: Path) -> str | None:
+        try:
+            with h5py.File(f, "r") as h:
+                v = h.attrs.get("stage")
+                return None if v is None or "config" not in h.attrs else (v.decode() if isinstance(v, bytes) else str(v))
+        except (OSError, ValueError):
+            return None
+
+    if p.is_dir():
+        found = [(p / name, stage_of(p / name)) for name in FIGURE_SOURCES if (p / name).is_file()]
+        found = [(f, st) for f, st in found if st in stages]
+        if not found:
+            names = ", ".join(n for n, st in FIGURE_SOURCES.items() if st in stages)
+            raise ConfigError(f"{target}: no results file with figures in this folder (looked for {names})")
+        return found
+    st = stage_of(p)
+    if st is None:
+        raise ConfigError(f"{target}: not a results file of this project (an HDF5 file with the root "
+                          "attributes stage and config)")
+    if st not in stages:
+        raise ConfigError(f"{target}: a {st!r} result, whose figures this command does not draw "
+                          f"(it draws {', '.join(stages)})")
+    return [(p, st)]
+
+
+def draw_collected(calls) -> list[Path]:
+    """:func:`draw_figures` of ``calls``, returning the files they wrote (each call returns a
+    path or a list of paths).
+
+    Parameters
+    ----------
+    calls : iterable of callable
+        The figure calls.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, in order.
+
+    Raises
+    ------
+    acmm_qpp.errors.FigureError
+        A figure could not be drawn or written.
+    """
+    written: list[Path] = []
+
+    def keep(call):
+        def run():
+            out = call()
+            written.extend(Path(x) for x in (out if isinstance(out, (list, tuple)) else [out]) if x is not None)
+        return run
+
+    draw_figures([keep(c) for c in calls])
+    return written
+
+
 #: vector formats whose files matplotlib dates by default → the metadata key of that date
 _DATED_FORMATS = {"pdf": "CreationDate", "svg": "Date", "ps": "CreationDate", "eps": "CreationDate"}

@@ -8,7 +8,8 @@ from __future__ import annotations
 from typing import Optional
 
 # first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
-from acmm_qpp.cli.plumbing import ExitCodeGroup, OverridesArg, StrictOpt, run_app, strict_exit, user_errors, version_option
+from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, run_app, strict_exit, user_errors,
+                                   version_option)
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
 
@@ -17,12 +18,22 @@ import typer  # noqa: E402
 
 from acmm_qpp.errors import DesignError  # noqa: E402
 
-app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
+class _QppGroup(ExitCodeGroup):
+    """The ``qpp`` app: its help ends with examples and the packaged qpp configs."""
+
+    examples = ("qpp design qpp_siso                  # ch. 13: H-infinity gains, circle criterion",
+                "qpp simulate qpp_manipulator         # ch. 14: the spheres checked in simulation",
+                "qpp plot runs/qpp_siso               # redraw a run's figures from its .h5 files",
+                "qpp COMMAND --help                   # each command's options and examples")
+    config_kinds = ("qpp",)
+
+
+app = typer.Typer(add_completion=True, no_args_is_help=True, cls=_QppGroup, rich_markup_mode=None,
                   help="Quantitative pole placement for Lure systems (CR-185644 Part III).",
                   epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
                          "or option value), 3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
 
-ConfigArg = typer.Argument(..., help="YAML config file (or the name of a packaged config, e.g. qpp_siso)")
+ConfigArg = typer.Argument(..., help="YAML config file (or the name of a packaged config, listed below)")
 FigOpt = typer.Option(None, "--figures/--no-figures", help="override output.figures")
 
 
@@ -37,9 +48,10 @@ def _load(config, overrides):
     return load_config(config, overrides)
 
 
-@app.command()
+@app.command(short_help="Check a qpp config.",
+             cls=help_command(["qpp validate qpp_siso", "qpp validate my_plant.yaml --show"], ("qpp",)))
 @user_errors
-def validate(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("spheres.beta_o=0.3"),
              show: bool = typer.Option(False, "--show", help="print the resolved config")) -> None:
     """Check a qpp config (an acmm run or sweep config is named as such: ``acmm validate`` checks it)."""
     from acmm_qpp.configio import detect_kind, read_yaml
@@ -55,7 +67,8 @@ def validate(config: str = ConfigArg, overrides: Optional[list[str]] = Overrides
         typer.echo(cfg.to_yaml())
 
 
-@app.command()
+@app.command(short_help="Print the JSON schema of the qpp config format.",
+             cls=help_command(["qpp schema > qpp.schema.json"]))
 @user_errors
 def schema() -> None:
     """Print the JSON schema of the qpp config format (`acmm schema --kind ...` for the others)."""
@@ -70,9 +83,12 @@ def _mat(a) -> str:
     return np.array2string(np.asarray(a), precision=4, suppress_small=True, max_line_width=120)
 
 
-@app.command(short_help="H-infinity gains (ch 11), beta1, thresholds m and the circle criterion (ch 12.1).")
+@app.command(short_help="H-infinity gains, thresholds and the circle criterion.",
+             cls=help_command(["qpp design qpp_siso", "qpp design qpp_manipulator hinf.rho=0.02 --strict",
+                               "qpp design my_plant.yaml --no-figures"], ("qpp",)))
 @user_errors
-def design(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
+def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("hinf.rho=0.02 spheres.beta_o=0.3"),
+           figures: bool = FigOpt,
            strict: bool = StrictOpt) -> None:
     """H∞ gains (ch. 11), β1, thresholds m and the circle criterion (ch. 12.1) → qpp_design.h5.
     With --strict, a failed circle criterion or β1 > m (for design.bz and design.bookkeeping), or a
@@ -131,9 +147,11 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesAr
     strict_exit(strict, widened, f"{cfg.name}: the sector of φ rests on a grid its random check found too coarse")
 
 
-@app.command()
+@app.command(short_help="Nonlinear closed loop per scenario and the sphere check.",
+             cls=help_command(["qpp simulate qpp_siso", "qpp simulate qpp_siso simulation.t_final=5 --strict"], ("qpp",)))
 @user_errors
-def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = OverridesArg, figures: bool = FigOpt,
+def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.t_final=5"),
+             figures: bool = FigOpt,
              strict: bool = StrictOpt) -> None:
     """Nonlinear closed loop per scenario and the sphere check ‖y − y_o‖∞ ≤ β_o → qpp_sim.h5.
     The gains are those `qpp design` wrote for this config, else designed first. With --strict, an
@@ -169,6 +187,28 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = Overrides
     out = [s.name for s in sims if not s.passed]
     strict_exit(strict, bool(out), f"{cfg.name}: outside the output sphere in {', '.join(out)}")
     strict_exit(strict, not r.certified, f"{cfg.name}: the design is not certified ({r.verdict})")
+
+
+@app.command(short_help="Redraw a run's figures from its stored results (.h5).",
+             cls=help_command(["qpp plot runs/qpp_siso", "qpp plot runs/qpp_manipulator/qpp_sim.h5 --out figures"]))
+@user_errors
+def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
+                                      help="a run folder (runs/<name>) or its qpp_design.h5 / qpp_sim.h5"),
+         out: Optional[str] = typer.Option(None, "--out", help="folder of the figures (default: the results "
+                                                                "file's folder)")) -> None:
+    """Redraw the figures of a qpp run from its stored results alone (nothing is designed or
+    simulated again): the same files, with the same names, as the stage that wrote them.
+    Exit 2 when RUN_DIR_OR_H5 is missing or holds no qpp results file."""
+    from qpp.io.stages import redraw_figures
+
+    if out is not None and not out.strip():
+        from acmm_qpp.errors import ConfigError
+
+        raise ConfigError("--out: empty; give the folder of the figures")
+    written = redraw_figures(target, out)
+    typer.echo(f"{target}: redrew {len(written)} figure file(s)")
+    for p in written:
+        typer.echo(f"  wrote {p}")
 
 
 def main() -> None:

@@ -102,7 +102,8 @@ def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
     """
     plt = _plt()
     p, m = sim.y.shape[0], sim.u.shape[0]
-    fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
+    # constrained layout: no gap under the title; the legends beside the panels, off the data
+    fig, axes = plt.subplots(3, 1, figsize=(9, 8.5), sharex=True, layout="constrained")
     many = p > MAX_LABELLED_CHANNELS        # a legend of line styles, not of every channel's four lines
     for i in range(p):
         if many:
@@ -124,12 +125,13 @@ def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
     if many:                                # the output that sets ‖y − y_o‖∞, drawn last, named
         axes[1].plot(sim.t, np.abs(sim.y[worst] - sim.y_o[worst]), "C0",
                      label=f"|y{worst + 1} − y_o{worst + 1}| (largest)")
-    axes[0].legend(fontsize=7, ncol=2)
+    outside = {"fontsize": 7, "loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0.0}
+    axes[0].legend(**outside)
     axes[0].set_ylabel("reference / output")
     axes[1].axhline(sim.beta_o, color="r", ls="--", label=f"β_o = {sim.beta_o:g}")
     axes[1].set_ylabel("tracking error")
     axes[1].set_title(f"‖y − y_o‖∞ = {sim.error_inf:.4g} ({'within' if sim.passed else 'OUTSIDE'} the sphere)")
-    axes[1].legend(fontsize=7)
+    axes[1].legend(**outside)
     for j in range(m):
         if m > MAX_LABELLED_CHANNELS:
             axes[2].plot(sim.t, sim.u[j], lw=0.8, label=f"u1 … u{m}" if j == 0 else None)
@@ -137,7 +139,7 @@ def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
             axes[2].plot(sim.t, sim.u[j], label=f"u{j + 1}")
     axes[2].set_ylabel("control u")
     axes[2].set_xlabel("t, s")
-    axes[2].legend(fontsize=7)
+    axes[2].legend(**outside)
     fig.suptitle(f"scenario {sim.name} ({_scenario_values(sim)})")
     save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
@@ -172,7 +174,8 @@ def plot_cartesian(sims, a: float, path: Path) -> Path:
     ax.set_aspect("equal")
     ax.set_xlabel("Y_A1, m")
     ax.set_ylabel("Y_A2, m")
-    ax.legend(fontsize=7)
+    ax.set_title("Load path in Cartesian coordinates (cf. Fig 14.5)")
+    ax.legend(fontsize=7, loc="best")
     save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
@@ -201,13 +204,17 @@ def plot_iterations(res, path: Path) -> Path:
         b1 = np.array([it["beta1"] for it in its])
         m = np.array([it["m"] for it in its])
         circ = np.array([it["circle"] for it in its], bool)
-        ax.plot(k, b1, "b.-", label="β1")
-        ax.plot(k, m, "r.-", label="m (12.1)")
-        ax.plot(k[~circ], b1[~circ], "kx", ms=8, label="circle criterion fails")
-        for i, it in enumerate(its):
-            if it.get("certified"):
-                ax.plot(k[i], b1[i], "go", mfc="none", ms=10)
+        style = "-" if k.size > 1 else ""
+        ax.plot(k, b1, "b.", ls=style, ms=9, label="β1")
+        ax.plot(k, m, "r.", ls=style, ms=9, label="m (12.1)")
+        if (~circ).any():             # a legend entry only for what is drawn
+            ax.plot(k[~circ], b1[~circ], "kx", ms=8, label="circle criterion fails")
+        cert = np.array([bool(it.get("certified")) for it in its])
+        if cert.any():
+            ax.plot(k[cert], b1[cert], "go", mfc="none", ms=12, label="certified (β1 ≤ m, circle passes)")
         ax.set_xticks(k if k.size <= 30 else k[:: max(1, k.size // 15)])
+        if k.size <= 3:               # a few evaluations: room around them, not two dots at the edges
+            ax.set_xlim(0.5, k.size + 0.5)
     ax.set_xlabel("evaluation of procedure 12.1")
     ax.set_ylabel("β1, m")
     ax.set_title(("certified" if res.certified else "NO certified design")

@@ -13,11 +13,24 @@ import enum
 
 import typer
 
-from acmm_qpp.cli.plumbing import ExitCodeGroup, OverridesArg, StrictOpt, run_app, strict_exit, user_errors, version_option
+from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, run_app, strict_exit, user_errors,
+                                   version_option)
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
 
-app = typer.Typer(add_completion=True, no_args_is_help=True, cls=ExitCodeGroup, rich_markup_mode=None,
+class _AcmmGroup(ExitCodeGroup):
+    """The ``acmm`` app: its help ends with examples and every packaged config."""
+
+    examples = ("acmm design mb3                      # sector LQR of MB3, writes runs/mb3/design.h5 + figures",
+                "acmm simulate                        # the packaged stair-case (130 orbits)",
+                "acmm simulate mb3 simulation.orbits=2",
+                "acmm sweep sweep_smoke --workers 2",
+                "acmm plot runs/staircase             # redraw a run's figures from its .h5 files",
+                "acmm COMMAND --help                  # each command's options and examples")
+    config_kinds = ("acmm", "sweep", "qpp")
+
+
+app = typer.Typer(add_completion=True, no_args_is_help=True, cls=_AcmmGroup, rich_markup_mode=None,
                   help="Space Station attitude control / momentum management (CR-185644 Part II).",
                   epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
                          "or option value), 3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
@@ -36,7 +49,7 @@ def _load(config, overrides):
 
     return load_config(*split_overrides(config, overrides))
 
-ConfigArg = typer.Argument(None, help="YAML config file (or the name of a packaged config); "
+ConfigArg = typer.Argument(None, help="YAML config file (or the name of a packaged config, listed below); "
                                       "default: the packaged stair-case config")
 
 
@@ -47,9 +60,12 @@ def _fmt(v, fmt="{:+.4f}"):
     return "[" + ", ".join(fmt.format(x) for x in v) + "]"
 
 
-@app.command()
+@app.command(short_help="Check a config of any kind (acmm run, sweep or qpp).",
+             cls=help_command(["acmm validate mb3", "acmm validate my_station.yaml --show",
+                               "acmm validate staircase schedule.n_points=6"], ("acmm", "sweep", "qpp")))
 @user_errors
-def validate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def validate(config: Optional[str] = ConfigArg,
+             overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=6"),
              show: bool = typer.Option(False, "--show", help="print the resolved config (all defaults, canonical units)")) -> None:
     """Check a config of any kind (acmm run, sweep or qpp; detected from its sections); exit 2
     naming the offending field when it is invalid."""
@@ -71,7 +87,8 @@ class ConfigKind(str, enum.Enum):
     qpp = "qpp"
 
 
-@app.command()
+@app.command(short_help="Print the JSON schema of a config kind.",
+             cls=help_command(["acmm schema > acmm.schema.json", "acmm schema --kind sweep", "acmm schema --kind qpp"]))
 @user_errors
 def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="config kind")) -> None:
     """Print the JSON schema of a config kind (for editors: see README, 'Config format')."""
@@ -80,9 +97,10 @@ def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="conf
     typer.echo(schema_json(kind.value))
 
 
-@app.command()
+@app.command(short_help="Torque-equilibrium attitude (eqs 4.1-4.3); writes tea.h5.",
+             cls=help_command(["acmm tea mb3", "acmm tea ac --all", "acmm tea mb3 inertia.I22=1.5e6"], ("acmm",)))
 @user_errors
-def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("inertia.I22=1.5e6"),
         all_roots: bool = typer.Option(False, "--all", help="also list every other equilibrium found")) -> None:
     """Torque-equilibrium attitude (eqs 4.1–4.3); writes runs/<name>/tea.h5."""
     from acmm.stages.runners import run_tea
@@ -103,9 +121,11 @@ def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = Over
     typer.echo(f"  wrote {path}")
 
 
-@app.command()
+@app.command(short_help="24-state linearization about the TEA (eqs 4.4-4.50).",
+             cls=help_command(["acmm linearize mb3", "acmm linearize ac design.drf_mode=attitude_hold"], ("acmm",)))
 @user_errors
-def linearize(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg) -> None:
+def linearize(config: Optional[str] = ConfigArg,
+              overrides: Optional[list[str]] = overrides_arg("orbit_rate=0.0011")) -> None:
     """24-state linearization about the TEA (eqs 4.4-4.50); writes runs/<name>/linearize.h5."""
     import numpy as np
 
@@ -148,12 +168,30 @@ def _run_with_progress(runner, cfg, figures, what: str):
 
         if what == "simulate":
             bar.describe(f"{cfg.name}: design (or reuse), {after}")
-        return runner(cfg, progress=tick, figures=figures)
+        return runner(cfg, progress=tick, figures=figures, warn=_warn)
 
 
-@app.command()
+def _warn(message: str) -> None:
+    """A warning of a stage (e.g. an unstable schedule, before it is written), on stderr."""
+    typer.echo(f"warning: {message}", err=True)
+
+
+def _design_line(name: str, note: str) -> str:
+    """The line saying where a command's design came from (``note`` of
+    :func:`acmm.stages.design.design_for`: ``reused <path>`` or ``designed, wrote <path>``)."""
+    if note.startswith("reused "):
+        return f"{name}: design reused from {note[len('reused '):]} (same config)"
+    if note.startswith("designed, wrote "):
+        return f"{name}: no stored design for this config; designed it and wrote {note[len('designed, wrote '):]}"
+    return f"{name}: design {note}"
+
+
+@app.command(short_help="Sector LQR per design point and the gain schedule.",
+             cls=help_command(["acmm design mb3", "acmm design staircase schedule.n_points=7 --strict",
+                               "acmm design my_station.yaml design.sector.sigma=0.6 --no-figures"], ("acmm",)))
 @user_errors
-def design(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def design(config: Optional[str] = ConfigArg,
+           overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=7"),
            figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
     """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures.
     With --strict, a scheduled gain with poles outside the sector, or a blend whose end lies on
@@ -197,6 +235,7 @@ def design(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = O
         strict_exit(strict, r.check.worst <= 0,
                     f"{cfg.name}: the scheduled gain puts poles outside the sector "
                     f"(worst margin {r.check.worst:+.3f} n)")
+    strict_exit(strict, r.unstable() is not None, f"{cfg.name}: {r.unstable()}")
 
 
 def _branch_jump_text(jump) -> str:
@@ -211,9 +250,10 @@ def _branch_jump_text(jump) -> str:
             "the blend crosses a fold and the schedule is fitted across the jump")
 
 
-@app.command(short_help="Dwell-time stability certificate of the stair-case (switched linear system).")
+@app.command(short_help="Dwell-time stability certificate of the stair-case.",
+             cls=help_command(["acmm certify", "acmm certify staircase schedule.n_points=8 --strict"], ("acmm",)))
 @user_errors
-def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("schedule.n_points=8"),
             strict: bool = StrictOpt) -> None:
     """Dwell-time stability certificate of the stair-case: per-level Lyapunov functions of the
     frozen closed loops, the worst jump ratio between levels (both ways), the certified minimum
@@ -224,18 +264,21 @@ def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = 
     from acmm.stages.design import design_for
 
     cfg = _load(config, overrides)
-    table, note = design_for(cfg)
+    table, note = design_for(cfg, warn=_warn)
     sc = compute_certificate(cfg, table)
-    typer.echo(f"{cfg.name}: design {note}")
+    typer.echo(_design_line(cfg.name, note))
     for line in certificate_lines(sc):
         typer.echo(line)
     strict_exit(strict, not sc.certificate.certified,
                 f"{cfg.name}: the stair-case is not certified by a dwell time")
 
 
-@app.command(short_help="Nonlinear closed-loop simulation (ch 6); designs first if needed; writes sim.h5 + figures.")
+@app.command(short_help="Nonlinear closed-loop simulation (ch 6); writes sim.h5.",
+             cls=help_command(["acmm simulate                         # the stair-case, 130 orbits",
+                               "acmm simulate mb3 simulation.orbits=2",
+                               "acmm simulate ac output.units=si --strict"], ("acmm",)))
 @user_errors
-def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = OverridesArg,
+def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.orbits=10"),
              figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
     """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures.
     With --strict, a DIVERGED verdict exits 1."""
@@ -246,7 +289,7 @@ def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] =
     from acmm_qpp.units import shown
 
     cfg, s = r.config, r.sim
-    typer.echo(f"{cfg.name}: design {r.design_note}")
+    typer.echo(_design_line(cfg.name, r.design_note))
     typer.echo(f"  simulated {r.orbits_simulated:.2f} of {cfg.simulation.orbits:g} orbits in "
                f"{r.wall_time:.2f} s ({s.n_steps} steps, {s.n_rejected} rejected)")
     typer.echo(f"  verdict: {s.verdict.upper()} ({s.reason}" +
@@ -257,6 +300,30 @@ def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] =
                    "{:.0f} {}".format(*shown(st['peak_momentum'], "ft*lbf*s", cfg.output.units)))
     typer.echo(f"  wrote {path}")
     strict_exit(strict, s.verdict != "bounded", f"{cfg.name}: verdict {s.verdict.upper()} ({s.reason})")
+
+
+@app.command(short_help="Redraw a run's figures from its stored results (.h5).",
+             cls=help_command(["acmm plot runs/staircase", "acmm plot runs/mb3/sim.h5 --out figures/mb3",
+                               "acmm plot runs/sweep_smoke"]))
+@user_errors
+def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
+                                      help="a run folder (runs/<name>) or one of its results files: design.h5, "
+                                           "sim.h5, sweep.h5, qpp_design.h5, qpp_sim.h5"),
+         out: Optional[str] = typer.Option(None, "--out", help="folder of the figures (default: the results "
+                                                                "file's folder)")) -> None:
+    """Redraw the figures of a run from its stored results alone (nothing is designed or
+    simulated again): the same files, with the same names, as the stage that wrote them.
+    Exit 2 when RUN_DIR_OR_H5 is missing or holds no results file of this project."""
+    from acmm.stages.runners import redraw_figures
+
+    if out is not None and not out.strip():
+        from acmm_qpp.errors import ConfigError
+
+        raise ConfigError("--out: empty; give the folder of the figures")
+    written = redraw_figures(target, out)
+    typer.echo(f"{target}: redrew {len(written)} figure file(s)")
+    for p in written:
+        typer.echo(f"  wrote {p}")
 
 
 def main() -> None:

@@ -10,7 +10,7 @@ from typing import Optional
 
 import typer
 
-from acmm_qpp.cli.plumbing import user_errors
+from acmm_qpp.cli.plumbing import help_command, user_errors
 
 
 def register(app: typer.Typer) -> None:
@@ -22,7 +22,9 @@ def register(app: typer.Typer) -> None:
         The ``acmm`` app.
     """
 
-    @app.command("report")
+    @app.command("report", short_help="Every figure and table of CR-185644 in one HTML page.",
+                 cls=help_command(["acmm report --fast                  # CI mode, a few minutes",
+                                   "acmm report --out runs/report --jobs 2"]))
     @user_errors
     def report(
         out: str = typer.Option("runs/report", "--out", help="output directory (index.html, report.md, "

@@ -10,7 +10,7 @@ from typing import Optional
 import typer
 
 from acmm_qpp.errors import EXIT_INPUT
-from acmm_qpp.cli.plumbing import OverridesArg, fail, strict_exit, user_errors
+from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit, user_errors
 
 
 class _Bar:
@@ -79,10 +79,14 @@ def register(app: typer.Typer) -> None:
         The ``acmm`` app.
     """
 
-    @app.command()
+    @app.command(short_help="Monte Carlo / grid sweep of closed-loop runs; writes sweep.h5.",
+                 cls=help_command(["acmm sweep sweep_smoke --workers 2",
+                                   "acmm sweep sweep_inertia30 sweep.n_runs=20 sweep.orbits=2",
+                                   "acmm sweep my_sweep.yaml --resume --no-figures"], ("sweep",)))
     @user_errors
-    def sweep(config: str = typer.Argument(..., help="sweep config YAML (see configs/sweep_smoke.yaml)"),
-              overrides: Optional[list[str]] = OverridesArg,
+    def sweep(config: str = typer.Argument(..., help="sweep config YAML or the name of a packaged sweep config "
+                                                     "(listed below)"),
+              overrides: Optional[list[str]] = overrides_arg("sweep.n_runs=20 sweep.orbits=2"),
               workers: Optional[int] = typer.Option(None, "--workers", "-j",
                                                     help="local worker processes (1: in-process; "
                                                          "default: sweep.workers or the CPU count)"),
@@ -94,7 +98,9 @@ def register(app: typer.Typer) -> None:
               strict: bool = typer.Option(False, "--strict", help="exit 1 when any case is not bounded (for CI)")
               ) -> None:
         """Monte Carlo / grid sweep of closed-loop runs; writes runs/<name>/sweep.h5, sweep.csv, figures.
-        KEY=VALUE overrides apply to the sweep file (e.g. sweep.n_runs=20 sweep.orbits=2)."""
+
+        KEY=VALUE overrides apply to the sweep file (its sweep and output sections), not to
+        the base configs it names."""
         import numpy as np
 
         from acmm.sweep.run import run_sweep

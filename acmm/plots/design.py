@@ -159,28 +159,59 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(6.5, 5.5))
+    fig, (ax, zoom) = plt.subplots(1, 2, figsize=(11, 5.2), gridspec_kw={"width_ratios": [1.0, 1.0]})
     allp = np.concatenate([np.asarray(p) for p in poles_per_point]) / n
     rmin = min(allp.real.min() * 1.1, -2 * sigma)
-    x = np.linspace(rmin, -sigma, 10)
     t = np.tan(np.radians(half_angle_deg))
-    ax.fill_between(x, t * x, -t * x, color="0.9", label="sector")
-    ax.plot([-sigma, -sigma], [-t * sigma, t * sigma], "k-", lw=0.8)
-    ax.plot(x, t * x, "k-", lw=0.8)
-    ax.plot(x, -t * x, "k-", lw=0.8)
+    # the zoomed panel: the sector's edge and the poles near it (within 4σ, or the slowest
+    # third of the poles when they lie further in)
+    edge = max(4 * sigma, float(np.quantile(-allp.real, 1 / 3)) * 1.3)
     cmap = plt.get_cmap("viridis")
-    for k, (p, name) in enumerate(zip(poles_per_point, names)):
-        p = np.asarray(p) / n
-        ax.plot(p.real, p.imag, "x", ms=4, color=cmap(k / max(1, len(names) - 1)),
-                label=name if len(names) <= 12 else None)
-    ax.axvline(0, color="k", lw=0.5)
-    ax.set_xlabel("real part Re λ (units of n, the orbit rate)")
-    ax.set_ylabel("imaginary part Im λ (units of n)")
-    ax.set_title(f"Closed-loop poles and the sector (Re λ ≤ −{sigma}n, |Im λ| ≤ tan {half_angle_deg:g}°·|Re λ|)")
-    # a fixed place, not 'best' (a search over every pole): the corner outside the sector
-    ax.legend(fontsize=6, ncol=2, loc="upper right")
-    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.1, top=0.92)
+    for a in (ax, zoom):
+        x = np.linspace(rmin, -sigma, 10)
+        a.fill_between(x, t * x, -t * x, color="0.9", label="sector" if a is ax else None)
+        a.plot([-sigma, -sigma], [-t * sigma, t * sigma], "k-", lw=0.8)
+        a.plot(x, t * x, "k-", lw=0.8)
+        a.plot(x, -t * x, "k-", lw=0.8)
+        for k, (p, name) in enumerate(zip(poles_per_point, names)):
+            p = np.asarray(p) / n
+            a.plot(p.real, p.imag, "x", ms=4, color=cmap(k / max(1, len(names) - 1)),
+                   label=point_label(name) if len(names) <= 12 and a is ax else None)
+        a.axvline(0, color="k", lw=0.5)
+        a.set_xlabel("real part Re λ (units of n, the orbit rate)")
+        a.set_ylabel("imaginary part Im λ (units of n)")
+    near = allp[allp.real >= -edge]
+    ylim = max(t * edge, float(np.abs(near.imag).max()) * 1.1 if near.size else 0.0) * 1.05
+    zoom.set_xlim(-edge, 0.25 * edge)
+    zoom.set_ylim(-ylim, ylim)
+    zoom.set_title(f"zoom: the sector edge (Re λ ≥ −{edge:.3g}n)", fontsize=9)
+    ax.indicate_inset_zoom(zoom, edgecolor="C3")
+    ax.set_title("all poles", fontsize=9)
+    fig.suptitle(f"Closed-loop poles and the sector (Re λ ≤ −{sigma}n, |Im λ| ≤ tan {half_angle_deg:g}°·|Re λ|)")
+    # outside the data: to the right of the panels
+    if len(names) <= 12:
+        fig.legend(*ax.get_legend_handles_labels(), fontsize=7, loc="center right", frameon=False)
+    fig.subplots_adjust(left=0.07, right=0.8, bottom=0.1, top=0.88, wspace=0.25)
     return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+
+
+def point_label(name: str) -> str:
+    """A design point's name as a legend says it: ``blend_0.017`` (a point of the blend of
+    eq 5.3) is ``blend parameter s = 0.017``; other names are kept.
+
+    Parameters
+    ----------
+    name : str
+        Design point name.
+
+    Returns
+    -------
+    str
+        The label.
+    """
+    if name.startswith("blend_"):
+        return f"blend parameter s = {name[len('blend_'):]}"
+    return name
 
 
 #: superscript digits and minus for the log axis' tick labels
@@ -220,16 +251,13 @@ def _path_check_layout():
     plt = _plt()
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
     a1.set_ylabel("units of n")
-    a2.set_yscale("log")
-    # the labels LogScale gives its axis, as plain text (10⁰, 6×10⁻¹)
-    a2.yaxis.set_major_formatter(_plain_log_formatter(base=10))
-    a2.yaxis.set_minor_formatter(_plain_log_formatter(base=10, labelOnlyBase=False))
-    a2.set_ylabel("disk margin α at u (skew 0)")
+    # a linear axis (a log axis over less than a decade showed two tick labels): α is between
+    # 0 and 2 for a skew-0 disk margin
+    a2.set_ylabel("disk margin α at u, skew 0 (1)")
     a2.set_xlabel("pitch TEA θ2* (deg)")
     # a fixed layout: bbox 'tight' draws the figure twice
     fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
     _premake_ticks([a1, a2], 10, 11)
-    a2.yaxis.get_minor_ticks(12)
     return fig, (a1, a2)
 
 
@@ -265,7 +293,15 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
     a1.axhline(-0.25, color="C3", lw=0.8, ls="--", label="Re λ = −0.25n")
     a1.legend(fontsize=7)
     a1.set_title(f"Scheduled gain on the local model at {th.size} TEAs")
-    a2.plot(th, np.maximum(disk_margin, 1e-6), "-", color="C2")
+    a2.plot(th, disk_margin, "-", color="C2", label="disk margin α")
+    fin = np.asarray(disk_margin, float)[np.isfinite(disk_margin)]
+    if fin.size:
+        lo, hi = float(fin.min()), float(fin.max())
+        pad = max(0.05 * (hi - lo), 0.02 * max(abs(hi), 1e-3))
+        a2.set_ylim(max(0.0, lo - pad), hi + pad)
+    from matplotlib.ticker import MaxNLocator
+
+    a2.yaxis.set_major_locator(MaxNLocator(6))
     return _save(fig, path, vector, tight=False)
 
 

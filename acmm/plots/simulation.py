@@ -162,15 +162,19 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
 _TABLE_HEADER = ("level", "start (orbit)", "θ2* est (deg)", "steady |err| max (deg) r/p/y", "peak |h| ({})")
 
 
-def _summary_layout(units: str):
+def _summary_layout(units: str, n_rows: int = 12):
     """The three panels with their (empty) lines, one legend, the table's header and empty
-    columns; titles, labels, legend and header pre-rendered (_bake_texts)."""
+    columns; titles, labels, legend and header pre-rendered (_bake_texts).  The table's height
+    follows its ``n_rows`` rows (at most 12 lines of full height): a one-level run leaves no
+    blank third of the page."""
     from acmm_qpp.units import pretty, shown
 
     hu, uu = shown(1.0, "ft*lbf*s", units)[1], shown(1.0, "ft*lbf", units)[1]
     plt = _plt()
-    fig = plt.figure(figsize=(11, 8.5))
-    gs = fig.add_gridspec(3, 2)
+    table_ratio = min(1.0, 0.25 + 0.0625 * max(1, n_rows))
+    k = 1.0 / table_ratio           # the header's and rules' offsets from the top stay the same in points
+    fig = plt.figure(figsize=(11, 8.5 * (2 + table_ratio) / 3))
+    gs = fig.add_gridspec(3, 2, height_ratios=(1.0, 1.0, table_ratio))
     top = fig.add_subplot(gs[0, :])
     top.set_ylabel("attitude error (deg)")
     mid = [fig.add_subplot(gs[1, col]) for col in range(2)]
@@ -190,9 +194,9 @@ def _summary_layout(units: str):
     head = [table.text((k + 0.5) / 5, 1.0, h.format(pretty(hu)), ha="center", va="top", fontsize=8,
                        transform=table.transAxes) for k, h in enumerate(_TABLE_HEADER)]
     rules = [table.plot([0, 1], [y, y], transform=table.transAxes, color="k", lw=lw, clip_on=False)[0]
-             for y, lw in ((1.02, 0.9), (0.93, 0.6))]
-    body = [table.text((k + 0.5) / 5, 0.91, "", ha="center", va="top", fontsize=8, linespacing=1.45,
-                       transform=table.transAxes) for k in range(5)]
+             for y, lw in ((1 + 0.02 * k, 0.9), (1 - 0.07 * k, 0.6))]
+    body = [table.text((c + 0.5) / 5, 1 - 0.09 * k, "", ha="center", va="top", fontsize=8, linespacing=1.45,
+                       transform=table.transAxes) for c in range(5)]
     fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
     _premake_ticks([top, *mid], 6, 4)
     _bake_texts(fig, [*head, *rules, *fig.legends,
@@ -236,7 +240,7 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     k_h = shown(1.0, "ft*lbf*s", units)[0]
-    fig, (top, mid, lines, body) = _layout("summary", units)
+    fig, (top, mid, lines, body) = _layout("summary", units, min(len(level_stats), 12))
     xlim = _data_limits(orbits)
     for ax, panel, data in zip((top, *mid), lines, (err_deg, h, u)):
         for a in range(3):
@@ -247,7 +251,7 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
              " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum'] * k_h:.0f}")
             for s in level_stats]
     if rows:     # the columns, each one text; the font shrinks to fit many levels (down to 6 pt)
-        px = body[0].axes.bbox.height * 0.9
+        px = body[0].axes.bbox.height * (body[0].get_position()[1] - 0.01)
         fit = max(2, int(px / (6.0 * fig.dpi / 72 * 1.45)))
         if len(rows) > fit:
             rows = rows[:fit - 1] + [("…", f"{len(rows) - fit + 1} more levels", "in sim.h5", "", "")]

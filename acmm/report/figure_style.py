@@ -22,6 +22,11 @@ from acmm_qpp.results import save_figure
 SPEED_RC = {"axes.titley": 1.0}
 
 
+#: resolution of the report's PNG figures (a PDF beside each is the vector form): readable on a
+#: high-density screen and in print
+PNG_DPI = 160
+
+
 def pyplot():
     """``matplotlib.pyplot`` with the report style (:func:`acmm_qpp.plot_style.pyplot`) and :data:`SPEED_RC`.
 
@@ -114,7 +119,7 @@ def save(fig, directory: Path, stem: str) -> dict[str, Path]:
     # layouts are fixed (fixed_layout, no bbox_inches="tight": it costs a second draw);
     # fixed metadata: the same data give byte-identical PDFs (no creation date)
     save_figure(fig, out["pdf"], metadata={"CreationDate": None, "Creator": "acmm report"})
-    save_figure(fig, out["png"], metadata={"Software": "acmm report"},
+    save_figure(fig, out["png"], metadata={"Software": "acmm report"}, dpi=PNG_DPI,
                 pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
     plt.close(fig)
     return out

@@ -82,3 +82,52 @@ def _define_units(items: dict, orbit_rate: float) -> dict:
 
 def _as_config(config) -> Config:
     return config if isinstance(config, Config) else load_config(config)
+
+
+def stored_config(attrs: dict) -> Config:
+    """The config a results file was written from (its root attribute ``config``, the resolved
+    YAML), validated again.
+
+    Parameters
+    ----------
+    attrs : dict
+        The file's root attributes (:func:`acmm_qpp.results.read_h5`'s ``"attrs"``).
+
+    Returns
+    -------
+    acmm.io.config.Config
+        The config.
+    """
+    import yaml
+
+    from acmm.io.config import parse_config
+
+    text = attrs["config"]
+    return parse_config(yaml.safe_load(text.decode() if isinstance(text, bytes) else text), source="stored config")
+
+
+def stored_in(f, key: str, unit: str) -> np.ndarray:
+    """Dataset ``key`` of an open results file (h5py) in the unit ``unit``, converted from the
+    unit its ``units`` attribute names (a file in SI units is read back in the report's units).
+
+    Parameters
+    ----------
+    f : h5py.File or h5py.Group
+        The open file.
+    key : str
+        Dataset path.
+    unit : str
+        Unit wanted (e.g. ``"ft*lbf*s"``, ``"deg/s"``).
+
+    Returns
+    -------
+    ndarray
+        The values in ``unit``.
+    """
+    from acmm_qpp.units import convert
+
+    ds = f[key]
+    stored = ds.attrs.get("units", unit)
+    stored = stored.decode() if isinstance(stored, bytes) else str(stored)
+    value = np.asarray(ds[()])
+    return value if stored == unit else convert(value, stored, unit)

@@ -81,6 +81,33 @@ class DesignResult:
         return off_branch_point([p.spec for p in self.points], [p.tea.theta for p in self.points],
                                 self.config.orbit_rate)
 
+    def unstable(self) -> str | None:
+        """Where the scheduled closed loop is unstable, as one sentence (None: stable at every
+        schedule check and every path TEA, or no schedule).
+
+        Returns
+        -------
+        str or None
+            E.g. ``the scheduled closed loop is UNSTABLE at mid_0.640 (midpoint; largest Re λ
+            +0.020 n) and at 14 of 201 path TEAs, θ2* -30.10 ... -25.30 deg``.
+        """
+        parts = []
+        c = self.check
+        if c is not None and c.max_real.size and not np.all(c.max_real < 0):
+            k = int(np.nanargmax(np.where(np.isnan(c.max_real), np.inf, c.max_real)))
+            bad = int(np.sum(~(c.max_real < 0)))
+            kind = f"{c.kind[k]}; " if c.kind else ""
+            parts.append(f"at {c.names[k]} ({kind}largest Re λ {c.max_real[k]:+.3f} n"
+                         + (f"; {bad} of {c.max_real.size} schedule checks unstable)" if bad > 1 else ")"))
+        pc = self.path_check
+        if pc is not None and pc.max_real.size and not np.all(pc.max_real < 0):
+            bad = ~(pc.max_real < 0)                # NaN (a failed eigenvalue) counts as unstable
+            th = np.degrees(pc.theta2[bad])
+            parts.append(f"at {int(bad.sum())} of {bad.size} path TEAs, θ2* {th.min():+.2f} ... {th.max():+.2f} deg")
+        if not parts:
+            return None
+        return "the scheduled closed loop is UNSTABLE " + " and ".join(parts)
+
     def worst_check_index(self) -> int | None:
         """Index of the schedule check with the smallest sector margin (None without a schedule).
 
@@ -173,7 +200,7 @@ def design_table(points, fit, design_hash: str) -> DesignTable:
 
 @locked_stage(_as_config)
 @owns_outputs("design", lambda c: _as_config(c))
-def run_design(config, progress=None, figures: bool | None = None) -> tuple[DesignResult, Path]:
+def run_design(config, progress=None, figures: bool | None = None, warn=None) -> tuple[DesignResult, Path]:
     """Design and write ``runs/<name>/design.h5`` plus the gain-schedule and pole-map figures
     (:mod:`acmm.stages.design_output` builds both).
 
@@ -185,6 +212,9 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
         ``progress(name)``, called after each design point.
     figures : bool, optional
         Write the figures (default: ``output.figures``).
+    warn : callable, optional
+        ``warn(message)``, called before ``design.h5`` is written when the scheduled closed loop
+        is unstable somewhere (:meth:`DesignResult.unstable`).
 
     Returns
     -------
@@ -198,6 +228,8 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
     want_figures = cfg.output.figures if figures is None else figures
     s, run_dir = design_settings(cfg), cfg.run_dir()
     r = compute_design(cfg, progress)
+    if warn is not None and r.unstable() is not None:
+        warn(f"{cfg.name}: {r.unstable()}; writing it to {cfg.run_dir() / 'design.h5'} all the same")
     pts = out.point_items(r.points)
     items = out.table_items(r, pts)
     if r.fit is not None:
@@ -214,7 +246,7 @@ def run_design(config, progress=None, figures: bool | None = None) -> tuple[Desi
     return r, path
 
 
-def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple[DesignTable, str]:
+def design_for(cfg: Config, progress=None, figures: bool | None = None, warn=None) -> tuple[DesignTable, str]:
     """The design of a config: reused from ``design.h5`` when its hash matches, else computed.
 
     Parameters
@@ -225,6 +257,8 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple
         ``progress(name)``, called after each design point when designing.
     figures : bool, optional
         Write the design figures when designing (default: ``output.figures``).
+    warn : callable, optional
+        Passed to :func:`run_design` when designing (an unstable schedule is named before it is written).
 
     Returns
     -------
@@ -240,7 +274,7 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None) -> tuple
                 return table, f"reused {path}"
         except (OSError, KeyError, ValueError):
             pass
-    r, path = run_design(cfg, progress, figures)
+    r, path = run_design(cfg, progress, figures, warn)
     if cfg.output.units != "imperial":
         # the table as a later run reuses it: converted to SI and back, so that a simulation is
         # the same bit for bit whether its design was just made or read from design.h5

@@ -293,3 +293,64 @@ def _gain_figure(points, fit, s, path: Path, units_system: str):
     units, torque = gain_labels(s.drf_mode, units_system)
     return partial(design_plots.gain_schedule_grid, theta2, gains, design_plots.sample_schedule(fit, theta2),
                    STATE_NAMES, path, units=list(units), torque_unit=torque)
+
+
+def design_figures_from_file(path: Path, out_dir: Path) -> list:
+    """The figures of :func:`design_figures` drawn from a ``design.h5`` alone (``acmm plot``):
+    the points' poles and TEAs, the gains and schedule, the path check and the sector, read
+    from the file and its stored config; nothing is designed again.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The ``design.h5`` (imperial or SI).
+    out_dir : pathlib.Path
+        Folder of the figures (the same file names as the design stage writes).
+
+    Returns
+    -------
+    list of functools.partial
+        The figure calls, for :func:`acmm_qpp.results.draw_figures`.
+    """
+    import h5py
+
+    from acmm.design.schedule import schedule_gain
+    from acmm.design.settings import design_settings
+    from acmm.io.design_file import _text, _texts
+    from acmm.stages.common import stored_config
+
+    with h5py.File(path, "r") as f:
+        attrs = {k: f.attrs[k] for k in f.attrs}
+        names = _texts(f["names"][()])
+        keys = sorted(f["points"])
+        poles = [np.asarray(f[f"points/{k}/poles"][()]) for k in keys]
+        tea = np.asarray(f["tea"][()], float)
+        K = np.asarray(f["K"][()], float)
+        sched = None
+        if "schedule" in f:
+            g = f["schedule"]
+            sched = {"coef": np.asarray(g["coef"][()], float), "variable": np.asarray(g["variable"][()], float)}
+            if "path" in g:
+                sched["path"] = {k: np.asarray(g[f"path/{k}"][()]) for k in
+                                 ("theta2", "max_real", "sector_margin", "disk_margin", "poles")}
+    cfg = stored_config(attrs)
+    s = design_settings(cfg)
+    system = _text(attrs.get("unit_system", "imperial"))
+    calls = [partial(design_plots.pole_map, poles, names, s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg,
+                     out_dir / "design_poles.png")]
+    if sched is not None:
+        form = _text(attrs.get("schedule_form", "polynomial"))
+        theta2 = tea[:, 1]
+        fine = np.linspace(theta2.min(), theta2.max(), 60)
+        sampled = design_plots.SampledSchedule(
+            form, fine, np.array([schedule_gain(form, sched["coef"], sched["variable"], K, t) for t in fine]))
+        units, torque = gain_labels(s.drf_mode, system)
+        calls.append(partial(design_plots.gain_schedule_grid, theta2, K, sampled, STATE_NAMES,
+                             out_dir / "design_gains.png", units=list(units), torque_unit=torque))
+        pc = sched.get("path")
+        if pc is not None:
+            calls.append(partial(design_plots.schedule_path_check, pc["theta2"], pc["max_real"], pc["sector_margin"],
+                                 pc["disk_margin"], out_dir / "design_path_margins.png"))
+            calls.append(partial(design_plots.scheduled_pole_map, pc["poles"], pc["theta2"], s.orbit_rate,
+                                 s.sector.sigma, s.sector.half_angle_deg, out_dir / "design_path_poles.png"))
+    return calls

@@ -190,3 +190,47 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
     path = write_h5(cfg.run_dir() / "linearize.h5", items, cfg.to_yaml(),
                     {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
     return result, path
+
+
+def redraw_figures(target, out=None) -> list[Path]:
+    """Redraw a run's figures from its stored results (``acmm plot``): ``design.h5``,
+    ``sim.h5``, ``sweep.h5`` and the qpp files, each drawn from the file alone
+    (:func:`acmm.stages.design_output.design_figures_from_file`,
+    :func:`acmm.stages.sim_output.sim_figures_from_file`,
+    :func:`acmm.sweep.output.sweep_figures_from_file`, :func:`qpp.io.stages.figure_calls_from_file`).
+
+    Parameters
+    ----------
+    target : path-like
+        A run folder (every results file with figures in it) or one results file.
+    out : path-like, optional
+        Folder of the figures (created if missing; default: the results file's folder).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The figures written.
+
+    Raises
+    ------
+    acmm_qpp.errors.ConfigError
+        ``target`` is missing or holds no results file of this project (exit 2).
+    acmm_qpp.errors.FigureError
+        A figure could not be drawn or written (exit 4).
+    """
+    from acmm.stages.design_output import design_figures_from_file
+    from acmm.stages.sim_output import sim_figures_from_file
+    from acmm.sweep.output import sweep_figures_from_file
+    from acmm_qpp.results import draw_collected, stored_results
+    from qpp.io.stages import figure_calls_from_file
+
+    readers = {"design": design_figures_from_file, "simulate": sim_figures_from_file,
+               "sweep": sweep_figures_from_file, "qpp design": figure_calls_from_file,
+               "qpp simulate": figure_calls_from_file}
+    files = stored_results(target, tuple(readers))
+    calls = []
+    for path, stage in files:
+        folder = Path(out) if out is not None else path.parent
+        folder.mkdir(parents=True, exist_ok=True)
+        calls += readers[stage](path, folder)
+    return draw_collected(calls)

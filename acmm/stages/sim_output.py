@@ -137,3 +137,56 @@ def sim_figures(cfg, sc, r, stats: list, items: dict) -> list:
         calls.append(partial(sim_plots.inertia_histories, orbits, sc.inertia[r.level], d / "sim_inertia.png",
                              units=units))
     return calls
+
+
+def sim_figures_from_file(path, out_dir) -> list:
+    """The figures of :func:`sim_figures` drawn from a ``sim.h5`` alone (``acmm plot``): the
+    stored time series at full resolution, the per-level table and the inertia levels, in the
+    report's units whatever units the file is in; nothing is simulated again.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The ``sim.h5`` (imperial or SI).
+    out_dir : pathlib.Path
+        Folder of the figures (the same file names as the simulation stage writes).
+
+    Returns
+    -------
+    list of functools.partial
+        The figure calls, for :func:`acmm_qpp.results.draw_figures`.
+    """
+    import h5py
+
+    from acmm.stages.common import stored_config, stored_in
+
+    with h5py.File(path, "r") as f:
+        attrs = {k: f.attrs[k] for k in f.attrs}
+        orbits = np.asarray(f["orbits"][()], float)
+        err_deg = np.degrees(stored_in(f, "attitude_error", "rad"))
+        rate = stored_in(f, "rate_rel_lvlh", "deg/s")
+        u = stored_in(f, "u", "ft*lbf")
+        h = stored_in(f, "h", "ft*lbf*s")
+        level = np.asarray(f["level"][()], int)
+        start = stored_in(f, "levels/start", "s")
+        tea_est = stored_in(f, "levels/tea_estimate", "rad")
+        steady = np.degrees(stored_in(f, "levels/steady_error", "rad"))
+        peak = stored_in(f, "levels/peak_momentum", "ft*lbf*s")
+        inertia = stored_in(f, "levels/inertia", "slug*ft^2")
+    cfg = stored_config(attrs)
+    verdict = attrs["verdict"].decode() if isinstance(attrs["verdict"], bytes) else str(attrs["verdict"])
+    orbit = 2 * np.pi / cfg.orbit_rate
+    # the levels level_statistics reported: those with a steady error (NaN: not reached)
+    stats = [{"level": k, "start_orbit": start[k] / orbit, "theta2_deg": float(np.degrees(tea_est[k, 1])),
+              "steady_error_deg": steady[k], "peak_momentum": float(peak[k])}
+             for k in range(len(start)) if np.all(np.isfinite(steady[k]))]
+    units = cfg.output.units
+    title = f"{cfg.name}: {cfg.design.model} design — {verdict}"
+    calls = [partial(sim_plots.axis_histories, orbits, err_deg, rate, u, h, title, out_dir / "sim_axes.png",
+                     units=units),
+             partial(sim_plots.summary, orbits, err_deg, h, u, stats, verdict, cfg.name, out_dir / "sim_summary.png",
+                     units=units)]
+    if len(start) > 1:
+        calls.append(partial(sim_plots.inertia_histories, orbits, inertia[level], out_dir / "sim_inertia.png",
+                             units=units))
+    return calls

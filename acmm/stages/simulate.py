@@ -64,7 +64,7 @@ class SimulateResult:
 
 @locked_stage(_as_config)
 @owns_outputs("simulate", lambda c: _as_config(c))
-def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[SimulateResult, Path]:
+def run_simulate(config, progress=None, figures: bool | None = None, warn=None) -> tuple[SimulateResult, Path]:
     """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures.
 
     Parameters
@@ -75,6 +75,9 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
         ``progress(name)``, called after each design point when designing.
     figures : bool, optional
         Write the figures (default: ``output.figures``).
+    warn : callable, optional
+        ``warn(message)`` when a design made first has an unstable scheduled loop
+        (:func:`acmm.stages.design.design_for`).
 
     Returns
     -------
@@ -83,7 +86,7 @@ def run_simulate(config, progress=None, figures: bool | None = None) -> tuple[Si
     """
     cfg = _as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
-    table, note = design_for(cfg, progress, figures)
+    table, note = design_for(cfg, progress, figures, warn)
     sc = scen.scenario_from_config(cfg, table)
     t0 = time.perf_counter()
     r = sim_mod.simulate(sc)

@@ -169,6 +169,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     rows, margins = _split(sweep, records)
     a = table_arrays(sweep, rows)
     labels = [b.label for b in sweep.bases]
+    nominal = _nominal_tea_deg(sweep)
     S = lambda xs: np.array([x.encode() for x in xs], dtype="S") if len(xs) else np.zeros(0, "S1")  # noqa: E731
     items = {
         "case": Dataset(a["case"], "1", "global case index = base_index·n_cases + index"),
@@ -199,6 +200,9 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
                            dims=("case", "axis", "axis_col")),
         "bias": Dataset(a["bias"], "ft*lbf", "bias torque (first level)", list(AXES), dims=("case", "axis")),
         "n_draws": Dataset(a["n_draws"], "1", "Monte Carlo draws used (resampling of unphysical inertia)"),
+        "nominal_tea": Dataset(np.array([nominal[lab] for lab in labels]).reshape(len(labels), 3), "deg",
+                               "TEA of each base config's nominal plant (NaN: none found)", list(AXES),
+                               dims=("base_name", "axis")),
         "orbit_period": Dataset(np.array([2 * np.pi / sweep.bases[int(k)].config.orbit_rate for k in a["base"]]),
                                 "s", "orbital period of the case's base: the length of its 'orbit'"),
     }
@@ -216,7 +220,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
         from acmm_qpp.errors import FigureError
 
         try:
-            figs = plot_sweep(sweep, a, run_dir)
+            figs = plot_sweep(sweep, a, run_dir, nominal)
         except OSError as exc:        # the tables are written: only a figure failed (exit 4)
             err = FigureError.of(exc)
             raise err from (None if err is exc else exc)
@@ -248,7 +252,7 @@ def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
     write_text(path, "\n".join(lines) + "\n")
 
 
-def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
+def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None) -> list[Path]:
     """Stability map over two swept quantities and distributions of the peak attitude error.
 
     Parameters
@@ -259,6 +263,8 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
         Column arrays of :func:`table_arrays` (their units).
     run_dir : pathlib.Path
         Folder of the figures.
+    nominal : dict, optional
+        Base label → nominal TEA (3,), deg (default: solved for each base).
 
     Returns
     -------
@@ -272,7 +278,7 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
     labels = [b.label for b in sweep.bases]
     names = list(a["parameters"])
     axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
-    nominal = _nominal_tea_deg(sweep)
+    nominal = _nominal_tea_deg(sweep) if nominal is None else nominal
 
     from acmm_qpp.units import shown
 
@@ -304,6 +310,11 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path) -> list[Path]:
         ax.set_xlabel(_label(axes_names[0], system))
         ax.set_ylabel(_label(axes_names[1], system) if len(axes_names) > 1 else "peak attitude error (deg)")
         ax.set_title(f"{lab}: {int(np.sum(verdicts == 'bounded'))}/{int(sel.sum())} bounded")
+        from matplotlib.ticker import MaxNLocator
+
+        ax.xaxis.set_major_locator(MaxNLocator(5))       # fewer ticks, turned: they do not crowd
+        ax.yaxis.set_major_locator(MaxNLocator(6))
+        ax.tick_params(axis="x", labelrotation=30)
         ax.legend(fontsize=7)
     fig.suptitle(f"{sweep.name}: stability map ({sweep.spec.design} design)")
     out = _save(fig, run_dir / "sweep_map.png")
@@ -340,3 +351,50 @@ def _label(name: str, units: str = "imperial") -> str:
         unit = display_unit(p.unit, units).replace("*", "·")
         return f"{name}: {p.description.split('(')[0].split(',')[0].strip()} ({unit})"
     return f"{name}: plant's {name.rsplit('_', 1)[-1]} TEA − nominal TEA (deg)"
+
+
+def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
+    """The figures of :func:`plot_sweep` drawn from a ``sweep.h5`` alone (``acmm plot``): its
+    stored resolved config (the sweep and its base configs), case table and nominal TEAs;
+    nothing is run again.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The ``sweep.h5``.
+    out_dir : pathlib.Path
+        Folder of the figures (``sweep_map.png``, ``sweep_peak_error.png``).
+
+    Returns
+    -------
+    list of functools.partial
+        One call drawing both figures (none when the file holds no case), for
+        :func:`acmm_qpp.results.draw_figures`.
+    """
+    from functools import partial
+
+    import h5py
+    import yaml
+
+    from acmm.sweep.config import parse_sweep
+    from acmm.stages.common import stored_in
+
+    def text(v):
+        return v.decode() if isinstance(v, bytes) else str(v)
+
+    with h5py.File(path, "r") as f:
+        sweep = parse_sweep(yaml.safe_load(text(f.attrs["config"])), source=str(path))
+        labels = [b.label for b in sweep.bases]
+        verdict = [text(v) for v in f["verdict"][()]]
+        a = {"base": np.asarray(f["base"][()], np.int64), "verdict": verdict,
+             "stable": np.array([v == "bounded" for v in verdict], bool),
+             "parameters": {k: stored_in(f, f"parameters/{k}", PARAMETERS[k].unit) for k in f["parameters"]
+                            if k in PARAMETERS},
+             "peak_attitude_error": stored_in(f, "peak_attitude_error", "deg"),
+             "tea_true": stored_in(f, "tea_true", "deg")}
+        nominal = (dict(zip(labels, stored_in(f, "nominal_tea", "deg"))) if "nominal_tea" in f else None)
+    order = list(swept_parameters(sweep.spec))         # the order of the sweep's parameters, as drawn
+    a["parameters"] = {k: a["parameters"][k] for k in order if k in a["parameters"]}
+    if not len(verdict):
+        return []
+    return [partial(plot_sweep, sweep, a, out_dir, nominal)]

@@ -101,11 +101,119 @@ from typer.core import TyperGroup  # noqa: E402
 
 from acmm_qpp.errors import EXIT_USAGE, EXIT_VERDICT  # noqa: E402
 
-#: Positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm_qpp.overrides`).
-OverridesArg = typer.Argument(None, metavar="KEY=VALUE",
-                              help="overrides of config values, dotted: simulation.orbits=10 "
-                                   "design.sector.sigma=0.6 (validated like the file; ~key removes one)",
-                              show_default=False)
+def overrides_arg(example: str):
+    """The positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm_qpp.overrides`), their
+    help naming ``example``, an override of a key the command reads.
+
+    Parameters
+    ----------
+    example : str
+        One or two overrides, e.g. ``"design.sector.sigma=0.6"``.
+
+    Returns
+    -------
+    typer.models.ArgumentInfo
+        The argument.
+    """
+    return typer.Argument(None, metavar="KEY=VALUE",
+                          help=f"overrides of config values, dotted, e.g. {example} "
+                               "(validated like the file; ~key removes one)",
+                          show_default=False)
+
+
+#: The rule by which a config path is found, as the commands' help states it.
+CONFIG_PATH_RULE = ("A config path is relative to the working directory; a bare name that is no file there "
+                    "(mb3, mb3.yaml) is a packaged config.")
+#: ... and for the acmm configs, which name other configs inside them.
+NESTED_PATH_RULE = ("A config a config names (sweep.base, schedule.to) is looked up beside the naming file, "
+                    "then in the working directory, then among the packaged configs.")
+
+_KIND_KEYS = {"sweep": ("sweep",), "qpp": ("plant", "nonlinearity", "hinf", "spheres")}
+
+
+def packaged_configs(kinds: tuple = ("acmm", "sweep", "qpp")) -> list[str]:
+    """Names of the packaged configs (the ``configs/`` folder shipped as ``acmm.configs``) of the
+    given kinds, read from the folder when called (so a help screen lists what is installed).
+
+    The kind is read from a config's top-level keys without parsing its YAML (``sweep:`` → sweep;
+    ``plant:``, ``nonlinearity:``, ``hinf:``, ``spheres:`` → qpp; otherwise an acmm run config),
+    as :func:`acmm_qpp.configio.detect_kind` decides it.
+
+    Parameters
+    ----------
+    kinds : tuple of str, optional
+        Any of ``"acmm"``, ``"sweep"``, ``"qpp"``.
+
+    Returns
+    -------
+    list of str
+        Sorted names without ``.yaml``; empty when the folder cannot be read.
+    """
+    import re
+    from importlib import resources
+
+    from acmm_qpp import PACKAGED_CONFIGS
+
+    out = []
+    try:
+        files = sorted(resources.files(PACKAGED_CONFIGS).iterdir(), key=lambda p: p.name)
+        for f in files:
+            if not f.name.endswith(".yaml"):
+                continue
+            top = set(re.findall(r"^([A-Za-z_]\w*)\s*:", f.read_text(encoding="utf-8"), flags=re.M))
+            kind = next((k for k, keys in _KIND_KEYS.items() if top & set(keys)), "acmm")
+            if kind in kinds:
+                out.append(f.name[:-5])
+    except (OSError, ModuleNotFoundError):  # pragma: no cover (a broken installation)
+        return []
+    return out
+
+
+def help_command(examples: list, kinds: tuple = ()):
+    """A typer command class whose help ends with ``examples`` (one command line each, kept as
+    written) and, for ``kinds``, the packaged configs of those kinds listed from the folder at
+    help time and the rule by which config paths are found (:data:`CONFIG_PATH_RULE`,
+    :data:`NESTED_PATH_RULE`).
+
+    Parameters
+    ----------
+    examples : list of str
+        Command lines, each shown on a line of its own under ``Examples:``.
+    kinds : tuple of str, optional
+        Config kinds the command reads (:func:`packaged_configs`); empty: no config list.
+
+    Returns
+    -------
+    type
+        A subclass of ``typer.core.TyperCommand`` for ``app.command(cls=...)``.
+    """
+    from typer.core import TyperCommand
+
+    class WithExamples(TyperCommand):
+        """A command whose help ends with its examples and the packaged configs it can read."""
+
+        def format_epilog(self, ctx, formatter) -> None:
+            """Write the examples (unwrapped), the packaged configs and the path rule, then the
+            command's own epilog."""
+            formatter.write_paragraph()
+            formatter.write_text("Examples:")
+            with formatter.indentation():
+                for line in examples:
+                    formatter.write(f"{'':>{formatter.current_indent}}{line}\n")
+            if kinds:
+                formatter.write_paragraph()
+                names = packaged_configs(tuple(kinds))
+                formatter.write_text(f"Packaged configs ({', '.join(kinds)}; give the name instead of a file): "
+                                     + (", ".join(names) if names else "none installed"))
+                formatter.write_paragraph()
+                nested = {"acmm", "sweep"} & set(kinds)
+                formatter.write_text(CONFIG_PATH_RULE + (" " + NESTED_PATH_RULE if nested else ""))
+            super().format_epilog(ctx, formatter)
+
+    WithExamples.examples = list(examples)
+    return WithExamples
+
+
 StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes with a failing verdict "
                                                  "(for CI)")
 
@@ -158,6 +266,33 @@ class ExitCodeGroup(TyperGroup):
       bad value in a config file);
     * Ctrl-C → 130; SIGTERM / SIGHUP → 143 / 129 (:func:`acmm_qpp.signals.terminate_like_ctrl_c`).
     """
+
+    #: command lines shown under ``Examples:`` at the end of the app's help
+    examples: tuple = ()
+    #: config kinds whose packaged configs the app's help lists (:func:`packaged_configs`)
+    config_kinds: tuple = ()
+
+    def format_epilog(self, ctx, formatter) -> None:
+        """Write the app's examples and packaged configs (listed from the folder), then its epilog.
+
+        Parameters
+        ----------
+        ctx : click.Context
+            The app's context.
+        formatter : click.HelpFormatter
+            The help being written.
+        """
+        if self.examples:
+            formatter.write_paragraph()
+            formatter.write_text("Examples:")
+            with formatter.indentation():
+                for line in self.examples:
+                    formatter.write(f"{'':>{formatter.current_indent}}{line}\n")
+        if self.config_kinds:
+            formatter.write_paragraph()
+            formatter.write_text(f"Packaged configs (give the name instead of a file): "
+                                 + ", ".join(packaged_configs(tuple(self.config_kinds))))
+        super().format_epilog(ctx, formatter)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         """Run the app like :meth:`click.Group.main`, mapping click's errors to the exit codes.

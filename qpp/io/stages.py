@@ -200,6 +200,8 @@ def _circle_items(c) -> dict:
         "radii": Dataset(c.radii, "1", "Gershgorin mean radii (d_i + d'_i)/2", dims=("channel", "omega")),
         "margins": Dataset(c.margins, "1", "distance of band to disc boundary (>0 passes)", dims=("channel",)),
         "encirclements": Dataset(c.encirclements, "1", "N_ci (clockwise)", dims=("channel",)),
+        "alpha": Dataset(np.asarray(c.alpha, float), "1", "lower sector gain α_i of the critical disc", dims=("channel",)),
+        "beta": Dataset(np.asarray(c.beta, float), "1", "upper sector gain β_i of the critical disc", dims=("channel",)),
         "max_scale": Dataset(c.max_scale, "1", "largest s with sector s·[α, β] passing"),
         "min_scale": Dataset(c.min_scale, "1", "smallest s with sector s·[α, β] passing (0: every "
                              "smaller sector passes; > 0: an unstable H(s) needs a sector this wide)"),
@@ -340,3 +342,112 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
                      "design_certified": int(r.certified), "design_verdict": r.verdict})
     draw_figures(figures)
     return r, sims, path
+
+
+def figure_calls_from_file(path: Path, out_dir: Path) -> list:
+    """The figures of ``qpp design`` (``qpp_design.h5``: circle criterion per channel, procedure
+    12.1's evaluations) or of ``qpp simulate`` (``qpp_sim.h5``: one figure per scenario, the
+    Cartesian load path of the polar arm) drawn from the file alone (``qpp plot``): nothing is
+    designed or simulated again.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        A ``qpp_design.h5`` or ``qpp_sim.h5`` (root attribute ``stage``).
+    out_dir : pathlib.Path
+        Folder of the figures (the file names the stage writes).
+
+    Returns
+    -------
+    list of functools.partial
+        The figure calls, for :func:`acmm_qpp.results.draw_figures`.
+
+    Raises
+    ------
+    acmm_qpp.errors.ConfigError
+        The file is not a qpp result.
+    """
+    import types
+
+    import h5py
+    import yaml
+
+    from acmm_qpp.errors import ConfigError
+    from qpp.io.config import parse_config
+
+    def text(v):
+        return v.decode() if isinstance(v, bytes) else str(v)
+
+    with h5py.File(path, "r") as f:
+        stage = text(f.attrs.get("stage", ""))
+        if stage not in ("qpp design", "qpp simulate"):
+            raise ConfigError(f"{path}: not a qpp result file (stage {stage or 'unknown'!r}; qpp plot draws "
+                              "qpp_design.h5 and qpp_sim.h5)")
+        cfg = parse_config(yaml.safe_load(text(f.attrs["config"])), source=f"{path} (stored config)")
+        if stage == "qpp design":
+            c = f["circle"]
+            sector = np.asarray(f["sector"][()], float)
+            circle = types.SimpleNamespace(
+                passed=bool(f.attrs["circle_passed"]), margins=np.asarray(c["margins"][()]),
+                centres=np.asarray(c["centres"][()]), radii=np.asarray(c["radii"][()]),
+                alpha=np.asarray(c["alpha"][()]) if "alpha" in c else sector[:, 0],
+                beta=np.asarray(c["beta"][()]) if "beta" in c else sector[:, 1],
+                method="small_gain" if "gain_bound" in c else "gershgorin")
+            rows = np.asarray(f["iterations"][()], float).reshape(-1, len(_ITER_KEYS))
+            iterations = [dict(zip(_ITER_KEYS, row)) for row in rows]
+            for it in iterations:
+                it["circle"], it["certified"] = bool(it["circle"]), bool(it["certified"])
+            res = types.SimpleNamespace(circle=circle, iterations=iterations, certified=bool(f.attrs["certified"]),
+                                        beta1_ref=float(f["certificate/beta1"][()]), m_ref=float(f["certificate/m"][()]))
+            return [partial(plot_circle, res, out_dir / "qpp_circle.png"),
+                    partial(plot_iterations, res, out_dir / "qpp_iterations.png")]
+        order = [sc.name for sc in cfg.simulation.scenarios]
+        groups = sorted((k for k in f if isinstance(f[k], h5py.Group)),
+                        key=lambda k: (order.index(k) if k in order else len(order), k))
+        sims = []
+        for name in groups:
+            g = f[name]
+            e = g["error_inf"]
+            params = {k[len("param_"):]: float(v) for k, v in e.attrs.items() if k.startswith("param_")}
+            sims.append(types.SimpleNamespace(
+                name=name, t=np.asarray(g["t"][()]), **{k: np.asarray(g[k][()]).T for k in ("r", "r_o", "y", "y_o", "u")},
+                error_inf=float(e[()]), error_per_output=np.asarray(g["error_per_output"][()]),
+                beta_o=float(e.attrs["beta_o"]), passed=bool(e.attrs["passed"]), parameters=params or None,
+                gamma=float(e.attrs.get("gamma", np.nan))))
+    calls = [partial(plot_scenario, sm, out_dir / f"qpp_sim_{sm.name}.png") for sm in sims]
+    if isinstance(cfg.nonlinearity, PolarArmNonlinearity) and sims:
+        calls.append(partial(plot_cartesian, sims, cfg.nonlinearity.a, out_dir / "qpp_sim_cartesian.png"))
+    return calls
+
+
+def redraw_figures(target, out=None) -> list[Path]:
+    """Redraw a qpp run's figures from ``qpp_design.h5`` / ``qpp_sim.h5`` alone (``qpp plot``;
+    :func:`figure_calls_from_file`).
+
+    Parameters
+    ----------
+    target : path-like
+        A run folder or one of its qpp results files.
+    out : path-like, optional
+        Folder of the figures (created if missing; default: the results file's folder).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The figures written.
+
+    Raises
+    ------
+    acmm_qpp.errors.ConfigError
+        ``target`` is missing or holds no qpp results file (exit 2).
+    acmm_qpp.errors.FigureError
+        A figure could not be drawn or written (exit 4).
+    """
+    from acmm_qpp.results import draw_collected, stored_results
+
+    calls = []
+    for path, _ in stored_results(target, ("qpp design", "qpp simulate")):
+        folder = Path(out) if out is not None else path.parent
+        folder.mkdir(parents=True, exist_ok=True)
+        calls += figure_calls_from_file(path, folder)
+    return draw_collected(calls)

@@ -70,3 +70,29 @@ def test_api_misuse_raises_the_documented_errors():
             call()
     with pytest.raises(AcmmError, match="not int"):
         api.load_config(42)
+
+
+def test_design_points_and_plain_system_names():
+    """Issue 34: ``Design.points`` and python-control names without ``$indexed``."""
+    from acmm import api
+
+    d = api.design(api.load_config("mb3"))
+    assert [p.spec.name for p in d.points] == d.names == ["mb3"]
+    assert d.points[0].lqr.K.shape == (3, 24)
+    cl = d.closed_loop("mb3")
+    assert cl.name == "closed loop at mb3"
+    sub = d.closed_loop("mb3", outputs=["dtheta2"], inputs=["w2"])
+    assert sub.name == "closed loop at mb3" and "$" not in sub.name
+    assert sub.output_labels == ["dtheta2"] and sub.input_labels == ["w2"]
+    full = cl[["dtheta2"], ["w2"]]                                      # python-control's own indexing
+    assert np.allclose(sub.C, full.C) and np.allclose(sub.B, full.B) and np.allclose(sub.A, full.A)
+    assert "$" not in d.loop_transfer("mb3").name
+
+
+def test_a_blend_point_with_a_dot_in_its_name_gives_a_valid_system(staircase):
+    from acmm import api
+
+    d = api.Design(staircase.config, staircase)
+    name = next(n for n in d.names if "." in n)               # blend_0.017 ...
+    assert d.closed_loop(name).name == f"closed loop at {name.replace('.', ',')}"
+    assert d.loop_transfer(name).name == f"loop transfer at {name.replace('.', ',')}"

@@ -234,3 +234,53 @@ def test_a_printed_H_of_zeros_is_no_difference_to_report(tmp_path):
     assert "Traceback" not in r.output and (r.exception is None or isinstance(r.exception, SystemExit))
     assert (tmp_path / "qpp_siso" / "qpp_design.h5").is_file()
     assert yaml.safe_load((tmp_path / "qpp_siso" / "config.yaml").read_text())["name"] == "qpp_siso"
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 34: help with examples and the packaged configs; qpp plot
+# ---------------------------------------------------------------------------------------------
+QPP_COMMANDS = ("validate", "schema", "design", "simulate", "plot")
+
+
+@pytest.mark.parametrize("command", ("",) + QPP_COMMANDS)
+def test_every_help_has_an_example_and_no_truncated_summary(command):
+    from tests.conftest import CONFIGS
+
+    r = invoke(app, *([command] if command else []), "--help")
+    assert r.exit_code == 0, r.output
+    assert r.output.split("Examples:")[1].strip().startswith(f"qpp {command}".strip())
+    assert "…" not in r.output
+    if command in ("", "validate", "design", "simulate"):
+        listed = " ".join(r.output.split("Packaged configs")[1].split(":", 1)[1].split("\n\n")[0].split())
+        assert [x.strip() for x in listed.split(",")] == sorted(p.stem for p in CONFIGS.glob("qpp_*.yaml"))
+    if not command:
+        summaries = r.output.split("Commands:")[1].split("Examples:")[0].strip().splitlines()
+        assert sorted(x.split()[0] for x in summaries) == sorted(QPP_COMMANDS)
+        assert not any(x.rstrip().endswith("...") for x in summaries)
+    if command in ("validate", "design", "simulate"):       # the override example is valid for it
+        from qpp.io.config import load_config
+
+        example = " ".join(r.output.split("e.g.")[1].split("(validated")[0].split()).split()
+        assert "simulation.orbits=10" not in example
+        load_config("qpp_siso", example)
+
+
+def test_plot_redraws_the_design_and_simulation_figures_pixel_for_pixel(tmp_path):
+    import matplotlib.image as mpimg
+
+    root = tmp_path / "runs"
+    for stage in ("design", "simulate"):
+        r = invoke(app, stage, "qpp_siso", f"output.root={root}", "simulation.t_final=2", "--figures")
+        assert r.exit_code == 0, r.output
+    run = root / "qpp_siso"
+    made = sorted(p.name for p in run.glob("*.png"))
+    assert {"qpp_circle_ch1.png", "qpp_iterations.png"} <= set(made) and len(made) >= 4
+    r = invoke(app, "plot", run, "--out", tmp_path / "again")
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in (tmp_path / "again").glob("*.png")) == made
+    for name in made:
+        a, b = mpimg.imread(run / name), mpimg.imread(tmp_path / "again" / name)
+        assert a.shape == b.shape and np.abs(a - b).max() == 0.0, name
+    for bad in (tmp_path / "nowhere", run / "config.yaml", tmp_path):
+        r = invoke(app, "plot", bad)
+        assert r.exit_code == 2 and r.stderr.strip().count("\n") == 0 and r.stderr.startswith("error: ")

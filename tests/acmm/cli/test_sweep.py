@@ -59,3 +59,21 @@ def test_workers_and_a_scheduler_together_are_refused(tmp_runs, run_acmm):
     """-j was silently ignored beside --scheduler (a review)."""
     r = run_acmm("sweep", "sweep_smoke", "-j", "2", "--scheduler", "tcp://127.0.0.1:1", "sweep.n_runs=2")
     assert r.exit_code == 2 and r.output.strip().startswith("error: --workers and --scheduler: give one"), r.output
+
+
+def test_plot_redraws_the_sweep_figures_pixel_for_pixel(tmp_runs):
+    """Issue 34: ``acmm plot`` draws the stability map and the peak errors from sweep.h5 alone."""
+    import matplotlib.image as mpimg
+    import numpy as np
+
+    from acmm.cli.app import app
+    from tests.conftest import invoke
+
+    r = invoke(app, "sweep", "sweep_smoke", "sweep.n_runs=3", "sweep.orbits=0.3", "~sweep.margin", "-j", "1",
+               "--figures")
+    assert r.exit_code == 0, r.output
+    run = tmp_runs / "runs" / "sweep_smoke"
+    assert invoke(app, "plot", run, "--out", tmp_runs / "re").exit_code == 0
+    for name in ("sweep_map.png", "sweep_peak_error.png"):
+        a, b = mpimg.imread(run / name), mpimg.imread(tmp_runs / "re" / name)
+        assert a.shape == b.shape and np.abs(a - b).max() == 0.0, name

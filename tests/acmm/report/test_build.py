@@ -127,7 +127,9 @@ def test_every_printed_number_matched_or_explained(fast_report, page):
     _, r = fast_report
     assert r.unexplained == []
     statuses = [p.status for p in r.ledger]
-    assert statuses.count(ledger_mod.STATUS_MATCHED) >= 25
+    assert statuses.count(ledger_mod.STATUS_MATCHED) >= 20
+    # the inertias of Table 1 are inputs echoed back: shown, never counted as matched (issue 34)
+    assert not [p for p in r.ledger if p.section == "Table 1" and p.quantity.split()[-1].startswith("I")]
     ledger_rows = [t for t in page.tables if t["rows"] and t["rows"][0][:3] == ["section", "quantity", "printed"]]
     assert len(ledger_rows) == 1 and len(ledger_rows[0]["rows"]) - 1 == len(r.ledger)
     for row in ledger_rows[0]["rows"][1:]:

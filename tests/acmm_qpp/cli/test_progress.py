@@ -16,7 +16,8 @@ def acmm(*args):
 # ---------------------------------------------------------------------------------------------
 def test_progress_silent_without_terminal_and_shown_when_forced(tmp_runs, monkeypatch):
     quiet = acmm("design", "staircase", "schedule.n_points=4", "--no-figures")
-    assert quiet.exit_code == 0 and quiet.stderr == ""
+    # no progress; only the warning that this 4-point schedule is unstable somewhere (issue 34)
+    assert quiet.exit_code == 0 and [x[:9] for x in quiet.stderr.splitlines()] == ["warning: "]
     monkeypatch.setenv("ACMM_PROGRESS", "1")
     loud = acmm("design", "staircase", "schedule.n_points=4", "--no-figures")
     assert loud.exit_code == 0
