@@ -419,7 +419,7 @@ def block_qpp_bullet(r: dict) -> str:
             f"m = {fixed(s[0]['m'], 5)}\n  and {fixed(s[1]['m'], 5)}, β1 exact for both B_z readings (the SISO "
             f"certificate β1 ≤ m holds for\n  {which[tuple(holds[0])]}; the manipulator's for "
             f"{which[tuple(holds[1])]}), simulated errors "
-            f"{'within' if spheres else '**not** all within'} the output spheres (see *qpp*).\n")
+            f"{'within' if spheres else '**not** all within'} the output spheres (see [QPP results](qpp.md)).\n")
 
 
 def block_qpp_reproduced(r: dict) -> str:
