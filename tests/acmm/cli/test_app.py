@@ -311,7 +311,7 @@ def test_strict_diverged_verdict(tmp_runs):
 
 
 def test_strict_sector_violation(tmp_runs):
-    # the shipped 4th-order schedule leaves some scheduled poles outside the sector (docs/results/design.md)
+    # the shipped 4th-order schedule leaves some scheduled poles outside the sector (README)
     args = ("design", "staircase", "schedule.n_points=6", "--no-figures")
     r = acmm(*args)
     assert r.exit_code == 0 and "NOT all in the sector" in r.stdout
