@@ -11,7 +11,7 @@ UV_VENV    := .venv-uv
 # `make test-latest`: the newest releases instead of the lock, in a venv of their own
 LATEST     := .venv-latest
 
-.PHONY: run test test-slow test-latest lock bench report report-fast browser install bytecode clean
+.PHONY: run test test-slow test-latest lock bench report report-fast browser install bytecode clean docs docs-figures
 
 # the package's own modules as bytecode: with PYTHONDONTWRITEBYTECODE set (as on CI machines) an
 # editable install would otherwise compile them from source at every command (~0.1 s a run;
@@ -42,7 +42,7 @@ run: $(STAMP) bytecode
 # package); elsewhere that test is skipped unless /usr/bin/chromium exists.
 # --durations: the slowest tests are printed at the end of every run (CI's output included).
 # `make test` leaves out the system tests marked slow (whole reports, the cross-kernel runs, timed
-# signals, the README's regeneration, the longest subprocess and fuzz runs); `make test-slow` runs
+# signals, the generated numbers' regeneration, the README's quick start, the longest subprocess and fuzz runs); `make test-slow` runs
 # them, and CI (.ci/run) runs both.
 test: $(STAMP) bytecode $(if $(CI),browser)
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -m "not slow" --durations=25
@@ -93,11 +93,20 @@ report: $(STAMP) bytecode
 report-fast: $(STAMP) bytecode
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/acmm report --fast
 
-clean:
-	rm -rf $(VENV) $(LATEST) $(UV_VENV) runs build *.egg-info
+# The user guide (docs/, MkDocs + mkdocstrings) into site/; any warning fails the build
+docs: $(STAMP)
+	$(BIN)/python -m mkdocs build --strict --site-dir site
 
-# The README's generated tables (<!-- generated:NAME --> blocks) from a fresh run of the packaged
-# configs in a temporary results root (scripts/readme_numbers.py; tests/test_readme_numbers.py checks them)
+# The guide's figures (docs/img/*.png) from a fresh run in a temporary results root
+docs-figures: $(STAMP) bytecode
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/docs_figures.py
+
+clean:
+	rm -rf $(VENV) $(LATEST) $(UV_VENV) runs build site *.egg-info
+
+# The generated tables (<!-- generated:NAME --> blocks) of README.md and docs/**/*.md from a fresh
+# run of the packaged configs in a temporary results root (scripts/readme_numbers.py;
+# tests/test_readme_numbers.py checks them)
 .PHONY: readme
 readme: $(STAMP) bytecode
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/readme_numbers.py

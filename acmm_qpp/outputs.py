@@ -1,6 +1,6 @@
 """What a stage owns in its run folder, and the run's ``config.yaml``.
 
-Policy (README, *Results*): a rerun **replaces the outputs the stage owns** in ``runs/<name>/``
+Policy (docs/howto/results.md, *Run folders*): a rerun **replaces the outputs the stage owns** in ``runs/<name>/``
 — no history folders.  Each stage declares glob patterns of the files it writes
 (:data:`STAGE_OUTPUTS`); every file written through :func:`acmm_qpp.results.atomic_path` while the
 stage runs is recorded, and when the stage finishes successfully

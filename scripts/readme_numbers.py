@@ -1,7 +1,7 @@
 #!/usr/bin/env python
-"""The README's numbers about the packaged configs, computed from a fresh run (issue 30, item 4).
+"""The numbers README.md and the guide (docs/) quote about the packaged configs, from a fresh run.
 
-Every figure the README quotes about a packaged config (the claims of ch. 6, the per-level
+Every figure the README or a page of the guide quotes about a packaged config (the claims of ch. 6, the per-level
 statistics of the stair-case, the design points' margins and conditioning, the schedule along the
 path, the ±30 % Monte Carlo counts and the inertia-scaling margins) sits in a block between
 
@@ -17,13 +17,17 @@ Numbers are rounded to the digits that mean something (3 significant digits for 
 attitude errors, 3 decimals for margins in units of n, 2 significant digits for condition numbers
 and robustness radii), so the text does not change between machines.
 
+A block may sit in README.md or in any ``docs/**/*.md`` page (:func:`documents`), each block
+exactly once across them; a block is found wherever it lives, so a page may move or a new page may
+hold a new block without a change here beyond the block's function and its name in :data:`BLOCKS`.
+
 Usage::
 
-    python scripts/readme_numbers.py            # rewrite the blocks of README.md (make readme)
+    python scripts/readme_numbers.py            # rewrite the blocks where they live (make readme)
     python scripts/readme_numbers.py --check    # exit 1 and name the blocks that differ
 
 ``tests/test_readme_numbers.py`` computes the same blocks from a fresh run and asserts that the
-README holds them.
+documents hold them.
 """
 from __future__ import annotations
 
@@ -45,7 +49,7 @@ import numpy as np  # noqa: E402
 REPO = Path(__file__).resolve().parent.parent
 README = REPO / "README.md"
 
-#: the blocks this script writes, in README order
+#: the blocks this script writes (each in README.md or one page of docs/)
 BLOCKS = ("table1_tea", "qpp_bullet", "claims", "staircase_levels", "design_points", "schedule_path",
           "dwell_certificate", "design_routes", "staircase_routes", "sweep_monte_carlo",
           "sweep_diverged", "sweep_margin", "qpp_reproduced", "qpp_examples")
@@ -444,7 +448,7 @@ def block_qpp_bullet(r: dict) -> str:
             f"m = {fixed(s[0]['m'], 5)}\n  and {fixed(s[1]['m'], 5)}, β1 exact for both B_z readings (the SISO "
             f"certificate β1 ≤ m holds for\n  {which[tuple(holds[0])]}; the manipulator's for "
             f"{which[tuple(holds[1])]}), simulated errors "
-            f"{'within' if spheres else '**not** all within'} the output spheres (see *qpp*).\n")
+            f"{'within' if spheres else '**not** all within'} the output spheres (see [QPP results](qpp.md)).\n")
 
 
 def block_qpp_reproduced(r: dict) -> str:
@@ -987,14 +991,25 @@ def fresh_blocks(workers: int | None = None) -> dict[str, str]:
         return compute_blocks(run_stages(Path(tmp), workers))
 
 
-# ------------------------------------------------------------------------------ README text
+# ------------------------------------------------------------------------------ the documents
+def documents() -> list[Path]:
+    """The files that may hold generated blocks: README.md and every ``docs/**/*.md``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        README.md first, then the guide's pages in path order.
+    """
+    return [README] + sorted((REPO / "docs").rglob("*.md"))
+
+
 def read_blocks(text: str) -> dict[str, str]:
-    """The generated blocks of a README text.
+    """The generated blocks of one document's text.
 
     Parameters
     ----------
     text : str
-        The README.
+        The document (README.md or a page of the guide).
 
     Returns
     -------
@@ -1009,71 +1024,133 @@ def read_blocks(text: str) -> dict[str, str]:
     found: dict[str, str] = {}
     for m in _BLOCK_RE.finditer(text):
         if m["name"] in found:
-            raise ValueError(f"README block {m['name']!r} appears twice")
+            raise ValueError(f"block {m['name']!r} appears twice")
         found[m["name"]] = m["body"]
     return found
 
 
-def replace_blocks(text: str, blocks: dict[str, str]) -> str:
-    """``text`` with each generated block's body replaced by ``blocks[name]``.
+def read_texts(paths: list[Path] | None = None) -> dict[Path, str]:
+    """The texts of the documents.
 
     Parameters
     ----------
-    text : str
-        The README.
+    paths : list of pathlib.Path, optional
+        The documents (default: :func:`documents`).
+
+    Returns
+    -------
+    dict
+        Path → its text.
+    """
+    return {p: p.read_text(encoding="utf-8") for p in (documents() if paths is None else paths)}
+
+
+def _name(path: Path) -> str:
+    try:
+        return path.relative_to(REPO).as_posix()
+    except ValueError:
+        return str(path)
+
+
+def _checked_read(text: str, path: Path) -> dict[str, str]:
+    try:
+        return read_blocks(text)
+    except ValueError as exc:
+        raise ValueError(f"{_name(path)}: {exc}") from None
+
+
+def locate_blocks(texts: dict[Path, str]) -> dict[str, tuple[Path, str]]:
+    """Where each generated block lives among the documents, and its text.
+
+    Parameters
+    ----------
+    texts : dict
+        Path → text (:func:`read_texts`).
+
+    Returns
+    -------
+    dict
+        Block name → (the document holding it, the text between its markers).
+
+    Raises
+    ------
+    ValueError
+        A block appears twice, in one document or in two.
+    """
+    found: dict[str, tuple[Path, str]] = {}
+    for path, text in texts.items():
+        for name, body in _checked_read(text, path).items():
+            if name in found:
+                raise ValueError(f"block {name!r} appears twice: in {_name(found[name][0])} and {_name(path)}")
+            found[name] = (path, body)
+    return found
+
+
+def replace_blocks(texts: dict[Path, str], blocks: dict[str, str]) -> dict[Path, str]:
+    """The documents with each generated block's body replaced by ``blocks[name]``.
+
+    Parameters
+    ----------
+    texts : dict
+        Path → text of the documents.
     blocks : dict
         Block name → new text.
 
     Returns
     -------
-    str
-        The new README.
+    dict
+        Path → the new text (every document of ``texts``).
 
     Raises
     ------
     ValueError
-        A block of ``blocks`` has no markers in ``text``.
+        A block of ``blocks`` has no markers in any document, or a block appears twice.
     """
-    missing = sorted(set(blocks) - set(read_blocks(text)))
+    where = locate_blocks(texts)
+    missing = sorted(set(blocks) - set(where))
     if missing:
-        raise ValueError(f"README has no markers for {missing}")
+        raise ValueError(f"no markers for {missing} in README.md or docs/")
 
     def sub(m):
         return f"<!-- generated:{m['name']} -->\n{blocks.get(m['name'], m['body'])}<!-- /generated:{m['name']} -->"
-    return _BLOCK_RE.sub(sub, text)
+    return {path: _BLOCK_RE.sub(sub, text) for path, text in texts.items()}
 
 
-def check(text: str, blocks: dict[str, str]) -> list[str]:
-    """The blocks of ``text`` that differ from ``blocks`` (or are missing), with the first
+def check(texts: dict[Path, str], blocks: dict[str, str]) -> list[str]:
+    """The blocks that differ from ``blocks`` (or are missing), with the document and the first
     differing line.
 
     Parameters
     ----------
-    text : str
-        The README.
+    texts : dict
+        Path → text of the documents.
     blocks : dict
         Block name → expected text.
 
     Returns
     -------
     list of str
-        One line per wrong block; empty when the README holds every block.
+        One line per wrong block; empty when the documents hold every block once.
     """
-    have = read_blocks(text)
     bad = []
+    try:
+        have = locate_blocks(texts)
+    except ValueError as exc:
+        return [str(exc)]
     for name, want in blocks.items():
-        got = have.get(name)
-        if got is None:
-            bad.append(f"{name}: no <!-- generated:{name} --> block in README.md")
-        elif got != want:
-            line = next((f"README {a!r} != computed {b!r}" for a, b in
-                         zip(got.splitlines(), want.splitlines()) if a != b), "different length")
+        if name not in have:
+            bad.append(f"{name}: no <!-- generated:{name} --> block in README.md or docs/")
+            continue
+        path, got = have[name]
+        if got != want:
+            line = next((f"{_name(path)} {a!r} != computed {b!r}" for a, b in
+                         zip(got.splitlines(), want.splitlines()) if a != b), f"{_name(path)}: different length")
             bad.append(f"{name}: {line}")
     return bad
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Rewrite (or ``--check``) the generated blocks of README.md from a fresh run.
+    """Rewrite (or ``--check``) the generated blocks of README.md and docs/ from a fresh run.
 
     Parameters
     ----------
@@ -1087,20 +1164,21 @@ def main(argv: list[str] | None = None) -> int:
     """
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--check", action="store_true", help="compare only; exit 1 when a block differs")
-    ap.add_argument("--readme", type=Path, default=README)
     ap.add_argument("--workers", type=int, default=None, help="sweep workers (default: min(2, CPUs))")
     args = ap.parse_args(argv)
+    texts = read_texts()
+    locate_blocks(texts)                # a block twice: say so before the runs
     blocks = fresh_blocks(args.workers)
-    text = args.readme.read_text(encoding="utf-8")
     if args.check:
-        bad = check(text, blocks)
+        bad = check(texts, blocks)
         for line in bad:
             print(line)
         return 1 if bad else 0
-    new = replace_blocks(text, blocks)
-    if new != text:
-        args.readme.write_text(new, encoding="utf-8")
-    print(f"{args.readme}: {len(blocks)} generated blocks {'rewritten' if new != text else 'unchanged'}")
+    new = replace_blocks(texts, blocks)
+    changed = [path for path in texts if new[path] != texts[path]]
+    for path in changed:
+        path.write_text(new[path], encoding="utf-8")
+    print(f"{len(blocks)} generated blocks; rewritten: {', '.join(_name(p) for p in changed) or 'none'}")
     return 0
 
 

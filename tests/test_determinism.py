@@ -2,7 +2,7 @@
 (mb3_decoupled) designs and simulations run in subprocesses under two OpenBLAS kernels and 1 and
 2 threads, and the stored results agree.
 
-What each result holds to (README "Reproducibility"):
+What each result holds to (docs/reproducibility.md):
 - the stair-case's point gains (and so its table schedule) to 1e-6 relative;
 - per-level peak CMG momentum and steady attitude errors to 3 significant digits;
 - the verdicts (bounded / diverged);

@@ -245,14 +245,18 @@ def test_sources_cite_no_file_outside_the_repository():
     assert bad == []
 
 
+#: The guide's page that holds the module map (the tables of modules and their equations).
+MODULE_MAP = REPO / "docs" / "architecture.md"
+
+
 def _readme_module_rows() -> list[str]:
-    """The rows of the README's module tables (``| `path` | content | … |``)."""
-    return [line for line in (REPO / "README.md").read_text(encoding="utf-8").splitlines()
+    """The rows of the module tables of the guide's module map (``| `path` | content | … |``)."""
+    return [line for line in MODULE_MAP.read_text(encoding="utf-8").splitlines()
             if line.startswith("| `") and ("acmm" in line or "qpp" in line)]
 
 
 def test_the_readme_module_map_names_every_module_and_no_missing_one():
-    """The README's module map matches the tree: every module file it names exists, and every
+    """The guide's module map (docs/architecture.md) matches the tree: every module file it names exists, and every
     module of the three packages is named, by its path or, in a row naming its folder
     (``acmm/sweep/``), by its module name."""
     import re
@@ -312,8 +316,9 @@ def _misnamed_test_files(files: list[str]) -> list[str]:
 def test_test_files_mirror_the_modules_and_every_cited_test_file_exists():
     """tests/acmm/design/test_sector_lqr.py tests acmm/design/sector_lqr.py (python-control's
     layout): every file under tests/acmm, tests/qpp and tests/acmm_qpp is named after a module of
-    the package folder it mirrors; the test files the README, docs/ERRATA.md, the sources, the
-    scripts, the Makefile and the tests themselves cite exist (a moved test leaves no stale path)."""
+    the package folder it mirrors; the test files the README, every page of docs/ (docs/ERRATA.md
+    included), the sources, the scripts, the Makefile and the tests themselves cite exist (a moved
+    test leaves no stale path)."""
     import re
 
     files = sorted(p.relative_to(REPO).as_posix() for p in (REPO / "tests").rglob("*.py")
@@ -326,7 +331,8 @@ def test_test_files_mirror_the_modules_and_every_cited_test_file_exists():
         "tests/acmm/desing/test_riccati.py: tests/acmm/desing mirrors no package folder",
         "tests/qpp/test_qpp_core.py: no module qpp/qpp_core.py of that name",
         "tests/acmm/design/helpers.py: not test_<module>.py"]
-    citing = [REPO / "README.md", REPO / "docs" / "ERRATA.md", REPO / "Makefile"]
+    citing = [REPO / "README.md", REPO / "Makefile"] + sorted((REPO / "docs").rglob("*.md"))
+    assert REPO / "docs" / "ERRATA.md" in citing
     for folder in PACKAGES + ("scripts", "tests"):
         citing += sorted(p for p in (REPO / folder).rglob("*.py") if p.name != "test_layers.py")   # (examples above)
     cited = {(path.relative_to(REPO).as_posix(), m) for path in citing

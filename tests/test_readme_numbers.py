@@ -1,11 +1,11 @@
-"""The README's numbers about the packaged configs equal a fresh run (issue 30, item 4).
+"""The numbers README.md and the guide quote about the packaged configs equal a fresh run.
 
-``scripts/readme_numbers.py`` writes the ``<!-- generated:NAME -->`` blocks of README.md from the
-stages' results; here the same blocks are computed from a fresh run into a temporary results root
+``scripts/readme_numbers.py`` writes the ``<!-- generated:NAME -->`` blocks of README.md and of the
+guide's pages (``docs/**/*.md``, each block once across them) from the stages' results; here the same blocks are computed from a fresh run into a temporary results root
 (designs of mb3, mb3_decoupled, ac and the stair-case, their simulations, the qpp designs and
 simulations of the two report chapters and the three shipped examples, the 400-case
 ``sweep_inertia30`` Monte Carlo and margin search, once per module) and compared
-with the README, so a code change that moves a number fails here until ``make readme`` is run.
+with the documents, so a code change that moves a number fails here until ``make readme`` is run.
 """
 from __future__ import annotations
 
@@ -15,7 +15,9 @@ import pytest
 
 from tests.conftest import REPO
 
-pytestmark = pytest.mark.slow      # runs every packaged config (~40 s): `make test-slow`, run by CI
+#: the tests that compare with a fresh run of every packaged config (several minutes): `make test-slow`, run by CI;
+#: the others read only text
+slow = pytest.mark.slow
 
 
 def _script():
@@ -34,39 +36,51 @@ def fresh(tmp_path_factory) -> dict:
     return rn.compute_blocks(rn.run_stages(tmp_path_factory.mktemp("readme-root")))
 
 
-def readme() -> str:
-    return (REPO / "README.md").read_text(encoding="utf-8")
+def texts() -> dict:
+    """README.md and every page of docs/, path → text."""
+    return rn.read_texts()
 
 
+def _holding(all_texts: dict, name: str):
+    """The document that holds block ``name``."""
+    return next(p for p, t in all_texts.items() if f"<!-- generated:{name} -->" in t)
+
+
+@slow
 def test_readme_blocks_equal_a_fresh_run(fresh):
-    """Every block the script writes is in the README once and holds the fresh run's text."""
+    """Every block the script writes is in README.md or docs/ exactly once and holds the fresh run's text."""
     assert sorted(fresh) == sorted(rn.BLOCKS)
-    assert sorted(rn.read_blocks(readme())) == sorted(rn.BLOCKS)
-    assert rn.check(readme(), fresh) == []
+    assert sorted(rn.locate_blocks(texts())) == sorted(rn.BLOCKS)
+    assert rn.check(texts(), fresh) == []
 
 
+@slow
 def test_a_wrong_digit_in_the_claims_table_fails(fresh):
     """One digit changed in a claims-table cell (the MB3 Monte Carlo count) is rejected and named."""
-    text = readme()
-    body = rn.read_blocks(text)["claims"]
+    all_texts = texts()
+    path = _holding(all_texts, "claims")
+    body = rn.locate_blocks(all_texts)["claims"][1]
     cell = next(line for line in body.splitlines() if "±30 %" in line)
     count = cell.split("MB3 **")[1].split("/")[0]
     wrong = str(int(count) + 1)
     bad_body = body.replace(cell, cell.replace(f"MB3 **{count}/", f"MB3 **{wrong}/"))
     assert bad_body != body
-    bad = text.replace(body, bad_body)
+    bad = {**all_texts, path: all_texts[path].replace(body, bad_body)}
     problems = rn.check(bad, fresh)
     assert len(problems) == 1 and problems[0].startswith("claims:") and f"**{wrong}/" in problems[0]
-    # and the rewrite puts the computed number back
-    assert rn.replace_blocks(bad, fresh) == rn.replace_blocks(text, fresh)
+    # and the rewrite puts the computed number back, in the document that holds the block
+    assert rn.replace_blocks(bad, fresh) == rn.replace_blocks(all_texts, fresh)
 
 
+@slow
 def test_a_missing_block_fails(fresh):
-    """A README that lost a block's markers is rejected, and cannot be rewritten silently."""
-    text = readme().replace("<!-- generated:sweep_margin -->", "")
-    assert rn.check(text, fresh) == ["sweep_margin: no <!-- generated:sweep_margin --> block in README.md"]
+    """A document that lost a block's markers is rejected, and cannot be rewritten silently."""
+    all_texts = texts()
+    path = _holding(all_texts, "sweep_margin")
+    lost = {**all_texts, path: all_texts[path].replace("<!-- generated:sweep_margin -->", "")}
+    assert rn.check(lost, fresh) == ["sweep_margin: no <!-- generated:sweep_margin --> block in README.md or docs/"]
     with pytest.raises(ValueError, match="sweep_margin"):
-        rn.replace_blocks(text, fresh)
+        rn.replace_blocks(lost, fresh)
 
 
 @pytest.mark.parametrize("x, digits, text", [(3986.2, 3, "3 990"), (6644.9, 3, "6 640"), (0.03812, 3, "0.0381"),
@@ -82,3 +96,40 @@ def test_scientific_and_fixed():
     assert rn.fixed(-0.46802) == "\u22120.468"
     assert rn.fixed(5.0916, 2, sign=True) == "+5.09"
     assert rn.fixed(-0.0001) == "0.000"
+
+
+# ------------------------------------------------------------------ where blocks may live (no runs)
+def _page(tmp_path, name, text):
+    path = tmp_path / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_blocks_are_found_in_any_document_and_rewritten_there(tmp_path):
+    """A block in README.md and another in a page of the guide are both found, checked and
+    rewritten in the file that holds each."""
+    readme = _page(tmp_path, "README.md", "a\n<!-- generated:one -->\nold 1\n<!-- /generated:one -->\n")
+    page = _page(tmp_path, "docs/how/page.md", "b\n<!-- generated:two -->\nold 2\n<!-- /generated:two -->\nc\n")
+    all_texts = rn.read_texts([readme, page])
+    assert {k: v[0] for k, v in rn.locate_blocks(all_texts).items()} == {"one": readme, "two": page}
+    blocks = {"one": "new 1\n", "two": "new 2\n"}
+    assert [line.split(":")[0] for line in rn.check(all_texts, blocks)] == ["one", "two"]
+    new = rn.replace_blocks(all_texts, blocks)
+    assert new[page] == "b\n<!-- generated:two -->\nnew 2\n<!-- /generated:two -->\nc\n"
+    assert rn.check(new, blocks) == []
+
+
+def test_a_block_in_two_documents_is_refused(tmp_path):
+    one = _page(tmp_path, "README.md", "<!-- generated:one -->\nx\n<!-- /generated:one -->\n")
+    two = _page(tmp_path, "docs/a.md", "<!-- generated:one -->\nx\n<!-- /generated:one -->\n")
+    all_texts = rn.read_texts([one, two])
+    with pytest.raises(ValueError, match="appears twice"):
+        rn.locate_blocks(all_texts)
+    assert "appears twice" in rn.check(all_texts, {"one": "x\n"})[0]
+
+
+def test_the_documents_are_the_readme_and_every_page_of_the_guide():
+    docs = rn.documents()
+    assert docs[0] == REPO / "README.md"
+    assert set(docs[1:]) == set((REPO / "docs").rglob("*.md")) and len(docs) > 5

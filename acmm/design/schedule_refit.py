@@ -1,4 +1,4 @@
-"""The closed-loop refit of a polynomial gain schedule (CR-185644 ch. 5.3, README "Gain schedule").
+"""The closed-loop refit of a polynomial gain schedule (CR-185644 ch. 5.3; docs/results/design.md, "The gain schedule").
 
 :func:`refit_closed_loop` moves the least-squares coefficients to push the least damped
 closed-loop pole along the whole path to the left (smooth maximum by L-BFGS or its epigraph form
@@ -22,7 +22,7 @@ stays the report's: one polynomial of the fit's order per gain element.
 to v ≤ t for the ``top`` largest Re λ terms and the ``top`` largest φ-line terms per TEA (poles
 with Im λ ≥ 0, each conjugate pair once), by SLSQP with the same analytic eigenvalue gradients;
 it reaches a lower worst Re λ in ~10× fewer eigenvalue evaluations than L-BFGS on the smooth
-maximum (README "Gain schedule").
+maximum (docs/results/design.md, "The gain schedule").
 """
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ def _power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
 #: (21 of 201), in epigraph form (the 4 largest terms of each kind per TEA) by SLSQP run until its
 #: own convergence test (``ftol`` :data:`REFIT_FTOL` on the worst term) or until it can no longer
 #: make progress; ``max_iter`` is a guard on the work, not the stopping rule.  The problem is a
-#: non-convex, non-smooth minimax: where SLSQP stops depends on rounding (README "Gain
+#: non-convex, non-smooth minimax: where SLSQP stops depends on rounding (docs/results/design.md, "The gain
 #: schedule"), which is why the packaged stair-case uses ``form: table``.
 REFIT_DEFAULTS = {"every": 10, "beta": 20.0, "max_iter": 2000, "angle_weight": 0.7, "angle_offset": 2.2,
                   "solver": "slsqp", "top": 4}

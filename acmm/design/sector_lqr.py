@@ -31,7 +31,7 @@ with every closed-loop pole of A − BK verified to lie in S.
 All computations are done on the state-scaled model x = D x̃ (``scale``), where the Riccati
 residual is checked; K, P and Q are returned in physical units.
 
-Conditioning (the shipped configs; README "Sector design and gain schedule").  With Q0 = 0 the
+Conditioning (the shipped configs; docs/results/design.md).  With Q0 = 0 the
 shifted LQR mirrors repeated open-loop modes — the three DRF pairs at ±jn and ±j2n, the Jordan
 chains h → ∫h at 0 — onto identical points: near-defective clusters with eigenvalue condition
 numbers ~1e9, "in the sector" only to rounding.  The configs therefore use a small fixed diagonal
@@ -39,7 +39,7 @@ Q0 on the scaled states (7e-6 rates, 7e-7 attitudes, 5e-6 momentum, 2e-4 momentu
 ``Q0_groups``), which splits the Jordan chains, and ``min_margin = 0.1`` (n), so every pole is
 ≥ 0.1n inside: largest eigenvalue condition ≤ 5.4e4 at MB3, AC and every stair-case point (the
 former 1e-5/1e-6/5e-6/5e-5 reached 9.99e4).  The weights were chosen by measurement among ~60
-candidates (README) for the condition number *and*
+candidates (CHANGELOG.md) for the condition number *and*
 for a second-order gain schedule that can be made stable along the whole path; larger weights lower
 the condition number further but make the scheduled loop unstable.  ``line_spacing`` > 0 mirrors
 stray poles one real-Schur block at a time about distinct lines (distinct poles; it did not help

@@ -113,7 +113,7 @@ class LinearModel:
         Returns
         -------
         control.StateSpace
-            ẋ = A x + [B G] [u; w], y = x (eq 4.46), in the report's physical units
+            ``ẋ = A x + [B G] [u; w]``, ``y = x`` (eq 4.46), in the report's physical units
             (torques ft·lbf; states as :func:`state_units`).
         """
         import control

@@ -1,6 +1,6 @@
 """How the sweep's tasks are cut into chunks for the executors (guided self-scheduling, issue 16):
 sizes from the run's own measured throughput, so that a task's fixed cost stays a few per cent at
-any number of workers and the last chunks leave no worker idle (README *Performance*)."""
+any number of workers and the last chunks leave no worker idle (docs/performance.md)."""
 from __future__ import annotations
 
 import math
@@ -31,7 +31,7 @@ def chunk_size(n_tasks: int, workers: int, case_seconds: Optional[float] = None,
     worker, s; not yet measured) it is clipped to [1, :data:`MAX_CHUNK`]; with it, to the cases
     that take :data:`MIN_TASK_SECONDS` … :data:`MAX_TASK_SECONDS`, and never above
     ⌈``n_total`` / workers⌉ (every worker gets a share of a small sweep; ``n_total``: the tasks of
-    the whole sweep, default ``n_tasks``).  See README *Performance* for why this holds at large N.
+    the whole sweep, default ``n_tasks``).  See docs/performance.md for why this holds at large N.
 
     Parameters
     ----------

@@ -7,8 +7,7 @@ event loop wakes every 20 ms to check that it is not blocked, and every worker's
 every 100 ms.  Measured on the 2-core machine with a 2-worker ``LocalCluster`` (scheduler and
 nannies in the driver's process): ~1.1 s of CPU per 10 s *idle* with Dask's defaults, 0.3 s with
 :data:`DASK_SETTINGS`; a sweep task thread runs as fast as a pool worker's, so with as many
-workers as cores this background activity is most of what separates the two (README
-"Performance").
+workers as cores this background activity is most of what separates the two (docs/performance.md).
 
 The settings change no result (a sweep's table is the same bit for bit under any Dask
 configuration); they only make the cluster quieter:

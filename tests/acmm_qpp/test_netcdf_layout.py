@@ -139,7 +139,7 @@ def test_sweep_h5_opens_in_xarray(tmp_path, n_runs):
     assert sw["inertia"].dims == ("case", "axis", "axis_col")
     import h5py
 
-    def fixed_length_text(name, obj):     # README: text variables other than coordinates
+    def fixed_length_text(name, obj):     # docs/howto/results.md: text variables other than coordinates
         info = h5py.check_string_dtype(obj.dtype) if isinstance(obj, h5py.Dataset) else None
         if info is not None and obj.attrs.get("CLASS") != b"DIMENSION_SCALE":
             assert info.length is not None and info.encoding == "utf-8", name

@@ -80,7 +80,7 @@ def test_a_terminated_run_rolls_back_like_ctrl_c_and_leaves_no_process(tmp_path,
     after = _digest(run)
     if point == "design":
         assert after == before
-    else:       # the nested design stage had finished (README "Run folders"): kept, whole, with its
+    else:       # the nested design stage had finished (docs/howto/results.md, "Run folders"): kept, whole, with its
         # config.yaml; the simulation's files are gone (the earlier ones described the old design)
         assert after["design.h5"] != before["design.h5"] and after["config.yaml"] != before["config.yaml"]
         assert sorted(after) == ["config.yaml", "design.h5", "design_poles.png"], sorted(after)

@@ -100,7 +100,7 @@ def test_chunk_sizes_and_a_process_cluster_identical(tmp_path):
 
     from acmm.sweep.dask_settings import DASK_SETTINGS
 
-    # the cluster under the recommended settings (README "Performance"): in force in the spawned
+    # the cluster under the recommended settings (docs/howto/sweeps.md, "A Dask cluster for sweeps"): in force in the spawned
     # worker, and the table unchanged
     with dask.config.set(DASK_SETTINGS), distributed.LocalCluster(
             n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:

@@ -1,5 +1,5 @@
 """The recommended Dask settings (acmm.sweep.dask_settings) are distributed's own keys, and their
-YAML text (shown in the README) says the same."""
+YAML text (shown in the guide, docs/howto/sweeps.md) says the same."""
 from __future__ import annotations
 
 import pytest
@@ -11,7 +11,7 @@ from tests.conftest import REPO
 def test_dask_settings_are_dask_keys_and_their_yaml_says_the_same():
     # a misspelt key would be accepted by dask.config.set and do nothing: each must be one of
     # distributed's own keys, with a value of the default's kind; the YAML file text nests the
-    # same keys and values, and the README shows that text
+    # same keys and values, and the guide shows that text
     pytest.importorskip("distributed", reason="optional extra acmm-qpp[dask] not installed")
     import dask
     from dask.utils import parse_timedelta
@@ -37,5 +37,5 @@ def test_dask_settings_are_dask_keys_and_their_yaml_says_the_same():
 
     walk(tree, "")
     assert flat == DASK_SETTINGS
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
-    assert dask_settings_yaml().strip() in readme
+    guide = (REPO / "docs" / "howto" / "sweeps.md").read_text(encoding="utf-8")
+    assert dask_settings_yaml().strip() in guide
