@@ -854,7 +854,7 @@ def block_staircase_routes(r: dict) -> str:
             refit = (f" (the least-squares fit it starts from: largest Re λ "
                      f"{fixed(float(sc['refit_max_real_before']), 2, sign=True)}n on the refit's TEAs; SLSQP "
                      + ("converged" if float(sc["refit_converged"]) else "stopped: " + _text(sc["refit_message"]))
-                     + ")")
+                     + "; where it stops depends on rounding)")
         rows.append([label + refit, f"{np.asarray(pa['theta2']).size}",
                      f"{fixed(np.max(pa['max_real']))}n", f"{fixed(np.min(pa['sector_margin']), 2)}n",
                      fixed(np.min(pa["disk_margin"])), sig(np.max(d["max_eig_condition"]), 2),
