@@ -38,7 +38,7 @@ def build(ctx: SectionWriter) -> None:
         ctx.doc.p(f"FAST MODE: reduced sweep, {r['n_runs']} Monte Carlo runs per base of {r['orbits']:g} orbits, "
                   "no margin search. Run without --fast for the 200-run sweep of configs/sweep_inertia30.yaml.")
     start = ("each case starts at its plant's equilibrium connected to the design TEA, or at the root "
-             "continued from LVLH where that branch folds (README, Sweeps: Perturbed plant)"
+             "continued from LVLH where that branch folds (guide: docs/howto/sweeps.md, 'The perturbed plant')"
              if r["design"] == "fixed" else "each case redesigned about its plant's TEA")
     knows = ("is redesigned for the perturbed plant" if r["design"] != "fixed" else
              "does not know the perturbation" if r["tea_estimate"] == "nominal" else

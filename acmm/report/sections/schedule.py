@@ -61,7 +61,7 @@ def summary(ctx: SectionWriter) -> None:
     ctx.doc.p(f"{len(pts)} design points along the MB3 → AC blend, evenly spaced in pitch TEA from "
               f"{np.degrees(d['tea'][0, 1]):.2f}° to {np.degrees(d['tea'][-1, 1]):.2f}°; sector LQR "
               f"(Re λ ≤ −{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g}°) per point, "
-              f"{how} (README, 'Gain schedule').")
+              f"{how} (guide: docs/results/design.md, 'The gain schedule').")
     cm = np.asarray(sc["check_margin"])
     ctx.doc.table(["quantity", "value"], [
         ["worst sector margin of the LQR gains (units of n, > 0 inside)", f"{margins.min():+.4f}"],
@@ -90,7 +90,7 @@ def _dwell(ctx: SectionWriter, g: dict, n: float) -> None:
     tau, dwell = float(g["tau_star"]), np.asarray(g["dwell"])
     mu = max(np.max(g["jump_up"]), np.max(g["jump_down"]))
     certified = bool(np.all(dwell > tau))
-    ctx.doc.p("The stair-case as a switched system (README, 'Dwell-time certificate'): each level's frozen "
+    ctx.doc.p("The stair-case as a switched system (guide: docs/results/design.md, 'Dwell-time certificate'): each level's frozen "
               "closed loop (the coupled model of eq 4.46 about the level's TEA, with the scheduled gain) has a "
               "Lyapunov function decaying at one rate λ; the worst ratio μ between the Lyapunov functions of "
               "neighbouring levels, switches checked both ways, gives the certified minimum dwell "
