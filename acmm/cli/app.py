@@ -91,7 +91,7 @@ class ConfigKind(str, enum.Enum):
              cls=help_command(["acmm schema > acmm.schema.json", "acmm schema --kind sweep", "acmm schema --kind qpp"]))
 @user_errors
 def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="config kind")) -> None:
-    """Print the JSON schema of a config kind (for editors: see docs/reference/config.md)."""
+    """Print the JSON schema of a config kind (for editors: see the guide's config page, Reference → Config)."""
     from acmm.cli.configkinds import schema_json
 
     typer.echo(schema_json(kind.value))
