@@ -48,7 +48,10 @@ README = REPO / "README.md"
 #: the blocks this script writes, in README order
 BLOCKS = ("table1_tea", "qpp_bullet", "claims", "staircase_levels", "design_points", "schedule_path",
           "dwell_certificate", "design_routes", "sweep_monte_carlo",
-          "sweep_diverged", "sweep_margin", "qpp_reproduced", "qpp_examples")
+          "sweep_diverged", "sweep_margin", "qpp_reproduced", "qpp_examples", "qpp_certificates")
+
+#: the documents that may hold blocks (README.md and docs/*.md); each block lives in exactly one
+DOCS = (README, *sorted((REPO / "docs").glob("*.md")))
 
 #: the qpp configs the README quotes: the report's two chapters and the three shipped examples
 QPP_CONFIGS = ("qpp_siso", "qpp_manipulator", "qpp_unstable", "qpp_saturation", "qpp_cubic2")
@@ -416,6 +419,40 @@ def block_qpp_bullet(r: dict) -> str:
             f"certificate β1 ≤ m holds for\n  {which[tuple(holds[0])]}; the manipulator's for "
             f"{which[tuple(holds[1])]}), simulated errors "
             f"{'within' if spheres else '**not** all within'} the output spheres (see *qpp*).\n")
+
+
+def block_qpp_certificates(r: dict) -> str:
+    """docs/qpp-certificates.md: per packaged qpp config, the report's bookkeeping (a reproduction)
+    beside the consistent certificate (one sector, the Euclidean norm) and its verdict.
+
+    Parameters
+    ----------
+    r : dict
+        :func:`run_stages`.
+
+    Returns
+    -------
+    str
+        A Markdown table.
+    """
+    rows = ["| config | report's bookkeeping (reproduction, not a certificate): m, β1 ≤ m | consistent: β1 | m "
+            "(β_i, β3, β4) | γ∞·max E/m | verdict (exit of `qpp design`) |",
+            "| --- | --- | --- | --- | --- | --- |"]
+    for name in QPP_CONFIGS:
+        d = r[f"qpp_design:{name}"]
+        a, c = d["attrs"], d["certificate"]
+        bk = str(a["bookkeeping"])
+        if bk == "consistent":
+            rep = "— (iterates against the consistent m)"
+        else:
+            rep = f"{bk}: m = {fixed(float(c['m_bookkeeping']), 5)}, {'holds' if float(c['beta1']) <= float(c['m_bookkeeping']) else 'fails'}"
+        ok = bool(int(a["certified"]))
+        failed = [k[8:-1] for k in a if k.startswith("premise[") and not int(a[k])]
+        rows.append(f"| `{name}` | {rep} | {fixed(float(c['beta1']), 4)} | {fixed(float(c['m']), 4)} "
+                    f"({fixed(float(c['beta_i']), 4)}, {fixed(float(c['beta3']), 4)}, {fixed(float(c['beta4']), 4)}) | "
+                    f"{fixed(float(c['peak_ratio']), 3)} | "
+                    + ("**certified** (0)" if ok else f"no certified design: {', '.join(failed)} fail (3)") + " |")
+    return "\n".join(rows) + "\n"
 
 
 def block_qpp_reproduced(r: dict) -> str:
@@ -983,12 +1020,24 @@ def check(text: str, blocks: dict[str, str]) -> list[str]:
     for name, want in blocks.items():
         got = have.get(name)
         if got is None:
-            bad.append(f"{name}: no <!-- generated:{name} --> block in README.md")
+            bad.append(f"{name}: no <!-- generated:{name} --> block in README.md or docs/*.md")
         elif got != want:
             line = next((f"README {a!r} != computed {b!r}" for a, b in
                          zip(got.splitlines(), want.splitlines()) if a != b), "different length")
             bad.append(f"{name}: {line}")
     return bad
+
+
+def docs_text() -> str:
+    """README.md and every docs/*.md joined: the text :func:`check` reads (a block appearing in two
+    documents is then found twice).
+
+    Returns
+    -------
+    str
+        The documents' texts, one after the other.
+    """
+    return "\n".join(p.read_text(encoding="utf-8") for p in DOCS)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -1010,16 +1059,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=None, help="sweep workers (default: min(2, CPUs))")
     args = ap.parse_args(argv)
     blocks = fresh_blocks(args.workers)
-    text = args.readme.read_text(encoding="utf-8")
+    docs = [args.readme] if args.readme != README else list(DOCS)
+    texts = {p: p.read_text(encoding="utf-8") for p in docs}
     if args.check:
-        bad = check(text, blocks)
+        bad = check("\n".join(texts.values()), blocks)
         for line in bad:
             print(line)
         return 1 if bad else 0
-    new = replace_blocks(text, blocks)
-    if new != text:
-        args.readme.write_text(new, encoding="utf-8")
-    print(f"{args.readme}: {len(blocks)} generated blocks {'rewritten' if new != text else 'unchanged'}")
+    for p, text in texts.items():
+        mine = {k: v for k, v in blocks.items() if k in read_blocks(text)}
+        new = replace_blocks(text, mine)
+        if new != text:
+            p.write_text(new, encoding="utf-8")
+        print(f"{p}: {len(mine)} generated blocks {'rewritten' if new != text else 'unchanged'}")
     return 0
 
 

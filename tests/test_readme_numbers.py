@@ -35,11 +35,13 @@ def fresh(tmp_path_factory) -> dict:
 
 
 def readme() -> str:
-    return (REPO / "README.md").read_text(encoding="utf-8")
+    """README.md and docs/*.md (a block lives in exactly one of them)."""
+    return rn.docs_text()
 
 
 def test_readme_blocks_equal_a_fresh_run(fresh):
-    """Every block the script writes is in the README once and holds the fresh run's text."""
+    """Every block the script writes is in README.md or a docs/*.md page once and holds the fresh
+    run's text."""
     assert sorted(fresh) == sorted(rn.BLOCKS)
     assert sorted(rn.read_blocks(readme())) == sorted(rn.BLOCKS)
     assert rn.check(readme(), fresh) == []
@@ -64,7 +66,7 @@ def test_a_wrong_digit_in_the_claims_table_fails(fresh):
 def test_a_missing_block_fails(fresh):
     """A README that lost a block's markers is rejected, and cannot be rewritten silently."""
     text = readme().replace("<!-- generated:sweep_margin -->", "")
-    assert rn.check(text, fresh) == ["sweep_margin: no <!-- generated:sweep_margin --> block in README.md"]
+    assert rn.check(text, fresh) == ["sweep_margin: no <!-- generated:sweep_margin --> block in README.md or docs/*.md"]
     with pytest.raises(ValueError, match="sweep_margin"):
         rn.replace_blocks(text, fresh)
 

@@ -372,7 +372,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     T = cfg.spheres.T if T is None else float(T)
     horizon = max(T, cfg.simulation.t_final)
     n = int(min(20001, max(801, 801 * horizon / T)))
-    t, y_o, x_o = nominal_output(cfg, K1, Kc, H, horizon, n)
+    t, y_o, x_o = nominal_output(cfg, K1, Kc, H, horizon, n, extra=(T,))
     r_o = np.array([eval_signal(cfg.simulation.r_o, tt) for tt in t]).T
     Ts, T_modal = settling_time(t, y_o, r_o, cfg.spheres.settle_band), None
     if Ts == 0.0:   # the nominal loop tracks from the start (r_o ≡ 0, say): its modes still settle

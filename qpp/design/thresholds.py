@@ -48,7 +48,7 @@ class Thresholds:
     m: float
 
 
-def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801):
+def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801, extra=()):
     """Nominal loop (γ nominal, r = r_o, d = 0) on [0, T]: (t, y_o, x_o).
 
     Parameters
@@ -65,6 +65,8 @@ def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801):
         Horizon, s.
     n : int
         Number of samples.
+    extra : sequence of float
+        Further sample times in [0, T], s (the truncation time of the certificate).
 
     Returns
     -------
@@ -73,7 +75,7 @@ def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801):
     """
     P = cfg.lure_plant()
     f1, g_nom = config_f1(cfg, P)
-    t = np.linspace(0.0, T, n)
+    t = np.union1d(np.linspace(0.0, T, n), [x for x in extra if 0.0 <= x <= T])
     Z, _ = simulate_nominal(P, K1, Kc, H, f1, g_nom, cfg.simulation.r_o, t, initial_state(cfg, P, K1, Kc),
                             rtol=1e-9, atol=1e-11)
     return t, P.C @ Z[:P.n], Z[:P.n]

@@ -173,6 +173,7 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         "beta4": Dataset(c.beta4, "output units", "e^{aT} ||(phi(y_o) - phi_o)_T||_2 / E, sector bound (10.53, 10.55)"),
         "gamma_inf": Dataset(r.gamma_inf, "output units per input unit per s^1/2",
                              "L2-to-peak gain of C_z (sI - A_n)^-1 B_z; gamma_inf E <= m closes eq 10.45"),
+        "peak_ratio": Dataset(r.gamma_inf * c.E_over_m, "1", "gamma_inf max over T' <= T of E/m (<= 1: eq 10.45 closed)"),
         "m_bookkeeping": Dataset(r.m_ref, "1", f"m of the iteration target, bookkeeping {r.bookkeeping} "
                                  "(a bookkeeping of the report is a reproduction, not a certificate)"),
         "T_settle": Dataset(r.T_settle, "s", "settling time of the nominal closed loop"),
