@@ -97,6 +97,8 @@ class DesignResult:
         output units per input unit per s^½; γ∞·E ≤ m closes the step 10.45.
     premises : dict
         Premise name → (holds, statement in words); ``certified`` is their conjunction.
+    norm : str
+        The certificate's signal norm in words (:data:`qpp.design.thresholds.NORM`).
     """
 
     K1: np.ndarray

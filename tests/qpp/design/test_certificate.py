@@ -185,6 +185,8 @@ def _issue_mimo():
                            "parameters": {"k": {"min": 0.5, "max": 1.5, "nominal": 1.0}},
                            "y_range": [[-2.0, 2.0], [-2.0, 2.0]]}
     cfg["spheres"] = {"beta_o": 0.1, "beta_ri": 0.05, "T": 1.0}
+    for sc, k in zip(cfg["simulation"]["scenarios"], (0.5, 1.5, 0.5)):
+        sc["parameters"] = {"k": k}
     return cfg
 
 
