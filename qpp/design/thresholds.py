@@ -291,7 +291,8 @@ def consistent(cfg: QppConfig, t, y_o, x_o, sector, coupled, T: float, a: float)
     E = np.array([spheres.E_factor(a, x) if x > 0 else np.inf for x in tk])
     b4 = np.exp(a * tk) * l2 / E
     beta_i = float(np.sqrt(P.p) * sp.beta_ri + np.sqrt(P.r) * sp.d_inf)
-    m = sp.beta_o / (beta_i + sp.beta_o * b3 + b4)
+    with np.errstate(divide="ignore"):          # T' = 0 with β_ri = ‖d‖ = 0: nothing to bound yet
+        m = sp.beta_o / (beta_i + sp.beta_o * b3 + b4)
     m[0] = np.inf if tk.size > 1 else m[0]       # T' = 0: nothing to bound
     j = int(np.argmin(m))
     peak = np.where(tk > 0, E, 0.0) / m
