@@ -52,7 +52,7 @@ README = REPO / "README.md"
 #: the blocks this script writes (each in README.md or one page of docs/)
 BLOCKS = ("table1_tea", "qpp_bullet", "claims", "staircase_levels", "design_points", "schedule_path",
           "dwell_certificate", "design_routes", "staircase_routes", "sweep_monte_carlo",
-          "sweep_diverged", "sweep_margin", "qpp_reproduced", "qpp_examples")
+          "sweep_diverged", "sweep_margin", "qpp_reproduced", "qpp_examples", "qpp_certificates")
 
 #: the qpp configs the README quotes: the report's two chapters and the three shipped examples
 QPP_CONFIGS = ("qpp_siso", "qpp_manipulator", "qpp_unstable", "qpp_saturation", "qpp_cubic2")
@@ -449,6 +449,40 @@ def block_qpp_bullet(r: dict) -> str:
             f"certificate β1 ≤ m holds for\n  {which[tuple(holds[0])]}; the manipulator's for "
             f"{which[tuple(holds[1])]}), simulated errors "
             f"{'within' if spheres else '**not** all within'} the output spheres (see [QPP results](qpp.md)).\n")
+
+
+def block_qpp_certificates(r: dict) -> str:
+    """docs/qpp-certificates.md: per packaged qpp config, the report's bookkeeping (a reproduction)
+    beside the consistent certificate (one sector, the Euclidean norm) and its verdict.
+
+    Parameters
+    ----------
+    r : dict
+        :func:`run_stages`.
+
+    Returns
+    -------
+    str
+        A Markdown table.
+    """
+    rows = ["| config | report's bookkeeping (reproduction, not a certificate): m, β1 ≤ m | consistent: β1 | m "
+            "(β_i, β3, β4) | γ∞·max E/m | verdict (exit of `qpp design`) |",
+            "| --- | --- | --- | --- | --- | --- |"]
+    for name in QPP_CONFIGS:
+        d = r[f"qpp_design:{name}"]
+        a, c = d["attrs"], d["certificate"]
+        bk = str(a["bookkeeping"])
+        if bk == "consistent":
+            rep = "— (iterates against the consistent m)"
+        else:
+            rep = f"{bk}: m = {fixed(float(c['m_bookkeeping']), 5)}, {'holds' if float(c['beta1']) <= float(c['m_bookkeeping']) else 'fails'}"
+        ok = bool(int(a["certified"]))
+        failed = [k[8:-1] for k in a if k.startswith("premise[") and not int(a[k])]
+        rows.append(f"| `{name}` | {rep} | {fixed(float(c['beta1']), 4)} | {fixed(float(c['m']), 4)} "
+                    f"({fixed(float(c['beta_i']), 4)}, {fixed(float(c['beta3']), 4)}, {fixed(float(c['beta4']), 4)}) | "
+                    f"{fixed(float(c['peak_ratio']), 3)} | "
+                    + ("**certified** (0)" if ok else f"no certified design: {', '.join(failed)} fail (3)") + " |")
+    return "\n".join(rows) + "\n"
 
 
 def block_qpp_reproduced(r: dict) -> str:

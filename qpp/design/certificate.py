@@ -21,7 +21,7 @@ from qpp.io.config import QppConfig
 from qpp.design.hinf import HinfGains
 from qpp.model.lure import channels, closed_loop
 from qpp.simulate.signals import eval_signal
-from qpp.design.thresholds import Thresholds, nominal_output, pick_bookkeeping, thresholds
+from qpp.design.thresholds import NORM, Consistent, Thresholds, consistent, nominal_output, pick_bookkeeping, thresholds
 
 
 @dataclass
@@ -90,6 +90,15 @@ class DesignResult:
         ch. 11 passes (ρ, ν, δ, tests).
     published : DesignResult or None
         Certificate of the printed gains (report examples).
+    consistent : qpp.design.thresholds.Consistent or None
+        The certificate's threshold in one sector and one norm (:data:`qpp.design.thresholds.NORM`).
+    gamma_inf : float
+        L2-to-peak gain of C_z (sI − A_n)⁻¹ B_z (:func:`qpp.design.spheres.l2_to_peak_gain`),
+        output units per input unit per s^½; γ∞·E ≤ m closes the step 10.45.
+    premises : dict
+        Premise name → (holds, statement in words); ``certified`` is their conjunction.
+    norm : str
+        The certificate's signal norm in words (:data:`qpp.design.thresholds.NORM`).
     """
 
     K1: np.ndarray
@@ -122,11 +131,25 @@ class DesignResult:
     ws_scale: list = field(default_factory=list)   #: W_s = diag(w)·S_c of the gains
     hinf_history: list = field(default_factory=list)  #: ch. 11 passes (ρ, ν, δ, tests)
     published: "DesignResult | None" = None  #: certificate of the printed gains (report examples)
+    consistent: Consistent | None = None     #: the certificate's threshold (one sector, one norm)
+    gamma_inf: float = np.nan                #: L2-to-peak gain of C_z (sI − A_n)⁻¹ B_z
+    premises: dict = field(default_factory=dict)  #: premise → (holds, statement)
+    norm: str = NORM                         #: the certificate's signal norm
 
     @property
     def m_ref(self) -> float:
-        """Threshold m of the design's bookkeeping, dimensionless."""
+        """Threshold m of the design's bookkeeping (the consistent m for ``consistent``), dimensionless."""
+        if self.bookkeeping == "consistent":
+            return self.consistent.m
         return self.threshold(self.bookkeeping).m
+
+    @property
+    def lhs_ref(self) -> float:
+        """What the design compares with ``m_ref``: β1 of the design's B_z reading, and for the
+        ``consistent`` bookkeeping max(β1, γ∞·m·max E/m) (both must be ≤ m), dimensionless."""
+        if self.bookkeeping == "consistent":
+            return float(max(self.beta1_ref, self.gamma_inf * self.consistent.E_over_m * self.consistent.m))
+        return self.beta1_ref
 
     @property
     def beta1_ref(self) -> float:
@@ -351,7 +374,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     T = cfg.spheres.T if T is None else float(T)
     horizon = max(T, cfg.simulation.t_final)
     n = int(min(20001, max(801, 801 * horizon / T)))
-    t, y_o, x_o = nominal_output(cfg, K1, Kc, H, horizon, n)
+    t, y_o, x_o = nominal_output(cfg, K1, Kc, H, horizon, n, extra=(T,))
     r_o = np.array([eval_signal(cfg.simulation.r_o, tt) for tt in t]).T
     Ts, T_modal = settling_time(t, y_o, r_o, cfg.spheres.settle_band), None
     if Ts == 0.0:   # the nominal loop tracks from the start (r_o ≡ 0, say): its modes still settle
@@ -367,5 +390,57 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     res.late_slope = late_slope(cfg, T, horizon)
     res.bookkeeping = pick_bookkeeping(cfg, [x.name for x in th])
     res.bz = cfg.design.bz
-    res.certified = bool(res.beta1_ref <= res.m_ref and circ.passed)
+    coupled = sector_coupling(cfg)
+    res.consistent = consistent(cfg, t, y_o, x_o, sector, coupled, T, a)
+    An = Azd[res.bz] + a * np.eye(len(Azd[res.bz]))
+    res.gamma_inf = spheres.l2_to_peak_gain(An, Bzd[res.bz], Cz)
+    res.premises = premises(cfg, res, t, y_o)
+    res.certified = bool(all(ok for ok, _ in res.premises.values()))
     return res
+
+
+def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
+    """Every premise of the consistent certificate (``docs/qpp-certificates.md``), each with
+    whether it holds and the numbers in words.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config.
+    res : DesignResult
+        The design, with ``consistent`` and ``gamma_inf`` computed.
+    t : (S,) array
+        Sample times of the nominal loop, s.
+    y_o : (p, S) array
+        Nominal output, output units.
+
+    Returns
+    -------
+    dict
+        ``{name: (bool, str)}`` for ``stable``, ``circle``, ``contraction`` (β1 ≤ m),
+        ``peak`` (γ∞·E(T')/m(T') ≤ 1 for every T' ≤ T, eq 10.45) and, for an expression, ``range`` (y_o ± β_o inside y_range).
+    """
+    c = res.consistent
+    worst = float(np.max(np.linalg.eigvals(res.Az[res.bz] + res.a * np.eye(len(res.Az[res.bz]))).real))
+    b1 = res.beta1_ref
+    peak = res.gamma_inf * c.E_over_m
+    out = {
+        "stable": (worst < 0, f"A_z + aI Hurwitz (largest Re λ = {worst:.4g} 1/s)"),
+        "circle": (bool(res.circle.passed), "circle criterion with the sector "
+                   f"{np.round(res.sector, 6).tolist()} at a = {res.a:g}"),
+        "contraction": (bool(b1 <= c.m), f"beta1 = {b1:.6g} <= m = {c.m:.6g} (eqs 10.43, 10.57 in the Euclidean "
+                        f"norm; m the smallest over T' <= T, at T' = {c.T_worst:.4g} s)"),
+        "peak": (bool(peak <= 1.0), f"gamma_inf * max E/m = {peak:.6g} <= 1 (the L2 sphere bounds the L-infinity "
+                 f"sphere on [0, T], eq 10.45)"),
+    }
+    nl = cfg.nonlinearity
+    if isinstance(nl, ExpressionNonlinearity):
+        keep = np.asarray(t) <= res.T + 1e-12
+        yk = np.atleast_2d(y_o)[:, keep]
+        rng = np.asarray(nl.y_range, float)
+        lo = yk.min(axis=1) - cfg.spheres.beta_o
+        hi = yk.max(axis=1) + cfg.spheres.beta_o
+        ok = bool(np.all(lo >= rng[:, 0]) and np.all(hi <= rng[:, 1]))
+        out["range"] = (ok, f"y_o ± beta_o within nonlinearity.y_range on [0, T] ({np.round(lo, 4).tolist()} … "
+                            f"{np.round(hi, 4).tolist()})")
+    return out

@@ -217,10 +217,10 @@ class _Procedure:
             res = self.evaluate(g, a, T, ws, stage)
             res, T = self.adapt_T(g, a, T, ws, res, stage)
             m_est = res.m_ref
-            if res.beta1_ref > res.m_ref:                      # step 3: decrease rho
-                if res.beta1_ref >= prev_b1 * (1 - 1e-9) or g.rho * dc.rho_factor < dc.rho_min:
+            if res.lhs_ref > res.m_ref:                       # step 3: decrease rho
+                if res.lhs_ref >= prev_b1 * (1 - 1e-9) or g.rho * dc.rho_factor < dc.rho_min:
                     return None
-                prev_b1 = res.beta1_ref
+                prev_b1 = res.lhs_ref
                 rho = g.rho * dc.rho_factor
                 continue
             if not res.circle.passed:                           # step 4: adjust a, back to step 1
@@ -242,7 +242,7 @@ class _Procedure:
             if g2 is None:
                 break
             r2 = self.evaluate(g2, a_up, T, ws, stage + " a up")
-            if not r2.certified:
+            if not _meets(r2):
                 break
             g, res, a = g2, r2, a_up
         return res
@@ -269,7 +269,7 @@ class _Procedure:
                                               False, ws, note="no stabilizing gains for any rho"))
                 continue
             res = self._finish_candidate(rho, a, ws)
-            if res is not None and res.certified:
+            if res is not None and _meets(res):
                 return res
         return None
 
@@ -331,7 +331,7 @@ class _Procedure:
             return None
         res = self.evaluate(g, a, self.best.T if self.best is not None else self.cfg.spheres.T, ws, "wider")
         res, T = self.adapt_T(g, a, res.T, ws, res, "wider")
-        if res.beta1_ref <= res.m_ref and not res.circle.passed:
+        if res.lhs_ref <= res.m_ref and not res.circle.passed:
             res = self._retry_circle(g, res, rho, a, T, ws)
         return res
 
@@ -433,9 +433,15 @@ def _golden_section(f, lo, hi, steps: int = GOLDEN_STEPS) -> tuple[tuple, tuple]
     return (f1, x1), (f2, x2)
 
 
+def _meets(res: DesignResult) -> bool:
+    """The design's target (procedure 12.1, step 5): ``lhs_ref`` ≤ m of its bookkeeping and the
+    circle criterion.  The verdict ``certified`` is the consistent certificate's (all premises)."""
+    return bool(res.lhs_ref <= res.m_ref and res.circle.passed)
+
+
 def _score(res: DesignResult) -> tuple:
-    """Order of designs: certified first, then circle passed, then smaller β1/m."""
-    return (not res.certified, not res.circle.passed, res.beta1_ref / max(res.m_ref, 1e-300))
+    """Order of designs: certified first, then target met, then circle passed, then smaller β1/m."""
+    return (not res.certified, not _meets(res), not res.circle.passed, res.lhs_ref / max(res.m_ref, 1e-300))
 
 
 def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
@@ -469,12 +475,18 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
         else:
             why = f"admissible sector scales {c.min_scale:.3g} … {c.max_scale:.3g}, but not 1"
         return f"circle criterion fails for every a tried ({why} at a = {res.a:g})"
-    t = res.threshold(res.bookkeeping)
-    terms = {"β_ri": sp.beta_ri, "‖d‖∞": sp.d_inf, "β_o·β3": sp.beta_o * t.beta3, "β4": t.beta4}
+    c = res.consistent
+    failed = [k for k, (ok, _) in res.premises.items() if not ok]
+    if "range" in failed:
+        return f"the output sphere leaves the range the sector holds on: {res.premises['range'][1]}"
+    terms = {"β_i": c.beta_i, "β_o·β3": sp.beta_o * c.beta3, "β4": c.beta4}
     dom = max(terms, key=terms.get)
-    txt = (f"β1 > m: m = β_o/(β_ri + ‖d‖∞ + β_o·β3 + β4) = {sp.beta_o:g}/("
-           + " + ".join(f"{v:.4g}" for v in terms.values()) + f"), largest term {dom} = {terms[dom]:.4g}")
-    if t.m < 1.0:
+    lead = ("β1 > m" if "contraction" in failed else
+            f"γ∞·max E/m = {res.gamma_inf * res.consistent.E_over_m:.4g} > 1 (the L2 sphere does not bound the L∞ "
+            f"sphere, 10.45)")
+    txt = (f"{lead} (consistent reading): β1 = {res.beta1_ref:.4g}, m = β_o/(β_i + β_o·β3 + β4) = {sp.beta_o:g}/("
+           + " + ".join(f"{v:.4g}" for v in terms.values()) + f") = {c.m:.4g}, largest term {dom} = {terms[dom]:.4g}")
+    if c.m < 1.0:
         txt += ("; m < 1 at this T while β1 ≥ 1 for a loop that tracks r_o (gain 1 at the servo "
                 "frequencies)")
     return txt
@@ -535,13 +547,17 @@ def design(cfg: QppConfig) -> DesignResult:
 
 
 def _finish(cfg: QppConfig, res: DesignResult) -> None:
-    res.certified = bool(res.beta1_ref <= res.m_ref and res.circle.passed)
+    """The verdict: ``certified`` only when every premise of the consistent certificate holds
+    (:func:`qpp.design.certificate.premises`); a bookkeeping of the report never certifies by itself."""
+    res.certified = bool(res.premises) and all(ok for ok, _ in res.premises.values())
+    c = res.consistent
     if res.certified:
-        res.verdict = (f"certified: beta1 = {res.beta1_ref:.5g} <= m = {res.m_ref:.5g} ({res.bookkeeping}), "
-                       f"circle criterion satisfied at a = {res.a:g}, T = {res.T:.4g} s")
+        res.verdict = (f"certified (one sector, Euclidean norm): beta1 = {res.beta1_ref:.5g} <= m = {c.m:.5g}, "
+                       f"gamma_inf*max E/m = {res.gamma_inf * c.E_over_m:.5g} <= 1, circle criterion satisfied at "
+                       f"a = {res.a:g}; the output sphere holds on [0, T], T = {res.T:.4g} s")
         res.limiting = ""
     else:
         res.limiting = limiting_factor(cfg, res)
-        res.verdict = (f"no certified design: best beta1 = {res.beta1_ref:.5g}, m = {res.m_ref:.5g} "
-                       f"({res.bookkeeping}), circle {'passed' if res.circle.passed else 'failed'}, "
+        res.verdict = (f"no certified design: best beta1 = {res.beta1_ref:.5g}, m = {c.m:.5g} "
+                       f"(consistent), circle {'passed' if res.circle.passed else 'failed'}, "
                        f"limiting factor: {res.limiting}")

@@ -179,6 +179,35 @@ def beta1(Az, Bz, Cz, a: float, *, method: str = "slycot", omega=None) -> dict:
     return {"value": val, "omega_peak": wp, "grid_value": gv, "grid_omega": gw}
 
 
+def l2_to_peak_gain(An, B, C) -> float:
+    """Induced gain from L2 (Euclidean) to the pointwise Euclidean norm of C e^{A_n t} B:
+    (λ_max(C P Cᵀ))^½ with A_n P + P A_nᵀ + B Bᵀ = 0 (the step from the L2 sphere of eq 10.43 to
+    the L∞ sphere of 10.45: |y_a(t) − y_ao(t)| ≤ this gain × ‖(v)_T‖₂).
+
+    Parameters
+    ----------
+    An : (k, k) array
+        Hurwitz state matrix A_z + aI, 1/s.
+    B : (k, q) array
+        Input matrix, state units per input unit per s.
+    C : (p, k) array
+        Output matrix, output units per state unit.
+
+    Returns
+    -------
+    float
+        The gain, output units per input unit per s^½ (inf when A_n is not Hurwitz).
+    """
+    from scipy.linalg import solve_continuous_lyapunov
+
+    An, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (An, B, C))
+    if np.max(np.linalg.eigvals(An).real) >= 0:
+        return float(np.inf)
+    Pg = solve_continuous_lyapunov(An, -B @ B.T)
+    Pg = 0.5 * (Pg + Pg.T)
+    return float(np.sqrt(max(np.max(np.linalg.eigvalsh(C @ Pg @ C.T)), 0.0)))
+
+
 def E_factor(a: float, T: float) -> float:
     """E = [(e^{2aT} − 1)/(2a)]^{1/2} (eq 10.44); √T in the limit a → 0.
 

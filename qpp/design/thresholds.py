@@ -4,7 +4,9 @@
 kind: the sinusoidal feedback of ch. 13 (``report`` and ``circle`` half-widths), a user
 expression (``computed``, ``stated``), the polar arm of ch. 14 (``trajectory``), plus the
 ``printed`` values when the config gives them.  The bookkeepings are described in
-:mod:`qpp.design.procedure` (``docs/ERRATA.md`` § QPP thresholds).
+:mod:`qpp.design.procedure` (``docs/ERRATA.md`` § QPP thresholds).  They reproduce the report's
+arithmetic; the certificate itself is :func:`consistent` (one sector, one norm: the Euclidean one,
+``docs/qpp-certificates.md``).
 """
 from __future__ import annotations
 
@@ -26,8 +28,9 @@ class Thresholds:
     Attributes
     ----------
     name : str
-        Bookkeeping: ``printed``, ``report``, ``circle``, ``computed``, ``stated`` or
-        ``trajectory``.
+        Bookkeeping: ``printed``, ``report``, ``circle``, ``computed``, ``stated``,
+        ``trajectory`` (the report's arithmetic, reproduced) or ``consistent`` (the certificate:
+        :func:`consistent`).
     half_width : float
         Sector half-width k used for β3 and β4 (dimensionless gain; NaN when not applicable).
     beta3 : float
@@ -45,7 +48,7 @@ class Thresholds:
     m: float
 
 
-def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801):
+def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801, extra=()):
     """Nominal loop (γ nominal, r = r_o, d = 0) on [0, T]: (t, y_o, x_o).
 
     Parameters
@@ -62,6 +65,8 @@ def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801):
         Horizon, s.
     n : int
         Number of samples.
+    extra : sequence of float
+        Further sample times in [0, T], s (the truncation time of the certificate).
 
     Returns
     -------
@@ -70,7 +75,7 @@ def nominal_output(cfg: QppConfig, K1, Kc, H, T: float, n: int = 801):
     """
     P = cfg.lure_plant()
     f1, g_nom = config_f1(cfg, P)
-    t = np.linspace(0.0, T, n)
+    t = np.union1d(np.linspace(0.0, T, n), [x for x in extra if 0.0 <= x <= T])
     Z, _ = simulate_nominal(P, K1, Kc, H, f1, g_nom, cfg.simulation.r_o, t, initial_state(cfg, P, K1, Kc),
                             rtol=1e-9, atol=1e-11)
     return t, P.C @ Z[:P.n], Z[:P.n]
@@ -152,6 +157,149 @@ def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> l
     return out
 
 
+#: The signal norm of the consistent certificate (stated in the output, qpp_design.h5 and the docs)
+NORM = ("Euclidean: |v(t)|_2 at each t, truncated L2 in time; beta1 = H-infinity norm sigma_max "
+        "(eq 10.36), the induced L2 gain")
+
+
+@dataclass
+class Consistent:
+    """The certificate's threshold in one sector and one norm (Euclidean; ``docs/qpp-certificates.md``).
+
+    Attributes
+    ----------
+    beta_i : float
+        Euclidean input radius √p·β_ri + √r·‖d‖∞ (a sphere stated per component, ch. 9), output units.
+    beta3 : float
+        sup over t ∈ [0, T], y in range, θ of the spectral norm of ∇_yφ (eq 10.40, the induced L2
+        gain of the increment of φ; bounded by (Σ_i g_i²)^½, g_i the row sum of |∂φ_i/∂y_j|),
+        dimensionless.
+    beta4 : float
+        e^{aT}·‖(φ(y_o) − φ_o)_T‖₂ / E with |φ_i(y_o)| ≤ k_i |y_o,i| (k_i the largest |bound| of the
+        circle's sector; |y_o|₂ for a coupled channel), the bound on β2/E of eq 10.53, output units.
+    m : float
+        β_o / (β_i + β_o β3 + β4), dimensionless.
+    half_width : (r,) array
+        k_i of the circle's sector, dimensionless gains.
+    T_worst : float
+        The truncation time T' ≤ T of the smallest m, s: the sphere at time t rests on the
+        truncation at t, so β3, β4 and m are evaluated for every T' ∈ (0, T] of the grid and m is
+        their minimum.
+    E_over_m : float
+        max over T' ∈ (0, T] of E(T')/m(T'), s^½; γ∞ · E_over_m ≤ 1 closes the step 10.45.
+    """
+
+    beta_i: float
+    beta3: float
+    beta4: float
+    m: float
+    half_width: np.ndarray
+    T_worst: float = np.nan
+    E_over_m: float = np.nan
+
+
+def _sup_sin(omega: float, T: float) -> float:
+    """sup_{0 ≤ t ≤ T} |sin ωt| (dimensionless)."""
+    return 1.0 if omega * T >= np.pi / 2 else float(abs(np.sin(omega * T)))
+
+
+def _arm_jacobian_norms(cfg: QppConfig, t, x_o) -> np.ndarray:
+    """Per sample of the nominal trajectory, max over M ∈ {M_min, M_max} of the spectral norm of
+    ∂φ/∂y (central differences, y = x_1..p), dimensionless (sampled on the trajectory only)."""
+    P = cfg.lure_plant()
+    nl = cfg.nonlinearity
+    f1, g_nom = config_f1(cfg, P)
+    N = P.N()
+    h = 1e-6
+    best = np.zeros(len(t))
+    for M in (nl.M_min, nl.M_max):
+        for s_, (x, tt) in enumerate(zip(x_o.T, t)):
+            J = np.zeros((N.shape[0], P.p))
+            for j in range(P.p):
+                e = np.zeros(P.n)
+                e[j] = h
+                J[:, j] = N @ ((f1(x + e, tt, M) - f1(x + e, tt, g_nom)) - (f1(x - e, tt, M) - f1(x - e, tt, g_nom))) / (2 * h)
+            best[s_] = max(best[s_], float(np.linalg.norm(J, 2)))
+    return best
+
+
+def consistent(cfg: QppConfig, t, y_o, x_o, sector, coupled, T: float, a: float) -> Consistent:
+    """Threshold m (10.57, 12.1) in one sector (the circle criterion's) and one norm (Euclidean).
+
+    The contraction of eqs 10.37–10.43 in the truncated L2 norm with the Euclidean vector norm:
+    β1 ≤ m with β_i = √p·β_ri + √r·‖d‖∞ (10.44, |w − w_o|₂ of spheres stated per component),
+    β3 the induced gain of eq 10.40 (a supremum over t, not the report's L2 norm in time of 10.54),
+    β2 ≤ e^{aT} ‖(φ(y_o) − φ_o)_T‖₂ (the report's E·β4 of 10.53 holds only when E ≥ e^{aT}).
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config.
+    t : (S,) array
+        Sample times of the nominal loop, s.
+    y_o : (p, S) array
+        Nominal output, output units.
+    x_o : (n, S) array
+        Nominal plant state, state units.
+    sector : (r, 2) array
+        The circle criterion's sector, dimensionless gains.
+    coupled : (r,) bool array
+        Channels whose φ_i depends on other outputs than y_i.
+    T : float
+        Truncation time, s.
+    a : float
+        Exponential weighting a, 1/s.
+
+    Returns
+    -------
+    Consistent
+        β_i, β3, β4, m at the worst truncation time T' ≤ T, and max E/m.
+    """
+    sp = cfg.spheres
+    nl = cfg.nonlinearity
+    P = cfg.lure_plant()
+    t = np.asarray(t, float)
+    keep = t <= T + 1e-12
+    tk = t[keep]
+    k = np.max(np.abs(np.asarray(sector, float)), axis=1)
+    if isinstance(nl, SinusoidalNonlinearity):     # sup over [0, T'] of the Jacobian's norm, per T'
+        k_struct = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        kk = np.maximum(k, k_struct)
+        b3 = np.sqrt(np.sum(kk ** 2)) * np.array([_sup_sin(nl.omega, x) for x in tk])
+    elif isinstance(nl, ExpressionNonlinearity):
+        M = cfg.expression_model()
+        tg, g = M.slope_profile(T)
+        g = np.array(g, float)
+        if tg.size == 1:
+            g = np.maximum(g, np.asarray(M.sector_info.slope_bound, float)[:, None])
+            b3 = np.full(tk.size, float(np.max(np.sqrt(np.sum(g ** 2, axis=0)), initial=0.0)))
+        else:
+            gn = np.maximum.accumulate(np.sqrt(np.sum(g ** 2, axis=0)))
+            # sup over the grid times ≤ T' (the grid's first point is 0; a T' between grid points takes the next)
+            idx = np.clip(np.searchsorted(tg, tk, side="left"), 0, tg.size - 1)
+            b3 = gn[idx]
+    else:
+        b3 = np.maximum.accumulate(_arm_jacobian_norms(cfg, tk, x_o[:, keep]))
+    y_o = np.atleast_2d(np.asarray(y_o, float))
+    yk = y_o[:, keep]
+    ynorm = np.sqrt(np.sum(yk ** 2, axis=0))
+    bound = np.array([k[i] * (ynorm if (coupled[i] or i >= yk.shape[0]) else np.abs(yk[i]))
+                      for i in range(k.size)])
+    from scipy.integrate import cumulative_trapezoid
+
+    l2 = np.sqrt(np.maximum(cumulative_trapezoid(np.sum(bound ** 2, axis=0), tk, initial=0.0), 0.0))
+    E = np.array([spheres.E_factor(a, x) if x > 0 else np.inf for x in tk])
+    b4 = np.exp(a * tk) * l2 / E
+    beta_i = float(np.sqrt(P.p) * sp.beta_ri + np.sqrt(P.r) * sp.d_inf)
+    with np.errstate(divide="ignore"):          # T' = 0 with β_ri = ‖d‖ = 0: nothing to bound yet
+        m = sp.beta_o / (beta_i + sp.beta_o * b3 + b4)
+    m[0] = np.inf if tk.size > 1 else m[0]       # T' = 0: nothing to bound
+    j = int(np.argmin(m))
+    peak = np.where(tk > 0, E, 0.0) / m
+    return Consistent(beta_i, float(b3[j]), float(b4[j]), float(m[j]), k, float(tk[j]),
+                      float(np.max(peak[1:], initial=0.0)) if tk.size > 1 else float(peak[0]))
+
+
 def pick_bookkeeping(cfg: QppConfig, names: list[str]) -> str:
     """The threshold the design iterates against: ``design.bookkeeping`` when available, else the
     stated values, else the last (most specific) bookkeeping.
@@ -168,6 +316,6 @@ def pick_bookkeeping(cfg: QppConfig, names: list[str]) -> str:
     str
         The chosen bookkeeping.
     """
-    if cfg.design.bookkeeping in names:
+    if cfg.design.bookkeeping == "consistent" or cfg.design.bookkeeping in names:
         return cfg.design.bookkeeping
     return "stated" if "stated" in names else names[-1]

@@ -90,8 +90,10 @@ class Design(_Model):
     sector: Optional[Matrix] = Field(None, description="sector [[α_i, β_i], ...] of φ for the circle check; "
                                                         "default from the nonlinearity")
     bz: Literal["eq10.7", "printed"] = Field("eq10.7", description="B_z reading for the design loop")
-    bookkeeping: Literal["printed", "report", "circle", "trajectory"] = Field(
-        "report", description="threshold m the design iterates against (see qpp.design.procedure)")
+    bookkeeping: Literal["consistent", "printed", "report", "circle", "trajectory"] = Field(
+        "consistent", description="threshold m the design iterates against: consistent (the certificate's, "
+        "one sector and one norm), or a reproduction of the report's bookkeeping (printed, report, circle, "
+        "trajectory; never a certificate by itself; see docs/qpp-certificates.md)")
     max_iter: int = Field(8, strict=True, ge=1, le=100, description="iterations of ch. 12.1 (ρ ← ρ·rho_factor when β1 > m)")
     rho_factor: float = Field(0.5, gt=0, lt=1, description="ρ reduction per iteration")
     a_factor: float = Field(0.1, gt=0, lt=1, description="a reduction when the circle criterion fails")

@@ -162,10 +162,20 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
                                        "a (1/s), mean W_s scale", keys, dims=("hinf_pass", "hinf_quantity"),
                                        attrs={"actions": "; ".join(str(h.get("action", "")) for h in r.hinf_history),
                                               "column_units": ",".join("1/s" if k == "a" else "1" for k in keys)})
+    c = r.consistent
     items["certificate"] = {
-        "certified": Dataset(int(r.certified), "1", "1: beta1 <= m and circle criterion (theorem 2, lemma 1)"),
-        "beta1": Dataset(r.beta1_ref, "1", f"beta1 of the design inequality (B_z {r.bz})"),
-        "m": Dataset(r.m_ref, "1", f"threshold m (12.1), bookkeeping {r.bookkeeping}"),
+        "certified": Dataset(int(r.certified), "1", "1: every premise of the consistent certificate holds "
+                             "(one sector, the circle criterion's; one norm: " + r.norm + ")"),
+        "beta1": Dataset(r.beta1_ref, "1", f"beta1 = H-infinity norm sigma_max of C_z (sI - A_n)^-1 B_z (B_z {r.bz})"),
+        "m": Dataset(c.m, "1", "threshold m = beta_o/(beta_i + beta_o beta3 + beta4), consistent reading"),
+        "beta_i": Dataset(c.beta_i, "output units", "Euclidean input radius sqrt(p) beta_ri + sqrt(r) d_inf"),
+        "beta3": Dataset(c.beta3, "1", "sup over t <= T of the spectral norm of grad_y phi (eq 10.40)"),
+        "beta4": Dataset(c.beta4, "output units", "e^{aT} ||(phi(y_o) - phi_o)_T||_2 / E, sector bound (10.53, 10.55)"),
+        "gamma_inf": Dataset(r.gamma_inf, "output units per input unit per s^1/2",
+                             "L2-to-peak gain of C_z (sI - A_n)^-1 B_z; gamma_inf E <= m closes eq 10.45"),
+        "peak_ratio": Dataset(r.gamma_inf * c.E_over_m, "1", "gamma_inf max over T' <= T of E/m (<= 1: eq 10.45 closed)"),
+        "m_bookkeeping": Dataset(r.m_ref, "1", f"m of the iteration target, bookkeeping {r.bookkeeping} "
+                                 "(a bookkeeping of the report is a reproduction, not a certificate)"),
         "T_settle": Dataset(r.T_settle, "s", "settling time of the nominal closed loop"),
         "ws_scale": Dataset(np.asarray(r.ws_scale or [1.0], float), "1", "W_s = diag(w)·S_c of the gains",
                             dims=("ws_entry",)),
@@ -260,7 +270,9 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
                     {"stage": "qpp design", "circle_passed": bool(r.circle.passed), **verdicts,
                      "certified": bool(r.certified), "label": "certified" if r.certified else "uncertified",
-                     "verdict": r.verdict, "bookkeeping": r.bookkeeping,
+                     "verdict": r.verdict, "bookkeeping": r.bookkeeping, "norm": r.norm,
+                     "sector_of_certificate": "the circle criterion's (dataset sector)",
+                     **{f"premise[{k}]": bool(ok) for k, (ok, _) in r.premises.items()},
                      "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
     if want_figures:
         draw_figures([partial(plot_circle, r, cfg.run_dir() / "qpp_circle.png"),

@@ -114,3 +114,101 @@ def test_a_slow_mode_beyond_the_horizon_is_named_with_nothing_to_track(tmp_runs)
         decay = float(np.min(-np.linalg.eigvals(f["Az"][()]).real))
     assert float(said.group(1)) == pytest.approx(np.log(20.0) / decay, rel=1e-3)
     assert float(said.group(1)) > 10.0                        # beyond the 10 s horizon
+
+
+# ----------------------------------------------------------------- the independent verifier (issue 33 item 3)
+def _verified(tmp_path, cfg_dict):
+    """Design through the CLI, then recompute the certificate with tests/qpp/independent_verifier.py."""
+    from typer.testing import CliRunner
+
+    from acmm_qpp.results import read_h5
+    from qpp.cli import app
+    from tests.qpp.independent_verifier import verify
+
+    cfg_dict = {**cfg_dict, "output": {"root": str(tmp_path / "runs"), "figures": False}}
+    path = tmp_path / f"{cfg_dict['name']}.yaml"
+    path.write_text(yaml.safe_dump(cfg_dict))
+    r = CliRunner().invoke(app, ["design", str(path), "--no-figures"])
+    d = read_h5(tmp_path / "runs" / cfg_dict["name"] / "qpp_design.h5")
+    v = verify(cfg_dict, d)
+    tool = bool(d["attrs"]["certified"])
+    assert r.exit_code == (0 if tool else 3), r.output
+    assert tool == v["certified"], (r.output, v.get("premises"))
+    if np.isfinite(v["beta1"]):
+        assert d["certificate"]["beta1"] == pytest.approx(v["beta1"], rel=1e-6)
+        assert d["certificate"]["m"] == pytest.approx(v["m"], rel=1e-4)
+        assert d["certificate"]["gamma_inf"] == pytest.approx(v["gamma_inf"], rel=1e-6)
+    for name, err in v.get("errors", {}).items():           # a certified design stays in its sphere
+        assert err <= cfg_dict["spheres"]["beta_o"], (name, err)
+    return tool, d, v
+
+
+def _packaged(name):
+    from configs import __file__ as cfgdir
+    from pathlib import Path
+
+    return yaml.safe_load((Path(cfgdir).parent / f"{name}.yaml").read_text())
+
+
+@pytest.mark.parametrize("name", [
+    "qpp_siso", "qpp_saturation",
+    pytest.param("qpp_unstable", marks=pytest.mark.slow), pytest.param("qpp_cubic2", marks=pytest.mark.slow),
+    pytest.param("qpp_manipulator", marks=pytest.mark.slow)])
+def test_independent_verifier_agrees_on_every_packaged_config(tmp_path, name):
+    """The tool's verdict, β1 (1e-6), m (1e-4) and γ∞ equal the independent verifier's; every
+    scenario of a certified design stays inside its output sphere on [0, T]."""
+    _verified(tmp_path, _packaged(name))
+
+
+def _issue_scalar():
+    """The issue's scalar plant, G = B/10 (φ = N·γ·y·sin t, N = 10), report's bookkeeping."""
+    return {"name": "issue_scalar",
+            "plant": {"A": [[0, 1], [2, -1]], "B": [[0], [1]], "C": [[1, 0]], "G": [[0], [0.1]],
+                      "Ac": [[0, 1], [-9, 0]], "Bc": [[0], [1]], "Cc": [[1, 0]]},
+            "nonlinearity": {"kind": "sinusoidal", "F0": [[2.0]], "F1": [[1.5]], "F_unc": [[1.0]],
+                             "omega": 1.0, "gamma_max": 0.05},
+            "hinf": {"rho": 1.0e-4, "a": 1.0e-8},
+            "spheres": {"beta_o": 0.2, "beta_ri": 0.1, "T": 0.5},
+            "design": {"bookkeeping": "report", "sector": [[-0.5, 0.5]]},
+            "simulation": {"t_final": 10.0, "n_samples": 1001, "r_o": [[{"kind": "sin", "amplitude": 1.0, "omega": 3.0}]],
+                           "scenarios": [{"name": "s", "gamma": 0.05,
+                                          "delta_r": [[{"kind": "step", "amplitude": -0.1}]]}]}}
+
+
+def _issue_mimo():
+    """The issue's 2×2 plant: an unstable pole (+0.5 on mass 1) and a saturation."""
+    cfg = _packaged("qpp_cubic2")
+    cfg["name"] = "issue_mimo"
+    cfg["plant"]["A"] = [[0, 0, 1, 0], [0, 0, 0, 1], [0.5, 0.0, -0.2, 0], [0.0, -1, 0, -0.2]]
+    cfg["nonlinearity"] = {"kind": "expression",
+                           "f1": [{"form": "saturation", "output": 1, "gain": "-k", "level": 0.2}, "0"],
+                           "parameters": {"k": {"min": 0.5, "max": 1.5, "nominal": 1.0}},
+                           "y_range": [[-2.0, 2.0], [-2.0, 2.0]]}
+    cfg["spheres"] = {"beta_o": 0.1, "beta_ri": 0.05, "T": 1.0}
+    for sc, k in zip(cfg["simulation"]["scenarios"], (0.5, 1.5, 0.5)):
+        sc["parameters"] = {"k": k}
+    return cfg
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("make", [_issue_scalar, _issue_mimo])
+def test_the_issues_two_cases_are_not_certified(tmp_path, make):
+    """Issue 33: the scalar plant with G = B/10 under the report's bookkeeping, and a 2×2 plant with
+    an unstable pole and a saturation: no certificate (exit 3), and the verifier agrees."""
+    tool, _, _ = _verified(tmp_path, make())
+    assert not tool
+
+
+@pytest.mark.slow
+def test_verifier_agrees_on_a_lightly_damped_and_an_impossible_plant(tmp_path):
+    """A lightly damped mass (ζ = 0.02) with a saturating spring is certified with wide spheres;
+    the same plant with β_o = β_ri/2 cannot be (β1 ≥ 1 for a loop that tracks), and the verifier
+    agrees with both verdicts."""
+    cfg = _packaged("qpp_saturation")
+    cfg["name"] = "light"
+    cfg["plant"]["A"] = [[0, 1], [-1, -0.04]]
+    cfg["spheres"] = {"beta_o": 0.6, "beta_ri": 0.05, "T": 1.0}
+    _verified(tmp_path, cfg)
+    cfg = {**cfg, "name": "impossible", "spheres": {"beta_o": 0.025, "beta_ri": 0.05, "T": 1.0}}
+    tool, _, _ = _verified(tmp_path, cfg)
+    assert not tool

@@ -35,5 +35,5 @@ def test_library_forms_and_stated_overrides(tmp_path):
     np.testing.assert_array_equal(default_sector(cfg), [[-0.7, 0.7]])
     res = certify(cfg, [[-10.0, -4.0]], [[20.0]], [[-1.0], [-0.5]], 1e-4)
     st = res.threshold("stated")
-    assert (st.beta3, st.beta4) == (0.01, 0.02) and res.bookkeeping == "stated"
+    assert (st.beta3, st.beta4) == (0.01, 0.02) and res.bookkeeping == "consistent"   # stated: reported only
     assert st.m == pytest.approx(0.3 / (0.05 + 0.3 * 0.01 + 0.02))
