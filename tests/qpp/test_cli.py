@@ -270,9 +270,9 @@ def test_plot_redraws_the_design_and_simulation_figures_pixel_for_pixel(tmp_path
 
     root = tmp_path / "runs"
     for stage in ("design", "simulate"):
-        r = invoke(app, stage, "qpp_siso", f"output.root={root}", "simulation.t_final=2", "--figures")
+        r = invoke(app, stage, "qpp_unstable", f"output.root={root}", "simulation.t_final=2", "--figures")
         assert r.exit_code == 0, r.output
-    run = root / "qpp_siso"
+    run = root / "qpp_unstable"
     made = sorted(p.name for p in run.glob("*.png"))
     assert {"qpp_circle_ch1.png", "qpp_iterations.png"} <= set(made) and len(made) >= 4
     r = invoke(app, "plot", run, "--out", tmp_path / "again")
