@@ -21,9 +21,10 @@ from acmm_qpp.errors import DesignError  # noqa: E402
 class _QppGroup(ExitCodeGroup):
     """The ``qpp`` app: its help ends with examples and the packaged qpp configs."""
 
-    examples = ("qpp design qpp_siso                  # ch. 13: H-infinity gains, circle criterion",
-                "qpp simulate qpp_manipulator         # ch. 14: the spheres checked in simulation",
-                "qpp plot runs/qpp_siso               # redraw a run's figures from its .h5 files",
+    examples = ("qpp design qpp_unstable              # an unstable plant: gains and a certificate (exit 0)",
+                "qpp design qpp_siso                  # ch. 13: the report's gains; no consistent certificate (exit 3)",
+                "qpp simulate qpp_unstable            # the spheres checked in simulation",
+                "qpp plot runs/qpp_unstable           # redraw a run's figures from its .h5 files",
                 "qpp COMMAND --help                   # each command's options and examples")
     config_kinds = ("qpp",)
 
@@ -84,7 +85,7 @@ def _mat(a) -> str:
 
 
 @app.command(short_help="H-infinity gains, thresholds and the circle criterion.",
-             cls=help_command(["qpp design qpp_siso", "qpp design qpp_manipulator hinf.rho=0.02 --strict",
+             cls=help_command(["qpp design qpp_unstable", "qpp design qpp_saturation spheres.beta_o=0.4 --strict",
                                "qpp design my_plant.yaml --no-figures"], ("qpp",)))
 @user_errors
 def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("hinf.rho=0.02 spheres.beta_o=0.3"),
@@ -157,7 +158,7 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_a
 
 
 @app.command(short_help="Nonlinear closed loop per scenario and the sphere check.",
-             cls=help_command(["qpp simulate qpp_siso", "qpp simulate qpp_siso simulation.t_final=5 --strict"], ("qpp",)))
+             cls=help_command(["qpp simulate qpp_unstable", "qpp simulate qpp_unstable simulation.t_final=5 --strict"], ("qpp",)))
 @user_errors
 def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.t_final=5"),
              figures: bool = FigOpt,
@@ -199,7 +200,7 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
 
 
 @app.command(short_help="Redraw a run's figures from its stored results (.h5).",
-             cls=help_command(["qpp plot runs/qpp_siso", "qpp plot runs/qpp_manipulator/qpp_sim.h5 --out figures"]))
+             cls=help_command(["qpp plot runs/qpp_unstable", "qpp plot runs/qpp_saturation/qpp_sim.h5 --out figures"]))
 @user_errors
 def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
                                       help="a run folder (runs/<name>) or its qpp_design.h5 / qpp_sim.h5"),

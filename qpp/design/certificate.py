@@ -392,11 +392,51 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     res.bz = cfg.design.bz
     coupled = sector_coupling(cfg)
     res.consistent = consistent(cfg, t, y_o, x_o, sector, coupled, T, a)
-    An = Azd[res.bz] + a * np.eye(len(Azd[res.bz]))
-    res.gamma_inf = spheres.l2_to_peak_gain(An, Bzd[res.bz], Cz)
+    # the certificate is of the loop that runs (B_z of eq 10.7, as simulated), whatever design.bz
+    # says; the printed B_z reading stays in the bookkeeping
+    An = Azd["eq10.7"] + a * np.eye(len(Azd["eq10.7"]))
+    res.gamma_inf = spheres.l2_to_peak_gain(An, Bzd["eq10.7"], Cz)
     res.premises = premises(cfg, res, t, y_o)
     res.certified = bool(all(ok for ok, _ in res.premises.values()))
     return res
+
+
+def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:
+    """Whether φ lies in the sector the certificate uses (premise ``sector``).
+
+    The sinusoidal form's sector is structural, ±N·γ_max·|F_unc| (row sums): a stated
+    ``design.sector`` must contain it.  An expression's stated ``nonlinearity.sector`` must contain
+    the sector sampled from the expression on ``y_range`` (no slack).  The polar arm's sector is
+    the config's assumption, and its β3 is taken along the nominal trajectory only: not a premise
+    this tool proves.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config.
+    sector : (r, 2) array
+        The sector [α, β] per channel the circle criterion and β4 use, dimensionless.
+
+    Returns
+    -------
+    tuple
+        (holds, statement).
+    """
+    nl = cfg.nonlinearity
+    s = np.asarray(sector, float)
+    if isinstance(nl, SinusoidalNonlinearity):
+        k = np.abs(cfg.lure_plant().N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        ok = bool(np.all(s[:, 0] <= -k) and np.all(s[:, 1] >= k))
+        return ok, (f"the sector contains phi's own, ±N·gamma_max·|F_unc| = ±{np.round(k, 6).tolist()}"
+                    + ("" if ok else " (design.sector is narrower)"))
+    if isinstance(nl, ExpressionNonlinearity):
+        own = cfg.expression_model().sector_info.sector
+        tol = 1e-9 * np.maximum(np.abs(own), 1e-300)        # the rounding of a sampled bound
+        ok = bool(np.all(s[:, 0] <= own[:, 0] + tol[:, 0]) and np.all(s[:, 1] >= own[:, 1] - tol[:, 1]))
+        return ok, (f"the sector contains the one sampled from the expression on y_range, "
+                    f"{np.round(own, 6).tolist()}" + ("" if ok else " (nonlinearity.sector is narrower)"))
+    return False, ("the polar arm's sector is assumed by the config and its beta3 sampled along the nominal "
+                   "trajectory only: not proved")
 
 
 def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
@@ -417,19 +457,21 @@ def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
     Returns
     -------
     dict
-        ``{name: (bool, str)}`` for ``stable``, ``circle``, ``contraction`` (β1 ≤ m),
+        ``{name: (bool, str)}`` for ``stable``, ``sector`` (:func:`sector_premise`), ``circle``,
+        ``contraction`` (β1 < m),
         ``peak`` (γ∞·E(T')/m(T') ≤ 1 for every T' ≤ T, eq 10.45) and, for an expression, ``range`` (y_o ± β_o inside y_range).
     """
     c = res.consistent
-    worst = float(np.max(np.linalg.eigvals(res.Az[res.bz] + res.a * np.eye(len(res.Az[res.bz]))).real))
-    b1 = res.beta1_ref
+    worst = float(np.max(np.linalg.eigvals(res.Az["eq10.7"] + res.a * np.eye(len(res.Az["eq10.7"]))).real))
+    b1 = float(res.beta1["eq10.7"]["value"])
     peak = res.gamma_inf * c.E_over_m
     out = {
-        "stable": (worst < 0, f"A_z + aI Hurwitz (largest Re λ = {worst:.4g} 1/s)"),
+        "stable": (worst < 0, f"A_z + aI Hurwitz, B_z of eq 10.7 (largest Re λ = {worst:.4g} 1/s)"),
+        "sector": sector_premise(cfg, res.sector),
         "circle": (bool(res.circle.passed), "circle criterion with the sector "
                    f"{np.round(res.sector, 6).tolist()} at a = {res.a:g}"),
-        "contraction": (bool(b1 <= c.m), f"beta1 = {b1:.6g} <= m = {c.m:.6g} (eqs 10.43, 10.57 in the Euclidean "
-                        f"norm; m the smallest over T' <= T, at T' = {c.T_worst:.4g} s)"),
+        "contraction": (bool(b1 < c.m), f"beta1 = {b1:.6g} < m = {c.m:.6g} (eqs 10.43, 10.57 in the Euclidean "
+                        f"norm, B_z of eq 10.7; m the smallest over T' <= T, at T' = {c.T_worst:.4g} s)"),
         "peak": (bool(peak <= 1.0), f"gamma_inf * max E/m = {peak:.6g} <= 1 (the L2 sphere bounds the L-infinity "
                  f"sphere on [0, T], eq 10.45)"),
     }

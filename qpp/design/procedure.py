@@ -479,12 +479,14 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
     failed = [k for k, (ok, _) in res.premises.items() if not ok]
     if "range" in failed:
         return f"the output sphere leaves the range the sector holds on: {res.premises['range'][1]}"
+    if "sector" in failed:
+        return f"phi is not proved to lie in the sector the certificate uses: {res.premises['sector'][1]}"
     terms = {"β_i": c.beta_i, "β_o·β3": sp.beta_o * c.beta3, "β4": c.beta4}
     dom = max(terms, key=terms.get)
     lead = ("β1 > m" if "contraction" in failed else
             f"γ∞·max E/m = {res.gamma_inf * res.consistent.E_over_m:.4g} > 1 (the L2 sphere does not bound the L∞ "
             f"sphere, 10.45)")
-    txt = (f"{lead} (consistent reading): β1 = {res.beta1_ref:.4g}, m = β_o/(β_i + β_o·β3 + β4) = {sp.beta_o:g}/("
+    txt = (f"{lead} (consistent reading): β1 = {float(res.beta1['eq10.7']['value']):.4g}, m = β_o/(β_i + β_o·β3 + β4) = {sp.beta_o:g}/("
            + " + ".join(f"{v:.4g}" for v in terms.values()) + f") = {c.m:.4g}, largest term {dom} = {terms[dom]:.4g}")
     if c.m < 1.0:
         txt += ("; m < 1 at this T while β1 ≥ 1 for a loop that tracks r_o (gain 1 at the servo "

@@ -9,11 +9,12 @@ or simulation code), only numpy, scipy and sympy.
   α < 0 < β: each Gershgorin mean band inside the disc of radius 1/k_i about 0) on 80 000
   frequencies;
 * the sector, the slopes (β3) of φ = N (f1(θ) − f1(θ°)) sampled by evaluating the user's
-  expression with ``sympy.lambdify`` on a dense grid (or the sinusoidal form directly);
+  expression with ``sympy.lambdify`` on a dense grid (or the sinusoidal form directly); the stored
+  sector must contain that one (premise ``sector``; the polar arm's assumed sector never does);
 * the nominal output y_o and the scenarios by ``scipy.integrate.solve_ivp`` (LSODA, rtol 1e-10)
   of ż = A_z z + B_z [r; d + φ(C_z z, t)] from the stored A_z, B_z, C_z (eq 10.7);
 * m = β_o / (β_i + β_o β3 + β4) of the consistent reading, smallest over T' ≤ T, and the
-  premises: stable, circle, β1 ≤ m, γ∞ max E/m ≤ 1, y_o ± β_o inside y_range.
+  premises: stable, sector, circle, β1 < m, γ∞ max E/m ≤ 1, y_o ± β_o inside y_range.
 """
 from __future__ import annotations
 
@@ -161,6 +162,26 @@ class Phi:
         return [np.array(c) for c in np.array(np.meshgrid(*[np.linspace(a, b, 5) for a, b in
                                                                 zip(self.lo, self.hi)])).reshape(len(self.lo), -1).T]
 
+    def own_sector(self, n=2001):
+        """Half-widths k_i with |φ_i| ≤ k_i |y_i|: the sinusoidal form's structural ±N·γ·|F_unc|, an
+        expression's sup of |φ_i/y_i| sampled on y_range (every θ corner and nominal value, 64
+        times in a period of t), None for the polar arm (its sector is an assumption)."""
+        if self.kind == "sinusoidal":
+            return np.abs(self.N @ np.asarray(self.nl["F_unc"], float)).sum(axis=1) * float(self.nl["gamma_max"])
+        if self.kind != "expression":
+            return None
+        p = len(self.ys)
+        axes = [np.linspace(a, b, n if p == 1 else 81) for a, b in self.y_range]
+        Y = np.array([y.ravel() for y in np.meshgrid(*axes, indexing="ij")])
+        k = np.zeros(len(self.f))
+        for th in self.thetas():
+            for tq in np.linspace(0.0, 2 * np.pi, 64):
+                ph = np.atleast_2d(self(list(Y), tq, th))
+                for i in range(min(len(k), p)):
+                    nz = np.abs(Y[i]) > 1e-9
+                    k[i] = max(k[i], float(np.max(np.abs(ph[i, nz] / Y[i, nz]))))
+        return k
+
     def sector_and_slopes(self, tt, n=401):
         """(k_i sampled on a dense y grid; per time of ``tt`` the sup over y, θ of
         (Σ_i (Σ_j |∂φ_i/∂y_j|)²)^½ from sympy's derivative), or (k, None) for the sinusoidal form."""
@@ -202,8 +223,8 @@ def verify(cfg: dict, d: dict, *, simulate: bool = True) -> dict:
     dict
         beta1, gamma_inf, m, premises, certified, and (certified designs) the scenario errors.
     """
-    bz = "Bz_eq10_7" if cfg.get("design", {}).get("bz", "eq10.7") == "eq10.7" else "Bz_printed"
-    Az, Bz, Cz = (np.asarray(d[k], float) for k in ("Az", bz, "Cz"))
+    # the loop that runs: B_z of eq 10.7, whatever design.bz names for the report's bookkeeping
+    Az, Bz, Cz = (np.asarray(d[k], float) for k in ("Az", "Bz_eq10_7", "Cz"))
     a, T = float(d["a"]), float(d["T"])
     p = Cz.shape[0]
     r = Bz.shape[1] - p
@@ -218,6 +239,9 @@ def verify(cfg: dict, d: dict, *, simulate: bool = True) -> dict:
     phi = Phi(cfg)
     sector = np.asarray(d["sector"], float)
     k = np.max(np.abs(sector), axis=1)
+    own = phi.own_sector()            # φ's sector found here, not read from the tool
+    sector_ok = own is not None and bool(np.all(k >= own * (1 - 1e-9)))     # (rounding of k − k°)
+    k = k if own is None else np.maximum(k, own)
     circle = circle_symmetric(An, Bz[:, p:], Cz, k)
     sp = cfg["spheres"]
     beta_o, beta_ri, d_inf = float(sp["beta_o"]), float(sp.get("beta_ri", 0.0)), float(sp.get("d_inf", 0.0))
@@ -259,7 +283,7 @@ def verify(cfg: dict, d: dict, *, simulate: bool = True) -> dict:
     m_t = beta_o / (beta_i + beta_o * b3 + b4)
     m = float(np.min(m_t[1:]))
     peak = gam * float(np.max(E[1:] / m_t[1:]))
-    prem = {"stable": stable, "circle": circle, "contraction": beta1 <= m, "peak": peak <= 1.0}
+    prem = {"stable": stable, "sector": sector_ok, "circle": circle, "contraction": beta1 < m, "peak": peak <= 1.0}
     if phi.kind == "expression":
         rng = phi.y_range
         prem["range"] = bool(np.all(yo.min(axis=1) - beta_o >= rng[:, 0]) and np.all(yo.max(axis=1) + beta_o <= rng[:, 1]))

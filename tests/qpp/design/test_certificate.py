@@ -136,8 +136,12 @@ def _verified(tmp_path, cfg_dict):
     assert tool == v["certified"], (r.output, v.get("premises"))
     if np.isfinite(v["beta1"]):
         assert d["certificate"]["beta1"] == pytest.approx(v["beta1"], rel=1e-6)
-        assert d["certificate"]["m"] == pytest.approx(v["m"], rel=1e-4)
+        if v["premises"]["sector"]:      # (on a sector narrower than φ's the tool's m means nothing)
+            assert d["certificate"]["m"] == pytest.approx(v["m"], rel=1e-4)
         assert d["certificate"]["gamma_inf"] == pytest.approx(v["gamma_inf"], rel=1e-6)
+    stored = {k[len("premise["):-1]: bool(int(x)) for k, x in d["attrs"].items() if k.startswith("premise[")}
+    for k, ok in v.get("premises", {}).items():             # premise by premise, not only the verdict
+        assert stored.get(k) == ok, (k, stored, v["premises"])
     for name, err in v.get("errors", {}).items():           # a certified design stays in its sphere
         assert err <= cfg_dict["spheres"]["beta_o"], (name, err)
     return tool, d, v
@@ -157,7 +161,20 @@ def _packaged(name):
 def test_independent_verifier_agrees_on_every_packaged_config(tmp_path, name):
     """The tool's verdict, β1 (1e-6), m (1e-4) and γ∞ equal the independent verifier's; every
     scenario of a certified design stays inside its output sphere on [0, T]."""
-    _verified(tmp_path, _packaged(name))
+    tool, _, _ = _verified(tmp_path, _packaged(name))
+    assert tool == (name in ("qpp_unstable", "qpp_saturation", "qpp_cubic2"))
+
+
+def test_a_stated_sector_narrower_than_phis_own_is_no_certificate(tmp_path):
+    """design.sector = ±0.001 for ch. 13's φ = 10·Δm·y·sin t (|Δm| ≤ 0.05, so ±0.5): the circle
+    criterion and β4 on that sector would prove nothing; the premise ``sector`` fails in the tool
+    and in the verifier, which finds φ's sector itself."""
+    cfg = _packaged("qpp_siso")
+    cfg["name"] = "narrow"
+    cfg["design"] = {**cfg.get("design", {}), "sector": [[-0.001, 0.001]]}
+    tool, d, v = _verified(tmp_path, cfg)
+    assert not tool and not v["premises"]["sector"]
+    assert int(d["attrs"]["premise[sector]"]) == 0
 
 
 def _issue_scalar():
@@ -208,7 +225,8 @@ def test_verifier_agrees_on_a_lightly_damped_and_an_impossible_plant(tmp_path):
     cfg["name"] = "light"
     cfg["plant"]["A"] = [[0, 1], [-1, -0.04]]
     cfg["spheres"] = {"beta_o": 0.6, "beta_ri": 0.05, "T": 1.0}
-    _verified(tmp_path, cfg)
+    tool, _, _ = _verified(tmp_path, cfg)
+    assert tool
     cfg = {**cfg, "name": "impossible", "spheres": {"beta_o": 0.025, "beta_ri": 0.05, "T": 1.0}}
     tool, _, _ = _verified(tmp_path, cfg)
     assert not tool
