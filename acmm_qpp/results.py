@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from acmm_qpp.atomic_write import in_memory
-from acmm_qpp.errors import FigureError
+from acmm_qpp.errors import ConfigError, FigureError
 from acmm_qpp.provenance import provenance
 
 
@@ -237,6 +237,43 @@ def draw_figures(calls) -> None:
 #: figures are redrawn
 FIGURE_SOURCES = {"design.h5": "design", "sim.h5": "simulate", "sweep.h5": "sweep",
                   "qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
+
+
+def redraw_from_files(files: list, readers: dict, out=None) -> list[Path]:
+    """Draw the figures of stored results files (``acmm plot`` / ``qpp plot``): every file is read
+    first, then the output folders are made and the figures drawn.
+
+    Parameters
+    ----------
+    files : list of (pathlib.Path, str)
+        :func:`stored_results`.
+    readers : dict
+        Stage → ``reader(path, folder)`` returning the figure calls of that file.
+    out : path-like, optional
+        Folder of the figures (default: each file's own folder).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The figures written.
+
+    Raises
+    ------
+    acmm_qpp.errors.ConfigError
+        A file lacks a dataset or attribute its figures need (exit 2; nothing is written).
+    """
+    calls, folders = [], []
+    for path, stage in files:
+        folder = Path(out) if out is not None else path.parent
+        try:
+            calls += readers[stage](path, folder)
+        except (KeyError, ValueError, TypeError, IndexError, OSError) as exc:
+            raise ConfigError(f"{path}: not a complete '{stage}' results file, its figures cannot be drawn "
+                              f"({type(exc).__name__}: {exc})") from None
+        folders.append(folder)
+    for folder in folders:
+        folder.mkdir(parents=True, exist_ok=True)
+    return draw_collected(calls)
 
 
 def stored_results(target: str | Path, stages: tuple) -> list[tuple[Path, str]]:

@@ -221,16 +221,10 @@ def redraw_figures(target, out=None) -> list[Path]:
     from acmm.stages.design_output import design_figures_from_file
     from acmm.stages.sim_output import sim_figures_from_file
     from acmm.sweep.output import sweep_figures_from_file
-    from acmm_qpp.results import draw_collected, stored_results
+    from acmm_qpp.results import redraw_from_files, stored_results
     from qpp.io.stages import figure_calls_from_file
 
     readers = {"design": design_figures_from_file, "simulate": sim_figures_from_file,
                "sweep": sweep_figures_from_file, "qpp design": figure_calls_from_file,
                "qpp simulate": figure_calls_from_file}
-    files = stored_results(target, tuple(readers))
-    calls = []
-    for path, stage in files:
-        folder = Path(out) if out is not None else path.parent
-        folder.mkdir(parents=True, exist_ok=True)
-        calls += readers[stage](path, folder)
-    return draw_collected(calls)
+    return redraw_from_files(stored_results(target, tuple(readers)), readers, out)

@@ -455,11 +455,7 @@ def redraw_figures(target, out=None) -> list[Path]:
     acmm_qpp.errors.FigureError
         A figure could not be drawn or written (exit 4).
     """
-    from acmm_qpp.results import draw_collected, stored_results
+    from acmm_qpp.results import redraw_from_files, stored_results
 
-    calls = []
-    for path, _ in stored_results(target, ("qpp design", "qpp simulate")):
-        folder = Path(out) if out is not None else path.parent
-        folder.mkdir(parents=True, exist_ok=True)
-        calls += figure_calls_from_file(path, folder)
-    return draw_collected(calls)
+    readers = {"qpp design": figure_calls_from_file, "qpp simulate": figure_calls_from_file}
+    return redraw_from_files(stored_results(target, tuple(readers)), readers, out)

@@ -447,3 +447,19 @@ def test_plot_redraws_a_schedule_and_refuses_bad_input_on_one_line(tmp_runs):
     for bad in ("nowhere", tmp_runs / "junk.h5", run / "config.yaml", tmp_runs):
         r = acmm("plot", bad)
         assert r.exit_code == EXIT_INPUT and one_line(r) and r.stderr.startswith("error: "), r.output
+
+
+@pytest.mark.parametrize("stage, name", [("simulate", "sim.h5"), ("design", "design.h5"),
+                                         ("qpp design", "qpp_design.h5"), ("qpp simulate", "qpp_sim.h5")])
+def test_plot_of_a_results_file_missing_its_datasets_is_one_line_and_writes_nothing(tmp_runs, stage, name):
+    """A file with the root attributes of a stage but none of its datasets (a truncated copy, a
+    file of another version): one line naming the file, exit 2, no output folder made."""
+    import h5py
+
+    path = tmp_runs / name
+    with h5py.File(path, "w") as f:
+        f.attrs["stage"], f.attrs["config"] = stage, "name: x\n"
+    out = tmp_runs / "figures"
+    r = acmm("plot", path, "--out", out)
+    assert r.exit_code == EXIT_INPUT and one_line(r) and r.stderr.startswith("error: "), r.output
+    assert str(path) in r.stderr and not out.exists()
