@@ -92,6 +92,7 @@ def test_non_finite_or_huge_values_rejected_before_any_work(tmp_path, edit, fiel
     assert not (tmp_path / "runs").exists()
 
 
+@pytest.mark.slow     # a qpp_saturation design (~12 s)
 def test_expression_scenarios_store_their_parameters_not_a_gamma(tmp_runs):
     """An expression's scenario stored ``gamma`` = its first parameter beside ``param_k`` (a
     review: γ = 4.2 for k = 4.2); γ belongs to the sinusoidal kind only."""
@@ -265,6 +266,7 @@ def test_every_help_has_an_example_and_no_truncated_summary(command):
         load_config("qpp_siso", example)
 
 
+@pytest.mark.slow     # a qpp_unstable design and simulation (~12 s); acmm plot's pixel test stays fast
 def test_plot_redraws_the_design_and_simulation_figures_pixel_for_pixel(tmp_path):
     import matplotlib.image as mpimg
 

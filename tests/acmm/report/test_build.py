@@ -298,7 +298,8 @@ def test_report_leaves_the_users_run_folders_byte_identical(tmp_runs):
 
     for stage in ("design", "simulate"):
         res = invoke(qpp_app, stage, "qpp_siso")
-        assert res.exit_code == 0, res.output
+        # ch. 13 carries no consistent certificate: `qpp design` writes it labelled uncertified, exit 3
+        assert res.exit_code == (3 if stage == "design" else 0), res.output
     user = tmp_runs / "runs" / "qpp_siso"
     before = _tree(user)
     assert any(k.endswith(".png") or k.endswith(".pdf") for k in before), sorted(before)   # figures made

@@ -155,7 +155,7 @@ def _packaged(name):
 
 
 @pytest.mark.parametrize("name", [
-    "qpp_siso", "qpp_saturation",
+    "qpp_siso", pytest.param("qpp_saturation", marks=pytest.mark.slow),
     pytest.param("qpp_unstable", marks=pytest.mark.slow), pytest.param("qpp_cubic2", marks=pytest.mark.slow),
     pytest.param("qpp_manipulator", marks=pytest.mark.slow)])
 def test_independent_verifier_agrees_on_every_packaged_config(tmp_path, name):
