@@ -8,7 +8,7 @@ from __future__ import annotations
 from typing import Optional
 
 # first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
-from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, run_app, strict_exit, user_errors,
+from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
                                    version_option)
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
@@ -211,14 +211,7 @@ def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
     Exit 2 when RUN_DIR_OR_H5 is missing or holds no qpp results file."""
     from qpp.io.stages import redraw_figures
 
-    if out is not None and not out.strip():
-        from acmm_qpp.errors import ConfigError
-
-        raise ConfigError("--out: empty; give the folder of the figures")
-    written = redraw_figures(target, out)
-    typer.echo(f"{target}: redrew {len(written)} figure file(s)")
-    for p in written:
-        typer.echo(f"  wrote {p}")
+    redraw_command(redraw_figures, target, out)
 
 
 def main() -> None:

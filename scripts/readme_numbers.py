@@ -797,6 +797,15 @@ def block_dwell_certificate(r: dict) -> str:
     return table(["dwell-time certificate (`acmm certify staircase`)", "value"], rows)
 
 
+def _energy(p: dict, n: float) -> float:
+    """:func:`acmm.design.regional_lmi.control_energy` of one stored design point (``points/<k>``)."""
+    from acmm.design.regional_lmi import control_energy
+    from acmm.model.state_scaling import torque_scale
+
+    A, B, K, scales = (np.asarray(p[k]) for k in ("A", "B", "K", "scales"))
+    return control_energy(A, B, K, n, scales, torque_scale(scales))
+
+
 def block_design_routes(r: dict) -> str:
     """The LQR route (sector LQR, the report's method) and the regional LMI route side by side at
     MB3 and AC: margin, conditioning, robustness, energy, fastest pole, and the ±30 % Monte Carlo
@@ -812,8 +821,7 @@ def block_design_routes(r: dict) -> str:
     str
         A Markdown table.
     """
-    from acmm.design.regional_lmi import control_energy, random_gain_radius
-    from acmm.model.state_scaling import torque_scale
+    from acmm.design.regional_lmi import random_gain_radius
 
     def point(d):
         return d["points"][sorted(d["points"])[0]]
@@ -834,14 +842,13 @@ def block_design_routes(r: dict) -> str:
         for route, d, sw, base in (("sector LQR", r[f"design:{name}"], r["sweep"], name),
                                    ("regional LMI", r[f"design:{name}_lmi"], r["sweep_lmi"], f"{name}_lmi")):
             p = point(d)
-            A, B, K, sc = (np.asarray(p[k]) for k in ("A", "B", "K", "scales"))
-            e = torque_scale(sc)
+            A, B, K = (np.asarray(p[k]) for k in ("A", "B", "K"))
             fastest = float(np.max(-np.real(np.asarray(p["poles"])))) / n
             rr = float(p["lmi"]["random_radius"]) if "lmi" in p else random_gain_radius(A, B, K, n)
             ok, tot = counts(sw, base)
             rows.append([f"{label}, {route}", fixed(float(p["sector_margin"])), sig(float(p["max_eig_condition"]), 2),
                          sci(float(p["robustness_radius_elementwise"])), sci(rr),
-                         sig(control_energy(A, B, K, n, sc, e), 3), fixed(fastest, 1), f"{ok}/{tot}",
+                         sig(_energy(p, n), 3), fixed(fastest, 1), f"{ok}/{tot}",
                          margin_range(sw, base)])
     return table(["station, route", "margin (n)", "κ max", "radius (first order, elementwise)",
                   "radius (random re-check)", "energy", "fastest pole (n)", "±30 % bounded and settled",
@@ -864,9 +871,6 @@ def block_staircase_routes(r: dict) -> str:
     str
         A Markdown table.
     """
-    from acmm.design.regional_lmi import control_energy
-    from acmm.model.state_scaling import torque_scale
-
     labels = {"staircase_dense": "sector LQR points, table (packaged)",
               "staircase_lmi": "regional LMI points, table",
               "staircase_quadratic": "sector LQR points, quadratic refit on the closed loops"}
@@ -875,11 +879,7 @@ def block_staircase_routes(r: dict) -> str:
         d, sim = r[f"design:{name}"], r[f"simulate:{name}"]
         n = r[f"config:{name}"].orbit_rate
         pa, sc, g = d["schedule"]["path"], d["schedule"], d.get("dwell")
-        energy = []
-        for key in sorted(d["points"]):
-            p = d["points"][key]
-            A, B, K, scales = (np.asarray(p[k]) for k in ("A", "B", "K", "scales"))
-            energy.append(control_energy(A, B, K, n, scales, torque_scale(scales)))
+        energy = [_energy(d["points"][key], n) for key in sorted(d["points"])]
         tau = "no certificate" if g is None or "tau_star" not in g else (
             f"{fixed(float(g['tau_star']), 2)} orbit" + ("" if np.all(np.asarray(g["dwell"]) > float(g["tau_star"]))
                                                          else " (NOT certified)"))

@@ -11,7 +11,7 @@ import typer
 
 from acmm_qpp.cli.failures import (EXIT_PIPE_CLOSED, _interrupt_behind, _note_compiled_cache, _note_warnings, _quiet_stdout)
 from acmm_qpp.errors import plain_failure as _plain_failure
-from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError
+from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError, ConfigError
 
 
 def fail(message: str, code: int = EXIT_INPUT) -> None:
@@ -426,6 +426,32 @@ def version_option():
 
     return typer.Option(False, "--version", callback=show, is_eager=True,
                         help="print the version and exit")
+
+
+def redraw_command(redraw, target: str, out) -> None:
+    """The body of ``acmm plot`` and ``qpp plot``: ``redraw(target, out)`` (the figures of stored
+    results), then one line per figure written.
+
+    Parameters
+    ----------
+    redraw : callable
+        ``redraw(target, out)`` → list of the paths written.
+    target : str
+        The run folder or results file given.
+    out : str or None
+        ``--out``: the folder of the figures (None: each file's own).
+
+    Raises
+    ------
+    acmm_qpp.errors.ConfigError
+        An empty ``--out`` (exit 2).
+    """
+    if out is not None and not out.strip():
+        raise ConfigError("--out: empty; give the folder of the figures")
+    written = redraw(target, out)
+    typer.echo(f"{target}: redrew {len(written)} figure file(s)")
+    for p in written:
+        typer.echo(f"  wrote {p}")
 
 
 def strict_exit(strict: bool, failed: bool, why: str) -> None:
