@@ -135,6 +135,30 @@ def submit(executor, fn, *args):
         release_interrupts(held)
 
 
+def pool_map(executor, fn, items):
+    """``fn(x) for x in items`` computed on ``executor``: every task submitted first
+    (:func:`submit`, the interrupts held), each result yielded as soon as it and those before it
+    are done, in the order of ``items``.
+
+    Parameters
+    ----------
+    executor : concurrent.futures.Executor
+        The executor (e.g. :func:`process_pool`).
+    fn : callable
+        The task (picklable for a process pool).
+    items : iterable
+        Its arguments, one task each.
+
+    Yields
+    ------
+    object
+        The results, in order; the first task's error (in that order) is raised.
+    """
+    futures = [submit(executor, fn, x) for x in items]
+    for f in futures:
+        yield f.result()
+
+
 def stop_pool(pool: cf.ProcessPoolExecutor, abort: bool = False) -> None:
     """Shut a pool down, the interrupts held (a second Ctrl-C broke the shutdown: a hang); with
     ``abort`` (the parent was interrupted or failed) its workers are killed first instead of

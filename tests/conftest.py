@@ -16,6 +16,11 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 REPO = Path(__file__).resolve().parent.parent
 CONFIGS = REPO / "configs"
 
+#: The override that designs a packaged stair-case on the report's route (sector LQR with pole
+#: shifting, about a second a point) instead of the shipped regional LMI (tens of seconds a point):
+#: the tests of the pipeline's mechanics use it; the shipped design is tested in the slow group.
+LQR_ROUTE = "design.pole_method=shift"
+
 
 @pytest.fixture
 def tmp_runs(tmp_path, monkeypatch) -> Path:

@@ -3,13 +3,17 @@
 2 threads, and the stored results agree.
 
 What each result holds to (docs/reproducibility.md):
-- the stair-case's point gains (and so its table schedule) to 1e-6 relative;
-- per-level peak CMG momentum and steady attitude errors to 3 significant digits;
+- the shipped stair-case's point gains (regional LMI, Clarabel to gap and feasibility 1e-7) to
+  1e-5 relative; it runs under both kernels with 1 thread (a few minutes of LMI solves each);
+- the stair-case on the report's route (sector LQR points, ``design.pole_method=shift``) under all
+  four: its point gains (and so its table schedule) to 1e-6 relative;
+- per-level peak CMG momentum and steady attitude errors to 3 significant digits, the shipped
+  stair-case's peak ≤ 6 000 ft·lbf·s on every kernel (issue 32);
 - the verdicts (bounded / diverged);
 - claim 1's gain to 1e-4 relative and its divergence time to 1 %: its model is nearly
   uncontrollable (κ_CARE ≫ 1/ε, flagged in ``design.h5``) and its gain is determined by its data
-  only to a few 1e-6 (measured 2.4e-6 between kernels), which moves the time at which the
-  exponentially growing error crosses the divergence bound by ~6e-4 relative.
+  only to a few 1e-6, which moves the time at which the exponentially growing error crosses the
+  divergence bound.
 
 The results are read with h5py, not through the package.
 """
@@ -44,17 +48,24 @@ def _needs_two_kernels() -> None:
 
 ENVIRONMENTS = [(k, t) for k in ("Haswell", "Prescott") for t in (1, 2)]
 
+#: the runs of each environment: (run name, acmm simulate arguments); the shipped stair-case only
+#: with 1 thread (its LMI points dominate the time, and threads do not reach its small matrices)
+RUNS = {"mb3_decoupled": ("mb3_decoupled",),
+        "staircase_lqr": ("staircase", "design.pole_method=shift", "name=staircase_lqr")}
+SHIPPED = {"staircase": ("staircase",)}
+
 
 def _run(tmp_path: Path, kernel: str, threads: int) -> Path:
-    """``acmm simulate`` of both configs in a folder of their own; returns its runs/."""
+    """``acmm simulate`` of the configs in a folder of their own; returns its runs/."""
     cwd = tmp_path / f"{kernel}_{threads}"
     cwd.mkdir()
     env = {**os.environ, "OPENBLAS_CORETYPE": kernel, "OPENBLAS_NUM_THREADS": str(threads),
            "MPLBACKEND": "Agg"}
     env.pop("OPENBLAS_L2_SIZE", None)
-    for name in ("staircase", "mb3_decoupled"):
-        r = subprocess.run([sys.executable, "-m", "acmm.cli.app", "simulate", name, "--no-figures"],
-                           cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
+    runs = {**RUNS, **(SHIPPED if threads == 1 else {})}
+    for name, args in runs.items():
+        r = subprocess.run([sys.executable, "-m", "acmm.cli.app", "simulate", *args, "--no-figures"],
+                           cwd=cwd, env=env, capture_output=True, text=True, timeout=1200)
         assert r.returncode == 0, (kernel, threads, name, r.stderr[-2000:])
     return cwd / "runs"
 
@@ -87,15 +98,26 @@ def _same_to_3_digits(a, b) -> bool:
     return bool(np.all(np.abs(a - b) <= 5e-4 * np.maximum(np.abs(a), np.abs(b)) + 1e-12))
 
 
-def test_staircase_is_the_same_under_every_kernel_and_thread_count(runs):
-    ref = _read(runs[ENVIRONMENTS[0]], "staircase")
-    assert ref["verdict"] == "bounded" and ref["peak"].size == 12
-    # the two kernels did run: their rounding differs in the last bits of the gains (measured
-    # 6e-10 relative), so a test that passed because OPENBLAS_CORETYPE was ignored would fail here
+def test_shipped_staircase_is_the_same_under_both_kernels(runs):
+    ref = _read(runs[("Haswell", 1)], "staircase")
     other = _read(runs[("Prescott", 1)], "staircase")
+    for got in (ref, other):
+        assert got["verdict"] == "bounded" and got["peak"].size == 12
+        assert got["peak"].max() <= 6000.0, got["peak"]
+    assert _rel(other["K"], ref["K"]) <= 1e-5
+    assert _same_to_3_digits(other["peak"], ref["peak"]), (other["peak"], ref["peak"])
+    assert _same_to_3_digits(other["steady"], ref["steady"])
+
+
+def test_staircase_on_the_reports_route_is_the_same_under_every_kernel_and_thread_count(runs):
+    ref = _read(runs[ENVIRONMENTS[0]], "staircase_lqr")
+    assert ref["verdict"] == "bounded" and ref["peak"].size == 12
+    # the two kernels did run: their rounding differs in the last bits of the gains, so a test
+    # that passed because OPENBLAS_CORETYPE was ignored would fail here
+    other = _read(runs[("Prescott", 1)], "staircase_lqr")
     assert not np.array_equal(other["K"], ref["K"])
     for env in ENVIRONMENTS[1:]:
-        got = _read(runs[env], "staircase")
+        got = _read(runs[env], "staircase_lqr")
         assert _rel(got["K"], ref["K"]) <= 1e-6, env
         assert got["verdict"] == ref["verdict"], env
         assert _same_to_3_digits(got["peak"], ref["peak"]), (env, got["peak"], ref["peak"])

@@ -186,14 +186,14 @@ def _design_line(name: str, note: str) -> str:
     return f"{name}: design {note}"
 
 
-@app.command(short_help="Sector LQR per design point and the gain schedule.",
+@app.command(short_help="Sector LQR or regional LMI per design point and the gain schedule.",
              cls=help_command(["acmm design mb3", "acmm design staircase schedule.n_points=7 --strict",
                                "acmm design my_station.yaml design.sector.sigma=0.6 --no-figures"], ("acmm",)))
 @user_errors
 def design(config: Optional[str] = ConfigArg,
            overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=7"),
            figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
-    """TEA -> linearize -> sector LQR per point -> schedule; writes runs/<name>/design.h5 + figures.
+    """TEA -> linearize -> sector LQR or LMI per point -> schedule; writes runs/<name>/design.h5 + figures.
     With --strict, a scheduled gain with poles outside the sector, or a blend whose end lies on
     another branch of equilibria, exits 1."""
 

@@ -10,6 +10,7 @@ eqs 5.2–5.4); then the gain schedule and its checks (ch. 5.3).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 import numpy as np
 
 from acmm.design import schedule as sch
@@ -42,9 +43,14 @@ class DesignedSchedule:
 
 
 def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | None,
-                    progress=None) -> DesignedSchedule:
+                    progress=None, map_points=map) -> DesignedSchedule:
     """Design every point of ``specs`` with settings ``s`` and fit the schedule ``sched``
     (when there are ≥ 2 points); ``progress(name)`` is called after each point.
+
+    The points are independent: ``map_points(fn, specs)`` designs them (the built-in ``map`` in
+    this process, or a process pool's map-like callable from the stage, as scipy's ``workers``),
+    and must yield the results in the order of ``specs``; each point's result does not depend on
+    where it was computed.
 
     Parameters
     ----------
@@ -56,15 +62,28 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
         The schedule settings (None: order 2 polynomial, no path check).
     progress : callable or None
         Called with each point's name after its design.
+    map_points : callable, optional
+        ``map_points(fn, specs)`` → iterable of ``fn(spec)`` in order (default: ``map``).
 
     Returns
     -------
     DesignedSchedule
         The point designs, the schedule and its checks.
+
+    Raises
+    ------
+    ConfigError
+        A schedule whose design points are all one station, or all at one pitch TEA.
     """
+    if len(specs) >= 2 and all(np.array_equal(p.inertia, specs[0].inertia) and np.array_equal(p.bias, specs[0].bias)
+                               for p in specs[1:]):
+        raise ConfigError(f"schedule: the {len(specs)} design points all have the pitch TEA of one station "
+                          "(is schedule.to the same station as the config itself?): a gain schedule in θ2* "
+                          "needs stations whose TEAs differ")
     points = []
-    for spec in specs:                      # TEA, model and sector LQR of each point (ch. 5.2)
-        points.append(sch.design_one(spec, s))
+    # TEA, model and sector LQR (or regional LMI) of each point (ch. 5.2)
+    for spec, point in zip(specs, map_points(partial(sch.design_one, s=s), specs)):
+        points.append(point)
         if progress is not None:
             progress(spec.name)
     if len(points) < 2:

@@ -118,8 +118,9 @@ def _sweep_task(root, fast, rerun, workers):
     return res, note, time.perf_counter() - t0
 
 
-#: rough run times (s) of the stages on one idle core, only to order the parallel tasks
-_COST = {"design:staircase": 1.2, "simulate:staircase": 0.4, "qpp design:qpp_siso": 2.0,
+#: rough relative run times of the stages on one idle core, only to order the parallel tasks (the
+#: stair-case's regional LMI points, in a report worker designed one after another, dominate)
+_COST = {"design:staircase": 25.0, "simulate:staircase": 0.4, "qpp design:qpp_siso": 2.0,
          "qpp simulate:qpp_siso": 1.0, "qpp design:qpp_manipulator": 1.8, "qpp simulate:qpp_manipulator": 1.0,
          "sweep": 2.7}
 

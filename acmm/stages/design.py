@@ -5,7 +5,10 @@ Split from :mod:`acmm.stages.runners` (issue 12).
 """
 from __future__ import annotations
 
+import multiprocessing
+import os
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +18,7 @@ from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
 from acmm.stages.certify import certificate_items, compute_certificate
 from acmm.stages.common import _as_config, _define_units, _in_system
 from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.pool import pool_map, process_pool, stop_pool
 from acmm_qpp.results import draw_figures, write_h5
 from acmm_qpp.runlock import locked_stage
 from acmm.io.design_file import DesignTable, _stored_digest, _unit_system, load_design_table, table_sha256
@@ -141,6 +145,30 @@ def design_hash(cfg: Config) -> str:
     return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
 
 
+def point_workers(pole_method: str, n_points: int) -> int:
+    """Processes that design a config's points: the regional LMI route's points (tens of seconds
+    each) on a process pool of one worker per available CPU (at most one per point); the sector
+    LQR's (about a second each), and any design inside a pool worker already (a sweep's, the
+    report's), in this process.  A point's result does not depend on where it is computed.
+
+    Parameters
+    ----------
+    pole_method : str
+        ``design.pole_method``.
+    n_points : int
+        Number of design points.
+
+    Returns
+    -------
+    int
+        Worker processes (1: in this process).
+    """
+    if pole_method != "lmi" or n_points < 2 or multiprocessing.parent_process() is not None:
+        return 1
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return max(1, min(cpus, n_points))
+
+
 def compute_design(config, progress=None) -> DesignResult:
     """Design every point of a config and fit the schedule (when there are ≥ 2 points).
 
@@ -169,7 +197,19 @@ def compute_design(config, progress=None) -> DesignResult:
 
     cfg = _as_config(config)
     t0 = time.perf_counter()
-    ds = design_schedule(sp.point_specs(cfg), design_settings(cfg), schedule_settings(cfg), progress)
+    specs = sp.point_specs(cfg)
+    workers = point_workers(cfg.design.pole_method, len(specs))
+    if workers <= 1:
+        ds = design_schedule(specs, design_settings(cfg), schedule_settings(cfg), progress)
+    else:
+        pool = process_pool(workers)
+        try:
+            ds = design_schedule(specs, design_settings(cfg), schedule_settings(cfg), progress,
+                                 map_points=partial(pool_map, pool))
+        except BaseException:
+            stop_pool(pool, abort=True)
+            raise
+        stop_pool(pool)
     table = design_table(ds.points, ds.fit, design_hash(cfg))
     return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check)
 

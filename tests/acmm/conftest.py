@@ -10,17 +10,26 @@ import pytest
 import yaml
 
 from acmm.io.config import load_config
-from acmm.stages.design import compute_design
+from acmm.stages.design import compute_design, run_design
 from acmm.plots import base as plot_base
 from acmm.plots import design as design_plots
 from acmm.plots import simulation as sim_plots
 
-from tests.conftest import CONFIGS
+from tests.conftest import LQR_ROUTE, CONFIGS
 
 
 @pytest.fixture(scope="session")
-def staircase():
-    return compute_design(load_config("staircase"))
+def staircase_lqr():
+    """The packaged stair-case designed on the report's route (:data:`tests.conftest.LQR_ROUTE`)."""
+    return compute_design(load_config("staircase", [LQR_ROUTE]))
+
+
+@pytest.fixture(scope="session")
+def staircase_shipped(tmp_path_factory):
+    """The packaged stair-case as shipped (regional LMI points, ~2.5 min on 2 cores): its
+    :class:`~acmm.stages.design.DesignResult` and the ``design.h5`` written for it (slow tests)."""
+    root = tmp_path_factory.mktemp("shipped")
+    return run_design(load_config("staircase", [f"output.root={root}"]), figures=False)
 
 
 UNIT = re.compile(r"^(?P<quantity>.{3,}?)\s*\((?P<unit>[^()]*(\([^()]*\))?[^()]*)\)\s*$")

@@ -5,7 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from acmm.io.config import load_config
 from acmm_qpp.errors import ConfigError
+
+from tests.conftest import LQR_ROUTE
 
 
 # ---------------------------------------------------------------- API: python-control systems
@@ -17,7 +20,7 @@ def test_scheduled_closed_loop_equals_independent_linearization():
     from acmm.model import linearize as lin
     from acmm.model.tea import resolve_bias, solve_tea
 
-    cfg = api.load_config("staircase")
+    cfg = load_config("staircase", [LQR_ROUTE])
     d = api.design(cfg)
     cl = d.scheduled_closed_loop(-20.0)
     # independent: the blend station with pitch TEA −20°, its TEA, the 24-state model, K(θ2*)
@@ -89,10 +92,10 @@ def test_design_points_and_plain_system_names():
     assert "$" not in d.loop_transfer("mb3").name
 
 
-def test_a_blend_point_with_a_dot_in_its_name_gives_a_valid_system(staircase):
+def test_a_blend_point_with_a_dot_in_its_name_gives_a_valid_system(staircase_lqr):
     from acmm import api
 
-    d = api.Design(staircase.config, staircase)
+    d = api.Design(staircase_lqr.config, staircase_lqr)
     name = next(n for n in d.names if "." in n)               # blend_0.017 ...
     assert d.closed_loop(name).name == f"closed loop at {name.replace('.', ',')}"
     assert d.loop_transfer(name).name == f"loop transfer at {name.replace('.', ',')}"

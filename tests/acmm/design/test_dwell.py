@@ -12,21 +12,29 @@ import scipy.linalg as sla
 
 from acmm.design.dwell import dwell_certificate, jump_ratios, lyapunov_matrices
 from acmm.io.config import load_config
+from acmm.io.design_file import load_design_table
 from acmm.stages.design import run_design
+
+from tests.conftest import LQR_ROUTE
 
 ORBIT_DWELL = 10.8                                   # orbits each stair-case level is held (ch. 6)
 
 
-@pytest.fixture(scope="module")
-def staircase_h5(tmp_path_factory):
-    root = tmp_path_factory.mktemp("dwell")
-    cfg = load_config("staircase", [f"output.root={root}"])
-    _, path = run_design(cfg, figures=False)
+@pytest.fixture(scope="module", params=["report's route", pytest.param("shipped", marks=pytest.mark.slow)])
+def staircase_h5(request, tmp_path_factory):
+    """(config, the ``dwell`` group of ``design.h5``, its design table) of the packaged stair-case
+    on the report's route (sector LQR points) and as shipped (regional LMI points, slow)."""
+    if request.param == "shipped":
+        r, path = request.getfixturevalue("staircase_shipped")
+        cfg = r.config
+    else:
+        cfg = load_config("staircase", [LQR_ROUTE, f"output.root={tmp_path_factory.mktemp('dwell')}"])
+        _, path = run_design(cfg, figures=False)
     with h5py.File(path, "r") as f:
         g = f["dwell"]
         data = {k: g[k][()] for k in g if isinstance(g[k], h5py.Dataset)}
         data["attrs"] = dict(g["tau_star"].attrs)
-    return cfg, data
+    return cfg, data, load_design_table(path)
 
 
 def _kron_lyapunov(A, lam):
@@ -40,7 +48,7 @@ def _kron_lyapunov(A, lam):
 
 
 def test_the_stored_certificate_holds_when_recomputed_independently(staircase_h5):
-    cfg, g = staircase_h5
+    cfg, g, _ = staircase_h5
     n = cfg.orbit_rate
     d = g["scales"]
     As = g["closed_loop"] / d[None, :, None] * d[None, None, :]
@@ -66,7 +74,7 @@ def test_the_stored_certificate_holds_when_recomputed_independently(staircase_h5
 
 def test_the_decay_rate_minimizes_the_dwell_time(staircase_h5):
     """λ is the minimizer of τ*(λ): a nearby λ on either side gives a longer certified dwell."""
-    cfg, g = staircase_h5
+    cfg, g, _ = staircase_h5
     d = g["scales"]
     As = g["closed_loop"] / d[None, :, None] * d[None, None, :]
     lam = float(g["decay_rate"])
@@ -81,13 +89,12 @@ def test_the_decay_rate_minimizes_the_dwell_time(staircase_h5):
 def test_the_transient_bound_holds_on_the_exact_linear_response(staircase_h5):
     """The exact response of the linear switched stair-case (levels held as in the scenario,
     the equilibrium jumping at each switch) stays inside the certified bounds on √V, |u| and |h|."""
-    cfg, g = staircase_h5
+    cfg, g, table = staircase_h5
     d = g["scales"]
     Acl, P, jumps, dwell = g["closed_loop"], g["lyapunov"], g["jump"], g["dwell"] * 2 * np.pi / cfg.orbit_rate
     from acmm.stages.certify import level_closed_loops
-    from acmm.stages.design import compute_design
 
-    _, gains, *_ = level_closed_loops(cfg, compute_design(cfg).table)
+    _, gains, *_ = level_closed_loops(cfg, table)
     x = np.zeros(24)
     for k in range(12):
         if k:
@@ -134,7 +141,7 @@ def test_acmm_certify_prints_the_certificate_and_strict_fails_an_unstable_claim_
     from acmm.cli.app import app
 
     run = lambda *a: CliRunner().invoke(app, ["certify", *a, f"output.root={tmp_path}"])   # noqa: E731
-    ok = run("staircase")
+    ok = run("staircase", LQR_ROUTE)
     assert ok.exit_code == 0 and "CERTIFIED" in ok.stdout and "linearized switched system" in ok.stdout, ok.output
     bad = run("mb3_decoupled", "--strict")
     assert bad.exit_code == 1 and "not stable" in bad.stdout and "strict:" in bad.output
@@ -146,9 +153,9 @@ def test_an_initial_offset_enters_the_transient_bound():
     from acmm.stages.certify import compute_certificate
     from acmm.stages.design import compute_design
 
-    cfg = load_config("staircase")
+    cfg = load_config("staircase", [LQR_ROUTE])
     table = compute_design(cfg).table
     at_rest = compute_certificate(cfg, table).certificate
-    offset = compute_certificate(load_config("staircase", ["simulation.initial_offset=[3,3,3]"]), table).certificate
+    offset = compute_certificate(load_config("staircase", [LQR_ROUTE, "simulation.initial_offset=[3,3,3]"]), table).certificate
     assert at_rest.transient[0] == 0 and offset.transient[0] > 0
     assert np.all(offset.transient[1:] >= at_rest.transient[1:]) and offset.tau_star == at_rest.tau_star

@@ -96,3 +96,55 @@ def test_the_control_energy_is_below_the_lqr_routes(mb3_both_routes):
 
     assert energy(lmi) < energy(lqr)
     assert energy(lmi) == pytest.approx(lmi["energy"], rel=1e-6)
+
+
+def _points(path):
+    """Every stored design point of a ``design.h5`` (in the order of the points)."""
+    with h5py.File(path, "r") as f:
+        out = []
+        for key in sorted(f["points"]):
+            g = f["points"][key]
+            p = {k: g[k][()] for k in ("A", "B", "K", "scales")}
+            if "lmi" in g:
+                p["X"] = g["lmi"]["X"][()]
+            out.append(p)
+    return out
+
+
+def _energy(p, n):
+    As, Bs, Ks = _scaled(p, n)
+    W = sla.solve_continuous_lyapunov(As - Bs @ Ks, -Bs @ Bs.T)
+    return float(np.trace(Ks @ W @ Ks.T))
+
+
+def test_every_shipped_staircase_point_meets_the_lmi_targets(staircase_shipped, staircase_lqr):
+    """Issue 32, at every point of the shipped stair-case (MB3 … AC, regional LMI): every pole
+    ≥ 0.1n inside the sector, κ ≤ 2e4 and the stored certificate proving the regions (eigenvalues
+    of the stored matrices), no pole leaving the sector under 100 random relative gain errors of
+    3e-4, and less control energy than the report's route at the same point (its gains from the
+    LQR stair-case of the same config)."""
+    r, path = staircase_shipped
+    n, phi, mu = r.config.orbit_rate, np.radians(45.0), 0.1
+    pts = _points(path)
+    lqr_K = [p.lqr.K for p in staircase_lqr.points]
+    assert len(pts) == len(lqr_K) == 12
+    rng = np.random.default_rng(32)
+    for k, p in enumerate(pts):
+        lam = np.linalg.eigvals(p["A"] - p["B"] @ p["K"])
+        assert _margin(lam, n).min() >= mu, k
+        As, Bs, Ks = _scaled(p, n)
+        _, Vs = np.linalg.eig(As - Bs @ Ks)
+        kappa = np.linalg.norm(Vs, axis=0) * np.linalg.norm(np.linalg.inv(Vs), axis=1)
+        assert kappa.max() <= 2e4, (k, kappa.max())
+        X = p["X"]
+        assert np.linalg.eigvalsh(X).min() > 0
+        M = (As - Bs @ Ks) @ X
+        assert np.linalg.eigvalsh(M + M.T + 2 * (0.5 + mu) * X).max() < 0, k
+        Mc = M + mu / np.sin(phi) * X
+        cone = np.block([[np.sin(phi) * (Mc + Mc.T), np.cos(phi) * (Mc - Mc.T)],
+                         [np.cos(phi) * (Mc.T - Mc), np.sin(phi) * (Mc + Mc.T)]])
+        assert np.linalg.eigvalsh(0.5 * (cone + cone.T)).max() < 0, k
+        for _ in range(100):
+            Kp = p["K"] * (1 + 3e-4 * rng.uniform(-1, 1, p["K"].shape))
+            assert _margin(np.linalg.eigvals(p["A"] - p["B"] @ Kp), n).min() > 0, k
+        assert _energy(p, n) < _energy({**p, "K": lqr_K[k]}, n), k

@@ -18,7 +18,7 @@ from acmm.io.config import load_config
 from acmm_qpp.errors import NoEquilibriumError
 from acmm.stages.runners import compute_tea
 
-from tests.conftest import CONFIGS
+from tests.conftest import CONFIGS, LQR_ROUTE
 
 N = 0.0011
 TABLE1 = {"mb3": (1.3, -44.7, 2.1), "ac": (0.19, -5.0, 0.56)}
@@ -289,7 +289,7 @@ def test_schedule_end_point_gets_its_asked_attitude():
     from acmm.design.schedule_points import point_specs
     from acmm.design.settings import design_settings
 
-    cfg = load_config(CONFIGS / "staircase.yaml", ["schedule.to.disturbance.bias_from_tea=[0,-60,0]"])
+    cfg = load_config(CONFIGS / "staircase.yaml", [LQR_ROUTE, "schedule.to.disturbance.bias_from_tea=[0,-60,0]"])
     end = point_specs(cfg)[-1]
     assert end.theta_guess is not None and abs(np.degrees(end.theta_guess[1]) + 60) > 5
     t = design_one(end, design_settings(cfg)).tea

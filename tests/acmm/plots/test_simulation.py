@@ -14,13 +14,15 @@ from acmm.model.linearize import STATE_NAMES
 
 from tests.acmm.conftest import _check_labels
 
+from tests.conftest import LQR_ROUTE
+
 
 def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_path):
     from acmm.simulate import kernel as sm
     from acmm.simulate import scenario as scen
     from acmm.stages.design import compute_design
 
-    cfg = load_config("staircase")
+    cfg = load_config("staircase", [LQR_ROUTE])
     r = compute_design(cfg)
     design_plots.gain_schedule_grid(r.table.tea[:, 1], r.table.gain, r.fit, STATE_NAMES, tmp_path / "g.png",
                              units=plot_base.state_units(cfg.design.drf_mode))

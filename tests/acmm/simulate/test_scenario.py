@@ -9,6 +9,8 @@ from acmm.simulate import reference
 from acmm.io.config import load_config
 from acmm.stages.simulate import run_simulate
 
+from tests.conftest import LQR_ROUTE
+
 
 def test_level_statistics_do_not_depend_on_the_output_sampling(tmp_path):
     """Per-level peak momentum and steady error came from the output samples: 9.58° at 60 s but
@@ -48,7 +50,7 @@ def test_a_level_without_a_sample_in_its_second_half_keeps_its_statistics(tmp_pa
     dwell; its steady error was dropped (NaN, 'the run ended before it') although the kernel had
     tracked it (review)."""
     res, path = run_simulate(load_config("staircase", [
-        "name=sparse", "schedule.n_points=3", "schedule.fit=least_squares", "schedule.n_check=2",
+        "name=sparse", LQR_ROUTE, "schedule.n_points=3", "schedule.fit=least_squares", "schedule.n_check=2",
         "simulation.orbits=1", "simulation.levels=[0, 0.3, 0.6]", "simulation.sample_interval=3000",
         "output.figures=false", f"output.root={tmp_path}"]))
     assert [s["level"] for s in res.stats] == [0, 1, 2]

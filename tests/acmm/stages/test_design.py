@@ -18,6 +18,8 @@ from acmm.io.config import load_config
 from acmm.stages.design import compute_design, design_for, run_design
 from acmm.io.design_file import load_design_table
 
+from tests.conftest import LQR_ROUTE
+
 N = 0.0011
 
 
@@ -26,16 +28,16 @@ def _inside_sector(poles, n, sigma=0.5, half_angle_deg=45.0):
     return bool(np.all(re <= -sigma * n) and np.all(im <= np.tan(np.radians(half_angle_deg)) * -re))
 
 
-def test_staircase_points_span_the_report_range(staircase):
-    th2 = np.degrees(staircase.table.tea[:, 1])
+def test_staircase_points_span_the_report_range(staircase_lqr):
+    th2 = np.degrees(staircase_lqr.table.tea[:, 1])
     assert len(th2) >= 10
     assert th2[0] == pytest.approx(-44.7, abs=0.01) and th2[-1] == pytest.approx(-5.0, abs=0.01)
     # evenly spaced in pitch TEA (schedule.spacing: tea; s interpolated on an 81-point track)
     assert np.allclose(np.diff(th2), np.diff(th2).mean(), rtol=1e-2)
 
 
-def test_every_design_point_in_sector_with_exact_lqr_gain(staircase):
-    for p in staircase.points:
+def test_every_design_point_in_sector_with_exact_lqr_gain(staircase_lqr):
+    for p in staircase_lqr.points:
         m, res = p.model, p.lqr
         poles = np.linalg.eigvals(m.A - m.B @ res.K)
         assert _inside_sector(poles, N), p.spec.name
@@ -52,12 +54,12 @@ def test_every_design_point_in_sector_with_exact_lqr_gain(staircase):
         assert np.max(np.abs(k_again - res.K)) <= 1e-8 * np.max(np.abs(res.K))
 
 
-def test_design_points_well_conditioned_with_margin(staircase):
+def test_design_points_well_conditioned_with_margin(staircase_lqr):
     """Every stair-case point (MB3 and AC are its ends): every pole ≥ 0.1n inside the sector and
     the largest eigenvalue condition number in the stored state scaling ≤ 1e5, both recomputed
     with scipy's left/right eigenvectors."""
     ours, theirs = [], []
-    for p in staircase.points:
+    for p in staircase_lqr.points:
         m, res = p.model, p.lqr
         d = m.scales
         acl = (m.A - m.B @ res.K) / d[:, None] * d[None, :]
@@ -92,11 +94,12 @@ def _worst_on_own_blend(r, gain_at, count: int = 25):
     return worst
 
 
-def test_table_schedule_is_stable_along_the_whole_path(staircase):
-    """The shipped schedule is the table look-up (K linear in θ2* between the 12 design points,
-    report ch. 6); with it every local loop has Re λ ≤ −0.25n at ≥ 200 TEAs.  Recomputed here
+def test_table_schedule_is_stable_along_the_whole_path(staircase_lqr):
+    """The packaged schedule's form, the table look-up (K linear in θ2* between the 12 design
+    points, report ch. 6), with the report's route's points: every local loop has Re λ ≤ −0.25n at
+    ≥ 200 TEAs.  Recomputed here
     with np.interp of the point gains at 25 blend points of our own."""
-    r = staircase
+    r = staircase_lqr
     assert r.fit.form == "table"
     pc = r.path_check
     assert pc.theta2.size >= 200 and pc.max_real.max() <= -0.25
@@ -112,10 +115,14 @@ def test_table_schedule_is_stable_along_the_whole_path(staircase):
 
 
 @pytest.mark.slow
-def test_table_schedule_is_stable_on_a_thousand_teas_of_the_path(staircase):
-    """Judged on 1 001 TEAs of the path (issue 32 item 2), not only at the design points: every
-    local loop of the shipped schedule has Re λ ≤ −0.25n, by the numpy eigenvalues of our own
+def test_shipped_schedule_is_stable_on_a_thousand_teas_of_the_path(staircase_shipped):
+    """Judged on 1 001 TEAs of the path (issue 32 item 2), not only at the design points: the
+    shipped stair-case (regional LMI points, table look-up) is checked on ≥ 1 000 path TEAs by the
+    design itself, and every local loop has Re λ ≤ −0.25n by the numpy eigenvalues of our own
     blend (~5 s)."""
+    staircase = staircase_shipped[0]
+    assert staircase.config.design.pole_method == "lmi" and staircase.fit.form == "table"
+    assert staircase.path_check.theta2.size >= 1000 and staircase.path_check.max_real.max() <= -0.25
     th = np.array([p.tea.theta[1] for p in staircase.points])
     Ks = np.array([p.lqr.K for p in staircase.points])
 
@@ -127,7 +134,8 @@ def test_table_schedule_is_stable_on_a_thousand_teas_of_the_path(staircase):
 
 @pytest.fixture(scope="module")
 def staircase_polynomial():
-    return compute_design(load_config("staircase", ["schedule.form=polynomial", "schedule.fit=closed_loop"]))
+    return compute_design(load_config("staircase", [LQR_ROUTE, "schedule.form=polynomial",
+                                                     "schedule.fit=closed_loop"]))
 
 
 def test_quadratic_schedule_is_stable_along_the_whole_path(staircase_polynomial):
@@ -153,12 +161,12 @@ def test_an_edited_design_h5_is_designed_again_not_simulated(tmp_runs, run_acmm,
     traceback, exit 1); one whose K was scaled by 1e6 under the right design_hash was simulated
     (52 M steps).  The design is now reused only when its arrays have the points' shapes, are
     finite and match the digest written with them; else it is designed again."""
-    r = run_acmm("design", "staircase", f"output.units={units}", "--no-figures")
+    r = run_acmm("design", "staircase", LQR_ROUTE, f"output.units={units}", "--no-figures")
     assert r.exit_code == 0, r.output
     path = tmp_runs / "runs" / "staircase" / "design.h5"
     with h5py.File(path, "r") as f:
         K0 = f["K"][()]
-    assert design_for(load_config("staircase", [f"output.units={units}"]))[1].startswith("reused")
+    assert design_for(load_config("staircase", [LQR_ROUTE, f"output.units={units}"]))[1].startswith("reused")
     with h5py.File(path, "r+") as f:
         if edit == "K of another shape":
             del f["K"]
@@ -169,7 +177,8 @@ def test_an_edited_design_h5_is_designed_again_not_simulated(tmp_runs, run_acmm,
             f["K"][0, 0, 0] = np.nan
         else:
             f["schedule/coef"][0, 0, 0] += 1e-9
-    r = run_acmm("simulate", "staircase", f"output.units={units}", "simulation.orbits=1", "--no-figures")
+    r = run_acmm("simulate", "staircase", LQR_ROUTE, f"output.units={units}", "simulation.orbits=1",
+                 "--no-figures")
     assert r.exit_code == 0 and "Traceback" not in r.output, r.output
     with h5py.File(path, "r") as f:
         np.testing.assert_array_equal(f["K"][()], K0)            # designed again, the same gains
@@ -203,7 +212,7 @@ def test_design_h5_is_self_describing_and_reused(tmp_path, monkeypatch):
 
 def test_table_form_prints_the_check_that_strict_judges(tmp_runs, run_acmm):
     """schedule.form: table printed no check lines, yet --strict failed on the check's margin."""
-    r = run_acmm("design", "staircase", "schedule.form=table", "schedule.fit=least_squares",
+    r = run_acmm("design", "staircase", LQR_ROUTE, "schedule.form=table", "schedule.fit=least_squares",
                  "schedule.n_points=4", "--no-figures")
     assert r.exit_code == 0, r.output
     assert "scheduled gain (table) on the local models" in r.stdout and "scheduled closed loops:" in r.stdout
