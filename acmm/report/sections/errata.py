@@ -353,8 +353,12 @@ def design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str
     ctrb = ctrb_mod.controllability(lin.design_point(I, th, n, model="no_cross_inertia", drf_mode=d.drf_mode))
     rows.append(["sector LQR (Sunkel–Shieh)", "algorithm cited, not available", "shifted LQR + optimal pole "
                  "shifting of the DRF poles (Amin 1985); K exact LQR gain of a Q ⪰ 0",
-                 f"{len(pts)} stair-case points: worst margin {min(float(p['sector_margin']) for p in pts):+.4f} n, "
-                 f"worst residual {max(float(p['riccati_residual']) for p in pts):.1e}; cross-inertia-free MB3 model "
+                 f"{len(pts)} stair-case points"
+                 + (" (designed by the regional LMI route, pre-conditioned by this sector LQR)"
+                    if all("lmi" in p for p in pts) else "")
+                 + f": worst margin {min(float(p['sector_margin']) for p in pts):+.4f} n, "
+                 f"worst sector-LQR residual {max(float(p['riccati_residual']) for p in pts):.1e}; "
+                 "cross-inertia-free MB3 model "
                  f"PBH σmin/σmax = {ctrb.min_ratio:.1e} (nearly uncontrollable)",
                  "tests/acmm/design/test_sector_lqr.py, tests/acmm/stages/test_design.py"])
     rows.append(["saturation", "±150 ft·lbf, 20 000 ft·lbf·s", "CMG at its limit delivers only the torque that stops "

@@ -58,14 +58,21 @@ def summary(ctx: SectionWriter) -> None:
     else:
         how = (f"then an order-{order} polynomial schedule in θ2* (the report uses order 2), fitted by "
                f"{_decode(sc.get('fit_method', b'least_squares'))}")
+    lmi = all("lmi" in p for p in pts)
+    route = ("regional pole placement by LMIs (every pole certified in the sector by a Lyapunov matrix, "
+             "minimal H2 energy bound, coordinates pre-conditioned by the sector LQR; guide: 'The regional "
+             "LMI route')" if lmi else "sector LQR")
     ctx.doc.p(f"{len(pts)} design points along the MB3 → AC blend, evenly spaced in pitch TEA from "
-              f"{np.degrees(d['tea'][0, 1]):.2f}° to {np.degrees(d['tea'][-1, 1]):.2f}°; sector LQR "
+              f"{np.degrees(d['tea'][0, 1]):.2f}° to {np.degrees(d['tea'][-1, 1]):.2f}°; {route} "
               f"(Re λ ≤ −{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g}°) per point, "
               f"{how} (guide: docs/results/design.md, 'The gain schedule').")
     cm = np.asarray(sc["check_margin"])
     ctx.doc.table(["quantity", "value"], [
-        ["worst sector margin of the LQR gains (units of n, > 0 inside)", f"{margins.min():+.4f}"],
-        ["worst relative Riccati residual (scaled coordinates)", f"{resid.max():.2e}"],
+        ["worst sector margin of the point gains (units of n, > 0 inside)", f"{margins.min():+.4f}"],
+    ] + ([["smallest margin certified by the LMI's Lyapunov matrices (units of n)",
+           f"{min(float(p['lmi']['certified_margin']) for p in pts):+.4f}"]] if lmi else []) + [
+        ["worst relative Riccati residual (scaled coordinates)" + (" of the pre-conditioning sector LQRs" if lmi else ""),
+         f"{resid.max():.2e}"],
     ] + ([["worst Riccati backward error after refinement (the accepted quantity)", f"{max(backward):.1e}"]]
          if backward else []) + ([
         ["worst relative schedule fit residual (RMS / max|K_ij|)", f"{np.max(sc['rel_residual']):.3f}"]]
@@ -188,15 +195,19 @@ def pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:
 def _conditioning(ctx: SectionWriter, d, pts):
     """Per-point conditioning and robustness; the scheduled gain along the whole path (tables)."""
     if "max_eig_condition" in pts[0]:
+        lmi = all("lmi" in p for p in pts)
         rows = []
         for name, p in zip(d["names"], pts):
             rows.append([_decode(name), f"{np.degrees(float(p['tea'][1])):.2f}",
                          f"{float(p['sector_margin']):+.3f}", f"{float(p['max_eig_condition']):.2e}",
                          f"{float(p['robustness_radius']):.1e}",
-                         f"{float(p['robustness_radius_elementwise']):.1e}",
-                         f"{float(p['riccati_condition']):.1e}"])
+                         f"{float(p['robustness_radius_elementwise']):.1e}"]
+                        + ([f"{float(p['lmi']['random_radius']):.1e}"] if lmi else [])
+                        + [f"{float(p['riccati_condition']):.1e}"])
         ctx.doc.table(["point", "θ2* (deg)", "sector margin (n)", "max eigenvalue condition (scaled)",
-                       "sector robustness radius ‖δK‖/‖K‖", "radius, elementwise", "CARE condition"],
+                       "sector robustness radius ‖δK‖/‖K‖", "radius, elementwise"]
+                      + (["radius, random re-check"] if lmi else [])
+                      + ["CARE condition" + (" (pre-conditioning LQR)" if lmi else "")],
                        rows, "Design points: conditioning of the closed loop and the estimated smallest "
                              "relative gain error that moves a pole out of the sector (first order)")
     sc = d["schedule"]
