@@ -48,7 +48,7 @@ def set_parent_death_signal() -> bool:
         return False
 
 
-def process_pool(workers: int, initializer=None, start_method: str | None = None) -> cf.ProcessPoolExecutor:
+def process_pool(workers: int, initializer=None) -> cf.ProcessPoolExecutor:
     """A process pool of ``workers`` processes set up by :func:`_pool_worker`.
 
     Parameters
@@ -57,21 +57,13 @@ def process_pool(workers: int, initializer=None, start_method: str | None = None
         Number of worker processes.
     initializer : callable, optional
         Called (without arguments) in each worker after its set-up (e.g. to empty a cache).
-    start_method : {"fork", "spawn", "forkserver"}, optional
-        How the workers start (default: ``"fork"`` on Linux, which inherits this process's
-        imports, else the platform's default).  ``"spawn"`` for tasks whose libraries are not
-        fork-safe once used in the parent (Clarabel's solver threads: a forked child of a process
-        that has already solved a program hangs in its next solve).
 
     Returns
     -------
     concurrent.futures.ProcessPoolExecutor
-        The pool.
+        The pool (Linux: forked workers, which inherit this process's imports).
     """
-    if start_method is not None:
-        ctx = multiprocessing.get_context(start_method)
-    else:
-        ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
+    ctx = multiprocessing.get_context("fork") if sys.platform.startswith("linux") else None
     return cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_worker,
                                   initargs=(os.getpid(), initializer))
 

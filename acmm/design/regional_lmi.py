@@ -58,6 +58,13 @@ import scipy.linalg as sla
 from acmm.design.sector_lqr import eigen_conditioning, sector_margin, sector_robustness
 from acmm_qpp.errors import DesignError
 
+#: Clarabel options of every solve besides the tolerances: one thread.  Its solver threads are not
+#: fork-safe (a forked child of a process that has solved a program with them hung in its next
+#: solve: the LMI stair-case's points on the process pool after an in-process LMI design), and one
+#: thread makes the result independent of the machine's core count; on these programs (a dense
+#: KKT factorization per iteration) more threads were not faster.
+CLARABEL_OPTIONS = {"max_threads": 1}
+
 _RELAX = ("relax design.min_margin, design.sector.sigma, design.sector.half_angle_deg or "
           "design.lmi.disk_radius (or the cost weights: design.lmi.dilation, design.R)")
 
@@ -324,7 +331,7 @@ def _solve_pass(As, Bs, Gs, T, s_u, obj_scale, st: RegionalLMISettings, tol):
         warnings.simplefilter("ignore")
         try:
             prob.solve(solver=cp.CLARABEL, tol_gap_abs=tol, tol_gap_rel=tol, tol_feas=tol,
-                       max_iter=st.max_iter)
+                       max_iter=st.max_iter, **CLARABEL_OPTIONS)
         except cp.error.SolverError as exc:
             return f"solver_error ({exc})", np.nan, 0, None, None, None
     iters = int(prob.solver_stats.num_iters or 0)

@@ -147,8 +147,7 @@ def design_hash(cfg: Config) -> str:
 
 def point_workers(pole_method: str, n_points: int) -> int:
     """Processes that design a config's points: the regional LMI route's points (tens of seconds
-    each) on a process pool of one worker per available CPU (at most one per point, started by
-    ``spawn``: Clarabel is not fork-safe once used in the parent); the sector
+    each) on a process pool of one worker per available CPU (at most one per point); the sector
     LQR's (about a second each), and any design inside a pool worker already (a sweep's, the
     report's), in this process.  A point's result does not depend on where it is computed.
 
@@ -203,9 +202,7 @@ def compute_design(config, progress=None) -> DesignResult:
     if workers <= 1:
         ds = design_schedule(specs, design_settings(cfg), schedule_settings(cfg), progress)
     else:
-        # spawned, not forked: a forked child of a process that has already run Clarabel (a test
-        # session, a notebook, the report's serial path) hangs in its solver's thread pool
-        pool = process_pool(workers, start_method="spawn")
+        pool = process_pool(workers)
         try:
             ds = design_schedule(specs, design_settings(cfg), schedule_settings(cfg), progress,
                                  map_points=partial(pool_map, pool))

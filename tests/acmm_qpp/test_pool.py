@@ -9,7 +9,6 @@ import textwrap
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from tests.conftest import REPO as ROOT
@@ -45,29 +44,3 @@ def test_a_pool_worker_dies_with_its_parent_even_under_sigkill(tmp_path):
         time.sleep(0.02)
     os.kill(worker, signal.SIGKILL)
     pytest.fail("the pool worker outlived its parent")
-
-
-def _sdp(size: int) -> float:
-    """A semidefinite program solved by Clarabel: min tr X s.t. X ⪰ I (optimum = size)."""
-    import cvxpy as cp
-
-    X = cp.Variable((size, size), symmetric=True)
-    prob = cp.Problem(cp.Minimize(cp.trace(X)), [X >> np.eye(size)])
-    prob.solve(solver=cp.CLARABEL)
-    return float(prob.value)
-
-
-def test_a_spawned_pool_solves_after_the_parent_has_used_clarabel():
-    """A forked child of a process that has already solved a 60 × 60 SDP with Clarabel hung in
-    its next solve (the regional LMI stair-case after an in-process LMI design, in the test
-    session): the design stage's pool is spawned (``start_method="spawn"``), and its workers solve."""
-    from acmm_qpp.pool import pool_map, process_pool, stop_pool
-
-    assert _sdp(60) == pytest.approx(60.0, rel=1e-6)
-    pool = process_pool(2, start_method="spawn")
-    try:
-        futures = [pool.submit(_sdp, 60) for _ in range(2)]
-        assert [f.result(timeout=120) for f in futures] == pytest.approx([60.0, 60.0], rel=1e-6)
-        assert list(pool_map(pool, _sdp, [3, 4])) == pytest.approx([3.0, 4.0], rel=1e-6)
-    finally:
-        stop_pool(pool, abort=True)

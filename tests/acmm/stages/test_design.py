@@ -232,3 +232,33 @@ def test_a_fifo_in_place_of_design_h5_is_designed_again_not_a_hang(tmp_path, mon
     table, note = design_for(cfg)
     assert note.startswith("designed") and (run / "design.h5").is_file()
     assert design_for(cfg)[1].startswith("reused")
+
+
+def _sdp(size: int) -> float:
+    """A semidefinite program solved by Clarabel with the regional LMI route's options:
+    min tr X s.t. X ⪰ I (optimum = size)."""
+    import cvxpy as cp
+
+    from acmm.design.regional_lmi import CLARABEL_OPTIONS
+
+    X = cp.Variable((size, size), symmetric=True)
+    prob = cp.Problem(cp.Minimize(cp.trace(X)), [X >> np.eye(size)])
+    prob.solve(solver=cp.CLARABEL, **CLARABEL_OPTIONS)
+    return float(prob.value)
+
+
+def test_pool_workers_solve_lmis_after_the_parent_has():
+    """With Clarabel's default threads a forked child of a process that had solved a 60 × 60 SDP
+    hung in its next solve (the LMI stair-case's points on the design stage's pool after an
+    in-process LMI design, in the test session); with the route's options (one thread) the forked
+    workers of the same pool solve."""
+    from acmm_qpp.pool import pool_map, process_pool, stop_pool
+
+    assert _sdp(60) == pytest.approx(60.0, rel=1e-6)
+    pool = process_pool(2)
+    try:
+        futures = [pool.submit(_sdp, 60) for _ in range(2)]
+        assert [f.result(timeout=120) for f in futures] == pytest.approx([60.0, 60.0], rel=1e-6)
+        assert list(pool_map(pool, _sdp, [3, 4])) == pytest.approx([3.0, 4.0], rel=1e-6)
+    finally:
+        stop_pool(pool, abort=True)
