@@ -75,8 +75,9 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
     ConfigError
         A schedule whose design points are all one station, or all at one pitch TEA.
     """
-    if len(specs) >= 2 and all(np.array_equal(p.inertia, specs[0].inertia) and np.array_equal(p.bias, specs[0].bias)
-                               for p in specs[1:]):
+    # (a blend of a station with itself differs from it only by rounding)
+    if len(specs) >= 2 and all(np.allclose(p.inertia, specs[0].inertia, rtol=1e-12, atol=0)
+                               and np.allclose(p.bias, specs[0].bias, rtol=1e-12, atol=1e-300) for p in specs[1:]):
         raise ConfigError(f"schedule: the {len(specs)} design points all have the pitch TEA of one station "
                           "(is schedule.to the same station as the config itself?): a gain schedule in θ2* "
                           "needs stations whose TEAs differ")

@@ -1,5 +1,7 @@
 """The simulation stage (acmm.stages.simulate): the report's claim 2 (130 orbits of the
 stair-case), a divergence as a result, an inconsistent simulation refused before writing."""
+import shutil
+
 import h5py
 import numpy as np
 import pytest
@@ -11,9 +13,14 @@ ORBIT = 2 * np.pi / 0.0011
 
 
 @pytest.mark.slow
-def test_claim2_staircase_130_orbits(tmp_path, monkeypatch):
+def test_claim2_staircase_130_orbits(tmp_path, monkeypatch, staircase_shipped):
     monkeypatch.chdir(tmp_path)
+    # the session's shipped design (minutes of LMI solves), reused as `acmm simulate` reuses a
+    # matching design.h5
+    (tmp_path / "runs" / "staircase").mkdir(parents=True)
+    shutil.copy(staircase_shipped[1], tmp_path / "runs" / "staircase" / "design.h5")
     res, path = run_simulate(load_config("staircase"))
+    assert res.design_note.startswith("reused"), res.design_note
     assert res.sim.verdict == "bounded"
     assert res.sim.t[-1] == pytest.approx(130 * ORBIT)
     assert len(res.stats) == 12
