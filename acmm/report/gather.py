@@ -58,7 +58,8 @@ class Gathered:
 
 
 def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
-    """The six packaged configs of the report, keyed by config name (``--fast``: short stair-case).
+    """The six packaged configs of the report and the stair-case on the report's route, keyed by
+    config name (``--fast``: short stair-case).
 
     Parameters
     ----------
@@ -71,12 +72,37 @@ def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
     -------
     dict
         ``"mb3"``, ``"mb3_decoupled"``, ``"ac"``, ``"staircase"`` → acmm config (Table 1, ch. 5–6);
+        ``"staircase_lqr"`` → the stair-case on the report's route (:func:`reports_route`);
         ``"qpp_siso"``, ``"qpp_manipulator"`` → qpp config (ch. 13–14).
     """
     cfgs = {name: acmm_config(name, root, fast=fast and name == "staircase")
             for name in ("mb3", "mb3_decoupled", "ac", "staircase")}
+    cfgs["staircase_lqr"] = reports_route(cfgs["staircase"])
     cfgs.update({name: qpp_config(name, root) for name in ("qpp_siso", "qpp_manipulator")})
     return cfgs
+
+
+def reports_route(cfg):
+    """The stair-case ``cfg`` on the report's route (sector LQR points, ``design.pole_method:
+    shift``), named ``<name>_lqr``: the comparison beside the packaged regional LMI route.
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The stair-case config (:func:`acmm.report.stage_results.acmm_config`).
+
+    Returns
+    -------
+    acmm.io.config.Config
+        The same config with the other route and name.
+    """
+    from acmm.io.config import parse_config
+
+    data = cfg.model_dump(mode="json")
+    data["name"] = f"{data['name']}_lqr"
+    data["design"]["pole_method"] = "shift"
+    data["description"] = f"{data['description']} [the report's route: sector LQR points]"
+    return parse_config(data, source=f"{cfg.name} on the report's route")
 
 
 def _design_task(cfg, rerun, donors):
@@ -120,7 +146,8 @@ def _sweep_task(root, fast, rerun, workers):
 
 #: rough relative run times of the stages on one idle core, only to order the parallel tasks (the
 #: stair-case's regional LMI points, in a report worker designed one after another, dominate)
-_COST = {"design:staircase": 25.0, "simulate:staircase": 0.4, "qpp design:qpp_siso": 2.0,
+_COST = {"design:staircase": 25.0, "simulate:staircase": 0.4, "design:staircase_lqr": 1.2,
+         "simulate:staircase_lqr": 0.4, "qpp design:qpp_siso": 2.0,
          "qpp simulate:qpp_siso": 1.0, "qpp design:qpp_manipulator": 1.8, "qpp simulate:qpp_manipulator": 1.0,
          "sweep": 2.7}
 
@@ -158,11 +185,11 @@ def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rer
     """
     full = acmm_config("staircase", root)
     tasks = []
-    for name in ("mb3", "mb3_decoupled", "ac", "staircase"):
+    for name in ("mb3", "mb3_decoupled", "ac", "staircase", "staircase_lqr"):
         donors = [full.run_dir()] if cfgs[name].name != full.name else []
         tasks.append(_stage(f"design:{name}", _design_task, (), (cfgs[name], rerun, donors),
                             _COST.get(f"design:{name}", 0.1)))
-    for name in ("mb3", "mb3_decoupled", "staircase"):
+    for name in ("mb3", "mb3_decoupled", "staircase", "staircase_lqr"):
         tasks.append(_stage(f"simulate:{name}", _simulate_task, (f"design:{name}",), (cfgs[name], rerun),
                             _COST.get(f"simulate:{name}", 0.1) if not fast else 0.1))
     for name in ("qpp_siso", "qpp_manipulator"):

@@ -144,6 +144,8 @@ PARTS = [
     ("table1", "table1", table1.build, (), (), 0.1),
     ("schedule", "schedule", schedule.summary, (_STAIR,), (), 0.2),
     ("schedule/paths", "schedule", schedule.path_figures, (_STAIR,), (), 0.75),
+    ("schedule/routes", "schedule", schedule.routes,
+     (_STAIR, _design("staircase_lqr"), _SIM, _simulate("staircase_lqr")), (), 0.1),
     ("poles", "schedule", schedule.true_poles, (_MB3, _DEC), (), 0.05),
     ("schedule/gains", "schedule", schedule.gain_figure, (_STAIR,), (), 1.6),
     ("schedule/poles", "schedule", schedule.pole_figure, (_STAIR, _MB3, _DEC), ("poles",), 0.3),

@@ -89,6 +89,46 @@ def summary(ctx: SectionWriter) -> None:
         _dwell(ctx, d["dwell"], cfg.orbit_rate)
 
 
+def routes(ctx: SectionWriter) -> None:
+    """The packaged stair-case (its route, normally regional LMI points) beside the same
+    stair-case on the report's route (sector LQR points), both table look-up schedules judged on
+    the same path TEAs, simulated and certified (issue 32 item 5; the guide's routes table has the
+    report's quadratic form too).
+
+    Parameters
+    ----------
+    ctx : acmm.report.context.SectionWriter
+        The two configs' ``design.h5`` and ``sim.h5``.
+    """
+    from acmm.design.regional_lmi import control_energy
+    from acmm.model.state_scaling import torque_scale
+
+    cfgs = ctx.g.configs
+    rows = []
+    for key in ("staircase", "staircase_lqr"):
+        cfg = cfgs[key]
+        d, sim = ctx.data("acmm design:" + cfg.name), ctx.data("acmm simulate:" + cfg.name)
+        pts = [d["points"][k] for k in sorted(d["points"])]
+        lmi = all("lmi" in p for p in pts)
+        energy = max(control_energy(p["A"], p["B"], p["K"], cfg.orbit_rate, p["scales"], torque_scale(p["scales"]))
+                     for p in pts)
+        pa, g = d["schedule"].get("path", {}), d.get("dwell", {})
+        tau = f"{float(g['tau_star']):.2f} orbit" if "tau_star" in g else "—"
+        rows.append([("regional LMI points" if lmi else "sector LQR points") + f" (`{cfg.name}`"
+                     + (", packaged)" if key == "staircase" else ", the report's route)"),
+                     f"{max(float(p['max_eig_condition']) for p in pts):.2g}",
+                     f"{min(float(p['robustness_radius_elementwise']) for p in pts):.1e}",
+                     f"{min(float(p['lmi']['random_radius']) for p in pts):.1e}" if lmi else "—",
+                     f"{energy:.3g}",
+                     f"{np.max(pa['max_real']):+.3f}" if "max_real" in pa else "—",
+                     f"{np.max(sim['levels']['peak_momentum']):.0f}", tau])
+    ctx.doc.table(["stair-case (route)", "κ max (points)", "robustness radius (first order, elementwise, min)",
+                   "radius (random re-check, min)", "control energy (max over points)",
+                   "largest Re λ on the path (n)", "peak |h| (ft·lbf·s)", "certified dwell τ*"], rows,
+                  "The two design routes on the stair-case (table look-up schedules); the ±30 % Monte Carlo "
+                  "of each route's fixed MB3 and AC gains is in the guide (docs/results/robustness.md)")
+
+
 def _dwell(ctx: SectionWriter, g: dict, n: float) -> None:
     """The stair-case's dwell-time certificate (``design.h5`` group ``dwell``,
     :mod:`acmm.design.dwell`): the systematic procedure ch. 5.3 says does not exist, for the

@@ -154,6 +154,23 @@ def test_claim1_numbers_come_from_the_simulation(fast_report, page):
     assert "claim 1 REPRODUCED" in r.markdown.read_text(encoding="utf-8")
 
 
+def test_the_two_design_routes_side_by_side_come_from_their_runs(fast_report, page):
+    """The report shows the packaged stair-case (regional LMI points) beside the report's route
+    (issue 32 item 5): each row's κ and peak CMG momentum read back from its own files."""
+    import h5py
+
+    base, _ = fast_report
+    rows = _table(page, "The two design routes on the stair-case")
+    assert len(rows) == 3 and "regional LMI points" in rows[1][0] and "sector LQR points" in rows[2][0]
+    for row, name in zip(rows[1:], ("staircase_fast", "staircase_fast_lqr")):
+        with h5py.File(base / "runs" / name / "design.h5", "r") as f:
+            kappa = max(float(f["points"][k]["max_eig_condition"][()]) for k in f["points"])
+        with h5py.File(base / "runs" / name / "sim.h5", "r") as f:
+            peak = float(np.max(f["levels/peak_momentum"][()]))
+        assert float(row[1]) == pytest.approx(kappa, rel=0.05) and float(row[6]) == pytest.approx(peak, abs=0.5)
+    assert float(rows[1][1]) <= 2e4 < float(rows[2][1])          # the LMI points are the better conditioned
+
+
 def test_errata_table_carries_independent_evidence(page):
     rows = {r[0]: r for r in [t for t in page.tables if t["rows"] and t["rows"][0][0] == "item"][0]["rows"][1:]}
     for key in ("eq 3.6 (1,1) entry", "4 ft·lbf pitch bias (Wie et al. 1989)", "eq 4.34 A2(3,1)",
