@@ -21,7 +21,7 @@ from tests.conftest import LQR_ROUTE, CONFIGS
 @pytest.fixture(scope="session")
 def staircase_lqr():
     """The packaged stair-case designed on the report's route (:data:`tests.conftest.LQR_ROUTE`)."""
-    return compute_design(load_config("staircase", [LQR_ROUTE]))
+    return compute_design(load_config("staircase", [*LQR_ROUTE]))
 
 
 @pytest.fixture(scope="session")

@@ -20,7 +20,7 @@ def test_scheduled_closed_loop_equals_independent_linearization():
     from acmm.model import linearize as lin
     from acmm.model.tea import resolve_bias, solve_tea
 
-    cfg = load_config("staircase", [LQR_ROUTE])
+    cfg = load_config("staircase", [*LQR_ROUTE])
     d = api.design(cfg)
     cl = d.scheduled_closed_loop(-20.0)
     # independent: the blend station with pitch TEA −20°, its TEA, the 24-state model, K(θ2*)

@@ -313,7 +313,7 @@ def test_strict_diverged_verdict(tmp_runs):
 def test_strict_sector_violation(tmp_runs):
     # the shipped 4th-order schedule leaves some scheduled poles outside the sector (README)
     # (issue 34) it is unstable too: one warning line naming where, before design.h5 is written
-    args = ("design", "staircase", LQR_ROUTE, "schedule.n_points=6", "--no-figures")
+    args = ("design", "staircase", *LQR_ROUTE, "schedule.n_points=6", "--no-figures")
     r = acmm(*args)
     assert r.exit_code == 0 and "NOT all in the sector" in r.stdout
     warning = r.stderr.strip()
@@ -435,7 +435,7 @@ def test_plot_redraws_the_runs_figures_pixel_for_pixel(tmp_runs):
 def test_plot_redraws_a_schedule_and_refuses_bad_input_on_one_line(tmp_runs):
     import matplotlib.image as mpimg
 
-    assert acmm("design", "staircase", LQR_ROUTE, "schedule.n_points=3", "schedule.n_check=11").exit_code == 0
+    assert acmm("design", "staircase", *LQR_ROUTE, "schedule.n_points=3", "schedule.n_check=11").exit_code == 0
     run = tmp_runs / "runs" / "staircase"
     made = sorted(p.name for p in run.glob("*.png"))
     assert {"design_gains.png", "design_path_margins.png", "design_path_poles.png", "design_poles.png"} <= set(made)

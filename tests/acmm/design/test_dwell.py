@@ -28,7 +28,7 @@ def staircase_h5(request, tmp_path_factory):
         r, path = request.getfixturevalue("staircase_shipped")
         cfg = r.config
     else:
-        cfg = load_config("staircase", [LQR_ROUTE, f"output.root={tmp_path_factory.mktemp('dwell')}"])
+        cfg = load_config("staircase", [*LQR_ROUTE, f"output.root={tmp_path_factory.mktemp('dwell')}"])
         _, path = run_design(cfg, figures=False)
     with h5py.File(path, "r") as f:
         g = f["dwell"]
@@ -141,7 +141,7 @@ def test_acmm_certify_prints_the_certificate_and_strict_fails_an_unstable_claim_
     from acmm.cli.app import app
 
     run = lambda *a: CliRunner().invoke(app, ["certify", *a, f"output.root={tmp_path}"])   # noqa: E731
-    ok = run("staircase", LQR_ROUTE)
+    ok = run("staircase", *LQR_ROUTE)
     assert ok.exit_code == 0 and "CERTIFIED" in ok.stdout and "linearized switched system" in ok.stdout, ok.output
     bad = run("mb3_decoupled", "--strict")
     assert bad.exit_code == 1 and "not stable" in bad.stdout and "strict:" in bad.output
@@ -153,9 +153,9 @@ def test_an_initial_offset_enters_the_transient_bound():
     from acmm.stages.certify import compute_certificate
     from acmm.stages.design import compute_design
 
-    cfg = load_config("staircase", [LQR_ROUTE])
+    cfg = load_config("staircase", [*LQR_ROUTE])
     table = compute_design(cfg).table
     at_rest = compute_certificate(cfg, table).certificate
-    offset = compute_certificate(load_config("staircase", [LQR_ROUTE, "simulation.initial_offset=[3,3,3]"]), table).certificate
+    offset = compute_certificate(load_config("staircase", [*LQR_ROUTE, "simulation.initial_offset=[3,3,3]"]), table).certificate
     assert at_rest.transient[0] == 0 and offset.transient[0] > 0
     assert np.all(offset.transient[1:] >= at_rest.transient[1:]) and offset.tau_star == at_rest.tau_star

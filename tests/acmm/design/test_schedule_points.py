@@ -70,7 +70,7 @@ def test_a_branch_that_folds_on_the_blend_blames_the_first_point_beyond_the_fold
     from acmm.model import tea as tea_mod
     from acmm.design.schedule_points import off_branch_point, point_specs
 
-    cfg = load_config("staircase", [LQR_ROUTE])
+    cfg = load_config("staircase", [*LQR_ROUTE])
     n = cfg.orbit_rate
     specs = point_specs(cfg)
     teas = [compute_design(cfg).points[k].tea.theta for k in range(len(specs))]

@@ -289,7 +289,7 @@ def test_schedule_end_point_gets_its_asked_attitude():
     from acmm.design.schedule_points import point_specs
     from acmm.design.settings import design_settings
 
-    cfg = load_config(CONFIGS / "staircase.yaml", [LQR_ROUTE, "schedule.to.disturbance.bias_from_tea=[0,-60,0]"])
+    cfg = load_config(CONFIGS / "staircase.yaml", [*LQR_ROUTE, "schedule.to.disturbance.bias_from_tea=[0,-60,0]"])
     end = point_specs(cfg)[-1]
     assert end.theta_guess is not None and abs(np.degrees(end.theta_guess[1]) + 60) > 5
     t = design_one(end, design_settings(cfg)).tea

@@ -22,7 +22,7 @@ def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_p
     from acmm.simulate import scenario as scen
     from acmm.stages.design import compute_design
 
-    cfg = load_config("staircase", [LQR_ROUTE])
+    cfg = load_config("staircase", [*LQR_ROUTE])
     r = compute_design(cfg)
     design_plots.gain_schedule_grid(r.table.tea[:, 1], r.table.gain, r.fit, STATE_NAMES, tmp_path / "g.png",
                              units=plot_base.state_units(cfg.design.drf_mode))

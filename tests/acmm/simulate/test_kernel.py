@@ -112,7 +112,7 @@ def test_claim1_coupled_design_stays_bounded(mb3):
 
 
 def test_sample_at_a_level_start_belongs_to_the_new_level():
-    cfg = load_config("staircase", [LQR_ROUTE])
+    cfg = load_config("staircase", [*LQR_ROUTE])
     sc = scen.scenario_from_config(cfg, compute_design(cfg).table, orbits=1.2)
     r = sm.simulate(sc)
     at_start = np.isin(r.t, sc.level_start)

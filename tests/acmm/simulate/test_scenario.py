@@ -50,7 +50,7 @@ def test_a_level_without_a_sample_in_its_second_half_keeps_its_statistics(tmp_pa
     dwell; its steady error was dropped (NaN, 'the run ended before it') although the kernel had
     tracked it (review)."""
     res, path = run_simulate(load_config("staircase", [
-        "name=sparse", LQR_ROUTE, "schedule.n_points=3", "schedule.fit=least_squares", "schedule.n_check=2",
+        "name=sparse", *LQR_ROUTE, "schedule.n_points=3", "schedule.fit=least_squares", "schedule.n_check=2",
         "simulation.orbits=1", "simulation.levels=[0, 0.3, 0.6]", "simulation.sample_interval=3000",
         "output.figures=false", f"output.root={tmp_path}"]))
     assert [s["level"] for s in res.stats] == [0, 1, 2]

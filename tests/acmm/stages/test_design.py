@@ -134,7 +134,7 @@ def test_shipped_schedule_is_stable_on_a_thousand_teas_of_the_path(staircase_shi
 
 @pytest.fixture(scope="module")
 def staircase_polynomial():
-    return compute_design(load_config("staircase", [LQR_ROUTE, "schedule.form=polynomial",
+    return compute_design(load_config("staircase", [*LQR_ROUTE, "schedule.form=polynomial",
                                                      "schedule.fit=closed_loop"]))
 
 
@@ -161,12 +161,12 @@ def test_an_edited_design_h5_is_designed_again_not_simulated(tmp_runs, run_acmm,
     traceback, exit 1); one whose K was scaled by 1e6 under the right design_hash was simulated
     (52 M steps).  The design is now reused only when its arrays have the points' shapes, are
     finite and match the digest written with them; else it is designed again."""
-    r = run_acmm("design", "staircase", LQR_ROUTE, f"output.units={units}", "--no-figures")
+    r = run_acmm("design", "staircase", *LQR_ROUTE, f"output.units={units}", "--no-figures")
     assert r.exit_code == 0, r.output
     path = tmp_runs / "runs" / "staircase" / "design.h5"
     with h5py.File(path, "r") as f:
         K0 = f["K"][()]
-    assert design_for(load_config("staircase", [LQR_ROUTE, f"output.units={units}"]))[1].startswith("reused")
+    assert design_for(load_config("staircase", [*LQR_ROUTE, f"output.units={units}"]))[1].startswith("reused")
     with h5py.File(path, "r+") as f:
         if edit == "K of another shape":
             del f["K"]
@@ -177,7 +177,7 @@ def test_an_edited_design_h5_is_designed_again_not_simulated(tmp_runs, run_acmm,
             f["K"][0, 0, 0] = np.nan
         else:
             f["schedule/coef"][0, 0, 0] += 1e-9
-    r = run_acmm("simulate", "staircase", LQR_ROUTE, f"output.units={units}", "simulation.orbits=1",
+    r = run_acmm("simulate", "staircase", *LQR_ROUTE, f"output.units={units}", "simulation.orbits=1",
                  "--no-figures")
     assert r.exit_code == 0 and "Traceback" not in r.output, r.output
     with h5py.File(path, "r") as f:
@@ -212,7 +212,7 @@ def test_design_h5_is_self_describing_and_reused(tmp_path, monkeypatch):
 
 def test_table_form_prints_the_check_that_strict_judges(tmp_runs, run_acmm):
     """schedule.form: table printed no check lines, yet --strict failed on the check's margin."""
-    r = run_acmm("design", "staircase", LQR_ROUTE, "schedule.form=table", "schedule.fit=least_squares",
+    r = run_acmm("design", "staircase", *LQR_ROUTE, "schedule.form=table", "schedule.fit=least_squares",
                  "schedule.n_points=4", "--no-figures")
     assert r.exit_code == 0, r.output
     assert "scheduled gain (table) on the local models" in r.stdout and "scheduled closed loops:" in r.stdout

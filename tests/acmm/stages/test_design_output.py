@@ -14,7 +14,7 @@ def test_design_figures_of_a_finished_design(tmp_path):
     from acmm.design.settings import design_settings
     from acmm.stages.design import compute_design
 
-    cfg = load_config("staircase", [LQR_ROUTE])
+    cfg = load_config("staircase", [*LQR_ROUTE])
     r = compute_design(cfg)
     draw_figures(design_figures(r, design_settings(cfg), tmp_path, "imperial"))
     names = sorted(p.name for p in tmp_path.iterdir())

@@ -15,11 +15,11 @@ def acmm(*args):
 # item 9: progress only on a terminal
 # ---------------------------------------------------------------------------------------------
 def test_progress_silent_without_terminal_and_shown_when_forced(tmp_runs, monkeypatch):
-    quiet = acmm("design", "staircase", LQR_ROUTE, "schedule.n_points=4", "--no-figures")
+    quiet = acmm("design", "staircase", *LQR_ROUTE, "schedule.n_points=4", "--no-figures")
     # no progress; only the warning that this 4-point schedule is unstable somewhere (issue 34)
     assert quiet.exit_code == 0 and [x[:9] for x in quiet.stderr.splitlines()] == ["warning: "]
     monkeypatch.setenv("ACMM_PROGRESS", "1")
-    loud = acmm("design", "staircase", LQR_ROUTE, "schedule.n_points=4", "--no-figures")
+    loud = acmm("design", "staircase", *LQR_ROUTE, "schedule.n_points=4", "--no-figures")
     assert loud.exit_code == 0
     assert "designed" in loud.stderr or "fitting the schedule" in loud.stderr
     # stdout (the results) is the same with and without progress, up to the wall time
