@@ -135,10 +135,19 @@ def submit(executor, fn, *args):
         release_interrupts(held)
 
 
+def _recording_warnings(fn, x):
+    """``(fn(x), its warnings)`` for :func:`pool_map` (the warnings as :func:`portable_warnings`)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        value = fn(x)
+    return value, portable_warnings(caught)
+
+
 def pool_map(executor, fn, items):
     """``fn(x) for x in items`` computed on ``executor``: every task submitted first
     (:func:`submit`, the interrupts held), each result yielded as soon as it and those before it
-    are done, in the order of ``items``.
+    are done, in the order of ``items``, the warnings of each task raised again here first
+    (:func:`raise_warnings_again`: this process's filters apply, as if computed in place).
 
     Parameters
     ----------
@@ -154,9 +163,11 @@ def pool_map(executor, fn, items):
     object
         The results, in order; the first task's error (in that order) is raised.
     """
-    futures = [submit(executor, fn, x) for x in items]
+    futures = [submit(executor, _recording_warnings, fn, x) for x in items]
     for f in futures:
-        yield f.result()
+        value, raised = f.result()
+        raise_warnings_again(raised)
+        yield value
 
 
 def stop_pool(pool: cf.ProcessPoolExecutor, abort: bool = False) -> None:

@@ -8,7 +8,8 @@
 4. `acmm simulate staircase` and `acmm design staircase` on the report's route (`design.pole_method=shift`)
    with figures vs without (≤ 1.5 s with);
 5. `acmm report --fast` (and the full report with ``--full``): wall and CPU time from a fresh results
-   root and again reusing its stage results, per section and per stage (≤ 10 s fast, ≤ 20 s full).
+   root and again reusing its stage results, per section and per stage (reusing: ≤ 10 s fast, ≤ 20 s full;
+   fresh, the stair-case's LMI points take minutes).
 
     MPLBACKEND=Agg .venv/bin/python scripts/bench_ratios.py [--workers 2] [--cases 3200] [--full]
         [--report-jobs 1 2] [--only-report]

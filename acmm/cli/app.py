@@ -159,7 +159,9 @@ def _run_with_progress(runner, cfg, figures, what: str):
     with_figures = cfg.output.figures if figures is None else figures
     after = ("simulating, writing results" if what == "simulate" else
              "fitting the schedule, checking it, writing results") + (" and figures" if with_figures else "")
-    with prog.Steps(f"{cfg.name}: designing", total) as bar:
+    # redrawn at each step, not from rich's thread: the LMI points are designed on a forked pool,
+    # which is not forked beside other threads (acmm.stages.design.point_workers)
+    with prog.Steps(f"{cfg.name}: designing", total, refresh_thread=False) as bar:
         count = [0]
 
         def tick(name):

@@ -30,7 +30,7 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
     fig = plt.figure(figsize=(13, 15), dpi=80)
     colors = ("C0", "C1", "C2")
     series = ([{"marker": "o", "ls": "none", "ms": 3, "color": c,
-                "label": f"K({i + 1},·): LQR gain (dots), schedule (line)"} for i, c in enumerate(colors)]
+                "label": f"K({i + 1},·): point gain (dots), schedule (line)"} for i, c in enumerate(colors)]
               + [{"lw": 1, "color": c} for c in colors])
     grid = PanelGrid(fig, 6, 4, series, {"left": 0.06, "right": 0.98, "bottom": 0.04, "top": 0.95,
                                          "wspace": 0.38, "hspace": 0.3})
@@ -128,7 +128,7 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
         grid.show(j, xlim, [(i, theta2_deg, gains[:, i, j]) for i in range(3)]
                   + [(3 + i, fine, kf[:, i, j]) for i in range(3)], xticks)
     grid.draw_data(_compact_formatter().format_ticks)
-    fig.suptitle(f"Gain schedule: LQR gains (dots) and the {curve.form} schedule (lines) vs TEA "
+    fig.suptitle(f"Gain schedule: the design points' gains (dots) and the {curve.form} schedule (lines) vs TEA "
                  "(cf. Figs 5.3–5.26)", y=0.995)
     return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 

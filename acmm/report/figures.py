@@ -58,9 +58,9 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     for ax in axs[-1]:
         ax.set_xlabel("pitch TEA θ2* (deg)")
     handles, _ = axs[0, 0].get_legend_handles_labels()
-    labels = [f"{kind}, row i = {i + 1} ({AXES[i]} torque)" for i in range(3) for kind in ("LQR gain", "schedule")]
+    labels = [f"{kind}, row i = {i + 1} ({AXES[i]} torque)" for i in range(3) for kind in ("point gain", "schedule")]
     fig.legend(handles, labels, loc="upper center", ncol=3, fontsize=7, bbox_to_anchor=(0.5, 0.985))
-    fig.suptitle(f"Gain schedule vs TEA: LQR gains (markers) and the order-{sc['coef'].shape[0] - 1} "
+    fig.suptitle(f"Gain schedule vs TEA: the design points' gains (markers) and the order-{sc['coef'].shape[0] - 1} "
                  f"{form} schedule (lines); rows i = roll, pitch, yaw torque", y=0.995, fontsize=9)
     # a fixed layout: tight_layout on 24 panels costs as much as drawing them (issue 16)
     fig.subplots_adjust(left=0.075, right=0.985, bottom=0.04, top=0.93, wspace=0.42, hspace=0.32)

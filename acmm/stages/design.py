@@ -5,8 +5,10 @@ Split from :mod:`acmm.stages.runners` (issue 12).
 """
 from __future__ import annotations
 
+import concurrent.futures as cf
 import multiprocessing
 import os
+import threading
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -17,6 +19,7 @@ from acmm.io.config import Config
 from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
 from acmm.stages.certify import certificate_items, compute_certificate
 from acmm.stages.common import _as_config, _define_units, _in_system
+from acmm_qpp.errors import OutputError
 from acmm_qpp.outputs import owns_outputs
 from acmm_qpp.pool import pool_map, process_pool, stop_pool
 from acmm_qpp.results import draw_figures, write_h5
@@ -149,7 +152,9 @@ def point_workers(pole_method: str, n_points: int) -> int:
     """Processes that design a config's points: the regional LMI route's points (tens of seconds
     each) on a process pool of one worker per available CPU (at most one per point); the sector
     LQR's (about a second each), and any design inside a pool worker already (a sweep's, the
-    report's), in this process.  A point's result does not depend on where it is computed.
+    report's), or in a process running other threads (a fork beside them can deadlock the child:
+    a terminal's progress bar), in this process.  A point's result does not depend on where it is
+    computed.
 
     Parameters
     ----------
@@ -165,6 +170,8 @@ def point_workers(pole_method: str, n_points: int) -> int:
     """
     if pole_method != "lmi" or n_points < 2 or multiprocessing.parent_process() is not None:
         return 1
+    if threading.active_count() > 1:        # (a terminal's progress bar, a notebook's kernel threads)
+        return 1                            # forking beside other threads can deadlock the child
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     return max(1, min(cpus, n_points))
 
@@ -187,6 +194,11 @@ def compute_design(config, progress=None) -> DesignResult:
     -------
     DesignResult
         The design.
+
+    Raises
+    ------
+    OutputError
+        A worker process of the design pool died (killed, or out of memory).
     """
     import time
 
@@ -206,6 +218,10 @@ def compute_design(config, progress=None) -> DesignResult:
         try:
             ds = design_schedule(specs, design_settings(cfg), schedule_settings(cfg), progress,
                                  map_points=partial(pool_map, pool))
+        except cf.BrokenExecutor:
+            stop_pool(pool, abort=True)
+            raise OutputError(f"{cfg.name}: a design worker process died (killed, or out of memory); "
+                              "nothing was written") from None
         except BaseException:
             stop_pool(pool, abort=True)
             raise

@@ -86,12 +86,16 @@ class Steps:
         Number of steps (None: unknown, the bar pulses).
     rate : bool, optional
         Also show the speed in steps/s.
+    refresh_thread : bool, optional
+        Redraw from rich's own thread (default); False redraws at each step only, so that no
+        thread runs beside a process pool that forks (the design stage's).
     """
 
-    def __init__(self, description: str, total: int | None, rate: bool = False):
+    def __init__(self, description: str, total: int | None, rate: bool = False, refresh_thread: bool = True):
         self.description = description
         self.total = total
         self.rate = rate
+        self.refresh_thread = refresh_thread
         self._p = None
         self._task = None
 
@@ -104,7 +108,7 @@ class Steps:
                     MofNCompleteColumn(), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn()]
             if self.rate:
                 cols.insert(4, TextColumn("{task.fields[rate]}", markup=False))
-            self._p = Progress(*cols, console=_console(), transient=True)
+            self._p = Progress(*cols, console=_console(), transient=True, auto_refresh=self.refresh_thread)
             self._p.__enter__()
             self._task = self._p.add_task(self.description, total=self.total, rate="")
         return self
@@ -134,6 +138,8 @@ class Steps:
             speed = t.finished_speed or t.speed
             kw["rate"] = f"{speed:.2f}/s" if speed else ""
         self._p.update(self._task, advance=n, **kw)
+        if not self.refresh_thread:
+            self._p.refresh()
 
     def describe(self, text: str) -> None:
         """Change the text before the bar without moving it.
@@ -145,3 +151,5 @@ class Steps:
         """
         if self._p is not None:
             self._p.update(self._task, description=text)
+            if not self.refresh_thread:
+                self._p.refresh()

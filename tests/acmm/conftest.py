@@ -1,5 +1,5 @@
-"""Fixtures and helpers of the acmm tests in several folders: the packaged stair-case design
-(``staircase``), the figures a test draws (``captured``) with the check that every axis names a
+"""Fixtures and helpers of the acmm tests in several folders: the packaged stair-case designed on
+the report's route (``staircase_lqr``) and as shipped (``staircase_shipped``, slow tests), the figures a test draws (``captured``) with the check that every axis names a
 quantity and a unit, and a sweep config file written for a test (``_sweep_yaml``)."""
 from __future__ import annotations
 

@@ -2,7 +2,8 @@
 and determinism; a report that cannot be written, or whose sections fail, and the user's run
 folders it leaves alone.
 
-One fast report is built into a temporary directory (module fixture, ~30 s on 2 cores); the
+One fast report is built into a temporary directory (module fixture, minutes on 2 cores: the
+stair-case's LMI points); the
 other tests read it.  Numbers are checked against the report's printed values (Table 1, the
 ch. 13/14 gains) or against independent closed forms (the MB3 gravity-gradient capacity, the
 printed eq 3.6 residual of eq 4.2).

@@ -262,3 +262,50 @@ def test_pool_workers_solve_lmis_after_the_parent_has():
         assert list(pool_map(pool, _sdp, [3, 4])) == pytest.approx([3.0, 4.0], rel=1e-6)
     finally:
         stop_pool(pool, abort=True)
+
+
+def _warns(x):
+    import warnings
+
+    warnings.warn(f"point {x}", RuntimeWarning)
+    return x * 2
+
+
+def test_pooled_points_equal_the_serial_ones_and_their_warnings_reach_the_parent():
+    """The design stage maps LMI points onto the pool (``map_points``); the result does not depend
+    on where a point is designed: here four points of the report's route, bit for bit, and a
+    worker's warning is raised in the parent (where filters and pytest.warns see it)."""
+    from functools import partial
+
+    from acmm.design import schedule_points as sp
+    from acmm.design.design_core import design_schedule
+    from acmm.design.settings import design_settings, schedule_settings
+    from acmm_qpp.pool import pool_map, process_pool, stop_pool
+
+    cfg = load_config("staircase", [*LQR_ROUTE, "schedule.n_points=4", "schedule.n_check=11"])
+    specs, s, sched = sp.point_specs(cfg), design_settings(cfg), schedule_settings(cfg)
+    serial = design_schedule(specs, s, sched)
+    pool = process_pool(2)
+    try:
+        pooled = design_schedule(specs, s, sched, map_points=partial(pool_map, pool))
+        with pytest.warns(RuntimeWarning, match=r"point [13]") as rec:
+            assert list(pool_map(pool, _warns, [1, 3])) == [2, 6]
+        assert sorted(str(w.message) for w in rec) == ["point 1", "point 3"]
+    finally:
+        stop_pool(pool, abort=True)
+    for a, b in zip(serial.points, pooled.points):
+        np.testing.assert_array_equal(a.lqr.K, b.lqr.K)
+
+
+def test_lmi_points_are_designed_in_this_process_beside_other_threads(monkeypatch):
+    """A fork beside a running thread (a terminal's progress bar) can deadlock the child: the
+    LMI points then go serial; inside a pool worker too; the report's route never uses the pool."""
+    import threading
+
+    from acmm.stages.design import point_workers
+
+    assert point_workers("shift", 12) == 1 and point_workers("lmi", 1) == 1
+    monkeypatch.setattr(threading, "active_count", lambda: 1)
+    assert point_workers("lmi", 12) == min(12, len(os.sched_getaffinity(0)))
+    monkeypatch.setattr(threading, "active_count", lambda: 2)
+    assert point_workers("lmi", 12) == 1
