@@ -22,6 +22,7 @@ import threading
 import time
 import warnings
 
+from acmm_qpp.errors import OutputError
 from acmm_qpp.signals import TERMINATING, hold_interrupts, release_interrupts
 
 #: prctl(2) option: the signal a process gets when its parent thread exits (Linux)
@@ -162,10 +163,18 @@ def pool_map(executor, fn, items):
     ------
     object
         The results, in order; the first task's error (in that order) is raised.
+
+    Raises
+    ------
+    OutputError
+        A worker process died.
     """
     futures = [submit(executor, _recording_warnings, fn, x) for x in items]
     for f in futures:
-        value, raised = f.result()
+        try:
+            value, raised = f.result()
+        except cf.BrokenExecutor:
+            raise OutputError("a worker process died (killed, or out of memory); nothing was written") from None
         raise_warnings_again(raised)
         yield value
 

@@ -5,7 +5,6 @@ Split from :mod:`acmm.stages.runners` (issue 12).
 """
 from __future__ import annotations
 
-import concurrent.futures as cf
 import multiprocessing
 import os
 import threading
@@ -19,7 +18,6 @@ from acmm.io.config import Config
 from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
 from acmm.stages.certify import certificate_items, compute_certificate
 from acmm.stages.common import _as_config, _define_units, _in_system
-from acmm_qpp.errors import OutputError
 from acmm_qpp.outputs import owns_outputs
 from acmm_qpp.pool import pool_map, process_pool, stop_pool
 from acmm_qpp.results import draw_figures, write_h5
@@ -198,7 +196,7 @@ def compute_design(config, progress=None) -> DesignResult:
     Raises
     ------
     OutputError
-        A worker process of the design pool died (killed, or out of memory).
+        A worker process of the design pool died (killed, or out of memory; :func:`acmm_qpp.pool.pool_map`).
     """
     import time
 
@@ -218,10 +216,6 @@ def compute_design(config, progress=None) -> DesignResult:
         try:
             ds = design_schedule(specs, design_settings(cfg), schedule_settings(cfg), progress,
                                  map_points=partial(pool_map, pool))
-        except cf.BrokenExecutor:
-            stop_pool(pool, abort=True)
-            raise OutputError(f"{cfg.name}: a design worker process died (killed, or out of memory); "
-                              "nothing was written") from None
         except BaseException:
             stop_pool(pool, abort=True)
             raise

@@ -4,6 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.design.dwell import NOT_COVERED
+from acmm.design.regional_lmi import control_energy
+from acmm.model.state_scaling import torque_scale
 from acmm.report.context import SectionWriter
 from acmm.report.document import _decode
 from acmm.report.figures import fig_gain_schedule, fig_pole_maps
@@ -100,9 +102,6 @@ def routes(ctx: SectionWriter) -> None:
     ctx : acmm.report.context.SectionWriter
         The two configs' ``design.h5`` and ``sim.h5``.
     """
-    from acmm.design.regional_lmi import control_energy
-    from acmm.model.state_scaling import torque_scale
-
     cfgs = ctx.g.configs
     rows = []
     for key in ("staircase", "staircase_lqr"):

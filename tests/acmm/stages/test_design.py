@@ -309,3 +309,20 @@ def test_lmi_points_are_designed_in_this_process_beside_other_threads(monkeypatc
     assert point_workers("lmi", 12) == min(12, len(os.sched_getaffinity(0)))
     monkeypatch.setattr(threading, "active_count", lambda: 2)
     assert point_workers("lmi", 12) == 1
+
+
+def _dies(x):
+    os._exit(1)
+
+
+def test_a_dead_pool_worker_is_one_output_error():
+    """A worker killed mid-task (here it exits) is an OutputError (exit 4, one line), not a traceback."""
+    from acmm_qpp.errors import OutputError
+    from acmm_qpp.pool import pool_map, process_pool, stop_pool
+
+    pool = process_pool(1)
+    try:
+        with pytest.raises(OutputError, match="worker process died"):
+            list(pool_map(pool, _dies, [1]))
+    finally:
+        stop_pool(pool, abort=True)
