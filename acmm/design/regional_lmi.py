@@ -37,14 +37,39 @@ gives gains with *more* energy than the LQR route; β ≈ 0.35–0.5 gives less.
 bound of E(K) (loose for larger β: its minimizer, not its value, is what is used).
 
 Scaling.  Scaled states x = D x̃ (:mod:`acmm.model.state_scaling`), input u = e ũ (``input_scale``),
-time in units of 1/n: Ã = D⁻¹AD/n, B̃ = D⁻¹Be/n, K̃ = K D/e.  The program is solved in
-coordinates x̃ = T z: first T = chol(X₀) with X₀ the Lyapunov matrix of a reference closed loop
-(the sector LQR's gain, shifted by σ, driven by G̃G̃ᵀ + 10⁻³I), then again with T ← T chol(X)
-from the first solution and the input columns scaled to unit gain-row norms, the objective divided
-by the first optimum — the same problem, but with its optimum near X = I, Y, W = O(1), where
-Clarabel reaches status "optimal" at gap and feasibility tolerance 1e-7 (``tol``; at 1e-8 AC stops
-"optimal_inaccurate"); the first pass usually stops at
-"optimal_inaccurate", which is accepted only as a pre-conditioner).
+time in units of 1/n: Ã = D⁻¹AD/n, B̃ = D⁻¹Be/n, K̃ = K D/e.  The program is written in coordinates
+x̃ = T z with T = chol(X₀), X₀ the Lyapunov matrix of a reference closed loop (the sector LQR's
+gain, shifted by σ, driven by G̃G̃ᵀ + 10⁻³I) — the reference loop's coordinates.
+
+Well-posed.  Without more, the program has no attained optimum: X and X₂ grow without bound along
+the directions the gain does not use (K̃ v ≈ 0; eigenvalues ~1e7 in a 2-D subspace at MB3) while
+tr W keeps falling toward its infimum, so every interior-point solver ends "inaccurate", stalls or
+meets a singular system, and the answer depends on where it stopped (the BLAS kernel, the solver).
+The objective is therefore ::
+
+    tr W + ε (tr X' + tr X₂'),     X̃ = T X' Tᵀ  (the reference loop's coordinates),
+
+with ε = ``regularization`` = 1e-5: the level sets are bounded, the optimum is attained, and the
+control energy of the answer is within 0.1 % of the unregularized infimum's (0.05 % at MB3 and AC,
+measured; a weight on tr X̃ in the scaled coordinates, whose eigenvalues span 1e-4…1e6, either
+left the program ill-posed or cost more energy, and a bound X' ⪯ cI adds a cone).
+
+Solvers (``solver``; :data:`ROUTES`), each answer accepted on the checks of :func:`_rejection`
+(X̃ ≻ 0; every pole's margin and the margin X̃ certifies by generalized eigenvalues ≥ μ; the disk;
+the cost LMIs' largest eigenvalue ≤ :data:`COST_TOL` of their norm), never on a status string;
+a refused answer falls back to the next solver with a warning, and when none passes the error says
+what each solver returned — never "infeasible", which a solver's failure does not prove:
+
+* ``"dsdp"`` (default): DSDP 5, a dual-scaling method that factors the 678 × 678 Schur complement
+  and uses the low rank of each variable's data, through ``cvxopt.dsdp`` (GPL-3, README); two
+  passes (:func:`_route_dsdp`): the second in the coordinates of the first's answer, where X' ≈ I,
+  converges to K independent of the BLAS kernel (~1e-9).
+* ``"clarabel"``: Clarabel through cvxpy (Apache-2.0), the reference: it factors the whole KKT
+  system, with a dense 1 176 × 1 176 block per 48 × 48 LMI, ~5× slower here; a first pass, then
+  up to ``refinements`` passes with T ← T chol(X') and the input columns scaled to unit gain-row
+  norms, the objective divided by the last optimum, at gap and feasibility tolerance ``tol``.
+
+Both solve the same program; their gains agree to ~3e-6 (MB3, AC; tests).
 """
 from __future__ import annotations
 
@@ -54,9 +79,16 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+from scipy import sparse
 
 from acmm.design.sector_lqr import eigen_conditioning, sector_margin, sector_robustness
 from acmm_qpp.errors import DesignError
+
+try:                  # GPL-3 (README, Dependencies): without it the route solves with Clarabel only
+    import cvxopt
+    from cvxopt import dsdp
+except ImportError:   # pragma: no cover - exercised by uninstalling cvxopt
+    cvxopt = dsdp = None
 
 #: Clarabel options of every solve besides the tolerances: one thread.  Its solver threads are not
 #: fork-safe (a forked child of a process that has solved a program with them hung in its next
@@ -65,7 +97,7 @@ from acmm_qpp.errors import DesignError
 #: KKT factorization per iteration) more threads were not faster.
 CLARABEL_OPTIONS = {"max_threads": 1}
 
-_RELAX = ("relax design.min_margin, design.sector.sigma, design.sector.half_angle_deg or "
+_RELAX = ("hint: relax design.min_margin, design.sector.sigma, design.sector.half_angle_deg or "
           "design.lmi.disk_radius (or the cost weights: design.lmi.dilation, design.R)")
 
 
@@ -88,12 +120,19 @@ class RegionalLMISettings:
         r > 0 adds the region |λ| ≤ r n (fastest pole), units of n; 0 = none.
     dilation : float
         β of the dilated H2 bound (module docstring), units of 1/n (time); > 0.
+    regularization : float
+        ε of the objective's ε (tr X̃ + tr X̃₂), which makes its optimum attained (module
+        docstring, "Well-posed"), dimensionless.
+    solver : str
+        The SDP solver tried first (:data:`SOLVERS`): ``"dsdp"`` or ``"clarabel"``; the others
+        follow as fallbacks when its answer fails the checks.
     tol : float
-        Clarabel's tol_gap_abs = tol_gap_rel = tol_feas of the final pass, dimensionless.
+        The solvers' gap tolerance (DSDP's relative gap; Clarabel's tol_gap_abs = tol_gap_rel =
+        tol_feas of its final pass), dimensionless.
     max_iter : int
         Clarabel iteration limit per pass.
     refinements : int
-        Largest number of re-pre-conditioned passes tried after the first.
+        Largest number of Clarabel's re-pre-conditioned passes after the first.
     n_random : int
         Random gain perturbations of :func:`random_gain_radius`.
     seed : int
@@ -106,6 +145,8 @@ class RegionalLMISettings:
     backoff: float = 0.002
     disk_radius: float = 0.0
     dilation: float = 0.35
+    regularization: float = 1e-5
+    solver: str = "dsdp"
     tol: float = 1e-7
     max_iter: int = 200
     refinements: int = 2
@@ -147,13 +188,21 @@ class RegionalLMI:
     cost_bound : float
         tr W, the certified upper bound of ``energy``, in the units of ``energy``.
     status : str
-        cvxpy status of the accepted pass ("optimal").
+        The accepting solver's own status of its last pass (information only: the answer is
+        accepted on the checks of :func:`regional_lmi`).
     tol : float
-        Clarabel tolerance it converged to (gap and feasibility), dimensionless.
+        The solvers' gap tolerance, dimensionless.
     iterations : tuple of int
-        Clarabel iterations of each pass.
+        Iterations of each pass (0 where the solver does not report them: DSDP).
     solve_time : float
-        Wall time of all passes, s.
+        Wall time of every solve tried, s.
+    solver : str
+        The solver whose answer was accepted.
+    lmi_residual : float
+        Largest eigenvalue of the cost LMIs at the answer relative to their norm (≤
+        :data:`COST_TOL`), dimensionless.
+    rejected : tuple of str
+        The solvers tried before it and why their answers were refused.
     """
 
     K: np.ndarray
@@ -172,6 +221,9 @@ class RegionalLMI:
     tol: float
     iterations: tuple
     solve_time: float
+    solver: str = "dsdp"
+    lmi_residual: float = 0.0
+    rejected: tuple = ()
 
     @property
     def max_eig_condition(self) -> float:
@@ -290,58 +342,202 @@ def random_gain_radius(A, B, K, n: float, sigma: float = 0.5, half_angle_deg: fl
 # ---------------------------------------------------------------------------------------------
 # the program
 # ---------------------------------------------------------------------------------------------
-def _region_blocks(M, X, a, c, phi, r):
-    """The LMIs (⪯ 0) of the half-plane, the shifted cone and the optional disk (numpy or cvxpy)."""
-    import cvxpy as cp
-
+def _blocks(Az, Bz, GG, X, X2, Y, W, a, c, phi, r, beta, bmat, with_constant=True):
+    """Every LMI of the program as a matrix that must be ⪯ 0 (numpy arrays or cvxpy expressions):
+    the half-plane, the shifted cone, the optional disk, the dilated H2 condition and the cost."""
+    M = Az @ X - Bz @ Y
     Mc = M + c * X
     out = [M + M.T + 2 * a * X,
-           cp.bmat([[np.sin(phi) * (Mc + Mc.T), np.cos(phi) * (Mc - Mc.T)],
-                    [np.cos(phi) * (Mc.T - Mc), np.sin(phi) * (Mc + Mc.T)]])]
+           bmat([[np.sin(phi) * (Mc + Mc.T), np.cos(phi) * (Mc - Mc.T)],
+                 [np.cos(phi) * (Mc.T - Mc), np.sin(phi) * (Mc + Mc.T)]])]
     if r > 0:
-        out.append(cp.bmat([[-r * X, M], [M.T, -r * X]]))
+        out.append(bmat([[-r * X, M], [M.T, -r * X]]))
+    out += [bmat([[-2 * beta * X, X2 - X + beta * M.T], [X2 - X + beta * M, M + M.T + GG * with_constant]]),
+            -bmat([[W, Y], [Y.T, 2 * X - X2]])]
     return out
 
 
-def _solve_pass(As, Bs, Gs, T, s_u, obj_scale, st: RegionalLMISettings, tol):
-    """One Clarabel solve in the coordinates x̃ = T z, input columns scaled by ``s_u``.
+@dataclass(frozen=True)
+class LMIProgram:
+    """The program in the coordinates x̃ = T z, as data: minimize cᵀv subject to
+    F0_k + Σ_i v_i F_ik ⪯ 0 for every block k.
 
-    Returns (status, tr W, iterations, K̃, X̃, X̃₂) with K̃, X̃, X̃₂ in the scaled coordinates."""
-    import cvxpy as cp
+    v stacks the upper triangles of X and X₂ (row by row), Y (m × N, row by row) and the upper
+    triangle of W.  The objective is tr(S W S) + ε (tr X̃ + tr X̃₂) with S = diag(s_u) and
+    X̃ = T X Tᵀ (module docstring, "Well-posed").
+    """
 
+    Az: np.ndarray
+    Bz: np.ndarray
+    GG: np.ndarray
+    T: np.ndarray
+    s_u: np.ndarray
+    pars: tuple            # (a, c, phi, r, beta)
+    c: np.ndarray
+    F0: list
+    F: list                # per block: (n_var, m_k, m_k) array of the F_ik
+    reg: np.ndarray        # the objective's ε (tr X' + tr X₂') = tr(reg X) + tr(reg X₂) in these coordinates
+
+    @property
+    def sizes(self):
+        """(N, m): states and inputs."""
+        return self.Bz.shape
+
+    def unpack(self, v):
+        """(X, X₂, Y, W) of the variable vector ``v`` (coordinates z)."""
+        N, m = self.sizes
+        iu, ium = np.triu_indices(N), np.triu_indices(m)
+        nS, nY = iu[0].size, N * m
+        return (_sym(v[:nS], N, iu), _sym(v[nS:2 * nS], N, iu), v[2 * nS:2 * nS + nY].reshape(m, N),
+                _sym(v[2 * nS + nY:], m, ium))
+
+    def blocks(self, v):
+        """Every LMI block (⪯ 0 when feasible) at the variable vector ``v``."""
+        X, X2, Y, W = self.unpack(v)
+        return _blocks(self.Az, self.Bz, self.GG, X, X2, Y, W, *self.pars, np.block)
+
+    def result(self, v):
+        """(K̃, X̃, X̃₂) in the scaled coordinates (time in 1/n) from the variable vector ``v``."""
+        X, X2, Y, _ = self.unpack(v)
+        X = 0.5 * (X + X.T)
+        Ti = np.linalg.inv(self.T)
+        Kz = self.s_u[:, None] * np.linalg.solve(X, Y.T).T
+        Xs, X2s = self.T @ X @ self.T.T, self.T @ X2 @ self.T.T
+        return Kz @ Ti, 0.5 * (Xs + Xs.T), 0.5 * (X2s + X2s.T)
+
+
+def _sym(v, N, iu):
+    M = np.zeros((N, N))
+    M[iu] = v
+    return M + M.T - np.diag(np.diag(M))
+
+
+def lmi_program(As, Bs, Gs, T, s_u, st: "RegionalLMISettings", T_reg=None) -> LMIProgram:
+    """The regional LMI program of the scaled model in the coordinates x̃ = T z, input columns
+    scaled by ``s_u``, as :class:`LMIProgram` data (each F_ik by evaluating the blocks at the
+    i-th unit vector without the constant term).
+
+    Parameters
+    ----------
+    As, Bs, Gs : arrays
+        Scaled model and disturbance input (time in 1/n), dimensionless.
+    T : (N, N) array
+        Coordinates x̃ = T z, dimensionless.
+    s_u : (m,) array
+        Input column scaling, dimensionless.
+    st : RegionalLMISettings
+        Regions, dilation and regularization.
+    T_reg : (N, N) array or None
+        The coordinates x̃ = T_reg z' in which the regularization is ε (tr X' + tr X₂'): the
+        reference loop's (module docstring, "Well-posed"); None = ``T``.
+
+    Returns
+    -------
+    LMIProgram
+        The program data.
+    """
     N, m = Bs.shape
     Ti = np.linalg.inv(T)
     Az, Bz, Gz = Ti @ As @ T, Ti @ Bs * s_u[None, :], Ti @ Gs
+    phi = np.deg2rad(st.half_angle_deg)
+    mu = st.min_margin + st.backoff
+    pars = (st.sigma + mu, mu / np.sin(phi), phi, st.disk_radius, st.dilation)
+    iu, ium = np.triu_indices(N), np.triu_indices(m)
+    offdiag = np.where(iu[0] == iu[1], 1.0, 2.0)
+    P = np.eye(N) if T_reg is None else np.linalg.solve(T_reg, T)
+    TT = P.T @ P
+    c = np.concatenate([st.regularization * TT[iu] * offdiag, st.regularization * TT[iu] * offdiag,
+                        np.zeros(m * N), (s_u[ium[0]] * s_u[ium[1]]) * np.where(ium[0] == ium[1], 1.0, 0.0)])
+    GG = Gz @ Gz.T
+    z = np.zeros(c.size)
+    prog = LMIProgram(Az, Bz, GG, T, s_u, pars, c, [], [], st.regularization * TT)
+    F0 = prog.blocks(z)
+    cols = [[] for _ in F0]
+    for i in range(c.size):
+        z[i] = 1.0
+        X, X2, Y, W = prog.unpack(z)
+        for k, Fk in enumerate(_blocks(Az, Bz, GG, X, X2, Y, W, *pars, np.block, with_constant=False)):
+            cols[k].append(Fk)
+        z[i] = 0.0
+    return LMIProgram(Az, Bz, GG, T, s_u, pars, c, F0, [np.array(f) for f in cols], st.regularization * TT)
+
+
+# ---------------------------------------------------------------------------------------------
+# the solvers: each returns (status, variable vector or None, iterations)
+# ---------------------------------------------------------------------------------------------
+#: Gap tolerance of DSDP's first (pre-conditioning) pass, dimensionless.
+DSDP_FIRST_TOL = 1e-4
+
+#: DSDP's box |v_i| ≤ bound on the variables in the reference loop's coordinates (where X, X₂ are
+#: O(1)–O(10³) at the optimum): an answer with any |v_i| above half of it is refused, so the box
+#: never changes the optimum.  With DSDP's default 1e7 its iterates stalled 1.5 % above the optimum
+#: (MB3, measured).
+DSDP_BOUND = 1e5
+
+
+def _solve_dsdp(prog: LMIProgram, tol: float):
+    """DSDP 5 (dual scaling, Schur complement with low-rank data) through ``cvxopt.dsdp.sdp``:
+    the blocks as sparse lower triangles, gap tolerance ``tol``."""
+    Gs = []
+    for F in prog.F:
+        n_var, mk, _ = F.shape
+        G = F.reshape(n_var, mk * mk).T.copy()          # column i = vec(F_i) (symmetric: any order)
+        G[~np.tril(np.ones((mk, mk), bool)).ravel(order="F")] = 0.0
+        coo = sparse.coo_matrix(G)
+        Gs.append(cvxopt.spmatrix(coo.data.tolist(), coo.row.tolist(), coo.col.tolist(), G.shape))
+    hs = [cvxopt.matrix(-F0) for F0 in prog.F0]
+    options = {"DSDP_GapTolerance": tol, "DSDP_MaxIts": 500, "DSDP_Monitor": 0}
+    saved = dict(dsdp.options)
+    dsdp.options.clear()
+    dsdp.options.update(options)
+    try:
+        status, x, r, _, _ = dsdp.sdp(cvxopt.matrix(prog.c), Gs=Gs, hs=hs, gamma=1e8, beta=DSDP_BOUND)
+    except (ValueError, ArithmeticError) as exc:
+        return f"error ({exc})", None, 0
+    finally:
+        dsdp.options.clear()
+        dsdp.options.update(saved)
+    if x is None:
+        return status, None, 0
+    v = np.array(x).ravel()
+    if float(r) > 0 or np.max(np.abs(v)) > 0.5 * DSDP_BOUND:
+        return (f"{status} with the LMIs relaxed by r = {float(r):.1e}" if float(r) > 0 else
+                f"{status} at the box |v| ≤ {DSDP_BOUND:.0e} (max |v| = {np.max(np.abs(v)):.3g})"), None, 0
+    return status, v, 0
+
+
+def _solve_clarabel_pass(prog: LMIProgram, obj_scale: float, st: "RegionalLMISettings", tol: float):
+    """One Clarabel solve of ``prog`` through cvxpy; the objective divided by ``obj_scale``."""
+    import cvxpy as cp     # heavy (~0.5 s); only on the reference route
+
+    N, m = prog.sizes
     X = cp.Variable((N, N), symmetric=True)
     X2 = cp.Variable((N, N), symmetric=True)
     Y = cp.Variable((m, N))
     W = cp.Variable((m, m), symmetric=True)
-    M = Az @ X - Bz @ Y
-    phi = np.deg2rad(st.half_angle_deg)
-    mu = st.min_margin + st.backoff
-    a = st.sigma + mu
-    c = mu / np.sin(phi)
-    b = st.dilation
-    cons = [L << 0 for L in _region_blocks(M, X, a, c, phi, st.disk_radius)]
-    cons += [cp.bmat([[-2 * b * X, X2 - X + b * M.T], [X2 - X + b * M, M + M.T + Gz @ Gz.T]]) << 0,
-             cp.bmat([[W, Y], [Y.T, 2 * X - X2]]) >> 0]
-    S = np.diag(s_u)
-    prob = cp.Problem(cp.Minimize(cp.trace(S @ W @ S) / obj_scale), cons)
+    cons = [L << 0 for L in _blocks(prog.Az, prog.Bz, prog.GG, X, X2, Y, W, *prog.pars, cp.bmat)]
+    S = np.diag(prog.s_u)
+    objective = cp.trace(S @ W @ S) + cp.trace(prog.reg @ X) + cp.trace(prog.reg @ X2)
+    problem = cp.Problem(cp.Minimize(objective / obj_scale), cons)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            prob.solve(solver=cp.CLARABEL, tol_gap_abs=tol, tol_gap_rel=tol, tol_feas=tol,
-                       max_iter=st.max_iter, **CLARABEL_OPTIONS)
+            problem.solve(solver=cp.CLARABEL, tol_gap_abs=tol, tol_gap_rel=tol, tol_feas=tol,
+                          max_iter=st.max_iter, **CLARABEL_OPTIONS)
         except cp.error.SolverError as exc:
-            return f"solver_error ({exc})", np.nan, 0, None, None, None
-    iters = int(prob.solver_stats.num_iters or 0)
-    if prob.status not in ("optimal", "optimal_inaccurate") or X.value is None:
-        return prob.status, np.nan, iters, None, None, None
-    Xz = 0.5 * (X.value + X.value.T)
-    Kz = s_u[:, None] * np.linalg.solve(Xz, Y.value.T).T
-    Xs = T @ Xz @ T.T
-    X2s = T @ (0.5 * (X2.value + X2.value.T)) @ T.T
-    return prob.status, float(prob.value) * obj_scale, iters, Kz @ Ti, 0.5 * (Xs + Xs.T), 0.5 * (X2s + X2s.T)
+            return f"error ({exc})", None, 0
+    iters = int(problem.solver_stats.num_iters or 0)
+    if X.value is None:
+        return problem.status, None, iters
+    iu, ium = np.triu_indices(N), np.triu_indices(m)
+    v = np.concatenate([X.value[iu], X2.value[iu], Y.value.ravel(), W.value[ium]])
+    return problem.status, v, iters
+
+
+def _precondition(T, Ks, Xs):
+    """The next pass's coordinates and input scaling: T ← chol(X̃), s_u = row norms of K̃ T."""
+    T = np.linalg.cholesky(Xs)
+    return T, np.maximum(np.linalg.norm(Ks @ T, axis=1), 1e-12)
 
 
 def certified_margin(As, Bs, Ks, X, sigma: float, half_angle_deg: float, min_margin: float) -> float:
@@ -414,15 +610,17 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
     ValueError
         Settings out of range.
     DesignError
-        The regions are infeasible, the final pass does not reach status "optimal", or a pole
-        of the result lies outside the sector with margin μ (each with one line naming the
-        settings to relax).
+        No solver returned a gain that passes the checks (X̃ ≻ 0, certified and actual sector
+        margin ≥ μ, the disk, the cost LMIs): one line naming each solver's outcome and the
+        settings to relax.  It never claims the regions infeasible: a solver's failure is no
+        proof of that.
     """
     st = settings
     if not (n > 0 and st.sigma > 0 and 0 < st.half_angle_deg < 90 and st.min_margin >= 0
-            and st.dilation > 0 and st.backoff >= 0 and st.disk_radius >= 0 and st.tol > 0):
-        raise ValueError("need n > 0, sigma > 0, 0 < half_angle_deg < 90, min_margin ≥ 0, "
-                         "dilation > 0, disk_radius ≥ 0, tol > 0")
+            and st.dilation > 0 and st.backoff >= 0 and st.disk_radius >= 0 and st.tol > 0
+            and st.regularization >= 0 and st.solver in ("dsdp", "clarabel")):
+        raise ValueError("need n > 0, sigma > 0, 0 < half_angle_deg < 90, min_margin ≥ 0, dilation > 0, "
+                         "disk_radius ≥ 0, tol > 0, regularization ≥ 0, solver 'dsdp' or 'clarabel'")
     t0 = time.perf_counter()
     A, B = np.asarray(A, dtype=float), np.asarray(B, dtype=float)
     N, m = B.shape
@@ -435,47 +633,124 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
         raise DesignError("regional LMI: the reference gain does not give Re λ ≤ −σn; "
                           "pass the sector LQR's gain as K_ref")
     X0 = sla.solve_continuous_lyapunov(Acl0 + st.sigma * np.eye(N), -(Gs @ Gs.T + 1e-3 * np.eye(N)))
-    T = np.linalg.cholesky(0.5 * (X0 + X0.T))
-    s_u, obj = np.ones(m), 1.0
-    iters = []
-    # pass 1: a pre-conditioner (optimal_inaccurate accepted); then re-pre-conditioned passes
-    status, val, it, Ks, Xs, X2s = _solve_pass(As, Bs, Gs, T, s_u, obj, st, max(st.tol, 1e-6))
-    iters.append(it)
-    if Ks is None:
-        raise DesignError(f"regional LMI: the regions and cost bound are infeasible (Clarabel: {status}); "
-                          + _RELAX)
-    for _ in range(st.refinements):
-        T = np.linalg.cholesky(Xs)
-        s_u = np.maximum(np.linalg.norm(Ks @ T, axis=1), 1e-12)
-        obj = val
-        status, val_new, it, Kn, Xn, X2n = _solve_pass(As, Bs, Gs, T, s_u, obj, st, st.tol)
-        iters.append(it)
-        if Kn is None:
+    T0 = np.linalg.cholesky(0.5 * (X0 + X0.T))
+    # the configured solver first (where installed), then the others in SOLVERS order
+    order = tuple(dict.fromkeys(x for x in (st.solver,) + SOLVERS if x in ROUTES))
+    rejected = []
+    for k, solver in enumerate(order):
+        try:
+            status, iters, sol = ROUTES[solver](As, Bs, Gs, K0, T0, st)
+        except (np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:   # a crash is not infeasibility
+            status, iters, sol = f"error ({type(exc).__name__}: {exc})", (0,), None
+        reason = "no solution" if sol is None else _rejection(As, Bs, sol, st, n)
+        if reason is None:
             break
-        val, Ks, Xs, X2s = val_new, Kn, Xn, X2n
-        if status == "optimal":
-            break
-    if status != "optimal":
-        raise DesignError(f"regional LMI: Clarabel status {status!r} after {len(iters)} passes "
-                          f"(tolerance {st.tol:.0e}); " + _RELAX)
+        rejected.append(f"{solver}: {status}, {reason}")
+        if k + 1 < len(order):
+            warnings.warn(f"regional LMI: {solver} returned no gain that passes the checks ({status}, {reason}); "
+                          f"trying {order[k + 1]}", RuntimeWarning, stacklevel=2)
+    else:
+        raise DesignError("regional LMI: no solver returned a gain that passes the checks ("
+                          + "; ".join(rejected) + "); " + _RELAX)
+    Ks, Xs, X2s, cost, lmi_residual = sol
     Acl = As - Bs @ Ks
     lam, _, _, kappa = eigen_conditioning(Acl)
     order = np.lexsort((lam.imag, lam.real))
     poles, kappa = lam[order] * n, kappa[order]
     margin = float(np.min(sector_margin(poles, n, st.sigma, st.half_angle_deg)))
     cert = certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg, st.min_margin)
-    if margin < st.min_margin or cert < st.min_margin:
-        raise DesignError(f"regional LMI: worst sector margin {margin:.4g}n (certified {cert:.4g}n) "
-                          f"below {st.min_margin}n; " + _RELAX)
-    fastest = float(np.max(np.abs(poles))) / n
-    if st.disk_radius > 0 and fastest > st.disk_radius * (1 + 1e-6):
-        raise DesignError(f"regional LMI: the fastest pole |λ| = {fastest:.4g}n is outside the disk of radius "
-                          f"design.lmi.disk_radius = {st.disk_radius}n; " + _RELAX)
     K = Ks / d[None, :] * input_scale
     e_norm, e_elem = sector_robustness(A, B, K, n, st.sigma, st.half_angle_deg, scale=d)
     rr = random_gain_radius(A, B, K, n, st.sigma, st.half_angle_deg, st.n_random, st.seed)
     energy = control_energy(A, B, K, n, d, input_scale, G)
     return RegionalLMI(K=K, X=Xs, X2=X2s, poles=poles, margin=margin, certified_margin=cert,
                        eig_condition=kappa, robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
-                       random_radius=rr, energy=energy, cost_bound=val, status=status, tol=st.tol,
-                       iterations=tuple(iters), solve_time=time.perf_counter() - t0)
+                       random_radius=rr, energy=energy, cost_bound=cost, status=status, tol=st.tol,
+                       iterations=tuple(iters), solve_time=time.perf_counter() - t0, solver=solver,
+                       lmi_residual=lmi_residual, rejected=tuple(rejected))
+
+
+def _route_dsdp(As, Bs, Gs, K0, T, st):
+    """DSDP twice: in the reference loop's coordinates (T, input columns scaled to the reference
+    gain's rows) to a loose gap (:data:`DSDP_FIRST_TOL`), then in the coordinates of that answer
+    (T ← chol X̃, unit gain rows), where the optimum is X ≈ I, to ``st.tol``.  The second pass
+    makes the answer independent of rounding (K equal to ~1e-10 under two BLAS kernels; one pass
+    stalls ~1e-6 short of the optimum and leaves K ~4e-6 apart): (status, iterations, solution
+    or None)."""
+    prog = lmi_program(As, Bs, Gs, T, np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12), st)
+    status, v, it = _solve_dsdp(prog, max(st.tol, DSDP_FIRST_TOL))
+    if v is None:
+        return status, (it,), None
+    sol = _solution(prog, v)
+    T1, s_u = _precondition(T, sol[0], sol[1])
+    prog = lmi_program(As, Bs, Gs, T1, s_u, st, T_reg=T)
+    status, v, it2 = _solve_dsdp(prog, st.tol)
+    return status, (it, it2), None if v is None else _solution(prog, v)
+
+
+def _route_clarabel(As, Bs, Gs, K0, T, st):
+    """Clarabel through cvxpy: a first pass as pre-conditioner, then up to ``st.refinements``
+    passes with T ← chol(X̃) and unit gain rows, the objective divided by the last optimum,
+    until Clarabel reports "optimal" (its status only selects the pass; acceptance is by the
+    checks): (status, iterations, solution or None)."""
+    T0, s_u, obj = T, np.ones(Bs.shape[1]), 1.0
+    prog = lmi_program(As, Bs, Gs, T, s_u, st)
+    status, v, it = _solve_clarabel_pass(prog, obj, st, max(st.tol, 1e-6))
+    iters = [it]
+    if v is None:
+        return status, iters, None
+    sol = _solution(prog, v)
+    for _ in range(st.refinements):
+        if status == "optimal" and len(iters) > 1:
+            break
+        T, s_u = _precondition(T, sol[0], sol[1])
+        prog = lmi_program(As, Bs, Gs, T, s_u, st, T_reg=T0)
+        status_new, v, it = _solve_clarabel_pass(prog, sol[3], st, st.tol)
+        iters.append(it)
+        if v is None:
+            break
+        status, sol = status_new, _solution(prog, v)
+    return status, iters, sol
+
+
+#: The solver routes by ``design.lmi.solver``, in fallback order (DSDP only where cvxopt is installed).
+ROUTES = {"dsdp": _route_dsdp, "clarabel": _route_clarabel} if dsdp is not None else {"clarabel": _route_clarabel}
+SOLVERS = tuple(ROUTES)
+
+
+def _solution(prog: LMIProgram, v):
+    """(K̃, X̃, X̃₂, the cost tr(S W S), the largest relative eigenvalue of the cost blocks) of a
+    variable vector."""
+    Ks, Xs, X2s = prog.result(v)
+    W = prog.unpack(v)[3]
+    S = np.diag(prog.s_u)
+    blocks = prog.blocks(v)
+    residual = max(float(np.max(np.linalg.eigvalsh(0.5 * (F + F.T)))) / max(np.linalg.norm(F, 2), 1e-300)
+                   for F in blocks[-2:])
+    return Ks, Xs, X2s, float(np.trace(S @ W @ S)), residual
+
+
+#: Largest eigenvalue of the cost blocks accepted, relative to their norm (the cost bound holds
+#: to this); the regions are checked by the certified margin itself.
+COST_TOL = 1e-6
+
+
+def _rejection(As, Bs, sol, st, n):
+    """Why a solution fails the checks (None: accepted): finite, X̃ ≻ 0, the margin certified
+    by X̃ (generalized eigenvalues) and every pole's margin ≥ μ, the disk, the cost blocks."""
+    Ks, Xs, X2s, cost, residual = sol
+    if not (np.all(np.isfinite(Ks)) and np.all(np.isfinite(Xs)) and np.isfinite(cost)):
+        return "not finite"
+    if np.min(np.linalg.eigvalsh(Xs)) <= 0:
+        return "X is not positive definite"
+    cert = certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg, st.min_margin)
+    lam = np.linalg.eigvals(As - Bs @ Ks)
+    margin = float(np.min(sector_margin(lam * n, n, st.sigma, st.half_angle_deg)))
+    if margin < st.min_margin or cert < st.min_margin:
+        return f"worst sector margin {margin:.4g}n (certified {cert:.4g}n) below {st.min_margin}n"
+    fastest = float(np.max(np.abs(lam)))
+    if st.disk_radius > 0 and fastest > st.disk_radius * (1 + 1e-6):
+        return f"fastest pole |λ| = {fastest:.4g}n outside the disk of radius {st.disk_radius}n"
+    if residual > COST_TOL:
+        return f"cost LMIs violated by {residual:.1e} (relative)"
+    return None

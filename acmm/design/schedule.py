@@ -230,8 +230,9 @@ def sector_design(A, B, scales, s: DesignSettings):
                                 Q0=s.q0_weight(A.shape[0]),   # on the scaled states
                                 scale=scales, method="shift" if s.pole_method == "lmi" else s.pole_method,
                                 riccati_method=s.riccati_method, residual_tol=s.residual_tol,
-                                min_margin=s.min_margin, line_spacing=s.line_spacing,
-                                input_scale=scaling.torque_scale(scales))
+                                # the LMI route's reference only pre-conditions: the margin is the LMI's to meet
+                                min_margin=0.0 if s.pole_method == "lmi" else s.min_margin,
+                                line_spacing=s.line_spacing, input_scale=scaling.torque_scale(scales))
     if s.pole_method != "lmi":
         return res
     # the regional LMI design, its coordinates pre-conditioned by the sector LQR's closed loop;

@@ -169,6 +169,7 @@ def design_settings(cfg) -> DesignSettings:
         lmi=None if d.pole_method != "lmi" else RegionalLMISettings(
             sigma=d.sector.sigma, half_angle_deg=d.sector.half_angle_deg, min_margin=d.min_margin,
             backoff=d.lmi.backoff, disk_radius=d.lmi.disk_radius, dilation=d.lmi.dilation, tol=d.lmi.tol,
+            regularization=d.lmi.regularization, solver=d.lmi.solver,
             n_random=d.lmi.n_random, seed=d.lmi.seed))
 
 

@@ -58,7 +58,12 @@ class RegionalLMI(_Model):
     """The regional pole placement by LMIs (``pole_method: lmi``, :mod:`acmm.design.regional_lmi`)."""
 
     dilation: float = Field(0.35, gt=0, le=100, description="β of the dilated H2 energy bound, units of 1/n")
-    tol: float = Field(1e-7, ge=1e-10, le=1e-3, description="Clarabel's gap and feasibility tolerance of the final pass")
+    solver: Literal["dsdp", "clarabel"] = Field(
+        "dsdp", description="SDP solver tried first: DSDP 5 through cvxopt (GPL-3) or Clarabel through cvxpy "
+                            "(Apache-2.0, the reference); the other is the fallback when an answer fails the checks")
+    regularization: float = Field(1e-5, ge=0, le=1, description="ε of ε(tr X + tr X2) in the objective, in the "
+                                                               "reference loop's coordinates: makes the optimum attained")
+    tol: float = Field(1e-7, ge=1e-10, le=1e-3, description="the solvers' gap tolerance of the final pass")
     backoff: float = Field(0.002, ge=0, le=1, description="the regions are imposed with margin min_margin + backoff, "
                                                           "units of n (so the certificate proves min_margin)")
     disk_radius: float = Field(0.0, ge=0, le=1e4, description="> 0: also |λ| ≤ disk_radius·n (fastest pole); 0: none")
