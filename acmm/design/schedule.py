@@ -24,6 +24,7 @@ from acmm.design.regional_lmi import regional_lmi
 from acmm.design.settings import DesignSettings
 from acmm.design.schedule_points import PointSpec
 from acmm.model.tea import TEA, solve_tea, solve_tea_near
+from acmm_qpp.errors import DesignError
 
 
 @dataclass
@@ -204,6 +205,11 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     return PointDesign(spec, t, model, res)
 
 
+#: Sector margin asked of the LMI route's reference LQR when it cannot reach ``min_margin``
+#: (the reference only pre-conditions the LMI's coordinates), units of n.
+LMI_REFERENCE_MARGIN = 0.01
+
+
 def sector_design(A, B, scales, s: DesignSettings):
     """The sector LQR of one linear model with the design settings ``s`` (R, Q0, sector, pole
     method, Riccati solver, tolerances; orbital rate ``s.orbit_rate``) — the one call the
@@ -225,14 +231,22 @@ def sector_design(A, B, scales, s: DesignSettings):
     acmm.design.sector_lqr.SectorLQR
         The verified design.
     """
-    res = sector_lqr.sector_lqr(A, B, s.R * np.eye(3), s.orbit_rate, sigma=s.sector.sigma,
-                                half_angle_deg=s.sector.half_angle_deg,
-                                Q0=s.q0_weight(A.shape[0]),   # on the scaled states
-                                scale=scales, method="shift" if s.pole_method == "lmi" else s.pole_method,
-                                riccati_method=s.riccati_method, residual_tol=s.residual_tol,
-                                # the LMI route's reference only pre-conditions: the margin is the LMI's to meet
-                                min_margin=0.0 if s.pole_method == "lmi" else s.min_margin,
-                                line_spacing=s.line_spacing, input_scale=scaling.torque_scale(scales))
+    def lqr(min_margin):
+        return sector_lqr.sector_lqr(A, B, s.R * np.eye(3), s.orbit_rate, sigma=s.sector.sigma,
+                                     half_angle_deg=s.sector.half_angle_deg,
+                                     Q0=s.q0_weight(A.shape[0]),   # on the scaled states
+                                     scale=scales, method="shift" if s.pole_method == "lmi" else s.pole_method,
+                                     riccati_method=s.riccati_method, residual_tol=s.residual_tol,
+                                     min_margin=min_margin, line_spacing=s.line_spacing,
+                                     input_scale=scaling.torque_scale(scales))
+
+    try:
+        res = lqr(s.min_margin)
+    except DesignError:
+        if s.pole_method != "lmi" or s.min_margin <= LMI_REFERENCE_MARGIN:
+            raise
+        # the LMI route's reference only pre-conditions: a margin the LQR cannot reach is the LMI's to meet
+        res = lqr(LMI_REFERENCE_MARGIN)
     if s.pole_method != "lmi":
         return res
     # the regional LMI design, its coordinates pre-conditioned by the sector LQR's closed loop;
