@@ -3,7 +3,10 @@
 
 Runs ``acmm simulate staircase`` (which designs first) and ``qpp simulate qpp_siso`` into a
 temporary results root (never ``runs/``) and writes the figures the guide embeds as palette PNGs
-(128 colours), each well under the 200 kB that ``tests/test_docs.py`` allows.
+(128 colours), each well under the 200 kB that ``tests/test_docs.py`` allows.  Each PNG carries
+what it was drawn from as text chunks (:func:`provenance`: the command and, for the stair-case,
+its per-level peak CMG momentum to 3 significant digits), which a slow test compares with a fresh
+run (``tests/acmm/stages/test_simulate.py``): a figure of an earlier design fails it.
 
 Usage: python scripts/docs_figures.py        (make docs-figures)
 """
@@ -29,8 +32,21 @@ FIGURES = [
 _ENTRY = {"acmm": "from acmm.cli.app import main; main()", "qpp": "from qpp.cli import main; main()"}
 
 
+def provenance(root: Path, command: list, name: str) -> dict:
+    """The text chunks of a figure drawn from run ``name`` of ``command`` under ``root``."""
+    import h5py
+
+    out = {"acmm-qpp:command": " ".join(command)}
+    sim = root / name / "sim.h5"
+    if command[0] == "acmm" and sim.is_file():
+        with h5py.File(sim, "r") as f:
+            out["acmm-qpp:peak_momentum_ft_lbf_s"] = ",".join(f"{v:.3g}" for v in f["levels/peak_momentum"][()])
+    return out
+
+
 def main() -> int:
     from PIL import Image
+    from PIL.PngImagePlugin import PngInfo
 
     env = {**os.environ, "MPLBACKEND": "Agg", "OPENBLAS_NUM_THREADS": "1",
            "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))}
@@ -44,7 +60,11 @@ def main() -> int:
                                stdout=subprocess.DEVNULL)
                 done.add(tuple(command))
             image = Image.open(Path(root) / name / figure).convert("RGB")
-            image.quantize(colors=128, method=Image.Quantize.MEDIANCUT).save(IMG / figure, optimize=True)
+            info = PngInfo()
+            for key, value in provenance(Path(root), command, name).items():
+                info.add_text(key, value)
+            image.quantize(colors=128, method=Image.Quantize.MEDIANCUT).save(IMG / figure, optimize=True,
+                                                                             pnginfo=info)
             print(f"docs/img/{figure}: {(IMG / figure).stat().st_size // 1024} kB")
     return 0
 

@@ -8,6 +8,7 @@ import pytest
 
 from acmm.io.config import load_config
 from acmm.stages.simulate import run_simulate
+from tests.conftest import REPO
 
 ORBIT = 2 * np.pi / 0.0011
 
@@ -53,6 +54,15 @@ def test_claim2_staircase_130_orbits(tmp_path, monkeypatch, staircase_shipped):
         np.testing.assert_allclose(gain[k], want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
     for fig in ("sim_summary.png", "sim_axes.png", "sim_inertia.png"):
         assert (tmp_path / "runs" / "staircase" / fig).stat().st_size > 10_000
+    # the guide's stair-case figures (docs/img, `make docs-figures`) were drawn from this design:
+    # their recorded per-level peaks (3 significant digits) are this fresh run's, to that rounding
+    from PIL import Image
+
+    for fig in ("sim_summary.png", "design_poles.png", "design_path_margins.png"):
+        text = Image.open(REPO / "docs" / "img" / fig).text
+        assert text.get("acmm-qpp:command") == "acmm simulate staircase", fig
+        drawn = np.array([float(v) for v in text["acmm-qpp:peak_momentum_ft_lbf_s"].split(",")])
+        assert drawn.shape == peak.shape and np.allclose(drawn, peak, rtol=5e-3, atol=0), (fig, drawn, peak)
 
 
 def test_divergence_is_a_result_not_a_crash(tmp_path, monkeypatch):
