@@ -163,8 +163,9 @@ class Design:
     def points(self) -> list:
         """The design points, in order: each an :class:`acmm.design.schedule.PointDesign` with
         ``spec`` (name, inertia slug·ft², bias ft·lbf, blend parameter s), ``tea`` (θ* in rad),
-        ``model`` (the linear model of eq 4.46) and ``lqr`` (gain ``K``, closed-loop ``poles``
-        in rad/s, sector ``margin`` in units of n)."""
+        ``model`` (the linear model of eq 4.46) and ``gain`` (:class:`acmm.design.methods.PointGain`:
+        ``K``, closed-loop ``poles`` in rad/s, sector ``margin`` in units of n, ``energy``, the
+        Riccati design and the LMI certificate if any)."""
         return list(self.result.points)
 
     @property
@@ -195,7 +196,7 @@ class Design:
         (3, 24) array
             K of u = −K x, ft·lbf per unit of each state (rad, rad/s, ft·lbf·s, ...).
         """
-        return self.result.points[self._index(point)].lqr.K
+        return self.result.points[self._index(point)].gain.K
 
     def open_loop(self, point=0):
         """Open-loop design model of a point: inputs u1..u3, w1..w3; outputs the states.
@@ -232,7 +233,7 @@ class Design:
             states and u1..u3 (ft·lbf); named ``closed loop at <point>``.
         """
         p = self.result.points[self._index(point)]
-        return _select(self._closed(p.model, p.lqr.K, f"closed loop at {p.spec.name}".replace(".", ",")), outputs, inputs)
+        return _select(self._closed(p.model, p.gain.K, f"closed loop at {p.spec.name}".replace(".", ",")), outputs, inputs)
 
     # ------------------------------------------------------------------ scheduled loop
     def plant_at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -392,7 +393,7 @@ class Design:
         """
         if tea_pitch_deg is None:
             p = self.result.points[self._index(point)]
-            model, K = p.model, p.lqr.K
+            model, K = p.model, p.gain.K
         else:
             model = self.model_at(tea_pitch_deg)
             K = self.result.table.gain_at(model.theta_star[1], 0)

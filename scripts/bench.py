@@ -35,6 +35,7 @@ from acmm.simulate import reference  # noqa: E402
 from acmm.io.config import load_config  # noqa: E402
 from dataclasses import replace  # noqa: E402
 
+from acmm.design.methods import pole_method  # noqa: E402
 from acmm.design.regional_lmi import regional_lmi  # noqa: E402
 from acmm.design.schedule import design_one  # noqa: E402
 from acmm.design.schedule_points import point_specs  # noqa: E402
@@ -76,8 +77,8 @@ def _solver_rows(name):
     iterations, certified margins and the gains' agreement (issue 40)."""
     cfg = load_config(name, ["design.pole_method=lmi"])
     s = design_settings(cfg)
-    pd = design_one(point_specs(cfg)[0], replace(s, pole_method="shift"))    # model and reference gain
-    m, ref = pd.model, pd.lqr
+    pd = design_one(point_specs(cfg)[0], replace(s, method=pole_method("shift")))    # model, reference gain
+    m, ref = pd.model, pd.gain
     out = {}
     for solver in ("dsdp", "clarabel"):
         st = replace(s.lmi, solver=solver, n_random=0)
@@ -112,7 +113,7 @@ def main() -> int:
     shipped = compute_design(cfg)
     table = shipped.table
     t_design = time.perf_counter() - t0
-    solves = sum(p.lqr.lmi.solve_time for p in shipped.points)
+    solves = sum(p.gain.lmi.solve_time for p in shipped.points)
     _row(f"packaged stair-case design in-process (12 LMI points, {shipped.path_check.theta2.size} path TEAs)",
          f"{t_design:.1f} s", "-", True)
     _row(f"  its points' LMI solve times summed / its wall time ({os.cpu_count()} CPUs)",

@@ -199,6 +199,7 @@ def design(config: Optional[str] = ConfigArg,
     With --strict, a scheduled gain with poles outside the sector, or a blend whose end lies on
     another branch of equilibria, exits 1."""
 
+    from acmm.design.methods import pole_method
     from acmm.stages.design import run_design
 
     r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
@@ -206,14 +207,13 @@ def design(config: Optional[str] = ConfigArg,
     typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
                f"sector Re <= -{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g} deg "
                f"({r.wall_time:.2f} s)")
-    if cfg.design.pole_method == "lmi":
-        typer.echo("  pole_method lmi: regional LMI gains; 'residual' is that of the reference sector LQR "
-                   "(the LMI's pre-conditioner)")
+    note = pole_method(cfg.design.pole_method).note
+    if note:
+        typer.echo("  " + note)
     typer.echo(f"  {'point':<14} {'TEA r/p/y (deg)':<28} {'margin (n)':>10} {'residual':>9} {'fastest/n':>9}")
     for p, fastest in zip(r.points, r.fastest_over_n()):
-        res = p.lqr
-        typer.echo(f"  {p.spec.name:<14} {_fmt(p.tea.theta_deg, '{:+.2f}'):<28} {res.margin:>10.3f} "
-                   f"{res.residual:>9.1e} {fastest:>9.2f}")
+        typer.echo(f"  {p.spec.name:<14} {_fmt(p.tea.theta_deg, '{:+.2f}'):<28} {p.gain.margin:>10.3f} "
+                   f"{p.gain.riccati.residual:>9.1e} {fastest:>9.2f}")
     if r.fit is not None and r.fit.form == "table":
         typer.echo(f"  schedule: table, K linear in theta2* between the {len(r.points)} design points")
     elif r.fit is not None:

@@ -101,7 +101,7 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
 def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, path):
     """The gain schedule of ``points`` (ch. 5.3): least squares (or the table look-up), then the
     closed-loop refit on the path's models ``path`` when configured."""
-    gains = np.array([p.lqr.K for p in points])
+    gains = np.array([p.gain.K for p in points])
     teas = np.array([p.tea.theta for p in points])
     if np.ptp(teas[:, 1]) < 1e-6:
         raise ConfigError(f"schedule: the {len(points)} design points all have the pitch TEA "

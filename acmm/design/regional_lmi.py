@@ -363,8 +363,30 @@ class LMIProgram:
     F0_k + Σ_i v_i F_ik ⪯ 0 for every block k.
 
     v stacks the upper triangles of X and X₂ (row by row), Y (m × N, row by row) and the upper
-    triangle of W.  The objective is tr(S W S) + ε (tr X̃ + tr X̃₂) with S = diag(s_u) and
-    X̃ = T X Tᵀ (module docstring, "Well-posed").
+    triangle of W.  The objective is tr(S W S) + ε (tr X' + tr X₂') with S = diag(s_u) and X'
+    the matrix in the regularization's coordinates (module docstring, "Well-posed").
+
+    Attributes
+    ----------
+    Az, Bz : arrays
+        T⁻¹ÃT and T⁻¹B̃ diag(s_u), dimensionless (time in 1/n).
+    GG : (N, N) array
+        T⁻¹G̃G̃ᵀT⁻ᵀ, dimensionless.
+    T : (N, N) array
+        The coordinates x̃ = T z, dimensionless.
+    s_u : (m,) array
+        Input column scaling, dimensionless.
+    pars : tuple of float
+        (a, c, φ, r, β): half-plane shift σ + μ and cone-apex shift μ/sin φ (units of n), φ (rad),
+        disk radius (units of n, 0 = none), dilation β (units of 1/n).
+    c : (n_var,) array
+        Objective coefficients, dimensionless.
+    F0 : list of arrays
+        Constant term of each block, dimensionless.
+    F : list of (n_var, m_k, m_k) arrays
+        Coefficient F_ik of each variable in each block, dimensionless.
+    reg : (N, N) array
+        ε R with ε (tr X' + tr X₂') = tr(reg X) + tr(reg X₂) in these coordinates, dimensionless.
     """
 
     Az: np.ndarray
@@ -372,11 +394,11 @@ class LMIProgram:
     GG: np.ndarray
     T: np.ndarray
     s_u: np.ndarray
-    pars: tuple            # (a, c, phi, r, beta)
+    pars: tuple
     c: np.ndarray
     F0: list
-    F: list                # per block: (n_var, m_k, m_k) array of the F_ik
-    reg: np.ndarray        # the objective's ε (tr X' + tr X₂') = tr(reg X) + tr(reg X₂) in these coordinates
+    F: list
+    reg: np.ndarray
 
     @property
     def sizes(self):
@@ -384,7 +406,18 @@ class LMIProgram:
         return self.Bz.shape
 
     def unpack(self, v):
-        """(X, X₂, Y, W) of the variable vector ``v`` (coordinates z)."""
+        """The matrices of a variable vector.
+
+        Parameters
+        ----------
+        v : (n_var,) array
+            Variable vector, dimensionless.
+
+        Returns
+        -------
+        tuple of arrays
+            (X, X₂, Y, W) in the coordinates z, dimensionless.
+        """
         N, m = self.sizes
         iu, ium = np.triu_indices(N), np.triu_indices(m)
         nS, nY = iu[0].size, N * m
@@ -392,12 +425,34 @@ class LMIProgram:
                 _sym(v[2 * nS + nY:], m, ium))
 
     def blocks(self, v):
-        """Every LMI block (⪯ 0 when feasible) at the variable vector ``v``."""
+        """Every LMI block at a variable vector.
+
+        Parameters
+        ----------
+        v : (n_var,) array
+            Variable vector, dimensionless.
+
+        Returns
+        -------
+        list of arrays
+            The blocks (each ⪯ 0 where ``v`` is feasible), dimensionless.
+        """
         X, X2, Y, W = self.unpack(v)
         return _blocks(self.Az, self.Bz, self.GG, X, X2, Y, W, *self.pars, np.block)
 
     def result(self, v):
-        """(K̃, X̃, X̃₂) in the scaled coordinates (time in 1/n) from the variable vector ``v``."""
+        """The gain and the certificates of a variable vector in the scaled coordinates.
+
+        Parameters
+        ----------
+        v : (n_var,) array
+            Variable vector, dimensionless.
+
+        Returns
+        -------
+        tuple of arrays
+            (K̃, X̃, X̃₂), scaled coordinates (time in 1/n), dimensionless.
+        """
         X, X2, Y, _ = self.unpack(v)
         X = 0.5 * (X + X.T)
         Ti = np.linalg.inv(self.T)
@@ -429,7 +484,7 @@ def lmi_program(As, Bs, Gs, T, s_u, st: "RegionalLMISettings", T_reg=None) -> LM
         Regions, dilation and regularization.
     T_reg : (N, N) array or None
         The coordinates x̃ = T_reg z' in which the regularization is ε (tr X' + tr X₂'): the
-        reference loop's (module docstring, "Well-posed"); None = ``T``.
+        reference loop's (module docstring, "Well-posed"), dimensionless; None = ``T``.
 
     Returns
     -------

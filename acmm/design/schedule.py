@@ -13,23 +13,22 @@ input).  The config is read only by :func:`acmm.design.schedule_points.point_spe
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace, field
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from acmm.model import linearize as lin
 from acmm.model import state_scaling as scaling
 from acmm.design import sector_lqr
-from acmm.design.regional_lmi import regional_lmi
+from acmm.design.methods import PointGain
 from acmm.design.settings import DesignSettings
 from acmm.design.schedule_points import PointSpec
 from acmm.model.tea import TEA, solve_tea, solve_tea_near
-from acmm_qpp.errors import DesignError
 
 
 @dataclass
 class PointDesign:
-    """One design point: its TEA, design model and sector-LQR result.
+    """One design point: its TEA, design model and gain.
 
     Attributes
     ----------
@@ -39,14 +38,14 @@ class PointDesign:
         Its torque equilibrium attitude (eqs 4.1–4.3).
     model : acmm.model.linearize.LinearModel
         Its design model (eq 4.46).
-    lqr : acmm.design.sector_lqr.SectorLQR
-        Its sector-LQR design (ch. 5.2).
+    gain : acmm.design.methods.PointGain
+        Its design (ch. 5.2) by the route of ``design.pole_method``.
     """
 
     spec: PointSpec
     tea: TEA
     model: lin.LinearModel
-    lqr: object
+    gain: PointGain
 
 
 @dataclass
@@ -178,7 +177,7 @@ class ScheduleCheck:
 
 
 def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
-    """TEA, design model and sector LQR of one design point (settings ``s``).
+    """TEA, design model and gain of one design point (settings ``s``).
 
     Parameters
     ----------
@@ -190,7 +189,7 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     Returns
     -------
     PointDesign
-        Its TEA, design model and sector-LQR design.
+        Its TEA, design model and gain.
     """
     n = s.orbit_rate
     if spec.theta_guess is not None:
@@ -205,15 +204,11 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     return PointDesign(spec, t, model, res)
 
 
-#: Sector margin asked of the LMI route's reference LQR when it cannot reach ``min_margin``
-#: (the reference only pre-conditions the LMI's coordinates), units of n.
-LMI_REFERENCE_MARGIN = 0.01
-
-
 def sector_design(A, B, scales, s: DesignSettings):
-    """The sector LQR of one linear model with the design settings ``s`` (R, Q0, sector, pole
-    method, Riccati solver, tolerances; orbital rate ``s.orbit_rate``) — the one call the
-    pipeline, the sweep's redesign and the report's errata evidence share.
+    """The design of one linear model by the route of the settings ``s`` (``s.method``:
+    :mod:`acmm.design.methods`; R, Q0, sector, Riccati solver, tolerances, orbital rate
+    ``s.orbit_rate``) — the one call the pipeline, the sweep's redesign and the report's errata
+    evidence share.
 
     Parameters
     ----------
@@ -228,33 +223,10 @@ def sector_design(A, B, scales, s: DesignSettings):
 
     Returns
     -------
-    acmm.design.sector_lqr.SectorLQR
+    acmm.design.methods.PointGain
         The verified design.
     """
-    def lqr(min_margin):
-        return sector_lqr.sector_lqr(A, B, s.R * np.eye(3), s.orbit_rate, sigma=s.sector.sigma,
-                                     half_angle_deg=s.sector.half_angle_deg,
-                                     Q0=s.q0_weight(A.shape[0]),   # on the scaled states
-                                     scale=scales, method="shift" if s.pole_method == "lmi" else s.pole_method,
-                                     riccati_method=s.riccati_method, residual_tol=s.residual_tol,
-                                     min_margin=min_margin, line_spacing=s.line_spacing,
-                                     input_scale=scaling.torque_scale(scales))
-
-    try:
-        res = lqr(s.min_margin)
-    except DesignError:
-        if s.pole_method != "lmi" or s.min_margin <= LMI_REFERENCE_MARGIN:
-            raise
-        # the LMI route's reference only pre-conditions: a margin the LQR cannot reach is the LMI's to meet
-        res = lqr(LMI_REFERENCE_MARGIN)
-    if s.pole_method != "lmi":
-        return res
-    # the regional LMI design, its coordinates pre-conditioned by the sector LQR's closed loop;
-    # the result keeps that reference design's Riccati data (P, Q, residuals) beside its own
-    lmi = regional_lmi(A, B, s.orbit_rate, res.K, s.lmi, scale=scales, input_scale=scaling.torque_scale(scales))
-    return replace(res, K=lmi.K, poles=lmi.poles, margin=lmi.margin, eig_condition=lmi.eig_condition,
-                   robustness_radius=lmi.robustness_radius,
-                   robustness_radius_elementwise=lmi.robustness_radius_elementwise, method="lmi", lmi=lmi)
+    return s.method.design(A, B, scales, s)
 
 
 def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: str = "polynomial",

@@ -167,10 +167,6 @@ class SectorLQR:
     backward_error : float
         Backward error ω (:func:`acmm.design.riccati.care_backward_error`) of (A + shift·I, B, Q, R, P),
         the accepted quantity (≤ ``residual_tol``), dimensionless.
-    lmi : acmm.design.regional_lmi.RegionalLMI or None
-        With ``method="lmi"`` the regional LMI design whose gain K is (its certificate, energy,
-        robustness re-check); P, Q, the residuals and the Riccati condition are then those of the
-        reference sector LQR that pre-conditioned it.  None otherwise.
     """
 
     K: np.ndarray
@@ -191,7 +187,6 @@ class SectorLQR:
     riccati_condition: float = float("nan")
     riccati_ill_conditioned: bool = False
     backward_error: float = float("nan")
-    lmi: object = None
 
     @property
     def max_eig_condition(self) -> float:

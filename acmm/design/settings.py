@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acmm.design.methods import PoleMethod, pole_method
 from acmm.design.regional_lmi import RegionalLMISettings
 
 
@@ -55,9 +56,9 @@ class DesignSettings:
         Diagonal added to Q0 on the scaled states, dimensionless; or None.
     sector : Sector
         The pole sector.
-    pole_method : str
-        ``"shift"`` or ``"uniform"`` (:func:`acmm.design.sector_lqr.sector_lqr`), or ``"lmi"``
-        (:func:`acmm.design.regional_lmi.regional_lmi`, pre-conditioned by the ``"shift"`` design).
+    method : acmm.design.methods.PoleMethod
+        The design route of ``design.pole_method`` (:mod:`acmm.design.methods`): the sector LQR
+        (``"shift"``, ``"uniform"``) or the regional LMI (``"lmi"``).
     riccati_method : str
         ``"sign"``, ``"scipy"`` or ``"slycot"``.
     residual_tol : float
@@ -72,7 +73,7 @@ class DesignSettings:
     drf_mode : str
         ``"attitude_hold"`` or ``"momentum_hold"``.
     lmi : acmm.design.regional_lmi.RegionalLMISettings or None
-        The regional LMI design's settings (``pole_method="lmi"``), else None.
+        The regional LMI design's settings (read by the ``"lmi"`` route only).
     """
 
     orbit_rate: float                 # rad/s
@@ -80,7 +81,7 @@ class DesignSettings:
     Q0: float                         # scaled-state weight q (dimensionless)
     Q0_groups: np.ndarray | None      # (nx,) diagonal added to Q0 on the scaled states, or None
     sector: Sector
-    pole_method: str                  # "shift", "uniform" or "lmi"
+    method: PoleMethod                # the route of design.pole_method
     riccati_method: str               # "sign", "scipy" or "slycot"
     residual_tol: float
     min_margin: float                 # units of n
@@ -164,9 +165,9 @@ def design_settings(cfg) -> DesignSettings:
         orbit_rate=cfg.orbit_rate, R=d.R, Q0=d.Q0,
         Q0_groups=None if d.Q0_groups is None else d.Q0_groups.diagonal(),
         sector=Sector(d.sector.sigma, d.sector.half_angle_deg),
-        pole_method=d.pole_method, riccati_method=d.riccati_method, residual_tol=d.residual_tol,
+        method=pole_method(d.pole_method), riccati_method=d.riccati_method, residual_tol=d.residual_tol,
         min_margin=d.min_margin, line_spacing=d.line_spacing, model=d.model, drf_mode=d.drf_mode,
-        lmi=None if d.pole_method != "lmi" else RegionalLMISettings(
+        lmi=RegionalLMISettings(
             sigma=d.sector.sigma, half_angle_deg=d.sector.half_angle_deg, min_margin=d.min_margin,
             backoff=d.lmi.backoff, disk_radius=d.lmi.disk_radius, dilation=d.lmi.dilation, tol=d.lmi.tol,
             regularization=d.lmi.regularization, solver=d.lmi.solver,

@@ -70,7 +70,7 @@ class DesignResult:
         (P,) array
             max(−Re s) / n, dimensionless.
         """
-        return np.array([np.max(-p.lqr.poles.real) / self.config.orbit_rate for p in self.points])
+        return np.array([np.max(-p.gain.poles.real) / self.config.orbit_rate for p in self.points])
 
     def off_branch(self):
         """The first blend point whose TEA is not on the branch of equilibria continued from the
@@ -146,9 +146,9 @@ def design_hash(cfg: Config) -> str:
     return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
 
 
-def point_workers(pole_method: str, n_points: int) -> int:
-    """Processes that design a config's points: the regional LMI route's points (tens of seconds
-    each) on a process pool of one worker per available CPU (at most one per point); the sector
+def point_workers(pooled: bool, n_points: int) -> int:
+    """Processes that design a config's points: a pooled route's points (the regional LMI's, seconds
+    each; :attr:`acmm.design.methods.PoleMethod.pooled`) on a process pool of one worker per available CPU (at most one per point); the sector
     LQR's (about a second each), and any design inside a pool worker already (a sweep's, the
     report's), or in a process running other threads (a fork beside them can deadlock the child:
     a terminal's progress bar), in this process.  A point's result does not depend on where it is
@@ -156,8 +156,8 @@ def point_workers(pole_method: str, n_points: int) -> int:
 
     Parameters
     ----------
-    pole_method : str
-        ``design.pole_method``.
+    pooled : bool
+        The route's points are worth a pool (:attr:`acmm.design.methods.PoleMethod.pooled`).
     n_points : int
         Number of design points.
 
@@ -166,7 +166,7 @@ def point_workers(pole_method: str, n_points: int) -> int:
     int
         Worker processes (1: in this process).
     """
-    if pole_method != "lmi" or n_points < 2 or multiprocessing.parent_process() is not None:
+    if not pooled or n_points < 2 or multiprocessing.parent_process() is not None:
         return 1
     if threading.active_count() > 1:        # (a terminal's progress bar, a notebook's kernel threads)
         return 1                            # forking beside other threads can deadlock the child
@@ -207,15 +207,14 @@ def compute_design(config, progress=None) -> DesignResult:
 
     cfg = _as_config(config)
     t0 = time.perf_counter()
-    specs = sp.point_specs(cfg)
-    workers = point_workers(cfg.design.pole_method, len(specs))
+    specs, s = sp.point_specs(cfg), design_settings(cfg)
+    workers = point_workers(s.method.pooled, len(specs))
     if workers <= 1:
-        ds = design_schedule(specs, design_settings(cfg), schedule_settings(cfg), progress)
+        ds = design_schedule(specs, s, schedule_settings(cfg), progress)
     else:
         pool = process_pool(workers)
         try:
-            ds = design_schedule(specs, design_settings(cfg), schedule_settings(cfg), progress,
-                                 map_points=partial(pool_map, pool))
+            ds = design_schedule(specs, s, schedule_settings(cfg), progress, map_points=partial(pool_map, pool))
         except BaseException:
             stop_pool(pool, abort=True)
             raise
@@ -243,7 +242,7 @@ def design_table(points, fit, design_hash: str) -> DesignTable:
     """
     return DesignTable([p.spec.name for p in points], np.array([p.spec.inertia for p in points]),
                        np.array([p.spec.bias for p in points]), np.array([p.tea.theta for p in points]),
-                       np.array([p.lqr.K for p in points]),
+                       np.array([p.gain.K for p in points]),
                        None if fit is None else fit.coef, design_hash,
                        "polynomial" if fit is None else fit.form)
 

@@ -37,7 +37,7 @@ def point_items(points) -> dict:
     """
     pts = {}
     for k, p in enumerate(points):
-        res = p.lqr
+        res, ric = p.gain, p.gain.riccati
         pts[f"{k:03d}_{p.spec.name}"] = {
             "inertia": Dataset(p.spec.inertia, "slug*ft^2", "inertia of the design point", AXES),
             "bias": Dataset(p.spec.bias, "ft*lbf", "bias torque", AXES),
@@ -46,16 +46,16 @@ def point_items(points) -> dict:
                          dims=("state", "state_col")),
             "B": Dataset(p.model.B, UNIT_B, "input matrix", STATE_NAMES, dims=("state", "axis")),
             "G": Dataset(p.model.G, UNIT_B, "disturbance matrix", STATE_NAMES, dims=("state", "axis")),
-            "Q": Dataset(res.Q, UNIT_Q, "state weight for which K is the exact LQR gain of the shifted problem",
+            "Q": Dataset(ric.Q, UNIT_Q, "state weight for which K is the exact LQR gain of the shifted problem",
                          dims=("state", "state_col")),
-            "R": Dataset(res.R, "1/(ft*lbf)^2", "control weight", dims=("axis", "axis_col")),
-            "P": Dataset(res.P, UNIT_P, "Riccati solution (physical units)", dims=("state", "state_col")),
+            "R": Dataset(ric.R, "1/(ft*lbf)^2", "control weight", dims=("axis", "axis_col")),
+            "P": Dataset(ric.P, UNIT_P, "Riccati solution (physical units)", dims=("state", "state_col")),
             "K": Dataset(res.K, UNIT_K, ("regional LMI gain" if res.lmi is not None else "LQR gain") + ", u = -K x",
                          STATE_NAMES, dims=("axis", "state")),
             "poles": Dataset(res.poles, "rad/s", "closed-loop poles of A - B K", dims=("pole",)),
             "sector_margin": Dataset(res.margin, "n", "worst pole distance into the sector (>0 inside)"),
-            "riccati_residual": Dataset(res.residual, "1", "relative CARE residual, scaled coordinates"),
-            "riccati_backward_error": Dataset(res.backward_error, "1",
+            "riccati_residual": Dataset(ric.residual, "1", "relative CARE residual, scaled coordinates"),
+            "riccati_backward_error": Dataset(ric.backward_error, "1",
                                               "CARE backward error after refinement (accepted quantity)"),
             "scales": Dataset(p.model.scales, UNIT_STATE, "state scaling used for the Riccati solve",
                               STATE_NAMES),
@@ -69,10 +69,12 @@ def point_items(points) -> dict:
                                          "out of the sector (first order)"),
             "robustness_radius_elementwise": Dataset(res.robustness_radius_elementwise, "1",
                                                      "same for elementwise relative errors max|dK_ij/K_ij|"),
-            "riccati_condition": Dataset(res.riccati_condition, "1",
+            "riccati_condition": Dataset(ric.riccati_condition, "1",
                                          "relative condition estimate of the shifted CARE (acmm.design.riccati)"),
-            "riccati_ill_conditioned": Dataset(np.int8(res.riccati_ill_conditioned), "1",
+            "riccati_ill_conditioned": Dataset(np.int8(ric.riccati_ill_conditioned), "1",
                                                "1 if the CARE condition exceeds 1/sqrt(eps)"),
+            "energy": Dataset(res.energy, "1", "H2 control energy tr(K W Kt) of the torque disturbance, scaled "
+                              "input, time in 1/n (acmm.design.regional_lmi.control_energy)"),
         }
         if res.lmi is not None:
             pts[f"{k:03d}_{p.spec.name}"]["lmi"] = _lmi_items(res.lmi)
@@ -132,21 +134,21 @@ def table_items(r, pts: dict) -> dict:
         "state_units": Dataset(np.array(r.points[0].model.state_units, dtype="S"), "1",
                                "unit of each state (the state_units of the unit strings)", dims=("state",)),
         "wall_time": Dataset(r.wall_time, "s", "design wall time"),
-        "sector_margin": Dataset(np.array([p.lqr.margin for p in r.points]), "n",
+        "sector_margin": Dataset(np.array([p.gain.margin for p in r.points]), "n",
                                  "worst pole distance into the sector per point (>0 inside)", dims=("point",)),
-        "max_eig_condition": Dataset(np.array([p.lqr.max_eig_condition for p in r.points]), "1",
+        "max_eig_condition": Dataset(np.array([p.gain.max_eig_condition for p in r.points]), "1",
                                      "largest eigenvalue condition number of A - B K per point, scaled states",
                                      dims=("point",)),
-        "robustness_radius": Dataset(np.array([p.lqr.robustness_radius for p in r.points]), "1",
+        "robustness_radius": Dataset(np.array([p.gain.robustness_radius for p in r.points]), "1",
                                      "sector robustness radius per point (relative gain error, normwise, scaled)",
                                      dims=("point",)),
         "robustness_radius_elementwise": Dataset(
-            np.array([p.lqr.robustness_radius_elementwise for p in r.points]), "1",
+            np.array([p.gain.robustness_radius_elementwise for p in r.points]), "1",
             "sector robustness radius per point (elementwise relative gain error)", dims=("point",)),
-        "riccati_condition": Dataset(np.array([p.lqr.riccati_condition for p in r.points]), "1",
+        "riccati_condition": Dataset(np.array([p.gain.riccati.riccati_condition for p in r.points]), "1",
                                      "CARE condition estimate per point" + (
                                          " (of the reference sector LQR, the LMI design's pre-conditioner)"
-                                         if any(p.lqr.lmi is not None for p in r.points) else ""),
+                                         if any(p.gain.lmi is not None for p in r.points) else ""),
                                      dims=("point",)),
     }
     return items
@@ -271,7 +273,7 @@ def design_figures(r, s, run_dir: Path, units_system: str) -> list:
     list of functools.partial
         The figure calls.
     """
-    calls = [partial(design_plots.pole_map, [p.lqr.poles for p in r.points], [p.spec.name for p in r.points],
+    calls = [partial(design_plots.pole_map, [p.gain.poles for p in r.points], [p.spec.name for p in r.points],
                      s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg, run_dir / "design_poles.png")]
     if r.fit is not None:
         calls.append(_gain_figure(r.points, r.fit, s, run_dir / "design_gains.png", units_system))
@@ -287,7 +289,7 @@ def design_figures(r, s, run_dir: Path, units_system: str) -> list:
 def _gain_figure(points, fit, s, path: Path, units_system: str):
     """The gain-schedule figure's call: the points' LQR gains and the schedule ``fit`` (imperial
     units, converted to ``units_system``: the schedule is linear in K)."""
-    gains = np.array([p.lqr.K for p in points])
+    gains = np.array([p.gain.K for p in points])
     theta2 = np.array([p.tea.theta[1] for p in points])
     if units_system != "imperial":
         conv = lambda K: state_space_in(units_system, s.drf_mode, K=K)["K"]  # noqa: E731

@@ -35,7 +35,7 @@ def test_scheduled_closed_loop_equals_independent_linearization():
     # the packaged table look-up: each K_ij linear in θ2* between the design points' own gains
     assert d.result.fit.form == "table"
     th = np.array([p.tea.theta[1] for p in d.result.points])
-    Ks = np.array([p.lqr.K for p in d.result.points])
+    Ks = np.array([p.gain.K for p in d.result.points])
     K = np.array([[np.interp(theta[1], th, Ks[:, i, j]) for j in range(24)] for i in range(3)])
     scale = max(np.abs(m.A).max(), np.abs(m.B @ K).max())
     np.testing.assert_allclose(cl.A, m.A - m.B @ K, rtol=0, atol=1e-9 * scale)
@@ -52,7 +52,7 @@ def test_scheduled_closed_loop_equals_independent_linearization():
     ol = d.open_loop(0)
     assert ol.input_labels == ["u1", "u2", "u3", "w1", "w2", "w3"] and ol.nstates == 24
     np.testing.assert_allclose(d.closed_loop(0).A, d.result.points[0].model.A - d.result.points[0].model.B
-                               @ d.result.points[0].lqr.K)
+                               @ d.result.points[0].gain.K)
 
 
 def test_api_misuse_raises_the_documented_errors():
@@ -81,7 +81,7 @@ def test_design_points_and_plain_system_names():
 
     d = api.design(api.load_config("mb3"))
     assert [p.spec.name for p in d.points] == d.names == ["mb3"]
-    assert d.points[0].lqr.K.shape == (3, 24)
+    assert d.points[0].gain.K.shape == (3, 24)
     cl = d.closed_loop("mb3")
     assert cl.name == "closed loop at mb3"
     sub = d.closed_loop("mb3", outputs=["dtheta2"], inputs=["w2"])

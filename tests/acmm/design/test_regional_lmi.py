@@ -137,7 +137,7 @@ def test_every_shipped_staircase_point_meets_the_lmi_targets(staircase_shipped, 
     r, path = staircase_shipped
     n, phi, mu = r.config.orbit_rate, np.radians(45.0), 0.1
     pts = _points(path)
-    lqr_K = [p.lqr.K for p in staircase_lqr.points]
+    lqr_K = [p.gain.K for p in staircase_lqr.points]
     assert len(pts) == len(lqr_K) == 12
     rng = np.random.default_rng(32)
     for k, p in enumerate(pts):
@@ -170,7 +170,7 @@ def mb3_model():
     cfg = load_config("mb3", ["design.pole_method=shift"])
     s = design_settings(cfg)
     p = design_one(point_specs(cfg)[0], s)
-    return p.model, p.lqr.K, cfg.orbit_rate
+    return p.model, p.gain.K, cfg.orbit_rate
 
 
 def _design(mb3_model, **settings):
@@ -304,7 +304,7 @@ def test_stations_beyond_ssf_design_on_the_lmi_route(station, tmp_path):
     lqr = compute_design(load_config("mb3", [*over, "design.pole_method=shift"]))
     lmi = compute_design(load_config("mb3", [*over, "design.pole_method=lmi"]))
     n = load_config("mb3", over).orbit_rate
-    assert lqr.points[0].lqr.margin >= 0.1
+    assert lqr.points[0].gain.margin >= 0.1
     point = lmi.points[0]
-    assert point.lqr.lmi.certified_margin >= 0.1 and point.lqr.lmi.rejected == ()
-    assert _certificate_holds(point.model, n, point.lqr.lmi)
+    assert point.gain.lmi.certified_margin >= 0.1 and point.gain.lmi.rejected == ()
+    assert _certificate_holds(point.model, n, point.gain.lmi)

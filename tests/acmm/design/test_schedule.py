@@ -32,7 +32,7 @@ def test_config_q0_is_a_weight_on_the_scaled_states():
         update={"Q0": 1e-3, "Q0_groups": None, "min_margin": 0.01})})
     p = design_one(point_specs(cfg)[0], design_settings(cfg))
     d = p.model.scales
-    q_scaled = p.lqr.Q * d[:, None] * d[None, :]
+    q_scaled = p.gain.riccati.Q * d[:, None] * d[None, :]
     assert np.linalg.eigvalsh(0.5 * (q_scaled + q_scaled.T) - 1e-3 * np.eye(24)).min() > -1e-9
     assert np.linalg.eigvalsh(q_scaled).max() < 10.0      # not the 1/d² blow-up of a physical q·I
 
@@ -50,6 +50,6 @@ def test_config_q0_groups_are_diagonal_weights_on_the_scaled_states():
     cfg = cfg.model_copy(update={"design": cfg.design.model_copy(update={"Q0_groups": g})})
     p = design_one(point_specs(cfg)[0], design_settings(cfg))
     d = p.model.scales
-    q_scaled = p.lqr.Q * d[:, None] * d[None, :]
+    q_scaled = p.gain.riccati.Q * d[:, None] * d[None, :]
     q_scaled = 0.5 * (q_scaled + q_scaled.T)
     assert np.linalg.eigvalsh(q_scaled - np.diag(g.diagonal())).min() > -1e-9 * np.abs(q_scaled).max()

@@ -48,7 +48,7 @@ def test_sector_design_reads_only_the_settings():
     spec = sp.point_specs(cfg)[0]
     p = schedule.design_one(spec, s)
     r = schedule.sector_design(p.model.A, p.model.B, p.model.scales, s)
-    np.testing.assert_array_equal(r.K, p.lqr.K)
+    np.testing.assert_array_equal(r.K, p.gain.K)
     with pytest.raises(AttributeError):
         schedule.sector_design(p.model.A, p.model.B, p.model.scales, _Bare())
     assert isinstance(s, DesignSettings)

@@ -47,17 +47,17 @@ def test_small_stations_design_and_are_the_same_scaled_problem(designs):
     for p, k in ((a, 1e-4), (b, 1e-8)):
         # both lie beyond the band (its natural momentum λmax(I)·n·0.01 below 1e-2 × 1000)
         assert 6e6 * k * 1.0001 * N * NOMINAL_ANGLE / NOMINAL_MOMENTUM < MOMENTUM_BAND[0]
-        assert p.lqr.margin > 0 and p.lqr.residual < 1e-9
-        poles = np.linalg.eigvals(p.model.A - p.model.B @ p.lqr.K)       # re-checked here
+        assert p.gain.margin > 0 and p.gain.riccati.residual < 1e-9
+        poles = np.linalg.eigvals(p.model.A - p.model.B @ p.gain.K)       # re-checked here
         assert np.all(poles.real <= -0.5 * N * 0.999) and np.all(np.abs(poles.imag) <= np.abs(poles.real) * 1.001)
-    np.testing.assert_allclose(np.sort_complex(a.lqr.poles / N), np.sort_complex(b.lqr.poles / N),
+    np.testing.assert_allclose(np.sort_complex(a.gain.poles / N), np.sort_complex(b.gain.poles / N),
                                rtol=0, atol=1e-4)   # a mirrored cluster: ill-conditioned poles
     # u ∝ k; rates and angles unchanged, momentum and its integral ∝ k: K·D (D the state scales)
     # over the torque unit is the same matrix, to what the mirrored cluster's pole shifting
     # determines: the two problems differ by rounding, which moves the clustered poles by ~1e-4n
     # (above) and the gains by a few 1e-5 (measured 3e-5; 5.7e-4 under another BLAS build)
-    ka = a.lqr.K * a.model.scales / (a.model.scales[6] / NOMINAL_MOMENTUM)
-    kb = b.lqr.K * b.model.scales / (b.model.scales[6] / NOMINAL_MOMENTUM)
+    ka = a.gain.K * a.model.scales / (a.model.scales[6] / NOMINAL_MOMENTUM)
+    kb = b.gain.K * b.model.scales / (b.model.scales[6] / NOMINAL_MOMENTUM)
     assert np.linalg.norm(ka - kb) <= 1e-3 * np.linalg.norm(ka)
     assert a.model.scales[6] / b.model.scales[6] == pytest.approx(1e4, rel=1e-12)
 

@@ -26,7 +26,7 @@ def test_design_and_simulation_figures_have_quantities_and_units(captured, tmp_p
     r = compute_design(cfg)
     design_plots.gain_schedule_grid(r.table.tea[:, 1], r.table.gain, r.fit, STATE_NAMES, tmp_path / "g.png",
                              units=plot_base.state_units(cfg.design.drf_mode))
-    design_plots.pole_map([p.lqr.poles for p in r.points], r.table.names, cfg.orbit_rate, 0.5, 45, tmp_path / "p.png")
+    design_plots.pole_map([p.gain.poles for p in r.points], r.table.names, cfg.orbit_rate, 0.5, 45, tmp_path / "p.png")
     sc = scen.scenario_from_config(cfg, r.table, orbits=12)
     res = sm.simulate(sc)
     orbits = res.t * cfg.orbit_rate / (2 * np.pi)

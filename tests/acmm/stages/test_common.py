@@ -76,7 +76,9 @@ def test_per_state_arrays_carry_state_units_and_convert_like_pint(files):
             e_imp = _element_units(ureg, u_imp, su_imp, a_imp.shape, vector)
             e_si = _element_units(ureg, u_si, su_si, a_si.shape, vector)
             factor = np.vectorize(lambda a, b: ureg.Quantity(1.0, a).to(b).magnitude)(e_imp, e_si)
-            np.testing.assert_allclose(a_si, a_imp * factor, rtol=1e-12, atol=0, err_msg=name)
+            # 1e-10: the program's and pint's factors round differently (a DRF state of sim.h5
+            # differed by 1.2e-12 relative on this machine's kernel); a wrong factor is ≥ 1e-6 off
+            np.testing.assert_allclose(a_si, a_imp * factor, rtol=1e-10, atol=0, err_msg=name)
             checked.add(name.rsplit("/", 1)[-1])
     assert {"A", "B", "G", "K", "P", "Q", "scales", "drf", "gain"} <= checked
 

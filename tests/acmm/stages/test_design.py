@@ -38,7 +38,8 @@ def test_staircase_points_span_the_report_range(staircase_lqr):
 
 def test_every_design_point_in_sector_with_exact_lqr_gain(staircase_lqr):
     for p in staircase_lqr.points:
-        m, res = p.model, p.lqr
+        m, res = p.model, p.gain.riccati           # the report's route: the gain is the LQR's
+        assert np.array_equal(p.gain.K, res.K)
         poles = np.linalg.eigvals(m.A - m.B @ res.K)
         assert _inside_sector(poles, N), p.spec.name
         assert res.residual <= 1e-9
@@ -60,7 +61,7 @@ def test_design_points_well_conditioned_with_margin(staircase_lqr):
     with scipy's left/right eigenvectors."""
     ours, theirs = [], []
     for p in staircase_lqr.points:
-        m, res = p.model, p.lqr
+        m, res = p.model, p.gain
         d = m.scales
         acl = (m.A - m.B @ res.K) / d[:, None] * d[None, :]
         w, vl, vr = sla.eig(acl, left=True, right=True)
@@ -105,7 +106,7 @@ def test_table_schedule_is_stable_along_the_whole_path(staircase_lqr):
     assert pc.theta2.size >= 200 and pc.max_real.max() <= -0.25
     assert np.allclose(np.diff(pc.theta2), np.diff(pc.theta2).mean(), rtol=0.05)
     th = np.array([p.tea.theta[1] for p in r.points])
-    Ks = np.array([p.lqr.K for p in r.points])
+    Ks = np.array([p.gain.K for p in r.points])
     assert np.all(np.diff(th) > 0)
 
     def table(t2):
@@ -124,7 +125,7 @@ def test_shipped_schedule_is_stable_on_a_thousand_teas_of_the_path(staircase_shi
     assert staircase.config.design.pole_method == "lmi" and staircase.fit.form == "table"
     assert staircase.path_check.theta2.size >= 1000 and staircase.path_check.max_real.max() <= -0.25
     th = np.array([p.tea.theta[1] for p in staircase.points])
-    Ks = np.array([p.lqr.K for p in staircase.points])
+    Ks = np.array([p.gain.K for p in staircase.points])
 
     def table(t2):
         return np.array([[np.interp(t2, th, Ks[:, i, j]) for j in range(24)] for i in range(3)])
@@ -199,9 +200,9 @@ def test_design_h5_is_self_describing_and_reused(tmp_path, monkeypatch):
     table = load_design_table(path)
     with h5py.File(path) as f:
         k = sorted(f["points"])[0]
-        assert f[f"points/{k}/max_eig_condition"][()] == pytest.approx(r.points[0].lqr.max_eig_condition)
+        assert f[f"points/{k}/max_eig_condition"][()] == pytest.approx(r.points[0].gain.max_eig_condition)
         assert f[f"points/{k}/robustness_radius"].attrs["units"] == "1"
-    assert np.array_equal(table.gain[0], r.points[0].lqr.K)
+    assert np.array_equal(table.gain[0], r.points[0].gain.K)
     _, note = design_for(cfg)
     assert note.startswith("reused")
     # a design-relevant change invalidates the cached design
@@ -294,7 +295,7 @@ def test_pooled_points_equal_the_serial_ones_and_their_warnings_reach_the_parent
     finally:
         stop_pool(pool, abort=True)
     for a, b in zip(serial.points, pooled.points):
-        np.testing.assert_array_equal(a.lqr.K, b.lqr.K)
+        np.testing.assert_array_equal(a.gain.K, b.gain.K)
 
 
 def test_lmi_points_are_designed_in_this_process_beside_other_threads(monkeypatch):
@@ -304,11 +305,11 @@ def test_lmi_points_are_designed_in_this_process_beside_other_threads(monkeypatc
 
     from acmm.stages.design import point_workers
 
-    assert point_workers("shift", 12) == 1 and point_workers("lmi", 1) == 1
+    assert point_workers(False, 12) == 1 and point_workers(True, 1) == 1
     monkeypatch.setattr(threading, "active_count", lambda: 1)
-    assert point_workers("lmi", 12) == min(12, len(os.sched_getaffinity(0)))
+    assert point_workers(True, 12) == min(12, len(os.sched_getaffinity(0)))
     monkeypatch.setattr(threading, "active_count", lambda: 2)
-    assert point_workers("lmi", 12) == 1
+    assert point_workers(True, 12) == 1
 
 
 def _dies(x):

@@ -1,0 +1,170 @@
+"""The design routes of one point (``design.pole_method``), resolved once into a :class:`PoleMethod`.
+
+Every route takes the point's model and the :class:`acmm.design.settings.DesignSettings` and returns
+the same record, :class:`PointGain`: the gain u = −K x (eq 5.3), its poles and sector margin
+(Fig 5.2), eigenvalue conditioning and robustness radii, the H2 control energy
+(:func:`acmm.design.regional_lmi.control_energy`, the same measure for every route), the Riccati
+design it rests on and, for the LMI route, its certificate and solver statistics.
+
+* ``"shift"``, ``"uniform"``: the sector LQR of report ch. 5.2 (:func:`acmm.design.sector_lqr.sector_lqr`);
+* ``"lmi"``: regional pole placement by LMIs (:func:`acmm.design.regional_lmi.regional_lmi`), its
+  coordinates pre-conditioned by the ``"shift"`` sector LQR of the same settings (its reference,
+  kept as :attr:`PointGain.riccati`).
+
+The string is read here and only here (:func:`pole_method`, called by
+:func:`acmm.design.settings.design_settings`); the rest of the program asks the method object.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Callable
+
+import numpy as np
+
+from acmm.design import sector_lqr
+from acmm.design.regional_lmi import RegionalLMI, control_energy, regional_lmi
+from acmm.model import state_scaling as scaling
+from acmm_qpp.errors import DesignError
+
+#: Sector margin asked of the LMI route's reference LQR when it cannot reach ``min_margin``
+#: (the reference only pre-conditions the LMI's coordinates), units of n.
+LMI_REFERENCE_MARGIN = 0.01
+
+
+@dataclass(frozen=True)
+class PointGain:
+    """One design point's gain and its evidence, whichever route made it.
+
+    Attributes
+    ----------
+    K : (M, N) array
+        Gain, u = −K x (eq 5.3), ft·lbf per state unit.
+    poles : (N,) complex array
+        Eigenvalues of A − BK, rad/s, sorted by real part.
+    margin : float
+        Worst :func:`~acmm.design.sector_lqr.sector_margin` of the poles, units of n.
+    eig_condition : (N,) array
+        Eigenvalue condition numbers of A − BK in the scaled coordinates (order of ``poles``),
+        dimensionless.
+    robustness_radius, robustness_radius_elementwise : float
+        First-order sector robustness radii (:func:`~acmm.design.sector_lqr.sector_robustness`),
+        normwise (scaled) and elementwise, dimensionless.
+    energy : float
+        H2 control energy of K (:func:`~acmm.design.regional_lmi.control_energy`), in units of
+        the torque scale squared, time in 1/n.
+    method : str
+        The route's name (``design.pole_method``).
+    riccati : acmm.design.sector_lqr.SectorLQR
+        The sector LQR the gain is (``shift``, ``uniform``) or that pre-conditioned it (``lmi``):
+        its Q, R, P, Riccati residual, backward error and condition.
+    lmi : acmm.design.regional_lmi.RegionalLMI or None
+        The LMI route's design: certificate X, certified margin, cost bound, random robustness
+        re-check, solver and its statistics; None on the LQR routes.
+    """
+
+    K: np.ndarray
+    poles: np.ndarray
+    margin: float
+    eig_condition: np.ndarray
+    robustness_radius: float
+    robustness_radius_elementwise: float
+    energy: float
+    method: str
+    riccati: sector_lqr.SectorLQR
+    lmi: RegionalLMI | None = None
+
+    @property
+    def max_eig_condition(self) -> float:
+        """Largest eigenvalue condition number κ of A − BK (scaled), dimensionless."""
+        return float(np.max(self.eig_condition)) if self.eig_condition.size else float("nan")
+
+
+@dataclass(frozen=True)
+class PoleMethod:
+    """A design route (``design.pole_method``).
+
+    Attributes
+    ----------
+    name : str
+        Its config name.
+    design : callable
+        ``design(A, B, scales, s)`` → :class:`PointGain` for a model (1/s; state units per
+        ft·lbf; state scales) and the design settings ``s``.
+    pooled : bool
+        Its points are worth designing on a process pool (seconds each, not milliseconds).
+    note : str
+        What ``acmm design`` prints about the route's table ("" for nothing).
+    """
+
+    name: str
+    design: Callable
+    pooled: bool = False
+    note: str = ""
+
+
+def _reference_lqr(A, B, scales, s, method: str, min_margin: float) -> sector_lqr.SectorLQR:
+    """The sector LQR of the settings ``s`` with ``method`` and ``min_margin`` (units of n)."""
+    return sector_lqr.sector_lqr(A, B, s.R * np.eye(B.shape[1]), s.orbit_rate, sigma=s.sector.sigma,
+                                 half_angle_deg=s.sector.half_angle_deg, Q0=s.q0_weight(A.shape[0]),
+                                 scale=scales, method=method, riccati_method=s.riccati_method,
+                                 residual_tol=s.residual_tol, min_margin=min_margin,
+                                 line_spacing=s.line_spacing, input_scale=scaling.torque_scale(scales))
+
+
+def _lqr_route(method: str, A, B, scales, s) -> PointGain:
+    """The sector LQR with ``method`` (``"shift"``, ``"uniform"``) as a :class:`PointGain`."""
+    r = _reference_lqr(A, B, scales, s, method, s.min_margin)
+    return PointGain(K=r.K, poles=r.poles, margin=r.margin, eig_condition=r.eig_condition,
+                     robustness_radius=r.robustness_radius, robustness_radius_elementwise=r.robustness_radius_elementwise,
+                     energy=control_energy(A, B, r.K, s.orbit_rate, scales, scaling.torque_scale(scales)),
+                     method=method, riccati=r)
+
+
+def _lmi_route(A, B, scales, s) -> PointGain:
+    """The regional LMI design pre-conditioned by the ``"shift"`` sector LQR (with the configured
+    margin, or :data:`LMI_REFERENCE_MARGIN` when the LQR cannot reach it), as a :class:`PointGain`."""
+    try:
+        ref = _reference_lqr(A, B, scales, s, "shift", s.min_margin)
+    except DesignError:
+        if s.min_margin <= LMI_REFERENCE_MARGIN:
+            raise
+        ref = _reference_lqr(A, B, scales, s, "shift", LMI_REFERENCE_MARGIN)
+    r = regional_lmi(A, B, s.orbit_rate, ref.K, s.lmi, scale=scales, input_scale=scaling.torque_scale(scales))
+    return PointGain(K=r.K, poles=r.poles, margin=r.margin, eig_condition=r.eig_condition,
+                     robustness_radius=r.robustness_radius, robustness_radius_elementwise=r.robustness_radius_elementwise,
+                     energy=r.energy, method="lmi", riccati=ref, lmi=r)
+
+
+#: The routes by ``design.pole_method``.
+METHODS = {
+    "shift": PoleMethod("shift", partial(_lqr_route, "shift")),          # (partials pickle: pool workers)
+    "uniform": PoleMethod("uniform", partial(_lqr_route, "uniform")),
+    "lmi": PoleMethod("lmi", _lmi_route, pooled=True,
+                      note="pole_method lmi: regional LMI gains; 'residual' is that of the reference sector LQR "
+                           "(the LMI's pre-conditioner)"),
+}
+
+
+def pole_method(name: str) -> PoleMethod:
+    """The :class:`PoleMethod` of ``design.pole_method`` ``name``.
+
+    Parameters
+    ----------
+    name : str
+        ``"shift"``, ``"uniform"`` or ``"lmi"``.
+
+    Returns
+    -------
+    PoleMethod
+        The route.
+
+    Raises
+    ------
+    ValueError
+        An unknown name.
+    """
+    try:
+        return METHODS[name]
+    except KeyError:
+        raise ValueError(f"design.pole_method: unknown route {name!r} (one of {', '.join(METHODS)})") from None
