@@ -231,18 +231,18 @@ def test_an_answer_failing_the_checks_is_refused_whatever_its_status(mb3_model, 
     solver tried with a warning; when every answer fails: one DesignError naming each solver's
     outcome and the settings to relax, never "infeasible"."""
     good = dict(rl.ROUTES)
-    monkeypatch.setitem(rl.ROUTES, "dsdp", _fake_route("zero"))
-    with pytest.warns(RuntimeWarning, match="dsdp returned no gain that passes the checks"):
-        r = _design(mb3_model, solver="dsdp")
-    assert r.solver == "clarabel" and r.rejected[0].startswith("dsdp: fake optimal, worst sector margin")
-    assert _certificate_holds(mb3_model[0], mb3_model[2], r)
     monkeypatch.setitem(rl.ROUTES, "clarabel", _fake_route("zero"))
+    with pytest.warns(RuntimeWarning, match="clarabel returned no gain that passes the checks"):
+        r = _design(mb3_model, solver="clarabel")
+    assert r.solver == "dsdp" and r.rejected[0].startswith("clarabel: fake optimal, worst sector margin")
+    assert _certificate_holds(mb3_model[0], mb3_model[2], r)
+    monkeypatch.setitem(rl.ROUTES, "dsdp", _fake_route("zero"))
     with pytest.raises(DesignError) as exc, pytest.warns(RuntimeWarning):
         _design(mb3_model, solver="clarabel")
     msg = str(exc.value)
     assert "\n" not in msg and "infeasib" not in msg.lower()
     assert "clarabel: fake optimal" in msg and "dsdp: fake optimal" in msg and "relax design.min_margin" in msg
-    assert good["dsdp"] is not rl.ROUTES["dsdp"]
+    assert good["dsdp"] is not rl.ROUTES["dsdp"] and good["clarabel"] is not rl.ROUTES["clarabel"]
 
 
 def test_a_solver_crash_is_named_as_a_crash_not_as_infeasibility(mb3_model, monkeypatch):
