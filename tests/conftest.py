@@ -17,7 +17,7 @@ REPO = Path(__file__).resolve().parent.parent
 CONFIGS = REPO / "configs"
 
 #: The overrides that design a packaged stair-case on the report's route (sector LQR with pole
-#: shifting, about a second a point) instead of the shipped regional LMI (tens of seconds a point),
+#: shifting, a fraction of a second a point) instead of the shipped regional LMI (seconds a point),
 #: checked on 201 path TEAs instead of 1 001 (seconds less a design): the tests of the pipeline's
 #: mechanics use them (``load_config("staircase", [*LQR_ROUTE])``); the shipped design is tested
 #: in the slow group.

@@ -214,6 +214,12 @@ def design(config: Optional[str] = ConfigArg,
     for p, fastest in zip(r.points, r.fastest_over_n()):
         typer.echo(f"  {p.spec.name:<14} {_fmt(p.tea.theta_deg, '{:+.2f}'):<28} {p.gain.margin:>10.3f} "
                    f"{p.gain.riccati.residual:>9.1e} {fastest:>9.2f}")
+    lmis = [p.gain.lmi for p in r.points if p.gain.lmi is not None]
+    if lmis:
+        fallbacks = sum(bool(x.rejected) for x in lmis)
+        typer.echo(f"  regional LMI: solved by {', '.join(sorted({x.solver for x in lmis}))}; margin certified by X "
+                   f">= {min(x.certified_margin for x in lmis):.4f} n at every point; "
+                   f"{fallbacks} point(s) needed the fallback solver; {sum(x.solve_time for x in lmis):.1f} s of solves")
     if r.fit is not None and r.fit.form == "table":
         typer.echo(f"  schedule: table, K linear in theta2* between the {len(r.points)} design points")
     elif r.fit is not None:

@@ -26,7 +26,7 @@ def staircase_lqr():
 
 @pytest.fixture(scope="session")
 def staircase_shipped(tmp_path_factory):
-    """The packaged stair-case as shipped (regional LMI points, ~2.5 min on 2 cores): its
+    """The packaged stair-case as shipped (regional LMI points, seconds each on the process pool): its
     :class:`~acmm.stages.design.DesignResult` and the ``design.h5`` written for it (slow tests)."""
     root = tmp_path_factory.mktemp("shipped")
     return run_design(load_config("staircase", [f"output.root={root}"]), figures=False)

@@ -16,7 +16,7 @@ ORBIT = 2 * np.pi / 0.0011
 @pytest.mark.slow
 def test_claim2_staircase_130_orbits(tmp_path, monkeypatch, staircase_shipped):
     monkeypatch.chdir(tmp_path)
-    # the session's shipped design (minutes of LMI solves), reused as `acmm simulate` reuses a
+    # the session's shipped design (12 LMI points), reused as `acmm simulate` reuses a
     # matching design.h5
     (tmp_path / "runs" / "staircase").mkdir(parents=True)
     shutil.copy(staircase_shipped[1], tmp_path / "runs" / "staircase" / "design.h5")
