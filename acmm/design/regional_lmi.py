@@ -691,6 +691,9 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
     T0 = np.linalg.cholesky(0.5 * (X0 + X0.T))
     # the configured solver first (where installed), then the others in SOLVERS order
     order = tuple(dict.fromkeys(x for x in (st.solver,) + SOLVERS if x in ROUTES))
+    if st.solver not in ROUTES:
+        warnings.warn(f"regional LMI: design.lmi.solver {st.solver!r} is not installed (cvxopt); "
+                      f"solving with {order[0]}", RuntimeWarning, stacklevel=2)
     rejected = []
     for k, solver in enumerate(order):
         try:
