@@ -308,3 +308,13 @@ def test_stations_beyond_ssf_design_on_the_lmi_route(station, tmp_path):
     point = lmi.points[0]
     assert point.gain.lmi.certified_margin >= 0.1 and point.gain.lmi.rejected == ()
     assert _certificate_holds(point.model, n, point.gain.lmi)
+
+
+def test_without_cvxopt_the_route_names_the_missing_solver_and_uses_clarabel(mb3_model, monkeypatch):
+    """cvxopt (GPL-3) is optional: where it is not installed the default ``dsdp`` is named in a
+    warning and Clarabel solves (here a fake Clarabel, whose refused answer ends the design)."""
+    monkeypatch.setattr(rl, "ROUTES", {"clarabel": _fake_route("zero")})
+    monkeypatch.setattr(rl, "SOLVERS", ("clarabel",))
+    with pytest.raises(DesignError, match=r"\(clarabel: fake optimal"), \
+            pytest.warns(RuntimeWarning, match="'dsdp' is not installed"):
+        _design(mb3_model, solver="dsdp")
