@@ -99,8 +99,7 @@ def _same_to_3_digits(a, b) -> bool:
 
 
 def test_shipped_staircase_is_the_same_under_every_kernel_and_thread_count(runs):
-    ref = _read(runs[ENVIRONMENTS[0]], "staircase")
-    assert not np.array_equal(_read(runs[("Prescott", 1)], "staircase")["K"], ref["K"])   # both kernels ran
+    ref = _read(runs[ENVIRONMENTS[0]], "staircase")      # (that both kernels ran: the report's route's test)
     for env in ENVIRONMENTS:
         got = _read(runs[env], "staircase")
         assert got["verdict"] == "bounded" and got["peak"].size == 12

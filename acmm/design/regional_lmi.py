@@ -42,7 +42,7 @@ x̃ = T z with T = chol(X₀), X₀ the Lyapunov matrix of a reference closed lo
 gain, shifted by σ, driven by G̃G̃ᵀ + 10⁻³I) — the reference loop's coordinates.
 
 Well-posed.  Without more, the program has no attained optimum: X and X₂ grow without bound along
-the directions the gain does not use (K̃ v ≈ 0; eigenvalues ~1e7 in a 2-D subspace at MB3) while
+the directions the gain does not use (K̃ v ≈ 0; a 2-D subspace at MB3) while
 tr W keeps falling toward its infimum, so every interior-point solver ends "inaccurate", stalls or
 meets a singular system, and the answer depends on where it stopped (the BLAS kernel, the solver).
 The objective is therefore ::
@@ -50,9 +50,9 @@ The objective is therefore ::
     tr W + ε (tr X' + tr X₂'),     X̃ = T X' Tᵀ  (the reference loop's coordinates),
 
 with ε = ``regularization`` = 1e-5: the level sets are bounded, the optimum is attained, and the
-control energy of the answer is within 0.1 % of the unregularized infimum's (0.05 % at MB3 and AC,
-measured; a weight on tr X̃ in the scaled coordinates, whose eigenvalues span 1e-4…1e6, either
-left the program ill-posed or cost more energy, and a bound X' ⪯ cI adds a cone).
+control energy of the answer stays within 0.1 % of the unregularized program's (a slow test at
+MB3).  The same weight on tr X̃ in the scaled coordinates, whose eigenvalues span many decades,
+left the program ill-posed or cost more energy; a bound X' ⪯ cI would add a cone.
 
 Solvers (``solver``; :data:`ROUTES`), each answer accepted on the checks of :func:`_rejection`
 (X̃ ≻ 0; every pole's margin and the margin X̃ certifies by generalized eigenvalues ≥ μ; the disk;
@@ -63,16 +63,17 @@ what each solver returned — never "infeasible", which a solver's failure does 
 * ``"dsdp"`` (default): DSDP 5, a dual-scaling method that factors the 678 × 678 Schur complement
   and uses the low rank of each variable's data, through ``cvxopt.dsdp`` (GPL-3, README); two
   passes (:func:`_route_dsdp`): the second in the coordinates of the first's answer, where X' ≈ I,
-  converges to K independent of the BLAS kernel (~1e-9).
+  converges to a K independent of the BLAS kernel.
 * ``"clarabel"``: Clarabel through cvxpy (Apache-2.0), the reference: it factors the whole KKT
-  system, with a dense 1 176 × 1 176 block per 48 × 48 LMI, ~5× slower here; a first pass, then
+  system, with a dense 1 176 × 1 176 block per 48 × 48 LMI (``make bench`` times both); a first pass, then
   up to ``refinements`` passes with T ← T chol(X') and the input columns scaled to unit gain-row
   norms, the objective divided by the last optimum, at gap and feasibility tolerance ``tol``.
 
-Both solve the same program; their gains agree to ~3e-6 (MB3, AC; tests).
+Both solve the same program; their gains agree to 1e-5 relative (a slow test at MB3).
 """
 from __future__ import annotations
 
+import threading
 import time
 import warnings
 from dataclasses import dataclass
@@ -171,9 +172,9 @@ class RegionalLMI:
     margin : float
         Worst sector margin of the poles, units of n.
     certified_margin : float
-        Sector margin proved by X: min(a* − σ, c* sin φ), a* and c* the largest half-plane shift
-        and cone-apex shift for which the region LMIs hold with this X and K (generalized
-        eigenvalues), units of n.
+        Sector margin proved by X (:func:`certified_margin`): min(a* − σ, c* sin φ), a* and c*
+        the largest half-plane shift and cone-apex shift for which the region LMIs hold with this
+        X and K, less a rounding allowance, units of n.
     eig_condition : (N,) array
         Eigenvalue condition numbers of Ã − B̃K̃ (:func:`~acmm.design.sector_lqr.eigen_conditioning`),
         same order as ``poles``, dimensionless.
@@ -186,7 +187,8 @@ class RegionalLMI:
     energy : float
         :func:`control_energy` of K, in (input_scale)² (time unit 1/n).
     cost_bound : float
-        tr W, the certified upper bound of ``energy``, in the units of ``energy``.
+        tr W, the cost LMIs' upper bound of ``energy`` (energy ≤ it is checked), in the units of
+        ``energy``.
     status : str
         The accepting solver's own status of its last pass (information only: the answer is
         accepted on the checks of :func:`regional_lmi`).
@@ -520,13 +522,16 @@ def lmi_program(As, Bs, Gs, T, s_u, st: "RegionalLMISettings", T_reg=None) -> LM
 # ---------------------------------------------------------------------------------------------
 # the solvers: each returns (status, variable vector or None, iterations)
 # ---------------------------------------------------------------------------------------------
+#: Serializes cvxopt's module-level DSDP options and the call that reads them (threads of one process).
+_DSDP_OPTIONS_LOCK = threading.Lock()
+
 #: Gap tolerance of DSDP's first (pre-conditioning) pass, dimensionless.
 DSDP_FIRST_TOL = 1e-4
 
 #: DSDP's box |v_i| ≤ bound on the variables in the reference loop's coordinates (where X, X₂ are
 #: O(1)–O(10³) at the optimum): an answer with any |v_i| above half of it is refused, so the box
-#: never changes the optimum.  With DSDP's default 1e7 its iterates stalled 1.5 % above the optimum
-#: (MB3, measured).
+#: never changes the optimum.  With DSDP's default 1e7 its iterates stalled well above the optimum
+#: (MB3).
 DSDP_BOUND = 1e5
 
 
@@ -542,22 +547,21 @@ def _solve_dsdp(prog: LMIProgram, tol: float):
         Gs.append(cvxopt.spmatrix(coo.data.tolist(), coo.row.tolist(), coo.col.tolist(), G.shape))
     hs = [cvxopt.matrix(-F0) for F0 in prog.F0]
     options = {"DSDP_GapTolerance": tol, "DSDP_MaxIts": 500, "DSDP_Monitor": 0}
-    saved = dict(dsdp.options)
-    dsdp.options.clear()
-    dsdp.options.update(options)
-    try:
-        status, x, r, _, _ = dsdp.sdp(cvxopt.matrix(prog.c), Gs=Gs, hs=hs, gamma=1e8, beta=DSDP_BOUND)
-    except (ValueError, ArithmeticError) as exc:
-        return f"error ({exc})", None, 0
-    finally:
+    with _DSDP_OPTIONS_LOCK:            # cvxopt reads its options from module state: one call at a time
+        saved = dict(dsdp.options)
         dsdp.options.clear()
-        dsdp.options.update(saved)
+        dsdp.options.update(options)
+        try:
+            status, x, r, _, _ = dsdp.sdp(cvxopt.matrix(prog.c), Gs=Gs, hs=hs, gamma=1e8, beta=DSDP_BOUND)
+        finally:
+            dsdp.options.clear()
+            dsdp.options.update(saved)
     if x is None:
-        return status, None, 0
+        return "no answer", None, 0
     v = np.array(x).ravel()
     if float(r) > 0 or np.max(np.abs(v)) > 0.5 * DSDP_BOUND:
-        return (f"{status} with the LMIs relaxed by r = {float(r):.1e}" if float(r) > 0 else
-                f"{status} at the box |v| ≤ {DSDP_BOUND:.0e} (max |v| = {np.max(np.abs(v)):.3g})"), None, 0
+        return (f"no answer: the LMIs needed relaxing by r = {float(r):.1e}" if float(r) > 0 else
+                f"no answer: at the box |v| ≤ {DSDP_BOUND:.0e} (max |v| = {np.max(np.abs(v)):.3g})"), None, 0
     return status, v, 0
 
 
@@ -580,10 +584,10 @@ def _solve_clarabel_pass(prog: LMIProgram, obj_scale: float, st: "RegionalLMISet
             problem.solve(solver=cp.CLARABEL, tol_gap_abs=tol, tol_gap_rel=tol, tol_feas=tol,
                           max_iter=st.max_iter, **CLARABEL_OPTIONS)
         except cp.error.SolverError as exc:
-            return f"error ({exc})", None, 0
+            return f"solver error: {exc}", None, 0
     iters = int(problem.solver_stats.num_iters or 0)
     if X.value is None:
-        return problem.status, None, iters
+        return "no answer", None, iters
     iu, ium = np.triu_indices(N), np.triu_indices(m)
     v = np.concatenate([X.value[iu], X2.value[iu], Y.value.ravel(), W.value[ium]])
     return problem.status, v, iters
@@ -595,12 +599,18 @@ def _precondition(T, Ks, Xs):
     return T, np.maximum(np.linalg.norm(Ks @ T, axis=1), 1e-12)
 
 
-def certified_margin(As, Bs, Ks, X, sigma: float, half_angle_deg: float, min_margin: float) -> float:
-    """Sector margin proved by the region certificate X for Ã − B̃K̃ (units of n).
+def certified_margin(As, Bs, Ks, X, sigma: float, half_angle_deg: float) -> float:
+    """Sector margin proved by the region certificate X for Ã − B̃K̃, less a rounding allowance
+    (units of n).
 
-    a* = −λ_max(He(Ã_cl X), 2X) (largest a with He(Ã_cl X) + 2aX ⪯ 0) and c* the largest apex
-    shift with the cone LMI of M_c = Ã_cl X + c X ⪯ 0 (a generalized eigenvalue of the pencil
-    (L₀, 2 sin φ I₂ ⊗ X)); the margin is min(a* − σ, c* sin φ).  −inf if X is not ≻ 0.
+    With X = LLᵀ (Cholesky) and Z = L⁻¹(Ã − B̃K̃)L, the half-plane LMI He(Ã_cl X) + 2aX ⪯ 0 holds
+    for every a ≤ a* = −λ_max(Z + Zᵀ)/2 and the cone LMI of M_c = Ã_cl X + cX for every
+    c ≤ c* = λ_min(−L₀(Z))/(2 sin φ), L₀(Z) = [[sin φ He Z, cos φ (Z − Zᵀ)], [cos φ (Zᵀ − Z),
+    sin φ He Z]] (the generalized eigenvalues of the pencils with X, computed from symmetric
+    matrices of the whitened loop Z, whatever the condition of X); the margin is
+    min(a* − σ, c* sin φ) − δ, with δ = 8 N ε κ(L) (‖Ã‖ + ‖B̃‖‖K̃‖) a first-order bound of the
+    rounding in forming Ã_cl and Z (ε the unit roundoff).  −inf if X is not ≻ 0 (its Cholesky
+    factorization fails).
 
     Parameters
     ----------
@@ -610,8 +620,6 @@ def certified_margin(As, Bs, Ks, X, sigma: float, half_angle_deg: float, min_mar
         The certificate in the same coordinates, dimensionless.
     sigma, half_angle_deg : float
         The sector (units of n, deg).
-    min_margin : float
-        μ, units of n (unused in the value; kept for the signature of the settings).
 
     Returns
     -------
@@ -619,16 +627,23 @@ def certified_margin(As, Bs, Ks, X, sigma: float, half_angle_deg: float, min_mar
         The certified margin, units of n.
     """
     X = 0.5 * (X + X.T)
-    if np.min(np.linalg.eigvalsh(X)) <= 0:
+    try:
+        L = np.linalg.cholesky(X)
+    except np.linalg.LinAlgError:
+        return float("-inf")
+    Acl = As - Bs @ Ks
+    Z = sla.solve_triangular(L, Acl @ L, lower=True)
+    if not np.all(np.isfinite(Z)):
         return float("-inf")
     phi = np.deg2rad(half_angle_deg)
-    M = (As - Bs @ Ks) @ X
-    H = M + M.T
-    a_star = -float(np.max(sla.eigh(H, 2 * X, eigvals_only=True)))
-    L0 = np.block([[np.sin(phi) * H, np.cos(phi) * (M - M.T)], [np.cos(phi) * (M.T - M), np.sin(phi) * H]])
-    E = 2 * np.sin(phi) * np.kron(np.eye(2), X)
-    c_star = float(np.min(sla.eigh(-0.5 * (L0 + L0.T), E, eigvals_only=True)))
-    return min(a_star - sigma, c_star * np.sin(phi))
+    H, S = Z + Z.T, Z - Z.T
+    a_star = -0.5 * float(np.max(np.linalg.eigvalsh(H)))
+    L0 = np.block([[np.sin(phi) * H, np.cos(phi) * S], [-np.cos(phi) * S, np.sin(phi) * H]])
+    c_star = float(np.min(np.linalg.eigvalsh(-L0))) / (2 * np.sin(phi))
+    N = X.shape[0]
+    delta = 8 * N * np.finfo(float).eps * np.linalg.cond(L) * (np.linalg.norm(As, 2)
+                                                                + np.linalg.norm(Bs, 2) * np.linalg.norm(Ks, 2))
+    return min(a_star - sigma, c_star * np.sin(phi)) - delta
 
 
 def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = RegionalLMISettings(), *,
@@ -695,28 +710,34 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
         warnings.warn(f"regional LMI: design.lmi.solver {st.solver!r} is not installed (cvxopt); "
                       f"solving with {order[0]}", RuntimeWarning, stacklevel=2)
     rejected = []
+    ts = time.perf_counter()
     for k, solver in enumerate(order):
         try:
             status, iters, sol = ROUTES[solver](As, Bs, Gs, K0, T0, st)
-        except (np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:   # a crash is not infeasibility
-            status, iters, sol = f"error ({type(exc).__name__}: {exc})", (0,), None
-        reason = "no solution" if sol is None else _rejection(As, Bs, sol, st, n)
+            reason = status if sol is None else _rejection(As, Bs, Gs, sol, st, n)
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except BaseException as exc:        # a crash (a Rust panic is a BaseException) is the solver's failure
+            status, iters, sol = "error", (0,), None
+            reason = f"{type(exc).__name__}: {exc}"
         if reason is None:
             break
-        rejected.append(f"{solver}: {status}, {reason}")
+        # the solver's own words stay out of the message: its "infeasible" is no checked certificate
+        rejected.append(f"{solver}: {reason}")
         if k + 1 < len(order):
-            warnings.warn(f"regional LMI: {solver} returned no gain that passes the checks ({status}, {reason}); "
+            warnings.warn(f"regional LMI: {solver} returned no gain that passes the checks ({reason}); "
                           f"trying {order[k + 1]}", RuntimeWarning, stacklevel=2)
     else:
         raise DesignError("regional LMI: no solver returned a gain that passes the checks ("
                           + "; ".join(rejected) + "); " + _RELAX)
+    solve_time = time.perf_counter() - ts
     Ks, Xs, X2s, cost, lmi_residual = sol
     Acl = As - Bs @ Ks
     lam, _, _, kappa = eigen_conditioning(Acl)
     order = np.lexsort((lam.imag, lam.real))
     poles, kappa = lam[order] * n, kappa[order]
     margin = float(np.min(sector_margin(poles, n, st.sigma, st.half_angle_deg)))
-    cert = certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg, st.min_margin)
+    cert = certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg)
     K = Ks / d[None, :] * input_scale
     e_norm, e_elem = sector_robustness(A, B, K, n, st.sigma, st.half_angle_deg, scale=d)
     rr = random_gain_radius(A, B, K, n, st.sigma, st.half_angle_deg, st.n_random, st.seed)
@@ -724,7 +745,7 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
     return RegionalLMI(K=K, X=Xs, X2=X2s, poles=poles, margin=margin, certified_margin=cert,
                        eig_condition=kappa, robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
                        random_radius=rr, energy=energy, cost_bound=cost, status=status, tol=st.tol,
-                       iterations=tuple(iters), solve_time=time.perf_counter() - t0, solver=solver,
+                       iterations=tuple(iters), solve_time=solve_time, solver=solver,
                        lmi_residual=lmi_residual, rejected=tuple(rejected))
 
 
@@ -732,9 +753,11 @@ def _route_dsdp(As, Bs, Gs, K0, T, st):
     """DSDP twice: in the reference loop's coordinates (T, input columns scaled to the reference
     gain's rows) to a loose gap (:data:`DSDP_FIRST_TOL`), then in the coordinates of that answer
     (T ← chol X̃, unit gain rows), where the optimum is X ≈ I, to ``st.tol``.  The second pass
-    makes the answer independent of rounding (K equal to ~1e-10 under two BLAS kernels; one pass
-    stalls ~1e-6 short of the optimum and leaves K ~4e-6 apart): (status, iterations, solution
-    or None)."""
+    makes the answer independent of rounding (one pass stalls short of the optimum at a point
+    that moves with the BLAS kernel; ``tests/test_determinism.py`` holds K to 1e-6 under two
+    kernels).  A refused second pass is not replaced by the loose first: the fallback solver
+    answers instead.  cvxopt's interface reports no iteration count (0): (status, iterations,
+    solution or None)."""
     prog = lmi_program(As, Bs, Gs, T, np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12), st)
     status, v, it = _solve_dsdp(prog, max(st.tol, DSDP_FIRST_TOL))
     if v is None:
@@ -793,15 +816,16 @@ def _solution(prog: LMIProgram, v):
 COST_TOL = 1e-6
 
 
-def _rejection(As, Bs, sol, st, n):
-    """Why a solution fails the checks (None: accepted): finite, X̃ ≻ 0, the margin certified
-    by X̃ (generalized eigenvalues) and every pole's margin ≥ μ, the disk, the cost blocks."""
+def _rejection(As, Bs, Gs, sol, st, n):
+    """Why a solution fails the checks (None: accepted): finite, X̃ ≻ 0, the margin X̃ certifies
+    (:func:`certified_margin`, rounding allowance included) and every pole's margin ≥ μ, the
+    disk, the cost LMIs to :data:`COST_TOL`, and the control energy ≤ the cost bound tr W."""
     Ks, Xs, X2s, cost, residual = sol
     if not (np.all(np.isfinite(Ks)) and np.all(np.isfinite(Xs)) and np.isfinite(cost)):
-        return "not finite"
+        return "answer not finite"
     if np.min(np.linalg.eigvalsh(Xs)) <= 0:
         return "X is not positive definite"
-    cert = certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg, st.min_margin)
+    cert = certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg)
     lam = np.linalg.eigvals(As - Bs @ Ks)
     margin = float(np.min(sector_margin(lam * n, n, st.sigma, st.half_angle_deg)))
     if margin < st.min_margin or cert < st.min_margin:
@@ -811,4 +835,9 @@ def _rejection(As, Bs, sol, st, n):
         return f"fastest pole |λ| = {fastest:.4g}n outside the disk of radius {st.disk_radius}n"
     if residual > COST_TOL:
         return f"cost LMIs violated by {residual:.1e} (relative)"
+    Acl = As - Bs @ Ks
+    W = sla.solve_continuous_lyapunov(Acl, -(Gs @ Gs.T))
+    energy = float(np.trace(Ks @ W @ Ks.T))
+    if not energy <= cost * (1 + 1e-6):
+        return f"control energy {energy:.6g} above the cost bound {cost:.6g}"
     return None

@@ -42,7 +42,7 @@ def test_every_route_returns_one_record(route):
     # each stored pole within 1e-5 n of one recomputed here (the uniform route: κ_CARE ~1e18)
     assert lam.size == g.poles.size and np.abs(lam[:, None] - g.poles[None, :]).min(axis=1).max() <= 1e-5 * cfg.orbit_rate
     assert g.energy == pytest.approx(_energy(p.model, g.K, cfg.orbit_rate), rel=1e-9)
-    assert g.margin >= 0.1 and g.max_eig_condition == pytest.approx(np.max(g.eig_condition))
+    assert g.margin >= 0.1
     if route == "lmi":
         assert g.lmi is not None and g.lmi.certified_margin >= 0.1 and not np.array_equal(g.K, g.riccati.K)
     else:

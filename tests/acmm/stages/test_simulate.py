@@ -5,6 +5,7 @@ import shutil
 import h5py
 import numpy as np
 import pytest
+from PIL import Image
 
 from acmm.io.config import load_config
 from acmm.stages.simulate import run_simulate
@@ -56,8 +57,6 @@ def test_claim2_staircase_130_orbits(tmp_path, monkeypatch, staircase_shipped):
         assert (tmp_path / "runs" / "staircase" / fig).stat().st_size > 10_000
     # the guide's stair-case figures (docs/img, `make docs-figures`) were drawn from this design:
     # their recorded per-level peaks (3 significant digits) are this fresh run's, to that rounding
-    from PIL import Image
-
     for fig in ("sim_summary.png", "design_poles.png", "design_path_margins.png"):
         text = Image.open(REPO / "docs" / "img" / fig).text
         assert text.get("acmm-qpp:command") == "acmm simulate staircase", fig
