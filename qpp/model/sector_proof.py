@@ -35,7 +35,7 @@ PROOF_BUDGET_S = 30.0
 #: boxes of one branch and bound
 MAX_BOXES = 400_000
 #: time cells of [0, T] on which the slope is bounded for β3 (a t-dependent φ)
-SLOPE_CELLS = 32
+SLOPE_CELLS = 128
 #: boxes of one time cell's slope bound (a cell that does not converge keeps the global bound)
 CELL_BOXES = 3000
 
