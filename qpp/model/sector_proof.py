@@ -137,9 +137,11 @@ class _Prover:
             self.deadline = model.proof_deadline = time.monotonic() + PROOF_BUDGET_S
         self.boxes = 0
 
-    def run(self, f, box, **kw):
+    def run(self, f, box, share: int = 1, **kw):
+        """:func:`maximize` until the model's deadline, or 1/``share`` of the time left."""
         kw.setdefault("max_boxes", MAX_BOXES)
-        res = maximize(f, box, deadline=self.deadline, **kw)
+        now = time.monotonic()
+        res = maximize(f, box, deadline=min(self.deadline, now + max(self.deadline - now, 0.0) / share), **kw)
         self.boxes += res.boxes
         return res
 
@@ -168,7 +170,7 @@ class _Prover:
     def ratio_fns(self, i, syms):
         sp, M = self.sp, self.model
         ph = tidy(M.phi[i])
-        f = compile_interval(ph, syms)
+        f = compile_interval(tidy(ph / M.ys[i]), syms)      # φ_i / y_i, cancelled where it can be
         k = syms.index(M.ys[i])
         lo, hi = M.y_range[i]
         try:
@@ -180,7 +182,7 @@ class _Prover:
             Y = env[k]
             lo_b, hi_b = -np.inf, np.inf
             if Y.a > 0 or Y.b < 0:
-                r = f(*env) / Y
+                r = f(*env)
                 lo_b, hi_b = r.a, r.b
             if d is not None and lo <= 0 <= hi:
                 e = list(env)
@@ -235,7 +237,7 @@ def prove(model) -> ProvedBounds:
         if any(model.dep[i]):
             try:
                 fn, syms = P.slope_fn(i)
-                g = P.run(fn, _ranges(model, syms, model.t_range), target=slope_s[i] + tol)
+                g = P.run(fn, _ranges(model, syms, model.t_range), share=3 * (r - i), target=slope_s[i] + tol)
             except NotEnclosable as exc:
                 g = None
                 slo_fail.append(f"{ch}: {exc}")
@@ -258,8 +260,8 @@ def prove(model) -> ProvedBounds:
                 sec_fail.append(f"{ch}: {exc}")
                 continue
             lo_t, hi_t = s[i, 0] - tol, s[i, 1] + tol
-            for name, fn, target, sign in (("upper", ratio, hi_t, 1.0), ("lower", neg, -lo_t, -1.0)):
-                b = P.run(fn, box, target=target)
+            for n_left, (name, fn, target, sign) in enumerate((("upper", ratio, hi_t, 1.0), ("lower", neg, -lo_t, -1.0))):
+                b = P.run(fn, box, share=3 * (r - i) - 1 - n_left, target=target)
                 if b.status == "proved":
                     sec_gap.append(tol)
                     continue
