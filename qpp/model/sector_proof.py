@@ -20,7 +20,7 @@ it is "not proved in the limit", and no certificate is printed.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from mpmath import iv
@@ -68,7 +68,6 @@ class ProvedBounds:
     slope_text: str
     seconds: float
     boxes: int
-    notes: list = field(default_factory=list)
 
 
 #: largest number of terms the distribution of products may create in :func:`tidy`

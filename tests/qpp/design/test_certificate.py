@@ -139,7 +139,7 @@ def _verified(tmp_path, cfg_dict):
         if v["premises"]["sector"]:      # (on a sector narrower than φ's the tool's m means nothing)
             # the tool's β3 is proved on time cells (a T' takes its whole cell), so its m is at most
             # the sampled one and close to it
-            assert d["certificate"]["m"] <= v["m"] * (1 + 1e-6)
+            assert d["certificate"]["m"] <= v["m"] * (1 + 1e-5)
             assert d["certificate"]["m"] == pytest.approx(v["m"], rel=5e-4)
         assert d["certificate"]["gamma_inf"] == pytest.approx(v["gamma_inf"], rel=1e-6)
     stored = {k[len("premise["):-1]: bool(int(x)) for k, x in d["attrs"].items() if k.startswith("premise[")}
