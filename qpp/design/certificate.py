@@ -15,6 +15,7 @@ import numpy as np
 
 from acmm_qpp.errors import DesignError
 from qpp.design import circle as circle_mod
+from qpp.design.circle_kyp import KypResult, circle_kyp
 from qpp.design import spheres
 from qpp.io.config_nonlin import ExpressionNonlinearity, SinusoidalNonlinearity
 from qpp.io.config import QppConfig
@@ -99,6 +100,9 @@ class DesignResult:
         Premise name → (holds, statement in words); ``certified`` is their conjunction.
     norm : str
         The certificate's signal norm in words (:data:`qpp.design.thresholds.NORM`).
+    circle_proof : qpp.design.circle_kyp.KypResult or None
+        The circle criterion decided by the KYP lemma (premise ``circle``); ``circle`` is the
+        frequency grid's check, kept for the figures and as a cross-check.
     """
 
     K1: np.ndarray
@@ -135,6 +139,7 @@ class DesignResult:
     gamma_inf: float = np.nan                #: L2-to-peak gain of C_z (sI − A_n)⁻¹ B_z
     premises: dict = field(default_factory=dict)  #: premise → (holds, statement)
     norm: str = NORM                         #: the certificate's signal norm
+    circle_proof: KypResult | None = None    #: the circle criterion decided by the KYP lemma
 
     @property
     def m_ref(self) -> float:
@@ -211,7 +216,7 @@ def default_sector(cfg: QppConfig) -> np.ndarray:
     if isinstance(nl, ExpressionNonlinearity):
         if nl.sector is not None:
             return np.asarray(nl.sector, float)
-        s = cfg.expression_model().sector_info.sector.copy()
+        s = np.array(cfg.expression_model().proof.sector, float)   # the sampled sector, widened to the proved one
         flat = ~(s[:, 0] < s[:, 1])        # a sampled φ ≡ 0 (or exactly linear): [α, α]
         if flat.any():                     # widened by 1e-12 (as a zero sinusoidal one, above)
             pad = 1e-12 * np.maximum(1.0, np.abs(s[flat]).max(axis=1))
@@ -371,6 +376,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     sector = default_sector(cfg)
     _, dcols = channels(P)
     circ = circle_mod.circle_criterion(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=sector_coupling(cfg))
+    kyp = circle_kyp(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=sector_coupling(cfg))
     T = cfg.spheres.T if T is None else float(T)
     horizon = max(T, cfg.simulation.t_final)
     n = int(min(20001, max(801, 801 * horizon / T)))
@@ -384,6 +390,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     th = thresholds(cfg, t, y_o, x_o, sector, T)
     res = DesignResult(K1, Kc, H, gains_source, hinf, a, T, Azd, Bzd, Cz, b1, th, circ, sector,
                        spheres.E_factor(a, T), t[keep], y_o[:, keep])
+    res.circle_proof = kyp
     res.T_settle = Ts
     res.settled = bool(Ts < float(t[-1]))
     res.T_modal = T_modal
@@ -408,7 +415,9 @@ def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:
     ``design.sector`` must contain it.  An expression's stated ``nonlinearity.sector`` must contain
     the sector sampled from the expression on ``y_range`` (no slack).  The polar arm's sector is
     the config's assumption, and its β3 is taken along the nominal trajectory only: not a premise
-    this tool proves.
+    this tool proves.  An expression's sector is proved by interval branch and bound
+    (:attr:`qpp.model.nonlin.ExpressionModel.proof`): the sampled sector widened by
+    :data:`qpp.model.sector_proof.REL_GAP`, which a stated sector must contain.
 
     Parameters
     ----------
@@ -430,11 +439,12 @@ def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:
         return ok, (f"the sector contains phi's own, ±N·gamma_max·|F_unc| = ±{np.round(k, 6).tolist()}"
                     + ("" if ok else " (design.sector is narrower)"))
     if isinstance(nl, ExpressionNonlinearity):
-        own = cfg.expression_model().sector_info.sector
-        tol = 1e-9 * np.maximum(np.abs(own), 1e-300)        # the rounding of a sampled bound
-        ok = bool(np.all(s[:, 0] <= own[:, 0] + tol[:, 0]) and np.all(s[:, 1] >= own[:, 1] - tol[:, 1]))
-        return ok, (f"the sector contains the one sampled from the expression on y_range, "
-                    f"{np.round(own, 6).tolist()}" + ("" if ok else " (nonlinearity.sector is narrower)"))
+        proof = cfg.expression_model().proof
+        own = proof.sector
+        ok = bool(np.all(s[:, 0] <= own[:, 0]) and np.all(s[:, 1] >= own[:, 1]))
+        return ok and proof.sector_ok, (
+            f"phi in the sector {np.round(own, 6).tolist()} on y_range x parameters x [0, t_range]: "
+            f"{proof.sector_text}" + ("" if ok else " (nonlinearity.sector is narrower than it)"))
     return False, ("the polar arm's sector is assumed by the config and its beta3 sampled along the nominal "
                    "trajectory only: not proved")
 
@@ -459,7 +469,8 @@ def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
     dict
         ``{name: (bool, str)}`` for ``stable``, ``sector`` (:func:`sector_premise`), ``circle``,
         ``contraction`` (β1 < m),
-        ``peak`` (γ∞·E(T')/m(T') ≤ 1 for every T' ≤ T, eq 10.45) and, for an expression, ``range`` (y_o ± β_o inside y_range).
+        ``peak`` (γ∞·E(T')/m(T') ≤ 1 for every T' ≤ T, eq 10.45) and, for an expression, ``range`` (y_o ± β_o inside y_range)
+        and ``slope`` (the slope bound of β3 proved by interval branch and bound).
     """
     c = res.consistent
     worst = float(np.max(np.linalg.eigvals(res.Az["eq10.7"] + res.a * np.eye(len(res.Az["eq10.7"]))).real))
@@ -468,8 +479,10 @@ def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
     out = {
         "stable": (worst < 0, f"A_z + aI Hurwitz, B_z of eq 10.7 (largest Re λ = {worst:.4g} 1/s)"),
         "sector": sector_premise(cfg, res.sector),
-        "circle": (bool(res.circle.passed), "circle criterion with the sector "
-                   f"{np.round(res.sector, 6).tolist()} at a = {res.a:g}"),
+        "circle": (bool(res.circle_proof is not None and res.circle_proof.proved), "circle criterion with the sector "
+                   f"{np.round(res.sector, 6).tolist()} at a = {res.a:g}: "
+                   + (res.circle_proof.text if res.circle_proof is not None else "not decided")
+                   + f" (frequency grid: {'passes' if res.circle.passed else 'fails'})"),
         "contraction": (bool(b1 < c.m), f"beta1 = {b1:.6g} < m = {c.m:.6g} (eqs 10.43, 10.57 in the Euclidean "
                         f"norm, B_z of eq 10.7; m the smallest over T' <= T, at T' = {c.T_worst:.4g} s)"),
         "peak": (bool(peak <= 1.0), f"gamma_inf * max E/m = {peak:.6g} <= 1 (the L2 sphere bounds the L-infinity "
@@ -485,4 +498,7 @@ def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
         ok = bool(np.all(lo >= rng[:, 0]) and np.all(hi <= rng[:, 1]))
         out["range"] = (ok, f"y_o ± beta_o within nonlinearity.y_range on [0, T] ({np.round(lo, 4).tolist()} … "
                             f"{np.round(hi, 4).tolist()})")
+        proof = cfg.expression_model().proof
+        out["slope"] = (bool(proof.slope_ok), f"sum_j |dphi_i/dy_j| <= {np.round(proof.slope, 6).tolist()} on "
+                        f"y_range x parameters x [0, t_range] (beta3, eq 10.40): {proof.slope_text}")
     return out

@@ -481,6 +481,10 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
         return f"the output sphere leaves the range the sector holds on: {res.premises['range'][1]}"
     if "sector" in failed:
         return f"phi is not proved to lie in the sector the certificate uses: {res.premises['sector'][1]}"
+    if "slope" in failed:
+        return f"the slope bound of beta3 is not proved: {res.premises['slope'][1]}"
+    if "circle" in failed:
+        return f"the circle criterion is not proved: {res.premises['circle'][1]}"
     terms = {"β_i": c.beta_i, "β_o·β3": sp.beta_o * c.beta3, "β4": c.beta4}
     dom = max(terms, key=terms.get)
     lead = ("β1 > m" if "contraction" in failed else

@@ -270,7 +270,12 @@ def consistent(cfg: QppConfig, t, y_o, x_o, sector, coupled, T: float, a: float)
         M = cfg.expression_model()
         tg, g = M.slope_profile(T)
         g = np.array(g, float)
-        if tg.size == 1:
+        if M.proof.slope_ok:         # proved bounds on cells of [0, T]; a T' takes every cell it reaches
+            edges, G = M.proved_slope_cells(T)
+            gn = np.maximum.accumulate(np.sqrt(np.sum(np.asarray(G, float) ** 2, axis=0)))
+            idx = np.clip(np.searchsorted(edges, tk, side="left") - 1, 0, gn.size - 1)
+            b3 = gn[idx]
+        elif tg.size == 1:
             g = np.maximum(g, np.asarray(M.sector_info.slope_bound, float)[:, None])
             b3 = np.full(tk.size, float(np.max(np.sqrt(np.sum(g ** 2, axis=0)), initial=0.0)))
         else:

@@ -29,6 +29,7 @@ from acmm_qpp.errors import ConfigError
 from qpp.model.expression_parser import FUNCTIONS, parse_expression, sympy_module
 from qpp.model.sector_bounds import climb_from, global_search, refine, verify
 from qpp.model.sector_grid import SampleGrid
+from qpp.model.sector_proof import ProvedBounds, prove, slope_cells
 
 
 @dataclass
@@ -258,6 +259,32 @@ class ExpressionModel(SampleGrid):
                 c = 0.5 * (alpha[i] + beta[i])
                 alpha[i], beta[i] = c - 1e-12, c + 1e-12
         return SectorInfo(np.column_stack([alpha, beta]), slope, diag, verified, n)
+
+    @cached_property
+    def proof(self) -> ProvedBounds:
+        """The sampled sector and slope bounds (:attr:`sector_info`) proved by interval branch and
+        bound over Y × Θ × [0, t_range], or the premises that could not be proved
+        (:func:`qpp.model.sector_proof.prove`; one time budget per model)."""
+        return prove(self)
+
+    @lru_cache(maxsize=8)
+    def proved_slope_cells(self, T: float) -> tuple:
+        """(cell edges on [0, T] in s, (r, K) proved bounds of sup_{y, θ} Σ_j |∂φ_i/∂y_j| on each
+        cell, units of φ per unit of y), read-only (:func:`qpp.model.sector_proof.slope_cells`).
+
+        Parameters
+        ----------
+        T : float
+            End of the interval, s.
+
+        Returns
+        -------
+        tuple
+            (edges, G).
+        """
+        edges, G = slope_cells(self, float(T), self.proof)
+        edges.flags.writeable = G.flags.writeable = False
+        return edges, G
 
     def _ratio_bounds(self, i, ph, Yf, tg, th, alpha, beta, slope, starts, where) -> None:
         """Widen α_i, β_i (in place) to the ratios φ_i / y_i of one parameter sample ``ph``

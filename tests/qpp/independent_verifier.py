@@ -5,9 +5,10 @@ or simulation code), only numpy, scipy and sympy.
 * β1 = sup_ω σ̄(C_z (jωI − A_n)⁻¹ B_z), A_n = A_z + aI (eq 10.36): Hamiltonian bisection
   (Boyd–Balakrishnan), started from a dense frequency sweep;
 * γ∞ = (λ_max(C_z P C_zᵀ))^½ with the Gramian P from a Kronecker-product linear solve;
-* the circle criterion for symmetric sectors [−k_i, k_i] and a Hurwitz A_n (lemma 1 with
-  α < 0 < β: each Gershgorin mean band inside the disc of radius 1/k_i about 0) on 80 000
-  frequencies;
+* the circle criterion for symmetric sectors [−k_i, k_i] and a Hurwitz A_n by the KYP lemma
+  (‖D diag(k) H D⁻¹‖∞ < 1 by its own Hamiltonian bisection, D searched on a grid), and as a
+  cross-check lemma 1 with α < 0 < β (each Gershgorin mean band inside the disc of radius 1/k_i
+  about 0) on 80 000 frequencies;
 * the sector, the slopes (β3) of φ = N (f1(θ) − f1(θ°)) sampled by evaluating the user's
   expression with ``sympy.lambdify`` on a dense grid (or the sinusoidal form directly); the stored
   sector must contain that one (premise ``sector``; the polar arm's assumed sector never does);
@@ -83,6 +84,24 @@ def circle_symmetric(A, Bphi, C, k, n_freq=80_000):
         if not ok:
             break
     return ok
+
+
+def circle_kyp_symmetric(A, Bphi, C, k):
+    """The circle criterion for sectors [−k_i, k_i] (Hurwitz A) by the KYP lemma: the small gain
+    ‖D diag(k) C (sI − A)⁻¹ B D⁻¹‖∞ < 1 decided by the Hamiltonian bisection :func:`hinf`, D a
+    positive diagonal scaling searched on a grid of 10^-6 … 10^6 per channel beyond the first (a
+    diagonal φ commutes with D); no frequency grid decides it."""
+    k = np.asarray(k, float)
+    m = k.size
+    if m == 1:
+        return bool(hinf(A, Bphi, k[0] * C) < 1.0)
+    best = np.inf
+    for logd in np.linspace(-6, 6, 49) if m == 2 else [0.0]:
+        d = np.array([1.0] + [10.0 ** logd] * (m - 1))
+        best = min(best, hinf(A, Bphi / d[None, :], (d * k)[:, None] * C))
+        if best < 1.0:
+            break
+    return bool(best < 1.0)
 
 
 # ----------------------------------------------------------------------------- signals
@@ -242,7 +261,9 @@ def verify(cfg: dict, d: dict, *, simulate: bool = True) -> dict:
     own = phi.own_sector()            # φ's sector found here, not read from the tool
     sector_ok = own is not None and bool(np.all(k >= own * (1 - 1e-9)))     # (rounding of k − k°)
     k = k if own is None else np.maximum(k, own)
-    circle = circle_symmetric(An, Bz[:, p:], Cz, k)
+    # the premise is decided by the KYP lemma (a Hamiltonian test), the grid kept as a cross-check
+    circle = circle_kyp_symmetric(An, Bz[:, p:], Cz, k)
+    out["circle_grid"] = circle_symmetric(An, Bz[:, p:], Cz, k)
     sp = cfg["spheres"]
     beta_o, beta_ri, d_inf = float(sp["beta_o"]), float(sp.get("beta_ri", 0.0)), float(sp.get("d_inf", 0.0))
     # nominal loop ż = A_z z + B_z [r_o; 0] (φ = 0 at θ°)

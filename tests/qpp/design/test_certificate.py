@@ -137,7 +137,10 @@ def _verified(tmp_path, cfg_dict):
     if np.isfinite(v["beta1"]):
         assert d["certificate"]["beta1"] == pytest.approx(v["beta1"], rel=1e-6)
         if v["premises"]["sector"]:      # (on a sector narrower than φ's the tool's m means nothing)
-            assert d["certificate"]["m"] == pytest.approx(v["m"], rel=1e-4)
+            # the tool's β3 is proved on time cells (a T' takes its whole cell), so its m is at most
+            # the sampled one and close to it
+            assert d["certificate"]["m"] <= v["m"] * (1 + 1e-5)
+            assert d["certificate"]["m"] == pytest.approx(v["m"], rel=5e-4)
         assert d["certificate"]["gamma_inf"] == pytest.approx(v["gamma_inf"], rel=1e-6)
     stored = {k[len("premise["):-1]: bool(int(x)) for k, x in d["attrs"].items() if k.startswith("premise[")}
     for k, ok in v.get("premises", {}).items():             # premise by premise, not only the verdict
