@@ -29,7 +29,7 @@ from acmm_qpp.errors import ConfigError
 from qpp.model.expression_parser import FUNCTIONS, parse_expression, sympy_module
 from qpp.model.sector_bounds import climb_from, global_search, refine, verify
 from qpp.model.sector_grid import SampleGrid
-from qpp.model.sector_proof import ProvedBounds, prove, slope_cells
+from qpp.model.sector_proof import SLOPE_CELLS, ProvedBounds, prove, slope_cells
 
 
 @dataclass
@@ -90,6 +90,8 @@ class ExpressionModel(SampleGrid):
         self.y_range = np.asarray(y_range, float).reshape(self.p, 2)
         self.N = np.atleast_2d(np.asarray(N, float))
         self.t_range = float(t_range)
+        self._cell_width = None            # proved_slope_cells: the cells' width (s) and their bounds
+        self._cells = []
         self.n_grid, self.n_t = int(n_grid), int(n_t)
         self.ys = sp.symbols([f"y{i + 1}" for i in range(self.p)], real=True)
         self.t = sp.Symbol("t", real=True)
@@ -269,8 +271,12 @@ class ExpressionModel(SampleGrid):
 
     @lru_cache(maxsize=8)
     def proved_slope_cells(self, T: float) -> tuple:
-        """(cell edges on [0, T] in s, (r, K) proved bounds of sup_{y, θ} Σ_j |∂φ_i/∂y_j| on each
-        cell, units of φ per unit of y), read-only (:func:`qpp.model.sector_proof.slope_cells`).
+        """(cell edges covering [0, T] in s, (r, K) proved bounds of sup_{y, θ} Σ_j |∂φ_i/∂y_j| on
+        each cell, units of φ per unit of y), read-only (:func:`qpp.model.sector_proof.slope_cells`).
+
+        The cells have one width for the model's life, T / :data:`~qpp.model.sector_proof.SLOPE_CELLS`
+        of the first call's T (the last cell may reach past T: its bound holds on the part inside),
+        and each cell is proved once: procedure 12.1 asks for many T.
 
         Parameters
         ----------
@@ -282,7 +288,15 @@ class ExpressionModel(SampleGrid):
         tuple
             (edges, G).
         """
-        edges, G = slope_cells(self, float(T), self.proof)
+        if self._cell_width is None:
+            self._cell_width = float(T) / SLOPE_CELLS
+        w = self._cell_width
+        K = max(1, int(np.ceil(float(T) / w - 1e-9)))
+        have = len(self._cells)                     # the cells proved so far: [0, have·w]
+        if K > have:
+            self._cells.extend(slope_cells(self, w * np.arange(have, K + 1, dtype=float), self.proof).T)
+        edges = w * np.arange(K + 1, dtype=float)
+        G = np.column_stack(self._cells[:K])
         edges.flags.writeable = G.flags.writeable = False
         return edges, G
 

@@ -289,9 +289,9 @@ def prove(model) -> ProvedBounds:
     return ProvedBounds(sector, slope, sec_ok, slo_ok, sector_text, slope_text, secs, P.boxes)
 
 
-def slope_cells(model, T: float, proved: ProvedBounds) -> tuple[np.ndarray, np.ndarray]:
-    """Proved upper bounds of g_i = sup_{y, θ} Σ_j |∂φ_i/∂y_j| on :data:`SLOPE_CELLS` cells of
-    [0, T] (a t-dependent channel), else the channel's proved slope bound on every cell.
+def slope_cells(model, edges, proved: ProvedBounds) -> np.ndarray:
+    """Proved upper bounds of g_i = sup_{y, θ} Σ_j |∂φ_i/∂y_j| on the time cells between
+    ``edges`` (a t-dependent channel), else the channel's proved slope bound on every cell.
 
     A cell whose own branch and bound does not converge (to :data:`REL_GAP`) within
     :data:`CELL_BOXES` keeps the global bound (itself proved), so the result is proved whenever
@@ -301,23 +301,21 @@ def slope_cells(model, T: float, proved: ProvedBounds) -> tuple[np.ndarray, np.n
     ----------
     model : qpp.model.nonlin.ExpressionModel
         The nonlinearity.
-    T : float
-        End of the interval, s.
+    edges : (K + 1,) array
+        Cell edges, s.
     proved : ProvedBounds
         The model's :func:`prove` outcome.
 
     Returns
     -------
-    edges : (K + 1,) ndarray
-        Cell edges, s.
-    G : (r, K) ndarray
+    (r, K) ndarray
         The bounds, units of φ per unit of y.
     """
+    edges = np.asarray(edges, float)
+    K = edges.size - 1
     P = _Prover(model)
     r = len(model.phi)
     varies = [model.t in ph.free_symbols and any(model.dep[i]) for i, ph in enumerate(model.phi)]
-    K = SLOPE_CELLS if any(varies) else 1
-    edges = np.linspace(0.0, float(T), K + 1)
     G = np.repeat(np.asarray(proved.slope, float)[:, None], K, axis=1)
     for i in range(r):
         if not varies[i] or not proved.slope_ok:
@@ -332,4 +330,4 @@ def slope_cells(model, T: float, proved: ProvedBounds) -> tuple[np.ndarray, np.n
             b = P.run(fn, box, tol=REL_GAP * max(proved.slope[i], 1e-300), max_boxes=CELL_BOXES)
             if b.status == "proved":
                 G[i, k] = min(G[i, k], b.upper)
-    return edges, G
+    return G
