@@ -1,32 +1,18 @@
-"""Docstring conventions of the public API, enforced (issue 12 item 7; on numpydoc since issue 42 item 7).
+"""Docstring conventions of the public API, enforced (issue 12 item 7; numpydoc's since issue 42).
 
-Every public function, class and method (name not starting with ``_``) of every module of the
-packages ``acmm``, ``qpp`` and ``acmm_qpp`` -- found by :func:`pkgutil.walk_packages`, so a new
-module is checked from the moment it exists -- passes numpydoc's own validator
-(:func:`numpydoc.validate.validate`) on the error codes of :data:`CODES`.  What numpydoc has no
-code for is checked here on its parsed docstring (:mod:`numpydoc.docscrape`):
-
-* the units rule: numeric entries (``float``, ``complex``, arrays) of ``Parameters``, ``Returns``
-  and ``Attributes`` state their unit (or say ``dimensionless`` / name the units they follow);
-* every exception class a function raises itself is listed under ``Raises``;
-* a dataclass documents every field under ``Attributes`` (or ``Parameters``); a class without an
-  ``__init__`` of its own (pydantic models, named tuples, enums) need not document the
-  constructor that is generated for it (numpydoc's PR01 would ask for it);
-* a typer command of ``cli`` (a function registered on a ``typer.Typer`` app, also from a
-  ``register(app)`` function) needs a summary line -- it is the command's ``--help`` text -- and
-  a non-empty ``help=`` on every ``typer.Option``/``typer.Argument``, which typer prints in
-  ``--help`` (a ``Parameters`` section would repeat it; one present anyway must name real
-  parameters);
-* each module docstring cites the report's equations or chapters (CR-185644), unless the module is
-  listed, with the reason, in :data:`NO_REPORT_CITATION`;
-* docstrings cite no file outside the repository (``NOTES.md``, ``shared/reference``, absolute
-  paths); conventions and misprints are cited as ``docs/ERRATA.md § <section>`` with a section
-  that exists in that document, and any other ``docs/*.md`` cited must exist.
-
-The checker is exercised on deliberately faulty code in :func:`test_checker_reports_each_defect`.
+Every public function, class and method of every module of ``acmm``, ``qpp`` and ``acmm_qpp``
+(found by :func:`pkgutil.walk_packages`) passes :func:`numpydoc.validate.validate` on the codes
+of :data:`CODES`.  The project's own rules, which numpydoc has no code for, are checked on its
+parsed docstring (:mod:`numpydoc.docscrape`): numeric entries of ``Parameters``, ``Returns`` and
+``Attributes`` state their unit (:func:`unit_problems`); the exceptions a function raises itself
+are listed under ``Raises``; a dataclass documents its fields under ``Attributes`` (a class
+without an ``__init__`` of its own need not document its generated constructor); a typer command
+has a summary (its ``--help``) and ``help=`` on every parameter instead of a ``Parameters``
+section; a module docstring cites the report's equations or chapters (CR-185644) unless listed in
+:data:`NO_REPORT_CITATION`; docstrings cite no file outside the repository, and the errata as
+``docs/ERRATA.md § <section>`` with a section that exists.  The checker is exercised on faulty
+code in :func:`test_checker_reports_each_defect`.
 """
-from __future__ import annotations
-
 import ast
 import dataclasses
 import importlib
@@ -290,9 +276,8 @@ def test_errata_sections_are_read():
             "Saturation"} <= errata_sections()
 
 
-FAULTY = '''"""One faulty object per rule (cites reference/NOTES.md)."""
+FAULTY = '''"""One defect per rule (cites reference/NOTES.md)."""
 import dataclasses
-
 import typer
 
 
@@ -300,42 +285,26 @@ def no_doc(x):
     return x
 
 
-def undocumented_param(a, b):
-    """Sum.
-
-    Parameters
-    ----------
-    a : float
-        First, rad.
-    c : float
-        Not in the signature, rad.
-    """
-    return a + b
-
-
-def no_unit(a):
-    """Nothing.
+def faulty(a, b):
+    """Sum, ``docs/ERRATA.md`` § Nonexistent and ``ERRATA.md`` without its folder.
 
     Parameters
     ----------
     a : float
         A number.
+    c : int
+        Not in the signature.
+
+    Notez
+    -----
     """
-
-
-def unlisted_raise(a):
-    """Check ``docs/ERRATA.md`` § Nonexistent and ``docs/ERRATA.md`` without section.
-
-    Parameter
-    ---------
-    a : int
-        Anything.
-    """
-    raise ValueError(a)
+    if a:
+        raise ValueError(a)
+    return a + b
 
 
 class WrongParameters:
-    """A class whose 'Parameters' name no constructor parameter.
+    """Its 'Parameters' name no constructor parameter.
 
     Parameters
     ----------
@@ -358,7 +327,7 @@ app = typer.Typer()
 
 
 @app.command()
-def helpless(config: str = typer.Argument(..., help="a config"), fast: bool = typer.Option(False), plain=1):
+def helpless(config: str = typer.Argument(..., help="A config."), fast: bool = typer.Option(False), plain=1):
     """A command."""
 '''
 
@@ -410,38 +379,29 @@ class Point:
 '''
 
 
-def _load(tmp_path, name, source):
-    path = tmp_path / f"{name}.py"
-    path.write_text(source, encoding="utf-8")
-    spec = importlib.util.spec_from_file_location(name, path)
+def _problems(tmp_path, name, source) -> list:
+    (tmp_path / f"{name}.py").write_text(source, encoding="utf-8")
+    spec = importlib.util.spec_from_file_location(name, tmp_path / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module
+    return module_problems(module)
 
 
 def test_checker_reports_each_defect(tmp_path):
-    problems = "\n".join(module_problems(_load(tmp_path, "faulty_docs", FAULTY)))
+    problems = "\n".join(_problems(tmp_path, "faulty_docs", FAULTY))
     for expected in [
-        "faulty_docs: cites a file outside the repository",
-        "faulty_docs: module docstring cites no equation",
-        "no_doc: GL08",
-        "undocumented_param: PR01 Parameters {'b'} not documented",
-        "undocumented_param: PR02 Unknown parameters {'c'}",
-        "undocumented_param: RT01 No Returns section found",
-        "no_unit: Parameters entry 'a' states no unit",
-        "unlisted_raise: raises ValueError but does not list it",
-        "unlisted_raise: '§ Nonexistent",
-        "unlisted_raise: cite the errata as",
-        'unlisted_raise: GL06 Found unknown section "Parameter"',
-        "unlisted_raise: PR01 Parameters {'a'} not documented",
-        "WrongParameters: PR01 Parameters {'n'} not documented",
+        "faulty_docs: cites a file outside the repository", "faulty_docs: module docstring cites no",
+        "no_doc: GL08", "faulty: PR01 Parameters {'b'} not documented",
+        "faulty: PR02 Unknown parameters {'c'}", "faulty: RT01 No Returns section found",
+        'faulty: GL06 Found unknown section "Notez"', "faulty: Parameters entry 'a' states no unit",
+        "faulty: raises ValueError but does not list it", "faulty: '§ Nonexistent",
+        "faulty: cite the errata as", "WrongParameters: PR01 Parameters {'n'} not documented",
         "WrongParameters: PR02 Unknown parameters {'size'}",
         "Fields: field 'theta' is not documented under 'Attributes'",
-        "helpless: parameter 'fast' has no help= text",
-        "helpless: parameter 'plain' is no typer Option/Argument",
+        "helpless: parameter 'fast' has no help= text", "helpless: parameter 'plain' is no typer",
     ]:
         assert expected in problems, f"checker missed: {expected}\n{problems}"
 
 
 def test_checker_accepts_conforming_code(tmp_path):
-    assert module_problems(_load(tmp_path, "good_docs", GOOD)) == []
+    assert _problems(tmp_path, "good_docs", GOOD) == []
