@@ -399,10 +399,12 @@ def solve_tea_connected(theta0: np.ndarray, inertia0: np.ndarray, bias0: np.ndar
         An equilibrium (or a guess within 5° of one) of the nominal plant, rad.
     inertia0, bias0 : (3, 3) array, (3,) array
         The nominal plant: inertia, slug·ft²; constant disturbance torque, ft·lbf.
-    inertia, bias : (3, 3) array, (3,) array
-        The perturbed plant, same units.
+    inertia : (3, 3) array
+        The perturbed plant's inertia, slug·ft².
     n : float
         Orbital rate, rad/s.
+    bias : (3,) array
+        The perturbed plant's constant disturbance torque, ft·lbf.
 
     Returns
     -------

@@ -92,11 +92,11 @@ def check_printed(section: str, quantity: str, printed: str, computed, unit: str
         This run's value, in ``unit`` (None: not computed, ``explanation`` required).
     unit : str, optional
         Unit of the printed and computed numbers.
+    explanation : str
+        Why a number that does not match differs (required for it to count as explained).
     bound : {"upper", None}
         ``"upper"``: the report prints a bound ("less than 0.094"); the value is consistent when
         it is below the bound.
-    explanation : str
-        Why a number that does not match differs (required for it to count as explained).
 
     Returns
     -------
