@@ -103,6 +103,10 @@ class DesignResult:
     circle_proof : qpp.design.circle_kyp.KypResult or None
         The circle criterion decided by the KYP lemma (premise ``circle``); ``circle`` is the
         frequency grid's check, kept for the figures and as a cross-check.
+    proved : list of str
+        What the certificate proves, in words (:func:`scope`).
+    assumed : list of str
+        What it assumes, not proved, in words (:func:`scope`).
     """
 
     K1: np.ndarray
@@ -140,6 +144,13 @@ class DesignResult:
     premises: dict = field(default_factory=dict)  #: premise → (holds, statement)
     norm: str = NORM                         #: the certificate's signal norm
     circle_proof: KypResult | None = None    #: the circle criterion decided by the KYP lemma
+    proved: list = field(default_factory=list)   #: what the certificate proves (:func:`scope`)
+    assumed: list = field(default_factory=list)  #: what it assumes, not proved (:func:`scope`)
+
+    @property
+    def scope_text(self) -> str:
+        """What is proved and what is assumed, in one line (:func:`scope_text`)."""
+        return scope_text(self.proved, self.assumed)
 
     @property
     def m_ref(self) -> float:
@@ -405,7 +416,71 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     res.gamma_inf = spheres.l2_to_peak_gain(An, Bzd["eq10.7"], Cz)
     res.premises = premises(cfg, res, t, y_o)
     res.certified = bool(all(ok for ok, _ in res.premises.values()))
+    res.proved, res.assumed = scope(cfg, res)
     return res
+
+
+#: what every certificate assumes, whatever φ (issue 43; docs/qpp-certificates.md "Still assumed")
+ASSUMED_ALWAYS = ("beta4 and the time integrals by the trapezoid rule",
+                  "floating-point evaluation (eigenvalues, H-infinity norm, Gramian)")
+
+
+def scope(cfg: QppConfig, res: DesignResult) -> tuple:
+    """What a certificate proves and what it assumes, in words, from its premises and the kind of
+    φ: the single source of the verdict's last clause, the root attributes ``proved`` and
+    ``assumed`` of ``qpp_design.h5`` and docs/qpp-certificates.md's "What is proved".
+
+    A premise enters ``proved`` only when it holds and rests on a proof: an expression's sector
+    and slope (interval branch and bound, :mod:`qpp.model.sector_proof`), the sinusoidal form's
+    (closed form, |sin| ≤ 1) and the circle criterion (KYP lemma, :mod:`qpp.design.circle_kyp`).
+    β1 ≤ m and γ∞·E/m ≤ 1 rest on :data:`ASSUMED_ALWAYS`; the polar arm's sector and β3 are
+    assumed.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config.
+    res : DesignResult
+        The certificate, with ``premises`` and ``T`` (s).
+
+    Returns
+    -------
+    tuple
+        (proved, assumed): two lists of str; what is proved holds for t in [0, T].
+    """
+    holds = {k: ok for k, (ok, _) in res.premises.items()}
+    nl = cfg.nonlinearity
+    proved, assumed = [], []
+    if isinstance(nl, ExpressionNonlinearity):
+        which = [k for k in ("sector", "slope") if holds.get(k)]
+        if which:
+            proved.append(" and ".join(which) + " (interval branch and bound)")
+    elif isinstance(nl, SinusoidalNonlinearity):
+        if holds.get("sector"):
+            proved.append("sector and slope (closed form, |sin| <= 1)")
+    else:
+        assumed.append("the polar arm's sector (the config's) and its beta3 along the nominal trajectory")
+    if holds.get("circle"):
+        proved.append("circle criterion (KYP lemma)")
+    return proved, assumed + list(ASSUMED_ALWAYS)
+
+
+def scope_text(proved, assumed) -> str:
+    """One line: ``proved for t in [0, T]: …; assumed: …`` (:func:`scope`; an empty list is left
+    out).
+
+    Parameters
+    ----------
+    proved, assumed : list of str
+        :func:`scope`.
+
+    Returns
+    -------
+    str
+        The clause the certified verdict ends with.
+    """
+    parts = [f"proved for t in [0, T]: {', '.join(proved)}"] if proved else []
+    return "; ".join(parts + ([f"assumed: {', '.join(assumed)}"] if assumed else []))
 
 
 def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:

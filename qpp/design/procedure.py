@@ -560,7 +560,7 @@ def _finish(cfg: QppConfig, res: DesignResult) -> None:
     if res.certified:
         res.verdict = (f"certified (one sector, Euclidean norm): beta1 = {res.beta1_ref:.5g} <= m = {c.m:.5g}, "
                        f"gamma_inf*max E/m = {res.gamma_inf * c.E_over_m:.5g} <= 1, circle criterion satisfied at "
-                       f"a = {res.a:g}; the output sphere holds on [0, T], T = {res.T:.4g} s")
+                       f"a = {res.a:g}; the output sphere holds on [0, T], T = {res.T:.4g} s; {res.scope_text}")
         res.limiting = ""
     else:
         res.limiting = limiting_factor(cfg, res)

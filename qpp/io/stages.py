@@ -26,11 +26,6 @@ from qpp.simulate.closed_loop import simulate
 GAIN_UNITS = {"K1": "input units per state unit", "Kc": "input units per servo-state unit",
               "H": "state units per output unit per s"}
 
-#: what a certificate still assumes (issue 43; stored in ``qpp_design.h5``, stated in docs/qpp-certificates.md)
-ASSUMED = ("floating point in the eigenvalue, H-infinity and Gramian computations (accepted on their own tests); "
-           "beta4 and the time integrals by the trapezoid rule; the polar arm's sector and its beta3 along the "
-           "nominal trajectory; proved: an expression's sector and slope (interval branch and bound) and the "
-           "circle criterion (KYP lemma), for t in [0, T]")
 
 def _cfg(config) -> QppConfig:
     return config if isinstance(config, QppConfig) else load_config(config)
@@ -256,6 +251,8 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
 
     An uncertified design is still written (root attributes ``certified = 0``, ``label =
     "uncertified"``, ``verdict``); the caller decides the exit code (:class:`DesignError`, 3).
+    The root attributes ``proved``, ``assumed`` and ``scope`` (their one line, which a certified
+    verdict ends with) come from :func:`qpp.design.certificate.scope`.
 
     Parameters
     ----------
@@ -280,7 +277,7 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
                      "sector_of_certificate": "the circle criterion's (dataset sector)",
                      **{f"premise[{k}]": bool(ok) for k, (ok, _) in r.premises.items()},
                      **{f"premise_statement[{k}]": text for k, (_, text) in r.premises.items()},
-                     "assumed": ASSUMED,
+                     "proved": "; ".join(r.proved), "assumed": "; ".join(r.assumed), "scope": r.scope_text,
                      "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
     if want_figures:
         draw_figures([partial(plot_circle, r, cfg.run_dir() / "qpp_circle.png"),

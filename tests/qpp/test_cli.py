@@ -7,7 +7,7 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from acmm_qpp.errors import EXIT_USAGE, EXIT_VERDICT, ConfigError
+from acmm_qpp.errors import EXIT_NUMERICAL, EXIT_USAGE, EXIT_VERDICT, ConfigError
 from acmm_qpp.results import read_h5
 from qpp.cli import app
 from qpp.io.config import parse_config
@@ -286,3 +286,33 @@ def test_plot_redraws_the_design_and_simulation_figures_pixel_for_pixel(tmp_path
     for bad in (tmp_path / "nowhere", run / "config.yaml", tmp_path):
         r = invoke(app, "plot", bad)
         assert r.exit_code == 2 and r.stderr.strip().count("\n") == 0 and r.stderr.startswith("error: ")
+
+
+def test_the_verdict_names_what_is_proved_and_what_is_assumed(tmp_runs):
+    """A certified verdict ends with what is proved (for t in [0, T]) and what is assumed (issue 43:
+    'certified' read like a proof of everything); the same words in qpp_design.h5.  An uncertified
+    verdict claims no proof (qpp_cubic2 ~5 s, qpp_siso ~1 s)."""
+    import h5py
+
+    from qpp.cli import app
+
+    r = runner.invoke(app, ["design", "qpp_cubic2", "--no-figures"])
+    assert r.exit_code == 0, r.output
+    with h5py.File(tmp_runs / "runs" / "qpp_cubic2" / "qpp_design.h5") as f:
+        a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    assert a["certified"] == 1
+    assert a["proved"] == "sector and slope (interval branch and bound); circle criterion (KYP lemma)"
+    assert "beta4 and the time integrals by the trapezoid rule" in a["assumed"]
+    assert "floating-point" in a["assumed"]
+    assert a["scope"].startswith("proved for t in [0, T]: sector and slope") and "; assumed: " in a["scope"]
+    assert a["verdict"].startswith("certified") and a["verdict"].endswith(a["scope"])
+    verdict = next(ln.strip() for ln in r.output.splitlines() if ln.strip().startswith("certified"))
+    assert verdict == a["verdict"]
+    r = runner.invoke(app, ["design", "qpp_siso", "--no-figures"])
+    assert r.exit_code == EXIT_NUMERICAL, r.output
+    with h5py.File(tmp_runs / "runs" / "qpp_siso" / "qpp_design.h5") as f:
+        verdict = f.attrs["verdict"]
+        verdict = verdict.decode() if isinstance(verdict, bytes) else verdict
+        assert f.attrs["certified"] == 0
+    assert verdict.startswith("no certified design") and "proved for" not in verdict
+    assert "assumed:" not in verdict and "proved for" not in r.output

@@ -28,6 +28,7 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures:
                    float(f[f"beta1_{rd.replace('.', '_')}"].attrs["omega_peak_rad_s"])) for rd in ("eq10.7", "printed")}
         names = f["thresholds"].attrs["description"].split(":")[-1].replace(" ", "").split(",")
         circle_passed = bool(f.attrs["circle_passed"])
+        consistent = _consistent_verdict(f.attrs)
     th = {nm: row for nm, row in zip(names, np.atleast_2d(d["thresholds"]))}
     brow = []
     expl_b1 = (f"β1 is computed exactly (L∞ norm) for both readings of B_z: eq 10.7 gives {b1['eq10.7'][0]:.5f}, "
@@ -49,6 +50,8 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures:
     for rd, (v, _, _) in b1.items():
         verd = ", ".join(f"{nm}: {'β1 ≤ m' if v <= row[3] else 'β1 > m'}" for nm, row in th.items())
         brow.append([f"design inequality β1 ≤ m, B_z {rd}", "β1 < m", verd, ""])
+    brow.append(["consistent certificate (one sector, one norm; the bookkeepings above reproduce, not certify)",
+                 "—", consistent, "see docs/qpp-certificates.md"])
     brow.extend(_printed_gain_rows(ctx, chap, d, pub, names))
     brow.append(["circle criterion (lemma 1), sector " + _fmt(d["sector"], "{:g}"), "satisfied",
                  f"{'PASS' if circle_passed else 'FAIL'}; margins {_fmt(d['circle']['margins'], '{:.4f}')}; "
@@ -66,6 +69,20 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures:
     if figures:
         _figures(ctx, key, name, out_labels)
     return beta3
+
+
+def _consistent_verdict(attrs) -> str:
+    """The consistent certificate's verdict from ``qpp_design.h5``'s root attributes: ``certified``
+    with its stored ``scope`` (what is proved and what is assumed, the clause the verdict of
+    ``qpp design`` ends with), else the premises that fail."""
+    def text(v):
+        return v.decode() if isinstance(v, bytes) else str(v)
+
+    if int(attrs["certified"]):
+        scope = text(attrs["scope"]) if "scope" in attrs else ""
+        return "certified" + (f"; {scope}" if scope else "")
+    failed = [k[len("premise["):-1] for k in attrs if k.startswith("premise[") and not int(attrs[k])]
+    return "not certified" + (f": {', '.join(failed)} fail" if failed else "")
 
 
 def _figures(ctx: SectionWriter, key, name, out_labels) -> None:
