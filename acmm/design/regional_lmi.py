@@ -786,7 +786,7 @@ def _route_clarabel(As, Bs, Gs, K0, T, st):
             break
         T, s_u = _precondition(T, sol[0], sol[1])
         prog = lmi_program(As, Bs, Gs, T, s_u, st, T_reg=T0)
-        status_new, v, it = _solve_clarabel_pass(prog, sol[3], st, st.tol)
+        status_new, v, it = _solve_clarabel_pass(prog, max(sol[3], 1e-12), st, st.tol)
         iters.append(it)
         if v is None:
             break
