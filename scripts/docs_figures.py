@@ -18,6 +18,10 @@ import sys
 import tempfile
 from pathlib import Path
 
+import h5py
+from PIL import Image
+from PIL.PngImagePlugin import PngInfo
+
 REPO = Path(__file__).resolve().parent.parent
 IMG = REPO / "docs" / "img"
 
@@ -34,8 +38,6 @@ _ENTRY = {"acmm": "from acmm.cli.app import main; main()", "qpp": "from qpp.cli 
 
 def provenance(root: Path, command: list, name: str) -> dict:
     """The text chunks of a figure drawn from run ``name`` of ``command`` under ``root``."""
-    import h5py
-
     out = {"acmm-qpp:command": " ".join(command)}
     sim = root / name / "sim.h5"
     if command[0] == "acmm" and sim.is_file():
@@ -45,8 +47,6 @@ def provenance(root: Path, command: list, name: str) -> dict:
 
 
 def main() -> int:
-    from PIL import Image
-    from PIL.PngImagePlugin import PngInfo
 
     env = {**os.environ, "MPLBACKEND": "Agg", "OPENBLAS_NUM_THREADS": "1",
            "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))}

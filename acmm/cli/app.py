@@ -199,7 +199,6 @@ def design(config: Optional[str] = ConfigArg,
     With --strict, a scheduled gain with poles outside the sector, or a blend whose end lies on
     another branch of equilibria, exits 1."""
 
-    from acmm.design.methods import pole_method
     from acmm.stages.design import run_design
 
     r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
@@ -207,14 +206,13 @@ def design(config: Optional[str] = ConfigArg,
     typer.echo(f"{cfg.name}: {len(r.points)} design point(s), {cfg.design.model} model, "
                f"sector Re <= -{cfg.design.sector.sigma}n, {cfg.design.sector.half_angle_deg:g} deg "
                f"({r.wall_time:.2f} s)")
-    note = pole_method(cfg.design.pole_method).note
-    if note:
-        typer.echo("  " + note)
+    lmis = [p.gain.lmi for p in r.points if p.gain.lmi is not None]
+    if lmis:
+        typer.echo("  regional LMI gains; 'residual' is that of the reference sector LQR (the LMI's pre-conditioner)")
     typer.echo(f"  {'point':<14} {'TEA r/p/y (deg)':<28} {'margin (n)':>10} {'residual':>9} {'fastest/n':>9}")
     for p, fastest in zip(r.points, r.fastest_over_n()):
         typer.echo(f"  {p.spec.name:<14} {_fmt(p.tea.theta_deg, '{:+.2f}'):<28} {p.gain.margin:>10.3f} "
                    f"{p.gain.riccati.residual:>9.1e} {fastest:>9.2f}")
-    lmis = [p.gain.lmi for p in r.points if p.gain.lmi is not None]
     if lmis:
         fallbacks = sum(bool(x.rejected) for x in lmis)
         typer.echo(f"  regional LMI: solved by {', '.join(sorted({x.solver for x in lmis}))}; margin certified by X "

@@ -93,14 +93,11 @@ class PoleMethod:
         ft·lbf; state scales) and the design settings ``s``.
     pooled : bool
         Its points are worth designing on a process pool (seconds each, not milliseconds).
-    note : str
-        What ``acmm design`` prints about the route's table ("" for nothing).
     """
 
     name: str
     design: Callable
     pooled: bool = False
-    note: str = ""
 
 
 def _reference_lqr(A, B, scales, s, method: str, min_margin: float) -> sector_lqr.SectorLQR:
@@ -140,9 +137,7 @@ def _lmi_route(A, B, scales, s) -> PointGain:
 METHODS = {
     "shift": PoleMethod("shift", partial(_lqr_route, "shift")),          # (partials pickle: pool workers)
     "uniform": PoleMethod("uniform", partial(_lqr_route, "uniform")),
-    "lmi": PoleMethod("lmi", _lmi_route, pooled=True,
-                      note="pole_method lmi: regional LMI gains; 'residual' is that of the reference sector LQR "
-                           "(the LMI's pre-conditioner)"),
+    "lmi": PoleMethod("lmi", _lmi_route, pooled=True),
 }
 
 

@@ -688,10 +688,9 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
     st = settings
     if not (n > 0 and st.sigma > 0 and 0 < st.half_angle_deg < 90 and st.min_margin >= 0
             and st.dilation > 0 and st.backoff >= 0 and st.disk_radius >= 0 and st.tol > 0
-            and st.regularization >= 0 and st.solver in ("dsdp", "clarabel")):
+            and st.regularization >= 0 and st.solver in KNOWN_SOLVERS):
         raise ValueError("need n > 0, sigma > 0, 0 < half_angle_deg < 90, min_margin ≥ 0, dilation > 0, "
-                         "disk_radius ≥ 0, tol > 0, regularization ≥ 0, solver 'dsdp' or 'clarabel'")
-    t0 = time.perf_counter()
+                         f"disk_radius ≥ 0, tol > 0, regularization ≥ 0, solver in {KNOWN_SOLVERS}")
     A, B = np.asarray(A, dtype=float), np.asarray(B, dtype=float)
     N, m = B.shape
     d = np.ones(N) if scale is None else np.asarray(scale, dtype=float)
@@ -794,7 +793,10 @@ def _route_clarabel(As, Bs, Gs, K0, T, st):
     return status, iters, sol
 
 
-#: The solver routes by ``design.lmi.solver``, in fallback order (DSDP only where cvxopt is installed).
+#: Every ``design.lmi.solver``, in fallback order.
+KNOWN_SOLVERS = ("dsdp", "clarabel")
+
+#: The solver routes that can run here (DSDP only where cvxopt is installed).
 ROUTES = {"dsdp": _route_dsdp, "clarabel": _route_clarabel} if dsdp is not None else {"clarabel": _route_clarabel}
 SOLVERS = tuple(ROUTES)
 
