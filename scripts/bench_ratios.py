@@ -5,7 +5,7 @@
 3. a Dask LocalCluster of N single-threaded workers vs the local pool at the same N (≤ 1.15x),
    with Dask's default configuration and with ``acmm.sweep.dask_settings.DASK_SETTINGS``, with
    the CPU time of each run (driver + workers) and the load average beside it;
-4. `acmm simulate staircase` and `acmm design staircase` on the report's route (`design.pole_method=shift`)
+4. `acmm simulate staircase` and `acmm design staircase` on the report's route (`design.pole_method=shift schedule.refine_points=0`)
    with figures vs without (≤ 1.5 s with);
 5. `acmm report --fast` (and the full report with ``--full``): wall and CPU time from a fresh results
    root and again reusing its stage results, per section and per stage (reusing: ≤ 10 s fast, ≤ 20 s full;
@@ -78,7 +78,7 @@ def _blocks_1_to_4(args) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         acmm = str(BIN / "acmm")
         # the report's route: the figures' share, not the packaged route's minutes of LMI solves
-        lqr = ["design.pole_method=shift", "name=staircase_lqr"]
+        lqr = ["design.pole_method=shift", "schedule.refine_points=0", "name=staircase_lqr"]
         subprocess.run([acmm, "simulate", "staircase", *lqr], cwd=tmp, check=True, capture_output=True)
         for stage in ("simulate", "design"):
             with_f = _wall([acmm, stage, "staircase", *lqr], tmp)

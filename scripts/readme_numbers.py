@@ -249,9 +249,9 @@ def _variant(root: Path, base: str, name: str, patch: dict):
 #: points) with the same table, and the report's quadratic form refit on the closed loops from the
 #: LQR points
 STAIRCASE_VARIANTS = {
-    "staircase_lqr": {"design": {"pole_method": "shift"}},
+    "staircase_lqr": {"design": {"pole_method": "shift"}, "schedule": {"refine_points": 0}},
     "staircase_quadratic": {"design": {"pole_method": "shift"},
-                            "schedule": {"form": "polynomial", "fit": "closed_loop"}},
+                            "schedule": {"form": "polynomial", "fit": "closed_loop", "refine_points": 0}},
 }
 
 

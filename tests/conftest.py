@@ -21,7 +21,7 @@ CONFIGS = REPO / "configs"
 #: checked on 201 path TEAs instead of 1 001 (seconds less a design): the tests of the pipeline's
 #: mechanics use them (``load_config("staircase", [*LQR_ROUTE])``); the shipped design is tested
 #: in the slow group.
-LQR_ROUTE = ("design.pole_method=shift", "schedule.n_check=201")
+LQR_ROUTE = ("design.pole_method=shift", "schedule.refine_points=0", "schedule.n_check=201")
 
 
 @pytest.fixture

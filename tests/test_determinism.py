@@ -50,7 +50,7 @@ ENVIRONMENTS = [(k, t) for k in ("Haswell", "Prescott") for t in (1, 2)]
 
 #: the runs of each environment: (run name, acmm simulate arguments)
 RUNS = {"mb3_decoupled": ("mb3_decoupled",),
-        "staircase_lqr": ("staircase", "design.pole_method=shift", "name=staircase_lqr"),
+        "staircase_lqr": ("staircase", "design.pole_method=shift", "schedule.refine_points=0", "name=staircase_lqr"),
         "staircase": ("staircase",)}
 
 

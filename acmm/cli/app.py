@@ -219,10 +219,17 @@ def design(config: Optional[str] = ConfigArg,
                    f">= {min(x.certified_margin for x in lmis):.4f} n at every point; "
                    f"{fallbacks} point(s) needed the fallback solver; {sum(x.solve_time for x in lmis):.1f} s of solves")
     if r.fit is not None and r.fit.form == "table":
-        typer.echo(f"  schedule: table, K linear in theta2* between the {len(r.points)} design points")
+        nodes = sum(not p.spec.level for p in r.points)
+        added = (f" ({len(r.points) - nodes} levels and {nodes} node(s) added where the scheduled loop left "
+                 f"the sector)") if nodes else ""
+        typer.echo(f"  schedule: table, K linear in theta2* between the {len(r.points)} design points{added}")
     elif r.fit is not None:
         typer.echo(f"  schedule: order {r.fit.order} in theta2*; worst relative fit residual "
                    f"{r.fit.rel_residual.max():.2e}")
+    if r.refinement is not None and not r.refinement.met:
+        typer.echo(f"  warning: the table's refinement stopped after {r.refinement.added} of at most "
+                   f"{r.refinement.limit} node(s) with the margin {r.refinement.margin:g} n not met at every path TEA "
+                   "(raise schedule.refine_points)")
     if r.fit is not None and r.check is not None:      # either form: what --strict judges
         c = r.check
         worst = r.worst_check_index()
@@ -231,6 +238,12 @@ def design(config: Optional[str] = ConfigArg,
                    f"worst margin {c.worst:+.3f} n at {c.names[worst]} ({c.kind[worst]})")
         stable = "stable at every check" if c.max_real.max() < 0 else "UNSTABLE at some checks"
         typer.echo(f"  scheduled closed loops: {stable}; largest Re(pole) = {c.max_real.max():+.3f} n")
+    pc = r.path_check
+    if pc is not None:
+        inside = int((pc.margin >= 0).sum())
+        typer.echo(f"  along the path ({pc.margin.size} TEAs): every pole in the sector at {inside} of "
+                   f"{pc.margin.size}; worst margin {pc.margin.min():+.3f} n; largest Re(pole) "
+                   f"{pc.max_real.max():+.3f} n")
     jump = r.off_branch()
     if jump is not None:
         typer.echo("  warning: " + _branch_jump_text(jump))

@@ -16,8 +16,34 @@ import numpy as np
 from acmm.design import schedule as sch
 from acmm.design.path_check import check_path, path_models
 from acmm.design.schedule_refit import REFIT_DEFAULTS, refit_closed_loop
+from acmm.design.schedule_points import PointSpec
 from acmm.design.settings import DesignSettings, ScheduleSettings
 from acmm_qpp.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """What the table schedule's refinement did (``schedule.refine_points``).
+
+    Attributes
+    ----------
+    added : int
+        Table nodes added between the levels.
+    rounds : int
+        Bisection rounds (each designs the midpoints of every interval that failed).
+    limit : int
+        The most nodes it could add.
+    margin : float
+        The sector margin asked of every path TEA, units of n.
+    met : bool
+        Every path TEA has that margin with the final table.
+    """
+
+    added: int
+    rounds: int
+    limit: int
+    margin: float
+    met: bool
 
 
 @dataclass
@@ -34,12 +60,15 @@ class DesignedSchedule:
         The schedule at the design points and blend midpoints.
     path_check : acmm.design.path_check.PathCheck or None
         The schedule along the path (``schedule.n_check``).
+    refinement : Refinement or None
+        What the refinement of a table schedule did (None: not asked for).
     """
 
     points: list            # list[acmm.design.schedule.PointDesign]
     fit: object             # acmm.design.schedule.ScheduleFit or None
     check: object           # acmm.design.schedule.ScheduleCheck or None
     path_check: object      # acmm.design.path_check.PathCheck or None
+    refinement: Refinement | None = None
 
 
 def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | None,
@@ -90,12 +119,72 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
     if len(points) < 2:
         return DesignedSchedule(points, None, None, None)
     path = path_models(points, s, sched.n_check) if sched is not None else None
+    refinement = None
+    if path is not None and sched.refine_points > 0:
+        points, refinement = _refine(points, s, sched, path, map_points, progress)
     fit = _schedule(points, s, sched, path)
     check = sch.check_schedule(fit, points, s)
     path_check = None
     if path is not None:
         path_check = check_path(fit.gain, path, s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg)
-    return DesignedSchedule(points, fit, check, path_check)
+    return DesignedSchedule(points, fit, check, path_check, refinement)
+
+
+def _refine(points: list, s: DesignSettings, sched: ScheduleSettings, path, map_points, progress):
+    """Table nodes added where the scheduled loop leaves the sector along ``path``.
+
+    A table schedule interpolates K linearly in θ2* between its nodes; a loop that every node
+    keeps in the sector can leave it between them.  Each round checks the table at every TEA of
+    the path (margin ≥ ``sched.refine_margin``), takes every interval between neighbouring
+    blend nodes that holds a failing TEA, designs a node at the middle of its blend parameter s
+    (TEA from the neighbours' mean by Newton, the same design route), and refits; it stops when
+    every TEA has the margin, when ``sched.refine_points`` nodes were added (the intervals with
+    the worst margin first) or when no failing interval can be bisected (one end off the blend).
+    The new nodes are gains of the schedule, not levels of the stair-case (``PointSpec.level``);
+    they are returned among the blend's points in the order of s.
+    """
+    n = s.orbit_rate
+    ends = [p.spec for p in points if p.spec.s in (0.0, 1.0)]
+    start = next(p for p in ends if p.s == 0.0)
+    end = next(p for p in ends if p.s == 1.0)
+    added = rounds = 0
+    while True:
+        fit = _schedule(points, s, sched, None)
+        pc = check_path(fit.gain, path, n, s.sector.sigma, s.sector.half_angle_deg, disk=False)
+        bad = ~(pc.margin >= sched.refine_margin)          # NaN (a failed eigenvalue) fails
+        if not bad.any() or added >= sched.refine_points:
+            break
+        order = np.argsort([p.tea.theta[1] for p in points], kind="stable")
+        nodes = [points[k] for k in order]
+        x = np.array([p.tea.theta[1] for p in nodes])
+        where = np.clip(np.searchsorted(x, pc.theta2[bad]) - 1, 0, len(x) - 2)
+        worst = {}
+        for k, m in zip(where, pc.margin[bad]):
+            worst[int(k)] = min(worst.get(int(k), np.inf), float(np.nan_to_num(m, nan=-np.inf)))
+        split = [k for k in sorted(worst, key=lambda k: (worst[k], k))
+                 if np.isfinite(nodes[k].spec.s) and np.isfinite(nodes[k + 1].spec.s)
+                 and abs(nodes[k + 1].spec.s - nodes[k].spec.s) > 1e-9]
+        split = split[:sched.refine_points - added]
+        if not split:
+            break
+        specs = []
+        for k in split:
+            a, b = nodes[k], nodes[k + 1]
+            sm = 0.5 * (a.spec.s + b.spec.s)
+            specs.append(PointSpec(f"node_s{sm:.6f}", (1 - sm) * start.inertia + sm * end.inertia,
+                                   (1 - sm) * start.bias + sm * end.bias, sm,
+                                   0.5 * (a.tea.theta + b.tea.theta), level=False))
+        for spec, point in zip(specs, map_points(partial(sch.design_one, s=s), specs)):
+            points = points + [point]
+            if progress is not None:
+                progress(spec.name)
+        added += len(specs)
+        rounds += 1
+    # the blend's points in the order of s (θ2* monotonic along it, as a table is read), the named
+    # points after them
+    blend = sorted((p for p in points if np.isfinite(p.spec.s)), key=lambda p: p.spec.s)
+    points = blend + [p for p in points if not np.isfinite(p.spec.s)]
+    return points, Refinement(added, rounds, sched.refine_points, sched.refine_margin, not bad.any())
 
 
 def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, path):

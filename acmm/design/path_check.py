@@ -108,7 +108,7 @@ def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> P
     specs = [p.spec for p in points]
     d = s
     n = s.orbit_rate
-    blended = [p for p in specs if np.isfinite(p.s)]
+    blended = sorted((p for p in specs if np.isfinite(p.s)), key=lambda p: p.s)
     if len(blended) < 2:
         return None
     start, end = blended[0], blended[-1]

@@ -298,7 +298,7 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
 
     for p in points:
         _check(p.spec.name, p.model, p.tea.theta[1], "design point")
-    blended = [p for p in points if np.isfinite(p.spec.s)]
+    blended = sorted((p for p in points if np.isfinite(p.spec.s)), key=lambda p: p.spec.s)
     for a, b in zip(blended, blended[1:]):
         spec = PointSpec(f"mid_{0.5 * (a.spec.s + b.spec.s):.3f}", 0.5 * (a.spec.inertia + b.spec.inertia),
                          0.5 * (a.spec.bias + b.spec.bias), 0.5 * (a.spec.s + b.spec.s))

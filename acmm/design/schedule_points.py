@@ -36,6 +36,9 @@ class PointSpec:
     expected : (3,) array or None
         The TEA its config asks for (``bias_from_tea``, rad): the ``expected`` of
         :func:`acmm.model.tea.solve_tea`; None: the continuation's.
+    level : bool
+        The configuration is a level of the stair-case (ch. 6); False for a table node that the
+        schedule's refinement added between levels (``schedule.refine_points``).
     """
 
     name: str
@@ -44,6 +47,7 @@ class PointSpec:
     s: float = float("nan")
     theta_guess: np.ndarray | None = None
     expected: np.ndarray | None = None
+    level: bool = True
 
 
 

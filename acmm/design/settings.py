@@ -136,6 +136,11 @@ class ScheduleSettings:
         Blend points evenly spaced in ``"tea"`` or in ``"blend"`` s.
     n_points : int
         Blend points including both ends.
+    refine_points : int
+        At most this many table nodes added where the path check leaves the sector (0: none;
+        :func:`acmm.design.design_core.design_schedule`).
+    refine_margin : float
+        Sector margin the refinement asks of every path check TEA, units of n.
     """
 
     order: int = 2                    # polynomial order of K_ij(θ2*)
@@ -144,6 +149,8 @@ class ScheduleSettings:
     n_check: int | None = None        # TEAs along the path of the path check (None: no path)
     spacing: str = "tea"              # blend points evenly spaced in "tea" or in "blend" s
     n_points: int = 12                # blend points including both ends
+    refine_points: int = 0            # table nodes added where the path leaves the sector
+    refine_margin: float = 0.0        # sector margin asked of every path TEA, units of n
 
 
 def design_settings(cfg) -> DesignSettings:
@@ -191,4 +198,5 @@ def schedule_settings(cfg) -> ScheduleSettings | None:
     if sc is None:
         return None
     return ScheduleSettings(order=sc.order, form=sc.form, fit=sc.fit, n_check=sc.n_check,
-                            spacing=sc.spacing, n_points=sc.n_points)
+                            spacing=sc.spacing, n_points=sc.n_points, refine_points=sc.refine_points,
+                            refine_margin=sc.refine_margin)

@@ -126,12 +126,25 @@ class Schedule(_Model):
                                      "against the closed loop along the path (acmm.design.schedule.refit_closed_loop)")
     n_check: int = Field(201, strict=True, ge=2, le=2001, description="TEAs evenly spaced along the blend path at which "
                                                          "the scheduled gain is checked on the local model")
+    refine_points: int = Field(
+        0, strict=True, ge=0, le=200,
+        description="table schedule: at most this many gain nodes added by bisecting, in the blend parameter s, "
+                    "each interval between nodes where the scheduled loop leaves the sector (by less than "
+                    "refine_margin) at a path check TEA; the added nodes are schedule gains, not stair-case "
+                    "levels (0: none)")
+    refine_margin: float = Field(
+        0.0, ge=0, le=1, description="sector margin, units of n, that refine_points asks of every path check TEA")
 
     @model_validator(mode="after")
     def _fit_of_the_form(self):
         if self.form == "table" and self.fit == "closed_loop":
             raise ValueError("fit: closed_loop refines a polynomial schedule; form: table interpolates the "
                              "design points' gains themselves (give one or the other)")
+        if self.refine_points and self.form != "table":
+            raise ValueError("refine_points adds nodes to a table schedule (form: table); a polynomial has "
+                             "no nodes to add")
+        if self.refine_points and self.to is None:
+            raise ValueError("refine_points bisects the blend toward schedule.to, which is not given")
         return self
 
 
@@ -140,7 +153,8 @@ class Simulation(_Model):
 
     orbits: float = Field(5.0, gt=0, le=10000, description="simulated time, orbits (2π/n s each)")
     levels: Optional[list[float]] = Field(
-        None, description="orbit at which each schedule design point starts (default: equal dwell)")
+        None, description="orbit at which each stair-case level (a design point of the blend or "
+                    "schedule.points, not a node schedule.refine_points adds) starts (default: equal dwell)")
     initial_offset: AngleVec = Field([0.0, 0.0, 0.0], description="initial attitude minus TEA, deg")
     sample_interval: Time = Field(60.0, gt=0, description="output sample interval, s")
     rtol: float = Field(1e-8, ge=1e-14, lt=1, description="integrator relative tolerance (≥ 1e-14: ~100 ulp)")

@@ -14,10 +14,10 @@ import numpy as np
 _TABLE_KEYS = ("inertia", "bias", "tea", "K")
 
 
-def table_sha256(names, arrays, coef) -> str:
+def table_sha256(names, arrays, coef, level=None) -> str:
     """SHA-256 of a design table as stored in ``design.h5`` (names, then the float64 bytes and
-    shapes of inertia, bias, tea, K and the schedule's coefficients): written by the design
-    stage, checked before a design is reused.
+    shapes of inertia, bias, tea, K and the schedule's coefficients, then which rows are levels
+    when some are not): written by the design stage, checked before a design is reused.
 
     Parameters
     ----------
@@ -27,6 +27,8 @@ def table_sha256(names, arrays, coef) -> str:
         inertia, bias, tea and K as stored (the file's units).
     coef : array or None
         The schedule's coefficients as stored (the file's units), or None.
+    level : (P,) array of bool or None
+        Which rows are stair-case levels (None, or all True: every row).
 
     Returns
     -------
@@ -36,7 +38,8 @@ def table_sha256(names, arrays, coef) -> str:
     import hashlib
 
     h = hashlib.sha256("\x1f".join(names).encode())
-    for a in (*arrays, np.zeros(0) if coef is None else coef):
+    extra = () if level is None or np.all(level) else (np.asarray(level, dtype=float),)
+    for a in (*arrays, np.zeros(0) if coef is None else coef, *extra):
         a = np.ascontiguousarray(a, dtype=float)
         h.update(f"|{a.shape}|".encode())
         h.update(a.tobytes())
@@ -49,10 +52,11 @@ def _stored_digest(items: dict, system: str) -> str:
 
     st = convert_items({k: items[k] for k in _TABLE_KEYS} | {"schedule": items.get("schedule", {})}, system)
     coef = st["schedule"]["coef"].data if "coef" in st["schedule"] else None
-    return table_sha256(_texts(items["names"].data), [st[k].data for k in _TABLE_KEYS], coef)
+    level = np.asarray(items["level"].data, bool) if "level" in items else None
+    return table_sha256(_texts(items["names"].data), [st[k].data for k in _TABLE_KEYS], coef, level)
 
 
-def _check_table(names, inertia, bias, tea, K, coef, stored_digest) -> None:
+def _check_table(names, inertia, bias, tea, K, coef, stored_digest, level=None) -> None:
     """ValueError unless the arrays of a ``design.h5`` have the shapes of ``len(names)`` points,
     are finite and match the digest written with them (an edited or foreign file is designed
     again rather than simulated: a K of the wrong shape reached the compiled simulator)."""
@@ -63,8 +67,10 @@ def _check_table(names, inertia, bias, tea, K, coef, stored_digest) -> None:
             raise ValueError(f"design.h5: {k} has shape {a.shape} or non-finite values ({P} points)")
     if coef is not None and (coef.ndim != 3 or coef.shape[1:] != (3, 24) or not np.all(np.isfinite(coef))):
         raise ValueError(f"design.h5: schedule/coef has shape {coef.shape} or non-finite values")
+    if level is not None and (level.shape != (P,) or not level.any()):
+        raise ValueError(f"design.h5: level has shape {level.shape} or no point is a level")
     if P < 1 or (stored_digest is not None
-                 and stored_digest != table_sha256(names, (inertia, bias, tea, K), coef)):
+                 and stored_digest != table_sha256(names, (inertia, bias, tea, K), coef, level)):
         raise ValueError("design.h5: its arrays do not match the digest written with them")
 
 
@@ -97,7 +103,8 @@ def load_design_table(path: Path) -> DesignTable:
         coef = np.asarray(f["schedule/coef"][()], float) if "schedule" in f else None
         names = _texts(f["names"][()])
         inertia, bias, K, tea = (np.asarray(f[k][()], float) for k in ("inertia", "bias", "K", "tea"))
-    _check_table(names, inertia, bias, tea, K, coef, attrs.get("table_sha256"))
+        level = np.asarray(f["level"][()]).astype(bool) if "level" in f else None
+    _check_table(names, inertia, bias, tea, K, coef, attrs.get("table_sha256"), level)
     if attrs.get("unit_system", "imperial") == "SI":      # back to the report's units
         import yaml
 
@@ -110,7 +117,7 @@ def load_design_table(path: Path) -> DesignTable:
         K = K * f / FT_LBF_IN_NM
         coef = None if coef is None else coef * f / FT_LBF_IN_NM
     return DesignTable(names, inertia, bias, tea, K, coef, attrs["design_hash"],
-                       attrs.get("schedule_form", "polynomial"))
+                       attrs.get("schedule_form", "polynomial"), level)
 
 
 def _unit_system(path: Path) -> str:
@@ -154,6 +161,9 @@ class DesignTable:
         :func:`design_hash` of the config it was designed from.
     form : str
         Schedule form (:func:`acmm.design.schedule.schedule_gain`), ``"polynomial"`` by default.
+    level : (P,) array of bool or None
+        Which rows are levels of the stair-case (ch. 6); the others are table nodes the schedule's
+        refinement added (``schedule.refine_points``).  None: every row.
     """
 
     names: list
@@ -164,6 +174,19 @@ class DesignTable:
     coef: np.ndarray | None  # (order+1, 3, 24) schedule coefficients, or None
     design_hash: str
     form: str = "polynomial"
+    level: np.ndarray | None = None
+
+    def level_rows(self) -> np.ndarray:
+        """The rows that are stair-case levels, in order.
+
+        Returns
+        -------
+        (L,) int array
+            Row indices.
+        """
+        if self.level is None:
+            return np.arange(len(self.names))
+        return np.flatnonzero(self.level)
 
     def scheduled_gain(self, k: int) -> np.ndarray:
         """Gain in use at point k: the schedule evaluated at its TEA when there is one, else

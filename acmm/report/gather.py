@@ -101,6 +101,8 @@ def reports_route(cfg):
     data = cfg.model_dump(mode="json")
     data["name"] = f"{data['name']}_lqr"
     data["design"]["pole_method"] = "shift"
+    if data.get("schedule"):
+        data["schedule"]["refine_points"] = 0       # its gains are chosen discretely: bisection does not converge
     data["description"] = f"{data['description']} [the report's route: sector LQR points]"
     return parse_config(data, source=f"{cfg.name} on the report's route")
 

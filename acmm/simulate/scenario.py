@@ -275,19 +275,20 @@ def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float
     n = cfg.orbit_rate
     orbit = 2 * np.pi / n
     total = sim.orbits if orbits is None else orbits
-    P = len(table.names)
+    rows = table.level_rows()
+    P = rows.size
     levels = np.asarray(sim.levels, float) if sim.levels is not None else total * np.arange(P) / P
     if levels.size != P:
         from acmm_qpp.errors import ConfigError
 
-        raise ConfigError(f"simulation.levels has {levels.size} entries but the design has {P} points")
+        raise ConfigError(f"simulation.levels has {levels.size} entries but the design has {P} levels")
     t_end = total * orbit
     level_start = levels * orbit
     keep = level_start < t_end
     level_start = level_start[keep]
-    idx = np.nonzero(keep)[0]
+    idx = rows[np.nonzero(keep)[0]]
     samples = np.union1d(np.arange(0.0, t_end, sim.sample_interval), np.append(level_start, t_end))
-    theta0 = table.tea[0] + np.radians(sim.initial_offset)
+    theta0 = table.tea[rows[0]] + np.radians(sim.initial_offset)
     x0 = np.concatenate([kin.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
     return Scenario(
         level_start=level_start, inertia=table.inertia[idx], bias=table.bias[idx], theta_est=table.tea[idx],

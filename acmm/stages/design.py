@@ -52,6 +52,8 @@ class DesignResult:
         Design wall time, s.
     path_check : acmm.design.path_check.PathCheck or None
         The schedule checked along the path (``schedule.n_check``).
+    refinement : acmm.design.design_core.Refinement or None
+        What the table's refinement did (``schedule.refine_points``; None: not asked for).
     """
 
     config: Config
@@ -61,6 +63,7 @@ class DesignResult:
     table: DesignTable
     wall_time: float
     path_check: object = None
+    refinement: object = None
 
     def fastest_over_n(self) -> np.ndarray:
         """Per design point, the fastest closed-loop pole's decay rate max(−Re s) divided by n.
@@ -220,7 +223,8 @@ def compute_design(config, progress=None) -> DesignResult:
             raise
         stop_pool(pool)
     table = design_table(ds.points, ds.fit, design_hash(cfg))
-    return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check)
+    return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check,
+                        ds.refinement)
 
 
 def design_table(points, fit, design_hash: str) -> DesignTable:
@@ -244,7 +248,8 @@ def design_table(points, fit, design_hash: str) -> DesignTable:
                        np.array([p.spec.bias for p in points]), np.array([p.tea.theta for p in points]),
                        np.array([p.gain.K for p in points]),
                        None if fit is None else fit.coef, design_hash,
-                       "polynomial" if fit is None else fit.form)
+                       "polynomial" if fit is None else fit.form,
+                       np.array([p.spec.level for p in points], dtype=bool))
 
 
 @locked_stage(_as_config)

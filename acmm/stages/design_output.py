@@ -128,6 +128,9 @@ def table_items(r, pts: dict) -> dict:
         "inertia": Dataset(r.table.inertia, "slug*ft^2", "inertia per point", dims=("point", "axis", "axis_col")),
         "bias": Dataset(r.table.bias, "ft*lbf", "bias per point", AXES, dims=("point", "axis")),
         "tea": Dataset(r.table.tea, "rad", "TEA per point", AXES, dims=("point", "axis")),
+        "level": Dataset(np.isin(np.arange(len(r.table.names)), r.table.level_rows()).astype(np.int8),
+                         "1", "1: the point is a level of the stair-case; 0: a table node added between levels "
+                         "where the scheduled loop left the sector (schedule.refine_points)", dims=("point",)),
         "K": Dataset(r.table.gain, UNIT_K, "design gain per point (u = -K x; sector LQR or regional LMI: design.pole_method)",
                      dims=("point", "axis", "state")),
         "state_names": Dataset(np.array(STATE_NAMES, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
@@ -188,6 +191,12 @@ def schedule_items(r) -> dict:
         value = np.array(val, dtype="S") if isinstance(val, str) else float(val)
         sched[f"refit_{key}"] = Dataset(value, "n" if key.startswith("max_real") else "1",
                                         f"closed-loop refit: {key.replace('_', ' ')}")
+    rf = r.refinement
+    if rf is not None:
+        sched["refine_added"] = Dataset(rf.added, "1", "table nodes added between the levels where the scheduled "
+                                        "loop left the sector at a path TEA (schedule.refine_points)",
+                                        attrs={"rounds": rf.rounds, "limit": rf.limit, "margin_n": rf.margin,
+                                               "met": int(rf.met)})
     pc = r.path_check
     if pc is not None:
         sched["path"] = {

@@ -169,7 +169,8 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
             true, tea_note = perturbed_tea(sc0, inertia, bias)
             if spec.tea_estimate == "true":
                 est = true
-                gain = np.array([table.gain_at(true[k, 1], k) for k in range(L)])
+                rows = table.level_rows()
+                gain = np.array([table.gain_at(true[k, 1], rows[k]) for k in range(L)])
             else:
                 est, gain = sc0.theta_est, sc0.gain
             sc = dataclasses.replace(sc0, inertia=inertia, bias=bias, theta_est=est, gain=gain,
