@@ -46,7 +46,8 @@ def per_case_cost(base: str, orbits: float, n: int = 60) -> tuple[float, float]:
     from acmm.model import dynamics as dyn
     from acmm.model import kinematics as kin
     from acmm.simulate import kernel as sm
-    from acmm.sweep.cases import case_values, perturb_inertia
+    from acmm.model.inertia import perturb_inertia
+    from acmm.sweep.cases import case_values
     from acmm.sweep.case import prepare_base, run_case, simulate_values
     from acmm.sweep.config import parse_sweep
 

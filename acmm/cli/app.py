@@ -218,6 +218,9 @@ def design(config: Optional[str] = ConfigArg,
         typer.echo(f"  regional LMI: solved by {', '.join(sorted({x.solver for x in lmis}))}; margin certified by X "
                    f">= {min(x.certified_margin for x in lmis):.4f} n at every point; "
                    f"{fallbacks} point(s) needed the fallback solver; {sum(x.solve_time for x in lmis):.1f} s of solves")
+    for p in r.points:
+        if p.gain.robust is not None:
+            _echo_robust(p.spec.name, p.gain.robust)
     if r.fit is not None and r.fit.form == "table":
         nodes = sum(not p.spec.level for p in r.points)
         added = (f" ({len(r.points) - nodes} levels and {nodes} node(s) added where the scheduled loop left "
@@ -255,6 +258,26 @@ def design(config: Optional[str] = ConfigArg,
                     f"{cfg.name}: the scheduled gain puts poles outside the sector "
                     f"(worst margin {r.check.worst:+.3f} n)")
     strict_exit(strict, r.unstable() is not None, f"{cfg.name}: {r.unstable()}")
+
+
+def _echo_robust(name: str, rd) -> None:
+    """The per-plant verdicts of a robust design (acmm.design.robust.RobustDesign)."""
+    fam = rd.family
+    held = rd.sector_held()
+    typer.echo(f"  robust gain at {name}: {len(fam.labels)} plants (nominal, {len(fam.labels) - 1 - sum(l.startswith('scale') for l in fam.labels)} "
+               f"of {fam.draws} draws, {fam.unphysical} unphysical, {fam.folded} whose design branch folds; "
+               f"{sum(l.startswith('scale') for l in fam.labels)} uniform scalings); worst pole real part "
+               f"{rd.start_abscissa:+.3f} n -> {rd.worst_abscissa:+.3f} n ({rd.restarts} BFGS restart(s): {rd.stop}; "
+               f"{rd.solve_time:.1f} s)")
+    typer.echo(f"    {'plant':<12} {'pitch TEA (deg)':>15} {'decay (n)':>10} {'cone (deg)':>10}  verdict (certified by X)")
+    for lab, th, c, h in zip(fam.labels, fam.theta, rd.certificates, held):
+        verdict = "in the sector" if h else "stable, not in the sector" if c.decay > 0 else "NOT proved stable"
+        typer.echo(f"    {lab:<12} {math.degrees(th[1]):>15.2f} {c.decay:>10.4f} {c.cone_deg:>10.2f}  {verdict}")
+    sigma, phi = rd.sector
+    typer.echo(f"  every plant is certified in Re <= -{rd.decay:.4f}n, |arg(-pole)| <= {rd.cone_deg:.2f} deg; "
+               + (f"the sector (Re <= -{sigma:g}n, {phi:g} deg) holds for all" if held.all()
+                  else f"the sector (Re <= -{sigma:g}n, {phi:g} deg) holds for {int(held.sum())} of {held.size}")
+               + (f"; NOT proved stable: {', '.join(rd.unproved())}" if rd.unproved() else ""))
 
 
 def _branch_jump_text(jump) -> str:

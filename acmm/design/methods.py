@@ -11,12 +11,16 @@ design it rests on and, for the LMI route, its certificate and solver statistics
   coordinates pre-conditioned by the ``"shift"`` sector LQR of the same settings (its reference,
   kept as :attr:`PointGain.riccati`).
 
+With ``design.robust`` (:func:`with_robust_gain`), any route's gain is the start of a gain designed
+for a family of inertias around the point and certified plant by plant
+(:mod:`acmm.design.robust`); the record keeps both (:attr:`PointGain.robust`).
+
 The string is read here and only here (:func:`pole_method`, called by
 :func:`acmm.design.settings.design_settings`); the rest of the program asks the method object.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Callable
 
@@ -24,6 +28,7 @@ import numpy as np
 
 from acmm.design import sector_lqr
 from acmm.design.regional_lmi import RegionalLMI, control_energy, regional_lmi
+from acmm.design.robust import RobustDesign, RobustSettings, robust_design
 from acmm.model import state_scaling as scaling
 from acmm_qpp.errors import DesignError
 
@@ -61,6 +66,10 @@ class PointGain:
     lmi : acmm.design.regional_lmi.RegionalLMI or None
         The LMI route's design: certificate X, certified margin, cost bound, random robustness
         re-check, solver and its statistics; None on the LQR routes.
+    robust : acmm.design.robust.RobustDesign or None
+        With ``design.robust``: the family, the route's nominal gain the search started from and one
+        certificate per plant; K, poles, margins and energy are then the robust gain's on the
+        nominal plant.  None without.
     """
 
     K: np.ndarray
@@ -73,6 +82,7 @@ class PointGain:
     method: str
     riccati: sector_lqr.SectorLQR
     lmi: RegionalLMI | None = None
+    robust: RobustDesign | None = None
 
     @property
     def max_eig_condition(self) -> float:
@@ -131,6 +141,51 @@ def _lmi_route(A, B, scales, s) -> PointGain:
     return PointGain(K=r.K, poles=r.poles, margin=r.margin, eig_condition=r.eig_condition,
                      robustness_radius=r.robustness_radius, robustness_radius_elementwise=r.robustness_radius_elementwise,
                      energy=r.energy, method="lmi", riccati=ref, lmi=r)
+
+
+def with_robust_gain(gain: PointGain, A, B, scales, inertia, bias, theta, s, st: RobustSettings) -> PointGain:
+    """The point's record with the gain designed for the family ``st`` around it
+    (:func:`acmm.design.robust.robust_design`, started from ``gain.K``): K, poles, margin,
+    conditioning, radii and energy of the robust gain on the nominal model (A, B), and
+    :attr:`PointGain.robust`.
+
+    Parameters
+    ----------
+    gain : PointGain
+        The route's design of the nominal plant.
+    A : (N, N) array
+        Nominal design model, 1/s.
+    B : (N, M) array
+        Its input matrix, state units per ft·lbf.
+    scales : (N,) array
+        State scales, in the units of each state.
+    inertia : (3, 3) array
+        Nominal inertia, slug·ft².
+    bias : (3,) array
+        Bias torque, ft·lbf.
+    theta : (3,) array
+        Nominal TEA, rad.
+    s : acmm.design.settings.DesignSettings
+        Design settings (orbital rate, sector, design model, DRF mode).
+    st : acmm.design.robust.RobustSettings
+        The family.
+
+    Returns
+    -------
+    PointGain
+        The robust design's record.
+    """
+    n, e = s.orbit_rate, scaling.torque_scale(scales)
+    rd = robust_design(inertia, bias, theta, n, gain.K, scales, e, st, model=s.model, drf_mode=s.drf_mode,
+                       sector=(s.sector.sigma, s.sector.half_angle_deg))
+    d = np.asarray(scales, float)
+    lam, _, _, kappa = sector_lqr.eigen_conditioning((A - B @ rd.K) / d[:, None] * d[None, :])
+    order = np.lexsort((lam.imag, lam.real))
+    margin = float(np.min(sector_lqr.sector_margin(lam, n, s.sector.sigma, s.sector.half_angle_deg)))
+    e_norm, e_elem = sector_lqr.sector_robustness(A, B, rd.K, n, s.sector.sigma, s.sector.half_angle_deg, scales)
+    return replace(gain, K=rd.K, poles=lam[order], margin=margin, eig_condition=kappa[order],
+                   robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
+                   energy=control_energy(A, B, rd.K, n, scales, e), robust=rd)
 
 
 #: The routes by ``design.pole_method``.

@@ -20,7 +20,7 @@ import numpy as np
 from acmm.model import linearize as lin
 from acmm.model import state_scaling as scaling
 from acmm.design import sector_lqr
-from acmm.design.methods import PointGain
+from acmm.design.methods import PointGain, with_robust_gain
 from acmm.design.settings import DesignSettings
 from acmm.design.schedule_points import PointSpec
 from acmm.model.tea import TEA, solve_tea, solve_tea_near
@@ -201,6 +201,8 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
             t = solve_tea(spec.inertia, n, spec.bias, expected=spec.expected)
     model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
     res = sector_design(model.A, model.B, model.scales, s)
+    if s.robust is not None:
+        res = with_robust_gain(res, model.A, model.B, model.scales, spec.inertia, spec.bias, t.theta, s, s.robust)
     return PointDesign(spec, t, model, res)
 
 

@@ -19,6 +19,7 @@ import numpy as np
 
 from acmm.design.methods import PoleMethod, pole_method
 from acmm.design.regional_lmi import RegionalLMISettings
+from acmm.design.robust import RobustSettings
 
 
 @dataclass(frozen=True)
@@ -72,6 +73,8 @@ class DesignSettings:
         Design model (eq 4.46 or a simplification).
     drf_mode : str
         ``"attitude_hold"`` or ``"momentum_hold"``.
+    robust : acmm.design.robust.RobustSettings or None
+        The family each point's gain is designed for (``design.robust``); None: the nominal plant only.
     lmi : acmm.design.regional_lmi.RegionalLMISettings or None
         The regional LMI design's settings (read by the ``"lmi"`` route only).
     """
@@ -89,6 +92,7 @@ class DesignSettings:
     model: str                        # design model (eq 4.46 or a simplification)
     drf_mode: str                     # "attitude_hold" or "momentum_hold"
     lmi: RegionalLMISettings | None = None
+    robust: RobustSettings | None = None
 
     def q0_weight(self, nx: int):
         """The initial state weight on the scaled states: Q0·I plus ``Q0_groups`` on the
@@ -178,7 +182,9 @@ def design_settings(cfg) -> DesignSettings:
             sigma=d.sector.sigma, half_angle_deg=d.sector.half_angle_deg, min_margin=d.min_margin,
             backoff=d.lmi.backoff, disk_radius=d.lmi.disk_radius, dilation=d.lmi.dilation, tol=d.lmi.tol,
             regularization=d.lmi.regularization, solver=d.lmi.solver,
-            n_random=d.lmi.n_random, seed=d.lmi.seed))
+            n_random=d.lmi.n_random, seed=d.lmi.seed),
+        robust=(RobustSettings(d.robust.inertia_percent, d.robust.samples, d.robust.seed)
+                if d.robust.inertia_percent > 0 else None))
 
 
 def schedule_settings(cfg) -> ScheduleSettings | None:

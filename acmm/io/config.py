@@ -72,6 +72,17 @@ class RegionalLMI(_Model):
     seed: int = Field(0, strict=True, ge=0, description="seed of those perturbations")
 
 
+class Robust(_Model):
+    """A gain designed for a family of inertias and certified per plant (:mod:`acmm.design.robust`)."""
+
+    inertia_percent: float = Field(0.0, ge=0, lt=100, description="half-width of the element draws I∘(1+δ), "
+                                   "δ ~ U(±p %), and of the uniform scalings (1 ± p %)·I; 0: off")
+    samples: int = Field(20, strict=True, ge=1, le=500, description="physical element draws with an equilibrium "
+                         "connected to the design TEA in the family (besides the nominal plant and the scalings)")
+    seed: int = Field(1, strict=True, ge=0, description="seed of the draws (not the sweep's: the gain is judged on "
+                      "draws it never saw)")
+
+
 class Design(_Model):
     """Linear design model (eq 4.46) and the sector LQR (ch. 5.2)."""
 
@@ -87,6 +98,7 @@ class Design(_Model):
         "shift", description="sector enforcement: optimal pole shifting of the stray poles, a uniform shift, or "
                              "regional pole placement by LMIs with an H2 energy bound (design.lmi)")
     lmi: RegionalLMI = RegionalLMI()
+    robust: Robust = Robust()
     residual_tol: float = Field(1e-12, gt=0, lt=1, description="largest accepted Riccati backward error after "
                                                                  "refinement (acmm.design.riccati.care_backward_error)")
     Q0_groups: Optional[Q0Groups] = Field(

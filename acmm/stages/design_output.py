@@ -76,6 +76,11 @@ def point_items(points) -> dict:
             "energy": Dataset(res.energy, "1", "H2 control energy tr(K W Kt) of the torque disturbance, scaled "
                               "input, time in 1/n (acmm.design.regional_lmi.control_energy)"),
         }
+        if res.robust is not None:
+            pts[f"{k:03d}_{p.spec.name}"]["robust"] = _robust_items(res.robust, p.gain)
+            pts[f"{k:03d}_{p.spec.name}"]["K"] = replace(
+                pts[f"{k:03d}_{p.spec.name}"]["K"], description="robust gain for the family of design.robust "
+                "(group robust), u = -K x")
         if res.lmi is not None:
             pts[f"{k:03d}_{p.spec.name}"]["lmi"] = _lmi_items(res.lmi)
             for key in ("Q", "P", "riccati_residual", "riccati_backward_error", "riccati_condition",
@@ -84,6 +89,36 @@ def point_items(points) -> dict:
                 pts[f"{k:03d}_{p.spec.name}"][key] = replace(
                     ds, description=ds.description + " of the reference sector LQR (the LMI design's pre-conditioner)")
     return pts
+
+
+def _robust_items(r, gain) -> dict:
+    """The ``points/<k>/robust`` group: the family, the start and one certificate per plant
+    (:mod:`acmm.design.robust`)."""
+    c = r.certificates
+    return {
+        "plant": Dataset(np.array(r.family.labels, dtype=object), "1", "plant of the family: nominal, draw <k> "
+                         "(index among all draws), scale <s>", dims=("plant",)),
+        "inertia": Dataset(r.family.inertia, "slug*ft^2", "inertia of each plant", dims=("plant", "axis", "axis_col")),
+        "tea": Dataset(r.family.theta, "rad", "each plant's TEA, connected to the design TEA", AXES,
+                       dims=("plant", "axis")),
+        "X": Dataset(np.array([x.X for x in c]), "1", "Lyapunov certificate of each plant's closed loop, scaled "
+                     "states, time in 1/n", dims=("plant", "state", "state_col")),
+        "certified_decay": Dataset(np.array([x.decay for x in c]), "n", "decay proved by X: every pole Re <= -it",
+                                   dims=("plant",)),
+        "certified_cone": Dataset(np.radians([x.cone_deg for x in c]), "rad", "cone proved by X: every pole "
+                                  "|arg(-pole)| <= it", dims=("plant",)),
+        "max_real": Dataset(np.array([x.max_real for x in c]), "n", "largest real part of the computed poles",
+                            dims=("plant",)),
+        "sector_held": Dataset(r.sector_held().astype(np.int8), "1",
+                               "1: the plant is certified in the sector of design.sector", dims=("plant",)),
+        "nominal_K": Dataset(r.nominal_K, UNIT_K, "the route's gain for the nominal plant (the search's start)",
+                             STATE_NAMES, dims=("axis", "state")),
+        "worst_abscissa": Dataset(r.worst_abscissa, "n", "largest pole real part over the family with the robust gain",
+                                  attrs={"start_abscissa_n": r.start_abscissa, "restarts": r.restarts, "stop": r.stop,
+                                         "draws": r.family.draws, "unphysical_draws": r.family.unphysical,
+                                         "folded": r.family.folded}),
+        "solve_time": Dataset(r.solve_time, "s", "wall time of the family, the search and the certificates"),
+    }
 
 
 def _lmi_items(r) -> dict:
@@ -232,6 +267,8 @@ def unit_roles(pts: dict, has_fit: bool) -> dict:
     roles = {"K": "K"}
     for key in pts:
         roles.update({f"points/{key}/{m}": m for m in ("A", "B", "G", "Q", "P", "K")})
+        if "robust" in pts[key]:
+            roles[f"points/{key}/robust/nominal_K"] = "K"
         roles[f"points/{key}/scales"] = "scales"
     if has_fit:
         roles.update({"schedule/coef": "K", "schedule/rms_residual": "K"})

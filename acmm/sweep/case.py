@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm_qpp.errors import ConvergenceError, DesignError, NoEquilibriumError
-from acmm.sweep.cases import AXES, _why, case_values, perturb_inertia
+from acmm.model.inertia import perturb_inertia
+from acmm.sweep.cases import AXES, _why, case_values
 
 
 # ---------------------------------------------------------------------------------------------

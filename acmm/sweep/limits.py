@@ -26,8 +26,8 @@ PILOT = 1000
 def _physical_fraction(sweep, n: int) -> tuple[int, int]:
     """(physical draws, draws) of a pilot of ``n`` draws at every level of every base."""
     from acmm.design.schedule_points import point_specs
-    from acmm.sweep.cases import _draw, perturb_inertia
-    from acmm.sweep.cases import physical_mask
+    from acmm.model.inertia import perturb_inertia, physical_mask
+    from acmm.sweep.cases import _draw
 
     spec = sweep.spec
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, 0x9E3779B9]))

@@ -10,7 +10,7 @@ from acmm.model import tea
 from acmm.io.config import load_config
 from acmm_qpp.errors import AcmmError
 from acmm.design.schedule_points import point_specs
-from acmm.sweep.cases import perturb_inertia, unphysical_reason
+from acmm.model.inertia import perturb_inertia, unphysical_reason
 from acmm.model.tea_compiled import solve_tea_fast
 
 

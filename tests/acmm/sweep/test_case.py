@@ -9,7 +9,8 @@ import numpy as np
 import yaml
 
 from acmm_qpp.results import read_h5
-from acmm.sweep.cases import case_values, perturb_inertia
+from acmm.model.inertia import perturb_inertia
+from acmm.sweep.cases import case_values
 from acmm.sweep.run import run_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.config import load_sweep

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from acmm.sweep.cases import case_values, perturb_inertia, physical_mask, unphysical_reason
+from acmm.model.inertia import perturb_inertia, physical_mask, unphysical_reason
+from acmm.sweep.cases import case_values
 from acmm.sweep.config import load_sweep
 
 from tests.acmm.conftest import _sweep_yaml

@@ -14,7 +14,8 @@ import yaml
 
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.results import read_h5
-from acmm.sweep.cases import case_values, perturb_inertia, unphysical_reason
+from acmm.model.inertia import perturb_inertia, unphysical_reason
+from acmm.sweep.cases import case_values
 from acmm.sweep.run import run_sweep
 from acmm.sweep.config import load_sweep, parse_sweep
 
