@@ -51,7 +51,7 @@ README = REPO / "README.md"
 
 #: the blocks this script writes (each in README.md or one page of docs/)
 BLOCKS = ("table1_tea", "qpp_bullet", "claims", "staircase_levels", "design_points", "schedule_path",
-          "dwell_certificate", "design_routes", "staircase_routes", "sweep_monte_carlo",
+          "dwell_certificate", "design_routes", "robust_family", "staircase_routes", "sweep_monte_carlo",
           "sweep_diverged", "sweep_margin", "qpp_reproduced", "qpp_examples", "qpp_certificates")
 
 #: the qpp configs the README quotes: the report's two chapters and the three shipped examples
@@ -244,6 +244,13 @@ def _variant(root: Path, base: str, name: str, patch: dict):
     return path, load_config(str(path), [f"output.root={root}", "output.figures=false"])
 
 
+#: the station routes beside the packaged sector LQR (``block_design_routes``): the regional LMI
+#: point design, and the robust gain for the ±30 % family started from it (``design.robust``)
+ROUTE_VARIANTS = {
+    "lmi": {"design": {"pole_method": "lmi"}},
+    "robust": {"design": {"pole_method": "lmi", "robust": {"inertia_percent": 30}}},
+}
+
 #: the stair-case variants of the routes table (``block_staircase_routes``) beside the packaged one
 #: (regional LMI points, table look-up, judged on a 1 001-TEA path): the report's route (sector LQR
 #: points) with the same table, and the report's quadratic form refit on the closed loops from the
@@ -270,18 +277,20 @@ def _lmi_route(root: Path, workers: int | None) -> dict:
     from acmm.sweep.config import parse_sweep
     from acmm.sweep.run import run_sweep
 
-    out, bases = {}, []
-    for name in ("mb3", "ac"):
-        path, cfg = _variant(root, name, f"{name}_lmi", {"design": {"pole_method": "lmi"}})
-        bases.append(str(path))
-        out[f"design:{name}_lmi"] = read_h5(ensure_acmm_design(cfg).path)
-    p = packaged_config_path("sweep_inertia30.yaml")
-    data = yaml.safe_load(p.read_text())
-    data["name"], data["sweep"]["bases"] = "sweep_inertia30_lmi", bases
-    data["output"] = {"root": str(root), "figures": False}
-    sweep = parse_sweep(data, source=str(p), directory=p.parent)
-    out["sweep_lmi"] = read_h5(run_sweep(sweep, workers=workers or max(1, min(2, os.cpu_count() or 1)),
-                                         figures=False).path)
+    out = {}
+    for route, patch in ROUTE_VARIANTS.items():
+        bases = []
+        for name in ("mb3", "ac"):
+            path, cfg = _variant(root, name, f"{name}_{route}", patch)
+            bases.append(str(path))
+            out[f"design:{name}_{route}"] = read_h5(ensure_acmm_design(cfg).path)
+        p = packaged_config_path("sweep_inertia30.yaml")
+        data = yaml.safe_load(p.read_text())
+        data["name"], data["sweep"]["bases"] = f"sweep_inertia30_{route}", bases
+        data["output"] = {"root": str(root), "figures": False}
+        sweep = parse_sweep(data, source=str(p), directory=p.parent)
+        out[f"sweep_{route}"] = read_h5(run_sweep(sweep, workers=workers or max(1, min(2, os.cpu_count() or 1)),
+                                                  figures=False).path)
     for name, patch in STAIRCASE_VARIANTS.items():
         _, cfg = _variant(root, "staircase", name, patch)
         out[f"config:{name}"] = cfg
@@ -662,7 +671,8 @@ def block_claims(r: dict) -> str:
     margins = [float(np.min(r[f"design:{k}"]["sector_margin"])) for k in ("mb3", "ac", "staircase")]
     conds = [float(np.max(r[f"design:{k}"]["max_eig_condition"])) for k in ("mb3", "ac", "staircase")]
     rows += [
-        ["sector", "smallest sector margin of the MB3, AC and 12 stair-case design points",
+        ["sector", f"smallest sector margin of the MB3, AC and {len(d['sector_margin'])} stair-case design points "
+                   f"({int(np.sum(d['level']))} levels and the table's nodes)",
          f"{fixed(min(margins))}n"],
         ["sector", "relative Riccati residual of the sector LQRs (scaled; MB3, AC and the stair-case's "
                    "pre-conditioning designs), decade above the largest",
@@ -859,19 +869,62 @@ def block_design_routes(r: dict) -> str:
     for name, label in (("mb3", "MB3"), ("ac", "AC")):
         n = r[f"config:{name}"].orbit_rate
         for route, d, sw, base in (("sector LQR", r[f"design:{name}"], r["sweep"], name),
-                                   ("regional LMI", r[f"design:{name}_lmi"], r["sweep_lmi"], f"{name}_lmi")):
+                                   ("regional LMI", r[f"design:{name}_lmi"], r["sweep_lmi"], f"{name}_lmi"),
+                                   ("robust gain for the ±30 % family (from the LMI gain)",
+                                    r[f"design:{name}_robust"], r["sweep_robust"], f"{name}_robust")):
             p = point(d)
             A, B, K = (np.asarray(p[k]) for k in ("A", "B", "K"))
             fastest = float(np.max(-np.real(np.asarray(p["poles"])))) / n
-            rr = float(p["lmi"]["random_radius"]) if "lmi" in p else random_gain_radius(A, B, K, n)
+            rr = (float(p["lmi"]["random_radius"]) if "lmi" in p and "robust" not in p
+                  else random_gain_radius(A, B, K, n))
             ok, tot = counts(sw, base)
+            inside = float(p["sector_margin"]) > 0          # a radius is the distance to leaving the sector
             rows.append([f"{label}, {route}", fixed(float(p["sector_margin"])), sig(float(p["max_eig_condition"]), 2),
-                         sci(float(p["robustness_radius_elementwise"])), sci(rr),
+                         sci(float(p["robustness_radius_elementwise"])) if inside else "— (outside)",
+                         sci(rr) if inside else "— (outside)",
                          sig(_energy(p, n), 3), fixed(fastest, 1), f"{ok}/{tot}",
                          margin_range(sw, base)])
     return table(["station, route", "margin (n)", "κ max", "radius (first order, elementwise)",
                   "radius (random re-check)", "energy", "fastest pole (n)", "±30 % bounded and settled",
                   "tolerated inertia scaling s"], rows)
+
+
+def block_robust_family(r: dict) -> str:
+    """The robust route's family and per-plant certificates at MB3 and AC (``design.robust``), and
+    its gain on the packaged sweep's draws: how many of them have an equilibrium connected to the
+    design TEA, and how many of those stay bounded and settled.
+
+    Parameters
+    ----------
+    r : dict
+        :func:`run_stages`.
+
+    Returns
+    -------
+    str
+        A Markdown table.
+    """
+    rows = []
+    for name, label in (("mb3", "MB3"), ("ac", "AC")):
+        p = r[f"design:{name}_robust"]["points"]
+        g = p[sorted(p)[0]]["robust"]
+        decay = np.asarray(g["certified_decay"], float)
+        cone = np.degrees(np.asarray(g["certified_cone"], float))
+        sw = r["sweep_robust"]
+        names = [_text(x) for x in np.atleast_1d(sw["base_names"])]
+        sel = np.atleast_1d(sw["base"]) == names.index(f"{name}_robust")
+        verdict = np.array([_text(x) for x in np.atleast_1d(sw["verdict"])])[sel]
+        reason = np.array([_text(x) for x in np.atleast_1d(sw["reason"])])[sel]
+        folded = np.array(["folds" in x for x in reason])
+        rows.append([label, str(decay.size), f"{fixed(float(decay.min()), 4)}n",
+                     f"{fixed(float(cone.max()), 1)}°", f"{int(np.sum(np.asarray(g['sector_held'])))}/{decay.size}",
+                     f"{int(np.sum(~folded))}/{folded.size}",
+                     f"{int(np.sum(verdict[~folded] == 'bounded'))}/{int(np.sum(~folded))}",
+                     f"{int(np.sum(verdict == 'bounded'))}/{verdict.size}"])
+    return table(["station", "plants in the family", "decay every plant is certified to keep",
+                  "cone every plant is certified in", "plants certified in the sector",
+                  "packaged draws with an equilibrium connected to the design TEA",
+                  "of those, bounded and settled", "all draws bounded and settled"], rows)
 
 
 def block_staircase_routes(r: dict) -> str:

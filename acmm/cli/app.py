@@ -196,8 +196,9 @@ def design(config: Optional[str] = ConfigArg,
            overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=7"),
            figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
     """TEA -> linearize -> sector LQR or LMI per point -> schedule; writes runs/<name>/design.h5 + figures.
-    With --strict, a scheduled gain with poles outside the sector, or a blend whose end lies on
-    another branch of equilibria, exits 1."""
+    With --strict, a scheduled gain with poles outside the sector, a blend whose end lies on
+    another branch of equilibria, or a robust gain not proved stable for every plant of its
+    family (design.robust), exits 1."""
 
     from acmm.stages.design import run_design
 
@@ -258,6 +259,9 @@ def design(config: Optional[str] = ConfigArg,
                     f"{cfg.name}: the scheduled gain puts poles outside the sector "
                     f"(worst margin {r.check.worst:+.3f} n)")
     strict_exit(strict, r.unstable() is not None, f"{cfg.name}: {r.unstable()}")
+    unproved = [f"{p.spec.name}: {', '.join(p.gain.robust.unproved())}" for p in r.points
+                if p.gain.robust is not None and p.gain.robust.unproved()]
+    strict_exit(strict, bool(unproved), f"{cfg.name}: the robust gain is not proved stable for " + "; ".join(unproved))
 
 
 def _echo_robust(name: str, rd) -> None:

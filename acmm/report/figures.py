@@ -47,7 +47,7 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     fig, axs = plt.subplots(6, 4, figsize=(11, 14), sharex=True)
     for j, ax in enumerate(axs.flat):
         for i in range(3):
-            ax.plot(np.degrees(th), K[:, i, j], "o", ms=3, color=COLORS[i], label=f"K({i + 1},{j + 1}) LQR")
+            ax.plot(np.degrees(th), K[:, i, j], "o", ms=3, color=COLORS[i], label=f"K({i + 1},{j + 1}) point")
             ax.plot(np.degrees(fine), kf[:, i, j], "-", color=COLORS[i], lw=1,
                     label=f"K({i + 1},{j + 1}) schedule")
         ax.set_title(f"K(i,{j + 1}): {STATE_NAMES[j]}", fontsize=8)
@@ -60,8 +60,10 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     handles, _ = axs[0, 0].get_legend_handles_labels()
     labels = [f"{kind}, row i = {i + 1} ({AXES[i]} torque)" for i in range(3) for kind in ("point gain", "schedule")]
     fig.legend(handles, labels, loc="upper center", ncol=3, fontsize=7, bbox_to_anchor=(0.5, 0.985))
-    fig.suptitle(f"Gain schedule vs TEA: the design points' gains (markers) and the order-{sc['coef'].shape[0] - 1} "
-                 f"{form} schedule (lines); rows i = roll, pitch, yaw torque", y=0.995, fontsize=9)
+    what = (f"the table look-up (K linear in θ2* between its {len(th)} nodes)" if form == "table"
+            else f"the order-{sc['coef'].shape[0] - 1} polynomial schedule")
+    fig.suptitle(f"Gain schedule vs TEA: the design points' gains (markers) and {what} (lines); "
+                 "rows i = roll, pitch, yaw torque", y=0.995, fontsize=9)
     # a fixed layout: tight_layout on 24 panels costs as much as drawing them (issue 16)
     fig.subplots_adjust(left=0.075, right=0.985, bottom=0.04, top=0.93, wspace=0.42, hspace=0.32)
     return save(fig, figdir, "gain_schedule")
