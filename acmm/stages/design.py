@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm.io.config import Config
+from acmm.io.dimensions import COORDS
 from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
 from acmm.stages.certify import certificate_items, compute_certificate
 from acmm.stages.common import _as_config, _define_units, _in_system
@@ -289,7 +290,7 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None) ->
     items = _define_units(_in_system(items, cfg, roles), cfg.orbit_rate)
     path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
                     {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
-                     "schedule_form": r.table.form, "table_sha256": _stored_digest(items, cfg.output.units)})
+                     "schedule_form": r.table.form, "table_sha256": _stored_digest(items, cfg.output.units)}, coords=COORDS)
     if want_figures:
         draw_figures(out.design_figures(r, s, run_dir, cfg.output.units))
     return r, path

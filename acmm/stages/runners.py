@@ -16,6 +16,7 @@ import numpy as np
 
 from acmm.model import tea as tea_mod
 from acmm.io.config import Config
+from acmm.io.dimensions import COORDS
 from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, _as_config, _in_system
 from acmm_qpp.outputs import owns_outputs
 from acmm_qpp.results import Dataset, write_h5
@@ -88,10 +89,10 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
         result.others = [r for r in tea_mod.all_equilibria(inertia, cfg.orbit_rate, t.bias)
                          if np.max(np.abs(r.theta - t.theta)) > 1e-6]
     items = {
-        "theta": Dataset(t.theta, "rad", "torque-equilibrium attitude θ* (eq 4.1)", AXES),
-        "omega": Dataset(t.omega, "rad/s", "ω* at θ* (eq 4.3)", AXES),
-        "bias": Dataset(t.bias, "ft*lbf", "bias torque balanced at θ* (eq 4.1)", AXES),
-        "inertia": Dataset(inertia, "slug*ft^2", "inertia matrix (eq 3.2)", AXES),
+        "theta": Dataset(t.theta, "rad", "torque-equilibrium attitude θ* (eq 4.1)", AXES, dims=("axis",)),
+        "omega": Dataset(t.omega, "rad/s", "ω* at θ* (eq 4.3)", AXES, dims=("axis",)),
+        "bias": Dataset(t.bias, "ft*lbf", "bias torque balanced at θ* (eq 4.1)", AXES, dims=("axis",)),
+        "inertia": Dataset(inertia, "slug*ft^2", "inertia matrix (eq 3.2)", AXES, dims=("axis", "axis_col")),
         "orbit_rate": Dataset(cfg.orbit_rate, "rad/s", "orbital rate n"),
         "residual": Dataset(t.residual, "ft*lbf", "max |τ_gyro + τ_gg + bias| at θ*"),
     }
@@ -99,7 +100,7 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
         items["other_roots"] = Dataset(np.array([o.theta for o in result.others]), "rad",
                                        "other equilibria found by multi-start Newton", AXES,
                                        dims=("root", "axis"))
-    path = write_h5(cfg.run_dir() / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"})
+    path = write_h5(cfg.run_dir() / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"}, coords=COORDS)
     return result, path
 
 
@@ -175,12 +176,14 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
         "G": Dataset(model.G, UNIT_B, "disturbance input matrix", names, dims=("state", "axis")),
         "state_names": Dataset(np.array(names, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
         "state_units": Dataset(np.array(model.state_units, dtype="S"), "1", "unit of each state", dims=("state",)),
-        "scales": Dataset(model.scales, UNIT_STATE, "nominal state magnitudes", names),
-        "theta_star": Dataset(model.theta_star, "rad", "linearization attitude", AXES),
-        "omega_star": Dataset(model.omega_star, "rad/s", "ω* at the linearization attitude (eq 4.3)", AXES),
-        "tea": Dataset(tr.tea.theta, "rad", "TEA of the full inertia", AXES),
-        "inertia_design": Dataset(model.inertia, "slug*ft^2", "inertia of the design model", AXES),
-        "inertia": Dataset(cfg.inertia.matrix(), "slug*ft^2", "full inertia", AXES),
+        "scales": Dataset(model.scales, UNIT_STATE, "nominal state magnitudes", names, dims=("state",)),
+        "theta_star": Dataset(model.theta_star, "rad", "linearization attitude", AXES, dims=("axis",)),
+        "omega_star": Dataset(model.omega_star, "rad/s", "ω* at the linearization attitude (eq 4.3)", AXES,
+                              dims=("axis",)),
+        "tea": Dataset(tr.tea.theta, "rad", "TEA of the full inertia", AXES, dims=("axis",)),
+        "inertia_design": Dataset(model.inertia, "slug*ft^2", "inertia of the design model", AXES,
+                                  dims=("axis", "axis_col")),
+        "inertia": Dataset(cfg.inertia.matrix(), "slug*ft^2", "full inertia", AXES, dims=("axis", "axis_col")),
         "eigenvalues": Dataset(eig, "rad/s", "open-loop eigenvalues of A", dims=("eigenvalue",)),
         "controllability_min_ratio": Dataset(ctrb.min_ratio, "1",
                                              "min σmin([A−sI, B])/σmax over eigenvalues and s=0, scaled"),
@@ -188,7 +191,7 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
     }
     items = _in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
     path = write_h5(cfg.run_dir() / "linearize.h5", items, cfg.to_yaml(),
-                    {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
+                    {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode}, coords=COORDS)
     return result, path
 
 

@@ -11,6 +11,7 @@ import numpy as np
 import time
 
 from acmm.io.config import Config
+from acmm.io.dimensions import AUX_COORDS, COORDS
 from acmm.simulate import kernel as sim_mod
 from acmm.simulate import scenario as scen
 from acmm.stages import sim_output as out
@@ -96,6 +97,6 @@ def run_simulate(config, progress=None, figures: bool | None = None, warn=None) 
     items, attrs = out.sim_items(cfg, sc, r, stats, table.design_hash, wall)
     figures_to_draw = out.sim_figures(cfg, sc, r, stats, items) if want_figures else []
     items = _define_units(_in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
-    path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
+    path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs, coords=COORDS, aux_coords=AUX_COORDS)
     draw_figures(figures_to_draw)
     return result, path
