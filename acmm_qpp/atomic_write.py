@@ -12,11 +12,6 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-#: Called with the path of each file :func:`atomic_path` completes (:mod:`acmm_qpp.outputs` adds
-#: its recorder on import, so this module need not import it).
-WRITTEN_HOOKS: list = []
-
-
 def make_dirs(directory: str | Path) -> list[Path]:
     """Create ``directory`` and its missing parents; return the ones created (outermost first),
     so that a refused run can remove them again (:func:`remove_empty_dirs`).
@@ -147,8 +142,6 @@ def atomic_path(path: str | Path, what: str = "results"):
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
-        for hook in WRITTEN_HOOKS:
-            hook(path)
     except BaseException as exc:
         try:
             os.unlink(tmp)

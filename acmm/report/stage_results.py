@@ -102,10 +102,14 @@ def failed(name: str, exc: BaseException) -> Failed | None:
     Returns
     -------
     Failed or None
-        Its one-line message and exit code (:func:`acmm_qpp.errors.failure_line`), or None.
+        Its one-line message and exit code (:func:`acmm_qpp.errors.failure_line`), or None (also
+        for an :class:`acmm_qpp.errors.OutputError`: a report that cannot write stops at once,
+        with one ``error:`` line).
     """
-    from acmm_qpp.errors import failure_line
+    from acmm_qpp.errors import OutputError, failure_line
 
+    if isinstance(exc, OutputError):    # the report's folder cannot be written (a full disk…): it stops
+        return None
     line = failure_line(exc) if isinstance(exc, Exception) else None
     return None if line is None else Failed(name, *line)
 

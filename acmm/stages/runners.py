@@ -18,9 +18,8 @@ from acmm.model import tea as tea_mod
 from acmm.io.config import Config
 from acmm.io.dimensions import COORDS
 from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, _as_config, _in_system
-from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.outputs import stage
 from acmm_qpp.results import Dataset, write_h5
-from acmm_qpp.runlock import locked_stage
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -65,9 +64,8 @@ def compute_tea(config) -> TeaResult:
                                             expected=cfg.disturbance.requested_tea()))
 
 
-@locked_stage(_as_config)
-@owns_outputs("tea", lambda c: _as_config(c))
-def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
+@stage(("tea.h5",), _as_config)
+def run_tea(config, all_roots: bool = False, *, out: Path) -> tuple[TeaResult, Path]:
     """Compute the TEA and write ``runs/<name>/tea.h5``.
 
     Parameters
@@ -76,6 +74,8 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
         The config, or a config file / packaged name to load.
     all_roots : bool, optional
         Also search the other equilibria (multi-start Newton) and write them.
+    out : pathlib.Path
+        The folder its files are written in (the staging folder :func:`acmm_qpp.outputs.stage` gives).
 
     Returns
     -------
@@ -100,8 +100,8 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
         items["other_roots"] = Dataset(np.array([o.theta for o in result.others]), "rad",
                                        "other equilibria found by multi-start Newton", AXES,
                                        dims=("root", "axis"))
-    path = write_h5(cfg.run_dir() / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"}, coords=COORDS)
-    return result, path
+    write_h5(out / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"}, coords=COORDS)
+    return result, cfg.run_dir() / "tea.h5"
 
 
 @dataclass
@@ -141,15 +141,16 @@ class LinearizeResult:
         return eig[np.lexsort((eig.imag, eig.real))]
 
 
-@locked_stage(_as_config)
-@owns_outputs("linearize", lambda c: _as_config(c))
-def run_linearize(config) -> tuple[LinearizeResult, Path]:
+@stage(("linearize.h5",), _as_config)
+def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     """TEA, then the design model of ``design.model``; writes ``runs/<name>/linearize.h5``.
 
     Parameters
     ----------
     config : acmm.io.config.Config or path-like or str
         The config, or a config file / packaged name to load.
+    out : pathlib.Path
+        The folder its files are written in (the staging folder :func:`acmm_qpp.outputs.stage` gives).
 
     Returns
     -------
@@ -190,9 +191,9 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
         "controllability_rank": Dataset(ctrb.rank, "1", f"PBH rank with tolerance {ctrb.tol:g}"),
     }
     items = _in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
-    path = write_h5(cfg.run_dir() / "linearize.h5", items, cfg.to_yaml(),
-                    {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode}, coords=COORDS)
-    return result, path
+    write_h5(out / "linearize.h5", items, cfg.to_yaml(),
+             {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode}, coords=COORDS)
+    return result, cfg.run_dir() / "linearize.h5"
 
 
 def redraw_figures(target, out=None) -> list[Path]:
