@@ -12,3 +12,9 @@ Subpackages: :mod:`acmm.model` (the plant), :mod:`acmm.design` (the controller),
 (``load_config``, ``design``, ``Design``, ``linearize``, ``simulate``).
 """
 __version__ = "0.1.0"
+
+#: The data package of the configs shipped with the distribution (the source tree's ``configs/``
+#: folder, mapped by ``pyproject.toml``), looked up by name with importlib.resources.
+PACKAGED_CONFIGS = "acmm.configs"
+#: The packaged config ``acmm`` reads when none is named: the report's stair-case.
+DEFAULT_CONFIG = "staircase"

@@ -409,12 +409,6 @@ def draw_figures(calls) -> None:
         raise err from (None if err is first else first)
 
 
-#: result file → the stage that writes it (root attribute ``stage``), in the order a run folder's
-#: figures are redrawn
-FIGURE_SOURCES = {"design.h5": "design", "sim.h5": "simulate", "sweep.h5": "sweep",
-                  "qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
-
-
 def redraw_from_files(files: list, readers: dict, out=None) -> list[Path]:
     """Draw the figures of stored results files (``acmm plot`` / ``qpp plot``): every file is read
     first, then the output folders are made and the figures drawn.
@@ -452,17 +446,18 @@ def redraw_from_files(files: list, readers: dict, out=None) -> list[Path]:
     return draw_collected(calls)
 
 
-def stored_results(target: str | Path, stages: tuple) -> list[tuple[Path, str]]:
+def stored_results(target: str | Path, sources: dict) -> list[tuple[Path, str]]:
     """The result files a figure redraw (``acmm plot`` / ``qpp plot``) reads: ``target`` itself
-    (an ``.h5`` written by one of ``stages``) or, for a run folder, every file of
-    :data:`FIGURE_SOURCES` in it written by one of ``stages``.
+    (an ``.h5`` written by one of the stages of ``sources``) or, for a run folder, every file of
+    ``sources`` in it written by its stage.
 
     Parameters
     ----------
     target : path-like
         A run folder or a results file.
-    stages : tuple of str
-        The stages (root attribute ``stage``) whose files the caller draws.
+    sources : dict
+        Results file name → the stage that writes it (root attribute ``stage``), for the files
+        whose figures the caller draws, in the order a run folder's figures are drawn.
 
     Returns
     -------
@@ -476,6 +471,7 @@ def stored_results(target: str | Path, stages: tuple) -> list[tuple[Path, str]]:
         none.
     """
     p = Path(target)
+    stages = tuple(dict.fromkeys(sources.values()))
     if not str(target).strip() or not p.exists():
         raise ConfigError(f"{target}: no such run folder or results file")
 
@@ -488,10 +484,10 @@ def stored_results(target: str | Path, stages: tuple) -> list[tuple[Path, str]]:
             return None
 
     if p.is_dir():
-        found = [(p / name, stage_of(p / name)) for name in FIGURE_SOURCES if (p / name).is_file()]
+        found = [(p / name, stage_of(p / name)) for name in sources if (p / name).is_file()]
         found = [(f, st) for f, st in found if st in stages]
         if not found:
-            names = ", ".join(n for n, st in FIGURE_SOURCES.items() if st in stages)
+            names = ", ".join(sources)
             raise ConfigError(f"{target}: no results file with figures in this folder (looked for {names})")
         return found
     st = stage_of(p)

@@ -376,11 +376,12 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
 
     import importlib
 
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.configio import packaged_config_path
     from acmm_qpp.results import read_h5
     from acmm.sweep.config import parse_sweep
 
-    p = packaged_config_path(SWEEP_CONFIG)
+    p = packaged_config_path(SWEEP_CONFIG, PACKAGED_CONFIGS)
     if not p.exists():
         return None, f"configs/{SWEEP_CONFIG} is not present"
     data = yaml.safe_load(p.read_text())

@@ -171,10 +171,11 @@ def acmm_config(name: str, root: Path | None = None, *, fast: bool = False):
         The config, figures off.
     """
     from acmm.io.config import load_config, parse_config
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.configio import packaged_config_path
 
     # the packaged file itself: a file or folder named like it in the working directory is not it
-    data = load_config(packaged_config_path(f"{name}.yaml")).model_dump(mode="json")
+    data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
     if root is not None:
         data["output"]["root"] = str(root)
     data["output"]["figures"] = False
@@ -200,10 +201,11 @@ def qpp_config(name: str, root: Path | None = None):
     qpp.io.config.QppConfig
         The config, figures off.
     """
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.configio import packaged_config_path
     from qpp.io.config import load_config, parse_config
 
-    data = load_config(packaged_config_path(f"{name}.yaml")).model_dump(mode="json")
+    data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
     if root is not None:
         data["output"]["root"] = str(root)
     data["output"]["figures"] = False

@@ -196,6 +196,12 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     return result, cfg.run_dir() / "linearize.h5"
 
 
+#: results file → the stage that writes it (root attribute ``stage``), in the order ``acmm plot``
+#: redraws a run folder's figures (the qpp files too: a run folder may hold both)
+FIGURE_SOURCES = {"design.h5": "design", "sim.h5": "simulate", "sweep.h5": "sweep",
+                  "qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
+
+
 def redraw_figures(target, out=None) -> list[Path]:
     """Redraw a run's figures from its stored results (``acmm plot``): ``design.h5``,
     ``sim.h5``, ``sweep.h5`` and the qpp files, each drawn from the file alone
@@ -231,4 +237,4 @@ def redraw_figures(target, out=None) -> list[Path]:
     readers = {"design": design_figures_from_file, "simulate": sim_figures_from_file,
                "sweep": sweep_figures_from_file, "qpp design": figure_calls_from_file,
                "qpp simulate": figure_calls_from_file}
-    return redraw_from_files(stored_results(target, tuple(readers)), readers, out)
+    return redraw_from_files(stored_results(target, FIGURE_SOURCES), readers, out)

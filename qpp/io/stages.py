@@ -438,6 +438,11 @@ def figure_calls_from_file(path: Path, out_dir: Path) -> list:
     return calls
 
 
+#: results file → the stage that writes it (root attribute ``stage``), in the order ``qpp plot``
+#: redraws a run folder's figures
+FIGURE_SOURCES = {"qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
+
+
 def redraw_figures(target, out=None) -> list[Path]:
     """Redraw a qpp run's figures from ``qpp_design.h5`` / ``qpp_sim.h5`` alone (``qpp plot``;
     :func:`figure_calls_from_file`).
@@ -464,4 +469,4 @@ def redraw_figures(target, out=None) -> list[Path]:
     from acmm_qpp.results import redraw_from_files, stored_results
 
     readers = {"qpp design": figure_calls_from_file, "qpp simulate": figure_calls_from_file}
-    return redraw_from_files(stored_results(target, tuple(readers)), readers, out)
+    return redraw_from_files(stored_results(target, FIGURE_SOURCES), readers, out)
