@@ -13,15 +13,8 @@ Subpackages: :mod:`acmm.model` (the plant), :mod:`acmm.design` (the controller),
 """
 __version__ = "0.1.0"
 
-from acmm_qpp.state_names import register_state_names as _register_state_names
-
-
-def _state_names():
-    from acmm.model.linearize import STATE_NAMES
-
-    return STATE_NAMES
-
-
-#: the ``state`` dimension of every results file holds the 24 states of eq 4.47 (a callable, so
-#: that importing ``acmm`` does not import the model)
-_register_state_names(_state_names)
+#: The data package of the configs shipped with the distribution (the source tree's ``configs/``
+#: folder, mapped by ``pyproject.toml``), looked up by name with importlib.resources.
+PACKAGED_CONFIGS = "acmm.configs"
+#: The packaged config ``acmm`` reads when none is named: the report's stair-case.
+DEFAULT_CONFIG = "staircase"

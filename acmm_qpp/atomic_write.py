@@ -7,15 +7,13 @@ calls (HDF5 files and figures are built in memory first, :func:`in_memory`).
 """
 from __future__ import annotations
 
+import io
 import os
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-#: Called with the path of each file :func:`atomic_path` completes (:mod:`acmm_qpp.outputs` adds
-#: its recorder on import, so this module need not import it).
-WRITTEN_HOOKS: list = []
-
+from acmm_qpp.errors import OutputError
 
 def make_dirs(directory: str | Path) -> list[Path]:
     """Create ``directory`` and its missing parents; return the ones created (outermost first),
@@ -91,8 +89,6 @@ def output_error(exc: OSError, what: str, where: str | Path):
     OutputError
         The error to raise.
     """
-    from acmm_qpp.errors import OutputError
-
     if isinstance(exc, OutputError):
         return exc
     why = exc.strerror or str(exc)
@@ -127,8 +123,6 @@ def atomic_path(path: str | Path, what: str = "results"):
     output_error
         (the :class:`~acmm_qpp.errors.OutputError` built by :func:`output_error` from an OS error)
     """
-    from acmm_qpp.errors import OutputError
-
     path = Path(path)
     created: list[Path] = []
     try:
@@ -147,8 +141,6 @@ def atomic_path(path: str | Path, what: str = "results"):
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
-        for hook in WRITTEN_HOOKS:
-            hook(path)
     except BaseException as exc:
         try:
             os.unlink(tmp)
@@ -228,8 +220,6 @@ def in_memory(path: Path, what: str = "results"):
     io.BytesIO
         The buffer to write to.
     """
-    import io
-
     buf = io.BytesIO()
     yield buf
     view = buf.getbuffer()                # no copy of a large file

@@ -9,14 +9,17 @@ from __future__ import annotations
 
 import errno
 import os
+import stat
 from importlib import resources
 from pathlib import Path
 
 import yaml
 from pydantic import ValidationError
 
-from acmm_qpp import PACKAGED_CONFIGS
+from acmm_qpp.config_model import BOOLEAN_AS_NUMBER
 from acmm_qpp.errors import ConfigError
+from acmm_qpp.hints import missing_config_message, prioritize, unknown_key_hint
+from acmm_qpp.limits import how_to_raise, limit
 
 
 class _UniqueKeyLoader(yaml.SafeLoader):
@@ -83,9 +86,6 @@ def user_path(loc: tuple, data: object) -> tuple:
 
 
 def _format_error(exc: ValidationError, model_cls=None, data: object = None) -> str:
-    from acmm_qpp.config_model import BOOLEAN_AS_NUMBER
-    from acmm_qpp.hints import prioritize, unknown_key_hint
-
     errors = prioritize(exc.errors())
     err = errors[0]
     path = user_path(tuple(err["loc"]), data)
@@ -167,27 +167,27 @@ def validate_model(model_cls, data: object, source: str = "config"):
         raise ConfigError(f"{source}: {_format_error(exc, model_cls, data)}") from None
 
 
-DEFAULT_CONFIG = "staircase.yaml"
-
-
-def packaged_config_path(name: str = DEFAULT_CONFIG) -> Path:
+def packaged_config_path(name: str, package: str) -> Path:
     """Path of a config shipped inside the distribution (``configs/`` in the source tree).
 
     Parameters
     ----------
     name : str
         File name of the config.
+    package : str
+        The data package of the packaged configs (``acmm.PACKAGED_CONFIGS``, ``qpp.PACKAGED_CONFIGS``),
+        looked up with :mod:`importlib.resources`.
 
     Returns
     -------
     Path
         Its path (which need not exist).
     """
-    return Path(str(resources.files(PACKAGED_CONFIGS).joinpath(name)))
+    return Path(str(resources.files(package).joinpath(name)))
 
 
-def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
-    """Read a YAML config file (``None``: the packaged default); returns (data, path).
+def read_yaml(path: str | Path, package: str) -> tuple[object, Path]:
+    """Read a YAML config file; returns (data, path).
 
     A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working directory (absent,
     or a folder: a results root holds run folders named like the configs) is looked up among the
@@ -196,8 +196,10 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
 
     Parameters
     ----------
-    path : path-like or None
-        The config file, a packaged config's name, or None for the packaged default.
+    path : path-like
+        The config file or a packaged config's name.
+    package : str
+        The data package of the packaged configs (:func:`packaged_config_path`).
 
     Returns
     -------
@@ -211,9 +213,7 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
     ConfigError
         Missing or unreadable file, or invalid YAML (with line and column).
     """
-    if path is None:
-        p = packaged_config_path()
-    elif not str(path).strip():
+    if not str(path).strip():
         raise ConfigError("config path is empty: give a YAML file or the name of a packaged config")
     else:
         p = Path(path)
@@ -225,7 +225,7 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
         # file here (absent, or a folder such as a run folder named like it): a packaged config
         bare = len(p.parts) == 1 and not any(sep and sep in str(path) for sep in ("/", os.sep, os.altsep))
         if bare and (not present or p.is_dir()):
-            candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml")
+            candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml", package)
             if candidate.exists():
                 p, present = candidate, True
         if present and p.is_dir():
@@ -233,9 +233,7 @@ def read_yaml(path: str | Path | None = None) -> tuple[object, Path]:
         if not present and p.is_symlink():     # a link to nothing, or a loop of links
             raise ConfigError(f"cannot read config file {str(path)[:200]}: {_link_problem(p)}")
         if not present:
-            from acmm_qpp.hints import missing_config_message
-
-            raise ConfigError(missing_config_message(path))
+            raise ConfigError(missing_config_message(path, package))
     text = read_config_text(p)
     try:
         data = load_yaml_text(text, p)
@@ -318,9 +316,6 @@ def read_regular_file(p: Path, what: str = "config", cap: int | None = None,
     ConfigError
         Not a readable regular file, or larger than ``cap``.
     """
-    import os
-    import stat
-
     too_large = f"{what} file {p} is too large: {{}} bytes" + (f" ({raise_how})" if raise_how else "")
     try:
         fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
@@ -370,8 +365,6 @@ def read_config_text(p: Path) -> str:
     ConfigError
         Not a readable regular file, too large, or not UTF-8.
     """
-    from acmm_qpp.limits import how_to_raise, limit
-
     data = read_regular_file(p, "config", int(limit("CONFIG_BYTES")), how_to_raise("CONFIG_BYTES"))
     try:
         return data.decode("utf-8")
@@ -400,8 +393,6 @@ def check_yaml_structure(text: str, source: object = "config") -> None:
     ConfigError
         Too deep, too many nodes, or a cyclic alias.
     """
-    from acmm_qpp.limits import how_to_raise, limit
-
     max_depth, max_nodes = int(limit("YAML_DEPTH")), int(limit("YAML_NODES"))
     stack: list[tuple[str | None, int]] = []
     sizes: dict[str, int] = {}

@@ -11,11 +11,15 @@
 from __future__ import annotations
 
 import difflib
+import re
 import types
 import typing
+from importlib import resources
 from pathlib import Path
 
 from pydantic import BaseModel
+
+from acmm_qpp.errors import EXIT_NUMERICAL, NoEquilibriumError
 
 
 # ---------------------------------------------------------------------------------------------
@@ -159,39 +163,42 @@ def prioritize(errors: list[dict]) -> list[dict]:
 # ---------------------------------------------------------------------------------------------
 # packaged config names
 # ---------------------------------------------------------------------------------------------
-def packaged_names() -> list[str]:
+def packaged_names(package: str) -> list[str]:
     """Names of the configs shipped with the package (without ``.yaml``).
+
+    Parameters
+    ----------
+    package : str
+        The data package of the packaged configs.
 
     Returns
     -------
     list of str
         Sorted names; empty when the data package cannot be read.
     """
-    from importlib import resources
-
-    from acmm_qpp import PACKAGED_CONFIGS
-
     try:
-        return sorted(Path(p.name).stem for p in resources.files(PACKAGED_CONFIGS).iterdir()
+        return sorted(Path(p.name).stem for p in resources.files(package).iterdir()
                       if p.name.endswith(".yaml"))
     except (OSError, ModuleNotFoundError):  # pragma: no cover
         return []
 
 
-def missing_config_message(path) -> str:
+def missing_config_message(path, package: str) -> str:
     """``config file not found: x (not a packaged config either; did you mean `mb3`? packaged: ...)``.
 
     Parameters
     ----------
     path : str or path-like
         The config as the user gave it.
+    package : str
+        The data package of the packaged configs.
 
     Returns
     -------
     str
         The one-line message.
     """
-    names = packaged_names()
+    names = packaged_names(package)
     msg = f"config file not found: {path}"
     p = Path(str(path))
     if len(p.parts) == 1 and names:
@@ -285,8 +292,6 @@ _RICCATI_METHODS = ("scipy", "sign", "slycot")
 
 def _other_riccati_methods(low_message: str) -> str:
     """The Riccati methods to suggest: all but the one the message says failed (``method='…'``)."""
-    import re
-
     m = re.search(r"method='(\w+)'", low_message)
     used = m.group(1) if m else None
     return " or ".join(x for x in _RICCATI_METHODS if x != used)
@@ -308,8 +313,6 @@ def with_hint(exc: Exception, product: str = "acmm") -> str:
     str
         ``str(exc)``, followed by ``; hint: ...`` when one applies.
     """
-    from acmm_qpp.errors import EXIT_NUMERICAL, NoEquilibriumError
-
     msg = str(exc)
     if getattr(exc, "exit_code", None) == EXIT_NUMERICAL or isinstance(exc, NoEquilibriumError):
         hint = numerical_hint(msg, product)

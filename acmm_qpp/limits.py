@@ -35,6 +35,8 @@ from __future__ import annotations
 
 import os
 
+from acmm_qpp.errors import ConfigError
+
 DEFAULTS: dict[str, float] = {
     "CONFIG_BYTES": 1_000_000,
     "YAML_DEPTH": 32,
@@ -92,8 +94,6 @@ def limit(name: str) -> float:
     except ValueError:
         value = float("nan")
     if not 0 < value < float("inf"):
-        from acmm_qpp.errors import ConfigError
-
         raise ConfigError(f"ACMM_LIMIT_{name}: must be a positive number (got {raw!r}); unset it for the "
                           f"default {DEFAULTS[name]:.6g}")
     return value

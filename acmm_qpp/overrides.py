@@ -19,9 +19,11 @@ from __future__ import annotations
 
 import copy
 import re
+from pathlib import Path
 
 import yaml
 
+from acmm_qpp.configio import load_yaml_text
 from acmm_qpp.errors import EXIT_USAGE, ConfigError
 
 
@@ -82,7 +84,6 @@ def parse_override(text: str) -> tuple[list, object, bool]:
     if text.startswith("~"):
         return [_part(p) for p in text[1:].split(".")], None, True
     key, _, raw = text.partition("=")
-    from acmm_qpp.configio import load_yaml_text
 
     try:   # the bounds of a config file (depth, nodes with aliases expanded) apply here too
         value = load_yaml_text(raw, f"override {key}") if raw.strip() else None
@@ -185,8 +186,6 @@ def split_overrides(config, overrides) -> tuple[object, list[str]]:
     """
     overrides = list(overrides or [])
     if config is not None and looks_like_override(str(config)):
-        from pathlib import Path
-
         if not Path(str(config)).exists():
             return None, [str(config)] + overrides
     return config, overrides

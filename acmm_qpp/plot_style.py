@@ -9,6 +9,12 @@ figures: grid, 110 dpi, 9 pt).
 """
 from __future__ import annotations
 
+import os
+import stat
+import sys
+import tempfile
+from pathlib import Path
+
 #: Okabe–Ito colour-blind-safe palette (roll, pitch, yaw first).
 COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#000000")
 AXIS_COLORS = dict(zip(("roll", "pitch", "yaw"), COLORS))
@@ -45,9 +51,6 @@ def files_only_backend() -> None:
     ``module://matplotlib_inline.backend_inline``) made ``import matplotlib`` itself fail, a
     traceback in ``acmm report``/``sweep`` (a review).  Call it before anything imports
     matplotlib or starts a process that will; the variable is inherited by those processes."""
-    import os
-    import sys
-
     os.environ["MPLBACKEND"] = "Agg"
     if "matplotlib" in sys.modules:
         sys.modules["matplotlib"].use("Agg", force=True)
@@ -55,7 +58,6 @@ def files_only_backend() -> None:
         # no writable home: matplotlib made a new /tmp/matplotlib-* folder in every process
         # and warned twice;
         # one folder per user, kept, holds its font cache across runs
-        import tempfile
 
         own = os.path.join(tempfile.gettempdir(), f"acmm-matplotlib-{os.getuid() if hasattr(os, 'getuid') else 0}")
         if _writable_dir(own, private=True):
@@ -64,10 +66,6 @@ def files_only_backend() -> None:
 
 def _default_config_dir() -> str:
     """matplotlib's configuration folder on this machine when ``MPLCONFIGDIR`` is not set."""
-    import os
-    import sys
-    from pathlib import Path
-
     try:
         home = Path.home()
     except (KeyError, RuntimeError):                  # no home in the password database
@@ -80,8 +78,6 @@ def _default_config_dir() -> str:
 def _writable_dir(path: str, private: bool = False) -> bool:
     """Whether ``path`` is (made) a writable folder; ``private``: made with mode 0700 and owned
     by this user (a shared temporary folder)."""
-    import os
-
     if not path:
         return False
     try:
@@ -89,7 +85,6 @@ def _writable_dir(path: str, private: bool = False) -> bool:
         st = os.lstat(path)
     except OSError:
         return False
-    import stat
 
     if private and (not stat.S_ISDIR(st.st_mode) or (hasattr(os, "getuid") and st.st_uid != os.getuid())):
         return False

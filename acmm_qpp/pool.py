@@ -5,7 +5,7 @@ leave Ctrl-C to the parent (a terminal sends it to the whole process group: a wo
 too printed a traceback or broke the pool's shutdown) and die with it (Linux
 ``prctl(PR_SET_PDEATHSIG)``, and elsewhere a daemon thread that watches ``os.getppid()``), so a
 killed sweep or report leaves no orphans.  :func:`submit` forks new workers with the interrupts
-held, so none arrives before a worker's set-up; :func:`stop_pool` shuts the pool down, killing its
+deferred, so none breaks a fork; :func:`stop_pool` shuts the pool down, killing its
 workers first when the parent was interrupted.  A caller whose tasks' warnings matter (the
 report's) sends them back with each result (:func:`portable_warnings`) and raises them again in
 the parent as if computed there (:func:`raise_warnings_again`); the sweep's workers print theirs.
@@ -13,6 +13,8 @@ the parent as if computed there (:func:`raise_warnings_again`); the sweep's work
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
+import ctypes
 import multiprocessing
 import os
 import pickle
@@ -23,7 +25,7 @@ import time
 import warnings
 
 from acmm_qpp.errors import OutputError
-from acmm_qpp.signals import TERMINATING, hold_interrupts, release_interrupts
+from acmm_qpp.signals import TERMINATING, interrupts_deferred
 
 #: prctl(2) option: the signal a process gets when its parent thread exits (Linux)
 PR_SET_PDEATHSIG = 1
@@ -41,8 +43,6 @@ def set_parent_death_signal() -> bool:
     if not sys.platform.startswith("linux"):
         return False
     try:
-        import ctypes
-
         libc = ctypes.CDLL(None, use_errno=True)
         return libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
     except (OSError, AttributeError):
@@ -99,20 +99,18 @@ def _watch(parent: int, interval: float) -> None:
 def _pool_worker(parent: int, initializer=None, interval: float = 1.0) -> None:
     """A pool worker's set-up: Ctrl-C is the parent's alone; SIGTERM and SIGHUP take their default
     action; the worker dies with ``parent`` (:func:`acmm_qpp.signals.die_with_parent`, and a watch
-    thread polling every ``interval`` s where ``PR_SET_PDEATHSIG`` does not exist); the interrupts
-    that :func:`submit` held while forking are unblocked; then ``initializer()``."""
+    thread polling every ``interval`` s where ``PR_SET_PDEATHSIG`` does not exist); then
+    ``initializer()``."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with_parent(parent)
     threading.Thread(target=_watch, args=(parent, interval), daemon=True, name="parent-watch").start()
-    if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
     if initializer is not None:
         initializer()
 
 
 def submit(executor, fn, *args):
-    """``executor.submit(fn, *args)``; for a process pool with the interrupts held, so that a
-    worker it forks now inherits the held mask and no Ctrl-C reaches it before its set-up
+    """``executor.submit(fn, *args)``; for a process pool with the interrupts deferred
+    (:func:`acmm_qpp.signals.interrupts_deferred`), so that none breaks the forking of a worker
     (other executors fork nothing).
 
     Parameters
@@ -129,11 +127,8 @@ def submit(executor, fn, *args):
     concurrent.futures.Future
         The task's future.
     """
-    held = hold_interrupts() if isinstance(executor, cf.ProcessPoolExecutor) else None
-    try:
+    with interrupts_deferred() if isinstance(executor, cf.ProcessPoolExecutor) else contextlib.nullcontext():
         return executor.submit(fn, *args)
-    finally:
-        release_interrupts(held)
 
 
 def _recording_warnings(fn, x):
@@ -146,7 +141,7 @@ def _recording_warnings(fn, x):
 
 def pool_map(executor, fn, items):
     """``fn(x) for x in items`` computed on ``executor``: every task submitted first
-    (:func:`submit`, the interrupts held), each result yielded as soon as it and those before it
+    (:func:`submit`, the interrupts deferred), each result yielded as soon as it and those before it
     are done, in the order of ``items``, the warnings of each task raised again here first
     (:func:`raise_warnings_again`: this process's filters apply, as if computed in place).
 
@@ -180,7 +175,7 @@ def pool_map(executor, fn, items):
 
 
 def stop_pool(pool: cf.ProcessPoolExecutor, abort: bool = False) -> None:
-    """Shut a pool down, the interrupts held (a second Ctrl-C broke the shutdown: a hang); with
+    """Shut a pool down, the interrupts deferred (a second Ctrl-C broke the shutdown: a hang); with
     ``abort`` (the parent was interrupted or failed) its workers are killed first instead of
     finishing tasks whose results nobody will read.
 
@@ -191,8 +186,7 @@ def stop_pool(pool: cf.ProcessPoolExecutor, abort: bool = False) -> None:
     abort : bool, optional
         Kill the running tasks.
     """
-    held = hold_interrupts()
-    try:
+    with interrupts_deferred():
         if abort:
             for p in list((getattr(pool, "_processes", None) or {}).values()):
                 try:
@@ -200,8 +194,6 @@ def stop_pool(pool: cf.ProcessPoolExecutor, abort: bool = False) -> None:
                 except (OSError, ValueError, AttributeError):   # already gone, or closed
                     pass
         pool.shutdown(wait=True, cancel_futures=True)
-    finally:
-        release_interrupts(held)
 
 
 def portable_warnings(caught) -> list:

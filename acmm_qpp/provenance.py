@@ -10,6 +10,8 @@ from datetime import datetime, timezone
 from functools import lru_cache
 from pathlib import Path
 
+from acmm_qpp import __version__
+
 
 @lru_cache(maxsize=1)
 def _git_state() -> tuple[str, bool | None]:
@@ -92,8 +94,6 @@ def provenance(config_text: str) -> dict[str, str]:
     dict
         Package, version, git commit, config hash and creation time (UTC).
     """
-    from acmm_qpp import __version__
-
     return {
         "package": "acmm-qpp",
         "package_version": __version__,
@@ -132,11 +132,6 @@ def code_identity() -> str:
         ``<version>+<12 hex digits>``.
     """
     if not _CODE:
-        import hashlib
-        from pathlib import Path
-
-        from acmm_qpp import __version__
-
         root = Path(__file__).resolve().parents[1]
         h = hashlib.sha256()
         for package in ("acmm", "common", "qpp"):

@@ -1,29 +1,45 @@
-"""Self-describing HDF5 results, written atomically.
+"""Self-describing netCDF-4/HDF5 results, written atomically by h5netcdf.
 
-Every dataset carries a ``units`` attribute; the root group carries the resolved config
-(YAML text), its hash, the package version, the git commit when known and the creation
-time.  Files are written to a temporary name in the target directory and renamed into
-place, so an interrupted run never leaves a partial file (:mod:`acmm_qpp.atomic_write`; the
-provenance attributes come from :mod:`acmm_qpp.provenance`).
+Every dataset carries a ``units`` attribute and named dimensions; the root group carries the
+resolved config (YAML text), its hash, the package version, the git commit when known and the
+creation time (:mod:`acmm_qpp.provenance`).  The file is built in memory by
+`h5netcdf <https://h5netcdf.org>`_ and written to a temporary name beside the target, then renamed
+into place, so an interrupted run never leaves a partial file (:mod:`acmm_qpp.atomic_write`).
+
+The netCDF layout, for ``xarray.open_dataset(path, engine="h5netcdf")`` and the netCDF-C library:
+
+* each array names the dimension of every axis (:attr:`Dataset.dims`, time first);
+* a 1-D dataset named like its dimension (``t``, ``point`` ...) is that dimension's coordinate;
+  else the writer's ``coords`` give one, else the :attr:`Dataset.names` of a dataset along it (its
+  last axis) make a text coordinate; a dimension with none of these is a netCDF "dimension but not
+  a variable";
+* CF attributes: ``units`` (on every dataset), ``long_name`` (the description),
+  ``standard_name="time"``/``axis="T"`` on the time coordinate ``t``, the ``coordinates``
+  attribute naming the writer's auxiliary coordinates (``aux_coords``) on the variables along
+  their dimension, root ``Conventions``.
 """
 from __future__ import annotations
 
 import json
 from collections.abc import Mapping  # not typing.Mapping: its isinstance check is slow
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+import h5netcdf
+import h5py
 import numpy as np
+import yaml
 
 from acmm_qpp.atomic_write import in_memory
 from acmm_qpp.errors import ConfigError, FigureError
 from acmm_qpp.provenance import provenance
+from acmm_qpp.units import to_system
 
 
 @dataclass
 class Dataset:
-    """One array to store, with its unit and optional axis/element names.
+    """One array to store, with its unit, its dimensions and optional axis/element names.
 
     Attributes
     ----------
@@ -32,13 +48,14 @@ class Dataset:
     units : str
         Unit of ``data`` (stored as the ``units`` attribute).
     description : str
-        Stored as the ``description`` attribute when not empty.
+        Stored as the ``description`` and ``long_name`` attributes when not empty.
     names : list of str or None
-        Element names, stored as JSON in the ``names`` attribute.
+        Names of the entries of the last axis, stored as JSON in the ``names`` attribute (and
+        the text coordinate of that dimension when nothing else gives it one).
     attrs : dict
-        Further dataset attributes.
+        Further dataset attributes (they replace the defaults above).
     dims : tuple of str or None
-        netCDF dimension name of each axis (time first); inferred when None.
+        netCDF dimension name of each axis (time first); required for an array, None for a scalar.
     """
 
     data: Any
@@ -46,41 +63,126 @@ class Dataset:
     description: str = ""
     names: list[str] | None = None
     attrs: dict[str, Any] = field(default_factory=dict)
-    #: netCDF dimension name of each axis (time first); inferred when None, see
-    #: :mod:`acmm_qpp.netcdf_layout`.
     dims: tuple[str, ...] | None = None
 
 
-def _write_group(group, items: Mapping[str, Any], writer) -> dict:
-    """Write ``items`` into ``group`` with ``writer`` (:class:`acmm_qpp.hdf5_lowlevel.Writer`);
-    return the handles :func:`acmm_qpp.netcdf_layout.annotate` takes: name → dataset identifier,
-    or → ``(sub-group, its handles)``."""
-    handles: dict[str, Any] = {}
+#: Root attribute ``Conventions``: the CF version the layout follows.
+CONVENTIONS = "CF-1.8"
+#: Name of the time coordinate (``standard_name="time"``, ``axis="T"``).
+TIME = "t"
+
+
+def _shape(data) -> tuple:
+    return () if isinstance(data, str) else np.shape(data)
+
+
+def _dims(key: str, value: Dataset) -> tuple:
+    """The dimension names of dataset ``key`` (checked against its shape)."""
+    shape = _shape(value.data)
+    dims = tuple(value.dims) if value.dims is not None else ()
+    if len(dims) != len(shape):
+        raise ValueError(f"dataset {key!r}: {len(dims)} dimension names {dims} for shape {shape}"
+                         + (" (an array names its dimensions: Dataset(..., dims=...))" if not dims else ""))
+    return dims
+
+
+def _sizes(items: Mapping[str, Any]) -> dict[str, int]:
+    """Dimension name → length of the datasets of one group (a name has one length)."""
+    sizes: dict[str, int] = {}
     for key, value in items.items():
         if isinstance(value, Mapping):
-            sub = group.create_group(key)
-            handles[key] = (sub, _write_group(sub, value, writer))
             continue
         if not isinstance(value, Dataset):
             raise TypeError(f"results item {key!r} must be a Dataset or a mapping")
-        data = value.data
-        if isinstance(data, str):
-            ds = writer.dataset(group, key, data)
-        else:
-            arr = np.asarray(data)
-            if arr.dtype.kind in "OU":   # text arrays: variable-length UTF-8 strings
-                ds = writer.dataset(group, key, arr.astype(object), dtype=writer.text)
-            else:
-                ds = writer.dataset(group, key, arr)
-        handles[key] = ds
-        writer.attr(ds, "units", value.units, new=True)         # a new dataset: no attributes yet
+        for d, n in zip(_dims(key, value), _shape(value.data)):
+            if sizes.setdefault(d, n) != n:
+                raise ValueError(f"dataset {key!r}: dimension {d!r} of length {n}, "
+                                 f"{sizes[d]} elsewhere in the group")
+    return sizes
+
+
+def _text(values) -> np.ndarray:
+    """Text as an array of variable-length UTF-8 strings."""
+    return np.array(values, dtype=h5py.string_dtype())
+
+
+def _coordinates(items: Mapping[str, Any], sizes: dict, coords: Mapping[str, Dataset]) -> dict:
+    """Dimension → the coordinate variable to create for it (a :class:`Dataset`), for the
+    dimensions of one group that have no dataset of their own name."""
+    out = {}
+    for d, n in sizes.items():
+        own = items.get(d)
+        if isinstance(own, Dataset) and _shape(own.data) == (n,):
+            continue
+        given = coords.get(d)
+        if given is not None and _shape(given.data) == (n,):
+            out[d] = replace(given, dims=(d,))
+            continue
+        for key, value in items.items():
+            if (isinstance(value, Dataset) and value.names is not None and len(value.names) == n
+                    and _dims(key, value)[-1:] == (d,)):
+                out[d] = Dataset([str(x) for x in value.names], "1", attrs={"long_name": f"name along {d}"},
+                                 dims=(d,))
+                break
+    return out
+
+
+def _attr_value(value):
+    """An attribute value as stored: a flag as int8 0/1 (one kind of flag in every file)."""
+    return np.int8(value) if isinstance(value, (bool, np.bool_)) else value
+
+
+def _array(value: Dataset):
+    """``value.data`` as the array to store and its type: text as UTF-8 (variable-length for
+    str, fixed-length for bytes)."""
+    data = value.data
+    if isinstance(data, str):
+        return _text(data), h5py.string_dtype()
+    arr = np.asarray(data)
+    if arr.dtype.kind in "OU":
+        return _text(arr.astype(object)), h5py.string_dtype()
+    if arr.dtype.kind == "S":       # fixed-length text is UTF-8 (a sweep's reasons say ft·lbf)
+        dtype = h5py.string_dtype("utf-8", arr.dtype.itemsize)
+        return arr.astype(dtype), dtype
+    return arr, arr.dtype
+
+
+def _write_group(group, h5group, items: Mapping[str, Any], coords: Mapping[str, Dataset],
+                 aux_coords: tuple) -> None:
+    """Write ``items`` into ``group`` (an :class:`h5netcdf.Group`, whose HDF5 group is ``h5group``),
+    its dimensions first.  Attributes are set through h5py: a number stays a scalar (h5netcdf
+    makes it a 1-element array, as the netCDF-C library writes it)."""
+    sizes = _sizes(items)
+    for d, n in sizes.items():        # declared here: a sub-group has dimensions of its own
+        group.dimensions[d] = n
+    made = _coordinates(items, sizes, coords)
+    for d in sizes:                   # a dimension without a variable: no data, unit "1"
+        if d not in made and not (isinstance(items.get(d), Dataset) and _shape(items[d].data) == (sizes[d],)):
+            h5group[d].attrs["units"] = "1"
+    aux = [a for a in aux_coords if isinstance(items.get(a), Dataset) and items[a].dims == (TIME,)]
+    for key, value in {**made, **items}.items():
+        if isinstance(value, Mapping):
+            sub = group.create_group(key)
+            _write_group(sub, h5group[key], value, coords, aux_coords)
+            continue
+        dims = _dims(key, value)
+        data, dtype = _array(value)
+        group.create_variable(key, dims, dtype, data=data)
+        attrs = {"units": value.units}
         if value.description:
-            writer.attr(ds, "description", value.description, new=True)
+            attrs["description"] = value.description
         if value.names is not None:
-            writer.attr(ds, "names", json.dumps(list(value.names)), new=True)
-        for ak, av in value.attrs.items():
-            writer.attr(ds, ak, av)
-    return handles
+            attrs["names"] = json.dumps(list(value.names))
+        attrs.update(value.attrs)
+        if aux and TIME in dims and key not in aux and key != TIME:
+            attrs["coordinates"] = " ".join(aux)
+        if key == TIME and dims == (TIME,):
+            attrs.update(standard_name="time", axis="T")
+        if value.description and "long_name" not in attrs:
+            attrs["long_name"] = value.description
+        stored = h5group[key].attrs
+        for k, v in attrs.items():
+            stored[k] = _attr_value(v)
 
 
 #: Run names (acmm, qpp and sweep configs, qpp scenarios): a single path component of letters,
@@ -93,7 +195,8 @@ ROOT_PATTERN = r"^[^\x00]+$"
 
 
 def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
-             attrs: Mapping[str, Any] | None = None, units: str | None = None) -> Path:
+             attrs: Mapping[str, Any] | None = None, units: str | None = None,
+             coords: Mapping[str, Dataset] | None = None, aux_coords: tuple = ()) -> Path:
     """Write ``items`` (name → :class:`Dataset` or nested mapping) to ``path`` atomically.
 
     Parameters
@@ -110,34 +213,109 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         Output unit system (``output.units``; default: read from ``config_text``, else
         imperial).  Items are given in the report's units and converted on writing; angles
         are stored in rad in both systems (:func:`acmm_qpp.units.output_unit`).
+    coords : mapping, optional
+        Dimension name → its coordinate (a 1-D :class:`Dataset`), written in every group that
+        has the dimension and no dataset of that name (e.g. the names of the body axes).
+    aux_coords : tuple of str, optional
+        Names of 1-D variables along the time dimension ``t`` listed in the CF ``coordinates``
+        attribute of every other variable along ``t`` of their group (e.g. ``("orbits",)``).
 
     Returns
     -------
     Path
         ``path``.
-    """
-    from acmm_qpp.hdf5_lowlevel import Writer
-    from acmm_qpp.netcdf_layout import annotate, convert_items, unit_system_of
-    import h5py
 
+    Raises
+    ------
+    TypeError
+        An item is neither a :class:`Dataset` nor a mapping.
+    ValueError
+        An array without dimension names, or a dimension with two lengths in one group.
+    """
     path = Path(path)
-    with in_memory(path) as tmp:
-        with h5py.File(tmp, "w") as f:
-            w, root = Writer(), f.id
-            w.attr(root, "config", config_text)
-            for k, v in provenance(config_text).items():
-                w.attr(root, k, v)
-            for k, v in (attrs or {}).items():
-                w.attr(root, k, v)
-            system = units or unit_system_of(config_text)
-            items = convert_items(items, system)
-            w.attr(root, "unit_system", system)
-            annotate(f, items, handles=_write_group(f, items, w), writer=w)
+    system = units or unit_system_of(config_text)
+    items = convert_items(items, system)
+    root = {"config": config_text, **provenance(config_text), **(attrs or {}), "unit_system": system,
+            "Conventions": CONVENTIONS}
+    with in_memory(path) as buf:
+        # invalid_netcdf: bool datasets (HDF5 enums, as h5py writes them), which the netCDF-C
+        # library reads; track_order off: groups and attributes listed by name, as before
+        with h5py.File(buf, "w", track_order=False) as h5, h5netcdf.File(h5, "w", invalid_netcdf=True) as f:
+            for k, v in root.items():
+                h5.attrs[k] = _attr_value(v)
+            _write_group(f, h5, items, coords or {}, tuple(aux_coords))
     return path
 
 
-def _dimension_only(ds) -> bool:
-    """A netCDF dimension scale that is not a variable (holds no data)."""
+def unit_system_of(config_text: str) -> str:
+    """``output.units`` of a resolved config text (``imperial`` when absent or unreadable).
+
+    Parameters
+    ----------
+    config_text : str
+        Resolved config, YAML.
+
+    Returns
+    -------
+    str
+        ``"imperial"`` or ``"SI"`` (whatever the config says).
+    """
+    try:       # libyaml's loader when PyYAML has it: the same objects, several times faster
+        data = yaml.load(config_text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+        return str(((data or {}).get("output") or {}).get("units") or "imperial")
+    except (yaml.YAMLError, AttributeError):
+        return "imperial"
+
+
+def convert_items(items: Mapping[str, Any], system: str) -> dict:
+    """A copy of ``items`` with each dataset in its output unit (:func:`acmm_qpp.units.output_unit`):
+    deg → rad always, imperial → SI under ``SI``.  Units pint does not know are kept.
+
+    Parameters
+    ----------
+    items : Mapping
+        Dataset name → :class:`Dataset` or nested mapping.
+    system : str
+        Output unit system, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    dict
+        Same structure; float/complex datasets converted with their ``units`` updated.
+    """
+    out = {}
+    for key, value in items.items():
+        if isinstance(value, Mapping):
+            out[key] = convert_items(value, system)
+            continue
+        if not isinstance(value, Dataset):   # write_h5 reports it
+            out[key] = value
+            continue
+        data = value.data
+        if isinstance(data, str) or np.asarray(data).dtype.kind not in "fc":
+            out[key] = value
+            continue
+        try:
+            new, unit = to_system(np.asarray(data), value.units, system)
+        except ValueError:
+            new, unit = data, value.units
+        out[key] = value if unit == value.units else replace(value, data=new, units=unit)
+    return out
+
+
+def dimension_only(ds) -> bool:
+    """Whether an HDF5 dataset is a netCDF dimension that is not a variable (it holds no data).
+
+    Parameters
+    ----------
+    ds : h5py.Dataset
+        The dataset.
+
+    Returns
+    -------
+    bool
+        It is such a dimension scale.
+    """
     name = ds.attrs.get("NAME", b"")
     name = name.decode() if isinstance(name, bytes) else str(name)
     return name.startswith("This is a netCDF dimension but not a netCDF variable.")
@@ -157,14 +335,12 @@ def read_h5(path: str | Path) -> dict[str, Any]:
         Nested dict of the stored datasets (in the file's units, see their ``units``
         attributes) plus the root attributes under ``"attrs"``.
     """
-    import h5py
-
     def _read(group):
         out: dict[str, Any] = {}
         for k, v in group.items():
             if isinstance(v, h5py.Group):
                 out[k] = _read(v)
-            elif _dimension_only(v):
+            elif isinstance(v, h5py.Datatype) or dimension_only(v):   # (complex numbers' type)
                 continue
             else:
                 val = v[()]
@@ -233,12 +409,6 @@ def draw_figures(calls) -> None:
         raise err from (None if err is first else first)
 
 
-#: result file → the stage that writes it (root attribute ``stage``), in the order a run folder's
-#: figures are redrawn
-FIGURE_SOURCES = {"design.h5": "design", "sim.h5": "simulate", "sweep.h5": "sweep",
-                  "qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
-
-
 def redraw_from_files(files: list, readers: dict, out=None) -> list[Path]:
     """Draw the figures of stored results files (``acmm plot`` / ``qpp plot``): every file is read
     first, then the output folders are made and the figures drawn.
@@ -276,17 +446,18 @@ def redraw_from_files(files: list, readers: dict, out=None) -> list[Path]:
     return draw_collected(calls)
 
 
-def stored_results(target: str | Path, stages: tuple) -> list[tuple[Path, str]]:
+def stored_results(target: str | Path, sources: dict) -> list[tuple[Path, str]]:
     """The result files a figure redraw (``acmm plot`` / ``qpp plot``) reads: ``target`` itself
-    (an ``.h5`` written by one of ``stages``) or, for a run folder, every file of
-    :data:`FIGURE_SOURCES` in it written by one of ``stages``.
+    (an ``.h5`` written by one of the stages of ``sources``) or, for a run folder, every file of
+    ``sources`` in it written by its stage.
 
     Parameters
     ----------
     target : path-like
         A run folder or a results file.
-    stages : tuple of str
-        The stages (root attribute ``stage``) whose files the caller draws.
+    sources : dict
+        Results file name → the stage that writes it (root attribute ``stage``), for the files
+        whose figures the caller draws, in the order a run folder's figures are drawn.
 
     Returns
     -------
@@ -299,11 +470,8 @@ def stored_results(target: str | Path, stages: tuple) -> list[tuple[Path, str]]:
         ``target`` does not exist, is not a results file of those stages, or is a folder with
         none.
     """
-    import h5py
-
-    from acmm_qpp.errors import ConfigError
-
     p = Path(target)
+    stages = tuple(dict.fromkeys(sources.values()))
     if not str(target).strip() or not p.exists():
         raise ConfigError(f"{target}: no such run folder or results file")
 
@@ -316,10 +484,10 @@ def stored_results(target: str | Path, stages: tuple) -> list[tuple[Path, str]]:
             return None
 
     if p.is_dir():
-        found = [(p / name, stage_of(p / name)) for name in FIGURE_SOURCES if (p / name).is_file()]
+        found = [(p / name, stage_of(p / name)) for name in sources if (p / name).is_file()]
         found = [(f, st) for f, st in found if st in stages]
         if not found:
-            names = ", ".join(n for n, st in FIGURE_SOURCES.items() if st in stages)
+            names = ", ".join(sources)
             raise ConfigError(f"{target}: no results file with figures in this folder (looked for {names})")
         return found
     st = stage_of(p)

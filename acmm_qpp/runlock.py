@@ -1,50 +1,50 @@
-"""One run at a time per results directory ``<root>/<name>/`` (issue 13).
+"""One run at a time per results directory ``<root>/<name>/`` (issue 13), on `filelock`_.
 
-:func:`run_lock` takes an exclusive, non-blocking ``fcntl.flock`` on ``<run dir>/.lock`` for the
-whole of a stage (``acmm tea|linearize|design|simulate|sweep``, ``qpp design|simulate``).  A
-second run of the same name is refused at once with one :class:`~acmm_qpp.errors.OutputError` line
-naming the holder's pid (exit 4) instead of racing it (last writer wins) or appending to its
-journal.  The kernel releases the lock when the holder dies, even by ``kill -9``, so a stale
-lock file never blocks a later run; the file is removed when the run ends.
+:func:`run_lock` holds an exclusive, non-blocking lock on ``<run dir>/.lock``
+(:class:`filelock.FileLock`: ``flock`` on POSIX) for the whole of a stage or report.  A second run
+of the same name is refused at once with one :class:`~acmm_qpp.errors.OutputError` line naming the
+holder's pid (exit 4) instead of racing it.  The kernel releases the lock when the holder dies,
+even by ``kill -9``, so a stale lock file never blocks a later run; the file is removed when the
+run ends.  Holding the lock, a run removes what a killed earlier run of the same folder left
+behind (:func:`remove_leftovers`: staging folders, temporary files), and a run refused or failed
+before writing anything removes the directories it created.  The lock is re-entrant within a
+process (``simulate`` runs ``design`` under its lock).
 
-While holding the lock a run also removes the temporary files (``.<file>.<random>.tmp``) that a
-killed earlier run of the same name left behind, and a run that is refused or fails before
-writing anything removes the directories it created, so a refusal leaves nothing on disk.
-
-The lock is re-entrant within a process (``simulate`` runs ``design`` under its lock).
+.. _filelock: https://py-filelock.readthedocs.io
 """
 from __future__ import annotations
 
-import fcntl
-import functools
 import os
 import re
+import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
-from acmm_qpp.errors import OutputError
+import filelock
+
 from acmm_qpp.atomic_write import make_dirs, output_error, remove_empty_dirs
-from acmm_qpp.signals import hold_interrupts, release_interrupts
+from acmm_qpp.errors import OutputError
+from acmm_qpp.signals import interrupts_deferred
 
 LOCK_NAME = ".lock"
-_TEMP = re.compile(r"^\..+\.tmp$")
+#: What a killed run leaves in its folder: temporary files of an atomic write (``.<file>.<random>.tmp``)
+#: and the staging folders of stages (``.staging-<pid>-<random>``) and of the report's figures
+#: (``.figures-<pid>-<random>``).
+LEFTOVERS = re.compile(r"^\.(.+\.tmp|staging-\d+-.+|figures-\d+-.+)$")
 
-#: absolute run dir → [fd, depth] for the locks this process holds
-_held: dict[str, list] = {}
 
-
-def _holder(fd: int) -> str:
+def _holder(lock: Path) -> str:
     try:
-        text = os.pread(fd, 64, 0).decode("ascii", "replace").strip()
+        text = lock.read_text(encoding="ascii", errors="replace").strip()
     except OSError:
         text = ""
     return f"pid {text}" if text.isdigit() else "a process that has not yet written its pid"
 
 
-def remove_stale_temps(directory: Path) -> list[str]:
-    """Remove the temporary files of killed writers (``.<name>.*.tmp``) in ``directory``.
+def remove_leftovers(directory: Path) -> list[str]:
+    """Remove what killed runs left in ``directory`` (:data:`LEFTOVERS`).
 
-    Only call this while holding the directory's run lock: no live writer then owns them.
+    Only call this while holding the directory's run lock: no live run then owns them.
 
     Parameters
     ----------
@@ -54,7 +54,7 @@ def remove_stale_temps(directory: Path) -> list[str]:
     Returns
     -------
     list of str
-        Names of the files removed.
+        Names of the files and folders removed.
     """
     removed = []
     try:
@@ -62,50 +62,41 @@ def remove_stale_temps(directory: Path) -> list[str]:
     except OSError:
         return removed
     for e in entries:
-        if _TEMP.match(e.name) and e.is_file(follow_symlinks=False):
-            try:
+        if not LEFTOVERS.match(e.name) or e.is_symlink():
+            continue
+        try:
+            if e.is_dir():
+                shutil.rmtree(e.path)
+            else:
                 os.unlink(e.path)
-                removed.append(e.name)
-            except OSError:
-                pass
+            removed.append(e.name)
+        except OSError:
+            pass
     return removed
 
 
-def _take(lock: Path, d: Path) -> int:
-    """Create and lock the file ``lock`` of run folder ``d`` (its pid written); returns its
-    descriptor.  Another holder: :class:`OutputError`; an I/O failure: ``OSError`` (the file
-    dropped when it was ours)."""
-    fd = -1
+def _write_pid(lock: Path) -> None:
+    """Write this process's pid into the lock file it holds (for the message of a refused run)."""
+    fd = os.open(lock, os.O_WRONLY | getattr(os, "O_CLOEXEC", 0))
     try:
-        while True:
-            fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o666)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                who = _holder(fd)
-                os.close(fd)
-                fd = -1
-                raise OutputError(f"{d} is in use by another run ({who}); wait for it to finish "
-                                  "or give this run another name") from None
-            try:                          # the holder we waited for may have unlinked the file
-                same = os.stat(lock).st_ino == os.fstat(fd).st_ino
-            except FileNotFoundError:
-                same = False
-            if same:
-                break
-            os.close(fd)
-            fd = -1
         os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
-    except OSError:
-        if fd >= 0:                       # we hold the lock (writing the pid failed): drop the file
+        os.write(fd, f"{os.getpid()}\n".encode())
+    finally:
+        os.close(fd)
+
+
+def _release(lock: filelock.FileLock, path: Path, created: list) -> None:
+    """Release ``lock``; the outermost release removes the lock file (while still held:
+    filelock's next holder checks that its inode is still linked) and the folders created."""
+    with interrupts_deferred():            # the lock goes whole, whatever arrives meanwhile
+        if lock.lock_counter == 1:
             try:
-                os.unlink(lock)
+                os.unlink(path)
             except OSError:
                 pass
-            os.close(fd)
-        raise
-    return fd
+        lock.release()
+        if not lock.is_locked:
+            remove_empty_dirs(created)
 
 
 @contextmanager
@@ -127,74 +118,31 @@ def run_lock(run_dir: str | Path):
     OutputError
         Another live process holds the lock (message names its pid), or the directory cannot
         be created / the lock file cannot be written (exit 4).
-    output_error
-        (the :class:`~acmm_qpp.errors.OutputError` built by
-        :func:`acmm_qpp.results.output_error` from an OS error)
     """
     d = Path(run_dir)
-    key = os.path.abspath(d)
-    if key in _held and _held[key][2] == os.getpid():
-        _held[key][1] += 1
-        try:
-            yield d
-        finally:
-            _held[key][1] -= 1
-        return
     try:
         created = make_dirs(d)
     except OSError as exc:
         raise output_error(exc, "the run directory", d) from None
-    lock = d / LOCK_NAME
-    held = hold_interrupts()              # an interrupt is handled once the lock is released below
+    path = d / LOCK_NAME
+    lock = filelock.FileLock(path, timeout=0, is_singleton=True, thread_local=False)
     try:
-        fd = _take(lock, d)
+        lock.acquire()
+    except filelock.Timeout:
+        remove_empty_dirs(created)
+        raise OutputError(f"{d} is in use by another run ({_holder(path)}); wait for it to finish "
+                          "or give this run another name") from None
     except OSError as exc:
         remove_empty_dirs(created)
-        release_interrupts(held)
-        raise output_error(exc, "the run lock", lock) from None
-    except BaseException:
-        release_interrupts(held)
-        raise
-    _held[key] = [fd, 1, os.getpid()]
+        raise output_error(exc, "the run lock", path) from None
     try:
-        release_interrupts(held)
-        remove_stale_temps(d)
+        if lock.lock_counter == 1:
+            _write_pid(path)
+            remove_leftovers(d)
+    except OSError as exc:
+        _release(lock, path, created)
+        raise output_error(exc, "the run lock", path) from None
+    try:
         yield d
     finally:
-        held = hold_interrupts()          # the lock goes whole, whatever arrives meanwhile
-        try:
-            del _held[key]
-            try:
-                os.unlink(lock)
-            except OSError:
-                pass
-            os.close(fd)
-            remove_empty_dirs(created)
-        finally:
-            release_interrupts(held)
-
-
-def locked_stage(as_config):
-    """Decorator for a stage runner ``fn(config, ...)``: resolve the config with ``as_config``
-    (validation first: a refused config creates nothing), then run ``fn`` on it under
-    :func:`run_lock` of its ``run_dir()``.
-
-    Parameters
-    ----------
-    as_config : callable
-        Resolves the stage's ``config`` argument (path, mapping or model) to a validated config.
-
-    Returns
-    -------
-    callable
-        The decorator.
-    """
-
-    def deco(fn):
-        @functools.wraps(fn)
-        def wrapper(config, *args, **kwargs):
-            cfg = as_config(config)
-            with run_lock(cfg.run_dir()):
-                return fn(cfg, *args, **kwargs)
-        return wrapper
-    return deco
+        _release(lock, path, created)

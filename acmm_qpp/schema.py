@@ -140,9 +140,3 @@ def model_schema(model_cls) -> dict:
     """
     return fix_alternatives(model_cls.model_json_schema(mode="validation", schema_generator=Generator))
 
-
-# the names acmm/io/schema.py had before the split (issue 12)
-_Generator = Generator
-_header = header
-_fix_alternatives = fix_alternatives
-_model_schema = model_schema

@@ -83,8 +83,26 @@ def parse_unit(unit: str):
         raise ValueError(f"unknown unit {unit!r}") from exc
 
 
-def _factor(unit: str, target: str) -> float:
-    """Factor from ``unit`` to ``target``; ``ValueError`` naming both if the dimensions differ."""
+def conversion_factor(unit: str, target: str) -> float:
+    """Factor from ``unit`` to ``target``.
+
+    Parameters
+    ----------
+    unit : str
+        The unit of a value (pint syntax; ``lb`` in a torque or momentum read as ``lbf``).
+    target : str
+        The unit to convert it to.
+
+    Returns
+    -------
+    float
+        The factor (dimensionless): a value in ``unit`` times it is in ``target``.
+
+    Raises
+    ------
+    ValueError
+        The dimensions differ (the message names both units).
+    """
     import pint
 
     ureg = registry()
@@ -144,7 +162,7 @@ def to_canonical(value: object, dimension: str) -> float:
     except ValueError:
         raise ValueError(f"unknown unit {unit!r} (expected a unit of {canonical})") from None
     _check_angle(unit, canonical)
-    return number * _factor(unit, canonical)
+    return number * conversion_factor(unit, canonical)
 
 
 def _check_angle(unit: str, canonical: str) -> None:
@@ -179,7 +197,7 @@ def convert(value, unit: str, target: str):
     float or array
         The value in the unit ``target``.
     """
-    return value * _factor(unit, target)
+    return value * conversion_factor(unit, target)
 
 
 def output_unit(unit: str, system: str = "imperial") -> str:

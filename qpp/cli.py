@@ -12,6 +12,7 @@ from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overr
                                    version_option)
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
+from qpp import PACKAGED_CONFIGS
 
 import numpy as np  # noqa: E402
 import typer  # noqa: E402
@@ -27,6 +28,7 @@ class _QppGroup(ExitCodeGroup):
                 "qpp plot runs/qpp_unstable           # redraw a run's figures from its .h5 files",
                 "qpp COMMAND --help                   # each command's options and examples")
     config_kinds = ("qpp",)
+    config_package = PACKAGED_CONFIGS
 
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=_QppGroup, rich_markup_mode=None,
@@ -50,7 +52,7 @@ def _load(config, overrides):
 
 
 @app.command(short_help="Check a qpp config.",
-             cls=help_command(["qpp validate qpp_siso", "qpp validate my_plant.yaml --show"], ("qpp",)))
+             cls=help_command(["qpp validate qpp_siso", "qpp validate my_plant.yaml --show"], ("qpp",), PACKAGED_CONFIGS))
 @user_errors
 def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("spheres.beta_o=0.3"),
              show: bool = typer.Option(False, "--show", help="print the resolved config")) -> None:
@@ -58,7 +60,7 @@ def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
     from acmm_qpp.configio import detect_kind, read_yaml
     from acmm_qpp.errors import ConfigError
 
-    data, path = read_yaml(config)
+    data, path = read_yaml(config, PACKAGED_CONFIGS)
     kind = detect_kind(data)
     if kind != "qpp":
         raise ConfigError(f"{path}: an {kind} config, not a qpp config: check it with `acmm validate`")
@@ -86,7 +88,7 @@ def _mat(a) -> str:
 
 @app.command(short_help="H-infinity gains, thresholds and the circle criterion.",
              cls=help_command(["qpp design qpp_unstable", "qpp design qpp_saturation spheres.beta_o=0.4 --strict",
-                               "qpp design my_plant.yaml --no-figures"], ("qpp",)))
+                               "qpp design my_plant.yaml --no-figures"], ("qpp",), PACKAGED_CONFIGS))
 @user_errors
 def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("hinf.rho=0.02 spheres.beta_o=0.3"),
            figures: bool = FigOpt,
@@ -158,7 +160,7 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_a
 
 
 @app.command(short_help="Nonlinear closed loop per scenario and the sphere check.",
-             cls=help_command(["qpp simulate qpp_unstable", "qpp simulate qpp_unstable simulation.t_final=5 --strict"], ("qpp",)))
+             cls=help_command(["qpp simulate qpp_unstable", "qpp simulate qpp_unstable simulation.t_final=5 --strict"], ("qpp",), PACKAGED_CONFIGS))
 @user_errors
 def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.t_final=5"),
              figures: bool = FigOpt,

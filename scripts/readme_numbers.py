@@ -232,10 +232,11 @@ def _variant(root: Path, base: str, name: str, patch: dict):
     (``{section: {key: value}}``), written into ``root`` and loaded with results under ``root``."""
     import yaml
 
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.configio import packaged_config_path
     from acmm.io.config import load_config
 
-    data = yaml.safe_load(packaged_config_path(f"{base}.yaml").read_text())
+    data = yaml.safe_load(packaged_config_path(f"{base}.yaml", PACKAGED_CONFIGS).read_text())
     data["name"] = name
     for section, values in patch.items():
         data.setdefault(section, {}).update(values)
@@ -271,6 +272,7 @@ def _lmi_route(root: Path, workers: int | None) -> dict:
 
     import yaml
 
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.configio import packaged_config_path
     from acmm_qpp.results import read_h5
     from acmm.report.stage_results import ensure_acmm_design, ensure_acmm_simulation
@@ -284,7 +286,7 @@ def _lmi_route(root: Path, workers: int | None) -> dict:
             path, cfg = _variant(root, name, f"{name}_{route}", patch)
             bases.append(str(path))
             out[f"design:{name}_{route}"] = read_h5(ensure_acmm_design(cfg).path)
-        p = packaged_config_path("sweep_inertia30.yaml")
+        p = packaged_config_path("sweep_inertia30.yaml", PACKAGED_CONFIGS)
         data = yaml.safe_load(p.read_text())
         data["name"], data["sweep"]["bases"] = f"sweep_inertia30_{route}", bases
         data["output"] = {"root": str(root), "figures": False}

@@ -3,6 +3,7 @@ name, a full disk, stale temporary files.  These need real processes, so they us
 (the `acmm` script of this environment)."""
 from __future__ import annotations
 
+import errno
 import os
 import random
 import signal
@@ -280,3 +281,117 @@ def test_a_refused_report_leaves_no_empty_output_folder(tmp_path):
     errors = [ln for ln in r.stderr.splitlines() if ln.startswith("error:")]
     assert r.returncode == 4 and len(errors) == 1 and "Traceback" not in r.stderr, r.stderr
     assert not (tmp_path / "out").exists()
+
+
+#: `acmm simulate` that stops where its figures are drawn (its results written in its staging
+#: folder, the nested design stage finished), says so, and waits there to be killed
+_STOP_AT_FIGURES = """
+import sys
+import acmm.stages.simulate as target
+
+def stop(*args, **kwargs):
+    print("at figures", flush=True)
+    sys.stdin.readline()
+    raise SystemExit("not killed")
+
+target.draw_figures = stop
+sys.argv = ["acmm", *sys.argv[1:]]
+from acmm.cli.app import main
+main()
+"""
+
+
+def _hidden(directory: Path) -> list[str]:
+    return sorted(str(p.relative_to(directory)) for p in directory.rglob(".*"))
+
+
+def test_a_stage_killed_with_sigkill_leaves_nothing_the_next_run_does_not_remove(tmp_runs):
+    """kill -9 while `acmm simulate` draws its figures: its staging folder (with sim.h5) and the
+    lock file stay behind, the finished design is whole beside its config.yaml; the next run of
+    that name removes both, and no sim.h5 of the killed run ever reaches the folder."""
+    proc = subprocess.Popen([sys.executable, "-c", _STOP_AT_FIGURES, "simulate", "mb3", "simulation.orbits=0.5"],
+                            env=ENV, cwd=tmp_runs, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        assert proc.stdout.readline().strip() == "at figures", proc.stderr.read()
+        run = tmp_runs / "runs" / "mb3"
+        staging = [p for p in run.iterdir() if p.name.startswith(".staging-")]
+        assert len(staging) == 1 and (staging[0] / "sim.h5").is_file()
+    finally:
+        proc.kill()
+        proc.wait(timeout=30)
+    assert sorted(p.name for p in run.iterdir() if not p.name.startswith(".")) == ["config.yaml", "design.h5",
+                                                                                  "design_poles.png"]
+    assert (run / ".lock").exists()
+    _h5_all_open(run)
+    r = subprocess.run([ACMM, "tea", "mb3"], env=ENV, cwd=tmp_runs, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert _hidden(tmp_runs / "runs") == []
+    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5", "design_poles.png", "tea.h5"]
+
+
+def test_a_report_killed_with_sigkill_leaves_nothing_the_next_run_does_not_remove(tmp_path):
+    """kill -9 of `acmm report` while its first stage runs: its figure staging folder
+    (``.figures-<pid>-…``), its lock file and the stage's staging folder stay behind; the next
+    report in that folder removes its own (here one refused at once: the results root is a
+    file), the next run of the stage its own."""
+    from acmm_qpp.runlock import run_lock
+
+    out = tmp_path / "out"
+    proc = subprocess.Popen([ACMM, "report", "--fast", "--jobs", "1", "--out", str(out)], env=ENV, cwd=tmp_path,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while not list((out / "results").glob("*/.staging-*")) and time.monotonic() < deadline:
+            time.sleep(0.05)
+    finally:
+        proc.kill()
+        proc.wait(timeout=30)
+    left = _hidden(out)
+    assert any(n.startswith(".figures-") for n in left) and ".lock" in left, left
+    stages = sorted({p.parent for p in (out / "results").glob("*/.staging-*")})
+    assert stages, left
+    (tmp_path / "afile").write_text("")
+    r = subprocess.run([ACMM, "report", "--fast", "--root", str(tmp_path / "afile"), "--out", str(out)],
+                       env=ENV, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 4 and r.stderr.startswith("error: --root") and len(r.stderr.splitlines()) == 1, r.stderr
+    assert [n for n in _hidden(out) if "/" not in n] == []
+    for run in stages:                      # what the next run of each stage does first
+        with run_lock(run):
+            pass
+    assert _hidden(out) == []
+
+
+def test_a_report_meeting_a_full_disk_is_one_error_line_exit_4(tmp_path, small_tmpfs):
+    """A report whose stages (in its pool workers) run out of space stops at the first: one
+    `error:` line on stderr and exit 4, not a section per failed stage (44 lines, a review)."""
+    r = subprocess.run([ACMM, "report", "--fast", "--out", str(small_tmpfs / "out")], env=ENV, cwd=tmp_path,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 4, (r.returncode, r.stderr)
+    assert len(r.stderr.splitlines()) == 1 and r.stderr.startswith("error: "), r.stderr
+    assert "No space left on device" in r.stderr and "Traceback" not in r.stderr
+    assert not list(small_tmpfs.rglob("*.tmp")) and not list(small_tmpfs.rglob(".figures-*"))
+
+
+def _disk_full(*args, **kwargs):
+    raise OSError(errno.ENOSPC, "No space left on device")
+
+
+@pytest.mark.parametrize("args", [["tea", "mb3"], ["design", "mb3", "--no-figures"],
+                                  ["sweep", "SWEEP", "-j", "1"]])
+def test_a_full_disk_in_a_stage_is_one_error_line_exit_4(tmp_runs, monkeypatch, args):
+    """Every file a stage writes is synced (os.fsync, acmm_qpp.atomic_write; the sweep's journal
+    too), where a full disk shows at the latest: one `error:` line, exit 4, no result and nothing
+    hidden left in the run folder."""
+    from typer.testing import CliRunner
+
+    from acmm.cli.app import app
+    import acmm_qpp.atomic_write as atomic_write
+
+    if "SWEEP" in args:
+        args = [str(_sweep_config(tmp_runs, n_runs=2, orbits=0.5)) if a == "SWEEP" else a for a in args]
+    monkeypatch.setattr(atomic_write.os, "fsync", _disk_full)
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 4, (r.exit_code, r.output)
+    assert r.stderr.count("\n") == 1 and r.stderr.startswith("error: ") and "No space left on device" in r.stderr
+    assert list(tmp_runs.rglob("*.h5")) == [] and _hidden(tmp_runs) == []

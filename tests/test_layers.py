@@ -156,6 +156,73 @@ def test_qpp_imports_nothing_of_acmm_and_the_base_neither():
             for d in deps if d.split(".")[0] in ("acmm", "qpp")] == []
 
 
+#: The imports the shared base may make inside a function, each for a reason of start-up time or
+#: import order (issue 42 item 4); any other import of ``acmm_qpp`` goes at the top of its module.
+#: The product packages are not held to this yet (their function-level imports remain to be moved).
+BASE_LAZY_IMPORTS = {
+    ("acmm_qpp.errors", "numpy"): "the CLI sets its BLAS thread defaults before numpy is first imported",
+    ("acmm_qpp.units", "pint"): "start-up: pint (~0.3 s) only when a unit is converted",
+    ("acmm_qpp.plot_style", "matplotlib"): "start-up: matplotlib only when a figure is drawn",
+    ("acmm_qpp.plot_style", "matplotlib.pyplot"): "start-up: matplotlib only when a figure is drawn",
+    ("acmm_qpp.plot_style", "cycler"): "start-up: matplotlib's cycler with matplotlib",
+    ("acmm_qpp.cli.progress", "rich.console"): "start-up: rich only on a terminal",
+    ("acmm_qpp.cli.progress", "rich.progress"): "start-up: rich only on a terminal",
+    ("acmm_qpp.cli.plumbing", "acmm_qpp.hints"): "start-up: the hints bring pydantic, which `--help` needs not",
+    ("acmm_qpp.cli.plumbing", "typer._click"): "typer's vendored click, else click (a version switch)",
+    ("acmm_qpp.cli.plumbing", "click"): "typer's vendored click, else click (a version switch)",
+    ("acmm_qpp.cli.plumbing", "importlib.metadata"): "start-up: the distribution's metadata for --version only",
+}
+
+
+def _function_imports(path: Path) -> list[str]:
+    """The modules a file imports inside a function (``from x import y`` → ``x``)."""
+    found = []
+    for fn in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
+        if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            for node in ast.walk(fn):
+                if isinstance(node, ast.Import):
+                    found += [a.name for a in node.names]
+                elif isinstance(node, ast.ImportFrom):
+                    found.append(("." * node.level) + (node.module or ""))
+    return found
+
+
+def test_the_base_imports_at_the_top_of_its_modules():
+    bad = [f"{m} imports {imp} inside a function" for m, path in sorted(_modules().items())
+           if m.split(".")[0] == "acmm_qpp" for imp in _function_imports(path)
+           if (m, imp) not in BASE_LAZY_IMPORTS]
+    assert bad == []
+
+
+def test_function_import_finder():
+    probe = REPO / "acmm_qpp" / "_layers_probe_tmp.py"
+    probe.write_text("import os\n\ndef f():\n    import numpy\n    from . import errors\n"
+                     "    from acmm_qpp.units import x\n")
+    try:
+        assert _function_imports(probe) == ["numpy", ".", "acmm_qpp.units"]
+    finally:
+        probe.unlink()
+
+
+def _private_imports(path: Path) -> list[str]:
+    """``from <project module> import _name`` in a file (dunder names such as ``__version__`` are
+    not private)."""
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
+        if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").split(".")[0] in PACKAGES):
+            out += [f"{node.module}.{a.name}" for a in node.names
+                    if a.name.startswith("_") and not (a.name.startswith("__") and a.name.endswith("__"))]
+    return out
+
+
+def test_no_private_name_of_the_base_is_imported_by_another_module():
+    """A name the base keeps private stays in its module: what another module needs is public.
+    (Private names imported between product modules remain to be made public.)"""
+    bad = [f"{m} imports {name}" for m, path in sorted(_modules().items())
+           for name in _private_imports(path) if name.startswith("acmm_qpp")]
+    assert bad == []
+
+
 def _is_alias(tree: ast.Module) -> bool:
     """A module whose body (docstring aside) is only imports and ``sys.modules`` / ``globals()``
     rebinding: it defines nothing of its own."""

@@ -17,6 +17,7 @@ from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overr
                                    version_option)
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
+from acmm import PACKAGED_CONFIGS
 
 class _AcmmGroup(ExitCodeGroup):
     """The ``acmm`` app: its help ends with examples and every packaged config."""
@@ -28,6 +29,7 @@ class _AcmmGroup(ExitCodeGroup):
                 "acmm plot runs/staircase             # redraw a run's figures from its .h5 files",
                 "acmm COMMAND --help                  # each command's options and examples")
     config_kinds = ("acmm", "sweep", "qpp")
+    config_package = PACKAGED_CONFIGS
 
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=_AcmmGroup, rich_markup_mode=None,
@@ -62,7 +64,7 @@ def _fmt(v, fmt="{:+.4f}"):
 
 @app.command(short_help="Check a config of any kind (acmm run, sweep or qpp).",
              cls=help_command(["acmm validate mb3", "acmm validate my_station.yaml --show",
-                               "acmm validate staircase schedule.n_points=6"], ("acmm", "sweep", "qpp")))
+                               "acmm validate staircase schedule.n_points=6"], ("acmm", "sweep", "qpp"), PACKAGED_CONFIGS))
 @user_errors
 def validate(config: Optional[str] = ConfigArg,
              overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=6"),
@@ -98,7 +100,7 @@ def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="conf
 
 
 @app.command(short_help="Torque-equilibrium attitude (eqs 4.1-4.3); writes tea.h5.",
-             cls=help_command(["acmm tea mb3", "acmm tea ac --all", "acmm tea mb3 inertia.I22=1.5e6"], ("acmm",)))
+             cls=help_command(["acmm tea mb3", "acmm tea ac --all", "acmm tea mb3 inertia.I22=1.5e6"], ("acmm",), PACKAGED_CONFIGS))
 @user_errors
 def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("inertia.I22=1.5e6"),
         all_roots: bool = typer.Option(False, "--all", help="also list every other equilibrium found")) -> None:
@@ -122,7 +124,7 @@ def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = over
 
 
 @app.command(short_help="24-state linearization about the TEA (eqs 4.4-4.50).",
-             cls=help_command(["acmm linearize mb3", "acmm linearize ac design.drf_mode=attitude_hold"], ("acmm",)))
+             cls=help_command(["acmm linearize mb3", "acmm linearize ac design.drf_mode=attitude_hold"], ("acmm",), PACKAGED_CONFIGS))
 @user_errors
 def linearize(config: Optional[str] = ConfigArg,
               overrides: Optional[list[str]] = overrides_arg("orbit_rate=0.0011")) -> None:
@@ -190,7 +192,7 @@ def _design_line(name: str, note: str) -> str:
 
 @app.command(short_help="Sector LQR or regional LMI per design point and the gain schedule.",
              cls=help_command(["acmm design mb3", "acmm design staircase schedule.n_points=7 --strict",
-                               "acmm design my_station.yaml design.sector.sigma=0.6 --no-figures"], ("acmm",)))
+                               "acmm design my_station.yaml design.sector.sigma=0.6 --no-figures"], ("acmm",), PACKAGED_CONFIGS))
 @user_errors
 def design(config: Optional[str] = ConfigArg,
            overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=7"),
@@ -297,7 +299,7 @@ def _branch_jump_text(jump) -> str:
 
 
 @app.command(short_help="Dwell-time stability certificate of the stair-case.",
-             cls=help_command(["acmm certify", "acmm certify staircase schedule.n_points=8 --strict"], ("acmm",)))
+             cls=help_command(["acmm certify", "acmm certify staircase schedule.n_points=8 --strict"], ("acmm",), PACKAGED_CONFIGS))
 @user_errors
 def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("schedule.n_points=8"),
             strict: bool = StrictOpt) -> None:
@@ -322,7 +324,7 @@ def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = 
 @app.command(short_help="Nonlinear closed-loop simulation (ch 6); writes sim.h5.",
              cls=help_command(["acmm simulate                         # the stair-case, 130 orbits",
                                "acmm simulate mb3 simulation.orbits=2",
-                               "acmm simulate ac output.units=si --strict"], ("acmm",)))
+                               "acmm simulate ac output.units=si --strict"], ("acmm",), PACKAGED_CONFIGS))
 @user_errors
 def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.orbits=10"),
              figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:

@@ -79,10 +79,11 @@ def load_any(path, overrides=None):
         Exactly like the kind's own loader.
     """
     from acmm.io.config import parse_config
+    from acmm import DEFAULT_CONFIG, PACKAGED_CONFIGS
     from acmm_qpp.configio import read_yaml
     from acmm_qpp.overrides import apply_overrides, remember_origin
 
-    data, p = read_yaml(path)
+    data, p = read_yaml(DEFAULT_CONFIG if path is None else path, PACKAGED_CONFIGS)
     data = apply_overrides(data, overrides)
     kind = detect_kind(data)
     if kind == "sweep":

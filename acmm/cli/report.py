@@ -45,10 +45,15 @@ def register(app: typer.Typer) -> None:
         import sys
 
         from acmm.report.build import build_report
+        from acmm_qpp.cli.progress import enabled as progress_enabled
+
+        # progress on a terminal's stderr; elsewhere (CI, pipes) on stdout, so that stderr holds
+        # the errors alone: one `error:` line when the report cannot go on (a full disk…)
+        stream = sys.stderr if progress_enabled() else sys.stdout
 
         def say(msg: str) -> None:
-            sys.stderr.write(msg + "\n")
-            sys.stderr.flush()
+            stream.write(msg + "\n")
+            stream.flush()
 
         if not out.strip():              # Path("") would be the working directory itself
             from acmm_qpp.errors import ConfigError

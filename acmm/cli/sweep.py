@@ -10,6 +10,7 @@ from typing import Optional
 import typer
 
 from acmm_qpp.errors import EXIT_INPUT
+from acmm import PACKAGED_CONFIGS
 from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit, user_errors
 
 
@@ -82,7 +83,7 @@ def register(app: typer.Typer) -> None:
     @app.command(short_help="Monte Carlo / grid sweep of closed-loop runs; writes sweep.h5.",
                  cls=help_command(["acmm sweep sweep_smoke --workers 2",
                                    "acmm sweep sweep_inertia30 sweep.n_runs=20 sweep.orbits=2",
-                                   "acmm sweep my_sweep.yaml --resume --no-figures"], ("sweep",)))
+                                   "acmm sweep my_sweep.yaml --resume --no-figures"], ("sweep",), PACKAGED_CONFIGS))
     @user_errors
     def sweep(config: str = typer.Argument(..., help="sweep config YAML or the name of a packaged sweep config "
                                                      "(listed below)"),

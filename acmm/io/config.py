@@ -22,6 +22,7 @@ from acmm.io.config_fields import Angle, AngleVec, Rate, Time, WeightTorque, _Mo
 from acmm.io.config_station import Actuators, Disturbance, Inertia
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
+from acmm import DEFAULT_CONFIG, PACKAGED_CONFIGS
 from acmm_qpp.configio import read_yaml, validate_model
 
 
@@ -344,7 +345,7 @@ def load_config(path: str | Path | None = None, overrides: list[str] | None = No
     """
     from acmm_qpp.overrides import apply_overrides, remember_origin
 
-    data, p = read_yaml(path)
+    data, p = read_yaml(DEFAULT_CONFIG if path is None else path, PACKAGED_CONFIGS)
     data = resolve_references(apply_overrides(data, overrides), p.parent, str(p))
     cfg = parse_config(data, source=str(p))
     return remember_origin(cfg, str(p), overrides)
@@ -387,7 +388,7 @@ def resolve_references(data: object, base_dir: str | Path = ".", source: str = "
         return data
     p = Path(base_dir) / ref
     try:
-        sub, sub_path = read_yaml(p if p.is_file() else ref)
+        sub, sub_path = read_yaml(p if p.is_file() else ref, PACKAGED_CONFIGS)
     except ConfigError as exc:
         raise ConfigError(f"{source}: schedule.to: {exc}") from None
     if _depth >= 8:

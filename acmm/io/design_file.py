@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from acmm_qpp.results import convert_items
+
 
 _TABLE_KEYS = ("inertia", "bias", "tea", "K")
 
@@ -48,8 +50,6 @@ def table_sha256(names, arrays, coef, level=None) -> str:
 
 def _stored_digest(items: dict, system: str) -> str:
     """:func:`table_sha256` of ``items`` as :func:`acmm_qpp.results.write_h5` stores them."""
-    from acmm_qpp.netcdf_layout import convert_items
-
     st = convert_items({k: items[k] for k in _TABLE_KEYS} | {"schedule": items.get("schedule", {})}, system)
     coef = st["schedule"]["coef"].data if "coef" in st["schedule"] else None
     level = np.asarray(items["level"].data, bool) if "level" in items else None

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 
 
-from acmm_qpp.schema import _header, _model_schema
+from acmm_qpp.schema import header, model_schema
 
 def acmm_schema() -> dict:
     """Schema of an acmm run config (:class:`acmm.io.config.Config`).
@@ -37,4 +37,4 @@ def acmm_schema() -> dict:
     """
     from acmm.io.config import Config
 
-    return _header(_model_schema(Config), "acmm", "acmm run config (CR-185644 Part II)")
+    return header(model_schema(Config), "acmm", "acmm run config (CR-185644 Part II)")

@@ -5,7 +5,7 @@ This module holds what needs the 24 states of eq 4.47: :func:`state_factors` and
 """
 from __future__ import annotations
 
-from acmm_qpp.units import _factor
+from acmm_qpp.units import conversion_factor
 
 
 def state_factors(drf_mode: str = "attitude_hold", system: str = "imperial"):
@@ -33,7 +33,7 @@ def state_factors(drf_mode: str = "attitude_hold", system: str = "imperial"):
     if system != "SI":
         return np.ones(len(units)), units
     si = [u.replace("ft*lbf", "N*m") for u in units]
-    return np.array([_factor(u, v) for u, v in zip(units, si)]), si
+    return np.array([conversion_factor(u, v) for u, v in zip(units, si)]), si
 
 
 def state_space_in(system: str, drf_mode: str, **arrays):
@@ -65,7 +65,7 @@ def state_space_in(system: str, drf_mode: str, **arrays):
     import numpy as np
 
     d, _ = state_factors(drf_mode, system)
-    k = _factor("ft*lbf", "N*m") if system == "SI" else 1.0
+    k = conversion_factor("ft*lbf", "N*m") if system == "SI" else 1.0
     out = {}
     for name, a in arrays.items():
         if a is None:

@@ -15,7 +15,8 @@ from typing import Callable
 
 from acmm_qpp.errors import OutputError
 from acmm_qpp.atomic_write import write_text
-from acmm_qpp.signals import hold_interrupts, release_interrupts
+from acmm_qpp.runlock import run_lock
+from acmm_qpp.signals import interrupts_deferred
 from acmm.report.constants import SECTIONS
 from acmm.report.context import SectionWriter
 from acmm.report.document import render_html, render_markdown
@@ -143,38 +144,28 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     out, figdir = Path(out), Path(out) / "figures"
     root = out / "results" if root is None else Path(root)      # its own: never a user's runs/<name>/
-    if root.exists() and not root.is_dir():     # every stage would fail: refused before anything is written
-        raise OutputError(f"--root: the results root {root} is not a directory")
-    created = [d for d in (out, figdir) if not d.exists()]
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        figdir.mkdir(exist_ok=True)
-        _remove_dead_staging(out)
-        staged = Path(tempfile.mkdtemp(prefix=f".figures-{os.getpid()}-", dir=out))
-    except OSError as exc:
-        raise OutputError(f"cannot create the report directory {out}: {exc.strerror or exc}") from None
-    say(f"gathering results and writing sections ({'fast' if fast else 'full'} mode, root "
-        f"{root}, {jobs} process{'es' if jobs > 1 else ''})")
-    try:
-        res = _build_into(out, figdir, staged, root, fast, rerun, robustness, jobs, say, t_start, cpu0)
-    except BaseException:
-        shutil.rmtree(staged, ignore_errors=True)
-        _remove_empty(created)               # a refused or failed report leaves no empty folders behind
-        raise
-    shutil.rmtree(staged, ignore_errors=True)
-    return res
-
-
-def _remove_dead_staging(out: Path) -> None:
-    """Remove the figure staging folders (``.figures-<pid>-*``) of reports whose process is gone."""
-    for d in out.glob(".figures-*-*"):
+    # one report at a time per folder; holding its lock, the report removes the staging folders
+    # (.figures-<pid>-*) a killed report left (acmm_qpp.runlock.remove_leftovers)
+    with run_lock(out):
+        if root.exists() and not root.is_dir():     # every stage would fail: refused before anything is written
+            raise OutputError(f"--root: the results root {root} is not a directory")
+        created = [figdir] if not figdir.exists() else []
         try:
-            pid = int(d.name.split("-")[1])
-            os.kill(pid, 0)
-        except ProcessLookupError:
-            shutil.rmtree(d, ignore_errors=True)
-        except (ValueError, IndexError, PermissionError, OSError):
-            continue
+            figdir.mkdir(exist_ok=True)
+            staged = Path(tempfile.mkdtemp(prefix=f".figures-{os.getpid()}-", dir=out))
+        except OSError as exc:
+            _remove_empty(created)
+            raise OutputError(f"cannot create the report directory {out}: {exc.strerror or exc}") from None
+        say(f"gathering results and writing sections ({'fast' if fast else 'full'} mode, root "
+            f"{root}, {jobs} process{'es' if jobs > 1 else ''})")
+        try:
+            res = _build_into(out, figdir, staged, root, fast, rerun, robustness, jobs, say, t_start, cpu0)
+        except BaseException:
+            shutil.rmtree(staged, ignore_errors=True)
+            _remove_empty(created)               # a refused or failed report leaves no empty folders behind
+            raise
+        shutil.rmtree(staged, ignore_errors=True)
+    return res
 
 
 def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robustness, jobs, say, t_start, cpu0):
@@ -212,11 +203,8 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
         raise OutputError(f"cannot write the report in {out}: {exc.strerror or exc}; nothing was written") from None
     for name, text in (("manifest.json", json.dumps(manifest, indent=1)), ("report.md", md), ("index.html", page)):
         pairs.append((write_text(pages / name, text), out / name))
-    held = hold_interrupts()                           # the figures and the pages go together
-    try:
+    with interrupts_deferred():                        # the figures and the pages go together
         publish(pairs, staged / ".replaced")
-    finally:
-        release_interrupts(held)
     figs = sorted(figdir.glob("*.png"))
     say(f"wrote {out / 'index.html'} ({len(figs)} figures) in {time.perf_counter() - t_start:.1f} s")
     res = ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),

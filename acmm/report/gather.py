@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from acmm_qpp.errors import AcmmError
+from acmm_qpp.errors import AcmmError, OutputError
 from acmm_qpp.outputs import file_identity
 # the results files of one stage (reused by hash, else run)
 from acmm.report.stage_results import (Failed, StageRun, _record, _try_attrs, acmm_config, blocked, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, failed, qpp_config)
@@ -359,7 +359,9 @@ def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bo
         return None, f"acmm.sweep is not installed in this tree ({exc.name or exc})"
     try:
         return _robustness_from_sweep(root, fast=fast, rerun=rerun, workers=workers)
-    except (AcmmError, OSError) as exc:        # a sweep that refuses its input or cannot write;
+    except OutputError:                         # the report's folder cannot be written: it stops
+        raise
+    except (AcmmError, OSError) as exc:        # a sweep that refuses its input or cannot read;
         return None, f"the sweep failed: {type(exc).__name__}: {exc}"   # a bug (TypeError, …) propagates
 
 
@@ -376,11 +378,12 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
 
     import importlib
 
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.configio import packaged_config_path
     from acmm_qpp.results import read_h5
     from acmm.sweep.config import parse_sweep
 
-    p = packaged_config_path(SWEEP_CONFIG)
+    p = packaged_config_path(SWEEP_CONFIG, PACKAGED_CONFIGS)
     if not p.exists():
         return None, f"configs/{SWEEP_CONFIG} is not present"
     data = yaml.safe_load(p.read_text())

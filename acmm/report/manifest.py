@@ -31,12 +31,12 @@ def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> di
     """
     import h5py
 
-    from acmm_qpp.results import _dimension_only
+    from acmm_qpp.results import dimension_only
 
     out: dict[str, str] = {}
 
     def visit(name, obj):
-        if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in exclude and not _dimension_only(obj):
+        if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in exclude and not dimension_only(obj):
             arr = np.ascontiguousarray(obj[()])
             h = hashlib.sha256(f"{arr.dtype.str}|{arr.shape}|".encode())
             h.update(arr.tobytes() if arr.dtype.kind != "O" else repr(arr.tolist()).encode())

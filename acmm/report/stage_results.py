@@ -102,10 +102,14 @@ def failed(name: str, exc: BaseException) -> Failed | None:
     Returns
     -------
     Failed or None
-        Its one-line message and exit code (:func:`acmm_qpp.errors.failure_line`), or None.
+        Its one-line message and exit code (:func:`acmm_qpp.errors.failure_line`), or None (also
+        for an :class:`acmm_qpp.errors.OutputError`: a report that cannot write stops at once,
+        with one ``error:`` line).
     """
-    from acmm_qpp.errors import failure_line
+    from acmm_qpp.errors import OutputError, failure_line
 
+    if isinstance(exc, OutputError):    # the report's folder cannot be written (a full disk…): it stops
+        return None
     line = failure_line(exc) if isinstance(exc, Exception) else None
     return None if line is None else Failed(name, *line)
 
@@ -167,10 +171,11 @@ def acmm_config(name: str, root: Path | None = None, *, fast: bool = False):
         The config, figures off.
     """
     from acmm.io.config import load_config, parse_config
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.configio import packaged_config_path
 
     # the packaged file itself: a file or folder named like it in the working directory is not it
-    data = load_config(packaged_config_path(f"{name}.yaml")).model_dump(mode="json")
+    data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
     if root is not None:
         data["output"]["root"] = str(root)
     data["output"]["figures"] = False
@@ -196,10 +201,11 @@ def qpp_config(name: str, root: Path | None = None):
     qpp.io.config.QppConfig
         The config, figures off.
     """
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.configio import packaged_config_path
     from qpp.io.config import load_config, parse_config
 
-    data = load_config(packaged_config_path(f"{name}.yaml")).model_dump(mode="json")
+    data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
     if root is not None:
         data["output"]["root"] = str(root)
     data["output"]["figures"] = False

@@ -15,13 +15,13 @@ from pathlib import Path
 import numpy as np
 
 from acmm.io.config import Config
+from acmm.io.dimensions import COORDS
 from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
 from acmm.stages.certify import certificate_items, compute_certificate
 from acmm.stages.common import _as_config, _define_units, _in_system
-from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.outputs import stage
 from acmm_qpp.pool import pool_map, process_pool, stop_pool
 from acmm_qpp.results import draw_figures, write_h5
-from acmm_qpp.runlock import locked_stage
 from acmm.io.design_file import DesignTable, _stored_digest, _unit_system, load_design_table, table_sha256
 
 AXES = ["roll", "pitch", "yaw"]
@@ -252,9 +252,9 @@ def design_table(points, fit, design_hash: str) -> DesignTable:
                        np.array([p.spec.level for p in points], dtype=bool))
 
 
-@locked_stage(_as_config)
-@owns_outputs("design", lambda c: _as_config(c))
-def run_design(config, progress=None, figures: bool | None = None, warn=None) -> tuple[DesignResult, Path]:
+@stage(("design.h5", "design_*.png"), _as_config)
+def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
+               out: Path) -> tuple[DesignResult, Path]:
     """Design and write ``runs/<name>/design.h5`` plus the gain-schedule and pole-map figures
     (:mod:`acmm.stages.design_output` builds both).
 
@@ -269,35 +269,37 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None) ->
     warn : callable, optional
         ``warn(message)``, called before ``design.h5`` is written when the scheduled closed loop
         is unstable somewhere (:meth:`DesignResult.unstable`).
+    out : pathlib.Path
+        The folder its files are written in (the staging folder :func:`acmm_qpp.outputs.stage` gives).
 
     Returns
     -------
     tuple
         (:class:`DesignResult`, pathlib.Path of ``design.h5``).
     """
-    from acmm.stages import design_output as out
+    from acmm.stages import design_output
     from acmm.design.settings import design_settings
 
     cfg = _as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
-    s, run_dir = design_settings(cfg), cfg.run_dir()
+    s = design_settings(cfg)
     r = compute_design(cfg, progress)
     if warn is not None and r.unstable() is not None:
         warn(f"{cfg.name}: {r.unstable()}; writing it to {cfg.run_dir() / 'design.h5'} all the same")
-    pts = out.point_items(r.points)
-    items = out.table_items(r, pts)
+    pts = design_output.point_items(r.points)
+    items = design_output.table_items(r, pts)
     if r.fit is not None:
-        items["schedule"] = out.schedule_items(r)
+        items["schedule"] = design_output.schedule_items(r)
     items["dwell"] = certificate_items(compute_certificate(cfg, r.table))
-    roles = {**out.unit_roles(pts, r.fit is not None),
+    roles = {**design_output.unit_roles(pts, r.fit is not None),
              **{k: v for k, v in CERTIFICATE_ROLES.items() if k.split("/")[1] in items["dwell"]}}
     items = _define_units(_in_system(items, cfg, roles), cfg.orbit_rate)
-    path = write_h5(cfg.run_dir() / "design.h5", items, cfg.to_yaml(),
-                    {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
-                     "schedule_form": r.table.form, "table_sha256": _stored_digest(items, cfg.output.units)})
+    write_h5(out / "design.h5", items, cfg.to_yaml(),
+             {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
+              "schedule_form": r.table.form, "table_sha256": _stored_digest(items, cfg.output.units)}, coords=COORDS)
     if want_figures:
-        draw_figures(out.design_figures(r, s, run_dir, cfg.output.units))
-    return r, path
+        draw_figures(design_output.design_figures(r, s, out, cfg.output.units))
+    return r, cfg.run_dir() / "design.h5"
 
 
 def design_for(cfg: Config, progress=None, figures: bool | None = None, warn=None) -> tuple[DesignTable, str]:

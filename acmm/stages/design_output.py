@@ -39,9 +39,10 @@ def point_items(points) -> dict:
     for k, p in enumerate(points):
         res, ric = p.gain, p.gain.riccati
         pts[f"{k:03d}_{p.spec.name}"] = {
-            "inertia": Dataset(p.spec.inertia, "slug*ft^2", "inertia of the design point", AXES),
-            "bias": Dataset(p.spec.bias, "ft*lbf", "bias torque", AXES),
-            "tea": Dataset(p.tea.theta, "rad", "torque-equilibrium attitude", AXES),
+            "inertia": Dataset(p.spec.inertia, "slug*ft^2", "inertia of the design point", AXES,
+                               dims=("axis", "axis_col")),
+            "bias": Dataset(p.spec.bias, "ft*lbf", "bias torque", AXES, dims=("axis",)),
+            "tea": Dataset(p.tea.theta, "rad", "torque-equilibrium attitude", AXES, dims=("axis",)),
             "A": Dataset(p.model.A, UNIT_A, "design model state matrix (eq 4.46)", STATE_NAMES,
                          dims=("state", "state_col")),
             "B": Dataset(p.model.B, UNIT_B, "input matrix", STATE_NAMES, dims=("state", "axis")),
@@ -58,7 +59,7 @@ def point_items(points) -> dict:
             "riccati_backward_error": Dataset(ric.backward_error, "1",
                                               "CARE backward error after refinement (accepted quantity)"),
             "scales": Dataset(p.model.scales, UNIT_STATE, "state scaling used for the Riccati solve",
-                              STATE_NAMES),
+                              STATE_NAMES, dims=("state",)),
             "eig_condition": Dataset(res.eig_condition, "1",
                                      "eigenvalue condition number of each pole (order of 'poles'), scaled states",
                                      dims=("pole",)),

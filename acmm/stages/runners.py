@@ -16,10 +16,10 @@ import numpy as np
 
 from acmm.model import tea as tea_mod
 from acmm.io.config import Config
+from acmm.io.dimensions import COORDS
 from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, _as_config, _in_system
-from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.outputs import stage
 from acmm_qpp.results import Dataset, write_h5
-from acmm_qpp.runlock import locked_stage
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -64,9 +64,8 @@ def compute_tea(config) -> TeaResult:
                                             expected=cfg.disturbance.requested_tea()))
 
 
-@locked_stage(_as_config)
-@owns_outputs("tea", lambda c: _as_config(c))
-def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
+@stage(("tea.h5",), _as_config)
+def run_tea(config, all_roots: bool = False, *, out: Path) -> tuple[TeaResult, Path]:
     """Compute the TEA and write ``runs/<name>/tea.h5``.
 
     Parameters
@@ -75,6 +74,8 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
         The config, or a config file / packaged name to load.
     all_roots : bool, optional
         Also search the other equilibria (multi-start Newton) and write them.
+    out : pathlib.Path
+        The folder its files are written in (the staging folder :func:`acmm_qpp.outputs.stage` gives).
 
     Returns
     -------
@@ -88,10 +89,10 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
         result.others = [r for r in tea_mod.all_equilibria(inertia, cfg.orbit_rate, t.bias)
                          if np.max(np.abs(r.theta - t.theta)) > 1e-6]
     items = {
-        "theta": Dataset(t.theta, "rad", "torque-equilibrium attitude θ* (eq 4.1)", AXES),
-        "omega": Dataset(t.omega, "rad/s", "ω* at θ* (eq 4.3)", AXES),
-        "bias": Dataset(t.bias, "ft*lbf", "bias torque balanced at θ* (eq 4.1)", AXES),
-        "inertia": Dataset(inertia, "slug*ft^2", "inertia matrix (eq 3.2)", AXES),
+        "theta": Dataset(t.theta, "rad", "torque-equilibrium attitude θ* (eq 4.1)", AXES, dims=("axis",)),
+        "omega": Dataset(t.omega, "rad/s", "ω* at θ* (eq 4.3)", AXES, dims=("axis",)),
+        "bias": Dataset(t.bias, "ft*lbf", "bias torque balanced at θ* (eq 4.1)", AXES, dims=("axis",)),
+        "inertia": Dataset(inertia, "slug*ft^2", "inertia matrix (eq 3.2)", AXES, dims=("axis", "axis_col")),
         "orbit_rate": Dataset(cfg.orbit_rate, "rad/s", "orbital rate n"),
         "residual": Dataset(t.residual, "ft*lbf", "max |τ_gyro + τ_gg + bias| at θ*"),
     }
@@ -99,8 +100,8 @@ def run_tea(config, all_roots: bool = False) -> tuple[TeaResult, Path]:
         items["other_roots"] = Dataset(np.array([o.theta for o in result.others]), "rad",
                                        "other equilibria found by multi-start Newton", AXES,
                                        dims=("root", "axis"))
-    path = write_h5(cfg.run_dir() / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"})
-    return result, path
+    write_h5(out / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"}, coords=COORDS)
+    return result, cfg.run_dir() / "tea.h5"
 
 
 @dataclass
@@ -140,15 +141,16 @@ class LinearizeResult:
         return eig[np.lexsort((eig.imag, eig.real))]
 
 
-@locked_stage(_as_config)
-@owns_outputs("linearize", lambda c: _as_config(c))
-def run_linearize(config) -> tuple[LinearizeResult, Path]:
+@stage(("linearize.h5",), _as_config)
+def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     """TEA, then the design model of ``design.model``; writes ``runs/<name>/linearize.h5``.
 
     Parameters
     ----------
     config : acmm.io.config.Config or path-like or str
         The config, or a config file / packaged name to load.
+    out : pathlib.Path
+        The folder its files are written in (the staging folder :func:`acmm_qpp.outputs.stage` gives).
 
     Returns
     -------
@@ -175,21 +177,29 @@ def run_linearize(config) -> tuple[LinearizeResult, Path]:
         "G": Dataset(model.G, UNIT_B, "disturbance input matrix", names, dims=("state", "axis")),
         "state_names": Dataset(np.array(names, dtype="S"), "1", "state order of eq 4.47", dims=("state",)),
         "state_units": Dataset(np.array(model.state_units, dtype="S"), "1", "unit of each state", dims=("state",)),
-        "scales": Dataset(model.scales, UNIT_STATE, "nominal state magnitudes", names),
-        "theta_star": Dataset(model.theta_star, "rad", "linearization attitude", AXES),
-        "omega_star": Dataset(model.omega_star, "rad/s", "ω* at the linearization attitude (eq 4.3)", AXES),
-        "tea": Dataset(tr.tea.theta, "rad", "TEA of the full inertia", AXES),
-        "inertia_design": Dataset(model.inertia, "slug*ft^2", "inertia of the design model", AXES),
-        "inertia": Dataset(cfg.inertia.matrix(), "slug*ft^2", "full inertia", AXES),
+        "scales": Dataset(model.scales, UNIT_STATE, "nominal state magnitudes", names, dims=("state",)),
+        "theta_star": Dataset(model.theta_star, "rad", "linearization attitude", AXES, dims=("axis",)),
+        "omega_star": Dataset(model.omega_star, "rad/s", "ω* at the linearization attitude (eq 4.3)", AXES,
+                              dims=("axis",)),
+        "tea": Dataset(tr.tea.theta, "rad", "TEA of the full inertia", AXES, dims=("axis",)),
+        "inertia_design": Dataset(model.inertia, "slug*ft^2", "inertia of the design model", AXES,
+                                  dims=("axis", "axis_col")),
+        "inertia": Dataset(cfg.inertia.matrix(), "slug*ft^2", "full inertia", AXES, dims=("axis", "axis_col")),
         "eigenvalues": Dataset(eig, "rad/s", "open-loop eigenvalues of A", dims=("eigenvalue",)),
         "controllability_min_ratio": Dataset(ctrb.min_ratio, "1",
                                              "min σmin([A−sI, B])/σmax over eigenvalues and s=0, scaled"),
         "controllability_rank": Dataset(ctrb.rank, "1", f"PBH rank with tolerance {ctrb.tol:g}"),
     }
     items = _in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
-    path = write_h5(cfg.run_dir() / "linearize.h5", items, cfg.to_yaml(),
-                    {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
-    return result, path
+    write_h5(out / "linearize.h5", items, cfg.to_yaml(),
+             {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode}, coords=COORDS)
+    return result, cfg.run_dir() / "linearize.h5"
+
+
+#: results file → the stage that writes it (root attribute ``stage``), in the order ``acmm plot``
+#: redraws a run folder's figures (the qpp files too: a run folder may hold both)
+FIGURE_SOURCES = {"design.h5": "design", "sim.h5": "simulate", "sweep.h5": "sweep",
+                  "qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
 
 
 def redraw_figures(target, out=None) -> list[Path]:
@@ -227,4 +237,4 @@ def redraw_figures(target, out=None) -> list[Path]:
     readers = {"design": design_figures_from_file, "simulate": sim_figures_from_file,
                "sweep": sweep_figures_from_file, "qpp design": figure_calls_from_file,
                "qpp simulate": figure_calls_from_file}
-    return redraw_from_files(stored_results(target, tuple(readers)), readers, out)
+    return redraw_from_files(stored_results(target, FIGURE_SOURCES), readers, out)

@@ -9,6 +9,7 @@ eq 3.9.
 from __future__ import annotations
 
 from functools import partial
+from pathlib import Path
 
 import numpy as np
 
@@ -96,7 +97,7 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
     return items, attrs
 
 
-def sim_figures(cfg, sc, r, stats: list, items: dict) -> list:
+def sim_figures(cfg, sc, r, stats: list, items: dict, folder: Path) -> list:
     """The simulation figures (axis histories, summary, inertia steps), each a call for
     :func:`acmm_qpp.results.draw_figures`.
 
@@ -116,14 +117,16 @@ def sim_figures(cfg, sc, r, stats: list, items: dict) -> list:
     items : dict
         The datasets of :func:`sim_items` (``orbits``, ``attitude_error`` rad,
         ``rate_rel_lvlh`` deg/s).
+    folder : pathlib.Path
+        The folder of the figures.
 
     Returns
     -------
     list of functools.partial
         The figure calls: ``sim_axes.png``, ``sim_summary.png`` and, with more than one
-        inertia level, ``sim_inertia.png`` in the run folder.
+        inertia level, ``sim_inertia.png`` in ``folder``.
     """
-    d = cfg.run_dir()
+    d = Path(folder)
     units = cfg.output.units
     orbits = items["orbits"].data
     err_deg = np.degrees(items["attitude_error"].data)

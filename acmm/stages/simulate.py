@@ -11,14 +11,14 @@ import numpy as np
 import time
 
 from acmm.io.config import Config
+from acmm.io.dimensions import AUX_COORDS, COORDS
 from acmm.simulate import kernel as sim_mod
 from acmm.simulate import scenario as scen
-from acmm.stages import sim_output as out
+from acmm.stages import sim_output
 from acmm.stages.common import _as_config, _define_units, _in_system
 from acmm.stages.design import design_for
-from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.outputs import stage
 from acmm_qpp.results import draw_figures, write_h5
-from acmm_qpp.runlock import locked_stage
 
 
 # ---------------------------------------------------------------------------------------------
@@ -62,9 +62,9 @@ class SimulateResult:
         return float(self.sim.stop_time * self.config.orbit_rate / (2 * np.pi))
 
 
-@locked_stage(_as_config)
-@owns_outputs("simulate", lambda c: _as_config(c))
-def run_simulate(config, progress=None, figures: bool | None = None, warn=None) -> tuple[SimulateResult, Path]:
+@stage(("sim.h5", "sim_*.png"), _as_config)
+def run_simulate(config, progress=None, figures: bool | None = None, warn=None, *,
+                 out: Path) -> tuple[SimulateResult, Path]:
     """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures.
 
     Parameters
@@ -78,6 +78,8 @@ def run_simulate(config, progress=None, figures: bool | None = None, warn=None) 
     warn : callable, optional
         ``warn(message)`` when a design made first has an unstable scheduled loop
         (:func:`acmm.stages.design.design_for`).
+    out : pathlib.Path
+        The folder its files are written in (the staging folder :func:`acmm_qpp.outputs.stage` gives).
 
     Returns
     -------
@@ -93,9 +95,9 @@ def run_simulate(config, progress=None, figures: bool | None = None, warn=None) 
     wall = time.perf_counter() - t0
     stats = scen.level_statistics(sc, r)
     result = SimulateResult(cfg, sc, r, stats, note, wall)
-    items, attrs = out.sim_items(cfg, sc, r, stats, table.design_hash, wall)
-    figures_to_draw = out.sim_figures(cfg, sc, r, stats, items) if want_figures else []
+    items, attrs = sim_output.sim_items(cfg, sc, r, stats, table.design_hash, wall)
+    figures_to_draw = sim_output.sim_figures(cfg, sc, r, stats, items, out) if want_figures else []
     items = _define_units(_in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
-    path = write_h5(cfg.run_dir() / "sim.h5", items, cfg.to_yaml(), attrs)
+    write_h5(out / "sim.h5", items, cfg.to_yaml(), attrs, coords=COORDS, aux_coords=AUX_COORDS)
     draw_figures(figures_to_draw)
-    return result, path
+    return result, cfg.run_dir() / "sim.h5"

@@ -301,10 +301,11 @@ def load_sweep(path: str | Path, overrides: list[str] | None = None) -> Sweep:
     Sweep
         The validated sweep.
     """
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.configio import read_yaml
     from acmm_qpp.overrides import apply_overrides, remember_origin
 
-    data, p = read_yaml(path)
+    data, p = read_yaml(path, PACKAGED_CONFIGS)
     sw = parse_sweep(apply_overrides(data, overrides), source=str(p), directory=p.parent)
     return remember_origin(sw, str(p), overrides)
 

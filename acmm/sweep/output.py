@@ -8,6 +8,8 @@ import numpy as np
 
 from acmm_qpp.errors import AcmmError
 from acmm_qpp.atomic_write import write_text
+from acmm_qpp.results import Dataset, write_h5
+from acmm.io.dimensions import COORDS
 from acmm.sweep.cases import AXES, VERDICTS
 from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS
 from acmm.sweep.config import Sweep
@@ -90,8 +92,6 @@ def _nominal_tea_deg(sweep: Sweep) -> dict:
 
 def _margin_items(margins: list, S) -> dict:
     """Datasets of the margin searches: one group ``<base>_<direction>`` per search."""
-    from acmm_qpp.results import Dataset
-
     return {
         m["base"] + "_" + m["direction"]: {
             "limit": Dataset(m["limit"], "1", "tolerated uniform inertia scaling (bounded up to here)"),
@@ -141,6 +141,10 @@ def _orbit_defined(items: dict, sweep) -> dict:
             if getattr(v, "units", None) == "orbit" else v for k, v in items.items()}
 
 
+#: The dimension of the per-case arrays: one row per case.
+CASE = ("case",)
+
+
 def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bool = False,
                   wall_time: float | None = None) -> tuple[Path, list]:
     """Build ``sweep.h5`` (atomically, via :func:`acmm_qpp.results.write_h5`) and ``sweep.csv`` from
@@ -164,56 +168,53 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     tuple
         (pathlib.Path of ``sweep.h5``, list of the figure paths).
     """
-    from acmm_qpp.results import Dataset, write_h5
-
     rows, margins = _split(sweep, records)
     a = table_arrays(sweep, rows)
     labels = [b.label for b in sweep.bases]
     nominal = _nominal_tea_deg(sweep)
     S = lambda xs: np.array([x.encode() for x in xs], dtype="S") if len(xs) else np.zeros(0, "S1")  # noqa: E731
     items = {
-        "case": Dataset(a["case"], "1", "global case index = base_index·n_cases + index"),
-        "base": Dataset(a["base"], "1", "index into base_names"),
+        "case": Dataset(a["case"], "1", "global case index = base_index·n_cases + index", dims=CASE),
+        "base": Dataset(a["base"], "1", "index into base_names", dims=CASE),
         "base_names": Dataset(S(labels), "1", "base config names", dims=("base_name",)),
-        "index": Dataset(a["index"], "1", "case index within its base (seeds SeedSequence([seed, index]))"),
-        "parameters": {k: Dataset(v, PARAMETERS[k].unit, PARAMETERS[k].description)
+        "index": Dataset(a["index"], "1", "case index within its base (seeds SeedSequence([seed, index]))", dims=CASE),
+        "parameters": {k: Dataset(v, PARAMETERS[k].unit, PARAMETERS[k].description, dims=CASE)
                        for k, v in a["parameters"].items()},
         "verdict": Dataset(S(a["verdict"]), "1", "bounded | not_settled | diverged | no_equilibrium | unphysical | "
-                                                 "design_failed | tea_failed"),
-        "verdict_code": Dataset(a["verdict_code"], "1", "index into the root attribute 'verdicts'"),
-        "reason": Dataset(S(a["reason"]), "1", "why the run stopped or was not run"),
-        "stable": Dataset(a["stable"], "1", "verdict == bounded"),
-        "time_to_divergence": Dataset(a["time_to_divergence"], "orbit", "stop time of a diverged run (NaN if not)"),
+                                                 "design_failed | tea_failed", dims=CASE),
+        "verdict_code": Dataset(a["verdict_code"], "1", "index into the root attribute 'verdicts'", dims=CASE),
+        "reason": Dataset(S(a["reason"]), "1", "why the run stopped or was not run", dims=CASE),
+        "stable": Dataset(a["stable"], "1", "verdict == bounded", dims=CASE),
+        "time_to_divergence": Dataset(a["time_to_divergence"], "orbit", "stop time of a diverged run (NaN if not)", dims=CASE),
         "peak_attitude_error": Dataset(a["peak_attitude_error"], "deg",
                                        "max |θ − θ*_true| over the run (θ*_true: the plant's TEA)", list(AXES), dims=("case", "axis")),
         "steady_attitude_error": Dataset(a["steady_attitude_error"], "deg",
                                          "max |θ − θ*_true| over the second half of the run", list(AXES), dims=("case", "axis")),
         "peak_momentum": Dataset(a["peak_momentum"], "ft*lbf*s", "max |h_i| over the run", list(AXES), dims=("case", "axis")),
         "torque_saturation_time": Dataset(a["torque_saturation_time"], "orbit",
-                                          "time with any axis torque-limited (every integrator step)"),
+                                          "time with any axis torque-limited (every integrator step)", dims=CASE),
         "momentum_saturation_time": Dataset(a["momentum_saturation_time"], "orbit",
-                                            "time with any CMG axis at its momentum limit (every integrator step)"),
+                                            "time with any CMG axis at its momentum limit (every integrator step)", dims=CASE),
         "tea_true": Dataset(a["tea_true"], "deg", "TEA of the perturbed plant (first level)", list(AXES), dims=("case", "axis")),
         "tea_estimate": Dataset(a["tea_estimate"], "deg", "TEA estimate used by the controller (first level)",
                                 list(AXES), dims=("case", "axis")),
         "inertia": Dataset(a["inertia"], "slug*ft^2", "perturbed inertia (first level)",
                            dims=("case", "axis", "axis_col")),
         "bias": Dataset(a["bias"], "ft*lbf", "bias torque (first level)", list(AXES), dims=("case", "axis")),
-        "n_draws": Dataset(a["n_draws"], "1", "Monte Carlo draws used (resampling of unphysical inertia)"),
+        "n_draws": Dataset(a["n_draws"], "1", "Monte Carlo draws used (resampling of unphysical inertia)", dims=CASE),
         "nominal_tea": Dataset(np.array([nominal[lab] for lab in labels]).reshape(len(labels), 3), "deg",
                                "TEA of each base config's nominal plant (NaN: none found)", list(AXES),
                                dims=("base_name", "axis")),
         "orbit_period": Dataset(np.array([2 * np.pi / sweep.bases[int(k)].config.orbit_rate for k in a["base"]]),
-                                "s", "orbital period of the case's base: the length of its 'orbit'"),
+                                "s", "orbital period of the case's base: the length of its 'orbit'", dims=CASE),
     }
     if margins:
         items["margin"] = _margin_items(margins, S)
     attrs = _root_attrs(sweep, a, labels, len(rows), complete, wall_time)
     run_dir = sweep.run_dir()
-    from acmm_qpp.netcdf_layout import with_leading_dim
-
-    items = _orbit_defined(with_leading_dim(items, "case", len(a["case"])), sweep)   # one row per case
-    path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units)
+    items = _orbit_defined(items, sweep)
+    path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units,
+                    coords=COORDS)
     _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
     if figures and rows:

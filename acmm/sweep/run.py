@@ -9,8 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
-from acmm_qpp.outputs import owns_outputs
-from acmm_qpp.runlock import locked_stage
+from acmm_qpp.outputs import remove_owned, stage, write_config_yaml
 from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
@@ -19,7 +18,7 @@ from acmm.sweep.executors import (SerialExecutor, _call_chunk, _remote_contexts,
                                   _task_key, _tasks, lost_worker, make_executor)
 from acmm.sweep.journal import GroupCommitJournal, read_journal
 from acmm_qpp.errors import ConfigError, OutputError
-from acmm_qpp.signals import hold_interrupts, release_interrupts
+from acmm_qpp.signals import interrupts_deferred
 from acmm_qpp.pool import submit
 from acmm.sweep.output import _split, write_results
 
@@ -84,12 +83,16 @@ def _as_sweep(sweep) -> Sweep:
     return sweep if isinstance(sweep, Sweep) else load_sweep(sweep)
 
 
-@locked_stage(_as_sweep)
-@owns_outputs("sweep", lambda s: _as_sweep(s))
+#: The files a sweep owns in its run folder (its journal is not one of them: it survives for --resume).
+OUTPUTS = ("sweep.h5", "sweep.csv", "sweep_*.png")
+
+
+@stage(OUTPUTS, _as_sweep, keep_partial=True)
 def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, scheduler: Optional[str] = None,
               resume: bool = False, progress: Optional[Callable[[int, int, dict], None]] = None,
               after_record: Optional[Callable[[int], None]] = None, figures: Optional[bool] = None,
-              snapshot_interval: float = 5.0, executor=None, chunk: Optional[int] = None) -> SweepResult:
+              snapshot_interval: float = 5.0, executor=None, chunk: Optional[int] = None,
+              out: Path) -> SweepResult:
     """Run (or resume) a sweep; writes ``sweep.journal``, ``sweep.h5``, ``sweep.csv`` and figures.
 
     Parameters
@@ -114,6 +117,9 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     chunk : int, optional
         Cases per task (default: sized as the chunks are submitted, :class:`Chunker`; 1
         in-process).  The results do not depend on it.
+    out : pathlib.Path
+        Its run folder (a sweep writes there directly and keeps its snapshots when interrupted,
+        :func:`acmm_qpp.outputs.stage` with ``keep_partial``).
 
     Returns
     -------
@@ -125,7 +131,7 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     spec = sweep.spec
     t0 = time.perf_counter()
     key = sweep.results_key()
-    run_dir = sweep.run_dir()
+    run_dir = out
     jpath = run_dir / "sweep.journal"
     done = _resumed(sweep, jpath, key) if resume and jpath.exists() else {}
     n_resumed = len(done)
@@ -211,9 +217,7 @@ def _start_afresh(sweep: Sweep, run_dir: Path) -> None:
     (its journal is replaced next) and this sweep's ``config.yaml`` is written first.  An
     interrupted re-run with another seed left its results beside the earlier run's config.yaml
     and figures (a review)."""
-    from acmm_qpp.outputs import prune, write_config_yaml
-
-    prune(run_dir, "sweep", set())
+    remove_owned(run_dir, OUTPUTS)
     write_config_yaml(run_dir, sweep)
 
 
@@ -357,8 +361,7 @@ def _close_feed(sweep: Sweep, feed: _Feed, close, snaps: _Snapshots, complete: b
     """The end of :func:`_drive`, interrupts held (a second Ctrl-C in this cleanup hung the sweep:
     a review): the journal closed, the background rebuild awaited and, when the sweep did not
     complete, the chunks in flight cancelled, the executor aborted and the partial results written."""
-    held = hold_interrupts()
-    try:
+    with interrupts_deferred():
         feed.journal.close()
         snaps.wait()
         if not complete:
@@ -369,8 +372,6 @@ def _close_feed(sweep: Sweep, feed: _Feed, close, snaps: _Snapshots, complete: b
                 close(abort=True)
                 if feed.done:
                     write_results(sweep, list(feed.done.values()), complete=False)
-    finally:
-        release_interrupts(held)
 
 
 def _records(fut) -> list:

@@ -17,7 +17,7 @@ from pydantic import BeforeValidator, Field, model_validator
 from acmm.io.config import Output
 from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS, SHORTHANDS, parameter_value, to_parameter_unit
 from acmm_qpp.config_model import StrictModel
-from acmm_qpp.schema import _fix_alternatives, _Generator, _header
+from acmm_qpp.schema import Generator, fix_alternatives, header
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN
 
 
@@ -262,8 +262,8 @@ def sweep_schema() -> dict:
     from acmm.io.config import Config
 
     keys, top = models_json_schema([(SweepFile, "validation"), (Config, "validation"),
-                                    (SweepSpec, "validation")], schema_generator=_Generator)
-    defs = _fix_alternatives(top)["$defs"]
+                                    (SweepSpec, "validation")], schema_generator=Generator)
+    defs = fix_alternatives(top)["$defs"]
     ref_file = keys[(SweepFile, "validation")]["$ref"]
     ref_cfg = keys[(Config, "validation")]["$ref"]
     ref_spec = keys[(SweepSpec, "validation")]["$ref"]
@@ -282,4 +282,4 @@ def sweep_schema() -> dict:
     file_def["properties"]["sweep"] = {"allOf": [file_def["properties"]["sweep"],
                                                  {"anyOf": [{"required": ["base"]}, {"required": ["bases"]}]}]}
     schema = {"anyOf": [{"$ref": ref_file}, {"$ref": "#/$defs/InlineSweepConfig"}], "$defs": defs}
-    return _header(schema, "sweep", "acmm sweep config")
+    return header(schema, "sweep", "acmm sweep config")

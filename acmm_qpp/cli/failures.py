@@ -5,14 +5,26 @@ wrapped in another exception, the numerical warnings and numba's cache notes of 
 standard output."""
 from __future__ import annotations
 
+import os
 import sys
 
 import typer
 
 
 
-def _interrupt_behind(exc: BaseException):
-    """The Ctrl-C/SIGTERM behind ``exc`` (its cause or context), else None."""
+def interrupt_behind(exc: BaseException):
+    """The Ctrl-C/SIGTERM behind ``exc`` (its cause or context), else None.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception a command raised.
+
+    Returns
+    -------
+    KeyboardInterrupt or None
+        The interrupt in its chain of causes and contexts.
+    """
     seen = set()
     while exc is not None and id(exc) not in seen:
         if isinstance(exc, KeyboardInterrupt):
@@ -22,8 +34,14 @@ def _interrupt_behind(exc: BaseException):
     return None
 
 
-def _note_warnings(caught) -> None:
-    """One summary line for the numpy/scipy warnings a successful command raised (never raw)."""
+def note_warnings(caught) -> None:
+    """One summary line for the numpy/scipy warnings a successful command raised (never raw).
+
+    Parameters
+    ----------
+    caught : list of warnings.WarningMessage
+        The warnings recorded while the command ran.
+    """
     if not caught:
         return
     first = caught[0]
@@ -31,7 +49,7 @@ def _note_warnings(caught) -> None:
                f"{first.category.__name__}: {' '.join(str(first.message).split())}", err=True)
 
 
-def _note_compiled_cache() -> None:
+def note_compiled_cache() -> None:
     """A ``note:`` line for each reason numba could not save a kernel it compiled in this run."""
     cache = sys.modules.get("acmm.simulate.compiled_cache")       # (not imported: nothing was compiled)
     for line in cache.write_error_notes() if cache is not None else []:
@@ -42,10 +60,8 @@ def _note_compiled_cache() -> None:
 EXIT_PIPE_CLOSED = 141
 
 
-def _quiet_stdout() -> None:
+def quiet_stdout() -> None:
     """Point stdout at /dev/null, so that flushing it at exit raises nothing more."""
-    import os
-
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())

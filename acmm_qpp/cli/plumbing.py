@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import functools
+import re
 import signal
 import sys
 import threading
+import types
+import warnings
+from importlib import resources
 
 import typer
 
-from acmm_qpp.cli.failures import (EXIT_PIPE_CLOSED, _interrupt_behind, _note_compiled_cache, _note_warnings, _quiet_stdout)
+from acmm_qpp.cli.failures import (EXIT_PIPE_CLOSED, interrupt_behind, note_compiled_cache, note_warnings, quiet_stdout)
 from acmm_qpp.errors import plain_failure as _plain_failure
 from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError, ConfigError
 
@@ -62,8 +66,6 @@ def user_errors(fn):
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
-        import warnings
-
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("default")      # each distinct warning once (a hot loop stays cheap)
             try:
@@ -76,19 +78,19 @@ def user_errors(fn):
             except KeyboardInterrupt as exc:
                 interrupted(exc)
             except BrokenPipeError:     # the reader of stdout went away (`| head`): not an I/O failure
-                _quiet_stdout()         # of the results, which the stage wrote before printing
+                quiet_stdout()         # of the results, which the stage wrote before printing
                 sys.exit(EXIT_PIPE_CLOSED)
             except Exception as exc:  # noqa: BLE001 (re-raised unless a known kind of failure)
-                signal = _interrupt_behind(exc)
+                signal = interrupt_behind(exc)
                 if signal is not None:      # Python wrapped it (a Ctrl-C in a class body: RuntimeError)
                     interrupted(signal)
                 plain = _plain_failure(exc)
                 if plain is None:
                     raise
                 fail(*plain)
-        _note_warnings([w for w in caught if not issubclass(w.category, (DeprecationWarning,
+        note_warnings([w for w in caught if not issubclass(w.category, (DeprecationWarning,
                                                                            PendingDeprecationWarning))])
-        _note_compiled_cache()
+        note_compiled_cache()
         return out
 
     return wrapper
@@ -97,9 +99,10 @@ def user_errors(fn):
 # ---------------------------------------------------------------------------------------------
 # command-line conventions (issue 14): exit codes of click errors, --version, overrides, --strict
 # ---------------------------------------------------------------------------------------------
-from typer.core import TyperGroup  # noqa: E402
+from typer.core import TyperCommand, TyperGroup  # noqa: E402
 
 from acmm_qpp.errors import EXIT_USAGE, EXIT_VERDICT  # noqa: E402
+
 
 def overrides_arg(example: str):
     """The positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm_qpp.overrides`), their
@@ -131,9 +134,9 @@ NESTED_PATH_RULE = ("A config a config names (sweep.base, schedule.to) is looked
 _KIND_KEYS = {"sweep": ("sweep",), "qpp": ("plant", "nonlinearity", "hinf", "spheres")}
 
 
-def packaged_configs(kinds: tuple = ("acmm", "sweep", "qpp")) -> list[str]:
-    """Names of the packaged configs (the ``configs/`` folder shipped as ``acmm.configs``) of the
-    given kinds, read from the folder when called (so a help screen lists what is installed).
+def packaged_configs(package: str, kinds: tuple = ("acmm", "sweep", "qpp")) -> list[str]:
+    """Names of the packaged configs (the data package ``package``) of the given kinds, read from
+    the folder when called (so a help screen lists what is installed).
 
     The kind is read from a config's top-level keys without parsing its YAML (``sweep:`` → sweep;
     ``plant:``, ``nonlinearity:``, ``hinf:``, ``spheres:`` → qpp; otherwise an acmm run config),
@@ -141,6 +144,8 @@ def packaged_configs(kinds: tuple = ("acmm", "sweep", "qpp")) -> list[str]:
 
     Parameters
     ----------
+    package : str
+        The data package of the packaged configs (``acmm.PACKAGED_CONFIGS``).
     kinds : tuple of str, optional
         Any of ``"acmm"``, ``"sweep"``, ``"qpp"``.
 
@@ -149,14 +154,9 @@ def packaged_configs(kinds: tuple = ("acmm", "sweep", "qpp")) -> list[str]:
     list of str
         Sorted names without ``.yaml``; empty when the folder cannot be read.
     """
-    import re
-    from importlib import resources
-
-    from acmm_qpp import PACKAGED_CONFIGS
-
     out = []
     try:
-        files = sorted(resources.files(PACKAGED_CONFIGS).iterdir(), key=lambda p: p.name)
+        files = sorted(resources.files(package).iterdir(), key=lambda p: p.name)
         for f in files:
             if not f.name.endswith(".yaml"):
                 continue
@@ -169,7 +169,7 @@ def packaged_configs(kinds: tuple = ("acmm", "sweep", "qpp")) -> list[str]:
     return out
 
 
-def help_command(examples: list, kinds: tuple = ()):
+def help_command(examples: list, kinds: tuple = (), package: str | None = None):
     """A typer command class whose help ends with ``examples`` (one command line each, kept as
     written) and, for ``kinds``, the packaged configs of those kinds listed from the folder at
     help time and the rule by which config paths are found (:data:`CONFIG_PATH_RULE`,
@@ -181,14 +181,14 @@ def help_command(examples: list, kinds: tuple = ()):
         Command lines, each shown on a line of its own under ``Examples:``.
     kinds : tuple of str, optional
         Config kinds the command reads (:func:`packaged_configs`); empty: no config list.
+    package : str, optional
+        The data package of the packaged configs listed for ``kinds``.
 
     Returns
     -------
     type
         A subclass of ``typer.core.TyperCommand`` for ``app.command(cls=...)``.
     """
-    from typer.core import TyperCommand
-
     class WithExamples(TyperCommand):
         """A command whose help ends with its examples and the packaged configs it can read."""
 
@@ -202,7 +202,7 @@ def help_command(examples: list, kinds: tuple = ()):
                     formatter.write(f"{'':>{formatter.current_indent}}{line}\n")
             if kinds:
                 formatter.write_paragraph()
-                names = packaged_configs(tuple(kinds))
+                names = packaged_configs(package, tuple(kinds))
                 formatter.write_text(f"Packaged configs ({', '.join(kinds)}; give the name instead of a file): "
                                      + (", ".join(names) if names else "none installed"))
                 formatter.write_paragraph()
@@ -220,8 +220,6 @@ StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes w
 
 def _click():
     """The click that typer uses: recent typer vendors it as ``typer._click``, older ones use click."""
-    import types
-
     try:
         from typer._click import exceptions
     except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
@@ -271,6 +269,8 @@ class ExitCodeGroup(TyperGroup):
     examples: tuple = ()
     #: config kinds whose packaged configs the app's help lists (:func:`packaged_configs`)
     config_kinds: tuple = ()
+    #: the data package of those packaged configs
+    config_package: str = ""
 
     def format_epilog(self, ctx, formatter) -> None:
         """Write the app's examples and packaged configs (listed from the folder), then its epilog.
@@ -291,7 +291,7 @@ class ExitCodeGroup(TyperGroup):
         if self.config_kinds:
             formatter.write_paragraph()
             formatter.write_text(f"Packaged configs (give the name instead of a file): "
-                                 + ", ".join(packaged_configs(tuple(self.config_kinds))))
+                                 + ", ".join(packaged_configs(self.config_package, tuple(self.config_kinds))))
         super().format_epilog(ctx, formatter)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):

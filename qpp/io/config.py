@@ -387,7 +387,8 @@ def load_config(path, overrides: list[str] | None = None) -> QppConfig:
     """
     from acmm_qpp.configio import read_yaml
     from acmm_qpp.overrides import apply_overrides, remember_origin
+    from qpp import PACKAGED_CONFIGS
 
-    data, p = read_yaml(path)
+    data, p = read_yaml(path, PACKAGED_CONFIGS)
     cfg = parse_config(apply_overrides(data, overrides), source=str(p))
     return remember_origin(cfg, str(p), overrides)

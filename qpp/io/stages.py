@@ -10,9 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm_qpp.outputs import owns_outputs
+from acmm_qpp.outputs import stage
 from acmm_qpp.results import Dataset, draw_figures, write_h5
-from acmm_qpp.runlock import locked_stage
 from qpp.io.config_nonlin import PolarArmNonlinearity
 from qpp.io.config import QppConfig, load_config
 from qpp.design.certificate import DesignResult
@@ -244,9 +243,8 @@ def _iterations(r: DesignResult) -> Dataset:
                                                         for it in r.iterations)})
 
 
-@locked_stage(_cfg)
-@owns_outputs("qpp design", lambda c: _cfg(c))
-def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignResult, Path]:
+@stage(("qpp_design.h5", "qpp_circle*.png", "qpp_iterations.png"), _cfg)
+def run_design(config, figures: bool | None = None, *, out: Path) -> tuple[QppConfig, DesignResult, Path]:
     """Design (ch. 12.1) and write ``<root>/<name>/qpp_design.h5`` (+ circle and iteration figures).
 
     An uncertified design is still written (root attributes ``certified = 0``, ``label =
@@ -260,6 +258,8 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
         The config, or a config file / packaged name to load.
     figures : bool, optional
         Write the figures (default: ``output.figures``).
+    out : pathlib.Path
+        The folder its files are written in (the staging folder :func:`acmm_qpp.outputs.stage` gives).
 
     Returns
     -------
@@ -270,24 +270,23 @@ def run_design(config, figures: bool | None = None) -> tuple[QppConfig, DesignRe
     want_figures = cfg.output.figures if figures is None else figures
     r = design(cfg)
     verdicts = {f"beta1_le_m[{rd},{bk}]": bool(v) for (rd, bk), v in r.verdicts().items()}
-    path = write_h5(cfg.run_dir() / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
-                    {"stage": "qpp design", "circle_passed": bool(r.circle.passed), **verdicts,
-                     "certified": bool(r.certified), "label": "certified" if r.certified else "uncertified",
-                     "verdict": r.verdict, "bookkeeping": r.bookkeeping, "norm": r.norm,
-                     "sector_of_certificate": "the circle criterion's (dataset sector)",
-                     **{f"premise[{k}]": bool(ok) for k, (ok, _) in r.premises.items()},
-                     **{f"premise_statement[{k}]": text for k, (_, text) in r.premises.items()},
-                     "proved": "; ".join(r.proved), "assumed": "; ".join(r.assumed), "scope": r.scope_text,
-                     "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
+    write_h5(out / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
+             {"stage": "qpp design", "circle_passed": bool(r.circle.passed), **verdicts,
+              "certified": bool(r.certified), "label": "certified" if r.certified else "uncertified",
+              "verdict": r.verdict, "bookkeeping": r.bookkeeping, "norm": r.norm,
+              "sector_of_certificate": "the circle criterion's (dataset sector)",
+              **{f"premise[{k}]": bool(ok) for k, (ok, _) in r.premises.items()},
+              **{f"premise_statement[{k}]": text for k, (_, text) in r.premises.items()},
+              "proved": "; ".join(r.proved), "assumed": "; ".join(r.assumed), "scope": r.scope_text,
+              "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
     if want_figures:
-        draw_figures([partial(plot_circle, r, cfg.run_dir() / "qpp_circle.png"),
-                      partial(plot_iterations, r, cfg.run_dir() / "qpp_iterations.png")])
-    return cfg, r, path
+        draw_figures([partial(plot_circle, r, out / "qpp_circle.png"),
+                      partial(plot_iterations, r, out / "qpp_iterations.png")])
+    return cfg, r, cfg.run_dir() / "qpp_design.h5"
 
 
-@locked_stage(_cfg)
-@owns_outputs("qpp simulate", lambda c: _cfg(c))
-def run_simulate(config, figures: bool | None = None, progress=None):
+@stage(("qpp_sim.h5", "qpp_sim_*.png"), _cfg)
+def run_simulate(config, figures: bool | None = None, progress=None, *, out: Path):
     """Design (or reuse the design), simulate every scenario, write ``<root>/<name>/qpp_sim.h5``
     (+ figures).
 
@@ -304,6 +303,8 @@ def run_simulate(config, figures: bool | None = None, progress=None):
         Write the figures (default: ``output.figures``).
     progress : callable, optional
         ``progress(done, total, name)``.
+    out : pathlib.Path
+        The folder its files are written in (the staging folder :func:`acmm_qpp.outputs.stage` gives).
 
     Returns
     -------
@@ -315,21 +316,21 @@ def run_simulate(config, figures: bool | None = None, progress=None):
     """
     cfg = _cfg(config)
     want_figures = cfg.output.figures if figures is None else figures
-    r, sims, path = _simulate_and_write(cfg, want_figures, progress,
-                                        load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()))
-    return cfg, r, sims, path
+    r, sims = _simulate_and_write(cfg, want_figures, progress,
+                                  load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()), out)
+    return cfg, r, sims, cfg.run_dir() / "qpp_sim.h5"
 
 
-def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
-    """The body of :func:`run_simulate`: (design, simulations, path); the figures are drawn
-    after the HDF5 file is written."""
+def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored, out: Path):
+    """The body of :func:`run_simulate`: (design, simulations), written in ``out``; the figures
+    are drawn after the HDF5 file is written."""
     r = stored or design(cfg)
     sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
     figures = []
     if want_figures:
-        figures = [partial(plot_scenario, s, cfg.run_dir() / f"qpp_sim_{s.name}.png") for s in sims]
+        figures = [partial(plot_scenario, s, out / f"qpp_sim_{s.name}.png") for s in sims]
         if isinstance(cfg.nonlinearity, PolarArmNonlinearity):
-            figures.append(partial(plot_cartesian, sims, cfg.nonlinearity.a, cfg.run_dir() / "qpp_sim_cartesian.png"))
+            figures.append(partial(plot_cartesian, sims, cfg.nonlinearity.a, out / "qpp_sim_cartesian.png"))
     items = {"K1": Dataset(r.K1, GAIN_UNITS["K1"], "gain K1 used", dims=("input", "state")),
              "Kc": Dataset(r.Kc, GAIN_UNITS["Kc"], "gain Kc used", dims=("input", "servo_state")),
              "H": Dataset(r.H, GAIN_UNITS["H"], "observer gain H used (report's sign)", dims=("state", "output"))}
@@ -354,11 +355,11 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored):
                                         **{f"param_{k}": v for k, v in (s.parameters or {}).items()}}),
             "error_per_output": Dataset(s.error_per_output, "output units", "sup_t |y_i − y_oi|", dims=("output",)),
         }
-    path = write_h5(cfg.run_dir() / "qpp_sim.h5", items, cfg.to_yaml(),
-                    {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims)),
-                     "design_certified": int(r.certified), "design_verdict": r.verdict})
+    write_h5(out / "qpp_sim.h5", items, cfg.to_yaml(),
+             {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims)),
+              "design_certified": int(r.certified), "design_verdict": r.verdict})
     draw_figures(figures)
-    return r, sims, path
+    return r, sims
 
 
 def figure_calls_from_file(path: Path, out_dir: Path) -> list:
@@ -437,6 +438,11 @@ def figure_calls_from_file(path: Path, out_dir: Path) -> list:
     return calls
 
 
+#: results file → the stage that writes it (root attribute ``stage``), in the order ``qpp plot``
+#: redraws a run folder's figures
+FIGURE_SOURCES = {"qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
+
+
 def redraw_figures(target, out=None) -> list[Path]:
     """Redraw a qpp run's figures from ``qpp_design.h5`` / ``qpp_sim.h5`` alone (``qpp plot``;
     :func:`figure_calls_from_file`).
@@ -463,4 +469,4 @@ def redraw_figures(target, out=None) -> list[Path]:
     from acmm_qpp.results import redraw_from_files, stored_results
 
     readers = {"qpp design": figure_calls_from_file, "qpp simulate": figure_calls_from_file}
-    return redraw_from_files(stored_results(target, tuple(readers)), readers, out)
+    return redraw_from_files(stored_results(target, FIGURE_SOURCES), readers, out)

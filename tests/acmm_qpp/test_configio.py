@@ -15,11 +15,11 @@ def test_yaml_merge_keys_are_read_and_duplicates_still_refused(tmp_path):
 
     p = tmp_path / "m.yaml"
     p.write_text("ref: &I {I11: 21970000, I22: 13320000, I33: 32130000}\ninertia: {<<: *I, I11: 24000000}\n")
-    got, _ = read_yaml(p)
+    got, _ = read_yaml(p, "acmm.configs")
     assert got["inertia"] == {"I11": 24000000, "I22": 13320000, "I33": 32130000}
     p.write_text("inertia: {<<: {I11: 1.0}, I22: 2.0, I22: 3.0}\n")
     with pytest.raises(ConfigError, match="duplicate key 'I22'"):
-        read_yaml(p)
+        read_yaml(p, "acmm.configs")
 
 
 def test_an_unknown_key_of_a_library_form_names_the_users_field():

@@ -1,10 +1,21 @@
-"""What a stage leaves in its run folder when it fails (acmm_qpp.outputs): no result beside a
-config.yaml of another run; files of earlier runs, of other run folders and of nested stages that
-completed are left alone; the sweep keeps its self-describing partial tables."""
+"""What a stage leaves in its run folder (acmm_qpp.outputs): its files are written in a staging
+folder and moved into place when it succeeds; a stage that fails or is interrupted leaves the
+folder as it was; no result beside a config.yaml of another run; files of earlier runs, of other
+run folders and of nested stages that completed are left alone; the sweep keeps its
+self-describing partial tables."""
+import os
+import subprocess
+import sys
+
 import pytest
 
-from acmm_qpp.outputs import stage_outputs
 from acmm_qpp.atomic_write import write_text
+from acmm_qpp.errors import FigureError, OutputError
+from acmm_qpp.outputs import stage, staged_outputs
+from acmm_qpp.runlock import run_lock
+
+DESIGN = ("design.h5", "design_*.png")
+SIMULATE = ("sim.h5", "sim_*.png")
 
 
 class _Boom(Exception):
@@ -18,139 +29,150 @@ def _earlier_run(run):
     write_text(run / "design_gains.png", "old figure")
 
 
-def test_a_stage_failing_after_writing_removes_what_it_wrote(tmp_path):
+def _contents(run):
+    """Name → bytes of each entry (a folder: "folder"; config.yaml without its comment header)."""
+    def body(p):
+        data = p.read_bytes()
+        return b"".join(ln for ln in data.splitlines(True) if not ln.startswith(b"#")) if p.name == "config.yaml" else data
+    return {p.name: body(p) if p.is_file() else "folder" for p in sorted(run.iterdir())}
+
+
+def test_a_stage_writes_in_its_staging_folder_and_moves_its_files_into_place(tmp_path):
     run = tmp_path / "run"
     _earlier_run(run)
-    with pytest.raises(_Boom):
-        with stage_outputs(run, "design", config_text="name: new\n"):
-            write_text(run / "design.h5", "new results")      # replaces the earlier run's file
-            write_text(run / "design_poles.png", "new figure")
-            raise _Boom                                         # e.g. the next figure cannot be written
-    # nothing of the failed run is left; the earlier run's files, the one it replaced included,
-    # and its config.yaml are as before the command
-    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5", "design_gains.png"]
-    assert (run / "config.yaml").read_text() == "name: old\n"
-    assert (run / "design.h5").read_text() == "old results"
+    with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+        assert out.parent == run and out.name.startswith(f".staging-{os.getpid()}-")
+        write_text(out / "design.h5", "new results")
+        write_text(out / "design_poles.png", "new figure")
+        assert (run / "design.h5").read_text() == "old results"       # nothing moved yet
+    # this run's files and config.yaml; the earlier run's figure that this run did not draw is gone
+    assert _contents(run) == {"config.yaml": b"name: new\n", "design.h5": b"new results",
+                              "design_poles.png": b"new figure"}
 
 
-def test_a_stage_whose_config_yaml_cannot_be_written_removes_its_results(tmp_path):
+def test_a_stage_failing_after_writing_leaves_the_folder_as_it_was(tmp_path):
     run = tmp_path / "run"
-    (run / "config.yaml").mkdir(parents=True)                  # config.yaml cannot be written
-    with pytest.raises(OSError):
-        with stage_outputs(run, "design", config_text="name: new\n"):
-            write_text(run / "design.h5", "new results")
-    assert sorted(p.name for p in run.iterdir()) == ["config.yaml"]
+    _earlier_run(run)
+    before = _contents(run)
+    with pytest.raises(_Boom):
+        with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+            write_text(out / "design.h5", "new results")
+            write_text(out / "design_poles.png", "new figure")
+            raise _Boom                                         # e.g. the next figure cannot be written
+    assert _contents(run) == before                             # its staging folder gone too
+
+
+def test_ctrl_c_while_the_figures_are_drawn_leaves_the_folder_as_it_was(tmp_path):
+    from acmm_qpp.results import draw_figures
+
+    run = tmp_path / "run"
+    _earlier_run(run)
+    before = _contents(run)
+
+    def interrupted_figure():
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+            write_text(out / "design.h5", "new results")
+            draw_figures([lambda: write_text(out / "design_poles.png", "a new figure"), interrupted_figure])
+    assert _contents(run) == before
+
+
+@pytest.mark.parametrize("blocked", ["design.h5", "config.yaml"])
+def test_a_directory_in_the_place_of_a_result_or_the_config_moves_nothing(tmp_path, blocked):
+    run = tmp_path / "run"
+    _earlier_run(run)
+    (run / blocked).unlink()
+    (run / blocked).mkdir()
+    before = _contents(run)
+    with pytest.raises(OutputError, match="a directory of that name is in the way"):
+        with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+            write_text(out / "design.h5", "new results")
+    assert _contents(run) == before
+
+
+def test_only_a_figure_failing_keeps_the_results_with_their_config(tmp_path):
+    run = tmp_path / "run"
+    _earlier_run(run)
+    with pytest.raises(FigureError):
+        with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+            write_text(out / "design.h5", "new results")
+            raise FigureError("cannot write design_poles.png")   # raised when the figures are joined
+    # the results and this run's config.yaml; the earlier run's figure is removed as on success
+    assert _contents(run) == {"config.yaml": b"name: new\n", "design.h5": b"new results"}
+
+
+def test_a_directory_in_the_place_of_a_figure_keeps_the_results_with_their_config(tmp_path):
+    run = tmp_path / "run"
+    _earlier_run(run)
+    (run / "design_poles.png").mkdir()
+    with pytest.raises(FigureError, match="design_poles.png: a directory of that name is in the way"):
+        with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+            write_text(out / "design.h5", "new results")
+            write_text(out / "design_poles.png", "new figure")
+    assert _contents(run) == {"config.yaml": b"name: new\n", "design.h5": b"new results",
+                              "design_poles.png": "folder"}
 
 
 def test_completed_nested_stage_and_other_run_folders_are_kept(tmp_path):
-    outer, inner, other = tmp_path / "outer", tmp_path / "inner", tmp_path / "other"
-    for d in (outer, inner, other):
-        d.mkdir()
+    run, other = tmp_path / "run", tmp_path / "other"
+    run.mkdir()
+    other.mkdir()
+    write_text(run / "sim.h5", "an earlier run's simulation")
+    write_text(run / "config.yaml", "name: old\n")
+    write_text(other / "sim.h5", "another run's")
     with pytest.raises(_Boom):
-        with stage_outputs(outer, "simulate", config_text="name: outer\n"):
-            with stage_outputs(inner, "design", config_text="name: inner\n"):
-                write_text(inner / "design.h5", "inner results")
-            write_text(outer / "design.h5", "design run by the outer stage")
-            with stage_outputs(outer, "design", config_text="name: outer\n"):
-                write_text(outer / "design_poles.png", "nested, completed")
-            write_text(other / "sim.h5", "written meanwhile by a stage of another thread")   # recorded too
-            write_text(outer / "sim.h5", "outer results")
+        with staged_outputs(run, SIMULATE, config_text="name: new\n") as sim_out:
+            write_text(sim_out / "sim_axes.png", "drawn before the design")
+            with staged_outputs(run, DESIGN, config_text="name: new\n") as design_out:
+                write_text(design_out / "design.h5", "design results")
+            write_text(sim_out / "sim.h5", "new simulation")
             raise _Boom
-    assert sorted(p.name for p in inner.iterdir()) == ["config.yaml", "design.h5"]
-    assert sorted(p.name for p in other.iterdir()) == ["sim.h5"]
-    # the outer stage's own files go; the nested stage that completed keeps its files and config
-    assert sorted(p.name for p in outer.iterdir()) == ["config.yaml", "design_poles.png"]
-    assert (outer / "config.yaml").read_text().endswith("name: outer\n")
+    # the design finished (results, config.yaml); the simulation did not: its files are gone, and
+    # so is the earlier sim.h5, which the new config.yaml no longer describes
+    assert _contents(run) == {"config.yaml": b"name: new\n", "design.h5": b"design results"}
+    assert _contents(other) == {"sim.h5": b"another run's"}
+
+
+def test_a_nested_stage_figure_failing_does_not_finish_the_outer_stage(tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    write_text(run / "sim.h5", "an earlier run's simulation")
+    with pytest.raises(FigureError):
+        with staged_outputs(run, SIMULATE, config_text="name: sim\n") as sim_out:
+            write_text(sim_out / "sim_axes.png", "drawn before the design")
+            with staged_outputs(run, DESIGN, config_text="name: sim\n") as design_out:
+                write_text(design_out / "design.h5", "design results")
+                raise FigureError("cannot write design_poles.png")
+    assert _contents(run) == {"config.yaml": b"name: sim\n", "design.h5": b"design results"}
+
+
+def test_a_nested_stage_interrupted_keeps_the_earlier_run_whole(tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    with staged_outputs(run, SIMULATE, config_text="cfg: A\n") as sim_out:
+        with staged_outputs(run, DESIGN, config_text="cfg: A\n") as design_out:
+            write_text(design_out / "design.h5", "design A")
+        write_text(sim_out / "sim.h5", "sim A")
+    before = _contents(run)
+    with pytest.raises(KeyboardInterrupt):
+        with staged_outputs(run, SIMULATE, config_text="cfg: B\n"):
+            with staged_outputs(run, DESIGN, config_text="cfg: B\n") as design_out:
+                write_text(design_out / "design.h5", "design B")
+                raise KeyboardInterrupt
+    assert _contents(run) == before
 
 
 def test_a_failed_sweep_keeps_its_partial_tables(tmp_path):
     run = tmp_path / "run"
     run.mkdir()
     with pytest.raises(_Boom):
-        with stage_outputs(run, "sweep", config_text="name: s\n"):
+        with staged_outputs(run, ("sweep.h5",), config_text="name: s\n", keep_partial=True) as out:
+            assert out == run
             write_text(run / "sweep.h5", "snapshot, complete = False")
             raise _Boom
-    assert sorted(p.name for p in run.iterdir()) == ["sweep.h5"]
-
-
-def test_only_a_figure_failing_keeps_the_results_with_their_config(tmp_path):
-    from acmm_qpp.errors import FigureError
-
-    run = tmp_path / "run"
-    _earlier_run(run)
-    with pytest.raises(FigureError):
-        with stage_outputs(run, "design", config_text="name: new\n"):
-            write_text(run / "design.h5", "new results")
-            raise FigureError("cannot write design_poles.png")   # raised when the figures are joined
-    # the results and this run's config.yaml; the earlier run's figure is pruned as on success
-    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5"]
-    assert (run / "config.yaml").read_text().endswith("name: new\n")
-
-
-def test_a_nested_stage_figure_failing_does_not_finish_the_outer_stage(tmp_path):
-    from acmm_qpp.errors import FigureError
-
-    run = tmp_path / "run"
-    run.mkdir()
-    write_text(run / "sim.h5", "an earlier run's simulation")
-    with pytest.raises(FigureError):
-        with stage_outputs(run, "simulate", config_text="name: sim\n"):
-            write_text(run / "sim_axes.png", "drawn before the design")
-            with stage_outputs(run, "design", config_text="name: sim\n"):
-                write_text(run / "design.h5", "design results")
-                raise FigureError("cannot write design_poles.png")
-    # the design finished (results, config.yaml); the simulation did not: its own file is removed,
-    # and so is the earlier sim.h5, which the new config.yaml no longer describes
-    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5"]
-    assert (run / "config.yaml").read_text().endswith("name: sim\n")
-
-
-def test_a_figure_completed_but_not_yet_recorded_is_removed_too(tmp_path):
-    """A figure writer of the worker may complete a file the stage records only when it joins
-    the worker; a stage that fails before then still removes it (it is new or replaced), and
-    leaves the earlier run's files it did not touch."""
-    run = tmp_path / "run"
-    _earlier_run(run)
-    with pytest.raises(_Boom):
-        with stage_outputs(run, "design", config_text="name: new\n"):
-            tmp = run / ".design_poles.png.tmp"
-            tmp.write_text("a writer's figure")               # not through acmm_qpp.results: unrecorded
-            tmp.replace(run / "design_poles.png")
-            raise _Boom
-    assert sorted(p.name for p in run.iterdir()) == ["config.yaml", "design.h5", "design_gains.png"]
-
-
-def test_a_writer_killed_mid_write_leaves_no_temporary_file(tmp_path):
-    """Ctrl-C while a figure writer was inside its atomic write: the writer, killed with its
-    worker, left ``.sim_inertia.png.<random>.tmp`` beside the rolled-back folder (a review);
-    only the next run removed it.  The rollback removes it (the stage holds the run lock)."""
-    run = tmp_path / "run"
-    _earlier_run(run)
-    before = sorted(p.name for p in run.iterdir())
-    with pytest.raises(_Boom):
-        with stage_outputs(run, "simulate", config_text="name: new\n"):
-            (run / ".sim_inertia.png.x7k2q9.tmp").write_bytes(b"half a PNG")   # a killed writer's
-            raise _Boom
-    assert sorted(p.name for p in run.iterdir()) == before
-
-
-def test_ctrl_c_while_the_figures_are_drawn_rolls_the_stage_back(tmp_path):
-    """Ctrl-C while the stage draws its figures (its results written): Python's interrupt path
-    rolls the whole folder back, the results and the figures drawn so far included."""
-    from acmm_qpp.results import draw_figures
-
-    run = tmp_path / "run"
-    _earlier_run(run)
-    before = {p.name: p.read_bytes() for p in run.iterdir()}
-
-    def interrupted_figure():
-        raise KeyboardInterrupt
-
-    with pytest.raises(KeyboardInterrupt):
-        with stage_outputs(run, "design", config_text="name: new\n"):
-            write_text(run / "design.h5", "new results")
-            draw_figures([lambda: write_text(run / "design_poles.png", "a new figure"), interrupted_figure])
-    assert {p.name: p.read_bytes() for p in run.iterdir()} == before
+    assert _contents(run) == {"sweep.h5": b"snapshot, complete = False"}
 
 
 def test_a_sweep_whose_figure_fails_finishes_with_its_config(tmp_runs):
@@ -180,78 +202,41 @@ def test_a_sweep_whose_figure_fails_finishes_with_its_config(tmp_runs):
     assert not (run / "sweep_peak_error.png").exists()
 
 
-def test_an_interrupted_stage_puts_back_every_file_it_replaced(tmp_path):
-    """Ctrl-C after the new results replaced the old ones (while the figures or config.yaml are
-    written): the folder is as before the command, byte for byte, and no hidden folder is left."""
+def test_a_stage_declares_its_files_and_runs_under_the_lock_with_its_staging_folder(tmp_path):
+    class Cfg:
+        def run_dir(self):
+            return tmp_path / "runs" / "x"
+
+        def to_yaml(self):
+            return "name: x\n"
+
+    @stage(("x.h5",), lambda c: c)
+    def run_x(cfg, value, *, out):
+        assert (cfg.run_dir() / ".lock").is_file() and out.parent == cfg.run_dir()
+        write_text(out / "x.h5", value)
+        return out
+
+    out = run_x(Cfg(), "v")
+    assert not out.exists()
+    assert _contents(tmp_path / "runs" / "x") == {"config.yaml": b"name: x\n", "x.h5": b"v"}
+
+
+def test_what_a_killed_run_left_is_removed_by_the_next_run(tmp_path):
+    """A run killed with kill -9 leaves its staging folder, a writer's temporary file and the
+    lock file (the kernel released the lock); the next run of that folder removes them."""
     run = tmp_path / "run"
     _earlier_run(run)
-    write_text(run / "design_poles.png", "old poles")
-    before = {p.name: p.read_bytes() for p in run.iterdir()}
-    with pytest.raises(KeyboardInterrupt):
-        with stage_outputs(run, "design", config_text="name: new\n"):
-            write_text(run / "design.h5", "new results")
-            write_text(run / "design_gains.png", "new figure")
-            (run / "design_poles.png").unlink()         # whatever the stage did to its own files
-            raise KeyboardInterrupt
-    assert {p.name: p.read_bytes() for p in run.iterdir()} == before
-
-
-def test_a_stage_that_fails_in_its_config_yaml_puts_the_old_one_back(tmp_path, monkeypatch):
-    import acmm_qpp.outputs as outputs
-
-    run = tmp_path / "run"
-    _earlier_run(run)
-
-    def prune_fails(*a, **k):                      # config.yaml written, then the end fails
-        raise OSError("disk full")
-
-    monkeypatch.setattr(outputs, "prune", prune_fails)
-    with pytest.raises(OSError):
-        with stage_outputs(run, "design", config_text="name: new\n"):
-            write_text(run / "design.h5", "new results")
-    assert (run / "config.yaml").read_text() == "name: old\n"
-    assert (run / "design.h5").read_text() == "old results"
-
-
-def test_a_finished_stage_leaves_no_rollback_folder_and_a_killed_ones_is_removed(tmp_path):
-    import subprocess
-    import sys
-
-    run = tmp_path / "run"
-    _earlier_run(run)
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
-                          text=True).stdout.strip()
-    (run / f".rollback-{dead}-1").mkdir()              # left by a process killed with kill -9
-    write_text(run / f".rollback-{dead}-1" / "design.h5", "older")
-    with stage_outputs(run, "design", config_text="name: new\n"):
-        write_text(run / "design.h5", "new results")
-    assert not [p for p in run.iterdir() if p.name.startswith(".rollback")]
-    assert (run / "design.h5").read_text() == "new results"
-
-
-def _slow_figure(path):
-    """A figure writer that takes 1 s (module level: the worker calls it by reference)."""
-    import time
-
-    time.sleep(1.0)
-    write_text(path, "a figure landing late")
-    return path
-
-
-def test_a_nested_stage_interrupted_keeps_the_earlier_run_whole(tmp_path):
-    """acmm simulate → design, both of an earlier complete run on disk; the new design is
-    interrupted: the design puts back its earlier design.h5, and the simulation that ran it does
-    not then remove that restored file as one it wrote (it did: the earlier design.h5 was lost)."""
-    d = tmp_path / "run"
-    d.mkdir()
-    with stage_outputs(d, "simulate", config_text="cfg: A\n"):
-        with stage_outputs(d, "design", config_text="cfg: A\n"):
-            write_text(d / "design.h5", "design A")
-        write_text(d / "sim.h5", "sim A")
-    before = {p.name: p.read_text() for p in d.iterdir()}
-    with pytest.raises(KeyboardInterrupt):
-        with stage_outputs(d, "simulate", config_text="cfg: B\n"):
-            with stage_outputs(d, "design", config_text="cfg: B\n"):
-                write_text(d / "design.h5", "design B")
-                raise KeyboardInterrupt
-    assert {p.name: p.read_text() for p in d.iterdir()} == before
+    code = ("import os, sys\nfrom acmm_qpp.outputs import staged_outputs\nfrom acmm_qpp.runlock import run_lock\n"
+            "with run_lock(sys.argv[1]):\n"
+            "    with staged_outputs(sys.argv[1], ('design.h5',), config_text='name: killed') as out:\n"
+            "        (out / 'design.h5').write_text('half')\n"
+            "        (out.parent / '.design_gains.png.x7k2.tmp').write_text('half a PNG')\n"
+            "        os.kill(os.getpid(), 9)\n")
+    done = subprocess.run([sys.executable, "-c", code, str(run)], capture_output=True, text=True, timeout=60)
+    assert done.returncode == -9, done.stderr
+    left = sorted(p.name for p in run.iterdir() if p.name.startswith("."))
+    assert left[0] == ".design_gains.png.x7k2.tmp" and left[1] == ".lock" and left[2].startswith(".staging-")
+    with run_lock(run):
+        pass
+    assert _contents(run) == {"config.yaml": b"name: old\n", "design.h5": b"old results",
+                              "design_gains.png": b"old figure"}

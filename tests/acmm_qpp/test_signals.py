@@ -1,5 +1,5 @@
 """SIGTERM and SIGHUP unwind a command like Ctrl-C (:mod:`acmm_qpp.signals`).  Before: SIGTERM
-killed the command at once, and ``.lock``/``.rollback-*`` stayed behind."""
+killed the command at once, and the lock file and a rollback folder stayed behind."""
 from __future__ import annotations
 
 import hashlib
@@ -61,7 +61,7 @@ _STOP_AT = textwrap.dedent("""
                                         (signal.SIGTERM, "figures"), (signal.SIGHUP, "results")])
 def test_a_terminated_run_rolls_back_like_ctrl_c_and_leaves_no_process(tmp_path, sig, point):
     """SIGTERM/SIGHUP at each step of ``acmm simulate`` (designing, integrating, drawing, writing
-    the results) exits 128 + N with one line and leaves no lock, no rollback folder, no half
+    the results) exits 128 + N with one line and leaves no lock, no staging folder, no half
     file: the earlier complete run as it was, or the new design stage whole."""
     first = subprocess.run([sys.executable, "-c", "from acmm.cli.app import main; main()", "simulate", "mb3",
                             "simulation.orbits=1"], cwd=tmp_path, capture_output=True, text=True, env=ENV,
@@ -147,41 +147,32 @@ def test_a_signal_before_the_command_runs_is_one_line_and_its_exit_code(tmp_path
     assert not list(tmp_path.iterdir())
 
 
-def test_a_second_interrupt_soon_after_is_dropped_and_a_later_one_raised(tmp_path):
-    """An interrupt within REPEAT_WINDOW s of the one raised before is dropped (raised inside the
-    cleanup it broke a lock: 'RuntimeError: release unlocked lock', or hung a pool's shutdown);
-    a later one is raised as usual, also after the first was swallowed and the command went on
-    (a review: a marker that never cleared dropped it or exited without the rollback), and a
-    held step still holds it."""
+def test_an_interrupt_in_a_deferred_step_is_raised_at_its_end(tmp_path):
+    """Ctrl-C, SIGTERM or SIGHUP arriving inside :func:`acmm_qpp.signals.interrupts_deferred`
+    (a finished stage's files being moved into place) is raised when the step is whole, by the
+    handler in force before it; outside, SIGTERM raises at once."""
     script = textwrap.dedent("""
         import os, signal, time
         from acmm_qpp import signals
         signals.terminate_like_ctrl_c()
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            try:
+                with signals.interrupts_deferred():
+                    os.kill(os.getpid(), sig)
+                    time.sleep(0.1)
+                    print("step finished", flush=True)
+            except KeyboardInterrupt as exc:
+                print("raised at the end:", type(exc).__name__, getattr(exc, "exit_code", 130), flush=True)
         try:
             os.kill(os.getpid(), signal.SIGTERM)
             time.sleep(5)
-        except KeyboardInterrupt as exc:
-            print("unwinding from", type(exc).__name__, flush=True)
-        os.kill(os.getpid(), signal.SIGINT)          # at once: dropped, the cleanup goes on
-        time.sleep(0.2)
-        print("cleanup finished", flush=True)
-        signals.REPEAT_WINDOW = 0.0                  # (as if the window had passed)
-        held = signals.hold_interrupts()
-        os.kill(os.getpid(), signal.SIGINT)          # in a held step: waits for its end
-        time.sleep(0.2)
-        print("held step finished", flush=True)
-        try:
-            signals.release_interrupts(held)
         except KeyboardInterrupt:
-            print("raised at the release", flush=True)
-        try:
-            os.kill(os.getpid(), signal.SIGHUP)
-            time.sleep(5)
-        except KeyboardInterrupt as exc:
-            print("raised again:", exc.exit_code, flush=True)
+            print("raised at once", flush=True)
     """)
     done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, env=ENV,
                           timeout=60, check=False)
-    assert done.stdout.splitlines() == ["unwinding from Terminated", "cleanup finished", "held step finished",
-                                        "raised at the release", "raised again: 129"], done.stdout + done.stderr
+    assert done.stdout.splitlines() == ["step finished", "raised at the end: KeyboardInterrupt 130",
+                                        "step finished", "raised at the end: Terminated 143",
+                                        "step finished", "raised at the end: Terminated 129",
+                                        "raised at once"], done.stdout + done.stderr
     assert done.returncode == 0 and done.stderr == ""

@@ -387,12 +387,13 @@ def test_help_lists_the_packaged_configs_of_its_kind_from_the_folder(run_acmm, c
 
 
 def test_the_packaged_config_kinds_of_the_help_are_those_detect_kind_finds():
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.cli.plumbing import packaged_configs
     from acmm_qpp.configio import detect_kind, read_yaml
 
     for kind in ("acmm", "sweep", "qpp"):
-        for name in packaged_configs((kind,)):
-            assert detect_kind(read_yaml(CONFIGS / f"{name}.yaml")[0]) == kind, name
+        for name in packaged_configs(PACKAGED_CONFIGS, (kind,)):
+            assert detect_kind(read_yaml(CONFIGS / f"{name}.yaml", PACKAGED_CONFIGS)[0]) == kind, name
 
 
 @pytest.mark.parametrize("command", ("validate", "tea", "linearize", "design", "certify", "simulate", "sweep"))

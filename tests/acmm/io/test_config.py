@@ -13,6 +13,7 @@ import pytest
 import yaml
 
 from acmm.io.config import Config, load_config, parse_config
+from acmm import PACKAGED_CONFIGS
 from acmm_qpp.configio import packaged_config_path
 from acmm_qpp.errors import ConfigError
 
@@ -49,7 +50,7 @@ def test_shipped_configs_validate(name):
 
 def test_packaged_default_and_bare_names_work_from_any_directory(tmp_runs):
     assert load_config(None).name == "staircase"
-    assert packaged_config_path("mb3.yaml").is_file()
+    assert packaged_config_path("mb3.yaml", PACKAGED_CONFIGS).is_file()
     assert load_config("mb3").name == "mb3"
     assert load_config("ac.yaml").name == "ac"
 

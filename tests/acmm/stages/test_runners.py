@@ -17,7 +17,7 @@ from tests.conftest import CONFIGS
 
 
 def _all_datasets(path):
-    """Datasets other than the netCDF dimension scales added by acmm_qpp.netcdf_layout."""
+    """Datasets other than the netCDF dimension scales."""
     found = {}
     with h5py.File(path, "r") as f:
         f.visititems(lambda name, obj: found.__setitem__(name, dict(obj.attrs))

@@ -87,10 +87,11 @@ def test_simulate_rejects_inconsistent_simulation_before_writing(tmp_path, monke
 
     from acmm.cli.app import app
 
+    from acmm import PACKAGED_CONFIGS
     from acmm_qpp.configio import packaged_config_path
 
     monkeypatch.chdir(tmp_path)
-    text = packaged_config_path("mb3.yaml").read_text()
+    text = packaged_config_path("mb3.yaml", PACKAGED_CONFIGS).read_text()
     text = text.replace("name: mb3", "name: badsim").split("simulation:")[0] + extra
     (tmp_path / "bad.yaml").write_text(text)
     out = CliRunner().invoke(app, ["simulate", "bad.yaml"])
