@@ -226,8 +226,8 @@ def design(config: Optional[str] = ConfigArg,
             _echo_robust(p.spec.name, p.gain.robust)
     if r.fit is not None and r.fit.form == "table":
         nodes = sum(not p.spec.level for p in r.points)
-        added = (f" ({len(r.points) - nodes} levels and {nodes} node(s) added where the scheduled loop left "
-                 f"the sector)") if nodes else ""
+        added = (f" ({len(r.points) - nodes} levels and {nodes} node(s) added where a path TEA's sector margin "
+                 f"was below {r.config.schedule.refine_margin:g} n)") if nodes else ""
         typer.echo(f"  schedule: table, K linear in theta2* between the {len(r.points)} design points{added}")
     elif r.fit is not None:
         typer.echo(f"  schedule: order {r.fit.order} in theta2*; worst relative fit residual "
@@ -270,20 +270,30 @@ def _echo_robust(name: str, rd) -> None:
     """The per-plant verdicts of a robust design (acmm.design.robust.RobustDesign)."""
     fam = rd.family
     held = rd.sector_held()
-    typer.echo(f"  robust gain at {name}: {len(fam.labels)} plants (nominal, {len(fam.labels) - 1 - sum(l.startswith('scale') for l in fam.labels)} "
-               f"of {fam.draws} draws, {fam.unphysical} unphysical, {fam.folded} whose design branch folds; "
-               f"{sum(l.startswith('scale') for l in fam.labels)} uniform scalings); worst pole real part "
+    scalings = sum(lab.startswith("scale") for lab in fam.labels)
+    folded_scalings = (f", {len(fam.scalings_folded)} scaling(s) whose design branch folds"
+                       if fam.scalings_folded else "")
+    typer.echo(f"  robust gain at {name}: {len(fam.labels)} plants (nominal, {len(fam.labels) - 1 - scalings} "
+               f"of {fam.draws} draws: {fam.unphysical} unphysical, {fam.folded} whose design branch folds; "
+               f"{scalings} uniform scalings{folded_scalings}); worst pole real part "
                f"{rd.start_abscissa:+.3f} n -> {rd.worst_abscissa:+.3f} n ({rd.restarts} BFGS restart(s): {rd.stop}; "
                f"{rd.solve_time:.1f} s)")
     typer.echo(f"    {'plant':<12} {'pitch TEA (deg)':>15} {'decay (n)':>10} {'cone (deg)':>10}  verdict (certified by X)")
     for lab, th, c, h in zip(fam.labels, fam.theta, rd.certificates, held):
-        verdict = "in the sector" if h else "stable, not in the sector" if c.decay > 0 else "NOT proved stable"
+        if not c.decay > 0:
+            typer.echo(f"    {lab:<12} {math.degrees(th[1]):>15.2f} {'-':>10} {'-':>10}  NOT proved stable "
+                       f"(largest Re(pole) {c.max_real:+.4f} n)")
+            continue
+        verdict = "in the sector" if h else "stable, not in the sector"
         typer.echo(f"    {lab:<12} {math.degrees(th[1]):>15.2f} {c.decay:>10.4f} {c.cone_deg:>10.2f}  {verdict}")
     sigma, phi = rd.sector
-    typer.echo(f"  every plant is certified in Re <= -{rd.decay:.4f}n, |arg(-pole)| <= {rd.cone_deg:.2f} deg; "
-               + (f"the sector (Re <= -{sigma:g}n, {phi:g} deg) holds for all" if held.all()
-                  else f"the sector (Re <= -{sigma:g}n, {phi:g} deg) holds for {int(held.sum())} of {held.size}")
-               + (f"; NOT proved stable: {', '.join(rd.unproved())}" if rd.unproved() else ""))
+    unproved = rd.unproved()
+    if unproved:
+        typer.echo(f"  warning: the robust gain at {name} is NOT proved stable for {len(unproved)} of "
+                   f"{len(fam.labels)} plants ({', '.join(unproved)}): no region is certified for the family")
+    else:
+        typer.echo(f"  every plant is certified in Re <= {-rd.decay:+.4f}n, |arg(-pole)| <= {rd.cone_deg:.2f} deg; "
+                   f"the sector (Re <= -{sigma:g}n, {phi:g} deg) holds for {int(held.sum())} of {held.size}")
 
 
 def _branch_jump_text(jump) -> str:

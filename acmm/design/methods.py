@@ -69,7 +69,8 @@ class PointGain:
     robust : acmm.design.robust.RobustDesign or None
         With ``design.robust``: the family, the route's nominal gain the search started from and one
         certificate per plant; K, poles, margins and energy are then the robust gain's on the
-        nominal plant.  None without.
+        nominal plant, ``lmi`` is None (its certificate was of the nominal gain) and ``riccati``
+        is the route's reference design.  None without.
     """
 
     K: np.ndarray
@@ -183,9 +184,10 @@ def with_robust_gain(gain: PointGain, A, B, scales, inertia, bias, theta, s, st:
     order = np.lexsort((lam.imag, lam.real))
     margin = float(np.min(sector_lqr.sector_margin(lam, n, s.sector.sigma, s.sector.half_angle_deg)))
     e_norm, e_elem = sector_lqr.sector_robustness(A, B, rd.K, n, s.sector.sigma, s.sector.half_angle_deg, scales)
+    # the route's LMI certificate proves things of the nominal gain, not of this one: not kept
     return replace(gain, K=rd.K, poles=lam[order], margin=margin, eig_condition=kappa[order],
                    robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
-                   energy=control_energy(A, B, rd.K, n, scales, e), robust=rd)
+                   energy=control_energy(A, B, rd.K, n, scales, e), lmi=None, robust=rd)
 
 
 #: The routes by ``design.pole_method``.

@@ -13,10 +13,11 @@ stays stable for ±30 % inertia variations.  Here the claim is designed for and 
    branch folds before it (no connected equilibrium) is not a member and is counted.
 2. **The gain** (:func:`robust_gain`): the worst spectral abscissa over the family,
    f(K) = max_i max Re λ(A_i − B_i K), minimized from the route's nominal gain by BFGS on the
-   scaled gain (Lewis & Overton 2013: BFGS on a nonsmooth, locally Lipschitz spectral function
-   converges to Clarke-stationary points; HIFOO, Burke et al. 2006, designs multi-model
-   fixed-order controllers this way, and MATLAB's ``systune`` optimizes the worst case over
-   plants alike).  BFGS is restarted from its last point until a restart lowers f by less than
+   scaled gain (Lewis & Overton 2013 observe that BFGS with a weak line search works well on
+   such nonsmooth spectral functions, without a convergence proof; HIFOO, Burke et al. 2006,
+   designs multi-model fixed-order controllers this way, and MATLAB's ``systune`` optimizes the
+   worst case over plants alike).  The objective is the abscissa alone: the cone is left free,
+   and the route's gain is kept when every plant is already certified in the sector with it.  BFGS is restarted from its last point until a restart lowers f by less than
    :data:`RESTART_TOL` (units of n), at most :data:`MAX_RESTARTS` times (then ``stop`` says so).
    A common Lyapunov matrix for the whole family — the convex route — is infeasible for these
    stations (the directions of total momentum the CMGs cannot change rotate with the inertia),
@@ -103,7 +104,9 @@ class PlantFamily:
     unphysical : int
         Draws that were not a rigid body's inertia.
     folded : int
-        Physical draws (or scalings) whose design branch folds before them: no member.
+        Physical draws whose design branch folds before them: no member.
+    scalings_folded : tuple of float
+        The uniform scalings (dimensionless factors) whose design branch folds before them: no member.
     """
 
     labels: tuple
@@ -112,6 +115,7 @@ class PlantFamily:
     draws: int
     unphysical: int
     folded: int
+    scalings_folded: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -125,7 +129,8 @@ class RegionCertificate:
     decay : float
         Certified decay, units of n: every pole has Re λ ≤ −decay·n (≤ 0: stability not proved).
     cone_deg : float
-        Certified cone, deg: every pole has |arg(−λ)| ≤ cone_deg (90 when only the half-plane is proved).
+        Certified cone, deg: every pole has |arg(−λ)| ≤ cone_deg (90 when only the half-plane is
+        proved; NaN when not even that is: no certificate).
     max_real : float
         Largest real part of the computed poles, units of n (for comparison, not a proof).
     """
@@ -182,8 +187,10 @@ class RobustDesign:
 
     @property
     def cone_deg(self) -> float:
-        """The cone half-angle every plant of the family is certified to keep, deg."""
-        return float(max(c.cone_deg for c in self.certificates))
+        """The cone half-angle every plant of the family is certified to keep, deg (NaN when a
+        plant has no certificate)."""
+        cones = [c.cone_deg for c in self.certificates]
+        return float("nan") if any(np.isnan(cones)) else float(max(cones))
 
     def unproved(self) -> list[str]:
         """The plants whose stability is not certified (decay ≤ 0).
@@ -250,15 +257,17 @@ def plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFam
         inertias.append(I)
         thetas.append(tea.theta)
         members += 1
+    scalings_folded = []
     for s in (1.0 - h, 1.0 + h):
         tea = solve_tea_connected(th0, I0, b0, s * I0, n, b0)
         if tea is None:
-            folded += 1
+            scalings_folded.append(float(s))
             continue
-        labels.append(f"scale {s:.2f}")
+        labels.append(f"scale {s:.6g}")
         inertias.append(s * I0)
         thetas.append(tea.theta)
-    return PlantFamily(tuple(labels), np.array(inertias), np.array(thetas), draws, unphysical, folded)
+    return PlantFamily(tuple(labels), np.array(inertias), np.array(thetas), draws, unphysical, folded,
+                       tuple(scalings_folded))
 
 
 def _worst_abscissa(Ks: np.ndarray, models) -> tuple[float, np.ndarray]:
@@ -355,16 +364,16 @@ def region_certificate(As: np.ndarray, Bs: np.ndarray, Ks: np.ndarray) -> Region
     try:
         L = np.linalg.cholesky(X)
     except np.linalg.LinAlgError:
-        return RegionCertificate(X, float("-inf"), 90.0, max_real)
+        return RegionCertificate(X, float("-inf"), float("nan"), max_real)
     Z = sla.solve_triangular(L, Acl @ L, lower=True)
     if not np.all(np.isfinite(Z)):
-        return RegionCertificate(X, float("-inf"), 90.0, max_real)
+        return RegionCertificate(X, float("-inf"), float("nan"), max_real)
     delta = 8 * N * np.finfo(float).eps * np.linalg.cond(L) * (np.linalg.norm(As, 2)
                                                                 + np.linalg.norm(Bs, 2) * np.linalg.norm(Ks, 2))
     H, Sk = Z + Z.T, Z - Z.T
     decay = -0.5 * float(np.max(np.linalg.eigvalsh(H))) - delta
     if not decay > 0:
-        return RegionCertificate(X, decay, 90.0, max_real)
+        return RegionCertificate(X, decay, float("nan"), max_real)
 
     def holds(phi: float) -> bool:
         t = np.tan(phi)
@@ -434,10 +443,21 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
     models = models_at(1.0)
     K0s = np.asarray(K_nominal, float) * d[None, :] / input_scale
     start = _worst_abscissa(K0s, models)[0]
-    Ks, restarts = K0s, 0
+    start_certs = tuple(region_certificate(As, Bs, K0s) for As, Bs in models)
+    sigma, phi = sector
+    if all(c.decay >= sigma and c.cone_deg <= phi for c in start_certs):
+        return RobustDesign(np.asarray(K_nominal, float), np.asarray(K_nominal, float), fam, start_certs, start,
+                            start, 0, "the route's gain is certified in the sector for every plant: kept",
+                            time.perf_counter() - t0, (float(sigma), float(phi)))
+    Ks, restarts, limited = K0s, 0, []
     for step in CONTINUATION:
         Ks, worst, r, stop = robust_gain(models if step == 1.0 else models_at(step), Ks)
         restarts += r
+        if stop.startswith(f"{MAX_RESTARTS} restarts"):
+            limited.append(f"{step:g}")
+    stop = (f"every continuation step settled (a restart lowered the worst abscissa by less than "
+            f"{RESTART_TOL:g} n)" if not limited else
+            f"the restart limit ({MAX_RESTARTS}) was reached at continuation step(s) {', '.join(limited)}")
     certs = tuple(region_certificate(As, Bs, Ks) for As, Bs in models)
     K = Ks * input_scale / d[None, :]
     return RobustDesign(K, np.asarray(K_nominal, float), fam, certs, worst, start, restarts, stop,

@@ -142,9 +142,8 @@ class Schedule(_Model):
     refine_points: int = Field(
         0, strict=True, ge=0, le=200,
         description="table schedule: at most this many gain nodes added by bisecting, in the blend parameter s, "
-                    "each interval between nodes where the scheduled loop leaves the sector (by less than "
-                    "refine_margin) at a path check TEA; the added nodes are schedule gains, not stair-case "
-                    "levels (0: none)")
+                    "each interval between nodes that holds a path check TEA whose sector margin is below "
+                    "refine_margin; the added nodes are schedule gains, not stair-case levels (0: none)")
     refine_margin: float = Field(
         0.0, ge=0, le=1, description="sector margin, units of n, that refine_points asks of every path check TEA")
 

@@ -78,10 +78,15 @@ def point_items(points) -> dict:
                               "input, time in 1/n (acmm.design.regional_lmi.control_energy)"),
         }
         if res.robust is not None:
-            pts[f"{k:03d}_{p.spec.name}"]["robust"] = _robust_items(res.robust, p.gain)
-            pts[f"{k:03d}_{p.spec.name}"]["K"] = replace(
-                pts[f"{k:03d}_{p.spec.name}"]["K"], description="robust gain for the family of design.robust "
-                "(group robust), u = -K x")
+            g = pts[f"{k:03d}_{p.spec.name}"]
+            g["robust"] = _robust_items(res.robust, p.gain)
+            g["K"] = replace(g["K"], description="robust gain for the family of design.robust (group robust), u = -K x")
+            for key in ("Q", "P", "riccati_residual", "riccati_backward_error", "riccati_condition",
+                        "riccati_ill_conditioned"):
+                g[key] = replace(g[key], description=g[key].description + " of the route's reference sector LQR "
+                                 "(not of the robust gain K)")
+            for key in ("robustness_radius", "robustness_radius_elementwise"):
+                g[key] = replace(g[key], description=g[key].description + " (0 when K has a pole outside the sector)")
         if res.lmi is not None:
             pts[f"{k:03d}_{p.spec.name}"]["lmi"] = _lmi_items(res.lmi)
             for key in ("Q", "P", "riccati_residual", "riccati_backward_error", "riccati_condition",
