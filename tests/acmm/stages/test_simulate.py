@@ -48,8 +48,9 @@ def test_claim2_staircase_130_orbits(tmp_path, monkeypatch, staircase_shipped):
     with h5py.File(path) as f:
         gain, tea = f["levels/gain"][()], f["levels/tea_estimate"][()]
     with h5py.File(tmp_path / "runs" / "staircase" / "design.h5") as f:
-        Ks, th = f["K"][()], f["tea"][()][:, 1]
-    assert Ks.shape == (12, 3, 24) and np.all(np.diff(th) > 0)
+        Ks, th, level = f["K"][()], f["tea"][()][:, 1], f["level"][()]
+    # 12 levels and the nodes the table's refinement added between them, in the order of θ2*
+    assert int(level.sum()) == 12 and Ks.shape == (level.size, 3, 24) and np.all(np.diff(th) > 0)
     for k in (0, 5, 11):
         want = np.array([[np.interp(tea[k, 1], th, Ks[:, i, j]) for j in range(24)] for i in range(3)])
         np.testing.assert_allclose(gain[k], want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
