@@ -574,17 +574,21 @@ def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
                         f"T' = {c.T_worst:.4g} s; the trapezoid rule on the samples gives {c.m_sampled:.6g}: "
                         f"enclosure gap {max(c.m_sampled - c.m, 0.0) / c.m_sampled:.2g} relative)"
                         + (f"; beta3 = {c.beta3:.4g} over the sphere y_o +- beta_o, rates within "
-                           f"{c.note['rho_v']:.4g} of the nominal ones" if "rho_v" in c.note else "")),
+                           f"{c.note['rho_v']:.4g} of the nominal ones" if "rho_v" in c.note else "")
+                        + (f"; m not bounded: {c.note['unbounded']}" if "unbounded" in c.note else "")),
         "peak": (bool(peak <= 1.0), f"gamma_inf * max E/m = {peak:.6g} <= 1 (the L2 sphere bounds the L-infinity "
                  f"sphere on [0, T], eq 10.45)"),
     }
     nl = cfg.nonlinearity
     if isinstance(nl, ExpressionNonlinearity):
-        ylo, yhi = c.enclosure.box(res.Cz)          # every t of [0, T], not the samples only
         rng = np.asarray(nl.y_range, float)
-        lo = ylo.min(axis=1) - cfg.spheres.beta_o
-        hi = yhi.max(axis=1) + cfg.spheres.beta_o
-        ok = bool(np.all(lo >= rng[:, 0]) and np.all(hi <= rng[:, 1]))
+        if c.enclosure is None:                     # (not enclosed: nothing is proved of y_o)
+            lo, hi, ok = np.full(len(rng), -np.inf), np.full(len(rng), np.inf), False
+        else:
+            ylo, yhi = c.enclosure.box(res.Cz)      # every t of [0, T], not the samples only
+            lo = ylo.min(axis=1) - cfg.spheres.beta_o
+            hi = yhi.max(axis=1) + cfg.spheres.beta_o
+            ok = bool(np.all(lo >= rng[:, 0]) and np.all(hi <= rng[:, 1]))
         out["range"] = (ok, f"y_o ± beta_o within nonlinearity.y_range on [0, T] ({np.round(lo, 4).tolist()} … "
                             f"{np.round(hi, 4).tolist()}; the nominal loop enclosed on cells)")
         proof = cfg.expression_model().proof

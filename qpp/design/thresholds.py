@@ -197,7 +197,7 @@ class Consistent:
     enclosure : qpp.design.nominal_enclosure.NominalEnclosure or None
         The nominal loop enclosed on cells of [0, T] (state units).
     note : dict
-        For the polar arm: ``rho_v`` (the rates' sphere, m/s and rad/s), ``dq_upper`` and ``dq_gap``
+        ``unbounded``: why the nominal loop could not be enclosed (then m = 0); for the polar arm: ``rho_v`` (the rates' sphere, m/s and rad/s), ``dq_upper`` and ``dq_gap``
         (the bound of sup |Δq| and its enclosure's width, 1/m²).
     """
 
@@ -322,8 +322,12 @@ def consistent(cfg: QppConfig, t, y_o, x_o, sector, coupled, T: float, a: float,
     sp = cfg.spheres
     P = cfg.lure_plant()
     Az, Bz, Cz, extra = loop
-    enc = enclose(Az, np.asarray(Bz)[:, :P.p], extra["z0"], cfg.simulation.r_o, T)
     k = np.max(np.abs(np.asarray(sector, float)), axis=1)
+    beta_i = float(np.sqrt(P.p) * sp.beta_ri + np.sqrt(P.r) * sp.d_inf)
+    try:
+        enc = enclose(Az, np.asarray(Bz)[:, :P.p], extra["z0"], cfg.simulation.r_o, T)
+    except ValueError as exc:            # a loop too stiff for the cell budget: m is not bounded
+        return Consistent(beta_i, np.inf, np.inf, 0.0, k, float(T), np.inf, note={"unbounded": str(exc)})
     te = enc.edges[1:]
     h = enc.h
     b3, note = _beta3_at(cfg, T, te, k, enc, loop, sp.beta_o)
@@ -342,7 +346,6 @@ def consistent(cfg: QppConfig, t, y_o, x_o, sector, coupled, T: float, a: float,
         ratio = np.where(B > 0, I_left / B, 0.0)
     # (I_left + x f)/(B + x) is monotone in x ∈ [0, h]: its largest value is at an end
     b4 = grow * np.sqrt(np.maximum(ratio, (I_left + h * f) / (B + h)))
-    beta_i = float(np.sqrt(P.p) * sp.beta_ri + np.sqrt(P.r) * sp.d_inf)
     with np.errstate(divide="ignore"):
         m = sp.beta_o / ((beta_i + sp.beta_o * b3 + b4) * (1 + PAD))
     j = int(np.argmin(m))
