@@ -411,7 +411,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     res.bz = cfg.design.bz
     coupled = sector_coupling(cfg)
     loop = (Azd["eq10.7"], Bzd["eq10.7"], Cz, {"z0": initial_state(cfg, P, K1, Kc), "a": a})
-    res.consistent = consistent(cfg, t, y_o, x_o, sector, coupled, T, a, loop)
+    res.consistent = consistent(cfg, t, y_o, sector, coupled, T, a, loop)
     # the certificate is of the loop that runs (B_z of eq 10.7, as simulated), whatever design.bz
     # says; the printed B_z reading stays in the bookkeeping
     An = Azd["eq10.7"] + a * np.eye(len(Azd["eq10.7"]))

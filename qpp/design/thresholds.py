@@ -276,7 +276,7 @@ def _beta3_at(cfg: QppConfig, T: float, te: np.ndarray, k: np.ndarray, enc, loop
     return gcum[np.clip(np.searchsorted(ends, te - 1e-12 * max(T, 1.0), side="left"), 0, gcum.size - 1)], note
 
 
-def consistent(cfg: QppConfig, t, y_o, x_o, sector, coupled, T: float, a: float, loop) -> Consistent:
+def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop) -> Consistent:
     """Threshold m (10.57, 12.1) in one sector (the circle criterion's) and one norm (Euclidean),
     bounded for every truncation time T' ∈ (0, T] from an enclosure of the nominal loop.
 
@@ -301,8 +301,6 @@ def consistent(cfg: QppConfig, t, y_o, x_o, sector, coupled, T: float, a: float,
         Sample times of the nominal loop, s (the trapezoid rule on them gives ``m_sampled``).
     y_o : (p, S) array
         Nominal output, output units.
-    x_o : (n, S) array
-        Nominal plant state, state units.
     sector : (r, 2) array
         The circle criterion's sector, dimensionless gains.
     coupled : (r,) bool array

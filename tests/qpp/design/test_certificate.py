@@ -164,8 +164,9 @@ def _packaged(name):
     pytest.param("qpp_unstable", marks=pytest.mark.slow), pytest.param("qpp_cubic2", marks=pytest.mark.slow),
     pytest.param("qpp_manipulator", marks=pytest.mark.slow)])
 def test_independent_verifier_agrees_on_every_packaged_config(tmp_path, name):
-    """The tool's verdict, β1 (1e-6), m (1e-4) and γ∞ equal the independent verifier's; every
-    scenario of a certified design stays inside its output sphere on [0, T]."""
+    """The tool's verdict and premises, β1 (1e-6), m (5e-4, the tool's a lower bound) and γ∞ equal
+    the independent verifier's; every scenario of a certified design stays inside its output sphere
+    on [0, T]."""
     tool, _, _ = _verified(tmp_path, _packaged(name))
     assert tool == (name in ("qpp_unstable", "qpp_saturation", "qpp_cubic2"))
 
