@@ -213,11 +213,6 @@ class Consistent:
     note: dict = field(default_factory=dict)
 
 
-def _sup_sin(omega: float, T: float) -> float:
-    """sup_{0 ≤ t ≤ T} |sin ωt| (dimensionless)."""
-    return 1.0 if omega * T >= np.pi / 2 else float(abs(np.sin(omega * T)))
-
-
 def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, beta_o: float, T: float):
     """The polar arm's β3 proved over the sphere around the nominal trajectory, per group of the
     enclosure's cells (:data:`ARM_GROUPS` groups of [0, T]): y = (x1, x2) within β_o of the
@@ -256,7 +251,8 @@ def _beta3_at(cfg: QppConfig, T: float, te: np.ndarray, k: np.ndarray, enc, loop
     if isinstance(nl, SinusoidalNonlinearity):     # closed form: k·sup_{[0, T']} |sin ωt|
         k_struct = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
         kk = np.maximum(k, k_struct)
-        return np.sqrt(np.sum(kk ** 2)) * np.array([_sup_sin(nl.omega, x) for x in te]), note
+        wt = nl.omega * np.asarray(te, float)
+        return np.sqrt(np.sum(kk ** 2)) * np.where(wt >= np.pi / 2, 1.0, np.abs(np.sin(wt))), note
     if isinstance(nl, ExpressionNonlinearity):
         M = cfg.expression_model()
         if M.proof.slope_ok:         # proved bounds on cells of [0, T]; a T' takes every cell it reaches
@@ -336,7 +332,9 @@ def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop
     f = np.asarray(f, float) * (1 + PAD)
     I_right = np.cumsum(h * f) * (1 + PAD)
     I_left = np.concatenate([[0.0], I_right[:-1]])
-    E = np.array([spheres.E_factor(a, x) for x in enc.edges])
+    aT = a * enc.edges                          # E of eq 10.44 at every edge (spheres.E_factor, vectorized)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        E = np.where(aT < 1e-8, np.sqrt(enc.edges * (1 + aT)), np.sqrt(np.expm1(2 * aT) / (2 * a if a else 1.0)))
     E_lo, E_hi = E * (1 - PAD), E * (1 + PAD)
     grow = np.exp(a * te) * (1 + PAD)
     B = E_lo[:-1] ** 2
