@@ -157,6 +157,29 @@ def _picard(X: np.ndarray, v: np.ndarray) -> np.ndarray:
     return d
 
 
+#: steps propagated by one product with the stacked powers Φ, Φ², …, Φ^BLOCK (:func:`_propagate`)
+BLOCK = 64
+
+
+def _propagate(Phi: np.ndarray, x0: np.ndarray, n: int) -> np.ndarray:
+    """x0, Φ x0, …, Φⁿ x0 as columns, BLOCK steps per matrix product (the powers formed once)."""
+    k = min(BLOCK, n)
+    powers = [Phi]
+    for _ in range(k - 1):
+        powers.append(Phi @ powers[-1])
+    stack = np.vstack(powers)                                      # (k·d, d)
+    d = x0.size
+    cols, x = [x0[:, None]], x0
+    done = 0
+    while done < n:
+        step = min(k, n - done)
+        blk = (stack[:step * d] @ x).reshape(step, d).T
+        cols.append(blk)
+        x = blk[:, -1]
+        done += step
+    return np.hstack(cols)
+
+
 def enclose(Az, Br, z0, r_o, T: float, cells: int = CELLS) -> NominalEnclosure:
     """The nominal loop ż = A_z z + B_r r_o(t), z(0) = z0, sampled and enclosed on cells of [0, T].
 
@@ -209,12 +232,7 @@ def enclose(Az, Br, z0, r_o, T: float, cells: int = CELLS) -> NominalEnclosure:
         Phi = expm(M * h)
         slopes = w[2 * (S.shape[0] // 2 - p) + 1::2][:p] if p else np.zeros(0)
         dr = _variation(r_o, h, slopes)
-        zw = np.concatenate([z, w])
-        cols = [zw]
-        for _ in range(n):
-            zw = Phi @ zw
-            cols.append(zw)
-        ZW = np.array(cols).T                                     # (N + nw, n + 1)
+        ZW = _propagate(Phi, np.concatenate([z, w]), n)             # (N + nw, n + 1)
         zs, rs = ZW[:N], Q @ ZW[N:]
         F = np.abs(Az @ zs[:, :-1] + Br @ rs[:, :-1]) / scale[:, None]   # |D⁻¹ ż(t_j)|
         v = h * (F + (absB @ dr)[:, None])
