@@ -416,7 +416,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     # says; the printed B_z reading stays in the bookkeeping
     An = Azd["eq10.7"] + a * np.eye(len(Azd["eq10.7"]))
     res.gamma_inf = spheres.l2_to_peak_gain(An, Bzd["eq10.7"], Cz)
-    res.premises = premises(cfg, res, t, y_o)
+    res.premises = premises(cfg, res)
     res.certified = bool(all(ok for ok, _ in res.premises.values()))
     res.proved, res.assumed = scope(cfg, res)
     return res
@@ -501,7 +501,8 @@ def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:
     ``design.sector`` must contain it.  An expression's stated ``nonlinearity.sector`` must contain
     the sector sampled from the expression on ``y_range`` (no slack).  The polar arm's sector is
     the config's assumption (φ depends on the rates, not on y alone): not a premise this tool
-    proves; its β3 is proved over the sphere (:func:`qpp.design.thresholds.consistent`).  An expression's sector is proved by interval branch and bound
+    proves; its β3 is proved over the sphere (:func:`qpp.design.thresholds.consistent`).  An
+    expression's sector is proved by interval branch and bound
     (:attr:`qpp.model.nonlin.ExpressionModel.proof`): the sampled sector widened by
     :data:`qpp.model.sector_proof.REL_GAP`, which a stated sector must contain.
 
@@ -535,7 +536,7 @@ def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:
                    "not on y alone); its beta3 is proved over the sphere around the nominal trajectory")
 
 
-def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
+def premises(cfg: QppConfig, res: DesignResult) -> dict:
     """Every premise of the consistent certificate (``docs/qpp-certificates.md``), each with
     whether it holds and the numbers in words.
 
@@ -545,10 +546,6 @@ def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
         Validated config.
     res : DesignResult
         The design, with ``consistent`` and ``gamma_inf`` computed.
-    t : (S,) array
-        Sample times of the nominal loop, s.
-    y_o : (p, S) array
-        Nominal output, output units.
 
     Returns
     -------
