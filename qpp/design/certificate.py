@@ -467,7 +467,8 @@ def scope(cfg: QppConfig, res: DesignResult) -> tuple:
         if holds.get("sector"):
             proved.append("sector and slope (closed form, |sin| <= 1)")
     else:
-        proved.append("the polar arm's beta3 over the sphere around the nominal trajectory (interval branch and bound)")
+        if holds.get("peak"):       # (the rates' box rests on the step 10.45 the premise peak closes)
+            proved.append("the polar arm's beta3 over the sphere around the nominal trajectory (interval branch and bound)")
         assumed.append("the polar arm's sector (the config's; phi depends on the rates, not on y alone)")
     if holds.get("circle"):
         proved.append("circle criterion (KYP lemma)")
