@@ -119,8 +119,9 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_a
     cc = r.consistent
     typer.echo(f"  certificate (one sector: the circle criterion's; norm: {r.norm}):")
     typer.echo(f"    m = beta_o/(beta_i + beta_o*beta3 + beta4) = {cc.m:.6g} (beta_i {cc.beta_i:.5g}, "
-               f"beta3 {cc.beta3:.5g}, beta4 {cc.beta4:.5g}; smallest over T' <= T, at T' = {cc.T_worst:.4g} s); "
-               f"gamma_inf = {r.gamma_inf:.6g}, max E/m = {cc.E_over_m:.5g}")
+               f"beta3 {cc.beta3:.5g}, beta4 {cc.beta4:.5g}; a lower bound for every T' <= T, least at T' <= "
+               f"{cc.T_worst:.4g} s); "
+               f"gamma_inf = {r.gamma_inf:.6g}, max E/m <= {cc.E_over_m:.5g}")
     for k, (ok, txt) in r.premises.items():
         typer.echo(f"    [{'holds' if ok else 'FAILS'}] {k}: {txt}")
     c = r.circle

@@ -21,6 +21,7 @@ from qpp.io.config_nonlin import ExpressionNonlinearity, SinusoidalNonlinearity
 from qpp.io.config import QppConfig
 from qpp.design.hinf import HinfGains
 from qpp.model.lure import channels, closed_loop
+from qpp.simulate.loop import initial_state
 from qpp.simulate.signals import eval_signal
 from qpp.design.thresholds import NORM, Consistent, Thresholds, consistent, nominal_output, pick_bookkeeping, thresholds
 
@@ -409,20 +410,23 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     res.bookkeeping = pick_bookkeeping(cfg, [x.name for x in th])
     res.bz = cfg.design.bz
     coupled = sector_coupling(cfg)
-    res.consistent = consistent(cfg, t, y_o, x_o, sector, coupled, T, a)
+    loop = (Azd["eq10.7"], Bzd["eq10.7"], Cz, {"z0": initial_state(cfg, P, K1, Kc), "a": a})
+    res.consistent = consistent(cfg, t, y_o, sector, coupled, T, a, loop)
     # the certificate is of the loop that runs (B_z of eq 10.7, as simulated), whatever design.bz
     # says; the printed B_z reading stays in the bookkeeping
     An = Azd["eq10.7"] + a * np.eye(len(Azd["eq10.7"]))
     res.gamma_inf = spheres.l2_to_peak_gain(An, Bzd["eq10.7"], Cz)
-    res.premises = premises(cfg, res, t, y_o)
+    res.premises = premises(cfg, res)
     res.certified = bool(all(ok for ok, _ in res.premises.values()))
     res.proved, res.assumed = scope(cfg, res)
     return res
 
 
 #: what every certificate assumes, whatever φ (issue 43; docs/qpp-certificates.md "Still assumed")
-ASSUMED_ALWAYS = ("beta4 and the time integrals by the trapezoid rule",
-                  "floating-point evaluation (eigenvalues, H-infinity norm, Gramian)")
+ASSUMED_ALWAYS = ("floating-point evaluation (eigenvalues, H-infinity norm, Gramian, the nominal loop's "
+                  "matrix exponential)",)
+#: what every certificate whose premises hold proves of the time integrals (:func:`qpp.design.thresholds.consistent`)
+PROVED_INTEGRALS = "beta4 and m for every T' in (0, T] (the nominal loop enclosed on cells)"
 
 
 def scope(cfg: QppConfig, res: DesignResult) -> tuple:
@@ -431,10 +435,12 @@ def scope(cfg: QppConfig, res: DesignResult) -> tuple:
     ``assumed`` of ``qpp_design.h5`` and docs/qpp-certificates.md's "What is proved".
 
     A premise enters ``proved`` only when it holds and rests on a proof: an expression's sector
-    and slope (interval branch and bound, :mod:`qpp.model.sector_proof`), the sinusoidal form's
-    (closed form, |sin| ≤ 1) and the circle criterion (KYP lemma, :mod:`qpp.design.circle_kyp`).
-    β1 ≤ m and γ∞·E/m ≤ 1 rest on :data:`ASSUMED_ALWAYS`; the polar arm's sector and β3 are
-    assumed.
+    and slope (interval branch and bound, :mod:`qpp.model.sector_proof`) and its range (the
+    enclosure of the nominal loop), the sinusoidal form's (closed form, |sin| ≤ 1), the circle
+    criterion (KYP lemma, :mod:`qpp.design.circle_kyp`), β4 and m for every truncation time
+    (:data:`PROVED_INTEGRALS`, :mod:`qpp.design.nominal_enclosure`) and the polar arm's β3 over the
+    sphere (:mod:`qpp.model.arm_bounds`).  Everything rests on :data:`ASSUMED_ALWAYS`; the polar
+    arm's sector is assumed.
 
     Parameters
     ----------
@@ -455,13 +461,19 @@ def scope(cfg: QppConfig, res: DesignResult) -> tuple:
         which = [k for k in ("sector", "slope") if holds.get(k)]
         if which:
             proved.append(" and ".join(which) + " (interval branch and bound)")
+        if holds.get("range"):
+            proved.append("y_o +- beta_o inside y_range (enclosure)")
     elif isinstance(nl, SinusoidalNonlinearity):
         if holds.get("sector"):
             proved.append("sector and slope (closed form, |sin| <= 1)")
     else:
-        assumed.append("the polar arm's sector (the config's) and its beta3 along the nominal trajectory")
+        if holds.get("peak"):       # (the rates' box rests on the step 10.45 the premise peak closes)
+            proved.append("the polar arm's beta3 over the sphere around the nominal trajectory (interval branch and bound)")
+        assumed.append("the polar arm's sector (the config's; phi depends on the rates, not on y alone)")
     if holds.get("circle"):
         proved.append("circle criterion (KYP lemma)")
+    if holds.get("contraction") and holds.get("peak"):
+        proved.append(PROVED_INTEGRALS)
     return proved, assumed + list(ASSUMED_ALWAYS)
 
 
@@ -489,8 +501,9 @@ def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:
     The sinusoidal form's sector is structural, ±N·γ_max·|F_unc| (row sums): a stated
     ``design.sector`` must contain it.  An expression's stated ``nonlinearity.sector`` must contain
     the sector sampled from the expression on ``y_range`` (no slack).  The polar arm's sector is
-    the config's assumption, and its β3 is taken along the nominal trajectory only: not a premise
-    this tool proves.  An expression's sector is proved by interval branch and bound
+    the config's assumption (φ depends on the rates, not on y alone): not a premise this tool
+    proves; its β3 is proved over the sphere (:func:`qpp.design.thresholds.consistent`).  An
+    expression's sector is proved by interval branch and bound
     (:attr:`qpp.model.nonlin.ExpressionModel.proof`): the sampled sector widened by
     :data:`qpp.model.sector_proof.REL_GAP`, which a stated sector must contain.
 
@@ -520,11 +533,11 @@ def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:
         return ok and proof.sector_ok, (
             f"phi in the sector {np.round(own, 6).tolist()} on y_range x parameters x [0, t_range]: "
             f"{proof.sector_text}" + ("" if ok else " (nonlinearity.sector is narrower than it)"))
-    return False, ("the polar arm's sector is assumed by the config and its beta3 sampled along the nominal "
-                   "trajectory only: not proved")
+    return False, ("the polar arm's sector is assumed by the config, not proved (phi depends on the rates x3, x4, "
+                   "not on y alone); its beta3 is proved over the sphere around the nominal trajectory")
 
 
-def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
+def premises(cfg: QppConfig, res: DesignResult) -> dict:
     """Every premise of the consistent certificate (``docs/qpp-certificates.md``), each with
     whether it holds and the numbers in words.
 
@@ -534,10 +547,6 @@ def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
         Validated config.
     res : DesignResult
         The design, with ``consistent`` and ``gamma_inf`` computed.
-    t : (S,) array
-        Sample times of the nominal loop, s.
-    y_o : (p, S) array
-        Nominal output, output units.
 
     Returns
     -------
@@ -559,20 +568,27 @@ def premises(cfg: QppConfig, res: DesignResult, t, y_o) -> dict:
                    + (res.circle_proof.text if res.circle_proof is not None else "not decided")
                    + f" (frequency grid: {'passes' if res.circle.passed else 'fails'})"),
         "contraction": (bool(b1 < c.m), f"beta1 = {b1:.6g} < m = {c.m:.6g} (eqs 10.43, 10.57 in the Euclidean "
-                        f"norm, B_z of eq 10.7; m the smallest over T' <= T, at T' = {c.T_worst:.4g} s)"),
+                        f"norm, B_z of eq 10.7; m a lower bound for every T' in (0, T], least in the cell ending at "
+                        f"T' = {c.T_worst:.4g} s; the trapezoid rule on the samples gives {c.m_sampled:.6g}: "
+                        f"enclosure gap {max(c.m_sampled - c.m, 0.0) / c.m_sampled:.2g} relative)"
+                        + (f"; beta3 = {c.beta3:.4g} over the sphere y_o +- beta_o, rates within "
+                           f"{c.note['rho_v']:.4g} of the nominal ones" if "rho_v" in c.note else "")
+                        + (f"; m not bounded: {c.note['unbounded']}" if "unbounded" in c.note else "")),
         "peak": (bool(peak <= 1.0), f"gamma_inf * max E/m = {peak:.6g} <= 1 (the L2 sphere bounds the L-infinity "
                  f"sphere on [0, T], eq 10.45)"),
     }
     nl = cfg.nonlinearity
     if isinstance(nl, ExpressionNonlinearity):
-        keep = np.asarray(t) <= res.T + 1e-12
-        yk = np.atleast_2d(y_o)[:, keep]
         rng = np.asarray(nl.y_range, float)
-        lo = yk.min(axis=1) - cfg.spheres.beta_o
-        hi = yk.max(axis=1) + cfg.spheres.beta_o
-        ok = bool(np.all(lo >= rng[:, 0]) and np.all(hi <= rng[:, 1]))
+        if c.enclosure is None:                     # (not enclosed: nothing is proved of y_o)
+            lo, hi, ok = np.full(len(rng), -np.inf), np.full(len(rng), np.inf), False
+        else:
+            ylo, yhi = c.enclosure.box(res.Cz)      # every t of [0, T], not the samples only
+            lo = ylo.min(axis=1) - cfg.spheres.beta_o
+            hi = yhi.max(axis=1) + cfg.spheres.beta_o
+            ok = bool(np.all(lo >= rng[:, 0]) and np.all(hi <= rng[:, 1]))
         out["range"] = (ok, f"y_o ± beta_o within nonlinearity.y_range on [0, T] ({np.round(lo, 4).tolist()} … "
-                            f"{np.round(hi, 4).tolist()})")
+                            f"{np.round(hi, 4).tolist()}; the nominal loop enclosed on cells)")
         proof = cfg.expression_model().proof
         out["slope"] = (bool(proof.slope_ok), f"sum_j |dphi_i/dy_j| <= {np.round(proof.slope, 6).tolist()} on "
                         f"y_range x parameters x [0, t_range] (beta3, eq 10.40): {proof.slope_text}")

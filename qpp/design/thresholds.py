@@ -10,14 +10,17 @@ arithmetic; the certificate itself is :func:`consistent` (one sector, one norm: 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.integrate import cumulative_trapezoid
 
 from qpp.design import spheres
+from qpp.design.nominal_enclosure import PAD, NominalEnclosure, enclose
 from qpp.io.config_nonlin import ExpressionNonlinearity, SinusoidalNonlinearity
 from qpp.io.config import QppConfig
 from qpp.simulate.loop import initial_state, simulate_nominal
+from qpp.model.arm_bounds import arm_slope_bound
 from qpp.model.matched_nonlinearity import config_f1
 
 
@@ -182,11 +185,20 @@ class Consistent:
     half_width : (r,) array
         k_i of the circle's sector, dimensionless gains.
     T_worst : float
-        The truncation time T' ≤ T of the smallest m, s: the sphere at time t rests on the
-        truncation at t, so β3, β4 and m are evaluated for every T' ∈ (0, T] of the grid and m is
-        their minimum.
+        The end of the enclosure's cell of the smallest m, s: the sphere at time t rests on the
+        truncation at t, so m is bounded for every T' ∈ (0, T] (cell by cell) and m is the least
+        bound.
     E_over_m : float
-        max over T' ∈ (0, T] of E(T')/m(T'), s^½; γ∞ · E_over_m ≤ 1 closes the step 10.45.
+        An upper bound of max over T' ∈ (0, T] of E(T')/m(T'), s^½; γ∞ · E_over_m ≤ 1 closes the
+        step 10.45.
+    m_sampled : float
+        m of the trapezoid rule on the nominal loop's samples (smallest over them), dimensionless: an estimate
+        that ``m`` bounds from below; (m_sampled − m)/m_sampled is the enclosure's gap.
+    enclosure : qpp.design.nominal_enclosure.NominalEnclosure or None
+        The nominal loop enclosed on cells of [0, T] (state units).
+    note : dict
+        ``unbounded``: why the nominal loop could not be enclosed (then m = 0); for the polar arm: ``rho_v`` (the rates' sphere, m/s and rad/s), ``dq_upper`` and ``dq_gap``
+        (the bound of sup |Δq| and its enclosure's width, 1/m²).
     """
 
     beta_i: float
@@ -196,51 +208,95 @@ class Consistent:
     half_width: np.ndarray
     T_worst: float = np.nan
     E_over_m: float = np.nan
+    m_sampled: float = np.nan
+    enclosure: NominalEnclosure | None = None
+    note: dict = field(default_factory=dict)
 
 
-def _sup_sin(omega: float, T: float) -> float:
-    """sup_{0 ≤ t ≤ T} |sin ωt| (dimensionless)."""
-    return 1.0 if omega * T >= np.pi / 2 else float(abs(np.sin(omega * T)))
+def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, beta_o: float, T: float):
+    """The polar arm's β3 proved over the sphere around the nominal trajectory, per group of the
+    enclosure's cells (:data:`ARM_GROUPS` groups of [0, T]): y = (x1, x2) within β_o of the
+    enclosure of y_o, the rates (x3, x4) within ρ_v = γ_v β_o / γ∞ of theirs (γ_v the L2-to-peak gain
+    to the rates, γ∞ to y: the step 10.45 that bounds |y − y_o| by β_o bounds the rates by ρ_v under
+    the same premise ``peak``), M ∈ [M_min, M_max] (:func:`qpp.model.arm_bounds.arm_slope_bound`).
 
-
-def _arm_jacobian_norms(cfg: QppConfig, t, x_o) -> np.ndarray:
-    """Per sample of the nominal trajectory, max over M ∈ {M_min, M_max} of the spectral norm of
-    ∂φ/∂y (central differences, y = x_1..p), dimensionless (sampled on the trajectory only)."""
+    Returns (group ends in s, cumulative bounds, ρ_v, the Δq branch and bound)."""
     P = cfg.lure_plant()
+    Az, Bz, Cz, _ = loop
+    An = Az + float(loop[3]["a"]) * np.eye(len(Az))
+    Cv = np.zeros((2, Az.shape[0]))
+    Cv[0, 2] = Cv[1, 3] = 1.0                     # the rates x3, x4 of z = [x; x_c; x̂]
+    g_inf = spheres.l2_to_peak_gain(An, Bz, Cz)
+    rho_v = spheres.l2_to_peak_gain(An, Bz, Cv) * beta_o / g_inf if g_inf > 0 else np.inf
+    K = enc.lo.shape[1]
+    groups = np.array_split(np.arange(K), min(ARM_GROUPS, K))
+    x3 = np.array([[enc.lo[2, g].min() - rho_v for g in groups], [enc.hi[2, g].max() + rho_v for g in groups]])
+    x4 = np.array([[enc.lo[3, g].min() - rho_v for g in groups], [enc.hi[3, g].max() + rho_v for g in groups]])
+    x1 = (float(enc.lo[0].min() - beta_o), float(enc.hi[0].max() + beta_o))
+    g, dq = arm_slope_bound(cfg.nonlinearity, P.N(), x1, x3, x4)
+    ends = np.array([enc.edges[gr[-1] + 1] for gr in groups])
+    return ends, np.maximum.accumulate(g), rho_v, dq
+
+
+#: groups of the enclosure's cells on which the polar arm's β3 is bounded
+ARM_GROUPS = 128
+
+
+def _beta3_at(cfg: QppConfig, T: float, te: np.ndarray, k: np.ndarray, enc, loop, beta_o):
+    """Upper bounds of β3(T') = sup over [0, T'] (nondecreasing in T') at the times ``te`` (s), and
+    a note for the arm (ρ_v, the gap of sup |Δq|); see :func:`consistent`."""
     nl = cfg.nonlinearity
-    f1, g_nom = config_f1(cfg, P)
-    N = P.N()
-    h = 1e-6
-    best = np.zeros(len(t))
-    for M in (nl.M_min, nl.M_max):
-        for s_, (x, tt) in enumerate(zip(x_o.T, t)):
-            J = np.zeros((N.shape[0], P.p))
-            for j in range(P.p):
-                e = np.zeros(P.n)
-                e[j] = h
-                J[:, j] = N @ ((f1(x + e, tt, M) - f1(x + e, tt, g_nom)) - (f1(x - e, tt, M) - f1(x - e, tt, g_nom))) / (2 * h)
-            best[s_] = max(best[s_], float(np.linalg.norm(J, 2)))
-    return best
+    P = cfg.lure_plant()
+    note = {}
+    if isinstance(nl, SinusoidalNonlinearity):     # closed form: k·sup_{[0, T']} |sin ωt|
+        k_struct = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        kk = np.maximum(k, k_struct)
+        wt = nl.omega * np.asarray(te, float)
+        return np.sqrt(np.sum(kk ** 2)) * np.where(wt >= np.pi / 2, 1.0, np.abs(np.sin(wt))), note
+    if isinstance(nl, ExpressionNonlinearity):
+        M = cfg.expression_model()
+        if M.proof.slope_ok:         # proved bounds on cells of [0, T]; a T' takes every cell it reaches
+            edges, G = M.proved_slope_cells(T)
+            gn = np.maximum.accumulate(np.sqrt(np.sum(np.asarray(G, float) ** 2, axis=0)))
+            idx = np.clip(np.searchsorted(edges, te, side="left") - 1, 0, gn.size - 1)
+            return gn[idx], note
+        tg, g = M.slope_profile(T)   # not proved (the premise ``slope`` fails): the sampled profile
+        g = np.array(g, float)
+        if tg.size == 1:
+            g = np.maximum(g, np.asarray(M.sector_info.slope_bound, float)[:, None])
+            return np.full(te.size, float(np.max(np.sqrt(np.sum(g ** 2, axis=0)), initial=0.0))), note
+        gn = np.maximum.accumulate(np.sqrt(np.sum(g ** 2, axis=0)))
+        return gn[np.clip(np.searchsorted(tg, te, side="left"), 0, tg.size - 1)], note
+    ends, gcum, rho_v, dq = _arm_beta3_cells(cfg, enc, loop, beta_o, T)
+    note.update(rho_v=float(rho_v), dq_gap=float(dq.gap), dq_upper=float(dq.upper))
+    return gcum[np.clip(np.searchsorted(ends, te - 1e-12 * max(T, 1.0), side="left"), 0, gcum.size - 1)], note
 
 
-def consistent(cfg: QppConfig, t, y_o, x_o, sector, coupled, T: float, a: float) -> Consistent:
-    """Threshold m (10.57, 12.1) in one sector (the circle criterion's) and one norm (Euclidean).
+def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop) -> Consistent:
+    """Threshold m (10.57, 12.1) in one sector (the circle criterion's) and one norm (Euclidean),
+    bounded for every truncation time T' ∈ (0, T] from an enclosure of the nominal loop.
 
     The contraction of eqs 10.37–10.43 in the truncated L2 norm with the Euclidean vector norm:
     β1 ≤ m with β_i = √p·β_ri + √r·‖d‖∞ (10.44, |w − w_o|₂ of spheres stated per component),
     β3 the induced gain of eq 10.40 (a supremum over t, not the report's L2 norm in time of 10.54),
     β2 ≤ e^{aT} ‖(φ(y_o) − φ_o)_T‖₂ (the report's E·β4 of 10.53 holds only when E ≥ e^{aT}).
 
+    The integral I(T') = ∫₀^{T'} Σ_i k_i² y_o,i² dt of β4 is bounded from the enclosure of the
+    nominal loop (:mod:`qpp.design.nominal_enclosure`): each cell adds its width times the
+    integrand's largest value f_j on its box.  For T' = t_j + x in a cell of width h:
+    I(T')/E(T')² ≤ (I(t_j) + x f_j)/(E(t_j)² + x) (dE²/dT' = e^{2aT'} ≥ 1), monotone in x, so at most
+    the larger of its values at x = 0 and x = h, and β4(T') ≤ e^{a t_{j+1}} (that value)^½; β3(T') ≤ β3(t_{j+1}) (a supremum over [0, T']); and
+    E(T')/m(T') ≤ [E(t_{j+1})(β_i + β_o β3(t_{j+1})) + e^{a t_{j+1}} I(t_{j+1})^½] / β_o.  m is the
+    smallest of the cells' lower bounds, E/m the largest of their upper bounds: no T' is missed.
+
     Parameters
     ----------
     cfg : qpp.io.config.QppConfig
         Validated config.
     t : (S,) array
-        Sample times of the nominal loop, s.
+        Sample times of the nominal loop, s (the trapezoid rule on them gives ``m_sampled``).
     y_o : (p, S) array
         Nominal output, output units.
-    x_o : (n, S) array
-        Nominal plant state, state units.
     sector : (r, 2) array
         The circle criterion's sector, dimensionless gains.
     coupled : (r,) bool array
@@ -249,6 +305,8 @@ def consistent(cfg: QppConfig, t, y_o, x_o, sector, coupled, T: float, a: float)
         Truncation time, s.
     a : float
         Exponential weighting a, 1/s.
+    loop : tuple
+        (A_z in 1/s, B_z of eq 10.7, C_z, {"z0": z(0), "a": a}) of the nominal loop.
 
     Returns
     -------
@@ -256,53 +314,57 @@ def consistent(cfg: QppConfig, t, y_o, x_o, sector, coupled, T: float, a: float)
         β_i, β3, β4, m at the worst truncation time T' ≤ T, and max E/m.
     """
     sp = cfg.spheres
-    nl = cfg.nonlinearity
     P = cfg.lure_plant()
-    t = np.asarray(t, float)
-    keep = t <= T + 1e-12
-    tk = t[keep]
+    Az, Bz, Cz, extra = loop
     k = np.max(np.abs(np.asarray(sector, float)), axis=1)
-    if isinstance(nl, SinusoidalNonlinearity):     # sup over [0, T'] of the Jacobian's norm, per T'
-        k_struct = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
-        kk = np.maximum(k, k_struct)
-        b3 = np.sqrt(np.sum(kk ** 2)) * np.array([_sup_sin(nl.omega, x) for x in tk])
-    elif isinstance(nl, ExpressionNonlinearity):
-        M = cfg.expression_model()
-        tg, g = M.slope_profile(T)
-        g = np.array(g, float)
-        if M.proof.slope_ok:         # proved bounds on cells of [0, T]; a T' takes every cell it reaches
-            edges, G = M.proved_slope_cells(T)
-            gn = np.maximum.accumulate(np.sqrt(np.sum(np.asarray(G, float) ** 2, axis=0)))
-            idx = np.clip(np.searchsorted(edges, tk, side="left") - 1, 0, gn.size - 1)
-            b3 = gn[idx]
-        elif tg.size == 1:
-            g = np.maximum(g, np.asarray(M.sector_info.slope_bound, float)[:, None])
-            b3 = np.full(tk.size, float(np.max(np.sqrt(np.sum(g ** 2, axis=0)), initial=0.0)))
-        else:
-            gn = np.maximum.accumulate(np.sqrt(np.sum(g ** 2, axis=0)))
-            # sup over the grid times ≤ T' (the grid's first point is 0; a T' between grid points takes the next)
-            idx = np.clip(np.searchsorted(tg, tk, side="left"), 0, tg.size - 1)
-            b3 = gn[idx]
-    else:
-        b3 = np.maximum.accumulate(_arm_jacobian_norms(cfg, tk, x_o[:, keep]))
-    y_o = np.atleast_2d(np.asarray(y_o, float))
-    yk = y_o[:, keep]
-    ynorm = np.sqrt(np.sum(yk ** 2, axis=0))
-    bound = np.array([k[i] * (ynorm if (coupled[i] or i >= yk.shape[0]) else np.abs(yk[i]))
-                      for i in range(k.size)])
-    from scipy.integrate import cumulative_trapezoid
-
-    l2 = np.sqrt(np.maximum(cumulative_trapezoid(np.sum(bound ** 2, axis=0), tk, initial=0.0), 0.0))
-    E = np.array([spheres.E_factor(a, x) if x > 0 else np.inf for x in tk])
-    b4 = np.exp(a * tk) * l2 / E
     beta_i = float(np.sqrt(P.p) * sp.beta_ri + np.sqrt(P.r) * sp.d_inf)
-    with np.errstate(divide="ignore"):          # T' = 0 with β_ri = ‖d‖ = 0: nothing to bound yet
-        m = sp.beta_o / (beta_i + sp.beta_o * b3 + b4)
-    m[0] = np.inf if tk.size > 1 else m[0]       # T' = 0: nothing to bound
+    try:
+        enc = enclose(Az, np.asarray(Bz)[:, :P.p], extra["z0"], cfg.simulation.r_o, T)
+    except ValueError as exc:            # a loop too stiff for the cell budget: m is not bounded
+        return Consistent(beta_i, np.inf, np.inf, 0.0, k, float(T), np.inf, note={"unbounded": str(exc)})
+    te = enc.edges[1:]
+    h = enc.h
+    b3, note = _beta3_at(cfg, T, te, k, enc, loop, sp.beta_o)
+    ylo, yhi = enc.box(Cz)
+    ysup = np.maximum(np.abs(ylo), np.abs(yhi))
+    ysq = np.sum(ysup ** 2, axis=0)
+    f = sum(k[i] ** 2 * (ysq if (coupled[i] or i >= ysup.shape[0]) else ysup[i] ** 2) for i in range(k.size))
+    f = np.asarray(f, float) * (1 + PAD)
+    I_right = np.cumsum(h * f) * (1 + PAD)
+    I_left = np.concatenate([[0.0], I_right[:-1]])
+    aT = a * enc.edges                          # E of eq 10.44 at every edge (spheres.E_factor, vectorized)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        E = np.where(aT < 1e-8, np.sqrt(enc.edges * (1 + aT)), np.sqrt(np.expm1(2 * aT) / (2 * a if a else 1.0)))
+    E_lo, E_hi = E * (1 - PAD), E * (1 + PAD)
+    grow = np.exp(a * te) * (1 + PAD)
+    B = E_lo[:-1] ** 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(B > 0, I_left / B, 0.0)
+    # (I_left + x f)/(B + x) is monotone in x ∈ [0, h]: its largest value is at an end
+    b4 = grow * np.sqrt(np.maximum(ratio, (I_left + h * f) / (B + h)))
+    with np.errstate(divide="ignore"):
+        m = sp.beta_o / ((beta_i + sp.beta_o * b3 + b4) * (1 + PAD))
     j = int(np.argmin(m))
-    peak = np.where(tk > 0, E, 0.0) / m
-    return Consistent(beta_i, float(b3[j]), float(b4[j]), float(m[j]), k, float(tk[j]),
-                      float(np.max(peak[1:], initial=0.0)) if tk.size > 1 else float(peak[0]))
+    e_over_m = (E_hi[1:] * (beta_i + sp.beta_o * b3) + grow * np.sqrt(I_right)) / sp.beta_o * (1 + PAD)
+    m_s = _sampled_m(cfg, t, y_o, T, a, k, coupled, beta_i, b3, te)
+    return Consistent(beta_i, float(b3[j]), float(b4[j]), float(m[j]), k, float(te[j]), float(np.max(e_over_m)),
+                      m_sampled=m_s, enclosure=enc, note=note)
+
+
+def _sampled_m(cfg, t, y_o, T, a, k, coupled, beta_i, b3, te) -> float:
+    """m of the trapezoid rule on the nominal loop's samples, smallest over those samples (the
+    estimate the enclosure bounds from below; their difference is the bound's gap)."""
+    sp = cfg.spheres
+    t = np.asarray(t, float)
+    keep = (t <= T + 1e-12) & (t > 0)
+    tk = np.concatenate([[0.0], t[keep]])
+    yk = np.atleast_2d(np.asarray(y_o, float))[:, np.concatenate([[np.argmin(np.abs(t))], np.nonzero(keep)[0]])]
+    ynorm = np.sqrt(np.sum(yk ** 2, axis=0))
+    bound = np.array([k[i] * (ynorm if (coupled[i] or i >= yk.shape[0]) else np.abs(yk[i])) for i in range(k.size)])
+    l2 = np.sqrt(np.maximum(cumulative_trapezoid(np.sum(bound ** 2, axis=0), tk, initial=0.0), 0.0))[1:]
+    E = np.array([spheres.E_factor(a, x) for x in tk[1:]])
+    b3s = b3[np.clip(np.searchsorted(te, tk[1:], side="left"), 0, b3.size - 1)]
+    return float(np.min(sp.beta_o / (beta_i + sp.beta_o * b3s + np.exp(a * tk[1:]) * l2 / E), initial=np.inf))
 
 
 def pick_bookkeeping(cfg: QppConfig, names: list[str]) -> str:

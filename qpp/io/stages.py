@@ -167,19 +167,27 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         "certified": Dataset(int(r.certified), "1", "1: every premise of the consistent certificate holds "
                              "(one sector, the circle criterion's; one norm: " + r.norm + ")"),
         "beta1": Dataset(r.beta1_ref, "1", f"beta1 = H-infinity norm sigma_max of C_z (sI - A_n)^-1 B_z (B_z {r.bz})"),
-        "m": Dataset(c.m, "1", "threshold m = beta_o/(beta_i + beta_o beta3 + beta4), consistent reading"),
+        "m": Dataset(c.m, "1", "threshold m = beta_o/(beta_i + beta_o beta3 + beta4), consistent reading: a lower "
+                     "bound for every T' in (0, T] from the nominal loop enclosed on cells"),
+        "m_sampled": Dataset(c.m_sampled, "1", "m of the trapezoid rule on the nominal loop's samples (an estimate "
+                             "m bounds from below; their difference is the enclosure's gap)"),
         "beta_i": Dataset(c.beta_i, "output units", "Euclidean input radius sqrt(p) beta_ri + sqrt(r) d_inf"),
         "beta3": Dataset(c.beta3, "1", "sup over t <= T of the spectral norm of grad_y phi (eq 10.40)"),
         "beta4": Dataset(c.beta4, "output units", "e^{aT} ||(phi(y_o) - phi_o)_T||_2 / E, sector bound (10.53, 10.55)"),
         "gamma_inf": Dataset(r.gamma_inf, "output units per input unit per s^1/2",
                              "L2-to-peak gain of C_z (sI - A_n)^-1 B_z; gamma_inf E <= m closes eq 10.45"),
-        "peak_ratio": Dataset(r.gamma_inf * c.E_over_m, "1", "gamma_inf max over T' <= T of E/m (<= 1: eq 10.45 closed)"),
+        "peak_ratio": Dataset(r.gamma_inf * c.E_over_m, "1", "gamma_inf times an upper bound of max over T' <= T of E/m "
+                              "(<= 1: eq 10.45 closed)"),
         "m_bookkeeping": Dataset(r.m_ref, "1", f"m of the iteration target, bookkeeping {r.bookkeeping} "
                                  "(a bookkeeping of the report is a reproduction, not a certificate)"),
         "T_settle": Dataset(r.T_settle, "s", "settling time of the nominal closed loop"),
         "ws_scale": Dataset(np.asarray(r.ws_scale or [1.0], float), "1", "W_s = diag(w)·S_c of the gains",
                             dims=("ws_entry",)),
     }
+    if "rho_v" in c.note:
+        items["certificate"]["rho_v"] = Dataset(c.note["rho_v"], "state units (m/s, rad/s)",
+                                                "the polar arm's rates within rho_v = gamma_v beta_o / gamma_inf of the "
+                                                "nominal ones: the box of its beta3 (with y_o +- beta_o)")
     if r.published is not None:
         items["published_certificate"] = _published_certificate_items(r.published)
     for reading in r.beta1:

@@ -12,6 +12,11 @@ or simulation code), only numpy, scipy and sympy.
 * the sector, the slopes (β3) of φ = N (f1(θ) − f1(θ°)) sampled by evaluating the user's
   expression with ``sympy.lambdify`` on a dense grid (or the sinusoidal form directly); the stored
   sector must contain that one (premise ``sector``; the polar arm's assumed sector never does);
+* then both PROVED by its own interval bisection (mpmath's outward-rounded ``iv`` functions
+  substituted into ``sympy.lambdify``): |φ_i / y_i| ≤ k_i of the stored sector on y_range ×
+  θ box × [0, t_range] (the cancelled ratio, or φ_i(Y)/Y and the derivative over the hull of 0 and
+  Y — the mean value theorem, φ_i(0) = 0), and sup Σ_j |∂φ_i/∂y_j| on [0, T] within 1e-3 of its
+  sampled value (premise ``slope`` of an expression); the sinusoidal form as an expression in γ;
 * the nominal output y_o and the scenarios by ``scipy.integrate.solve_ivp`` (LSODA, rtol 1e-10)
   of ż = A_z z + B_z [r; d + φ(C_z z, t)] from the stored A_z, B_z, C_z (eq 10.7);
 * m = β_o / (β_i + β_o β3 + β4) of the consistent reading, smallest over T' ≤ T, and the
@@ -21,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 import sympy
+from mpmath import iv
 from scipy.integrate import solve_ivp
 
 
@@ -134,17 +140,18 @@ class Phi:
         self.nl = nl
         if self.kind == "expression":
             p = np.atleast_2d(cfg["plant"]["C"]).shape[0]
-            self.ys = sympy.symbols(" ".join(f"y{i + 1}" for i in range(p)) + " ,")[:p]
-            self.t = sympy.Symbol("t")
+            self.ys = sympy.symbols(" ".join(f"y{i + 1}" for i in range(p)) + " ,", real=True)[:p]
+            self.t = sympy.Symbol("t", real=True)
             pars = nl.get("parameters", {})
             self.pnames = list(pars)
-            self.ps = [sympy.Symbol(n) for n in self.pnames]
+            self.ps = [sympy.Symbol(n, real=True) for n in self.pnames]
             self.lo = np.array([float(pars[n]["min"]) for n in self.pnames])
             self.hi = np.array([float(pars[n]["max"]) for n in self.pnames])
             self.nom = np.array([float(pars[n].get("nominal", 0.5 * (pars[n]["min"] + pars[n]["max"])))
                                  for n in self.pnames])
             loc = {str(s): s for s in (*self.ys, self.t, *self.ps)}
-            loc.update({"sat": lambda x, L: sympy.Min(sympy.Max(x, -L), L)})
+            loc.update({"sat": lambda x, L: sympy.Min(sympy.Max(x, -L), L), "max": sympy.Max, "min": sympy.Min,
+                        "abs": sympy.Abs})
             exprs = [self._text(e) for e in nl["f1"]]
             self.f = [sympy.sympify(e, locals=loc) for e in exprs]
             self.fn = [sympy.lambdify((*self.ys, self.t, *self.ps), f, "numpy") for f in self.f]
@@ -164,6 +171,83 @@ class Phi:
         if form == "cubic":
             return f"({gain})*{y}**3"
         raise NotImplementedError(form)
+
+    def phi_exprs(self, p):
+        """(φ_i as sympy expressions, output symbols, t, parameter symbols, their boxes): an
+        expression's N (f1(θ) − f1(θ°)), the sinusoidal form's N γ F_unc y sin ωt with γ ∈ ±γ_max."""
+        t = sympy.Symbol("t", real=True)
+        if self.kind == "sinusoidal":
+            ys = sympy.symbols(" ".join(f"y{i + 1}" for i in range(p)) + " ,", real=True)[:p]
+            g = sympy.Symbol("gamma", real=True)
+            F = np.asarray(self.nl["F_unc"], float)
+            w = float(self.nl["omega"])
+            ph = [sum(float(self.N[i, k]) * g * float(F[k, j]) * ys[j] for k in range(F.shape[0]) for j in range(p))
+                  * sympy.sin(w * t) for i in range(self.N.shape[0])]
+            gm = float(self.nl["gamma_max"])
+            return ph, list(ys), t, [g], [(-gm, gm)]
+        nom = dict(zip(self.ps, map(float, self.nom)))
+        df = [f - f.subs(nom) for f in self.f]
+        ph = [sum(float(self.N[i, k]) * df[k] for k in range(len(df))) for i in range(self.N.shape[0])]
+        return ph, list(self.ys), self.t, list(self.ps), list(zip(map(float, self.lo), map(float, self.hi)))
+
+    def prove(self, k, t_hi, p, y_range=None, T=None):
+        """Interval proofs of the sector |φ_i/y_i| ≤ k_i (a channel in y_i alone; another's
+        sector is Σ_j sup|∂φ_i/∂y_j| ≤ k_i by the mean value theorem) and, with ``T``, of the
+        slopes: sup of Σ_j |∂φ_i/∂y_j| on [0, T] proved within 1e-3 of its sampled value (which the
+        verifier's β3 uses): (sector proved, slope proved)."""
+        ph, ys, t, ths, thbox = self.phi_exprs(p)
+        yr = [(-1.0, 1.0)] * p if y_range is None else [tuple(map(float, r)) for r in y_range]
+        ranges = dict(zip([*ys, t, *ths], [*yr, (0.0, float(t_hi)), *thbox]))
+
+        def on_box(expr, need=()):
+            """(interval function, box) over the symbols ``expr`` (and ``need``) depends on: a
+            variable it ignores would only be split in vain."""
+            syms = [s for s in ranges if s in expr.free_symbols or s in need]
+            return iv_function(expr, syms), [ranges[s] for s in syms], syms
+
+        sector_ok = slope_ok = True
+        for i, e in enumerate(ph):
+            # distributed, common factors out: an interval counts a variable once where φ cancels
+            # ((1.5 + dm)·y·sin t − 1.5·y·sin t is dm·y·sin t)
+            e = sympy.factor_terms(sympy.expand(sympy.sympify(e)))
+            if not e.free_symbols & set(ys):
+                continue
+            slope = sum(sympy.Abs(sympy.factor_terms(sympy.expand(sympy.diff(e, y)))) for y in ys if y in e.free_symbols)
+            fs, box, syms = on_box(slope)
+            if T is not None:
+                # the slope premise: the sampled slope (β3 here) is within 1e-3 of the sup proved on [0, T]
+                bt = [(0.0, float(T)) if s_ is t else b for s_, b in zip(syms, box)]
+                axes = [np.linspace(lo, hi, 401 if s_ in ys and p == 1 else 61 if s_ in ys else
+                                    200 if s_ is t else 5) for s_, (lo, hi) in zip(syms, bt)]
+                grid = np.meshgrid(*axes, indexing="ij")
+                sampled = float(np.max(np.broadcast_to(np.asarray(
+                    sympy.lambdify(syms, slope, "numpy")(*grid), float), grid[0].shape)))
+                upper = sup_enclose(fs, bt, target=sampled * (1 + 1e-3) + 1e-12)[1]
+                slope_ok &= bool(upper <= sampled * (1 + 1e-3) + 1e-12)
+            others = [y for y in ys if y in e.free_symbols and (i >= len(ys) or y is not ys[i])]
+            if i >= len(ys) or others:
+                sector_ok &= prove_below(fs, box, float(k[i]) * (1 + 1e-9))
+                continue
+            yi = ys[i]
+            r = sympy.factor_terms(sympy.cancel(sympy.together(e / yi)))
+            if yi not in sympy.denom(r).free_symbols:
+                fr, box, _ = on_box(sympy.Abs(r))
+                sector_ok &= prove_below(fr, box, float(k[i]) * (1 + 1e-9))
+                continue
+            fphi, box, syms = on_box(e)
+            fd = iv_function(sympy.diff(e, yi), syms)
+            j = syms.index(yi)
+
+            def ratio(*b, j=j, fphi=fphi, fd=fd):
+                Y = b[j]
+                hull = [*b[:j], iv.mpf([min(Y.a, 0), max(Y.b, 0)]), *b[j + 1:]]
+                up = _iv_abs(fd(*hull)).b                         # φ(y)/y = φ'(ξ), ξ between 0 and y
+                if not (Y.a > 0 or Y.b < 0):
+                    return iv.mpf([0, up])
+                direct = _iv_abs(fphi(*b) / Y)                   # (at a point: the value itself)
+                return iv.mpf([min(direct.a, up), min(up, direct.b)])
+            sector_ok &= prove_below(ratio, box, float(k[i]) * (1 + 1e-9))
+        return bool(sector_ok), bool(slope_ok)
 
     def f1(self, y, t, theta):
         return np.array([np.broadcast_to(np.asarray(fn(*y, t, *theta), float), np.shape(y[0])) for fn in self.fn])
@@ -226,6 +310,84 @@ class Phi:
         return None, np.interp(tt, tcoarse, np.maximum.accumulate(prof))
 
 
+# ----------------------------------------------------------------------------- interval proofs
+def _iv_min(*xs):
+    xs = [iv.mpf(x) for x in xs]
+    return iv.mpf([min(x.a for x in xs), min(x.b for x in xs)])
+
+
+def _iv_max(*xs):
+    xs = [iv.mpf(x) for x in xs]
+    return iv.mpf([max(x.a for x in xs), max(x.b for x in xs)])
+
+
+def _iv_abs(x):
+    lo = 0 if x.a <= 0 <= x.b else min(abs(x.a), abs(x.b))
+    return iv.mpf([lo, max(abs(x.a), abs(x.b))])
+
+
+def _iv_heaviside(x, *_):
+    return iv.mpf(1) if x.a > 0 else iv.mpf(0) if x.b < 0 else iv.mpf([0, 1])
+
+
+def _iv_sign(x):
+    return iv.mpf(1) if x.a > 0 else iv.mpf(-1) if x.b < 0 else iv.mpf([-1 if x.a < 0 else 0, 1 if x.b > 0 else 0])
+
+
+#: the names sympy's lambdify prints, bound to interval functions (every one outward rounded)
+IV_NAMES = {"sin": iv.sin, "cos": iv.cos, "tan": iv.tan, "exp": iv.exp, "log": iv.log, "sqrt": iv.sqrt,
+            "abs": _iv_abs, "Abs": _iv_abs, "min": _iv_min, "max": _iv_max, "Min": _iv_min, "Max": _iv_max,
+            "Heaviside": _iv_heaviside, "sgn": _iv_sign, "pi": iv.pi, "E": iv.e}
+
+
+def iv_function(expr, syms):
+    """An interval function of a sympy expression: called with mpmath ``iv`` intervals it returns an
+    interval containing every value on their box (a name IV_NAMES lacks raises NameError)."""
+    expr = sympy.sympify(expr).replace(sympy.sign, sympy.Function("sgn"))   # (printed as copysign otherwise)
+    return sympy.lambdify(syms, expr, modules=[IV_NAMES])
+
+
+def sup_enclose(fn, box, *, target=None, rtol=1e-3, budget=40_000):
+    """Best-first bisection for sup fn on ``box`` (the widest side relative to the box split first):
+    (lower, upper) with lower a value fn reaches (at a box's midpoint) and upper ≥ sup fn.  It stops
+    when upper ≤ ``target`` or lower > ``target`` (with a target), or when upper ≤ lower·(1 + rtol)
+    + 1e-12 (without), or when the budget of boxes runs out."""
+    import heapq
+
+    w0 = [max(hi - lo, 1e-300) for lo, hi in box]
+    best = [-np.inf]
+
+    def enc(b):
+        v = fn(*(iv.mpf(0.5 * (lo + hi)) for lo, hi in b)).a
+        best[0] = max(best[0], float(v))
+        return float(fn(*(iv.mpf([lo, hi]) for lo, hi in b)).b)
+
+    heap, n = [(-enc(list(box)), 0, list(box))], 1
+    while True:
+        up = -heap[0][0]
+        if target is not None and (up <= target or best[0] > target):
+            return best[0], up
+        if target is None and up <= best[0] * (1 + rtol) + 1e-12:
+            return best[0], up
+        if n >= budget:
+            return best[0], up
+        _, _, b = heapq.heappop(heap)
+        k = max(range(len(b)), key=lambda i: (b[i][1] - b[i][0]) / w0[i])
+        lo, hi = b[k]
+        mid = 0.5 * (lo + hi)
+        if not lo < mid < hi:
+            return best[0], up
+        for part in ((lo, mid), (mid, hi)):
+            c = b[:k] + [part] + b[k + 1:]
+            heapq.heappush(heap, (-enc(c), n, c))
+            n += 1
+
+
+def prove_below(fn, box, bound):
+    """sup fn ≤ bound on ``box``, proved by :func:`sup_enclose` (False: a point above it, or the budget)."""
+    return sup_enclose(fn, box, target=bound)[1] <= bound
+
+
 # ----------------------------------------------------------------------------- the verifier
 def verify(cfg: dict, d: dict, *, simulate: bool = True) -> dict:
     """The certificate of a stored design, recomputed.
@@ -261,10 +423,16 @@ def verify(cfg: dict, d: dict, *, simulate: bool = True) -> dict:
     own = phi.own_sector()            # φ's sector found here, not read from the tool
     sector_ok = own is not None and bool(np.all(k >= own * (1 - 1e-9)))     # (rounding of k − k°)
     k = k if own is None else np.maximum(k, own)
+    sp = cfg["spheres"]
+    t_hi = float(cfg["nonlinearity"].get("t_range") or max(float(cfg["simulation"].get("t_final", 10.0)), T))
+    if phi.kind in ("sinusoidal", "expression"):     # the sampled sector and slopes, then proved
+        sec_proved, slope_proved = phi.prove(np.max(np.abs(sector), axis=1), t_hi, p,
+                                             phi.y_range if phi.kind == "expression" else None, T)
+        sector_ok = sector_ok and sec_proved
+        out["slope_proved"] = slope_proved
     # the premise is decided by the KYP lemma (a Hamiltonian test), the grid kept as a cross-check
     circle = circle_kyp_symmetric(An, Bz[:, p:], Cz, k)
     out["circle_grid"] = circle_symmetric(An, Bz[:, p:], Cz, k)
-    sp = cfg["spheres"]
     beta_o, beta_ri, d_inf = float(sp["beta_o"]), float(sp.get("beta_ri", 0.0)), float(sp.get("d_inf", 0.0))
     # nominal loop ż = A_z z + B_z [r_o; 0] (φ = 0 at θ°)
     sim = cfg["simulation"]
@@ -306,6 +474,7 @@ def verify(cfg: dict, d: dict, *, simulate: bool = True) -> dict:
     peak = gam * float(np.max(E[1:] / m_t[1:]))
     prem = {"stable": stable, "sector": sector_ok, "circle": circle, "contraction": beta1 < m, "peak": peak <= 1.0}
     if phi.kind == "expression":
+        prem["slope"] = out["slope_proved"]
         rng = phi.y_range
         prem["range"] = bool(np.all(yo.min(axis=1) - beta_o >= rng[:, 0]) and np.all(yo.max(axis=1) + beta_o <= rng[:, 1]))
     out.update(beta1=beta1, gamma_inf=gam, m=m, peak=peak, premises=prem, certified=all(prem.values()), y_o=yo, t=tt)

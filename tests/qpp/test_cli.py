@@ -301,9 +301,12 @@ def test_the_verdict_names_what_is_proved_and_what_is_assumed(tmp_runs):
     with h5py.File(tmp_runs / "runs" / "qpp_cubic2" / "qpp_design.h5") as f:
         a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
     assert a["certified"] == 1
-    assert a["proved"] == "sector and slope (interval branch and bound); circle criterion (KYP lemma)"
-    assert "beta4 and the time integrals by the trapezoid rule" in a["assumed"]
-    assert "floating-point" in a["assumed"]
+    assert a["proved"] == ("sector and slope (interval branch and bound); y_o +- beta_o inside y_range (enclosure); "
+                           "circle criterion (KYP lemma); beta4 and m for every T' in (0, T] (the nominal loop "
+                           "enclosed on cells)")
+    assert "trapezoid" not in a["assumed"] and "trapezoid" not in a["proved"]
+    assert a["assumed"] == ("floating-point evaluation (eigenvalues, H-infinity norm, Gramian, the nominal loop's "
+                            "matrix exponential)")
     assert a["scope"].startswith("proved for t in [0, T]: sector and slope") and "; assumed: " in a["scope"]
     assert a["verdict"].startswith("certified") and a["verdict"].endswith(a["scope"])
     verdict = next(ln.strip() for ln in r.output.splitlines() if ln.strip().startswith("certified"))

@@ -142,6 +142,8 @@ def _verified(tmp_path, cfg_dict):
             assert d["certificate"]["m"] <= v["m"] * (1 + 1e-5)
             assert d["certificate"]["m"] == pytest.approx(v["m"], rel=5e-4)
         assert d["certificate"]["gamma_inf"] == pytest.approx(v["gamma_inf"], rel=1e-6)
+    if cfg_dict["nonlinearity"]["kind"] == "expression":      # the verifier's own interval proofs ran
+        assert "slope" in v["premises"] and "slope_proved" in v
     stored = {k[len("premise["):-1]: bool(int(x)) for k, x in d["attrs"].items() if k.startswith("premise[")}
     for k, ok in v.get("premises", {}).items():             # premise by premise, not only the verdict
         assert stored.get(k) == ok, (k, stored, v["premises"])
@@ -162,8 +164,9 @@ def _packaged(name):
     pytest.param("qpp_unstable", marks=pytest.mark.slow), pytest.param("qpp_cubic2", marks=pytest.mark.slow),
     pytest.param("qpp_manipulator", marks=pytest.mark.slow)])
 def test_independent_verifier_agrees_on_every_packaged_config(tmp_path, name):
-    """The tool's verdict, β1 (1e-6), m (1e-4) and γ∞ equal the independent verifier's; every
-    scenario of a certified design stays inside its output sphere on [0, T]."""
+    """The tool's verdict and premises, β1 (1e-6), m (5e-4, the tool's a lower bound) and γ∞ equal
+    the independent verifier's; every scenario of a certified design stays inside its output sphere
+    on [0, T]."""
     tool, _, _ = _verified(tmp_path, _packaged(name))
     assert tool == (name in ("qpp_unstable", "qpp_saturation", "qpp_cubic2"))
 
@@ -236,3 +239,20 @@ def test_verifier_agrees_on_a_lightly_damped_and_an_impossible_plant(tmp_path):
            "simulation": {**cfg["simulation"], "t_final": 6.0}}
     tool, _, _ = _verified(tmp_path, cfg)
     assert not tool
+
+
+@pytest.mark.slow
+def test_the_verifier_proves_premises_itself_and_refuses_a_window_narrower_than_its_grid(tmp_path):
+    """φ/y doubles in a window of width 1e-7 (tests/qpp/model/test_sector_proof.py's WINDOW): both
+    samplings miss it; the tool's interval proof and the verifier's own (mpmath iv in sympy's
+    lambdify, its own bisection) refute the sector and the slope, premise by premise (~20 s)."""
+    from tests.qpp.model.test_sector_proof import WINDOW
+
+    cfg = _packaged("qpp_unstable")
+    cfg["name"] = "window"
+    cfg["nonlinearity"]["f1"] = [WINDOW]
+    cfg["nonlinearity"]["parameters"] = {"k": {"min": 0.95, "max": 1.05, "nominal": 1.0}}
+    for s in cfg["simulation"]["scenarios"]:
+        s["parameters"] = {"k": 1.05}
+    tool, d, v = _verified(tmp_path, cfg)
+    assert not tool and not v["premises"]["sector"] and not v["premises"]["slope"]
