@@ -435,6 +435,7 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
             if step < 1.0:
                 Is = I0 + step * (I - I0)
                 tea = solve_tea_connected(th0, I0, b0, Is, n, b0)
+                # (an intermediate plant only guides the search; the certificates are of the family)
                 I, th = Is, (tea.theta if tea is not None else th0 + step * (th - th0))
             m = lin.design_point(I, th, n, model=model, drf_mode=drf_mode)
             out.append((m.A / d[:, None] * d[None, :] / n, m.B / d[:, None] * input_scale / n))
