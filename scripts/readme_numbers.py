@@ -891,6 +891,13 @@ def _energy(p: dict, n: float) -> float:
     return control_energy(A, B, K, n, scales, torque_scale(scales))
 
 
+def _base_texts(sw: dict, label: str, key: str) -> np.ndarray:
+    """The text column ``key`` (``verdict``, ``reason``) of a ``sweep.h5``'s cases of base ``label``."""
+    names = [_text(x) for x in np.atleast_1d(sw["base_names"])]
+    column = np.array([_text(x) for x in np.atleast_1d(sw[key])])
+    return column[np.atleast_1d(sw["base"]) == names.index(label)]
+
+
 def block_design_routes(r: dict) -> str:
     """The LQR route (sector LQR, the report's method) and the regional LMI route side by side at
     MB3 and AC: margin, conditioning, robustness, energy, fastest pole, and the ±30 % Monte Carlo
@@ -912,9 +919,7 @@ def block_design_routes(r: dict) -> str:
         return d["points"][sorted(d["points"])[0]]
 
     def counts(sw, label):
-        names = [_text(x) for x in np.atleast_1d(sw["base_names"])]
-        verdict = np.array([_text(x) for x in np.atleast_1d(sw["verdict"])])
-        v = verdict[np.atleast_1d(sw["base"]) == names.index(label)]
+        v = _base_texts(sw, label, "verdict")
         return int(np.sum(v == "bounded")), v.size
 
     def margin_range(sw, label):
@@ -966,12 +971,8 @@ def block_robust_family(r: dict) -> str:
         g = p[sorted(p)[0]]["robust"]
         decay = np.asarray(g["certified_decay"], float)
         cone = np.degrees(np.asarray(g["certified_cone"], float))
-        sw = r["sweep_robust"]
-        names = [_text(x) for x in np.atleast_1d(sw["base_names"])]
-        sel = np.atleast_1d(sw["base"]) == names.index(f"{name}_robust")
-        verdict = np.array([_text(x) for x in np.atleast_1d(sw["verdict"])])[sel]
-        reason = np.array([_text(x) for x in np.atleast_1d(sw["reason"])])[sel]
-        folded = np.array(["folds" in x for x in reason])
+        verdict = _base_texts(r["sweep_robust"], f"{name}_robust", "verdict")
+        folded = np.array(["folds" in x for x in _base_texts(r["sweep_robust"], f"{name}_robust", "reason")])
         rows.append([label, str(decay.size), f"{fixed(float(decay.min()), 4)}n",
                      f"{fixed(float(cone.max()), 1)}°", f"{int(np.sum(np.asarray(g['sector_held'])))}/{decay.size}",
                      f"{int(np.sum(~folded))}/{folded.size}",

@@ -626,24 +626,48 @@ def certified_margin(As, Bs, Ks, X, sigma: float, half_angle_deg: float) -> floa
     float
         The certified margin, units of n.
     """
-    X = 0.5 * (X + X.T)
-    try:
-        L = np.linalg.cholesky(X)
-    except np.linalg.LinAlgError:
+    whitened = whitened_loop(As, Bs, Ks, X)
+    if whitened is None:
         return float("-inf")
-    Acl = As - Bs @ Ks
-    Z = sla.solve_triangular(L, Acl @ L, lower=True)
-    if not np.all(np.isfinite(Z)):
-        return float("-inf")
+    Z, delta = whitened
     phi = np.deg2rad(half_angle_deg)
     H, S = Z + Z.T, Z - Z.T
     a_star = -0.5 * float(np.max(np.linalg.eigvalsh(H)))
     L0 = np.block([[np.sin(phi) * H, np.cos(phi) * S], [-np.cos(phi) * S, np.sin(phi) * H]])
     c_star = float(np.min(np.linalg.eigvalsh(-L0))) / (2 * np.sin(phi))
-    N = X.shape[0]
-    delta = 8 * N * np.finfo(float).eps * np.linalg.cond(L) * (np.linalg.norm(As, 2)
-                                                                + np.linalg.norm(Bs, 2) * np.linalg.norm(Ks, 2))
     return min(a_star - sigma, c_star * np.sin(phi)) - delta
+
+
+def whitened_loop(As, Bs, Ks, X):
+    """The loop Ã − B̃K̃ whitened by a certificate X = LLᵀ, Z = L⁻¹(Ã − B̃K̃)L, and the first-order
+    rounding allowance δ = 8Nε κ(L)(‖Ã‖ + ‖B̃‖‖K̃‖) of forming it: region LMIs in X are decided
+    on symmetric matrices of Z, whatever the condition of X (:func:`certified_margin`,
+    :func:`acmm.design.robust.region_certificate`).
+
+    Parameters
+    ----------
+    As, Bs, Ks : arrays
+        Scaled model and gain (time in 1/n), dimensionless.
+    X : (N, N) array
+        The certificate in the same coordinates, dimensionless.
+
+    Returns
+    -------
+    tuple or None
+        (Z (N, N) array, δ float), dimensionless; None when X is not ≻ 0 (its Cholesky
+        factorization fails) or Z is not finite.
+    """
+    X = 0.5 * (X + X.T)
+    try:
+        L = np.linalg.cholesky(X)
+    except np.linalg.LinAlgError:
+        return None
+    Z = sla.solve_triangular(L, (As - Bs @ Ks) @ L, lower=True)
+    if not np.all(np.isfinite(Z)):
+        return None
+    delta = 8 * X.shape[0] * np.finfo(float).eps * np.linalg.cond(L) * (
+        np.linalg.norm(As, 2) + np.linalg.norm(Bs, 2) * np.linalg.norm(Ks, 2))
+    return Z, delta
 
 
 def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = RegionalLMISettings(), *,

@@ -41,9 +41,9 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.optimize as so
 
+from acmm.design.regional_lmi import whitened_loop
 from acmm.model import linearize as lin
 from acmm.model.inertia import ELEMENTS, perturb_inertia, unphysical_reason
 from acmm.model.tea_compiled import solve_tea_connected
@@ -351,25 +351,18 @@ def region_certificate(As: np.ndarray, Bs: np.ndarray, Ks: np.ndarray) -> Region
     Returns
     -------
     RegionCertificate
-        X, the certified decay (units of n) and cone (deg); decay −inf and cone 90 when no
-        certificate was found.
+        X, the certified decay (units of n) and cone (deg); decay −inf (or ≤ 0) and cone NaN when
+        no certificate was found.
     """
-    Acl = As - Bs @ Ks
-    N = Acl.shape[0]
-    lam, V = np.linalg.eig(Acl)
+    lam, V = np.linalg.eig(As - Bs @ Ks)
     max_real = float(np.max(lam.real))
     X = (V @ V.conj().T).real
     X = 0.5 * (X + X.T)
     X = X / np.max(np.abs(np.diag(X)))
-    try:
-        L = np.linalg.cholesky(X)
-    except np.linalg.LinAlgError:
+    whitened = whitened_loop(As, Bs, Ks, X)
+    if whitened is None:
         return RegionCertificate(X, float("-inf"), float("nan"), max_real)
-    Z = sla.solve_triangular(L, Acl @ L, lower=True)
-    if not np.all(np.isfinite(Z)):
-        return RegionCertificate(X, float("-inf"), float("nan"), max_real)
-    delta = 8 * N * np.finfo(float).eps * np.linalg.cond(L) * (np.linalg.norm(As, 2)
-                                                                + np.linalg.norm(Bs, 2) * np.linalg.norm(Ks, 2))
+    Z, delta = whitened
     H, Sk = Z + Z.T, Z - Z.T
     decay = -0.5 * float(np.max(np.linalg.eigvalsh(H))) - delta
     if not decay > 0:

@@ -20,7 +20,7 @@ from acmm.io.design_file import load_design_table
 from acmm.model import linearize as lin
 from acmm.model.tea import solve_tea_near
 from acmm.simulate.scenario import scenario_from_config
-from acmm.stages.design import compute_design, run_design
+from acmm.stages.design import run_design
 from acmm_qpp.errors import ConfigError
 
 N = 0.0011
