@@ -1,18 +1,19 @@
 """The report's examples searched over procedure 12.1's family (issue 43, deliverable 5): the bounds
-that hold for every design (β1 ≥ 1, m ≤ β_o/(β_i + |k∘C x0|), m ≤ 1 for ch. 13 once T ≥ π/2)
-against numbers computed here from the configs and the independent verifier's Hamiltonian norm."""
+that hold for every design (β1 ≥ 1, m ≤ β_o/(β_i + |k∘C x0|), m ≤ 1 for ch. 13 once T ≥ π/2, the
+premise peak's γ∞ ≥ L(T) against m(T) ≤ U(T)) against numbers computed here from the configs, the
+independent verifier's Hamiltonian norm and Gramian, and adaptive quadrature."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 from qpp.design.certificate import certify
-from qpp.design.family import REPORT_GRIDS, family_bounds, refine, search, servo_frequencies
+from qpp.design.family import REPORT_GRIDS, family_bounds, peak_exclusion, refine, search, servo_frequencies
 from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
 from qpp.model.lure import closed_loop
 from tests.qpp.conftest import _pub
-from tests.qpp.independent_verifier import hinf
+from tests.qpp.independent_verifier import hinf, l2_to_peak
 
 
 def test_the_bounds_of_the_report_examples(siso, arm):
@@ -70,5 +71,60 @@ def test_the_grid_of_the_family_certifies_nothing(name, siso, arm):
         assert c.m <= b.m_upper * (1 + 1e-12)
         if b.T_sin is not None and c.T >= b.T_sin:
             assert c.m <= b.m_upper_sin * (1 + 1e-12)
+    pe = peak_exclusion(cfg)
+    for c in cands if pe is not None else ():      # the premise peak's bound holds on every design
+        j = int(np.argmin(np.abs(pe.times - c.T)))
+        assert c.gamma_inf >= pe.gamma_lower[j] * (1 - 1e-9)
+        assert "peak" in c.failed or not pe.excluded[j]
     best, n = refine(cfg, max(cands, key=lambda c: c.m - c.beta1), max_evals=12)
     assert n >= 1 and not best.certified and best.m < best.beta1
+
+
+def _L_here(T, times, band=0.05):
+    """L(T) recomputed: ‖sin 5t‖²_{L2[0, t]} by scipy's quad, the min over the peak error P on a grid
+    of 0.0005 (an upper estimate of the min of the max, within the grid step times the slopes)."""
+    from scipy.integrate import quad
+
+    later = times[times > T + 1e-12]
+    en = np.array([np.sqrt(quad(lambda s: np.sin(5 * s) ** 2, 0, x, limit=200)[0]) for x in later])
+    eT = np.sqrt(quad(lambda s: np.sin(5 * s) ** 2, 0, T, limit=200)[0])
+    P = np.arange(0.0, 3.0, 0.0005)
+    g1 = np.max((np.abs(np.sin(5 * later))[None, :] - band * P[:, None]) / en[None, :], axis=1)
+    return float(np.min(np.maximum(g1, (P - 1.0) / eT)))
+
+
+def test_the_premise_peak_excludes_settling_times_below_pi_over_2(siso, arm):
+    """ch. 13 starts at rest and tracks sin 5t: γ∞ ≥ L(T) for every design settling at T, m(T) ≤
+    U(T) = 0.2/(0.1 + 0.1 sin T); L and U against their recomputation, and the sample times that the
+    bound excludes (√T·L > U) below π/2: from 0.7625 s on, but three (the guide's numbers come from
+    the same function)."""
+    pe = peak_exclusion(siso)
+    assert pe.times[0] == pytest.approx(10.0 / 800) and pe.times[-1] == pytest.approx(10.0)
+    assert np.allclose(pe.m_upper[pe.times < np.pi / 2], 0.2 / (0.1 + 0.1 * np.sin(pe.times[pe.times < np.pi / 2])),
+                       rtol=1e-12)
+    for T in (0.075, 0.5, 0.7625, 1.05, 1.5):
+        j = int(np.argmin(np.abs(pe.times - T)))
+        here = _L_here(pe.times[j], pe.times)
+        assert pe.gamma_lower[j] <= here * (1 + 1e-9) and pe.gamma_lower[j] >= here - 5e-3, (T, pe.gamma_lower[j], here)
+    ex = pe.times[pe.excluded & (pe.times < np.pi / 2)]
+    assert ex.min() == pytest.approx(0.7625)
+    assert np.allclose(pe.open_below(np.pi / 2)[-3:], [1.0375, 1.05, 1.0625])
+    assert peak_exclusion(arm) is None                      # x0 ≠ 0 and a step and a ramp to track
+
+
+@pytest.mark.parametrize("rho, w, a", [(1e-6, 100.0, 1e-8), (1e-4, 1.0, 0.3), (1e-2, 3.0, 1e-2)])
+def test_every_design_meets_the_lower_bound_of_gamma_inf(siso, rho, w, a):
+    """γ∞ of a design of the family (the Gramian here) is at least L at its settling time, and where
+    the bound excludes that time the design's premise peak fails."""
+    pe = peak_exclusion(siso)
+    c = search(siso, [rho], [w], [a])[0]
+    P = siso.lure_plant()
+    g = hinf_gains(weighted_plant(P, w), rho=rho, a=a)
+    Az, Bz, Cz = closed_loop(P, g.K1, g.Kc, g.H)
+    gam = l2_to_peak(Az + a * np.eye(len(Az)), Bz, Cz)
+    assert c.gamma_inf == pytest.approx(gam, rel=1e-6)
+    j = int(np.argmin(np.abs(pe.times - c.T)))
+    assert abs(pe.times[j] - c.T) < 1e-9                      # T is a sample of the first pass
+    assert gam >= pe.gamma_lower[j] * (1 - 1e-9), (c.T, gam, pe.gamma_lower[j])
+    if pe.excluded[j]:
+        assert "peak" in c.failed
