@@ -253,7 +253,7 @@ class PeakExclusion:
     m_upper : (K,) ndarray
         U(T) ≥ m(T), dimensionless.
     excluded : (K,) bool ndarray
-        √T·L(T) > U(T): no design settling at T meets the premise ``peak``.
+        √T·L(T) > U(T): no design settling at T meets the premise ``peak`` (dimensionless flags).
     """
 
     times: np.ndarray
@@ -262,7 +262,18 @@ class PeakExclusion:
     excluded: np.ndarray
 
     def open_below(self, T_max: float) -> np.ndarray:
-        """The settling times below ``T_max`` (s) that the bound leaves open, s."""
+        """The settling times below ``T_max`` that the bound leaves open.
+
+        Parameters
+        ----------
+        T_max : float
+            Upper end, s.
+
+        Returns
+        -------
+        ndarray
+            The open settling times, s.
+        """
         return self.times[(self.times < T_max) & ~self.excluded]
 
 
