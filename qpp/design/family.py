@@ -27,7 +27,7 @@ loop, and the nominal loop is that loop driven by r_o (shifted by a ≥ 0, which
 pass (``SETTLE_SAMPLES`` on [0, horizon]) where |y_o − r_o| exceeds band·P, P its peak over the
 samples, reached at some sample t* ≤ T.  Hence |y_o(t*)| ≥ P − A and |y_o(t1)| ≥ |r_o(t1)| − band·P at
 every later sample t1, so γ∞ ≥ L(T) = min over P ≥ 0 of max[(P − A)/‖r_o‖_T, max_{t1}(|r_o(t1)| −
-band·P)/‖r_o‖_{t1}], whatever the gains.  The premise needs γ∞ E(T) ≤ m(T) ≤ U(T) =
+band·P)/‖r_o‖_{t1}, the later samples combined by weak duality (:func:`_dual_line`)], whatever the gains.  The premise needs γ∞ E(T) ≤ m(T) ≤ U(T) =
 β_o/(β_i + β_o β3_min(T)) (β3_min the sinusoidal φ's closed form, else 0) with E(T) ≥ √T: a
 settling time with √T·L(T) > U(T) is excluded.
 
@@ -283,6 +283,73 @@ def _sine_energy(A: float, w: float, ph: float, t):
     return A ** 2 * (t / 2 - (np.sin(2 * (w * t + ph)) - np.sin(2 * ph)) / (4 * w))
 
 
+#: later samples whose constraints the weak-duality bound of :func:`_dual_line` combines
+DUAL_SAMPLES = 200
+
+
+def _dual_line(t, A: float, w: float, ph: float, band: float) -> tuple:
+    """γ∞ ≥ a0 − a1·P from every later sample at once, by weak duality.
+
+    y_o(t_i) = ⟨h, g_i⟩ with h the loop's impulse response from r (‖h‖₂ ≤ γ∞) and
+    g_i(s) = r_o(t_i − s) on [0, t_i]; settling gives s_i y_o(t_i) ≥ |r_o(t_i)| − band·P
+    (s_i = sign r_o(t_i)).  For any λ ≥ 0, Σ λ_i s_i y_o(t_i) = ⟨h, Σ λ_i s_i g_i⟩, so
+    γ∞ ≥ Σ λ_i (|r_o(t_i)| − band·P) / ‖Σ λ_i s_i g_i‖₂ (Cauchy–Schwarz), the Gram matrix of the g_i
+    in closed form; λ from a non-negative least squares (any λ ≥ 0 gives a bound, the number is
+    computed from it exactly).
+
+    Parameters
+    ----------
+    t : (n,) array
+        Sample times after T, s.
+    A, w, ph : float
+        r_o = A sin(w t + ph): output units, rad/s, rad.
+    band : float
+        Settling band, dimensionless.
+
+    Returns
+    -------
+    tuple
+        (a0, a1), output units per input unit·s^½ and per output unit of P.
+    """
+    from scipy.optimize import nnls
+
+    if t.size == 0:
+        return 0.0, 0.0
+    r = A * np.sin(w * t + ph)
+    sg = np.where(r >= 0, 1.0, -1.0)
+    m = np.minimum(t[:, None], t[None, :])
+    s = t[:, None] + t[None, :]
+    G = A ** 2 / 2 * (m * np.cos(w * (t[:, None] - t[None, :]))
+                      - (np.sin(w * s + 2 * ph) - np.sin(w * (s - 2 * m) + 2 * ph)) / (2 * w))
+    G = G * sg[:, None] * sg[None, :]
+    ev, V = np.linalg.eigh(0.5 * (G + G.T))
+    R = (V * np.sqrt(np.maximum(ev, 0.0))).T
+    c = np.abs(r) - band * A                     # (λ fitted at P = A; the line holds for every P)
+    mu = 1e3 * max(float(np.max(ev)), 1.0)
+    lam, _ = nnls(np.vstack([R, np.sqrt(mu) * c[None, :]]), np.concatenate([np.zeros(R.shape[0]), [np.sqrt(mu)]]),
+                  maxiter=20 * t.size)
+    norm = float(np.sqrt(max(lam @ G @ lam, 0.0))) * (1 + 1e-9)
+    if norm <= 0.0 or not np.any(lam > 0):
+        return 0.0, 0.0
+    return float(lam @ np.abs(r)) / norm, float(band * lam.sum()) / norm
+
+
+def _min_max(g1, g2, A: float, e: float) -> float:
+    """A lower bound of min over P ≥ 0 of max(g1(P), g2(P)), g1 non-increasing, g2 increasing
+    (γ∞'s two bounds; :func:`peak_exclusion`): bisection on P to a bracket [lo, hi], then
+    min(g1(hi), g2(lo)) — every P is ≤ hi (g1 ≥ g1(hi)) or ≥ lo (g2 ≥ g2(lo))."""
+    lo, hi = 0.0, A + max(g1(0.0), 0.0) * e + 1.0
+    if g1(lo) <= g2(lo):
+        return max(g2(lo), 0.0)
+    for _ in range(200):                   # g1(lo) > g2(lo), g1(hi) ≤ g2(hi)
+        mid = 0.5 * (lo + hi)
+        if g1(mid) > g2(mid):
+            lo = mid
+        else:
+            hi = mid
+    return max(min(g1(hi), g2(lo)), 0.0)
+
+
 def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
     """The settling times excluded by the premise ``peak`` for every design of the family (module
     docstring), or None when the bound does not apply (a loop that does not start at rest, or an
@@ -323,23 +390,14 @@ def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
     L = np.zeros(t.size)
     for j in range(t.size - 1):
         later = slice(j + 1, None)
-
-        def g1(p, later=later):            # from the samples after T (decreasing in P)
-            return float(np.max((r_abs[later] - band * p) / energy[later]))
-
-        def g2(p, j=j):                    # from the peak at t* ≤ T (increasing in P)
-            return (p - A) / energy[j]
-        lo, hi = 0.0, A + g1(0.0) * energy[j] + 1.0
-        if g1(lo) <= g2(lo):
-            L[j] = max(g2(lo), 0.0)
-            continue
-        for _ in range(200):               # g1(lo) > g2(lo), g1(hi) ≤ g2(hi)
-            mid = 0.5 * (lo + hi)
-            if g1(mid) > g2(mid):
-                lo = mid
-            else:
-                hi = mid
-        L[j] = max(min(g1(hi), g2(lo)), 0.0)   # every P is ≤ hi (g1 ≥ g1(hi)) or ≥ lo (g2 ≥ g2(lo))
+        # the samples one at a time first; combined by duality only where that excludes nothing
+        L[j] = _min_max(lambda p, later=later: float(np.max((r_abs[later] - band * p) / energy[later])),
+                        lambda p, j=j: (p - A) / energy[j], A, energy[j])
+        if np.sqrt(t[j]) * L[j] <= U[j] * (1 + 1e-9):
+            a0, a1 = _dual_line(t[later][:DUAL_SAMPLES], A, w, ph, band)
+            L[j] = _min_max(lambda p, later=later, a0=a0, a1=a1: max(
+                float(np.max((r_abs[later] - band * p) / energy[later])), a0 - a1 * p),
+                lambda p, j=j: (p - A) / energy[j], A, energy[j])
     excluded = np.sqrt(t) * L > U * (1 + 1e-9)
     return PeakExclusion(t, L, U, excluded)
 
