@@ -518,7 +518,7 @@ def block_qpp_search(r: dict) -> str:
     str
         A Markdown table and one sentence per example.
     """
-    from qpp.design.family import REPORT_GRIDS, family_bounds, refine, search
+    from qpp.design.family import REPORT_GRIDS, family_bounds, peak_exclusion, refine, search
 
     rows = ["| example | β1 ≥ (every design: T_ry = I at ω_k) | m ≤ (every design, every T) | m ≤ for T ≥ π/(2ω) "
             "| grid: designs (ρ, w, a; T = settling time) | certified | largest m | smallest β1 | largest m − β1 "
@@ -546,8 +546,23 @@ def block_qpp_search(r: dict) -> str:
             notes.append(f"* `{name}`: **no design of the family is certified**, by the bounds alone: β1 ≥ "
                          f"{fixed(b.beta1_lower, 1)} > {fixed(b.m_upper, 4)} ≥ m for every ρ, w, a and T.")
         elif b.m_upper_sin is not None and b.m_upper_sin <= b.beta1_lower:
+            pe = peak_exclusion(cfg)
+            peak_note = ""
+            if pe is not None and np.any(pe.excluded & (pe.times < b.T_sin)):
+                first = float(np.min(pe.times[pe.excluded & (pe.times < b.T_sin)]))
+                j = int(np.argmin(np.abs(pe.times - first)))
+                gaps = [x for x in pe.open_below(b.T_sin) if x > first]
+                below = pe.open_below(b.T_sin)
+                below = below[below < first]
+                peak_note = (f"; below it, the premise peak excludes every settling time from {fixed(first, 4)} s on"
+                             + (f" but {', '.join(fixed(x, 4) for x in gaps)} s" if gaps else "")
+                             + f" (the first pass's samples, {fixed(pe.times[1] - pe.times[0], 4)} s apart: γ∞ ≥ L(T) "
+                             f"of every design settling at T against m(T) ≤ U(T), √T·L = "
+                             f"{fixed(np.sqrt(first) * pe.gamma_lower[j], 4)} > U = {fixed(pe.m_upper[j], 4)} at "
+                             f"T = {fixed(first, 4)} s), which leaves {below.size + len(gaps)} settling times open "
+                             f"(T ≤ {fixed(float(below.max()), 4)} s" + (" and the exceptions" if gaps else "") + ")")
             notes.append(f"* `{name}`: no design with T ≥ {fixed(b.T_sin, 4)} s is certified (β1 ≥ "
-                         f"{fixed(b.beta1_lower, 1)} ≥ {fixed(b.m_upper_sin, 4)} ≥ m); below, m ≤ "
+                         f"{fixed(b.beta1_lower, 1)} ≥ {fixed(b.m_upper_sin, 4)} ≥ m){peak_note}; there, m ≤ "
                          f"{fixed(b.m_upper, 4)} leaves room, and the grid finds "
                          + ("**no** certified design" if n_cert == 0 else f"{n_cert} certified designs")
                          + f": m ≤ {fixed(max(c.m for c in cands), 4)} against β1 ≥ "

@@ -20,6 +20,17 @@ family, whatever ρ, w, a and T:
   (Σ k_i²)^½ sup_{[0, T']} |sin ωt| whatever the gains, so once T ≥ π/(2ω):
   m ≤ β_o / (β_i + β_o (Σ k_i²)^½).
 
+A third bound, on the premise ``peak`` (γ∞·max E/m ≤ 1), holds for a loop that starts at rest and
+tracks one sine r_o = A sin(ω_r t + φ) (:func:`peak_exclusion`).  γ∞ is the L2-to-peak gain of the
+loop, and the nominal loop is that loop driven by r_o (shifted by a ≥ 0, which only helps), so
+γ∞ ≥ |y_o(t)| / ‖r_o‖_{L2[0, t]} at every t.  T is the settling time: the last sample of the first
+pass (``SETTLE_SAMPLES`` on [0, horizon]) where |y_o − r_o| exceeds band·P, P its peak over the
+samples, reached at some sample t* ≤ T.  Hence |y_o(t*)| ≥ P − A and |y_o(t1)| ≥ |r_o(t1)| − band·P at
+every later sample t1, so γ∞ ≥ L(T) = min over P ≥ 0 of max[(P − A)/‖r_o‖_T, max_{t1}(|r_o(t1)| −
+band·P)/‖r_o‖_{t1}, the later samples combined by weak duality (:func:`_dual_line`)], whatever the gains.  The premise needs γ∞ E(T) ≤ m(T) ≤ U(T) =
+β_o/(β_i + β_o β3_min(T)) (β3_min the sinusoidal φ's closed form, else 0) with E(T) ≥ √T: a
+settling time with √T·L(T) > U(T) is excluded.
+
 When an upper bound of m is ≤ 1 ≤ β1, no design of the family is certified (the premise
 ``contraction``, β1 < m, fails).  Otherwise :func:`search` evaluates a grid of the family (T the
 settling time of each design: m is non-increasing in T and γ∞·max E/m non-decreasing, so a longer
@@ -155,6 +166,8 @@ class Candidate:
         Every premise holds.
     failed : list of str
         The premises that fail.
+    gamma_inf : float
+        γ∞, the loop's L2-to-peak gain, output units per input unit·s^½.
     """
 
     rho: float
@@ -167,6 +180,7 @@ class Candidate:
     servo_gain: float
     certified: bool
     failed: list
+    gamma_inf: float = np.nan
 
 
 def _servo_gain(res, freqs) -> float:
@@ -208,7 +222,7 @@ def search(cfg: QppConfig, rhos, ws_list, a_list) -> list:
                 try:
                     g = hinf_gains(weighted_plant(P, w), rho=float(rho), a=float(a), nu=hc.nu, weight=hc.weight,
                                    observer=hc.observer)
-                    first = certify(cfg, g.K1, g.Kc, g.H, float(a), T=horizon)
+                    first = certify(cfg, g.K1, g.Kc, g.H, float(a), T=horizon)     # (SETTLE_SAMPLES samples)
                     T = float(min(max(first.T_settle, 1e-3 * horizon), horizon))
                     res = certify(cfg, g.K1, g.Kc, g.H, float(a), T=T)
                 except (DesignError, ConvergenceError, np.linalg.LinAlgError):
@@ -216,8 +230,176 @@ def search(cfg: QppConfig, rhos, ws_list, a_list) -> list:
                 c = res.consistent
                 out.append(Candidate(float(rho), tuple(np.atleast_1d(w).astype(float)), float(a), T,
                                      res.beta1_ref, c.m, res.gamma_inf * c.E_over_m, _servo_gain(res, freqs),
-                                     res.certified, [k for k, (ok, _) in res.premises.items() if not ok]))
+                                     res.certified, [k for k, (ok, _) in res.premises.items() if not ok],
+                                     float(res.gamma_inf)))
     return out
+
+
+#: samples of [0, horizon] on which :func:`search`'s first pass finds the settling time
+#: (:func:`qpp.design.certificate.certify` at T = horizon samples the nominal loop 801 times)
+SETTLE_SAMPLES = 801
+
+
+@dataclass
+class PeakExclusion:
+    """Settling times T excluded by the premise ``peak`` for every design (module docstring).
+
+    Attributes
+    ----------
+    times : (K,) ndarray
+        The possible settling times: the samples of the first pass in (0, horizon], s.
+    gamma_lower : (K,) ndarray
+        L(T), a lower bound of γ∞ of every design settling at T, output units per input unit·s^½.
+    m_upper : (K,) ndarray
+        U(T) ≥ m(T), dimensionless.
+    excluded : (K,) bool ndarray
+        √T·L(T) > U(T): no design settling at T meets the premise ``peak`` (dimensionless flags).
+    """
+
+    times: np.ndarray
+    gamma_lower: np.ndarray
+    m_upper: np.ndarray
+    excluded: np.ndarray
+
+    def open_below(self, T_max: float) -> np.ndarray:
+        """The settling times below ``T_max`` that the bound leaves open.
+
+        Parameters
+        ----------
+        T_max : float
+            Upper end, s.
+
+        Returns
+        -------
+        ndarray
+            The open settling times, s.
+        """
+        return self.times[(self.times < T_max) & ~self.excluded]
+
+
+def _sine_energy(A: float, w: float, ph: float, t):
+    """‖A sin(ωs + φ)‖²_{L2[0, t]} = A² [t/2 − (sin(2(ωt + φ)) − sin 2φ)/(4ω)], (output unit)²·s."""
+    t = np.asarray(t, float)
+    return A ** 2 * (t / 2 - (np.sin(2 * (w * t + ph)) - np.sin(2 * ph)) / (4 * w))
+
+
+#: later samples whose constraints the weak-duality bound of :func:`_dual_line` combines
+DUAL_SAMPLES = 200
+
+
+def _dual_line(t, A: float, w: float, ph: float, band: float) -> tuple:
+    """γ∞ ≥ a0 − a1·P from every later sample at once, by weak duality.
+
+    y_o(t_i) = ⟨h, g_i⟩ with h the loop's impulse response from r (‖h‖₂ ≤ γ∞) and
+    g_i(s) = r_o(t_i − s) on [0, t_i]; settling gives s_i y_o(t_i) ≥ |r_o(t_i)| − band·P
+    (s_i = sign r_o(t_i)).  For any λ ≥ 0, Σ λ_i s_i y_o(t_i) = ⟨h, Σ λ_i s_i g_i⟩, so
+    γ∞ ≥ Σ λ_i (|r_o(t_i)| − band·P) / ‖Σ λ_i s_i g_i‖₂ (Cauchy–Schwarz), the Gram matrix of the g_i
+    in closed form; λ from a non-negative least squares (any λ ≥ 0 gives a bound, the number is
+    computed from it exactly).
+
+    Parameters
+    ----------
+    t : (n,) array
+        Sample times after T, s.
+    A, w, ph : float
+        r_o = A sin(w t + ph): output units, rad/s, rad.
+    band : float
+        Settling band, dimensionless.
+
+    Returns
+    -------
+    tuple
+        (a0, a1), output units per input unit·s^½ and per output unit of P.
+    """
+    from scipy.optimize import nnls
+
+    if t.size == 0:
+        return 0.0, 0.0
+    r = A * np.sin(w * t + ph)
+    sg = np.where(r >= 0, 1.0, -1.0)
+    m = np.minimum(t[:, None], t[None, :])
+    s = t[:, None] + t[None, :]
+    G = A ** 2 / 2 * (m * np.cos(w * (t[:, None] - t[None, :]))
+                      - (np.sin(w * s + 2 * ph) - np.sin(w * (s - 2 * m) + 2 * ph)) / (2 * w))
+    G = G * sg[:, None] * sg[None, :]
+    ev, V = np.linalg.eigh(0.5 * (G + G.T))
+    R = (V * np.sqrt(np.maximum(ev, 0.0))).T
+    c = np.abs(r) - band * A                     # (λ fitted at P = A; the line holds for every P)
+    mu = 1e3 * max(float(np.max(ev)), 1.0)
+    lam, _ = nnls(np.vstack([R, np.sqrt(mu) * c[None, :]]), np.concatenate([np.zeros(R.shape[0]), [np.sqrt(mu)]]),
+                  maxiter=20 * t.size)
+    norm = float(np.sqrt(max(lam @ G @ lam, 0.0))) * (1 + 1e-9)
+    if norm <= 0.0 or not np.any(lam > 0):
+        return 0.0, 0.0
+    return float(lam @ np.abs(r)) / norm, float(band * lam.sum()) / norm
+
+
+def _min_max(g1, g2, A: float, e: float) -> float:
+    """A lower bound of min over P ≥ 0 of max(g1(P), g2(P)), g1 non-increasing, g2 increasing
+    (γ∞'s two bounds; :func:`peak_exclusion`): bisection on P to a bracket [lo, hi], then
+    min(g1(hi), g2(lo)) — every P is ≤ hi (g1 ≥ g1(hi)) or ≥ lo (g2 ≥ g2(lo))."""
+    lo, hi = 0.0, A + max(g1(0.0), 0.0) * e + 1.0
+    if g1(lo) <= g2(lo):
+        return max(g2(lo), 0.0)
+    for _ in range(200):                   # g1(lo) > g2(lo), g1(hi) ≤ g2(hi)
+        mid = 0.5 * (lo + hi)
+        if g1(mid) > g2(mid):
+            lo = mid
+        else:
+            hi = mid
+    return max(min(g1(hi), g2(lo)), 0.0)
+
+
+def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
+    """The settling times excluded by the premise ``peak`` for every design of the family (module
+    docstring), or None when the bound does not apply (a loop that does not start at rest, or an
+    r_o other than one sine on one channel).
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config.
+
+    Returns
+    -------
+    PeakExclusion or None
+        L(T), U(T) and the verdict per possible settling time.
+    """
+    P = cfg.lure_plant()
+    ro = cfg.simulation.r_o
+    x0 = cfg.plant.x0
+    if P.p != 1 or len(ro) != 1 or len(ro[0]) != 1 or ro[0][0].kind != "sin" or ro[0][0].omega <= 0:
+        return None
+    if x0 is not None and np.any(np.asarray(x0, float) != 0.0):
+        return None
+    A, w, ph = abs(ro[0][0].amplitude), ro[0][0].omega, ro[0][0].phase
+    band, sp = cfg.spheres.settle_band, cfg.spheres
+    horizon = max(cfg.simulation.t_final, sp.T)
+    t = np.linspace(0.0, horizon, SETTLE_SAMPLES)[1:]
+    energy = np.sqrt(_sine_energy(A, w, ph, t))
+    r_abs = np.abs(A * np.sin(w * t + ph))
+    b = family_bounds(cfg)
+    nl = cfg.nonlinearity
+    if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
+        k_struct = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        k3 = float(np.sqrt(np.sum(np.maximum(b.k, k_struct) ** 2)))
+        b3 = k3 * np.where(nl.omega * t >= np.pi / 2, 1.0, np.abs(np.sin(nl.omega * t)))
+    else:
+        b3 = np.zeros(t.size)
+    U = sp.beta_o / (b.beta_i + sp.beta_o * b3)
+    L = np.zeros(t.size)
+    for j in range(t.size - 1):
+        later = slice(j + 1, None)
+        # the samples one at a time first; combined by duality only where that excludes nothing
+        L[j] = _min_max(lambda p, later=later: float(np.max((r_abs[later] - band * p) / energy[later])),
+                        lambda p, j=j: (p - A) / energy[j], A, energy[j])
+        if np.sqrt(t[j]) * L[j] <= U[j] * (1 + 1e-9):
+            a0, a1 = _dual_line(t[later][:DUAL_SAMPLES], A, w, ph, band)
+            L[j] = _min_max(lambda p, later=later, a0=a0, a1=a1: max(
+                float(np.max((r_abs[later] - band * p) / energy[later])), a0 - a1 * p),
+                lambda p, j=j: (p - A) / energy[j], A, energy[j])
+    excluded = np.sqrt(t) * L > U * (1 + 1e-9)
+    return PeakExclusion(t, L, U, excluded)
 
 
 #: evaluations of :func:`refine` from the best grid point

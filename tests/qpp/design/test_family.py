@@ -1,18 +1,19 @@
 """The report's examples searched over procedure 12.1's family (issue 43, deliverable 5): the bounds
-that hold for every design (β1 ≥ 1, m ≤ β_o/(β_i + |k∘C x0|), m ≤ 1 for ch. 13 once T ≥ π/2)
-against numbers computed here from the configs and the independent verifier's Hamiltonian norm."""
+that hold for every design (β1 ≥ 1, m ≤ β_o/(β_i + |k∘C x0|), m ≤ 1 for ch. 13 once T ≥ π/2, the
+premise peak's γ∞ ≥ L(T) against m(T) ≤ U(T)) against numbers computed here from the configs, the
+independent verifier's Hamiltonian norm and Gramian, and adaptive quadrature."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 from qpp.design.certificate import certify
-from qpp.design.family import REPORT_GRIDS, family_bounds, refine, search, servo_frequencies
+from qpp.design.family import REPORT_GRIDS, family_bounds, peak_exclusion, refine, search, servo_frequencies
 from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
 from qpp.model.lure import closed_loop
 from tests.qpp.conftest import _pub
-from tests.qpp.independent_verifier import hinf
+from tests.qpp.independent_verifier import hinf, l2_to_peak
 
 
 def test_the_bounds_of_the_report_examples(siso, arm):
@@ -70,5 +71,96 @@ def test_the_grid_of_the_family_certifies_nothing(name, siso, arm):
         assert c.m <= b.m_upper * (1 + 1e-12)
         if b.T_sin is not None and c.T >= b.T_sin:
             assert c.m <= b.m_upper_sin * (1 + 1e-12)
+    pe = peak_exclusion(cfg)
+    for c in cands if pe is not None else ():      # the premise peak's bound holds on every design
+        j = int(np.argmin(np.abs(pe.times - c.T)))
+        assert c.gamma_inf >= pe.gamma_lower[j] * (1 - 1e-9)
+        assert "peak" in c.failed or not pe.excluded[j]
     best, n = refine(cfg, max(cands, key=lambda c: c.m - c.beta1), max_evals=12)
     assert n >= 1 and not best.certified and best.m < best.beta1
+
+
+def _L_single(T, times, band=0.05):
+    """L(T) from one later sample at a time, recomputed: ‖sin 5t‖²_{L2[0, t]} by scipy's quad, the
+    min over the peak error P on a grid of 0.0005 (an upper estimate of the min of the max)."""
+    from scipy.integrate import quad
+
+    later = times[times > T + 1e-12]
+    en = np.array([np.sqrt(quad(lambda s: np.sin(5 * s) ** 2, 0, x, limit=200)[0]) for x in later])
+    eT = np.sqrt(quad(lambda s: np.sin(5 * s) ** 2, 0, T, limit=200)[0])
+    P = np.arange(0.0, 3.0, 0.0005)
+    g1 = np.max((np.abs(np.sin(5 * later))[None, :] - band * P[:, None]) / en[None, :], axis=1)
+    return float(np.min(np.maximum(g1, (P - 1.0) / eT)))
+
+
+def _L_primal(T, times, band=0.05, n=400, span=2.5):
+    """L(T) from the later samples together, as the primal problem: the least ‖h‖₂ of an impulse
+    response, piecewise constant on n cells, whose response to sin 5t meets every later sample's
+    settling constraint (SLSQP), then the min over P on a grid — both restrictions can only raise
+    it, so the package's bound (weak duality) must stay below."""
+    from scipy.optimize import minimize
+
+    later = times[(times > T + 1e-12) & (times <= T + span)]
+    ds = later.max() / n
+    lo = np.arange(n) * ds
+    hi = lo + ds
+    M = np.array([np.where(np.minimum(hi, ti) > lo, (np.cos(5 * (ti - np.minimum(hi, ti))) - np.cos(5 * (ti - lo))) / 5,
+                           0.0) for ti in later])
+    r = np.sin(5 * later)
+    Ain = np.sign(r)[:, None] * M
+    eT = np.sqrt(T / 2 - np.sin(10 * T) / 20)
+    vals = []
+    for P in np.linspace(0.8, 1.6, 17):      # (below 0.8 the primal only grows; above 1.6, (P − 1)/‖r‖_T does)
+        c = np.abs(r) - band * P
+        res = minimize(lambda h: ds * h @ h, np.linalg.lstsq(Ain, c, rcond=None)[0], jac=lambda h: 2 * ds * h,
+                       method="SLSQP", constraints=[{"type": "ineq", "fun": lambda h: Ain @ h - c, "jac": lambda h: Ain}],
+                       options={"maxiter": 500})
+        assert res.success
+        vals.append(max((P - 1.0) / eT, float(np.sqrt(ds * res.x @ res.x))))
+    return min(vals)
+
+
+def test_the_premise_peak_excludes_settling_times_below_pi_over_2(siso, arm):
+    """ch. 13 starts at rest and tracks sin 5t: γ∞ ≥ L(T) for every design settling at T, m(T) ≤
+    U(T) = 0.2/(0.1 + 0.1 sin T); U against its formula, L at least the one-sample bound and at most
+    the primal least norm (both recomputed here), and the sample times the bound excludes
+    (√T·L > U) below π/2: every one from 0.7625 s on (the guide's numbers come from the same
+    function)."""
+    pe = peak_exclusion(siso)
+    assert pe.times[0] == pytest.approx(10.0 / 800) and pe.times[-1] == pytest.approx(10.0)
+    low = pe.times < np.pi / 2
+    assert np.allclose(pe.m_upper[low], 0.2 / (0.1 + 0.1 * np.sin(pe.times[low])), rtol=1e-12)
+    for T in (0.075, 0.5, 0.7625, 1.05, 1.5):
+        j = int(np.argmin(np.abs(pe.times - T)))
+        single = _L_single(pe.times[j], pe.times)
+        assert pe.gamma_lower[j] >= single - 5e-3, (T, pe.gamma_lower[j], single)
+        if T in (0.5, 0.7625, 1.05):
+            primal = _L_primal(pe.times[j], pe.times)
+            assert pe.gamma_lower[j] <= primal * (1 + 1e-3) and pe.gamma_lower[j] >= 0.95 * primal
+        if T == 1.05:                           # the later samples combined: what excludes it
+            assert pe.gamma_lower[j] > single * 1.01
+            assert np.sqrt(1.05) * single <= pe.m_upper[j] < np.sqrt(1.05) * pe.gamma_lower[j]
+    ex = pe.times[pe.excluded & low]
+    assert ex.min() == pytest.approx(0.7625)
+    assert np.all(pe.excluded[low & (pe.times >= 0.7625 - 1e-9)])
+    assert np.all(pe.excluded[low & (pe.times >= np.pi / 4)])              # (README: none between π/4 and π/2 s)
+    assert pe.open_below(np.pi / 2).max() == pytest.approx(0.75)
+    assert peak_exclusion(arm) is None                      # x0 ≠ 0 and a step and a ramp to track
+
+
+@pytest.mark.parametrize("rho, w, a", [(1e-6, 100.0, 1e-8), (1e-4, 1.0, 0.3), (1e-2, 3.0, 1e-2)])
+def test_every_design_meets_the_lower_bound_of_gamma_inf(siso, rho, w, a):
+    """γ∞ of a design of the family (the Gramian here) is at least L at its settling time, and where
+    the bound excludes that time the design's premise peak fails."""
+    pe = peak_exclusion(siso)
+    c = search(siso, [rho], [w], [a])[0]
+    P = siso.lure_plant()
+    g = hinf_gains(weighted_plant(P, w), rho=rho, a=a)
+    Az, Bz, Cz = closed_loop(P, g.K1, g.Kc, g.H)
+    gam = l2_to_peak(Az + a * np.eye(len(Az)), Bz, Cz)
+    assert c.gamma_inf == pytest.approx(gam, rel=1e-6)
+    j = int(np.argmin(np.abs(pe.times - c.T)))
+    assert abs(pe.times[j] - c.T) < 1e-9                      # T is a sample of the first pass
+    assert gam >= pe.gamma_lower[j] * (1 - 1e-9), (c.T, gam, pe.gamma_lower[j])
+    if pe.excluded[j]:
+        assert "peak" in c.failed
