@@ -15,7 +15,7 @@ import numpy as np
 
 from acmm.design import schedule as sch
 from acmm.design.path_check import check_path, path_models
-from acmm.design.schedule_refit import REFIT_DEFAULTS, refit_closed_loop
+from acmm.design.schedule_refit import REFITS, refit_closed_loop
 from acmm.design.schedule_points import PointSpec
 from acmm.design.settings import DesignSettings, ScheduleSettings
 from acmm_qpp.errors import ConfigError
@@ -189,7 +189,7 @@ def _refine(points: list, s: DesignSettings, sched: ScheduleSettings, path, map_
 
 def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, path):
     """The gain schedule of ``points`` (ch. 5.3): least squares (or the table look-up), then the
-    closed-loop refit on the path's models ``path`` when configured."""
+    refit ``schedule.fit`` names (closed loop or minimax) on the path's models ``path``."""
     gains = np.array([p.gain.K for p in points])
     teas = np.array([p.tea.theta for p in points])
     if np.ptp(teas[:, 1]) < 1e-6:
@@ -198,7 +198,7 @@ def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, p
                           "differ (is schedule.to the same station as the config itself?)")
     fit = sch.fit_schedule(teas[:, 1], gains, sched.order if sched else 2,
                            sched.form if sched else "polynomial")
-    if sched is not None and sched.fit == "closed_loop" and fit.form == "polynomial" and path is not None:
+    if sched is not None and sched.fit in REFITS and fit.form == "polynomial" and path is not None:
         fit = refit_closed_loop(fit, path, s.orbit_rate, half_angle_deg=s.sector.half_angle_deg,
-                                **REFIT_DEFAULTS)
+                                **REFITS[sched.fit])
     return fit

@@ -23,10 +23,27 @@ to v ≤ t for the ``top`` largest Re λ terms and the ``top`` largest φ-line t
 with Im λ ≥ 0, each conjugate pair once), by SLSQP with the same analytic eigenvalue gradients;
 it reaches a lower worst Re λ in ~10× fewer eigenvalue evaluations than L-BFGS on the smooth
 maximum (docs/results/design.md, "The gain schedule").
+
+``solver="trust_lp"`` (``schedule.fit: minimax``, :data:`MINIMAX_DEFAULTS`) minimizes the largest
+Re λ itself on every path TEA by a trust-region sequential linear program: at the coefficients x
+every eigenvalue (Im λ ≥ 0) of every TEA within ``band`` of the largest is replaced by its
+first-order model, the linear program ::
+
+    min s   subject to   Re λ_i(x)/n + ∇Re λ_i(x)/n · d ≤ s,   |d|∞ ≤ Δ
+
+(HiGHS, scipy) gives the step d, and the step is taken only if the true largest Re λ falls by at
+least a tenth of the predicted fall (Δ doubled when the ratio exceeds 3/4, halved when a step is
+refused).  The largest Re λ therefore never rises (a monotone method), and the search stops on a
+stated tolerance: the trust radius below :data:`RADIUS_TOL` (no step of that relative size lowers
+the worst pole: converged), the model predicting no fall, or the last :data:`STALL_WINDOW`
+accepted steps together lowering it by less than :data:`STALL_TOL` n (stalled; reported).
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
+from scipy.optimize import linprog
 
 from acmm.design.path_check import PathModels
 from acmm.design.schedule import ScheduleFit
@@ -58,12 +75,34 @@ REFIT_DEFAULTS = {"every": 10, "beta": 20.0, "max_iter": 2000, "angle_weight": 0
 #: SLSQP's convergence tolerance on the worst term of the refit (units of n).
 REFIT_FTOL = 1e-9
 
+#: Parameters of the minimax refit (``schedule.fit: minimax``): the largest Re λ alone on every
+#: path TEA, by the trust-region linear program of the module docstring, modelling every
+#: eigenvalue within ``band`` (units of n) of the largest.
+MINIMAX_DEFAULTS = {"every": 1, "solver": "trust_lp", "angle_weight": 0.0, "band": 0.05,
+                    "max_iter": 5000}
+
+#: The refits a ``schedule.fit`` string names (the choice made once, in
+#: :func:`acmm.design.design_core.design_schedule`).
+REFITS = {"closed_loop": REFIT_DEFAULTS, "minimax": MINIMAX_DEFAULTS}
+
+#: Trust-region linear program: the trust radius at which it stops as converged (relative change
+#: of each coefficient, dimensionless).
+RADIUS_TOL = 1e-7
+
+#: Trust-region linear program: the first trust radius (relative change of each coefficient).
+RADIUS_START = 0.5
+
+#: Trust-region linear program: it stops as stalled when the last STALL_WINDOW accepted steps
+#: together lowered the largest Re λ by less than STALL_TOL (units of n).
+STALL_WINDOW = 50
+STALL_TOL = 1e-3
+
 
 def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: int = 5,
                       beta: float = 20.0, max_iter: int = 60, angle_weight: float = 0.0,
                       half_angle_deg: float = 45.0, re_weight: float = 1.0,
                       re_offset: float = 0.0, angle_offset: float = 0.0, solver: str = "lbfgs",
-                      top: int = 3) -> ScheduleFit:
+                      top: int = 3, band: float = 0.05) -> ScheduleFit:
     """Refine a least-squares polynomial schedule against the closed loop along the path.
 
     The coefficients are moved to minimize the smooth maximum f(c) of the module docstring over
@@ -97,16 +136,20 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
         Shift of the Re λ terms, units of n.
     angle_offset : float
         Shift of the φ-line terms, units of n.
-    solver : {"lbfgs", "slsqp"}
-        Smooth maximum by L-BFGS-B, or the epigraph form by SLSQP.
+    solver : {"lbfgs", "slsqp", "trust_lp"}
+        Smooth maximum by L-BFGS-B, the epigraph form by SLSQP, or the largest Re λ by the
+        trust-region linear program (module docstring; Re λ terms only: ``angle_weight`` must be 0).
     top : int
         ``solver="slsqp"``: number of largest terms of each kind per TEA.
+    band : float
+        ``solver="trust_lp"``: eigenvalues within ``band`` of the largest Re λ are modelled, units of n.
 
     Returns
     -------
     acmm.design.schedule.ScheduleFit
-        The refitted schedule (``method="closed_loop"``), or the least-squares one when the
-        refit does not lower the largest Re λ; ``refit_info`` records the outcome.
+        The refitted schedule (``method="closed_loop"``, or ``"minimax"`` for ``solver="trust_lp"``),
+        or the least-squares one when the refit does not lower the largest Re λ; ``refit_info``
+        records the outcome.
 
     Raises
     ------
@@ -125,6 +168,12 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
     if solver == "slsqp":
         res = _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offset,
                              angle_weight, angle_offset, half_angle_deg)
+    elif solver == "trust_lp":
+        if angle_weight or re_weight != 1.0 or re_offset:
+            raise ValueError("the trust-region refit minimizes the largest Re λ alone (angle_weight 0, "
+                             "re_weight 1, re_offset 0)")
+        res = _minimax_trust_lp(a0, sc, up, As_t, Bs_t, n, band, max_iter)
+        return _refit_outcome(fit, st, res, w0, _worst_real(st, res.x, n), beta, "minimax")
     elif solver == "lbfgs":
         fg = _smooth_max(a0, sc, shape, up, As_t, Bs_t, n, beta, re_weight, re_offset, angle_weight,
                          angle_offset, half_angle_deg)
@@ -135,9 +184,10 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
     return _refit_outcome(fit, st, res, w0, _worst_real(st, res.x, n), beta)
 
 
-def _refit_outcome(fit: ScheduleFit, st: dict, res, w0: float, w1: float, beta: float) -> ScheduleFit:
-    """The refitted schedule when the optimizer's result ``res`` lowers the largest Re λ / n
-    (``w0`` → ``w1``), else ``fit`` again; ``refit_info`` records the outcome either way."""
+def _refit_outcome(fit: ScheduleFit, st: dict, res, w0: float, w1: float, beta: float,
+                   method: str = "closed_loop") -> ScheduleFit:
+    """The refitted schedule (``method``) when the optimizer's result ``res`` lowers the largest
+    Re λ / n (``w0`` → ``w1``), else ``fit`` again; ``refit_info`` records the outcome either way."""
     info = {"beta": beta, "iterations": int(res.nit), "evaluations": int(res.nfev),
             "converged": bool(res.status == 0), "message": str(res.message),
             "n_tea": len(st["idx"]), "max_real_before": float(w0), "max_real_after": float(w1),
@@ -146,7 +196,7 @@ def _refit_outcome(fit: ScheduleFit, st: dict, res, w0: float, w1: float, beta: 
         return ScheduleFit(fit.coef, fit.variable, fit.gains, fit.rms_residual, fit.rel_residual,
                            fit.form, "least_squares", info)
     a = st["a0"] + res.x.reshape(st["shape"]) * st["sc"]
-    return _refitted(fit, _power_basis(a, st["c0"], st["h0"]) / st["d"][None, None, :], info)
+    return _refitted(fit, _power_basis(a, st["c0"], st["h0"]) / st["d"][None, None, :], info, method)
 
 
 def _worst_real(st: dict, x: np.ndarray, n: float) -> float:
@@ -215,9 +265,9 @@ def _smooth_max(a0, sc, shape, up, As_t, Bs_t, n, beta, re_weight, re_offset, an
     return fg
 
 
-def _refitted(fit: ScheduleFit, coef: np.ndarray, info: dict) -> ScheduleFit:
-    """The closed-loop schedule with coefficients ``coef`` (powers of θ2*) and its residuals
-    against the design-point gains of ``fit``."""
+def _refitted(fit: ScheduleFit, coef: np.ndarray, info: dict, method: str = "closed_loop") -> ScheduleFit:
+    """The refitted schedule (``method``) with coefficients ``coef`` (powers of θ2*) and its
+    residuals against the design-point gains of ``fit``."""
     order = fit.order
     P = fit.variable.size
     vander_th = fit.variable[:, None] ** np.arange(order + 1)[None, :]
@@ -225,7 +275,7 @@ def _refitted(fit: ScheduleFit, coef: np.ndarray, info: dict) -> ScheduleFit:
     rms = np.sqrt(np.mean(resid ** 2, axis=0)).reshape(fit.gains.shape[1:])
     peak = np.max(np.abs(fit.gains.reshape(P, -1)), axis=0).reshape(fit.gains.shape[1:])
     rel = np.divide(rms, peak, out=np.zeros_like(rms), where=peak > 0)
-    return ScheduleFit(coef, fit.variable, fit.gains, rms, rel, fit.form, "closed_loop", info)
+    return ScheduleFit(coef, fit.variable, fit.gains, rms, rel, fit.form, method, info)
 
 
 def _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offset, angle_weight,
@@ -289,3 +339,59 @@ def _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offse
                    options={"maxiter": max_iter, "ftol": REFIT_FTOL})
     res.x = res.x[:-1]
     return res
+
+
+def _modelled_poles(a0, sc, up, As_t, Bs_t, n, x, band):
+    """The largest Re λ/n over the TEAs at the scaled coefficient change ``x`` and, for every
+    eigenvalue (Im λ ≥ 0) within ``band`` of it, Re λ/n and its gradient with respect to x."""
+    a = a0 + x.reshape(a0.shape) * sc
+    lam, V = np.linalg.eig(As_t - Bs_t @ np.einsum("tk,kab->tab", up, a))
+    f = float(lam.real.max()) / n
+    t, i = np.nonzero((lam.real / n >= f - band) & (lam.imag >= 0))
+    W = np.linalg.inv(V[np.unique(t)])
+    slot = np.searchsorted(np.unique(t), t)
+    # ∂λ/∂K_ab = −(w_i B)_a v_bi (W V = I), chained through K = Σ_k up[t, k] a_k, a_k = a0_k + x_k sc_k
+    dK = -np.einsum("ja,jb->jab", np.einsum("jn,jnm->jm", W[slot, i], Bs_t[t]), V[t, :, i]).real / n
+    jac = (up[t][:, :, None, None] * dK[:, None] * sc[None]).reshape(t.size, -1)
+    return f, lam.real[t, i] / n, jac
+
+
+def _minimax_trust_lp(a0, sc, up, As_t, Bs_t, n, band, max_iter):
+    """The largest Re λ over the TEAs minimized by the trust-region linear program of the module
+    docstring.  Returns a result with ``x`` (scaled coefficient change), ``fun`` (largest Re λ/n),
+    ``nit`` (linear programs), ``nfev`` (eigen-decompositions of every TEA), ``status`` (0:
+    stopped on a tolerance) and ``message``."""
+    nx = a0.size
+    x, radius = np.zeros(nx), RADIUS_START
+    f, vals, jac = _modelled_poles(a0, sc, up, As_t, Bs_t, n, x, band)
+    history, nfev = [f], 1
+    status, message = 1, f"{max_iter} linear programs (the guard) before a tolerance was met"
+    for it in range(1, max_iter + 1):
+        lp = linprog(np.r_[np.zeros(nx), 1.0], A_ub=np.hstack([jac, -np.ones((vals.size, 1))]), b_ub=-vals,
+                     bounds=[(-radius, radius)] * nx + [(None, None)], method="highs")
+        if lp.status != 0:
+            status, message = 2, f"the linear program failed: {lp.message}"
+            break
+        predicted = f - float(lp.x[-1])
+        if not predicted > 1e-12:
+            status, message = 0, "the linear model predicts no fall of the largest Re λ (stationary)"
+            break
+        trial = _modelled_poles(a0, sc, up, As_t, Bs_t, n, x + lp.x[:-1], band)
+        nfev += 1
+        ratio = (f - trial[0]) / predicted
+        if ratio > 0.1:
+            x = x + lp.x[:-1]
+            f, vals, jac = trial
+            history.append(f)
+            if ratio > 0.75:
+                radius = min(2.0 * radius, RADIUS_START)
+            if len(history) > STALL_WINDOW and history[-STALL_WINDOW - 1] - f < STALL_TOL:
+                status, message = 0, (f"the last {STALL_WINDOW} accepted steps lowered the largest Re λ by "
+                                      f"less than {STALL_TOL:g} n (stalled)")
+                break
+        else:
+            radius *= 0.5
+            if radius < RADIUS_TOL:
+                status, message = 0, f"trust radius below {RADIUS_TOL:g}: no smaller step lowers the largest Re λ"
+                break
+    return SimpleNamespace(x=x, fun=f, nit=it, nfev=nfev, status=status, message=message)

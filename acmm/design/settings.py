@@ -133,7 +133,7 @@ class ScheduleSettings:
     form : str
         ``"polynomial"`` or ``"table"``.
     fit : str
-        ``"least_squares"`` or ``"closed_loop"`` (refit_closed_loop).
+        ``"least_squares"``, ``"closed_loop"`` or ``"minimax"`` (refit_closed_loop).
     n_check : int or None
         TEAs along the path of the path check (None: no path check).
     spacing : str
@@ -149,7 +149,7 @@ class ScheduleSettings:
 
     order: int = 2                    # polynomial order of K_ij(θ2*)
     form: str = "polynomial"          # "polynomial" or "table"
-    fit: str = "least_squares"        # or "closed_loop" (refit_closed_loop)
+    fit: str = "least_squares"        # or "closed_loop", "minimax" (refit_closed_loop)
     n_check: int | None = None        # TEAs along the path of the path check (None: no path)
     spacing: str = "tea"              # blend points evenly spaced in "tea" or in "blend" s
     n_points: int = 12                # blend points including both ends

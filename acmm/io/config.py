@@ -134,9 +134,12 @@ class Schedule(_Model):
                                   "table look-up, linear in θ2* between design points (ch. 7 alternative)")
     points: list[DesignPoint] = Field([], description="additional named design points")
     order: int = Field(2, strict=True, ge=1, le=4, description="polynomial order of K_ij(θ2*) (the report uses 2)")
-    fit: Literal["least_squares", "closed_loop"] = Field(
-        "least_squares", description="polynomial fit: least squares on the gains, or least squares refined "
-                                     "against the closed loop along the path (acmm.design.schedule.refit_closed_loop)")
+    fit: Literal["least_squares", "closed_loop", "minimax"] = Field(
+        "least_squares", description="polynomial fit: least squares on the gains; least squares refined "
+                                     "against the closed loop along the path (closed_loop: SLSQP on Re λ and the "
+                                     "sector's lines); or the largest Re λ on every path check TEA minimized by a "
+                                     "monotone trust-region linear program (minimax) "
+                                     "(acmm.design.schedule_refit.refit_closed_loop)")
     n_check: int = Field(201, strict=True, ge=2, le=2001, description="TEAs evenly spaced along the blend path at which "
                                                          "the scheduled gain is checked on the local model")
     refine_points: int = Field(
@@ -149,8 +152,8 @@ class Schedule(_Model):
 
     @model_validator(mode="after")
     def _fit_of_the_form(self):
-        if self.form == "table" and self.fit == "closed_loop":
-            raise ValueError("fit: closed_loop refines a polynomial schedule; form: table interpolates the "
+        if self.form == "table" and self.fit != "least_squares":
+            raise ValueError(f"fit: {self.fit} refines a polynomial schedule; form: table interpolates the "
                              "design points' gains themselves (give one or the other)")
         if self.refine_points and self.form != "table":
             raise ValueError("refine_points adds nodes to a table schedule (form: table); a polynomial has "

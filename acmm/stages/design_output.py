@@ -226,7 +226,8 @@ def schedule_items(r) -> dict:
         "check_max_real": Dataset(r.check.max_real, "n", "largest closed-loop Re λ with the scheduled gain",
                                   dims=("check",)),
         "fit_method": Dataset(np.array(r.fit.method, dtype="S"), "1",
-                              "least_squares, or closed_loop (least squares refined on the path)"),
+                              "least_squares, closed_loop (least squares refined on the path) or minimax "
+                              "(the largest Re λ on the path minimized)"),
     }
     for key, val in r.fit.refit_info.items():
         value = np.array(val, dtype="S") if isinstance(val, str) else float(val)
