@@ -377,11 +377,13 @@ def test_a_path_is_only_ever_that_file_never_a_packaged_config(tmp_path, monkeyp
     assert load_config(given.removeprefix("./").removeprefix("sub/")).name == given.split("/")[-1].removesuffix(".yaml")
 
 
-def test_a_table_schedule_takes_no_closed_loop_refit():
-    """The closed-loop refit refines a polynomial; a table passes through the points' gains: asking
-    for both is refused (it used to drop the refit silently and label the table a polynomial)."""
-    with pytest.raises(ConfigError, match="schedule: fit: closed_loop refines a polynomial"):
-        load_config("staircase", ["schedule.form=table", "schedule.fit=closed_loop"])
+@pytest.mark.parametrize("refit", ["closed_loop", "minimax"])
+def test_a_table_schedule_takes_no_closed_loop_refit(refit):
+    """The closed-loop and minimax refits refine a polynomial; a table passes through the points'
+    gains: asking for both is refused (it used to drop the refit silently and label the table a
+    polynomial)."""
+    with pytest.raises(ConfigError, match=f"schedule: fit: {refit} refines a polynomial"):
+        load_config("staircase", ["schedule.form=table", f"schedule.fit={refit}"])
     cfg = load_config("staircase", ["schedule.form=table", "schedule.fit=least_squares"])
     assert cfg.schedule.form == "table"
 
