@@ -230,7 +230,7 @@ def schedule_items(r) -> dict:
                               "(the largest Re λ on the path minimized)"),
     }
     for key, val in r.fit.refit_info.items():
-        value = np.array(val, dtype="S") if isinstance(val, str) else float(val)
+        value = np.array(val.encode("utf-8"), dtype="S") if isinstance(val, str) else float(val)
         sched[f"refit_{key}"] = Dataset(value, "n" if key.startswith("max_real") else "1",
                                         f"closed-loop refit: {key.replace('_', ' ')}")
     rf = r.refinement
