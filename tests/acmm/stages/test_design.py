@@ -161,8 +161,11 @@ def test_minimax_quadratic_from_the_lmi_points_is_stable_along_the_path_and_unde
     """Issue 41 item 4: the report's form (one quadratic in θ2* per gain element) started from
     the regional LMI points and refit by ``schedule.fit: minimax`` on the 1 001 path TEAs: every
     local loop has Re λ ≤ −0.25n (the design's check, and np.polyval of the stored coefficients
-    on 101 blend points of our own), the refit never rose and stopped on its stated tolerance, and
-    the nonlinear 130-orbit stair-case keeps its peak CMG momentum under 6 000 ft·lbf·s (~4 min)."""
+    on 101 blend points of our own) and the refit stopped on its stated tolerance (~3 min).  The
+    nonlinear stair-case stays bounded, but the quadratic cannot follow the LMI gains near AC:
+    the AC level's peak CMG momentum is above the 6 000 ft·lbf·s target (the routes table of
+    docs/results/design.md), and this test holds it to be so, so that the guide's sentence fails
+    with it the day a refit meets the target."""
     cfg = load_config("staircase", ["schedule.form=polynomial", "schedule.fit=minimax",
                                     "schedule.refine_points=0", f"output.root={tmp_path}"])
     r, _ = run_design(cfg, figures=False)
@@ -178,7 +181,8 @@ def test_minimax_quadratic_from_the_lmi_points_is_stable_along_the_path_and_unde
     res, path = run_simulate(cfg)
     assert res.design_note.startswith("reused") and res.sim.verdict == "bounded"
     with h5py.File(path) as f:
-        assert f["levels/peak_momentum"][()].max() <= 6000.0
+        peak = f["levels/peak_momentum"][()]
+    assert peak[:-1].max() <= 6000.0 < peak[-1]
 
 
 @pytest.mark.parametrize("units", ["imperial", "SI"])
