@@ -260,6 +260,7 @@ STAIRCASE_VARIANTS = {
     "staircase_lqr": {"design": {"pole_method": "shift"}, "schedule": {"refine_points": 0}},
     "staircase_quadratic": {"design": {"pole_method": "shift"},
                             "schedule": {"form": "polynomial", "fit": "closed_loop", "refine_points": 0}},
+    "staircase_minimax": {"schedule": {"form": "polynomial", "fit": "minimax", "refine_points": 0}},
 }
 
 
@@ -1025,7 +1026,8 @@ def block_staircase_routes(r: dict) -> str:
     """
     labels = {"staircase": "regional LMI points, table (packaged)",
               "staircase_lqr": "sector LQR points (the report's route), table",
-              "staircase_quadratic": "sector LQR points, quadratic refit on the closed loops"}
+              "staircase_quadratic": "sector LQR points, quadratic refit on the closed loops",
+              "staircase_minimax": "regional LMI points, quadratic minimax of Re λ on the path"}
     rows = []
     for name, label in labels.items():
         d, sim = r[f"design:{name}"], r[f"simulate:{name}"]
@@ -1033,19 +1035,24 @@ def block_staircase_routes(r: dict) -> str:
         pa, sc, g = d["schedule"]["path"], d["schedule"], d.get("dwell")
         energy = [_energy(d["points"][key], n) for key in sorted(d["points"])]
         tau = "no certificate" if g is None or "tau_star" not in g else (
-            f"{fixed(float(g['tau_star']), 2)} orbit" + ("" if np.all(np.asarray(g["dwell"]) > float(g["tau_star"]))
+            f"{fixed(float(g['tau_star']), 2 if name != 'staircase_minimax' else 1)} orbit" + ("" if np.all(np.asarray(g["dwell"]) > float(g["tau_star"]))
                                                          else " (NOT certified)"))
         refit = ""
-        if "refit_converged" in sc:
+        if "refit_converged" in sc and _text(sc["fit_method"]) == "minimax":
+            refit = (f" (from the least-squares fit's {fixed(float(sc['refit_max_real_before']), 2, sign=True)}n; "
+                     f"stopped: {_text(sc['refit_message'])}; where depends on rounding)")
+        elif "refit_converged" in sc:
             refit = (f" (the least-squares fit it starts from: largest Re λ "
                      f"{fixed(float(sc['refit_max_real_before']), 2, sign=True)}n on the refit's TEAs; SLSQP "
                      + ("converged" if float(sc["refit_converged"]) else "stopped: " + _text(sc["refit_message"]))
                      + "; where it stops depends on rounding)")
+        # the minimax stops on a stall whose place depends on rounding: its loop's numbers to 2 digits
+        k = 2 if name == "staircase_minimax" else 3
         rows.append([label + refit, f"{np.asarray(pa['theta2']).size}",
-                     f"{fixed(np.max(pa['max_real']))}n", f"{fixed(np.min(pa['sector_margin']), 2)}n",
-                     fixed(np.min(pa["disk_margin"])), sig(np.max(d["max_eig_condition"]), 2),
+                     f"{fixed(np.max(pa['max_real']), k)}n", f"{fixed(np.min(pa['sector_margin']), k - 1)}n",
+                     fixed(np.min(pa["disk_margin"]), k), sig(np.max(d["max_eig_condition"]), 2),
                      sci(np.min(d["robustness_radius_elementwise"])), sig(max(energy), 3),
-                     sig(np.max(sim["levels"]["peak_momentum"])), tau])
+                     sig(np.max(sim["levels"]["peak_momentum"]), k), tau])
     return table(["stair-case (route, schedule)", "path TEAs", "largest Re λ on the path",
                   "worst sector margin on the path", "smallest disk margin", "κ max (points)",
                   "radius (first order, elementwise, min over points)", "energy (max over points)",
