@@ -5,7 +5,6 @@ mathematics lives here.  User errors print one line and exit with code 2.
 """
 from __future__ import annotations
 
-import json
 import math
 from typing import Optional
 

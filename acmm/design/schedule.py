@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acmm.model import linearize as lin
-from acmm.model import state_scaling as scaling
 from acmm.design import sector_lqr
 from acmm.design.methods import PointGain, with_robust_gain
 from acmm.design.settings import DesignSettings

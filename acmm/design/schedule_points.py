@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm.model.tea import resolve_bias, solve_tea, solve_tea_near
+from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
+from acmm.design.settings import schedule_settings
 
 
 @dataclass(frozen=True)
@@ -142,8 +144,6 @@ def blend_context(end_name: str | None, s: float):
     NoEquilibriumError
         The one raised inside, its message prefixed with the place on the blend.
     """
-    from acmm_qpp.errors import NoEquilibriumError
-
     try:
         yield
     except NoEquilibriumError as exc:
@@ -200,8 +200,6 @@ def point_specs(cfg) -> list[PointSpec]:
     list of PointSpec
         The design points.
     """
-    from acmm.design.settings import schedule_settings
-
     n = cfg.orbit_rate
     inertia = cfg.inertia.matrix()
     start = PointSpec(cfg.name, inertia, resolve_bias(cfg.disturbance, inertia, n), 0.0,
@@ -314,8 +312,6 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
     BranchJump or None
         The first point off the branch, None when all are on it (or without a blend).
     """
-    from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
-
     blend = [(sp, np.asarray(th, float)) for sp, th in zip(specs, thetas) if np.isfinite(sp.s)]
     if len(blend) < 2:
         return None
@@ -344,8 +340,6 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
 def _track_to_fold(start: PointSpec, end: PointSpec, n: float, grid: np.ndarray) -> np.ndarray:
     """TEA (k, 3), rad, of :func:`_continue_blend` over ``grid`` up to the last s before the
     branch folds (k = 0 when even the start has none)."""
-    from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
-
     out = []
     try:
         for t in _continue_blend(start, end, n, grid):

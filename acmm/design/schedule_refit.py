@@ -30,12 +30,12 @@ import numpy as np
 
 from acmm.design.path_check import PathModels
 from acmm.design.schedule import ScheduleFit
+from math import comb
+from scipy.optimize import minimize
 
 
 def _power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
     """Coefficients in powers of θ of Σ_k a[k]·((θ − c)/h)^k (a: (order+1, ...))."""
-    from math import comb
-
     order = a.shape[0] - 1
     b = np.zeros_like(a)
     for k in range(order + 1):
@@ -113,8 +113,6 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
     ValueError
         ``fit`` is not a polynomial schedule, or ``solver`` is unknown.
     """
-    from scipy.optimize import minimize
-
     if fit.form != "polynomial":
         raise ValueError("refit_closed_loop refines a polynomial schedule")
     st = _refit_start(fit, path, every)
@@ -236,8 +234,6 @@ def _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offse
     minimize t subject to t − v ≥ 0 for the ``top`` largest terms of each kind per TEA.
     Returns the scipy result with ``x`` set to the coefficient part.
     """
-    from scipy.optimize import minimize
-
     shape = a0.shape
     sphi, cphi = np.sin(np.radians(half_angle_deg)), np.cos(np.radians(half_angle_deg))
     T = As_t.shape[0]

@@ -24,6 +24,8 @@ from acmm_qpp.errors import ConfigError
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 from acmm import DEFAULT_CONFIG, PACKAGED_CONFIGS
 from acmm_qpp.configio import read_yaml, validate_model
+from acmm_qpp.overrides import apply_overrides, remember_origin
+from acmm_qpp.limits import how_to_raise, limit
 
 
 class Sector(_Model):
@@ -245,7 +247,6 @@ class Config(_Model):
             if len(lv) != self.n_design_points():
                 raise ValueError(f"simulation.levels has {len(lv)} entries but the design has "
                                  f"{self.n_design_points()} point(s), one level each")
-        from acmm_qpp.limits import how_to_raise, limit
 
         if self.n_design_points() > limit("DESIGN_POINTS"):
             raise ValueError(f"schedule: {self.n_design_points()} design points (one sector LQR each); use fewer "
@@ -342,8 +343,6 @@ def load_config(path: str | Path | None = None, overrides: list[str] | None = No
     Config
         The validated config.
     """
-    from acmm_qpp.overrides import apply_overrides, remember_origin
-
     data, p = read_yaml(DEFAULT_CONFIG if path is None else path, PACKAGED_CONFIGS)
     data = resolve_references(apply_overrides(data, overrides), p.parent, str(p))
     cfg = parse_config(data, source=str(p))

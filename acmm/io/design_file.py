@@ -11,6 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from acmm_qpp.results import convert_items
+import hashlib
+import h5py
+from acmm.design.schedule import schedule_gain
 
 
 _TABLE_KEYS = ("inertia", "bias", "tea", "K")
@@ -37,8 +40,6 @@ def table_sha256(names, arrays, coef, level=None) -> str:
     str
         Hex digest.
     """
-    import hashlib
-
     h = hashlib.sha256("\x1f".join(names).encode())
     extra = () if level is None or np.all(level) else (np.asarray(level, dtype=float),)
     for a in (*arrays, np.zeros(0) if coef is None else coef, *extra):
@@ -93,10 +94,6 @@ def load_design_table(path: Path) -> DesignTable:
         Arrays of the wrong shape, non-finite, or not those written with the file's
         ``table_sha256`` (:func:`design_for` then designs again).
     """
-    import h5py
-
-
-
     with h5py.File(path, "r") as f:
         attrs = {k: _text(f.attrs[k]) for k in ("design_hash", "schedule_form", "unit_system", "config",
                                                 "table_sha256") if k in f.attrs}
@@ -122,8 +119,6 @@ def load_design_table(path: Path) -> DesignTable:
 
 def _unit_system(path: Path) -> str:
     """``unit_system`` root attribute of a results file (files before issue 14: imperial)."""
-    import h5py
-
     with h5py.File(path, "r") as f:
         return _text(f.attrs.get("unit_system", "imperial"))
 
@@ -219,8 +214,6 @@ class DesignTable:
         (3, 24) array
             Gain K(θ2*) of the schedule of ch. 5.3, ft·lbf per state unit.
         """
-        from acmm.design.schedule import schedule_gain
-
         if self.coef is None:
             return self.gain[k]
         return schedule_gain(self.form, self.coef, self.tea[:, 1], self.gain, theta2)

@@ -34,6 +34,7 @@ import numpy as np
 from acmm.model import dynamics as dyn
 from acmm.model import kinematics as kin
 from acmm.model.state_scaling import NOMINAL_ANGLE, momentum_scale
+from acmm.model.tea import resolve_bias, solve_tea
 
 STATE_NAMES = [
     "domega1", "theta2_dot", "domega3", "dtheta1", "dtheta2", "dtheta3",
@@ -336,8 +337,6 @@ def linearize_config(cfg) -> LinearModel:
     LinearModel
         The design model of eq 4.46 about the config's TEA.
     """
-    from acmm.model.tea import resolve_bias, solve_tea
-
     inertia = cfg.inertia.matrix()
     t = solve_tea(inertia, cfg.orbit_rate, resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate),
                   expected=cfg.disturbance.requested_tea())        # the root bias_from_tea names

@@ -21,6 +21,9 @@ import numpy as np
 
 from acmm_qpp.plot_style import stage_pyplot as _plt
 from acmm_qpp.results import save_figure
+import re
+import itertools
+from acmm.model.linearize import state_units as units
 
 AXES = ("roll", "pitch", "yaw")
 
@@ -201,9 +204,6 @@ def state_units(drf_mode: str = "attitude_hold") -> list[str]:
     list of str
         The 24 unit labels.
     """
-    import re
-
-    from acmm.model.linearize import state_units as units
 
     def pretty(u: str) -> str:
         if "/" in u:
@@ -233,8 +233,6 @@ def _compact_formatter():
     """A tick formatter writing each value in full and short (``−7.5e6``, ``0.0045``, ``−1.5e-5``)
     with the fewest significant digits that keep the labels distinct and exact: no offset or
     ×10ⁿ text above the axes (it collides with the panel titles and is one more text per axis)."""
-    import itertools
-
     from matplotlib.ticker import Formatter
 
     class Compact(Formatter):

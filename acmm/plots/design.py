@@ -11,8 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acmm.plots.base import (_BUILDERS, FAST_TEXT_RC, _bake_texts, _compact_formatter, _data_limits, _layout, _premake_ticks, _save, gain_unit, state_units)
+from acmm.plots.base import (FAST_TEXT_RC, _BUILDERS, _bake_texts, _compact_formatter, _data_limits, _layout,
+    _premake_ticks, _save, gain_unit, in_view_ticks, state_units)
 from acmm_qpp.plot_style import stage_pyplot as _plt
+import re
+from acmm.plots.panel_grid import PanelGrid
 
 
 def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
@@ -24,8 +27,6 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
     ~0.65 s to build and draw), a fixed layout (tight_layout/bbox 'tight' on 24 panels costs
     seconds), the legend at a fixed place, the fixed texts rendered ahead (:func:`_bake_texts`).
     """
-    from acmm.plots.panel_grid import PanelGrid
-
     plt = _plt()
     fig = plt.figure(figsize=(13, 15), dpi=80)
     colors = ("C0", "C1", "C2")
@@ -115,8 +116,6 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    from acmm.plots.base import in_view_ticks
-
     theta2_deg = np.degrees(theta2)
     curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
     fine, kf = np.degrees(curve.theta2), curve.gains
@@ -221,8 +220,6 @@ _SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
 def _plain_math(label: str) -> str:
     """A log axis' mathtext tick label (``$\\mathdefault{6\\times10^{-1}}$``) as plain text with
     Unicode superscripts (``6×10⁻¹``); anything else is returned unchanged."""
-    import re
-
     m = re.fullmatch(r"\$\\mathdefault\{(.*)\}\$", label)
     if not m:
         return label

@@ -9,8 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm.plots.base import (_BUILDERS, AXES, FAST_TEXT_RC, _bake_texts, _compact_formatter, _data_limits, _fixed_label_positions, _in_view_locator, _layout, _line, _premake_ticks, _save, _set_limits, decimate)
+from acmm.plots.base import (AXES, FAST_TEXT_RC, _BUILDERS, _bake_texts, _compact_formatter, _data_limits,
+    _fixed_label_positions, _in_view_locator, _layout, _line, _premake_ticks, _save, _set_limits, decimate,
+    in_view_ticks)
 from acmm_qpp.plot_style import stage_pyplot as _plt
+from acmm.plots.panel_grid import PanelGrid
+from acmm_qpp.units import pretty, shown
 
 
 def _panel_axes(ax) -> None:
@@ -27,8 +31,6 @@ def _axis_histories_layout(units: str):
     one line series for all panels."""
     import matplotlib as mpl
 
-    from acmm.plots.panel_grid import PanelGrid
-    from acmm_qpp.units import pretty, shown
 
     plt = _plt()
     fig = plt.figure(figsize=(13, 10))
@@ -80,9 +82,6 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    from acmm.plots.base import in_view_ticks
-    from acmm_qpp.units import shown
-
     fig, grid = _layout("axis_histories", units)
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
@@ -101,8 +100,6 @@ def _inertia_layout(units: str):
     and one step-line series for all panels."""
     import matplotlib as mpl
 
-    from acmm.plots.panel_grid import PanelGrid
-    from acmm_qpp.units import pretty, shown
 
     iu = shown(1.0, "slug*ft^2", units)[1]
     plt = _plt()
@@ -144,10 +141,7 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    from acmm_qpp.units import shown
-
     inertia = shown(np.asarray(inertia), "slug*ft^2", units)[0]
-    from acmm.plots.base import in_view_ticks
 
     fig, grid = _layout("inertia_histories", units)
     xlim = _data_limits(orbits) or (0.0, 1.0)
@@ -167,8 +161,6 @@ def _summary_layout(units: str, n_rows: int = 12):
     columns; titles, labels, legend and header pre-rendered (_bake_texts).  The table's height
     follows its ``n_rows`` rows (at most 12 lines of full height): a one-level run leaves no
     blank third of the page."""
-    from acmm_qpp.units import pretty, shown
-
     hu, uu = shown(1.0, "ft*lbf*s", units)[1], shown(1.0, "ft*lbf", units)[1]
     plt = _plt()
     table_ratio = min(1.0, 0.25 + 0.0625 * max(1, n_rows))
@@ -235,8 +227,6 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    from acmm_qpp.units import shown
-
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     k_h = shown(1.0, "ft*lbf*s", units)[0]

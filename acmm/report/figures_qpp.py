@@ -6,6 +6,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import h5py
+from acmm_qpp.plot_style import COLORS
+from acmm.report.figure_style import fixed_layout, pyplot, save
+from qpp.design.circle import critical_disc
 
 
 def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path, out_labels):
@@ -31,11 +35,8 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    import h5py
     from matplotlib.ticker import NullLocator
 
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
 
     plt = pyplot()
     with h5py.File(sim_path, "r") as f:
@@ -89,9 +90,6 @@ def fig_circle(design: dict, name: str, figdir: Path):
     """
     from matplotlib.collections import PatchCollection
 
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
-    from qpp.design.circle import critical_disc
 
     plt = pyplot()
     c = design["circle"]

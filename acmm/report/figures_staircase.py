@@ -7,6 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from acmm.report.constants import AXES
+from acmm_qpp.plot_style import COLORS
+from acmm.report.figure_style import fixed_layout, pyplot, save
 
 
 def fig_staircase(sim: dict, figdir: Path):
@@ -46,9 +48,6 @@ def fig_staircase_inertia(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
-
     plt = pyplot()
     o = sim["orbits"]
     inertia = sim["levels"]["inertia"][sim["level"]]
@@ -83,8 +82,6 @@ def fig_staircase_responses(sim: dict, figdir: Path):
     """
     from matplotlib.collections import LineCollection
 
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import pyplot, save
 
     plt = pyplot()
     o = sim["orbits"]
@@ -130,9 +127,6 @@ def fig_staircase_levels(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
-
     plt = pyplot()
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
     th = np.degrees(sim["levels"]["tea_estimate"][:, 1])[: len(sim["levels"]["steady_error"])]

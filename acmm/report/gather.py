@@ -15,6 +15,15 @@ from acmm_qpp.errors import AcmmError, OutputError
 from acmm_qpp.outputs import file_identity
 # the results files of one stage (reused by hash, else run)
 from acmm.report.stage_results import (Failed, StageRun, _record, _try_attrs, acmm_config, blocked, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, failed, qpp_config)
+import yaml
+from acmm.io.config import parse_config
+from acmm.report.runner import Task, run_tasks
+from acmm.simulate.warmup import warm_up
+from acmm.report.figure_style import warm
+from acmm import PACKAGED_CONFIGS
+from acmm_qpp.configio import packaged_config_path
+from acmm_qpp.results import read_h5
+from acmm.sweep.config import parse_sweep
 
 
 @dataclass
@@ -96,8 +105,6 @@ def reports_route(cfg):
     acmm.io.config.Config
         The same config with the other route and name.
     """
-    from acmm.io.config import parse_config
-
     data = cfg.model_dump(mode="json")
     data["name"] = f"{data['name']}_lqr"
     data["design"]["pole_method"] = "shift"
@@ -135,8 +142,6 @@ def _guarded(name, fn, not_run, *args):
 
 def _stage(name, fn, deps, args, cost):
     """The stage ``name`` as a task of :func:`_guarded`."""
-    from acmm.report.runner import Task
-
     return Task(name, _guarded, deps, lambda done: (name, fn, blocked(name, done, deps), *args), cost)
 
 
@@ -301,8 +306,6 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
     Gathered
         The configs and the results files.
     """
-    from acmm.report.runner import run_tasks
-
     say = progress or (lambda msg: None)
     g = Gathered(report_configs(root, fast=fast), {})
     tasks = stage_tasks(g.configs, root, fast=fast, rerun=rerun, robustness=robustness, jobs=jobs)
@@ -321,8 +324,6 @@ def warm_workers() -> None:
     import acmm.stages.runners  # noqa: F401
     import acmm.sweep.run  # noqa: F401
     import qpp.io.stages  # noqa: F401
-    from acmm.simulate.warmup import warm_up
-    from acmm.report.figure_style import warm
 
     warm_up(lambda *a: None)
     warm()
@@ -374,14 +375,8 @@ SWEEP_CONFIG = "sweep_inertia30.yaml"
 def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     """Run (or reuse, by ``results_key``) ``configs/sweep_inertia30.yaml`` through
     :func:`acmm.sweep.run_sweep` and read ``sweep.h5`` back."""
-    import yaml
-
     import importlib
 
-    from acmm import PACKAGED_CONFIGS
-    from acmm_qpp.configio import packaged_config_path
-    from acmm_qpp.results import read_h5
-    from acmm.sweep.config import parse_sweep
 
     p = packaged_config_path(SWEEP_CONFIG, PACKAGED_CONFIGS)
     if not p.exists():

@@ -9,6 +9,9 @@ import numpy as np
 
 from acmm.report.constants import TIMING_DATASETS
 from acmm.report.gather import Gathered
+import h5py
+from acmm_qpp.results import dimension_only
+from acmm_qpp.provenance import git_commit, git_dirty
 
 
 def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> dict[str, str]:
@@ -29,9 +32,6 @@ def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> di
     dict
         Dataset path → hash, sorted by path.
     """
-    import h5py
-
-    from acmm_qpp.results import dimension_only
 
     out: dict[str, str] = {}
 
@@ -115,12 +115,8 @@ def compare_manifests(old: dict | None, new: dict) -> dict:
 # helpers
 # =============================================================================================
 def _git_commit() -> str:
-    from acmm_qpp.provenance import git_commit
-
     return git_commit()
 
 
 def _git_dirty() -> str:
-    from acmm_qpp.provenance import git_dirty
-
     return {"yes": "modified files present", "no": "clean"}.get(git_dirty(), "unknown")

@@ -14,6 +14,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from acmm.report.constants import FAST_ORBITS
+import h5py
+from acmm_qpp.errors import OutputError, failure_line
+from acmm.io.config import load_config, parse_config
+from acmm import PACKAGED_CONFIGS
+from acmm_qpp.configio import packaged_config_path
+from acmm_qpp.provenance import config_hash
+from acmm.stages.design import design_for, design_hash, run_design
+from acmm.stages.simulate import run_simulate
+from qpp.io import stages as qst
 
 
 @dataclass
@@ -106,8 +115,6 @@ def failed(name: str, exc: BaseException) -> Failed | None:
         for an :class:`acmm_qpp.errors.OutputError`: a report that cannot write stops at once,
         with one ``error:`` line).
     """
-    from acmm_qpp.errors import OutputError, failure_line
-
     if isinstance(exc, OutputError):    # the report's folder cannot be written (a full disk…): it stops
         return None
     line = failure_line(exc) if isinstance(exc, Exception) else None
@@ -140,8 +147,6 @@ def blocked(name: str, done: dict, deps) -> Failed | None:
 
 
 def _attrs(path: Path) -> dict:
-    import h5py
-
     with h5py.File(path, "r") as f:
         return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
 
@@ -170,10 +175,6 @@ def acmm_config(name: str, root: Path | None = None, *, fast: bool = False):
     acmm.io.config.Config
         The config, figures off.
     """
-    from acmm.io.config import load_config, parse_config
-    from acmm import PACKAGED_CONFIGS
-    from acmm_qpp.configio import packaged_config_path
-
     # the packaged file itself: a file or folder named like it in the working directory is not it
     data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
     if root is not None:
@@ -201,8 +202,6 @@ def qpp_config(name: str, root: Path | None = None):
     qpp.io.config.QppConfig
         The config, figures off.
     """
-    from acmm import PACKAGED_CONFIGS
-    from acmm_qpp.configio import packaged_config_path
     from qpp.io.config import load_config, parse_config
 
     data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
@@ -239,9 +238,6 @@ def ensure_acmm_design(cfg, *, rerun: bool = False, donor_roots=()) -> StageRun:
     StageRun
         The design file used.
     """
-    from acmm_qpp.provenance import config_hash
-    from acmm.stages.design import design_for, design_hash, run_design
-
     want = design_hash(cfg)
     path = cfg.run_dir() / "design.h5"
     chash = config_hash(cfg.to_yaml())
@@ -278,10 +274,6 @@ def ensure_acmm_simulation(cfg, *, rerun: bool = False) -> StageRun:
     StageRun
         The simulation file used.
     """
-    from acmm_qpp.provenance import config_hash
-    from acmm.stages.design import design_hash
-    from acmm.stages.simulate import run_simulate
-
     chash, dhash = config_hash(cfg.to_yaml()), design_hash(cfg)
     path = cfg.run_dir() / "sim.h5"
     a = None if rerun else _try_attrs(path)
@@ -309,9 +301,6 @@ def ensure_qpp(cfg, stage: str, *, rerun: bool = False) -> StageRun:
     StageRun
         The file used.
     """
-    from acmm_qpp.provenance import config_hash
-    from qpp.io import stages as qst
-
     chash = config_hash(cfg.to_yaml())
     path = cfg.run_dir() / ("qpp_design.h5" if stage == "design" else "qpp_sim.h5")
     a = None if rerun else _try_attrs(path)

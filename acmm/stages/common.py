@@ -7,7 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm.io.config import Config, load_config
+from acmm.io.config import Config, load_config, parse_config
+import yaml
+from dataclasses import replace
+from acmm.io.units import state_factors, state_space_in
+from acmm_qpp.units import convert
 
 #: Units of the per-state arrays, element by element: ``state_units[i]`` is the unit of state
 #: ``i``, given by the dataset's ``state_units`` attribute (set by :func:`_in_system`); under
@@ -27,9 +31,6 @@ def _in_system(items: dict, cfg: Config, roles: dict) -> dict:
     12 of the DRF block for role ``drf``) that its unit string refers to (:data:`UNIT_A`, …); a
     top-level ``state_units`` dataset follows too.  Other datasets are converted by unit string
     in :func:`acmm_qpp.results.write_h5`."""
-    from dataclasses import replace
-
-    from acmm.io.units import state_factors, state_space_in
 
     system = cfg.output.units
     _, su = state_factors(cfg.design.drf_mode, system)
@@ -67,8 +68,6 @@ def _define_units(items: dict, orbit_rate: float) -> dict:
     dict
         ``items``.
     """
-    from dataclasses import replace
-
     period = 2 * np.pi / orbit_rate
     definitions = {"n": f"n = {float(orbit_rate)!r} * rad / s",
                    "orbit": f"orbit = {float(period)!r} * s"}
@@ -98,9 +97,6 @@ def stored_config(attrs: dict) -> Config:
     acmm.io.config.Config
         The config.
     """
-    import yaml
-
-    from acmm.io.config import parse_config
 
     text = attrs["config"]
     return parse_config(yaml.safe_load(text.decode() if isinstance(text, bytes) else text), source="stored config")
@@ -124,8 +120,6 @@ def stored_in(f, key: str, unit: str) -> np.ndarray:
     ndarray
         The values in ``unit``.
     """
-    from acmm_qpp.units import convert
-
     ds = f[key]
     stored = ds.attrs.get("units", unit)
     stored = stored.decode() if isinstance(stored, bytes) else str(stored)

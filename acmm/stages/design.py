@@ -22,7 +22,15 @@ from acmm.stages.common import _as_config, _define_units, _in_system
 from acmm_qpp.outputs import stage
 from acmm_qpp.pool import pool_map, process_pool, stop_pool
 from acmm_qpp.results import draw_figures, write_h5
-from acmm.io.design_file import DesignTable, _stored_digest, _unit_system, load_design_table, table_sha256
+from acmm.io.design_file import DesignTable, _stored_digest, _unit_system, load_design_table
+import json
+import time
+from acmm_qpp.provenance import config_hash
+from acmm.design import schedule_points as sp
+from acmm.design.design_core import design_schedule
+from acmm.design.settings import design_settings, schedule_settings
+from acmm.stages import design_output
+from acmm.design.schedule_points import off_branch_point
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -84,8 +92,6 @@ class DesignResult:
         acmm.design.schedule_points.BranchJump or None
             The point, its TEA and the branch's there, rad.
         """
-        from acmm.design.schedule_points import off_branch_point
-
         return off_branch_point([p.spec for p in self.points], [p.tea.theta for p in self.points],
                                 self.config.orbit_rate)
 
@@ -140,9 +146,6 @@ def design_hash(cfg: Config) -> str:
     str
         :func:`acmm_qpp.results.config_hash` of those sections.
     """
-    import json
-
-    from acmm_qpp.provenance import config_hash
 
     d = cfg.model_dump(mode="json")
     keys = ("inertia", "orbit_rate", "disturbance", "design", "schedule")
@@ -201,12 +204,6 @@ def compute_design(config, progress=None) -> DesignResult:
     OutputError
         A worker process of the design pool died (killed, or out of memory; :func:`acmm_qpp.pool.pool_map`).
     """
-    import time
-
-    from acmm.design import schedule as sch
-    from acmm.design import schedule_points as sp
-    from acmm.design.design_core import design_schedule
-    from acmm.design.settings import design_settings, schedule_settings
 
     cfg = _as_config(config)
     t0 = time.perf_counter()
@@ -277,9 +274,6 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
     tuple
         (:class:`DesignResult`, pathlib.Path of ``design.h5``).
     """
-    from acmm.stages import design_output
-    from acmm.design.settings import design_settings
-
     cfg = _as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
     s = design_settings(cfg)

@@ -16,8 +16,12 @@ from acmm.io.units import state_factors, state_space_in
 from acmm.model.linearize import STATE_NAMES
 from acmm.plots import design as design_plots
 from acmm.plots.base import state_units
-from acmm.stages.common import UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE
+from acmm.stages.common import UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE, stored_config
 from acmm_qpp.results import Dataset
+import h5py
+from acmm.design.schedule import schedule_gain
+from acmm.design.settings import design_settings
+from acmm.io.design_file import _text, _texts
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -369,12 +373,6 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
     list of functools.partial
         The figure calls, for :func:`acmm_qpp.results.draw_figures`.
     """
-    import h5py
-
-    from acmm.design.schedule import schedule_gain
-    from acmm.design.settings import design_settings
-    from acmm.io.design_file import _text, _texts
-    from acmm.stages.common import stored_config
 
     with h5py.File(path, "r") as f:
         attrs = {k: f.attrs[k] for k in f.attrs}

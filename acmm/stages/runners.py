@@ -14,12 +14,16 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm.model import tea as tea_mod
+from acmm.model import controllability as ctrb_mod, linearize as lin, tea as tea_mod
 from acmm.io.config import Config
 from acmm.io.dimensions import COORDS
 from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, _as_config, _in_system
 from acmm_qpp.outputs import stage
-from acmm_qpp.results import Dataset, write_h5
+from acmm_qpp.results import Dataset, redraw_from_files, stored_results, write_h5
+from acmm.stages.design_output import design_figures_from_file
+from acmm.stages.sim_output import sim_figures_from_file
+from acmm.sweep.output import sweep_figures_from_file
+from qpp.io.stages import figure_calls_from_file
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -157,9 +161,6 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     tuple
         (:class:`LinearizeResult`, pathlib.Path of ``linearize.h5``).
     """
-    from acmm.model import linearize as lin
-    from acmm.model import controllability as ctrb_mod
-
     tr = compute_tea(config)
     cfg = tr.config
     model = lin.design_point(cfg.inertia.matrix(), tr.tea.theta, cfg.orbit_rate,
@@ -228,12 +229,6 @@ def redraw_figures(target, out=None) -> list[Path]:
     acmm_qpp.errors.FigureError
         A figure could not be drawn or written (exit 4).
     """
-    from acmm.stages.design_output import design_figures_from_file
-    from acmm.stages.sim_output import sim_figures_from_file
-    from acmm.sweep.output import sweep_figures_from_file
-    from acmm_qpp.results import redraw_from_files, stored_results
-    from qpp.io.stages import figure_calls_from_file
-
     readers = {"design": design_figures_from_file, "simulate": sim_figures_from_file,
                "sweep": sweep_figures_from_file, "qpp design": figure_calls_from_file,
                "qpp simulate": figure_calls_from_file}

@@ -16,8 +16,9 @@ import numpy as np
 from acmm.model import kinematics as kin
 from acmm.plots import simulation as sim_plots
 from acmm.simulate import scenario as scen
-from acmm.stages.common import UNIT_K, UNIT_STATE
+from acmm.stages.common import UNIT_K, UNIT_STATE, stored_config, stored_in
 from acmm_qpp.results import Dataset
+import h5py
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -159,9 +160,6 @@ def sim_figures_from_file(path, out_dir) -> list:
     list of functools.partial
         The figure calls, for :func:`acmm_qpp.results.draw_figures`.
     """
-    import h5py
-
-    from acmm.stages.common import stored_config, stored_in
 
     with h5py.File(path, "r") as f:
         attrs = {k: f.attrs[k] for k in f.attrs}

@@ -33,6 +33,7 @@ or, for ``dask scheduler`` / ``dask worker`` processes, as a YAML file in the Da
 directory (``~/.config/dask/`` or ``$DASK_CONFIG``) with the text of :func:`dask_settings_yaml`.
 """
 from __future__ import annotations
+import yaml
 
 #: dotted Dask config keys and values for a cluster that runs acmm sweeps (module docstring)
 DASK_SETTINGS = {
@@ -50,8 +51,6 @@ def dask_settings_yaml() -> str:
     str
         The YAML text.
     """
-    import yaml
-
     tree: dict = {}
     for key, value in DASK_SETTINGS.items():
         *parents, leaf = key.split(".")

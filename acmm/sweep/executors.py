@@ -15,6 +15,7 @@ from acmm_qpp.errors import ConfigError
 from acmm_qpp.pool import process_pool, stop_pool
 from acmm.sweep.config import Sweep
 from acmm.sweep.case import BaseContext, margin_search, run_case
+from acmm_qpp.provenance import code_identity
 
 
 # ---------------------------------------------------------------------------------------------
@@ -252,8 +253,6 @@ def same_code(code: str) -> None:
     ConfigError
         This process runs other code.
     """
-    from acmm_qpp.provenance import code_identity
-
     if code != code_identity():
         raise ConfigError(f"--scheduler: a Dask worker runs other acmm code ({code_identity()}) than this "
                           f"command ({code}): start the workers from the same installation")

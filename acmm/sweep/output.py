@@ -12,8 +12,18 @@ from acmm_qpp.results import Dataset, write_h5
 from acmm.io.dimensions import COORDS
 from acmm.sweep.cases import AXES, VERDICTS
 from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS
-from acmm.sweep.config import Sweep
+from acmm.sweep.config import Sweep, parse_sweep
 from acmm.sweep.spec import swept_parameters
+import h5py
+import yaml
+from acmm.design.schedule_points import point_specs
+from acmm.model.tea import solve_tea
+from acmm.stages.common import _define_units, stored_in
+from dataclasses import replace
+from acmm_qpp.units import display_unit, shown
+from acmm.plots.base import _save
+from acmm_qpp.plot_style import stage_pyplot as _plt
+from functools import partial
 
 
 # ---------------------------------------------------------------------------------------------
@@ -77,9 +87,6 @@ def table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
 
 
 def _nominal_tea_deg(sweep: Sweep) -> dict:
-    from acmm.design.schedule_points import point_specs
-    from acmm.model.tea import solve_tea
-
     out = {}
     for b in sweep.bases:
         s = point_specs(b.config)[0]
@@ -129,9 +136,6 @@ def _orbit_defined(items: dict, sweep) -> dict:
     """``items`` with the unit ``orbit`` defined (:func:`acmm.stages.common._define_units`) when
     every base config has the same orbit rate; else an orbit's length differs between cases and
     each dataset in orbits says that its case's orbit is ``orbit_period[case]`` s."""
-    from acmm.stages.common import _define_units
-
-    from dataclasses import replace
 
     rates = {b.config.orbit_rate for b in sweep.bases}
     if len(rates) == 1:
@@ -229,8 +233,6 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
 
 
 def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
-    from acmm_qpp.units import display_unit, shown
-
     cols = ["case", "base", "index"] + [f"{k}[{display_unit(PARAMETERS[k].unit, units)}]" for k in a["parameters"]] + [
         "verdict", "time_to_divergence[orbit]"]
     for what, unit in (("peak_attitude_error", "deg"), ("steady_attitude_error", "deg"),
@@ -272,16 +274,12 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
     list of pathlib.Path
         The figures written.
     """
-    from acmm.plots.base import _save
-    from acmm_qpp.plot_style import stage_pyplot as _plt
-
     plt = _plt()
     labels = [b.label for b in sweep.bases]
     names = list(a["parameters"])
     axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
     nominal = _nominal_tea_deg(sweep) if nominal is None else nominal
 
-    from acmm_qpp.units import shown
 
     system = sweep.file.output.units
 
@@ -372,13 +370,7 @@ def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
         One call drawing both figures (none when the file holds no case), for
         :func:`acmm_qpp.results.draw_figures`.
     """
-    from functools import partial
 
-    import h5py
-    import yaml
-
-    from acmm.sweep.config import parse_sweep
-    from acmm.stages.common import stored_in
 
     def text(v):
         return v.decode() if isinstance(v, bytes) else str(v)

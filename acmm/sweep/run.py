@@ -21,6 +21,7 @@ from acmm_qpp.errors import ConfigError, OutputError
 from acmm_qpp.signals import interrupts_deferred
 from acmm_qpp.pool import submit
 from acmm.sweep.output import _split, write_results
+from acmm_qpp.provenance import code_identity
 
 
 # ---------------------------------------------------------------------------------------------
@@ -177,7 +178,6 @@ def _task_arguments(executor, contexts: dict) -> dict:
     remote = _remote_contexts(executor, contexts)
     if getattr(executor, "_client", None) is None:
         return {k: (v,) for k, v in remote.items()}
-    from acmm_qpp.provenance import code_identity
 
     return {k: (v, code_identity()) for k, v in remote.items()}
 

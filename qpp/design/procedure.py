@@ -22,13 +22,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm_qpp.errors import ConvergenceError, DesignError
+from acmm_qpp.errors import ConfigError, ConvergenceError, DesignError
 from qpp.design import circle as circle_mod
 from qpp.design import spheres
 from qpp.design.certificate import DesignResult, certify, default_sector, sector_coupling
 from qpp.io.config import QppConfig
-from qpp.design.hinf import HinfGains, hinf_gains, hinf_search
+from qpp.design.hinf import HinfGains, closed_loop_norm, hinf_gains, hinf_search
 from qpp.model.lure import LurePlant, channels, closed_loop
+from acmm_qpp.limits import how_to_raise, limit
+from qpp.simulate.closed_loop import check_work
 
 
 # ---------------------------------------------------------------------- the wider search
@@ -129,7 +131,6 @@ class _Procedure:
         self._budget(g, T)
         res = certify(self.cfg, g.K1, g.Kc, g.H, a, "hinf", g, T=T)
         res.ws_scale = [float(x) for x in np.atleast_1d(ws)]
-        from qpp.design.hinf import closed_loop_norm
 
         delta = closed_loop_norm(weighted_plant(self.P, ws), g, bz=self.dc.bz)
         self.records.append(self._rec(stage, g.rho, g.nu, a, T, delta, res.beta1_ref, res.m_ref,
@@ -142,10 +143,6 @@ class _Procedure:
         """Each evaluation integrates the nominal loop over max(T, simulation.t_final) (for its
         thresholds): the work of all of them is bounded by ``QPP_WORK`` (issue 13), so that a long
         horizon is refused in seconds instead of running for hours through the wider search."""
-        from acmm_qpp.errors import ConfigError
-        from acmm_qpp.limits import how_to_raise, limit
-        from qpp.simulate.closed_loop import check_work
-
         horizon = max(float(T), self.cfg.simulation.t_final)
         try:
             self.work += check_work(self.cfg, g.K1, g.Kc, g.H, runs=1, horizon=horizon)

@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from acmm_qpp.errors import ConvergenceError
+from qpp.model.transfer import transfer_on_grid
+from scipy.linalg import solve_continuous_lyapunov
 
 
 def hinf_norm(A, B, C, D=None, *, method: str = "slycot") -> tuple[float, float]:
@@ -137,8 +139,6 @@ def grid_norm(A, B, C, omega) -> tuple[float, float]:
     omega_peak : float
         Grid frequency of that largest value, rad/s.
     """
-    from qpp.model.transfer import transfer_on_grid
-
     omega = np.asarray(omega, float)
     G = transfer_on_grid(A, B, C, 1j * omega)
     vals = np.linalg.svd(G, compute_uv=False)[:, 0]
@@ -198,8 +198,6 @@ def l2_to_peak_gain(An, B, C) -> float:
     float
         The gain, output units per input unit per s^½ (inf when A_n is not Hurwitz).
     """
-    from scipy.linalg import solve_continuous_lyapunov
-
     An, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (An, B, C))
     if np.max(np.linalg.eigvals(An).real) >= 0:
         return float(np.inf)

@@ -21,6 +21,12 @@ from qpp.io.config_checks import _check_periods, _check_sample_count, _check_sec
 from qpp.io.config_fields import Matrix, PerSecond, Seconds, _finite_matrix, _Model
 from qpp.io.config_simulation import Simulation
 from qpp.io.config_nonlin import (ExpressionNonlinearity, LibraryForm, Nonlinearity, PolarArmNonlinearity, SinusoidalNonlinearity)
+from acmm_qpp.configio import read_yaml, validate_model
+from acmm_qpp.overrides import apply_overrides, remember_origin
+from qpp import PACKAGED_CONFIGS
+from acmm_qpp.limits import how_to_raise, limit
+from qpp.model.lure import LurePlant
+from qpp.model.nonlin import ExpressionModel
 
 
 class Plant(_Model):
@@ -266,7 +272,6 @@ class QppConfig(_Model):
                 for term in chan:
                     if term.kind == "sin" and term.omega > 0:
                         _check_periods(f"{sig_name} omega", term.omega, self.simulation.t_final)
-        from acmm_qpp.limits import how_to_raise, limit
 
         runs = len(self.simulation.scenarios) + 1
         if self.simulation.n_samples * runs > limit("QPP_SAMPLES"):
@@ -285,8 +290,6 @@ class QppConfig(_Model):
         qpp.model.lure.LurePlant
             Plant (A, B, C, G) and servo-compensator (Ac, Bc, Cc), in the user's units.
         """
-        from qpp.model.lure import LurePlant
-
         p = self.plant
         return LurePlant(p.A, p.B, p.C, p.G, p.Ac, p.Bc, p.Cc)
 
@@ -303,8 +306,6 @@ class QppConfig(_Model):
         TypeError
             If ``nonlinearity.kind`` is not ``expression``.
         """
-        from qpp.model.nonlin import ExpressionModel
-
         nl = self.nonlinearity
         if not isinstance(nl, ExpressionNonlinearity):
             raise TypeError("expression_model() needs nonlinearity.kind = expression")
@@ -360,8 +361,6 @@ def parse_config(data: object, source: str = "config") -> QppConfig:
     acmm_qpp.errors.ConfigError
         One line naming the offending field.
     """
-    from acmm_qpp.configio import validate_model
-
     return validate_model(QppConfig, data, source)
 
 
@@ -385,10 +384,6 @@ def load_config(path, overrides: list[str] | None = None) -> QppConfig:
     acmm_qpp.errors.ConfigError
         A missing or unreadable file, bad YAML or an invalid field (one line).
     """
-    from acmm_qpp.configio import read_yaml
-    from acmm_qpp.overrides import apply_overrides, remember_origin
-    from qpp import PACKAGED_CONFIGS
-
     data, p = read_yaml(path, PACKAGED_CONFIGS)
     cfg = parse_config(apply_overrides(data, overrides), source=str(p))
     return remember_origin(cfg, str(p), overrides)

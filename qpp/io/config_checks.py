@@ -7,11 +7,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from acmm_qpp.limits import how_to_raise, limit
 
 
 def _check_periods(field: str, omega: float, t_final: float) -> None:
-    from acmm_qpp.limits import how_to_raise, limit
-
     periods = omega * t_final / (2 * math.pi)
     if periods > limit("QPP_PERIODS"):
         raise ValueError(f"{field}: {omega:g} rad/s over simulation.t_final = {t_final:g} s is {periods:.3g} "
@@ -46,8 +45,6 @@ def _check_sample_count(model) -> None:
     """The points at which :meth:`qpp.model.nonlin.ExpressionModel.sector_info` samples φ (its
     :meth:`~qpp.model.sector_grid.SampleGrid.sector_points`) stay within the ``QPP_SECTOR_POINTS``
     limit; the message gives the factors and what the config can lower."""
-    from acmm_qpp.limits import how_to_raise, limit
-
     points = model.sector_points()
     if points <= limit("QPP_SECTOR_POINTS"):
         return

@@ -11,6 +11,8 @@ from typing import Annotated, Literal, Optional, Union
 from pydantic import Field, field_validator, model_validator
 
 from qpp.io.config_fields import KgM2, Kilograms, Matrix, Metres, RadPerSecond, _Model
+import re
+from qpp.model.expression_parser import library_expression
 
 
 class SinusoidalNonlinearity(_Model):
@@ -105,8 +107,6 @@ class ExpressionNonlinearity(_Model):
     @field_validator("parameters")
     @classmethod
     def _names(cls, v):
-        import re
-
         for k in v:
             if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,30}", k):
                 raise ValueError(f"parameter name {k!r} is not an identifier")
@@ -120,8 +120,6 @@ class ExpressionNonlinearity(_Model):
         list of str
             One expression per control input, in y1…yp, t and the parameter names.
         """
-        from qpp.model.expression_parser import library_expression
-
         return [e if isinstance(e, str) else repr(float(e)) if isinstance(e, (int, float))
                 else library_expression(e.form, e.output, str(e.gain), e.level) for e in self.f1]
 

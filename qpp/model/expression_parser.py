@@ -15,6 +15,7 @@ from __future__ import annotations
 import ast
 
 from acmm_qpp.errors import ConfigError
+import math
 
 MAX_LEN = 400           #: longest accepted expression, characters
 MAX_EXPONENT = 64       #: largest |numeric exponent| accepted in ``**``
@@ -153,8 +154,6 @@ _BINOPS = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: l
 
 def _float_sized(a, b) -> bool:
     """Whether the constant a**b stays within floating point (1e-300 ≤ |value| ≤ 1e300, or 0)."""
-    import math
-
     try:
         x, e = abs(complex(a)), abs(complex(b))
     except (OverflowError, TypeError, ValueError):

@@ -18,6 +18,8 @@ from scipy.integrate import solve_ivp
 from acmm_qpp.errors import ConvergenceError
 from qpp.io.config import QppConfig
 from qpp.model.lure import LurePlant
+from qpp.simulate.signals import eval_signal
+from acmm_qpp.limits import limit
 
 
 def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
@@ -187,8 +189,6 @@ def simulate_nominal(plant: LurePlant, K1, Kc, H, f1, gamma_nominal, r_o, t_eval
         (Z, U) as :func:`simulate_loop` returns them: z in the units of x and x_c, u in the
         units of u (NaN after a divergence).
     """
-    from qpp.simulate.signals import eval_signal
-
     t_eval = np.asarray(t_eval, float)
     return simulate_loop(plant, K1, Kc, H, f1, gamma=gamma_nominal, gamma_nominal=gamma_nominal,
                          r_fun=lambda tt: eval_signal(r_o, tt), t_eval=t_eval, z0=z0, rtol=rtol, atol=atol,
@@ -216,8 +216,6 @@ def nominal_diverged_beyond(r_o, t: np.ndarray, z0: np.ndarray) -> float:
     float
         The threshold, the units of z.
     """
-    from qpp.simulate.signals import eval_signal
-
     step = max(1, t.size // 200)
     r_peak = max((float(np.max(np.abs(eval_signal(r_o, tt)), initial=0.0)) for tt in t[::step]), default=0.0)
     return DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0), initial=0.0)), r_peak)
@@ -231,8 +229,6 @@ def _counted(rhs):
     """``rhs`` refusing to be evaluated more than ``QPP_RHS_EVALS`` times (acmm_qpp.limits): the
     static work bound (t_final × the loop's rates) cannot see a fast t inside an expression
     nonlinearity, e.g. sin(1e6·t), whose run never ended (a review)."""
-    from acmm_qpp.limits import limit
-
     budget, count = limit("QPP_RHS_EVALS"), [0]
 
     def counted(t, z):

@@ -10,6 +10,9 @@ import numpy as np
 from acmm.report.context import SectionWriter
 from acmm.report.gather import Gathered
 from acmm.report.manifest import _git_commit, _git_dirty
+import h5py
+import scipy
+from acmm import __version__
 
 
 def build(rep: SectionWriter, g: Gathered, timings: dict) -> None:
@@ -24,11 +27,8 @@ def build(rep: SectionWriter, g: Gathered, timings: dict) -> None:
     timings : dict
         Step name → wall time, s.
     """
-    import h5py
     import matplotlib
-    import scipy
 
-    from acmm import __version__
 
     rep.section("provenance")
     commit = _git_commit()

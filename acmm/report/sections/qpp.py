@@ -7,14 +7,15 @@ from acmm.report.context import SectionWriter
 from acmm.report.document import _fmt
 from acmm.report.figures_qpp import fig_circle, fig_qpp
 from acmm.report.ledger import _num_str, _printed_str, matches_printed
+import h5py
+from qpp.design.hinf import hinf_gains
+from qpp.design import spheres
 
 
 def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures: bool = True):
     """One QPP chapter; returns (β3 with sin 5t, with sin t) for ch. 13, else None.
 
     ``figures=False``: text and tables only (:func:`_figures` adds the two figures)."""
-    import h5py
-
     ctx.section(key)
     cfg = ctx.g.configs[name]
     dpath, spath = ctx.run(f"qpp design:{name}").path, ctx.run(f"qpp simulate:{name}").path
@@ -108,8 +109,6 @@ def _responses_figure(ctx: SectionWriter, key, name, out_labels) -> None:
 
 def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
     """K1, Kc, H printed vs synthesized (ch. 11 Riccati); H also vs the DGKF-style observer."""
-    from qpp.design.hinf import hinf_gains
-
     pub = cfg.published
     rows = []
     dgkf = hinf_gains(cfg.lure_plant(), rho=cfg.hinf.rho, a=cfg.hinf.a, nu=cfg.hinf.nu,
@@ -136,8 +135,6 @@ def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
 
 def _error_table(ctx: SectionWriter, chap: str, cfg, spath, printed_errors, out_labels) -> None:
     """Simulated tracking errors per scenario (``qpp_sim.h5``) and the printed ones in the ledger."""
-    import h5py
-
     with h5py.File(spath, "r") as f:
         scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
         erow = []
@@ -179,8 +176,6 @@ def _printed_gain_rows(ctx: SectionWriter, chap, d, pub, names=()):
 
 def _thresholds(ctx: SectionWriter, chap, cfg, th):
     """β3, β4 rows of the ledger; ch. 13: returns β3 with sin 5t and with sin t."""
-    from qpp.design import spheres
-
     pub = cfg.published
     if chap == "13":
         nl = cfg.nonlinearity

@@ -9,6 +9,8 @@ from acmm.model.state_scaling import torque_scale
 from acmm.report.context import SectionWriter
 from acmm.report.document import _decode
 from acmm.report.figures import fig_gain_schedule, fig_pole_maps
+from acmm.model import linearize as lin
+from acmm.plots import design as design_plots
 
 
 def build(ctx: SectionWriter) -> np.ndarray:
@@ -168,8 +170,6 @@ def true_poles(ctx: SectionWriter) -> np.ndarray:
     (24,) complex array
         The closed-loop poles, rad/s.
     """
-    from acmm.model import linearize as lin
-
     dec = ctx.data("acmm design:mb3_decoupled")
     cfg_m = ctx.g.configs["mb3"]
     true = lin.design_point(cfg_m.inertia.matrix(), dec["tea"][0], cfg_m.orbit_rate, model="coupled",
@@ -273,7 +273,6 @@ def path_figures(ctx: SectionWriter) -> None:
     ctx : acmm.report.context.SectionWriter
         The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
     """
-    from acmm.plots import design as design_plots
     cfg = ctx.g.configs["staircase"]
     pa = ctx.data("acmm design:" + cfg.name)["schedule"].get("path")
     if pa is None:
