@@ -138,7 +138,7 @@ def design(config, _compute: bool = True) -> "Design":
 
 
 def _named(A, B, C, D, states, inputs, outputs, name):
-    import control
+    import control  # deferred: python-control start-up (~1.5 s), only for a StateSpace
 
     return control.ss(A, B, C, D, states=list(states), inputs=list(inputs), outputs=list(outputs), name=name)
 

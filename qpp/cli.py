@@ -5,6 +5,7 @@ one line and exit with code 2.
 """
 from __future__ import annotations
 
+import json
 from typing import Optional
 
 # first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
@@ -17,7 +18,8 @@ from qpp import PACKAGED_CONFIGS
 import numpy as np  # noqa: E402
 import typer  # noqa: E402
 
-from acmm_qpp.errors import DesignError  # noqa: E402
+from acmm_qpp.cli.progress import status  # noqa: E402
+from acmm_qpp.errors import ConfigError, DesignError  # noqa: E402
 
 class _QppGroup(ExitCodeGroup):
     """The ``qpp`` app: its help ends with examples and the packaged qpp configs."""
@@ -46,7 +48,7 @@ def _root(version: bool = version_option()) -> None:
 
 
 def _load(config, overrides):
-    from qpp.io.config import load_config
+    from qpp.io.config import load_config  # deferred: --help needs no scipy, pydantic
 
     return load_config(config, overrides)
 
@@ -57,8 +59,7 @@ def _load(config, overrides):
 def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("spheres.beta_o=0.3"),
              show: bool = typer.Option(False, "--show", help="print the resolved config")) -> None:
     """Check a qpp config (an acmm run or sweep config is named as such: ``acmm validate`` checks it)."""
-    from acmm_qpp.configio import detect_kind, read_yaml
-    from acmm_qpp.errors import ConfigError
+    from acmm_qpp.configio import detect_kind, read_yaml  # deferred: --help needs no pydantic, yaml
 
     data, path = read_yaml(config, PACKAGED_CONFIGS)
     kind = detect_kind(data)
@@ -75,9 +76,7 @@ def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
 @user_errors
 def schema() -> None:
     """Print the JSON schema of the qpp config format (`acmm schema --kind ...` for the others)."""
-    import json
-
-    from qpp.io.schema import qpp_schema
+    from qpp.io.schema import qpp_schema  # deferred: --help needs no scipy, pydantic
 
     typer.echo(json.dumps(qpp_schema(), indent=2, ensure_ascii=False))
 
@@ -97,8 +96,7 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_a
     Exit 3 when a premise of the certificate (one sector, the Euclidean norm) fails (the best design
     is still written, labelled uncertified); with --strict, a computed sector of φ that its random
     check had to widen exits 1."""
-    from acmm_qpp.cli.progress import status
-    from qpp.io.stages import printed_H_difference, run_design, sector_verified
+    from qpp.io.stages import printed_H_difference, run_design, sector_verified  # deferred: --help needs no scipy, pydantic
 
     cfg = _load(config, overrides)
     with status(f"{cfg.name}: designing (ch. 12.1: H∞ gains, β1, thresholds, circle criterion) ..."):
@@ -169,8 +167,7 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
     """Nonlinear closed loop per scenario and the sphere check ‖y − y_o‖∞ ≤ β_o → qpp_sim.h5.
     The gains are those `qpp design` wrote for this config, else designed first. With --strict, an
     output outside the sphere, or an uncertified design, exits 1."""
-    from acmm_qpp.cli.progress import status
-    from qpp.io.stages import run_simulate
+    from qpp.io.stages import run_simulate  # deferred: --help needs no scipy, pydantic
 
     cfg = _load(config, overrides)
     n = len(cfg.simulation.scenarios)
@@ -212,7 +209,7 @@ def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
     """Redraw the figures of a qpp run from its stored results alone (nothing is designed or
     simulated again): the same files, with the same names, as the stage that wrote them.
     Exit 2 when RUN_DIR_OR_H5 is missing or holds no qpp results file."""
-    from qpp.io.stages import redraw_figures
+    from qpp.io.stages import redraw_figures  # deferred: --help needs no scipy, pydantic
 
     redraw_command(redraw_figures, target, out)
 

@@ -28,8 +28,7 @@ def plot_circle(res, path: Path) -> list[Path]:
     list of pathlib.Path
         The figures written, one per channel.
     """
-    from matplotlib.collections import EllipseCollection
-
+    from matplotlib.collections import EllipseCollection  # deferred: matplotlib start-up
 
     plt = _plt()
     c = res.circle

@@ -492,7 +492,7 @@ def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign
 
 def _care_slycot(A, B, Q, R):
     try:
-        from slycot import sb02md
+        from slycot import sb02md  # deferred: slycot start-up, only for method='slycot'
     except ImportError as exc:  # pragma: no cover - slycot is a declared dependency
         raise ConvergenceError("method='slycot' needs the slycot package") from exc
     n = A.shape[0]

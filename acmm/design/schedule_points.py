@@ -52,7 +52,6 @@ class PointSpec:
     level: bool = True
 
 
-
 def blend_points(start: PointSpec, end: PointSpec, n_points: int) -> list[PointSpec]:
     """``n_points`` configurations on I(s) = (1−s)·I_start + s·I_end, bias blended alike.
 
@@ -253,7 +252,6 @@ def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSp
         else:
             specs = blend_points(start, end, sched.n_points)
     return specs + list(extras)
-
 
 
 @dataclass(frozen=True)

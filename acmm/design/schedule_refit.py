@@ -5,7 +5,6 @@ closed-loop pole along the whole path to the left (smooth maximum by L-BFGS or i
 by SLSQP).  Split from :mod:`acmm.design.schedule`.
 
 The objective is the smooth maximum ::
-
     f(c) = (1/β) log Σ_{j,i} exp(β Re λ_i(A_j − B_j K(θ_j; c)) / n)
 
 over the chosen TEAs θ_j; with ``angle_weight`` w > 0 the terms

@@ -14,6 +14,9 @@ from acmm_qpp.results import convert_items
 import hashlib
 import h5py
 from acmm.design.schedule import schedule_gain
+import yaml
+from acmm_qpp.units import FT_LBF_IN_NM
+from acmm.io.units import state_factors
 
 
 _TABLE_KEYS = ("inertia", "bias", "tea", "K")
@@ -103,10 +106,6 @@ def load_design_table(path: Path) -> DesignTable:
         level = np.asarray(f["level"][()]).astype(bool) if "level" in f else None
     _check_table(names, inertia, bias, tea, K, coef, attrs.get("table_sha256"), level)
     if attrs.get("unit_system", "imperial") == "SI":      # back to the report's units
-        import yaml
-
-        from acmm_qpp.units import FT_LBF_IN_NM
-        from acmm.io.units import state_factors
 
         drf_mode = (yaml.safe_load(attrs["config"]).get("design") or {}).get("drf_mode", "attitude_hold")
         f, _ = state_factors(drf_mode, "SI")

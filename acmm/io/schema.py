@@ -23,7 +23,6 @@ extension, any editor using yaml-language-server).
 from __future__ import annotations
 
 
-
 from acmm_qpp.schema import header, model_schema
 from acmm.io.config import Config
 

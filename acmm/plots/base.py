@@ -24,6 +24,11 @@ from acmm_qpp.results import save_figure
 import re
 import itertools
 from acmm.model.linearize import state_units as units
+import matplotlib
+from matplotlib.backends.backend_agg import RendererAgg
+from matplotlib.artist import Artist
+from matplotlib.ticker import Formatter, MaxNLocator
+from matplotlib.lines import Line2D
 
 AXES = ("roll", "pitch", "yaw")
 
@@ -49,8 +54,6 @@ PNG_COMPRESS_LEVEL = 1
 
 
 def _save_now(fig, path: Path, out: list, vector: bool, tight: bool, rc: dict | None = None) -> None:
-    import matplotlib
-
     bbox = "tight" if tight else None
     with matplotlib.rc_context(rc or {}):
         save_figure(fig, out[0], bbox_inches=bbox, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
@@ -80,9 +83,6 @@ def _bake_texts(fig, texts) -> None:
     anti-aliased edges.  Drawn on any other canvas (a PDF, another size or resolution, a
     'tight' bounding box) the texts are drawn as texts instead.
     """
-    import matplotlib
-    from matplotlib.backends.backend_agg import RendererAgg
-
     w, h = (round(float(v)) for v in fig.bbox.size)
     renderer = RendererAgg(w, h, fig.dpi)
     texts = [t for t in texts if t.get_visible()]
@@ -103,9 +103,6 @@ def _tiles_artist(tiles: list, texts: list, canvas: tuple):
     """An artist blending pre-rendered RGBA ``tiles`` ``(x, y, array)`` (pixels from the lower
     left, rows bottom first) onto an Agg renderer of ``canvas`` (width, height, dpi) as they
     are, without resampling; on any other renderer it draws the hidden ``texts`` instead."""
-    from matplotlib.artist import Artist
-    from matplotlib.backends.backend_agg import RendererAgg
-
     class Tiles(Artist):
         zorder = 3
 
@@ -233,8 +230,6 @@ def _compact_formatter():
     """A tick formatter writing each value in full and short (``−7.5e6``, ``0.0045``, ``−1.5e-5``)
     with the fewest significant digits that keep the labels distinct and exact: no offset or
     ×10ⁿ text above the axes (it collides with the panel titles and is one more text per axis)."""
-    from matplotlib.ticker import Formatter
-
     class Compact(Formatter):
         @staticmethod
         def _label(v: float, d: int, sci: bool) -> str:
@@ -282,8 +277,6 @@ def in_view_ticks(lo: float, hi: float, nbins: int) -> list:
     list of float
         The tick values, units of the data.
     """
-    from matplotlib.ticker import MaxNLocator
-
     lo, hi = sorted((lo, hi))
     tol = 1e-10 * (hi - lo)              # as an axis keeps a tick (relative to the view's span)
     return [v for v in MaxNLocator(nbins, min_n_ticks=3).tick_values(lo, hi) if lo - tol <= v <= hi + tol]
@@ -291,8 +284,6 @@ def in_view_ticks(lo: float, hi: float, nbins: int) -> list:
 
 def _in_view_locator(nbins: int = 4):
     """An axis locator placing :func:`in_view_ticks` in the axis' view."""
-    from matplotlib.ticker import MaxNLocator
-
     class InView(MaxNLocator):
         def __call__(self):
             return in_view_ticks(*self.axis.get_view_interval(), nbins)
@@ -303,8 +294,6 @@ def _in_view_locator(nbins: int = 4):
 def _line(ax, **kw):
     """An empty :class:`~matplotlib.lines.Line2D` with ``kw`` added to ``ax`` (its data set later
     with ``set_data``; ~40 % cheaper than ``ax.plot``'s argument handling)."""
-    from matplotlib.lines import Line2D
-
     return ax.add_line(Line2D([], [], **kw))
 
 

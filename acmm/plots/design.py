@@ -16,6 +16,7 @@ from acmm.plots.base import (FAST_TEXT_RC, _BUILDERS, _bake_texts, _compact_form
 from acmm_qpp.plot_style import stage_pyplot as _plt
 import re
 from acmm.plots.panel_grid import PanelGrid
+from matplotlib.ticker import LogFormatterSciNotation, MaxNLocator
 
 
 def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
@@ -233,8 +234,6 @@ def _plain_log_formatter(**kw):
     same ticks labelled) writing its labels as plain text (:func:`_plain_math`): no mathtext,
     whose parser is built on first use (~0.07 s of CPU in each figure writer) and whose labels
     are laid out glyph by glyph."""
-    from matplotlib.ticker import LogFormatterSciNotation
-
     class PlainSciNotation(LogFormatterSciNotation):
         def __call__(self, x, pos=None):
             return _plain_math(super().__call__(x, pos))
@@ -296,7 +295,6 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
         lo, hi = float(fin.min()), float(fin.max())
         pad = max(0.05 * (hi - lo), 0.02 * max(abs(hi), 1e-3))
         a2.set_ylim(max(0.0, lo - pad), hi + pad)
-    from matplotlib.ticker import MaxNLocator
 
     a2.yaxis.set_major_locator(MaxNLocator(6))
     return _save(fig, path, vector, tight=False)

@@ -15,6 +15,7 @@ from acmm.plots.base import (AXES, FAST_TEXT_RC, _BUILDERS, _bake_texts, _compac
 from acmm_qpp.plot_style import stage_pyplot as _plt
 from acmm.plots.panel_grid import PanelGrid
 from acmm_qpp.units import pretty, shown
+import matplotlib as mpl
 
 
 def _panel_axes(ax) -> None:
@@ -29,9 +30,6 @@ def _axis_histories_layout(units: str):
     """The 12 panels (:class:`acmm.plots.panel_grid.PanelGrid`) with the axis names over the top row,
     the quantity left of each row, the time under the bottom row (pre-rendered: _bake_texts) and
     one line series for all panels."""
-    import matplotlib as mpl
-
-
     plt = _plt()
     fig = plt.figure(figsize=(13, 10))
     uu, hu = shown(1.0, "ft*lbf", units)[1], shown(1.0, "ft*lbf*s", units)[1]
@@ -98,9 +96,6 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
 def _inertia_layout(units: str):
     """The six panels (:class:`acmm.plots.panel_grid.PanelGrid`) with titles, labels (pre-rendered)
     and one step-line series for all panels."""
-    import matplotlib as mpl
-
-
     iu = shown(1.0, "slug*ft^2", units)[1]
     plt = _plt()
     fig = plt.figure(figsize=(12, 6))

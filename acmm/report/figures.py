@@ -12,7 +12,7 @@ from acmm.model.linearize import STATE_NAMES, state_units
 from acmm_qpp.plot_style import COLORS
 from acmm.report.figure_style import fixed_layout, pyplot, save
 from acmm.design.schedule import schedule_gain
-
+from matplotlib.ticker import MaxNLocator
 
 
 def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
@@ -33,9 +33,6 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from matplotlib.ticker import MaxNLocator
-
-
     plt = pyplot()
     K, tea = design["K"], design["tea"]
     sc = design["schedule"]

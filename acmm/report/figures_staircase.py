@@ -9,6 +9,7 @@ import numpy as np
 from acmm.report.constants import AXES
 from acmm_qpp.plot_style import COLORS
 from acmm.report.figure_style import fixed_layout, pyplot, save
+from matplotlib.collections import LineCollection
 
 
 def fig_staircase(sim: dict, figdir: Path):
@@ -80,9 +81,6 @@ def fig_staircase_responses(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from matplotlib.collections import LineCollection
-
-
     plt = pyplot()
     o = sim["orbits"]
     fig2, axs = plt.subplots(4, 3, figsize=(11, 10), sharex=True)

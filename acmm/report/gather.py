@@ -5,6 +5,7 @@ The stages are those of Part II (TEA, design and stair-case simulation, ch. 4–
 """
 from __future__ import annotations
 
+import importlib
 import os
 import time
 from dataclasses import dataclass, field
@@ -24,6 +25,13 @@ from acmm import PACKAGED_CONFIGS
 from acmm_qpp.configio import packaged_config_path
 from acmm_qpp.results import read_h5
 from acmm.sweep.config import parse_sweep
+# imported here so that the report's workers, forked after :func:`warm_workers`, find them loaded
+import h5py  # noqa: F401
+import matplotlib.pyplot  # noqa: F401
+import scipy.linalg  # noqa: F401
+import acmm.stages.runners  # noqa: F401
+import acmm.sweep.run  # noqa: F401
+import qpp.io.stages  # noqa: F401
 
 
 @dataclass
@@ -316,15 +324,7 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
 
 def warm_workers() -> None:
     """Imports (and the compiled simulator, a first figure's fonts and caches) every worker needs,
-    done once before forking them."""
-    import h5py  # noqa: F401
-    import matplotlib.pyplot  # noqa: F401
-    import scipy.linalg  # noqa: F401
-
-    import acmm.stages.runners  # noqa: F401
-    import acmm.sweep.run  # noqa: F401
-    import qpp.io.stages  # noqa: F401
-
+    done once before forking them (the modules they import are imported at the top of this one)."""
     warm_up(lambda *a: None)
     warm()
 
@@ -352,8 +352,6 @@ def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bo
         "design", "tea_estimate", "seed", "bases"}`` and a note.  A missing sweep package, or a sweep that fails with an :class:`AcmmError` or an
         ``OSError``, makes the section "not available"; programming errors propagate.
     """
-    import importlib
-
     try:
         importlib.import_module("acmm.sweep.run")
     except ImportError as exc:
@@ -375,8 +373,6 @@ SWEEP_CONFIG = "sweep_inertia30.yaml"
 def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     """Run (or reuse, by ``results_key``) ``configs/sweep_inertia30.yaml`` through
     :func:`acmm.sweep.run_sweep` and read ``sweep.h5`` back."""
-    import importlib
-
 
     p = packaged_config_path(SWEEP_CONFIG, PACKAGED_CONFIGS)
     if not p.exists():

@@ -17,6 +17,7 @@ from acmm.report.constants import FAST_ORBITS
 import h5py
 from acmm_qpp.errors import OutputError, failure_line
 from acmm.io.config import load_config, parse_config
+from qpp.io.config import load_config as load_qpp_config, parse_config as parse_qpp_config
 from acmm import PACKAGED_CONFIGS
 from acmm_qpp.configio import packaged_config_path
 from acmm_qpp.provenance import config_hash
@@ -202,13 +203,11 @@ def qpp_config(name: str, root: Path | None = None):
     qpp.io.config.QppConfig
         The config, figures off.
     """
-    from qpp.io.config import load_config, parse_config
-
-    data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
+    data = load_qpp_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
     if root is not None:
         data["output"]["root"] = str(root)
     data["output"]["figures"] = False
-    return parse_config(data, source=f"packaged config {name}")
+    return parse_qpp_config(data, source=f"packaged config {name}")
 
 
 def _record(stage, cfg_name, path, chash, dhash, reused, wall):

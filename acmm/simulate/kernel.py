@@ -25,7 +25,7 @@ import numpy as np
 
 from acmm.model import dynamics as dyn
 from acmm.model import kinematics as kin
-from acmm.simulate.compiled_cache import njit_cached
+from acmm.model.compiled_cache import njit_cached
 from acmm.model.linearize import DRF_INPUTS
 from acmm.simulate.scenario import (STOP_ANGLE, STOP_NONE, STOP_NONFINITE, STOP_SATURATION, STOP_STEP,
                                     RunExtremes, Scenario, SimResult)

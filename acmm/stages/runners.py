@@ -19,11 +19,7 @@ from acmm.io.config import Config
 from acmm.io.dimensions import COORDS
 from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, _as_config, _in_system
 from acmm_qpp.outputs import stage
-from acmm_qpp.results import Dataset, redraw_from_files, stored_results, write_h5
-from acmm.stages.design_output import design_figures_from_file
-from acmm.stages.sim_output import sim_figures_from_file
-from acmm.sweep.output import sweep_figures_from_file
-from qpp.io.stages import figure_calls_from_file
+from acmm_qpp.results import Dataset, write_h5
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -45,7 +41,6 @@ class TeaResult:
     config: Config
     tea: tea_mod.TEA
     others: list = field(default_factory=list)
-
 
 
 def compute_tea(config) -> TeaResult:
@@ -195,41 +190,3 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     write_h5(out / "linearize.h5", items, cfg.to_yaml(),
              {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode}, coords=COORDS)
     return result, cfg.run_dir() / "linearize.h5"
-
-
-#: results file → the stage that writes it (root attribute ``stage``), in the order ``acmm plot``
-#: redraws a run folder's figures (the qpp files too: a run folder may hold both)
-FIGURE_SOURCES = {"design.h5": "design", "sim.h5": "simulate", "sweep.h5": "sweep",
-                  "qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
-
-
-def redraw_figures(target, out=None) -> list[Path]:
-    """Redraw a run's figures from its stored results (``acmm plot``): ``design.h5``,
-    ``sim.h5``, ``sweep.h5`` and the qpp files, each drawn from the file alone
-    (:func:`acmm.stages.design_output.design_figures_from_file`,
-    :func:`acmm.stages.sim_output.sim_figures_from_file`,
-    :func:`acmm.sweep.output.sweep_figures_from_file`, :func:`qpp.io.stages.figure_calls_from_file`).
-
-    Parameters
-    ----------
-    target : path-like
-        A run folder (every results file with figures in it) or one results file.
-    out : path-like, optional
-        Folder of the figures (created if missing; default: the results file's folder).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The figures written.
-
-    Raises
-    ------
-    acmm_qpp.errors.ConfigError
-        ``target`` is missing or holds no results file of this project (exit 2).
-    acmm_qpp.errors.FigureError
-        A figure could not be drawn or written (exit 4).
-    """
-    readers = {"design": design_figures_from_file, "simulate": sim_figures_from_file,
-               "sweep": sweep_figures_from_file, "qpp design": figure_calls_from_file,
-               "qpp simulate": figure_calls_from_file}
-    return redraw_from_files(stored_results(target, FIGURE_SOURCES), readers, out)

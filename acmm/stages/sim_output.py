@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 
 from acmm.model import kinematics as kin
-from acmm.plots import simulation as sim_plots
 from acmm.simulate import scenario as scen
 from acmm.stages.common import UNIT_K, UNIT_STATE, stored_config, stored_in
 from acmm_qpp.results import Dataset
@@ -127,6 +126,8 @@ def sim_figures(cfg, sc, r, stats: list, items: dict, folder: Path) -> list:
         The figure calls: ``sim_axes.png``, ``sim_summary.png`` and, with more than one
         inertia level, ``sim_inertia.png`` in ``folder``.
     """
+    from acmm.plots import simulation as sim_plots  # deferred: matplotlib start-up
+
     d = Path(folder)
     units = cfg.output.units
     orbits = items["orbits"].data
@@ -160,6 +161,7 @@ def sim_figures_from_file(path, out_dir) -> list:
     list of functools.partial
         The figure calls, for :func:`acmm_qpp.results.draw_figures`.
     """
+    from acmm.plots import simulation as sim_plots  # deferred: matplotlib start-up
 
     with h5py.File(path, "r") as f:
         attrs = {k: f.attrs[k] for k in f.attrs}

@@ -2,7 +2,6 @@
 
 A sweep file names one or more *base* configs (ordinary acmm configs) and says how to vary
 them::
-
     name: inertia30                # results go to <output.root>/<name>/sweep.h5
     description: "..."
     sweep:
@@ -47,6 +46,7 @@ from acmm.sweep.limits import check_sweep_work
 from acmm import PACKAGED_CONFIGS
 from acmm_qpp.overrides import apply_overrides, remember_origin
 from acmm_qpp.provenance import config_hash
+import difflib
 
 #: Version of how a ``design: fixed`` case is computed, part of :meth:`Sweep.results_key` so that
 #: ``--resume`` never mixes rows of two versions: 2 (2026-11-30): a case starts at the equilibrium
@@ -226,8 +226,6 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
                           f"got {type(raw).__name__}")
     inline = "base" not in raw and "bases" not in raw
     if inline and "inertia" not in data:     # neither a base nor an inline acmm config around it
-        import difflib
-
         unknown = [k for k in raw if k not in SweepSpec.model_fields]
         close = [m for k in unknown for m in difflib.get_close_matches(str(k), ["base", "bases"], n=1)]
         hint = (f" (sweep.{unknown[0]}: unknown key" + (f"; did you mean {close[0]!r}?)" if close else ")")

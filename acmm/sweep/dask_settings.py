@@ -22,7 +22,6 @@ configuration); they only make the cluster quieter:
     noticed up to a second later; a sweep case holds a few MB).
 
 They must be in force where each server starts: in the process that creates a ``LocalCluster``::
-
     import dask, distributed
     from acmm.sweep.dask_settings import DASK_SETTINGS
 

@@ -16,6 +16,9 @@ from acmm_qpp.pool import process_pool, stop_pool
 from acmm.sweep.config import Sweep
 from acmm.sweep.case import BaseContext, margin_search, run_case
 from acmm_qpp.provenance import code_identity
+import ctypes
+from acmm_qpp.limits import limit
+from acmm.simulate.warmup import warm_up
 
 
 # ---------------------------------------------------------------------------------------------
@@ -73,10 +76,9 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
     """
     if scheduler:
         try:
-            import distributed
+            import distributed  # deferred: dask start-up, and an optional dependency
         except ImportError:
             raise ConfigError("--scheduler needs the optional Dask dependency: pip install 'acmm-qpp[dask]'") from None
-        from acmm_qpp.limits import limit
 
         timeout = f"{limit('DASK_CONNECT_SECONDS'):g}s"        # (its own error, not the address's)
         try:
@@ -114,8 +116,6 @@ def lost_worker(exc: BaseException) -> Optional[str]:
     else:
         return None
     return what + "; the finished cases are kept in the journal: run the sweep again with --resume"
-
-
 
 
 def _tasks(sweep: Sweep):
@@ -170,8 +170,6 @@ def _restore_heap_reuse() -> bool:
             or "MALLOC_MMAP_THRESHOLD_" in os.environ):
         return False
     try:
-        import ctypes
-
         libc = ctypes.CDLL(None)
         return (libc.mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD) == 1
                 and libc.mallopt(M_TRIM_THRESHOLD, 2 * MMAP_THRESHOLD) == 1)
@@ -185,7 +183,7 @@ def _in_dask_worker() -> bool:
     if "distributed" not in sys.modules:
         return False
     try:
-        from distributed.worker import Worker
+        from distributed.worker import Worker  # deferred: dask, an optional dependency
 
         return bool(Worker._instances)
     except (ImportError, AttributeError):
@@ -198,8 +196,6 @@ def _warm_worker() -> None:
     ahead with ``client.run(acmm.sweep._warm_worker)``."""
     global _WARM
     if not _WARM:
-        from acmm.simulate.warmup import warm_up
-
         if _in_dask_worker():        # only the nanny's environment needs it; the user's own
             _restore_heap_reuse()    # MALLOC_* choice in a driver or pool process is left alone
         warm_up()

@@ -11,6 +11,7 @@ from pathlib import Path
 from acmm_qpp.errors import AcmmError, ConfigError
 from acmm.sweep.journal_records import record_problem
 from acmm_qpp.configio import read_regular_file
+from acmm_qpp.atomic_write import output_error
 
 
 JOURNAL_VERSION = 1
@@ -82,8 +83,6 @@ def _journal_errors(path):
     try:
         yield
     except OSError as exc:
-        from acmm_qpp.atomic_write import output_error
-
         raise output_error(exc, "the sweep journal", path) from None
 
 
@@ -215,5 +214,4 @@ class GroupCommitJournal(Journal):
                 self._f.flush()
                 os.fsync(self._f.fileno())
         super().close()
-
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm_qpp.errors import AcmmError
+from acmm_qpp.errors import AcmmError, FigureError
 from acmm_qpp.atomic_write import write_text
 from acmm_qpp.results import Dataset, write_h5
 from acmm.io.dimensions import COORDS
@@ -21,7 +21,6 @@ from acmm.model.tea import solve_tea
 from acmm.stages.common import _define_units, stored_in
 from dataclasses import replace
 from acmm_qpp.units import display_unit, shown
-from acmm.plots.base import _save
 from acmm_qpp.plot_style import stage_pyplot as _plt
 from functools import partial
 
@@ -222,8 +221,6 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
     if figures and rows:
-        from acmm_qpp.errors import FigureError
-
         try:
             figs = plot_sweep(sweep, a, run_dir, nominal)
         except OSError as exc:        # the tables are written: only a figure failed (exit 4)
@@ -274,12 +271,15 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
     list of pathlib.Path
         The figures written.
     """
+    from matplotlib.ticker import MaxNLocator  # deferred: matplotlib start-up
+
+    from acmm.plots.base import _save  # deferred: matplotlib start-up
+
     plt = _plt()
     labels = [b.label for b in sweep.bases]
     names = list(a["parameters"])
     axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
     nominal = _nominal_tea_deg(sweep) if nominal is None else nominal
-
 
     system = sweep.file.output.units
 
@@ -309,7 +309,6 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
         ax.set_xlabel(_label(axes_names[0], system))
         ax.set_ylabel(_label(axes_names[1], system) if len(axes_names) > 1 else "peak attitude error (deg)")
         ax.set_title(f"{lab}: {int(np.sum(verdicts == 'bounded'))}/{int(sel.sum())} bounded")
-        from matplotlib.ticker import MaxNLocator
 
         ax.xaxis.set_major_locator(MaxNLocator(5))       # fewer ticks, turned: they do not crowd
         ax.yaxis.set_major_locator(MaxNLocator(6))
@@ -345,7 +344,6 @@ def _label(name: str, units: str = "imperial") -> str:
             return f"{name}: relative change of {name[1:]} (1, 0.1 = +10 %)"
         if p.kind == "scale":
             return f"{name}: {p.description.split(':')[0].split('(')[0].strip()} (1, × nominal)"
-        from acmm_qpp.units import display_unit
 
         unit = display_unit(p.unit, units).replace("*", "·")
         return f"{name}: {p.description.split('(')[0].split(',')[0].strip()} ({unit})"
@@ -370,7 +368,6 @@ def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
         One call drawing both figures (none when the file holds no case), for
         :func:`acmm_qpp.results.draw_figures`.
     """
-
 
     def text(v):
         return v.decode() if isinstance(v, bytes) else str(v)

@@ -79,7 +79,6 @@ class SweepResult:
         return out
 
 
-
 def _as_sweep(sweep) -> Sweep:
     return sweep if isinstance(sweep, Sweep) else load_sweep(sweep)
 

@@ -20,6 +20,7 @@ from acmm_qpp.config_model import StrictModel
 from acmm_qpp.schema import Generator, fix_alternatives, header
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN
 from pydantic.json_schema import models_json_schema
+from acmm_qpp.hints import closest
 
 
 class _Model(StrictModel):
@@ -197,8 +198,6 @@ class SweepSpec(_Model):
 
 def _check_name(name: str) -> None:
     if name not in PARAMETERS and name not in SHORTHANDS:
-        from acmm_qpp.hints import closest
-
         known = list(SHORTHANDS) + list(PARAMETERS)
         best = closest(name, known)
         raise ValueError(f"unknown parameter {name!r}" + (f" (did you mean `{best}`?)" if best else "")

@@ -11,7 +11,6 @@ import sys
 import typer
 
 
-
 def interrupt_behind(exc: BaseException):
     """The Ctrl-C/SIGTERM behind ``exc`` (its cause or context), else None.
 
@@ -51,7 +50,7 @@ def note_warnings(caught) -> None:
 
 def note_compiled_cache() -> None:
     """A ``note:`` line for each reason numba could not save a kernel it compiled in this run."""
-    cache = sys.modules.get("acmm.simulate.compiled_cache")       # (not imported: nothing was compiled)
+    cache = sys.modules.get("acmm.model.compiled_cache")       # (not imported: nothing was compiled)
     for line in cache.write_error_notes() if cache is not None else []:
         typer.echo(f"note: {line}", err=True)
 

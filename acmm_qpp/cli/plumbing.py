@@ -13,6 +13,12 @@ from importlib import resources
 
 import typer
 
+# the click that typer uses: recent typer vendors it as ``typer._click``, older ones use click
+try:
+    from typer._click import exceptions as click_exceptions
+except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
+    from click import exceptions as click_exceptions
+
 from acmm_qpp.cli.failures import (EXIT_PIPE_CLOSED, interrupt_behind, note_compiled_cache, note_warnings, quiet_stdout)
 from acmm_qpp.errors import plain_failure as _plain_failure
 from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError, ConfigError
@@ -220,11 +226,7 @@ StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes w
 
 def _click():
     """The click that typer uses: recent typer vendors it as ``typer._click``, older ones use click."""
-    try:
-        from typer._click import exceptions
-    except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
-        from click import exceptions
-    return types.SimpleNamespace(exceptions=exceptions)
+    return types.SimpleNamespace(exceptions=click_exceptions)
 
 
 def _one_line_usage(exc) -> str:
@@ -415,7 +417,7 @@ def version_option():
 
     def show(value: bool) -> None:
         if value:
-            from importlib.metadata import PackageNotFoundError, version
+            from importlib.metadata import PackageNotFoundError, version  # deferred: for --version only
 
             try:
                 v = version("acmm-qpp")

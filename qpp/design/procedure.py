@@ -27,8 +27,8 @@ from qpp.design import circle as circle_mod
 from qpp.design import spheres
 from qpp.design.certificate import DesignResult, certify, default_sector, sector_coupling
 from qpp.io.config import QppConfig
-from qpp.design.hinf import HinfGains, closed_loop_norm, hinf_gains, hinf_search
-from qpp.model.lure import LurePlant, channels, closed_loop
+from qpp.design.hinf import HinfGains, closed_loop_norm, existence_tests, hinf_gains, hinf_search
+from qpp.model.lure import LurePlant, channels, closed_loop, structural_obstacles
 from acmm_qpp.limits import how_to_raise, limit
 from qpp.simulate.closed_loop import check_work
 
@@ -95,7 +95,6 @@ class _Procedure:
                     self.hist.append({**h, "a": a, "ws": float(np.mean(ws))})
             else:
                 g = hinf_gains(Pw, rho=rho, a=a, nu=hc.nu, weight=hc.weight, observer=obs)
-                from qpp.design.hinf import closed_loop_norm, existence_tests
 
                 tests = existence_tests(g)
                 self.hist.append({"rho": rho, "nu": hc.nu, "delta": closed_loop_norm(Pw, g, bz=dc.bz), **tests,
@@ -535,8 +534,6 @@ def design(cfg: QppConfig) -> DesignResult:
     if res is None:
         res = proc.best
     if res is None:
-        from qpp.model.lure import structural_obstacles
-
         why = structural_obstacles(cfg.lure_plant())
         raise DesignError("procedure 12.1: no stabilizing H∞ gains for any rho, a or weight tried"
                           + (f": {'; '.join(why)}" if why else ""))

@@ -9,7 +9,9 @@ import numpy as np
 
 from acmm_qpp.errors import ConvergenceError
 from qpp.model.transfer import transfer_on_grid
-from scipy.linalg import solve_continuous_lyapunov
+from scipy.linalg import solve_continuous_lyapunov, svdvals
+from slycot import ab13dd
+from slycot.exceptions import SlycotArithmeticError
 
 
 def hinf_norm(A, B, C, D=None, *, method: str = "slycot") -> tuple[float, float]:
@@ -60,14 +62,9 @@ AB13DD_TOL = 1e-10
 
 def _hinf_ab13dd(A, B, C, D) -> tuple[float, float]:
     """L∞ norm and peak frequency (rad/s) by SLICOT AB13DD, as :func:`control.linfnorm` calls it."""
-    from slycot import ab13dd
-    from slycot.exceptions import SlycotArithmeticError
-
     n, m, p = A.shape[0], B.shape[1], C.shape[0]
     if n == 0:             # AB13DD takes no empty system; a static gain's norm is its σ_max
-        from scipy.linalg import svdvals       # as control.linfnorm computes it
-
-        return float(svdvals(D)[0]), 0.0
+        return float(svdvals(D)[0]), 0.0       # as control.linfnorm computes it
     jobd = "Z" if not np.any(D) else "D"
     try:
         gpeak, fpeak = ab13dd("C", "I", "S", jobd, n, m, p, A, np.eye(n), B, C, D, AB13DD_TOL)

@@ -396,7 +396,6 @@ def figure_calls_from_file(path: Path, out_dir: Path) -> list:
         The file is not a qpp result.
     """
 
-
     def text(v):
         return v.decode() if isinstance(v, bytes) else str(v)
 

@@ -30,7 +30,7 @@ def sympy_module():
     module
         The sympy module.
     """
-    import sympy
+    import sympy  # deferred: sympy start-up, only for an expression nonlinearity
 
     return sympy
 

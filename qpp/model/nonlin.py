@@ -32,6 +32,7 @@ from qpp.model.sector_grid import SampleGrid
 from qpp.model.sector_proof import SLOPE_CELLS, ProvedBounds, prove, slope_cells
 from scipy.optimize import minimize_scalar
 from qpp.design.spheres import truncated_l2
+from scipy.stats import qmc
 
 
 @dataclass
@@ -500,8 +501,6 @@ def _on_grid(sp, expr, syms, ranges):
         axes = [np.linspace(*ranges[s], per_axis) for s in syms]
         grid = np.meshgrid(*axes, indexing="ij")
     else:
-        from scipy.stats import qmc
-
         u = qmc.Sobol(d, scramble=True, seed=0).random(SINGULARITY_POINTS)
         lo = np.array([ranges[s][0] for s in syms], float)
         hi = np.array([ranges[s][1] for s in syms], float)

@@ -13,6 +13,7 @@ from acmm.report.manifest import _git_commit, _git_dirty
 import h5py
 import scipy
 from acmm import __version__
+import matplotlib
 
 
 def build(rep: SectionWriter, g: Gathered, timings: dict) -> None:
@@ -27,9 +28,6 @@ def build(rep: SectionWriter, g: Gathered, timings: dict) -> None:
     timings : dict
         Step name → wall time, s.
     """
-    import matplotlib
-
-
     rep.section("provenance")
     commit = _git_commit()
     rows = [["package", f"acmm-qpp {__version__}"], ["git commit", f"{commit} ({_git_dirty()})"],

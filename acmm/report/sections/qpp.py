@@ -106,7 +106,6 @@ def _responses_figure(ctx: SectionWriter, key, name, out_labels) -> None:
                         name, ctx.figdir, out_labels))
 
 
-
 def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
     """K1, Kc, H printed vs synthesized (ch. 11 Riccati); H also vs the DGKF-style observer."""
     pub = cfg.published
