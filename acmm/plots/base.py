@@ -1,13 +1,13 @@
 """What every stage figure shares (report Figs 5.3–5.26, 6.2–6.30): saving a figure (PNG/PDF,
-atomically), figure skeletons (:func:`_layout`), tick and line thinning, and the unit labels of
+atomically), figure skeletons (:func:`new_layout`), tick and line thinning, and the unit labels of
 the 24 states of eq 4.46.
 
 Drawing cost (issue 16): a skeleton holds everything that does not depend on the data (axes,
-empty lines, legend, tick artists) and its fixed texts already rasterized (:func:`_bake_texts`);
-the figure function then sets the data and the limits (:func:`_set_limits`, no autoscaling
+empty lines, legend, tick artists) and its fixed texts already rasterized (:func:`bake_texts`);
+the figure function then sets the data and the limits (:func:`set_limits`, no autoscaling
 bookkeeping) and saves.  Grids of panels are drawn without an Axes each
-(:mod:`acmm.plots.panel_grid`), tick labels are few and short (:func:`_in_view_locator`,
-:func:`_compact_formatter`) and text is unhinted while these figures are drawn
+(:mod:`acmm.plots.panel_grid`), tick labels are few and short (:func:`in_view_locator`,
+:func:`compact_formatter`) and text is unhinted while these figures are drawn
 (:data:`FAST_TEXT_RC`).
 
 The figures themselves
@@ -34,14 +34,33 @@ AXES = ("roll", "pitch", "yaw")
 
 
 #: rcParams of the cost-cut stage figures (issue 16), applied only while they are laid out and
-#: drawn (:func:`_save` with ``rc``, :func:`_bake_texts`), never set globally (the report draws
+#: drawn (:func:`write_figure` with ``rc``, :func:`bake_texts`), never set globally (the report draws
 #: its own figures, and two of these, in the same process): unhinted glyphs render ~40 % faster
 FAST_TEXT_RC = {"text.hinting": "none"}
 
 
-def _save(fig, path: Path, vector: bool = False, tight: bool = True, rc: dict | None = None) -> list[Path]:
+def write_figure(fig, path: Path, vector: bool = False, tight: bool = True, rc: dict | None = None) -> list[Path]:
     """Write ``fig`` as PNG (and PDF with ``vector``) beside ``path``'s stem, atomically, and
-    close it; returns the files written."""
+    close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : pathlib.Path
+        The file; its suffix is replaced by ``.png`` (and ``.pdf``).
+    vector : bool, optional
+        Also write a PDF.
+    tight : bool, optional
+        Save with a tight bounding box.
+    rc : dict, optional
+        rcParams in effect while saving.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+    """
     path = Path(path)
     out = [path.with_suffix(".png")]
     _save_now(fig, path, out, vector, tight, rc)
@@ -63,25 +82,45 @@ def _save_now(fig, path: Path, out: list, vector: bool, tight: bool, rc: dict | 
 
 
 #: figure kind → skeleton builder; filled by :mod:`acmm.plots.design` and :mod:`acmm.plots.simulation`
-_BUILDERS: dict = {}
+BUILDERS: dict = {}
 
 
-def _layout(kind: str, *params):
+def new_layout(kind: str, *params):
     """A new skeleton of the figure ``kind`` (axes, labels, titles, tick artists: everything that
-    does not depend on the data) for the parameters ``params`` (e.g. the unit system)."""
-    return _BUILDERS[kind](*params)
+    does not depend on the data) for the parameters ``params`` (e.g. the unit system).
+
+    Parameters
+    ----------
+    kind : str
+        The figure (a key of :data:`BUILDERS`).
+    *params
+        Its builder's parameters.
+
+    Returns
+    -------
+    tuple
+        What the builder returns: the figure and its artists.
+    """
+    return BUILDERS[kind](*params)
 
 
-def _bake_texts(fig, texts) -> None:
+def bake_texts(fig, texts) -> None:
     """Render data-independent ``texts`` (titles, axis labels, a legend: artists already placed
     by a fixed layout) now, into small transparent images at the figure's resolution that take
     their place; the texts themselves are hidden.
 
     Laying out and rasterizing text is the costliest part of drawing a stage figure (each glyph
-    is rendered on its own); a skeleton (:func:`_layout`) pays it before the
+    is rendered on its own); a skeleton (:func:`new_layout`) pays it before the
     data exist.  The PNG differs from drawing the texts at save time only by rounding of the
     anti-aliased edges.  Drawn on any other canvas (a PDF, another size or resolution, a
     'tight' bounding box) the texts are drawn as texts instead.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    texts : iterable of matplotlib.artist.Artist
+        The texts (and legends) to render now.
     """
     w, h = (round(float(v)) for v in fig.bbox.size)
     renderer = RendererAgg(w, h, fig.dpi)
@@ -135,9 +174,17 @@ def _runs(mask, gap: int) -> list:
     return list(zip(starts.tolist(), stops.tolist()))
 
 
-def _premake_ticks(axes, nx: int = 9, ny: int = 8) -> None:
+def premake_ticks(axes, nx: int = 9, ny: int = 8) -> None:
     """Create the tick artists now (the costly part of an axis): at draw time the axis reuses
-    the first ones it needs and makes more only if the locator asks for more."""
+    the first ones it needs and makes more only if the locator asks for more.
+
+    Parameters
+    ----------
+    axes : iterable of matplotlib.axes.Axes
+        The axes.
+    nx, ny : int, optional
+        Ticks to make on the x and y axis.
+    """
     for ax in axes:
         ax.xaxis.get_major_ticks(nx)
         ax.yaxis.get_major_ticks(ny)
@@ -217,19 +264,34 @@ def state_units(drf_mode: str = "attitude_hold") -> list[str]:
     return [pretty(u) for u in units(drf_mode)]
 
 
-def _fixed_label_positions(ax, x=None, y=None) -> None:
+def fixed_label_positions(ax, x=None, y=None) -> None:
     """Place the axis labels at fixed axes coordinates (x label at ``x`` below, y label at ``y``
-    left of the axes): the automatic placement measures every tick label a second time per axis."""
+    left of the axes): the automatic placement measures every tick label a second time per axis.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+    x, y : float, optional
+        Axes coordinates (dimensionless) of the x label's height and of the y label's abscissa;
+        None leaves that label where matplotlib puts it.
+    """
     if x is not None:
         ax.xaxis.set_label_coords(0.5, x)
     if y is not None:
         ax.yaxis.set_label_coords(y, 0.5)
 
 
-def _compact_formatter():
+def compact_formatter():
     """A tick formatter writing each value in full and short (``−7.5e6``, ``0.0045``, ``−1.5e-5``)
     with the fewest significant digits that keep the labels distinct and exact: no offset or
-    ×10ⁿ text above the axes (it collides with the panel titles and is one more text per axis)."""
+    ×10ⁿ text above the axes (it collides with the panel titles and is one more text per axis).
+
+    Returns
+    -------
+    matplotlib.ticker.Formatter
+        The formatter.
+    """
     class Compact(Formatter):
         @staticmethod
         def _label(v: float, d: int, sci: bool) -> str:
@@ -282,8 +344,19 @@ def in_view_ticks(lo: float, hi: float, nbins: int) -> list:
     return [v for v in MaxNLocator(nbins, min_n_ticks=3).tick_values(lo, hi) if lo - tol <= v <= hi + tol]
 
 
-def _in_view_locator(nbins: int = 4):
-    """An axis locator placing :func:`in_view_ticks` in the axis' view."""
+def in_view_locator(nbins: int = 4):
+    """An axis locator placing :func:`in_view_ticks` in the axis' view.
+
+    Parameters
+    ----------
+    nbins : int, optional
+        The number of intervals asked for.
+
+    Returns
+    -------
+    matplotlib.ticker.MaxNLocator
+        The locator.
+    """
     class InView(MaxNLocator):
         def __call__(self):
             return in_view_ticks(*self.axis.get_view_interval(), nbins)
@@ -291,16 +364,39 @@ def _in_view_locator(nbins: int = 4):
     return InView(nbins, min_n_ticks=3)
 
 
-def _line(ax, **kw):
+def empty_line(ax, **kw):
     """An empty :class:`~matplotlib.lines.Line2D` with ``kw`` added to ``ax`` (its data set later
-    with ``set_data``; ~40 % cheaper than ``ax.plot``'s argument handling)."""
+    with ``set_data``; ~40 % cheaper than ``ax.plot``'s argument handling).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+    **kw
+        Line properties.
+
+    Returns
+    -------
+    matplotlib.lines.Line2D
+        The line.
+    """
     return ax.add_line(Line2D([], [], **kw))
 
 
-def _set_limits(axs, xlim, *ys) -> None:
+def set_limits(axs, xlim, *ys) -> None:
     """Set the x limits ``xlim`` of ``axs`` (and, with ``ys``, their common y limits, the data's
-    range with matplotlib's margins)."""
-    ylim = _data_limits(*ys) if ys else None
+    range with matplotlib's margins).
+
+    Parameters
+    ----------
+    axs : iterable of matplotlib.axes.Axes
+        The axes.
+    xlim : tuple or None
+        The x limits (in the units of the axes' data); None leaves them.
+    *ys : array_like
+        The data whose range the y limits span (in the units of the axes' data).
+    """
+    ylim = data_limits(*ys) if ys else None
     for ax in axs:
         if xlim is not None:
             ax.set_xlim(xlim)
@@ -308,10 +404,23 @@ def _set_limits(axs, xlim, *ys) -> None:
             ax.set_ylim(ylim)
 
 
-def _data_limits(*arrays, margin: float = 0.05):
+def data_limits(*arrays, margin: float = 0.05):
     """(lo, hi) of the finite values of ``arrays`` widened by ``margin`` of the span on each side
     (matplotlib's autoscale margins), or None when there is none; set on an axis directly this
-    replaces the data-limit bookkeeping of the plotting calls."""
+    replaces the data-limit bookkeeping of the plotting calls.
+
+    Parameters
+    ----------
+    *arrays : array_like
+        The data (in the units of the axis).
+    margin : float, optional
+        Fraction of the span added on each side (dimensionless).
+
+    Returns
+    -------
+    tuple of float or None
+        (lo, hi) in the units of the data; None when no value is finite.
+    """
     lo, hi = np.inf, -np.inf
     for a in arrays:
         a = np.asarray(a, dtype=float)

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acmm.plots.base import _data_limits, in_view_ticks
+from acmm.plots.base import data_limits, in_view_ticks
 import matplotlib as mpl
 from matplotlib.collections import LineCollection
 from matplotlib.gridspec import GridSpec
@@ -230,7 +230,7 @@ class PanelGrid:
         """
         for s, x, y in data:
             self.set_data(k, s, x, y)
-        ylim = _data_limits(*(y for _, _, y in data)) or (0.0, 1.0)
+        ylim = data_limits(*(y for _, _, y in data)) or (0.0, 1.0)
         self.set_limits(k, xlim, ylim, xticks, in_view_ticks(*ylim, nbins))
 
     def draw_data(self, formatter, x_labelled=None) -> None:

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm.plots.base import (AXES, FAST_TEXT_RC, _BUILDERS, _bake_texts, _compact_formatter, _data_limits,
-    _fixed_label_positions, _in_view_locator, _layout, _line, _premake_ticks, _save, _set_limits, decimate,
+from acmm.plots.base import (AXES, FAST_TEXT_RC, BUILDERS, bake_texts, compact_formatter, data_limits,
+    fixed_label_positions, in_view_locator, new_layout, empty_line, premake_ticks, write_figure, set_limits, decimate,
     in_view_ticks)
 from acmm_qpp.plot_style import stage_pyplot as _plt
 from acmm.plots.panel_grid import PanelGrid
@@ -20,15 +20,15 @@ import matplotlib as mpl
 
 def _panel_axes(ax) -> None:
     """A summary panel's axes: few y ticks written short, at most six x ticks."""
-    ax.yaxis.set_major_locator(_in_view_locator(3))
-    ax.yaxis.set_major_formatter(_compact_formatter())
+    ax.yaxis.set_major_locator(in_view_locator(3))
+    ax.yaxis.set_major_formatter(compact_formatter())
     ax.tick_params(labelsize=8)
-    ax.xaxis.set_major_locator(_in_view_locator(5))
+    ax.xaxis.set_major_locator(in_view_locator(5))
 
 
 def _axis_histories_layout(units: str):
     """The 12 panels (:class:`acmm.plots.panel_grid.PanelGrid`) with the axis names over the top row,
-    the quantity left of each row, the time under the bottom row (pre-rendered: _bake_texts) and
+    the quantity left of each row, the time under the bottom row (pre-rendered: bake_texts) and
     one line series for all panels."""
     plt = _plt()
     fig = plt.figure(figsize=(13, 10))
@@ -45,7 +45,7 @@ def _axis_histories_layout(units: str):
     for a in range(3):
         grid.set_title(a, AXES[a])
         grid.set_label(9 + a, "time (orbits)", "below", offset=0.12)
-    _bake_texts(fig, [*grid.titles, *grid.labels])
+    bake_texts(fig, [*grid.titles, *grid.labels])
     return fig, grid
 
 
@@ -80,17 +80,17 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    fig, grid = _layout("axis_histories", units)
+    fig, grid = new_layout("axis_histories", units)
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
-    xlim = _data_limits(orbits) or (0.0, 1.0)
+    xlim = data_limits(orbits) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 5)
     for r, data in enumerate((err_deg, rate, u, h)):
         for a in range(3):
             grid.show(3 * r + a, xlim, [(0, *decimate(orbits, data[:, a]))], xticks)
-    grid.draw_data(_compact_formatter().format_ticks)
+    grid.draw_data(compact_formatter().format_ticks)
     fig.suptitle(title)
-    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+    return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 def _inertia_layout(units: str):
@@ -108,7 +108,7 @@ def _inertia_layout(units: str):
     for k in range(3, 6):
         grid.set_label(k, "time (orbits)", "below", offset=0.12)
     title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
-    _bake_texts(fig, [title, *grid.titles, *grid.labels])
+    bake_texts(fig, [title, *grid.titles, *grid.labels])
     return fig, grid
 
 
@@ -138,13 +138,13 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
     """
     inertia = shown(np.asarray(inertia), "slug*ft^2", units)[0]
 
-    fig, grid = _layout("inertia_histories", units)
-    xlim = _data_limits(orbits) or (0.0, 1.0)
+    fig, grid = new_layout("inertia_histories", units)
+    xlim = data_limits(orbits) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 5)
     for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
         grid.show(k, xlim, [(0, orbits, inertia[:, i, j] / 1e6)], xticks)
-    grid.draw_data(_compact_formatter().format_ticks)
-    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+    grid.draw_data(compact_formatter().format_ticks)
+    return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 #: the per-level table of the summary: column headers (the last takes the momentum unit)
@@ -153,7 +153,7 @@ _TABLE_HEADER = ("level", "start (orbit)", "θ2* est (deg)", "steady |err| max (
 
 def _summary_layout(units: str, n_rows: int = 12):
     """The three panels with their (empty) lines, one legend, the table's header and empty
-    columns; titles, labels, legend and header pre-rendered (_bake_texts).  The table's height
+    columns; titles, labels, legend and header pre-rendered (bake_texts).  The table's height
     follows its ``n_rows`` rows (at most 12 lines of full height): a one-level run leaves no
     blank third of the page."""
     hu, uu = shown(1.0, "ft*lbf*s", units)[1], shown(1.0, "ft*lbf", units)[1]
@@ -171,8 +171,8 @@ def _summary_layout(units: str, n_rows: int = 12):
     for ax in (top, *mid):
         _panel_axes(ax)
         ax.set_xlabel("time (orbits)")
-        _fixed_label_positions(ax, -0.1 if ax is top else -0.12, -0.06 if ax is top else -0.12)
-        lines.append([_line(ax, lw=0.7, color=f"C{a}", label=AXES[a]) for a in range(3)])
+        fixed_label_positions(ax, -0.1 if ax is top else -0.12, -0.06 if ax is top else -0.12)
+        lines.append([empty_line(ax, lw=0.7, color=f"C{a}", label=AXES[a]) for a in range(3)])
     # one legend for the three panels, above them: no 'best' placement search over the data
     fig.legend(handles=lines[0], loc="upper right", bbox_to_anchor=(0.98, 0.995), ncol=3, fontsize=8,
                frameon=False)
@@ -185,8 +185,8 @@ def _summary_layout(units: str, n_rows: int = 12):
     body = [table.text((c + 0.5) / 5, 1 - 0.09 * k, "", ha="center", va="top", fontsize=8, linespacing=1.45,
                        transform=table.transAxes) for c in range(5)]
     fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
-    _premake_ticks([top, *mid], 6, 4)
-    _bake_texts(fig, [*head, *rules, *fig.legends,
+    premake_ticks([top, *mid], 6, 4)
+    bake_texts(fig, [*head, *rules, *fig.legends,
                       *(t for ax in (top, *mid) for t in (ax.xaxis.label, ax.yaxis.label))])
     return fig, (top, mid, lines, body)
 
@@ -225,12 +225,12 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     k_h = shown(1.0, "ft*lbf*s", units)[0]
-    fig, (top, mid, lines, body) = _layout("summary", units, min(len(level_stats), 12))
-    xlim = _data_limits(orbits)
+    fig, (top, mid, lines, body) = new_layout("summary", units, min(len(level_stats), 12))
+    xlim = data_limits(orbits)
     for ax, panel, data in zip((top, *mid), lines, (err_deg, h, u)):
         for a in range(3):
             panel[a].set_data(*decimate(orbits, data[:, a]))
-        _set_limits([ax], xlim, data)
+        set_limits([ax], xlim, data)
     top.set_title(f"{title} — verdict: {verdict}")
     rows = [(str(s["level"]), f"{s['start_orbit']:.1f}", f"{s['theta2_deg']:.2f}",
              " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum'] * k_h:.0f}")
@@ -244,8 +244,8 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
         for text, column in zip(body, zip(*rows)):
             text.set_text("\n".join(column))
             text.set_fontsize(size)
-    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+    return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
-_BUILDERS.update({"axis_histories": _axis_histories_layout, "inertia_histories": _inertia_layout,
+BUILDERS.update({"axis_histories": _axis_histories_layout, "inertia_histories": _inertia_layout,
                   "summary": _summary_layout})

@@ -15,7 +15,7 @@ from typing import Callable
 from acmm_qpp.errors import AcmmError, OutputError
 from acmm_qpp.outputs import file_identity
 # the results files of one stage (reused by hash, else run)
-from acmm.report.stage_results import (Failed, StageRun, _record, _try_attrs, acmm_config, blocked, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, failed, qpp_config)
+from acmm.report.stage_results import (Failed, StageRun, stage_record, try_attrs, acmm_config, blocked, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, failed, qpp_config)
 import yaml
 from acmm.io.config import parse_config
 from acmm.report.runner import Task, run_tasks
@@ -389,7 +389,7 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
         data["sweep"].pop("margin", None)
     sweep = parse_sweep(data, source=str(p), directory=p.parent)
     path = sweep.run_dir() / "sweep.h5"
-    a = None if rerun else _try_attrs(path)
+    a = None if rerun else try_attrs(path)
     reused = bool(a is not None and a.get("results_key") == sweep.results_key() and bool(a.get("complete")))
     t0 = time.perf_counter()
     if not reused:
@@ -398,7 +398,7 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     wall = 0.0 if reused else time.perf_counter() - t0
     d = read_h5(path)
     chash = str(d["attrs"].get("config_hash", ""))
-    run = _record("acmm sweep", sweep.name, path, chash, "", reused, wall)
+    run = stage_record("acmm sweep", sweep.name, path, chash, "", reused, wall)
     spec = sweep.spec
     return {"data": d, "run": run, "fast": fast, "n_runs": spec.n_runs, "orbits": spec.orbits,
             "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed,

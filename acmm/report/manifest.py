@@ -66,7 +66,7 @@ def build_manifest(g: Gathered) -> dict:
         files[key] = {"path": str(r.path), "config_hash": r.config_hash, "design_hash": r.design_hash,
                       "created_utc": r.created_utc, "reused": r.reused, "datasets": dataset_hashes(r.path)}
     return {"created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-            "git_commit": _git_commit(), "files": files}
+            "git_commit": git_commit(), "files": files}
 
 
 def compare_manifests(old: dict | None, new: dict) -> dict:
@@ -114,9 +114,12 @@ def compare_manifests(old: dict | None, new: dict) -> dict:
 # =============================================================================================
 # helpers
 # =============================================================================================
-def _git_commit() -> str:
-    return git_commit()
+def report_git_state() -> str:
+    """Whether the working tree the report ran in has modified files, in words.
 
-
-def _git_dirty() -> str:
+    Returns
+    -------
+    str
+        ``"modified files present"``, ``"clean"`` or ``"unknown"`` (no git).
+    """
     return {"yes": "modified files present", "no": "clean"}.get(git_dirty(), "unknown")

@@ -152,7 +152,19 @@ def _attrs(path: Path) -> dict:
         return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
 
 
-def _try_attrs(path: Path) -> dict | None:
+def try_attrs(path: Path) -> dict | None:
+    """The root attributes of a results file, or None when it is missing or unreadable.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The results file.
+
+    Returns
+    -------
+    dict or None
+        Its root attributes.
+    """
     try:
         return _attrs(path) if path.exists() else None
     except OSError:
@@ -210,7 +222,29 @@ def qpp_config(name: str, root: Path | None = None):
     return parse_qpp_config(data, source=f"packaged config {name}")
 
 
-def _record(stage, cfg_name, path, chash, dhash, reused, wall):
+def stage_record(stage, cfg_name, path, chash, dhash, reused, wall):
+    """The :class:`StageRun` of a results file the report computed or reused.
+
+    Parameters
+    ----------
+    stage : str
+        The stage (``tea``, ``design``…).
+    cfg_name : str
+        The config's name.
+    path : pathlib.Path
+        The results file.
+    chash, dhash : str
+        Its config and data hashes.
+    reused : bool
+        Whether it was reused (not computed in this report).
+    wall : float
+        Wall time of the stage, s.
+
+    Returns
+    -------
+    StageRun
+        The record, with the file's creation time and git commit.
+    """
     a = _attrs(path)
     return StageRun(stage, cfg_name, path, chash, dhash, reused, wall, str(a.get("created_utc", "")),
                     str(a.get("git_commit", "")))
@@ -243,18 +277,18 @@ def ensure_acmm_design(cfg, *, rerun: bool = False, donor_roots=()) -> StageRun:
     t0 = time.perf_counter()
     if rerun:
         _, path = run_design(cfg, figures=False)
-        return _record("acmm design", cfg.name, path, chash, want, False, time.perf_counter() - t0)
-    a = _try_attrs(path)
+        return stage_record("acmm design", cfg.name, path, chash, want, False, time.perf_counter() - t0)
+    a = try_attrs(path)
     if a is None or a.get("design_hash") != want:
         for donor in donor_roots:
-            a = _try_attrs(Path(donor) / "design.h5")
+            a = try_attrs(Path(donor) / "design.h5")
             if a is not None and a.get("design_hash") == want:
                 path.parent.mkdir(parents=True, exist_ok=True)
                 shutil.copy2(Path(donor) / "design.h5", path)
                 break
     _, note = design_for(cfg, figures=False)
     reused = note.startswith("reused")
-    return _record("acmm design", cfg.name, path, chash, want, reused,
+    return stage_record("acmm design", cfg.name, path, chash, want, reused,
                    0.0 if reused else time.perf_counter() - t0)
 
 
@@ -275,12 +309,12 @@ def ensure_acmm_simulation(cfg, *, rerun: bool = False) -> StageRun:
     """
     chash, dhash = config_hash(cfg.to_yaml()), design_hash(cfg)
     path = cfg.run_dir() / "sim.h5"
-    a = None if rerun else _try_attrs(path)
+    a = None if rerun else try_attrs(path)
     if a is not None and a.get("config_hash") == chash and a.get("design_hash") == dhash:
-        return _record("acmm simulate", cfg.name, path, chash, dhash, True, 0.0)
+        return stage_record("acmm simulate", cfg.name, path, chash, dhash, True, 0.0)
     t0 = time.perf_counter()
     _, path = run_simulate(cfg, figures=False)
-    return _record("acmm simulate", cfg.name, path, chash, dhash, False, time.perf_counter() - t0)
+    return stage_record("acmm simulate", cfg.name, path, chash, dhash, False, time.perf_counter() - t0)
 
 
 def ensure_qpp(cfg, stage: str, *, rerun: bool = False) -> StageRun:
@@ -302,12 +336,12 @@ def ensure_qpp(cfg, stage: str, *, rerun: bool = False) -> StageRun:
     """
     chash = config_hash(cfg.to_yaml())
     path = cfg.run_dir() / ("qpp_design.h5" if stage == "design" else "qpp_sim.h5")
-    a = None if rerun else _try_attrs(path)
+    a = None if rerun else try_attrs(path)
     if a is not None and a.get("config_hash") == chash:
-        return _record(f"qpp {stage}", cfg.name, path, chash, "", True, 0.0)
+        return stage_record(f"qpp {stage}", cfg.name, path, chash, "", True, 0.0)
     t0 = time.perf_counter()
     if stage == "design":
         path = qst.run_design(cfg, figures=False)[2]
     else:
         path = qst.run_simulate(cfg, figures=False)[3]
-    return _record(f"qpp {stage}", cfg.name, path, chash, "", False, time.perf_counter() - t0)
+    return stage_record(f"qpp {stage}", cfg.name, path, chash, "", False, time.perf_counter() - t0)

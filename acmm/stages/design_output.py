@@ -19,7 +19,7 @@ from acmm_qpp.results import Dataset
 import h5py
 from acmm.design.schedule import schedule_gain
 from acmm.design.settings import design_settings
-from acmm.io.design_file import _text, _texts
+from acmm.io.design_file import h5_text, h5_texts
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -381,7 +381,7 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
 
     with h5py.File(path, "r") as f:
         attrs = {k: f.attrs[k] for k in f.attrs}
-        names = _texts(f["names"][()])
+        names = h5_texts(f["names"][()])
         keys = sorted(f["points"])
         poles = [np.asarray(f[f"points/{k}/poles"][()]) for k in keys]
         tea = np.asarray(f["tea"][()], float)
@@ -395,11 +395,11 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
                                  ("theta2", "max_real", "sector_margin", "disk_margin", "poles")}
     cfg = stored_config(attrs)
     s = design_settings(cfg)
-    system = _text(attrs.get("unit_system", "imperial"))
+    system = h5_text(attrs.get("unit_system", "imperial"))
     calls = [partial(design_plots.pole_map, poles, names, s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg,
                      out_dir / "design_poles.png")]
     if sched is not None:
-        form = _text(attrs.get("schedule_form", "polynomial"))
+        form = h5_text(attrs.get("schedule_form", "polynomial"))
         theta2 = tea[:, 1]
         fine = np.linspace(theta2.min(), theta2.max(), 60)
         sampled = design_plots.SampledSchedule(

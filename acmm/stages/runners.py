@@ -17,7 +17,7 @@ import numpy as np
 from acmm.model import controllability as ctrb_mod, linearize as lin, tea as tea_mod
 from acmm.io.config import Config
 from acmm.io.dimensions import COORDS
-from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, _as_config, _in_system
+from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, as_config, in_system
 from acmm_qpp.outputs import stage
 from acmm_qpp.results import Dataset, write_h5
 
@@ -56,14 +56,14 @@ def compute_tea(config) -> TeaResult:
     TeaResult
         The config and its TEA.
     """
-    cfg = _as_config(config)
+    cfg = as_config(config)
     inertia = cfg.inertia.matrix()
     bias = tea_mod.resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate)
     return TeaResult(cfg, tea_mod.solve_tea(inertia, cfg.orbit_rate, bias,
                                             expected=cfg.disturbance.requested_tea()))
 
 
-@stage(("tea.h5",), _as_config)
+@stage(("tea.h5",), as_config)
 def run_tea(config, all_roots: bool = False, *, out: Path) -> tuple[TeaResult, Path]:
     """Compute the TEA and write ``runs/<name>/tea.h5``.
 
@@ -140,7 +140,7 @@ class LinearizeResult:
         return eig[np.lexsort((eig.imag, eig.real))]
 
 
-@stage(("linearize.h5",), _as_config)
+@stage(("linearize.h5",), as_config)
 def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     """TEA, then the design model of ``design.model``; writes ``runs/<name>/linearize.h5``.
 
@@ -186,7 +186,7 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
                                              "min σmin([A−sI, B])/σmax over eigenvalues and s=0, scaled"),
         "controllability_rank": Dataset(ctrb.rank, "1", f"PBH rank with tolerance {ctrb.tol:g}"),
     }
-    items = _in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
+    items = in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
     write_h5(out / "linearize.h5", items, cfg.to_yaml(),
              {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode}, coords=COORDS)
     return result, cfg.run_dir() / "linearize.h5"

@@ -14,7 +14,7 @@ import numpy as np
 
 from acmm_qpp.errors import ConvergenceError, DesignError, NoEquilibriumError
 from acmm.model.inertia import perturb_inertia
-from acmm.sweep.cases import AXES, _why, case_values
+from acmm.sweep.cases import AXES, unphysical_draw_reason, case_values
 from acmm.simulate.scenario import scenario_from_config
 from acmm.stages.design import compute_design, design_table
 from acmm.design.schedule_points import PointSpec, schedule_specs
@@ -106,7 +106,20 @@ def _redesigned_table(cfg, values: dict, biases: np.ndarray):
     return design_table(ds.points, ds.fit, "")
 
 
-def _empty_row(n_levels: int) -> dict:
+def empty_row(n_levels: int) -> dict:
+    """The metrics row of a case that has none yet (NaN and empty values).
+
+    Parameters
+    ----------
+    n_levels : int
+        Inertia levels of the case.
+
+    Returns
+    -------
+    dict
+        The row's fields, NaN where a metric is a number (units of the metrics row: deg, s,
+        ft·lbf·s, slug·ft², ft·lbf).
+    """
     nan3 = [math.nan] * 3
     return {"verdict": "", "reason": "", "time_to_divergence": math.nan,
             "peak_attitude_error": nan3, "steady_attitude_error": nan3, "peak_momentum": nan3,
@@ -137,12 +150,12 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
     """
     sc0, table, cfg, spec = ctx.scenario, ctx.table, ctx.config, ctx.spec
     L = sc0.inertia.shape[0]
-    row = _empty_row(L)
+    row = empty_row(L)
     inertia = np.array([perturb_inertia(m, values) for m in sc0.inertia])
     bias = sc0.bias + np.array([values.get(f"bias_{a}", 0.0) for a in AXES])
     row["inertia"] = inertia[0].tolist()
     row["bias"] = bias[0].tolist()
-    why = _why(values, sc0.inertia)
+    why = unphysical_draw_reason(values, sc0.inertia)
     if why is not None:
         row.update(verdict="unphysical", reason=why)
         return row

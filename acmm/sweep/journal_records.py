@@ -9,12 +9,12 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from acmm.sweep.case import _empty_row
+from acmm.sweep.case import empty_row
 from acmm.sweep.cases import VERDICTS
 
 _NUMBER = (int, float)
 
-#: the fields a case record adds to its metrics row (:func:`acmm.sweep.case._empty_row`)
+#: the fields a case record adds to its metrics row (:func:`acmm.sweep.case.empty_row`)
 CASE_KEYS = {"base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ())}
 
 
@@ -23,7 +23,7 @@ def case_fields() -> dict:
     """Case record fields: name → (kind, shape), kind "num" (a number, NaN or ±inf), "int" or
     "str": :data:`CASE_KEYS` and the metrics row's fields, read off its empty row."""
     fields = dict(CASE_KEYS)
-    for k, v in _empty_row(1).items():
+    for k, v in empty_row(1).items():
         fields[k] = ("str" if isinstance(v, str) else "int" if isinstance(v, int) else "num", np.shape(v))
     return fields
 

@@ -18,7 +18,7 @@ import h5py
 import yaml
 from acmm.design.schedule_points import point_specs
 from acmm.model.tea import solve_tea
-from acmm.stages.common import _define_units, stored_in
+from acmm.stages.common import define_units, stored_in
 from dataclasses import replace
 from acmm_qpp.units import display_unit, shown
 from acmm_qpp.plot_style import stage_pyplot as _plt
@@ -28,7 +28,23 @@ from functools import partial
 # ---------------------------------------------------------------------------------------------
 # results: sweep.h5, sweep.csv, figures
 # ---------------------------------------------------------------------------------------------
-def _split(sweep: Sweep, records: list[dict]):
+def split_records(sweep: Sweep, records: list[dict]):
+    """The case rows and the margin records of a sweep, each in the bases' order.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep.
+    records : list of dict
+        Its journal records.
+
+    Returns
+    -------
+    rows : list of dict
+        The case records, by base then index.
+    margins : list of dict
+        The margin records, by base, ``up`` first.
+    """
     order = {b.label: k for k, b in enumerate(sweep.bases)}
     rows = sorted((r for r in records if r["kind"] == "case"), key=lambda r: (order[r["base"]], r["index"]))
     margins = sorted((r for r in records if r["kind"] == "margin"),
@@ -132,13 +148,13 @@ def _root_attrs(sweep: Sweep, a: dict, labels: list, n_done: int, complete: bool
 
 
 def _orbit_defined(items: dict, sweep) -> dict:
-    """``items`` with the unit ``orbit`` defined (:func:`acmm.stages.common._define_units`) when
+    """``items`` with the unit ``orbit`` defined (:func:`acmm.stages.common.define_units`) when
     every base config has the same orbit rate; else an orbit's length differs between cases and
     each dataset in orbits says that its case's orbit is ``orbit_period[case]`` s."""
 
     rates = {b.config.orbit_rate for b in sweep.bases}
     if len(rates) == 1:
-        return _define_units(items, rates.pop())
+        return define_units(items, rates.pop())
     # bases of different orbit rates: no one definition; each case's orbit is its orbit_period
     return {k: replace(v, attrs={**v.attrs, "units_per_case": "orbit = orbit_period[case] * s"})
             if getattr(v, "units", None) == "orbit" else v for k, v in items.items()}
@@ -171,7 +187,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     tuple
         (pathlib.Path of ``sweep.h5``, list of the figure paths).
     """
-    rows, margins = _split(sweep, records)
+    rows, margins = split_records(sweep, records)
     a = table_arrays(sweep, rows)
     labels = [b.label for b in sweep.bases]
     nominal = _nominal_tea_deg(sweep)
@@ -273,7 +289,7 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
     """
     from matplotlib.ticker import MaxNLocator  # deferred: matplotlib start-up
 
-    from acmm.plots.base import _save  # deferred: matplotlib start-up
+    from acmm.plots.base import write_figure  # deferred: matplotlib start-up
 
     plt = _plt()
     labels = [b.label for b in sweep.bases]
@@ -315,7 +331,7 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
         ax.tick_params(axis="x", labelrotation=30)
         ax.legend(fontsize=7)
     fig.suptitle(f"{sweep.name}: stability map ({sweep.spec.design} design)")
-    out = _save(fig, run_dir / "sweep_map.png")
+    out = write_figure(fig, run_dir / "sweep_map.png")
     fig, axs = plt.subplots(1, B, figsize=(4.6 * B, 3.6), squeeze=False)
     for k, lab in enumerate(labels):
         ax = axs[0, k]
@@ -331,7 +347,7 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
         ax.set_ylabel("number of cases (count)")
         ax.set_title(f"{lab}: {int(sel.sum())} bounded of {int(np.sum(a['base'] == k))}")
     fig.suptitle(f"{sweep.name}: peak attitude error")
-    out += _save(fig, run_dir / "sweep_peak_error.png")
+    out += write_figure(fig, run_dir / "sweep_peak_error.png")
     return out
 
 

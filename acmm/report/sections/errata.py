@@ -14,7 +14,7 @@ from acmm.design import matrix_sign as msign
 from acmm.design import riccati as ric
 from acmm_qpp.errors import AcmmError, ConvergenceError, NoEquilibriumError
 from acmm.report.context import SectionWriter
-from acmm.report.document import _fmt
+from acmm.report.document import fmt_value
 from acmm.report.sections.claim1 import Claim1Numbers
 from acmm.report.sections.errata_qpp import qpp_rows
 from acmm.model import (controllability as ctrb_mod, dynamics as dyn, kinematics as kin, linearize as lin,
@@ -180,7 +180,7 @@ def tea_rows(I, n: float, t0, bias) -> list[list[str]]:
     rows.append(["TEA roots (eqs 4.1–4.3)", "one TEA per configuration", "continuation from LVLH picks the "
                  "physical branch", f"MB3, zero bias: {len(roots)} equilibria found, pitch {pitches} deg; "
                  f"continuation gives {t0.theta_deg[1]:+.2f}°; Table 1 TEAs reproduced with back-solved bias "
-                 f"{_fmt(bias, '{:+.4f}')} ft·lbf", "tests/acmm/model/test_tea.py"])
+                 f"{fmt_value(bias, '{:+.4f}')} ft·lbf", "tests/acmm/model/test_tea.py"])
     cap = 3 * n ** 2 * np.hypot((I[2, 2] - I[0, 0]) / 2, I[0, 2])
     try:
         tea_mod.solve_tea(I, n, np.array([0.0, 4.0, 0.0]))
@@ -354,6 +354,6 @@ def design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str
     rows.append(["claim 1", "cross-inertia-free design unstable within 0.1 orbit",
                  "design: minimum-energy shifted LQR (Q0 = 0, R = I/(100 ft·lbf)²) + pole shifting of the DRF poles",
                  f"diverges at {c1.div:.3f} orbit; its gain on the true linear model: max Re λ = {c1.maxre:+.3f} n; "
-                 f"coupled design bounded, peak error first orbit {_fmt(c1.first, '{:.1f}')} deg, from orbit 2 "
-                 f"{_fmt(c1.late, '{:.2f}')} deg", "tests/acmm/simulate/test_kernel.py"])
+                 f"coupled design bounded, peak error first orbit {fmt_value(c1.first, '{:.1f}')} deg, from orbit 2 "
+                 f"{fmt_value(c1.late, '{:.2f}')} deg", "tests/acmm/simulate/test_kernel.py"])
     return rows

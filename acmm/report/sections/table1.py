@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.report.context import SectionWriter
-from acmm.report.document import _fmt
+from acmm.report.document import fmt_value
 from acmm.model import tea as tea_mod
 
 TABLE1_PRINTED = {
@@ -63,8 +63,8 @@ def build(ctx: SectionWriter) -> dict:
     brow = []
     for name in ("mb3", "ac"):
         t, t0, bias = teas[name]
-        brow.append([name.upper(), _fmt(bias, "{:+.5f}"), f"{t.residual:.1e}",
-                     _fmt(np.degrees(t.omega) * 3600, "{:+.4f}")])
+        brow.append([name.upper(), fmt_value(bias, "{:+.5f}"), f"{t.residual:.1e}",
+                     fmt_value(np.degrees(t.omega) * 3600, "{:+.4f}")])
     ctx.doc.table(["config", "bias used [roll, pitch, yaw] (ft·lbf)", "residual (ft·lbf)", "ω* (deg/h)"], brow,
                   "Bias torques used (back-solved from eq 4.1 at the printed TEA; not printed in the report)")
     return teas

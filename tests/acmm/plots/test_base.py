@@ -25,7 +25,7 @@ def test_baked_texts_are_text_in_a_pdf():
     from acmm.plots import base as plot_base
     from acmm_qpp import plot_style as plot_style_mod
 
-    fig, grid = plot_base._BUILDERS["gain_schedule_grid"](tuple(STATE_NAMES), tuple(plot_base.state_units()),
+    fig, grid = plot_base.BUILDERS["gain_schedule_grid"](tuple(STATE_NAMES), tuple(plot_base.state_units()),
                                                           "ft·lbf")
     title = grid.titles[0]
     drawn, draw = [], title.draw
