@@ -13,8 +13,9 @@ import enum
 
 import typer
 
-from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
+from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit,
                                    version_option)
+from acmm.cli.hints import acmm_command
 from acmm_qpp.cli.progress import Steps
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
@@ -66,7 +67,7 @@ def _fmt(v, fmt="{:+.4f}"):
 @app.command(short_help="Check a config of any kind (acmm run, sweep or qpp).",
              cls=help_command(["acmm validate mb3", "acmm validate my_station.yaml --show",
                                "acmm validate staircase schedule.n_points=6"], ("acmm", "sweep", "qpp"), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def validate(config: Optional[str] = ConfigArg,
              overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=6"),
              show: bool = typer.Option(False, "--show", help="print the resolved config (all defaults, canonical units)")) -> None:
@@ -90,7 +91,7 @@ class ConfigKind(str, enum.Enum):
 
 @app.command(short_help="Print the JSON schema of a config kind.",
              cls=help_command(["acmm schema > acmm.schema.json", "acmm schema --kind sweep", "acmm schema --kind qpp"]))
-@user_errors
+@acmm_command
 def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="config kind")) -> None:
     """Print the JSON schema of a config kind (for editors: see the guide's config page, Reference → Config)."""
     from acmm.cli.configkinds import schema_json  # deferred: --help needs no numpy, scipy, pydantic
@@ -100,7 +101,7 @@ def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="conf
 
 @app.command(short_help="Torque-equilibrium attitude (eqs 4.1-4.3); writes tea.h5.",
              cls=help_command(["acmm tea mb3", "acmm tea ac --all", "acmm tea mb3 inertia.I22=1.5e6"], ("acmm",), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("inertia.I22=1.5e6"),
         all_roots: bool = typer.Option(False, "--all", help="also list every other equilibrium found")) -> None:
     """Torque-equilibrium attitude (eqs 4.1–4.3); writes runs/<name>/tea.h5."""
@@ -122,7 +123,7 @@ def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = over
 
 @app.command(short_help="24-state linearization about the TEA (eqs 4.4-4.50).",
              cls=help_command(["acmm linearize mb3", "acmm linearize ac design.drf_mode=attitude_hold"], ("acmm",), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def linearize(config: Optional[str] = ConfigArg,
               overrides: Optional[list[str]] = overrides_arg("orbit_rate=0.0011")) -> None:
     """24-state linearization about the TEA (eqs 4.4-4.50); writes runs/<name>/linearize.h5."""
@@ -187,7 +188,7 @@ def _design_line(name: str, note: str) -> str:
 @app.command(short_help="Sector LQR or regional LMI per design point and the gain schedule.",
              cls=help_command(["acmm design mb3", "acmm design staircase schedule.n_points=7 --strict",
                                "acmm design my_station.yaml design.sector.sigma=0.6 --no-figures"], ("acmm",), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def design(config: Optional[str] = ConfigArg,
            overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=7"),
            figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
@@ -304,7 +305,7 @@ def _branch_jump_text(jump) -> str:
 
 @app.command(short_help="Dwell-time stability certificate of the stair-case.",
              cls=help_command(["acmm certify", "acmm certify staircase schedule.n_points=8 --strict"], ("acmm",), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("schedule.n_points=8"),
             strict: bool = StrictOpt) -> None:
     """Dwell-time stability certificate of the stair-case: per-level Lyapunov functions of the
@@ -329,7 +330,7 @@ def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = 
              cls=help_command(["acmm simulate                         # the stair-case, 130 orbits",
                                "acmm simulate mb3 simulation.orbits=2",
                                "acmm simulate ac output.units=si --strict"], ("acmm",), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.orbits=10"),
              figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
     """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures.
@@ -355,7 +356,7 @@ def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] =
 @app.command(short_help="Redraw a run's figures from its stored results (.h5).",
              cls=help_command(["acmm plot runs/staircase", "acmm plot runs/mb3/sim.h5 --out figures/mb3",
                                "acmm plot runs/sweep_smoke"]))
-@user_errors
+@acmm_command
 def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
                                       help="a run folder (runs/<name>) or one of its results files: design.h5, "
                                            "sim.h5, sweep.h5, qpp_design.h5, qpp_sim.h5"),

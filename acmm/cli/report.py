@@ -11,7 +11,8 @@ from typing import Optional
 
 import typer
 
-from acmm_qpp.cli.plumbing import help_command, user_errors
+from acmm.cli.hints import acmm_command
+from acmm_qpp.cli.plumbing import help_command
 from acmm_qpp.cli.progress import enabled
 from acmm_qpp.errors import AcmmError, ConfigError
 
@@ -28,7 +29,7 @@ def register(app: typer.Typer) -> None:
     @app.command("report", short_help="Every figure and table of CR-185644 in one HTML page.",
                  cls=help_command(["acmm report --fast                  # CI mode, a few minutes",
                                    "acmm report --out runs/report --jobs 2"]))
-    @user_errors
+    @acmm_command
     def report(
         out: str = typer.Option("runs/report", "--out", help="output directory (index.html, report.md, "
                                                                      "figures/, manifest.json)"),

@@ -12,7 +12,8 @@ import typer
 
 from acmm_qpp.errors import EXIT_INPUT
 from acmm import PACKAGED_CONFIGS
-from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit, user_errors
+from acmm.cli.hints import acmm_command
+from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit
 from acmm_qpp.cli.progress import Steps, enabled
 
 
@@ -82,7 +83,7 @@ def register(app: typer.Typer) -> None:
                  cls=help_command(["acmm sweep sweep_smoke --workers 2",
                                    "acmm sweep sweep_inertia30 sweep.n_runs=20 sweep.orbits=2",
                                    "acmm sweep my_sweep.yaml --resume --no-figures"], ("sweep",), PACKAGED_CONFIGS))
-    @user_errors
+    @acmm_command
     def sweep(config: str = typer.Argument(..., help="sweep config YAML or the name of a packaged sweep config "
                                                      "(listed below)"),
               overrides: Optional[list[str]] = overrides_arg("sweep.n_runs=20 sweep.orbits=2"),
