@@ -1,5 +1,5 @@
 """What every stage figure shares (report Figs 5.3–5.26, 6.2–6.30): saving a figure (PNG/PDF,
-atomically), figure skeletons (:func:`new_layout`), tick and line thinning, and the unit labels of
+atomically), figure skeletons (each figure's layout function, its texts baked), tick and line thinning, and the unit labels of
 the 24 states of eq 4.46.
 
 Drawing cost (issue 16): a skeleton holds everything that does not depend on the data (axes,
@@ -81,36 +81,13 @@ def _save_now(fig, path: Path, out: list, vector: bool, tight: bool, rc: dict | 
             save_figure(fig, out[1], bbox_inches=bbox)
 
 
-#: figure kind → skeleton builder; filled by :mod:`acmm.plots.design` and :mod:`acmm.plots.simulation`
-BUILDERS: dict = {}
-
-
-def new_layout(kind: str, *params):
-    """A new skeleton of the figure ``kind`` (axes, labels, titles, tick artists: everything that
-    does not depend on the data) for the parameters ``params`` (e.g. the unit system).
-
-    Parameters
-    ----------
-    kind : str
-        The figure (a key of :data:`BUILDERS`).
-    *params
-        Its builder's parameters.
-
-    Returns
-    -------
-    tuple
-        What the builder returns: the figure and its artists.
-    """
-    return BUILDERS[kind](*params)
-
-
 def bake_texts(fig, texts) -> None:
     """Render data-independent ``texts`` (titles, axis labels, a legend: artists already placed
     by a fixed layout) now, into small transparent images at the figure's resolution that take
     their place; the texts themselves are hidden.
 
     Laying out and rasterizing text is the costliest part of drawing a stage figure (each glyph
-    is rendered on its own); a skeleton (:func:`new_layout`) pays it before the
+    is rendered on its own); a skeleton (each figure's layout function) pays it before the
     data exist.  The PNG differs from drawing the texts at save time only by rounding of the
     anti-aliased edges.  Drawn on any other canvas (a PDF, another size or resolution, a
     'tight' bounding box) the texts are drawn as texts instead.

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acmm.plots.base import (FAST_TEXT_RC, BUILDERS, bake_texts, compact_formatter, data_limits, new_layout,
+from acmm.plots.base import (FAST_TEXT_RC, bake_texts, compact_formatter, data_limits,
     premake_ticks, write_figure, gain_unit, in_view_ticks, state_units)
 from acmm_qpp.plot_style import stage_pyplot as _plt
 import re
@@ -121,7 +121,7 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
     fine, kf = np.degrees(curve.theta2), curve.gains
     units = units or state_units()
-    fig, grid = new_layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
+    fig, grid = _gain_grid_layout(tuple(state_names), tuple(units), torque_unit)
     xlim = data_limits(theta2_deg, fine) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 4)
     for j in range(24):
@@ -282,7 +282,7 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
     th = np.degrees(theta2)
-    fig, (a1, a2) = new_layout("schedule_path_check")
+    fig, (a1, a2) = _path_check_layout()
     a1.plot(th, max_real, "-", color="C3", label="largest Re λ / n")
     a1.plot(th, margin, "-", color="C0", label="worst sector margin / n")
     a1.axhline(0.0, color="k", lw=0.8)
@@ -345,7 +345,7 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
     p = np.asarray(poles) / n
-    fig, ax, sc = new_layout("scheduled_pole_map")
+    fig, ax, sc = _scheduled_poles_layout()
     t = np.tan(np.radians(half_angle_deg))
     fin = p[np.isfinite(p)]                  # limits from the finite poles (a failed eig: NaN)
     fin = fin if fin.size else np.zeros(1, complex)
@@ -366,6 +366,3 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
     ax.legend(fontsize=7, loc="upper left")
     return write_figure(fig, path, vector, tight=False)
 
-
-BUILDERS.update({"gain_schedule_grid": _gain_grid_layout, "schedule_path_check": _path_check_layout,
-                  "scheduled_pole_map": _scheduled_poles_layout})

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm.plots.base import (AXES, FAST_TEXT_RC, BUILDERS, bake_texts, compact_formatter, data_limits,
-    fixed_label_positions, in_view_locator, new_layout, empty_line, premake_ticks, write_figure, set_limits, decimate,
+from acmm.plots.base import (AXES, FAST_TEXT_RC, bake_texts, compact_formatter, data_limits,
+    fixed_label_positions, in_view_locator, empty_line, premake_ticks, write_figure, set_limits, decimate,
     in_view_ticks)
 from acmm_qpp.plot_style import stage_pyplot as _plt
 from acmm.plots.panel_grid import PanelGrid
@@ -80,7 +80,7 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    fig, grid = new_layout("axis_histories", units)
+    fig, grid = _axis_histories_layout(units)
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
     xlim = data_limits(orbits) or (0.0, 1.0)
@@ -138,7 +138,7 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
     """
     inertia = shown(np.asarray(inertia), "slug*ft^2", units)[0]
 
-    fig, grid = new_layout("inertia_histories", units)
+    fig, grid = _inertia_layout(units)
     xlim = data_limits(orbits) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 5)
     for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
@@ -225,7 +225,7 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     k_h = shown(1.0, "ft*lbf*s", units)[0]
-    fig, (top, mid, lines, body) = new_layout("summary", units, min(len(level_stats), 12))
+    fig, (top, mid, lines, body) = _summary_layout(units, min(len(level_stats), 12))
     xlim = data_limits(orbits)
     for ax, panel, data in zip((top, *mid), lines, (err_deg, h, u)):
         for a in range(3):
@@ -246,6 +246,3 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
             text.set_fontsize(size)
     return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
-
-BUILDERS.update({"axis_histories": _axis_histories_layout, "inertia_histories": _inertia_layout,
-                  "summary": _summary_layout})
