@@ -316,6 +316,40 @@ def test_the_private_import_check_fails_on_one():
     assert private_imports(source) == ["acmm.plots.base._save", ".kernel._rhs", "qpp.io.config_fields._Model"]
 
 
+def registry_fills(source: str) -> list[str]:
+    """Module-level statements that fill a container imported from another project module
+    (``BUILDERS.update(...)``, ``REGISTRY[key] = ...``, ``HOOKS.append(...)``): a registry that
+    one module keeps and others fill at import, so that what a module holds depends on what else
+    was imported."""
+    tree = ast.parse(source)
+    imported = {a.asname or a.name for n in tree.body if isinstance(n, ast.ImportFrom)
+                and (n.level or (n.module or "").split(".")[0] in PACKAGES) for a in n.names}
+    out = []
+    for n in tree.body:
+        if isinstance(n, ast.Expr) and isinstance(n.value, ast.Call) and isinstance(n.value.func, ast.Attribute):
+            f = n.value.func
+            if isinstance(f.value, ast.Name) and f.value.id in imported and f.attr in (
+                    "update", "append", "extend", "add", "setdefault", "insert"):
+                out.append(f"{f.value.id}.{f.attr}(...)")
+        targets = n.targets if isinstance(n, ast.Assign) else [n.target] if isinstance(n, ast.AugAssign) else []
+        for t in targets:
+            if isinstance(t, ast.Subscript) and isinstance(t.value, ast.Name) and t.value.id in imported:
+                out.append(f"{t.value.id}[...] =")
+    return out
+
+
+def test_no_module_fills_another_modules_registry_at_import():
+    assert [f"{m}: {r}" for m, path in sorted(_modules().items())
+            for r in registry_fills(path.read_text(encoding="utf-8"))] == []
+
+
+def test_the_registry_check_fails_on_one():
+    source = ("from acmm.plots.base import BUILDERS, HOOKS, TABLE\nfrom numpy import x\nimport acmm\n\n"
+              "BUILDERS.update({'a': 1})\nHOOKS.append(print)\nTABLE['k'] = 2\nx.update(1)\nlocal = {}\n"
+              "local.update(a=1)\n\ndef f():\n    BUILDERS.update({})\n")
+    assert registry_fills(source) == ["BUILDERS.update(...)", "HOOKS.append(...)", "TABLE[...] ="]
+
+
 def _is_alias(tree: ast.Module) -> bool:
     """A module whose body (docstring aside) is only imports and ``sys.modules`` / ``globals()``
     rebinding: it defines nothing of its own."""
