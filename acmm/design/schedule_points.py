@@ -152,9 +152,6 @@ def blend_context(end_name: str | None, s: float):
         raise
 
 
-_TRACKS: dict = {}
-
-
 def _continue_blend(start: PointSpec, end: PointSpec, n: float, grid):
     """Yield the TEA (3,), rad, at each s of ``grid`` along the blend start → end, Newton-continued
     from the start's equilibrium; where the branch folds, the error is raised naming the blend
@@ -168,18 +165,10 @@ def _continue_blend(start: PointSpec, end: PointSpec, n: float, grid):
 
 
 def _tea_track(start: PointSpec, end: PointSpec, n: float, n_track: int) -> np.ndarray:
-    """TEA (n_track, 3) along the blend start → end by Newton continuation on evenly spaced s,
-    remembered per (start, end, n, n_track): the design points and the path check of one design
-    track the same blend."""
-    key = tuple(np.asarray(x, dtype=float).tobytes() for x in (start.inertia, start.bias, end.inertia, end.bias)) + (
-        float(n), int(n_track), None if start.expected is None else np.asarray(start.expected, float).tobytes())
-    if key in _TRACKS:
-        return _TRACKS[key].copy()
-    thetas = np.array(list(_continue_blend(start, end, n, np.linspace(0.0, 1.0, n_track))))
-    if len(_TRACKS) > 16:
-        _TRACKS.clear()
-    _TRACKS[key] = thetas
-    return thetas.copy()
+    """TEA (n_track, 3) along the blend start → end by Newton continuation on evenly spaced s
+    (the design points and the path check of one design track the same blend: ~35 ms each, so
+    it is not remembered between them)."""
+    return np.array(list(_continue_blend(start, end, n, np.linspace(0.0, 1.0, n_track))))
 
 
 def point_specs(cfg) -> list[PointSpec]:
