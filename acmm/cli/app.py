@@ -49,9 +49,10 @@ def _root(version: bool = version_option()) -> None:
 def _load(config, overrides):
     """The validated acmm config of CONFIG plus KEY=VALUE overrides (a CONFIG that is itself an
     override means: the packaged default with that override)."""
-    from acmm.cli.configkinds import load_run  # deferred: --help needs no numpy, scipy, pydantic
+    from acmm.io.config import load_config  # deferred: --help needs no numpy, scipy, pydantic
+    from acmm_qpp.overrides import split_overrides  # deferred: --help needs no pydantic, yaml
 
-    return load_run(config, overrides)
+    return load_config(*split_overrides(config, overrides))
 
 ConfigArg = typer.Argument(None, help="YAML config file (or the name of a packaged config, listed below); "
                                       "default: the packaged stair-case config")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 
 from acmm import DEFAULT_CONFIG, PACKAGED_CONFIGS
-from acmm.io.config import load_config, parse_config, resolve_references
+from acmm.io.config import parse_config, resolve_references
 from acmm.io.schema import acmm_schema
 from acmm.sweep.config import parse_sweep
 from acmm.sweep.spec import sweep_schema
@@ -22,7 +22,7 @@ from acmm_qpp.overrides import apply_overrides, remember_origin, split_overrides
 from qpp.io.config import parse_config as parse_qpp
 from qpp.io.schema import qpp_schema
 
-__all__ = ["KINDS", "detect_kind", "load_any", "load_any_from_command_line", "load_run", "schema_for", "schema_json"]
+__all__ = ["KINDS", "detect_kind", "load_any", "load_any_from_command_line", "schema_for", "schema_json"]
 
 KINDS = ("acmm", "sweep", "qpp")
 
@@ -114,22 +114,3 @@ def load_any_from_command_line(config, overrides):
     """
     return load_any(*split_overrides(config, overrides))
 
-
-def load_run(config, overrides):
-    """The acmm run config of a command's CONFIG and KEY=VALUE arguments (``acmm tea|design|...``),
-    validated (:func:`acmm.io.config.load_config`; a CONFIG that is really an override means the
-    packaged default with it).
-
-    Parameters
-    ----------
-    config : str or None
-        The positional CONFIG (a file, a packaged name, an override, or None).
-    overrides : list of str or None
-        The ``key.path=value`` overrides after it.
-
-    Returns
-    -------
-    acmm.io.config.Config
-        The validated config.
-    """
-    return load_config(*split_overrides(config, overrides))
