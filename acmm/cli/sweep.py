@@ -1,7 +1,7 @@
 """``acmm sweep``: batch sweeps / Monte Carlo robustness studies (issue 7).
 
-Registered on the ``acmm`` app by :func:`register`; every import of the library happens inside
-the command so that ``acmm --help`` stays fast.
+Registered on the ``acmm`` app by :func:`register`; the library (numpy, the sweep, numba's note)
+is imported inside the command, so that ``acmm --help`` stays fast.
 """
 from __future__ import annotations
 
