@@ -48,6 +48,7 @@ from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
 from qpp.io.config import QppConfig
 from qpp.io.config_nonlin import SinusoidalNonlinearity
+from scipy.optimize import minimize
 
 
 @dataclass
@@ -431,8 +432,6 @@ def refine(cfg: QppConfig, start: Candidate, max_evals: int = REFINE_EVALS) -> t
     tuple
         (the best Candidate met, the number of evaluations).
     """
-    from scipy.optimize import minimize
-
     seen = [start]
 
     def cost(x):
