@@ -48,7 +48,7 @@ from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
 from qpp.io.config import QppConfig
 from qpp.io.config_nonlin import SinusoidalNonlinearity
-from scipy.optimize import minimize
+from scipy.optimize import minimize, nnls
 
 
 @dataclass
@@ -312,8 +312,6 @@ def _dual_line(t, A: float, w: float, ph: float, band: float) -> tuple:
     tuple
         (a0, a1), output units per input unit·s^½ and per output unit of P.
     """
-    from scipy.optimize import nnls
-
     if t.size == 0:
         return 0.0, 0.0
     r = A * np.sin(w * t + ph)
