@@ -30,6 +30,13 @@ import numpy as np
 from acmm.io.config import Config
 from acmm_qpp.errors import ConfigError, UnknownPointError
 from acmm.io.config import load_config as _load_config
+from acmm.model import linearize as lin
+from acmm.stages.simulate import run_simulate
+from acmm.stages.design import compute_design
+from acmm.design import schedule_points as sp
+from acmm.model.tea import solve_tea, solve_tea_near
+from scipy.optimize import brentq
+from acmm.model.linearize import DISTURBANCE_NAMES, INPUT_NAMES
 
 __all__ = ["load_config", "design", "simulate", "linearize", "Design"]
 
@@ -79,8 +86,6 @@ def linearize(config, tea_pitch_deg: float | None = None):
     acmm.model.linearize.LinearModel
         The design model (eqs 4.46–4.47), in the report's units.
     """
-    from acmm.model import linearize as lin
-
     cfg = load_config(config)
     if tea_pitch_deg is None:
         return lin.linearize_config(cfg)
@@ -106,8 +111,6 @@ def simulate(config, figures: bool = False):
     tuple
         (:class:`acmm.stages.runners.SimulateResult`, pathlib.Path of ``sim.h5``).
     """
-    from acmm.stages.simulate import run_simulate
-
     return run_simulate(load_config(config), figures=figures)
 
 
@@ -130,14 +133,12 @@ def design(config, _compute: bool = True) -> "Design":
     Design
         The config and its design.
     """
-    from acmm.stages.design import compute_design
-
     cfg = load_config(config)
     return Design(cfg, compute_design(cfg) if _compute else None)
 
 
 def _named(A, B, C, D, states, inputs, outputs, name):
-    import control
+    import control  # deferred: python-control start-up (~1.5 s), only for a StateSpace
 
     return control.ss(A, B, C, D, states=list(states), inputs=list(inputs), outputs=list(outputs), name=name)
 
@@ -258,17 +259,12 @@ class Design:
 
     def _blend_ends(self):
         """The first and last blended design points (:class:`acmm.design.schedule.PointSpec`)."""
-        from acmm.design import schedule as sch
-        from acmm.design import schedule_points as sp
-
         blended = [p for p in sp.point_specs(self.config) if np.isfinite(p.s)]
         if len(blended) < 2:
             raise ConfigError("the config has no gain schedule (no schedule.to blend): give a config with one")
         return blended[0], blended[-1]
 
     def _tea_at(self, s: float, guess=None):
-        from acmm.model.tea import solve_tea, solve_tea_near
-
         a, b = self._blend_ends()
         inertia, bias = _mix(a, b, s)
         n = self.config.orbit_rate
@@ -296,10 +292,6 @@ class Design:
         ConfigError
             No blend in the config, or the pitch TEA is outside the blend's range.
         """
-        from scipy.optimize import brentq
-
-        from acmm.design import schedule as sch
-        from acmm.design import schedule_points as sp
 
         specs = [p for p in sp.point_specs(self.config) if np.isfinite(p.s)]
         if len(specs) < 2:
@@ -332,8 +324,6 @@ class Design:
         acmm.model.linearize.LinearModel
             The 24-state model of eqs 4.46–4.47 at that station.
         """
-        from acmm.model import linearize as lin
-
         s = self.blend_for_tea(tea_pitch_deg)
         inertia, t = self._tea_at(s)
         d = self.config.design
@@ -397,7 +387,6 @@ class Design:
         else:
             model = self.model_at(tea_pitch_deg)
             K = self.result.table.gain_at(model.theta_star[1], 0)
-        from acmm.model.linearize import INPUT_NAMES
 
         return _named(model.A, model.B, K, np.zeros((3, 3)), model.state_names, INPUT_NAMES,
                       [f"K{u}" for u in INPUT_NAMES], ("loop transfer at " + (
@@ -406,8 +395,6 @@ class Design:
 
     @staticmethod
     def _closed(model, K, name):
-        from acmm.model.linearize import DISTURBANCE_NAMES, INPUT_NAMES
-
         A = model.A - model.B @ K
         B = np.hstack([model.B, model.G])
         C = np.vstack([np.eye(24), -K])

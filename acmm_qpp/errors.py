@@ -134,7 +134,7 @@ def plain_failure(exc: BaseException):
         The message and the exit code (:data:`EXIT_INPUT`, :data:`EXIT_NUMERICAL` or
         :data:`EXIT_OUTPUT`), or None: a bug, to be left to propagate.
     """
-    import numpy as np
+    import numpy as np  # deferred: the CLI sets the BLAS thread defaults before numpy's first import
 
     if isinstance(exc, RecursionError):
         return "input nested too deeply to process", EXIT_INPUT

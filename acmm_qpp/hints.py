@@ -5,21 +5,21 @@
 * :func:`prioritize` — the error to report first: an unknown key explains the "missing field"
   errors it causes (``Ixx:`` instead of ``I11:`` is one typo, not six missing fields);
 * :func:`missing_config_message` — a config that is neither a file nor a packaged name lists the
-  packaged names (closest first);
-* :func:`numerical_hint` — which setting to change when a solver or a design fails.
+  packaged names (closest first).
+
+Which setting to change when a solver or a design fails is each product's own knowledge (its
+config keys): :mod:`acmm.cli.hints` and :mod:`qpp.cli` give it to
+:func:`acmm_qpp.cli.plumbing.user_errors`.
 """
 from __future__ import annotations
 
 import difflib
-import re
 import types
 import typing
 from importlib import resources
 from pathlib import Path
 
 from pydantic import BaseModel
-
-from acmm_qpp.errors import EXIT_NUMERICAL, NoEquilibriumError
 
 
 # ---------------------------------------------------------------------------------------------
@@ -207,115 +207,4 @@ def missing_config_message(path, package: str) -> str:
         msg += f" (not a packaged config either; {hint}packaged configs: {', '.join(names)})"
     elif names:
         msg += f" (packaged configs, usable by name: {', '.join(names)})"
-    return msg
-
-
-# ---------------------------------------------------------------------------------------------
-# numerical failures
-# ---------------------------------------------------------------------------------------------
-#: (product, words that must all occur in the message, hint) — first match of the product's
-#: entries wins; case-insensitive.  Each hint names settings of that product's configs only.
-_NUMERICAL_HINTS: list[tuple[str, tuple[str, ...], str]] = [
-    ("qpp", ("riccati 11.1",), "change hinf.rho or hinf.nu (larger values relax the H∞ problem), "
-                               "or set hinf.search: true"),
-    ("qpp", ("converge",), "change hinf.rho or hinf.nu, or loosen simulation.rtol / simulation.atol"),
-    ("qpp", ("closed loop of these gains is unstable",),
-     "these gains do not stabilize the plant: let the procedure find gains (design.gains: design)"),
-    ("qpp", ("no certified design", "m < 1"), "no tracking loop meets these spheres: widen spheres.beta_o or "
-                                              "narrow spheres.beta_ri"),
-    ("qpp", ("no certified design", "β1 > m"), "widen spheres.beta_o, narrow spheres.beta_ri or the "
-                                               "nonlinearity's parameter ranges, or allow a smaller "
-                                               "design.rho_min (with design.wider_search)"),
-    ("qpp", ("no certified design", "circle criterion"), "narrow the nonlinearity's sector (its parameter "
-                                                         "ranges or y_range), or widen the search of a "
-                                                         "(design.a_min, design.a_max)"),
-    ("qpp", ("no stabilizing",), "change hinf.rho or hinf.nu, or set hinf.search: true"),
-    ("qpp", ("required step size",), "the loop is stiff or escapes: check the gains, or loosen "
-                                     "simulation.rtol / simulation.atol"),
-    ("acmm", ("cannot shift the poles",), "widen design.sector.half_angle_deg or lower design.sector.sigma "
-                                          "(a narrow sector leaves the moved poles a sliver of the plane), or "
-                                          "try design.pole_method: uniform; a nearly uncontrollable model (see "
-                                          "`acmm linearize`) needs another design.model or design.drf_mode"),
-    ("acmm", ("residual",), "raise design.residual_tol or try design.riccati_method: {other}; a nearly "
-                            "uncontrollable model (see `acmm linearize`) needs another design.model or design.drf_mode"),
-    ("acmm", ("matrix sign",), "use design.riccati_method: {other} (the sign iteration needs a well-conditioned model)"),
-    ("acmm", ("sector lqr", "riccati", "failed"), "lower design.sector.sigma (the shift α asked of the LQR may "
-                                                  "be too large), or try another design.riccati_method ({other})"),
-    ("acmm", ("riccati",), "try another design.riccati_method ({other})"),
-    ("acmm", ("uncontrollable", "λ/n = 0+0j"), "no gain moves that pole and no sector (σ > 0) holds λ = 0: "
-                                               "change design.model or design.drf_mode (an axisymmetric "
-                                               "station's neutral mode, say)"),
-    ("acmm", ("uncontrollable",), "no gain moves that pole: lower design.sector.sigma, or change design.model / "
-                                  "design.drf_mode"),
-    ("acmm", ("not positive semidefinite",), "change design.Q0 or design.R"),
-    ("acmm", ("sector",), "lower design.sector.sigma, widen design.sector.half_angle_deg, or try "
-                          "design.pole_method: uniform / shift"),
-    ("acmm", ("blend toward schedule.to", "no torque-equilibrium"),
-     "reduce the bias of disturbance or of schedule.to (their blend must balance at every s), or "
-     "give each as its bias_from_tea"),
-    ("acmm", ("no torque-equilibrium",), "reduce disturbance.bias (or use disturbance.bias_from_tea with the "
-                                         "attitude you want)"),
-    ("acmm", ("tea continuation",), "check the products of inertia (inertia.I12, I13, I23) or give the bias as "
-                                    "disturbance.bias_from_tea"),
-    ("acmm", ("converge",), "loosen the tolerance (design.residual_tol, simulation.rtol) or change "
-                            "design.riccati_method ({other})"),
-]
-
-
-def numerical_hint(message: str, product: str = "acmm") -> str:
-    """A "which setting to change" hint for a numerical failure message (empty if none applies).
-
-    Parameters
-    ----------
-    message : str
-        The failure message.
-    product : {"acmm", "qpp"}, optional
-        The command that failed: only its own settings are suggested.
-
-    Returns
-    -------
-    str
-        The first matching hint; empty when none applies or the message already has a hint.
-    """
-    low = message.lower()
-    if "hint:" in low:
-        return ""                      # already has one
-    for prod, words, hint in _NUMERICAL_HINTS:
-        if prod == product and all(w in low for w in words):
-            return hint.replace("{other}", _other_riccati_methods(low))
-    return ""
-
-
-#: the values of design.riccati_method
-_RICCATI_METHODS = ("scipy", "sign", "slycot")
-
-
-def _other_riccati_methods(low_message: str) -> str:
-    """The Riccati methods to suggest: all but the one the message says failed (``method='…'``)."""
-    m = re.search(r"method='(\w+)'", low_message)
-    used = m.group(1) if m else None
-    return " or ".join(x for x in _RICCATI_METHODS if x != used)
-
-
-def with_hint(exc: Exception, product: str = "acmm") -> str:
-    """The message of a user-facing error, with a numerical hint appended when one applies
-    (solver/design failures, exit 3, and a missing equilibrium).
-
-    Parameters
-    ----------
-    exc : Exception
-        The user-facing error.
-    product : {"acmm", "qpp"}, optional
-        The command that failed (:func:`numerical_hint`).
-
-    Returns
-    -------
-    str
-        ``str(exc)``, followed by ``; hint: ...`` when one applies.
-    """
-    msg = str(exc)
-    if getattr(exc, "exit_code", None) == EXIT_NUMERICAL or isinstance(exc, NoEquilibriumError):
-        hint = numerical_hint(msg, product)
-        if hint:
-            msg = f"{msg}; hint: {hint}"
     return msg

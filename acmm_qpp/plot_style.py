@@ -104,10 +104,10 @@ def agg_pyplot(force: bool = False):
     module
         ``matplotlib.pyplot``.
     """
-    import matplotlib
+    import matplotlib  # deferred: matplotlib start-up
 
     matplotlib.use("Agg", force=force)
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: matplotlib start-up
 
     return plt
 
@@ -133,7 +133,7 @@ def pyplot():
     module
         ``matplotlib.pyplot``.
     """
-    from cycler import cycler
+    from cycler import cycler  # deferred: matplotlib's cycler, with matplotlib
 
     plt = agg_pyplot(force=True)
     plt.rcParams.update(RC)

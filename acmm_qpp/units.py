@@ -18,12 +18,25 @@ from functools import lru_cache
 
 
 @lru_cache(maxsize=1)
+def pint_module():
+    """:mod:`pint`, imported on first use (~0.3 s, so runs whose configs hold bare numbers never
+    pay for it).
+
+    Returns
+    -------
+    module
+        The pint module.
+    """
+    import pint  # deferred: pint start-up, only when a unit is converted
+
+    return pint
+
+
+@lru_cache(maxsize=1)
 def registry():
     """The package's single :class:`pint.UnitRegistry` (built on first use: ~0.5 s, so runs whose
     configs hold bare numbers never pay for it)."""
-    import pint
-
-    return pint.UnitRegistry()
+    return pint_module().UnitRegistry()
 
 
 #: 1 ft·lbf in N·m (exact by definition of the foot and the pound-force).
@@ -73,8 +86,7 @@ def _spell(unit: str) -> str:
 @lru_cache(maxsize=256)
 def parse_unit(unit: str):
     """A pint unit from a string; ``ValueError`` if pint does not know it."""
-    import pint
-
+    pint = pint_module()
     try:
         return registry().parse_units(_spell(unit))
     except Exception as exc:    # pint raises many kinds (tokenizer, syntax, undefined): one message
@@ -103,8 +115,7 @@ def conversion_factor(unit: str, target: str) -> float:
     ValueError
         The dimensions differ (the message names both units).
     """
-    import pint
-
+    pint = pint_module()
     ureg = registry()
     src, dst = parse_unit(unit), parse_unit(target)
     try:

@@ -5,6 +5,7 @@ one line and exit with code 2.
 """
 from __future__ import annotations
 
+import json
 from typing import Optional
 
 # first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
@@ -17,7 +18,64 @@ from qpp import PACKAGED_CONFIGS
 import numpy as np  # noqa: E402
 import typer  # noqa: E402
 
-from acmm_qpp.errors import DesignError  # noqa: E402
+from acmm_qpp.cli.progress import status  # noqa: E402
+from acmm_qpp.errors import ConfigError, DesignError  # noqa: E402
+
+
+#: (words that must all occur in the message, hint) — the first match wins; case-insensitive.
+#: Each hint names settings of the qpp configs only.
+NUMERICAL_HINTS: list[tuple[tuple[str, ...], str]] = [
+    (("riccati 11.1",), "change hinf.rho or hinf.nu (larger values relax the H∞ problem), "
+                        "or set hinf.search: true"),
+    (("converge",), "change hinf.rho or hinf.nu, or loosen simulation.rtol / simulation.atol"),
+    (("closed loop of these gains is unstable",),
+     "these gains do not stabilize the plant: let the procedure find gains (design.gains: design)"),
+    (("no certified design", "m < 1"), "no tracking loop meets these spheres: widen spheres.beta_o or "
+                                       "narrow spheres.beta_ri"),
+    (("no certified design", "β1 > m"), "widen spheres.beta_o, narrow spheres.beta_ri or the "
+                                        "nonlinearity's parameter ranges, or allow a smaller "
+                                        "design.rho_min (with design.wider_search)"),
+    (("no certified design", "circle criterion"), "narrow the nonlinearity's sector (its parameter "
+                                                  "ranges or y_range), or widen the search of a "
+                                                  "(design.a_min, design.a_max)"),
+    (("no stabilizing",), "change hinf.rho or hinf.nu, or set hinf.search: true"),
+    (("required step size",), "the loop is stiff or escapes: check the gains, or loosen "
+                              "simulation.rtol / simulation.atol"),
+]
+
+
+def numerical_hint(message: str) -> str:
+    """A "which setting to change" hint for a numerical failure message of ``qpp``.
+
+    Parameters
+    ----------
+    message : str
+        The failure message.
+
+    Returns
+    -------
+    str
+        The first matching hint (:data:`NUMERICAL_HINTS`); empty when none applies.
+    """
+    low = message.lower()
+    return next((hint for words, hint in NUMERICAL_HINTS if all(w in low for w in words)), "")
+
+
+def qpp_command(fn):
+    """:func:`acmm_qpp.cli.plumbing.user_errors` for a ``qpp`` command, with qpp's numerical hints.
+
+    Parameters
+    ----------
+    fn : callable
+        The command function.
+
+    Returns
+    -------
+    callable
+        The wrapped command.
+    """
+    return user_errors(fn, hint=numerical_hint)
+
 
 class _QppGroup(ExitCodeGroup):
     """The ``qpp`` app: its help ends with examples and the packaged qpp configs."""
@@ -46,19 +104,18 @@ def _root(version: bool = version_option()) -> None:
 
 
 def _load(config, overrides):
-    from qpp.io.config import load_config
+    from qpp.io.config import load_config  # deferred: --help needs no scipy, pydantic
 
     return load_config(config, overrides)
 
 
 @app.command(short_help="Check a qpp config.",
              cls=help_command(["qpp validate qpp_siso", "qpp validate my_plant.yaml --show"], ("qpp",), PACKAGED_CONFIGS))
-@user_errors
+@qpp_command
 def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("spheres.beta_o=0.3"),
              show: bool = typer.Option(False, "--show", help="print the resolved config")) -> None:
     """Check a qpp config (an acmm run or sweep config is named as such: ``acmm validate`` checks it)."""
-    from acmm_qpp.configio import detect_kind, read_yaml
-    from acmm_qpp.errors import ConfigError
+    from acmm_qpp.configio import detect_kind, read_yaml  # deferred: --help needs no pydantic, yaml
 
     data, path = read_yaml(config, PACKAGED_CONFIGS)
     kind = detect_kind(data)
@@ -72,12 +129,10 @@ def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
 
 @app.command(short_help="Print the JSON schema of the qpp config format.",
              cls=help_command(["qpp schema > qpp.schema.json"]))
-@user_errors
+@qpp_command
 def schema() -> None:
     """Print the JSON schema of the qpp config format (`acmm schema --kind ...` for the others)."""
-    import json
-
-    from qpp.io.schema import qpp_schema
+    from qpp.io.schema import qpp_schema  # deferred: --help needs no scipy, pydantic
 
     typer.echo(json.dumps(qpp_schema(), indent=2, ensure_ascii=False))
 
@@ -89,7 +144,7 @@ def _mat(a) -> str:
 @app.command(short_help="H-infinity gains, thresholds and the circle criterion.",
              cls=help_command(["qpp design qpp_unstable", "qpp design qpp_saturation spheres.beta_o=0.4 --strict",
                                "qpp design my_plant.yaml --no-figures"], ("qpp",), PACKAGED_CONFIGS))
-@user_errors
+@qpp_command
 def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("hinf.rho=0.02 spheres.beta_o=0.3"),
            figures: bool = FigOpt,
            strict: bool = StrictOpt) -> None:
@@ -97,8 +152,7 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_a
     Exit 3 when a premise of the certificate (one sector, the Euclidean norm) fails (the best design
     is still written, labelled uncertified); with --strict, a computed sector of φ that its random
     check had to widen exits 1."""
-    from acmm_qpp.cli.progress import status
-    from qpp.io.stages import printed_H_difference, run_design, sector_verified
+    from qpp.io.stages import printed_H_difference, run_design, sector_verified  # deferred: --help needs no scipy, pydantic
 
     cfg = _load(config, overrides)
     with status(f"{cfg.name}: designing (ch. 12.1: H∞ gains, β1, thresholds, circle criterion) ..."):
@@ -162,15 +216,14 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_a
 
 @app.command(short_help="Nonlinear closed loop per scenario and the sphere check.",
              cls=help_command(["qpp simulate qpp_unstable", "qpp simulate qpp_unstable simulation.t_final=5 --strict"], ("qpp",), PACKAGED_CONFIGS))
-@user_errors
+@qpp_command
 def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.t_final=5"),
              figures: bool = FigOpt,
              strict: bool = StrictOpt) -> None:
     """Nonlinear closed loop per scenario and the sphere check ‖y − y_o‖∞ ≤ β_o → qpp_sim.h5.
     The gains are those `qpp design` wrote for this config, else designed first. With --strict, an
     output outside the sphere, or an uncertified design, exits 1."""
-    from acmm_qpp.cli.progress import status
-    from qpp.io.stages import run_simulate
+    from qpp.io.stages import run_simulate  # deferred: --help needs no scipy, pydantic
 
     cfg = _load(config, overrides)
     n = len(cfg.simulation.scenarios)
@@ -204,7 +257,7 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
 
 @app.command(short_help="Redraw a run's figures from its stored results (.h5).",
              cls=help_command(["qpp plot runs/qpp_unstable", "qpp plot runs/qpp_saturation/qpp_sim.h5 --out figures"]))
-@user_errors
+@qpp_command
 def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
                                       help="a run folder (runs/<name>) or its qpp_design.h5 / qpp_sim.h5"),
          out: Optional[str] = typer.Option(None, "--out", help="folder of the figures (default: the results "
@@ -212,7 +265,7 @@ def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
     """Redraw the figures of a qpp run from its stored results alone (nothing is designed or
     simulated again): the same files, with the same names, as the stage that wrote them.
     Exit 2 when RUN_DIR_OR_H5 is missing or holds no qpp results file."""
-    from qpp.io.stages import redraw_figures
+    from qpp.io.stages import redraw_figures  # deferred: --help needs no scipy, pydantic
 
     redraw_command(redraw_figures, target, out)
 

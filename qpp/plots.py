@@ -10,6 +10,7 @@ import numpy as np
 
 from acmm_qpp.plot_style import agg_pyplot as _plt
 from acmm_qpp.results import save_figure
+from qpp.design.circle import critical_disc
 
 
 def plot_circle(res, path: Path) -> list[Path]:
@@ -27,9 +28,7 @@ def plot_circle(res, path: Path) -> list[Path]:
     list of pathlib.Path
         The figures written, one per channel.
     """
-    from matplotlib.collections import EllipseCollection
-
-    from qpp.design.circle import critical_disc
+    from matplotlib.collections import EllipseCollection  # deferred: matplotlib start-up
 
     plt = _plt()
     c = res.circle

@@ -468,20 +468,25 @@ def test_each_numerical_hint_names_settings_of_its_own_product():
     # dotted key a hint names resolves in its product's config schema
     import re
 
+    import qpp.cli
+    from acmm.cli.hints import NUMERICAL_HINTS, numerical_hint
     from acmm.io.config import Config
+    from acmm_qpp.cli.plumbing import with_hint
     from acmm_qpp.errors import ConvergenceError
-    from acmm_qpp.hints import _NUMERICAL_HINTS, model_at, with_hint
+    from acmm_qpp.hints import model_at
     from qpp.io.config import QppConfig
 
     schema = {"acmm": Config, "qpp": QppConfig}
-    for product, _words, hint in _NUMERICAL_HINTS:
-        for key in re.findall(r"\b[a-z_]+(?:\.[A-Za-z_0-9]+)+", hint):
-            *parents, leaf = key.split(".")
-            m = model_at(schema[product], tuple(parents))
-            assert m is not None and leaf in m.model_fields, (product, key)
+    tables = {"acmm": NUMERICAL_HINTS, "qpp": qpp.cli.NUMERICAL_HINTS}
+    for product, table in tables.items():
+        for _words, hint in table:
+            for key in re.findall(r"\b[a-z_]+(?:\.[A-Za-z_0-9]+)+", hint):
+                *parents, leaf = key.split(".")
+                m = model_at(schema[product], tuple(parents))
+                assert m is not None and leaf in m.model_fields, (product, key)
     exc = ConvergenceError("circle criterion fails for every a tried (largest admissible sector scale 0 < 1)")
-    assert "design.sector.sigma" in with_hint(exc, "acmm")
-    assert "design.sector.sigma" not in with_hint(exc, "qpp")
+    assert "design.sector.sigma" in with_hint(exc, numerical_hint)
+    assert "design.sector.sigma" not in with_hint(exc, qpp.cli.numerical_hint)
 
 
 def test_design_work_bound_refuses_a_long_horizon(tmp_runs, monkeypatch):

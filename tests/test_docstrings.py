@@ -57,7 +57,7 @@ NO_REPORT_CITATION = {module: reason for reason, modules in {
         acmm_qpp.signals acmm_qpp.units""",
     "config schemas and checks, stage plumbing, numba's compilation: no mathematics of the report":
         """acmm.io.schema qpp.io.schema qpp.io.config_checks acmm.stages.common
-        acmm.simulate.warmup acmm.simulate.compiled_cache""",
+        acmm.simulate.warmup acmm.model.compiled_cache""",
     "a package of modules: no mathematics of its own":
         "acmm.io acmm.plots acmm.stages qpp.io acmm.report.sections acmm_qpp.cli",
     "the sweep's machinery (bounds, draws, tasks, executors, journal, output): no mathematics":
@@ -70,7 +70,7 @@ NO_REPORT_CITATION = {module: reason for reason, modules in {
         acmm.report.sections.printed acmm.report.sections.provenance acmm.report.runner
         acmm.report.ledger""",
     "command line: parses, calls and prints, no mathematics (the layer rule)": """acmm.cli
-        acmm.cli.compile_note acmm.cli.configkinds acmm.cli.app acmm.cli.sweep acmm.cli.report
+        acmm.cli.compile_note acmm.cli.redraw acmm.cli.hints acmm.cli.configkinds acmm.cli.app acmm.cli.sweep acmm.cli.report
         qpp.cli acmm_qpp.cli.plumbing acmm_qpp.cli.progress acmm_qpp.cli.failures""",
 }.items() for module in modules.split()}
 

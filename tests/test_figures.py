@@ -25,7 +25,7 @@ def figs(monkeypatch):
         return [Path(path)]
 
     for mod in (base, design, simulation):
-        monkeypatch.setattr(mod, "_save", keep)
+        monkeypatch.setattr(mod, "write_figure", keep)
     monkeypatch.setattr(qplots, "save_figure", keep)
     plt = qplots._plt()
     monkeypatch.setattr(plt, "close", lambda fig=None: None)

@@ -5,7 +5,7 @@ mathematics lives here.  User errors print one line and exit with code 2.
 """
 from __future__ import annotations
 
-import json
+import importlib
 import math
 from typing import Optional
 
@@ -13,11 +13,14 @@ import enum
 
 import typer
 
-from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
+from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit,
                                    version_option)
+from acmm.cli.hints import acmm_command
+from acmm_qpp.cli.progress import Steps
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
 from acmm import PACKAGED_CONFIGS
+from acmm_qpp.units import shown
 
 class _AcmmGroup(ExitCodeGroup):
     """The ``acmm`` app: its help ends with examples and every packaged config."""
@@ -46,8 +49,8 @@ def _root(version: bool = version_option()) -> None:
 def _load(config, overrides):
     """The validated acmm config of CONFIG plus KEY=VALUE overrides (a CONFIG that is itself an
     override means: the packaged default with that override)."""
-    from acmm.io.config import load_config
-    from acmm_qpp.overrides import split_overrides
+    from acmm.io.config import load_config  # deferred: --help needs no numpy, scipy, pydantic
+    from acmm_qpp.overrides import split_overrides  # deferred: --help needs no pydantic, yaml
 
     return load_config(*split_overrides(config, overrides))
 
@@ -65,17 +68,15 @@ def _fmt(v, fmt="{:+.4f}"):
 @app.command(short_help="Check a config of any kind (acmm run, sweep or qpp).",
              cls=help_command(["acmm validate mb3", "acmm validate my_station.yaml --show",
                                "acmm validate staircase schedule.n_points=6"], ("acmm", "sweep", "qpp"), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def validate(config: Optional[str] = ConfigArg,
              overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=6"),
              show: bool = typer.Option(False, "--show", help="print the resolved config (all defaults, canonical units)")) -> None:
     """Check a config of any kind (acmm run, sweep or qpp; detected from its sections); exit 2
     naming the offending field when it is invalid."""
-    from acmm_qpp.overrides import split_overrides
-    from acmm.cli.configkinds import load_any
+    from acmm.cli.configkinds import load_any_from_command_line  # deferred: --help needs no numpy, scipy, pydantic
 
-    config, overrides = split_overrides(config, overrides)
-    kind, cfg = load_any(config, overrides)
+    kind, cfg = load_any_from_command_line(config, overrides)
     typer.echo(f"{cfg.name}: valid ({kind} config)")
     if show:
         typer.echo(cfg.to_yaml())
@@ -91,29 +92,27 @@ class ConfigKind(str, enum.Enum):
 
 @app.command(short_help="Print the JSON schema of a config kind.",
              cls=help_command(["acmm schema > acmm.schema.json", "acmm schema --kind sweep", "acmm schema --kind qpp"]))
-@user_errors
+@acmm_command
 def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="config kind")) -> None:
     """Print the JSON schema of a config kind (for editors: see the guide's config page, Reference → Config)."""
-    from acmm.cli.configkinds import schema_json
+    from acmm.cli.configkinds import schema_json  # deferred: --help needs no numpy, scipy, pydantic
 
     typer.echo(schema_json(kind.value))
 
 
 @app.command(short_help="Torque-equilibrium attitude (eqs 4.1-4.3); writes tea.h5.",
              cls=help_command(["acmm tea mb3", "acmm tea ac --all", "acmm tea mb3 inertia.I22=1.5e6"], ("acmm",), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("inertia.I22=1.5e6"),
         all_roots: bool = typer.Option(False, "--all", help="also list every other equilibrium found")) -> None:
     """Torque-equilibrium attitude (eqs 4.1–4.3); writes runs/<name>/tea.h5."""
-    from acmm.stages.runners import run_tea
+    from acmm.stages.runners import run_tea  # deferred: --help needs no numpy, scipy, pydantic
 
     result, path = run_tea(_load(config, overrides), all_roots=all_roots)
     t = result.tea
     typer.echo(f"{result.config.name}: torque-equilibrium attitude (eqs 4.1-4.3)")
     typer.echo(f"  theta* [roll, pitch, yaw]  = {_fmt(t.theta_deg)} deg")
     typer.echo(f"  omega*                     = {_fmt(t.omega, '{:+.6e}')} rad/s")
-    from acmm_qpp.units import shown
-
     sys_ = result.config.output.units
     bias, tu = shown(t.bias, "ft*lbf", sys_)
     typer.echo(f"  bias used                  = {_fmt(bias, '{:+.6g}')} {tu}")
@@ -125,18 +124,16 @@ def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = over
 
 @app.command(short_help="24-state linearization about the TEA (eqs 4.4-4.50).",
              cls=help_command(["acmm linearize mb3", "acmm linearize ac design.drf_mode=attitude_hold"], ("acmm",), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def linearize(config: Optional[str] = ConfigArg,
               overrides: Optional[list[str]] = overrides_arg("orbit_rate=0.0011")) -> None:
     """24-state linearization about the TEA (eqs 4.4-4.50); writes runs/<name>/linearize.h5."""
-    import numpy as np
-
-    from acmm.stages.runners import run_linearize
+    from acmm.stages.runners import run_linearize  # deferred: --help needs no numpy, scipy, pydantic
 
     r, path = run_linearize(_load(config, overrides))
     m, c = r.model, r.controllability
     typer.echo(f"{r.config.name}: {m.variant} model, {m.drf_mode}, about theta* = "
-               f"{_fmt(np.degrees(m.theta_star), '{:+.3f}')} deg")
+               f"{_fmt([math.degrees(x) for x in m.theta_star], '{:+.3f}')} deg")
     eig = r.eigenvalues_over_n()
     typer.echo("  open-loop eigenvalues / n:")
     for k in range(0, len(eig), 4):
@@ -152,18 +149,17 @@ def linearize(config: Optional[str] = ConfigArg,
 def _run_with_progress(runner, cfg, figures, what: str):
     """Call a stage runner with terminal progress (acmm_qpp.cli.progress: a bar over the design points,
     then the remaining work; silent when stderr is not a terminal)."""
-    from acmm.cli import compile_note
-    from acmm_qpp.cli import progress as prog
+    from acmm.cli.compile_note import announce_numba_compile  # deferred: --help needs no numba
 
     total = cfg.n_design_points()
     if what == "simulate":
-        compile_note.announce_numba_compile()
+        announce_numba_compile()
     with_figures = cfg.output.figures if figures is None else figures
     after = ("simulating, writing results" if what == "simulate" else
              "fitting the schedule, checking it, writing results") + (" and figures" if with_figures else "")
     # redrawn at each step, not from rich's thread: the LMI points are designed on a forked pool,
     # which is not forked beside other threads (acmm.stages.design.point_workers)
-    with prog.Steps(f"{cfg.name}: designing", total, refresh_thread=False) as bar:
+    with Steps(f"{cfg.name}: designing", total, refresh_thread=False) as bar:
         count = [0]
 
         def tick(name):
@@ -193,7 +189,7 @@ def _design_line(name: str, note: str) -> str:
 @app.command(short_help="Sector LQR or regional LMI per design point and the gain schedule.",
              cls=help_command(["acmm design mb3", "acmm design staircase schedule.n_points=7 --strict",
                                "acmm design my_station.yaml design.sector.sigma=0.6 --no-figures"], ("acmm",), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def design(config: Optional[str] = ConfigArg,
            overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=7"),
            figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
@@ -202,7 +198,7 @@ def design(config: Optional[str] = ConfigArg,
     another branch of equilibria, or a robust gain not proved stable for every plant of its
     family (design.robust), exits 1."""
 
-    from acmm.stages.design import run_design
+    from acmm.stages.design import run_design  # deferred: --help needs no numpy, scipy, pydantic
 
     r, path = _run_with_progress(run_design, _load(config, overrides), figures, "design")
     cfg = r.config
@@ -310,7 +306,7 @@ def _branch_jump_text(jump) -> str:
 
 @app.command(short_help="Dwell-time stability certificate of the stair-case.",
              cls=help_command(["acmm certify", "acmm certify staircase schedule.n_points=8 --strict"], ("acmm",), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("schedule.n_points=8"),
             strict: bool = StrictOpt) -> None:
     """Dwell-time stability certificate of the stair-case: per-level Lyapunov functions of the
@@ -318,8 +314,8 @@ def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = 
     dwell against each level's dwell, and the bound on each TEA step's transient against the torque
     and momentum limits (designs first if needed; `acmm design` stores it in design.h5).
     With --strict, a stair-case that is not certified exits 1."""
-    from acmm.stages.certify import certificate_lines, compute_certificate
-    from acmm.stages.design import design_for
+    from acmm.stages.certify import certificate_lines, compute_certificate  # deferred: --help needs no numpy, scipy, pydantic
+    from acmm.stages.design import design_for  # deferred: --help needs no numpy, scipy, pydantic
 
     cfg = _load(config, overrides)
     table, note = design_for(cfg, warn=_warn)
@@ -335,17 +331,15 @@ def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = 
              cls=help_command(["acmm simulate                         # the stair-case, 130 orbits",
                                "acmm simulate mb3 simulation.orbits=2",
                                "acmm simulate ac output.units=si --strict"], ("acmm",), PACKAGED_CONFIGS))
-@user_errors
+@acmm_command
 def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.orbits=10"),
              figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:
     """Nonlinear closed-loop simulation (ch. 6); designs first if needed; writes runs/<name>/sim.h5 + figures.
     With --strict, a DIVERGED verdict exits 1."""
 
-    from acmm.stages.simulate import run_simulate
+    from acmm.stages.simulate import run_simulate  # deferred: --help needs no numpy, scipy, pydantic
 
     r, path = _run_with_progress(run_simulate, _load(config, overrides), figures, "simulate")
-    from acmm_qpp.units import shown
-
     cfg, s = r.config, r.sim
     typer.echo(_design_line(cfg.name, r.design_note))
     typer.echo(f"  simulated {r.orbits_simulated:.2f} of {cfg.simulation.orbits:g} orbits in "
@@ -363,7 +357,7 @@ def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] =
 @app.command(short_help="Redraw a run's figures from its stored results (.h5).",
              cls=help_command(["acmm plot runs/staircase", "acmm plot runs/mb3/sim.h5 --out figures/mb3",
                                "acmm plot runs/sweep_smoke"]))
-@user_errors
+@acmm_command
 def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
                                       help="a run folder (runs/<name>) or one of its results files: design.h5, "
                                            "sim.h5, sweep.h5, qpp_design.h5, qpp_sim.h5"),
@@ -372,7 +366,7 @@ def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
     """Redraw the figures of a run from its stored results alone (nothing is designed or
     simulated again): the same files, with the same names, as the stage that wrote them.
     Exit 2 when RUN_DIR_OR_H5 is missing or holds no results file of this project."""
-    from acmm.stages.runners import redraw_figures
+    from acmm.cli.redraw import redraw_figures  # deferred: --help needs no numpy, scipy, pydantic
 
     redraw_command(redraw_figures, target, out)
 
@@ -387,8 +381,6 @@ def main() -> None:
 
 def _register_optional_commands() -> None:
     """Commands that live in their own CLI modules (``register(app)`` adds them)."""
-    import importlib
-
     for mod in ("acmm.cli.sweep", "acmm.cli.report"):
         try:
             module = importlib.import_module(mod)

@@ -4,6 +4,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from acmm.model.compiled_cache import uncached_note
+from acmm.simulate import kernel
 from acmm_qpp.cli.progress import enabled, note
 
 
@@ -17,13 +19,11 @@ def numba_needs_compile() -> bool:
         True when the first call will compile; False also when numba's internals cannot be read.
     """
     try:
-        import acmm.simulate.kernel as sim_mod
-
-        disp = sim_mod._integrate
+        disp = kernel._integrate
         if disp.signatures:
             return False
         index = Path(disp._cache._cache_file._index_path)
-        src = Path(sim_mod.__file__)
+        src = Path(kernel.__file__)
         return not index.exists() or index.stat().st_mtime < src.stat().st_mtime
     except Exception:  # noqa: BLE001 — numba internals moved: say nothing rather than fail
         return False
@@ -31,10 +31,8 @@ def numba_needs_compile() -> bool:
 
 def announce_numba_compile() -> None:
     """Announce numba's first compile of the simulator (~8–12 s, cached afterwards); say always
-    (progress or not) when numba has no cache folder, so that every run compiles."""
-    from acmm.simulate import kernel as simulate  # noqa: F401 (defines the kernels: whether they are cached is known)
-    from acmm.simulate.compiled_cache import uncached_note
-
+    (progress or not) when numba has no cache folder, so that every run compiles (the kernels,
+    imported with this module, are defined: whether they are cached is known)."""
     why = uncached_note()
     if why is not None:
         print(f"note: {why}", file=sys.stderr, flush=True)

@@ -12,9 +12,17 @@ from __future__ import annotations
 
 import json
 
-from acmm_qpp.configio import detect_kind
+from acmm import DEFAULT_CONFIG, PACKAGED_CONFIGS
+from acmm.io.config import parse_config, resolve_references
+from acmm.io.schema import acmm_schema
+from acmm.sweep.config import parse_sweep
+from acmm.sweep.spec import sweep_schema
+from acmm_qpp.configio import detect_kind, read_yaml
+from acmm_qpp.overrides import apply_overrides, remember_origin, split_overrides
+from qpp.io.config import parse_config as parse_qpp
+from qpp.io.schema import qpp_schema
 
-__all__ = ["KINDS", "detect_kind", "load_any", "schema_for", "schema_json"]
+__all__ = ["KINDS", "detect_kind", "load_any", "load_any_from_command_line", "schema_for", "schema_json"]
 
 KINDS = ("acmm", "sweep", "qpp")
 
@@ -32,9 +40,6 @@ def schema_for(kind: str) -> dict:
     dict
         JSON schema (draft 2020-12).
     """
-    from acmm.io.schema import acmm_schema
-    from acmm.sweep.spec import sweep_schema
-    from qpp.io.schema import qpp_schema
 
     return {"acmm": acmm_schema, "sweep": sweep_schema, "qpp": qpp_schema}[kind]()
 
@@ -53,8 +58,6 @@ def schema_json(kind: str) -> str:
         JSON text (UTF-8 characters kept).
     """
     return json.dumps(schema_for(kind), indent=2, ensure_ascii=False)
-
-
 
 
 def load_any(path, overrides=None):
@@ -78,25 +81,36 @@ def load_any(path, overrides=None):
     acmm_qpp.errors.ConfigError
         Exactly like the kind's own loader.
     """
-    from acmm.io.config import parse_config
-    from acmm import DEFAULT_CONFIG, PACKAGED_CONFIGS
-    from acmm_qpp.configio import read_yaml
-    from acmm_qpp.overrides import apply_overrides, remember_origin
 
     data, p = read_yaml(DEFAULT_CONFIG if path is None else path, PACKAGED_CONFIGS)
     data = apply_overrides(data, overrides)
     kind = detect_kind(data)
     if kind == "sweep":
-        from acmm.sweep.config import parse_sweep
-
         model = parse_sweep(data, source=str(p), directory=p.parent)
     elif kind == "qpp":
-        from qpp.io.config import parse_config as parse_qpp
-
         model = parse_qpp(data, source=str(p))
     else:
-        from acmm.io.config import resolve_references
-
         # schedule.to and the like relative to the config's folder, as `acmm tea|design|...` read them
         model = parse_config(resolve_references(data, p.parent, str(p)), source=str(p))
     return kind, remember_origin(model, str(p), overrides)
+
+
+def load_any_from_command_line(config, overrides):
+    """:func:`load_any` of a command's CONFIG and KEY=VALUE arguments (``acmm validate``): a
+    CONFIG that is really an override means the packaged default with it
+    (:func:`acmm_qpp.overrides.split_overrides`).
+
+    Parameters
+    ----------
+    config : str or None
+        The positional CONFIG (a file, a packaged name, an override, or None).
+    overrides : list of str or None
+        The ``key.path=value`` overrides after it.
+
+    Returns
+    -------
+    tuple
+        ``(kind, model)`` as :func:`load_any` returns them.
+    """
+    return load_any(*split_overrides(config, overrides))
+

@@ -6,11 +6,15 @@ the report machinery stay inside the command so ``acmm --help`` stays fast.
 from __future__ import annotations
 
 from pathlib import Path
+import sys
 from typing import Optional
 
 import typer
 
-from acmm_qpp.cli.plumbing import help_command, user_errors
+from acmm.cli.hints import acmm_command
+from acmm_qpp.cli.plumbing import help_command
+from acmm_qpp.cli.progress import enabled
+from acmm_qpp.errors import AcmmError, ConfigError
 
 
 def register(app: typer.Typer) -> None:
@@ -25,7 +29,7 @@ def register(app: typer.Typer) -> None:
     @app.command("report", short_help="Every figure and table of CR-185644 in one HTML page.",
                  cls=help_command(["acmm report --fast                  # CI mode, a few minutes",
                                    "acmm report --out runs/report --jobs 2"]))
-    @user_errors
+    @acmm_command
     def report(
         out: str = typer.Option("runs/report", "--out", help="output directory (index.html, report.md, "
                                                                      "figures/, manifest.json)"),
@@ -42,22 +46,17 @@ def register(app: typer.Typer) -> None:
         """Every figure and table of CR-185644 regenerated and compared with the printed values;
         writes <out>/index.html (self-contained) and <out>/report.md; a failed section is shown there
         with its error and the command exits with that error's code."""
-        import sys
-
-        from acmm.report.build import build_report
-        from acmm_qpp.cli.progress import enabled as progress_enabled
+        from acmm.report.build import build_report  # deferred: --help needs no report (every stage, matplotlib)
 
         # progress on a terminal's stderr; elsewhere (CI, pipes) on stdout, so that stderr holds
         # the errors alone: one `error:` line when the report cannot go on (a full disk…)
-        stream = sys.stderr if progress_enabled() else sys.stdout
+        stream = sys.stderr if enabled() else sys.stdout
 
         def say(msg: str) -> None:
             stream.write(msg + "\n")
             stream.flush()
 
         if not out.strip():              # Path("") would be the working directory itself
-            from acmm_qpp.errors import ConfigError
-
             raise ConfigError("--out: empty; give the report's output directory")
         r = build_report(Path(out), fast=fast, rerun=rerun, root=root, progress=say, jobs=jobs)
         counts: dict[str, int] = {}
@@ -74,8 +73,6 @@ def register(app: typer.Typer) -> None:
         typer.echo(f"  wrote {r.html}")
         typer.echo(f"  wrote {r.markdown}")
         if r.failures:                   # the report is written, with each failure in its section
-            from acmm_qpp.errors import AcmmError
-
             section, first = r.failures[0]
             err = AcmmError(f"report incomplete: {len(r.failures)} failed section part(s), first in section "
                             f"{section}: {first.text()} (see {r.html})")

@@ -1,17 +1,20 @@
 """``acmm sweep``: batch sweeps / Monte Carlo robustness studies (issue 7).
 
-Registered on the ``acmm`` app by :func:`register`; every import of the library happens inside
-the command so that ``acmm --help`` stays fast.
+Registered on the ``acmm`` app by :func:`register`; the library (numpy, the sweep, numba's note)
+is imported inside the command, so that ``acmm --help`` stays fast.
 """
 from __future__ import annotations
 
+import logging
 from typing import Optional
 
 import typer
 
 from acmm_qpp.errors import EXIT_INPUT
 from acmm import PACKAGED_CONFIGS
-from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit, user_errors
+from acmm.cli.hints import acmm_command
+from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit
+from acmm_qpp.cli.progress import Steps, enabled
 
 
 class _Bar:
@@ -24,8 +27,6 @@ class _Bar:
         self.steps = None
 
     def __call__(self, done: int, total: int, rec: dict) -> None:
-        from acmm_qpp.cli.progress import Steps, enabled
-
         if rec.get("kind") == "case" and rec.get("verdict") != "bounded":
             self.bad += 1
         if not enabled():
@@ -62,10 +63,8 @@ def _quiet_dask_client() -> None:
     """Silence the Dask client's error log (its tracebacks while it reconnects to a lost
     scheduler); the sweep reports that loss on one line.  After ``import distributed``, which
     sets its loggers' levels from its config."""
-    import logging
-
     try:
-        import distributed  # noqa: F401
+        import distributed  # noqa: F401  # deferred: dask start-up, and an optional dependency
     except ImportError:        # reported by the sweep (--scheduler needs acmm-qpp[dask])
         return
     logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
@@ -84,7 +83,7 @@ def register(app: typer.Typer) -> None:
                  cls=help_command(["acmm sweep sweep_smoke --workers 2",
                                    "acmm sweep sweep_inertia30 sweep.n_runs=20 sweep.orbits=2",
                                    "acmm sweep my_sweep.yaml --resume --no-figures"], ("sweep",), PACKAGED_CONFIGS))
-    @user_errors
+    @acmm_command
     def sweep(config: str = typer.Argument(..., help="sweep config YAML or the name of a packaged sweep config "
                                                      "(listed below)"),
               overrides: Optional[list[str]] = overrides_arg("sweep.n_runs=20 sweep.orbits=2"),
@@ -102,12 +101,11 @@ def register(app: typer.Typer) -> None:
 
         KEY=VALUE overrides apply to the sweep file (its sweep and output sections), not to
         the base configs it names."""
-        import numpy as np
+        import numpy as np  # deferred: --help needs no numpy
 
-        from acmm.sweep.run import run_sweep
-        from acmm.sweep.config import load_sweep
-
-        from acmm.cli.compile_note import announce_numba_compile
+        from acmm.cli.compile_note import announce_numba_compile  # deferred: --help needs no numba
+        from acmm.sweep.config import load_sweep  # deferred: --help needs no numpy, scipy
+        from acmm.sweep.run import run_sweep  # deferred: --help needs no numpy, scipy
 
         _check_executor_options(workers, scheduler)
         sw = load_sweep(config, overrides)

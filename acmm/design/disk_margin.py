@@ -88,7 +88,7 @@ def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None, *, refine: in
     omega_n : array or None
         Frequencies in units of n; default :data:`DISK_OMEGA_N` (0.01n … 1000n, 121 points).
     refine : int
-        Refinement steps of the branch and bound (:func:`_disk_alpha_batch`).
+        Refinement steps of the branch and bound (:func:`disk_alpha_batch`).
 
     Returns
     -------
@@ -100,14 +100,35 @@ def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None, *, refine: in
     if scale is not None:
         d = np.asarray(scale, dtype=float)
         A, B, K = A / d[:, None] * d[None, :], B / d[:, None], K * d[None, :]
-    alpha = float(_disk_alpha_batch([_disk_parts(A, B, K, n, omega_n)], refine)[0])
+    alpha = float(disk_alpha_batch([disk_parts(A, B, K, n, omega_n)], refine)[0])
     return (alpha,) + disk_gain_phase(alpha)
 
 
-def _disk_parts(A, B, K, n, omega_n=None, refine=6, eig=None):
+def disk_parts(A, B, K, n, omega_n=None, refine=6, eig=None):
     """S(jω) − I/2 on the frequency grid (stacked) and the cheap upper bound √(‖M‖₁‖M‖∞) of
-    σ̄ ≥ μ at each frequency; None for an unstable closed loop.  Scaled inputs.  ``eig``:
-    the eigendecomposition (λ, V, V⁻¹ or None, cond V) of A − BK when already computed."""
+    σ̄ ≥ μ at each frequency; None for an unstable closed loop.  Scaled inputs.
+
+    Parameters
+    ----------
+    A, B : ndarray
+        Plant matrices (n×n, n×m), scaled states (units of the scaled model).
+    K : ndarray
+        Gain (m×n), in the units of the scaled model.
+    n : float
+        Orbit rate, rad/s (the grid is in units of it).
+    omega_n : array_like, optional
+        Frequency grid in units of ``n`` (default :data:`DISK_OMEGA_N`).
+    refine : int, optional
+        Not used here (the signature of the branch-and-bound step).
+    eig : tuple, optional
+        The eigendecomposition (λ, V, V⁻¹ or None, cond V) of A − BK when already computed.
+
+    Returns
+    -------
+    tuple or None
+        (M, bound): M(jω) stacked over the grid (dimensionless) and the upper bound per frequency
+        (dimensionless); None when the closed loop is unstable.
+    """
     Acl = A - B @ K
     if eig is None:
         lam, V = np.linalg.eig(Acl)
@@ -137,10 +158,25 @@ def _disk_parts(A, B, K, n, omega_n=None, refine=6, eig=None):
     return M, cheap
 
 
-def _disk_alpha_batch(parts, refine: int = 6, rounds: int = 6) -> np.ndarray:
+def disk_alpha_batch(parts, refine: int = 6, rounds: int = 6) -> np.ndarray:
     """Disk margin α = 1/max_ω μ(M(ω)) for several loops at once (None → 0), exact to the
     D-scaling bound on the grid by branch and bound: μ is computed (batched over loops) at the
-    frequencies whose upper bound (√(‖M‖₁‖M‖∞), then σ̄) still exceeds the largest μ found."""
+    frequencies whose upper bound (√(‖M‖₁‖M‖∞), then σ̄) still exceeds the largest μ found.
+
+    Parameters
+    ----------
+    parts : list
+        :func:`disk_parts` of each loop (None for an unstable one).
+    refine : int, optional
+        Refinements of the D-scaling iteration per round.
+    rounds : int, optional
+        Rounds of branch and bound.
+
+    Returns
+    -------
+    ndarray
+        α of each loop (dimensionless; 0 for an unstable one).
+    """
     P = len(parts)
     ub = [None if p is None else p[1].copy() for p in parts]      # current upper bound per freq
     exact = [None if p is None else np.zeros(p[1].size, bool) for p in parts]

@@ -14,7 +14,7 @@ import numpy as np
 
 from acmm.model import linearize as lin
 from acmm.design import sector_lqr
-from acmm.design.disk_margin import DISK_OMEGA_N, _disk_alpha_batch, _disk_parts, disk_gain_phase
+from acmm.design.disk_margin import DISK_OMEGA_N, disk_alpha_batch, disk_parts, disk_gain_phase
 from acmm.design.schedule import PointDesign
 from acmm.design.schedule_points import PointSpec, tea_spaced_blend
 from acmm.design.settings import DesignSettings
@@ -180,7 +180,7 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
         mg[j] = np.min(sector_lqr.sector_margin(lam, n, sigma, half_angle_deg))
     if disk:
         # S(jω) − I/2 of every stable, well-conditioned loop in one modal evaluation
-        # (as in _disk_parts); the others one by one
+        # (as in disk_parts); the others one by one
         fast = (np.max(lam_all.real, axis=1) < 0) & (condV < 1e8) & (W_all is not None)
         parts = [None] * P
         if np.any(fast):
@@ -198,10 +198,10 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
                 parts[j] = (M_all[r], cheap[r])
         for j in np.flatnonzero(~fast):
             eig = (lam_all[j], V_all[j], None if W_all is None else W_all[j], condV[j])
-            parts[j] = _disk_parts(As[j], Bs[j], Ks[j], n, eig=eig)
+            parts[j] = disk_parts(As[j], Bs[j], Ks[j], n, eig=eig)
     if disk:
         # batched branch and bound over every TEA's frequencies
-        dm[:] = _disk_alpha_batch(parts)
+        dm[:] = disk_alpha_batch(parts)
         for j in range(P):
             dg[j], dp[j] = disk_gain_phase(dm[j]) if dm[j] > 0 else (0.0, 0.0)
     return PathCheck(path.theta2.copy(), path.s.copy(), mr, mg, dm, dg, dp, np.array(poles))

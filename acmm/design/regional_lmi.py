@@ -567,7 +567,7 @@ def _solve_dsdp(prog: LMIProgram, tol: float):
 
 def _solve_clarabel_pass(prog: LMIProgram, obj_scale: float, st: "RegionalLMISettings", tol: float):
     """One Clarabel solve of ``prog`` through cvxpy; the objective divided by ``obj_scale``."""
-    import cvxpy as cp     # heavy (~0.5 s); only on the reference route
+    import cvxpy as cp  # deferred: cvxpy start-up (~1 s), only on the reference route
 
     N, m = prog.sizes
     X = cp.Variable((N, N), symmetric=True)

@@ -96,7 +96,21 @@ def _as_square(M, k: int, name: str) -> np.ndarray:
     return 0.5 * (M + M.T)
 
 
-def _as_R(R, m: int) -> np.ndarray:
+def as_R(R, m: int) -> np.ndarray:
+    """The input weight ``R`` as an m×m matrix (a scalar or a diagonal broadcast).
+
+    Parameters
+    ----------
+    R : float or array_like
+        The weight, 1/(ft·lbf)² (a scalar, the diagonal, or the matrix).
+    m : int
+        Number of inputs.
+
+    Returns
+    -------
+    ndarray
+        R (m×m), 1/(ft·lbf)².
+    """
     return _as_square(R, m, "R")
 
 
@@ -163,7 +177,7 @@ def care_residual(A, B, Q, R, P) -> float:
     """
     A, B, P = (np.asarray(x, dtype=float) for x in (A, B, P))
     Q = _as_Q(Q, A.shape[0])
-    R = _as_R(R, B.shape[1])
+    R = as_R(R, B.shape[1])
     AtP = A.T @ P
     PB = P @ B
     PGP = PB @ np.linalg.solve(R, PB.T)
@@ -211,7 +225,7 @@ def care_backward_error(A, B, Q, R, P) -> float:
     """
     A, B, P = (np.asarray(x, dtype=float) for x in (A, B, P))
     Q = _as_Q(Q, A.shape[0])
-    R = _as_R(R, B.shape[1])
+    R = as_R(R, B.shape[1])
     G = B @ np.linalg.solve(R, B.T)
     G = 0.5 * (G + G.T)
     AtP = A.T @ P
@@ -492,7 +506,7 @@ def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign
 
 def _care_slycot(A, B, Q, R):
     try:
-        from slycot import sb02md
+        from slycot import sb02md  # deferred: slycot start-up, only for method='slycot'
     except ImportError as exc:  # pragma: no cover - slycot is a declared dependency
         raise ConvergenceError("method='slycot' needs the slycot package") from exc
     n = A.shape[0]
@@ -642,7 +656,7 @@ def _as_problem(A, B, Q, R, scale):
     if A.shape != (n, n):
         raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
     d = np.asarray(scale, dtype=float) if scale is not None else None
-    return A, B, _as_Q(Q, n), _as_R(R, m), d
+    return A, B, _as_Q(Q, n), as_R(R, m), d
 
 
 def _verified_gain(As, Bs, Qs, R, Ps, *, method, tol, scaled):

@@ -18,11 +18,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acmm.model import linearize as lin
-from acmm.model import state_scaling as scaling
 from acmm.design import sector_lqr
 from acmm.design.methods import PointGain, with_robust_gain
 from acmm.design.settings import DesignSettings
-from acmm.design.schedule_points import PointSpec
+from acmm.design.schedule_points import PointSpec, blend_context
 from acmm.model.tea import TEA, solve_tea, solve_tea_near
 
 
@@ -195,8 +194,6 @@ def design_one(spec: PointSpec, s: DesignSettings) -> PointDesign:
     if spec.theta_guess is not None:
         t = solve_tea_near(spec.inertia, n, spec.bias, spec.theta_guess, expected=spec.expected)
     else:
-        from acmm.design.schedule_points import blend_context
-
         with blend_context(spec.name if spec.s == 1.0 else None, spec.s if spec.s > 0 else 0.0):
             t = solve_tea(spec.inertia, n, spec.bias, expected=spec.expected)
     model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
@@ -308,5 +305,4 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
         model = lin.design_point(spec.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
         _check(spec.name, model, t.theta[1], "midpoint")
     return ScheduleCheck(names, np.array(th2), np.array(margins), kinds, np.array(max_real))
-
 

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm.model.tea import resolve_bias, solve_tea, solve_tea_near
+from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
+from acmm.design.settings import schedule_settings
 
 
 @dataclass(frozen=True)
@@ -48,7 +50,6 @@ class PointSpec:
     theta_guess: np.ndarray | None = None
     expected: np.ndarray | None = None
     level: bool = True
-
 
 
 def blend_points(start: PointSpec, end: PointSpec, n_points: int) -> list[PointSpec]:
@@ -142,8 +143,6 @@ def blend_context(end_name: str | None, s: float):
     NoEquilibriumError
         The one raised inside, its message prefixed with the place on the blend.
     """
-    from acmm_qpp.errors import NoEquilibriumError
-
     try:
         yield
     except NoEquilibriumError as exc:
@@ -151,9 +150,6 @@ def blend_context(end_name: str | None, s: float):
             raise NoEquilibriumError(f"on the blend toward schedule.to{f' ({end_name})' if end_name else ''} "
                                      f"at s = {s:.3g}, inertia and bias (1 − s)·start + s·end: {exc}") from None
         raise
-
-
-_TRACKS: dict = {}
 
 
 def _continue_blend(start: PointSpec, end: PointSpec, n: float, grid):
@@ -169,18 +165,10 @@ def _continue_blend(start: PointSpec, end: PointSpec, n: float, grid):
 
 
 def _tea_track(start: PointSpec, end: PointSpec, n: float, n_track: int) -> np.ndarray:
-    """TEA (n_track, 3) along the blend start → end by Newton continuation on evenly spaced s,
-    remembered per (start, end, n, n_track): the design points and the path check of one design
-    track the same blend."""
-    key = tuple(np.asarray(x, dtype=float).tobytes() for x in (start.inertia, start.bias, end.inertia, end.bias)) + (
-        float(n), int(n_track), None if start.expected is None else np.asarray(start.expected, float).tobytes())
-    if key in _TRACKS:
-        return _TRACKS[key].copy()
-    thetas = np.array(list(_continue_blend(start, end, n, np.linspace(0.0, 1.0, n_track))))
-    if len(_TRACKS) > 16:
-        _TRACKS.clear()
-    _TRACKS[key] = thetas
-    return thetas.copy()
+    """TEA (n_track, 3) along the blend start → end by Newton continuation on evenly spaced s
+    (the design points and the path check of one design track the same blend: ~35 ms each, so
+    it is not remembered between them)."""
+    return np.array(list(_continue_blend(start, end, n, np.linspace(0.0, 1.0, n_track))))
 
 
 def point_specs(cfg) -> list[PointSpec]:
@@ -200,8 +188,6 @@ def point_specs(cfg) -> list[PointSpec]:
     list of PointSpec
         The design points.
     """
-    from acmm.design.settings import schedule_settings
-
     n = cfg.orbit_rate
     inertia = cfg.inertia.matrix()
     start = PointSpec(cfg.name, inertia, resolve_bias(cfg.disturbance, inertia, n), 0.0,
@@ -255,7 +241,6 @@ def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSp
         else:
             specs = blend_points(start, end, sched.n_points)
     return specs + list(extras)
-
 
 
 @dataclass(frozen=True)
@@ -314,8 +299,6 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
     BranchJump or None
         The first point off the branch, None when all are on it (or without a blend).
     """
-    from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
-
     blend = [(sp, np.asarray(th, float)) for sp, th in zip(specs, thetas) if np.isfinite(sp.s)]
     if len(blend) < 2:
         return None
@@ -344,8 +327,6 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
 def _track_to_fold(start: PointSpec, end: PointSpec, n: float, grid: np.ndarray) -> np.ndarray:
     """TEA (k, 3), rad, of :func:`_continue_blend` over ``grid`` up to the last s before the
     branch folds (k = 0 when even the start has none)."""
-    from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
-
     out = []
     try:
         for t in _continue_blend(start, end, n, grid):

@@ -5,7 +5,6 @@ closed-loop pole along the whole path to the left (smooth maximum by L-BFGS or i
 by SLSQP).  Split from :mod:`acmm.design.schedule`.
 
 The objective is the smooth maximum ::
-
     f(c) = (1/β) log Σ_{j,i} exp(β Re λ_i(A_j − B_j K(θ_j; c)) / n)
 
 over the chosen TEAs θ_j; with ``angle_weight`` w > 0 the terms
@@ -47,12 +46,12 @@ from scipy.optimize import linprog
 
 from acmm.design.path_check import PathModels
 from acmm.design.schedule import ScheduleFit
+from math import comb
+from scipy.optimize import minimize
 
 
 def _power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
     """Coefficients in powers of θ of Σ_k a[k]·((θ − c)/h)^k (a: (order+1, ...))."""
-    from math import comb
-
     order = a.shape[0] - 1
     b = np.zeros_like(a)
     for k in range(order + 1):
@@ -156,8 +155,6 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
     ValueError
         ``fit`` is not a polynomial schedule, or ``solver`` is unknown.
     """
-    from scipy.optimize import minimize
-
     if fit.form != "polynomial":
         raise ValueError("refit_closed_loop refines a polynomial schedule")
     st = _refit_start(fit, path, every)
@@ -286,8 +283,6 @@ def _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offse
     minimize t subject to t − v ≥ 0 for the ``top`` largest terms of each kind per TEA.
     Returns the scipy result with ``x`` set to the coefficient part.
     """
-    from scipy.optimize import minimize
-
     shape = a0.shape
     sphi, cphi = np.sin(np.radians(half_angle_deg)), np.cos(np.radians(half_angle_deg))
     T = As_t.shape[0]

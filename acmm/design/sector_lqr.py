@@ -54,7 +54,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from acmm.model.controllability import pbh_ratios
-from acmm.design.riccati import (ILL_CONDITIONED, _as_R, care_backward_error, care_condition, care_residual,
+from acmm.design.riccati import (ILL_CONDITIONED, as_R, care_backward_error, care_condition, care_residual,
                                  scale_problem, solve_care)
 from acmm_qpp.errors import ConvergenceError, DesignError
 
@@ -414,7 +414,7 @@ def _problem(A, B, R, n, sigma, half_angle_deg, Q0, scale, method, riccati_metho
     A = np.asarray(A, dtype=float)
     B = np.asarray(B, dtype=float)
     nx, m = B.shape
-    R = _as_R(R, m)
+    R = as_R(R, m)
     if Q0 is None:
         Q0s = np.zeros((nx, nx))
     else:

@@ -18,22 +18,24 @@ import numpy as np
 import yaml
 from pydantic import Field, field_validator, model_validator
 
-from acmm.io.config_fields import Angle, AngleVec, Rate, Time, WeightTorque, _Model
+from acmm.io.config_fields import Angle, AngleVec, Rate, Time, WeightTorque, SectionModel
 from acmm.io.config_station import Actuators, Disturbance, Inertia
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 from acmm import DEFAULT_CONFIG, PACKAGED_CONFIGS
 from acmm_qpp.configio import read_yaml, validate_model
+from acmm_qpp.overrides import apply_overrides, remember_origin
+from acmm_qpp.limits import how_to_raise, limit
 
 
-class Sector(_Model):
+class Sector(SectionModel):
     """Closed-loop pole region of ch. 5.2: Re λ ≤ −sigma·n and |Im λ| ≤ tan(half_angle)·|Re λ|."""
 
     sigma: float = Field(0.5, gt=0, le=1000, description="minimum decay rate in units of the orbital rate n")
     half_angle_deg: Angle = Field(45.0, gt=0, lt=90, description="sector half-angle about the negative real axis, deg")
 
 
-class Q0Groups(_Model):
+class Q0Groups(SectionModel):
     """Diagonal initial state weight on the *scaled* states (dimensionless), one value per state
     group (x̃ = D⁻¹x, :func:`acmm.model.linearize.state_scales`); added to ``Q0``·I."""
 
@@ -55,7 +57,7 @@ class Q0Groups(_Model):
                         + [self.momentum_integral] * 3 + [self.drf] * 12)
 
 
-class RegionalLMI(_Model):
+class RegionalLMI(SectionModel):
     """The regional pole placement by LMIs (``pole_method: lmi``, :mod:`acmm.design.regional_lmi`)."""
 
     dilation: float = Field(0.35, gt=0, le=100, description="β of the dilated H2 energy bound, units of 1/n")
@@ -73,7 +75,7 @@ class RegionalLMI(_Model):
     seed: int = Field(0, strict=True, ge=0, description="seed of those perturbations")
 
 
-class Robust(_Model):
+class Robust(SectionModel):
     """A gain designed for a family of inertias and certified per plant (:mod:`acmm.design.robust`)."""
 
     inertia_percent: float = Field(0.0, ge=0, lt=100, description="half-width of the element draws I∘(1+δ), "
@@ -84,7 +86,7 @@ class Robust(_Model):
                       "draws it never saw)")
 
 
-class Design(_Model):
+class Design(SectionModel):
     """Linear design model (eq 4.46) and the sector LQR (ch. 5.2)."""
 
     model: Literal["coupled", "no_cross_inertia", "small_angle"] = Field(
@@ -109,7 +111,7 @@ class Design(_Model):
                                                           "line; > 0 one pole at a time about distinct lines, units of n")
 
 
-class DesignPoint(_Model):
+class DesignPoint(SectionModel):
     """A named station configuration used as a design point of the gain schedule."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX, description="name of the design point")
@@ -117,7 +119,7 @@ class DesignPoint(_Model):
     disturbance: Disturbance = Disturbance()
 
 
-class Schedule(_Model):
+class Schedule(SectionModel):
     """Design points of the gain schedule (ch. 5.3)."""
 
     # a string is resolved to the mapping by Config's before-validator (resolve_references), so
@@ -163,7 +165,7 @@ class Schedule(_Model):
         return self
 
 
-class Simulation(_Model):
+class Simulation(SectionModel):
     """Nonlinear closed-loop simulation (ch. 6)."""
 
     orbits: float = Field(5.0, gt=0, le=10000, description="simulated time, orbits (2π/n s each)")
@@ -179,7 +181,7 @@ class Simulation(_Model):
         1.0, gt=0, description="stop as diverged when a CMG axis stays saturated this long, orbits")
 
 
-class Output(_Model):
+class Output(SectionModel):
     """Where results go."""
 
     root: str = Field("runs", pattern=ROOT_PATTERN, description="results root; files go to <root>/<name>/")
@@ -202,7 +204,7 @@ class Output(_Model):
 MAX_SAMPLES = 2_000_000
 
 
-class Config(_Model):
+class Config(SectionModel):
     """A complete acmm run configuration."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX,
@@ -248,7 +250,6 @@ class Config(_Model):
             if len(lv) != self.n_design_points():
                 raise ValueError(f"simulation.levels has {len(lv)} entries but the design has "
                                  f"{self.n_design_points()} point(s), one level each")
-        from acmm_qpp.limits import how_to_raise, limit
 
         if self.n_design_points() > limit("DESIGN_POINTS"):
             raise ValueError(f"schedule: {self.n_design_points()} design points (one sector LQR each); use fewer "
@@ -345,8 +346,6 @@ def load_config(path: str | Path | None = None, overrides: list[str] | None = No
     Config
         The validated config.
     """
-    from acmm_qpp.overrides import apply_overrides, remember_origin
-
     data, p = read_yaml(DEFAULT_CONFIG if path is None else path, PACKAGED_CONFIGS)
     data = resolve_references(apply_overrides(data, overrides), p.parent, str(p))
     cfg = parse_config(data, source=str(p))

@@ -28,7 +28,26 @@ _CANON = {"inertia": "slug·ft²", "torque": "ft·lbf", "momentum": "ft·lbf·s"
 MIN_PRINCIPAL_MOMENT = 1e-6
 
 
-def _plausible(x: float, dimension: str) -> float:
+def plausible_value(x: float, dimension: str) -> float:
+    """``x`` itself when its magnitude is physically plausible for ``dimension``.
+
+    Parameters
+    ----------
+    x : float
+        A value in the canonical unit of its dimension (units of :data:`_CANON`).
+    dimension : str
+        Its dimension kind (``inertia``, ``torque``…).
+
+    Returns
+    -------
+    float
+        ``x``, unchanged (canonical unit).
+
+    Raises
+    ------
+    ValueError
+        ``|x|`` is beyond the plausible range of the dimension (the message names both).
+    """
     bound = _RANGE.get(dimension)
     if bound is not None and abs(x) > bound:
         raise ValueError(f"{x:.4g} {_CANON[dimension]} is outside the physically plausible range "
@@ -38,7 +57,7 @@ def _plausible(x: float, dimension: str) -> float:
 
 def _q(dimension: str):
     """The quantity validator of the acmm config: finite and within :data:`_RANGE`."""
-    return quantity(dimension, _plausible)
+    return quantity(dimension, plausible_value)
 
 
 def _vec3(dimension: str):
@@ -47,7 +66,7 @@ def _vec3(dimension: str):
             raise ValueError("must be a list of three values [roll, pitch, yaw]")
         if len(v) != 3:
             raise ValueError(f"must have three values [roll, pitch, yaw], got {len(v)}")
-        return [quantity_value(x, dimension, _plausible) for x in v]
+        return [quantity_value(x, dimension, plausible_value) for x in v]
     return BeforeValidator(conv)
 
 
@@ -62,6 +81,6 @@ AngleVec = Annotated[list[float], _vec3("angle")]
 WeightTorque = Annotated[float, _q("weight_torque")]
 
 
-class _Model(StrictModel):
+class SectionModel(StrictModel):
     """Strict base of every config section: unknown keys, NaN, infinity and booleans given as
     numbers refused (:class:`acmm_qpp.config_model.StrictModel`)."""

@@ -14,11 +14,11 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from acmm.io.config_fields import (MIN_PRINCIPAL_MOMENT, AngleVec, InertiaValue, Momentum, Torque,
-                                TorqueVec, _Model, _plausible)
+                                TorqueVec, SectionModel, plausible_value)
 from acmm_qpp.units import to_canonical
 
 
-class Inertia(_Model):
+class Inertia(SectionModel):
     """Inertia matrix about the body control axes (slug·ft²), eq 3.2; I_ij = I_ji."""
 
     I11: InertiaValue = Field(description="roll moment of inertia, slug·ft²")
@@ -42,7 +42,7 @@ class Inertia(_Model):
             if not np.all(np.isfinite(m)):
                 raise ValueError("inertia matrix must contain finite numbers")
             for x in m.ravel():
-                _plausible(float(x), "inertia")
+                plausible_value(float(x), "inertia")
             if not np.allclose(m, m.T, rtol=1e-9, atol=0.0):
                 raise ValueError("inertia matrix is not symmetric (I_ij must equal I_ji)")
             return {"I11": m[0, 0], "I22": m[1, 1], "I33": m[2, 2],
@@ -89,7 +89,7 @@ class Inertia(_Model):
         return Inertia(I11=self.I11, I22=self.I22, I33=self.I33)
 
 
-class Disturbance(_Model):
+class Disturbance(SectionModel):
     """External torque per body axis, eq 3.9: w_i = bias_i + A_i sin(nt) + B_i sin(2nt) (ft·lbf).
 
     Give the bias either directly (``bias``) or as ``bias_from_tea``: the attitude (deg) that
@@ -122,7 +122,7 @@ class Disturbance(_Model):
         return None if self.bias_from_tea is None else np.radians(np.asarray(self.bias_from_tea, float))
 
 
-class Actuators(_Model):
+class Actuators(SectionModel):
     """CMG actuator limits (report ch. 5.1)."""
 
     torque_limit: Torque = Field(150.0, description="control torque limit per axis, ft·lbf")

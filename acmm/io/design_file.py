@@ -11,6 +11,12 @@ from pathlib import Path
 import numpy as np
 
 from acmm_qpp.results import convert_items
+import hashlib
+import h5py
+from acmm.design.schedule import schedule_gain
+import yaml
+from acmm_qpp.units import FT_LBF_IN_NM
+from acmm.io.units import state_factors
 
 
 _TABLE_KEYS = ("inertia", "bias", "tea", "K")
@@ -37,8 +43,6 @@ def table_sha256(names, arrays, coef, level=None) -> str:
     str
         Hex digest.
     """
-    import hashlib
-
     h = hashlib.sha256("\x1f".join(names).encode())
     extra = () if level is None or np.all(level) else (np.asarray(level, dtype=float),)
     for a in (*arrays, np.zeros(0) if coef is None else coef, *extra):
@@ -48,12 +52,25 @@ def table_sha256(names, arrays, coef, level=None) -> str:
     return h.hexdigest()
 
 
-def _stored_digest(items: dict, system: str) -> str:
-    """:func:`table_sha256` of ``items`` as :func:`acmm_qpp.results.write_h5` stores them."""
+def stored_table_digest(items: dict, system: str) -> str:
+    """:func:`table_sha256` of ``items`` as :func:`acmm_qpp.results.write_h5` stores them.
+
+    Parameters
+    ----------
+    items : dict
+        The design's datasets (imperial units), as the design stage writes them.
+    system : str
+        The unit system they are stored in (``"imperial"`` or ``"SI"``).
+
+    Returns
+    -------
+    str
+        The hex digest of the stored table.
+    """
     st = convert_items({k: items[k] for k in _TABLE_KEYS} | {"schedule": items.get("schedule", {})}, system)
     coef = st["schedule"]["coef"].data if "coef" in st["schedule"] else None
     level = np.asarray(items["level"].data, bool) if "level" in items else None
-    return table_sha256(_texts(items["names"].data), [st[k].data for k in _TABLE_KEYS], coef, level)
+    return table_sha256(h5_texts(items["names"].data), [st[k].data for k in _TABLE_KEYS], coef, level)
 
 
 def _check_table(names, inertia, bias, tea, K, coef, stored_digest, level=None) -> None:
@@ -93,23 +110,15 @@ def load_design_table(path: Path) -> DesignTable:
         Arrays of the wrong shape, non-finite, or not those written with the file's
         ``table_sha256`` (:func:`design_for` then designs again).
     """
-    import h5py
-
-
-
     with h5py.File(path, "r") as f:
-        attrs = {k: _text(f.attrs[k]) for k in ("design_hash", "schedule_form", "unit_system", "config",
+        attrs = {k: h5_text(f.attrs[k]) for k in ("design_hash", "schedule_form", "unit_system", "config",
                                                 "table_sha256") if k in f.attrs}
         coef = np.asarray(f["schedule/coef"][()], float) if "schedule" in f else None
-        names = _texts(f["names"][()])
+        names = h5_texts(f["names"][()])
         inertia, bias, K, tea = (np.asarray(f[k][()], float) for k in ("inertia", "bias", "K", "tea"))
         level = np.asarray(f["level"][()]).astype(bool) if "level" in f else None
     _check_table(names, inertia, bias, tea, K, coef, attrs.get("table_sha256"), level)
     if attrs.get("unit_system", "imperial") == "SI":      # back to the report's units
-        import yaml
-
-        from acmm_qpp.units import FT_LBF_IN_NM
-        from acmm.io.units import state_factors
 
         drf_mode = (yaml.safe_load(attrs["config"]).get("design") or {}).get("drf_mode", "attitude_hold")
         f, _ = state_factors(drf_mode, "SI")
@@ -120,22 +129,53 @@ def load_design_table(path: Path) -> DesignTable:
                        attrs.get("schedule_form", "polynomial"), level)
 
 
-def _unit_system(path: Path) -> str:
-    """``unit_system`` root attribute of a results file (files before issue 14: imperial)."""
-    import h5py
+def stored_unit_system(path: Path) -> str:
+    """``unit_system`` root attribute of a results file (files before issue 14: imperial).
 
+    Parameters
+    ----------
+    path : pathlib.Path
+        The results file.
+
+    Returns
+    -------
+    str
+        ``"imperial"`` or ``"SI"``.
+    """
     with h5py.File(path, "r") as f:
-        return _text(f.attrs.get("unit_system", "imperial"))
+        return h5_text(f.attrs.get("unit_system", "imperial"))
 
 
-def _text(v) -> str:
-    """An HDF5 string (bytes of a fixed-length one, or str) as str."""
+def h5_text(v) -> str:
+    """An HDF5 string (bytes of a fixed-length one, or str) as str.
+
+    Parameters
+    ----------
+    v : bytes or str
+        The stored value.
+
+    Returns
+    -------
+    str
+        The text.
+    """
     return v.decode() if isinstance(v, bytes) else str(v)
 
 
-def _texts(values) -> list[str]:
-    """The strings of an HDF5 text array (or a scalar) as a list of str."""
-    return [_text(x) for x in np.atleast_1d(values)]
+def h5_texts(values) -> list[str]:
+    """The strings of an HDF5 text array (or a scalar) as a list of str.
+
+    Parameters
+    ----------
+    values : array_like
+        The stored strings (bytes or str).
+
+    Returns
+    -------
+    list of str
+        The texts.
+    """
+    return [h5_text(x) for x in np.atleast_1d(values)]
 
 
 @dataclass
@@ -219,8 +259,6 @@ class DesignTable:
         (3, 24) array
             Gain K(θ2*) of the schedule of ch. 5.3, ft·lbf per state unit.
         """
-        from acmm.design.schedule import schedule_gain
-
         if self.coef is None:
             return self.gain[k]
         return schedule_gain(self.form, self.coef, self.tea[:, 1], self.gain, theta2)

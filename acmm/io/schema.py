@@ -23,8 +23,8 @@ extension, any editor using yaml-language-server).
 from __future__ import annotations
 
 
-
 from acmm_qpp.schema import header, model_schema
+from acmm.io.config import Config
 
 def acmm_schema() -> dict:
     """Schema of an acmm run config (:class:`acmm.io.config.Config`).
@@ -35,6 +35,4 @@ def acmm_schema() -> dict:
         JSON schema (draft 2020-12); dimensional fields accept a number in the report's units or
         a quantity string in any unit of the field's dimension.
     """
-    from acmm.io.config import Config
-
     return header(model_schema(Config), "acmm", "acmm run config (CR-185644 Part II)")

@@ -6,6 +6,8 @@ This module holds what needs the 24 states of eq 4.47: :func:`state_factors` and
 from __future__ import annotations
 
 from acmm_qpp.units import conversion_factor
+import numpy as np
+from acmm.model.linearize import state_units
 
 
 def state_factors(drf_mode: str = "attitude_hold", system: str = "imperial"):
@@ -25,9 +27,6 @@ def state_factors(drf_mode: str = "attitude_hold", system: str = "imperial"):
     tuple
         ((24,) array of dimensionless factors d, list of the 24 unit strings under ``system``).
     """
-    import numpy as np
-
-    from acmm.model.linearize import state_units
 
     units = state_units(drf_mode)
     if system != "SI":
@@ -62,8 +61,6 @@ def state_space_in(system: str, drf_mode: str, **arrays):
     KeyError
         For an array name not listed above.
     """
-    import numpy as np
-
     d, _ = state_factors(drf_mode, system)
     k = conversion_factor("ft*lbf", "N*m") if system == "SI" else 1.0
     out = {}

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+from acmm.model.state_scaling import torque_scale
 
 if TYPE_CHECKING:
     from acmm.model.linearize import LinearModel
@@ -61,8 +62,6 @@ def controllability(model: LinearModel, tol: float = 1e-10) -> Controllability:
     Controllability
         Rank, smallest ratio and where it occurs.
     """
-    from acmm.model.state_scaling import torque_scale
-
     a, b, _ = model.scaled()
     b = b * torque_scale(model.scales)            # 1.0 within the band: the report's stations
     nx = a.shape[0]

@@ -1,7 +1,6 @@
 """Fully coupled 24-state linearization about a torque-equilibrium attitude (eqs 4.4–4.50).
 
 State order (eq 4.47)::
-
     x = [δω1, θ̇2, δω3, δθ1, δθ2, δθ3 | h1, h2, h3, ∫h1, ∫h2, ∫h3 |
          α̇1, α1, α̇2, α2, α̇3, α3, β̇1, β1, β̇2, β2, β̇3, β3]
 
@@ -34,6 +33,7 @@ import numpy as np
 from acmm.model import dynamics as dyn
 from acmm.model import kinematics as kin
 from acmm.model.state_scaling import NOMINAL_ANGLE, momentum_scale
+from acmm.model.tea import resolve_bias, solve_tea
 
 STATE_NAMES = [
     "domega1", "theta2_dot", "domega3", "dtheta1", "dtheta2", "dtheta3",
@@ -116,7 +116,7 @@ class LinearModel:
             ``ẋ = A x + [B G] [u; w]``, ``y = x`` (eq 4.46), in the report's physical units
             (torques ft·lbf; states as :func:`state_units`).
         """
-        import control
+        import control  # deferred: python-control start-up (~1.5 s), only for a StateSpace
 
         return control.ss(self.A, np.hstack([self.B, self.G]), np.eye(24), np.zeros((24, 6)),
                           states=list(STATE_NAMES), inputs=INPUT_NAMES + DISTURBANCE_NAMES,
@@ -336,8 +336,6 @@ def linearize_config(cfg) -> LinearModel:
     LinearModel
         The design model of eq 4.46 about the config's TEA.
     """
-    from acmm.model.tea import resolve_bias, solve_tea
-
     inertia = cfg.inertia.matrix()
     t = solve_tea(inertia, cfg.orbit_rate, resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate),
                   expected=cfg.disturbance.requested_tea())        # the root bias_from_tea names

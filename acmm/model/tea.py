@@ -17,6 +17,7 @@ from acmm.model import kinematics as kin
 from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
 import itertools
 from acmm_qpp.errors import NoEquilibriumError
+from acmm_qpp.units import FT_LBF_IN_NM
 
 #: Largest residual (ft·lbf) accepted for an equilibrium; for a station whose gravity-gradient
 #: torque scale 3n²·max|I| is below 10 ft·lbf, 1e-13 of that scale instead (an absolute 1e-12
@@ -443,8 +444,6 @@ def fold_message(bias: np.ndarray, lam_max: float) -> str:
     str
         One sentence naming the bias and the fold.
     """
-    from acmm_qpp.units import FT_LBF_IN_NM
-
     def torque(v) -> str:      # both systems: the core does not know which one the run prints
         return (f"[{v[0]:.4g}, {v[1]:.4g}, {v[2]:.4g}] ft·lbf "
                 f"(= [{v[0] * FT_LBF_IN_NM:.4g}, {v[1] * FT_LBF_IN_NM:.4g}, {v[2] * FT_LBF_IN_NM:.4g}] N·m)")

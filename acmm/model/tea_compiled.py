@@ -41,7 +41,7 @@ import math
 
 import numpy as np
 
-from acmm.simulate.compiled_cache import njit_cached
+from acmm.model.compiled_cache import njit_cached
 from acmm.model.tea import (RESIDUAL_TOL, TEA, equilibrium_residual, fold_message, make_tea, residual_threshold,
                              solve_tea)
 from acmm_qpp.errors import NoEquilibriumError

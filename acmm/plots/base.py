@@ -1,13 +1,13 @@
 """What every stage figure shares (report Figs 5.3–5.26, 6.2–6.30): saving a figure (PNG/PDF,
-atomically), figure skeletons (:func:`_layout`), tick and line thinning, and the unit labels of
+atomically), figure skeletons (each figure's layout function, its texts baked), tick and line thinning, and the unit labels of
 the 24 states of eq 4.46.
 
 Drawing cost (issue 16): a skeleton holds everything that does not depend on the data (axes,
-empty lines, legend, tick artists) and its fixed texts already rasterized (:func:`_bake_texts`);
-the figure function then sets the data and the limits (:func:`_set_limits`, no autoscaling
+empty lines, legend, tick artists) and its fixed texts already rasterized (:func:`bake_texts`);
+the figure function then sets the data and the limits (:func:`set_limits`, no autoscaling
 bookkeeping) and saves.  Grids of panels are drawn without an Axes each
-(:mod:`acmm.plots.panel_grid`), tick labels are few and short (:func:`_in_view_locator`,
-:func:`_compact_formatter`) and text is unhinted while these figures are drawn
+(:mod:`acmm.plots.panel_grid`), tick labels are few and short (:func:`in_view_locator`,
+:func:`compact_formatter`) and text is unhinted while these figures are drawn
 (:data:`FAST_TEXT_RC`).
 
 The figures themselves
@@ -21,19 +21,46 @@ import numpy as np
 
 from acmm_qpp.plot_style import stage_pyplot as _plt
 from acmm_qpp.results import save_figure
+import re
+import itertools
+from acmm.model.linearize import state_units as units
+import matplotlib
+from matplotlib.backends.backend_agg import RendererAgg
+from matplotlib.artist import Artist
+from matplotlib.ticker import Formatter, MaxNLocator
+from matplotlib.lines import Line2D
 
 AXES = ("roll", "pitch", "yaw")
 
 
 #: rcParams of the cost-cut stage figures (issue 16), applied only while they are laid out and
-#: drawn (:func:`_save` with ``rc``, :func:`_bake_texts`), never set globally (the report draws
+#: drawn (:func:`write_figure` with ``rc``, :func:`bake_texts`), never set globally (the report draws
 #: its own figures, and two of these, in the same process): unhinted glyphs render ~40 % faster
 FAST_TEXT_RC = {"text.hinting": "none"}
 
 
-def _save(fig, path: Path, vector: bool = False, tight: bool = True, rc: dict | None = None) -> list[Path]:
+def write_figure(fig, path: Path, vector: bool = False, tight: bool = True, rc: dict | None = None) -> list[Path]:
     """Write ``fig`` as PNG (and PDF with ``vector``) beside ``path``'s stem, atomically, and
-    close it; returns the files written."""
+    close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : pathlib.Path
+        The file; its suffix is replaced by ``.png`` (and ``.pdf``).
+    vector : bool, optional
+        Also write a PDF.
+    tight : bool, optional
+        Save with a tight bounding box.
+    rc : dict, optional
+        rcParams in effect while saving.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+    """
     path = Path(path)
     out = [path.with_suffix(".png")]
     _save_now(fig, path, out, vector, tight, rc)
@@ -46,8 +73,6 @@ PNG_COMPRESS_LEVEL = 1
 
 
 def _save_now(fig, path: Path, out: list, vector: bool, tight: bool, rc: dict | None = None) -> None:
-    import matplotlib
-
     bbox = "tight" if tight else None
     with matplotlib.rc_context(rc or {}):
         save_figure(fig, out[0], bbox_inches=bbox, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
@@ -56,30 +81,24 @@ def _save_now(fig, path: Path, out: list, vector: bool, tight: bool, rc: dict | 
             save_figure(fig, out[1], bbox_inches=bbox)
 
 
-#: figure kind → skeleton builder; filled by :mod:`acmm.plots.design` and :mod:`acmm.plots.simulation`
-_BUILDERS: dict = {}
-
-
-def _layout(kind: str, *params):
-    """A new skeleton of the figure ``kind`` (axes, labels, titles, tick artists: everything that
-    does not depend on the data) for the parameters ``params`` (e.g. the unit system)."""
-    return _BUILDERS[kind](*params)
-
-
-def _bake_texts(fig, texts) -> None:
+def bake_texts(fig, texts) -> None:
     """Render data-independent ``texts`` (titles, axis labels, a legend: artists already placed
     by a fixed layout) now, into small transparent images at the figure's resolution that take
     their place; the texts themselves are hidden.
 
     Laying out and rasterizing text is the costliest part of drawing a stage figure (each glyph
-    is rendered on its own); a skeleton (:func:`_layout`) pays it before the
+    is rendered on its own); a skeleton (each figure's layout function) pays it before the
     data exist.  The PNG differs from drawing the texts at save time only by rounding of the
     anti-aliased edges.  Drawn on any other canvas (a PDF, another size or resolution, a
     'tight' bounding box) the texts are drawn as texts instead.
-    """
-    import matplotlib
-    from matplotlib.backends.backend_agg import RendererAgg
 
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    texts : iterable of matplotlib.artist.Artist
+        The texts (and legends) to render now.
+    """
     w, h = (round(float(v)) for v in fig.bbox.size)
     renderer = RendererAgg(w, h, fig.dpi)
     texts = [t for t in texts if t.get_visible()]
@@ -100,9 +119,6 @@ def _tiles_artist(tiles: list, texts: list, canvas: tuple):
     """An artist blending pre-rendered RGBA ``tiles`` ``(x, y, array)`` (pixels from the lower
     left, rows bottom first) onto an Agg renderer of ``canvas`` (width, height, dpi) as they
     are, without resampling; on any other renderer it draws the hidden ``texts`` instead."""
-    from matplotlib.artist import Artist
-    from matplotlib.backends.backend_agg import RendererAgg
-
     class Tiles(Artist):
         zorder = 3
 
@@ -135,9 +151,17 @@ def _runs(mask, gap: int) -> list:
     return list(zip(starts.tolist(), stops.tolist()))
 
 
-def _premake_ticks(axes, nx: int = 9, ny: int = 8) -> None:
+def premake_ticks(axes, nx: int = 9, ny: int = 8) -> None:
     """Create the tick artists now (the costly part of an axis): at draw time the axis reuses
-    the first ones it needs and makes more only if the locator asks for more."""
+    the first ones it needs and makes more only if the locator asks for more.
+
+    Parameters
+    ----------
+    axes : iterable of matplotlib.axes.Axes
+        The axes.
+    nx, ny : int, optional
+        Ticks to make on the x and y axis.
+    """
     for ax in axes:
         ax.xaxis.get_major_ticks(nx)
         ax.yaxis.get_major_ticks(ny)
@@ -201,9 +225,6 @@ def state_units(drf_mode: str = "attitude_hold") -> list[str]:
     list of str
         The 24 unit labels.
     """
-    import re
-
-    from acmm.model.linearize import state_units as units
 
     def pretty(u: str) -> str:
         if "/" in u:
@@ -220,23 +241,34 @@ def state_units(drf_mode: str = "attitude_hold") -> list[str]:
     return [pretty(u) for u in units(drf_mode)]
 
 
-def _fixed_label_positions(ax, x=None, y=None) -> None:
+def fixed_label_positions(ax, x=None, y=None) -> None:
     """Place the axis labels at fixed axes coordinates (x label at ``x`` below, y label at ``y``
-    left of the axes): the automatic placement measures every tick label a second time per axis."""
+    left of the axes): the automatic placement measures every tick label a second time per axis.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+    x, y : float, optional
+        Axes coordinates (dimensionless) of the x label's height and of the y label's abscissa;
+        None leaves that label where matplotlib puts it.
+    """
     if x is not None:
         ax.xaxis.set_label_coords(0.5, x)
     if y is not None:
         ax.yaxis.set_label_coords(y, 0.5)
 
 
-def _compact_formatter():
+def compact_formatter():
     """A tick formatter writing each value in full and short (``−7.5e6``, ``0.0045``, ``−1.5e-5``)
     with the fewest significant digits that keep the labels distinct and exact: no offset or
-    ×10ⁿ text above the axes (it collides with the panel titles and is one more text per axis)."""
-    import itertools
+    ×10ⁿ text above the axes (it collides with the panel titles and is one more text per axis).
 
-    from matplotlib.ticker import Formatter
-
+    Returns
+    -------
+    matplotlib.ticker.Formatter
+        The formatter.
+    """
     class Compact(Formatter):
         @staticmethod
         def _label(v: float, d: int, sci: bool) -> str:
@@ -284,17 +316,24 @@ def in_view_ticks(lo: float, hi: float, nbins: int) -> list:
     list of float
         The tick values, units of the data.
     """
-    from matplotlib.ticker import MaxNLocator
-
     lo, hi = sorted((lo, hi))
     tol = 1e-10 * (hi - lo)              # as an axis keeps a tick (relative to the view's span)
     return [v for v in MaxNLocator(nbins, min_n_ticks=3).tick_values(lo, hi) if lo - tol <= v <= hi + tol]
 
 
-def _in_view_locator(nbins: int = 4):
-    """An axis locator placing :func:`in_view_ticks` in the axis' view."""
-    from matplotlib.ticker import MaxNLocator
+def in_view_locator(nbins: int = 4):
+    """An axis locator placing :func:`in_view_ticks` in the axis' view.
 
+    Parameters
+    ----------
+    nbins : int, optional
+        The number of intervals asked for.
+
+    Returns
+    -------
+    matplotlib.ticker.MaxNLocator
+        The locator.
+    """
     class InView(MaxNLocator):
         def __call__(self):
             return in_view_ticks(*self.axis.get_view_interval(), nbins)
@@ -302,18 +341,39 @@ def _in_view_locator(nbins: int = 4):
     return InView(nbins, min_n_ticks=3)
 
 
-def _line(ax, **kw):
+def empty_line(ax, **kw):
     """An empty :class:`~matplotlib.lines.Line2D` with ``kw`` added to ``ax`` (its data set later
-    with ``set_data``; ~40 % cheaper than ``ax.plot``'s argument handling)."""
-    from matplotlib.lines import Line2D
+    with ``set_data``; ~40 % cheaper than ``ax.plot``'s argument handling).
 
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+    **kw
+        Line properties.
+
+    Returns
+    -------
+    matplotlib.lines.Line2D
+        The line.
+    """
     return ax.add_line(Line2D([], [], **kw))
 
 
-def _set_limits(axs, xlim, *ys) -> None:
+def set_limits(axs, xlim, *ys) -> None:
     """Set the x limits ``xlim`` of ``axs`` (and, with ``ys``, their common y limits, the data's
-    range with matplotlib's margins)."""
-    ylim = _data_limits(*ys) if ys else None
+    range with matplotlib's margins).
+
+    Parameters
+    ----------
+    axs : iterable of matplotlib.axes.Axes
+        The axes.
+    xlim : tuple or None
+        The x limits (in the units of the axes' data); None leaves them.
+    *ys : array_like
+        The data whose range the y limits span (in the units of the axes' data).
+    """
+    ylim = data_limits(*ys) if ys else None
     for ax in axs:
         if xlim is not None:
             ax.set_xlim(xlim)
@@ -321,10 +381,23 @@ def _set_limits(axs, xlim, *ys) -> None:
             ax.set_ylim(ylim)
 
 
-def _data_limits(*arrays, margin: float = 0.05):
+def data_limits(*arrays, margin: float = 0.05):
     """(lo, hi) of the finite values of ``arrays`` widened by ``margin`` of the span on each side
     (matplotlib's autoscale margins), or None when there is none; set on an axis directly this
-    replaces the data-limit bookkeeping of the plotting calls."""
+    replaces the data-limit bookkeeping of the plotting calls.
+
+    Parameters
+    ----------
+    *arrays : array_like
+        The data (in the units of the axis).
+    margin : float, optional
+        Fraction of the span added on each side (dimensionless).
+
+    Returns
+    -------
+    tuple of float or None
+        (lo, hi) in the units of the data; None when no value is finite.
+    """
     lo, hi = np.inf, -np.inf
     for a in arrays:
         a = np.asarray(a, dtype=float)

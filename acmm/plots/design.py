@@ -11,8 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acmm.plots.base import (_BUILDERS, FAST_TEXT_RC, _bake_texts, _compact_formatter, _data_limits, _layout, _premake_ticks, _save, gain_unit, state_units)
+from acmm.plots.base import (FAST_TEXT_RC, bake_texts, compact_formatter, data_limits,
+    premake_ticks, write_figure, gain_unit, in_view_ticks, state_units)
 from acmm_qpp.plot_style import stage_pyplot as _plt
+import re
+from acmm.plots.panel_grid import PanelGrid
+from matplotlib.ticker import LogFormatterSciNotation, MaxNLocator
 
 
 def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
@@ -22,10 +26,8 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
 
     Cost-cut (issue 16): no Axes per panel (24 Axes with their axis and tick artists took
     ~0.65 s to build and draw), a fixed layout (tight_layout/bbox 'tight' on 24 panels costs
-    seconds), the legend at a fixed place, the fixed texts rendered ahead (:func:`_bake_texts`).
+    seconds), the legend at a fixed place, the fixed texts rendered ahead (:func:`bake_texts`).
     """
-    from acmm.plots.panel_grid import PanelGrid
-
     plt = _plt()
     fig = plt.figure(figsize=(13, 15), dpi=80)
     colors = ("C0", "C1", "C2")
@@ -40,7 +42,7 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
         grid.set_label(j, "pitch TEA θ2* (deg)", "below")
     fig.legend(handles=grid.lines[:3], loc="upper center", bbox_to_anchor=(0.5, 0.978),
                ncol=3, fontsize=7, frameon=False)
-    _bake_texts(fig, [*grid.titles, *grid.labels, *fig.legends])
+    bake_texts(fig, [*grid.titles, *grid.labels, *fig.legends])
     return fig, grid
 
 
@@ -115,22 +117,20 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    from acmm.plots.base import in_view_ticks
-
     theta2_deg = np.degrees(theta2)
     curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
     fine, kf = np.degrees(curve.theta2), curve.gains
     units = units or state_units()
-    fig, grid = _layout("gain_schedule_grid", tuple(state_names), tuple(units), torque_unit)
-    xlim = _data_limits(theta2_deg, fine) or (0.0, 1.0)
+    fig, grid = _gain_grid_layout(tuple(state_names), tuple(units), torque_unit)
+    xlim = data_limits(theta2_deg, fine) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 4)
     for j in range(24):
         grid.show(j, xlim, [(i, theta2_deg, gains[:, i, j]) for i in range(3)]
                   + [(3 + i, fine, kf[:, i, j]) for i in range(3)], xticks)
-    grid.draw_data(_compact_formatter().format_ticks)
+    grid.draw_data(compact_formatter().format_ticks)
     fig.suptitle(f"Gain schedule: the design points' gains (dots) and the {curve.form} schedule (lines) vs TEA "
                  "(cf. Figs 5.3–5.26)", y=0.995)
-    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+    return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=False):
@@ -192,7 +192,7 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
     if len(names) <= 12:
         fig.legend(*ax.get_legend_handles_labels(), fontsize=7, loc="center right", frameon=False)
     fig.subplots_adjust(left=0.07, right=0.8, bottom=0.1, top=0.88, wspace=0.25)
-    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+    return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 def point_label(name: str) -> str:
@@ -221,8 +221,6 @@ _SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
 def _plain_math(label: str) -> str:
     """A log axis' mathtext tick label (``$\\mathdefault{6\\times10^{-1}}$``) as plain text with
     Unicode superscripts (``6×10⁻¹``); anything else is returned unchanged."""
-    import re
-
     m = re.fullmatch(r"\$\\mathdefault\{(.*)\}\$", label)
     if not m:
         return label
@@ -236,8 +234,6 @@ def _plain_log_formatter(**kw):
     same ticks labelled) writing its labels as plain text (:func:`_plain_math`): no mathtext,
     whose parser is built on first use (~0.07 s of CPU in each figure writer) and whose labels
     are laid out glyph by glyph."""
-    from matplotlib.ticker import LogFormatterSciNotation
-
     class PlainSciNotation(LogFormatterSciNotation):
         def __call__(self, x, pos=None):
             return _plain_math(super().__call__(x, pos))
@@ -257,7 +253,7 @@ def _path_check_layout():
     a2.set_xlabel("pitch TEA θ2* (deg)")
     # a fixed layout: bbox 'tight' draws the figure twice
     fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
-    _premake_ticks([a1, a2], 10, 11)
+    premake_ticks([a1, a2], 10, 11)
     return fig, (a1, a2)
 
 
@@ -286,7 +282,7 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
     th = np.degrees(theta2)
-    fig, (a1, a2) = _layout("schedule_path_check")
+    fig, (a1, a2) = _path_check_layout()
     a1.plot(th, max_real, "-", color="C3", label="largest Re λ / n")
     a1.plot(th, margin, "-", color="C0", label="worst sector margin / n")
     a1.axhline(0.0, color="k", lw=0.8)
@@ -299,10 +295,9 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
         lo, hi = float(fin.min()), float(fin.max())
         pad = max(0.05 * (hi - lo), 0.02 * max(abs(hi), 1e-3))
         a2.set_ylim(max(0.0, lo - pad), hi + pad)
-    from matplotlib.ticker import MaxNLocator
 
     a2.yaxis.set_major_locator(MaxNLocator(6))
-    return _save(fig, path, vector, tight=False)
+    return write_figure(fig, path, vector, tight=False)
 
 
 def _scheduled_poles_layout():
@@ -318,7 +313,7 @@ def _scheduled_poles_layout():
     # above the sector's fill (1), below its boundary lines (2)
     sc = ax.scatter(np.empty(0), np.empty(0), c=np.empty(0), s=3, cmap="viridis", zorder=1.5)
     cbar = fig.colorbar(sc, ax=ax, label="pitch TEA θ2* (deg)")
-    _premake_ticks([ax], 10, 10)
+    premake_ticks([ax], 10, 10)
     cbar.ax.yaxis.get_major_ticks(10)
     return fig, ax, sc
 
@@ -350,7 +345,7 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
     p = np.asarray(poles) / n
-    fig, ax, sc = _layout("scheduled_pole_map")
+    fig, ax, sc = _scheduled_poles_layout()
     t = np.tan(np.radians(half_angle_deg))
     fin = p[np.isfinite(p)]                  # limits from the finite poles (a failed eig: NaN)
     fin = fin if fin.size else np.zeros(1, complex)
@@ -369,8 +364,5 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
     ylim = min(max(3.0, np.abs(fin.imag).max() * 1.05), 60.0)
     ax.set_ylim(-ylim, ylim)
     ax.legend(fontsize=7, loc="upper left")
-    return _save(fig, path, vector, tight=False)
+    return write_figure(fig, path, vector, tight=False)
 
-
-_BUILDERS.update({"gain_schedule_grid": _gain_grid_layout, "schedule_path_check": _path_check_layout,
-                  "scheduled_pole_map": _scheduled_poles_layout})

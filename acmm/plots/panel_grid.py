@@ -20,7 +20,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acmm.plots.base import _data_limits, in_view_ticks
+from acmm.plots.base import data_limits, in_view_ticks
+import matplotlib as mpl
+from matplotlib.collections import LineCollection
+from matplotlib.gridspec import GridSpec
+from matplotlib.lines import Line2D
 
 
 @dataclass
@@ -96,11 +100,6 @@ class PanelGrid:
 
     def __init__(self, fig, rows: int, cols: int, series: list, adjust: dict,
                  title_size: float | str = 8.0, tick_size: float = 7.0) -> None:
-        import matplotlib as mpl
-        from matplotlib.collections import LineCollection
-        from matplotlib.gridspec import GridSpec
-        from matplotlib.lines import Line2D
-
         self.fig, self.rows, self.cols = fig, rows, cols
         self.tick_size = tick_size
         bottoms, tops, lefts, rights = GridSpec(rows, cols, **adjust).get_grid_positions(fig)
@@ -231,7 +230,7 @@ class PanelGrid:
         """
         for s, x, y in data:
             self.set_data(k, s, x, y)
-        ylim = _data_limits(*(y for _, _, y in data)) or (0.0, 1.0)
+        ylim = data_limits(*(y for _, _, y in data)) or (0.0, 1.0)
         self.set_limits(k, xlim, ylim, xticks, in_view_ticks(*ylim, nbins))
 
     def draw_data(self, formatter, x_labelled=None) -> None:

@@ -9,27 +9,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm.plots.base import (_BUILDERS, AXES, FAST_TEXT_RC, _bake_texts, _compact_formatter, _data_limits, _fixed_label_positions, _in_view_locator, _layout, _line, _premake_ticks, _save, _set_limits, decimate)
+from acmm.plots.base import (AXES, FAST_TEXT_RC, bake_texts, compact_formatter, data_limits,
+    fixed_label_positions, in_view_locator, empty_line, premake_ticks, write_figure, set_limits, decimate,
+    in_view_ticks)
 from acmm_qpp.plot_style import stage_pyplot as _plt
+from acmm.plots.panel_grid import PanelGrid
+from acmm_qpp.units import pretty, shown
+import matplotlib as mpl
 
 
 def _panel_axes(ax) -> None:
     """A summary panel's axes: few y ticks written short, at most six x ticks."""
-    ax.yaxis.set_major_locator(_in_view_locator(3))
-    ax.yaxis.set_major_formatter(_compact_formatter())
+    ax.yaxis.set_major_locator(in_view_locator(3))
+    ax.yaxis.set_major_formatter(compact_formatter())
     ax.tick_params(labelsize=8)
-    ax.xaxis.set_major_locator(_in_view_locator(5))
+    ax.xaxis.set_major_locator(in_view_locator(5))
 
 
 def _axis_histories_layout(units: str):
     """The 12 panels (:class:`acmm.plots.panel_grid.PanelGrid`) with the axis names over the top row,
-    the quantity left of each row, the time under the bottom row (pre-rendered: _bake_texts) and
+    the quantity left of each row, the time under the bottom row (pre-rendered: bake_texts) and
     one line series for all panels."""
-    import matplotlib as mpl
-
-    from acmm.plots.panel_grid import PanelGrid
-    from acmm_qpp.units import pretty, shown
-
     plt = _plt()
     fig = plt.figure(figsize=(13, 10))
     uu, hu = shown(1.0, "ft*lbf", units)[1], shown(1.0, "ft*lbf*s", units)[1]
@@ -45,7 +45,7 @@ def _axis_histories_layout(units: str):
     for a in range(3):
         grid.set_title(a, AXES[a])
         grid.set_label(9 + a, "time (orbits)", "below", offset=0.12)
-    _bake_texts(fig, [*grid.titles, *grid.labels])
+    bake_texts(fig, [*grid.titles, *grid.labels])
     return fig, grid
 
 
@@ -80,30 +80,22 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    from acmm.plots.base import in_view_ticks
-    from acmm_qpp.units import shown
-
-    fig, grid = _layout("axis_histories", units)
+    fig, grid = _axis_histories_layout(units)
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
-    xlim = _data_limits(orbits) or (0.0, 1.0)
+    xlim = data_limits(orbits) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 5)
     for r, data in enumerate((err_deg, rate, u, h)):
         for a in range(3):
             grid.show(3 * r + a, xlim, [(0, *decimate(orbits, data[:, a]))], xticks)
-    grid.draw_data(_compact_formatter().format_ticks)
+    grid.draw_data(compact_formatter().format_ticks)
     fig.suptitle(title)
-    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+    return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 def _inertia_layout(units: str):
     """The six panels (:class:`acmm.plots.panel_grid.PanelGrid`) with titles, labels (pre-rendered)
     and one step-line series for all panels."""
-    import matplotlib as mpl
-
-    from acmm.plots.panel_grid import PanelGrid
-    from acmm_qpp.units import pretty, shown
-
     iu = shown(1.0, "slug*ft^2", units)[1]
     plt = _plt()
     fig = plt.figure(figsize=(12, 6))
@@ -116,7 +108,7 @@ def _inertia_layout(units: str):
     for k in range(3, 6):
         grid.set_label(k, "time (orbits)", "below", offset=0.12)
     title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
-    _bake_texts(fig, [title, *grid.titles, *grid.labels])
+    bake_texts(fig, [title, *grid.titles, *grid.labels])
     return fig, grid
 
 
@@ -144,18 +136,15 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    from acmm_qpp.units import shown
-
     inertia = shown(np.asarray(inertia), "slug*ft^2", units)[0]
-    from acmm.plots.base import in_view_ticks
 
-    fig, grid = _layout("inertia_histories", units)
-    xlim = _data_limits(orbits) or (0.0, 1.0)
+    fig, grid = _inertia_layout(units)
+    xlim = data_limits(orbits) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 5)
     for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
         grid.show(k, xlim, [(0, orbits, inertia[:, i, j] / 1e6)], xticks)
-    grid.draw_data(_compact_formatter().format_ticks)
-    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+    grid.draw_data(compact_formatter().format_ticks)
+    return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
 #: the per-level table of the summary: column headers (the last takes the momentum unit)
@@ -164,11 +153,9 @@ _TABLE_HEADER = ("level", "start (orbit)", "θ2* est (deg)", "steady |err| max (
 
 def _summary_layout(units: str, n_rows: int = 12):
     """The three panels with their (empty) lines, one legend, the table's header and empty
-    columns; titles, labels, legend and header pre-rendered (_bake_texts).  The table's height
+    columns; titles, labels, legend and header pre-rendered (bake_texts).  The table's height
     follows its ``n_rows`` rows (at most 12 lines of full height): a one-level run leaves no
     blank third of the page."""
-    from acmm_qpp.units import pretty, shown
-
     hu, uu = shown(1.0, "ft*lbf*s", units)[1], shown(1.0, "ft*lbf", units)[1]
     plt = _plt()
     table_ratio = min(1.0, 0.25 + 0.0625 * max(1, n_rows))
@@ -184,8 +171,8 @@ def _summary_layout(units: str, n_rows: int = 12):
     for ax in (top, *mid):
         _panel_axes(ax)
         ax.set_xlabel("time (orbits)")
-        _fixed_label_positions(ax, -0.1 if ax is top else -0.12, -0.06 if ax is top else -0.12)
-        lines.append([_line(ax, lw=0.7, color=f"C{a}", label=AXES[a]) for a in range(3)])
+        fixed_label_positions(ax, -0.1 if ax is top else -0.12, -0.06 if ax is top else -0.12)
+        lines.append([empty_line(ax, lw=0.7, color=f"C{a}", label=AXES[a]) for a in range(3)])
     # one legend for the three panels, above them: no 'best' placement search over the data
     fig.legend(handles=lines[0], loc="upper right", bbox_to_anchor=(0.98, 0.995), ncol=3, fontsize=8,
                frameon=False)
@@ -198,8 +185,8 @@ def _summary_layout(units: str, n_rows: int = 12):
     body = [table.text((c + 0.5) / 5, 1 - 0.09 * k, "", ha="center", va="top", fontsize=8, linespacing=1.45,
                        transform=table.transAxes) for c in range(5)]
     fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
-    _premake_ticks([top, *mid], 6, 4)
-    _bake_texts(fig, [*head, *rules, *fig.legends,
+    premake_ticks([top, *mid], 6, 4)
+    bake_texts(fig, [*head, *rules, *fig.legends,
                       *(t for ax in (top, *mid) for t in (ax.xaxis.label, ax.yaxis.label))])
     return fig, (top, mid, lines, body)
 
@@ -235,17 +222,15 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    from acmm_qpp.units import shown
-
     h = shown(np.asarray(h), "ft*lbf*s", units)[0]
     u = shown(np.asarray(u), "ft*lbf", units)[0]
     k_h = shown(1.0, "ft*lbf*s", units)[0]
-    fig, (top, mid, lines, body) = _layout("summary", units, min(len(level_stats), 12))
-    xlim = _data_limits(orbits)
+    fig, (top, mid, lines, body) = _summary_layout(units, min(len(level_stats), 12))
+    xlim = data_limits(orbits)
     for ax, panel, data in zip((top, *mid), lines, (err_deg, h, u)):
         for a in range(3):
             panel[a].set_data(*decimate(orbits, data[:, a]))
-        _set_limits([ax], xlim, data)
+        set_limits([ax], xlim, data)
     top.set_title(f"{title} — verdict: {verdict}")
     rows = [(str(s["level"]), f"{s['start_orbit']:.1f}", f"{s['theta2_deg']:.2f}",
              " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum'] * k_h:.0f}")
@@ -259,8 +244,5 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
         for text, column in zip(body, zip(*rows)):
             text.set_text("\n".join(column))
             text.set_fontsize(size)
-    return _save(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
+    return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
-
-_BUILDERS.update({"axis_histories": _axis_histories_layout, "inertia_histories": _inertia_layout,
-                  "summary": _summary_layout})

@@ -30,6 +30,7 @@ from acmm.report.runner import default_jobs, run_tasks
 from acmm.report.sections import determinism as sec_determinism
 from acmm.report.sections import printed as sec_printed
 from acmm.report.sections import provenance as sec_provenance
+import resource
 
 
 @dataclass
@@ -229,8 +230,6 @@ def _previous_manifest(path: Path) -> dict | None:
 
 def _cpu() -> float:
     """User + system CPU time (s) of this process and of its finished children."""
-    import resource
-
     own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 

@@ -8,6 +8,7 @@ from acmm.report.constants import SECTIONS
 from acmm.report.document import Doc
 from acmm.report.gather import Gathered
 from acmm.report.ledger import PrintedNumber, check_printed, status_text
+from acmm_qpp.results import read_h5
 
 
 class SectionWriter:
@@ -74,8 +75,6 @@ class SectionWriter:
             Dataset name → array (in the file's units), ``attrs`` → root attributes; read once
             per report.
         """
-        from acmm_qpp.results import read_h5
-
         if key not in self._results:
             self._results[key] = read_h5(self.run(key).path)
         return self._results[key]

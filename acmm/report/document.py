@@ -21,11 +21,25 @@ def _css() -> str:
     return resources.files("acmm.report").joinpath("style.css").read_text(encoding="utf-8")
 
 
-def _fmt(x, f="{:.4g}"):
+def fmt_value(x, f="{:.4g}"):
+    """A number (or each of a sequence) as text in the report's tables, ``—`` for none.
+
+    Parameters
+    ----------
+    x : float, array_like or None
+        The value(s), in the units of the table's column.
+    f : str, optional
+        The format of one number.
+
+    Returns
+    -------
+    str
+        The text (``[a, b, …]`` for a sequence).
+    """
     if x is None:
         return "—"
     if isinstance(x, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(_fmt(v, f) for v in np.ravel(x)) + "]"
+        return "[" + ", ".join(fmt_value(v, f) for v in np.ravel(x)) + "]"
     return f.format(float(x))
 
 
@@ -108,8 +122,19 @@ class Doc:
         self.blocks.append(("fig", stem, caption, files))
 
 
-def _decode(x) -> str:
-    """A name stored as bytes (HDF5) or str, as str."""
+def decoded(x) -> str:
+    """A name stored as bytes (HDF5) or str, as str.
+
+    Parameters
+    ----------
+    x : bytes, str or numpy scalar
+        The stored name.
+
+    Returns
+    -------
+    str
+        The name.
+    """
     x = x.item() if hasattr(x, "item") else x
     return x.decode() if isinstance(x, bytes) else str(x)
 

@@ -14,6 +14,11 @@ from pathlib import Path
 from acmm_qpp.plot_style import RC
 from acmm_qpp.plot_style import pyplot as _style_pyplot
 from acmm_qpp.results import save_figure
+import io
+import matplotlib
+import matplotlib.pyplot as plt
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 #: rcParams of the report's figures on top of :data:`acmm_qpp.plot_style.RC` that change no pixel but
 #: save drawing time (issue 16): an axes title at the top edge of the axes, where matplotlib's
@@ -46,12 +51,6 @@ def warm() -> None:
     built (issue 16): each report worker would otherwise pay 0.2–0.5 s of CPU for them in its first
     figure.  Nothing is written, and this process's rcParams are left as they were.
     """
-    import io
-
-    import matplotlib
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     with matplotlib.rc_context({**RC, **SPEED_RC}):   # no pyplot: the backend is left alone too
         fig = Figure(figsize=(2.0, 1.5))
         FigureCanvasAgg(fig)
@@ -111,8 +110,6 @@ def save(fig, directory: Path, stem: str) -> dict[str, Path]:
     dict
         ``{"pdf": path, "png": path}``.
     """
-    import matplotlib.pyplot as plt
-
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     out = {"pdf": directory / f"{stem}.pdf", "png": directory / f"{stem}.png"}

@@ -8,7 +8,11 @@ from pathlib import Path
 import numpy as np
 
 from acmm.report.constants import AXES
-
+from acmm.model.linearize import STATE_NAMES, state_units
+from acmm_qpp.plot_style import COLORS
+from acmm.report.figure_style import fixed_layout, pyplot, save
+from acmm.design.schedule import schedule_gain
+from matplotlib.ticker import MaxNLocator
 
 
 def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
@@ -29,13 +33,6 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from matplotlib.ticker import MaxNLocator
-
-    from acmm.model.linearize import STATE_NAMES, state_units
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import pyplot, save
-    from acmm.design.schedule import schedule_gain
-
     plt = pyplot()
     K, tea = design["K"], design["tea"]
     sc = design["schedule"]
@@ -103,9 +100,6 @@ def fig_pole_maps(stair: dict, mb3: dict, dec: dict, dec_true_poles, n, sector, 
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
-
     plt = pyplot()
     sigma, phi = sector
     fig, axs = plt.subplots(1, 2, figsize=(11, 4.6))
@@ -160,9 +154,6 @@ def fig_claim1(mb3: dict, dec: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
-
     plt = pyplot()
     fig, axs = plt.subplots(4, 3, figsize=(11, 10))
     for a in range(3):
@@ -211,9 +202,6 @@ def fig_robustness(params: dict, base, verdict, peak, names, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
-
     plt = pyplot()
     keys = [k for k in ("dI11", "dI22", "dI33", "dI12", "dI13", "dI23") if k in params]
     dmax = np.max(np.abs(np.column_stack([params[k] for k in keys])), axis=1) if keys else np.zeros(len(base))

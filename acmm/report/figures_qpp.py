@@ -6,6 +6,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import h5py
+from acmm_qpp.plot_style import COLORS
+from acmm.report.figure_style import fixed_layout, pyplot, save
+from qpp.design.circle import critical_disc
+from matplotlib.ticker import NullLocator
+from matplotlib.collections import PatchCollection
 
 
 def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path, out_labels):
@@ -31,12 +37,6 @@ def fig_qpp(sim_path: Path, design: dict, beta_o: float, name: str, figdir: Path
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    import h5py
-    from matplotlib.ticker import NullLocator
-
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
-
     plt = pyplot()
     with h5py.File(sim_path, "r") as f:
         scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
@@ -87,12 +87,6 @@ def fig_circle(design: dict, name: str, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from matplotlib.collections import PatchCollection
-
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
-    from qpp.design.circle import critical_disc
-
     plt = pyplot()
     c = design["circle"]
     centres, radii, sector = np.atleast_2d(c["centres"]), np.atleast_2d(c["radii"]), design["sector"]

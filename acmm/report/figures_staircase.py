@@ -7,6 +7,9 @@ from pathlib import Path
 import numpy as np
 
 from acmm.report.constants import AXES
+from acmm_qpp.plot_style import COLORS
+from acmm.report.figure_style import fixed_layout, pyplot, save
+from matplotlib.collections import LineCollection
 
 
 def fig_staircase(sim: dict, figdir: Path):
@@ -46,9 +49,6 @@ def fig_staircase_inertia(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
-
     plt = pyplot()
     o = sim["orbits"]
     inertia = sim["levels"]["inertia"][sim["level"]]
@@ -81,11 +81,6 @@ def fig_staircase_responses(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from matplotlib.collections import LineCollection
-
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import pyplot, save
-
     plt = pyplot()
     o = sim["orbits"]
     fig2, axs = plt.subplots(4, 3, figsize=(11, 10), sharex=True)
@@ -130,9 +125,6 @@ def fig_staircase_levels(sim: dict, figdir: Path):
     dict
         ``{"pdf": path, "png": path}`` (:func:`acmm.report.figure_style.save`).
     """
-    from acmm_qpp.plot_style import COLORS
-    from acmm.report.figure_style import fixed_layout, pyplot, save
-
     plt = pyplot()
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
     th = np.degrees(sim["levels"]["tea_estimate"][:, 1])[: len(sim["levels"]["steady_error"])]

@@ -5,6 +5,7 @@ The stages are those of Part II (TEA, design and stair-case simulation, ch. 4–
 """
 from __future__ import annotations
 
+import importlib
 import os
 import time
 from dataclasses import dataclass, field
@@ -14,7 +15,23 @@ from typing import Callable
 from acmm_qpp.errors import AcmmError, OutputError
 from acmm_qpp.outputs import file_identity
 # the results files of one stage (reused by hash, else run)
-from acmm.report.stage_results import (Failed, StageRun, _record, _try_attrs, acmm_config, blocked, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, failed, qpp_config)
+from acmm.report.stage_results import (Failed, StageRun, stage_record, try_attrs, acmm_config, blocked, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, failed, qpp_config)
+import yaml
+from acmm.io.config import parse_config
+from acmm.report.runner import Task, run_tasks
+from acmm.simulate.warmup import warm_up
+from acmm.report.figure_style import warm
+from acmm import PACKAGED_CONFIGS
+from acmm_qpp.configio import packaged_config_path
+from acmm_qpp.results import read_h5
+from acmm.sweep.config import parse_sweep
+# imported here so that the report's workers, forked after :func:`warm_workers`, find them loaded
+import h5py  # noqa: F401
+import matplotlib.pyplot  # noqa: F401
+import scipy.linalg  # noqa: F401
+import acmm.stages.runners  # noqa: F401
+import acmm.sweep.run  # noqa: F401
+import qpp.io.stages  # noqa: F401
 
 
 @dataclass
@@ -96,8 +113,6 @@ def reports_route(cfg):
     acmm.io.config.Config
         The same config with the other route and name.
     """
-    from acmm.io.config import parse_config
-
     data = cfg.model_dump(mode="json")
     data["name"] = f"{data['name']}_lqr"
     data["design"]["pole_method"] = "shift"
@@ -135,8 +150,6 @@ def _guarded(name, fn, not_run, *args):
 
 def _stage(name, fn, deps, args, cost):
     """The stage ``name`` as a task of :func:`_guarded`."""
-    from acmm.report.runner import Task
-
     return Task(name, _guarded, deps, lambda done: (name, fn, blocked(name, done, deps), *args), cost)
 
 
@@ -301,8 +314,6 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
     Gathered
         The configs and the results files.
     """
-    from acmm.report.runner import run_tasks
-
     say = progress or (lambda msg: None)
     g = Gathered(report_configs(root, fast=fast), {})
     tasks = stage_tasks(g.configs, root, fast=fast, rerun=rerun, robustness=robustness, jobs=jobs)
@@ -313,17 +324,7 @@ def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
 
 def warm_workers() -> None:
     """Imports (and the compiled simulator, a first figure's fonts and caches) every worker needs,
-    done once before forking them."""
-    import h5py  # noqa: F401
-    import matplotlib.pyplot  # noqa: F401
-    import scipy.linalg  # noqa: F401
-
-    import acmm.stages.runners  # noqa: F401
-    import acmm.sweep.run  # noqa: F401
-    import qpp.io.stages  # noqa: F401
-    from acmm.simulate.warmup import warm_up
-    from acmm.report.figure_style import warm
-
+    done once before forking them (the modules they import are imported at the top of this one)."""
     warm_up(lambda *a: None)
     warm()
 
@@ -351,8 +352,6 @@ def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bo
         "design", "tea_estimate", "seed", "bases"}`` and a note.  A missing sweep package, or a sweep that fails with an :class:`AcmmError` or an
         ``OSError``, makes the section "not available"; programming errors propagate.
     """
-    import importlib
-
     try:
         importlib.import_module("acmm.sweep.run")
     except ImportError as exc:
@@ -374,14 +373,6 @@ SWEEP_CONFIG = "sweep_inertia30.yaml"
 def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     """Run (or reuse, by ``results_key``) ``configs/sweep_inertia30.yaml`` through
     :func:`acmm.sweep.run_sweep` and read ``sweep.h5`` back."""
-    import yaml
-
-    import importlib
-
-    from acmm import PACKAGED_CONFIGS
-    from acmm_qpp.configio import packaged_config_path
-    from acmm_qpp.results import read_h5
-    from acmm.sweep.config import parse_sweep
 
     p = packaged_config_path(SWEEP_CONFIG, PACKAGED_CONFIGS)
     if not p.exists():
@@ -398,7 +389,7 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
         data["sweep"].pop("margin", None)
     sweep = parse_sweep(data, source=str(p), directory=p.parent)
     path = sweep.run_dir() / "sweep.h5"
-    a = None if rerun else _try_attrs(path)
+    a = None if rerun else try_attrs(path)
     reused = bool(a is not None and a.get("results_key") == sweep.results_key() and bool(a.get("complete")))
     t0 = time.perf_counter()
     if not reused:
@@ -407,7 +398,7 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     wall = 0.0 if reused else time.perf_counter() - t0
     d = read_h5(path)
     chash = str(d["attrs"].get("config_hash", ""))
-    run = _record("acmm sweep", sweep.name, path, chash, "", reused, wall)
+    run = stage_record("acmm sweep", sweep.name, path, chash, "", reused, wall)
     spec = sweep.spec
     return {"data": d, "run": run, "fast": fast, "n_runs": spec.n_runs, "orbits": spec.orbits,
             "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed,

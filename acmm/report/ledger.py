@@ -135,10 +135,35 @@ def status_text(pn: PrintedNumber) -> str:
     return pn.status if pn.status != STATUS_EXPLAINED else f"{STATUS_EXPLAINED}: {pn.note}"
 
 
-def _printed_str(v: float, gname: str) -> str:
-    """The printed form of a gain (K: one decimal; H: four decimals, as in the report)."""
+def printed_str(v: float, gname: str) -> str:
+    """The printed form of a gain (K: one decimal; H: four decimals, as in the report).
+
+    Parameters
+    ----------
+    v : float
+        The gain entry (units of the report's table).
+    gname : str
+        The gain's name (``K`` or ``H``).
+
+    Returns
+    -------
+    str
+        The entry as the report prints it.
+    """
     return f"{v:.4f}" if gname == "H" else f"{v:.1f}"
 
 
-def _num_str(v) -> str:
+def num_str(v) -> str:
+    """A number in full (``repr``) for the ledger, ``—`` for none.
+
+    Parameters
+    ----------
+    v : float or None
+        The value (units of its ledger row).
+
+    Returns
+    -------
+    str
+        The text.
+    """
     return repr(float(v)) if v is not None else "—"

@@ -9,6 +9,9 @@ import numpy as np
 
 from acmm.report.constants import TIMING_DATASETS
 from acmm.report.gather import Gathered
+import h5py
+from acmm_qpp.results import dimension_only
+from acmm_qpp.provenance import git_commit, git_dirty
 
 
 def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> dict[str, str]:
@@ -29,9 +32,6 @@ def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> di
     dict
         Dataset path → hash, sorted by path.
     """
-    import h5py
-
-    from acmm_qpp.results import dimension_only
 
     out: dict[str, str] = {}
 
@@ -66,7 +66,7 @@ def build_manifest(g: Gathered) -> dict:
         files[key] = {"path": str(r.path), "config_hash": r.config_hash, "design_hash": r.design_hash,
                       "created_utc": r.created_utc, "reused": r.reused, "datasets": dataset_hashes(r.path)}
     return {"created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-            "git_commit": _git_commit(), "files": files}
+            "git_commit": git_commit(), "files": files}
 
 
 def compare_manifests(old: dict | None, new: dict) -> dict:
@@ -114,13 +114,12 @@ def compare_manifests(old: dict | None, new: dict) -> dict:
 # =============================================================================================
 # helpers
 # =============================================================================================
-def _git_commit() -> str:
-    from acmm_qpp.provenance import git_commit
+def report_git_state() -> str:
+    """Whether the working tree the report ran in has modified files, in words.
 
-    return git_commit()
-
-
-def _git_dirty() -> str:
-    from acmm_qpp.provenance import git_dirty
-
+    Returns
+    -------
+    str
+        ``"modified files present"``, ``"clean"`` or ``"unknown"`` (no git).
+    """
     return {"yes": "modified files present", "no": "clean"}.get(git_dirty(), "unknown")

@@ -14,6 +14,16 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from acmm.report.constants import FAST_ORBITS
+import h5py
+from acmm_qpp.errors import OutputError, failure_line
+from acmm.io.config import load_config, parse_config
+from qpp.io.config import load_config as load_qpp_config, parse_config as parse_qpp_config
+from acmm import PACKAGED_CONFIGS
+from acmm_qpp.configio import packaged_config_path
+from acmm_qpp.provenance import config_hash
+from acmm.stages.design import design_for, design_hash, run_design
+from acmm.stages.simulate import run_simulate
+from qpp.io import stages as qst
 
 
 @dataclass
@@ -106,8 +116,6 @@ def failed(name: str, exc: BaseException) -> Failed | None:
         for an :class:`acmm_qpp.errors.OutputError`: a report that cannot write stops at once,
         with one ``error:`` line).
     """
-    from acmm_qpp.errors import OutputError, failure_line
-
     if isinstance(exc, OutputError):    # the report's folder cannot be written (a full disk…): it stops
         return None
     line = failure_line(exc) if isinstance(exc, Exception) else None
@@ -140,13 +148,23 @@ def blocked(name: str, done: dict, deps) -> Failed | None:
 
 
 def _attrs(path: Path) -> dict:
-    import h5py
-
     with h5py.File(path, "r") as f:
         return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
 
 
-def _try_attrs(path: Path) -> dict | None:
+def try_attrs(path: Path) -> dict | None:
+    """The root attributes of a results file, or None when it is missing or unreadable.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The results file.
+
+    Returns
+    -------
+    dict or None
+        Its root attributes.
+    """
     try:
         return _attrs(path) if path.exists() else None
     except OSError:
@@ -170,10 +188,6 @@ def acmm_config(name: str, root: Path | None = None, *, fast: bool = False):
     acmm.io.config.Config
         The config, figures off.
     """
-    from acmm.io.config import load_config, parse_config
-    from acmm import PACKAGED_CONFIGS
-    from acmm_qpp.configio import packaged_config_path
-
     # the packaged file itself: a file or folder named like it in the working directory is not it
     data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
     if root is not None:
@@ -201,18 +215,36 @@ def qpp_config(name: str, root: Path | None = None):
     qpp.io.config.QppConfig
         The config, figures off.
     """
-    from acmm import PACKAGED_CONFIGS
-    from acmm_qpp.configio import packaged_config_path
-    from qpp.io.config import load_config, parse_config
-
-    data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
+    data = load_qpp_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
     if root is not None:
         data["output"]["root"] = str(root)
     data["output"]["figures"] = False
-    return parse_config(data, source=f"packaged config {name}")
+    return parse_qpp_config(data, source=f"packaged config {name}")
 
 
-def _record(stage, cfg_name, path, chash, dhash, reused, wall):
+def stage_record(stage, cfg_name, path, chash, dhash, reused, wall):
+    """The :class:`StageRun` of a results file the report computed or reused.
+
+    Parameters
+    ----------
+    stage : str
+        The stage (``tea``, ``design``…).
+    cfg_name : str
+        The config's name.
+    path : pathlib.Path
+        The results file.
+    chash, dhash : str
+        Its config and data hashes.
+    reused : bool
+        Whether it was reused (not computed in this report).
+    wall : float
+        Wall time of the stage, s.
+
+    Returns
+    -------
+    StageRun
+        The record, with the file's creation time and git commit.
+    """
     a = _attrs(path)
     return StageRun(stage, cfg_name, path, chash, dhash, reused, wall, str(a.get("created_utc", "")),
                     str(a.get("git_commit", "")))
@@ -239,27 +271,24 @@ def ensure_acmm_design(cfg, *, rerun: bool = False, donor_roots=()) -> StageRun:
     StageRun
         The design file used.
     """
-    from acmm_qpp.provenance import config_hash
-    from acmm.stages.design import design_for, design_hash, run_design
-
     want = design_hash(cfg)
     path = cfg.run_dir() / "design.h5"
     chash = config_hash(cfg.to_yaml())
     t0 = time.perf_counter()
     if rerun:
         _, path = run_design(cfg, figures=False)
-        return _record("acmm design", cfg.name, path, chash, want, False, time.perf_counter() - t0)
-    a = _try_attrs(path)
+        return stage_record("acmm design", cfg.name, path, chash, want, False, time.perf_counter() - t0)
+    a = try_attrs(path)
     if a is None or a.get("design_hash") != want:
         for donor in donor_roots:
-            a = _try_attrs(Path(donor) / "design.h5")
+            a = try_attrs(Path(donor) / "design.h5")
             if a is not None and a.get("design_hash") == want:
                 path.parent.mkdir(parents=True, exist_ok=True)
                 shutil.copy2(Path(donor) / "design.h5", path)
                 break
     _, note = design_for(cfg, figures=False)
     reused = note.startswith("reused")
-    return _record("acmm design", cfg.name, path, chash, want, reused,
+    return stage_record("acmm design", cfg.name, path, chash, want, reused,
                    0.0 if reused else time.perf_counter() - t0)
 
 
@@ -278,18 +307,14 @@ def ensure_acmm_simulation(cfg, *, rerun: bool = False) -> StageRun:
     StageRun
         The simulation file used.
     """
-    from acmm_qpp.provenance import config_hash
-    from acmm.stages.design import design_hash
-    from acmm.stages.simulate import run_simulate
-
     chash, dhash = config_hash(cfg.to_yaml()), design_hash(cfg)
     path = cfg.run_dir() / "sim.h5"
-    a = None if rerun else _try_attrs(path)
+    a = None if rerun else try_attrs(path)
     if a is not None and a.get("config_hash") == chash and a.get("design_hash") == dhash:
-        return _record("acmm simulate", cfg.name, path, chash, dhash, True, 0.0)
+        return stage_record("acmm simulate", cfg.name, path, chash, dhash, True, 0.0)
     t0 = time.perf_counter()
     _, path = run_simulate(cfg, figures=False)
-    return _record("acmm simulate", cfg.name, path, chash, dhash, False, time.perf_counter() - t0)
+    return stage_record("acmm simulate", cfg.name, path, chash, dhash, False, time.perf_counter() - t0)
 
 
 def ensure_qpp(cfg, stage: str, *, rerun: bool = False) -> StageRun:
@@ -309,17 +334,14 @@ def ensure_qpp(cfg, stage: str, *, rerun: bool = False) -> StageRun:
     StageRun
         The file used.
     """
-    from acmm_qpp.provenance import config_hash
-    from qpp.io import stages as qst
-
     chash = config_hash(cfg.to_yaml())
     path = cfg.run_dir() / ("qpp_design.h5" if stage == "design" else "qpp_sim.h5")
-    a = None if rerun else _try_attrs(path)
+    a = None if rerun else try_attrs(path)
     if a is not None and a.get("config_hash") == chash:
-        return _record(f"qpp {stage}", cfg.name, path, chash, "", True, 0.0)
+        return stage_record(f"qpp {stage}", cfg.name, path, chash, "", True, 0.0)
     t0 = time.perf_counter()
     if stage == "design":
         path = qst.run_design(cfg, figures=False)[2]
     else:
         path = qst.run_simulate(cfg, figures=False)[3]
-    return _record(f"qpp {stage}", cfg.name, path, chash, "", False, time.perf_counter() - t0)
+    return stage_record(f"qpp {stage}", cfg.name, path, chash, "", False, time.perf_counter() - t0)

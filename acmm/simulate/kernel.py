@@ -25,7 +25,7 @@ import numpy as np
 
 from acmm.model import dynamics as dyn
 from acmm.model import kinematics as kin
-from acmm.simulate.compiled_cache import njit_cached
+from acmm.model.compiled_cache import njit_cached
 from acmm.model.linearize import DRF_INPUTS
 from acmm.simulate.scenario import (STOP_ANGLE, STOP_NONE, STOP_NONFINITE, STOP_SATURATION, STOP_STEP,
                                     RunExtremes, Scenario, SimResult)
@@ -193,7 +193,7 @@ class KernelOutputs(NamedTuple):
 
 
 class Workspace(NamedTuple):
-    """Scratch buffers of the kernel (built by :func:`_workspace`).
+    """Scratch buffers of the kernel (built by :func:`workspace`).
 
     Attributes
     ----------
@@ -223,14 +223,20 @@ class Workspace(NamedTuple):
 
 
 # ----------------------------------------------------------------------------------------------
-# compiled kernel.  The right-hand side (:func:`_rhs`, :func:`_torque`) is inlined into its
+# compiled kernel.  The right-hand side (:func:`closed_loop_rhs`, :func:`_torque`) is inlined into its
 # callers (``inline="always"``, numba's own inlining: the arithmetic is unchanged): called
 # apart, it re-reads the bundles' arrays at every stage with their reference counts, ~15 % of
 # the integration time.
 # ----------------------------------------------------------------------------------------------
 @njit_cached()
-def _workspace():
-    """Fresh scratch buffers (:class:`Workspace`)."""
+def workspace():
+    """Fresh scratch buffers (:class:`Workspace`).
+
+    Returns
+    -------
+    Workspace
+        The buffers (uninitialized state scratch, zeroed flags).
+    """
     return Workspace(np.empty((7, 24)), np.empty(24), np.empty(24), np.empty(3), np.empty(3),
                      np.zeros(6), np.zeros(3))
 
@@ -299,9 +305,26 @@ def _torque(X, th2d, lv, loop, w):
 
 
 @njit_cached(fastmath=False, inline="always")
-def _rhs(t, X, lv, loop, out, w):
+def closed_loop_rhs(t, X, lv, loop, out, w):
     """Closed-loop Ẋ at (t, X) into ``out`` (eqs 3.1, 3.5, 3.8, 3.9, 4.35–4.40, 5.1) at the level
-    ``lv`` (:class:`Level`); x, u, u_cmd and the flags into ``w`` (:class:`Workspace`)."""
+    ``lv`` (:class:`Level`); x, u, u_cmd and the flags into ``w`` (:class:`Workspace`).
+
+    Parameters
+    ----------
+    t : float
+        Time, s.
+    X : ndarray
+        The state (24: body rates rad/s, attitude rad, momentum ft·lbf·s, controller states in
+        their units of :func:`acmm.model.linearize.state_units`).
+    lv : Level
+        The inertia level (its inertia, bias, gain and estimate).
+    loop : LoopConstants
+        The plant, controller and integrator constants.
+    out : ndarray
+        Ẋ, written in place (units of X per s).
+    w : Workspace
+        Scratch buffers, written in place.
+    """
     inertia, inertia_inv, bias = lv.inertia, lv.inertia_inv, lv.bias
     ha, hb, n, drf_idx = loop.ha, loop.hb, loop.n, loop.drf_idx
     x, u = w.x, w.u
@@ -381,7 +404,7 @@ def _dp_attempt(X, t, h, lv, loop, w):
             for j in range(st):
                 acc += h * A[st, j] * K[j, i]
             y[i] = acc
-        _rhs(t + C[st] * h, y, lv, loop, K[st], w)
+        closed_loop_rhs(t + C[st] * h, y, lv, loop, K[st], w)
     # error estimate (RMS of scaled error)
     err = 0.0
     finite = True
@@ -469,9 +492,9 @@ def _window_entry(X0, K, X1, t0, h, mid, ref, worst):
 @njit_cached()
 def _record(out, s, t, X, lv, loop, level, w):
     """Sample ``s`` of ``out`` (:class:`KernelOutputs`): the state X at t, the torques and
-    saturation flags of the closed loop there (:func:`_rhs` at the level ``lv``) and the level in
+    saturation flags of the closed loop there (:func:`closed_loop_rhs` at the level ``lv``) and the level in
     force."""
-    _rhs(t, X, lv, loop, w.y, w)
+    closed_loop_rhs(t, X, lv, loop, w.y, w)
     out.state[s] = X
     out.u[s] = w.u
     out.u_cmd[s] = w.u_cmd
@@ -509,7 +532,7 @@ def _integrate(sample_times, x0, sched, loop, out):
         Accepted and rejected steps.
     """
     X = x0.copy()
-    w = _workspace()
+    w = workspace()
     t = sample_times[0]
     dt = 10.0
     n_steps, n_rej, stop = 0, 0, STOP_NONE
@@ -581,8 +604,19 @@ def _schedule(sc: Scenario) -> LevelSchedule:
                          run_mid=0.5 * float(sc.t_end))
 
 
-def _loop_constants(sc: Scenario) -> LoopConstants:
-    """The plant, controller and integrator constants of ``sc`` for the kernel."""
+def loop_constants(sc: Scenario) -> LoopConstants:
+    """The plant, controller and integrator constants of ``sc`` for the kernel.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    LoopConstants
+        The constants (in the scenario's units: rad/s, ft·lbf, ft·lbf·s).
+    """
     return LoopConstants(ha=np.asarray(sc.harmonic_a, float), hb=np.asarray(sc.harmonic_b, float), n=float(sc.n),
                          tmax=float(sc.torque_limit), hmax=float(sc.momentum_limit),
                          drf_idx=_drf_index(sc.drf_mode), rtol=float(sc.rtol), atol=np.asarray(sc.atol, float),
@@ -619,7 +653,7 @@ def simulate(sc: Scenario) -> SimResult:
     out = _outputs(sc.sample_times.shape[0], sc.level_start.shape[0])
     last, stop, t_stop, n_steps, n_rej = _integrate(
         np.ascontiguousarray(sc.sample_times, float), np.asarray(sc.x0, float), _schedule(sc),
-        _loop_constants(sc), out)
+        loop_constants(sc), out)
     k = last + 1
     t = sc.sample_times[:k].copy()
     if stop != STOP_NONE:

@@ -14,7 +14,7 @@ import numpy as np
 from acmm.model import dynamics as dyn
 from acmm.model import kinematics as kin
 from acmm.model.linearize import DRF_INPUTS
-from acmm.simulate.kernel import Level, _loop_constants, _rhs, _workspace
+from acmm.simulate.kernel import Level, loop_constants, closed_loop_rhs, workspace
 from acmm.simulate.scenario import Scenario
 
 
@@ -87,13 +87,13 @@ def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
         Commanded torque −K x (eq 5.1), ft·lbf.
     """
     # one level's rows only (the whole schedule costs ~0.1 ms a call, and solve_ivp calls often);
-    # _rhs reads neither theta_ref nor mid
+    # closed_loop_rhs reads neither theta_ref nor mid
     inertia = np.ascontiguousarray(sc.inertia[level], float)
     theta_est = np.ascontiguousarray(sc.theta_est[level], float)
     lv = Level(inertia=inertia, inertia_inv=np.linalg.inv(inertia), bias=np.ascontiguousarray(sc.bias[level], float),
                theta_est=theta_est, omega_est=np.ascontiguousarray(kin.lvlh_rate_in_body(theta_est, sc.n), float),
                gain=np.ascontiguousarray(sc.gain[level], float), theta_ref=theta_est, mid=0.0)
-    w = _workspace()
+    w = workspace()
     out = np.empty(24)
-    _rhs(t, np.asarray(X, float), lv, _loop_constants(sc), out, w)
+    closed_loop_rhs(t, np.asarray(X, float), lv, loop_constants(sc), out, w)
     return out, w.u.copy(), w.u_cmd.copy()

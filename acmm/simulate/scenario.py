@@ -17,6 +17,7 @@ import numpy as np
 
 from acmm.model import kinematics as kin
 from acmm.model.linearize import state_scales
+from acmm_qpp.errors import ConfigError
 
 PLAIN_STATE_NAMES = ["omega1", "omega2", "omega3", "theta1", "theta2", "theta3",
                      "h1", "h2", "h3", "int_h1", "int_h2", "int_h3",
@@ -110,7 +111,6 @@ class Scenario:
     divergence: float
     max_saturation: float
     theta_ref: np.ndarray | None = None
-
 
 
 @dataclass(frozen=True)
@@ -214,7 +214,6 @@ class SimResult:
         return STOP_REASONS[self.stop_code]
 
 
-
 def plain_scales(n: float, drf_mode: str, inertia=None) -> np.ndarray:
     """Nominal magnitudes of the plain state X (for absolute tolerances).
 
@@ -238,7 +237,6 @@ def plain_scales(n: float, drf_mode: str, inertia=None) -> np.ndarray:
     s = state_scales(n, drf_mode, inertia).copy()
     s[1] = s[0]            # ω2 instead of θ̇2: same rate scale
     return s
-
 
 
 def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float | None = None) -> Scenario:
@@ -279,8 +277,6 @@ def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float
     P = rows.size
     levels = np.asarray(sim.levels, float) if sim.levels is not None else total * np.arange(P) / P
     if levels.size != P:
-        from acmm_qpp.errors import ConfigError
-
         raise ConfigError(f"simulation.levels has {levels.size} entries but the design has {P} levels")
     t_end = total * orbit
     level_start = levels * orbit
@@ -300,7 +296,6 @@ def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float
         divergence=np.radians(sim.divergence_deg), max_saturation=sim.max_saturation_orbits * orbit)
 
 
-
 def attitude_error(sc: Scenario, r: SimResult) -> np.ndarray:
     """θ − θ̂* of the level in force at each sample (rad).
 
@@ -317,7 +312,6 @@ def attitude_error(sc: Scenario, r: SimResult) -> np.ndarray:
         Attitude error, rad.
     """
     return r.state[:, 3:6] - sc.theta_est[r.level]
-
 
 
 def level_statistics(sc: Scenario, r: SimResult) -> list[dict]:

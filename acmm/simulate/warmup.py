@@ -9,6 +9,10 @@ from __future__ import annotations
 
 import sys
 import time
+import numpy as np
+from acmm.simulate import kernel as sm, reference, scenario as scen
+from acmm.model.tea_compiled import warm_up as warm_tea
+from acmm.model.compiled_cache import uncached_note, write_error_notes
 
 
 def warm_up(say=print) -> float:
@@ -25,13 +29,6 @@ def warm_up(say=print) -> float:
         Wall time of the warm-up, s.
     """
     t0 = time.perf_counter()
-    import numpy as np
-
-    from acmm.simulate import kernel as sm
-    from acmm.simulate import scenario as scen
-    from acmm.simulate import reference
-    from acmm.model.tea_compiled import warm_up as warm_tea
-
     warm_tea()
     n = 0.0011
     inertia = np.diag([2.0e7, 1.0e6, 2.1e7])[None]
@@ -53,10 +50,6 @@ def main() -> int:
     int
         Exit code 0.
     """
-    from acmm.simulate import kernel as simulate  # noqa: F401 (defines the kernels: whether they can be cached is known)
-    from acmm.model import tea_compiled  # noqa: F401
-    from acmm.simulate.compiled_cache import uncached_note, write_error_notes
-
     why = uncached_note()
     if why is not None:
         print(f"acmm: nothing compiled ahead: {why}")

@@ -21,7 +21,7 @@ from acmm.simulate.scenario import scenario_from_config
 from acmm.stages.common import UNIT_A, UNIT_STATE
 from acmm_qpp.results import Dataset
 
-#: the ``design.h5`` datasets of the ``dwell`` group converted per state (:func:`acmm.stages.common._in_system`)
+#: the ``design.h5`` datasets of the ``dwell`` group converted per state (:func:`acmm.stages.common.in_system`)
 UNIT_ROLES = {"dwell/closed_loop": "A", "dwell/scales": "scales", "dwell/jump": "x"}
 
 #: indices of h1, h2, h3 and of δω1, δω3, δθ1..3 in the state of eq 4.47

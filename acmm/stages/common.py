@@ -7,10 +7,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm.io.config import Config, load_config
+from acmm.io.config import Config, load_config, parse_config
+import yaml
+from dataclasses import replace
+from acmm.io.units import state_factors, state_space_in
+from acmm_qpp.units import convert
 
 #: Units of the per-state arrays, element by element: ``state_units[i]`` is the unit of state
-#: ``i``, given by the dataset's ``state_units`` attribute (set by :func:`_in_system`); under
+#: ``i``, given by the dataset's ``state_units`` attribute (set by :func:`in_system`); under
 #: ``output.units: SI`` ft*lbf reads N*m.  x' = A x + B u + G w (eq 4.46), u = −K x, and the
 #: LQR cost ∫ (x'Q x + u'R u) dt = x0'P x0 with R in 1/(ft*lbf)^2 (ch. 5.2).
 UNIT_STATE = "state_units[i]"
@@ -21,15 +25,27 @@ UNIT_Q = "1/(state_units[i]*state_units[j])"
 UNIT_P = "s/(state_units[i]*state_units[j])"
 
 
-def _in_system(items: dict, cfg: Config, roles: dict) -> dict:
+def in_system(items: dict, cfg: Config, roles: dict) -> dict:
     """Per-state arrays of ``items`` (path → role of :func:`acmm.io.units.state_space_in`) in the
     config's ``output.units``, each with a ``state_units`` attribute (the 24 state units, or the
     12 of the DRF block for role ``drf``) that its unit string refers to (:data:`UNIT_A`, …); a
     top-level ``state_units`` dataset follows too.  Other datasets are converted by unit string
-    in :func:`acmm_qpp.results.write_h5`."""
-    from dataclasses import replace
+    in :func:`acmm_qpp.results.write_h5`.
 
-    from acmm.io.units import state_factors, state_space_in
+    Parameters
+    ----------
+    items : dict
+        The datasets (imperial units), nested by group.
+    cfg : Config
+        The run's config (its ``output.units`` and DRF mode).
+    roles : dict
+        Dataset path (``group/name``) → its role for :func:`acmm.io.units.state_space_in`.
+
+    Returns
+    -------
+    dict
+        ``items`` with those arrays converted to the config's unit system.
+    """
 
     system = cfg.output.units
     _, su = state_factors(cfg.design.drf_mode, system)
@@ -50,7 +66,7 @@ def _in_system(items: dict, cfg: Config, roles: dict) -> dict:
     return items
 
 
-def _define_units(items: dict, orbit_rate: float) -> dict:
+def define_units(items: dict, orbit_rate: float) -> dict:
     """``items`` with a ``units_definition`` attribute on every dataset in units of the orbit
     rate (``n``) or of orbits (``orbit``): the unit in pint's definition syntax, e.g.
     ``n = 0.0011313 * rad / s``, so ``pint.UnitRegistry().define(...)`` reads the file.
@@ -67,20 +83,30 @@ def _define_units(items: dict, orbit_rate: float) -> dict:
     dict
         ``items``.
     """
-    from dataclasses import replace
-
     period = 2 * np.pi / orbit_rate
     definitions = {"n": f"n = {float(orbit_rate)!r} * rad / s",
                    "orbit": f"orbit = {float(period)!r} * s"}
     for key, ds in items.items():
         if isinstance(ds, dict):
-            _define_units(ds, orbit_rate)
+            define_units(ds, orbit_rate)
         elif getattr(ds, "units", None) in definitions:
             items[key] = replace(ds, attrs=dict(ds.attrs, units_definition=definitions[ds.units]))
     return items
 
 
-def _as_config(config) -> Config:
+def as_config(config) -> Config:
+    """A config as given, or loaded from a file or packaged name.
+
+    Parameters
+    ----------
+    config : Config, str or path-like
+        The config, or what :func:`acmm.io.config.load_config` reads.
+
+    Returns
+    -------
+    Config
+        The validated config.
+    """
     return config if isinstance(config, Config) else load_config(config)
 
 
@@ -98,9 +124,6 @@ def stored_config(attrs: dict) -> Config:
     acmm.io.config.Config
         The config.
     """
-    import yaml
-
-    from acmm.io.config import parse_config
 
     text = attrs["config"]
     return parse_config(yaml.safe_load(text.decode() if isinstance(text, bytes) else text), source="stored config")
@@ -124,8 +147,6 @@ def stored_in(f, key: str, unit: str) -> np.ndarray:
     ndarray
         The values in ``unit``.
     """
-    from acmm_qpp.units import convert
-
     ds = f[key]
     stored = ds.attrs.get("units", unit)
     stored = stored.decode() if isinstance(stored, bytes) else str(stored)

@@ -18,11 +18,19 @@ from acmm.io.config import Config
 from acmm.io.dimensions import COORDS
 from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
 from acmm.stages.certify import certificate_items, compute_certificate
-from acmm.stages.common import _as_config, _define_units, _in_system
+from acmm.stages.common import as_config, define_units, in_system
 from acmm_qpp.outputs import stage
 from acmm_qpp.pool import pool_map, process_pool, stop_pool
 from acmm_qpp.results import draw_figures, write_h5
-from acmm.io.design_file import DesignTable, _stored_digest, _unit_system, load_design_table, table_sha256
+from acmm.io.design_file import DesignTable, stored_table_digest, stored_unit_system, load_design_table
+import json
+import time
+from acmm_qpp.provenance import config_hash
+from acmm.design import schedule_points as sp
+from acmm.design.design_core import design_schedule
+from acmm.design.settings import design_settings, schedule_settings
+from acmm.stages import design_output
+from acmm.design.schedule_points import off_branch_point
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -84,8 +92,6 @@ class DesignResult:
         acmm.design.schedule_points.BranchJump or None
             The point, its TEA and the branch's there, rad.
         """
-        from acmm.design.schedule_points import off_branch_point
-
         return off_branch_point([p.spec for p in self.points], [p.tea.theta for p in self.points],
                                 self.config.orbit_rate)
 
@@ -140,9 +146,6 @@ def design_hash(cfg: Config) -> str:
     str
         :func:`acmm_qpp.results.config_hash` of those sections.
     """
-    import json
-
-    from acmm_qpp.provenance import config_hash
 
     d = cfg.model_dump(mode="json")
     keys = ("inertia", "orbit_rate", "disturbance", "design", "schedule")
@@ -201,14 +204,8 @@ def compute_design(config, progress=None) -> DesignResult:
     OutputError
         A worker process of the design pool died (killed, or out of memory; :func:`acmm_qpp.pool.pool_map`).
     """
-    import time
 
-    from acmm.design import schedule as sch
-    from acmm.design import schedule_points as sp
-    from acmm.design.design_core import design_schedule
-    from acmm.design.settings import design_settings, schedule_settings
-
-    cfg = _as_config(config)
+    cfg = as_config(config)
     t0 = time.perf_counter()
     specs, s = sp.point_specs(cfg), design_settings(cfg)
     workers = point_workers(s.method.pooled, len(specs))
@@ -252,7 +249,7 @@ def design_table(points, fit, design_hash: str) -> DesignTable:
                        np.array([p.spec.level for p in points], dtype=bool))
 
 
-@stage(("design.h5", "design_*.png"), _as_config)
+@stage(("design.h5", "design_*.png"), as_config)
 def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
                out: Path) -> tuple[DesignResult, Path]:
     """Design and write ``runs/<name>/design.h5`` plus the gain-schedule and pole-map figures
@@ -277,10 +274,7 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
     tuple
         (:class:`DesignResult`, pathlib.Path of ``design.h5``).
     """
-    from acmm.stages import design_output
-    from acmm.design.settings import design_settings
-
-    cfg = _as_config(config)
+    cfg = as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
     s = design_settings(cfg)
     r = compute_design(cfg, progress)
@@ -293,10 +287,10 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
     items["dwell"] = certificate_items(compute_certificate(cfg, r.table))
     roles = {**design_output.unit_roles(pts, r.fit is not None),
              **{k: v for k, v in CERTIFICATE_ROLES.items() if k.split("/")[1] in items["dwell"]}}
-    items = _define_units(_in_system(items, cfg, roles), cfg.orbit_rate)
+    items = define_units(in_system(items, cfg, roles), cfg.orbit_rate)
     write_h5(out / "design.h5", items, cfg.to_yaml(),
              {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
-              "schedule_form": r.table.form, "table_sha256": _stored_digest(items, cfg.output.units)}, coords=COORDS)
+              "schedule_form": r.table.form, "table_sha256": stored_table_digest(items, cfg.output.units)}, coords=COORDS)
     if want_figures:
         draw_figures(design_output.design_figures(r, s, out, cfg.output.units))
     return r, cfg.run_dir() / "design.h5"
@@ -326,7 +320,7 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None, warn=Non
     if path.is_file():          # a regular file (a FIFO or a device there would block or never end)
         try:
             table = load_design_table(path)
-            if table.design_hash == want and _unit_system(path) == cfg.output.units:   # one system per run folder
+            if table.design_hash == want and stored_unit_system(path) == cfg.output.units:   # one system per run folder
                 return table, f"reused {path}"
         except (OSError, KeyError, ValueError):
             pass

@@ -14,10 +14,12 @@ import numpy as np
 
 from acmm.io.units import state_factors, state_space_in
 from acmm.model.linearize import STATE_NAMES
-from acmm.plots import design as design_plots
-from acmm.plots.base import state_units
-from acmm.stages.common import UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE
+from acmm.stages.common import UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE, stored_config
 from acmm_qpp.results import Dataset
+import h5py
+from acmm.design.schedule import schedule_gain
+from acmm.design.settings import design_settings
+from acmm.io.design_file import h5_text, h5_texts
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -299,6 +301,8 @@ def gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
     torque_unit : str
         The torque unit label (``"ft·lbf"`` or ``"N·m"``).
     """
+    from acmm.plots.base import state_units  # deferred: matplotlib start-up
+
     if units_system == "imperial":
         return tuple(state_units(drf_mode)), "ft·lbf"
     return tuple(u.replace("*", "·") for u in state_factors(drf_mode, units_system)[1]), "N·m"
@@ -326,6 +330,8 @@ def design_figures(r, s, run_dir: Path, units_system: str) -> list:
     list of functools.partial
         The figure calls.
     """
+    from acmm.plots import design as design_plots  # deferred: matplotlib start-up
+
     calls = [partial(design_plots.pole_map, [p.gain.poles for p in r.points], [p.spec.name for p in r.points],
                      s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg, run_dir / "design_poles.png")]
     if r.fit is not None:
@@ -342,6 +348,8 @@ def design_figures(r, s, run_dir: Path, units_system: str) -> list:
 def _gain_figure(points, fit, s, path: Path, units_system: str):
     """The gain-schedule figure's call: the points' LQR gains and the schedule ``fit`` (imperial
     units, converted to ``units_system``: the schedule is linear in K)."""
+    from acmm.plots import design as design_plots  # deferred: matplotlib start-up
+
     gains = np.array([p.gain.K for p in points])
     theta2 = np.array([p.tea.theta[1] for p in points])
     if units_system != "imperial":
@@ -370,16 +378,11 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
     list of functools.partial
         The figure calls, for :func:`acmm_qpp.results.draw_figures`.
     """
-    import h5py
-
-    from acmm.design.schedule import schedule_gain
-    from acmm.design.settings import design_settings
-    from acmm.io.design_file import _text, _texts
-    from acmm.stages.common import stored_config
+    from acmm.plots import design as design_plots  # deferred: matplotlib start-up
 
     with h5py.File(path, "r") as f:
         attrs = {k: f.attrs[k] for k in f.attrs}
-        names = _texts(f["names"][()])
+        names = h5_texts(f["names"][()])
         keys = sorted(f["points"])
         poles = [np.asarray(f[f"points/{k}/poles"][()]) for k in keys]
         tea = np.asarray(f["tea"][()], float)
@@ -393,11 +396,11 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
                                  ("theta2", "max_real", "sector_margin", "disk_margin", "poles")}
     cfg = stored_config(attrs)
     s = design_settings(cfg)
-    system = _text(attrs.get("unit_system", "imperial"))
+    system = h5_text(attrs.get("unit_system", "imperial"))
     calls = [partial(design_plots.pole_map, poles, names, s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg,
                      out_dir / "design_poles.png")]
     if sched is not None:
-        form = _text(attrs.get("schedule_form", "polynomial"))
+        form = h5_text(attrs.get("schedule_form", "polynomial"))
         theta2 = tea[:, 1]
         fine = np.linspace(theta2.min(), theta2.max(), 60)
         sampled = design_plots.SampledSchedule(

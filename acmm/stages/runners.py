@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm.model import tea as tea_mod
+from acmm.model import controllability as ctrb_mod, linearize as lin, tea as tea_mod
 from acmm.io.config import Config
 from acmm.io.dimensions import COORDS
-from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, _as_config, _in_system
+from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, as_config, in_system
 from acmm_qpp.outputs import stage
 from acmm_qpp.results import Dataset, write_h5
 
@@ -43,7 +43,6 @@ class TeaResult:
     others: list = field(default_factory=list)
 
 
-
 def compute_tea(config) -> TeaResult:
     """TEA of a config's own inertia and bias (physical branch).
 
@@ -57,14 +56,14 @@ def compute_tea(config) -> TeaResult:
     TeaResult
         The config and its TEA.
     """
-    cfg = _as_config(config)
+    cfg = as_config(config)
     inertia = cfg.inertia.matrix()
     bias = tea_mod.resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate)
     return TeaResult(cfg, tea_mod.solve_tea(inertia, cfg.orbit_rate, bias,
                                             expected=cfg.disturbance.requested_tea()))
 
 
-@stage(("tea.h5",), _as_config)
+@stage(("tea.h5",), as_config)
 def run_tea(config, all_roots: bool = False, *, out: Path) -> tuple[TeaResult, Path]:
     """Compute the TEA and write ``runs/<name>/tea.h5``.
 
@@ -141,7 +140,7 @@ class LinearizeResult:
         return eig[np.lexsort((eig.imag, eig.real))]
 
 
-@stage(("linearize.h5",), _as_config)
+@stage(("linearize.h5",), as_config)
 def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     """TEA, then the design model of ``design.model``; writes ``runs/<name>/linearize.h5``.
 
@@ -157,9 +156,6 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     tuple
         (:class:`LinearizeResult`, pathlib.Path of ``linearize.h5``).
     """
-    from acmm.model import linearize as lin
-    from acmm.model import controllability as ctrb_mod
-
     tr = compute_tea(config)
     cfg = tr.config
     model = lin.design_point(cfg.inertia.matrix(), tr.tea.theta, cfg.orbit_rate,
@@ -190,51 +186,7 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
                                              "min σmin([A−sI, B])/σmax over eigenvalues and s=0, scaled"),
         "controllability_rank": Dataset(ctrb.rank, "1", f"PBH rank with tolerance {ctrb.tol:g}"),
     }
-    items = _in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
+    items = in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
     write_h5(out / "linearize.h5", items, cfg.to_yaml(),
              {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode}, coords=COORDS)
     return result, cfg.run_dir() / "linearize.h5"
-
-
-#: results file → the stage that writes it (root attribute ``stage``), in the order ``acmm plot``
-#: redraws a run folder's figures (the qpp files too: a run folder may hold both)
-FIGURE_SOURCES = {"design.h5": "design", "sim.h5": "simulate", "sweep.h5": "sweep",
-                  "qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
-
-
-def redraw_figures(target, out=None) -> list[Path]:
-    """Redraw a run's figures from its stored results (``acmm plot``): ``design.h5``,
-    ``sim.h5``, ``sweep.h5`` and the qpp files, each drawn from the file alone
-    (:func:`acmm.stages.design_output.design_figures_from_file`,
-    :func:`acmm.stages.sim_output.sim_figures_from_file`,
-    :func:`acmm.sweep.output.sweep_figures_from_file`, :func:`qpp.io.stages.figure_calls_from_file`).
-
-    Parameters
-    ----------
-    target : path-like
-        A run folder (every results file with figures in it) or one results file.
-    out : path-like, optional
-        Folder of the figures (created if missing; default: the results file's folder).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The figures written.
-
-    Raises
-    ------
-    acmm_qpp.errors.ConfigError
-        ``target`` is missing or holds no results file of this project (exit 2).
-    acmm_qpp.errors.FigureError
-        A figure could not be drawn or written (exit 4).
-    """
-    from acmm.stages.design_output import design_figures_from_file
-    from acmm.stages.sim_output import sim_figures_from_file
-    from acmm.sweep.output import sweep_figures_from_file
-    from acmm_qpp.results import redraw_from_files, stored_results
-    from qpp.io.stages import figure_calls_from_file
-
-    readers = {"design": design_figures_from_file, "simulate": sim_figures_from_file,
-               "sweep": sweep_figures_from_file, "qpp design": figure_calls_from_file,
-               "qpp simulate": figure_calls_from_file}
-    return redraw_from_files(stored_results(target, FIGURE_SOURCES), readers, out)

@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from acmm.model import kinematics as kin
-from acmm.plots import simulation as sim_plots
 from acmm.simulate import scenario as scen
-from acmm.stages.common import UNIT_K, UNIT_STATE
+from acmm.stages.common import UNIT_K, UNIT_STATE, stored_config, stored_in
 from acmm_qpp.results import Dataset
+import h5py
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -126,6 +126,8 @@ def sim_figures(cfg, sc, r, stats: list, items: dict, folder: Path) -> list:
         The figure calls: ``sim_axes.png``, ``sim_summary.png`` and, with more than one
         inertia level, ``sim_inertia.png`` in ``folder``.
     """
+    from acmm.plots import simulation as sim_plots  # deferred: matplotlib start-up
+
     d = Path(folder)
     units = cfg.output.units
     orbits = items["orbits"].data
@@ -159,9 +161,7 @@ def sim_figures_from_file(path, out_dir) -> list:
     list of functools.partial
         The figure calls, for :func:`acmm_qpp.results.draw_figures`.
     """
-    import h5py
-
-    from acmm.stages.common import stored_config, stored_in
+    from acmm.plots import simulation as sim_plots  # deferred: matplotlib start-up
 
     with h5py.File(path, "r") as f:
         attrs = {k: f.attrs[k] for k in f.attrs}

@@ -15,7 +15,7 @@ from acmm.io.dimensions import AUX_COORDS, COORDS
 from acmm.simulate import kernel as sim_mod
 from acmm.simulate import scenario as scen
 from acmm.stages import sim_output
-from acmm.stages.common import _as_config, _define_units, _in_system
+from acmm.stages.common import as_config, define_units, in_system
 from acmm.stages.design import design_for
 from acmm_qpp.outputs import stage
 from acmm_qpp.results import draw_figures, write_h5
@@ -62,7 +62,7 @@ class SimulateResult:
         return float(self.sim.stop_time * self.config.orbit_rate / (2 * np.pi))
 
 
-@stage(("sim.h5", "sim_*.png"), _as_config)
+@stage(("sim.h5", "sim_*.png"), as_config)
 def run_simulate(config, progress=None, figures: bool | None = None, warn=None, *,
                  out: Path) -> tuple[SimulateResult, Path]:
     """Design (or reuse the design), simulate, write ``runs/<name>/sim.h5`` and the figures.
@@ -86,7 +86,7 @@ def run_simulate(config, progress=None, figures: bool | None = None, warn=None, 
     tuple
         (:class:`SimulateResult`, pathlib.Path of ``sim.h5``).
     """
-    cfg = _as_config(config)
+    cfg = as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
     table, note = design_for(cfg, progress, figures, warn)
     sc = scen.scenario_from_config(cfg, table)
@@ -97,7 +97,7 @@ def run_simulate(config, progress=None, figures: bool | None = None, warn=None, 
     result = SimulateResult(cfg, sc, r, stats, note, wall)
     items, attrs = sim_output.sim_items(cfg, sc, r, stats, table.design_hash, wall)
     figures_to_draw = sim_output.sim_figures(cfg, sc, r, stats, items, out) if want_figures else []
-    items = _define_units(_in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
+    items = define_units(in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
     write_h5(out / "sim.h5", items, cfg.to_yaml(), attrs, coords=COORDS, aux_coords=AUX_COORDS)
     draw_figures(figures_to_draw)
     return result, cfg.run_dir() / "sim.h5"

@@ -14,7 +14,16 @@ import numpy as np
 
 from acmm_qpp.errors import ConvergenceError, DesignError, NoEquilibriumError
 from acmm.model.inertia import perturb_inertia
-from acmm.sweep.cases import AXES, _why, case_values
+from acmm.sweep.cases import AXES, unphysical_draw_reason, case_values
+from acmm.simulate.scenario import scenario_from_config
+from acmm.stages.design import compute_design, design_table
+from acmm.design.schedule_points import PointSpec, schedule_specs
+from acmm.design.settings import design_settings, schedule_settings
+from acmm.model.tea import resolve_bias
+from acmm.design.design_core import design_schedule
+from acmm.model import kinematics as kin
+from acmm.simulate import kernel as sm, scenario as scen
+from acmm.model.tea_compiled import solve_tea_connected, solve_tea_fast
 
 
 # ---------------------------------------------------------------------------------------------
@@ -63,9 +72,6 @@ def prepare_base(base, spec) -> BaseContext:
     BaseContext
         The base's context for every case.
     """
-    from acmm.simulate.scenario import scenario_from_config
-    from acmm.stages.design import compute_design
-
     cfg = base.config
     orbits = spec.orbits if spec.orbits is not None else cfg.simulation.orbits
     table = compute_design(cfg).table
@@ -77,10 +83,6 @@ def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
     """The design points of the base config with the perturbed inertia and explicit (held) bias
     torques: ``biases[0]`` at the start, each other configuration's own bias plus the same
     added torque (``biases[0]`` minus the start's nominal bias)."""
-    from acmm.design.schedule_points import PointSpec, schedule_specs
-    from acmm.design.settings import schedule_settings
-    from acmm.model.tea import resolve_bias
-
     n = cfg.orbit_rate
     start = PointSpec(cfg.name, perturb_inertia(cfg.inertia.matrix(), values),
                       np.array([float(b) for b in biases[0]]), 0.0)
@@ -100,15 +102,24 @@ def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
 def _redesigned_table(cfg, values: dict, biases: np.ndarray):
     """The design table of the perturbed plant: the core (:func:`acmm.design.design_core.design_schedule`)
     called directly on the perturbed design points with the base config's settings."""
-    from acmm.design.design_core import design_schedule
-    from acmm.design.settings import design_settings, schedule_settings
-    from acmm.stages.design import design_table
-
     ds = design_schedule(_redesigned_specs(cfg, values, biases), design_settings(cfg), schedule_settings(cfg))
     return design_table(ds.points, ds.fit, "")
 
 
-def _empty_row(n_levels: int) -> dict:
+def empty_row(n_levels: int) -> dict:
+    """The metrics row of a case that has none yet (NaN and empty values).
+
+    Parameters
+    ----------
+    n_levels : int
+        Inertia levels of the case.
+
+    Returns
+    -------
+    dict
+        The row's fields, NaN where a metric is a number (units of the metrics row: deg, s,
+        ft·lbf·s, slug·ft², ft·lbf).
+    """
     nan3 = [math.nan] * 3
     return {"verdict": "", "reason": "", "time_to_divergence": math.nan,
             "peak_attitude_error": nan3, "steady_attitude_error": nan3, "peak_momentum": nan3,
@@ -137,18 +148,14 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
         (ft·lbf), ``n_steps``.  An unphysical plant, a missing equilibrium, a failed design or
         TEA is a verdict, not an exception.
     """
-    from acmm.model import dynamics as dyn
-    from acmm.model import kinematics as kin
-    from acmm.simulate import kernel as sm
-    from acmm.simulate import scenario as scen
     sc0, table, cfg, spec = ctx.scenario, ctx.table, ctx.config, ctx.spec
     L = sc0.inertia.shape[0]
-    row = _empty_row(L)
+    row = empty_row(L)
     inertia = np.array([perturb_inertia(m, values) for m in sc0.inertia])
     bias = sc0.bias + np.array([values.get(f"bias_{a}", 0.0) for a in AXES])
     row["inertia"] = inertia[0].tolist()
     row["bias"] = bias[0].tolist()
-    why = _why(values, sc0.inertia)
+    why = unphysical_draw_reason(values, sc0.inertia)
     if why is not None:
         row.update(verdict="unphysical", reason=why)
         return row
@@ -202,9 +209,6 @@ def _metrics(row: dict, r, sc, true: np.ndarray, n: float, spec) -> dict:
     (rad/s).  Peaks, steady errors and saturation times are taken over every accepted integrator
     step (:class:`acmm.simulate.scenario.RunExtremes`), not over the output samples, which under-reported
     them (by 2.3x for a stair-case's peak momentum at 300 s samples)."""
-    from acmm.simulate import kernel as sm
-    from acmm.simulate import scenario as scen
-
     ext = r.run_extremes
     steady = np.degrees(ext.steady_error)
     if not np.all(np.isfinite(steady)):          # stopped before t_end / 2: its last state
@@ -269,9 +273,6 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarra
         A level whose design branch folds has no root continued from LVLH either (the
         NoEquilibriumError names the fold and the level first).
     """
-    from acmm.model.tea_compiled import solve_tea_fast
-    from acmm.model.tea_compiled import solve_tea_connected
-
     theta, folded = [], []    # a fallback's NoEquilibriumError says the design branch folded first
     for k in range(inertia.shape[0]):
         tea = solve_tea_connected(sc0.theta_est[k], sc0.inertia[k], sc0.bias[k], inertia[k], sc0.n, bias[k])

@@ -21,8 +21,21 @@ VERDICTS = ("bounded", "not_settled", "diverged", "no_equilibrium", "unphysical"
 # ---------------------------------------------------------------------------------------------
 # case parameters
 # ---------------------------------------------------------------------------------------------
-def _draw(rng: np.random.Generator, spec) -> dict:
-    """One draw of every Monte Carlo parameter, in the order the config lists them."""
+def draw_parameters(rng: np.random.Generator, spec) -> dict:
+    """One draw of every Monte Carlo parameter, in the order the config lists them.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The case's random generator.
+    spec : SweepSpec
+        The sweep's spec (its ``monte_carlo`` section).
+
+    Returns
+    -------
+    dict
+        Parameter name → drawn value (in the parameter's units, see :data:`PARAMETERS`).
+    """
     out = {}
     for key, dist in spec.monte_carlo.items():
         for name in SHORTHANDS.get(key, [key]):
@@ -63,18 +76,32 @@ def case_values(spec, index: int, inertias: np.ndarray) -> tuple[dict, int, Opti
         shape = [len(spec.grid[k]) for k in names]
         idx = np.unravel_index(index, shape)
         values = {k: float(spec.grid[k][j]) for k, j in zip(names, idx)}
-        return values, 1, _why(values, inertias)
+        return values, 1, unphysical_draw_reason(values, inertias)
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, index]))
     draws = 0
     while True:
-        values = _draw(rng, spec)
+        values = draw_parameters(rng, spec)
         draws += 1
-        why = _why(values, inertias)
+        why = unphysical_draw_reason(values, inertias)
         if why is None or spec.unphysical == "reject" or draws >= spec.max_draws:
             return values, draws, why
 
 
-def _why(values: dict, inertias: np.ndarray) -> Optional[str]:
+def unphysical_draw_reason(values: dict, inertias: np.ndarray) -> Optional[str]:
+    """Why a draw makes an unphysical inertia at one of the design points, or None.
+
+    Parameters
+    ----------
+    values : dict
+        The drawn parameters (their units, :data:`PARAMETERS`).
+    inertias : ndarray
+        The inertia of each design point (k×3×3), slug·ft².
+
+    Returns
+    -------
+    str or None
+        The reason, naming the design point when there are several.
+    """
     for k, inertia in enumerate(inertias):
         why = unphysical_reason(perturb_inertia(inertia, values))
         if why is not None:

@@ -2,7 +2,6 @@
 
 A sweep file names one or more *base* configs (ordinary acmm configs) and says how to vary
 them::
-
     name: inertia30                # results go to <output.root>/<name>/sweep.h5
     description: "..."
     sweep:
@@ -39,9 +38,15 @@ from pathlib import Path
 import yaml
 
 from acmm.io.config import Config, load_config, parse_config
-from acmm_qpp.configio import require_mapping, validate_model
+from acmm_qpp.configio import read_yaml, require_mapping, validate_model
 from acmm.sweep.spec import SweepFile, SweepSpec
 from acmm_qpp.errors import ConfigError
+import json
+from acmm.sweep.limits import check_sweep_work
+from acmm import PACKAGED_CONFIGS
+from acmm_qpp.overrides import apply_overrides, remember_origin
+from acmm_qpp.provenance import config_hash
+import difflib
 
 #: Version of how a ``design: fixed`` case is computed, part of :meth:`Sweep.results_key` so that
 #: ``--resume`` never mixes rows of two versions: 2 (2026-11-30): a case starts at the equilibrium
@@ -164,9 +169,6 @@ class Sweep:
         str
             16 hex digits (:func:`acmm_qpp.provenance.config_hash`).
         """
-        import json
-
-        from acmm_qpp.provenance import config_hash
 
         settings = self._case_settings()
         f, bases = settings["file"], settings["bases"]
@@ -224,8 +226,6 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
                           f"got {type(raw).__name__}")
     inline = "base" not in raw and "bases" not in raw
     if inline and "inertia" not in data:     # neither a base nor an inline acmm config around it
-        import difflib
-
         unknown = [k for k in raw if k not in SweepSpec.model_fields]
         close = [m for k in unknown for m in difflib.get_close_matches(str(k), ["base", "bases"], n=1)]
         hint = (f" (sweep.{unknown[0]}: unknown key" + (f"; did you mean {close[0]!r}?)" if close else ")")
@@ -249,7 +249,6 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
         raise ConfigError(f"{source}: sweep.bases: two base configs share the name "
                           f"{next(x for x in labels if labels.count(x) > 1)!r}")
     sweep = Sweep(sf, bases, source)
-    from acmm.sweep.limits import check_sweep_work
 
     check_sweep_work(sweep, source)
     return sweep
@@ -279,7 +278,6 @@ def _parse_resolved(data: dict, source: str) -> Sweep:
         raise ConfigError(f"{source}: bases: {len(bases)} config(s) for the {expected} base(s) of "
                           "sweep_file.sweep")
     sweep = Sweep(sf, bases, source)
-    from acmm.sweep.limits import check_sweep_work
 
     check_sweep_work(sweep, source)
     return sweep
@@ -301,10 +299,6 @@ def load_sweep(path: str | Path, overrides: list[str] | None = None) -> Sweep:
     Sweep
         The validated sweep.
     """
-    from acmm import PACKAGED_CONFIGS
-    from acmm_qpp.configio import read_yaml
-    from acmm_qpp.overrides import apply_overrides, remember_origin
-
     data, p = read_yaml(path, PACKAGED_CONFIGS)
     sw = parse_sweep(apply_overrides(data, overrides), source=str(p), directory=p.parent)
     return remember_origin(sw, str(p), overrides)

@@ -22,7 +22,6 @@ configuration); they only make the cluster quieter:
     noticed up to a second later; a sweep case holds a few MB).
 
 They must be in force where each server starts: in the process that creates a ``LocalCluster``::
-
     import dask, distributed
     from acmm.sweep.dask_settings import DASK_SETTINGS
 
@@ -33,6 +32,7 @@ or, for ``dask scheduler`` / ``dask worker`` processes, as a YAML file in the Da
 directory (``~/.config/dask/`` or ``$DASK_CONFIG``) with the text of :func:`dask_settings_yaml`.
 """
 from __future__ import annotations
+import yaml
 
 #: dotted Dask config keys and values for a cluster that runs acmm sweeps (module docstring)
 DASK_SETTINGS = {
@@ -50,8 +50,6 @@ def dask_settings_yaml() -> str:
     str
         The YAML text.
     """
-    import yaml
-
     tree: dict = {}
     for key, value in DASK_SETTINGS.items():
         *parents, leaf = key.split(".")

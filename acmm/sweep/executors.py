@@ -15,6 +15,10 @@ from acmm_qpp.errors import ConfigError
 from acmm_qpp.pool import process_pool, stop_pool
 from acmm.sweep.config import Sweep
 from acmm.sweep.case import BaseContext, margin_search, run_case
+from acmm_qpp.provenance import code_identity
+import ctypes
+from acmm_qpp.limits import limit
+from acmm.simulate.warmup import warm_up
 
 
 # ---------------------------------------------------------------------------------------------
@@ -72,10 +76,9 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
     """
     if scheduler:
         try:
-            import distributed
+            import distributed  # deferred: dask start-up, and an optional dependency
         except ImportError:
             raise ConfigError("--scheduler needs the optional Dask dependency: pip install 'acmm-qpp[dask]'") from None
-        from acmm_qpp.limits import limit
 
         timeout = f"{limit('DASK_CONNECT_SECONDS'):g}s"        # (its own error, not the address's)
         try:
@@ -115,9 +118,19 @@ def lost_worker(exc: BaseException) -> Optional[str]:
     return what + "; the finished cases are kept in the journal: run the sweep again with --resume"
 
 
+def sweep_tasks(sweep: Sweep):
+    """The tasks of a sweep, in order: every case of every base, then the margin searches.
 
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep.
 
-def _tasks(sweep: Sweep):
+    Yields
+    ------
+    tuple
+        ``("case", base, index)`` or ``("margin", base, direction)``.
+    """
     n = sweep.spec.n_cases()
     for b in sweep.bases:
         for i in range(n):
@@ -128,7 +141,19 @@ def _tasks(sweep: Sweep):
                 yield ("margin", b.label, d)
 
 
-def _task_key(rec_or_task) -> tuple:
+def task_key(rec_or_task) -> tuple:
+    """The key of a task, or of the record a task returned (:func:`sweep_tasks`' tuples).
+
+    Parameters
+    ----------
+    rec_or_task : dict or tuple
+        A journal record or a task.
+
+    Returns
+    -------
+    tuple
+        ``("case", base, index)`` or ``("margin", base, direction)``.
+    """
     if isinstance(rec_or_task, dict):
         r = rec_or_task
         return ("case", r["base"], r["index"]) if r["kind"] == "case" else ("margin", r["base"], r["direction"])
@@ -169,8 +194,6 @@ def _restore_heap_reuse() -> bool:
             or "MALLOC_MMAP_THRESHOLD_" in os.environ):
         return False
     try:
-        import ctypes
-
         libc = ctypes.CDLL(None)
         return (libc.mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD) == 1
                 and libc.mallopt(M_TRIM_THRESHOLD, 2 * MMAP_THRESHOLD) == 1)
@@ -184,7 +207,7 @@ def _in_dask_worker() -> bool:
     if "distributed" not in sys.modules:
         return False
     try:
-        from distributed.worker import Worker
+        from distributed.worker import Worker  # deferred: dask, an optional dependency
 
         return bool(Worker._instances)
     except (ImportError, AttributeError):
@@ -197,8 +220,6 @@ def _warm_worker() -> None:
     ahead with ``client.run(acmm.sweep._warm_worker)``."""
     global _WARM
     if not _WARM:
-        from acmm.simulate.warmup import warm_up
-
         if _in_dask_worker():        # only the nanny's environment needs it; the user's own
             _restore_heap_reuse()    # MALLOC_* choice in a driver or pool process is left alone
         warm_up()
@@ -228,10 +249,25 @@ def _local_context(ctx: BaseContext) -> BaseContext:
     return local
 
 
-def _call_chunk(chunk, ctx, code: Optional[str] = None) -> list[dict]:
-    """Run the tasks of one chunk in order; returns their records.  ``code``: the driver's
+def call_chunk(chunk, ctx, code: Optional[str] = None) -> list[dict]:
+    """Run the tasks of one chunk in order.  ``code``: the driver's
     :func:`acmm_qpp.provenance.code_identity`, checked on a Dask worker (started elsewhere, it may
-    run other acmm code, whose rows would enter the table unnoticed: a review)."""
+    run other acmm code, whose rows would enter the table unnoticed: a review).
+
+    Parameters
+    ----------
+    chunk : list of tuple
+        The tasks (:func:`sweep_tasks`).
+    ctx : object
+        The bases' contexts (or their Dask futures).
+    code : str, optional
+        The driver's code identity.
+
+    Returns
+    -------
+    list of dict
+        The tasks' records.
+    """
     if code is not None:
         same_code(code)
     _warm_worker()
@@ -252,15 +288,26 @@ def same_code(code: str) -> None:
     ConfigError
         This process runs other code.
     """
-    from acmm_qpp.provenance import code_identity
-
     if code != code_identity():
         raise ConfigError(f"--scheduler: a Dask worker runs other acmm code ({code_identity()}) than this "
                           f"command ({code}): start the workers from the same installation")
 
 
-def _scheduler_workers(executor, default: int) -> int:
-    """Number of workers (threads) of the Dask cluster behind ``executor``, else ``default``."""
+def scheduler_workers(executor, default: int) -> int:
+    """Number of workers (threads) of the Dask cluster behind ``executor``, else ``default``.
+
+    Parameters
+    ----------
+    executor : concurrent.futures.Executor
+        The sweep's executor.
+    default : int
+        The count when it has no Dask client.
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
     client = getattr(executor, "_client", None)
     if client is None:
         return max(1, default)
@@ -270,9 +317,22 @@ def _scheduler_workers(executor, default: int) -> int:
         return max(1, default)
 
 
-def _remote_contexts(executor, contexts: dict) -> dict:
+def remote_contexts(executor, contexts: dict) -> dict:
     """The base contexts as the executor's tasks take them: on a Dask cluster scattered once to
-    every worker (a task then carries a reference, not a pickled design); else as they are."""
+    every worker (a task then carries a reference, not a pickled design); else as they are.
+
+    Parameters
+    ----------
+    executor : concurrent.futures.Executor
+        The sweep's executor.
+    contexts : dict
+        Base label → its context.
+
+    Returns
+    -------
+    dict
+        Base label → the context or its future.
+    """
     client = getattr(executor, "_client", None)
     if client is None or not contexts:
         return contexts

@@ -9,6 +9,9 @@ import time
 from pathlib import Path
 
 from acmm_qpp.errors import AcmmError, ConfigError
+from acmm.sweep.journal_records import record_problem
+from acmm_qpp.configio import read_regular_file
+from acmm_qpp.atomic_write import output_error
 
 
 JOURNAL_VERSION = 1
@@ -45,9 +48,6 @@ def read_journal(path: Path, key: str, bases: set | None = None) -> list[dict]:
         The journal belongs to a different sweep configuration, or a line (other than a torn
         last one) is not a record the sweep wrote (:func:`acmm.sweep.journal_records.record_problem`).
     """
-    from acmm.sweep.journal_records import record_problem
-    from acmm_qpp.configio import read_regular_file
-
     records = []
     try:            # a FIFO or a device there (a symlink to /dev/zero) would hang or fill memory
         lines = read_regular_file(path, "sweep journal").split(b"\n")
@@ -83,8 +83,6 @@ def _journal_errors(path):
     try:
         yield
     except OSError as exc:
-        from acmm_qpp.atomic_write import output_error
-
         raise output_error(exc, "the sweep journal", path) from None
 
 
@@ -216,5 +214,4 @@ class GroupCommitJournal(Journal):
                 self._f.flush()
                 os.fsync(self._f.fileno())
         super().close()
-
 

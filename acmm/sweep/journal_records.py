@@ -9,10 +9,12 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+from acmm.sweep.case import empty_row
+from acmm.sweep.cases import VERDICTS
 
 _NUMBER = (int, float)
 
-#: the fields a case record adds to its metrics row (:func:`acmm.sweep.case._empty_row`)
+#: the fields a case record adds to its metrics row (:func:`acmm.sweep.case.empty_row`)
 CASE_KEYS = {"base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ())}
 
 
@@ -20,10 +22,8 @@ CASE_KEYS = {"base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ())}
 def case_fields() -> dict:
     """Case record fields: name → (kind, shape), kind "num" (a number, NaN or ±inf), "int" or
     "str": :data:`CASE_KEYS` and the metrics row's fields, read off its empty row."""
-    from acmm.sweep.case import _empty_row
-
     fields = dict(CASE_KEYS)
-    for k, v in _empty_row(1).items():
+    for k, v in empty_row(1).items():
         fields[k] = ("str" if isinstance(v, str) else "int" if isinstance(v, int) else "num", np.shape(v))
     return fields
 
@@ -70,8 +70,6 @@ def record_problem(rec: object, bases: set | None = None) -> str | None:
     str or None
         The first problem (a missing or mistyped field, an unknown verdict, kind or base).
     """
-    from acmm.sweep.cases import VERDICTS
-
     if not isinstance(rec, dict):
         return "not a record (a JSON object)"
     kind = rec.get("kind")

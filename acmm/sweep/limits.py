@@ -19,19 +19,19 @@ import numpy as np
 
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.limits import how_to_raise, limit
+import math
+from acmm.design.schedule_points import point_specs
+from acmm.model.inertia import perturb_inertia, physical_mask
+from acmm.sweep.cases import draw_parameters
 
 PILOT = 1000
 
 
 def _physical_fraction(sweep, n: int) -> tuple[int, int]:
     """(physical draws, draws) of a pilot of ``n`` draws at every level of every base."""
-    from acmm.design.schedule_points import point_specs
-    from acmm.model.inertia import perturb_inertia, physical_mask
-    from acmm.sweep.cases import _draw
-
     spec = sweep.spec
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, 0x9E3779B9]))
-    draws = [_draw(rng, spec) for _ in range(n)]
+    draws = [draw_parameters(rng, spec) for _ in range(n)]
     ok = np.ones(n, bool)
     for b in sweep.bases:
         for s in point_specs(b.config):
@@ -53,8 +53,6 @@ def margin_evaluations(margin) -> int:
     int
         Upper bound of the simulations.
     """
-    import math
-
     if margin is None:
         return 0
     total = 0

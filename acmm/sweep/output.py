@@ -6,20 +6,45 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm_qpp.errors import AcmmError
+from acmm_qpp.errors import AcmmError, FigureError
 from acmm_qpp.atomic_write import write_text
 from acmm_qpp.results import Dataset, write_h5
 from acmm.io.dimensions import COORDS
 from acmm.sweep.cases import AXES, VERDICTS
 from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS
-from acmm.sweep.config import Sweep
+from acmm.sweep.config import Sweep, parse_sweep
 from acmm.sweep.spec import swept_parameters
+import h5py
+import yaml
+from acmm.design.schedule_points import point_specs
+from acmm.model.tea import solve_tea
+from acmm.stages.common import define_units, stored_in
+from dataclasses import replace
+from acmm_qpp.units import display_unit, shown
+from acmm_qpp.plot_style import stage_pyplot as _plt
+from functools import partial
 
 
 # ---------------------------------------------------------------------------------------------
 # results: sweep.h5, sweep.csv, figures
 # ---------------------------------------------------------------------------------------------
-def _split(sweep: Sweep, records: list[dict]):
+def split_records(sweep: Sweep, records: list[dict]):
+    """The case rows and the margin records of a sweep, each in the bases' order.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep.
+    records : list of dict
+        Its journal records.
+
+    Returns
+    -------
+    rows : list of dict
+        The case records, by base then index.
+    margins : list of dict
+        The margin records, by base, ``up`` first.
+    """
     order = {b.label: k for k, b in enumerate(sweep.bases)}
     rows = sorted((r for r in records if r["kind"] == "case"), key=lambda r: (order[r["base"]], r["index"]))
     margins = sorted((r for r in records if r["kind"] == "margin"),
@@ -77,9 +102,6 @@ def table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
 
 
 def _nominal_tea_deg(sweep: Sweep) -> dict:
-    from acmm.design.schedule_points import point_specs
-    from acmm.model.tea import solve_tea
-
     out = {}
     for b in sweep.bases:
         s = point_specs(b.config)[0]
@@ -126,16 +148,13 @@ def _root_attrs(sweep: Sweep, a: dict, labels: list, n_done: int, complete: bool
 
 
 def _orbit_defined(items: dict, sweep) -> dict:
-    """``items`` with the unit ``orbit`` defined (:func:`acmm.stages.common._define_units`) when
+    """``items`` with the unit ``orbit`` defined (:func:`acmm.stages.common.define_units`) when
     every base config has the same orbit rate; else an orbit's length differs between cases and
     each dataset in orbits says that its case's orbit is ``orbit_period[case]`` s."""
-    from acmm.stages.common import _define_units
-
-    from dataclasses import replace
 
     rates = {b.config.orbit_rate for b in sweep.bases}
     if len(rates) == 1:
-        return _define_units(items, rates.pop())
+        return define_units(items, rates.pop())
     # bases of different orbit rates: no one definition; each case's orbit is its orbit_period
     return {k: replace(v, attrs={**v.attrs, "units_per_case": "orbit = orbit_period[case] * s"})
             if getattr(v, "units", None) == "orbit" else v for k, v in items.items()}
@@ -168,7 +187,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     tuple
         (pathlib.Path of ``sweep.h5``, list of the figure paths).
     """
-    rows, margins = _split(sweep, records)
+    rows, margins = split_records(sweep, records)
     a = table_arrays(sweep, rows)
     labels = [b.label for b in sweep.bases]
     nominal = _nominal_tea_deg(sweep)
@@ -218,8 +237,6 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
     if figures and rows:
-        from acmm_qpp.errors import FigureError
-
         try:
             figs = plot_sweep(sweep, a, run_dir, nominal)
         except OSError as exc:        # the tables are written: only a figure failed (exit 4)
@@ -229,8 +246,6 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
 
 
 def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
-    from acmm_qpp.units import display_unit, shown
-
     cols = ["case", "base", "index"] + [f"{k}[{display_unit(PARAMETERS[k].unit, units)}]" for k in a["parameters"]] + [
         "verdict", "time_to_divergence[orbit]"]
     for what, unit in (("peak_attitude_error", "deg"), ("steady_attitude_error", "deg"),
@@ -272,16 +287,15 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
     list of pathlib.Path
         The figures written.
     """
-    from acmm.plots.base import _save
-    from acmm_qpp.plot_style import stage_pyplot as _plt
+    from matplotlib.ticker import MaxNLocator  # deferred: matplotlib start-up
+
+    from acmm.plots.base import write_figure  # deferred: matplotlib start-up
 
     plt = _plt()
     labels = [b.label for b in sweep.bases]
     names = list(a["parameters"])
     axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
     nominal = _nominal_tea_deg(sweep) if nominal is None else nominal
-
-    from acmm_qpp.units import shown
 
     system = sweep.file.output.units
 
@@ -311,14 +325,13 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
         ax.set_xlabel(_label(axes_names[0], system))
         ax.set_ylabel(_label(axes_names[1], system) if len(axes_names) > 1 else "peak attitude error (deg)")
         ax.set_title(f"{lab}: {int(np.sum(verdicts == 'bounded'))}/{int(sel.sum())} bounded")
-        from matplotlib.ticker import MaxNLocator
 
         ax.xaxis.set_major_locator(MaxNLocator(5))       # fewer ticks, turned: they do not crowd
         ax.yaxis.set_major_locator(MaxNLocator(6))
         ax.tick_params(axis="x", labelrotation=30)
         ax.legend(fontsize=7)
     fig.suptitle(f"{sweep.name}: stability map ({sweep.spec.design} design)")
-    out = _save(fig, run_dir / "sweep_map.png")
+    out = write_figure(fig, run_dir / "sweep_map.png")
     fig, axs = plt.subplots(1, B, figsize=(4.6 * B, 3.6), squeeze=False)
     for k, lab in enumerate(labels):
         ax = axs[0, k]
@@ -334,7 +347,7 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
         ax.set_ylabel("number of cases (count)")
         ax.set_title(f"{lab}: {int(sel.sum())} bounded of {int(np.sum(a['base'] == k))}")
     fig.suptitle(f"{sweep.name}: peak attitude error")
-    out += _save(fig, run_dir / "sweep_peak_error.png")
+    out += write_figure(fig, run_dir / "sweep_peak_error.png")
     return out
 
 
@@ -347,7 +360,6 @@ def _label(name: str, units: str = "imperial") -> str:
             return f"{name}: relative change of {name[1:]} (1, 0.1 = +10 %)"
         if p.kind == "scale":
             return f"{name}: {p.description.split(':')[0].split('(')[0].strip()} (1, × nominal)"
-        from acmm_qpp.units import display_unit
 
         unit = display_unit(p.unit, units).replace("*", "·")
         return f"{name}: {p.description.split('(')[0].split(',')[0].strip()} ({unit})"
@@ -372,13 +384,6 @@ def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
         One call drawing both figures (none when the file holds no case), for
         :func:`acmm_qpp.results.draw_figures`.
     """
-    from functools import partial
-
-    import h5py
-    import yaml
-
-    from acmm.sweep.config import parse_sweep
-    from acmm.stages.common import stored_in
 
     def text(v):
         return v.decode() if isinstance(v, bytes) else str(v)

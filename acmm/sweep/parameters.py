@@ -9,6 +9,7 @@ given with a unit to the parameter's unit.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from acmm_qpp.units import DIMENSIONS, to_canonical
 
 
 @dataclass(frozen=True)
@@ -87,8 +88,6 @@ def to_parameter_unit(v, unit: str, where: str):
     ValueError
         The unit is malformed or of the wrong dimension (pydantic turns it into a field error).
     """
-    from acmm_qpp.units import to_canonical, DIMENSIONS
-
     if not isinstance(v, str):
         return v
     kind = next((k for k, u in DIMENSIONS.items() if u == unit), None)

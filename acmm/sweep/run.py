@@ -14,13 +14,14 @@ from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
 from acmm.sweep.chunking import Chunker
-from acmm.sweep.executors import (SerialExecutor, _call_chunk, _remote_contexts, _scheduler_workers,
-                                  _task_key, _tasks, lost_worker, make_executor)
+from acmm.sweep.executors import (SerialExecutor, call_chunk, remote_contexts, scheduler_workers,
+                                  task_key, sweep_tasks, lost_worker, make_executor)
 from acmm.sweep.journal import GroupCommitJournal, read_journal
 from acmm_qpp.errors import ConfigError, OutputError
 from acmm_qpp.signals import interrupts_deferred
 from acmm_qpp.pool import submit
-from acmm.sweep.output import _split, write_results
+from acmm.sweep.output import split_records, write_results
+from acmm_qpp.provenance import code_identity
 
 
 # ---------------------------------------------------------------------------------------------
@@ -76,7 +77,6 @@ class SweepResult:
             out[b.label] = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
             out[b.label]["total"] = len(rows)
         return out
-
 
 
 def _as_sweep(sweep) -> Sweep:
@@ -135,7 +135,7 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     jpath = run_dir / "sweep.journal"
     done = _resumed(sweep, jpath, key) if resume and jpath.exists() else {}
     n_resumed = len(done)
-    tasks = [t for t in _tasks(sweep) if t not in done]
+    tasks = [t for t in sweep_tasks(sweep) if t not in done]
     total = n_resumed + len(tasks)
     contexts = {b.label: prepare_base(b, spec) for b in sweep.bases} if tasks else {}
     for ctx in contexts.values():          # warm up (and load the compiled simulator) before forking
@@ -157,7 +157,7 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         close()
         raise
     serial = isinstance(executor, SerialExecutor)
-    n_workers = 1 if serial else _scheduler_workers(executor, workers)
+    n_workers = 1 if serial else scheduler_workers(executor, workers)
     chunks = Chunker(tasks, n_workers, chunk if chunk is not None else (1 if serial else None))
     window = 1 if serial else max(4, 2 * n_workers)
     remote = _task_arguments(executor, contexts)
@@ -167,17 +167,16 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     path, figs = write_results(sweep, list(done.values()), complete=True,
                                figures=sweep.file.output.figures if figures is None else figures,
                                wall_time=time.perf_counter() - t0)
-    rows, margins = _split(sweep, list(done.values()))
+    rows, margins = split_records(sweep, list(done.values()))
     return SweepResult(sweep, path, rows, margins, n_new, n_resumed, time.perf_counter() - t0, True, figs)
 
 
 def _task_arguments(executor, contexts: dict) -> dict:
     """Base label → the arguments of its chunks' tasks after the chunk: the base context (on
     Dask scattered) and, on Dask, whose workers may run other code, this code's identity."""
-    remote = _remote_contexts(executor, contexts)
+    remote = remote_contexts(executor, contexts)
     if getattr(executor, "_client", None) is None:
         return {k: (v,) for k, v in remote.items()}
-    from acmm_qpp.provenance import code_identity
 
     return {k: (v, code_identity()) for k, v in remote.items()}
 
@@ -202,7 +201,7 @@ def _resumed(sweep: Sweep, jpath: Path, key: str) -> dict:
         raise ConfigError(f"{exc} (changed since: {'; '.join(changed[:4])}{' …' if len(changed) > 4 else ''})"
                           if changed else str(exc)) from None
     for rec in records:
-        task = _task_key(rec)
+        task = task_key(rec)
         if (task[0] == "case" and not 0 <= task[2] < n_cases) or (task[0] == "margin" and spec.margin is None):
             raise ConfigError(f"{jpath}: a record of {task[0]} {task[2]!r} of {task[1]}, which this sweep "
                               f"does not have ({n_cases} cases per base); delete the journal or run without "
@@ -314,7 +313,7 @@ class _Feed:
             c = self.chunks.next()
             if c is None:
                 return
-            self.pending[submit(self.executor, _call_chunk, c, *self.remote[c[0][1]])] = c
+            self.pending[submit(self.executor, call_chunk, c, *self.remote[c[0][1]])] = c
 
     def take(self, fut) -> None:
         """Journal and record the records of a finished chunk."""
@@ -323,7 +322,7 @@ class _Feed:
         self.chunks.returned(len(recs))
         self.journal.append_many(recs)
         for rec in recs:
-            self.done[_task_key(rec)] = rec
+            self.done[task_key(rec)] = rec
             self.n_new += 1
             if self.progress is not None:
                 self.progress(len(self.done), self.total, rec)

@@ -14,11 +14,13 @@ from typing import Annotated, Literal, Optional
 
 from pydantic import BeforeValidator, Field, model_validator
 
-from acmm.io.config import Output
+from acmm.io.config import Config, Output
 from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS, SHORTHANDS, parameter_value, to_parameter_unit
 from acmm_qpp.config_model import StrictModel
 from acmm_qpp.schema import Generator, fix_alternatives, header
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN
+from pydantic.json_schema import models_json_schema
+from acmm_qpp.hints import closest
 
 
 class _Model(StrictModel):
@@ -196,8 +198,6 @@ class SweepSpec(_Model):
 
 def _check_name(name: str) -> None:
     if name not in PARAMETERS and name not in SHORTHANDS:
-        from acmm_qpp.hints import closest
-
         known = list(SHORTHANDS) + list(PARAMETERS)
         best = closest(name, known)
         raise ValueError(f"unknown parameter {name!r}" + (f" (did you mean `{best}`?)" if best else "")
@@ -257,9 +257,6 @@ def sweep_schema() -> dict:
     dict
         JSON schema (draft 2020-12) with ``anyOf`` the two forms.
     """
-    from pydantic.json_schema import models_json_schema
-
-    from acmm.io.config import Config
 
     keys, top = models_json_schema([(SweepFile, "validation"), (Config, "validation"),
                                     (SweepSpec, "validation")], schema_generator=Generator)

@@ -1,7 +1,7 @@
 """How a command's failures and side notes become one line each (used by :func:`acmm_qpp.cli.plumbing.user_errors`):
 exceptions outside the :class:`acmm_qpp.errors.AcmmError` hierarchy (:func:`acmm_qpp.errors.plain_failure`,
 shared with the report's failed sections), an interrupt that Python
-wrapped in another exception, the numerical warnings and numba's cache notes of a run, a closed
+wrapped in another exception, the numerical warnings of a run, a closed
 standard output."""
 from __future__ import annotations
 
@@ -9,7 +9,6 @@ import os
 import sys
 
 import typer
-
 
 
 def interrupt_behind(exc: BaseException):
@@ -47,13 +46,6 @@ def note_warnings(caught) -> None:
     first = caught[0]
     typer.echo(f"note: {len(caught)} distinct numerical warning(s) during the run; first: "
                f"{first.category.__name__}: {' '.join(str(first.message).split())}", err=True)
-
-
-def note_compiled_cache() -> None:
-    """A ``note:`` line for each reason numba could not save a kernel it compiled in this run."""
-    cache = sys.modules.get("acmm.simulate.compiled_cache")       # (not imported: nothing was compiled)
-    for line in cache.write_error_notes() if cache is not None else []:
-        typer.echo(f"note: {line}", err=True)
 
 
 #: exit code when the reader of standard output closed it (128 + SIGPIPE, as a C tool killed by it)

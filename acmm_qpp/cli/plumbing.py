@@ -13,9 +13,15 @@ from importlib import resources
 
 import typer
 
-from acmm_qpp.cli.failures import (EXIT_PIPE_CLOSED, interrupt_behind, note_compiled_cache, note_warnings, quiet_stdout)
+# the click that typer uses: recent typer vendors it as ``typer._click``, older ones use click
+try:
+    from typer._click import exceptions as click_exceptions
+except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
+    from click import exceptions as click_exceptions
+
+from acmm_qpp.cli.failures import EXIT_PIPE_CLOSED, interrupt_behind, note_warnings, quiet_stdout
 from acmm_qpp.errors import plain_failure as _plain_failure
-from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError, ConfigError
+from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_NUMERICAL, AcmmError, ConfigError, NoEquilibriumError
 
 
 def fail(message: str, code: int = EXIT_INPUT) -> None:
@@ -44,7 +50,33 @@ def fail(message: str, code: int = EXIT_INPUT) -> None:
 MAX_MESSAGE = 600
 
 
-def user_errors(fn):
+def with_hint(exc: AcmmError, hint=None) -> str:
+    """The message of a user-facing error, with the product's hint appended when one applies
+    (solver/design failures, exit 3, and a missing equilibrium).
+
+    Parameters
+    ----------
+    exc : AcmmError
+        The user-facing error.
+    hint : callable, optional
+        The product's ``hint(message) -> str`` ("which setting to change"; empty when none
+        applies); None: no hint.
+
+    Returns
+    -------
+    str
+        ``str(exc)``, followed by ``; hint: ...`` when one applies and the message has none yet.
+    """
+    msg = str(exc)
+    if hint is not None and "hint:" not in msg.lower() and (
+            getattr(exc, "exit_code", None) == EXIT_NUMERICAL or isinstance(exc, NoEquilibriumError)):
+        text = hint(msg)
+        if text:
+            msg = f"{msg}; hint: {text}"
+    return msg
+
+
+def user_errors(fn, hint=None, notes=None):
     """Decorator for typer commands: turn :class:`AcmmError` into one line on stderr and the
     error's ``exit_code``.
 
@@ -57,6 +89,10 @@ def user_errors(fn):
     ----------
     fn : callable
         The command function.
+    hint : callable, optional
+        The product's hint for a numerical failure (:func:`with_hint`).
+    notes : callable, optional
+        ``notes() -> list of str``: the product's ``note:`` lines after a successful run.
 
     Returns
     -------
@@ -71,10 +107,7 @@ def user_errors(fn):
             try:
                 out = fn(*args, **kwargs)
             except AcmmError as exc:
-                from acmm_qpp.hints import with_hint
-
-                product = "qpp" if fn.__module__.split(".")[0] == "qpp" else "acmm"
-                fail(with_hint(exc, product), exc.exit_code)
+                fail(with_hint(exc, hint), exc.exit_code)
             except KeyboardInterrupt as exc:
                 interrupted(exc)
             except BrokenPipeError:     # the reader of stdout went away (`| head`): not an I/O failure
@@ -90,7 +123,8 @@ def user_errors(fn):
                 fail(*plain)
         note_warnings([w for w in caught if not issubclass(w.category, (DeprecationWarning,
                                                                            PendingDeprecationWarning))])
-        note_compiled_cache()
+        for line in notes() if notes is not None else []:
+            typer.echo(f"note: {line}", err=True)
         return out
 
     return wrapper
@@ -220,11 +254,7 @@ StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes w
 
 def _click():
     """The click that typer uses: recent typer vendors it as ``typer._click``, older ones use click."""
-    try:
-        from typer._click import exceptions
-    except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
-        from click import exceptions
-    return types.SimpleNamespace(exceptions=exceptions)
+    return types.SimpleNamespace(exceptions=click_exceptions)
 
 
 def _one_line_usage(exc) -> str:
@@ -415,7 +445,7 @@ def version_option():
 
     def show(value: bool) -> None:
         if value:
-            from importlib.metadata import PackageNotFoundError, version
+            from importlib.metadata import PackageNotFoundError, version  # deferred: for --version only
 
             try:
                 v = version("acmm-qpp")

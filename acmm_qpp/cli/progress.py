@@ -9,7 +9,6 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
-from pathlib import Path
 
 
 def enabled() -> bool:
@@ -30,7 +29,7 @@ def enabled() -> bool:
 
 
 def _console():
-    from rich.console import Console
+    from rich.console import Console  # deferred: rich start-up, only on a terminal
 
     return Console(stderr=True, force_terminal=True if os.environ.get("ACMM_PROGRESS") == "1" else None)
 
@@ -45,10 +44,6 @@ def note(message: str) -> None:
     """
     if enabled():
         _console().print(message, markup=False, highlight=False)
-
-
-
-
 
 
 @contextlib.contextmanager
@@ -102,7 +97,7 @@ class Steps:
     def __enter__(self):
         if enabled():
             from rich.progress import (BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn,
-                                       TimeElapsedColumn, TimeRemainingColumn)
+                                       TimeElapsedColumn, TimeRemainingColumn)  # deferred: rich start-up, only on a terminal
 
             cols = [SpinnerColumn(), TextColumn("{task.description}", markup=False), BarColumn(),
                     MofNCompleteColumn(), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn()]

@@ -43,6 +43,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from qpp.model.transfer import transfer_on_grid
 
 
 def default_grid(A, n: int = 6000) -> np.ndarray:
@@ -88,8 +89,6 @@ def frequency_response(A, B, C, a: float, omega) -> np.ndarray:
     (N, p, k) complex ndarray
         H(−a + jω), in the units of the output per unit of input.
     """
-    from qpp.model.transfer import transfer_on_grid
-
     return transfer_on_grid(A, B, C, -a + 1j * np.asarray(omega, float))
 
 

@@ -48,6 +48,7 @@ from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
 from qpp.io.config import QppConfig
 from qpp.io.config_nonlin import SinusoidalNonlinearity
+from scipy.optimize import minimize, nnls
 
 
 @dataclass
@@ -311,8 +312,6 @@ def _dual_line(t, A: float, w: float, ph: float, band: float) -> tuple:
     tuple
         (a0, a1), output units per input unit·s^½ and per output unit of P.
     """
-    from scipy.optimize import nnls
-
     if t.size == 0:
         return 0.0, 0.0
     r = A * np.sin(w * t + ph)
@@ -431,8 +430,6 @@ def refine(cfg: QppConfig, start: Candidate, max_evals: int = REFINE_EVALS) -> t
     tuple
         (the best Candidate met, the number of evaluations).
     """
-    from scipy.optimize import minimize
-
     seen = [start]
 
     def cost(x):

@@ -23,6 +23,7 @@ import scipy.linalg as sla
 
 from acmm_qpp.errors import ConvergenceError, DesignError
 from qpp.model.lure import LurePlant, augmented, closed_loop
+from qpp.design.spheres import hinf_norm
 
 
 @dataclass
@@ -189,8 +190,6 @@ def closed_loop_norm(plant: LurePlant, g: HinfGains, *, bz: str = "eq10.7") -> f
     float
         δ, the H∞ norm from w = [r; d] to y, in the units of y per unit of w.
     """
-    from qpp.design.spheres import hinf_norm
-
     Az, Bz, Cz = closed_loop(plant, g.K1, g.Kc, g.H, bz=bz)
     return hinf_norm(Az + g.a * np.eye(Az.shape[0]), Bz, Cz)[0]
 

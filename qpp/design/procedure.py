@@ -22,13 +22,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm_qpp.errors import ConvergenceError, DesignError
+from acmm_qpp.errors import ConfigError, ConvergenceError, DesignError
 from qpp.design import circle as circle_mod
 from qpp.design import spheres
 from qpp.design.certificate import DesignResult, certify, default_sector, sector_coupling
 from qpp.io.config import QppConfig
-from qpp.design.hinf import HinfGains, hinf_gains, hinf_search
-from qpp.model.lure import LurePlant, channels, closed_loop
+from qpp.design.hinf import HinfGains, closed_loop_norm, existence_tests, hinf_gains, hinf_search
+from qpp.model.lure import LurePlant, channels, closed_loop, structural_obstacles
+from acmm_qpp.limits import how_to_raise, limit
+from qpp.simulate.closed_loop import check_work
 
 
 # ---------------------------------------------------------------------- the wider search
@@ -93,7 +95,6 @@ class _Procedure:
                     self.hist.append({**h, "a": a, "ws": float(np.mean(ws))})
             else:
                 g = hinf_gains(Pw, rho=rho, a=a, nu=hc.nu, weight=hc.weight, observer=obs)
-                from qpp.design.hinf import closed_loop_norm, existence_tests
 
                 tests = existence_tests(g)
                 self.hist.append({"rho": rho, "nu": hc.nu, "delta": closed_loop_norm(Pw, g, bz=dc.bz), **tests,
@@ -129,7 +130,6 @@ class _Procedure:
         self._budget(g, T)
         res = certify(self.cfg, g.K1, g.Kc, g.H, a, "hinf", g, T=T)
         res.ws_scale = [float(x) for x in np.atleast_1d(ws)]
-        from qpp.design.hinf import closed_loop_norm
 
         delta = closed_loop_norm(weighted_plant(self.P, ws), g, bz=self.dc.bz)
         self.records.append(self._rec(stage, g.rho, g.nu, a, T, delta, res.beta1_ref, res.m_ref,
@@ -142,10 +142,6 @@ class _Procedure:
         """Each evaluation integrates the nominal loop over max(T, simulation.t_final) (for its
         thresholds): the work of all of them is bounded by ``QPP_WORK`` (issue 13), so that a long
         horizon is refused in seconds instead of running for hours through the wider search."""
-        from acmm_qpp.errors import ConfigError
-        from acmm_qpp.limits import how_to_raise, limit
-        from qpp.simulate.closed_loop import check_work
-
         horizon = max(float(T), self.cfg.simulation.t_final)
         try:
             self.work += check_work(self.cfg, g.K1, g.Kc, g.H, runs=1, horizon=horizon)
@@ -538,8 +534,6 @@ def design(cfg: QppConfig) -> DesignResult:
     if res is None:
         res = proc.best
     if res is None:
-        from qpp.model.lure import structural_obstacles
-
         why = structural_obstacles(cfg.lure_plant())
         raise DesignError("procedure 12.1: no stabilizing H∞ gains for any rho, a or weight tried"
                           + (f": {'; '.join(why)}" if why else ""))

@@ -8,6 +8,10 @@ from __future__ import annotations
 import numpy as np
 
 from acmm_qpp.errors import ConvergenceError
+from qpp.model.transfer import transfer_on_grid
+from scipy.linalg import solve_continuous_lyapunov, svdvals
+from slycot import ab13dd
+from slycot.exceptions import SlycotArithmeticError
 
 
 def hinf_norm(A, B, C, D=None, *, method: str = "slycot") -> tuple[float, float]:
@@ -58,14 +62,9 @@ AB13DD_TOL = 1e-10
 
 def _hinf_ab13dd(A, B, C, D) -> tuple[float, float]:
     """L∞ norm and peak frequency (rad/s) by SLICOT AB13DD, as :func:`control.linfnorm` calls it."""
-    from slycot import ab13dd
-    from slycot.exceptions import SlycotArithmeticError
-
     n, m, p = A.shape[0], B.shape[1], C.shape[0]
     if n == 0:             # AB13DD takes no empty system; a static gain's norm is its σ_max
-        from scipy.linalg import svdvals       # as control.linfnorm computes it
-
-        return float(svdvals(D)[0]), 0.0
+        return float(svdvals(D)[0]), 0.0       # as control.linfnorm computes it
     jobd = "Z" if not np.any(D) else "D"
     try:
         gpeak, fpeak = ab13dd("C", "I", "S", jobd, n, m, p, A, np.eye(n), B, C, D, AB13DD_TOL)
@@ -137,8 +136,6 @@ def grid_norm(A, B, C, omega) -> tuple[float, float]:
     omega_peak : float
         Grid frequency of that largest value, rad/s.
     """
-    from qpp.model.transfer import transfer_on_grid
-
     omega = np.asarray(omega, float)
     G = transfer_on_grid(A, B, C, 1j * omega)
     vals = np.linalg.svd(G, compute_uv=False)[:, 0]
@@ -198,8 +195,6 @@ def l2_to_peak_gain(An, B, C) -> float:
     float
         The gain, output units per input unit per s^½ (inf when A_n is not Hurwitz).
     """
-    from scipy.linalg import solve_continuous_lyapunov
-
     An, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (An, B, C))
     if np.max(np.linalg.eigvals(An).real) >= 0:
         return float(np.inf)

@@ -17,13 +17,19 @@ from pydantic import Field, field_validator, model_validator
 
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
-from qpp.io.config_checks import _check_periods, _check_sample_count, _check_sector, _check_stated_sector
-from qpp.io.config_fields import Matrix, PerSecond, Seconds, _finite_matrix, _Model
+from qpp.io.config_checks import check_periods, check_sample_count, check_sector, check_stated_sector
+from qpp.io.config_fields import Matrix, PerSecond, Seconds, finite_matrix, SectionModel
 from qpp.io.config_simulation import Simulation
 from qpp.io.config_nonlin import (ExpressionNonlinearity, LibraryForm, Nonlinearity, PolarArmNonlinearity, SinusoidalNonlinearity)
+from acmm_qpp.configio import read_yaml, validate_model
+from acmm_qpp.overrides import apply_overrides, remember_origin
+from qpp import PACKAGED_CONFIGS
+from acmm_qpp.limits import how_to_raise, limit
+from qpp.model.lure import LurePlant
+from qpp.model.nonlin import ExpressionModel
 
 
-class Plant(_Model):
+class Plant(SectionModel):
     """Lure plant x' = A x + B u + G d + B f1(·), y = C x (eqs 10.1, 13.1, 14.2) and servo-compensator."""
 
     A: Matrix = Field(description="plant state matrix (n×n), 1/s")
@@ -40,10 +46,10 @@ class Plant(_Model):
     @field_validator("A", "B", "C", "G", "Ac", "Bc", "Cc")
     @classmethod
     def _mats(cls, v):
-        return _finite_matrix(v)
+        return finite_matrix(v)
 
 
-class Hinf(_Model):
+class Hinf(SectionModel):
     """Chapter 11 H∞ gains (Riccati 11.1 and the observer Riccati)."""
 
     rho: float = Field(gt=0, description="control weight ρ in z = [ρ u; W_s e] (dimensionless)")
@@ -54,7 +60,7 @@ class Hinf(_Model):
     search: bool = Field(False, description="run the ch. 11 steps 1-8 search over ν and ρ")
 
 
-class Published(_Model):
+class Published(SectionModel):
     """Gains and numbers printed in the report, for comparison (and optionally for use)."""
 
     K1: Optional[Matrix] = Field(None, description="printed K1 (m×n)")
@@ -68,10 +74,10 @@ class Published(_Model):
     @field_validator("K1", "Kc", "H")
     @classmethod
     def _mats(cls, v):
-        return v if v is None else _finite_matrix(v)
+        return v if v is None else finite_matrix(v)
 
 
-class Spheres(_Model):
+class Spheres(SectionModel):
     """Input/output spheres (eqs 10.34–10.35) and the truncation time T."""
 
     beta_o: float = Field(gt=0, description="output sphere radius β_o, output units")
@@ -83,7 +89,7 @@ class Spheres(_Model):
                                                              "fraction of its peak after T")
 
 
-class Design(_Model):
+class Design(SectionModel):
     """Design procedure of ch. 12.1."""
 
     gains: Literal["design", "published"] = Field("design", description="use the H∞ gains or the printed ones")
@@ -106,7 +112,7 @@ class Design(_Model):
                                    description="W_s = w·S_c scalings tried by the wider search")
 
 
-class Output(_Model):
+class Output(SectionModel):
     """Where results go."""
 
     root: str = Field("runs", pattern=ROOT_PATTERN, description="results root; files go to <root>/<name>/")
@@ -124,7 +130,7 @@ class Output(_Model):
 _EXPR_CACHE: dict = {}
 
 
-class QppConfig(_Model):
+class QppConfig(SectionModel):
     """A complete ``qpp`` configuration."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX,
@@ -178,16 +184,16 @@ class QppConfig(_Model):
                     raise ValueError(f"nonlinearity.f1: output {e.output} > p = {P.p}")
             if nl.sector is not None and np.shape(nl.sector) != (P.r, 2):
                 raise ValueError(f"nonlinearity.sector must be {P.r} pairs [alpha, beta]")
-            _check_sector("nonlinearity.sector", nl.sector)
+            check_sector("nonlinearity.sector", nl.sector)
             try:
                 model = self.expression_model()
-                _check_sample_count(model)
+                check_sample_count(model)
                 info = model.sector_info                 # parse, check singular / sector-bounded
             except ConfigError as exc:
                 raise ValueError(str(exc)) from None
             for field, stated in (("nonlinearity.sector", nl.sector), ("design.sector", self.design.sector)):
                 if stated is not None:
-                    _check_stated_sector(field, stated, info.sector)
+                    check_stated_sector(field, stated, info.sector)
             self._check_expression_scenarios(nl)
         elif (P.n, P.m, P.p) != (4, 2, 2):
             raise ValueError("nonlinearity.kind polar_arm needs n=4, m=2, p=2 (eq 14.2)")
@@ -231,7 +237,7 @@ class QppConfig(_Model):
                 raise ValueError(f"scenario {s.name}: give both impulse and impulse_time")
         if self.design.sector is not None and np.shape(self.design.sector) != (P.r, 2):
             raise ValueError(f"design.sector must be {P.r} pairs [alpha, beta]")
-        _check_sector("design.sector", self.design.sector)
+        check_sector("design.sector", self.design.sector)
         names = [s.name for s in self.simulation.scenarios]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
@@ -259,14 +265,13 @@ class QppConfig(_Model):
         nl = self.nonlinearity
         if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
             # the nonlinearity's sin(ω t) must be resolved by the integrator: bound the periods
-            _check_periods("nonlinearity.omega", nl.omega, self.simulation.t_final)
+            check_periods("nonlinearity.omega", nl.omega, self.simulation.t_final)
         for sig_name, sig in [("simulation.r_o", self.simulation.r_o)] + [
                 (f"simulation.scenarios.{s.name}.delta_r", s.delta_r) for s in self.simulation.scenarios]:
             for chan in sig or []:
                 for term in chan:
                     if term.kind == "sin" and term.omega > 0:
-                        _check_periods(f"{sig_name} omega", term.omega, self.simulation.t_final)
-        from acmm_qpp.limits import how_to_raise, limit
+                        check_periods(f"{sig_name} omega", term.omega, self.simulation.t_final)
 
         runs = len(self.simulation.scenarios) + 1
         if self.simulation.n_samples * runs > limit("QPP_SAMPLES"):
@@ -285,8 +290,6 @@ class QppConfig(_Model):
         qpp.model.lure.LurePlant
             Plant (A, B, C, G) and servo-compensator (Ac, Bc, Cc), in the user's units.
         """
-        from qpp.model.lure import LurePlant
-
         p = self.plant
         return LurePlant(p.A, p.B, p.C, p.G, p.Ac, p.Bc, p.Cc)
 
@@ -303,8 +306,6 @@ class QppConfig(_Model):
         TypeError
             If ``nonlinearity.kind`` is not ``expression``.
         """
-        from qpp.model.nonlin import ExpressionModel
-
         nl = self.nonlinearity
         if not isinstance(nl, ExpressionNonlinearity):
             raise TypeError("expression_model() needs nonlinearity.kind = expression")
@@ -360,8 +361,6 @@ def parse_config(data: object, source: str = "config") -> QppConfig:
     acmm_qpp.errors.ConfigError
         One line naming the offending field.
     """
-    from acmm_qpp.configio import validate_model
-
     return validate_model(QppConfig, data, source)
 
 
@@ -385,10 +384,6 @@ def load_config(path, overrides: list[str] | None = None) -> QppConfig:
     acmm_qpp.errors.ConfigError
         A missing or unreadable file, bad YAML or an invalid field (one line).
     """
-    from acmm_qpp.configio import read_yaml
-    from acmm_qpp.overrides import apply_overrides, remember_origin
-    from qpp import PACKAGED_CONFIGS
-
     data, p = read_yaml(path, PACKAGED_CONFIGS)
     cfg = parse_config(apply_overrides(data, overrides), source=str(p))
     return remember_origin(cfg, str(p), overrides)

@@ -7,19 +7,48 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from acmm_qpp.limits import how_to_raise, limit
 
 
-def _check_periods(field: str, omega: float, t_final: float) -> None:
-    from acmm_qpp.limits import how_to_raise, limit
+def check_periods(field: str, omega: float, t_final: float) -> None:
+    """A periodic input of frequency ``omega`` over ``t_final`` stays within the
+    ``QPP_PERIODS`` limit of periods to integrate.
 
+    Parameters
+    ----------
+    field : str
+        The config field, for the message.
+    omega : float
+        The frequency, rad/s.
+    t_final : float
+        The simulated time, s.
+
+    Raises
+    ------
+    ValueError
+        Too many periods (the message says what to lower, and the limit's variable).
+    """
     periods = omega * t_final / (2 * math.pi)
     if periods > limit("QPP_PERIODS"):
         raise ValueError(f"{field}: {omega:g} rad/s over simulation.t_final = {t_final:g} s is {periods:.3g} "
                          f"periods to integrate; lower the frequency or t_final ({how_to_raise('QPP_PERIODS')})")
 
 
-def _check_sector(field: str, sector) -> None:
-    """Each pair [α_i, β_i] of a stated sector has α_i < β_i (lemma 1's critical disc)."""
+def check_sector(field: str, sector) -> None:
+    """Each pair [α_i, β_i] of a stated sector has α_i < β_i (lemma 1's critical disc).
+
+    Parameters
+    ----------
+    field : str
+        The config field, for the message.
+    sector : list of pair or None
+        The stated sector, one [α, β] pair per channel (dimensionless slopes).
+
+    Raises
+    ------
+    ValueError
+        A pair with α ≥ β.
+    """
     for i, (a, b) in enumerate(sector or []):
         if not a < b:
             raise ValueError(f"{field}: pair {i + 1} is [{a:g}, {b:g}]; a sector needs alpha < beta")
@@ -30,10 +59,25 @@ def _check_sector(field: str, sector) -> None:
 STATED_SECTOR_SLACK = 0.02
 
 
-def _check_stated_sector(field: str, stated, computed) -> None:
+def check_stated_sector(field: str, stated, computed) -> None:
     """A sector stated for an ``expression`` nonlinearity holds φ's sector computed on the stated
     ranges (to :data:`STATED_SECTOR_SLACK`): the circle check and the thresholds of a narrower one
-    would certify another nonlinearity."""
+    would certify another nonlinearity.
+
+    Parameters
+    ----------
+    field : str
+        The config field, for the message.
+    stated : array_like
+        The stated sector, one [α, β] pair per channel (dimensionless slopes).
+    computed : array_like
+        The computed sector, same shape (dimensionless slopes).
+
+    Raises
+    ------
+    ValueError
+        A stated pair narrower than the computed one.
+    """
     for i, ((a, b), (ca, cb)) in enumerate(zip(np.asarray(stated, float), np.asarray(computed, float))):
         slack = STATED_SECTOR_SLACK * max(0.5 * (cb - ca), 1e-12)
         if a > ca + slack or b < cb - slack:
@@ -42,12 +86,21 @@ def _check_stated_sector(field: str, stated, computed) -> None:
                              "for this nonlinearity (widen the pair, or leave the sector out to use the computed one)")
 
 
-def _check_sample_count(model) -> None:
+def check_sample_count(model) -> None:
     """The points at which :meth:`qpp.model.nonlin.ExpressionModel.sector_info` samples φ (its
     :meth:`~qpp.model.sector_grid.SampleGrid.sector_points`) stay within the ``QPP_SECTOR_POINTS``
-    limit; the message gives the factors and what the config can lower."""
-    from acmm_qpp.limits import how_to_raise, limit
+    limit; the message gives the factors and what the config can lower.
 
+    Parameters
+    ----------
+    model : qpp.model.nonlin.ExpressionModel
+        The nonlinearity's model.
+
+    Raises
+    ------
+    ValueError
+        Too many points.
+    """
     points = model.sector_points()
     if points <= limit("QPP_SECTOR_POINTS"):
         return

@@ -50,7 +50,10 @@ def _implausible(v):
     return None
 
 
-class _Model(StrictModel):
+class SectionModel(StrictModel):
+    """Strict base of every qpp config section: unknown keys, NaN, infinity and booleans given as
+    numbers refused (:class:`acmm_qpp.config_model.StrictModel`), and every number within the
+    plausible magnitude ``QPP_MAX``."""
 
     @model_validator(mode="after")
     def _plausible_magnitudes(self):
@@ -61,7 +64,24 @@ class _Model(StrictModel):
         return self
 
 
-def _finite_matrix(v):
+def finite_matrix(v):
+    """A matrix field: a non-empty list of rows of one length, finite numbers.
+
+    Parameters
+    ----------
+    v : object
+        The value read from the config.
+
+    Returns
+    -------
+    list of list
+        ``v`` unchanged (units of its field).
+
+    Raises
+    ------
+    ValueError
+        Not such a matrix (the message says what is wrong).
+    """
     if not isinstance(v, list) or not v or not all(isinstance(r, list) for r in v):
         raise ValueError("must be a non-empty matrix (list of rows)")
     if len({len(r) for r in v}) != 1 or not v[0]:

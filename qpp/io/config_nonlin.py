@@ -10,10 +10,12 @@ from typing import Annotated, Literal, Optional, Union
 
 from pydantic import Field, field_validator, model_validator
 
-from qpp.io.config_fields import KgM2, Kilograms, Matrix, Metres, RadPerSecond, _Model
+from qpp.io.config_fields import KgM2, Kilograms, Matrix, Metres, RadPerSecond, SectionModel
+import re
+from qpp.model.expression_parser import library_expression
 
 
-class SinusoidalNonlinearity(_Model):
+class SinusoidalNonlinearity(SectionModel):
     """f1(y, γ, t) = F0 y + (F1 + γ F_unc) y sin(ω t), |γ| ≤ gamma_max (ch. 13: F0 = 2, F1 = 1.5, γ = Δm).
 
     The controller and observer cancel the nominal part f1o = F0 y + F1 y sin(ωt) (γ = 0).
@@ -27,7 +29,7 @@ class SinusoidalNonlinearity(_Model):
     gamma_max: float = Field(gt=0, description="uncertainty bound |γ| ≤ gamma_max (dimensionless)")
 
 
-class PolarArmNonlinearity(_Model):
+class PolarArmNonlinearity(SectionModel):
     """Two-DOF extend/rotate arm of ch. 14 (eq 14.1), uncertain payload M ∈ [M_min, M_max] (kg).
 
     f1 = [R/(μ+M) x4²; −2 R x3 x4 / I], R = μ x1 + M (x1 + a), I = J1 + J2 + μ x1² + M (x1 + a)².
@@ -53,7 +55,7 @@ class PolarArmNonlinearity(_Model):
         return 0.5 * (self.M_min + self.M_max)
 
 
-class ParameterRange(_Model):
+class ParameterRange(SectionModel):
     """An uncertain parameter θ ∈ [min, max] with its nominal value θ° (default: the midpoint)."""
 
     min: float
@@ -74,7 +76,7 @@ class ParameterRange(_Model):
         return 0.5 * (self.min + self.max) if self.nominal is None else self.nominal
 
 
-class LibraryForm(_Model):
+class LibraryForm(SectionModel):
     """A library nonlinearity on one output: gain·form(y_output) (qpp.model.nonlin.library_expression)."""
 
     form: Literal["saturation", "dead_zone", "cubic", "sin"]
@@ -83,7 +85,7 @@ class LibraryForm(_Model):
     level: Optional[float] = Field(None, gt=0, description="saturation level / dead-zone half-width")
 
 
-class ExpressionNonlinearity(_Model):
+class ExpressionNonlinearity(SectionModel):
     """General sector-bounded f1(y, t, θ) per control channel (qpp.model.nonlin), parsed without eval.
 
     ``f1`` has one entry per control input: an expression in y1…yp, t and the parameter names
@@ -105,8 +107,6 @@ class ExpressionNonlinearity(_Model):
     @field_validator("parameters")
     @classmethod
     def _names(cls, v):
-        import re
-
         for k in v:
             if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,30}", k):
                 raise ValueError(f"parameter name {k!r} is not an identifier")
@@ -120,8 +120,6 @@ class ExpressionNonlinearity(_Model):
         list of str
             One expression per control input, in y1…yp, t and the parameter names.
         """
-        from qpp.model.expression_parser import library_expression
-
         return [e if isinstance(e, str) else repr(float(e)) if isinstance(e, (int, float))
                 else library_expression(e.form, e.output, str(e.gain), e.level) for e in self.f1]
 

@@ -9,10 +9,10 @@ from typing import Literal, Optional
 from pydantic import Field
 
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN
-from qpp.io.config_fields import OptSeconds, Radians, RadPerSecond, Seconds, _Model
+from qpp.io.config_fields import OptSeconds, Radians, RadPerSecond, Seconds, SectionModel
 
 
-class Term(_Model):
+class Term(SectionModel):
     """One additive term of a signal: sin, step (on [t_on, t_off)), or ramp held after t_end."""
 
     kind: Literal["sin", "step", "ramp"]
@@ -26,7 +26,7 @@ class Term(_Model):
 Signal = list[list[Term]]   # one list of terms per channel
 
 
-class Scenario(_Model):
+class Scenario(SectionModel):
     """A simulation case: r = r_o + delta_r, uncertain parameter value, disturbance impulse."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX)
@@ -38,7 +38,7 @@ class Scenario(_Model):
     impulse: Optional[list[float]] = Field(None, description="impulse size I per disturbance channel (r)")
 
 
-class Simulation(_Model):
+class Simulation(SectionModel):
     """Nonlinear closed-loop simulation (ch. 13.4 / 14.5)."""
 
     t_final: Seconds = Field(10.0, ge=1e-9, le=1e5, description="simulated time, s (1 ns … 1e5 s)")

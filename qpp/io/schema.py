@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from acmm_qpp.schema import header, model_schema
+from qpp.io.config import QppConfig
 
 
 def qpp_schema() -> dict:
@@ -14,6 +15,4 @@ def qpp_schema() -> dict:
         JSON schema (draft 2020-12); dimensional fields accept a number or a quantity string in
         any unit of the field's dimension.
     """
-    from qpp.io.config import QppConfig
-
     return header(model_schema(QppConfig), "qpp", "qpp config (CR-185644 Part III)")

@@ -11,14 +11,18 @@ from pathlib import Path
 import numpy as np
 
 from acmm_qpp.outputs import stage
-from acmm_qpp.results import Dataset, draw_figures, write_h5
-from qpp.io.config_nonlin import PolarArmNonlinearity
-from qpp.io.config import QppConfig, load_config
+from acmm_qpp.results import Dataset, draw_figures, redraw_from_files, stored_results, write_h5
+from qpp.io.config_nonlin import ExpressionNonlinearity, PolarArmNonlinearity
+from qpp.io.config import QppConfig, load_config, parse_config
 from qpp.design.certificate import DesignResult
 from qpp.design.procedure import design
 from qpp.io.stored_design import gains_sha256, load_stored_design
 from qpp.plots import plot_cartesian, plot_circle, plot_iterations, plot_scenario
 from qpp.simulate.closed_loop import simulate
+import types
+import h5py
+import yaml
+from acmm_qpp.errors import ConfigError
 
 
 #: units of the gains of eq 10.5–10.6 in the results (text: the config's own units, not UDUNITS)
@@ -103,8 +107,6 @@ def sector_verified(cfg: QppConfig) -> bool | None:
     bool or None
         The verification's outcome.
     """
-    from qpp.io.config_nonlin import ExpressionNonlinearity
-
     nl = cfg.nonlinearity
     if cfg.design.sector is not None or not isinstance(nl, ExpressionNonlinearity) or nl.sector is not None:
         return None
@@ -393,13 +395,6 @@ def figure_calls_from_file(path: Path, out_dir: Path) -> list:
     acmm_qpp.errors.ConfigError
         The file is not a qpp result.
     """
-    import types
-
-    import h5py
-    import yaml
-
-    from acmm_qpp.errors import ConfigError
-    from qpp.io.config import parse_config
 
     def text(v):
         return v.decode() if isinstance(v, bytes) else str(v)
@@ -474,7 +469,5 @@ def redraw_figures(target, out=None) -> list[Path]:
     acmm_qpp.errors.FigureError
         A figure could not be drawn or written (exit 4).
     """
-    from acmm_qpp.results import redraw_from_files, stored_results
-
     readers = {"qpp design": figure_calls_from_file, "qpp simulate": figure_calls_from_file}
     return redraw_from_files(stored_results(target, FIGURE_SOURCES), readers, out)

@@ -15,6 +15,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import h5py
+import hashlib
+from acmm_qpp import __version__
+from acmm_qpp.provenance import config_hash, git_commit, source_unchanged
 
 
 @dataclass
@@ -60,10 +64,6 @@ def load_stored_design(path: Path, config_text: str) -> StoredDesign | None:
     StoredDesign or None
         None when the file is missing, unreadable, from another config, version or commit.
     """
-    import h5py
-
-    from acmm_qpp import __version__
-    from acmm_qpp.provenance import config_hash, git_commit, source_unchanged
 
     if not Path(path).is_file():
         return None
@@ -96,8 +96,6 @@ def gains_sha256(K1, Kc, H) -> str:
     str
         Hex digest.
     """
-    import hashlib
-
     h = hashlib.sha256()
     for g in (K1, Kc, H):
         g = np.ascontiguousarray(g, dtype=float)

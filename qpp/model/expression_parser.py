@@ -15,6 +15,7 @@ from __future__ import annotations
 import ast
 
 from acmm_qpp.errors import ConfigError
+import math
 
 MAX_LEN = 400           #: longest accepted expression, characters
 MAX_EXPONENT = 64       #: largest |numeric exponent| accepted in ``**``
@@ -29,7 +30,7 @@ def sympy_module():
     module
         The sympy module.
     """
-    import sympy
+    import sympy  # deferred: sympy start-up, only for an expression nonlinearity
 
     return sympy
 
@@ -153,8 +154,6 @@ _BINOPS = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: l
 
 def _float_sized(a, b) -> bool:
     """Whether the constant a**b stays within floating point (1e-300 ≤ |value| ≤ 1e300, or 0)."""
-    import math
-
     try:
         x, e = abs(complex(a)), abs(complex(b))
     except (OverflowError, TypeError, ValueError):

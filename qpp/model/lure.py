@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm_qpp.errors import ConfigError
+from scipy.linalg import matrix_balance
 
 BZ_READINGS = ("eq10.7", "printed")
 
@@ -197,8 +198,6 @@ def _balanced(A, B, C):
     """(D⁻¹AD, D⁻¹B, CD) with D the diagonal balancing of A (LAPACK gebal, scipy), the columns
     of B and the rows of C then of unit norm: the same controllability and observability, with
     the magnitudes that make a relative rank tolerance meaningful."""
-    from scipy.linalg import matrix_balance
-
     _, (scale, _) = matrix_balance(np.asarray(A, float), permute=False, separate=True)
     Ab = A / scale[:, None] * scale[None, :]
     Bb = np.asarray(B, float) / scale[:, None]

@@ -30,6 +30,9 @@ from qpp.model.expression_parser import FUNCTIONS, parse_expression, sympy_modul
 from qpp.model.sector_bounds import climb_from, global_search, refine, verify
 from qpp.model.sector_grid import SampleGrid
 from qpp.model.sector_proof import SLOPE_CELLS, ProvedBounds, prove, slope_cells
+from scipy.optimize import minimize_scalar
+from qpp.design.spheres import truncated_l2
+from scipy.stats import qmc
 
 
 @dataclass
@@ -397,7 +400,6 @@ class ExpressionModel(SampleGrid):
         float
             β3, in units of φ per unit of y times s^½.
         """
-        from qpp.design.spheres import truncated_l2
         tg, g = self.slope_profile(T)
         if tg.size == 1:    # φ independent of t: g_i is its slope bound, refined beyond the grid
             return float(max(np.max(g), np.max(self.sector_info.slope_bound)) * np.sqrt(T))
@@ -448,8 +450,6 @@ class ExpressionModel(SampleGrid):
         float
             β4, in units of φ times s^½.
         """
-        from qpp.design.spheres import truncated_l2
-
         t = np.asarray(t, float)
         y_o = np.atleast_2d(np.asarray(y_o, float))
         best = 0.0
@@ -501,8 +501,6 @@ def _on_grid(sp, expr, syms, ranges):
         axes = [np.linspace(*ranges[s], per_axis) for s in syms]
         grid = np.meshgrid(*axes, indexing="ij")
     else:
-        from scipy.stats import qmc
-
         u = qmc.Sobol(d, scramble=True, seed=0).random(SINGULARITY_POINTS)
         lo = np.array([ranges[s][0] for s in syms], float)
         hi = np.array([ranges[s][1] for s in syms], float)
@@ -540,8 +538,6 @@ def _touches_zero(sp, arg, syms, ranges, grid, vals):
     """The axis (index into ``syms``) along which ``arg`` reaches 0 between grid points without
     changing sign — a double root, |y − c|: its local minimum nearest 0 refined along each axis by
     a bounded Brent search — else None."""
-    from scipy.optimize import minimize_scalar
-
     a = np.abs(vals)
     top = float(np.max(a)) if a.size else 0.0
     if not top > 0:

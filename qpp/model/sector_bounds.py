@@ -13,6 +13,8 @@ to the extremum the grid missed.  Bounds are only ever widened, never narrowed.
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import differential_evolution, minimize
+from acmm_qpp.errors import ConfigError
 
 #: Nelder–Mead iterations per variable for each start point of :func:`refine`
 REFINE_ITER_PER_DIM = 200
@@ -85,8 +87,6 @@ def global_search(model, i: int, kinds: tuple, bounds: dict) -> dict:
     dict
         The bounds, each widened to the best extremum found (never narrowed).
     """
-    from scipy.optimize import differential_evolution
-
     ranges, free = _box(model, i)
     if not free.any():
         return dict(bounds)
@@ -174,8 +174,6 @@ def refine(model, i: int, starts: dict, bounds: dict, at: dict | None = None) ->
     dict
         The same kinds, each value widened to the best extremum found (never narrowed).
     """
-    from scipy.optimize import minimize
-
     ranges, free = _box(model, i)
     out = dict(bounds)
     for kind, x0 in starts.items():
@@ -238,8 +236,6 @@ def verify(model, alpha, beta, slope, diag) -> tuple[bool, list]:
     ConfigError
         φ is not finite at a random point (singular on the stated ranges).
     """
-    from acmm_qpp.errors import ConfigError
-
     rng = np.random.default_rng(20240529)
     K = 4000
     Y = [rng.uniform(lo, hi, K) for lo, hi in model.y_range]

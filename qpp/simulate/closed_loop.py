@@ -25,6 +25,8 @@ from qpp.simulate.loop import DIVERGED_FACTOR, nominal_diverged_beyond, simulate
 from qpp.simulate.loop import initial_state, simulate_loop
 from qpp.model.matched_nonlinearity import config_f1, scenario_gamma
 from qpp.simulate.signals import eval_signal
+from acmm_qpp.errors import ConfigError
+from acmm_qpp.limits import how_to_raise, limit
 
 
 @dataclass
@@ -215,9 +217,6 @@ def check_work(cfg: QppConfig, K1, Kc, H, runs: int | None = None, horizon: floa
     ConfigError
         The work exceeds the ``QPP_WORK`` limit.
     """
-    from acmm_qpp.errors import ConfigError
-    from acmm_qpp.limits import how_to_raise, limit
-
     P = cfg.lure_plant()
     A, B, C, Ac, Bc = (np.atleast_2d(np.asarray(x, float)) for x in (P.A, P.B, P.C, P.Ac, P.Bc))
     K1, Kc, L = np.atleast_2d(K1), np.atleast_2d(Kc), -np.atleast_2d(H)

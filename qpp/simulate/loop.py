@@ -2,7 +2,6 @@
 
 State z = [x; x_c; x̂] (eq 10.7).  With f1 the plant nonlinearity and f1o its nominal value
 (γ = nominal), the loop is (sign conventions of ``docs/ERRATA.md`` § QPP signs and :mod:`qpp.model.lure`):
-
     u   = K1 x̂ + Kc x_c − f1o                       (eq 10.6, "computed torque" in ch. 14)
     x'  = A x + B u + G d + B f1(x, y, γ, t)         (eqs 13.1, 14.2)
     x_c'= Ac x_c + Bc (r − y)                        (eq 10.2)
@@ -15,9 +14,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from acmm_qpp.errors import ConvergenceError
+from acmm_qpp.errors import ConfigError, ConvergenceError
 from qpp.io.config import QppConfig
 from qpp.model.lure import LurePlant
+from qpp.simulate.signals import eval_signal
+from acmm_qpp.limits import how_to_raise, limit
 
 
 def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
@@ -187,8 +188,6 @@ def simulate_nominal(plant: LurePlant, K1, Kc, H, f1, gamma_nominal, r_o, t_eval
         (Z, U) as :func:`simulate_loop` returns them: z in the units of x and x_c, u in the
         units of u (NaN after a divergence).
     """
-    from qpp.simulate.signals import eval_signal
-
     t_eval = np.asarray(t_eval, float)
     return simulate_loop(plant, K1, Kc, H, f1, gamma=gamma_nominal, gamma_nominal=gamma_nominal,
                          r_fun=lambda tt: eval_signal(r_o, tt), t_eval=t_eval, z0=z0, rtol=rtol, atol=atol,
@@ -216,8 +215,6 @@ def nominal_diverged_beyond(r_o, t: np.ndarray, z0: np.ndarray) -> float:
     float
         The threshold, the units of z.
     """
-    from qpp.simulate.signals import eval_signal
-
     step = max(1, t.size // 200)
     r_peak = max((float(np.max(np.abs(eval_signal(r_o, tt)), initial=0.0)) for tt in t[::step]), default=0.0)
     return DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0), initial=0.0)), r_peak)
@@ -231,8 +228,6 @@ def _counted(rhs):
     """``rhs`` refusing to be evaluated more than ``QPP_RHS_EVALS`` times (acmm_qpp.limits): the
     static work bound (t_final × the loop's rates) cannot see a fast t inside an expression
     nonlinearity, e.g. sin(1e6·t), whose run never ended (a review)."""
-    from acmm_qpp.limits import limit
-
     budget, count = limit("QPP_RHS_EVALS"), [0]
 
     def counted(t, z):
@@ -270,9 +265,6 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, div
                 sol = solve_ivp(rhs, (ta, tb), z, method="DOP853", t_eval=np.unique(te), rtol=rtol, atol=atol,
                                 max_step=max_step, events=events)
             except _TooManyEvaluations as exc:
-                from acmm_qpp.errors import ConfigError
-                from acmm_qpp.limits import how_to_raise, limit
-
                 raise ConfigError(
                     f"simulation.t_final: the integration reached t = {float(exc.args[0]):.4g} s of {tf:g} s "
                     f"after {limit('QPP_RHS_EVALS'):.3g} evaluations of the loop: something in it varies much "
@@ -283,8 +275,8 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, div
         # within one step, past the event, and fail the integrator there)
         reached = np.abs(np.column_stack([z, sol.y]) if sol.y.size else z)
         peak = float(np.max(reached, initial=0.0, where=np.isfinite(reached)))
-        limit = diverged_beyond if diverged_beyond is not None else failed_beyond
-        stopped = limit is not None and (sol.status == 1 or (not sol.success and peak > 1e-3 * limit))
+        beyond = diverged_beyond if diverged_beyond is not None else failed_beyond
+        stopped = beyond is not None and (sol.status == 1 or (not sol.success and peak > 1e-3 * beyond))
         if not sol.success and not stopped:
             raise ConvergenceError(f"simulation failed at t = {sol.t[-1]:.4g} s: {sol.message}")
         keep = np.isin(sol.t, t_eval[mask])

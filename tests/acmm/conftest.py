@@ -47,9 +47,9 @@ def captured(monkeypatch):
         figs.append(fig)
         return [path]
 
-    monkeypatch.setattr(plot_base, "_save", fake_save)         # acmm.sweep.output imports it from there
-    monkeypatch.setattr(design_plots, "_save", fake_save)      # the figures live in these two
-    monkeypatch.setattr(sim_plots, "_save", fake_save)
+    monkeypatch.setattr(plot_base, "write_figure", fake_save)         # acmm.sweep.output imports it from there
+    monkeypatch.setattr(design_plots, "write_figure", fake_save)      # the figures live in these two
+    monkeypatch.setattr(sim_plots, "write_figure", fake_save)
     return figs
 
 

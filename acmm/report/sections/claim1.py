@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm.report.context import SectionWriter
-from acmm.report.document import _fmt
+from acmm.report.document import fmt_value
 from acmm.report.figures import fig_claim1
 
 
@@ -76,7 +76,7 @@ def build(ctx: SectionWriter, dec_true_poles: np.ndarray) -> Claim1Numbers:
         f"Its gain on the true coupled linear model: largest Re λ = {ev.real.max() / n:+.3f} n "
         f"({'unstable' if ev.real.max() > 0 else 'stable'}) although all its design-model poles lie in the sector.",
         f"Coupled design: {s_c['attrs']['verdict']}; peak |error| in the first orbit "
-        f"{_fmt(first, '{:.2f}')} deg (roll, pitch, yaw); from orbit 2 on {_fmt(late, '{:.2f}')} deg.",
+        f"{fmt_value(first, '{:.2f}')} deg (roll, pitch, yaw); from orbit 2 on {fmt_value(late, '{:.2f}')} deg.",
         f"Verdict: claim 1 {'REPRODUCED' if (div < 0.1 and s_c['attrs']['verdict'] == 'bounded') else 'NOT reproduced'}.",
     ])
     ctx.ledger_add("Claim 1", "divergence of the cross-inertia-free design", "0.1", div, "orbit",

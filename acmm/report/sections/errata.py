@@ -12,11 +12,15 @@ import numpy as np
 
 from acmm.design import matrix_sign as msign
 from acmm.design import riccati as ric
-from acmm_qpp.errors import AcmmError, ConvergenceError
+from acmm_qpp.errors import AcmmError, ConvergenceError, NoEquilibriumError
 from acmm.report.context import SectionWriter
-from acmm.report.document import _fmt
+from acmm.report.document import fmt_value
 from acmm.report.sections.claim1 import Claim1Numbers
 from acmm.report.sections.errata_qpp import qpp_rows
+from acmm.model import (controllability as ctrb_mod, dynamics as dyn, kinematics as kin, linearize as lin,
+    tea as tea_mod)
+from acmm.design.settings import design_settings
+from acmm.design.schedule import sector_design
 
 
 def build(ctx: SectionWriter, tea_mb3: tuple, claim1: Claim1Numbers, beta3: tuple[float, float]) -> None:
@@ -74,10 +78,6 @@ def errata_rows(cfg, tea_mb3, st, sim, c1: Claim1Numbers, s13, d13, a, beta3) ->
     list of list of str
         Table rows: item, printed / claim, correction used, evidence, confirming tests.
     """
-    from acmm.model import linearize as lin
-    from acmm.model import controllability as ctrb_mod
-    from acmm.design.settings import design_settings
-
     n, I = cfg.orbit_rate, cfg.inertia.matrix()
     t, t0, bias = tea_mb3
     th, d = t.theta, cfg.design
@@ -107,8 +107,6 @@ def design_on(A, B, m, s) -> str:
         Whether the design is stable on the true model, with its largest Re λ in units of n (or
         why the design fails).
     """
-    from acmm.design.schedule import sector_design
-
     n = s.orbit_rate
     try:
         r = sector_design(A, B, m.scales, s)
@@ -134,9 +132,6 @@ def kinematics_rows(th, n: float) -> list[list[str]]:
     list of list of str
         Table rows: item, printed / claim, correction used, evidence, confirming tests.
     """
-    from acmm.model import dynamics as dyn
-    from acmm.model import kinematics as kin
-
     rows = []
     # eq 3.6
     def printed_f(theta):
@@ -178,9 +173,6 @@ def tea_rows(I, n: float, t0, bias) -> list[list[str]]:
     list of list of str
         Table rows: item, printed / claim, correction used, evidence, confirming tests.
     """
-    from acmm.model import tea as tea_mod
-    from acmm_qpp.errors import NoEquilibriumError
-
     rows = []
     # TEA branches
     roots = tea_mod.all_equilibria(I, n, np.zeros(3))
@@ -188,7 +180,7 @@ def tea_rows(I, n: float, t0, bias) -> list[list[str]]:
     rows.append(["TEA roots (eqs 4.1–4.3)", "one TEA per configuration", "continuation from LVLH picks the "
                  "physical branch", f"MB3, zero bias: {len(roots)} equilibria found, pitch {pitches} deg; "
                  f"continuation gives {t0.theta_deg[1]:+.2f}°; Table 1 TEAs reproduced with back-solved bias "
-                 f"{_fmt(bias, '{:+.4f}')} ft·lbf", "tests/acmm/model/test_tea.py"])
+                 f"{fmt_value(bias, '{:+.4f}')} ft·lbf", "tests/acmm/model/test_tea.py"])
     cap = 3 * n ** 2 * np.hypot((I[2, 2] - I[0, 0]) / 2, I[0, 2])
     try:
         tea_mod.solve_tea(I, n, np.array([0.0, 4.0, 0.0]))
@@ -222,9 +214,6 @@ def linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
     list of list of str
         Table rows: item, printed / claim, correction used, evidence, confirming tests.
     """
-    from acmm.model import dynamics as dyn
-    from acmm.model import kinematics as kin
-
     rows = []
     # linearization
 
@@ -344,9 +333,6 @@ def design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str
     list of list of str
         Table rows: item, printed / claim, correction used, evidence, confirming tests.
     """
-    from acmm.model import linearize as lin
-    from acmm.model import controllability as ctrb_mod
-
     rows = []
     # sector LQR
     pts = [st["points"][k] for k in sorted(st["points"])]
@@ -368,6 +354,6 @@ def design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str
     rows.append(["claim 1", "cross-inertia-free design unstable within 0.1 orbit",
                  "design: minimum-energy shifted LQR (Q0 = 0, R = I/(100 ft·lbf)²) + pole shifting of the DRF poles",
                  f"diverges at {c1.div:.3f} orbit; its gain on the true linear model: max Re λ = {c1.maxre:+.3f} n; "
-                 f"coupled design bounded, peak error first orbit {_fmt(c1.first, '{:.1f}')} deg, from orbit 2 "
-                 f"{_fmt(c1.late, '{:.2f}')} deg", "tests/acmm/simulate/test_kernel.py"])
+                 f"coupled design bounded, peak error first orbit {fmt_value(c1.first, '{:.1f}')} deg, from orbit 2 "
+                 f"{fmt_value(c1.late, '{:.2f}')} deg", "tests/acmm/simulate/test_kernel.py"])
     return rows

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm.report.document import _fmt
+from acmm.report.document import fmt_value
 
 
 def qpp_rows(s13, d13, a, beta3) -> list[list[str]]:
@@ -39,8 +39,8 @@ def qpp_rows(s13, d13, a, beta3) -> list[list[str]]:
                  f"printed 1.61454", "tests/qpp/design/test_spheres.py"])
     rows.append(["ch. 11 weights", "state weight [C 0]ᵀ[C 0]; Lyapunov 11.2 for the observer",
                  "servo weight [0 C_c]ᵀ[0 C_c]; filter Riccati H = −h Cᵀ",
-                 f"ch. 13 K1 = {_fmt(d13['K1'], '{:.1f}')}, Kc = {_fmt(d13['Kc'], '{:.1f}')} (printed "
-                 f"{_fmt(s13.published.K1, '{:.1f}')}, {_fmt(s13.published.Kc, '{:.1f}')})",
+                 f"ch. 13 K1 = {fmt_value(d13['K1'], '{:.1f}')}, Kc = {fmt_value(d13['Kc'], '{:.1f}')} (printed "
+                 f"{fmt_value(s13.published.K1, '{:.1f}')}, {fmt_value(s13.published.Kc, '{:.1f}')})",
                  "tests/qpp/design/test_hinf.py"])
     b3_5, b3_1 = beta3
     th13 = np.atleast_2d(d13["thresholds"])

@@ -9,7 +9,12 @@ import numpy as np
 
 from acmm.report.context import SectionWriter
 from acmm.report.gather import Gathered
-from acmm.report.manifest import _git_commit, _git_dirty
+from acmm.report.manifest import report_git_state
+from acmm_qpp.provenance import git_commit
+import h5py
+import scipy
+from acmm import __version__
+import matplotlib
 
 
 def build(rep: SectionWriter, g: Gathered, timings: dict) -> None:
@@ -24,15 +29,9 @@ def build(rep: SectionWriter, g: Gathered, timings: dict) -> None:
     timings : dict
         Step name → wall time, s.
     """
-    import h5py
-    import matplotlib
-    import scipy
-
-    from acmm import __version__
-
     rep.section("provenance")
-    commit = _git_commit()
-    rows = [["package", f"acmm-qpp {__version__}"], ["git commit", f"{commit} ({_git_dirty()})"],
+    commit = git_commit()
+    rows = [["package", f"acmm-qpp {__version__}"], ["git commit", f"{commit} ({report_git_state()})"],
             ["date (UTC)", datetime.now(timezone.utc).isoformat(timespec="seconds")],
             ["python", platform.python_version()], ["numpy / scipy", f"{np.__version__} / {scipy.__version__}"],
             ["h5py / matplotlib", f"{h5py.__version__} / {matplotlib.__version__}"],

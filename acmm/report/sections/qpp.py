@@ -4,17 +4,18 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.report.context import SectionWriter
-from acmm.report.document import _fmt
+from acmm.report.document import fmt_value
 from acmm.report.figures_qpp import fig_circle, fig_qpp
-from acmm.report.ledger import _num_str, _printed_str, matches_printed
+from acmm.report.ledger import num_str, printed_str, matches_printed
+import h5py
+from qpp.design.hinf import hinf_gains
+from qpp.design import spheres
 
 
 def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures: bool = True):
     """One QPP chapter; returns (β3 with sin 5t, with sin t) for ch. 13, else None.
 
     ``figures=False``: text and tables only (:func:`_figures` adds the two figures)."""
-    import h5py
-
     ctx.section(key)
     cfg = ctx.g.configs[name]
     dpath, spath = ctx.run(f"qpp design:{name}").path, ctx.run(f"qpp simulate:{name}").path
@@ -34,13 +35,13 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures:
     expl_b1 = (f"β1 is computed exactly (L∞ norm) for both readings of B_z: eq 10.7 gives {b1['eq10.7'][0]:.5f}, "
                f"the printed B_z (H in the r-columns) {b1['printed'][0]:.5f}; the printed value matches neither "
                "(docs/ERRATA.md: it looks like a coarse frequency grid)")
-    pn = ctx.ledger_add(f"ch. {chap}", "β1", _num_str(pub.beta1), b1["eq10.7"][0], explanation=expl_b1)
+    pn = ctx.ledger_add(f"ch. {chap}", "β1", num_str(pub.beta1), b1["eq10.7"][0], explanation=expl_b1)
     for rd, (v, gv, w) in b1.items():
-        brow.append([f"β1, B_z {rd}", _num_str(pub.beta1), f"{v:.6f} (peak at {w:.4g} rad/s)",
+        brow.append([f"β1, B_z {rd}", num_str(pub.beta1), f"{v:.6f} (peak at {w:.4g} rad/s)",
                      ctx.status_text(pn) if rd == "eq10.7" else "see above"])
     m_pr = th["printed"][3] if "printed" in th else None
-    pn_m = ctx.ledger_add(f"ch. {chap}", "m (from printed β3, β4)", _num_str(pub.m), m_pr)
-    brow.append(["m = β_o/(β_ri + ‖d‖∞ + β_o β3 + β4), printed β3, β4", _num_str(pub.m), f"{m_pr:.5f}",
+    pn_m = ctx.ledger_add(f"ch. {chap}", "m (from printed β3, β4)", num_str(pub.m), m_pr)
+    brow.append(["m = β_o/(β_ri + ‖d‖∞ + β_o β3 + β4), printed β3, β4", num_str(pub.m), f"{m_pr:.5f}",
                  ctx.status_text(pn_m)])
     for nm, row in th.items():
         if nm == "printed":
@@ -53,8 +54,8 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures:
     brow.append(["consistent certificate (one sector, one norm; the bookkeepings above reproduce, not certify)",
                  "—", consistent, "see docs/qpp-certificates.md"])
     brow.extend(_printed_gain_rows(ctx, chap, d, pub, names))
-    brow.append(["circle criterion (lemma 1), sector " + _fmt(d["sector"], "{:g}"), "satisfied",
-                 f"{'PASS' if circle_passed else 'FAIL'}; margins {_fmt(d['circle']['margins'], '{:.4f}')}; "
+    brow.append(["circle criterion (lemma 1), sector " + fmt_value(d["sector"], "{:g}"), "satisfied",
+                 f"{'PASS' if circle_passed else 'FAIL'}; margins {fmt_value(d['circle']['margins'], '{:.4f}')}; "
                  f"largest admissible sector scale {float(d['circle']['max_scale']):.4g}",
                  "✔ reproduced" if circle_passed else "not reproduced"])
     ctx.doc.table(["quantity", "printed", "computed", "status"], brow,
@@ -64,7 +65,7 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures:
     led = [pn for pn in ctx.ledger if pn.section == f"ch. {chap}" and pn.quantity.startswith("‖y")]
     if led:
         ctx.doc.table(["printed", "quantity", "computed", "status"],
-                      [[p.printed, p.quantity, _fmt(p.computed, "{:.5f}"), ctx.status_text(p)] for p in led],
+                      [[p.printed, p.quantity, fmt_value(p.computed, "{:.5f}"), ctx.status_text(p)] for p in led],
                       "Printed simulation results")
     if figures:
         _figures(ctx, key, name, out_labels)
@@ -105,11 +106,8 @@ def _responses_figure(ctx: SectionWriter, key, name, out_labels) -> None:
                         name, ctx.figdir, out_labels))
 
 
-
 def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
     """K1, Kc, H printed vs synthesized (ch. 11 Riccati); H also vs the DGKF-style observer."""
-    from qpp.design.hinf import hinf_gains
-
     pub = cfg.published
     rows = []
     dgkf = hinf_gains(cfg.lure_plant(), rho=cfg.hinf.rho, a=cfg.hinf.a, nu=cfg.hinf.nu,
@@ -119,7 +117,7 @@ def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
         for idx in np.ndindex(P.shape):
             if P[idx] == 0.0:
                 continue
-            ps = _printed_str(P[idx], gname)
+            ps = printed_str(P[idx], gname)
             expl = ""
             if gname == "H":
                 dv = float(np.asarray(dgkf.H)[idx])
@@ -136,8 +134,6 @@ def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
 
 def _error_table(ctx: SectionWriter, chap: str, cfg, spath, printed_errors, out_labels) -> None:
     """Simulated tracking errors per scenario (``qpp_sim.h5``) and the printed ones in the ledger."""
-    import h5py
-
     with h5py.File(spath, "r") as f:
         scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
         erow = []
@@ -145,7 +141,7 @@ def _error_table(ctx: SectionWriter, chap: str, cfg, spath, printed_errors, out_
             e = float(f[k]["error_inf"][()])
             per = np.atleast_1d(f[k]["error_per_output"][()])
             pas = bool(f[k]["error_inf"].attrs["passed"])
-            erow.append([k, f"{float(f[k]['error_inf'].attrs['gamma']):g}", _fmt(per, "{:.5f}"),
+            erow.append([k, f"{float(f[k]['error_inf'].attrs['gamma']):g}", fmt_value(per, "{:.5f}"),
                          f"{e:.5f}", f"{cfg.spheres.beta_o:g}", "within" if pas else "OUTSIDE"])
             for (scn, i, pstr, bound, expl) in printed_errors:
                 if scn == k:
@@ -163,10 +159,10 @@ def _printed_gain_rows(ctx: SectionWriter, chap, d, pub, names=()):
         return []
     rows = []
     b1e, b1p = float(pc["beta1_eq10_7"]), float(pc["beta1_printed"])
-    pn = ctx.ledger_add(f"ch. {chap}", "β1 of the printed gains (B_z eq 10.7)", _num_str(pub.beta1), b1e,
+    pn = ctx.ledger_add(f"ch. {chap}", "β1 of the printed gains (B_z eq 10.7)", num_str(pub.beta1), b1e,
                         explanation=f"printed gains, exact L∞ norm: {b1e:.5f} (eq 10.7 B_z), {b1p:.5f} "
                                     "(printed B_z); see the β1 row above for the synthesized gains")
-    rows.append(["β1 with the printed gains, B_z eq 10.7 / printed", _num_str(pub.beta1),
+    rows.append(["β1 with the printed gains, B_z eq 10.7 / printed", num_str(pub.beta1),
                  f"{b1e:.6f} / {b1p:.6f}", ctx.status_text(pn)])
     for k, row in enumerate(np.atleast_2d(pc["thresholds"])):
         nm = f", {names[k]} bookkeeping" if k < len(names) else ""
@@ -179,20 +175,18 @@ def _printed_gain_rows(ctx: SectionWriter, chap, d, pub, names=()):
 
 def _thresholds(ctx: SectionWriter, chap, cfg, th):
     """β3, β4 rows of the ledger; ch. 13: returns β3 with sin 5t and with sin t."""
-    from qpp.design import spheres
-
     pub = cfg.published
     if chap == "13":
         nl = cfg.nonlinearity
         b3_5 = spheres.beta3_sinusoidal(0.05, 5.0, cfg.spheres.T)
         b3_1 = spheres.beta3_sinusoidal(0.05, nl.omega, cfg.spheres.T)
-        ctx.ledger_add("ch. 13", "β3 = 0.05‖(sin 5t)_T‖₂, T = 0.5 s", _num_str(pub.beta3), b3_5,
+        ctx.ledger_add("ch. 13", "β3 = 0.05‖(sin 5t)_T‖₂, T = 0.5 s", num_str(pub.beta3), b3_5,
                        explanation=f"the exact integral gives 0.05‖(sin 5t)_T‖₂ = {b3_5:.5f} "
                                    f"({100 * abs(b3_5 - pub.beta3) / pub.beta3:.2f} % above the printed value, "
                                    "presumably a coarse quadrature); the definition 10.54 with sin t gives "
                                    f"{b3_1:.5f} (docs/ERRATA.md)")
         b4 = th["report"][2]
-        ctx.ledger_add("ch. 13", "β4 = 0.05·‖(y_o)_T‖₂", _num_str(pub.beta4), b4,
+        ctx.ledger_add("ch. 13", "β4 = 0.05·‖(y_o)_T‖₂", num_str(pub.beta4), b4,
                        explanation=f"‖(y_o)_T‖₂ = {b4 / 0.05:.4f} here vs the printed 0.363: y_o is the "
                                    "nominal closed-loop output on [0, T], which depends on the gains and the "
                                    "initial servo state; m changes by "
@@ -201,8 +195,8 @@ def _thresholds(ctx: SectionWriter, chap, cfg, th):
         b3, b4 = th["trajectory"][1], th["trajectory"][2]
         why = (f"the arm mass μ is not printed (μ = {cfg.nonlinearity.mu:g} kg assumed) and the report does not "
                "say how β3, β4 were evaluated; here they are sup over M ∈ [45, 55] kg along the nominal trajectory")
-        ctx.ledger_add("ch. 14", "β3", _num_str(pub.beta3), b3, explanation=why + f" (β3 = {b3:.3g})")
-        ctx.ledger_add("ch. 14", "β4", _num_str(pub.beta4), b4, explanation=why + f" (β4 = {b4:.3g})")
+        ctx.ledger_add("ch. 14", "β3", num_str(pub.beta3), b3, explanation=why + f" (β3 = {b3:.3g})")
+        ctx.ledger_add("ch. 14", "β4", num_str(pub.beta4), b4, explanation=why + f" (β4 = {b4:.3g})")
         return None
     return b3_5, b3_1
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.report.context import SectionWriter
-from acmm.report.document import _fmt
+from acmm.report.document import fmt_value
 from acmm.report.figures import fig_robustness
 from acmm.report.ledger import STATUS_EXPLAINED, PrintedNumber
 
@@ -55,8 +55,8 @@ def build(ctx: SectionWriter) -> None:
         fracs[lab] = nb / max(1, v.size)
         others = ", ".join(f"{x} {int(np.sum(v == x))}" for x in sorted(set(v)) if x != "bounded")
         pk = peak[sel][v == "bounded"]
-        med = _fmt(np.median(pk, axis=0), "{:.2f}") if pk.size else "—"
-        mx = _fmt(np.max(pk, axis=0), "{:.2f}") if pk.size else "—"
+        med = fmt_value(np.median(pk, axis=0), "{:.2f}") if pk.size else "—"
+        mx = fmt_value(np.max(pk, axis=0), "{:.2f}") if pk.size else "—"
         lim = ""
         mg = d.get("margin", {})
         if f"{lab}_down" in mg and f"{lab}_up" in mg:

@@ -7,8 +7,10 @@ from acmm.design.dwell import NOT_COVERED
 from acmm.design.regional_lmi import control_energy
 from acmm.model.state_scaling import torque_scale
 from acmm.report.context import SectionWriter
-from acmm.report.document import _decode
+from acmm.report.document import decoded
 from acmm.report.figures import fig_gain_schedule, fig_pole_maps
+from acmm.model import linearize as lin
+from acmm.plots import design as design_plots
 
 
 def build(ctx: SectionWriter) -> np.ndarray:
@@ -59,7 +61,7 @@ def summary(ctx: SectionWriter) -> None:
                "the report names beside its order-2 polynomial for claim 2, ch. 6)")
     else:
         how = (f"then an order-{order} polynomial schedule in θ2* (the report uses order 2), fitted by "
-               f"{_decode(sc.get('fit_method', b'least_squares'))}")
+               f"{decoded(sc.get('fit_method', b'least_squares'))}")
     lmi = all("lmi" in p for p in pts)
     route = ("regional pole placement by LMIs (every pole certified in the sector by a Lyapunov matrix, "
              "minimal H2 energy bound, coordinates pre-conditioned by the sector LQR; guide: 'The regional "
@@ -168,8 +170,6 @@ def true_poles(ctx: SectionWriter) -> np.ndarray:
     (24,) complex array
         The closed-loop poles, rad/s.
     """
-    from acmm.model import linearize as lin
-
     dec = ctx.data("acmm design:mb3_decoupled")
     cfg_m = ctx.g.configs["mb3"]
     true = lin.design_point(cfg_m.inertia.matrix(), dec["tea"][0], cfg_m.orbit_rate, model="coupled",
@@ -237,7 +237,7 @@ def _conditioning(ctx: SectionWriter, d, pts):
         lmi = all("lmi" in p for p in pts)
         rows = []
         for name, p in zip(d["names"], pts):
-            rows.append([_decode(name), f"{np.degrees(float(p['tea'][1])):.2f}",
+            rows.append([decoded(name), f"{np.degrees(float(p['tea'][1])):.2f}",
                          f"{float(p['sector_margin']):+.3f}", f"{float(p['max_eig_condition']):.2e}",
                          f"{float(p['robustness_radius']):.1e}",
                          f"{float(p['robustness_radius_elementwise']):.1e}"]
@@ -273,7 +273,6 @@ def path_figures(ctx: SectionWriter) -> None:
     ctx : acmm.report.context.SectionWriter
         The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
     """
-    from acmm.plots import design as design_plots
     cfg = ctx.g.configs["staircase"]
     pa = ctx.data("acmm design:" + cfg.name)["schedule"].get("path")
     if pa is None:

@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.report.context import SectionWriter
-from acmm.report.document import _fmt
+from acmm.report.document import fmt_value
+from acmm.model import tea as tea_mod
 
 TABLE1_PRINTED = {
     "mb3": {"I11": "23.22", "I22": "1.30", "I33": "23.23", "I12": "-0.023", "I13": "0.477", "I23": "-0.011",
@@ -32,8 +33,6 @@ def build(ctx: SectionWriter) -> dict:
         ``"mb3"``/``"ac"`` → (:class:`acmm.model.tea.TEA` with the config's bias, TEA with zero bias,
         (3,) array bias torque in ft·lbf); TEAs by eqs 4.1–4.3, θ* in rad.
     """
-    from acmm.model import tea as tea_mod
-
     ctx.section("table1")
     ctx.doc.p("Table 1 of CR-185644 next to this run. The bias torque is not printed in the report: each "
               "config uses the bias back-solved from eq 4.1 at the printed attitude (bias_from_tea), and the "
@@ -64,8 +63,8 @@ def build(ctx: SectionWriter) -> dict:
     brow = []
     for name in ("mb3", "ac"):
         t, t0, bias = teas[name]
-        brow.append([name.upper(), _fmt(bias, "{:+.5f}"), f"{t.residual:.1e}",
-                     _fmt(np.degrees(t.omega) * 3600, "{:+.4f}")])
+        brow.append([name.upper(), fmt_value(bias, "{:+.5f}"), f"{t.residual:.1e}",
+                     fmt_value(np.degrees(t.omega) * 3600, "{:+.4f}")])
     ctx.doc.table(["config", "bias used [roll, pitch, yaw] (ft·lbf)", "residual (ft·lbf)", "ω* (deg/h)"], brow,
                   "Bias torques used (back-solved from eq 4.1 at the printed TEA; not printed in the report)")
     return teas

@@ -12,7 +12,7 @@ def test_numba_compile_detection_says_whether_the_first_call_compiles(tmp_path, 
     when numba's internals cannot be read.  (It was ``in (True, False)``: a test that cannot fail.)"""
     import acmm.simulate.kernel as sim_mod
     from acmm.cli.compile_note import numba_needs_compile
-    from acmm.simulate.compiled_cache import UNCACHED
+    from acmm.model.compiled_cache import UNCACHED
 
     real = sim_mod._integrate
     if "_integrate" not in UNCACHED:            # the internals it reads are those of this numba

@@ -85,7 +85,6 @@ def test_a_branch_that_folds_on_the_blend_blames_the_first_point_beyond_the_fold
             raise NoEquilibriumError("folds")
         return real(inertia, n_, bias, guess, **kw)
 
-    monkeypatch.setattr(sp_mod, "_TRACKS", {})
     monkeypatch.setattr(sp_mod, "solve_tea_near", folds_at_0_6)
     jump = off_branch_point(specs, teas, n)
     first_beyond = next(p for p in blend if p.s > 0.6)

@@ -23,10 +23,10 @@ def test_baked_texts_are_text_in_a_pdf():
     import io
 
     from acmm.plots import base as plot_base
+    from acmm.plots import design as design_plots
     from acmm_qpp import plot_style as plot_style_mod
 
-    fig, grid = plot_base._BUILDERS["gain_schedule_grid"](tuple(STATE_NAMES), tuple(plot_base.state_units()),
-                                                          "ft·lbf")
+    fig, grid = design_plots._gain_grid_layout(tuple(STATE_NAMES), tuple(plot_base.state_units()), "ft·lbf")
     title = grid.titles[0]
     drawn, draw = [], title.draw
     title.draw = lambda renderer: (title.get_visible() and drawn.append(type(renderer).__name__), draw(renderer))

@@ -12,7 +12,7 @@ from acmm.model.linearize import STATE_NAMES
 
 
 def test_baked_texts_draw_as_the_live_texts(tmp_path, monkeypatch):
-    """The skeleton's pre-rendered titles, labels and legend (plot_base._bake_texts) give the PNG
+    """The skeleton's pre-rendered titles, labels and legend (plot_base.bake_texts) give the PNG
     the live texts give, to anti-aliasing rounding; a PDF gets them as text."""
     from PIL import Image
 
@@ -23,7 +23,7 @@ def test_baked_texts_draw_as_the_live_texts(tmp_path, monkeypatch):
                                          np.cos(np.arange(60 * 3 * 24).reshape(60, 3, 24)))
     baked = design_plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "b.png", units=units, vector=True)
     assert [p.name for p in baked] == ["b.png", "b.pdf"]
-    monkeypatch.setattr(design_plots, "_bake_texts", lambda fig, texts: None)
+    monkeypatch.setattr(design_plots, "bake_texts", lambda fig, texts: None)
     design_plots.gain_schedule_grid(theta2, gains, sched, names, tmp_path / "l.png", units=units)
     a, b = (np.asarray(Image.open(tmp_path / n), dtype=int) for n in ("b.png", "l.png"))
     assert a.shape == b.shape and np.abs(a - b).max() <= 2

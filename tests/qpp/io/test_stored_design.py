@@ -18,14 +18,14 @@ def test_qpp_simulate_reuses_the_gains_qpp_design_wrote(tmp_path, monkeypatch):
 
     import h5py
 
-    from acmm_qpp import provenance
+    from qpp.io import stored_design          # it imports source_unchanged: patched where it is read
 
     over = [f"output.root={tmp_path}", "simulation.t_final=3.0"]
     alone = stages.run_simulate(qpp_config("qpp_siso", over + ["name=alone"]), figures=False)
     cfg = qpp_config("qpp_siso", over + ["name=pair"])
     _, designed, dpath = stages.run_design(cfg, figures=False)
     real_design = procedure_mod.design
-    monkeypatch.setattr(provenance, "source_unchanged", lambda: True)     # as in a clean checkout
+    monkeypatch.setattr(stored_design, "source_unchanged", lambda: True)     # as in a clean checkout
     monkeypatch.setattr(stages, "design", lambda c: pytest.fail("designed again"))
     _, reused, _, path = stages.run_simulate(cfg, figures=False)
     assert isinstance(reused, StoredDesign) and reused.verdict == designed.verdict
@@ -36,10 +36,10 @@ def test_qpp_simulate_reuses_the_gains_qpp_design_wrote(tmp_path, monkeypatch):
     monkeypatch.setattr(stages, "design", lambda c: called.append(1) or real_design(c))
     stages.run_simulate(qpp_config("qpp_siso", over + ["name=pair", "simulation.t_final=2.0"]), figures=False)
     assert called == [1]                       # the config changed: designed
-    monkeypatch.setattr(provenance, "source_unchanged", lambda: False)    # edited source: designed
+    monkeypatch.setattr(stored_design, "source_unchanged", lambda: False)    # edited source: designed
     stages.run_simulate(cfg, figures=False)
     assert called == [1, 1]
-    monkeypatch.setattr(provenance, "source_unchanged", lambda: True)
+    monkeypatch.setattr(stored_design, "source_unchanged", lambda: True)
     with h5py.File(dpath, "r+") as f:          # gains edited in the file: designed
         f["K1"][0, 0] = 50.0 * f["K1"][0, 0]
     stages.run_simulate(cfg, figures=False)

@@ -53,7 +53,8 @@ def test_design_on_is_the_pipelines_sector_design(mb3, monkeypatch):
         seen.append(s)
         return real(A, B, scales, s)
 
-    monkeypatch.setattr(schedule, "sector_design", spy)
+    assert errata.sector_design is real                # the pipeline's own function, imported
+    monkeypatch.setattr(errata, "sector_design", spy)
     settings = design_settings(cfg)
     assert settings.orbit_rate == n
     text = errata.design_on(m.A, m.B, m, settings)

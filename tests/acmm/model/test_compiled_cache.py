@@ -1,4 +1,4 @@
-"""The compiled kernels where numba cannot cache them (acmm.simulate.compiled_cache): a read-only install
+"""The compiled kernels where numba cannot cache them (acmm.model.compiled_cache): a read-only install
 for a user without a home crashed at import with numba's "no locator available" traceback, and a
 full disk under NUMBA_CACHE_DIR failed the run with "I/O error: No space left on device"."""
 from __future__ import annotations
@@ -12,12 +12,12 @@ import textwrap
 import numba.core.caching as numba_caching
 import pytest
 
-from acmm.simulate import compiled_cache
+from acmm.model import compiled_cache
 
 from tests.conftest import REPO as ROOT
 
 KERNEL = textwrap.dedent("""
-    from acmm.simulate.compiled_cache import njit_cached
+    from acmm.model.compiled_cache import njit_cached
 
     @njit_cached()
     def plus_one(x):
