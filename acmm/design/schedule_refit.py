@@ -343,8 +343,12 @@ def _modelled_poles(a0, sc, up, As_t, Bs_t, n, x, band):
     lam, V = np.linalg.eig(As_t - Bs_t @ np.einsum("tk,kab->tab", up, a))
     f = float(lam.real.max()) / n
     t, i = np.nonzero((lam.real / n >= f - band) & (lam.imag >= 0))
-    W = np.linalg.inv(V[np.unique(t)])
-    slot = np.searchsorted(np.unique(t), t)
+    rows = np.unique(t)
+    try:
+        W = np.linalg.inv(V[rows])
+    except np.linalg.LinAlgError:           # a defective eigenvalue: its gradient is unbounded anyway
+        W = np.linalg.pinv(V[rows])
+    slot = np.searchsorted(rows, t)
     # ∂λ/∂K_ab = −(w_i B)_a v_bi (W V = I), chained through K = Σ_k up[t, k] a_k, a_k = a0_k + x_k sc_k
     dK = -np.einsum("ja,jb->jab", np.einsum("jn,jnm->jm", W[slot, i], Bs_t[t]), V[t, :, i]).real / n
     jac = (up[t][:, :, None, None] * dK[:, None] * sc[None]).reshape(t.size, -1)
