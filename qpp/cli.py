@@ -9,7 +9,7 @@ import json
 from typing import Optional
 
 # first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
-from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
+from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, first_hint, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
                                    version_option)
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
@@ -57,8 +57,7 @@ def numerical_hint(message: str) -> str:
     str
         The first matching hint (:data:`NUMERICAL_HINTS`); empty when none applies.
     """
-    low = message.lower()
-    return next((hint for words, hint in NUMERICAL_HINTS if all(w in low for w in words)), "")
+    return first_hint(message, NUMERICAL_HINTS)
 
 
 def qpp_command(fn):

@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 import sys
 
-from acmm_qpp.cli.plumbing import user_errors
+from acmm_qpp.cli.plumbing import first_hint, user_errors
 
 #: (words that must all occur in the message, hint) — the first match wins; case-insensitive.
 #: Each hint names settings of the acmm configs only; ``{other}`` is the Riccati methods other
@@ -59,11 +59,7 @@ def numerical_hint(message: str) -> str:
     str
         The first matching hint (:data:`NUMERICAL_HINTS`); empty when none applies.
     """
-    low = message.lower()
-    for words, hint in NUMERICAL_HINTS:
-        if all(w in low for w in words):
-            return hint.replace("{other}", other_riccati_methods(low))
-    return ""
+    return first_hint(message, NUMERICAL_HINTS).replace("{other}", other_riccati_methods(message.lower()))
 
 
 def other_riccati_methods(low_message: str) -> str:

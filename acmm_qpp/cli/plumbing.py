@@ -50,6 +50,26 @@ def fail(message: str, code: int = EXIT_INPUT) -> None:
 MAX_MESSAGE = 600
 
 
+def first_hint(message: str, table) -> str:
+    """The hint of the first row of a product's hint table whose words all occur in ``message``
+    (any case): how each product's ``hint`` for :func:`with_hint` reads its table.
+
+    Parameters
+    ----------
+    message : str
+        The failure message.
+    table : sequence of (tuple of str, str)
+        (lower-case words, hint) rows, most specific first.
+
+    Returns
+    -------
+    str
+        The hint; empty when no row applies.
+    """
+    low = message.lower()
+    return next((hint for words, hint in table if all(w in low for w in words)), "")
+
+
 def with_hint(exc: AcmmError, hint=None) -> str:
     """The message of a user-facing error, with the product's hint appended when one applies
     (solver/design failures, exit 3, and a missing equilibrium).
