@@ -235,7 +235,9 @@ def _smooth_max(a0, sc, shape, up, As_t, Bs_t, n, beta, re_weight, re_offset, an
 
     def fg(x):
         # all TEAs at once: batched eigendecompositions and first-order gradients
-        lam, dlc = _poles_and_derivatives(a0 + x.reshape(shape) * sc, up, As_t, Bs_t, n)
+        a = a0 + x.reshape(shape) * sc
+        Kt = np.einsum("tk,kab->tab", up, a)
+        lam, V = np.linalg.eig(As_t - Bs_t @ Kt)                      # (T, N), (T, N, N)
         terms = [re_weight * (lam.real / n - re_offset)]
         if angle_weight > 0:
             # distance beyond the φ lines, |Im λ| cos φ + Re λ sin φ (> 0 outside), weighted
@@ -245,6 +247,11 @@ def _smooth_max(a0, sc, shape, up, As_t, Bs_t, n, beta, re_weight, re_offset, an
         e = np.exp(beta * (v - vm))
         s_ = e.sum()
         wgt = e / s_
+        try:
+            W = np.linalg.inv(V)
+        except np.linalg.LinAlgError:
+            W = np.linalg.pinv(V)
+        dlc = -np.einsum("tia,tbi->tiab", W @ Bs_t, V) / n              # ∂λ_i/∂K_ab / n
         gK = np.einsum("ti,tiab->tab", wgt[:, 0] * re_weight, dlc.real)
         if angle_weight > 0:
             g2 = np.sign(lam.imag)[:, :, None, None] * dlc.imag * cphi + dlc.real * sphi
@@ -286,7 +293,14 @@ def _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offse
         key = z.tobytes()
         if key in memo:
             return memo[key]
-        lam, dlc = _poles_and_derivatives(a0 + z[:-1].reshape(shape) * sc, up, As_t, Bs_t, n)
+        a = a0 + z[:-1].reshape(shape) * sc
+        Kt = np.einsum("tk,kab->tab", up, a)
+        lam, V = np.linalg.eig(As_t - Bs_t @ Kt)
+        try:
+            W = np.linalg.inv(V)
+        except np.linalg.LinAlgError:
+            W = np.linalg.pinv(V)
+        dlc = -np.einsum("tia,tbi->tiab", W @ Bs_t, V) / n                # ∂λ_i/∂K_ab / n
         kinds = [(re_weight * (lam.real / n - re_offset), re_weight * dlc.real)]
         if angle_weight > 0:
             kinds.append((angle_weight * ((np.abs(lam.imag) * cphi + lam.real * sphi) / n - angle_offset),
@@ -322,26 +336,22 @@ def _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offse
     return res
 
 
-def _poles_and_derivatives(a, up, As_t, Bs_t, n):
-    """The closed-loop poles at every TEA with the coefficients ``a`` (in u, scaled gains) and
-    their first-order derivatives ∂λ_i/∂K_ab / n = −(w_i B)_a v_bi / n (W V = I), batched:
-    (T, N) and (T, N, M, N) arrays."""
-    lam, V = np.linalg.eig(As_t - Bs_t @ np.einsum("tk,kab->tab", up, a))
-    try:
-        W = np.linalg.inv(V)
-    except np.linalg.LinAlgError:
-        W = np.linalg.pinv(V)
-    return lam, -np.einsum("tia,tbi->tiab", W @ Bs_t, V) / n
-
-
 def _modelled_poles(a0, sc, up, As_t, Bs_t, n, x, band):
     """The largest Re λ/n over the TEAs at the scaled coefficient change ``x`` and, for every
     eigenvalue (Im λ ≥ 0) within ``band`` of it, Re λ/n and its gradient with respect to x."""
-    lam, dlc = _poles_and_derivatives(a0 + x.reshape(a0.shape) * sc, up, As_t, Bs_t, n)
+    a = a0 + x.reshape(a0.shape) * sc
+    lam, V = np.linalg.eig(As_t - Bs_t @ np.einsum("tk,kab->tab", up, a))
     f = float(lam.real.max()) / n
     t, i = np.nonzero((lam.real / n >= f - band) & (lam.imag >= 0))
-    # chained through K = Σ_k up[t, k] a_k, a_k = a0_k + x_k sc_k
-    jac = (up[t][:, :, None, None] * dlc[t, i].real[:, None] * sc[None]).reshape(t.size, a0.size)
+    rows = np.unique(t)
+    try:
+        W = np.linalg.inv(V[rows])
+    except np.linalg.LinAlgError:           # a defective eigenvalue: its gradient is unbounded anyway
+        W = np.linalg.pinv(V[rows])
+    slot = np.searchsorted(rows, t)
+    # ∂λ/∂K_ab = −(w_i B)_a v_bi (W V = I), chained through K = Σ_k up[t, k] a_k, a_k = a0_k + x_k sc_k
+    dK = -np.einsum("ja,jb->jab", np.einsum("jn,jnm->jm", W[slot, i], Bs_t[t]), V[t, :, i]).real / n
+    jac = (up[t][:, :, None, None] * dK[:, None] * sc[None]).reshape(t.size, -1)
     return f, lam.real[t, i] / n, jac
 
 
