@@ -60,16 +60,23 @@ the cost LMIs' largest eigenvalue ≤ :data:`COST_TOL` of their norm), never on 
 a refused answer falls back to the next solver with a warning, and when none passes the error says
 what each solver returned — never "infeasible", which a solver's failure does not prove:
 
-* ``"dsdp"`` (default): DSDP 5, a dual-scaling method that factors the 678 × 678 Schur complement
+* ``"conelp"`` (default): cvxopt's primal-dual ``conelp`` (Nesterov–Todd scaling) with a KKT
+  solver that forms the 678 × 678 Schur complement from the program's structure — every block is a
+  sum of terms Sym(P V Qᵀ), so the complement is a sum of Kronecker products of small matrices
+  (:mod:`acmm.design.lmi_structure`) — in two passes (:func:`_route_conelp`), as DSDP below
+  (``make bench`` times it; ``tests/test_determinism.py`` holds the gains under two BLAS kernels
+  and thread counts).
+* ``"dsdp"``: DSDP 5, a dual-scaling method that factors the 678 × 678 Schur complement
   and uses the low rank of each variable's data, through ``cvxopt.dsdp`` (GPL-3, README); two
   passes (:func:`_route_dsdp`): the second in the coordinates of the first's answer, where X' ≈ I,
   converges to a K independent of the BLAS kernel.
 * ``"clarabel"``: Clarabel through cvxpy (Apache-2.0), the reference: it factors the whole KKT
-  system, with a dense 1 176 × 1 176 block per 48 × 48 LMI (``make bench`` times both); a first pass, then
+  system, with a dense 1 176 × 1 176 block per 48 × 48 LMI (``make bench`` times the three); a first pass, then
   up to ``refinements`` passes with T ← T chol(X') and the input columns scaled to unit gain-row
   norms, the objective divided by the last optimum, at gap and feasibility tolerance ``tol``.
 
-Both solve the same program; their gains agree to 1e-5 relative (a slow test at MB3).
+All three solve the same program; at the tolerance 1e-7 the optimum's flat directions let their
+gains differ by more than each solver's own rounding does (a slow test at MB3 holds them to 3e-5).
 """
 from __future__ import annotations
 
@@ -82,6 +89,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy import sparse
 
+from acmm.design.lmi_structure import coefficient_arrays, layout, program_terms, solve_conelp
 from acmm.design.sector_lqr import eigen_conditioning, sector_margin, sector_robustness
 from acmm_qpp.errors import DesignError
 
@@ -125,13 +133,13 @@ class RegionalLMISettings:
         ε of the objective's ε (tr X̃ + tr X̃₂), which makes its optimum attained (module
         docstring, "Well-posed"), dimensionless.
     solver : str
-        The SDP solver tried first (:data:`SOLVERS`): ``"dsdp"`` or ``"clarabel"``; the others
-        follow as fallbacks when its answer fails the checks.
+        The SDP solver tried first (:data:`SOLVERS`): ``"conelp"``, ``"dsdp"`` or ``"clarabel"``;
+        the others follow, in that order, as fallbacks when its answer fails the checks.
     tol : float
         The solvers' gap tolerance (DSDP's relative gap; Clarabel's tol_gap_abs = tol_gap_rel =
         tol_feas of its final pass), dimensionless.
     max_iter : int
-        Clarabel iteration limit per pass.
+        Iteration limit per pass of conelp and Clarabel (a guard: they stop on their tolerances).
     refinements : int
         Largest number of Clarabel's re-pre-conditioned passes after the first.
     n_random : int
@@ -147,7 +155,7 @@ class RegionalLMISettings:
     disk_radius: float = 0.0
     dilation: float = 0.35
     regularization: float = 1e-5
-    solver: str = "dsdp"
+    solver: str = "conelp"
     tol: float = 1e-7
     max_iter: int = 200
     refinements: int = 2
@@ -385,8 +393,9 @@ class LMIProgram:
         Objective coefficients, dimensionless.
     F0 : list of arrays
         Constant term of each block, dimensionless.
-    F : list of (n_var, m_k, m_k) arrays
-        Coefficient F_ik of each variable in each block, dimensionless.
+    terms : list of list of Term
+        Each block's linear part, F_k(v) − F0_k = Σ_t Sym(P_t V_t Q_tᵀ)
+        (:func:`acmm.design.lmi_structure.program_terms`; :meth:`coefficients` gives the F_ik).
     reg : (N, N) array
         ε R with ε (tr X' + tr X₂') = tr(reg X) + tr(reg X₂) in these coordinates, dimensionless.
     """
@@ -399,13 +408,24 @@ class LMIProgram:
     pars: tuple
     c: np.ndarray
     F0: list
-    F: list
+    terms: list
     reg: np.ndarray
 
     @property
     def sizes(self):
         """(N, m): states and inputs."""
         return self.Bz.shape
+
+    def coefficients(self) -> list:
+        """The coefficient F_ik of every variable in every block, the data of a general SDP
+        solver (:func:`acmm.design.lmi_structure.coefficient_arrays`).
+
+        Returns
+        -------
+        list of (n_var, m_k, m_k) arrays
+            Dimensionless.
+        """
+        return coefficient_arrays(self.terms, layout(*self.sizes))
 
     def unpack(self, v):
         """The matrices of a variable vector.
@@ -425,6 +445,23 @@ class LMIProgram:
         nS, nY = iu[0].size, N * m
         return (_sym(v[:nS], N, iu), _sym(v[nS:2 * nS], N, iu), v[2 * nS:2 * nS + nY].reshape(m, N),
                 _sym(v[2 * nS + nY:], m, ium))
+
+    def pack(self, X, X2, Y, W):
+        """The variable vector of matrices (the inverse of :meth:`unpack`).
+
+        Parameters
+        ----------
+        X, X2, Y, W : arrays
+            (N, N), (N, N), (m, N), (m, m) in the coordinates z, dimensionless.
+
+        Returns
+        -------
+        (n_var,) array
+            Variable vector, dimensionless.
+        """
+        N, m = self.sizes
+        iu, ium = np.triu_indices(N), np.triu_indices(m)
+        return np.concatenate([X[iu], X2[iu], np.asarray(Y).ravel(), W[ium]])
 
     def blocks(self, v):
         """Every LMI block at a variable vector.
@@ -471,8 +508,8 @@ def _sym(v, N, iu):
 
 def lmi_program(As, Bs, Gs, T, s_u, st: "RegionalLMISettings", T_reg=None) -> LMIProgram:
     """The regional LMI program of the scaled model in the coordinates x̃ = T z, input columns
-    scaled by ``s_u``, as :class:`LMIProgram` data (each F_ik by evaluating the blocks at the
-    i-th unit vector without the constant term).
+    scaled by ``s_u``, as :class:`LMIProgram` data (F0 the blocks at v = 0 and the terms of
+    :func:`acmm.design.lmi_structure.program_terms`).
 
     Parameters
     ----------
@@ -506,17 +543,8 @@ def lmi_program(As, Bs, Gs, T, s_u, st: "RegionalLMISettings", T_reg=None) -> LM
     c = np.concatenate([st.regularization * TT[iu] * offdiag, st.regularization * TT[iu] * offdiag,
                         np.zeros(m * N), (s_u[ium[0]] * s_u[ium[1]]) * np.where(ium[0] == ium[1], 1.0, 0.0)])
     GG = Gz @ Gz.T
-    z = np.zeros(c.size)
-    prog = LMIProgram(Az, Bz, GG, T, s_u, pars, c, [], [], st.regularization * TT)
-    F0 = prog.blocks(z)
-    cols = [[] for _ in F0]
-    for i in range(c.size):
-        z[i] = 1.0
-        X, X2, Y, W = prog.unpack(z)
-        for k, Fk in enumerate(_blocks(Az, Bz, GG, X, X2, Y, W, *pars, np.block, with_constant=False)):
-            cols[k].append(Fk)
-        z[i] = 0.0
-    return LMIProgram(Az, Bz, GG, T, s_u, pars, c, F0, [np.array(f) for f in cols], st.regularization * TT)
+    F0 = LMIProgram(Az, Bz, GG, T, s_u, pars, c, [], [], st.regularization * TT).blocks(np.zeros(c.size))
+    return LMIProgram(Az, Bz, GG, T, s_u, pars, c, F0, program_terms(Az, Bz, pars), st.regularization * TT)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -539,7 +567,7 @@ def _solve_dsdp(prog: LMIProgram, tol: float):
     """DSDP 5 (dual scaling, Schur complement with low-rank data) through ``cvxopt.dsdp.sdp``:
     the blocks as sparse lower triangles, gap tolerance ``tol``."""
     Gs = []
-    for F in prog.F:
+    for F in prog.coefficients():
         n_var, mk, _ = F.shape
         G = F.reshape(n_var, mk * mk).T.copy()          # column i = vec(F_i) (symmetric: any order)
         G[~np.tril(np.ones((mk, mk), bool)).ravel(order="F")] = 0.0
@@ -792,6 +820,52 @@ def _route_dsdp(As, Bs, Gs, K0, T, st):
     return status, (it, it2), None if v is None else _solution(prog, v)
 
 
+#: Relative gap and feasibility tolerances of conelp's first (pre-conditioning) pass, dimensionless
+#: (a feasibility tolerance of 1e-2 let cvxopt declare MB3 "primal infeasible" on a spurious
+#: certificate: its answer would then be no answer, and the fallback solver's).
+CONELP_FIRST_TOL = (1e-1, 1e-3)
+
+
+def _route_conelp(As, Bs, Gs, K0, T, st):
+    """cvxopt's conelp with the program's structured KKT solver (:mod:`acmm.design.lmi_structure`),
+    twice, as :func:`_route_dsdp`: in the reference loop's coordinates to a loose gap
+    (:data:`CONELP_FIRST_TOL`), then in the coordinates of that answer to ``st.tol`` (gap and
+    feasibility), started from the first pass's last iterate carried into them
+    (:func:`_carry_iterate`: the same program, so the same point, residuals and gap):
+    (status, iterations, solution or None)."""
+    s_u = np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12)
+    prog = lmi_program(As, Bs, Gs, T, s_u, st)
+    status, v, it, iterate = solve_conelp(prog, *CONELP_FIRST_TOL, st.max_iter, refinement=1)
+    if v is None:
+        return status, (it,), None
+    sol = _solution(prog, v)
+    T1, s_u1 = _precondition(T, sol[0], sol[1])
+    prog2 = lmi_program(As, Bs, Gs, T1, s_u1, st, T_reg=T)
+    start = _carry_iterate(prog, prog2, v, iterate)
+    status, v, it2, _ = solve_conelp(prog2, st.tol, st.tol, st.max_iter, start=start)
+    return status, (it, it2), None if v is None else _solution(prog2, v)
+
+
+def _carry_iterate(prog: LMIProgram, prog2: LMIProgram, v, iterate):
+    """An interior-point iterate (v, slacks s_k, duals z_k) of ``prog`` as one of ``prog2``, the same
+    program in other coordinates: with P = T₂⁻¹T₁ and D = diag(s_u₁/s_u₂) the variables map as
+    X ↦ PXPᵀ, X₂ ↦ PX₂Pᵀ, Y ↦ DYPᵀ, W ↦ DWD, every block as F ↦ R F Rᵀ (R = I ⊗ P, the cost
+    block's diag(D, P)), so s ↦ R s Rᵀ and z ↦ R⁻ᵀ z R⁻¹ keep the residuals and sᵀz."""
+    N, m = prog.sizes
+    P = np.linalg.solve(prog2.T, prog.T)
+    D = np.diag(prog.s_u / prog2.s_u)
+    X, X2, Y, W = prog.unpack(v)
+    v2 = prog2.pack(P @ X @ P.T, P @ X2 @ P.T, D @ Y @ P.T, D @ W @ D)
+    slack, dual = iterate
+    s2, z2 = [], []
+    for k, (Sk, Zk) in enumerate(zip(slack, dual)):
+        R = sla.block_diag(D, P) if k == len(slack) - 1 else np.kron(np.eye(Sk.shape[0] // N), P)
+        Ri = np.linalg.inv(R)
+        s2.append(R @ Sk @ R.T)
+        z2.append(Ri.T @ Zk @ Ri)
+    return v2, s2, z2
+
+
 def _route_clarabel(As, Bs, Gs, K0, T, st):
     """Clarabel through cvxpy: a first pass as pre-conditioner, then up to ``st.refinements``
     passes with T ← chol(X̃) and unit gain rows, the objective divided by the last optimum,
@@ -818,10 +892,11 @@ def _route_clarabel(As, Bs, Gs, K0, T, st):
 
 
 #: Every ``design.lmi.solver``, in fallback order.
-KNOWN_SOLVERS = ("dsdp", "clarabel")
+KNOWN_SOLVERS = ("conelp", "dsdp", "clarabel")
 
 #: The solver routes that can run here (DSDP only where cvxopt is installed).
-ROUTES = {"dsdp": _route_dsdp, "clarabel": _route_clarabel} if dsdp is not None else {"clarabel": _route_clarabel}
+ROUTES = ({"conelp": _route_conelp, "dsdp": _route_dsdp, "clarabel": _route_clarabel} if dsdp is not None
+          else {"clarabel": _route_clarabel})
 SOLVERS = tuple(ROUTES)
 
 

@@ -61,9 +61,10 @@ class RegionalLMI(SectionModel):
     """The regional pole placement by LMIs (``pole_method: lmi``, :mod:`acmm.design.regional_lmi`)."""
 
     dilation: float = Field(0.35, gt=0, le=100, description="β of the dilated H2 energy bound, units of 1/n")
-    solver: Literal["dsdp", "clarabel"] = Field(
-        "dsdp", description="SDP solver tried first: DSDP 5 through cvxopt (GPL-3) or Clarabel through cvxpy "
-                            "(Apache-2.0, the reference); the other is the fallback when an answer fails the checks")
+    solver: Literal["conelp", "dsdp", "clarabel"] = Field(
+        "conelp", description="SDP solver tried first: cvxopt's conelp with the program's structured KKT solver "
+                              "or DSDP 5 (both cvxopt, GPL-3), or Clarabel through cvxpy (Apache-2.0, the "
+                              "reference); the others follow, in that order, when an answer fails the checks")
     regularization: float = Field(1e-5, ge=0, le=1, description="ε of ε(tr X + tr X2) in the objective, in the "
                                                                "reference loop's coordinates: makes the optimum attained")
     tol: float = Field(1e-7, ge=1e-10, le=1e-3, description="the solvers' gap tolerance of the final pass")

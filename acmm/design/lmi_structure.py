@@ -1,0 +1,454 @@
+"""The regional LMI program's structure (report ch. 5.2, eqs 5.2–5.4), and an interior-point KKT
+solver that uses it (issue 40).
+
+Every block of the program of :mod:`acmm.design.regional_lmi` is affine in three matrix
+variables, Z = [X; Y] ((N + m) × N: the region certificate X stacked on Y = K̃X), X₂ (N × N) and
+W (m × m), and is a sum of terms ::
+
+    F_k(v) = F0_k + Σ_t Sym(P_t V_t Q_tᵀ),      Sym(U) = U + Uᵀ,
+
+with constant P_t (m_k × rows V_t) and Q_t (m_k × cols V_t) (:func:`program_terms`; M = [Ã, −B̃]Z).
+A primal-dual interior-point method spends its time on the Schur complement of the Newton system,
+H_ab = Σ_k tr(F_k(E_a) Σ_k F_k(E_b) Σ_k) (678 × 678 at N = 24, m = 3; Σ_k the scaling of block
+k), which a general solver forms from the data of each of the 678 variables.  For terms it is a
+sum of Kronecker products of small matrices: with E_a = e_i e_jᵀ in V and E_b = e_k e_lᵀ in V′, ::
+
+    tr(Sym(P E_a Qᵀ) Σ Sym(P′ E_b Q′ᵀ) Σ) = 2 [(QᵀΣP′)_jk (Q′ᵀΣP)_li + (QᵀΣQ′)_jl (P′ᵀΣP)_ki],
+
+so each pair of terms costs four products of m_k-sized matrices and the sums over pairs are single
+matrix products (:meth:`StructuredKKT.schur`): ~7 ms at MB3 against DSDP's ~28 ms per iteration.
+(This is the KKT customization cvxopt documents for structured cone programs: Andersen, Dahl,
+Vandenberghe, "Implementation of nonsymmetric interior-point methods for linear optimization
+over sparse matrix cones", and the CVXOPT user's guide, "Exploiting structure".)
+
+:func:`solve_conelp` hands the program to cvxopt's ``conelp`` (Nesterov–Todd scaling,
+Mehrotra correction) with this KKT solver: the linear algebra is LAPACK's Cholesky of H (an LU
+factorization where rounding leaves H numerically indefinite, counted in the answer's status),
+everything else is cvxopt's.  Stopping rule: cvxopt's relative gap and feasibility tolerances.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+from scipy import sparse
+
+try:                  # GPL-3 (README, Dependencies): without it the LMI route solves with Clarabel only
+    import cvxopt
+    from cvxopt import solvers
+except ImportError:   # pragma: no cover - exercised by uninstalling cvxopt
+    cvxopt = solvers = None
+
+#: The variables of the terms, in the order of the program's variable vector's parts.
+VARIABLES = ("Z", "X2", "W")
+
+
+@dataclass(frozen=True)
+class Term:
+    """One term Sym(P V Qᵀ) of a block.
+
+    Attributes
+    ----------
+    P : (m_k, r) array
+        Left factor, dimensionless.
+    var : str
+        The variable V (:data:`VARIABLES`), r × c.
+    Q : (m_k, c) array
+        Right factor, dimensionless.
+    """
+
+    P: np.ndarray
+    var: str
+    Q: np.ndarray
+
+
+def program_terms(Az, Bz, pars) -> list:
+    """The terms of each block of the regional LMI program, in the order of
+    :func:`acmm.design.regional_lmi.LMIProgram.blocks` (the constant parts are not terms).
+
+    Parameters
+    ----------
+    Az, Bz : arrays
+        The model in the program's coordinates, (N, N) and (N, m), dimensionless.
+    pars : tuple of float
+        (a, c, φ, r, β) of :class:`acmm.design.regional_lmi.LMIProgram`: half-plane and cone-apex
+        shifts (units of n), sector half-angle (rad), disk radius (units of n), dilation (units of 1/n).
+
+    Returns
+    -------
+    list of list of Term
+        One list per block: half-plane, cone, the disk if r > 0, the dilated H2 condition, the cost.
+    """
+    N, m = Bz.shape
+    a, c, phi, r, beta = pars
+    I, zero = np.eye(N), np.zeros((N, m))
+    e1, e2 = np.array([[1.0], [0.0]]), np.array([[0.0], [1.0]])
+    AB = np.hstack([Az, -Bz])                                   # M = AB Z
+    Xonly = np.hstack([I, zero])                                # X = Xonly Z
+    theta = np.array([[np.sin(phi), np.cos(phi)], [-np.cos(phi), np.sin(phi)]])
+    blocks = [[Term(AB + a * Xonly, "Z", I)],                                  # He(M) + 2aX
+              [Term(np.kron(theta @ e, AB + c * Xonly), "Z", np.kron(e, I))    # Sym(Θ ⊗ M_c)
+               for e in (e1, e2)]]
+    if r > 0:                                                   # [[−rX, M], [Mᵀ, −rX]]
+        blocks.append([Term(np.kron(e1, -0.5 * r * Xonly), "Z", np.kron(e1, I)),
+                       Term(np.kron(e2, -0.5 * r * Xonly) + np.kron(e1, AB), "Z", np.kron(e2, I))])
+    # [[−2βX, X₂ − X + βMᵀ], [X₂ − X + βM, M + Mᵀ]]
+    blocks.append([Term(np.kron(e1, -beta * Xonly) + np.kron(e2, beta * AB - Xonly), "Z", np.kron(e1, I)),
+                   Term(np.kron(e2, I), "X2", np.kron(e1, I)),
+                   Term(np.kron(e2, AB), "Z", np.kron(e2, I))])
+    # −[[W, Y], [Yᵀ, 2X − X₂]]
+    E1 = np.vstack([np.eye(m), np.zeros((N, m))])
+    E2 = np.vstack([np.zeros((m, N)), I])
+    blocks.append([Term(-0.5 * E1, "W", E1), Term(-np.hstack([E2, E1]), "Z", E2), Term(0.5 * E2, "X2", E2)])
+    return blocks
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where the variable vector's entries sit in the terms' variables.
+
+    The vector v stacks the upper triangles of X and X₂ (row by row), Y (row by row) and the upper
+    triangle of W (:class:`acmm.design.regional_lmi.LMIProgram`); the variables Z = [X; Y], X₂ and
+    W are stored whole, row by row, one after another.
+
+    Attributes
+    ----------
+    shapes : dict
+        Each variable's shape.
+    offsets : dict
+        Each variable's first index in the stacked whole variables.
+    first, second : (n_var,) int arrays
+        Where each v_a sits in the variables stored whole: an off-diagonal entry of a symmetric
+        variable at two places (``second`` ≥ 0), every other entry at one (``second`` = −1).
+    S : sparse (n_full, n_var) matrix
+        The duplication: vec(whole variables) = S v.
+    """
+
+    shapes: dict
+    offsets: dict
+    first: np.ndarray
+    second: np.ndarray
+    S: sparse.csr_matrix
+
+    def fold(self, H) -> np.ndarray:
+        """Sᵀ H S of a matrix over the whole variables (gathers: ~2× faster than the sparse products).
+
+        Parameters
+        ----------
+        H : (n_full, n_full) array
+            Over the whole variables, dimensionless.
+
+        Returns
+        -------
+        (n_var, n_var) array
+            Over the variable vector, dimensionless.
+        """
+        two = np.flatnonzero(self.second >= 0)
+        rows = np.take(H, self.first, axis=0)
+        rows[two] += np.take(H, self.second[two], axis=0)
+        out = np.take(rows, self.first, axis=1)
+        out[:, two] += np.take(rows, self.second[two], axis=1)
+        return out
+
+
+def layout(N: int, m: int) -> Layout:
+    """The :class:`Layout` of a program with N states and m inputs.
+
+    Parameters
+    ----------
+    N, m : int
+        States and inputs.
+
+    Returns
+    -------
+    Layout
+        Shapes, offsets and the duplication.
+    """
+    shapes = {"Z": (N + m, N), "X2": (N, N), "W": (m, m)}
+    offsets = dict(zip(VARIABLES, np.cumsum([0] + [r * c for r, c in shapes.values()])[:-1].tolist()))
+
+    def symmetric(n):
+        i, j = np.triu_indices(n)
+        return i * n + j, np.where(i == j, -1, j * n + i)
+
+    nS, nY = N * (N + 1) // 2, m * N
+    fx, sx = symmetric(N)
+    fw, sw = symmetric(m)
+    n_var = 2 * nS + nY + fw.size
+    first, second = np.empty(n_var, int), np.empty(n_var, int)
+    for var, idx, f, t in (("Z", np.r_[0:nS, 2 * nS:2 * nS + nY], np.r_[fx, N * N + np.arange(nY)],
+                            np.r_[sx, np.full(nY, -1)]),
+                           ("X2", np.r_[nS:2 * nS], fx, sx), ("W", 2 * nS + nY + np.arange(fw.size), fw, sw)):
+        first[idx] = offsets[var] + f
+        second[idx] = np.where(t >= 0, offsets[var] + t, -1)
+    two = second >= 0
+    rows = np.concatenate([first, second[two]])
+    cols = np.concatenate([np.arange(n_var), np.flatnonzero(two)])
+    n_full = sum(r * c for r, c in shapes.values())
+    S = sparse.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n_full, n_var))
+    return Layout(shapes, offsets, first, second, S)
+
+
+def coefficient_arrays(blocks, lay: Layout) -> list:
+    """The coefficient F_ik of every variable in every block (the data of a general SDP solver).
+
+    Parameters
+    ----------
+    blocks : list of list of Term
+        :func:`program_terms`.
+    lay : Layout
+        The variable layout.
+
+    Returns
+    -------
+    list of (n_var, m_k, m_k) arrays
+        F_ik = Σ_t Sym(P_t E_i Q_tᵀ), E_i the i-th variable's unit matrix, dimensionless.
+    """
+    n_full = lay.S.shape[0]
+    out = []
+    for terms in blocks:
+        mk = terms[0].P.shape[0]
+        full = np.zeros((n_full, mk, mk))
+        for t in terms:
+            r, c = lay.shapes[t.var]
+            o = lay.offsets[t.var]
+            U = np.einsum("ai,bj->ijab", t.P, t.Q).reshape(r * c, mk, mk)
+            full[o:o + r * c] += U + U.transpose(0, 2, 1)
+        out.append((lay.S.T @ full.reshape(n_full, mk * mk)).reshape(-1, mk, mk))
+    return out
+
+
+class StructuredKKT:
+    """cvxopt ``conelp`` callbacks for the program: the operator G (v ↦ the blocks' linear part) and
+    the KKT solver whose Schur complement is formed from the terms (module docstring).
+
+    Parameters
+    ----------
+    blocks : list of list of Term
+        :func:`program_terms`.
+    lay : Layout
+        The variable layout.
+
+    Attributes
+    ----------
+    dims : list of int
+        The blocks' sizes m_k.
+    indefinite : int
+        Factorizations where rounding left H numerically indefinite (solved by LU instead).
+    """
+
+    def __init__(self, blocks, lay: Layout):
+        self.blocks, self.lay = blocks, lay
+        self.dims = [terms[0].P.shape[0] for terms in blocks]
+        self.offs = np.cumsum([0] + [d * d for d in self.dims])
+        self.lower = [np.tril(np.ones((d, d), bool)) for d in self.dims]
+        # H over the whole variables (12 MB at N = 24), rewritten at every Schur complement: zeroing
+        # a fresh one each time cost ~15 % of the solve, most of it in page faults
+        self._whole = np.zeros((lay.S.shape[0],) * 2)
+        self.indefinite = 0
+
+    def apply(self, v) -> np.ndarray:
+        """G v: the blocks' linear parts Σ_t Sym(P_t V_t Q_tᵀ).
+
+        Parameters
+        ----------
+        v : (n_var,) array
+            Variable vector, dimensionless.
+
+        Returns
+        -------
+        (Σ m_k²,) array
+            The blocks, each a symmetric matrix stacked as a vector (row or column order alike),
+            dimensionless.
+        """
+        whole = self.lay.S @ v
+        out = []
+        for terms in self.blocks:
+            B = sum(t.P @ self._variable(whole, t.var) @ t.Q.T for t in terms)
+            out.append((B + B.T).ravel())
+        return np.concatenate(out)
+
+    def adjoint(self, Zs) -> np.ndarray:
+        """Gᵀ z: the gradient of Σ_k tr(F_k(v) Z_k), Σ_t 2 P_tᵀ Z_k Q_t folded into the variable
+        vector.
+
+        Parameters
+        ----------
+        Zs : list of (m_k, m_k) arrays
+            Symmetric matrices, one per block, dimensionless.
+
+        Returns
+        -------
+        (n_var,) array
+            Dimensionless.
+        """
+        g = np.zeros(self.lay.S.shape[0])
+        for terms, Z in zip(self.blocks, Zs):
+            for t in terms:
+                o = self.lay.offsets[t.var]
+                D = 2.0 * (t.P.T @ Z @ t.Q)
+                g[o:o + D.size] += D.ravel()
+        return self.lay.S.T @ g
+
+    def _variable(self, whole, var):
+        r, c = self.lay.shapes[var]
+        o = self.lay.offsets[var]
+        return whole[o:o + r * c].reshape(r, c)
+
+    def schur(self, sigma) -> np.ndarray:
+        """H_ab = Σ_k tr(F_k(E_a) Σ_k F_k(E_b) Σ_k) over the variable vector.
+
+        Parameters
+        ----------
+        sigma : list of (m_k, m_k) arrays
+            The symmetric positive definite scaling of each block, dimensionless.
+
+        Returns
+        -------
+        (n_var, n_var) array
+            The Schur complement (the KKT solver factors it in place), dimensionless.
+        """
+        lay = self.lay
+        order = {v: k for k, v in enumerate(VARIABLES)}
+        pairs = {}
+        for terms, Sg in zip(self.blocks, sigma):
+            SP = [Sg @ t.P for t in terms]
+            SQ = [Sg @ t.Q for t in terms]
+            for i, t in enumerate(terms):
+                for j, u in enumerate(terms):
+                    if order[t.var] > order[u.var]:
+                        continue                                # the lower blocks are the transposes
+                    acc = pairs.setdefault((t.var, u.var), ([], [], [], []))
+                    acc[0].append((t.P.T @ SP[j]).ravel())      # (P′ᵀΣP)ᵀ_ik = (PᵀΣP′)_ik
+                    acc[1].append((t.Q.T @ SQ[j]).ravel())      # (QᵀΣQ′)_jl
+                    acc[2].append((SP[i].T @ u.Q).ravel())      # (Q′ᵀΣP)ᵀ_il
+                    acc[3].append((t.Q.T @ SP[j]).ravel())      # (QᵀΣP′)_jk
+        H = self._whole                                  # every variable pair meets in the cost block
+        for (v, w), (pp, qq, pq, qp) in pairs.items():
+            ri, cj = lay.shapes[v]
+            rk, cl = lay.shapes[w]
+            t2 = (np.array(pp).T @ np.array(qq)).reshape(ri, rk, cj, cl).transpose(0, 2, 1, 3)
+            t1 = (np.array(pq).T @ np.array(qp)).reshape(ri, cl, cj, rk).transpose(0, 2, 3, 1)
+            blk = t1 + t2
+            rows = slice(lay.offsets[v], lay.offsets[v] + ri * cj)
+            cols = slice(lay.offsets[w], lay.offsets[w] + rk * cl)
+            H[rows, cols] = blk.reshape(ri * cj, rk * cl)
+            if v != w:
+                H[cols, rows] = blk.reshape(ri * cj, rk * cl).T
+        out = lay.fold(H)
+        out *= 2.0
+        return out
+
+    def _blocks_of(self, z):
+        """The symmetric blocks of a cvxopt 's' vector (lower triangles, column by column)."""
+        out = []
+        for k, (d, lower) in enumerate(zip(self.dims, self.lower)):
+            Z = z[self.offs[k]:self.offs[k + 1]].reshape(d, d).T
+            out.append(np.where(lower, Z, Z.T))
+        return out
+
+    def kktsolver(self, W):
+        """cvxopt's ``kktsolver(W)``: the solver of [[0, Gᵀ], [G, −WᵀW]] [ux; uz] = [bx; bz]
+        (no equality constraints): H ux = bx + Gᵀ(WᵀW)⁻¹bz, then W uz = W⁻ᵀ(G ux − bz).
+
+        Parameters
+        ----------
+        W : dict
+            cvxopt's Nesterov–Todd scaling: ``W["rti"][k]`` = r_k⁻ᵀ, W_k(u) = r_kᵀ u r_k.
+
+        Returns
+        -------
+        callable
+            ``f(x, y, z)``: overwrites x with ux and z with W uz (cvxopt matrices).
+        """
+        rti = [np.array(r) for r in W["rti"]]
+        sigma = [r @ r.T for r in rti]                  # (WᵀW)⁻¹ u = Σ u Σ,  Σ = r⁻ᵀ r⁻¹
+        H = self.schur(sigma)
+        try:
+            factor = sla.cho_factor(H, lower=True, overwrite_a=True, check_finite=False)
+            solve = lambda b: sla.cho_solve(factor, b, check_finite=False)  # noqa: E731
+        except np.linalg.LinAlgError:                   # H was overwritten: formed again
+            self.indefinite += 1
+            lu = sla.lu_factor(self.schur(sigma), overwrite_a=True, check_finite=False)
+            solve = lambda b: sla.lu_solve(lu, b, check_finite=False)  # noqa: E731
+
+        def f(x, y, z):
+            bz = self._blocks_of(np.array(z).ravel())
+            ux = solve(np.array(x).ravel() + self.adjoint([Sg @ B @ Sg for Sg, B in zip(sigma, bz)]))
+            gz = self.apply(ux)
+            out = [(r.T @ (gz[self.offs[k]:self.offs[k + 1]].reshape(d, d) - bz[k]) @ r).T.ravel()
+                   for k, (d, r) in enumerate(zip(self.dims, rti))]        # W⁻ᵀ(G ux − bz) = rtiᵀ(·)rti
+            x[:] = cvxopt.matrix(ux)
+            z[:] = cvxopt.matrix(np.concatenate(out))
+        return f
+
+    def operator(self, x, y, alpha=1.0, beta=0.0, trans="N"):
+        """cvxopt's G(x, y, alpha, beta, trans): y := alpha G x + beta y, or Gᵀ with trans "T".
+
+        Parameters
+        ----------
+        x, y : cvxopt matrices
+            Argument and result (overwritten); cvxopt's 's' vectors are lower triangles, column by
+            column, dimensionless.
+        alpha, beta : float
+            Weights, dimensionless.
+        trans : str
+            "N" or "T".
+        """
+        xv = np.array(x).ravel()
+        r = self.apply(xv) if trans == "N" else self.adjoint(self._blocks_of(xv))
+        y[:] = cvxopt.matrix(alpha * r + beta * np.array(y).ravel())
+
+
+def solve_conelp(prog, tol: float, feastol: float, max_iter: int = 100, start=None, refinement: int = 2):
+    """Minimize cᵀv subject to the program's blocks ⪯ 0 by cvxopt's ``conelp`` with
+    :class:`StructuredKKT`.
+
+    Parameters
+    ----------
+    prog : acmm.design.regional_lmi.LMIProgram
+        The program.
+    tol : float
+        Relative gap tolerance, dimensionless.
+    feastol : float
+        Primal and dual feasibility tolerance, dimensionless.
+    max_iter : int
+        Iteration limit (a guard: the stop is the tolerances).
+    start : tuple or None
+        (v, slacks, duals): an interior iterate to start from (slacks s_k = −F_k(v) up to the
+        residual and duals z_k, each block ≻ 0); None: cvxopt's own starting point.
+    refinement : int
+        Steps of iterative refinement of each KKT solve.  Near the optimum the Schur complement's
+        condition grows as 1/gap²; with one step (cvxopt's default for matrix cones) the tight
+        pass stalled, its dual residual growing 10⁻⁷ → 10⁻⁴ (AC, and 4 of the packaged
+        stair-case's 22 points), with two it converged on all; a loose pass needs one.
+
+    Returns
+    -------
+    tuple
+        (status, variable vector or None, iterations, (slacks, duals) of the last iterate or None);
+        status is cvxopt's, with the count of indefinite Schur complements when there were any, or
+        "no answer" without a vector (cvxopt's own word, e.g. "primal infeasible", is not a
+        checked certificate).
+    """
+    N, m = prog.sizes
+    kkt = StructuredKKT(prog.terms, layout(N, m))
+    h = cvxopt.matrix(np.concatenate([-f0.ravel(order="F") for f0 in prog.F0]))
+    options = {"show_progress": False, "abstol": 1e-300, "reltol": tol, "feastol": feastol,
+               "maxiters": max_iter, "refinement": refinement}
+    warm = {}
+    if start is not None:
+        v0, slacks, duals = start
+        warm = {"primalstart": {"x": cvxopt.matrix(v0),
+                                "s": cvxopt.matrix(np.concatenate([x.ravel(order="F") for x in slacks]))},
+                "dualstart": {"z": cvxopt.matrix(np.concatenate([x.ravel(order="F") for x in duals]))}}
+    sol = solvers.conelp(cvxopt.matrix(prog.c), kkt.operator, h, {"l": 0, "q": [], "s": kkt.dims},
+                         kktsolver=kkt.kktsolver, options=options, **warm)
+    status = sol["status"] + (f" ({kkt.indefinite} indefinite Schur complements)" if kkt.indefinite else "")
+    if sol["x"] is None:        # cvxopt's word for why (e.g. "primal infeasible") is no checked certificate
+        return "no answer", None, int(sol["iterations"]), None
+    s, z = np.array(sol["s"]).ravel(), np.array(sol["z"]).ravel()
+    blocks = [(s[a:b].reshape(d, d).T, z[a:b].reshape(d, d).T)
+              for a, b, d in zip(kkt.offs[:-1], kkt.offs[1:], kkt.dims)]
+    return status, np.array(sol["x"]).ravel(), int(sol["iterations"]), tuple(zip(*blocks))
