@@ -136,8 +136,8 @@ class RegionalLMISettings:
         The SDP solver tried first (:data:`SOLVERS`): ``"conelp"``, ``"dsdp"`` or ``"clarabel"``;
         the others follow, in that order, as fallbacks when its answer fails the checks.
     tol : float
-        The solvers' gap tolerance (DSDP's relative gap; Clarabel's tol_gap_abs = tol_gap_rel =
-        tol_feas of its final pass), dimensionless.
+        The solvers' tolerance of the final pass (conelp's relative gap and feasibility; DSDP's
+        relative gap; Clarabel's tol_gap_abs = tol_gap_rel = tol_feas), dimensionless.
     max_iter : int
         Iteration limit per pass of conelp and Clarabel (a guard: they stop on their tolerances).
     refinements : int
@@ -352,7 +352,7 @@ def random_gain_radius(A, B, K, n: float, sigma: float = 0.5, half_angle_deg: fl
 # ---------------------------------------------------------------------------------------------
 # the program
 # ---------------------------------------------------------------------------------------------
-def _blocks(Az, Bz, GG, X, X2, Y, W, a, c, phi, r, beta, bmat, with_constant=True):
+def _blocks(Az, Bz, GG, X, X2, Y, W, a, c, phi, r, beta, bmat):
     """Every LMI of the program as a matrix that must be ⪯ 0 (numpy arrays or cvxpy expressions):
     the half-plane, the shifted cone, the optional disk, the dilated H2 condition and the cost."""
     M = Az @ X - Bz @ Y
@@ -362,7 +362,7 @@ def _blocks(Az, Bz, GG, X, X2, Y, W, a, c, phi, r, beta, bmat, with_constant=Tru
                  [np.cos(phi) * (Mc.T - Mc), np.sin(phi) * (Mc + Mc.T)]])]
     if r > 0:
         out.append(bmat([[-r * X, M], [M.T, -r * X]]))
-    out += [bmat([[-2 * beta * X, X2 - X + beta * M.T], [X2 - X + beta * M, M + M.T + GG * with_constant]]),
+    out += [bmat([[-2 * beta * X, X2 - X + beta * M.T], [X2 - X + beta * M, M + M.T + GG]]),
             -bmat([[W, Y], [Y.T, 2 * X - X2]])]
     return out
 
@@ -851,7 +851,7 @@ def _carry_iterate(prog: LMIProgram, prog2: LMIProgram, v, iterate):
     program in other coordinates: with P = T₂⁻¹T₁ and D = diag(s_u₁/s_u₂) the variables map as
     X ↦ PXPᵀ, X₂ ↦ PX₂Pᵀ, Y ↦ DYPᵀ, W ↦ DWD, every block as F ↦ R F Rᵀ (R = I ⊗ P, the cost
     block's diag(D, P)), so s ↦ R s Rᵀ and z ↦ R⁻ᵀ z R⁻¹ keep the residuals and sᵀz."""
-    N, m = prog.sizes
+    N = prog.sizes[0]
     P = np.linalg.solve(prog2.T, prog.T)
     D = np.diag(prog.s_u / prog2.s_u)
     X, X2, Y, W = prog.unpack(v)
@@ -894,7 +894,7 @@ def _route_clarabel(As, Bs, Gs, K0, T, st):
 #: Every ``design.lmi.solver``, in fallback order.
 KNOWN_SOLVERS = ("conelp", "dsdp", "clarabel")
 
-#: The solver routes that can run here (DSDP only where cvxopt is installed).
+#: The solver routes that can run here (conelp and DSDP only where cvxopt is installed).
 ROUTES = ({"conelp": _route_conelp, "dsdp": _route_dsdp, "clarabel": _route_clarabel} if dsdp is not None
           else {"clarabel": _route_clarabel})
 SOLVERS = tuple(ROUTES)
