@@ -140,11 +140,10 @@ def _recording_warnings(fn, x):
 
 
 def pool_map(executor, fn, items):
-    """``fn(x) for x in items`` computed on ``executor``: every task submitted at the call
-    (:func:`submit`, the interrupts deferred; as ``Executor.map``, so the caller can work while they
-    run), each result yielded as soon as it and those before it are done, in the order of ``items``,
-    the warnings of each task raised again here first (:func:`raise_warnings_again`: this process's
-    filters apply, as if computed in place).
+    """``fn(x) for x in items`` computed on ``executor``: every task submitted first
+    (:func:`submit`, the interrupts deferred), each result yielded as soon as it and those before it
+    are done, in the order of ``items``, the warnings of each task raised again here first
+    (:func:`raise_warnings_again`: this process's filters apply, as if computed in place).
 
     Parameters
     ----------
@@ -155,17 +154,17 @@ def pool_map(executor, fn, items):
     items : iterable
         Its arguments, one task each.
 
-    Returns
-    -------
-    iterator
-        The results, in order; the first task's error (in that order) is raised, an
-        :class:`~acmm_qpp.errors.OutputError` where a worker process died.
+    Yields
+    ------
+    object
+        The results, in order; the first task's error (in that order) is raised.
+
+    Raises
+    ------
+    OutputError
+        A worker process died.
     """
-    return _results([submit(executor, _recording_warnings, fn, x) for x in items])
-
-
-def _results(futures):
-    """The results of :func:`pool_map`'s futures, in order."""
+    futures = [submit(executor, _recording_warnings, fn, x) for x in items]
     for f in futures:
         try:
             value, raised = f.result()

@@ -111,16 +111,14 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
                           "(is schedule.to the same station as the config itself?): a gain schedule in θ2* "
                           "needs stations whose TEAs differ")
     points = []
-    # TEA, model and sector LQR (or regional LMI) of each point (ch. 5.2); a pool's map has
-    # submitted them all, so the path's models (which need only the specs) are solved meanwhile
-    designs = map_points(partial(sch.design_one, s=s), specs)
-    path = path_models(specs, s, sched.n_check) if sched is not None and len(specs) >= 2 else None
-    for spec, point in zip(specs, designs):
+    # TEA, model and sector LQR (or regional LMI) of each point (ch. 5.2)
+    for spec, point in zip(specs, map_points(partial(sch.design_one, s=s), specs)):
         points.append(point)
         if progress is not None:
             progress(spec.name)
     if len(points) < 2:
         return DesignedSchedule(points, None, None, None)
+    path = path_models(points, s, sched.n_check) if sched is not None else None
     refinement = None
     if path is not None and sched.refine_points > 0:
         points, refinement = _refine(points, s, sched, path, map_points, progress)

@@ -29,6 +29,7 @@ tolerances; an answer is accepted or refused by :mod:`acmm.design.regional_lmi`'
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,6 +41,9 @@ try:                  # GPL-3 (README, Dependencies): without it the LMI route s
     from cvxopt import solvers
 except ImportError:   # pragma: no cover - exercised by uninstalling cvxopt
     cvxopt = solvers = None
+
+#: Whether :func:`solve_conelp` can run here (cvxopt installed).
+conelp_available = solvers is not None
 
 #: The variables of the terms, in the order of the program's variable vector's parts.
 VARIABLES = ("Z", "X2", "W")
@@ -133,7 +137,7 @@ class Layout:
     S: sparse.csr_matrix
 
     def fold(self, H) -> np.ndarray:
-        """Sᵀ H S of a matrix over the whole variables (gathers: ~2× faster than the sparse products).
+        """Sᵀ H S of a matrix over the whole variables (by gathers, faster here than sparse products).
 
         Parameters
         ----------
@@ -244,8 +248,8 @@ class StructuredKKT:
         self.dims = [terms[0].P.shape[0] for terms in blocks]
         self.offs = np.cumsum([0] + [d * d for d in self.dims])
         self.lower = [np.tril(np.ones((d, d), bool)) for d in self.dims]
-        # H over the whole variables (12 MB at N = 24), rewritten at every Schur complement: zeroing
-        # a fresh one each time cost ~15 % of the solve, most of it in page faults
+        # H over the whole variables (12 MB at N = 24), rewritten at every Schur complement: a fresh
+        # one each iteration cost a noticeable part of the solve in zeroing and page faults
         self._whole = np.zeros((lay.S.shape[0],) * 2)
         self.indefinite = 0
 
@@ -308,7 +312,7 @@ class StructuredKKT:
         Returns
         -------
         (n_var, n_var) array
-            The Schur complement (the KKT solver factors it in place), dimensionless.
+            The Schur complement, dimensionless.
         """
         lay = self.lay
         order = {v: k for k, v in enumerate(VARIABLES)}
@@ -361,22 +365,37 @@ class StructuredKKT:
         Returns
         -------
         callable
-            ``f(x, y, z)``: overwrites x with ux and z with W uz (cvxopt matrices).
+            ``f(x, y, z)``: overwrites x with ux and z with W uz (cvxopt matrices); it raises
+            ArithmeticError where the solve is not finite, which cvxopt ends on.
+
+        Raises
+        ------
+        ArithmeticError
+            H is numerically singular (cvxopt then stops with status "unknown" and its last
+            iterate).
         """
         rti = [np.array(r) for r in W["rti"]]
         sigma = [r @ r.T for r in rti]                  # (WᵀW)⁻¹ u = Σ u Σ,  Σ = r⁻ᵀ r⁻¹
         H = self.schur(sigma)
         try:
-            factor = sla.cho_factor(H, lower=True, overwrite_a=True, check_finite=False)
+            factor = sla.cho_factor(H, lower=True, check_finite=False)
             solve = lambda b: sla.cho_solve(factor, b, check_finite=False)  # noqa: E731
-        except np.linalg.LinAlgError:                   # H was overwritten: formed again
+        except np.linalg.LinAlgError:
             self.indefinite += 1
-            lu = sla.lu_factor(self.schur(sigma), overwrite_a=True, check_finite=False)
+            with warnings.catch_warnings():
+                warnings.simplefilter("error", sla.LinAlgWarning)
+                try:
+                    lu = sla.lu_factor(H, check_finite=False)
+                except sla.LinAlgWarning:
+                    # cvxopt ends on an ArithmeticError with status "unknown" and its last iterate
+                    raise ArithmeticError("singular Schur complement") from None
             solve = lambda b: sla.lu_solve(lu, b, check_finite=False)  # noqa: E731
 
         def f(x, y, z):
             bz = self._blocks_of(np.array(z).ravel())
             ux = solve(np.array(x).ravel() + self.adjoint([Sg @ B @ Sg for Sg, B in zip(sigma, bz)]))
+            if not np.all(np.isfinite(ux)):
+                raise ArithmeticError("the KKT solve is not finite")
             gz = self.apply(ux)
             out = [(r.T @ (gz[self.offs[k]:self.offs[k + 1]].reshape(d, d) - bz[k]) @ r).T.ravel()
                    for k, (d, r) in enumerate(zip(self.dims, rti))]        # W⁻ᵀ(G ux − bz) = rtiᵀ(·)rti
@@ -421,9 +440,9 @@ def solve_conelp(prog, tol: float, feastol: float, max_iter: int = 100, start=No
         residual and duals z_k, each block ≻ 0); None: cvxopt's own starting point.
     refinement : int
         Steps of iterative refinement of each KKT solve.  Near the optimum the Schur complement's
-        condition grows as 1/gap²; with one step (cvxopt's default for matrix cones) the tight
-        pass stalled, its dual residual growing 10⁻⁷ → 10⁻⁴ (AC, and 4 of the packaged
-        stair-case's 22 points), with two it converged on all; a loose pass needs one.
+        condition grows as 1/gap²: with one step (cvxopt's default for matrix cones) the tight
+        pass stalled on some of the packaged stair-case's points, its dual residual growing
+        instead of falling; a loose pass needs one.
 
     Returns
     -------
@@ -447,7 +466,8 @@ def solve_conelp(prog, tol: float, feastol: float, max_iter: int = 100, start=No
     sol = solvers.conelp(cvxopt.matrix(prog.c), kkt.operator, h, {"l": 0, "q": [], "s": kkt.dims},
                          kktsolver=kkt.kktsolver, options=options, **warm)
     status = sol["status"] + (f" ({kkt.indefinite} indefinite Schur complements)" if kkt.indefinite else "")
-    if sol["x"] is None:        # cvxopt's word for why (e.g. "primal infeasible") is no checked certificate
+    if sol["status"] not in ("optimal", "unknown") or sol["x"] is None or sol["z"] is None:
+        # an infeasibility certificate's ray is no answer, and cvxopt's word for it no checked proof
         return "no answer", None, int(sol["iterations"]), None
     s, z = np.array(sol["s"]).ravel(), np.array(sol["z"]).ravel()
     blocks = [(s[a:b].reshape(d, d).T, z[a:b].reshape(d, d).T)

@@ -15,6 +15,7 @@ import numpy as np
 from acmm.model import linearize as lin
 from acmm.design import sector_lqr
 from acmm.design.disk_margin import DISK_OMEGA_N, disk_alpha_batch, disk_parts, disk_gain_phase
+from acmm.design.schedule import PointDesign
 from acmm.design.schedule_points import PointSpec, tea_spaced_blend
 from acmm.design.settings import DesignSettings
 from acmm.model.tea import solve_tea, solve_tea_near
@@ -82,9 +83,9 @@ class PathCheck:
         return float(np.mean(self.margin >= 0.0))
 
 
-def path_models(specs: list[PointSpec], s: DesignSettings, n_check: int) -> PathModels | None:
+def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> PathModels | None:
     """Design models at ``n_check`` TEAs evenly spaced between the first and last blend point
-    of the design points ``specs``.
+    of the designed ``points``.
 
     None when the config has no blend (``schedule.to``).  The TEA of each model is solved
     exactly (Newton from the continuation guess), so the θ2* are evenly spaced to within the
@@ -92,7 +93,7 @@ def path_models(specs: list[PointSpec], s: DesignSettings, n_check: int) -> Path
 
     Parameters
     ----------
-    specs : list of acmm.design.schedule.PointSpec
+    points : list of acmm.design.schedule.PointDesign
         The design points; the first and last blend points bound the path.
     s : DesignSettings
         The design settings (orbital rate, design model, DRF mode).
@@ -104,6 +105,7 @@ def path_models(specs: list[PointSpec], s: DesignSettings, n_check: int) -> Path
     PathModels or None
         The models, None without a blend.
     """
+    specs = [p.spec for p in points]
     d = s
     n = s.orbit_rate
     blended = sorted((p for p in specs if np.isfinite(p.s)), key=lambda p: p.s)

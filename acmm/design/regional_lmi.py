@@ -89,15 +89,15 @@ import numpy as np
 import scipy.linalg as sla
 from scipy import sparse
 
-from acmm.design.lmi_structure import coefficient_arrays, layout, program_terms, solve_conelp
+from acmm.design.lmi_structure import coefficient_arrays, conelp_available, layout, program_terms, solve_conelp
 from acmm.design.sector_lqr import eigen_conditioning, sector_margin, sector_robustness
 from acmm_qpp.errors import DesignError
 
 try:                  # GPL-3 (README, Dependencies): without it the route solves with Clarabel only
     import cvxopt
     from cvxopt import dsdp
-except ImportError:   # pragma: no cover - exercised by uninstalling cvxopt
-    cvxopt = dsdp = None
+except ImportError:   # pragma: no cover - exercised by uninstalling cvxopt (or a build without DSDP)
+    dsdp = None
 
 #: Clarabel options of every solve besides the tolerances: one thread.  Its solver threads are not
 #: fork-safe (a forked child of a process that has solved a program with them hung in its next
@@ -841,8 +841,11 @@ def _route_conelp(As, Bs, Gs, K0, T, st):
     sol = _solution(prog, v)
     T1, s_u1 = _precondition(T, sol[0], sol[1])
     prog2 = lmi_program(As, Bs, Gs, T1, s_u1, st, T_reg=T)
-    start = _carry_iterate(prog, prog2, v, iterate)
-    status, v, it2, _ = solve_conelp(prog2, st.tol, st.tol, st.max_iter, start=start)
+    try:
+        status, v, it2, _ = solve_conelp(prog2, st.tol, st.tol, st.max_iter,
+                                         start=_carry_iterate(prog, prog2, v, iterate))
+    except ValueError:          # cvxopt refused the carried iterate (not interior after rounding)
+        status, v, it2, _ = solve_conelp(prog2, st.tol, st.tol, st.max_iter)
     return status, (it, it2), None if v is None else _solution(prog2, v)
 
 
@@ -850,7 +853,25 @@ def _carry_iterate(prog: LMIProgram, prog2: LMIProgram, v, iterate):
     """An interior-point iterate (v, slacks s_k, duals z_k) of ``prog`` as one of ``prog2``, the same
     program in other coordinates: with P = T₂⁻¹T₁ and D = diag(s_u₁/s_u₂) the variables map as
     X ↦ PXPᵀ, X₂ ↦ PX₂Pᵀ, Y ↦ DYPᵀ, W ↦ DWD, every block as F ↦ R F Rᵀ (R = I ⊗ P, the cost
-    block's diag(D, P)), so s ↦ R s Rᵀ and z ↦ R⁻ᵀ z R⁻¹ keep the residuals and sᵀz."""
+    block's diag(D, P)), so s ↦ R s Rᵀ and z ↦ R⁻ᵀ z R⁻¹: the same objective, blocks up to the
+    congruence, and sᵀz (cvxopt's normalized residuals differ, and it restarts its homogeneous
+    embedding with τ = κ = 1).
+
+    Parameters
+    ----------
+    prog, prog2 : LMIProgram
+        The program in the iterate's coordinates and in the new ones (:func:`lmi_program` of one
+        model and settings).
+    v : (n_var,) array
+        The iterate's variables, dimensionless.
+    iterate : tuple
+        (slacks, duals): lists of (m_k, m_k) symmetric arrays, dimensionless.
+
+    Returns
+    -------
+    tuple
+        (v₂, slacks₂, duals₂) in ``prog2``'s coordinates.
+    """
     N = prog.sizes[0]
     P = np.linalg.solve(prog2.T, prog.T)
     D = np.diag(prog.s_u / prog2.s_u)
@@ -894,9 +915,10 @@ def _route_clarabel(As, Bs, Gs, K0, T, st):
 #: Every ``design.lmi.solver``, in fallback order.
 KNOWN_SOLVERS = ("conelp", "dsdp", "clarabel")
 
-#: The solver routes that can run here (conelp and DSDP only where cvxopt is installed).
-ROUTES = ({"conelp": _route_conelp, "dsdp": _route_dsdp, "clarabel": _route_clarabel} if dsdp is not None
-          else {"clarabel": _route_clarabel})
+#: The solver routes that can run here (conelp and DSDP only where cvxopt and its DSDP are installed).
+ROUTES = {name: route for name, route, here in (("conelp", _route_conelp, conelp_available),
+                                                ("dsdp", _route_dsdp, dsdp is not None),
+                                                ("clarabel", _route_clarabel, True)) if here}
 SOLVERS = tuple(ROUTES)
 
 

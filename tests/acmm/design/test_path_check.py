@@ -19,7 +19,7 @@ def test_path_disk_margin_agrees_with_python_control(staircase_lqr):
     if not hasattr(control, "disk_margins"):       # python-control < 0.10.2
         pytest.skip("this python-control has no disk_margins")
     pc = staircase_lqr.path_check
-    path = path_check_mod.path_models([p.spec for p in staircase_lqr.points], design_settings(staircase_lqr.config), pc.theta2.size)
+    path = path_check_mod.path_models(staircase_lqr.points, design_settings(staircase_lqr.config), pc.theta2.size)
     d = path.scales
     for j in (0, pc.theta2.size // 2, pc.theta2.size - 1):
         K = staircase_lqr.fit.gain(pc.theta2[j]) * d[None, :]
