@@ -7,8 +7,8 @@ Targets (issues 4 and 5):
 * the 130-orbit stair-case simulation ≤ 1 s wall after the one-time (cached) compilation,
   ≥ 15x faster than the same model integrated by scipy `solve_ivp` (RK45, rtol 1e-8) with a plain
   numpy right-hand side; peak memory < 500 MB.
-* the packaged stair-case's LMI points on the process pool: the sum of the points' LMI solve
-  times over the wall time of the design ≥ 1.6 on 2 cores (one worker per CPU); the 12-point
+* the stair-case's 12 LMI points on the process pool: their time one after another over their
+  time on the pool (its start included) ≥ 1.6 on 2 cores (one worker per CPU); the 12-point
   stair-case on the LMI route (no refined nodes) ≤ 4× the same on the report's route (issue 40);
 * MB3's and AC's regional LMI program solved by conelp with the structured KKT solver (the
   default), by DSDP and by Clarabel (the reference), in one run: Clarabel's time / conelp's ≥ 20
@@ -43,6 +43,8 @@ from acmm.design.schedule_points import point_specs  # noqa: E402
 from acmm.design.settings import design_settings  # noqa: E402
 from acmm.model.state_scaling import torque_scale  # noqa: E402
 from acmm.stages.design import compute_design  # noqa: E402
+from acmm_qpp.pool import pool_map, process_pool, stop_pool  # noqa: E402
+from functools import partial  # noqa: E402
 
 BIN = Path(sys.executable).parent
 
@@ -124,11 +126,21 @@ def main() -> int:
     shipped = compute_design(cfg)
     table = shipped.table
     t_design = time.perf_counter() - t0
-    solves = sum(p.gain.lmi.solve_time for p in shipped.points)
     _row(f"packaged stair-case design in-process ({len(shipped.points)} LMI points with the refined nodes, "
          f"{shipped.path_check.theta2.size} path TEAs)", f"{t_design:.1f} s", "-", True)
-    _row(f"  its points' LMI solve times summed / its wall time ({os.cpu_count()} CPUs)",
-         f"{solves / t_design:.2f}x", ">= 1.6x", solves / t_design >= 1.6)
+    cfg12 = load_config("staircase", ["schedule.refine_points=0"])
+    specs, s12 = point_specs(cfg12), design_settings(cfg12)
+    t0 = time.perf_counter()
+    for spec in specs:
+        design_one(spec, s12)
+    t_serial = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    pool = process_pool(os.cpu_count())
+    list(pool_map(pool, partial(design_one, s=s12), specs))
+    stop_pool(pool)
+    t_pool = time.perf_counter() - t0
+    _row(f"  the 12 LMI points one after another / on the process pool ({os.cpu_count()} CPUs, its start included)",
+         f"{t_serial / t_pool:.2f}x", ">= 1.6x", t_serial / t_pool >= 1.6)
 
     t0 = time.perf_counter()
     compute_design(load_config("staircase", ["schedule.refine_points=0"]))
