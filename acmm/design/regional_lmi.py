@@ -825,12 +825,17 @@ def _route_dsdp(As, Bs, Gs, K0, T, st):
 #: certificate: its answer would then be no answer, and the fallback solver's).
 CONELP_FIRST_TOL = (1e-1, 1e-3)
 
+#: Largest feasibility tolerance of conelp's second pass, dimensionless: the answer must hold the
+#: cost LMIs to :data:`COST_TOL` of their norm, which a looser ``tol`` (1e-3) alone did not.
+CONELP_FEASTOL = 1e-7
+
 
 def _route_conelp(As, Bs, Gs, K0, T, st):
     """cvxopt's conelp with the program's structured KKT solver (:mod:`acmm.design.lmi_structure`),
     twice, as :func:`_route_dsdp`: in the reference loop's coordinates to a loose gap
-    (:data:`CONELP_FIRST_TOL`), then in the coordinates of that answer to ``st.tol`` (gap and
-    feasibility), started from the first pass's last iterate carried into them
+    (:data:`CONELP_FIRST_TOL`), then in the coordinates of that answer to the relative gap ``st.tol``
+    and the feasibility min(``st.tol``, :data:`CONELP_FEASTOL`), started from the first pass's last
+    iterate carried into them
     (:func:`_carry_iterate`: the same program, so the same point, residuals and gap):
     (status, iterations, solution or None)."""
     s_u = np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12)
@@ -841,11 +846,12 @@ def _route_conelp(As, Bs, Gs, K0, T, st):
     sol = _solution(prog, v)
     T1, s_u1 = _precondition(T, sol[0], sol[1])
     prog2 = lmi_program(As, Bs, Gs, T1, s_u1, st, T_reg=T)
+    feastol = min(st.tol, CONELP_FEASTOL)
     try:
-        status, v, it2, _ = solve_conelp(prog2, st.tol, st.tol, st.max_iter,
+        status, v, it2, _ = solve_conelp(prog2, st.tol, feastol, st.max_iter,
                                          start=_carry_iterate(prog, prog2, v, iterate))
     except ValueError:          # cvxopt refused the carried iterate (not interior after rounding)
-        status, v, it2, _ = solve_conelp(prog2, st.tol, st.tol, st.max_iter)
+        status, v, it2, _ = solve_conelp(prog2, st.tol, feastol, st.max_iter)
     return status, (it, it2), None if v is None else _solution(prog2, v)
 
 

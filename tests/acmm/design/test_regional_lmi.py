@@ -324,6 +324,15 @@ def test_the_default_solver_answer_is_proved_by_eigenvalues(mb3_model):
     assert _energy(p, n) == pytest.approx(r.energy, rel=1e-9) and r.energy <= r.cost_bound
 
 
+def test_a_loose_gap_tolerance_still_gives_an_answer_that_passes_the_checks(mb3_model):
+    """``design.lmi.tol=1e-3`` loosens conelp's gap only: its feasibility stays at 1e-7, so its answer
+    holds the cost LMIs to the checks' 1e-6 and no fallback is needed (with the feasibility at 1e-3
+    too, the answer was refused and DSDP solved)."""
+    r = _design(mb3_model, tol=1e-3)
+    assert r.solver == "conelp" and r.rejected == () and r.lmi_residual <= rl.COST_TOL
+    assert _certificate_holds(mb3_model[0], mb3_model[2], r)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("solver", ["conelp", "dsdp", "clarabel"])
 def test_an_unreachable_margin_is_one_line_and_exit_3_with_every_solver(solver, tmp_path):
