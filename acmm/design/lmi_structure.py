@@ -137,23 +137,24 @@ class Layout:
     S: sparse.csr_matrix
 
     def fold(self, H) -> np.ndarray:
-        """Sᵀ H S of a matrix over the whole variables (by gathers, faster here than sparse products).
+        """Sᵀ H S of a matrix over the whole variables, by four gathers (faster here than sparse
+        products or indexed additions): an entry with no second place (``second`` = −1) gathers
+        H's last row and column, which are zero.
 
         Parameters
         ----------
-        H : (n_full, n_full) array
-            Over the whole variables, dimensionless.
+        H : (n_full + 1, n_full + 1) array
+            Over the whole variables, then a zero row and column, dimensionless.
 
         Returns
         -------
         (n_var, n_var) array
             Over the variable vector, dimensionless.
         """
-        two = np.flatnonzero(self.second >= 0)
         rows = np.take(H, self.first, axis=0)
-        rows[two] += np.take(H, self.second[two], axis=0)
+        rows += np.take(H, self.second, axis=0)
         out = np.take(rows, self.first, axis=1)
-        out[:, two] += np.take(rows, self.second[two], axis=1)
+        out += np.take(rows, self.second, axis=1)
         return out
 
 
@@ -250,7 +251,7 @@ class StructuredKKT:
         self.lower = [np.tril(np.ones((d, d), bool)) for d in self.dims]
         # H over the whole variables (12 MB at N = 24), rewritten at every Schur complement: a fresh
         # one each iteration cost a noticeable part of the solve in zeroing and page faults
-        self._whole = np.zeros((lay.S.shape[0],) * 2)
+        self._whole = np.zeros((lay.S.shape[0] + 1,) * 2)     # its last row and column stay zero (fold)
         self.indefinite = 0
 
     def apply(self, v) -> np.ndarray:
