@@ -34,7 +34,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-from scipy import sparse
 
 try:                  # GPL-3 (README, Dependencies): without it the LMI route solves with Clarabel only
     import cvxopt
@@ -125,36 +124,58 @@ class Layout:
         Each variable's first index in the stacked whole variables.
     first, second : (n_var,) int arrays
         Where each v_a sits in the variables stored whole: an off-diagonal entry of a symmetric
-        variable at two places (``second`` ≥ 0), every other entry at one (``second`` = −1).
-    S : sparse (n_full, n_var) matrix
-        The duplication: vec(whole variables) = S v.
+        variable at two places (``second`` ≥ 0), every other entry at one (``second`` = −1).  They
+        are the duplication S, vec(whole variables) = S v, written as indices.
     """
 
     shapes: dict
     offsets: dict
     first: np.ndarray
     second: np.ndarray
-    S: sparse.csr_matrix
 
-    def fold(self, H) -> np.ndarray:
-        """Sᵀ H S of a matrix over the whole variables, by four gathers (faster here than sparse
-        products or indexed additions): an entry with no second place (``second`` = −1) gathers
-        H's last row and column, which are zero.
+    @property
+    def n_full(self) -> int:
+        """Number of entries of the variables stored whole."""
+        return sum(r * c for r, c in self.shapes.values())
+
+    def expand(self, v) -> np.ndarray:
+        """S v: the variables stored whole.
 
         Parameters
         ----------
-        H : (n_full + 1, n_full + 1) array
-            Over the whole variables, then a zero row and column, dimensionless.
+        v : (n_var,) array
+            Variable vector, dimensionless.
 
         Returns
         -------
-        (n_var, n_var) array
-            Over the variable vector, dimensionless.
+        (n_full,) array
+            Dimensionless.
         """
-        rows = np.take(H, self.first, axis=0)
-        rows += np.take(H, self.second, axis=0)
-        out = np.take(rows, self.first, axis=1)
-        out += np.take(rows, self.second, axis=1)
+        two = self.second >= 0
+        whole = np.empty(self.n_full)
+        whole[self.first] = v
+        whole[self.second[two]] = v[two]
+        return whole
+
+    def fold(self, A, axis: int = 0) -> np.ndarray:
+        """Sᵀ A along ``axis`` (A S for axis 1), by two gathers (faster here than sparse products or
+        indexed additions): an entry with no second place (``second`` = −1) gathers A's last slice
+        along ``axis``, which must be zero.
+
+        Parameters
+        ----------
+        A : array
+            Over the whole variables along ``axis``, then one zero slice (n_full + 1), dimensionless.
+        axis : int
+            The axis folded.
+
+        Returns
+        -------
+        array
+            Over the variable vector along ``axis``, dimensionless.
+        """
+        out = np.take(A, self.first, axis=axis)
+        out += np.take(A, self.second, axis=axis)
         return out
 
 
@@ -188,12 +209,7 @@ def layout(N: int, m: int) -> Layout:
                            ("X2", np.r_[nS:2 * nS], fx, sx), ("W", 2 * nS + nY + np.arange(fw.size), fw, sw)):
         first[idx] = offsets[var] + f
         second[idx] = np.where(t >= 0, offsets[var] + t, -1)
-    two = second >= 0
-    rows = np.concatenate([first, second[two]])
-    cols = np.concatenate([np.arange(n_var), np.flatnonzero(two)])
-    n_full = sum(r * c for r, c in shapes.values())
-    S = sparse.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n_full, n_var))
-    return Layout(shapes, offsets, first, second, S)
+    return Layout(shapes, offsets, first, second)
 
 
 def coefficient_arrays(blocks, lay: Layout) -> list:
@@ -211,17 +227,16 @@ def coefficient_arrays(blocks, lay: Layout) -> list:
     list of (n_var, m_k, m_k) arrays
         F_ik = Σ_t Sym(P_t E_i Q_tᵀ), E_i the i-th variable's unit matrix, dimensionless.
     """
-    n_full = lay.S.shape[0]
     out = []
     for terms in blocks:
         mk = terms[0].P.shape[0]
-        full = np.zeros((n_full, mk, mk))
+        full = np.zeros((lay.n_full + 1, mk, mk))                # the last slice stays zero (fold)
         for t in terms:
             r, c = lay.shapes[t.var]
             o = lay.offsets[t.var]
             U = np.einsum("ai,bj->ijab", t.P, t.Q).reshape(r * c, mk, mk)
             full[o:o + r * c] += U + U.transpose(0, 2, 1)
-        out.append((lay.S.T @ full.reshape(n_full, mk * mk)).reshape(-1, mk, mk))
+        out.append(lay.fold(full))
     return out
 
 
@@ -251,7 +266,7 @@ class StructuredKKT:
         self.lower = [np.tril(np.ones((d, d), bool)) for d in self.dims]
         # H over the whole variables (12 MB at N = 24), rewritten at every Schur complement: a fresh
         # one each iteration cost a noticeable part of the solve in zeroing and page faults
-        self._whole = np.zeros((lay.S.shape[0] + 1,) * 2)     # its last row and column stay zero (fold)
+        self._whole = np.zeros((lay.n_full + 1,) * 2)     # its last row and column stay zero (fold)
         self.indefinite = 0
 
     def apply(self, v) -> np.ndarray:
@@ -268,7 +283,7 @@ class StructuredKKT:
             The blocks, each a symmetric matrix stacked as a vector (row or column order alike),
             dimensionless.
         """
-        whole = self.lay.S @ v
+        whole = self.lay.expand(v)
         out = []
         for terms in self.blocks:
             B = sum(t.P @ self._variable(whole, t.var) @ t.Q.T for t in terms)
@@ -289,13 +304,13 @@ class StructuredKKT:
         (n_var,) array
             Dimensionless.
         """
-        g = np.zeros(self.lay.S.shape[0])
+        g = np.zeros(self.lay.n_full + 1)                    # the last entry stays zero (fold)
         for terms, Z in zip(self.blocks, Zs):
             for t in terms:
                 o = self.lay.offsets[t.var]
                 D = 2.0 * (t.P.T @ Z @ t.Q)
                 g[o:o + D.size] += D.ravel()
-        return self.lay.S.T @ g
+        return self.lay.fold(g)
 
     def _variable(self, whole, var):
         r, c = self.lay.shapes[var]
@@ -342,7 +357,7 @@ class StructuredKKT:
             H[rows, cols] = blk.reshape(ri * cj, rk * cl)
             if v != w:
                 H[cols, rows] = blk.reshape(ri * cj, rk * cl).T
-        out = lay.fold(H)
+        out = lay.fold(lay.fold(H), axis=1)
         out *= 2.0
         return out
 
