@@ -5,26 +5,33 @@ determine the performance and the stability characteristics … other than to ex
 simulate".  The stair-case is, however, a *switched* system: level k holds the inertia I_k for
 τ_k seconds, its frozen closed loop (eq 4.46 linearized about the level's TEA, eqs 4.1–4.3, with
 the scheduled gain, eq 5.1) is ẋ = A_k x with A_k = A(I_k, θ*_k) − B(I_k, θ*_k) K_k.  This module
-certifies it with multiple Lyapunov functions and a dwell time (Hespanha & Morse 1999;
-Geromel & Colaneri 2006 in spirit):
+certifies it with one Lyapunov function per level and a minimum dwell time (Geromel & Colaneri
+2006), in the common scaled coordinates x = D x̃:
 
-1. one decay rate λ > 0 and, per level, P_k ≻ 0 solving the Lyapunov equation
-   (A_k + λI)ᵀ P_k + P_k (A_k + λI) = −I in the common scaled coordinates x = D x̃, so that
-   V_k(x) = xᵀ P_k x decays at least as e^{−2λt} while level k holds;
-2. the jump ratio μ between levels that follow each other, in both directions,
-   μ_{j←i} = λ_max(P_i⁻¹ P_j) (V_j ≤ μ_{j←i} V_i): both directions, because a one-way chain can be
-   rescaled to any μ and certifies nothing;
-3. the certified minimum dwell time τ* = ln μ / (2λ), μ the worst ratio: every switching sequence
-   between neighbouring levels (either way) whose levels are each held longer than τ* is
-   exponentially stable; λ is the local minimizer of τ* a bounded Brent search finds (the
-   certificate holds for any λ in the range; the search only makes τ* small);
+1. a decay rate λ = α/64, α = −max_k max Re λ(A_k) the slowest level's (:data:`DECAY_FRACTION`:
+   any λ > 0 gives a certificate, and the smallest certified dwell grows with λ);
+2. for a dwell T, matrices P_k found by the LMIs of :mod:`acmm.design.dwell_program` (solved for
+   the rate 2λ) and *accepted only on checks computed here* (:func:`dwell_margins`): P_k ≻ 0,
+   (A_k + λI)ᵀP_k + P_k(A_k + λI) ≺ 0 and e^{A_kᵀT} P_j e^{A_k T} ≺ e^{−2λT} P_k for the levels
+   j = k ± 1 that can follow k (switches both ways), by symmetric eigenvalues less a first-order
+   rounding allowance.  Then every switching sequence between neighbouring levels whose levels
+   are each held at least T is exponentially stable with rate λ (V = xᵀP_σ x falls by e^{−2λτ}
+   over every level held τ ≥ T);
+3. the certified minimum dwell τ*: the smallest T so certified, found by bisection
+   (:func:`smallest_dwell`, feasibility grows with T) to :data:`DWELL_RESOLUTION`; ``tau_lower``
+   is the largest dwell tried that the program did not certify (not a proof that none exists);
 4. the transient caused by each level's TEA step: at the switch into level j the state's deviation
    from the new equilibrium jumps by δ_j (the change of the TEA in the attitude states and of the
    LVLH rate ω* = C_BL(0, −n, 0) in the rate states), so s_j = √V_j after the switch obeys
-   s_j ≤ √μ_{j←i} e^{−λ τ_i} s_i + √V_j(δ_j), s_0 = √V_0 of the initial state's deviation from
-   the first equilibrium (``simulation.initial_offset``; 0 when the run starts there);
-   while level j holds |u_a| ≤ s_j √(K_a P_j⁻¹ K_aᵀ) and |h_a| ≤ s_j √((P_j⁻¹)_aa), checked
-   against the torque and momentum limits.
+   s_j ≤ q_i e^{−λ τ_i} s_i + √V_j(δ_j), q_i = 1 when τ_i ≥ τ* and √μ_{j←i} otherwise
+   (μ_{j←i} = λ_max(P_i⁻¹ P_j), V_j ≤ μ_{j←i} V_i), s_0 = √V_0 of the initial state's
+   deviation from the first equilibrium (``simulation.initial_offset``; 0 when the run starts
+   there); while level j holds |u_a| ≤ s_j √(K_a P_j⁻¹ K_aᵀ) and |h_a| ≤ s_j √((P_j⁻¹)_aa),
+   checked against the torque and momentum limits.
+
+An earlier certificate (Hespanha & Morse 1999: one common decay rate, P_k from Lyapunov
+equations, τ* = ln μ / (2λ)) gave 1.65 orbit on the packaged stair-case; Geromel and Colaneri's
+condition is never weaker (their LMIs hold at that τ* with those P_k) and is far sharper here.
 
 What it does not cover (stated with every certificate): the nonlinear plant (3.1–3.9) away from the
 equilibria, the saturations, the cyclic aerodynamic disturbance (eq 3.9) that the DRFs reject in
@@ -37,19 +44,54 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.optimize import minimize_scalar
 
-#: relative tolerance on the decay rate λ that minimizes τ* (bounded Brent search)
-DECAY_XTOL = 1e-6
+from acmm.design.dwell_program import solve_dwell_program
 
-#: the search for λ keeps this fraction of the smallest level decay rate as its upper end, so
-#: that every (A_k + λI) stays Hurwitz with room (P_k finite)
-DECAY_UPPER_FRACTION = 0.999
+#: the decay rate the certificate proves, as a fraction of the slowest level's decay rate α
+#: (a power of two: the program's coordinates are scaled by it exactly)
+DECAY_FRACTION = 1.0 / 64.0
+
+#: the program is solved for this multiple of the proved decay rate, so that an answer on the
+#: edge of its LMIs still proves the rate λ with room for rounding
+SOLVE_FACTOR = 2.0
+
+#: bisection resolution of τ* and its first upper end, in units of 1/α (α the slowest level's
+#: decay rate); the upper end doubles until a dwell is certified
+DWELL_RESOLUTION = 1.0 / 32.0
+FIRST_UPPER = 1.0
+
+#: the bisection gives up (no certificate, τ* infinite) once the upper end passes this many
+#: units of 1/α
+UPPER_LIMIT = 1024.0
 
 #: what a dwell-time certificate never covers, printed and stored with it
 NOT_COVERED = ("the nonlinear plant away from each level's equilibrium, the torque and momentum "
                "saturations, the cyclic disturbance torque (eq 3.9, rejected by the DRFs in steady "
                "state) and each level's equilibrium CMG momentum")
+
+
+@dataclass(frozen=True)
+class DwellProof:
+    """The stability part of a dwell-time certificate (steps 1–3), which depends on the levels'
+    closed loops only (not on the scenario's dwell times, jumps or limits).
+
+    Attributes
+    ----------
+    decay : float
+        Decay rate λ proved, 1/s.
+    tau : float
+        Certified minimum dwell τ*, s (0 with one level, infinite when none was found).
+    lower : float
+        The largest dwell tried and not certified, s.
+    P : (L, N, N) array
+        Lyapunov matrices in the scaled coordinates, dimensionless (with ``tau`` infinite: the
+        Lyapunov equations' at rate λ, which prove only the decay while a level holds).
+    """
+
+    decay: float
+    tau: float
+    lower: float
+    P: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -59,21 +101,24 @@ class DwellCertificate:
     Attributes
     ----------
     decay : float
-        Common decay rate λ of every level's Lyapunov function, 1/s (V̇_k ≤ −2λ V_k).
+        Decay rate λ the certificate proves, 1/s (V̇_k ≤ −2λ V_k while a level holds).
     P : (L, N, N) array
         Lyapunov matrices of the levels, in the scaled coordinates x̃ = D⁻¹ x (dimensionless).
     scale : (N,) array
         The scaling D (units of each state).
     jump_up, jump_down : (L-1,) arrays
-        μ_{k+1←k} and μ_{k←k+1}: the jump ratios into the next level and back, dimensionless.
+        μ_{k+1←k} = λ_max(P_k⁻¹ P_{k+1}) and μ_{k←k+1}: the jump ratios into the next level and
+        back, dimensionless.
     mu : float
         The worst jump ratio, dimensionless.
     tau_star : float
-        Certified minimum dwell time ln μ / (2λ), s (0 with one level).
+        Certified minimum dwell time, s (0 with one level; infinite without a certificate).
+    tau_lower : float
+        The largest dwell the bisection tried and did not certify, s (0 with one level).
     dwell : (L-1,) array
         How long each level but the last is held, s.
     certified : bool
-        Every level is held longer than τ*.
+        Every level but the last is held at least τ*.
     transient : (L,) array
         Bound on √V_k of the deviation from the level's equilibrium while level k holds,
         dimensionless (V_k of the scaled state).
@@ -95,6 +140,7 @@ class DwellCertificate:
     jump_down: np.ndarray
     mu: float
     tau_star: float
+    tau_lower: float
     dwell: np.ndarray
     certified: bool
     transient: np.ndarray
@@ -107,7 +153,8 @@ class DwellCertificate:
 
 
 def lyapunov_matrices(Acl: np.ndarray, decay: float) -> np.ndarray:
-    """P_k ≻ 0 with (A_k + λI)ᵀ P_k + P_k (A_k + λI) = −I for every level (step 1).
+    """P_k ≻ 0 with (A_k + λI)ᵀ P_k + P_k (A_k + λI) = −I for every level (the certificate of a
+    stair-case with one level).
 
     Parameters
     ----------
@@ -130,7 +177,7 @@ def lyapunov_matrices(Acl: np.ndarray, decay: float) -> np.ndarray:
 
 
 def jump_ratios(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """μ_{k+1←k} = λ_max(P_k⁻¹ P_{k+1}) and μ_{k←k+1} = λ_max(P_{k+1}⁻¹ P_k) (step 2).
+    """μ_{k+1←k} = λ_max(P_k⁻¹ P_{k+1}) and μ_{k←k+1} = λ_max(P_{k+1}⁻¹ P_k).
 
     Parameters
     ----------
@@ -147,51 +194,124 @@ def jump_ratios(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return up, down
 
 
-def _dwell_bound(P: np.ndarray, decay: float) -> tuple:
-    """(μ_{k+1←k}, μ_{k←k+1}, worst μ, τ* = ln μ/(2λ) in s) of Lyapunov matrices ``P`` (step 3);
-    one level: no switch, μ = 1, τ* = 0."""
-    up, down = jump_ratios(P) if len(P) > 1 else (np.zeros(0), np.zeros(0))
-    mu = float(max(np.max(up, initial=1.0), np.max(down, initial=1.0)))
-    return up, down, mu, float(np.log(mu) / (2.0 * decay))
+def dwell_margins(As: np.ndarray, P: np.ndarray, T: float, decay: float) -> np.ndarray:
+    """How far P_0 … P_{L−1} satisfy the dwell-time conditions at T (step 2), each relative to
+    ‖P_k‖ and less a first-order rounding allowance: positive means proved.
 
-
-def _tau_star(Acl: np.ndarray, decay: float) -> float:
-    return _dwell_bound(lyapunov_matrices(Acl, decay), decay)[3]
-
-
-def best_decay(Acl: np.ndarray) -> float:
-    """The λ in (0, min_k α_k) minimizing τ* = ln μ(λ) / (2λ), α_k = −max Re λ(A_k) (step 3):
-    a bounded Brent search converged to :data:`DECAY_XTOL` relative.
+    The allowance of a symmetric matrix M formed from the data is 8Nε times the sum of the norms
+    of its products (ε the unit roundoff); that of e^{A_k T} adds 2‖E‖‖P_j‖η, η = ‖E − F²‖,
+    F = e^{A_k T/2} (the exponential compared with the square of its half step).
 
     Parameters
     ----------
-    Acl : (L, N, N) array
-        Closed-loop state matrices (scaled coordinates), 1/s; each Hurwitz.
+    As : (L, N, N) array
+        The levels' closed loops, 1/s.
+    P : (L, N, N) array
+        Candidate Lyapunov matrices, dimensionless.
+    T : float
+        Dwell, s.
+    decay : float
+        λ, 1/s.
 
     Returns
     -------
-    float
-        λ, 1/s.
-
-    Raises
-    ------
-    ValueError
-        A level's closed loop is not asymptotically stable (no certificate exists).
+    (3,) array
+        The worst margin of P_k ≻ 0, of the decay LMIs and of the switch LMIs (both ways),
+        dimensionless.
     """
-    alpha = min(-np.max(np.linalg.eigvals(A).real) for A in Acl)
-    if not alpha > 0:
-        raise ValueError(f"a level's frozen closed loop is not stable (largest Re λ = {-alpha:+.3g} 1/s)")
-    hi = DECAY_UPPER_FRACTION * alpha
-    if len(Acl) < 2:
-        return hi
-    got = minimize_scalar(lambda x: _tau_star(Acl, x * alpha), bounds=(1e-3, DECAY_UPPER_FRACTION),
-                          method="bounded", options={"xatol": DECAY_XTOL})
-    return float(got.x * alpha)
+    L, N = As.shape[:2]
+    eps = 8 * N * np.finfo(float).eps
+    c = np.exp(-2.0 * decay * T)
+    I = np.eye(N)
+    P = 0.5 * (P + P.transpose(0, 2, 1))
+    norms = np.array([np.linalg.norm(p, 2) for p in P])
+    pos, lyap, jump = np.inf, np.inf, np.inf
+    for k in range(L):
+        pos = min(pos, np.linalg.eigvalsh(P[k])[0] / norms[k] - eps)
+        At = As[k] + decay * I
+        M = At.T @ P[k] + P[k] @ At
+        lyap = min(lyap, -np.linalg.eigvalsh(0.5 * (M + M.T))[-1] / norms[k] - 2 * eps * np.linalg.norm(At, 2))
+        E, F = sla.expm(As[k] * T), sla.expm(As[k] * (T / 2))
+        eta = np.linalg.norm(E - F @ F, 2)
+        nE = np.linalg.norm(E, 2)
+        for j in (k - 1, k + 1):
+            if 0 <= j < L:
+                M = E.T @ P[j] @ E - c * P[k]
+                allow = eps * (nE ** 2 * norms[j] + norms[k]) + 2 * nE * norms[j] * eta
+                jump = min(jump, (-np.linalg.eigvalsh(0.5 * (M + M.T))[-1] - allow) / norms[k])
+    return np.array([pos, lyap, jump])
+
+
+def smallest_dwell(As: np.ndarray, decay: float) -> tuple:
+    """The smallest dwell certified (steps 2–3): T = :data:`FIRST_UPPER`/α, doubled until the
+    program's answer passes :func:`dwell_margins`, then bisection to :data:`DWELL_RESOLUTION`/α.
+
+    Parameters
+    ----------
+    As : (L, N, N) array
+        The levels' closed loops (scaled coordinates), 1/s, L ≥ 2, each Hurwitz.
+    decay : float
+        λ to prove, 1/s.
+
+    Returns
+    -------
+    tau : float
+        The certified dwell, s (infinite when none was found).
+    lower : float
+        The largest dwell tried and not certified, s.
+    P : (L, N, N) array or None
+        The matrices that certify ``tau``, dimensionless.
+    """
+    alpha = min(-np.max(np.linalg.eigvals(A).real) for A in As)
+    Au = As / alpha                                     # the program's time unit: 1/α
+    rate = SOLVE_FACTOR * decay / alpha
+    # each level's coordinates: its Lyapunov matrix at the program's rate, R_kᵀR_k = P_k/‖P_k‖
+    R = np.array([np.linalg.cholesky(P / np.linalg.norm(P, 2)).T for P in lyapunov_matrices(Au, rate)])
+
+    def certify(T):
+        P = solve_dwell_program(Au, T * alpha, rate, R)
+        return P if P is not None and np.all(dwell_margins(As, P, T, decay) > 0) else None
+
+    lo, hi = 0.0, FIRST_UPPER / alpha
+    P = certify(hi)
+    while P is None:
+        lo, hi = hi, 2 * hi
+        if hi > UPPER_LIMIT / alpha:
+            return np.inf, lo, None
+        P = certify(hi)
+    while hi - lo > DWELL_RESOLUTION / alpha:
+        mid = 0.5 * (lo + hi)
+        got = certify(mid)
+        if got is None:
+            lo = mid
+        else:
+            hi, P = mid, got
+    return hi, lo, P
+
+
+def dwell_proof(As: np.ndarray) -> DwellProof:
+    """Steps 1–3 for the levels' closed loops in scaled coordinates.
+
+    Parameters
+    ----------
+    As : (L, N, N) array
+        D⁻¹ A_k D of every level, 1/s, each Hurwitz.
+
+    Returns
+    -------
+    DwellProof
+        λ = α/64, τ* and its matrices.
+    """
+    lam = DECAY_FRACTION * min(-np.max(np.linalg.eigvals(A).real) for A in As)
+    if len(As) < 2:
+        return DwellProof(lam, 0.0, 0.0, lyapunov_matrices(As, lam))
+    tau, lower, P = smallest_dwell(As, lam)
+    return DwellProof(lam, tau, lower, lyapunov_matrices(As, lam) if P is None else P)
 
 
 def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: np.ndarray, jumps: np.ndarray,
-                      h_index, torque_limit: float, momentum_limit: float, decay: float | None = None,
-                      start=None) -> DwellCertificate:
+                      h_index, torque_limit: float, momentum_limit: float, start=None,
+                      proof: DwellProof | None = None) -> DwellCertificate:
     """The dwell-time certificate of a stair-case of frozen closed loops (steps 1–4).
 
     Parameters
@@ -210,11 +330,13 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
         Indices of the CMG momentum states h1, h2, h3 in x.
     torque_limit, momentum_limit : float
         |u| limit (ft·lbf) and |h| limit (ft·lbf·s).
-    decay : float, optional
-        λ (1/s); default :func:`best_decay`.
     start : (N,) array, optional
         The initial state's deviation from the first level's equilibrium, state units (default:
         the run starts at that equilibrium).
+    proof : DwellProof, optional
+        Steps 1–3 found before for these closed loops (e.g. stored in ``design.h5``): used when its
+        decay rate is these loops' and its matrices pass :func:`dwell_margins` here again, else
+        found anew.
 
     Returns
     -------
@@ -230,18 +352,23 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
     if unstable:
         nan3 = np.full((L, 3), np.nan)
         return DwellCertificate(np.nan, np.full_like(As, np.nan), d, np.full(L - 1, np.nan), np.full(L - 1, np.nan),
-                                np.inf, np.inf, dwell, False, np.full(L, np.nan), nan3, nan3.copy(),
+                                np.inf, np.inf, 0.0, dwell, False, np.full(L, np.nan), nan3, nan3.copy(),
                                 float(torque_limit), float(momentum_limit), False, unstable)
-    lam = best_decay(As) if decay is None else float(decay)
-    P = lyapunov_matrices(As, lam)
-    up, down, mu, tau = _dwell_bound(P, lam)
+    lam = DECAY_FRACTION * min(-np.max(np.linalg.eigvals(A).real) for A in As)
+    if not (proof is not None and L > 1 and proof.decay == lam and np.isfinite(proof.tau)
+            and proof.P.shape == As.shape and np.all(dwell_margins(As, proof.P, proof.tau, lam) > 0)):
+        proof = dwell_proof(As)
+    lam, tau, P = proof.decay, proof.tau, proof.P
+    up, down = jump_ratios(P) if L > 1 else (np.zeros(0), np.zeros(0))
+    mu = float(max(np.max(up, initial=1.0), np.max(down, initial=1.0)))
     s = np.zeros(L)
     if start is not None:
         z0 = np.asarray(start, float) * Dinv
         s[0] = np.sqrt(z0 @ P[0] @ z0)
     for k in range(1, L):
         dj = np.asarray(jumps[k - 1], float) * Dinv
-        s[k] = np.sqrt(up[k - 1]) * np.exp(-lam * dwell[k - 1]) * s[k - 1] + np.sqrt(dj @ P[k] @ dj)
+        q = 1.0 if dwell[k - 1] >= tau else np.sqrt(up[k - 1])
+        s[k] = q * np.exp(-lam * dwell[k - 1]) * s[k - 1] + np.sqrt(dj @ P[k] @ dj)
     u_bound, h_bound = np.empty((L, 3)), np.empty((L, 3))
     for k in range(L):
         Pinv = np.linalg.inv(P[k])
@@ -249,5 +376,5 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
         u_bound[k] = s[k] * np.sqrt(np.einsum("ai,ij,aj->a", Ks, Pinv, Ks))
         h_bound[k] = s[k] * d[list(h_index)] * np.sqrt(np.diag(Pinv)[list(h_index)])
     within = bool(np.all(u_bound <= torque_limit) and np.all(h_bound <= momentum_limit))
-    return DwellCertificate(lam, P, d, up, down, mu, tau, dwell, bool(L < 2 or np.all(dwell > tau)), s,
+    return DwellCertificate(lam, P, d, up, down, mu, tau, proof.lower, dwell, bool(L < 2 or np.all(dwell >= tau)), s,
                             u_bound, h_bound, float(torque_limit), float(momentum_limit), within)

@@ -264,9 +264,10 @@ class StructuredKKT:
         self.dims = [terms[0].P.shape[0] for terms in blocks]
         self.offs = np.cumsum([0] + [d * d for d in self.dims])
         self.lower = [np.tril(np.ones((d, d), bool)) for d in self.dims]
-        # H over the whole variables (12 MB at N = 24), rewritten at every Schur complement: a fresh
-        # one each iteration cost a noticeable part of the solve in zeroing and page faults
-        self._whole = np.zeros((lay.n_full + 1,) * 2)     # its last row and column stay zero (fold)
+        # H over the whole variables (12 MB at N = 24), made at the first Schur complement and
+        # rewritten at every one after: a fresh one each iteration cost a noticeable part of the
+        # solve in zeroing and page faults
+        self._whole = None
         self.indefinite = 0
 
     def apply(self, v) -> np.ndarray:
@@ -345,6 +346,8 @@ class StructuredKKT:
                     acc[1].append((t.Q.T @ SQ[j]).ravel())      # (QᵀΣQ′)_jl
                     acc[2].append((SP[i].T @ u.Q).ravel())      # (Q′ᵀΣP)ᵀ_il
                     acc[3].append((t.Q.T @ SP[j]).ravel())      # (QᵀΣP′)_jk
+        if self._whole is None:                          # its last row and column stay zero (fold)
+            self._whole = np.zeros((lay.n_full + 1,) * 2)
         H = self._whole                                  # every variable pair meets in the cost block
         for (v, w), (pp, qq, pq, qp) in pairs.items():
             ri, cj = lay.shapes[v]
@@ -369,6 +372,41 @@ class StructuredKKT:
             out.append(np.where(lower, Z, Z.T))
         return out
 
+    def factor(self, sigma):
+        """The Schur complement H of the scaling ``sigma`` factored: LAPACK's Cholesky, or LU where
+        rounding leaves H numerically indefinite (counted in :attr:`indefinite`).
+
+        Parameters
+        ----------
+        sigma : list of (m_k, m_k) arrays
+            The symmetric positive definite scaling of each block, dimensionless.
+
+        Returns
+        -------
+        callable
+            ``solve(b)``: H⁻¹ b for a vector b over the variable vector, dimensionless.
+
+        Raises
+        ------
+        ArithmeticError
+            H is numerically singular (cvxopt then stops with status "unknown" and its last
+            iterate).
+        """
+        H = self.schur(sigma)
+        try:
+            factor = sla.cho_factor(H, lower=True, check_finite=False)
+            return lambda b: sla.cho_solve(factor, b, check_finite=False)
+        except np.linalg.LinAlgError:
+            self.indefinite += 1
+            with warnings.catch_warnings():
+                warnings.simplefilter("error", sla.LinAlgWarning)
+                try:
+                    lu = sla.lu_factor(H, check_finite=False)
+                except sla.LinAlgWarning:
+                    # cvxopt ends on an ArithmeticError with status "unknown" and its last iterate
+                    raise ArithmeticError("singular Schur complement") from None
+            return lambda b: sla.lu_solve(lu, b, check_finite=False)
+
     def kktsolver(self, W):
         """cvxopt's ``kktsolver(W)``: the solver of [[0, Gᵀ], [G, −WᵀW]] [ux; uz] = [bx; bz]
         (no equality constraints): H ux = bx + Gᵀ(WᵀW)⁻¹bz, then W uz = W⁻ᵀ(G ux − bz).
@@ -392,20 +430,7 @@ class StructuredKKT:
         """
         rti = [np.array(r) for r in W["rti"]]
         sigma = [r @ r.T for r in rti]                  # (WᵀW)⁻¹ u = Σ u Σ,  Σ = r⁻ᵀ r⁻¹
-        H = self.schur(sigma)
-        try:
-            factor = sla.cho_factor(H, lower=True, check_finite=False)
-            solve = lambda b: sla.cho_solve(factor, b, check_finite=False)  # noqa: E731
-        except np.linalg.LinAlgError:
-            self.indefinite += 1
-            with warnings.catch_warnings():
-                warnings.simplefilter("error", sla.LinAlgWarning)
-                try:
-                    lu = sla.lu_factor(H, check_finite=False)
-                except sla.LinAlgWarning:
-                    # cvxopt ends on an ArithmeticError with status "unknown" and its last iterate
-                    raise ArithmeticError("singular Schur complement") from None
-            solve = lambda b: sla.lu_solve(lu, b, check_finite=False)  # noqa: E731
+        solve = self.factor(sigma)
 
         def f(x, y, z):
             bz = self._blocks_of(np.array(z).ravel())
@@ -438,13 +463,47 @@ class StructuredKKT:
 
 
 def solve_conelp(prog, tol: float, feastol: float, max_iter: int = 100, start=None, refinement: int = 2):
-    """Minimize cᵀv subject to the program's blocks ⪯ 0 by cvxopt's ``conelp`` with
-    :class:`StructuredKKT`.
+    """Minimize cᵀv subject to the regional LMI program's blocks ⪯ 0 by cvxopt's ``conelp`` with
+    :class:`StructuredKKT` (:func:`run_conelp`).
 
     Parameters
     ----------
     prog : acmm.design.regional_lmi.LMIProgram
         The program.
+    tol : float
+        Relative gap tolerance, dimensionless.
+    feastol : float
+        Primal and dual feasibility tolerance, dimensionless.
+    max_iter : int
+        Iteration limit (a guard: the stop is the tolerances).
+    start : tuple or None
+        An interior iterate to start from, as :func:`run_conelp`.
+    refinement : int
+        Steps of iterative refinement of each KKT solve (:func:`run_conelp`).
+
+    Returns
+    -------
+    tuple
+        As :func:`run_conelp`.
+    """
+    N, m = prog.sizes
+    return run_conelp(StructuredKKT(prog.terms, layout(N, m)), prog.c, prog.F0, tol, feastol, max_iter, start,
+                      refinement)
+
+
+def run_conelp(kkt: StructuredKKT, c, F0, tol: float, feastol: float, max_iter: int = 100, start=None,
+               refinement: int = 2):
+    """Minimize cᵀv subject to F0_k + G_k(v) ⪯ 0 for every block k by cvxopt's ``conelp`` with a
+    structured KKT solver.
+
+    Parameters
+    ----------
+    kkt : StructuredKKT
+        The program's operator G and KKT solver (its blocks' terms).
+    c : (n_var,) array
+        Objective, dimensionless.
+    F0 : list of (m_k, m_k) arrays
+        The blocks' constant parts, dimensionless.
     tol : float
         Relative gap tolerance, dimensionless.
     feastol : float
@@ -468,9 +527,7 @@ def solve_conelp(prog, tol: float, feastol: float, max_iter: int = 100, start=No
         "no answer" without a vector (cvxopt's own word, e.g. "primal infeasible", is not a
         checked certificate).
     """
-    N, m = prog.sizes
-    kkt = StructuredKKT(prog.terms, layout(N, m))
-    h = cvxopt.matrix(np.concatenate([-f0.ravel(order="F") for f0 in prog.F0]))
+    h = cvxopt.matrix(np.concatenate([-f0.ravel(order="F") for f0 in F0]))
     options = {"show_progress": False, "abstol": 1e-300, "reltol": tol, "feastol": feastol,
                "maxiters": max_iter, "refinement": refinement}
     warm = {}
@@ -479,7 +536,7 @@ def solve_conelp(prog, tol: float, feastol: float, max_iter: int = 100, start=No
         warm = {"primalstart": {"x": cvxopt.matrix(v0),
                                 "s": cvxopt.matrix(np.concatenate([x.ravel(order="F") for x in slacks]))},
                 "dualstart": {"z": cvxopt.matrix(np.concatenate([x.ravel(order="F") for x in duals]))}}
-    sol = solvers.conelp(cvxopt.matrix(prog.c), kkt.operator, h, {"l": 0, "q": [], "s": kkt.dims},
+    sol = solvers.conelp(cvxopt.matrix(np.asarray(c, float)), kkt.operator, h, {"l": 0, "q": [], "s": kkt.dims},
                          kktsolver=kkt.kktsolver, options=options, **warm)
     status = sol["status"] + (f" ({kkt.indefinite} indefinite Schur complements)" if kkt.indefinite else "")
     if sol["status"] not in ("optimal", "unknown") or sol["x"] is None or sol["z"] is None:

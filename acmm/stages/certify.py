@@ -9,10 +9,12 @@ closed by the gain in use there (the scheduled gain, eq 5.1).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
+import h5py
 import numpy as np
 
-from acmm.design.dwell import NOT_COVERED, DwellCertificate, dwell_certificate
+from acmm.design.dwell import NOT_COVERED, DwellCertificate, DwellProof, dwell_certificate
 from acmm.io.config import Config
 from acmm.io.design_file import DesignTable
 from acmm.model import kinematics as kin
@@ -112,7 +114,33 @@ def _deviation(theta: np.ndarray, theta_eq: np.ndarray, n: float, nx: int) -> np
     return x
 
 
-def compute_certificate(cfg: Config, table: DesignTable) -> StairCertificate:
+def stored_proof(path: Path, orbit: float) -> DwellProof | None:
+    """The Lyapunov matrices, decay rate and dwells of a ``design.h5``'s ``dwell`` group, for
+    :func:`acmm.design.dwell.dwell_certificate` to check again and reuse.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The ``design.h5``.
+    orbit : float
+        One orbit, s.
+
+    Returns
+    -------
+    acmm.design.dwell.DwellProof or None
+        None when the file or the group cannot be read.
+    """
+    try:
+        with h5py.File(path, "r") as f:
+            g = f["dwell"]
+            return DwellProof(float(g["decay_rate"][()]), float(g["tau_star"][()]) * orbit,
+                              float(g["tau_star"].attrs["not_certified_below_orbit"]) * orbit,
+                              np.asarray(g["lyapunov"][()], float))
+    except (OSError, KeyError, ValueError):
+        return None
+
+
+def compute_certificate(cfg: Config, table: DesignTable, proof: DwellProof | None = None) -> StairCertificate:
     """The dwell-time certificate of a config's stair-case (:func:`acmm.design.dwell.dwell_certificate`).
 
     Parameters
@@ -121,6 +149,8 @@ def compute_certificate(cfg: Config, table: DesignTable) -> StairCertificate:
         The config.
     table : acmm.io.design_file.DesignTable
         Its design.
+    proof : acmm.design.dwell.DwellProof, optional
+        A proof found before (:func:`stored_proof`), reused where it holds for these levels.
 
     Returns
     -------
@@ -129,7 +159,7 @@ def compute_certificate(cfg: Config, table: DesignTable) -> StairCertificate:
     """
     Acl, gains, scale, dwell, jumps, idx, sc = level_closed_loops(cfg, table)
     cert = dwell_certificate(Acl, gains, scale, dwell, jumps, H_INDEX, sc.torque_limit, sc.momentum_limit,
-                             start=_deviation(sc.x0[3:6], sc.theta_est[0], sc.n, Acl.shape[1]))
+                             start=_deviation(sc.x0[3:6], sc.theta_est[0], sc.n, Acl.shape[1]), proof=proof)
     return StairCertificate(cert, [table.names[i] for i in idx], sc.theta_est[:, 1], Acl, jumps, sc.n)
 
 
@@ -154,18 +184,21 @@ def certificate_items(sc: StairCertificate) -> dict:
         "closed_loop": Dataset(sc.closed_loops, UNIT_A, "A_k - B_k K_k of each level's frozen loop (eq 4.46, coupled, "
                                "about the level's TEA)", dims=("level", "state", "state_col")),
         "scales": Dataset(c.scale, UNIT_STATE, "state scaling D of the Lyapunov matrices (x = D x~)", dims=("state",)),
-        "lyapunov": Dataset(c.P, "1", "P_k: (A~_k + lambda I)' P_k + P_k (A~_k + lambda I) = -I, scaled states",
-                            dims=("level", "state", "state_col")),
+        "lyapunov": Dataset(c.P, "1", "P_k > 0: (A~_k + lambda I)' P_k + P_k (A~_k + lambda I) < 0 and "
+                            "expm(A~_k' tau*) P_j expm(A~_k tau*) < exp(-2 lambda tau*) P_k for j = k +- 1, "
+                            "scaled states", dims=("level", "state", "state_col")),
         "jump": Dataset(sc.jumps, "state_units[j]", "equilibrium state of level k minus that of level k+1",
                         dims=("switch", "state")),
-        "decay_rate": Dataset(c.decay, "1/s", "common decay rate lambda of the levels' Lyapunov functions"),
+        "decay_rate": Dataset(c.decay, "1/s", "decay rate lambda the certificate proves (1/64 of the slowest "
+                              "level's)"),
         "jump_up": Dataset(c.jump_up, "1", "mu(k+1 <- k) = lambda_max(P_k^-1 P_k+1)", dims=("switch",)),
         "jump_down": Dataset(c.jump_down, "1", "mu(k <- k+1) = lambda_max(P_k+1^-1 P_k)", dims=("switch",)),
         "tau_star": Dataset(c.tau_star / orbit if np.isfinite(c.tau_star) else np.inf, "orbit",
-                            "certified minimum dwell time ln(mu)/(2 lambda)",
+                            "certified minimum dwell time (Geromel-Colaneri LMIs, bisection)",
                             attrs={"certified": bool(c.certified), "within_limits": bool(c.within_limits),
                                    "unstable_levels": list(c.unstable_levels), "not_covered": NOT_COVERED,
-                                   "statement": "certificate of the linearized switched system"}),
+                                   "statement": "certificate of the linearized switched system",
+                                   "not_certified_below_orbit": c.tau_lower / orbit}),
         "dwell": Dataset(c.dwell / orbit, "orbit", "time each level but the last is held", dims=("switch",)),
         "transient": Dataset(c.transient, "1", "bound on sqrt(V_k) of the deviation while level k holds", dims=level),
         "u_bound": Dataset(c.u_bound, "ft*lbf", "bound on |u| while each level holds", ["roll", "pitch", "yaw"],
@@ -199,12 +232,12 @@ def certificate_lines(sc: StairCertificate) -> list[str]:
         bad = ", ".join(sc.names[k] for k in c.unstable_levels)
         return [f"  no certificate: the frozen closed loop of level(s) {bad} is not stable"]
     n = sc.n
-    lines = [f"  {L} level(s); common decay rate lambda = {c.decay / n:.3f} n"]
+    lines = [f"  {L} level(s); proved decay rate lambda = {c.decay / n:.4f} n"]
     if L > 1:
         shortest = float(np.min(c.dwell)) / sc.orbit
-        lines.append(f"  worst jump ratio mu = {c.mu:.3g} (switches checked both ways); certified minimum dwell "
-                     f"tau* = ln(mu)/(2 lambda) = {c.tau_star / sc.orbit:.3f} orbit; shortest level "
-                     f"{shortest:.2f} orbit: {'CERTIFIED' if c.certified else 'NOT certified'}")
+        lines.append(f"  certified minimum dwell tau* = {c.tau_star / sc.orbit:.3f} orbit (Geromel-Colaneri LMIs "
+                     f"per level, switches checked both ways; not certified at {c.tau_lower / sc.orbit:.3f}); "
+                     f"shortest level {shortest:.2f} orbit: {'CERTIFIED' if c.certified else 'NOT certified'}")
     if L > 1:
         lines.append(f"  TEA-step transient: |u| <= {np.max(c.u_bound):.3g} ft*lbf (limit {c.torque_limit:g}), "
                      f"|h - h*| <= {np.max(c.h_bound):.4g} ft*lbf*s (limit {c.momentum_limit:g}): "
