@@ -29,9 +29,9 @@ certifies it with one Lyapunov function per level and a minimum dwell time (Gero
    there); while level j holds |u_a| ≤ s_j √(K_a P_j⁻¹ K_aᵀ) and |h_a| ≤ s_j √((P_j⁻¹)_aa),
    checked against the torque and momentum limits.
 
-An earlier certificate (Hespanha & Morse 1999: one common decay rate, P_k from Lyapunov
-equations, τ* = ln μ / (2λ)) gave 1.65 orbit on the packaged stair-case; Geromel and Colaneri's
-condition is never weaker (their LMIs hold at that τ* with those P_k) and is far sharper here.
+An earlier certificate (Hespanha & Morse 1999: one common decay rate λ′, P_k from Lyapunov
+equations, τ* = ln μ / (2λ′)) is never sharper: its P_k satisfy the LMIs of step 2 at the rate
+λ < λ′ from T = ln μ / (2(λ′ − λ)) on.
 
 What it does not cover (stated with every certificate): the nonlinear plant (3.1–3.9) away from the
 equilibria, the saturations, the cyclic aerodynamic disturbance (eq 3.9) that the DRFs reject in
