@@ -349,6 +349,16 @@ def _min_max(g1, g2, A: float, e: float) -> float:
     return max(min(g1(hi), g2(lo)), 0.0)
 
 
+def _at_rest(cfg: QppConfig) -> bool:
+    """Whether the nominal loop starts at rest: x0 = 0 (the observer starts equal) and x_c(0) = 0
+    (``xc0: zero``, ``equilibrium`` with x0 = 0, or a list of zeros), so that y_o = h * r_o."""
+    x0 = cfg.plant.x0
+    if x0 is not None and np.any(np.asarray(x0, float) != 0.0):
+        return False
+    xc0 = cfg.plant.xc0
+    return not (isinstance(xc0, list) and np.any(np.asarray(xc0, float) != 0.0))
+
+
 def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
     """The settling times excluded by the premise ``peak`` for every design of the family (module
     docstring), or None when the bound does not apply (a loop that does not start at rest, or an
@@ -366,10 +376,9 @@ def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
     """
     P = cfg.lure_plant()
     ro = cfg.simulation.r_o
-    x0 = cfg.plant.x0
     if P.p != 1 or len(ro) != 1 or len(ro[0]) != 1 or ro[0][0].kind != "sin" or ro[0][0].omega <= 0:
         return None
-    if x0 is not None and np.any(np.asarray(x0, float) != 0.0):
+    if not _at_rest(cfg):
         return None
     A, w, ph = abs(ro[0][0].amplitude), ro[0][0].omega, ro[0][0].phase
     band, sp = cfg.spheres.settle_band, cfg.spheres

@@ -164,3 +164,9 @@ def test_every_design_meets_the_lower_bound_of_gamma_inf(siso, rho, w, a):
     assert gam >= pe.gamma_lower[j] * (1 - 1e-9), (c.T, gam, pe.gamma_lower[j])
     if pe.excluded[j]:
         assert "peak" in c.failed
+
+
+def test_a_loop_not_at_rest_has_no_peak_bound(siso):
+    """y_o = h * r_o only for a loop at rest: a servo state x_c(0) ≠ 0 (as x0 ≠ 0) leaves the bound out."""
+    assert peak_exclusion(siso.model_copy(update={"plant": siso.plant.model_copy(update={"xc0": [1.0, 0.0]})})) is None
+    assert peak_exclusion(siso.model_copy(update={"plant": siso.plant.model_copy(update={"xc0": [0.0, 0.0]})})) is not None
