@@ -474,7 +474,8 @@ def _settle_terms(s, later, sg, edges, A: float, w: float, ph: float) -> tuple:
     Pg = sg[:, None] * np.where(s[None, :] < later[:, None], A * np.sin(w * (later[:, None] - s[None, :]) + ph), 0.0)
     c0, c1 = edges[:-1][:, None], edges[1:][:, None]
     lo = np.maximum(c0, s[None, :])
-    PG = np.where(s[None, :] < c1, A / w * (np.cos(w * (lo - s[None, :]) + ph) - np.cos(w * (c1 - s[None, :]) + ph)), 0.0)
+    PG = np.where(s[None, :] < c1,
+                  A / w * (np.cos(w * (lo - s[None, :]) + ph) - np.cos(w * (c1 - s[None, :]) + ph)), 0.0)
     return Pg, PG
 
 
@@ -518,8 +519,8 @@ def _settle_multipliers(later, sg, edges, c, nu: float, A: float, w: float, ph: 
         ev, V = np.linalg.eigh(0.5 * (R + R.T))
         Rh = (V * np.sqrt(np.maximum(ev, 0.0))).T
         pen = 1e3 * max(float(np.max(ev)), 1.0)
-        lam, _ = nnls(np.vstack([Rh, np.sqrt(pen) * c[None, :]]), np.concatenate([np.zeros(Rh.shape[0]), [np.sqrt(pen)]]),
-                      maxiter=50 * later.size)
+        lam, _ = nnls(np.vstack([Rh, np.sqrt(pen) * c[None, :]]),
+                      np.concatenate([np.zeros(Rh.shape[0]), [np.sqrt(pen)]]), maxiter=50 * later.size)
         mu = K @ lam
         q2 = lam @ Ggg @ lam - 2 * lam @ GgF @ mu + mu @ GFF @ mu
         if q2 > 0:
@@ -561,7 +562,8 @@ def _settle_line(later, sg, edges, lam, mu, A: float, w: float, ph: float) -> tu
             f = iv.mpf(float(lam[i] * sg[i])) * Ai
             be += f * iv.sin(th_i[i])
             ga -= f * iv.cos(th_i[i])
-        for j in np.nonzero((edges[1:] > sm) & (mu != 0))[0]:    # −μ_j (A/w)[cos(w(max(c0, s) − s) + φ) − cos(θ_c1 − ws)]
+        # −μ_j (A/w)[cos(w(max(c0, s) − s) + φ) − cos(θ_c1 − ws)]
+        for j in np.nonzero((edges[1:] > sm) & (mu != 0))[0]:
             f = -iv.mpf(float(mu[j])) * Ai / W
             be -= f * iv.cos(th_e[j + 1])
             ga -= f * iv.sin(th_e[j + 1])
@@ -645,8 +647,8 @@ def _settle_gamma(T: float, later, sg, edges, nu: float, A: float, w: float, ph:
         a0, lsum, cm, Q = _settle_line(later, sg, edges, lam, mu, A, w, ph)
         L = (a0 - cm * nu - band * lsum * A) / (Q + band * lsum * e_T)
         if float(L.a) > best.gamma:
-            best = SettleLine(T, nu, later, sg, edges, lam, mu, *[(float(x.a), float(x.b)) for x in (a0, lsum, cm, Q, e_T)],
-                              float(L.a))
+            ends = [(float(x.a), float(x.b)) for x in (a0, lsum, cm, Q, e_T)]
+            best = SettleLine(T, nu, later, sg, edges, lam, mu, *ends, float(L.a))
         P_fit = A + float(L.a) * float(e_T.b)
     return best
 
