@@ -313,5 +313,8 @@ def test_fast_designs_meet_the_settle_bound(siso, rho, w, a):
     line = settle_line(siso, c.T, nu * (1 + 1e-6))
     assert gam >= line.gamma, (c.T, gam, line.gamma)
     assert abs(c.T / 0.0125 - round(c.T / 0.0125)) < 1e-9          # a sample of the first pass
+    if (rho, w, a) == (1e-6, 1000.0, 1e-8):    # (the guide: settling in 0.0375 s, m = 1.29 > 1, β1 = 2.16)
+        assert c.T == pytest.approx(0.0375) and round(c.m, 2) == 1.29 and round(c.beta1, 2) == 2.16
+        assert hinf(Az + a * np.eye(len(Az)), Bz, Cz) == pytest.approx(c.beta1, rel=1e-6)
     if c.T >= 0.0625 - 1e-9:
         assert {"contraction", "peak"} & set(c.failed)
