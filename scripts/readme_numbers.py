@@ -519,7 +519,7 @@ def block_qpp_search(r: dict) -> str:
     str
         A Markdown table and one sentence per example.
     """
-    from qpp.design.family import REPORT_GRIDS, family_bounds, peak_exclusion, refine, search
+    from qpp.design.family import REPORT_GRIDS, family_bounds, peak_exclusion, refine, search, settle_exclusion
 
     rows = ["| example | β1 ≥ (every design: T_ry = I at ω_k) | m ≤ (every design, every T) | m ≤ for T ≥ π/(2ω) "
             "| grid: designs (ρ, w, a; T = settling time) | certified | largest m | smallest β1 | largest m − β1 "
@@ -560,8 +560,24 @@ def block_qpp_search(r: dict) -> str:
                              + f" (the first pass's samples, {fixed(pe.times[1] - pe.times[0], 4)} s apart: γ∞ ≥ L(T) "
                              f"of every design settling at T against m(T) ≤ U(T), √T·L = "
                              f"{fixed(np.sqrt(first) * pe.gamma_lower[j], 4)} > U = {fixed(pe.m_upper[j], 4)} at "
-                             f"T = {fixed(first, 4)} s), which leaves {below.size + len(gaps)} settling times open "
+                             f"T = {fixed(first, 4)} s), which leaves {below.size + len(gaps)} settling times "
                              f"(T ≤ {fixed(float(below.max()), 4)} s" + (" and the exceptions" if gaps else "") + ")")
+                se = settle_exclusion(cfg, pe)
+                if se is not None and np.any(se.excluded):
+                    ex = se.excluded
+                    k = int(np.argmin(np.where(ex, np.sqrt(se.times) * se.gamma_lower, np.inf)))
+                    rest = se.open_times()
+                    peak_note += (f"; of these, the premises contraction and peak together exclude {int(ex.sum())}, "
+                                  f"from {fixed(float(se.times[ex].min()), 4)} s to {fixed(float(se.times[ex].max()), 4)} s "
+                                  f"(β1 ≥ 1 < m keeps ‖y_o‖_{{L2[0, T]}} below ν_max(T) = "
+                                  f"{fixed(float(se.nu_max[ex].min()), 4)} … {fixed(float(se.nu_max[ex].max()), 4)}, and "
+                                  f"settling right after T then needs γ∞ ≥ L(T, ν): √T·L(T, ν_max) ≥ "
+                                  f"{fixed(float(np.sqrt(se.times[k]) * se.gamma_lower[k]), 4)} (T = "
+                                  f"{fixed(float(se.times[k]), 4)} s) > U(T, ν_max) = 1, every smaller ν covered by at "
+                                  f"most {int(se.splits[ex].max())} intervals), which leaves {rest.size} settling times "
+                                  f"open" + (f" ({', '.join(fixed(float(x), 4) for x in rest)} s)" if rest.size else ""))
+                else:
+                    peak_note += " open"
             notes.append(f"* `{name}`: no design with T ≥ {fixed(b.T_sin, 4)} s is certified (β1 ≥ "
                          f"{fixed(b.beta1_lower, 1)} ≥ {fixed(b.m_upper_sin, 4)} ≥ m){peak_note}; there, m ≤ "
                          f"{fixed(b.m_upper, 4)} leaves room, and the grid finds "

@@ -31,6 +31,13 @@ band·P)/‖r_o‖_{t1}, the later samples combined by weak duality (:func:`_dua
 β_o/(β_i + β_o β3_min(T)) (β3_min the sinusoidal φ's closed form, else 0) with E(T) ≥ √T: a
 settling time with √T·L(T) > U(T) is excluded.
 
+A fourth bound takes the premises ``contraction`` and ``peak`` together (:func:`settle_exclusion`):
+β1 ≥ 1 and β1 < m ≤ β_o/(β_i + β_o β3_min(T) + |k|₂ ‖y_o‖_{L2[0, T]}/√T) keep y_o small on [0, T]
+(‖y_o‖_T < ν_max(T)), and a loop that settles right after T with so little output before it needs a
+large impulse response: γ∞ ≥ ‖h‖₂ ≥ L(T, ν), from the settling constraints and ∫₀^T μ y_o ≤ ‖μ‖₂ ν
+by weak duality, with multipliers whose bound is computed in interval arithmetic.  A settling time
+is excluded when every ν ∈ [0, ν_max) has √T·L > U(T, ν).
+
 When an upper bound of m is ≤ 1 ≤ β1, no design of the family is certified (the premise
 ``contraction``, β1 < m, fails).  Otherwise :func:`search` evaluates a grid of the family (T the
 settling time of each design: m is non-increasing in T and γ∞·max E/m non-decreasing, so a longer
@@ -48,6 +55,7 @@ from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
 from qpp.io.config import QppConfig
 from qpp.io.config_nonlin import SinusoidalNonlinearity
+from mpmath import iv
 from scipy.optimize import minimize, nnls
 
 
@@ -349,6 +357,16 @@ def _min_max(g1, g2, A: float, e: float) -> float:
     return max(min(g1(hi), g2(lo)), 0.0)
 
 
+def _at_rest(cfg: QppConfig) -> bool:
+    """Whether the nominal loop starts at rest: x0 = 0 (the observer starts equal) and x_c(0) = 0
+    (``xc0: zero``, ``equilibrium`` with x0 = 0, or a list of zeros), so that y_o = h * r_o."""
+    x0 = cfg.plant.x0
+    if x0 is not None and np.any(np.asarray(x0, float) != 0.0):
+        return False
+    xc0 = cfg.plant.xc0
+    return not (isinstance(xc0, list) and np.any(np.asarray(xc0, float) != 0.0))
+
+
 def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
     """The settling times excluded by the premise ``peak`` for every design of the family (module
     docstring), or None when the bound does not apply (a loop that does not start at rest, or an
@@ -366,10 +384,9 @@ def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
     """
     P = cfg.lure_plant()
     ro = cfg.simulation.r_o
-    x0 = cfg.plant.x0
     if P.p != 1 or len(ro) != 1 or len(ro[0]) != 1 or ro[0][0].kind != "sin" or ro[0][0].omega <= 0:
         return None
-    if x0 is not None and np.any(np.asarray(x0, float) != 0.0):
+    if not _at_rest(cfg):
         return None
     A, w, ph = abs(ro[0][0].amplitude), ro[0][0].omega, ro[0][0].phase
     band, sp = cfg.spheres.settle_band, cfg.spheres
@@ -399,6 +416,383 @@ def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
                 lambda p, j=j: (p - A) / energy[j], A, energy[j])
     excluded = np.sqrt(t) * L > U * (1 + 1e-9)
     return PeakExclusion(t, L, U, excluded)
+
+
+#: later samples (after T) and cells of [0, T] whose constraints :func:`settle_exclusion` combines
+SETTLE_LATER, SETTLE_CELLS = 48, 24
+#: ν-intervals one settling time may be split into by :func:`settle_exclusion` (multipliers each)
+SETTLE_SPLITS = 12
+#: the weights τ of ‖μ‖² scanned when :func:`_settle_multipliers` chooses the multipliers
+_SETTLE_TAUS = tuple(np.geomspace(1e-8, 1e2, 21))
+#: quadrature points on [0, t_N] of the Gram matrices that only choose the multipliers
+_SETTLE_QUAD = 4000
+
+
+@dataclass
+class SettleExclusion:
+    """Settling times T excluded by the premises ``contraction`` and ``peak`` together, for every
+    design (:func:`settle_exclusion`).
+
+    Attributes
+    ----------
+    times : (K,) ndarray
+        The settling times examined (those :func:`peak_exclusion` leaves open), s.
+    nu_max : (K,) ndarray
+        ν_max(T): ‖y_o‖_{L2[0, T]} of a design meeting ``contraction`` is below it, output units·s^½.
+    gamma_lower : (K,) ndarray
+        L(T, ν_max), a lower bound of γ∞ of every design settling at T with ‖y_o‖_T ≤ ν_max, output
+        units per input unit·s^½.
+    nu_low : (K,) ndarray
+        The smallest ν the covering reached: 0 where T is excluded, output units·s^½.
+    splits : (K,) int ndarray
+        The ν-intervals used, dimensionless.
+    excluded : (K,) bool ndarray
+        Every ν ∈ [0, ν_max) covered: no design settling at T meets both premises (dimensionless flags).
+    """
+
+    times: np.ndarray
+    nu_max: np.ndarray
+    gamma_lower: np.ndarray
+    nu_low: np.ndarray
+    splits: np.ndarray
+    excluded: np.ndarray
+
+    def open_times(self) -> np.ndarray:
+        """The settling times the bound leaves open.
+
+        Returns
+        -------
+        ndarray
+            The open settling times, s.
+        """
+        return self.times[~self.excluded]
+
+
+def _settle_terms(s, later, sg, edges, A: float, w: float, ph: float) -> tuple:
+    """The functions g_i(s) = s_i r_o(t_i − s) (s < t_i) and G_j(s) = ∫_{cell j} r_o(t − s) 1[t > s] dt
+    of :func:`settle_exclusion` at the points s (float; only to choose the multipliers), output units."""
+    Pg = sg[:, None] * np.where(s[None, :] < later[:, None], A * np.sin(w * (later[:, None] - s[None, :]) + ph), 0.0)
+    c0, c1 = edges[:-1][:, None], edges[1:][:, None]
+    lo = np.maximum(c0, s[None, :])
+    PG = np.where(s[None, :] < c1,
+                  A / w * (np.cos(w * (lo - s[None, :]) + ph) - np.cos(w * (c1 - s[None, :]) + ph)), 0.0)
+    return Pg, PG
+
+
+def _settle_multipliers(later, sg, edges, c, nu: float, A: float, w: float, ph: float) -> tuple:
+    """Multipliers λ ≥ 0 (later samples) and μ (cells of [0, T]) for :func:`settle_exclusion`: for
+    each τ of :data:`_SETTLE_TAUS`, μ minimizes ‖q‖² + τ Σ μ_j² |cell_j| for given λ (least squares),
+    then λ minimizes the reduced form under cᵀλ = 1 (non-negative least squares); the τ of the
+    largest (cᵀλ − ν‖μ‖)/‖q‖ on the quadrature wins.  Any λ ≥ 0, μ give a bound (computed from them
+    exactly by :func:`_settle_line`); this only chooses them.
+
+    Parameters
+    ----------
+    later : (N,) array
+        Sample times after T, s.
+    sg : (N,) array
+        Signs s_i of r_o(t_i), dimensionless.
+    edges : (M+1,) array
+        Cell edges of [0, T], s.
+    c : (N,) array
+        |r_o(t_i)| − band·P at the P fitted, output units.
+    nu : float
+        Bound of ‖y_o‖_{L2[0, T]}, output units·s^½.
+    A, w, ph : float
+        r_o = A sin(w t + ph): output units, rad/s, rad.
+
+    Returns
+    -------
+    tuple
+        (λ, μ): (N,) and (M,) arrays, dimensionless and per s.
+    """
+    S = _SETTLE_QUAD
+    s = (np.arange(S) + 0.5) * later[-1] / S
+    Pg, PG = _settle_terms(s, later, sg, edges, A, w, ph)
+    dq = later[-1] / S
+    Ggg, GgF, GFF = Pg @ Pg.T * dq, Pg @ PG.T * dq, PG @ PG.T * dq
+    D = np.diff(edges)
+    best = (-np.inf, np.zeros(later.size), np.zeros(D.size))
+    for tau in _SETTLE_TAUS:
+        K = np.linalg.solve(GFF + tau * np.diag(D), GgF.T)
+        R = Ggg - GgF @ K
+        ev, V = np.linalg.eigh(0.5 * (R + R.T))
+        Rh = (V * np.sqrt(np.maximum(ev, 0.0))).T
+        pen = 1e3 * max(float(np.max(ev)), 1.0)
+        lam, _ = nnls(np.vstack([Rh, np.sqrt(pen) * c[None, :]]),
+                      np.concatenate([np.zeros(Rh.shape[0]), [np.sqrt(pen)]]), maxiter=50 * later.size)
+        mu = K @ lam
+        q2 = lam @ Ggg @ lam - 2 * lam @ GgF @ mu + mu @ GFF @ mu
+        if q2 > 0:
+            val = (c @ lam - nu * np.sqrt(mu @ (D * mu))) / np.sqrt(q2)
+            if val > best[0]:
+                best = (val, lam, mu)
+    return best[1], best[2]
+
+
+def _settle_line(later, sg, edges, lam, mu, A: float, w: float, ph: float) -> tuple:
+    """(Σ λ_i s_i r_o(t_i), Σ λ_i, ‖μ‖_{L2[0, T]}, ‖q‖₂) of :func:`settle_exclusion` in mpmath's
+    outward-rounded interval arithmetic (``iv``): q = Σ λ_i g_i − Σ μ_j G_j is, between consecutive
+    breakpoints (cell edges and sample times), α + β cos ws + γ sin ws, and ‖q‖² is the sum of the
+    pieces' integrals in closed form.
+
+    Parameters
+    ----------
+    later, sg, edges, lam, mu : arrays
+        :func:`_settle_multipliers` (s, dimensionless, s, dimensionless, 1/s).
+    A, w, ph : float
+        r_o = A sin(w t + ph): output units, rad/s, rad.
+
+    Returns
+    -------
+    tuple of mpmath.iv.mpf
+        Intervals: output units, dimensionless, output units·s^½, output units·s^½.
+    """
+    W, Ai, PH = iv.mpf(w), iv.mpf(A), iv.mpf(ph)
+    th_i = [W * iv.mpf(float(t)) + PH for t in later]
+    th_e = [W * iv.mpf(float(e)) + PH for e in edges]
+    bps = np.unique(np.concatenate([[0.0], edges, later]))
+    total = iv.mpf(0)
+    for s0, s1 in zip(bps[:-1], bps[1:]):
+        if s1 <= s0:
+            continue
+        sm = 0.5 * (s0 + s1)
+        al, be, ga = iv.mpf(0), iv.mpf(0), iv.mpf(0)
+        for i in np.nonzero((later > sm) & (lam != 0))[0]:       # λ_i s_i A sin(θ_i − ws)
+            f = iv.mpf(float(lam[i] * sg[i])) * Ai
+            be += f * iv.sin(th_i[i])
+            ga -= f * iv.cos(th_i[i])
+        # −μ_j (A/w)[cos(w(max(c0, s) − s) + φ) − cos(θ_c1 − ws)]
+        for j in np.nonzero((edges[1:] > sm) & (mu != 0))[0]:
+            f = -iv.mpf(float(mu[j])) * Ai / W
+            be -= f * iv.cos(th_e[j + 1])
+            ga -= f * iv.sin(th_e[j + 1])
+            if sm < edges[j]:
+                be += f * iv.cos(th_e[j])
+                ga += f * iv.sin(th_e[j])
+            else:
+                al += f * iv.cos(PH)
+        a, b = iv.mpf(float(s0)), iv.mpf(float(s1))
+        L = b - a
+        i_c = (iv.sin(W * b) - iv.sin(W * a)) / W
+        i_s = (iv.cos(W * a) - iv.cos(W * b)) / W
+        i_cc = L / 2 + (iv.sin(2 * W * b) - iv.sin(2 * W * a)) / (4 * W)
+        i_ss = L - i_cc
+        i_cs = (iv.sin(W * b) ** 2 - iv.sin(W * a) ** 2) / (2 * W)
+        total += (al * al * L + 2 * al * be * i_c + 2 * al * ga * i_s + be * be * i_cc + ga * ga * i_ss
+                  + 2 * be * ga * i_cs)
+    a0 = sum((iv.mpf(float(lam[i] * sg[i])) * Ai * iv.sin(th_i[i]) for i in range(later.size)), iv.mpf(0))
+    lsum = sum((iv.mpf(float(x)) for x in lam), iv.mpf(0))
+    cm = iv.sqrt(sum((iv.mpf(float(mu[j])) ** 2 * (iv.mpf(float(edges[j + 1])) - iv.mpf(float(edges[j])))
+                      for j in range(mu.size)), iv.mpf(0)))
+    return a0, lsum, cm, iv.sqrt(iv.mpf([0, total.b]))
+
+
+@dataclass
+class SettleLine:
+    """One lower bound L(T, ν) of γ∞ (:func:`settle_exclusion`, step 3) with its multipliers.
+
+    Attributes
+    ----------
+    T : float
+        Settling time, s.
+    nu : float
+        Bound of ‖y_o‖_{L2[0, T]}, output units·s^½.
+    later : (N,) ndarray
+        Sample times after T whose settling constraints enter, s.
+    signs : (N,) ndarray
+        s_i, ±1 (dimensionless).
+    edges : (M+1,) ndarray
+        Cells of [0, T] of the multiplier μ, s.
+    lam : (N,) ndarray
+        λ ≥ 0, dimensionless.
+    mu : (M,) ndarray
+        μ per cell, 1/s.
+    a0, lsum, mu_norm, q_norm, r_norm : tuple
+        Σ λ_i s_i r_o(t_i), Σ λ_i, ‖μ‖₂, ‖q‖₂ and ‖r_o‖_{L2[0, T]} as (lower, upper) ends of their
+        intervals: output units, dimensionless, output units·s^½ (the last three).
+    gamma : float
+        L(T, ν), the lower end of its interval, output units per input unit·s^½ (0 when the bound is void).
+    """
+
+    T: float
+    nu: float
+    later: np.ndarray
+    signs: np.ndarray
+    edges: np.ndarray
+    lam: np.ndarray
+    mu: np.ndarray
+    a0: tuple
+    lsum: tuple
+    mu_norm: tuple
+    q_norm: tuple
+    r_norm: tuple
+    gamma: float
+
+
+def _settle_gamma(T: float, later, sg, edges, nu: float, A: float, w: float, ph: float, band: float) -> SettleLine:
+    """L(T, ν) of :func:`settle_exclusion` from the multipliers fitted at P = A and then at the
+    crossing P of the previous fit (three fits, the largest lower end kept)."""
+    e_T = iv.sqrt(iv.mpf([0, (A ** 2 * (iv.mpf(T) / 2 - (iv.sin(2 * (w * iv.mpf(T) + ph)) - iv.sin(iv.mpf(2 * ph)))
+                                          / (4 * w))).b]))
+    r = A * np.sin(w * later + ph)
+    z = (0.0, 0.0)
+    best = SettleLine(T, nu, later, sg, edges, np.zeros(later.size), np.zeros(edges.size - 1), z, z, z, z,
+                      (float(e_T.a), float(e_T.b)), 0.0)
+    P_fit = A
+    for _ in range(3):
+        lam, mu = _settle_multipliers(later, sg, edges, sg * r - band * P_fit, nu, A, w, ph)
+        if not np.any(lam > 0):
+            break
+        a0, lsum, cm, Q = _settle_line(later, sg, edges, lam, mu, A, w, ph)
+        L = (a0 - cm * nu - band * lsum * A) / (Q + band * lsum * e_T)
+        if float(L.a) > best.gamma:
+            ends = [(float(x.a), float(x.b)) for x in (a0, lsum, cm, Q, e_T)]
+            best = SettleLine(T, nu, later, sg, edges, lam, mu, *ends, float(L.a))
+        P_fit = A + float(L.a) * float(e_T.b)
+    return best
+
+
+def _settle_setup(cfg: QppConfig) -> tuple | None:
+    """(A, ω, φ, band, |k|₂, k3, family_bounds) of :func:`settle_exclusion`, or None where it does not apply."""
+    P = cfg.lure_plant()
+    ro, b = cfg.simulation.r_o, family_bounds(cfg)
+    if (P.p != 1 or len(ro) != 1 or len(ro[0]) != 1 or ro[0][0].kind != "sin" or ro[0][0].omega <= 0
+            or not _at_rest(cfg) or b.beta1_lower < 1.0):
+        return None
+    A, w, ph = abs(ro[0][0].amplitude), float(ro[0][0].omega), float(ro[0][0].phase)
+    if ro[0][0].amplitude < 0:
+        ph += np.pi
+    k_norm = float(np.sqrt(np.sum(b.k ** 2)))
+    nl, k3 = cfg.nonlinearity, 0.0
+    if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
+        k_struct = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        k3 = float(np.sqrt(np.sum(np.maximum(b.k, k_struct) ** 2)))
+    if k_norm <= 0:
+        return None
+    return A, w, ph, cfg.spheres.settle_band, k_norm, k3, b
+
+
+def settle_line(cfg: QppConfig, T: float, nu: float) -> SettleLine | None:
+    """L(T, ν) of :func:`settle_exclusion` (step 3) for one settling time T (a sample of the first
+    pass) and one bound ν of ‖y_o‖_{L2[0, T]}, with its multipliers.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config.
+    T : float
+        Settling time, s.
+    nu : float
+        Bound of ‖y_o‖_{L2[0, T]}, output units·s^½.
+
+    Returns
+    -------
+    SettleLine or None
+        The bound; None where :func:`settle_exclusion` does not apply.
+    """
+    setup = _settle_setup(cfg)
+    if setup is None:
+        return None
+    A, w, ph, band, *_ = setup
+    horizon = max(cfg.simulation.t_final, cfg.spheres.T)
+    times = np.linspace(0.0, horizon, SETTLE_SAMPLES)[1:]
+    later = times[times > T + 1e-12][:SETTLE_LATER]
+    sg = np.where(A * np.sin(w * later + ph) >= 0, 1.0, -1.0)
+    return _settle_gamma(float(T), later, sg, np.linspace(0.0, float(T), SETTLE_CELLS + 1), float(nu), A, w, ph, band)
+
+
+def settle_exclusion(cfg: QppConfig, pe: PeakExclusion | None = None) -> SettleExclusion | None:
+    """The settling times excluded by the premises ``contraction`` and ``peak`` together, for every
+    design of the family, among those :func:`peak_exclusion` leaves open; None where that bound does
+    not apply (a loop not at rest, an r_o other than one sine on one channel) or β1 has no lower bound.
+
+    The argument (r_o = A sin(ωt + φ), a loop at rest, T a settling time of the first pass, as in
+    :func:`peak_exclusion`; h the loop's impulse response from r, so y_o = h * r_o):
+
+    1. *Contraction bounds y_o on [0, T].*  The certificate's m is at most its value at T' = T,
+       β_o/(β_i + β_o β3(T) + β4(T)), with β3(T) ≥ β3_min(T) (the sinusoidal φ's closed form, else
+       0) and β4(T) = e^{aT} ‖(k y_o)_T‖₂ / E(T) ≥ |k|₂ ν/√T, ν = ‖y_o‖_{L2[0, T]}, since
+       e^{aT}/E(T) = (2a/(1 − e^{−2aT}))^½ ≥ T^{−½} (eq 10.44).  So m ≤ U(T, ν) = β_o/(β_i +
+       β_o β3_min(T) + |k|₂ ν/√T), and β1 ≥ 1 (:func:`family_bounds`) with β1 < m needs
+       ν < ν_max = √T (β_o − β_i − β_o β3_min(T)) / |k|₂.
+    2. *Peak bounds γ∞ from above.*  γ∞ max E/m ≥ γ∞ E(T)/m(T) ≥ γ∞ √T / U(T, ν) (the
+       certificate's E/m at T is at least (E(T)(β_i + β_o β3) + e^{aT}|k|₂ ν)/β_o), so the premise
+       needs √T γ∞ ≤ U(T, ν).
+    3. *Settling and a small y_o on [0, T] bound γ∞ from below.*  γ∞ ≥ ‖h‖₂ (the Gramian's
+       r-column, and ‖e^{a·}h‖₂ ≥ ‖h‖₂ for a ≥ 0).  With g_i(s) = s_i r_o(t_i − s) on [0, t_i]
+       (s_i = sign r_o(t_i), t_i the first :data:`SETTLE_LATER` samples after T) and
+       G_j(s) = ∫_{cell j} r_o(t − s) 1[t > s] dt (:data:`SETTLE_CELLS` cells of [0, T]), for any
+       λ ≥ 0 and μ, q = Σ λ_i g_i − Σ μ_j G_j gives ⟨h, q⟩ = Σ λ_i s_i y_o(t_i) − ∫₀^T μ y_o, hence
+       (settling: s_i y_o(t_i) ≥ s_i r_o(t_i) − band·P; Cauchy–Schwarz twice)
+
+           γ∞ ≥ (a_0 − band·P Σλ_i − ‖μ‖₂ ν) / ‖q‖₂,  a_0 = Σ λ_i s_i r_o(t_i),
+
+       and, at the peak error's sample t* ≤ T, γ∞ ≥ (P − A)/‖r_o‖_{L2[0, T]}.  The smaller of the
+       two over every P is L(T, ν) = (a_0 − band·A Σλ_i − ‖μ‖₂ ν) / (‖q‖₂ + band Σλ_i ‖r_o‖_T)
+       (the lines' crossing), non-increasing in ν.  a_0, Σλ, ‖μ‖₂, ‖q‖₂ and ‖r_o‖_T are computed
+       in closed form in interval arithmetic (:func:`_settle_line`) for multipliers chosen by
+       :func:`_settle_multipliers`.
+    4. *Covering ν.*  From ν_hi = ν_max: the interval [ν_lo, ν_hi] with U(T, ν_lo) < √T L(T, ν_hi)
+       is excluded (for ν in it, √T γ∞ ≥ √T L(T, ν_hi) > U(T, ν_lo) ≥ U(T, ν)); then ν_hi ← ν_lo,
+       new multipliers, at most :data:`SETTLE_SPLITS` times.  T is excluded when ν_lo ≤ 0.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config.
+    pe : PeakExclusion, optional
+        :func:`peak_exclusion` of ``cfg`` (computed when not given).
+
+    Returns
+    -------
+    SettleExclusion or None
+        ν_max, L(T, ν_max), the covering and the verdict per open settling time.
+    """
+    setup = _settle_setup(cfg)
+    pe = peak_exclusion(cfg) if pe is None and setup is not None else pe
+    if setup is None or pe is None:
+        return None
+    A, w, ph, band, k_norm, k3, b = setup
+    sp, nl = cfg.spheres, cfg.nonlinearity
+    times = pe.times[~pe.excluded & (pe.times < (b.T_sin if b.T_sin is not None else np.inf))]
+    out = {key: [] for key in ("nu_max", "gamma", "nu_low", "splits", "excluded")}
+    bo, bi = iv.mpf(sp.beta_o), iv.mpf(b.beta_i)
+    for T in times:
+        Ti = iv.mpf(float(T))
+        b3 = iv.mpf(0)
+        if k3 > 0:
+            x = iv.mpf(nl.omega) * Ti
+            b3 = iv.mpf(k3) * (iv.sin(x) if x.b < np.pi / 2 else iv.mpf(1))
+        nu_max = iv.sqrt(Ti) * (bo / iv.mpf(b.beta1_lower) - bi - bo * b3) / iv.mpf(k_norm)
+        nu_hi = float(nu_max.b)
+        later = pe.times[pe.times > T][:SETTLE_LATER]
+        sg = np.where(A * np.sin(w * later + ph) >= 0, 1.0, -1.0)
+        edges = np.linspace(0.0, float(T), SETTLE_CELLS + 1)
+        gamma0, splits, ok = np.nan, 0, nu_hi <= 0
+        while not ok and splits < SETTLE_SPLITS and later.size:
+            L = iv.mpf(_settle_gamma(float(T), later, sg, edges, nu_hi, A, w, ph, band).gamma)
+            splits += 1
+            if splits == 1:
+                gamma0 = float(L.a)
+            if L.a <= 0:
+                break
+            # U(T, ν_lo) < √T L  ⟺  ν_lo > √T (β_o/(√T L) − β_i − β_o β3)/|k|₂ (its upper end, widened)
+            nu_lo = float((iv.sqrt(Ti) * (bo / (iv.sqrt(Ti) * iv.mpf(L.a)) - bi - bo * b3) / iv.mpf(k_norm)).b)
+            nu_lo = nu_lo + 1e-12 * max(abs(nu_lo), nu_hi)
+            if nu_lo <= 0:
+                nu_hi, ok = 0.0, True
+                break
+            if nu_lo >= nu_hi * (1 - 1e-3):
+                break
+            nu_hi = nu_lo
+        out["nu_max"].append(float(nu_max.b))
+        out["gamma"].append(gamma0)
+        out["nu_low"].append(max(nu_hi, 0.0))
+        out["splits"].append(splits)
+        out["excluded"].append(bool(ok))
+    return SettleExclusion(times, np.array(out["nu_max"]), np.array(out["gamma"]), np.array(out["nu_low"]),
+                           np.array(out["splits"], int), np.array(out["excluded"], bool))
 
 
 #: evaluations of :func:`refine` from the best grid point
