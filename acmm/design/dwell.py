@@ -57,7 +57,7 @@ SOLVE_FACTOR = 2.0
 
 #: bisection resolution of τ* and its first upper end, in units of 1/α (α the slowest level's
 #: decay rate); the upper end doubles until a dwell is certified
-DWELL_RESOLUTION = 1.0 / 32.0
+DWELL_RESOLUTION = 1.0 / 8.0
 FIRST_UPPER = 1.0
 
 #: the bisection gives up (no certificate, τ* infinite) once the upper end passes this many
