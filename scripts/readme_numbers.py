@@ -380,7 +380,7 @@ def block_table1_tea(r: dict) -> str:
     fold = _wie_pitch_fold(cfg)
 
     def bound(x):
-        return "≤ " + sci(10.0 ** math.ceil(math.log10(max(x, 1e-300))), 1)
+        return "≤ " + sci(10.0 ** math.ceil(math.log10(max(x, 1e-16))), 1)     # 0: round-off level
     text = ("* **Table 1 TEA** (bias back-solved from eq 4.1 at the printed attitude, continuation branch):\n"
             f"  MB3 {angles(t['mb3'])}, residual {bound(t['mb3'].residual)} ft·lbf; "
             f"AC {angles(t['ac'])}, residual {bound(t['ac'].residual)} ft·lbf.\n"
