@@ -14,18 +14,10 @@ below 1e-7; a step is accepted when Newton converges to :func:`residual_threshol
 ≤ 5° and the sign of det ∂r/∂θ is kept) and the bisection of a fold.  The functions below are the
 Python layer: the :class:`TEA` record, the fallbacks, the messages and the errors.
 
-A sweep case's plant is a perturbation of the plant the controller was designed for, so its TEA is
-the equilibrium *connected to the design TEA* (:func:`solve_tea_connected`: the same continuation,
-from the design TEA along the straight line from the nominal plant to the perturbed one), with two
-differences: only yaw is boxed at ±89.5° (the singular angle of the 2-3-1 sequence), and on a path
-exactly symmetric about the orbit plane (no I12, I23, roll or yaw bias; roll = yaw = 0) a step
-across which det ∂r/∂θ changes sign is accepted when ∂r2/∂θ2 keeps its sign and the trapezoidal
-rule of the branch's tangents reproduces it: a pitchfork, through which the branch goes on, rather
-than a jump between the two roots of a fold.  The root the continuation from LVLH reaches is not
-that one for a nearly planar body: for MB3 (I11 ≈ I33) a 0.5 % smaller I33 flips it from −44.7° to
-+41.8° pitch, while the design TEA's equilibrium moves to −48.2°.  Where the design TEA's branch
-folds before the perturbed plant, the sweep falls back to :func:`solve_tea_fast`, the continuation
-from LVLH.
+A sweep case's plant is a perturbation of the plant its controller was designed for: its TEA is the
+equilibrium connected to the design TEA (:func:`solve_tea_connected`, the same continuation from
+the design TEA along the line from the nominal plant to the perturbed one), or where that branch
+folds, the root continued from LVLH (:func:`solve_tea_fast`).
 """
 from __future__ import annotations
 
@@ -472,7 +464,6 @@ def bias_for_attitude(theta, inertia, n) -> np.ndarray:
     return -equilibrium_residual(theta, inertia, n, np.zeros(3))
 
 
-
 def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) -> TEA:
     """The physical-branch TEA by continuation (eqs 4.1–4.3).
 
@@ -516,12 +507,10 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) ->
     except (NoEquilibriumError, ConvergenceError) as exc:
         if at is not None:
             return at
-
         return without_continuation(exc, inertia, n, bias)
     if at is not None and np.max(np.abs(t.theta - at.theta)) > 1e-6:
         return at
     return t
-
 
 
 def _at_expected(inertia, n, bias, expected) -> TEA | None:
