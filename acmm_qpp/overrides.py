@@ -216,20 +216,24 @@ def header(source: str | None, overrides: list[str] | None) -> str:
 
 
 # ---------------------------------------------------------------------------------------------
-# where a loaded config came from (for the config.yaml header); kept outside the frozen models so
-# that equality and hashing of configs are unchanged
+# where a loaded config came from (for the config.yaml header): carried by the loaded object itself,
+# in an attribute that is no field, so that equality, hashing and the YAML dump of configs ignore it
 # ---------------------------------------------------------------------------------------------
-_ORIGINS: "dict[int, tuple[object, str, list[str]]]" = {}
-_MAX_ORIGINS = 256
+#: the attribute of a loaded config holding ``(source, overrides)``
+ORIGIN_ATTRIBUTE = "_loaded_from"
 
 
 def remember_origin(model: object, source: str, overrides: list[str] | None) -> object:
-    """Record the file and the overrides a loaded config came from; returns ``model``.
+    """Record on ``model`` the file and the overrides it was loaded from; returns ``model``.
+
+    The record is an attribute of the object (:data:`ORIGIN_ATTRIBUTE`), not a field: a frozen
+    pydantic model or dataclass compares, hashes and dumps its fields only, so two configs of the
+    same values are equal whatever their origin.
 
     Parameters
     ----------
     model : object
-        The loaded config (kept by identity; the last 256 are remembered).
+        The loaded config.
     source : str
         The file or packaged name.
     overrides : list of str or None
@@ -240,9 +244,7 @@ def remember_origin(model: object, source: str, overrides: list[str] | None) -> 
     object
         ``model``.
     """
-    if len(_ORIGINS) >= _MAX_ORIGINS:
-        _ORIGINS.pop(next(iter(_ORIGINS)))
-    _ORIGINS[id(model)] = (model, str(source), list(overrides or []))
+    object.__setattr__(model, ORIGIN_ATTRIBUTE, (str(source), list(overrides or [])))
     return model
 
 
@@ -252,14 +254,12 @@ def origin_of(model: object) -> tuple[str | None, list[str]]:
     Parameters
     ----------
     model : object
-        A loaded config.
+        A config.
 
     Returns
     -------
     tuple
         (source or None, list of overrides).
     """
-    rec = _ORIGINS.get(id(model))
-    if rec is None or rec[0] is not model:
-        return None, []
-    return rec[1], rec[2]
+    source, overrides = getattr(model, ORIGIN_ATTRIBUTE, (None, []))
+    return source, list(overrides)

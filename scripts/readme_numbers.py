@@ -335,8 +335,8 @@ def _wie_pitch_fold(cfg, pitch_bias: float = 4.0) -> float | None:
     """The largest pitch bias (ft·lbf) on the branch the TEA continuation follows from LVLH, for
     a pure pitch bias of ``pitch_bias`` that has no equilibrium; None when it has one.
 
-    The same steps as :func:`acmm.tea.solve_tea` (products of inertia, then the bias) and its fold
-    refinement, i.e. the bias its ``NoEquilibriumError`` names.
+    The continuation of :func:`acmm.model.tea.solve_tea` (products of inertia, then the bias) and its
+    fold refinement, i.e. the bias its ``NoEquilibriumError`` names.
     """
     from acmm.model import tea
     from acmm_qpp.errors import NoEquilibriumError
@@ -348,10 +348,8 @@ def _wie_pitch_fold(cfg, pitch_bias: float = 4.0) -> float | None:
         return None
     except NoEquilibriumError:
         pass
-    diag = np.diag(np.diag(inertia))
-    theta, _ = tea._continue(np.zeros(3), lambda lam: (diag + lam * (inertia - diag), np.zeros(3)), n)
-    theta, fold = tea._continue(theta, lambda lam: (inertia, lam * bias), n)
-    return float(tea._fold_location(theta, fold, inertia, n, bias) * pitch_bias)
+    _, status, lam = tea._from_lvlh(np.ascontiguousarray(inertia, float), float(n), bias, tea.RESIDUAL_TOL)
+    return float(lam * pitch_bias) if status == 2 else None
 
 
 def block_table1_tea(r: dict) -> str:
@@ -382,7 +380,7 @@ def block_table1_tea(r: dict) -> str:
     fold = _wie_pitch_fold(cfg)
 
     def bound(x):
-        return "≤ " + sci(10.0 ** math.ceil(math.log10(max(x, 1e-300))), 1)
+        return "≤ " + sci(10.0 ** math.ceil(math.log10(max(x, 1e-16))), 1)     # 0: round-off level
     text = ("* **Table 1 TEA** (bias back-solved from eq 4.1 at the printed attitude, continuation branch):\n"
             f"  MB3 {angles(t['mb3'])}, residual {bound(t['mb3'].residual)} ft·lbf; "
             f"AC {angles(t['ac'])}, residual {bound(t['ac'].residual)} ft·lbf.\n"

@@ -8,7 +8,7 @@ stays stable for ±30 % inertia variations.  Here the claim is designed for and 
    I ∘ (1 + δ), δ_ij ~ U(±p) independently (p = ``inertia_percent``/100; only rigid bodies,
    :func:`acmm.model.inertia.unphysical_reason`), and the uniform scalings (1 ± p)·I at the
    family's ends; each plant linearized (eq 4.46) about **its own** equilibrium connected to the
-   design TEA (:func:`acmm.model.tea_compiled.solve_tea_connected`: where the station goes as its
+   design TEA (:func:`acmm.model.tea.solve_tea_connected`: where the station goes as its
    inertia moves from the nominal one; the bias is held, as in the sweep).  A draw whose design
    branch folds before it (no connected equilibrium) is not a member and is counted.
 2. **The gain** (:func:`robust_gain`): the worst spectral abscissa over the family,
@@ -46,7 +46,7 @@ import scipy.optimize as so
 from acmm.design.regional_lmi import whitened_loop
 from acmm.model import linearize as lin
 from acmm.model.inertia import ELEMENTS, perturb_inertia, unphysical_reason
-from acmm.model.tea_compiled import solve_tea_connected
+from acmm.model.tea import solve_tea_connected
 
 #: a BFGS restart that lowers the worst spectral abscissa by less than this (units of n) ends the search
 RESTART_TOL = 1e-7

@@ -1,22 +1,35 @@
-"""Torque-equilibrium attitude (TEA), CR-185644 eqs 4.1–4.3.
+"""Torque-equilibrium attitude (TEA), CR-185644 eqs 4.1–4.3: one continuation, compiled.
 
 The TEA θ* solves τ_gyro(ω*(θ*)) + τ_gg(θ*) + bias = 0 with ω*(θ) = C_BL·(0, −n, 0)
 (eq 4.3).  Several roots exist; the physical branch is reached reproducibly by continuation
 (``docs/ERRATA.md`` § TEA): start from the diagonal body at LVLH (θ = 0 is exact there with zero bias), grow the
 products of inertia to their values, then grow the bias.  A fold in the bias continuation
 means no equilibrium exists for the full bias.
+
+The algorithm is written once, as numba kernels on plain arrays (compiled once and cached on disk,
+:mod:`acmm.model.compiled_cache`): the residual of eq 4.1 and its Jacobian in closed form, damped
+Newton (steps ≤ 0.5 rad, |θ| < 89.5°, 3×3 Gaussian elimination with partial pivoting), the
+continuation (first step 0.05 of the path, ×1.5 up to 0.1 on success, halved on failure, a fold
+below 1e-7; a step is accepted when Newton converges to :func:`residual_threshold`, θ jumps
+≤ 5° and the sign of det ∂r/∂θ is kept) and the bisection of a fold.  The functions below are the
+Python layer: the :class:`TEA` record, the fallbacks, the messages and the errors.
+
+A sweep case's plant is a perturbation of the plant its controller was designed for: its TEA is the
+equilibrium connected to the design TEA (:func:`solve_tea_connected`, the same continuation from
+the design TEA along the line from the nominal plant to the perturbed one), or where that branch
+folds, the root continued from LVLH (:func:`solve_tea_fast`).
 """
 from __future__ import annotations
 
+import itertools
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from acmm.model import dynamics as dyn
 from acmm.model import kinematics as kin
+from acmm.model.compiled_cache import njit_cached
 from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
-import itertools
-from acmm_qpp.errors import NoEquilibriumError
 from acmm_qpp.units import FT_LBF_IN_NM
 
 #: Largest residual (ft·lbf) accepted for an equilibrium; for a station whose gravity-gradient
@@ -41,6 +54,316 @@ def residual_threshold(scale: float, tol: float = RESIDUAL_TOL) -> float:
         max(min(tol, 1e-13·scale), 1e-15·scale), ft·lbf.
     """
     return max(min(tol, 1e-13 * scale), 1e-15 * scale)
+
+
+# ------------------------------------------------------------------------------------------------
+# The kernels (numba): residual and Jacobian, Newton, continuation, fold bisection
+# ------------------------------------------------------------------------------------------------
+
+_MAX_JUMP = math.radians(5.0)
+_THETA_LIMIT = math.radians(89.5)
+
+
+@njit_cached()
+def _mv(a, v):
+    out = np.empty(3)
+    for i in range(3):
+        out[i] = a[i, 0] * v[0] + a[i, 1] * v[1] + a[i, 2] * v[2]
+    return out
+
+
+@njit_cached()
+def _residual_jac(th, inertia, n, bias, r, jac, want_jac):
+    """r = τ_gyro(ω*(θ)) + τ_gg(θ) + bias (ft·lbf) and, with ``want_jac``, ∂r/∂θ (eq 4.1, 4.3)."""
+    s1, s2, s3 = math.sin(th[0]), math.sin(th[1]), math.sin(th[2])
+    c1, c2, c3 = math.cos(th[0]), math.cos(th[1]), math.cos(th[2])
+    # ω* = C_BL (0, −n, 0), eq 4.3
+    w = np.empty(3)
+    w[0] = -n * s3
+    w[1] = -n * c1 * c3
+    w[2] = n * s1 * c3
+    # nadir vector c, eq 3.4
+    c = np.empty(3)
+    c[0] = -s2 * c3
+    c[1] = c1 * s2 * s3 + s1 * c2
+    c[2] = -s1 * s2 * s3 + c1 * c2
+    iw = _mv(inertia, w)
+    ic = _mv(inertia, c)
+    k = 3.0 * n * n
+    r[0] = -(w[1] * iw[2] - w[2] * iw[1]) + k * (c[1] * ic[2] - c[2] * ic[1]) + bias[0]
+    r[1] = -(w[2] * iw[0] - w[0] * iw[2]) + k * (c[2] * ic[0] - c[0] * ic[2]) + bias[1]
+    r[2] = -(w[0] * iw[1] - w[1] * iw[0]) + k * (c[0] * ic[1] - c[1] * ic[0]) + bias[2]
+    if not want_jac:
+        return
+    # ∂ω*/∂θ
+    dw = np.zeros((3, 3))
+    dw[0, 2] = -n * c3
+    dw[1, 0] = n * s1 * c3
+    dw[1, 2] = n * c1 * s3
+    dw[2, 0] = n * c1 * c3
+    dw[2, 2] = -n * s1 * s3
+    # ∂τ_gyro/∂ω = [(Iω)×] − [ω×] I
+    gj = np.empty((3, 3))
+    for j in range(3):
+        gj[0, j] = -(w[1] * inertia[2, j] - w[2] * inertia[1, j])
+        gj[1, j] = -(w[2] * inertia[0, j] - w[0] * inertia[2, j])
+        gj[2, j] = -(w[0] * inertia[1, j] - w[1] * inertia[0, j])
+    gj[0, 1] += -iw[2]
+    gj[0, 2] += iw[1]
+    gj[1, 0] += iw[2]
+    gj[1, 2] += -iw[0]
+    gj[2, 0] += -iw[1]
+    gj[2, 1] += iw[0]
+    # ∂c/∂θ: columns d_k
+    d = np.empty((3, 3))
+    d[0, 0], d[1, 0], d[2, 0] = 0.0, -s1 * s2 * s3 + c1 * c2, -c1 * s2 * s3 - s1 * c2
+    d[0, 1], d[1, 1], d[2, 1] = -c2 * c3, c1 * c2 * s3 - s1 * s2, -s1 * c2 * s3 - c1 * s2
+    d[0, 2], d[1, 2], d[2, 2] = s2 * s3, c1 * s2 * c3, -s1 * s2 * c3
+    for kk in range(3):
+        idk = _mv(inertia, d[:, kk])
+        # d_k × Ic + c × I d_k
+        g0 = d[1, kk] * ic[2] - d[2, kk] * ic[1] + c[1] * idk[2] - c[2] * idk[1]
+        g1 = d[2, kk] * ic[0] - d[0, kk] * ic[2] + c[2] * idk[0] - c[0] * idk[2]
+        g2 = d[0, kk] * ic[1] - d[1, kk] * ic[0] + c[0] * idk[1] - c[1] * idk[0]
+        jac[0, kk] = k * g0
+        jac[1, kk] = k * g1
+        jac[2, kk] = k * g2
+    for i in range(3):
+        for j in range(3):
+            jac[i, j] += gj[i, 0] * dw[0, j] + gj[i, 1] * dw[1, j] + gj[i, 2] * dw[2, j]
+
+
+@njit_cached()
+def _det3(a):
+    return (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
+            - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+            + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+
+
+@njit_cached()
+def _solve3(a, b, x):
+    """x = a⁻¹ b by Gaussian elimination with partial pivoting; False when singular."""
+    m = a.copy()
+    v = b.copy()
+    for col in range(3):
+        p = col
+        for i in range(col + 1, 3):
+            if abs(m[i, col]) > abs(m[p, col]):
+                p = i
+        if m[p, col] == 0.0:
+            return False
+        if p != col:
+            for j in range(3):
+                m[col, j], m[p, j] = m[p, j], m[col, j]
+            v[col], v[p] = v[p], v[col]
+        for i in range(col + 1, 3):
+            f = m[i, col] / m[col, col]
+            for j in range(col, 3):
+                m[i, j] -= f * m[col, j]
+            v[i] -= f * v[col]
+    for i in range(2, -1, -1):
+        acc = v[i]
+        for j in range(i + 1, 3):
+            acc -= m[i, j] * x[j]
+        x[i] = acc / m[i, i]
+    return True
+
+
+@njit_cached()
+def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out, yaw_only=False):
+    """Damped Newton on eq 4.1 from ``theta0``; the root in ``out``, True when converged.
+
+    An iterate beyond 89.5° fails: in any angle, or with ``yaw_only`` in yaw θ3 alone, the one
+    singular angle of the 2-3-1 sequence."""
+    th = theta0.copy()
+    amax = 0.0
+    for i in range(3):
+        for j in range(3):
+            amax = max(amax, abs(inertia[i, j]))
+    scale = max(3.0 * n * n * amax, 1e-300)
+    thr = max(min(tol, 1e-13 * scale), 1e-15 * scale)          # residual_threshold
+    r = np.empty(3)
+    jac = np.empty((3, 3))
+    step = np.empty(3)
+    for _ in range(max_iter):
+        _residual_jac(th, inertia, n, bias, r, jac, True)
+        if max(abs(r[0]), abs(r[1]), abs(r[2])) <= thr:
+            out[:] = th
+            return True
+        if not _solve3(jac, -r, step):
+            return False
+        norm = 0.0
+        for i in range(3):
+            if not np.isfinite(step[i]):
+                return False
+            norm = max(norm, abs(step[i]))
+        if norm > max_step:
+            for i in range(3):
+                step[i] *= max_step / norm
+        for i in range(3):
+            th[i] += step[i]
+        if abs(th[2]) > _THETA_LIMIT or (not yaw_only and max(abs(th[0]), abs(th[1])) > _THETA_LIMIT):
+            return False
+    _residual_jac(th, inertia, n, bias, r, jac, False)
+    if max(abs(r[0]), abs(r[1]), abs(r[2])) <= thr:
+        out[:] = th
+        return True
+    return False
+
+
+@njit_cached()
+def _continue(theta, i0, i1, b0, b1, n, tol, min_step, connected=False):
+    """Follow θ(λ) along I = i0 + λ(i1 − i0), bias = b0 + λ(b1 − b0) from λ = 0 to 1.
+
+    Returns (θ, λ reached, folded) with the step control of the module's docstring.  With
+    ``connected`` (:func:`solve_tea_connected`) Newton is boxed in yaw only, and
+    on a path exactly symmetric about the orbit plane (:func:`_symmetric_path`) a step across
+    which det ∂r/∂θ changes sign is accepted when ∂r2/∂θ2 keeps its sign and the step is smooth
+    (:func:`_smooth_step`): the branch passes a pitchfork (the roll/yaw stiffness changes sign),
+    not a fold.  A nearly symmetric station has a fold there instead, and it is treated as one.
+    """
+    lam, step = 0.0, 0.05
+    jac = np.empty((3, 3))
+    r = np.empty(3)
+    _residual_jac(theta, i0, n, b0, r, jac, True)
+    det0 = np.sign(_det3(jac))
+    pitch0 = np.sign(jac[1, 1])
+    symmetric = connected and _symmetric_path(theta, i0, i1, b0, b1)
+    new = np.empty(3)
+    th = theta.copy()
+    while lam < 1.0:
+        trial = min(1.0, lam + step)
+        inertia = i0 + trial * (i1 - i0)
+        bias = b0 + trial * (b1 - b0)
+        ok = _newton(th, inertia, n, bias, tol, 50, 0.5, new, connected)
+        if ok:
+            jump = 0.0
+            for i in range(3):
+                jump = max(jump, abs(new[i] - th[i]))
+            ok = jump <= _MAX_JUMP
+        if ok:
+            _residual_jac(new, inertia, n, bias, r, jac, True)
+            det = np.sign(_det3(jac))
+            if (det != det0 and symmetric and np.sign(jac[1, 1]) == pitch0 and new[0] == 0.0
+                    and new[2] == 0.0 and _smooth_step(th, new, lam, trial, i0, i1, b0, b1, n)):
+                det0 = det
+            ok = det == det0
+        if ok:
+            th[:] = new
+            lam = trial
+            step = min(step * 1.5, 0.1)
+        else:
+            step *= 0.5
+            if step < min_step:
+                return th, lam, True
+    return th, lam, False
+
+
+@njit_cached()
+def _symmetric_path(theta, i0, i1, b0, b1):
+    """Whether the path of :func:`_continue` stays exactly in the plane-symmetric subspace: no
+    I12, I23, roll or yaw bias in either plant, and θ1 = θ3 = 0 (Newton keeps them exactly 0)."""
+    return (theta[0] == 0.0 and theta[2] == 0.0 and i0[0, 1] == 0.0 and i0[1, 2] == 0.0
+            and i1[0, 1] == 0.0 and i1[1, 2] == 0.0 and b0[0] == 0.0 and b0[2] == 0.0
+            and b1[0] == 0.0 and b1[2] == 0.0)
+
+
+@njit_cached()
+def _tangent(th, lam, i0, i1, b0, b1, n, out):
+    """dθ/dλ = −(∂r/∂θ)⁻¹ ∂r/∂λ on the path of :func:`_continue`; r is linear in the inertia and
+    the bias, so ∂r/∂λ is r of the difference plant (i1 − i0, b1 − b0)."""
+    r = np.empty(3)
+    jac = np.empty((3, 3))
+    _residual_jac(th, i0 + lam * (i1 - i0), n, b0 + lam * (b1 - b0), r, jac, True)
+    _residual_jac(th, i1 - i0, n, b1 - b0, r, np.empty((3, 3)), False)
+    return _solve3(jac, -r, out)
+
+
+@njit_cached()
+def _smooth_step(th, new, lam, trial, i0, i1, b0, b1, n):
+    """Whether the step θ(λ) → θ(trial) follows one smooth branch: the trapezoidal rule of the
+    tangents at both ends reproduces it to 5 % (at a fold the two roots' tangents point apart)."""
+    ta = np.empty(3)
+    tb = np.empty(3)
+    if not (_tangent(th, lam, i0, i1, b0, b1, n, ta) and _tangent(new, trial, i0, i1, b0, b1, n, tb)):
+        return False
+    h = trial - lam
+    err = 0.0
+    size = 0.0
+    for i in range(3):
+        err = max(err, abs(new[i] - th[i] - 0.5 * h * (ta[i] + tb[i])))
+        size = max(size, abs(new[i] - th[i]))
+    return err <= 0.05 * size + 1e-12
+
+
+@njit_cached()
+def _fold_location(theta, lam, inertia, n, bias, tol):
+    """The largest λ in [``lam``, 1] whose equilibrium exists on the branch through ``theta`` (bisection)."""
+    lo, hi = lam, 1.0
+    th = theta.copy()
+    new = np.empty(3)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        ok = _newton(th, inertia, n, mid * bias, tol, 50, 0.05, new)
+        if ok:
+            jump = 0.0
+            for i in range(3):
+                jump = max(jump, abs(new[i] - th[i]))
+            ok = jump < _MAX_JUMP
+        if ok:
+            lo = mid
+            th[:] = new
+        else:
+            hi = mid
+    return lo
+
+
+@njit_cached()
+def _from_lvlh(inertia, n, bias, tol):
+    """(θ, status, λ): status 0 solved, 1 fold in the products of inertia (λ reached), 2 fold
+    in the bias (λ: the largest bias fraction with an equilibrium)."""
+    diag = np.zeros((3, 3))
+    for i in range(3):
+        diag[i, i] = inertia[i, i]
+    zero = np.zeros(3)
+    th, lam, fold = _continue(np.zeros(3), diag, inertia, zero, zero, n, tol, 1e-7)
+    if fold:
+        return th, 1, lam
+    th, lam, fold = _continue(th, inertia, inertia, zero, bias, n, tol, 1e-7)
+    if fold:
+        return th, 2, _fold_location(th, lam, inertia, n, bias, tol)
+    return th, 0, 1.0
+
+
+@njit_cached()
+def _from_root(theta0, i0, b0, i1, b1, n, tol):
+    """(θ, ok): the root of (i1, b1) on the branch through the root of (i0, b0) that damped
+    Newton reaches from θ0 (within 5°), by the connected continuation."""
+    start = np.empty(3)
+    if not _newton(theta0, i0, n, b0, tol, 50, 0.05, start, False):
+        return theta0.copy(), False
+    jump = 0.0
+    for i in range(3):
+        jump = max(jump, abs(start[i] - theta0[i]))
+    if jump > _MAX_JUMP:
+        return start, False
+    th, _, fold = _continue(start, i0, i1, b0, b1, n, tol, 1e-7, True)
+    return th, not fold
+
+
+# ------------------------------------------------------------------------------------------------
+# The Python layer
+# ------------------------------------------------------------------------------------------------
+def _vec(x) -> np.ndarray:
+    """``x`` as the C-contiguous float64 array the kernels are compiled for."""
+    return np.ascontiguousarray(x, dtype=float)
+
+
+def _root(theta0, inertia, n, bias, max_iter=50, max_step=0.5) -> np.ndarray | None:
+    """Damped Newton on eq 4.1 from ``theta0`` (rad); the root, or None when it fails to converge."""
+    out = np.empty(3)
+    ok = _newton(_vec(theta0), _vec(inertia), float(n), _vec(bias), RESIDUAL_TOL, max_iter, max_step, out, False)
+    return out if ok else None
 
 
 @dataclass(frozen=True)
@@ -89,8 +412,9 @@ def equilibrium_residual(theta, inertia, n, bias) -> np.ndarray:
     (3,) array
         Residual torque, ft·lbf (zero at an equilibrium).
     """
-    omega = kin.lvlh_rate_in_body(theta, n)
-    return dyn.gyroscopic_torque(omega, inertia) + dyn.gravity_gradient_torque(theta, inertia, n) + bias
+    r = np.empty(3)
+    _residual_jac(_vec(theta), _vec(inertia), float(n), _vec(bias), r, np.empty((3, 3)), False)
+    return r
 
 
 def equilibrium_jacobian(theta, inertia, n) -> np.ndarray:
@@ -113,9 +437,9 @@ def equilibrium_jacobian(theta, inertia, n) -> np.ndarray:
     (3, 3) array
         Jacobian of the residual, ft·lbf/rad.
     """
-    omega = kin.lvlh_rate_in_body(theta, n)
-    return (dyn.gyroscopic_torque_jacobian(omega, inertia) @ kin.lvlh_rate_jacobian(theta, n)
-            + dyn.gravity_gradient_jacobian(theta, inertia, n))
+    jac = np.empty((3, 3))
+    _residual_jac(_vec(theta), _vec(inertia), float(n), np.zeros(3), np.empty(3), jac, True)
+    return jac
 
 
 def bias_for_attitude(theta, inertia, n) -> np.ndarray:
@@ -137,58 +461,7 @@ def bias_for_attitude(theta, inertia, n) -> np.ndarray:
     (3,) array
         Bias torque, ft·lbf.
     """
-    return -(equilibrium_residual(np.asarray(theta, float), inertia, n, np.zeros(3)))
-
-
-def _newton(theta0, inertia, n, bias, tol=RESIDUAL_TOL, max_iter=50, max_step=0.5):
-    """Damped Newton on eq 4.1; returns θ or None when it fails to converge."""
-    theta = np.array(theta0, float)
-    scale = max(3 * n * n * np.abs(inertia).max(), 1e-300)
-    for _ in range(max_iter):
-        r = equilibrium_residual(theta, inertia, n, bias)
-        if np.max(np.abs(r)) <= residual_threshold(scale, tol):
-            return theta
-        jac = equilibrium_jacobian(theta, inertia, n)
-        try:
-            step = np.linalg.solve(jac, -r)
-        except np.linalg.LinAlgError:
-            return None
-        if not np.all(np.isfinite(step)):
-            return None
-        norm = np.max(np.abs(step))
-        if norm > max_step:
-            step *= max_step / norm
-        theta = theta + step
-        if np.max(np.abs(theta)) > np.radians(89.5):
-            return None
-    r = equilibrium_residual(theta, inertia, n, bias)
-    return theta if np.max(np.abs(r)) <= residual_threshold(scale, tol) else None
-
-
-def _continue(theta, path, n, max_jump=np.radians(5.0), min_step=1e-7):
-    """Follow θ(λ) along ``path(λ) -> (inertia, bias)`` for λ from 0 to 1.
-
-    Returns (θ at λ=1, None) or (θ at the last λ reached, λ_last) on a fold.
-    """
-    lam, step = 0.0, 0.05
-    inertia, _ = path(0.0)
-    det0 = np.sign(np.linalg.det(equilibrium_jacobian(theta, inertia, n)))
-    while lam < 1.0:
-        trial = min(1.0, lam + step)
-        inertia, bias = path(trial)
-        new = _newton(theta, inertia, n, bias)
-        ok = new is not None and np.max(np.abs(new - theta)) <= max_jump
-        if ok:
-            det = np.sign(np.linalg.det(equilibrium_jacobian(new, inertia, n)))
-            ok = det == det0
-        if ok:
-            theta, lam = new, trial
-            step = min(step * 1.5, 0.1)
-        else:
-            step *= 0.5
-            if step < min_step:
-                return theta, lam
-    return theta, None
+    return -equilibrium_residual(theta, inertia, n, np.zeros(3))
 
 
 def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) -> TEA:
@@ -226,15 +499,14 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) ->
     ConvergenceError
         The products continuation fails and no equilibrium lies within ±85°.
     """
-    inertia = np.asarray(inertia, float)
-    bias = np.asarray(bias, float)
+    inertia = _vec(inertia)
+    bias = _vec(bias)
     at = None if expected is None else _at_expected(inertia, n, bias, expected)
     try:
         t = _solve_by_continuation(inertia, n, bias)
     except (NoEquilibriumError, ConvergenceError) as exc:
         if at is not None:
             return at
-
         return without_continuation(exc, inertia, n, bias)
     if at is not None and np.max(np.abs(t.theta - at.theta)) > 1e-6:
         return at
@@ -243,33 +515,20 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) ->
 
 def _at_expected(inertia, n, bias, expected) -> TEA | None:
     """The equilibrium within 1e-6 rad of ``expected`` (rad) by Newton from it, or None."""
-    theta = _newton(np.asarray(expected, float), inertia, n, bias, max_step=0.05)
+    theta = _root(expected, inertia, n, bias, max_step=0.05)
     ok = theta is not None and np.max(np.abs(theta - expected)) <= 1e-6
     return make_tea(theta, inertia, n, bias) if ok else None
 
 
 def _solve_by_continuation(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
     """:func:`solve_tea`'s continuation (diagonal body at LVLH → products → bias) and its errors."""
-    diag = np.diag(np.diag(inertia))
-
-    def inertia_path(lam):
-        return diag + lam * (inertia - diag), np.zeros(3)
-
-    theta, fold = _continue(np.zeros(3), inertia_path, n)
-    if fold is not None:
+    theta, status, lam = _from_lvlh(inertia, float(n), bias, RESIDUAL_TOL)
+    if status == 1:
         raise ConvergenceError(
             "TEA continuation in the products of inertia failed at "
-            f"{100 * fold:.3g}% of their values (the inertia may have no LVLH-near equilibrium)")
-
-    def bias_path(lam):
-        return inertia, lam * bias
-
-    theta, fold = _continue(theta, bias_path, n)
-    if fold is not None:
-        lam_max = _fold_location(theta, fold, inertia, n, bias)
-        b = lam_max * bias
-
-        raise NoEquilibriumError(fold_message(bias, lam_max))
+            f"{100 * lam:.3g}% of their values (the inertia may have no LVLH-near equilibrium)")
+    if status == 2:
+        raise NoEquilibriumError(fold_message(bias, lam))
     return make_tea(theta, inertia, n, bias)
 
 
@@ -304,9 +563,9 @@ def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess:
     NoEquilibriumError, ConvergenceError
         From the fallback :func:`solve_tea`.
     """
-    inertia = np.asarray(inertia, float)
-    bias = np.asarray(bias, float)
-    theta = _newton(theta_guess, inertia, n, bias, max_step=0.05)
+    inertia = _vec(inertia)
+    bias = _vec(bias)
+    theta = _root(theta_guess, inertia, n, bias, max_step=0.05)
     if theta is None or np.max(np.abs(theta - theta_guess)) > np.radians(5.0):
         return solve_tea(inertia, n, bias, expected=expected)
     if expected is not None and np.max(np.abs(theta - expected)) > 1e-6:
@@ -314,19 +573,6 @@ def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess:
         if at is not None:
             return at
     return make_tea(theta, inertia, n, bias)
-
-
-def _fold_location(theta, lam, inertia, n, bias):
-    """Refine the fold of the bias continuation: the largest λ whose equilibrium exists."""
-    lo, hi, th = lam, 1.0, theta
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        new = _newton(th, inertia, n, mid * bias, max_step=0.05)
-        if new is not None and np.max(np.abs(new - th)) < np.radians(5):
-            lo, th = mid, new
-        else:
-            hi = mid
-    return lo
 
 
 def make_tea(theta, inertia, n, bias) -> TEA:
@@ -414,12 +660,12 @@ def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: fl
     list of TEA
         The distinct equilibria of eqs 4.1–4.3, smallest |θ| first.
     """
-    inertia = np.asarray(inertia, float)
-    bias = np.asarray(bias, float)
+    inertia = _vec(inertia)
+    bias = _vec(bias)
     starts = np.radians(np.arange(-limit_deg + grid_deg / 2, limit_deg, grid_deg))
     roots: list[np.ndarray] = []
     for t0 in itertools.product(starts, repeat=3):
-        th = _newton(np.array(t0), inertia, n, bias, max_iter=100, max_step=0.2)
+        th = _root(t0, inertia, n, bias, max_iter=100, max_step=0.2)
         if th is None or np.max(np.abs(th)) > np.radians(limit_deg):
             continue
         if not any(np.max(np.abs(th - r)) < 1e-6 for r in roots):
@@ -500,7 +746,7 @@ def non_isolated_equilibrium(inertia: np.ndarray, n: float, bias: np.ndarray,
     Jacobian of eq 4.1 is singular on it, so the continuation and Newton's method fail and the
     station was reported to have no equilibrium.  Gauss–Newton with the minimum-norm step
     (least squares) from LVLH reaches the member of the family nearest LVLH; it is accepted only
-    when its residual vanishes (:func:`acmm.model.tea._newton`'s test) and the Jacobian there is
+    when its residual vanishes (Newton's test, :func:`residual_threshold`) and the Jacobian there is
     singular — an isolated root is the continuation's to find, not this function's.
 
     Parameters
@@ -580,3 +826,86 @@ def without_continuation(exc, inertia: np.ndarray, n: float, bias: np.ndarray) -
     if family is not None:
         return family
     raise exc
+
+
+def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
+    """The physical-branch TEA by :func:`solve_tea`'s continuation, without the searches of a fold.
+
+    A sweep's per-case path: a fold of the bias continuation is the error, without
+    :func:`solve_tea`'s family and grid searches (its message is the start of theirs).
+
+    Parameters
+    ----------
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        Constant disturbance torque, ft·lbf.
+
+    Returns
+    -------
+    TEA
+        The torque equilibrium attitude (eqs 4.1–4.3), θ in rad.
+
+    Raises
+    ------
+    NoEquilibriumError
+        The bias continuation folds (:func:`fold_message`: the largest bias with an equilibrium).
+    ConvergenceError
+        The continuation in the products of inertia folds and :func:`without_continuation` finds
+        no equilibrium either.
+    """
+    inertia, bias = _vec(inertia), _vec(bias)
+    try:
+        return _solve_by_continuation(inertia, n, bias)
+    except ConvergenceError as exc:
+        return without_continuation(exc, inertia, n, bias)
+
+
+def solve_tea_connected(theta0: np.ndarray, inertia0: np.ndarray, bias0: np.ndarray,
+                        inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA | None:
+    """The plant's TEA on the branch continuously connected to a known equilibrium of another plant.
+
+    A Monte Carlo case perturbs the plant a controller was designed for; the station sits at the
+    equilibrium it reaches as the plant moves from the nominal one to the perturbed one, not at
+    whichever root a continuation from LVLH happens to end on (for a nearly planar body such as
+    MB3, I11 ≈ I33, that root can lie ~90° from the design TEA while a connected one exists).
+    Damped Newton first polishes ``theta0`` as a root of the nominal plant (≤ 5° away), then the
+    continuation of :func:`solve_tea` (same step control and acceptance tests) follows it along
+    I = I0 + λ(I − I0), bias = b0 + λ(b − b0), λ: 0 → 1.
+
+    Parameters
+    ----------
+    theta0 : (3,) array
+        An equilibrium (or a guess within 5° of one) of the nominal plant, rad.
+    inertia0, bias0 : (3, 3) array, (3,) array
+        The nominal plant: inertia, slug·ft²; constant disturbance torque, ft·lbf.
+    inertia : (3, 3) array
+        The perturbed plant's inertia, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        The perturbed plant's constant disturbance torque, ft·lbf.
+
+    Returns
+    -------
+    TEA or None
+        The connected equilibrium (eqs 4.1–4.3), θ in rad; None when ``theta0`` is not within 5°
+        of an equilibrium of the nominal plant, the branch folds between the two plants (it turns
+        back in λ: the continuation's step falls below 1e-7), or it reaches yaw ±89.5° (the 2-3-1
+        sequence's singularity).  A change of sign of det ∂r/∂θ on a smooth branch (a pitchfork
+        of a symmetric station) is passed, and roll or pitch may go beyond ±90°.
+    """
+    inertia, bias = _vec(inertia), _vec(bias)
+    theta, ok = _from_root(_vec(theta0), _vec(inertia0), _vec(bias0), inertia, bias, float(n), RESIDUAL_TOL)
+    return make_tea(theta, inertia, n, bias) if ok else None
+
+
+def warm_up() -> None:
+    """Compile (or load from numba's cache) the kernels of this module."""
+    inertia, bias = np.diag([2.0e7, 1.0e6, 2.5e7]), np.array([0.0, 0.1, 0.0])
+    root = solve_tea_fast(inertia, 0.0011, bias)
+    solve_tea_connected(root.theta, inertia, bias, 1.01 * inertia, 0.0011, bias)
+    solve_tea_near(inertia, 0.0011, bias, root.theta)
+    equilibrium_jacobian(root.theta, inertia, 0.0011)

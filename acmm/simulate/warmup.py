@@ -1,7 +1,7 @@
 """Compile the numba kernels ahead of time (``python -m acmm.simulate.warmup``; run by ``make install``).
 
 The compiled Dormand–Prince closed loop (:mod:`acmm.simulate.kernel`) and the compiled TEA continuation
-(:mod:`acmm.model.tea_compiled`) are cached by numba (``cache=True``) in ``__pycache__`` beside the
+(:mod:`acmm.model.tea`) are cached by numba (``cache=True``) in ``__pycache__`` beside the
 sources (or numba's user cache directory when that is not writable), so the first ``acmm simulate``
 after install loads machine code instead of compiling it (~10 s).  Prints what it does.
 """
@@ -11,7 +11,7 @@ import sys
 import time
 import numpy as np
 from acmm.simulate import kernel as sm, reference, scenario as scen
-from acmm.model.tea_compiled import warm_up as warm_tea
+from acmm.model.tea import warm_up as warm_tea
 from acmm.model.compiled_cache import uncached_note, write_error_notes
 
 

@@ -19,11 +19,10 @@ from acmm.simulate.scenario import scenario_from_config
 from acmm.stages.design import compute_design, design_table
 from acmm.design.schedule_points import PointSpec, schedule_specs
 from acmm.design.settings import design_settings, schedule_settings
-from acmm.model.tea import resolve_bias
 from acmm.design.design_core import design_schedule
 from acmm.model import kinematics as kin
 from acmm.simulate import kernel as sm, scenario as scen
-from acmm.model.tea_compiled import solve_tea_connected, solve_tea_fast
+from acmm.model.tea import resolve_bias, solve_tea_connected, solve_tea_fast
 
 
 # ---------------------------------------------------------------------------------------------
@@ -242,10 +241,10 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarra
 
     Each level's plant moves from the nominal one (its design TEA ``sc0.theta_est[k]``) to the
     perturbed one, and the station follows the equilibrium continuously connected to the design
-    TEA (:func:`acmm.model.tea_compiled.solve_tea_connected`, compiled, ~0.1–1 ms).  Only where that
+    TEA (:func:`acmm.model.tea.solve_tea_connected`, compiled, ~0.1–1 ms).  Only where that
     branch folds between the two plants (no equilibrium near the design TEA survives the
     perturbation) is the case started at the root continued from LVLH
-    (:func:`acmm.model.tea_compiled.solve_tea_fast`, the physical branch of :mod:`acmm.model.tea`, whose
+    (:func:`acmm.model.tea.solve_tea_fast`, the physical branch of :mod:`acmm.model.tea`, whose
     errors it raises), and the returned note says so.  A case's TEA depends only on its plant and
     the nominal design, never on the cases run before, so its row is the same whatever executor,
     chunking or order runs it.

@@ -50,3 +50,29 @@ def test_override_paths_and_errors():
             apply_overrides(data, bad)
     with pytest.raises(OverrideSyntaxError):
         apply_overrides(data, ["a..b=1"])
+
+
+def test_a_loaded_config_carries_its_origin_and_compares_by_its_values():
+    """The file and overrides a config was loaded from travel with the object (config.yaml's
+    header), not in a table keyed by id(); equality, the YAML dump and a pickled copy see it right."""
+    import pickle
+
+    import yaml
+
+    from acmm.io.config import parse_config
+    from acmm.sweep.config import load_sweep
+    from acmm_qpp.outputs import config_text_of
+    from acmm_qpp.overrides import origin_of
+
+    cfg = load_config("mb3", ["design.sector.sigma=0.9"])
+    source, overrides = origin_of(cfg)
+    assert source.endswith("mb3.yaml") and overrides == ["design.sector.sigma=0.9"]
+    plain = parse_config(yaml.safe_load(cfg.to_yaml()))           # the same values, no origin
+    assert origin_of(plain) == (None, []) and plain == cfg
+    assert "loaded_from" not in cfg.to_yaml() and "loaded_from" not in repr(cfg)
+    assert origin_of(pickle.loads(pickle.dumps(cfg))) == (source, overrides)
+    text = config_text_of(cfg)
+    assert f"# source: {source}\n" in text and "# command-line overrides: design.sector.sigma=0.9\n" in text
+    assert "# source:" not in config_text_of(plain)
+    assert origin_of(load_sweep("sweep_smoke"))[0].endswith("sweep_smoke.yaml")
+    assert origin_of(object()) == (None, [])

@@ -1,9 +1,12 @@
 """Independent references of the model tests (``test_kinematics``, ``test_dynamics``): the
 direction-cosine matrix from elementary rotations, the cross-product matrix, random physically
-possible inertias and attitudes, and a fourth-order central-difference Jacobian."""
+possible inertias and attitudes, and a fourth-order central-difference Jacobian; the TEA
+continuation in plain numpy (``test_tea``'s oracle of the compiled one)."""
 from __future__ import annotations
 
 import numpy as np
+
+from acmm.model import dynamics as dyn, kinematics as kin
 
 N = 0.0011  # rad/s
 RNG_SEED = 20240502
@@ -60,3 +63,83 @@ def num_jac(fun, x, h):
 
 
 CASES = list(range(8))
+
+
+# ----------------------------------------------------------------- the TEA continuation in plain numpy
+# The oracle of acmm.model.tea's compiled continuation (test_tea): the same algorithm (path, step
+# control, acceptance tests, fold bisection) on the numpy residual of acmm.model.dynamics and
+# acmm.model.kinematics, numpy's LAPACK solve and determinant.
+def tea_residual_np(theta, inertia, n, bias):
+    """Eq 4.1 with eq 4.3 substituted, from the model's numpy torques (ft·lbf)."""
+    omega = kin.lvlh_rate_in_body(theta, n)
+    return dyn.gyroscopic_torque(omega, inertia) + dyn.gravity_gradient_torque(theta, inertia, n) + bias
+
+
+def tea_jacobian_np(theta, inertia, n):
+    """∂/∂θ of :func:`tea_residual_np` from the model's numpy partials (ft·lbf/rad)."""
+    omega = kin.lvlh_rate_in_body(theta, n)
+    return (dyn.gyroscopic_torque_jacobian(omega, inertia) @ kin.lvlh_rate_jacobian(theta, n)
+            + dyn.gravity_gradient_jacobian(theta, inertia, n))
+
+
+def _newton_np(theta0, inertia, n, bias, max_iter=50, max_step=0.5):
+    theta = np.array(theta0, float)
+    scale = max(3 * n * n * np.abs(inertia).max(), 1e-300)
+    thr = max(min(1e-12, 1e-13 * scale), 1e-15 * scale)
+    for _ in range(max_iter):
+        r = tea_residual_np(theta, inertia, n, bias)
+        if np.max(np.abs(r)) <= thr:
+            return theta
+        try:
+            step = np.linalg.solve(tea_jacobian_np(theta, inertia, n), -r)
+        except np.linalg.LinAlgError:
+            return None
+        if not np.all(np.isfinite(step)):
+            return None
+        norm = np.max(np.abs(step))
+        if norm > max_step:
+            step *= max_step / norm
+        theta = theta + step
+        if np.max(np.abs(theta)) > np.radians(89.5):
+            return None
+    return theta if np.max(np.abs(tea_residual_np(theta, inertia, n, bias))) <= thr else None
+
+
+def _continue_np(theta, path, n, max_jump=np.radians(5.0), min_step=1e-7):
+    lam, step = 0.0, 0.05
+    det0 = np.sign(np.linalg.det(tea_jacobian_np(theta, path(0.0)[0], n)))
+    while lam < 1.0:
+        trial = min(1.0, lam + step)
+        inertia, bias = path(trial)
+        new = _newton_np(theta, inertia, n, bias)
+        ok = new is not None and np.max(np.abs(new - theta)) <= max_jump
+        if ok and np.sign(np.linalg.det(tea_jacobian_np(new, inertia, n))) == det0:
+            theta, lam = new, trial
+            step = min(step * 1.5, 0.1)
+        else:
+            step *= 0.5
+            if step < min_step:
+                return theta, lam
+    return theta, None
+
+
+def tea_continuation_np(inertia, n, bias):
+    """(θ, status, λ) of the continuation from the diagonal body at LVLH: status 0 solved, 1 fold
+    in the products of inertia at λ, 2 fold in the bias (λ: the largest bias fraction with an
+    equilibrium, by bisection)."""
+    diag = np.diag(np.diag(inertia))
+    theta, fold = _continue_np(np.zeros(3), lambda lam: (diag + lam * (inertia - diag), np.zeros(3)), n)
+    if fold is not None:
+        return theta, 1, fold
+    theta, fold = _continue_np(theta, lambda lam: (inertia, lam * bias), n)
+    if fold is None:
+        return theta, 0, 1.0
+    lo, hi = fold, 1.0
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        new = _newton_np(theta, inertia, n, mid * bias, max_step=0.05)
+        if new is not None and np.max(np.abs(new - theta)) < np.radians(5):
+            lo, theta = mid, new
+        else:
+            hi = mid
+    return theta, 2, lo

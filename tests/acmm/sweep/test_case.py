@@ -133,15 +133,14 @@ def test_a_case_starts_at_the_equilibrium_connected_to_the_design_tea(tmp_path):
     # follows the design TEA's own equilibrium to −48.2° and the fixed design holds it
     sw = load_sweep(_sweep_yaml(tmp_path, "connected", base=str(CONFIGS / "mb3.yaml"), orbits=2.0))
     ctx = prepare_base(sw.bases[0], sw.spec)
-    from acmm.model import tea
-    from acmm.model.tea_compiled import solve_tea_connected     # checked against an independent path
-                                                            # in tests/acmm/model/test_tea_compiled.py
+    from acmm.model import tea      # solve_tea_connected: checked against an independent path
+                                    # in tests/acmm/model/test_tea.py
     sc0 = ctx.scenario
     rows = [simulate_values(ctx, {"dI33": d}) for d in (-0.005, 0.0, 0.005)]
     assert [r["verdict"] for r in rows] == ["bounded"] * 3
     for d, r in zip((-0.005, 0.0, 0.005), rows):
         inertia = perturb_inertia(sc0.inertia[0], {"dI33": d})
-        ref = solve_tea_connected(sc0.theta_est[0], sc0.inertia[0], sc0.bias[0], inertia, sc0.n, sc0.bias[0])
+        ref = tea.solve_tea_connected(sc0.theta_est[0], sc0.inertia[0], sc0.bias[0], inertia, sc0.n, sc0.bias[0])
         np.testing.assert_allclose(r["tea_true"], np.degrees(ref.theta), atol=1e-9)
         assert "LVLH" not in r["reason"]
     assert round(rows[1]["tea_true"][1], 1) == -44.7                     # MB3's TEA (report, Table 1)
@@ -152,7 +151,7 @@ def test_a_case_starts_at_the_equilibrium_connected_to_the_design_tea(tmp_path):
     ctx = prepare_base(sw.bases[0], sw.spec)
     row = simulate_values(ctx, {"dI11": 0.2})
     lvlh = tea.solve_tea(perturb_inertia(ctx.scenario.inertia[0], {"dI11": 0.2}), ctx.scenario.n,
-                         ctx.scenario.bias[0]).theta                     # the numpy continuation
+                         ctx.scenario.bias[0]).theta                     # the continuation from LVLH
     assert "design TEA's equilibrium folds" in row["reason"]
     np.testing.assert_allclose(row["tea_true"], np.degrees(lvlh), atol=1e-9)
     # I11 15 % larger: no equilibrium on either branch; the reason says the design's folded first
