@@ -268,25 +268,28 @@ def smallest_dwell(As: np.ndarray, decay: float) -> tuple:
     # each level's coordinates: its Lyapunov matrix at the program's rate, R_kᵀR_k = P_k/‖P_k‖
     R = np.array([np.linalg.cholesky(P / np.linalg.norm(P, 2)).T for P in lyapunov_matrices(Au, rate)])
 
-    def certify(T):
-        P = solve_dwell_program(Au, T * alpha, rate, R)
+    def certify(k):
+        """The matrices that certify the dwell k·(resolution)/α, or None."""
+        T = k * DWELL_RESOLUTION / alpha
+        P = solve_dwell_program(Au, k * DWELL_RESOLUTION, rate, R)
         return P if P is not None and np.all(dwell_margins(As, P, T, decay) > 0) else None
 
-    lo, hi = 0.0, FIRST_UPPER / alpha
+    # the bracket in whole steps of the resolution, so that the steps taken never depend on rounding
+    lo, hi = 0, int(round(FIRST_UPPER / DWELL_RESOLUTION))
     P = certify(hi)
     while P is None:
         lo, hi = hi, 2 * hi
-        if hi > UPPER_LIMIT / alpha:
-            return np.inf, lo, None
+        if hi * DWELL_RESOLUTION > UPPER_LIMIT:
+            return np.inf, lo * DWELL_RESOLUTION / alpha, None
         P = certify(hi)
-    while hi - lo > DWELL_RESOLUTION / alpha:
-        mid = 0.5 * (lo + hi)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
         got = certify(mid)
         if got is None:
             lo = mid
         else:
             hi, P = mid, got
-    return hi, lo, P
+    return hi * DWELL_RESOLUTION / alpha, lo * DWELL_RESOLUTION / alpha, P
 
 
 def dwell_proof(As: np.ndarray) -> DwellProof:
