@@ -517,7 +517,8 @@ def block_qpp_search(r: dict) -> str:
     str
         A Markdown table and one sentence per example.
     """
-    from qpp.design.family import REPORT_GRIDS, family_bounds, peak_exclusion, refine, search, settle_exclusion
+    from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion, refine, resettle,
+                                   search, settle_exclusion)
 
     rows = ["| example | β1 ≥ (every design: T_ry = I at ω_k) | m ≤ (every design, every T) | m ≤ for T ≥ π/(2ω) "
             "| grid: designs (ρ, w, a; T = settling time) | certified | largest m | smallest β1 | largest m − β1 "
@@ -583,6 +584,21 @@ def block_qpp_search(r: dict) -> str:
                          + f": m ≤ {fixed(max(c.m for c in cands), 4)} against β1 ≥ "
                          f"{fixed(min(c.beta1 for c in cands), 4)} on its {len(cands)} designs, and the local search "
                          f"from its best point ends at m − β1 = {fixed(ref.m - ref.beta1, 4)} (a search, not a proof).")
+        if name in REPORT_CERTIFIED:
+            c = search(cfg, *[[x] for x in REPORT_CERTIFIED[name]])[0]
+            rs = resettle(cfg, c)
+            cmp_b, cmp_p = ("<" if c.beta1 < c.m else "≥"), ("≤" if c.peak <= 1.0 else ">")
+            notes.append(f"* `{name}`, beyond the grid (`qpp.design.family.REPORT_CERTIFIED`): ρ = {sci(c.rho)}, w = "
+                         f"{sig(c.ws[0])}, a = {sci(c.a)} settles at T = {fixed(c.T, 4)} s on the first pass's samples "
+                         f"and is " + ("**certified** there" if c.certified else "**not** certified there")
+                         + f": β1 = {fixed(c.beta1, 4)} {cmp_b} m = {fixed(c.m, 4)}, γ∞·max E/m = {fixed(c.peak, 3)} "
+                         f"{cmp_p} 1" + (f", so no bound excludes the settling time {fixed(c.T, 4)} s" if c.certified else
+                                         f" ({', '.join(c.failed)} fail)")
+                         + f". The certificate's own samples at that T (up to 20 001 on [0, t_final]) put the same "
+                         f"loop's settling time at {fixed(rs.T, 4)} s, where it is "
+                         + ("certified too." if rs.certified else
+                            f"not certified ({', '.join(rs.failed)} fail; β1 = {fixed(rs.beta1, 4)}, m = "
+                            f"{fixed(rs.m, 4)}): the verdict rests on how finely step 3 samples the settling time."))
     return "\n".join(rows) + "\n\n" + "\n".join(notes) + "\n"
 
 

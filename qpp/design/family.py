@@ -42,6 +42,11 @@ When an upper bound of m is ≤ 1 ≤ β1, no design of the family is certified 
 ``contraction``, β1 < m, fails).  Otherwise :func:`search` evaluates a grid of the family (T the
 settling time of each design: m is non-increasing in T and γ∞·max E/m non-decreasing, so a longer
 T only loses) and reports the best margin found.
+
+Where no bound excludes a settling time, a design may be certified there: :data:`REPORT_CERTIFIED`
+names one of ch. 13 certified at the first pass's first sample (near the edge of the solvability of
+Riccati 11.1, β1 is well below the grid's), and :func:`resettle` finds its settling time again on the
+certificate's finer samples, where it is not.
 """
 from __future__ import annotations
 
@@ -797,6 +802,63 @@ def settle_exclusion(cfg: QppConfig, pe: PeakExclusion | None = None) -> SettleE
 
 #: evaluations of :func:`refine` from the best grid point
 REFINE_EVALS = 30
+
+#: designs of the family (ρ, w, a) that :func:`search` certifies at their settling time, per example
+#: (issue 43): found near the edge of the solvability of Riccati 11.1 (large w, ρ just below the
+#: largest ρ with a solution), where β1 falls to about 1.6 while the loop settles within the first
+#: sample of the first pass; :func:`resettle` shows how they depend on that sampling
+REPORT_CERTIFIED = {"qpp_siso": (1.3e-5, 1.69e4, 1e-8)}
+
+
+@dataclass
+class Resettled:
+    """A candidate's settling time found again on the certificate's own samples (:func:`resettle`).
+
+    Attributes
+    ----------
+    T : float
+        The settling time on the samples of :func:`qpp.design.certificate.certify` at the
+        candidate's T (finer than the first pass's), s.
+    m : float
+        The certificate's m at that T, dimensionless.
+    beta1 : float
+        β1, dimensionless.
+    certified : bool
+        Every premise holds at that T.
+    failed : list of str
+        The premises that fail at that T.
+    """
+
+    T: float
+    m: float
+    beta1: float
+    certified: bool
+    failed: list
+
+
+def resettle(cfg: QppConfig, c: Candidate) -> Resettled:
+    """The settling time of a candidate of :func:`search` taken again from the certificate at its T
+    (which samples [0, max(T, t_final)] up to 20 001 times instead of the first pass's
+    :data:`SETTLE_SAMPLES`), and the certificate at that settling time.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        Validated config.
+    c : Candidate
+        A design of the family (its first weight w stands for every channel).
+
+    Returns
+    -------
+    Resettled
+        The finer settling time and the verdict there.
+    """
+    g = hinf_gains(weighted_plant(cfg.lure_plant(), c.ws[0]), rho=c.rho, a=c.a, nu=cfg.hinf.nu,
+                   weight=cfg.hinf.weight, observer=cfg.hinf.observer)
+    T = float(certify(cfg, g.K1, g.Kc, g.H, c.a, T=c.T).T_settle)
+    res = certify(cfg, g.K1, g.Kc, g.H, c.a, T=T)
+    return Resettled(T, float(res.consistent.m), float(res.beta1_ref), bool(res.certified),
+                     [k for k, (ok, _) in res.premises.items() if not ok])
 
 #: the grids of the report's examples searched (docs/qpp-certificates.md): ρ over six decades, five
 #: output weights w, three a; the manipulator's bounds already exclude its family, its grid is smaller

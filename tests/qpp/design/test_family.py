@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from qpp.design.certificate import certify
-from qpp.design.family import (REPORT_GRIDS, family_bounds, peak_exclusion, refine, search, servo_frequencies,
-                               settle_exclusion, settle_line)
+from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion, refine, resettle,
+                               search, servo_frequencies, settle_exclusion, settle_line)
 from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
 from qpp.model.lure import closed_loop
@@ -318,3 +318,73 @@ def test_fast_designs_meet_the_settle_bound(siso, rho, w, a):
         assert hinf(Az + a * np.eye(len(Az)), Bz, Cz) == pytest.approx(c.beta1, rel=1e-6)
     if c.T >= 0.0625 - 1e-9:
         assert {"contraction", "peak"} & set(c.failed)
+
+
+def _nominal(Az, Br, Cz, t):
+    """y_o on the samples t (uniform, from 0) of the loop at rest tracking sin 5t, by the matrix
+    exponential of loop and exosystem (scipy's expm), output units."""
+    from scipy.linalg import expm
+
+    n = len(Az)
+    M = np.zeros((n + 2, n + 2))
+    M[:n, :n], M[:n, n], M[n, n + 1], M[n + 1, n] = Az, Br[:, 0], 5.0, -5.0
+    E = expm(M * (t[1] - t[0]))
+    z = np.zeros(n + 2)
+    z[n + 1] = 1.0                                 # exosystem (sin 5t, cos 5t)
+    y = np.empty(t.size)
+    for i in range(t.size):
+        y[i] = Cz[0] @ z[:n]
+        z = E @ z
+    return y
+
+
+def _settle(t, y):
+    e = np.abs(y - np.sin(5 * t))
+    return float(t[np.nonzero(e > 0.05 * e.max())[0][-1]])
+
+
+def test_a_design_of_the_family_is_certified_at_its_settling_time(siso, tmp_path):
+    """Issue 43: the ch. 13 design of REPORT_CERTIFIED settles at T = 0.0125 s on the first pass's
+    samples and is certified there — recomputed here: β1 and γ∞ by the verifier's Hamiltonian
+    bisection and Gramian, the settling time and m (every truncation time on 0.0125/400 s steps,
+    β4 by the trapezoid rule) from scipy's matrix exponential, and the verdict of ``qpp design`` on
+    its gains (exit 0).  On 20 001 samples the same loop settles only at 0.036 s, where it fails."""
+    import yaml
+    from typer.testing import CliRunner
+
+    from qpp.cli import app
+
+    rho, w, a = REPORT_CERTIFIED["qpp_siso"]
+    c = search(siso, [rho], [w], [a])[0]
+    assert c.certified and c.failed == [] and c.T == pytest.approx(0.0125)
+    P = siso.lure_plant()
+    g = hinf_gains(weighted_plant(P, w), rho=rho, a=a)
+    Az, Bz, Cz = closed_loop(P, g.K1, g.Kc, g.H)
+    An = Az + a * np.eye(len(Az))
+    b1, gam = hinf(An, Bz, Cz), l2_to_peak(An, Bz, Cz)
+    assert b1 == pytest.approx(c.beta1, rel=1e-6) and gam == pytest.approx(c.gamma_inf, rel=1e-4)   # (a stiff Gramian)
+    assert _settle(np.linspace(0.0, 10.0, 801), _nominal(Az, Bz[:, :1], Cz, np.linspace(0.0, 10.0, 801))) == 0.0125
+    # m = inf over T' of β_o/(β_i + β_o k sin T' + β4(T')), β4 = e^{aT'} ‖(k y_o)_T'‖₂ / E(T'), k = 0.5
+    t = np.linspace(0.0, 0.0125, 401)
+    y = _nominal(Az, Bz[:, :1], Cz, t)
+    I = np.concatenate([[0.0], np.cumsum(0.5 * (y[1:] ** 2 + y[:-1] ** 2) * np.diff(t))])[1:]
+    E = np.sqrt(np.expm1(2 * a * t[1:]) / (2 * a))
+    m = 0.2 / (0.1 + 0.2 * 0.5 * np.sin(t[1:]) + np.exp(a * t[1:]) * 0.5 * np.sqrt(I) / E)
+    assert np.min(m) == pytest.approx(c.m, rel=5e-4) and b1 < np.min(m)
+    assert gam * np.max(E / m) == pytest.approx(c.peak, rel=5e-4) and gam * np.max(E / m) < 1.0
+    # the same gains through the command line: certified (exit 0)
+    from tests.conftest import CONFIGS
+    d = yaml.safe_load((CONFIGS / "qpp_siso.yaml").read_text())
+    d.update(name="siso_family_certified", output={"root": str(tmp_path / "runs"), "figures": False},
+             published={"K1": g.K1.tolist(), "Kc": g.Kc.tolist(), "H": g.H.tolist()})
+    d["design"] = {"gains": "published", "bookkeeping": "consistent", "sector": [[-0.5, 0.5]]}
+    d["hinf"]["a"], d["spheres"]["T"] = a, 0.0125
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(d))
+    r = CliRunner().invoke(app, ["design", str(tmp_path / "c.yaml"), "--no-figures"])
+    assert r.exit_code == 0 and "certified (one sector" in r.output, r.output
+    # sampled 20 001 times, the loop settles at 0.036 s: there contraction and peak fail
+    fine = np.linspace(0.0, 10.0, 20001)
+    assert _settle(fine, _nominal(Az, Bz[:, :1], Cz, fine)) == pytest.approx(0.036)
+    rs = resettle(siso, c)
+    assert rs.T == pytest.approx(0.036) and not rs.certified and "contraction" in rs.failed
+
