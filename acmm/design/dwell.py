@@ -195,12 +195,17 @@ def jump_ratios(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def dwell_margins(As: np.ndarray, P: np.ndarray, T: float, decay: float) -> np.ndarray:
-    """How far P_0 … P_{L−1} satisfy the dwell-time conditions at T (step 2), each relative to
-    ‖P_k‖ and less a first-order rounding allowance: positive means proved.
+    """How far P_0 … P_{L−1} satisfy the dwell-time conditions at T (step 2), relative to the
+    matrices' norms and less a first-order allowance for rounding: positive means proved.
 
-    The allowance of a symmetric matrix M formed from the data is 8Nε times the sum of the norms
-    of its products (ε the unit roundoff); that of e^{A_k T} adds 2‖E‖‖P_j‖η, η = ‖E − F²‖,
-    F = e^{A_k T/2} (the exponential compared with the square of its half step).
+    The matrices are scaled together by a power of two (the conditions are homogeneous).  A
+    symmetric matrix formed from the data is allowed 8Nu times the norms of its products (u the unit
+    roundoff).  The switch condition of level k is decided after the congruence by S_k, the inverse
+    Cholesky factor of level k's Lyapunov matrix at the rate λ (congruences keep the signs of
+    eigenvalues): there Â_k = S_k⁻¹A_kS_k has a logarithmic norm μ̂_k ≤ −λ, so ‖e^{Â_k s}‖ ≤
+    G = e^{max(μ̂_k, 0)T} ≤ 1 for s ∈ [0, T], and the error of scipy's e^{Â_kT} is bounded by G²
+    times its backward error (4u‖Â_kT‖, the Padé design of Al-Mohy and Higham, plus the error of
+    forming Â_k) and the rounding of its squarings.  Non-finite or asymmetric candidates fail.
 
     Parameters
     ----------
@@ -217,29 +222,56 @@ def dwell_margins(As: np.ndarray, P: np.ndarray, T: float, decay: float) -> np.n
     -------
     (3,) array
         The worst margin of P_k ≻ 0, of the decay LMIs and of the switch LMIs (both ways),
-        dimensionless.
+        dimensionless (−inf where a candidate cannot be checked).
     """
     L, N = As.shape[:2]
-    eps = 8 * N * np.finfo(float).eps
+    u = 0.5 * np.finfo(float).eps
+    g = 8 * N * u
+    fail = np.full(3, -np.inf)
+    P = np.asarray(P, float)
+    if (P.shape != As.shape or not (np.all(np.isfinite(P)) and np.all(np.isfinite(As)) and np.isfinite(T)
+                                    and T >= 0 and decay > 0) or np.any(P != P.transpose(0, 2, 1))):
+        return fail
+    top = max(np.linalg.norm(p, 2) for p in P)
+    if not 0 < top < np.inf:
+        return fail
+    P = P * 2.0 ** -np.ceil(np.log2(top))                               # exact: every ‖P_k‖ ≤ 1
+    try:
+        S = [np.linalg.inv(np.linalg.cholesky(Q / np.linalg.norm(Q, 2)).T) for Q in lyapunov_matrices(As, decay)]
+    except np.linalg.LinAlgError:
+        return fail
     c = np.exp(-2.0 * decay * T)
     I = np.eye(N)
-    P = 0.5 * (P + P.transpose(0, 2, 1))
-    norms = np.array([np.linalg.norm(p, 2) for p in P])
-    pos, lyap, jump = np.inf, np.inf, np.inf
+    pos, lyap, jump = [], [], []
     for k in range(L):
-        pos = min(pos, np.linalg.eigvalsh(P[k])[0] / norms[k] - eps)
+        nk = np.linalg.norm(P[k], 2)
+        pos.append(np.linalg.eigvalsh(P[k])[0] / nk - g)
         At = As[k] + decay * I
+        nA = np.linalg.norm(At, 2)
         M = At.T @ P[k] + P[k] @ At
-        lyap = min(lyap, -np.linalg.eigvalsh(0.5 * (M + M.T))[-1] / norms[k] - 2 * eps * np.linalg.norm(At, 2))
-        E, F = sla.expm(As[k] * T), sla.expm(As[k] * (T / 2))
-        eta = np.linalg.norm(E - F @ F, 2)
-        nE = np.linalg.norm(E, 2)
+        lyap.append(-np.linalg.eigvalsh(0.5 * (M + M.T))[-1] / (nA * nk) - 2 * g)
+        # the switch condition after the congruence by S_k, where the exponential is a contraction
+        Sk, Rk = S[k], np.linalg.inv(S[k])
+        Ah = Rk @ As[k] @ Sk
+        dA = g * np.linalg.cond(Sk) * np.linalg.norm(Rk, 2) * np.linalg.norm(As[k], 2) * np.linalg.norm(Sk, 2)
+        nAh = np.linalg.norm(Ah, 2)
+        mu = np.linalg.eigvalsh(0.5 * (Ah + Ah.T))[-1] + dA + g * nAh
+        G = np.exp(max(mu, 0.0) * T)
+        squarings = max(0, int(np.ceil(np.log2(max(np.linalg.norm(Ah, 1) * T, 1.0))))) + 1
+        gamma = G * G * (T * (dA + 4 * u * nAh) + 2 * g * squarings)
+        Eh = sla.expm(Ah * T)
+        nE = np.linalg.norm(Eh, 2)
+        Pk = Sk.T @ P[k] @ Sk
+        nSk = np.linalg.norm(Sk, 2) ** 2
         for j in (k - 1, k + 1):
             if 0 <= j < L:
-                M = E.T @ P[j] @ E - c * P[k]
-                allow = eps * (nE ** 2 * norms[j] + norms[k]) + 2 * nE * norms[j] * eta
-                jump = min(jump, (-np.linalg.eigvalsh(0.5 * (M + M.T))[-1] - allow) / norms[k])
-    return np.array([pos, lyap, jump])
+                Pj = Sk.T @ P[j] @ Sk
+                nj, nkh = np.linalg.norm(Pj, 2), np.linalg.norm(Pk, 2)
+                M = Eh.T @ Pj @ Eh - c * Pk
+                allow = (2 * nE * gamma + gamma * gamma) * nj + g * (nE * nE * nj + nkh) + 2 * g * nSk
+                jump.append(-(np.linalg.eigvalsh(0.5 * (M + M.T))[-1] + allow) / nkh)
+    m = np.array([np.min(pos), np.min(lyap), np.min(jump) if jump else np.inf])
+    return m if not np.any(np.isnan(m)) else fail
 
 
 def smallest_dwell(As: np.ndarray, decay: float) -> tuple:
@@ -312,6 +344,19 @@ def dwell_proof(As: np.ndarray) -> DwellProof:
     return DwellProof(lam, tau, lower, lyapunov_matrices(As, lam) if P is None else P)
 
 
+def _reusable(As: np.ndarray, proof: DwellProof) -> bool:
+    """Whether a proof found before holds for these levels as this module would find it: its decay
+    rate is theirs (to rounding: a design read back from SI units differs in the last digits), its
+    dwell and the one below are neighbouring steps of this bisection's grid, and its matrices pass
+    :func:`dwell_margins` here."""
+    alpha = min(-np.max(np.linalg.eigvals(A).real) for A in As)
+    steps = np.array([proof.tau, proof.lower]) * alpha / DWELL_RESOLUTION
+    return bool(abs(proof.decay - DECAY_FRACTION * alpha) <= 1e-9 * DECAY_FRACTION * alpha
+                and np.all(np.isfinite(steps)) and np.all(np.abs(steps - np.round(steps)) <= 1e-6)
+                and round(steps[0]) - round(steps[1]) == 1
+                and np.all(dwell_margins(As, proof.P, proof.tau, proof.decay) > 0))
+
+
 def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: np.ndarray, jumps: np.ndarray,
                       h_index, torque_limit: float, momentum_limit: float, start=None,
                       proof: DwellProof | None = None) -> DwellCertificate:
@@ -338,8 +383,8 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
         the run starts at that equilibrium).
     proof : DwellProof, optional
         Steps 1–3 found before for these closed loops (e.g. stored in ``design.h5``): used when its
-        decay rate is these loops' and its matrices pass :func:`dwell_margins` here again, else
-        found anew.
+        decay rate and grid are these loops' and its matrices pass :func:`dwell_margins` here
+        again, else found anew.
 
     Returns
     -------
@@ -351,15 +396,14 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
     As = np.array([A * Dinv[:, None] * d[None, :] for A in Acl])          # D⁻¹ A D
     dwell = np.asarray(dwell, float)
     L = len(As)
-    unstable = tuple(k for k, A in enumerate(As) if np.max(np.linalg.eigvals(A).real) >= 0)
+    unstable = tuple(k for k, A in enumerate(As)
+                     if not np.all(np.isfinite(A)) or np.max(np.linalg.eigvals(A).real) >= 0)
     if unstable:
         nan3 = np.full((L, 3), np.nan)
         return DwellCertificate(np.nan, np.full_like(As, np.nan), d, np.full(L - 1, np.nan), np.full(L - 1, np.nan),
                                 np.inf, np.inf, 0.0, dwell, False, np.full(L, np.nan), nan3, nan3.copy(),
                                 float(torque_limit), float(momentum_limit), False, unstable)
-    lam = DECAY_FRACTION * min(-np.max(np.linalg.eigvals(A).real) for A in As)
-    if not (proof is not None and L > 1 and proof.decay == lam and np.isfinite(proof.tau)
-            and proof.P.shape == As.shape and np.all(dwell_margins(As, proof.P, proof.tau, lam) > 0)):
+    if not (proof is not None and L > 1 and _reusable(As, proof)):
         proof = dwell_proof(As)
     lam, tau, P = proof.decay, proof.tau, proof.P
     up, down = jump_ratios(P) if L > 1 else (np.zeros(0), np.zeros(0))

@@ -201,7 +201,7 @@ class ChainKKT(StructuredKKT):
         ------
         ArithmeticError
             A pivot block is not numerically positive definite (cvxopt then stops with status
-            "unknown" and its last iterate).
+            "unknown" and its last iterate, or, at its starting point, raises ValueError).
         """
         H = self.schur_blocks(sigma)
         L = self.levels
@@ -262,7 +262,12 @@ def solve_dwell_program(As: np.ndarray, T: float, decay: float, R: np.ndarray, m
     kkt = ChainKKT(blocks, chain_layout(L, N))
     i, j = np.triu_indices(N)
     c = np.tile((i == j).astype(float), L)                      # Σ_k tr P̂_k
-    _, v, _, _ = run_conelp(kkt, c, F0, *DWELL_TOL, max_iter=max_iter, refinement=1)
+    try:
+        _, v, _, _ = run_conelp(kkt, c, F0, *DWELL_TOL, max_iter=max_iter, refinement=1)
+    except (ArithmeticError, ValueError):
+        # a singular Schur complement at cvxopt's start ends in ValueError ("Rank(A) < p ..."), later
+        # in an ArithmeticError: no answer at this T
+        return None
     if v is None or not np.all(np.isfinite(v)):
         return None
     P = np.empty((L, N, N))

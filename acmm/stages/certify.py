@@ -235,8 +235,10 @@ def certificate_lines(sc: StairCertificate) -> list[str]:
     lines = [f"  {L} level(s); proved decay rate lambda = {c.decay / n:.4f} n"]
     if L > 1:
         shortest = float(np.min(c.dwell)) / sc.orbit
+        below = (f"not certified at {c.tau_lower / sc.orbit:.3f}" if c.tau_lower > 0 else
+                 "the first step of the search's grid: a shorter dwell may hold")
         lines.append(f"  certified minimum dwell tau* = {c.tau_star / sc.orbit:.3f} orbit (Geromel-Colaneri LMIs "
-                     f"per level, switches checked both ways; not certified at {c.tau_lower / sc.orbit:.3f}); "
+                     f"per level, switches checked both ways; {below}); "
                      f"shortest level {shortest:.2f} orbit: {'CERTIFIED' if c.certified else 'NOT certified'}")
     if L > 1:
         lines.append(f"  TEA-step transient: |u| <= {np.max(c.u_bound):.3g} ft*lbf (limit {c.torque_limit:g}), "

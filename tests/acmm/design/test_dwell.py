@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from acmm.design.dwell import DECAY_FRACTION, DWELL_RESOLUTION, DwellProof, dwell_certificate
+from acmm.design.dwell import DECAY_FRACTION, DWELL_RESOLUTION, DwellProof, dwell_certificate, dwell_margins
 from acmm.io.config import load_config
 from acmm.io.design_file import load_design_table
 from acmm.stages.design import run_design
@@ -224,3 +224,49 @@ def test_a_stored_proof_is_reused_only_where_it_holds():
     assert wrong.P is not c.P and wrong.tau_star == fresh.tau_star
     short = dwell_certificate(Acl, *args, proof=DwellProof(c.decay, 0.5 * c.tau_lower, 0.0, c.P))
     assert short.P is not c.P and short.tau_star == c.tau_star
+
+
+def test_the_acceptance_check_refuses_what_it_does_not_prove():
+    """dwell_margins is positive for the certificate's own matrices at τ* and not for: the same
+    matrices at a quarter of τ*, a huge multiple of I (the products would overflow unscaled), a
+    NaN, an asymmetric candidate (a review found the first three accepted)."""
+    Acl = _two_levels(1.0, 1.0, 1.2)
+    c = dwell_certificate(Acl, np.zeros((2, 3, 2)), np.ones(2), np.array([100.0]), np.zeros((1, 2)), (0, 1, 1),
+                          1.0, 1.0)
+    assert np.all(dwell_margins(Acl, c.P, c.tau_star, c.decay) > 0)
+    assert np.min(dwell_margins(Acl, c.P, 0.25 * c.tau_star, c.decay)) <= 0
+    huge = np.array([np.eye(2), np.eye(2)]) * 1.7e308
+    short = 0.25 * c.tau_star
+    E = _expm(Acl[0] * short)
+    assert _largest(E.T @ np.eye(2) @ E - np.exp(-2 * c.decay * short) * np.eye(2)) > 0   # violated
+    assert np.min(dwell_margins(Acl, huge, short, c.decay)) <= 0
+    bad = c.P.copy()
+    bad[0, 0, 0] = np.nan
+    assert np.all(dwell_margins(Acl, bad, c.tau_star, c.decay) == -np.inf)
+    skew = c.P.copy()
+    skew[0, 0, 1] *= 1 + 1e-12
+    assert np.all(dwell_margins(Acl, skew, c.tau_star, c.decay) == -np.inf)
+
+
+def test_the_transient_bound_of_a_level_held_shorter_than_tau_star():
+    """A level held shorter than τ* takes the jump ratio √μ into the bound (the branch the
+    stair-case never reaches): the exact response of two switched levels with equilibrium jumps
+    stays inside it, and the same recursion without √μ would not."""
+    Acl = _two_levels(1.0, 1.0, 1.2)
+    K = np.array([np.eye(3, 2), np.eye(3, 2)])
+    jumps = np.array([[1.0, -0.5]])
+    c = dwell_certificate(Acl, K, np.ones(2), np.array([0.05]), jumps, (0, 1, 1), 1e9, 1e9, start=np.array([0.3, 0.8]))
+    assert not c.certified and 0.05 < c.tau_star
+    x = np.array([0.3, 0.8])
+    worst = 0.0
+    for t in np.linspace(0.0, 0.05, 200):
+        z = sla.expm(Acl[0] * t) @ x
+        assert np.sqrt(z @ c.P[0] @ z) <= c.transient[0] * (1 + 1e-9)
+    x = sla.expm(Acl[0] * 0.05) @ x + jumps[0]
+    for t in np.linspace(0.0, 5.0, 400):
+        z = sla.expm(Acl[1] * t) @ x
+        worst = max(worst, np.sqrt(z @ c.P[1] @ z))
+    assert worst <= c.transient[1] * (1 + 1e-9)
+    dj = jumps[0]
+    without = np.exp(-c.decay * 0.05) * c.transient[0] + np.sqrt(dj @ c.P[1] @ dj)
+    assert np.sqrt(c.jump_up[0]) > 1 and c.transient[1] > without
