@@ -15,7 +15,7 @@ import typer
 
 from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit,
                                    version_option)
-from acmm.cli.hints import acmm_command
+from acmm.cli.command import acmm_command
 from acmm_qpp.cli.progress import Steps
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c

@@ -12,7 +12,7 @@ import typer
 
 from acmm_qpp.errors import EXIT_INPUT
 from acmm import PACKAGED_CONFIGS
-from acmm.cli.hints import acmm_command
+from acmm.cli.command import acmm_command
 from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit
 from acmm_qpp.cli.progress import Steps, enabled
 

@@ -21,7 +21,7 @@ except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
 
 from acmm_qpp.cli.failures import EXIT_PIPE_CLOSED, interrupt_behind, note_warnings, quiet_stdout
 from acmm_qpp.errors import plain_failure as _plain_failure
-from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_NUMERICAL, AcmmError, ConfigError, NoEquilibriumError
+from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError, ConfigError, with_hint
 
 
 def fail(message: str, code: int = EXIT_INPUT) -> None:
@@ -50,55 +50,9 @@ def fail(message: str, code: int = EXIT_INPUT) -> None:
 MAX_MESSAGE = 600
 
 
-def first_hint(message: str, table) -> str:
-    """The hint of the first row of a product's hint table whose words all occur in ``message``
-    (any case): how each product's ``hint`` for :func:`with_hint` reads its table.
-
-    Parameters
-    ----------
-    message : str
-        The failure message.
-    table : sequence of (tuple of str, str)
-        (lower-case words, hint) rows, most specific first.
-
-    Returns
-    -------
-    str
-        The hint; empty when no row applies.
-    """
-    low = message.lower()
-    return next((hint for words, hint in table if all(w in low for w in words)), "")
-
-
-def with_hint(exc: AcmmError, hint=None) -> str:
-    """The message of a user-facing error, with the product's hint appended when one applies
-    (solver/design failures, exit 3, and a missing equilibrium).
-
-    Parameters
-    ----------
-    exc : AcmmError
-        The user-facing error.
-    hint : callable, optional
-        The product's ``hint(message) -> str`` ("which setting to change"; empty when none
-        applies); None: no hint.
-
-    Returns
-    -------
-    str
-        ``str(exc)``, followed by ``; hint: ...`` when one applies and the message has none yet.
-    """
-    msg = str(exc)
-    if hint is not None and "hint:" not in msg.lower() and (
-            getattr(exc, "exit_code", None) == EXIT_NUMERICAL or isinstance(exc, NoEquilibriumError)):
-        text = hint(msg)
-        if text:
-            msg = f"{msg}; hint: {text}"
-    return msg
-
-
-def user_errors(fn, hint=None, notes=None):
-    """Decorator for typer commands: turn :class:`AcmmError` into one line on stderr and the
-    error's ``exit_code``.
+def user_errors(fn, notes=None):
+    """Decorator for typer commands: turn :class:`AcmmError` into one line on stderr (with the
+    hint it was raised with, :func:`acmm_qpp.errors.with_hint`) and the error's ``exit_code``.
 
     numpy/scipy warnings are captured: a refused run prints only its error line; a successful
     one a single ``note:`` line counting them.  Numerical exceptions outside the hierarchy
@@ -109,8 +63,6 @@ def user_errors(fn, hint=None, notes=None):
     ----------
     fn : callable
         The command function.
-    hint : callable, optional
-        The product's hint for a numerical failure (:func:`with_hint`).
     notes : callable, optional
         ``notes() -> list of str``: the product's ``note:`` lines after a successful run.
 
@@ -127,7 +79,7 @@ def user_errors(fn, hint=None, notes=None):
             try:
                 out = fn(*args, **kwargs)
             except AcmmError as exc:
-                fail(with_hint(exc, hint), exc.exit_code)
+                fail(with_hint(exc), exc.exit_code)
             except KeyboardInterrupt as exc:
                 interrupted(exc)
             except BrokenPipeError:     # the reader of stdout went away (`| head`): not an I/O failure
