@@ -9,17 +9,23 @@ import json
 from typing import Optional
 
 # first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
-from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
+from acmm_qpp.cli.plumbing import (ConfigKinds, ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
                                    version_option)
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
-from qpp import PACKAGED_CONFIGS
+from qpp import CONFIG_SECTIONS, PACKAGED_CONFIGS
 
 import numpy as np  # noqa: E402
 import typer  # noqa: E402
 
 from acmm_qpp.cli.progress import status  # noqa: E402
 from acmm_qpp.errors import ConfigError, DesignError  # noqa: E402
+
+
+#: The packaged configs and the one kind of config ``qpp`` reads.
+CONFIGS = ConfigKinds(PACKAGED_CONFIGS, (("qpp", CONFIG_SECTIONS),),
+                      "A config path is relative to the working directory; a bare name that is no file there "
+                      "(qpp_siso, qpp_siso.yaml) is a packaged config.")
 
 
 class _QppGroup(ExitCodeGroup):
@@ -31,7 +37,7 @@ class _QppGroup(ExitCodeGroup):
                 "qpp plot runs/qpp_unstable           # redraw a run's figures from its .h5 files",
                 "qpp COMMAND --help                   # each command's options and examples")
     config_kinds = ("qpp",)
-    config_package = PACKAGED_CONFIGS
+    configs = CONFIGS
 
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=_QppGroup, rich_markup_mode=None,
@@ -55,17 +61,18 @@ def _load(config, overrides):
 
 
 @app.command(short_help="Check a qpp config.",
-             cls=help_command(["qpp validate qpp_siso", "qpp validate my_plant.yaml --show"], ("qpp",), PACKAGED_CONFIGS))
+             cls=help_command(["qpp validate qpp_siso", "qpp validate my_plant.yaml --show"], ("qpp",), CONFIGS))
 @user_errors
 def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("spheres.beta_o=0.3"),
              show: bool = typer.Option(False, "--show", help="print the resolved config")) -> None:
     """Check a qpp config (an acmm run or sweep config is named as such: ``acmm validate`` checks it)."""
-    from acmm_qpp.configio import detect_kind, read_yaml  # deferred: --help needs no pydantic, yaml
+    from acmm_qpp.configio import read_yaml  # deferred: --help needs no pydantic, yaml
 
     data, path = read_yaml(config, PACKAGED_CONFIGS)
-    kind = detect_kind(data)
+    kind = CONFIGS.kind_of(data)
     if kind != "qpp":
-        raise ConfigError(f"{path}: an {kind} config, not a qpp config: check it with `acmm validate`")
+        raise ConfigError(f"{path}: not a qpp config (it has none of the sections {', '.join(CONFIG_SECTIONS)}): "
+                          "an acmm run or sweep config is checked by `acmm validate`")
     cfg = _load(config, overrides)
     typer.echo(f"{cfg.name}: valid ({kind} config)")
     if show:
@@ -88,7 +95,7 @@ def _mat(a) -> str:
 
 @app.command(short_help="H-infinity gains, thresholds and the circle criterion.",
              cls=help_command(["qpp design qpp_unstable", "qpp design qpp_saturation spheres.beta_o=0.4 --strict",
-                               "qpp design my_plant.yaml --no-figures"], ("qpp",), PACKAGED_CONFIGS))
+                               "qpp design my_plant.yaml --no-figures"], ("qpp",), CONFIGS))
 @user_errors
 def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("hinf.rho=0.02 spheres.beta_o=0.3"),
            figures: bool = FigOpt,
@@ -160,7 +167,7 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_a
 
 
 @app.command(short_help="Nonlinear closed loop per scenario and the sphere check.",
-             cls=help_command(["qpp simulate qpp_unstable", "qpp simulate qpp_unstable simulation.t_final=5 --strict"], ("qpp",), PACKAGED_CONFIGS))
+             cls=help_command(["qpp simulate qpp_unstable", "qpp simulate qpp_unstable simulation.t_final=5 --strict"], ("qpp",), CONFIGS))
 @user_errors
 def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.t_final=5"),
              figures: bool = FigOpt,
