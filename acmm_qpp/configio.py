@@ -175,7 +175,7 @@ def packaged_config_path(name: str, package: str) -> Path:
     name : str
         File name of the config.
     package : str
-        The data package of the packaged configs (``acmm.PACKAGED_CONFIGS``, ``qpp.PACKAGED_CONFIGS``),
+        The data package of the packaged configs (each product's ``PACKAGED_CONFIGS``),
         looked up with :mod:`importlib.resources`.
 
     Returns
@@ -425,25 +425,3 @@ def check_yaml_structure(text: str, source: object = "config") -> None:
         if count > max_nodes:
             raise ConfigError(f"{source}: YAML has more than {max_nodes} values (aliases expanded) "
                               f"({how_to_raise('YAML_NODES')})")
-
-
-def detect_kind(data: object) -> str:
-    """The kind of a parsed config mapping.
-
-    Parameters
-    ----------
-    data : object
-        Parsed YAML document.
-
-    Returns
-    -------
-    str
-        ``sweep`` (has a ``sweep`` section, or is the resolved form with ``sweep_file``), ``qpp`` (has a plant / nonlinearity / hinf /
-        spheres section) or ``acmm``.
-    """
-    if isinstance(data, dict):
-        if "sweep" in data or "sweep_file" in data:      # a sweep file, or its resolved form
-            return "sweep"
-        if any(k in data for k in ("plant", "nonlinearity", "hinf", "spheres")):
-            return "qpp"
-    return "acmm"

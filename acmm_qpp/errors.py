@@ -1,8 +1,8 @@
 """The package's small exception hierarchy and the exit code of each kind of failure.
 
 Every error a user can trigger with a config, a file or a numerical problem derives from
-:class:`AcmmError`; the command-line apps catch it, print its message on one line on stderr and
-exit with the class's ``exit_code``:
+:class:`AcmmError`; the command-line apps catch it, print its message on one line on stderr (with
+the ``hint`` it was raised with, :func:`with_hint`) and exit with the class's ``exit_code``:
 
 ====  =====================================================================================
 code  meaning
@@ -52,9 +52,40 @@ class Terminated(KeyboardInterrupt):
 
 
 class AcmmError(Exception):
-    """Base class of every error the tool reports to a user."""
+    """Base class of every error the tool reports to a user.
+
+    Parameters
+    ----------
+    *args : object
+        The message (and anything else the built-in exception takes).
+    hint : str, optional
+        Which setting to change, in the words of the product that raises it (empty: none).
+    """
 
     exit_code = EXIT_INPUT
+    hint = ""
+
+    def __init__(self, *args, hint: str = "") -> None:
+        super().__init__(*args)
+        if hint:
+            self.hint = hint
+
+
+def with_hint(exc: BaseException) -> str:
+    """The message of an error followed by ``; hint: ...`` when it was raised with one.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The error.
+
+    Returns
+    -------
+    str
+        ``str(exc)``, and its ``hint`` when it has one and the message carries none yet.
+    """
+    msg, hint = str(exc), getattr(exc, "hint", "")
+    return f"{msg}; hint: {hint}" if hint and "hint:" not in msg.lower() else msg
 
 
 class ConfigError(AcmmError, ValueError):

@@ -7,9 +7,8 @@
 * :func:`missing_config_message` — a config that is neither a file nor a packaged name lists the
   packaged names (closest first).
 
-Which setting to change when a solver or a design fails is each product's own knowledge (its
-config keys): :mod:`acmm.cli.hints` and :mod:`qpp.cli` give it to
-:func:`acmm_qpp.cli.plumbing.user_errors`.
+Which setting to change when a solver or a design fails is the knowledge of the product that
+raises the error: it passes ``hint=`` to the error (:class:`acmm_qpp.errors.AcmmError`).
 """
 from __future__ import annotations
 

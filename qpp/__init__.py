@@ -7,3 +7,5 @@ __version__ = "0.1.0"
 #: The data package of the configs shipped with the distribution (the source tree's ``configs/``
 #: folder, mapped by ``pyproject.toml``), looked up by name with importlib.resources.
 PACKAGED_CONFIGS = "acmm.configs"
+#: The top-level sections of a qpp config: a config with one of them is a qpp config.
+CONFIG_SECTIONS = ("plant", "nonlinearity", "hinf", "spheres")

@@ -9,11 +9,11 @@ import json
 from typing import Optional
 
 # first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
-from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, first_hint, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
+from acmm_qpp.cli.plumbing import (ConfigKinds, ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
                                    version_option)
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
-from qpp import PACKAGED_CONFIGS
+from qpp import CONFIG_SECTIONS, PACKAGED_CONFIGS
 
 import numpy as np  # noqa: E402
 import typer  # noqa: E402
@@ -22,58 +22,10 @@ from acmm_qpp.cli.progress import status  # noqa: E402
 from acmm_qpp.errors import ConfigError, DesignError  # noqa: E402
 
 
-#: (words that must all occur in the message, hint) — the first match wins; case-insensitive.
-#: Each hint names settings of the qpp configs only.
-NUMERICAL_HINTS: list[tuple[tuple[str, ...], str]] = [
-    (("riccati 11.1",), "change hinf.rho or hinf.nu (larger values relax the H∞ problem), "
-                        "or set hinf.search: true"),
-    (("converge",), "change hinf.rho or hinf.nu, or loosen simulation.rtol / simulation.atol"),
-    (("closed loop of these gains is unstable",),
-     "these gains do not stabilize the plant: let the procedure find gains (design.gains: design)"),
-    (("no certified design", "m < 1"), "no tracking loop meets these spheres: widen spheres.beta_o or "
-                                       "narrow spheres.beta_ri"),
-    (("no certified design", "β1 > m"), "widen spheres.beta_o, narrow spheres.beta_ri or the "
-                                        "nonlinearity's parameter ranges, or allow a smaller "
-                                        "design.rho_min (with design.wider_search)"),
-    (("no certified design", "circle criterion"), "narrow the nonlinearity's sector (its parameter "
-                                                  "ranges or y_range), or widen the search of a "
-                                                  "(design.a_min, design.a_max)"),
-    (("no stabilizing",), "change hinf.rho or hinf.nu, or set hinf.search: true"),
-    (("required step size",), "the loop is stiff or escapes: check the gains, or loosen "
-                              "simulation.rtol / simulation.atol"),
-]
-
-
-def numerical_hint(message: str) -> str:
-    """A "which setting to change" hint for a numerical failure message of ``qpp``.
-
-    Parameters
-    ----------
-    message : str
-        The failure message.
-
-    Returns
-    -------
-    str
-        The first matching hint (:data:`NUMERICAL_HINTS`); empty when none applies.
-    """
-    return first_hint(message, NUMERICAL_HINTS)
-
-
-def qpp_command(fn):
-    """:func:`acmm_qpp.cli.plumbing.user_errors` for a ``qpp`` command, with qpp's numerical hints.
-
-    Parameters
-    ----------
-    fn : callable
-        The command function.
-
-    Returns
-    -------
-    callable
-        The wrapped command.
-    """
-    return user_errors(fn, hint=numerical_hint)
+#: The packaged configs and the one kind of config ``qpp`` reads.
+CONFIGS = ConfigKinds(PACKAGED_CONFIGS, (("qpp", CONFIG_SECTIONS),),
+                      "A config path is relative to the working directory; a bare name that is no file there "
+                      "(qpp_siso, qpp_siso.yaml) is a packaged config.")
 
 
 class _QppGroup(ExitCodeGroup):
@@ -85,7 +37,7 @@ class _QppGroup(ExitCodeGroup):
                 "qpp plot runs/qpp_unstable           # redraw a run's figures from its .h5 files",
                 "qpp COMMAND --help                   # each command's options and examples")
     config_kinds = ("qpp",)
-    config_package = PACKAGED_CONFIGS
+    configs = CONFIGS
 
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=_QppGroup, rich_markup_mode=None,
@@ -109,17 +61,18 @@ def _load(config, overrides):
 
 
 @app.command(short_help="Check a qpp config.",
-             cls=help_command(["qpp validate qpp_siso", "qpp validate my_plant.yaml --show"], ("qpp",), PACKAGED_CONFIGS))
-@qpp_command
+             cls=help_command(["qpp validate qpp_siso", "qpp validate my_plant.yaml --show"], ("qpp",), CONFIGS))
+@user_errors
 def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("spheres.beta_o=0.3"),
              show: bool = typer.Option(False, "--show", help="print the resolved config")) -> None:
     """Check a qpp config (an acmm run or sweep config is named as such: ``acmm validate`` checks it)."""
-    from acmm_qpp.configio import detect_kind, read_yaml  # deferred: --help needs no pydantic, yaml
+    from acmm_qpp.configio import read_yaml  # deferred: --help needs no pydantic, yaml
 
     data, path = read_yaml(config, PACKAGED_CONFIGS)
-    kind = detect_kind(data)
+    kind = CONFIGS.kind_of(data)
     if kind != "qpp":
-        raise ConfigError(f"{path}: an {kind} config, not a qpp config: check it with `acmm validate`")
+        raise ConfigError(f"{path}: not a qpp config (it has none of the sections {', '.join(CONFIG_SECTIONS)}): "
+                          "an acmm run or sweep config is checked by `acmm validate`")
     cfg = _load(config, overrides)
     typer.echo(f"{cfg.name}: valid ({kind} config)")
     if show:
@@ -128,7 +81,7 @@ def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
 
 @app.command(short_help="Print the JSON schema of the qpp config format.",
              cls=help_command(["qpp schema > qpp.schema.json"]))
-@qpp_command
+@user_errors
 def schema() -> None:
     """Print the JSON schema of the qpp config format (`acmm schema --kind ...` for the others)."""
     from qpp.io.schema import qpp_schema  # deferred: --help needs no scipy, pydantic
@@ -142,8 +95,8 @@ def _mat(a) -> str:
 
 @app.command(short_help="H-infinity gains, thresholds and the circle criterion.",
              cls=help_command(["qpp design qpp_unstable", "qpp design qpp_saturation spheres.beta_o=0.4 --strict",
-                               "qpp design my_plant.yaml --no-figures"], ("qpp",), PACKAGED_CONFIGS))
-@qpp_command
+                               "qpp design my_plant.yaml --no-figures"], ("qpp",), CONFIGS))
+@user_errors
 def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("hinf.rho=0.02 spheres.beta_o=0.3"),
            figures: bool = FigOpt,
            strict: bool = StrictOpt) -> None:
@@ -209,13 +162,13 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_a
     typer.echo(f"  {r.verdict}")
     typer.echo(f"  wrote {path}")
     if not r.certified:
-        raise DesignError(r.verdict + " (best design written, labelled uncertified)")
+        raise DesignError(r.verdict + " (best design written, labelled uncertified)", hint=r.hint)
     strict_exit(strict, widened, f"{cfg.name}: the sector of φ rests on a grid its random check found too coarse")
 
 
 @app.command(short_help="Nonlinear closed loop per scenario and the sphere check.",
-             cls=help_command(["qpp simulate qpp_unstable", "qpp simulate qpp_unstable simulation.t_final=5 --strict"], ("qpp",), PACKAGED_CONFIGS))
-@qpp_command
+             cls=help_command(["qpp simulate qpp_unstable", "qpp simulate qpp_unstable simulation.t_final=5 --strict"], ("qpp",), CONFIGS))
+@user_errors
 def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.t_final=5"),
              figures: bool = FigOpt,
              strict: bool = StrictOpt) -> None:
@@ -256,7 +209,7 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
 
 @app.command(short_help="Redraw a run's figures from its stored results (.h5).",
              cls=help_command(["qpp plot runs/qpp_unstable", "qpp plot runs/qpp_saturation/qpp_sim.h5 --out figures"]))
-@qpp_command
+@user_errors
 def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
                                       help="a run folder (runs/<name>) or its qpp_design.h5 / qpp_sim.h5"),
          out: Optional[str] = typer.Option(None, "--out", help="folder of the figures (default: the results "

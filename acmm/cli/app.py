@@ -15,11 +15,10 @@ import typer
 
 from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit,
                                    version_option)
-from acmm.cli.hints import acmm_command
+from acmm.cli.command import CONFIGS, acmm_command
 from acmm_qpp.cli.progress import Steps
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
-from acmm import PACKAGED_CONFIGS
 from acmm_qpp.units import shown
 
 class _AcmmGroup(ExitCodeGroup):
@@ -32,7 +31,7 @@ class _AcmmGroup(ExitCodeGroup):
                 "acmm plot runs/staircase             # redraw a run's figures from its .h5 files",
                 "acmm COMMAND --help                  # each command's options and examples")
     config_kinds = ("acmm", "sweep", "qpp")
-    config_package = PACKAGED_CONFIGS
+    configs = CONFIGS
 
 
 app = typer.Typer(add_completion=True, no_args_is_help=True, cls=_AcmmGroup, rich_markup_mode=None,
@@ -67,7 +66,7 @@ def _fmt(v, fmt="{:+.4f}"):
 
 @app.command(short_help="Check a config of any kind (acmm run, sweep or qpp).",
              cls=help_command(["acmm validate mb3", "acmm validate my_station.yaml --show",
-                               "acmm validate staircase schedule.n_points=6"], ("acmm", "sweep", "qpp"), PACKAGED_CONFIGS))
+                               "acmm validate staircase schedule.n_points=6"], ("acmm", "sweep", "qpp"), CONFIGS))
 @acmm_command
 def validate(config: Optional[str] = ConfigArg,
              overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=6"),
@@ -101,7 +100,7 @@ def schema(kind: ConfigKind = typer.Option(ConfigKind.acmm, "--kind", help="conf
 
 
 @app.command(short_help="Torque-equilibrium attitude (eqs 4.1-4.3); writes tea.h5.",
-             cls=help_command(["acmm tea mb3", "acmm tea ac --all", "acmm tea mb3 inertia.I22=1.5e6"], ("acmm",), PACKAGED_CONFIGS))
+             cls=help_command(["acmm tea mb3", "acmm tea ac --all", "acmm tea mb3 inertia.I22=1.5e6"], ("acmm",), CONFIGS))
 @acmm_command
 def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("inertia.I22=1.5e6"),
         all_roots: bool = typer.Option(False, "--all", help="also list every other equilibrium found")) -> None:
@@ -123,7 +122,7 @@ def tea(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = over
 
 
 @app.command(short_help="24-state linearization about the TEA (eqs 4.4-4.50).",
-             cls=help_command(["acmm linearize mb3", "acmm linearize ac design.drf_mode=attitude_hold"], ("acmm",), PACKAGED_CONFIGS))
+             cls=help_command(["acmm linearize mb3", "acmm linearize ac design.drf_mode=attitude_hold"], ("acmm",), CONFIGS))
 @acmm_command
 def linearize(config: Optional[str] = ConfigArg,
               overrides: Optional[list[str]] = overrides_arg("orbit_rate=0.0011")) -> None:
@@ -188,7 +187,7 @@ def _design_line(name: str, note: str) -> str:
 
 @app.command(short_help="Sector LQR or regional LMI per design point and the gain schedule.",
              cls=help_command(["acmm design mb3", "acmm design staircase schedule.n_points=7 --strict",
-                               "acmm design my_station.yaml design.sector.sigma=0.6 --no-figures"], ("acmm",), PACKAGED_CONFIGS))
+                               "acmm design my_station.yaml design.sector.sigma=0.6 --no-figures"], ("acmm",), CONFIGS))
 @acmm_command
 def design(config: Optional[str] = ConfigArg,
            overrides: Optional[list[str]] = overrides_arg("design.sector.sigma=0.6 schedule.n_points=7"),
@@ -305,7 +304,7 @@ def _branch_jump_text(jump) -> str:
 
 
 @app.command(short_help="Dwell-time stability certificate of the stair-case.",
-             cls=help_command(["acmm certify", "acmm certify staircase schedule.n_points=8 --strict"], ("acmm",), PACKAGED_CONFIGS))
+             cls=help_command(["acmm certify", "acmm certify staircase schedule.n_points=8 --strict"], ("acmm",), CONFIGS))
 @acmm_command
 def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("schedule.n_points=8"),
             strict: bool = StrictOpt) -> None:
@@ -330,7 +329,7 @@ def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = 
 @app.command(short_help="Nonlinear closed-loop simulation (ch 6); writes sim.h5.",
              cls=help_command(["acmm simulate                         # the stair-case, 130 orbits",
                                "acmm simulate mb3 simulation.orbits=2",
-                               "acmm simulate ac output.units=si --strict"], ("acmm",), PACKAGED_CONFIGS))
+                               "acmm simulate ac output.units=si --strict"], ("acmm",), CONFIGS))
 @acmm_command
 def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = overrides_arg("simulation.orbits=10"),
              figures: Optional[bool] = FiguresOpt, strict: bool = StrictOpt) -> None:

@@ -17,7 +17,8 @@ from acmm.io.config import parse_config, resolve_references
 from acmm.io.schema import acmm_schema
 from acmm.sweep.config import parse_sweep
 from acmm.sweep.spec import sweep_schema
-from acmm_qpp.configio import detect_kind, read_yaml
+from acmm.cli.command import CONFIGS
+from acmm_qpp.configio import read_yaml
 from acmm_qpp.overrides import apply_overrides, remember_origin, split_overrides
 from qpp.io.config import parse_config as parse_qpp
 from qpp.io.schema import qpp_schema
@@ -25,6 +26,23 @@ from qpp.io.schema import qpp_schema
 __all__ = ["KINDS", "detect_kind", "load_any", "load_any_from_command_line", "schema_for", "schema_json"]
 
 KINDS = ("acmm", "sweep", "qpp")
+
+
+def detect_kind(data: object) -> str:
+    """The kind of a parsed config (:data:`acmm.cli.command.CONFIGS`).
+
+    Parameters
+    ----------
+    data : object
+        Parsed YAML document.
+
+    Returns
+    -------
+    str
+        ``sweep`` (a ``sweep`` section, or the resolved form's ``sweep_file``), ``qpp`` (a plant,
+        nonlinearity, hinf or spheres section) or ``acmm``.
+    """
+    return CONFIGS.kind_of(data)
 
 
 def schema_for(kind: str) -> dict:

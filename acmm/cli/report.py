@@ -11,7 +11,7 @@ from typing import Optional
 
 import typer
 
-from acmm.cli.hints import acmm_command
+from acmm.cli.command import acmm_command
 from acmm_qpp.cli.plumbing import help_command
 from acmm_qpp.cli.progress import enabled
 from acmm_qpp.errors import AcmmError, ConfigError

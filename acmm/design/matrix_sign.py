@@ -19,6 +19,9 @@ import numpy as np
 
 from acmm_qpp.errors import ConvergenceError
 
+#: The hint of every failure of the iteration: which setting to change (acmm's config).
+SIGN_HINT = "use design.riccati_method: scipy or slycot (the sign iteration needs a well-conditioned model)"
+
 __all__ = ["SignResult", "matrix_sign"]
 
 
@@ -88,10 +91,10 @@ def _step(S, eye, form, evaluation, k):
             S_new = np.linalg.solve(den, num)
     except np.linalg.LinAlgError as exc:
         raise ConvergenceError(f"matrix sign (eq 5.6, {form}): singular denominator "
-                               f"at iteration {k}") from exc
+                               f"at iteration {k}", hint=SIGN_HINT) from exc
     if not np.all(np.isfinite(S_new)):
         raise ConvergenceError(f"matrix sign (eq 5.6, {form}): iteration overflowed "
-                               f"at iteration {k}")
+                               f"at iteration {k}", hint=SIGN_HINT)
     return S_new
 
 
@@ -101,7 +104,7 @@ def _check_limit(S, M0, eye, tol, form, k) -> None:
     if inv > np.sqrt(tol) * max(1.0, np.linalg.norm(S, 1)) ** 2:
         raise ConvergenceError(
             f"matrix sign (eq 5.6, {form}): iteration settled after {k} steps on a "
-            f"matrix that is not a sign (‖S²−I‖₁ = {inv:.3g})")
+            f"matrix that is not a sign (‖S²−I‖₁ = {inv:.3g})", hint=SIGN_HINT)
     # sign(M)·M = (M²)^½ has its spectrum in the open right half-plane; a wrong
     # involutory limit (e.g. I for a matrix with stable eigenvalues) fails this.
     mineig = float(np.min(np.linalg.eigvals(S @ M0).real))
@@ -109,7 +112,7 @@ def _check_limit(S, M0, eye, tol, form, k) -> None:
         raise ConvergenceError(
             f"matrix sign (eq 5.6, {form}): iteration converged after {k} steps to an "
             f"involutory matrix that is not sign(M) (eigenvalue of S·M with real part "
-            f"{mineig:.3g} ≤ 0)")
+            f"{mineig:.3g} ≤ 0)", hint=SIGN_HINT)
 
 
 def matrix_sign(M, *, scaling: str = "det", tol: float = 1e-13, max_iter: int = 60,
@@ -171,4 +174,4 @@ def matrix_sign(M, *, scaling: str = "det", tol: float = 1e-13, max_iter: int = 
             _check_limit(S, M0, eye, tol, form, k)
             return SignResult(S=S, iterations=k, step=float(step))
     raise ConvergenceError(f"matrix sign (eq 5.6, {form}): no convergence in {max_iter} "
-                           f"iterations (last relative step {step:.3g}, tolerance {tol:.1e})")
+                           f"iterations (last relative step {step:.3g}, tolerance {tol:.1e})", hint=SIGN_HINT)

@@ -106,7 +106,7 @@ except ImportError:   # pragma: no cover - exercised by uninstalling cvxopt (or 
 #: KKT factorization per iteration) more threads were not faster.
 CLARABEL_OPTIONS = {"max_threads": 1}
 
-_RELAX = ("hint: relax design.min_margin, design.sector.sigma, design.sector.half_angle_deg or "
+_RELAX_HINT = ("relax design.min_margin, design.sector.sigma, design.sector.half_angle_deg or "
           "design.lmi.disk_radius (or the cost weights: design.lmi.dilation, design.R)")
 
 
@@ -780,7 +780,7 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
                           f"trying {order[k + 1]}", RuntimeWarning, stacklevel=2)
     else:
         raise DesignError("regional LMI: no solver returned a gain that passes the checks ("
-                          + "; ".join(rejected) + "); " + _RELAX)
+                          + "; ".join(rejected) + ")", hint=_RELAX_HINT)
     solve_time = time.perf_counter() - ts
     Ks, Xs, X2s, cost, lmi_residual = sol
     Acl = As - Bs @ Ks

@@ -276,7 +276,7 @@ def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
         if n:
             _refuse(f"Riccati solve (method={method!r}): no stabilizing solution "
                            f"(Hamiltonian is zero: every eigenvalue on the imaginary axis)",
-                           method, float("nan"))
+                           method, float("nan"), other_method_hint(method))
         return float("inf")
     Hb, _ = sla.matrix_balance(H, permute=True)
     hn = float(np.linalg.norm(Hb))
@@ -294,7 +294,7 @@ def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
             f"eigenvalue {complex(w[i]):.6g} on or within rounding of the imaginary axis "
             f"(|Re λ| = {abs(w[i].real):.3g} ≤ {band[i]:.3g}; eigenvalue condition "
             f"{kappa[i]:.3g}): a mode on the axis is uncontrollable or unobservable", method,
-            float("nan"))
+            float("nan"), other_method_hint(method))
     return float(np.min(np.abs(w.real)) / hn)
 
 
@@ -340,19 +340,53 @@ def care_condition(A, B, Q, R, P) -> float:
     return n2(Y) * top / p
 
 
-def _refuse(message: str, method: str, residual: float) -> NoReturn:
+def _refuse(message: str, method: str, residual: float, hint: str) -> NoReturn:
     """Raise the :class:`ConvergenceError` of :func:`_refusal`."""
-    raise _refusal(message, method, residual)
+    raise _refusal(message, method, residual, hint)
 
 
-def _refusal(message: str, method: str, residual: float) -> ConvergenceError:
-    exc = ConvergenceError(message)
+def _refusal(message: str, method: str, residual: float, hint: str) -> ConvergenceError:
+    exc = ConvergenceError(message, hint=hint)
     exc.method = method          # for reports (scripts/compare_riccati.py)
     exc.residual = residual
     return exc
 
 
 METHODS = ("scipy", "sign", "slycot")
+
+
+def other_method_hint(method: str) -> str:
+    """The hint of a failed Riccati solve: the values of ``design.riccati_method`` but ``method``.
+
+    Parameters
+    ----------
+    method : str
+        The method that failed (:data:`METHODS`).
+
+    Returns
+    -------
+    str
+        ``"try another design.riccati_method (sign or slycot)"`` and the like.
+    """
+    return f"try another design.riccati_method ({' or '.join(m for m in METHODS if m != method)})"
+
+
+def residual_hint(method: str) -> str:
+    """The hint of a Riccati solution refused on its residual or stability (acmm's settings).
+
+    Parameters
+    ----------
+    method : str
+        The method whose solution was refused (:data:`METHODS`).
+
+    Returns
+    -------
+    str
+        Raise the tolerance, try the other methods, or change the model.
+    """
+    return (f"raise design.residual_tol or try design.riccati_method: "
+            f"{' or '.join(m for m in METHODS if m != method)}; a nearly uncontrollable model "
+            "(see `acmm linearize`) needs another design.model or design.drf_mode")
 
 #: Guard on the refinement steps of :func:`refine_care`.  The refinement stops on its criterion
 #: (a step that no longer halves the backward error) after 1–5 steps on every packaged problem;
@@ -508,14 +542,16 @@ def _care_slycot(A, B, Q, R):
     try:
         from slycot import sb02md  # deferred: slycot start-up, only for method='slycot'
     except ImportError as exc:  # pragma: no cover - slycot is a declared dependency
-        raise ConvergenceError("method='slycot' needs the slycot package") from exc
+        raise ConvergenceError("method='slycot' needs the slycot package",
+                               hint=other_method_hint("slycot")) from exc
     n = A.shape[0]
     G = B @ np.linalg.solve(R, B.T)
     G = 0.5 * (G + G.T)
     try:
         out = sb02md(n, A.copy(), G, Q.copy(), "C", scal="N", sort="S")
     except Exception as exc:  # slycot raises SlycotArithmeticError / ValueError
-        raise ConvergenceError(f"Riccati solve (method='slycot', SB02MD) failed: {exc}") from exc
+        raise ConvergenceError(f"Riccati solve (method='slycot', SB02MD) failed: {exc}",
+                               hint=other_method_hint("slycot")) from exc
     return out[0]
 
 
@@ -570,7 +606,8 @@ def solve_unverified(A, B, Q, R, *, method: str = "scipy", sign_scaling: str = "
         else:
             P = _care_slycot(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError) as exc:
-        raise ConvergenceError(f"Riccati solve (method={method!r}) failed: {exc}") from exc
+        raise ConvergenceError(f"Riccati solve (method={method!r}) failed: {exc}",
+                               hint=other_method_hint(method)) from exc
     return P, iterations
 
 
@@ -663,17 +700,18 @@ def _verified_gain(As, Bs, Qs, R, Ps, *, method, tol, scaled):
     """(K̃, relative residual, backward error) of a refined solution P̃, refused if non-finite,
     inaccurate (backward error above ``tol``) or not stabilizing."""
     if not np.all(np.isfinite(Ps)):
-        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values")
+        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values",
+                               hint=other_method_hint(method))
     res = care_residual(As, Bs, Qs, R, Ps)
     omega = care_backward_error(As, Bs, Qs, R, Ps)
     if not omega <= tol:
         _refuse(f"Riccati solve (method={method!r}{', state-scaled' if scaled else ''}"
                 f"): backward error {omega:.3e} after refinement exceeds tolerance {tol:.1e} "
-                f"(relative residual {res:.3e})", method, omega)
+                f"(relative residual {res:.3e})", method, omega, residual_hint(method))
     Ks = np.linalg.solve(R, Bs.T @ Ps)
     worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
     if not worst < 0.0:
         _refuse(f"Riccati solve (method={method!r}): solution is not stabilizing "
                        f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
-                       f"{res:.3e})", method, res)
+                       f"{res:.3e})", method, res, residual_hint(method))
     return Ks, res, omega

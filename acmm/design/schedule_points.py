@@ -148,7 +148,9 @@ def blend_context(end_name: str | None, s: float):
     except NoEquilibriumError as exc:
         if s > 0:
             raise NoEquilibriumError(f"on the blend toward schedule.to{f' ({end_name})' if end_name else ''} "
-                                     f"at s = {s:.3g}, inertia and bias (1 − s)·start + s·end: {exc}") from None
+                                     f"at s = {s:.3g}, inertia and bias (1 − s)·start + s·end: {exc}",
+                                     hint="reduce the bias of disturbance or of schedule.to (their blend must "
+                                          "balance at every s), or give each as its bias_from_tea") from None
         raise
 
 

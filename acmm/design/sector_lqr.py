@@ -55,8 +55,12 @@ import scipy.linalg as sla
 
 from acmm.model.controllability import pbh_ratios
 from acmm.design.riccati import (ILL_CONDITIONED, as_R, care_backward_error, care_condition, care_residual,
-                                 scale_problem, solve_care)
+                                 other_method_hint, residual_hint, scale_problem, solve_care)
 from acmm_qpp.errors import ConvergenceError, DesignError
+
+#: The hint of a design whose poles stay outside the sector: which settings to change.
+SECTOR_HINT = ("lower design.sector.sigma, widen design.sector.half_angle_deg, or try "
+               "design.pole_method: uniform / shift")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -313,9 +317,12 @@ def _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin):
         return
     for z, ratio in zip(outside, pbh_ratios(As, Bs, outside)):
         if ratio <= UNCONTROLLABLE_RATIO:
+            hint = ("no gain moves that pole and no sector (σ > 0) holds Re λ ≥ 0: change design.model or "
+                    "design.drf_mode (an axisymmetric station's neutral mode, say)" if z.real > -1e-9 * n else
+                    "no gain moves that pole: lower design.sector.sigma, or change design.model / design.drf_mode")
             raise DesignError(
                 f"sector LQR: open-loop pole λ/n = {complex(z / n):.4g} lies outside the sector "
-                f"and is uncontrollable (PBH ratio {ratio:.2e}); no feedback can move it")
+                f"and is uncontrollable (PBH ratio {ratio:.2e}); no feedback can move it", hint=hint)
 
 
 def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, residual_tol,
@@ -334,19 +341,19 @@ def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, r
     qmin = float(np.min(np.linalg.eigvalsh(Qs))) if nx else 0.0
     if qmin < -1e-12 * max(1.0, np.linalg.norm(Qs, 2)):
         raise DesignError(f"sector LQR ({method}): Q is not positive semidefinite "
-                          f"(smallest eigenvalue {qmin:.3e})")
+                          f"(smallest eigenvalue {qmin:.3e})", hint="change design.Q0 or design.R")
     res = care_residual(Ash, Bs, Qs, R, Ps)
     omega = care_backward_error(Ash, Bs, Qs, R, Ps)
     if not omega <= residual_tol:
         raise ConvergenceError(f"sector LQR ({method}, Riccati method {riccati_method!r}): Riccati "
                                f"backward error {omega:.3e} exceeds tolerance {residual_tol:.1e} "
-                               f"(relative residual {res:.3e})")
+                               f"(relative residual {res:.3e})", hint=residual_hint(riccati_method))
     if margin < min_margin:
         bad = poles[margins < min_margin]
         raise DesignError(
             f"sector LQR ({method}): {bad.size} closed-loop pole(s) outside the sector "
             f"Re λ ≤ −{sigma}n, |Im λ| ≤ tan({half_angle_deg}°)|Re λ| with margin {min_margin}n "
-            f"(worst margin {margin:.3g}n at λ/n = {complex(bad[0] / n):.4g})")
+            f"(worst margin {margin:.3g}n at λ/n = {complex(bad[0] / n):.4g})", hint=SECTOR_HINT)
     lam_c, _, _, kappa = eigen_conditioning(As - Bs @ Ks)
     kappa = kappa[np.lexsort((lam_c.imag, lam_c.real))]
     e_norm, e_elem = sector_robustness(As, Bs, Ks, n, sigma, half_angle_deg)
@@ -399,7 +406,9 @@ class _SectorProblem:
             return solve_care(self.As + a * eye, self.Bs, self.Q0s, self.R, method=self.riccati_method,
                               tol=self.residual_tol)
         except ConvergenceError as exc:
-            raise ConvergenceError(f"sector LQR ({self.method}) at shift α = {a / self.n:.4g}n: {exc}") from exc
+            raise ConvergenceError(f"sector LQR ({self.method}) at shift α = {a / self.n:.4g}n: {exc}",
+                                   hint="lower design.sector.sigma (the shift α asked of the LQR may be too "
+                                        f"large), or {exc.hint or other_method_hint(self.riccati_method)}") from exc
 
     def finish(self, Qs, Ps, shift, mirror_shifts) -> SectorLQR:
         return _finish(self.As, self.Bs, Qs, self.R, Ps, shift, self.n, self.sigma, self.half_angle_deg,
@@ -457,7 +466,7 @@ def _sector_uniform(p: _SectorProblem, max_uniform_shift: float) -> SectorLQR:
         hi *= 1.25
         if hi > max_uniform_shift * n:
             raise DesignError(f"sector LQR (uniform): no shift α ≤ {max_uniform_shift}n puts "
-                              f"every pole in the sector")
+                              f"every pole in the sector", hint=SECTOR_HINT)
     while hi - lo > 1e-3 * hi:
         mid = 0.5 * (lo + hi)
         good, r_mid = ok(mid)
@@ -526,7 +535,11 @@ def _mirror_group(p: _SectorProblem, Ps, Qs, lo, hi, line_spacing, target, mirro
                              method=p.riccati_method, tol=p.residual_tol)
         except ConvergenceError as exc:
             raise DesignError(f"sector LQR (shift): cannot shift the poles λ/n = "
-                              f"{np.round(lam1 / n, 4).tolist()} (uncontrollable?): {exc}") from exc
+                              f"{np.round(lam1 / n, 4).tolist()} (uncontrollable?): {exc}",
+                              hint="widen design.sector.half_angle_deg or lower design.sector.sigma (a narrow "
+                                   "sector leaves the moved poles a sliver of the plane), or try "
+                                   "design.pole_method: uniform; a nearly uncontrollable model (see `acmm "
+                                   "linearize`) needs another design.model or design.drf_mode") from exc
         dP = U1 @ sub.P @ U1.T
         dP = 0.5 * (dP + dP.T)
         Ps = Ps + dP

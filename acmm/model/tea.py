@@ -32,6 +32,9 @@ from acmm.model.compiled_cache import njit_cached
 from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
 from acmm_qpp.units import FT_LBF_IN_NM
 
+#: The hint of a bias with no equilibrium: which settings to change (acmm's config).
+BIAS_HINT = "reduce disturbance.bias (or use disturbance.bias_from_tea with the attitude you want)"
+
 #: Largest residual (ft·lbf) accepted for an equilibrium; for a station whose gravity-gradient
 #: torque scale 3n²·max|I| is below 10 ft·lbf, 1e-13 of that scale instead (an absolute 1e-12
 #: would accept a 3 % residual on a model-sized station), and never below 1e-15 of it (round-off).
@@ -526,9 +529,11 @@ def _solve_by_continuation(inertia: np.ndarray, n: float, bias: np.ndarray) -> T
     if status == 1:
         raise ConvergenceError(
             "TEA continuation in the products of inertia failed at "
-            f"{100 * lam:.3g}% of their values (the inertia may have no LVLH-near equilibrium)")
+            f"{100 * lam:.3g}% of their values (the inertia may have no LVLH-near equilibrium)",
+            hint="check the products of inertia (inertia.I12, I13, I23) or give the bias as "
+                 "disturbance.bias_from_tea")
     if status == 2:
-        raise NoEquilibriumError(fold_message(bias, lam))
+        raise NoEquilibriumError(fold_message(bias, lam), hint=BIAS_HINT)
     return make_tea(theta, inertia, n, bias)
 
 
@@ -724,14 +729,14 @@ def with_other_roots(exc: NoEquilibriumError, inertia, n, bias) -> NoEquilibrium
     found = all_equilibria(inertia, n, bias)
     if not found:
         return NoEquilibriumError(f"{exc}; no other equilibrium lies within ±85° either (Newton from a "
-                                  "30° grid of attitudes)")
+                                  "30° grid of attitudes)", hint=exc.hint)
     roots = "; ".join("[" + ", ".join(f"{v:.4f}" for v in r.theta_deg) + "]" for r in found[:3])
     more = f" (and {len(found) - 3} more)" if len(found) > 3 else ""
     first = ", ".join(f"{v:.4f}" for v in found[0].theta_deg)
     return NoEquilibriumError(
         f"{exc}. Equilibria on other branches do exist for this bias, at θ = {roots} deg{more}: "
         f"name the one meant with disturbance.bias_from_tea (e.g. bias_from_tea=[{first}] "
-        "gives this bias and that attitude)")
+        "gives this bias and that attitude)", hint=exc.hint)
 
 
 #: σmin/σmax of the eq 4.1 Jacobian below which an equilibrium is not isolated

@@ -281,7 +281,7 @@ def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarra
                 tea = solve_tea_fast(inertia[k], sc0.n, bias[k])
             except NoEquilibriumError as exc:
                 raise NoEquilibriumError(f"the design TEA's equilibrium folds between the nominal and this "
-                                         f"plant (level {k}), and there is {exc}") from None
+                                         f"plant (level {k}), and there is {exc}", hint=exc.hint) from None
         theta.append(tea.theta)
     note = ""
     if folded:

@@ -10,6 +10,7 @@ import threading
 import types
 import warnings
 from importlib import resources
+from typing import NamedTuple
 
 import typer
 
@@ -21,7 +22,7 @@ except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
 
 from acmm_qpp.cli.failures import EXIT_PIPE_CLOSED, interrupt_behind, note_warnings, quiet_stdout
 from acmm_qpp.errors import plain_failure as _plain_failure
-from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_NUMERICAL, AcmmError, ConfigError, NoEquilibriumError
+from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError, ConfigError, with_hint
 
 
 def fail(message: str, code: int = EXIT_INPUT) -> None:
@@ -50,55 +51,9 @@ def fail(message: str, code: int = EXIT_INPUT) -> None:
 MAX_MESSAGE = 600
 
 
-def first_hint(message: str, table) -> str:
-    """The hint of the first row of a product's hint table whose words all occur in ``message``
-    (any case): how each product's ``hint`` for :func:`with_hint` reads its table.
-
-    Parameters
-    ----------
-    message : str
-        The failure message.
-    table : sequence of (tuple of str, str)
-        (lower-case words, hint) rows, most specific first.
-
-    Returns
-    -------
-    str
-        The hint; empty when no row applies.
-    """
-    low = message.lower()
-    return next((hint for words, hint in table if all(w in low for w in words)), "")
-
-
-def with_hint(exc: AcmmError, hint=None) -> str:
-    """The message of a user-facing error, with the product's hint appended when one applies
-    (solver/design failures, exit 3, and a missing equilibrium).
-
-    Parameters
-    ----------
-    exc : AcmmError
-        The user-facing error.
-    hint : callable, optional
-        The product's ``hint(message) -> str`` ("which setting to change"; empty when none
-        applies); None: no hint.
-
-    Returns
-    -------
-    str
-        ``str(exc)``, followed by ``; hint: ...`` when one applies and the message has none yet.
-    """
-    msg = str(exc)
-    if hint is not None and "hint:" not in msg.lower() and (
-            getattr(exc, "exit_code", None) == EXIT_NUMERICAL or isinstance(exc, NoEquilibriumError)):
-        text = hint(msg)
-        if text:
-            msg = f"{msg}; hint: {text}"
-    return msg
-
-
-def user_errors(fn, hint=None, notes=None):
-    """Decorator for typer commands: turn :class:`AcmmError` into one line on stderr and the
-    error's ``exit_code``.
+def user_errors(fn, notes=None):
+    """Decorator for typer commands: turn :class:`AcmmError` into one line on stderr (with the
+    hint it was raised with, :func:`acmm_qpp.errors.with_hint`) and the error's ``exit_code``.
 
     numpy/scipy warnings are captured: a refused run prints only its error line; a successful
     one a single ``note:`` line counting them.  Numerical exceptions outside the hierarchy
@@ -109,8 +64,6 @@ def user_errors(fn, hint=None, notes=None):
     ----------
     fn : callable
         The command function.
-    hint : callable, optional
-        The product's hint for a numerical failure (:func:`with_hint`).
     notes : callable, optional
         ``notes() -> list of str``: the product's ``note:`` lines after a successful run.
 
@@ -127,7 +80,7 @@ def user_errors(fn, hint=None, notes=None):
             try:
                 out = fn(*args, **kwargs)
             except AcmmError as exc:
-                fail(with_hint(exc, hint), exc.exit_code)
+                fail(with_hint(exc), exc.exit_code)
             except KeyboardInterrupt as exc:
                 interrupted(exc)
             except BrokenPipeError:     # the reader of stdout went away (`| head`): not an I/O failure
@@ -178,65 +131,81 @@ def overrides_arg(example: str):
                           show_default=False)
 
 
-#: The rule by which a config path is found, as the commands' help states it.
-CONFIG_PATH_RULE = ("A config path is relative to the working directory; a bare name that is no file there "
-                    "(mb3, mb3.yaml) is a packaged config.")
-#: ... and for the acmm configs, which name other configs inside them.
-NESTED_PATH_RULE = ("A config a config names (sweep.base, schedule.to) is looked up beside the naming file, "
-                    "then in the working directory, then among the packaged configs.")
-
-_KIND_KEYS = {"sweep": ("sweep",), "qpp": ("plant", "nonlinearity", "hinf", "spheres")}
-
-
-def packaged_configs(package: str, kinds: tuple = ("acmm", "sweep", "qpp")) -> list[str]:
-    """Names of the packaged configs (the data package ``package``) of the given kinds, read from
-    the folder when called (so a help screen lists what is installed).
-
-    The kind is read from a config's top-level keys without parsing its YAML (``sweep:`` → sweep;
-    ``plant:``, ``nonlinearity:``, ``hinf:``, ``spheres:`` → qpp; otherwise an acmm run config),
-    as :func:`acmm_qpp.configio.detect_kind` decides it.
+class ConfigKinds(NamedTuple):
+    """A product's packaged configs and the kinds of config it tells apart by their top-level keys
+    (the base knows no kind: each product gives its own).
 
     Parameters
     ----------
     package : str
-        The data package of the packaged configs (``acmm.PACKAGED_CONFIGS``).
-    kinds : tuple of str, optional
-        Any of ``"acmm"``, ``"sweep"``, ``"qpp"``.
-
-    Returns
-    -------
-    list of str
-        Sorted names without ``.yaml``; empty when the folder cannot be read.
+        The data package of the product's packaged configs.
+    kinds : tuple
+        ``(kind, top-level keys)`` pairs: a config is of the first kind one of whose keys it has;
+        a pair with no keys takes any config.
+    path_rule : str, optional
+        How a command finds a config it is given, as the product's help states it.
     """
-    out = []
-    try:
-        files = sorted(resources.files(package).iterdir(), key=lambda p: p.name)
-        for f in files:
-            if not f.name.endswith(".yaml"):
-                continue
-            top = set(re.findall(r"^([A-Za-z_]\w*)\s*:", f.read_text(encoding="utf-8"), flags=re.M))
-            kind = next((k for k, keys in _KIND_KEYS.items() if top & set(keys)), "acmm")
-            if kind in kinds:
-                out.append(f.name[:-5])
-    except (OSError, ModuleNotFoundError):  # pragma: no cover (a broken installation)
-        return []
-    return out
+
+    package: str
+    kinds: tuple
+    path_rule: str = ""
+
+    def kind_of(self, data: object) -> str:
+        """The kind of a parsed config (empty when none of :attr:`kinds` takes it).
+
+        Parameters
+        ----------
+        data : object
+            Parsed YAML (a mapping; anything else has no keys).
+
+        Returns
+        -------
+        str
+            The kind.
+        """
+        top = set(data) if isinstance(data, dict) else set()
+        return next((kind for kind, keys in self.kinds if not keys or top & set(keys)), "")
+
+    def packaged(self, wanted: tuple) -> list[str]:
+        """Names of the packaged configs of the ``wanted`` kinds, read from the folder when called
+        (a help screen lists what is installed), each kind read from the file's top-level keys
+        without parsing its YAML.
+
+        Parameters
+        ----------
+        wanted : tuple of str
+            Kinds of :attr:`kinds`.
+
+        Returns
+        -------
+        list of str
+            Sorted names without ``.yaml``; empty when the folder cannot be read.
+        """
+        out = []
+        try:
+            for f in sorted(resources.files(self.package).iterdir(), key=lambda p: p.name):
+                if f.name.endswith(".yaml"):
+                    top = re.findall(r"^([A-Za-z_]\w*)\s*:", f.read_text(encoding="utf-8"), flags=re.M)
+                    if self.kind_of(dict.fromkeys(top)) in wanted:
+                        out.append(f.name[:-5])
+        except (OSError, ModuleNotFoundError):  # pragma: no cover (a broken installation)
+            return []
+        return out
 
 
-def help_command(examples: list, kinds: tuple = (), package: str | None = None):
+def help_command(examples: list, kinds: tuple = (), configs: ConfigKinds | None = None):
     """A typer command class whose help ends with ``examples`` (one command line each, kept as
     written) and, for ``kinds``, the packaged configs of those kinds listed from the folder at
-    help time and the rule by which config paths are found (:data:`CONFIG_PATH_RULE`,
-    :data:`NESTED_PATH_RULE`).
+    help time and the product's rule by which config paths are found (:class:`ConfigKinds`).
 
     Parameters
     ----------
     examples : list of str
         Command lines, each shown on a line of its own under ``Examples:``.
     kinds : tuple of str, optional
-        Config kinds the command reads (:func:`packaged_configs`); empty: no config list.
-    package : str, optional
-        The data package of the packaged configs listed for ``kinds``.
+        Config kinds the command reads (:meth:`ConfigKinds.packaged`); empty: no config list.
+    configs : ConfigKinds, optional
+        The product's packaged configs and kinds, listed for ``kinds``.
 
     Returns
     -------
@@ -256,12 +225,11 @@ def help_command(examples: list, kinds: tuple = (), package: str | None = None):
                     formatter.write(f"{'':>{formatter.current_indent}}{line}\n")
             if kinds:
                 formatter.write_paragraph()
-                names = packaged_configs(package, tuple(kinds))
+                names = configs.packaged(tuple(kinds))
                 formatter.write_text(f"Packaged configs ({', '.join(kinds)}; give the name instead of a file): "
                                      + (", ".join(names) if names else "none installed"))
                 formatter.write_paragraph()
-                nested = {"acmm", "sweep"} & set(kinds)
-                formatter.write_text(CONFIG_PATH_RULE + (" " + NESTED_PATH_RULE if nested else ""))
+                formatter.write_text(configs.path_rule)
             super().format_epilog(ctx, formatter)
 
     WithExamples.examples = list(examples)
@@ -317,10 +285,10 @@ class ExitCodeGroup(TyperGroup):
 
     #: command lines shown under ``Examples:`` at the end of the app's help
     examples: tuple = ()
-    #: config kinds whose packaged configs the app's help lists (:func:`packaged_configs`)
+    #: config kinds whose packaged configs the app's help lists (:meth:`ConfigKinds.packaged`)
     config_kinds: tuple = ()
-    #: the data package of those packaged configs
-    config_package: str = ""
+    #: the product's packaged configs and kinds (:class:`ConfigKinds`)
+    configs: ConfigKinds | None = None
 
     def format_epilog(self, ctx, formatter) -> None:
         """Write the app's examples and packaged configs (listed from the folder), then its epilog.
@@ -341,7 +309,7 @@ class ExitCodeGroup(TyperGroup):
         if self.config_kinds:
             formatter.write_paragraph()
             formatter.write_text(f"Packaged configs (give the name instead of a file): "
-                                 + ", ".join(packaged_configs(self.config_package, tuple(self.config_kinds))))
+                                 + ", ".join(self.configs.packaged(tuple(self.config_kinds))))
         super().format_epilog(ctx, formatter)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):

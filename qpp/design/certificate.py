@@ -86,6 +86,9 @@ class DesignResult:
         The outcome in words.
     limiting : str
         Why an uncertified design fails (:func:`qpp.design.procedure.limiting_factor`).
+    hint : str
+        Which settings to change for a certificate (:func:`qpp.design.procedure.limiting_factor`;
+        empty when certified or when none is known to help).
     ws_scale : list of float
         Weights w of W_s = diag(w)·S_c of the gains, dimensionless.
     hinf_history : list of dict
@@ -137,6 +140,7 @@ class DesignResult:
     certified: bool = False           #: β1 ≤ m (bookkeeping, bz) and circle criterion
     verdict: str = ""
     limiting: str = ""
+    hint: str = ""
     ws_scale: list = field(default_factory=list)   #: W_s = diag(w)·S_c of the gains
     hinf_history: list = field(default_factory=list)  #: ch. 11 passes (ρ, ν, δ, tests)
     published: "DesignResult | None" = None  #: certificate of the printed gains (report examples)

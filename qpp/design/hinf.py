@@ -25,6 +25,9 @@ from acmm_qpp.errors import ConvergenceError, DesignError
 from qpp.model.lure import LurePlant, augmented, closed_loop
 from qpp.design.spheres import hinf_norm
 
+#: The hint of a failed H∞ Riccati equation: which settings of the qpp config to change.
+RICCATI_HINT = "change hinf.rho or hinf.nu (larger values relax the H∞ problem), or set hinf.search: true"
+
 
 @dataclass
 class HinfGains:
@@ -130,13 +133,15 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
     try:
         k = sla.solve_continuous_are(Ab, Bcomb, Q, R)
     except (np.linalg.LinAlgError, ValueError) as exc:
-        raise DesignError(f"Riccati 11.1 has no stabilizing solution at rho={rho:g}, nu={nu:g}: {exc}") from None
+        raise DesignError(f"Riccati 11.1 has no stabilizing solution at rho={rho:g}, nu={nu:g}: {exc}",
+                          hint=RICCATI_HINT) from None
     k = 0.5 * (k + k.T)
     res_k = _rel_res(Ab.T @ k + k @ Ab + k @ (Ga @ Ga.T / nu ** 2 - Ba @ Ba.T / rho ** 2) @ k + Q, k)
     if not np.all(np.isfinite(k)) or res_k > 1e-6:
-        raise ConvergenceError(f"Riccati 11.1 residual {res_k:.1e} too large at rho={rho:g}, nu={nu:g}")
+        raise ConvergenceError(f"Riccati 11.1 residual {res_k:.1e} too large at rho={rho:g}, nu={nu:g}",
+                               hint=RICCATI_HINT)
     if strict and np.linalg.eigvalsh(k).min() < -1e-9 * max(1.0, np.abs(k).max()):
-        raise DesignError(f"Riccati 11.1 solution is not k ≥ 0 at rho={rho:g}, nu={nu:g} (step 4)")
+        raise DesignError(f"Riccati 11.1 solution is not k ≥ 0 at rho={rho:g}, nu={nu:g} (step 4)", hint=RICCATI_HINT)
     K = -Ba.T @ k / rho ** 2
     n = P.n
     h, res_h = _filter_riccati(P, a)
@@ -168,7 +173,8 @@ def _filter_riccati(P: LurePlant, a: float):
     try:
         h = sla.solve_continuous_are(Af.T, P.C.T, GG, np.eye(P.p))
     except (np.linalg.LinAlgError, ValueError) as exc:
-        raise DesignError(f"filter Riccati equation has no stabilizing solution: {exc}") from None
+        raise DesignError(f"filter Riccati equation has no stabilizing solution: {exc}",
+                          hint="change hinf.rho or hinf.nu, or set hinf.search: true") from None
     h = 0.5 * (h + h.T)
     return h, _rel_res(Af @ h + h @ Af.T - h @ P.C.T @ P.C @ h + GG, h)
 

@@ -440,8 +440,8 @@ def _score(res: DesignResult) -> tuple:
     return (not res.certified, not _meets(res), not res.circle.passed, res.lhs_ref / max(res.m_ref, 1e-300))
 
 
-def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
-    """Why the best design is not certified, in words and numbers.
+def limiting_factor(cfg: QppConfig, res: DesignResult) -> tuple[str, str]:
+    """Why the best design is not certified, in words and numbers, and which setting to change.
 
     Parameters
     ----------
@@ -452,14 +452,16 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
 
     Returns
     -------
-    str
+    text : str
         The failing condition (circle criterion, or β1 > m of eq 12.1 with its largest term).
+    hint : str
+        Which settings of the qpp config to change (empty when none is known to help).
     """
     sp = cfg.spheres
     worst = float(np.max(np.linalg.eigvals(res.Az["eq10.7"]).real))
     if worst >= 0:                  # nothing else matters: the loop of these gains diverges
         return (f"the closed loop of these gains is unstable (largest Re λ(A_z) = {worst:.4g} 1/s): β1 is "
-                f"infinite and no circle criterion holds")
+                f"infinite and no circle criterion holds", _UNSTABLE_HINT)
     if not res.circle.passed:
         c = res.circle
         if np.isnan(c.min_scale):
@@ -470,17 +472,17 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
             why = f"largest admissible sector scale {c.max_scale:.3g} < 1"
         else:
             why = f"admissible sector scales {c.min_scale:.3g} … {c.max_scale:.3g}, but not 1"
-        return f"circle criterion fails for every a tried ({why} at a = {res.a:g})"
+        return f"circle criterion fails for every a tried ({why} at a = {res.a:g})", _CIRCLE_HINT
     c = res.consistent
     failed = [k for k, (ok, _) in res.premises.items() if not ok]
     if "range" in failed:
-        return f"the output sphere leaves the range the sector holds on: {res.premises['range'][1]}"
+        return f"the output sphere leaves the range the sector holds on: {res.premises['range'][1]}", ""
     if "sector" in failed:
-        return f"phi is not proved to lie in the sector the certificate uses: {res.premises['sector'][1]}"
+        return f"phi is not proved to lie in the sector the certificate uses: {res.premises['sector'][1]}", ""
     if "slope" in failed:
-        return f"the slope bound of beta3 is not proved: {res.premises['slope'][1]}"
+        return f"the slope bound of beta3 is not proved: {res.premises['slope'][1]}", ""
     if "circle" in failed:
-        return f"the circle criterion is not proved: {res.premises['circle'][1]}"
+        return f"the circle criterion is not proved: {res.premises['circle'][1]}", _CIRCLE_HINT
     terms = {"β_i": c.beta_i, "β_o·β3": sp.beta_o * c.beta3, "β4": c.beta4}
     dom = max(terms, key=terms.get)
     lead = ("β1 > m" if "contraction" in failed else
@@ -488,10 +490,20 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> str:
             f"sphere, 10.45)")
     txt = (f"{lead} (consistent reading): β1 = {float(res.beta1['eq10.7']['value']):.4g}, m = β_o/(β_i + β_o·β3 + β4) = {sp.beta_o:g}/("
            + " + ".join(f"{v:.4g}" for v in terms.values()) + f") = {c.m:.4g}, largest term {dom} = {terms[dom]:.4g}")
+    hint = ("widen spheres.beta_o, narrow spheres.beta_ri or the nonlinearity's parameter ranges, or allow a "
+            "smaller design.rho_min (with design.wider_search)" if "contraction" in failed else "")
     if c.m < 1.0:
         txt += ("; m < 1 at this T while β1 ≥ 1 for a loop that tracks r_o (gain 1 at the servo "
                 "frequencies)")
-    return txt
+        hint = "no tracking loop meets these spheres: widen spheres.beta_o or narrow spheres.beta_ri"
+    return txt, hint
+
+
+#: The hint of gains whose closed loop is unstable.
+_UNSTABLE_HINT = "these gains do not stabilize the plant: let the procedure find gains (design.gains: design)"
+#: The hint of a circle criterion that fails: which settings of the qpp config to change.
+_CIRCLE_HINT = ("narrow the nonlinearity's sector (its parameter ranges or y_range), or widen the search of a "
+                "(design.a_min, design.a_max)")
 
 
 def design(cfg: QppConfig) -> DesignResult:
@@ -536,7 +548,8 @@ def design(cfg: QppConfig) -> DesignResult:
     if res is None:
         why = structural_obstacles(cfg.lure_plant())
         raise DesignError("procedure 12.1: no stabilizing H∞ gains for any rho, a or weight tried"
-                          + (f": {'; '.join(why)}" if why else ""))
+                          + (f": {'; '.join(why)}" if why else ""),
+                          hint="change hinf.rho or hinf.nu, or set hinf.search: true")
     res.iterations = proc.records
     res.hinf_history = proc.hist
     _finish(cfg, res)
@@ -557,7 +570,7 @@ def _finish(cfg: QppConfig, res: DesignResult) -> None:
                        f"a = {res.a:g}; the output sphere holds on [0, T], T = {res.T:.4g} s; {res.scope_text}")
         res.limiting = ""
     else:
-        res.limiting = limiting_factor(cfg, res)
+        res.limiting, res.hint = limiting_factor(cfg, res)
         res.verdict = (f"no certified design: best beta1 = {res.beta1_ref:.5g}, m = {c.m:.5g} "
                        f"(consistent), circle {'passed' if res.circle.passed else 'failed'}, "
                        f"limiting factor: {res.limiting}")

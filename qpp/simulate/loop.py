@@ -278,7 +278,9 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, div
         beyond = diverged_beyond if diverged_beyond is not None else failed_beyond
         stopped = beyond is not None and (sol.status == 1 or (not sol.success and peak > 1e-3 * beyond))
         if not sol.success and not stopped:
-            raise ConvergenceError(f"simulation failed at t = {sol.t[-1]:.4g} s: {sol.message}")
+            raise ConvergenceError(f"simulation failed at t = {sol.t[-1]:.4g} s: {sol.message}",
+                                   hint="the loop is stiff or escapes: check the gains, or loosen "
+                                        "simulation.rtol / simulation.atol")
         keep = np.isin(sol.t, t_eval[mask])
         got = sol.y[:, keep]
         zs.append(got)

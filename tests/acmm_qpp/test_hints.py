@@ -1,5 +1,5 @@
 """Hints attached to the error messages (acmm_qpp.hints): an unknown key's closest valid key (the
-numerical hints are each product's: tests/acmm/cli/test_hints.py)."""
+numerical hints are raised with their errors: tests/acmm_qpp/test_errors.py)."""
 from __future__ import annotations
 
 import pytest

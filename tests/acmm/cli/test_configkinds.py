@@ -48,8 +48,7 @@ def schemas():
 
 
 def test_every_packaged_config_validates_against_its_schema(schemas):
-    from acmm.cli.configkinds import load_any
-    from acmm_qpp.configio import detect_kind
+    from acmm.cli.configkinds import detect_kind, load_any
 
     paths = sorted(CONFIGS.glob("*.yaml"))
     assert len(paths) >= 9

@@ -8,7 +8,7 @@ import pytest
 import scipy.linalg as sla
 
 from acmm_qpp.errors import ConvergenceError
-from acmm.design.riccati import METHODS, care_residual, solve_care
+from acmm.design.riccati import METHODS, care_residual, other_method_hint, residual_hint, solve_care
 
 from tests.acmm.design.conftest import SB02PD_A, SB02PD_B, SB02PD_Q, SB02PD_X, _hamiltonian, _random_problem
 
@@ -222,3 +222,10 @@ def test_nearly_uncontrollable_claim1_model_solves_with_every_method(method):
     Rs = sla.solve_continuous_are(As, Bs, Q, R)              # scipy itself, unrefined, unchecked
     ref = np.linalg.solve(R, Bs.T @ Rs) / d[None, :]
     assert np.linalg.norm(r.K - ref) <= 1e-3 * np.linalg.norm(ref)
+
+
+def test_a_riccati_hint_never_suggests_the_method_that_failed():
+    for used in METHODS:
+        for hint in (other_method_hint(used), residual_hint(used)):
+            others = hint.split("riccati_method", 1)[1].split(";")[0]
+            assert used not in others and all(m in others for m in METHODS if m != used), hint

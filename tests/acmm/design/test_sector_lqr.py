@@ -164,6 +164,21 @@ def test_uncontrollable_pole_outside_sector_is_a_design_error():
         sector_lqr(A2, B2, 1e-4, N, method="uniform")
 
 
+def test_an_uncontrollable_pole_carries_a_hint_that_can_help():
+    """'lower design.sector.sigma' cannot help an uncontrollable pole at 0 or right of it (no sector
+    σ > 0 holds it); it can one at −0.2n (review). The hint is raised with the error, not matched on
+    its words."""
+    A, B = _random_plant(0, nx=9)
+    B2 = np.vstack([B, np.zeros((1, 3))])
+    for pole in (0.0, 0.2 * N):
+        with pytest.raises(DesignError, match="uncontrollable") as exc:
+            sector_lqr(sla.block_diag(A, np.array([[pole]])), B2, 1e-4, N)
+        assert "sigma" not in exc.value.hint and "design.drf_mode" in exc.value.hint
+    with pytest.raises(DesignError, match="uncontrollable") as away:
+        sector_lqr(sla.block_diag(A, np.array([[-0.2 * N]])), B2, 1e-4, N)
+    assert "lower design.sector.sigma" in away.value.hint
+
+
 def test_uncontrollable_pole_inside_sector_is_fine():
     A, B = _random_plant(1, nx=9)
     A2 = sla.block_diag(A, np.array([[-2 * N]]))

@@ -16,7 +16,7 @@ from tests.acmm.conftest import _sweep_yaml
 def test_the_resolved_sweep_it_writes_runs_again_as_the_same_sweep(tmp_path, name):
     """``runs/<name>/config.yaml`` (and sweep.h5's ``config``) of a sweep is a sweep config itself:
     the same results key and text, no base file needed; a bad one is one line."""
-    from acmm_qpp.configio import detect_kind
+    from acmm.cli.configkinds import detect_kind
 
     if name == "inline":                    # a sweep section inside a run config
         data = yaml.safe_load((CONFIGS / "mb3.yaml").read_text())
