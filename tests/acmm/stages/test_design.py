@@ -157,7 +157,7 @@ def test_quadratic_schedule_is_stable_along_the_whole_path(staircase_polynomial)
     assert _worst_on_own_blend(r, poly) <= -0.25
 
 
-@pytest.fixture(scope="module", params=["imperial", "SI"])
+@pytest.fixture(scope="module", params=["imperial", pytest.param("SI", marks=pytest.mark.slow)])
 def designed_staircase(request, tmp_path_factory):
     """(units, the stair-case's design.h5 written by `acmm design` in those units), once per module."""
     root = tmp_path_factory.mktemp(f"designed_{request.param}")
