@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from acmm.design.lmi_structure import Layout, StructuredKKT, Term, run_conelp
+from acmm.design.lmi_structure import Layout, StructuredKKT, Term, run_conelp, symmetric_places
 
 
 def chain_layout(levels: int, N: int) -> Layout:
@@ -43,8 +43,7 @@ def chain_layout(levels: int, N: int) -> Layout:
     acmm.design.lmi_structure.Layout
         Shapes, offsets and the duplication.
     """
-    i, j = np.triu_indices(N)
-    place, mirror = i * N + j, np.where(i == j, -1, j * N + i)
+    place, mirror = symmetric_places(N)
     names = [f"P{k}" for k in range(levels)]
     return Layout({v: (N, N) for v in names}, {v: k * N * N for k, v in enumerate(names)},
                   np.concatenate([k * N * N + place for k in range(levels)]),

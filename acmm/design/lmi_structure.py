@@ -179,6 +179,24 @@ class Layout:
         return out
 
 
+def symmetric_places(n: int) -> tuple:
+    """Where the upper triangle of a symmetric n × n matrix, row by row, sits in the matrix stored
+    whole (row by row): each entry's first place, and its mirror (−1 on the diagonal).
+
+    Parameters
+    ----------
+    n : int
+        Size.
+
+    Returns
+    -------
+    first, second : (n(n+1)/2,) int arrays
+        Flat indices into the n × n matrix.
+    """
+    i, j = np.triu_indices(n)
+    return i * n + j, np.where(i == j, -1, j * n + i)
+
+
 def layout(N: int, m: int) -> Layout:
     """The :class:`Layout` of a program with N states and m inputs.
 
@@ -195,13 +213,9 @@ def layout(N: int, m: int) -> Layout:
     shapes = {"Z": (N + m, N), "X2": (N, N), "W": (m, m)}
     offsets = dict(zip(VARIABLES, np.cumsum([0] + [r * c for r, c in shapes.values()])[:-1].tolist()))
 
-    def symmetric(n):
-        i, j = np.triu_indices(n)
-        return i * n + j, np.where(i == j, -1, j * n + i)
-
     nS, nY = N * (N + 1) // 2, m * N
-    fx, sx = symmetric(N)
-    fw, sw = symmetric(m)
+    fx, sx = symmetric_places(N)
+    fw, sw = symmetric_places(m)
     n_var = 2 * nS + nY + fw.size
     first, second = np.empty(n_var, int), np.empty(n_var, int)
     for var, idx, f, t in (("Z", np.r_[0:nS, 2 * nS:2 * nS + nY], np.r_[fx, N * N + np.arange(nY)],
