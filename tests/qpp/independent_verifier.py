@@ -41,7 +41,7 @@ import numpy as np
 import sympy
 from mpmath import iv
 from scipy.integrate import solve_ivp
-from scipy.linalg import expm
+from scipy.linalg import expm, matrix_balance
 
 
 # ----------------------------------------------------------------------------- norms
@@ -506,6 +506,11 @@ def nominal_bounds(Az, Br, z0, ro, T, *, cells=4096, stiff=0.5):
       exponential series from its second term on; ‖M‖ the spectral norm), so an output row c lies
       between the ends of c x_j + s c M x_j widened by ‖c‖₂‖ρ‖ (``box``).
 
+    All of this runs in the coordinates x = D x̃ of LAPACK's balancing (``scipy.linalg.matrix_balance``,
+    D diagonal with powers of 2, so the similarity is exact): a loop with large gains has ‖M‖ many
+    orders above its largest |eigenvalue| (ch. 13's certified design: 1e11 against 1e4), and the
+    cells the remainder needs follow ‖D⁻¹MD‖.
+
     Returns a dict: edges (K + 1,), x (n, K + 1) at the edges, and the functions ``box(Crow)`` →
     (lo, hi) per cell and ``integral(W)`` → ∫₀^{t_j} xᵀ W x at every edge (W on the loop's states)."""
     Az, Br = np.asarray(Az, float), np.atleast_2d(np.asarray(Br, float))
@@ -515,27 +520,32 @@ def nominal_bounds(Az, Br, z0, ro, T, *, cells=4096, stiff=0.5):
     x = np.asarray(z0, float)
     for t_a, t_b in zip(cuts[:-1], cuts[1:]):
         S, Q, w = _exo(ro, t_a, t_b)
-        M = np.block([[Az, Br @ Q], [np.zeros((S.shape[0], N)), S]])
+        M0 = np.block([[Az, Br @ Q], [np.zeros((S.shape[0], N)), S]])
+        M, (D, _) = matrix_balance(M0, permute=False, separate=True)       # M = D⁻¹ M0 D
         nM = float(np.linalg.norm(M, 2))
-        n = int(np.ceil(max((t_b - t_a) / (T / cells), (t_b - t_a) * nM / stiff) - 1e-9))
+        # as many cells as the unscaled norm asks where that is affordable (finer boxes), else as
+        # the balanced one asks
+        count = [int(np.ceil(max((t_b - t_a) / (T / cells), (t_b - t_a) * v / stiff) - 1e-9))
+                 for v in (float(np.linalg.norm(M0, 2)), nM)]
+        n = count[0] if count[0] <= 400_000 else count[1]
         if n > 400_000:
             raise ValueError("loop too stiff for the verifier's cells")
         h = (t_b - t_a) / n
         Phi = expm(M * h)
         X = np.empty((M.shape[0], n + 1))
-        X[:, 0] = np.concatenate([x[:N], w])
+        X[:, 0] = np.concatenate([x[:N], w]) / D
         for j in range(n):
             X[:, j + 1] = Phi @ X[:, j]
-        x = X[:N, -1]
-        segs.append((t_a, h, n, M, nM, X))
+        x = X[:N, -1] * D[:N]
+        segs.append((t_a, h, n, M, nM, X, D))
     edges = np.concatenate([[0.0]] + [t_a + h * np.arange(1, n + 1) for t_a, h, n, *_ in segs])
     edges[-1] = T
 
     def box(c):
         c = np.asarray(c, float)
         lo, hi = [], []
-        for t_a, h, n, M, nM, X in segs:
-            cx = np.concatenate([c, np.zeros(M.shape[0] - N)])
+        for t_a, h, n, M, nM, X, D in segs:
+            cx = np.concatenate([c, np.zeros(M.shape[0] - N)]) * D
             v0 = cx @ X[:, :-1]
             v1 = v0 + h * (cx @ M @ X[:, :-1])
             rem = np.linalg.norm(M @ X[:, :-1], axis=0) * (np.expm1(nM * h) - nM * h) / max(nM, 1e-300)
@@ -546,10 +556,10 @@ def nominal_bounds(Az, Br, z0, ro, T, *, cells=4096, stiff=0.5):
 
     def integral(W):
         out = [0.0]
-        for t_a, h, n, M, nM, X in segs:
+        for t_a, h, n, M, nM, X, D in segs:
             d = M.shape[0]
             Wx = np.zeros((d, d))
-            Wx[:N, :N] = W
+            Wx[:N, :N] = W * np.outer(D[:N], D[:N])
             F = expm(np.block([[-M.T, Wx], [np.zeros((d, d)), M]]) * h)
             G = F[d:, d:].T @ F[:d, d:]                                   # ∫₀^h e^{Mᵀs} W e^{Ms} ds
             G = 0.5 * (G + G.T)
@@ -557,7 +567,7 @@ def nominal_bounds(Az, Br, z0, ro, T, *, cells=4096, stiff=0.5):
             out.extend(out[-1] + np.cumsum(np.maximum(inc, 0.0)))
         return np.asarray(out) * (1 + 1e-9)
 
-    return {"edges": edges, "x": np.hstack([s[-1][:N, :-1] for s in segs] + [x[:, None]]), "box": box,
+    return {"edges": edges, "x": np.hstack([s[5][:N, :-1] * s[6][:N, None] for s in segs] + [x[:, None]]), "box": box,
             "integral": integral}
 
 

@@ -10,6 +10,7 @@ import warnings
 import numpy as np
 import pytest
 
+from acmm_qpp.results import read_h5
 from qpp.design.certificate import certify
 from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion, refine, resettle,
                                search, servo_frequencies, settle_exclusion, settle_line)
@@ -17,7 +18,7 @@ from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
 from qpp.model.lure import closed_loop
 from tests.qpp.conftest import _pub
-from tests.qpp.independent_verifier import hinf, l2_to_peak
+from tests.qpp.independent_verifier import hinf, l2_to_peak, verify
 
 
 def test_the_bounds_of_the_report_examples(siso, arm):
@@ -383,6 +384,15 @@ def test_a_design_of_the_family_is_certified_at_its_settling_time(siso, tmp_path
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(d))
     r = CliRunner().invoke(app, ["design", str(tmp_path / "c.yaml"), "--no-figures"])
     assert r.exit_code == 0 and "certified (one sector" in r.output, r.output
+    # the independent verifier (its cells in balanced coordinates: ‖A_z‖ ≈ 1e11, |λ| ≤ 1e4) agrees
+    # premise by premise, and every scenario stays in the output sphere on [0, T]
+    stored = read_h5(tmp_path / "runs" / d["name"] / "qpp_design.h5")
+    v = verify(d, stored)
+    assert v["certified"] and all(v["premises"].values()), v["premises"]
+    assert v["beta1"] == pytest.approx(stored["certificate"]["beta1"], rel=1e-6)
+    assert v["m"] == pytest.approx(stored["certificate"]["m"], rel=5e-4)
+    assert v["peak"] == pytest.approx(stored["certificate"]["peak_ratio"], rel=5e-4)
+    assert max(v["errors"].values()) <= d["spheres"]["beta_o"], v["errors"]
     # sampled 20 001 times, the loop settles at 0.036 s: there contraction and peak fail
     fine = np.linspace(0.0, 10.0, 20001)
     assert _settle(fine, _nominal(Az, Bz[:, :1], Cz, fine)) == pytest.approx(0.036)
