@@ -82,10 +82,8 @@ browser:
 	  echo "chromium not installed: the browser test will be skipped"
 
 bench: $(STAMP) bytecode
-	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench.py
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench.py --full
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python scripts/compare_riccati.py
-	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench_sweep.py
-	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench_ratios.py --full
 
 report: $(STAMP) bytecode
 	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/acmm report

@@ -29,16 +29,16 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import time  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from acmm.io.config import load_config
-from acmm_qpp.errors import ConvergenceError
-from acmm.model.linearize import linearize_config
-from acmm.design.sector_lqr import sector_lqr
-from acmm.design.riccati import care_condition, care_residual, scale_problem
-from acmm.design.riccati import solve_unverified
-from acmm.design.settings import design_settings
+from acmm.design.riccati import care_condition, care_residual, scale_problem, solve_unverified  # noqa: E402
+from acmm.design.sector_lqr import sector_lqr  # noqa: E402
+from acmm.design.settings import design_settings  # noqa: E402
+from acmm.io.config import load_config  # noqa: E402
+from acmm.model.linearize import linearize_config  # noqa: E402
+from acmm_qpp.errors import ConvergenceError  # noqa: E402
 
 SOLVERS = [("sign", {}), ("sign (polynomial eval.)", {"sign_evaluation": "polynomial"}),
            ("scipy", {}), ("slycot", {})]
@@ -58,18 +58,6 @@ def problems(name):
     As = m.A + alpha * np.eye(24)
     q0_phys = np.zeros((24, 24)) if q0 is None else q0 / d[:, None] / d[None, :]
     return d, R, {"step 1": (As, m.B, q0_phys), "final": (As, m.B, design.Q)}
-
-
-def conditions(repeat=1) -> str:
-    """κ_CARE (acmm.design.riccati.care_condition, scaled) of each problem, from scipy's solution."""
-    cells = []
-    for name in ("mb3", "ac"):
-        d, R, probs = problems(name)
-        for pname, (A, B, Q) in probs.items():
-            At, Bt, Qt = scale_problem(A, B, Q, d)
-            P, _ = solve_unverified(At, Bt, Qt, R, method="scipy")
-            cells.append(f"{name.upper()} {pname}: {care_condition(At, Bt, Qt, R, 0.5 * (P + P.T)):.1e}")
-    return "κ_CARE (scaled): " + "; ".join(cells)
 
 
 def measure(A, B, Q, R, d, scaled, solver, kw, repeat):
@@ -93,9 +81,10 @@ def measure(A, B, Q, R, d, scaled, solver, kw, repeat):
     return res, stable, float(np.median(times))
 
 
-def table(repeat=7) -> str:
-    cols = []
-    data = {}
+def table(repeat=7) -> tuple[str, str]:
+    """The Markdown table (residual / time per solver, states and problem), and the line of
+    κ_CARE (acmm.design.riccati.care_condition, scaled) of each problem from scipy's solution."""
+    cols, data, kappa = [], {}, []
     for name in ("mb3", "ac"):
         d, R, probs = problems(name)
         for pname, (A, B, Q) in probs.items():
@@ -104,21 +93,16 @@ def table(repeat=7) -> str:
             for solver, kw in SOLVERS:
                 for scaled in (True, False):
                     data[(solver, scaled, col)] = measure(A, B, Q, R, d, scaled, solver, kw, repeat)
-    head = "| solver | states | " + " | ".join(cols) + " |"
-    sep = "|---|---|" + "---|" * len(cols)
-    lines = [head, sep]
+            At, Bt, Qt = scale_problem(A, B, Q, d)
+            P, _ = solve_unverified(At, Bt, Qt, R, method="scipy")
+            kappa.append(f"{col}: {care_condition(At, Bt, Qt, R, 0.5 * (P + P.T)):.1e}")
+    lines = ["| solver | states | " + " | ".join(cols) + " |", "|---|---|" + "---|" * len(cols)]
     for solver, _kw in SOLVERS:
         for scaled in (True, False):
-            cells = []
-            for col in cols:
-                r = data[(solver, scaled, col)]
-                if r is None:
-                    cells.append("fail")
-                else:
-                    res, stable, t = r
-                    cells.append(f"{res:.1e}{'' if stable else ' !'} / {t * 1e3:.1f} ms")
+            cells = ["fail" if r is None else f"{r[0]:.1e}{'' if r[1] else ' !'} / {r[2] * 1e3:.1f} ms"
+                     for r in (data[(solver, scaled, col)] for col in cols)]
             lines.append(f"| {solver} | {'scaled' if scaled else 'unscaled'} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+    return "\n".join(lines), "κ_CARE (scaled): " + "; ".join(kappa)
 
 
 def main():
@@ -126,14 +110,13 @@ def main():
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--out", default=None, help="also write the table to this markdown file")
     a = ap.parse_args()
-    t = table(a.repeat)
+    t, kappa = table(a.repeat)
     print(t)
     print("\nrelative residual (acmm.design.riccati.care_residual, scaled coordinates) / median solve time;"
           " '!' = not stabilizing, 'fail' = no solution")
-    print(conditions())
+    print(kappa)
     if a.out:
-        with open(a.out, "w") as fh:
-            fh.write(t + "\n")
+        Path(a.out).write_text(t + "\n")
 
 
 if __name__ == "__main__":

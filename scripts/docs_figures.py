@@ -47,7 +47,6 @@ def provenance(root: Path, command: list, name: str) -> dict:
 
 
 def main() -> int:
-
     env = {**os.environ, "MPLBACKEND": "Agg", "OPENBLAS_NUM_THREADS": "1",
            "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))}
     IMG.mkdir(parents=True, exist_ok=True)

@@ -79,10 +79,6 @@ def version_cell(pins: list[dict]) -> str:
     return ", ".join(p["version"] + (f" on {_python_range(p['marker'])}" if p["marker"] else "") for p in pins)
 
 
-def _cells(line: str) -> list[str]:
-    return [c.strip() for c in line.strip().strip("|").split("|", 2)]
-
-
 def readme_table(text: str) -> tuple[int, int, dict[str, str]]:
     """Where README's dependency table lies (start, end offsets) and its reasons by package."""
     start = text.index(SECTION)
@@ -92,7 +88,7 @@ def readme_table(text: str) -> tuple[int, int, dict[str, str]]:
         end = text.index("\n", end) + 1
     reasons = {}
     for line in text[start:end].splitlines()[2:]:
-        cells = _cells(line)
+        cells = [c.strip() for c in line.strip().strip("|").split("|", 2)]
         reasons[canonicalize_name(cells[0].split()[0].strip("`"))] = cells[-1]
     return start, end, reasons
 

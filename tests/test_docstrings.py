@@ -65,7 +65,7 @@ NO_REPORT_CITATION = {module: reason for reason, modules in {
         acmm.sweep.output acmm.sweep.run acmm.sweep.executors acmm.sweep.chunking
         acmm.sweep.dask_settings""",
     "the report's machinery (document, figures, task graph, hashes, printed numbers): no mathematics":
-        """acmm.report.constants acmm.report.publish acmm.report.context acmm.report.document
+        """acmm.report.constants acmm.report.publish acmm.report.context acmm.report.document acmm.report.numbers
         acmm.report.figure_style acmm.report.manifest acmm.report.sections.determinism
         acmm.report.sections.printed acmm.report.sections.provenance acmm.report.runner
         acmm.report.ledger""",

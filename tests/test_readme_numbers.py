@@ -1,7 +1,8 @@
 """The numbers README.md and the guide quote about the packaged configs equal a fresh run.
 
 ``scripts/readme_numbers.py`` writes the ``<!-- generated:NAME -->`` blocks of README.md and of the
-guide's pages (``docs/**/*.md``, each block once across them) from the stages' results; here the same blocks are computed from a fresh run into a temporary results root
+guide's pages (``docs/**/*.md``, each block once across them) as the report computes them
+(:mod:`acmm.report.page_blocks`); here the same blocks are computed from a fresh run into a temporary results root
 (designs of mb3, mb3_decoupled, ac and the stair-case, their simulations, the qpp designs and
 simulations of the two report chapters and the three shipped examples, the 400-case
 ``sweep_inertia30`` Monte Carlo and margin search, once per module) and compared
@@ -16,6 +17,8 @@ import pytest
 
 from acmm.model import linearize as lin
 from acmm.model.tea import solve_tea_near
+from acmm.report.page_blocks import BLOCKS, compute_blocks
+from acmm.report.page_runs import run_stages
 from tests.conftest import REPO
 
 #: the tests that compare with a fresh run of every packaged config (several minutes): `make test-slow`, run by CI;
@@ -36,13 +39,14 @@ rn = _script()
 @pytest.fixture(scope="module")
 def stages(tmp_path_factory) -> dict:
     """The stages the blocks quote, run into an empty results root (:func:`run_stages`)."""
-    return rn.run_stages(tmp_path_factory.mktemp("readme-root"))
+    rn.use_this_trees_configs()
+    return run_stages(tmp_path_factory.mktemp("readme-root"))
 
 
 @pytest.fixture(scope="module")
 def fresh(stages) -> dict:
     """Every generated block, computed from the fresh stages."""
-    return rn.compute_blocks(stages)
+    return compute_blocks(stages)
 
 
 def texts() -> dict:
@@ -58,8 +62,8 @@ def _holding(all_texts: dict, name: str):
 @slow
 def test_readme_blocks_equal_a_fresh_run(fresh):
     """Every block the script writes is in README.md or docs/ exactly once and holds the fresh run's text."""
-    assert sorted(fresh) == sorted(rn.BLOCKS)
-    assert sorted(rn.locate_blocks(texts())) == sorted(rn.BLOCKS)
+    assert sorted(fresh) == sorted(BLOCKS)
+    assert sorted(rn.locate_blocks(texts())) == sorted(BLOCKS)
     assert rn.check(texts(), fresh) == []
 
 
@@ -90,21 +94,6 @@ def test_a_missing_block_fails(fresh):
     assert rn.check(lost, fresh) == ["sweep_margin: no <!-- generated:sweep_margin --> block in README.md or docs/"]
     with pytest.raises(ValueError, match="sweep_margin"):
         rn.replace_blocks(lost, fresh)
-
-
-@pytest.mark.parametrize("x, digits, text", [(3986.2, 3, "3 990"), (6644.9, 3, "6 640"), (0.03812, 3, "0.0381"),
-                                             (-1.964, 3, "\u22121.96"), (9.996, 3, "10.0"), (0.0495, 2, "0.050"),
-                                             (130.0, 3, "130")])
-def test_significant_digits(x, digits, text):
-    assert rn.sig(x, digits) == text
-
-
-def test_scientific_and_fixed():
-    assert rn.sci(48396.1) == "4.8e4"
-    assert rn.sci(2.43e-6) == "2.4e\u22126"
-    assert rn.fixed(-0.46802) == "\u22120.468"
-    assert rn.fixed(5.0916, 2, sign=True) == "+5.09"
-    assert rn.fixed(-0.0001) == "0.000"
 
 
 # ------------------------------------------------------------------ where blocks may live (no runs)

@@ -537,6 +537,30 @@ def _solve_by_continuation(inertia: np.ndarray, n: float, bias: np.ndarray) -> T
     return make_tea(theta, inertia, n, bias)
 
 
+def bias_fold(inertia: np.ndarray, n: float, bias: np.ndarray) -> float | None:
+    """Where :func:`solve_tea`'s continuation folds in the bias.
+
+    Parameters
+    ----------
+    inertia : (3, 3) array
+        Inertia matrix, slug·ft².
+    n : float
+        Orbital rate, rad/s.
+    bias : (3,) array
+        Body-frame bias torque, ft·lbf.
+
+    Returns
+    -------
+    float or None
+        The largest fraction λ of ``bias`` with an equilibrium on the branch the continuation
+        follows from LVLH (dimensionless, the fraction :class:`NoEquilibriumError` names), or None
+        when the continuation does not fold in the bias.
+    """
+    _, status, lam = _from_lvlh(np.ascontiguousarray(inertia, float), float(n), np.asarray(bias, float),
+                                RESIDUAL_TOL)
+    return float(lam) if status == 2 else None
+
+
 def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess: np.ndarray,
                    expected=None) -> TEA:
     """The equilibrium nearest a guess (rad) by damped Newton, e.g. along a continuation path.

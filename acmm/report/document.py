@@ -10,37 +10,14 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
-import numpy as np
-
 from acmm.report.constants import SECTIONS
 from acmm.report.ledger import STATUS_BOUND, STATUS_EXPLAINED, STATUS_MATCHED, STATUS_UNEXPLAINED
+from acmm.report.numbers import markdown_table
 
 
 def _css() -> str:
     """The page style sheet (``acmm/report/style.css``)."""
     return resources.files("acmm.report").joinpath("style.css").read_text(encoding="utf-8")
-
-
-def fmt_value(x, f="{:.4g}"):
-    """A number (or each of a sequence) as text in the report's tables, ``—`` for none.
-
-    Parameters
-    ----------
-    x : float, array_like or None
-        The value(s), in the units of the table's column.
-    f : str, optional
-        The format of one number.
-
-    Returns
-    -------
-    str
-        The text (``[a, b, …]`` for a sequence).
-    """
-    if x is None:
-        return "—"
-    if isinstance(x, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(fmt_value(v, f) for v in np.ravel(x)) + "]"
-    return f.format(float(x))
 
 
 # =============================================================================================
@@ -122,23 +99,6 @@ class Doc:
         self.blocks.append(("fig", stem, caption, files))
 
 
-def decoded(x) -> str:
-    """A name stored as bytes (HDF5) or str, as str.
-
-    Parameters
-    ----------
-    x : bytes, str or numpy scalar
-        The stored name.
-
-    Returns
-    -------
-    str
-        The name.
-    """
-    x = x.item() if hasattr(x, "item") else x
-    return x.decode() if isinstance(x, bytes) else str(x)
-
-
 def _md_cell(s: str) -> str:
     return str(s).replace("|", "\\|").replace("\n", " ")
 
@@ -170,10 +130,7 @@ def render_markdown(doc: Doc, title: str) -> str:
             _, header, rows, caption = b
             if caption:
                 out += [f"*{caption}*", ""]
-            out.append("| " + " | ".join(_md_cell(c) for c in header) + " |")
-            out.append("|" + "---|" * len(header))
-            out += ["| " + " | ".join(_md_cell(c) for c in r) + " |" for r in rows]
-            out.append("")
+            out += markdown_table([_md_cell(c) for c in header], [[_md_cell(c) for c in r] for r in rows]).split("\n")
         elif b[0] == "fig":
             _, stem, caption, files = b
             out += [f"![{caption}](figures/{stem}.png)", "",

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from acmm.report.constants import FAST_ORBITS
 import h5py
+import numpy as np
 from acmm_qpp.errors import OutputError, failure_line
 from acmm.io.config import load_config, parse_config
 from qpp.io.config import load_config as load_qpp_config, parse_config as parse_qpp_config
@@ -345,3 +346,30 @@ def ensure_qpp(cfg, stage: str, *, rerun: bool = False) -> StageRun:
     else:
         path = qst.run_simulate(cfg, figures=False)[3]
     return stage_record(f"qpp {stage}", cfg.name, path, chash, "", False, time.perf_counter() - t0)
+
+
+def qpp_scenarios(path: Path) -> dict:
+    """The scenarios of a ``qpp_sim.h5``: their errors and sphere verdicts (dataset attributes,
+    which :func:`acmm_qpp.results.read_h5` does not return).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The ``qpp_sim.h5`` file.
+
+    Returns
+    -------
+    dict
+        Scenario name (file order) → ``{"error_inf": float, "per_output": array, "passed": bool,
+        "beta_o": float, "gamma": float}`` (errors in the outputs' units; ``gamma`` NaN for a
+        scenario that sets an expression's parameters instead).
+    """
+    out = {}
+    with h5py.File(path, "r") as f:
+        for k in f:
+            if isinstance(f[k], h5py.Group) and "error_inf" in f[k]:
+                e = f[k]["error_inf"]
+                out[k] = {"error_inf": float(e[()]), "per_output": np.atleast_1d(f[k]["error_per_output"][()]),
+                          "passed": bool(e.attrs["passed"]), "beta_o": float(e.attrs["beta_o"]),
+                          "gamma": float(e.attrs.get("gamma", np.nan))}
+    return out

@@ -214,10 +214,10 @@ def _in_dask_worker() -> bool:
         return False
 
 
-def _warm_worker() -> None:
+def warm_worker() -> None:
     """Once per worker process: load the compiled kernels (from numba's cache: no compile) and
     in a Dask worker restore heap reuse (:func:`_restore_heap_reuse`); a long-lived Dask cluster can be warmed
-    ahead with ``client.run(acmm.sweep._warm_worker)``."""
+    ahead with ``client.run(acmm.sweep.executors.warm_worker)``."""
     global _WARM
     if not _WARM:
         if _in_dask_worker():        # only the nanny's environment needs it; the user's own
@@ -270,7 +270,7 @@ def call_chunk(chunk, ctx, code: Optional[str] = None) -> list[dict]:
     """
     if code is not None:
         same_code(code)
-    _warm_worker()
+    warm_worker()
     ctx = _local_context(ctx)
     return [_call(t, ctx) for t in chunk]
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm.report.context import SectionWriter
-from acmm.report.document import fmt_value
+from acmm.report.numbers import fmt_value
 from acmm.report.figures import fig_claim1
 
 

@@ -14,7 +14,7 @@ from acmm.design import matrix_sign as msign
 from acmm.design import riccati as ric
 from acmm_qpp.errors import AcmmError, ConvergenceError, NoEquilibriumError
 from acmm.report.context import SectionWriter
-from acmm.report.document import fmt_value
+from acmm.report.numbers import fmt_value
 from acmm.report.sections.claim1 import Claim1Numbers
 from acmm.report.sections.errata_qpp import qpp_rows
 from acmm.model import (controllability as ctrb_mod, dynamics as dyn, kinematics as kin, linearize as lin,

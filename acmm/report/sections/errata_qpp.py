@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from acmm.report.document import fmt_value
+from acmm.report.numbers import fmt_value
 
 
 def qpp_rows(s13, d13, a, beta3) -> list[list[str]]:

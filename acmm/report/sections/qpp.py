@@ -4,9 +4,10 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.report.context import SectionWriter
-from acmm.report.document import fmt_value
+from acmm.report.numbers import fmt_value
 from acmm.report.figures_qpp import fig_circle, fig_qpp
 from acmm.report.ledger import num_str, printed_str, matches_printed
+from acmm.report.stage_results import qpp_scenarios
 import h5py
 from qpp.design.hinf import hinf_gains
 from qpp.design import spheres
@@ -134,19 +135,15 @@ def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
 
 def _error_table(ctx: SectionWriter, chap: str, cfg, spath, printed_errors, out_labels) -> None:
     """Simulated tracking errors per scenario (``qpp_sim.h5``) and the printed ones in the ledger."""
-    with h5py.File(spath, "r") as f:
-        scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
-        erow = []
-        for k in scen:
-            e = float(f[k]["error_inf"][()])
-            per = np.atleast_1d(f[k]["error_per_output"][()])
-            pas = bool(f[k]["error_inf"].attrs["passed"])
-            erow.append([k, f"{float(f[k]['error_inf'].attrs['gamma']):g}", fmt_value(per, "{:.5f}"),
-                         f"{e:.5f}", f"{cfg.spheres.beta_o:g}", "within" if pas else "OUTSIDE"])
-            for (scn, i, pstr, bound, expl) in printed_errors:
-                if scn == k:
-                    ctx.ledger_add(f"ch. {chap}", f"‖y{i + 1} − y_o{i + 1}‖∞, {k}", pstr, per[i],
-                                   out_labels[i], bound=bound, explanation=expl)
+    erow = []
+    for k, s in qpp_scenarios(spath).items():
+        per = s["per_output"]
+        erow.append([k, f"{s['gamma']:g}", fmt_value(per, "{:.5f}"), f"{s['error_inf']:.5f}",
+                     f"{cfg.spheres.beta_o:g}", "within" if s["passed"] else "OUTSIDE"])
+        for (scn, i, pstr, bound, expl) in printed_errors:
+            if scn == k:
+                ctx.ledger_add(f"ch. {chap}", f"‖y{i + 1} − y_o{i + 1}‖∞, {k}", pstr, per[i],
+                               out_labels[i], bound=bound, explanation=expl)
     ctx.doc.table(["scenario", "γ / payload", "sup |y_i − y_oi| per output", "‖y − y_o‖∞", "β_o", "sphere"],
                   erow, f"Ch. {chap}: simulated tracking errors (nonlinear closed loop)")
 

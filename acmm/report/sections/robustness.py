@@ -4,9 +4,51 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.report.context import SectionWriter
-from acmm.report.document import fmt_value
+from acmm.report.numbers import decoded, fmt_value
 from acmm.report.figures import fig_robustness
 from acmm.report.ledger import STATUS_EXPLAINED, PrintedNumber
+
+
+def case_column(sweep: dict, label: str, key: str) -> np.ndarray:
+    """A text column of the cases of one base of a ``sweep.h5`` (ch. 7's Monte Carlo).
+
+    Parameters
+    ----------
+    sweep : dict
+        The ``sweep.h5`` as read by :func:`acmm_qpp.results.read_h5`.
+    label : str
+        The base's label (``mb3``, ``ac``, ...).
+    key : str
+        The column (``verdict``, ``reason``).
+
+    Returns
+    -------
+    str array
+        Its cases' texts, in case order.
+    """
+    names = [decoded(x) for x in np.atleast_1d(sweep["base_names"])]
+    column = np.array([decoded(x) for x in np.atleast_1d(sweep[key])])
+    return column[np.atleast_1d(sweep["base"]) == names.index(label)]
+
+
+def bounded_count(sweep: dict, label: str) -> tuple[int, int]:
+    """How many cases of one base of a ``sweep.h5`` stayed bounded and settled, of how many: the
+    count the report's robustness table and the README's claims table show.
+
+    Parameters
+    ----------
+    sweep : dict
+        The ``sweep.h5`` as read by :func:`acmm_qpp.results.read_h5`.
+    label : str
+        The base's label.
+
+    Returns
+    -------
+    tuple of int
+        (bounded cases, cases).
+    """
+    v = case_column(sweep, label, "verdict")
+    return int(np.sum(v == "bounded")), int(v.size)
 
 
 def build(ctx: SectionWriter) -> None:
@@ -29,8 +71,8 @@ def build(ctx: SectionWriter) -> None:
                                         STATUS_EXPLAINED, "not evaluated in this run: " + ctx.g.robustness_note))
         return
     d = r["data"]
-    names = [x.decode() if isinstance(x, bytes) else str(x) for x in np.atleast_1d(d["base_names"])]
-    verdict = np.array([x.decode() if isinstance(x, bytes) else str(x) for x in np.atleast_1d(d["verdict"])])
+    names = [decoded(x) for x in np.atleast_1d(d["base_names"])]
+    verdict = np.array([decoded(x) for x in np.atleast_1d(d["verdict"])])
     base = np.atleast_1d(d["base"])
     peak = np.degrees(np.atleast_2d(d["peak_attitude_error"]))   # stored in rad
     params = d["parameters"]
@@ -51,8 +93,8 @@ def build(ctx: SectionWriter) -> None:
     for k, lab in enumerate(names):
         sel = base == k
         v = verdict[sel]
-        nb = int(np.sum(v == "bounded"))
-        fracs[lab] = nb / max(1, v.size)
+        nb, nv = bounded_count(d, lab)
+        fracs[lab] = nb / max(1, nv)
         others = ", ".join(f"{x} {int(np.sum(v == x))}" for x in sorted(set(v)) if x != "bounded")
         pk = peak[sel][v == "bounded"]
         med = fmt_value(np.median(pk, axis=0), "{:.2f}") if pk.size else "—"
@@ -61,7 +103,7 @@ def build(ctx: SectionWriter) -> None:
         mg = d.get("margin", {})
         if f"{lab}_down" in mg and f"{lab}_up" in mg:
             lim = f"[{float(mg[f'{lab}_down']['limit']):.3f}, {float(mg[f'{lab}_up']['limit']):.3f}]"
-        rows.append([lab.upper(), f"{nb}/{v.size} ({100 * fracs[lab]:.0f} %)", others or "—", med, mx, lim or "—"])
+        rows.append([lab.upper(), f"{nb}/{nv} ({100 * fracs[lab]:.0f} %)", others or "—", med, mx, lim or "—"])
     ctx.doc.table(["base", "bounded", "other verdicts", "median peak |err| r/p/y (deg), bounded",
                    "max peak |err| r/p/y (deg), bounded", "uniform scaling s tolerated"], rows,
                    "±30 % inertia Monte Carlo with the fixed nominal designs")

@@ -7,7 +7,7 @@ from acmm.design.dwell import NOT_COVERED
 from acmm.design.regional_lmi import control_energy
 from acmm.model.state_scaling import torque_scale
 from acmm.report.context import SectionWriter
-from acmm.report.document import decoded
+from acmm.report.numbers import decoded
 from acmm.report.figures import fig_gain_schedule, fig_pole_maps
 from acmm.model import linearize as lin
 from acmm.plots import design as design_plots
@@ -93,6 +93,29 @@ def summary(ctx: SectionWriter) -> None:
         _dwell(ctx, d["dwell"], cfg.orbit_rate)
 
 
+def point_energy(p: dict, n: float) -> float:
+    """The control energy bound of one stored design point (``design.h5: points/<k>``), the
+    number the routes tables of the report and of the guide show
+    (:func:`acmm.design.regional_lmi.control_energy`, ch. 5.2's sector LQR or the LMI gain).
+
+    Parameters
+    ----------
+    p : dict
+        The point's datasets as read by :func:`acmm_qpp.results.read_h5` (``A``, ``B``, ``K``,
+        ``scales``).
+    n : float
+        Orbit rate, rad/s.
+
+    Returns
+    -------
+    float
+        The energy, in the units of :func:`acmm.design.regional_lmi.control_energy` (input
+        scaled, time in 1/n).
+    """
+    A, B, K, scales = (np.asarray(p[k]) for k in ("A", "B", "K", "scales"))
+    return control_energy(A, B, K, n, scales, torque_scale(scales))
+
+
 def routes(ctx: SectionWriter) -> None:
     """The packaged stair-case (its route, normally regional LMI points) beside the same
     stair-case on the report's route (sector LQR points), both table look-up schedules judged on
@@ -111,8 +134,7 @@ def routes(ctx: SectionWriter) -> None:
         d, sim = ctx.data("acmm design:" + cfg.name), ctx.data("acmm simulate:" + cfg.name)
         pts = [d["points"][k] for k in sorted(d["points"])]
         lmi = all("lmi" in p for p in pts)
-        energy = max(control_energy(p["A"], p["B"], p["K"], cfg.orbit_rate, p["scales"], torque_scale(p["scales"]))
-                     for p in pts)
+        energy = max(point_energy(p, cfg.orbit_rate) for p in pts)
         pa, g = d["schedule"].get("path", {}), d.get("dwell", {})
         tau = f"{float(g['tau_star']):.2f} orbit" if "tau_star" in g else "—"
         rows.append([("regional LMI points" if lmi else "sector LQR points") + f" (`{cfg.name}`"

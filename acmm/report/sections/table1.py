@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.report.context import SectionWriter
-from acmm.report.document import fmt_value
+from acmm.report.numbers import fmt_value
 from acmm.model import tea as tea_mod
 
 TABLE1_PRINTED = {
@@ -17,6 +17,26 @@ TABLE1_PRINTED = {
 
 #: the status of a Table 1 row that is an input of the configs (the inertias), not a computed number
 INPUT_STATUS = "input (the config's value; not counted as matched)"
+
+
+def table1_teas(cfg) -> tuple:
+    """A station's TEA with its config's bias and with zero bias (eqs 4.1–4.3), the numbers Table 1
+    and the README's Table 1 bullet show.
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The station's config (MB3 or AC).
+
+    Returns
+    -------
+    tuple
+        (:class:`acmm.model.tea.TEA` with the config's bias, TEA with zero bias, (3,) array bias
+        torque in ft·lbf); θ* in rad.
+    """
+    I = cfg.inertia.matrix()
+    bias = tea_mod.resolve_bias(cfg.disturbance, I, cfg.orbit_rate)
+    return tea_mod.solve_tea(I, cfg.orbit_rate, bias), tea_mod.solve_tea(I, cfg.orbit_rate, np.zeros(3)), bias
 
 
 def build(ctx: SectionWriter) -> dict:
@@ -50,10 +70,8 @@ def build(ctx: SectionWriter) -> dict:
             # numbers this run computes and matches
             rows.append([name.upper(), f"{key} (10⁶ slug·ft²)", pr[key], f"{I[i, j] / 1e6:.4g}", "—",
                          INPUT_STATUS])
-        bias = tea_mod.resolve_bias(cfg.disturbance, I, cfg.orbit_rate)
-        t = tea_mod.solve_tea(I, cfg.orbit_rate, bias)
-        t0 = tea_mod.solve_tea(I, cfg.orbit_rate, np.zeros(3))
-        teas[name] = (t, t0, bias)
+        teas[name] = table1_teas(cfg)
+        t, t0, _ = teas[name]
         for a in range(3):
             pn = ctx.ledger_add("Table 1", f"{name.upper()} θ{a + 1}*", pr["tea"][a], t.theta_deg[a], "deg")
             rows.append([name.upper(), f"θ{a + 1}* (deg)", pr["tea"][a], f"{t.theta_deg[a]:+.4f}",
