@@ -114,9 +114,11 @@ def block_qpp_certificates(r: dict) -> str:
         rows.append([f"`{name}`", rep, fixed(float(c["beta1"]), 4),
                      f"{fixed(float(c['m']), 4)} ({fixed(float(c['beta_i']), 4)}, {fixed(float(c['beta3']), 4)}, "
                      f"{fixed(float(c['beta4']), 4)})", fixed(float(c["peak_ratio"]), 3),
+                     f"{sig(float(d['T']))}, {sig(float(c['T_settle']))}",
                      "**certified** (0)" if ok else f"no certified design: {', '.join(failed)} fail (3)"])
     return markdown_table(["config", "report's bookkeeping (reproduction, not a certificate): m, β1 ≤ m",
-                           "consistent: β1", "m (β_i, β3, β4)", "γ∞·max E/m", "verdict (exit of `qpp design`)"], rows)
+                           "consistent: β1", "m (β_i, β3, β4)", "γ∞·max E/m",
+                           "T, nominal settling time (s)", "verdict (exit of `qpp design`)"], rows)
 
 
 def block_qpp_search(r: dict) -> str:

@@ -26,7 +26,7 @@ from acmm_qpp.errors import AcmmError
 from acmm_qpp.results import read_h5
 
 #: the qpp configs the pages quote: the report's two chapters and the three shipped examples
-QPP_CONFIGS = ("qpp_siso", "qpp_manipulator", "qpp_unstable", "qpp_saturation", "qpp_cubic2")
+QPP_CONFIGS = ("qpp_siso", "qpp_manipulator", "qpp_unstable", "qpp_saturation", "qpp_cubic2", "qpp_siso_certified")
 
 
 def run_stages(root: Path, workers: int | None = None) -> dict:

@@ -188,7 +188,7 @@ class _Procedure:
 
     # -- the loops -----------------------------------------------------------------
     def report_loop(self, ws=(1.0,), stage="12.1") -> DesignResult | None:
-        """Steps 1–5 of 12.1 from the configured ρ, a, T."""
+        """Steps 1–5 of 12.1 from the configured ρ, a, T and the output weight W_s = diag(ws)·S_c."""
         dc = self.dc
         rho, a, T = self.hc.rho, self.hc.a, self.cfg.spheres.T
         ws = np.asarray(ws, float)
@@ -540,7 +540,7 @@ def design(cfg: QppConfig) -> DesignResult:
         _finish(cfg, res)
         return res
     proc = _Procedure(cfg)
-    res = proc.report_loop()
+    res = proc.report_loop(ws=(hc.w,))
     if res is None and dc.wider_search and proc.best is not None:
         res = proc.wider()
     if res is None:

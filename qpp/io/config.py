@@ -57,6 +57,8 @@ class Hinf(SectionModel):
     nu: float = Field(1.0, gt=0, description="H∞ level ν of the scaling 11.3 (γ = ν)")
     weight: Literal["servo", "output"] = Field("servo", description="state weight [0 Cc] or printed [C 0]")
     observer: Literal["filter", "dgkf"] = Field("filter", description="observer gain formula")
+    w: float = Field(1.0, gt=0, description="output weight scale w in W_s = w·S_c of z = [ρ u; W_s e] "
+                                            "(13.5), dimensionless; the report uses 1")
     search: bool = Field(False, description="run the ch. 11 steps 1-8 search over ν and ρ")
 
 

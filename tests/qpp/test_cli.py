@@ -10,7 +10,10 @@ from typer.testing import CliRunner
 from acmm_qpp.errors import EXIT_NUMERICAL, EXIT_USAGE, EXIT_VERDICT, ConfigError
 from acmm_qpp.results import read_h5
 from qpp.cli import app
-from qpp.io.config import parse_config
+from qpp.design.family import REPORT_CERTIFIED
+from qpp.design.hinf import hinf_gains
+from qpp.design.procedure import weighted_plant
+from qpp.io.config import load_config, parse_config
 
 from tests.conftest import invoke
 
@@ -311,6 +314,12 @@ def test_the_verdict_names_what_is_proved_and_what_is_assumed(tmp_runs):
     assert a["verdict"].startswith("certified") and a["verdict"].endswith(a["scope"])
     verdict = next(ln.strip() for ln in r.output.splitlines() if ln.strip().startswith("certified"))
     assert verdict == a["verdict"]
+    # T (1 s) ends before the nominal loop settles: the output says the certificate covers [0, T] only
+    d = read_h5(tmp_runs / "runs" / "qpp_cubic2" / "qpp_design.h5")
+    T, Ts = float(d["T"]), float(d["certificate"]["T_settle"])
+    assert T == 1.0 and Ts > 1.1 * T
+    assert (f"note: T = {T:.4g} s ends before the nominal loop settles ({Ts:.4g} s): the certificate covers "
+            f"[0, T] only") in r.output, r.output
     r = runner.invoke(app, ["design", "qpp_siso", "--no-figures"])
     assert r.exit_code == EXIT_NUMERICAL, r.output
     with h5py.File(tmp_runs / "runs" / "qpp_siso" / "qpp_design.h5") as f:
@@ -319,3 +328,21 @@ def test_the_verdict_names_what_is_proved_and_what_is_assumed(tmp_runs):
         assert f.attrs["certified"] == 0
     assert verdict.startswith("no certified design") and "proved for" not in verdict
     assert "assumed:" not in verdict and "proved for" not in r.output
+
+
+def test_the_packaged_certified_ch13_design_is_certified_on_its_short_horizon(tmp_runs):
+    """qpp_siso_certified (issue 43): the family's design of qpp.design.family.REPORT_CERTIFIED
+    through procedure 12.1 with hinf.w, certified at T = 0.0125 s (exit 0), its gains those of
+    hinf_gains at the family's ρ, w, a, and the note that T ends before the loop settles."""
+    r = runner.invoke(app, ["design", "qpp_siso_certified", "--no-figures"])
+    assert r.exit_code == 0, r.output
+    d = read_h5(tmp_runs / "runs" / "qpp_siso_certified" / "qpp_design.h5")
+    assert d["attrs"]["certified"] == 1 and float(d["T"]) == 0.0125
+    rho, w, a = REPORT_CERTIFIED["qpp_siso"]
+    cfg = load_config("qpp_siso_certified")
+    assert (cfg.hinf.rho, cfg.hinf.w, cfg.hinf.a) == (rho, w, a)
+    g = hinf_gains(weighted_plant(cfg.lure_plant(), w), rho=rho, a=a)
+    for k, v in (("K1", g.K1), ("Kc", g.Kc), ("H", g.H)):
+        assert np.asarray(d[k]) == pytest.approx(np.asarray(v), rel=1e-9), k
+    Ts = float(d["certificate"]["T_settle"])
+    assert Ts > 2 * 0.0125 and f"ends before the nominal loop settles ({Ts:.4g} s)" in r.output, r.output

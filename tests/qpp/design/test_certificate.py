@@ -172,13 +172,13 @@ def _packaged(name):
 @pytest.mark.parametrize("name", [
     "qpp_siso", pytest.param("qpp_saturation", marks=pytest.mark.slow),
     pytest.param("qpp_unstable", marks=pytest.mark.slow), pytest.param("qpp_cubic2", marks=pytest.mark.slow),
-    pytest.param("qpp_manipulator", marks=pytest.mark.slow)])
+    pytest.param("qpp_manipulator", marks=pytest.mark.slow), pytest.param("qpp_siso_certified", marks=pytest.mark.slow)])
 def test_independent_verifier_agrees_on_every_packaged_config(tmp_path, name):
     """The tool's verdict and premises, β1 (1e-6), the proved m (5e-4), β3, β4 (1e-3: the arm's over
     its sphere too), γ∞·max E/m (5e-4) and γ∞ equal the independent verifier's; every scenario of a
     certified design stays inside its output sphere on [0, T]."""
     tool, _, _ = _verified(tmp_path, _packaged(name))
-    assert tool == (name in ("qpp_unstable", "qpp_saturation", "qpp_cubic2"))
+    assert tool == (name in ("qpp_unstable", "qpp_saturation", "qpp_cubic2", "qpp_siso_certified"))
 
 
 def test_a_stated_sector_narrower_than_phis_own_is_no_certificate(tmp_path):
