@@ -160,4 +160,5 @@ def test_report_examples_keep_published_gains_and_certify_printed_gains():
 def test_every_shipped_qpp_config_is_covered_by_a_design_test():
 
     shipped = {p.stem for p in (REPO / "configs").glob("qpp_*.yaml")}
-    assert shipped == set(NEW) | {"qpp_siso", "qpp_manipulator"}
+    # qpp_siso_certified: tests/qpp/test_cli.py (design, gains, note) and test_certificate.py (verifier)
+    assert shipped == set(NEW) | {"qpp_siso", "qpp_manipulator", "qpp_siso_certified"}
