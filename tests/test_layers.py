@@ -131,7 +131,7 @@ LAYERS = {
     "acmm.sweep": 2.1, "acmm.api": 2.1,
     "acmm.report": 3,
     "acmm.cli": 4, "qpp.cli": 4,
-    "acmm": 4, "qpp": 4,            # the packages' own __init__ (docstring and version)
+    "acmm": 4, "qpp": 4,            # the packages' own __init__ (docstring, version, constants)
 }
 
 
@@ -149,7 +149,7 @@ def test_every_module_has_a_layer():
 
 def upward_imports(graph: dict[str, set[str]]) -> list[str]:
     """The imports of a module of a higher layer by one of a lower layer (the packages' own
-    ``__init__``, which holds only the packaged-config names and the version, aside)."""
+    ``__init__``, which holds only the packaged-config names, the work limits and the version, aside)."""
     return [f"{m} (layer {layer(m)}) imports {d} (layer {layer(d)})"
             for m, deps in sorted(graph.items()) for d in sorted(deps)
             if layer(d) > layer(m) and d not in ("acmm", "qpp")]

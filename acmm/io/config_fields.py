@@ -14,11 +14,13 @@ from pydantic import BeforeValidator
 
 from acmm_qpp.config_model import StrictModel
 from acmm_qpp.quantity_fields import quantity, quantity_value
+from acmm.model.inertia import MAX_INERTIA
 
 
-#: |value| bound per dimension, canonical units (issue 13: no overflow accepted); see
-#: :data:`acmm_qpp.limits.PHYSICAL_MAX` for the reasoning.
-_RANGE = {"inertia": 1e13, "torque": 1e9, "momentum": 1e12, "angle": 3600.0, "rate": 1.0, "time": 1e9}
+#: |value| bound per dimension, canonical units (issue 13: no overflow accepted): beyond it a value
+#: is refused as a typo or an overflow hazard (bias torques are a few ft·lbf, CMG momentum ~1e4
+#: ft·lbf·s; the inertia's reasoning is :data:`acmm.model.inertia.MAX_INERTIA`'s).
+_RANGE = {"inertia": MAX_INERTIA, "torque": 1e9, "momentum": 1e12, "angle": 3600.0, "rate": 1.0, "time": 1e9}
 _CANON = {"inertia": "slug·ft²", "torque": "ft·lbf", "momentum": "ft·lbf·s", "angle": "deg", "rate": "rad/s",
           "time": "s"}
 

@@ -18,6 +18,7 @@ from acmm.sweep.case import BaseContext, margin_search, run_case
 from acmm_qpp.provenance import code_identity
 import ctypes
 from acmm_qpp.limits import limit
+from acmm import LIMITS
 from acmm.simulate.warmup import warm_up
 
 
@@ -80,7 +81,7 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
         except ImportError:
             raise ConfigError("--scheduler needs the optional Dask dependency: pip install 'acmm-qpp[dask]'") from None
 
-        timeout = f"{limit('DASK_CONNECT_SECONDS'):g}s"        # (its own error, not the address's)
+        timeout = f"{limit('DASK_CONNECT_SECONDS', LIMITS):g}s"        # (its own error, not the address's)
         try:
             client = distributed.Client(scheduler, timeout=timeout)
         except Exception as exc:  # noqa: BLE001 (tls:// without a context, ucx:// without ucx…: a bad address)
