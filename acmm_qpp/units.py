@@ -44,24 +44,6 @@ FT_LBF_IN_NM = 0.3048 * 4.4482216152605
 #: 1 slug·ft² in kg·m² (1 slug = 1 lbf·s²/ft, so slug·ft² = lbf·ft·s²).
 SLUG_FT2_IN_KGM2 = FT_LBF_IN_NM
 
-#: dimension kind -> the unit a bare number (and the internal value) is in.
-DIMENSIONS: dict[str, str] = {
-    "inertia": "slug*ft^2",
-    "torque": "ft*lbf",
-    "momentum": "ft*lbf*s",
-    "angle": "deg",
-    "angle_rad": "rad",
-    "rate": "rad/s",
-    "time": "s",
-    "weight_torque": "1/(ft*lbf)^2",
-    "frequency": "rad/s",
-    "inverse_time": "1/s",
-    "mass": "kg",
-    "length": "m",
-    "si_inertia": "kg*m^2",
-    "dimensionless": "1",
-}
-
 #: Output unit systems: imperial unit -> SI unit for each quantity kind that differs.
 SYSTEMS = ("imperial", "SI")
 _SI = {
@@ -131,28 +113,27 @@ def conversion_factor(unit: str, target: str) -> float:
         raise ValueError(f"unit {unit!r} is not a unit of {target} (wrong dimension)") from None
 
 
-def to_canonical(value: object, dimension: str) -> float:
-    """Convert a number or a ``"<number> <unit>"`` string to the dimension kind's unit
-    (:data:`DIMENSIONS`); a bare number is taken as already in that unit.
+def to_canonical(value: object, canonical: str) -> float:
+    """Convert a number or a ``"<number> <unit>"`` string to the unit ``canonical``; a bare number
+    is taken as already in that unit.
 
     Parameters
     ----------
     value : float or str
-        A number (in the dimension kind's unit) or a ``"<number> <unit>"`` string.
-    dimension : str
-        A key of :data:`DIMENSIONS`.
+        A number (in the unit ``canonical``) or a ``"<number> <unit>"`` string.
+    canonical : str
+        The field's unit, pint syntax (``"slug*ft^2"``, ``"rad/s"``, ``"1"`` for a pure number).
 
     Returns
     -------
     float
-        The value in the dimension kind's unit (:data:`DIMENSIONS`).
+        The value in the unit ``canonical``.
 
     Raises
     ------
     ValueError
         One line naming the unit and the expected one (pydantic adds the field name).
     """
-    canonical = DIMENSIONS[dimension]
     if isinstance(value, bool):
         raise ValueError("expected a number, got a boolean")
     if isinstance(value, (int, float)):
