@@ -21,7 +21,6 @@ from acmm.model.tea import solve_tea
 from acmm.stages.common import define_units, stored_in
 from dataclasses import replace
 from acmm_qpp.units import display_unit, shown
-from acmm_qpp.plot_style import stage_pyplot as _plt
 from functools import partial
 
 
@@ -289,9 +288,9 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
     """
     from matplotlib.ticker import MaxNLocator  # deferred: matplotlib start-up
 
-    from acmm.plots.base import write_figure  # deferred: matplotlib start-up
+    from acmm.plots.base import stage_pyplot, write_figure  # deferred: matplotlib start-up
 
-    plt = _plt()
+    plt = stage_pyplot()
     labels = [b.label for b in sweep.bases]
     names = list(a["parameters"])
     axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
