@@ -94,13 +94,6 @@ class ConfigError(AcmmError, ValueError):
     exit_code = EXIT_INPUT
 
 
-class UnknownPointError(ConfigError, KeyError, IndexError):
-    """A design point that a design does not have (by name or index, :mod:`acmm.api`); also a
-    KeyError and an IndexError, as a lookup in a list or mapping of the points would raise."""
-
-    __str__ = Exception.__str__
-
-
 class ConvergenceError(AcmmError, ArithmeticError):
     """A numerical solver did not converge or its result failed verification (exit 3)."""
 
