@@ -14,14 +14,13 @@ from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
 from acmm.sweep.chunking import Chunker
-from acmm.sweep.executors import (SerialExecutor, call_chunk, remote_contexts, scheduler_workers,
+from acmm.sweep.executors import (SerialExecutor, call_chunk, code_identity, remote_contexts, scheduler_workers,
                                   task_key, sweep_tasks, lost_worker, make_executor)
 from acmm.sweep.journal import GroupCommitJournal, read_journal
 from acmm_qpp.errors import ConfigError, OutputError
 from acmm_qpp.signals import interrupts_deferred
 from acmm_qpp.pool import submit
 from acmm.sweep.output import split_records, write_results
-from acmm_qpp.provenance import code_identity
 
 
 # ---------------------------------------------------------------------------------------------
