@@ -29,7 +29,6 @@ from typing import Any
 import h5netcdf
 import h5py
 import numpy as np
-import yaml
 
 from acmm_qpp.atomic_write import in_memory
 from acmm_qpp.errors import ConfigError, FigureError
@@ -210,9 +209,10 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
     attrs : mapping, optional
         Extra root attributes (e.g. a verdict).
     units : {"imperial", "SI"}, optional
-        Output unit system (``output.units``; default: read from ``config_text``, else
-        imperial).  Items are given in the report's units and converted on writing; angles
-        are stored in rad in both systems (:func:`acmm_qpp.units.output_unit`).
+        Output unit system (the config's ``output.units``), stored as the root attribute
+        ``unit_system``: items are given in the report's units and converted on writing, angles
+        stored in rad in both systems (:func:`acmm_qpp.units.output_unit`).  None: written as
+        given, no ``unit_system``.
     coords : mapping, optional
         Dimension name → its coordinate (a 1-D :class:`Dataset`), written in every group that
         has the dimension and no dataset of that name (e.g. the names of the body axes).
@@ -233,10 +233,10 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         An array without dimension names, or a dimension with two lengths in one group.
     """
     path = Path(path)
-    system = units or unit_system_of(config_text)
-    items = convert_items(items, system)
-    root = {"config": config_text, **provenance(config_text), **(attrs or {}), "unit_system": system,
-            "Conventions": CONVENTIONS}
+    if units is not None:
+        items = convert_items(items, units)
+    root = {"config": config_text, **provenance(config_text), **(attrs or {}),
+            **({} if units is None else {"unit_system": units}), "Conventions": CONVENTIONS}
     with in_memory(path) as buf:
         # invalid_netcdf: bool datasets (HDF5 enums, as h5py writes them), which the netCDF-C
         # library reads; track_order off: groups and attributes listed by name, as before
@@ -245,26 +245,6 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
                 h5.attrs[k] = _attr_value(v)
             _write_group(f, h5, items, coords or {}, tuple(aux_coords))
     return path
-
-
-def unit_system_of(config_text: str) -> str:
-    """``output.units`` of a resolved config text (``imperial`` when absent or unreadable).
-
-    Parameters
-    ----------
-    config_text : str
-        Resolved config, YAML.
-
-    Returns
-    -------
-    str
-        ``"imperial"`` or ``"SI"`` (whatever the config says).
-    """
-    try:       # libyaml's loader when PyYAML has it: the same objects, several times faster
-        data = yaml.load(config_text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
-        return str(((data or {}).get("output") or {}).get("units") or "imperial")
-    except (yaml.YAMLError, AttributeError):
-        return "imperial"
 
 
 def convert_items(items: Mapping[str, Any], system: str) -> dict:

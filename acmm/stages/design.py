@@ -290,7 +290,8 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
     items = define_units(in_system(items, cfg, roles), cfg.orbit_rate)
     write_h5(out / "design.h5", items, cfg.to_yaml(),
              {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
-              "schedule_form": r.table.form, "table_sha256": stored_table_digest(items, cfg.output.units)}, coords=COORDS)
+              "schedule_form": r.table.form, "table_sha256": stored_table_digest(items, cfg.output.units)}, cfg.output.units,
+             coords=COORDS)
     if want_figures:
         draw_figures(design_output.design_figures(r, s, out, cfg.output.units))
     return r, cfg.run_dir() / "design.h5"

@@ -99,7 +99,7 @@ def run_tea(config, all_roots: bool = False, *, out: Path) -> tuple[TeaResult, P
         items["other_roots"] = Dataset(np.array([o.theta for o in result.others]), "rad",
                                        "other equilibria found by multi-start Newton", AXES,
                                        dims=("root", "axis"))
-    write_h5(out / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"}, coords=COORDS)
+    write_h5(out / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"}, cfg.output.units, coords=COORDS)
     return result, cfg.run_dir() / "tea.h5"
 
 
@@ -188,5 +188,6 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     }
     items = in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
     write_h5(out / "linearize.h5", items, cfg.to_yaml(),
-             {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode}, coords=COORDS)
+             {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode}, cfg.output.units,
+             coords=COORDS)
     return result, cfg.run_dir() / "linearize.h5"

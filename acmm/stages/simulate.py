@@ -98,6 +98,6 @@ def run_simulate(config, progress=None, figures: bool | None = None, warn=None, 
     items, attrs = sim_output.sim_items(cfg, sc, r, stats, table.design_hash, wall)
     figures_to_draw = sim_output.sim_figures(cfg, sc, r, stats, items, out) if want_figures else []
     items = define_units(in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
-    write_h5(out / "sim.h5", items, cfg.to_yaml(), attrs, coords=COORDS, aux_coords=AUX_COORDS)
+    write_h5(out / "sim.h5", items, cfg.to_yaml(), attrs, cfg.output.units, coords=COORDS, aux_coords=AUX_COORDS)
     draw_figures(figures_to_draw)
     return result, cfg.run_dir() / "sim.h5"
