@@ -221,7 +221,7 @@ LAZY_IMPORTS = {
     ("acmm_qpp.errors", "numpy"): "the CLI sets its BLAS thread defaults before numpy is first imported",
     ("acmm_qpp.units", "pint"): "start-up: pint (~0.3 s) only when a unit is converted",
     ("acmm_qpp.cli.progress", "rich.console"): "start-up: rich only on a terminal",
-    ("acmm_qpp.cli.progress", "rich.progress"): "start-up: rich only on a terminal",
+    ("acmm.cli.steps", "rich.progress"): "start-up: rich only on a terminal",
     ("acmm_qpp.cli.plumbing", "importlib.metadata"): "start-up: the distribution's metadata for --version only",
 }
 #: At most this many import statements inside functions in the three packages.

@@ -16,7 +16,7 @@ import typer
 from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit,
                                    version_option)
 from acmm.cli.command import CONFIGS, acmm_command
-from acmm_qpp.cli.progress import Steps
+from acmm.cli.steps import Steps
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
 from acmm_qpp.units import shown
