@@ -33,7 +33,6 @@ import numpy as np
 from acmm_qpp.atomic_write import in_memory
 from acmm_qpp.errors import ConfigError, FigureError
 from acmm_qpp.provenance import provenance
-from acmm_qpp.units import to_system
 
 
 @dataclass
@@ -194,7 +193,7 @@ ROOT_PATTERN = r"^[^\x00]+$"
 
 
 def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
-             attrs: Mapping[str, Any] | None = None, units: str | None = None,
+             attrs: Mapping[str, Any] | None = None,
              coords: Mapping[str, Dataset] | None = None, aux_coords: tuple = ()) -> Path:
     """Write ``items`` (name → :class:`Dataset` or nested mapping) to ``path`` atomically.
 
@@ -208,11 +207,6 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         The resolved config as YAML; embedded as the root attribute ``config``.
     attrs : mapping, optional
         Extra root attributes (e.g. a verdict).
-    units : {"imperial", "SI"}, optional
-        Output unit system (the config's ``output.units``), stored as the root attribute
-        ``unit_system``: items are given in the report's units and converted on writing, angles
-        stored in rad in both systems (:func:`acmm_qpp.units.output_unit`).  None: written as
-        given, no ``unit_system``.
     coords : mapping, optional
         Dimension name → its coordinate (a 1-D :class:`Dataset`), written in every group that
         has the dimension and no dataset of that name (e.g. the names of the body axes).
@@ -233,10 +227,7 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         An array without dimension names, or a dimension with two lengths in one group.
     """
     path = Path(path)
-    if units is not None:
-        items = convert_items(items, units)
-    root = {"config": config_text, **provenance(config_text), **(attrs or {}),
-            **({} if units is None else {"unit_system": units}), "Conventions": CONVENTIONS}
+    root = {"config": config_text, **provenance(config_text), **(attrs or {}), "Conventions": CONVENTIONS}
     with in_memory(path) as buf:
         # invalid_netcdf: bool datasets (HDF5 enums, as h5py writes them), which the netCDF-C
         # library reads; track_order off: groups and attributes listed by name, as before
@@ -245,42 +236,6 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
                 h5.attrs[k] = _attr_value(v)
             _write_group(f, h5, items, coords or {}, tuple(aux_coords))
     return path
-
-
-def convert_items(items: Mapping[str, Any], system: str) -> dict:
-    """A copy of ``items`` with each dataset in its output unit (:func:`acmm_qpp.units.output_unit`):
-    deg → rad always, imperial → SI under ``SI``.  Units pint does not know are kept.
-
-    Parameters
-    ----------
-    items : Mapping
-        Dataset name → :class:`Dataset` or nested mapping.
-    system : str
-        Output unit system, ``"imperial"`` or ``"SI"``.
-
-    Returns
-    -------
-    dict
-        Same structure; float/complex datasets converted with their ``units`` updated.
-    """
-    out = {}
-    for key, value in items.items():
-        if isinstance(value, Mapping):
-            out[key] = convert_items(value, system)
-            continue
-        if not isinstance(value, Dataset):   # write_h5 reports it
-            out[key] = value
-            continue
-        data = value.data
-        if isinstance(data, str) or np.asarray(data).dtype.kind not in "fc":
-            out[key] = value
-            continue
-        try:
-            new, unit = to_system(np.asarray(data), value.units, system)
-        except ValueError:
-            new, unit = data, value.units
-        out[key] = value if unit == value.units else replace(value, data=new, units=unit)
-    return out
 
 
 def dimension_only(ds) -> bool:

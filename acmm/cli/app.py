@@ -19,7 +19,7 @@ from acmm.cli.command import CONFIGS, acmm_command
 from acmm.cli.steps import Steps
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
-from acmm_qpp.units import shown
+from acmm.model.unit_systems import shown
 
 class _AcmmGroup(ExitCodeGroup):
     """The ``acmm`` app: its help ends with examples and every packaged config."""

@@ -14,7 +14,7 @@ from acmm.plots.base import (AXES, FAST_TEXT_RC, bake_texts, compact_formatter, 
     in_view_ticks)
 from acmm.plots.base import stage_pyplot
 from acmm.plots.panel_grid import PanelGrid
-from acmm_qpp.units import pretty, shown
+from acmm.model.unit_systems import pretty, shown
 import matplotlib as mpl
 
 

@@ -20,7 +20,8 @@ from acmm.design.schedule_points import point_specs
 from acmm.model.tea import solve_tea
 from acmm.stages.common import define_units, stored_in
 from dataclasses import replace
-from acmm_qpp.units import display_unit, shown
+from acmm.io.units import convert_items
+from acmm.model.unit_systems import display_unit, shown
 from functools import partial
 
 
@@ -231,7 +232,8 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     attrs = _root_attrs(sweep, a, labels, len(rows), complete, wall_time)
     run_dir = sweep.run_dir()
     items = _orbit_defined(items, sweep)
-    path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units,
+    system = sweep.file.output.units
+    path = write_h5(run_dir / "sweep.h5", convert_items(items, system), sweep.to_yaml(), {**attrs, "unit_system": system},
                     coords=COORDS)
     _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []

@@ -342,12 +342,9 @@ def test_write_h5_refuses_arrays_without_their_dimensions(tmp_path, items, match
     assert list(tmp_path.iterdir()) == []
 
 
-def test_write_h5_converts_to_the_unit_system_it_is_given(tmp_path):
-    """``units`` converts the report's units and is recorded as ``unit_system``; without it the
-    items are written as given (the base reads no config key)."""
+def test_write_h5_writes_the_items_as_given(tmp_path):
+    """The base converts nothing and reads no config key: a product converts its items first
+    (acmm: :func:`acmm.io.units.convert_items`) and names its unit system in ``attrs``."""
     items = {"torque": Dataset(2.0, "ft*lbf"), "angle": Dataset(180.0, "deg")}
-    si = read_h5(write_h5(tmp_path / "si.h5", items, "name: x\n", units="SI"))
-    assert si["attrs"]["unit_system"] == "SI"
-    assert si["torque"] == pytest.approx(2.0 * 0.3048 * 4.4482216152605) and si["angle"] == pytest.approx(np.pi)
     plain = read_h5(write_h5(tmp_path / "plain.h5", items, "output: {units: SI}\n"))
     assert "unit_system" not in plain["attrs"] and plain["torque"] == 2.0 and plain["angle"] == 180.0
