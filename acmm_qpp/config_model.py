@@ -1,7 +1,7 @@
 """The strict pydantic base of every config section (acmm, sweep, qpp).
 
 Unknown keys, NaN and infinity are refused, the model is frozen, and a YAML boolean is not a
-number: pydantic's lax mode would read ``orbits: true`` as 1 orbit and ``sigma: false`` as 0,
+number: pydantic's lax mode would read ``count: true`` as 1 and ``rate: false`` as 0,
 so a boolean given where the field wants a number (or a list of numbers) is refused, naming
 the field.  Strict mode for the whole model is not used: it would also refuse YAML lists for
 tuple fields and plain strings for enum fields.
@@ -81,7 +81,7 @@ class StrictModel(BaseModel):
     @classmethod
     def _no_boolean_numbers(cls, data: Any) -> Any:
         # a model-level check: a field validator on every field would also wrap the ``kind``
-        # discriminator of the qpp nonlinearity union, which pydantic refuses
+        # discriminator of a tagged union (qpp's nonlinearity), which pydantic refuses
         if isinstance(data, dict):
             for name, field in cls.model_fields.items():
                 key = field.alias or name

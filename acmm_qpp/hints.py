@@ -1,9 +1,10 @@
 """Hints attached to user-facing error messages.
 
 * :func:`unknown_key_hint` — the closest valid key of the model at an error's location
-  ("did you mean `orbits`?", :mod:`difflib`), or the list of valid keys when none is close;
+  ("did you mean `x`?", :mod:`difflib`), or the list of valid keys when none is close;
 * :func:`prioritize` — the error to report first: an unknown key explains the "missing field"
-  errors it causes (``Ixx:`` instead of ``I11:`` is one typo, not six missing fields);
+  errors it causes (a misspelt key of a section is one typo, not a missing field for each of its
+  required ones);
 * :func:`missing_config_message` — a config that is neither a file nor a packaged name lists the
   packaged names (closest first).
 
@@ -183,7 +184,7 @@ def packaged_names(package: str) -> list[str]:
 
 
 def missing_config_message(path, package: str) -> str:
-    """``config file not found: x (not a packaged config either; did you mean `mb3`? packaged: ...)``.
+    """``config file not found: x (not a packaged config either; did you mean `y`? packaged: ...)``.
 
     Parameters
     ----------

@@ -139,7 +139,7 @@ def _array(value: Dataset):
     arr = np.asarray(data)
     if arr.dtype.kind in "OU":
         return _text(arr.astype(object)), h5py.string_dtype()
-    if arr.dtype.kind == "S":       # fixed-length text is UTF-8 (a sweep's reasons say ft·lbf)
+    if arr.dtype.kind == "S":       # fixed-length text is UTF-8 (a unit such as ft·lbf in it)
         dtype = h5py.string_dtype("utf-8", arr.dtype.itemsize)
         return arr.astype(dtype), dtype
     return arr, arr.dtype
@@ -183,7 +183,7 @@ def _write_group(group, h5group, items: Mapping[str, Any], coords: Mapping[str, 
             stored[k] = _attr_value(v)
 
 
-#: Run names (acmm, qpp and sweep configs, qpp scenarios): a single path component of letters,
+#: Run names (every config's, and the names a config gives its runs): a single path component of letters,
 #: digits, ``_ . -`` that does not start with a dot (so never ``.``/``..``/hidden), at most
 #: :data:`RUN_NAME_MAX` characters (room for the longest file name written inside it).
 RUN_NAME_PATTERN = r"^[A-Za-z0-9_-][A-Za-z0-9_.-]*$"
@@ -212,7 +212,7 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         has the dimension and no dataset of that name (e.g. the names of the body axes).
     aux_coords : tuple of str, optional
         Names of 1-D variables along the time dimension ``t`` listed in the CF ``coordinates``
-        attribute of every other variable along ``t`` of their group (e.g. ``("orbits",)``).
+        attribute of every other variable along ``t`` of their group (e.g. a time in other units).
 
     Returns
     -------

@@ -113,7 +113,7 @@ def overrides_arg(example: str):
     Parameters
     ----------
     example : str
-        One or two overrides, e.g. ``"design.sector.sigma=0.6"``.
+        One or two overrides of keys the command reads, e.g. ``"a.b=0.6"``.
 
     Returns
     -------
