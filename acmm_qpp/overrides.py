@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import copy
 import re
-from pathlib import Path
 
 import yaml
 
@@ -165,29 +164,6 @@ def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None)
             raise ConfigError(f"override {text}: {'.'.join(map(str, path[:-1]))}: cannot go inside a "
                               f"{type(node).__name__} value")
     return out
-
-
-def split_overrides(config, overrides) -> tuple[object, list[str]]:
-    """Separate a positional CONFIG that is really an override (``<command> a.b=1``, using the
-    packaged default) from the override list: returns (config or None, overrides).
-
-    Parameters
-    ----------
-    config : str or path-like or None
-        The positional CONFIG argument.
-    overrides : list of str or None
-        The KEY=VALUE arguments.
-
-    Returns
-    -------
-    tuple
-        (config, or None when it was an override and no such file exists; list of overrides).
-    """
-    overrides = list(overrides or [])
-    if config is not None and looks_like_override(str(config)):
-        if not Path(str(config)).exists():
-            return None, [str(config)] + overrides
-    return config, overrides
 
 
 def header(source: str | None, overrides: list[str] | None) -> str:

@@ -185,7 +185,6 @@ _MPL = "start-up: matplotlib only where figures are drawn"
 LAZY_IMPORTS = {
     ("acmm.cli.app", "acmm.cli.configkinds"): _CLI_START,
     ("acmm.cli.app", "acmm.io.config"): _CLI_START,
-    ("acmm.cli.app", "acmm_qpp.overrides"): "start-up: `--help` imports no pydantic or yaml",
     ("acmm.cli.app", "acmm.stages.runners"): _CLI_START,
     ("acmm.cli.app", "acmm.stages.design"): _CLI_START,
     ("acmm.cli.app", "acmm.stages.certify"): _CLI_START,

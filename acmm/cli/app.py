@@ -48,8 +48,7 @@ def _root(version: bool = version_option()) -> None:
 def _load(config, overrides):
     """The validated acmm config of CONFIG plus KEY=VALUE overrides (a CONFIG that is itself an
     override means: the packaged default with that override)."""
-    from acmm.io.config import load_config  # deferred: --help needs no numpy, scipy, pydantic
-    from acmm_qpp.overrides import split_overrides  # deferred: --help needs no pydantic, yaml
+    from acmm.io.config import load_config, split_overrides  # deferred: --help needs no numpy, scipy, pydantic
 
     return load_config(*split_overrides(config, overrides))
 
