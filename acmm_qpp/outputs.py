@@ -96,24 +96,6 @@ def remove_owned(run_dir, patterns: tuple) -> None:
     _remove(Path(run_dir), _owned(Path(run_dir), patterns))
 
 
-def write_config_yaml(run_dir, config) -> Path:
-    """Write ``<run_dir>/config.yaml`` (:func:`config_text_of`) atomically.
-
-    Parameters
-    ----------
-    run_dir : path-like
-        The run folder.
-    config : model
-        The resolved config.
-
-    Returns
-    -------
-    pathlib.Path
-        The file written.
-    """
-    return write_text(Path(run_dir) / CONFIG_FILE, config_text_of(config))
-
-
 def config_text_of(config=None, config_text: str | None = None) -> str:
     """The text of ``config.yaml``: the resolved config headed by its source and overrides.
 

@@ -150,23 +150,3 @@ def _check_angle(unit: str, canonical: str) -> None:
                          f"give rad/s, deg/s, rpm or cycle/s (1 Hz = 2π rad/s)")
     if canonical == "1" and radian_power(unit) != 0:
         raise ValueError(f"unit {unit!r} is an angle, but this value is a pure number")
-
-
-def convert(value, unit: str, target: str):
-    """``value`` (number or array) in ``unit`` expressed in ``target``.
-
-    Parameters
-    ----------
-    value : float or array
-        The value, in the unit ``unit``.
-    unit : str
-        Its unit.
-    target : str
-        The unit wanted.
-
-    Returns
-    -------
-    float or array
-        The value in the unit ``target``.
-    """
-    return value * conversion_factor(unit, target)

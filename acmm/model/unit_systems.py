@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from acmm_qpp.units import convert
+from acmm_qpp.units import conversion_factor
 
 #: 1 ft·lbf in N·m (exact by definition of the foot and the pound-force).
 FT_LBF_IN_NM = 0.3048 * 4.4482216152605
@@ -100,7 +100,7 @@ def to_system(value, unit: str, system: str = "imperial", display: bool = False)
         return value, unit
     if unit in ("deg", "deg/s") and not display:
         return value * (math.pi / 180.0), target
-    return convert(value, unit, target), target
+    return value * conversion_factor(unit, target), target
 
 
 def pretty(unit: str) -> str:

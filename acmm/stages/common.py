@@ -15,7 +15,7 @@ from dataclasses import replace
 from acmm.io.dimensions import COORDS
 from acmm.io.units import convert_items, state_factors, state_space_in
 from acmm_qpp.results import write_h5
-from acmm_qpp.units import convert
+from acmm_qpp.units import conversion_factor
 
 #: Units of the per-state arrays, element by element: ``state_units[i]`` is the unit of state
 #: ``i``, given by the dataset's ``state_units`` attribute (set by :func:`in_system`); under
@@ -184,4 +184,4 @@ def stored_in(f, key: str, unit: str) -> np.ndarray:
     stored = ds.attrs.get("units", unit)
     stored = stored.decode() if isinstance(stored, bytes) else str(stored)
     value = np.asarray(ds[()])
-    return value if stored == unit else convert(value, stored, unit)
+    return value if stored == unit else value * conversion_factor(stored, unit)

@@ -9,7 +9,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
-from acmm_qpp.outputs import remove_owned, stage, write_config_yaml
+from acmm_qpp.atomic_write import write_text
+from acmm_qpp.outputs import CONFIG_FILE, config_text_of, remove_owned, stage
 from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
@@ -216,7 +217,7 @@ def _start_afresh(sweep: Sweep, run_dir: Path) -> None:
     interrupted re-run with another seed left its results beside the earlier run's config.yaml
     and figures (a review)."""
     remove_owned(run_dir, OUTPUTS)
-    write_config_yaml(run_dir, sweep)
+    write_text(run_dir / CONFIG_FILE, config_text_of(sweep))
 
 
 class _Snapshots:
