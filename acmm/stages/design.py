@@ -143,7 +143,7 @@ def design_hash(cfg: Config) -> str:
     Returns
     -------
     str
-        :func:`acmm_qpp.results.config_hash` of those sections.
+        :func:`acmm_qpp.provenance.config_hash` of those sections.
     """
 
     d = cfg.model_dump(mode="json")
