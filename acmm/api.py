@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm.io.config import Config
-from acmm_qpp.errors import ConfigError, UnknownPointError
+from acmm_qpp.errors import ConfigError
 from acmm.io.config import load_config as _load_config
 from acmm.model import linearize as lin
 from acmm.stages.simulate import run_simulate
@@ -41,6 +41,13 @@ from acmm.model.linearize import DISTURBANCE_NAMES, INPUT_NAMES
 __all__ = ["load_config", "design", "simulate", "linearize", "Design"]
 
 V_NAMES = ["v1", "v2", "v3"]
+
+
+class UnknownPointError(ConfigError, KeyError, IndexError):
+    """A design point that a design does not have (by name or index); also a KeyError and an
+    IndexError, as a lookup in a list or mapping of the points would raise."""
+
+    __str__ = Exception.__str__
 
 
 def load_config(config: str | Path | Config | None = None) -> Config:

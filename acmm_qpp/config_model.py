@@ -1,7 +1,7 @@
 """The strict pydantic base of every config section (acmm, sweep, qpp).
 
 Unknown keys, NaN and infinity are refused, the model is frozen, and a YAML boolean is not a
-number: pydantic's lax mode would read ``orbits: true`` as 1 orbit and ``sigma: false`` as 0,
+number: pydantic's lax mode would read ``count: true`` as 1 and ``rate: false`` as 0,
 so a boolean given where the field wants a number (or a list of numbers) is refused, naming
 the field.  Strict mode for the whole model is not used: it would also refuse YAML lists for
 tuple fields and plain strings for enum fields.
@@ -21,25 +21,40 @@ _NUMBERS = (int, float, complex)
 BOOLEAN_AS_NUMBER = "boolean_as_number"
 
 
-def _kinds(annotation: Any) -> tuple[set, list]:
-    """(the scalar types ``annotation`` admits, the element annotations of its list/tuple
-    types), through ``Optional``/``Union``/``Annotated``."""
+def union_members(annotation: Any) -> list:
+    """The types an annotation can hold, with ``Optional``/``Union``/``Annotated`` removed.
+
+    Parameters
+    ----------
+    annotation : type or typing form
+        A field's annotation.
+
+    Returns
+    -------
+    list
+        The members, each a type or a generic alias (``list[float]``, ``dict[str, float]``…).
+    """
     origin = typing.get_origin(annotation)
     if origin is typing.Annotated:
-        return _kinds(typing.get_args(annotation)[0])
+        return union_members(typing.get_args(annotation)[0])
     if origin in (typing.Union, types.UnionType):
-        scalars, elements = set(), []
-        for arg in typing.get_args(annotation):
-            s, e = _kinds(arg)
-            scalars |= s
-            elements += e
-        return scalars, elements
-    if origin in (list, tuple, set, frozenset):
-        return set(), [a for a in typing.get_args(annotation) if a is not Ellipsis]
-    if origin is dict:                                 # the values' annotation
-        args = typing.get_args(annotation)
-        return set(), [args[1]] if len(args) == 2 else []
-    return ({annotation} if isinstance(annotation, type) else set()), []
+        return [x for arg in typing.get_args(annotation) for x in union_members(arg)]
+    return [annotation]
+
+
+def _kinds(annotation: Any) -> tuple[set, list]:
+    """(the scalar types ``annotation`` admits, the element annotations of its list/tuple
+    types, and the values' of its mappings)."""
+    scalars, elements = set(), []
+    for member in union_members(annotation):
+        origin, args = typing.get_origin(member), typing.get_args(member)
+        if origin in (list, tuple, set, frozenset):
+            elements += [a for a in args if a is not Ellipsis]
+        elif origin is dict:
+            elements += [args[1]] if len(args) == 2 else []
+        elif isinstance(member, type):
+            scalars.add(member)
+    return scalars, elements
 
 
 def boolean_as_number(annotation: Any, value: Any) -> bool:
@@ -81,7 +96,7 @@ class StrictModel(BaseModel):
     @classmethod
     def _no_boolean_numbers(cls, data: Any) -> Any:
         # a model-level check: a field validator on every field would also wrap the ``kind``
-        # discriminator of the qpp nonlinearity union, which pydantic refuses
+        # discriminator of a tagged union (qpp's nonlinearity), which pydantic refuses
         if isinstance(data, dict):
             for name, field in cls.model_fields.items():
                 key = field.alias or name

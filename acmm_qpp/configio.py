@@ -189,9 +189,9 @@ def packaged_config_path(name: str, package: str) -> Path:
 def read_yaml(path: str | Path, package: str) -> tuple[object, Path]:
     """Read a YAML config file; returns (data, path).
 
-    A bare name such as ``mb3`` or ``mb3.yaml`` that is not a file in the working directory (absent,
+    A bare name such as ``name`` or ``name.yaml`` that is not a file in the working directory (absent,
     or a folder: a results root holds run folders named like the configs) is looked up among the
-    packaged configs; a path (``./mb3``, ``dir/mb3.yaml``) is only ever that file.  Duplicate keys
+    packaged configs; a path (``./name``, ``dir/name.yaml``) is only ever that file.  Duplicate keys
     are rejected.
 
     Parameters
@@ -221,7 +221,7 @@ def read_yaml(path: str | Path, package: str) -> tuple[object, Path]:
             present = p.exists()
         except (OSError, ValueError) as exc:   # name too long, NUL byte, ...
             raise ConfigError(f"cannot read config file {str(path)[:200]}: {getattr(exc, 'strerror', None) or exc}") from None
-        # a bare name (``mb3``, not ``./mb3`` or ``dir/mb3``: Path drops the ``./``) that is not a
+        # a bare name (``name``, not ``./name`` or ``dir/name``: Path drops the ``./``) that is not a
         # file here (absent, or a folder such as a run folder named like it): a packaged config
         bare = len(p.parts) == 1 and not any(sep and sep in str(path) for sep in ("/", os.sep, os.altsep))
         if bare and (not present or p.is_dir()):
@@ -300,7 +300,7 @@ def read_regular_file(p: Path, what: str = "config", cap: int | None = None,
     p : Path
         The file.
     what : str, optional
-        What the file is, for the messages (``"config"``, ``"sweep journal"``).
+        What the file is, for the messages (``"config"``, a journal).
     cap : int, optional
         Largest size accepted, bytes (None: any size a regular file has).
     raise_how : str, optional

@@ -7,9 +7,9 @@ the ``hint`` it was raised with, :func:`with_hint`) and exit with the class's ``
 ====  =====================================================================================
 code  meaning
 ====  =====================================================================================
-0     success (a diverged run or a sector violation is a *result*: 0 unless ``--strict``)
-1     ``--strict``: the run finished but its verdict is a failure (diverged, outside the
-      output sphere, pole outside the sector, no certified design)
+0     success (a failing verdict is a *result*: 0 unless ``--strict``)
+1     ``--strict``: the run finished but its verdict is a failure (e.g. a diverged
+      simulation, a design without its certificate)
 2     bad input: config missing, unreadable, malformed, inconsistent or physically impossible;
       a bad command-line value
 3     numerical failure: a solver did not converge, a design cannot meet its specification
@@ -94,13 +94,6 @@ class ConfigError(AcmmError, ValueError):
     exit_code = EXIT_INPUT
 
 
-class UnknownPointError(ConfigError, KeyError, IndexError):
-    """A design point that a design does not have (by name or index, :mod:`acmm.api`); also a
-    KeyError and an IndexError, as a lookup in a list or mapping of the points would raise."""
-
-    __str__ = Exception.__str__
-
-
 class ConvergenceError(AcmmError, ArithmeticError):
     """A numerical solver did not converge or its result failed verification (exit 3)."""
 
@@ -117,7 +110,7 @@ class NoEquilibriumError(AcmmError):
 
 
 class DesignError(AcmmError):
-    """A control design cannot meet its specification, e.g. poles outside the sector (exit 3)."""
+    """A control design cannot meet its specification (exit 3)."""
 
     exit_code = EXIT_NUMERICAL
 

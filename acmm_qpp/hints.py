@@ -1,9 +1,10 @@
 """Hints attached to user-facing error messages.
 
 * :func:`unknown_key_hint` — the closest valid key of the model at an error's location
-  ("did you mean `orbits`?", :mod:`difflib`), or the list of valid keys when none is close;
+  ("did you mean `x`?", :mod:`difflib`), or the list of valid keys when none is close;
 * :func:`prioritize` — the error to report first: an unknown key explains the "missing field"
-  errors it causes (``Ixx:`` instead of ``I11:`` is one typo, not six missing fields);
+  errors it causes (a misspelt key of a section is one typo, not a missing field for each of its
+  required ones);
 * :func:`missing_config_message` — a config that is neither a file nor a packaged name lists the
   packaged names (closest first).
 
@@ -13,30 +14,21 @@ raises the error: it passes ``hint=`` to the error (:class:`acmm_qpp.errors.Acmm
 from __future__ import annotations
 
 import difflib
-import types
 import typing
 from importlib import resources
 from pathlib import Path
 
 from pydantic import BaseModel
 
+from acmm_qpp.config_model import union_members
+
 
 # ---------------------------------------------------------------------------------------------
 # unknown keys
 # ---------------------------------------------------------------------------------------------
-def _unwrap(tp) -> list:
-    """The types an annotation can hold, with Optional/Union/Annotated removed."""
-    origin = typing.get_origin(tp)
-    if origin is typing.Annotated:
-        return _unwrap(typing.get_args(tp)[0])
-    if origin is typing.Union or origin is types.UnionType:
-        return [x for a in typing.get_args(tp) for x in _unwrap(a)]
-    return [tp]
-
-
 def _step(tp, key):
     """The annotation reached from ``tp`` by one location element ``key`` (None if unknown)."""
-    for t in _unwrap(tp):
+    for t in union_members(tp):
         if isinstance(t, type) and issubclass(t, BaseModel):
             if isinstance(key, str) and key in t.model_fields:
                 return t.model_fields[key].annotation
@@ -48,7 +40,7 @@ def _step(tp, key):
         if origin is dict and len(args) == 2:
             return args[1]
     # a tagged-union tag in the location (pydantic puts the discriminator value there)
-    for t in _unwrap(tp):
+    for t in union_members(tp):
         if isinstance(t, type) and issubclass(t, BaseModel) and isinstance(key, str):
             f = t.model_fields.get("kind")
             if f is not None and typing.get_args(f.annotation) == (key,):
@@ -76,7 +68,7 @@ def model_at(model_cls: type, loc: tuple) -> type | None:
         tp = _step(tp, key)
         if tp is None:
             return None
-    models = [t for t in _unwrap(tp) if isinstance(t, type) and issubclass(t, BaseModel)]
+    models = [t for t in union_members(tp) if isinstance(t, type) and issubclass(t, BaseModel)]
     return models[0] if len(models) == 1 else None
 
 
@@ -183,7 +175,7 @@ def packaged_names(package: str) -> list[str]:
 
 
 def missing_config_message(path, package: str) -> str:
-    """``config file not found: x (not a packaged config either; did you mean `mb3`? packaged: ...)``.
+    """``config file not found: x (not a packaged config either; did you mean `y`? packaged: ...)``.
 
     Parameters
     ----------

@@ -11,13 +11,13 @@ longer exists or of a run with figures, cannot be mistaken for a result of this 
 fails or is interrupted, the staging folder is removed and the run folder is as it was; a folder
 left by a killed process is removed by the next run of that name (:func:`acmm_qpp.runlock.run_lock`).
 
-Files of other stages are left alone (``acmm simulate`` does not remove ``design.h5``; the sweep
-journal survives for ``--resume``).  When a stage run by this one (``acmm simulate`` → design)
-finished first, that stage's files stay with its new ``config.yaml``, and the earlier run's files
+Files of other stages are left alone (a stage does not remove the files of the stage it reads;
+a journal survives for ``--resume``).  When a stage run by this one (a simulation that designs
+first) finished first, that stage's files stay with its new ``config.yaml``, and the earlier run's files
 of the failed stage, which that ``config.yaml`` no longer describes, are removed.
 Two exceptions: a stage whose results are written and only a figure fails
 (:class:`acmm_qpp.errors.FigureError`, exit 4) finishes as above, results and ``config.yaml`` kept;
-and a stage declared with ``keep_partial`` (the sweep) writes into the run folder itself: its
+and a stage declared with ``keep_partial`` (acmm's sweep) writes into the run folder itself: its
 tables are snapshots of its journal that say whether they are complete, kept for ``--resume``.
 """
 from __future__ import annotations
@@ -94,24 +94,6 @@ def remove_owned(run_dir, patterns: tuple) -> None:
         Glob patterns of the stage's files.
     """
     _remove(Path(run_dir), _owned(Path(run_dir), patterns))
-
-
-def write_config_yaml(run_dir, config) -> Path:
-    """Write ``<run_dir>/config.yaml`` (:func:`config_text_of`) atomically.
-
-    Parameters
-    ----------
-    run_dir : path-like
-        The run folder.
-    config : model
-        The resolved config.
-
-    Returns
-    -------
-    pathlib.Path
-        The file written.
-    """
-    return write_text(Path(run_dir) / CONFIG_FILE, config_text_of(config))
 
 
 def config_text_of(config=None, config_text: str | None = None) -> str:

@@ -1,13 +1,12 @@
 """Command-line overrides in the dotted ``key=value`` style of Hydra / OmegaConf.
 
-``acmm simulate mb3 simulation.orbits=10 design.sector.sigma=0.6`` reads ``mb3``, sets the two
-values in the raw mapping and only then validates it, so an override is checked exactly like
-the same value written in the file (a misspelt key gets the file's "unknown key (did you mean
-…)" message).  Rules:
+A command given ``CONFIG a.b=1 c.d=0.6`` reads CONFIG, sets the two values in the raw mapping
+and only then validates it, so an override is checked exactly like the same value written in
+the file (a misspelt key gets the file's "unknown key (did you mean …)" message).  Rules:
 
 * ``a.b.c=value`` sets ``c`` inside ``a.b``; missing intermediate mappings are created (the
   file may rely on a section's defaults), an integer element addresses a list item
-  (``simulation.initial_offset.1=5``);
+  (``a.list.1=5``);
 * the value is parsed as YAML: ``10`` is an int, ``0.6`` a float, ``true`` a bool, ``null`` (or
   nothing after ``=``) is null, ``"2 N*m"`` or ``2 N*m`` a unit string, ``[0, 5, 0]`` a list;
 * ``~a.b`` removes ``b`` from ``a`` (back to its default).
@@ -19,7 +18,6 @@ from __future__ import annotations
 
 import copy
 import re
-from pathlib import Path
 
 import yaml
 
@@ -79,8 +77,8 @@ def parse_override(text: str) -> tuple[list, object, bool]:
     """
     text = str(text)
     if not looks_like_override(text):
-        raise OverrideSyntaxError(f"unexpected argument {text!r}: an override must read dotted.key=value (e.g. simulation.orbits=10) "
-                          "or ~dotted.key to remove a key")
+        raise OverrideSyntaxError(f"unexpected argument {text!r}: an override must read dotted.key=value "
+                                  "or ~dotted.key to remove a key")
     if text.startswith("~"):
         return [_part(p) for p in text[1:].split(".")], None, True
     key, _, raw = text.partition("=")
@@ -166,29 +164,6 @@ def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None)
             raise ConfigError(f"override {text}: {'.'.join(map(str, path[:-1]))}: cannot go inside a "
                               f"{type(node).__name__} value")
     return out
-
-
-def split_overrides(config, overrides) -> tuple[object, list[str]]:
-    """Separate a positional CONFIG that is really an override (``acmm simulate a.b=1``, using the
-    packaged default) from the override list: returns (config or None, overrides).
-
-    Parameters
-    ----------
-    config : str or path-like or None
-        The positional CONFIG argument.
-    overrides : list of str or None
-        The KEY=VALUE arguments.
-
-    Returns
-    -------
-    tuple
-        (config, or None when it was an override and no such file exists; list of overrides).
-    """
-    overrides = list(overrides or [])
-    if config is not None and looks_like_override(str(config)):
-        if not Path(str(config)).exists():
-            return None, [str(config)] + overrides
-    return config, overrides
 
 
 def header(source: str | None, overrides: list[str] | None) -> str:

@@ -1,11 +1,9 @@
-"""The one matplotlib style module of the project: backend, rcParams and colour cycle.
+"""The matplotlib set-up of the project: backend, the publication rcParams and colour cycle.
 
-Every figure (the stage figures of :mod:`acmm.plots` and :mod:`qpp.plots`, the sweep's, the
-report's through :mod:`acmm.report.figure_style`) gets ``matplotlib.pyplot`` from here, on the
-non-interactive Agg backend; nothing is shown on screen.  Two sets of rcParams exist so the
-existing figures stay as they were: :data:`RC` (publication style of ``acmm report``: Okabe–Ito
-colour-blind-safe cycle, light grids, no top/right spines) and :data:`STAGE_RC` (the stage
-figures: grid, 110 dpi, 9 pt).
+Every figure gets ``matplotlib.pyplot`` from here (:func:`agg_pyplot`), on the non-interactive
+Agg backend; nothing is shown on screen.  :data:`RC` and :data:`COLORS` are the publication style
+(Okabe–Ito colour-blind-safe cycle, light grids, no top/right spines, :func:`pyplot`); a
+product's stage figures keep a style of their own (acmm's ``acmm.plots.base.STAGE_RC``).
 """
 from __future__ import annotations
 
@@ -15,9 +13,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-#: Okabe–Ito colour-blind-safe palette (roll, pitch, yaw first).
+#: Okabe–Ito colour-blind-safe palette.
 COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#000000")
-AXIS_COLORS = dict(zip(("roll", "pitch", "yaw"), COLORS))
 
 #: rcParams of the report's figures.
 RC = {
@@ -38,12 +35,6 @@ RC = {
     "legend.frameon": False,
     "pdf.fonttype": 3,           # subsetted Type 3 fonts: small, fast, still vector text
 }
-
-#: rcParams of the stage figures (``acmm design|simulate``, the sweep); saved at the figure's own
-#: resolution also in a process that drew the report's figures (:data:`RC` sets ``savefig.dpi``)
-STAGE_RC = {"figure.dpi": 110, "savefig.dpi": "figure", "axes.grid": True, "grid.alpha": 0.3, "font.size": 9,
-            "axes.titley": 1.0}
-
 
 def files_only_backend() -> None:
     """The commands draw figures into files only: matplotlib's backend is Agg whatever
@@ -109,19 +100,6 @@ def agg_pyplot(force: bool = False):
     matplotlib.use("Agg", force=force)
     import matplotlib.pyplot as plt  # deferred: matplotlib start-up
 
-    return plt
-
-
-def stage_pyplot():
-    """``matplotlib.pyplot`` on the Agg backend with :data:`STAGE_RC` applied.
-
-    Returns
-    -------
-    module
-        ``matplotlib.pyplot``.
-    """
-    plt = agg_pyplot(force=True)
-    plt.rcParams.update(STAGE_RC)
     return plt
 
 

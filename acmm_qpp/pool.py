@@ -98,7 +98,7 @@ def _watch(parent: int, interval: float) -> None:
 
 def _pool_worker(parent: int, initializer=None, interval: float = 1.0) -> None:
     """A pool worker's set-up: Ctrl-C is the parent's alone; SIGTERM and SIGHUP take their default
-    action; the worker dies with ``parent`` (:func:`acmm_qpp.signals.die_with_parent`, and a watch
+    action; the worker dies with ``parent`` (:func:`die_with_parent`, and a watch
     thread polling every ``interval`` s where ``PR_SET_PDEATHSIG`` does not exist); then
     ``initializer()``."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -118,24 +118,3 @@ def source_unchanged() -> bool:
     """
     return git_commit() != "unknown" and _git_state()[1] is False
 
-
-_CODE: list = []
-
-
-def code_identity() -> str:
-    """The package version and a hash of the project's Python sources (``acmm``, ``common``,
-    ``qpp``), computed once per process: two processes with the same identity run the same code.
-
-    Returns
-    -------
-    str
-        ``<version>+<12 hex digits>``.
-    """
-    if not _CODE:
-        root = Path(__file__).resolve().parents[1]
-        h = hashlib.sha256()
-        for package in ("acmm", "common", "qpp"):
-            for f in sorted((root / package).rglob("*.py")):
-                h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
-        _CODE.append(f"{__version__}+{h.hexdigest()[:12]}")
-    return _CODE[0]

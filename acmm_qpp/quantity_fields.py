@@ -1,8 +1,8 @@
 """Config fields holding a physical quantity: a number, or a ``"<number> <unit>"`` string.
 
 The one pydantic before-validator of the acmm, sweep and qpp configs (:func:`quantity`): the
-value is converted (pint, :func:`acmm_qpp.units.to_canonical`) to the canonical unit of its
-dimension kind and must be finite; a config may add its own range check.
+value is converted (pint, :func:`acmm_qpp.units.to_canonical`) to the field's unit and must be
+finite; a config may add its own range check.
 """
 from __future__ import annotations
 
@@ -14,23 +14,23 @@ from pydantic import BeforeValidator
 from acmm_qpp.units import to_canonical
 
 
-def quantity_value(value: object, kind: str, check: Optional[Callable[[float, str], float]] = None) -> float:
-    """A number or ``"<number> <unit>"`` string in the canonical unit of ``kind``, checked finite.
+def quantity_value(value: object, unit: str, check: Optional[Callable[[float], float]] = None) -> float:
+    """A number or ``"<number> <unit>"`` string in the unit ``unit``, checked finite.
 
     Parameters
     ----------
     value : float or str
-        The value as written in the config (a bare number is in the canonical unit).
-    kind : str
-        Dimension kind, a key of :data:`acmm_qpp.units.DIMENSIONS`.
+        The value as written in the config (a bare number is in ``unit``).
+    unit : str
+        The field's unit, pint syntax (``"slug*ft^2"``, ``"s"``, ``"1"``).
     check : callable, optional
-        ``check(x, kind) -> x``: a further check of the converted value (e.g. a plausible
-        range), raising :class:`ValueError`.
+        ``check(x) -> x``: a further check of the converted value (e.g. a plausible range),
+        raising :class:`ValueError`.
 
     Returns
     -------
     float
-        The value in the canonical unit of ``kind`` (:data:`acmm_qpp.units.DIMENSIONS`).
+        The value in ``unit``.
 
     Raises
     ------
@@ -38,24 +38,24 @@ def quantity_value(value: object, kind: str, check: Optional[Callable[[float, st
         Not a number, a wrong or unknown unit, not finite, or refused by ``check`` (pydantic
         adds the field name).
     """
-    x = to_canonical(value, kind)
+    x = to_canonical(value, unit)
     if not math.isfinite(x):
         raise ValueError("must be a finite number")
-    return x if check is None else check(x, kind)
+    return x if check is None else check(x)
 
 
-def quantity(kind: str, check: Optional[Callable[[float, str], float]] = None, *,
+def quantity(unit: str, check: Optional[Callable[[float], float]] = None, *,
              allow_none: bool = False) -> BeforeValidator:
-    """The before-validator of a quantity field of dimension kind ``kind`` (:func:`quantity_value`).
+    """The before-validator of a quantity field in the unit ``unit`` (:func:`quantity_value`).
 
-    Use as ``Annotated[float, quantity("torque")]``.
+    Use as ``Annotated[float, quantity("s")]``.
 
     Parameters
     ----------
-    kind : str
-        Dimension kind, a key of :data:`acmm_qpp.units.DIMENSIONS`.
+    unit : str
+        The field's unit, pint syntax.
     check : callable, optional
-        ``check(x, kind) -> x``, a further check of the converted value.
+        ``check(x) -> x``, a further check of the converted value.
     allow_none : bool
         Pass ``None`` through unchanged (for optional fields); otherwise ``None`` is refused
         as not a number.
@@ -63,10 +63,10 @@ def quantity(kind: str, check: Optional[Callable[[float, str], float]] = None, *
     Returns
     -------
     pydantic.BeforeValidator
-        The validator, converting to the canonical unit of ``kind``.
+        The validator, converting to ``unit``.
     """
     def conv(v):
         if allow_none and v is None:
             return v
-        return quantity_value(v, kind, check)
+        return quantity_value(v, unit, check)
     return BeforeValidator(conv)

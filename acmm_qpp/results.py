@@ -29,12 +29,10 @@ from typing import Any
 import h5netcdf
 import h5py
 import numpy as np
-import yaml
 
 from acmm_qpp.atomic_write import in_memory
 from acmm_qpp.errors import ConfigError, FigureError
 from acmm_qpp.provenance import provenance
-from acmm_qpp.units import to_system
 
 
 @dataclass
@@ -141,7 +139,7 @@ def _array(value: Dataset):
     arr = np.asarray(data)
     if arr.dtype.kind in "OU":
         return _text(arr.astype(object)), h5py.string_dtype()
-    if arr.dtype.kind == "S":       # fixed-length text is UTF-8 (a sweep's reasons say ft·lbf)
+    if arr.dtype.kind == "S":       # fixed-length text is UTF-8 (a unit such as ft·lbf in it)
         dtype = h5py.string_dtype("utf-8", arr.dtype.itemsize)
         return arr.astype(dtype), dtype
     return arr, arr.dtype
@@ -185,7 +183,7 @@ def _write_group(group, h5group, items: Mapping[str, Any], coords: Mapping[str, 
             stored[k] = _attr_value(v)
 
 
-#: Run names (acmm, qpp and sweep configs, qpp scenarios): a single path component of letters,
+#: Run names (every config's, and the names a config gives its runs): a single path component of letters,
 #: digits, ``_ . -`` that does not start with a dot (so never ``.``/``..``/hidden), at most
 #: :data:`RUN_NAME_MAX` characters (room for the longest file name written inside it).
 RUN_NAME_PATTERN = r"^[A-Za-z0-9_-][A-Za-z0-9_.-]*$"
@@ -195,7 +193,7 @@ ROOT_PATTERN = r"^[^\x00]+$"
 
 
 def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
-             attrs: Mapping[str, Any] | None = None, units: str | None = None,
+             attrs: Mapping[str, Any] | None = None,
              coords: Mapping[str, Dataset] | None = None, aux_coords: tuple = ()) -> Path:
     """Write ``items`` (name → :class:`Dataset` or nested mapping) to ``path`` atomically.
 
@@ -209,16 +207,12 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         The resolved config as YAML; embedded as the root attribute ``config``.
     attrs : mapping, optional
         Extra root attributes (e.g. a verdict).
-    units : {"imperial", "SI"}, optional
-        Output unit system (``output.units``; default: read from ``config_text``, else
-        imperial).  Items are given in the report's units and converted on writing; angles
-        are stored in rad in both systems (:func:`acmm_qpp.units.output_unit`).
     coords : mapping, optional
         Dimension name → its coordinate (a 1-D :class:`Dataset`), written in every group that
         has the dimension and no dataset of that name (e.g. the names of the body axes).
     aux_coords : tuple of str, optional
         Names of 1-D variables along the time dimension ``t`` listed in the CF ``coordinates``
-        attribute of every other variable along ``t`` of their group (e.g. ``("orbits",)``).
+        attribute of every other variable along ``t`` of their group (e.g. a time in other units).
 
     Returns
     -------
@@ -233,10 +227,7 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         An array without dimension names, or a dimension with two lengths in one group.
     """
     path = Path(path)
-    system = units or unit_system_of(config_text)
-    items = convert_items(items, system)
-    root = {"config": config_text, **provenance(config_text), **(attrs or {}), "unit_system": system,
-            "Conventions": CONVENTIONS}
+    root = {"config": config_text, **provenance(config_text), **(attrs or {}), "Conventions": CONVENTIONS}
     with in_memory(path) as buf:
         # invalid_netcdf: bool datasets (HDF5 enums, as h5py writes them), which the netCDF-C
         # library reads; track_order off: groups and attributes listed by name, as before
@@ -245,62 +236,6 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
                 h5.attrs[k] = _attr_value(v)
             _write_group(f, h5, items, coords or {}, tuple(aux_coords))
     return path
-
-
-def unit_system_of(config_text: str) -> str:
-    """``output.units`` of a resolved config text (``imperial`` when absent or unreadable).
-
-    Parameters
-    ----------
-    config_text : str
-        Resolved config, YAML.
-
-    Returns
-    -------
-    str
-        ``"imperial"`` or ``"SI"`` (whatever the config says).
-    """
-    try:       # libyaml's loader when PyYAML has it: the same objects, several times faster
-        data = yaml.load(config_text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
-        return str(((data or {}).get("output") or {}).get("units") or "imperial")
-    except (yaml.YAMLError, AttributeError):
-        return "imperial"
-
-
-def convert_items(items: Mapping[str, Any], system: str) -> dict:
-    """A copy of ``items`` with each dataset in its output unit (:func:`acmm_qpp.units.output_unit`):
-    deg → rad always, imperial → SI under ``SI``.  Units pint does not know are kept.
-
-    Parameters
-    ----------
-    items : Mapping
-        Dataset name → :class:`Dataset` or nested mapping.
-    system : str
-        Output unit system, ``"imperial"`` or ``"SI"``.
-
-    Returns
-    -------
-    dict
-        Same structure; float/complex datasets converted with their ``units`` updated.
-    """
-    out = {}
-    for key, value in items.items():
-        if isinstance(value, Mapping):
-            out[key] = convert_items(value, system)
-            continue
-        if not isinstance(value, Dataset):   # write_h5 reports it
-            out[key] = value
-            continue
-        data = value.data
-        if isinstance(data, str) or np.asarray(data).dtype.kind not in "fc":
-            out[key] = value
-            continue
-        try:
-            new, unit = to_system(np.asarray(data), value.units, system)
-        except ValueError:
-            new, unit = data, value.units
-        out[key] = value if unit == value.units else replace(value, data=new, units=unit)
-    return out
 
 
 def dimension_only(ds) -> bool:

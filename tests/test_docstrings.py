@@ -71,6 +71,7 @@ NO_REPORT_CITATION = {module: reason for reason, modules in {
         acmm.report.ledger""",
     "command line: parses, calls and prints, no mathematics (the layer rule)": """acmm.cli
         acmm.cli.compile_note acmm.cli.redraw acmm.cli.command acmm.cli.configkinds acmm.cli.app acmm.cli.sweep acmm.cli.report
+        acmm.cli.steps
         qpp.cli acmm_qpp.cli.plumbing acmm_qpp.cli.progress acmm_qpp.cli.failures""",
 }.items() for module in modules.split()}
 

@@ -131,7 +131,7 @@ LAYERS = {
     "acmm.sweep": 2.1, "acmm.api": 2.1,
     "acmm.report": 3,
     "acmm.cli": 4, "qpp.cli": 4,
-    "acmm": 4, "qpp": 4,            # the packages' own __init__ (docstring and version)
+    "acmm": 4, "qpp": 4,            # the packages' own __init__ (docstring, version, constants)
 }
 
 
@@ -149,7 +149,7 @@ def test_every_module_has_a_layer():
 
 def upward_imports(graph: dict[str, set[str]]) -> list[str]:
     """The imports of a module of a higher layer by one of a lower layer (the packages' own
-    ``__init__``, which holds only the packaged-config names and the version, aside)."""
+    ``__init__``, which holds only the packaged-config names, the work limits and the version, aside)."""
     return [f"{m} (layer {layer(m)}) imports {d} (layer {layer(d)})"
             for m, deps in sorted(graph.items()) for d in sorted(deps)
             if layer(d) > layer(m) and d not in ("acmm", "qpp")]
@@ -185,7 +185,6 @@ _MPL = "start-up: matplotlib only where figures are drawn"
 LAZY_IMPORTS = {
     ("acmm.cli.app", "acmm.cli.configkinds"): _CLI_START,
     ("acmm.cli.app", "acmm.io.config"): _CLI_START,
-    ("acmm.cli.app", "acmm_qpp.overrides"): "start-up: `--help` imports no pydantic or yaml",
     ("acmm.cli.app", "acmm.stages.runners"): _CLI_START,
     ("acmm.cli.app", "acmm.stages.design"): _CLI_START,
     ("acmm.cli.app", "acmm.stages.certify"): _CLI_START,
@@ -221,7 +220,7 @@ LAZY_IMPORTS = {
     ("acmm_qpp.errors", "numpy"): "the CLI sets its BLAS thread defaults before numpy is first imported",
     ("acmm_qpp.units", "pint"): "start-up: pint (~0.3 s) only when a unit is converted",
     ("acmm_qpp.cli.progress", "rich.console"): "start-up: rich only on a terminal",
-    ("acmm_qpp.cli.progress", "rich.progress"): "start-up: rich only on a terminal",
+    ("acmm.cli.steps", "rich.progress"): "start-up: rich only on a terminal",
     ("acmm_qpp.cli.plumbing", "importlib.metadata"): "start-up: the distribution's metadata for --version only",
 }
 #: At most this many import statements inside functions in the three packages.

@@ -16,10 +16,10 @@ import typer
 from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit,
                                    version_option)
 from acmm.cli.command import CONFIGS, acmm_command
-from acmm_qpp.cli.progress import Steps
+from acmm.cli.steps import Steps
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
-from acmm_qpp.units import shown
+from acmm.model.unit_systems import shown
 
 class _AcmmGroup(ExitCodeGroup):
     """The ``acmm`` app: its help ends with examples and every packaged config."""
@@ -48,8 +48,7 @@ def _root(version: bool = version_option()) -> None:
 def _load(config, overrides):
     """The validated acmm config of CONFIG plus KEY=VALUE overrides (a CONFIG that is itself an
     override means: the packaged default with that override)."""
-    from acmm.io.config import load_config  # deferred: --help needs no numpy, scipy, pydantic
-    from acmm_qpp.overrides import split_overrides  # deferred: --help needs no pydantic, yaml
+    from acmm.io.config import load_config, split_overrides  # deferred: --help needs no numpy, scipy, pydantic
 
     return load_config(*split_overrides(config, overrides))
 

@@ -13,13 +13,13 @@ from __future__ import annotations
 import json
 
 from acmm import DEFAULT_CONFIG, PACKAGED_CONFIGS
-from acmm.io.config import parse_config, resolve_references
+from acmm.io.config import parse_config, resolve_references, split_overrides
 from acmm.io.schema import acmm_schema
 from acmm.sweep.config import parse_sweep
 from acmm.sweep.spec import sweep_schema
 from acmm.cli.command import CONFIGS
 from acmm_qpp.configio import read_yaml
-from acmm_qpp.overrides import apply_overrides, remember_origin, split_overrides
+from acmm_qpp.overrides import apply_overrides, remember_origin
 from qpp.io.config import parse_config as parse_qpp
 from qpp.io.schema import qpp_schema
 
@@ -116,7 +116,7 @@ def load_any(path, overrides=None):
 def load_any_from_command_line(config, overrides):
     """:func:`load_any` of a command's CONFIG and KEY=VALUE arguments (``acmm validate``): a
     CONFIG that is really an override means the packaged default with it
-    (:func:`acmm_qpp.overrides.split_overrides`).
+    (:func:`acmm.io.config.split_overrides`).
 
     Parameters
     ----------

@@ -13,7 +13,8 @@ import typer
 from acmm_qpp.errors import EXIT_INPUT
 from acmm.cli.command import CONFIGS, acmm_command
 from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit
-from acmm_qpp.cli.progress import Steps, enabled
+from acmm.cli.steps import Steps
+from acmm_qpp.cli.progress import enabled
 
 
 class _Bar:

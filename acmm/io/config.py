@@ -22,9 +22,9 @@ from acmm.io.config_fields import Angle, AngleVec, Rate, Time, WeightTorque, Sec
 from acmm.io.config_station import Actuators, Disturbance, Inertia
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
-from acmm import DEFAULT_CONFIG, PACKAGED_CONFIGS
+from acmm import DEFAULT_CONFIG, LIMITS, PACKAGED_CONFIGS
 from acmm_qpp.configio import read_yaml, validate_model
-from acmm_qpp.overrides import apply_overrides, remember_origin
+from acmm_qpp.overrides import apply_overrides, looks_like_override, remember_origin
 from acmm_qpp.limits import how_to_raise, limit
 
 
@@ -252,14 +252,14 @@ class Config(SectionModel):
                 raise ValueError(f"simulation.levels has {len(lv)} entries but the design has "
                                  f"{self.n_design_points()} point(s), one level each")
 
-        if self.n_design_points() > limit("DESIGN_POINTS"):
+        if self.n_design_points() > limit("DESIGN_POINTS", LIMITS):
             raise ValueError(f"schedule: {self.n_design_points()} design points (one sector LQR each); use fewer "
-                             f"schedule.n_points or schedule.points ({how_to_raise('DESIGN_POINTS')})")
+                             f"schedule.n_points or schedule.points ({how_to_raise('DESIGN_POINTS', LIMITS)})")
         samples = self.output_samples()
-        if samples > limit("SIM_SAMPLES"):
+        if samples > limit("SIM_SAMPLES", LIMITS):
             raise ValueError(f"simulation.sample_interval: {sim.sample_interval:g} s gives {samples:.3g} output "
                              f"samples over {sim.orbits:g} orbits; raise sample_interval or lower orbits "
-                             f"({how_to_raise('SIM_SAMPLES')})")
+                             f"({how_to_raise('SIM_SAMPLES', LIMITS)})")
         return self
 
     def output_samples(self, orbits: float | None = None) -> float:
@@ -351,6 +351,29 @@ def load_config(path: str | Path | None = None, overrides: list[str] | None = No
     data = resolve_references(apply_overrides(data, overrides), p.parent, str(p))
     cfg = parse_config(data, source=str(p))
     return remember_origin(cfg, str(p), overrides)
+
+
+def split_overrides(config, overrides) -> tuple[object, list[str]]:
+    """Separate a positional CONFIG that is really an override (``acmm simulate a.b=1``, using the
+    packaged default) from the override list: returns (config or None, overrides).
+
+    Parameters
+    ----------
+    config : str or path-like or None
+        The positional CONFIG argument.
+    overrides : list of str or None
+        The KEY=VALUE arguments.
+
+    Returns
+    -------
+    tuple
+        (config, or None when it was an override and no such file exists; list of overrides).
+    """
+    overrides = list(overrides or [])
+    if config is not None and looks_like_override(str(config)):
+        if not Path(str(config)).exists():
+            return None, [str(config)] + overrides
+    return config, overrides
 
 
 def resolve_references(data: object, base_dir: str | Path = ".", source: str = "config",

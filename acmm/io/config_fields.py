@@ -14,13 +14,18 @@ from pydantic import BeforeValidator
 
 from acmm_qpp.config_model import StrictModel
 from acmm_qpp.quantity_fields import quantity, quantity_value
+from acmm.model.inertia import MAX_INERTIA
 
 
-#: |value| bound per dimension, canonical units (issue 13: no overflow accepted); see
-#: :data:`acmm_qpp.limits.PHYSICAL_MAX` for the reasoning.
-_RANGE = {"inertia": 1e13, "torque": 1e9, "momentum": 1e12, "angle": 3600.0, "rate": 1.0, "time": 1e9}
+#: |value| bound per dimension, canonical units (issue 13: no overflow accepted): beyond it a value
+#: is refused as a typo or an overflow hazard (bias torques are a few ft·lbf, CMG momentum ~1e4
+#: ft·lbf·s; the inertia's reasoning is :data:`acmm.model.inertia.MAX_INERTIA`'s).
+_RANGE = {"inertia": MAX_INERTIA, "torque": 1e9, "momentum": 1e12, "angle": 3600.0, "rate": 1.0, "time": 1e9}
 _CANON = {"inertia": "slug·ft²", "torque": "ft·lbf", "momentum": "ft·lbf·s", "angle": "deg", "rate": "rad/s",
           "time": "s"}
+#: The report's unit of each dimension kind of the config (pint syntax): a bare number is in it.
+UNITS = {"inertia": "slug*ft^2", "torque": "ft*lbf", "momentum": "ft*lbf*s", "angle": "deg", "rate": "rad/s",
+         "time": "s", "weight_torque": "1/(ft*lbf)^2"}
 
 
 #: Smallest accepted principal moment of inertia, slug·ft² (a 1 cm, 1 g body is ~1e-8; below
@@ -56,8 +61,8 @@ def plausible_value(x: float, dimension: str) -> float:
 
 
 def _q(dimension: str):
-    """The quantity validator of the acmm config: finite and within :data:`_RANGE`."""
-    return quantity(dimension, plausible_value)
+    """The quantity validator of the acmm config: in :data:`UNITS`, finite and within :data:`_RANGE`."""
+    return quantity(UNITS[dimension], lambda x: plausible_value(x, dimension))
 
 
 def _vec3(dimension: str):
@@ -66,7 +71,7 @@ def _vec3(dimension: str):
             raise ValueError("must be a list of three values [roll, pitch, yaw]")
         if len(v) != 3:
             raise ValueError(f"must have three values [roll, pitch, yaw], got {len(v)}")
-        return [quantity_value(x, dimension, plausible_value) for x in v]
+        return [quantity_value(x, UNITS[dimension], lambda y: plausible_value(y, dimension)) for x in v]
     return BeforeValidator(conv)
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from acmm.io.config_fields import (MIN_PRINCIPAL_MOMENT, AngleVec, InertiaValue, Momentum, Torque,
-                                TorqueVec, SectionModel, plausible_value)
+                                TorqueVec, UNITS, SectionModel, plausible_value)
 from acmm_qpp.units import to_canonical
 
 
@@ -34,7 +34,7 @@ class Inertia(SectionModel):
         """Accept a 3×3 nested list too; it must then be symmetric."""
         if isinstance(data, (list, tuple)):
             try:
-                m = np.array([[to_canonical(x, "inertia") for x in row] for row in data], float)
+                m = np.array([[to_canonical(x, UNITS["inertia"]) for x in row] for row in data], float)
             except (TypeError, ValueError) as exc:
                 raise ValueError(f"inertia matrix must be 3×3 numbers: {exc}") from None
             if m.shape != (3, 3):

@@ -10,13 +10,12 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm_qpp.results import convert_items
 import hashlib
 import h5py
 from acmm.design.schedule import schedule_gain
 import yaml
-from acmm_qpp.units import FT_LBF_IN_NM
-from acmm.io.units import state_factors
+from acmm.model.unit_systems import FT_LBF_IN_NM
+from acmm.io.units import convert_items, state_factors
 
 
 _TABLE_KEYS = ("inertia", "bias", "tea", "K")

@@ -1,5 +1,6 @@
 """JSON schemas of the acmm config kinds (acmm run and sweep), generated from the pydantic models
-so that they accept what the loader accepts (the generic machinery is :mod:`acmm_qpp.schema`):
+so that they accept what the loader accepts (the generic machinery is :mod:`acmm_qpp.schema`,
+acmm's own forms :class:`AcmmGenerator`):
 
 * a dimensional field (one converted by a unit-aware before-validator, e.g. ``"2 N*m"``) is
   ``number`` **or** a ``"<number> [unit]"`` string; a vector of them likewise per element;
@@ -22,9 +23,68 @@ extension, any editor using yaml-language-server).
 """
 from __future__ import annotations
 
-
-from acmm_qpp.schema import header, model_schema
+from acmm_qpp.schema import Generator, header, model_schema, quantity_schema
 from acmm.io.config import Config
+
+
+def _inertia_matrix() -> dict:
+    return {"type": "array", "minItems": 3, "maxItems": 3,
+            "description": "symmetric 3×3 inertia matrix, rows",
+            "items": {"type": "array", "minItems": 3, "maxItems": 3,
+                      "items": quantity_schema({"type": "number"})}}
+
+
+class AcmmGenerator(Generator):
+    """The base's schema generator (:class:`acmm_qpp.schema.Generator`), taught acmm's own forms:
+    an inertia given as a 3×3 matrix, a vector of three values ``[roll, pitch, yaw]``."""
+
+    def function_before_schema(self, schema):
+        """The JSON schema of a field with a before-validator, widened to the accepted forms.
+
+        Parameters
+        ----------
+        schema : dict
+            pydantic-core schema of the ``function-before`` node.
+
+        Returns
+        -------
+        dict
+            JSON schema: the base's, with the inertia matrix alternative or three elements.
+        """
+        qual = getattr(schema.get("function", {}).get("function"), "__qualname__", "")
+        generated = super().function_before_schema(schema)
+        if qual.endswith("Inertia._from_matrix"):
+            return {"anyOf": [generated, _inertia_matrix()]}
+        if "_vec3" in qual and "items" in generated:          # [roll, pitch, yaw]
+            generated["minItems"] = generated["maxItems"] = 3
+        return generated
+
+
+def fix_alternatives(schema: dict) -> dict:
+    """Move object-only keywords into the object branch of a model with an alternative form.
+
+    A model with a before-validator accepting another form (Inertia: a 3×3 list) comes out as
+    ``{anyOf: [object, matrix], additionalProperties: false}``; the object-only keywords belong
+    inside the object branch.
+
+    Parameters
+    ----------
+    schema : dict
+        JSON schema with ``$defs``; modified in place.
+
+    Returns
+    -------
+    dict
+        The same ``schema``.
+    """
+    for d in schema.get("$defs", {}).values():
+        if "anyOf" in d and d.get("anyOf") and d["anyOf"][0].get("type") == "object":
+            for key in ("additionalProperties", "required", "properties"):
+                if key in d:
+                    d["anyOf"][0][key] = d.pop(key)
+            d.pop("type", None)
+    return schema
+
 
 def acmm_schema() -> dict:
     """Schema of an acmm run config (:class:`acmm.io.config.Config`).
@@ -35,4 +95,4 @@ def acmm_schema() -> dict:
         JSON schema (draft 2020-12); dimensional fields accept a number in the report's units or
         a quantity string in any unit of the field's dimension.
     """
-    return header(model_schema(Config), "acmm", "acmm run config (CR-185644 Part II)")
+    return header(fix_alternatives(model_schema(Config, AcmmGenerator)), "acmm run config (CR-185644 Part II)")

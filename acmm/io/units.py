@@ -1,13 +1,19 @@
-"""Units of the acmm state vector; the general unit handling lives in :mod:`acmm_qpp.units`.
-
-This module holds what needs the 24 states of eq 4.47: :func:`state_factors` and
-:func:`state_space_in`.
+"""acmm's results in the unit system of ``output.units`` (:mod:`acmm.model.unit_systems`): the
+datasets by their unit strings (:func:`convert_items`), and what needs the 24 states of eq 4.47
+(:func:`state_factors`, :func:`state_space_in`); the general unit handling lives in
+:mod:`acmm_qpp.units`.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import replace
+from typing import Any
+
+from acmm_qpp.results import Dataset
 from acmm_qpp.units import conversion_factor
 import numpy as np
 from acmm.model.linearize import state_units
+from acmm.model.unit_systems import to_system
 
 
 def state_factors(drf_mode: str = "attitude_hold", system: str = "imperial"):
@@ -85,4 +91,40 @@ def state_space_in(system: str, drf_mode: str, **arrays):
             out[name] = a * d[12:]
         else:
             raise KeyError(name)
+    return out
+
+
+def convert_items(items: Mapping[str, Any], system: str) -> dict:
+    """A copy of ``items`` with each dataset in its output unit (:func:`acmm.model.unit_systems.output_unit`):
+    deg → rad always, imperial → SI under ``SI``.  Units pint does not know are kept.
+
+    Parameters
+    ----------
+    items : Mapping
+        Dataset name → :class:`acmm_qpp.results.Dataset` or nested mapping.
+    system : str
+        Output unit system, ``"imperial"`` or ``"SI"``.
+
+    Returns
+    -------
+    dict
+        Same structure; float/complex datasets converted with their ``units`` updated.
+    """
+    out = {}
+    for key, value in items.items():
+        if isinstance(value, Mapping):
+            out[key] = convert_items(value, system)
+            continue
+        if not isinstance(value, Dataset):   # write_h5 reports it
+            out[key] = value
+            continue
+        data = value.data
+        if isinstance(data, str) or np.asarray(data).dtype.kind not in "fc":
+            out[key] = value
+            continue
+        try:
+            new, unit = to_system(np.asarray(data), value.units, system)
+        except ValueError:
+            new, unit = data, value.units
+        out[key] = value if unit == value.units else replace(value, data=new, units=unit)
     return out

@@ -8,7 +8,11 @@ from typing import Optional
 
 import numpy as np
 
-from acmm_qpp.limits import PHYSICAL_MAX
+#: Largest |element| of a plausible inertia, slug·ft²: the Space Station is ~1e7–1e8 slug·ft²; the
+#: bound leaves orders of magnitude of headroom while keeping every derived quantity (ω²·I, I·ω·h,
+#: Riccati products) far from float overflow (the config refuses beyond it too,
+#: :mod:`acmm.io.config_fields`).
+MAX_INERTIA = 1e13
 
 #: the six independent elements of an inertia, in the order the draws take them
 ELEMENTS = ("dI11", "dI22", "dI33", "dI12", "dI13", "dI23")
@@ -18,7 +22,7 @@ def unphysical_reason(inertia: np.ndarray) -> Optional[str]:
     """Why a symmetric 3×3 inertia (slug·ft²) is not a rigid body's, or ``None`` if it is.
 
     Same test as :class:`acmm.io.config.Inertia`: finite, within the physical range
-    (:data:`acmm_qpp.limits.PHYSICAL_MAX`), positive definite, and the principal moments satisfy the
+    (:data:`MAX_INERTIA`), positive definite, and the principal moments satisfy the
     triangle inequality a + b ≥ c.
 
     Parameters
@@ -33,8 +37,8 @@ def unphysical_reason(inertia: np.ndarray) -> Optional[str]:
     """
     if not np.all(np.isfinite(inertia)):
         return "non-finite inertia"
-    if np.max(np.abs(inertia)) > PHYSICAL_MAX["inertia"]:     # as the config refuses it
-        return f"beyond the physical range (an element {np.max(np.abs(inertia)):.3g} > {PHYSICAL_MAX['inertia']:.0e} slug·ft²)"
+    if np.max(np.abs(inertia)) > MAX_INERTIA:     # as the config refuses it
+        return f"beyond the physical range (an element {np.max(np.abs(inertia)):.3g} > {MAX_INERTIA:.0e} slug·ft²)"
     eig = np.linalg.eigvalsh(inertia)
     if eig[0] <= 0:
         return f"not positive definite (smallest principal moment {eig[0]:.4g})"
@@ -60,7 +64,7 @@ def physical_mask(inertias: np.ndarray) -> np.ndarray:
     with np.errstate(all="ignore"):
         ok = np.all(np.isfinite(m), axis=(1, 2))
         m[~ok] = np.eye(3)
-        ok &= np.max(np.abs(m), axis=(1, 2)) <= PHYSICAL_MAX["inertia"]
+        ok &= np.max(np.abs(m), axis=(1, 2)) <= MAX_INERTIA
         eig = np.linalg.eigvalsh(m)
     return ok & (eig[:, 0] > 0) & (eig[:, 0] + eig[:, 1] >= eig[:, 2] * (1 - 1e-12))
 

@@ -30,7 +30,7 @@ import numpy as np
 from acmm.model import kinematics as kin
 from acmm.model.compiled_cache import njit_cached
 from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
-from acmm_qpp.units import FT_LBF_IN_NM
+from acmm.model.unit_systems import FT_LBF_IN_NM
 
 #: The hint of a bias with no equilibrium: which settings to change (acmm's config).
 BIAS_HINT = "reduce disturbance.bias (or use disturbance.bias_from_tea with the attitude you want)"

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm_qpp.plot_style import stage_pyplot as _plt
+from acmm_qpp.plot_style import agg_pyplot
 from acmm_qpp.results import save_figure
 import re
 import itertools
@@ -29,6 +29,25 @@ from matplotlib.backends.backend_agg import RendererAgg
 from matplotlib.artist import Artist
 from matplotlib.ticker import Formatter, MaxNLocator
 from matplotlib.lines import Line2D
+
+#: rcParams of the stage figures (``acmm design|simulate``, the sweep); saved at the figure's own
+#: resolution also in a process that drew the report's figures (:data:`acmm_qpp.plot_style.RC` sets
+#: ``savefig.dpi``)
+STAGE_RC = {"figure.dpi": 110, "savefig.dpi": "figure", "axes.grid": True, "grid.alpha": 0.3, "font.size": 9,
+            "axes.titley": 1.0}
+
+
+def stage_pyplot():
+    """``matplotlib.pyplot`` on the Agg backend with :data:`STAGE_RC` applied.
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``.
+    """
+    plt = agg_pyplot(force=True)
+    plt.rcParams.update(STAGE_RC)
+    return plt
 
 AXES = ("roll", "pitch", "yaw")
 
@@ -64,7 +83,7 @@ def write_figure(fig, path: Path, vector: bool = False, tight: bool = True, rc: 
     path = Path(path)
     out = [path.with_suffix(".png")]
     _save_now(fig, path, out, vector, tight, rc)
-    _plt().close(fig)       # no fig.clf(): clearing 12 axes cost ~0.15 s, close frees it
+    stage_pyplot().close(fig)       # no fig.clf(): clearing 12 axes cost ~0.15 s, close frees it
     return out
 
 

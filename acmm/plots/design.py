@@ -13,7 +13,7 @@ import numpy as np
 
 from acmm.plots.base import (FAST_TEXT_RC, bake_texts, compact_formatter, data_limits,
     premake_ticks, write_figure, gain_unit, in_view_ticks, state_units)
-from acmm_qpp.plot_style import stage_pyplot as _plt
+from acmm.plots.base import stage_pyplot
 import re
 from acmm.plots.panel_grid import PanelGrid
 from matplotlib.ticker import LogFormatterSciNotation, MaxNLocator
@@ -28,7 +28,7 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
     ~0.65 s to build and draw), a fixed layout (tight_layout/bbox 'tight' on 24 panels costs
     seconds), the legend at a fixed place, the fixed texts rendered ahead (:func:`bake_texts`).
     """
-    plt = _plt()
+    plt = stage_pyplot()
     fig = plt.figure(figsize=(13, 15), dpi=80)
     colors = ("C0", "C1", "C2")
     series = ([{"marker": "o", "ls": "none", "ms": 3, "color": c,
@@ -158,7 +158,7 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    plt = _plt()
+    plt = stage_pyplot()
     fig, (ax, zoom) = plt.subplots(1, 2, figsize=(11, 5.2), gridspec_kw={"width_ratios": [1.0, 1.0]})
     allp = np.concatenate([np.asarray(p) for p in poles_per_point]) / n
     rmin = min(allp.real.min() * 1.1, -2 * sigma)
@@ -244,7 +244,7 @@ def _plain_log_formatter(**kw):
 def _path_check_layout():
     """The path check's two axes with their labels and log scale (data-independent; the same
     artists in the same order as drawing them after the data: the PNG is identical)."""
-    plt = _plt()
+    plt = stage_pyplot()
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
     a1.set_ylabel("units of n")
     # a linear axis (a log axis over less than a decade showed two tick labels): α is between
@@ -304,7 +304,7 @@ def _scheduled_poles_layout():
     """The scheduled pole map's axes with labels and title, its (empty) scatter and the colour
     bar (data-independent: the PNG is identical to drawing them after the data; the colour bar's
     axes and ticks were the costliest part of drawing this figure after the data)."""
-    plt = _plt()
+    plt = stage_pyplot()
     fig, ax = plt.subplots(figsize=(6.5, 5.5))
     fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
     ax.set_xlabel("Re λ / n")

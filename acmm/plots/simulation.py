@@ -12,9 +12,9 @@ import numpy as np
 from acmm.plots.base import (AXES, FAST_TEXT_RC, bake_texts, compact_formatter, data_limits,
     fixed_label_positions, in_view_locator, empty_line, premake_ticks, write_figure, set_limits, decimate,
     in_view_ticks)
-from acmm_qpp.plot_style import stage_pyplot as _plt
+from acmm.plots.base import stage_pyplot
 from acmm.plots.panel_grid import PanelGrid
-from acmm_qpp.units import pretty, shown
+from acmm.model.unit_systems import pretty, shown
 import matplotlib as mpl
 
 
@@ -30,7 +30,7 @@ def _axis_histories_layout(units: str):
     """The 12 panels (:class:`acmm.plots.panel_grid.PanelGrid`) with the axis names over the top row,
     the quantity left of each row, the time under the bottom row (pre-rendered: bake_texts) and
     one line series for all panels."""
-    plt = _plt()
+    plt = stage_pyplot()
     fig = plt.figure(figsize=(13, 10))
     uu, hu = shown(1.0, "ft*lbf", units)[1], shown(1.0, "ft*lbf*s", units)[1]
     labels = ["attitude error θ−θ̂* (deg)", "body rate rel. LVLH (deg/s)",
@@ -97,7 +97,7 @@ def _inertia_layout(units: str):
     """The six panels (:class:`acmm.plots.panel_grid.PanelGrid`) with titles, labels (pre-rendered)
     and one step-line series for all panels."""
     iu = shown(1.0, "slug*ft^2", units)[1]
-    plt = _plt()
+    plt = stage_pyplot()
     fig = plt.figure(figsize=(12, 6))
     grid = PanelGrid(fig, 2, 3, [{"drawstyle": "steps-post", "color": "C0"}],
                      {"left": 0.07, "right": 0.98, "bottom": 0.09, "top": 0.9, "wspace": 0.3, "hspace": 0.25},
@@ -157,7 +157,7 @@ def _summary_layout(units: str, n_rows: int = 12):
     follows its ``n_rows`` rows (at most 12 lines of full height): a one-level run leaves no
     blank third of the page."""
     hu, uu = shown(1.0, "ft*lbf*s", units)[1], shown(1.0, "ft*lbf", units)[1]
-    plt = _plt()
+    plt = stage_pyplot()
     table_ratio = min(1.0, 0.25 + 0.0625 * max(1, n_rows))
     k = 1.0 / table_ratio           # the header's and rules' offsets from the top stay the same in points
     fig = plt.figure(figsize=(11, 8.5 * (2 + table_ratio) / 3))

@@ -5,13 +5,17 @@ Used by :mod:`acmm.stages.runners`, :mod:`acmm.stages.design` and :mod:`acmm.sta
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from acmm.io.config import Config, load_config, parse_config
 import yaml
 from dataclasses import replace
-from acmm.io.units import state_factors, state_space_in
-from acmm_qpp.units import convert
+from acmm.io.dimensions import COORDS
+from acmm.io.units import convert_items, state_factors, state_space_in
+from acmm_qpp.results import write_h5
+from acmm_qpp.units import conversion_factor
 
 #: Units of the per-state arrays, element by element: ``state_units[i]`` is the unit of state
 #: ``i``, given by the dataset's ``state_units`` attribute (set by :func:`in_system`); under
@@ -30,7 +34,7 @@ def in_system(items: dict, cfg: Config, roles: dict) -> dict:
     config's ``output.units``, each with a ``state_units`` attribute (the 24 state units, or the
     12 of the DRF block for role ``drf``) that its unit string refers to (:data:`UNIT_A`, …); a
     top-level ``state_units`` dataset follows too.  Other datasets are converted by unit string
-    in :func:`acmm_qpp.results.write_h5`.
+    in :func:`write_results`.
 
     Parameters
     ----------
@@ -64,6 +68,35 @@ def in_system(items: dict, cfg: Config, roles: dict) -> dict:
     if "state_units" in items:
         items["state_units"] = replace(items["state_units"], data=np.array(su, dtype="S"))
     return items
+
+
+def write_results(path: Path, items: dict, cfg: Config, attrs: dict, aux_coords: tuple = ()) -> Path:
+    """Write a stage's results file: ``items`` (the report's units) converted to the config's
+    ``output.units`` (:func:`acmm.io.units.convert_items`, root attribute
+    ``unit_system``), with the resolved config and the coordinates of acmm's dimensions
+    (:data:`acmm.io.dimensions.COORDS`) by :func:`acmm_qpp.results.write_h5`.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    items : dict
+        Name → :class:`acmm_qpp.results.Dataset` or group, in the report's units.
+    cfg : Config
+        The run's config.
+    attrs : dict
+        Root attributes (the stage's name and verdicts).
+    aux_coords : tuple of str, optional
+        Auxiliary coordinates along the time dimension (:func:`acmm_qpp.results.write_h5`).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    system = cfg.output.units
+    return write_h5(path, convert_items(items, system), cfg.to_yaml(), {**attrs, "unit_system": system},
+                    coords=COORDS, aux_coords=aux_coords)
 
 
 def define_units(items: dict, orbit_rate: float) -> dict:
@@ -151,4 +184,4 @@ def stored_in(f, key: str, unit: str) -> np.ndarray:
     stored = ds.attrs.get("units", unit)
     stored = stored.decode() if isinstance(stored, bytes) else str(stored)
     value = np.asarray(ds[()])
-    return value if stored == unit else convert(value, stored, unit)
+    return value if stored == unit else value * conversion_factor(stored, unit)

@@ -15,13 +15,12 @@ from pathlib import Path
 import numpy as np
 
 from acmm.io.config import Config
-from acmm.io.dimensions import COORDS
 from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
 from acmm.stages.certify import certificate_items, compute_certificate
-from acmm.stages.common import as_config, define_units, in_system
+from acmm.stages.common import as_config, define_units, in_system, write_results
 from acmm_qpp.outputs import stage
 from acmm_qpp.pool import pool_map, process_pool, stop_pool
-from acmm_qpp.results import draw_figures, write_h5
+from acmm_qpp.results import draw_figures
 from acmm.io.design_file import DesignTable, stored_table_digest, stored_unit_system, load_design_table
 import json
 import time
@@ -144,7 +143,7 @@ def design_hash(cfg: Config) -> str:
     Returns
     -------
     str
-        :func:`acmm_qpp.results.config_hash` of those sections.
+        :func:`acmm_qpp.provenance.config_hash` of those sections.
     """
 
     d = cfg.model_dump(mode="json")
@@ -288,9 +287,9 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
     roles = {**design_output.unit_roles(pts, r.fit is not None),
              **{k: v for k, v in CERTIFICATE_ROLES.items() if k.split("/")[1] in items["dwell"]}}
     items = define_units(in_system(items, cfg, roles), cfg.orbit_rate)
-    write_h5(out / "design.h5", items, cfg.to_yaml(),
-             {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
-              "schedule_form": r.table.form, "table_sha256": stored_table_digest(items, cfg.output.units)}, coords=COORDS)
+    write_results(out / "design.h5", items, cfg,
+                  {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
+                   "schedule_form": r.table.form, "table_sha256": stored_table_digest(items, cfg.output.units)})
     if want_figures:
         draw_figures(design_output.design_figures(r, s, out, cfg.output.units))
     return r, cfg.run_dir() / "design.h5"

@@ -16,10 +16,9 @@ import numpy as np
 
 from acmm.model import controllability as ctrb_mod, linearize as lin, tea as tea_mod
 from acmm.io.config import Config
-from acmm.io.dimensions import COORDS
-from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, as_config, in_system
+from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, as_config, in_system, write_results
 from acmm_qpp.outputs import stage
-from acmm_qpp.results import Dataset, write_h5
+from acmm_qpp.results import Dataset
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -99,7 +98,7 @@ def run_tea(config, all_roots: bool = False, *, out: Path) -> tuple[TeaResult, P
         items["other_roots"] = Dataset(np.array([o.theta for o in result.others]), "rad",
                                        "other equilibria found by multi-start Newton", AXES,
                                        dims=("root", "axis"))
-    write_h5(out / "tea.h5", items, cfg.to_yaml(), {"stage": "tea"}, coords=COORDS)
+    write_results(out / "tea.h5", items, cfg, {"stage": "tea"})
     return result, cfg.run_dir() / "tea.h5"
 
 
@@ -187,6 +186,6 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
         "controllability_rank": Dataset(ctrb.rank, "1", f"PBH rank with tolerance {ctrb.tol:g}"),
     }
     items = in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
-    write_h5(out / "linearize.h5", items, cfg.to_yaml(),
-             {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode}, coords=COORDS)
+    write_results(out / "linearize.h5", items, cfg,
+                  {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
     return result, cfg.run_dir() / "linearize.h5"

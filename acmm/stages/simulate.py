@@ -11,14 +11,14 @@ import numpy as np
 import time
 
 from acmm.io.config import Config
-from acmm.io.dimensions import AUX_COORDS, COORDS
+from acmm.io.dimensions import AUX_COORDS
 from acmm.simulate import kernel as sim_mod
 from acmm.simulate import scenario as scen
 from acmm.stages import sim_output
-from acmm.stages.common import as_config, define_units, in_system
+from acmm.stages.common import as_config, define_units, in_system, write_results
 from acmm.stages.design import design_for
 from acmm_qpp.outputs import stage
-from acmm_qpp.results import draw_figures, write_h5
+from acmm_qpp.results import draw_figures
 
 
 # ---------------------------------------------------------------------------------------------
@@ -98,6 +98,6 @@ def run_simulate(config, progress=None, figures: bool | None = None, warn=None, 
     items, attrs = sim_output.sim_items(cfg, sc, r, stats, table.design_hash, wall)
     figures_to_draw = sim_output.sim_figures(cfg, sc, r, stats, items, out) if want_figures else []
     items = define_units(in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
-    write_h5(out / "sim.h5", items, cfg.to_yaml(), attrs, coords=COORDS, aux_coords=AUX_COORDS)
+    write_results(out / "sim.h5", items, cfg, attrs, aux_coords=AUX_COORDS)
     draw_figures(figures_to_draw)
     return result, cfg.run_dir() / "sim.h5"

@@ -5,8 +5,11 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import dataclasses
+import functools
+import hashlib
 import os
 import sys
+from pathlib import Path
 from typing import Optional
 
 import numpy as np
@@ -15,9 +18,9 @@ from acmm_qpp.errors import ConfigError
 from acmm_qpp.pool import process_pool, stop_pool
 from acmm.sweep.config import Sweep
 from acmm.sweep.case import BaseContext, margin_search, run_case
-from acmm_qpp.provenance import code_identity
 import ctypes
 from acmm_qpp.limits import limit
+from acmm import LIMITS, __version__
 from acmm.simulate.warmup import warm_up
 
 
@@ -80,7 +83,7 @@ def make_executor(workers: int = 1, scheduler: Optional[str] = None):
         except ImportError:
             raise ConfigError("--scheduler needs the optional Dask dependency: pip install 'acmm-qpp[dask]'") from None
 
-        timeout = f"{limit('DASK_CONNECT_SECONDS'):g}s"        # (its own error, not the address's)
+        timeout = f"{limit('DASK_CONNECT_SECONDS', LIMITS):g}s"        # (its own error, not the address's)
         try:
             client = distributed.Client(scheduler, timeout=timeout)
         except Exception as exc:  # noqa: BLE001 (tls:// without a context, ucx:// without ucx…: a bad address)
@@ -251,7 +254,7 @@ def _local_context(ctx: BaseContext) -> BaseContext:
 
 def call_chunk(chunk, ctx, code: Optional[str] = None) -> list[dict]:
     """Run the tasks of one chunk in order.  ``code``: the driver's
-    :func:`acmm_qpp.provenance.code_identity`, checked on a Dask worker (started elsewhere, it may
+    :func:`code_identity`, checked on a Dask worker (started elsewhere, it may
     run other acmm code, whose rows would enter the table unnoticed: a review).
 
     Parameters
@@ -275,13 +278,31 @@ def call_chunk(chunk, ctx, code: Optional[str] = None) -> list[dict]:
     return [_call(t, ctx) for t in chunk]
 
 
+@functools.lru_cache(maxsize=1)
+def code_identity() -> str:
+    """The package version and a hash of the project's Python sources (``acmm``, ``acmm_qpp``,
+    ``qpp``), computed once per process: two processes with the same identity run the same code.
+
+    Returns
+    -------
+    str
+        ``<version>+<12 hex digits>``.
+    """
+    root = Path(__file__).resolve().parents[2]
+    h = hashlib.sha256()
+    for package in ("acmm", "acmm_qpp", "qpp"):
+        for f in sorted((root / package).rglob("*.py")):
+            h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
+    return f"{__version__}+{h.hexdigest()[:12]}"
+
+
 def same_code(code: str) -> None:
     """Check that this (worker) process runs the code of the driver.
 
     Parameters
     ----------
     code : str
-        The driver's :func:`acmm_qpp.provenance.code_identity`.
+        The driver's :func:`code_identity`.
 
     Raises
     ------

@@ -11,7 +11,7 @@
   gives a physical inertia with a huge ``max_draws`` is thus refused in well under a second
   instead of grinding through billions of eigenvalue tests.
 
-Limits: :mod:`acmm_qpp.limits` (``ACMM_LIMIT_<NAME>`` environment variables).
+Limits: ``acmm.LIMITS`` (:func:`acmm_qpp.limits.limit`, ``ACMM_LIMIT_<NAME>`` environment variables).
 """
 from __future__ import annotations
 
@@ -19,6 +19,7 @@ import numpy as np
 
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.limits import how_to_raise, limit
+from acmm import LIMITS
 import math
 from acmm.design.schedule_points import point_specs
 from acmm.model.inertia import perturb_inertia, physical_mask
@@ -68,10 +69,10 @@ def _check_samples(sweep, source: str) -> None:
         sim = b.config.simulation
         orbits = sweep.spec.orbits if sweep.spec.orbits is not None else sim.orbits
         samples = b.config.output_samples(orbits)
-        if samples > limit("SIM_SAMPLES"):
+        if samples > limit("SIM_SAMPLES", LIMITS):
             raise ConfigError(f"{source}: sweep.orbits: {orbits:g} orbits of {b.label} at its sample_interval "
                               f"{sim.sample_interval:g} s give {samples:.3g} output samples per run; lower "
-                              f"sweep.orbits or raise simulation.sample_interval ({how_to_raise('SIM_SAMPLES')})")
+                              f"sweep.orbits or raise simulation.sample_interval ({how_to_raise('SIM_SAMPLES', LIMITS)})")
 
 
 def check_sweep_work(sweep, source: str = "sweep config") -> None:
@@ -100,26 +101,26 @@ def check_sweep_work(sweep, source: str = "sweep config") -> None:
     else:
         cases = int(spec.n_runs)
     cases *= nb
-    if cases > limit("SWEEP_CASES"):
+    if cases > limit("SWEEP_CASES", LIMITS):
         raise ConfigError(f"{source}: sweep: {cases:.3g} cases over {nb} base(s); use fewer grid values or "
-                          f"n_runs ({how_to_raise('SWEEP_CASES')})")
+                          f"n_runs ({how_to_raise('SWEEP_CASES', LIMITS)})")
     _check_samples(sweep, source)
     runs = cases // nb + margin_evaluations(spec.margin)        # per base
     orbits = sum(spec.orbits if spec.orbits is not None else b.config.simulation.orbits for b in sweep.bases)
     total_orbits = orbits * runs
-    if total_orbits > limit("SWEEP_ORBITS"):
+    if total_orbits > limit("SWEEP_ORBITS", LIMITS):
         raise ConfigError(f"{source}: sweep.orbits: {cases} cases"
                           f"{' and the margin searches' if spec.margin is not None else ''} simulate "
                           f"{total_orbits:.3g} orbits in all; lower sweep.orbits, the number of cases or "
-                          f"margin.scan_points ({how_to_raise('SWEEP_ORBITS')})")
+                          f"margin.scan_points ({how_to_raise('SWEEP_ORBITS', LIMITS)})")
     if spec.design == "redesign":
         designs = runs * sum(b.config.n_design_points() for b in sweep.bases)
-        if designs > limit("SWEEP_DESIGNS"):
+        if designs > limit("SWEEP_DESIGNS", LIMITS):
             raise ConfigError(f"{source}: sweep.design: redesign runs {designs} sector-LQR designs ({cases} cases "
-                              f"× design points); use design: fixed or fewer cases ({how_to_raise('SWEEP_DESIGNS')})")
+                              f"× design points); use design: fixed or fewer cases ({how_to_raise('SWEEP_DESIGNS', LIMITS)})")
     if spec.grid is not None or spec.unphysical != "resample":
         return
-    cap = limit("SWEEP_DRAWS")
+    cap = limit("SWEEP_DRAWS", LIMITS)
     if cases * spec.max_draws <= cap:
         return
     good, n = _physical_fraction(sweep, PILOT)
@@ -128,4 +129,4 @@ def check_sweep_work(sweep, source: str = "sweep config") -> None:
     if expected > cap:
         raise ConfigError(f"{source}: sweep.max_draws: {good} of {n} pilot draws give a physical inertia, so "
                           f"{cases} cases would need ~{expected:.3g} draws; narrow sweep.monte_carlo, lower "
-                          f"max_draws or set unphysical: reject ({how_to_raise('SWEEP_DRAWS')})")
+                          f"max_draws or set unphysical: reject ({how_to_raise('SWEEP_DRAWS', LIMITS)})")

@@ -20,8 +20,8 @@ from acmm.design.schedule_points import point_specs
 from acmm.model.tea import solve_tea
 from acmm.stages.common import define_units, stored_in
 from dataclasses import replace
-from acmm_qpp.units import display_unit, shown
-from acmm_qpp.plot_style import stage_pyplot as _plt
+from acmm.io.units import convert_items
+from acmm.model.unit_systems import display_unit, shown
 from functools import partial
 
 
@@ -232,7 +232,8 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     attrs = _root_attrs(sweep, a, labels, len(rows), complete, wall_time)
     run_dir = sweep.run_dir()
     items = _orbit_defined(items, sweep)
-    path = write_h5(run_dir / "sweep.h5", items, sweep.to_yaml(), attrs, units=sweep.file.output.units,
+    system = sweep.file.output.units
+    path = write_h5(run_dir / "sweep.h5", convert_items(items, system), sweep.to_yaml(), {**attrs, "unit_system": system},
                     coords=COORDS)
     _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
@@ -289,9 +290,9 @@ def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None
     """
     from matplotlib.ticker import MaxNLocator  # deferred: matplotlib start-up
 
-    from acmm.plots.base import write_figure  # deferred: matplotlib start-up
+    from acmm.plots.base import stage_pyplot, write_figure  # deferred: matplotlib start-up
 
-    plt = _plt()
+    plt = stage_pyplot()
     labels = [b.label for b in sweep.bases]
     names = list(a["parameters"])
     axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])

@@ -9,7 +9,7 @@ given with a unit to the parameter's unit.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from acmm_qpp.units import DIMENSIONS, to_canonical
+from acmm_qpp.units import to_canonical
 
 
 @dataclass(frozen=True)
@@ -90,9 +90,8 @@ def to_parameter_unit(v, unit: str, where: str):
     """
     if not isinstance(v, str):
         return v
-    kind = next((k for k, u in DIMENSIONS.items() if u == unit), None)
     try:
-        return to_canonical(v, kind) if kind else to_canonical(v, "dimensionless")
+        return to_canonical(v, unit)
     except ValueError as exc:
         raise ValueError(f"{where}: {exc}") from None
 

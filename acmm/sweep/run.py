@@ -9,19 +9,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
-from acmm_qpp.outputs import remove_owned, stage, write_config_yaml
+from acmm_qpp.atomic_write import write_text
+from acmm_qpp.outputs import CONFIG_FILE, config_text_of, remove_owned, stage
 from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
 from acmm.sweep.chunking import Chunker
-from acmm.sweep.executors import (SerialExecutor, call_chunk, remote_contexts, scheduler_workers,
+from acmm.sweep.executors import (SerialExecutor, call_chunk, code_identity, remote_contexts, scheduler_workers,
                                   task_key, sweep_tasks, lost_worker, make_executor)
 from acmm.sweep.journal import GroupCommitJournal, read_journal
 from acmm_qpp.errors import ConfigError, OutputError
 from acmm_qpp.signals import interrupts_deferred
 from acmm_qpp.pool import submit
 from acmm.sweep.output import split_records, write_results
-from acmm_qpp.provenance import code_identity
 
 
 # ---------------------------------------------------------------------------------------------
@@ -217,7 +217,7 @@ def _start_afresh(sweep: Sweep, run_dir: Path) -> None:
     interrupted re-run with another seed left its results beside the earlier run's config.yaml
     and figures (a review)."""
     remove_owned(run_dir, OUTPUTS)
-    write_config_yaml(run_dir, sweep)
+    write_text(run_dir / CONFIG_FILE, config_text_of(sweep))
 
 
 class _Snapshots:

@@ -17,7 +17,8 @@ from pydantic import BeforeValidator, Field, model_validator
 from acmm.io.config import Config, Output
 from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS, SHORTHANDS, parameter_value, to_parameter_unit
 from acmm_qpp.config_model import StrictModel
-from acmm_qpp.schema import Generator, fix_alternatives, header
+from acmm_qpp.schema import header
+from acmm.io.schema import AcmmGenerator, fix_alternatives
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN
 from pydantic.json_schema import models_json_schema
 from acmm_qpp.hints import closest
@@ -259,7 +260,7 @@ def sweep_schema() -> dict:
     """
 
     keys, top = models_json_schema([(SweepFile, "validation"), (Config, "validation"),
-                                    (SweepSpec, "validation")], schema_generator=Generator)
+                                    (SweepSpec, "validation")], schema_generator=AcmmGenerator)
     defs = fix_alternatives(top)["$defs"]
     ref_file = keys[(SweepFile, "validation")]["$ref"]
     ref_cfg = keys[(Config, "validation")]["$ref"]
@@ -279,4 +280,4 @@ def sweep_schema() -> dict:
     file_def["properties"]["sweep"] = {"allOf": [file_def["properties"]["sweep"],
                                                  {"anyOf": [{"required": ["base"]}, {"required": ["bases"]}]}]}
     schema = {"anyOf": [{"$ref": ref_file}, {"$ref": "#/$defs/InlineSweepConfig"}], "$defs": defs}
-    return header(schema, "sweep", "acmm sweep config")
+    return header(schema, "acmm sweep config")

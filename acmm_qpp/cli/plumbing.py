@@ -7,12 +7,12 @@ import re
 import signal
 import sys
 import threading
-import types
 import warnings
 from importlib import resources
 from typing import NamedTuple
 
 import typer
+from typer.core import TyperCommand, TyperGroup
 
 # the click that typer uses: recent typer vendors it as ``typer._click``, older ones use click
 try:
@@ -21,8 +21,8 @@ except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
     from click import exceptions as click_exceptions
 
 from acmm_qpp.cli.failures import EXIT_PIPE_CLOSED, interrupt_behind, note_warnings, quiet_stdout
-from acmm_qpp.errors import plain_failure as _plain_failure
-from acmm_qpp.errors import EXIT_INPUT, EXIT_INTERRUPTED, AcmmError, ConfigError, with_hint
+from acmm_qpp.errors import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_USAGE, EXIT_VERDICT, AcmmError, ConfigError,
+                             plain_failure, with_hint)
 
 
 def fail(message: str, code: int = EXIT_INPUT) -> None:
@@ -90,7 +90,7 @@ def user_errors(fn, notes=None):
                 signal = interrupt_behind(exc)
                 if signal is not None:      # Python wrapped it (a Ctrl-C in a class body: RuntimeError)
                     interrupted(signal)
-                plain = _plain_failure(exc)
+                plain = plain_failure(exc)
                 if plain is None:
                     raise
                 fail(*plain)
@@ -106,11 +106,6 @@ def user_errors(fn, notes=None):
 # ---------------------------------------------------------------------------------------------
 # command-line conventions (issue 14): exit codes of click errors, --version, overrides, --strict
 # ---------------------------------------------------------------------------------------------
-from typer.core import TyperCommand, TyperGroup  # noqa: E402
-
-from acmm_qpp.errors import EXIT_USAGE, EXIT_VERDICT  # noqa: E402
-
-
 def overrides_arg(example: str):
     """The positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm_qpp.overrides`), their
     help naming ``example``, an override of a key the command reads.
@@ -118,7 +113,7 @@ def overrides_arg(example: str):
     Parameters
     ----------
     example : str
-        One or two overrides, e.g. ``"design.sector.sigma=0.6"``.
+        One or two overrides of keys the command reads, e.g. ``"a.b=0.6"``.
 
     Returns
     -------
@@ -193,6 +188,23 @@ class ConfigKinds(NamedTuple):
         return out
 
 
+def write_examples(formatter, examples) -> None:
+    """Write ``Examples:`` and the command lines ``examples`` under it, one a line, unwrapped.
+
+    Parameters
+    ----------
+    formatter : click.HelpFormatter
+        The help being written.
+    examples : sequence of str
+        The command lines.
+    """
+    formatter.write_paragraph()
+    formatter.write_text("Examples:")
+    with formatter.indentation():
+        for line in examples:
+            formatter.write(f"{'':>{formatter.current_indent}}{line}\n")
+
+
 def help_command(examples: list, kinds: tuple = (), configs: ConfigKinds | None = None):
     """A typer command class whose help ends with ``examples`` (one command line each, kept as
     written) and, for ``kinds``, the packaged configs of those kinds listed from the folder at
@@ -218,11 +230,7 @@ def help_command(examples: list, kinds: tuple = (), configs: ConfigKinds | None 
         def format_epilog(self, ctx, formatter) -> None:
             """Write the examples (unwrapped), the packaged configs and the path rule, then the
             command's own epilog."""
-            formatter.write_paragraph()
-            formatter.write_text("Examples:")
-            with formatter.indentation():
-                for line in examples:
-                    formatter.write(f"{'':>{formatter.current_indent}}{line}\n")
+            write_examples(formatter, examples)
             if kinds:
                 formatter.write_paragraph()
                 names = configs.packaged(tuple(kinds))
@@ -232,7 +240,6 @@ def help_command(examples: list, kinds: tuple = (), configs: ConfigKinds | None 
                 formatter.write_text(configs.path_rule)
             super().format_epilog(ctx, formatter)
 
-    WithExamples.examples = list(examples)
     return WithExamples
 
 
@@ -240,18 +247,11 @@ StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes w
                                                  "(for CI)")
 
 
-def _click():
-    """The click that typer uses: recent typer vendors it as ``typer._click``, older ones use click."""
-    return types.SimpleNamespace(exceptions=click_exceptions)
-
-
 def _one_line_usage(exc) -> str:
     """A click usage error as one line: the message and where to get help."""
-    click = _click()
-
     msg = " ".join(exc.format_message().replace("Value error, ", "").split())
     ctx = getattr(exc, "ctx", None)
-    if ctx is not None and not isinstance(exc, click.exceptions.NoArgsIsHelpError):
+    if ctx is not None and not isinstance(exc, click_exceptions.NoArgsIsHelpError):
         msg += f" (see '{ctx.command_path} --help')"
     return msg
 
@@ -301,11 +301,7 @@ class ExitCodeGroup(TyperGroup):
             The help being written.
         """
         if self.examples:
-            formatter.write_paragraph()
-            formatter.write_text("Examples:")
-            with formatter.indentation():
-                for line in self.examples:
-                    formatter.write(f"{'':>{formatter.current_indent}}{line}\n")
+            write_examples(formatter, self.examples)
         if self.config_kinds:
             formatter.write_paragraph()
             formatter.write_text(f"Packaged configs (give the name instead of a file): "
@@ -334,8 +330,6 @@ class ExitCodeGroup(TyperGroup):
             The command's return value, only when ``standalone_mode`` is False (otherwise the
             process exits).
         """
-        click = _click()
-
         if not standalone_mode:
             try:
                 return super().main(args, prog_name, complete_var, standalone_mode, **extra)
@@ -343,19 +337,15 @@ class ExitCodeGroup(TyperGroup):
                 raise exc.signal from None
         try:
             rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
-        except click.exceptions.NoArgsIsHelpError as exc:
+        except click_exceptions.NoArgsIsHelpError as exc:
             typer.echo(exc.ctx.get_help() if exc.ctx is not None else exc.format_message(), err=True)
             sys.exit(EXIT_USAGE)
-        except click.exceptions.MissingParameter as exc:
+        except click_exceptions.UsageError as exc:      # a bad value (not a missing one) is bad input
             typer.echo(f"error: {_one_line_usage(exc)}", err=True)
-            sys.exit(EXIT_USAGE)
-        except click.exceptions.BadParameter as exc:
-            typer.echo(f"error: {_one_line_usage(exc)}", err=True)
-            sys.exit(EXIT_INPUT)
-        except click.exceptions.UsageError as exc:
-            typer.echo(f"error: {_one_line_usage(exc)}", err=True)
-            sys.exit(EXIT_USAGE)
-        except click.exceptions.ClickException as exc:
+            bad_value = (isinstance(exc, click_exceptions.BadParameter)
+                         and not isinstance(exc, click_exceptions.MissingParameter))
+            sys.exit(EXIT_INPUT if bad_value else EXIT_USAGE)
+        except click_exceptions.ClickException as exc:
             typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
             sys.exit(exc.exit_code)
         except (typer.Abort, KeyboardInterrupt) as exc:

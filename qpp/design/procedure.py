@@ -30,6 +30,7 @@ from qpp.io.config import QppConfig
 from qpp.design.hinf import HinfGains, closed_loop_norm, existence_tests, hinf_gains, hinf_search
 from qpp.model.lure import LurePlant, channels, closed_loop, structural_obstacles
 from acmm_qpp.limits import how_to_raise, limit
+from qpp import LIMITS
 from qpp.simulate.closed_loop import check_work
 
 
@@ -147,14 +148,14 @@ class _Procedure:
             self.work += check_work(self.cfg, g.K1, g.Kc, g.H, runs=1, horizon=horizon)
         except ConfigError:
             self.work = np.inf
-        if self.work > limit("QPP_WORK"):
+        if self.work > limit("QPP_WORK", LIMITS):
             given, tf = self.cfg.spheres.T, self.cfg.simulation.t_final
             field, value = (("spheres.T", f"{given:g} s" + (f" (adapted to {T:g} s)" if T != given else ""))
                             if T > tf else ("simulation.t_final", f"{tf:g} s"))
             raise ConfigError(f"{field}: {value} is too long for the design: "
                               f"each of its candidate loops is integrated over max(spheres.T, t_final) = "
                               f"{horizon:g} s, {len(self.records) + 1} so far (work {self.work:.3g}); shorten "
-                              f"t_final or spheres.T ({how_to_raise('QPP_WORK')})")
+                              f"t_final or spheres.T ({how_to_raise('QPP_WORK', LIMITS)})")
 
     def adapt_T(self, g, a, T, ws, res, stage) -> tuple[DesignResult, float]:
         """Step 3: T ← settling time of the closed loop until they agree within 10 %."""

@@ -23,7 +23,7 @@ from qpp.io.config_simulation import Simulation
 from qpp.io.config_nonlin import (ExpressionNonlinearity, LibraryForm, Nonlinearity, PolarArmNonlinearity, SinusoidalNonlinearity)
 from acmm_qpp.configio import read_yaml, validate_model
 from acmm_qpp.overrides import apply_overrides, remember_origin
-from qpp import PACKAGED_CONFIGS
+from qpp import LIMITS, PACKAGED_CONFIGS
 from acmm_qpp.limits import how_to_raise, limit
 from qpp.model.lure import LurePlant
 from qpp.model.nonlin import ExpressionModel
@@ -276,10 +276,10 @@ class QppConfig(SectionModel):
                         check_periods(f"{sig_name} omega", term.omega, self.simulation.t_final)
 
         runs = len(self.simulation.scenarios) + 1
-        if self.simulation.n_samples * runs > limit("QPP_SAMPLES"):
+        if self.simulation.n_samples * runs > limit("QPP_SAMPLES", LIMITS):
             raise ValueError(f"simulation.n_samples: {self.simulation.n_samples} samples × {runs} runs (scenarios + "
                              f"the nominal loop) is too many; lower n_samples or the scenarios "
-                             f"({how_to_raise('QPP_SAMPLES')})")
+                             f"({how_to_raise('QPP_SAMPLES', LIMITS)})")
         if 2 * self.hinf.a * self.spheres.T > 600:
             raise ValueError(f"hinf.a × spheres.T = {self.hinf.a * self.spheres.T:.4g}: e^(2aT) of eq 10.44 "
                              "overflows; lower hinf.a or spheres.T")

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 from acmm_qpp.limits import how_to_raise, limit
+from qpp import LIMITS
 
 
 def check_periods(field: str, omega: float, t_final: float) -> None:
@@ -29,9 +30,9 @@ def check_periods(field: str, omega: float, t_final: float) -> None:
         Too many periods (the message says what to lower, and the limit's variable).
     """
     periods = omega * t_final / (2 * math.pi)
-    if periods > limit("QPP_PERIODS"):
+    if periods > limit("QPP_PERIODS", LIMITS):
         raise ValueError(f"{field}: {omega:g} rad/s over simulation.t_final = {t_final:g} s is {periods:.3g} "
-                         f"periods to integrate; lower the frequency or t_final ({how_to_raise('QPP_PERIODS')})")
+                         f"periods to integrate; lower the frequency or t_final ({how_to_raise('QPP_PERIODS', LIMITS)})")
 
 
 def check_sector(field: str, sector) -> None:
@@ -102,7 +103,7 @@ def check_sample_count(model) -> None:
         Too many points.
     """
     points = model.sector_points()
-    if points <= limit("QPP_SECTOR_POINTS"):
+    if points <= limit("QPP_SECTOR_POINTS", LIMITS):
         return
     r, k = len(model.phi), len(model.names)
     n_theta, n_t = model.theta_sample_count(), model.time_sample_count()
@@ -123,4 +124,4 @@ def check_sample_count(model) -> None:
         advice.append(f"a coarser nonlinearity.n_grid (now {model.n_grid})")
     raise ValueError(f"nonlinearity: finding the sector samples φ at {points:.3g} points ({factors}); "
                      f"use {' or '.join(advice) or 'fewer nonlinear channels'} "
-                     f"({how_to_raise('QPP_SECTOR_POINTS')})")
+                     f"({how_to_raise('QPP_SECTOR_POINTS', LIMITS)})")

@@ -17,20 +17,20 @@ from acmm_qpp.quantity_fields import quantity
 Matrix = list[list[float]]
 
 
-def _q(kind: str):
-    """A number, or a ``"<number> <unit>"`` string converted (pint) to the SI unit of ``kind``;
+def _q(unit: str):
+    """A number, or a ``"<number> <unit>"`` string converted (pint) to the SI unit ``unit``;
     ``None`` passes (optional fields)."""
-    return quantity(kind, allow_none=True)
+    return quantity(unit, allow_none=True)
 
 
-Seconds = Annotated[float, _q("time")]
-OptSeconds = Annotated[Optional[float], _q("time")]
-RadPerSecond = Annotated[float, _q("frequency")]
-PerSecond = Annotated[float, _q("inverse_time")]
-Kilograms = Annotated[float, _q("mass")]
-Metres = Annotated[float, _q("length")]
-KgM2 = Annotated[float, _q("si_inertia")]
-Radians = Annotated[float, _q("angle_rad")]
+Seconds = Annotated[float, _q("s")]
+OptSeconds = Annotated[Optional[float], _q("s")]
+RadPerSecond = Annotated[float, _q("rad/s")]
+PerSecond = Annotated[float, _q("1/s")]
+Kilograms = Annotated[float, _q("kg")]
+Metres = Annotated[float, _q("m")]
+KgM2 = Annotated[float, _q("kg*m^2")]
+Radians = Annotated[float, _q("rad")]
 #: Largest magnitude accepted for any number of a qpp config (matrix entry, gain, weight,
 #: amplitude, time); beyond it products in the design and the simulation overflow (issue 13).
 QPP_MAX = 1e12

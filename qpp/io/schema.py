@@ -15,4 +15,4 @@ def qpp_schema() -> dict:
         JSON schema (draft 2020-12); dimensional fields accept a number or a quantity string in
         any unit of the field's dimension.
     """
-    return header(model_schema(QppConfig), "qpp", "qpp config (CR-185644 Part III)")
+    return header(model_schema(QppConfig), "qpp config (CR-185644 Part III)")

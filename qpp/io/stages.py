@@ -288,7 +288,7 @@ def run_design(config, figures: bool | None = None, *, out: Path) -> tuple[QppCo
               **{f"premise[{k}]": bool(ok) for k, (ok, _) in r.premises.items()},
               **{f"premise_statement[{k}]": text for k, (_, text) in r.premises.items()},
               "proved": "; ".join(r.proved), "assumed": "; ".join(r.assumed), "scope": r.scope_text,
-              "gains_sha256": gains_sha256(r.K1, r.Kc, r.H)})
+              "gains_sha256": gains_sha256(r.K1, r.Kc, r.H), "unit_system": cfg.output.units})
     if want_figures:
         draw_figures([partial(plot_circle, r, out / "qpp_circle.png"),
                       partial(plot_iterations, r, out / "qpp_iterations.png")])
@@ -367,7 +367,7 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored, ou
         }
     write_h5(out / "qpp_sim.h5", items, cfg.to_yaml(),
              {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims)),
-              "design_certified": int(r.certified), "design_verdict": r.verdict})
+              "design_certified": int(r.certified), "design_verdict": r.verdict, "unit_system": cfg.output.units})
     draw_figures(figures)
     return r, sims
 

@@ -27,6 +27,7 @@ from qpp.model.matched_nonlinearity import config_f1, scenario_gamma
 from qpp.simulate.signals import eval_signal
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.limits import how_to_raise, limit
+from qpp import LIMITS
 
 
 @dataclass
@@ -190,7 +191,7 @@ def check_work(cfg: QppConfig, K1, Kc, H, runs: int | None = None, horizon: floa
     of the loop): the largest |eigenvalue| of the linear closed loop (plant, servo-compensator,
     observer) plus the size of the nonlinearity's output feedback and the fastest signal
     frequency.  Work = that × (scenarios + 1) is bounded by the ``QPP_WORK`` limit
-    (:mod:`acmm_qpp.limits`).  Returns the work estimate.
+    (``qpp.LIMITS``).  Returns the work estimate.
 
     Parameters
     ----------
@@ -235,10 +236,10 @@ def check_work(cfg: QppConfig, K1, Kc, H, runs: int | None = None, horizon: floa
     runs = len(sim.scenarios) + 1 if runs is None else int(runs)
     horizon = sim.t_final if horizon is None else float(horizon)
     work = horizon * rate * runs
-    if not work <= limit("QPP_WORK"):
+    if not work <= limit("QPP_WORK", LIMITS):
         raise ConfigError(f"simulation.t_final: {horizon:g} s × the loop's fastest rate {rate:.4g} 1/s × "
                           f"{runs} run(s) needs too many integrator steps (work {work:.3g}); "
-                          f"shorten t_final, use fewer scenarios or slower gains ({how_to_raise('QPP_WORK')})")
+                          f"shorten t_final, use fewer scenarios or slower gains ({how_to_raise('QPP_WORK', LIMITS)})")
     return work
 
 

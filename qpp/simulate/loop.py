@@ -19,6 +19,7 @@ from qpp.io.config import QppConfig
 from qpp.model.lure import LurePlant
 from qpp.simulate.signals import eval_signal
 from acmm_qpp.limits import how_to_raise, limit
+from qpp import LIMITS
 
 
 def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
@@ -225,10 +226,10 @@ class _TooManyEvaluations(Exception):
 
 
 def _counted(rhs):
-    """``rhs`` refusing to be evaluated more than ``QPP_RHS_EVALS`` times (acmm_qpp.limits): the
+    """``rhs`` refusing to be evaluated more than ``QPP_RHS_EVALS`` times (``qpp.LIMITS``): the
     static work bound (t_final × the loop's rates) cannot see a fast t inside an expression
     nonlinearity, e.g. sin(1e6·t), whose run never ended (a review)."""
-    budget, count = limit("QPP_RHS_EVALS"), [0]
+    budget, count = limit("QPP_RHS_EVALS", LIMITS), [0]
 
     def counted(t, z):
         count[0] += 1
@@ -267,10 +268,10 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, div
             except _TooManyEvaluations as exc:
                 raise ConfigError(
                     f"simulation.t_final: the integration reached t = {float(exc.args[0]):.4g} s of {tf:g} s "
-                    f"after {limit('QPP_RHS_EVALS'):.3g} evaluations of the loop: something in it varies much "
+                    f"after {limit('QPP_RHS_EVALS', LIMITS):.3g} evaluations of the loop: something in it varies much "
                     "faster than its closed-loop rates (a t inside a nonlinearity's expression, e.g. "
                     "sin(1e6*t)?), or simulation.rtol / atol are very tight; shorten t_final, slow it down or "
-                    f"loosen the tolerances ({how_to_raise('QPP_RHS_EVALS')})") from None
+                    f"loosen the tolerances ({how_to_raise('QPP_RHS_EVALS', LIMITS)})") from None
         # the largest finite |z| of the samples reached (a loop can leap from large to inf or NaN
         # within one step, past the event, and fail the integrator there)
         reached = np.abs(np.column_stack([z, sol.y]) if sol.y.size else z)

@@ -14,11 +14,22 @@ def test_a_work_limit_variable_that_is_no_number_is_refused(monkeypatch):
     from acmm_qpp.errors import ConfigError
     from acmm_qpp.limits import DEFAULTS, limit
 
-    monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", "5e6")
-    assert limit("SIM_SAMPLES") == 5e6
+    monkeypatch.setenv("ACMM_LIMIT_CONFIG_BYTES", "5e6")
+    assert limit("CONFIG_BYTES") == 5e6
     for bad in ("lots", "0", "-3", "inf", "nan"):
-        monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", bad)
-        with pytest.raises(ConfigError, match=f"ACMM_LIMIT_SIM_SAMPLES: must be a positive number \\(got '{bad}'\\)"):
-            limit("SIM_SAMPLES")
-    monkeypatch.setenv("ACMM_LIMIT_SIM_SAMPLES", " ")
-    assert limit("SIM_SAMPLES") == DEFAULTS["SIM_SAMPLES"]
+        monkeypatch.setenv("ACMM_LIMIT_CONFIG_BYTES", bad)
+        with pytest.raises(ConfigError, match=f"ACMM_LIMIT_CONFIG_BYTES: must be a positive number \\(got '{bad}'\\)"):
+            limit("CONFIG_BYTES")
+    monkeypatch.setenv("ACMM_LIMIT_CONFIG_BYTES", " ")
+    assert limit("CONFIG_BYTES") == DEFAULTS["CONFIG_BYTES"]
+
+
+def test_a_product_limit_is_read_from_the_products_table(monkeypatch):
+    """A product passes its own table; the variable overrides its default the same way."""
+    from acmm_qpp.limits import how_to_raise, limit
+
+    table = {"WIDGETS": 7}
+    monkeypatch.delenv("ACMM_LIMIT_WIDGETS", raising=False)
+    assert limit("WIDGETS", table) == 7
+    monkeypatch.setenv("ACMM_LIMIT_WIDGETS", "9")
+    assert how_to_raise("WIDGETS", table) == "limit 9; set ACMM_LIMIT_WIDGETS to change it"

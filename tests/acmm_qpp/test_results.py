@@ -14,7 +14,7 @@ import yaml
 
 import acmm
 from acmm.io.config import load_config, parse_config
-from acmm_qpp.results import Dataset, read_h5, unit_system_of, write_h5
+from acmm_qpp.results import Dataset, read_h5, write_h5
 from acmm.plots import simulation as sim_plots
 
 from tests.conftest import CONFIGS
@@ -342,12 +342,9 @@ def test_write_h5_refuses_arrays_without_their_dimensions(tmp_path, items, match
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("text,system", [
-    ("output: {units: SI}\n", "SI"), ("output:\n  units: imperial\n", "imperial"),
-    ("name: x\n", "imperial"), ("output: {}\n", "imperial"), ("", "imperial"),
-    ("- a\n- b\n", "imperial"),                 # not a mapping
-    ("output: {units: SI\n", "imperial"),       # not YAML
-    ("output: {units: \"\\x00\"}\n", "\x00"),   # whatever the config says
-])
-def test_unit_system_of_config_text(text, system):
-    assert unit_system_of(text) == system
+def test_write_h5_writes_the_items_as_given(tmp_path):
+    """The base converts nothing and reads no config key: a product converts its items first
+    (acmm: :func:`acmm.io.units.convert_items`) and names its unit system in ``attrs``."""
+    items = {"torque": Dataset(2.0, "ft*lbf"), "angle": Dataset(180.0, "deg")}
+    plain = read_h5(write_h5(tmp_path / "plain.h5", items, "output: {units: SI}\n"))
+    assert "unit_system" not in plain["attrs"] and plain["torque"] == 2.0 and plain["angle"] == 180.0

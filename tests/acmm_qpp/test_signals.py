@@ -48,7 +48,7 @@ _STOP_AT = textwrap.dedent("""
     elif point == "figures":
         from acmm.plots import simulation as target; name = "summary"
     else:
-        from acmm.stages import simulate as target; name = "write_h5"
+        from acmm.stages import simulate as target; name = "write_results"
     setattr(target, name, stop)
     sys.argv = ["acmm", *sys.argv[2:]]
     from acmm.cli.app import main

@@ -14,7 +14,7 @@ from tests.conftest import CONFIGS
 # ---------------------------------------------------------------- unit strings everywhere
 def test_unit_strings_in_acmm_sweep_and_qpp_configs():
     from acmm.sweep.spec import SweepSpec
-    from acmm_qpp.units import FT_LBF_IN_NM as k
+    from acmm.model.unit_systems import FT_LBF_IN_NM as k
     from qpp.io.config import QppConfig
 
     base = yaml.safe_load((CONFIGS / "mb3.yaml").read_text())

@@ -22,7 +22,7 @@ def test_si_config_round_trips(tmp_path):
     import h5py
 
     from acmm.stages.simulate import run_simulate
-    from acmm_qpp.units import FT_LBF_IN_NM
+    from acmm.model.unit_systems import FT_LBF_IN_NM
 
     imp = _short("mb3", tmp_path / "imp")
     d = imp.model_dump(mode="json")
@@ -60,7 +60,7 @@ def test_si_design_h5_is_the_imperial_design_in_si_and_is_reused_exactly(tmp_pat
 
     from acmm.io.design_file import load_design_table
     from acmm.stages.design import run_design
-    from acmm_qpp.units import FT_LBF_IN_NM as k
+    from acmm.model.unit_systems import FT_LBF_IN_NM as k
 
     imp = _short("ac", tmp_path / "imp")
     d = imp.model_dump(mode="json")
@@ -101,3 +101,20 @@ def test_si_simulation_is_the_same_whether_its_design_was_just_made_or_reused(tm
     r, again = run_simulate(cfg)
     assert "reused" in r.design_note
     assert dataset_hashes(again) == first
+
+
+def test_convert_items_to_si_and_angles_to_rad():
+    """Datasets are converted by their unit strings: ft·lbf → N·m under SI, deg → rad in both
+    systems, units pint does not know kept; groups alike."""
+    from acmm.io.units import convert_items
+    from acmm.model.unit_systems import FT_LBF_IN_NM
+    from acmm_qpp.results import Dataset
+
+    items = {"torque": Dataset(2.0, "ft*lbf"), "g": {"angle": Dataset(180.0, "deg")},
+             "odd": Dataset(1.0, "output units"), "n": Dataset(3, "1")}
+    si = convert_items(items, "SI")
+    assert (si["torque"].data, si["torque"].units) == (pytest.approx(2.0 * FT_LBF_IN_NM), "N*m")
+    assert (si["g"]["angle"].data, si["g"]["angle"].units) == (pytest.approx(np.pi), "rad")
+    assert si["odd"] is items["odd"] and si["n"] is items["n"]
+    imperial = convert_items(items, "imperial")
+    assert imperial["torque"] is items["torque"] and imperial["g"]["angle"].units == "rad"

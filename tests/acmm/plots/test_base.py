@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.plots import base as plot_base
-from acmm_qpp import plot_style as plot_style_mod
 from acmm.model.linearize import STATE_NAMES
 
 
@@ -24,8 +23,7 @@ def test_baked_texts_are_text_in_a_pdf():
 
     from acmm.plots import base as plot_base
     from acmm.plots import design as design_plots
-    from acmm_qpp import plot_style as plot_style_mod
-
+    
     fig, grid = design_plots._gain_grid_layout(tuple(STATE_NAMES), tuple(plot_base.state_units()), "ft·lbf")
     title = grid.titles[0]
     drawn, draw = [], title.draw
@@ -34,4 +32,4 @@ def test_baked_texts_are_text_in_a_pdf():
     assert drawn == [] and not title.get_visible()          # the PNG blends the baked tile
     fig.savefig(io.BytesIO(), format="pdf")
     assert drawn == ["MixedModeRenderer"] and not title.get_visible()   # the PDF draws the text
-    plot_style_mod.stage_pyplot().close(fig)
+    plot_base.stage_pyplot().close(fig)

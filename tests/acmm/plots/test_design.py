@@ -7,7 +7,6 @@ import pytest
 
 from acmm.plots import base as plot_base
 from acmm.plots import design as design_plots
-from acmm_qpp import plot_style as plot_style_mod
 from acmm.model.linearize import STATE_NAMES
 
 
@@ -44,7 +43,7 @@ def test_log_axis_labels_are_plain_text_of_the_tick_values():
             return float(label)
         return float(coeff.rstrip("×") or 1) * 10.0 ** int(power.translate(sup))
 
-    fig, (_, a2) = plot_style_mod.stage_pyplot().subplots(2, 1)
+    fig, (_, a2) = plot_base.stage_pyplot().subplots(2, 1)
     a2.set_yscale("log")
     a2.set_ylim(0.3, 3.0)                                 # one decade: minor ticks labelled too
     fig.canvas.draw()
@@ -61,7 +60,7 @@ def test_log_axis_labels_are_plain_text_of_the_tick_values():
             if got:
                 assert value(got) == pytest.approx(v, rel=1e-12), (v, got)
     assert design_plots._plain_math(r"$\mathdefault{6\times10^{-1}}$") == "6×10⁻¹"
-    plot_style_mod.stage_pyplot().close(fig)
+    plot_base.stage_pyplot().close(fig)
 
 
 def test_scheduled_pole_map_colours_ignore_a_nan_tea(captured, tmp_path):

@@ -143,7 +143,7 @@ def test_a_second_ctrl_c_does_not_hang_the_sweep(tmp_path, gap):
 def test_a_dask_worker_running_other_code_is_refused():
     from acmm.sweep.executors import call_chunk, same_code
     from acmm_qpp.errors import ConfigError
-    from acmm_qpp.provenance import code_identity
+    from acmm.sweep.executors import code_identity
 
     with pytest.raises(ConfigError, match="--scheduler: a Dask worker runs other acmm code"):
         call_chunk([], None, "0.0.0+000000000000")         # before anything else of the chunk

@@ -25,19 +25,3 @@ def test_progress_silent_without_terminal_and_shown_when_forced(tmp_runs, monkey
     # stdout (the results) is the same with and without progress, up to the wall time
     strip = lambda s: [x for x in s.splitlines() if "design point(s)" not in x]  # noqa: E731
     assert strip(loud.stdout) == strip(quiet.stdout)
-
-
-def test_the_design_bar_runs_no_thread_beside_the_design_pool(monkeypatch):
-    """The design stage forks its LMI pool only when no other thread runs (a fork beside one can
-    deadlock the child): the design's bar redraws at each step instead of from rich's thread."""
-    import threading
-
-    from acmm_qpp.cli import progress as prog
-
-    monkeypatch.setenv("ACMM_PROGRESS", "1")
-    before = threading.active_count()
-    with prog.Steps("designing", 3, refresh_thread=False) as bar:
-        bar.advance("designed one")
-        assert threading.active_count() == before
-    with prog.Steps("sweeping", 3) as bar:               # the default: rich's refresh thread
-        assert threading.active_count() == before + 1
