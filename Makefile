@@ -82,7 +82,8 @@ browser:
 	  echo "chromium not installed: the browser test will be skipped"
 
 bench: $(STAMP) bytecode
-	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench.py --full
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench.py --only-targets
+	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python scripts/bench.py --only-ratios --full
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python scripts/compare_riccati.py
 
 report: $(STAMP) bytecode

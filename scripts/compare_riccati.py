@@ -1,4 +1,3 @@
-#!/usr/bin/env python
 """Compare the Riccati solvers of acmm.design.riccati on the MB3 and AC design problems.
 
 For each configuration two Riccati equations of the sector LQR (acmm.design.sector_lqr, ch. 5.2) are solved:
@@ -38,6 +37,7 @@ from acmm.design.sector_lqr import sector_lqr  # noqa: E402
 from acmm.design.settings import design_settings  # noqa: E402
 from acmm.io.config import load_config  # noqa: E402
 from acmm.model.linearize import linearize_config  # noqa: E402
+from acmm.report.numbers import markdown_table  # noqa: E402
 from acmm_qpp.errors import ConvergenceError  # noqa: E402
 
 SOLVERS = [("sign", {}), ("sign (polynomial eval.)", {"sign_evaluation": "polynomial"}),
@@ -96,13 +96,11 @@ def table(repeat=7) -> tuple[str, str]:
             At, Bt, Qt = scale_problem(A, B, Q, d)
             P, _ = solve_unverified(At, Bt, Qt, R, method="scipy")
             kappa.append(f"{col}: {care_condition(At, Bt, Qt, R, 0.5 * (P + P.T)):.1e}")
-    lines = ["| solver | states | " + " | ".join(cols) + " |", "|---|---|" + "---|" * len(cols)]
-    for solver, _kw in SOLVERS:
-        for scaled in (True, False):
-            cells = ["fail" if r is None else f"{r[0]:.1e}{'' if r[1] else ' !'} / {r[2] * 1e3:.1f} ms"
-                     for r in (data[(solver, scaled, col)] for col in cols)]
-            lines.append(f"| {solver} | {'scaled' if scaled else 'unscaled'} | " + " | ".join(cells) + " |")
-    return "\n".join(lines), "κ_CARE (scaled): " + "; ".join(kappa)
+    rows = [[solver, "scaled" if scaled else "unscaled"]
+            + ["fail" if r is None else f"{r[0]:.1e}{'' if r[1] else ' !'} / {r[2] * 1e3:.1f} ms"
+               for r in (data[(solver, scaled, col)] for col in cols)]
+            for solver, _kw in SOLVERS for scaled in (True, False)]
+    return markdown_table(["solver", "states", *cols], rows), "κ_CARE (scaled): " + "; ".join(kappa)
 
 
 def main():

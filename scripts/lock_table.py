@@ -1,4 +1,3 @@
-#!/usr/bin/env python
 """The README's dependency table, its version column taken from requirements.lock.
 
 One row per direct dependency of pyproject.toml (the main ones, then the test extra's): the
@@ -20,6 +19,8 @@ from pathlib import Path
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
+from acmm.report.numbers import markdown_table
+
 try:
     import tomllib
 except ModuleNotFoundError:         # Python 3.10 (tomli is in the lock there: pytest's)
@@ -30,7 +31,6 @@ LOCK = ROOT / "requirements.lock"
 PYPROJECT = ROOT / "pyproject.toml"
 README = ROOT / "README.md"
 SECTION = "## Dependencies"
-HEADER = "| package | locked | why it earns its place |\n|---|---|---|"
 NO_REASON = "(why? say it here)"
 
 _ENTRY = re.compile(r"^([A-Za-z0-9][A-Za-z0-9._-]*)==([^\s;\\]+)\s*(?:;\s*(.+?))?\s*\\?$")
@@ -96,15 +96,15 @@ def readme_table(text: str) -> tuple[int, int, dict[str, str]]:
 def table(reasons: dict[str, str]) -> str:
     """The table (header, then one row per direct dependency), ending with a newline."""
     pins = locked()
-    rows = [HEADER]
+    rows = []
     for req, extras in direct():
         name = canonicalize_name(req.name)
         if name not in pins:
             raise SystemExit(f"lock_table: {req.name} is not in {LOCK.name}: run make lock")
         where = "; ".join(("test extra" if e == "test" else f"`{e}` extra") for e in extras)
         label = req.name + (f" ({where})" if where else "")
-        rows.append(f"| {label} | {version_cell(pins[name])} | {reasons.get(name, NO_REASON)} |")
-    return "\n".join(rows) + "\n"
+        rows.append([label, version_cell(pins[name]), reasons.get(name, NO_REASON)])
+    return markdown_table(["package", "locked", "why it earns its place"], rows)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -554,7 +554,8 @@ def bias_fold(inertia: np.ndarray, n: float, bias: np.ndarray) -> float | None:
     float or None
         The largest fraction λ of ``bias`` with an equilibrium on the branch the continuation
         follows from LVLH (dimensionless, the fraction :class:`NoEquilibriumError` names), or None
-        when the continuation does not fold in the bias.
+        when the continuation reaches the whole bias or fails before it (in the products of
+        inertia).
     """
     _, status, lam = _from_lvlh(np.ascontiguousarray(inertia, float), float(n), np.asarray(bias, float),
                                 RESIDUAL_TOL)

@@ -103,7 +103,6 @@ def block_claims(r: dict) -> str:
     str
         A Markdown table.
     """
-    n = r["config:mb3"].orbit_rate
     s_c, s_d = r["simulate:mb3"], r["simulate:mb3_decoupled"]
     o, err = s_c["orbits"], np.degrees(np.abs(s_c["attitude_error"]))
     first, late = err[o <= 1.0].max(axis=0), err[o >= 2.0].max(axis=0)

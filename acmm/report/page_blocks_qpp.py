@@ -73,7 +73,7 @@ def block_qpp_bullet(r: dict) -> str:
     holds = [[b <= x["m"] for b in x["b1"]] for x in s]
     which = {(True, True): "both readings", (True, False): "the eq 10.7 reading only",
              (False, True): "the printed reading only", (False, False): "neither reading"}
-    spheres = all(v["passed"] for x in s for v in x["sims"].values())
+    in_spheres = all(v["passed"] for x in s for v in x["sims"].values())
     cert = tuple(bool(int(x["d"]["attrs"]["certified"])) for x in s)
     consistent = {(False, False): "neither example is certified", (True, True): "both examples are certified",
                   (True, False): "only the SISO example is certified",
@@ -83,7 +83,7 @@ def block_qpp_bullet(r: dict) -> str:
             f"own bookkeeping reproduces\n  β1 ≤ m for the SISO example with {which[tuple(holds[0])]} and for the "
             f"manipulator with {which[tuple(holds[1])]},\n  a reproduction, not a certificate: in the consistent "
             f"reading (one sector, one norm) {consistent}\n  ([QPP certificates](../qpp-certificates.md)); simulated "
-            f"errors {'within' if spheres else '**not** all within'} the output spheres (see [QPP results](qpp.md)).\n")
+            f"errors {'within' if in_spheres else '**not** all within'} the output spheres (see [QPP results](qpp.md)).\n")
 
 
 def block_qpp_certificates(r: dict) -> str:
@@ -235,7 +235,7 @@ def block_qpp_reproduced(r: dict) -> str:
     """
     so, ma = _qpp_summary(r, "qpp_siso"), _qpp_summary(r, "qpp_manipulator")
     rows = [["SISO A_z (13.6), Table 14.1 A_z/B_z", "—", "rebuilt from printed gains, equal at printed precision"]]
-    for lab, x, rho_a in (("SISO K1, Kc", so, None), ("manip. K1 / Kc", ma, None)):
+    for lab, x in (("SISO K1, Kc", so), ("manip. K1 / Kc", ma)):
         d, pub, h = x["d"], x["d"]["published"], x["cfg"].hinf
         if lab.startswith("SISO"):
             pr = f"[{_printed(pub['K1'])}], [{_printed(pub['Kc'])}]"

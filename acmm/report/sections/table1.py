@@ -36,7 +36,8 @@ def table1_teas(cfg) -> tuple:
     """
     I = cfg.inertia.matrix()
     bias = tea_mod.resolve_bias(cfg.disturbance, I, cfg.orbit_rate)
-    return tea_mod.solve_tea(I, cfg.orbit_rate, bias), tea_mod.solve_tea(I, cfg.orbit_rate, np.zeros(3)), bias
+    return (tea_mod.solve_tea(I, cfg.orbit_rate, bias, expected=cfg.disturbance.requested_tea()),
+            tea_mod.solve_tea(I, cfg.orbit_rate, np.zeros(3)), bias)
 
 
 def build(ctx: SectionWriter) -> dict:

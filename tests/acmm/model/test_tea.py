@@ -194,6 +194,18 @@ def test_mb3_4ftlbf_pitch_bias_has_no_equilibrium():
     assert largest[1] == pytest.approx(scan, rel=2e-3), (msg, scan)
 
 
+def test_bias_fold_is_the_fraction_the_error_names():
+    """tea.bias_fold: the fold's fraction of the bias, as NoEquilibriumError prints it, and None
+    where the whole bias has an equilibrium."""
+    bias = np.array([0.0, 4.0, 0.0])
+    lam = tea.bias_fold(MB3_INERTIA, N, bias)
+    with pytest.raises(NoEquilibriumError) as exc:
+        tea.solve_tea(MB3_INERTIA, N, bias)
+    assert 0.0 < lam < 1.0 and str(exc.value).startswith(tea.fold_message(bias, lam))
+    assert lam * 4.0 == pytest.approx(_max_pitch_bias_scan(), rel=2e-3)
+    assert tea.bias_fold(MB3_INERTIA, N, 0.3 * bias) is None        # 1.2 ft·lbf, below the capacity
+
+
 def test_mb3_pitch_bias_just_inside_capacity_has_equilibrium():
     scan = _max_pitch_bias_scan()
     bias = np.array([0.0, 0.97 * scan, 0.0])
