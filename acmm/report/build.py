@@ -130,7 +130,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     -------
     ReportResult
         The files written and what they contain.  A stage, part or section that raised a
-        user-facing error (:func:`acmm_qpp.errors.failure_line`) is shown in its section with that
+        user-facing error (:func:`acmm.report.stage_results.failure_line`) is shown in its section with that
         error, the others complete, and it is listed in :attr:`ReportResult.failures`; a bug
         propagates and nothing is written.
 
