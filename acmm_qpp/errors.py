@@ -100,15 +100,6 @@ class ConvergenceError(AcmmError, ArithmeticError):
     exit_code = EXIT_NUMERICAL
 
 
-class NoEquilibriumError(AcmmError):
-    """No torque-equilibrium attitude exists for the given inertia and bias (eqs 4.1–4.3).
-
-    A property of the configured plant, so it is an input error (exit 2); see
-    ``docs/ERRATA.md`` § TEA."""
-
-    exit_code = EXIT_INPUT
-
-
 class DesignError(AcmmError):
     """A control design cannot meet its specification (exit 3)."""
 
