@@ -100,15 +100,6 @@ class ConvergenceError(AcmmError, ArithmeticError):
     exit_code = EXIT_NUMERICAL
 
 
-class NoEquilibriumError(AcmmError):
-    """No torque-equilibrium attitude exists for the given inertia and bias (eqs 4.1–4.3).
-
-    A property of the configured plant, so it is an input error (exit 2); see
-    ``docs/ERRATA.md`` § TEA."""
-
-    exit_code = EXIT_INPUT
-
-
 class DesignError(AcmmError):
     """A control design cannot meet its specification (exit 3)."""
 
@@ -170,23 +161,3 @@ def plain_failure(exc: BaseException):
         where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
         return f"I/O error: {exc.strerror or exc}{where}", EXIT_OUTPUT
     return None
-
-
-def failure_line(exc: BaseException):
-    """(one-line message, exit code) of any user-facing failure: an :class:`AcmmError` (its
-    message and class's ``exit_code``) or a :func:`plain_failure`; None for a genuine bug.
-
-    Parameters
-    ----------
-    exc : BaseException
-        The exception caught.
-
-    Returns
-    -------
-    tuple of (str, int) or None
-        The message on one line and the exit code, or None.
-    """
-    if isinstance(exc, AcmmError):
-        return " ".join(str(exc).split()) or type(exc).__name__, int(getattr(exc, "exit_code", EXIT_INPUT))
-    plain = plain_failure(exc)
-    return None if plain is None else (" ".join(plain[0].split()), plain[1])

@@ -33,7 +33,7 @@ from pathlib import Path
 from acmm_qpp.atomic_write import output_error, write_text
 from acmm_qpp.errors import FigureError, OutputError
 from acmm_qpp.overrides import header, origin_of
-from acmm_qpp.runlock import run_lock
+from acmm_qpp.runlock import STAGING, run_lock
 from acmm_qpp.signals import interrupts_deferred
 
 CONFIG_FILE = "config.yaml"
@@ -189,7 +189,7 @@ def staged_outputs(run_dir, patterns: tuple, config=None, config_text: str | Non
         _finish_in_place(run_dir, patterns, before, text)
         return
     try:
-        staging = Path(tempfile.mkdtemp(prefix=f".staging-{os.getpid()}-", dir=run_dir))
+        staging = Path(tempfile.mkdtemp(prefix=f".{STAGING}-{os.getpid()}-", dir=run_dir))
     except OSError as exc:
         raise output_error(exc, "results", run_dir) from None
     try:

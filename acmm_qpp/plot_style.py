@@ -1,9 +1,8 @@
-"""The matplotlib set-up of the project: backend, the publication rcParams and colour cycle.
+"""The matplotlib set-up of the project: figures into files only, on the Agg backend.
 
 Every figure gets ``matplotlib.pyplot`` from here (:func:`agg_pyplot`), on the non-interactive
-Agg backend; nothing is shown on screen.  :data:`RC` and :data:`COLORS` are the publication style
-(Okabe–Ito colour-blind-safe cycle, light grids, no top/right spines, :func:`pyplot`); a
-product's stage figures keep a style of their own (acmm's ``acmm.plots.base.STAGE_RC``).
+Agg backend; nothing is shown on screen (:func:`files_only_backend`).  The rcParams are each
+product's own.
 """
 from __future__ import annotations
 
@@ -13,28 +12,6 @@ import sys
 import tempfile
 from pathlib import Path
 
-#: Okabe–Ito colour-blind-safe palette.
-COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#000000")
-
-#: rcParams of the report's figures.
-RC = {
-    "figure.dpi": 100,
-    "savefig.dpi": 120,
-    "font.size": 9,
-    "axes.titlesize": 9,
-    "axes.labelsize": 9,
-    "legend.fontsize": 7.5,
-    "xtick.labelsize": 8,
-    "ytick.labelsize": 8,
-    "axes.grid": True,
-    "grid.alpha": 0.3,
-    "grid.linewidth": 0.5,
-    "lines.linewidth": 1.0,
-    "axes.spines.top": False,
-    "axes.spines.right": False,
-    "legend.frameon": False,
-    "pdf.fonttype": 3,           # subsetted Type 3 fonts: small, fast, still vector text
-}
 
 def files_only_backend() -> None:
     """The commands draw figures into files only: matplotlib's backend is Agg whatever
@@ -102,18 +79,3 @@ def agg_pyplot(force: bool = False):
 
     return plt
 
-
-def pyplot():
-    """``matplotlib.pyplot`` on the Agg backend with the report style (:data:`RC`, :data:`COLORS`).
-
-    Returns
-    -------
-    module
-        ``matplotlib.pyplot``.
-    """
-    from cycler import cycler  # deferred: matplotlib's cycler, with matplotlib
-
-    plt = agg_pyplot(force=True)
-    plt.rcParams.update(RC)
-    plt.rcParams["axes.prop_cycle"] = cycler(color=list(COLORS))
-    return plt

@@ -103,18 +103,3 @@ def provenance(config_text: str) -> dict[str, str]:
         "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
     }
 
-
-def source_unchanged() -> bool:
-    """Whether the code running is exactly a commit: the source tree is a git checkout whose
-    tracked files have no uncommitted change (``git status --porcelain --untracked-files=no``).
-
-    A stage may reuse another stage's results only then (:mod:`qpp.io.stored_design`): an edited
-    or unknown source may compute something else.
-
-    Returns
-    -------
-    bool
-        True for a clean checkout; False when dirty, not a checkout, or git is missing.
-    """
-    return git_commit() != "unknown" and _git_state()[1] is False
-

@@ -6,9 +6,9 @@ of the same name is refused at once with one :class:`~acmm_qpp.errors.OutputErro
 holder's pid (exit 4) instead of racing it.  The kernel releases the lock when the holder dies,
 even by ``kill -9``, so a stale lock file never blocks a later run; the file is removed when the
 run ends.  Holding the lock, a run removes what a killed earlier run of the same folder left
-behind (:func:`remove_leftovers`: staging folders, temporary files), and a run refused or failed
-before writing anything removes the directories it created.  The lock is re-entrant within a
-process (``simulate`` runs ``design`` under its lock).
+behind (:func:`remove_leftovers`: staging folders, the caller's kinds among them, temporary
+files), and a run refused or failed before writing anything removes the directories it created.
+The lock is re-entrant within a process (``simulate`` runs ``design`` under its lock).
 
 .. _filelock: https://py-filelock.readthedocs.io
 """
@@ -27,10 +27,8 @@ from acmm_qpp.errors import OutputError
 from acmm_qpp.signals import interrupts_deferred
 
 LOCK_NAME = ".lock"
-#: What a killed run leaves in its folder: temporary files of an atomic write (``.<file>.<random>.tmp``)
-#: and the staging folders of stages (``.staging-<pid>-<random>``) and of the report's figures
-#: (``.figures-<pid>-<random>``).
-LEFTOVERS = re.compile(r"^\.(.+\.tmp|staging-\d+-.+|figures-\d+-.+)$")
+#: Kind of the staging folders of stages (``.staging-<pid>-<random>``, :mod:`acmm_qpp.outputs`).
+STAGING = "staging"
 
 
 def _holder(lock: Path) -> str:
@@ -41,8 +39,10 @@ def _holder(lock: Path) -> str:
     return f"pid {text}" if text.isdigit() else "a process that has not yet written its pid"
 
 
-def remove_leftovers(directory: Path) -> list[str]:
-    """Remove what killed runs left in ``directory`` (:data:`LEFTOVERS`).
+def remove_leftovers(directory: Path, staging: tuple = ()) -> list[str]:
+    """Remove what killed runs left in ``directory``: temporary files of an atomic write
+    (``.<file>.<random>.tmp``) and staging folders ``.<kind>-<pid>-<random>`` of the stages'
+    kind (:data:`STAGING`) and of the caller's kinds.
 
     Only call this while holding the directory's run lock: no live run then owns them.
 
@@ -50,19 +50,22 @@ def remove_leftovers(directory: Path) -> list[str]:
     ----------
     directory : Path
         The run directory.
+    staging : tuple of str, optional
+        The caller's own kinds of staging folder.
 
     Returns
     -------
     list of str
         Names of the files and folders removed.
     """
-    removed = []
+    kinds = "|".join(re.escape(k) for k in (STAGING, *staging))
+    removed, pattern = [], re.compile(rf"^\.(.+\.tmp|(?:{kinds})-\d+-.+)$")
     try:
         entries = list(os.scandir(directory))
     except OSError:
         return removed
     for e in entries:
-        if not LEFTOVERS.match(e.name) or e.is_symlink():
+        if not pattern.match(e.name) or e.is_symlink():
             continue
         try:
             if e.is_dir():
@@ -100,13 +103,16 @@ def _release(lock: filelock.FileLock, path: Path, created: list) -> None:
 
 
 @contextmanager
-def run_lock(run_dir: str | Path):
+def run_lock(run_dir: str | Path, staging: tuple = ()):
     """Hold the exclusive run lock of ``run_dir`` (created if needed) for the ``with`` block.
 
     Parameters
     ----------
     run_dir : path-like
         The run directory ``<root>/<name>/``.
+    staging : tuple of str, optional
+        The kinds of staging folder (``.<kind>-<pid>-<random>``) the caller makes besides the
+        stages', removed as a killed run's leftovers (:func:`remove_leftovers`).
 
     Yields
     ------
@@ -138,7 +144,7 @@ def run_lock(run_dir: str | Path):
     try:
         if lock.lock_counter == 1:
             _write_pid(path)
-            remove_leftovers(d)
+            remove_leftovers(d, staging)
     except OSError as exc:
         _release(lock, path, created)
         raise output_error(exc, "the run lock", path) from None

@@ -3,8 +3,8 @@
 A command that receives SIGTERM or SIGHUP (``kill``, ``timeout``, a closed terminal, a batch
 system's time limit) unwinds like Ctrl-C: :func:`terminate_like_ctrl_c` makes the signal raise
 :class:`acmm_qpp.errors.Terminated` (a ``KeyboardInterrupt``), so Python's own interrupt path runs:
-a stage removes its staging folder (:mod:`acmm_qpp.outputs`), a pool is stopped
-(:func:`acmm_qpp.pool.stop_pool`), and the command exits with 128 + the signal number.  The few
+a stage removes its staging folder (:mod:`acmm_qpp.outputs`), a process pool is stopped by its
+owner, and the command exits with 128 + the signal number.  The few
 steps that must not stop halfway (a finished stage's files moved into place, a pool's workers
 forked or stopped) run inside :func:`interrupts_deferred`.
 """

@@ -5,6 +5,7 @@ one line and exit with code 2.
 """
 from __future__ import annotations
 
+import contextlib
 import json
 from typing import Optional
 
@@ -18,7 +19,7 @@ from qpp import CONFIG_SECTIONS, PACKAGED_CONFIGS
 import numpy as np  # noqa: E402
 import typer  # noqa: E402
 
-from acmm_qpp.cli.progress import status  # noqa: E402
+from acmm_qpp.cli.progress import console, enabled  # noqa: E402
 from acmm_qpp.errors import ConfigError, DesignError  # noqa: E402
 
 
@@ -26,6 +27,27 @@ from acmm_qpp.errors import ConfigError, DesignError  # noqa: E402
 CONFIGS = ConfigKinds(PACKAGED_CONFIGS, (("qpp", CONFIG_SECTIONS),),
                       "A config path is relative to the working directory; a bare name that is no file there "
                       "(qpp_siso, qpp_siso.yaml) is a packaged config.")
+
+
+@contextlib.contextmanager
+def status(message: str):
+    """A spinner with ``message`` while the block runs (transient); yields ``update(text)``.
+
+    Parameters
+    ----------
+    message : str
+        Text shown next to the spinner.
+
+    Yields
+    ------
+    callable
+        ``update(text)`` replaces the text (does nothing when progress is disabled).
+    """
+    if not enabled():
+        yield lambda text: None
+        return
+    with console().status(message) as st:
+        yield lambda text: st.update(text)
 
 
 class _QppGroup(ExitCodeGroup):

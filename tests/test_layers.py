@@ -209,7 +209,6 @@ LAZY_IMPORTS = {
     ("qpp.plots", "matplotlib.collections"): _MPL,
     ("acmm_qpp.plot_style", "matplotlib"): _MPL,
     ("acmm_qpp.plot_style", "matplotlib.pyplot"): _MPL,
-    ("acmm_qpp.plot_style", "cycler"): _MPL,
     ("acmm.api", "control"): "start-up: python-control (~1.5 s) only for a StateSpace",
     ("acmm.model.linearize", "control"): "start-up: python-control (~1.5 s) only for a StateSpace",
     ("acmm.design.regional_lmi", "cvxpy"): "start-up: cvxpy (~1 s) only on the reference LMI route",

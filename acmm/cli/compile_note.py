@@ -6,7 +6,7 @@ from pathlib import Path
 
 from acmm.model.compiled_cache import uncached_note
 from acmm.simulate import kernel
-from acmm_qpp.cli.progress import enabled, note
+from acmm_qpp.cli.progress import console, enabled
 
 
 def numba_needs_compile() -> bool:
@@ -38,4 +38,5 @@ def announce_numba_compile() -> None:
         print(f"note: {why}", file=sys.stderr, flush=True)
         return
     if enabled() and numba_needs_compile():
-        note("compiling the closed-loop simulator with numba (first run only, ~10 s; cached afterwards) ...")
+        console().print("compiling the closed-loop simulator with numba (first run only, ~10 s; cached afterwards) ...",
+                        markup=False, highlight=False)

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acmm.model.tea import resolve_bias, solve_tea, solve_tea_near
-from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
+from acmm.model.tea import NoEquilibriumError, resolve_bias, solve_tea, solve_tea_near
+from acmm_qpp.errors import ConvergenceError
 from acmm.design.settings import schedule_settings
 
 

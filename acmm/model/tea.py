@@ -29,11 +29,21 @@ import numpy as np
 
 from acmm.model import kinematics as kin
 from acmm.model.compiled_cache import njit_cached
-from acmm_qpp.errors import ConvergenceError, NoEquilibriumError
+from acmm_qpp.errors import EXIT_INPUT, AcmmError, ConvergenceError
 from acmm.model.unit_systems import FT_LBF_IN_NM
 
 #: The hint of a bias with no equilibrium: which settings to change (acmm's config).
 BIAS_HINT = "reduce disturbance.bias (or use disturbance.bias_from_tea with the attitude you want)"
+
+
+class NoEquilibriumError(AcmmError):
+    """No torque-equilibrium attitude exists for the given inertia and bias (eqs 4.1–4.3).
+
+    A property of the configured plant, so it is an input error (exit 2); see
+    ``docs/ERRATA.md`` § TEA."""
+
+    exit_code = EXIT_INPUT
+
 
 #: Largest residual (ft·lbf) accepted for an equilibrium; for a station whose gravity-gradient
 #: torque scale 3n²·max|I| is below 10 ft·lbf, 1e-13 of that scale instead (an absolute 1e-12

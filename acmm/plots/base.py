@@ -31,7 +31,7 @@ from matplotlib.ticker import Formatter, MaxNLocator
 from matplotlib.lines import Line2D
 
 #: rcParams of the stage figures (``acmm design|simulate``, the sweep); saved at the figure's own
-#: resolution also in a process that drew the report's figures (:data:`acmm_qpp.plot_style.RC` sets
+#: resolution also in a process that drew the report's figures (:data:`acmm.report.figure_style.RC` sets
 #: ``savefig.dpi``)
 STAGE_RC = {"figure.dpi": 110, "savefig.dpi": "figure", "axes.grid": True, "grid.alpha": 0.3, "font.size": 9,
             "axes.titley": 1.0}

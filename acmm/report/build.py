@@ -32,6 +32,10 @@ from acmm.report.sections import printed as sec_printed
 from acmm.report.sections import provenance as sec_provenance
 import resource
 
+#: Kind of the report's figure staging folder (``<out>/.figures-<pid>-<random>``): the next report
+#: in that folder removes one a killed report left (:func:`acmm_qpp.runlock.run_lock`'s ``staging``).
+FIGURE_STAGING = "figures"
+
 
 @dataclass
 class ReportResult:
@@ -130,7 +134,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     -------
     ReportResult
         The files written and what they contain.  A stage, part or section that raised a
-        user-facing error (:func:`acmm_qpp.errors.failure_line`) is shown in its section with that
+        user-facing error (:func:`acmm.report.stage_results.failure_line`) is shown in its section with that
         error, the others complete, and it is listed in :attr:`ReportResult.failures`; a bug
         propagates and nothing is written.
 
@@ -147,13 +151,13 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     root = out / "results" if root is None else Path(root)      # its own: never a user's runs/<name>/
     # one report at a time per folder; holding its lock, the report removes the staging folders
     # (.figures-<pid>-*) a killed report left (acmm_qpp.runlock.remove_leftovers)
-    with run_lock(out):
+    with run_lock(out, staging=(FIGURE_STAGING,)):
         if root.exists() and not root.is_dir():     # every stage would fail: refused before anything is written
             raise OutputError(f"--root: the results root {root} is not a directory")
         created = [figdir] if not figdir.exists() else []
         try:
             figdir.mkdir(exist_ok=True)
-            staged = Path(tempfile.mkdtemp(prefix=f".figures-{os.getpid()}-", dir=out))
+            staged = Path(tempfile.mkdtemp(prefix=f".{FIGURE_STAGING}-{os.getpid()}-", dir=out))
         except OSError as exc:
             _remove_empty(created)
             raise OutputError(f"cannot create the report directory {out}: {exc.strerror or exc}") from None

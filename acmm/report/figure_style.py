@@ -1,7 +1,8 @@
 """One matplotlib style for every figure of ``acmm report`` (publication quality).
 
-The colours, rcParams and ``pyplot()`` come from :mod:`acmm_qpp.plot_style`, the project's one
-style module; this module adds the report's PDF + PNG writer.
+The report's colours (:data:`COLORS`), rcParams (:data:`RC`, :data:`SPEED_RC`) and
+:func:`pyplot`, on the Agg backend of :func:`acmm_qpp.plot_style.agg_pyplot`, and its PDF + PNG
+writer.
 
 Labelled axes with units, legends, a colour-blind-safe cycle (Okabe–Ito), light grids, vector
 PDF plus a PNG for the HTML page.  Figures are drawn with the non-interactive Agg backend and
@@ -11,16 +12,39 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from acmm_qpp.plot_style import RC
-from acmm_qpp.plot_style import pyplot as _style_pyplot
+from acmm_qpp.plot_style import agg_pyplot
 from acmm_qpp.results import save_figure
 import io
 import matplotlib
 import matplotlib.pyplot as plt
+from cycler import cycler
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-#: rcParams of the report's figures on top of :data:`acmm_qpp.plot_style.RC` that change no pixel but
+#: Okabe–Ito colour-blind-safe palette.
+COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#000000")
+
+#: rcParams of the report's figures (publication style: light grids, no top/right spines).
+RC = {
+    "figure.dpi": 100,
+    "savefig.dpi": 120,
+    "font.size": 9,
+    "axes.titlesize": 9,
+    "axes.labelsize": 9,
+    "legend.fontsize": 7.5,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "grid.linewidth": 0.5,
+    "lines.linewidth": 1.0,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "legend.frameon": False,
+    "pdf.fonttype": 3,           # subsetted Type 3 fonts: small, fast, still vector text
+}
+
+#: rcParams of the report's figures on top of :data:`RC` that change no pixel but
 #: save drawing time (issue 16): an axes title at the top edge of the axes, where matplotlib's
 #: automatic placement puts it anyway when nothing is drawn above the axes, so that the search for
 #: overlapping tick labels (a quarter of a 24-panel figure's drawing time) is skipped.
@@ -33,14 +57,17 @@ PNG_DPI = 160
 
 
 def pyplot():
-    """``matplotlib.pyplot`` with the report style (:func:`acmm_qpp.plot_style.pyplot`) and :data:`SPEED_RC`.
+    """``matplotlib.pyplot`` on the Agg backend with the report style (:data:`RC`, the
+    :data:`COLORS` cycle, :data:`SPEED_RC`).
 
     Returns
     -------
     module
         ``matplotlib.pyplot``.
     """
-    plt = _style_pyplot()
+    plt = agg_pyplot(force=True)
+    plt.rcParams.update(RC)
+    plt.rcParams["axes.prop_cycle"] = cycler(color=list(COLORS))
     plt.rcParams.update(SPEED_RC)
     return plt
 

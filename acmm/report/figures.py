@@ -9,8 +9,7 @@ import numpy as np
 
 from acmm.report.constants import AXES
 from acmm.model.linearize import STATE_NAMES, state_units
-from acmm_qpp.plot_style import COLORS
-from acmm.report.figure_style import fixed_layout, pyplot, save
+from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
 from acmm.design.schedule import schedule_gain
 from matplotlib.ticker import MaxNLocator
 

@@ -7,8 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import h5py
-from acmm_qpp.plot_style import COLORS
-from acmm.report.figure_style import fixed_layout, pyplot, save
+from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
 from qpp.design.circle import critical_disc
 from matplotlib.ticker import NullLocator
 from matplotlib.collections import PatchCollection

@@ -7,8 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm.report.constants import AXES
-from acmm_qpp.plot_style import COLORS
-from acmm.report.figure_style import fixed_layout, pyplot, save
+from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
 from matplotlib.collections import LineCollection
 
 

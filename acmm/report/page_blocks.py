@@ -29,7 +29,7 @@ from acmm.report.page_runs import run_stages
 from acmm.report.sections.robustness import bounded_count, case_column
 from acmm.report.sections.schedule import point_energy
 from acmm.report.sections.table1 import table1_teas
-from acmm_qpp.errors import NoEquilibriumError
+from acmm.model.tea import NoEquilibriumError
 
 
 def _wie_pitch_fold(cfg, pitch_bias: float = 4.0) -> float | None:

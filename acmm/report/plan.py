@@ -77,7 +77,7 @@ def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: 
     """``fn(ctx, *values)`` on a fresh writer; ``results``: HDF5 files already read (None: this
     worker process's cache).  matplotlib's settings are reset first, so a figure looks the same
     whichever figures the process drew before.  A user-facing error it raises
-    (:func:`acmm_qpp.errors.failure_line`) becomes the part's :attr:`Part.failed` and its one-line
+    (:func:`acmm.report.stage_results.failure_line`) becomes the part's :attr:`Part.failed` and its one-line
     text; a bug propagates.
 
     Parameters

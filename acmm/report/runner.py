@@ -5,7 +5,7 @@ the robustness sweep, the QPP chapters) and the parts of its sections (each writ
 figures).  :func:`run_tasks` runs such a graph
 
 * serially (``jobs=1``): in the order of the list, in this process;
-* on a pool of ``jobs`` worker processes (:func:`acmm_qpp.pool.process_pool`): a task is
+* on a pool of ``jobs`` worker processes (:func:`acmm.stages.pool.process_pool`): a task is
   submitted as soon as the tasks it depends on have finished, longest remaining chain first.
   Only the task's function, its arguments (built in this process from the results of its
   dependencies) and its return value cross the process boundary; everything a task writes
@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 from acmm_qpp.errors import AcmmError, ConfigError, OutputError
-from acmm_qpp.pool import portable_warnings, process_pool, raise_warnings_again, stop_pool, submit
+from acmm.stages.pool import portable_warnings, process_pool, raise_warnings_again, stop_pool, submit
 
 
 def _no_args(done: dict) -> tuple:
@@ -217,7 +217,7 @@ def _call(fn, args) -> tuple:
     """Run ``fn(*args)`` in a worker: ``(outcome, value, warnings, wall s, CPU s)`` with outcome
     ``"ok"`` and the result, or ``"error"`` and an :class:`AcmmError` as data (module, class name,
     message, exit code: its class may not pickle); the warnings it raised travel for the parent to
-    raise again (:func:`acmm_qpp.pool.portable_warnings`)."""
+    raise again (:func:`acmm.stages.pool.portable_warnings`)."""
     t0, c0 = time.perf_counter(), time.process_time()
     with warnings.catch_warnings(record=True) as caught:
         try:

@@ -16,7 +16,7 @@ from pathlib import Path
 from acmm.report.constants import FAST_ORBITS
 import h5py
 import numpy as np
-from acmm_qpp.errors import OutputError, failure_line
+from acmm_qpp.errors import EXIT_INPUT, AcmmError, OutputError, plain_failure
 from acmm.io.config import load_config, parse_config
 from qpp.io.config import load_config as load_qpp_config, parse_config as parse_qpp_config
 from acmm import PACKAGED_CONFIGS
@@ -100,6 +100,27 @@ class Failed:
         return f"{self.name} failed: {self.message}"
 
 
+def failure_line(exc: BaseException):
+    """(one-line message, exit code) of any user-facing failure: an
+    :class:`~acmm_qpp.errors.AcmmError` (its message and class's ``exit_code``) or a
+    :func:`~acmm_qpp.errors.plain_failure`; None for a genuine bug.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception caught.
+
+    Returns
+    -------
+    tuple of (str, int) or None
+        The message on one line and the exit code, or None.
+    """
+    if isinstance(exc, AcmmError):
+        return " ".join(str(exc).split()) or type(exc).__name__, int(getattr(exc, "exit_code", EXIT_INPUT))
+    plain = plain_failure(exc)
+    return None if plain is None else (" ".join(plain[0].split()), plain[1])
+
+
 def failed(name: str, exc: BaseException) -> Failed | None:
     """``exc`` raised by task ``name`` as a :class:`Failed`, or None for a bug (to propagate).
 
@@ -113,7 +134,7 @@ def failed(name: str, exc: BaseException) -> Failed | None:
     Returns
     -------
     Failed or None
-        Its one-line message and exit code (:func:`acmm_qpp.errors.failure_line`), or None (also
+        Its one-line message and exit code (:func:`failure_line`), or None (also
         for an :class:`acmm_qpp.errors.OutputError`: a report that cannot write stops at once,
         with one ``error:`` line).
     """

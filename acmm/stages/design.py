@@ -19,7 +19,7 @@ from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
 from acmm.stages.certify import certificate_items, compute_certificate
 from acmm.stages.common import as_config, define_units, in_system, write_results
 from acmm_qpp.outputs import stage
-from acmm_qpp.pool import pool_map, process_pool, stop_pool
+from acmm.stages.pool import pool_map, process_pool, stop_pool
 from acmm_qpp.results import draw_figures
 from acmm.io.design_file import DesignTable, stored_table_digest, stored_unit_system, load_design_table
 import json
@@ -201,7 +201,7 @@ def compute_design(config, progress=None) -> DesignResult:
     Raises
     ------
     OutputError
-        A worker process of the design pool died (killed, or out of memory; :func:`acmm_qpp.pool.pool_map`).
+        A worker process of the design pool died (killed, or out of memory; :func:`acmm.stages.pool.pool_map`).
     """
 
     cfg = as_config(config)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acmm_qpp.errors import ConvergenceError, DesignError, NoEquilibriumError
+from acmm_qpp.errors import ConvergenceError, DesignError
 from acmm.model.inertia import perturb_inertia
 from acmm.sweep.cases import AXES, unphysical_draw_reason, case_values
 from acmm.simulate.scenario import scenario_from_config
@@ -22,7 +22,7 @@ from acmm.design.settings import design_settings, schedule_settings
 from acmm.design.design_core import design_schedule
 from acmm.model import kinematics as kin
 from acmm.simulate import kernel as sm, scenario as scen
-from acmm.model.tea import resolve_bias, solve_tea_connected, solve_tea_fast
+from acmm.model.tea import NoEquilibriumError, resolve_bias, solve_tea_connected, solve_tea_fast
 
 
 # ---------------------------------------------------------------------------------------------

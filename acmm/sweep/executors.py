@@ -15,7 +15,7 @@ from typing import Optional
 import numpy as np
 
 from acmm_qpp.errors import ConfigError
-from acmm_qpp.pool import process_pool, stop_pool
+from acmm.stages.pool import process_pool, stop_pool
 from acmm.sweep.config import Sweep
 from acmm.sweep.case import BaseContext, margin_search, run_case
 import ctypes

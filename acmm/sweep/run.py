@@ -20,7 +20,7 @@ from acmm.sweep.executors import (SerialExecutor, call_chunk, code_identity, rem
 from acmm.sweep.journal import GroupCommitJournal, read_journal
 from acmm_qpp.errors import ConfigError, OutputError
 from acmm_qpp.signals import interrupts_deferred
-from acmm_qpp.pool import submit
+from acmm.stages.pool import submit
 from acmm.sweep.output import split_records, write_results
 
 

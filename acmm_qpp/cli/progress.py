@@ -1,12 +1,12 @@
 """Terminal progress for the command lines (rich), on stderr and only on an interactive terminal.
 
-When stderr is not a TTY (a pipe, a CI log, a test) every function here is silent, so errors
-stay one line and captured output is unchanged.  ``ACMM_PROGRESS=0`` silences it on a terminal
-too, ``ACMM_PROGRESS=1`` forces it (for demonstrations).
+When stderr is not a TTY (a pipe, a CI log, a test) no progress is shown (:func:`enabled`), so
+errors stay one line and captured output is unchanged.  ``ACMM_PROGRESS=0`` silences it on a
+terminal too, ``ACMM_PROGRESS=1`` forces it (for demonstrations).  Each product draws its own
+with the :func:`console` (acmm's bar and notes, qpp's spinner).
 """
 from __future__ import annotations
 
-import contextlib
 import os
 import sys
 
@@ -40,35 +40,3 @@ def console():
 
     return Console(stderr=True, force_terminal=True if os.environ.get("ACMM_PROGRESS") == "1" else None)
 
-
-def note(message: str) -> None:
-    """One line on stderr when progress is enabled (e.g. the numba first-compile notice).
-
-    Parameters
-    ----------
-    message : str
-        The line, printed verbatim (no rich markup).
-    """
-    if enabled():
-        console().print(message, markup=False, highlight=False)
-
-
-@contextlib.contextmanager
-def status(message: str):
-    """A spinner with ``message`` while the block runs (transient); yields ``update(text)``.
-
-    Parameters
-    ----------
-    message : str
-        Text shown next to the spinner.
-
-    Yields
-    ------
-    callable
-        ``update(text)`` replaces the text (does nothing when progress is disabled).
-    """
-    if not enabled():
-        yield lambda text: None
-        return
-    with console().status(message) as st:
-        yield lambda text: st.update(text)

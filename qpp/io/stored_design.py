@@ -4,7 +4,7 @@
 ch. 11 included) before simulating, even right after ``qpp design`` wrote the same gains.  It now
 takes K1, Kc and H (eqs 10.5–10.6) from ``<run>/qpp_design.h5`` when that file was written from
 the same resolved config (``config_hash``) by the same package version and git commit, the
-source is that commit unchanged (:func:`acmm_qpp.provenance.source_unchanged`), and the gains read
+source is that commit unchanged (:func:`source_unchanged`), and the gains read
 back hash to the ``gains_sha256`` the design stored with them (an edited file is designed
 again); otherwise it designs.  The gains are stored as float64, so the simulation is the same bit
 for bit either way.
@@ -18,7 +18,7 @@ import numpy as np
 import h5py
 import hashlib
 from acmm_qpp import __version__
-from acmm_qpp.provenance import config_hash, git_commit, source_unchanged
+from acmm_qpp.provenance import config_hash, git_commit, git_dirty
 
 
 @dataclass
@@ -47,6 +47,21 @@ class StoredDesign:
     certified: bool
     verdict: str
     path: Path
+
+
+def source_unchanged() -> bool:
+    """Whether the code running is exactly a commit: the source tree is a git checkout whose
+    tracked files have no uncommitted change (:func:`acmm_qpp.provenance.git_dirty`).
+
+    A stage may reuse another stage's results only then: an edited or unknown source may compute
+    something else.
+
+    Returns
+    -------
+    bool
+        True for a clean checkout; False when dirty, not a checkout, or git is missing.
+    """
+    return git_commit() != "unknown" and git_dirty() == "no"
 
 
 def load_stored_design(path: Path, config_text: str) -> StoredDesign | None:

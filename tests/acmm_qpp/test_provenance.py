@@ -26,7 +26,6 @@ def test_git_commit_asked_once_per_process(monkeypatch):
         assert provenance.git_commit() == first and len(calls) == 1
         prov = provenance.provenance("a: 1\n")
         assert prov["git_commit"] == first and prov["git_dirty"] in ("yes", "no") and len(calls) == 1
-        assert provenance.source_unchanged() == (prov["git_dirty"] == "no") and len(calls) == 1
     finally:
         provenance._git_state.cache_clear()
 
@@ -49,7 +48,7 @@ def test_provenance_flags_uncommitted_changes(tmp_path):
     subprocess.run(git + ["add", "-A"], cwd=repo, check=True)
     subprocess.run(git + ["commit", "-q", "-m", "x"], cwd=repo, check=True)
     head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True).stdout.strip()
-    probe = "from acmm_qpp import provenance as p; print(p.git_commit(), p.git_dirty(), p.source_unchanged())"
+    probe = "from acmm_qpp import provenance as p; print(p.git_commit(), p.git_dirty())"
     env = {**os.environ, "PYTHONPATH": str(repo)}
 
     def state():
@@ -57,7 +56,7 @@ def test_provenance_flags_uncommitted_changes(tmp_path):
         assert r.returncode == 0, r.stderr
         return r.stdout.split()
 
-    assert state() == [head, "no", "True"]
+    assert state() == [head, "no"]
     with open(repo / "acmm_qpp" / "units.py", "a") as f:
         f.write("# edited\n")
-    assert state() == [head, "yes", "False"]
+    assert state() == [head, "yes"]

@@ -12,7 +12,8 @@ import numpy as np
 
 from acmm.design import matrix_sign as msign
 from acmm.design import riccati as ric
-from acmm_qpp.errors import AcmmError, ConvergenceError, NoEquilibriumError
+from acmm.model.tea import NoEquilibriumError
+from acmm_qpp.errors import AcmmError, ConvergenceError
 from acmm.report.context import SectionWriter
 from acmm.report.numbers import fmt_value
 from acmm.report.sections.claim1 import Claim1Numbers

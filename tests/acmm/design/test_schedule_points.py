@@ -81,8 +81,7 @@ def test_a_branch_that_folds_on_the_blend_blames_the_first_point_beyond_the_fold
 
     def folds_at_0_6(inertia, n_, bias, guess, **kw):          # no equilibrium beyond s = 0.6
         if (inertia[0, 0] - i0) / (i1 - i0) > 0.6:
-            from acmm_qpp.errors import NoEquilibriumError
-            raise NoEquilibriumError("folds")
+            raise tea_mod.NoEquilibriumError("folds")
         return real(inertia, n_, bias, guess, **kw)
 
     monkeypatch.setattr(sp_mod, "solve_tea_near", folds_at_0_6)

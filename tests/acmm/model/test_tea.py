@@ -15,7 +15,7 @@ from scipy.optimize import fsolve, minimize_scalar
 from acmm.model import tea
 from acmm.io.config_station import Disturbance
 from acmm.io.config import load_config
-from acmm_qpp.errors import NoEquilibriumError
+from acmm.model.tea import NoEquilibriumError
 from acmm.stages.runners import compute_tea
 from acmm.design.schedule_points import point_specs
 from acmm.model.inertia import perturb_inertia, unphysical_reason

@@ -2,6 +2,7 @@
 worker processes as one after the other, and one clear error with no output on a failure."""
 from __future__ import annotations
 
+import importlib
 import os
 import re
 import time
@@ -215,13 +216,11 @@ def test_report_failure_in_a_worker_is_one_line_and_shown_in_its_sections(tmp_pa
     """Every qpp stage raising in a worker: one ``error:`` line, exit 3, no traceback; the report
     is written (issue 30: it stopped with nothing written), its qpp sections show the error and the
     acmm sections are complete."""
-    import sys
-
     from typer.testing import CliRunner
 
     from acmm.cli.app import app
 
-    gather_mod = sys.modules["acmm.report.gather"]
+    gather_mod = importlib.import_module("acmm.report.gather")
 
     monkeypatch.setattr(gather_mod, "_qpp_task", _broken_qpp)
     out = tmp_path / "out"
@@ -244,8 +243,6 @@ def test_an_interrupted_report_leaves_out_as_it_was(tmp_path, monkeypatch):
     last): the figures had been written into --out/figures as their tasks finished, beside the
     previous report's pages (a review).  They are drawn in a staging folder now and moved in only
     with the pages."""
-    import sys
-
     from typer.testing import CliRunner
 
     from acmm.cli.app import app
@@ -253,7 +250,7 @@ def test_an_interrupted_report_leaves_out_as_it_was(tmp_path, monkeypatch):
     out = tmp_path / "out"
     (out / "figures").mkdir(parents=True)
     (out / "index.html").write_text("the previous report")
-    build_mod = sys.modules["acmm.report.build"]
+    build_mod = importlib.import_module("acmm.report.build")
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
@@ -322,14 +319,13 @@ def test_a_results_file_rewritten_while_the_report_runs_is_refused(tmp_path, mon
     schedule section spoke of 3 points and whose errata row of 12 (a review).  A results file
     rewritten after the report took it is now named, and nothing is written."""
     import shutil
-    import sys
 
     from typer.testing import CliRunner
 
     from acmm.cli.app import app
 
     out = tmp_path / "out"
-    build_mod = sys.modules["acmm.report.build"]
+    build_mod = importlib.import_module("acmm.report.build")
     original = build_mod.sec_printed.build
 
     def rewrite_then_build(rep, *args, **kwargs):

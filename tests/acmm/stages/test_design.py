@@ -18,6 +18,7 @@ import scipy.linalg as sla
 from acmm.cli.app import app
 from acmm.io.config import load_config
 from acmm.stages.design import compute_design, design_for, run_design
+from acmm.stages.pool import pool_map, process_pool, stop_pool
 from acmm.io.design_file import load_design_table
 
 from tests.conftest import LQR_ROUTE, invoke
@@ -265,8 +266,6 @@ def test_pool_workers_solve_lmis_after_the_parent_has():
     hung in its next solve (the LMI stair-case's points on the design stage's pool after an
     in-process LMI design, in the test session); with the route's options (one thread) the forked
     workers of the same pool solve."""
-    from acmm_qpp.pool import pool_map, process_pool, stop_pool
-
     assert _sdp(60) == pytest.approx(60.0, rel=1e-6)
     pool = process_pool(2)
     try:
@@ -293,7 +292,6 @@ def test_pooled_points_equal_the_serial_ones_and_their_warnings_reach_the_parent
     from acmm.design import schedule_points as sp
     from acmm.design.design_core import design_schedule
     from acmm.design.settings import design_settings, schedule_settings
-    from acmm_qpp.pool import pool_map, process_pool, stop_pool
 
     cfg = load_config("staircase", [*LQR_ROUTE, "schedule.n_points=4", "schedule.n_check=11"])
     specs, s, sched = sp.point_specs(cfg), design_settings(cfg), schedule_settings(cfg)
@@ -331,7 +329,6 @@ def _dies(x):
 def test_a_dead_pool_worker_is_one_output_error():
     """A worker killed mid-task (here it exits) is an OutputError (exit 4, one line), not a traceback."""
     from acmm_qpp.errors import OutputError
-    from acmm_qpp.pool import pool_map, process_pool, stop_pool
 
     pool = process_pool(1)
     try:

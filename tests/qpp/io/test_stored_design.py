@@ -44,3 +44,15 @@ def test_qpp_simulate_reuses_the_gains_qpp_design_wrote(tmp_path, monkeypatch):
         f["K1"][0, 0] = 50.0 * f["K1"][0, 0]
     stages.run_simulate(cfg, figures=False)
     assert called == [1, 1, 1]
+
+
+@pytest.mark.parametrize("commit, dirty, unchanged", [("abc", "no", True), ("abc", "yes", False),
+                                                      ("abc", "unknown", False), ("unknown", "no", False)])
+def test_the_source_is_unchanged_only_in_a_clean_checkout(monkeypatch, commit, dirty, unchanged):
+    """Stored gains are reused only when the code running is a commit without uncommitted changes
+    (git's answers as :mod:`acmm_qpp.provenance` gives them)."""
+    from qpp.io import stored_design
+
+    monkeypatch.setattr(stored_design, "git_commit", lambda: commit)
+    monkeypatch.setattr(stored_design, "git_dirty", lambda: dirty)
+    assert stored_design.source_unchanged() is unchanged

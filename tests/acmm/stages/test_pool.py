@@ -1,4 +1,4 @@
-"""The one local process pool (:mod:`acmm_qpp.pool`): its workers die with their parent."""
+"""The one local process pool (:mod:`acmm.stages.pool`): its workers die with their parent."""
 from __future__ import annotations
 
 import os
@@ -20,11 +20,11 @@ ENV = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
 
 
 def test_a_pool_worker_dies_with_its_parent_even_under_sigkill(tmp_path):
-    """The workers of :func:`acmm_qpp.pool.process_pool` (the sweep's, the report's) are stopped
+    """The workers of :func:`acmm.stages.pool.process_pool` (the sweep's, the report's) are stopped
     when their parent is killed with SIGKILL, where no cleanup of the parent runs."""
     code = textwrap.dedent("""
         import os, sys
-        from acmm_qpp.pool import process_pool
+        from acmm.stages.pool import process_pool
         pool = process_pool(1)
         print(pool.submit(os.getpid).result(), flush=True)
         sys.stdin.readline()

@@ -1,4 +1,4 @@
-"""The one local process pool of both products (the sweep's cases, the report's tasks).
+"""acmm's one local process pool (the design stage's LMI points, the sweep's cases, the report's tasks).
 
 :func:`process_pool` is a standard :class:`concurrent.futures.ProcessPoolExecutor` whose workers
 leave Ctrl-C to the parent (a terminal sends it to the whole process group: a worker interrupted
