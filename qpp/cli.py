@@ -174,9 +174,8 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_a
         typer.echo(f"  warning: the nonlinearity is stiffer after T = {r.T:.4g} s (slope bound {r.late_slope[1]:.4g}) "
                    f"than within it ({r.late_slope[0]:.4g}): beta3 and beta4 see it only up to T (eqs 10.53-10.54), "
                    f"so the certificate says nothing of the simulation beyond T")
-    if r.settled and r.T < r.T_settle * (1 - 0.1):     # (T fixed by spheres.adapt_T = false)
-        typer.echo(f"  note: T = {r.T:.4g} s ends before the nominal loop settles ({r.T_settle:.4g} s): the "
-                   f"certificate covers [0, T] only, not the settling (12.1 step 3 takes T near the settling time)")
+    if r.horizon_note:
+        typer.echo(f"  note: {r.horizon_note}")
     if not r.settled and np.isfinite(r.beta1_ref):    # (an unstable loop is named by the verdict)
         cause = (f"the loop's slowest mode settles in {r.T_modal:.4g} s (r_o leaves it unexcited): lengthen "
                  f"simulation.t_final or speed the loop up" if r.T_modal is not None
@@ -211,6 +210,8 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
 
         cfg, r, sims, path = run_simulate(cfg, figures, progress=tick)
     typer.echo(f"{cfg.name}: beta_o = {cfg.spheres.beta_o:g}; design {r.verdict}")
+    if r.horizon_note:
+        typer.echo(f"  note: {r.horizon_note}")
     if not r.certified:
         typer.echo("  these are simulations of an UNCERTIFIED design: staying inside the sphere here is "
                    "measured on these scenarios only, not guaranteed")

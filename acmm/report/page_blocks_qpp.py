@@ -213,7 +213,7 @@ def block_qpp_search(r: dict) -> str:
                          + ("certified too." if rs.certified else
                             f"not certified ({', '.join(rs.failed)} fail; β1 = {fixed(rs.beta1, 4)}, m = "
                             f"{fixed(rs.m, 4)}): the certificate covers [0, T], a horizon shorter than the loop's "
-                            f"settling. Packaged as `qpp_siso_certified`."))
+                            f"settling."))
     table = markdown_table(["example", "β1 ≥ (every design: T_ry = I at ω_k)", "m ≤ (every design, every T)",
                             "m ≤ for T ≥ π/(2ω)", "grid: designs (ρ, w, a; T = settling time)", "certified",
                             "largest m", "smallest β1", "largest m − β1", "refined from there (Nelder–Mead)"], rows)

@@ -158,6 +158,18 @@ class DesignResult:
         return scope_text(self.proved, self.assumed)
 
     @property
+    def horizon_note(self) -> str:
+        """One line when T ends before the nominal loop settles (T fixed by ``spheres.adapt_T:
+        false``, or the procedure kept a design evaluated at the configured T after step 3 moved
+        T to the settling time): what the certificate, or the evaluation, covers; else ""."""
+        if not (self.settled and self.T < 0.9 * self.T_settle):
+            return ""
+        what = ("the certificate covers [0, T] only, not the settling" if self.certified else
+                "the premises were evaluated on [0, T] only")
+        return (f"T = {self.T:.4g} s ends before the nominal loop settles ({self.T_settle:.4g} s): {what} "
+                f"(12.1 step 3 takes T near the settling time)")
+
+    @property
     def m_ref(self) -> float:
         """Threshold m of the design's bookkeeping (the consistent m for ``consistent``), dimensionless."""
         if self.bookkeeping == "consistent":
@@ -318,11 +330,20 @@ def modal_settling_time(Az, band: float) -> float:
     return float(np.log(1.0 / band) / decay) if decay > 0 else 0.0
 
 
+def _sup_abs_sin(omega: float, t0: float, t1: float) -> float:
+    """sup |sin ωt| over [t0, t1] (0 ≤ t0 ≤ t1), dimensionless."""
+    k = np.ceil((omega * t0 - np.pi / 2) / np.pi)          # the first peak ωt = π/2 + kπ at or after t0
+    if (np.pi / 2 + k * np.pi) <= omega * t1:
+        return 1.0
+    return float(max(abs(np.sin(omega * t0)), abs(np.sin(omega * t1))))
+
+
 def late_slope(cfg: QppConfig, T: float, horizon: float) -> tuple | None:
-    """(sup slope on [0, T], sup slope on (T, horizon]) of an expression φ that depends on t, when
-    the later one exceeds the earlier by half; else None.  β3 and β4 (10.53–10.54) see φ only up
-    to T: a nonlinearity that stiffens (or switches on) after T gives a certificate the
-    simulation beyond T may contradict (a review's φ = k·y·(sat(10(t − 3)) + 1)/2 with T = 2.3 s).
+    """(sup slope on [0, T], sup slope on (T, horizon]) of a φ that depends on t, when the later one
+    exceeds the earlier by half; else None.  β3 and β4 (10.53–10.54) see φ only up to T: a
+    nonlinearity that stiffens (or switches on) after T gives a certificate the simulation beyond
+    T may contradict (a review's φ = k·y·(sat(10(t − 3)) + 1)/2 with T = 2.3 s; the sinusoidal form
+    of ch. 13, whose slope k·|sin ωt| is small on a short [0, T]).
 
     Parameters
     ----------
@@ -338,7 +359,15 @@ def late_slope(cfg: QppConfig, T: float, horizon: float) -> tuple | None:
     tuple or None
         The two slope bounds, units of φ per unit of y; or None.
     """
-    if not isinstance(cfg.nonlinearity, ExpressionNonlinearity) or horizon <= T:
+    nl = cfg.nonlinearity
+    if horizon <= T:
+        return None
+    if isinstance(nl, SinusoidalNonlinearity):     # slope k·|sin ωt|, k = |N F_unc|·γ_max (closed form)
+        k = float(np.linalg.norm(np.abs(cfg.lure_plant().N() @ np.asarray(nl.F_unc, float)).sum(axis=1)
+                                 * nl.gamma_max))
+        before, after = k * _sup_abs_sin(nl.omega, 0.0, T), k * _sup_abs_sin(nl.omega, T, horizon)
+        return (before, after) if after > 1.5 * before + 1e-12 else None
+    if not isinstance(nl, ExpressionNonlinearity):
         return None
     M = cfg.expression_model()
     if not M.t_varies:

@@ -111,7 +111,7 @@ class Design(SectionModel):
     rho_max: float = Field(1e2, gt=0, description="largest ρ of the wider bracketing search")
     wider_search: bool = Field(True, description="when 12.1 fails: other W_s weights and a bracketing ρ search")
     ws_scales: list[float] = Field([1.0, 0.3, 3.0, 0.1, 10.0], min_length=1,
-                                   description="W_s = w·S_c scalings tried by the wider search")
+                                   description="W_s = w·S_c scalings tried by the wider search (absolute, not scaled by hinf.w)")
 
 
 class Output(SectionModel):

@@ -260,7 +260,8 @@ def run_design(config, figures: bool | None = None, *, out: Path) -> tuple[QppCo
     An uncertified design is still written (root attributes ``certified = 0``, ``label =
     "uncertified"``, ``verdict``); the caller decides the exit code (:class:`DesignError`, 3).
     The root attributes ``proved``, ``assumed`` and ``scope`` (their one line, which a certified
-    verdict ends with) come from :func:`qpp.design.certificate.scope`.
+    verdict ends with) come from :func:`qpp.design.certificate.scope`; ``horizon_note`` says when T
+    ends before the nominal loop settles (empty otherwise), as ``qpp design`` prints it.
 
     Parameters
     ----------
@@ -288,6 +289,7 @@ def run_design(config, figures: bool | None = None, *, out: Path) -> tuple[QppCo
               **{f"premise[{k}]": bool(ok) for k, (ok, _) in r.premises.items()},
               **{f"premise_statement[{k}]": text for k, (_, text) in r.premises.items()},
               "proved": "; ".join(r.proved), "assumed": "; ".join(r.assumed), "scope": r.scope_text,
+              "horizon_note": r.horizon_note,
               "gains_sha256": gains_sha256(r.K1, r.Kc, r.H), "unit_system": cfg.output.units})
     if want_figures:
         draw_figures([partial(plot_circle, r, out / "qpp_circle.png"),

@@ -328,21 +328,36 @@ def test_the_verdict_names_what_is_proved_and_what_is_assumed(tmp_runs):
         assert f.attrs["certified"] == 0
     assert verdict.startswith("no certified design") and "proved for" not in verdict
     assert "assumed:" not in verdict and "proved for" not in r.output
+    # no certificate: the note says what was evaluated, not what a certificate covers
+    assert "ends before the nominal loop settles" in r.output and "the premises were evaluated on [0, T] only" in r.output
+    assert "the certificate covers" not in r.output
 
 
-def test_the_packaged_certified_ch13_design_is_certified_on_its_short_horizon(tmp_runs):
-    """qpp_siso_certified (issue 43): the family's design of qpp.design.family.REPORT_CERTIFIED
-    through procedure 12.1 with hinf.w, certified at T = 0.0125 s (exit 0), its gains those of
-    hinf_gains at the family's ρ, w, a, and the note that T ends before the loop settles."""
+def test_the_packaged_certified_ch13_design_is_certified_on_its_horizon(tmp_runs):
+    """qpp_siso_certified (issue 43): ch. 13's procedure at ρ = 3.5e-4 with T = 0.25 s fixed,
+    certified (exit 0), its gains those of hinf_gains at the config's ρ, a; the output and
+    qpp_design.h5 say that T ends before the loop settles, and that φ = 10 Δm y sin t is stiffer
+    after T (slope 0.5·sin(0.25) within, 0.5 after).  ``hinf.w`` reaches the design: the
+    family's stiff design of qpp.design.family.REPORT_CERTIFIED through the same config."""
     r = runner.invoke(app, ["design", "qpp_siso_certified", "--no-figures"])
     assert r.exit_code == 0, r.output
     d = read_h5(tmp_runs / "runs" / "qpp_siso_certified" / "qpp_design.h5")
-    assert d["attrs"]["certified"] == 1 and float(d["T"]) == 0.0125
-    rho, w, a = REPORT_CERTIFIED["qpp_siso"]
+    assert d["attrs"]["certified"] == 1 and float(d["T"]) == 0.25
     cfg = load_config("qpp_siso_certified")
-    assert (cfg.hinf.rho, cfg.hinf.w, cfg.hinf.a) == (rho, w, a)
-    g = hinf_gains(weighted_plant(cfg.lure_plant(), w), rho=rho, a=a)
+    assert (cfg.hinf.rho, cfg.hinf.w, cfg.hinf.a) == (3.5e-4, 1.0, 1e-8)
+    g = hinf_gains(cfg.lure_plant(), rho=3.5e-4, a=1e-8)
     for k, v in (("K1", g.K1), ("Kc", g.Kc), ("H", g.H)):
         assert np.asarray(d[k]) == pytest.approx(np.asarray(v), rel=1e-9), k
     Ts = float(d["certificate"]["T_settle"])
-    assert Ts > 2 * 0.0125 and f"ends before the nominal loop settles ({Ts:.4g} s)" in r.output, r.output
+    note = (f"T = 0.25 s ends before the nominal loop settles ({Ts:.4g} s): the certificate covers [0, T] "
+            f"only, not the settling")
+    assert Ts > 2 * 0.25 and note in r.output and d["attrs"]["horizon_note"].startswith(note), r.output
+    assert (f"stiffer after T = 0.25 s (slope bound 0.5) than within it ({0.5 * np.sin(0.25):.4g})"
+            in r.output), r.output
+    rho, w, a = REPORT_CERTIFIED["qpp_siso"]
+    r = runner.invoke(app, ["design", "qpp_siso_certified", f"hinf.rho={rho}", f"hinf.w={w}", f"hinf.a={a}",
+                            "spheres.T=0.0125", "simulation.t_final=1", "name=stiff", "--no-figures"])
+    assert r.exit_code == 0, r.output
+    g = hinf_gains(weighted_plant(cfg.lure_plant(), w), rho=rho, a=a)
+    d = read_h5(tmp_runs / "runs" / "stiff" / "qpp_design.h5")
+    assert np.asarray(d["Kc"]) == pytest.approx(np.asarray(g.Kc), rel=1e-9)

@@ -77,8 +77,8 @@ def test_a_nominal_loop_that_never_settles_is_named(tmp_runs):
 def test_a_nonlinearity_that_switches_on_after_T_is_named(tmp_runs):
     """φ = k·y·(sat(10(t − 3)) + 1)/2 is off on [0, T] and on after 3 s: β3 = β4 = 0 and a
     certificate that the simulation beyond T contradicted (26 β_o; review).  The design now warns
-    that the certificate (on [0, T], eqs 10.53–10.54) does not reach beyond T; a periodic φ (the
-    ch. 13 form, sin t) is as stiff within T as after it: no warning."""
+    that the certificate (on [0, T], eqs 10.53–10.54) does not reach beyond T; the ch. 13 form
+    k·y·sin t warns only while [0, T] has not come near |sin t|'s peak (closed form)."""
     from typer.testing import CliRunner
 
     from qpp.cli import app
@@ -92,6 +92,12 @@ def test_a_nonlinearity_that_switches_on_after_T_is_named(tmp_runs):
     before, after = late_slope(load_config(str(tmp_runs / "late.yaml")), 2.0, 8.0)
     assert before == pytest.approx(0.0, abs=1e-9) and after == pytest.approx(0.8, rel=1e-6)
     assert late_slope(load_config("qpp_unstable"), 2.0, 10.0) is None
+    # ch. 13's k·|sin t| (k = 0.5): small on a short [0, T], 0.5 after it; on [0, 2 s] it has peaked
+    siso = load_config("qpp_siso")
+    assert late_slope(siso, 0.25, 10.0) == pytest.approx((0.5 * np.sin(0.25), 0.5), rel=1e-12)
+    assert late_slope(siso, 0.25, 1.0) == pytest.approx((0.5 * np.sin(0.25), 0.5 * np.sin(1.0)), rel=1e-12)
+    assert late_slope(siso, 1.0, 1.2) is None          # sin rises by less than half on (1, 1.2]
+    assert late_slope(siso, 2.0, 10.0) is None
 
 
 def test_a_slow_mode_beyond_the_horizon_is_named_with_nothing_to_track(tmp_runs):

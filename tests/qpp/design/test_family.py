@@ -345,7 +345,7 @@ def _settle(t, y):
 
 
 @pytest.mark.slow
-def test_a_design_of_the_family_is_certified_at_its_settling_time(siso, tmp_path):
+def test_a_design_of_the_family_is_certified_at_its_first_pass_settling_time(siso, tmp_path):
     """Issue 43: the ch. 13 design of REPORT_CERTIFIED settles at T = 0.0125 s on the first pass's
     samples and is certified there — recomputed here: β1 and γ∞ by the verifier's Hamiltonian
     bisection and Gramian, the settling time and m (every truncation time on 0.0125/400 s steps,
