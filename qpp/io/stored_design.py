@@ -39,6 +39,9 @@ class StoredDesign:
         The design's verdict line.
     path : pathlib.Path
         The file read.
+    horizon_note : str
+        The design's note when T ends before the nominal loop settles, "" otherwise
+        (:attr:`qpp.design.certificate.DesignResult.horizon_note`).
     """
 
     K1: np.ndarray
@@ -47,6 +50,7 @@ class StoredDesign:
     certified: bool
     verdict: str
     path: Path
+    horizon_note: str = ""
 
 
 def source_unchanged() -> bool:
@@ -93,7 +97,9 @@ def load_stored_design(path: Path, config_text: str) -> StoredDesign | None:
             K1, Kc, H = (np.array(f[k][()], dtype=float) for k in ("K1", "Kc", "H"))
             if a.get("gains_sha256") != gains_sha256(K1, Kc, H):
                 return None
-            return StoredDesign(K1, Kc, H, bool(a["certified"]), str(a["verdict"]), Path(path))
+            note = a.get("horizon_note", "")
+            return StoredDesign(K1, Kc, H, bool(a["certified"]), str(a["verdict"]), Path(path),
+                                note.decode() if isinstance(note, bytes) else str(note))
     except (OSError, KeyError, ValueError):
         return None
 

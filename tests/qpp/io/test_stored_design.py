@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from typer.testing import CliRunner
+
+from qpp.cli import app
 
 
 @pytest.mark.slow
@@ -29,6 +32,9 @@ def test_qpp_simulate_reuses_the_gains_qpp_design_wrote(tmp_path, monkeypatch):
     monkeypatch.setattr(stages, "design", lambda c: pytest.fail("designed again"))
     _, reused, _, path = stages.run_simulate(cfg, figures=False)
     assert isinstance(reused, StoredDesign) and reused.verdict == designed.verdict
+    assert reused.horizon_note == designed.horizon_note != ""         # T = 0.5 s, settling later
+    r = CliRunner().invoke(app, ["simulate", "qpp_siso", *over, "name=pair", "--no-figures"])
+    assert r.exit_code == 0 and f"note: {designed.horizon_note}" in r.output, r.output
     for name in ("K1", "Kc", "H"):
         assert np.array_equal(getattr(reused, name), getattr(designed, name))
     assert dataset_hashes(path) == dataset_hashes(alone[3])
