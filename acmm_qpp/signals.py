@@ -47,6 +47,34 @@ def terminate_like_ctrl_c() -> list[int]:
     return done
 
 
+def _first_interrupt(signum, frame) -> None:
+    """The handler of :func:`only_the_first_interrupt`: every later interrupt ignored, then this one
+    raised (Ctrl-C as ``KeyboardInterrupt``, SIGTERM or SIGHUP as :class:`acmm_qpp.errors.Terminated`)."""
+    for sig in (signal.SIGINT, *TERMINATING):
+        signal.signal(sig, signal.SIG_IGN)
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
+    raise Terminated(signum)
+
+
+def only_the_first_interrupt() -> None:
+    """A command's process: the first Ctrl-C, SIGTERM or SIGHUP unwinds (as before), and every later
+    one is ignored, so that it cannot break the unwinding itself.  A terminal sends Ctrl-C twice in
+    a row to the process group: the second one, arriving after the first had raised but before the
+    cleanup had begun deferring interrupts, skipped the pool's shutdown, and the sweep hung at
+    exit while its workers finished their cases (a CI run).  Acts in the main thread only, on the
+    handlers still in force from :func:`terminate_like_ctrl_c` and Python's default Ctrl-C.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for sig in (signal.SIGINT, *TERMINATING):
+        try:
+            if signal.getsignal(sig) in (signal.default_int_handler, _raise_terminated):
+                signal.signal(sig, _first_interrupt)
+        except (OSError, ValueError):
+            pass
+
+
 @contextmanager
 def interrupts_deferred():
     """Run the ``with`` block whole: Ctrl-C, SIGTERM or SIGHUP arriving meanwhile is handled at

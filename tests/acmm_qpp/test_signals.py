@@ -176,3 +176,27 @@ def test_an_interrupt_in_a_deferred_step_is_raised_at_its_end(tmp_path):
                                         "step finished", "raised at the end: Terminated 129",
                                         "raised at once"], done.stdout + done.stderr
     assert done.returncode == 0 and done.stderr == ""
+
+
+def test_only_the_first_interrupt_unwinds(tmp_path):
+    """A command's process (:func:`acmm_qpp.signals.only_the_first_interrupt`): Ctrl-C twice in a
+    row, or Ctrl-C then SIGTERM, raise once; the cleanup that follows runs whole (the second Ctrl-C
+    of a terminal had skipped a sweep's pool shutdown: a hang at exit)."""
+    script = textwrap.dedent("""
+        import os, signal, time
+        from acmm_qpp import signals
+        signals.terminate_like_ctrl_c()
+        signals.only_the_first_interrupt()
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1)
+            print("not interrupted", flush=True)
+        except KeyboardInterrupt:
+            os.kill(os.getpid(), signal.SIGINT)
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.2)
+            print("cleanup whole", flush=True)
+    """)
+    done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, env=ENV,
+                          timeout=60, check=False)
+    assert done.returncode == 0 and done.stdout.splitlines() == ["cleanup whole"], (done.stdout, done.stderr)
