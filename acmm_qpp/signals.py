@@ -25,9 +25,30 @@ def _raise_terminated(signum, frame) -> None:
     raise Terminated(signum)
 
 
-def terminate_like_ctrl_c() -> list[int]:
+def _first_interrupt(signum, frame) -> None:
+    """The handler of ``terminate_like_ctrl_c(once=True)``: every later interrupt ignored, then this
+    one raised (Ctrl-C as ``KeyboardInterrupt``, SIGTERM or SIGHUP as :class:`acmm_qpp.errors.Terminated`)."""
+    for sig in (signal.SIGINT, *TERMINATING):
+        signal.signal(sig, signal.SIG_IGN)
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
+    raise Terminated(signum)
+
+
+def terminate_like_ctrl_c(once: bool = False) -> list[int]:
     """Make SIGTERM and SIGHUP raise :class:`acmm_qpp.errors.Terminated` in this (main) thread,
     where their handler is still the default one (a caller's own handler is left alone).
+
+    With ``once`` (a command's process) only the first interrupt counts: the first Ctrl-C, SIGTERM
+    or SIGHUP unwinds and every later one is ignored, so that it cannot break the unwinding.  A
+    terminal sends Ctrl-C twice in a row to the process group: the second one, arriving after the
+    first had raised but before the clean-up deferred interrupts, skipped a sweep pool's shutdown,
+    and the sweep hung at exit while its workers finished their cases (a CI run).
+
+    Parameters
+    ----------
+    once : bool, optional
+        Ctrl-C too, and only the first interrupt raises.
 
     Returns
     -------
@@ -37,42 +58,17 @@ def terminate_like_ctrl_c() -> list[int]:
     if threading.current_thread() is not threading.main_thread():
         return []
     done = []
-    for sig in TERMINATING:
+    defaults = {sig: signal.SIG_DFL for sig in TERMINATING}
+    if once:
+        defaults[signal.SIGINT] = signal.default_int_handler
+    for sig, default in defaults.items():
         try:
-            if signal.getsignal(sig) is signal.SIG_DFL:
-                signal.signal(sig, _raise_terminated)
+            if signal.getsignal(sig) is default:
+                signal.signal(sig, _first_interrupt if once else _raise_terminated)
                 done.append(int(sig))
         except (OSError, ValueError):        # not settable here
             pass
     return done
-
-
-def _first_interrupt(signum, frame) -> None:
-    """The handler of :func:`only_the_first_interrupt`: every later interrupt ignored, then this one
-    raised (Ctrl-C as ``KeyboardInterrupt``, SIGTERM or SIGHUP as :class:`acmm_qpp.errors.Terminated`)."""
-    for sig in (signal.SIGINT, *TERMINATING):
-        signal.signal(sig, signal.SIG_IGN)
-    if signum == signal.SIGINT:
-        raise KeyboardInterrupt
-    raise Terminated(signum)
-
-
-def only_the_first_interrupt() -> None:
-    """A command's process: the first Ctrl-C, SIGTERM or SIGHUP unwinds (as before), and every later
-    one is ignored, so that it cannot break the unwinding itself.  A terminal sends Ctrl-C twice in
-    a row to the process group: the second one, arriving after the first had raised but before the
-    cleanup had begun deferring interrupts, skipped the pool's shutdown, and the sweep hung at
-    exit while its workers finished their cases (a CI run).  Acts in the main thread only, on the
-    handlers still in force from :func:`terminate_like_ctrl_c` and Python's default Ctrl-C.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        return
-    for sig in (signal.SIGINT, *TERMINATING):
-        try:
-            if signal.getsignal(sig) in (signal.default_int_handler, _raise_terminated):
-                signal.signal(sig, _first_interrupt)
-        except (OSError, ValueError):
-            pass
 
 
 @contextmanager

@@ -13,7 +13,7 @@ from typing import Optional
 from acmm_qpp.cli.plumbing import (ConfigKinds, ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
                                    version_option)
 from acmm_qpp.plot_style import files_only_backend
-from acmm_qpp.signals import only_the_first_interrupt, terminate_like_ctrl_c
+from acmm_qpp.signals import terminate_like_ctrl_c
 from qpp import CONFIG_SECTIONS, PACKAGED_CONFIGS
 
 import numpy as np  # noqa: E402
@@ -250,10 +250,9 @@ def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
 
 def main() -> None:
     """Run the command-line app (the console-script entry point); exits with the code of the run
-    (SIGTERM and SIGHUP roll back like Ctrl-C: :func:`acmm_qpp.signals.terminate_like_ctrl_c`; only
-    the first interrupt counts: :func:`acmm_qpp.signals.only_the_first_interrupt`)."""
-    terminate_like_ctrl_c()
-    only_the_first_interrupt()
+    (SIGTERM and SIGHUP roll back like Ctrl-C, and only the first interrupt counts:
+    :func:`acmm_qpp.signals.terminate_like_ctrl_c`)."""
+    terminate_like_ctrl_c(once=True)
     files_only_backend()
     run_app(app)
 

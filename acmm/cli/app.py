@@ -18,7 +18,7 @@ from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overr
 from acmm.cli.command import CONFIGS, acmm_command
 from acmm.cli.steps import Steps
 from acmm_qpp.plot_style import files_only_backend
-from acmm_qpp.signals import only_the_first_interrupt, terminate_like_ctrl_c
+from acmm_qpp.signals import terminate_like_ctrl_c
 from acmm.model.unit_systems import shown
 
 class _AcmmGroup(ExitCodeGroup):
@@ -371,10 +371,9 @@ def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
 
 def main() -> None:
     """Console entry point (``acmm``): SIGTERM and SIGHUP unwind like Ctrl-C
-    (:func:`acmm_qpp.signals.terminate_like_ctrl_c`), only the first interrupt counts
-    (:func:`acmm_qpp.signals.only_the_first_interrupt`), figures go to files only, then the app runs."""
-    terminate_like_ctrl_c()
-    only_the_first_interrupt()
+    and only the first interrupt counts (:func:`acmm_qpp.signals.terminate_like_ctrl_c`), figures go
+    to files only, then the app runs."""
+    terminate_like_ctrl_c(once=True)
     files_only_backend()
     run_app(app)
 

@@ -181,7 +181,7 @@ def block_staircase_levels(r: dict) -> str:
                      " / ".join(sig(v, 2) for v in np.degrees(lv["steady_error"][k])),
                      sig(lv["peak_momentum"][k])])
     return markdown_table(["level", "start (orbit)", "θ2* (deg)", "steady \\|θ − θ̂*\\| roll / pitch / yaw (deg)",
-                  "peak \\|h\\| (ft·lbf·s)"], rows, "rrrrr")
+                           "peak \\|h\\| (ft·lbf·s)"], rows, "rrrrr")
 
 
 def block_design_points(r: dict) -> str:
@@ -337,8 +337,8 @@ def block_design_routes(r: dict) -> str:
                          sig(point_energy(p, n), 3), fixed(fastest, 1), f"{ok}/{tot}",
                          margin_range(sw, base)])
     return markdown_table(["station, route", "margin (n)", "κ max", "radius (first order, elementwise)",
-                  "radius (random re-check)", "energy", "fastest pole (n)", "±30 % bounded and settled",
-                  "tolerated inertia scaling s"], rows)
+                           "radius (random re-check)", "energy", "fastest pole (n)", "±30 % bounded and settled",
+                           "tolerated inertia scaling s"], rows)
 
 
 def block_robust_family(r: dict) -> str:
@@ -371,9 +371,9 @@ def block_robust_family(r: dict) -> str:
                      f"{int(np.sum(verdict[~folded] == 'bounded'))}/{int(np.sum(~folded))}",
                      f"{int(np.sum(verdict == 'bounded'))}/{verdict.size}"])
     return markdown_table(["station", "plants in the family", "decay every plant is certified to keep",
-                  "cone every plant is certified in", "plants certified in the sector",
-                  "packaged draws with an equilibrium connected to the design TEA",
-                  "of those, bounded and settled", "all draws bounded and settled"], rows)
+                           "cone every plant is certified in", "plants certified in the sector",
+                           "packaged draws with an equilibrium connected to the design TEA",
+                           "of those, bounded and settled", "all draws bounded and settled"], rows)
 
 
 def block_staircase_routes(r: dict) -> str:
@@ -431,9 +431,9 @@ def block_staircase_routes(r: dict) -> str:
                      sig(np.max(d["max_eig_condition"]), 2), sci(np.min(d["robustness_radius_elementwise"])),
                      sig(max(energy), 3), *loop[3:]])
     return markdown_table(["stair-case (route, schedule)", "path TEAs", "largest Re λ on the path",
-                  "worst sector margin on the path", "smallest disk margin", "κ max (points)",
-                  "radius (first order, elementwise, min over points)", "energy (max over points)",
-                  "peak \\|h\\| (ft·lbf·s)", "τ* (dwell 10.8 orbit)"], rows)
+                           "worst sector margin on the path", "smallest disk margin", "κ max (points)",
+                           "radius (first order, elementwise, min over points)", "energy (max over points)",
+                           "peak \\|h\\| (ft·lbf·s)", "τ* (dwell 10.8 orbit)"], rows)
 
 
 def block_sweep_monte_carlo(r: dict) -> str:
@@ -466,8 +466,8 @@ def block_sweep_monte_carlo(r: dict) -> str:
                      str(int(np.sum(v == "no_equilibrium"))),
                      f"{nd - v.size} ({100 * v.size / nd:.0f} % of draws physical)", med])
     return markdown_table(["base", "cases", "bounded", "not settled", "diverged", "no equilibrium",
-                  "unphysical draws redrawn", "median peak error of the bounded, r / p / y (deg)"],
-                 rows, "lrrrrrrr")
+                           "unphysical draws redrawn", "median peak error of the bounded, r / p / y (deg)"],
+                          rows, "lrrrrrrr")
 
 
 def block_sweep_diverged(r: dict) -> str:
@@ -497,7 +497,7 @@ def block_sweep_diverged(r: dict) -> str:
                      f"{sig(np.median(np.abs(true - est)), 2)}°",
                      f"{sig(np.min(np.atleast_1d(w['time_to_divergence'])[sel]), 2)}"])
     return markdown_table(["base", "diverged", "plant's pitch TEA (5–95 %)", "median \\|TEA − estimate\\| (pitch)",
-                  "earliest divergence (orbit)"], rows, "lrrrr")
+                           "earliest divergence (orbit)"], rows, "lrrrr")
 
 
 def block_sweep_margin(r: dict) -> str:

@@ -336,4 +336,4 @@ def block_qpp_examples(r: dict) -> str:
                      f"{fixed(b1, 4)} {'≤' if b1 <= m else '>'} {fixed(m, 4)}" + ("" if ok else " (not certified)"),
                      ", ".join(sig(v["error_inf"], 2) for v in sims.values()) + f" ({beta_o:g})"])
     return markdown_table(["config", "plant / nonlinearity", "design (12.1): ρ, T, a along the iterations",
-                  "β1 ≤ m", "‖y − y_o‖∞ per scenario (β_o)"], rows)
+                           "β1 ≤ m", "‖y − y_o‖∞ per scenario (β_o)"], rows)

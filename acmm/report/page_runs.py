@@ -123,9 +123,9 @@ STAIRCASE_VARIANTS = {
 
 
 def route_variants(root: Path, workers: int | None) -> dict:
-    """MB3 and AC designed by the regional LMI route (``design.pole_method: lmi``) and the packaged
-    ±30 % sweep of those fixed gains on the same draws (``"design:<name>_lmi"``, ``"sweep_lmi"``),
-    and the stair-case variants of :data:`STAIRCASE_VARIANTS`, designed and simulated
+    """MB3 and AC designed by each route of :data:`ROUTE_VARIANTS` (regional LMI, robust) and the
+    packaged ±30 % sweep of those fixed gains on the same draws (``"design:<name>_<route>"``,
+    ``"sweep_<route>"``), and the stair-case variants of :data:`STAIRCASE_VARIANTS`, designed and simulated
     (``"design:<variant>"``, ``"simulate:<variant>"``, ``"config:<variant>"``).
 
     Parameters

@@ -237,8 +237,7 @@ def default_sector(cfg: QppConfig) -> np.ndarray:
         return np.asarray(cfg.design.sector, float)
     nl = cfg.nonlinearity
     if isinstance(nl, SinusoidalNonlinearity):
-        P = cfg.lure_plant()
-        k = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        k = cfg.sinusoidal_half_widths()
         k = np.where(k > 0, k, 1e-12)
         return np.column_stack([-k, k])
     if isinstance(nl, ExpressionNonlinearity):
@@ -330,14 +329,6 @@ def modal_settling_time(Az, band: float) -> float:
     return float(np.log(1.0 / band) / decay) if decay > 0 else 0.0
 
 
-def _sup_abs_sin(omega: float, t0: float, t1: float) -> float:
-    """sup |sin ωt| over [t0, t1] (0 ≤ t0 ≤ t1), dimensionless."""
-    k = np.ceil((omega * t0 - np.pi / 2) / np.pi)          # the first peak ωt = π/2 + kπ at or after t0
-    if (np.pi / 2 + k * np.pi) <= omega * t1:
-        return 1.0
-    return float(max(abs(np.sin(omega * t0)), abs(np.sin(omega * t1))))
-
-
 def late_slope(cfg: QppConfig, T: float, horizon: float) -> tuple | None:
     """(sup slope on [0, T], sup slope on (T, horizon]) of a φ that depends on t, when the later one
     exceeds the earlier by half; else None.  β3 and β4 (10.53–10.54) see φ only up to T: a
@@ -363,9 +354,8 @@ def late_slope(cfg: QppConfig, T: float, horizon: float) -> tuple | None:
     if horizon <= T:
         return None
     if isinstance(nl, SinusoidalNonlinearity):     # slope k·|sin ωt|, k = |N F_unc|·γ_max (closed form)
-        k = float(np.linalg.norm(np.abs(cfg.lure_plant().N() @ np.asarray(nl.F_unc, float)).sum(axis=1)
-                                 * nl.gamma_max))
-        before, after = k * _sup_abs_sin(nl.omega, 0.0, T), k * _sup_abs_sin(nl.omega, T, horizon)
+        k = float(np.linalg.norm(cfg.sinusoidal_half_widths()))
+        before, after = (k * float(spheres.sup_abs_sin(nl.omega, t0, t1)) for t0, t1 in ((0.0, T), (T, horizon)))
         return (before, after) if after > 1.5 * before + 1e-12 else None
     if not isinstance(nl, ExpressionNonlinearity):
         return None
@@ -555,7 +545,7 @@ def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:
     nl = cfg.nonlinearity
     s = np.asarray(sector, float)
     if isinstance(nl, SinusoidalNonlinearity):
-        k = np.abs(cfg.lure_plant().N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        k = cfg.sinusoidal_half_widths()
         ok = bool(np.all(s[:, 0] <= -k) and np.all(s[:, 1] >= k))
         return ok, (f"the sector contains phi's own, ±N·gamma_max·|F_unc| = ±{np.round(k, 6).tolist()}"
                     + ("" if ok else " (design.sector is narrower)"))

@@ -55,6 +55,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acmm_qpp.errors import ConvergenceError, DesignError
+from qpp.design import spheres
 from qpp.design.certificate import certify, default_sector
 from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
@@ -148,7 +149,7 @@ def family_bounds(cfg: QppConfig) -> FamilyBounds:
     T_sin = m_sin = None
     nl = cfg.nonlinearity
     if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
-        k_struct = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        k_struct = cfg.sinusoidal_half_widths()
         T_sin = float(np.pi / (2 * nl.omega))
         m_sin = float(sp.beta_o / (beta_i + sp.beta_o * np.sqrt(np.sum(np.maximum(k, k_struct) ** 2))))
     return FamilyBounds(ws, 1.0 if ws else 0.0, float(m_up), y0_term, T_sin, m_sin, beta_i, k)
@@ -402,9 +403,9 @@ def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
     b = family_bounds(cfg)
     nl = cfg.nonlinearity
     if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
-        k_struct = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        k_struct = cfg.sinusoidal_half_widths()
         k3 = float(np.sqrt(np.sum(np.maximum(b.k, k_struct) ** 2)))
-        b3 = k3 * np.where(nl.omega * t >= np.pi / 2, 1.0, np.abs(np.sin(nl.omega * t)))
+        b3 = k3 * spheres.sup_abs_sin(nl.omega, 0.0, t)
     else:
         b3 = np.zeros(t.size)
     U = sp.beta_o / (b.beta_i + sp.beta_o * b3)
@@ -671,7 +672,7 @@ def _settle_setup(cfg: QppConfig) -> tuple | None:
     k_norm = float(np.sqrt(np.sum(b.k ** 2)))
     nl, k3 = cfg.nonlinearity, 0.0
     if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
-        k_struct = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        k_struct = cfg.sinusoidal_half_widths()
         k3 = float(np.sqrt(np.sum(np.maximum(b.k, k_struct) ** 2)))
     if k_norm <= 0:
         return None

@@ -256,6 +256,29 @@ def truncated_l2(t, y, T: float) -> float:
     return float(np.sqrt(np.max(np.trapezoid(y[:, mask] ** 2, t[mask], axis=1))))
 
 
+def sup_abs_sin(omega: float, t0: float, t1):
+    """sup |sin ωt| over [t0, t1] (0 ≤ t0 ≤ t1; ``t1`` may be an array), in closed form: 1 when a
+    peak ωt = π/2 + kπ lies in the interval, else the larger end.
+
+    Parameters
+    ----------
+    omega : float
+        ω, rad/s.
+    t0 : float
+        Start, s.
+    t1 : float or array
+        End(s), s.
+
+    Returns
+    -------
+    float or array
+        The supremum, dimensionless.
+    """
+    t1 = np.asarray(t1, float)
+    peak = (np.pi / 2 + np.ceil((omega * t0 - np.pi / 2) / np.pi) * np.pi) / omega if omega > 0 else np.inf
+    return np.where(peak <= t1, 1.0, np.maximum(abs(np.sin(omega * t0)), np.abs(np.sin(omega * t1))))
+
+
 def sin_l2(omega: float, T: float) -> float:
     """‖(sin ωt)_T‖₂ = (T/2 − sin(2ωT)/(4ω))^{1/2}, exactly; √T for ω = 0 means ‖(1)_T‖₂.
 

@@ -246,13 +246,11 @@ def _beta3_at(cfg: QppConfig, T: float, te: np.ndarray, k: np.ndarray, enc, loop
     """Upper bounds of β3(T') = sup over [0, T'] (nondecreasing in T') at the times ``te`` (s), and
     a note for the arm (ρ_v, the gap of sup |Δq|); see :func:`consistent`."""
     nl = cfg.nonlinearity
-    P = cfg.lure_plant()
     note = {}
     if isinstance(nl, SinusoidalNonlinearity):     # closed form: k·sup_{[0, T']} |sin ωt|
-        k_struct = np.abs(P.N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+        k_struct = cfg.sinusoidal_half_widths()
         kk = np.maximum(k, k_struct)
-        wt = nl.omega * np.asarray(te, float)
-        return np.sqrt(np.sum(kk ** 2)) * np.where(wt >= np.pi / 2, 1.0, np.abs(np.sin(wt))), note
+        return np.sqrt(np.sum(kk ** 2)) * spheres.sup_abs_sin(nl.omega, 0.0, te), note
     if isinstance(nl, ExpressionNonlinearity):
         M = cfg.expression_model()
         if M.proof.slope_ok:         # proved bounds on cells of [0, T]; a T' takes every cell it reaches

@@ -295,6 +295,18 @@ class QppConfig(SectionModel):
         p = self.plant
         return LurePlant(p.A, p.B, p.C, p.G, p.Ac, p.Bc, p.Cc)
 
+    def sinusoidal_half_widths(self) -> np.ndarray:
+        """φ's own sector half-width per output for the ``sinusoidal`` kind, |N F_unc|·1·γ_max (row
+        sums; φ = N (γ F_unc) y sin ωt is the uncertain part, eq 13.6).
+
+        Returns
+        -------
+        (p,) array
+            Half-widths, φ units per unit of y.
+        """
+        nl = self.nonlinearity
+        return np.abs(self.lure_plant().N() @ np.asarray(nl.F_unc, float)).sum(axis=1) * nl.gamma_max
+
     def expression_model(self):
         """The compiled model of an ``expression`` nonlinearity f1 (eq 10.1), cached.
 

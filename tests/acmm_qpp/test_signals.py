@@ -179,14 +179,13 @@ def test_an_interrupt_in_a_deferred_step_is_raised_at_its_end(tmp_path):
 
 
 def test_only_the_first_interrupt_unwinds(tmp_path):
-    """A command's process (:func:`acmm_qpp.signals.only_the_first_interrupt`): Ctrl-C twice in a
+    """A command's process (``terminate_like_ctrl_c(once=True)``): Ctrl-C twice in a
     row, or Ctrl-C then SIGTERM, raise once; the cleanup that follows runs whole (the second Ctrl-C
     of a terminal had skipped a sweep's pool shutdown: a hang at exit)."""
     script = textwrap.dedent("""
         import os, signal, time
         from acmm_qpp import signals
-        signals.terminate_like_ctrl_c()
-        signals.only_the_first_interrupt()
+        signals.terminate_like_ctrl_c(once=True)
         try:
             os.kill(os.getpid(), signal.SIGINT)
             time.sleep(1)
