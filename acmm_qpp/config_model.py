@@ -1,6 +1,8 @@
 """The strict pydantic base of every config section (acmm, sweep, qpp).
 
-Unknown keys, NaN and infinity are refused, the model is frozen, and a YAML boolean is not a
+Unknown keys, NaN and infinity are refused, the model is frozen; an unknown key's error names the
+closest valid key of its own model ("did you mean `x`?", :mod:`difflib`) or lists that model's keys
+when none is close (a wrap validator: each model knows its keys).  A YAML boolean is not a
 number: pydantic's lax mode would read ``count: true`` as 1 and ``rate: false`` as 0,
 so a boolean given where the field wants a number (or a list of numbers) is refused, naming
 the field.  Strict mode for the whole model is not used: it would also refuse YAML lists for
@@ -8,17 +10,38 @@ tuple fields and plain strings for enum fields.
 """
 from __future__ import annotations
 
+import difflib
 import types
 import typing
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, model_validator
+from pydantic import BaseModel, ConfigDict, ValidationError, model_validator
 from pydantic_core import PydanticCustomError
 
 _NUMBERS = (int, float, complex)
 #: the pydantic error type of a boolean given as a number; its context names the field, which
 #: :func:`acmm_qpp.configio` adds to the error's location
 BOOLEAN_AS_NUMBER = "boolean_as_number"
+
+
+def closest(word: str, candidates: list[str]) -> str | None:
+    """The candidate closest to ``word`` (case-insensitive difflib ratio ≥ 0.6), or None.
+
+    Parameters
+    ----------
+    word : str
+        The misspelt word.
+    candidates : list of str
+        Valid spellings.
+
+    Returns
+    -------
+    str or None
+        The closest candidate, in its own spelling.
+    """
+    lower = {c.lower(): c for c in candidates}
+    m = difflib.get_close_matches(str(word).lower(), list(lower), n=1, cutoff=0.6)
+    return lower[m[0]] if m else None
 
 
 def union_members(annotation: Any) -> list:
@@ -104,3 +127,23 @@ class StrictModel(BaseModel):
                     raise PydanticCustomError(BOOLEAN_AS_NUMBER, "expected a number, got a boolean (true/false)",
                                               {"field": key})
         return data
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _unknown_keys_named(cls, data: Any, handler) -> Any:
+        # pydantic's "extra inputs are not permitted" for a key of this model becomes "unknown key
+        # (did you mean `x`?)" or "(valid keys: ...)"; every other error keeps its type, message
+        # and context (an inner model's unknown keys were named by that model)
+        try:
+            return handler(data)
+        except ValidationError as exc:
+            errors = exc.errors()
+            if not any(e["type"] == "extra_forbidden" and len(e["loc"]) == 1 for e in errors):
+                raise
+            keys = list(cls.model_fields)
+            for e in errors:
+                if e["type"] == "extra_forbidden" and len(e["loc"]) == 1:
+                    best = closest(str(e["loc"][0]), keys)
+                    e["msg"] = "unknown key " + (f"(did you mean `{best}`?)" if best else f"(valid keys: {', '.join(keys)})")
+            raise ValidationError.from_exception_data(exc.title, [
+                {**e, "type": PydanticCustomError(e["type"], e["msg"], e.get("ctx"))} for e in errors]) from None

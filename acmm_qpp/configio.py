@@ -16,9 +16,8 @@ from pathlib import Path
 import yaml
 from pydantic import ValidationError
 
-from acmm_qpp.config_model import BOOLEAN_AS_NUMBER
+from acmm_qpp.config_model import BOOLEAN_AS_NUMBER, closest
 from acmm_qpp.errors import ConfigError
-from acmm_qpp.hints import missing_config_message, prioritize, unknown_key_hint
 from acmm_qpp.limits import how_to_raise, limit
 
 
@@ -85,8 +84,10 @@ def user_path(loc: tuple, data: object) -> tuple:
     return tuple(out)
 
 
-def _format_error(exc: ValidationError, model_cls=None, data: object = None) -> str:
-    errors = prioritize(exc.errors())
+def _format_error(exc: ValidationError, data: object = None) -> str:
+    # unknown keys first: a misspelt key of a section is one typo, not also a missing field for
+    # each of its required ones
+    errors = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")
     err = errors[0]
     path = user_path(tuple(err["loc"]), data)
     # a mapping where a union also allows a string or a number: the mapping member's own error,
@@ -104,8 +105,6 @@ def _format_error(exc: ValidationError, model_cls=None, data: object = None) -> 
     for prefix in ("Value error, ", "Assertion failed, "):
         if msg.startswith(prefix):
             msg = msg[len(prefix):]
-    if err["type"] == "extra_forbidden":
-        msg = "unknown key" + (unknown_key_hint(model_cls, tuple(err["loc"])) if model_cls else "")
     # other fields in error (the union's other members at the same place are not other errors)
     others = {q for q in (user_path(tuple(e["loc"]), data) for e in errors[1:]) if q != path[:len(q)]}
     extra = f" (and {len(others)} more)" if others else ""
@@ -164,7 +163,7 @@ def validate_model(model_cls, data: object, source: str = "config"):
     try:
         return model_cls.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(f"{source}: {_format_error(exc, model_cls, data)}") from None
+        raise ConfigError(f"{source}: {_format_error(exc, data)}") from None
 
 
 def packaged_config_path(name: str, package: str) -> Path:
@@ -184,6 +183,36 @@ def packaged_config_path(name: str, package: str) -> Path:
         Its path (which need not exist).
     """
     return Path(str(resources.files(package).joinpath(name)))
+
+
+def missing_config_message(path, package: str) -> str:
+    """``config file not found: x (not a packaged config either; did you mean `y`? packaged: ...)``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The config as the user gave it.
+    package : str
+        The data package of the packaged configs.
+
+    Returns
+    -------
+    str
+        The one-line message.
+    """
+    try:
+        names = sorted(Path(p.name).stem for p in resources.files(package).iterdir() if p.name.endswith(".yaml"))
+    except (OSError, ModuleNotFoundError):  # pragma: no cover
+        names = []
+    msg = f"config file not found: {path}"
+    p = Path(str(path))
+    if len(p.parts) == 1 and names:
+        best = closest(p.stem, names)
+        hint = f"did you mean `{best}`? " if best else ""
+        msg += f" (not a packaged config either; {hint}packaged configs: {', '.join(names)})"
+    elif names:
+        msg += f" (packaged configs, usable by name: {', '.join(names)})"
+    return msg
 
 
 def read_yaml(path: str | Path, package: str) -> tuple[object, Path]:

@@ -1,13 +1,18 @@
-"""A YAML boolean is not a number: ``orbits: true`` is refused, naming the field, in the acmm,
-sweep and qpp configs (pydantic's lax mode alone would read it as 1)."""
+"""The strict config base (acmm_qpp.config_model): a YAML boolean is not a number (``orbits: true``
+is refused, naming the field, in the acmm, sweep and qpp configs: pydantic's lax mode alone would
+read it as 1), and an unknown key names the closest valid key of its model."""
 from __future__ import annotations
 
 from typing import Literal, Optional, Union
 
 import pytest
+import yaml
 
+from acmm.io.config import parse_config
 from acmm_qpp.config_model import boolean_as_number
-from tests.conftest import invoke
+from acmm_qpp.errors import ConfigError
+from qpp.io.config import parse_config as parse_qpp
+from tests.conftest import CONFIGS, invoke
 
 
 @pytest.mark.parametrize("annotation, value, refused", [
@@ -65,3 +70,18 @@ def test_booleans_still_accepted_where_the_field_is_a_switch(tmp_runs):
 
     assert invoke(acmm_app, "validate", "mb3", "output.figures=false").exit_code == 0
     assert invoke(qpp_app, "validate", "qpp_siso", "spheres.adapt_T=true").exit_code == 0
+
+
+def test_unknown_key_hints():
+    d = yaml.safe_load((CONFIGS / "mb3.yaml").read_text())
+    d["inertia"] = {"Ixx": 23.22e6, "I22": 1.30e6, "I33": 23.23e6}
+    with pytest.raises(ConfigError, match=r"inertia\.Ixx: unknown key \(valid keys: I11, I22"):
+        parse_config(d)
+    d = yaml.safe_load((CONFIGS / "mb3.yaml").read_text())
+    d["simulaton"] = {"orbits": 2}
+    with pytest.raises(ConfigError, match=r"simulaton: unknown key \(did you mean `simulation`\?\)"):
+        parse_config(d)
+    q = yaml.safe_load((CONFIGS / "qpp_siso.yaml").read_text())
+    q["nonlinearity"]["omgea"] = 1.0
+    with pytest.raises(ConfigError, match=r"did you mean `omega`"):
+        parse_qpp(q)

@@ -28,7 +28,7 @@ def test_an_unknown_key_of_a_library_form_names_the_users_field():
 
     with pytest.raises(ConfigError) as got:
         load_config("qpp_saturation", ["nonlinearity.f1.0={form: saturation, output: 1, gain: k, bogus: 1}"])
-    assert str(got.value).endswith("nonlinearity.f1.0.bogus: unknown key")
+    assert str(got.value).endswith("nonlinearity.f1.0.bogus: unknown key (valid keys: form, output, gain, level)")
     assert "function-after" not in str(got.value) and "more)" not in str(got.value)
 
 
