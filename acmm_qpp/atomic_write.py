@@ -95,67 +95,15 @@ def output_error(exc: OSError, what: str, where: str | Path):
     return OutputError(f"cannot write {what} {where}: {why}")
 
 
-@contextmanager
-def atomic_path(path: str | Path, what: str = "results"):
-    """Yield a temporary path beside ``path``; on success it is renamed onto ``path``.
-
-    The file gets the usual permissions (0666 & ~umask, not mkstemp's 0600); on any error the
-    temporary file is removed, directories created for it are removed again, ``path`` is left
-    as it was, and an OS error (read-only, not a directory, no space, name too long, a
-    directory where the file should go) becomes one :class:`~acmm_qpp.errors.OutputError` line.
-
-    Parameters
-    ----------
-    path : path-like
-        The target file.
-    what : str
-        What is written, for error messages.
-
-    Yields
-    ------
-    Path
-        The temporary path to write to.
-
-    Raises
-    ------
-    OutputError
-        A directory of that name is in the way, or an OS error occurred.
-    output_error
-        (the :class:`~acmm_qpp.errors.OutputError` built by :func:`output_error` from an OS error)
-    """
-    path = Path(path)
-    created: list[Path] = []
-    try:
-        created = make_dirs(path.parent)
-        if os.path.isdir(path):
-            remove_empty_dirs(created)
-            raise OutputError(f"cannot write {what} {path}: a directory of that name is in the way")
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    except OSError as exc:
-        remove_empty_dirs(created)
-        raise output_error(exc, what, path) from None
-    os.close(fd)
-    try:
-        yield Path(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        remove_empty_dirs(created)
-        if isinstance(exc, OSError):
-            raise output_error(exc, what, path) from None
-        raise
-
-
 def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
-    """Write ``data`` atomically with plain ``os.write`` calls and an fsync (see
-    :func:`atomic_path`): a full disk is then an ordinary OSError → OutputError, never a crash
-    inside a C library, and no temporary file survives.
+    """Write ``data`` to a temporary file beside ``path``, then rename it onto ``path``.
+
+    The bytes go out in plain ``os.write`` calls and an fsync: a full disk is then an ordinary
+    OSError, never a crash inside a C library.  The file gets the usual permissions (0666 & ~umask,
+    not mkstemp's 0600).  On any error or interrupt the temporary file is removed, directories
+    created for it are removed again and ``path`` is left as it was; an OS error (read-only, not a
+    directory, no space, name too long, a directory where the file should go) becomes one
+    :class:`~acmm_qpp.errors.OutputError` line.
 
     Parameters
     ----------
@@ -170,9 +118,24 @@ def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
     -------
     Path
         ``path``.
+
+    Raises
+    ------
+    OutputError
+        A directory of that name is in the way, or an OS error occurred.
     """
-    with atomic_path(path, what) as tmp:
-        fd = os.open(tmp, os.O_WRONLY | os.O_TRUNC | getattr(os, "O_CLOEXEC", 0))
+    path = Path(path)
+    created: list[Path] = []
+    try:
+        created = make_dirs(path.parent)
+        if os.path.isdir(path):
+            remove_empty_dirs(created)
+            raise OutputError(f"cannot write {what} {path}: a directory of that name is in the way")
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        remove_empty_dirs(created)
+        raise output_error(exc, what, path) from None
+    try:
         try:
             view = memoryview(data)
             while view:
@@ -180,11 +143,24 @@ def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
             os.fsync(fd)
         finally:
             os.close(fd)
-    return Path(path)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        remove_empty_dirs(created)
+        if isinstance(exc, OSError):
+            raise output_error(exc, what, path) from None
+        raise
+    return path
 
 
 def write_text(path: str | Path, text: str) -> Path:
-    """Write a text file atomically (see :func:`atomic_path`).
+    """Write a text file atomically (see :func:`write_bytes`).
 
     Parameters
     ----------

@@ -78,16 +78,6 @@ def remove_leftovers(directory: Path, staging: tuple = ()) -> list[str]:
     return removed
 
 
-def _write_pid(lock: Path) -> None:
-    """Write this process's pid into the lock file it holds (for the message of a refused run)."""
-    fd = os.open(lock, os.O_WRONLY | getattr(os, "O_CLOEXEC", 0))
-    try:
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
-    finally:
-        os.close(fd)
-
-
 def _release(lock: filelock.FileLock, path: Path, created: list) -> None:
     """Release ``lock``; the outermost release removes the lock file (while still held:
     filelock's next holder checks that its inode is still linked) and the folders created."""
@@ -142,8 +132,8 @@ def run_lock(run_dir: str | Path, staging: tuple = ()):
         remove_empty_dirs(created)
         raise output_error(exc, "the run lock", path) from None
     try:
-        if lock.lock_counter == 1:
-            _write_pid(path)
+        if lock.lock_counter == 1:      # the holder's pid, for the message of a refused run
+            path.write_text(f"{os.getpid()}\n", encoding="ascii")
             remove_leftovers(d, staging)
     except OSError as exc:
         _release(lock, path, created)
