@@ -317,7 +317,7 @@ def save_figure(fig, path: str | Path, **kwargs) -> Path:
     return path
 
 
-def draw_figures(calls) -> None:
+def draw_figures(calls) -> list[Path]:
     """Draw a stage's figures, in this process, after its results are written: every call is
     made even if one fails, and the first failure is raised then as a
     :class:`acmm_qpp.errors.FigureError` (exit 4: the results stay written).
@@ -326,22 +326,31 @@ def draw_figures(calls) -> None:
     ----------
     calls : iterable of callable
         The figures, each a call without arguments (e.g. a ``functools.partial`` of a figure
-        function that writes its file with :func:`save_figure`).
+        function that writes its file with :func:`save_figure`), returning the path or the list
+        of paths it wrote (or None).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, in order.
 
     Raises
     ------
     acmm_qpp.errors.FigureError
         A figure could not be drawn or written (the first failure's message).
     """
-    first = None
+    first, written = None, []
     for call in calls:
         try:
-            call()
+            out = call()
         except Exception as exc:  # noqa: BLE001 (raised once the others are drawn)
             first = first or exc
+            continue
+        written += [Path(x) for x in (out if isinstance(out, (list, tuple)) else [out]) if x is not None]
     if first is not None:
         err = FigureError.of(first)
         raise err from (None if err is first else first)
+    return written
 
 
 def redraw_from_files(files: list, readers: dict, out=None) -> list[Path]:
@@ -378,7 +387,7 @@ def redraw_from_files(files: list, readers: dict, out=None) -> list[Path]:
         folders.append(folder)
     for folder in folders:
         folder.mkdir(parents=True, exist_ok=True)
-    return draw_collected(calls)
+    return draw_figures(calls)
 
 
 def stored_results(target: str | Path, sources: dict) -> list[tuple[Path, str]]:
@@ -433,37 +442,6 @@ def stored_results(target: str | Path, sources: dict) -> list[tuple[Path, str]]:
         raise ConfigError(f"{target}: a {st!r} result, whose figures this command does not draw "
                           f"(it draws {', '.join(stages)})")
     return [(p, st)]
-
-
-def draw_collected(calls) -> list[Path]:
-    """:func:`draw_figures` of ``calls``, returning the files they wrote (each call returns a
-    path or a list of paths).
-
-    Parameters
-    ----------
-    calls : iterable of callable
-        The figure calls.
-
-    Returns
-    -------
-    list of pathlib.Path
-        The files written, in order.
-
-    Raises
-    ------
-    acmm_qpp.errors.FigureError
-        A figure could not be drawn or written.
-    """
-    written: list[Path] = []
-
-    def keep(call):
-        def run():
-            out = call()
-            written.extend(Path(x) for x in (out if isinstance(out, (list, tuple)) else [out]) if x is not None)
-        return run
-
-    draw_figures([keep(c) for c in calls])
-    return written
 
 
 #: vector formats whose files matplotlib dates by default → the metadata key of that date
