@@ -240,32 +240,34 @@ def read_yaml(path: str | Path, package: str) -> tuple[object, Path]:
     Raises
     ------
     ConfigError
-        Missing or unreadable file, or invalid YAML (with line and column).
+        Missing, unreadable (not a regular file, larger than ``CONFIG_BYTES`` of
+        :mod:`acmm_qpp.limits`, not UTF-8) or invalid YAML (with line and column).
     """
     if not str(path).strip():
         raise ConfigError("config path is empty: give a YAML file or the name of a packaged config")
-    else:
-        p = Path(path)
-        try:
-            present = p.exists()
-        except (OSError, ValueError) as exc:   # name too long, NUL byte, ...
-            raise ConfigError(f"cannot read config file {str(path)[:200]}: {getattr(exc, 'strerror', None) or exc}") from None
-        # a bare name (``name``, not ``./name`` or ``dir/name``: Path drops the ``./``) that is not a
-        # file here (absent, or a folder such as a run folder named like it): a packaged config
-        bare = len(p.parts) == 1 and not any(sep and sep in str(path) for sep in ("/", os.sep, os.altsep))
-        if bare and (not present or p.is_dir()):
-            candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml", package)
-            if candidate.exists():
-                p, present = candidate, True
-        if present and p.is_dir():
-            raise ConfigError(f"config path is a directory, not a file: {str(path)[:200]}")
-        if not present and p.is_symlink():     # a link to nothing, or a loop of links
-            raise ConfigError(f"cannot read config file {str(path)[:200]}: {_link_problem(p)}")
-        if not present:
-            raise ConfigError(missing_config_message(path, package))
-    text = read_config_text(p)
+    p = Path(path)
     try:
-        data = load_yaml_text(text, p)
+        present = p.exists()
+    except (OSError, ValueError) as exc:   # name too long, NUL byte, ...
+        raise ConfigError(f"cannot read config file {str(path)[:200]}: {getattr(exc, 'strerror', None) or exc}") from None
+    # a bare name (``name``, not ``./name`` or ``dir/name``: Path drops the ``./``) that is not a
+    # file here (absent, or a folder such as a run folder named like it): a packaged config
+    bare = len(p.parts) == 1 and not any(sep and sep in str(path) for sep in ("/", os.sep, os.altsep))
+    if bare and (not present or p.is_dir()):
+        candidate = packaged_config_path(p.name if p.suffix else p.name + ".yaml", package)
+        if candidate.exists():
+            p, present = candidate, True
+    if present and p.is_dir():
+        raise ConfigError(f"config path is a directory, not a file: {str(path)[:200]}")
+    if not present and p.is_symlink():     # a link to nothing, or a loop of links
+        raise ConfigError(f"cannot read config file {str(path)[:200]}: {_link_problem(p)}")
+    if not present:
+        raise ConfigError(missing_config_message(path, package))
+    raw = read_regular_file(p, "config", int(limit("CONFIG_BYTES")), how_to_raise("CONFIG_BYTES"))
+    try:
+        data = load_yaml_text(raw.decode("utf-8"), p)
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"cannot read config file {p}: not UTF-8 text (byte {exc.start})") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
@@ -358,47 +360,15 @@ def read_regular_file(p: Path, what: str = "config", cap: int | None = None,
             raise ConfigError(f"{what} path is not a regular file (a FIFO, device or socket): {p}")
         if cap is not None and st.st_size > cap:
             raise ConfigError(too_large.format(st.st_size))
-        chunks, size = [], 0
-        while True:
-            chunk = os.read(fd, 1 << 16)
-            if not chunk:
-                break
-            size += len(chunk)
-            if cap is not None and size > cap:          # grew while being read
-                raise ConfigError(too_large.format(f"over {cap}"))
-            chunks.append(chunk)
+        with os.fdopen(os.dup(fd), "rb") as f:
+            data = f.read() if cap is None else f.read(cap + 1)
     except OSError as exc:
         raise ConfigError(f"cannot read {what} file {p}: {exc.strerror or exc}") from None
     finally:
         os.close(fd)
-    return b"".join(chunks)
-
-
-def read_config_text(p: Path) -> str:
-    """The text of config file ``p``, read with bounds (:func:`read_regular_file`, at most
-    ``CONFIG_BYTES`` bytes of :mod:`acmm_qpp.limits`), UTF-8.  One-line :class:`ConfigError`
-    otherwise.
-
-    Parameters
-    ----------
-    p : Path
-        The config file.
-
-    Returns
-    -------
-    str
-        Its text.
-
-    Raises
-    ------
-    ConfigError
-        Not a readable regular file, too large, or not UTF-8.
-    """
-    data = read_regular_file(p, "config", int(limit("CONFIG_BYTES")), how_to_raise("CONFIG_BYTES"))
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"cannot read config file {p}: not UTF-8 text (byte {exc.start})") from None
+    if cap is not None and len(data) > cap:          # grew while being read
+        raise ConfigError(too_large.format(f"over {cap}"))
+    return data
 
 
 def check_yaml_structure(text: str, source: object = "config") -> None:
