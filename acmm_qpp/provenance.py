@@ -18,10 +18,14 @@ def _git_state() -> tuple[str, bool | None]:
     """(commit, whether tracked files have uncommitted changes) of the source tree, from one
     ``git status --porcelain=v2 --branch`` run once per process; ("unknown", None) outside a
     checkout or without git."""
-    out = _git("status", "--porcelain=v2", "--branch", "--untracked-files=no")
-    if out is None:
+    try:
+        out = subprocess.run(["git", "status", "--porcelain=v2", "--branch", "--untracked-files=no"],
+                             cwd=Path(__file__).resolve().parent, capture_output=True, text=True, timeout=5)
+    except (OSError, subprocess.SubprocessError):
         return "unknown", None
-    lines = out.splitlines()
+    if out.returncode != 0:
+        return "unknown", None
+    lines = out.stdout.splitlines()
     oid = next((ln.split()[2] for ln in lines if ln.startswith("# branch.oid ")), "unknown")
     if oid == "(initial)":
         oid = "unknown"
@@ -53,16 +57,6 @@ def git_dirty() -> str:
     """
     dirty = _git_state()[1]
     return "unknown" if dirty is None else ("yes" if dirty else "no")
-
-
-def _git(*args: str) -> str | None:
-    """Standard output of ``git <args>`` run in the source tree, or None when git fails."""
-    try:
-        out = subprocess.run(["git", *args], cwd=Path(__file__).resolve().parent,
-                             capture_output=True, text=True, timeout=5)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return out.stdout if out.returncode == 0 else None
 
 
 def config_hash(config_text: str) -> str:
