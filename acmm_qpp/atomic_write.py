@@ -3,14 +3,13 @@
 An interrupted or failed write never leaves a partial file nor the directories created for it;
 an OS error (read-only, not a directory, no space, name too long) becomes one
 :class:`~acmm_qpp.errors.OutputError` line (exit 4).  Bytes are written with plain ``os.write``
-calls (HDF5 files and figures are built in memory first, :func:`in_memory`).
+calls (HDF5 files and figures are built in memory first: HDF5 crashes on ENOSPC, so the
+libraries never write to the disk themselves).
 """
 from __future__ import annotations
 
-import io
 import os
 import tempfile
-from contextlib import contextmanager
 from pathlib import Path
 
 from acmm_qpp.errors import OutputError
@@ -175,31 +174,3 @@ def write_text(path: str | Path, text: str) -> Path:
         ``path``.
     """
     return write_bytes(path, text.encode("utf-8"), "text")
-
-
-@contextmanager
-def in_memory(path: Path, what: str = "results"):
-    """Yield a :class:`io.BytesIO`; afterwards its bytes are written to ``path`` atomically.
-
-    HDF5 files and figures are built in memory so that the libraries (HDF5 segfaults on ENOSPC)
-    never write to the disk themselves.
-
-    Parameters
-    ----------
-    path : path-like
-        The target file.
-    what : str
-        What is written, for error messages.
-
-    Yields
-    ------
-    io.BytesIO
-        The buffer to write to.
-    """
-    buf = io.BytesIO()
-    yield buf
-    view = buf.getbuffer()                # no copy of a large file
-    try:
-        write_bytes(path, view, what)
-    finally:
-        view.release()

@@ -20,6 +20,7 @@ The netCDF layout, for ``xarray.open_dataset(path, engine="h5netcdf")`` and the 
 """
 from __future__ import annotations
 
+import io
 import json
 from collections.abc import Mapping  # not typing.Mapping: its isinstance check is slow
 from dataclasses import dataclass, field, replace
@@ -30,7 +31,7 @@ import h5netcdf
 import h5py
 import numpy as np
 
-from acmm_qpp.atomic_write import in_memory
+from acmm_qpp.atomic_write import write_bytes
 from acmm_qpp.errors import ConfigError, FigureError
 from acmm_qpp.provenance import provenance
 
@@ -228,14 +229,14 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
     """
     path = Path(path)
     root = {"config": config_text, **provenance(config_text), **(attrs or {}), "Conventions": CONVENTIONS}
-    with in_memory(path) as buf:
-        # invalid_netcdf: bool datasets (HDF5 enums, as h5py writes them), which the netCDF-C
-        # library reads; track_order off: groups and attributes listed by name, as before
-        with h5py.File(buf, "w", track_order=False) as h5, h5netcdf.File(h5, "w", invalid_netcdf=True) as f:
-            for k, v in root.items():
-                h5.attrs[k] = _attr_value(v)
-            _write_group(f, h5, items, coords or {}, tuple(aux_coords))
-    return path
+    buf = io.BytesIO()        # built in memory, written by write_bytes (HDF5 crashes on ENOSPC)
+    # invalid_netcdf: bool datasets (HDF5 enums, as h5py writes them), which the netCDF-C
+    # library reads; track_order off: groups and attributes listed by name, as before
+    with h5py.File(buf, "w", track_order=False) as h5, h5netcdf.File(h5, "w", invalid_netcdf=True) as f:
+        for k, v in root.items():
+            h5.attrs[k] = _attr_value(v)
+        _write_group(f, h5, items, coords or {}, tuple(aux_coords))
+    return write_bytes(path, buf.getbuffer())
 
 
 def dimension_only(ds) -> bool:
@@ -312,9 +313,9 @@ def save_figure(fig, path: str | Path, **kwargs) -> Path:
     fmt = path.suffix.lstrip(".").lower() or "png"
     if fmt in _DATED_FORMATS:           # the same figure gives the same bytes: no creation date
         kwargs["metadata"] = {_DATED_FORMATS[fmt]: None, **(kwargs.get("metadata") or {})}
-    with in_memory(path, "figure") as tmp:
-        fig.savefig(tmp, format=fmt, **kwargs)
-    return path
+    buf = io.BytesIO()
+    fig.savefig(buf, format=fmt, **kwargs)
+    return write_bytes(path, buf.getbuffer(), "figure")
 
 
 def draw_figures(calls) -> list[Path]:
