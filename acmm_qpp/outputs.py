@@ -32,7 +32,7 @@ from pathlib import Path
 
 from acmm_qpp.atomic_write import output_error, write_text
 from acmm_qpp.errors import FigureError, OutputError
-from acmm_qpp.overrides import header, origin_of
+from acmm_qpp.overrides import origin_of
 from acmm_qpp.runlock import STAGING, run_lock
 from acmm_qpp.signals import interrupts_deferred
 
@@ -97,7 +97,8 @@ def remove_owned(run_dir, patterns: tuple) -> None:
 
 
 def config_text_of(config=None, config_text: str | None = None) -> str:
-    """The text of ``config.yaml``: the resolved config headed by its source and overrides.
+    """The text of ``config.yaml``: the resolved config headed by a comment naming its source and
+    overrides.
 
     Parameters
     ----------
@@ -111,9 +112,15 @@ def config_text_of(config=None, config_text: str | None = None) -> str:
     str
         The file's text.
     """
-    text = config_text if config_text is not None else config.to_yaml()
     source, overrides = origin_of(config) if config is not None else (None, [])
-    return header(source, overrides) + text
+    lines = ["# resolved config of this run (every default filled in, numbers in the config's canonical units)"]
+    if source:
+        lines.append(f"# source: {source}")
+    if overrides:
+        lines.append("# command-line overrides: " + " ".join(overrides))
+    # a line break inside a path or an override stays inside the comment
+    head = "\n".join(line.replace("\r", "\\r").replace("\n", "\n#   ") for line in lines) + "\n"
+    return head + (config_text if config_text is not None else config.to_yaml())
 
 
 def _commit(staging: Path, run_dir: Path, patterns: tuple) -> None:

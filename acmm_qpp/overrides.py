@@ -54,47 +54,6 @@ def looks_like_override(text: str) -> bool:
     return bool(eq) and bool(_KEY.match(key)) and not key.startswith("~")
 
 
-def parse_override(text: str) -> tuple[list, object, bool]:
-    """``"a.b=1"`` → (["a", "b"], 1, False); ``"~a.b"`` → (["a", "b"], None, True).
-
-    Parameters
-    ----------
-    text : str
-        One override.
-
-    Returns
-    -------
-    tuple
-        (key path, list of str and int (digits are list indices); value parsed as YAML;
-        whether it removes the key).
-
-    Raises
-    ------
-    OverrideSyntaxError
-        The text is not ``dotted.key=value`` / ``~dotted.key`` (exit 64).
-    ConfigError
-        The value is not valid YAML.
-    """
-    text = str(text)
-    if not looks_like_override(text):
-        raise OverrideSyntaxError(f"unexpected argument {text!r}: an override must read dotted.key=value "
-                                  "or ~dotted.key to remove a key")
-    if text.startswith("~"):
-        return [_part(p) for p in text[1:].split(".")], None, True
-    key, _, raw = text.partition("=")
-
-    try:   # the bounds of a config file (depth, nodes with aliases expanded) apply here too
-        value = load_yaml_text(raw, f"override {key}") if raw.strip() else None
-    except yaml.YAMLError as exc:
-        what = getattr(exc, "problem", None) or "not valid YAML"
-        raise ConfigError(f"override {key}: value {raw!r} is not valid YAML ({what})") from None
-    return [_part(p) for p in key.split(".")], value, False
-
-
-def _part(p: str):
-    return int(p) if p.isdigit() else p
-
-
 def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None) -> object:
     """A deep copy of the raw mapping ``data`` with every override applied in order.
 
@@ -113,8 +72,11 @@ def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None)
 
     Raises
     ------
+    OverrideSyntaxError
+        A word is not ``dotted.key=value`` / ``~dotted.key`` (exit 64).
     ConfigError
-        An override goes into a missing list element or inside a scalar value, or is malformed.
+        A value is not valid YAML, or an override goes into a missing list element or inside a
+        scalar value.
     """
     if not overrides:
         return data
@@ -122,7 +84,18 @@ def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None)
         return data                       # the loader reports the malformed top level itself
     out = copy.deepcopy(data)
     for text in overrides:
-        path, value, delete = parse_override(text)
+        text = str(text)
+        if not looks_like_override(text):
+            raise OverrideSyntaxError(f"unexpected argument {text!r}: an override must read dotted.key=value "
+                                      "or ~dotted.key to remove a key")
+        dotted, _, raw = text.partition("=")
+        delete = text.startswith("~")
+        try:   # the value: YAML, with the bounds of a config file (depth, nodes with aliases expanded)
+            value = load_yaml_text(raw, f"override {dotted}") if raw.strip() else None
+        except yaml.YAMLError as exc:
+            what = getattr(exc, "problem", None) or "not valid YAML"
+            raise ConfigError(f"override {dotted}: value {raw!r} is not valid YAML ({what})") from None
+        path = [int(p) if p.isdigit() else p for p in dotted.lstrip("~").split(".")]
         node = out
         for depth, key in enumerate(path[:-1]):
             where = ".".join(str(p) for p in path[:depth + 1])
@@ -164,30 +137,6 @@ def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None)
             raise ConfigError(f"override {text}: {'.'.join(map(str, path[:-1]))}: cannot go inside a "
                               f"{type(node).__name__} value")
     return out
-
-
-def header(source: str | None, overrides: list[str] | None) -> str:
-    """The comment block heading ``config.yaml``: where the config came from and the overrides.
-
-    Parameters
-    ----------
-    source : str or None
-        The config file or packaged name.
-    overrides : list of str or None
-        The command-line overrides.
-
-    Returns
-    -------
-    str
-        ``#`` comment lines, ending in a newline.
-    """
-    lines = ["# resolved config of this run (every default filled in, numbers in the config's canonical units)"]
-    if source:
-        lines.append(f"# source: {source}")
-    if overrides:
-        lines.append("# command-line overrides: " + " ".join(overrides))
-    # a line break inside a path or an override stays inside the comment
-    return "\n".join(line.replace("\r", "\\r").replace("\n", "\n#   ") for line in lines) + "\n"
 
 
 # ---------------------------------------------------------------------------------------------
