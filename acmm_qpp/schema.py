@@ -1,5 +1,6 @@
-"""Generic machinery of the JSON schemas of the config kinds (issue 12): quantity fields widened,
-the schema header and the model-schema helper, shared by :mod:`acmm.io.schema` and :mod:`qpp.io.schema`.
+"""Generic machinery of the JSON schemas of the config kinds (issue 12): quantity fields widened
+(:class:`Generator`, for pydantic's ``model_json_schema(mode="validation", schema_generator=...)``)
+and the schema header, shared by :mod:`acmm.io.schema` and :mod:`qpp.io.schema`.
 
 The schema generated from a pydantic config model accepts what the loader accepts:
 
@@ -89,21 +90,3 @@ def header(schema: dict, title: str) -> dict:
     out = {"$schema": "https://json-schema.org/draft/2020-12/schema", "title": title}
     out.update(schema)
     return out
-
-
-def model_schema(model_cls, generator: type[GenerateJsonSchema] = Generator) -> dict:
-    """The validation-mode JSON schema of a pydantic model, quantities widened.
-
-    Parameters
-    ----------
-    model_cls : type
-        A pydantic ``BaseModel`` subclass.
-    generator : type, optional
-        The schema generator (:class:`Generator` or a product's subclass).
-
-    Returns
-    -------
-    dict
-        Its JSON schema.
-    """
-    return model_cls.model_json_schema(mode="validation", schema_generator=generator)

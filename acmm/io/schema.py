@@ -23,7 +23,7 @@ extension, any editor using yaml-language-server).
 """
 from __future__ import annotations
 
-from acmm_qpp.schema import Generator, header, model_schema, quantity_schema
+from acmm_qpp.schema import Generator, header, quantity_schema
 from acmm.io.config import Config
 
 
@@ -95,4 +95,5 @@ def acmm_schema() -> dict:
         JSON schema (draft 2020-12); dimensional fields accept a number in the report's units or
         a quantity string in any unit of the field's dimension.
     """
-    return header(fix_alternatives(model_schema(Config, AcmmGenerator)), "acmm run config (CR-185644 Part II)")
+    schema = Config.model_json_schema(mode="validation", schema_generator=AcmmGenerator)
+    return header(fix_alternatives(schema), "acmm run config (CR-185644 Part II)")

@@ -2,7 +2,7 @@
 :mod:`acmm_qpp.schema`.  ``qpp schema`` prints it."""
 from __future__ import annotations
 
-from acmm_qpp.schema import header, model_schema
+from acmm_qpp.schema import Generator, header
 from qpp.io.config import QppConfig
 
 
@@ -15,4 +15,5 @@ def qpp_schema() -> dict:
         JSON schema (draft 2020-12); dimensional fields accept a number or a quantity string in
         any unit of the field's dimension.
     """
-    return header(model_schema(QppConfig), "qpp config (CR-185644 Part III)")
+    return header(QppConfig.model_json_schema(mode="validation", schema_generator=Generator),
+                  "qpp config (CR-185644 Part III)")
