@@ -1,8 +1,12 @@
 """Shared CLI plumbing: one clear message and a documented exit code for every user error
-(:mod:`acmm_qpp.errors` lists the codes)."""
+(:mod:`acmm_qpp.errors` lists the codes): an :class:`acmm_qpp.errors.AcmmError` or another
+user-facing failure (:func:`acmm_qpp.errors.plain_failure`, shared with the report's failed
+sections), an interrupt that Python wrapped in another exception, click's usage errors, the
+numerical warnings of a run and a closed standard output each become one line."""
 from __future__ import annotations
 
 import functools
+import os
 import re
 import signal
 import sys
@@ -17,10 +21,11 @@ from typer.core import TyperCommand, TyperGroup
 # the click that typer uses: recent typer vendors it as ``typer._click``, older ones use click
 try:
     from typer._click import exceptions as click_exceptions
+    from typer._click.utils import _detect_program_name
 except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
     from click import exceptions as click_exceptions
+    from click.utils import _detect_program_name
 
-from acmm_qpp.cli.failures import EXIT_PIPE_CLOSED, interrupt_behind, note_warnings, quiet_stdout
 from acmm_qpp.errors import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_USAGE, EXIT_VERDICT, AcmmError, ConfigError,
                              plain_failure, with_hint)
 
@@ -49,6 +54,56 @@ def fail(message: str, code: int = EXIT_INPUT) -> None:
 
 
 MAX_MESSAGE = 600
+
+
+def interrupt_behind(exc: BaseException):
+    """The Ctrl-C/SIGTERM behind ``exc`` (its cause or context), else None.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception a command raised.
+
+    Returns
+    -------
+    KeyboardInterrupt or None
+        The interrupt in its chain of causes and contexts.
+    """
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
+def note_warnings(caught) -> None:
+    """One summary line for the numpy/scipy warnings a successful command raised (never raw).
+
+    Parameters
+    ----------
+    caught : list of warnings.WarningMessage
+        The warnings recorded while the command ran.
+    """
+    if not caught:
+        return
+    first = caught[0]
+    typer.echo(f"note: {len(caught)} distinct numerical warning(s) during the run; first: "
+               f"{first.category.__name__}: {' '.join(str(first.message).split())}", err=True)
+
+
+#: exit code when the reader of standard output closed it (128 + SIGPIPE, as a C tool killed by it)
+EXIT_PIPE_CLOSED = 141
+
+
+def quiet_stdout() -> None:
+    """Point stdout at /dev/null, so that flushing it at exit raises nothing more."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
 
 
 def user_errors(fn, notes=None):
@@ -188,21 +243,42 @@ class ConfigKinds(NamedTuple):
         return out
 
 
-def write_examples(formatter, examples) -> None:
-    """Write ``Examples:`` and the command lines ``examples`` under it, one a line, unwrapped.
+def write_epilog(formatter, examples=(), configs: ConfigKinds | None = None, kinds: tuple = (),
+                 command: bool = True) -> None:
+    """Write ``Examples:`` and the command lines ``examples`` under it (one a line, unwrapped) and,
+    for ``kinds``, the packaged configs of those kinds, listed from the folder now (a help screen
+    lists what is installed); a command's help also names the kinds and the product's rule by
+    which config paths are found (:attr:`ConfigKinds.path_rule`).
 
     Parameters
     ----------
     formatter : click.HelpFormatter
         The help being written.
-    examples : sequence of str
+    examples : sequence of str, optional
         The command lines.
+    configs : ConfigKinds, optional
+        The product's packaged configs and kinds (needed with ``kinds``).
+    kinds : tuple of str, optional
+        Config kinds whose packaged configs are listed (:meth:`ConfigKinds.packaged`).
+    command : bool, optional
+        A command's help (else the app's).
     """
-    formatter.write_paragraph()
-    formatter.write_text("Examples:")
-    with formatter.indentation():
-        for line in examples:
-            formatter.write(f"{'':>{formatter.current_indent}}{line}\n")
+    if examples:
+        formatter.write_paragraph()
+        formatter.write_text("Examples:")
+        with formatter.indentation():
+            for line in examples:
+                formatter.write(f"{'':>{formatter.current_indent}}{line}\n")
+    if kinds:
+        names = configs.packaged(tuple(kinds))
+        formatter.write_paragraph()
+        if not command:
+            formatter.write_text("Packaged configs (give the name instead of a file): " + ", ".join(names))
+            return
+        formatter.write_text(f"Packaged configs ({', '.join(kinds)}; give the name instead of a file): "
+                             + (", ".join(names) if names else "none installed"))
+        formatter.write_paragraph()
+        formatter.write_text(configs.path_rule)
 
 
 def help_command(examples: list, kinds: tuple = (), configs: ConfigKinds | None = None):
@@ -230,14 +306,7 @@ def help_command(examples: list, kinds: tuple = (), configs: ConfigKinds | None 
         def format_epilog(self, ctx, formatter) -> None:
             """Write the examples (unwrapped), the packaged configs and the path rule, then the
             command's own epilog."""
-            write_examples(formatter, examples)
-            if kinds:
-                formatter.write_paragraph()
-                names = configs.packaged(tuple(kinds))
-                formatter.write_text(f"Packaged configs ({', '.join(kinds)}; give the name instead of a file): "
-                                     + (", ".join(names) if names else "none installed"))
-                formatter.write_paragraph()
-                formatter.write_text(configs.path_rule)
+            write_epilog(formatter, examples, configs, kinds)
             super().format_epilog(ctx, formatter)
 
     return WithExamples
@@ -280,7 +349,8 @@ class ExitCodeGroup(TyperGroup):
       (``EXIT_USAGE``);
     * a bad *value* of an option or argument (``-j 0``, ``--kind foo``) → 2 (``EXIT_INPUT``, like a
       bad value in a config file);
-    * Ctrl-C → 130; SIGTERM / SIGHUP → 143 / 129 (:func:`acmm_qpp.signals.terminate_like_ctrl_c`).
+    * Ctrl-C → 130; SIGTERM / SIGHUP → 143 / 129 (:func:`acmm_qpp.signals.terminate_like_ctrl_c`),
+      also while click parses.
     """
 
     #: command lines shown under ``Examples:`` at the end of the app's help
@@ -300,16 +370,14 @@ class ExitCodeGroup(TyperGroup):
         formatter : click.HelpFormatter
             The help being written.
         """
-        if self.examples:
-            write_examples(formatter, self.examples)
-        if self.config_kinds:
-            formatter.write_paragraph()
-            formatter.write_text(f"Packaged configs (give the name instead of a file): "
-                                 + ", ".join(self.configs.packaged(tuple(self.config_kinds))))
+        write_epilog(formatter, self.examples, self.configs, self.config_kinds, command=False)
         super().format_epilog(ctx, formatter)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
-        """Run the app like :meth:`click.Group.main`, mapping click's errors to the exit codes.
+        """Parse ``args`` and run the command, mapping click's errors to the exit codes.
+
+        The steps of :meth:`click.Command.main` (shell completion, the context, the command), not
+        typer's, which turns a Ctrl-C or SIGTERM while click parses into a silent exit 130.
 
         Parameters
         ----------
@@ -320,7 +388,8 @@ class ExitCodeGroup(TyperGroup):
         complete_var : str, optional
             Environment variable of shell completion.
         standalone_mode : bool, optional
-            False: click's own behaviour (exceptions propagate, the return value is returned).
+            False: click's own behaviour (exceptions, an interrupt included, propagate; the
+            return value or the exit code of ``typer.Exit`` is returned).
         **extra : dict
             Passed on to click.
 
@@ -330,13 +399,13 @@ class ExitCodeGroup(TyperGroup):
             The command's return value, only when ``standalone_mode`` is False (otherwise the
             process exits).
         """
+        args = sys.argv[1:] if args is None else list(args)
+        prog_name = prog_name or _detect_program_name()
+        self._main_shell_completion(extra, prog_name, complete_var)
         if not standalone_mode:
-            try:
-                return super().main(args, prog_name, complete_var, standalone_mode, **extra)
-            except _Interrupted as exc:          # the caller's own KeyboardInterrupt, as click gives it
-                raise exc.signal from None
+            return self._run(prog_name, args, extra)
         try:
-            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+            rv = self._run(prog_name, args, extra)
         except click_exceptions.NoArgsIsHelpError as exc:
             typer.echo(exc.ctx.get_help() if exc.ctx is not None else exc.format_message(), err=True)
             sys.exit(EXIT_USAGE)
@@ -348,68 +417,20 @@ class ExitCodeGroup(TyperGroup):
         except click_exceptions.ClickException as exc:
             typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
             sys.exit(exc.exit_code)
-        except (typer.Abort, KeyboardInterrupt) as exc:
+        except (typer.Abort, KeyboardInterrupt, EOFError) as exc:
             interrupted(exc)
-        except _Interrupted as exc:
-            interrupted(exc.signal)
+        except BrokenPipeError:         # the help's reader went away (`acmm --help | head -1`)
+            quiet_stdout()
+            sys.exit(1)
         sys.exit(rv if isinstance(rv, int) else 0)
 
-    def make_context(self, *args, **kwargs):
-        """Click's ``make_context``; a signal while it parses is raised as :class:`_Interrupted`
-        (typer made it a silent exit 130, a SIGTERM included).
-
-        Parameters
-        ----------
-        *args, **kwargs : object
-            Passed on to click.
-
-        Returns
-        -------
-        click.Context
-            The group's context.
-
-        Raises
-        ------
-        _Interrupted
-            Ctrl-C, SIGTERM or SIGHUP meanwhile.
-        """
+    def _run(self, prog_name: str, args: list, extra: dict):
+        """The command's return value, or the exit code of a ``typer.Exit`` (``--help``, ...)."""
         try:
-            return super().make_context(*args, **kwargs)
-        except KeyboardInterrupt as exc:
-            raise _Interrupted(exc) from exc
-
-    def invoke(self, ctx):
-        """Click's ``invoke`` (the subcommand's parsing, then the command), a signal outside the
-        command's own handling raised as :class:`_Interrupted`.
-
-        Parameters
-        ----------
-        ctx : click.Context
-            The group's context.
-
-        Returns
-        -------
-        object
-            The command's return value.
-
-        Raises
-        ------
-        _Interrupted
-            Ctrl-C, SIGTERM or SIGHUP meanwhile.
-        """
-        try:
-            return super().invoke(ctx)
-        except KeyboardInterrupt as exc:
-            raise _Interrupted(exc) from exc
-
-
-class _Interrupted(BaseException):
-    """A Ctrl-C / SIGTERM / SIGHUP that arrived while click parsed, carried past typer (which
-    maps a ``KeyboardInterrupt`` there to exit 130 without a word) to :func:`interrupted`."""
-
-    def __init__(self, signal: KeyboardInterrupt) -> None:
-        super().__init__(str(signal))
-        self.signal = signal
+            with self.make_context(prog_name, args, **extra) as ctx:
+                return self.invoke(ctx)
+        except typer.Exit as exc:
+            return exc.exit_code
 
 
 def version_option():

@@ -68,8 +68,9 @@ def test_an_interrupt_wrapped_in_another_exception_is_still_an_interrupt():
 
 
 def test_an_interrupt_while_parsing_reaches_a_non_standalone_caller_as_keyboardinterrupt():
-    """ExitCodeGroup carries it past typer as _Interrupted; a caller of main(standalone_mode=False)
-    gets the KeyboardInterrupt back (not an Exception its `except Exception` would swallow)."""
+    """ExitCodeGroup runs click's steps itself (typer's main made it a silent exit 130); a caller of
+    main(standalone_mode=False) gets the KeyboardInterrupt back (not an Exception its `except
+    Exception` would swallow)."""
     from typer.main import get_command
 
     with pytest.raises(KeyboardInterrupt):
