@@ -15,10 +15,8 @@ Files of other stages are left alone (a stage does not remove the files of the s
 a journal survives for ``--resume``).  When a stage run by this one (a simulation that designs
 first) finished first, that stage's files stay with its new ``config.yaml``, and the earlier run's files
 of the failed stage, which that ``config.yaml`` no longer describes, are removed.
-Two exceptions: a stage whose results are written and only a figure fails
-(:class:`acmm_qpp.errors.FigureError`, exit 4) finishes as above, results and ``config.yaml`` kept;
-and a stage declared with ``keep_partial`` (acmm's sweep) writes into the run folder itself: its
-tables are snapshots of its journal that say whether they are complete, kept for ``--resume``.
+A stage whose results are written and only a figure fails (:class:`acmm_qpp.errors.FigureError`,
+exit 4) finishes as above, results and ``config.yaml`` kept.
 """
 from __future__ import annotations
 
@@ -63,9 +61,22 @@ def file_identity(path) -> tuple | None:
     return (st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size) if stat.S_ISREG(st.st_mode) else None
 
 
-def _owned(run_dir: Path, patterns: tuple) -> dict:
-    """The files of ``run_dir`` matching ``patterns``, each with its :func:`file_identity`."""
-    out = {}
+def owned_files(run_dir, patterns: tuple) -> dict:
+    """The files of ``run_dir`` matching ``patterns`` (a stage's), each with its :func:`file_identity`.
+
+    Parameters
+    ----------
+    run_dir : path-like
+        The run folder.
+    patterns : tuple of str
+        Glob patterns of the stage's files.
+
+    Returns
+    -------
+    dict
+        File name → identity.
+    """
+    out, run_dir = {}, Path(run_dir)
     if run_dir.is_dir():
         for pattern in patterns:
             for p in run_dir.glob(pattern):
@@ -81,19 +92,6 @@ def _remove(run_dir: Path, names) -> None:
             (run_dir / name).unlink()
         except OSError:
             pass
-
-
-def remove_owned(run_dir, patterns: tuple) -> None:
-    """Remove the files of ``run_dir`` matching ``patterns`` (a stage's files of an earlier run).
-
-    Parameters
-    ----------
-    run_dir : path-like
-        The run folder.
-    patterns : tuple of str
-        Glob patterns of the stage's files.
-    """
-    _remove(Path(run_dir), _owned(Path(run_dir), patterns))
 
 
 def config_text_of(config=None, config_text: str | None = None) -> str:
@@ -147,15 +145,14 @@ def _commit(staging: Path, run_dir: Path, patterns: tuple) -> None:
                 os.replace(staging / name, run_dir / name)
         except OSError as exc:
             raise output_error(exc, "results", run_dir / name) from None
-        _remove(run_dir, set(_owned(run_dir, patterns)) - set(moved))
+        _remove(run_dir, set(owned_files(run_dir, patterns)) - set(moved))
         shutil.rmtree(staging, ignore_errors=True)
     if blocked:
         raise FigureError(f"cannot write figure {run_dir / blocked[0]}: a directory of that name is in the way")
 
 
 @contextmanager
-def staged_outputs(run_dir, patterns: tuple, config=None, config_text: str | None = None,
-                   keep_partial: bool = False):
+def staged_outputs(run_dir, patterns: tuple, config=None, config_text: str | None = None):
     """Context of one stage writing its files; see the module docstring.
 
     Parameters
@@ -169,9 +166,6 @@ def staged_outputs(run_dir, patterns: tuple, config=None, config_text: str | Non
         overrides go into ``config.yaml``).
     config_text : str, optional
         The resolved config as YAML, when ``config`` has no ``to_yaml``.
-    keep_partial : bool, optional
-        The stage writes into the run folder itself and keeps its files when it fails (the
-        sweep's self-describing snapshots).
 
     Yields
     ------
@@ -186,15 +180,6 @@ def staged_outputs(run_dir, patterns: tuple, config=None, config_text: str | Non
     run_dir = Path(run_dir)
     text = config_text_of(config, config_text) if config is not None or config_text is not None else None
     config_before = file_identity(run_dir / CONFIG_FILE)
-    if keep_partial:
-        before = _owned(run_dir, patterns)
-        try:
-            yield run_dir
-        except FigureError:
-            _finish_in_place(run_dir, patterns, before, text)
-            raise
-        _finish_in_place(run_dir, patterns, before, text)
-        return
     try:
         staging = Path(tempfile.mkdtemp(prefix=f".{STAGING}-{os.getpid()}-", dir=run_dir))
     except OSError as exc:
@@ -218,7 +203,7 @@ def staged_outputs(run_dir, patterns: tuple, config=None, config_text: str | Non
         if file_identity(run_dir / CONFIG_FILE) != config_before:
             # a stage run by this one finished: its config.yaml does not describe this stage's
             # files of an earlier run
-            _remove(run_dir, _owned(run_dir, patterns))
+            _remove(run_dir, owned_files(run_dir, patterns))
         if isinstance(exc, OutputError) and str(staging) in str(exc):    # named where it was going
             raise OutputError(str(exc).replace(str(staging), str(run_dir))) from None
         raise
@@ -230,15 +215,7 @@ def _finish(staging: Path, run_dir: Path, patterns: tuple, text: str | None) -> 
     _commit(staging, run_dir, patterns)
 
 
-def _finish_in_place(run_dir: Path, patterns: tuple, before: dict, text: str | None) -> None:
-    """The end of a ``keep_partial`` stage: its ``config.yaml``, then its files of an earlier run
-    (those whose identity did not change while it ran) removed."""
-    if text is not None:
-        write_text(run_dir / CONFIG_FILE, text)
-    _remove(run_dir, [n for n, ident in _owned(run_dir, patterns).items() if before.get(n) == ident])
-
-
-def stage(patterns: tuple, load, keep_partial: bool = False):
+def stage(patterns: tuple, load):
     """Decorator of a stage runner ``fn(config, ..., out)``: resolve ``config`` with ``load``
     (validation first: a refused config creates nothing), take the run lock of its ``run_dir()``
     (:func:`acmm_qpp.runlock.run_lock`), then run ``fn`` with ``out``, the folder to write its
@@ -250,8 +227,6 @@ def stage(patterns: tuple, load, keep_partial: bool = False):
         Glob patterns of the files the stage owns in its run folder.
     load : callable
         ``load(config)`` → validated config (with ``run_dir()``).
-    keep_partial : bool, optional
-        See :func:`staged_outputs`.
 
     Returns
     -------
@@ -264,7 +239,7 @@ def stage(patterns: tuple, load, keep_partial: bool = False):
         def wrapper(config=None, *args, **kwargs):
             cfg = load(config)
             with run_lock(cfg.run_dir()) as run_dir:
-                with staged_outputs(run_dir, patterns, cfg, keep_partial=keep_partial) as out:
+                with staged_outputs(run_dir, patterns, cfg) as out:
                     return fn(cfg, *args, out=out, **kwargs)
         return wrapper
     return deco

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import concurrent.futures as cf
+import functools
 import os
 import threading
 import time
@@ -10,7 +11,8 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from acmm_qpp.atomic_write import write_text
-from acmm_qpp.outputs import CONFIG_FILE, config_text_of, remove_owned, stage
+from acmm_qpp.outputs import CONFIG_FILE, config_text_of, owned_files
+from acmm_qpp.runlock import run_lock
 from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
@@ -18,7 +20,7 @@ from acmm.sweep.chunking import Chunker
 from acmm.sweep.executors import (SerialExecutor, call_chunk, code_identity, remote_contexts, scheduler_workers,
                                   task_key, sweep_tasks, lost_worker, make_executor)
 from acmm.sweep.journal import GroupCommitJournal, read_journal
-from acmm_qpp.errors import ConfigError, OutputError
+from acmm_qpp.errors import ConfigError, FigureError, OutputError
 from acmm_qpp.signals import interrupts_deferred
 from acmm.stages.pool import submit
 from acmm.sweep.output import split_records, write_results
@@ -87,7 +89,41 @@ def _as_sweep(sweep) -> Sweep:
 OUTPUTS = ("sweep.h5", "sweep.csv", "sweep_*.png")
 
 
-@stage(OUTPUTS, _as_sweep, keep_partial=True)
+def _remove_earlier(run_dir: Path, before: dict | None = None) -> None:
+    """Remove the sweep's files of an earlier run: all of them, or those whose identity is the
+    one in ``before`` (:func:`acmm_qpp.outputs.owned_files`: not written again by this run)."""
+    for name, ident in owned_files(run_dir, OUTPUTS).items():
+        if before is None or before.get(name) == ident:
+            try:
+                (run_dir / name).unlink()
+            except OSError:
+                pass
+
+
+def _in_run_folder(fn):
+    """``run_sweep`` under the run lock of its folder (:func:`acmm_qpp.runlock.run_lock`), writing
+    there itself, not through a staging folder (:func:`acmm_qpp.outputs.stage`): its tables are
+    snapshots of its journal that say whether they are complete, kept when it fails or is
+    interrupted, for ``--resume``.  When it finishes (or only a figure fails, exit 4) its
+    ``config.yaml`` is written and its files of an earlier run that it did not write again go."""
+    @functools.wraps(fn)
+    def wrapper(sweep, *args, **kwargs):
+        sweep = _as_sweep(sweep)
+        with run_lock(sweep.run_dir()) as run_dir:
+            before = owned_files(run_dir, OUTPUTS)
+            try:
+                result = fn(sweep, *args, out=run_dir, **kwargs)
+            except FigureError:
+                write_text(run_dir / CONFIG_FILE, config_text_of(sweep))
+                _remove_earlier(run_dir, before)
+                raise
+            write_text(run_dir / CONFIG_FILE, config_text_of(sweep))
+            _remove_earlier(run_dir, before)
+            return result
+    return wrapper
+
+
+@_in_run_folder
 def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, scheduler: Optional[str] = None,
               resume: bool = False, progress: Optional[Callable[[int, int, dict], None]] = None,
               after_record: Optional[Callable[[int], None]] = None, figures: Optional[bool] = None,
@@ -118,8 +154,7 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         Cases per task (default: sized as the chunks are submitted, :class:`Chunker`; 1
         in-process).  The results do not depend on it.
     out : pathlib.Path
-        Its run folder (a sweep writes there directly and keeps its snapshots when interrupted,
-        :func:`acmm_qpp.outputs.stage` with ``keep_partial``).
+        Its run folder (a sweep writes there directly and keeps its snapshots when interrupted).
 
     Returns
     -------
@@ -216,7 +251,7 @@ def _start_afresh(sweep: Sweep, run_dir: Path) -> None:
     (its journal is replaced next) and this sweep's ``config.yaml`` is written first.  An
     interrupted re-run with another seed left its results beside the earlier run's config.yaml
     and figures (a review)."""
-    remove_owned(run_dir, OUTPUTS)
+    _remove_earlier(run_dir)
     write_text(run_dir / CONFIG_FILE, config_text_of(sweep))
 
 

@@ -1,8 +1,8 @@
 """What a stage leaves in its run folder (acmm_qpp.outputs): its files are written in a staging
 folder and moved into place when it succeeds; a stage that fails or is interrupted leaves the
 folder as it was; no result beside a config.yaml of another run; files of earlier runs, of other
-run folders and of nested stages that completed are left alone; the sweep keeps its
-self-describing partial tables."""
+run folders and of nested stages that completed are left alone (the sweep, which keeps its
+self-describing partial tables, writes into its run folder itself: tests/acmm/sweep/test_run.py)."""
 import os
 import subprocess
 import sys
@@ -162,44 +162,6 @@ def test_a_nested_stage_interrupted_keeps_the_earlier_run_whole(tmp_path):
                 write_text(design_out / "design.h5", "design B")
                 raise KeyboardInterrupt
     assert _contents(run) == before
-
-
-def test_a_failed_sweep_keeps_its_partial_tables(tmp_path):
-    run = tmp_path / "run"
-    run.mkdir()
-    with pytest.raises(_Boom):
-        with staged_outputs(run, ("sweep.h5",), config_text="name: s\n", keep_partial=True) as out:
-            assert out == run
-            write_text(run / "sweep.h5", "snapshot, complete = False")
-            raise _Boom
-    assert _contents(run) == {"sweep.h5": b"snapshot, complete = False"}
-
-
-def test_a_sweep_whose_figure_fails_finishes_with_its_config(tmp_runs):
-    """The sweep's tables are written before its figures: a figure in the way is exit 4 with
-    this run's config.yaml, and the earlier run's other figure pruned."""
-    import yaml
-    from typer.testing import CliRunner
-
-    from acmm.cli.app import app
-    from tests.conftest import CONFIGS
-
-    cfg = yaml.safe_load((CONFIGS / "sweep_smoke.yaml").read_text())
-    cfg["sweep"].pop("margin", None)
-    cfg["sweep"].update(n_runs=2, orbits=0.5)
-    cfg["output"] = {"root": str(tmp_runs / "runs"), "figures": True}
-    path = tmp_runs / "sw.yaml"
-    path.write_text(yaml.safe_dump(cfg))
-    r = CliRunner().invoke(app, ["sweep", str(path), "-j", "1"])
-    assert r.exit_code == 0, r.output
-    run = tmp_runs / "runs" / cfg["name"]
-    (run / "sweep_map.png").unlink()
-    (run / "sweep_map.png").mkdir()
-    r = CliRunner().invoke(app, ["sweep", str(path), "-j", "1", "sweep.n_runs=3"])
-    assert r.exit_code == 4, r.output
-    assert "n_runs: 3" in (run / "config.yaml").read_text()
-    # the map is drawn first and failed; the earlier run's peak-error figure is not this run's
-    assert not (run / "sweep_peak_error.png").exists()
 
 
 def test_a_stage_declares_its_files_and_runs_under_the_lock_with_its_staging_folder(tmp_path):

@@ -50,6 +50,33 @@ def test_an_interrupted_rerun_does_not_sit_beside_the_earlier_runs_config_and_fi
         assert not h["attrs"]["complete"] and "seed: 2" in h["attrs"]["config"]
 
 
+def test_a_sweep_whose_figure_fails_finishes_with_its_config(tmp_runs):
+    """The sweep's tables are written before its figures: a figure in the way is exit 4 with
+    this run's config.yaml, and the earlier run's other figure pruned."""
+    import yaml
+    from typer.testing import CliRunner
+
+    from acmm.cli.app import app
+    from tests.conftest import CONFIGS
+
+    cfg = yaml.safe_load((CONFIGS / "sweep_smoke.yaml").read_text())
+    cfg["sweep"].pop("margin", None)
+    cfg["sweep"].update(n_runs=2, orbits=0.5)
+    cfg["output"] = {"root": str(tmp_runs / "runs"), "figures": True}
+    path = tmp_runs / "sw.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(app, ["sweep", str(path), "-j", "1"])
+    assert r.exit_code == 0, r.output
+    run = tmp_runs / "runs" / cfg["name"]
+    (run / "sweep_map.png").unlink()
+    (run / "sweep_map.png").mkdir()
+    r = CliRunner().invoke(app, ["sweep", str(path), "-j", "1", "sweep.n_runs=3"])
+    assert r.exit_code == 4, r.output
+    assert "n_runs: 3" in (run / "config.yaml").read_text()
+    # the map is drawn first and failed; the earlier run's peak-error figure is not this run's
+    assert not (run / "sweep_peak_error.png").exists()
+
+
 def test_same_config_and_seed_give_identical_data_serial_and_pool(tmp_path):
     cfg = _sweep_yaml(tmp_path, "same", margin={"low": 0.8, "high": 1.25, "scan_points": 1, "rel_tol": 0.1})
     r1 = run_sweep(cfg, workers=1)
