@@ -56,43 +56,6 @@ def fail(message: str, code: int = EXIT_INPUT) -> None:
 MAX_MESSAGE = 600
 
 
-def interrupt_behind(exc: BaseException):
-    """The Ctrl-C/SIGTERM behind ``exc`` (its cause or context), else None.
-
-    Parameters
-    ----------
-    exc : BaseException
-        The exception a command raised.
-
-    Returns
-    -------
-    KeyboardInterrupt or None
-        The interrupt in its chain of causes and contexts.
-    """
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return exc
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return None
-
-
-def note_warnings(caught) -> None:
-    """One summary line for the numpy/scipy warnings a successful command raised (never raw).
-
-    Parameters
-    ----------
-    caught : list of warnings.WarningMessage
-        The warnings recorded while the command ran.
-    """
-    if not caught:
-        return
-    first = caught[0]
-    typer.echo(f"note: {len(caught)} distinct numerical warning(s) during the run; first: "
-               f"{first.category.__name__}: {' '.join(str(first.message).split())}", err=True)
-
-
 #: exit code when the reader of standard output closed it (128 + SIGPIPE, as a C tool killed by it)
 EXIT_PIPE_CLOSED = 141
 
@@ -142,15 +105,20 @@ def user_errors(fn, notes=None):
                 quiet_stdout()         # of the results, which the stage wrote before printing
                 sys.exit(EXIT_PIPE_CLOSED)
             except Exception as exc:  # noqa: BLE001 (re-raised unless a known kind of failure)
-                signal = interrupt_behind(exc)
-                if signal is not None:      # Python wrapped it (a Ctrl-C in a class body: RuntimeError)
-                    interrupted(signal)
+                cause, seen = exc, set()     # Python may wrap a Ctrl-C (in a class body: RuntimeError)
+                while cause is not None and id(cause) not in seen:
+                    if isinstance(cause, KeyboardInterrupt):
+                        interrupted(cause)
+                    seen.add(id(cause))
+                    cause = cause.__cause__ or cause.__context__
                 plain = plain_failure(exc)
                 if plain is None:
                     raise
                 fail(*plain)
-        note_warnings([w for w in caught if not issubclass(w.category, (DeprecationWarning,
-                                                                           PendingDeprecationWarning))])
+        caught = [w for w in caught if not issubclass(w.category, (DeprecationWarning, PendingDeprecationWarning))]
+        if caught:                  # one summary line for the numerical warnings, never raw
+            typer.echo(f"note: {len(caught)} distinct numerical warning(s) during the run; first: "
+                       f"{caught[0].category.__name__}: {' '.join(str(caught[0].message).split())}", err=True)
         for line in notes() if notes is not None else []:
             typer.echo(f"note: {line}", err=True)
         return out
