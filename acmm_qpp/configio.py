@@ -288,9 +288,15 @@ def _link_problem(p: Path) -> str:
 
 
 def load_yaml_text(text: str, source: object = "config") -> object:
-    """YAML text → Python objects, within the bounds of :func:`check_yaml_structure` and without
-    duplicate keys; what PyYAML itself fails on besides syntax (a list or mapping as a key, an
-    integer of more than 4300 digits) is a one-line :class:`ConfigError`.
+    """YAML text → Python objects, within bounds and without duplicate keys; what PyYAML itself
+    fails on besides syntax (a list or mapping as a key, an integer of more than 4300 digits) is a
+    one-line :class:`ConfigError`.
+
+    YAML that would be expensive or recursive to build is refused before it is built: the parser's
+    event stream is scanned first (iteratively, so deep nesting cannot overflow the stack), and
+    nesting deeper than ``YAML_DEPTH``, more than ``YAML_NODES`` nodes with aliases expanded (so
+    "billion laughs" alias bombs count at their expanded size) or an alias to a collection that
+    contains it (a cycle) raise :class:`ConfigError` (limits of :mod:`acmm_qpp.limits`).
 
     Parameters
     ----------
@@ -311,7 +317,38 @@ def load_yaml_text(text: str, source: object = "config") -> object:
     yaml.YAMLError
         A syntax error or a duplicate key.
     """
-    check_yaml_structure(text, source)
+    max_depth, max_nodes = int(limit("YAML_DEPTH")), int(limit("YAML_NODES"))
+    stack: list[tuple[str | None, int]] = []
+    sizes: dict[str, int] = {}
+    open_anchors: set[str] = set()
+    count = 0
+    for ev in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(ev, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+            count += 1
+            stack.append((ev.anchor, count))
+            if ev.anchor:
+                open_anchors.add(ev.anchor)
+            if len(stack) > max_depth:
+                line = ev.start_mark.line + 1 if ev.start_mark else "?"
+                raise ConfigError(f"{source}: YAML nested deeper than {max_depth} levels at line {line} "
+                                  f"({how_to_raise('YAML_DEPTH')})")
+        elif isinstance(ev, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+            anchor, start = stack.pop()
+            if anchor:
+                sizes[anchor] = count - start + 1
+                open_anchors.discard(anchor)
+        elif isinstance(ev, yaml.ScalarEvent):
+            count += 1
+            if ev.anchor:
+                sizes[ev.anchor] = 1
+        elif isinstance(ev, yaml.AliasEvent):
+            if ev.anchor in open_anchors:
+                raise ConfigError(f"{source}: YAML alias *{ev.anchor} refers to a collection that contains it "
+                                  "(a cycle)")
+            count += sizes.get(ev.anchor, 1)
+        if count > max_nodes:
+            raise ConfigError(f"{source}: YAML has more than {max_nodes} values (aliases expanded) "
+                              f"({how_to_raise('YAML_NODES')})")
     try:
         return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
     except TypeError as exc:          # e.g. "unhashable type: 'list'" for ? [a, b]
@@ -369,58 +406,3 @@ def read_regular_file(p: Path, what: str = "config", cap: int | None = None,
     if cap is not None and len(data) > cap:          # grew while being read
         raise ConfigError(too_large.format(f"over {cap}"))
     return data
-
-
-def check_yaml_structure(text: str, source: object = "config") -> None:
-    """Refuse YAML that would be expensive or recursive to build, before building it.
-
-    Scans the parser's event stream (iterative, so deep nesting cannot overflow the stack):
-    nesting deeper than ``YAML_DEPTH``, more than ``YAML_NODES`` nodes with aliases expanded
-    (so "billion laughs" alias bombs count at their expanded size) or an alias to a collection
-    that contains it (a cycle) raise :class:`ConfigError`.  Syntax errors raise
-    :class:`yaml.YAMLError` as :func:`yaml.load` would.
-
-    Parameters
-    ----------
-    text : str
-        The YAML text.
-    source : object
-        Name of the file, for the message.
-
-    Raises
-    ------
-    ConfigError
-        Too deep, too many nodes, or a cyclic alias.
-    """
-    max_depth, max_nodes = int(limit("YAML_DEPTH")), int(limit("YAML_NODES"))
-    stack: list[tuple[str | None, int]] = []
-    sizes: dict[str, int] = {}
-    open_anchors: set[str] = set()
-    count = 0
-    for ev in yaml.parse(text, Loader=yaml.SafeLoader):
-        if isinstance(ev, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
-            count += 1
-            stack.append((ev.anchor, count))
-            if ev.anchor:
-                open_anchors.add(ev.anchor)
-            if len(stack) > max_depth:
-                line = ev.start_mark.line + 1 if ev.start_mark else "?"
-                raise ConfigError(f"{source}: YAML nested deeper than {max_depth} levels at line {line} "
-                                  f"({how_to_raise('YAML_DEPTH')})")
-        elif isinstance(ev, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
-            anchor, start = stack.pop()
-            if anchor:
-                sizes[anchor] = count - start + 1
-                open_anchors.discard(anchor)
-        elif isinstance(ev, yaml.ScalarEvent):
-            count += 1
-            if ev.anchor:
-                sizes[ev.anchor] = 1
-        elif isinstance(ev, yaml.AliasEvent):
-            if ev.anchor in open_anchors:
-                raise ConfigError(f"{source}: YAML alias *{ev.anchor} refers to a collection that contains it "
-                                  "(a cycle)")
-            count += sizes.get(ev.anchor, 1)
-        if count > max_nodes:
-            raise ConfigError(f"{source}: YAML has more than {max_nodes} values (aliases expanded) "
-                              f"({how_to_raise('YAML_NODES')})")
