@@ -14,48 +14,21 @@ from pydantic import BeforeValidator
 from acmm_qpp.units import to_canonical
 
 
-def quantity_value(value: object, unit: str, check: Optional[Callable[[float], float]] = None) -> float:
-    """A number or ``"<number> <unit>"`` string in the unit ``unit``, checked finite.
+def quantity(unit: str, check: Optional[Callable[[float], float]] = None, *,
+             allow_none: bool = False) -> BeforeValidator:
+    """The before-validator of a quantity field in the unit ``unit``: a number (in ``unit``) or a
+    ``"<number> <unit>"`` string, converted to ``unit``, checked finite and by ``check``.
+
+    Use as ``Annotated[float, quantity("s")]``; its ``func`` converts one value (the elements of
+    a list field).
 
     Parameters
     ----------
-    value : float or str
-        The value as written in the config (a bare number is in ``unit``).
     unit : str
         The field's unit, pint syntax (``"slug*ft^2"``, ``"s"``, ``"1"``).
     check : callable, optional
         ``check(x) -> x``: a further check of the converted value (e.g. a plausible range),
         raising :class:`ValueError`.
-
-    Returns
-    -------
-    float
-        The value in ``unit``.
-
-    Raises
-    ------
-    ValueError
-        Not a number, a wrong or unknown unit, not finite, or refused by ``check`` (pydantic
-        adds the field name).
-    """
-    x = to_canonical(value, unit)
-    if not math.isfinite(x):
-        raise ValueError("must be a finite number")
-    return x if check is None else check(x)
-
-
-def quantity(unit: str, check: Optional[Callable[[float], float]] = None, *,
-             allow_none: bool = False) -> BeforeValidator:
-    """The before-validator of a quantity field in the unit ``unit`` (:func:`quantity_value`).
-
-    Use as ``Annotated[float, quantity("s")]``.
-
-    Parameters
-    ----------
-    unit : str
-        The field's unit, pint syntax.
-    check : callable, optional
-        ``check(x) -> x``, a further check of the converted value.
     allow_none : bool
         Pass ``None`` through unchanged (for optional fields); otherwise ``None`` is refused
         as not a number.
@@ -63,10 +36,14 @@ def quantity(unit: str, check: Optional[Callable[[float], float]] = None, *,
     Returns
     -------
     pydantic.BeforeValidator
-        The validator, converting to ``unit``.
+        The validator; it raises :class:`ValueError` (pydantic adds the field name) for a value
+        that is not a number, has a wrong or unknown unit, is not finite or is refused by ``check``.
     """
     def conv(v):
         if allow_none and v is None:
             return v
-        return quantity_value(v, unit, check)
+        x = to_canonical(v, unit)
+        if not math.isfinite(x):
+            raise ValueError("must be a finite number")
+        return x if check is None else check(x)
     return BeforeValidator(conv)

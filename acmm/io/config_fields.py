@@ -13,7 +13,7 @@ from typing import Annotated
 from pydantic import BeforeValidator
 
 from acmm_qpp.config_model import StrictModel
-from acmm_qpp.quantity_fields import quantity, quantity_value
+from acmm_qpp.quantity_fields import quantity
 from acmm.model.inertia import MAX_INERTIA
 
 
@@ -71,7 +71,7 @@ def _vec3(dimension: str):
             raise ValueError("must be a list of three values [roll, pitch, yaw]")
         if len(v) != 3:
             raise ValueError(f"must have three values [roll, pitch, yaw], got {len(v)}")
-        return [quantity_value(x, UNITS[dimension], lambda y: plausible_value(y, dimension)) for x in v]
+        return [_q(dimension).func(x) for x in v]
     return BeforeValidator(conv)
 
 
