@@ -354,14 +354,19 @@ def draw_figures(calls) -> list[Path]:
     return written
 
 
-def redraw_from_files(files: list, readers: dict, out=None) -> list[Path]:
-    """Draw the figures of stored results files (``acmm plot`` / ``qpp plot``): every file is read
-    first, then the output folders are made and the figures drawn.
+def redraw_stored(target: str | Path, sources: dict, readers: dict, out=None) -> list[Path]:
+    """Draw the figures of stored results files (``acmm plot`` / ``qpp plot``): ``target`` itself
+    (an ``.h5`` written by one of the stages of ``sources``) or, for a run folder, every file of
+    ``sources`` in it written by its stage.  Every file is read first, then the output folders are
+    made and the figures drawn (:func:`draw_figures`).
 
     Parameters
     ----------
-    files : list of (pathlib.Path, str)
-        :func:`stored_results`.
+    target : path-like
+        A run folder or a results file.
+    sources : dict
+        Results file name → the stage that writes it (root attribute ``stage``), for the files
+        whose figures the caller draws, in the order a run folder's figures are drawn.
     readers : dict
         Stage → ``reader(path, folder)`` returning the figure calls of that file.
     out : path-like, optional
@@ -375,45 +380,8 @@ def redraw_from_files(files: list, readers: dict, out=None) -> list[Path]:
     Raises
     ------
     acmm_qpp.errors.ConfigError
-        A file lacks a dataset or attribute its figures need (exit 2; nothing is written).
-    """
-    calls, folders = [], []
-    for path, stage in files:
-        folder = Path(out) if out is not None else path.parent
-        try:
-            calls += readers[stage](path, folder)
-        except (KeyError, ValueError, TypeError, IndexError, OSError) as exc:
-            raise ConfigError(f"{path}: not a complete '{stage}' results file, its figures cannot be drawn "
-                              f"({type(exc).__name__}: {exc})") from None
-        folders.append(folder)
-    for folder in folders:
-        folder.mkdir(parents=True, exist_ok=True)
-    return draw_figures(calls)
-
-
-def stored_results(target: str | Path, sources: dict) -> list[tuple[Path, str]]:
-    """The result files a figure redraw (``acmm plot`` / ``qpp plot``) reads: ``target`` itself
-    (an ``.h5`` written by one of the stages of ``sources``) or, for a run folder, every file of
-    ``sources`` in it written by its stage.
-
-    Parameters
-    ----------
-    target : path-like
-        A run folder or a results file.
-    sources : dict
-        Results file name → the stage that writes it (root attribute ``stage``), for the files
-        whose figures the caller draws, in the order a run folder's figures are drawn.
-
-    Returns
-    -------
-    list of (pathlib.Path, str)
-        Each file and its stage.
-
-    Raises
-    ------
-    acmm_qpp.errors.ConfigError
-        ``target`` does not exist, is not a results file of those stages, or is a folder with
-        none.
+        ``target`` does not exist, is not a results file of those stages, is a folder with none,
+        or a file lacks a dataset or attribute its figures need (exit 2; nothing is written).
     """
     p = Path(target)
     stages = tuple(dict.fromkeys(sources.values()))
@@ -429,20 +397,31 @@ def stored_results(target: str | Path, sources: dict) -> list[tuple[Path, str]]:
             return None
 
     if p.is_dir():
-        found = [(p / name, stage_of(p / name)) for name in sources if (p / name).is_file()]
-        found = [(f, st) for f, st in found if st in stages]
-        if not found:
-            names = ", ".join(sources)
-            raise ConfigError(f"{target}: no results file with figures in this folder (looked for {names})")
-        return found
-    st = stage_of(p)
-    if st is None:
-        raise ConfigError(f"{target}: not a results file of this project (an HDF5 file with the root "
-                          "attributes stage and config)")
-    if st not in stages:
-        raise ConfigError(f"{target}: a {st!r} result, whose figures this command does not draw "
-                          f"(it draws {', '.join(stages)})")
-    return [(p, st)]
+        files = [(p / name, stage_of(p / name)) for name in sources if (p / name).is_file()]
+        files = [(f, st) for f, st in files if st in stages]
+        if not files:
+            raise ConfigError(f"{target}: no results file with figures in this folder (looked for {', '.join(sources)})")
+    else:
+        st = stage_of(p)
+        if st is None:
+            raise ConfigError(f"{target}: not a results file of this project (an HDF5 file with the root "
+                              "attributes stage and config)")
+        if st not in stages:
+            raise ConfigError(f"{target}: a {st!r} result, whose figures this command does not draw "
+                              f"(it draws {', '.join(stages)})")
+        files = [(p, st)]
+    calls, folders = [], []
+    for path, stage in files:
+        folder = Path(out) if out is not None else path.parent
+        try:
+            calls += readers[stage](path, folder)
+        except (KeyError, ValueError, TypeError, IndexError, OSError) as exc:
+            raise ConfigError(f"{path}: not a complete '{stage}' results file, its figures cannot be drawn "
+                              f"({type(exc).__name__}: {exc})") from None
+        folders.append(folder)
+    for folder in folders:
+        folder.mkdir(parents=True, exist_ok=True)
+    return draw_figures(calls)
 
 
 #: vector formats whose files matplotlib dates by default → the metadata key of that date

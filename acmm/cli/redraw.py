@@ -7,7 +7,7 @@ from pathlib import Path
 from acmm.stages.design_output import design_figures_from_file
 from acmm.stages.sim_output import sim_figures_from_file
 from acmm.sweep.output import sweep_figures_from_file
-from acmm_qpp.results import redraw_from_files, stored_results
+from acmm_qpp.results import redraw_stored
 from qpp.io.stages import figure_calls_from_file
 
 
@@ -46,4 +46,4 @@ def redraw_figures(target, out=None) -> list[Path]:
     readers = {"design": design_figures_from_file, "simulate": sim_figures_from_file,
                "sweep": sweep_figures_from_file, "qpp design": figure_calls_from_file,
                "qpp simulate": figure_calls_from_file}
-    return redraw_from_files(stored_results(target, FIGURE_SOURCES), readers, out)
+    return redraw_stored(target, FIGURE_SOURCES, readers, out)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm_qpp.outputs import stage
-from acmm_qpp.results import Dataset, draw_figures, redraw_from_files, stored_results, write_h5
+from acmm_qpp.results import Dataset, draw_figures, redraw_stored, write_h5
 from qpp.io.config_nonlin import ExpressionNonlinearity, PolarArmNonlinearity
 from qpp.io.config import QppConfig, load_config, parse_config
 from qpp.design.certificate import DesignResult
@@ -472,4 +472,4 @@ def redraw_figures(target, out=None) -> list[Path]:
         A figure could not be drawn or written (exit 4).
     """
     readers = {"qpp design": figure_calls_from_file, "qpp simulate": figure_calls_from_file}
-    return redraw_from_files(stored_results(target, FIGURE_SOURCES), readers, out)
+    return redraw_stored(target, FIGURE_SOURCES, readers, out)
