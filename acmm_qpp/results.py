@@ -9,21 +9,20 @@ into place, so an interrupted run never leaves a partial file (:mod:`acmm_qpp.at
 The netCDF layout, for ``xarray.open_dataset(path, engine="h5netcdf")`` and the netCDF-C library:
 
 * each array names the dimension of every axis (:attr:`Dataset.dims`, time first);
-* a 1-D dataset named like its dimension (``t``, ``point`` ...) is that dimension's coordinate;
-  else the writer's ``coords`` give one, else the :attr:`Dataset.names` of a dataset along it (its
-  last axis) make a text coordinate; a dimension with none of these is a netCDF "dimension but not
-  a variable";
+* a 1-D dataset named like its dimension (``t``, ``point`` ...) is that dimension's coordinate
+  (a product adds the coordinates of its own dimensions to its items: acmm's
+  :func:`acmm.io.dimensions.with_coordinates`); else the :attr:`Dataset.names` of a dataset along
+  it (its last axis) make a text coordinate; a dimension with neither is a netCDF "dimension but
+  not a variable";
 * CF attributes: ``units`` (on every dataset), ``long_name`` (the description),
-  ``standard_name="time"``/``axis="T"`` on the time coordinate ``t``, the ``coordinates``
-  attribute naming the writer's auxiliary coordinates (``aux_coords``) on the variables along
-  their dimension, root ``Conventions``.
+  ``standard_name="time"``/``axis="T"`` on the time coordinate ``t``, root ``Conventions``.
 """
 from __future__ import annotations
 
 import io
 import json
 from collections.abc import Mapping  # not typing.Mapping: its isinstance check is slow
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -105,17 +104,13 @@ def _text(values) -> np.ndarray:
     return np.array(values, dtype=h5py.string_dtype())
 
 
-def _coordinates(items: Mapping[str, Any], sizes: dict, coords: Mapping[str, Dataset]) -> dict:
-    """Dimension → the coordinate variable to create for it (a :class:`Dataset`), for the
-    dimensions of one group that have no dataset of their own name."""
+def _coordinates(items: Mapping[str, Any], sizes: dict) -> dict:
+    """Dimension → the text coordinate to create for it from the :attr:`Dataset.names` of a
+    dataset along it, for the dimensions of one group that have no dataset of their own name."""
     out = {}
     for d, n in sizes.items():
         own = items.get(d)
         if isinstance(own, Dataset) and _shape(own.data) == (n,):
-            continue
-        given = coords.get(d)
-        if given is not None and _shape(given.data) == (n,):
-            out[d] = replace(given, dims=(d,))
             continue
         for key, value in items.items():
             if (isinstance(value, Dataset) and value.names is not None and len(value.names) == n
@@ -146,23 +141,21 @@ def _array(value: Dataset):
     return arr, arr.dtype
 
 
-def _write_group(group, h5group, items: Mapping[str, Any], coords: Mapping[str, Dataset],
-                 aux_coords: tuple) -> None:
+def _write_group(group, h5group, items: Mapping[str, Any]) -> None:
     """Write ``items`` into ``group`` (an :class:`h5netcdf.Group`, whose HDF5 group is ``h5group``),
     its dimensions first.  Attributes are set through h5py: a number stays a scalar (h5netcdf
     makes it a 1-element array, as the netCDF-C library writes it)."""
     sizes = _sizes(items)
     for d, n in sizes.items():        # declared here: a sub-group has dimensions of its own
         group.dimensions[d] = n
-    made = _coordinates(items, sizes, coords)
+    made = _coordinates(items, sizes)
     for d in sizes:                   # a dimension without a variable: no data, unit "1"
         if d not in made and not (isinstance(items.get(d), Dataset) and _shape(items[d].data) == (sizes[d],)):
             h5group[d].attrs["units"] = "1"
-    aux = [a for a in aux_coords if isinstance(items.get(a), Dataset) and items[a].dims == (TIME,)]
     for key, value in {**made, **items}.items():
         if isinstance(value, Mapping):
             sub = group.create_group(key)
-            _write_group(sub, h5group[key], value, coords, aux_coords)
+            _write_group(sub, h5group[key], value)
             continue
         dims = _dims(key, value)
         data, dtype = _array(value)
@@ -173,8 +166,6 @@ def _write_group(group, h5group, items: Mapping[str, Any], coords: Mapping[str, 
         if value.names is not None:
             attrs["names"] = json.dumps(list(value.names))
         attrs.update(value.attrs)
-        if aux and TIME in dims and key not in aux and key != TIME:
-            attrs["coordinates"] = " ".join(aux)
         if key == TIME and dims == (TIME,):
             attrs.update(standard_name="time", axis="T")
         if value.description and "long_name" not in attrs:
@@ -194,8 +185,7 @@ ROOT_PATTERN = r"^[^\x00]+$"
 
 
 def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
-             attrs: Mapping[str, Any] | None = None,
-             coords: Mapping[str, Dataset] | None = None, aux_coords: tuple = ()) -> Path:
+             attrs: Mapping[str, Any] | None = None) -> Path:
     """Write ``items`` (name → :class:`Dataset` or nested mapping) to ``path`` atomically.
 
     Parameters
@@ -208,12 +198,6 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         The resolved config as YAML; embedded as the root attribute ``config``.
     attrs : mapping, optional
         Extra root attributes (e.g. a verdict).
-    coords : mapping, optional
-        Dimension name → its coordinate (a 1-D :class:`Dataset`), written in every group that
-        has the dimension and no dataset of that name (e.g. the names of the body axes).
-    aux_coords : tuple of str, optional
-        Names of 1-D variables along the time dimension ``t`` listed in the CF ``coordinates``
-        attribute of every other variable along ``t`` of their group (e.g. a time in other units).
 
     Returns
     -------
@@ -235,7 +219,7 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
     with h5py.File(buf, "w", track_order=False) as h5, h5netcdf.File(h5, "w", invalid_netcdf=True) as f:
         for k, v in root.items():
             h5.attrs[k] = _attr_value(v)
-        _write_group(f, h5, items, coords or {}, tuple(aux_coords))
+        _write_group(f, h5, items)
     return write_bytes(path, buf.getbuffer())
 
 

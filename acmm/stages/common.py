@@ -12,7 +12,7 @@ import numpy as np
 from acmm.io.config import Config, load_config, parse_config
 import yaml
 from dataclasses import replace
-from acmm.io.dimensions import COORDS
+from acmm.io.dimensions import with_coordinates
 from acmm.io.units import convert_items, state_factors, state_space_in
 from acmm_qpp.results import write_h5
 from acmm_qpp.units import conversion_factor
@@ -74,7 +74,7 @@ def write_results(path: Path, items: dict, cfg: Config, attrs: dict, aux_coords:
     """Write a stage's results file: ``items`` (the report's units) converted to the config's
     ``output.units`` (:func:`acmm.io.units.convert_items`, root attribute
     ``unit_system``), with the resolved config and the coordinates of acmm's dimensions
-    (:data:`acmm.io.dimensions.COORDS`) by :func:`acmm_qpp.results.write_h5`.
+    (:func:`acmm.io.dimensions.with_coordinates`) by :func:`acmm_qpp.results.write_h5`.
 
     Parameters
     ----------
@@ -87,7 +87,7 @@ def write_results(path: Path, items: dict, cfg: Config, attrs: dict, aux_coords:
     attrs : dict
         Root attributes (the stage's name and verdicts).
     aux_coords : tuple of str, optional
-        Auxiliary coordinates along the time dimension (:func:`acmm_qpp.results.write_h5`).
+        Auxiliary coordinates along the time dimension (:func:`acmm.io.dimensions.with_coordinates`).
 
     Returns
     -------
@@ -95,8 +95,8 @@ def write_results(path: Path, items: dict, cfg: Config, attrs: dict, aux_coords:
         ``path``.
     """
     system = cfg.output.units
-    return write_h5(path, convert_items(items, system), cfg.to_yaml(), {**attrs, "unit_system": system},
-                    coords=COORDS, aux_coords=aux_coords)
+    return write_h5(path, with_coordinates(convert_items(items, system), aux_coords), cfg.to_yaml(),
+                    {**attrs, "unit_system": system})
 
 
 def define_units(items: dict, orbit_rate: float) -> dict:

@@ -9,7 +9,7 @@ import numpy as np
 from acmm_qpp.errors import AcmmError, FigureError
 from acmm_qpp.atomic_write import write_text
 from acmm_qpp.results import Dataset, write_h5
-from acmm.io.dimensions import COORDS
+from acmm.io.dimensions import with_coordinates
 from acmm.sweep.cases import AXES, VERDICTS
 from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS
 from acmm.sweep.config import Sweep, parse_sweep
@@ -233,8 +233,8 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     run_dir = sweep.run_dir()
     items = _orbit_defined(items, sweep)
     system = sweep.file.output.units
-    path = write_h5(run_dir / "sweep.h5", convert_items(items, system), sweep.to_yaml(), {**attrs, "unit_system": system},
-                    coords=COORDS)
+    path = write_h5(run_dir / "sweep.h5", with_coordinates(convert_items(items, system)), sweep.to_yaml(),
+                    {**attrs, "unit_system": system})
     _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
     figs = []
     if figures and rows:

@@ -294,11 +294,9 @@ def test_sweep_h5_opens_in_xarray(tmp_path, n_runs):
 
 
 def test_write_h5_layout_dims_coordinates_and_attribute_overrides(tmp_path):
-    """Dataset attributes replace the defaults (units; a coordinates attribute that the auxiliary
-    coordinates then set); each group declares its own dimensions; the writer's coords give a
-    dimension its coordinate where the group has none, names give the rest theirs."""
-    axis = Dataset(np.array(["roll", "pitch", "yaw"], dtype=object), "1", attrs={"long_name": "body axis"},
-                   dims=("axis",))
+    """Dataset attributes replace the defaults (units, coordinates, long_name); each group declares
+    its own dimensions; names give a dimension without a dataset of its name its coordinate (a
+    product's own coordinates: tests/acmm/io/test_dimensions.py)."""
     items = {"t": Dataset(np.arange(3.0), "s", "time", dims=("t",)),
              "orbits": Dataset(np.arange(3.0) / 2, "1", "orbit count", dims=("t",)),
              "w": Dataset(np.ones((3, 3)), "rad/s", "rate", ["roll", "pitch", "yaw"],
@@ -306,14 +304,14 @@ def test_write_h5_layout_dims_coordinates_and_attribute_overrides(tmp_path):
              "flag": Dataset(np.array([True, False]), "1", dims=("two",)),
              "poles": Dataset(np.array([1 + 2j, 3 - 1j]), "rad/s", dims=("two",)),
              "grp": {"k": Dataset(np.ones((2, 3)), "1", "gain", ["a", "b", "c"], dims=("row", "col"))}}
-    path = write_h5(tmp_path / "a.h5", items, "name: x\n", {"n": 3, "ok": True}, coords={"axis": axis},
-                    aux_coords=("orbits",))
+    path = write_h5(tmp_path / "a.h5", items, "name: x\n", {"n": 3, "ok": True})
     with h5py.File(path, "r") as f:
         w = f["w"]
-        assert w.attrs["units"] == "deg/s" and w.attrs["coordinates"] == "orbits"
+        assert w.attrs["units"] == "deg/s" and w.attrs["coordinates"] == "mine"
         assert w.attrs["long_name"] == "own" and json.loads(w.attrs["names"]) == ["roll", "pitch", "yaw"]
         assert [d[0].name for d in w.dims] == ["/t", "/axis"]
-        assert f["axis"].attrs["long_name"] == "body axis" and "description" not in f["axis"].attrs
+        assert f["axis"].asstr()[()].tolist() == ["roll", "pitch", "yaw"]
+        assert f["axis"].attrs["long_name"] == "name along axis" and "description" not in f["axis"].attrs
         assert f["orbits"].dims[0][0].name == "/t" and "coordinates" not in f["orbits"].attrs
         assert f["t"].attrs["standard_name"] == "time" and f["t"].attrs["axis"] == "T"
         assert [d[0].name for d in f["grp/k"].dims] == ["/grp/row", "/grp/col"]
