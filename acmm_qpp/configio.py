@@ -185,36 +185,6 @@ def packaged_config_path(name: str, package: str) -> Path:
     return Path(str(resources.files(package).joinpath(name)))
 
 
-def missing_config_message(path, package: str) -> str:
-    """``config file not found: x (not a packaged config either; did you mean `y`? packaged: ...)``.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The config as the user gave it.
-    package : str
-        The data package of the packaged configs.
-
-    Returns
-    -------
-    str
-        The one-line message.
-    """
-    try:
-        names = sorted(Path(p.name).stem for p in resources.files(package).iterdir() if p.name.endswith(".yaml"))
-    except (OSError, ModuleNotFoundError):  # pragma: no cover
-        names = []
-    msg = f"config file not found: {path}"
-    p = Path(str(path))
-    if len(p.parts) == 1 and names:
-        best = closest(p.stem, names)
-        hint = f"did you mean `{best}`? " if best else ""
-        msg += f" (not a packaged config either; {hint}packaged configs: {', '.join(names)})"
-    elif names:
-        msg += f" (packaged configs, usable by name: {', '.join(names)})"
-    return msg
-
-
 def read_yaml(path: str | Path, package: str) -> tuple[object, Path]:
     """Read a YAML config file; returns (data, path).
 
@@ -240,7 +210,7 @@ def read_yaml(path: str | Path, package: str) -> tuple[object, Path]:
     Raises
     ------
     ConfigError
-        Missing, unreadable (not a regular file, larger than ``CONFIG_BYTES`` of
+        Missing (listing the packaged names, the closest first), unreadable (not a regular file, larger than ``CONFIG_BYTES`` of
         :mod:`acmm_qpp.limits`, not UTF-8) or invalid YAML (with line and column).
     """
     if not str(path).strip():
@@ -261,8 +231,19 @@ def read_yaml(path: str | Path, package: str) -> tuple[object, Path]:
         raise ConfigError(f"config path is a directory, not a file: {str(path)[:200]}")
     if not present and p.is_symlink():     # a link to nothing, or a loop of links
         raise ConfigError(f"cannot read config file {str(path)[:200]}: {_link_problem(p)}")
-    if not present:
-        raise ConfigError(missing_config_message(path, package))
+    if not present:               # the packaged names, the closest first
+        try:
+            names = sorted(Path(q.name).stem for q in resources.files(package).iterdir() if q.name.endswith(".yaml"))
+        except (OSError, ModuleNotFoundError):  # pragma: no cover (a broken installation)
+            names = []
+        msg = f"config file not found: {path}"
+        if len(p.parts) == 1 and names:
+            best = closest(p.stem, names)
+            msg += (f" (not a packaged config either; {f'did you mean `{best}`? ' if best else ''}"
+                    f"packaged configs: {', '.join(names)})")
+        elif names:
+            msg += f" (packaged configs, usable by name: {', '.join(names)})"
+        raise ConfigError(msg)
     raw = read_regular_file(p, "config", int(limit("CONFIG_BYTES")), how_to_raise("CONFIG_BYTES"))
     try:
         data = load_yaml_text(raw.decode("utf-8"), p)
