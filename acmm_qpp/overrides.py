@@ -97,45 +97,29 @@ def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None)
             raise ConfigError(f"override {dotted}: value {raw!r} is not valid YAML ({what})") from None
         path = [int(p) if p.isdigit() else p for p in dotted.lstrip("~").split(".")]
         node = out
-        for depth, key in enumerate(path[:-1]):
-            where = ".".join(str(p) for p in path[:depth + 1])
+        for depth, key in enumerate(path):
+            last, where = depth == len(path) - 1, ".".join(map(str, path[:depth + 1]))
             if isinstance(node, list):
                 if not isinstance(key, int) or not -len(node) <= key < len(node):
-                    raise ConfigError(f"override {text}: {where}: no such list element "
-                                      f"(the list has {len(node)})")
-                node = node[key]
-                continue
-            if not isinstance(node, dict):
-                raise ConfigError(f"override {text}: {where}: cannot go inside a "
-                                  f"{type(node).__name__} value")
-            if key not in node or node[key] is None:
+                    raise ConfigError(f"override {text}: {where}: no such list element (the list has {len(node)})")
+            elif not isinstance(node, dict):
+                raise ConfigError(f"override {text}: {where.rpartition('.')[0] if last else where}: cannot go "
+                                  f"inside a {type(node).__name__} value")
+            elif not last and node.get(key) is None:
                 if delete:
-                    node = None
-                    break
+                    break                   # removing something that is not there: nothing to do
                 if isinstance(path[depth + 1], int):
                     raise ConfigError(f"override {text}: {where} is not set in the file, so it has no element "
                                       f"{path[depth + 1]}; give the whole list ({where}=[...])")
                 node[key] = {}
-            node = node[key]
-        if node is None:
-            continue                       # removing something that is not there: nothing to do
-        last = path[-1]
-        if isinstance(node, list):
-            if not isinstance(last, int) or not -len(node) <= last < len(node):
-                raise ConfigError(f"override {text}: {'.'.join(map(str, path))}: no such list element "
-                                  f"(the list has {len(node)})")
-            if delete:
-                del node[last]
+            if not last:
+                node = node[key]
+            elif not delete:
+                node[key] = value
+            elif isinstance(node, list):
+                del node[key]
             else:
-                node[last] = value
-        elif isinstance(node, dict):
-            if delete:
-                node.pop(last, None)
-            else:
-                node[last] = value
-        else:
-            raise ConfigError(f"override {text}: {'.'.join(map(str, path[:-1]))}: cannot go inside a "
-                              f"{type(node).__name__} value")
+                node.pop(key, None)
     return out
 
 
