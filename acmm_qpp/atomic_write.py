@@ -123,18 +123,12 @@ def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
     OutputError
         A directory of that name is in the way, or an OS error occurred.
     """
-    path = Path(path)
-    created: list[Path] = []
+    path, created, tmp = Path(path), [], None
     try:
         created = make_dirs(path.parent)
         if os.path.isdir(path):
-            remove_empty_dirs(created)
             raise OutputError(f"cannot write {what} {path}: a directory of that name is in the way")
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    except OSError as exc:
-        remove_empty_dirs(created)
-        raise output_error(exc, what, path) from None
-    try:
         try:
             view = memoryview(data)
             while view:
@@ -147,10 +141,11 @@ def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
         os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
     except BaseException as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
         remove_empty_dirs(created)
         if isinstance(exc, OSError):
             raise output_error(exc, what, path) from None

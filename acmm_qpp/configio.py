@@ -88,25 +88,20 @@ def _format_error(exc: ValidationError, data: object = None) -> str:
     # unknown keys first: a misspelt key of a section is one typo, not also a missing field for
     # each of its required ones
     errors = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")
-    err = errors[0]
-    path = user_path(tuple(err["loc"]), data)
+    paths = [user_path(tuple(e["loc"]), data) for e in errors]
+    err, path = errors[0], paths[0]
     # a mapping where a union also allows a string or a number: the mapping member's own error,
     # deeper in the user's data, says more than "should be a valid string"
-    deeper = [e for e in errors[1:] if len(user_path(tuple(e["loc"]), data)) > len(path)
-              and user_path(tuple(e["loc"]), data)[:len(path)] == path]
+    deeper = [(e, q) for e, q in zip(errors[1:], paths[1:]) if len(q) > len(path) and q[:len(path)] == path]
     if deeper and err["type"] in ("string_type", "float_type", "int_type", "float_parsing", "bool_type"):
-        err = deeper[0]
-        path = user_path(tuple(err["loc"]), data)
+        err, path = deeper[0]
     loc = ".".join(str(p) for p in path)
     if err["type"] == BOOLEAN_AS_NUMBER:                     # a model-level check naming its field
         loc = f"{loc}.{err['ctx']['field']}" if loc else err["ctx"]["field"]
     loc = loc or "config"
-    msg = err["msg"]
-    for prefix in ("Value error, ", "Assertion failed, "):
-        if msg.startswith(prefix):
-            msg = msg[len(prefix):]
+    msg = err["msg"].removeprefix("Value error, ").removeprefix("Assertion failed, ")
     # other fields in error (the union's other members at the same place are not other errors)
-    others = {q for q in (user_path(tuple(e["loc"]), data) for e in errors[1:]) if q != path[:len(q)]}
+    others = {q for q in paths[1:] if q != path[:len(q)]}
     extra = f" (and {len(others)} more)" if others else ""
     return f"{loc}: {msg}{extra}"
 
