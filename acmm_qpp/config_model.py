@@ -1,4 +1,5 @@
-"""The strict pydantic base of every config section (acmm, sweep, qpp).
+"""The pydantic side of the configs (acmm, sweep, qpp): the strict base of every config section,
+the quantity validator of their dimensional fields and the generator of their JSON schemas.
 
 Unknown keys, NaN and infinity are refused, the model is frozen; an unknown key's error names the
 closest valid key of its own model ("did you mean `x`?", :mod:`difflib`) or lists that model's keys
@@ -7,16 +8,30 @@ number: pydantic's lax mode would read ``count: true`` as 1 and ``rate: false`` 
 so a boolean given where the field wants a number (or a list of numbers) is refused, naming
 the field.  Strict mode for the whole model is not used: it would also refuse YAML lists for
 tuple fields and plain strings for enum fields.
+
+A field holding a physical quantity (:func:`quantity`) takes a number, or a ``"<number> <unit>"``
+string converted (pint, :func:`acmm_qpp.units.to_canonical`) to the field's unit; it must be
+finite, and a config may add its own range check.
+
+The JSON schema of a config model (issue 12; pydantic's ``model_json_schema(mode="validation",
+schema_generator=Generator)``) accepts what the loader accepts: a dimensional field is ``number``
+**or** a ``"<number> [unit]"`` string, a list of them likewise per element, and a choice spelt
+``true`` is also a YAML boolean.  A product widens the forms of its own fields in a subclass of
+:class:`Generator`; the schema header is :func:`header`.
 """
 from __future__ import annotations
 
 import difflib
+import math
 import types
 import typing
-from typing import Any
+from typing import Any, Callable, Optional
 
-from pydantic import BaseModel, ConfigDict, ValidationError, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, ValidationError, model_validator
+from pydantic.json_schema import GenerateJsonSchema
 from pydantic_core import PydanticCustomError
+
+from acmm_qpp.units import to_canonical
 
 _NUMBERS = (int, float, complex)
 #: the pydantic error type of a boolean given as a number; its context names the field, which
@@ -147,3 +162,116 @@ class StrictModel(BaseModel):
                     e["msg"] = "unknown key " + (f"(did you mean `{best}`?)" if best else f"(valid keys: {', '.join(keys)})")
             raise ValidationError.from_exception_data(exc.title, [
                 {**e, "type": PydanticCustomError(e["type"], e["msg"], e.get("ctx"))} for e in errors]) from None
+
+
+def quantity(unit: str, check: Optional[Callable[[float], float]] = None, *,
+             allow_none: bool = False) -> BeforeValidator:
+    """The before-validator of a quantity field in the unit ``unit``: a number (in ``unit``) or a
+    ``"<number> <unit>"`` string, converted to ``unit``, checked finite and by ``check``.
+
+    Use as ``Annotated[float, quantity("s")]``; its ``func`` converts one value (the elements of
+    a list field).
+
+    Parameters
+    ----------
+    unit : str
+        The field's unit, pint syntax (``"slug*ft^2"``, ``"s"``, ``"1"``).
+    check : callable, optional
+        ``check(x) -> x``: a further check of the converted value (e.g. a plausible range),
+        raising :class:`ValueError`.
+    allow_none : bool
+        Pass ``None`` through unchanged (for optional fields); otherwise ``None`` is refused
+        as not a number.
+
+    Returns
+    -------
+    pydantic.BeforeValidator
+        The validator; it raises :class:`ValueError` (pydantic adds the field name) for a value
+        that is not a number, has a wrong or unknown unit, is not finite or is refused by ``check``.
+    """
+    def conv(v):
+        if allow_none and v is None:
+            return v
+        x = to_canonical(v, unit)
+        if not math.isfinite(x):
+            raise ValueError("must be a finite number")
+        return x if check is None else check(x)
+    return BeforeValidator(conv)
+
+
+#: "<number>" or "<number> <unit>" (the unit is checked by the loader, dimension included).
+QUANTITY_PATTERN = r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?(?:\s*\S.*)?$"
+
+_QUANTITY_STRING = {"type": "string", "pattern": QUANTITY_PATTERN,
+                    "description": "a number with a unit, e.g. \"2 N*m\", \"31.5e6 kg*m^2\", \"0.063 deg/s\""}
+
+
+def quantity_schema(number_schema: dict) -> dict:
+    """``number`` (with the field's bounds) or a quantity string.
+
+    Parameters
+    ----------
+    number_schema : dict
+        The JSON schema of the number.
+
+    Returns
+    -------
+    dict
+        ``{"anyOf": [number_schema, <quantity string>]}``.
+    """
+    return {"anyOf": [number_schema, dict(_QUANTITY_STRING)]}
+
+
+class Generator(GenerateJsonSchema):
+    """pydantic's schema generator, taught which before-validators widen the accepted input.
+
+    Constructed like :class:`pydantic.json_schema.GenerateJsonSchema` (whose constructor it keeps).
+    """
+
+    def function_before_schema(self, schema):
+        """The JSON schema of a field with a before-validator, widened to the accepted forms.
+
+        Parameters
+        ----------
+        schema : dict
+            pydantic-core schema of the ``function-before`` node.
+
+        Returns
+        -------
+        dict
+            JSON schema: a quantity (``number`` or ``"<number> <unit>"``, units of the field),
+            a list of quantities or a boolean alternative.
+        """
+        inner_core = schema["schema"]
+        generated = super().function_before_schema(schema)
+        if inner_core.get("type") == "literal" and {"true", "false"} & set(map(str, inner_core["expected"])):
+            # a choice spelt like a YAML boolean is also accepted as one
+            return {"anyOf": [generated, {"type": "boolean"}]}
+        kind = inner_core.get("type")
+        if kind == "float":
+            return quantity_schema(generated)
+        if kind == "list" and inner_core.get("items_schema", {}).get("type") == "float":
+            out = dict(generated)
+            out["items"] = quantity_schema(generated.get("items", {"type": "number"}))
+            return out
+        return generated
+
+
+def header(schema: dict, title: str) -> dict:
+    """The schema with the draft-2020-12 ``$schema`` and a ``title`` in front.
+
+    Parameters
+    ----------
+    schema : dict
+        JSON schema body.
+    title : str
+        Title shown by editors.
+
+    Returns
+    -------
+    dict
+        A new schema mapping.
+    """
+    out = {"$schema": "https://json-schema.org/draft/2020-12/schema", "title": title}
+    out.update(schema)
+    return out

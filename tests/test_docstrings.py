@@ -53,7 +53,7 @@ NO_REPORT_CITATION = {module: reason for reason, modules in {
     "no mathematics of the report": """acmm_qpp acmm_qpp.atomic_write acmm_qpp.config_model
         acmm_qpp.configio acmm_qpp.errors acmm_qpp.hints acmm_qpp.limits
         acmm_qpp.outputs acmm_qpp.overrides acmm_qpp.plot_style acmm_qpp.provenance
-        acmm_qpp.quantity_fields acmm_qpp.results acmm_qpp.runlock acmm_qpp.schema
+        acmm_qpp.results acmm_qpp.runlock
         acmm_qpp.signals acmm_qpp.units""",
     "config schemas and checks, stage plumbing, numba's compilation: no mathematics of the report":
         """acmm.io.schema qpp.io.schema qpp.io.config_checks acmm.stages.common acmm.stages.pool

@@ -6,7 +6,7 @@ This package sits above both cores (like :mod:`acmm.report`, below :mod:`acmm_qp
 and ``qpp``, neither of them imports it at import time (``tests/test_layers.py``).  It is not
 part of :mod:`acmm_qpp.cli` because tests and scripts use it without the command line, and its
 :func:`load_any` validates models, which is more than parsing arguments.  The schemas themselves
-are in :mod:`acmm.io.schema`, :mod:`qpp.io.schema` and :mod:`acmm_qpp.schema`.
+are in :mod:`acmm.io.schema`, :mod:`qpp.io.schema` and :mod:`acmm_qpp.config_model`.
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Field types of the acmm configuration: quantities in the report's units (CR-185644 Table 1, eq 3.9).
 
-A number may be written as ``"<number> <unit>"`` (:mod:`acmm_qpp.quantity_fields`); it is
+A number may be written as ``"<number> <unit>"`` (:func:`acmm_qpp.config_model.quantity`); it is
 converted to the report's units (slug·ft², ft·lbf, ft·lbf·s, deg, rad/s, s) and must lie
 within a physically plausible range.  Also the strict base model of every section.
 
@@ -13,7 +13,7 @@ from typing import Annotated
 from pydantic import BeforeValidator
 
 from acmm_qpp.config_model import StrictModel
-from acmm_qpp.quantity_fields import quantity
+from acmm_qpp.config_model import quantity
 from acmm.model.inertia import MAX_INERTIA
 
 

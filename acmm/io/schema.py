@@ -1,5 +1,5 @@
 """JSON schemas of the acmm config kinds (acmm run and sweep), generated from the pydantic models
-so that they accept what the loader accepts (the generic machinery is :mod:`acmm_qpp.schema`,
+so that they accept what the loader accepts (the generic machinery is :mod:`acmm_qpp.config_model`,
 acmm's own forms :class:`AcmmGenerator`):
 
 * a dimensional field (one converted by a unit-aware before-validator, e.g. ``"2 N*m"``) is
@@ -23,7 +23,7 @@ extension, any editor using yaml-language-server).
 """
 from __future__ import annotations
 
-from acmm_qpp.schema import Generator, header, quantity_schema
+from acmm_qpp.config_model import Generator, header, quantity_schema
 from acmm.io.config import Config
 
 
@@ -35,7 +35,7 @@ def _inertia_matrix() -> dict:
 
 
 class AcmmGenerator(Generator):
-    """The base's schema generator (:class:`acmm_qpp.schema.Generator`), taught acmm's own forms:
+    """The base's schema generator (:class:`acmm_qpp.config_model.Generator`), taught acmm's own forms:
     an inertia given as a 3×3 matrix, a vector of three values ``[roll, pitch, yaw]``."""
 
     def function_before_schema(self, schema):

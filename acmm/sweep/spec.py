@@ -16,8 +16,7 @@ from pydantic import BeforeValidator, Field, model_validator
 
 from acmm.io.config import Config, Output
 from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS, SHORTHANDS, parameter_value, to_parameter_unit
-from acmm_qpp.config_model import StrictModel, closest
-from acmm_qpp.schema import header
+from acmm_qpp.config_model import StrictModel, closest, header
 from acmm.io.schema import AcmmGenerator, fix_alternatives
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN
 from pydantic.json_schema import models_json_schema

@@ -12,7 +12,7 @@ import numpy as np
 from pydantic import BaseModel, model_validator
 
 from acmm_qpp.config_model import StrictModel
-from acmm_qpp.quantity_fields import quantity
+from acmm_qpp.config_model import quantity
 
 Matrix = list[list[float]]
 

@@ -1,8 +1,8 @@
 """JSON schema of a qpp config (CR-185644 Part III), generated from :class:`qpp.io.config.QppConfig` with the generic machinery of
-:mod:`acmm_qpp.schema`.  ``qpp schema`` prints it."""
+:mod:`acmm_qpp.config_model`.  ``qpp schema`` prints it."""
 from __future__ import annotations
 
-from acmm_qpp.schema import Generator, header
+from acmm_qpp.config_model import Generator, header
 from qpp.io.config import QppConfig
 
 
