@@ -1,16 +1,13 @@
-"""Provenance of a results file: git commit, config hash, package version, creation time.
-
-Stored as root attributes of every HDF5 file (:func:`acmm_qpp.results.write_h5`).
+"""Provenance of a results file: the git commit (and whether the checkout differs from it) and
+the config hash, stored with the package version and the creation time as root attributes of
+every HDF5 file (:func:`acmm_qpp.results.write_h5`).
 """
 from __future__ import annotations
 
 import hashlib
 import subprocess
-from datetime import datetime, timezone
 from functools import lru_cache
 from pathlib import Path
-
-from acmm_qpp import __version__
 
 
 @lru_cache(maxsize=1)
@@ -73,27 +70,3 @@ def config_hash(config_text: str) -> str:
         The first 16 hex digits of the hash.
     """
     return hashlib.sha256(config_text.encode()).hexdigest()[:16]
-
-
-def provenance(config_text: str) -> dict[str, str]:
-    """Attributes stored on every results file.
-
-    Parameters
-    ----------
-    config_text : str
-        The resolved config as YAML.
-
-    Returns
-    -------
-    dict
-        Package, version, git commit, config hash and creation time (UTC).
-    """
-    return {
-        "package": "acmm-qpp",
-        "package_version": __version__,
-        "git_commit": git_commit(),
-        "git_dirty": git_dirty(),
-        "config_hash": config_hash(config_text),
-        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-    }
-

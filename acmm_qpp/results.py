@@ -23,6 +23,7 @@ import io
 import json
 from collections.abc import Mapping  # not typing.Mapping: its isinstance check is slow
 from dataclasses import dataclass, field
+from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
@@ -30,9 +31,10 @@ import h5netcdf
 import h5py
 import numpy as np
 
+from acmm_qpp import __version__
 from acmm_qpp.atomic_write import write_bytes
 from acmm_qpp.errors import ConfigError, FigureError
-from acmm_qpp.provenance import provenance
+from acmm_qpp.provenance import config_hash, git_commit, git_dirty
 
 
 @dataclass
@@ -195,7 +197,9 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
     items : mapping
         Datasets (or groups of datasets) to store.
     config_text : str
-        The resolved config as YAML; embedded as the root attribute ``config``.
+        The resolved config as YAML; embedded as the root attribute ``config``, with the
+        provenance (:mod:`acmm_qpp.provenance`: package version, git commit, config hash,
+        creation time in UTC).
     attrs : mapping, optional
         Extra root attributes (e.g. a verdict).
 
@@ -212,7 +216,10 @@ def write_h5(path: str | Path, items: Mapping[str, Any], config_text: str,
         An array without dimension names, or a dimension with two lengths in one group.
     """
     path = Path(path)
-    root = {"config": config_text, **provenance(config_text), **(attrs or {}), "Conventions": CONVENTIONS}
+    root = {"config": config_text, "package": "acmm-qpp", "package_version": __version__,
+            "git_commit": git_commit(), "git_dirty": git_dirty(), "config_hash": config_hash(config_text),
+            "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"), **(attrs or {}),
+            "Conventions": CONVENTIONS}
     buf = io.BytesIO()        # built in memory, written by write_bytes (HDF5 crashes on ENOSPC)
     # invalid_netcdf: bool datasets (HDF5 enums, as h5py writes them), which the netCDF-C
     # library reads; track_order off: groups and attributes listed by name, as before

@@ -7,10 +7,11 @@ import pytest
 from tests.conftest import REPO
 
 
-def test_git_commit_asked_once_per_process(monkeypatch):
+def test_git_commit_asked_once_per_process(monkeypatch, tmp_path):
     import subprocess
 
     from acmm_qpp import provenance
+    from acmm_qpp.results import read_h5, write_h5
 
     calls = []
     real = subprocess.run
@@ -24,7 +25,7 @@ def test_git_commit_asked_once_per_process(monkeypatch):
     try:
         first = provenance.git_commit()
         assert provenance.git_commit() == first and len(calls) == 1
-        prov = provenance.provenance("a: 1\n")
+        prov = read_h5(write_h5(tmp_path / "a.h5", {}, "a: 1\n"))["attrs"]
         assert prov["git_commit"] == first and prov["git_dirty"] in ("yes", "no") and len(calls) == 1
     finally:
         provenance._git_state.cache_clear()
