@@ -15,9 +15,8 @@ finite, and a config may add its own range check.
 
 The JSON schema of a config model (issue 12; pydantic's ``model_json_schema(mode="validation",
 schema_generator=Generator)``) accepts what the loader accepts: a dimensional field is ``number``
-**or** a ``"<number> [unit]"`` string, a list of them likewise per element, and a choice spelt
-``true`` is also a YAML boolean.  A product widens the forms of its own fields in a subclass of
-:class:`Generator`; the schema header is :func:`header`.
+**or** a ``"<number> [unit]"`` string, a list of them likewise per element.  A product widens the
+forms of its own fields in a subclass of :class:`Generator`; the schema header is :func:`header`.
 """
 from __future__ import annotations
 
@@ -239,14 +238,11 @@ class Generator(GenerateJsonSchema):
         Returns
         -------
         dict
-            JSON schema: a quantity (``number`` or ``"<number> <unit>"``, units of the field),
-            a list of quantities or a boolean alternative.
+            JSON schema: a quantity (``number`` or ``"<number> <unit>"``, units of the field)
+            or a list of quantities.
         """
         inner_core = schema["schema"]
         generated = super().function_before_schema(schema)
-        if inner_core.get("type") == "literal" and {"true", "false"} & set(map(str, inner_core["expected"])):
-            # a choice spelt like a YAML boolean is also accepted as one
-            return {"anyOf": [generated, {"type": "boolean"}]}
         kind = inner_core.get("type")
         if kind == "float":
             return quantity_schema(generated)

@@ -36,7 +36,8 @@ def _inertia_matrix() -> dict:
 
 class AcmmGenerator(Generator):
     """The base's schema generator (:class:`acmm_qpp.config_model.Generator`), taught acmm's own forms:
-    an inertia given as a 3×3 matrix, a vector of three values ``[roll, pitch, yaw]``."""
+    an inertia given as a 3×3 matrix, a vector of three values ``[roll, pitch, yaw]``, a choice
+    spelt like a YAML boolean (``sweep.tea_estimate: true``) also given as one."""
 
     def function_before_schema(self, schema):
         """The JSON schema of a field with a before-validator, widened to the accepted forms.
@@ -49,10 +50,14 @@ class AcmmGenerator(Generator):
         Returns
         -------
         dict
-            JSON schema: the base's, with the inertia matrix alternative or three elements.
+            JSON schema: the base's, with the inertia matrix or a boolean alternative, or three
+            elements.
         """
         qual = getattr(schema.get("function", {}).get("function"), "__qualname__", "")
         generated = super().function_before_schema(schema)
+        inner = schema["schema"]
+        if inner.get("type") == "literal" and {"true", "false"} & set(map(str, inner["expected"])):
+            return {"anyOf": [generated, {"type": "boolean"}]}
         if qual.endswith("Inertia._from_matrix"):
             return {"anyOf": [generated, _inertia_matrix()]}
         if "_vec3" in qual and "items" in generated:          # [roll, pitch, yaw]
