@@ -37,17 +37,13 @@ class Terminated(KeyboardInterrupt):
     Parameters
     ----------
     signum : int
-        The signal received.
+        The signal received; ``exit_code`` is 128 + it (143 for SIGTERM, 129 for SIGHUP).
     """
 
     def __init__(self, signum: int) -> None:
         super().__init__(signum)
         self.signum = int(signum)
-
-    @property
-    def exit_code(self) -> int:
-        """128 + the signal number (143 for SIGTERM, 129 for SIGHUP)."""
-        return 128 + self.signum
+        self.exit_code = 128 + self.signum
 
 
 class AcmmError(Exception):

@@ -284,15 +284,6 @@ StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes w
                                                  "(for CI)")
 
 
-def _one_line_usage(exc) -> str:
-    """A click usage error as one line: the message and where to get help."""
-    msg = " ".join(exc.format_message().replace("Value error, ", "").split())
-    ctx = getattr(exc, "ctx", None)
-    if ctx is not None and not isinstance(exc, click_exceptions.NoArgsIsHelpError):
-        msg += f" (see '{ctx.command_path} --help')"
-    return msg
-
-
 def interrupted(exc: BaseException) -> None:
     """Report Ctrl-C ("interrupted", exit 130) or SIGTERM/SIGHUP (:class:`acmm_qpp.errors.Terminated`:
     "terminated by signal N", exit 128 + N) on one line and exit.
@@ -378,7 +369,9 @@ class ExitCodeGroup(TyperGroup):
             typer.echo(exc.ctx.get_help() if exc.ctx is not None else exc.format_message(), err=True)
             sys.exit(EXIT_USAGE)
         except click_exceptions.UsageError as exc:      # a bad value (not a missing one) is bad input
-            typer.echo(f"error: {_one_line_usage(exc)}", err=True)
+            msg = " ".join(exc.format_message().replace("Value error, ", "").split())
+            where = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
+            typer.echo(f"error: {msg}{where}", err=True)
             bad_value = (isinstance(exc, click_exceptions.BadParameter)
                          and not isinstance(exc, click_exceptions.MissingParameter))
             sys.exit(EXIT_INPUT if bad_value else EXIT_USAGE)
