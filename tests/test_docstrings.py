@@ -51,7 +51,7 @@ CHECKED_MODULES = discover_modules()
 NO_REPORT_CITATION = {module: reason for reason, modules in {
     "the shared base (files, locks, signals, errors, configs, units, figure style): "
     "no mathematics of the report": """acmm_qpp acmm_qpp.atomic_write acmm_qpp.config_model
-        acmm_qpp.configio acmm_qpp.errors acmm_qpp.hints acmm_qpp.limits
+        acmm_qpp.configio acmm_qpp.errors acmm_qpp.limits
         acmm_qpp.outputs acmm_qpp.overrides acmm_qpp.plot_style acmm_qpp.provenance
         acmm_qpp.results acmm_qpp.runlock
         acmm_qpp.signals acmm_qpp.units""",
