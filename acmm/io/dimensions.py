@@ -37,9 +37,10 @@ AUX_COORDS = ("orbits",)
 def with_coordinates(items: Mapping, aux_coords: tuple = ()) -> dict:
     """``items`` for :func:`acmm_qpp.results.write_h5` with, in every group, the coordinate
     (:data:`COORDS`) of each of acmm's dimensions its datasets use (of its length) and that has no
-    item of its own name, added after its items; and, when datasets ``aux_coords`` of a group lie
-    along the time dimension ``t`` alone, the CF ``coordinates`` attribute naming them on every
-    other dataset along ``t`` of that group.
+    item of its own name, placed before the first dataset along it (a coordinate variable made
+    after the variables along its dimension has h5netcdf attach its scale to each of them again);
+    and, when datasets ``aux_coords`` of a group lie along the time dimension ``t`` alone, the CF
+    ``coordinates`` attribute naming them on every other dataset along ``t`` of that group.
 
     Parameters
     ----------
@@ -54,17 +55,16 @@ def with_coordinates(items: Mapping, aux_coords: tuple = ()) -> dict:
         The items, groups copied; a dataset that gets the attribute is a copy.
     """
     aux = [a for a in aux_coords if isinstance(items.get(a), Dataset) and items[a].dims == (TIME,)]
-    out, sizes = {}, {}
+    out = {}
     for key, value in items.items():
         if isinstance(value, Mapping):
             out[key] = with_coordinates(value, aux_coords)
             continue
         dims = tuple(value.dims or ())
-        sizes.update(zip(dims, np.shape(value.data)))
+        for d, n in zip(dims, np.shape(value.data)):
+            if d in COORDS and d not in items and d not in out and np.shape(COORDS[d].data) == (n,):
+                out[d] = COORDS[d]
         if aux and TIME in dims and key not in aux and key != TIME:
             value = replace(value, attrs={**value.attrs, "coordinates": " ".join(aux)})
         out[key] = value
-    for d, coord in COORDS.items():
-        if d in sizes and d not in items and np.shape(coord.data) == (sizes[d],):
-            out[d] = coord
     return out
