@@ -18,12 +18,13 @@ from typing import NamedTuple
 import typer
 from typer.core import TyperCommand, TyperGroup
 
-# the click that typer uses: recent typer vendors it as ``typer._click``, older ones use click
 try:
     from typer._click import exceptions as click_exceptions
-    from typer._click.utils import _detect_program_name
 except ImportError:  # pragma: no cover (typer < 0.20 uses click itself)
     from click import exceptions as click_exceptions
+try:
+    from typer._click.utils import _detect_program_name
+except ImportError:  # pragma: no cover
     from click.utils import _detect_program_name
 
 from acmm_qpp.errors import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_USAGE, EXIT_VERDICT, AcmmError, ConfigError,
