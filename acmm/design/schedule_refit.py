@@ -50,8 +50,24 @@ from math import comb
 from scipy.optimize import minimize
 
 
-def _power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
-    """Coefficients in powers of θ of Σ_k a[k]·((θ − c)/h)^k (a: (order+1, ...))."""
+def power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
+    """Coefficients in powers of θ of Σ_k a[k]·((θ − c)/h)^k.
+
+    Parameters
+    ----------
+    a : (order+1, ...) array
+        Coefficients in the normalized variable u = (θ − c)/h, lowest power first, units of
+        the polynomial's value.
+    c : float
+        Centre of the normalization, rad.
+    h : float
+        Half-width of the normalization, rad.
+
+    Returns
+    -------
+    (order+1, ...) array
+        The same polynomials' coefficients in powers of θ, units of ``a`` per rad^k.
+    """
     order = a.shape[0] - 1
     b = np.zeros_like(a)
     for k in range(order + 1):
@@ -157,11 +173,11 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
     """
     if fit.form != "polynomial":
         raise ValueError("refit_closed_loop refines a polynomial schedule")
-    st = _refit_start(fit, path, every)
+    st = refit_start(fit, path, every)
     a0, sc, up, shape = st["a0"], st["sc"], st["up"], st["shape"]
     As_t, Bs_t = np.array(st["As"]), np.array(st["Bs"])              # (T, N, N), (T, N, M)
     x0 = np.zeros(a0.size)
-    w0 = _worst_real(st, x0, n)
+    w0 = worst_real(st, x0, n)
     if solver == "slsqp":
         res = _minimax_slsqp(a0, sc, up, As_t, Bs_t, n, max_iter, top, re_weight, re_offset,
                              angle_weight, angle_offset, half_angle_deg)
@@ -170,7 +186,7 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
             raise ValueError("the trust-region refit minimizes the largest Re λ alone (angle_weight 0, "
                              "re_weight 1, re_offset 0)")
         res = _minimax_trust_lp(a0, sc, up, As_t, Bs_t, n, band, max_iter)
-        return _refit_outcome(fit, st, res, w0, _worst_real(st, res.x, n), beta, "minimax")
+        return _refit_outcome(fit, st, res, w0, worst_real(st, res.x, n), beta, "minimax")
     elif solver == "lbfgs":
         fg = _smooth_max(a0, sc, shape, up, As_t, Bs_t, n, beta, re_weight, re_offset, angle_weight,
                          angle_offset, half_angle_deg)
@@ -178,7 +194,7 @@ def refit_closed_loop(fit: ScheduleFit, path: PathModels, n: float, *, every: in
                                                                       "gtol": 1e-9})
     else:
         raise ValueError(f"unknown refit solver {solver!r}")
-    return _refit_outcome(fit, st, res, w0, _worst_real(st, res.x, n), beta)
+    return _refit_outcome(fit, st, res, w0, worst_real(st, res.x, n), beta)
 
 
 def _refit_outcome(fit: ScheduleFit, st: dict, res, w0: float, w1: float, beta: float,
@@ -193,21 +209,51 @@ def _refit_outcome(fit: ScheduleFit, st: dict, res, w0: float, w1: float, beta: 
         return ScheduleFit(fit.coef, fit.variable, fit.gains, fit.rms_residual, fit.rel_residual,
                            fit.form, "least_squares", info)
     a = st["a0"] + res.x.reshape(st["shape"]) * st["sc"]
-    return _refitted(fit, _power_basis(a, st["c0"], st["h0"]) / st["d"][None, None, :], info, method)
+    return refitted(fit, power_basis(a, st["c0"], st["h0"]) / st["d"][None, None, :], info, method)
 
 
-def _worst_real(st: dict, x: np.ndarray, n: float) -> float:
-    """Largest Re λ / n over the refit's TEAs (``st`` from :func:`_refit_start`) with the scaled
-    coefficient change ``x``."""
+def worst_real(st: dict, x: np.ndarray, n: float) -> float:
+    """Largest Re λ / n of the scheduled loop over the refit's TEAs.
+
+    Parameters
+    ----------
+    st : dict
+        The refit's TEAs, models and starting coefficients (:func:`refit_start`).
+    x : array
+        Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    float
+        The largest real part of a closed-loop pole, units of n.
+    """
     a = st["a0"] + x.reshape(st["shape"]) * st["sc"]
     return max(np.max(np.linalg.eigvals(A - B @ np.tensordot(tp, a, axes=1)).real)
                for A, B, tp in zip(st["As"], st["Bs"], st["up"])) / n
 
 
-def _refit_start(fit: ScheduleFit, path: PathModels, every: int) -> dict:
-    """The refit's TEAs (every ``every``-th of ``path``, the ends included), the scaled models
-    there, the normalized variable u = (θ2* − c0)/h0 and the starting coefficients in u
-    (``a0``, scaled gains) with their scale ``sc``."""
+def refit_start(fit: ScheduleFit, path: PathModels, every: int) -> dict:
+    """The TEAs, models and starting coefficients of a refit of ``fit`` on ``path``.
+
+    Parameters
+    ----------
+    fit : acmm.design.schedule.ScheduleFit
+        The polynomial schedule the refit starts from.
+    path : acmm.design.path_check.PathModels
+        Local models along the path.
+    every : int
+        Use every ``every``-th TEA of ``path`` (the ends included).
+
+    Returns
+    -------
+    dict
+        ``idx`` (the TEAs' indices), ``c0``, ``h0`` (the normalized variable u = (θ2* − c0)/h0,
+        rad), ``d`` (the state scaling), ``As``, ``Bs`` (the scaled models), ``up`` (powers of u
+        at each TEA), ``shape``, ``a0`` (the starting coefficients in u, scaled gains) and ``sc``
+        (their scale: the largest |a0| of each element).
+    """
     idx = sorted(set(range(0, path.theta2.size, max(1, every))) | {path.theta2.size - 1})
     th = path.theta2[idx]
     c0, h0 = 0.5 * (th.max() + th.min()), 0.5 * (th.max() - th.min())
@@ -262,9 +308,25 @@ def _smooth_max(a0, sc, shape, up, As_t, Bs_t, n, beta, re_weight, re_offset, an
     return fg
 
 
-def _refitted(fit: ScheduleFit, coef: np.ndarray, info: dict, method: str = "closed_loop") -> ScheduleFit:
-    """The refitted schedule (``method``) with coefficients ``coef`` (powers of θ2*) and its
-    residuals against the design-point gains of ``fit``."""
+def refitted(fit: ScheduleFit, coef: np.ndarray, info: dict, method: str = "closed_loop") -> ScheduleFit:
+    """The refitted schedule with its residuals against the design-point gains.
+
+    Parameters
+    ----------
+    fit : acmm.design.schedule.ScheduleFit
+        The schedule that was refitted (its points and gains).
+    coef : (order+1, 3, N) array
+        The new coefficients in powers of θ2*, units of K per rad^k.
+    info : dict
+        The refit's diagnostics (``refit_info``).
+    method : str
+        The refit's name (``ScheduleFit.method``).
+
+    Returns
+    -------
+    acmm.design.schedule.ScheduleFit
+        The polynomial schedule with ``coef``.
+    """
     order = fit.order
     P = fit.variable.size
     vander_th = fit.variable[:, None] ** np.arange(order + 1)[None, :]

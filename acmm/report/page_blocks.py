@@ -395,7 +395,7 @@ def block_staircase_routes(r: dict) -> str:
     labels = {"staircase": "regional LMI points, table (packaged)",
               "staircase_lqr": "sector LQR points (the report's route), table",
               "staircase_quadratic": "sector LQR points, quadratic refit on the closed loops",
-              "staircase_minimax": "regional LMI points, quadratic minimax of Re λ on the path"}
+              "staircase_shifted_lqr": "regional LMI points, quadratic converged on the path's shifted LQR cost"}
     rows = []
     for name, label in labels.items():
         d, sim = r[f"design:{name}"], r[f"simulate:{name}"]
@@ -406,10 +406,12 @@ def block_staircase_routes(r: dict) -> str:
             f"{fixed(float(g['tau_star']), 2)} orbit" + ("" if np.all(np.asarray(g["dwell"]) > float(g["tau_star"]))
                                                          else " (NOT certified)"))
         refit = ""
-        if "refit_converged" in sc and decoded(sc["fit_method"]) == "minimax":
+        if "refit_converged" in sc and decoded(sc["fit_method"]) == "shifted_lqr":
             refit = (f" (from the least-squares fit's {fixed(float(sc['refit_max_real_before']), 2, sign=True)}n; "
-                     "it stops at a stall or at its trust radius, where rounding leads it: the bounds every "
-                     "run so far met)")
+                     f"Re λ < −{fixed(float(sc['refit_decay']), 2)}n and the {fixed(float(sc['refit_cone_deg']), 0)}° "
+                     "cone at " + f"{int(sc['refit_n_tea'])} TEAs; "
+                     + ("Newton's method converged" if float(sc["refit_converged"]) else
+                        "NOT converged: " + decoded(sc["refit_message"])) + ")")
         elif "refit_converged" in sc:
             refit = (f" (the least-squares fit it starts from: largest Re λ "
                      f"{fixed(float(sc['refit_max_real_before']), 2, sign=True)}n on the refit's TEAs; SLSQP "
@@ -417,16 +419,6 @@ def block_staircase_routes(r: dict) -> str:
                      + "; where it stops depends on rounding)")
         loop = [f"{fixed(np.max(pa['max_real']))}n", f"{fixed(np.min(pa['sector_margin']), 2)}n",
                 fixed(np.min(pa["disk_margin"])), sig(np.max(sim["levels"]["peak_momentum"])), tau]
-        if name == "staircase_minimax":
-            # where the minimax stops depends on rounding (runs: largest Re λ −0.2715n, −0.2723n,
-            # −0.2516n, −0.24n; peak 9 493 and ~9 700; τ* 3.3 and 4): only bounds that survive it
-            peak = np.asarray(sim["levels"]["peak_momentum"])
-            loop = ["≤ −0.2n" if np.max(pa["max_real"]) <= -0.2 else f"{fixed(np.max(pa['max_real']), 2)}n",
-                    "< 0 at every TEA" if np.all(pa["sector_margin"] < 0) else f"{fixed(np.min(pa['sector_margin']), 1)}n",
-                    "< 0.1" if np.min(pa["disk_margin"]) < 0.1 else fixed(np.min(pa["disk_margin"]), 1),
-                    (f"> 6 000 at the last level only" if peak[:-1].max() <= 6000 < peak[-1] else sig(peak.max(), 1)),
-                    "no certificate" if tau == "no certificate" else
-                    ("< 5 orbit" if float(g["tau_star"]) < 5 else f"{sig(float(g['tau_star']), 1)} orbit")]
         rows.append([label + refit, f"{np.asarray(pa['theta2']).size}", *loop[:3],
                      sig(np.max(d["max_eig_condition"]), 2), sci(np.min(d["robustness_radius_elementwise"])),
                      sig(max(energy), 3), *loop[3:]])
