@@ -42,7 +42,8 @@ both chained through K = Σ_k u^k a_k.
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import solve_continuous_lyapunov
+from scipy.linalg import schur
+from scipy.linalg.lapack import ztrsyl
 from scipy.optimize import minimize
 
 from acmm.design.path_check import PathModels
@@ -85,6 +86,16 @@ FINAL_BFGS_ITER = 2000
 HESSIAN_STEP = 1e-6
 
 
+def _lyapunov(T: np.ndarray, U: np.ndarray, W: np.ndarray, adjoint: bool) -> np.ndarray:
+    """X with Mᴴ X + X M + W = 0 (``adjoint``) or M X + X Mᴴ + W = 0, M = U T Uᴴ, T upper
+    triangular (complex Schur form), U unitary; by LAPACK's triangular Sylvester solver."""
+    C = -(U.conj().T @ W @ U)
+    y, scale, info = ztrsyl(T, T, C, trana="C" if adjoint else "N", tranb="N" if adjoint else "C")
+    if info < 0:
+        raise ValueError(f"ztrsyl: argument {-info} is invalid")
+    return U @ (y / scale) @ U.conj().T
+
+
 class _Cost:
     """F(x) of the module docstring and its gradient at the refit's TEAs (``st`` from
     :func:`acmm.design.schedule_refit.refit_start`)."""
@@ -102,21 +113,23 @@ class _Cost:
         K = self.gains(x)
         shifted = self.As - self.Bs @ K + alpha * self.n * self.eye
         rot = np.exp(1j * psi)
+        # one complex Schur form A^α = U T Uᴴ per TEA serves its four Lyapunov equations (the
+        # rotated matrix is U (e^{jψ} T) Uᴴ), each then a triangular Sylvester solve (LAPACK ztrsyl)
+        forms = [schur(Ac, output="complex") for Ac in shifted]
         # the region, with 1e-8 n to spare (closer, the Lyapunov equations are numerically singular)
-        ev = np.linalg.eigvals(shifted) / self.n
+        ev = np.array([np.diag(T) for T, _ in forms]) / self.n
         if not (np.all(ev.real < -1e-8) and np.all((rot * ev).real < -1e-8)
                 and np.all((np.conj(rot) * ev).real < -1e-8)):
             return np.inf, np.zeros_like(x)
         total, gK = 0.0, np.empty_like(K)
-        for j, (Ac, B, Kj) in enumerate(zip(shifted, self.Bs, K)):
-            P = solve_continuous_lyapunov(Ac.T, -(self.Q + Kj.T @ self.R @ Kj))
-            L = solve_continuous_lyapunov(Ac, -self.eye)
+        for j, ((T, U), B, Kj) in enumerate(zip(forms, self.Bs, K)):
+            P = _lyapunov(T, U, self.Q + Kj.T @ self.R @ Kj, adjoint=True).real
+            L = _lyapunov(T, U, self.eye, adjoint=False).real
             total += np.trace(P)
             gK[j] = 2.0 * (self.R @ Kj - B.T @ P) @ L
             if psi:
-                M = rot * Ac
-                Pc = solve_continuous_lyapunov(M.conj().T, -self.Q.astype(complex))
-                Lc = solve_continuous_lyapunov(M, -self.eye.astype(complex))
+                Pc = _lyapunov(rot * T, U, self.Q, adjoint=True)
+                Lc = _lyapunov(rot * T, U, self.eye, adjoint=False)
                 total += np.trace(Pc).real
                 gK[j] -= 2.0 * (np.conj(rot) * (B.T @ Pc @ Lc)).real
         if not total > 0:
