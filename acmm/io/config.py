@@ -137,15 +137,16 @@ class Schedule(SectionModel):
                                   "table look-up, linear in θ2* between design points (ch. 7 alternative)")
     points: list[DesignPoint] = Field([], description="additional named design points")
     order: int = Field(2, strict=True, ge=1, le=4, description="polynomial order of K_ij(θ2*) (the report uses 2)")
-    fit: Optional[Literal["least_squares", "closed_loop", "minimax", "shifted_lqr"]] = Field(
-        None, description="how the schedule is fitted to the design points; by default least_squares for a table "
-                          "and shifted_lqr for a polynomial.  least_squares: least squares on the gains (a table "
-                          "interpolates the gains themselves); closed_loop: least squares refined against the "
-                          "closed loop along the path (SLSQP on Re λ and the sector's lines); minimax: the largest "
-                          "Re λ on every path check TEA lowered by a monotone trust-region linear program "
-                          "(acmm.design.schedule_refit.refit_closed_loop); shifted_lqr: the polynomial that "
-                          "minimizes the path's summed LQR cost shifted by 0.3n and rotated into a 70° cone, "
-                          "converged by Newton's method (acmm.design.schedule_shifted_lqr.refit_shifted_lqr)")
+    fit: Literal["least_squares", "closed_loop", "minimax", "shifted_lqr"] = Field(
+        "least_squares", description="how the schedule is fitted to the design points.  least_squares: least "
+                                     "squares on the gains (a table interpolates the gains themselves); closed_loop: "
+                                     "least squares refined against the closed loop along the path (SLSQP on Re λ and "
+                                     "the sector's lines); minimax: the largest Re λ on every path check TEA lowered by "
+                                     "a monotone trust-region linear program "
+                                     "(acmm.design.schedule_refit.refit_closed_loop); shifted_lqr: the report's "
+                                     "polynomial converged, the minimizer of the path's summed LQR cost shifted by "
+                                     "0.3n and rotated into a 70° cone, by Newton's method "
+                                     "(acmm.design.schedule_shifted_lqr.refit_shifted_lqr)")
     n_check: int = Field(201, strict=True, ge=2, le=2001, description="TEAs evenly spaced along the blend path at which "
                                                          "the scheduled gain is checked on the local model")
     refine_points: int = Field(
@@ -155,14 +156,6 @@ class Schedule(SectionModel):
                     "refine_margin; the added nodes are schedule gains, not stair-case levels (0: none)")
     refine_margin: float = Field(
         0.0, ge=0, le=1, description="sector margin, units of n, that refine_points asks of every path check TEA")
-
-    @model_validator(mode="before")
-    @classmethod
-    def _default_fit(cls, data):
-        # the fit a form takes when none is given: a table its points' gains, a polynomial converged
-        if isinstance(data, dict) and data.get("fit") is None:
-            data = {**data, "fit": "least_squares" if data.get("form", "polynomial") == "table" else "shifted_lqr"}
-        return data
 
     @model_validator(mode="after")
     def _fit_of_the_form(self):
