@@ -23,8 +23,10 @@ import pytest
 
 from acmm.model import linearize as lin
 from acmm.model.tea import solve_tea_near
+from acmm.report.build import build_report
 from acmm.report.page_blocks import BLOCKS, compute_blocks
 from acmm.report.page_runs import run_stages
+from tests.acmm.report.conftest import PageParser
 from tests.conftest import REPO
 
 #: the tests that compare with a fresh run of every packaged config (several minutes): `make test-slow`, run by CI;
@@ -43,10 +45,16 @@ rn = _script()
 
 
 @pytest.fixture(scope="module")
-def stages(tmp_path_factory) -> dict:
+def readme_root(tmp_path_factory) -> Path:
+    """The results root the stages run into."""
+    return tmp_path_factory.mktemp("readme-root")
+
+
+@pytest.fixture(scope="module")
+def stages(readme_root) -> dict:
     """The stages the blocks quote, run into an empty results root (:func:`run_stages`)."""
     rn.use_this_trees_configs()
-    return run_stages(tmp_path_factory.mktemp("readme-root"))
+    return run_stages(readme_root)
 
 
 @pytest.fixture(scope="module")
@@ -157,14 +165,14 @@ def _blend_poles(cfg, d, coef, count: int = 101) -> np.ndarray:
 
 @slow
 def test_converged_quadratic_holds_the_decay_and_the_momentum_target(stages):
-    """Issue 41 item 4, on the routes table's ``staircase_shifted_lqr`` run: the report's form
+    """Issue 41 item 4, on the routes table's ``staircase_quadratic`` run: the report's form
     (one quadratic in θ2* per gain element) started from the regional LMI points' least-squares
     fit, whose loop is unstable, and converged by Newton's method on the path's shifted LQR cost
     (``schedule.fit: shifted_lqr``).  Every local loop on the 1 001 path TEAs has Re λ ≤ −0.25n —
     the design's own check, and here with our own blend at 101 points, where every pole is also
     inside the 70° cone about −0.3n — and no level of the 130-orbit stair-case peaks above
     6 000 ft·lbf·s."""
-    cfg, d, sim = (stages[f"{k}:staircase_shifted_lqr"] for k in ("config", "design", "simulate"))
+    cfg, d, sim = (stages[f"{k}:staircase_quadratic"] for k in ("config", "design", "simulate"))
     sc = d["schedule"]
     method = sc["fit_method"]
     assert (method.decode() if isinstance(method, bytes) else str(method)) == "shifted_lqr"
@@ -184,7 +192,8 @@ def test_converged_quadratic_holds_the_decay_and_the_momentum_target(stages):
 @slow
 def test_converged_quadratic_is_the_same_under_another_blas_kernel(stages, tmp_path):
     """Issue 41 item 4: the converged quadratic's gains, designed again in a subprocess under
-    OpenBLAS's Prescott kernel (SSE3) from scratch (LMI points included), equal this run's
+    OpenBLAS's Prescott kernel (SSE3) from scratch (LMI points included) by the packaged
+    stair-case with ``schedule.form=polynomial`` alone (the form selects the fit), equal this run's
     (the machine's own kernel) to 1e-6 relative at 201 TEAs over the path's range (the norm of
     the 3×24 gain, as the determinism test compares gains)."""
     flags = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else ""
@@ -192,16 +201,47 @@ def test_converged_quadratic_is_the_same_under_another_blas_kernel(stages, tmp_p
         pytest.skip("needs an x86-64 CPU with AVX2 to run two OpenBLAS kernels")
     env = {**os.environ, "OPENBLAS_CORETYPE": "Prescott", "OPENBLAS_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
     r = subprocess.run([sys.executable, "-m", "acmm.cli.app", "design", "staircase", "schedule.form=polynomial",
-                        "schedule.fit=shifted_lqr", "schedule.refine_points=0", "name=other_kernel", "--no-figures"],
+                        "name=other_kernel", "--no-figures"],
                        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=1200)
     assert r.returncode == 0, r.stderr[-2000:]
     with h5py.File(tmp_path / "runs" / "other_kernel" / "design.h5") as f:
         other = f["schedule/coef"][()]
         assert float(f["schedule/refit_converged"][()]) == 1.0
-    ref = stages["design:staircase_shifted_lqr"]["schedule"]["coef"]
-    th = stages["design:staircase_shifted_lqr"]["tea"][:, 1]
+    ref = stages["design:staircase_quadratic"]["schedule"]["coef"]
+    th = stages["design:staircase_quadratic"]["tea"][:, 1]
     grid = np.linspace(th.min(), th.max(), 201)[:, None] ** np.arange(3)
     k_ref, k_other = (np.einsum("tk,kij->tij", grid, c) for c in (ref, other))
     assert not np.array_equal(other, ref)            # the two kernels did run: their last bits differ
     rel = max(np.linalg.norm(a - b) / np.linalg.norm(b) for a, b in zip(k_other, k_ref))
     assert rel <= 1e-6, rel
+
+
+@slow
+def test_the_report_shows_the_schedule_forms_side_by_side_from_the_same_runs(readme_root, stages, tmp_path):
+    """Issue 41 item 4: the full ``acmm report`` on the README's results root takes its runs (the
+    converged quadratic is not designed again: its ``design.h5`` is the same file) and shows the
+    packaged table, the report's route and the report's quadratic form converged on the path side
+    by side, each row's largest Re λ, path count in the sector and peak momentum those files'; the
+    gain-schedule figure draws the quadratic beside the table."""
+    quadratic = readme_root / "staircase_quadratic" / "design.h5"
+    before = quadratic.stat().st_mtime_ns
+    r = build_report(tmp_path / "out", root=readme_root)
+    assert quadratic.stat().st_mtime_ns == before
+    page = PageParser()
+    page.feed(r.html.read_text(encoding="utf-8"))
+    page.close()
+    table = [t for t in page.tables if t["caption"].startswith("The design routes and schedule forms")]
+    rows = table[0]["rows"]
+    assert len(rows) == 4 and "--fast" not in table[0]["caption"]
+    for row, name, form in zip(rows[1:], ("staircase", "staircase_lqr", "staircase_quadratic"),
+                               ("regional LMI points, table", "sector LQR points, table",
+                                "regional LMI points, quadratic converged on the path")):
+        path = stages[f"design:{name}"]["schedule"]["path"]
+        margin = np.asarray(path["sector_margin"])
+        assert row[0].startswith(form) and f"`{name}`" in row[0]
+        assert float(row[5]) == pytest.approx(np.max(path["max_real"]), abs=5e-4)
+        assert row[6] == f"{np.sum(margin >= 0)} of {margin.size}"
+        assert float(row[7]) == pytest.approx(np.max(stages[f"simulate:{name}"]["levels"]["peak_momentum"]), abs=0.5)
+    assert rows[3][6].startswith("0 of ") and rows[1][6] == "1001 of 1001"
+    assert "the report's quadratic form converged on the path (dashed)" in r.markdown.read_text(encoding="utf-8")
+

@@ -15,7 +15,6 @@ import numpy as np
 
 from acmm.design import schedule as sch
 from acmm.design.path_check import check_path, path_models
-from acmm.design.schedule_refit import REFITS, refit_closed_loop
 from acmm.design.schedule_points import PointSpec
 from acmm.design.schedule_shifted_lqr import refit_shifted_lqr
 from acmm.design.settings import DesignSettings, ScheduleSettings
@@ -121,7 +120,7 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
         return DesignedSchedule(points, None, None, None)
     path = path_models(points, s, sched.n_check) if sched is not None else None
     refinement = None
-    if path is not None and sched.refine_points > 0:
+    if path is not None and sched.refine_points > 0 and sched.form == "table":
         points, refinement = _refine(points, s, sched, path, map_points, progress)
     fit = _schedule(points, s, sched, path)
     check = sch.check_schedule(fit, points, s)
@@ -189,9 +188,8 @@ def _refine(points: list, s: DesignSettings, sched: ScheduleSettings, path, map_
 
 
 def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, path):
-    """The gain schedule of ``points`` (ch. 5.3): least squares (or the table look-up), then the
-    refit ``schedule.fit`` names (closed loop, minimax or the converged shifted-LQR quadratic) on
-    the path's models ``path``."""
+    """The gain schedule of ``points`` (ch. 5.3): least squares (or the table look-up), then, for
+    ``schedule.fit: shifted_lqr``, the converged quadratic on the path's models ``path``."""
     gains = np.array([p.gain.K for p in points])
     teas = np.array([p.tea.theta for p in points])
     if np.ptp(teas[:, 1]) < 1e-6:
@@ -200,14 +198,9 @@ def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, p
                           "differ (is schedule.to the same station as the config itself?)")
     fit = sch.fit_schedule(teas[:, 1], gains, sched.order if sched else 2,
                            sched.form if sched else "polynomial")
-    if sched is None or fit.form != "polynomial" or path is None:
+    if sched is None or sched.fit != "shifted_lqr" or path is None:
         return fit
-    if sched.fit == "shifted_lqr":
-        nx = path.A.shape[1]
-        q0 = s.q0_weight(nx)
-        return refit_shifted_lqr(fit, path, s.orbit_rate, np.zeros((nx, nx)) if q0 is None else q0,
-                                 s.R * np.eye(path.B.shape[2]))
-    if sched.fit in REFITS:
-        fit = refit_closed_loop(fit, path, s.orbit_rate, half_angle_deg=s.sector.half_angle_deg,
-                                **REFITS[sched.fit])
-    return fit
+    nx = path.A.shape[1]
+    q0 = s.q0_weight(nx)
+    return refit_shifted_lqr(fit, path, s.orbit_rate, np.zeros((nx, nx)) if q0 is None else q0,
+                             s.R * np.eye(path.B.shape[2]))

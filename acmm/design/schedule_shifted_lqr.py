@@ -41,6 +41,8 @@ both chained through K = Σ_k u^k a_k.
 """
 from __future__ import annotations
 
+from math import comb
+
 import numpy as np
 from scipy.linalg import schur
 from scipy.linalg.lapack import ztrsyl
@@ -48,7 +50,6 @@ from scipy.optimize import minimize
 
 from acmm.design.path_check import PathModels
 from acmm.design.schedule import ScheduleFit
-from acmm.design.schedule_refit import power_basis, refit_start, refitted, worst_real
 
 #: Decay rate α asked of every local loop, units of n (issue 41 item 4 asks Re λ ≤ −0.25n on the
 #: path; 0.3n leaves room between the fit's TEAs).
@@ -86,6 +87,122 @@ FINAL_BFGS_ITER = 2000
 HESSIAN_STEP = 1e-6
 
 
+def power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
+    """Coefficients in powers of θ of Σ_k a[k]·((θ − c)/h)^k.
+
+    Parameters
+    ----------
+    a : (order+1, ...) array
+        Coefficients in the normalized variable u = (θ − c)/h, lowest power first, units of
+        the polynomial's value.
+    c : float
+        Centre of the normalization, rad.
+    h : float
+        Half-width of the normalization, rad.
+
+    Returns
+    -------
+    (order+1, ...) array
+        The same polynomials' coefficients in powers of θ, units of ``a`` per rad^k.
+    """
+    order = a.shape[0] - 1
+    b = np.zeros_like(a)
+    for k in range(order + 1):
+        for j in range(k + 1):       # ((θ − c)/h)^k = Σ_j C(k,j) θ^j (−c)^(k−j) / h^k
+            b[j] = b[j] + a[k] * comb(k, j) * (-c) ** (k - j) / h ** k
+    return b
+
+
+def refit_start(fit: ScheduleFit, path: PathModels, every: int) -> dict:
+    """The TEAs, models and starting coefficients of a refit of ``fit`` on ``path``.
+
+    Parameters
+    ----------
+    fit : acmm.design.schedule.ScheduleFit
+        The polynomial schedule the refit starts from.
+    path : acmm.design.path_check.PathModels
+        Local models along the path.
+    every : int
+        Use every ``every``-th TEA of ``path`` (the ends included).
+
+    Returns
+    -------
+    dict
+        ``idx`` (the TEAs' indices), ``c0``, ``h0`` (the normalized variable u = (θ2* − c0)/h0,
+        rad), ``d`` (the state scaling), ``As``, ``Bs`` (the scaled models), ``up`` (powers of u
+        at each TEA), ``shape``, ``a0`` (the starting coefficients in u, scaled gains) and ``sc``
+        (their scale: the largest |a0| of each element).
+    """
+    idx = sorted(set(range(0, path.theta2.size, max(1, every))) | {path.theta2.size - 1})
+    th = path.theta2[idx]
+    c0, h0 = 0.5 * (th.max() + th.min()), 0.5 * (th.max() - th.min())
+    d = path.scales
+    As = [path.A[j] / d[:, None] * d[None, :] for j in idx]
+    Bs = [path.B[j] / d[:, None] for j in idx]
+    order = fit.order
+    u = (th - c0) / h0
+    up = u[:, None] ** np.arange(order + 1)[None, :]                     # (T, order+1)
+    # the starting coefficients (fit.coef, powers of θ) in u, scaled gains: sample and refit
+    shape = (order + 1,) + fit.gains.shape[1:]
+    us = np.linspace(-1.0, 1.0, order + 1)
+    ks = np.array([fit.gain(c0 + h0 * x) * d[None, :] for x in us]).reshape(order + 1, -1)
+    a0 = np.linalg.solve(us[:, None] ** np.arange(order + 1)[None, :], ks).reshape(shape)
+    sc = np.broadcast_to(np.maximum(np.abs(a0).max(axis=0, keepdims=True), 1e-12), shape)
+    return {"idx": idx, "c0": c0, "h0": h0, "d": d, "As": As, "Bs": Bs, "up": up, "shape": shape,
+            "a0": a0, "sc": sc}
+
+
+def worst_real(st: dict, x: np.ndarray, n: float) -> float:
+    """Largest Re λ / n of the scheduled loop over the refit's TEAs.
+
+    Parameters
+    ----------
+    st : dict
+        The refit's TEAs, models and starting coefficients (:func:`refit_start`).
+    x : array
+        Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
+    n : float
+        Orbital rate, rad/s.
+
+    Returns
+    -------
+    float
+        The largest real part of a closed-loop pole, units of n.
+    """
+    a = st["a0"] + x.reshape(st["shape"]) * st["sc"]
+    return max(np.max(np.linalg.eigvals(A - B @ np.tensordot(tp, a, axes=1)).real)
+               for A, B, tp in zip(st["As"], st["Bs"], st["up"])) / n
+
+
+def refitted(fit: ScheduleFit, coef: np.ndarray, info: dict, method: str = "shifted_lqr") -> ScheduleFit:
+    """The refitted schedule with its residuals against the design-point gains.
+
+    Parameters
+    ----------
+    fit : acmm.design.schedule.ScheduleFit
+        The schedule that was refitted (its points and gains).
+    coef : (order+1, 3, N) array
+        The new coefficients in powers of θ2*, units of K per rad^k.
+    info : dict
+        The refit's diagnostics (``refit_info``).
+    method : str
+        The refit's name (``ScheduleFit.method``).
+
+    Returns
+    -------
+    acmm.design.schedule.ScheduleFit
+        The polynomial schedule with ``coef``.
+    """
+    order = fit.order
+    P = fit.variable.size
+    vander_th = fit.variable[:, None] ** np.arange(order + 1)[None, :]
+    resid = fit.gains.reshape(P, -1) - vander_th @ coef.reshape(order + 1, -1)
+    rms = np.sqrt(np.mean(resid ** 2, axis=0)).reshape(fit.gains.shape[1:])
+    peak = np.max(np.abs(fit.gains.reshape(P, -1)), axis=0).reshape(fit.gains.shape[1:])
+    rel = np.divide(rms, peak, out=np.zeros_like(rms), where=peak > 0)
+    return ScheduleFit(coef, fit.variable, fit.gains, rms, rel, fit.form, method, info)
+
+
 def _lyapunov(T: np.ndarray, U: np.ndarray, W: np.ndarray, adjoint: bool) -> np.ndarray:
     """X with Mᴴ X + X M + W = 0 (``adjoint``) or M X + X Mᴴ + W = 0, M = U T Uᴴ, T upper
     triangular (complex Schur form), U unitary; by LAPACK's triangular Sylvester solver."""
@@ -98,7 +215,7 @@ def _lyapunov(T: np.ndarray, U: np.ndarray, W: np.ndarray, adjoint: bool) -> np.
 
 class _Cost:
     """F(x) of the module docstring and its gradient at the refit's TEAs (``st`` from
-    :func:`acmm.design.schedule_refit.refit_start`)."""
+    :func:`refit_start`)."""
 
     def __init__(self, st: dict, n: float, Q: np.ndarray, R: np.ndarray, weight: float):
         self.st, self.n, self.Q, self.R, self.weight = st, n, Q, R, weight

@@ -1,6 +1,6 @@
 """The design settings the numerical core takes, built from a Config at one place.
 
-The core (:mod:`acmm.design.schedule`, :mod:`acmm.design.path_check`, :mod:`acmm.design.schedule_refit`,
+The core (:mod:`acmm.design.schedule`, :mod:`acmm.design.path_check`, :mod:`acmm.design.schedule_shifted_lqr`,
 :mod:`acmm.design.sector_lqr`) takes arrays and these small frozen objects, never the whole Config:
 :func:`design_settings` and :func:`schedule_settings` are the only readers of ``cfg.design`` and
 ``cfg.schedule``'s numerical settings on the design path.  Following ``design.sector.sigma``:
@@ -133,7 +133,8 @@ class ScheduleSettings:
     form : str
         ``"polynomial"`` or ``"table"``.
     fit : str
-        ``"least_squares"``, ``"closed_loop"`` or ``"minimax"`` (refit_closed_loop).
+        ``"least_squares"`` or ``"shifted_lqr"`` (the converged quadratic,
+        :func:`acmm.design.schedule_shifted_lqr.refit_shifted_lqr`).
     n_check : int or None
         TEAs along the path of the path check (None: no path check).
     spacing : str
@@ -149,7 +150,7 @@ class ScheduleSettings:
 
     order: int = 2                    # polynomial order of K_ij(θ2*)
     form: str = "polynomial"          # "polynomial" or "table"
-    fit: str = "least_squares"        # or "closed_loop", "minimax" (refit_closed_loop)
+    fit: str = "least_squares"        # or "shifted_lqr" (refit_shifted_lqr)
     n_check: int | None = None        # TEAs along the path of the path check (None: no path)
     spacing: str = "tea"              # blend points evenly spaced in "tea" or in "blend" s
     n_points: int = 12                # blend points including both ends

@@ -137,35 +137,43 @@ class Schedule(SectionModel):
                                   "table look-up, linear in θ2* between design points (ch. 7 alternative)")
     points: list[DesignPoint] = Field([], description="additional named design points")
     order: int = Field(2, strict=True, ge=1, le=4, description="polynomial order of K_ij(θ2*) (the report uses 2)")
-    fit: Literal["least_squares", "closed_loop", "minimax", "shifted_lqr"] = Field(
-        "least_squares", description="how the schedule is fitted to the design points.  least_squares: least "
-                                     "squares on the gains (a table interpolates the gains themselves); closed_loop: "
-                                     "least squares refined against the closed loop along the path (SLSQP on Re λ and "
-                                     "the sector's lines); minimax: the largest Re λ on every path check TEA lowered by "
-                                     "a monotone trust-region linear program "
-                                     "(acmm.design.schedule_refit.refit_closed_loop); shifted_lqr: the report's "
-                                     "polynomial converged, the minimizer of the path's summed LQR cost shifted by "
-                                     "0.3n and rotated into a 70° cone, by Newton's method "
-                                     "(acmm.design.schedule_shifted_lqr.refit_shifted_lqr)")
+    fit: Literal["least_squares", "shifted_lqr"] = Field(
+        "least_squares", description="how a polynomial schedule is fitted.  shifted_lqr (the default of a polynomial with "
+                          "schedule.to): the report's quadratic converged, the coefficients that minimize the "
+                          "path's summed LQR cost shifted by 0.3n and rotated into a 70° cone, by Newton's method "
+                          "to a step tolerance (acmm.design.schedule_shifted_lqr.refit_shifted_lqr); "
+                          "least_squares: least squares on the design points' gains, as the report fits them "
+                          "(the default without schedule.to, which the refit needs for its path; a table "
+                          "interpolates the gains themselves)")
     n_check: int = Field(201, strict=True, ge=2, le=2001, description="TEAs evenly spaced along the blend path at which "
                                                          "the scheduled gain is checked on the local model")
     refine_points: int = Field(
         0, strict=True, ge=0, le=200,
         description="table schedule: at most this many gain nodes added by bisecting, in the blend parameter s, "
                     "each interval between nodes that holds a path check TEA whose sector margin is below "
-                    "refine_margin; the added nodes are schedule gains, not stair-case levels (0: none)")
+                    "refine_margin; the added nodes are schedule gains, not stair-case levels (0: none; a "
+                    "polynomial has no nodes: it ignores this and refine_margin)")
     refine_margin: float = Field(
         0.0, ge=0, le=1, description="sector margin, units of n, that refine_points asks of every path check TEA")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_fit(cls, data):
+        """A polynomial toward ``to`` is converged (shifted_lqr) unless the fit is given."""
+        if isinstance(data, dict) and data.get("fit") is None:
+            polynomial = data.get("form", "polynomial") == "polynomial" and data.get("to") is not None
+            data = {**data, "fit": "shifted_lqr" if polynomial else "least_squares"}
+        return data
 
     @model_validator(mode="after")
     def _fit_of_the_form(self):
         if self.form == "table" and self.fit != "least_squares":
             raise ValueError(f"fit: {self.fit} refines a polynomial schedule; form: table interpolates the "
                              "design points' gains themselves (give one or the other)")
-        if self.refine_points and self.form != "table":
-            raise ValueError("refine_points adds nodes to a table schedule (form: table); a polynomial has "
-                             "no nodes to add (give schedule.refine_points=0 with form: polynomial)")
-        if self.refine_points and self.to is None:
+        if self.fit == "shifted_lqr" and self.to is None:
+            raise ValueError("fit: shifted_lqr refits the polynomial along the blend path toward schedule.to, "
+                             "which is not given")
+        if self.refine_points and self.form == "table" and self.to is None:
             raise ValueError("refine_points bisects the blend toward schedule.to, which is not given")
         return self
 

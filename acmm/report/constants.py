@@ -22,3 +22,8 @@ SECTIONS = [
     ("determinism", "Determinism"),
     ("provenance", "Provenance"),
 ]
+
+
+#: the report's stair-cases (config keys of :func:`acmm.report.gather.report_configs`): the
+#: packaged one, on the report's route, in the report's quadratic form
+STAIRCASES = ("staircase", "staircase_lqr", "staircase_quadratic")

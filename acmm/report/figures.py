@@ -10,12 +10,15 @@ import numpy as np
 from acmm.report.constants import AXES
 from acmm.model.linearize import STATE_NAMES, state_units
 from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
+from acmm.report.numbers import decoded
 from acmm.design.schedule import schedule_gain
 from matplotlib.ticker import MaxNLocator
 
 
-def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
-    """K(i, j) vs pitch TEA for the 24 columns: LQR gains (markers) and the schedule (lines).
+def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path, other: dict | None = None):
+    """K(i, j) vs pitch TEA for the 24 columns: the design points' gains (markers) and the
+    schedule (lines), and another schedule of the same path (dashed), e.g. the quadratic beside
+    the table.
 
     Parameters
     ----------
@@ -26,6 +29,8 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
         DRF mode of the 24 states (their units).
     figdir : pathlib.Path
         Folder of the figures.
+    other : dict, optional
+        Another ``design.h5`` of the same path, its schedule drawn dashed.
 
     Returns
     -------
@@ -39,6 +44,9 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     th = tea[:, 1]
     fine = np.linspace(th.min(), th.max(), 120)
     kf = np.array([schedule_gain(form, sc["coef"], sc["variable"], K, t) for t in fine])
+    ko = None if other is None else np.array([
+        schedule_gain(other["attrs"].get("schedule_form", "polynomial"), other["schedule"]["coef"],
+                      other["schedule"]["variable"], other["K"], t) for t in fine])
     units = state_units(drf_mode)
     fig, axs = plt.subplots(6, 4, figsize=(11, 14), sharex=True)
     for j, ax in enumerate(axs.flat):
@@ -46,6 +54,9 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
             ax.plot(np.degrees(th), K[:, i, j], "o", ms=3, color=COLORS[i], label=f"K({i + 1},{j + 1}) point")
             ax.plot(np.degrees(fine), kf[:, i, j], "-", color=COLORS[i], lw=1,
                     label=f"K({i + 1},{j + 1}) schedule")
+            if ko is not None:
+                ax.plot(np.degrees(fine), ko[:, i, j], "--", color=COLORS[i], lw=0.8,
+                        label=f"K({i + 1},{j + 1}) other")
         ax.set_title(f"K(i,{j + 1}): {STATE_NAMES[j]}", fontsize=8)
         ax.set_ylabel(f"ft·lbf / ({units[j]})", fontsize=6.5)
         ax.tick_params(labelsize=6.5)
@@ -54,15 +65,24 @@ def fig_gain_schedule(design: dict, drf_mode: str, figdir: Path):
     for ax in axs[-1]:
         ax.set_xlabel("pitch TEA θ2* (deg)")
     handles, _ = axs[0, 0].get_legend_handles_labels()
-    labels = [f"{kind}, row i = {i + 1} ({AXES[i]} torque)" for i in range(3) for kind in ("point gain", "schedule")]
+    kinds = ("point gain", "schedule") + (() if ko is None else ("other schedule (dashed)",))
+    labels = [f"{kind}, row i = {i + 1} ({AXES[i]} torque)" for i in range(3) for kind in kinds]
     fig.legend(handles, labels, loc="upper center", ncol=3, fontsize=7, bbox_to_anchor=(0.5, 0.985))
-    what = (f"the table look-up (K linear in θ2* between its {len(th)} nodes)" if form == "table"
-            else f"the order-{sc['coef'].shape[0] - 1} polynomial schedule")
-    fig.suptitle(f"Gain schedule vs TEA: the design points' gains (markers) and {what} (lines); "
-                 "rows i = roll, pitch, yaw torque", y=0.995, fontsize=9)
+    beside = "" if ko is None else f";\nother schedule: {_form_name(other)} (dashed)"
+    fig.suptitle(f"Gain schedule vs TEA: the design points' gains (markers), {_form_name(design)} (lines){beside}; "
+                 "rows i = roll, pitch, yaw torque", y=0.998, fontsize=9)
     # a fixed layout: tight_layout on 24 panels costs as much as drawing them (issue 16)
     fig.subplots_adjust(left=0.075, right=0.985, bottom=0.04, top=0.93, wspace=0.42, hspace=0.32)
     return save(fig, figdir, "gain_schedule")
+
+
+def _form_name(design: dict) -> str:
+    """What the schedule of ``design`` (``design.h5`` as read) is, in words."""
+    sc = design["schedule"]
+    if design["attrs"].get("schedule_form", "polynomial") == "table":
+        return f"the table look-up (K linear in θ2* between its {len(design['tea'])} nodes)"
+    how = {"shifted_lqr": ", converged on the path"}.get(decoded(sc.get("fit_method", b"least_squares")), "")
+    return f"the order-{sc['coef'].shape[0] - 1} polynomial{how}"
 
 
 def _sector(ax, sigma, half_angle_deg, xmin):

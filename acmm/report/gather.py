@@ -19,6 +19,7 @@ from acmm.report.stage_results import (Failed, StageRun, stage_record, try_attrs
 import yaml
 from acmm.io.config import parse_config
 from acmm.report.runner import Task, run_tasks
+from acmm.report.constants import STAIRCASES
 from acmm.simulate.warmup import warm_up
 from acmm.report.figure_style import warm
 from acmm import PACKAGED_CONFIGS
@@ -75,26 +76,32 @@ class Gathered:
 
 
 def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
-    """The six packaged configs of the report and the stair-case on the report's route, keyed by
-    config name (``--fast``: short stair-case).
+    """The six packaged configs of the report, the stair-case on the report's route and in the
+    report's quadratic form, keyed by config name (``--fast``: short stair-case, and no quadratic:
+    its refit is a minute of design).
 
     Parameters
     ----------
     root : pathlib.Path, optional
         Results root (default: each config's ``output.root``).
     fast : bool, optional
-        The stair-case config with :data:`FAST_ORBITS` orbits (:func:`acmm_config`).
+        The stair-case config with :data:`FAST_ORBITS` orbits (:func:`acmm_config`), without
+        ``"staircase_quadratic"``.
 
     Returns
     -------
     dict
         ``"mb3"``, ``"mb3_decoupled"``, ``"ac"``, ``"staircase"`` → acmm config (Table 1, ch. 5–6);
         ``"staircase_lqr"`` → the stair-case on the report's route (:func:`reports_route`);
+        ``"staircase_quadratic"`` → its converged quadratic schedule (:func:`quadratic_form`; not
+        with ``fast``);
         ``"qpp_siso"``, ``"qpp_manipulator"`` → qpp config (ch. 13–14).
     """
     cfgs = {name: acmm_config(name, root, fast=fast and name == "staircase")
             for name in ("mb3", "mb3_decoupled", "ac", "staircase")}
     cfgs["staircase_lqr"] = reports_route(cfgs["staircase"])
+    if not fast:
+        cfgs["staircase_quadratic"] = quadratic_form(cfgs["staircase"])
     cfgs.update({name: qpp_config(name, root) for name in ("qpp_siso", "qpp_manipulator")})
     return cfgs
 
@@ -120,6 +127,29 @@ def reports_route(cfg):
         data["schedule"]["refine_points"] = 0       # its gains are chosen discretely: bisection does not converge
     data["description"] = f"{data['description']} [the report's route: sector LQR points]"
     return parse_config(data, source=f"{cfg.name} on the report's route")
+
+
+def quadratic_form(cfg):
+    """The stair-case ``cfg`` with the report's schedule form, one second-order polynomial in θ2*
+    per gain (ch. 5.3), converged on the path (``schedule.form: polynomial``, whose default fit is
+    ``shifted_lqr``), named ``<name>_quadratic``: the form beside the packaged table.
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The stair-case config (:func:`acmm.report.stage_results.acmm_config`).
+
+    Returns
+    -------
+    acmm.io.config.Config
+        The same config with the polynomial schedule and its name.
+    """
+    data = cfg.model_dump(mode="json")
+    data["name"] = f"{data['name']}_quadratic"
+    data["schedule"]["form"] = "polynomial"
+    data["schedule"].pop("fit")                     # the form's default: the converged quadratic
+    data["description"] = f"{data['description']} [the report's quadratic schedule, converged]"
+    return parse_config(data, source=f"{cfg.name} in the report's quadratic form")
 
 
 def _design_task(cfg, rerun, donors):
@@ -162,7 +192,7 @@ def _sweep_task(root, fast, rerun, workers):
 #: rough relative run times of the stages on one idle core, only to order the parallel tasks (the
 #: stair-case's regional LMI points, in a report worker designed one after another, dominate)
 _COST = {"design:staircase": 25.0, "simulate:staircase": 0.4, "design:staircase_lqr": 1.2,
-         "simulate:staircase_lqr": 0.4, "qpp design:qpp_siso": 2.0,
+         "simulate:staircase_lqr": 0.4, "design:staircase_quadratic": 25.0, "simulate:staircase_quadratic": 0.4, "qpp design:qpp_siso": 2.0,
          "qpp simulate:qpp_siso": 1.0, "qpp design:qpp_manipulator": 1.8, "qpp simulate:qpp_manipulator": 1.0,
          "sweep": 2.7}
 
@@ -198,13 +228,15 @@ def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rer
         ``(result, note, wall s)``), or a :class:`Failed` when it raised a user-facing error or
         the stage it waits for failed (a bug propagates).
     """
-    full = acmm_config("staircase", root)
+    # a --fast stair-case takes the design of the full one when it has the same design hash
+    full = report_configs(root) if fast else cfgs
     tasks = []
-    for name in ("mb3", "mb3_decoupled", "ac", "staircase", "staircase_lqr"):
-        donors = [full.run_dir()] if cfgs[name].name != full.name else []
+    stairs = [name for name in STAIRCASES if name in cfgs]
+    for name in ("mb3", "mb3_decoupled", "ac", *stairs):
+        donors = [full[name].run_dir()] if cfgs[name].name != full[name].name else []
         tasks.append(_stage(f"design:{name}", _design_task, (), (cfgs[name], rerun, donors),
                             _COST.get(f"design:{name}", 0.1)))
-    for name in ("mb3", "mb3_decoupled", "staircase", "staircase_lqr"):
+    for name in ("mb3", "mb3_decoupled", *stairs):
         tasks.append(_stage(f"simulate:{name}", _simulate_task, (f"design:{name}",), (cfgs[name], rerun),
                             _COST.get(f"simulate:{name}", 0.1) if not fast else 0.1))
     for name in ("qpp_siso", "qpp_manipulator"):

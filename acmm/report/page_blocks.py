@@ -238,14 +238,15 @@ def block_schedule_path(r: dict) -> str:
     mr, mg, dm = (np.asarray(pa[k]) for k in ("max_real", "sector_margin", "disk_margin"))
     i = int(np.argmin(dm))
     form = decoded(d["attrs"]["schedule_form"]) if "attrs" in d and "schedule_form" in d["attrs"] else (
-        "polynomial" if "refit_iterations" in sc else "table")
+        "polynomial" if "refit_converged" in sc else "table")
     rows = [["schedule form", "table look-up, K linear in θ2* between the design points" if form == "table"
              else "2nd-order polynomial in θ2*"]]
-    if "refit_iterations" in sc:
+    if "refit_converged" in sc:
         rows += [
             ["least-squares fit before the refit: largest Re λ over the refit's "
              f"{int(sc['refit_n_tea'])} TEAs", f"{fixed(sc['refit_max_real_before'], 2, sign=True)}n"],
-            ["closed-loop refit (SLSQP iterations to convergence)", str(int(sc["refit_iterations"]))]]
+            ["converged quadratic (homotopy stages, Newton steps to the step tolerance)",
+             f"{int(sc['refit_homotopy_stages'])}, {int(sc['refit_iterations'])}"]]
     rows += [
         ["largest Re λ of the scheduled local loop", f"**{fixed(mr.max())}n**"],
         ["worst sector margin", f"{fixed(mg.min(), 2)}n"],
@@ -254,7 +255,7 @@ def block_schedule_path(r: dict) -> str:
          f"{fixed(dm[i])} at θ2* = {fixed(th[i], 1)}° (±{sig(pa['disk_gain_margin'][i], 2)} dB, "
          f"±{sig(np.degrees(pa['disk_phase_margin'][i]), 2)}°)"],
     ]
-    if "refit_iterations" in sc:
+    if "refit_converged" in sc:
         rows.append(["largest RMS deviation of a refined polynomial from the LQR gains, / max\\|K_ij\\| "
                      "(`schedule/rel_residual`)", sig(np.max(sc["rel_residual"]), 2)])
     return markdown_table([f"along the path ({th.size} TEAs, {fixed(th[0], 1)}° … {fixed(th[-1], 1)}°)", "value"], rows)
@@ -394,15 +395,15 @@ def block_staircase_routes(r: dict) -> str:
     """
     labels = {"staircase": "regional LMI points, table (packaged)",
               "staircase_lqr": "sector LQR points (the report's route), table",
-              "staircase_quadratic": "sector LQR points, quadratic refit on the closed loops",
-              "staircase_shifted_lqr": "regional LMI points, quadratic converged on the path's shifted LQR cost"}
+              "staircase_lqr_quadratic": "sector LQR points, the report's quadratic by least squares (ch. 5.3)",
+              "staircase_quadratic": "regional LMI points, quadratic converged on the path's shifted LQR cost"}
     rows = []
     for name, label in labels.items():
         d, sim = r[f"design:{name}"], r[f"simulate:{name}"]
         n = r[f"config:{name}"].orbit_rate
         pa, sc, g = d["schedule"]["path"], d["schedule"], d.get("dwell")
         energy = [point_energy(d["points"][key], n) for key in sorted(d["points"])]
-        tau = "no certificate" if g is None or "tau_star" not in g else (
+        tau = "no certificate" if g is None or "tau_star" not in g or not np.isfinite(float(g["tau_star"])) else (
             f"{fixed(float(g['tau_star']), 2)} orbit" + ("" if np.all(np.asarray(g["dwell"]) > float(g["tau_star"]))
                                                          else " (NOT certified)"))
         refit = ""
@@ -412,18 +413,17 @@ def block_staircase_routes(r: dict) -> str:
                      "cone at " + f"{int(sc['refit_n_tea'])} TEAs; "
                      + ("Newton's method converged" if float(sc["refit_converged"]) else
                         "NOT converged: " + decoded(sc["refit_message"])) + ")")
-        elif "refit_converged" in sc:
-            refit = (f" (the least-squares fit it starts from: largest Re λ "
-                     f"{fixed(float(sc['refit_max_real_before']), 2, sign=True)}n on the refit's TEAs; SLSQP "
-                     + ("converged" if float(sc["refit_converged"]) else "stopped: " + decoded(sc["refit_message"]))
-                     + "; where it stops depends on rounding)")
-        loop = [f"{fixed(np.max(pa['max_real']))}n", f"{fixed(np.min(pa['sector_margin']), 2)}n",
-                fixed(np.min(pa["disk_margin"])), sig(np.max(sim["levels"]["peak_momentum"])), tau]
+        verdict = decoded(sim["attrs"]["verdict"])
+        peak = sig(np.max(sim["levels"]["peak_momentum"])) if verdict != "diverged" else (
+            f"diverged at orbit {fixed(float(sim['attrs']['stop_time_orbits']), 1)}")
+        inside = int(np.sum(np.asarray(pa["sector_margin"]) >= 0))
+        loop = [f"{fixed(np.max(pa['max_real']), sign=True)}n", f"{fixed(np.min(pa['sector_margin']), 2)}n ({inside})",
+                fixed(np.min(pa["disk_margin"])), peak, tau]
         rows.append([label + refit, f"{np.asarray(pa['theta2']).size}", *loop[:3],
                      sig(np.max(d["max_eig_condition"]), 2), sci(np.min(d["robustness_radius_elementwise"])),
                      sig(max(energy), 3), *loop[3:]])
     return markdown_table(["stair-case (route, schedule)", "path TEAs", "largest Re λ on the path",
-                           "worst sector margin on the path", "smallest disk margin", "κ max (points)",
+                           "worst sector margin on the path (TEAs with every pole in the sector)", "smallest disk margin", "κ max (points)",
                            "radius (first order, elementwise, min over points)", "energy (max over points)",
                            "peak \\|h\\| (ft·lbf·s)", "τ* (dwell 10.8 orbit)"], rows)
 

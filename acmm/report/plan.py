@@ -138,6 +138,7 @@ def _simulate(c):
 #: CPU of the part in a warmed worker on the 2-core machine, issue 16)
 _STAIR, _MB3, _DEC = _design("staircase"), _design("mb3"), _design("mb3_decoupled")
 _SIM = _simulate("staircase")
+_QUAD = _design("staircase_quadratic")
 _Q13 = ("qpp design:qpp_siso", "qpp simulate:qpp_siso")
 _Q14 = ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator")
 PARTS = [
@@ -145,9 +146,10 @@ PARTS = [
     ("schedule", "schedule", schedule.summary, (_STAIR,), (), 0.2),
     ("schedule/paths", "schedule", schedule.path_figures, (_STAIR,), (), 0.75),
     ("schedule/routes", "schedule", schedule.routes,
-     (_STAIR, _design("staircase_lqr"), _SIM, _simulate("staircase_lqr")), (), 0.1),
+     (_STAIR, _design("staircase_lqr"), _QUAD, _SIM, _simulate("staircase_lqr"),
+      _simulate("staircase_quadratic")), (), 0.1),
     ("poles", "schedule", schedule.true_poles, (_MB3, _DEC), (), 0.05),
-    ("schedule/gains", "schedule", schedule.gain_figure, (_STAIR,), (), 1.6),
+    ("schedule/gains", "schedule", schedule.gain_figure, (_STAIR, _QUAD), (), 1.8),
     ("schedule/poles", "schedule", schedule.pole_figure, (_STAIR, _MB3, _DEC), ("poles",), 0.3),
     ("claim1", "claim1", claim1.build, (_MB3, _DEC, _simulate("mb3"), _simulate("mb3_decoupled")), ("poles",), 0.85),
     ("staircase", "staircase", staircase.summary, (_SIM,), (), 0.1),

@@ -228,13 +228,13 @@ def schedule_items(r) -> dict:
         "check_max_real": Dataset(r.check.max_real, "n", "largest closed-loop Re λ with the scheduled gain",
                                   dims=("check",)),
         "fit_method": Dataset(np.array(r.fit.method, dtype="S"), "1",
-                              "least_squares, closed_loop (least squares refined on the path) or minimax "
-                              "(the largest Re λ on the path minimized)"),
+                              "least_squares, or shifted_lqr (the quadratic converged on the path's "
+                              "shifted LQR cost)"),
     }
     for key, val in r.fit.refit_info.items():
         value = np.array(val.encode("utf-8"), dtype="S") if isinstance(val, str) else float(val)
         sched[f"refit_{key}"] = Dataset(value, "n" if key.startswith("max_real") else "1",
-                                        f"closed-loop refit: {key.replace('_', ' ')}")
+                                        f"refit on the path: {key.replace('_', ' ')}")
     rf = r.refinement
     if rf is not None:
         sched["refine_added"] = Dataset(rf.added, "1", "table nodes added between the levels where the scheduled "

@@ -6,6 +6,7 @@ import numpy as np
 from acmm.design.dwell import NOT_COVERED
 from acmm.design.regional_lmi import control_energy
 from acmm.model.state_scaling import torque_scale
+from acmm.report.constants import STAIRCASES
 from acmm.report.context import SectionWriter
 from acmm.report.numbers import decoded
 from acmm.report.figures import fig_gain_schedule, fig_pole_maps
@@ -117,19 +118,19 @@ def point_energy(p: dict, n: float) -> float:
 
 
 def routes(ctx: SectionWriter) -> None:
-    """The packaged stair-case (its route, normally regional LMI points) beside the same
-    stair-case on the report's route (sector LQR points), both table look-up schedules judged on
-    the same path TEAs, simulated and certified (issue 32 item 5; the guide's routes table has the
-    report's quadratic form too).
+    """The packaged stair-case (its route, normally regional LMI points, a table look-up schedule)
+    beside the same stair-case on the report's route (sector LQR points, the same form) and in the
+    report's quadratic form converged on the path (:func:`acmm.report.gather.quadratic_form`),
+    judged on the same path TEAs, simulated and certified (issue 32 item 5, issue 41 item 4).
 
     Parameters
     ----------
     ctx : acmm.report.context.SectionWriter
-        The two configs' ``design.h5`` and ``sim.h5``.
+        The three configs' ``design.h5`` and ``sim.h5``.
     """
     cfgs = ctx.g.configs
     rows = []
-    for key in ("staircase", "staircase_lqr"):
+    for key in (k for k in STAIRCASES if k in cfgs):
         cfg = cfgs[key]
         d, sim = ctx.data("acmm design:" + cfg.name), ctx.data("acmm simulate:" + cfg.name)
         pts = [d["points"][k] for k in sorted(d["points"])]
@@ -137,19 +138,31 @@ def routes(ctx: SectionWriter) -> None:
         energy = max(point_energy(p, cfg.orbit_rate) for p in pts)
         pa, g = d["schedule"].get("path", {}), d.get("dwell", {})
         tau = f"{float(g['tau_star']):.2f} orbit" if "tau_star" in g else "—"
-        rows.append([("regional LMI points" if lmi else "sector LQR points") + f" (`{cfg.name}`"
-                     + (", packaged)" if key == "staircase" else ", the report's route)"),
+        form = "table" if d["attrs"].get("schedule_form") == "table" else {
+            "shifted_lqr": "quadratic converged on the path"}.get(
+            decoded(d["schedule"].get("fit_method", b"least_squares")), "quadratic, least squares")
+        verdict = sim["attrs"].get("verdict", "")
+        peak = (f"{np.max(sim['levels']['peak_momentum']):.0f}" if verdict != "diverged" else
+                f"diverged at orbit {float(sim['attrs']['stop_time_orbits']):.1f}")
+        rows.append([("regional LMI points" if lmi else "sector LQR points") + f", {form} (`{cfg.name}`"
+                     + {"staircase": ", packaged)", "staircase_lqr": ", the report's route)"}.get(key, ")"),
                      f"{max(float(p['max_eig_condition']) for p in pts):.2g}",
                      f"{min(float(p['robustness_radius_elementwise']) for p in pts):.1e}",
                      f"{min(float(p['lmi']['random_radius']) for p in pts):.1e}" if lmi else "—",
                      f"{energy:.3g}",
                      f"{np.max(pa['max_real']):+.3f}" if "max_real" in pa else "—",
-                     f"{np.max(sim['levels']['peak_momentum']):.0f}", tau])
-    ctx.doc.table(["stair-case (route)", "κ max (points)", "robustness radius (first order, elementwise, min)",
-                   "radius (random re-check, min)", "control energy (max over points)",
-                   "largest Re λ on the path (n)", "peak |h| (ft·lbf·s)", "certified dwell τ*"], rows,
-                  "The two design routes on the stair-case (table look-up schedules); the ±30 % Monte Carlo "
-                  "of each route's fixed MB3 and AC gains is in the guide (docs/results/robustness.md)")
+                     (f"{np.sum(np.asarray(pa['sector_margin']) >= 0)} of {np.size(pa['sector_margin'])}"
+                      if "sector_margin" in pa else "—"),
+                     peak, tau])
+    ctx.doc.table(["stair-case (route, schedule)", "κ max (points)",
+                   "robustness radius (first order, elementwise, min)", "radius (random re-check, min)",
+                   "control energy (max over points)", "largest Re λ on the path (n)",
+                   "path TEAs with every pole in the sector", "peak |h| (ft·lbf·s)", "certified dwell τ*"], rows,
+                  "The design routes and schedule forms on the stair-case: the packaged table, the report's "
+                  "route with the same table, and the report's quadratic form converged on the path; the ±30 % "
+                  "Monte Carlo of each route's fixed MB3 and AC gains is in the guide (docs/results/robustness.md)"
+                  + ("" if "staircase_quadratic" in cfgs else "; the quadratic is not designed by a --fast report "
+                     "(its refit is a minute of design)"))
 
 
 def _dwell(ctx: SectionWriter, g: dict, n: float) -> None:
@@ -215,8 +228,8 @@ def figures(ctx: SectionWriter, ev: np.ndarray) -> None:
 
 
 def gain_figure(ctx: SectionWriter) -> None:
-    """The 72 gains of the stair-case design points and their schedule (Figs 5.3–5.26,
-    :func:`acmm.report.figures.fig_gain_schedule`).
+    """The 72 gains of the stair-case design points, their schedule and the report's quadratic form
+    converged on the path (Figs 5.3–5.26, :func:`acmm.report.figures.fig_gain_schedule`).
 
     Parameters
     ----------
@@ -224,9 +237,12 @@ def gain_figure(ctx: SectionWriter) -> None:
         The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
     """
     cfg = ctx.g.configs["staircase"]
-    files = fig_gain_schedule(ctx.data("acmm design:" + cfg.name), cfg.design.drf_mode, ctx.figdir)
-    ctx.doc.fig("gain_schedule", "Gain schedule: the 72 gains K(i, j) vs pitch TEA (Figs 5.3–5.26 analogue)",
-                files)
+    quad = ctx.g.configs.get("staircase_quadratic")          # (not in a --fast report)
+    quad = None if quad is None else ctx.data("acmm design:" + quad.name)
+    files = fig_gain_schedule(ctx.data("acmm design:" + cfg.name), cfg.design.drf_mode, ctx.figdir, quad)
+    ctx.doc.fig("gain_schedule", "Gain schedule: the 72 gains K(i, j) vs pitch TEA (Figs 5.3–5.26 analogue)"
+                + ("" if quad is None else ", the packaged schedule and the report's quadratic form converged on "
+                   "the path (dashed)"), files)
 
 
 def pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:

@@ -34,7 +34,7 @@ def test_a_blend_whose_end_is_on_another_branch_of_equilibria_is_flagged(tmp_run
         "name: fold\ninertia: {I11: 10.0e6, I22: 3.0e6, I33: 11.0e6}\norbit_rate: 0.0011\n"
         "disturbance: {bias_from_tea: [0, -40.0, 0]}\n"
         "schedule:\n  to: {name: fend, inertia: {I11: 10.0e6, I22: 3.0e6, I33: 12.0e6}, "
-        f"disturbance: {{bias_from_tea: [0, -55.0, 0]}}}}\n  n_points: 5\n  spacing: {spacing}\n"
+        f"disturbance: {{bias_from_tea: [0, -55.0, 0]}}}}\n  n_points: 5\n  spacing: {spacing}\n  fit: least_squares\n"
         "output: {figures: false}\n")
     r = run_acmm("design", "fold.yaml")
     assert r.exit_code == 0, r.output         # the end keeps the TEA it asks for (a result) ...
@@ -53,7 +53,7 @@ def test_no_equilibrium_on_the_blend_names_the_blend(tmp_runs, run_acmm, spacing
         "name: s\ninertia: {I11: 10.0e6, I22: 3.0e6, I33: 11.0e6}\norbit_rate: 0.0011\n"
         "disturbance: {bias_from_tea: [1.0, -30.0, 1.5]}\n"
         "schedule:\n  to: {name: endst, inertia: {I11: 30.0e6, I22: 9.0e6, I33: 36.0e6}, "
-        f"disturbance: {{bias: [0, 500, 0]}}}}\n  n_points: 5\n  spacing: {spacing}\noutput: {{figures: false}}\n")
+        f"disturbance: {{bias: [0, 500, 0]}}}}\n  n_points: 5\n  spacing: {spacing}\n  fit: least_squares\noutput: {{figures: false}}\n")
     r = run_acmm("design", "s.yaml")
     assert r.exit_code == 2, r.output
     assert "on the blend toward schedule.to" in r.stderr and "no torque-equilibrium" in r.stderr

@@ -8,13 +8,13 @@ from acmm.design import design_core
 from acmm.design import sector_lqr
 from acmm.design import schedule
 from acmm.design import path_check as pc
-from acmm.design import schedule_refit, disk_margin
+from acmm.design import schedule_shifted_lqr, disk_margin
 from acmm.design import schedule_points as sp
 from acmm.io.config import load_config
 from acmm.design.settings import DesignSettings, ScheduleSettings, Sector, design_settings, schedule_settings
 
 CORE = [schedule.design_one, schedule.sector_design, schedule.check_schedule, pc.path_models,
-        sp.schedule_specs, schedule.fit_schedule, pc.check_path, schedule_refit.refit_closed_loop,
+        sp.schedule_specs, schedule.fit_schedule, pc.check_path, schedule_shifted_lqr.refit_shifted_lqr,
         disk_margin.disk_margin_input, design_core.design_schedule, sector_lqr.sector_lqr, sector_lqr.sector_margin]
 
 

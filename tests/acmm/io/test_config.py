@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 import yaml
 
+from acmm.design.settings import schedule_settings
 from acmm.io.config import Config, load_config, parse_config
 from acmm import PACKAGED_CONFIGS
 from acmm_qpp.configio import packaged_config_path
@@ -377,15 +378,39 @@ def test_a_path_is_only_ever_that_file_never_a_packaged_config(tmp_path, monkeyp
     assert load_config(given.removeprefix("./").removeprefix("sub/")).name == given.split("/")[-1].removesuffix(".yaml")
 
 
-@pytest.mark.parametrize("refit", ["closed_loop", "minimax"])
-def test_a_table_schedule_takes_no_closed_loop_refit(refit):
-    """The closed-loop and minimax refits refine a polynomial; a table passes through the points'
-    gains: asking for both is refused (it used to drop the refit silently and label the table a
+def test_a_table_schedule_takes_no_refit():
+    """The converged quadratic refines a polynomial; a table passes through the points' gains:
+    asking for both is refused (it used to drop the refit silently and label the table a
     polynomial)."""
-    with pytest.raises(ConfigError, match=f"schedule: fit: {refit} refines a polynomial"):
-        load_config("staircase", ["schedule.form=table", f"schedule.fit={refit}"])
+    with pytest.raises(ConfigError, match="schedule: fit: shifted_lqr refines a polynomial"):
+        load_config("staircase", ["schedule.form=table", "schedule.fit=shifted_lqr"])
     cfg = load_config("staircase", ["schedule.form=table", "schedule.fit=least_squares"])
     assert cfg.schedule.form == "table"
+
+
+@pytest.mark.parametrize("removed", ["closed_loop", "minimax"])
+def test_the_unconverged_refits_are_gone(removed):
+    with pytest.raises(ConfigError, match="schedule.fit: Input should be 'least_squares' or 'shifted_lqr'"):
+        load_config("staircase", ["schedule.form=polynomial", f"schedule.fit={removed}"])
+
+
+def test_a_polynomial_toward_a_station_is_the_converged_quadratic():
+    """``schedule.form=polynomial`` alone selects the converged quadratic (issue 41 item 4), on
+    the packaged stair-case too (its table-only refine_points is not asked of a polynomial); a
+    polynomial without ``schedule.to`` has no path to refit on and keeps least squares, and
+    asking it for the refit is refused."""
+    cfg = load_config("staircase", ["schedule.form=polynomial"])
+    assert (cfg.schedule.form, cfg.schedule.fit) == ("polynomial", "shifted_lqr")
+    assert schedule_settings(cfg).fit == "shifted_lqr"
+    assert load_config("staircase", ["schedule.form=polynomial", "schedule.fit=least_squares"]).schedule.fit \
+        == "least_squares"
+    assert load_config("staircase").schedule.fit == "least_squares"          # the packaged table
+    data = yaml.safe_load(packaged_config_path("staircase.yaml", PACKAGED_CONFIGS).read_text())
+    data["schedule"] = {"form": "polynomial", "points": [{"name": "ac", "inertia": data["schedule"]["to"]["inertia"]}]}
+    assert parse_config(data).schedule.fit == "least_squares"
+    with pytest.raises(ConfigError, match="fit: shifted_lqr refits the polynomial along the blend path toward "
+                                          "schedule.to, which is not given"):
+        parse_config({**data, "schedule": {**data["schedule"], "fit": "shifted_lqr"}})
 
 
 # ---------------------------------------------------------------- schedule.to by reference

@@ -155,20 +155,26 @@ def test_claim1_numbers_come_from_the_simulation(fast_report, page):
     assert "claim 1 REPRODUCED" in r.markdown.read_text(encoding="utf-8")
 
 
-def test_the_two_design_routes_side_by_side_come_from_their_runs(fast_report, page):
-    """The report shows the packaged stair-case (regional LMI points) beside the report's route
-    (issue 32 item 5): each row's κ and peak CMG momentum read back from its own files."""
+def test_the_design_routes_side_by_side_come_from_their_runs(fast_report, page):
+    """The report shows the packaged stair-case (regional LMI points, table) beside the report's
+    route (issue 32 item 5): each row's κ, path count in the sector and peak CMG momentum read
+    back from its own files; a --fast report says it leaves the quadratic out (the full report's
+    three rows: tests/test_readme_numbers.py)."""
     import h5py
 
     base, _ = fast_report
-    rows = _table(page, "The two design routes on the stair-case")
-    assert len(rows) == 3 and "regional LMI points" in rows[1][0] and "sector LQR points" in rows[2][0]
+    table = [t for t in page.tables if t["caption"].startswith("The design routes and schedule forms")]
+    assert table and "the quadratic is not designed by a --fast report" in table[0]["caption"]
+    rows = table[0]["rows"]
+    assert len(rows) == 3 and "regional LMI points, table" in rows[1][0] and "sector LQR points, table" in rows[2][0]
     for row, name in zip(rows[1:], ("staircase_fast", "staircase_fast_lqr")):
         with h5py.File(base / "runs" / name / "design.h5", "r") as f:
             kappa = max(float(f["points"][k]["max_eig_condition"][()]) for k in f["points"])
+            margin = f["schedule/path/sector_margin"][()]
         with h5py.File(base / "runs" / name / "sim.h5", "r") as f:
             peak = float(np.max(f["levels/peak_momentum"][()]))
-        assert float(row[1]) == pytest.approx(kappa, rel=0.05) and float(row[6]) == pytest.approx(peak, abs=0.5)
+        assert float(row[1]) == pytest.approx(kappa, rel=0.05) and float(row[7]) == pytest.approx(peak, abs=0.5)
+        assert row[6] == f"{np.sum(margin >= 0)} of {margin.size}"
     assert float(rows[1][1]) <= 2e4 < float(rows[2][1])          # the LMI points are the better conditioned
 
 

@@ -11,6 +11,7 @@ import re
 import shutil
 
 import h5py
+import mpmath as mp
 import numpy as np
 import pytest
 import scipy.linalg as sla
@@ -58,25 +59,37 @@ def test_every_design_point_in_sector_with_exact_lqr_gain(staircase_lqr):
         assert np.max(np.abs(k_again - res.K)) <= 1e-8 * np.max(np.abs(res.K))
 
 
+def _kappa_mp(acl: np.ndarray) -> np.ndarray:
+    """Eigenvalue condition numbers ‖w_i‖‖v_i‖ (W = V⁻¹) of ``acl`` in 30-digit arithmetic (mpmath)."""
+    mp.mp.dps = 30
+    _, vr = mp.eig(mp.matrix(acl.tolist()), left=False, right=True)
+    vl = mp.inverse(vr)
+    return np.array([float(mp.norm(vl[i, :], 2) * mp.norm(vr[:, i], 2)) for i in range(vr.rows)])
+
+
 def test_design_points_well_conditioned_with_margin(staircase_lqr):
     """Every stair-case point (MB3 and AC are its ends): every pole ≥ 0.1n inside the sector and
-    the largest eigenvalue condition number in the stored state scaling ≤ 1e5, both recomputed
-    with scipy's left/right eigenvectors."""
-    ours, theirs = [], []
+    the largest eigenvalue condition number in the stored state scaling ≤ 1e5, recomputed with
+    scipy's left/right eigenvectors and, where either estimate is largest, in 30 digits: the
+    points have nearly double eigenvalues, where pairing LAPACK's left and right eigenvectors by
+    index fails on some kernels (on an AVX-512 machine 98 872 at a point where 30 digits give
+    44 188, as the design stores)."""
+    ours, theirs, loops = [], [], []
     for p in staircase_lqr.points:
         m, res = p.model, p.gain
         d = m.scales
         acl = (m.A - m.B @ res.K) / d[:, None] * d[None, :]
         w, vl, vr = sla.eig(acl, left=True, right=True)
         vl, vr = vl / np.linalg.norm(vl, axis=0), vr / np.linalg.norm(vr, axis=0)
-        kappa = 1.0 / np.abs(np.sum(vl.conj() * vr, axis=0))
-        assert kappa.max() <= 1e5, (p.spec.name, kappa.max())
         ours.append(res.max_eig_condition)
-        theirs.append(kappa.max())
+        theirs.append(np.max(1.0 / np.abs(np.sum(vl.conj() * vr, axis=0))))
+        loops.append(acl)
         assert _inside_sector(w, N, 0.5 + 0.1) and _inside_sector(w + 0.1 * np.sqrt(2) * N, N), p.spec.name
         assert 0 < res.robustness_radius < 1 and 0 < res.robustness_radius_elementwise < 1
-    # κ of nearly clustered poles moves by ~10-20 % with the rounding of A − BK; the maxima agree
-    assert max(ours) == pytest.approx(max(theirs), rel=0.05) and max(ours) <= 1e5
+    for k in {int(np.argmax(ours)), int(np.argmax(theirs))}:
+        exact = _kappa_mp(loops[k])
+        assert exact.max() <= 1e5 and ours[k] == pytest.approx(exact.max(), rel=1e-6)
+    assert max(ours) <= 1e5
 
 
 def _worst_on_own_blend(r, gain_at, count: int = 25):
@@ -134,28 +147,6 @@ def test_shipped_schedule_is_stable_on_a_thousand_teas_of_the_path(staircase_shi
         return np.array([[np.interp(t2, th, Ks[:, i, j]) for j in range(24)] for i in range(3)])
 
     assert _worst_on_own_blend(staircase, table, count=1001) <= -0.25
-
-
-@pytest.fixture(scope="module")
-def staircase_polynomial():
-    return compute_design(load_config("staircase", [*LQR_ROUTE, "schedule.form=polynomial",
-                                                     "schedule.fit=closed_loop"]))
-
-
-def test_quadratic_schedule_is_stable_along_the_whole_path(staircase_polynomial):
-    """The report's form (order 2 in θ2*, refined against the closed loop until SLSQP's own
-    convergence test): every local loop has Re λ ≤ −0.25n at ≥ 200 TEAs, recomputed here with
-    np.polyval at 25 blend points of our own."""
-    r = staircase_polynomial
-    assert r.fit.order == 2 and r.fit.coef.shape[0] == 3
-    assert r.fit.refit_info["accepted"] and r.fit.refit_info["iterations"] < 2000
-    pc = r.path_check
-    assert pc.theta2.size >= 200 and pc.max_real.max() <= -0.25
-
-    def poly(t2):
-        return np.array([[np.polyval(r.fit.coef[::-1, i, j], t2) for j in range(24)] for i in range(3)])
-
-    assert _worst_on_own_blend(r, poly) <= -0.25
 
 
 @pytest.fixture(scope="module", params=["imperial", pytest.param("SI", marks=pytest.mark.slow)])
