@@ -227,11 +227,13 @@ def design(config: Optional[str] = ConfigArg,
         typer.echo(f"  schedule: order {r.fit.order} in theta2*; worst relative fit residual "
                    f"{r.fit.rel_residual.max():.2e}")
         info = r.fit.refit_info
-        if r.config.schedule.fit == "shifted_lqr":
+        if "decay" in info:                            # the converged quadratic's refit ran
             typer.echo(f"  shifted-LQR refit (Re(pole) < -{info['decay']:g} n, {info['cone_deg']:g} deg cone, at "
                        f"{info['n_tea']} TEAs; from the least-squares fit's {info['max_real_before']:+.3f} n): "
                        + (info["message"] if info["accepted"] else f"NOT done, {info['message']}; the least-squares "
                           "fit is kept"))
+    if r.fit is not None and r.fit.form == "polynomial" and r.config.schedule.refine_points:
+        typer.echo("  note: schedule.refine_points adds nodes to a table; a polynomial has none (not used)")
     if r.refinement is not None and not r.refinement.met:
         typer.echo(f"  warning: the table's refinement stopped after {r.refinement.added} of at most "
                    f"{r.refinement.limit} node(s) with the margin {r.refinement.margin:g} n not met at every path TEA "

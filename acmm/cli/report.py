@@ -33,7 +33,8 @@ def register(app: typer.Typer) -> None:
     def report(
         out: str = typer.Option("runs/report", "--out", help="output directory (index.html, report.md, "
                                                                      "figures/, manifest.json)"),
-        fast: bool = typer.Option(False, "--fast", help="CI mode: a 13-orbit stair-case instead of 130 orbits"),
+        fast: bool = typer.Option(False, "--fast", help="CI mode: a 13-orbit stair-case instead of 130 orbits, "
+                                                          "a short sweep, and no quadratic schedule"),
         rerun: bool = typer.Option(False, "--rerun", help="recompute every stage even when results with the "
                                                           "same config hash exist (determinism check)"),
         root: Optional[Path] = typer.Option(None, "--root", help="results root the report computes its stages in, "

@@ -198,7 +198,7 @@ def _schedule(points: list, s: DesignSettings, sched: ScheduleSettings | None, p
                           "differ (is schedule.to the same station as the config itself?)")
     fit = sch.fit_schedule(teas[:, 1], gains, sched.order if sched else 2,
                            sched.form if sched else "polynomial")
-    if sched is None or sched.fit != "shifted_lqr" or path is None:
+    if sched is None or sched.fit != "shifted_lqr" or fit.form != "polynomial" or path is None:
         return fit
     nx = path.A.shape[1]
     q0 = s.q0_weight(nx)

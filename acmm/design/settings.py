@@ -204,6 +204,6 @@ def schedule_settings(cfg) -> ScheduleSettings | None:
     sc = cfg.schedule
     if sc is None:
         return None
-    return ScheduleSettings(order=sc.order, form=sc.form, fit=sc.fit, n_check=sc.n_check,
+    return ScheduleSettings(order=sc.order, form=sc.form, fit=sc.fit_method, n_check=sc.n_check,
                             spacing=sc.spacing, n_points=sc.n_points, refine_points=sc.refine_points,
                             refine_margin=sc.refine_margin)

@@ -137,8 +137,9 @@ class Schedule(SectionModel):
                                   "table look-up, linear in θ2* between design points (ch. 7 alternative)")
     points: list[DesignPoint] = Field([], description="additional named design points")
     order: int = Field(2, strict=True, ge=1, le=4, description="polynomial order of K_ij(θ2*) (the report uses 2)")
-    fit: Literal["least_squares", "shifted_lqr"] = Field(
-        "least_squares", description="how a polynomial schedule is fitted.  shifted_lqr (the default of a polynomial with "
+    fit: Optional[Literal["least_squares", "shifted_lqr"]] = Field(
+        None, description="how a polynomial schedule is fitted (null: the form's default, resolved at design time "
+                          "and stored as fit_method in design.h5).  shifted_lqr (the default of a polynomial with "
                           "schedule.to): the report's quadratic converged, the coefficients that minimize the "
                           "path's summed LQR cost shifted by 0.3n and rotated into a 70° cone, by Newton's method "
                           "to a step tolerance (acmm.design.schedule_shifted_lqr.refit_shifted_lqr); "
@@ -156,18 +157,17 @@ class Schedule(SectionModel):
     refine_margin: float = Field(
         0.0, ge=0, le=1, description="sector margin, units of n, that refine_points asks of every path check TEA")
 
-    @model_validator(mode="before")
-    @classmethod
-    def _default_fit(cls, data):
-        """A polynomial toward ``to`` is converged (shifted_lqr) unless the fit is given."""
-        if isinstance(data, dict) and data.get("fit") is None:
-            polynomial = data.get("form", "polynomial") == "polynomial" and data.get("to") is not None
-            data = {**data, "fit": "shifted_lqr" if polynomial else "least_squares"}
-        return data
+    @property
+    def fit_method(self) -> str:
+        """The fit ``fit`` names, or the form's default: a polynomial toward ``to`` converged on the
+        path (``"shifted_lqr"``), least squares otherwise (a table interpolates the gains)."""
+        if self.fit is not None:
+            return self.fit
+        return "shifted_lqr" if self.form == "polynomial" and self.to is not None else "least_squares"
 
     @model_validator(mode="after")
     def _fit_of_the_form(self):
-        if self.form == "table" and self.fit != "least_squares":
+        if self.form == "table" and self.fit == "shifted_lqr":
             raise ValueError(f"fit: {self.fit} refines a polynomial schedule; form: table interpolates the "
                              "design points' gains themselves (give one or the other)")
         if self.fit == "shifted_lqr" and self.to is None:

@@ -147,8 +147,7 @@ def quadratic_form(cfg):
     data = cfg.model_dump(mode="json")
     data["name"] = f"{data['name']}_quadratic"
     data["schedule"]["form"] = "polynomial"
-    data["schedule"].pop("fit")                     # the form's default: the converged quadratic
-    data["description"] = f"{data['description']} [the report's quadratic schedule, converged]"
+    data["schedule"]["fit"] = None                  # the form's default: the converged quadratic
     return parse_config(data, source=f"{cfg.name} in the report's quadratic form")
 
 

@@ -139,6 +139,9 @@ def _simulate(c):
 _STAIR, _MB3, _DEC = _design("staircase"), _design("mb3"), _design("mb3_decoupled")
 _SIM = _simulate("staircase")
 _QUAD = _design("staircase_quadratic")
+#: stages a part shows when they ran and leaves out, saying why, when they failed: the report's
+#: quadratic beside the packaged schedule (the packaged table and figure do not fail with it)
+OPTIONAL = {_QUAD, _simulate("staircase_quadratic")}
 _Q13 = ("qpp design:qpp_siso", "qpp simulate:qpp_siso")
 _Q14 = ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator")
 PARTS = [
@@ -199,8 +202,9 @@ def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, resul
         deps = tuple(d for d in stage_deps if d in stage_names) + value_deps
         heading = None if section in headed else section      # the first part of a section writes it
         headed.add(section)
+        required = tuple(d for d in deps if d not in OPTIONAL)
         tasks.append(Task(name, run_part, deps, _part_args(fn, values, g, figdir, fast, results, name, heading,
-                                                           deps), cost))
+                                                           required), cost))
     return tasks
 
 

@@ -129,15 +129,16 @@ def routes(ctx: SectionWriter) -> None:
         The three configs' ``design.h5`` and ``sim.h5``.
     """
     cfgs = ctx.g.configs
+    quad, why = quadratic(ctx, ("design", "simulate"))
     rows = []
-    for key in (k for k in STAIRCASES if k in cfgs):
+    for key in (k for k in STAIRCASES if k != "staircase_quadratic" or quad is not None):
         cfg = cfgs[key]
         d, sim = ctx.data("acmm design:" + cfg.name), ctx.data("acmm simulate:" + cfg.name)
         pts = [d["points"][k] for k in sorted(d["points"])]
         lmi = all("lmi" in p for p in pts)
         energy = max(point_energy(p, cfg.orbit_rate) for p in pts)
         pa, g = d["schedule"].get("path", {}), d.get("dwell", {})
-        tau = f"{float(g['tau_star']):.2f} orbit" if "tau_star" in g else "—"
+        tau = f"{float(g['tau_star']):.2f} orbit" if "tau_star" in g and np.isfinite(float(g["tau_star"])) else "—"
         form = "table" if d["attrs"].get("schedule_form") == "table" else {
             "shifted_lqr": "quadratic converged on the path"}.get(
             decoded(d["schedule"].get("fit_method", b"least_squares")), "quadratic, least squares")
@@ -161,8 +162,35 @@ def routes(ctx: SectionWriter) -> None:
                   "The design routes and schedule forms on the stair-case: the packaged table, the report's "
                   "route with the same table, and the report's quadratic form converged on the path; the ±30 % "
                   "Monte Carlo of each route's fixed MB3 and AC gains is in the guide (docs/results/robustness.md)"
-                  + ("" if "staircase_quadratic" in cfgs else "; the quadratic is not designed by a --fast report "
-                     "(its refit is a minute of design)"))
+                  + ("" if why is None else f"; {why}"))
+
+
+def quadratic(ctx: SectionWriter, stages: tuple) -> tuple:
+    """The report's quadratic stair-case (:func:`acmm.report.gather.quadratic_form`) when its
+    ``stages`` ran, else why not.
+
+    Parameters
+    ----------
+    ctx : acmm.report.context.SectionWriter
+        The gathered configs and failed stages.
+    stages : tuple of str
+        ``"design"``, ``"simulate"``: the stages the caller reads.
+
+    Returns
+    -------
+    tuple
+        (its config, None), or (None, why: not designed by a --fast report, or its stage's
+        one-line failure).
+    """
+    cfg = ctx.g.configs.get("staircase_quadratic")
+    if cfg is None:
+        return None, ("the quadratic is not designed by a --fast report (its LMI points and refit are "
+                      "another stair-case design)")
+    for stage in stages:
+        f = ctx.g.failed.get(f"{stage}:staircase_quadratic")
+        if f is not None:
+            return None, f"the quadratic's {stage} failed: {f.message}"
+    return cfg, None
 
 
 def _dwell(ctx: SectionWriter, g: dict, n: float) -> None:
@@ -237,7 +265,7 @@ def gain_figure(ctx: SectionWriter) -> None:
         The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
     """
     cfg = ctx.g.configs["staircase"]
-    quad = ctx.g.configs.get("staircase_quadratic")          # (not in a --fast report)
+    quad, _ = quadratic(ctx, ("design",))
     quad = None if quad is None else ctx.data("acmm design:" + quad.name)
     files = fig_gain_schedule(ctx.data("acmm design:" + cfg.name), cfg.design.drf_mode, ctx.figdir, quad)
     ctx.doc.fig("gain_schedule", "Gain schedule: the 72 gains K(i, j) vs pitch TEA (Figs 5.3–5.26 analogue)"

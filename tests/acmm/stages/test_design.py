@@ -61,10 +61,10 @@ def test_every_design_point_in_sector_with_exact_lqr_gain(staircase_lqr):
 
 def _kappa_mp(acl: np.ndarray) -> np.ndarray:
     """Eigenvalue condition numbers ‖w_i‖‖v_i‖ (W = V⁻¹) of ``acl`` in 30-digit arithmetic (mpmath)."""
-    mp.mp.dps = 30
-    _, vr = mp.eig(mp.matrix(acl.tolist()), left=False, right=True)
-    vl = mp.inverse(vr)
-    return np.array([float(mp.norm(vl[i, :], 2) * mp.norm(vr[:, i], 2)) for i in range(vr.rows)])
+    with mp.workdps(30):
+        _, vr = mp.eig(mp.matrix(acl.tolist()), left=False, right=True)
+        vl = mp.inverse(vr)
+        return np.array([float(mp.norm(vl[i, :], 2) * mp.norm(vr[:, i], 2)) for i in range(vr.rows)])
 
 
 def test_design_points_well_conditioned_with_margin(staircase_lqr):
@@ -88,7 +88,7 @@ def test_design_points_well_conditioned_with_margin(staircase_lqr):
         assert 0 < res.robustness_radius < 1 and 0 < res.robustness_radius_elementwise < 1
     for k in {int(np.argmax(ours)), int(np.argmax(theirs))}:
         exact = _kappa_mp(loops[k])
-        assert exact.max() <= 1e5 and ours[k] == pytest.approx(exact.max(), rel=1e-6)
+        assert exact.max() <= 1e5 and ours[k] == pytest.approx(exact.max(), rel=1e-4)
     assert max(ours) <= 1e5
 
 
