@@ -233,7 +233,8 @@ def schedule_items(r) -> dict:
     }
     for key, val in r.fit.refit_info.items():
         value = np.array(val.encode("utf-8"), dtype="S") if isinstance(val, str) else float(val)
-        unit = "n" if key.startswith("max_real") or key == "decay" else "deg" if key == "cone_deg" else "1"
+        # (the cone's half-angle keeps its degrees: a dataset in "deg" is written in rad)
+        unit = "n" if key.startswith("max_real") or key == "decay" else "1"
         sched[f"refit_{key}"] = Dataset(value, unit,
                                         f"refit on the path: {key.replace('_', ' ')}")
     rf = r.refinement
