@@ -92,63 +92,51 @@ def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
     -------
     dict
         ``"mb3"``, ``"mb3_decoupled"``, ``"ac"``, ``"staircase"`` → acmm config (Table 1, ch. 5–6);
-        ``"staircase_lqr"`` → the stair-case on the report's route (:func:`reports_route`);
-        ``"staircase_quadratic"`` → its converged quadratic schedule (:func:`quadratic_form`; not
-        with ``fast``);
+        ``"staircase_lqr"`` → the stair-case on the report's route and ``"staircase_quadratic"``
+        → in the report's converged quadratic form (:data:`REPORT_VARIANTS`; not with ``fast``);
         ``"qpp_siso"``, ``"qpp_manipulator"`` → qpp config (ch. 13–14).
     """
     cfgs = {name: acmm_config(name, root, fast=fast and name == "staircase")
             for name in ("mb3", "mb3_decoupled", "ac", "staircase")}
-    cfgs["staircase_lqr"] = reports_route(cfgs["staircase"])
-    if not fast:
-        cfgs["staircase_quadratic"] = quadratic_form(cfgs["staircase"])
+    for key, (suffix, patch) in REPORT_VARIANTS.items():
+        if not (fast and key == "staircase_quadratic"):
+            cfgs[key] = variant(cfgs["staircase"], suffix, patch)
     cfgs.update({name: qpp_config(name, root) for name in ("qpp_siso", "qpp_manipulator")})
     return cfgs
 
 
-def reports_route(cfg):
-    """The stair-case ``cfg`` on the report's route (sector LQR points, ``design.pole_method:
-    shift``), named ``<name>_lqr``: the comparison beside the packaged regional LMI route.
+#: the report's stair-case variants beside the packaged one (config key → name suffix and the
+#: config sections it changes): the report's route, sector LQR points (its gains are chosen
+#: discretely, so bisection of the table does not converge), and the report's quadratic form
+#: (ch. 5.3), converged on the path (``fit`` null: the polynomial's default, ``shifted_lqr``)
+REPORT_VARIANTS = {
+    "staircase_lqr": ("lqr", {"design": {"pole_method": "shift"}, "schedule": {"refine_points": 0}}),
+    "staircase_quadratic": ("quadratic", {"schedule": {"form": "polynomial", "fit": None}}),
+}
+
+
+def variant(cfg, suffix: str, patch: dict):
+    """``cfg`` named ``<name>_<suffix>`` with its sections updated by ``patch``.
 
     Parameters
     ----------
     cfg : acmm.io.config.Config
-        The stair-case config (:func:`acmm.report.stage_results.acmm_config`).
+        The config (:func:`acmm.report.stage_results.acmm_config`).
+    suffix : str
+        Appended to its name.
+    patch : dict
+        ``{section: {key: value}}`` merged into its sections.
 
     Returns
     -------
     acmm.io.config.Config
-        The same config with the other route and name.
+        The variant, validated.
     """
     data = cfg.model_dump(mode="json")
-    data["name"] = f"{data['name']}_lqr"
-    data["design"]["pole_method"] = "shift"
-    if data.get("schedule"):
-        data["schedule"]["refine_points"] = 0       # its gains are chosen discretely: bisection does not converge
-    data["description"] = f"{data['description']} [the report's route: sector LQR points]"
-    return parse_config(data, source=f"{cfg.name} on the report's route")
-
-
-def quadratic_form(cfg):
-    """The stair-case ``cfg`` with the report's schedule form, one second-order polynomial in θ2*
-    per gain (ch. 5.3), converged on the path (``schedule.form: polynomial``, whose default fit is
-    ``shifted_lqr``), named ``<name>_quadratic``: the form beside the packaged table.
-
-    Parameters
-    ----------
-    cfg : acmm.io.config.Config
-        The stair-case config (:func:`acmm.report.stage_results.acmm_config`).
-
-    Returns
-    -------
-    acmm.io.config.Config
-        The same config with the polynomial schedule and its name.
-    """
-    data = cfg.model_dump(mode="json")
-    data["name"] = f"{data['name']}_quadratic"
-    data["schedule"]["form"] = "polynomial"
-    data["schedule"]["fit"] = None                  # the form's default: the converged quadratic
-    return parse_config(data, source=f"{cfg.name} in the report's quadratic form")
+    data["name"] = f"{data['name']}_{suffix}"
+    for section, values in patch.items():
+        data[section].update(values)
+    return parse_config(data, source=f"{cfg.name} ({suffix})")
 
 
 def _design_task(cfg, rerun, donors):

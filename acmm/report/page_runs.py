@@ -16,7 +16,7 @@ import yaml
 
 from acmm import PACKAGED_CONFIGS
 from acmm.io.config import load_config
-from acmm.report.gather import robustness_result
+from acmm.report.gather import REPORT_VARIANTS, robustness_result
 from acmm.report.stage_results import (acmm_config, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp,
                                        qpp_config, qpp_scenarios)
 from acmm.sweep.config import parse_sweep
@@ -111,16 +111,14 @@ ROUTE_VARIANTS = {
 }
 
 #: the stair-case variants of the routes table (``block_staircase_routes``) beside the packaged one
-#: (regional LMI points, table look-up, judged on a 1 001-TEA path): the report's route (sector LQR
-#: points) with the same table, the report's own quadratic (least squares on the LQR points, ch.
-#: 5.3), and the quadratic converged on the path's shifted LQR cost from the LMI points
+#: (regional LMI points, table look-up, judged on a 1 001-TEA path): the report's own two
+#: (:data:`acmm.report.gather.REPORT_VARIANTS`, the report's route with the same table and the
+#: quadratic converged on the path from the LMI points: the same names and designs, so a report on
+#: this root reuses them), and the report's route with its own quadratic (least squares, ch. 5.3)
 STAIRCASE_VARIANTS = {
-    "staircase_lqr": {"design": {"pole_method": "shift"}, "schedule": {"refine_points": 0}},
+    **{key: patch for key, (_, patch) in REPORT_VARIANTS.items()},
     "staircase_lqr_quadratic": {"design": {"pole_method": "shift"},
                                 "schedule": {"form": "polynomial", "fit": "least_squares", "refine_points": 0}},
-    # the report's own run of the converged quadratic (acmm.report.gather.quadratic_form): the same
-    # name and design, so a report on this root reuses it
-    "staircase_quadratic": {"schedule": {"form": "polynomial"}},
 }
 
 

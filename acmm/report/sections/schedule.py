@@ -120,7 +120,7 @@ def point_energy(p: dict, n: float) -> float:
 def routes(ctx: SectionWriter) -> None:
     """The packaged stair-case (its route, normally regional LMI points, a table look-up schedule)
     beside the same stair-case on the report's route (sector LQR points, the same form) and in the
-    report's quadratic form converged on the path (:func:`acmm.report.gather.quadratic_form`),
+    report's quadratic form converged on the path (:data:`acmm.report.gather.REPORT_VARIANTS`),
     judged on the same path TEAs, simulated and certified (issue 32 item 5, issue 41 item 4).
 
     Parameters
@@ -166,7 +166,7 @@ def routes(ctx: SectionWriter) -> None:
 
 
 def quadratic(ctx: SectionWriter, stages: tuple) -> tuple:
-    """The report's quadratic stair-case (:func:`acmm.report.gather.quadratic_form`) when its
+    """The report's quadratic stair-case (:data:`acmm.report.gather.REPORT_VARIANTS`) when its
     ``stages`` ran, else why not.
 
     Parameters
