@@ -30,21 +30,24 @@ past the targets.  The homotopy ends when the loops are inside the final region 
 :data:`HOMOTOPY_GAP` to spare in decay, or when two stages at the targets change nothing; it
 gives up (the least-squares fit is kept, ``accepted`` false, the reason in the message) after
 :data:`MAX_STAGES` stages.  The last problem, F at the targets with its weight, is solved by BFGS
-and then Newton's method (Hessian by forward differences of the analytic gradient, reused while
-the steps contract by half, a backtracking line search that keeps F finite) until no coefficient
+and then Newton's method (the exact Hessian, reused while the steps contract by half, a backtracking line search that keeps F finite) until no coefficient
 moves by more than :data:`STEP_TOL` of its scale: the answer is the stationary point itself,
 not where an iteration count ran out, and it does not depend on the way there.
 
 Gradients (Levine–Athans): ∂ tr P/∂K = 2(R K − Bᵀ P) L with A^α L + L (A^α)ᵀ + I = 0; for the
 cone term ∂ tr P^c/∂K = −2 Re(e^{−jψ} Bᵀ P^c L^c) with (e^{jψ}A^α) L^c + L^c (e^{jψ}A^α)ᴴ + I = 0;
-both chained through K = Σ_k u^k a_k.
+both chained through K = Σ_k u^k a_k.  The Hessian differentiates these once more along each
+gain element E (dA^α = −B E): with S = R K − Bᵀ P, ∂(∂ tr P/∂K)[E] = 2(R E − Bᵀ dP) L + 2 S dL, where
+(A^α)ᵀ dP + dP A^α + (dA^α)ᵀ P + P dA^α + Eᵀ R K + Kᵀ R E = 0 and
+A^α dL + dL (A^α)ᵀ + dA^α L + L (dA^α)ᵀ = 0, and likewise for the cone term; F's Hessian adds the
+log's rank-one term −∇T ∇Tᵀ/T² (T the summed traces) and the weight ε I.
 """
 from __future__ import annotations
 
 from math import comb
 
 import numpy as np
-from scipy.linalg import schur
+from scipy.linalg import schur, solve_triangular
 from scipy.linalg.lapack import ztrsyl
 from scipy.optimize import minimize
 
@@ -82,9 +85,6 @@ MAX_STAGES = 60
 MAX_NEWTON = 60
 STAGE_ITER = 40
 FINAL_BFGS_ITER = 2000
-
-#: Step of the forward differences of the gradient that form the Hessian (scaled coefficients).
-HESSIAN_STEP = 1e-6
 
 
 def power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
@@ -152,28 +152,6 @@ def refit_start(fit: ScheduleFit, path: PathModels, every: int) -> dict:
             "a0": a0, "sc": sc}
 
 
-def worst_real(st: dict, x: np.ndarray, n: float) -> float:
-    """Largest Re λ / n of the scheduled loop over the refit's TEAs.
-
-    Parameters
-    ----------
-    st : dict
-        The refit's TEAs, models and starting coefficients (:func:`refit_start`).
-    x : array
-        Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
-    n : float
-        Orbital rate, rad/s.
-
-    Returns
-    -------
-    float
-        The largest real part of a closed-loop pole, units of n.
-    """
-    a = st["a0"] + x.reshape(st["shape"]) * st["sc"]
-    return max(np.max(np.linalg.eigvals(A - B @ np.tensordot(tp, a, axes=1)).real)
-               for A, B, tp in zip(st["As"], st["Bs"], st["up"])) / n
-
-
 def refitted(fit: ScheduleFit, coef: np.ndarray, info: dict, method: str = "shifted_lqr") -> ScheduleFit:
     """The refitted schedule with its residuals against the design-point gains.
 
@@ -205,17 +183,46 @@ def refitted(fit: ScheduleFit, coef: np.ndarray, info: dict, method: str = "shif
 
 def _lyapunov(T: np.ndarray, U: np.ndarray, W: np.ndarray, adjoint: bool) -> np.ndarray:
     """X with Mᴴ X + X M + W = 0 (``adjoint``) or M X + X Mᴴ + W = 0, M = U T Uᴴ, T upper
-    triangular (complex Schur form), U unitary; by LAPACK's triangular Sylvester solver."""
+    triangular (complex Schur form), U unitary (Bartels–Stewart).  One right-hand side W is
+    solved by LAPACK's triangular Sylvester solver (ztrsyl); a stack of them (W's last two axes)
+    together, a column of the triangular system at a time, each column one triangular solve with
+    the whole stack as its right-hand sides."""
     C = -(U.conj().T @ W @ U)
-    y, scale, info = ztrsyl(T, T, C, trana="C" if adjoint else "N", tranb="N" if adjoint else "C")
-    if info < 0:
-        raise ValueError(f"ztrsyl: argument {-info} is invalid")
-    return U @ (y / scale) @ U.conj().T
+    if C.ndim == 2:
+        Y, scale, info = ztrsyl(T, T, C, trana="C" if adjoint else "N", tranb="N" if adjoint else "C")
+        if info < 0:
+            raise ValueError(f"ztrsyl: argument {-info} is invalid")
+        return U @ (Y / scale) @ U.conj().T
+    N = T.shape[0]
+    Y = np.zeros(C.shape, complex)
+    eye = np.eye(N)
+    if adjoint:     # Tᴴ y_k + Σ_{i ≤ k} y_i T_ik = c_k, k = 0, 1, …: (Tᴴ + T_kk I) lower triangular
+        for k in range(N):
+            rhs = C[..., k] - Y[..., :k] @ T[:k, k]
+            Y[..., k] = solve_triangular(T.conj().T + T[k, k] * eye, rhs.T, lower=True).T
+    else:           # T y_k + Σ_{i ≥ k} y_i conj(T_ki) = c_k, k = N − 1, …, 0: (T + conj(T_kk) I) upper
+        for k in range(N - 1, -1, -1):
+            rhs = C[..., k] - Y[..., k + 1:] @ T[k, k + 1:].conj()
+            Y[..., k] = solve_triangular(T + np.conj(T[k, k]) * eye, rhs.T, lower=False).T
+    return U @ Y @ U.conj().T
 
 
-class _Cost:
-    """F(x) of the module docstring and its gradient at the refit's TEAs (``st`` from
-    :func:`refit_start`)."""
+class ShiftedCost:
+    """F(x) of the module docstring, its gradient and its Hessian at the refit's TEAs.
+
+    Parameters
+    ----------
+    st : dict
+        The refit's TEAs, models and starting coefficients (:func:`refit_start`).
+    n : float
+        Orbital rate, rad/s.
+    Q : (N, N) array
+        State weight on the scaled states, dimensionless (the identity included).
+    R : (M, M) array
+        Control weight, 1/(ft·lbf)².
+    weight : float
+        Weight ε of the distance from the start, dimensionless.
+    """
 
     def __init__(self, st: dict, n: float, Q: np.ndarray, R: np.ndarray, weight: float):
         self.st, self.n, self.Q, self.R, self.weight = st, n, Q, R, weight
@@ -223,10 +230,53 @@ class _Cost:
         self.eye = np.eye(self.As.shape[1])
 
     def gains(self, x: np.ndarray) -> np.ndarray:
+        """The scheduled gain at each of the refit's TEAs.
+
+        Parameters
+        ----------
+        x : array
+            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
+
+        Returns
+        -------
+        (T, M, N) array
+            Gains on the scaled states, ft·lbf per unit of each scaled state.
+        """
         a = self.st["a0"] + x.reshape(self.st["shape"]) * self.st["sc"]
         return np.einsum("tk,kab->tab", self.st["up"], a)
 
+    def poles(self, x: np.ndarray) -> np.ndarray:
+        """The closed-loop poles at each of the refit's TEAs.
+
+        Parameters
+        ----------
+        x : array
+            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
+
+        Returns
+        -------
+        (T, N) complex array
+            Eigenvalues of A − B K, units of n.
+        """
+        return np.linalg.eigvals(self.As - self.Bs @ self.gains(x)) / self.n
+
     def __call__(self, x: np.ndarray, alpha: float, psi: float = 0.0) -> tuple[float, np.ndarray]:
+        """F and its gradient at ``x``; (inf, 0) outside the region.
+
+        Parameters
+        ----------
+        x : array
+            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
+        alpha : float
+            Decay rate α, units of n.
+        psi : float
+            Rotation ψ of the cone term, rad (0: no cone term).
+
+        Returns
+        -------
+        tuple
+            (F, dimensionless; ∇F, array like ``x``).
+        """
         K = self.gains(x)
         shifted = self.As - self.Bs @ K + alpha * self.n * self.eye
         rot = np.exp(1j * psi)
@@ -256,16 +306,64 @@ class _Cost:
         return f, g + self.weight * x
 
     def hessian(self, x: np.ndarray, alpha: float, psi: float = 0.0) -> np.ndarray:
-        H = np.empty((x.size, x.size))
-        g0 = self(x, alpha, psi)[1]
-        for i in range(x.size):
-            e = np.zeros(x.size)
-            e[i] = HESSIAN_STEP
-            H[i] = (self(x + e, alpha, psi)[1] - g0) / HESSIAN_STEP
+        """∇²F at ``x``, exact (the module docstring): each TEA's gradient differentiated along
+        every gain element, the Schur form of its loop serving every Lyapunov equation.
+
+        Parameters
+        ----------
+        x : array
+            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``; inside the
+            region.
+        alpha : float
+            Decay rate α, units of n.
+        psi : float
+            Rotation ψ of the cone term, rad (0: no cone term).
+
+        Returns
+        -------
+        (x.size, x.size) array
+            The symmetric Hessian, dimensionless.
+        """
+        K = self.gains(x)
+        rot = np.exp(1j * psi)
+        m, N = K.shape[1:]
+        E = np.eye(m * N).reshape(m * N, m, N)                 # every gain element, one at a time
+        total, gK, D = 0.0, np.empty_like(K), np.empty((len(K), m * N, m * N))
+        for j, (A, B, Kj) in enumerate(zip(self.As, self.Bs, K)):
+            T, U = schur(A - B @ Kj + alpha * self.n * self.eye, output="complex")
+            P = _lyapunov(T, U, self.Q + Kj.T @ self.R @ Kj, adjoint=True).real
+            L = _lyapunov(T, U, self.eye, adjoint=False).real
+            S = self.R @ Kj - B.T @ P
+            dM = -B @ E                                         # (m N, N, N)
+            dP = _lyapunov(T, U, _swap(dM) @ P + P @ dM + _swap(E) @ (self.R @ Kj) + Kj.T @ self.R @ E,
+                           adjoint=True).real
+            dL = _lyapunov(T, U, dM @ L + L @ _swap(dM), adjoint=False).real
+            total += np.trace(P)
+            gK[j] = 2.0 * S @ L
+            dG = 2.0 * ((self.R @ E - B.T @ dP) @ L + S @ dL)
+            if psi:
+                Pc = _lyapunov(rot * T, U, self.Q, adjoint=True)
+                Lc = _lyapunov(rot * T, U, self.eye, adjoint=False)
+                dMr = rot * dM
+                dPc = _lyapunov(rot * T, U, _swap(dMr).conj() @ Pc + Pc @ dMr, adjoint=True)
+                dLc = _lyapunov(rot * T, U, dMr @ Lc + Lc @ _swap(dMr).conj(), adjoint=False)
+                total += np.trace(Pc).real
+                gK[j] -= 2.0 * (np.conj(rot) * (B.T @ Pc @ Lc)).real
+                dG -= 2.0 * (np.conj(rot) * (B.T @ (dPc @ Lc + Pc @ dLc))).real
+            D[j] = dG.reshape(m * N, m * N)
+        up, sc = self.st["up"], self.st["sc"].reshape(len(self.st["a0"]), -1)
+        g = (np.einsum("tk,tab->kab", up, gK) * self.st["sc"]).ravel()
+        H = np.einsum("tk,tl,tef->kelf", up, up, D).reshape(g.size, g.size) * np.outer(sc.ravel(), sc.ravel())
+        H = H / total - np.outer(g, g) / total ** 2 + self.weight * np.eye(g.size)
         return 0.5 * (H + H.T)
 
 
-def _newton(cost: _Cost, x: np.ndarray, alpha: float, psi: float = 0.0) -> tuple[np.ndarray, int, bool]:
+def _swap(M: np.ndarray) -> np.ndarray:
+    """The transpose of each matrix of a stack (its last two axes)."""
+    return np.swapaxes(M, -1, -2)
+
+
+def _newton(cost: ShiftedCost, x: np.ndarray, alpha: float, psi: float = 0.0) -> tuple[np.ndarray, int, bool]:
     """Newton's method on F at (``alpha``, ``psi``) from ``x`` (inside the region); the Hessian is
     reused while the steps contract by half or better (a chord method) and recomputed otherwise.
     Returns the minimizer, the steps taken and whether the step tolerance was met."""
@@ -343,9 +441,9 @@ def refit_shifted_lqr(fit: ScheduleFit, path: PathModels, n: float, Q: np.ndarra
     Qi = np.eye(st["As"][0].shape[0]) + Q
     # the homotopy's stages minimize the barrier alone (the weight would hold them near the
     # least-squares fit, which is far outside the region); the last problem adds it
-    cost, stage_cost = _Cost(st, n, Qi, R, weight), _Cost(st, n, Qi, R, 0.0)
+    cost, stage_cost = ShiftedCost(st, n, Qi, R, weight), ShiftedCost(st, n, Qi, R, 0.0)
     x = np.zeros(st["a0"].size)
-    w0 = w = worst_real(st, x, n)
+    w0 = w = float(cost.poles(x).real.max())
     psi_target = np.radians(90.0 - cone_deg)
     alpha, psi, stages, still = min(-(w0 + 0.1), decay), 0.0, 0, 0
     while True:
@@ -360,12 +458,13 @@ def refit_shifted_lqr(fit: ScheduleFit, path: PathModels, n: float, Q: np.ndarra
                        options={"maxiter": STAGE_ITER, "gtol": 1e-4})
         if np.isfinite(res.fun):
             x = res.x
-        w_new = worst_real(st, x, n)
+        lam = cost.poles(x)
+        w_new = float(lam.real.max())
         still = still + 1 if alpha == decay and psi == psi_target and abs(w_new - w) < 1e-9 else 0
         w, stages = w_new, stages + 1
         alpha = min(0.5 * (alpha - w), decay)
         # the largest rotation ψ that keeps every pole's e^{±jψ}(λ + αn) in the left half-plane
-        ev = np.linalg.eigvals(cost.As - cost.Bs @ cost.gains(x)) / n + alpha
+        ev = lam + alpha
         psi_max = 0.5 * np.pi - np.max(np.arctan2(np.abs(ev.imag), -ev.real))
         psi = min(psi_target, 0.5 * (psi + psi_max) if psi_max > psi else 0.5 * psi_max)
     res = minimize(lambda z: cost(z, decay, psi), x, jac=True, method="BFGS",
@@ -373,7 +472,7 @@ def refit_shifted_lqr(fit: ScheduleFit, path: PathModels, n: float, Q: np.ndarra
     if np.isfinite(res.fun):
         x = res.x
     x, steps, converged = _newton(cost, x, decay, psi)
-    w1 = worst_real(st, x, n)
+    w1 = float(cost.poles(x).real.max())
     message = (f"Newton's method converged: no coefficient moves by more than {STEP_TOL:g} of its size"
                if converged else f"Newton's method did not meet its step tolerance in {steps} steps")
     return _outcome(fit, st, x, w0, w1, stages, steps, converged, w1 < -decay, message, decay, cone_deg)

@@ -12,7 +12,7 @@ import scipy.linalg as sla
 
 from acmm.design import schedule as sch
 from acmm.design.path_check import PathModels
-from acmm.design.schedule_shifted_lqr import refit_shifted_lqr
+from acmm.design.schedule_shifted_lqr import ShiftedCost, power_basis, refit_shifted_lqr, refit_start
 
 N_RATE = 1.0            # orbital rate of the constructed path (the refit works in units of n)
 DECAY, CONE, WEIGHT = 0.3, 70.0, 1e-2
@@ -131,3 +131,36 @@ def test_only_a_polynomial_is_refit():
     table = sch.fit_schedule(path.theta2[idx], np.zeros((3, 3, 5)), 2, "table")
     with pytest.raises(ValueError, match="polynomial"):
         refit_shifted_lqr(table, path, N_RATE, Q, R)
+
+
+def test_the_exact_hessian_is_the_curvature_of_F():
+    """Newton's Hessian (ShiftedCost.hessian) at the answer against the second differences of F
+    written here (Kronecker-product Lyapunov solves) along random directions, vᵀ∇²F v, and the
+    cross term between two directions; the module's coordinates x (the coefficients in u, scaled)
+    are mapped to θ-power coefficients with its public power_basis."""
+    path = _path()
+    start = _start(path)
+    fit = refit_shifted_lqr(start, path, N_RATE, Q, R, decay=DECAY, cone_deg=CONE, weight=WEIGHT)
+    st = refit_start(start, path, 1)
+    # the answer's x: its coefficients in u (sampled at u = −1, 0, 1), less the start's, scaled
+    us = np.array([-1.0, 0.0, 1.0])
+    vt = (st["c0"] + st["h0"] * us)[:, None] ** np.arange(3)
+    a = np.linalg.solve(us[:, None] ** np.arange(3), vt @ fit.coef.reshape(3, -1)).reshape(st["shape"])
+    x = ((a - st["a0"]) / st["sc"]).ravel()
+
+    def coef(z):
+        return power_basis(st["a0"] + z.reshape(st["shape"]) * st["sc"], st["c0"], st["h0"])
+
+    assert np.allclose(coef(x), fit.coef, rtol=1e-10, atol=1e-12)
+    H = ShiftedCost(st, N_RATE, np.eye(5) + Q, R, WEIGHT).hessian(x, DECAY, np.radians(90.0 - CONE))
+    assert np.allclose(H, H.T) and np.linalg.eigvalsh(H).min() > 0       # a minimum
+    rng = np.random.default_rng(3)
+    h = 1e-4
+    f0 = _F(path, start, coef(x))
+    for _ in range(3):
+        v, w = rng.standard_normal((2, x.size))
+        fd = (_F(path, start, coef(x + h * v)) - 2 * f0 + _F(path, start, coef(x - h * v))) / h ** 2
+        assert v @ H @ v == pytest.approx(fd, rel=1e-4)
+        cross = (_F(path, start, coef(x + h * (v + w))) - _F(path, start, coef(x + h * (v - w)))
+                 - _F(path, start, coef(x - h * (v - w))) + _F(path, start, coef(x - h * (v + w)))) / (4 * h * h)
+        assert v @ H @ w == pytest.approx(cross, rel=1e-3, abs=1e-4 * abs(v @ H @ v))
