@@ -4,6 +4,7 @@ Test modules import the constants and helpers of this file as ``from tests.conft
 (``tests`` is a package: see ``tests/__init__.py``)."""
 from __future__ import annotations
 
+import importlib.util
 import os
 from pathlib import Path
 
@@ -45,3 +46,29 @@ def run_acmm():
     from acmm.cli.app import app
 
     return lambda *args: invoke(app, *args)
+
+
+def readme_script():
+    """``scripts/readme_numbers.py`` as a module (``scripts/`` is no package)."""
+    spec = importlib.util.spec_from_file_location("readme_numbers", REPO / "scripts" / "readme_numbers.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="session")
+def readme_root(tmp_path_factory) -> Path:
+    """The results root the README's stages run into (:func:`readme_stages`)."""
+    return tmp_path_factory.mktemp("readme-root")
+
+
+@pytest.fixture(scope="session")
+def readme_stages(readme_root) -> dict:
+    """The stages the README and the guide quote (:func:`acmm.report.page_runs.run_stages`), run
+    once a session into :func:`readme_root` in this process (several minutes): the README numbers'
+    tests read them, and the determinism test takes them as the run of this process's BLAS kernel
+    and thread count."""
+    from acmm.report.page_runs import run_stages       # the report layer: only for the slow tests
+
+    readme_script().use_this_trees_configs()
+    return run_stages(readme_root)

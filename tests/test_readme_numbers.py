@@ -5,19 +5,11 @@ guide's pages (``docs/**/*.md``, each block once across them) as the report comp
 (:mod:`acmm.report.page_blocks`); here the same blocks are computed from a fresh run into a temporary results root
 (designs of mb3, mb3_decoupled, ac and the stair-case, their simulations, the qpp designs and
 simulations of the two report chapters and the three shipped examples, the 400-case
-``sweep_inertia30`` Monte Carlo and margin search, once per module) and compared
+``sweep_inertia30`` Monte Carlo and margin search, once a session: :func:`tests.conftest.readme_stages`) and compared
 with the documents, so a code change that moves a number fails here until ``make readme`` is run.
 """
 from __future__ import annotations
 
-import importlib.util
-import os
-import platform
-import subprocess
-import sys
-from pathlib import Path
-
-import h5py
 import numpy as np
 import pytest
 
@@ -25,42 +17,21 @@ from acmm.model import linearize as lin
 from acmm.model.tea import solve_tea_near
 from acmm.report.build import build_report
 from acmm.report.page_blocks import BLOCKS, compute_blocks
-from acmm.report.page_runs import run_stages
 from tests.acmm.report.conftest import PageParser
-from tests.conftest import REPO
+from tests.conftest import REPO, readme_script
 
 #: the tests that compare with a fresh run of every packaged config (several minutes): `make test-slow`, run by CI;
 #: the others read only text
 slow = pytest.mark.slow
 
 
-def _script():
-    spec = importlib.util.spec_from_file_location("readme_numbers", REPO / "scripts" / "readme_numbers.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-rn = _script()
+rn = readme_script()
 
 
 @pytest.fixture(scope="module")
-def readme_root(tmp_path_factory) -> Path:
-    """The results root the stages run into."""
-    return tmp_path_factory.mktemp("readme-root")
-
-
-@pytest.fixture(scope="module")
-def stages(readme_root) -> dict:
-    """The stages the blocks quote, run into an empty results root (:func:`run_stages`)."""
-    rn.use_this_trees_configs()
-    return run_stages(readme_root)
-
-
-@pytest.fixture(scope="module")
-def fresh(stages) -> dict:
-    """Every generated block, computed from the fresh stages."""
-    return compute_blocks(stages)
+def fresh(readme_stages) -> dict:
+    """Every generated block, computed from the fresh stages (:func:`tests.conftest.readme_stages`)."""
+    return compute_blocks(readme_stages)
 
 
 def texts() -> dict:
@@ -164,7 +135,7 @@ def _blend_poles(cfg, d, coef, count: int = 101) -> np.ndarray:
 
 
 @slow
-def test_converged_quadratic_holds_the_decay_and_the_momentum_target(stages):
+def test_converged_quadratic_holds_the_decay_and_the_momentum_target(readme_stages):
     """Issue 41 item 4, on the routes table's ``staircase_quadratic`` run: the report's form
     (one quadratic in θ2* per gain element) started from the regional LMI points' least-squares
     fit, whose loop is unstable, and converged by Newton's method on the path's shifted LQR cost
@@ -172,7 +143,7 @@ def test_converged_quadratic_holds_the_decay_and_the_momentum_target(stages):
     the design's own check, and here with our own blend at 101 points, where every pole is also
     inside the 70° cone about −0.3n — and no level of the 130-orbit stair-case peaks above
     6 000 ft·lbf·s."""
-    cfg, d, sim = (stages[f"{k}:staircase_quadratic"] for k in ("config", "design", "simulate"))
+    cfg, d, sim = (readme_stages[f"{k}:staircase_quadratic"] for k in ("config", "design", "simulate"))
     sc = d["schedule"]
     method = sc["fit_method"]
     assert (method.decode() if isinstance(method, bytes) else str(method)) == "shifted_lqr"
@@ -190,34 +161,7 @@ def test_converged_quadratic_holds_the_decay_and_the_momentum_target(stages):
 
 
 @slow
-def test_converged_quadratic_is_the_same_under_another_blas_kernel(stages, tmp_path):
-    """Issue 41 item 4: the converged quadratic's gains, designed again in a subprocess under
-    OpenBLAS's Prescott kernel (SSE3) from scratch (LMI points included) by the packaged
-    stair-case with ``schedule.form=polynomial`` alone (the form selects the fit), equal this run's
-    (the machine's own kernel) to 1e-6 relative at 201 TEAs over the path's range (the norm of
-    the 3×24 gain, as the determinism test compares gains)."""
-    flags = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else ""
-    if platform.machine() not in ("x86_64", "AMD64") or " avx2" not in flags:
-        pytest.skip("needs an x86-64 CPU with AVX2 to run two OpenBLAS kernels")
-    env = {**os.environ, "OPENBLAS_CORETYPE": "Prescott", "OPENBLAS_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
-    r = subprocess.run([sys.executable, "-m", "acmm.cli.app", "design", "staircase", "schedule.form=polynomial",
-                        "name=other_kernel", "--no-figures"],
-                       cwd=tmp_path, env=env, capture_output=True, text=True, timeout=1200)
-    assert r.returncode == 0, r.stderr[-2000:]
-    with h5py.File(tmp_path / "runs" / "other_kernel" / "design.h5") as f:
-        other = f["schedule/coef"][()]
-        assert float(f["schedule/refit_converged"][()]) == 1.0
-    ref = stages["design:staircase_quadratic"]["schedule"]["coef"]
-    th = stages["design:staircase_quadratic"]["tea"][:, 1]
-    grid = np.linspace(th.min(), th.max(), 201)[:, None] ** np.arange(3)
-    k_ref, k_other = (np.einsum("tk,kij->tij", grid, c) for c in (ref, other))
-    assert not np.array_equal(other, ref)            # the two kernels did run: their last bits differ
-    rel = max(np.linalg.norm(a - b) / np.linalg.norm(b) for a, b in zip(k_other, k_ref))
-    assert rel <= 1e-6, rel
-
-
-@slow
-def test_the_report_shows_the_schedule_forms_side_by_side_from_the_same_runs(readme_root, stages, tmp_path):
+def test_the_report_shows_the_schedule_forms_side_by_side_from_the_same_runs(readme_root, readme_stages, tmp_path):
     """Issue 41 item 4: the full ``acmm report`` on the README's results root takes its runs (the
     converged quadratic is not designed again: its ``design.h5`` is the same file) and shows the
     packaged table, the report's route and the report's quadratic form converged on the path side
@@ -236,12 +180,12 @@ def test_the_report_shows_the_schedule_forms_side_by_side_from_the_same_runs(rea
     for row, name, form in zip(rows[1:], ("staircase", "staircase_lqr", "staircase_quadratic"),
                                ("regional LMI points, table", "sector LQR points, table",
                                 "regional LMI points, quadratic converged on the path")):
-        path = stages[f"design:{name}"]["schedule"]["path"]
+        path = readme_stages[f"design:{name}"]["schedule"]["path"]
         margin = np.asarray(path["sector_margin"])
         assert row[0].startswith(form) and f"`{name}`" in row[0]
         assert float(row[5]) == pytest.approx(np.max(path["max_real"]), abs=5e-4)
         assert row[6] == f"{np.sum(margin >= 0)} of {margin.size}"
-        assert float(row[7]) == pytest.approx(np.max(stages[f"simulate:{name}"]["levels"]["peak_momentum"]), abs=0.5)
+        assert float(row[7]) == pytest.approx(np.max(readme_stages[f"simulate:{name}"]["levels"]["peak_momentum"]), abs=0.5)
     assert rows[3][6].startswith("0 of ") and rows[1][6] == "1001 of 1001"
     assert "the report's quadratic form converged on the path (dashed)" in r.markdown.read_text(encoding="utf-8")
 
