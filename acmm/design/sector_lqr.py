@@ -101,31 +101,6 @@ def sector_margin(poles, n: float, sigma: float = 0.5, half_angle_deg: float = 4
     return np.minimum(d1, d2) / n
 
 
-def in_sector(poles, n: float, sigma: float = 0.5, half_angle_deg: float = 45.0, *,
-              min_margin: float = 0.0) -> np.ndarray:
-    """Boolean mask: pole lies in the sector with :func:`sector_margin` ≥ ``min_margin`` (units of n).
-
-    Parameters
-    ----------
-    poles : array_like of complex
-        Closed-loop eigenvalues, rad/s.
-    n : float
-        Orbital rate, rad/s.
-    sigma : float
-        Minimum decay rate in units of n.
-    half_angle_deg : float
-        Sector half-angle φ about the negative real axis, deg.
-    min_margin : float
-        Required margin, in units of n.
-
-    Returns
-    -------
-    bool array
-        True where the pole lies in the sector with the required margin.
-    """
-    return sector_margin(poles, n, sigma, half_angle_deg) >= min_margin
-
-
 @dataclass(frozen=True)
 class SectorLQR:
     """A verified sector-constrained LQR design.

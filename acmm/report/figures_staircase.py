@@ -11,27 +11,6 @@ from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
 from matplotlib.collections import LineCollection
 
 
-def fig_staircase(sim: dict, figdir: Path):
-    """Inertia steps (Figs 6.14–6.19), the responses (Figs 6.20–6.30) and the per-level statistics.
-
-    Parameters
-    ----------
-    sim : dict
-        ``sim.h5`` of the stair-case run as read by :func:`acmm_qpp.results.read_h5` (orbits, t in s,
-        inertia per level in slug·ft², attitude error in rad, body rate in rad/s, u in ft·lbf,
-        h in ft·lbf·s, the ``levels`` group).
-    figdir : pathlib.Path
-        Folder of the figures.
-
-    Returns
-    -------
-    tuple of dict
-        The three figures of :func:`fig_staircase_inertia`, :func:`fig_staircase_responses` and
-        :func:`fig_staircase_levels`, each ``{"pdf": path, "png": path}``.
-    """
-    return fig_staircase_inertia(sim, figdir), fig_staircase_responses(sim, figdir), fig_staircase_levels(sim, figdir)
-
-
 def fig_staircase_inertia(sim: dict, figdir: Path):
     """Inertia elements vs time (Figs 6.14–6.19).
 

@@ -133,28 +133,3 @@ class Chunker:
                 pos += 1
         self._pos = pos
         return chunk
-
-
-def make_chunks(tasks: list, size: int) -> list[list]:
-    """Consecutive case tasks of one base in lists of ``size``; each margin search alone.
-
-    Parameters
-    ----------
-    tasks : list of tuple
-        Tasks ``("case", base, index)`` or ``("margin", base, direction)``, in order.
-    size : int
-        Most case tasks per chunk.
-
-    Returns
-    -------
-    list of list
-        The chunks, in order.
-    """
-    chunks: list[list] = []
-    for t in tasks:
-        if (t[0] == "case" and chunks and len(chunks[-1]) < size and chunks[-1][0][0] == "case"
-                and chunks[-1][0][1] == t[1]):
-            chunks[-1].append(t)
-        else:
-            chunks.append([t])
-    return chunks

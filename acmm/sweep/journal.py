@@ -8,17 +8,13 @@ import os
 import time
 from pathlib import Path
 
-from acmm_qpp.errors import AcmmError, ConfigError
+from acmm_qpp.errors import ConfigError
 from acmm.sweep.journal_records import record_problem
 from acmm_qpp.configio import read_regular_file
 from acmm_qpp.atomic_write import output_error
 
 
 JOURNAL_VERSION = 1
-
-
-class SweepInterrupted(AcmmError):
-    """A sweep was stopped before all cases finished (the journal keeps what was done)."""
 
 
 # ---------------------------------------------------------------------------------------------

@@ -35,10 +35,6 @@ class NotEnclosable(ValueError):
     """An expression node the interval evaluation cannot enclose (no proof is possible)."""
 
 
-def _hull(a, b):
-    return iv.mpf([min(a.a, b.a), max(a.b, b.b)])
-
-
 def _sign(x):
     if x.a > 0:
         return iv.mpf(1)

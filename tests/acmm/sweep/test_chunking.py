@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from acmm.sweep.chunking import (MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker, chunk_size,
-                                 make_chunks)
+from acmm.sweep.chunking import MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, Chunker, chunk_size
 
 from tests.acmm.sweep.conftest import _assert_same_data, _cfg, _run_bytes
 
@@ -17,12 +16,10 @@ def test_chunk_size_and_chunks():
     assert chunk_size(3200, 16) == 25                     # 8 tasks per worker
     tasks = [("case", "a", i) for i in range(5)] + [("case", "b", i) for i in range(3)] + \
         [("margin", "a", "up"), ("margin", "a", "down")]
-    chunks = make_chunks(tasks, 2)
-    assert [len(c) for c in chunks] == [2, 2, 1, 2, 1, 1, 1]
+    chunks = list(iter(Chunker(tasks, 2, size=2).next, None))      # handed out lazily
+    assert [len(c) for c in chunks] == [2, 2, 1, 2, 1, 1, 1]          # a base's cases together, each margin alone
     assert [t for c in chunks for t in c] == tasks        # order kept, nothing lost
     assert all(len({t[1] for t in c}) == 1 for c in chunks)
-    fixed = Chunker(tasks, 2, size=2)
-    assert list(iter(fixed.next, None)) == chunks                 # the same chunks, handed out lazily
 
 
 def test_chunk_size_with_a_measured_case_cost():
