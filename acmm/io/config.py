@@ -213,10 +213,6 @@ class Output(SectionModel):
         return v
 
 
-#: Largest number of output samples a simulation may ask for (memory guard).
-MAX_SAMPLES = 2_000_000
-
-
 class Config(SectionModel):
     """A complete acmm run configuration."""
 

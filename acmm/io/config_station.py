@@ -78,16 +78,6 @@ class Inertia(SectionModel):
                          [self.I12, self.I22, self.I23],
                          [self.I13, self.I23, self.I33]])
 
-    def without_cross_products(self) -> "Inertia":
-        """The same body with I12 = I13 = I23 = 0 (the report's ch. 6 design model).
-
-        Returns
-        -------
-        Inertia
-            The principal-axis part of this inertia.
-        """
-        return Inertia(I11=self.I11, I22=self.I22, I33=self.I33)
-
 
 class Disturbance(SectionModel):
     """External torque per body axis, eq 3.9: w_i = bias_i + A_i sin(nt) + B_i sin(2nt) (ft·lbf).
