@@ -4,7 +4,8 @@ designed and simulated under two BLAS environments, and the stored results agree
 
 The two environments differ in both OpenBLAS kernel and thread count: this process's (the README's
 stages, :func:`tests.conftest.readme_stages`: under ``make`` the Haswell kernel, AVX2, on one
-thread) and a subprocess's, Prescott (SSE3, every x86-64) on two threads.
+thread) and a subprocess's, Prescott (SSE3, every x86-64) on two threads (Haswell where this
+process runs Prescott), with this tree's code and configs.
 
 What each result holds to (docs/reproducibility.md):
 - the shipped stair-case (regional LMI points, DSDP's second pass in the coordinates of its first
@@ -35,6 +36,8 @@ import h5py
 import numpy as np
 import pytest
 
+from tests.conftest import CONFIGS, REPO
+
 pytestmark = pytest.mark.slow
 
 
@@ -49,10 +52,11 @@ def _needs_two_kernels() -> None:
         pytest.skip("needs an x86-64 CPU with AVX2 to run two OpenBLAS kernels")
 
 
-#: the other environment: (OpenBLAS kernel, threads)
-OTHER = ("Prescott", 2)
+#: the other environment: (OpenBLAS kernel, threads); Haswell where this process runs Prescott
+OTHER = ("Haswell" if os.environ.get("OPENBLAS_CORETYPE", "").lower() == "prescott" else "Prescott", 2)
 
-#: the runs of the other environment: (command, arguments), each name as in the README's stages
+#: the runs of the other environment: (command, this tree's config, overrides), each name as in
+#: the README's stages
 RUNS = {"mb3_decoupled": ("simulate", "mb3_decoupled"),
         "staircase_lqr": ("simulate", "staircase", "design.pole_method=shift", "schedule.refine_points=0",
                           "name=staircase_lqr"),
@@ -67,10 +71,13 @@ def runs(request, tmp_path_factory) -> dict:
     request.getfixturevalue("readme_stages")         # (run first: this process's environment)
     cwd = tmp_path_factory.mktemp("determinism")
     kernel, threads = OTHER
-    env = {**os.environ, "OPENBLAS_CORETYPE": kernel, "OPENBLAS_NUM_THREADS": str(threads), "MPLBACKEND": "Agg"}
+    # this tree's code and configs, as the README's stages use (an editable install may map another)
+    env = {**os.environ, "OPENBLAS_CORETYPE": kernel, "OPENBLAS_NUM_THREADS": str(threads), "MPLBACKEND": "Agg",
+           "PYTHONPATH": str(REPO)}
     env.pop("OPENBLAS_L2_SIZE", None)
-    for name, (command, *args) in RUNS.items():
-        r = subprocess.run([sys.executable, "-m", "acmm.cli.app", command, *args, "--no-figures"],
+    for name, (command, config, *args) in RUNS.items():
+        r = subprocess.run([sys.executable, "-m", "acmm.cli.app", command, str(CONFIGS / f"{config}.yaml"), *args,
+                            "--no-figures"],
                            cwd=cwd, env=env, capture_output=True, text=True, timeout=1200)
         assert r.returncode == 0, (name, r.stderr[-2000:])
     return {"here": request.getfixturevalue("readme_root"), "other": cwd / "runs"}

@@ -30,8 +30,9 @@ past the targets.  The homotopy ends when the loops are inside the final region 
 :data:`HOMOTOPY_GAP` to spare in decay, or when two stages at the targets change nothing; it
 gives up (the least-squares fit is kept, ``accepted`` false, the reason in the message) after
 :data:`MAX_STAGES` stages.  The last problem, F at the targets with its weight, is solved by BFGS
-and then Newton's method (the exact Hessian, reused while the steps contract by half, a backtracking line search that keeps F finite) until no coefficient
-moves by more than :data:`STEP_TOL` of its scale: the answer is the stationary point itself,
+and then Newton's method (the exact Hessian, reused while the steps contract by half, a
+backtracking line search that keeps F finite) until no coefficient moves by more than
+:data:`STEP_TOL` of its scale: the answer is the stationary point itself,
 not where an iteration count ran out, and it does not depend on the way there.
 
 Gradients (Levine–Athans): ∂ tr P/∂K = 2(R K − Bᵀ P) L with A^α L + L (A^α)ᵀ + I = 0; for the
@@ -194,16 +195,18 @@ def _lyapunov(T: np.ndarray, U: np.ndarray, W: np.ndarray, adjoint: bool) -> np.
             raise ValueError(f"ztrsyl: argument {-info} is invalid")
         return U @ (Y / scale) @ U.conj().T
     N = T.shape[0]
-    Y = np.zeros(C.shape, complex)
+    stack = C.reshape(-1, N, N)
+    Y = np.zeros(stack.shape, complex)
     eye = np.eye(N)
     if adjoint:     # Tᴴ y_k + Σ_{i ≤ k} y_i T_ik = c_k, k = 0, 1, …: (Tᴴ + T_kk I) lower triangular
         for k in range(N):
-            rhs = C[..., k] - Y[..., :k] @ T[:k, k]
+            rhs = stack[..., k] - Y[..., :k] @ T[:k, k]
             Y[..., k] = solve_triangular(T.conj().T + T[k, k] * eye, rhs.T, lower=True).T
     else:           # T y_k + Σ_{i ≥ k} y_i conj(T_ki) = c_k, k = N − 1, …, 0: (T + conj(T_kk) I) upper
         for k in range(N - 1, -1, -1):
-            rhs = C[..., k] - Y[..., k + 1:] @ T[k, k + 1:].conj()
+            rhs = stack[..., k] - Y[..., k + 1:] @ T[k, k + 1:].conj()
             Y[..., k] = solve_triangular(T + np.conj(T[k, k]) * eye, rhs.T, lower=False).T
+    Y = Y.reshape(C.shape)
     return U @ Y @ U.conj().T
 
 

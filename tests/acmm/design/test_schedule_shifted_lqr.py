@@ -63,7 +63,7 @@ def _lyap_trace(M: np.ndarray, W: np.ndarray) -> float:
     return float(np.trace(P).real)
 
 
-def _F(path: PathModels, start: sch.ScheduleFit, coef: np.ndarray) -> float:
+def _F(path: PathModels, start: sch.ScheduleFit, coef: np.ndarray, cone: float = CONE) -> float:
     """F of the module docstring at θ-power coefficients ``coef``: log of the mean over the path's
     TEAs of tr P (shifted LQR) + tr P_c (the cone's rotated Lyapunov equation), plus (ε/2)‖x‖²
     with x the change of the coefficients in u = (θ − c)/h from the start's, each in units of the
@@ -77,12 +77,14 @@ def _F(path: PathModels, start: sch.ScheduleFit, coef: np.ndarray) -> float:
     a = np.linalg.solve(vu, (vt @ coef.reshape(3, -1)))
     a0 = np.linalg.solve(vu, (vt @ start.coef.reshape(3, -1)))
     x = (a - a0) / np.maximum(np.abs(a0).max(axis=0), 1e-12)
-    rot = np.exp(1j * np.radians(90.0 - CONE))
+    rot = np.exp(1j * np.radians(90.0 - cone))
     total = 0.0
     for A, B, t in zip(path.A, path.B, th):
         K = np.array([[np.polyval(coef[::-1, i, j], t) for j in range(5)] for i in range(3)])
         Ac = A - B @ K + DECAY * N_RATE * np.eye(5)
-        total += _lyap_trace(Ac, np.eye(5) + Q + K.T @ R @ K) + _lyap_trace(rot * Ac, (np.eye(5) + Q).astype(complex))
+        total += _lyap_trace(Ac, np.eye(5) + Q + K.T @ R @ K)
+        if cone < 90.0:
+            total += _lyap_trace(rot * Ac, (np.eye(5) + Q).astype(complex))
     return np.log(total / th.size) + 0.5 * WEIGHT * float(np.sum(x ** 2))
 
 
@@ -152,15 +154,21 @@ def test_the_exact_hessian_is_the_curvature_of_F():
         return power_basis(st["a0"] + z.reshape(st["shape"]) * st["sc"], st["c0"], st["h0"])
 
     assert np.allclose(coef(x), fit.coef, rtol=1e-10, atol=1e-12)
-    H = ShiftedCost(st, N_RATE, np.eye(5) + Q, R, WEIGHT).hessian(x, DECAY, np.radians(90.0 - CONE))
-    assert np.allclose(H, H.T) and np.linalg.eigvalsh(H).min() > 0       # a minimum
     rng = np.random.default_rng(3)
     h = 1e-4
-    f0 = _F(path, start, coef(x))
-    for _ in range(3):
-        v, w = rng.standard_normal((2, x.size))
-        fd = (_F(path, start, coef(x + h * v)) - 2 * f0 + _F(path, start, coef(x - h * v))) / h ** 2
-        assert v @ H @ v == pytest.approx(fd, rel=1e-4)
-        cross = (_F(path, start, coef(x + h * (v + w))) - _F(path, start, coef(x + h * (v - w)))
-                 - _F(path, start, coef(x - h * (v - w))) + _F(path, start, coef(x - h * (v + w)))) / (4 * h * h)
-        assert v @ H @ w == pytest.approx(cross, rel=1e-3, abs=1e-4 * abs(v @ H @ v))
+    for cone in (CONE, 90.0):                   # with the cone term, and without it (ψ = 0)
+        H = ShiftedCost(st, N_RATE, np.eye(5) + Q, R, WEIGHT).hessian(x, DECAY, np.radians(90.0 - cone))
+        assert np.allclose(H, H.T)
+        if cone == CONE:
+            assert np.linalg.eigvalsh(H).min() > 0        # the answer: a minimum
+
+        def F(z):
+            return _F(path, start, coef(z), cone)
+
+        f0 = F(x)
+        for _ in range(3):
+            v, w = rng.standard_normal((2, x.size))
+            fd = (F(x + h * v) - 2 * f0 + F(x - h * v)) / h ** 2
+            assert v @ H @ v == pytest.approx(fd, rel=1e-4)
+            cross = (F(x + h * (v + w)) - F(x + h * (v - w)) - F(x - h * (v - w)) + F(x - h * (v + w))) / (4 * h * h)
+            assert v @ H @ w == pytest.approx(cross, rel=1e-3, abs=1e-4 * abs(v @ H @ v))
