@@ -280,33 +280,12 @@ class ShiftedCost:
         tuple
             (F, dimensionless; ∇F, array like ``x``).
         """
-        K = self.gains(x)
-        shifted = self.As - self.Bs @ K + alpha * self.n * self.eye
-        rot = np.exp(1j * psi)
-        # one complex Schur form A^α = U T Uᴴ per TEA serves its four Lyapunov equations (the
-        # rotated matrix is U (e^{jψ} T) Uᴴ), each then a triangular Sylvester solve (LAPACK ztrsyl)
-        forms = [schur(Ac, output="complex") for Ac in shifted]
-        # the region, with 1e-8 n to spare (closer, the Lyapunov equations are numerically singular)
-        ev = np.array([np.diag(T) for T, _ in forms]) / self.n
-        if not (np.all(ev.real < -1e-8) and np.all((rot * ev).real < -1e-8)
-                and np.all((np.conj(rot) * ev).real < -1e-8)):
+        terms = self._terms(x, alpha, psi)
+        if terms is None:
             return np.inf, np.zeros_like(x)
-        total, gK = 0.0, np.empty_like(K)
-        for j, ((T, U), B, Kj) in enumerate(zip(forms, self.Bs, K)):
-            P = _lyapunov(T, U, self.Q + Kj.T @ self.R @ Kj, adjoint=True).real
-            L = _lyapunov(T, U, self.eye, adjoint=False).real
-            total += np.trace(P)
-            gK[j] = 2.0 * (self.R @ Kj - B.T @ P) @ L
-            if psi:
-                Pc = _lyapunov(rot * T, U, self.Q, adjoint=True)
-                Lc = _lyapunov(rot * T, U, self.eye, adjoint=False)
-                total += np.trace(Pc).real
-                gK[j] -= 2.0 * (np.conj(rot) * (B.T @ Pc @ Lc)).real
-        if not total > 0:
-            return np.inf, np.zeros_like(x)
-        g = (np.einsum("tk,tab->kab", self.st["up"], gK) * self.st["sc"]).ravel() / total
-        f = np.log(total / len(K)) + 0.5 * self.weight * float(x @ x)
-        return f, g + self.weight * x
+        total, g, _ = terms
+        f = np.log(total / len(self.As)) + 0.5 * self.weight * float(x @ x)
+        return f, g / total + self.weight * x
 
     def hessian(self, x: np.ndarray, alpha: float, psi: float = 0.0) -> np.ndarray:
         """∇²F at ``x``, exact (the module docstring): each TEA's gradient differentiated along
@@ -326,39 +305,64 @@ class ShiftedCost:
         -------
         (x.size, x.size) array
             The symmetric Hessian, dimensionless.
+
+        Raises
+        ------
+        ValueError
+            ``x`` is outside the region.
         """
+        terms = self._terms(x, alpha, psi, second=True)
+        if terms is None:
+            raise ValueError("the Hessian of F is asked outside the region")
+        total, g, D = terms
+        up, sc = self.st["up"], self.st["sc"].ravel()
+        H = np.einsum("tk,tl,tef->kelf", up, up, D).reshape(g.size, g.size) * np.outer(sc, sc)
+        H = H / total - np.outer(g, g) / total ** 2 + self.weight * np.eye(g.size)
+        return 0.5 * (H + H.T)
+
+    def _terms(self, x: np.ndarray, alpha: float, psi: float, second: bool = False):
+        """(T, ∇T, D) with T = Σ_j tr P_j + tr P_j^c the summed traces, ∇T its gradient in x and
+        D_j = ∂(∂T_j/∂K_j)/∂K_j (with ``second``; else None); None outside the region."""
         K = self.gains(x)
         rot = np.exp(1j * psi)
+        # one complex Schur form A^α = U T Uᴴ per TEA serves all its Lyapunov equations (the
+        # rotated matrix is U (e^{jψ} T) Uᴴ), each then a triangular Sylvester solve
+        forms = [schur(Ac, output="complex") for Ac in self.As - self.Bs @ K + alpha * self.n * self.eye]
+        # the region, with 1e-8 n to spare (closer, the Lyapunov equations are numerically singular)
+        ev = np.array([np.diag(T) for T, _ in forms]) / self.n
+        if not (np.all(ev.real < -1e-8) and np.all((rot * ev).real < -1e-8)
+                and np.all((np.conj(rot) * ev).real < -1e-8)):
+            return None
         m, N = K.shape[1:]
-        E = np.eye(m * N).reshape(m * N, m, N)                 # every gain element, one at a time
-        total, gK, D = 0.0, np.empty_like(K), np.empty((len(K), m * N, m * N))
-        for j, (A, B, Kj) in enumerate(zip(self.As, self.Bs, K)):
-            T, U = schur(A - B @ Kj + alpha * self.n * self.eye, output="complex")
+        E = np.eye(m * N).reshape(m * N, m, N) if second else None      # every gain element, one at a time
+        total, gK, D = 0.0, np.empty_like(K), np.empty((len(K), m * N, m * N)) if second else None
+        for j, ((T, U), B, Kj) in enumerate(zip(forms, self.Bs, K)):
             P = _lyapunov(T, U, self.Q + Kj.T @ self.R @ Kj, adjoint=True).real
             L = _lyapunov(T, U, self.eye, adjoint=False).real
             S = self.R @ Kj - B.T @ P
-            dM = -B @ E                                         # (m N, N, N)
-            dP = _lyapunov(T, U, _swap(dM) @ P + P @ dM + _swap(E) @ (self.R @ Kj) + Kj.T @ self.R @ E,
-                           adjoint=True).real
-            dL = _lyapunov(T, U, dM @ L + L @ _swap(dM), adjoint=False).real
             total += np.trace(P)
             gK[j] = 2.0 * S @ L
-            dG = 2.0 * ((self.R @ E - B.T @ dP) @ L + S @ dL)
+            if second:
+                dM = -B @ E                                     # (m N, N, N)
+                dP = _lyapunov(T, U, _swap(dM) @ P + P @ dM + _swap(E) @ (self.R @ Kj) + Kj.T @ self.R @ E,
+                               adjoint=True).real
+                dL = _lyapunov(T, U, dM @ L + L @ _swap(dM), adjoint=False).real
+                dG = 2.0 * ((self.R @ E - B.T @ dP) @ L + S @ dL)
             if psi:
                 Pc = _lyapunov(rot * T, U, self.Q, adjoint=True)
                 Lc = _lyapunov(rot * T, U, self.eye, adjoint=False)
-                dMr = rot * dM
-                dPc = _lyapunov(rot * T, U, _swap(dMr).conj() @ Pc + Pc @ dMr, adjoint=True)
-                dLc = _lyapunov(rot * T, U, dMr @ Lc + Lc @ _swap(dMr).conj(), adjoint=False)
                 total += np.trace(Pc).real
                 gK[j] -= 2.0 * (np.conj(rot) * (B.T @ Pc @ Lc)).real
-                dG -= 2.0 * (np.conj(rot) * (B.T @ (dPc @ Lc + Pc @ dLc))).real
-            D[j] = dG.reshape(m * N, m * N)
-        up, sc = self.st["up"], self.st["sc"].reshape(len(self.st["a0"]), -1)
-        g = (np.einsum("tk,tab->kab", up, gK) * self.st["sc"]).ravel()
-        H = np.einsum("tk,tl,tef->kelf", up, up, D).reshape(g.size, g.size) * np.outer(sc.ravel(), sc.ravel())
-        H = H / total - np.outer(g, g) / total ** 2 + self.weight * np.eye(g.size)
-        return 0.5 * (H + H.T)
+                if second:
+                    dMr = rot * dM
+                    dPc = _lyapunov(rot * T, U, _swap(dMr).conj() @ Pc + Pc @ dMr, adjoint=True)
+                    dLc = _lyapunov(rot * T, U, dMr @ Lc + Lc @ _swap(dMr).conj(), adjoint=False)
+                    dG -= 2.0 * (np.conj(rot) * (B.T @ (dPc @ Lc + Pc @ dLc))).real
+            if second:
+                D[j] = dG.reshape(m * N, m * N)
+        if not total > 0:
+            return None
+        return total, (np.einsum("tk,tab->kab", self.st["up"], gK) * self.st["sc"]).ravel(), D
 
 
 def _swap(M: np.ndarray) -> np.ndarray:
