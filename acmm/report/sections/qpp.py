@@ -13,10 +13,10 @@ from qpp.design.hinf import hinf_gains
 from qpp.design import spheres
 
 
-def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures: bool = True):
-    """One QPP chapter; returns (β3 with sin 5t, with sin t) for ch. 13, else None.
-
-    ``figures=False``: text and tables only (:func:`_figures` adds the two figures)."""
+def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
+    """One QPP chapter's text and tables (its figures are parts of their own,
+    :func:`circle13`, :func:`responses13`, ...); returns (β3 with sin 5t, with sin t) for ch. 13,
+    else None."""
     ctx.section(key)
     cfg = ctx.g.configs[name]
     dpath, spath = ctx.run(f"qpp design:{name}").path, ctx.run(f"qpp simulate:{name}").path
@@ -68,8 +68,6 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels, figures:
         ctx.doc.table(["printed", "quantity", "computed", "status"],
                       [[p.printed, p.quantity, fmt_value(p.computed, "{:.5f}"), ctx.status_text(p)] for p in led],
                       "Printed simulation results")
-    if figures:
-        _figures(ctx, key, name, out_labels)
     return beta3
 
 
@@ -85,12 +83,6 @@ def _consistent_verdict(attrs) -> str:
         return "certified" + (f"; {scope}" if scope else "")
     failed = [k[len("premise["):-1] for k in attrs if k.startswith("premise[") and not int(attrs[k])]
     return "not certified" + (f": {', '.join(failed)} fail" if failed else "")
-
-
-def _figures(ctx: SectionWriter, key, name, out_labels) -> None:
-    """The chapter's circle-criterion and response figures."""
-    _circle_figure(ctx, key, name)
-    _responses_figure(ctx, key, name, out_labels)
 
 
 def _circle_figure(ctx: SectionWriter, key, name) -> None:
@@ -222,18 +214,7 @@ def text13(ctx: SectionWriter) -> tuple[float, float]:
         seconds; :func:`qpp.design.spheres.beta3_sinusoidal`).
     """
     return _chapter(ctx, "qpp13", "qpp_siso", [("step_offset", 0, "0.094", "upper", ""),
-                                               ("sin10", 0, "0.16", "upper", "")], _OUT13, figures=False)
-
-
-def figures13(ctx: SectionWriter) -> None:
-    """Chapter 13's figures (:func:`circle13`, :func:`responses13`).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the ``qpp_siso`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
-    """
-    _figures(ctx, "qpp13", "qpp_siso", _OUT13)
+                                               ("sin10", 0, "0.16", "upper", "")], _OUT13)
 
 
 def circle13(ctx: SectionWriter) -> None:
@@ -271,18 +252,7 @@ def text14(ctx: SectionWriter) -> None:
     sc0 = c.simulation.scenarios[0]
     w = _WHY14.format(mu=c.nonlinearity.mu, imp=sc0.impulse, ti=sc0.impulse_time or 0.0)
     _chapter(ctx, "qpp14", "qpp_manipulator", [("M45", 0, "0.006", None, w), ("M45", 1, "0.0015", None, w)],
-             _OUT14, figures=False)
-
-
-def figures14(ctx: SectionWriter) -> None:
-    """Chapter 14's figures (:func:`circle14`, :func:`responses14`).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the ``qpp_manipulator`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
-    """
-    _figures(ctx, "qpp14", "qpp_manipulator", _OUT14)
+             _OUT14)
 
 
 def circle14(ctx: SectionWriter) -> None:
@@ -305,26 +275,3 @@ def responses14(ctx: SectionWriter) -> None:
         The section's inputs (the ``qpp_manipulator`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
     """
     _responses_figure(ctx, "qpp14", "qpp_manipulator", _OUT14)
-
-
-def build(ctx: SectionWriter) -> tuple[float, float]:
-    """Chapters 13 and 14 (:func:`text13`, :func:`figures13`, :func:`text14`, :func:`figures14` in this
-    order); returns ch. 13's β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the two qpp configs and their design and simulation files) and output (document blocks, printed numbers, figures).
-
-    Returns
-    -------
-    (float, float)
-        β3 = 0.05‖(sin 5t)_T‖₂ (T = 0.5 s, as the report prints it) and β3 = 0.05‖(sin t)_T‖₂
-        (definition eq 10.54 with the config's ω), both in s^{1/2} (units: square root of
-        seconds; :func:`qpp.design.spheres.beta3_sinusoidal`).
-    """
-    beta3 = text13(ctx)
-    figures13(ctx)
-    text14(ctx)
-    figures14(ctx)
-    return beta3

@@ -14,30 +14,6 @@ from acmm.model import linearize as lin
 from acmm.plots import design as design_plots
 
 
-def build(ctx: SectionWriter) -> np.ndarray:
-    """Stair-case design summary, gain schedule and pole maps; returns the poles of the
-    cross-inertia-free MB3 gain on the true coupled linear model (claim 1).
-
-    The same as its parts in order: :func:`summary`, :func:`path_figures`, :func:`true_poles`,
-    :func:`figures` (the report runs them as separate tasks).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs and output.
-
-    Returns
-    -------
-    (24,) complex array
-        Those closed-loop poles, rad/s.
-    """
-    summary(ctx)
-    path_figures(ctx)
-    ev = true_poles(ctx)
-    figures(ctx, ev)
-    return ev
-
-
 def summary(ctx: SectionWriter) -> None:
     """The section's text and tables (design summary, conditioning, the schedule along the path;
     sector LQR and schedule of ch. 5.2–5.3).
@@ -237,22 +213,6 @@ def true_poles(ctx: SectionWriter) -> np.ndarray:
     true = lin.design_point(cfg_m.inertia.matrix(), dec["tea"][0], cfg_m.orbit_rate, model="coupled",
                             drf_mode=cfg_m.design.drf_mode)
     return np.linalg.eigvals(true.A - true.B @ dec["K"][0])
-
-
-def figures(ctx: SectionWriter, ev: np.ndarray) -> None:
-    """The gain schedule and the pole maps (``ev``: :func:`true_poles`): :func:`gain_figure`, then
-    :func:`pole_figure`.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the stair-case config and its ``design.h5``, the mb3 designs) and output (document blocks, printed numbers, figures).
-    ev : (24,) complex array
-        Closed-loop poles of the cross-inertia-free MB3 gain on the true coupled model, rad/s
-        (:func:`true_poles`).
-    """
-    gain_figure(ctx)
-    pole_figure(ctx, ev)
 
 
 def gain_figure(ctx: SectionWriter) -> None:

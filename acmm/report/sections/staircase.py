@@ -8,21 +8,6 @@ from acmm.report.context import SectionWriter
 from acmm.report.figures_staircase import fig_staircase_inertia, fig_staircase_levels, fig_staircase_responses
 
 
-def build(ctx: SectionWriter) -> None:
-    """The MB3 → AC stair-case simulation (Figs 6.14–6.30): :func:`summary` and the three figures
-    (:func:`figure_inertia`, :func:`figure_responses`, :func:`figure_levels`), in this order.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the stair-case config and its ``sim.h5``) and output (document blocks, printed numbers, figures).
-    """
-    summary(ctx)
-    figure_inertia(ctx)
-    figure_responses(ctx)
-    figure_levels(ctx)
-
-
 def _sim(ctx: SectionWriter) -> dict:
     return ctx.data("acmm simulate:" + ctx.g.configs["staircase"].name)
 

@@ -1,7 +1,22 @@
-"""The report tests' HTML reader: section ids, images, links and the text of every table."""
+"""The report tests' HTML reader (section ids, images, links and the text of every table) and one
+fast report a session (:func:`fast_report`)."""
 from __future__ import annotations
 
 from html.parser import HTMLParser
+
+import pytest
+
+from acmm.report import build as build_mod
+
+
+@pytest.fixture(scope="session")
+def fast_report(tmp_path_factory):
+    """``(base, report)``: ``acmm report --fast`` built once a session into ``base / "out"``, its
+    stages computed in ``base / "runs"`` (about half a minute on 2 cores).  The tests that build a
+    report of their own with ``--root`` on that folder reuse its stages (same configs, same root,
+    same hashes) and run only the sections; none may change a file's contents there."""
+    base = tmp_path_factory.mktemp("report")
+    return base, build_mod.build_report(base / "out", fast=True, root=base / "runs")
 
 VOID = {"meta", "img", "br", "hr", "link", "input", "source", "wbr"}
 

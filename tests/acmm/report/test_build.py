@@ -2,9 +2,9 @@
 and determinism; a report that cannot be written, or whose sections fail, and the user's run
 folders it leaves alone.
 
-One fast report is built into a temporary directory (module fixture, minutes on 2 cores: the
-stair-case's LMI points); the
-other tests read it.  Numbers are checked against the report's printed values (Table 1, the
+One fast report is built into a temporary directory (:func:`tests.acmm.report.conftest.fast_report`,
+once a session); the other tests read it, and the tests of a failing part build theirs on its
+stages.  Numbers are checked against the report's printed values (Table 1, the
 ch. 13/14 gains) or against independent closed forms (the MB3 gravity-gradient capacity, the
 printed eq 3.6 residual of eq 4.2).
 """
@@ -36,13 +36,6 @@ pytestmark = pytest.mark.slow      # a whole `acmm report --fast` per session: `
 
 N = 0.0011
 MB3 = np.array([[23.22e6, -0.023e6, 0.477e6], [-0.023e6, 1.30e6, -0.011e6], [0.477e6, -0.011e6, 23.23e6]])
-
-
-@pytest.fixture(scope="module")
-def fast_report(tmp_path_factory):
-    base = tmp_path_factory.mktemp("report")
-    r = build_mod.build_report(base / "out", fast=True, root=base / "runs")
-    return base, r
 
 
 @pytest.fixture(scope="module")
@@ -340,11 +333,11 @@ def _failing_text14(ctx):
     raise ConvergenceError("injected: the chapter 14 solver did not converge")
 
 
-def test_a_failed_section_is_shown_and_the_others_complete(tmp_path, monkeypatch):
+def test_a_failed_section_is_shown_and_the_others_complete(fast_report, tmp_path, monkeypatch):
     """One section part raising a user-facing error (the first part of QPP chapter 14): the
     report is written, that section shows its heading and the one-line error, every other
     section is there with its content, and the command exits with the error's code (3) on one
-    ``error:`` line."""
+    ``error:`` line.  (The stages are the session's fast report's, reused.)"""
     import acmm.report.plan as plan
     from acmm.cli.app import app
     from acmm.report.constants import SECTIONS
@@ -352,7 +345,7 @@ def test_a_failed_section_is_shown_and_the_others_complete(tmp_path, monkeypatch
     parts = [(p[0], p[1], _failing_text14, *p[3:]) if p[0] == "qpp14" else p for p in plan.PARTS]
     monkeypatch.setattr(plan, "PARTS", parts)
     out = tmp_path / "out"
-    res = invoke(app, "report", "--fast", "--jobs", "2", "--out", out)
+    res = invoke(app, "report", "--fast", "--jobs", "2", "--out", out, "--root", fast_report[0] / "runs")
     assert res.exit_code == 3, res.output
     last = res.output.strip().splitlines()[-1]
     assert last.startswith("error: report incomplete:") and "injected: the chapter 14 solver" in last
@@ -376,17 +369,20 @@ def _broken_qpp_design(cfg, stage, rerun):
     return ensure_qpp(cfg, stage, rerun=rerun)
 
 
-def test_a_failed_stage_fails_only_the_sections_that_read_it(tmp_path, monkeypatch):
+def test_a_failed_stage_fails_only_the_sections_that_read_it(fast_report, tmp_path, monkeypatch):
     """A stage raising (the chapter-14 qpp design, in a worker): its simulation is not run, the
-    chapter-14 parts show the error, chapter 13 and the rest are complete, exit 3."""
+    chapter-14 parts show the error, chapter 13 and the rest are complete, exit 3.  (The other
+    stages are the session's fast report's, reused.)"""
     import sys
 
     from acmm.cli.app import app
 
     gather_mod = sys.modules["acmm.report.gather"]     # (acmm.report.gather the attribute is the function)
     monkeypatch.setattr(gather_mod, "_qpp_task", _broken_qpp_design)
-    out = tmp_path / "out"
-    res = invoke(app, "report", "--fast", "--jobs", "2", "--out", out)
+    out, root = tmp_path / "out", fast_report[0] / "runs"
+    sim14 = root / "qpp_manipulator" / "qpp_sim.h5"
+    stamp = sim14.stat().st_mtime_ns
+    res = invoke(app, "report", "--fast", "--jobs", "2", "--out", out, "--root", root)
     assert res.exit_code == 3, res.output
     assert res.output.strip().splitlines()[-1].startswith("error: report incomplete:")
     md = (out / "report.md").read_text(encoding="utf-8")
@@ -394,5 +390,6 @@ def test_a_failed_stage_fails_only_the_sections_that_read_it(tmp_path, monkeypat
     assert ("FAILED — qpp14 not computed: qpp design:qpp_manipulator failed: injected: qpp design of "
             "qpp_manipulator did not converge.") in q14
     assert "FAILED" not in md.split("## QPP chapter 14")[0]     # the sections before it are complete
-    assert not (out / "results" / "qpp_manipulator" / "qpp_sim.h5").exists()    # not run
-    assert (out / "results" / "qpp_siso" / "qpp_sim.h5").is_file()
+    assert sim14.stat().st_mtime_ns == stamp                    # not run
+    assert "qpp simulate:qpp_manipulator" not in (out / "manifest.json").read_text(encoding="utf-8")
+    assert (root / "qpp_siso" / "qpp_sim.h5").is_file()

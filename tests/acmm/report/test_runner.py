@@ -212,10 +212,10 @@ def _broken_qpp(cfg, stage, rerun):
 
 
 @pytest.mark.slow
-def test_report_failure_in_a_worker_is_one_line_and_shown_in_its_sections(tmp_path, monkeypatch):
+def test_report_failure_in_a_worker_is_one_line_and_shown_in_its_sections(fast_report, tmp_path, monkeypatch):
     """Every qpp stage raising in a worker: one ``error:`` line, exit 3, no traceback; the report
     is written (issue 30: it stopped with nothing written), its qpp sections show the error and the
-    acmm sections are complete."""
+    acmm sections are complete.  (The acmm stages are the session's fast report's, reused.)"""
     from typer.testing import CliRunner
 
     from acmm.cli.app import app
@@ -223,9 +223,9 @@ def test_report_failure_in_a_worker_is_one_line_and_shown_in_its_sections(tmp_pa
     gather_mod = importlib.import_module("acmm.report.gather")
 
     monkeypatch.setattr(gather_mod, "_qpp_task", _broken_qpp)
-    out = tmp_path / "out"
-    res = CliRunner().invoke(app, ["report", "--fast", "--jobs", "2", "--out", str(out), "--root",
-                                   str(tmp_path / "runs")])
+    out, root = tmp_path / "out", fast_report[0] / "runs"
+    qpp_files = {p: p.stat().st_mtime_ns for p in sorted((root / "qpp_siso").iterdir())}
+    res = CliRunner().invoke(app, ["report", "--fast", "--jobs", "2", "--out", str(out), "--root", str(root)])
     assert res.exit_code == 3, res.output
     lines = res.output.strip().splitlines()
     assert lines[-1].startswith("error:") and "did not converge" in lines[-1]
@@ -234,11 +234,11 @@ def test_report_failure_in_a_worker_is_one_line_and_shown_in_its_sections(tmp_pa
     assert "FAILED — qpp13 not computed: qpp design:qpp_siso failed: qpp design of qpp_siso: Riccati" in md
     assert "FAILED" not in md.split("## QPP chapter 13")[0]
     assert (out / "index.html").is_file() and (out / "manifest.json").is_file()
-    assert not (tmp_path / "runs" / "qpp_siso").exists()
+    assert qpp_files and {p: p.stat().st_mtime_ns for p in sorted((root / "qpp_siso").iterdir())} == qpp_files
 
 
 @pytest.mark.slow
-def test_an_interrupted_report_leaves_out_as_it_was(tmp_path, monkeypatch):
+def test_an_interrupted_report_leaves_out_as_it_was(fast_report, tmp_path, monkeypatch):
     """Ctrl-C after every section was drawn (here: in the printed-values section, which runs
     last): the figures had been written into --out/figures as their tasks finished, beside the
     previous report's pages (a review).  They are drawn in a staging folder now and moved in only
@@ -256,7 +256,7 @@ def test_an_interrupted_report_leaves_out_as_it_was(tmp_path, monkeypatch):
         raise KeyboardInterrupt
 
     monkeypatch.setattr(build_mod.sec_printed, "build", interrupted)
-    res = CliRunner().invoke(app, ["report", "--fast", "--out", str(out), "--root", str(tmp_path / "runs")])
+    res = CliRunner().invoke(app, ["report", "--fast", "--out", str(out), "--root", str(fast_report[0] / "runs")])
     assert res.exit_code == 130, res.output
     assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == ["figures", "index.html"]
     assert (out / "index.html").read_text() == "the previous report"
@@ -313,7 +313,7 @@ def test_worker_warnings_reach_the_caller_as_in_a_serial_run(action, expected):
 
 
 @pytest.mark.slow
-def test_a_results_file_rewritten_while_the_report_runs_is_refused(tmp_path, monkeypatch):
+def test_a_results_file_rewritten_while_the_report_runs_is_refused(fast_report, tmp_path, monkeypatch):
     """The report holds no run lock while its sections read the stages' files: a user's
     `acmm design staircase_fast schedule.n_points=3` during the report gave a report whose
     schedule section spoke of 3 points and whose errata row of 12 (a review).  A results file
@@ -335,7 +335,8 @@ def test_a_results_file_rewritten_while_the_report_runs_is_refused(tmp_path, mon
         return original(rep, *args, **kwargs)
 
     monkeypatch.setattr(build_mod.sec_printed, "build", rewrite_then_build)
-    res = CliRunner().invoke(app, ["report", "--fast", "--out", str(out), "--root", str(tmp_path / "runs")])
+    # (the session's fast report's stages: the copy moved into place holds the same bytes)
+    res = CliRunner().invoke(app, ["report", "--fast", "--out", str(out), "--root", str(fast_report[0] / "runs")])
     assert res.exit_code == 4, res.output
     assert res.output.strip().splitlines()[-1].startswith("error: acmm design:") and "rewritten" in res.output
     assert not [p for p in out.rglob("*") if p.is_file()]
