@@ -10,8 +10,8 @@ import numpy as np
 from acmm.report.numbers import fixed, markdown_table, sci, sig
 from acmm.report.page_runs import QPP_CONFIGS
 from qpp.design import spheres
-from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion, refine, resettle,
-                               search, settle_exclusion)
+from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion, resettle, search,
+                               settle_exclusion)
 
 
 def _decimals(p: float) -> int:
@@ -125,12 +125,13 @@ def block_qpp_search(r: dict) -> str:
     """docs/qpp-certificates.md: the report's two examples searched over procedure 12.1's family
     (:mod:`qpp.design.family`): the bounds that hold for every design, then the grid of
     :data:`qpp.design.family.REPORT_GRIDS` and a local search from its best point
-    (:func:`qpp.design.family.refine`; about three minutes on one core).
+    (:func:`acmm.report.page_runs.family_search`, run with the stages).
 
     Parameters
     ----------
     r : dict
-        :func:`acmm.report.page_runs.run_stages` (the qpp configs ``"qpp_config:<name>"``).
+        :func:`acmm.report.page_runs.run_stages` (the qpp configs ``"qpp_config:<name>"`` and
+        their searches ``"qpp_family:<name>"``).
 
     Returns
     -------
@@ -138,12 +139,11 @@ def block_qpp_search(r: dict) -> str:
         A Markdown table and one sentence per example.
     """
     rows, notes = [], []
-    for name, grid in REPORT_GRIDS.items():
+    for name in REPORT_GRIDS:
         cfg = r[f"qpp_config:{name}"]
         b = family_bounds(cfg)
-        cands = search(cfg, grid["rho"], grid["w"], grid["a"])
-        best = max(cands, key=lambda c: c.m - c.beta1)
-        ref, n_ref = refine(cfg, best)
+        fam = r[f"qpp_family:{name}"]
+        cands, best, ref, n_ref = fam["candidates"], fam["best"], fam["refined"], fam["designs"]
         n_cert = sum(c.certified for c in cands) + int(ref.certified)
         ws = ", ".join(fixed(w, 3) for w in b.servo_frequencies)
         sin = "—" if b.m_upper_sin is None else f"{fixed(b.m_upper_sin, 4)} (T ≥ {fixed(b.T_sin, 4)} s)"

@@ -24,6 +24,7 @@ from acmm.sweep.run import run_sweep
 from acmm_qpp.configio import packaged_config_path
 from acmm_qpp.errors import AcmmError
 from acmm_qpp.results import read_h5
+from qpp.design.family import REPORT_GRIDS, refine, search
 
 #: the qpp configs the pages quote: the report's two chapters and the three shipped examples
 QPP_CONFIGS = ("qpp_siso", "qpp_manipulator", "qpp_unstable", "qpp_saturation", "qpp_cubic2", "qpp_siso_certified")
@@ -47,7 +48,8 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
         :func:`acmm_qpp.results.read_h5`; ``"config:<name>"`` → the acmm config;
         ``"qpp_design:<name>"`` (:data:`QPP_CONFIGS`) → ``qpp_design.h5`` as read by ``read_h5``,
         ``"qpp_sim:<name>"`` → :func:`qpp_scenarios` of ``qpp_sim.h5``, ``"qpp_config:<name>"`` →
-        the qpp config.
+        the qpp config; ``"qpp_family:<name>"`` (:data:`qpp.design.family.REPORT_GRIDS`) →
+        :func:`family_search`.
 
     Raises
     ------
@@ -66,12 +68,41 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
         out[f"qpp_config:{name}"] = qcfg
         out[f"qpp_design:{name}"] = read_h5(ensure_qpp(qcfg, "design").path)
         out[f"qpp_sim:{name}"] = qpp_scenarios(ensure_qpp(qcfg, "simulate").path)
+    for name, grid in REPORT_GRIDS.items():
+        out[f"qpp_family:{name}"] = family_search(out[f"qpp_config:{name}"], grid)
     res, note = robustness_result(root, workers=workers)
     if res is None:
         raise AcmmError(f"the sweep for the README did not run: {note}")
     out["sweep"] = res["data"]
     out.update(route_variants(root, workers))
     return out
+
+
+def family_search(cfg, grid: dict) -> dict:
+    """Procedure 12.1's family of ``cfg`` searched on ``grid`` (:func:`qpp.design.family.search`)
+    and locally from the grid's best point (:func:`qpp.design.family.refine`; minutes on one core
+    for ch. 13's grid).
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        The qpp config.
+    grid : dict
+        ``"rho"``, ``"w"``, ``"a"``: the grid's control weights ρ (dimensionless), output weights
+        w (dimensionless) and exponential weightings a (1/s), as in
+        :data:`qpp.design.family.REPORT_GRIDS`.
+
+    Returns
+    -------
+    dict
+        ``"candidates"`` (list of :class:`qpp.design.family.Candidate`, one per grid design),
+        ``"best"`` (the one with the largest m − β1), ``"refined"`` (the local search's end, a
+        Candidate) and ``"designs"`` (the designs the local search evaluated).
+    """
+    cands = search(cfg, grid["rho"], grid["w"], grid["a"])
+    best = max(cands, key=lambda c: c.m - c.beta1)
+    refined, designs = refine(cfg, best)
+    return {"candidates": cands, "best": best, "refined": refined, "designs": designs}
 
 
 def variant_config(root: Path, base: str, name: str, patch: dict):

@@ -12,7 +12,7 @@ import pytest
 
 from acmm_qpp.results import read_h5
 from qpp.design.certificate import certify
-from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion, refine, resettle,
+from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion, resettle,
                                search, servo_frequencies, settle_exclusion, settle_line)
 from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
@@ -61,17 +61,18 @@ def test_m_stays_below_the_bounds(siso, arm):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(REPORT_GRIDS))
-def test_the_grid_of_the_family_certifies_nothing(name, siso, arm):
-    """The grids of docs/qpp-certificates.md, ch. 13's every other ρ (the README's test compares
-    the whole grid's counts and extremes with the page): no design certified; on each, β1 ≥ 1 (its
-    gain at the servo frequencies is 1), m below the bound, and β1 < m fails; a short local search
-    from the best point certifies nothing either."""
-    cfg = {"qpp_siso": siso, "qpp_manipulator": arm}[name]
+def test_the_grid_of_the_family_certifies_nothing(name, readme_stages):
+    """The grids of docs/qpp-certificates.md, searched with the README's stages
+    (:func:`acmm.report.page_runs.family_search`, whose numbers the README's test compares with
+    the page): no design certified; on each, β1 ≥ 1 (its gain at the servo frequencies is 1), m
+    below the bound, and β1 < m fails; the local search from the best point certifies nothing
+    either."""
+    cfg = readme_stages[f"qpp_config:{name}"]
+    fam = readme_stages[f"qpp_family:{name}"]
+    cands = fam["candidates"]
     grid = REPORT_GRIDS[name]
-    rhos = grid["rho"][::2] if name == "qpp_siso" else grid["rho"]
-    cands = search(cfg, rhos, grid["w"], grid["a"])
+    assert len(cands) >= 20 and len(cands) <= len(grid["rho"]) * len(grid["w"]) * len(grid["a"])
     b = family_bounds(cfg)
-    assert len(cands) >= 20
     for c in cands:
         assert not c.certified and "contraction" in c.failed
         assert c.servo_gain == pytest.approx(1.0, abs=1e-8) and c.beta1 >= 1.0 - 1e-9
@@ -83,7 +84,8 @@ def test_the_grid_of_the_family_certifies_nothing(name, siso, arm):
         j = int(np.argmin(np.abs(pe.times - c.T)))
         assert c.gamma_inf >= pe.gamma_lower[j] * (1 - 1e-9)
         assert "peak" in c.failed or not pe.excluded[j]
-    best, n = refine(cfg, max(cands, key=lambda c: c.m - c.beta1), max_evals=12)
+    assert fam["best"] is max(cands, key=lambda c: c.m - c.beta1)
+    best, n = fam["refined"], fam["designs"]
     assert n >= 1 and not best.certified and best.m < best.beta1
 
 
