@@ -10,8 +10,7 @@ import numpy as np
 from acmm.report.numbers import fixed, markdown_table, sci, sig
 from acmm.report.page_runs import QPP_CONFIGS
 from qpp.design import spheres
-from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion, resettle, search,
-                               settle_exclusion)
+from qpp.design.family import REPORT_GRIDS, family_bounds, peak_exclusion, settle_exclusion
 
 
 def _decimals(p: float) -> int:
@@ -198,9 +197,8 @@ def block_qpp_search(r: dict) -> str:
                          + f": m ≤ {fixed(max(c.m for c in cands), 4)} against β1 ≥ "
                          f"{fixed(min(c.beta1 for c in cands), 4)} on its {len(cands)} designs, and the local search "
                          f"from its best point ends at m − β1 = {fixed(ref.m - ref.beta1, 4)} (a search, not a proof).")
-        if name in REPORT_CERTIFIED:
-            c = search(cfg, *[[x] for x in REPORT_CERTIFIED[name]])[0]
-            rs = resettle(cfg, c)
+        if "beyond" in fam:
+            c, rs = fam["beyond"], fam["resettled"]
             cmp_b, cmp_p = ("<" if c.beta1 < c.m else "≥"), ("≤" if c.peak <= 1.0 else ">")
             notes.append(f"* `{name}`, beyond the grid (`qpp.design.family.REPORT_CERTIFIED`): ρ = {sci(c.rho)}, w = "
                          f"{sig(c.ws[0])}, a = {sci(c.a)} settles at T = {fixed(c.T, 4)} s on the first pass's samples "

@@ -24,7 +24,7 @@ from acmm.sweep.run import run_sweep
 from acmm_qpp.configio import packaged_config_path
 from acmm_qpp.errors import AcmmError
 from acmm_qpp.results import read_h5
-from qpp.design.family import REPORT_GRIDS, refine, search
+from qpp.design.family import REPORT_CERTIFIED, REPORT_GRIDS, refine, resettle, search
 
 #: the qpp configs the pages quote: the report's two chapters and the three shipped examples
 QPP_CONFIGS = ("qpp_siso", "qpp_manipulator", "qpp_unstable", "qpp_saturation", "qpp_cubic2", "qpp_siso_certified")
@@ -69,7 +69,7 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
         out[f"qpp_design:{name}"] = read_h5(ensure_qpp(qcfg, "design").path)
         out[f"qpp_sim:{name}"] = qpp_scenarios(ensure_qpp(qcfg, "simulate").path)
     for name, grid in REPORT_GRIDS.items():
-        out[f"qpp_family:{name}"] = family_search(out[f"qpp_config:{name}"], grid)
+        out[f"qpp_family:{name}"] = family_search(out[f"qpp_config:{name}"], grid, REPORT_CERTIFIED.get(name))
     res, note = robustness_result(root, workers=workers)
     if res is None:
         raise AcmmError(f"the sweep for the README did not run: {note}")
@@ -78,10 +78,11 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
     return out
 
 
-def family_search(cfg, grid: dict) -> dict:
-    """Procedure 12.1's family of ``cfg`` searched on ``grid`` (:func:`qpp.design.family.search`)
-    and locally from the grid's best point (:func:`qpp.design.family.refine`; minutes on one core
-    for ch. 13's grid).
+def family_search(cfg, grid: dict, beyond: tuple | None = None) -> dict:
+    """Procedure 12.1's family of ``cfg`` searched on ``grid`` (:func:`qpp.design.family.search`),
+    locally from the grid's best point (:func:`qpp.design.family.refine`) and at one design
+    ``beyond`` the grid, on the first pass's samples and on the certificate's own
+    (:func:`qpp.design.family.resettle`); minutes on one core for ch. 13's grid.
 
     Parameters
     ----------
@@ -91,18 +92,25 @@ def family_search(cfg, grid: dict) -> dict:
         ``"rho"``, ``"w"``, ``"a"``: the grid's control weights ρ (dimensionless), output weights
         w (dimensionless) and exponential weightings a (1/s), as in
         :data:`qpp.design.family.REPORT_GRIDS`.
+    beyond : tuple, optional
+        (ρ, w, a) of a design off the grid, as in :data:`qpp.design.family.REPORT_CERTIFIED`.
 
     Returns
     -------
     dict
         ``"candidates"`` (list of :class:`qpp.design.family.Candidate`, one per grid design),
         ``"best"`` (the one with the largest m − β1), ``"refined"`` (the local search's end, a
-        Candidate) and ``"designs"`` (the designs the local search evaluated).
+        Candidate), ``"designs"`` (the designs the local search evaluated), and with ``beyond``
+        ``"beyond"`` (its Candidate) and ``"resettled"`` (its :class:`qpp.design.family.Resettled`).
     """
     cands = search(cfg, grid["rho"], grid["w"], grid["a"])
     best = max(cands, key=lambda c: c.m - c.beta1)
     refined, designs = refine(cfg, best)
-    return {"candidates": cands, "best": best, "refined": refined, "designs": designs}
+    out = {"candidates": cands, "best": best, "refined": refined, "designs": designs}
+    if beyond is not None:
+        out["beyond"] = search(cfg, *[[x] for x in beyond])[0]
+        out["resettled"] = resettle(cfg, out["beyond"])
+    return out
 
 
 def variant_config(root: Path, base: str, name: str, patch: dict):

@@ -12,7 +12,7 @@ import pytest
 
 from acmm_qpp.results import read_h5
 from qpp.design.certificate import certify
-from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion, resettle,
+from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion,
                                search, servo_frequencies, settle_exclusion, settle_line)
 from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
@@ -349,19 +349,22 @@ def _settle(t, y):
 
 
 @pytest.mark.slow
-def test_a_design_of_the_family_is_certified_at_its_first_pass_settling_time(siso, tmp_path):
+def test_a_design_of_the_family_is_certified_at_its_first_pass_settling_time(siso, readme_stages, tmp_path):
     """Issue 43: the ch. 13 design of REPORT_CERTIFIED settles at T = 0.0125 s on the first pass's
     samples and is certified there — recomputed here: β1 and γ∞ by the verifier's Hamiltonian
     bisection and Gramian, the settling time and m (every truncation time on 0.0125/400 s steps,
     β4 by the trapezoid rule) from scipy's matrix exponential, and the verdict of ``qpp design`` on
-    its gains (exit 0).  On 20 001 samples the same loop settles only at 0.036 s, where it fails."""
+    its gains (exit 0).  On 20 001 samples the same loop settles only at 0.036 s, where it fails.
+    (The design and its resettling are the README's stages', :func:`acmm.report.page_runs.family_search`.)"""
     import yaml
     from typer.testing import CliRunner
 
     from qpp.cli import app
 
     rho, w, a = REPORT_CERTIFIED["qpp_siso"]
-    c = search(siso, [rho], [w], [a])[0]
+    fam = readme_stages["qpp_family:qpp_siso"]
+    c = fam["beyond"]
+    assert (c.rho, c.ws, c.a) == (rho, (w,), a)
     assert c.certified and c.failed == [] and c.T == pytest.approx(0.0125)
     P = siso.lure_plant()
     g = hinf_gains(weighted_plant(P, w), rho=rho, a=a)
@@ -400,6 +403,6 @@ def test_a_design_of_the_family_is_certified_at_its_first_pass_settling_time(sis
     # sampled 20 001 times, the loop settles at 0.036 s: there contraction and peak fail
     fine = np.linspace(0.0, 10.0, 20001)
     assert _settle(fine, _nominal(Az, Bz[:, :1], Cz, fine)) == pytest.approx(0.036)
-    rs = resettle(siso, c)
+    rs = fam["resettled"]
     assert rs.T == pytest.approx(0.036) and not rs.certified and "contraction" in rs.failed
 
