@@ -4,8 +4,9 @@
 guide's pages (``docs/**/*.md``, each block once across them) as the report computes them
 (:mod:`acmm.report.page_blocks`); here the same blocks are computed from a fresh run into a temporary results root
 (designs of mb3, mb3_decoupled, ac and the stair-case, their simulations, the qpp designs and
-simulations of the two report chapters and the three shipped examples, the 400-case
-``sweep_inertia30`` Monte Carlo and margin search, once a session: :func:`tests.conftest.readme_stages`) and compared
+simulations of the two report chapters and the three shipped examples, the search over procedure
+12.1's family of the two chapters, the 400-case ``sweep_inertia30`` Monte Carlo and margin search,
+once a session: :func:`tests.conftest.readme_stages`) and compared
 with the documents, so a code change that moves a number fails here until ``make readme`` is run.
 """
 from __future__ import annotations

@@ -5,7 +5,9 @@ into a results root through the report's own functions (:mod:`acmm.report.stage_
 The packaged designs and simulations of ch. 5–6 (MB3, AC, the stair-case), the ±30 % inertia
 sweep of ch. 7, the qpp examples of ch. 13–14 and the shipped ones, and the variants the guide
 compares them with: the regional LMI and robust routes (:data:`ROUTE_VARIANTS`) and the
-stair-case's other schedules (:data:`STAIRCASE_VARIANTS`).
+stair-case's other schedules (:data:`STAIRCASE_VARIANTS`); and the search over procedure 12.1's
+family of the report's two qpp examples that docs/qpp-certificates.md quotes
+(:func:`family_search`).
 """
 from __future__ import annotations
 

@@ -1,2 +1,3 @@
-"""One module per report section; each ``build(ctx, ...)`` takes declared inputs and writes its
+"""One module per report section; each part (a ``build(ctx, ...)`` or, where a section has several
+parts, :data:`acmm.report.plan.PARTS`'s functions) takes declared inputs and writes its share of the
 section (text, tables, figures, ledger entries) into its own :class:`acmm.report.context.SectionWriter`."""

@@ -2,7 +2,11 @@
 fast report a session (:func:`fast_report`)."""
 from __future__ import annotations
 
+import contextlib
+import json
+import shutil
 from html.parser import HTMLParser
+from pathlib import Path
 
 import pytest
 
@@ -17,6 +21,30 @@ def fast_report(tmp_path_factory):
     same hashes) and run only the sections; none may change a file's contents there."""
     base = tmp_path_factory.mktemp("report")
     return base, build_mod.build_report(base / "out", fast=True, root=base / "runs")
+
+
+@contextlib.contextmanager
+def moved_aside(root: Path, *names: str):
+    """The run folders ``names`` of results root ``root`` (the shared :func:`fast_report`'s) moved
+    out of it inside the block and back after it, so that a report on ``root`` finds them absent:
+    what it writes there, or reads from disk, shows.  A folder the block left in their place is
+    removed first."""
+    hold = root.parent / "aside"
+    hold.mkdir(exist_ok=True)
+    for name in names:
+        (root / name).rename(hold / name)
+    try:
+        yield
+    finally:
+        for name in names:
+            if (root / name).exists():
+                shutil.rmtree(root / name)
+            (hold / name).rename(root / name)
+
+
+def manifest_stages(out: Path) -> set:
+    """The stages a report in ``out`` lists in its ``manifest.json`` (``"qpp simulate:qpp_siso"``, ...)."""
+    return set(json.loads((out / "manifest.json").read_text(encoding="utf-8"))["files"])
 
 VOID = {"meta", "img", "br", "hr", "link", "input", "source", "wbr"}
 

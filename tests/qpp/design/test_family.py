@@ -2,7 +2,9 @@
 that hold for every design (β1 ≥ 1, m ≤ β_o/(β_i + |k∘C x0|), m ≤ 1 for ch. 13 once T ≥ π/2, the
 premise peak's γ∞ ≥ L(T) against m(T) ≤ U(T), and the premises contraction and peak together against
 fast settling) against numbers computed here from the configs, the independent verifier's Hamiltonian
-norm and Gramian, adaptive quadrature, a primal least-norm problem and DOP853 simulations."""
+norm and Gramian, adaptive quadrature, a primal least-norm problem and DOP853 simulations.  The grid
+search and the design beyond it are the README's (:func:`tests.conftest.readme_stages`, which runs
+every stage the README quotes: minutes), checked here design by design."""
 from __future__ import annotations
 
 import warnings
@@ -84,9 +86,11 @@ def test_the_grid_of_the_family_certifies_nothing(name, readme_stages):
         j = int(np.argmin(np.abs(pe.times - c.T)))
         assert c.gamma_inf >= pe.gamma_lower[j] * (1 - 1e-9)
         assert "peak" in c.failed or not pe.excluded[j]
-    assert fam["best"] is max(cands, key=lambda c: c.m - c.beta1)
-    best, n = fam["refined"], fam["designs"]
-    assert n >= 1 and not best.certified and best.m < best.beta1
+    best = fam["best"]
+    assert best in cands and all(c.m - c.beta1 <= best.m - best.beta1 for c in cands)
+    ref, n = fam["refined"], fam["designs"]
+    assert n >= 1 and ref.m - ref.beta1 >= best.m - best.beta1      # the local search did not go back
+    assert not ref.certified and ref.m < ref.beta1
 
 
 def _L_single(T, times, band=0.05):
