@@ -46,6 +46,7 @@ def manifest_stages(out: Path) -> set:
     """The stages a report in ``out`` lists in its ``manifest.json`` (``"qpp simulate:qpp_siso"``, ...)."""
     return set(json.loads((out / "manifest.json").read_text(encoding="utf-8"))["files"])
 
+
 VOID = {"meta", "img", "br", "hr", "link", "input", "source", "wbr"}
 
 
