@@ -2,10 +2,10 @@
 stair-case on the report's route, the report's converged quadratic and claim 1 (mb3_decoupled)
 designed and simulated under two BLAS environments, and the stored results agree.
 
-The two environments differ in both OpenBLAS kernel and thread count: this process's (the README's
-stages, :func:`tests.conftest.readme_stages`: under ``make`` the Haswell kernel, AVX2, on one
-thread) and a subprocess's, Prescott (SSE3, every x86-64) on two threads (Haswell where this
-process runs Prescott), with this tree's code and configs.
+The two environments differ in both OpenBLAS kernel and thread count: this process's (under
+``make`` the Haswell kernel, AVX2, on one thread) and Prescott's (SSE3, every x86-64) on two
+threads (Haswell where this process runs Prescott).  Each runs in a subprocess, with this tree's
+code and configs.
 
 What each result holds to (docs/reproducibility.md):
 - the shipped stair-case (regional LMI points, DSDP's second pass in the coordinates of its first
@@ -55,8 +55,8 @@ def _needs_two_kernels() -> None:
 #: the other environment: (OpenBLAS kernel, threads); Haswell where this process runs Prescott
 OTHER = ("Haswell" if os.environ.get("OPENBLAS_CORETYPE", "").lower() == "prescott" else "Prescott", 2)
 
-#: the runs of the other environment: (command, this tree's config, overrides), each name as in
-#: the README's stages
+#: the runs of each environment: (command, this tree's config, overrides), each name as in the
+#: README's stages
 RUNS = {"mb3_decoupled": ("simulate", "mb3_decoupled"),
         "staircase_lqr": ("simulate", "staircase", "design.pole_method=shift", "schedule.refine_points=0",
                           "name=staircase_lqr"),
@@ -64,23 +64,27 @@ RUNS = {"mb3_decoupled": ("simulate", "mb3_decoupled"),
         "staircase_quadratic": ("design", "staircase", "schedule.form=polynomial", "name=staircase_quadratic")}
 
 
-@pytest.fixture(scope="module")
-def runs(request, tmp_path_factory) -> dict:
-    """``{"here": this process's results root, "other": the subprocess's}``."""
-    _needs_two_kernels()
-    request.getfixturevalue("readme_stages")         # (run first: this process's environment)
-    cwd = tmp_path_factory.mktemp("determinism")
-    kernel, threads = OTHER
-    # this tree's code and configs, as the README's stages use (an editable install may map another)
-    env = {**os.environ, "OPENBLAS_CORETYPE": kernel, "OPENBLAS_NUM_THREADS": str(threads), "MPLBACKEND": "Agg",
-           "PYTHONPATH": str(REPO)}
-    env.pop("OPENBLAS_L2_SIZE", None)
+def _run_all(cwd: Path, kernel: str | None, threads: int) -> Path:
+    """The results root of :data:`RUNS` run in ``cwd`` by subprocesses on that OpenBLAS kernel
+    (None: this process's) and thread count."""
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": str(threads), "MPLBACKEND": "Agg", "PYTHONPATH": str(REPO)}
+    if kernel is not None:
+        env["OPENBLAS_CORETYPE"] = kernel
+        env.pop("OPENBLAS_L2_SIZE", None)
     for name, (command, config, *args) in RUNS.items():
         r = subprocess.run([sys.executable, "-m", "acmm.cli.app", command, str(CONFIGS / f"{config}.yaml"), *args,
                             "--no-figures"],
                            cwd=cwd, env=env, capture_output=True, text=True, timeout=1200)
         assert r.returncode == 0, (name, r.stderr[-2000:])
-    return {"here": request.getfixturevalue("readme_root"), "other": cwd / "runs"}
+    return cwd / "runs"
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory) -> dict:
+    """``{"here": the results root of this process's environment, "other": the other's}``."""
+    _needs_two_kernels()
+    here = _run_all(tmp_path_factory.mktemp("here"), None, int(os.environ.get("OPENBLAS_NUM_THREADS", "1")))
+    return {"here": here, "other": _run_all(tmp_path_factory.mktemp("other"), *OTHER)}
 
 
 def _read(runs_dir: Path, name: str) -> dict:
