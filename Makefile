@@ -53,11 +53,18 @@ run: $(STAMP) bytecode
 # `make test` leaves out the system tests marked slow (whole reports, the cross-kernel runs, timed
 # signals, the generated numbers' regeneration, the README's quick start, the longest subprocess and fuzz runs); `make test-slow` runs
 # them, and CI (.ci/run) runs both.
+# Both run in $(TEST_WORKERS) pytest-xdist worker processes, one per core of the 2-core machines CI
+# runs on (`make test TEST_WORKERS=auto` on a larger one); `make test-slow` runs the tests of the
+# files that share a session fixture of minutes on one worker, the others a file at a time
+# (--dist loadgroup: tests/conftest.py's work_unit).
+TEST_WORKERS ?= 2
+PYTEST := OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -n $(TEST_WORKERS)
+
 test: $(STAMP) bytecode $(if $(CI),browser)
-	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -m "not slow" --durations=25
+	$(PYTEST) -m "not slow" --durations=25
 
 test-slow: $(STAMP) bytecode
-	OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -m slow --durations=10
+	$(PYTEST) --dist loadgroup -m slow --durations=10
 
 # The suite against the newest releases within pyproject.toml's bounds, in $(LATEST) (re-resolved at
 # every call; not part of CI): what the next `make lock` would bring.  The numba cache beside the

@@ -4,6 +4,7 @@ Test modules import the constants and helpers of this file as ``from tests.conft
 (``tests`` is a package: see ``tests/__init__.py``)."""
 from __future__ import annotations
 
+import functools
 import importlib.util
 import os
 from pathlib import Path
@@ -23,6 +24,42 @@ CONFIGS = REPO / "configs"
 #: mechanics use them (``load_config("staircase", [*LQR_ROUTE])``); the shipped design is tested
 #: in the slow group.
 LQR_ROUTE = ("design.pole_method=shift", "schedule.refine_points=0", "schedule.n_check=201")
+
+
+#: The session fixtures that take minutes, in the order a test file that names several is grouped
+#: by (``readme_root`` is the README stages' folder).
+SHARED_FIXTURES = {"readme_stages": "readme_stages", "readme_root": "readme_stages",
+                   "fast_report": "fast_report", "staircase_shipped": "staircase_shipped"}
+
+
+@functools.cache
+def work_unit(test_file: str) -> str:
+    """The pytest-xdist work unit of the tests of a file: the first of :data:`SHARED_FIXTURES` the
+    file names, so that the files that share one run on the worker that computes it, once; else
+    the file itself, so that a module fixture is computed once too.
+
+    Parameters
+    ----------
+    test_file : str
+        The file's path relative to :data:`REPO`, as a node id starts.
+    """
+    text = (REPO / test_file).read_text(encoding="utf-8")
+    return next((group for name, group in SHARED_FIXTURES.items() if name in text), test_file)
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadgroup`` (``make test-slow``) by :func:`work_unit`: pytest-xdist's
+    own reads ``xdist_group`` marks off node ids that pytest 9.2 no longer lets it rewrite, and
+    so groups nothing (pytest-dev/pytest-xdist#1386)."""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling      # pytest-xdist: only where it runs the tests
+
+    class SharedFixtureScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return work_unit(nodeid.split("::", 1)[0])
+
+    return SharedFixtureScheduling(config, log)
 
 
 @pytest.fixture
@@ -66,8 +103,7 @@ def readme_root(tmp_path_factory) -> Path:
 def readme_stages(readme_root) -> dict:
     """The stages the README and the guide quote (:func:`acmm.report.page_runs.run_stages`), run
     once a session into :func:`readme_root` in this process (several minutes): the README numbers'
-    tests read them, the determinism test takes them as the run of this process's BLAS kernel
-    and thread count, and the qpp family tests check their search design by design."""
+    tests read them and the qpp family tests check their search design by design."""
     from acmm.report.page_runs import run_stages       # the report layer: only for the slow tests
 
     readme_script().use_this_trees_configs()
