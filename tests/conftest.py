@@ -26,38 +26,56 @@ CONFIGS = REPO / "configs"
 LQR_ROUTE = ("design.pole_method=shift", "schedule.refine_points=0", "schedule.n_check=201")
 
 
-#: The session fixtures that take minutes, in the order a test file that names several is grouped
-#: by (``readme_root`` is the README stages' folder).
+#: The costly session fixtures, in the order a test file that names several is grouped by
+#: (``readme_root`` is the README stages' folder).
 SHARED_FIXTURES = {"readme_stages": "readme_stages", "readme_root": "readme_stages",
                    "fast_report": "fast_report", "staircase_shipped": "staircase_shipped"}
 
+#: The work units handed out first: the two longest of ``make test-slow`` (its critical path).
+FIRST_UNITS = ("readme_stages", "tests/test_determinism.py")
+
 
 @functools.cache
-def work_unit(test_file: str) -> str:
+def work_unit(path: Path, test_file: str) -> str:
     """The pytest-xdist work unit of the tests of a file: the first of :data:`SHARED_FIXTURES` the
-    file names, so that the files that share one run on the worker that computes it, once; else
-    the file itself, so that a module fixture is computed once too.
+    file's text names, so that the files that share one run on the worker that computes it, once;
+    else the file itself (read from ``path``; a file that cannot be read is its own unit), so that
+    a module fixture is computed once too.  A file that reaches one only through another fixture
+    is not grouped with the others (none does).
 
     Parameters
     ----------
+    path : pathlib.Path
+        The file.
     test_file : str
-        The file's path relative to :data:`REPO`, as a node id starts.
+        Its node id's first part.
     """
-    text = (REPO / test_file).read_text(encoding="utf-8")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return test_file
     return next((group for name, group in SHARED_FIXTURES.items() if name in text), test_file)
 
 
+@pytest.hookimpl(optionalhook=True)       # a hook of pytest-xdist: unknown where it is not installed
 def pytest_xdist_make_scheduler(config, log):
-    """``--dist loadgroup`` (``make test-slow``) by :func:`work_unit`: pytest-xdist's
-    own reads ``xdist_group`` marks off node ids that pytest 9.2 no longer lets it rewrite, and
-    so groups nothing (pytest-dev/pytest-xdist#1386)."""
+    """``--dist loadgroup`` (``make test-slow``) by :func:`work_unit`, :data:`FIRST_UNITS` first:
+    pytest-xdist's own reads ``xdist_group`` marks off node ids that pytest 9.2 no longer lets it
+    rewrite, and so groups nothing (pytest-dev/pytest-xdist#1386)."""
     if config.getvalue("dist") != "loadgroup":
         return None
     from xdist.scheduler import LoadScopeScheduling      # pytest-xdist: only where it runs the tests
 
     class SharedFixtureScheduling(LoadScopeScheduling):
         def _split_scope(self, nodeid: str) -> str:
-            return work_unit(nodeid.split("::", 1)[0])
+            test_file = nodeid.split("::", 1)[0]
+            return work_unit(config.rootpath / test_file, test_file)
+
+        def _assign_work_unit(self, node) -> None:
+            for unit in reversed(FIRST_UNITS):
+                if unit in self.workqueue:
+                    self.workqueue.move_to_end(unit, last=False)
+            super()._assign_work_unit(node)
 
     return SharedFixtureScheduling(config, log)
 

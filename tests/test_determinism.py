@@ -3,9 +3,9 @@ stair-case on the report's route, the report's converged quadratic and claim 1 (
 designed and simulated under two BLAS environments, and the stored results agree.
 
 The two environments differ in both OpenBLAS kernel and thread count: this process's (under
-``make`` the Haswell kernel, AVX2, on one thread) and Prescott's (SSE3, every x86-64) on two
-threads (Haswell where this process runs Prescott).  Each runs in a subprocess, with this tree's
-code and configs.
+``make`` the Haswell kernel, AVX2, on one thread; one thread where it sets no number) and
+Prescott's (SSE3, every x86-64) on two threads (Haswell where this process runs Prescott).  Each
+runs in a subprocess, with this tree's code and configs.
 
 What each result holds to (docs/reproducibility.md):
 - the shipped stair-case (regional LMI points, DSDP's second pass in the coordinates of its first
@@ -64,12 +64,11 @@ RUNS = {"mb3_decoupled": ("simulate", "mb3_decoupled"),
         "staircase_quadratic": ("design", "staircase", "schedule.form=polynomial", "name=staircase_quadratic")}
 
 
-def _run_all(cwd: Path, kernel: str | None, threads: int) -> Path:
-    """The results root of :data:`RUNS` run in ``cwd`` by subprocesses on that OpenBLAS kernel
-    (None: this process's) and thread count."""
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": str(threads), "MPLBACKEND": "Agg", "PYTHONPATH": str(REPO)}
-    if kernel is not None:
-        env["OPENBLAS_CORETYPE"] = kernel
+def _run_all(cwd: Path, **blas: str) -> Path:
+    """The results root of :data:`RUNS` run in ``cwd`` by subprocesses in this process's
+    environment with the OpenBLAS variables ``blas`` (e.g. ``OPENBLAS_CORETYPE``) set."""
+    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONPATH": str(REPO), **blas}
+    if "OPENBLAS_CORETYPE" in blas:
         env.pop("OPENBLAS_L2_SIZE", None)
     for name, (command, config, *args) in RUNS.items():
         r = subprocess.run([sys.executable, "-m", "acmm.cli.app", command, str(CONFIGS / f"{config}.yaml"), *args,
@@ -81,10 +80,13 @@ def _run_all(cwd: Path, kernel: str | None, threads: int) -> Path:
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory) -> dict:
-    """``{"here": the results root of this process's environment, "other": the other's}``."""
+    """``{"here": the results root of this process's environment (one OpenBLAS thread where it
+    sets no number), "other": the other's}``."""
     _needs_two_kernels()
-    here = _run_all(tmp_path_factory.mktemp("here"), None, int(os.environ.get("OPENBLAS_NUM_THREADS", "1")))
-    return {"here": here, "other": _run_all(tmp_path_factory.mktemp("other"), *OTHER)}
+    here = _run_all(tmp_path_factory.mktemp("here"), OPENBLAS_NUM_THREADS=os.environ.get("OPENBLAS_NUM_THREADS", "1"))
+    kernel, threads = OTHER
+    other = _run_all(tmp_path_factory.mktemp("other"), OPENBLAS_CORETYPE=kernel, OPENBLAS_NUM_THREADS=str(threads))
+    return {"here": here, "other": other}
 
 
 def _read(runs_dir: Path, name: str) -> dict:
