@@ -1,5 +1,5 @@
 """Fixtures and helpers of the acmm tests in several folders: the packaged stair-case designed on
-the report's route (``staircase_lqr``) and as shipped (``staircase_shipped``, slow tests), the figures a test draws (``captured``) with the check that every axis names a
+the report's route (``staircase_lqr``; ``staircase_lqr_h5`` with its ``design.h5``) and as shipped (``staircase_shipped``, slow tests), the figures a test draws (``captured``) with the check that every axis names a
 quantity and a unit, and a sweep config file written for a test (``_sweep_yaml``)."""
 from __future__ import annotations
 
@@ -22,6 +22,16 @@ from tests.conftest import LQR_ROUTE, CONFIGS
 def staircase_lqr():
     """The packaged stair-case designed on the report's route (:data:`tests.conftest.LQR_ROUTE`)."""
     return compute_design(load_config("staircase", [*LQR_ROUTE]))
+
+
+@pytest.fixture(scope="session")
+def staircase_lqr_h5(tmp_path_factory):
+    """The packaged stair-case on the report's route as ``acmm design`` writes it, dwell-time
+    certificate included (about ten seconds): its :class:`~acmm.stages.design.DesignResult` and
+    ``design.h5``.  A test that needs the file in a run folder of its own copies it; none may
+    change it."""
+    root = tmp_path_factory.mktemp("lqr")
+    return run_design(load_config("staircase", [*LQR_ROUTE, f"output.root={root}"]), figures=False)
 
 
 @pytest.fixture(scope="session")

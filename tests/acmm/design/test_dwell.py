@@ -6,6 +6,8 @@ the Hespanha–Morse dwell the certificate replaced (Kronecker solves of the Lya
 the transient bound against the exact response of the linear switched system."""
 from __future__ import annotations
 
+import shutil
+
 import h5py
 import numpy as np
 import pytest
@@ -14,7 +16,6 @@ import scipy.linalg as sla
 from acmm.design.dwell import DECAY_FRACTION, DWELL_RESOLUTION, DwellProof, dwell_certificate, dwell_margins
 from acmm.io.config import load_config
 from acmm.io.design_file import load_design_table
-from acmm.stages.design import run_design
 
 from tests.conftest import LQR_ROUTE
 
@@ -22,15 +23,15 @@ ORBIT_DWELL = 10.8                                   # orbits each stair-case le
 
 
 @pytest.fixture(scope="module", params=["report's route", pytest.param("shipped", marks=pytest.mark.slow)])
-def staircase_h5(request, tmp_path_factory):
+def staircase_h5(request):
     """(config, the ``dwell`` group of ``design.h5``, its design table) of the packaged stair-case
     on the report's route (sector LQR points) and as shipped (regional LMI points, slow)."""
     if request.param == "shipped":
         r, path = request.getfixturevalue("staircase_shipped")
         cfg = r.config
     else:
-        cfg = load_config("staircase", [*LQR_ROUTE, f"output.root={tmp_path_factory.mktemp('dwell')}"])
-        _, path = run_design(cfg, figures=False)
+        r, path = request.getfixturevalue("staircase_lqr_h5")
+        cfg = r.config
     with h5py.File(path, "r") as f:
         g = f["dwell"]
         data = {k: g[k][()] for k in g if isinstance(g[k], h5py.Dataset)}
@@ -181,11 +182,14 @@ def test_both_directions_are_checked():
         assert _largest(E.T @ P[j] @ E - np.exp(-2 * lam * tau) * P[k]) < 0
 
 
-def test_acmm_certify_prints_the_certificate_and_strict_fails_an_unstable_claim_1(tmp_path):
+def test_acmm_certify_prints_the_certificate_and_strict_fails_an_unstable_claim_1(tmp_path, staircase_lqr_h5):
+    """``acmm certify`` after ``acmm design`` (the design and its proof reused, checked again)."""
     from typer.testing import CliRunner
 
     from acmm.cli.app import app
 
+    (tmp_path / "staircase").mkdir()
+    shutil.copyfile(staircase_lqr_h5[1], tmp_path / "staircase" / "design.h5")
     run = lambda *a: CliRunner().invoke(app, ["certify", *a, f"output.root={tmp_path}"])   # noqa: E731
     ok = run("staircase", *LQR_ROUTE)
     assert ok.exit_code == 0 and "CERTIFIED" in ok.stdout and "linearized switched system" in ok.stdout, ok.output
@@ -193,21 +197,22 @@ def test_acmm_certify_prints_the_certificate_and_strict_fails_an_unstable_claim_
     assert bad.exit_code == 1 and "not stable" in bad.stdout and "strict:" in bad.output
 
 
-def test_an_initial_offset_enters_the_transient_bound():
+def test_an_initial_offset_enters_the_transient_bound(staircase_lqr_h5):
     """A run that does not start at the first level's equilibrium (simulation.initial_offset) has
     a non-zero bound from the first level on, and larger ones after (a review: it was ignored)."""
-    from acmm.stages.certify import compute_certificate
-    from acmm.stages.design import compute_design
+    from acmm.stages.certify import compute_certificate, stored_proof
 
+    r, path = staircase_lqr_h5
     cfg = load_config("staircase", [*LQR_ROUTE])
-    table = compute_design(cfg).table
-    at_rest = compute_certificate(cfg, table).certificate
-    # the stability part depends on the levels only: reused (checked again), as `acmm certify` does
-    proof = DwellProof(at_rest.decay, at_rest.tau_star, at_rest.tau_lower, at_rest.P)
-    offset = compute_certificate(load_config("staircase", [*LQR_ROUTE, "simulation.initial_offset=[3,3,3]"]), table,
-                                 proof).certificate
+    # the stability part depends on the levels only: the stored proof is reused (checked again),
+    # as `acmm certify` does
+    proof = stored_proof(path, 2 * np.pi / cfg.orbit_rate)
+    at_rest = compute_certificate(cfg, r.table, proof).certificate
+    offset = compute_certificate(load_config("staircase", [*LQR_ROUTE, "simulation.initial_offset=[3,3,3]"]),
+                                 r.table, proof).certificate
     assert at_rest.transient[0] == 0 and offset.transient[0] > 0
-    assert np.all(offset.transient[1:] >= at_rest.transient[1:]) and offset.P is at_rest.P
+    assert np.all(offset.transient[1:] >= at_rest.transient[1:])
+    assert at_rest.P is proof.P and offset.P is proof.P
 
 
 def test_a_stored_proof_is_reused_only_where_it_holds():

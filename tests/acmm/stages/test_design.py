@@ -151,7 +151,10 @@ def test_shipped_schedule_is_stable_on_a_thousand_teas_of_the_path(staircase_shi
 
 @pytest.fixture(scope="module", params=["imperial", pytest.param("SI", marks=pytest.mark.slow)])
 def designed_staircase(request, tmp_path_factory):
-    """(units, the stair-case's design.h5 written by `acmm design` in those units), once per module."""
+    """(units, the stair-case's design.h5 written by `acmm design` in those units), once per module
+    (imperial: the session's :func:`tests.acmm.conftest.staircase_lqr_h5`)."""
+    if request.param == "imperial":
+        return "imperial", request.getfixturevalue("staircase_lqr_h5")[1]
     root = tmp_path_factory.mktemp(f"designed_{request.param}")
     r = invoke(app, "design", "staircase", *LQR_ROUTE, f"output.units={request.param}", "--no-figures",
                f"output.root={root / 'runs'}")
