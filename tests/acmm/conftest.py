@@ -1,6 +1,8 @@
 """Fixtures and helpers of the acmm tests in several folders: the packaged stair-case designed on
-the report's route (``staircase_lqr``; ``staircase_lqr_h5`` with its ``design.h5``) and as shipped (``staircase_shipped``, slow tests), the figures a test draws (``captured``) with the check that every axis names a
-quantity and a unit, and a sweep config file written for a test (``_sweep_yaml``)."""
+the report's route (``staircase_lqr``; ``staircase_lqr_h5`` with its ``design.h5``) and as shipped
+(``staircase_shipped``, slow tests), the figures a test draws (``captured``) with the check that
+every axis names a quantity and a unit, and a sweep config file written for a test
+(``_sweep_yaml``)."""
 from __future__ import annotations
 
 import re
