@@ -26,10 +26,8 @@ CONFIGS = REPO / "configs"
 LQR_ROUTE = ("design.pole_method=shift", "schedule.refine_points=0", "schedule.n_check=201")
 
 
-#: The costly session fixtures, in the order a test file that names several is grouped by
-#: (``readme_root`` is the README stages' folder).
-SHARED_FIXTURES = {"readme_stages": "readme_stages", "readme_root": "readme_stages",
-                   "fast_report": "fast_report", "staircase_shipped": "staircase_shipped"}
+#: The costly session fixtures, in the order a test file that names several is grouped by.
+SHARED_FIXTURES = ("readme_stages", "fast_report", "staircase_shipped")
 
 #: The work units handed out first: the two longest of ``make test-slow`` (its critical path).
 FIRST_UNITS = ("readme_stages", "tests/test_determinism.py")
@@ -54,7 +52,7 @@ def work_unit(path: Path, test_file: str) -> str:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError):
         return test_file
-    return next((group for name, group in SHARED_FIXTURES.items() if name in text), test_file)
+    return next((name for name in SHARED_FIXTURES if name in text), test_file)
 
 
 @pytest.hookimpl(optionalhook=True)       # a hook of pytest-xdist: unknown where it is not installed

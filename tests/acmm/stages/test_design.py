@@ -7,7 +7,6 @@ from the returned Q with scipy's CARE solver directly (not through acmm.design.r
 from __future__ import annotations
 
 import os
-import re
 import shutil
 
 import h5py
@@ -18,7 +17,7 @@ import scipy.linalg as sla
 
 from acmm.cli.app import app
 from acmm.io.config import load_config
-from acmm.stages.design import compute_design, design_for, run_design
+from acmm.stages.design import design_for, run_design
 from acmm.stages.pool import pool_map, process_pool, stop_pool
 from acmm.io.design_file import load_design_table
 
