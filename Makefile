@@ -54,14 +54,16 @@ run: $(STAMP) bytecode
 # signals, the generated numbers' regeneration, the README's quick start, the longest subprocess and fuzz runs); `make test-slow` runs
 # them, and CI (.ci/run) runs both.
 # Both run in $(TEST_WORKERS) pytest-xdist worker processes, one per core of the 2-core machines CI
-# runs on (`make test TEST_WORKERS=auto` on a larger one); `make test-slow` hands out a file at a
-# time, and the files that name the same costly session fixture to the same worker
-# (--dist loadgroup: tests/conftest.py's work_unit).
+# runs on (`make test TEST_WORKERS=auto` on a larger one).  `make test` hands out tests and lets
+# an idle worker take the other's queued ones (--dist worksteal: --dist load's last chunk left one
+# worker idle for about half a minute); `make test-slow` hands out a file at a time,
+# and the files that name the same costly session fixture to the same worker (--dist loadgroup:
+# tests/conftest.py's work_unit).
 TEST_WORKERS ?= 2
 PYTEST := OPENBLAS_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -n $(TEST_WORKERS)
 
 test: $(STAMP) bytecode $(if $(CI),browser)
-	$(PYTEST) -m "not slow" --durations=25
+	$(PYTEST) --dist worksteal -m "not slow" --durations=25
 
 test-slow: $(STAMP) bytecode
 	$(PYTEST) --dist loadgroup -m slow --durations=10

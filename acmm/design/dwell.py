@@ -344,17 +344,20 @@ def dwell_proof(As: np.ndarray) -> DwellProof:
     return DwellProof(lam, tau, lower, lyapunov_matrices(As, lam) if P is None else P)
 
 
-def _reusable(As: np.ndarray, proof: DwellProof) -> bool:
-    """Whether a proof found before holds for these levels as this module would find it: its decay
-    rate is theirs (to rounding: a design read back from SI units differs in the last digits), its
-    dwell and the one below are neighbouring steps of this bisection's grid, and its matrices pass
-    :func:`dwell_margins` here."""
+def _reused(As: np.ndarray, proof: DwellProof) -> DwellProof | None:
+    """A proof found before, as this module would find it for these levels, or None where it does
+    not hold for them: its decay rate must be theirs (to rounding: a design read back from SI units
+    differs in the last digits), its dwell and the one below neighbouring steps of this bisection's
+    grid, and its matrices must pass :func:`dwell_margins` here.  The rate and the dwells returned
+    are computed here (the grid's steps over α), those stored only located."""
     alpha = min(-np.max(np.linalg.eigvals(A).real) for A in As)
+    lam = DECAY_FRACTION * alpha
     steps = np.array([proof.tau, proof.lower]) * alpha / DWELL_RESOLUTION
-    return bool(abs(proof.decay - DECAY_FRACTION * alpha) <= 1e-9 * DECAY_FRACTION * alpha
-                and np.all(np.isfinite(steps)) and np.all(np.abs(steps - np.round(steps)) <= 1e-6)
-                and round(steps[0]) - round(steps[1]) == 1
-                and np.all(dwell_margins(As, proof.P, proof.tau, proof.decay) > 0))
+    if not (abs(proof.decay - lam) <= 1e-9 * lam and np.all(np.isfinite(steps))
+            and np.all(np.abs(steps - np.round(steps)) <= 1e-6) and round(steps[0]) - round(steps[1]) == 1):
+        return None
+    tau, lower = (round(k) * DWELL_RESOLUTION / alpha for k in steps)
+    return DwellProof(lam, tau, lower, proof.P) if np.all(dwell_margins(As, proof.P, tau, lam) > 0) else None
 
 
 def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: np.ndarray, jumps: np.ndarray,
@@ -403,7 +406,8 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
         return DwellCertificate(np.nan, np.full_like(As, np.nan), d, np.full(L - 1, np.nan), np.full(L - 1, np.nan),
                                 np.inf, np.inf, 0.0, dwell, False, np.full(L, np.nan), nan3, nan3.copy(),
                                 float(torque_limit), float(momentum_limit), False, unstable)
-    if not (proof is not None and L > 1 and _reusable(As, proof)):
+    proof = _reused(As, proof) if proof is not None and L > 1 else None
+    if proof is None:
         proof = dwell_proof(As)
     lam, tau, P = proof.decay, proof.tau, proof.P
     up, down = jump_ratios(P) if L > 1 else (np.zeros(0), np.zeros(0))

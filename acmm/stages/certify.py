@@ -16,7 +16,7 @@ import numpy as np
 
 from acmm.design.dwell import NOT_COVERED, DwellCertificate, DwellProof, dwell_certificate
 from acmm.io.config import Config
-from acmm.io.design_file import DesignTable
+from acmm.io.design_file import DesignTable, h5_text
 from acmm.model import kinematics as kin
 from acmm.model import linearize as lin
 from acmm.simulate.scenario import scenario_from_config
@@ -114,7 +114,7 @@ def _deviation(theta: np.ndarray, theta_eq: np.ndarray, n: float, nx: int) -> np
     return x
 
 
-def stored_proof(path: Path, orbit: float) -> DwellProof | None:
+def stored_proof(path: Path, orbit: float, closed_loops: np.ndarray | None = None) -> DwellProof | None:
     """The Lyapunov matrices, decay rate and dwells of a ``design.h5``'s ``dwell`` group, for
     :func:`acmm.design.dwell.dwell_certificate` to check again and reuse.
 
@@ -124,23 +124,36 @@ def stored_proof(path: Path, orbit: float) -> DwellProof | None:
         The ``design.h5``.
     orbit : float
         One orbit, s.
+    closed_loops : (L, 24, 24) array, optional
+        A_k − B_k K_k of the levels, 1/s: when given, the proof is returned only from a file in
+        the report's units whose stored closed loops are these, bit for bit (the same program,
+        whose bisection would find the same dwell and matrices).
 
     Returns
     -------
     acmm.design.dwell.DwellProof or None
-        None when the file or the group cannot be read.
+        None when the file or the group cannot be read (or, with ``closed_loops``, holds other
+        loops or other units).
     """
+    if not path.is_file():          # a regular file (a FIFO or a device there would block)
+        return None
     try:
         with h5py.File(path, "r") as f:
             g = f["dwell"]
+            if closed_loops is not None and (
+                    h5_text(f.attrs.get("unit_system", "imperial")) != "imperial"
+                    or g["closed_loop"].shape != closed_loops.shape
+                    or not np.array_equal(g["closed_loop"][()], closed_loops)):
+                return None
             return DwellProof(float(g["decay_rate"][()]), float(g["tau_star"][()]) * orbit,
                               float(g["tau_star"].attrs["not_certified_below_orbit"]) * orbit,
                               np.asarray(g["lyapunov"][()], float))
-    except (OSError, KeyError, ValueError):
+    except (OSError, KeyError, ValueError, TypeError):
         return None
 
 
-def compute_certificate(cfg: Config, table: DesignTable, proof: DwellProof | None = None) -> StairCertificate:
+def compute_certificate(cfg: Config, table: DesignTable, proof: DwellProof | None = None,
+                        previous: Path | None = None) -> StairCertificate:
     """The dwell-time certificate of a config's stair-case (:func:`acmm.design.dwell.dwell_certificate`).
 
     Parameters
@@ -151,6 +164,10 @@ def compute_certificate(cfg: Config, table: DesignTable, proof: DwellProof | Non
         Its design.
     proof : acmm.design.dwell.DwellProof, optional
         A proof found before (:func:`stored_proof`), reused where it holds for these levels.
+    previous : pathlib.Path, optional
+        Without ``proof``: a ``design.h5`` (e.g. the one a new design replaces) whose proof is
+        reused when its stored closed loops are these levels' bit for bit, so that designing the
+        same stair-case again solves no dwell-time program.
 
     Returns
     -------
@@ -158,6 +175,8 @@ def compute_certificate(cfg: Config, table: DesignTable, proof: DwellProof | Non
         The certificate with its levels.
     """
     Acl, gains, scale, dwell, jumps, idx, sc = level_closed_loops(cfg, table)
+    if proof is None and previous is not None:
+        proof = stored_proof(previous, 2 * np.pi / sc.n, Acl)
     cert = dwell_certificate(Acl, gains, scale, dwell, jumps, H_INDEX, sc.torque_limit, sc.momentum_limit,
                              start=_deviation(sc.x0[3:6], sc.theta_est[0], sc.n, Acl.shape[1]), proof=proof)
     return StairCertificate(cert, [table.names[i] for i in idx], sc.theta_est[:, 1], Acl, jumps, sc.n)

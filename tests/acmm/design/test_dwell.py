@@ -215,14 +215,43 @@ def test_an_initial_offset_enters_the_transient_bound(staircase_lqr_h5):
     assert at_rest.P is proof.P and offset.P is proof.P
 
 
+def test_a_design_of_the_same_stair_case_reuses_the_proof_of_the_file_it_replaces(tmp_path, staircase_lqr_h5):
+    """``acmm design`` again in the same run folder: the ``design.h5`` it replaces holds a proof for
+    the same closed loops (bit for bit), which is reused (checked again) with the same dwells to the
+    bit; a file whose stored loops differ in one element by one unit in the last place, or that is
+    in SI units, or that is no regular file, gives no proof."""
+    from acmm.stages.certify import compute_certificate, level_closed_loops, stored_proof
+
+    r, written = staircase_lqr_h5
+    cfg = load_config("staircase", [*LQR_ROUTE])
+    path = tmp_path / "design.h5"
+    shutil.copyfile(written, path)
+    with h5py.File(path, "r") as f:
+        P, tau = f["dwell/lyapunov"][()], f["dwell/tau_star"][()]
+        lower = f["dwell/tau_star"].attrs["not_certified_below_orbit"]
+    cert = compute_certificate(cfg, r.table, previous=path)
+    c = cert.certificate
+    assert np.array_equal(c.P, P) and c.tau_star / cert.orbit == tau and c.tau_lower / cert.orbit == lower
+    Acl = level_closed_loops(cfg, r.table)[0]
+    orbit = 2 * np.pi / cfg.orbit_rate
+    assert stored_proof(path, orbit, Acl) is not None
+    nudged = Acl.copy()
+    nudged[3, 0, 3] = np.nextafter(nudged[3, 0, 3], np.inf)
+    assert stored_proof(path, orbit, nudged) is None and stored_proof(path, orbit, Acl[1:]) is None
+    assert stored_proof(tmp_path, orbit, Acl) is None and stored_proof(tmp_path / "none.h5", orbit, Acl) is None
+    with h5py.File(path, "r+") as f:
+        f.attrs["unit_system"] = "SI"
+    assert stored_proof(path, orbit, Acl) is None and stored_proof(path, orbit) is not None
+
+
 def test_a_stored_proof_is_reused_only_where_it_holds():
     """A proof for other closed loops (or with another decay rate) is not taken: the certificate is
     found anew."""
     Acl = _two_levels(1.0, 1.0, 1.2)
     args = (np.zeros((2, 3, 2)), np.ones(2), np.array([100.0]), np.zeros((1, 2)), (0, 1, 1), 1.0, 1.0)
     c = dwell_certificate(Acl, *args)
-    same = dwell_certificate(Acl, *args, proof=DwellProof(c.decay, c.tau_star, c.tau_lower, c.P))
-    assert same.P is c.P
+    same = dwell_certificate(Acl, *args, proof=DwellProof(c.decay, c.tau_star * (1 + 1e-15), c.tau_lower, c.P))
+    assert same.P is c.P and same.tau_star == c.tau_star and same.tau_lower == c.tau_lower   # the grid's, to the bit
     other = _two_levels(1.0, 3.0, 0.4)
     fresh = dwell_certificate(other, *args)
     wrong = dwell_certificate(other, *args, proof=DwellProof(c.decay, c.tau_star, c.tau_lower, c.P))

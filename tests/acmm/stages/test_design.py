@@ -161,20 +161,10 @@ def designed_staircase(request, tmp_path_factory):
     return request.param, root / "runs" / "staircase" / "design.h5"
 
 
-@pytest.mark.parametrize("edit", ["K of another shape", "K scaled", "K non-finite", "a coefficient changed"])
-def test_an_edited_design_h5_is_designed_again_not_simulated(tmp_runs, run_acmm, edit, designed_staircase):
-    """A review: a design.h5 whose K had another shape reached the compiled simulator (a numba
-    traceback, exit 1); one whose K was scaled by 1e6 under the right design_hash was simulated
-    (52 M steps).  The design is now reused only when its arrays have the points' shapes, are
-    finite and match the digest written with them; else it is designed again."""
-    units, written = designed_staircase
-    path = tmp_runs / "runs" / "staircase" / "design.h5"
-    path.parent.mkdir(parents=True)
-    shutil.copyfile(written, path)
-    with h5py.File(path, "r") as f:
-        K0 = f["K"][()]
-    assert design_for(load_config("staircase", [*LQR_ROUTE, f"output.units={units}"]))[1].startswith("reused")
+def _edit(path, edit: str) -> np.ndarray:
+    """Edit the design.h5 at ``path`` as ``edit`` says; returns its K before the edit."""
     with h5py.File(path, "r+") as f:
+        K0 = f["K"][()]
         if edit == "K of another shape":
             del f["K"]
             f["K"] = np.zeros((2, 5))
@@ -184,9 +174,39 @@ def test_an_edited_design_h5_is_designed_again_not_simulated(tmp_runs, run_acmm,
             f["K"][0, 0, 0] = np.nan
         else:
             f["schedule/coef"][0, 0, 0] += 1e-9
+    return K0
+
+
+@pytest.mark.parametrize("edit,why", [("K of another shape", "K has shape"), ("K scaled", "digest"),
+                                      ("K non-finite", "non-finite"), ("a coefficient changed", "digest")])
+def test_an_edited_design_h5_is_refused_where_reuse_is_decided(tmp_path, edit, why, designed_staircase):
+    """A review: a design.h5 whose K had another shape reached the compiled simulator (a numba
+    traceback, exit 1); one whose K was scaled by 1e6 under the right design_hash was simulated
+    (52 M steps).  The design is now reused only when its arrays have the points' shapes, are
+    finite and match the digest written with them: :func:`load_design_table`, by which
+    :func:`design_for` decides, reads the file as written and refuses every edit, naming why."""
+    units, written = designed_staircase
+    path = tmp_path / "design.h5"
+    shutil.copyfile(written, path)
+    assert load_design_table(path).gain.shape[1:] == (3, 24)
+    _edit(path, edit)
+    with pytest.raises(ValueError, match=why):
+        load_design_table(path)
+
+
+def test_an_edited_design_h5_is_designed_again_not_simulated(tmp_runs, run_acmm, designed_staircase):
+    """End to end, the refusal above makes ``acmm simulate`` design again (the same gains) instead
+    of simulating the edited gains."""
+    units, written = designed_staircase
+    path = tmp_runs / "runs" / "staircase" / "design.h5"
+    path.parent.mkdir(parents=True)
+    shutil.copyfile(written, path)
+    assert design_for(load_config("staircase", [*LQR_ROUTE, f"output.units={units}"]))[1].startswith("reused")
+    K0 = _edit(path, "K scaled")
     r = run_acmm("simulate", "staircase", *LQR_ROUTE, f"output.units={units}", "simulation.orbits=1",
                  "--no-figures")
     assert r.exit_code == 0 and "Traceback" not in r.output, r.output
+    assert "designed" in r.stdout and "design reused" not in r.stdout, r.stdout
     with h5py.File(path, "r") as f:
         np.testing.assert_array_equal(f["K"][()], K0)            # designed again, the same gains
 
