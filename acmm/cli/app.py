@@ -320,12 +320,12 @@ def certify(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] = 
     dwell against each level's dwell, and the bound on each TEA step's transient against the torque
     and momentum limits (designs first if needed; `acmm design` stores it in design.h5).
     With --strict, a stair-case that is not certified exits 1."""
-    from acmm.stages.certify import certificate_lines, compute_certificate, stored_proof  # deferred: --help needs no numpy, scipy, pydantic
+    from acmm.stages.certify import certificate_lines, compute_certificate  # deferred: --help needs no numpy, scipy, pydantic
     from acmm.stages.design import design_for  # deferred: --help needs no numpy, scipy, pydantic
 
     cfg = _load(config, overrides)
     table, note = design_for(cfg, warn=_warn)
-    sc = compute_certificate(cfg, table, stored_proof(cfg.run_dir() / "design.h5", 2 * math.pi / cfg.orbit_rate))
+    sc = compute_certificate(cfg, table, cfg.run_dir() / "design.h5")
     typer.echo(_design_line(cfg.name, note))
     for line in certificate_lines(sc):
         typer.echo(line)

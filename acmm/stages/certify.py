@@ -21,6 +21,8 @@ from acmm.model import kinematics as kin
 from acmm.model import linearize as lin
 from acmm.simulate.scenario import scenario_from_config
 from acmm.stages.common import UNIT_A, UNIT_STATE
+from acmm_qpp import __version__
+from acmm_qpp.provenance import git_commit, git_dirty
 from acmm_qpp.results import Dataset
 
 #: the ``design.h5`` datasets of the ``dwell`` group converted per state (:func:`acmm.stages.common.in_system`)
@@ -114,7 +116,39 @@ def _deviation(theta: np.ndarray, theta_eq: np.ndarray, n: float, nx: int) -> np
     return x
 
 
-def stored_proof(path: Path, orbit: float, closed_loops: np.ndarray | None = None) -> DwellProof | None:
+def _hard(parent, name: str, kind, shape: tuple | None = None):
+    """``parent[name]`` when it is a hard link to a ``kind`` (a float dataset of ``shape`` where
+    given: checked before anything is read), else KeyError (a soft or external link could lead
+    anywhere: a FIFO, itself)."""
+    if not isinstance(parent.get(name, getlink=True), h5py.HardLink):
+        raise KeyError(name)
+    obj = parent[name]
+    if not isinstance(obj, kind) or (kind is h5py.Dataset and (obj.dtype.kind != "f" or obj.shape != shape)):
+        raise KeyError(name)
+    return obj
+
+
+def same_program(attrs) -> bool:
+    """Whether a results file's provenance (root attributes) is this process's: the same package
+    version and git commit, and neither checkout with uncommitted changes (the commit alone would
+    not say what code ran).
+
+    Parameters
+    ----------
+    attrs : mapping
+        The file's root attributes (:func:`acmm_qpp.results.write_h5`).
+
+    Returns
+    -------
+    bool
+        True when a proof in the file is what this program would find for the same loops.
+    """
+    ours = {"package_version": __version__, "git_commit": git_commit(), "git_dirty": git_dirty()}
+    return ours["git_dirty"] != "yes" and all(
+        k in attrs and h5_text(attrs[k]) == v for k, v in ours.items())
+
+
+def stored_proof(path: Path, orbit: float, closed_loops: np.ndarray, exact: bool = False) -> DwellProof | None:
     """The Lyapunov matrices, decay rate and dwells of a ``design.h5``'s ``dwell`` group, for
     :func:`acmm.design.dwell.dwell_certificate` to check again and reuse.
 
@@ -124,36 +158,44 @@ def stored_proof(path: Path, orbit: float, closed_loops: np.ndarray | None = Non
         The ``design.h5``.
     orbit : float
         One orbit, s.
-    closed_loops : (L, 24, 24) array, optional
-        A_k − B_k K_k of the levels, 1/s: when given, the proof is returned only from a file in
-        the report's units whose stored closed loops are these, bit for bit (the same program,
-        whose bisection would find the same dwell and matrices).
+    closed_loops : (L, 24, 24) array
+        A_k − B_k K_k of the levels the proof is for, 1/s: the stored matrices must have their
+        shape (nothing else is read).
+    exact : bool
+        Also require a file in the report's units written by this program (:func:`same_program`)
+        whose stored closed loops equal ``closed_loops`` element by element: the same program
+        on the same loops, whose bisection finds the same dwells and matrices (a new design
+        replacing the file).
 
     Returns
     -------
     acmm.design.dwell.DwellProof or None
-        None when the file or the group cannot be read (or, with ``closed_loops``, holds other
-        loops or other units).
+        None when the file or the group cannot be read as written (links, types, shapes) or,
+        with ``exact``, is not the same program's on the same loops.
     """
     if not path.is_file():          # a regular file (a FIFO or a device there would block)
         return None
     try:
         with h5py.File(path, "r") as f:
-            g = f["dwell"]
-            if closed_loops is not None and (
-                    h5_text(f.attrs.get("unit_system", "imperial")) != "imperial"
-                    or g["closed_loop"].shape != closed_loops.shape
-                    or not np.array_equal(g["closed_loop"][()], closed_loops)):
+            if exact and (h5_text(f.attrs.get("unit_system", "imperial")) != "imperial"
+                          or not same_program(f.attrs)):
                 return None
-            return DwellProof(float(g["decay_rate"][()]), float(g["tau_star"][()]) * orbit,
-                              float(g["tau_star"].attrs["not_certified_below_orbit"]) * orbit,
-                              np.asarray(g["lyapunov"][()], float))
-    except (OSError, KeyError, ValueError, TypeError):
+            g = _hard(f, "dwell", h5py.Group)
+            if exact and not np.array_equal(_hard(g, "closed_loop", h5py.Dataset, closed_loops.shape)[()],
+                                            closed_loops):
+                return None
+            tau = _hard(g, "tau_star", h5py.Dataset, ())
+            if tau.attrs.get_id("not_certified_below_orbit").shape != ():
+                return None
+            return DwellProof(float(_hard(g, "decay_rate", h5py.Dataset, ())[()]), float(tau[()]) * orbit,
+                              float(tau.attrs["not_certified_below_orbit"]) * orbit,
+                              np.asarray(_hard(g, "lyapunov", h5py.Dataset, closed_loops.shape)[()], float))
+    except Exception:       # noqa: BLE001 -- a file that cannot be read as written holds no proof
         return None
 
 
-def compute_certificate(cfg: Config, table: DesignTable, proof: DwellProof | None = None,
-                        previous: Path | None = None) -> StairCertificate:
+def compute_certificate(cfg: Config, table: DesignTable, previous: Path | None = None,
+                        exact: bool = False) -> StairCertificate:
     """The dwell-time certificate of a config's stair-case (:func:`acmm.design.dwell.dwell_certificate`).
 
     Parameters
@@ -162,12 +204,13 @@ def compute_certificate(cfg: Config, table: DesignTable, proof: DwellProof | Non
         The config.
     table : acmm.io.design_file.DesignTable
         Its design.
-    proof : acmm.design.dwell.DwellProof, optional
-        A proof found before (:func:`stored_proof`), reused where it holds for these levels.
     previous : pathlib.Path, optional
-        Without ``proof``: a ``design.h5`` (e.g. the one a new design replaces) whose proof is
-        reused when its stored closed loops are these levels' bit for bit, so that designing the
-        same stair-case again solves no dwell-time program.
+        A ``design.h5`` whose stored proof (:func:`stored_proof`) is reused where it holds for
+        these levels, checked again (``acmm certify`` on the design it certifies).
+    exact : bool
+        Reuse it only from the same program on the same closed loops (:func:`stored_proof`'s
+        ``exact``): a new design replacing ``previous`` then solves no dwell-time program when
+        it designs the same stair-case again.
 
     Returns
     -------
@@ -175,8 +218,7 @@ def compute_certificate(cfg: Config, table: DesignTable, proof: DwellProof | Non
         The certificate with its levels.
     """
     Acl, gains, scale, dwell, jumps, idx, sc = level_closed_loops(cfg, table)
-    if proof is None and previous is not None:
-        proof = stored_proof(previous, 2 * np.pi / sc.n, Acl)
+    proof = None if previous is None else stored_proof(previous, 2 * np.pi / sc.n, Acl, exact)
     cert = dwell_certificate(Acl, gains, scale, dwell, jumps, H_INDEX, sc.torque_limit, sc.momentum_limit,
                              start=_deviation(sc.x0[3:6], sc.theta_est[0], sc.n, Acl.shape[1]), proof=proof)
     return StairCertificate(cert, [table.names[i] for i in idx], sc.theta_est[:, 1], Acl, jumps, sc.n)

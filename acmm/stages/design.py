@@ -283,8 +283,8 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
     items = design_output.table_items(r, pts)
     if r.fit is not None:
         items["schedule"] = design_output.schedule_items(r)
-    # the file this design replaces: its proof is reused where its closed loops are these
-    items["dwell"] = certificate_items(compute_certificate(cfg, r.table, previous=cfg.run_dir() / "design.h5"))
+    # the file this design replaces: its proof is reused where the same program found it for these loops
+    items["dwell"] = certificate_items(compute_certificate(cfg, r.table, cfg.run_dir() / "design.h5", exact=True))
     roles = {**design_output.unit_roles(pts, r.fit is not None),
              **{k: v for k, v in CERTIFICATE_ROLES.items() if k.split("/")[1] in items["dwell"]}}
     items = define_units(in_system(items, cfg, roles), cfg.orbit_rate)

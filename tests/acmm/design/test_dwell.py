@@ -6,6 +6,7 @@ the Hespanha–Morse dwell the certificate replaced (Kronecker solves of the Lya
 the transient bound against the exact response of the linear switched system."""
 from __future__ import annotations
 
+import os
 import shutil
 
 import h5py
@@ -13,9 +14,13 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
+from acmm.design import dwell as dwell_module
 from acmm.design.dwell import DECAY_FRACTION, DWELL_RESOLUTION, DwellProof, dwell_certificate, dwell_margins
 from acmm.io.config import load_config
 from acmm.io.design_file import load_design_table
+from acmm.stages import certify as certify_module
+from acmm.stages.certify import compute_certificate, level_closed_loops, stored_proof
+from acmm.stages.design import run_design
 
 from tests.conftest import LQR_ROUTE
 
@@ -133,8 +138,6 @@ def test_the_transient_bound_holds_on_the_exact_linear_response(staircase_h5):
     cfg, g, table = staircase_h5
     d = g["scales"]
     Acl, P, jumps, dwell = g["closed_loop"], g["lyapunov"], g["jump"], g["dwell"] * 2 * np.pi / cfg.orbit_rate
-    from acmm.stages.certify import level_closed_loops
-
     _, gains, *_ = level_closed_loops(cfg, table)
     x = np.zeros(24)
     for k in range(12):
@@ -197,51 +200,108 @@ def test_acmm_certify_prints_the_certificate_and_strict_fails_an_unstable_claim_
     assert bad.exit_code == 1 and "not stable" in bad.stdout and "strict:" in bad.output
 
 
-def test_an_initial_offset_enters_the_transient_bound(staircase_lqr_h5):
+def _no_bisection(*args, **kwargs):
+    raise AssertionError("the dwell-time program was solved: the stored proof was not reused")
+
+
+def test_an_initial_offset_enters_the_transient_bound(staircase_lqr_h5, monkeypatch):
     """A run that does not start at the first level's equilibrium (simulation.initial_offset) has
     a non-zero bound from the first level on, and larger ones after (a review: it was ignored)."""
-    from acmm.stages.certify import compute_certificate, stored_proof
-
     r, path = staircase_lqr_h5
     cfg = load_config("staircase", [*LQR_ROUTE])
+    with h5py.File(path, "r") as f:
+        P = f["dwell/lyapunov"][()]
     # the stability part depends on the levels only: the stored proof is reused (checked again),
-    # as `acmm certify` does
-    proof = stored_proof(path, 2 * np.pi / cfg.orbit_rate)
-    at_rest = compute_certificate(cfg, r.table, proof).certificate
+    # as `acmm certify` does, and no program is solved
+    monkeypatch.setattr(dwell_module, "smallest_dwell", _no_bisection)
+    at_rest = compute_certificate(cfg, r.table, path).certificate
     offset = compute_certificate(load_config("staircase", [*LQR_ROUTE, "simulation.initial_offset=[3,3,3]"]),
-                                 r.table, proof).certificate
+                                 r.table, path).certificate
     assert at_rest.transient[0] == 0 and offset.transient[0] > 0
     assert np.all(offset.transient[1:] >= at_rest.transient[1:])
-    assert at_rest.P is proof.P and offset.P is proof.P
+    assert np.array_equal(at_rest.P, P) and np.array_equal(offset.P, P)
 
 
-def test_a_design_of_the_same_stair_case_reuses_the_proof_of_the_file_it_replaces(tmp_path, staircase_lqr_h5):
-    """``acmm design`` again in the same run folder: the ``design.h5`` it replaces holds a proof for
-    the same closed loops (bit for bit), which is reused (checked again) with the same dwells to the
-    bit; a file whose stored loops differ in one element by one unit in the last place, or that is
-    in SI units, or that is no regular file, gives no proof."""
-    from acmm.stages.certify import compute_certificate, level_closed_loops, stored_proof
+def _as_clean_checkout(path, monkeypatch, commit=None):
+    """Mark the copy ``path`` as written from a checkout without uncommitted changes (at
+    ``commit``: default this process's), and this process as running from one."""
+    monkeypatch.setattr(certify_module, "git_dirty", lambda: "no")
+    with h5py.File(path, "r+") as f:
+        f.attrs["git_dirty"] = "no"
+        if commit is not None:
+            f.attrs["git_commit"] = commit
 
+
+def test_a_design_of_the_same_stair_case_reuses_the_proof_of_the_file_it_replaces(tmp_path, staircase_lqr_h5,
+                                                                                   monkeypatch):
+    """``acmm design`` again in the same run folder: the ``design.h5`` it replaces holds a proof that
+    this program found for the same closed loops (element by element), which is reused (checked
+    again; no program solved) with the same matrices and dwells to the bit."""
     r, written = staircase_lqr_h5
-    cfg = load_config("staircase", [*LQR_ROUTE])
-    path = tmp_path / "design.h5"
+    root = tmp_path / "runs"
+    path = root / "staircase" / "design.h5"
+    path.parent.mkdir(parents=True)
     shutil.copyfile(written, path)
+    _as_clean_checkout(path, monkeypatch)
     with h5py.File(path, "r") as f:
         P, tau = f["dwell/lyapunov"][()], f["dwell/tau_star"][()]
         lower = f["dwell/tau_star"].attrs["not_certified_below_orbit"]
-    cert = compute_certificate(cfg, r.table, previous=path)
-    c = cert.certificate
-    assert np.array_equal(c.P, P) and c.tau_star / cert.orbit == tau and c.tau_lower / cert.orbit == lower
+    monkeypatch.setattr(dwell_module, "smallest_dwell", _no_bisection)
+    _, new = run_design(load_config("staircase", [*LQR_ROUTE, f"output.root={root}"]), figures=False)
+    with h5py.File(new, "r") as f:
+        assert np.array_equal(f["dwell/lyapunov"][()], P) and f["dwell/tau_star"][()] == tau
+        assert f["dwell/tau_star"].attrs["not_certified_below_orbit"] == lower
+
+
+def test_a_proof_is_taken_for_a_new_design_only_from_the_same_program_on_the_same_loops(tmp_path, staircase_lqr_h5,
+                                                                                       monkeypatch):
+    """What a new design does not take: loops that differ in one element by one unit in the last
+    place, other levels, a file in SI units, another commit, a checkout with uncommitted changes,
+    no regular file, a group where the loops were; and what no reader takes: a soft link to
+    itself, an external link to a FIFO (it would block), a matrix of another shape (not read)."""
+    r, written = staircase_lqr_h5
+    cfg = load_config("staircase", [*LQR_ROUTE])
     Acl = level_closed_loops(cfg, r.table)[0]
     orbit = 2 * np.pi / cfg.orbit_rate
-    assert stored_proof(path, orbit, Acl) is not None
+    path = tmp_path / "design.h5"
+
+    def fresh(commit=None):
+        shutil.copyfile(written, path)
+        _as_clean_checkout(path, monkeypatch, commit)
+        return path
+
+    assert stored_proof(fresh(), orbit, Acl, exact=True) is not None
     nudged = Acl.copy()
     nudged[3, 0, 3] = np.nextafter(nudged[3, 0, 3], np.inf)
-    assert stored_proof(path, orbit, nudged) is None and stored_proof(path, orbit, Acl[1:]) is None
+    assert stored_proof(path, orbit, nudged, exact=True) is None and stored_proof(path, orbit, nudged) is not None
+    assert stored_proof(path, orbit, Acl[1:], exact=True) is None and stored_proof(path, orbit, Acl[1:]) is None
     assert stored_proof(tmp_path, orbit, Acl) is None and stored_proof(tmp_path / "none.h5", orbit, Acl) is None
-    with h5py.File(path, "r+") as f:
+    assert stored_proof(fresh(commit="0" * 40), orbit, Acl, exact=True) is None
+    assert stored_proof(path, orbit, Acl) is not None
+    monkeypatch.setattr(certify_module, "git_dirty", lambda: "yes")
+    assert stored_proof(path, orbit, Acl, exact=True) is None
+    with h5py.File(fresh(), "r+") as f:
         f.attrs["unit_system"] = "SI"
-    assert stored_proof(path, orbit, Acl) is None and stored_proof(path, orbit) is not None
+    assert stored_proof(path, orbit, Acl, exact=True) is None and stored_proof(path, orbit, Acl) is not None
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    for edit in ("group", "self link", "external link", "shape"):
+        with h5py.File(fresh(), "r+") as f:
+            g = f["dwell"]
+            if edit == "group":
+                del g["closed_loop"]
+                g.create_group("closed_loop")
+            elif edit == "self link":
+                del g["lyapunov"]
+                g["lyapunov"] = h5py.SoftLink("/dwell/lyapunov")
+            elif edit == "external link":
+                del f["dwell"]
+                f["dwell"] = h5py.ExternalLink(str(fifo), "/dwell")
+            else:
+                del g["lyapunov"]
+                g.create_dataset("lyapunov", shape=(10**6, 24, 24), dtype=float)      # 4.6 GB if read
+        assert stored_proof(path, orbit, Acl, exact=True) is None, edit
+        assert (stored_proof(path, orbit, Acl) is None) == (edit != "group"), edit   # certify reads no loops
 
 
 def test_a_stored_proof_is_reused_only_where_it_holds():

@@ -177,8 +177,9 @@ def _edit(path, edit: str) -> np.ndarray:
     return K0
 
 
-@pytest.mark.parametrize("edit,why", [("K of another shape", "K has shape"), ("K scaled", "digest"),
-                                      ("K non-finite", "non-finite"), ("a coefficient changed", "digest")])
+@pytest.mark.parametrize("edit,why", [("K of another shape", r"K has shape \(2, 5\)"), ("K scaled", "digest"),
+                                      ("K non-finite", r"K has shape \(\d+, 3, 24\) or non-finite"),
+                                      ("a coefficient changed", "digest")])
 def test_an_edited_design_h5_is_refused_where_reuse_is_decided(tmp_path, edit, why, designed_staircase):
     """A review: a design.h5 whose K had another shape reached the compiled simulator (a numba
     traceback, exit 1); one whose K was scaled by 1e6 under the right design_hash was simulated
