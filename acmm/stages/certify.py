@@ -117,21 +117,24 @@ def _deviation(theta: np.ndarray, theta_eq: np.ndarray, n: float, nx: int) -> np
 
 
 def _hard(parent, name: str, kind, shape: tuple | None = None):
-    """``parent[name]`` when it is a hard link to a ``kind`` (a float dataset of ``shape`` where
-    given: checked before anything is read), else KeyError (a soft or external link could lead
-    anywhere: a FIFO, itself)."""
+    """``parent[name]`` when it is a hard link to a ``kind`` (a float dataset of ``shape`` whose
+    data is in the file where given: checked before anything is read), else KeyError (a soft or
+    external link, an external raw file or a virtual dataset could lead anywhere: a FIFO,
+    itself)."""
     if not isinstance(parent.get(name, getlink=True), h5py.HardLink):
         raise KeyError(name)
     obj = parent[name]
-    if not isinstance(obj, kind) or (kind is h5py.Dataset and (obj.dtype.kind != "f" or obj.shape != shape)):
+    if not isinstance(obj, kind) or (kind is h5py.Dataset and (
+            obj.dtype.kind != "f" or obj.shape != shape or obj.is_virtual
+            or obj.id.get_create_plist().get_external_count() != 0)):
         raise KeyError(name)
     return obj
 
 
 def same_program(attrs) -> bool:
     """Whether a results file's provenance (root attributes) is this process's: the same package
-    version and git commit, and neither checkout with uncommitted changes (the commit alone would
-    not say what code ran).
+    version and git commit, both known, and neither checkout with uncommitted changes (without
+    git, or with such changes, the version alone would not say what code ran).
 
     Parameters
     ----------
@@ -144,7 +147,7 @@ def same_program(attrs) -> bool:
         True when a proof in the file is what this program would find for the same loops.
     """
     ours = {"package_version": __version__, "git_commit": git_commit(), "git_dirty": git_dirty()}
-    return ours["git_dirty"] != "yes" and all(
+    return ours["git_commit"] != "unknown" and ours["git_dirty"] == "no" and all(
         k in attrs and h5_text(attrs[k]) == v for k, v in ours.items())
 
 

@@ -200,8 +200,12 @@ def test_acmm_certify_prints_the_certificate_and_strict_fails_an_unstable_claim_
     assert bad.exit_code == 1 and "not stable" in bad.stdout and "strict:" in bad.output
 
 
+class Solved(Exception):
+    """The dwell-time program was solved: the stored proof was not reused."""
+
+
 def _no_bisection(*args, **kwargs):
-    raise AssertionError("the dwell-time program was solved: the stored proof was not reused")
+    raise Solved
 
 
 def test_an_initial_offset_enters_the_transient_bound(staircase_lqr_h5, monkeypatch):
@@ -222,21 +226,26 @@ def test_an_initial_offset_enters_the_transient_bound(staircase_lqr_h5, monkeypa
     assert np.array_equal(at_rest.P, P) and np.array_equal(offset.P, P)
 
 
-def _as_clean_checkout(path, monkeypatch, commit=None):
-    """Mark the copy ``path`` as written from a checkout without uncommitted changes (at
-    ``commit``: default this process's), and this process as running from one."""
+#: the commit this process and the copies of design.h5 are made to have (whatever git says here)
+COMMIT = "c0ffee" * 6 + "c0ff"
+
+
+def _as_clean_checkout(path, monkeypatch, commit: str = COMMIT):
+    """Mark the copy ``path`` as written from a checkout at ``commit`` without uncommitted changes,
+    and this process as running from one at :data:`COMMIT`."""
     monkeypatch.setattr(certify_module, "git_dirty", lambda: "no")
+    monkeypatch.setattr(certify_module, "git_commit", lambda: COMMIT)
     with h5py.File(path, "r+") as f:
         f.attrs["git_dirty"] = "no"
-        if commit is not None:
-            f.attrs["git_commit"] = commit
+        f.attrs["git_commit"] = commit
 
 
 def test_a_design_of_the_same_stair_case_reuses_the_proof_of_the_file_it_replaces(tmp_path, staircase_lqr_h5,
                                                                                    monkeypatch):
     """``acmm design`` again in the same run folder: the ``design.h5`` it replaces holds a proof that
     this program found for the same closed loops (element by element), which is reused (checked
-    again; no program solved) with the same matrices and dwells to the bit."""
+    again; no program solved) with the same matrices and dwells to the bit; from another commit,
+    it is not."""
     r, written = staircase_lqr_h5
     root = tmp_path / "runs"
     path = root / "staircase" / "design.h5"
@@ -247,25 +256,31 @@ def test_a_design_of_the_same_stair_case_reuses_the_proof_of_the_file_it_replace
         P, tau = f["dwell/lyapunov"][()], f["dwell/tau_star"][()]
         lower = f["dwell/tau_star"].attrs["not_certified_below_orbit"]
     monkeypatch.setattr(dwell_module, "smallest_dwell", _no_bisection)
-    _, new = run_design(load_config("staircase", [*LQR_ROUTE, f"output.root={root}"]), figures=False)
+    cfg = load_config("staircase", [*LQR_ROUTE, f"output.root={root}"])
+    _, new = run_design(cfg, figures=False)
     with h5py.File(new, "r") as f:
         assert np.array_equal(f["dwell/lyapunov"][()], P) and f["dwell/tau_star"][()] == tau
         assert f["dwell/tau_star"].attrs["not_certified_below_orbit"] == lower
+    # the same file from another commit: the design solves the program (here: stops where it would)
+    _as_clean_checkout(new, monkeypatch, commit="0" * 40)
+    with pytest.raises(Solved):
+        run_design(cfg, figures=False)
 
 
 def test_a_proof_is_taken_for_a_new_design_only_from_the_same_program_on_the_same_loops(tmp_path, staircase_lqr_h5,
                                                                                        monkeypatch):
     """What a new design does not take: loops that differ in one element by one unit in the last
     place, other levels, a file in SI units, another commit, a checkout with uncommitted changes,
-    no regular file, a group where the loops were; and what no reader takes: a soft link to
-    itself, an external link to a FIFO (it would block), a matrix of another shape (not read)."""
+    no regular file, a group where the loops were, no git; and what no reader takes: soft links
+    (to itself, to the data), data in an external raw file (a FIFO would block), an external link
+    to a FIFO, a matrix of another shape (not read)."""
     r, written = staircase_lqr_h5
     cfg = load_config("staircase", [*LQR_ROUTE])
     Acl = level_closed_loops(cfg, r.table)[0]
     orbit = 2 * np.pi / cfg.orbit_rate
     path = tmp_path / "design.h5"
 
-    def fresh(commit=None):
+    def fresh(commit=COMMIT):
         shutil.copyfile(written, path)
         _as_clean_checkout(path, monkeypatch, commit)
         return path
@@ -278,14 +293,24 @@ def test_a_proof_is_taken_for_a_new_design_only_from_the_same_program_on_the_sam
     assert stored_proof(tmp_path, orbit, Acl) is None and stored_proof(tmp_path / "none.h5", orbit, Acl) is None
     assert stored_proof(fresh(commit="0" * 40), orbit, Acl, exact=True) is None
     assert stored_proof(path, orbit, Acl) is not None
-    monkeypatch.setattr(certify_module, "git_dirty", lambda: "yes")
+    fresh()
+    monkeypatch.setattr(certify_module, "git_dirty", lambda: "yes")      # this checkout changed since
     assert stored_proof(path, orbit, Acl, exact=True) is None
+    monkeypatch.setattr(certify_module, "git_dirty", lambda: "unknown")     # no git: the version alone
+    monkeypatch.setattr(certify_module, "git_commit", lambda: "unknown")
+    with h5py.File(path, "r+") as f:
+        f.attrs["git_dirty"] = f.attrs["git_commit"] = "unknown"
+    assert stored_proof(path, orbit, Acl, exact=True) is None and stored_proof(path, orbit, Acl) is not None
     with h5py.File(fresh(), "r+") as f:
         f.attrs["unit_system"] = "SI"
     assert stored_proof(path, orbit, Acl, exact=True) is None and stored_proof(path, orbit, Acl) is not None
     fifo = tmp_path / "fifo"
     os.mkfifo(fifo)
-    for edit in ("group", "self link", "external link", "shape"):
+    raw = tmp_path / "lyapunov.raw"
+    # the readable cases first: a reader that followed links or external storage fails the test on
+    # them before it could block on the FIFO
+    for edit in ("group", "self link", "soft link to the data", "external raw file", "external raw FIFO",
+                 "external link", "shape"):
         with h5py.File(fresh(), "r+") as f:
             g = f["dwell"]
             if edit == "group":
@@ -294,6 +319,15 @@ def test_a_proof_is_taken_for_a_new_design_only_from_the_same_program_on_the_sam
             elif edit == "self link":
                 del g["lyapunov"]
                 g["lyapunov"] = h5py.SoftLink("/dwell/lyapunov")
+            elif edit == "soft link to the data":
+                g.move("lyapunov", "lyapunov_data")
+                g["lyapunov"] = h5py.SoftLink("/dwell/lyapunov_data")
+            elif edit.startswith("external raw"):
+                P = g["lyapunov"][()]
+                P.tofile(raw)
+                del g["lyapunov"]
+                g.create_dataset("lyapunov", shape=P.shape, dtype=P.dtype,
+                                 external=[(str(raw if edit.endswith("file") else fifo), 0, P.nbytes)])
             elif edit == "external link":
                 del f["dwell"]
                 f["dwell"] = h5py.ExternalLink(str(fifo), "/dwell")
