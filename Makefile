@@ -55,8 +55,8 @@ run: $(STAMP) bytecode
 # them, and CI (.ci/run) runs both.
 # Both run in $(TEST_WORKERS) pytest-xdist worker processes, one per core of the 2-core machines CI
 # runs on (`make test TEST_WORKERS=auto` on a larger one).  `make test` hands out tests and lets
-# an idle worker take the other's queued ones (--dist worksteal: --dist load's last chunk left one
-# worker idle for about half a minute); `make test-slow` hands out a file at a time,
+# an idle worker take the other's queued ones (--dist worksteal: with --dist load one worker sat idle
+# while the other ran its last chunk); `make test-slow` hands out a file at a time,
 # and the files that name the same costly session fixture to the same worker (--dist loadgroup:
 # tests/conftest.py's work_unit).
 TEST_WORKERS ?= 2
