@@ -8,7 +8,7 @@ it imports both, neither imports it.
 running the stage; ``root`` is the report's own, ``<out>/results`` by default, never a user's
 ``runs/<name>/``), writes one section per module of :mod:`acmm.report.sections` (each with declared
 inputs), keeps the printed-number ledger (:mod:`acmm.report.ledger`), draws the figures
-(:mod:`acmm.report.figures`, style :mod:`acmm.report.figure_style`: vector PDF + PNG) and writes
+(in the section that shows each, style :mod:`acmm.report.figure_style`: vector PDF + PNG) and writes
 
 * ``<out>/index.html`` — self-contained (PNG figures embedded as base64; no server needed),
 * ``<out>/report.md`` — the same content in Markdown (figures as relative files),

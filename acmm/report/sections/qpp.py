@@ -5,12 +5,15 @@ import numpy as np
 
 from acmm.report.context import SectionWriter
 from acmm.report.numbers import fmt_value
-from acmm.report.figures_qpp import fig_circle, fig_qpp
+from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
 from acmm.report.ledger import num_str, printed_str, matches_printed
 from acmm.report.stage_results import qpp_scenarios
 import h5py
 from qpp.design.hinf import hinf_gains
 from qpp.design import spheres
+from qpp.design.circle import critical_disc
+from matplotlib.ticker import NullLocator
+from matplotlib.collections import PatchCollection
 
 
 def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
@@ -86,17 +89,75 @@ def _consistent_verdict(attrs) -> str:
 
 
 def _circle_figure(ctx: SectionWriter, key, name) -> None:
+    """Circle criterion (lemma 1) of config ``name``: h_ii(−a + jω) with the Gershgorin mean radii
+    (the ``circle`` group of ``qpp_design.h5``, dimensionless) and the critical disc of the sector."""
     chap = "13" if key == "qpp13" else "14"
-    ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion",
-                fig_circle(ctx.data(f"qpp design:{name}"), name, ctx.figdir))
+    design = ctx.data(f"qpp design:{name}")
+    plt = pyplot()
+    c = design["circle"]
+    centres, radii, sector = np.atleast_2d(c["centres"]), np.atleast_2d(c["radii"]), design["sector"]
+    m = centres.shape[0]
+    fig, axs = plt.subplots(1, m, figsize=(4.6 * m, 4.4), squeeze=False)
+    for i in range(m):
+        ax = axs[0, i]
+        h = centres[i]
+        # the Gershgorin circles as one collection (one artist instead of 150, issue 16)
+        ax.add_collection(PatchCollection([plt.Circle((h[k].real, h[k].imag), radii[i, k]) for k in
+                                           np.unique(np.linspace(0, h.size - 1, 150).astype(int))],
+                                          facecolor="none", edgecolor="0.7", linewidths=0.3))
+        ax.plot(h.real, h.imag, color=COLORS[0], label="h_ii(−a + jω), ω ≥ 0")
+        ax.plot(h.real, -h.imag, "--", color=COLORS[0], lw=0.7, label="ω ≤ 0")
+        al, be = sector[i]
+        cc, R = critical_disc(al, be)
+        ax.add_patch(plt.Circle((cc, 0), R, fill=False, color=COLORS[1], lw=1.4))
+        ax.plot([], [], color=COLORS[1], label=f"critical disc D({al:g}, {be:g})")
+        lim = 1.1 * max(abs(cc) + R, np.abs(h).max() + radii[i].max())
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(-lim, lim)
+        ax.set_aspect("equal")
+        ax.set_xlabel("Re h_ii (dimensionless)")
+        ax.set_ylabel("Im h_ii")
+        ax.set_title(f"channel {i + 1}: margin {np.atleast_1d(c['margins'])[i]:.3g}")
+        ax.legend(fontsize=6.5, loc="upper right")
+    fig.suptitle(f"{name}: circle criterion (Figs 13.1, 14.2–14.3 analogue)", fontsize=10)
+    fixed_layout(fig, left=0.72, bottom=0.5, top=0.6, wspace=0.2)
+    ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion", save(fig, ctx.figdir, f"{name}_circle"))
 
 
 def _responses_figure(ctx: SectionWriter, key, name, out_labels) -> None:
+    """Per scenario of ``qpp_sim.h5`` (t in s, outputs in the plant's units): y and y_o, and
+    |y − y_o| against the output sphere's radius β_o."""
     chap = "13" if key == "qpp13" else "14"
-    cfg = ctx.g.configs[name]
+    beta_o = ctx.g.configs[name].spheres.beta_o
+    plt = pyplot()
+    with h5py.File(ctx.run(f"qpp simulate:{name}").path, "r") as f:
+        scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
+        data = {k: {d: f[k][d][()].T for d in ("t", "y", "y_o", "r", "u")} for k in scen}   # stored (t, channel)
+    p = next(iter(data.values()))["y"].shape[0]
+    fig, axs = plt.subplots(2, len(scen), figsize=(3.8 * len(scen) + 1, 6.5), squeeze=False)
+    for c, k in enumerate(scen):
+        d = data[k]
+        for i in range(p):
+            axs[0, c].plot(d["t"], d["y"][i], "-", color=COLORS[i], label=f"y{i + 1} ({out_labels[i]})")
+            axs[0, c].plot(d["t"], d["y_o"][i], "--", color=COLORS[i], lw=0.8, label=f"y_o{i + 1} nominal")
+            axs[1, c].plot(d["t"], np.abs(d["y"][i] - d["y_o"][i]), color=COLORS[i],
+                           label=f"|y{i + 1} − y_o{i + 1}| ({out_labels[i]})")
+        axs[1, c].axhline(beta_o, color="k", ls=":", lw=0.8, label=f"β_o = {beta_o:g}")
+        axs[1, c].set_yscale("log")
+        # decades only: ~45 unlabelled minor ticks per axis cost a sixth of the figure (issue 16)
+        axs[1, c].yaxis.set_minor_locator(NullLocator())
+        axs[1, c].set_ylim(beta_o * 1e-5, beta_o * 3)
+        axs[0, c].set_title(f"scenario {k}")
+        axs[0, c].set_ylabel("output")
+        axs[1, c].set_ylabel("tracking error |y − y_o|")
+        for r in range(2):
+            axs[r, c].set_xlabel("time t (s)")
+        axs[0, c].legend(fontsize=6.5)
+        axs[1, c].legend(fontsize=6.5, loc="lower right")
+    fig.suptitle(f"{name}: nonlinear closed loop, output vs nominal output and the output sphere", fontsize=10)
+    fixed_layout(fig, left=0.74, bottom=0.54, top=0.6, wspace=0.22, hspace=0.23)
     ctx.doc.fig(f"{name}_responses", f"Ch. {chap}: outputs vs nominal outputs and tracking errors",
-                fig_qpp(ctx.run(f"qpp simulate:{name}").path, ctx.data(f"qpp design:{name}"), cfg.spheres.beta_o,
-                        name, ctx.figdir, out_labels))
+                save(fig, ctx.figdir, f"{name}_responses"))
 
 
 def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
@@ -218,7 +279,7 @@ def text13(ctx: SectionWriter) -> tuple[float, float]:
 
 
 def circle13(ctx: SectionWriter) -> None:
-    """Chapter 13's circle-criterion figure (Fig 13.1, :func:`acmm.report.figures.fig_circle`).
+    """Chapter 13's circle-criterion figure (Fig 13.1, :func:`_circle_figure`).
 
     Parameters
     ----------
@@ -229,7 +290,7 @@ def circle13(ctx: SectionWriter) -> None:
 
 
 def responses13(ctx: SectionWriter) -> None:
-    """Chapter 13's responses figure (Figs 13.3–13.9, :func:`acmm.report.figures.fig_qpp`).
+    """Chapter 13's responses figure (Figs 13.3–13.9, :func:`_responses_figure`).
 
     Parameters
     ----------
@@ -256,7 +317,7 @@ def text14(ctx: SectionWriter) -> None:
 
 
 def circle14(ctx: SectionWriter) -> None:
-    """Chapter 14's circle-criterion figure (Figs 14.2–14.3, :func:`acmm.report.figures.fig_circle`).
+    """Chapter 14's circle-criterion figure (Figs 14.2–14.3, :func:`_circle_figure`).
 
     Parameters
     ----------
@@ -267,7 +328,7 @@ def circle14(ctx: SectionWriter) -> None:
 
 
 def responses14(ctx: SectionWriter) -> None:
-    """Chapter 14's responses figure (Fig 14.4, :func:`acmm.report.figures.fig_qpp`).
+    """Chapter 14's responses figure (Fig 14.4, :func:`_responses_figure`).
 
     Parameters
     ----------

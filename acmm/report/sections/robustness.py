@@ -5,7 +5,7 @@ import numpy as np
 
 from acmm.report.context import SectionWriter
 from acmm.report.numbers import decoded, fmt_value
-from acmm.report.figures import fig_robustness
+from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
 from acmm.report.ledger import STATUS_EXPLAINED, PrintedNumber
 
 
@@ -118,6 +118,30 @@ def build(ctx: SectionWriter) -> None:
         ("" if all(f == 1.0 for f in fracs.values()) else
          "; the report does not define its variations, estimate or design, so the statement cannot be "
          "checked as printed; this is the strictest reading (unknown perturbation, fixed gains)")))
-    files = fig_robustness(params, base, verdict, peak, names, ctx.figdir)
+    # peak attitude error (deg, worst axis) vs max_k |δ_k| (relative inertia changes) per case
+    plt = pyplot()
+    keys = [k for k in ("dI11", "dI22", "dI33", "dI12", "dI13", "dI23") if k in params]
+    dmax = np.max(np.abs(np.column_stack([params[k] for k in keys])), axis=1) if keys else np.zeros(len(base))
+    fig, axs = plt.subplots(1, len(names), figsize=(5.2 * len(names), 4.0), squeeze=False)
+    for k, lab in enumerate(names):
+        ax = axs[0, k]
+        sel = base == k
+        ok = sel & (verdict == "bounded")
+        bad = sel & (verdict != "bounded")
+        pk = np.full(len(base), np.nan)
+        finite = np.isfinite(peak).any(axis=1)
+        pk[finite] = np.nanmax(peak[finite], axis=1)
+        ax.plot(100 * dmax[ok], pk[ok], "o", ms=3.5, color=COLORS[0], label="bounded")
+        top = np.nanmax(pk[ok]) * 1.5 if ok.any() and np.isfinite(pk[ok]).any() else 60.0
+        yb = np.where(np.isfinite(pk[bad]), pk[bad], top)
+        ax.plot(100 * dmax[bad], np.minimum(yb, top), "x", ms=4, color=COLORS[1],
+                label="diverged / no equilibrium (clipped)")
+        ax.set_yscale("log")
+        ax.set_xlabel("largest inertia-element perturbation max|δ| (%)")
+        ax.set_ylabel("peak attitude error, worst axis (deg)")
+        ax.set_title(f"{lab.upper()}: {int(ok.sum())}/{int(sel.sum())} bounded")
+        ax.legend(loc="lower right")
+    fixed_layout(fig, left=0.72, bottom=0.54, top=0.33, wspace=0.2)
+    files = save(fig, ctx.figdir, "robustness")
     ctx.doc.fig("robustness", "±30 % inertia Monte Carlo: peak attitude error vs the largest element "
                 "perturbation per case (bounded: filled; diverged or no equilibrium: crosses)", files)

@@ -6,12 +6,14 @@ import numpy as np
 from acmm.design.dwell import NOT_COVERED
 from acmm.design.regional_lmi import control_energy
 from acmm.model.state_scaling import torque_scale
-from acmm.report.constants import STAIRCASES
+from acmm.report.constants import AXES, STAIRCASES
 from acmm.report.context import SectionWriter
 from acmm.report.numbers import decoded
-from acmm.report.figures import fig_gain_schedule, fig_pole_maps
+from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
+from acmm.design.schedule import schedule_gain
 from acmm.model import linearize as lin
 from acmm.plots import design as design_plots
+from matplotlib.ticker import MaxNLocator
 
 
 def summary(ctx: SectionWriter) -> None:
@@ -217,7 +219,8 @@ def true_poles(ctx: SectionWriter) -> np.ndarray:
 
 def gain_figure(ctx: SectionWriter) -> None:
     """The 72 gains of the stair-case design points, their schedule and the report's quadratic form
-    converged on the path (Figs 5.3–5.26, :func:`acmm.report.figures.fig_gain_schedule`).
+    converged on the path (Figs 5.3–5.26): K(i, j) in ft·lbf per state unit vs pitch TEA, one panel
+    per column j, the points as markers, the schedule as lines, the quadratic dashed.
 
     Parameters
     ----------
@@ -226,16 +229,72 @@ def gain_figure(ctx: SectionWriter) -> None:
     """
     cfg = ctx.g.configs["staircase"]
     quad, _ = quadratic(ctx, ("design",))
-    quad = None if quad is None else ctx.data("acmm design:" + quad.name)
-    files = fig_gain_schedule(ctx.data("acmm design:" + cfg.name), cfg.design.drf_mode, ctx.figdir, quad)
+    other = None if quad is None else ctx.data("acmm design:" + quad.name)
+    design = ctx.data("acmm design:" + cfg.name)
+    plt = pyplot()
+    K, tea = design["K"], design["tea"]
+    sc = design["schedule"]
+    form = design["attrs"].get("schedule_form", "polynomial")
+    th = tea[:, 1]
+    fine = np.linspace(th.min(), th.max(), 120)
+    kf = np.array([schedule_gain(form, sc["coef"], sc["variable"], K, t) for t in fine])
+    ko = None if other is None else np.array([
+        schedule_gain(other["attrs"].get("schedule_form", "polynomial"), other["schedule"]["coef"],
+                      other["schedule"]["variable"], other["K"], t) for t in fine])
+    units = lin.state_units(cfg.design.drf_mode)
+    fig, axs = plt.subplots(6, 4, figsize=(11, 14), sharex=True)
+    for j, ax in enumerate(axs.flat):
+        for i in range(3):
+            ax.plot(np.degrees(th), K[:, i, j], "o", ms=3, color=COLORS[i], label=f"K({i + 1},{j + 1}) point")
+            ax.plot(np.degrees(fine), kf[:, i, j], "-", color=COLORS[i], lw=1,
+                    label=f"K({i + 1},{j + 1}) schedule")
+            if ko is not None:
+                ax.plot(np.degrees(fine), ko[:, i, j], "--", color=COLORS[i], lw=0.8,
+                        label=f"K({i + 1},{j + 1}) other")
+        ax.set_title(f"K(i,{j + 1}): {lin.STATE_NAMES[j]}", fontsize=8)
+        ax.set_ylabel(f"ft·lbf / ({units[j]})", fontsize=6.5)
+        ax.tick_params(labelsize=6.5)
+        # ≤ 6 gain ticks (the default gives up to 9): each tick costs a label and a grid line (issue 16)
+        ax.yaxis.set_major_locator(MaxNLocator(5, steps=[1, 2, 2.5, 5, 10]))
+    for ax in axs[-1]:
+        ax.set_xlabel("pitch TEA θ2* (deg)")
+    handles, _ = axs[0, 0].get_legend_handles_labels()
+    kinds = ("point gain", "schedule") + (() if ko is None else ("other schedule (dashed)",))
+    labels = [f"{kind}, row i = {i + 1} ({AXES[i]} torque)" for i in range(3) for kind in kinds]
+    fig.legend(handles, labels, loc="upper center", ncol=3, fontsize=7, bbox_to_anchor=(0.5, 0.985))
+    beside = "" if ko is None else f";\nother schedule: {_form_name(other)} (dashed)"
+    fig.suptitle(f"Gain schedule vs TEA: the design points' gains (markers), {_form_name(design)} (lines){beside}; "
+                 "rows i = roll, pitch, yaw torque", y=0.998, fontsize=9)
+    # a fixed layout: tight_layout on 24 panels costs as much as drawing them (issue 16)
+    fig.subplots_adjust(left=0.075, right=0.985, bottom=0.04, top=0.93, wspace=0.42, hspace=0.32)
+    files = save(fig, ctx.figdir, "gain_schedule")
     ctx.doc.fig("gain_schedule", "Gain schedule: the 72 gains K(i, j) vs pitch TEA (Figs 5.3–5.26 analogue)"
                 + ("" if quad is None else ", the packaged schedule and the report's quadratic form converged on "
                    "the path (dashed)"), files)
 
 
+def _form_name(design: dict) -> str:
+    """What the schedule of ``design`` (``design.h5`` as read) is, in words."""
+    sc = design["schedule"]
+    if design["attrs"].get("schedule_form", "polynomial") == "table":
+        return f"the table look-up (K linear in θ2* between its {len(design['tea'])} nodes)"
+    how = {"shifted_lqr": ", converged on the path"}.get(decoded(sc.get("fit_method", b"least_squares")), "")
+    return f"the order-{sc['coef'].shape[0] - 1} polynomial{how}"
+
+
+def _sector(ax, sigma, half_angle_deg, xmin):
+    """Shade the sector of Fig 5.2 (Re λ/n ≤ −σ, |arg| within the half-angle in deg) from ``xmin`` on."""
+    t = np.tan(np.radians(half_angle_deg))
+    x = np.linspace(xmin, -sigma, 50)
+    ax.fill_between(x, t * x, -t * x, color="0.92", label="sector (Fig 5.2)", zorder=0)
+    ax.plot([-sigma, -sigma], [-t * sigma, t * sigma], "k-", lw=0.6)
+    ax.plot(x, t * x, "k-", lw=0.6)
+    ax.plot(x, -t * x, "k-", lw=0.6)
+
+
 def pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:
-    """Pole maps: the stair-case design points; claim 1 with ``ev`` (:func:`true_poles`), in the
-    sector of Fig 5.2 (:func:`acmm.report.figures.fig_pole_maps`).
+    """Pole maps (poles / n): the stair-case design points; claim 1 (the MB3 designs) with ``ev``
+    (:func:`true_poles`), in the sector of Fig 5.2.
 
     Parameters
     ----------
@@ -246,14 +305,46 @@ def pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:
         (:func:`true_poles`).
     """
     cfg = ctx.g.configs["staircase"]
-    d = ctx.data("acmm design:" + cfg.name)
+    stair = ctx.data("acmm design:" + cfg.name)
     mb3 = ctx.data("acmm design:mb3")
     dec = ctx.data("acmm design:mb3_decoupled")
-    files = fig_pole_maps(d, mb3, dec, ev, cfg.orbit_rate,
-                          (cfg.design.sector.sigma, cfg.design.sector.half_angle_deg), ctx.figdir)
+    n = cfg.orbit_rate
+    sigma, phi = cfg.design.sector.sigma, cfg.design.sector.half_angle_deg
+    plt = pyplot()
+    fig, axs = plt.subplots(1, 2, figsize=(11, 4.6))
+    ax = axs[0]
+    pts = [stair["points"][k] for k in sorted(stair["points"])]
+    allp = np.concatenate([p["poles"] for p in pts]) / n
+    _sector(ax, sigma, phi, min(allp.real.min() * 1.05, -2 * sigma))
+    cmap = plt.get_cmap("viridis")
+    th = np.degrees(stair["tea"][:, 1])
+    for k, p in enumerate(pts):
+        q = p["poles"] / n
+        ax.plot(q.real, q.imag, "x", ms=4, color=cmap(k / max(1, len(pts) - 1)),
+                label=f"θ2* = {th[k]:.1f}°" if k in (0, len(pts) - 1) else None)
+    ax.axvline(0, color="k", lw=0.5)
+    ax.set_xlabel("Re λ / n (n = orbital rate)")
+    ax.set_ylabel("Im λ / n")
+    ax.set_title(f"Stair-case schedule: {len(pts)} design points")
+    ax.legend(loc="upper left")
+    ax = axs[1]
+    pc = mb3["points"][sorted(mb3["points"])[0]]["poles"] / n
+    pd = dec["points"][sorted(dec["points"])[0]]["poles"] / n
+    pt = np.asarray(ev) / n
+    xmin = min(pc.real.min(), pd.real.min(), -2 * sigma) * 1.05
+    _sector(ax, sigma, phi, xmin)
+    ax.plot(pc.real, pc.imag, "x", color=COLORS[0], label="coupled design, coupled model")
+    ax.plot(pd.real, pd.imag, "+", color=COLORS[2], label="no-cross-inertia design, its own model")
+    ax.plot(pt.real, pt.imag, "o", mfc="none", color=COLORS[1], label="no-cross-inertia gain, true coupled model")
+    ax.axvline(0, color="k", lw=0.5)
+    ax.set_xlabel("Re λ / n")
+    ax.set_ylabel("Im λ / n")
+    ax.set_title("Claim 1 (MB3): closed-loop poles")
+    ax.legend(loc="upper left")
+    fixed_layout(fig, left=0.72, bottom=0.54, top=0.34, wspace=0.16)
     ctx.doc.fig("pole_maps", "Closed-loop poles (units of n) and the sector of Fig 5.2: every stair-case "
                 "design point (left); the claim-1 designs and the cross-inertia-free gain on the true "
-                "coupled MB3 model (right)", files)
+                "coupled MB3 model (right)", save(fig, ctx.figdir, "pole_maps"))
 
 
 def _conditioning(ctx: SectionWriter, d, pts):
