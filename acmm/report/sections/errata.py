@@ -17,7 +17,6 @@ from acmm_qpp.errors import AcmmError, ConvergenceError
 from acmm.report.context import SectionWriter
 from acmm.report.numbers import fmt_value
 from acmm.report.sections.claim1 import Claim1Numbers
-from acmm.report.sections.errata_qpp import qpp_rows
 from acmm.model import (controllability as ctrb_mod, dynamics as dyn, kinematics as kin, linearize as lin,
     tea as tea_mod)
 from acmm.design.settings import design_settings
@@ -44,70 +43,29 @@ def build(ctx: SectionWriter, tea_mb3: tuple, claim1: Claim1Numbers, beta3: tupl
               "computed in this run where the check is cheap, otherwise the test file that confirms it.")
     g = ctx.g
     stair = g.configs["staircase"].name
-    rows = errata_rows(g.configs["mb3"], tea_mb3, ctx.data("acmm design:" + stair),
+    rows = _errata_rows(g.configs["mb3"], tea_mb3, ctx.data("acmm design:" + stair),
                        ctx.data("acmm simulate:" + stair), claim1, g.configs["qpp_siso"],
                        ctx.data("qpp design:qpp_siso"), g.configs["qpp_manipulator"], beta3)
     ctx.doc.table(["item", "printed / claim", "correction used", "evidence (this run)", "confirmed by"], rows)
 
 
-def errata_rows(cfg, tea_mb3, st, sim, c1: Claim1Numbers, s13, d13, a, beta3) -> list[list[str]]:
-    """Rows of the errata table (cheap checks only).
-
-    Parameters
-    ----------
-    cfg : acmm.io.config.Config
-        The MB3 config.
-    tea_mb3 : tuple
-        (TEA, zero-bias TEA, (3,) array bias torque in ft·lbf) of MB3.
-    st : dict
-        Stair-case ``design.h5`` (read_h5 dict).
-    sim : dict
-        Stair-case ``sim.h5`` (read_h5 dict; u in ft·lbf, h in ft·lbf·s).
-    c1 : acmm.report.sections.claim1.Claim1Numbers
-        The claim-1 numbers.
-    s13 : qpp.io.config.QppConfig
-        The ch. 13 config.
-    d13 : dict
-        Its ``qpp_design.h5`` (read_h5 dict).
-    a : qpp.io.config.QppConfig
-        The ch. 14 config.
-    beta3 : tuple of float
-        Ch. 13 β3 with sin 5t and at the nonlinearity's frequency, output units.
-
-    Returns
-    -------
-    list of list of str
-        Table rows: item, printed / claim, correction used, evidence, confirming tests.
-    """
+def _errata_rows(cfg, tea_mb3, st, sim, c1: Claim1Numbers, s13, d13, a, beta3) -> list[list[str]]:
+    """Rows of the errata table (cheap checks only): item, printed / claim, correction used,
+    evidence, confirming tests; ``cfg`` MB3, ``tea_mb3`` as :func:`build`'s, ``st``/``sim`` the
+    stair-case ``design.h5``/``sim.h5`` (u in ft·lbf, h in ft·lbf·s), ``s13``/``d13`` the ch. 13
+    config and ``qpp_design.h5``, ``a`` the ch. 14 config, ``beta3`` as :func:`build`'s."""
     n, I = cfg.orbit_rate, cfg.inertia.matrix()
     t, t0, bias = tea_mb3
     th, d = t.theta, cfg.design
     m = lin.design_point(I, th, n, model="coupled", drf_mode=d.drf_mode)
-    return (kinematics_rows(th, n) + tea_rows(I, n, t0, bias) + linearization_rows(I, th, n, m, design_settings(cfg))
-            + riccati_rows(m, d, n) + design_rows(I, th, n, d, st, sim, c1) + qpp_rows(s13, d13, a, beta3))
+    return (_kinematics_rows(th, n) + _tea_rows(I, n, t0, bias) + _linearization_rows(I, th, n, m, design_settings(cfg))
+            + _riccati_rows(m, d, n) + _design_rows(I, th, n, d, st, sim, c1) + _qpp_rows(s13, d13, a, beta3))
 
 
-def design_on(A, B, m, s) -> str:
-    """A sector design (the pipeline's :func:`acmm.design.schedule.sector_design`, settings ``s``: an
-    :class:`acmm.design.settings.DesignSettings`) on the model (A, B), judged on the true model ``m``.
-
-    Parameters
-    ----------
-    A : (24, 24) array
-        State matrix designed on, per-state units (eq 4.46).
-    B : (24, 3) array
-        Input matrix designed on, state units per ft·lbf.
-    m : acmm.model.linearize.LinearModel
-        The true model (its scales, A and B).
-    s : acmm.design.settings.DesignSettings
-        The pipeline's design settings (orbit rate in rad/s, sector, R, Q0, solver).
-
-    Returns
-    -------
-    str
-        Whether the design is stable on the true model, with its largest Re λ in units of n (or
-        why the design fails).
-    """
+def _design_on(A, B, m, s) -> str:
+    """Whether the pipeline's sector design (:func:`acmm.design.schedule.sector_design`, settings
+    ``s``) on (A, B) (eq 4.46 state units, B per ft·lbf) is stable on the true model ``m``, with
+    its largest Re λ in units of n (or why the design fails)."""
     n = s.orbit_rate
     try:
         r = sector_design(A, B, m.scales, s)
@@ -118,21 +76,9 @@ def design_on(A, B, m, s) -> str:
             f"{'UNSTABLE' if ev.real.max() > 0 else 'stable'} on the true model: max Re λ = {ev.real.max() / n:+.2f} n")
 
 
-def kinematics_rows(th, n: float) -> list[list[str]]:
-    """Eq 3.6 (printed f11) against eq 4.2 at the MB3 TEA ``th`` (rad) and a test attitude.
-
-    Parameters
-    ----------
-    th : (3,) array
-        MB3 TEA, rad.
-    n : float
-        Orbit rate, rad/s.
-
-    Returns
-    -------
-    list of list of str
-        Table rows: item, printed / claim, correction used, evidence, confirming tests.
-    """
+def _kinematics_rows(th, n: float) -> list[list[str]]:
+    """Eq 3.6 (printed f11) against eq 4.2 at the MB3 TEA ``th`` (rad) and a test attitude; ``n``
+    the orbit rate, rad/s."""
     rows = []
     # eq 3.6
     def printed_f(theta):
@@ -155,25 +101,10 @@ def kinematics_rows(th, n: float) -> list[list[str]]:
     return rows
 
 
-def tea_rows(I, n: float, t0, bias) -> list[list[str]]:
-    """TEA branches of MB3 (zero bias) and the 4 ft·lbf pitch bias without an equilibrium.
-
-    Parameters
-    ----------
-    I : (3, 3) array
-        MB3 inertia, slug·ft².
-    n : float
-        Orbit rate, rad/s.
-    t0 : acmm.model.tea.TEA
-        Zero-bias TEA of the continuation (θ* in rad).
-    bias : (3,) array
-        Back-solved bias torque of Table 1, ft·lbf.
-
-    Returns
-    -------
-    list of list of str
-        Table rows: item, printed / claim, correction used, evidence, confirming tests.
-    """
+def _tea_rows(I, n: float, t0, bias) -> list[list[str]]:
+    """TEA branches of MB3 (inertia ``I`` in slug·ft², orbit rate ``n`` in rad/s; ``t0`` the
+    zero-bias TEA of the continuation) and the 4 ft·lbf pitch bias without an equilibrium;
+    ``bias`` the back-solved bias torque of Table 1, ft·lbf."""
     rows = []
     # TEA branches
     roots = tea_mod.all_equilibria(I, n, np.zeros(3))
@@ -194,27 +125,10 @@ def tea_rows(I, n: float, t0, bias) -> list[list[str]]:
     return rows
 
 
-def linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
-    """Eqs 4.12–4.14, 4.28–4.34, 4.44: the Jacobian and the printed signs, with designs on them.
-
-    Parameters
-    ----------
-    I : (3, 3) array
-        MB3 inertia, slug·ft².
-    th : (3,) array
-        MB3 TEA, rad.
-    n : float
-        Orbit rate, rad/s.
-    m : acmm.model.linearize.LinearModel
-        The coupled MB3 model at ``th``.
-    s : acmm.design.settings.DesignSettings
-        The pipeline's design settings.
-
-    Returns
-    -------
-    list of list of str
-        Table rows: item, printed / claim, correction used, evidence, confirming tests.
-    """
+def _linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
+    """Eqs 4.12–4.14, 4.28–4.34, 4.44: the Jacobian and the printed signs, with designs (settings
+    ``s``) on them; ``m`` the coupled MB3 model at the TEA ``th`` (rad), ``I`` in slug·ft², ``n``
+    in rad/s."""
     rows = []
     # linearization
 
@@ -234,40 +148,26 @@ def linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
     rows.append(["eq 4.29 column 6", "τgg² term in rows 1–3", "τgyr²·n·sin θ3 (units)", "—",
                  "tests/acmm/model/test_linearize.py"])
     rows.append(["eqs 4.30, 4.33, 4.49 signs", "u, w signs", "u enters ω̇ as −u and ḣ as +u; w enters ω̇ as +w",
-                 "input sign reversed: " + design_on(m.A, -m.B, m, s),
+                 "input sign reversed: " + _design_on(m.A, -m.B, m, s),
                  "tests/acmm/model/test_dynamics.py, tests/acmm/model/test_linearize.py"])
     a2 = m.A[6:9, 6:9]
     Ap = m.A.copy()
     Ap[8, 6] = -Ap[8, 6]
     rows.append(["eq 4.34 A2(3,1)", "+n cos θ1 cos θ3", "−n cos θ1 cos θ3 (block −[ω*×] skew-symmetric)",
                  f"A2(3,1) = {a2[2, 0]:+.4e} rad/s; printed sign gives |A2 + A2ᵀ|max = {2 * abs(a2[2, 0]):.3e} rad/s "
-                 f"(ours {np.abs(a2 + a2.T).max():.1e}); " + design_on(Ap, m.B, m, s),
+                 f"(ours {np.abs(a2 + a2.T).max():.1e}); " + _design_on(Ap, m.B, m, s),
                  "tests/acmm/model/test_linearize.py"])
     Aq = m.A.copy()
     for src, good, bad in ((4, 20, 21), (5, 22, 23)):
         Aq[bad, src], Aq[good, src] = Aq[good, src], 0.0
     rows.append(["eq 4.44 DRF input rows", "θ2, θ3 drive rows 10, 12 of x3", "rows 9, 11 (β̇2, β̇3)",
-                 "printed rows: " + design_on(Aq, m.B, m, s), "tests/acmm/model/test_linearize.py"])
+                 "printed rows: " + _design_on(Aq, m.B, m, s), "tests/acmm/model/test_linearize.py"])
     return rows
 
 
-def riccati_rows(m, d, n: float) -> list[list[str]]:
-    """Eq 5.6 (sign iteration) and state scaling of the Riccati solve on the MB3 model ``m``.
-
-    Parameters
-    ----------
-    m : acmm.model.linearize.LinearModel
-        The coupled MB3 model.
-    d : acmm.io.config.Design
-        The config's design section (sector σ in units of n, R).
-    n : float
-        Orbit rate, rad/s.
-
-    Returns
-    -------
-    list of list of str
-        Table rows: item, printed / claim, correction used, evidence, confirming tests.
-    """
+def _riccati_rows(m, d, n: float) -> list[list[str]]:
+    """Eq 5.6 (sign iteration) and state scaling of the Riccati solve on the MB3 model ``m``;
+    ``d`` the config's design section (sector σ in units of n, R), ``n`` in rad/s."""
     rows = []
     # eq 5.6
     alpha = d.sector.sigma * n
@@ -309,31 +209,9 @@ def riccati_rows(m, d, n: float) -> list[list[str]]:
     return rows
 
 
-def design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str]]:
-    """Sector LQR, saturation and claim 1.
-
-    Parameters
-    ----------
-    I : (3, 3) array
-        MB3 inertia, slug·ft².
-    th : (3,) array
-        MB3 TEA, rad.
-    n : float
-        Orbit rate, rad/s.
-    d : acmm.io.config.Design
-        The config's design section (DRF mode).
-    st : dict
-        Stair-case ``design.h5`` (read_h5 dict).
-    sim : dict
-        Stair-case ``sim.h5`` (read_h5 dict; u in ft·lbf, h in ft·lbf·s).
-    c1 : acmm.report.sections.claim1.Claim1Numbers
-        The claim-1 numbers.
-
-    Returns
-    -------
-    list of list of str
-        Table rows: item, printed / claim, correction used, evidence, confirming tests.
-    """
+def _design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str]]:
+    """Sector LQR, saturation and claim 1 (MB3 inertia ``I`` in slug·ft², TEA ``th`` in rad, ``n``
+    in rad/s, ``d`` the design section; ``st``/``sim`` the stair-case ``design.h5``/``sim.h5``)."""
     rows = []
     # sector LQR
     pts = [st["points"][k] for k in sorted(st["points"])]
@@ -357,4 +235,36 @@ def design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str
                  f"diverges at {c1.div:.3f} orbit; its gain on the true linear model: max Re λ = {c1.maxre:+.3f} n; "
                  f"coupled design bounded, peak error first orbit {fmt_value(c1.first, '{:.1f}')} deg, from orbit 2 "
                  f"{fmt_value(c1.late, '{:.2f}')} deg", "tests/acmm/simulate/test_kernel.py"])
+    return rows
+
+
+def _qpp_rows(s13, d13, a, beta3) -> list[list[str]]:
+    """Part III (ch. 10–14): the signs of 13.6 / Table 14.1, B_z, the ch. 11 weights, β3 (eq 10.54)
+    and m, and the unknowns of ch. 14; ``s13``/``d13`` the ch. 13 config and ``qpp_design.h5``,
+    ``a`` the ch. 14 config, ``beta3`` as :func:`build`'s."""
+    rows = []
+    # Part III
+    rows.append(["signs of 13.6 / Table 14.1", "u = +K x̂, L = −H; plant f sign differs (13.1/14.2 vs 10.1)",
+                 "as docs/ERRATA.md", "A_z rebuilt from the printed gains equals 13.6 / Table 14.1",
+                 "tests/qpp/model/test_lure.py"])
+    b = {rd: float(d13[f"beta1_{rd.replace('.', '_')}"]) for rd in ("eq10.7", "printed")}
+    rows.append(["B_z of 13.6 / Table 14.1", "H in the r-columns of the observer rows", "eq 10.7 (zeros); β1 "
+                 "reported for both", f"ch. 13 β1 = {b['eq10.7']:.5f} (eq 10.7), {b['printed']:.5f} (printed B_z); "
+                 f"printed 1.61454", "tests/qpp/design/test_spheres.py"])
+    rows.append(["ch. 11 weights", "state weight [C 0]ᵀ[C 0]; Lyapunov 11.2 for the observer",
+                 "servo weight [0 C_c]ᵀ[0 C_c]; filter Riccati H = −h Cᵀ",
+                 f"ch. 13 K1 = {fmt_value(d13['K1'], '{:.1f}')}, Kc = {fmt_value(d13['Kc'], '{:.1f}')} (printed "
+                 f"{fmt_value(s13.published.K1, '{:.1f}')}, {fmt_value(s13.published.Kc, '{:.1f}')})",
+                 "tests/qpp/design/test_hinf.py"])
+    b3_5, b3_1 = beta3
+    th13 = np.atleast_2d(d13["thresholds"])
+    rows.append(["β3 (10.54) and m", "β3 = 0.02727; half-width 0.05 in m, [−0.5, 0.5] in the circle check",
+                 "β3 = 0.05‖(sin 5t)_T‖₂; both bookkeepings reported",
+                 f"0.05‖(sin 5t)_T‖₂ = {b3_5:.5f} at T = 0.5 s; with sin t: {b3_1:.5f}; m = "
+                 + ", ".join(f"{v[3]:.4f}" for v in th13) + " (printed, report, circle bookkeepings)",
+                 "tests/qpp/design/test_spheres.py"])
+    rows.append(["ch. 14 target and unknowns", "Y_A1, Y_A2 ambiguous; μ, impulse not printed",
+                 "Y_A1 = (x1 + a) sin x2, Y_A2 = (x1 + a) cos x2; μ and impulse are config parameters",
+                 f"μ = {a.nonlinearity.mu:g} kg, impulse {a.simulation.scenarios[0].impulse} at "
+                 f"t = {a.simulation.scenarios[0].impulse_time} s", "tests/qpp/simulate/test_closed_loop.py"])
     return rows

@@ -31,7 +31,7 @@ def _num(pattern, text):
 
 def test_kinematics_printed_f_violates_eq42_corrected_does_not(mb3):
     _, _, n, t, _, _ = mb3
-    row = errata.kinematics_rows(t.theta, n)[0]
+    row = errata._kinematics_rows(t.theta, n)[0]
     assert row[0] == "eq 3.6 (1,1) entry"
     assert _num(r"rad/s at the MB3 TEA and (\S+) rad/s", row[3]) > 1e-5      # at (10°, −30°, 25°)
     assert _num(r"corrected f: (\S+) rad/s", row[3]) < 1e-12
@@ -39,7 +39,7 @@ def test_kinematics_printed_f_violates_eq42_corrected_does_not(mb3):
 
 def test_tea_rows_report_the_missing_equilibrium_of_the_4_ftlbf_bias(mb3):
     _, I, n, t, bias, _ = mb3
-    rows = errata.tea_rows(I, n, tea.solve_tea(I, n, np.zeros(3)), bias)
+    rows = errata._tea_rows(I, n, tea.solve_tea(I, n, np.zeros(3)), bias)
     assert [r[0] for r in rows] == ["TEA roots (eqs 4.1–4.3)", "4 ft·lbf pitch bias (Wie et al. 1989)"]
     assert "no equilibrium" in rows[1][3] and _num(r"MB3 = (\S+) ft·lbf < 4", rows[1][3]) < 4
 
@@ -57,16 +57,16 @@ def test_design_on_is_the_pipelines_sector_design(mb3, monkeypatch):
     monkeypatch.setattr(errata, "sector_design", spy)
     settings = design_settings(cfg)
     assert settings.orbit_rate == n
-    text = errata.design_on(m.A, m.B, m, settings)
+    text = errata._design_on(m.A, m.B, m, settings)
     assert seen == [settings]                         # R, Q0, sector and solver settings of the config
     margin = real(m.A, m.B, m.scales, settings).margin
     assert f"margin {margin:+.3f} n" in text and "stable on the true model" in text
-    assert "UNSTABLE" in errata.design_on(m.A, -m.B, m, settings)
+    assert "UNSTABLE" in errata._design_on(m.A, -m.B, m, settings)
 
 
 def test_riccati_rows_printed_sign_iteration_fails_corrected_converges(mb3):
     cfg, _, n, _, _, m = mb3
-    rows = errata.riccati_rows(m, cfg.design, n)
+    rows = errata._riccati_rows(m, cfg.design, n)
     assert rows[0][0] == "eq 5.6 sign iteration" and "corrected form converges" in rows[0][3]
     assert "converged (unexpected)" not in rows[0][3]
     assert rows[1][0] == "state scaling"
