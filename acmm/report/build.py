@@ -20,8 +20,8 @@ from acmm_qpp.signals import interrupts_deferred
 from acmm.report.constants import SECTIONS
 from acmm.report.context import SectionWriter
 from acmm.report.document import render_html, render_markdown
-from acmm.report.gather import (Gathered, changed_runs, keep_stage, order_runs, report_configs, stage_tasks, warm_workers)
-from acmm.report.stage_results import failed
+from acmm.report.gather import (Gathered, changed_runs, failed, keep_stage, order_runs, report_configs, stage_tasks,
+                                warm_workers)
 from acmm.report.ledger import STATUS_UNEXPLAINED
 from acmm.report.manifest import build_manifest, compare_manifests
 from acmm.report.plan import assemble, failure_blocks, section_tasks
@@ -134,7 +134,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     -------
     ReportResult
         The files written and what they contain.  A stage, part or section that raised a
-        user-facing error (:func:`acmm.report.stage_results.failure_line`) is shown in its section with that
+        user-facing error (:func:`acmm.report.gather.failed`) is shown in its section with that
         error, the others complete, and it is listed in :attr:`ReportResult.failures`; a bug
         propagates and nothing is written.
 

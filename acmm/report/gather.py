@@ -1,38 +1,366 @@
 """Gathering the results the report needs: reuse ``<root>/<name>/*.h5`` by hash, else run the stage.
 
 The stages are those of Part II (TEA, design and stair-case simulation, ch. 4–6) and Part III
-(the examples of ch. 13–14).
+(the examples of ch. 13–14).  One stage's results file is reused when its hashes match, else the
+stage is run (:func:`acmm.stages.design.design_for` for designs, the hashes of the simulation and of
+the QPP stages otherwise); :func:`stage_tasks` runs them as a task graph.
 """
 from __future__ import annotations
 
-import importlib
 import os
+import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from acmm_qpp.errors import AcmmError, OutputError
-from acmm_qpp.outputs import file_identity
-# the results files of one stage (reused by hash, else run)
-from acmm.report.stage_results import (Failed, StageRun, stage_record, try_attrs, acmm_config, blocked, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp, failed, qpp_config)
+import h5py
+import numpy as np
 import yaml
-from acmm.io.config import parse_config
+from acmm_qpp.errors import EXIT_INPUT, AcmmError, OutputError, plain_failure
+from acmm_qpp.outputs import file_identity
+from acmm.io.config import load_config, parse_config
+from qpp.io.config import load_config as load_qpp_config, parse_config as parse_qpp_config
 from acmm.report.runner import Task, run_tasks
-from acmm.report.constants import STAIRCASES
+from acmm.report.constants import FAST_ORBITS, STAIRCASES
 from acmm.simulate.warmup import warm_up
 from acmm.report.figure_style import warm
 from acmm import PACKAGED_CONFIGS
 from acmm_qpp.configio import packaged_config_path
+from acmm_qpp.provenance import config_hash
 from acmm_qpp.results import read_h5
+from acmm.stages.design import design_for, design_hash, run_design
+from acmm.stages.simulate import run_simulate
 from acmm.sweep.config import parse_sweep
+from acmm.sweep.run import run_sweep
+from qpp.io import stages as qst
 # imported here so that the report's workers, forked after :func:`warm_workers`, find them loaded
-import h5py  # noqa: F401
 import matplotlib.pyplot  # noqa: F401
 import scipy.linalg  # noqa: F401
 import acmm.stages.runners  # noqa: F401
-import acmm.sweep.run  # noqa: F401
-import qpp.io.stages  # noqa: F401
+
+
+@dataclass
+class StageRun:
+    """One results file the report used.
+
+    Attributes
+    ----------
+    stage : str
+        Stage name (``"acmm design"``, ``"qpp simulate"``, ...).
+    config : str
+        Config name.
+    path : pathlib.Path
+        The HDF5 file.
+    config_hash : str
+        Hash of the resolved config.
+    design_hash : str
+        Hash of the design-relevant config (acmm stages), else empty.
+    reused : bool
+        The file was reused, not recomputed.
+    wall_time : float
+        Time this report spent on the stage, s (0 when reused).
+    created_utc : str
+        The file's creation time.
+    git_commit : str
+        Commit the file was written by.
+    """
+
+    stage: str
+    config: str
+    path: Path
+    config_hash: str
+    design_hash: str = ""
+    reused: bool = False
+    wall_time: float = 0.0          #: seconds this report spent on the stage (0 when reused)
+    created_utc: str = ""
+    git_commit: str = ""
+
+
+@dataclass
+class Failed:
+    """A stage or section part of the report that failed with a user-facing error: the report
+    shows it in its section, the other sections complete, and ``acmm report`` exits non-zero.
+
+    Attributes
+    ----------
+    name : str
+        Task name (``"qpp design:qpp_siso"``, ``"qpp13/circle"``, ``"printed"``, ...).
+    message : str
+        The error on one line.
+    exit_code : int
+        The error's exit code (:mod:`acmm_qpp.errors`: 2 input, 3 numerical, 4 output).
+    cause : str
+        The task whose failure kept this one from running (its message is that task's); empty
+        when this task itself failed.
+    """
+
+    name: str
+    message: str
+    exit_code: int
+    cause: str = ""
+
+    def text(self) -> str:
+        """The failure as the report prints it.
+
+        Returns
+        -------
+        str
+            ``"<name> failed: <message>"``, or ``"<name> not computed: <cause> failed: <message>"``.
+        """
+        if self.cause:
+            return f"{self.name} not computed: {self.cause} failed: {self.message}"
+        return f"{self.name} failed: {self.message}"
+
+
+def failed(name: str, exc: BaseException) -> Failed | None:
+    """``exc`` raised by task ``name`` as a :class:`Failed`, or None for a bug (to propagate).
+
+    Parameters
+    ----------
+    name : str
+        Task name.
+    exc : BaseException
+        What it raised.
+
+    Returns
+    -------
+    Failed or None
+        Its message on one line and exit code: an :class:`~acmm_qpp.errors.AcmmError`'s message
+        (its class name when empty) and class's ``exit_code``, or a
+        :func:`~acmm_qpp.errors.plain_failure`; None for a genuine bug, for what is not an
+        ``Exception`` and for an :class:`acmm_qpp.errors.OutputError` (a report that cannot write
+        stops at once, with one ``error:`` line).
+    """
+    if isinstance(exc, OutputError) or not isinstance(exc, Exception):   # the report cannot write: it stops
+        return None
+    if isinstance(exc, AcmmError):
+        return Failed(name, " ".join(str(exc).split()) or type(exc).__name__,
+                      int(getattr(exc, "exit_code", EXIT_INPUT)))
+    plain = plain_failure(exc)
+    return None if plain is None else Failed(name, " ".join(plain[0].split()), plain[1])
+
+
+def blocked(name: str, done: dict, deps) -> Failed | None:
+    """The :class:`Failed` of task ``name`` when one of its dependencies failed (it is not run).
+
+    Parameters
+    ----------
+    name : str
+        Task name.
+    done : dict
+        Task name → result (a :class:`Failed`, or an object with a ``failed`` attribute).
+    deps : iterable of str
+        Its dependencies.
+
+    Returns
+    -------
+    Failed or None
+        The first failed dependency's message, exit code and origin; None: none failed.
+    """
+    for d in deps:
+        f = done.get(d)
+        f = f if isinstance(f, Failed) else getattr(f, "failed", None)
+        if isinstance(f, Failed):
+            return Failed(name, f.message, f.exit_code, f.cause or f.name)
+    return None
+
+
+def _attrs(path: Path) -> dict:
+    """The root attributes of a results file, bytes decoded."""
+    with h5py.File(path, "r") as f:
+        return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+
+
+def _try_attrs(path: Path) -> dict | None:
+    """The root attributes of a results file, or None when it is missing or unreadable."""
+    try:
+        return _attrs(path) if path.exists() else None
+    except OSError:
+        return None
+
+
+def acmm_config(name: str, root: Path | None = None, *, fast: bool = False):
+    """A packaged acmm config with its results root set to ``root`` (``--fast``: short stair-case).
+
+    Parameters
+    ----------
+    name : str
+        Packaged config name.
+    root : pathlib.Path, optional
+        Results root (default: the config's ``output.root``).
+    fast : bool, optional
+        For a config with a schedule: ``<name>_fast`` with :data:`FAST_ORBITS` orbits.
+
+    Returns
+    -------
+    acmm.io.config.Config
+        The config, figures off.
+    """
+    # the packaged file itself: a file or folder named like it in the working directory is not it
+    data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
+    if root is not None:
+        data["output"]["root"] = str(root)
+    data["output"]["figures"] = False
+    if fast and data.get("schedule") is not None:
+        data["name"] = f"{data['name']}_fast"
+        data["simulation"]["orbits"] = FAST_ORBITS
+        data["description"] = f"{data['description']} [--fast: {FAST_ORBITS:g} orbits]"
+    return parse_config(data, source=f"packaged config {name}")
+
+
+def qpp_config(name: str, root: Path | None = None):
+    """A packaged qpp config with its results root set to ``root``.
+
+    Parameters
+    ----------
+    name : str
+        Packaged config name.
+    root : pathlib.Path, optional
+        Results root (default: the config's ``output.root``).
+
+    Returns
+    -------
+    qpp.io.config.QppConfig
+        The config, figures off.
+    """
+    data = load_qpp_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
+    if root is not None:
+        data["output"]["root"] = str(root)
+    data["output"]["figures"] = False
+    return parse_qpp_config(data, source=f"packaged config {name}")
+
+
+def _stage_record(stage, cfg_name, path, chash, dhash, reused, wall):
+    """The :class:`StageRun` of a results file the report computed or reused (``wall`` in s), with
+    the file's creation time and git commit."""
+    a = _attrs(path)
+    return StageRun(stage, cfg_name, path, chash, dhash, reused, wall, str(a.get("created_utc", "")),
+                    str(a.get("git_commit", "")))
+
+
+def ensure_acmm_design(cfg, rerun: bool = False, donor_roots=()) -> StageRun:
+    """``design.h5`` of an acmm config through :func:`acmm.stages.runners.design_for` (the stages' own
+    reuse by ``design_hash``), or designed again (``rerun``).
+
+    ``donor_roots``: other run directories whose ``design.h5`` may be copied when its design hash
+    matches (the ``--fast`` stair-case reuses the full stair-case's design).
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The config.
+    rerun : bool, optional
+        Design again even when a matching file exists.
+    donor_roots : iterable of path-like, optional
+        Run directories whose ``design.h5`` may be copied.
+
+    Returns
+    -------
+    StageRun
+        The design file used.
+    """
+    want = design_hash(cfg)
+    path = cfg.run_dir() / "design.h5"
+    chash = config_hash(cfg.to_yaml())
+    t0 = time.perf_counter()
+    if rerun:
+        _, path = run_design(cfg, figures=False)
+        return _stage_record("acmm design", cfg.name, path, chash, want, False, time.perf_counter() - t0)
+    a = _try_attrs(path)
+    if a is None or a.get("design_hash") != want:
+        for donor in donor_roots:
+            a = _try_attrs(Path(donor) / "design.h5")
+            if a is not None and a.get("design_hash") == want:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copy2(Path(donor) / "design.h5", path)
+                break
+    _, note = design_for(cfg, figures=False)
+    reused = note.startswith("reused")
+    return _stage_record("acmm design", cfg.name, path, chash, want, reused,
+                         0.0 if reused else time.perf_counter() - t0)
+
+
+def ensure_acmm_simulation(cfg, rerun: bool = False) -> StageRun:
+    """``sim.h5`` of an acmm config: reused when config and design hashes match, else simulated.
+
+    Parameters
+    ----------
+    cfg : acmm.io.config.Config
+        The config.
+    rerun : bool, optional
+        Simulate again even when a matching file exists.
+
+    Returns
+    -------
+    StageRun
+        The simulation file used.
+    """
+    chash, dhash = config_hash(cfg.to_yaml()), design_hash(cfg)
+    path = cfg.run_dir() / "sim.h5"
+    a = None if rerun else _try_attrs(path)
+    if a is not None and a.get("config_hash") == chash and a.get("design_hash") == dhash:
+        return _stage_record("acmm simulate", cfg.name, path, chash, dhash, True, 0.0)
+    t0 = time.perf_counter()
+    _, path = run_simulate(cfg, figures=False)
+    return _stage_record("acmm simulate", cfg.name, path, chash, dhash, False, time.perf_counter() - t0)
+
+
+def ensure_qpp(cfg, stage: str, rerun: bool = False) -> StageRun:
+    """``qpp_design.h5`` (``stage="design"``) or ``qpp_sim.h5`` (``"simulate"``), reused by config hash.
+
+    Parameters
+    ----------
+    cfg : qpp.io.config.QppConfig
+        The config.
+    stage : {"design", "simulate"}
+        Which stage.
+    rerun : bool, optional
+        Run again even when a matching file exists.
+
+    Returns
+    -------
+    StageRun
+        The file used.
+    """
+    chash = config_hash(cfg.to_yaml())
+    path = cfg.run_dir() / ("qpp_design.h5" if stage == "design" else "qpp_sim.h5")
+    a = None if rerun else _try_attrs(path)
+    if a is not None and a.get("config_hash") == chash:
+        return _stage_record(f"qpp {stage}", cfg.name, path, chash, "", True, 0.0)
+    t0 = time.perf_counter()
+    if stage == "design":
+        path = qst.run_design(cfg, figures=False)[2]
+    else:
+        path = qst.run_simulate(cfg, figures=False)[3]
+    return _stage_record(f"qpp {stage}", cfg.name, path, chash, "", False, time.perf_counter() - t0)
+
+
+def qpp_scenarios(path: Path) -> dict:
+    """The scenarios of a ``qpp_sim.h5``: their errors and sphere verdicts (dataset attributes,
+    which :func:`acmm_qpp.results.read_h5` does not return).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The ``qpp_sim.h5`` file.
+
+    Returns
+    -------
+    dict
+        Scenario name (file order) → ``{"error_inf": float, "per_output": array, "passed": bool,
+        "beta_o": float, "gamma": float}`` (errors in the outputs' units; ``gamma`` NaN for a
+        scenario that sets an expression's parameters instead).
+    """
+    out = {}
+    with h5py.File(path, "r") as f:
+        for k in f:
+            if isinstance(f[k], h5py.Group) and "error_inf" in f[k]:
+                e = f[k]["error_inf"]
+                out[k] = {"error_inf": float(e[()]), "per_output": np.atleast_1d(f[k]["error_per_output"][()]),
+                          "passed": bool(e.attrs["passed"]), "beta_o": float(e.attrs["beta_o"]),
+                          "gamma": float(e.attrs.get("gamma", np.nan))}
+    return out
 
 
 @dataclass
@@ -121,7 +449,7 @@ def variant(cfg, suffix: str, patch: dict):
     Parameters
     ----------
     cfg : acmm.io.config.Config
-        The config (:func:`acmm.report.stage_results.acmm_config`).
+        The config (:func:`acmm_config`).
     suffix : str
         Appended to its name.
     patch : dict
@@ -137,18 +465,6 @@ def variant(cfg, suffix: str, patch: dict):
     for section, values in patch.items():
         data[section].update(values)
     return parse_config(data, source=f"{cfg.name} ({suffix})")
-
-
-def _design_task(cfg, rerun, donors):
-    return ensure_acmm_design(cfg, rerun=rerun, donor_roots=donors)
-
-
-def _simulate_task(cfg, rerun):
-    return ensure_acmm_simulation(cfg, rerun=rerun)
-
-
-def _qpp_task(cfg, stage, rerun):
-    return ensure_qpp(cfg, stage, rerun=rerun)
 
 
 def _guarded(name, fn, not_run, *args):
@@ -221,14 +537,14 @@ def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rer
     stairs = [name for name in STAIRCASES if name in cfgs]
     for name in ("mb3", "mb3_decoupled", "ac", *stairs):
         donors = [full[name].run_dir()] if cfgs[name].name != full[name].name else []
-        tasks.append(_stage(f"design:{name}", _design_task, (), (cfgs[name], rerun, donors),
+        tasks.append(_stage(f"design:{name}", ensure_acmm_design, (), (cfgs[name], rerun, donors),
                             _COST.get(f"design:{name}", 0.1)))
     for name in ("mb3", "mb3_decoupled", *stairs):
-        tasks.append(_stage(f"simulate:{name}", _simulate_task, (f"design:{name}",), (cfgs[name], rerun),
+        tasks.append(_stage(f"simulate:{name}", ensure_acmm_simulation, (f"design:{name}",), (cfgs[name], rerun),
                             _COST.get(f"simulate:{name}", 0.1) if not fast else 0.1))
     for name in ("qpp_siso", "qpp_manipulator"):
         for stage, deps in (("design", ()), ("simulate", (f"qpp design:{name}",))):
-            tasks.append(_stage(f"qpp {stage}:{name}", _qpp_task, deps, (cfgs[name], stage, rerun),
+            tasks.append(_stage(f"qpp {stage}:{name}", ensure_qpp, deps, (cfgs[name], stage, rerun),
                                 _COST[f"qpp {stage}:{name}"]))
     if robustness:
         tasks.append(_stage("sweep", _sweep_task, (), (root, fast, rerun, 1 if jobs > 1 else None),
@@ -309,38 +625,6 @@ def order_runs(g: "Gathered", tasks: list) -> None:
     g.runs = dict(sorted(g.runs.items(), key=lambda kv: rank.get(kv[0], len(index))))
 
 
-def gather(root: Path | None = None, *, fast: bool = False, rerun: bool = False,
-           progress: Callable[[str], None] | None = None, robustness: bool = True, jobs: int = 1) -> Gathered:
-    """Run (or reuse) every stage the report needs.
-
-    Parameters
-    ----------
-    root : Path or None
-        Results root (``<root>/<name>/``); None keeps each config's ``output.root`` (``runs``).
-    fast : bool
-        Short stair-case (:data:`FAST_ORBITS` orbits) and a reduced robustness sweep.
-    rerun : bool
-        Ignore existing results and recompute every stage.
-    progress : callable or None
-        Called with one line of text per stage.
-    robustness : bool
-        Also run (or reuse) the robustness sweep.
-    jobs : int
-        Worker processes (:mod:`acmm.report.runner`); 1 runs the stages one after the other here.
-
-    Returns
-    -------
-    Gathered
-        The configs and the results files.
-    """
-    say = progress or (lambda msg: None)
-    g = Gathered(report_configs(root, fast=fast), {})
-    tasks = stage_tasks(g.configs, root, fast=fast, rerun=rerun, robustness=robustness, jobs=jobs)
-    run_tasks(tasks, jobs, lambda name, res: keep_stage(g, name, res, say), warm=warm_workers)
-    order_runs(g, tasks)
-    return g
-
-
 def warm_workers() -> None:
     """Imports (and the compiled simulator, a first figure's fonts and caches) every worker needs,
     done once before forking them (the modules they import are imported at the top of this one)."""
@@ -368,13 +652,9 @@ def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bo
     -------
     (dict or None, str)
         ``{"data": sweep.h5 as read by read_h5, "run": StageRun, "fast", "n_runs", "orbits",
-        "design", "tea_estimate", "seed", "bases"}`` and a note.  A missing sweep package, or a sweep that fails with an :class:`AcmmError` or an
+        "design", "tea_estimate", "seed", "bases"}`` and a note.  A sweep that fails with an :class:`AcmmError` or an
         ``OSError``, makes the section "not available"; programming errors propagate.
     """
-    try:
-        importlib.import_module("acmm.sweep.run")
-    except ImportError as exc:
-        return None, f"acmm.sweep is not installed in this tree ({exc.name or exc})"
     try:
         return _robustness_from_sweep(root, fast=fast, rerun=rerun, workers=workers)
     except OutputError:                         # the report's folder cannot be written: it stops
@@ -408,20 +688,16 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
         data["sweep"].pop("margin", None)
     sweep = parse_sweep(data, source=str(p), directory=p.parent)
     path = sweep.run_dir() / "sweep.h5"
-    a = None if rerun else try_attrs(path)
+    a = None if rerun else _try_attrs(path)
     reused = bool(a is not None and a.get("results_key") == sweep.results_key() and bool(a.get("complete")))
     t0 = time.perf_counter()
     if not reused:
-        run_sweep = importlib.import_module("acmm.sweep.run").run_sweep
         path = run_sweep(sweep, workers=workers or max(1, min(2, os.cpu_count() or 1)), figures=False).path
     wall = 0.0 if reused else time.perf_counter() - t0
     d = read_h5(path)
     chash = str(d["attrs"].get("config_hash", ""))
-    run = stage_record("acmm sweep", sweep.name, path, chash, "", reused, wall)
+    run = _stage_record("acmm sweep", sweep.name, path, chash, "", reused, wall)
     spec = sweep.spec
     return {"data": d, "run": run, "fast": fast, "n_runs": spec.n_runs, "orbits": spec.orbits,
             "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed,
             "bases": [b.label for b in sweep.bases]}, f"{sweep.name}: {path}"
-
-
-# =============================================================================================

@@ -1,6 +1,5 @@
 """The stages whose numbers README.md and the guide quote (:mod:`acmm.report.page_blocks`), run
-into a results root through the report's own functions (:mod:`acmm.report.stage_results`,
-:func:`acmm.report.gather.robustness_result`), figures off.
+into a results root through the report's own functions (:mod:`acmm.report.gather`), figures off.
 
 The packaged designs and simulations of ch. 5–6 (MB3, AC, the stair-case), the ±30 % inertia
 sweep of ch. 7, the qpp examples of ch. 13–14 and the shipped ones, and the variants the guide
@@ -18,9 +17,8 @@ import yaml
 
 from acmm import PACKAGED_CONFIGS
 from acmm.io.config import load_config
-from acmm.report.gather import REPORT_VARIANTS, robustness_result
-from acmm.report.stage_results import (acmm_config, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp,
-                                       qpp_config, qpp_scenarios)
+from acmm.report.gather import (REPORT_VARIANTS, acmm_config, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp,
+                                qpp_config, qpp_scenarios, robustness_result)
 from acmm.sweep.config import parse_sweep
 from acmm.sweep.run import run_sweep
 from acmm_qpp.configio import packaged_config_path

@@ -15,8 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from acmm.report.context import SectionWriter
-from acmm.report.stage_results import Failed, blocked, failed
-from acmm.report.gather import Gathered
+from acmm.report.gather import Failed, Gathered, blocked, failed
 from acmm.report.runner import WORKER_CACHE, Task
 from acmm.report.sections import claim1
 from acmm.report.sections import errata
@@ -77,7 +76,7 @@ def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: 
     """``fn(ctx, *values)`` on a fresh writer; ``results``: HDF5 files already read (None: this
     worker process's cache).  matplotlib's settings are reset first, so a figure looks the same
     whichever figures the process drew before.  A user-facing error it raises
-    (:func:`acmm.report.stage_results.failure_line`) becomes the part's :attr:`Part.failed` and its one-line
+    (:func:`acmm.report.gather.failed`) becomes the part's :attr:`Part.failed` and its one-line
     text; a bug propagates.
 
     Parameters

@@ -7,7 +7,7 @@ from acmm.report.context import SectionWriter
 from acmm.report.numbers import fmt_value
 from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
 from acmm.report.ledger import num_str, printed_str, matches_printed
-from acmm.report.stage_results import qpp_scenarios
+from acmm.report.gather import qpp_scenarios
 import h5py
 from qpp.design.hinf import hinf_gains
 from qpp.design import spheres

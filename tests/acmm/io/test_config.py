@@ -341,7 +341,7 @@ def test_error_message_names_nested_field_directly():
 def test_a_run_folder_named_like_a_packaged_config_does_not_hide_it(tmp_path, monkeypatch):
     """Inside a results root (run folders mb3/, ac/, …) a bare packaged name still loads the
     packaged config; the report loads its packaged configs even past a local file of that name."""
-    from acmm.report.stage_results import acmm_config
+    from acmm.report.gather import acmm_config
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "mb3").mkdir()

@@ -23,9 +23,9 @@ import pytest
 from acmm.report import build as build_mod
 from acmm.report import constants as constants_mod
 from acmm.report import gather as gather_mod
+from acmm.report.gather import ensure_qpp
 from acmm.report import ledger as ledger_mod
 from acmm.report import manifest as manifest_mod
-from acmm.report import stage_results as stage_results_mod
 from acmm_qpp.errors import ConvergenceError
 
 from tests.conftest import invoke
@@ -221,11 +221,11 @@ def test_two_runs_give_identical_datasets(fast_report, tmp_path):
 
     _, r = fast_report
     manifest = json.loads(r.manifest.read_text())
-    cfgs = {n: stage_results_mod.acmm_config(n, tmp_path) for n in ("mb3", "mb3_decoupled")}
-    fresh = [stage_results_mod.ensure_acmm_design(cfgs["mb3"], rerun=True), stage_results_mod.ensure_acmm_simulation(cfgs["mb3"], rerun=True),
-             stage_results_mod.ensure_acmm_simulation(cfgs["mb3_decoupled"], rerun=True)]
-    q = stage_results_mod.qpp_config("qpp_siso", tmp_path)
-    fresh += [stage_results_mod.ensure_qpp(q, "design", rerun=True), stage_results_mod.ensure_qpp(q, "simulate", rerun=True)]
+    cfgs = {n: gather_mod.acmm_config(n, tmp_path) for n in ("mb3", "mb3_decoupled")}
+    fresh = [gather_mod.ensure_acmm_design(cfgs["mb3"], rerun=True), gather_mod.ensure_acmm_simulation(cfgs["mb3"], rerun=True),
+             gather_mod.ensure_acmm_simulation(cfgs["mb3_decoupled"], rerun=True)]
+    q = gather_mod.qpp_config("qpp_siso", tmp_path)
+    fresh += [gather_mod.ensure_qpp(q, "design", rerun=True), gather_mod.ensure_qpp(q, "simulate", rerun=True)]
     compared = 0
     for run in fresh:
         assert not run.reused
@@ -364,9 +364,7 @@ def test_a_failed_section_is_shown_and_the_others_complete(fast_report, tmp_path
 def _broken_qpp_design(cfg, stage, rerun):
     if stage == "design" and cfg.name == "qpp_manipulator":
         raise ConvergenceError("injected: qpp design of qpp_manipulator did not converge")
-    from acmm.report.stage_results import ensure_qpp
-
-    return ensure_qpp(cfg, stage, rerun=rerun)
+    return ensure_qpp(cfg, stage, rerun)
 
 
 def test_a_failed_stage_fails_only_the_sections_that_read_it(fast_report, tmp_path, monkeypatch):
@@ -378,7 +376,7 @@ def test_a_failed_stage_fails_only_the_sections_that_read_it(fast_report, tmp_pa
     from acmm.cli.app import app
 
     gather_mod = sys.modules["acmm.report.gather"]     # (acmm.report.gather the attribute is the function)
-    monkeypatch.setattr(gather_mod, "_qpp_task", _broken_qpp_design)
+    monkeypatch.setattr(gather_mod, "ensure_qpp", _broken_qpp_design)
     out, root = tmp_path / "out", fast_report[0] / "runs"
     with moved_aside(root, "qpp_manipulator"):
         res = invoke(app, "report", "--fast", "--jobs", "2", "--out", out, "--root", root)

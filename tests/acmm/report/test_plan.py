@@ -2,9 +2,8 @@
 keeps it from running."""
 from __future__ import annotations
 
-from acmm.report.gather import Gathered
+from acmm.report.gather import Failed, Gathered
 from acmm.report.plan import section_tasks
-from acmm.report.stage_results import Failed
 
 STAGES = {f"{stage}:{name}" for stage in ("design", "simulate")
           for name in ("mb3", "mb3_decoupled", "staircase", "staircase_lqr", "staircase_quadratic")}

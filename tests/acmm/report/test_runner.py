@@ -223,7 +223,7 @@ def test_report_failure_in_a_worker_is_one_line_and_shown_in_its_sections(fast_r
 
     gather_mod = importlib.import_module("acmm.report.gather")
 
-    monkeypatch.setattr(gather_mod, "_qpp_task", _broken_qpp)
+    monkeypatch.setattr(gather_mod, "ensure_qpp", _broken_qpp)
     out, root = tmp_path / "out", fast_report[0] / "runs"
     with moved_aside(root, "qpp_siso", "qpp_manipulator"):
         res = CliRunner().invoke(app, ["report", "--fast", "--jobs", "2", "--out", str(out), "--root", str(root)])

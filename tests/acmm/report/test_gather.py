@@ -1,22 +1,22 @@
-"""The report's one-line failures (acmm.report.stage_results): a user-facing error of a stage or a
+"""The report's one-line failures (acmm.report.gather): a user-facing error of a stage or a
 part becomes its message on one line and its exit code; a bug, or a report that cannot write,
 propagates."""
 from __future__ import annotations
 
 import numpy as np
 
-from acmm.report.stage_results import Failed, failed, failure_line
+from acmm.report.gather import Failed, failed
 from acmm_qpp.errors import (EXIT_INPUT, EXIT_NUMERICAL, EXIT_OUTPUT, ConfigError, ConvergenceError,
                              OutputError)
 
 
 def test_a_user_facing_error_is_one_line_with_its_exit_code():
-    assert failure_line(ConfigError("bad\n   value")) == ("bad value", EXIT_INPUT)
-    assert failure_line(ConvergenceError("")) == ("ConvergenceError", EXIT_NUMERICAL)
-    assert failure_line(np.linalg.LinAlgError("singular")) == ("numerical failure: LinAlgError: singular",
-                                                               EXIT_NUMERICAL)
-    assert failure_line(MemoryError())[1] == EXIT_OUTPUT
-    assert failure_line(KeyError("a bug")) is None
+    assert failed("t", ConfigError("bad\n   value")) == Failed("t", "bad value", EXIT_INPUT)
+    assert failed("t", ConvergenceError("")) == Failed("t", "ConvergenceError", EXIT_NUMERICAL)
+    assert failed("t", np.linalg.LinAlgError("singular")) == Failed("t", "numerical failure: LinAlgError: singular",
+                                                                    EXIT_NUMERICAL)
+    assert failed("t", MemoryError()).exit_code == EXIT_OUTPUT
+    assert failed("t", KeyError("a bug")) is None
 
 
 def test_a_failed_task_is_shown_unless_a_bug_or_the_report_cannot_write():
