@@ -20,11 +20,10 @@ from acmm_qpp.signals import interrupts_deferred
 from acmm.report.constants import SECTIONS
 from acmm.report.context import SectionWriter
 from acmm.report.document import render_html, render_markdown
-from acmm.report.gather import (Gathered, changed_runs, failed, keep_stage, order_runs, report_configs, stage_tasks,
+from acmm.report.gather import (Gathered, changed_runs, keep_stage, order_runs, report_configs, stage_tasks,
                                 warm_workers)
-from acmm.report.ledger import STATUS_UNEXPLAINED
 from acmm.report.manifest import build_manifest, compare_manifests
-from acmm.report.plan import assemble, failure_blocks, section_tasks
+from acmm.report.plan import assemble, run_part, section_tasks
 from acmm.report.publish import publish
 from acmm.report.runner import default_jobs, run_tasks
 from acmm.report.sections import determinism as sec_determinism
@@ -96,11 +95,6 @@ class ReportResult:
     #: (section key, Failed) of each failed part or section, in section order
     failures: list = field(default_factory=list)
     root: Path | None = None        #: the results root of the stages
-
-    @property
-    def unexplained(self) -> list:
-        """The ledger entries whose status is ``NOT EXPLAINED``."""
-        return [p for p in self.ledger if p.status == STATUS_UNEXPLAINED]
 
 
 def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: bool = False,
@@ -274,24 +268,15 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
 
 
 def _add(rep: SectionWriter, key: str, build, *args, failures: list | None = None):
-    """Run one section's ``build`` in a fresh writer and append its blocks and ledger to ``rep``;
-    a user-facing error it raises is shown as the section (its heading and the error) and
-    appended to ``failures`` as ``(key, Failed)``."""
-    w = rep.section_writer()
-    try:
-        result = build(w, *args)
-    except Exception as exc:  # noqa: BLE001 (re-raised unless a user-facing failure)
-        f = failed(key, exc)
-        if f is None:
-            raise
-        w = rep.section_writer()
-        failure_blocks(w, key, f)
-        if failures is not None:
-            failures.append((key, f))
-        result = None
-    rep.doc.blocks.extend(w.doc.blocks)
-    rep.ledger.extend(w.ledger)
-    return result
+    """Run one section's ``build`` as a part (:func:`acmm.report.plan.run_part`, a fresh writer) and
+    append its blocks and ledger to ``rep``; a user-facing error it raises is shown as the section
+    (its heading and the error) and appended to ``failures`` as ``(key, Failed)``."""
+    part = run_part(build, rep.g, rep.figdir, rep.fast, args, rep._results, key, key)
+    if part.failed is not None and failures is not None:
+        failures.append((key, part.failed))
+    rep.doc.blocks.extend(part.blocks)
+    rep.ledger.extend(part.ledger)
+    return part.value
 
 
 def _remove_empty(dirs: list) -> None:

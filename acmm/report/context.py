@@ -7,7 +7,7 @@ from pathlib import Path
 from acmm.report.constants import SECTIONS
 from acmm.report.document import Doc
 from acmm.report.gather import Gathered
-from acmm.report.ledger import PrintedNumber, check_printed, status_text
+from acmm.report.ledger import PrintedNumber, check_printed
 from acmm_qpp.results import read_h5
 
 
@@ -35,16 +35,6 @@ class SectionWriter:
         self._results = {} if results is None else results
         self.doc = Doc()
         self.ledger: list[PrintedNumber] = []
-
-    def section_writer(self) -> "SectionWriter":
-        """A writer for the next section: same inputs, empty document and ledger.
-
-        Returns
-        -------
-        SectionWriter
-            The new writer (sharing the read HDF5 files).
-        """
-        return SectionWriter(self.g, self.figdir, self.fast, self._results)
 
     def run(self, key):
         """The stage run ``key`` ("stage:name") of the gathered results.
@@ -97,21 +87,6 @@ class SectionWriter:
         pn = check_printed(*args, **kw)
         self.ledger.append(pn)
         return pn
-
-    def status_text(self, pn: PrintedNumber) -> str:
-        """The status of a ledger entry as the tables show it (:func:`acmm.report.ledger.status_text`).
-
-        Parameters
-        ----------
-        pn : acmm.report.ledger.PrintedNumber
-            The entry.
-
-        Returns
-        -------
-        str
-            Its status (an explained one with its note).
-        """
-        return status_text(pn)
 
     def section(self, key):
         """Start the section ``key`` of :data:`acmm.report.constants.SECTIONS` (its heading).

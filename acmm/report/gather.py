@@ -21,7 +21,7 @@ from acmm_qpp.errors import EXIT_INPUT, AcmmError, OutputError, plain_failure
 from acmm_qpp.outputs import file_identity
 from acmm.io.config import load_config, parse_config
 from qpp.io.config import load_config as load_qpp_config, parse_config as parse_qpp_config
-from acmm.report.runner import Task, run_tasks
+from acmm.report.runner import Task
 from acmm.report.constants import FAST_ORBITS, STAIRCASES
 from acmm.simulate.warmup import warm_up
 from acmm.report.figure_style import warm

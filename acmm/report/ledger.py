@@ -40,23 +40,6 @@ class PrintedNumber:
     note: str = ""
 
 
-def printed_decimals(printed: str) -> int:
-    """Number of decimals of a printed number (``"-44.7"`` → 1, ``"1020"`` → 0).
-
-    Parameters
-    ----------
-    printed : str
-        The number as printed.
-
-    Returns
-    -------
-    int
-        Its decimals (of the mantissa for an exponent form).
-    """
-    s = printed.strip().lower().split("e")[0]
-    return len(s.split(".")[1]) if "." in s else 0
-
-
 def matches_printed(printed: str, computed: float) -> bool:
     """|computed − printed| ≤ half a unit of the printed number's last digit.
 
@@ -72,7 +55,8 @@ def matches_printed(printed: str, computed: float) -> bool:
     bool
         It matches to printed precision.
     """
-    half = 0.5 * 10.0 ** (-printed_decimals(printed))
+    mantissa = printed.strip().lower().split("e")[0]          # "-44.7" → 1 decimal, "1020" → 0
+    half = 0.5 * 10.0 ** (-(len(mantissa.split(".")[1]) if "." in mantissa else 0))
     return bool(abs(float(computed) - float(printed)) <= half * (1 + 1e-9) + 1e-15)
 
 
@@ -115,10 +99,6 @@ def check_printed(section: str, quantity: str, printed: str, computed, unit: str
                          status, explanation if status == STATUS_EXPLAINED else "")
 
 
-# =============================================================================================
-# gathering results (reuse by hash, else run the stage)
-
-
 def status_text(pn: PrintedNumber) -> str:
     """The status of a ledger entry as shown in the tables (explained ones carry their note).
 
@@ -133,37 +113,3 @@ def status_text(pn: PrintedNumber) -> str:
         The status text.
     """
     return pn.status if pn.status != STATUS_EXPLAINED else f"{STATUS_EXPLAINED}: {pn.note}"
-
-
-def printed_str(v: float, gname: str) -> str:
-    """The printed form of a gain (K: one decimal; H: four decimals, as in the report).
-
-    Parameters
-    ----------
-    v : float
-        The gain entry (units of the report's table).
-    gname : str
-        The gain's name (``K`` or ``H``).
-
-    Returns
-    -------
-    str
-        The entry as the report prints it.
-    """
-    return f"{v:.4f}" if gname == "H" else f"{v:.1f}"
-
-
-def num_str(v) -> str:
-    """A number in full (``repr``) for the ledger, ``—`` for none.
-
-    Parameters
-    ----------
-    v : float or None
-        The value (units of its ledger row).
-
-    Returns
-    -------
-    str
-        The text.
-    """
-    return repr(float(v)) if v is not None else "—"

@@ -11,7 +11,7 @@ from acmm.report.constants import TIMING_DATASETS
 from acmm.report.gather import Gathered
 import h5py
 from acmm_qpp.results import dimension_only
-from acmm_qpp.provenance import git_commit, git_dirty
+from acmm_qpp.provenance import git_commit
 
 
 def dataset_hashes(path: Path, exclude: tuple[str, ...] = TIMING_DATASETS) -> dict[str, str]:
@@ -109,17 +109,3 @@ def compare_manifests(old: dict | None, new: dict) -> dict:
     return {"status": status, "compared": compared,
             "recomputed": recomputed, "differences": diffs, "missing": missing,
             "previous": old.get("created_utc")}
-
-
-# =============================================================================================
-# helpers
-# =============================================================================================
-def report_git_state() -> str:
-    """Whether the working tree the report ran in has modified files, in words.
-
-    Returns
-    -------
-    str
-        ``"modified files present"``, ``"clean"`` or ``"unknown"`` (no git).
-    """
-    return {"yes": "modified files present", "no": "clean"}.get(git_dirty(), "unknown")

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from acmm.report.context import SectionWriter
+from acmm.report.ledger import status_text
 
 
 def build(ctx: SectionWriter, ledger: list) -> None:
@@ -23,4 +24,4 @@ def build(ctx: SectionWriter, ledger: list) -> None:
               "; ".join(f"{v} {k}" for k, v in sorted(counts.items())) + ".")
     ctx.doc.table(["section", "quantity", "printed", "computed", "unit", "status"],
                   [[p.section, p.quantity, p.printed, "—" if p.computed is None else f"{p.computed:.6g}",
-                    p.unit, ctx.status_text(p)] for p in ledger])
+                    p.unit, status_text(p)] for p in ledger])

@@ -9,8 +9,7 @@ import numpy as np
 
 from acmm.report.context import SectionWriter
 from acmm.report.gather import Gathered
-from acmm.report.manifest import report_git_state
-from acmm_qpp.provenance import git_commit
+from acmm_qpp.provenance import git_commit, git_dirty
 import h5py
 import scipy
 from acmm import __version__
@@ -31,7 +30,8 @@ def build(rep: SectionWriter, g: Gathered, timings: dict) -> None:
     """
     rep.section("provenance")
     commit = git_commit()
-    rows = [["package", f"acmm-qpp {__version__}"], ["git commit", f"{commit} ({report_git_state()})"],
+    tree = {"yes": "modified files present", "no": "clean"}.get(git_dirty(), "unknown")   # no git: unknown
+    rows = [["package", f"acmm-qpp {__version__}"], ["git commit", f"{commit} ({tree})"],
             ["date (UTC)", datetime.now(timezone.utc).isoformat(timespec="seconds")],
             ["python", platform.python_version()], ["numpy / scipy", f"{np.__version__} / {scipy.__version__}"],
             ["h5py / matplotlib", f"{h5py.__version__} / {matplotlib.__version__}"],

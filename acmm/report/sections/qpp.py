@@ -6,7 +6,7 @@ import numpy as np
 from acmm.report.context import SectionWriter
 from acmm.report.numbers import fmt_value
 from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
-from acmm.report.ledger import num_str, printed_str, matches_printed
+from acmm.report.ledger import matches_printed, status_text
 from acmm.report.gather import qpp_scenarios
 import h5py
 from qpp.design.hinf import hinf_gains
@@ -39,14 +39,14 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
     expl_b1 = (f"β1 is computed exactly (L∞ norm) for both readings of B_z: eq 10.7 gives {b1['eq10.7'][0]:.5f}, "
                f"the printed B_z (H in the r-columns) {b1['printed'][0]:.5f}; the printed value matches neither "
                "(docs/ERRATA.md: it looks like a coarse frequency grid)")
-    pn = ctx.ledger_add(f"ch. {chap}", "β1", num_str(pub.beta1), b1["eq10.7"][0], explanation=expl_b1)
+    pn = ctx.ledger_add(f"ch. {chap}", "β1", _num_str(pub.beta1), b1["eq10.7"][0], explanation=expl_b1)
     for rd, (v, gv, w) in b1.items():
-        brow.append([f"β1, B_z {rd}", num_str(pub.beta1), f"{v:.6f} (peak at {w:.4g} rad/s)",
-                     ctx.status_text(pn) if rd == "eq10.7" else "see above"])
+        brow.append([f"β1, B_z {rd}", _num_str(pub.beta1), f"{v:.6f} (peak at {w:.4g} rad/s)",
+                     status_text(pn) if rd == "eq10.7" else "see above"])
     m_pr = th["printed"][3] if "printed" in th else None
-    pn_m = ctx.ledger_add(f"ch. {chap}", "m (from printed β3, β4)", num_str(pub.m), m_pr)
-    brow.append(["m = β_o/(β_ri + ‖d‖∞ + β_o β3 + β4), printed β3, β4", num_str(pub.m), f"{m_pr:.5f}",
-                 ctx.status_text(pn_m)])
+    pn_m = ctx.ledger_add(f"ch. {chap}", "m (from printed β3, β4)", _num_str(pub.m), m_pr)
+    brow.append(["m = β_o/(β_ri + ‖d‖∞ + β_o β3 + β4), printed β3, β4", _num_str(pub.m), f"{m_pr:.5f}",
+                 status_text(pn_m)])
     for nm, row in th.items():
         if nm == "printed":
             continue
@@ -69,7 +69,7 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
     led = [pn for pn in ctx.ledger if pn.section == f"ch. {chap}" and pn.quantity.startswith("‖y")]
     if led:
         ctx.doc.table(["printed", "quantity", "computed", "status"],
-                      [[p.printed, p.quantity, fmt_value(p.computed, "{:.5f}"), ctx.status_text(p)] for p in led],
+                      [[p.printed, p.quantity, fmt_value(p.computed, "{:.5f}"), status_text(p)] for p in led],
                       "Printed simulation results")
     return beta3
 
@@ -171,7 +171,7 @@ def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
         for idx in np.ndindex(P.shape):
             if P[idx] == 0.0:
                 continue
-            ps = printed_str(P[idx], gname)
+            ps = _printed_str(P[idx], gname)
             expl = ""
             if gname == "H":
                 dv = float(np.asarray(dgkf.H)[idx])
@@ -181,7 +181,7 @@ def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
                         + f"; within {100 * abs(comp[idx] - P[idx]) / abs(P[idx]):.1f} % of the printed value")
             pn = ctx.ledger_add(f"ch. {chap}", f"{gname}{tuple(int(i) + 1 for i in idx)}", ps, comp[idx],
                                 explanation=expl)
-            rows.append([f"{gname}{tuple(int(i) + 1 for i in idx)}", ps, f"{comp[idx]:.5g}", ctx.status_text(pn)])
+            rows.append([f"{gname}{tuple(int(i) + 1 for i in idx)}", ps, f"{comp[idx]:.5g}", status_text(pn)])
     ctx.doc.table(["gain", "printed", "computed (ch. 11 Riccati)", "status"], rows,
                   f"Ch. {chap} gains (ρ = {cfg.hinf.rho:g}, a = {cfg.hinf.a:g} 1/s, servo weight [0 C_c])")
 
@@ -209,11 +209,11 @@ def _printed_gain_rows(ctx: SectionWriter, chap, d, pub, names=()):
         return []
     rows = []
     b1e, b1p = float(pc["beta1_eq10_7"]), float(pc["beta1_printed"])
-    pn = ctx.ledger_add(f"ch. {chap}", "β1 of the printed gains (B_z eq 10.7)", num_str(pub.beta1), b1e,
+    pn = ctx.ledger_add(f"ch. {chap}", "β1 of the printed gains (B_z eq 10.7)", _num_str(pub.beta1), b1e,
                         explanation=f"printed gains, exact L∞ norm: {b1e:.5f} (eq 10.7 B_z), {b1p:.5f} "
                                     "(printed B_z); see the β1 row above for the synthesized gains")
-    rows.append(["β1 with the printed gains, B_z eq 10.7 / printed", num_str(pub.beta1),
-                 f"{b1e:.6f} / {b1p:.6f}", ctx.status_text(pn)])
+    rows.append(["β1 with the printed gains, B_z eq 10.7 / printed", _num_str(pub.beta1),
+                 f"{b1e:.6f} / {b1p:.6f}", status_text(pn)])
     for k, row in enumerate(np.atleast_2d(pc["thresholds"])):
         nm = f", {names[k]} bookkeeping" if k < len(names) else ""
         rows.append([f"β3 / β4 / m with the printed gains{nm}", f"{pub.beta3} / {pub.beta4} / {pub.m}",
@@ -230,13 +230,13 @@ def _thresholds(ctx: SectionWriter, chap, cfg, th):
         nl = cfg.nonlinearity
         b3_5 = spheres.beta3_sinusoidal(0.05, 5.0, cfg.spheres.T)
         b3_1 = spheres.beta3_sinusoidal(0.05, nl.omega, cfg.spheres.T)
-        ctx.ledger_add("ch. 13", "β3 = 0.05‖(sin 5t)_T‖₂, T = 0.5 s", num_str(pub.beta3), b3_5,
+        ctx.ledger_add("ch. 13", "β3 = 0.05‖(sin 5t)_T‖₂, T = 0.5 s", _num_str(pub.beta3), b3_5,
                        explanation=f"the exact integral gives 0.05‖(sin 5t)_T‖₂ = {b3_5:.5f} "
                                    f"({100 * abs(b3_5 - pub.beta3) / pub.beta3:.2f} % above the printed value, "
                                    "presumably a coarse quadrature); the definition 10.54 with sin t gives "
                                    f"{b3_1:.5f} (docs/ERRATA.md)")
         b4 = th["report"][2]
-        ctx.ledger_add("ch. 13", "β4 = 0.05·‖(y_o)_T‖₂", num_str(pub.beta4), b4,
+        ctx.ledger_add("ch. 13", "β4 = 0.05·‖(y_o)_T‖₂", _num_str(pub.beta4), b4,
                        explanation=f"‖(y_o)_T‖₂ = {b4 / 0.05:.4f} here vs the printed 0.363: y_o is the "
                                    "nominal closed-loop output on [0, T], which depends on the gains and the "
                                    "initial servo state; m changes by "
@@ -245,8 +245,8 @@ def _thresholds(ctx: SectionWriter, chap, cfg, th):
         b3, b4 = th["trajectory"][1], th["trajectory"][2]
         why = (f"the arm mass μ is not printed (μ = {cfg.nonlinearity.mu:g} kg assumed) and the report does not "
                "say how β3, β4 were evaluated; here they are sup over M ∈ [45, 55] kg along the nominal trajectory")
-        ctx.ledger_add("ch. 14", "β3", num_str(pub.beta3), b3, explanation=why + f" (β3 = {b3:.3g})")
-        ctx.ledger_add("ch. 14", "β4", num_str(pub.beta4), b4, explanation=why + f" (β4 = {b4:.3g})")
+        ctx.ledger_add("ch. 14", "β3", _num_str(pub.beta3), b3, explanation=why + f" (β3 = {b3:.3g})")
+        ctx.ledger_add("ch. 14", "β4", _num_str(pub.beta4), b4, explanation=why + f" (β4 = {b4:.3g})")
         return None
     return b3_5, b3_1
 
@@ -336,3 +336,13 @@ def responses14(ctx: SectionWriter) -> None:
         The section's inputs (the ``qpp_manipulator`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
     """
     _responses_figure(ctx, "qpp14", "qpp_manipulator", _OUT14)
+
+
+def _printed_str(v: float, gname: str) -> str:
+    """The printed form of a gain entry (H: four decimals; K1, Kc: one decimal, as in the report)."""
+    return f"{v:.4f}" if gname == "H" else f"{v:.1f}"
+
+
+def _num_str(v) -> str:
+    """A number in full (``repr``) for the ledger, ``—`` for none."""
+    return repr(float(v)) if v is not None else "—"

@@ -5,6 +5,7 @@ import numpy as np
 
 from acmm.report.context import SectionWriter
 from acmm.report.numbers import fmt_value
+from acmm.report.ledger import status_text
 from acmm.model import tea as tea_mod
 
 TABLE1_PRINTED = {
@@ -76,7 +77,7 @@ def build(ctx: SectionWriter) -> dict:
         for a in range(3):
             pn = ctx.ledger_add("Table 1", f"{name.upper()} θ{a + 1}*", pr["tea"][a], t.theta_deg[a], "deg")
             rows.append([name.upper(), f"θ{a + 1}* (deg)", pr["tea"][a], f"{t.theta_deg[a]:+.4f}",
-                         f"{t0.theta_deg[a]:+.3f}", ctx.status_text(pn)])
+                         f"{t0.theta_deg[a]:+.3f}", status_text(pn)])
     ctx.doc.table(["config", "quantity", "printed", "computed", "zero-bias TEA", "status"], rows,
                   "Table 1: printed vs computed (TEA residual of eq 4.1 below 1e-12 ft·lbf)")
     brow = []
