@@ -3,7 +3,7 @@
 
 Every number the README or a page of the guide quotes about a packaged config sits in a block
 ``<!-- generated:NAME -->`` … ``<!-- /generated:NAME -->`` whose text the report computes
-(:mod:`acmm.report.page_blocks`, from a fresh run into a temporary results root, the numbers
+(:mod:`acmm.report.pages`, from a fresh run into a temporary results root, the numbers
 written by :mod:`acmm.report.numbers` as in the HTML report).  This script finds the blocks in
 README.md and ``docs/**/*.md`` (each exactly once across them), compares and replaces their text
 (``tests/test_readme_numbers.py`` checks them against a fresh run).
@@ -23,9 +23,10 @@ import argparse  # noqa: E402
 import importlib.util  # noqa: E402
 import re  # noqa: E402
 import sys  # noqa: E402
+import tempfile  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from acmm.report.page_blocks import fresh_blocks  # noqa: E402
+from acmm.report.pages import BLOCKS, run_stages  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 README = REPO / "README.md"
@@ -191,7 +192,9 @@ def main(argv: list[str] | None = None) -> int:
     texts = read_texts()
     locate_blocks(texts)                # a block twice: say so before the runs
     use_this_trees_configs()
-    blocks = fresh_blocks(args.workers)
+    with tempfile.TemporaryDirectory(prefix="readme-numbers-") as tmp:     # the stages run here, never in runs/
+        r = run_stages(Path(tmp), args.workers)
+        blocks = {name: block(r) for name, block in BLOCKS.items()}
     if args.check:
         bad = check(texts, blocks)
         print("\n".join(bad) if bad else f"{len(blocks)} generated blocks: all as computed")

@@ -117,10 +117,10 @@ def readme_root(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def readme_stages(readme_root) -> dict:
-    """The stages the README and the guide quote (:func:`acmm.report.page_runs.run_stages`), run
+    """The stages the README and the guide quote (:func:`acmm.report.pages.run_stages`), run
     once a session into :func:`readme_root` in this process (several minutes): the README numbers'
     tests read them and the qpp family tests check their search design by design."""
-    from acmm.report.page_runs import run_stages       # the report layer: only for the slow tests
+    from acmm.report.pages import run_stages           # the report layer: only for the slow tests
 
     readme_script().use_this_trees_configs()
     return run_stages(readme_root)

@@ -2,7 +2,7 @@
 
 ``scripts/readme_numbers.py`` writes the ``<!-- generated:NAME -->`` blocks of README.md and of the
 guide's pages (``docs/**/*.md``, each block once across them) as the report computes them
-(:mod:`acmm.report.page_blocks`); here the same blocks are computed from a fresh run into a temporary results root
+(:mod:`acmm.report.pages`); here the same blocks are computed from a fresh run into a temporary results root
 (designs of mb3, mb3_decoupled, ac and the stair-case, their simulations, the qpp designs and
 simulations of the two report chapters and the three shipped examples, the search over procedure
 12.1's family of the two chapters, the 400-case ``sweep_inertia30`` Monte Carlo and margin search,
@@ -17,7 +17,7 @@ import pytest
 from acmm.model import linearize as lin
 from acmm.model.tea import solve_tea_near
 from acmm.report.build import build_report
-from acmm.report.page_blocks import BLOCKS, compute_blocks
+from acmm.report.pages import BLOCKS
 from tests.acmm.report.conftest import PageParser
 from tests.conftest import REPO, readme_script
 
@@ -32,7 +32,7 @@ rn = readme_script()
 @pytest.fixture(scope="module")
 def fresh(readme_stages) -> dict:
     """Every generated block, computed from the fresh stages (:func:`tests.conftest.readme_stages`)."""
-    return compute_blocks(readme_stages)
+    return {name: block(readme_stages) for name, block in BLOCKS.items()}
 
 
 def texts() -> dict:

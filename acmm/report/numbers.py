@@ -1,5 +1,5 @@
 """How the report writes a number: one set of formatting functions for the HTML report's tables
-and for the numbers README.md and the guide quote (:mod:`acmm.report.page_blocks`).
+and for the numbers README.md and the guide quote (:mod:`acmm.report.pages`).
 
 Numbers the pages quote are rounded to the digits that mean something (:func:`sig`,
 :func:`fixed`, :func:`sci`, with a Unicode minus), so their text does not change between

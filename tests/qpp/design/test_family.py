@@ -65,7 +65,7 @@ def test_m_stays_below_the_bounds(siso, arm):
 @pytest.mark.parametrize("name", list(REPORT_GRIDS))
 def test_the_grid_of_the_family_certifies_nothing(name, readme_stages):
     """The grids of docs/qpp-certificates.md, searched with the README's stages
-    (:func:`acmm.report.page_runs.family_search`, whose numbers the README's test compares with
+    (:func:`acmm.report.pages._family_search`, whose numbers the README's test compares with
     the page): no design certified; on each, β1 ≥ 1 (its gain at the servo frequencies is 1), m
     below the bound, and β1 < m fails; the local search from the best point certifies nothing
     either."""
@@ -359,7 +359,7 @@ def test_a_design_of_the_family_is_certified_at_its_first_pass_settling_time(sis
     bisection and Gramian, the settling time and m (every truncation time on 0.0125/400 s steps,
     β4 by the trapezoid rule) from scipy's matrix exponential, and the verdict of ``qpp design`` on
     its gains (exit 0).  On 20 001 samples the same loop settles only at 0.036 s, where it fails.
-    (The design and its resettling are the README's stages', :func:`acmm.report.page_runs.family_search`.)"""
+    (The design and its resettling are the README's stages', :func:`acmm.report.pages._family_search`.)"""
     import yaml
     from typer.testing import CliRunner
 
