@@ -66,9 +66,7 @@ NO_REPORT_CITATION = {module: reason for reason, modules in {
         acmm.sweep.dask_settings""",
     "the report's machinery (document, figures, task graph, hashes, printed numbers): no mathematics":
         """acmm.report.constants acmm.report.publish acmm.report.context acmm.report.document acmm.report.numbers
-        acmm.report.figure_style acmm.report.manifest acmm.report.sections.determinism
-        acmm.report.sections.printed acmm.report.sections.provenance acmm.report.runner
-        acmm.report.ledger""",
+        acmm.report.figure_style acmm.report.manifest acmm.report.runner acmm.report.ledger""",
     "command line: parses, calls and prints, no mathematics (the layer rule)": """acmm.cli
         acmm.cli.compile_note acmm.cli.redraw acmm.cli.command acmm.cli.configkinds acmm.cli.app acmm.cli.sweep acmm.cli.report
         acmm.cli.steps

@@ -1,34 +1,44 @@
 """``build_report``: gather the results, write every section, render, hash and compare.
 
-The sections cover Table 1, ch. 5–7 of Part II and ch. 13–14 of Part III.
+The sections cover Table 1, ch. 5–7 of Part II and ch. 13–14 of Part III (:mod:`acmm.report.sections`,
+run as parts of :mod:`acmm.report.plan`); the three closing ones, written here once the others are
+done, list the printed numbers of all of them, compare the dataset hashes with the previous
+report's (determinism) and state the software, run and stage files used (provenance).
 """
 from __future__ import annotations
 
 import json
 import os
+import platform
 import shutil
 import tempfile
 import time
 from dataclasses import dataclass, field
+from datetime import datetime, timezone
 from pathlib import Path
 from typing import Callable
 
+import h5py
+import matplotlib
+import numpy as np
+import scipy
+
+from acmm import __version__
 from acmm_qpp.errors import OutputError
+from acmm_qpp.provenance import git_commit, git_dirty
 from acmm_qpp.atomic_write import write_text
 from acmm_qpp.runlock import run_lock
 from acmm_qpp.signals import interrupts_deferred
-from acmm.report.constants import SECTIONS
+from acmm.report.constants import SECTIONS, TIMING_DATASETS
 from acmm.report.context import SectionWriter
 from acmm.report.document import render_html, render_markdown
+from acmm.report.ledger import status_text
 from acmm.report.gather import (Gathered, changed_runs, keep_stage, order_runs, report_configs, stage_tasks,
                                 warm_workers)
 from acmm.report.manifest import build_manifest, compare_manifests
 from acmm.report.plan import assemble, run_part, section_tasks
 from acmm.report.publish import publish
 from acmm.report.runner import default_jobs, run_tasks
-from acmm.report.sections import determinism as sec_determinism
-from acmm.report.sections import printed as sec_printed
-from acmm.report.sections import provenance as sec_provenance
 import resource
 
 #: Kind of the report's figure staging folder (``<out>/.figures-<pid>-<random>``): the next report
@@ -174,15 +184,15 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
     g, rep, timings = _run_graph(root, staged, fast, rerun, robustness, jobs, say)
     jobs = timings.pop("processes")
     failures = timings.pop("failures")
-    _add(rep, "printed", sec_printed.build, list(rep.ledger), failures=failures)
+    _add(rep, "printed", _printed, list(rep.ledger), failures=failures)
     # determinism
     man_path = out / "manifest.json"
     old = _previous_manifest(man_path)
     manifest = build_manifest(g)
     cmp = compare_manifests(old, manifest)
-    _add(rep, "determinism", sec_determinism.build, cmp, manifest, failures=failures)
+    _add(rep, "determinism", _determinism, cmp, manifest, failures=failures)
     total = time.perf_counter() - t_start
-    _add(rep, "provenance", sec_provenance.build, g, {
+    _add(rep, "provenance", _provenance, g, {
         "stages (until the last one finished)": timings["stages"],
         f"stages and sections ({jobs} process{'es' if jobs > 1 else ''})": timings["graph"], "total": total},
          failures=failures)
@@ -277,6 +287,71 @@ def _add(rep: SectionWriter, key: str, build, *args, failures: list | None = Non
     rep.doc.blocks.extend(part.blocks)
     rep.ledger.extend(part.ledger)
     return part.value
+
+
+def _printed(ctx: SectionWriter, ledger: list) -> None:
+    """Section printed numbers: every entry of ``ledger`` (all sections before this one), with its
+    status."""
+    ctx.section("printed")
+    counts = {}
+    for pn in ledger:
+        counts[pn.status] = counts.get(pn.status, 0) + 1
+    ctx.doc.p("Every printed number this report compares, with its status. Matched: |computed − printed| ≤ "
+              "half a unit of the last printed digit. Summary: " +
+              "; ".join(f"{v} {k}" for k, v in sorted(counts.items())) + ".")
+    ctx.doc.table(["section", "quantity", "printed", "computed", "unit", "status"],
+                  [[p.section, p.quantity, p.printed, "—" if p.computed is None else f"{p.computed:.6g}",
+                    p.unit, status_text(p)] for p in ledger])
+
+
+def _determinism(rep: SectionWriter, cmp: dict, manifest: dict) -> None:
+    """Section determinism: this report's ``manifest`` (:func:`acmm.report.manifest.build_manifest`)
+    and its comparison ``cmp`` with the previous report's (:func:`acmm.report.manifest.compare_manifests`)."""
+    rep.section("determinism")
+    n_ds = sum(len(f["datasets"]) for f in manifest["files"].values())
+    rep.doc.p(f"{len(manifest['files'])} HDF5 files, {n_ds} datasets hashed (SHA-256 of dtype, shape and bytes; "
+              f"timing datasets {', '.join(TIMING_DATASETS)} and file attributes such as the creation time excluded); "
+              "hashes are stored in manifest.json next to this page.")
+    if cmp["status"] == "no previous report":
+        rep.doc.p("No previous report in this directory: nothing to compare yet. Run the report again "
+                  "(with --rerun to recompute every stage) to compare.")
+    else:
+        rec = cmp["recomputed"]
+        rep.doc.p(f"Compared with the previous report of {cmp['previous']}: {cmp['compared']} datasets, "
+                  f"{rec} of {len(manifest['files'])} files recomputed since then "
+                  f"({'the others reused, identical by construction' if rec < len(manifest['files']) else 'none reused'}). "
+                  f"Result: {cmp['status'].upper()}"
+                  + (f" ({len(cmp['differences'])} datasets differ: {', '.join(cmp['differences'][:10])})"
+                     if cmp["differences"] else " — every dataset has the same hash." if cmp["compared"]
+                     else " — no file of the previous report has the same name and config.")
+                  + (f" Not compared (new or changed config): {', '.join(cmp['missing'][:10])}." if cmp["missing"] else ""))
+
+
+def _provenance(rep: SectionWriter, g: Gathered, timings: dict) -> None:
+    """Section provenance: software, machine, wall times (``timings``: step → s) and every stage file
+    of ``g`` used."""
+    rep.section("provenance")
+    commit = git_commit()
+    tree = {"yes": "modified files present", "no": "clean"}.get(git_dirty(), "unknown")   # no git: unknown
+    rows = [["package", f"acmm-qpp {__version__}"], ["git commit", f"{commit} ({tree})"],
+            ["date (UTC)", datetime.now(timezone.utc).isoformat(timespec="seconds")],
+            ["python", platform.python_version()], ["numpy / scipy", f"{np.__version__} / {scipy.__version__}"],
+            ["h5py / matplotlib", f"{h5py.__version__} / {matplotlib.__version__}"],
+            ["machine", f"{platform.system()} {platform.machine()}, {os.cpu_count()} CPUs"],
+            ["mode", "fast (CI)" if rep.fast else "full"]]
+    rows += [[f"wall time: {k}", f"{v:.1f} s"] for k, v in timings.items()]
+    if g.robustness_wall:
+        rows.append(["wall time: robustness sweep", f"{g.robustness_wall:.1f} s"])
+    rep.doc.table(["item", "value"], rows, "Software and run")
+    srows = []
+    for r in g.runs.values():
+        stale = "" if (not r.git_commit or r.git_commit == commit) else " (other commit)"
+        srows.append([r.stage, r.config, r.config_hash, r.design_hash or "—", str(r.path),
+                      "reused" if r.reused else "computed", "—" if r.reused else f"{r.wall_time:.1f}",
+                      f"{r.created_utc}, {r.git_commit[:10]}{stale}"])
+    rep.doc.table(["stage", "config", "config hash", "design hash", "file", "this run", "wall time (s)",
+                   "file created, commit"], srows,
+                  "Stages: results reused when the stored config hash (design hash for designs) matches")
 
 
 def _remove_empty(dirs: list) -> None:

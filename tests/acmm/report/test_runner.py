@@ -257,7 +257,7 @@ def test_an_interrupted_report_leaves_out_as_it_was(fast_report, tmp_path, monke
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(build_mod.sec_printed, "build", interrupted)
+    monkeypatch.setattr(build_mod, "_printed", interrupted)
     res = CliRunner().invoke(app, ["report", "--fast", "--out", str(out), "--root", str(fast_report[0] / "runs")])
     assert res.exit_code == 130, res.output
     assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == ["figures", "index.html"]
@@ -328,7 +328,7 @@ def test_a_results_file_rewritten_while_the_report_runs_is_refused(fast_report, 
 
     out = tmp_path / "out"
     build_mod = importlib.import_module("acmm.report.build")
-    original = build_mod.sec_printed.build
+    original = build_mod._printed
 
     def rewrite_then_build(rep, *args, **kwargs):
         path = next(r.path for k, r in rep.g.runs.items() if k.startswith("acmm design:"))
@@ -336,7 +336,7 @@ def test_a_results_file_rewritten_while_the_report_runs_is_refused(fast_report, 
         path.with_name("copy.h5").replace(path)              # another run's atomic write
         return original(rep, *args, **kwargs)
 
-    monkeypatch.setattr(build_mod.sec_printed, "build", rewrite_then_build)
+    monkeypatch.setattr(build_mod, "_printed", rewrite_then_build)
     # (the session's fast report's stages: the copy moved into place holds the same bytes)
     res = CliRunner().invoke(app, ["report", "--fast", "--out", str(out), "--root", str(fast_report[0] / "runs")])
     assert res.exit_code == 4, res.output
