@@ -428,7 +428,7 @@ def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
             for name in ("mb3", "mb3_decoupled", "ac", "staircase")}
     for key, (suffix, patch) in REPORT_VARIANTS.items():
         if not (fast and key == "staircase_quadratic"):
-            cfgs[key] = variant(cfgs["staircase"], suffix, patch)
+            cfgs[key] = _variant(cfgs["staircase"], suffix, patch)
     cfgs.update({name: qpp_config(name, root) for name in ("qpp_siso", "qpp_manipulator")})
     return cfgs
 
@@ -443,23 +443,9 @@ REPORT_VARIANTS = {
 }
 
 
-def variant(cfg, suffix: str, patch: dict):
-    """``cfg`` named ``<name>_<suffix>`` with its sections updated by ``patch``.
-
-    Parameters
-    ----------
-    cfg : acmm.io.config.Config
-        The config (:func:`acmm_config`).
-    suffix : str
-        Appended to its name.
-    patch : dict
-        ``{section: {key: value}}`` merged into its sections.
-
-    Returns
-    -------
-    acmm.io.config.Config
-        The variant, validated.
-    """
+def _variant(cfg, suffix: str, patch: dict):
+    """``cfg`` (:func:`acmm_config`) named ``<name>_<suffix>``, its sections updated by ``patch``
+    (``{section: {key: value}}``), validated."""
     data = cfg.model_dump(mode="json")
     data["name"] = f"{data['name']}_{suffix}"
     for section, values in patch.items():

@@ -52,19 +52,9 @@ class Part:
     failed: Failed | None = None     #: the part's failure, shown in its section
 
 
-def failure_blocks(ctx: SectionWriter, section: str | None, f: Failed) -> None:
-    """Write failure ``f`` into ``ctx`` (a fresh writer): the heading of ``section`` when the
-    failed part is the one that writes it, then the error on one line.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        An empty writer.
-    section : str or None
-        Section key whose heading the failed part would have written, or None.
-    f : acmm.report.gather.Failed
-        The failure.
-    """
+def _failure_blocks(ctx: SectionWriter, section: str | None, f: Failed) -> None:
+    """Write failure ``f`` into ``ctx`` (a fresh writer): the heading of ``section`` (when not
+    None: the failed part is the one that writes it), then the error on one line."""
     if section is not None:
         ctx.section(section)
     ctx.doc.p(f"FAILED — {f.text()}. (The other sections are complete; acmm report exits with code "
@@ -121,7 +111,7 @@ def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: 
             if f is None:
                 raise
     ctx = SectionWriter(g, figdir, fast, cache)
-    failure_blocks(ctx, heading, f)
+    _failure_blocks(ctx, heading, f)
     return Part(ctx.doc.blocks, ctx.ledger, None, time.perf_counter() - t0, f)
 
 
