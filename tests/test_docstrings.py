@@ -56,7 +56,7 @@ NO_REPORT_CITATION = {module: reason for reason, modules in {
         acmm_qpp.results acmm_qpp.runlock
         acmm_qpp.signals acmm_qpp.units""",
     "config schemas and checks, stage plumbing, numba's compilation: no mathematics of the report":
-        """acmm.io.schema qpp.io.schema qpp.io.config_checks acmm.stages.common acmm.stages.pool
+        """acmm.io.schema acmm.stages.common acmm.stages.pool
         acmm.simulate.warmup acmm.model.compiled_cache""",
     "a package of modules: no mathematics of its own":
         "acmm.io acmm.plots acmm.stages qpp.io acmm.report.sections acmm_qpp.cli",

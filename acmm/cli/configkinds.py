@@ -6,7 +6,7 @@ This package sits above both cores (like :mod:`acmm.report`, below :mod:`acmm_qp
 and ``qpp``, neither of them imports it at import time (``tests/test_layers.py``).  It is not
 part of :mod:`acmm_qpp.cli` because tests and scripts use it without the command line, and its
 :func:`load_any` validates models, which is more than parsing arguments.  The schemas themselves
-are in :mod:`acmm.io.schema`, :mod:`qpp.io.schema` and :mod:`acmm_qpp.config_model`.
+are in :mod:`acmm.io.schema`, :mod:`qpp.io.config` and :mod:`acmm_qpp.config_model`.
 """
 from __future__ import annotations
 
@@ -20,8 +20,7 @@ from acmm.sweep.spec import sweep_schema
 from acmm.cli.command import CONFIGS
 from acmm_qpp.configio import read_yaml
 from acmm_qpp.overrides import apply_overrides, remember_origin
-from qpp.io.config import parse_config as parse_qpp
-from qpp.io.schema import qpp_schema
+from qpp.io.config import parse_config as parse_qpp, qpp_schema
 
 __all__ = ["KINDS", "detect_kind", "load_any", "load_any_from_command_line", "schema_for", "schema_json"]
 

@@ -14,7 +14,7 @@ against the design points, matrix shapes of a qpp plant, a positive-definite ine
 right dimension).  Also, like pydantic's lax mode, the loader converts numeric strings (``"0.5"``)
 where a number is expected; the schema documents the canonical number form.
 
-The qpp schema is :mod:`qpp.io.schema`; the dispatcher across the three kinds (:func:`schema_for`,
+The qpp schema is in :mod:`qpp.io.config`; the dispatcher across the three kinds (:func:`schema_for`,
 :func:`schema_json`, :func:`detect_kind`, :func:`load_any`) is :mod:`acmm.cli.configkinds`.
 
 Editors: ``acmm schema --kind acmm > acmm.schema.json`` and a first line
