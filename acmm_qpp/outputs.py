@@ -30,7 +30,7 @@ from pathlib import Path
 
 from acmm_qpp.atomic_write import output_error, write_text
 from acmm_qpp.errors import FigureError, OutputError
-from acmm_qpp.overrides import origin_of
+from acmm_qpp.configio import origin_of
 from acmm_qpp.runlock import STAGING, run_lock
 from acmm_qpp.signals import interrupts_deferred
 

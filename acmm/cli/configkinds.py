@@ -18,8 +18,7 @@ from acmm.io.schema import acmm_schema
 from acmm.sweep.config import parse_sweep
 from acmm.sweep.spec import sweep_schema
 from acmm.cli.command import CONFIGS
-from acmm_qpp.configio import read_yaml
-from acmm_qpp.overrides import apply_overrides, remember_origin
+from acmm_qpp.configio import apply_overrides, read_yaml, remember_origin
 from qpp.io.config import parse_config as parse_qpp, qpp_schema
 
 __all__ = ["KINDS", "detect_kind", "load_any", "load_any_from_command_line", "schema_for", "schema_json"]

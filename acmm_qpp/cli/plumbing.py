@@ -131,7 +131,7 @@ def user_errors(fn, notes=None):
 # command-line conventions (issue 14): exit codes of click errors, --version, overrides, --strict
 # ---------------------------------------------------------------------------------------------
 def overrides_arg(example: str):
-    """The positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm_qpp.overrides`), their
+    """The positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm_qpp.configio`), their
     help naming ``example``, an override of a key the command reads.
 
     Parameters

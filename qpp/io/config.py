@@ -28,10 +28,9 @@ import yaml
 from pydantic import BaseModel, Field, field_validator, model_validator
 
 from acmm_qpp.config_model import Generator, StrictModel, header, quantity
-from acmm_qpp.configio import read_yaml, validate_model
+from acmm_qpp.configio import apply_overrides, read_yaml, remember_origin, validate_model
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.limits import how_to_raise, limit
-from acmm_qpp.overrides import apply_overrides, remember_origin
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 from qpp import LIMITS, PACKAGED_CONFIGS
 from qpp.model.expression_parser import library_expression
@@ -672,7 +671,7 @@ def load_config(path, overrides: list[str] | None = None) -> QppConfig:
     path : str or path-like
         YAML file, or the name of a packaged config.
     overrides : list of str, optional
-        Dotted ``key=value`` edits (:mod:`acmm_qpp.overrides`), applied before validation.
+        Dotted ``key=value`` edits (:mod:`acmm_qpp.configio`), applied before validation.
 
     Returns
     -------
