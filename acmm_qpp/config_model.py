@@ -58,24 +58,14 @@ def closest(word: str, candidates: list[str]) -> str | None:
     return lower[m[0]] if m else None
 
 
-def union_members(annotation: Any) -> list:
-    """The types an annotation can hold, with ``Optional``/``Union``/``Annotated`` removed.
-
-    Parameters
-    ----------
-    annotation : type or typing form
-        A field's annotation.
-
-    Returns
-    -------
-    list
-        The members, each a type or a generic alias (``list[float]``, ``dict[str, float]``…).
-    """
+def _union_members(annotation: Any) -> list:
+    """The types an annotation can hold (each a type or a generic alias, ``list[float]``…), with
+    ``Optional``/``Union``/``Annotated`` removed."""
     origin = typing.get_origin(annotation)
     if origin is typing.Annotated:
-        return union_members(typing.get_args(annotation)[0])
+        return _union_members(typing.get_args(annotation)[0])
     if origin in (typing.Union, types.UnionType):
-        return [x for arg in typing.get_args(annotation) for x in union_members(arg)]
+        return [x for arg in typing.get_args(annotation) for x in _union_members(arg)]
     return [annotation]
 
 
@@ -83,7 +73,7 @@ def _kinds(annotation: Any) -> tuple[set, list]:
     """(the scalar types ``annotation`` admits, the element annotations of its list/tuple
     types, and the values' of its mappings)."""
     scalars, elements = set(), []
-    for member in union_members(annotation):
+    for member in _union_members(annotation):
         origin, args = typing.get_origin(member), typing.get_args(member)
         if origin in (list, tuple, set, frozenset):
             elements += [a for a in args if a is not Ellipsis]
@@ -94,33 +84,20 @@ def _kinds(annotation: Any) -> tuple[set, list]:
     return scalars, elements
 
 
-def boolean_as_number(annotation: Any, value: Any) -> bool:
-    """Whether ``value`` holds a boolean where ``annotation`` wants a number (at any depth of
-    its lists and tuples).
-
-    Parameters
-    ----------
-    annotation : type or typing form
-        The field's annotation (``float``, ``Optional[float]``, ``tuple[float, float]``,
-        ``list[list[float]]``, ``dict[str, float]``, …).
-    value : object
-        The value as read from the config.
-
-    Returns
-    -------
-    bool
-        True when a boolean stands where only a number (int, float, complex) is admitted (in
-        a list, tuple or the values of a mapping too).
-    """
+def _boolean_as_number(annotation: Any, value: Any) -> bool:
+    """Whether ``value`` (as read from the config) holds a boolean where ``annotation``
+    (``float``, ``Optional[float]``, ``tuple[float, float]``, ``list[list[float]]``,
+    ``dict[str, float]``, …) admits only a number (int, float, complex), at any depth of its
+    lists, tuples and the values of its mappings."""
     scalars, elements = _kinds(annotation)
     if isinstance(value, bool):
         return bool(scalars & set(_NUMBERS)) and bool not in scalars
     if isinstance(value, dict) and elements:
-        return any(boolean_as_number(elements[0], v) for v in value.values())
+        return any(_boolean_as_number(elements[0], v) for v in value.values())
     if isinstance(value, (list, tuple)) and elements:
         if len(elements) == len(value) and len(elements) > 1:        # a fixed tuple
-            return any(boolean_as_number(a, v) for a, v in zip(elements, value))
-        return any(boolean_as_number(a, v) for a in elements for v in value)
+            return any(_boolean_as_number(a, v) for a, v in zip(elements, value))
+        return any(_boolean_as_number(a, v) for a in elements for v in value)
     return False
 
 
@@ -137,7 +114,7 @@ class StrictModel(BaseModel):
         if isinstance(data, dict):
             for name, field in cls.model_fields.items():
                 key = field.alias or name
-                if key in data and boolean_as_number(field.annotation, data[key]):
+                if key in data and _boolean_as_number(field.annotation, data[key]):
                     raise PydanticCustomError(BOOLEAN_AS_NUMBER, "expected a number, got a boolean (true/false)",
                                               {"field": key})
         return data

@@ -9,7 +9,7 @@ moved into the run folder with :func:`os.replace`, and the stage's files of an e
 this one did not write are removed: a figure of another scenario name, of a schedule that no
 longer exists or of a run with figures, cannot be mistaken for a result of this one.  When it
 fails or is interrupted, the staging folder is removed and the run folder is as it was; a folder
-left by a killed process is removed by the next run of that name (:func:`acmm_qpp.runlock.run_lock`).
+left by a killed process is removed by the next run of that name (:func:`run_lock`).
 
 Files of other stages are left alone (a stage does not remove the files of the stage it reads;
 a journal survives for ``--resume``).  When a stage run by this one (a simulation that designs
@@ -17,22 +17,297 @@ first) finished first, that stage's files stay with its new ``config.yaml``, and
 of the failed stage, which that ``config.yaml`` no longer describes, are removed.
 A stage whose results are written and only a figure fails (:class:`acmm_qpp.errors.FigureError`,
 exit 4) finishes as above, results and ``config.yaml`` kept.
+
+Atomic file writing (:func:`write_bytes`): a temporary file beside the target, renamed into place
+on success.  An interrupted or failed write never leaves a partial file nor the directories
+created for it; an OS error (read-only, not a directory, no space, name too long) becomes one
+:class:`~acmm_qpp.errors.OutputError` line (exit 4).  Bytes are written with plain ``os.write``
+calls (HDF5 files and figures are built in memory first: HDF5 crashes on ENOSPC, so the
+libraries never write to the disk themselves).
+
+One run at a time per results directory ``<root>/<name>/`` (issue 13), on `filelock`_:
+:func:`run_lock` holds an exclusive, non-blocking lock on ``<run dir>/.lock``
+(:class:`filelock.FileLock`: ``flock`` on POSIX) for the whole of a stage or report.  A second run
+of the same name is refused at once with one :class:`~acmm_qpp.errors.OutputError` line naming the
+holder's pid (exit 4) instead of racing it.  The kernel releases the lock when the holder dies,
+even by ``kill -9``, so a stale lock file never blocks a later run; the file is removed when the
+run ends.  Holding the lock, a run removes what a killed earlier run of the same folder left
+behind (:func:`remove_leftovers`: staging folders, the caller's kinds among them, temporary
+files), and a run refused or failed before writing anything removes the directories it created.
+The lock is re-entrant within a process (``simulate`` runs ``design`` under its lock).
+
+.. _filelock: https://py-filelock.readthedocs.io
 """
 from __future__ import annotations
 
 import functools
 import os
+import re
 import shutil
 import stat
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-from acmm_qpp.atomic_write import output_error, write_text
+import filelock
+
 from acmm_qpp.errors import FigureError, OutputError
-from acmm_qpp.overrides import origin_of
-from acmm_qpp.runlock import STAGING, run_lock
+from acmm_qpp.configio import origin_of
 from acmm_qpp.signals import interrupts_deferred
+
+
+def _make_dirs(directory: str | Path) -> list[Path]:
+    """Create ``directory`` and its missing parents; return the ones created (outermost first),
+    so that a refused run can remove them again; NotADirectoryError when it is no directory."""
+    d = Path(directory)
+    missing = []
+    while not os.path.lexists(d) and d != d.parent:
+        missing.append(d)
+        d = d.parent
+    created = []
+    try:
+        for q in reversed(missing):
+            try:
+                os.mkdir(q)
+            except FileExistsError:
+                if not os.path.isdir(q):
+                    raise
+                continue
+            created.append(q)
+    except BaseException:
+        _remove_empty_dirs(created)
+        raise
+    if not os.path.isdir(directory):
+        raise NotADirectoryError(20, "Not a directory", str(directory))
+    return created
+
+
+def _remove_empty_dirs(created: list[Path]) -> None:
+    """Remove the directories of :func:`_make_dirs` again, innermost first, while they are empty."""
+    for q in reversed(created):
+        try:
+            os.rmdir(q)
+        except OSError:
+            break
+
+
+def output_error(exc: OSError, what: str, where: str | Path):
+    """A one-line :class:`~acmm_qpp.errors.OutputError` (exit 4) for an OS error while writing.
+
+    Parameters
+    ----------
+    exc : OSError
+        The error (an OutputError is returned as it is).
+    what : str
+        What was being written ("results", "figure", ...).
+    where : path-like
+        Where it was being written.
+
+    Returns
+    -------
+    OutputError
+        The error to raise.
+    """
+    if isinstance(exc, OutputError):
+        return exc
+    why = exc.strerror or str(exc)
+    return OutputError(f"cannot write {what} {where}: {why}")
+
+
+def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
+    """Write ``data`` to a temporary file beside ``path``, then rename it onto ``path``.
+
+    The bytes go out in plain ``os.write`` calls and an fsync: a full disk is then an ordinary
+    OSError, never a crash inside a C library.  The file gets the usual permissions (0666 & ~umask,
+    not mkstemp's 0600).  On any error or interrupt the temporary file is removed, directories
+    created for it are removed again and ``path`` is left as it was; an OS error (read-only, not a
+    directory, no space, name too long, a directory where the file should go) becomes one
+    :class:`~acmm_qpp.errors.OutputError` line.
+
+    Parameters
+    ----------
+    path : path-like
+        The target file.
+    data : bytes-like
+        The content.
+    what : str
+        What is written, for error messages.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    OutputError
+        A directory of that name is in the way, or an OS error occurred.
+    """
+    path, created, tmp = Path(path), [], None
+    try:
+        created = _make_dirs(path.parent)
+        if os.path.isdir(path):
+            raise OutputError(f"cannot write {what} {path}: a directory of that name is in the way")
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException as exc:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        _remove_empty_dirs(created)
+        if isinstance(exc, OSError):
+            raise output_error(exc, what, path) from None
+        raise
+    return path
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write a text file atomically (see :func:`write_bytes`).
+
+    Parameters
+    ----------
+    path : path-like
+        The target file.
+    text : str
+        The content, written as UTF-8.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    return write_bytes(path, text.encode("utf-8"), "text")
+
+
+LOCK_NAME = ".lock"
+#: Kind of the staging folders of stages (``.staging-<pid>-<random>``, :func:`staged_outputs`).
+STAGING = "staging"
+
+
+def _holder(lock: Path) -> str:
+    try:
+        text = lock.read_text(encoding="ascii", errors="replace").strip()
+    except OSError:
+        text = ""
+    return f"pid {text}" if text.isdigit() else "a process that has not yet written its pid"
+
+
+def remove_leftovers(directory: Path, staging: tuple = ()) -> list[str]:
+    """Remove what killed runs left in ``directory``: temporary files of an atomic write
+    (``.<file>.<random>.tmp``) and staging folders ``.<kind>-<pid>-<random>`` of the stages'
+    kind (:data:`STAGING`) and of the caller's kinds.
+
+    Only call this while holding the directory's run lock: no live run then owns them.
+
+    Parameters
+    ----------
+    directory : Path
+        The run directory.
+    staging : tuple of str, optional
+        The caller's own kinds of staging folder.
+
+    Returns
+    -------
+    list of str
+        Names of the files and folders removed.
+    """
+    kinds = "|".join(re.escape(k) for k in (STAGING, *staging))
+    removed, pattern = [], re.compile(rf"^\.(.+\.tmp|(?:{kinds})-\d+-.+)$")
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return removed
+    for e in entries:
+        if not pattern.match(e.name) or e.is_symlink():
+            continue
+        try:
+            if e.is_dir():
+                shutil.rmtree(e.path)
+            else:
+                os.unlink(e.path)
+            removed.append(e.name)
+        except OSError:
+            pass
+    return removed
+
+
+def _release(lock: filelock.FileLock, path: Path, created: list) -> None:
+    """Release ``lock``; the outermost release removes the lock file (while still held:
+    filelock's next holder checks that its inode is still linked) and the folders created."""
+    with interrupts_deferred():            # the lock goes whole, whatever arrives meanwhile
+        if lock.lock_counter == 1:
+            try:
+                os.unlink(path)
+            except OSError:
+                pass
+        lock.release()
+        if not lock.is_locked:
+            _remove_empty_dirs(created)
+
+
+@contextmanager
+def run_lock(run_dir: str | Path, staging: tuple = ()):
+    """Hold the exclusive run lock of ``run_dir`` (created if needed) for the ``with`` block.
+
+    Parameters
+    ----------
+    run_dir : path-like
+        The run directory ``<root>/<name>/``.
+    staging : tuple of str, optional
+        The kinds of staging folder (``.<kind>-<pid>-<random>``) the caller makes besides the
+        stages', removed as a killed run's leftovers (:func:`remove_leftovers`).
+
+    Yields
+    ------
+    Path
+        ``run_dir``.
+
+    Raises
+    ------
+    OutputError
+        Another live process holds the lock (message names its pid), or the directory cannot
+        be created / the lock file cannot be written (exit 4).
+    """
+    d = Path(run_dir)
+    try:
+        created = _make_dirs(d)
+    except OSError as exc:
+        raise output_error(exc, "the run directory", d) from None
+    path = d / LOCK_NAME
+    lock = filelock.FileLock(path, timeout=0, is_singleton=True, thread_local=False)
+    try:
+        lock.acquire()
+    except filelock.Timeout:
+        _remove_empty_dirs(created)
+        raise OutputError(f"{d} is in use by another run ({_holder(path)}); wait for it to finish "
+                          "or give this run another name") from None
+    except OSError as exc:
+        _remove_empty_dirs(created)
+        raise output_error(exc, "the run lock", path) from None
+    try:
+        if lock.lock_counter == 1:      # the holder's pid, for the message of a refused run
+            path.write_text(f"{os.getpid()}\n", encoding="ascii")
+            remove_leftovers(d, staging)
+    except OSError as exc:
+        _release(lock, path, created)
+        raise output_error(exc, "the run lock", path) from None
+    try:
+        yield d
+    finally:
+        _release(lock, path, created)
+
 
 CONFIG_FILE = "config.yaml"
 #: Suffixes of figure files: one whose place is taken is a :class:`~acmm_qpp.errors.FigureError`
@@ -218,7 +493,7 @@ def _finish(staging: Path, run_dir: Path, patterns: tuple, text: str | None) -> 
 def stage(patterns: tuple, load):
     """Decorator of a stage runner ``fn(config, ..., out)``: resolve ``config`` with ``load``
     (validation first: a refused config creates nothing), take the run lock of its ``run_dir()``
-    (:func:`acmm_qpp.runlock.run_lock`), then run ``fn`` with ``out``, the folder to write its
+    (:func:`run_lock`), then run ``fn`` with ``out``, the folder to write its
     files in, inside :func:`staged_outputs`.
 
     Parameters

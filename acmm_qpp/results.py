@@ -4,7 +4,7 @@ Every dataset carries a ``units`` attribute and named dimensions; the root group
 resolved config (YAML text), its hash, the package version, the git commit when known and the
 creation time (:mod:`acmm_qpp.provenance`).  The file is built in memory by
 `h5netcdf <https://h5netcdf.org>`_ and written to a temporary name beside the target, then renamed
-into place, so an interrupted run never leaves a partial file (:mod:`acmm_qpp.atomic_write`).
+into place, so an interrupted run never leaves a partial file (:mod:`acmm_qpp.outputs`).
 
 The netCDF layout, for ``xarray.open_dataset(path, engine="h5netcdf")`` and the netCDF-C library:
 
@@ -32,7 +32,7 @@ import h5py
 import numpy as np
 
 from acmm_qpp import __version__
-from acmm_qpp.atomic_write import write_bytes
+from acmm_qpp.outputs import write_bytes
 from acmm_qpp.errors import ConfigError, FigureError
 from acmm_qpp.provenance import config_hash, git_commit, git_dirty
 

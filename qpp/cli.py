@@ -106,7 +106,7 @@ def validate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
 @user_errors
 def schema() -> None:
     """Print the JSON schema of the qpp config format (`acmm schema --kind ...` for the others)."""
-    from qpp.io.schema import qpp_schema  # deferred: --help needs no scipy, pydantic
+    from qpp.io.config import qpp_schema  # deferred: --help needs no scipy, pydantic
 
     typer.echo(json.dumps(qpp_schema(), indent=2, ensure_ascii=False))
 

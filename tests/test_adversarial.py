@@ -494,7 +494,7 @@ def test_each_numerical_hint_names_settings_of_its_own_product():
     from pydantic import BaseModel
 
     from acmm.io.config import Config
-    from acmm_qpp.config_model import union_members
+    from acmm_qpp.config_model import _union_members as union_members
     from qpp.io.config import QppConfig
 
     def resolves(model, key: list) -> bool:

@@ -22,7 +22,7 @@ ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
 
 HOLD_LOCK = """
 import sys, time
-from acmm_qpp.runlock import run_lock
+from acmm_qpp.outputs import run_lock
 with run_lock(sys.argv[1]):
     print("locked", flush=True)
     sys.stdin.read()
@@ -335,7 +335,7 @@ def test_a_report_killed_with_sigkill_leaves_nothing_the_next_run_does_not_remov
     (``.figures-<pid>-…``), its lock file and the stage's staging folder stay behind; the next
     report in that folder removes its own (here one refused at once: the results root is a
     file), the next run of the stage its own."""
-    from acmm_qpp.runlock import run_lock
+    from acmm_qpp.outputs import run_lock
 
     out = tmp_path / "out"
     proc = subprocess.Popen([ACMM, "report", "--fast", "--jobs", "1", "--out", str(out)], env=ENV, cwd=tmp_path,
@@ -380,17 +380,17 @@ def _disk_full(*args, **kwargs):
 @pytest.mark.parametrize("args", [["tea", "mb3"], ["design", "mb3", "--no-figures"],
                                   ["sweep", "SWEEP", "-j", "1"]])
 def test_a_full_disk_in_a_stage_is_one_error_line_exit_4(tmp_runs, monkeypatch, args):
-    """Every file a stage writes is synced (os.fsync, acmm_qpp.atomic_write; the sweep's journal
+    """Every file a stage writes is synced (os.fsync, acmm_qpp.outputs; the sweep's journal
     too), where a full disk shows at the latest: one `error:` line, exit 4, no result and nothing
     hidden left in the run folder."""
     from typer.testing import CliRunner
 
     from acmm.cli.app import app
-    import acmm_qpp.atomic_write as atomic_write
+    import acmm_qpp.outputs as outputs
 
     if "SWEEP" in args:
         args = [str(_sweep_config(tmp_runs, n_runs=2, orbits=0.5)) if a == "SWEEP" else a for a in args]
-    monkeypatch.setattr(atomic_write.os, "fsync", _disk_full)
+    monkeypatch.setattr(outputs.os, "fsync", _disk_full)
     r = CliRunner().invoke(app, args)
     assert r.exit_code == 4, (r.exit_code, r.output)
     assert r.stderr.count("\n") == 1 and r.stderr.startswith("error: ") and "No space left on device" in r.stderr

@@ -50,13 +50,13 @@ CHECKED_MODULES = discover_modules()
 #: Modules whose docstring need not cite the report's equations, grouped by the reason.
 NO_REPORT_CITATION = {module: reason for reason, modules in {
     "the shared base (files, locks, signals, errors, configs, units, figure style): "
-    "no mathematics of the report": """acmm_qpp acmm_qpp.atomic_write acmm_qpp.config_model
+    "no mathematics of the report": """acmm_qpp acmm_qpp.config_model
         acmm_qpp.configio acmm_qpp.errors acmm_qpp.limits
-        acmm_qpp.outputs acmm_qpp.overrides acmm_qpp.plot_style acmm_qpp.provenance
-        acmm_qpp.results acmm_qpp.runlock
+        acmm_qpp.outputs acmm_qpp.plot_style acmm_qpp.provenance
+        acmm_qpp.results
         acmm_qpp.signals acmm_qpp.units""",
     "config schemas and checks, stage plumbing, numba's compilation: no mathematics of the report":
-        """acmm.io.schema qpp.io.schema qpp.io.config_checks acmm.stages.common acmm.stages.pool
+        """acmm.io.schema acmm.stages.common acmm.stages.pool
         acmm.simulate.warmup acmm.model.compiled_cache""",
     "a package of modules: no mathematics of its own":
         "acmm.io acmm.plots acmm.stages qpp.io acmm.report.sections acmm_qpp.cli",

@@ -198,7 +198,6 @@ LAZY_IMPORTS = {
     ("acmm.cli.sweep", "acmm.sweep.run"): _CLI_START,
     ("acmm.cli.sweep", "distributed"): "optional dependency (acmm-qpp[dask]), only with --scheduler",
     ("qpp.cli", "qpp.io.config"): _CLI_START,
-    ("qpp.cli", "qpp.io.schema"): _CLI_START,
     ("qpp.cli", "qpp.io.stages"): _CLI_START,
     ("qpp.cli", "acmm_qpp.configio"): "start-up: `--help` imports no pydantic or yaml",
     ("acmm.stages.design_output", "acmm.plots.base"): _MPL,

@@ -5,7 +5,6 @@ mathematics lives here.  User errors print one line and exit with code 2.
 """
 from __future__ import annotations
 
-import importlib
 import math
 from typing import Optional
 
@@ -15,6 +14,7 @@ import typer
 
 from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit,
                                    version_option)
+from acmm.cli import report, sweep
 from acmm.cli.command import CONFIGS, acmm_command
 from acmm.cli.steps import Steps
 from acmm_qpp.plot_style import files_only_backend
@@ -72,9 +72,9 @@ def validate(config: Optional[str] = ConfigArg,
              show: bool = typer.Option(False, "--show", help="print the resolved config (all defaults, canonical units)")) -> None:
     """Check a config of any kind (acmm run, sweep or qpp; detected from its sections); exit 2
     naming the offending field when it is invalid."""
-    from acmm.cli.configkinds import load_any_from_command_line  # deferred: --help needs no numpy, scipy, pydantic
+    from acmm.cli.configkinds import load_any  # deferred: --help needs no numpy, scipy, pydantic
 
-    kind, cfg = load_any_from_command_line(config, overrides)
+    kind, cfg = load_any(config, overrides)
     typer.echo(f"{cfg.name}: valid ({kind} config)")
     if show:
         typer.echo(cfg.to_yaml())
@@ -386,19 +386,8 @@ def main() -> None:
     run_app(app)
 
 
-def _register_optional_commands() -> None:
-    """Commands that live in their own CLI modules (``register(app)`` adds them)."""
-    for mod in ("acmm.cli.sweep", "acmm.cli.report"):
-        try:
-            module = importlib.import_module(mod)
-        except ModuleNotFoundError as exc:
-            if exc.name != mod:
-                raise
-            continue
-        module.register(app)
-
-
-_register_optional_commands()
+sweep.register(app)      # the commands in their own modules, after the others in the help
+report.register(app)
 
 
 if __name__ == "__main__":     # python -m acmm.cli.app

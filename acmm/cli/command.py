@@ -19,14 +19,9 @@ CONFIGS = ConfigKinds(PACKAGED_CONFIGS, (("sweep", ("sweep", "sweep_file")), ("q
                       "configs.")
 
 
-def compiled_cache_notes() -> list[str]:
-    """A line for each reason numba could not save a kernel it compiled in this run.
-
-    Returns
-    -------
-    list of str
-        The notes (none when nothing was compiled: the cache module was not even imported).
-    """
+def _compiled_cache_notes() -> list[str]:
+    """A line for each reason numba could not save a kernel it compiled in this run (none when
+    nothing was compiled: the cache module was not even imported)."""
     cache = sys.modules.get("acmm.model.compiled_cache")       # (not imported: nothing was compiled)
     return cache.write_error_notes() if cache is not None else []
 
@@ -44,4 +39,4 @@ def acmm_command(fn):
     callable
         The wrapped command.
     """
-    return user_errors(fn, notes=compiled_cache_notes)
+    return user_errors(fn, notes=_compiled_cache_notes)

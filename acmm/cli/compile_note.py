@@ -9,15 +9,10 @@ from acmm.simulate import kernel
 from acmm_qpp.cli.progress import console, enabled
 
 
-def numba_needs_compile() -> bool:
+def _numba_needs_compile() -> bool:
     """True when the compiled simulator is neither loaded in this process nor in numba's on-disk
-    cache (first run, or the source changed since the cache was written).
-
-    Returns
-    -------
-    bool
-        True when the first call will compile; False also when numba's internals cannot be read.
-    """
+    cache (first run, or the source changed since the cache was written); False also when numba's
+    internals cannot be read."""
     try:
         disp = kernel._integrate
         if disp.signatures:
@@ -37,6 +32,6 @@ def announce_numba_compile() -> None:
     if why is not None:
         print(f"note: {why}", file=sys.stderr, flush=True)
         return
-    if enabled() and numba_needs_compile():
+    if enabled() and _numba_needs_compile():
         console().print("compiling the closed-loop simulator with numba (first run only, ~10 s; cached afterwards) ...",
                         markup=False, highlight=False)

@@ -8,13 +8,12 @@ from acmm.stages.design_output import design_figures_from_file
 from acmm.stages.sim_output import sim_figures_from_file
 from acmm.sweep.output import sweep_figures_from_file
 from acmm_qpp.results import redraw_stored
-from qpp.io.stages import figure_calls_from_file
+from qpp.io import stages as qpp_stages
 
 
 #: results file → the stage that writes it (root attribute ``stage``), in the order ``acmm plot``
 #: redraws a run folder's figures (the qpp files too: a run folder may hold both)
-FIGURE_SOURCES = {"design.h5": "design", "sim.h5": "simulate", "sweep.h5": "sweep",
-                  "qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
+FIGURE_SOURCES = {"design.h5": "design", "sim.h5": "simulate", "sweep.h5": "sweep", **qpp_stages.FIGURE_SOURCES}
 
 
 def redraw_figures(target, out=None) -> list[Path]:
@@ -44,6 +43,5 @@ def redraw_figures(target, out=None) -> list[Path]:
         A figure could not be drawn or written (exit 4).
     """
     readers = {"design": design_figures_from_file, "simulate": sim_figures_from_file,
-               "sweep": sweep_figures_from_file, "qpp design": figure_calls_from_file,
-               "qpp simulate": figure_calls_from_file}
+               "sweep": sweep_figures_from_file, **qpp_stages.READERS}
     return redraw_stored(target, FIGURE_SOURCES, readers, out)

@@ -24,7 +24,7 @@ from acmm_qpp.errors import ConfigError
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 from acmm import DEFAULT_CONFIG, LIMITS, PACKAGED_CONFIGS
 from acmm_qpp.configio import read_yaml, validate_model
-from acmm_qpp.overrides import apply_overrides, looks_like_override, remember_origin
+from acmm_qpp.configio import apply_overrides, looks_like_override, remember_origin
 from acmm_qpp.limits import how_to_raise, limit
 
 
@@ -347,7 +347,7 @@ def load_config(path: str | Path | None = None, overrides: list[str] | None = No
     path : path-like, optional
         A YAML file or a packaged config name; None: the packaged stair-case.
     overrides : list of str, optional
-        ``["simulation.orbits=10", ...]`` (see :mod:`acmm_qpp.overrides`), applied to the raw
+        ``["simulation.orbits=10", ...]`` (see :mod:`acmm_qpp.configio`), applied to the raw
         mapping before validation.
 
     Returns

@@ -4,9 +4,9 @@ the 24 states of eq 4.46.
 
 Drawing cost (issue 16): a skeleton holds everything that does not depend on the data (axes,
 empty lines, legend, tick artists) and its fixed texts already rasterized (:func:`bake_texts`);
-the figure function then sets the data and the limits (:func:`set_limits`, no autoscaling
+the figure function then sets the data and the limits (:func:`data_limits`, no autoscaling
 bookkeeping) and saves.  Grids of panels are drawn without an Axes each
-(:mod:`acmm.plots.panel_grid`), tick labels are few and short (:func:`in_view_locator`,
+(:mod:`acmm.plots.panel_grid`), tick labels are few and short (:func:`in_view_ticks`,
 :func:`compact_formatter`) and text is unhinted while these figures are drawn
 (:data:`FAST_TEXT_RC`).
 
@@ -28,7 +28,6 @@ import matplotlib
 from matplotlib.backends.backend_agg import RendererAgg
 from matplotlib.artist import Artist
 from matplotlib.ticker import Formatter, MaxNLocator
-from matplotlib.lines import Line2D
 
 #: rcParams of the stage figures (``acmm design|simulate``, the sweep); saved at the figure's own
 #: resolution also in a process that drew the report's figures (:data:`acmm.report.figure_style.RC` sets
@@ -260,24 +259,6 @@ def state_units(drf_mode: str = "attitude_hold") -> list[str]:
     return [pretty(u) for u in units(drf_mode)]
 
 
-def fixed_label_positions(ax, x=None, y=None) -> None:
-    """Place the axis labels at fixed axes coordinates (x label at ``x`` below, y label at ``y``
-    left of the axes): the automatic placement measures every tick label a second time per axis.
-
-    Parameters
-    ----------
-    ax : matplotlib.axes.Axes
-        The axes.
-    x, y : float, optional
-        Axes coordinates (dimensionless) of the x label's height and of the y label's abscissa;
-        None leaves that label where matplotlib puts it.
-    """
-    if x is not None:
-        ax.xaxis.set_label_coords(0.5, x)
-    if y is not None:
-        ax.yaxis.set_label_coords(y, 0.5)
-
-
 def compact_formatter():
     """A tick formatter writing each value in full and short (``−7.5e6``, ``0.0045``, ``−1.5e-5``)
     with the fewest significant digits that keep the labels distinct and exact: no offset or
@@ -340,66 +321,6 @@ def in_view_ticks(lo: float, hi: float, nbins: int) -> list:
     return [v for v in MaxNLocator(nbins, min_n_ticks=3).tick_values(lo, hi) if lo - tol <= v <= hi + tol]
 
 
-def in_view_locator(nbins: int = 4):
-    """An axis locator placing :func:`in_view_ticks` in the axis' view.
-
-    Parameters
-    ----------
-    nbins : int, optional
-        The number of intervals asked for.
-
-    Returns
-    -------
-    matplotlib.ticker.MaxNLocator
-        The locator.
-    """
-    class InView(MaxNLocator):
-        def __call__(self):
-            return in_view_ticks(*self.axis.get_view_interval(), nbins)
-
-    return InView(nbins, min_n_ticks=3)
-
-
-def empty_line(ax, **kw):
-    """An empty :class:`~matplotlib.lines.Line2D` with ``kw`` added to ``ax`` (its data set later
-    with ``set_data``; ~40 % cheaper than ``ax.plot``'s argument handling).
-
-    Parameters
-    ----------
-    ax : matplotlib.axes.Axes
-        The axes.
-    **kw
-        Line properties.
-
-    Returns
-    -------
-    matplotlib.lines.Line2D
-        The line.
-    """
-    return ax.add_line(Line2D([], [], **kw))
-
-
-def set_limits(axs, xlim, *ys) -> None:
-    """Set the x limits ``xlim`` of ``axs`` (and, with ``ys``, their common y limits, the data's
-    range with matplotlib's margins).
-
-    Parameters
-    ----------
-    axs : iterable of matplotlib.axes.Axes
-        The axes.
-    xlim : tuple or None
-        The x limits (in the units of the axes' data); None leaves them.
-    *ys : array_like
-        The data whose range the y limits span (in the units of the axes' data).
-    """
-    ylim = data_limits(*ys) if ys else None
-    for ax in axs:
-        if xlim is not None:
-            ax.set_xlim(xlim)
-        if ylim is not None:
-            ax.set_ylim(ylim)
-
-
 def data_limits(*arrays, margin: float = 0.05):
     """(lo, hi) of the finite values of ``arrays`` widened by ``margin`` of the span on each side
     (matplotlib's autoscale margins), or None when there is none; set on an axis directly this
@@ -431,21 +352,3 @@ def data_limits(*arrays, margin: float = 0.05):
     lo, hi = lo - pad, hi + pad
     # values below ~2e-287, or a span lost to underflow: ±0.05, as an Axes widens such a view
     return (lo, hi) if hi > lo and max(abs(lo), abs(hi)) >= 1e21 * np.finfo(float).tiny else (-0.05, 0.05)
-
-
-def gain_unit(state_unit: str, torque_unit: str = "ft·lbf") -> str:
-    """Unit of a gain column K(i, j): torque (``torque_unit``) per unit of state j.
-
-    Parameters
-    ----------
-    state_unit : str
-        Unit of state j.
-    torque_unit : str, optional
-        Torque unit.
-
-    Returns
-    -------
-    str
-        The label, e.g. ``ft·lbf/rad``.
-    """
-    return f"{torque_unit}/({state_unit})" if any(ch in state_unit for ch in "/·") else f"{torque_unit}/{state_unit}"

@@ -12,11 +12,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm.plots.base import (FAST_TEXT_RC, bake_texts, compact_formatter, data_limits,
-    premake_ticks, write_figure, gain_unit, in_view_ticks, state_units)
+    premake_ticks, write_figure, in_view_ticks, state_units)
 from acmm.plots.base import stage_pyplot
-import re
 from acmm.plots.panel_grid import PanelGrid
-from matplotlib.ticker import LogFormatterSciNotation, MaxNLocator
+from matplotlib.ticker import MaxNLocator
+
+
+def _gain_unit(state_unit: str, torque_unit: str) -> str:
+    """Unit of a gain column K(i, j): ``torque_unit`` per unit of state j (``ft·lbf/rad``,
+    ``ft·lbf/(ft·lbf·s)``)."""
+    return f"{torque_unit}/({state_unit})" if any(ch in state_unit for ch in "/·") else f"{torque_unit}/{state_unit}"
 
 
 def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
@@ -37,7 +42,7 @@ def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
     grid = PanelGrid(fig, 6, 4, series, {"left": 0.06, "right": 0.98, "bottom": 0.04, "top": 0.95,
                                          "wspace": 0.38, "hspace": 0.3})
     for j in range(24):
-        grid.set_title(j, f"K(i,{j + 1}) — {state_names[j]} ({gain_unit(units[j], torque_unit)})")
+        grid.set_title(j, f"K(i,{j + 1}) — {state_names[j]} ({_gain_unit(units[j], torque_unit)})")
     for j in range(20, 24):
         grid.set_label(j, "pitch TEA θ2* (deg)", "below")
     fig.legend(handles=grid.lines[:3], loc="upper center", bbox_to_anchor=(0.5, 0.978),
@@ -176,7 +181,7 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
         for k, (p, name) in enumerate(zip(poles_per_point, names)):
             p = np.asarray(p) / n
             a.plot(p.real, p.imag, "x", ms=4, color=cmap(k / max(1, len(names) - 1)),
-                   label=point_label(name) if len(names) <= 12 and a is ax else None)
+                   label=_point_label(name) if len(names) <= 12 and a is ax else None)
         a.axvline(0, color="k", lw=0.5)
         a.set_xlabel("real part Re λ (units of n, the orbit rate)")
         a.set_ylabel("imaginary part Im λ (units of n)")
@@ -195,50 +200,12 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
     return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
-def point_label(name: str) -> str:
-    """A design point's name as a legend says it: ``blend_0.017`` (a point of the blend of
-    eq 5.3) is ``blend parameter s = 0.017``; other names are kept.
-
-    Parameters
-    ----------
-    name : str
-        Design point name.
-
-    Returns
-    -------
-    str
-        The label.
-    """
+def _point_label(name: str) -> str:
+    """A design point's name as a legend says it: ``blend_0.017`` (a point of the blend of eq 5.3)
+    is ``blend parameter s = 0.017``; other names are kept."""
     if name.startswith("blend_"):
         return f"blend parameter s = {name[len('blend_'):]}"
     return name
-
-
-#: superscript digits and minus for the log axis' tick labels
-_SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
-
-
-def _plain_math(label: str) -> str:
-    """A log axis' mathtext tick label (``$\\mathdefault{6\\times10^{-1}}$``) as plain text with
-    Unicode superscripts (``6×10⁻¹``); anything else is returned unchanged."""
-    m = re.fullmatch(r"\$\\mathdefault\{(.*)\}\$", label)
-    if not m:
-        return label
-    body = m.group(1).replace(r"\times", "×")
-    body = re.sub(r"\^\{(-?\d+)\}", lambda g: g.group(1).translate(_SUPERSCRIPT), body)
-    return label if "\\" in body or "{" in body else body.replace("-", "\N{MINUS SIGN}")
-
-
-def _plain_log_formatter(**kw):
-    """matplotlib's log-axis formatter (:class:`~matplotlib.ticker.LogFormatterSciNotation`, the
-    same ticks labelled) writing its labels as plain text (:func:`_plain_math`): no mathtext,
-    whose parser is built on first use (~0.07 s of CPU in each figure writer) and whose labels
-    are laid out glyph by glyph."""
-    class PlainSciNotation(LogFormatterSciNotation):
-        def __call__(self, x, pos=None):
-            return _plain_math(super().__call__(x, pos))
-
-    return PlainSciNotation(**kw)
 
 
 def _path_check_layout():

@@ -58,19 +58,9 @@ class Panel:
     ylabel: str = ""
     data: dict = field(default_factory=dict)
 
-    def to_figure(self, x, y) -> tuple[np.ndarray, np.ndarray]:
-        """Data (x, y) → figure coordinates, through the panel's limits and box.
-
-        Parameters
-        ----------
-        x, y : array_like
-            Points, units of the data.
-
-        Returns
-        -------
-        tuple of ndarray
-            (x, y) in units of the figure's width and height.
-        """
+    def _to_figure(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+        """Data (x, y) → figure coordinates (units of the figure's width and height), through the
+        panel's limits and box."""
         x0, y0, w, h = self.box
         fx = x0 + (np.asarray(x, float) - self.xlim[0]) / (self.xlim[1] - self.xlim[0]) * w
         fy = y0 + (np.asarray(y, float) - self.ylim[0]) / (self.ylim[1] - self.ylim[0]) * h
@@ -180,36 +170,6 @@ class PanelGrid:
             raise ValueError(f"side must be 'below' or 'left', not {side!r}")
         self.labels.append(self.fig.text(s=text, ha="center", fontsize=fontsize, **kw))
 
-    def set_data(self, k: int, series: int, x, y) -> None:
-        """Set one series of a panel (drawn by :meth:`draw_data`).
-
-        Parameters
-        ----------
-        k : int
-            Panel index (row by row).
-        series : int
-            Series index (the order of ``series`` at construction).
-        x, y : array_like
-            The points, units of the data.
-        """
-        self.panels[k].data[series] = (np.asarray(x, float), np.asarray(y, float))
-
-    def set_limits(self, k: int, xlim, ylim, xticks, yticks) -> None:
-        """Set the limits and ticks of a panel.
-
-        Parameters
-        ----------
-        k : int
-            Panel index (row by row).
-        xlim, ylim : tuple of float
-            (low, high) mapped onto the panel's box, units of the data.
-        xticks, yticks : sequence of float
-            Tick values, units of the data.
-        """
-        p = self.panels[k]
-        p.xlim, p.ylim = tuple(map(float, xlim)), tuple(map(float, ylim))
-        p.xticks, p.yticks = [float(v) for v in xticks], [float(v) for v in yticks]
-
     def show(self, k: int, xlim, data: list, xticks, nbins: int = 3) -> None:
         """Set a panel from its data: series ``s`` of ``data`` as (s, x, y), the y limits the
         data's finite range with 5 % margins (0 to 1 when there is none), at most ``nbins`` + 1
@@ -228,10 +188,12 @@ class PanelGrid:
         nbins : int, optional
             Most intervals between y ticks.
         """
+        p = self.panels[k]
         for s, x, y in data:
-            self.set_data(k, s, x, y)
+            p.data[s] = (np.asarray(x, float), np.asarray(y, float))
         ylim = data_limits(*(y for _, _, y in data)) or (0.0, 1.0)
-        self.set_limits(k, xlim, ylim, xticks, in_view_ticks(*ylim, nbins))
+        p.xlim, p.ylim = tuple(map(float, xlim)), tuple(map(float, ylim))
+        p.xticks, p.yticks = [float(v) for v in xticks], [float(v) for v in in_view_ticks(*ylim, nbins)]
 
     def draw_data(self, formatter, x_labelled=None) -> None:
         """Put every panel's series, grid lines, tick marks and tick labels in place.
@@ -254,8 +216,8 @@ class PanelGrid:
         self.tick_labels = []
         for k, p in enumerate(self.panels):
             x0, y0, w, h = p.box
-            gx, _ = p.to_figure(p.xticks, np.zeros(len(p.xticks)))
-            _, gy = p.to_figure(np.zeros(len(p.yticks)), p.yticks)
+            gx, _ = p._to_figure(p.xticks, np.zeros(len(p.xticks)))
+            _, gy = p._to_figure(np.zeros(len(p.yticks)), p.yticks)
             grid += [[(x, y0), (x, y0 + h)] for x in gx] + [[(x0, y), (x0 + w, y)] for y in gy]
             marks += [[(x0 - tw, y), (x0, y)] for y in gy]
             self._labels(formatter(p.yticks), x0 - 2 * tw, gy, {"ha": "right", "va": "center_baseline"})
@@ -268,7 +230,7 @@ class PanelGrid:
             xs, ys = [], []
             for p in self.panels:
                 if s in p.data:
-                    fx, fy = p.to_figure(*p.data[s])
+                    fx, fy = p._to_figure(*p.data[s])
                     xs += [fx, [np.nan]]
                     ys += [fy, [np.nan]]
             line.set_data(np.concatenate(xs) if xs else [], np.concatenate(ys) if ys else [])

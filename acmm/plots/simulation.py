@@ -10,20 +10,30 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.plots.base import (AXES, FAST_TEXT_RC, bake_texts, compact_formatter, data_limits,
-    fixed_label_positions, in_view_locator, empty_line, premake_ticks, write_figure, set_limits, decimate,
-    in_view_ticks)
+    premake_ticks, write_figure, decimate, in_view_ticks)
 from acmm.plots.base import stage_pyplot
 from acmm.plots.panel_grid import PanelGrid
 from acmm.model.unit_systems import pretty, shown
 import matplotlib as mpl
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
+
+
+def _in_view_locator(nbins: int):
+    """An axis locator placing :func:`acmm.plots.base.in_view_ticks` (at most ``nbins`` + 1) in the axis' view."""
+    class InView(MaxNLocator):
+        def __call__(self):
+            return in_view_ticks(*self.axis.get_view_interval(), nbins)
+
+    return InView(nbins, min_n_ticks=3)
 
 
 def _panel_axes(ax) -> None:
     """A summary panel's axes: few y ticks written short, at most six x ticks."""
-    ax.yaxis.set_major_locator(in_view_locator(3))
+    ax.yaxis.set_major_locator(_in_view_locator(3))
     ax.yaxis.set_major_formatter(compact_formatter())
     ax.tick_params(labelsize=8)
-    ax.xaxis.set_major_locator(in_view_locator(5))
+    ax.xaxis.set_major_locator(_in_view_locator(5))
 
 
 def _axis_histories_layout(units: str):
@@ -171,8 +181,11 @@ def _summary_layout(units: str, n_rows: int = 12):
     for ax in (top, *mid):
         _panel_axes(ax)
         ax.set_xlabel("time (orbits)")
-        fixed_label_positions(ax, -0.1 if ax is top else -0.12, -0.06 if ax is top else -0.12)
-        lines.append([empty_line(ax, lw=0.7, color=f"C{a}", label=AXES[a]) for a in range(3)])
+        # the labels at fixed axes coordinates: the automatic placement measures every tick label again
+        ax.xaxis.set_label_coords(0.5, -0.1 if ax is top else -0.12)
+        ax.yaxis.set_label_coords(-0.06 if ax is top else -0.12, 0.5)
+        # empty lines, their data set later (~40 % cheaper than ax.plot's argument handling)
+        lines.append([ax.add_line(Line2D([], [], lw=0.7, color=f"C{a}", label=AXES[a])) for a in range(3)])
     # one legend for the three panels, above them: no 'best' placement search over the data
     fig.legend(handles=lines[0], loc="upper right", bbox_to_anchor=(0.98, 0.995), ncol=3, fontsize=8,
                frameon=False)
@@ -230,7 +243,9 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     for ax, panel, data in zip((top, *mid), lines, (err_deg, h, u)):
         for a in range(3):
             panel[a].set_data(*decimate(orbits, data[:, a]))
-        set_limits([ax], xlim, data)
+        for lim, set_lim in ((xlim, ax.set_xlim), (data_limits(data), ax.set_ylim)):
+            if lim is not None:     # no finite value: the limits stay
+                set_lim(lim)
     top.set_title(f"{title} — verdict: {verdict}")
     rows = [(str(s["level"]), f"{s['start_orbit']:.1f}", f"{s['theta2_deg']:.2f}",
              " / ".join(f"{v:.3f}" for v in s["steady_error_deg"]), f"{s['peak_momentum'] * k_h:.0f}")

@@ -25,9 +25,8 @@ import scipy
 
 from acmm import __version__
 from acmm_qpp.errors import OutputError
+from acmm_qpp.outputs import run_lock, write_text
 from acmm_qpp.provenance import git_commit, git_dirty
-from acmm_qpp.atomic_write import write_text
-from acmm_qpp.runlock import run_lock
 from acmm_qpp.signals import interrupts_deferred
 from acmm.report.constants import SECTIONS, TIMING_DATASETS
 from acmm.report.context import SectionWriter
@@ -42,7 +41,7 @@ from acmm.report.runner import default_jobs, run_tasks
 import resource
 
 #: Kind of the report's figure staging folder (``<out>/.figures-<pid>-<random>``): the next report
-#: in that folder removes one a killed report left (:func:`acmm_qpp.runlock.run_lock`'s ``staging``).
+#: in that folder removes one a killed report left (:func:`acmm_qpp.outputs.run_lock`'s ``staging``).
 FIGURE_STAGING = "figures"
 
 
@@ -154,7 +153,7 @@ def build_report(out: Path | str = "runs/report", *, fast: bool = False, rerun: 
     out, figdir = Path(out), Path(out) / "figures"
     root = out / "results" if root is None else Path(root)      # its own: never a user's runs/<name>/
     # one report at a time per folder; holding its lock, the report removes the staging folders
-    # (.figures-<pid>-*) a killed report left (acmm_qpp.runlock.remove_leftovers)
+    # (.figures-<pid>-*) a killed report left (acmm_qpp.outputs.remove_leftovers)
     with run_lock(out, staging=(FIGURE_STAGING,)):
         if root.exists() and not root.is_dir():     # every stage would fail: refused before anything is written
             raise OutputError(f"--root: the results root {root} is not a directory")

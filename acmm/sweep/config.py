@@ -44,7 +44,7 @@ from acmm_qpp.errors import ConfigError
 import json
 from acmm.sweep.limits import check_sweep_work
 from acmm import PACKAGED_CONFIGS
-from acmm_qpp.overrides import apply_overrides, remember_origin
+from acmm_qpp.configio import apply_overrides, remember_origin
 from acmm_qpp.provenance import config_hash
 import difflib
 
@@ -291,7 +291,7 @@ def load_sweep(path: str | Path, overrides: list[str] | None = None) -> Sweep:
     path : path-like
         The sweep file, or a packaged config name.
     overrides : list of str, optional
-        Dotted ``key=value`` overrides (:mod:`acmm_qpp.overrides`), applied before validation,
+        Dotted ``key=value`` overrides (:mod:`acmm_qpp.configio`), applied before validation,
         e.g. ``sweep.n_runs=20``.
 
     Returns

@@ -11,7 +11,7 @@ from pathlib import Path
 from acmm_qpp.errors import ConfigError
 from acmm.sweep.journal_records import record_problem
 from acmm_qpp.configio import read_regular_file
-from acmm_qpp.atomic_write import output_error
+from acmm_qpp.outputs import output_error
 
 
 JOURNAL_VERSION = 1

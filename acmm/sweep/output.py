@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm_qpp.errors import AcmmError, FigureError
-from acmm_qpp.atomic_write import write_text
+from acmm_qpp.outputs import write_text
 from acmm_qpp.results import Dataset, write_h5
 from acmm.io.dimensions import with_coordinates
 from acmm.sweep.cases import AXES, VERDICTS

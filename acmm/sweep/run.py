@@ -10,9 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
-from acmm_qpp.atomic_write import write_text
-from acmm_qpp.outputs import CONFIG_FILE, config_text_of, owned_files
-from acmm_qpp.runlock import run_lock
+from acmm_qpp.outputs import CONFIG_FILE, config_text_of, owned_files, run_lock, write_text
 from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import prepare_base, simulate_values
 from acmm.sweep.cases import VERDICTS
@@ -101,7 +99,7 @@ def _remove_earlier(run_dir: Path, before: dict | None = None) -> None:
 
 
 def _in_run_folder(fn):
-    """``run_sweep`` under the run lock of its folder (:func:`acmm_qpp.runlock.run_lock`), writing
+    """``run_sweep`` under the run lock of its folder (:func:`acmm_qpp.outputs.run_lock`), writing
     there itself, not through a staging folder (:func:`acmm_qpp.outputs.stage`): its tables are
     snapshots of its journal that say whether they are complete, kept when it fails or is
     interrupted, for ``--resume``.  When it finishes (or only a figure fails, exit 4) its

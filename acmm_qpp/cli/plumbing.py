@@ -101,7 +101,7 @@ def user_errors(fn, notes=None):
             except AcmmError as exc:
                 fail(with_hint(exc), exc.exit_code)
             except KeyboardInterrupt as exc:
-                interrupted(exc)
+                _interrupted(exc)
             except BrokenPipeError:     # the reader of stdout went away (`| head`): not an I/O failure
                 quiet_stdout()         # of the results, which the stage wrote before printing
                 sys.exit(EXIT_PIPE_CLOSED)
@@ -109,7 +109,7 @@ def user_errors(fn, notes=None):
                 cause, seen = exc, set()     # Python may wrap a Ctrl-C (in a class body: RuntimeError)
                 while cause is not None and id(cause) not in seen:
                     if isinstance(cause, KeyboardInterrupt):
-                        interrupted(cause)
+                        _interrupted(cause)
                     seen.add(id(cause))
                     cause = cause.__cause__ or cause.__context__
                 plain = plain_failure(exc)
@@ -131,7 +131,7 @@ def user_errors(fn, notes=None):
 # command-line conventions (issue 14): exit codes of click errors, --version, overrides, --strict
 # ---------------------------------------------------------------------------------------------
 def overrides_arg(example: str):
-    """The positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm_qpp.overrides`), their
+    """The positional ``KEY=VALUE`` overrides after CONFIG (see :mod:`acmm_qpp.configio`), their
     help naming ``example``, an override of a key the command reads.
 
     Parameters
@@ -212,26 +212,12 @@ class ConfigKinds(NamedTuple):
         return out
 
 
-def write_epilog(formatter, examples=(), configs: ConfigKinds | None = None, kinds: tuple = (),
-                 command: bool = True) -> None:
-    """Write ``Examples:`` and the command lines ``examples`` under it (one a line, unwrapped) and,
-    for ``kinds``, the packaged configs of those kinds, listed from the folder now (a help screen
-    lists what is installed); a command's help also names the kinds and the product's rule by
-    which config paths are found (:attr:`ConfigKinds.path_rule`).
-
-    Parameters
-    ----------
-    formatter : click.HelpFormatter
-        The help being written.
-    examples : sequence of str, optional
-        The command lines.
-    configs : ConfigKinds, optional
-        The product's packaged configs and kinds (needed with ``kinds``).
-    kinds : tuple of str, optional
-        Config kinds whose packaged configs are listed (:meth:`ConfigKinds.packaged`).
-    command : bool, optional
-        A command's help (else the app's).
-    """
+def _write_epilog(formatter, examples=(), configs: ConfigKinds | None = None, kinds: tuple = (),
+                  command: bool = True) -> None:
+    """Write ``Examples:`` and the command lines ``examples`` (one a line, unwrapped) and, for
+    ``kinds``, the packaged configs of those kinds (:meth:`ConfigKinds.packaged`, listed from the
+    folder now: a help screen lists what is installed); a command's help (``command``, else the
+    app's) also names the kinds and the rule by which config paths are found (:attr:`ConfigKinds.path_rule`)."""
     if examples:
         formatter.write_paragraph()
         formatter.write_text("Examples:")
@@ -275,7 +261,7 @@ def help_command(examples: list, kinds: tuple = (), configs: ConfigKinds | None 
         def format_epilog(self, ctx, formatter) -> None:
             """Write the examples (unwrapped), the packaged configs and the path rule, then the
             command's own epilog."""
-            write_epilog(formatter, examples, configs, kinds)
+            _write_epilog(formatter, examples, configs, kinds)
             super().format_epilog(ctx, formatter)
 
     return WithExamples
@@ -285,15 +271,10 @@ StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes w
                                                  "(for CI)")
 
 
-def interrupted(exc: BaseException) -> None:
-    """Report Ctrl-C ("interrupted", exit 130) or SIGTERM/SIGHUP (:class:`acmm_qpp.errors.Terminated`:
-    "terminated by signal N", exit 128 + N) on one line and exit.
-
-    Parameters
-    ----------
-    exc : BaseException
-        The ``KeyboardInterrupt`` (or ``typer.Abort``) caught.
-    """
+def _interrupted(exc: BaseException) -> None:
+    """Report the ``KeyboardInterrupt`` (or ``typer.Abort``) ``exc`` caught: Ctrl-C ("interrupted",
+    exit 130) or SIGTERM/SIGHUP (:class:`acmm_qpp.errors.Terminated`: "terminated by signal N",
+    exit 128 + N) on one line, and exit."""
     code = getattr(exc, "exit_code", None)
     if isinstance(code, int):
         typer.echo(f"terminated by signal {code - 128}", err=True)
@@ -330,7 +311,7 @@ class ExitCodeGroup(TyperGroup):
         formatter : click.HelpFormatter
             The help being written.
         """
-        write_epilog(formatter, self.examples, self.configs, self.config_kinds, command=False)
+        _write_epilog(formatter, self.examples, self.configs, self.config_kinds, command=False)
         super().format_epilog(ctx, formatter)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
@@ -380,7 +361,7 @@ class ExitCodeGroup(TyperGroup):
             typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
             sys.exit(exc.exit_code)
         except (typer.Abort, KeyboardInterrupt, EOFError) as exc:
-            interrupted(exc)
+            _interrupted(exc)
         except BrokenPipeError:         # the help's reader went away (`acmm --help | head -1`)
             quiet_stdout()
             sys.exit(1)
@@ -482,7 +463,7 @@ def run_app(app) -> None:
         try:
             app()
         except KeyboardInterrupt as exc:    # while typer built the command, before the group's main
-            interrupted(exc)
+            _interrupted(exc)
     except SystemExit:
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):

@@ -17,8 +17,7 @@ from acmm_qpp.errors import DesignError
 from qpp.design import circle as circle_mod
 from qpp.design.circle_kyp import KypResult, circle_kyp
 from qpp.design import spheres
-from qpp.io.config_nonlin import ExpressionNonlinearity, SinusoidalNonlinearity
-from qpp.io.config import QppConfig
+from qpp.io.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinearity
 from qpp.design.hinf import HinfGains
 from qpp.model.lure import channels, closed_loop
 from qpp.simulate.loop import initial_state

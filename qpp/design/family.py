@@ -59,8 +59,7 @@ from qpp.design import spheres
 from qpp.design.certificate import certify, default_sector
 from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
-from qpp.io.config import QppConfig
-from qpp.io.config_nonlin import SinusoidalNonlinearity
+from qpp.io.config import QppConfig, SinusoidalNonlinearity
 from mpmath import iv
 from scipy.optimize import minimize, nnls
 

@@ -5,28 +5,313 @@ design procedure (section 12.1) and the simulation of ch. 13/14.
 Units: time s, frequency rad/s, the exponential weighting ``a`` 1/s; plant matrices and signals
 are in the user's units (the report's examples: m, rad, kg).  Unknown keys are rejected; a
 validation error becomes one :class:`acmm_qpp.errors.ConfigError` line naming the field.
+
+In order: the field types (numbers that may be written ``"<number> <unit>"``, converted to SI on
+load; the bound ``QPP_MAX`` on plausible magnitudes; the strict base of every section), the checks
+that span fields or bound the work (sectors, the sector sampling budget of an expression
+nonlinearity, the periods to integrate; each raises ``ValueError`` naming the field), the
+``nonlinearity`` section (the sinusoidal Lure nonlinearity of ch. 13, the polar arm of ch. 14,
+eq 14.1, and general sector-bounded expressions, :mod:`qpp.model.nonlin`, discriminated by
+``kind``), the ``simulation`` section (reference signals r_o(t) and r − r_o as sums of terms, the
+scenarios and the integrator settings of ch. 13.4 and 14.5), the other sections, the config itself
+and its JSON schema (``qpp schema``).
 """
 from __future__ import annotations
 
+import math
+import re
 from pathlib import Path
-from typing import Literal, Optional, Union
+from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
 import yaml
-from pydantic import Field, field_validator, model_validator
+from pydantic import BaseModel, Field, field_validator, model_validator
 
+from acmm_qpp.config_model import Generator, StrictModel, header, quantity
+from acmm_qpp.configio import apply_overrides, read_yaml, remember_origin, validate_model
 from acmm_qpp.errors import ConfigError
-from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
-from qpp.io.config_checks import check_periods, check_sample_count, check_sector, check_stated_sector
-from qpp.io.config_fields import Matrix, PerSecond, Seconds, finite_matrix, SectionModel
-from qpp.io.config_simulation import Simulation
-from qpp.io.config_nonlin import (ExpressionNonlinearity, LibraryForm, Nonlinearity, PolarArmNonlinearity, SinusoidalNonlinearity)
-from acmm_qpp.configio import read_yaml, validate_model
-from acmm_qpp.overrides import apply_overrides, remember_origin
-from qpp import LIMITS, PACKAGED_CONFIGS
 from acmm_qpp.limits import how_to_raise, limit
+from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
+from qpp import LIMITS, PACKAGED_CONFIGS
+from qpp.model.expression_parser import library_expression
 from qpp.model.lure import LurePlant
 from qpp.model.nonlin import ExpressionModel
+
+
+Matrix = list[list[float]]
+
+
+def _q(unit: str):
+    """A number, or a ``"<number> <unit>"`` string converted (pint) to the SI unit ``unit``;
+    ``None`` passes (optional fields)."""
+    return quantity(unit, allow_none=True)
+
+
+Seconds = Annotated[float, _q("s")]
+OptSeconds = Annotated[Optional[float], _q("s")]
+RadPerSecond = Annotated[float, _q("rad/s")]
+PerSecond = Annotated[float, _q("1/s")]
+Kilograms = Annotated[float, _q("kg")]
+Metres = Annotated[float, _q("m")]
+KgM2 = Annotated[float, _q("kg*m^2")]
+Radians = Annotated[float, _q("rad")]
+#: Largest magnitude accepted for any number of a qpp config (matrix entry, gain, weight,
+#: amplitude, time); beyond it products in the design and the simulation overflow (issue 13).
+QPP_MAX = 1e12
+
+
+def _implausible(v):
+    """The first number in ``v`` (scalar or nested list) with |x| > QPP_MAX, else ``None``."""
+    if isinstance(v, bool) or isinstance(v, BaseModel):
+        return None
+    if isinstance(v, (int, float)):
+        return v if abs(v) > QPP_MAX else None
+    if isinstance(v, (list, tuple)):
+        for x in v:
+            bad = _implausible(x)
+            if bad is not None:
+                return bad
+    return None
+
+
+class SectionModel(StrictModel):
+    """Strict base of every qpp config section: unknown keys, NaN, infinity and booleans given as
+    numbers refused (:class:`acmm_qpp.config_model.StrictModel`), and every number within the
+    plausible magnitude ``QPP_MAX``."""
+
+    @model_validator(mode="after")
+    def _plausible_magnitudes(self):
+        for name in type(self).model_fields:
+            bad = _implausible(getattr(self, name))
+            if bad is not None:
+                raise ValueError(f"{name}: {bad:.4g} is outside the plausible range |value| ≤ {QPP_MAX:g}")
+        return self
+
+
+def _finite_matrix(v):
+    """``v`` unchanged if a non-empty list of rows of one length of finite numbers (a matrix
+    field, units of its field), else ValueError saying what is wrong."""
+    if not isinstance(v, list) or not v or not all(isinstance(r, list) for r in v):
+        raise ValueError("must be a non-empty matrix (list of rows)")
+    if len({len(r) for r in v}) != 1 or not v[0]:
+        raise ValueError(f"rows must all have the same, non-zero length (got row lengths {[len(r) for r in v]})")
+    a = np.asarray(v, float)
+    if not np.all(np.isfinite(a)):
+        raise ValueError("must contain finite numbers")
+    return v
+
+
+def _check_periods(field: str, omega: float, t_final: float) -> None:
+    """ValueError (naming ``field``, what to lower and the limit's variable) when a periodic input
+    of ``omega`` rad/s over ``t_final`` s is more periods to integrate than the ``QPP_PERIODS`` limit."""
+    periods = omega * t_final / (2 * math.pi)
+    if periods > limit("QPP_PERIODS", LIMITS):
+        raise ValueError(f"{field}: {omega:g} rad/s over simulation.t_final = {t_final:g} s is {periods:.3g} "
+                         f"periods to integrate; lower the frequency or t_final ({how_to_raise('QPP_PERIODS', LIMITS)})")
+
+
+def _check_sector(field: str, sector) -> None:
+    """ValueError naming ``field`` unless each pair [α_i, β_i] of a stated sector (None: none;
+    dimensionless slopes) has α_i < β_i (lemma 1's critical disc)."""
+    for i, (a, b) in enumerate(sector or []):
+        if not a < b:
+            raise ValueError(f"{field}: pair {i + 1} is [{a:g}, {b:g}]; a sector needs alpha < beta")
+
+
+#: how far (fraction of the computed half-width) a stated sector may lie inside the computed one:
+#: the computed bounds can exceed φ's own by the 1 % widening of a random check that found a point
+STATED_SECTOR_SLACK = 0.02
+
+
+def _check_stated_sector(field: str, stated, computed) -> None:
+    """ValueError naming ``field`` unless the sector ``stated`` for an ``expression`` nonlinearity
+    holds φ's sector ``computed`` on the stated ranges (one [α, β] pair per channel, dimensionless
+    slopes; to :data:`STATED_SECTOR_SLACK`): the circle check and the thresholds of a narrower
+    one would certify another nonlinearity."""
+    for i, ((a, b), (ca, cb)) in enumerate(zip(np.asarray(stated, float), np.asarray(computed, float))):
+        slack = STATED_SECTOR_SLACK * max(0.5 * (cb - ca), 1e-12)
+        if a > ca + slack or b < cb - slack:
+            raise ValueError(f"{field}: pair {i + 1} [{a:g}, {b:g}] does not hold φ_{i + 1}, whose sector on the "
+                             f"stated ranges is [{ca:.6g}, {cb:.6g}]; a certificate for a narrower sector is not one "
+                             "for this nonlinearity (widen the pair, or leave the sector out to use the computed one)")
+
+
+def _check_sample_count(model) -> None:
+    """ValueError when the points at which :meth:`qpp.model.nonlin.ExpressionModel.sector_info`
+    samples φ (:meth:`~qpp.model.sector_grid.SampleGrid.sector_points`) exceed the
+    ``QPP_SECTOR_POINTS`` limit; the message gives the factors and what the config can lower."""
+    points = model.sector_points()
+    if points <= limit("QPP_SECTOR_POINTS", LIMITS):
+        return
+    r, k = len(model.phi), len(model.names)
+    n_theta, n_t = model.theta_sample_count(), model.time_sample_count()
+    sizes = [model.sector_grid_size(i) for i in range(r)]
+    widest = int(np.argmax(sizes))
+    d = len(model.channel_outputs(widest))
+    factors = (f"over {r} channel{'s' * (r != 1)}: {n_theta:.3g} samples of {k} uncertain parameter"
+               f"{'s' * (k != 1)} × the channel's output grid, {sum(sizes):.3g} points in all, the largest "
+               f"{max(sizes):.3g} (channel {widest + 1}, on {d} output{'s' * (d != 1)})"
+               + (f", × {n_t} times on the channels that depend on t" if n_t > 1 else ""))
+    # what the config can lower: the parameters (a factor of every point), and whichever grids hold
+    # most of the points: those of channels on three or more outputs, or the n_grid-point ones
+    wide = sum(n for i, n in enumerate(sizes) if len(model.channel_outputs(i)) >= 3)
+    advice = ["fewer uncertain parameters (nonlinearity.parameters)"] if k > 1 else []
+    if 2 * wide >= sum(sizes):
+        advice.append("fewer outputs per channel (nonlinearity.f1)")
+    elif model.n_grid > 5:
+        advice.append(f"a coarser nonlinearity.n_grid (now {model.n_grid})")
+    raise ValueError(f"nonlinearity: finding the sector samples φ at {points:.3g} points ({factors}); "
+                     f"use {' or '.join(advice) or 'fewer nonlinear channels'} "
+                     f"({how_to_raise('QPP_SECTOR_POINTS', LIMITS)})")
+
+
+class SinusoidalNonlinearity(SectionModel):
+    """f1(y, γ, t) = F0 y + (F1 + γ F_unc) y sin(ω t), |γ| ≤ gamma_max (ch. 13: F0 = 2, F1 = 1.5, γ = Δm).
+
+    The controller and observer cancel the nominal part f1o = F0 y + F1 y sin(ωt) (γ = 0).
+    """
+
+    kind: Literal["sinusoidal"] = "sinusoidal"
+    F0: Matrix = Field(description="constant output feedback part (m×p)")
+    F1: Matrix = Field(description="nominal time-varying part (m×p), multiplies y sin(ωt)")
+    F_unc: Matrix = Field(description="uncertain direction (m×p), multiplies γ y sin(ωt)")
+    omega: RadPerSecond = Field(1.0, ge=0, description="frequency of the time variation, rad/s (0: constant)")
+    gamma_max: float = Field(gt=0, description="uncertainty bound |γ| ≤ gamma_max (dimensionless)")
+
+
+class PolarArmNonlinearity(SectionModel):
+    """Two-DOF extend/rotate arm of ch. 14 (eq 14.1), uncertain payload M ∈ [M_min, M_max] (kg).
+
+    f1 = [R/(μ+M) x4²; −2 R x3 x4 / I], R = μ x1 + M (x1 + a), I = J1 + J2 + μ x1² + M (x1 + a)².
+    """
+
+    kind: Literal["polar_arm"] = "polar_arm"
+    mu: Kilograms = Field(gt=0, description="arm mass μ, kg (not printed in the report)")
+    M_min: Kilograms = Field(gt=0, description="lower payload bound, kg")
+    M_max: Kilograms = Field(gt=0, description="upper payload bound, kg")
+    J1: KgM2 = Field(100.0, gt=0, description="inertia of the mechanism about O, kg·m²")
+    J2: KgM2 = Field(100.0, gt=0, description="inertia of the arm about C, kg·m²")
+    a: Metres = Field(1.0, gt=0, description="distance from the arm's mass centre C to the load, m")
+
+    @model_validator(mode="after")
+    def _bounds(self):
+        if self.M_max < self.M_min:
+            raise ValueError("M_max must be ≥ M_min")
+        return self
+
+    @property
+    def M_nominal(self) -> float:
+        """M° = (M_min + M_max)/2, kg."""
+        return 0.5 * (self.M_min + self.M_max)
+
+
+class ParameterRange(SectionModel):
+    """An uncertain parameter θ ∈ [min, max] with its nominal value θ° (default: the midpoint)."""
+
+    min: float
+    max: float
+    nominal: Optional[float] = Field(None, description="value cancelled by the controller (f1o = f1(θ°))")
+
+    @model_validator(mode="after")
+    def _order(self):
+        if self.max < self.min:
+            raise ValueError("max must be ≥ min")
+        if self.nominal is not None and not self.min <= self.nominal <= self.max:
+            raise ValueError("nominal must lie in [min, max]")
+        return self
+
+    @property
+    def nominal_value(self) -> float:
+        """θ°: ``nominal``, else the midpoint of [min, max] (units of the parameter)."""
+        return 0.5 * (self.min + self.max) if self.nominal is None else self.nominal
+
+
+class LibraryForm(SectionModel):
+    """A library nonlinearity on one output: gain·form(y_output) (qpp.model.nonlin.library_expression)."""
+
+    form: Literal["saturation", "dead_zone", "cubic", "sin"]
+    output: int = Field(1, strict=True, ge=1, description="output index (1-based) the form acts on")
+    gain: Union[float, str] = Field(1.0, description="number or an expression in the parameters, e.g. 'k'")
+    level: Optional[float] = Field(None, gt=0, description="saturation level / dead-zone half-width")
+
+
+class ExpressionNonlinearity(SectionModel):
+    """General sector-bounded f1(y, t, θ) per control channel (qpp.model.nonlin), parsed without eval.
+
+    ``f1`` has one entry per control input: an expression in y1…yp, t and the parameter names
+    (functions: sin cos tan exp log sqrt tanh atan abs sign min max sat deadzone cubic), or a
+    library form.  The sector, β3 and β4 are computed over ``y_range`` × parameter ranges ×
+    [0, t_range]; ``sector``, ``beta3``, ``beta4`` override the computed values.
+    """
+
+    kind: Literal["expression"] = "expression"
+    f1: list[Union[str, float, LibraryForm]] = Field(min_length=1, description="one entry per control input (m)")
+    parameters: dict[str, ParameterRange] = Field(default_factory=dict, description="uncertain parameters")
+    y_range: Matrix = Field(description="[[lo, hi], ...] per output: the set on which φ is sector-bounded")
+    t_range: Optional[float] = Field(None, gt=0, description="sampled time horizon, s (default: simulation.t_final)")
+    sector: Optional[Matrix] = Field(None, description="stated sector [[α, β], ...] of φ (overrides the computed one)")
+    beta3: Optional[float] = Field(None, ge=0, description="stated β3 (overrides the computed one)")
+    beta4: Optional[float] = Field(None, ge=0, description="stated β4 (overrides the computed one)")
+    n_grid: int = Field(41, strict=True, ge=5, le=401, description="grid points per output for the sampled bounds")
+
+    @field_validator("parameters")
+    @classmethod
+    def _names(cls, v):
+        for k in v:
+            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,30}", k):
+                raise ValueError(f"parameter name {k!r} is not an identifier")
+        return v
+
+    def _texts(self) -> list[str]:
+        """The channel expressions (one per control input, in y1…yp, t and the parameter names),
+        library forms expanded."""
+        return [e if isinstance(e, str) else repr(float(e)) if isinstance(e, (int, float))
+                else library_expression(e.form, e.output, str(e.gain), e.level) for e in self.f1]
+
+    def _param_table(self) -> dict:
+        """The uncertain parameters as ``{name: (min, max, θ°)}``, in the units of each parameter."""
+        return {k: (r.min, r.max, r.nominal_value) for k, r in self.parameters.items()}
+
+
+Nonlinearity = Annotated[Union[SinusoidalNonlinearity, PolarArmNonlinearity, ExpressionNonlinearity],
+                         Field(discriminator="kind")]
+
+
+class Term(SectionModel):
+    """One additive term of a signal: sin, step (on [t_on, t_off)), or ramp held after t_end."""
+
+    kind: Literal["sin", "step", "ramp"]
+    amplitude: float = Field(1.0, description="sin amplitude / step value / ramp slope (per s)")
+    omega: RadPerSecond = Field(0.0, ge=0, description="sin frequency, rad/s")
+    phase: Radians = Field(0.0, description="sin phase, rad")
+    t_on: OptSeconds = Field(None, description="step/ramp start, s (default: −∞ for a step, 0 for a ramp)")
+    t_off: OptSeconds = Field(None, description="step end / ramp hold time, s (default: never)")
+
+
+Signal = list[list[Term]]   # one list of terms per channel
+
+
+class Scenario(SectionModel):
+    """A simulation case: r = r_o + delta_r, uncertain parameter value, disturbance impulse."""
+
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX)
+    delta_r: Optional[Signal] = Field(None, description="reference perturbation r − r_o per channel")
+    gamma: float = Field(0.0, description="uncertain parameter: γ (sinusoidal) or payload M in kg (polar_arm)")
+    parameters: Optional[dict[str, float]] = Field(None, description="expression kind: parameter values "
+                                                                     "(missing ones nominal)")
+    impulse_time: OptSeconds = Field(None, ge=0, description="time of a disturbance impulse d = I δ(t − t_i), s")
+    impulse: Optional[list[float]] = Field(None, description="impulse size I per disturbance channel (r)")
+
+
+class Simulation(SectionModel):
+    """Nonlinear closed-loop simulation (ch. 13.4 / 14.5)."""
+
+    t_final: Seconds = Field(10.0, ge=1e-9, le=1e5, description="simulated time, s (1 ns … 1e5 s)")
+    n_samples: int = Field(2001, strict=True, ge=11, le=200001, description="output samples")
+    rtol: float = Field(1e-8, ge=1e-14, lt=1, description="integrator relative tolerance (≥ 1e-14: ~100 ulp)")
+    atol: float = Field(1e-10, ge=1e-20, lt=1, description="integrator absolute tolerance")
+    r_o: Signal = Field(description="nominal reference r_o(t), one list of terms per output")
+    scenarios: list[Scenario] = Field(min_length=1)
 
 
 class Plant(SectionModel):
@@ -46,7 +331,7 @@ class Plant(SectionModel):
     @field_validator("A", "B", "C", "G", "Ac", "Bc", "Cc")
     @classmethod
     def _mats(cls, v):
-        return finite_matrix(v)
+        return _finite_matrix(v)
 
 
 class Hinf(SectionModel):
@@ -76,7 +361,7 @@ class Published(SectionModel):
     @field_validator("K1", "Kc", "H")
     @classmethod
     def _mats(cls, v):
-        return v if v is None else finite_matrix(v)
+        return v if v is None else _finite_matrix(v)
 
 
 class Spheres(SectionModel):
@@ -186,16 +471,16 @@ class QppConfig(SectionModel):
                     raise ValueError(f"nonlinearity.f1: output {e.output} > p = {P.p}")
             if nl.sector is not None and np.shape(nl.sector) != (P.r, 2):
                 raise ValueError(f"nonlinearity.sector must be {P.r} pairs [alpha, beta]")
-            check_sector("nonlinearity.sector", nl.sector)
+            _check_sector("nonlinearity.sector", nl.sector)
             try:
                 model = self.expression_model()
-                check_sample_count(model)
+                _check_sample_count(model)
                 info = model.sector_info                 # parse, check singular / sector-bounded
             except ConfigError as exc:
                 raise ValueError(str(exc)) from None
             for field, stated in (("nonlinearity.sector", nl.sector), ("design.sector", self.design.sector)):
                 if stated is not None:
-                    check_stated_sector(field, stated, info.sector)
+                    _check_stated_sector(field, stated, info.sector)
             self._check_expression_scenarios(nl)
         elif (P.n, P.m, P.p) != (4, 2, 2):
             raise ValueError("nonlinearity.kind polar_arm needs n=4, m=2, p=2 (eq 14.2)")
@@ -239,7 +524,7 @@ class QppConfig(SectionModel):
                 raise ValueError(f"scenario {s.name}: give both impulse and impulse_time")
         if self.design.sector is not None and np.shape(self.design.sector) != (P.r, 2):
             raise ValueError(f"design.sector must be {P.r} pairs [alpha, beta]")
-        check_sector("design.sector", self.design.sector)
+        _check_sector("design.sector", self.design.sector)
         names = [s.name for s in self.simulation.scenarios]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
@@ -267,13 +552,13 @@ class QppConfig(SectionModel):
         nl = self.nonlinearity
         if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
             # the nonlinearity's sin(ω t) must be resolved by the integrator: bound the periods
-            check_periods("nonlinearity.omega", nl.omega, self.simulation.t_final)
+            _check_periods("nonlinearity.omega", nl.omega, self.simulation.t_final)
         for sig_name, sig in [("simulation.r_o", self.simulation.r_o)] + [
                 (f"simulation.scenarios.{s.name}.delta_r", s.delta_r) for s in self.simulation.scenarios]:
             for chan in sig or []:
                 for term in chan:
                     if term.kind == "sin" and term.omega > 0:
-                        check_periods(f"{sig_name} omega", term.omega, self.simulation.t_final)
+                        _check_periods(f"{sig_name} omega", term.omega, self.simulation.t_final)
 
         runs = len(self.simulation.scenarios) + 1
         if self.simulation.n_samples * runs > limit("QPP_SAMPLES", LIMITS):
@@ -325,12 +610,12 @@ class QppConfig(SectionModel):
             raise TypeError("expression_model() needs nonlinearity.kind = expression")
         P = self.lure_plant()
         t_range = nl.t_range or max(self.simulation.t_final, self.spheres.T)
-        key = (tuple(nl.texts()), tuple(sorted(nl.param_table().items())), np.asarray(nl.y_range).tobytes(),
+        key = (tuple(nl._texts()), tuple(sorted(nl._param_table().items())), np.asarray(nl.y_range).tobytes(),
                P.N().tobytes(), t_range, nl.n_grid)
         if key not in _EXPR_CACHE:
             if len(_EXPR_CACHE) > 32:
                 _EXPR_CACHE.clear()
-            _EXPR_CACHE[key] = ExpressionModel(nl.texts(), P.p, nl.param_table(), nl.y_range, P.N(), t_range,
+            _EXPR_CACHE[key] = ExpressionModel(nl._texts(), P.p, nl._param_table(), nl.y_range, P.N(), t_range,
                                                n_grid=nl.n_grid)
         return _EXPR_CACHE[key]
 
@@ -386,7 +671,7 @@ def load_config(path, overrides: list[str] | None = None) -> QppConfig:
     path : str or path-like
         YAML file, or the name of a packaged config.
     overrides : list of str, optional
-        Dotted ``key=value`` edits (:mod:`acmm_qpp.overrides`), applied before validation.
+        Dotted ``key=value`` edits (:mod:`acmm_qpp.configio`), applied before validation.
 
     Returns
     -------
@@ -401,3 +686,16 @@ def load_config(path, overrides: list[str] | None = None) -> QppConfig:
     data, p = read_yaml(path, PACKAGED_CONFIGS)
     cfg = parse_config(apply_overrides(data, overrides), source=str(p))
     return remember_origin(cfg, str(p), overrides)
+
+
+def qpp_schema() -> dict:
+    """Schema of a qpp config (:class:`qpp.io.config.QppConfig`).
+
+    Returns
+    -------
+    dict
+        JSON schema (draft 2020-12); dimensional fields accept a number or a quantity string in
+        any unit of the field's dimension.
+    """
+    return header(QppConfig.model_json_schema(mode="validation", schema_generator=Generator),
+                  "qpp config (CR-185644 Part III)")

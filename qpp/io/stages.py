@@ -2,6 +2,14 @@
 
 The design is procedure 12.1 (ch. 12.1; gains of eqs 10.5–10.6), the simulations those of
 ch. 13–14.
+
+``qpp simulate`` takes K1, Kc and H from ``<run>/qpp_design.h5`` (:class:`StoredDesign`, issue 16:
+it used to run the whole design of ch. 12.1 again, the H∞ search of ch. 11 included) when that
+file was written from the same resolved config (``config_hash``) by the same package version and
+git commit, the source is that commit without uncommitted changes (an edited or unknown source may
+compute something else), and the gains read back hash to the ``gains_sha256`` the design stored
+with them (an edited file is designed again); otherwise it designs.  The gains are stored as
+float64, so the simulation is the same bit for bit either way.
 """
 from __future__ import annotations
 
@@ -12,17 +20,19 @@ import numpy as np
 
 from acmm_qpp.outputs import stage
 from acmm_qpp.results import Dataset, draw_figures, redraw_stored, write_h5
-from qpp.io.config_nonlin import ExpressionNonlinearity, PolarArmNonlinearity
-from qpp.io.config import QppConfig, load_config, parse_config
+from qpp.io.config import ExpressionNonlinearity, PolarArmNonlinearity, QppConfig, load_config, parse_config
 from qpp.design.certificate import DesignResult
 from qpp.design.procedure import design
-from qpp.io.stored_design import gains_sha256, load_stored_design
 from qpp.plots import plot_cartesian, plot_circle, plot_iterations, plot_scenario
 from qpp.simulate.closed_loop import simulate
 import types
 import h5py
+import hashlib
 import yaml
+from dataclasses import dataclass
+from acmm_qpp import __version__
 from acmm_qpp.errors import ConfigError
+from acmm_qpp.provenance import config_hash, git_commit, git_dirty
 
 
 #: units of the gains of eq 10.5–10.6 in the results (text: the config's own units, not UDUNITS)
@@ -290,11 +300,85 @@ def run_design(config, figures: bool | None = None, *, out: Path) -> tuple[QppCo
               **{f"premise_statement[{k}]": text for k, (_, text) in r.premises.items()},
               "proved": "; ".join(r.proved), "assumed": "; ".join(r.assumed), "scope": r.scope_text,
               "horizon_note": r.horizon_note,
-              "gains_sha256": gains_sha256(r.K1, r.Kc, r.H), "unit_system": cfg.output.units})
+              "gains_sha256": _gains_sha256(r.K1, r.Kc, r.H), "unit_system": cfg.output.units})
     if want_figures:
         draw_figures([partial(plot_circle, r, out / "qpp_circle.png"),
                       partial(plot_iterations, r, out / "qpp_iterations.png")])
     return cfg, r, cfg.run_dir() / "qpp_design.h5"
+
+
+@dataclass
+class StoredDesign:
+    """A design read back from ``qpp_design.h5``: what a simulation needs of it.
+
+    Attributes
+    ----------
+    K1 : (m, n) array
+        State-feedback gain (eq 10.6), plant input units per state unit.
+    Kc : (m, q) array
+        Compensator gain (eq 10.6), plant input units per compensator-state unit.
+    H : (n, p) array
+        Observer gain (eq 10.5, report's sign), state units per output unit per s.
+    certified : bool
+        Whether the design was certified (β1 ≤ m and the circle criterion).
+    verdict : str
+        The design's verdict line.
+    path : pathlib.Path
+        The file read.
+    horizon_note : str
+        The design's note when T ends before the nominal loop settles, "" otherwise
+        (:attr:`qpp.design.certificate.DesignResult.horizon_note`).
+    """
+
+    K1: np.ndarray
+    Kc: np.ndarray
+    H: np.ndarray
+    certified: bool
+    verdict: str
+    path: Path
+    horizon_note: str = ""
+
+
+def _source_unchanged() -> bool:
+    """Whether the code running is exactly a commit: a git checkout whose tracked files have no
+    uncommitted change (:func:`acmm_qpp.provenance.git_dirty`); False when dirty, not a checkout,
+    or git is missing."""
+    return git_commit() != "unknown" and git_dirty() == "no"
+
+
+def _load_stored_design(path: Path, config_text: str) -> StoredDesign | None:
+    """The gains in ``path`` (a ``qpp_design.h5``, maybe missing) when it was written from
+    ``config_text`` (the resolved config's YAML) by this code; None when missing, unreadable, from
+    another config, version or commit, from a changed source, or with edited gains."""
+    if not Path(path).is_file():
+        return None
+    try:
+        with h5py.File(path, "r") as f:
+            a = f.attrs
+            same = (a.get("stage") == "qpp design" and a.get("config_hash") == config_hash(config_text)
+                    and a.get("package_version") == __version__
+                    and a.get("git_commit") == git_commit())
+            if not same or not _source_unchanged():
+                return None
+            K1, Kc, H = (np.array(f[k][()], dtype=float) for k in ("K1", "Kc", "H"))
+            if a.get("gains_sha256") != _gains_sha256(K1, Kc, H):
+                return None
+            note = a.get("horizon_note", "")
+            return StoredDesign(K1, Kc, H, bool(a["certified"]), str(a["verdict"]), Path(path),
+                                note.decode() if isinstance(note, bytes) else str(note))
+    except (OSError, KeyError, ValueError):
+        return None
+
+
+def _gains_sha256(K1, Kc, H) -> str:
+    """Hex SHA-256 of the gains' float64 bytes with their shapes (eqs 10.5–10.6; any units: the
+    bytes are hashed), stored by ``qpp design``."""
+    h = hashlib.sha256()
+    for g in (K1, Kc, H):
+        g = np.ascontiguousarray(g, dtype=float)
+        h.update(f"{g.shape}|".encode())
+        h.update(g.tobytes())
+    return h.hexdigest()
 
 
 @stage(("qpp_sim.h5", "qpp_sim_*.png"), _cfg)
@@ -303,7 +387,7 @@ def run_simulate(config, figures: bool | None = None, progress=None, *, out: Pat
     (+ figures).
 
     The gains of ``qpp_design.h5`` in the run directory are used when ``qpp design`` wrote it from
-    the same resolved config with this code (:func:`qpp.io.stored_design.load_stored_design`);
+    the same resolved config with this code (the module's docstring says when);
     otherwise the design of ch. 12.1 runs first.  ``progress(done, total, name)`` is called after
     each scenario.
 
@@ -322,14 +406,14 @@ def run_simulate(config, figures: bool | None = None, progress=None, *, out: Pat
     -------
     tuple
         (config, the design — :class:`qpp.design.certificate.DesignResult`, or
-        :class:`qpp.io.stored_design.StoredDesign` when reused; both have ``K1``, ``Kc``, ``H``,
+        :class:`StoredDesign` when reused; both have ``K1``, ``Kc``, ``H``,
         ``certified``, ``verdict`` —, list of :class:`qpp.simulate.closed_loop.SimResult`, path of
         ``qpp_sim.h5``).
     """
     cfg = _cfg(config)
     want_figures = cfg.output.figures if figures is None else figures
     r, sims = _simulate_and_write(cfg, want_figures, progress,
-                                  load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()), out)
+                                  _load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()), out)
     return cfg, r, sims, cfg.run_dir() / "qpp_sim.h5"
 
 
@@ -446,6 +530,8 @@ def figure_calls_from_file(path: Path, out_dir: Path) -> list:
 #: results file → the stage that writes it (root attribute ``stage``), in the order ``qpp plot``
 #: redraws a run folder's figures
 FIGURE_SOURCES = {"qpp_design.h5": "qpp design", "qpp_sim.h5": "qpp simulate"}
+#: stage → the reader of its results file's figures (:func:`acmm_qpp.results.redraw_stored`)
+READERS = {"qpp design": figure_calls_from_file, "qpp simulate": figure_calls_from_file}
 
 
 def redraw_figures(target, out=None) -> list[Path]:
@@ -471,5 +557,4 @@ def redraw_figures(target, out=None) -> list[Path]:
     acmm_qpp.errors.FigureError
         A figure could not be drawn or written (exit 4).
     """
-    readers = {"qpp design": figure_calls_from_file, "qpp simulate": figure_calls_from_file}
-    return redraw_stored(target, FIGURE_SOURCES, readers, out)
+    return redraw_stored(target, FIGURE_SOURCES, READERS, out)

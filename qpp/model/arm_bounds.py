@@ -35,7 +35,7 @@ def delta_q(nl):
 
     Parameters
     ----------
-    nl : qpp.io.config_nonlin.PolarArmNonlinearity
+    nl : qpp.io.config.PolarArmNonlinearity
         The arm (μ, M_min, M_max, J1, J2, a in kg, kg·m², m).
 
     Returns
@@ -62,7 +62,7 @@ def arm_slope_bound(nl, N, x1_box, x3_box, x4_box, *, deadline: float | None = N
 
     Parameters
     ----------
-    nl : qpp.io.config_nonlin.PolarArmNonlinearity
+    nl : qpp.io.config.PolarArmNonlinearity
         The arm.
     N : (r, m) array
         B = G N (assumption iii), dimensionless.

@@ -9,9 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from qpp.io.config_nonlin import ExpressionNonlinearity, PolarArmNonlinearity, SinusoidalNonlinearity
-from qpp.io.config import QppConfig
-from qpp.io.config_simulation import Scenario
+from qpp.io.config import ExpressionNonlinearity, PolarArmNonlinearity, QppConfig, Scenario, SinusoidalNonlinearity
 from qpp.model.lure import LurePlant
 
 

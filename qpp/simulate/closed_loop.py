@@ -18,9 +18,7 @@ import math
 
 import numpy as np
 
-from qpp.io.config_nonlin import ExpressionNonlinearity
-from qpp.io.config import QppConfig
-from qpp.io.config_simulation import Scenario
+from qpp.io.config import ExpressionNonlinearity, QppConfig, Scenario
 from qpp.simulate.loop import DIVERGED_FACTOR, nominal_diverged_beyond, simulate_nominal
 from qpp.simulate.loop import initial_state, simulate_loop
 from qpp.model.matched_nonlinearity import config_f1, scenario_gamma

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from qpp.io.config_simulation import Term
+from qpp.io.config import Term
 
 
 def eval_terms(terms: list[Term], t: float) -> float:

@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from acmm.io.config import parse_config
-from acmm_qpp.config_model import boolean_as_number
+from acmm_qpp.config_model import _boolean_as_number as boolean_as_number
 from acmm_qpp.errors import ConfigError
 from qpp.io.config import parse_config as parse_qpp
 from tests.conftest import CONFIGS, invoke

@@ -2,17 +2,17 @@
 folder and moved into place when it succeeds; a stage that fails or is interrupted leaves the
 folder as it was; no result beside a config.yaml of another run; files of earlier runs, of other
 run folders and of nested stages that completed are left alone (the sweep, which keeps its
-self-describing partial tables, writes into its run folder itself: tests/acmm/sweep/test_run.py)."""
+self-describing partial tables, writes into its run folder itself: tests/acmm/sweep/test_run.py).
+The run lock's cleanup: what a killed run left is removed by the next run of that folder, the
+staging folders of the kinds its caller names included."""
 import os
 import subprocess
 import sys
 
 import pytest
 
-from acmm_qpp.atomic_write import write_text
 from acmm_qpp.errors import FigureError, OutputError
-from acmm_qpp.outputs import stage, staged_outputs
-from acmm_qpp.runlock import run_lock
+from acmm_qpp.outputs import remove_leftovers, run_lock, stage, staged_outputs, write_text
 
 DESIGN = ("design.h5", "design_*.png")
 SIMULATE = ("sim.h5", "sim_*.png")
@@ -188,7 +188,7 @@ def test_what_a_killed_run_left_is_removed_by_the_next_run(tmp_path):
     lock file (the kernel released the lock); the next run of that folder removes them."""
     run = tmp_path / "run"
     _earlier_run(run)
-    code = ("import os, sys\nfrom acmm_qpp.outputs import staged_outputs\nfrom acmm_qpp.runlock import run_lock\n"
+    code = ("import os, sys\nfrom acmm_qpp.outputs import run_lock, staged_outputs\n"
             "with run_lock(sys.argv[1]):\n"
             "    with staged_outputs(sys.argv[1], ('design.h5',), config_text='name: killed') as out:\n"
             "        (out / 'design.h5').write_text('half')\n"
@@ -202,3 +202,30 @@ def test_what_a_killed_run_left_is_removed_by_the_next_run(tmp_path):
         pass
     assert _contents(run) == {"config.yaml": b"name: old\n", "design.h5": b"old results",
                               "design_gains.png": b"old figure"}
+
+
+LEFT = (".staging-12-ab", ".figures-12-cd", ".design.h5.x7k2.tmp")
+KEPT = (".figuresX", ".figures-cd", "figures-12-cd", "design.h5")
+
+
+def _fill(run):
+    run.mkdir()
+    for name in LEFT + KEPT:                    # files end in .tmp or .h5, the rest are folders
+        if name.endswith((".tmp", ".h5")):
+            (run / name).write_text("")
+        else:
+            (run / name).mkdir()
+
+
+def test_the_stages_leftovers_go_and_a_callers_kind_only_when_named(tmp_path):
+    _fill(tmp_path / "a")
+    assert sorted(remove_leftovers(tmp_path / "a")) == [".design.h5.x7k2.tmp", ".staging-12-ab"]
+    assert sorted(remove_leftovers(tmp_path / "a", ("figures",))) == [".figures-12-cd"]
+    assert sorted(p.name for p in (tmp_path / "a").iterdir()) == sorted(KEPT)
+
+
+def test_the_run_lock_removes_the_leftovers_of_the_kinds_named(tmp_path):
+    _fill(tmp_path / "b")
+    with run_lock(tmp_path / "b", staging=("figures",)) as run:
+        assert sorted(p.name for p in run.iterdir()) == sorted(KEPT + (".lock",))
+    assert sorted(p.name for p in (tmp_path / "b").iterdir()) == sorted(KEPT)

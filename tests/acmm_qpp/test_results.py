@@ -106,7 +106,7 @@ def test_results_are_readable_by_others_not_mkstemp_0600(tmp_path):
     import stat
 
     from acmm_qpp.results import Dataset, write_h5
-    from acmm_qpp.atomic_write import write_text
+    from acmm_qpp.outputs import write_text
 
     old = os.umask(0o022)
     try:

@@ -386,15 +386,14 @@ def test_help_lists_the_packaged_configs_of_its_kind_from_the_folder(run_acmm, c
     assert [x.strip() for x in listed.split(",")] == names
 
 
-def test_the_packaged_config_kinds_of_the_help_are_those_detect_kind_finds():
+def test_the_packaged_config_kinds_of_the_help_are_those_kind_of_finds():
     from acmm import PACKAGED_CONFIGS
     from acmm.cli.command import CONFIGS as KINDS
-    from acmm.cli.configkinds import detect_kind
     from acmm_qpp.configio import read_yaml
 
     for kind in ("acmm", "sweep", "qpp"):
         for name in KINDS.packaged((kind,)):
-            assert detect_kind(read_yaml(CONFIGS / f"{name}.yaml", PACKAGED_CONFIGS)[0]) == kind, name
+            assert KINDS.kind_of(read_yaml(CONFIGS / f"{name}.yaml", PACKAGED_CONFIGS)[0]) == kind, name
 
 
 @pytest.mark.parametrize("command", ("validate", "tea", "linearize", "design", "certify", "simulate", "sweep"))

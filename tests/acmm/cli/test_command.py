@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 import typer
 
-from acmm.cli.command import acmm_command, compiled_cache_notes
+from acmm.cli.command import _compiled_cache_notes as compiled_cache_notes, acmm_command
 from acmm_qpp.errors import EXIT_NUMERICAL, ConvergenceError
 
 

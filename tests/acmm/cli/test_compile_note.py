@@ -1,4 +1,4 @@
-"""The note on numba's first compile (acmm.cli.compile_note.numba_needs_compile)."""
+"""The note on numba's first compile (acmm.cli.compile_note._numba_needs_compile)."""
 from __future__ import annotations
 
 import os
@@ -11,7 +11,7 @@ def test_numba_compile_detection_says_whether_the_first_call_compiles(tmp_path, 
     index, or one older than the source); False once compiled here, and False (saying nothing)
     when numba's internals cannot be read.  (It was ``in (True, False)``: a test that cannot fail.)"""
     import acmm.simulate.kernel as sim_mod
-    from acmm.cli.compile_note import numba_needs_compile
+    from acmm.cli.compile_note import _numba_needs_compile as numba_needs_compile
     from acmm.model.compiled_cache import UNCACHED
 
     real = sim_mod._integrate

@@ -48,13 +48,14 @@ def schemas():
 
 
 def test_every_packaged_config_validates_against_its_schema(schemas):
-    from acmm.cli.configkinds import detect_kind, load_any
+    from acmm.cli.command import CONFIGS as KINDS
+    from acmm.cli.configkinds import load_any
 
     paths = sorted(CONFIGS.glob("*.yaml"))
     assert len(paths) >= 9
     for p in paths:
         data = yaml.safe_load(p.read_text())
-        kind = detect_kind(data)
+        kind = KINDS.kind_of(data)
         errors = [e.message for e in schemas[kind].iter_errors(data)]
         assert errors == [], (p.name, errors)
         assert load_any(p)[0] == kind

@@ -1,9 +1,8 @@
-"""The design figures (acmm.plots.design): baked texts draw as the live ones, plain-text log
-labels, pole-map colours, byte-identical vector files."""
+"""The design figures (acmm.plots.design): baked texts draw as the live ones, pole-map colours,
+byte-identical vector files."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from acmm.plots import base as plot_base
 from acmm.plots import design as design_plots
@@ -28,39 +27,6 @@ def test_baked_texts_draw_as_the_live_texts(tmp_path, monkeypatch):
     assert a.shape == b.shape and np.abs(a - b).max() <= 2
     # the baked text is there: the title band is not blank
     assert (a[:40, :, :3] < 100).any()
-
-
-def test_log_axis_labels_are_plain_text_of_the_tick_values():
-    """The path check's log axis labels its ticks as matplotlib does, in plain text (no mathtext
-    parser in the figure writers): each label read back is the tick's value."""
-    from matplotlib.ticker import LogFormatterSciNotation
-
-    sup = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻", "0123456789-")
-
-    def value(label):
-        coeff, _, power = label.replace("\N{MINUS SIGN}", "-").rpartition("10")
-        if not power:                                     # a plain number (min_exponent)
-            return float(label)
-        return float(coeff.rstrip("×") or 1) * 10.0 ** int(power.translate(sup))
-
-    fig, (_, a2) = plot_base.stage_pyplot().subplots(2, 1)
-    a2.set_yscale("log")
-    a2.set_ylim(0.3, 3.0)                                 # one decade: minor ticks labelled too
-    fig.canvas.draw()
-    ticks = [v for v in a2.get_yticks(minor=True) if 0.3 <= v <= 3.0]
-    for labelled_only_base in (True, False):
-        plain = design_plots._plain_log_formatter(base=10, labelOnlyBase=labelled_only_base)
-        mathtext = LogFormatterSciNotation(base=10, labelOnlyBase=labelled_only_base)
-        for f in (plain, mathtext):
-            f.set_axis(a2.yaxis)
-            f.set_locs(ticks)
-        for v in [*ticks, 1e-12, 1e-3, 0.01, 10.0, 2e3]:
-            want, got = mathtext(v), plain(v)
-            assert (want == "") == (got == "") and "$" not in got
-            if got:
-                assert value(got) == pytest.approx(v, rel=1e-12), (v, got)
-    assert design_plots._plain_math(r"$\mathdefault{6\times10^{-1}}$") == "6×10⁻¹"
-    plot_base.stage_pyplot().close(fig)
 
 
 def test_scheduled_pole_map_colours_ignore_a_nan_tea(captured, tmp_path):

@@ -16,7 +16,7 @@ from tests.acmm.conftest import _sweep_yaml
 def test_the_resolved_sweep_it_writes_runs_again_as_the_same_sweep(tmp_path, name):
     """``runs/<name>/config.yaml`` (and sweep.h5's ``config``) of a sweep is a sweep config itself:
     the same results key and text, no base file needed; a bad one is one line."""
-    from acmm.cli.configkinds import detect_kind
+    from acmm.cli.command import CONFIGS as KINDS
 
     if name == "inline":                    # a sweep section inside a run config
         data = yaml.safe_load((CONFIGS / "mb3.yaml").read_text())
@@ -25,7 +25,7 @@ def test_the_resolved_sweep_it_writes_runs_again_as_the_same_sweep(tmp_path, nam
     else:
         sw = load_sweep(name)
     resolved = yaml.safe_load(sw.to_yaml())
-    assert detect_kind(resolved) == "sweep"
+    assert KINDS.kind_of(resolved) == "sweep"
     again = parse_sweep(resolved, directory=tmp_path)          # no file next to it
     assert again.results_key() == sw.results_key() and again.to_yaml() == sw.to_yaml()
     assert [b.label for b in again.bases] == [b.label for b in sw.bases]

@@ -1,15 +1,18 @@
-"""qpp configs of the user's own plants (qpp.io.config; a review's findings): stated sectors that
+"""qpp configs (qpp.io.config).  The user's own plants (a review's findings): stated sectors that
 do not hold φ, channel counts the circle criterion cannot take, scenario parameters out of range,
-a twelve-output plant that validates."""
+a twelve-output plant that validates.  The nonlinearity section: library forms and stated sector,
+β3 and β4 overrides.  The sample budget of a nonlinearity's sector: a channel on many outputs is
+refused naming f1, the message names what can be lowered."""
 import numpy as np
 import pytest
 import yaml
 
 from acmm_qpp.errors import ConfigError
-from qpp.io.config import load_config, parse_config
+from qpp.io.config import _check_sample_count, load_config, parse_config
+from qpp.model.nonlin import ExpressionModel
 
 from tests.conftest import CONFIGS
-from tests.qpp.conftest import _base
+from tests.qpp.conftest import _base, _cfg
 
 
 @pytest.mark.parametrize("field", ["nonlinearity.sector", "design.sector"])
@@ -81,3 +84,57 @@ def test_twelve_output_plant_with_one_nonlinearity_per_channel_validates(tmp_pat
     # φ_1 = −(c − 1)·y1³ on |y1| ≤ 1, c ∈ [0.9, 1.1]: the sector [−0.1, 0.1]; the others are 0
     np.testing.assert_allclose(si.sector[0], [-0.1, 0.1], rtol=1e-12)
     assert np.all(np.abs(si.sector[1:]) <= 1e-12)
+
+
+def test_library_forms_and_stated_overrides(tmp_path):
+    d = _cfg("qpp_saturation", tmp_path)
+    d["nonlinearity"]["f1"] = [{"form": "dead_zone", "output": 1, "gain": "-k", "level": 0.3}]
+    d["nonlinearity"]["parameters"] = {"k": {"min": 1.0, "max": 2.0}}
+    for sc in d["simulation"]["scenarios"]:
+        sc["parameters"] = None
+    m = parse_config(d).expression_model()
+    # dead zone: (y - sat(y, .3))/y in [0, 0.9] on |y| <= 3; phi = -(k - 1.5)·dz(y) -> ±0.5·0.9
+    np.testing.assert_allclose(m.sector_info.sector, [[-0.45, 0.45]], rtol=1e-6)
+    d["nonlinearity"]["f1"] = [{"form": "sin", "output": 1, "gain": "k"}]
+    m = parse_config(d).expression_model()
+    np.testing.assert_allclose(m.sector_info.sector, [[-0.5, 0.5]], rtol=1e-6)
+    d["nonlinearity"]["f1"] = ["k*sin(y)"]                     # y is y1 when p = 1
+    np.testing.assert_allclose(parse_config(d).expression_model().sector_info.sector, [[-0.5, 0.5]], rtol=1e-6)
+    d["simulation"]["scenarios"][0]["gamma"] = 0.1
+    with pytest.raises(ConfigError, match="not gamma"):
+        parse_config(d)
+    d["simulation"]["scenarios"][0]["gamma"] = 0.0
+    d["nonlinearity"].update({"sector": [[-0.7, 0.7]], "beta3": 0.01, "beta4": 0.02})
+    d["simulation"]["t_final"] = 2.0
+    from qpp.design.certificate import certify, default_sector
+
+    cfg = parse_config(d)
+    np.testing.assert_array_equal(default_sector(cfg), [[-0.7, 0.7]])
+    res = certify(cfg, [[-10.0, -4.0]], [[20.0]], [[-1.0], [-0.5]], 1e-4)
+    st = res.threshold("stated")
+    assert (st.beta3, st.beta4) == (0.01, 0.02) and res.bookkeeping == "consistent"   # stated: reported only
+    assert st.m == pytest.approx(0.3 / (0.05 + 0.3 * 0.01 + 0.02))
+
+
+def test_channel_depending_on_many_outputs_refused_naming_f1():
+    p = 12
+    exprs = ["0.01*c*sin(" + "+".join(f"y{i + 1}" for i in range(p)) + ")"] + ["0"] * (p - 1)
+    m = ExpressionModel(exprs, p, {"c": (0.9, 1.1, 1.0)}, [[-1.0, 1.0]] * p, np.eye(p), 1.0)
+    with pytest.raises(ValueError, match=r"nonlinearity: .*channel 1, on 12 outputs.*fewer outputs per channel "
+                                         r"\(nonlinearity\.f1\).*ACMM_LIMIT_QPP_SECTOR_POINTS") as exc:
+        _check_sample_count(m)
+    assert "n_grid" not in str(exc.value)          # n_grid sets only 1- and 2-output grids
+
+
+def test_sample_count_message_names_what_can_be_lowered():
+    exprs = [f"c*e*y{i + 1}**3*cos(t)" for i in range(12)]
+    m = ExpressionModel(exprs, 12, {"c": (0.9, 1.1, 1.0), "e": (0.9, 1.1, 1.0)}, [[-1.0, 1.0]] * 12, np.eye(12),
+                        1.0, n_grid=201)
+    with pytest.raises(ValueError) as exc:
+        _check_sample_count(m)
+    msg = str(exc.value)
+    # the factors: Σ over the channels of 3² parameter samples × 205 grid points, × 256 times
+    assert "over 12 channels: 9 samples of 2 uncertain parameters" in msg and "2.46e+03 points in all" in msg
+    assert "× 256 times on the channels that depend on t" in msg and "on 1 output)" in msg
+    assert m.sector_points() == 9 * 12 * 205 * 256
+    assert "a coarser nonlinearity.n_grid (now 201)" in msg and "outputs per channel" not in msg
