@@ -19,7 +19,7 @@ from acmm.sweep.cases import VERDICTS
 from acmm.sweep.chunking import Chunker
 from acmm.sweep.executors import (SerialExecutor, call_chunk, code_identity, remote_contexts, scheduler_workers,
                                   task_key, sweep_tasks, lost_worker, make_executor)
-from acmm.sweep.journal import GroupCommitJournal, read_journal
+from acmm.sweep.journal import Journal, read_journal
 from acmm_qpp.errors import ConfigError, FigureError, OutputError
 from acmm_qpp.signals import interrupts_deferred
 from acmm.stages.pool import submit
@@ -183,7 +183,7 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     afresh = not (resume and jpath.exists())
     journal = None
     try:
-        journal = GroupCommitJournal(jpath, key, fresh=not resume)
+        journal = Journal(jpath, key, fresh=not resume)
         if afresh:              # after the journal: a journal that cannot be written changes nothing
             _start_afresh(sweep, run_dir)
     except BaseException:
@@ -320,7 +320,7 @@ class _Feed:
         Base label → the arguments after the chunk of each task (:func:`_task_arguments`).
     window : int
         At most this many chunks in flight.
-    journal : acmm.sweep.journal.GroupCommitJournal
+    journal : acmm.sweep.journal.Journal
         Every record is appended as it comes back.
     done : dict
         Task key → record: the finished tasks (resumed ones included); filled here.
@@ -355,7 +355,7 @@ class _Feed:
         self.pending.pop(fut)
         recs = _records(fut)
         self.chunks.returned(len(recs))
-        self.journal.append_many(recs)
+        self.journal.append(recs)
         for rec in recs:
             self.done[task_key(rec)] = rec
             self.n_new += 1
