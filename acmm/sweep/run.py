@@ -1,7 +1,12 @@
 """``run_sweep``: the driver (tasks → executor → journal → results), and the executors it runs
-the tasks on (in-process, process pool, Dask): case and margin tasks cut into chunks by
-:mod:`acmm.sweep.chunking`, worker warm-up, base contexts made local or scattered, a lost worker
-named on one line, and Dask workers checked to run this code (:func:`code_identity`)."""
+the tasks on (in-process, process pool, Dask): worker warm-up, base contexts made local or
+scattered, a lost worker named on one line, and Dask workers checked to run this code
+(:func:`code_identity`).
+
+The case and margin tasks are cut into chunks for the executors by guided self-scheduling
+(issue 16): sizes from the run's own measured throughput, so that a task's fixed cost stays a few
+per cent at any number of workers and the last chunks leave no worker idle (docs/performance.md).
+"""
 from __future__ import annotations
 
 import concurrent.futures as cf
@@ -9,6 +14,7 @@ import ctypes
 import dataclasses
 import functools
 import hashlib
+import math
 import os
 import sys
 import threading
@@ -31,7 +37,6 @@ from acmm.stages.pool import process_pool, stop_pool, submit
 from acmm.sweep.config import Sweep, load_sweep
 from acmm.sweep.case import BaseContext, margin_search, prepare_base, run_case, simulate_values
 from acmm.sweep.cases import VERDICTS
-from acmm.sweep.chunking import Chunker
 from acmm.sweep.journal import Journal, read_journal
 from acmm.sweep.output import split_records, write_results
 
@@ -155,8 +160,8 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     snapshot_interval : float, optional
         Period of the intermediate ``sweep.h5`` snapshots, s.
     chunk : int, optional
-        Cases per task (default: sized as the chunks are submitted, :class:`Chunker`; 1
-        in-process).  The results do not depend on it.
+        Cases per task (default: sized as the chunks are submitted, from the measured cost of a
+        case; 1 in-process).  The results do not depend on it.
     out : pathlib.Path
         Its run folder (a sweep writes there directly and keeps its snapshots when interrupted).
 
@@ -195,7 +200,7 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
         raise
     serial = isinstance(executor, _SerialExecutor)
     n_workers = 1 if serial else _scheduler_workers(executor, workers)
-    chunks = Chunker(tasks, n_workers, chunk if chunk is not None else (1 if serial else None))
+    chunks = _Chunker(tasks, n_workers, chunk if chunk is not None else (1 if serial else None))
     window = 1 if serial else max(4, 2 * n_workers)
     n_new = _drive(sweep, executor, close, chunks, _task_arguments(executor, contexts), window, journal, done,
                    total, progress, after_record, snapshot_interval)
@@ -464,6 +469,94 @@ def _task_arguments(executor, contexts: dict) -> dict:
     return {k: (v, code_identity()) for k, v in remote.items()}
 
 
+# ---------------------------------------------------------------------------------------------
+# chunks (guided self-scheduling)
+# ---------------------------------------------------------------------------------------------
+#: cases per task while the cost of a case is not yet measured (the first chunk of each worker):
+#: 64 10-orbit cases are ~0.2–2 s of work
+MAX_CHUNK = 64
+#: chunks per worker aimed at over the rest of the sweep (guided: the chunks shrink towards the
+#: end, so that the last ones do not leave workers idle)
+CHUNKS_PER_WORKER = 8
+#: work per task (s) once the cost of a case is measured: at least this, so that the fixed cost
+#: of a task (a few ms of scheduler, client and worker time on Dask) stays a few per cent at any
+#: number of workers and the scheduler sees at most ~10 tasks per second per worker ...
+MIN_TASK_SECONDS = 0.1
+#: ... and at most this, so that progress, the journal and an interruption stay live
+MAX_TASK_SECONDS = 1.0
+
+
+def _chunk_size(n_tasks: int, workers: int, case_seconds: Optional[float] = None,
+                n_total: Optional[int] = None) -> int:
+    """Cases per task when ``n_tasks`` cases remain for ``workers`` workers (a pool or a Dask
+    cluster; the in-process executor runs one case per task).
+
+    ⌈n / (8·workers)⌉: about 8 tasks per worker over what remains (the tail imbalance is then
+    ≤ 1/8 of a worker's remaining share).  Without ``case_seconds`` (the cost of one case on one
+    worker, s; not yet measured) it is clipped to [1, :data:`MAX_CHUNK`]; with it, to the cases
+    that take :data:`MIN_TASK_SECONDS` … :data:`MAX_TASK_SECONDS`, and never above
+    ⌈``n_total`` / workers⌉ (every worker gets a share of a small sweep; ``n_total``: the tasks of
+    the whole sweep, default ``n_tasks``).  See docs/performance.md for why this holds at large N.
+    """
+    n_workers = max(1, workers)
+    c = -(-n_tasks // (CHUNKS_PER_WORKER * n_workers))
+    if case_seconds is None or not case_seconds > 0:
+        return max(1, min(MAX_CHUNK, c))
+    lo = max(1, math.ceil(MIN_TASK_SECONDS / case_seconds))
+    hi = max(lo, int(MAX_TASK_SECONDS / case_seconds))
+    return max(1, min(max(c, lo), hi, -(-(n_total or n_tasks) // n_workers)))
+
+
+class _Chunker:
+    """The tasks (in order) handed out in chunks as they are submitted (guided self-scheduling).
+
+    Each chunk holds consecutive case tasks of one base (a margin search alone).  Its size is
+    ``size`` when given, else :func:`_chunk_size` of the tasks still to hand out with the cost of
+    a case measured so far: ``workers`` (Dask: worker threads) × the time since the first chunk
+    came back / the cases that came back since (the throughput of the whole run, so it includes
+    every per-task cost; before every worker can have returned a chunk, unmeasured).  The results
+    do not depend on the chunking.
+    """
+
+    def __init__(self, tasks: list, workers: int, size: Optional[int] = None):
+        self._tasks, self._pos = tasks, 0
+        self.workers = max(1, workers)
+        self.size = size
+        self._first_back: Optional[float] = None
+        self._cases_since = 0
+        self._chunks_since = 0
+
+    def case_seconds(self) -> Optional[float]:
+        """Measured cost of one case on one worker, s (None before there is a measure)."""
+        if self._first_back is None or self._chunks_since < self.workers or self._cases_since == 0:
+            return None
+        return self.workers * (time.monotonic() - self._first_back) / self._cases_since
+
+    def returned(self, n_tasks: int) -> None:
+        """Record that a chunk of ``n_tasks`` tasks came back."""
+        if self._first_back is None:
+            self._first_back = time.monotonic()
+        else:
+            self._chunks_since += 1
+            self._cases_since += n_tasks
+
+    def next(self) -> Optional[list]:
+        """The tasks of the next chunk, or None when every task was handed out."""
+        tasks, pos = self._tasks, self._pos
+        if pos >= len(tasks):
+            return None
+        size = self.size or _chunk_size(len(tasks) - pos, self.workers, self.case_seconds(), len(tasks))
+        chunk = [tasks[pos]]
+        pos += 1
+        if chunk[0][0] == "case":
+            while (pos < len(tasks) and len(chunk) < size and tasks[pos][0] == "case"
+                   and tasks[pos][1] == chunk[0][1]):
+                chunk.append(tasks[pos])
+                pos += 1
+        self._pos = pos
+        return chunk
+
+
 class _Snapshots:
     """``sweep.h5``/``sweep.csv`` rebuilt from the records so far, in a background thread.
 
@@ -515,7 +608,7 @@ class _Snapshots:
             self._thread = None
 
 
-def _drive(sweep: Sweep, executor, close, chunks: Chunker, remote: dict, window: int, journal: Journal,
+def _drive(sweep: Sweep, executor, close, chunks: _Chunker, remote: dict, window: int, journal: Journal,
            done: dict, total: int, progress, after_record, snapshot_interval: float) -> int:
     """Keep ``window`` chunks in flight on ``executor`` (their arguments after the chunk in
     ``remote``), journal and add to ``done`` each record as its chunk finishes (``progress(done,
