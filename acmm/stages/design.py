@@ -15,9 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm.io.config import Config
-from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
-from acmm.stages.certify import certificate_items, compute_certificate
-from acmm.stages.common import as_config, define_units, in_system, write_results
+from acmm.stages.common import as_config, write_results
 from acmm_qpp.outputs import stage
 from acmm.stages.pool import pool_map, process_pool, stop_pool
 from acmm_qpp.results import draw_figures
@@ -279,15 +277,7 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
     r = compute_design(cfg, progress)
     if warn is not None and r.unstable() is not None:
         warn(f"{cfg.name}: {r.unstable()}; writing it to {cfg.run_dir() / 'design.h5'} all the same")
-    pts = design_output.point_items(r.points)
-    items = design_output.table_items(r, pts)
-    if r.fit is not None:
-        items["schedule"] = design_output.schedule_items(r)
-    # the file this design replaces: its proof is reused where the same program found it for these loops
-    items["dwell"] = certificate_items(compute_certificate(cfg, r.table, cfg.run_dir() / "design.h5", exact=True))
-    roles = {**design_output.unit_roles(pts, r.fit is not None),
-             **{k: v for k, v in CERTIFICATE_ROLES.items() if k.split("/")[1] in items["dwell"]}}
-    items = define_units(in_system(items, cfg, roles), cfg.orbit_rate)
+    items = design_output.design_items(r, cfg)
     write_results(out / "design.h5", items, cfg,
                   {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
                    "schedule_form": r.table.form, "table_sha256": stored_table_digest(items, cfg.output.units)})
