@@ -11,9 +11,8 @@ from acmm_qpp.atomic_write import write_text
 from acmm_qpp.results import Dataset, write_h5
 from acmm.io.dimensions import with_coordinates
 from acmm.sweep.cases import AXES, VERDICTS
-from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS
+from acmm.sweep.spec import MAP_EXTRAS, PARAMETERS, swept_parameters
 from acmm.sweep.config import Sweep, parse_sweep
-from acmm.sweep.spec import swept_parameters
 import h5py
 import yaml
 from acmm.design.schedule_points import point_specs
