@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+import h5py
 import numpy as np
 
 from acmm.io.config import Config
@@ -19,7 +20,7 @@ from acmm.stages.common import as_config, write_results
 from acmm_qpp.outputs import stage
 from acmm.stages.pool import pool_map, process_pool, stop_pool
 from acmm_qpp.results import draw_figures
-from acmm.io.design_file import DesignTable, stored_table_digest, stored_unit_system, load_design_table
+from acmm.io.design_file import DesignTable, h5_text, stored_table_digest, load_design_table
 import json
 import time
 from acmm_qpp.provenance import config_hash
@@ -310,8 +311,10 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None, warn=Non
     if path.is_file():          # a regular file (a FIFO or a device there would block or never end)
         try:
             table = load_design_table(path)
-            if table.design_hash == want and stored_unit_system(path) == cfg.output.units:   # one system per run folder
-                return table, f"reused {path}"
+            if table.design_hash == want:
+                with h5py.File(path, "r") as f:    # one unit system per run folder (before issue 14: imperial)
+                    if h5_text(f.attrs.get("unit_system", "imperial")) == cfg.output.units:
+                        return table, f"reused {path}"
         except (OSError, KeyError, ValueError):
             pass
     r, path = run_design(cfg, progress, figures, warn)
