@@ -274,7 +274,6 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
     """
     cfg = as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
-    s = design_settings(cfg)
     r = compute_design(cfg, progress)
     if warn is not None and r.unstable() is not None:
         warn(f"{cfg.name}: {r.unstable()}; writing it to {cfg.run_dir() / 'design.h5'} all the same")
@@ -283,7 +282,7 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
                   {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
                    "schedule_form": r.table.form, "table_sha256": stored_table_digest(items, cfg.output.units)})
     if want_figures:
-        draw_figures(design_output.design_figures(r, s, out, cfg.output.units))
+        draw_figures(design_output.design_figures_from_file(out / "design.h5", out))
     return r, cfg.run_dir() / "design.h5"
 
 

@@ -1,8 +1,9 @@
 """What the design stage writes: the ``design.h5`` items and the design figures.
 
 :func:`acmm.stages.design.run_design` calls these; the items (:func:`design_items`) are built
-from a :class:`acmm.stages.design.DesignResult`, the figures from it and the design settings:
-the model of eq 4.46, the sector LQR of ch. 5.2 and the gain schedule of ch. 5.3.
+from a :class:`acmm.stages.design.DesignResult`, the figures from the ``design.h5`` just written
+(:func:`design_figures_from_file`, as ``acmm plot`` draws them): the model of eq 4.46, the
+sector LQR of ch. 5.2 and the gain schedule of ch. 5.3.
 """
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm.io.units import state_factors, state_space_in
+from acmm.io.units import state_factors
 from acmm.model.linearize import STATE_NAMES
 from acmm.stages.certify import UNIT_ROLES, certificate_items, compute_certificate
 from acmm.stages.common import (UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE, define_units, in_system,
@@ -285,70 +286,19 @@ def _gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
     return tuple(u.replace("*", "·") for u in state_factors(drf_mode, units_system)[1]), "N·m"
 
 
-def design_figures(r, s, run_dir: Path, units_system: str) -> list:
-    """The figures of a design: the points' pole map with the sector of ch. 5.2 (Fig 5.2), the
-    gain schedule (Figs 5.3–5.26) and the path check (margins, scheduled poles), each a call
-    for :func:`acmm_qpp.results.draw_figures`.
-
-    Parameters
-    ----------
-    r : acmm.stages.design.DesignResult
-        The design (its points, schedule fit and path check).
-    s : acmm.design.settings.DesignSettings
-        Its settings (orbit rate n in rad/s, sector σ in units of n and half-angle in deg, DRF mode).
-    run_dir : pathlib.Path
-        Folder of the figures: ``design_poles.png``, ``design_gains.png``,
-        ``design_path_margins.png``, ``design_path_poles.png``.
-    units_system : str
-        ``"imperial"`` or ``"SI"``: unit system of the gains drawn.
-
-    Returns
-    -------
-    list of functools.partial
-        The figure calls.
-    """
-    from acmm.plots import design as design_plots  # deferred: matplotlib start-up
-
-    calls = [partial(design_plots.pole_map, [p.gain.poles for p in r.points], [p.spec.name for p in r.points],
-                     s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg, run_dir / "design_poles.png")]
-    if r.fit is not None:
-        calls.append(_gain_figure(r.points, r.fit, s, run_dir / "design_gains.png", units_system))
-    pc = r.path_check
-    if pc is not None:
-        calls.append(partial(design_plots.schedule_path_check, pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
-                             run_dir / "design_path_margins.png"))
-        calls.append(partial(design_plots.scheduled_pole_map, pc.poles, pc.theta2, s.orbit_rate, s.sector.sigma,
-                             s.sector.half_angle_deg, run_dir / "design_path_poles.png"))
-    return calls
-
-
-def _gain_figure(points, fit, s, path: Path, units_system: str):
-    """The gain-schedule figure's call: the points' LQR gains and the schedule ``fit`` (imperial
-    units, converted to ``units_system``: the schedule is linear in K)."""
-    from acmm.plots import design as design_plots  # deferred: matplotlib start-up
-
-    gains = np.array([p.gain.K for p in points])
-    theta2 = np.array([p.tea.theta[1] for p in points])
-    if units_system != "imperial":
-        conv = lambda K: state_space_in(units_system, s.drf_mode, K=K)["K"]  # noqa: E731
-        gains = conv(gains)
-        fit = replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
-    units, torque = _gain_labels(s.drf_mode, units_system)
-    return partial(design_plots.gain_schedule_grid, theta2, gains, design_plots.sample_schedule(fit, theta2),
-                   STATE_NAMES, path, units=list(units), torque_unit=torque)
-
-
 def design_figures_from_file(path: Path, out_dir: Path) -> list:
-    """The figures of :func:`design_figures` drawn from a ``design.h5`` alone (``acmm plot``):
-    the points' poles and TEAs, the gains and schedule, the path check and the sector, read
-    from the file and its stored config; nothing is designed again.
+    """The figures of a design drawn from its ``design.h5`` alone (by the design stage after it
+    wrote the file, and by ``acmm plot``): the points' pole map with the sector of ch. 5.2
+    (Fig 5.2), the gain schedule (Figs 5.3–5.26, in the file's unit system) and the path check
+    (margins, scheduled poles), read from the file and its stored config; nothing is designed again.
 
     Parameters
     ----------
     path : pathlib.Path
         The ``design.h5`` (imperial or SI).
     out_dir : pathlib.Path
-        Folder of the figures (the same file names as the design stage writes).
+        Folder of the figures: ``design_poles.png``, ``design_gains.png``,
+        ``design_path_margins.png``, ``design_path_poles.png``.
 
     Returns
     -------
