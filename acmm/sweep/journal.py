@@ -32,7 +32,7 @@ CASE_KEYS = {"base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ())}
 
 
 @functools.cache
-def case_fields() -> dict:
+def _case_fields() -> dict:
     """Case record fields: name → (kind, shape), kind "num" (a number, NaN or ±inf), "int" or
     "str": :data:`CASE_KEYS` and the metrics row's fields, read off its empty row."""
     fields = dict(CASE_KEYS)
@@ -41,7 +41,7 @@ def case_fields() -> dict:
     return fields
 
 
-#: margin-search record fields, as :func:`case_fields` ("bool": true/false; shape None: a list)
+#: margin-search record fields, as :func:`_case_fields` ("bool": true/false; shape None: a list)
 MARGIN_FIELDS = {
     "base": ("str", ()), "direction": ("str", ()), "limit": ("num", ()), "first_failure": ("num", ()),
     "failure_verdict": ("str", ()), "failure_reason": ("str", ()), "reached_end": ("bool", ()),
@@ -86,7 +86,7 @@ def record_problem(rec: object, bases: set | None = None) -> str | None:
     if not isinstance(rec, dict):
         return "not a record (a JSON object)"
     kind = rec.get("kind")
-    fields = case_fields() if kind == "case" else MARGIN_FIELDS if kind == "margin" else None
+    fields = _case_fields() if kind == "case" else MARGIN_FIELDS if kind == "margin" else None
     if fields is None:
         return f"unknown record kind {kind!r}"
     for name, (k, shape) in fields.items():
