@@ -62,7 +62,7 @@ from acmm.sweep.case import prepare_base, run_case, simulate_values  # noqa: E40
 from acmm.sweep.cases import case_values  # noqa: E402
 from acmm.sweep.config import parse_sweep  # noqa: E402
 from acmm.sweep.dask_settings import DASK_SETTINGS  # noqa: E402
-from acmm.sweep.executors import warm_worker  # noqa: E402
+from acmm.sweep.run import warm_worker  # noqa: E402
 from acmm.sweep.run import run_sweep  # noqa: E402
 from acmm.stages.pool import pool_map, process_pool, stop_pool  # noqa: E402
 from acmm_qpp.results import read_h5  # noqa: E402

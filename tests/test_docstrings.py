@@ -61,8 +61,8 @@ NO_REPORT_CITATION = {module: reason for reason, modules in {
     "a package of modules: no mathematics of its own":
         "acmm.io acmm.plots acmm.stages qpp.io acmm.report.sections acmm_qpp.cli",
     "the sweep's machinery (bounds, draws, tasks, executors, journal, output): no mathematics":
-        """acmm.sweep.limits acmm.sweep.cases acmm.sweep.journal acmm.sweep.journal_records
-        acmm.sweep.output acmm.sweep.run acmm.sweep.executors acmm.sweep.chunking
+        """acmm.sweep.limits acmm.sweep.cases acmm.sweep.journal
+        acmm.sweep.output acmm.sweep.run
         acmm.sweep.dask_settings""",
     "the report's machinery (document, figures, task graph, hashes, printed numbers): no mathematics":
         """acmm.report.constants acmm.report.publish acmm.report.context acmm.report.document acmm.report.numbers

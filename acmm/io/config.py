@@ -6,26 +6,203 @@ strings (e.g. ``"31.5e6 kg*m^2"``, ``"2 N*m"``); they are converted to the repor
 impossible inertias and inconsistent sections are rejected with one message naming the
 field (:class:`acmm_qpp.errors.ConfigError`).  The sections follow the report: inertia (Table 1,
 eq 3.2), disturbance (eq 3.9), sector LQR design (ch. 5.2), gain schedule (ch. 5.3) and the
-stair-case simulation (ch. 6).  The field types are in :mod:`acmm.io.config_fields`.
+stair-case simulation (ch. 6).
+
+A quantity (:func:`acmm_qpp.config_model.quantity`) must lie within a physically plausible
+range (:data:`_RANGE`).  An inertia may also be written as a symmetric 3×3 list; it must be
+positive definite and obey the triangle inequality of principal moments.  The disturbance gives
+either its bias or the attitude whose equilibrium bias it is (``bias_from_tea``).
 """
 from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Literal, Optional
+from typing import Annotated, Literal, Optional
 
 import numpy as np
 import yaml
-from pydantic import Field, field_validator, model_validator
+from pydantic import BeforeValidator, Field, field_validator, model_validator
 
-from acmm.io.config_fields import Angle, AngleVec, Rate, Time, WeightTorque, SectionModel
-from acmm.io.config_station import Actuators, Disturbance, Inertia
+from acmm_qpp.config_model import StrictModel, quantity
 from acmm_qpp.errors import ConfigError
+from acmm_qpp.units import to_canonical
+from acmm.model.inertia import MAX_INERTIA
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 from acmm import DEFAULT_CONFIG, LIMITS, PACKAGED_CONFIGS
 from acmm_qpp.configio import read_yaml, validate_model
 from acmm_qpp.configio import apply_overrides, looks_like_override, remember_origin
 from acmm_qpp.limits import how_to_raise, limit
+
+
+# ---------------------------------------------------------------------------------------------
+# field types: quantities in the report's units (Table 1, eq 3.9)
+# ---------------------------------------------------------------------------------------------
+#: |value| bound per dimension, canonical units (issue 13: no overflow accepted): beyond it a value
+#: is refused as a typo or an overflow hazard (bias torques are a few ft·lbf, CMG momentum ~1e4
+#: ft·lbf·s; the inertia's reasoning is :data:`acmm.model.inertia.MAX_INERTIA`'s).
+_RANGE = {"inertia": MAX_INERTIA, "torque": 1e9, "momentum": 1e12, "angle": 3600.0, "rate": 1.0, "time": 1e9}
+_CANON = {"inertia": "slug·ft²", "torque": "ft·lbf", "momentum": "ft·lbf·s", "angle": "deg", "rate": "rad/s",
+          "time": "s"}
+#: The report's unit of each dimension kind of the config (pint syntax): a bare number is in it.
+UNITS = {"inertia": "slug*ft^2", "torque": "ft*lbf", "momentum": "ft*lbf*s", "angle": "deg", "rate": "rad/s",
+         "time": "s", "weight_torque": "1/(ft*lbf)^2"}
+
+
+#: Smallest accepted principal moment of inertia, slug·ft² (a 1 cm, 1 g body is ~1e-8; below
+#: this the linear model's scaling underflows and "uncontrollable" would be reported instead).
+MIN_PRINCIPAL_MOMENT = 1e-6
+
+
+def _plausible_value(x: float, dimension: str) -> float:
+    """``x`` (in the canonical unit of :data:`_CANON`) unchanged when its magnitude is physically
+    plausible for ``dimension`` (``inertia``, ``torque``…), else a ValueError naming both."""
+    bound = _RANGE.get(dimension)
+    if bound is not None and abs(x) > bound:
+        raise ValueError(f"{x:.4g} {_CANON[dimension]} is outside the physically plausible range "
+                         f"|value| ≤ {bound:g} {_CANON[dimension]}")
+    return x
+
+
+def _q(dimension: str):
+    """The quantity validator of the acmm config: in :data:`UNITS`, finite and within :data:`_RANGE`."""
+    return quantity(UNITS[dimension], lambda x: _plausible_value(x, dimension))
+
+
+def _vec3(dimension: str):
+    def conv(v):
+        if isinstance(v, (str, int, float)) or not hasattr(v, "__len__"):
+            raise ValueError("must be a list of three values [roll, pitch, yaw]")
+        if len(v) != 3:
+            raise ValueError(f"must have three values [roll, pitch, yaw], got {len(v)}")
+        return [_q(dimension).func(x) for x in v]
+    return BeforeValidator(conv)
+
+
+InertiaValue = Annotated[float, _q("inertia")]
+Torque = Annotated[float, _q("torque")]
+Momentum = Annotated[float, _q("momentum")]
+Angle = Annotated[float, _q("angle")]
+Rate = Annotated[float, _q("rate")]
+Time = Annotated[float, _q("time")]
+TorqueVec = Annotated[list[float], _vec3("torque")]
+AngleVec = Annotated[list[float], _vec3("angle")]
+WeightTorque = Annotated[float, _q("weight_torque")]
+
+
+class SectionModel(StrictModel):
+    """Strict base of every config section: unknown keys, NaN, infinity and booleans given as
+    numbers refused (:class:`acmm_qpp.config_model.StrictModel`)."""
+
+
+# ---------------------------------------------------------------------------------------------
+# the station: inertia (Table 1, eq 3.2), disturbance (eq 3.9), CMGs
+# ---------------------------------------------------------------------------------------------
+class Inertia(SectionModel):
+    """Inertia matrix about the body control axes (slug·ft²), eq 3.2; I_ij = I_ji."""
+
+    I11: InertiaValue = Field(description="roll moment of inertia, slug·ft²")
+    I22: InertiaValue = Field(description="pitch moment of inertia, slug·ft²")
+    I33: InertiaValue = Field(description="yaw moment of inertia, slug·ft²")
+    I12: InertiaValue = Field(0.0, description="product of inertia I12 = I21, slug·ft²")
+    I13: InertiaValue = Field(0.0, description="product of inertia I13 = I31, slug·ft²")
+    I23: InertiaValue = Field(0.0, description="product of inertia I23 = I32, slug·ft²")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_matrix(cls, data):
+        """Accept a 3×3 nested list too; it must then be symmetric."""
+        if isinstance(data, (list, tuple)):
+            try:
+                m = np.array([[to_canonical(x, UNITS["inertia"]) for x in row] for row in data], float)
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"inertia matrix must be 3×3 numbers: {exc}") from None
+            if m.shape != (3, 3):
+                raise ValueError(f"inertia matrix must be 3×3, got shape {m.shape}")
+            if not np.all(np.isfinite(m)):
+                raise ValueError("inertia matrix must contain finite numbers")
+            for x in m.ravel():
+                _plausible_value(float(x), "inertia")
+            if not np.allclose(m, m.T, rtol=1e-9, atol=0.0):
+                raise ValueError("inertia matrix is not symmetric (I_ij must equal I_ji)")
+            return {"I11": m[0, 0], "I22": m[1, 1], "I33": m[2, 2],
+                    "I12": m[0, 1], "I13": m[0, 2], "I23": m[1, 2]}
+        return data
+
+    @model_validator(mode="after")
+    def _physical(self):
+        m = self.matrix()
+        eig = np.linalg.eigvalsh(m)
+        if eig[0] <= 0:
+            raise ValueError(
+                f"inertia matrix is not positive definite (smallest principal moment {eig[0]:.4g} slug·ft²)")
+        if eig[0] < MIN_PRINCIPAL_MOMENT:
+            raise ValueError(f"smallest principal moment {eig[0]:.4g} slug·ft² is below the physically plausible "
+                             f"{MIN_PRINCIPAL_MOMENT:g} slug·ft²")
+        a, b, c = eig
+        if a + b < c * (1 - 1e-12):
+            raise ValueError(
+                "principal moments violate the triangle inequality "
+                f"({a:.4g} + {b:.4g} < {c:.4g} slug·ft²): no rigid body has this inertia")
+        return self
+
+    def matrix(self) -> np.ndarray:
+        """The symmetric 3×3 inertia matrix.
+
+        Returns
+        -------
+        (3, 3) ndarray
+            I, slug·ft².
+        """
+        return np.array([[self.I11, self.I12, self.I13],
+                         [self.I12, self.I22, self.I23],
+                         [self.I13, self.I23, self.I33]])
+
+
+class Disturbance(SectionModel):
+    """External torque per body axis, eq 3.9: w_i = bias_i + A_i sin(nt) + B_i sin(2nt) (ft·lbf).
+
+    Give the bias either directly (``bias``) or as ``bias_from_tea``: the attitude (deg) that
+    the bias must make a torque equilibrium (eq 4.1).  Neither means zero bias.
+    """
+
+    bias: Optional[TorqueVec] = Field(None, description="constant torque [roll, pitch, yaw], ft·lbf")
+    bias_from_tea: Optional[AngleVec] = Field(
+        None, description="attitude [roll, pitch, yaw] in deg whose equilibrium bias (eq 4.1) is used")
+    A: TorqueVec = Field([1.0, 2.0, 1.0], description="amplitude of sin(n t) per axis, ft·lbf")
+    B: TorqueVec = Field([0.5, 0.5, 0.5], description="amplitude of sin(2 n t) per axis, ft·lbf")
+
+    @model_validator(mode="after")
+    def _one_bias(self):
+        if self.bias is not None and self.bias_from_tea is not None:
+            raise ValueError("give either 'bias' or 'bias_from_tea', not both")
+        if self.bias_from_tea is not None and any(abs(a) >= 89.0 for a in self.bias_from_tea):
+            raise ValueError("bias_from_tea angles must lie within ±89 deg (eq 3.6 is singular at 90 deg)")
+        return self
+
+    def requested_tea(self) -> np.ndarray | None:
+        """The TEA this section asks for (``bias_from_tea``), the ``expected`` root of
+        :func:`acmm.model.tea.solve_tea` (its bias may have several equilibria; this one is meant).
+
+        Returns
+        -------
+        (3,) ndarray or None
+            The attitude, rad; None without ``bias_from_tea``.
+        """
+        return None if self.bias_from_tea is None else np.radians(np.asarray(self.bias_from_tea, float))
+
+
+class Actuators(SectionModel):
+    """CMG actuator limits (report ch. 5.1)."""
+
+    torque_limit: Torque = Field(150.0, description="control torque limit per axis, ft·lbf")
+    momentum_limit: Momentum = Field(20000.0, description="CMG momentum limit per axis, ft·lbf·s")
+
+    @field_validator("torque_limit", "momentum_limit")
+    @classmethod
+    def _positive(cls, v):
+        if v <= 0:
+            raise ValueError("must be > 0")
+        return v
 
 
 class Sector(SectionModel):

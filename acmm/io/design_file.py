@@ -128,23 +128,6 @@ def load_design_table(path: Path) -> DesignTable:
                        attrs.get("schedule_form", "polynomial"), level)
 
 
-def stored_unit_system(path: Path) -> str:
-    """``unit_system`` root attribute of a results file (files before issue 14: imperial).
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The results file.
-
-    Returns
-    -------
-    str
-        ``"imperial"`` or ``"SI"``.
-    """
-    with h5py.File(path, "r") as f:
-        return h5_text(f.attrs.get("unit_system", "imperial"))
-
-
 def h5_text(v) -> str:
     """An HDF5 string (bytes of a fixed-length one, or str) as str.
 

@@ -11,7 +11,7 @@ import numpy as np
 #: Largest |element| of a plausible inertia, slug·ft²: the Space Station is ~1e7–1e8 slug·ft²; the
 #: bound leaves orders of magnitude of headroom while keeping every derived quantity (ω²·I, I·ω·h,
 #: Riccati products) far from float overflow (the config refuses beyond it too,
-#: :mod:`acmm.io.config_fields`).
+#: :mod:`acmm.io.config`).
 MAX_INERTIA = 1e13
 
 #: the six independent elements of an inertia, in the order the draws take them

@@ -12,16 +12,15 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+import h5py
 import numpy as np
 
 from acmm.io.config import Config
-from acmm.stages.certify import UNIT_ROLES as CERTIFICATE_ROLES
-from acmm.stages.certify import certificate_items, compute_certificate
-from acmm.stages.common import as_config, define_units, in_system, write_results
+from acmm.stages.common import as_config, write_results
 from acmm_qpp.outputs import stage
 from acmm.stages.pool import pool_map, process_pool, stop_pool
 from acmm_qpp.results import draw_figures
-from acmm.io.design_file import DesignTable, stored_table_digest, stored_unit_system, load_design_table
+from acmm.io.design_file import DesignTable, h5_text, stored_table_digest, load_design_table
 import json
 import time
 from acmm_qpp.provenance import config_hash
@@ -275,24 +274,15 @@ def run_design(config, progress=None, figures: bool | None = None, warn=None, *,
     """
     cfg = as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
-    s = design_settings(cfg)
     r = compute_design(cfg, progress)
     if warn is not None and r.unstable() is not None:
         warn(f"{cfg.name}: {r.unstable()}; writing it to {cfg.run_dir() / 'design.h5'} all the same")
-    pts = design_output.point_items(r.points)
-    items = design_output.table_items(r, pts)
-    if r.fit is not None:
-        items["schedule"] = design_output.schedule_items(r)
-    # the file this design replaces: its proof is reused where the same program found it for these loops
-    items["dwell"] = certificate_items(compute_certificate(cfg, r.table, cfg.run_dir() / "design.h5", exact=True))
-    roles = {**design_output.unit_roles(pts, r.fit is not None),
-             **{k: v for k, v in CERTIFICATE_ROLES.items() if k.split("/")[1] in items["dwell"]}}
-    items = define_units(in_system(items, cfg, roles), cfg.orbit_rate)
+    items = design_output.design_items(r, cfg)
     write_results(out / "design.h5", items, cfg,
                   {"stage": "design", "design_hash": r.table.design_hash, "n_points": len(r.points),
                    "schedule_form": r.table.form, "table_sha256": stored_table_digest(items, cfg.output.units)})
     if want_figures:
-        draw_figures(design_output.design_figures(r, s, out, cfg.output.units))
+        draw_figures(design_output.design_figures_from_file(out / "design.h5", out))
     return r, cfg.run_dir() / "design.h5"
 
 
@@ -320,8 +310,10 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None, warn=Non
     if path.is_file():          # a regular file (a FIFO or a device there would block or never end)
         try:
             table = load_design_table(path)
-            if table.design_hash == want and stored_unit_system(path) == cfg.output.units:   # one system per run folder
-                return table, f"reused {path}"
+            if table.design_hash == want:
+                with h5py.File(path, "r") as f:    # one unit system per run folder (before issue 14: imperial)
+                    if h5_text(f.attrs.get("unit_system", "imperial")) == cfg.output.units:
+                        return table, f"reused {path}"
         except (OSError, KeyError, ValueError):
             pass
     r, path = run_design(cfg, progress, figures, warn)

@@ -1,8 +1,9 @@
 """What the design stage writes: the ``design.h5`` items and the design figures.
 
-:func:`acmm.stages.design.run_design` calls these; the items are built from a
-:class:`acmm.stages.design.DesignResult`, the figures from it and the design settings: the
-model of eq 4.46, the sector LQR of ch. 5.2 and the gain schedule of ch. 5.3.
+:func:`acmm.stages.design.run_design` calls these; the items (:func:`design_items`) are built
+from a :class:`acmm.stages.design.DesignResult`, the figures from the ``design.h5`` just written
+(:func:`design_figures_from_file`, as ``acmm plot`` draws them): the model of eq 4.46, the
+sector LQR of ch. 5.2 and the gain schedule of ch. 5.3.
 """
 from __future__ import annotations
 
@@ -12,9 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from acmm.io.units import state_factors, state_space_in
+from acmm.io.units import state_factors
 from acmm.model.linearize import STATE_NAMES
-from acmm.stages.common import UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE, stored_config
+from acmm.stages.certify import UNIT_ROLES, certificate_items, compute_certificate
+from acmm.stages.common import (UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE, define_units, in_system,
+                                stored_config)
 from acmm_qpp.results import Dataset
 import h5py
 from acmm.design.schedule import schedule_gain
@@ -24,19 +27,39 @@ from acmm.io.design_file import h5_text, h5_texts
 AXES = ["roll", "pitch", "yaw"]
 
 
-def point_items(points) -> dict:
-    """The ``points/<k>_<name>`` groups of ``design.h5``: model, weights and LQR of each point.
+def design_items(r, cfg) -> dict:
+    """The items of ``design.h5``: the point groups, the table, the schedule (when fitted) and the
+    dwell-time certificate, converted to the output unit system with their units defined.
+
+    The certificate reuses the proof of the ``design.h5`` this design replaces where the same
+    program found it for these loops (:func:`acmm.stages.certify.compute_certificate`).
 
     Parameters
     ----------
-    points : list of acmm.design.schedule.PointDesign
-        The point designs.
+    r : acmm.stages.design.DesignResult
+        The design.
+    cfg : acmm.io.config.Config
+        Its config (output unit system, orbit rate n in rad/s, run folder).
 
     Returns
     -------
     dict
-        Group name → {name: :class:`acmm_qpp.results.Dataset`} (report units, stated per dataset).
+        Name → :class:`acmm_qpp.results.Dataset` or group, as written (units stated per dataset).
     """
+    pts = _point_items(r.points)
+    items = _table_items(r, pts)
+    if r.fit is not None:
+        items["schedule"] = _schedule_items(r)
+    # the file this design replaces: its proof is reused where the same program found it for these loops
+    items["dwell"] = certificate_items(compute_certificate(cfg, r.table, cfg.run_dir() / "design.h5", exact=True))
+    roles = {**_unit_roles(pts, r.fit is not None),
+             **{k: v for k, v in UNIT_ROLES.items() if k.split("/")[1] in items["dwell"]}}
+    return define_units(in_system(items, cfg, roles), cfg.orbit_rate)
+
+
+def _point_items(points) -> dict:
+    """The ``points/<k>_<name>`` groups of ``design.h5`` (model, weights and LQR of each
+    :class:`acmm.design.schedule.PointDesign`; report units, stated per dataset)."""
     pts = {}
     for k, p in enumerate(points):
         res, ric = p.gain, p.gain.riccati
@@ -149,21 +172,9 @@ def _lmi_items(r) -> dict:
     }
 
 
-def table_items(r, pts: dict) -> dict:
-    """The top-level datasets of ``design.h5`` (the table, per-point summaries) around ``pts``.
-
-    Parameters
-    ----------
-    r : acmm.stages.runners.DesignResult
-        The design.
-    pts : dict
-        The point groups of :func:`point_items` (nested under ``points``).
-
-    Returns
-    -------
-    dict
-        Name → :class:`acmm_qpp.results.Dataset` or group (report units, stated per dataset).
-    """
+def _table_items(r, pts: dict) -> dict:
+    """The top-level datasets of ``design.h5`` (the table, per-point summaries; report units,
+    stated per dataset) around the point groups ``pts`` (nested under ``points``)."""
     items = {
         "points": pts,
         "names": Dataset(np.array(r.table.names, dtype="S"), "1", "design point names in order", dims=("point",)),
@@ -200,19 +211,9 @@ def table_items(r, pts: dict) -> dict:
     return items
 
 
-def schedule_items(r) -> dict:
-    """The ``schedule`` group of ``design.h5`` (fit, its checks, the path check); ``r.fit`` set.
-
-    Parameters
-    ----------
-    r : acmm.stages.runners.DesignResult
-        A design with a schedule.
-
-    Returns
-    -------
-    dict
-        Name → :class:`acmm_qpp.results.Dataset` or group (units stated per dataset).
-    """
+def _schedule_items(r) -> dict:
+    """The ``schedule`` group of ``design.h5`` (fit, its checks, the path check; units stated per
+    dataset) of a design with a schedule (``r.fit`` set)."""
     sched = {
         "coef": Dataset(r.fit.coef, UNIT_K + "/rad^k", "K_ij(θ2*) = Σ coef[k,i,j] θ2*^k" if r.fit.form == "polynomial"
                         else "least-squares polynomial of the gains, for reference (form table: K linear in θ2* "
@@ -260,21 +261,10 @@ def schedule_items(r) -> dict:
     return sched
 
 
-def unit_roles(pts: dict, has_fit: bool) -> dict:
-    """Which datasets of ``design.h5`` are converted to the output unit system, and as what.
-
-    Parameters
-    ----------
-    pts : dict
-        The point groups of :func:`point_items`.
-    has_fit : bool
-        The design has a schedule.
-
-    Returns
-    -------
-    dict
-        Dataset path → role of :func:`acmm.io.units.state_space_in` (``"K"``, ``"A"``, ...).
-    """
+def _unit_roles(pts: dict, has_fit: bool) -> dict:
+    """Dataset path → role of :func:`acmm.io.units.state_space_in` (``"K"``, ``"A"``, ...): which
+    datasets of ``design.h5`` (point groups ``pts``, a schedule when ``has_fit``) are converted to
+    the output unit system, and as what."""
     roles = {"K": "K"}
     for key in pts:
         roles.update({f"points/{key}/{m}": m for m in ("A", "B", "G", "Q", "P", "K")})
@@ -286,23 +276,9 @@ def unit_roles(pts: dict, has_fit: bool) -> dict:
     return roles
 
 
-def gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
-    """(unit of each state as printed, torque unit) for the gain figure's labels (Figs 5.3–5.26).
-
-    Parameters
-    ----------
-    drf_mode : str
-        DRF mode of the 24 states (:func:`acmm.model.linearize.state_units`).
-    units_system : str
-        Unit system of the figure, ``"imperial"`` or ``"SI"``.
-
-    Returns
-    -------
-    units : tuple of str
-        The 24 state unit labels, as printed.
-    torque_unit : str
-        The torque unit label (``"ft·lbf"`` or ``"N·m"``).
-    """
+def _gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
+    """(the 24 state unit labels as printed, torque unit ``"ft·lbf"`` or ``"N·m"``) for the gain
+    figure's labels (Figs 5.3–5.26) in DRF mode ``drf_mode`` and unit system ``units_system``."""
     from acmm.plots.base import state_units  # deferred: matplotlib start-up
 
     if units_system == "imperial":
@@ -310,70 +286,19 @@ def gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
     return tuple(u.replace("*", "·") for u in state_factors(drf_mode, units_system)[1]), "N·m"
 
 
-def design_figures(r, s, run_dir: Path, units_system: str) -> list:
-    """The figures of a design: the points' pole map with the sector of ch. 5.2 (Fig 5.2), the
-    gain schedule (Figs 5.3–5.26) and the path check (margins, scheduled poles), each a call
-    for :func:`acmm_qpp.results.draw_figures`.
-
-    Parameters
-    ----------
-    r : acmm.stages.design.DesignResult
-        The design (its points, schedule fit and path check).
-    s : acmm.design.settings.DesignSettings
-        Its settings (orbit rate n in rad/s, sector σ in units of n and half-angle in deg, DRF mode).
-    run_dir : pathlib.Path
-        Folder of the figures: ``design_poles.png``, ``design_gains.png``,
-        ``design_path_margins.png``, ``design_path_poles.png``.
-    units_system : str
-        ``"imperial"`` or ``"SI"``: unit system of the gains drawn.
-
-    Returns
-    -------
-    list of functools.partial
-        The figure calls.
-    """
-    from acmm.plots import design as design_plots  # deferred: matplotlib start-up
-
-    calls = [partial(design_plots.pole_map, [p.gain.poles for p in r.points], [p.spec.name for p in r.points],
-                     s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg, run_dir / "design_poles.png")]
-    if r.fit is not None:
-        calls.append(_gain_figure(r.points, r.fit, s, run_dir / "design_gains.png", units_system))
-    pc = r.path_check
-    if pc is not None:
-        calls.append(partial(design_plots.schedule_path_check, pc.theta2, pc.max_real, pc.margin, pc.disk_margin,
-                             run_dir / "design_path_margins.png"))
-        calls.append(partial(design_plots.scheduled_pole_map, pc.poles, pc.theta2, s.orbit_rate, s.sector.sigma,
-                             s.sector.half_angle_deg, run_dir / "design_path_poles.png"))
-    return calls
-
-
-def _gain_figure(points, fit, s, path: Path, units_system: str):
-    """The gain-schedule figure's call: the points' LQR gains and the schedule ``fit`` (imperial
-    units, converted to ``units_system``: the schedule is linear in K)."""
-    from acmm.plots import design as design_plots  # deferred: matplotlib start-up
-
-    gains = np.array([p.gain.K for p in points])
-    theta2 = np.array([p.tea.theta[1] for p in points])
-    if units_system != "imperial":
-        conv = lambda K: state_space_in(units_system, s.drf_mode, K=K)["K"]  # noqa: E731
-        gains = conv(gains)
-        fit = replace(fit, coef=conv(fit.coef), gains=conv(fit.gains), rms_residual=conv(fit.rms_residual))
-    units, torque = gain_labels(s.drf_mode, units_system)
-    return partial(design_plots.gain_schedule_grid, theta2, gains, design_plots.sample_schedule(fit, theta2),
-                   STATE_NAMES, path, units=list(units), torque_unit=torque)
-
-
 def design_figures_from_file(path: Path, out_dir: Path) -> list:
-    """The figures of :func:`design_figures` drawn from a ``design.h5`` alone (``acmm plot``):
-    the points' poles and TEAs, the gains and schedule, the path check and the sector, read
-    from the file and its stored config; nothing is designed again.
+    """The figures of a design drawn from its ``design.h5`` alone (by the design stage after it
+    wrote the file, and by ``acmm plot``): the points' pole map with the sector of ch. 5.2
+    (Fig 5.2), the gain schedule (Figs 5.3–5.26, in the file's unit system) and the path check
+    (margins, scheduled poles), read from the file and its stored config; nothing is designed again.
 
     Parameters
     ----------
     path : pathlib.Path
         The ``design.h5`` (imperial or SI).
     out_dir : pathlib.Path
-        Folder of the figures (the same file names as the design stage writes).
+        Folder of the figures: ``design_poles.png``, ``design_gains.png``,
+        ``design_path_margins.png``, ``design_path_poles.png``.
 
     Returns
     -------
@@ -407,7 +332,7 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
         fine = np.linspace(theta2.min(), theta2.max(), 60)
         sampled = design_plots.SampledSchedule(
             form, fine, np.array([schedule_gain(form, sched["coef"], sched["variable"], K, t) for t in fine]))
-        units, torque = gain_labels(s.drf_mode, system)
+        units, torque = _gain_labels(s.drf_mode, system)
         calls.append(partial(design_plots.gain_schedule_grid, theta2, K, sampled, STATE_NAMES,
                              out_dir / "design_gains.png", units=list(units), torque_unit=torque))
         pc = sched.get("path")

@@ -31,24 +31,6 @@ from acmm_qpp.signals import TERMINATING, interrupts_deferred
 PR_SET_PDEATHSIG = 1
 
 
-def set_parent_death_signal() -> bool:
-    """Ask the kernel (Linux ``prctl(PR_SET_PDEATHSIG)``) to send SIGKILL to this process when
-    the thread that forked it exits, however it exits (``kill -9`` included).
-
-    Returns
-    -------
-    bool
-        True when set (False elsewhere than Linux, or without ``prctl``).
-    """
-    if not sys.platform.startswith("linux"):
-        return False
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        return libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
-    except (OSError, AttributeError):
-        return False
-
-
 def process_pool(workers: int, initializer=None) -> cf.ProcessPoolExecutor:
     """A process pool of ``workers`` processes set up by :func:`_pool_worker`.
 
@@ -69,41 +51,34 @@ def process_pool(workers: int, initializer=None) -> cf.ProcessPoolExecutor:
                                   initargs=(os.getpid(), initializer))
 
 
-def die_with_parent(parent: int) -> None:
-    """In a pool worker: be killed (SIGKILL) when ``parent`` exits, however
-    it exits; exit at once if it is already gone.  The default handlers of SIGTERM and SIGHUP
-    are restored (a child is stopped by its parent, or by the signal itself).
-
-    Parameters
-    ----------
-    parent : int
-        The pid of the process that forked this one.
-    """
+def _pool_worker(parent: int, initializer=None, interval: float = 1.0) -> None:
+    """A pool worker's set-up: Ctrl-C is the parent's alone; SIGTERM and SIGHUP take their default
+    action (a child is stopped by its parent, or by the signal itself); the worker dies with
+    ``parent``, however it exits (``kill -9`` included): SIGKILL from the kernel when the thread
+    that forked it exits (Linux ``prctl(PR_SET_PDEATHSIG)``), an exit at once if it is already
+    gone, and a daemon thread polling ``os.getppid()`` every ``interval`` s (where ``prctl`` does
+    not exist); then ``initializer()``."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     for sig in TERMINATING:
         try:
             signal.signal(sig, signal.SIG_DFL)
         except (OSError, ValueError):
             pass
-    set_parent_death_signal()
-    if os.getppid() != parent:               # the parent died before the line above
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent:               # the parent died before the prctl above
         os._exit(1)
 
+    def watch():
+        while True:
+            time.sleep(interval)
+            if os.getppid() != parent:
+                os._exit(1)
 
-def _watch(parent: int, interval: float) -> None:
-    while True:
-        time.sleep(interval)
-        if os.getppid() != parent:
-            os._exit(1)
-
-
-def _pool_worker(parent: int, initializer=None, interval: float = 1.0) -> None:
-    """A pool worker's set-up: Ctrl-C is the parent's alone; SIGTERM and SIGHUP take their default
-    action; the worker dies with ``parent`` (:func:`die_with_parent`, and a watch
-    thread polling every ``interval`` s where ``PR_SET_PDEATHSIG`` does not exist); then
-    ``initializer()``."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    die_with_parent(parent)
-    threading.Thread(target=_watch, args=(parent, interval), daemon=True, name="parent-watch").start()
+    threading.Thread(target=watch, daemon=True, name="parent-watch").start()
     if initializer is not None:
         initializer()
 

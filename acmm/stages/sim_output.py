@@ -97,64 +97,19 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
     return items, attrs
 
 
-def sim_figures(cfg, sc, r, stats: list, items: dict, folder: Path) -> list:
-    """The simulation figures (axis histories, summary, inertia steps), each a call for
-    :func:`acmm_qpp.results.draw_figures`.
-
-    ``items`` are :func:`sim_items` (imperial units); the figures use ``cfg.output.units``
-    (Figs 6.2–6.30 of ch. 6).
-
-    Parameters
-    ----------
-    cfg : acmm.io.config.Config
-        The run's config (name, run directory, design model, output unit system).
-    sc : acmm.simulate.scenario.Scenario
-        The simulated scenario (level start times s, inertia per level slug·ft²).
-    r : acmm.simulate.scenario.SimResult
-        The trajectory (state in rad, rad/s, ft·lbf·s; delivered torque ``u`` in ft·lbf).
-    stats : list of dict
-        :func:`acmm.simulate.scenario.level_statistics` of ``r``.
-    items : dict
-        The datasets of :func:`sim_items` (``orbits``, ``attitude_error`` rad,
-        ``rate_rel_lvlh`` deg/s).
-    folder : pathlib.Path
-        The folder of the figures.
-
-    Returns
-    -------
-    list of functools.partial
-        The figure calls: ``sim_axes.png``, ``sim_summary.png`` and, with more than one
-        inertia level, ``sim_inertia.png`` in ``folder``.
-    """
-    from acmm.plots import simulation as sim_plots  # deferred: matplotlib start-up
-
-    d = Path(folder)
-    units = cfg.output.units
-    orbits = items["orbits"].data
-    err_deg = np.degrees(items["attitude_error"].data)
-    h = r.state[:, 6:9]
-    title = f"{cfg.name}: {cfg.design.model} design — {r.verdict}"
-    calls = [partial(sim_plots.axis_histories, orbits, err_deg, items["rate_rel_lvlh"].data, r.u, h, title,
-                     d / "sim_axes.png", units=units),
-             partial(sim_plots.summary, orbits, err_deg, h, r.u, stats, r.verdict, cfg.name,
-                     d / "sim_summary.png", units=units)]
-    if len(sc.level_start) > 1:
-        calls.append(partial(sim_plots.inertia_histories, orbits, sc.inertia[r.level], d / "sim_inertia.png",
-                             units=units))
-    return calls
-
-
 def sim_figures_from_file(path, out_dir) -> list:
-    """The figures of :func:`sim_figures` drawn from a ``sim.h5`` alone (``acmm plot``): the
-    stored time series at full resolution, the per-level table and the inertia levels, in the
-    report's units whatever units the file is in; nothing is simulated again.
+    """The simulation figures (Figs 6.2–6.30 of ch. 6) drawn from a ``sim.h5`` alone (by the
+    simulation stage after it wrote the file, and by ``acmm plot``): the stored time series at
+    full resolution, the per-level table and the inertia levels, read in the report's units
+    whatever units the file is in and drawn in ``output.units``; nothing is simulated again.
 
     Parameters
     ----------
     path : pathlib.Path
         The ``sim.h5`` (imperial or SI).
     out_dir : pathlib.Path
-        Folder of the figures (the same file names as the simulation stage writes).
+        Folder of the figures: ``sim_axes.png``, ``sim_summary.png`` and, with more than one
+        inertia level, ``sim_inertia.png``.
 
     Returns
     -------

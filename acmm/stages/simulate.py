@@ -96,8 +96,8 @@ def run_simulate(config, progress=None, figures: bool | None = None, warn=None, 
     stats = scen.level_statistics(sc, r)
     result = SimulateResult(cfg, sc, r, stats, note, wall)
     items, attrs = sim_output.sim_items(cfg, sc, r, stats, table.design_hash, wall)
-    figures_to_draw = sim_output.sim_figures(cfg, sc, r, stats, items, out) if want_figures else []
     items = define_units(in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
     write_results(out / "sim.h5", items, cfg, attrs, aux_coords=AUX_COORDS)
-    draw_figures(figures_to_draw)
+    if want_figures:
+        draw_figures(sim_output.sim_figures_from_file(out / "sim.h5", out))
     return result, cfg.run_dir() / "sim.h5"

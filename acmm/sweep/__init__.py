@@ -46,8 +46,8 @@ Execution and results
 Package layout
     :mod:`~acmm.sweep.config` (the sweep file and its validation), :mod:`~acmm.sweep.cases`
     (pure case generation: draws, grids, perturbation), :mod:`~acmm.sweep.case` (running one case
-    and the margin search), :mod:`~acmm.sweep.executors` (executors, tasks, chunking),
-    :mod:`~acmm.sweep.dask_settings` (the recommended Dask configuration of a sweep cluster),
-    :mod:`~acmm.sweep.journal` (the group-commit journal), :mod:`~acmm.sweep.output` (HDF5, CSV,
-    figures) and :mod:`~acmm.sweep.run` (the driver).
+    and the margin search), :mod:`~acmm.sweep.dask_settings` (the recommended Dask configuration
+    of a sweep cluster), :mod:`~acmm.sweep.journal` (the group-commit journal),
+    :mod:`~acmm.sweep.output` (HDF5, CSV, figures) and :mod:`~acmm.sweep.run` (the driver, its
+    executors, tasks and chunks).
 """

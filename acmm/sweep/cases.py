@@ -7,7 +7,7 @@ from typing import Optional
 import numpy as np
 
 from acmm.model.inertia import perturb_inertia, unphysical_reason
-from acmm.sweep.parameters import PARAMETERS, SHORTHANDS
+from acmm.sweep.spec import PARAMETERS, SHORTHANDS
 
 
 AXES = ("roll", "pitch", "yaw")

@@ -20,15 +20,15 @@ them::
 Alternatively the ``sweep`` section may sit inside an ordinary config (no ``base``/``bases``):
 the rest of that file is then the single base config and the sweep takes its ``name``.
 
-Parameters (see :data:`PARAMETERS`): relative inertia-element changes ``dI11 … dI23``
-(shorthand ``inertia``), a uniform inertia scale ``inertia_scale``, additive bias torques
-``bias_roll|pitch|yaw`` (ft·lbf, shorthand ``bias``), a factor on the harmonic amplitudes
+Parameters (see :data:`acmm.sweep.spec.PARAMETERS`): relative inertia-element changes
+``dI11 … dI23`` (shorthand ``inertia``), a uniform inertia scale ``inertia_scale``, additive bias
+torques ``bias_roll|pitch|yaw`` (ft·lbf, shorthand ``bias``), a factor on the harmonic amplitudes
 of eq 3.9 ``harmonic_scale`` and initial attitude offsets ``offset_roll|pitch|yaw`` (deg, shorthand
 ``offset``).  Distributions: ``{uniform: [low, high]}``, ``{normal: [mean, std]}`` or
 ``{percent: p}`` (relative and scale parameters only: neutral value ± p/100, uniform).
 
-The parameters live in :mod:`acmm.sweep.parameters`, the schema of the ``sweep`` section in
-:mod:`acmm.sweep.spec`; this module resolves the base configs and reads the file.
+The parameters and the schema of the ``sweep`` section live in :mod:`acmm.sweep.spec`; this
+module resolves the base configs and reads the file.
 """
 from __future__ import annotations
 

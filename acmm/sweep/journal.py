@@ -1,20 +1,110 @@
-"""The sweep journal: one JSON line per finished case, flushed and fsynced (group commit)."""
+"""The sweep journal: one JSON line per finished case, flushed at once and fsynced at most every
+0.5 s (group commit), and what a record must hold when a sweep is resumed from it.
+
+A journal line that is valid JSON but not a record the sweep wrote (edited, or from another
+version) would otherwise fail later, deep in the table builder, with a traceback.
+:func:`record_problem` names the first missing or mistyped field instead.
+"""
 from __future__ import annotations
 
 import contextlib
-
+import functools
 import json
 import os
 import time
 from pathlib import Path
 
+import numpy as np
+
 from acmm_qpp.errors import ConfigError
-from acmm.sweep.journal_records import record_problem
 from acmm_qpp.configio import read_regular_file
 from acmm_qpp.outputs import output_error
+from acmm.sweep.case import empty_row
+from acmm.sweep.cases import VERDICTS
 
 
 JOURNAL_VERSION = 1
+
+_NUMBER = (int, float)
+
+#: the fields a case record adds to its metrics row (:func:`acmm.sweep.case.empty_row`)
+CASE_KEYS = {"base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ())}
+
+
+@functools.cache
+def _case_fields() -> dict:
+    """Case record fields: name → (kind, shape), kind "num" (a number, NaN or ±inf), "int" or
+    "str": :data:`CASE_KEYS` and the metrics row's fields, read off its empty row."""
+    fields = dict(CASE_KEYS)
+    for k, v in empty_row(1).items():
+        fields[k] = ("str" if isinstance(v, str) else "int" if isinstance(v, int) else "num", np.shape(v))
+    return fields
+
+
+#: margin-search record fields, as :func:`_case_fields` ("bool": true/false; shape None: a list)
+MARGIN_FIELDS = {
+    "base": ("str", ()), "direction": ("str", ()), "limit": ("num", ()), "first_failure": ("num", ()),
+    "failure_verdict": ("str", ()), "failure_reason": ("str", ()), "reached_end": ("bool", ()),
+    "search_end": ("num", ()), "evaluated_s": ("num", None), "evaluated_verdict": ("str", None),
+}
+
+
+def _is(kind: str, v) -> bool:
+    if kind == "num":            # any float the sweep writes: finite, NaN or ±inf
+        return isinstance(v, _NUMBER) and not isinstance(v, bool)
+    if kind == "int":
+        return isinstance(v, int) and not isinstance(v, bool) and v >= 0
+    if kind == "bool":
+        return isinstance(v, bool)
+    return isinstance(v, str)
+
+
+def _shaped(kind: str, v, shape) -> bool:
+    if shape is None:
+        return isinstance(v, list) and all(_is(kind, x) for x in v)
+    if not shape:
+        return _is(kind, v)
+    return (isinstance(v, list) and len(v) == shape[0]
+            and all(_shaped(kind, x, shape[1:]) for x in v))
+
+
+def record_problem(rec: object, bases: set | None = None) -> str | None:
+    """What is wrong with a journal record, or None when it is one the sweep wrote.
+
+    Parameters
+    ----------
+    rec : object
+        A parsed journal line (after the header).
+    bases : set of str, optional
+        The sweep's base labels (a record of another base is wrong).
+
+    Returns
+    -------
+    str or None
+        The first problem (a missing or mistyped field, an unknown verdict, kind or base).
+    """
+    if not isinstance(rec, dict):
+        return "not a record (a JSON object)"
+    kind = rec.get("kind")
+    fields = _case_fields() if kind == "case" else MARGIN_FIELDS if kind == "margin" else None
+    if fields is None:
+        return f"unknown record kind {kind!r}"
+    for name, (k, shape) in fields.items():
+        if name not in rec:
+            return f"{kind} record without {name!r}"
+        if not _shaped(k, rec[name], shape):
+            return f"{kind} record with a malformed {name!r}"
+    if kind == "case":
+        if rec["verdict"] not in VERDICTS:
+            return f"unknown verdict {rec['verdict']!r}"
+        values = rec.get("values")
+        if not isinstance(values, dict) or not all(_is("num", v) for v in values.values()):
+            return "case record with a malformed 'values'"
+    elif rec["direction"] not in ("up", "down"):
+        return f"unknown margin direction {rec['direction']!r}"
+    if bases is not None and rec["base"] not in bases:
+        return f"record of base {rec['base']!r}, which the sweep does not have"
+    return None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -42,7 +132,7 @@ def read_journal(path: Path, key: str, bases: set | None = None) -> list[dict]:
     ------
     ConfigError
         The journal belongs to a different sweep configuration, or a line (other than a torn
-        last one) is not a record the sweep wrote (:func:`acmm.sweep.journal_records.record_problem`).
+        last one) is not a record the sweep wrote (:func:`record_problem`).
     """
     records = []
     try:            # a FIFO or a device there (a symlink to /dev/zero) would hang or fill memory
@@ -83,7 +173,13 @@ def _journal_errors(path):
 
 
 class Journal:
-    """Append-only JSON-lines file; each record is flushed and fsynced before returning.
+    """Append-only JSON-lines file with group commit (issue 16): every record is flushed at once,
+    fsynced at most every ``sync_interval`` seconds and on close.
+
+    A flushed line is in the operating system's cache, so a killed sweep (SIGKILL, Ctrl-C) keeps
+    every record; only a machine crash can lose the records of the last ``sync_interval``, which
+    ``--resume`` recomputes (a torn line is ignored).  An fsync costs ~1–6 ms here, as much as a
+    10-orbit case, so one per record would dominate a sweep.
 
     Parameters
     ----------
@@ -96,9 +192,12 @@ class Journal:
         one after dropping a torn last line.
     """
 
+    sync_interval = 0.5
+
     def __init__(self, path: Path, key: str, fresh: bool):
         with _journal_errors(path):
             self._open(path, key, fresh)
+        self._last_sync = time.monotonic()
 
     def _open(self, path: Path, key: str, fresh: bool) -> None:
         self.path = Path(path)
@@ -125,74 +224,18 @@ class Journal:
                     f.truncate(data.rfind(b"\n") + 1)
         self._f = open(self.path, "a")
 
-    def append(self, record: dict) -> None:
-        """Append one record as a JSON line, flushed and fsynced.
-
-        Parameters
-        ----------
-        record : dict
-            JSON-serialisable record.
-
-        Raises
-        ------
-        OutputError
-            When the write fails (exit 4).
-        """
-        with _journal_errors(self.path):
-            self._f.write(json.dumps(record) + "\n")
-            self._f.flush()
-            os.fsync(self._f.fileno())
-
-    def close(self) -> None:
-        """Close the file (every record is already on disk)."""
-        try:
-            self._f.close()
-        except OSError:          # every record was already flushed and fsynced
-            pass
-
-
-class GroupCommitJournal(Journal):
-    """A :class:`Journal` that flushes every record at once but fsyncs at most every
-    ``sync_interval`` seconds (and on close): group commit (issue 16).
-
-    A flushed line is in the operating system's cache, so a killed sweep (SIGKILL, Ctrl-C) keeps
-    every record, as before; only a machine crash can lose the records of the last
-    ``sync_interval``, which ``--resume`` recomputes (a torn line is ignored).  An fsync costs
-    ~1–6 ms here, as much as a 10-orbit case, so one per record would dominate a sweep.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The journal file.
-    key : str
-        Results key of the sweep.
-    fresh : bool
-        Start a new journal (see :class:`Journal`).
-    """
-
-    sync_interval = 0.5
-
-    def __init__(self, path: Path, key: str, fresh: bool):
-        super().__init__(path, key, fresh)
-        self._last_sync = time.monotonic()
-
-    def append(self, record: dict) -> None:
-        """Append one record (see :meth:`append_many`).
-
-        Parameters
-        ----------
-        record : dict
-            JSON-serialisable record.
-        """
-        self.append_many([record])
-
-    def append_many(self, records: list) -> None:
+    def append(self, records: list) -> None:
         """Append records (one write, one flush; an fsync when the last is older than the interval).
 
         Parameters
         ----------
         records : list of dict
             JSON-serialisable records.
+
+        Raises
+        ------
+        OutputError
+            When the write fails (exit 4).
         """
         if not records:
             return
@@ -209,5 +252,7 @@ class GroupCommitJournal(Journal):
             if not self._f.closed:
                 self._f.flush()
                 os.fsync(self._f.fileno())
-        super().close()
-
+        try:
+            self._f.close()
+        except OSError:          # every record was already flushed and fsynced
+            pass

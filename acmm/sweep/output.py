@@ -11,9 +11,8 @@ from acmm_qpp.outputs import write_text
 from acmm_qpp.results import Dataset, write_h5
 from acmm.io.dimensions import with_coordinates
 from acmm.sweep.cases import AXES, VERDICTS
-from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS
+from acmm.sweep.spec import MAP_EXTRAS, PARAMETERS, swept_parameters
 from acmm.sweep.config import Sweep, parse_sweep
-from acmm.sweep.spec import swept_parameters
 import h5py
 import yaml
 from acmm.design.schedule_points import point_specs
@@ -52,23 +51,11 @@ def split_records(sweep: Sweep, records: list[dict]):
     return rows, margins
 
 
-def table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
-    """Column arrays of the case rows (sorted by base then index).
-
-    Parameters
-    ----------
-    sweep : acmm.sweep.config.Sweep
-        The sweep.
-    rows : list of dict
-        Case rows (:func:`acmm.sweep.case.run_case`), sorted.
-
-    Returns
-    -------
-    dict
-        Column name → array (N rows) in the rows' units: attitude errors and TEAs deg, momentum
-        ft·lbf·s, times orbits, inertia slug·ft², bias ft·lbf; ``parameters`` a dict of the
-        swept parameters; ``verdict`` and ``reason`` lists of str.
-    """
+def _table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
+    """Column name → array (N rows) of the case rows (:func:`acmm.sweep.case.run_case`, sorted by
+    base then index) in the rows' units: attitude errors and TEAs deg, momentum ft·lbf·s, times
+    orbits, inertia slug·ft², bias ft·lbf; ``parameters`` a dict of the swept parameters;
+    ``verdict`` and ``reason`` lists of str."""
     names = swept_parameters(sweep.spec)
     labels = [b.label for b in sweep.bases]
     N = len(rows)
@@ -188,7 +175,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
         (pathlib.Path of ``sweep.h5``, list of the figure paths).
     """
     rows, margins = split_records(sweep, records)
-    a = table_arrays(sweep, rows)
+    a = _table_arrays(sweep, rows)
     labels = [b.label for b in sweep.bases]
     nominal = _nominal_tea_deg(sweep)
     S = lambda xs: np.array([x.encode() for x in xs], dtype="S") if len(xs) else np.zeros(0, "S1")  # noqa: E731
@@ -239,7 +226,7 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     figs = []
     if figures and rows:
         try:
-            figs = plot_sweep(sweep, a, run_dir, nominal)
+            figs = _plot_sweep(sweep, a, run_dir, nominal)
         except OSError as exc:        # the tables are written: only a figure failed (exit 4)
             err = FigureError.of(exc)
             raise err from (None if err is exc else exc)
@@ -269,25 +256,11 @@ def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
     write_text(path, "\n".join(lines) + "\n")
 
 
-def plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None) -> list[Path]:
-    """Stability map over two swept quantities and distributions of the peak attitude error.
-
-    Parameters
-    ----------
-    sweep : acmm.sweep.config.Sweep
-        The sweep.
-    a : dict
-        Column arrays of :func:`table_arrays` (their units).
-    run_dir : pathlib.Path
-        Folder of the figures.
-    nominal : dict, optional
-        Base label → nominal TEA (3,), deg (default: solved for each base).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The figures written.
-    """
+def _plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = None) -> list[Path]:
+    """The figures written in ``run_dir``: the stability map over two swept quantities and the
+    distributions of the peak attitude error, from the column arrays ``a`` of
+    :func:`_table_arrays` (their units); ``nominal``: base label → nominal TEA (3,), deg
+    (default: solved for each base)."""
     from matplotlib.ticker import MaxNLocator  # deferred: matplotlib start-up
 
     from acmm.plots.base import stage_pyplot, write_figure  # deferred: matplotlib start-up
@@ -368,7 +341,7 @@ def _label(name: str, units: str = "imperial") -> str:
 
 
 def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
-    """The figures of :func:`plot_sweep` drawn from a ``sweep.h5`` alone (``acmm plot``): its
+    """The figures of :func:`_plot_sweep` drawn from a ``sweep.h5`` alone (``acmm plot``): its
     stored resolved config (the sweep and its base configs), case table and nominal TEAs;
     nothing is run again.
 
@@ -404,4 +377,4 @@ def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
     a["parameters"] = {k: a["parameters"][k] for k in order if k in a["parameters"]}
     if not len(verdict):
         return []
-    return [partial(plot_sweep, sweep, a, out_dir, nominal)]
+    return [partial(_plot_sweep, sweep, a, out_dir, nominal)]

@@ -1,25 +1,99 @@
-"""Schema of the ``sweep`` section of a sweep config (pydantic v2, ``extra="forbid"``).
+"""The sweepable parameters and the schema of the ``sweep`` section of a sweep config
+(pydantic v2, ``extra="forbid"``).
 
-Grid or Monte Carlo distributions of the parameters of :mod:`acmm.sweep.parameters` (inertias of
-Table 1, the eq 3.9 disturbance, initial attitude offsets), the margin search on a uniform
-inertia scaling, and the sweep file (name, description, ``sweep``, ``output``).  Cross-field
-rules: one of grid/Monte Carlo, known parameter names, ranges that keep the plant physical.
+The parameters (:data:`PARAMETERS`, CR-185644 Table 1 inertias, eq 3.9 disturbance): relative
+inertia-element changes ``dI11 … dI23`` (shorthand ``inertia``), a uniform inertia scale
+``inertia_scale``, additive bias torques ``bias_roll|pitch|yaw`` (ft·lbf, shorthand ``bias``), a
+factor on the harmonic amplitudes ``harmonic_scale`` (eq 3.9) and initial attitude offsets
+``offset_roll|pitch|yaw`` (deg, shorthand ``offset``); a value given with a unit is converted
+to the parameter's unit.  The schema: grid or Monte Carlo distributions of these parameters, the
+margin search on a uniform inertia scaling, and the sweep file (name, description, ``sweep``,
+``output``).  Cross-field rules: one of grid/Monte Carlo, known parameter names, ranges that keep
+the plant physical.
 """
 from __future__ import annotations
 
 import copy
 
 import math
+from dataclasses import dataclass
 from typing import Annotated, Literal, Optional
 
 from pydantic import BeforeValidator, Field, model_validator
 
 from acmm.io.config import Config, Output
-from acmm.sweep.parameters import MAP_EXTRAS, PARAMETERS, SHORTHANDS, parameter_value, to_parameter_unit
 from acmm_qpp.config_model import StrictModel, closest, header
+from acmm_qpp.units import to_canonical
 from acmm.io.schema import AcmmGenerator, fix_alternatives
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN
 from pydantic.json_schema import models_json_schema
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A sweepable quantity: unit, neutral value, kind (relative | scale | absolute).
+
+    Attributes
+    ----------
+    name : str
+        Parameter name (a column of ``sweep.csv``).
+    unit : str
+        Its unit: ``"1"`` (dimensionless), ``"ft*lbf"`` or ``"deg"``.
+    neutral : float
+        The value that leaves the base config unchanged, in ``unit``.
+    kind : str
+        ``relative`` (x → x·(1 + p)), ``scale`` (x → p·x) or ``absolute`` (added).
+    description : str
+        What it changes.
+    """
+
+    name: str
+    unit: str
+    neutral: float
+    kind: str
+    description: str
+
+
+_AX = ("roll", "pitch", "yaw")
+_ELEMENTS = ("I11", "I22", "I33", "I12", "I13", "I23")
+
+#: Every sweepable parameter, in canonical (column) order.
+PARAMETERS: dict[str, Parameter] = {}
+for _e in _ELEMENTS:
+    PARAMETERS[f"d{_e}"] = Parameter(f"d{_e}", "1", 0.0, "relative",
+                                     f"relative change of {_e}: {_e} → {_e}·(1 + d{_e})")
+PARAMETERS["inertia_scale"] = Parameter("inertia_scale", "1", 1.0, "scale",
+                                        "uniform inertia scaling: I → s·I (applied after the element changes)")
+for _a in _AX:
+    PARAMETERS[f"bias_{_a}"] = Parameter(f"bias_{_a}", "ft*lbf", 0.0, "absolute",
+                                         f"torque added to the {_a} bias (eq 3.9)")
+PARAMETERS["harmonic_scale"] = Parameter("harmonic_scale", "1", 1.0, "scale",
+                                         "factor on the harmonic amplitudes A and B (eq 3.9)")
+for _a in _AX:
+    PARAMETERS[f"offset_{_a}"] = Parameter(f"offset_{_a}", "deg", 0.0, "absolute",
+                                           f"initial {_a} attitude minus the plant's TEA, added to "
+                                           "simulation.initial_offset")
+
+#: Shorthands expanding to several parameters (each drawn independently).
+SHORTHANDS = {"inertia": [f"d{e}" for e in _ELEMENTS],
+              "bias": [f"bias_{a}" for a in _AX],
+              "offset": [f"offset_{a}" for a in _AX]}
+
+#: Derived columns that may also be used as stability-map axes.
+MAP_EXTRAS = ("tea_shift_roll", "tea_shift_pitch", "tea_shift_yaw")
+
+
+def _in_unit(v, unit: Optional[str], where: str):
+    """``v`` converted (pint) to ``unit`` when it carries a unit (``"2 N*m"``, ``"5 deg"``); a bare
+    number (already in ``unit``), or any value when ``unit`` is None (an unknown parameter: the
+    schema reports it), as it is.  A malformed unit or one of the wrong dimension is a ValueError
+    naming ``where``, the config field (pydantic turns it into a field error)."""
+    if unit is None or not isinstance(v, str):
+        return v
+    try:
+        return to_canonical(v, unit)
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
 
 
 class _Model(StrictModel):
@@ -102,8 +176,8 @@ class SweepSpec(_Model):
             return data
         data = dict(data)
         if isinstance(data.get("grid"), dict):
-            data["grid"] = {k: [parameter_value(k, x, f"grid.{k}") for x in v] if isinstance(v, list) else v
-                            for k, v in data["grid"].items()}
+            data["grid"] = {k: [_in_unit(x, getattr(PARAMETERS.get(k), "unit", None), f"grid.{k}") for x in v]
+                            if isinstance(v, list) else v for k, v in data["grid"].items()}
         if isinstance(data.get("monte_carlo"), dict):
             mc = {}
             for k, dist in data["monte_carlo"].items():
@@ -111,11 +185,12 @@ class SweepSpec(_Model):
                     dist = dict(dist)
                     for kind in ("uniform", "normal"):
                         if isinstance(dist.get(kind), (list, tuple)):
-                            dist[kind] = [parameter_value(k, x, f"monte_carlo.{k}.{kind}") for x in dist[kind]]
+                            dist[kind] = [_in_unit(x, getattr(PARAMETERS.get(k), "unit", None), f"monte_carlo.{k}.{kind}")
+                                          for x in dist[kind]]
                 mc[k] = dist
             data["monte_carlo"] = mc
         if "settle_deg" in data:
-            data["settle_deg"] = to_parameter_unit(data["settle_deg"], "deg", "settle_deg")
+            data["settle_deg"] = _in_unit(data["settle_deg"], "deg", "settle_deg")
         return data
 
     @model_validator(mode="after")
@@ -230,7 +305,7 @@ def swept_parameters(spec: SweepSpec) -> list[str]:
     Returns
     -------
     list of str
-        Parameter names (:data:`acmm.sweep.parameters.PARAMETERS` order first).
+        Parameter names (:data:`PARAMETERS` order first).
     """
     keys = list(spec.grid or {}) + list(spec.monte_carlo or {})
     out = []

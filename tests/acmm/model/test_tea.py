@@ -13,7 +13,7 @@ import pytest
 from scipy.optimize import fsolve, minimize_scalar
 
 from acmm.model import tea
-from acmm.io.config_station import Disturbance
+from acmm.io.config import Disturbance
 from acmm.io.config import load_config
 from acmm.model.tea import NoEquilibriumError
 from acmm.stages.runners import compute_tea

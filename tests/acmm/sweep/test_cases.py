@@ -15,7 +15,7 @@ from tests.acmm.conftest import _sweep_yaml
 def test_unphysical_reason_agrees_with_config_validator():
     from pydantic import ValidationError
 
-    from acmm.io.config_station import Inertia
+    from acmm.io.config import Inertia
 
     rng = np.random.default_rng(0)
     base = np.array([[23.22e6, -0.023e6, 0.477e6], [-0.023e6, 1.30e6, -0.011e6], [0.477e6, -0.011e6, 23.23e6]])

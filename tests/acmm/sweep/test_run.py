@@ -1,5 +1,7 @@
 """Whole sweeps (acmm.sweep.run, issue 7): the same table serial and on a pool or a Dask
-cluster, kill and resume, a resume refused for another config, background snapshots."""
+cluster, kill and resume, a resume refused for another config, background snapshots; the workers
+(heap reuse restored where Dask's worker environment stops it, a lost worker, a repeated
+interrupt, a cluster running other code)."""
 from __future__ import annotations
 
 import os
@@ -16,11 +18,12 @@ from acmm_qpp.errors import ConfigError
 from acmm_qpp.results import read_h5
 from acmm.model.inertia import perturb_inertia, unphysical_reason
 from acmm.sweep.cases import case_values
-from acmm.sweep.run import run_sweep
+from acmm.sweep.run import MAX_CHUNK, MAX_TASK_SECONDS, MIN_TASK_SECONDS, _Chunker, _chunk_size, run_sweep
 from acmm.sweep.config import load_sweep, parse_sweep
 
 from tests.acmm.conftest import _sweep_yaml
 from tests.acmm.sweep.conftest import _assert_same_data, _cfg, _run_bytes
+from tests.conftest import REPO
 
 
 # --------------------------------------------------------------------------------------------
@@ -230,3 +233,260 @@ def test_background_snapshots_same_table_and_errors_reach_the_caller(tmp_path, m
     monkeypatch.setattr(run, "write_results", failing)
     with pytest.raises(OutputError, match="No space left"):
         run_sweep(cfg, workers=1, chunk=1, snapshot_interval=0.0)
+
+
+# ---------------------------------------------------------------------------------------------
+# sweep worker processes (issue 16)
+# ---------------------------------------------------------------------------------------------
+_PROBE = r"""
+import resource, sys
+import numpy as np
+from acmm.sweep.run import _restore_heap_reuse
+
+def faults():
+    r0 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    for _ in range(200):                       # a case's short-lived 1 MiB arrays, touched and freed
+        a = np.empty(1 << 17)
+        a[:] = 1.0
+        del a
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - r0
+
+before = faults()
+changed = _restore_heap_reuse()
+after = faults()
+print(before, int(changed), after)
+"""
+
+
+def _run(env_extra):
+    env = {k: v for k, v in os.environ.items() if not k.startswith("MALLOC_")}
+    env.update(env_extra)
+    out = subprocess.run([sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True, check=True)
+    return [int(x) for x in out.stdout.split()]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc mallopt")
+def test_heap_reuse_restored_under_dask_trim_threshold():
+    # the environment a Dask nanny gives its workers: every 1 MiB array is mmapped and faulted
+    # in afresh (256 pages each), until the fixed mmap threshold serves it from the heap
+    before, changed, after = _run({"MALLOC_TRIM_THRESHOLD_": "65536"})
+    assert changed == 1
+    assert before > 200 * 200
+    assert after < 0.05 * before
+
+
+def test_heap_reuse_untouched_without_the_trim_variable():
+    # glibc's dynamic threshold is on: nothing to restore, malloc left alone
+    before, changed, after = _run({})
+    assert changed == 0
+    assert after < 0.05 * 200 * 256
+
+
+def test_heap_setting_only_in_dask_worker_processes():
+    # the driver and pool processes keep the user's own MALLOC_* choice; a Dask worker (also in
+    # ``client.run``, where no task is running) gets the heap reuse back
+    from acmm.sweep.run import _in_dask_worker
+
+    # a fresh process (this one may still hold in-process workers of earlier tests)
+    out = subprocess.run([sys.executable, "-c", "import distributed\nfrom acmm.sweep.run import "
+                          "_in_dask_worker as f\nprint(f())"], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        assert list(client.run(_in_dask_worker).values()) == [True]
+        assert client.submit(_in_dask_worker, pure=False).result() is True
+
+
+# ---------------------------------------------------------------------------------------------
+# a lost worker, a repeated interrupt, a cluster running other code (a review)
+# ---------------------------------------------------------------------------------------------
+_BIG = ["sweep", "sweep_inertia30", "sweep.n_runs=600", "sweep.orbits=3", "--no-figures", "-j", "2"]
+
+
+def _start_sweep(tmp_path):
+
+    env = {**os.environ, "PYTHONPATH": str(REPO), "MPLBACKEND": "Agg",
+           "OPENBLAS_NUM_THREADS": "1"}
+    p = subprocess.Popen([sys.executable, "-m", "acmm.cli.app", *_BIG], cwd=tmp_path, env=env, text=True,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+    journal = tmp_path / "runs" / "sweep_inertia30" / "sweep.journal"
+    import time
+
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 120 and p.poll() is None:      # cases are coming back
+        if journal.exists() and journal.read_text().count("\n") >= 3:
+            break
+        time.sleep(0.02)
+    assert p.poll() is None, p.stderr.read()
+    return p, env, journal
+
+
+def _children(pid):
+    with open(f"/proc/{pid}/task/{pid}/children") as f:
+        return [int(x) for x in f.read().split()]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc, fork")
+def test_a_killed_pool_worker_is_one_line_and_the_sweep_resumes(tmp_path):
+    """It was a 93-line BrokenProcessPool traceback with exit 1 (the code of --strict)."""
+    import signal
+
+    p, env, journal = _start_sweep(tmp_path)
+    os.kill(_children(p.pid)[0], signal.SIGKILL)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 4, err
+    assert err.strip().splitlines() == ["error: a sweep worker process died (killed, or out of memory); the "
+                                        "finished cases are kept in the journal: run the sweep again with --resume"]
+    again = subprocess.run([sys.executable, "-m", "acmm.cli.app", *_BIG, "--resume"], cwd=tmp_path, env=env,
+                           capture_output=True, text=True, timeout=300, check=False)
+    assert again.returncode == 0, again.stderr
+    import json
+
+    records = [json.loads(line) for line in journal.read_text().splitlines()[1:]]
+    cases = [(r["base"], r["index"]) for r in records if r["kind"] == "case"]
+    assert len(cases) == len(set(cases)) == 2 * 600                # each base's cases, once
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process groups")
+@pytest.mark.parametrize("gap", [0.0, 0.05])
+def test_a_second_ctrl_c_does_not_hang_the_sweep(tmp_path, gap):
+    """Ctrl-C twice to the terminal's process group (the driver and its pool): the second one broke
+    the pool's shutdown and the sweep hung in multiprocessing's exit handler (a review)."""
+    import signal
+    import time
+
+    p, _, _ = _start_sweep(tmp_path)
+    os.killpg(p.pid, signal.SIGINT)
+    time.sleep(gap)
+    os.killpg(p.pid, signal.SIGINT)
+    try:
+        _, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        raise
+    assert p.returncode == 130 and err.strip() == "interrupted", err
+
+
+def test_a_dask_worker_running_other_code_is_refused():
+    from acmm.sweep.run import _call_chunk, code_identity
+
+    with pytest.raises(ConfigError, match="--scheduler: a Dask worker runs other acmm code"):
+        _call_chunk([], None, "0.0.0+000000000000")         # before anything else of the chunk
+    # (the same code passes: every Dask sweep above)
+    assert len(code_identity().rsplit("+", 1)[1]) == 12
+
+
+@pytest.mark.parametrize("address", ["tls://127.0.0.1:1", "ucx://127.0.0.1:1"])
+def test_a_scheduler_address_dask_cannot_use_is_one_line(address):
+    pytest.importorskip("distributed")
+    from acmm.sweep.run import _make_executor
+
+    with pytest.raises(ConfigError, match=f"--scheduler: cannot connect to the Dask scheduler at {address}"):
+        _make_executor(0, address)
+
+
+# ---------------------------------------------------------------------------------------------
+# sweep tasks in chunks (issue 16): the chunk sizes, and tables that do not depend on them
+# ---------------------------------------------------------------------------------------------
+
+def test_chunk_size_and_chunks():
+    assert _chunk_size(1000, 1) == 64                      # one worker process: still amortized
+    assert _chunk_size(10, 2) == 1
+    assert _chunk_size(3200, 2) == 64 == MAX_CHUNK
+    assert _chunk_size(3200, 16) == 25                     # 8 tasks per worker
+    tasks = [("case", "a", i) for i in range(5)] + [("case", "b", i) for i in range(3)] + \
+        [("margin", "a", "up"), ("margin", "a", "down")]
+    chunks = list(iter(_Chunker(tasks, 2, size=2).next, None))      # handed out lazily
+    assert [len(c) for c in chunks] == [2, 2, 1, 2, 1, 1, 1]          # a base's cases together, each margin alone
+    assert [t for c in chunks for t in c] == tasks        # order kept, nothing lost
+    assert all(len({t[1] for t in c}) == 1 for c in chunks)
+
+
+def test_chunk_size_with_a_measured_case_cost():
+    # 3.5 ms per case: tasks of 0.1 … 1 s are 29 … 285 cases
+    lo, hi = -(-MIN_TASK_SECONDS // 0.0035), MAX_TASK_SECONDS // 0.0035
+    assert (lo, hi) == (29, 285)
+    assert _chunk_size(3200, 2, 0.0035) == 200                     # 8 per worker, within the bounds
+    assert _chunk_size(3200, 16, 0.0035) == 29                     # 8 per worker would be 25: too little work
+    assert _chunk_size(10 ** 6, 100, 0.0035) == 285                # 8 per worker would be 1250: too long
+    assert _chunk_size(100, 16, 0.0035) == 7                       # every worker still gets a share
+    assert _chunk_size(40, 2, 0.0035, n_total=3200) == 29          # the tail of a large sweep: ≥ 0.1 s
+    assert _chunk_size(400, 2, 0.09) == 11                         # redesign cases: 25 would be 2.3 s
+    assert _chunk_size(5, 2, 10.0) == 1
+
+
+def test_chunker_guided_sizes_and_measure(monkeypatch):
+    import acmm.sweep.run as ex
+
+    clock = [100.0]
+    monkeypatch.setattr(ex.time, "monotonic", lambda: clock[0])
+    tasks = [("case", "a", i) for i in range(3200)] + [("margin", "a", "up")]
+    ch = _Chunker(tasks, 2)
+    sizes = []
+    first = [ch.next(), ch.next()]
+    assert [len(c) for c in first] == [64, 64]                   # unmeasured: MAX_CHUNK
+    assert ch.case_seconds() is None
+    ch.returned(64)                                              # the first chunk back starts the clock
+    clock[0] += 0.112
+    ch.returned(64)
+    assert ch.case_seconds() is None                             # one chunk per worker needed since
+    clock[0] += 0.112
+    ch.returned(64)
+    assert ch.case_seconds() == pytest.approx(0.0035)              # 2 workers × 0.224 s / 128 cases
+    while (c := ch.next()) is not None:
+        sizes.append(len(c))
+    assert sizes[0] == _chunk_size(3200 - 128 + 1, 2, 0.0035) == 193
+    assert sizes == sorted(sizes, reverse=True)                  # guided: shrinking towards the end
+    assert min(sizes[:-2]) == 29 and sizes[-1] == 1              # ≥ 0.1 s of work; the margin search alone
+    assert len(sizes) < 50                                       # 25 per worker with 64 per task
+    assert sum(sizes) + 128 == len(tasks)
+
+
+def test_pool_chunked_unchunked_and_serial_identical(tmp_path):
+    cfg = _cfg(tmp_path)
+    ref, ref_csv = _run_bytes(cfg, workers=1)
+    for chunk in (1, 3):
+        got, csv = _run_bytes(cfg, workers=2, chunk=chunk)
+        _assert_same_data(ref, got)
+        assert csv == ref_csv
+        assert got["margin"].keys() == ref["margin"].keys()
+        for k in ref["margin"]:
+            assert got["margin"][k]["limit"] == ref["margin"][k]["limit"]
+
+
+def test_dask_chunked_identical(tmp_path):
+    distributed = pytest.importorskip("distributed", reason="optional extra acmm-qpp[dask] not installed")
+    cfg = _cfg(tmp_path, "dask_chunks", n_runs=5)
+    ref, ref_csv = _run_bytes(cfg, workers=1)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster:
+        got, csv = _run_bytes(cfg, scheduler=cluster.scheduler_address, chunk=2)
+    _assert_same_data(ref, got)
+    assert csv == ref_csv
+
+
+def test_chunk_sizes_and_a_process_cluster_identical(tmp_path):
+    # chunks of 7 and 64 cases and guided chunks on a pool; 1 case per task and guided chunks on
+    # a Dask cluster of a spawned worker process (the workers users run: read-only scattered
+    # arrays, Dask's malloc environment): all the same table, bit for bit
+    distributed = pytest.importorskip("distributed", reason="optional extra acmm-qpp[dask] not installed")
+    cfg = _cfg(tmp_path, "sizes")
+    ref, ref_csv = _run_bytes(cfg, workers=1)
+    runs = [_run_bytes(cfg, workers=2, chunk=chunk) for chunk in (7, 64, None)]
+    import dask
+
+    from acmm.sweep.dask_settings import DASK_SETTINGS
+
+    # the cluster under the recommended settings (docs/howto/sweeps.md, "A Dask cluster for sweeps"): in force in the spawned
+    # worker, and the table unchanged
+    with dask.config.set(DASK_SETTINGS), distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            seen = client.run(lambda: {k: dask.config.get(k) for k in DASK_SETTINGS})
+        assert list(seen.values()) == [DASK_SETTINGS]
+        runs += [_run_bytes(cfg, scheduler=cluster.scheduler_address, chunk=chunk) for chunk in (1, None)]
+    for got, csv in runs:
+        _assert_same_data(ref, got)
+        assert csv == ref_csv
