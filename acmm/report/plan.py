@@ -2,10 +2,11 @@
 
 Each section is one or more *parts* (its text and tables, then figures) run in section order when
 serial, or concurrently on worker processes.  A part is a function ``fn(ctx, *values)`` of a fresh
-:class:`~acmm.report.context.SectionWriter`; values other sections computed (the MB3 TEA of Table 1,
-the claim-1 poles and numbers, β3 of ch. 13) are passed explicitly.  Its blocks and printed numbers
-come back as a :class:`Part` and are put together in the order of :data:`PARTS`, so the document
-is the same whichever process wrote which part.
+:class:`~acmm.report.context.SectionWriter`; values other sections computed (Table 1's TEAs, the
+claim-1 poles and numbers, β3 of ch. 13) are passed explicitly.  Each section module declares its
+own rows of :data:`PARTS`.  A part's blocks and printed numbers come back as a :class:`Part` and
+are put together in the order of :data:`PARTS`, so the document is the same whichever process
+wrote which part.
 """
 from __future__ import annotations
 
@@ -115,52 +116,12 @@ def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: 
     return Part(ctx.doc.blocks, ctx.ledger, None, time.perf_counter() - t0, f)
 
 
-def _design(c):
-    return f"design:{c}"
-
-
-def _simulate(c):
-    return f"simulate:{c}"
-
-
-#: (task name, section, function, stage tasks it reads, parts whose values it takes, rough cost in s:
-#: CPU of the part in a warmed worker on the 2-core machine, issue 16)
-_STAIR, _MB3, _DEC = _design("staircase"), _design("mb3"), _design("mb3_decoupled")
-_SIM = _simulate("staircase")
-_QUAD = _design("staircase_quadratic")
 #: stages a part shows when they ran and leaves out, saying why, when they failed: the report's
 #: quadratic beside the packaged schedule (the packaged table and figure do not fail with it)
-OPTIONAL = {_QUAD, _simulate("staircase_quadratic")}
-_Q13 = ("qpp design:qpp_siso", "qpp simulate:qpp_siso")
-_Q14 = ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator")
-PARTS = [
-    ("table1", "table1", table1.build, (), (), 0.1),
-    ("schedule", "schedule", schedule.summary, (_STAIR,), (), 0.2),
-    ("schedule/paths", "schedule", schedule.path_figures, (_STAIR,), (), 0.75),
-    ("schedule/routes", "schedule", schedule.routes,
-     (_STAIR, _design("staircase_lqr"), _QUAD, _SIM, _simulate("staircase_lqr"),
-      _simulate("staircase_quadratic")), (), 0.1),
-    ("poles", "schedule", schedule.true_poles, (_MB3, _DEC), (), 0.05),
-    ("schedule/gains", "schedule", schedule.gain_figure, (_STAIR, _QUAD), (), 1.8),
-    ("schedule/poles", "schedule", schedule.pole_figure, (_STAIR, _MB3, _DEC), ("poles",), 0.3),
-    ("claim1", "claim1", claim1.build, (_MB3, _DEC, _simulate("mb3"), _simulate("mb3_decoupled")), ("poles",), 0.85),
-    ("staircase", "staircase", staircase.summary, (_SIM,), (), 0.1),
-    ("staircase/inertia", "staircase", staircase.figure_inertia, (_SIM,), (), 0.5),
-    ("staircase/responses", "staircase", staircase.figure_responses, (_SIM,), (), 0.95),
-    ("staircase/levels", "staircase", staircase.figure_levels, (_SIM,), (), 0.3),
-    ("robustness", "robustness", robustness.build, ("sweep",), (), 0.55),
-    ("qpp13", "qpp13", qpp.text13, _Q13, (), 0.1),
-    ("qpp13/circle", "qpp13", qpp.circle13, _Q13, (), 0.25),
-    ("qpp13/responses", "qpp13", qpp.responses13, _Q13, (), 0.5),
-    ("qpp14", "qpp14", qpp.text14, _Q14, (), 0.1),
-    ("qpp14/circle", "qpp14", qpp.circle14, _Q14, (), 0.35),
-    ("qpp14/responses", "qpp14", qpp.responses14, _Q14, (), 0.85),
-    ("errata", "errata", errata.build, (_STAIR, _SIM, "qpp design:qpp_siso"), ("table1", "claim1", "qpp13"), 0.3),
-]
-
-
-def _errata_values(done: dict) -> tuple:
-    return done["table1"].value["mb3"], done["claim1"].value, done["qpp13"].value
+OPTIONAL = {"design:staircase_quadratic", "simulate:staircase_quadratic"}
+#: (task name, section, function, stage tasks it reads, parts whose values it takes, rough cost in s:
+#: CPU of the part in a warmed worker on the 2-core machine, issue 16), each section's own rows
+PARTS = table1.PARTS + schedule.PARTS + claim1.PARTS + staircase.PARTS + robustness.PARTS + qpp.PARTS + errata.PARTS
 
 
 def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, results: dict | None) -> list[Task]:
@@ -187,7 +148,7 @@ def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, resul
     """
     tasks, headed = [], set()
     for name, section, fn, stage_deps, value_deps, cost in PARTS:
-        values = _errata_values if name == "errata" else _values_of(value_deps)
+        values = _values_of(value_deps)
         deps = tuple(d for d in stage_deps if d in stage_names) + value_deps
         heading = None if section in headed else section      # the first part of a section writes it
         headed.add(section)

@@ -33,21 +33,9 @@ class Claim1Numbers:
     late: np.ndarray    #: peak |error| from orbit 2 on (deg)
 
 
-def build(ctx: SectionWriter, dec_true_poles: np.ndarray) -> Claim1Numbers:
-    """Claim 1 on the nonlinear MB3 model; ``dec_true_poles`` from the schedule section.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs and output.
-    dec_true_poles : (24,) complex array
-        Poles of the cross-inertia-free MB3 gain on the true coupled linear model, rad/s.
-
-    Returns
-    -------
-    Claim1Numbers
-        The numbers the errata table quotes.
-    """
+def _build(ctx: SectionWriter, dec_true_poles: np.ndarray) -> Claim1Numbers:
+    """Part: claim 1 on the nonlinear MB3 model; ``dec_true_poles``: the schedule section's poles of the
+    cross-inertia-free gain on the coupled model, rad/s; returns the :class:`Claim1Numbers`."""
     ctx.section("claim1")
     n = ctx.g.configs["mb3"].orbit_rate
     s_c, s_d = ctx.data("acmm simulate:mb3"), ctx.data("acmm simulate:mb3_decoupled")
@@ -107,3 +95,8 @@ def build(ctx: SectionWriter, dec_true_poles: np.ndarray) -> Claim1Numbers:
     ctx.doc.fig("claim1_responses", "Claim 1: attitude error (full run and first 0.1 orbit), torque and "
                 "momentum per axis (Figs 6.2–6.13 analogue)", save(fig, ctx.figdir, "claim1_responses"))
     return numbers
+
+
+#: this section's parts, rows of :data:`acmm.report.plan.PARTS`
+PARTS = [("claim1", "claim1", _build,
+          ("design:mb3", "design:mb3_decoupled", "simulate:mb3", "simulate:mb3_decoupled"), ("poles",), 0.85)]

@@ -23,27 +23,15 @@ from acmm.design.settings import design_settings
 from acmm.design.schedule import sector_design
 
 
-def build(ctx: SectionWriter, tea_mb3: tuple, claim1: Claim1Numbers, beta3: tuple[float, float]) -> None:
-    """The errata table; ``tea_mb3`` = (TEA, zero-bias TEA, bias) of MB3 (Table 1 section),
-    ``claim1`` from the claim-1 section, ``beta3`` from the QPP ch. 13 section.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs and output.
-    tea_mb3 : tuple
-        (TEA, zero-bias TEA, (3,) array bias torque in ft·lbf) of MB3.
-    claim1 : acmm.report.sections.claim1.Claim1Numbers
-        The claim-1 numbers.
-    beta3 : tuple of float
-        Ch. 13 β3 with sin 5t and at the nonlinearity's frequency, output units.
-    """
+def _build(ctx: SectionWriter, teas: dict, claim1: Claim1Numbers, beta3: tuple[float, float]) -> None:
+    """Part: the errata table; ``teas``: Table 1's ``{name: (TEA, zero-bias TEA, bias torque ft·lbf)}``,
+    ``claim1``: the claim-1 numbers, ``beta3``: ch. 13's β3 with sin 5t and sin t, s^½."""
     ctx.section("errata")
     ctx.doc.p("Each misprint or convention of docs/ERRATA.md, the correction used, and the evidence: numbers "
               "computed in this run where the check is cheap, otherwise the test file that confirms it.")
     g = ctx.g
     stair = g.configs["staircase"].name
-    rows = _errata_rows(g.configs["mb3"], tea_mb3, ctx.data("acmm design:" + stair),
+    rows = _errata_rows(g.configs["mb3"], teas["mb3"], ctx.data("acmm design:" + stair),
                        ctx.data("acmm simulate:" + stair), claim1, g.configs["qpp_siso"],
                        ctx.data("qpp design:qpp_siso"), g.configs["qpp_manipulator"], beta3)
     ctx.doc.table(["item", "printed / claim", "correction used", "evidence (this run)", "confirmed by"], rows)
@@ -51,9 +39,9 @@ def build(ctx: SectionWriter, tea_mb3: tuple, claim1: Claim1Numbers, beta3: tupl
 
 def _errata_rows(cfg, tea_mb3, st, sim, c1: Claim1Numbers, s13, d13, a, beta3) -> list[list[str]]:
     """Rows of the errata table (cheap checks only): item, printed / claim, correction used,
-    evidence, confirming tests; ``cfg`` MB3, ``tea_mb3`` as :func:`build`'s, ``st``/``sim`` the
+    evidence, confirming tests; ``cfg`` MB3, ``tea_mb3`` MB3's of :func:`_build`'s ``teas``, ``st``/``sim`` the
     stair-case ``design.h5``/``sim.h5`` (u in ft·lbf, h in ft·lbf·s), ``s13``/``d13`` the ch. 13
-    config and ``qpp_design.h5``, ``a`` the ch. 14 config, ``beta3`` as :func:`build`'s."""
+    config and ``qpp_design.h5``, ``a`` the ch. 14 config, ``beta3`` as :func:`_build`'s."""
     n, I = cfg.orbit_rate, cfg.inertia.matrix()
     t, t0, bias = tea_mb3
     th, d = t.theta, cfg.design
@@ -241,7 +229,7 @@ def _design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[st
 def _qpp_rows(s13, d13, a, beta3) -> list[list[str]]:
     """Part III (ch. 10–14): the signs of 13.6 / Table 14.1, B_z, the ch. 11 weights, β3 (eq 10.54)
     and m, and the unknowns of ch. 14; ``s13``/``d13`` the ch. 13 config and ``qpp_design.h5``,
-    ``a`` the ch. 14 config, ``beta3`` as :func:`build`'s."""
+    ``a`` the ch. 14 config, ``beta3`` as :func:`_build`'s."""
     rows = []
     # Part III
     rows.append(["signs of 13.6 / Table 14.1", "u = +K x̂, L = −H; plant f sign differs (13.1/14.2 vs 10.1)",
@@ -268,3 +256,8 @@ def _qpp_rows(s13, d13, a, beta3) -> list[list[str]]:
                  f"μ = {a.nonlinearity.mu:g} kg, impulse {a.simulation.scenarios[0].impulse} at "
                  f"t = {a.simulation.scenarios[0].impulse_time} s", "tests/qpp/simulate/test_closed_loop.py"])
     return rows
+
+
+#: this section's parts, rows of :data:`acmm.report.plan.PARTS`
+PARTS = [("errata", "errata", _build, ("design:staircase", "simulate:staircase", "qpp design:qpp_siso"),
+          ("table1", "claim1", "qpp13"), 0.3)]

@@ -1,6 +1,8 @@
 """Sections QPP chapters 13 (SISO Lure example) and 14 (two-DOF manipulator): ch. 13–14."""
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from acmm.report.context import SectionWriter
@@ -18,7 +20,7 @@ from matplotlib.collections import PatchCollection
 
 def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
     """One QPP chapter's text and tables (its figures are parts of their own,
-    :func:`circle13`, :func:`responses13`, ...); returns (β3 with sin 5t, with sin t) for ch. 13,
+    the ``/circle`` and ``/responses`` rows of :data:`PARTS`); returns (β3 with sin 5t, with sin t) for ch. 13,
     else None."""
     ctx.section(key)
     cfg = ctx.g.configs[name]
@@ -258,84 +260,21 @@ _WHY14 = ("μ (arm mass) and the impulse size are not printed; this run uses μ 
 _OUT13, _OUT14 = ["y"], ["m", "rad"]
 
 
-def text13(ctx: SectionWriter) -> tuple[float, float]:
-    """Chapter 13 (SISO Lure example) without its figures: gains, sphere bounds and tracking errors
-    (text, tables and printed numbers); returns β3 = 0.05‖(sin 5t)_T‖₂ and its sin t reading.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the ``qpp_siso`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
-
-    Returns
-    -------
-    (float, float)
-        β3 = 0.05‖(sin 5t)_T‖₂ (T = 0.5 s, as the report prints it) and β3 = 0.05‖(sin t)_T‖₂
-        (definition eq 10.54 with the config's ω), both in s^{1/2} (units: square root of
-        seconds; :func:`qpp.design.spheres.beta3_sinusoidal`).
-    """
+def _text13(ctx: SectionWriter) -> tuple[float, float]:
+    """Part: ch. 13 (SISO Lure example) without its figures; returns β3 = 0.05‖(sin 5t)_T‖₂ (T = 0.5 s, as
+    printed) and with sin t (eq 10.54, the config's ω), in s^½
+    (:func:`qpp.design.spheres.beta3_sinusoidal`)."""
     return _chapter(ctx, "qpp13", "qpp_siso", [("step_offset", 0, "0.094", "upper", ""),
                                                ("sin10", 0, "0.16", "upper", "")], _OUT13)
 
 
-def circle13(ctx: SectionWriter) -> None:
-    """Chapter 13's circle-criterion figure (Fig 13.1, :func:`_circle_figure`).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the ``qpp_siso`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
-    """
-    _circle_figure(ctx, "qpp13", "qpp_siso")
-
-
-def responses13(ctx: SectionWriter) -> None:
-    """Chapter 13's responses figure (Figs 13.3–13.9, :func:`_responses_figure`).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the ``qpp_siso`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
-    """
-    _responses_figure(ctx, "qpp13", "qpp_siso", _OUT13)
-
-
-def text14(ctx: SectionWriter) -> None:
-    """Chapter 14 (two-DOF manipulator) without its figures: gains, sphere bounds and tracking
-    errors (text, tables and printed numbers).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the ``qpp_manipulator`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
-    """
+def _text14(ctx: SectionWriter) -> None:
+    """Part: ch. 14 (two-DOF manipulator) without its figures: gains, sphere bounds and tracking errors."""
     c = ctx.g.configs["qpp_manipulator"]
     sc0 = c.simulation.scenarios[0]
     w = _WHY14.format(mu=c.nonlinearity.mu, imp=sc0.impulse, ti=sc0.impulse_time or 0.0)
     _chapter(ctx, "qpp14", "qpp_manipulator", [("M45", 0, "0.006", None, w), ("M45", 1, "0.0015", None, w)],
              _OUT14)
-
-
-def circle14(ctx: SectionWriter) -> None:
-    """Chapter 14's circle-criterion figure (Figs 14.2–14.3, :func:`_circle_figure`).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the ``qpp_manipulator`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
-    """
-    _circle_figure(ctx, "qpp14", "qpp_manipulator")
-
-
-def responses14(ctx: SectionWriter) -> None:
-    """Chapter 14's responses figure (Fig 14.4, :func:`_responses_figure`).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the ``qpp_manipulator`` config, its ``qpp_design.h5`` and ``qpp_sim.h5``) and output (document blocks, printed numbers, figures).
-    """
-    _responses_figure(ctx, "qpp14", "qpp_manipulator", _OUT14)
 
 
 def _printed_str(v: float, gname: str) -> str:
@@ -346,3 +285,18 @@ def _printed_str(v: float, gname: str) -> str:
 def _num_str(v) -> str:
     """A number in full (``repr``) for the ledger, ``—`` for none."""
     return repr(float(v)) if v is not None else "—"
+
+
+#: this section's parts, rows of :data:`acmm.report.plan.PARTS`
+_Q13 = ("qpp design:qpp_siso", "qpp simulate:qpp_siso")
+_Q14 = ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator")
+PARTS = [
+    ("qpp13", "qpp13", _text13, _Q13, (), 0.1),
+    ("qpp13/circle", "qpp13", partial(_circle_figure, key="qpp13", name="qpp_siso"), _Q13, (), 0.25),
+    ("qpp13/responses", "qpp13", partial(_responses_figure, key="qpp13", name="qpp_siso", out_labels=_OUT13),
+     _Q13, (), 0.5),
+    ("qpp14", "qpp14", _text14, _Q14, (), 0.1),
+    ("qpp14/circle", "qpp14", partial(_circle_figure, key="qpp14", name="qpp_manipulator"), _Q14, (), 0.35),
+    ("qpp14/responses", "qpp14",
+     partial(_responses_figure, key="qpp14", name="qpp_manipulator", out_labels=_OUT14), _Q14, (), 0.85),
+]

@@ -51,14 +51,8 @@ def bounded_count(sweep: dict, label: str) -> tuple[int, int]:
     return int(np.sum(v == "bounded")), int(v.size)
 
 
-def build(ctx: SectionWriter) -> None:
-    """The ±30 % inertia Monte Carlo (``ctx.g.robustness``), or why it is not available.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs and output.
-    """
+def _build(ctx: SectionWriter) -> None:
+    """Part: the ±30 % inertia Monte Carlo (``ctx.g.robustness``, ch. 7), or why it is not available."""
     ctx.section("robustness")
     ctx.doc.p("The report (ch. 7): 'the closed-loop system remains stable for up to ±30 % variations in "
               "the SSF inertia matrix'. It does not say which variations (elements, scaling), which TEA "
@@ -145,3 +139,7 @@ def build(ctx: SectionWriter) -> None:
     files = save(fig, ctx.figdir, "robustness")
     ctx.doc.fig("robustness", "±30 % inertia Monte Carlo: peak attitude error vs the largest element "
                 "perturbation per case (bounded: filled; diverged or no equilibrium: crosses)", files)
+
+
+#: this section's parts, rows of :data:`acmm.report.plan.PARTS`
+PARTS = [("robustness", "robustness", _build, ("sweep",), (), 0.55)]

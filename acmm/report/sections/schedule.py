@@ -16,15 +16,9 @@ from acmm.plots import design as design_plots
 from matplotlib.ticker import MaxNLocator
 
 
-def summary(ctx: SectionWriter) -> None:
-    """The section's text and tables (design summary, conditioning, the schedule along the path;
-    sector LQR and schedule of ch. 5.2–5.3).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
-    """
+def _summary(ctx: SectionWriter) -> None:
+    """Part: design summary, conditioning and the schedule along the path (tables; sector LQR and schedule
+    of ch. 5.2–5.3)."""
     ctx.section("schedule")
     d = ctx.data("acmm design:" + ctx.g.configs["staircase"].name)
     cfg = ctx.g.configs["staircase"]
@@ -95,19 +89,13 @@ def point_energy(p: dict, n: float) -> float:
     return control_energy(A, B, K, n, scales, torque_scale(scales))
 
 
-def routes(ctx: SectionWriter) -> None:
-    """The packaged stair-case (its route, normally regional LMI points, a table look-up schedule)
-    beside the same stair-case on the report's route (sector LQR points, the same form) and in the
-    report's quadratic form converged on the path (:data:`acmm.report.gather.REPORT_VARIANTS`),
-    judged on the same path TEAs, simulated and certified (issue 32 item 5, issue 41 item 4).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The three configs' ``design.h5`` and ``sim.h5``.
-    """
+def _routes(ctx: SectionWriter) -> None:
+    """Part: the packaged stair-case (normally regional LMI points, a table look-up schedule) beside it on
+    the report's route (sector LQR points, the same form) and the report's quadratic converged on the path
+    (:data:`acmm.report.gather.REPORT_VARIANTS`), judged on the same path TEAs, simulated and certified
+    (issue 32 item 5, issue 41 item 4)."""
     cfgs = ctx.g.configs
-    quad, why = quadratic(ctx, ("design", "simulate"))
+    quad, why = _quadratic(ctx, ("design", "simulate"))
     rows = []
     for key in (k for k in STAIRCASES if k != "staircase_quadratic" or quad is not None):
         cfg = cfgs[key]
@@ -143,23 +131,9 @@ def routes(ctx: SectionWriter) -> None:
                   + ("" if why is None else f"; {why}"))
 
 
-def quadratic(ctx: SectionWriter, stages: tuple) -> tuple:
-    """The report's quadratic stair-case (:data:`acmm.report.gather.REPORT_VARIANTS`) when its
-    ``stages`` ran, else why not.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The gathered configs and failed stages.
-    stages : tuple of str
-        ``"design"``, ``"simulate"``: the stages the caller reads.
-
-    Returns
-    -------
-    tuple
-        (its config, None), or (None, why: not designed by a --fast report, or its stage's
-        one-line failure).
-    """
+def _quadratic(ctx: SectionWriter, stages: tuple) -> tuple:
+    """(config, None) of the report's quadratic stair-case when its ``stages`` (``"design"``,
+    ``"simulate"``) ran, else (None, why: not designed by --fast, or its stage's one-line failure)."""
     cfg = ctx.g.configs.get("staircase_quadratic")
     if cfg is None:
         return None, ("the quadratic is not designed by a --fast report (its LMI points and refit are "
@@ -194,22 +168,9 @@ def _dwell(ctx: SectionWriter, g: dict, n: float) -> None:
     ], "Dwell-time certificate of the stair-case")
 
 
-def true_poles(ctx: SectionWriter) -> np.ndarray:
-    """Claim 1: poles of the cross-inertia-free MB3 gain on the true coupled linear model (rad/s).
-
-    The coupled linear model (ch. 4) at the TEA of the ``mb3_decoupled`` design, closed with that
-    design's gain: eig(A − B K).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the mb3 config and the ``mb3_decoupled`` ``design.h5``) and output (document blocks, printed numbers, figures).
-
-    Returns
-    -------
-    (24,) complex array
-        The closed-loop poles, rad/s.
-    """
+def _true_poles(ctx: SectionWriter) -> np.ndarray:
+    """Part, claim 1: the (24,) poles, rad/s, of the ``mb3_decoupled`` gain on the coupled linear model
+    (ch. 4) at its TEA, eig(A − B K)."""
     dec = ctx.data("acmm design:mb3_decoupled")
     cfg_m = ctx.g.configs["mb3"]
     true = lin.design_point(cfg_m.inertia.matrix(), dec["tea"][0], cfg_m.orbit_rate, model="coupled",
@@ -217,18 +178,12 @@ def true_poles(ctx: SectionWriter) -> np.ndarray:
     return np.linalg.eigvals(true.A - true.B @ dec["K"][0])
 
 
-def gain_figure(ctx: SectionWriter) -> None:
-    """The 72 gains of the stair-case design points, their schedule and the report's quadratic form
-    converged on the path (Figs 5.3–5.26): K(i, j) in ft·lbf per state unit vs pitch TEA, one panel
-    per column j, the points as markers, the schedule as lines, the quadratic dashed.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
-    """
+def _gain_figure(ctx: SectionWriter) -> None:
+    """Part: the 72 gains K(i, j) (ft·lbf per state unit) of the stair-case points (markers), their
+    schedule (lines) and the report's quadratic (dashed) vs pitch TEA, one panel per column j (Figs
+    5.3–5.26)."""
     cfg = ctx.g.configs["staircase"]
-    quad, _ = quadratic(ctx, ("design",))
+    quad, _ = _quadratic(ctx, ("design",))
     other = None if quad is None else ctx.data("acmm design:" + quad.name)
     design = ctx.data("acmm design:" + cfg.name)
     plt = pyplot()
@@ -292,18 +247,9 @@ def _sector(ax, sigma, half_angle_deg, xmin):
     ax.plot(x, -t * x, "k-", lw=0.6)
 
 
-def pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:
-    """Pole maps (poles / n): the stair-case design points; claim 1 (the MB3 designs) with ``ev``
-    (:func:`true_poles`), in the sector of Fig 5.2.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the stair-case config and its ``design.h5``, the mb3 and mb3_decoupled ``design.h5``) and output (document blocks, printed numbers, figures).
-    ev : (24,) complex array
-        Closed-loop poles of the cross-inertia-free MB3 gain on the true coupled model, rad/s
-        (:func:`true_poles`).
-    """
+def _pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:
+    """Part: pole maps (poles / n) in the sector of Fig 5.2: the stair-case points; claim 1's MB3 designs
+    with ``ev``, the :func:`_true_poles` in rad/s."""
     cfg = ctx.g.configs["staircase"]
     stair = ctx.data("acmm design:" + cfg.name)
     mb3 = ctx.data("acmm design:mb3")
@@ -380,15 +326,9 @@ def _conditioning(ctx: SectionWriter, d, pts):
        "judged on the closed loop at every path TEA")
 
 
-def path_figures(ctx: SectionWriter) -> None:
-    """The scheduled gain along the path: margins and poles in the sector of Fig 5.2 (figures of
-    :mod:`acmm.plots`); nothing when the design has no ``schedule/path`` group.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the stair-case config and its ``design.h5``) and output (document blocks, printed numbers, figures).
-    """
+def _path_figures(ctx: SectionWriter) -> None:
+    """Part: the scheduled gain along the path, margins and poles in the sector of Fig 5.2 (figures of
+    :mod:`acmm.plots`); nothing without a ``schedule/path`` group."""
     cfg = ctx.g.configs["staircase"]
     pa = ctx.data("acmm design:" + cfg.name)["schedule"].get("path")
     if pa is None:
@@ -403,3 +343,17 @@ def path_figures(ctx: SectionWriter) -> None:
                                   vector=True)
     ctx.doc.fig("schedule_path_poles", "Poles of the scheduled loop at every path TEA with the sector of "
                 "Fig 5.2", {"png": f2[0], "pdf": f2[1]})
+
+
+#: this section's parts, rows of :data:`acmm.report.plan.PARTS`
+PARTS = [
+    ("schedule", "schedule", _summary, ("design:staircase",), (), 0.2),
+    ("schedule/paths", "schedule", _path_figures, ("design:staircase",), (), 0.75),
+    ("schedule/routes", "schedule", _routes,
+     ("design:staircase", "design:staircase_lqr", "design:staircase_quadratic", "simulate:staircase",
+      "simulate:staircase_lqr", "simulate:staircase_quadratic"), (), 0.1),
+    ("poles", "schedule", _true_poles, ("design:mb3", "design:mb3_decoupled"), (), 0.05),
+    ("schedule/gains", "schedule", _gain_figure, ("design:staircase", "design:staircase_quadratic"), (), 1.8),
+    ("schedule/poles", "schedule", _pole_figure, ("design:staircase", "design:mb3", "design:mb3_decoupled"),
+     ("poles",), 0.3),
+]

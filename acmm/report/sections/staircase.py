@@ -13,14 +13,8 @@ def _sim(ctx: SectionWriter) -> dict:
     return ctx.data("acmm simulate:" + ctx.g.configs["staircase"].name)
 
 
-def summary(ctx: SectionWriter) -> None:
-    """Text, per-level table and printed numbers of the stair-case (claim 2, ch. 6).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the stair-case config and its ``sim.h5``) and output (document blocks, printed numbers, figures).
-    """
+def _summary(ctx: SectionWriter) -> None:
+    """Part: text, per-level table and printed numbers of the stair-case (claim 2, ch. 6)."""
     ctx.section("staircase")
     cfg = ctx.g.configs["staircase"]
     s = ctx.data("acmm simulate:" + cfg.name)
@@ -60,15 +54,9 @@ def summary(ctx: SectionWriter) -> None:
                        "%", bound="upper")
 
 
-def figure_inertia(ctx: SectionWriter) -> None:
-    """The inertia elements (``levels/inertia`` of the level of each sample, slug·ft², shown in
-    10⁶ slug·ft²) vs time in orbits (Figs 6.14–6.19).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the stair-case config and its ``sim.h5``) and output (document blocks, printed numbers, figures).
-    """
+def _figure_inertia(ctx: SectionWriter) -> None:
+    """Part: the inertia elements (``levels/inertia`` of each sample's level, slug·ft², shown in 10⁶
+    slug·ft²) vs orbits (Figs 6.14–6.19)."""
     sim = _sim(ctx)
     plt = pyplot()
     o = sim["orbits"]
@@ -86,15 +74,9 @@ def figure_inertia(ctx: SectionWriter) -> None:
                 save(fig1, ctx.figdir, "staircase_inertia"))
 
 
-def figure_responses(ctx: SectionWriter) -> None:
-    """Attitude error (rad), rate relative to LVLH (rad/s), both shown in degrees, torque (ft·lbf)
-    and momentum (ft·lbf·s) per axis vs orbits, the level changes dotted (Figs 6.20–6.30).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the stair-case config and its ``sim.h5``) and output (document blocks, printed numbers, figures).
-    """
+def _figure_responses(ctx: SectionWriter) -> None:
+    """Part: attitude error (rad) and rate relative to LVLH (rad/s), both shown in deg, torque (ft·lbf)
+    and momentum (ft·lbf·s) per axis vs orbits, level changes dotted (Figs 6.20–6.30)."""
     sim = _sim(ctx)
     plt = pyplot()
     o = sim["orbits"]
@@ -124,15 +106,9 @@ def figure_responses(ctx: SectionWriter) -> None:
                 "analogue)", save(fig2, ctx.figdir, "staircase_responses"))
 
 
-def figure_levels(ctx: SectionWriter) -> None:
-    """Steady attitude error (``levels/steady_error``, rad, shown in deg; second half of each
-    dwell) and peak momentum (ft·lbf·s) per inertia level vs the level's pitch TEA (ch. 6).
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs (the stair-case config and its ``sim.h5``) and output (document blocks, printed numbers, figures).
-    """
+def _figure_levels(ctx: SectionWriter) -> None:
+    """Part: steady attitude error (``levels/steady_error``, rad, shown in deg; second half of each dwell)
+    and peak momentum (ft·lbf·s) per level vs its pitch TEA (ch. 6)."""
     sim = _sim(ctx)
     plt = pyplot()
     fig3, axs = plt.subplots(1, 2, figsize=(11, 3.8))
@@ -151,3 +127,12 @@ def figure_levels(ctx: SectionWriter) -> None:
     fixed_layout(fig3, left=0.62, bottom=0.54, top=0.33, wspace=0.16)
     ctx.doc.fig("staircase_levels", "Per-level steady error and peak momentum vs the level's pitch TEA",
                 save(fig3, ctx.figdir, "staircase_levels"))
+
+
+#: this section's parts, rows of :data:`acmm.report.plan.PARTS`
+PARTS = [
+    ("staircase", "staircase", _summary, ("simulate:staircase",), (), 0.1),
+    ("staircase/inertia", "staircase", _figure_inertia, ("simulate:staircase",), (), 0.5),
+    ("staircase/responses", "staircase", _figure_responses, ("simulate:staircase",), (), 0.95),
+    ("staircase/levels", "staircase", _figure_levels, ("simulate:staircase",), (), 0.3),
+]

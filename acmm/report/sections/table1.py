@@ -41,20 +41,9 @@ def table1_teas(cfg) -> tuple:
             tea_mod.solve_tea(I, cfg.orbit_rate, np.zeros(3)), bias)
 
 
-def build(ctx: SectionWriter) -> dict:
-    """Table 1 printed vs computed; returns ``{name: (tea, zero-bias tea, bias)}`` for MB3 and AC.
-
-    Parameters
-    ----------
-    ctx : acmm.report.context.SectionWriter
-        The section's inputs and output.
-
-    Returns
-    -------
-    dict
-        ``"mb3"``/``"ac"`` → (:class:`acmm.model.tea.TEA` with the config's bias, TEA with zero bias,
-        (3,) array bias torque in ft·lbf); TEAs by eqs 4.1–4.3, θ* in rad.
-    """
+def _build(ctx: SectionWriter) -> dict:
+    """Part: Table 1 printed vs computed; returns ``{"mb3"/"ac": (TEA with the config's bias, zero-bias
+    TEA, (3,) bias torque ft·lbf)}``, eqs 4.1–4.3, θ* in rad."""
     ctx.section("table1")
     ctx.doc.p("Table 1 of CR-185644 next to this run. The bias torque is not printed in the report: each "
               "config uses the bias back-solved from eq 4.1 at the printed attitude (bias_from_tea), and the "
@@ -88,3 +77,7 @@ def build(ctx: SectionWriter) -> dict:
     ctx.doc.table(["config", "bias used [roll, pitch, yaw] (ft·lbf)", "residual (ft·lbf)", "ω* (deg/h)"], brow,
                   "Bias torques used (back-solved from eq 4.1 at the printed TEA; not printed in the report)")
     return teas
+
+
+#: this section's parts, rows of :data:`acmm.report.plan.PARTS`
+PARTS = [("table1", "table1", _build, (), (), 0.1)]

@@ -21,7 +21,7 @@ class _Robustness(SectionWriter):
     def robustness(self):
         from acmm.report.sections import robustness
 
-        robustness.build(self)
+        robustness._build(self)
 
 
 def test_robustness_absent_renders_not_available(tmp_path, monkeypatch):
