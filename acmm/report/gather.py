@@ -580,20 +580,17 @@ def keep_stage(g: "Gathered", name: str, result, say: Callable[[str], None]) -> 
     if name == "sweep":
         g.robustness, g.robustness_note, g.robustness_wall = result
         g.timings["robustness sweep"] = g.robustness_wall
-        if g.robustness is not None:
-            r = g.robustness["run"]
-            g.runs[f"{r.stage}:{r.config}"] = r
-            g.produced_by[f"{r.stage}:{r.config}"] = name
-            g.identities[f"{r.stage}:{r.config}"] = file_identity(r.path)
         say(f"  robustness     {'available' if g.robustness else 'not available'} "
             f"({g.robustness_wall:.1f} s) {g.robustness_note}")
-        return
-    r: StageRun = result
-    g.runs[f"{r.stage}:{r.config}"] = r
-    g.produced_by[f"{r.stage}:{r.config}"] = name
-    g.identities[f"{r.stage}:{r.config}"] = file_identity(r.path)
-    g.timings[f"{r.stage} {r.config}"] = r.wall_time
-    say(f"  {r.stage:<14} {r.config:<16} {'reused' if r.reused else f'{r.wall_time:6.1f} s'}  {r.path}")
+        if g.robustness is None:
+            return
+        r: StageRun = g.robustness["run"]
+    else:
+        r = result
+        g.timings[f"{r.stage} {r.config}"] = r.wall_time
+        say(f"  {r.stage:<14} {r.config:<16} {'reused' if r.reused else f'{r.wall_time:6.1f} s'}  {r.path}")
+    key = f"{r.stage}:{r.config}"
+    g.runs[key], g.produced_by[key], g.identities[key] = r, name, file_identity(r.path)
 
 
 def order_runs(g: "Gathered", tasks: list) -> None:
