@@ -861,23 +861,8 @@ def _carry_iterate(prog: LMIProgram, prog2: LMIProgram, v, iterate):
     X ↦ PXPᵀ, X₂ ↦ PX₂Pᵀ, Y ↦ DYPᵀ, W ↦ DWD, every block as F ↦ R F Rᵀ (R = I ⊗ P, the cost
     block's diag(D, P)), so s ↦ R s Rᵀ and z ↦ R⁻ᵀ z R⁻¹: the same objective, blocks up to the
     congruence, and sᵀz (cvxopt's normalized residuals differ, and it restarts its homogeneous
-    embedding with τ = κ = 1).
-
-    Parameters
-    ----------
-    prog, prog2 : LMIProgram
-        The program in the iterate's coordinates and in the new ones (:func:`lmi_program` of one
-        model and settings).
-    v : (n_var,) array
-        The iterate's variables, dimensionless.
-    iterate : tuple
-        (slacks, duals): lists of (m_k, m_k) symmetric arrays, dimensionless.
-
-    Returns
-    -------
-    tuple
-        (v₂, slacks₂, duals₂) in ``prog2``'s coordinates.
-    """
+    embedding with τ = κ = 1).  ``iterate`` = (slacks, duals), lists of symmetric arrays; all
+    dimensionless.  Returns (v₂, slacks₂, duals₂) in ``prog2``'s coordinates."""
     N = prog.sizes[0]
     P = np.linalg.solve(prog2.T, prog.T)
     D = np.diag(prog.s_u / prog2.s_u)
