@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize as so
 
-from acmm.design.regional_lmi import whitened_loop
+from acmm.design.regional_lmi import scaled_model, whitened_loop
 from acmm.model import linearize as lin
 from acmm.model.inertia import ELEMENTS, perturb_inertia, unphysical_reason
 from acmm.model.tea import solve_tea_connected
@@ -394,7 +394,7 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
                 # (an intermediate plant only guides the search; the certificates are of the family)
                 I, th = Is, (tea.theta if tea is not None else th0 + step * (th - th0))
             m = lin.design_point(I, th, n, model=model, drf_mode=drf_mode)
-            out.append((m.A / d[:, None] * d[None, :] / n, m.B / d[:, None] * input_scale / n))
+            out.append(scaled_model(m.A, m.B, n, d, input_scale))
         return out
 
     models = models_at(1.0)
