@@ -150,22 +150,11 @@ def _lyapunov(T: np.ndarray, U: np.ndarray, W: np.ndarray, adjoint: bool) -> np.
     return U @ Y @ U.conj().T
 
 
-class ShiftedCost:
-    """F(x) of the module docstring, its gradient and its Hessian at the refit's TEAs.
-
-    Parameters
-    ----------
-    st : dict
-        The refit's TEAs, models and starting coefficients (:func:`_refit_start`).
-    n : float
-        Orbital rate, rad/s.
-    Q : (N, N) array
-        State weight on the scaled states, dimensionless (the identity included).
-    R : (M, M) array
-        Control weight, 1/(ft·lbf)².
-    weight : float
-        Weight ε of the distance from the start, dimensionless.
-    """
+class _ShiftedCost:
+    """F(x) of the module docstring, its gradient and its Hessian at the refit's TEAs ``st``
+    (:func:`_refit_start`); n rad/s, Q on the scaled states (identity included), R 1/(ft·lbf)²,
+    ``weight`` ε of the distance from the start.  Every ``x`` is the change of the coefficients
+    from ``st["a0"]`` in units of ``st["sc"]``; α in units of n, ψ the cone term's rotation, rad."""
 
     def __init__(self, st: dict, n: float, Q: np.ndarray, R: np.ndarray, weight: float):
         self.st, self.n, self.Q, self.R, self.weight = st, n, Q, R, weight
@@ -173,53 +162,16 @@ class ShiftedCost:
         self.eye = np.eye(self.As.shape[1])
 
     def gains(self, x: np.ndarray) -> np.ndarray:
-        """The scheduled gain at each of the refit's TEAs.
-
-        Parameters
-        ----------
-        x : array
-            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
-
-        Returns
-        -------
-        (T, M, N) array
-            Gains on the scaled states, ft·lbf per unit of each scaled state.
-        """
+        """(T, M, N) gains at the refit's TEAs, ft·lbf per unit of each scaled state."""
         a = self.st["a0"] + x.reshape(self.st["shape"]) * self.st["sc"]
         return np.einsum("tk,kab->tab", self.st["up"], a)
 
     def poles(self, x: np.ndarray) -> np.ndarray:
-        """The closed-loop poles at each of the refit's TEAs.
-
-        Parameters
-        ----------
-        x : array
-            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
-
-        Returns
-        -------
-        (T, N) complex array
-            Eigenvalues of A − B K, units of n.
-        """
+        """(T, N) closed-loop poles (eigenvalues of A − B K) at the refit's TEAs, units of n."""
         return np.linalg.eigvals(self.As - self.Bs @ self.gains(x)) / self.n
 
     def __call__(self, x: np.ndarray, alpha: float, psi: float = 0.0) -> tuple[float, np.ndarray]:
-        """F and its gradient at ``x``; (inf, 0) outside the region.
-
-        Parameters
-        ----------
-        x : array
-            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
-        alpha : float
-            Decay rate α, units of n.
-        psi : float
-            Rotation ψ of the cone term, rad (0: no cone term).
-
-        Returns
-        -------
-        tuple
-            (F, dimensionless; ∇F, array like ``x``).
-        """
+        """(F, ∇F) at ``x``, dimensionless; (inf, 0) outside the region (ψ = 0: no cone term)."""
         terms = self._terms(x, alpha, psi)
         if terms is None:
             return np.inf, np.zeros_like(x)
@@ -228,29 +180,9 @@ class ShiftedCost:
         return f, g / total + self.weight * x
 
     def hessian(self, x: np.ndarray, alpha: float, psi: float = 0.0) -> np.ndarray:
-        """∇²F at ``x``, exact (the module docstring): each TEA's gradient differentiated along
-        every gain element, the Schur form of its loop serving every Lyapunov equation.
-
-        Parameters
-        ----------
-        x : array
-            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``; inside the
-            region.
-        alpha : float
-            Decay rate α, units of n.
-        psi : float
-            Rotation ψ of the cone term, rad (0: no cone term).
-
-        Returns
-        -------
-        (x.size, x.size) array
-            The symmetric Hessian, dimensionless.
-
-        Raises
-        ------
-        ValueError
-            ``x`` is outside the region.
-        """
+        """∇²F at ``x`` (inside the region, else ValueError), exact and symmetrized (the module
+        docstring): each TEA's gradient differentiated along every gain element, the Schur form of
+        its loop serving every Lyapunov equation."""
         terms = self._terms(x, alpha, psi, second=True)
         if terms is None:
             raise ValueError("the Hessian of F is asked outside the region")
@@ -310,7 +242,7 @@ def _swap(M: np.ndarray) -> np.ndarray:
     return np.swapaxes(M, -1, -2)
 
 
-def _newton(cost: ShiftedCost, x: np.ndarray, alpha: float, psi: float = 0.0) -> tuple[np.ndarray, int, bool]:
+def _newton(cost: _ShiftedCost, x: np.ndarray, alpha: float, psi: float = 0.0) -> tuple[np.ndarray, int, bool]:
     """Newton's method on F at (``alpha``, ``psi``) from ``x`` (inside the region); the Hessian is
     reused while the steps contract by half or better (a chord method) and recomputed otherwise.
     Returns the minimizer, the steps taken and whether the step tolerance was met."""
@@ -388,7 +320,7 @@ def refit_shifted_lqr(fit: ScheduleFit, path: PathModels, n: float, Q: np.ndarra
     Qi = np.eye(st["As"][0].shape[0]) + Q
     # the homotopy's stages minimize the barrier alone (the weight would hold them near the
     # least-squares fit, which is far outside the region); the last problem adds it
-    cost, stage_cost = ShiftedCost(st, n, Qi, R, weight), ShiftedCost(st, n, Qi, R, 0.0)
+    cost, stage_cost = _ShiftedCost(st, n, Qi, R, weight), _ShiftedCost(st, n, Qi, R, 0.0)
     x = np.zeros(st["a0"].size)
     w0 = w = float(cost.poles(x).real.max())
     psi_target = np.radians(90.0 - cone_deg)
