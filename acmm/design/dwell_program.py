@@ -29,20 +29,8 @@ import scipy.linalg as sla
 from acmm.design.lmi_structure import Layout, StructuredKKT, Term, run_conelp, symmetric_places
 
 
-def chain_layout(levels: int, N: int) -> Layout:
-    """The variable layout of ``levels`` symmetric N × N matrices P0, P1, …: the variable vector
-    stacks each one's upper triangle, row by row.
-
-    Parameters
-    ----------
-    levels, N : int
-        Number of matrices and their size.
-
-    Returns
-    -------
-    acmm.design.lmi_structure.Layout
-        Shapes, offsets and the duplication.
-    """
+def _chain_layout(levels: int, N: int) -> Layout:
+    """Layout of ``levels`` symmetric N × N matrices P0, P1, …, each one's upper triangle row by row."""
     place, mirror = symmetric_places(N)
     names = [f"P{k}" for k in range(levels)]
     return Layout({v: (N, N) for v in names}, {v: k * N * N for k, v in enumerate(names)},
@@ -50,33 +38,14 @@ def chain_layout(levels: int, N: int) -> Layout:
                   np.concatenate([np.where(mirror >= 0, k * N * N + mirror, -1) for k in range(levels)]))
 
 
-def dwell_terms(As: np.ndarray, T: float, decay: float, R: np.ndarray) -> tuple:
-    """The blocks of the dwell-time program (module docstring), each ⪯ 0, in the coordinates of
-    each level's factor R_k: P_k = R_kᵀ P̂_k R_k, and each block of level k congruent by R_k⁻¹ ::
+def _dwell_terms(As: np.ndarray, T: float, decay: float, R: np.ndarray) -> tuple:
+    """(blocks of Terms in the P̂_k, their constant parts F0) of the program, each ⪯ 0, in the
+    coordinates P_k = R_kᵀ P̂_k R_k of each level (As 1/time unit, dwell T time units, λ = decay) ::
 
         I − P̂_k,   (Â_k + λI)ᵀ P̂_k + P̂_k (Â_k + λI),   Ê_kjᵀ P̂_j Ê_kj − e^{−2λT} P̂_k,
 
-    Â_k = R_k A_k R_k⁻¹, Ê_kj = R_j e^{A_k T} R_k⁻¹ (the normalization P̂_k ⪰ I is as good as
-    P_k ⪰ I: the other conditions are homogeneous).
-
-    Parameters
-    ----------
-    As : (L, N, N) array
-        The levels' closed loops, 1/time unit.
-    T : float
-        Dwell, time units.
-    decay : float
-        λ, 1/time unit.
-    R : (L, N, N) array
-        Each level's coordinates (invertible), dimensionless.
-
-    Returns
-    -------
-    blocks : list of list of Term
-        The terms of each block, in the P̂_k.
-    F0 : list of (N, N) arrays
-        Their constant parts, dimensionless.
-    """
+    Â_k = R_k A_k R_k⁻¹, Ê_kj = R_j e^{A_k T} R_k⁻¹ (P̂_k ⪰ I is as good as P_k ⪰ I: the rest is
+    homogeneous)."""
     L, N = As.shape[:2]
     I, zero = np.eye(N), np.zeros((N, N))
     c = np.exp(-2.0 * decay * T)
@@ -104,7 +73,7 @@ class ChainKKT(StructuredKKT):
     blocks : list of list of Term
         The program's terms (variables ``"P<k>"``).
     lay : acmm.design.lmi_structure.Layout
-        :func:`chain_layout`.
+        :func:`_chain_layout`.
     """
 
     def __init__(self, blocks, lay: Layout):
@@ -245,7 +214,7 @@ def solve_dwell_program(As: np.ndarray, T: float, decay: float, R: np.ndarray, m
     decay : float
         λ, 1/time unit.
     R : (L, N, N) array
-        Each level's coordinates (:func:`dwell_terms`): chosen so that the P̂_k are well
+        Each level's coordinates (:func:`_dwell_terms`): chosen so that the P̂_k are well
         conditioned (e.g. R_kᵀR_k a Lyapunov matrix of level k), dimensionless.
     max_iter : int
         Iteration limit (a guard: the stop is the tolerances :data:`DWELL_TOL`).
@@ -257,8 +226,8 @@ def solve_dwell_program(As: np.ndarray, T: float, decay: float, R: np.ndarray, m
         answer (e.g. the program is infeasible at this T).
     """
     L, N = As.shape[:2]
-    blocks, F0 = dwell_terms(As, T, decay, R)
-    kkt = ChainKKT(blocks, chain_layout(L, N))
+    blocks, F0 = _dwell_terms(As, T, decay, R)
+    kkt = ChainKKT(blocks, _chain_layout(L, N))
     i, j = np.triu_indices(N)
     c = np.tile((i == j).astype(float), L)                      # Σ_k tr P̂_k
     try:

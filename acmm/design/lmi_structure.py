@@ -22,7 +22,7 @@ structure ("Cone Programming", "Exploiting Structure": G given as an operator an
 ``kktsolver`` of one's own); everything else — the Nesterov–Todd scaling, the steps, the
 stopping rule — is cvxopt's.
 
-:func:`solve_conelp` hands the program to cvxopt's ``conelp`` with this KKT solver: LAPACK's
+:func:`run_conelp` hands a program to cvxopt's ``conelp`` with this KKT solver: LAPACK's
 Cholesky of H (an LU factorization where rounding leaves H numerically indefinite, counted in the
 answer's status), then back-substitution.  It stops on cvxopt's relative gap and feasibility
 tolerances; an answer is accepted or refused by :mod:`acmm.design.regional_lmi`'s checks.
@@ -41,7 +41,7 @@ try:                  # GPL-3 (README, Dependencies): without it the LMI route s
 except ImportError:   # pragma: no cover - exercised by uninstalling cvxopt
     cvxopt = solvers = None
 
-#: Whether :func:`solve_conelp` can run here (cvxopt installed).
+#: Whether :func:`run_conelp` can run here (cvxopt installed).
 conelp_available = solvers is not None
 
 #: The variables of the terms, in the order of the program's variable vector's parts.
@@ -474,35 +474,6 @@ class StructuredKKT:
         xv = np.array(x).ravel()
         r = self.apply(xv) if trans == "N" else self.adjoint(self._blocks_of(xv))
         y[:] = cvxopt.matrix(alpha * r + beta * np.array(y).ravel())
-
-
-def solve_conelp(prog, tol: float, feastol: float, max_iter: int = 100, start=None, refinement: int = 2):
-    """Minimize cᵀv subject to the regional LMI program's blocks ⪯ 0 by cvxopt's ``conelp`` with
-    :class:`StructuredKKT` (:func:`run_conelp`).
-
-    Parameters
-    ----------
-    prog : acmm.design.regional_lmi.LMIProgram
-        The program.
-    tol : float
-        Relative gap tolerance, dimensionless.
-    feastol : float
-        Primal and dual feasibility tolerance, dimensionless.
-    max_iter : int
-        Iteration limit (a guard: the stop is the tolerances).
-    start : tuple or None
-        An interior iterate to start from, as :func:`run_conelp`.
-    refinement : int
-        Steps of iterative refinement of each KKT solve (:func:`run_conelp`).
-
-    Returns
-    -------
-    tuple
-        As :func:`run_conelp`.
-    """
-    N, m = prog.sizes
-    return run_conelp(StructuredKKT(prog.terms, layout(N, m)), prog.c, prog.F0, tol, feastol, max_iter, start,
-                      refinement)
 
 
 def run_conelp(kkt: StructuredKKT, c, F0, tol: float, feastol: float, max_iter: int = 100, start=None,

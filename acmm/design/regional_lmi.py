@@ -89,7 +89,8 @@ import numpy as np
 import scipy.linalg as sla
 from scipy import sparse
 
-from acmm.design.lmi_structure import coefficient_arrays, conelp_available, layout, program_terms, solve_conelp
+from acmm.design.lmi_structure import (StructuredKKT, coefficient_arrays, conelp_available, layout, program_terms,
+                                      run_conelp)
 from acmm.design.sector_lqr import eigen_conditioning, sector_margin, sector_robustness
 from acmm_qpp.errors import DesignError
 
@@ -593,6 +594,15 @@ def _solve_dsdp(prog: LMIProgram, tol: float):
     return status, v, 0
 
 
+def _solve_conelp(prog: LMIProgram, tol: float, feastol: float, max_iter: int = 100, start=None,
+                  refinement: int = 2):
+    """cvxopt's ``conelp`` on ``prog`` with its :class:`acmm.design.lmi_structure.StructuredKKT`:
+    :func:`acmm.design.lmi_structure.run_conelp` (tolerances dimensionless, returns as it does)."""
+    N, m = prog.sizes
+    return run_conelp(StructuredKKT(prog.terms, layout(N, m)), prog.c, prog.F0, tol, feastol, max_iter, start,
+                      refinement)
+
+
 def _solve_clarabel_pass(prog: LMIProgram, obj_scale: float, st: "RegionalLMISettings", tol: float):
     """One Clarabel solve of ``prog`` through cvxpy; the objective divided by ``obj_scale``."""
     import cvxpy as cp  # deferred: cvxpy start-up (~1 s), only on the reference route
@@ -840,7 +850,7 @@ def _route_conelp(As, Bs, Gs, K0, T, st):
     (status, iterations, solution or None)."""
     s_u = np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12)
     prog = lmi_program(As, Bs, Gs, T, s_u, st)
-    status, v, it, iterate = solve_conelp(prog, *CONELP_FIRST_TOL, st.max_iter, refinement=1)
+    status, v, it, iterate = _solve_conelp(prog, *CONELP_FIRST_TOL, st.max_iter, refinement=1)
     if v is None:
         return status, (it,), None
     sol = _solution(prog, v)
@@ -848,10 +858,10 @@ def _route_conelp(As, Bs, Gs, K0, T, st):
     prog2 = lmi_program(As, Bs, Gs, T1, s_u1, st, T_reg=T)
     feastol = min(st.tol, CONELP_FEASTOL)
     try:
-        status, v, it2, _ = solve_conelp(prog2, st.tol, feastol, st.max_iter,
-                                         start=_carry_iterate(prog, prog2, v, iterate))
+        status, v, it2, _ = _solve_conelp(prog2, st.tol, feastol, st.max_iter,
+                                          start=_carry_iterate(prog, prog2, v, iterate))
     except ValueError:          # cvxopt refused the carried iterate (not interior after rounding)
-        status, v, it2, _ = solve_conelp(prog2, st.tol, feastol, st.max_iter)
+        status, v, it2, _ = _solve_conelp(prog2, st.tol, feastol, st.max_iter)
     return status, (it, it2), None if v is None else _solution(prog2, v)
 
 
@@ -861,23 +871,8 @@ def _carry_iterate(prog: LMIProgram, prog2: LMIProgram, v, iterate):
     X ↦ PXPᵀ, X₂ ↦ PX₂Pᵀ, Y ↦ DYPᵀ, W ↦ DWD, every block as F ↦ R F Rᵀ (R = I ⊗ P, the cost
     block's diag(D, P)), so s ↦ R s Rᵀ and z ↦ R⁻ᵀ z R⁻¹: the same objective, blocks up to the
     congruence, and sᵀz (cvxopt's normalized residuals differ, and it restarts its homogeneous
-    embedding with τ = κ = 1).
-
-    Parameters
-    ----------
-    prog, prog2 : LMIProgram
-        The program in the iterate's coordinates and in the new ones (:func:`lmi_program` of one
-        model and settings).
-    v : (n_var,) array
-        The iterate's variables, dimensionless.
-    iterate : tuple
-        (slacks, duals): lists of (m_k, m_k) symmetric arrays, dimensionless.
-
-    Returns
-    -------
-    tuple
-        (v₂, slacks₂, duals₂) in ``prog2``'s coordinates.
-    """
+    embedding with τ = κ = 1).  ``iterate`` = (slacks, duals), lists of symmetric arrays; all
+    dimensionless.  Returns (v₂, slacks₂, duals₂) in ``prog2``'s coordinates."""
     N = prog.sizes[0]
     P = np.linalg.solve(prog2.T, prog.T)
     D = np.diag(prog.s_u / prog2.s_u)

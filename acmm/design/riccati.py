@@ -114,10 +114,6 @@ def as_R(R, m: int) -> np.ndarray:
     return _as_square(R, m, "R")
 
 
-def _as_Q(Q, n: int) -> np.ndarray:
-    return _as_square(Q, n, "Q")
-
-
 def scale_problem(A, B, Q, scale):
     """(Ã, B̃, Q̃) = (D⁻¹AD, D⁻¹B, DQD) for x = D x̃, D = diag(scale) (eq 5.4 in scaled states).
 
@@ -176,7 +172,7 @@ def care_residual(A, B, Q, R, P) -> float:
         ρ, dimensionless (``inf`` when the denominator vanishes but the residual does not).
     """
     A, B, P = (np.asarray(x, dtype=float) for x in (A, B, P))
-    Q = _as_Q(Q, A.shape[0])
+    Q = _as_square(Q, A.shape[0], "Q")
     R = as_R(R, B.shape[1])
     AtP = A.T @ P
     PB = P @ B
@@ -224,7 +220,7 @@ def care_backward_error(A, B, Q, R, P) -> float:
         residual does not).
     """
     A, B, P = (np.asarray(x, dtype=float) for x in (A, B, P))
-    Q = _as_Q(Q, A.shape[0])
+    Q = _as_square(Q, A.shape[0], "Q")
     R = as_R(R, B.shape[1])
     G = B @ np.linalg.solve(R, B.T)
     G = 0.5 * (G + G.T)
@@ -341,15 +337,11 @@ def care_condition(A, B, Q, R, P) -> float:
 
 
 def _refuse(message: str, method: str, residual: float, hint: str) -> NoReturn:
-    """Raise the :class:`ConvergenceError` of :func:`_refusal`."""
-    raise _refusal(message, method, residual, hint)
-
-
-def _refusal(message: str, method: str, residual: float, hint: str) -> ConvergenceError:
+    """Raise a :class:`ConvergenceError` carrying ``method`` and ``residual``."""
     exc = ConvergenceError(message, hint=hint)
     exc.method = method          # for reports (scripts/compare_riccati.py)
     exc.residual = residual
-    return exc
+    raise exc
 
 
 METHODS = ("scipy", "sign", "slycot")
@@ -693,7 +685,7 @@ def _as_problem(A, B, Q, R, scale):
     if A.shape != (n, n):
         raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
     d = np.asarray(scale, dtype=float) if scale is not None else None
-    return A, B, _as_Q(Q, n), as_R(R, m), d
+    return A, B, _as_square(Q, n, "Q"), as_R(R, m), d
 
 
 def _verified_gain(As, Bs, Qs, R, Ps, *, method, tol, scaled):

@@ -4,14 +4,14 @@
 The report designs each gain for the nominal plant and claims, from simulations, that the loop
 stays stable for ±30 % inertia variations.  Here the claim is designed for and proved per plant:
 
-1. **The family** (:func:`plant_family`): the nominal plant, ``samples`` element draws
+1. **The family** (:func:`_plant_family`): the nominal plant, ``samples`` element draws
    I ∘ (1 + δ), δ_ij ~ U(±p) independently (p = ``inertia_percent``/100; only rigid bodies,
    :func:`acmm.model.inertia.unphysical_reason`), and the uniform scalings (1 ± p)·I at the
    family's ends; each plant linearized (eq 4.46) about **its own** equilibrium connected to the
    design TEA (:func:`acmm.model.tea.solve_tea_connected`: where the station goes as its
    inertia moves from the nominal one; the bias is held, as in the sweep).  A draw whose design
    branch folds before it (no connected equilibrium) is not a member and is counted.
-2. **The gain** (:func:`robust_gain`): the worst spectral abscissa over the family,
+2. **The gain** (:func:`_robust_gain`): the worst spectral abscissa over the family,
    f(K) = max_i max Re λ(A_i − B_i K), minimized from the route's nominal gain by BFGS on the
    scaled gain (Lewis & Overton 2013 observe that BFGS with a weak line search works well on
    such nonsmooth spectral functions, without a convergence proof; HIFOO, Burke et al. 2006,
@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize as so
 
-from acmm.design.regional_lmi import whitened_loop
+from acmm.design.regional_lmi import scaled_model, whitened_loop
 from acmm.model import linearize as lin
 from acmm.model.inertia import ELEMENTS, perturb_inertia, unphysical_reason
 from acmm.model.tea import solve_tea_connected
@@ -214,28 +214,10 @@ class RobustDesign:
         return np.array([c.decay >= sigma and c.cone_deg <= phi for c in self.certificates], bool)
 
 
-def plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFamily:
-    """The nominal plant, ``st.samples`` physical element draws and the two uniform scalings, each
-    at its equilibrium connected to the design TEA ``theta`` (module docstring, step 1).
-
-    Parameters
-    ----------
-    inertia : (3, 3) array
-        Nominal inertia, slug·ft².
-    bias : (3,) array
-        Bias torque, held for every plant, ft·lbf.
-    theta : (3,) array
-        The nominal plant's TEA, rad.
-    n : float
-        Orbital rate, rad/s.
-    st : RobustSettings
-        The family's settings.
-
-    Returns
-    -------
-    PlantFamily
-        The members (fewer draws than asked when :data:`DRAWS_PER_MEMBER` per member ran out).
-    """
+def _plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFamily:
+    """Nominal plant (inertia slug·ft², bias ft·lbf held, TEA ``theta`` rad, n rad/s), ``st.samples``
+    element draws and the two uniform scalings at their TEAs connected to ``theta`` (module
+    docstring, step 1); fewer draws when :data:`DRAWS_PER_MEMBER` per member ran out."""
     I0, b0, th0 = (np.asarray(x, float) for x in (inertia, bias, theta))
     h = st.inertia_percent / 100.0
     labels, inertias, thetas = ["nominal"], [I0], [th0]
@@ -287,28 +269,9 @@ def _worst_abscissa(Ks: np.ndarray, models) -> tuple[float, np.ndarray]:
     return best, grad
 
 
-def robust_gain(models, K0: np.ndarray) -> tuple[np.ndarray, float, int, str]:
-    """The scaled gain minimizing the worst spectral abscissa over ``models`` (module docstring,
-    step 2), from ``K0``.
-
-    Parameters
-    ----------
-    models : sequence of (Ã, B̃)
-        Scaled models (time in 1/n), dimensionless.
-    K0 : (M, N) array
-        The starting scaled gain, dimensionless.
-
-    Returns
-    -------
-    K : (M, N) array
-        The gain found, scaled (dimensionless).
-    worst : float
-        Its worst spectral abscissa over the family, units of n.
-    restarts : int
-        BFGS restarts used.
-    stop : str
-        Why the search stopped.
-    """
+def _robust_gain(models, K0: np.ndarray) -> tuple[np.ndarray, float, int, str]:
+    """From scaled ``K0``, the scaled gain minimizing the worst spectral abscissa over the scaled
+    ``models`` (Ã, B̃) (module docstring, step 2): (K̃, worst abscissa in n, BFGS restarts, stop)."""
     M, N = K0.shape
     S = np.abs(K0) + 1e-3 * np.max(np.abs(K0))          # each element moved relative to its size
 
@@ -418,7 +381,7 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
         The gain, the family and one certificate per plant.
     """
     t0 = time.perf_counter()
-    fam = plant_family(inertia, bias, theta, n, st)
+    fam = _plant_family(inertia, bias, theta, n, st)
     d = np.asarray(scales, float)
     I0, th0, b0 = (np.asarray(x, float) for x in (inertia, theta, bias))
 
@@ -431,7 +394,7 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
                 # (an intermediate plant only guides the search; the certificates are of the family)
                 I, th = Is, (tea.theta if tea is not None else th0 + step * (th - th0))
             m = lin.design_point(I, th, n, model=model, drf_mode=drf_mode)
-            out.append((m.A / d[:, None] * d[None, :] / n, m.B / d[:, None] * input_scale / n))
+            out.append(scaled_model(m.A, m.B, n, d, input_scale))
         return out
 
     models = models_at(1.0)
@@ -445,7 +408,7 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
                             time.perf_counter() - t0, (float(sigma), float(phi)))
     Ks, restarts, limited = K0s, 0, []
     for step in CONTINUATION:
-        Ks, worst, r, stop = robust_gain(models if step == 1.0 else models_at(step), Ks)
+        Ks, worst, r, stop = _robust_gain(models if step == 1.0 else models_at(step), Ks)
         restarts += r
         if stop.startswith(f"{MAX_RESTARTS} restarts"):
             limited.append(f"{step:g}")

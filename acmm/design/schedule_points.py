@@ -52,21 +52,9 @@ class PointSpec:
     level: bool = True
 
 
-def blend_points(start: PointSpec, end: PointSpec, n_points: int) -> list[PointSpec]:
-    """``n_points`` configurations on I(s) = (1−s)·I_start + s·I_end, bias blended alike.
-
-    Parameters
-    ----------
-    start, end : PointSpec
-        The configurations at s = 0 and s = 1.
-    n_points : int
-        Number of points including both ends.
-
-    Returns
-    -------
-    list of PointSpec
-        The configurations at evenly spaced s.
-    """
+def _blend_points(start: PointSpec, end: PointSpec, n_points: int) -> list[PointSpec]:
+    """``n_points`` configurations (both ends included) at evenly spaced s on
+    I(s) = (1−s)·I_start + s·I_end, bias blended alike."""
     out = []
     for k, s in enumerate(np.linspace(0.0, 1.0, n_points)):
         name = start.name if k == 0 else end.name if k == n_points - 1 else f"blend_{s:.3f}"
@@ -110,7 +98,7 @@ def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
     th2 = thetas[:, 1]
     d = np.diff(th2)
     if not (np.all(d > 0) or np.all(d < 0)):
-        return blend_points(start, end, n_points)
+        return _blend_points(start, end, n_points)
     order = np.argsort(th2)
     targets = np.linspace(th2[0], th2[-1], n_points)
     s_pts = np.interp(targets, th2[order], s_grid[order])
@@ -241,7 +229,7 @@ def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSp
         if sched.spacing == "tea":
             specs = tea_spaced_blend(start, end, sched.n_points, n)
         else:
-            specs = blend_points(start, end, sched.n_points)
+            specs = _blend_points(start, end, sched.n_points)
     return specs + list(extras)
 
 

@@ -88,24 +88,8 @@ STAGE_ITER = 40
 FINAL_BFGS_ITER = 2000
 
 
-def power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
-    """Coefficients in powers of θ of Σ_k a[k]·((θ − c)/h)^k.
-
-    Parameters
-    ----------
-    a : (order+1, ...) array
-        Coefficients in the normalized variable u = (θ − c)/h, lowest power first, units of
-        the polynomial's value.
-    c : float
-        Centre of the normalization, rad.
-    h : float
-        Half-width of the normalization, rad.
-
-    Returns
-    -------
-    (order+1, ...) array
-        The same polynomials' coefficients in powers of θ, units of ``a`` per rad^k.
-    """
+def _power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
+    """Coefficients in powers of θ (units of ``a`` per rad^k) of Σ_k a[k]·((θ − c)/h)^k, c and h in rad."""
     order = a.shape[0] - 1
     b = np.zeros_like(a)
     for k in range(order + 1):
@@ -114,26 +98,11 @@ def power_basis(a: np.ndarray, c: float, h: float) -> np.ndarray:
     return b
 
 
-def refit_start(fit: ScheduleFit, path: PathModels, every: int) -> dict:
-    """The TEAs, models and starting coefficients of a refit of ``fit`` on ``path``.
-
-    Parameters
-    ----------
-    fit : acmm.design.schedule.ScheduleFit
-        The polynomial schedule the refit starts from.
-    path : acmm.design.path_check.PathModels
-        Local models along the path.
-    every : int
-        Use every ``every``-th TEA of ``path`` (the ends included).
-
-    Returns
-    -------
-    dict
-        ``idx`` (the TEAs' indices), ``c0``, ``h0`` (the normalized variable u = (θ2* − c0)/h0,
-        rad), ``d`` (the state scaling), ``As``, ``Bs`` (the scaled models), ``up`` (powers of u
-        at each TEA), ``shape``, ``a0`` (the starting coefficients in u, scaled gains) and ``sc``
-        (their scale: the largest |a0| of each element).
-    """
+def _refit_start(fit: ScheduleFit, path: PathModels, every: int) -> dict:
+    """The TEAs, models and starting coefficients of a refit of ``fit`` on every ``every``-th TEA
+    of ``path`` (ends included): ``idx``, ``c0``, ``h0`` (u = (θ2* − c0)/h0, rad), ``d`` (the
+    state scaling), ``As``, ``Bs`` (scaled models), ``up`` (powers of u at each TEA), ``shape``,
+    ``a0`` (starting coefficients in u, scaled gains) and ``sc`` (the largest |a0| per element)."""
     idx = sorted(set(range(0, path.theta2.size, max(1, every))) | {path.theta2.size - 1})
     th = path.theta2[idx]
     c0, h0 = 0.5 * (th.max() + th.min()), 0.5 * (th.max() - th.min())
@@ -151,35 +120,6 @@ def refit_start(fit: ScheduleFit, path: PathModels, every: int) -> dict:
     sc = np.broadcast_to(np.maximum(np.abs(a0).max(axis=0, keepdims=True), 1e-12), shape)
     return {"idx": idx, "c0": c0, "h0": h0, "d": d, "As": As, "Bs": Bs, "up": up, "shape": shape,
             "a0": a0, "sc": sc}
-
-
-def refitted(fit: ScheduleFit, coef: np.ndarray, info: dict, method: str = "shifted_lqr") -> ScheduleFit:
-    """The refitted schedule with its residuals against the design-point gains.
-
-    Parameters
-    ----------
-    fit : acmm.design.schedule.ScheduleFit
-        The schedule that was refitted (its points and gains).
-    coef : (order+1, 3, N) array
-        The new coefficients in powers of θ2*, units of K per rad^k.
-    info : dict
-        The refit's diagnostics (``refit_info``).
-    method : str
-        The refit's name (``ScheduleFit.method``).
-
-    Returns
-    -------
-    acmm.design.schedule.ScheduleFit
-        The polynomial schedule with ``coef``.
-    """
-    order = fit.order
-    P = fit.variable.size
-    vander_th = fit.variable[:, None] ** np.arange(order + 1)[None, :]
-    resid = fit.gains.reshape(P, -1) - vander_th @ coef.reshape(order + 1, -1)
-    rms = np.sqrt(np.mean(resid ** 2, axis=0)).reshape(fit.gains.shape[1:])
-    peak = np.max(np.abs(fit.gains.reshape(P, -1)), axis=0).reshape(fit.gains.shape[1:])
-    rel = np.divide(rms, peak, out=np.zeros_like(rms), where=peak > 0)
-    return ScheduleFit(coef, fit.variable, fit.gains, rms, rel, fit.form, method, info)
 
 
 def _lyapunov(T: np.ndarray, U: np.ndarray, W: np.ndarray, adjoint: bool) -> np.ndarray:
@@ -210,22 +150,11 @@ def _lyapunov(T: np.ndarray, U: np.ndarray, W: np.ndarray, adjoint: bool) -> np.
     return U @ Y @ U.conj().T
 
 
-class ShiftedCost:
-    """F(x) of the module docstring, its gradient and its Hessian at the refit's TEAs.
-
-    Parameters
-    ----------
-    st : dict
-        The refit's TEAs, models and starting coefficients (:func:`refit_start`).
-    n : float
-        Orbital rate, rad/s.
-    Q : (N, N) array
-        State weight on the scaled states, dimensionless (the identity included).
-    R : (M, M) array
-        Control weight, 1/(ft·lbf)².
-    weight : float
-        Weight ε of the distance from the start, dimensionless.
-    """
+class _ShiftedCost:
+    """F(x) of the module docstring, its gradient and its Hessian at the refit's TEAs ``st``
+    (:func:`_refit_start`); n rad/s, Q on the scaled states (identity included), R 1/(ft·lbf)²,
+    ``weight`` ε of the distance from the start.  Every ``x`` is the change of the coefficients
+    from ``st["a0"]`` in units of ``st["sc"]``; α in units of n, ψ the cone term's rotation, rad."""
 
     def __init__(self, st: dict, n: float, Q: np.ndarray, R: np.ndarray, weight: float):
         self.st, self.n, self.Q, self.R, self.weight = st, n, Q, R, weight
@@ -233,53 +162,16 @@ class ShiftedCost:
         self.eye = np.eye(self.As.shape[1])
 
     def gains(self, x: np.ndarray) -> np.ndarray:
-        """The scheduled gain at each of the refit's TEAs.
-
-        Parameters
-        ----------
-        x : array
-            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
-
-        Returns
-        -------
-        (T, M, N) array
-            Gains on the scaled states, ft·lbf per unit of each scaled state.
-        """
+        """(T, M, N) gains at the refit's TEAs, ft·lbf per unit of each scaled state."""
         a = self.st["a0"] + x.reshape(self.st["shape"]) * self.st["sc"]
         return np.einsum("tk,kab->tab", self.st["up"], a)
 
     def poles(self, x: np.ndarray) -> np.ndarray:
-        """The closed-loop poles at each of the refit's TEAs.
-
-        Parameters
-        ----------
-        x : array
-            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
-
-        Returns
-        -------
-        (T, N) complex array
-            Eigenvalues of A − B K, units of n.
-        """
+        """(T, N) closed-loop poles (eigenvalues of A − B K) at the refit's TEAs, units of n."""
         return np.linalg.eigvals(self.As - self.Bs @ self.gains(x)) / self.n
 
     def __call__(self, x: np.ndarray, alpha: float, psi: float = 0.0) -> tuple[float, np.ndarray]:
-        """F and its gradient at ``x``; (inf, 0) outside the region.
-
-        Parameters
-        ----------
-        x : array
-            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``.
-        alpha : float
-            Decay rate α, units of n.
-        psi : float
-            Rotation ψ of the cone term, rad (0: no cone term).
-
-        Returns
-        -------
-        tuple
-            (F, dimensionless; ∇F, array like ``x``).
-        """
+        """(F, ∇F) at ``x``, dimensionless; (inf, 0) outside the region (ψ = 0: no cone term)."""
         terms = self._terms(x, alpha, psi)
         if terms is None:
             return np.inf, np.zeros_like(x)
@@ -288,29 +180,9 @@ class ShiftedCost:
         return f, g / total + self.weight * x
 
     def hessian(self, x: np.ndarray, alpha: float, psi: float = 0.0) -> np.ndarray:
-        """∇²F at ``x``, exact (the module docstring): each TEA's gradient differentiated along
-        every gain element, the Schur form of its loop serving every Lyapunov equation.
-
-        Parameters
-        ----------
-        x : array
-            Change of the coefficients from ``st["a0"]``, in units of ``st["sc"]``; inside the
-            region.
-        alpha : float
-            Decay rate α, units of n.
-        psi : float
-            Rotation ψ of the cone term, rad (0: no cone term).
-
-        Returns
-        -------
-        (x.size, x.size) array
-            The symmetric Hessian, dimensionless.
-
-        Raises
-        ------
-        ValueError
-            ``x`` is outside the region.
-        """
+        """∇²F at ``x`` (inside the region, else ValueError), exact and symmetrized (the module
+        docstring): each TEA's gradient differentiated along every gain element, the Schur form of
+        its loop serving every Lyapunov equation."""
         terms = self._terms(x, alpha, psi, second=True)
         if terms is None:
             raise ValueError("the Hessian of F is asked outside the region")
@@ -370,7 +242,7 @@ def _swap(M: np.ndarray) -> np.ndarray:
     return np.swapaxes(M, -1, -2)
 
 
-def _newton(cost: ShiftedCost, x: np.ndarray, alpha: float, psi: float = 0.0) -> tuple[np.ndarray, int, bool]:
+def _newton(cost: _ShiftedCost, x: np.ndarray, alpha: float, psi: float = 0.0) -> tuple[np.ndarray, int, bool]:
     """Newton's method on F at (``alpha``, ``psi``) from ``x`` (inside the region); the Hessian is
     reused while the steps contract by half or better (a chord method) and recomputed otherwise.
     Returns the minimizer, the steps taken and whether the step tolerance was met."""
@@ -444,11 +316,11 @@ def refit_shifted_lqr(fit: ScheduleFit, path: PathModels, n: float, Q: np.ndarra
     if fit.form != "polynomial":
         raise ValueError("refit_shifted_lqr refines a polynomial schedule")
     every = max(1, (path.theta2.size - 1) // max(1, n_tea - 1))
-    st = refit_start(fit, path, every)
+    st = _refit_start(fit, path, every)
     Qi = np.eye(st["As"][0].shape[0]) + Q
     # the homotopy's stages minimize the barrier alone (the weight would hold them near the
     # least-squares fit, which is far outside the region); the last problem adds it
-    cost, stage_cost = ShiftedCost(st, n, Qi, R, weight), ShiftedCost(st, n, Qi, R, 0.0)
+    cost, stage_cost = _ShiftedCost(st, n, Qi, R, weight), _ShiftedCost(st, n, Qi, R, 0.0)
     x = np.zeros(st["a0"].size)
     w0 = w = float(cost.poles(x).real.max())
     psi_target = np.radians(90.0 - cone_deg)
@@ -487,7 +359,8 @@ def refit_shifted_lqr(fit: ScheduleFit, path: PathModels, n: float, Q: np.ndarra
 
 def _outcome(fit: ScheduleFit, st: dict, x: np.ndarray, w0: float, w1: float, stages: int, steps: int,
              converged: bool, accepted: bool, message: str, decay: float, cone_deg: float) -> ScheduleFit:
-    """The refitted schedule (or ``fit`` when not ``accepted``) with its ``refit_info``."""
+    """The refitted schedule (or ``fit`` when not ``accepted``) with its ``refit_info`` and its residuals
+    against the design-point gains."""
     info = {"iterations": int(steps), "homotopy_stages": int(stages), "converged": bool(converged),
             "decay": float(decay), "cone_deg": float(cone_deg),
             "message": message, "n_tea": len(st["idx"]), "max_real_before": float(w0),
@@ -496,4 +369,12 @@ def _outcome(fit: ScheduleFit, st: dict, x: np.ndarray, w0: float, w1: float, st
         return ScheduleFit(fit.coef, fit.variable, fit.gains, fit.rms_residual, fit.rel_residual,
                            fit.form, "least_squares", info)
     a = st["a0"] + x.reshape(st["shape"]) * st["sc"]
-    return refitted(fit, power_basis(a, st["c0"], st["h0"]) / st["d"][None, None, :], info, "shifted_lqr")
+    coef = _power_basis(a, st["c0"], st["h0"]) / st["d"][None, None, :]    # powers of θ2*, units of K
+    order = fit.order
+    P = fit.variable.size
+    vander_th = fit.variable[:, None] ** np.arange(order + 1)[None, :]
+    resid = fit.gains.reshape(P, -1) - vander_th @ coef.reshape(order + 1, -1)
+    rms = np.sqrt(np.mean(resid ** 2, axis=0)).reshape(fit.gains.shape[1:])
+    peak = np.max(np.abs(fit.gains.reshape(P, -1)), axis=0).reshape(fit.gains.shape[1:])
+    rel = np.divide(rms, peak, out=np.zeros_like(rms), where=peak > 0)
+    return ScheduleFit(coef, fit.variable, fit.gains, rms, rel, fit.form, "shifted_lqr", info)

@@ -20,25 +20,6 @@ import numpy as np
 from acmm.model.kinematics import attitude_rate, cross, nadir_vector, nadir_vector_jacobian, skew
 
 
-def gyroscopic_torque(omega: np.ndarray, inertia: np.ndarray) -> np.ndarray:
-    """τ_gyro = −ω × (I ω), eq 3.2 (ft·lbf).
-
-    Parameters
-    ----------
-    omega : (..., 3) array
-        Absolute angular velocity in body axes, rad/s.
-    inertia : (3, 3) array
-        Inertia matrix, slug·ft².
-
-    Returns
-    -------
-    (..., 3) array
-        Gyroscopic torque, ft·lbf.
-    """
-    omega = np.asarray(omega)
-    return -cross(omega, omega @ inertia.T)
-
-
 def gyroscopic_torque_jacobian(omega: np.ndarray, inertia: np.ndarray) -> np.ndarray:
     """∂τ_gyro/∂ω = [(Iω)×] − [ω×] I (ft·lbf per rad/s); eqs 4.8–4.10 in matrix form.
 
@@ -130,9 +111,10 @@ def disturbance_torque(t, bias: np.ndarray, a: np.ndarray, b: np.ndarray, n: flo
     return np.asarray(bias) + np.asarray(a) * np.sin(n * t) + np.asarray(b) * np.sin(2 * n * t)
 
 
-def angular_acceleration(theta, omega, inertia, n, w, u, inertia_inv=None) -> np.ndarray:
-    """ω̇ from eq 3.1: I ω̇ = τ_gyro + τ_gg + (w − u) (rad/s²).
+def plant_rhs(theta, omega, h, inertia, n, w, u):
+    """Right-hand side of eqs 3.1, 3.5, 3.8: returns (θ̇, ω̇, ḣ).
 
+    I ω̇ = τ_gyro + τ_gg + (w − u) with τ_gyro = −ω × (I ω) (eq 3.2); ḣ = u − ω × h (eq 3.8).
     Signs of u and w: ``docs/ERRATA.md`` § Momentum balance.
 
     Parameters
@@ -141,57 +123,6 @@ def angular_acceleration(theta, omega, inertia, n, w, u, inertia_inv=None) -> np
         Roll, pitch, yaw (rad).
     omega : (..., 3) array
         Absolute angular velocity in body axes, rad/s.
-    inertia : (3, 3) array
-        Inertia matrix, slug·ft².
-    n : float
-        Orbital rate, rad/s.
-    w : (..., 3) array
-        Disturbance torque (eq 3.9), ft·lbf.
-    u : (..., 3) array
-        CMG control torque, ft·lbf.
-    inertia_inv : (3, 3) array, optional
-        Inverse of ``inertia``, 1/(slug·ft²); computed when omitted.
-
-    Returns
-    -------
-    omega_dot : (..., 3) array
-        ω̇, rad/s².
-    """
-    if inertia_inv is None:
-        inertia_inv = np.linalg.inv(inertia)
-    torque = gyroscopic_torque(omega, inertia) + gravity_gradient_torque(theta, inertia, n) + w - u
-    return torque @ inertia_inv.T
-
-
-def cmg_momentum_rate(omega: np.ndarray, h: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """ḣ = u − ω × h, eq 3.8 (ft·lbf).
-
-    Parameters
-    ----------
-    omega : (..., 3) array
-        Absolute angular velocity in body axes, rad/s.
-    h : (..., 3) array
-        CMG momentum in body axes, ft·lbf·s.
-    u : (..., 3) array
-        CMG control torque, ft·lbf.
-
-    Returns
-    -------
-    h_dot : (..., 3) array
-        ḣ, ft·lbf.
-    """
-    return u - cross(omega, h)
-
-
-def plant_rhs(theta, omega, h, inertia, n, w, u, inertia_inv=None):
-    """Right-hand side of eqs 3.1, 3.5, 3.8: returns (θ̇, ω̇, ḣ).
-
-    Parameters
-    ----------
-    theta : (..., 3) array
-        Roll, pitch, yaw (rad).
-    omega : (..., 3) array
-        Absolute angular velocity in body axes, rad/s.
     h : (..., 3) array
         CMG momentum in body axes, ft·lbf·s.
     inertia : (3, 3) array
@@ -202,8 +133,6 @@ def plant_rhs(theta, omega, h, inertia, n, w, u, inertia_inv=None):
         Disturbance torque (eq 3.9), ft·lbf.
     u : (..., 3) array
         CMG control torque, ft·lbf.
-    inertia_inv : (3, 3) array, optional
-        Inverse of ``inertia``, 1/(slug·ft²); computed when omitted.
 
     Returns
     -------
@@ -214,6 +143,6 @@ def plant_rhs(theta, omega, h, inertia, n, w, u, inertia_inv=None):
     h_dot : (..., 3) array
         ḣ (eq 3.8), ft·lbf.
     """
-    return (attitude_rate(theta, omega, n),
-            angular_acceleration(theta, omega, inertia, n, w, u, inertia_inv),
-            cmg_momentum_rate(omega, h, u))
+    omega = np.asarray(omega)
+    torque = -cross(omega, omega @ inertia.T) + gravity_gradient_torque(theta, inertia, n) + w - u
+    return attitude_rate(theta, omega, n), torque @ np.linalg.inv(inertia).T, u - cross(omega, h)

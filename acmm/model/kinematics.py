@@ -8,10 +8,9 @@ Conventions (see ``docs/ERRATA.md`` § Units, § Frames and § Kinematics):
   body axes is C_BL·(0, −n, 0) (eq 4.3).
 * Eq 3.6 is misprinted: its (1,1) bracket entry is cos θ3, so f11 = 1.
 
-Cross products, rotations, the nadir vector and the LVLH rate with their Jacobians, and the
-attitude kinematics θ̇ = F(θ)(ω − ω_LVLH) (eq 3.5).  All functions are pure and accept stacked
-inputs along leading axes where noted; they keep the input dtype, so complex-step
-differentiation works through them.
+Cross products, the nadir vector with its Jacobian, the LVLH rate, and the attitude kinematics
+θ̇ = F(θ)(ω − ω_LVLH) (eq 3.5).  All functions are pure and accept stacked inputs along leading
+axes where noted; they keep the input dtype, so complex-step differentiation works through them.
 """
 from __future__ import annotations
 
@@ -59,82 +58,6 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
                      a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
                      a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], -1)
-
-
-def rotation_1(a: float) -> np.ndarray:
-    """Elementary frame rotation about axis 1 by angle ``a`` (rad).
-
-    C1(a) of the sequence C_BL = C1(θ1) C3(θ3) C2(θ2) (``docs/ERRATA.md`` § Frames).
-
-    Parameters
-    ----------
-    a : float
-        Rotation angle, rad.
-
-    Returns
-    -------
-    (3, 3) array
-        Direction-cosine matrix C1(a) (dimensionless).
-    """
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])
-
-
-def rotation_2(a: float) -> np.ndarray:
-    """Elementary frame rotation about axis 2 by angle ``a`` (rad).
-
-    C2(a) of the sequence C_BL = C1(θ1) C3(θ3) C2(θ2) (``docs/ERRATA.md`` § Frames).
-
-    Parameters
-    ----------
-    a : float
-        Rotation angle, rad.
-
-    Returns
-    -------
-    (3, 3) array
-        Direction-cosine matrix C2(a) (dimensionless).
-    """
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
-
-
-def rotation_3(a: float) -> np.ndarray:
-    """Elementary frame rotation about axis 3 by angle ``a`` (rad).
-
-    C3(a) of the sequence C_BL = C1(θ1) C3(θ3) C2(θ2) (``docs/ERRATA.md`` § Frames).
-
-    Parameters
-    ----------
-    a : float
-        Rotation angle, rad.
-
-    Returns
-    -------
-    (3, 3) array
-        Direction-cosine matrix C3(a) (dimensionless).
-    """
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def dcm_body_from_lvlh(theta: np.ndarray) -> np.ndarray:
-    """Direction-cosine matrix C_BL = C1(θ1) C3(θ3) C2(θ2) (pitch–yaw–roll sequence).
-
-    The nadir vector of eq 3.4 is its third column (``docs/ERRATA.md`` § Frames).
-
-    Parameters
-    ----------
-    theta : (3,) array
-        Roll, pitch, yaw (rad).
-
-    Returns
-    -------
-    (3, 3) array
-        C_BL, body components from LVLH components (dimensionless).
-    """
-    t1, t2, t3 = theta
-    return rotation_1(t1) @ rotation_3(t3) @ rotation_2(t2)
 
 
 def nadir_vector(theta: np.ndarray) -> np.ndarray:
@@ -201,28 +124,6 @@ def lvlh_rate_in_body(theta: np.ndarray, n: float) -> np.ndarray:
     s1, s3 = np.sin(theta[..., 0]), np.sin(theta[..., 2])
     c1, c3 = np.cos(theta[..., 0]), np.cos(theta[..., 2])
     return np.stack([-n * s3, -n * c1 * c3, n * s1 * c3], -1)
-
-
-def lvlh_rate_jacobian(theta: np.ndarray, n: float) -> np.ndarray:
-    """∂ω*/∂θ (3×3) of eq 4.3 (rad/s per rad).
-
-    Parameters
-    ----------
-    theta : (3,) array
-        Roll, pitch, yaw (rad).
-    n : float
-        Orbital rate, rad/s.
-
-    Returns
-    -------
-    (3, 3) array
-        ∂ω*/∂θ, rad/s per rad.
-    """
-    s1, _, s3 = np.sin(theta)
-    c1, _, c3 = np.cos(theta)
-    return np.array([[0.0, 0.0, -n * c3],
-                     [n * s1 * c3, 0.0, n * c1 * s3],
-                     [n * c1 * c3, 0.0, -n * s1 * s3]])
 
 
 def kinematics_matrix(theta: np.ndarray) -> np.ndarray:

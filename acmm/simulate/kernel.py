@@ -504,33 +504,10 @@ def _record(out, s, t, X, lv, loop, level, w):
 
 @njit_cached()
 def _integrate(sample_times, x0, sched, loop, out):
-    """Integrate the closed loop from (sample_times[0], x0) by adaptive Dormand–Prince 5(4) steps,
-    recording every sample time, until the last one or a stop.
-
-    Parameters
-    ----------
-    sample_times : (S,) array, s
-        Output times (they include 0 and every level start: no step crosses a level start).
-    x0 : (24,) array
-        Initial plain state X, in the units of the module docstring.
-    sched : LevelSchedule
-        The per-level arrays (units in :class:`LevelSchedule`).
-    loop : LoopConstants
-        Plant, controller and integrator constants (units in :class:`LoopConstants`).
-    out : KernelOutputs
-        Written: the samples up to the stop and the extremes over every accepted step.
-
-    Returns
-    -------
-    last : int
-        Index of the last sample written.
-    stop : int
-        One of the ``STOP_*`` codes of :mod:`acmm.simulate.scenario` (``STOP_NONE``: completed).
-    t : float
-        Time reached, s.
-    n_steps, n_rejected : int
-        Accepted and rejected steps.
-    """
+    """Integrate the closed loop from (sample_times[0] s, plain state x0) by adaptive Dormand–Prince
+    5(4) steps into ``out``, sampling at every ``sample_times`` (s; they include every level start,
+    so no step crosses one), until the last or a stop: (last sample index, ``STOP_*`` code of
+    :mod:`acmm.simulate.scenario`, time reached s, accepted steps, rejected steps)."""
     X = x0.copy()
     w = workspace()
     t = sample_times[0]

@@ -118,7 +118,7 @@ def test_an_infeasible_program_is_no_answer_not_the_solvers_word():
     A, B, G = _plant()
     st = replace(RegionalLMISettings(), min_margin=50.0, disk_radius=1.0)
     prog = lmi_program(A, B, G, np.eye(5), np.ones(2), st)
-    status, v, _, _ = ls.solve_conelp(prog, 1e-7, 1e-7)
+    status, v, _, _ = rl._solve_conelp(prog, 1e-7, 1e-7)
     assert v is None and status == "no answer"
 
 

@@ -20,7 +20,7 @@ import pytest
 from typer.testing import CliRunner
 
 from acmm.cli.app import app
-from acmm.design.robust import RobustSettings, plant_family, region_certificate
+from acmm.design.robust import RobustSettings, _plant_family, region_certificate
 from acmm.io.config import load_config
 from acmm.model import linearize as lin
 from acmm.model.inertia import unphysical_reason
@@ -72,7 +72,7 @@ def test_family_members_are_connected_rigid_body_equilibria():
 
     b0 = resolve_bias(cfg.disturbance, I0, N)
     th0 = solve_tea(I0, N, b0, expected=cfg.disturbance.requested_tea()).theta
-    fam = plant_family(I0, b0, th0, N, RobustSettings(30, 8, 5))
+    fam = _plant_family(I0, b0, th0, N, RobustSettings(30, 8, 5))
     assert fam.labels[0] == "nominal" and fam.labels[-2:] == ("scale 0.7", "scale 1.3")
     assert len(fam.labels) == 11 and fam.draws == 8 + fam.unphysical + fam.folded and fam.scalings_folded == ()
     assert np.allclose(fam.inertia[-1], 1.3 * I0) and np.allclose(fam.inertia[0], I0)
@@ -82,9 +82,9 @@ def test_family_members_are_connected_rigid_body_equilibria():
     ratio = fam.inertia[1:-2] / I0                      # element draws within ±30 %
     assert np.all(np.abs(ratio - 1) <= 0.3 + 1e-12)
     # the same settings draw the same family; another seed another one
-    again = plant_family(I0, b0, th0, N, RobustSettings(30, 8, 5))
+    again = _plant_family(I0, b0, th0, N, RobustSettings(30, 8, 5))
     assert np.array_equal(again.inertia, fam.inertia)
-    assert not np.allclose(plant_family(I0, b0, th0, N, RobustSettings(30, 8, 6)).inertia[1], fam.inertia[1])
+    assert not np.allclose(_plant_family(I0, b0, th0, N, RobustSettings(30, 8, 6)).inertia[1], fam.inertia[1])
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,7 @@ import scipy.linalg as sla
 
 from acmm.design import schedule as sch
 from acmm.design.path_check import PathModels
-from acmm.design.schedule_shifted_lqr import ShiftedCost, power_basis, refit_shifted_lqr, refit_start
+from acmm.design.schedule_shifted_lqr import _ShiftedCost, _power_basis, _refit_start, refit_shifted_lqr
 
 N_RATE = 1.0            # orbital rate of the constructed path (the refit works in units of n)
 DECAY, CONE, WEIGHT = 0.3, 70.0, 1e-2
@@ -136,14 +136,14 @@ def test_only_a_polynomial_is_refit():
 
 
 def test_the_exact_hessian_is_the_curvature_of_F():
-    """Newton's Hessian (ShiftedCost.hessian) at the answer against the second differences of F
+    """Newton's Hessian (_ShiftedCost.hessian) at the answer against the second differences of F
     written here (Kronecker-product Lyapunov solves) along random directions, vᵀ∇²F v, and the
     cross term between two directions; the module's coordinates x (the coefficients in u, scaled)
-    are mapped to θ-power coefficients with its public power_basis."""
+    are mapped to θ-power coefficients with its _power_basis."""
     path = _path()
     start = _start(path)
     fit = refit_shifted_lqr(start, path, N_RATE, Q, R, decay=DECAY, cone_deg=CONE, weight=WEIGHT)
-    st = refit_start(start, path, 1)
+    st = _refit_start(start, path, 1)
     # the answer's x: its coefficients in u (sampled at u = −1, 0, 1), less the start's, scaled
     us = np.array([-1.0, 0.0, 1.0])
     vt = (st["c0"] + st["h0"] * us)[:, None] ** np.arange(3)
@@ -151,13 +151,13 @@ def test_the_exact_hessian_is_the_curvature_of_F():
     x = ((a - st["a0"]) / st["sc"]).ravel()
 
     def coef(z):
-        return power_basis(st["a0"] + z.reshape(st["shape"]) * st["sc"], st["c0"], st["h0"])
+        return _power_basis(st["a0"] + z.reshape(st["shape"]) * st["sc"], st["c0"], st["h0"])
 
     assert np.allclose(coef(x), fit.coef, rtol=1e-10, atol=1e-12)
     rng = np.random.default_rng(3)
     h = 1e-4
     for cone in (CONE, 90.0):                   # with the cone term, and without it (ψ = 0)
-        H = ShiftedCost(st, N_RATE, np.eye(5) + Q, R, WEIGHT).hessian(x, DECAY, np.radians(90.0 - cone))
+        H = _ShiftedCost(st, N_RATE, np.eye(5) + Q, R, WEIGHT).hessian(x, DECAY, np.radians(90.0 - cone))
         assert np.allclose(H, H.T)
         if cone == CONE:
             assert np.linalg.eigvalsh(H).min() > 0        # the answer: a minimum

@@ -69,16 +69,25 @@ CASES = list(range(8))
 # The oracle of acmm.model.tea's compiled continuation (test_tea): the same algorithm (path, step
 # control, acceptance tests, fold bisection) on the numpy residual of acmm.model.dynamics and
 # acmm.model.kinematics, numpy's LAPACK solve and determinant.
+def lvlh_rate_jacobian(theta, n):
+    """∂ω*/∂θ (3×3) of eq 4.3, rad/s per rad (checked against differences in test_kinematics)."""
+    s1, _, s3 = np.sin(theta)
+    c1, _, c3 = np.cos(theta)
+    return np.array([[0.0, 0.0, -n * c3],
+                     [n * s1 * c3, 0.0, n * c1 * s3],
+                     [n * c1 * c3, 0.0, -n * s1 * s3]])
+
+
 def tea_residual_np(theta, inertia, n, bias):
     """Eq 4.1 with eq 4.3 substituted, from the model's numpy torques (ft·lbf)."""
     omega = kin.lvlh_rate_in_body(theta, n)
-    return dyn.gyroscopic_torque(omega, inertia) + dyn.gravity_gradient_torque(theta, inertia, n) + bias
+    return -kin.cross(omega, omega @ inertia.T) + dyn.gravity_gradient_torque(theta, inertia, n) + bias
 
 
 def tea_jacobian_np(theta, inertia, n):
     """∂/∂θ of :func:`tea_residual_np` from the model's numpy partials (ft·lbf/rad)."""
     omega = kin.lvlh_rate_in_body(theta, n)
-    return (dyn.gyroscopic_torque_jacobian(omega, inertia) @ kin.lvlh_rate_jacobian(theta, n)
+    return (dyn.gyroscopic_torque_jacobian(omega, inertia) @ lvlh_rate_jacobian(theta, n)
             + dyn.gravity_gradient_jacobian(theta, inertia, n))
 
 
