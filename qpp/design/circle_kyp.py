@@ -65,25 +65,9 @@ class KypResult:
     text: str
 
 
-def hamiltonian_clear(A, B, C) -> bool:
-    """Whether the Hamiltonian of ‖C (sI − A)⁻¹ B‖∞ < 1, [[A, BBᵀ], [−CᵀC, −Aᵀ]], has no
-    eigenvalue on the imaginary axis (|Re λ| ≤ :data:`AXIS_TOL`·max |λ|); with A Hurwitz this is
-    the norm being below 1.
-
-    Parameters
-    ----------
-    A : (n, n) array
-        Hurwitz state matrix, 1/s.
-    B : (n, k) array
-        Input matrix, state units per input unit per s.
-    C : (q, n) array
-        Output matrix, output units per state unit.
-
-    Returns
-    -------
-    bool
-        No imaginary-axis eigenvalue.
-    """
+def _hamiltonian_clear(A, B, C) -> bool:
+    """Whether the Hamiltonian [[A, BBᵀ], [−CᵀC, −Aᵀ]] of ‖C (sI − A)⁻¹ B‖∞ < 1 has no eigenvalue on the
+    imaginary axis (|Re λ| ≤ AXIS_TOL·max |λ|); with A (1/s) Hurwitz this is the norm being below 1."""
     H = np.block([[A, B @ B.T], [-C.T @ C, -A.T]])
     ev = np.linalg.eigvals(H)
     scale = max(1.0, float(np.abs(ev).max()))
@@ -141,7 +125,7 @@ def circle_kyp(A, B, C, sector, a: float = 0.0, coupled=None) -> KypResult:
         if res.fun < g:
             logd, g = np.clip(res.x, -30, 30), float(res.fun)
     d = np.exp(np.concatenate([[0.0], logd]))
-    clear = g < 1.0 - MARGIN and hamiltonian_clear(Ac, B / d[None, :], (d * radius)[:, None] * C)
+    clear = g < 1.0 - MARGIN and _hamiltonian_clear(Ac, B / d[None, :], (d * radius)[:, None] * C)
     form = "||R H_c||" if m == 1 else ("rho ||H_c||" if coupled.any() else "||D R H_c D^-1||")
     text = (f"proved by the KYP lemma: centred loop Hurwitz and {form}_inf = {g:.6g} < 1 (Hamiltonian without "
             "imaginary-axis eigenvalues)" if clear else
