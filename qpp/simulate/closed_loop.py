@@ -7,7 +7,7 @@ r = r_o, γ = nominal and d = 0 (eq 10.29).  The sphere check is
 ‖y − y_o‖∞ = max_i sup_t |y_i − y_oi| ≤ β_o (eq 10.35).  The nonlinear feedback terms are
 evaluated at the true state x (the report's φ(x, M, t) in ch. 14 uses x).
 
-The loop's inputs come from :mod:`qpp.simulate.signals` (r, r_o) and :mod:`qpp.model.matched_nonlinearity`
+The loop's inputs come from :func:`qpp.simulate.loop.eval_signal` (r, r_o) and :mod:`qpp.model.matched_nonlinearity`
 (f1, γ); this module runs the scenarios and checks the sphere.
 """
 from __future__ import annotations
@@ -19,10 +19,8 @@ import math
 import numpy as np
 
 from qpp.io.config import ExpressionNonlinearity, QppConfig, Scenario
-from qpp.simulate.loop import DIVERGED_FACTOR, nominal_diverged_beyond, simulate_nominal
-from qpp.simulate.loop import initial_state, simulate_loop
+from qpp.simulate.loop import DIVERGED_FACTOR, eval_signal, initial_state, nominal_diverged_beyond, simulate_loop, simulate_nominal
 from qpp.model.matched_nonlinearity import config_f1, scenario_gamma
-from qpp.simulate.signals import eval_signal
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.limits import how_to_raise, limit
 from qpp import LIMITS

@@ -8,6 +8,9 @@ State z = [x; x_c; x̂] (eq 10.7).  With f1 the plant nonlinearity and f1o its n
     x̂'  = A x̂ + B u + B f1o + L (y − C x̂),  L = −H  (eq 10.5)
 
 A disturbance impulse I δ(t − t_i) is the jump x(t_i⁺) = x(t_i⁻) + G I.
+
+The reference r = r_o + Δr of each scenario and the nominal reference r_o (eqs 10.2, 10.29) are
+one list of :class:`~qpp.io.config.Term` (sine, step, ramp) per channel (:func:`eval_signal`).
 """
 from __future__ import annotations
 
@@ -15,11 +18,45 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from acmm_qpp.errors import ConfigError, ConvergenceError
-from qpp.io.config import QppConfig
+from qpp.io.config import QppConfig, Term
 from qpp.model.lure import LurePlant
-from qpp.simulate.signals import eval_signal
 from acmm_qpp.limits import how_to_raise, limit
 from qpp import LIMITS
+
+
+def _terms_value(terms: list[Term], t: float) -> float:
+    """Value of one channel's sum of sine, step and ramp terms at time t (s), in its units."""
+    v = 0.0
+    for tm in terms:
+        if tm.kind == "sin":
+            v += tm.amplitude * np.sin(tm.omega * t + tm.phase)
+        elif tm.kind == "step":
+            on = -np.inf if tm.t_on is None else tm.t_on
+            off = np.inf if tm.t_off is None else tm.t_off
+            v += tm.amplitude if on <= t < off else 0.0
+        else:  # ramp
+            on = 0.0 if tm.t_on is None else tm.t_on
+            off = np.inf if tm.t_off is None else tm.t_off
+            v += tm.amplitude * (min(max(t, on), off) - on)
+    return v
+
+
+def eval_signal(signal, t: float) -> np.ndarray:
+    """Vector signal (one list of terms per channel) at time t.
+
+    Parameters
+    ----------
+    signal : list of list of Term
+        One list of terms per channel (empty or None: no channel).
+    t : float
+        Time, s.
+
+    Returns
+    -------
+    (p,) ndarray
+        The signal's value per channel, in the units of the channels.
+    """
+    return np.array([_terms_value(ch, t) for ch in signal]) if signal else np.zeros(0)
 
 
 def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
