@@ -72,15 +72,26 @@ def printed_H_difference(cfg: QppConfig, r: DesignResult) -> float | None:
     return float(_rel(r.H, pub)[np.abs(np.asarray(pub, float)) > 0].max())
 
 
+def _thresholds(ts, what: str) -> Dataset:
+    """Half-width, β3, β4, m (eq 12.1, dimensionless) per bookkeeping of ``ts``, described as ``what``."""
+    return Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in ts]), "1",
+                   what + " per bookkeeping: " + ", ".join(t.name for t in ts), ["half_width", "beta3", "beta4", "m"],
+                   dims=("bookkeeping", "threshold"))
+
+
+def _gains(K1, Kc, H, k1: str, kc: str, h: str) -> dict:
+    """Datasets of the gains K1, Kc, H (eqs 10.5–10.6, :data:`GAIN_UNITS`) with their descriptions."""
+    return {"K1": Dataset(K1, GAIN_UNITS["K1"], k1, dims=("input", "state")),
+            "Kc": Dataset(Kc, GAIN_UNITS["Kc"], kc, dims=("input", "servo_state")),
+            "H": Dataset(H, GAIN_UNITS["H"], h, dims=("state", "output"))}
+
+
 def _published_certificate_items(pb) -> dict:
     """Datasets of the certificate of the printed gains (β1 both readings, β3/β4/m, circle)."""
     return {
         "beta1_eq10_7": Dataset(pb.beta1["eq10.7"]["value"], "1", "beta1 of the printed gains, B_z eq 10.7"),
         "beta1_printed": Dataset(pb.beta1["printed"]["value"], "1", "beta1 of the printed gains, printed B_z"),
-        "thresholds": Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in pb.thresholds]), "1",
-                              "β3, β4, m of the printed gains per bookkeeping: "
-                              + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"],
-                              dims=("bookkeeping", "threshold")),
+        "thresholds": _thresholds(pb.thresholds, "β3, β4, m of the printed gains"),
         "circle_passed": Dataset(np.int8(pb.circle.passed), "1", "circle criterion with the printed gains (1: passed)"),
         "T": Dataset(pb.T, "s", "truncation time used"),
     }
@@ -151,10 +162,8 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         :func:`acmm_qpp.results.write_h5`.
     """
     items = {
-        "K1": Dataset(r.K1, GAIN_UNITS["K1"], "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
-                      dims=("input", "state")),
-        "Kc": Dataset(r.Kc, GAIN_UNITS["Kc"], "servo-state gain Kc (eq 10.6)", dims=("input", "servo_state")),
-        "H": Dataset(r.H, GAIN_UNITS["H"], "observer gain H, report's sign (L = −H, eq 10.5)", dims=("state", "output")),
+        **_gains(r.K1, r.Kc, r.H, "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
+                 "servo-state gain Kc (eq 10.6)", "observer gain H, report's sign (L = −H, eq 10.5)"),
         "Cz": Dataset(r.Cz, "output units per loop-state unit", "C_z (eq 10.7)", dims=("output", "loop_state")),
         "a": Dataset(r.a, "1/s", "exponential weighting a (10.27)"),
         "T": Dataset(r.T, "s", "truncation time T"),
@@ -212,9 +221,7 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
                                         attrs={"omega_peak_rad_s": b["omega_peak"], "grid_value": b["grid_value"]})
     items["Az"] = Dataset(r.Az["eq10.7"], "1/s", "A_z (eq 10.7; 13.6 / Table 14.1)",
                          dims=("loop_state", "loop_state_col"))
-    items["thresholds"] = Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in r.thresholds]),
-                                  "1", "β3, β4, m (12.1) per bookkeeping: " + ", ".join(t.name for t in r.thresholds),
-                                  ["half_width", "beta3", "beta4", "m"], dims=("bookkeeping", "threshold"))
+    items["thresholds"] = _thresholds(r.thresholds, "β3, β4, m (12.1)")
     items.update(_sector_check_items(cfg))
     items["circle"] = _circle_items(r.circle)
     printed = _printed_gain_items(cfg.published, r.H)
@@ -416,9 +423,7 @@ def run_simulate(config, figures: bool | None = None, progress=None, *, out: Pat
     cfg = config                # resolved by the stage decorator
     r = _load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()) or design(cfg)
     sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
-    items = {"K1": Dataset(r.K1, GAIN_UNITS["K1"], "gain K1 used", dims=("input", "state")),
-             "Kc": Dataset(r.Kc, GAIN_UNITS["Kc"], "gain Kc used", dims=("input", "servo_state")),
-             "H": Dataset(r.H, GAIN_UNITS["H"], "observer gain H used (report's sign)", dims=("state", "output"))}
+    items = _gains(r.K1, r.Kc, r.H, "gain K1 used", "gain Kc used", "observer gain H used (report's sign)")
     for s in sims:
         # time first: (t, channel), as in acmm's files
         items[s.name] = {
