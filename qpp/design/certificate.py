@@ -20,7 +20,7 @@ from qpp.design import spheres
 from qpp.io.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinearity
 from qpp.design.hinf import HinfGains
 from qpp.model.lure import channels, closed_loop
-from qpp.simulate.loop import eval_signal, initial_state
+from qpp.simulate.closed_loop import eval_signal, initial_state
 from qpp.design.thresholds import NORM, Consistent, Thresholds, consistent, nominal_output, pick_bookkeeping, thresholds
 
 
