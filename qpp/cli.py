@@ -30,19 +30,9 @@ CONFIGS = ConfigKinds(PACKAGED_CONFIGS, (("qpp", CONFIG_SECTIONS),),
 
 
 @contextlib.contextmanager
-def status(message: str):
-    """A spinner with ``message`` while the block runs (transient); yields ``update(text)``.
-
-    Parameters
-    ----------
-    message : str
-        Text shown next to the spinner.
-
-    Yields
-    ------
-    callable
-        ``update(text)`` replaces the text (does nothing when progress is disabled).
-    """
+def _status(message: str):
+    """A transient spinner with ``message`` while the block runs; yields ``update(text)`` (a no-op
+    when progress is disabled)."""
     if not enabled():
         yield lambda text: None
         return
@@ -129,7 +119,7 @@ def design(config: str = ConfigArg, overrides: Optional[list[str]] = overrides_a
     from qpp.io.stages import printed_H_difference, run_design, sector_verified  # deferred: --help needs no scipy, pydantic
 
     cfg = _load(config, overrides)
-    with status(f"{cfg.name}: designing (ch. 12.1: H∞ gains, β1, thresholds, circle criterion) ..."):
+    with _status(f"{cfg.name}: designing (ch. 12.1: H∞ gains, β1, thresholds, circle criterion) ..."):
         cfg, r, path = run_design(cfg, figures)
     typer.echo(f"{cfg.name}: gains from {r.gains_source} (a = {r.a:g} 1/s, T = {r.T:g} s)")
     typer.echo(f"  K1 = {_mat(r.K1)}\n  Kc = {_mat(r.Kc)}\n  H  = {_mat(r.H.T)}ᵀ")
@@ -203,7 +193,7 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
 
     cfg = _load(config, overrides)
     n = len(cfg.simulation.scenarios)
-    with status(f"{cfg.name}: designing (or reusing) the gains (ch. 12.1), then simulating the nominal loop and "
+    with _status(f"{cfg.name}: designing (or reusing) the gains (ch. 12.1), then simulating the nominal loop and "
                 f"{n} scenario(s) over {cfg.simulation.t_final:g} s ...") as update:
         def tick(done, total, name):
             update(f"{cfg.name}: simulated {done}/{total} scenario(s) (last: {name}) ...")

@@ -82,7 +82,7 @@ def _scenario_values(sim) -> str:
     return f"γ = {sim.gamma:g}"
 
 
-def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
+def plot_scenario(sim, path: Path) -> Path:
     """r, r_o, y, y_o; tracking error |y − y_o| against β_o; control u.
 
     Parameters
@@ -91,8 +91,6 @@ def plot_scenario(sim, path: Path, cartesian_a: float | None = None) -> Path:
         One simulated scenario (time in s, signals in the plant's output and control units).
     path : pathlib.Path
         Figure path.
-    cartesian_a : float, optional
-        Not used (the Cartesian load path is :func:`plot_cartesian`); units of the output y1.
 
     Returns
     -------

@@ -15,13 +15,12 @@ import numpy as np
 
 from acmm_qpp.errors import DesignError
 from qpp.design import circle as circle_mod
-from qpp.design.circle_kyp import KypResult, circle_kyp
+from qpp.design.circle import KypResult, circle_kyp
 from qpp.design import spheres
 from qpp.io.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinearity
 from qpp.design.hinf import HinfGains
 from qpp.model.lure import channels, closed_loop
-from qpp.simulate.loop import initial_state
-from qpp.simulate.signals import eval_signal
+from qpp.simulate.closed_loop import eval_signal, initial_state
 from qpp.design.thresholds import NORM, Consistent, Thresholds, consistent, nominal_output, pick_bookkeeping, thresholds
 
 
@@ -103,7 +102,7 @@ class DesignResult:
         Premise name → (holds, statement in words); ``certified`` is their conjunction.
     norm : str
         The certificate's signal norm in words (:data:`qpp.design.thresholds.NORM`).
-    circle_proof : qpp.design.circle_kyp.KypResult or None
+    circle_proof : qpp.design.circle.KypResult or None
         The circle criterion decided by the KYP lemma (premise ``circle``); ``circle`` is the
         frequency grid's check, kept for the figures and as a cross-check.
     proved : list of str
@@ -459,7 +458,7 @@ def scope(cfg: QppConfig, res: DesignResult) -> tuple:
     A premise enters ``proved`` only when it holds and rests on a proof: an expression's sector
     and slope (interval branch and bound, :mod:`qpp.model.sector_proof`) and its range (the
     enclosure of the nominal loop), the sinusoidal form's (closed form, |sin| ≤ 1), the circle
-    criterion (KYP lemma, :mod:`qpp.design.circle_kyp`), β4 and m for every truncation time
+    criterion (KYP lemma, :func:`qpp.design.circle.circle_kyp`), β4 and m for every truncation time
     (:data:`PROVED_INTEGRALS`, :mod:`qpp.design.nominal_enclosure`) and the polar arm's β3 over the
     sphere (:mod:`qpp.model.arm_bounds`).  Everything rests on :data:`ASSUMED_ALWAYS`; the polar
     arm's sector is assumed.

@@ -309,21 +309,8 @@ def _dual_line(t, A: float, w: float, ph: float, band: float) -> tuple:
     (s_i = sign r_o(t_i)).  For any λ ≥ 0, Σ λ_i s_i y_o(t_i) = ⟨h, Σ λ_i s_i g_i⟩, so
     γ∞ ≥ Σ λ_i (|r_o(t_i)| − band·P) / ‖Σ λ_i s_i g_i‖₂ (Cauchy–Schwarz), the Gram matrix of the g_i
     in closed form; λ from a non-negative least squares (any λ ≥ 0 gives a bound, the number is
-    computed from it exactly).
-
-    Parameters
-    ----------
-    t : (n,) array
-        Sample times after T, s.
-    A, w, ph : float
-        r_o = A sin(w t + ph): output units, rad/s, rad.
-    band : float
-        Settling band, dimensionless.
-
-    Returns
-    -------
-    tuple
-        (a0, a1), output units per input unit·s^½ and per output unit of P.
+    computed from it exactly).  t: sample times after T (s); r_o = A sin(w t + ph) (output units,
+    rad/s, rad); band dimensionless; (a0, a1) per input unit·s^½ and per output unit of P.
     """
     if t.size == 0:
         return 0.0, 0.0
@@ -489,27 +476,9 @@ def _settle_multipliers(later, sg, edges, c, nu: float, A: float, w: float, ph: 
     each τ of :data:`_SETTLE_TAUS`, μ minimizes ‖q‖² + τ Σ μ_j² |cell_j| for given λ (least squares),
     then λ minimizes the reduced form under cᵀλ = 1 (non-negative least squares); the τ of the
     largest (cᵀλ − ν‖μ‖)/‖q‖ on the quadrature wins.  Any λ ≥ 0, μ give a bound (computed from them
-    exactly by :func:`_settle_line`); this only chooses them.
-
-    Parameters
-    ----------
-    later : (N,) array
-        Sample times after T, s.
-    sg : (N,) array
-        Signs s_i of r_o(t_i), dimensionless.
-    edges : (M+1,) array
-        Cell edges of [0, T], s.
-    c : (N,) array
-        |r_o(t_i)| − band·P at the P fitted, output units.
-    nu : float
-        Bound of ‖y_o‖_{L2[0, T]}, output units·s^½.
-    A, w, ph : float
-        r_o = A sin(w t + ph): output units, rad/s, rad.
-
-    Returns
-    -------
-    tuple
-        (λ, μ): (N,) and (M,) arrays, dimensionless and per s.
+    exactly by :func:`_settle_line`); this only chooses them.  later: sample times after T (s), sg
+    signs of r_o there, edges of the cells of [0, T] (s), c = |r_o(t_i)| − band·P (output units), nu
+    the bound of ‖y_o‖_{L2[0, T]}; λ dimensionless, μ per s.
     """
     S = _SETTLE_QUAD
     s = (np.arange(S) + 0.5) * later[-1] / S
@@ -539,19 +508,7 @@ def _settle_line(later, sg, edges, lam, mu, A: float, w: float, ph: float) -> tu
     """(Σ λ_i s_i r_o(t_i), Σ λ_i, ‖μ‖_{L2[0, T]}, ‖q‖₂) of :func:`settle_exclusion` in mpmath's
     outward-rounded interval arithmetic (``iv``): q = Σ λ_i g_i − Σ μ_j G_j is, between consecutive
     breakpoints (cell edges and sample times), α + β cos ws + γ sin ws, and ‖q‖² is the sum of the
-    pieces' integrals in closed form.
-
-    Parameters
-    ----------
-    later, sg, edges, lam, mu : arrays
-        :func:`_settle_multipliers` (s, dimensionless, s, dimensionless, 1/s).
-    A, w, ph : float
-        r_o = A sin(w t + ph): output units, rad/s, rad.
-
-    Returns
-    -------
-    tuple of mpmath.iv.mpf
-        Intervals: output units, dimensionless, output units·s^½, output units·s^½.
+    pieces' integrals in closed form.  Intervals in output units, 1, output units·s^½ (twice).
     """
     W, Ai, PH = iv.mpf(w), iv.mpf(A), iv.mpf(ph)
     th_i = [W * iv.mpf(float(t)) + PH for t in later]
@@ -676,35 +633,6 @@ def _settle_setup(cfg: QppConfig) -> tuple | None:
     if k_norm <= 0:
         return None
     return A, w, ph, cfg.spheres.settle_band, k_norm, k3, b
-
-
-def settle_line(cfg: QppConfig, T: float, nu: float) -> SettleLine | None:
-    """L(T, ν) of :func:`settle_exclusion` (step 3) for one settling time T (a sample of the first
-    pass) and one bound ν of ‖y_o‖_{L2[0, T]}, with its multipliers.
-
-    Parameters
-    ----------
-    cfg : qpp.io.config.QppConfig
-        Validated config.
-    T : float
-        Settling time, s.
-    nu : float
-        Bound of ‖y_o‖_{L2[0, T]}, output units·s^½.
-
-    Returns
-    -------
-    SettleLine or None
-        The bound; None where :func:`settle_exclusion` does not apply.
-    """
-    setup = _settle_setup(cfg)
-    if setup is None:
-        return None
-    A, w, ph, band, *_ = setup
-    horizon = max(cfg.simulation.t_final, cfg.spheres.T)
-    times = np.linspace(0.0, horizon, SETTLE_SAMPLES)[1:]
-    later = times[times > T + 1e-12][:SETTLE_LATER]
-    sg = np.where(A * np.sin(w * later + ph) >= 0, 1.0, -1.0)
-    return _settle_gamma(float(T), later, sg, np.linspace(0.0, float(T), SETTLE_CELLS + 1), float(nu), A, w, ph, band)
 
 
 def settle_exclusion(cfg: QppConfig, pe: PeakExclusion | None = None) -> SettleExclusion | None:

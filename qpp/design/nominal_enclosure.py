@@ -2,9 +2,9 @@
 truncation time, not only on the samples (CR-185644 eqs 10.44, 10.53–10.57, 12.1; issue 43).
 
 At the nominal parameter the controller's f1o cancels the plant's f1 exactly (u = K1 x̂ + Kc x_c − f1o,
-f1o = f1(x, t, γ°): :mod:`qpp.simulate.loop`), so the nominal loop is linear, ż = A_z z + B_r r_o(t)
+f1o = f1(x, t, γ°): :mod:`qpp.simulate.closed_loop`), so the nominal loop is linear, ż = A_z z + B_r r_o(t)
 (A_z and the reference columns B_r of B_z, eq 10.7).  r_o is a sum of sines, steps and ramps
-(:mod:`qpp.simulate.signals`): between the switching times of its steps and ramps it is the output
+(:func:`qpp.simulate.closed_loop.eval_signal`): between the switching times of its steps and ramps it is the output
 of a linear exosystem (a sine is two states, a channel's ramp and constant two more), so
 
 * the samples z(t_j) at the cell edges are a matrix exponential of the loop and its exosystem

@@ -245,19 +245,9 @@ class _Procedure:
         return res
 
     def wider(self) -> DesignResult | None:
-        """The wider search after steps 1–5 of procedure 12.1 failed: other W_s, the ρ minimizing β1.
-
-        The report's conclusions (ch. 15): a controller is found whenever the minimum H∞-norm over
-        an appropriate set of ρ and W_s is smaller than the threshold m (12.1).  For each weighting
-        W_s = diag(w)·S_c of :func:`_ws_candidates`, the ρ minimizing β1 is bracketed and refined
-        (:meth:`_rho_minimizing_beta1`), and the design at that ρ is finished by steps 2–4 of 12.1
-        (:meth:`_finish_candidate`).  All at the a of the best design so far.
-
-        Returns
-        -------
-        DesignResult or None
-            The first certified design, in the order of the weightings; None when none is.
-        """
+        """The wider search after steps 1–5 failed (ch. 15: a controller exists when min over ρ, W_s of
+        β1 < m): per W_s of :func:`_ws_candidates`, the ρ minimizing β1, finished by steps 2–4, all at
+        the best design's a; the first design meeting its target, else None."""
         a = self.best.a if self.best is not None else self.hc.a
         for ws in _ws_candidates(self.P.Cc.shape[0], self.dc.ws_scales):
             rho = self._rho_minimizing_beta1(a, ws)
@@ -271,26 +261,9 @@ class _Procedure:
         return None
 
     def _rho_minimizing_beta1(self, a, ws) -> float | None:
-        """Step 2 of procedure 12.1 over all ρ: the ρ of smallest β1 for one weighting W_s.
-
-        β1 = ‖C_z (sI − A_n)⁻¹ B_z‖∞ of the fixed-ν gains (:meth:`beta1_only`) is scanned on
-        :data:`WIDER_GRID_POINTS` points of log10 ρ over [rho_min, rho_max]; the grid point of
-        smallest β1 and its two neighbours bracket the minimum, which :func:`_golden_section`
-        refines.  The smallest β1 evaluated (grid point or the two last interior points) wins.
-
-        Parameters
-        ----------
-        a : float
-            Exponential rate a of the weighting (10.27), 1/s.
-        ws : (k,) array
-            Weight w per compensator output of W_s = diag(w)·S_c, dimensionless.
-
-        Returns
-        -------
-        float or None
-            The ρ (weight of the control input in z = [ρu; W_s e], dimensionless); None when no ρ of
-            the grid gives stabilizing gains (β1 infinite everywhere).
-        """
+        """Step 2 over all ρ for one W_s (a in 1/s): β1 of the fixed-ν gains scanned on
+        WIDER_GRID_POINTS points of log10 ρ in [rho_min, rho_max], the bracket of the best point
+        golden-section refined; the ρ of the smallest β1 evaluated, None when none stabilizes."""
         dc = self.dc
         lr = np.linspace(np.log10(dc.rho_min), np.log10(dc.rho_max), WIDER_GRID_POINTS)
         vals = np.array([self.beta1_only(10 ** x, a, ws) for x in lr])
@@ -302,27 +275,9 @@ class _Procedure:
         return 10 ** min([(vals[k], lr[k]), *refined])[1]
 
     def _finish_candidate(self, rho, a, ws) -> DesignResult | None:
-        """Steps 2–4 of procedure 12.1 once, for the ρ and W_s found by the wider search.
-
-        Step 2: the H∞ gains at (ρ, a, W_s) (:meth:`gains`, with the best design's m as target);
-        step 3: β1 and m evaluated from the best design's T, T adapted to the settling time
-        (:meth:`adapt_T`); step 4: when β1 ≤ m but the circle criterion fails, one retry at another
-        a (:meth:`_retry_circle`).
-
-        Parameters
-        ----------
-        rho : float
-            Weight ρ of the control input, dimensionless.
-        a : float
-            Exponential rate a (10.27), 1/s.
-        ws : (k,) array
-            Weight w per compensator output of W_s = diag(w)·S_c, dimensionless.
-
-        Returns
-        -------
-        DesignResult or None
-            The evaluated design (certified or not); None when no gains exist at this ρ.
-        """
+        """Steps 2–4 once at the wider search's ρ, W_s (a in 1/s): gains (target: the best m), β1 and m
+        from the best design's T, T adapted; β1 ≤ m with the circle failing → one retry at another a.
+        The evaluated design, None when no gains exist at this ρ."""
         g = self.gains(rho, a, ws, target=self.best.m_ref if self.best is not None else None)
         if g is None:
             return None
@@ -333,31 +288,8 @@ class _Procedure:
         return res
 
     def _retry_circle(self, g, res, rho, a, T, ws) -> DesignResult:
-        """Step 4 of procedure 12.1 in the wider search: "otherwise adjust a" and redesign once.
-
-        An a passing the circle criterion with the gains g (:meth:`circle_a`); the gains are then
-        recomputed at (ρ, that a, W_s) and evaluated at T (step 1's m at the new a).
-
-        Parameters
-        ----------
-        g : qpp.design.hinf.HinfGains
-            The gains whose closed loop fails the circle criterion at a.
-        res : DesignResult
-            Their evaluation (β1 ≤ m, circle criterion failed).
-        rho : float
-            Weight ρ of the control input, dimensionless.
-        a : float
-            The current exponential rate a (10.27), 1/s.
-        T : float
-            Horizon T of the thresholds β3, β4 (10.54, 10.55), s.
-        ws : (k,) array
-            Weight w per compensator output of W_s = diag(w)·S_c, dimensionless.
-
-        Returns
-        -------
-        DesignResult
-            The design at the new a, or ``res`` unchanged when no a passes or no gains exist there.
-        """
+        """Step 4 in the wider search ("otherwise adjust a"): gains redesigned at (ρ, an a passing the
+        circle with g, W_s) and evaluated at T (s); ``res`` when no a passes or no gains exist there."""
         a_new = self.circle_a(g, a)
         if a_new is None:
             return res
@@ -368,23 +300,9 @@ class _Procedure:
 
 
 def _ws_candidates(p_w: int, ws_scales) -> list[np.ndarray]:
-    """The weightings W_s = diag(w)·S_c of the wider search (procedure 12.1, conclusions of ch. 15).
-
-    First w·(1, …, 1) for each scale of ``design.ws_scales``; for p_w > 1 compensator outputs also
-    each channel alone weighted by each factor of :data:`CHANNEL_FACTORS` (the others 1).
-
-    Parameters
-    ----------
-    p_w : int
-        Number of compensator outputs (rows of C_c).
-    ws_scales : list of float
-        The scalar weights w of ``design.ws_scales``, dimensionless.
-
-    Returns
-    -------
-    list of (p_w,) array
-        The weights w per compensator output, dimensionless, in the order they are tried.
-    """
+    """The weights w (dimensionless, per compensator output, in the order tried) of W_s = diag(w)·S_c in
+    the wider search: w·(1, …, 1) per ``design.ws_scales``; for p_w > 1 outputs also each channel
+    alone times each factor of CHANNEL_FACTORS."""
     weights = [np.full(p_w, w) for w in ws_scales]
     if p_w > 1:
         for i in range(p_w):
@@ -396,26 +314,8 @@ def _ws_candidates(p_w: int, ws_scales) -> list[np.ndarray]:
 
 
 def _golden_section(f, lo, hi, steps: int = GOLDEN_STEPS) -> tuple[tuple, tuple]:
-    """Golden-section refinement of a bracketed minimum of β1 over log10 ρ (procedure 12.1, step 2).
-
-    Two interior points at the golden ratio of [lo, hi]; each of ``steps`` steps drops the part of
-    the bracket beyond the worse point (ties keep the lower one) and evaluates one new point.  A
-    fixed number of steps, no tolerance test: always 2 + ``steps`` evaluations of ``f``.
-
-    Parameters
-    ----------
-    f : callable
-        β1 as a function of x = log10 ρ (dimensionless), ``f(x) -> float``.
-    lo, hi : float
-        The bracket of x = log10 ρ, dimensionless.
-    steps : int
-        Number of refinement steps (one evaluation each, after the first two).
-
-    Returns
-    -------
-    tuple of (float, float)
-        The two last interior points as (β1, x) pairs, dimensionless: ``(f1, x1), (f2, x2)``.
-    """
+    """Golden-section refinement of a minimum of f(x = log10 ρ) bracketed by [lo, hi]: a fixed ``steps``
+    (no tolerance test; ties keep the lower point); the two last interior points ((f1, x1), (f2, x2))."""
     x1, x2 = hi - _INV_GOLDEN * (hi - lo), lo + _INV_GOLDEN * (hi - lo)
     f1, f2 = f(x1), f(x2)
     for _ in range(steps):

@@ -18,7 +18,7 @@ from scipy.integrate import cumulative_trapezoid
 from qpp.design import spheres
 from qpp.design.nominal_enclosure import PAD, NominalEnclosure, enclose
 from qpp.io.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinearity
-from qpp.simulate.loop import initial_state, simulate_nominal
+from qpp.simulate.closed_loop import initial_state, simulate_nominal
 from qpp.model.arm_bounds import arm_slope_bound
 from qpp.model.matched_nonlinearity import config_f1
 

@@ -40,7 +40,8 @@ GAIN_UNITS = {"K1": "input units per state unit", "Kc": "input units per servo-s
               "H": "state units per output unit per s"}
 
 
-def _cfg(config) -> QppConfig:
+def _resolve(config) -> QppConfig:
+    """The config itself, or the one a config file / packaged name loads."""
     return config if isinstance(config, QppConfig) else load_config(config)
 
 
@@ -71,15 +72,26 @@ def printed_H_difference(cfg: QppConfig, r: DesignResult) -> float | None:
     return float(_rel(r.H, pub)[np.abs(np.asarray(pub, float)) > 0].max())
 
 
+def _thresholds(ts, what: str) -> Dataset:
+    """Half-width, β3, β4, m (eq 12.1, dimensionless) per bookkeeping of ``ts``, described as ``what``."""
+    return Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in ts]), "1",
+                   what + " per bookkeeping: " + ", ".join(t.name for t in ts), ["half_width", "beta3", "beta4", "m"],
+                   dims=("bookkeeping", "threshold"))
+
+
+def _gains(K1, Kc, H, k1: str, kc: str, h: str) -> dict:
+    """Datasets of the gains K1, Kc, H (eqs 10.5–10.6, :data:`GAIN_UNITS`) with their descriptions."""
+    return {"K1": Dataset(K1, GAIN_UNITS["K1"], k1, dims=("input", "state")),
+            "Kc": Dataset(Kc, GAIN_UNITS["Kc"], kc, dims=("input", "servo_state")),
+            "H": Dataset(H, GAIN_UNITS["H"], h, dims=("state", "output"))}
+
+
 def _published_certificate_items(pb) -> dict:
     """Datasets of the certificate of the printed gains (β1 both readings, β3/β4/m, circle)."""
     return {
         "beta1_eq10_7": Dataset(pb.beta1["eq10.7"]["value"], "1", "beta1 of the printed gains, B_z eq 10.7"),
         "beta1_printed": Dataset(pb.beta1["printed"]["value"], "1", "beta1 of the printed gains, printed B_z"),
-        "thresholds": Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in pb.thresholds]), "1",
-                              "β3, β4, m of the printed gains per bookkeeping: "
-                              + ", ".join(t.name for t in pb.thresholds), ["half_width", "beta3", "beta4", "m"],
-                              dims=("bookkeeping", "threshold")),
+        "thresholds": _thresholds(pb.thresholds, "β3, β4, m of the printed gains"),
         "circle_passed": Dataset(np.int8(pb.circle.passed), "1", "circle criterion with the printed gains (1: passed)"),
         "T": Dataset(pb.T, "s", "truncation time used"),
     }
@@ -150,10 +162,8 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
         :func:`acmm_qpp.results.write_h5`.
     """
     items = {
-        "K1": Dataset(r.K1, GAIN_UNITS["K1"], "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
-                      dims=("input", "state")),
-        "Kc": Dataset(r.Kc, GAIN_UNITS["Kc"], "servo-state gain Kc (eq 10.6)", dims=("input", "servo_state")),
-        "H": Dataset(r.H, GAIN_UNITS["H"], "observer gain H, report's sign (L = −H, eq 10.5)", dims=("state", "output")),
+        **_gains(r.K1, r.Kc, r.H, "observer-state gain K1 (eq 10.6; u = K1 x̂ + Kc x_c − f1o)",
+                 "servo-state gain Kc (eq 10.6)", "observer gain H, report's sign (L = −H, eq 10.5)"),
         "Cz": Dataset(r.Cz, "output units per loop-state unit", "C_z (eq 10.7)", dims=("output", "loop_state")),
         "a": Dataset(r.a, "1/s", "exponential weighting a (10.27)"),
         "T": Dataset(r.T, "s", "truncation time T"),
@@ -211,9 +221,7 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
                                         attrs={"omega_peak_rad_s": b["omega_peak"], "grid_value": b["grid_value"]})
     items["Az"] = Dataset(r.Az["eq10.7"], "1/s", "A_z (eq 10.7; 13.6 / Table 14.1)",
                          dims=("loop_state", "loop_state_col"))
-    items["thresholds"] = Dataset(np.array([[t.half_width, t.beta3, t.beta4, t.m] for t in r.thresholds]),
-                                  "1", "β3, β4, m (12.1) per bookkeeping: " + ", ".join(t.name for t in r.thresholds),
-                                  ["half_width", "beta3", "beta4", "m"], dims=("bookkeeping", "threshold"))
+    items["thresholds"] = _thresholds(r.thresholds, "β3, β4, m (12.1)")
     items.update(_sector_check_items(cfg))
     items["circle"] = _circle_items(r.circle)
     printed = _printed_gain_items(cfg.published, r.H)
@@ -263,7 +271,7 @@ def _iterations(r: DesignResult) -> Dataset:
                                                         for it in r.iterations)})
 
 
-@stage(("qpp_design.h5", "qpp_circle*.png", "qpp_iterations.png"), _cfg)
+@stage(("qpp_design.h5", "qpp_circle*.png", "qpp_iterations.png"), _resolve)
 def run_design(config, figures: bool | None = None, *, out: Path) -> tuple[QppConfig, DesignResult, Path]:
     """Design (ch. 12.1) and write ``<root>/<name>/qpp_design.h5`` (+ circle and iteration figures).
 
@@ -287,8 +295,7 @@ def run_design(config, figures: bool | None = None, *, out: Path) -> tuple[QppCo
     tuple
         (config, :class:`qpp.design.certificate.DesignResult`, path of ``qpp_design.h5``).
     """
-    cfg = _cfg(config)
-    want_figures = cfg.output.figures if figures is None else figures
+    cfg = config                # resolved by the stage decorator
     r = design(cfg)
     verdicts = {f"beta1_le_m[{rd},{bk}]": bool(v) for (rd, bk), v in r.verdicts().items()}
     write_h5(out / "qpp_design.h5", design_items(cfg, r), cfg.to_yaml(),
@@ -301,9 +308,8 @@ def run_design(config, figures: bool | None = None, *, out: Path) -> tuple[QppCo
               "proved": "; ".join(r.proved), "assumed": "; ".join(r.assumed), "scope": r.scope_text,
               "horizon_note": r.horizon_note,
               "gains_sha256": _gains_sha256(r.K1, r.Kc, r.H), "unit_system": cfg.output.units})
-    if want_figures:
-        draw_figures([partial(plot_circle, r, out / "qpp_circle.png"),
-                      partial(plot_iterations, r, out / "qpp_iterations.png")])
+    if cfg.output.figures if figures is None else figures:
+        draw_figures(figure_calls_from_file(out / "qpp_design.h5", out))
     return cfg, r, cfg.run_dir() / "qpp_design.h5"
 
 
@@ -363,11 +369,15 @@ def _load_stored_design(path: Path, config_text: str) -> StoredDesign | None:
             K1, Kc, H = (np.array(f[k][()], dtype=float) for k in ("K1", "Kc", "H"))
             if a.get("gains_sha256") != _gains_sha256(K1, Kc, H):
                 return None
-            note = a.get("horizon_note", "")
             return StoredDesign(K1, Kc, H, bool(a["certified"]), str(a["verdict"]), Path(path),
-                                note.decode() if isinstance(note, bytes) else str(note))
+                                _text(a.get("horizon_note", "")))
     except (OSError, KeyError, ValueError):
         return None
+
+
+def _text(v) -> str:
+    """An HDF5 attribute as text (h5py may give bytes)."""
+    return v.decode() if isinstance(v, bytes) else str(v)
 
 
 def _gains_sha256(K1, Kc, H) -> str:
@@ -381,7 +391,7 @@ def _gains_sha256(K1, Kc, H) -> str:
     return h.hexdigest()
 
 
-@stage(("qpp_sim.h5", "qpp_sim_*.png"), _cfg)
+@stage(("qpp_sim.h5", "qpp_sim_*.png"), _resolve)
 def run_simulate(config, figures: bool | None = None, progress=None, *, out: Path):
     """Design (or reuse the design), simulate every scenario, write ``<root>/<name>/qpp_sim.h5``
     (+ figures).
@@ -410,26 +420,10 @@ def run_simulate(config, figures: bool | None = None, progress=None, *, out: Pat
         ``certified``, ``verdict`` —, list of :class:`qpp.simulate.closed_loop.SimResult`, path of
         ``qpp_sim.h5``).
     """
-    cfg = _cfg(config)
-    want_figures = cfg.output.figures if figures is None else figures
-    r, sims = _simulate_and_write(cfg, want_figures, progress,
-                                  _load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()), out)
-    return cfg, r, sims, cfg.run_dir() / "qpp_sim.h5"
-
-
-def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored, out: Path):
-    """The body of :func:`run_simulate`: (design, simulations), written in ``out``; the figures
-    are drawn after the HDF5 file is written."""
-    r = stored or design(cfg)
+    cfg = config                # resolved by the stage decorator
+    r = _load_stored_design(cfg.run_dir() / "qpp_design.h5", cfg.to_yaml()) or design(cfg)
     sims = simulate(cfg, r.K1, r.Kc, r.H, progress=progress)
-    figures = []
-    if want_figures:
-        figures = [partial(plot_scenario, s, out / f"qpp_sim_{s.name}.png") for s in sims]
-        if isinstance(cfg.nonlinearity, PolarArmNonlinearity):
-            figures.append(partial(plot_cartesian, sims, cfg.nonlinearity.a, out / "qpp_sim_cartesian.png"))
-    items = {"K1": Dataset(r.K1, GAIN_UNITS["K1"], "gain K1 used", dims=("input", "state")),
-             "Kc": Dataset(r.Kc, GAIN_UNITS["Kc"], "gain Kc used", dims=("input", "servo_state")),
-             "H": Dataset(r.H, GAIN_UNITS["H"], "observer gain H used (report's sign)", dims=("state", "output"))}
+    items = _gains(r.K1, r.Kc, r.H, "gain K1 used", "gain Kc used", "observer gain H used (report's sign)")
     for s in sims:
         # time first: (t, channel), as in acmm's files
         items[s.name] = {
@@ -454,8 +448,9 @@ def _simulate_and_write(cfg: QppConfig, want_figures: bool, progress, stored, ou
     write_h5(out / "qpp_sim.h5", items, cfg.to_yaml(),
              {"stage": "qpp simulate", "all_passed": int(all(s.passed for s in sims)),
               "design_certified": int(r.certified), "design_verdict": r.verdict, "unit_system": cfg.output.units})
-    draw_figures(figures)
-    return r, sims
+    if cfg.output.figures if figures is None else figures:
+        draw_figures(figure_calls_from_file(out / "qpp_sim.h5", out))
+    return cfg, r, sims, cfg.run_dir() / "qpp_sim.h5"
 
 
 def figure_calls_from_file(path: Path, out_dir: Path) -> list:
@@ -481,16 +476,12 @@ def figure_calls_from_file(path: Path, out_dir: Path) -> list:
     acmm_qpp.errors.ConfigError
         The file is not a qpp result.
     """
-
-    def text(v):
-        return v.decode() if isinstance(v, bytes) else str(v)
-
     with h5py.File(path, "r") as f:
-        stage = text(f.attrs.get("stage", ""))
+        stage = _text(f.attrs.get("stage", ""))
         if stage not in ("qpp design", "qpp simulate"):
             raise ConfigError(f"{path}: not a qpp result file (stage {stage or 'unknown'!r}; qpp plot draws "
                               "qpp_design.h5 and qpp_sim.h5)")
-        cfg = parse_config(yaml.safe_load(text(f.attrs["config"])), source=f"{path} (stored config)")
+        cfg = parse_config(yaml.safe_load(_text(f.attrs["config"])), source=f"{path} (stored config)")
         if stage == "qpp design":
             c = f["circle"]
             sector = np.asarray(f["sector"][()], float)
@@ -505,7 +496,8 @@ def figure_calls_from_file(path: Path, out_dir: Path) -> list:
             for it in iterations:
                 it["circle"], it["certified"] = bool(it["circle"]), bool(it["certified"])
             res = types.SimpleNamespace(circle=circle, iterations=iterations, certified=bool(f.attrs["certified"]),
-                                        beta1_ref=float(f["certificate/beta1"][()]), m_ref=float(f["certificate/m"][()]))
+                                        beta1_ref=float(f["certificate/beta1"][()]),
+                                        m_ref=float(f["certificate/m_bookkeeping"][()]))
             return [partial(plot_circle, res, out_dir / "qpp_circle.png"),
                     partial(plot_iterations, res, out_dir / "qpp_iterations.png")]
         order = [sc.name for sc in cfg.simulation.scenarios]
@@ -515,7 +507,9 @@ def figure_calls_from_file(path: Path, out_dir: Path) -> list:
         for name in groups:
             g = f[name]
             e = g["error_inf"]
-            params = {k[len("param_"):]: float(v) for k, v in e.attrs.items() if k.startswith("param_")}
+            # the expression's order (the attributes are listed by name), as the stage's titles had it
+            params = {k: float(e.attrs[f"param_{k}"]) for k in getattr(cfg.nonlinearity, "parameters", {})
+                      if f"param_{k}" in e.attrs}
             sims.append(types.SimpleNamespace(
                 name=name, t=np.asarray(g["t"][()]), **{k: np.asarray(g[k][()]).T for k in ("r", "r_o", "y", "y_o", "u")},
                 error_inf=float(e[()]), error_per_output=np.asarray(g["error_per_output"][()]),

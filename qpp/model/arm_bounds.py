@@ -29,20 +29,9 @@ ARM_BOXES = 4000
 ARM_TOL = 1e-3
 
 
-def delta_q(nl):
-    """The interval enclosure of |q(x1, M) − q(x1, M°)| (module docstring), a function of
-    (x1 in m, M in kg) as :data:`mpmath.iv` intervals.
-
-    Parameters
-    ----------
-    nl : qpp.io.config.PolarArmNonlinearity
-        The arm (μ, M_min, M_max, J1, J2, a in kg, kg·m², m).
-
-    Returns
-    -------
-    callable
-        ``f(x1, M) -> mpmath.iv.mpf``, in 1/m² … the units of ∂(R/I)/∂x1 (1/(kg·m²)·kg = 1/m²).
-    """
+def _delta_q(nl):
+    """The interval enclosure of |q(x1, M) − q(x1, M°)| (module docstring) as a function
+    ``f(x1 in m, M in kg) -> mpmath.iv.mpf`` of the arm ``nl``, in 1/m² (the units of ∂(R/I)/∂x1)."""
     sp = sympy_module()
     x1, M = sp.symbols("x1 M", real=True)
     mu, a, J = (sp.nsimplify(v) for v in (nl.mu, nl.a, nl.J1 + nl.J2))
@@ -83,7 +72,7 @@ def arm_slope_bound(nl, N, x1_box, x3_box, x4_box, *, deadline: float | None = N
     n1 = float(np.linalg.norm(np.asarray(N, float)[:, 1]))
     deadline = time.monotonic() + 10.0 if deadline is None else deadline
     box = [tuple(map(float, x1_box)), (float(nl.M_min), float(nl.M_max))]
-    f = delta_q(nl)
+    f = _delta_q(nl)
     first = maximize(f, box, tol=0.0, deadline=deadline, max_boxes=16)
     dq = maximize(f, box, tol=ARM_TOL * max(first.lower, 1e-300), deadline=deadline, max_boxes=ARM_BOXES)
     v = np.max(np.abs(np.asarray(x3_box, float)), axis=0) * np.max(np.abs(np.asarray(x4_box, float)), axis=0)

@@ -70,7 +70,7 @@ class ProvedBounds:
     boxes: int
 
 
-#: largest number of terms the distribution of products may create in :func:`tidy`
+#: largest number of terms the distribution of products may create in :func:`_tidy`
 TIDY_TERMS = 2000
 
 
@@ -88,23 +88,12 @@ def _terms(sp, e) -> int:
     return 1 + sum(_terms(sp, a) - 1 for a in e.args if not a.is_Atom)
 
 
-def tidy(expr):
+def _tidy(expr):
     """``expr`` with products distributed and common factors taken out (sympy's ``expand`` without
     expanding powers of sums, then ``factor_terms``), so that an interval enclosure does not count
     a variable twice where the expression cancels: φ = (dm + 1.5)·y·sin t − 1.5·y·sin t becomes
     dm·y·sin t, −k·sat(y) + 4·sat(y) becomes (4 − k)·sat(y).  Left as it is when the distribution
-    would create more than :data:`TIDY_TERMS` terms.
-
-    Parameters
-    ----------
-    expr : sympy.Expr
-        The expression.
-
-    Returns
-    -------
-    sympy.Expr
-        An equal expression.
-    """
+    would create more than TIDY_TERMS terms."""
     sp = sympy_module()
     if _terms(sp, expr) > TIDY_TERMS:
         return expr
@@ -161,19 +150,19 @@ class _Prover:
         """(enclosure of Σ_j |∂φ_i/∂y_j|, its variables): only the symbols the sum depends on are
         split (a variable it ignores would multiply the boxes for nothing)."""
         sp, M = self.sp, self.model
-        terms = [sp.Abs(tidy(sp.diff(tidy(M.phi[i]), M.ys[j]))) for j in range(M.p) if M.dep[i][j]]
+        terms = [sp.Abs(_tidy(sp.diff(_tidy(M.phi[i]), M.ys[j]))) for j in range(M.p) if M.dep[i][j]]
         g = sp.Add(*terms)
         syms = sorted(g.free_symbols, key=str)
         return compile_interval(g, syms), syms
 
     def ratio_fns(self, i, syms):
         sp, M = self.sp, self.model
-        ph = tidy(M.phi[i])
-        f = compile_interval(tidy(ph / M.ys[i]), syms)      # φ_i / y_i, cancelled where it can be
+        ph = _tidy(M.phi[i])
+        f = compile_interval(_tidy(ph / M.ys[i]), syms)      # φ_i / y_i, cancelled where it can be
         k = syms.index(M.ys[i])
         lo, hi = M.y_range[i]
         try:
-            d = compile_interval(tidy(sp.diff(ph, M.ys[i])), syms)
+            d = compile_interval(_tidy(sp.diff(ph, M.ys[i])), syms)
         except NotEnclosable:
             d = None
 

@@ -14,13 +14,28 @@ import pytest
 
 from acmm_qpp.results import read_h5
 from qpp.design.certificate import certify
-from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion,
-                               search, servo_frequencies, settle_exclusion, settle_line)
+from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, SETTLE_CELLS, SETTLE_LATER, SETTLE_SAMPLES,
+                               _settle_gamma, _settle_setup, family_bounds, peak_exclusion, search,
+                               servo_frequencies, settle_exclusion)
 from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
 from qpp.model.lure import closed_loop
 from tests.qpp.conftest import _pub
 from tests.qpp.independent_verifier import hinf, l2_to_peak, verify
+
+
+def settle_line(cfg, T: float, nu: float):
+    """L(T, ν) of settle_exclusion (step 3) for one settling time T (s, a sample of the first pass)
+    and one bound ν of ‖y_o‖_{L2[0, T]} with its multipliers (a SettleLine); None where it does not apply."""
+    setup = _settle_setup(cfg)
+    if setup is None:
+        return None
+    A, w, ph, band, *_ = setup
+    horizon = max(cfg.simulation.t_final, cfg.spheres.T)
+    times = np.linspace(0.0, horizon, SETTLE_SAMPLES)[1:]
+    later = times[times > T + 1e-12][:SETTLE_LATER]
+    sg = np.where(A * np.sin(w * later + ph) >= 0, 1.0, -1.0)
+    return _settle_gamma(float(T), later, sg, np.linspace(0.0, float(T), SETTLE_CELLS + 1), float(nu), A, w, ph, band)
 
 
 def test_the_bounds_of_the_report_examples(siso, arm):

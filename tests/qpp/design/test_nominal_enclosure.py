@@ -11,7 +11,7 @@ from scipy.integrate import quad, solve_ivp
 from qpp.design.certificate import certify
 from qpp.design.nominal_enclosure import breakpoints, enclose
 from qpp.io.config import Term
-from qpp.simulate.loop import initial_state
+from qpp.simulate.closed_loop import initial_state
 from tests.qpp.conftest import _pub
 
 
