@@ -3,7 +3,7 @@
 Policy (docs/howto/results.md, *Run folders*): a rerun **replaces the outputs the stage owns** in
 ``runs/<name>/`` — no history folders.  Each stage declares the glob patterns of its files
 (:func:`stage`) and writes them into a staging folder ``runs/<name>/.staging-<pid>-<random>``
-that :func:`staged_outputs` gives it.  When the stage succeeds, its resolved config goes there as
+that :func:`_staged_outputs` gives it.  When the stage succeeds, its resolved config goes there as
 ``config.yaml`` (a comment names the source file and the command-line overrides), every file is
 moved into the run folder with :func:`os.replace`, and the stage's files of an earlier run that
 this one did not write are removed: a figure of another scenario name, of a schedule that no
@@ -192,7 +192,7 @@ def write_text(path: str | Path, text: str) -> Path:
 
 
 LOCK_NAME = ".lock"
-#: Kind of the staging folders of stages (``.staging-<pid>-<random>``, :func:`staged_outputs`).
+#: Kind of the staging folders of stages (``.staging-<pid>-<random>``, :func:`_staged_outputs`).
 STAGING = "staging"
 
 
@@ -427,31 +427,11 @@ def _commit(staging: Path, run_dir: Path, patterns: tuple) -> None:
 
 
 @contextmanager
-def staged_outputs(run_dir, patterns: tuple, config=None, config_text: str | None = None):
-    """Context of one stage writing its files; see the module docstring.
-
-    Parameters
-    ----------
-    run_dir : path
-        The run folder (``<output.root>/<name>``), which exists (the run lock made it).
-    patterns : tuple of str
-        Glob patterns (relative to the run folder) of the files the stage owns.
-    config : model, optional
-        The resolved config (its ``to_yaml()`` and, when loaded from a file, its source and
-        overrides go into ``config.yaml``).
-    config_text : str, optional
-        The resolved config as YAML, when ``config`` has no ``to_yaml``.
-
-    Yields
-    ------
-    Path
-        The folder to write the stage's files in.
-
-    Raises
-    ------
-    OutputError
-        The staging folder cannot be made, or a directory is in the way of a result.
-    """
+def _staged_outputs(run_dir, patterns: tuple, config=None, config_text: str | None = None):
+    """Context of one stage writing its files (see the module docstring): yields the staging folder in
+    the existing ``run_dir``; ``patterns`` globs the files the stage owns there; ``config`` (its
+    ``to_yaml()``, source and overrides) or ``config_text`` (YAML) goes into ``config.yaml``;
+    OutputError when the staging folder cannot be made or a directory is in the way of a result."""
     run_dir = Path(run_dir)
     text = config_text_of(config, config_text) if config is not None or config_text is not None else None
     config_before = file_identity(run_dir / CONFIG_FILE)
@@ -494,7 +474,7 @@ def stage(patterns: tuple, load):
     """Decorator of a stage runner ``fn(config, ..., out)``: resolve ``config`` with ``load``
     (validation first: a refused config creates nothing), take the run lock of its ``run_dir()``
     (:func:`run_lock`), then run ``fn`` with ``out``, the folder to write its
-    files in, inside :func:`staged_outputs`.
+    files in, inside :func:`_staged_outputs`.
 
     Parameters
     ----------
@@ -514,7 +494,7 @@ def stage(patterns: tuple, load):
         def wrapper(config=None, *args, **kwargs):
             cfg = load(config)
             with run_lock(cfg.run_dir()) as run_dir:
-                with staged_outputs(run_dir, patterns, cfg) as out:
+                with _staged_outputs(run_dir, patterns, cfg) as out:
                     return fn(cfg, *args, out=out, **kwargs)
         return wrapper
     return deco
