@@ -16,14 +16,14 @@ import numpy as np
 
 from acmm.design.dwell import NOT_COVERED, DwellCertificate, DwellProof, dwell_certificate
 from acmm.io.config import Config
-from acmm.io.design_file import DesignTable, h5_text
+from acmm.io.design_file import DesignTable
 from acmm.model import kinematics as kin
 from acmm.model import linearize as lin
 from acmm.simulate.scenario import scenario_from_config
 from acmm.stages.common import UNIT_A, UNIT_STATE
 from acmm_qpp import __version__
 from acmm_qpp.provenance import git_commit, git_dirty
-from acmm_qpp.results import Dataset
+from acmm_qpp.results import Dataset, h5_text
 
 #: the ``design.h5`` datasets of the ``dwell`` group converted per state (:func:`acmm.stages.common.in_system`)
 UNIT_ROLES = {"dwell/closed_loop": "A", "dwell/scales": "scales", "dwell/jump": "x"}

@@ -19,8 +19,8 @@ from acmm.io.config import Config
 from acmm.stages.common import as_config, write_results
 from acmm_qpp.outputs import stage
 from acmm.stages.pool import pool_map, process_pool, stop_pool
-from acmm_qpp.results import draw_figures
-from acmm.io.design_file import DesignTable, h5_text, stored_table_digest, load_design_table
+from acmm_qpp.results import draw_figures, h5_text
+from acmm.io.design_file import DesignTable, stored_table_digest, load_design_table
 import json
 import time
 from acmm_qpp.provenance import config_hash

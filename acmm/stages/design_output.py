@@ -18,11 +18,10 @@ from acmm.model.linearize import STATE_NAMES
 from acmm.stages.certify import UNIT_ROLES, certificate_items, compute_certificate
 from acmm.stages.common import (UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE, define_units, in_system,
                                 stored_config)
-from acmm_qpp.results import Dataset
+from acmm_qpp.results import Dataset, h5_text
 import h5py
 from acmm.design.schedule import schedule_gain
 from acmm.design.settings import design_settings
-from acmm.io.design_file import h5_text, h5_texts
 
 AXES = ["roll", "pitch", "yaw"]
 
@@ -309,7 +308,7 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
 
     with h5py.File(path, "r") as f:
         attrs = {k: f.attrs[k] for k in f.attrs}
-        names = h5_texts(f["names"][()])
+        names = list(map(h5_text, np.atleast_1d(f["names"][()])))
         keys = sorted(f["points"])
         poles = [np.asarray(f[f"points/{k}/poles"][()]) for k in keys]
         tea = np.asarray(f["tea"][()], float)
