@@ -150,26 +150,12 @@ def design_hash(cfg: Config) -> str:
     return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
 
 
-def point_workers(pooled: bool, n_points: int) -> int:
-    """Processes that design a config's points: a pooled route's points (the regional LMI's, seconds
-    each; :attr:`acmm.design.methods.PoleMethod.pooled`) on a process pool of one worker per available CPU (at most one per point); the sector
-    LQR's (about a second each), and any design inside a pool worker already (a sweep's, the
-    report's), or in a process running other threads (a fork beside them can deadlock the child:
-    a terminal's progress bar), in this process.  A point's result does not depend on where it is
-    computed.
-
-    Parameters
-    ----------
-    pooled : bool
-        The route's points are worth a pool (:attr:`acmm.design.methods.PoleMethod.pooled`).
-    n_points : int
-        Number of design points.
-
-    Returns
-    -------
-    int
-        Worker processes (1: in this process).
-    """
+def _point_workers(pooled: bool, n_points: int) -> int:
+    """Worker processes (1: in this process) designing ``n_points`` points: a ``pooled`` route's
+    (:attr:`acmm.design.methods.PoleMethod.pooled`, the regional LMI's, seconds each) on a process pool
+    of one worker per available CPU, at most one per point; the sector LQR's (about a second each),
+    and any design inside a pool worker already (a sweep's, the report's) or in a process running
+    other threads, in this process.  A point's result does not depend on where it is computed."""
     if not pooled or n_points < 2 or multiprocessing.parent_process() is not None:
         return 1
     if threading.active_count() > 1:        # (a terminal's progress bar, a notebook's kernel threads)
@@ -206,7 +192,7 @@ def compute_design(config, progress=None) -> DesignResult:
     cfg = as_config(config)
     t0 = time.perf_counter()
     specs, s = sp.point_specs(cfg), design_settings(cfg)
-    workers = point_workers(s.method.pooled, len(specs))
+    workers = _point_workers(s.method.pooled, len(specs))
     if workers <= 1:
         ds = design_schedule(specs, s, schedule_settings(cfg), progress)
     else:
