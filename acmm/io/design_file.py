@@ -179,22 +179,6 @@ class DesignTable:
             return np.arange(len(self.names))
         return np.flatnonzero(self.level)
 
-    def scheduled_gain(self, k: int) -> np.ndarray:
-        """Gain in use at point k: the schedule evaluated at its TEA when there is one, else
-        the point's LQR gain.
-
-        Parameters
-        ----------
-        k : int
-            Design point index.
-
-        Returns
-        -------
-        (3, 24) array
-            Gain, ft·lbf per state unit.
-        """
-        return self.gain_at(self.tea[k, 1], k)
-
     def gain_at(self, theta2: float, k: int) -> np.ndarray:
         """The schedule at pitch TEA ``theta2`` (rad); without a schedule, point k's LQR gain.
 
