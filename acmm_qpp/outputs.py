@@ -46,7 +46,7 @@ import re
 import shutil
 import stat
 import tempfile
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
 import filelock
@@ -162,10 +162,8 @@ def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
         os.replace(tmp, path)
     except BaseException as exc:
         if tmp is not None:
-            try:
+            with suppress(OSError):
                 os.unlink(tmp)
-            except OSError:
-                pass
         _remove_empty_dirs(created)
         if isinstance(exc, OSError):
             raise output_error(exc, what, path) from None
@@ -232,14 +230,12 @@ def remove_leftovers(directory: Path, staging: tuple = ()) -> list[str]:
     for e in entries:
         if not pattern.match(e.name) or e.is_symlink():
             continue
-        try:
+        with suppress(OSError):
             if e.is_dir():
                 shutil.rmtree(e.path)
             else:
                 os.unlink(e.path)
             removed.append(e.name)
-        except OSError:
-            pass
     return removed
 
 
@@ -248,10 +244,8 @@ def _release(lock: filelock.FileLock, path: Path, created: list) -> None:
     filelock's next holder checks that its inode is still linked) and the folders created."""
     with interrupts_deferred():            # the lock goes whole, whatever arrives meanwhile
         if lock.lock_counter == 1:
-            try:
+            with suppress(OSError):
                 os.unlink(path)
-            except OSError:
-                pass
         lock.release()
         if not lock.is_locked:
             _remove_empty_dirs(created)
@@ -363,10 +357,8 @@ def owned_files(run_dir, patterns: tuple) -> dict:
 
 def _remove(run_dir: Path, names) -> None:
     for name in names:
-        try:
+        with suppress(OSError):
             (run_dir / name).unlink()
-        except OSError:
-            pass
 
 
 def config_text_of(config=None, config_text: str | None = None) -> str:

@@ -5,6 +5,7 @@ Split from :mod:`acmm.stages.runners` (issue 12).
 """
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import threading
@@ -294,14 +295,12 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None, warn=Non
     path = cfg.run_dir() / "design.h5"
     want = design_hash(cfg)
     if path.is_file():          # a regular file (a FIFO or a device there would block or never end)
-        try:
+        with contextlib.suppress(OSError, KeyError, ValueError):
             table = load_design_table(path)
             if table.design_hash == want:
                 with h5py.File(path, "r") as f:    # one unit system per run folder (before issue 14: imperial)
                     if h5_text(f.attrs.get("unit_system", "imperial")) == cfg.output.units:
                         return table, f"reused {path}"
-        except (OSError, KeyError, ValueError):
-            pass
     r, path = run_design(cfg, progress, figures, warn)
     if cfg.output.units != "imperial":
         # the table as a later run reuses it: converted to SI and back, so that a simulation is

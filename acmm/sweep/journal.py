@@ -199,10 +199,8 @@ class Journal:
                     os.fsync(f.fileno())
                 os.replace(tmp, self.path)       # only under the run lock: no sweep is using it
             except BaseException:
-                try:
+                with contextlib.suppress(OSError):
                     os.unlink(tmp)
-                except OSError:
-                    pass
                 raise
         else:
             # drop a torn final line before appending
@@ -240,7 +238,5 @@ class Journal:
             if not self._f.closed:
                 self._f.flush()
                 os.fsync(self._f.fileno())
-        try:
+        with contextlib.suppress(OSError):          # every record was already flushed and fsynced
             self._f.close()
-        except OSError:          # every record was already flushed and fsynced
-            pass
