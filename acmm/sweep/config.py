@@ -266,7 +266,6 @@ def _parse_resolved(data: dict, source: str) -> Sweep:
     if not isinstance(bases_data, dict) or not bases_data:
         raise ConfigError(f"{source}: bases: missing or empty (the resolved base configs, by name)")
     file_data = data["sweep_file"]
-    require_mapping(file_data, f"{source}: sweep_file")
     sf = validate_model(SweepFile, file_data, f"{source}: sweep_file")
     bases = tuple(Base(str(label), parse_config(cfg, source=f"{source}: bases.{label}"), source)
                   for label, cfg in bases_data.items())
