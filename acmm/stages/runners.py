@@ -150,10 +150,9 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     model = lin.design_point(cfg.inertia.matrix(), tr.tea.theta, cfg.orbit_rate,
                              model=cfg.design.model, drf_mode=cfg.design.drf_mode)
     ctrb = ctrb_mod.controllability(model)
-    result = LinearizeResult(cfg, tr.tea, model, ctrb)
-    names = list(model.state_names)
     eig = np.linalg.eigvals(model.A)
-    result.eigenvalues = eig
+    result = LinearizeResult(cfg, tr.tea, model, ctrb, eig)
+    names = list(model.state_names)
     items = {
         "A": Dataset(model.A, UNIT_A, "state matrix of eq 4.46 (x' = A x + B u + G w)",
                      names, dims=("state", "state_col")),

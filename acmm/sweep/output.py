@@ -63,7 +63,7 @@ def _table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
     def col(k, shape=()):
         return np.array([r[k] for r in rows], float).reshape((N,) + shape)
 
-    out = {
+    return {
         "base": np.array([labels.index(r["base"]) for r in rows], np.int64),
         "index": np.array([r["index"] for r in rows], np.int64),
         "case": np.array([labels.index(r["base"]) * sweep.spec.n_cases() + r["index"] for r in rows], np.int64),
@@ -85,7 +85,6 @@ def _table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
         "bias": col("bias", (3,)),
         "n_draws": np.array([r["n_draws"] for r in rows], np.int64),
     }
-    return out
 
 
 def _nominal_tea_deg(sweep: Sweep) -> dict:
