@@ -3,7 +3,7 @@
 Policy (docs/howto/results.md, *Run folders*): a rerun **replaces the outputs the stage owns** in
 ``runs/<name>/`` — no history folders.  Each stage declares the glob patterns of its files
 (:func:`stage`) and writes them into a staging folder ``runs/<name>/.staging-<pid>-<random>``
-that :func:`staged_outputs` gives it.  When the stage succeeds, its resolved config goes there as
+that :func:`_staged_outputs` gives it.  When the stage succeeds, its resolved config goes there as
 ``config.yaml`` (a comment names the source file and the command-line overrides), every file is
 moved into the run folder with :func:`os.replace`, and the stage's files of an earlier run that
 this one did not write are removed: a figure of another scenario name, of a schedule that no
@@ -46,7 +46,7 @@ import re
 import shutil
 import stat
 import tempfile
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
 import filelock
@@ -162,10 +162,8 @@ def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:
         os.replace(tmp, path)
     except BaseException as exc:
         if tmp is not None:
-            try:
+            with suppress(OSError):
                 os.unlink(tmp)
-            except OSError:
-                pass
         _remove_empty_dirs(created)
         if isinstance(exc, OSError):
             raise output_error(exc, what, path) from None
@@ -192,7 +190,7 @@ def write_text(path: str | Path, text: str) -> Path:
 
 
 LOCK_NAME = ".lock"
-#: Kind of the staging folders of stages (``.staging-<pid>-<random>``, :func:`staged_outputs`).
+#: Kind of the staging folders of stages (``.staging-<pid>-<random>``, :func:`_staged_outputs`).
 STAGING = "staging"
 
 
@@ -232,14 +230,12 @@ def remove_leftovers(directory: Path, staging: tuple = ()) -> list[str]:
     for e in entries:
         if not pattern.match(e.name) or e.is_symlink():
             continue
-        try:
+        with suppress(OSError):
             if e.is_dir():
                 shutil.rmtree(e.path)
             else:
                 os.unlink(e.path)
             removed.append(e.name)
-        except OSError:
-            pass
     return removed
 
 
@@ -248,10 +244,8 @@ def _release(lock: filelock.FileLock, path: Path, created: list) -> None:
     filelock's next holder checks that its inode is still linked) and the folders created."""
     with interrupts_deferred():            # the lock goes whole, whatever arrives meanwhile
         if lock.lock_counter == 1:
-            try:
+            with suppress(OSError):
                 os.unlink(path)
-            except OSError:
-                pass
         lock.release()
         if not lock.is_locked:
             _remove_empty_dirs(created)
@@ -363,10 +357,8 @@ def owned_files(run_dir, patterns: tuple) -> dict:
 
 def _remove(run_dir: Path, names) -> None:
     for name in names:
-        try:
+        with suppress(OSError):
             (run_dir / name).unlink()
-        except OSError:
-            pass
 
 
 def config_text_of(config=None, config_text: str | None = None) -> str:
@@ -427,31 +419,11 @@ def _commit(staging: Path, run_dir: Path, patterns: tuple) -> None:
 
 
 @contextmanager
-def staged_outputs(run_dir, patterns: tuple, config=None, config_text: str | None = None):
-    """Context of one stage writing its files; see the module docstring.
-
-    Parameters
-    ----------
-    run_dir : path
-        The run folder (``<output.root>/<name>``), which exists (the run lock made it).
-    patterns : tuple of str
-        Glob patterns (relative to the run folder) of the files the stage owns.
-    config : model, optional
-        The resolved config (its ``to_yaml()`` and, when loaded from a file, its source and
-        overrides go into ``config.yaml``).
-    config_text : str, optional
-        The resolved config as YAML, when ``config`` has no ``to_yaml``.
-
-    Yields
-    ------
-    Path
-        The folder to write the stage's files in.
-
-    Raises
-    ------
-    OutputError
-        The staging folder cannot be made, or a directory is in the way of a result.
-    """
+def _staged_outputs(run_dir, patterns: tuple, config=None, config_text: str | None = None):
+    """Context of one stage writing its files (see the module docstring): yields the staging folder in
+    the existing ``run_dir``; ``patterns`` globs the files the stage owns there; ``config`` (its
+    ``to_yaml()``, source and overrides) or ``config_text`` (YAML) goes into ``config.yaml``;
+    OutputError when the staging folder cannot be made or a directory is in the way of a result."""
     run_dir = Path(run_dir)
     text = config_text_of(config, config_text) if config is not None or config_text is not None else None
     config_before = file_identity(run_dir / CONFIG_FILE)
@@ -494,7 +466,7 @@ def stage(patterns: tuple, load):
     """Decorator of a stage runner ``fn(config, ..., out)``: resolve ``config`` with ``load``
     (validation first: a refused config creates nothing), take the run lock of its ``run_dir()``
     (:func:`run_lock`), then run ``fn`` with ``out``, the folder to write its
-    files in, inside :func:`staged_outputs`.
+    files in, inside :func:`_staged_outputs`.
 
     Parameters
     ----------
@@ -514,7 +486,7 @@ def stage(patterns: tuple, load):
         def wrapper(config=None, *args, **kwargs):
             cfg = load(config)
             with run_lock(cfg.run_dir()) as run_dir:
-                with staged_outputs(run_dir, patterns, cfg) as out:
+                with _staged_outputs(run_dir, patterns, cfg) as out:
                     return fn(cfg, *args, out=out, **kwargs)
         return wrapper
     return deco

@@ -101,6 +101,23 @@ def _sizes(items: Mapping[str, Any]) -> dict[str, int]:
     return sizes
 
 
+def h5_text(v) -> str:
+    """An HDF5 string (bytes of a fixed-length one, or str, or a numpy scalar of either) as str.
+
+    Parameters
+    ----------
+    v : bytes, str or numpy scalar
+        The stored value.
+
+    Returns
+    -------
+    str
+        The text.
+    """
+    v = v.item() if hasattr(v, "item") else v
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
 def _text(values) -> np.ndarray:
     """Text as an array of variable-length UTF-8 strings."""
     return np.array(values, dtype=h5py.string_dtype())
@@ -243,9 +260,7 @@ def dimension_only(ds) -> bool:
     bool
         It is such a dimension scale.
     """
-    name = ds.attrs.get("NAME", b"")
-    name = name.decode() if isinstance(name, bytes) else str(name)
-    return name.startswith("This is a netCDF dimension but not a netCDF variable.")
+    return h5_text(ds.attrs.get("NAME", b"")).startswith("This is a netCDF dimension but not a netCDF variable.")
 
 
 def read_h5(path: str | Path) -> dict[str, Any]:
@@ -383,7 +398,7 @@ def redraw_stored(target: str | Path, sources: dict, readers: dict, out=None) ->
         try:
             with h5py.File(f, "r") as h:
                 v = h.attrs.get("stage")
-                return None if v is None or "config" not in h.attrs else (v.decode() if isinstance(v, bytes) else str(v))
+                return None if v is None or "config" not in h.attrs else h5_text(v)
         except (OSError, ValueError):
             return None
 

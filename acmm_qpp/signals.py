@@ -10,6 +10,7 @@ forked or stopped) run inside :func:`interrupts_deferred`.
 """
 from __future__ import annotations
 
+import contextlib
 import signal
 import threading
 from contextlib import contextmanager
@@ -62,12 +63,10 @@ def terminate_like_ctrl_c(once: bool = False) -> list[int]:
     if once:
         defaults[signal.SIGINT] = signal.default_int_handler
     for sig, default in defaults.items():
-        try:
+        with contextlib.suppress(OSError, ValueError):        # not settable here
             if signal.getsignal(sig) is default:
                 signal.signal(sig, _first_interrupt if once else _raise_terminated)
                 done.append(int(sig))
-        except (OSError, ValueError):        # not settable here
-            pass
     return done
 
 

@@ -8,6 +8,7 @@ wrong dimension is an error naming the expected unit.  One :class:`pint.UnitRegi
 """
 from __future__ import annotations
 
+import contextlib
 import re
 from functools import lru_cache
 
@@ -86,10 +87,8 @@ def conversion_factor(unit: str, target: str) -> float:
         # engineering habit: "lb" in a torque or momentum means pound-force
         alt = re.sub(r"(?<![A-Za-z_])lb(?![A-Za-z_])", "lbf", unit)
         if alt != unit:
-            try:
+            with contextlib.suppress(pint.errors.DimensionalityError, ValueError):
                 return float(ureg.Quantity(1.0, parse_unit(alt)).to(dst).magnitude)
-            except (pint.errors.DimensionalityError, ValueError):
-                pass
         raise ValueError(f"unit {unit!r} is not a unit of {target} (wrong dimension)") from None
 
 

@@ -62,8 +62,7 @@ from acmm.sweep.case import prepare_base, run_case, simulate_values  # noqa: E40
 from acmm.sweep.cases import case_values  # noqa: E402
 from acmm.sweep.config import parse_sweep  # noqa: E402
 from acmm.sweep.dask_settings import DASK_SETTINGS  # noqa: E402
-from acmm.sweep.run import warm_worker  # noqa: E402
-from acmm.sweep.run import run_sweep  # noqa: E402
+from acmm.sweep.run import run_sweep, warm_worker  # noqa: E402
 from acmm.stages.pool import pool_map, process_pool, stop_pool  # noqa: E402
 from acmm_qpp.results import read_h5  # noqa: E402
 
@@ -140,17 +139,14 @@ def scaling(workers: list[int], cases: int, base: str, orbits: float, dask: bool
     for n in workers:
         rows = [("local pool", "pool", {"workers": n})]
         if dask:
-            rows.append(("Dask LocalCluster", "dask", {}))
-            rows.append(("Dask, acmm settings", "dask_acmm", {}))
+            rows += [("Dask LocalCluster", "dask", {}), ("Dask, acmm settings", "dask_acmm", {})]
         if unchunked:
             rows.append(("Dask, 1 case/task", "dask1", {"chunk": 1}))
         for name, label, kw in rows:
             if label == "pool":
+                load = load1 if n == 1 else os.getloadavg()[0]
                 if n != 1:
-                    load = os.getloadavg()[0]
                     one(label, n, **kw)
-                else:
-                    load = load1
             else:
                 import dask
 
@@ -283,7 +279,7 @@ def _targets() -> None:
     _row(f"  the 12 LMI points one after another / on the process pool ({os.cpu_count()} CPUs, its start included)",
          f"{t_serial / t_pool:.2f}x", ">= 1.6x", t_serial / t_pool >= 1.6)
 
-    _, t_lmi12 = _timed(compute_design, load_config("staircase", ["schedule.refine_points=0"]))
+    _, t_lmi12 = _timed(compute_design, cfg12)
     _row("the 12-point stair-case on the LMI route (schedule.refine_points=0) in-process", f"{t_lmi12:.1f} s", "-", True)
     _, t_lqr = _timed(compute_design, load_config("staircase", ["design.pole_method=shift", "schedule.refine_points=0"]))
     _row("the same on the report's route (design.pole_method=shift) in-process", f"{t_lqr:.1f} s", "-", True)
@@ -433,8 +429,7 @@ def _report_block(fast: bool, jobs) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         runs = []
         for label in ("fresh root", "reuse"):
-            load = _load()
-            runs.append((label, load, _report_run(Path(tmp) / "report", Path(tmp), fast, jobs)))
+            runs.append((label, _load(), _report_run(Path(tmp) / "report", Path(tmp), fast, jobs)))
     target = 10 if fast else 20
     print(f"5. acmm report{' --fast' if fast else ''} ({runs[0][2]['jobs']} processes; target <= {target} s "
           "from a fresh root):")

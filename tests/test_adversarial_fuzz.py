@@ -95,7 +95,7 @@ def _strict(fn, *args, **kwargs):
 @given(mutated("mb3"))
 def test_fuzz_acmm_config_accepts_or_refuses_cleanly(data):
     from acmm.io.config import parse_config
-    from acmm.stages.runners import compute_tea
+    from acmm.stages.runners import _compute_tea
 
     try:
         cfg = _strict(parse_config, data)
@@ -104,7 +104,7 @@ def test_fuzz_acmm_config_accepts_or_refuses_cleanly(data):
         return
     try:
         with np.errstate(over="raise", invalid="raise", divide="raise"):
-            t = _strict(compute_tea, cfg).tea
+            t = _strict(_compute_tea, cfg).tea
     except AcmmError:
         return
     assert np.all(np.isfinite(t.theta)) and math.isfinite(t.residual)

@@ -156,7 +156,7 @@ def _run_with_progress(runner, cfg, figures, what: str):
     after = ("simulating, writing results" if what == "simulate" else
              "fitting the schedule, checking it, writing results") + (" and figures" if with_figures else "")
     # redrawn at each step, not from rich's thread: the LMI points are designed on a forked pool,
-    # which is not forked beside other threads (acmm.stages.design.point_workers)
+    # which is not forked beside other threads (acmm.stages.design._point_workers)
     with Steps(f"{cfg.name}: designing", total, refresh_thread=False) as bar:
         count = [0]
 

@@ -16,6 +16,7 @@ from acmm.design.schedule import schedule_gain
 import yaml
 from acmm.model.unit_systems import FT_LBF_IN_NM
 from acmm.io.units import convert_items, state_factors
+from acmm_qpp.results import h5_text
 
 
 _TABLE_KEYS = ("inertia", "bias", "tea", "K")
@@ -69,7 +70,7 @@ def stored_table_digest(items: dict, system: str) -> str:
     st = convert_items({k: items[k] for k in _TABLE_KEYS} | {"schedule": items.get("schedule", {})}, system)
     coef = st["schedule"]["coef"].data if "coef" in st["schedule"] else None
     level = np.asarray(items["level"].data, bool) if "level" in items else None
-    return table_sha256(h5_texts(items["names"].data), [st[k].data for k in _TABLE_KEYS], coef, level)
+    return table_sha256(list(map(h5_text, np.atleast_1d(items["names"].data))), [st[k].data for k in _TABLE_KEYS], coef, level)
 
 
 def _check_table(names, inertia, bias, tea, K, coef, stored_digest, level=None) -> None:
@@ -113,7 +114,7 @@ def load_design_table(path: Path) -> DesignTable:
         attrs = {k: h5_text(f.attrs[k]) for k in ("design_hash", "schedule_form", "unit_system", "config",
                                                 "table_sha256") if k in f.attrs}
         coef = np.asarray(f["schedule/coef"][()], float) if "schedule" in f else None
-        names = h5_texts(f["names"][()])
+        names = list(map(h5_text, np.atleast_1d(f["names"][()])))
         inertia, bias, K, tea = (np.asarray(f[k][()], float) for k in ("inertia", "bias", "K", "tea"))
         level = np.asarray(f["level"][()]).astype(bool) if "level" in f else None
     _check_table(names, inertia, bias, tea, K, coef, attrs.get("table_sha256"), level)
@@ -126,38 +127,6 @@ def load_design_table(path: Path) -> DesignTable:
         coef = None if coef is None else coef * f / FT_LBF_IN_NM
     return DesignTable(names, inertia, bias, tea, K, coef, attrs["design_hash"],
                        attrs.get("schedule_form", "polynomial"), level)
-
-
-def h5_text(v) -> str:
-    """An HDF5 string (bytes of a fixed-length one, or str) as str.
-
-    Parameters
-    ----------
-    v : bytes or str
-        The stored value.
-
-    Returns
-    -------
-    str
-        The text.
-    """
-    return v.decode() if isinstance(v, bytes) else str(v)
-
-
-def h5_texts(values) -> list[str]:
-    """The strings of an HDF5 text array (or a scalar) as a list of str.
-
-    Parameters
-    ----------
-    values : array_like
-        The stored strings (bytes or str).
-
-    Returns
-    -------
-    list of str
-        The texts.
-    """
-    return [h5_text(x) for x in np.atleast_1d(values)]
 
 
 @dataclass
@@ -209,22 +178,6 @@ class DesignTable:
         if self.level is None:
             return np.arange(len(self.names))
         return np.flatnonzero(self.level)
-
-    def scheduled_gain(self, k: int) -> np.ndarray:
-        """Gain in use at point k: the schedule evaluated at its TEA when there is one, else
-        the point's LQR gain.
-
-        Parameters
-        ----------
-        k : int
-            Design point index.
-
-        Returns
-        -------
-        (3, 24) array
-            Gain, ft·lbf per state unit.
-        """
-        return self.gain_at(self.tea[k, 1], k)
 
     def gain_at(self, theta2: float, k: int) -> np.ndarray:
         """The schedule at pitch TEA ``theta2`` (rad); without a schedule, point k's LQR gain.

@@ -115,11 +115,8 @@ def convert_items(items: Mapping[str, Any], system: str) -> dict:
         if isinstance(value, Mapping):
             out[key] = convert_items(value, system)
             continue
-        if not isinstance(value, Dataset):   # write_h5 reports it
-            out[key] = value
-            continue
-        data = value.data
-        if isinstance(data, str) or np.asarray(data).dtype.kind not in "fc":
+        data = value.data if isinstance(value, Dataset) else None     # (not a Dataset: write_h5 reports it)
+        if data is None or isinstance(data, str) or np.asarray(data).dtype.kind not in "fc":
             out[key] = value
             continue
         try:

@@ -73,23 +73,9 @@ class SampledSchedule:
     gains: np.ndarray
 
 
-def sample_schedule(fit, theta2, n: int = 60) -> SampledSchedule:
-    """``fit`` (an :class:`acmm.design.schedule.ScheduleFit`) at ``n`` pitch TEAs spanning ``theta2`` (rad).
-
-    Parameters
-    ----------
-    fit : acmm.design.schedule.ScheduleFit
-        The gain schedule of ch. 5.3.
-    theta2 : (P,) array
-        Pitch TEAs of the design points, rad (their range is sampled).
-    n : int, optional
-        Number of evenly spaced samples.
-
-    Returns
-    -------
-    SampledSchedule
-        The schedule's gains at the samples (the units of ``fit``'s gains).
-    """
+def _sample_schedule(fit, theta2, n: int = 60) -> SampledSchedule:
+    """``fit`` (an :class:`acmm.design.schedule.ScheduleFit`) at ``n`` evenly spaced pitch TEAs spanning
+    ``theta2`` (rad), in the units of its gains."""
     fine = np.linspace(theta2.min(), theta2.max(), n)
     return SampledSchedule(fit.form, fine, np.array([fit.gain(t) for t in fine]))
 
@@ -105,7 +91,7 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     gains : (P, 3, 24) array
         LQR gains, ``torque_unit`` per state unit.
     fit : acmm.design.schedule.ScheduleFit or SampledSchedule
-        The schedule, or its samples from :func:`sample_schedule` (same units as ``gains``).
+        The schedule, or its samples from :func:`_sample_schedule` (same units as ``gains``).
     state_names : list of str
         The 24 state names.
     path : path-like
@@ -123,7 +109,7 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
     theta2_deg = np.degrees(theta2)
-    curve = fit if isinstance(fit, SampledSchedule) else sample_schedule(fit, theta2)
+    curve = fit if isinstance(fit, SampledSchedule) else _sample_schedule(fit, theta2)
     fine, kf = np.degrees(curve.theta2), curve.gains
     units = units or state_units()
     fig, grid = _gain_grid_layout(tuple(state_names), tuple(units), torque_unit)

@@ -16,23 +16,6 @@ import numpy as np
 MINUS = "\u2212"
 
 
-def decoded(x) -> str:
-    """A name stored as bytes (HDF5) or str, as str.
-
-    Parameters
-    ----------
-    x : bytes, str or numpy scalar
-        The stored name.
-
-    Returns
-    -------
-    str
-        The name.
-    """
-    x = x.item() if hasattr(x, "item") else x
-    return x.decode() if isinstance(x, bytes) else str(x)
-
-
 def fmt_value(x, f="{:.4g}"):
     """A number (or each of a sequence) as text in the report's tables, ``—`` for none.
 

@@ -37,7 +37,7 @@ from acmm.model import tea
 from acmm.model.tea import NoEquilibriumError
 from acmm.report.gather import (REPORT_VARIANTS, acmm_config, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp,
                                 qpp_config, qpp_scenarios, robustness_result)
-from acmm.report.numbers import decoded, fixed, markdown_table, sci, sig
+from acmm.report.numbers import fixed, markdown_table, sci, sig
 from acmm.report.sections.robustness import bounded_count, case_column
 from acmm.report.sections.schedule import point_energy
 from acmm.report.sections.table1 import table1_teas
@@ -45,7 +45,7 @@ from acmm.sweep.config import parse_sweep
 from acmm.sweep.run import run_sweep
 from acmm_qpp.configio import packaged_config_path
 from acmm_qpp.errors import AcmmError
-from acmm_qpp.results import read_h5
+from acmm_qpp.results import h5_text, read_h5
 from qpp.design import spheres
 from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, family_bounds, peak_exclusion, refine, resettle, search,
                                settle_exclusion)
@@ -502,9 +502,9 @@ def _block_claims(r: dict) -> str:
     first, late = err[o <= 1.0].max(axis=0), err[o >= 2.0].max(axis=0)
     rows = [
         ["1", "cross-inertia-free MB3 design (`mb3_decoupled`) on the nonlinear model",
-         f"{decoded(s_d['attrs']['verdict'])} at **{sig(s_d['attrs']['stop_time_orbits'], 2)} orbit**"],
+         f"{h5_text(s_d['attrs']['verdict'])} at **{sig(s_d['attrs']['stop_time_orbits'], 2)} orbit**"],
         ["1", "fully coupled MB3 design (`mb3`)",
-         f"{decoded(s_c['attrs']['verdict'])} over {sig(o[-1], 2)} orbits"],
+         f"{h5_text(s_c['attrs']['verdict'])} over {sig(o[-1], 2)} orbits"],
         ["1", "its peak attitude error in the first orbit, roll / pitch / yaw",
          " / ".join(sig(v) for v in first) + "°"],
         ["1", "its peak attitude error after orbit 2, roll / pitch / yaw",
@@ -520,7 +520,7 @@ def _block_claims(r: dict) -> str:
     rows += [
         ["2", f"stair-case MB3 → AC (`staircase`): {len(pk)} levels, pitch TEA "
               f"{sig(pitch[0])}° … {sig(pitch[-1], 2)}°, dwell {sig(dwell.mean())} orbits",
-         f"{decoded(st['attrs']['verdict'])} over {sig(st['orbits'][-1])} orbits"],
+         f"{h5_text(st['attrs']['verdict'])} over {sig(st['orbits'][-1])} orbits"],
         ["2", "largest steady attitude error of a level, roll / pitch / yaw",
          " / ".join(sig(v, 2) for v in steady) + "°"],
         ["2", "peak CMG momentum per level (every integrator step)",
@@ -547,7 +547,7 @@ def _block_claims(r: dict) -> str:
         ["schedule", "smallest disk margin α at the plant input", fixed(dm.min())],
     ]
     w = r["sweep"]
-    counts = [(lab.upper(), *bounded_count(w, lab)) for lab in (decoded(x) for x in np.atleast_1d(w["base_names"]))]
+    counts = [(lab.upper(), *bounded_count(w, lab)) for lab in (h5_text(x) for x in np.atleast_1d(w["base_names"]))]
     rows.append(["ch. 7", "±30 % inertia element draws bounded with the fixed nominal gain "
                           "(`sweep_inertia30`)", ", ".join(f"{lab} **{ok}/{n}**" for lab, ok, n in counts)])
     return markdown_table(["claim", "quantity", "computed"], rows)
@@ -576,7 +576,7 @@ def _block_design_points(r: dict) -> str:
     rows = []
     for k, name in enumerate(d["names"]):
         p = d["points"][keys[k]]
-        row = [decoded(name), fixed(np.degrees(d["tea"][k, 1]), 1), fixed(d["sector_margin"][k]),
+        row = [h5_text(name), fixed(np.degrees(d["tea"][k, 1]), 1), fixed(d["sector_margin"][k]),
                sci(d["max_eig_condition"][k]), sci(d["robustness_radius"][k]),
                sci(d["robustness_radius_elementwise"][k])]
         if lmi:
@@ -598,7 +598,7 @@ def _block_schedule_path(r: dict) -> str:
     th = np.degrees(np.asarray(pa["theta2"]))
     mr, mg, dm = (np.asarray(pa[k]) for k in ("max_real", "sector_margin", "disk_margin"))
     i = int(np.argmin(dm))
-    form = decoded(d["attrs"]["schedule_form"]) if "attrs" in d and "schedule_form" in d["attrs"] else (
+    form = h5_text(d["attrs"]["schedule_form"]) if "attrs" in d and "schedule_form" in d["attrs"] else (
         "polynomial" if "refit_converged" in sc else "table")
     rows = [["schedule form", "table look-up, K linear in θ2* between the design points" if form == "table"
              else "2nd-order polynomial in θ2*"]]
@@ -723,13 +723,13 @@ def _block_staircase_routes(r: dict) -> str:
             f"{fixed(float(g['tau_star']), 2)} orbit" + ("" if np.all(np.asarray(g["dwell"]) > float(g["tau_star"]))
                                                          else " (NOT certified)"))
         refit = ""
-        if "refit_converged" in sc and decoded(sc["fit_method"]) == "shifted_lqr":
+        if "refit_converged" in sc and h5_text(sc["fit_method"]) == "shifted_lqr":
             refit = (f" (from the least-squares fit's {fixed(float(sc['refit_max_real_before']), 2, sign=True)}n; "
                      f"Re λ < −{fixed(float(sc['refit_decay']), 2)}n and the {fixed(float(sc['refit_cone_deg']), 0)}° "
                      "cone at " + f"{int(sc['refit_n_tea'])} TEAs; "
                      + ("Newton's method converged" if float(sc["refit_converged"]) else
-                        "NOT converged: " + decoded(sc["refit_message"])) + ")")
-        verdict = decoded(sim["attrs"]["verdict"])
+                        "NOT converged: " + h5_text(sc["refit_message"])) + ")")
+        verdict = h5_text(sim["attrs"]["verdict"])
         peak = sig(np.max(sim["levels"]["peak_momentum"])) if verdict != "diverged" else (
             f"diverged at orbit {fixed(float(sim['attrs']['stop_time_orbits']), 1)}")
         inside = int(np.sum(np.asarray(pa["sector_margin"]) >= 0))
@@ -747,8 +747,8 @@ def _block_staircase_routes(r: dict) -> str:
 def _block_sweep_monte_carlo(r: dict) -> str:
     """Verdict counts of the ±30 % inertia Monte Carlo (``sweep_inertia30``, ``sweep.h5``), one row per base."""
     w = r["sweep"]
-    names = [decoded(x) for x in np.atleast_1d(w["base_names"])]
-    verdict = np.array([decoded(x) for x in np.atleast_1d(w["verdict"])])
+    names = [h5_text(x) for x in np.atleast_1d(w["base_names"])]
+    verdict = np.array([h5_text(x) for x in np.atleast_1d(w["verdict"])])
     base, draws = np.atleast_1d(w["base"]), np.atleast_1d(w["n_draws"])
     peak = np.degrees(np.atleast_2d(w["peak_attitude_error"]))
     rows = []
@@ -771,10 +771,10 @@ def _block_sweep_diverged(r: dict) -> str:
     """Where the diverged cases' plants have their equilibrium (``sweep.h5: tea_true``,
     ``tea_estimate``), one row per base."""
     w = r["sweep"]
-    verdict = np.array([decoded(x) for x in np.atleast_1d(w["verdict"])])
+    verdict = np.array([h5_text(x) for x in np.atleast_1d(w["verdict"])])
     base = np.atleast_1d(w["base"])
     rows = []
-    for k, lab in enumerate(decoded(x) for x in np.atleast_1d(w["base_names"])):
+    for k, lab in enumerate(h5_text(x) for x in np.atleast_1d(w["base_names"])):
         sel = (base == k) & (verdict == "diverged")
         true = np.degrees(np.atleast_2d(w["tea_true"])[sel, 1])
         est = np.degrees(np.atleast_2d(w["tea_estimate"])[sel, 1])
@@ -791,12 +791,12 @@ def _block_sweep_margin(r: dict) -> str:
     w = r["sweep"]
     mg = w["margin"]
     rows = []
-    for lab in (decoded(x) for x in np.atleast_1d(w["base_names"])):
+    for lab in (h5_text(x) for x in np.atleast_1d(w["base_names"])):
         lo, hi = mg[f"{lab}_down"], mg[f"{lab}_up"]
         why = {"bounded": "not settled", "attitude": "diverged"}
 
         def reason(m):
-            text = decoded(m["failure_reason"])
+            text = h5_text(m["failure_reason"])
             return next((v for k, v in why.items() if text.startswith(k)), text)
         rows.append([lab.upper(), f"{fixed(lo['limit'])} … {fixed(hi['limit'])}",
                      f"{fixed(lo['first_failure'])} ({reason(lo)}) and {fixed(hi['first_failure'])} ({reason(hi)})"])

@@ -288,7 +288,7 @@ def scenario_from_config(cfg, table, *, orbits: float | None = None, rtol: float
     x0 = np.concatenate([kin.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
     return Scenario(
         level_start=level_start, inertia=table.inertia[idx], bias=table.bias[idx], theta_est=table.tea[idx],
-        gain=np.array([table.scheduled_gain(k) for k in idx]),
+        gain=np.array([table.gain_at(table.tea[k, 1], k) for k in idx]),
         harmonic_a=np.asarray(cfg.disturbance.A), harmonic_b=np.asarray(cfg.disturbance.B), n=n,
         torque_limit=cfg.actuators.torque_limit, momentum_limit=cfg.actuators.momentum_limit,
         drf_mode=cfg.design.drf_mode, t_end=t_end, sample_times=samples, x0=x0,

@@ -16,14 +16,14 @@ import numpy as np
 
 from acmm.design.dwell import NOT_COVERED, DwellCertificate, DwellProof, dwell_certificate
 from acmm.io.config import Config
-from acmm.io.design_file import DesignTable, h5_text
+from acmm.io.design_file import DesignTable
 from acmm.model import kinematics as kin
 from acmm.model import linearize as lin
 from acmm.simulate.scenario import scenario_from_config
 from acmm.stages.common import UNIT_A, UNIT_STATE
 from acmm_qpp import __version__
 from acmm_qpp.provenance import git_commit, git_dirty
-from acmm_qpp.results import Dataset
+from acmm_qpp.results import Dataset, h5_text
 
 #: the ``design.h5`` datasets of the ``dwell`` group converted per state (:func:`acmm.stages.common.in_system`)
 UNIT_ROLES = {"dwell/closed_loop": "A", "dwell/scales": "scales", "dwell/jump": "x"}
@@ -67,34 +67,11 @@ class StairCertificate:
         return 2 * np.pi / self.n
 
 
-def level_closed_loops(cfg: Config, table: DesignTable) -> tuple:
-    """The frozen closed loops of the config's stair-case levels and the equilibrium jumps.
-
-    Parameters
-    ----------
-    cfg : acmm.io.config.Config
-        The config (orbit rate, DRF mode, the levels of ``simulation``).
-    table : acmm.io.design_file.DesignTable
-        Its design.
-
-    Returns
-    -------
-    Acl : (L, 24, 24) array
-        A_k − B_k K_k, 1/s.
-    gains : (L, 3, 24) array
-        K_k, ft·lbf per state unit.
-    scale : (24,) array
-        State magnitudes of the first level (the certificate's common scaling), state units.
-    dwell : (L-1,) array
-        Time each level but the last is held, s.
-    jumps : (L-1, 24) array
-        The equilibrium state of level k minus that of level k+1, in level k+1's coordinates
-        (state units: rad, rad/s).
-    idx : (L,) array of int
-        The design point of each level.
-    scenario : acmm.simulate.scenario.Scenario
-        The scenario the levels come from (its torque and momentum limits).
-    """
+def _level_closed_loops(cfg: Config, table: DesignTable) -> tuple:
+    """(Acl = A_k − B_k K_k 1/s, gains K_k ft·lbf per state unit, the first level's state magnitudes
+    (the certificate's common scaling), the dwell of each level but the last s, the equilibrium of
+    level k minus that of k+1 in k+1's coordinates (rad, rad/s), each level's design point index,
+    the scenario (its torque and momentum limits)) of the config's stair-case levels."""
     sc = scenario_from_config(cfg, table)
     n = sc.n
     models = [lin.design_point(sc.inertia[k], sc.theta_est[k], n, model="coupled", drf_mode=sc.drf_mode)
@@ -131,57 +108,27 @@ def _hard(parent, name: str, kind, shape: tuple | None = None):
     return obj
 
 
-def same_program(attrs) -> bool:
-    """Whether a results file's provenance (root attributes) is this process's: the same package
-    version and git commit, both known, and neither checkout with uncommitted changes (without
-    git, or with such changes, the version alone would not say what code ran).
-
-    Parameters
-    ----------
-    attrs : mapping
-        The file's root attributes (:func:`acmm_qpp.results.write_h5`).
-
-    Returns
-    -------
-    bool
-        True when a proof in the file is what this program would find for the same loops.
-    """
+def _same_program(attrs) -> bool:
+    """Whether a file's root attributes (:func:`acmm_qpp.results.write_h5`) say this process's
+    program wrote it: the same package version and git commit, both known, and neither checkout
+    with uncommitted changes (else the version alone would not say what code ran)."""
     ours = {"package_version": __version__, "git_commit": git_commit(), "git_dirty": git_dirty()}
     return ours["git_commit"] != "unknown" and ours["git_dirty"] == "no" and all(
         k in attrs and h5_text(attrs[k]) == v for k, v in ours.items())
 
 
-def stored_proof(path: Path, orbit: float, closed_loops: np.ndarray, exact: bool = False) -> DwellProof | None:
-    """The Lyapunov matrices, decay rate and dwells of a ``design.h5``'s ``dwell`` group, for
-    :func:`acmm.design.dwell.dwell_certificate` to check again and reuse.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The ``design.h5``.
-    orbit : float
-        One orbit, s.
-    closed_loops : (L, 24, 24) array
-        A_k − B_k K_k of the levels the proof is for, 1/s: the stored matrices must have their
-        shape (nothing else is read).
-    exact : bool
-        Also require a file in the report's units written by this program (:func:`same_program`)
-        whose stored closed loops equal ``closed_loops`` element by element: the same program
-        on the same loops, whose bisection finds the same dwells and matrices (a new design
-        replacing the file).
-
-    Returns
-    -------
-    acmm.design.dwell.DwellProof or None
-        None when the file or the group cannot be read as written (links, types, shapes) or,
-        with ``exact``, is not the same program's on the same loops.
-    """
+def _stored_proof(path: Path, orbit: float, closed_loops: np.ndarray, exact: bool = False) -> DwellProof | None:
+    """The :class:`acmm.design.dwell.DwellProof` (Lyapunov matrices, decay rate, dwells) of a
+    ``design.h5``'s ``dwell`` group for the levels of ``closed_loops`` (A_k − B_k K_k, 1/s; the stored
+    matrices must have their shape), ``orbit`` s; None when the file or group cannot be read as
+    written (links, types, shapes) or, with ``exact``, is not in the report's units from
+    :func:`_same_program` on element-wise equal closed loops (whose bisection finds the same dwells)."""
     if not path.is_file():          # a regular file (a FIFO or a device there would block)
         return None
     try:
         with h5py.File(path, "r") as f:
             if exact and (h5_text(f.attrs.get("unit_system", "imperial")) != "imperial"
-                          or not same_program(f.attrs)):
+                          or not _same_program(f.attrs)):
                 return None
             g = _hard(f, "dwell", h5py.Group)
             if exact and not np.array_equal(_hard(g, "closed_loop", h5py.Dataset, closed_loops.shape)[()],
@@ -208,10 +155,10 @@ def compute_certificate(cfg: Config, table: DesignTable, previous: Path | None =
     table : acmm.io.design_file.DesignTable
         Its design.
     previous : pathlib.Path, optional
-        A ``design.h5`` whose stored proof (:func:`stored_proof`) is reused where it holds for
+        A ``design.h5`` whose stored proof (:func:`_stored_proof`) is reused where it holds for
         these levels, checked again (``acmm certify`` on the design it certifies).
     exact : bool
-        Reuse it only from the same program on the same closed loops (:func:`stored_proof`'s
+        Reuse it only from the same program on the same closed loops (:func:`_stored_proof`'s
         ``exact``): a new design replacing ``previous`` then solves no dwell-time program when
         it designs the same stair-case again.
 
@@ -220,8 +167,8 @@ def compute_certificate(cfg: Config, table: DesignTable, previous: Path | None =
     StairCertificate
         The certificate with its levels.
     """
-    Acl, gains, scale, dwell, jumps, idx, sc = level_closed_loops(cfg, table)
-    proof = None if previous is None else stored_proof(previous, 2 * np.pi / sc.n, Acl, exact)
+    Acl, gains, scale, dwell, jumps, idx, sc = _level_closed_loops(cfg, table)
+    proof = None if previous is None else _stored_proof(previous, 2 * np.pi / sc.n, Acl, exact)
     cert = dwell_certificate(Acl, gains, scale, dwell, jumps, H_INDEX, sc.torque_limit, sc.momentum_limit,
                              start=_deviation(sc.x0[3:6], sc.theta_est[0], sc.n, Acl.shape[1]), proof=proof)
     return StairCertificate(cert, [table.names[i] for i in idx], sc.theta_est[:, 1], Acl, jumps, sc.n)

@@ -14,7 +14,7 @@ import yaml
 from dataclasses import replace
 from acmm.io.dimensions import with_coordinates
 from acmm.io.units import convert_items, state_factors, state_space_in
-from acmm_qpp.results import write_h5
+from acmm_qpp.results import h5_text, write_h5
 from acmm_qpp.units import conversion_factor
 
 #: Units of the per-state arrays, element by element: ``state_units[i]`` is the unit of state
@@ -50,7 +50,6 @@ def in_system(items: dict, cfg: Config, roles: dict) -> dict:
     dict
         ``items`` with those arrays converted to the config's unit system.
     """
-
     system = cfg.output.units
     _, su = state_factors(cfg.design.drf_mode, system)
     for path, role in roles.items():
@@ -157,9 +156,7 @@ def stored_config(attrs: dict) -> Config:
     acmm.io.config.Config
         The config.
     """
-
-    text = attrs["config"]
-    return parse_config(yaml.safe_load(text.decode() if isinstance(text, bytes) else text), source="stored config")
+    return parse_config(yaml.safe_load(h5_text(attrs["config"])), source="stored config")
 
 
 def stored_in(f, key: str, unit: str) -> np.ndarray:
@@ -181,7 +178,6 @@ def stored_in(f, key: str, unit: str) -> np.ndarray:
         The values in ``unit``.
     """
     ds = f[key]
-    stored = ds.attrs.get("units", unit)
-    stored = stored.decode() if isinstance(stored, bytes) else str(stored)
+    stored = h5_text(ds.attrs.get("units", unit))
     value = np.asarray(ds[()])
     return value if stored == unit else value * conversion_factor(stored, unit)

@@ -5,6 +5,7 @@ Split from :mod:`acmm.stages.runners` (issue 12).
 """
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import threading
@@ -19,8 +20,8 @@ from acmm.io.config import Config
 from acmm.stages.common import as_config, write_results
 from acmm_qpp.outputs import stage
 from acmm.stages.pool import pool_map, process_pool, stop_pool
-from acmm_qpp.results import draw_figures
-from acmm.io.design_file import DesignTable, h5_text, stored_table_digest, load_design_table
+from acmm_qpp.results import draw_figures, h5_text
+from acmm.io.design_file import DesignTable, stored_table_digest, load_design_table
 import json
 import time
 from acmm_qpp.provenance import config_hash
@@ -150,26 +151,12 @@ def design_hash(cfg: Config) -> str:
     return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
 
 
-def point_workers(pooled: bool, n_points: int) -> int:
-    """Processes that design a config's points: a pooled route's points (the regional LMI's, seconds
-    each; :attr:`acmm.design.methods.PoleMethod.pooled`) on a process pool of one worker per available CPU (at most one per point); the sector
-    LQR's (about a second each), and any design inside a pool worker already (a sweep's, the
-    report's), or in a process running other threads (a fork beside them can deadlock the child:
-    a terminal's progress bar), in this process.  A point's result does not depend on where it is
-    computed.
-
-    Parameters
-    ----------
-    pooled : bool
-        The route's points are worth a pool (:attr:`acmm.design.methods.PoleMethod.pooled`).
-    n_points : int
-        Number of design points.
-
-    Returns
-    -------
-    int
-        Worker processes (1: in this process).
-    """
+def _point_workers(pooled: bool, n_points: int) -> int:
+    """Worker processes (1: in this process) designing ``n_points`` points: a ``pooled`` route's
+    (:attr:`acmm.design.methods.PoleMethod.pooled`, the regional LMI's, seconds each) on a process pool
+    of one worker per available CPU, at most one per point; the sector LQR's (about a second each),
+    and any design inside a pool worker already (a sweep's, the report's) or in a process running
+    other threads, in this process.  A point's result does not depend on where it is computed."""
     if not pooled or n_points < 2 or multiprocessing.parent_process() is not None:
         return 1
     if threading.active_count() > 1:        # (a terminal's progress bar, a notebook's kernel threads)
@@ -206,7 +193,7 @@ def compute_design(config, progress=None) -> DesignResult:
     cfg = as_config(config)
     t0 = time.perf_counter()
     specs, s = sp.point_specs(cfg), design_settings(cfg)
-    workers = point_workers(s.method.pooled, len(specs))
+    workers = _point_workers(s.method.pooled, len(specs))
     if workers <= 1:
         ds = design_schedule(specs, s, schedule_settings(cfg), progress)
     else:
@@ -308,14 +295,12 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None, warn=Non
     path = cfg.run_dir() / "design.h5"
     want = design_hash(cfg)
     if path.is_file():          # a regular file (a FIFO or a device there would block or never end)
-        try:
+        with contextlib.suppress(OSError, KeyError, ValueError):
             table = load_design_table(path)
             if table.design_hash == want:
                 with h5py.File(path, "r") as f:    # one unit system per run folder (before issue 14: imperial)
                     if h5_text(f.attrs.get("unit_system", "imperial")) == cfg.output.units:
                         return table, f"reused {path}"
-        except (OSError, KeyError, ValueError):
-            pass
     r, path = run_design(cfg, progress, figures, warn)
     if cfg.output.units != "imperial":
         # the table as a later run reuses it: converted to SI and back, so that a simulation is

@@ -18,13 +18,14 @@ from acmm.model.linearize import STATE_NAMES
 from acmm.stages.certify import UNIT_ROLES, certificate_items, compute_certificate
 from acmm.stages.common import (UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE, define_units, in_system,
                                 stored_config)
-from acmm_qpp.results import Dataset
+from acmm_qpp.results import Dataset, h5_text
 import h5py
 from acmm.design.schedule import schedule_gain
 from acmm.design.settings import design_settings
-from acmm.io.design_file import h5_text, h5_texts
 
 AXES = ["roll", "pitch", "yaw"]
+#: a point's datasets that describe the reference sector LQR of a robust or LMI gain, not the gain
+_REFERENCE_LQR = ("Q", "P", "riccati_residual", "riccati_backward_error", "riccati_condition", "riccati_ill_conditioned")
 
 
 def design_items(r, cfg) -> dict:
@@ -63,7 +64,7 @@ def _point_items(points) -> dict:
     pts = {}
     for k, p in enumerate(points):
         res, ric = p.gain, p.gain.riccati
-        pts[f"{k:03d}_{p.spec.name}"] = {
+        g = pts[f"{k:03d}_{p.spec.name}"] = {
             "inertia": Dataset(p.spec.inertia, "slug*ft^2", "inertia of the design point", AXES,
                                dims=("axis", "axis_col")),
             "bias": Dataset(p.spec.bias, "ft*lbf", "bias torque", AXES, dims=("axis",)),
@@ -103,22 +104,18 @@ def _point_items(points) -> dict:
                               "input, time in 1/n (acmm.design.regional_lmi.control_energy)"),
         }
         if res.robust is not None:
-            g = pts[f"{k:03d}_{p.spec.name}"]
             g["robust"] = _robust_items(res.robust, p.gain)
             g["K"] = replace(g["K"], description="robust gain for the family of design.robust (group robust), u = -K x")
-            for key in ("Q", "P", "riccati_residual", "riccati_backward_error", "riccati_condition",
-                        "riccati_ill_conditioned"):
+            for key in _REFERENCE_LQR:
                 g[key] = replace(g[key], description=g[key].description + " of the route's reference sector LQR "
                                  "(not of the robust gain K)")
             for key in ("robustness_radius", "robustness_radius_elementwise"):
                 g[key] = replace(g[key], description=g[key].description + " (0 when K has a pole outside the sector)")
         if res.lmi is not None:
-            pts[f"{k:03d}_{p.spec.name}"]["lmi"] = _lmi_items(res.lmi)
-            for key in ("Q", "P", "riccati_residual", "riccati_backward_error", "riccati_condition",
-                        "riccati_ill_conditioned"):
-                ds = pts[f"{k:03d}_{p.spec.name}"][key]
-                pts[f"{k:03d}_{p.spec.name}"][key] = replace(
-                    ds, description=ds.description + " of the reference sector LQR (the LMI design's pre-conditioner)")
+            g["lmi"] = _lmi_items(res.lmi)
+            for key in _REFERENCE_LQR:
+                g[key] = replace(g[key], description=g[key].description + " of the reference sector LQR (the LMI "
+                                 "design's pre-conditioner)")
     return pts
 
 
@@ -175,7 +172,7 @@ def _lmi_items(r) -> dict:
 def _table_items(r, pts: dict) -> dict:
     """The top-level datasets of ``design.h5`` (the table, per-point summaries; report units,
     stated per dataset) around the point groups ``pts`` (nested under ``points``)."""
-    items = {
+    return {
         "points": pts,
         "names": Dataset(np.array(r.table.names, dtype="S"), "1", "design point names in order", dims=("point",)),
         "point": Dataset(np.array(r.table.names, dtype=object), "1", "design point name", dims=("point",)),
@@ -208,7 +205,6 @@ def _table_items(r, pts: dict) -> dict:
                                          if any(p.gain.lmi is not None for p in r.points) else ""),
                                      dims=("point",)),
     }
-    return items
 
 
 def _schedule_items(r) -> dict:
@@ -236,8 +232,7 @@ def _schedule_items(r) -> dict:
         value = np.array(val.encode("utf-8"), dtype="S") if isinstance(val, str) else float(val)
         # (the cone's half-angle keeps its degrees: a dataset in "deg" is written in rad)
         unit = "n" if key.startswith("max_real") or key == "decay" else "1"
-        sched[f"refit_{key}"] = Dataset(value, unit,
-                                        f"refit on the path: {key.replace('_', ' ')}")
+        sched[f"refit_{key}"] = Dataset(value, unit, f"refit on the path: {key.replace('_', ' ')}")
     rf = r.refinement
     if rf is not None:
         sched["refine_added"] = Dataset(rf.added, "1", "table nodes added between the levels where the scheduled "
@@ -309,7 +304,7 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
 
     with h5py.File(path, "r") as f:
         attrs = {k: f.attrs[k] for k in f.attrs}
-        names = h5_texts(f["names"][()])
+        names = list(map(h5_text, np.atleast_1d(f["names"][()])))
         keys = sorted(f["points"])
         poles = [np.asarray(f[f"points/{k}/poles"][()]) for k in keys]
         tea = np.asarray(f["tea"][()], float)

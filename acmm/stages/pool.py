@@ -60,15 +60,11 @@ def _pool_worker(parent: int, initializer=None, interval: float = 1.0) -> None:
     not exist); then ``initializer()``."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     for sig in TERMINATING:
-        try:
+        with contextlib.suppress(OSError, ValueError):
             signal.signal(sig, signal.SIG_DFL)
-        except (OSError, ValueError):
-            pass
     if sys.platform.startswith("linux"):
-        try:
+        with contextlib.suppress(OSError, AttributeError):
             ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
-        except (OSError, AttributeError):
-            pass
     if os.getppid() != parent:               # the parent died before the prctl above
         os._exit(1)
 
@@ -164,10 +160,8 @@ def stop_pool(pool: cf.ProcessPoolExecutor, abort: bool = False) -> None:
     with interrupts_deferred():
         if abort:
             for p in list((getattr(pool, "_processes", None) or {}).values()):
-                try:
+                with contextlib.suppress(OSError, ValueError, AttributeError):   # already gone, or closed
                     p.kill()
-                except (OSError, ValueError, AttributeError):   # already gone, or closed
-                    pass
         pool.shutdown(wait=True, cancel_futures=True)
 
 

@@ -42,19 +42,9 @@ class TeaResult:
     others: list = field(default_factory=list)
 
 
-def compute_tea(config) -> TeaResult:
-    """TEA of a config's own inertia and bias (physical branch).
-
-    Parameters
-    ----------
-    config : acmm.io.config.Config or path-like or str
-        The config, or a config file / packaged name to load.
-
-    Returns
-    -------
-    TeaResult
-        The config and its TEA.
-    """
+def _compute_tea(config) -> TeaResult:
+    """The :class:`TeaResult` of a config (or config file / packaged name): TEA of its own inertia
+    and bias (physical branch)."""
     cfg = as_config(config)
     inertia = cfg.inertia.matrix()
     bias = tea_mod.resolve_bias(cfg.disturbance, inertia, cfg.orbit_rate)
@@ -80,7 +70,7 @@ def run_tea(config, all_roots: bool = False, *, out: Path) -> tuple[TeaResult, P
     tuple
         (:class:`TeaResult`, pathlib.Path of ``tea.h5``).
     """
-    result = compute_tea(config)
+    result = _compute_tea(config)
     cfg, t = result.config, result.tea
     inertia = cfg.inertia.matrix()
     if all_roots:
@@ -155,15 +145,14 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     tuple
         (:class:`LinearizeResult`, pathlib.Path of ``linearize.h5``).
     """
-    tr = compute_tea(config)
+    tr = _compute_tea(config)
     cfg = tr.config
     model = lin.design_point(cfg.inertia.matrix(), tr.tea.theta, cfg.orbit_rate,
                              model=cfg.design.model, drf_mode=cfg.design.drf_mode)
     ctrb = ctrb_mod.controllability(model)
-    result = LinearizeResult(cfg, tr.tea, model, ctrb)
-    names = list(model.state_names)
     eig = np.linalg.eigvals(model.A)
-    result.eigenvalues = eig
+    result = LinearizeResult(cfg, tr.tea, model, ctrb, eig)
+    names = list(model.state_names)
     items = {
         "A": Dataset(model.A, UNIT_A, "state matrix of eq 4.46 (x' = A x + B u + G w)",
                      names, dims=("state", "state_col")),

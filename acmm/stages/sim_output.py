@@ -16,7 +16,7 @@ import numpy as np
 from acmm.model import kinematics as kin
 from acmm.simulate import scenario as scen
 from acmm.stages.common import UNIT_K, UNIT_STATE, stored_config, stored_in
-from acmm_qpp.results import Dataset
+from acmm_qpp.results import Dataset, h5_text
 import h5py
 
 AXES = ["roll", "pitch", "yaw"]
@@ -132,7 +132,7 @@ def sim_figures_from_file(path, out_dir) -> list:
         peak = stored_in(f, "levels/peak_momentum", "ft*lbf*s")
         inertia = stored_in(f, "levels/inertia", "slug*ft^2")
     cfg = stored_config(attrs)
-    verdict = attrs["verdict"].decode() if isinstance(attrs["verdict"], bytes) else str(attrs["verdict"])
+    verdict = h5_text(attrs["verdict"])
     orbit = 2 * np.pi / cfg.orbit_rate
     # the levels level_statistics reported: those with a steady error (NaN: not reached)
     stats = [{"level": k, "start_orbit": start[k] / orbit, "theta2_deg": float(np.degrees(tea_est[k, 1])),

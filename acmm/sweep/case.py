@@ -173,7 +173,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
             # levels are the perturbed design points
             sc = dataclasses.replace(sc, harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
         else:
-            true, tea_note = perturbed_tea(sc0, inertia, bias)
+            true, tea_note = _perturbed_tea(sc0, inertia, bias)
             if spec.tea_estimate == "true":
                 est = true
                 rows = table.level_rows()
@@ -236,42 +236,16 @@ def _metrics(row: dict, r, sc, true: np.ndarray, n: float, spec) -> dict:
     return row
 
 
-def perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarray, str]:
-    """The perturbed plant's TEA per level (rad): the equilibrium connected to the design's.
-
-    Each level's plant moves from the nominal one (its design TEA ``sc0.theta_est[k]``) to the
-    perturbed one, and the station follows the equilibrium continuously connected to the design
-    TEA (:func:`acmm.model.tea.solve_tea_connected`, compiled, ~0.1–1 ms).  Only where that
-    branch folds between the two plants (no equilibrium near the design TEA survives the
-    perturbation) is the case started at the root continued from LVLH
-    (:func:`acmm.model.tea.solve_tea_fast`, the physical branch of :mod:`acmm.model.tea`, whose
-    errors it raises), and the returned note says so.  A case's TEA depends only on its plant and
-    the nominal design, never on the cases run before, so its row is the same whatever executor,
-    chunking or order runs it.
-
-    Parameters
-    ----------
-    sc0 : acmm.simulate.kernel.Scenario
-        The nominal scenario: orbit rate ``n`` (rad/s), and per level the nominal ``inertia``
-        (slug·ft²), ``bias`` (ft·lbf) and design TEA ``theta_est`` (rad).
-    inertia : (L, 3, 3) array
-        Perturbed inertia per level, slug·ft².
-    bias : (L, 3) array
-        Perturbed bias torque per level, ft·lbf.
-
-    Returns
-    -------
-    theta : (L, 3) array
-        TEA (roll, pitch, yaw) per level, rad.
-    note : str
-        ``""``, or which levels' design branch folded (appended to the case's reason).
-
-    Raises
-    ------
-    NoEquilibriumError, ConvergenceError
-        A level whose design branch folds has no root continued from LVLH either (the
-        NoEquilibriumError names the fold and the level first).
-    """
+def _perturbed_tea(sc0, inertia: np.ndarray, bias: np.ndarray) -> tuple[np.ndarray, str]:
+    """The perturbed plant's TEA per level ((L, 3), rad) and a note (``""``, or which levels' design
+    branch folded, appended to the case's reason), from the nominal scenario ``sc0`` (``n`` rad/s; per
+    level ``inertia`` slug·ft², ``bias`` ft·lbf, design TEA ``theta_est`` rad) and the perturbed
+    ``inertia`` (L, 3, 3) slug·ft² and ``bias`` (L, 3) ft·lbf: the equilibrium continuously connected
+    to the design TEA (:func:`acmm.model.tea.solve_tea_connected`, compiled, ~0.1–1 ms); only where
+    that branch folds between the two plants, the root continued from LVLH
+    (:func:`acmm.model.tea.solve_tea_fast`, whose NoEquilibriumError or ConvergenceError it raises,
+    naming the fold first).  It depends only on the case's plant and the nominal design, never on
+    the cases run before, so a row is the same whatever executor, chunking or order runs it."""
     theta, folded = [], []    # a fallback's NoEquilibriumError says the design branch folded first
     for k in range(inertia.shape[0]):
         tea = solve_tea_connected(sc0.theta_est[k], sc0.inertia[k], sc0.bias[k], inertia[k], sc0.n, bias[k])

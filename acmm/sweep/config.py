@@ -50,7 +50,7 @@ import difflib
 
 #: Version of how a ``design: fixed`` case is computed, part of :meth:`Sweep.results_key` so that
 #: ``--resume`` never mixes rows of two versions: 2 (2026-11-30): a case starts at the equilibrium
-#: connected to the design TEA (:func:`acmm.sweep.case.perturbed_tea`); 1: at the root continued
+#: connected to the design TEA (:func:`acmm.sweep.case._perturbed_tea`); 1: at the root continued
 #: from LVLH.  (A redesigned case is designed about its own plant's TEA, as before.)
 CASE_MODEL = 2
 
@@ -266,7 +266,6 @@ def _parse_resolved(data: dict, source: str) -> Sweep:
     if not isinstance(bases_data, dict) or not bases_data:
         raise ConfigError(f"{source}: bases: missing or empty (the resolved base configs, by name)")
     file_data = data["sweep_file"]
-    require_mapping(file_data, f"{source}: sweep_file")
     sf = validate_model(SweepFile, file_data, f"{source}: sweep_file")
     bases = tuple(Base(str(label), parse_config(cfg, source=f"{source}: bases.{label}"), source)
                   for label, cfg in bases_data.items())

@@ -3,7 +3,7 @@
 
 A journal line that is valid JSON but not a record the sweep wrote (edited, or from another
 version) would otherwise fail later, deep in the table builder, with a traceback.
-:func:`record_problem` names the first missing or mistyped field instead.
+:func:`_record_problem` names the first missing or mistyped field instead.
 """
 from __future__ import annotations
 
@@ -68,21 +68,9 @@ def _shaped(kind: str, v, shape) -> bool:
             and all(_shaped(kind, x, shape[1:]) for x in v))
 
 
-def record_problem(rec: object, bases: set | None = None) -> str | None:
-    """What is wrong with a journal record, or None when it is one the sweep wrote.
-
-    Parameters
-    ----------
-    rec : object
-        A parsed journal line (after the header).
-    bases : set of str, optional
-        The sweep's base labels (a record of another base is wrong).
-
-    Returns
-    -------
-    str or None
-        The first problem (a missing or mistyped field, an unknown verdict, kind or base).
-    """
+def _record_problem(rec: object, bases: set | None = None) -> str | None:
+    """The first problem of a parsed journal record ``rec`` (a missing or mistyped field, an unknown
+    verdict, kind or base not in ``bases``), or None when it is one the sweep wrote."""
     if not isinstance(rec, dict):
         return "not a record (a JSON object)"
     kind = rec.get("kind")
@@ -132,7 +120,7 @@ def read_journal(path: Path, key: str, bases: set | None = None) -> list[dict]:
     ------
     ConfigError
         The journal belongs to a different sweep configuration, or a line (other than a torn
-        last one) is not a record the sweep wrote (:func:`record_problem`).
+        last one) is not a record the sweep wrote (:func:`_record_problem`).
     """
     records = []
     try:            # a FIFO or a device there (a symlink to /dev/zero) would hang or fill memory
@@ -156,7 +144,7 @@ def read_journal(path: Path, key: str, bases: set | None = None) -> list[dict]:
                                   "(or by a version of acmm that computed cases differently); "
                                   "run without --resume to start over")
             continue
-        why = record_problem(rec, bases)
+        why = _record_problem(rec, bases)
         if why is not None:
             raise ConfigError(f"{path}: corrupt journal line {k + 1} ({why}); delete it or run without --resume")
         records.append(rec)
@@ -211,10 +199,8 @@ class Journal:
                     os.fsync(f.fileno())
                 os.replace(tmp, self.path)       # only under the run lock: no sweep is using it
             except BaseException:
-                try:
+                with contextlib.suppress(OSError):
                     os.unlink(tmp)
-                except OSError:
-                    pass
                 raise
         else:
             # drop a torn final line before appending
@@ -252,7 +238,5 @@ class Journal:
             if not self._f.closed:
                 self._f.flush()
                 os.fsync(self._f.fileno())
-        try:
+        with contextlib.suppress(OSError):          # every record was already flushed and fsynced
             self._f.close()
-        except OSError:          # every record was already flushed and fsynced
-            pass

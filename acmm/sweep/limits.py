@@ -40,20 +40,9 @@ def _physical_fraction(sweep, n: int) -> tuple[int, int]:
     return int(ok.sum()), n
 
 
-def margin_evaluations(margin) -> int:
-    """Most simulations of the two margin searches of one base (:func:`acmm.sweep.case.margin_search`):
-    the nominal, the scan and the bisection to ``rel_tol``, each way; 0 without a search.
-
-    Parameters
-    ----------
-    margin : acmm.sweep.spec.Margin or None
-        The search settings.
-
-    Returns
-    -------
-    int
-        Upper bound of the simulations.
-    """
+def _margin_evaluations(margin) -> int:
+    """Most simulations of the two margin searches of one base (:func:`acmm.sweep.case.margin_search`
+    settings ``margin``): the nominal, the scan and the bisection to ``rel_tol``, each way; 0 without a search."""
     if margin is None:
         return 0
     total = 0
@@ -105,7 +94,7 @@ def check_sweep_work(sweep, source: str = "sweep config") -> None:
         raise ConfigError(f"{source}: sweep: {cases:.3g} cases over {nb} base(s); use fewer grid values or "
                           f"n_runs ({how_to_raise('SWEEP_CASES', LIMITS)})")
     _check_samples(sweep, source)
-    runs = cases // nb + margin_evaluations(spec.margin)        # per base
+    runs = cases // nb + _margin_evaluations(spec.margin)        # per base
     orbits = sum(spec.orbits if spec.orbits is not None else b.config.simulation.orbits for b in sweep.bases)
     total_orbits = orbits * runs
     if total_orbits > limit("SWEEP_ORBITS", LIMITS):

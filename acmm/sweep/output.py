@@ -8,7 +8,7 @@ import numpy as np
 
 from acmm_qpp.errors import AcmmError, FigureError
 from acmm_qpp.outputs import write_text
-from acmm_qpp.results import Dataset, write_h5
+from acmm_qpp.results import Dataset, h5_text, write_h5
 from acmm.io.dimensions import with_coordinates
 from acmm.sweep.cases import AXES, VERDICTS
 from acmm.sweep.spec import MAP_EXTRAS, PARAMETERS, swept_parameters
@@ -63,7 +63,7 @@ def _table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
     def col(k, shape=()):
         return np.array([r[k] for r in rows], float).reshape((N,) + shape)
 
-    out = {
+    return {
         "base": np.array([labels.index(r["base"]) for r in rows], np.int64),
         "index": np.array([r["index"] for r in rows], np.int64),
         "case": np.array([labels.index(r["base"]) * sweep.spec.n_cases() + r["index"] for r in rows], np.int64),
@@ -85,7 +85,6 @@ def _table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
         "bias": col("bias", (3,)),
         "n_draws": np.array([r["n_draws"] for r in rows], np.int64),
     }
-    return out
 
 
 def _nominal_tea_deg(sweep: Sweep) -> dict:
@@ -358,14 +357,10 @@ def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
         One call drawing both figures (none when the file holds no case), for
         :func:`acmm_qpp.results.draw_figures`.
     """
-
-    def text(v):
-        return v.decode() if isinstance(v, bytes) else str(v)
-
     with h5py.File(path, "r") as f:
-        sweep = parse_sweep(yaml.safe_load(text(f.attrs["config"])), source=str(path))
+        sweep = parse_sweep(yaml.safe_load(h5_text(f.attrs["config"])), source=str(path))
         labels = [b.label for b in sweep.bases]
-        verdict = [text(v) for v in f["verdict"][()]]
+        verdict = [h5_text(v) for v in f["verdict"][()]]
         a = {"base": np.asarray(f["base"][()], np.int64), "verdict": verdict,
              "stable": np.array([v == "bounded" for v in verdict], bool),
              "parameters": {k: stored_in(f, f"parameters/{k}", PARAMETERS[k].unit) for k in f["parameters"]

@@ -10,6 +10,7 @@ per cent at any number of workers and the last chunks leave no worker idle (docs
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import ctypes
 import dataclasses
 import functools
@@ -103,10 +104,8 @@ def _remove_earlier(run_dir: Path, before: dict | None = None) -> None:
     one in ``before`` (:func:`acmm_qpp.outputs.owned_files`: not written again by this run)."""
     for name, ident in owned_files(run_dir, OUTPUTS).items():
         if before is None or before.get(name) == ident:
-            try:
+            with contextlib.suppress(OSError):
                 (run_dir / name).unlink()
-            except OSError:
-                pass
 
 
 def _in_run_folder(fn):
@@ -460,10 +459,8 @@ def _task_arguments(executor, contexts: dict) -> dict:
         return {k: (v,) for k, v in contexts.items()}
     remote = contexts
     if contexts:
-        try:
+        with contextlib.suppress(AttributeError, TypeError, ValueError):
             remote = {k: client.scatter(v, broadcast=True, hash=False) for k, v in contexts.items()}
-        except (AttributeError, TypeError, ValueError):
-            pass
     return {k: (v, code_identity()) for k, v in remote.items()}
 
 

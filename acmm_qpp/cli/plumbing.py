@@ -5,6 +5,7 @@ sections), an interrupt that Python wrapped in another exception, click's usage 
 numerical warnings of a run and a closed standard output each become one line."""
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import re
@@ -63,11 +64,9 @@ EXIT_PIPE_CLOSED = 141
 
 def quiet_stdout() -> None:
     """Point stdout at /dev/null, so that flushing it at exit raises nothing more."""
-    try:
+    with contextlib.suppress(OSError, ValueError):
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
-    except (OSError, ValueError):
-        pass
 
 
 def user_errors(fn, notes=None):
@@ -467,8 +466,6 @@ def run_app(app) -> None:
     except SystemExit:
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
-                try:
+                with contextlib.suppress(OSError, ValueError):
                     signal.signal(sig, signal.SIG_IGN)
-                except (OSError, ValueError):
-                    pass
         raise

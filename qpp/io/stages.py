@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from acmm_qpp.outputs import stage
-from acmm_qpp.results import Dataset, draw_figures, redraw_stored, write_h5
+from acmm_qpp.results import Dataset, draw_figures, h5_text, redraw_stored, write_h5
 from qpp.io.config import ExpressionNonlinearity, PolarArmNonlinearity, QppConfig, load_config, parse_config
 from qpp.design.certificate import DesignResult
 from qpp.design.procedure import design
@@ -370,14 +370,9 @@ def _load_stored_design(path: Path, config_text: str) -> StoredDesign | None:
             if a.get("gains_sha256") != _gains_sha256(K1, Kc, H):
                 return None
             return StoredDesign(K1, Kc, H, bool(a["certified"]), str(a["verdict"]), Path(path),
-                                _text(a.get("horizon_note", "")))
+                                h5_text(a.get("horizon_note", "")))
     except (OSError, KeyError, ValueError):
         return None
-
-
-def _text(v) -> str:
-    """An HDF5 attribute as text (h5py may give bytes)."""
-    return v.decode() if isinstance(v, bytes) else str(v)
 
 
 def _gains_sha256(K1, Kc, H) -> str:
@@ -477,11 +472,11 @@ def figure_calls_from_file(path: Path, out_dir: Path) -> list:
         The file is not a qpp result.
     """
     with h5py.File(path, "r") as f:
-        stage = _text(f.attrs.get("stage", ""))
+        stage = h5_text(f.attrs.get("stage", ""))
         if stage not in ("qpp design", "qpp simulate"):
             raise ConfigError(f"{path}: not a qpp result file (stage {stage or 'unknown'!r}; qpp plot draws "
                               "qpp_design.h5 and qpp_sim.h5)")
-        cfg = parse_config(yaml.safe_load(_text(f.attrs["config"])), source=f"{path} (stored config)")
+        cfg = parse_config(yaml.safe_load(h5_text(f.attrs["config"])), source=f"{path} (stored config)")
         if stage == "qpp design":
             c = f["circle"]
             sector = np.asarray(f["sector"][()], float)

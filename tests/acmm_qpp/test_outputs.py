@@ -12,7 +12,7 @@ import sys
 import pytest
 
 from acmm_qpp.errors import FigureError, OutputError
-from acmm_qpp.outputs import remove_leftovers, run_lock, stage, staged_outputs, write_text
+from acmm_qpp.outputs import remove_leftovers, run_lock, stage, _staged_outputs, write_text
 
 DESIGN = ("design.h5", "design_*.png")
 SIMULATE = ("sim.h5", "sim_*.png")
@@ -40,7 +40,7 @@ def _contents(run):
 def test_a_stage_writes_in_its_staging_folder_and_moves_its_files_into_place(tmp_path):
     run = tmp_path / "run"
     _earlier_run(run)
-    with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+    with _staged_outputs(run, DESIGN, config_text="name: new\n") as out:
         assert out.parent == run and out.name.startswith(f".staging-{os.getpid()}-")
         write_text(out / "design.h5", "new results")
         write_text(out / "design_poles.png", "new figure")
@@ -55,7 +55,7 @@ def test_a_stage_failing_after_writing_leaves_the_folder_as_it_was(tmp_path):
     _earlier_run(run)
     before = _contents(run)
     with pytest.raises(_Boom):
-        with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+        with _staged_outputs(run, DESIGN, config_text="name: new\n") as out:
             write_text(out / "design.h5", "new results")
             write_text(out / "design_poles.png", "new figure")
             raise _Boom                                         # e.g. the next figure cannot be written
@@ -73,7 +73,7 @@ def test_ctrl_c_while_the_figures_are_drawn_leaves_the_folder_as_it_was(tmp_path
         raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+        with _staged_outputs(run, DESIGN, config_text="name: new\n") as out:
             write_text(out / "design.h5", "new results")
             draw_figures([lambda: write_text(out / "design_poles.png", "a new figure"), interrupted_figure])
     assert _contents(run) == before
@@ -87,7 +87,7 @@ def test_a_directory_in_the_place_of_a_result_or_the_config_moves_nothing(tmp_pa
     (run / blocked).mkdir()
     before = _contents(run)
     with pytest.raises(OutputError, match="a directory of that name is in the way"):
-        with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+        with _staged_outputs(run, DESIGN, config_text="name: new\n") as out:
             write_text(out / "design.h5", "new results")
     assert _contents(run) == before
 
@@ -96,7 +96,7 @@ def test_only_a_figure_failing_keeps_the_results_with_their_config(tmp_path):
     run = tmp_path / "run"
     _earlier_run(run)
     with pytest.raises(FigureError):
-        with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+        with _staged_outputs(run, DESIGN, config_text="name: new\n") as out:
             write_text(out / "design.h5", "new results")
             raise FigureError("cannot write design_poles.png")   # raised when the figures are joined
     # the results and this run's config.yaml; the earlier run's figure is removed as on success
@@ -108,7 +108,7 @@ def test_a_directory_in_the_place_of_a_figure_keeps_the_results_with_their_confi
     _earlier_run(run)
     (run / "design_poles.png").mkdir()
     with pytest.raises(FigureError, match="design_poles.png: a directory of that name is in the way"):
-        with staged_outputs(run, DESIGN, config_text="name: new\n") as out:
+        with _staged_outputs(run, DESIGN, config_text="name: new\n") as out:
             write_text(out / "design.h5", "new results")
             write_text(out / "design_poles.png", "new figure")
     assert _contents(run) == {"config.yaml": b"name: new\n", "design.h5": b"new results",
@@ -123,9 +123,9 @@ def test_completed_nested_stage_and_other_run_folders_are_kept(tmp_path):
     write_text(run / "config.yaml", "name: old\n")
     write_text(other / "sim.h5", "another run's")
     with pytest.raises(_Boom):
-        with staged_outputs(run, SIMULATE, config_text="name: new\n") as sim_out:
+        with _staged_outputs(run, SIMULATE, config_text="name: new\n") as sim_out:
             write_text(sim_out / "sim_axes.png", "drawn before the design")
-            with staged_outputs(run, DESIGN, config_text="name: new\n") as design_out:
+            with _staged_outputs(run, DESIGN, config_text="name: new\n") as design_out:
                 write_text(design_out / "design.h5", "design results")
             write_text(sim_out / "sim.h5", "new simulation")
             raise _Boom
@@ -140,9 +140,9 @@ def test_a_nested_stage_figure_failing_does_not_finish_the_outer_stage(tmp_path)
     run.mkdir()
     write_text(run / "sim.h5", "an earlier run's simulation")
     with pytest.raises(FigureError):
-        with staged_outputs(run, SIMULATE, config_text="name: sim\n") as sim_out:
+        with _staged_outputs(run, SIMULATE, config_text="name: sim\n") as sim_out:
             write_text(sim_out / "sim_axes.png", "drawn before the design")
-            with staged_outputs(run, DESIGN, config_text="name: sim\n") as design_out:
+            with _staged_outputs(run, DESIGN, config_text="name: sim\n") as design_out:
                 write_text(design_out / "design.h5", "design results")
                 raise FigureError("cannot write design_poles.png")
     assert _contents(run) == {"config.yaml": b"name: sim\n", "design.h5": b"design results"}
@@ -151,14 +151,14 @@ def test_a_nested_stage_figure_failing_does_not_finish_the_outer_stage(tmp_path)
 def test_a_nested_stage_interrupted_keeps_the_earlier_run_whole(tmp_path):
     run = tmp_path / "run"
     run.mkdir()
-    with staged_outputs(run, SIMULATE, config_text="cfg: A\n") as sim_out:
-        with staged_outputs(run, DESIGN, config_text="cfg: A\n") as design_out:
+    with _staged_outputs(run, SIMULATE, config_text="cfg: A\n") as sim_out:
+        with _staged_outputs(run, DESIGN, config_text="cfg: A\n") as design_out:
             write_text(design_out / "design.h5", "design A")
         write_text(sim_out / "sim.h5", "sim A")
     before = _contents(run)
     with pytest.raises(KeyboardInterrupt):
-        with staged_outputs(run, SIMULATE, config_text="cfg: B\n"):
-            with staged_outputs(run, DESIGN, config_text="cfg: B\n") as design_out:
+        with _staged_outputs(run, SIMULATE, config_text="cfg: B\n"):
+            with _staged_outputs(run, DESIGN, config_text="cfg: B\n") as design_out:
                 write_text(design_out / "design.h5", "design B")
                 raise KeyboardInterrupt
     assert _contents(run) == before
@@ -188,9 +188,9 @@ def test_what_a_killed_run_left_is_removed_by_the_next_run(tmp_path):
     lock file (the kernel released the lock); the next run of that folder removes them."""
     run = tmp_path / "run"
     _earlier_run(run)
-    code = ("import os, sys\nfrom acmm_qpp.outputs import run_lock, staged_outputs\n"
+    code = ("import os, sys\nfrom acmm_qpp.outputs import run_lock, _staged_outputs\n"
             "with run_lock(sys.argv[1]):\n"
-            "    with staged_outputs(sys.argv[1], ('design.h5',), config_text='name: killed') as out:\n"
+            "    with _staged_outputs(sys.argv[1], ('design.h5',), config_text='name: killed') as out:\n"
             "        (out / 'design.h5').write_text('half')\n"
             "        (out.parent / '.design_gains.png.x7k2.tmp').write_text('half a PNG')\n"
             "        os.kill(os.getpid(), 9)\n")

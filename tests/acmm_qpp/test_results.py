@@ -14,7 +14,7 @@ import yaml
 
 import acmm
 from acmm.io.config import load_config, parse_config
-from acmm_qpp.results import Dataset, read_h5, write_h5
+from acmm_qpp.results import Dataset, h5_text, read_h5, write_h5
 from acmm.plots import simulation as sim_plots
 
 from tests.conftest import CONFIGS
@@ -346,3 +346,15 @@ def test_write_h5_writes_the_items_as_given(tmp_path):
     items = {"torque": Dataset(2.0, "ft*lbf"), "angle": Dataset(180.0, "deg")}
     plain = read_h5(write_h5(tmp_path / "plain.h5", items, "output: {units: SI}\n"))
     assert "unit_system" not in plain["attrs"] and plain["torque"] == 2.0 and plain["angle"] == 180.0
+
+
+def test_h5_text_reads_every_form_a_string_attribute_takes(tmp_path):
+    """bytes (a fixed-length string), str, and numpy scalars of either, as h5py returns them."""
+    with h5py.File(tmp_path / "t.h5", "w") as f:
+        f.attrs["fixed"] = np.bytes_(b"mb3")
+        f.attrs["variable"] = "ac"
+        f["names"] = np.array([b"roll", b"pitch"], dtype="S5")
+    with h5py.File(tmp_path / "t.h5", "r") as f:
+        assert h5_text(f.attrs["fixed"]) == "mb3" and h5_text(f.attrs["variable"]) == "ac"
+        assert [h5_text(v) for v in f["names"][()]] == ["roll", "pitch"]
+    assert h5_text(b"mb3") == "mb3" and h5_text("ac") == "ac" and h5_text(np.str_("x")) == "x"

@@ -5,8 +5,9 @@ from functools import partial
 
 import numpy as np
 
+from acmm_qpp.results import h5_text
 from acmm.report.context import SectionWriter
-from acmm.report.numbers import decoded, fmt_value
+from acmm.report.numbers import fmt_value
 from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
 from acmm.report.ledger import matches_printed, status_text
 from acmm.report.gather import qpp_scenarios
@@ -81,7 +82,7 @@ def _consistent_verdict(attrs) -> str:
     with its stored ``scope`` (what is proved and what is assumed, the clause the verdict of
     ``qpp design`` ends with), else the premises that fail."""
     if int(attrs["certified"]):
-        scope = decoded(attrs["scope"]) if "scope" in attrs else ""
+        scope = h5_text(attrs["scope"]) if "scope" in attrs else ""
         return "certified" + (f"; {scope}" if scope else "")
     failed = [k[len("premise["):-1] for k in attrs if k.startswith("premise[") and not int(attrs[k])]
     return "not certified" + (f": {', '.join(failed)} fail" if failed else "")

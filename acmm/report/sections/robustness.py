@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from acmm_qpp.results import h5_text
 from acmm.report.context import SectionWriter
-from acmm.report.numbers import decoded, fmt_value
+from acmm.report.numbers import fmt_value
 from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
 from acmm.report.ledger import STATUS_EXPLAINED, PrintedNumber
 
@@ -26,8 +27,8 @@ def case_column(sweep: dict, label: str, key: str) -> np.ndarray:
     str array
         Its cases' texts, in case order.
     """
-    names = [decoded(x) for x in np.atleast_1d(sweep["base_names"])]
-    column = np.array([decoded(x) for x in np.atleast_1d(sweep[key])])
+    names = [h5_text(x) for x in np.atleast_1d(sweep["base_names"])]
+    column = np.array([h5_text(x) for x in np.atleast_1d(sweep[key])])
     return column[np.atleast_1d(sweep["base"]) == names.index(label)]
 
 
@@ -65,8 +66,8 @@ def _build(ctx: SectionWriter) -> None:
                                         STATUS_EXPLAINED, "not evaluated in this run: " + ctx.g.robustness_note))
         return
     d = r["data"]
-    names = [decoded(x) for x in np.atleast_1d(d["base_names"])]
-    verdict = np.array([decoded(x) for x in np.atleast_1d(d["verdict"])])
+    names = [h5_text(x) for x in np.atleast_1d(d["base_names"])]
+    verdict = np.array([h5_text(x) for x in np.atleast_1d(d["verdict"])])
     base = np.atleast_1d(d["base"])
     peak = np.degrees(np.atleast_2d(d["peak_attitude_error"]))   # stored in rad
     params = d["parameters"]

@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from acmm_qpp.results import h5_text
 from acmm.design.dwell import NOT_COVERED
 from acmm.design.regional_lmi import control_energy
 from acmm.model.state_scaling import torque_scale
 from acmm.report.constants import AXES, STAIRCASES
 from acmm.report.context import SectionWriter
-from acmm.report.numbers import decoded
 from acmm.report.figure_style import COLORS, fixed_layout, pyplot, save
 from acmm.design.schedule import schedule_gain
 from acmm.model import linearize as lin
@@ -34,7 +34,7 @@ def _summary(ctx: SectionWriter) -> None:
                "the report names beside its order-2 polynomial for claim 2, ch. 6)")
     else:
         how = (f"then an order-{order} polynomial schedule in θ2* (the report uses order 2), fitted by "
-               f"{decoded(sc.get('fit_method', b'least_squares'))}")
+               f"{h5_text(sc.get('fit_method', b'least_squares'))}")
     lmi = all("lmi" in p for p in pts)
     route = ("regional pole placement by LMIs (every pole certified in the sector by a Lyapunov matrix, "
              "minimal H2 energy bound, coordinates pre-conditioned by the sector LQR; guide: 'The regional "
@@ -107,7 +107,7 @@ def _routes(ctx: SectionWriter) -> None:
         tau = f"{float(g['tau_star']):.2f} orbit" if "tau_star" in g and np.isfinite(float(g["tau_star"])) else "—"
         form = "table" if d["attrs"].get("schedule_form") == "table" else {
             "shifted_lqr": "quadratic converged on the path"}.get(
-            decoded(d["schedule"].get("fit_method", b"least_squares")), "quadratic, least squares")
+            h5_text(d["schedule"].get("fit_method", b"least_squares")), "quadratic, least squares")
         verdict = sim["attrs"].get("verdict", "")
         peak = (f"{np.max(sim['levels']['peak_momentum']):.0f}" if verdict != "diverged" else
                 f"diverged at orbit {float(sim['attrs']['stop_time_orbits']):.1f}")
@@ -233,7 +233,7 @@ def _form_name(design: dict) -> str:
     sc = design["schedule"]
     if design["attrs"].get("schedule_form", "polynomial") == "table":
         return f"the table look-up (K linear in θ2* between its {len(design['tea'])} nodes)"
-    how = {"shifted_lqr": ", converged on the path"}.get(decoded(sc.get("fit_method", b"least_squares")), "")
+    how = {"shifted_lqr": ", converged on the path"}.get(h5_text(sc.get("fit_method", b"least_squares")), "")
     return f"the order-{sc['coef'].shape[0] - 1} polynomial{how}"
 
 
@@ -299,7 +299,7 @@ def _conditioning(ctx: SectionWriter, d, pts):
         lmi = all("lmi" in p for p in pts)
         rows = []
         for name, p in zip(d["names"], pts):
-            rows.append([decoded(name), f"{np.degrees(float(p['tea'][1])):.2f}",
+            rows.append([h5_text(name), f"{np.degrees(float(p['tea'][1])):.2f}",
                          f"{float(p['sector_margin']):+.3f}", f"{float(p['max_eig_condition']):.2e}",
                          f"{float(p['robustness_radius']):.1e}",
                          f"{float(p['robustness_radius_elementwise']):.1e}"]

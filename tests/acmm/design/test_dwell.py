@@ -19,7 +19,7 @@ from acmm.design.dwell import DECAY_FRACTION, DWELL_RESOLUTION, DwellProof, dwel
 from acmm.io.config import load_config
 from acmm.io.design_file import load_design_table
 from acmm.stages import certify as certify_module
-from acmm.stages.certify import compute_certificate, level_closed_loops, stored_proof
+from acmm.stages.certify import compute_certificate, _level_closed_loops, _stored_proof
 from acmm.stages.design import run_design
 
 from tests.conftest import LQR_ROUTE
@@ -138,7 +138,7 @@ def test_the_transient_bound_holds_on_the_exact_linear_response(staircase_h5):
     cfg, g, table = staircase_h5
     d = g["scales"]
     Acl, P, jumps, dwell = g["closed_loop"], g["lyapunov"], g["jump"], g["dwell"] * 2 * np.pi / cfg.orbit_rate
-    _, gains, *_ = level_closed_loops(cfg, table)
+    _, gains, *_ = _level_closed_loops(cfg, table)
     x = np.zeros(24)
     for k in range(12):
         if k:
@@ -276,7 +276,7 @@ def test_a_proof_is_taken_for_a_new_design_only_from_the_same_program_on_the_sam
     to a FIFO, a matrix of another shape (not read)."""
     r, written = staircase_lqr_h5
     cfg = load_config("staircase", [*LQR_ROUTE])
-    Acl = level_closed_loops(cfg, r.table)[0]
+    Acl = _level_closed_loops(cfg, r.table)[0]
     orbit = 2 * np.pi / cfg.orbit_rate
     path = tmp_path / "design.h5"
 
@@ -285,25 +285,25 @@ def test_a_proof_is_taken_for_a_new_design_only_from_the_same_program_on_the_sam
         _as_clean_checkout(path, monkeypatch, commit)
         return path
 
-    assert stored_proof(fresh(), orbit, Acl, exact=True) is not None
+    assert _stored_proof(fresh(), orbit, Acl, exact=True) is not None
     nudged = Acl.copy()
     nudged[3, 0, 3] = np.nextafter(nudged[3, 0, 3], np.inf)
-    assert stored_proof(path, orbit, nudged, exact=True) is None and stored_proof(path, orbit, nudged) is not None
-    assert stored_proof(path, orbit, Acl[1:], exact=True) is None and stored_proof(path, orbit, Acl[1:]) is None
-    assert stored_proof(tmp_path, orbit, Acl) is None and stored_proof(tmp_path / "none.h5", orbit, Acl) is None
-    assert stored_proof(fresh(commit="0" * 40), orbit, Acl, exact=True) is None
-    assert stored_proof(path, orbit, Acl) is not None
+    assert _stored_proof(path, orbit, nudged, exact=True) is None and _stored_proof(path, orbit, nudged) is not None
+    assert _stored_proof(path, orbit, Acl[1:], exact=True) is None and _stored_proof(path, orbit, Acl[1:]) is None
+    assert _stored_proof(tmp_path, orbit, Acl) is None and _stored_proof(tmp_path / "none.h5", orbit, Acl) is None
+    assert _stored_proof(fresh(commit="0" * 40), orbit, Acl, exact=True) is None
+    assert _stored_proof(path, orbit, Acl) is not None
     fresh()
     monkeypatch.setattr(certify_module, "git_dirty", lambda: "yes")      # this checkout changed since
-    assert stored_proof(path, orbit, Acl, exact=True) is None
+    assert _stored_proof(path, orbit, Acl, exact=True) is None
     monkeypatch.setattr(certify_module, "git_dirty", lambda: "unknown")     # no git: the version alone
     monkeypatch.setattr(certify_module, "git_commit", lambda: "unknown")
     with h5py.File(path, "r+") as f:
         f.attrs["git_dirty"] = f.attrs["git_commit"] = "unknown"
-    assert stored_proof(path, orbit, Acl, exact=True) is None and stored_proof(path, orbit, Acl) is not None
+    assert _stored_proof(path, orbit, Acl, exact=True) is None and _stored_proof(path, orbit, Acl) is not None
     with h5py.File(fresh(), "r+") as f:
         f.attrs["unit_system"] = "SI"
-    assert stored_proof(path, orbit, Acl, exact=True) is None and stored_proof(path, orbit, Acl) is not None
+    assert _stored_proof(path, orbit, Acl, exact=True) is None and _stored_proof(path, orbit, Acl) is not None
     fifo = tmp_path / "fifo"
     os.mkfifo(fifo)
     raw = tmp_path / "lyapunov.raw"
@@ -334,8 +334,8 @@ def test_a_proof_is_taken_for_a_new_design_only_from_the_same_program_on_the_sam
             else:
                 del g["lyapunov"]
                 g.create_dataset("lyapunov", shape=(10**6, 24, 24), dtype=float)      # 4.6 GB if read
-        assert stored_proof(path, orbit, Acl, exact=True) is None, edit
-        assert (stored_proof(path, orbit, Acl) is None) == (edit != "group"), edit   # certify reads no loops
+        assert _stored_proof(path, orbit, Acl, exact=True) is None, edit
+        assert (_stored_proof(path, orbit, Acl) is None) == (edit != "group"), edit   # certify reads no loops
 
 
 def test_a_stored_proof_is_reused_only_where_it_holds():

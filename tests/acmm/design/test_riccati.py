@@ -194,11 +194,11 @@ def _claim1_problem():
     state scaling: nearly uncontrollable (PBH ratio ~3e-8 at s = 0)."""
     from acmm.model import linearize as lin
     from acmm.api import load_config
-    from acmm.stages.runners import compute_tea
+    from acmm.stages.runners import _compute_tea
 
     cfg = load_config("mb3_decoupled")
     n = cfg.orbit_rate
-    inertia, tea = cfg.inertia.matrix(), compute_tea(cfg).tea
+    inertia, tea = cfg.inertia.matrix(), _compute_tea(cfg).tea
     m = lin.design_point(inertia, tea.theta, n, model="no_cross_inertia")
     return m.A + 0.5 * n * np.eye(m.A.shape[0]), m.B, np.zeros_like(m.A), 1e-4 * np.eye(3), m.scales
 

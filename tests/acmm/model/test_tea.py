@@ -16,7 +16,7 @@ from acmm.model import tea
 from acmm.io.config import Disturbance
 from acmm.io.config import load_config
 from acmm.model.tea import NoEquilibriumError
-from acmm.stages.runners import compute_tea
+from acmm.stages.runners import _compute_tea
 from acmm.design.schedule_points import point_specs
 from acmm.model.inertia import perturb_inertia, unphysical_reason
 from acmm_qpp.errors import AcmmError
@@ -68,7 +68,7 @@ def test_shipped_configs_carry_table1_inertia():
 
 @pytest.mark.parametrize("name", ["mb3", "ac"])
 def test_tea_reproduces_table1(name):
-    result = compute_tea(CONFIGS / f"{name}.yaml")
+    result = _compute_tea(CONFIGS / f"{name}.yaml")
     t = result.tea
     np.testing.assert_allclose(t.theta_deg, TABLE1[name], atol=0.01)
     assert t.residual < 1e-10
@@ -283,7 +283,7 @@ def test_bias_from_tea_gives_the_asked_attitude(asked):
     # from LVLH may end on another root (MB3 with pitch +20°: −19.4°), so the stage's TEA is the
     # asked one, and the design's first point is designed about it
     cfg = load_config(CONFIGS / "mb3.yaml", [f"disturbance.bias_from_tea=[{asked[0]},{asked[1]},{asked[2]}]"])
-    t = compute_tea(cfg).tea
+    t = _compute_tea(cfg).tea
     np.testing.assert_allclose(np.degrees(t.theta), asked, atol=1e-9)
     assert np.max(np.abs(residual_ref(t.theta, cfg.inertia.matrix(), N, t.bias))) < 1e-9
     from acmm.design.schedule import design_one

@@ -2,7 +2,7 @@
 generated blocks of README.md and the guide."""
 import pytest
 
-from acmm.report.numbers import decoded, fixed, fmt_value, markdown_table, sci, sig
+from acmm.report.numbers import fixed, fmt_value, markdown_table, sci, sig
 
 
 @pytest.mark.parametrize("x, digits, text", [(3986.2, 3, "3 990"), (6644.9, 3, "6 640"), (0.03812, 3, "0.0381"),
@@ -20,10 +20,9 @@ def test_scientific_and_fixed():
     assert fixed(-0.0001) == "0.000"
 
 
-def test_fmt_value_and_decoded():
+def test_fmt_value():
     assert fmt_value(None) == "—"
     assert fmt_value([1.0, 2.5], "{:.1f}") == "[1.0, 2.5]"
-    assert decoded(b"mb3") == "mb3" and decoded("ac") == "ac"
 
 
 def test_markdown_table_aligns_columns():

@@ -327,13 +327,13 @@ def test_lmi_points_are_designed_in_this_process_beside_other_threads(monkeypatc
     LMI points then go serial; inside a pool worker too; the report's route never uses the pool."""
     import threading
 
-    from acmm.stages.design import point_workers
+    from acmm.stages.design import _point_workers
 
-    assert point_workers(False, 12) == 1 and point_workers(True, 1) == 1
+    assert _point_workers(False, 12) == 1 and _point_workers(True, 1) == 1
     monkeypatch.setattr(threading, "active_count", lambda: 1)
-    assert point_workers(True, 12) == min(12, len(os.sched_getaffinity(0)))
+    assert _point_workers(True, 12) == min(12, len(os.sched_getaffinity(0)))
     monkeypatch.setattr(threading, "active_count", lambda: 2)
-    assert point_workers(True, 12) == 1
+    assert _point_workers(True, 12) == 1
 
 
 def _dies(x):

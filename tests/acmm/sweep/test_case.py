@@ -69,17 +69,17 @@ def test_a_redesign_that_fails_is_design_failed_and_an_impossible_scale_unphysic
 
 
 def test_the_margin_searches_stay_within_the_runs_counted_for_them(tmp_path):
-    """The work bound counts the margin searches (acmm.sweep.limits.margin_evaluations): the searches
+    """The work bound counts the margin searches (acmm.sweep.limits._margin_evaluations): the searches
     actually run no more simulations than that."""
     from acmm.sweep.case import margin_search
-    from acmm.sweep.limits import margin_evaluations
+    from acmm.sweep.limits import _margin_evaluations
 
     for margin in ({"low": 0.5, "high": 2.0, "scan_points": 3, "rel_tol": 0.01},
                    {"low": 0.05, "high": 50.0, "scan_points": 1, "rel_tol": 1e-4}):
         sw = load_sweep(_sweep_yaml(tmp_path, "mw", n_runs=1, margin=margin, orbits=0.3))
         ctx = prepare_base(sw.bases[0], sw.spec)
         done = sum(len(margin_search(ctx, d)["evaluated_s"]) for d in ("up", "down"))
-        assert 4 <= done <= margin_evaluations(sw.spec.margin)
+        assert 4 <= done <= _margin_evaluations(sw.spec.margin)
 
 
 def test_an_si_sweeps_no_equilibrium_reason_gives_the_bias_in_n_m(tmp_path):

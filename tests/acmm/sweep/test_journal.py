@@ -1,5 +1,5 @@
 """The sweep journal (acmm.sweep.journal): a journal that is no regular file is one line, not a
-hang; a full disk under it names it; what --resume accepts of a journal line (record_problem)."""
+hang; a full disk under it names it; what --resume accepts of a journal line (_record_problem)."""
 from __future__ import annotations
 
 import json
@@ -55,22 +55,22 @@ def test_a_full_disk_under_the_journal_names_the_journal(tmp_path):
 def test_journal_record_checks(tmp_path):
     # what --resume accepts: the records a sweep writes (NaN and ±inf included); a line that is
     # JSON but not such a record is named, field by field, instead of failing in the table builder
-    from acmm.sweep.journal import record_problem
+    from acmm.sweep.journal import _record_problem
 
     sw = load_sweep(_sweep_yaml(tmp_path, "rec", n_runs=2, orbits=0.2))
     run_sweep(sw, workers=1)
     lines = (sw.run_dir() / "sweep.journal").read_text().splitlines()[1:]
     recs = [json.loads(x) for x in lines]
-    assert recs and all(record_problem(r, {"ac"}) is None for r in recs)
+    assert recs and all(_record_problem(r, {"ac"}) is None for r in recs)
     case = next(r for r in recs if r["kind"] == "case")
-    assert record_problem({**case, "time_to_divergence": float("inf")}) is None
+    assert _record_problem({**case, "time_to_divergence": float("inf")}) is None
     for bad, words in (({**case, "verdict": 123}, "malformed 'verdict'"), ({**case, "verdict": "fine"}, "unknown verdict"),
                        ({k: v for k, v in case.items() if k != "bias"}, "without 'bias'"),
                        ({**case, "inertia": [[1, 2, 3]] * 2}, "malformed 'inertia'"),
                        ({**case, "index": True}, "malformed 'index'"), ({**case, "kind": "x"}, "unknown record kind"),
                        ([1, 2], "not a record")):
-        assert words in record_problem(bad, {"ac"})
-    assert "base 'ac'" in record_problem(case, {"mb3"})
+        assert words in _record_problem(bad, {"ac"})
+    assert "base 'ac'" in _record_problem(case, {"mb3"})
     # a record of a case the sweep does not have (a review: --resume gave 161 rows of 160)
     with open(sw.run_dir() / "sweep.journal", "a") as f:
         f.write(json.dumps({**case, "index": 99999}) + "\n")
