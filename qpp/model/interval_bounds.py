@@ -242,7 +242,7 @@ class Bound:
 
 
 def maximize(enclose, box, *, target: float | None = None, tol: float = 0.0, deadline: float,
-             max_boxes: int = 200_000, point=None) -> Bound:
+             max_boxes: int = 200_000) -> Bound:
     """Branch and bound for sup f over ``box``: prove ``sup f ≤ target``, or find a point above it.
 
     The box of largest upper bound is bisected along its widest side (relative to the initial
@@ -265,8 +265,6 @@ def maximize(enclose, box, *, target: float | None = None, tol: float = 0.0, dea
         :func:`time.monotonic` time at which the search stops (status ``"limit"``), s.
     max_boxes : int
         Largest number of boxes enclosed, dimensionless.
-    point : callable, optional
-        ``point(*intervals)`` evaluated at midpoints instead of ``enclose`` (default ``enclose``).
 
     Returns
     -------
@@ -274,7 +272,6 @@ def maximize(enclose, box, *, target: float | None = None, tol: float = 0.0, dea
         The outcome.
     """
     t0 = time.monotonic()
-    point = enclose if point is None else point
     width0 = [max(hi - lo, 0.0) for lo, hi in box]
     count = itertools.count()
     best = [-mpmath.inf, None]
@@ -282,7 +279,7 @@ def maximize(enclose, box, *, target: float | None = None, tol: float = 0.0, dea
     def evaluate(b):
         enc = enclose(*(iv.mpf([lo, hi]) for lo, hi in b))
         mid = tuple(0.5 * (lo + hi) for lo, hi in b)
-        val = point(*(iv.mpf(x) for x in mid))
+        val = enclose(*(iv.mpf(x) for x in mid))
         if val.a == val.a and val.a > best[0]:
             best[0], best[1] = val.a, mid
         up = enc.b if enc.b == enc.b else mpmath.inf

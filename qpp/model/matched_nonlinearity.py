@@ -13,20 +13,17 @@ from qpp.io.config import ExpressionNonlinearity, PolarArmNonlinearity, QppConfi
 from qpp.model.lure import LurePlant
 
 
-def make_f1(nl, plant: LurePlant, model=None):
-    """Matched nonlinearity f1(x, t, γ) ∈ R^m (f = B f1) of the config's kind and the nominal γ.
-
-    For ``kind: expression`` γ is the vector of parameter values and ``model`` the config's
-    :meth:`~qpp.io.config.QppConfig.expression_model`.
+def config_f1(cfg: QppConfig, plant: LurePlant):
+    """Matched nonlinearity f1(x, t, γ) ∈ R^m (f = B f1) of the config's kind and the nominal γ
+    (for ``kind: expression`` γ is the vector of parameter values, f1 that of the config's
+    :meth:`~qpp.io.config.QppConfig.expression_model`, compiled here).
 
     Parameters
     ----------
-    nl : ExpressionNonlinearity or SinusoidalNonlinearity or PolarArmNonlinearity
-        The config's nonlinearity section.
+    cfg : QppConfig
+        The validated config.
     plant : LurePlant
         The Lure plant and servo-compensator.
-    model : object, optional
-        The compiled expression model (``kind: expression`` only).
 
     Returns
     -------
@@ -39,10 +36,11 @@ def make_f1(nl, plant: LurePlant, model=None):
     Raises
     ------
     TypeError
-        ``nl`` is of no known kind.
+        The nonlinearity is of no known kind.
     """
+    nl = cfg.nonlinearity
     if isinstance(nl, ExpressionNonlinearity):
-        C = plant.C
+        C, model = plant.C, cfg.expression_model()
 
         def f1(x, t, g):
             return model.f1(C @ x, t, g)
@@ -65,25 +63,6 @@ def make_f1(nl, plant: LurePlant, model=None):
             return np.array([R / (mu + M) * x4 ** 2, -2.0 * R * x3 * x4 / I])
         return f1, nl.M_nominal
     raise TypeError(f"unknown nonlinearity {type(nl).__name__}")
-
-
-def config_f1(cfg: QppConfig, plant: LurePlant):
-    """:func:`make_f1` of a config (compiles the expression model when needed).
-
-    Parameters
-    ----------
-    cfg : QppConfig
-        The validated config.
-    plant : LurePlant
-        The Lure plant and servo-compensator.
-
-    Returns
-    -------
-    tuple
-        ``(f1, gamma_nominal)`` as returned by :func:`make_f1`.
-    """
-    nl = cfg.nonlinearity
-    return make_f1(nl, plant, cfg.expression_model() if isinstance(nl, ExpressionNonlinearity) else None)
 
 
 def scenario_gamma(cfg: QppConfig, scenario: Scenario):
