@@ -2,14 +2,13 @@
 
 Three kinds (CR-185644 ch. 13–14 and ch. 10.4): a user expression in the outputs
 (:mod:`qpp.model.nonlin`), the sinusoidally varying output feedback of ch. 13 and the polar
-manipulator arm of ch. 14 (eq 14.2).  Also the value of the uncertain parameter(s) γ of one
-scenario.
+manipulator arm of ch. 14 (eq 14.2).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from qpp.io.config import ExpressionNonlinearity, PolarArmNonlinearity, QppConfig, Scenario, SinusoidalNonlinearity
+from qpp.io.config import ExpressionNonlinearity, PolarArmNonlinearity, QppConfig, SinusoidalNonlinearity
 from qpp.model.lure import LurePlant
 
 
@@ -64,24 +63,3 @@ def config_f1(cfg: QppConfig, plant: LurePlant):
         return f1, nl.M_nominal
     raise TypeError(f"unknown nonlinearity {type(nl).__name__}")
 
-
-def scenario_gamma(cfg: QppConfig, scenario: Scenario):
-    """Value of the uncertain parameter(s) in a scenario: γ, M, or the parameter vector.
-
-    Parameters
-    ----------
-    cfg : QppConfig
-        The validated config.
-    scenario : Scenario
-        One scenario of the config.
-
-    Returns
-    -------
-    float or ndarray
-        γ, M or the parameter vector, in the config's units.
-    """
-    nl = cfg.nonlinearity
-    if not isinstance(nl, ExpressionNonlinearity):
-        return scenario.gamma
-    vals = scenario.parameters or {}
-    return np.array([vals.get(k, r.nominal_value) for k, r in nl.parameters.items()], float)

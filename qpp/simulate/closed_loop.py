@@ -4,7 +4,8 @@ Each scenario runs the loop of eqs 10.2, 10.5–10.7 with its reference r = r_o 
 parameter γ and disturbance impulse.  The nominal output y_o is the same loop with r = r_o,
 γ = nominal and d = 0 (eq 10.29).  The sphere check is ‖y − y_o‖∞ = max_i sup_t |y_i − y_oi| ≤ β_o
 (eq 10.35).  The nonlinear feedback terms are evaluated at the true state x (the report's
-φ(x, M, t) in ch. 14 uses x); f1 and γ come from :mod:`qpp.model.matched_nonlinearity`.
+φ(x, M, t) in ch. 14 uses x); f1 comes from :mod:`qpp.model.matched_nonlinearity`; γ is the
+scenario's (γ or M, or for an expression its parameter values, the nominal where it names none).
 
 State z = [x; x_c; x̂] (eq 10.7).  With f1 the plant nonlinearity and f1o its nominal value
 (γ = nominal), the loop is (sign conventions of ``docs/ERRATA.md`` § QPP signs and :mod:`qpp.model.lure`):
@@ -31,7 +32,7 @@ from acmm_qpp.limits import how_to_raise, limit
 from qpp import LIMITS
 from qpp.io.config import ExpressionNonlinearity, QppConfig, Scenario, Term
 from qpp.model.lure import LurePlant
-from qpp.model.matched_nonlinearity import config_f1, scenario_gamma
+from qpp.model.matched_nonlinearity import config_f1
 
 
 def _terms_value(terms: list[Term], t: float) -> float:
@@ -398,7 +399,13 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
     plant = cfg.lure_plant()
     sim = cfg.simulation
     f1, g_nom = config_f1(cfg, plant)
-    gam = scenario_gamma(cfg, scenario)
+    nl, pars = cfg.nonlinearity, None
+    if isinstance(nl, ExpressionNonlinearity):      # γ: the parameter vector, nominal where unnamed
+        vals = scenario.parameters or {}
+        gam = np.array([vals.get(k, r.nominal_value) for k, r in nl.parameters.items()], float)
+        pars = dict(zip(nl.parameters, map(float, gam)))
+    else:
+        gam = scenario.gamma
     t = np.linspace(0.0, sim.t_final, sim.n_samples)
     z0 = initial_state(cfg, plant, K1, Kc)
     r_o_fun = lambda tt: eval_signal(sim.r_o, tt)  # noqa: E731
@@ -423,9 +430,6 @@ def simulate_scenario(cfg: QppConfig, K1, Kc, H, scenario: Scenario, nominal=Non
     err = np.max(np.abs(y - yo), axis=1) if diverged_at is None else np.full(plant.p, np.inf)
     R = np.array([r_fun(tt) for tt in t]).T
     Ro = np.array([r_o_fun(tt) for tt in t]).T
-    pars = None
-    if isinstance(cfg.nonlinearity, ExpressionNonlinearity):
-        pars = dict(zip(cfg.nonlinearity.parameters, map(float, np.atleast_1d(gam))))
     g_scalar = float(np.atleast_1d(gam)[0]) if np.size(gam) else 0.0
     return SimResult(scenario.name, t, R, Ro, y, yo, U, Uo, Z[:n], Zo[:n], g_scalar,
                      float(err.max()), err, cfg.spheres.beta_o, pars, diverged_at)
