@@ -103,23 +103,11 @@ class FamilyBounds:
         return bool(self.beta1_lower >= 1.0 and self.m_upper <= self.beta1_lower)
 
 
-def servo_frequencies(Ac, tol: float = 1e-9) -> list:
-    """The frequencies ω_k ≥ 0 of the servo-compensator's poles on the imaginary axis, rad/s.
-
-    Parameters
-    ----------
-    Ac : (q, q) array
-        Servo-compensator state matrix (eq 10.2), 1/s.
-    tol : float
-        A pole is on the axis when |Re λ| ≤ tol·max(1, |λ|), dimensionless.
-
-    Returns
-    -------
-    list of float
-        Sorted distinct ω_k, rad/s.
-    """
+def _servo_frequencies(Ac) -> list:
+    """Sorted distinct ω_k ≥ 0 (rad/s) of the poles of the servo-compensator's Ac (1/s, eq 10.2) on
+    the imaginary axis: |Re λ| ≤ 1e-9·max(1, |λ|)."""
     lam = np.linalg.eigvals(np.atleast_2d(np.asarray(Ac, float)))
-    on = lam[np.abs(lam.real) <= tol * np.maximum(1.0, np.abs(lam))]
+    on = lam[np.abs(lam.real) <= 1e-9 * np.maximum(1.0, np.abs(lam))]
     return sorted({round(float(abs(x.imag)), 12) for x in on})
 
 
@@ -143,7 +131,7 @@ def family_bounds(cfg: QppConfig) -> FamilyBounds:
     x0 = np.zeros(P.n) if cfg.plant.x0 is None else np.asarray(cfg.plant.x0, float)
     y0 = P.C @ x0
     y0_term = float(np.sqrt(sum((k[i] * y0[i]) ** 2 for i in range(min(k.size, y0.size)))))
-    ws = servo_frequencies(P.Ac)
+    ws = _servo_frequencies(P.Ac)
     m_up = sp.beta_o / (beta_i + y0_term) if beta_i + y0_term > 0 else np.inf
     T_sin = m_sin = None
     nl = cfg.nonlinearity
@@ -226,7 +214,7 @@ def search(cfg: QppConfig, rhos, ws_list, a_list) -> list:
         One per grid point whose Riccati equations have a stabilizing solution.
     """
     P = cfg.lure_plant()
-    freqs = servo_frequencies(P.Ac)
+    freqs = _servo_frequencies(P.Ac)
     hc = cfg.hinf
     horizon = max(cfg.simulation.t_final, cfg.spheres.T)
     out = []

@@ -15,8 +15,8 @@ import pytest
 from acmm_qpp.results import read_h5
 from qpp.design.certificate import certify
 from qpp.design.family import (REPORT_CERTIFIED, REPORT_GRIDS, SETTLE_CELLS, SETTLE_LATER, SETTLE_SAMPLES,
-                               _settle_gamma, _settle_setup, family_bounds, peak_exclusion, search,
-                               servo_frequencies, settle_exclusion)
+                               _servo_frequencies, _settle_gamma, _settle_setup, family_bounds, peak_exclusion,
+                               search, settle_exclusion)
 from qpp.design.hinf import hinf_gains
 from qpp.design.procedure import weighted_plant
 from qpp.model.lure import closed_loop
@@ -51,9 +51,9 @@ def test_the_bounds_of_the_report_examples(siso, arm):
 
 
 def test_servo_frequencies_of_an_oscillator_and_an_integrator():
-    assert servo_frequencies([[0, 1], [-9, 0]]) == [3.0]
-    assert servo_frequencies([[0, 0, 0], [0, 0, 1], [0, 0, 0]]) == [0.0]
-    assert servo_frequencies([[-1.0]]) == []
+    assert _servo_frequencies([[0, 1], [-9, 0]]) == [3.0]
+    assert _servo_frequencies([[0, 0, 0], [0, 0, 1], [0, 0, 0]]) == [0.0]
+    assert _servo_frequencies([[-1.0]]) == []
 
 
 @pytest.mark.parametrize("rho, w, a", [(1e-5, 0.3, 1e-8), (1e-2, 3.0, 0.3), (1e-3, 10.0, 1e-2)])
