@@ -51,7 +51,7 @@ def test_the_terms_are_the_blocks():
         for j in (k - 1, k + 1):
             if 0 <= j < L:
                 want.append(Ri[k].T @ (E.T @ P[j] @ E - np.exp(-2 * lam * T) * P[k]) @ Ri[k])
-    got = np.split(kkt.apply(v), kkt.offs[1:-1])
+    got = np.split(kkt._apply(v), kkt.offs[1:-1])
     assert len(got) == len(want) == len(F0)
     for g, w in zip(got, want):
         assert np.allclose(g.reshape(N, N), w, atol=1e-11 * np.abs(w).max())
@@ -67,7 +67,7 @@ def test_the_schur_complement_and_its_block_cholesky():
     kkt = dp._ChainKKT(blocks, dp._chain_layout(L, N))
     sigma = [_spd(N, rng) for _ in blocks]
     n = L * N * (N + 1) // 2
-    cols = [np.split(kkt.apply(e), kkt.offs[1:-1]) for e in np.eye(n)]
+    cols = [np.split(kkt._apply(e), kkt.offs[1:-1]) for e in np.eye(n)]
     dense = np.array([[sum(np.trace(Fa.reshape(N, N) @ S @ Fb.reshape(N, N) @ S)
                            for Fa, Fb, S in zip(cols[a], cols[b], sigma)) for b in range(n)] for a in range(n)])
     H = kkt.schur(sigma)
