@@ -786,9 +786,9 @@ def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
     Raises
     ------
     NoEquilibriumError
-        The bias continuation folds (:func:`_fold_message`: the largest bias with an equilibrium).
+        The bias continuation folds (the message names the largest bias with an equilibrium).
     ConvergenceError
-        The continuation in the products of inertia folds and :func:`_without_continuation` finds
+        The continuation in the products of inertia folds and :func:`solve_tea`'s fallbacks find
         no equilibrium either.
     """
     inertia, bias = _vec(inertia), _vec(bias)
