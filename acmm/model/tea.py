@@ -495,8 +495,7 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) ->
     ConvergenceError
         The products continuation fails and no equilibrium lies within ±85°.
     """
-    inertia = _vec(inertia)
-    bias = _vec(bias)
+    inertia, bias = _vec(inertia), _vec(bias)
     at = None if expected is None else _at_expected(inertia, n, bias, expected)
     try:
         t = _solve_by_continuation(inertia, n, bias)
@@ -585,8 +584,7 @@ def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess:
     NoEquilibriumError, ConvergenceError
         From the fallback :func:`solve_tea`.
     """
-    inertia = _vec(inertia)
-    bias = _vec(bias)
+    inertia, bias = _vec(inertia), _vec(bias)
     theta = _root(theta_guess, inertia, n, bias, max_step=0.05)
     if theta is None or np.max(np.abs(theta - theta_guess)) > np.radians(5.0):
         return solve_tea(inertia, n, bias, expected=expected)
@@ -665,8 +663,7 @@ def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: fl
     list of TEA
         The distinct equilibria of eqs 4.1–4.3, smallest |θ| first.
     """
-    inertia = _vec(inertia)
-    bias = _vec(bias)
+    inertia, bias = _vec(inertia), _vec(bias)
     starts = np.radians(np.arange(-limit_deg + grid_deg / 2, limit_deg, grid_deg))
     roots: list[np.ndarray] = []
     for t0 in itertools.product(starts, repeat=3):
