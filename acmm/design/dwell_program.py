@@ -16,7 +16,7 @@ x takes V_k(x) to V_j(x(τ)) ≤ e^{−2λT} V_k(e^{A_k(τ−T)}x) ≤ e^{−2λ
 Every block is a sum of terms Sym(P V Qᵀ) in one or two of the P_k (:class:`acmm.design.lmi_structure.Term`),
 so the Schur complement of each Newton step is a sum of Kronecker products of 24 × 24 matrices
 (:mod:`acmm.design.lmi_structure`), and block tridiagonal: P_k meets only P_{k±1}.
-:class:`ChainKKT` forms its blocks (one matrix product per pair of neighbouring levels, folded
+:class:`_ChainKKT` forms its blocks (one matrix product per pair of neighbouring levels, folded
 onto the symmetric variables by gathers) and factors it by block Cholesky (12 blocks of 300 at
 the packaged stair-case, instead of one dense matrix of 3 600).  An answer is a candidate only:
 :mod:`acmm.design.dwell` accepts it on eigenvalue checks of its own.
@@ -64,17 +64,10 @@ def _dwell_terms(As: np.ndarray, T: float, decay: float, R: np.ndarray) -> tuple
     return blocks, F0
 
 
-class ChainKKT(StructuredKKT):
-    """:class:`acmm.design.lmi_structure.StructuredKKT` for symmetric variables P0, P1, … of which
-    a block holds at most two neighbours: the Schur complement is block tridiagonal.
-
-    Parameters
-    ----------
-    blocks : list of list of Term
-        The program's terms (variables ``"P<k>"``).
-    lay : acmm.design.lmi_structure.Layout
-        :func:`_chain_layout`.
-    """
+class _ChainKKT(StructuredKKT):
+    """:class:`acmm.design.lmi_structure.StructuredKKT` for symmetric variables P0, P1, … (terms of
+    variables ``"P<k>"``, layout :func:`_chain_layout`) of which a block holds at most two
+    neighbours: the Schur complement is block tridiagonal."""
 
     def __init__(self, blocks, lay: Layout):
         super().__init__(blocks, lay)
@@ -92,23 +85,9 @@ class ChainKKT(StructuredKKT):
                                      wr[:, None] * wc[None, :]))
 
     def schur_blocks(self, sigma) -> dict:
-        """The blocks H_(k,k) and H_(k,k+1) of the Schur complement.
-
-        Parameters
-        ----------
-        sigma : list of (N, N) arrays
-            The symmetric positive definite scaling of each block, dimensionless.
-
-        Returns
-        -------
-        dict
-            (k, l) → (n_k, n_l) array over the upper triangles of P_k and P_l, k ≤ l.
-
-        Raises
-        ------
-        ValueError
-            A block holds variables that are not neighbours.
-        """
+        """The blocks H_(k,k) and H_(k,k+1) of the Schur complement for the block scalings ``sigma``
+        (s.p.d., dimensionless): (k, l) → array over the upper triangles of P_k and P_l, k ≤ l;
+        ValueError when a block holds variables that are not neighbours."""
         acc = {}
         for terms, Sg in zip(self.blocks, sigma):
             SP = [Sg @ t.P for t in terms]
@@ -131,18 +110,7 @@ class ChainKKT(StructuredKKT):
         return out
 
     def schur(self, sigma) -> np.ndarray:
-        """The whole Schur complement (dense; for tests and small programs).
-
-        Parameters
-        ----------
-        sigma : list of (N, N) arrays
-            The scaling of each block, dimensionless.
-
-        Returns
-        -------
-        (n_var, n_var) array
-            Dimensionless.
-        """
+        """The whole Schur complement, dense and dimensionless (for tests and small programs)."""
         blocks = self.schur_blocks(sigma)
         n = blocks[(0, 0)].shape[0]
         H = np.zeros((self.levels * n,) * 2)
@@ -153,24 +121,10 @@ class ChainKKT(StructuredKKT):
 
     def factor(self, sigma):
         """Block Cholesky of the block tridiagonal Schur complement: H = LLᵀ with diagonal blocks
-        C_k = chol(H_kk − B_{k−1} B_{k−1}ᵀ) and sub-diagonal blocks B_k = H_(k,k+1)ᵀ C_k⁻ᵀ.
-
-        Parameters
-        ----------
-        sigma : list of (N, N) arrays
-            The scaling of each block, dimensionless.
-
-        Returns
-        -------
-        callable
-            ``solve(b)``: H⁻¹ b, dimensionless.
-
-        Raises
-        ------
-        ArithmeticError
-            A pivot block is not numerically positive definite (cvxopt then stops with status
-            "unknown" and its last iterate, or, at its starting point, raises ValueError).
-        """
+        C_k = chol(H_kk − B_{k−1} B_{k−1}ᵀ) and sub-diagonal blocks B_k = H_(k,k+1)ᵀ C_k⁻ᵀ; returns
+        ``solve(b)`` = H⁻¹ b (dimensionless).  ArithmeticError when a pivot block is not numerically
+        positive definite (cvxopt then stops with status "unknown" and its last iterate, or, at its
+        starting point, raises ValueError)."""
         H = self.schur_blocks(sigma)
         L = self.levels
         diag, sub = [], []
@@ -203,7 +157,7 @@ DWELL_TOL = (1e-2, 1e-6)
 
 
 def solve_dwell_program(As: np.ndarray, T: float, decay: float, R: np.ndarray, max_iter: int = 100):
-    """Solve the dwell-time program (module docstring) by cvxopt's ``conelp`` with :class:`ChainKKT`.
+    """Solve the dwell-time program (module docstring) by cvxopt's ``conelp`` with :class:`_ChainKKT`.
 
     Parameters
     ----------
@@ -227,7 +181,7 @@ def solve_dwell_program(As: np.ndarray, T: float, decay: float, R: np.ndarray, m
     """
     L, N = As.shape[:2]
     blocks, F0 = _dwell_terms(As, T, decay, R)
-    kkt = ChainKKT(blocks, _chain_layout(L, N))
+    kkt = _ChainKKT(blocks, _chain_layout(L, N))
     i, j = np.triu_indices(N)
     c = np.tile((i == j).astype(float), L)                      # Σ_k tr P̂_k
     try:

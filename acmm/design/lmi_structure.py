@@ -138,42 +138,18 @@ class Layout:
         """Number of entries of the variables stored whole."""
         return sum(r * c for r, c in self.shapes.values())
 
-    def expand(self, v) -> np.ndarray:
-        """S v: the variables stored whole.
-
-        Parameters
-        ----------
-        v : (n_var,) array
-            Variable vector, dimensionless.
-
-        Returns
-        -------
-        (n_full,) array
-            Dimensionless.
-        """
+    def _expand(self, v) -> np.ndarray:
+        """S v: the variables stored whole, (n_full,), from the variable vector (dimensionless)."""
         two = self.second >= 0
         whole = np.empty(self.n_full)
         whole[self.first] = v
         whole[self.second[two]] = v[two]
         return whole
 
-    def fold(self, A, axis: int = 0) -> np.ndarray:
-        """Sᵀ A along ``axis`` (A S for axis 1), by two gathers (faster here than sparse products or
-        indexed additions): an entry with no second place (``second`` = −1) gathers A's last slice
-        along ``axis``, which must be zero.
-
-        Parameters
-        ----------
-        A : array
-            Over the whole variables along ``axis``, then one zero slice (n_full + 1), dimensionless.
-        axis : int
-            The axis folded.
-
-        Returns
-        -------
-        array
-            Over the variable vector along ``axis``, dimensionless.
-        """
+    def _fold(self, A, axis: int = 0) -> np.ndarray:
+        """Sᵀ A along ``axis`` (A S for axis 1; A over the whole variables, then one zero slice:
+        n_full + 1), by two gathers (faster here than sparse products or indexed additions): an
+        entry with no second place (``second`` = −1) gathers A's last slice, which must be zero."""
         out = np.take(A, self.first, axis=axis)
         out += np.take(A, self.second, axis=axis)
         return out
@@ -250,7 +226,7 @@ def coefficient_arrays(blocks, lay: Layout) -> list:
             o = lay.offsets[t.var]
             U = np.einsum("ai,bj->ijab", t.P, t.Q).reshape(r * c, mk, mk)
             full[o:o + r * c] += U + U.transpose(0, 2, 1)
-        out.append(lay.fold(full))
+        out.append(lay._fold(full))
     return out
 
 
@@ -284,48 +260,26 @@ class StructuredKKT:
         self._whole = None
         self.indefinite = 0
 
-    def apply(self, v) -> np.ndarray:
-        """G v: the blocks' linear parts Σ_t Sym(P_t V_t Q_tᵀ).
-
-        Parameters
-        ----------
-        v : (n_var,) array
-            Variable vector, dimensionless.
-
-        Returns
-        -------
-        (Σ m_k²,) array
-            The blocks, each a symmetric matrix stacked as a vector (row or column order alike),
-            dimensionless.
-        """
-        whole = self.lay.expand(v)
+    def _apply(self, v) -> np.ndarray:
+        """G v: the blocks' linear parts Σ_t Sym(P_t V_t Q_tᵀ), (Σ m_k²,), each block a symmetric
+        matrix stacked as a vector (row or column order alike), dimensionless."""
+        whole = self.lay._expand(v)
         out = []
         for terms in self.blocks:
             B = sum(t.P @ self._variable(whole, t.var) @ t.Q.T for t in terms)
             out.append((B + B.T).ravel())
         return np.concatenate(out)
 
-    def adjoint(self, Zs) -> np.ndarray:
-        """Gᵀ z: the gradient of Σ_k tr(F_k(v) Z_k), Σ_t 2 P_tᵀ Z_k Q_t folded into the variable
-        vector.
-
-        Parameters
-        ----------
-        Zs : list of (m_k, m_k) arrays
-            Symmetric matrices, one per block, dimensionless.
-
-        Returns
-        -------
-        (n_var,) array
-            Dimensionless.
-        """
+    def _adjoint(self, Zs) -> np.ndarray:
+        """Gᵀ z: the gradient of Σ_k tr(F_k(v) Z_k) (Zs: one symmetric matrix per block),
+        Σ_t 2 P_tᵀ Z_k Q_t folded into the variable vector, dimensionless."""
         g = np.zeros(self.lay.n_full + 1)                    # the last entry stays zero (fold)
         for terms, Z in zip(self.blocks, Zs):
             for t in terms:
                 o = self.lay.offsets[t.var]
                 D = 2.0 * (t.P.T @ Z @ t.Q)
                 g[o:o + D.size] += D.ravel()
-        return self.lay.fold(g)
+        return self.lay._fold(g)
 
     def _variable(self, whole, var):
         r, c = self.lay.shapes[var]
@@ -374,7 +328,7 @@ class StructuredKKT:
             H[rows, cols] = blk.reshape(ri * cj, rk * cl)
             if v != w:
                 H[cols, rows] = blk.reshape(ri * cj, rk * cl).T
-        out = lay.fold(lay.fold(H), axis=1)
+        out = lay._fold(lay._fold(H), axis=1)
         out *= 2.0
         return out
 
@@ -448,10 +402,10 @@ class StructuredKKT:
 
         def f(x, y, z):
             bz = self._blocks_of(np.array(z).ravel())
-            ux = solve(np.array(x).ravel() + self.adjoint([Sg @ B @ Sg for Sg, B in zip(sigma, bz)]))
+            ux = solve(np.array(x).ravel() + self._adjoint([Sg @ B @ Sg for Sg, B in zip(sigma, bz)]))
             if not np.all(np.isfinite(ux)):
                 raise ArithmeticError("the KKT solve is not finite")
-            gz = self.apply(ux)
+            gz = self._apply(ux)
             out = [(r.T @ (gz[self.offs[k]:self.offs[k + 1]].reshape(d, d) - bz[k]) @ r).T.ravel()
                    for k, (d, r) in enumerate(zip(self.dims, rti))]        # W⁻ᵀ(G ux − bz) = rtiᵀ(·)rti
             x[:] = cvxopt.matrix(ux)
@@ -472,7 +426,7 @@ class StructuredKKT:
             "N" or "T".
         """
         xv = np.array(x).ravel()
-        r = self.apply(xv) if trans == "N" else self.adjoint(self._blocks_of(xv))
+        r = self._apply(xv) if trans == "N" else self._adjoint(self._blocks_of(xv))
         y[:] = cvxopt.matrix(alpha * r + beta * np.array(y).ravel())
 
 

@@ -680,7 +680,7 @@ def whitened_loop(As, Bs, Ks, X):
     """The loop Ã − B̃K̃ whitened by a certificate X = LLᵀ, Z = L⁻¹(Ã − B̃K̃)L, and the first-order
     rounding allowance δ = 8Nε κ(L)(‖Ã‖ + ‖B̃‖‖K̃‖) of forming it: region LMIs in X are decided
     on symmetric matrices of Z, whatever the condition of X (:func:`certified_margin`,
-    :func:`acmm.design.robust.region_certificate`).
+    ``acmm.design.robust._region_certificate``).
 
     Parameters
     ----------

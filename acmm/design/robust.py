@@ -23,7 +23,7 @@ stays stable for ±30 % inertia variations.  Here the claim is designed for and 
    stations (the directions of total momentum the CMGs cannot change rotate with the inertia),
    and dilated LMIs with one matrix per plant grow as (300·plants)³; the nonsmooth search costs
    one eigendecomposition per plant and step.
-3. **The proof, per plant** (:func:`region_certificate`): with K fixed, X_i = Re(V_i V_iᴴ) (V_i
+3. **The proof, per plant** (:func:`_region_certificate`): with K fixed, X_i = Re(V_i V_iᴴ) (V_i
    the eigenvectors of A_i − B_i K) satisfies the LMIs of the half-plane Re λ ≤ −a and of the
    cone |arg(−λ)| ≤ φ for the a and φ its poles allow; they are re-checked, not assumed, on the
    whitened loop Z = L⁻¹(A_i − B_i K)L (X = LLᵀ) by symmetric eigenvalues, less a first-order
@@ -296,7 +296,7 @@ def _robust_gain(models, K0: np.ndarray) -> tuple[np.ndarray, float, int, str]:
     return Ks, _worst_abscissa(Ks, models)[0], restarts, stop
 
 
-def region_certificate(As: np.ndarray, Bs: np.ndarray, Ks: np.ndarray) -> RegionCertificate:
+def _region_certificate(As: np.ndarray, Bs: np.ndarray, Ks: np.ndarray) -> RegionCertificate:
     """A Lyapunov certificate X of the decay and cone the poles of Ã − B̃K̃ allow, re-checked
     (module docstring, step 3).
 
@@ -304,18 +304,9 @@ def region_certificate(As: np.ndarray, Bs: np.ndarray, Ks: np.ndarray) -> Region
     cone LMI [[sin φ He Z, cos φ (Z − Zᵀ)], [cos φ (Zᵀ − Z), sin φ He Z]] ⪯ 0 for every
     φ ≥ φ* (monotone: tan φ·diag(He Z, He Z) + [[0, S], [−S, 0]] decreases with φ when
     He Z ⪯ 0), φ* found by bisection to 1e-9 rad.  Both less the rounding allowance
-    δ = 8Nε κ(L)(‖Ã‖ + ‖B̃‖‖K̃‖) of forming Z.
-
-    Parameters
-    ----------
-    As, Bs, Ks : arrays
-        Scaled model and gain (time in 1/n), dimensionless.
-
-    Returns
-    -------
-    RegionCertificate
-        X, the certified decay (units of n) and cone (deg); decay −inf (or ≤ 0) and cone NaN when
-        no certificate was found.
+    δ = 8Nε κ(L)(‖Ã‖ + ‖B̃‖‖K̃‖) of forming Z.  Model and gain scaled (time in 1/n), dimensionless;
+    the certified decay in units of n, the cone in deg (decay −inf or ≤ 0 and cone NaN when no
+    certificate was found).
     """
     lam, V = np.linalg.eig(As - Bs @ Ks)
     max_real = float(np.max(lam.real))
@@ -400,7 +391,7 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
     models = models_at(1.0)
     K0s = np.asarray(K_nominal, float) * d[None, :] / input_scale
     start = _worst_abscissa(K0s, models)[0]
-    start_certs = tuple(region_certificate(As, Bs, K0s) for As, Bs in models)
+    start_certs = tuple(_region_certificate(As, Bs, K0s) for As, Bs in models)
     sigma, phi = sector
     if all(c.decay >= sigma and c.cone_deg <= phi for c in start_certs):
         return RobustDesign(np.asarray(K_nominal, float), np.asarray(K_nominal, float), fam, start_certs, start,
@@ -415,7 +406,7 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
     stop = (f"every continuation step settled (a restart lowered the worst abscissa by less than "
             f"{RESTART_TOL:g} n)" if not limited else
             f"the restart limit ({MAX_RESTARTS}) was reached at continuation step(s) {', '.join(limited)}")
-    certs = tuple(region_certificate(As, Bs, Ks) for As, Bs in models)
+    certs = tuple(_region_certificate(As, Bs, Ks) for As, Bs in models)
     K = Ks * input_scale / d[None, :]
     return RobustDesign(K, np.asarray(K_nominal, float), fam, certs, worst, start, restarts, stop,
                         time.perf_counter() - t0, (float(sector[0]), float(sector[1])))

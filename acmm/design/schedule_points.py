@@ -52,21 +52,16 @@ class PointSpec:
     level: bool = True
 
 
-def _blend_points(start: PointSpec, end: PointSpec, n_points: int) -> list[PointSpec]:
-    """``n_points`` configurations (both ends included) at evenly spaced s on
-    I(s) = (1−s)·I_start + s·I_end, bias blended alike."""
-    out = []
-    for k, s in enumerate(np.linspace(0.0, 1.0, n_points)):
-        name = start.name if k == 0 else end.name if k == n_points - 1 else f"blend_{s:.3f}"
-        out.append(PointSpec(name, (1 - s) * start.inertia + s * end.inertia,
-                             (1 - s) * start.bias + s * end.bias, float(s),
-                             expected=_end_expected(k, n_points, start, end)))
-    return out
-
-
-def _end_expected(k: int, n_points: int, start: PointSpec, end: PointSpec):
-    """The ``expected`` TEA of blend point ``k`` of ``n_points``: the start's, the end's, else None."""
-    return start.expected if k == 0 else end.expected if k == n_points - 1 else None
+def _blend_points(start: PointSpec, end: PointSpec, s_pts, guesses=None) -> list[PointSpec]:
+    """The configurations at the blend parameters ``s_pts`` (both ends included) on
+    I(s) = (1−s)·I_start + s·I_end, bias blended alike; TEA guesses ``guesses`` (rad) or none; the
+    ends keep their ``expected`` TEA."""
+    last = len(s_pts) - 1
+    return [PointSpec(start.name if k == 0 else end.name if k == last else f"blend_{s:.3f}",
+                      (1 - s) * start.inertia + s * end.inertia, (1 - s) * start.bias + s * end.bias, float(s),
+                      None if guesses is None else guesses[k],
+                      start.expected if k == 0 else end.expected if k == last else None)
+            for k, s in enumerate(s_pts)]
 
 
 def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
@@ -98,19 +93,13 @@ def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
     th2 = thetas[:, 1]
     d = np.diff(th2)
     if not (np.all(d > 0) or np.all(d < 0)):
-        return _blend_points(start, end, n_points)
+        return _blend_points(start, end, np.linspace(0.0, 1.0, n_points))
     order = np.argsort(th2)
     targets = np.linspace(th2[0], th2[-1], n_points)
     s_pts = np.interp(targets, th2[order], s_grid[order])
     s_pts[0], s_pts[-1] = 0.0, 1.0
-    out = []
-    for k, s in enumerate(s_pts):
-        name = start.name if k == 0 else end.name if k == n_points - 1 else f"blend_{s:.3f}"
-        guess = np.array([np.interp(s, s_grid, thetas[:, i]) for i in range(3)])
-        out.append(PointSpec(name, (1 - s) * start.inertia + s * end.inertia,
-                             (1 - s) * start.bias + s * end.bias, float(s), guess,
-                             _end_expected(k, n_points, start, end)))
-    return out
+    return _blend_points(start, end, s_pts,
+                         [np.array([np.interp(s, s_grid, thetas[:, i]) for i in range(3)]) for s in s_pts])
 
 
 @contextmanager
@@ -229,7 +218,7 @@ def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSp
         if sched.spacing == "tea":
             specs = tea_spaced_blend(start, end, sched.n_points, n)
         else:
-            specs = _blend_points(start, end, sched.n_points)
+            specs = _blend_points(start, end, np.linspace(0.0, 1.0, sched.n_points))
     return specs + list(extras)
 
 

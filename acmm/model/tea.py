@@ -10,7 +10,7 @@ The algorithm is written once, as numba kernels on plain arrays (compiled once a
 :mod:`acmm.model.compiled_cache`): the residual of eq 4.1 and its Jacobian in closed form, damped
 Newton (steps ≤ 0.5 rad, |θ| < 89.5°, 3×3 Gaussian elimination with partial pivoting), the
 continuation (first step 0.05 of the path, ×1.5 up to 0.1 on success, halved on failure, a fold
-below 1e-7; a step is accepted when Newton converges to :func:`residual_threshold`, θ jumps
+below 1e-7; a step is accepted when Newton converges to :data:`_RESIDUAL_TOL`, θ jumps
 ≤ 5° and the sign of det ∂r/∂θ is kept) and the bisection of a fold.  The functions below are the
 Python layer: the :class:`TEA` record, the fallbacks, the messages and the errors.
 
@@ -33,7 +33,7 @@ from acmm_qpp.errors import EXIT_INPUT, AcmmError, ConvergenceError
 from acmm.model.unit_systems import FT_LBF_IN_NM
 
 #: The hint of a bias with no equilibrium: which settings to change (acmm's config).
-BIAS_HINT = "reduce disturbance.bias (or use disturbance.bias_from_tea with the attitude you want)"
+_BIAS_HINT = "reduce disturbance.bias (or use disturbance.bias_from_tea with the attitude you want)"
 
 
 class NoEquilibriumError(AcmmError):
@@ -47,26 +47,9 @@ class NoEquilibriumError(AcmmError):
 
 #: Largest residual (ft·lbf) accepted for an equilibrium; for a station whose gravity-gradient
 #: torque scale 3n²·max|I| is below 10 ft·lbf, 1e-13 of that scale instead (an absolute 1e-12
-#: would accept a 3 % residual on a model-sized station), and never below 1e-15 of it (round-off).
-RESIDUAL_TOL = 1e-12
-
-
-def residual_threshold(scale: float, tol: float = RESIDUAL_TOL) -> float:
-    """The residual accepted for an equilibrium (see :data:`RESIDUAL_TOL`).
-
-    Parameters
-    ----------
-    scale : float
-        Gravity-gradient torque scale 3n²·max|I|, ft·lbf.
-    tol : float, optional
-        Absolute tolerance, ft·lbf.
-
-    Returns
-    -------
-    float
-        max(min(tol, 1e-13·scale), 1e-15·scale), ft·lbf.
-    """
-    return max(min(tol, 1e-13 * scale), 1e-15 * scale)
+#: would accept a 3 % residual on a model-sized station), and never below 1e-15 of it (round-off):
+#: max(min(tol, 1e-13·scale), 1e-15·scale), the threshold of Newton and of the family search.
+_RESIDUAL_TOL = 1e-12
 
 
 # ------------------------------------------------------------------------------------------------
@@ -194,7 +177,7 @@ def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out, yaw_only=Fal
         for j in range(3):
             amax = max(amax, abs(inertia[i, j]))
     scale = max(3.0 * n * n * amax, 1e-300)
-    thr = max(min(tol, 1e-13 * scale), 1e-15 * scale)          # residual_threshold
+    thr = max(min(tol, 1e-13 * scale), 1e-15 * scale)          # threshold of _RESIDUAL_TOL
     r = np.empty(3)
     jac = np.empty((3, 3))
     step = np.empty(3)
@@ -375,7 +358,7 @@ def _vec(x) -> np.ndarray:
 def _root(theta0, inertia, n, bias, max_iter=50, max_step=0.5) -> np.ndarray | None:
     """Damped Newton on eq 4.1 from ``theta0`` (rad); the root, or None when it fails to converge."""
     out = np.empty(3)
-    ok = _newton(_vec(theta0), _vec(inertia), float(n), _vec(bias), RESIDUAL_TOL, max_iter, max_step, out, False)
+    ok = _newton(_vec(theta0), _vec(inertia), float(n), _vec(bias), _RESIDUAL_TOL, max_iter, max_step, out, False)
     return out if ok else None
 
 
@@ -512,15 +495,14 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) ->
     ConvergenceError
         The products continuation fails and no equilibrium lies within ±85°.
     """
-    inertia = _vec(inertia)
-    bias = _vec(bias)
+    inertia, bias = _vec(inertia), _vec(bias)
     at = None if expected is None else _at_expected(inertia, n, bias, expected)
     try:
         t = _solve_by_continuation(inertia, n, bias)
     except (NoEquilibriumError, ConvergenceError) as exc:
         if at is not None:
             return at
-        return without_continuation(exc, inertia, n, bias)
+        return _without_continuation(exc, inertia, n, bias)
     if at is not None and np.max(np.abs(t.theta - at.theta)) > 1e-6:
         return at
     return t
@@ -530,12 +512,12 @@ def _at_expected(inertia, n, bias, expected) -> TEA | None:
     """The equilibrium within 1e-6 rad of ``expected`` (rad) by Newton from it, or None."""
     theta = _root(expected, inertia, n, bias, max_step=0.05)
     ok = theta is not None and np.max(np.abs(theta - expected)) <= 1e-6
-    return make_tea(theta, inertia, n, bias) if ok else None
+    return _make_tea(theta, inertia, n, bias) if ok else None
 
 
 def _solve_by_continuation(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
     """:func:`solve_tea`'s continuation (diagonal body at LVLH → products → bias) and its errors."""
-    theta, status, lam = _from_lvlh(inertia, float(n), bias, RESIDUAL_TOL)
+    theta, status, lam = _from_lvlh(inertia, float(n), bias, _RESIDUAL_TOL)
     if status == 1:
         raise ConvergenceError(
             "TEA continuation in the products of inertia failed at "
@@ -543,8 +525,8 @@ def _solve_by_continuation(inertia: np.ndarray, n: float, bias: np.ndarray) -> T
             hint="check the products of inertia (inertia.I12, I13, I23) or give the bias as "
                  "disturbance.bias_from_tea")
     if status == 2:
-        raise NoEquilibriumError(fold_message(bias, lam), hint=BIAS_HINT)
-    return make_tea(theta, inertia, n, bias)
+        raise NoEquilibriumError(_fold_message(bias, lam), hint=_BIAS_HINT)
+    return _make_tea(theta, inertia, n, bias)
 
 
 def bias_fold(inertia: np.ndarray, n: float, bias: np.ndarray) -> float | None:
@@ -567,8 +549,7 @@ def bias_fold(inertia: np.ndarray, n: float, bias: np.ndarray) -> float | None:
         when the continuation reaches the whole bias or fails before it (in the products of
         inertia).
     """
-    _, status, lam = _from_lvlh(np.ascontiguousarray(inertia, float), float(n), np.asarray(bias, float),
-                                RESIDUAL_TOL)
+    _, status, lam = _from_lvlh(_vec(inertia), float(n), _vec(bias), _RESIDUAL_TOL)
     return float(lam) if status == 2 else None
 
 
@@ -603,8 +584,7 @@ def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess:
     NoEquilibriumError, ConvergenceError
         From the fallback :func:`solve_tea`.
     """
-    inertia = _vec(inertia)
-    bias = _vec(bias)
+    inertia, bias = _vec(inertia), _vec(bias)
     theta = _root(theta_guess, inertia, n, bias, max_step=0.05)
     if theta is None or np.max(np.abs(theta - theta_guess)) > np.radians(5.0):
         return solve_tea(inertia, n, bias, expected=expected)
@@ -612,28 +592,11 @@ def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess:
         at = _at_expected(inertia, n, bias, expected)
         if at is not None:
             return at
-    return make_tea(theta, inertia, n, bias)
+    return _make_tea(theta, inertia, n, bias)
 
 
-def make_tea(theta, inertia, n, bias) -> TEA:
-    """Package θ* with ω*, bias and the residual (ft·lbf).
-
-    Parameters
-    ----------
-    theta : (3,) array
-        Equilibrium attitude θ*, rad.
-    inertia : (3, 3) array
-        Inertia matrix, slug·ft².
-    n : float
-        Orbital rate, rad/s.
-    bias : (3,) array
-        Bias torque balanced at θ*, ft·lbf.
-
-    Returns
-    -------
-    TEA
-        θ*, ω* of eq 4.3 (rad/s), the bias and max |residual of eq 4.1| (ft·lbf).
-    """
+def _make_tea(theta, inertia, n, bias) -> TEA:
+    """θ* (rad) with ω* of eq 4.3 (rad/s), the bias and max |residual of eq 4.1| (ft·lbf)."""
     theta = np.asarray(theta, float)
     res = float(np.max(np.abs(equilibrium_residual(theta, inertia, n, bias))))
     return TEA(theta=theta, omega=kin.lvlh_rate_in_body(theta, n), bias=np.asarray(bias, float),
@@ -700,8 +663,7 @@ def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: fl
     list of TEA
         The distinct equilibria of eqs 4.1–4.3, smallest |θ| first.
     """
-    inertia = _vec(inertia)
-    bias = _vec(bias)
+    inertia, bias = _vec(inertia), _vec(bias)
     starts = np.radians(np.arange(-limit_deg + grid_deg / 2, limit_deg, grid_deg))
     roots: list[np.ndarray] = []
     for t0 in itertools.product(starts, repeat=3):
@@ -711,25 +673,12 @@ def all_equilibria(inertia: np.ndarray, n: float, bias: np.ndarray, grid_deg: fl
         if not any(np.max(np.abs(th - r)) < 1e-6 for r in roots):
             roots.append(th)
     roots.sort(key=lambda r: float(np.linalg.norm(r)))
-    return [make_tea(r, inertia, n, bias) for r in roots]
+    return [_make_tea(r, inertia, n, bias) for r in roots]
 
 
-def fold_message(bias: np.ndarray, lam_max: float) -> str:
-    """The message of a bias continuation that folds at ``lam_max`` of ``bias`` (ft·lbf), the
-    torques given in ft·lbf and N·m (an SI run's message printed ft·lbf only).
-
-    Parameters
-    ----------
-    bias : (3,) array
-        The bias asked for, ft·lbf.
-    lam_max : float
-        Largest fraction of it reached on the branch continued from LVLH, dimensionless.
-
-    Returns
-    -------
-    str
-        One sentence naming the bias and the fold.
-    """
+def _fold_message(bias: np.ndarray, lam_max: float) -> str:
+    """The message of a bias continuation (ft·lbf) that folds at the fraction ``lam_max`` of it, the
+    torques given in ft·lbf and N·m (an SI run's message printed ft·lbf only)."""
     def torque(v) -> str:      # both systems: the core does not know which one the run prints
         return (f"[{v[0]:.4g}, {v[1]:.4g}, {v[2]:.4g}] ft·lbf "
                 f"(= [{v[0] * FT_LBF_IN_NM:.4g}, {v[1] * FT_LBF_IN_NM:.4g}, {v[2] * FT_LBF_IN_NM:.4g}] N·m)")
@@ -740,27 +689,10 @@ def fold_message(bias: np.ndarray, lam_max: float) -> str:
             f"branch ends (folds) at bias {torque(b)} ({100 * lam_max:.1f}% of the given bias)")
 
 
-def with_other_roots(exc: NoEquilibriumError, inertia, n, bias) -> NoEquilibriumError:
+def _with_other_roots(exc: NoEquilibriumError, inertia, n, bias) -> NoEquilibriumError:
     """The fold of the branch continued from LVLH (``exc``), with the equilibria that exist at
     the full bias on other branches (:func:`all_equilibria`) named, or the grid search's
-    confirmation that none lies within ±85°.
-
-    Parameters
-    ----------
-    exc : NoEquilibriumError
-        The fold (:func:`fold_message`).
-    inertia : (3, 3) array
-        Inertia matrix, slug·ft².
-    n : float
-        Orbital rate, rad/s.
-    bias : (3,) array
-        Constant disturbance torque, ft·lbf.
-
-    Returns
-    -------
-    NoEquilibriumError
-        The error to raise (one line).
-    """
+    confirmation that none lies within ±85°: the error to raise (one line)."""
     found = all_equilibria(inertia, n, bias)
     if not found:
         return NoEquilibriumError(f"{exc}; no other equilibrium lies within ±85° either (Newton from a "
@@ -775,44 +707,27 @@ def with_other_roots(exc: NoEquilibriumError, inertia, n, bias) -> NoEquilibrium
 
 
 #: σmin/σmax of the eq 4.1 Jacobian below which an equilibrium is not isolated
-SINGULAR_JACOBIAN = 1e-9
+_SINGULAR_JACOBIAN = 1e-9
 
 
-def non_isolated_equilibrium(inertia: np.ndarray, n: float, bias: np.ndarray,
-                             max_iter: int = 100) -> TEA | None:
-    """An equilibrium of a family (singular Jacobian), nearest LVLH, or None.
+def _non_isolated_equilibrium(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA | None:
+    """An equilibrium of a family (singular Jacobian), nearest LVLH (rad), or None.
 
     An axisymmetric station (I11 = I22, say) balances a bias on a whole curve of attitudes: the
     Jacobian of eq 4.1 is singular on it, so the continuation and Newton's method fail and the
     station was reported to have no equilibrium.  Gauss–Newton with the minimum-norm step
     (least squares) from LVLH reaches the member of the family nearest LVLH; it is accepted only
-    when its residual vanishes (Newton's test, :func:`residual_threshold`) and the Jacobian there is
-    singular — an isolated root is the continuation's to find, not this function's.
-
-    Parameters
-    ----------
-    inertia : (3, 3) array
-        Inertia matrix, slug·ft².
-    n : float
-        Orbital rate, rad/s.
-    bias : (3,) array
-        Constant disturbance torque, ft·lbf.
-    max_iter : int
-        Gauss–Newton iterations.
-
-    Returns
-    -------
-    TEA or None
-        The equilibrium (its attitude in rad), or None.
+    when its residual vanishes (Newton's test, :data:`_RESIDUAL_TOL`) and the Jacobian there is
+    singular — an isolated root is the continuation's to find, not this function's.  At most 100
+    Gauss–Newton iterations, each step at most 0.05 rad.
     """
-
     theta = np.zeros(3)
     scale = max(3 * n * n * np.abs(inertia).max(), 1e-300)
-    for _ in range(max_iter):
+    for _ in range(100):
         r = equilibrium_residual(theta, inertia, n, bias)
-        if np.max(np.abs(r)) <= residual_threshold(scale, RESIDUAL_TOL):
+        if np.max(np.abs(r)) <= max(min(_RESIDUAL_TOL, 1e-13 * scale), 1e-15 * scale):
             sv = np.linalg.svd(equilibrium_jacobian(theta, inertia, n), compute_uv=False)
-            return make_tea(theta, inertia, n, bias) if sv[-1] <= SINGULAR_JACOBIAN * sv[0] else None
+            return _make_tea(theta, inertia, n, bias) if sv[-1] <= _SINGULAR_JACOBIAN * sv[0] else None
         step = np.linalg.lstsq(equilibrium_jacobian(theta, inertia, n), -r, rcond=1e-10)[0]
         norm = np.max(np.abs(step))
         if not np.isfinite(norm):
@@ -823,46 +738,23 @@ def non_isolated_equilibrium(inertia: np.ndarray, n: float, bias: np.ndarray,
     return None
 
 
-def without_continuation(exc, inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
+def _without_continuation(exc, inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
     """The TEA when :func:`acmm.model.tea.solve_tea`'s continuation failed with ``exc``.
 
     A fold of the bias continuation (NoEquilibriumError): a family of equilibria
-    (:func:`non_isolated_equilibrium`), else the error naming the roots of other branches.  A
+    (:func:`_non_isolated_equilibrium`), else the error naming the roots of other branches.  A
     failed products-of-inertia continuation (ConvergenceError): the smallest-|θ| root of
-    :func:`all_equilibria`, else a family, else the error.
-
-    Parameters
-    ----------
-    exc : NoEquilibriumError or ConvergenceError
-        What the continuation raised.
-    inertia : (3, 3) array
-        Inertia matrix, slug·ft².
-    n : float
-        Orbital rate, rad/s.
-    bias : (3,) array
-        Constant disturbance torque, ft·lbf.
-
-    Returns
-    -------
-    TEA
-        The equilibrium (rad).
-
-    Raises
-    ------
-    NoEquilibriumError
-        No equilibrium on the branch continued from LVLH, nor a family (other roots named).
-    ConvergenceError
-        The products continuation failed and no equilibrium was found otherwise.
+    :func:`all_equilibria`, else a family, else ``exc`` (units as :func:`solve_tea`).
     """
     if isinstance(exc, NoEquilibriumError):
-        family = non_isolated_equilibrium(inertia, n, bias)     # axisymmetric: a curve of roots
+        family = _non_isolated_equilibrium(inertia, n, bias)     # axisymmetric: a curve of roots
         if family is not None:
             return family
-        raise with_other_roots(exc, inertia, n, bias) from None
+        raise _with_other_roots(exc, inertia, n, bias) from None
     found = all_equilibria(inertia, n, bias)
     if found:
         return found[0]
-    family = non_isolated_equilibrium(inertia, n, bias)         # a symmetry axis off the body axes
+    family = _non_isolated_equilibrium(inertia, n, bias)         # a symmetry axis off the body axes
     if family is not None:
         return family
     raise exc
@@ -891,16 +783,16 @@ def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
     Raises
     ------
     NoEquilibriumError
-        The bias continuation folds (:func:`fold_message`: the largest bias with an equilibrium).
+        The bias continuation folds (the message names the largest bias with an equilibrium).
     ConvergenceError
-        The continuation in the products of inertia folds and :func:`without_continuation` finds
+        The continuation in the products of inertia folds and :func:`solve_tea`'s fallbacks find
         no equilibrium either.
     """
     inertia, bias = _vec(inertia), _vec(bias)
     try:
         return _solve_by_continuation(inertia, n, bias)
     except ConvergenceError as exc:
-        return without_continuation(exc, inertia, n, bias)
+        return _without_continuation(exc, inertia, n, bias)
 
 
 def solve_tea_connected(theta0: np.ndarray, inertia0: np.ndarray, bias0: np.ndarray,
@@ -938,8 +830,8 @@ def solve_tea_connected(theta0: np.ndarray, inertia0: np.ndarray, bias0: np.ndar
         of a symmetric station) is passed, and roll or pitch may go beyond ±90°.
     """
     inertia, bias = _vec(inertia), _vec(bias)
-    theta, ok = _from_root(_vec(theta0), _vec(inertia0), _vec(bias0), inertia, bias, float(n), RESIDUAL_TOL)
-    return make_tea(theta, inertia, n, bias) if ok else None
+    theta, ok = _from_root(_vec(theta0), _vec(inertia0), _vec(bias0), inertia, bias, float(n), _RESIDUAL_TOL)
+    return _make_tea(theta, inertia, n, bias) if ok else None
 
 
 def warm_up() -> None:

@@ -193,7 +193,7 @@ class KernelOutputs(NamedTuple):
 
 
 class Workspace(NamedTuple):
-    """Scratch buffers of the kernel (built by :func:`workspace`).
+    """Scratch buffers of the kernel (built by :func:`_workspace`).
 
     Attributes
     ----------
@@ -229,14 +229,8 @@ class Workspace(NamedTuple):
 # the integration time.
 # ----------------------------------------------------------------------------------------------
 @njit_cached()
-def workspace():
-    """Fresh scratch buffers (:class:`Workspace`).
-
-    Returns
-    -------
-    Workspace
-        The buffers (uninitialized state scratch, zeroed flags).
-    """
+def _workspace():
+    """Fresh scratch buffers (:class:`Workspace`): uninitialized state scratch, zeroed flags."""
     return Workspace(np.empty((7, 24)), np.empty(24), np.empty(24), np.empty(3), np.empty(3),
                      np.zeros(6), np.zeros(3))
 
@@ -509,7 +503,7 @@ def _integrate(sample_times, x0, sched, loop, out):
     so no step crosses one), until the last or a stop: (last sample index, ``STOP_*`` code of
     :mod:`acmm.simulate.scenario`, time reached s, accepted steps, rejected steps)."""
     X = x0.copy()
-    w = workspace()
+    w = _workspace()
     t = sample_times[0]
     dt = 10.0
     n_steps, n_rej, stop = 0, 0, STOP_NONE
@@ -581,19 +575,8 @@ def _schedule(sc: Scenario) -> LevelSchedule:
                          run_mid=0.5 * float(sc.t_end))
 
 
-def loop_constants(sc: Scenario) -> LoopConstants:
-    """The plant, controller and integrator constants of ``sc`` for the kernel.
-
-    Parameters
-    ----------
-    sc : Scenario
-        The scenario.
-
-    Returns
-    -------
-    LoopConstants
-        The constants (in the scenario's units: rad/s, ft·lbf, ft·lbf·s).
-    """
+def _loop_constants(sc: Scenario) -> LoopConstants:
+    """The plant, controller and integrator constants of ``sc`` for the kernel (its units)."""
     return LoopConstants(ha=np.asarray(sc.harmonic_a, float), hb=np.asarray(sc.harmonic_b, float), n=float(sc.n),
                          tmax=float(sc.torque_limit), hmax=float(sc.momentum_limit),
                          drf_idx=_drf_index(sc.drf_mode), rtol=float(sc.rtol), atol=np.asarray(sc.atol, float),
@@ -630,7 +613,7 @@ def simulate(sc: Scenario) -> SimResult:
     out = _outputs(sc.sample_times.shape[0], sc.level_start.shape[0])
     last, stop, t_stop, n_steps, n_rej = _integrate(
         np.ascontiguousarray(sc.sample_times, float), np.asarray(sc.x0, float), _schedule(sc),
-        loop_constants(sc), out)
+        _loop_constants(sc), out)
     k = last + 1
     t = sc.sample_times[:k].copy()
     if stop != STOP_NONE:
@@ -643,3 +626,39 @@ def simulate(sc: Scenario) -> SimResult:
                      stop_time=float(t_stop), n_steps=int(n_steps), n_rejected=int(n_rej),
                      level_peak_momentum=out.peak_h, level_steady_error=out.steady,
                      run_extremes=RunExtremes(run[0:3], run[3:6], run[6:9], run[9], run[10]))
+
+
+def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
+    """The compiled right-hand side at one state: returns (Ẋ, u delivered, u commanded).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The closed loop (units in :class:`Scenario`).
+    t : float
+        Time, s.
+    X : (24,) array
+        Plain state, in the units listed in the module docstring.
+    level : int
+        Index of the inertia level in force.
+
+    Returns
+    -------
+    X_dot : (24,) array
+        Ẋ, in the units of X per second.
+    u : (3,) array
+        Torque delivered after saturation, ft·lbf.
+    u_cmd : (3,) array
+        Commanded torque −K x (eq 5.1), ft·lbf.
+    """
+    # one level's rows only (the whole schedule costs ~0.1 ms a call, and solve_ivp calls often);
+    # closed_loop_rhs reads neither theta_ref nor mid
+    inertia = np.ascontiguousarray(sc.inertia[level], float)
+    theta_est = np.ascontiguousarray(sc.theta_est[level], float)
+    lv = Level(inertia=inertia, inertia_inv=np.linalg.inv(inertia), bias=np.ascontiguousarray(sc.bias[level], float),
+               theta_est=theta_est, omega_est=np.ascontiguousarray(kin.lvlh_rate_in_body(theta_est, sc.n), float),
+               gain=np.ascontiguousarray(sc.gain[level], float), theta_ref=theta_est, mid=0.0)
+    w = _workspace()
+    out = np.empty(24)
+    closed_loop_rhs(t, np.asarray(X, float), lv, _loop_constants(sc), out, w)
+    return out, w.u.copy(), w.u_cmd.copy()

@@ -1,8 +1,8 @@
 """Plain-numpy right-hand side of the closed loop simulated by :mod:`acmm.simulate.kernel`.
 
 Built from :mod:`acmm.model.dynamics` independently of the compiled kernel: the reference the kernel
-is tested against and the ``solve_ivp`` baseline of ``make bench``; and :func:`kernel_rhs`, the
-compiled right-hand side called at one state (for tests and the warm-up).  It is the nonlinear model of
+(its :func:`acmm.simulate.kernel.kernel_rhs` at one state) is tested against and the ``solve_ivp``
+baseline of ``make bench``.  It is the nonlinear model of
 eqs 3.1–3.9 (rigid-body and CMG dynamics, 2-3-1 kinematics, gravity-gradient and disturbance
 torques) closed by the controller and DRF states of ch. 4–5.  Split from
 :mod:`acmm.simulate.kernel` (issue 12).
@@ -14,7 +14,6 @@ import numpy as np
 from acmm.model import dynamics as dyn
 from acmm.model import kinematics as kin
 from acmm.model.linearize import DRF_INPUTS
-from acmm.simulate.kernel import Level, loop_constants, closed_loop_rhs, workspace
 from acmm.simulate.scenario import Scenario
 
 
@@ -62,38 +61,3 @@ def rhs_numpy(t: float, X: np.ndarray, sc: Scenario, level: int = 0) -> np.ndarr
         d_drf[2 * j + 1] = drf[2 * j]
     return np.concatenate([omega_dot, theta_dot, h_dot, h, d_drf])
 
-
-def kernel_rhs(sc: Scenario, t: float, X: np.ndarray, level: int = 0):
-    """The compiled right-hand side at one state: returns (Ẋ, u delivered, u commanded).
-
-    Parameters
-    ----------
-    sc : Scenario
-        The closed loop (units in :class:`Scenario`).
-    t : float
-        Time, s.
-    X : (24,) array
-        Plain state, in the units listed in the module docstring.
-    level : int
-        Index of the inertia level in force.
-
-    Returns
-    -------
-    X_dot : (24,) array
-        Ẋ, in the units of X per second.
-    u : (3,) array
-        Torque delivered after saturation, ft·lbf.
-    u_cmd : (3,) array
-        Commanded torque −K x (eq 5.1), ft·lbf.
-    """
-    # one level's rows only (the whole schedule costs ~0.1 ms a call, and solve_ivp calls often);
-    # closed_loop_rhs reads neither theta_ref nor mid
-    inertia = np.ascontiguousarray(sc.inertia[level], float)
-    theta_est = np.ascontiguousarray(sc.theta_est[level], float)
-    lv = Level(inertia=inertia, inertia_inv=np.linalg.inv(inertia), bias=np.ascontiguousarray(sc.bias[level], float),
-               theta_est=theta_est, omega_est=np.ascontiguousarray(kin.lvlh_rate_in_body(theta_est, sc.n), float),
-               gain=np.ascontiguousarray(sc.gain[level], float), theta_ref=theta_est, mid=0.0)
-    w = workspace()
-    out = np.empty(24)
-    closed_loop_rhs(t, np.asarray(X, float), lv, loop_constants(sc), out, w)
-    return out, w.u.copy(), w.u_cmd.copy()

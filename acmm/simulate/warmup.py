@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 import time
 import numpy as np
-from acmm.simulate import kernel as sm, reference, scenario as scen
+from acmm.simulate import kernel as sm, scenario as scen
 from acmm.model.tea import warm_up as warm_tea
 from acmm.model.compiled_cache import uncached_note, write_error_notes
 
@@ -38,7 +38,7 @@ def warm_up(say=print) -> float:
                      sample_times=np.array([0.0, 300.0, 600.0]), x0=np.zeros(24), rtol=1e-8,
                      atol=scen.plain_scales(n, "attitude_hold") * 1e-8, divergence=1.0, max_saturation=1e4)
     sm.simulate(sc)
-    reference.kernel_rhs(sc, 0.0, np.zeros(24))
+    sm.kernel_rhs(sc, 0.0, np.zeros(24))
     return time.perf_counter() - t0
 
 

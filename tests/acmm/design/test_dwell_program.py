@@ -39,7 +39,7 @@ def test_the_terms_are_the_blocks():
     R = np.array([np.linalg.cholesky(_spd(N, rng)).T for _ in range(L)])
     T, lam = 0.7, 0.1
     blocks, F0 = dp._dwell_terms(As, T, lam, R)
-    kkt = dp.ChainKKT(blocks, dp._chain_layout(L, N))
+    kkt = dp._ChainKKT(blocks, dp._chain_layout(L, N))
     v = rng.standard_normal(L * N * (N + 1) // 2)
     Ph = [_sym(part, N) for part in np.split(v, L)]
     P = [R[k].T @ Ph[k] @ R[k] for k in range(L)]
@@ -51,7 +51,7 @@ def test_the_terms_are_the_blocks():
         for j in (k - 1, k + 1):
             if 0 <= j < L:
                 want.append(Ri[k].T @ (E.T @ P[j] @ E - np.exp(-2 * lam * T) * P[k]) @ Ri[k])
-    got = np.split(kkt.apply(v), kkt.offs[1:-1])
+    got = np.split(kkt._apply(v), kkt.offs[1:-1])
     assert len(got) == len(want) == len(F0)
     for g, w in zip(got, want):
         assert np.allclose(g.reshape(N, N), w, atol=1e-11 * np.abs(w).max())
@@ -64,10 +64,10 @@ def test_the_schur_complement_and_its_block_cholesky():
     L, N = As.shape[:2]
     R = np.array([np.eye(N)] * L)
     blocks, _ = dp._dwell_terms(As, 0.5, 0.05, R)
-    kkt = dp.ChainKKT(blocks, dp._chain_layout(L, N))
+    kkt = dp._ChainKKT(blocks, dp._chain_layout(L, N))
     sigma = [_spd(N, rng) for _ in blocks]
     n = L * N * (N + 1) // 2
-    cols = [np.split(kkt.apply(e), kkt.offs[1:-1]) for e in np.eye(n)]
+    cols = [np.split(kkt._apply(e), kkt.offs[1:-1]) for e in np.eye(n)]
     dense = np.array([[sum(np.trace(Fa.reshape(N, N) @ S @ Fb.reshape(N, N) @ S)
                            for Fa, Fb, S in zip(cols[a], cols[b], sigma)) for b in range(n)] for a in range(n)])
     H = kkt.schur(sigma)
@@ -82,7 +82,7 @@ def test_a_block_with_levels_that_are_not_neighbours_is_refused():
     As, rng = _levels()
     I = np.eye(4)
     blocks = [[Term(I, "P0", I), Term(I, "P2", I)]]
-    kkt = dp.ChainKKT(blocks, dp._chain_layout(3, 4))
+    kkt = dp._ChainKKT(blocks, dp._chain_layout(3, 4))
     with pytest.raises(ValueError, match="not neighbours"):
         kkt.schur_blocks([I])
 

@@ -53,12 +53,12 @@ def test_the_operator_and_its_adjoint():
     kkt = ls.StructuredKKT(prog.terms, ls.layout(*prog.sizes))
     rng = np.random.default_rng(1)
     v = rng.standard_normal(prog.c.size)
-    Gv = kkt.apply(v)
+    Gv = kkt._apply(v)
     lin = np.concatenate([(b - f0).ravel() for b, f0 in zip(prog.blocks(v), prog.F0)])
     assert np.allclose(Gv, lin, atol=1e-12 * np.abs(lin).max())
     Zs = [_spd(d, rng) - 0.5 * np.eye(d) for d in kkt.dims]
     lhs = sum(np.sum(g * Z.ravel()) for g, Z in zip(np.split(Gv, kkt.offs[1:-1]), Zs))
-    assert kkt.adjoint(Zs) @ v == pytest.approx(lhs, rel=1e-12)
+    assert kkt._adjoint(Zs) @ v == pytest.approx(lhs, rel=1e-12)
 
 
 def test_the_schur_complement_equals_the_dense_formula():

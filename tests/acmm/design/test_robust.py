@@ -20,7 +20,7 @@ import pytest
 from typer.testing import CliRunner
 
 from acmm.cli.app import app
-from acmm.design.robust import RobustSettings, _plant_family, region_certificate
+from acmm.design.robust import RobustSettings, _plant_family, _region_certificate
 from acmm.io.config import load_config
 from acmm.model import linearize as lin
 from acmm.model.inertia import unphysical_reason
@@ -54,14 +54,14 @@ def test_region_certificate_proves_what_the_poles_allow():
     T[2, 2], T[5, 5] = -1.0, -0.7
     T[3:5, 3:5] = [[-2.0, 1.5], [-1.5, -2.0]]
     A = V @ T @ np.linalg.inv(V)
-    c = region_certificate(A, np.zeros((6, 1)), np.zeros((1, 6)))
+    c = _region_certificate(A, np.zeros((6, 1)), np.zeros((1, 6)))
     assert c.decay == pytest.approx(0.3, abs=1e-6) and c.max_real == pytest.approx(-0.3, abs=1e-9)
     assert c.cone_deg == pytest.approx(np.degrees(np.arctan(1.5 / 2.0)), abs=1e-5)
     assert _lmis_hold(A, c.X, c.decay, c.cone_deg)
     assert not _lmis_hold(A, c.X, c.decay + 1e-3, c.cone_deg)
     assert not _lmis_hold(A, c.X, c.decay, c.cone_deg - 0.1)
     # an unstable loop is not certified: no decay, no cone
-    u = region_certificate(-A, np.zeros((6, 1)), np.zeros((1, 6)))
+    u = _region_certificate(-A, np.zeros((6, 1)), np.zeros((1, 6)))
     assert not u.decay > 0 and np.isnan(u.cone_deg)
 
 

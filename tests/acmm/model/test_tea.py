@@ -201,7 +201,7 @@ def test_bias_fold_is_the_fraction_the_error_names():
     lam = tea.bias_fold(MB3_INERTIA, N, bias)
     with pytest.raises(NoEquilibriumError) as exc:
         tea.solve_tea(MB3_INERTIA, N, bias)
-    assert 0.0 < lam < 1.0 and str(exc.value).startswith(tea.fold_message(bias, lam))
+    assert 0.0 < lam < 1.0 and str(exc.value).startswith(tea._fold_message(bias, lam))
     assert lam * 4.0 == pytest.approx(_max_pitch_bias_scan(), rel=2e-3)
     assert tea.bias_fold(MB3_INERTIA, N, 0.3 * bias) is None        # 1.2 ft·lbf, below the capacity
 
@@ -397,7 +397,7 @@ def _against_oracle(inertia, n, bias):
     got = _outcome(tea.solve_tea_fast, inertia, n, bias)
     theta, status, lam = tea_continuation_np(inertia, n, bias)
     if status == 2:
-        assert got == f"NoEquilibriumError: {tea.fold_message(bias, lam)}", got
+        assert got == f"NoEquilibriumError: {tea._fold_message(bias, lam)}", got
     elif status == 0:
         assert not isinstance(got, str), got
         assert np.max(np.abs(got - theta)) <= 1e-12

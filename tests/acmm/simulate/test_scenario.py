@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from acmm.simulate import reference
+from acmm.simulate import kernel
 from acmm.io.config import load_config
 from acmm.stages.simulate import run_simulate
 
@@ -34,7 +34,7 @@ def test_level_statistics_do_not_depend_on_the_output_sampling(tmp_path):
     # independent: dense RK45 on the kernel's rhs over the same 2 orbits
     res, _ = run_simulate(cfg)
     sc = res.scenario
-    sol = solve_ivp(lambda t, x: reference.kernel_rhs(sc, t, x)[0], (0.0, sc.t_end), sc.x0, rtol=1e-9,
+    sol = solve_ivp(lambda t, x: kernel.kernel_rhs(sc, t, x)[0], (0.0, sc.t_end), sc.x0, rtol=1e-9,
                     atol=sc.atol * 1e-2, dense_output=True, max_step=50.0)
     tt = np.linspace(0.0, sc.t_end, 20001)
     X = sol.sol(tt)
