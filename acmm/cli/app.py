@@ -15,7 +15,7 @@ import typer
 from acmm_qpp.cli.plumbing import (OutOpt, StrictOpt, help_command, overrides_arg, product_app, redraw_command,
                                    run_app, strict_exit)
 from acmm.cli import report, sweep
-from acmm.cli.command import CONFIGS, acmm_command
+from acmm.cli.command import CONFIGS, FiguresOpt, acmm_command
 from acmm.cli.steps import Steps
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
@@ -40,9 +40,6 @@ def _load(config, overrides):
 
 ConfigArg = typer.Argument(None, help="YAML config file (or the name of a packaged config, listed below); "
                                       "default: the packaged stair-case config")
-
-
-FiguresOpt = typer.Option(None, "--figures/--no-figures", help="write figures (default: output.figures)")
 
 
 def _fmt(v, fmt="{:+.4f}"):
