@@ -145,9 +145,11 @@ def design(config, _compute: bool = True) -> "Design":
 
 
 def _named(A, B, C, D, states, inputs, outputs, name):
+    """A named ``control.StateSpace`` (python-control allows no ``.`` in a name: ``,`` stands for it)."""
     import control  # deferred: python-control start-up (~1.5 s), only for a StateSpace
 
-    return control.ss(A, B, C, D, states=list(states), inputs=list(inputs), outputs=list(outputs), name=name)
+    return control.ss(A, B, C, D, states=list(states), inputs=list(inputs), outputs=list(outputs),
+                      name=name.replace(".", ","))
 
 
 @dataclass
@@ -181,13 +183,14 @@ class Design:
         """Names of the design points, in order."""
         return [p.spec.name for p in self.result.points]
 
-    def _index(self, point) -> int:
+    def _point(self, point):
+        """The :class:`acmm.design.schedule.PointDesign` of ``point`` (index or name)."""
         names = self.names
         if isinstance(point, str):
             if point in names:
-                return names.index(point)
+                return self.result.points[names.index(point)]
         elif isinstance(point, (int, np.integer)) and -len(names) <= int(point) < len(names):
-            return int(point) % len(names)
+            return self.result.points[int(point)]
         raise UnknownPointError(f"no design point {point!r}: give an index 0…{len(names) - 1} or a name "
                            f"({', '.join(names)})")
 
@@ -204,7 +207,7 @@ class Design:
         (3, 24) array
             K of u = −K x, ft·lbf per unit of each state (rad, rad/s, ft·lbf·s, ...).
         """
-        return self.result.points[self._index(point)].gain.K
+        return self._point(point).gain.K
 
     def open_loop(self, point=0):
         """Open-loop design model of a point: inputs u1..u3, w1..w3; outputs the states.
@@ -219,8 +222,7 @@ class Design:
         control.StateSpace
             The 24-state model of eq 4.46 (inputs in ft·lbf, time in s).
         """
-        p = self.result.points[self._index(point)]
-        return p.model.to_statespace()
+        return self._point(point).model.to_statespace()
 
     def closed_loop(self, point=0, outputs=None, inputs=None):
         """Closed loop of a point with its own LQR gain (see the module docstring).
@@ -240,8 +242,8 @@ class Design:
             x' = (A − B K) x + B v + G w; inputs v1..v3, w1..w3 (ft·lbf), outputs the 24
             states and u1..u3 (ft·lbf); named ``closed loop at <point>``.
         """
-        p = self.result.points[self._index(point)]
-        return _select(self._closed(p.model, p.gain.K, f"closed loop at {p.spec.name}".replace(".", ",")), outputs, inputs)
+        p = self._point(point)
+        return _select(self._closed(p.model, p.gain.K, f"closed loop at {p.spec.name}"), outputs, inputs)
 
     # ------------------------------------------------------------------ scheduled loop
     def plant_at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -262,17 +264,20 @@ class Design:
         ConfigError
             When the config has no blend (``schedule.to``).
         """
-        return _mix(*self._blend_ends(), s)
+        blended = self._blended()
+        return _mix(blended[0], blended[-1], s)
 
-    def _blend_ends(self):
-        """The first and last blended design points (:class:`acmm.design.schedule.PointSpec`)."""
+    def _blended(self) -> list:
+        """The blended design points (:class:`acmm.design.schedule.PointSpec`, at least two)."""
         blended = [p for p in sp.point_specs(self.config) if np.isfinite(p.s)]
         if len(blended) < 2:
             raise ConfigError("the config has no gain schedule (no schedule.to blend): give a config with one")
-        return blended[0], blended[-1]
+        return blended
 
     def _tea_at(self, s: float, guess=None):
-        a, b = self._blend_ends()
+        """(inertia slug·ft², TEA) of the blended station at ``s``, the TEA continued from ``guess`` if given."""
+        blended = self._blended()
+        a, b = blended[0], blended[-1]
         inertia, bias = _mix(a, b, s)
         n = self.config.orbit_rate
         expected = a.expected if s == 0 else b.expected if s == 1 else None   # their bias_from_tea
@@ -299,12 +304,8 @@ class Design:
         ConfigError
             No blend in the config, or the pitch TEA is outside the blend's range.
         """
-
-        specs = [p for p in sp.point_specs(self.config) if np.isfinite(p.s)]
-        if len(specs) < 2:
-            raise ConfigError("the config has no gain schedule (no schedule.to blend): give a config with one")
         target = np.radians(tea_pitch_deg)
-        grid = np.linspace(0.0, 1.0, max(len(specs), 3))
+        grid = np.linspace(0.0, 1.0, max(len(self._blended()), 3))
         teas = [self._tea_at(s)[1].theta for s in grid]
         f = [t[1] - target for t in teas]
         for k in range(len(grid) - 1):
@@ -368,9 +369,8 @@ class Design:
             Inputs v1..v3, w1..w3 (ft·lbf); outputs the 24 states and u1..u3 (ft·lbf); named
             ``scheduled loop at theta2* -20,00 deg`` (python-control allows no ``.`` in a name).
         """
-        model = self.model_at(tea_pitch_deg)
-        K = self.result.table.gain_at(model.theta_star[1], 0)
-        return _select(self._closed(model, K, f"scheduled loop at theta2* {tea_pitch_deg:+.2f} deg".replace(".", ",")), outputs, inputs)
+        name = f"scheduled loop at theta2* {tea_pitch_deg:+.2f} deg"
+        return _select(self._closed(*self._scheduled(tea_pitch_deg), name), outputs, inputs)
 
     def loop_transfer(self, point=0, tea_pitch_deg: float | None = None):
         """Loop transfer L = K (sI − A)⁻¹ B at the plant input (u1..u3 → Ku1..Ku3), for
@@ -389,16 +389,17 @@ class Design:
             L from u1..u3 to Ku1..Ku3 (ft·lbf to ft·lbf), time in s.
         """
         if tea_pitch_deg is None:
-            p = self.result.points[self._index(point)]
-            model, K = p.model, p.gain.K
+            p = self._point(point)
+            (model, K), where = (p.model, p.gain.K), p.spec.name
         else:
-            model = self.model_at(tea_pitch_deg)
-            K = self.result.table.gain_at(model.theta_star[1], 0)
-
+            (model, K), where = self._scheduled(tea_pitch_deg), f"theta2* {tea_pitch_deg:+.2f} deg"
         return _named(model.A, model.B, K, np.zeros((3, 3)), model.state_names, INPUT_NAMES,
-                      [f"K{u}" for u in INPUT_NAMES], ("loop transfer at " + (
-                          self.names[self._index(point)] if tea_pitch_deg is None
-                          else f"theta2* {tea_pitch_deg:+.2f} deg")).replace(".", ","))
+                      [f"K{u}" for u in INPUT_NAMES], f"loop transfer at {where}")
+
+    def _scheduled(self, tea_pitch_deg: float):
+        """(model of :meth:`model_at`, scheduled gain K(θ2*) at its own pitch TEA) of the blended station."""
+        model = self.model_at(tea_pitch_deg)
+        return model, self.result.table.gain_at(model.theta_star[1], 0)
 
     @staticmethod
     def _closed(model, K, name):

@@ -10,8 +10,8 @@ import json
 from typing import Optional
 
 # first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
-from acmm_qpp.cli.plumbing import (ConfigKinds, ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit, user_errors,
-                                   version_option)
+from acmm_qpp.cli.plumbing import (ConfigKinds, OutOpt, StrictOpt, help_command, overrides_arg, product_app,
+                                   redraw_command, run_app, strict_exit, user_errors)
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
 from qpp import CONFIG_SECTIONS, PACKAGED_CONFIGS
@@ -40,30 +40,16 @@ def _status(message: str):
         yield lambda text: st.update(text)
 
 
-class _QppGroup(ExitCodeGroup):
-    """The ``qpp`` app: its help ends with examples and the packaged qpp configs."""
-
-    examples = ("qpp design qpp_unstable              # an unstable plant: gains and a certificate (exit 0)",
-                "qpp design qpp_siso                  # ch. 13: the report's gains; no consistent certificate (exit 3)",
-                "qpp simulate qpp_unstable            # the spheres checked in simulation",
-                "qpp plot runs/qpp_unstable           # redraw a run's figures from its .h5 files",
-                "qpp COMMAND --help                   # each command's options and examples")
-    config_kinds = ("qpp",)
-    configs = CONFIGS
-
-
-app = typer.Typer(add_completion=True, no_args_is_help=True, cls=_QppGroup, rich_markup_mode=None,
-                  help="Quantitative pole placement for Lure systems (CR-185644 Part III).",
-                  epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
-                         "or option value), 3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
+app = product_app("Quantitative pole placement for Lure systems (CR-185644 Part III).",
+                  ("qpp design qpp_unstable              # an unstable plant: gains and a certificate (exit 0)",
+                   "qpp design qpp_siso                  # ch. 13: the report's gains; no consistent certificate (exit 3)",
+                   "qpp simulate qpp_unstable            # the spheres checked in simulation",
+                   "qpp plot runs/qpp_unstable           # redraw a run's figures from its .h5 files",
+                   "qpp COMMAND --help                   # each command's options and examples"),
+                  CONFIGS, ("qpp",))
 
 ConfigArg = typer.Argument(..., help="YAML config file (or the name of a packaged config, listed below)")
 FigOpt = typer.Option(None, "--figures/--no-figures", help="override output.figures")
-
-
-@app.callback()
-def _root(version: bool = version_option()) -> None:
-    """Quantitative pole placement for Lure systems (CR-185644 Part III)."""
 
 
 def _load(config, overrides):
@@ -228,8 +214,7 @@ def simulate(config: str = ConfigArg, overrides: Optional[list[str]] = overrides
 @user_errors
 def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
                                       help="a run folder (runs/<name>) or its qpp_design.h5 / qpp_sim.h5"),
-         out: Optional[str] = typer.Option(None, "--out", help="folder of the figures (default: the results "
-                                                                "file's folder)")) -> None:
+         out: Optional[str] = OutOpt) -> None:
     """Redraw the figures of a qpp run from its stored results alone (nothing is designed or
     simulated again): the same files, with the same names, as the stage that wrote them.
     Exit 2 when RUN_DIR_OR_H5 is missing or holds no qpp results file."""

@@ -12,37 +12,23 @@ import enum
 
 import typer
 
-from acmm_qpp.cli.plumbing import (ExitCodeGroup, StrictOpt, help_command, overrides_arg, redraw_command, run_app, strict_exit,
-                                   version_option)
+from acmm_qpp.cli.plumbing import (OutOpt, StrictOpt, help_command, overrides_arg, product_app, redraw_command,
+                                   run_app, strict_exit)
 from acmm.cli import report, sweep
-from acmm.cli.command import CONFIGS, acmm_command
+from acmm.cli.command import CONFIGS, FiguresOpt, acmm_command
 from acmm.cli.steps import Steps
 from acmm_qpp.plot_style import files_only_backend
 from acmm_qpp.signals import terminate_like_ctrl_c
 from acmm.model.unit_systems import shown
 
-class _AcmmGroup(ExitCodeGroup):
-    """The ``acmm`` app: its help ends with examples and every packaged config."""
-
-    examples = ("acmm design mb3                      # sector LQR of MB3, writes runs/mb3/design.h5 + figures",
-                "acmm simulate                        # the packaged stair-case (130 orbits)",
-                "acmm simulate mb3 simulation.orbits=2",
-                "acmm sweep sweep_smoke --workers 2",
-                "acmm plot runs/staircase             # redraw a run's figures from its .h5 files",
-                "acmm COMMAND --help                  # each command's options and examples")
-    config_kinds = ("acmm", "sweep", "qpp")
-    configs = CONFIGS
-
-
-app = typer.Typer(add_completion=True, no_args_is_help=True, cls=_AcmmGroup, rich_markup_mode=None,
-                  help="Space Station attitude control / momentum management (CR-185644 Part II).",
-                  epilog="Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override "
-                         "or option value), 3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
-
-
-@app.callback()
-def _root(version: bool = version_option()) -> None:
-    """Space Station attitude control / momentum management (CR-185644 Part II)."""
+app = product_app("Space Station attitude control / momentum management (CR-185644 Part II).",
+                  ("acmm design mb3                      # sector LQR of MB3, writes runs/mb3/design.h5 + figures",
+                   "acmm simulate                        # the packaged stair-case (130 orbits)",
+                   "acmm simulate mb3 simulation.orbits=2",
+                   "acmm sweep sweep_smoke --workers 2",
+                   "acmm plot runs/staircase             # redraw a run's figures from its .h5 files",
+                   "acmm COMMAND --help                  # each command's options and examples"),
+                  CONFIGS, ("acmm", "sweep", "qpp"))
 
 
 def _load(config, overrides):
@@ -54,9 +40,6 @@ def _load(config, overrides):
 
 ConfigArg = typer.Argument(None, help="YAML config file (or the name of a packaged config, listed below); "
                                       "default: the packaged stair-case config")
-
-
-FiguresOpt = typer.Option(None, "--figures/--no-figures", help="write figures (default: output.figures)")
 
 
 def _fmt(v, fmt="{:+.4f}"):
@@ -367,8 +350,7 @@ def simulate(config: Optional[str] = ConfigArg, overrides: Optional[list[str]] =
 def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
                                       help="a run folder (runs/<name>) or one of its results files: design.h5, "
                                            "sim.h5, sweep.h5, qpp_design.h5, qpp_sim.h5"),
-         out: Optional[str] = typer.Option(None, "--out", help="folder of the figures (default: the results "
-                                                                "file's folder)")) -> None:
+         out: Optional[str] = OutOpt) -> None:
     """Redraw the figures of a run from its stored results alone (nothing is designed or
     simulated again): the same files, with the same names, as the stage that wrote them.
     Exit 2 when RUN_DIR_OR_H5 is missing or holds no results file of this project."""

@@ -1,9 +1,11 @@
-"""What every ``acmm`` command shares: the kinds of config ``acmm`` reads (:data:`CONFIGS`) and the
-wrapper :func:`acmm_command` (:func:`acmm_qpp.cli.plumbing.user_errors`: one ``error:`` line, with
+"""What every ``acmm`` command shares: the kinds of config ``acmm`` reads (:data:`CONFIGS`), the
+``--figures/--no-figures`` option (:data:`FiguresOpt`) and the wrapper :func:`acmm_command` (:func:`acmm_qpp.cli.plumbing.user_errors`: one ``error:`` line, with
 the hint the error was raised with, and the ``note:`` lines numba's cache leaves after a run)."""
 from __future__ import annotations
 
 import sys
+
+import typer
 
 from acmm import PACKAGED_CONFIGS
 from acmm_qpp.cli.plumbing import ConfigKinds, user_errors
@@ -17,6 +19,10 @@ CONFIGS = ConfigKinds(PACKAGED_CONFIGS, (("sweep", ("sweep", "sweep_file")), ("q
                       "(mb3, mb3.yaml) is a packaged config. A config a config names (sweep.base, schedule.to) is "
                       "looked up beside the naming file, then in the working directory, then among the packaged "
                       "configs.")
+
+
+#: ``--figures/--no-figures`` of the acmm commands that draw figures
+FiguresOpt = typer.Option(None, "--figures/--no-figures", help="write figures (default: output.figures)")
 
 
 def _compiled_cache_notes() -> list[str]:

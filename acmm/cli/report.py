@@ -5,6 +5,7 @@ the report machinery stay inside the command so ``acmm --help`` stays fast.
 """
 from __future__ import annotations
 
+from collections import Counter
 from pathlib import Path
 import sys
 from typing import Optional
@@ -60,9 +61,7 @@ def register(app: typer.Typer) -> None:
         if not out.strip():              # Path("") would be the working directory itself
             raise ConfigError("--out: empty; give the report's output directory")
         r = build_report(Path(out), fast=fast, rerun=rerun, root=root, progress=say, jobs=jobs)
-        counts: dict[str, int] = {}
-        for p in r.ledger:
-            counts[p.status] = counts.get(p.status, 0) + 1
+        counts = Counter(p.status for p in r.ledger)
         typer.echo(f"report: {len(r.sections)} sections, {len(r.figures)} figures, "
                    f"{len(r.stages)} result files ({sum(s.reused for s in r.stages)} reused) in {r.wall_time:.1f} s "
                    f"({r.jobs} process{'es' if r.jobs > 1 else ''})")

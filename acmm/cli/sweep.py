@@ -11,7 +11,7 @@ from typing import Optional
 import typer
 
 from acmm_qpp.errors import EXIT_INPUT
-from acmm.cli.command import CONFIGS, acmm_command
+from acmm.cli.command import CONFIGS, FiguresOpt, acmm_command
 from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit
 from acmm.cli.steps import Steps
 from acmm_qpp.cli.progress import enabled
@@ -93,8 +93,7 @@ def register(app: typer.Typer) -> None:
               scheduler: Optional[str] = typer.Option(None, "--scheduler",
                                                       help="Dask scheduler address (needs acmm-qpp[dask])"),
               resume: bool = typer.Option(False, "--resume", help="skip the cases already in the journal"),
-              figures: Optional[bool] = typer.Option(None, "--figures/--no-figures",
-                                                     help="write figures (default: output.figures)"),
+              figures: Optional[bool] = FiguresOpt,
               strict: bool = typer.Option(False, "--strict", help="exit 1 when any case is not bounded (for CI)")
               ) -> None:
         """Monte Carlo / grid sweep of closed-loop runs; writes runs/<name>/sweep.h5, sweep.csv, figures.

@@ -15,11 +15,6 @@ from acmm.report.ledger import STATUS_BOUND, STATUS_EXPLAINED, STATUS_MATCHED, S
 from acmm.report.numbers import markdown_table
 
 
-def _css() -> str:
-    """The page style sheet (``acmm/report/style.css``)."""
-    return resources.files("acmm.report").joinpath("style.css").read_text(encoding="utf-8")
-
-
 # =============================================================================================
 # document model: blocks rendered to Markdown and HTML alike
 # =============================================================================================
@@ -139,7 +134,7 @@ def render_markdown(doc: Doc, title: str) -> str:
 
 
 def _status_class(text: str) -> str:
-    if text.startswith(STATUS_MATCHED) or text.startswith(STATUS_BOUND) or text.startswith("✔"):
+    if text.startswith((STATUS_MATCHED, STATUS_BOUND, "✔")):
         return "ok"
     if text.startswith(STATUS_UNEXPLAINED):
         return "bad"
@@ -166,9 +161,10 @@ def render_html(doc: Doc, title: str, figdir: Path) -> str:
         HTML text.
     """
     e = html.escape
+    css = resources.files("acmm.report").joinpath("style.css").read_text(encoding="utf-8")
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
              f"<title>{e(title)}</title>", '<meta name="viewport" content="width=device-width, initial-scale=1">',
-             f"<style>{_css()}</style></head><body>", f"<h1>{e(title)}</h1>",
+             f"<style>{css}</style></head><body>", f"<h1>{e(title)}</h1>",
              "<nav><strong>Contents</strong><ul>"]
     parts += [f'<li><a href="#{a}">{e(t)}</a></li>' for a, t in SECTIONS]
     parts.append("</ul></nav>")

@@ -268,6 +268,8 @@ def help_command(examples: list, kinds: tuple = (), configs: ConfigKinds | None 
 
 StrictOpt = typer.Option(False, "--strict", help="exit 1 when the run finishes with a failing verdict "
                                                  "(for CI)")
+#: ``--out`` of ``acmm plot`` and ``qpp plot`` (:func:`redraw_command`)
+OutOpt = typer.Option(None, "--out", help="folder of the figures (default: the results file's folder)")
 
 
 def _interrupted(exc: BaseException) -> None:
@@ -375,15 +377,32 @@ class ExitCodeGroup(TyperGroup):
             return exc.exit_code
 
 
-def version_option():
-    """An eager ``--version`` option printing the package version.
+#: the end of each app's help
+EXIT_CODES = ("Exit codes: 0 success, 1 failing verdict with --strict, 2 bad input (config, override or option value), "
+              "3 numerical failure, 4 output/I-O, 64 usage, 130 interrupted.")
+
+
+def product_app(about: str, examples: tuple, configs: ConfigKinds, kinds: tuple) -> typer.Typer:
+    """A product's typer app (an :class:`ExitCodeGroup`): help ``about``, then ``examples``, the
+    packaged configs of ``kinds`` and :data:`EXIT_CODES`; an eager ``--version`` prints
+    ``acmm-qpp <version>`` (exit 0).
+
+    Parameters
+    ----------
+    about : str
+        The app's one-line help.
+    examples : tuple of str
+        Command lines shown under ``Examples:`` (:attr:`ExitCodeGroup.examples`).
+    configs : ConfigKinds
+        The product's packaged configs and kinds.
+    kinds : tuple of str
+        Kinds whose packaged configs the help lists.
 
     Returns
     -------
-    typer.models.OptionInfo
-        The option; its callback prints ``acmm-qpp <version>`` and exits 0 (``typer.Exit``).
+    typer.Typer
+        The app, with no commands yet.
     """
-
     def show(value: bool) -> None:
         if value:
             from importlib.metadata import PackageNotFoundError, version  # deferred: for --version only
@@ -395,8 +414,16 @@ def version_option():
             typer.echo(f"acmm-qpp {v}")
             raise typer.Exit(0)
 
-    return typer.Option(False, "--version", callback=show, is_eager=True,
-                        help="print the version and exit")
+    group = type("ProductGroup", (ExitCodeGroup,), {"examples": examples, "config_kinds": kinds, "configs": configs})
+    app = typer.Typer(add_completion=True, no_args_is_help=True, cls=group, rich_markup_mode=None, help=about,
+                      epilog=EXIT_CODES)
+
+    @app.callback()
+    def _root(version: bool = typer.Option(False, "--version", callback=show, is_eager=True,
+                                           help="print the version and exit")) -> None:
+        """The app's own options."""
+
+    return app
 
 
 def redraw_command(redraw, target: str, out) -> None:
