@@ -19,7 +19,7 @@ Perturbed plant
     *torque* (ft·lbf) is external and is held at its nominal value (plus ``bias_*``), so the
     plant's true TEA moves with the inertia: at each level it is the equilibrium connected to
     the level's design TEA as the plant moves from nominal to perturbed
-    (:func:`acmm.sweep.case._perturbed_tea`); where that branch folds, the root continued from
+    (:mod:`acmm.sweep.case`); where that branch folds, the root continued from
     LVLH (:func:`acmm.model.tea.solve_tea`'s physical branch).  No equilibrium → verdict
     ``no_equilibrium`` (not simulated).
 

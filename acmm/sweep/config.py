@@ -50,7 +50,7 @@ import difflib
 
 #: Version of how a ``design: fixed`` case is computed, part of :meth:`Sweep.results_key` so that
 #: ``--resume`` never mixes rows of two versions: 2 (2026-11-30): a case starts at the equilibrium
-#: connected to the design TEA (:func:`acmm.sweep.case._perturbed_tea`); 1: at the root continued
+#: connected to the design TEA (:mod:`acmm.sweep.case`); 1: at the root continued
 #: from LVLH.  (A redesigned case is designed about its own plant's TEA, as before.)
 CASE_MODEL = 2
 

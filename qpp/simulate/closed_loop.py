@@ -16,7 +16,7 @@ State z = [x; x_c; x̂] (eq 10.7).  With f1 the plant nonlinearity and f1o its n
 
 A disturbance impulse I δ(t − t_i) is the jump x(t_i⁺) = x(t_i⁻) + G I.
 
-The reference r = r_o + Δr of each scenario and the nominal reference r_o (eqs 10.2, 10.29) are
+The reference r = r_o + Δr of each scenario and the nominal reference r_o (ch. 10.2, eqs 10.2, 10.29) are
 one list of :class:`~qpp.io.config.Term` (sine, step, ramp) per channel (:func:`eval_signal`).
 """
 from __future__ import annotations

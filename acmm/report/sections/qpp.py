@@ -1,4 +1,6 @@
-"""Sections QPP chapters 13 (SISO Lure example) and 14 (two-DOF manipulator): ch. 13–14."""
+"""Sections QPP chapters 13 (SISO Lure example) and 14 (two-DOF manipulator): ch. 13–14, with their
+figures, the nonlinear closed-loop responses against the output sphere (Figs 13.3–13.9, 14.4) and
+the circle criterion (Figs 13.1, 14.2–14.3)."""
 from __future__ import annotations
 
 from functools import partial

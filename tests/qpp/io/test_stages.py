@@ -82,3 +82,24 @@ def test_the_source_is_unchanged_only_in_a_clean_checkout(monkeypatch, commit, d
     monkeypatch.setattr(stages, "git_commit", lambda: commit)
     monkeypatch.setattr(stages, "git_dirty", lambda: dirty)
     assert stages._source_unchanged() is unchanged
+
+
+def test_the_figures_drawn_from_the_file_show_what_the_stage_computed(tmp_path):
+    """The stages draw their figures from the file they wrote (:func:`figure_calls_from_file`, as
+    ``qpp plot`` does): the iteration figure's β1 and m are the design's own (m of its bookkeeping,
+    ``printed`` here, not the consistent one), and a scenario's parameters are titled in the
+    expression's order (``k`` before ``c``), with the values it ran with."""
+    from qpp.io import stages
+
+    cfg = _cfg(tmp_path)
+    _, r, path = stages.run_design(cfg, figures=False)
+    res = stages.figure_calls_from_file(path, tmp_path)[1].args[0]
+    assert (res.beta1_ref, res.m_ref, [i["beta1"] for i in res.iterations]) == \
+        (r.beta1_ref, r.m_ref, [i["beta1"] for i in r.iterations])
+    over = [f"output.root={tmp_path}", "name=two", "simulation.t_final=0.5", "simulation.n_samples=51",
+            'nonlinearity.f1=[{form: cubic, output: 1, gain: "-c*k"}, "0"]',
+            "nonlinearity.parameters={k: {min: 0.5, max: 2.0, nominal: 1.0}, c: {min: 0.9, max: 1.1, nominal: 1.0}}",
+            "simulation.scenarios=[{name: s, parameters: {k: 1.5, c: 0.95}}]"]
+    _, _, sims, spath = stages.run_simulate(load_config("qpp_cubic2", over), figures=False)
+    drawn = stages.figure_calls_from_file(spath, tmp_path)[0].args[0]
+    assert list(drawn.parameters.items()) == list(sims[0].parameters.items()) == [("k", 1.5), ("c", 0.95)]
