@@ -26,11 +26,47 @@ def _raise_terminated(signum, frame) -> None:
     raise Terminated(signum)
 
 
+def switch_handlers(handlers: dict) -> dict:
+    """Install ``handlers`` with those signals blocked meanwhile (main thread only).
+
+    CPython runs a pending signal's handler at the start of each :func:`signal.signal`; a signal
+    landing between that check and a switch to ``SIG_IGN`` was found pending by the next switch
+    with no handler left, and reported on stderr ("Signal 2 ignored due to race condition", a
+    traceback) under a second Ctrl-C (a test run).  Blocked, it waits for the end of the switch:
+    then discarded (``SIG_IGN``) or handled by the new handler.
+
+    Parameters
+    ----------
+    handlers : dict
+        Signal number → handler (a callable, ``signal.SIG_IGN`` or ``signal.SIG_DFL``).
+
+    Returns
+    -------
+    dict
+        Signal number → the handler it replaced.
+    """
+    mask = getattr(signal, "pthread_sigmask", None)
+    blocked = mask(signal.SIG_BLOCK, handlers) if mask is not None else None
+    try:
+        return {sig: signal.signal(sig, handler) for sig, handler in handlers.items()}
+    finally:
+        if blocked is not None:
+            mask(signal.SIG_SETMASK, blocked)
+
+
+def ignore_interrupts() -> None:
+    """Ignore Ctrl-C, SIGTERM and SIGHUP from now on in this process (``SIG_IGN``; main thread only).
+
+    The three are blocked while they are switched, so that one arriving meanwhile is discarded
+    instead of reported on stderr as a race by CPython.
+    """
+    switch_handlers({sig: signal.SIG_IGN for sig in (signal.SIGINT, *TERMINATING)})
+
+
 def _first_interrupt(signum, frame) -> None:
     """The handler of ``terminate_like_ctrl_c(once=True)``: every later interrupt ignored, then this
     one raised (Ctrl-C as ``KeyboardInterrupt``, SIGTERM or SIGHUP as :class:`acmm_qpp.errors.Terminated`)."""
-    for sig in (signal.SIGINT, *TERMINATING):
-        signal.signal(sig, signal.SIG_IGN)
+    ignore_interrupts()
     if signum == signal.SIGINT:
         raise KeyboardInterrupt
     raise Terminated(signum)
@@ -86,11 +122,9 @@ def interrupts_deferred():
     arrived: list[int] = []
     old = {}
     try:
-        for sig in (signal.SIGINT, *TERMINATING):
-            old[sig] = signal.signal(sig, lambda signum, frame: arrived.append(signum))
+        old = switch_handlers({sig: lambda signum, frame: arrived.append(signum) for sig in (signal.SIGINT, *TERMINATING)})
         yield
     finally:
-        for sig, handler in old.items():
-            signal.signal(sig, handler)
+        switch_handlers(old)
         if arrived:
             signal.raise_signal(arrived[0])   # now, with the handler of before

@@ -25,7 +25,7 @@ import time
 import warnings
 
 from acmm_qpp.errors import OutputError
-from acmm_qpp.signals import TERMINATING, interrupts_deferred
+from acmm_qpp.signals import TERMINATING, interrupts_deferred, switch_handlers
 
 #: prctl(2) option: the signal a process gets when its parent thread exits (Linux)
 PR_SET_PDEATHSIG = 1
@@ -58,10 +58,7 @@ def _pool_worker(parent: int, initializer=None, interval: float = 1.0) -> None:
     that forked it exits (Linux ``prctl(PR_SET_PDEATHSIG)``), an exit at once if it is already
     gone, and a daemon thread polling ``os.getppid()`` every ``interval`` s (where ``prctl`` does
     not exist); then ``initializer()``."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    for sig in TERMINATING:
-        with contextlib.suppress(OSError, ValueError):
-            signal.signal(sig, signal.SIG_DFL)
+    switch_handlers({signal.SIGINT: signal.SIG_IGN, **{sig: signal.SIG_DFL for sig in TERMINATING}})
     if sys.platform.startswith("linux"):
         with contextlib.suppress(OSError, AttributeError):
             ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)

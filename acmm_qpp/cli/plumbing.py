@@ -9,7 +9,6 @@ import contextlib
 import functools
 import os
 import re
-import signal
 import sys
 import threading
 import warnings
@@ -30,6 +29,7 @@ except ImportError:  # pragma: no cover
 
 from acmm_qpp.errors import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_USAGE, EXIT_VERDICT, AcmmError, ConfigError,
                              plain_failure, with_hint)
+from acmm_qpp.signals import ignore_interrupts
 
 
 def fail(message: str, code: int = EXIT_INPUT) -> None:
@@ -492,7 +492,6 @@ def run_app(app) -> None:
             _interrupted(exc)
     except SystemExit:
         if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
-                with contextlib.suppress(OSError, ValueError):
-                    signal.signal(sig, signal.SIG_IGN)
+            with contextlib.suppress(OSError, ValueError):
+                ignore_interrupts()
         raise

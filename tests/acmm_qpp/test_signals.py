@@ -199,3 +199,39 @@ def test_only_the_first_interrupt_unwinds(tmp_path):
     done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, env=ENV,
                           timeout=60, check=False)
     assert done.returncode == 0 and done.stdout.splitlines() == ["cleanup whole"], (done.stdout, done.stderr)
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_sigmask"), reason="POSIX signal masks")
+def test_handlers_are_switched_with_their_signals_blocked():
+    """switch_handlers blocks the signals it switches during every signal.signal and restores the
+    mask after: a Ctrl-C landing in a switch to SIG_IGN is discarded, one landing in a switch to a
+    handler reaches that handler, and none is reported on stderr as a race by CPython."""
+    code = textwrap.dedent("""
+        import os, signal
+        from acmm_qpp.signals import TERMINATING, ignore_interrupts, switch_handlers
+        real, masks = signal.signal, []
+        def spy(sig, handler):
+            masks.append(signal.pthread_sigmask(signal.SIG_BLOCK, []))
+            return real(sig, handler)
+        signal.signal = spy
+        before = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+        got = []
+        switch_handlers({signal.SIGINT: lambda s, f: got.append("first")})
+        ignore_interrupts()
+        assert signal.pthread_sigmask(signal.SIG_BLOCK, []) == before
+        switched = {signal.SIGINT, *TERMINATING}
+        assert len(masks) == 1 + len(switched) and all(switched <= m for m in masks[1:]), masks
+        assert signal.SIGINT in masks[0] and all(signal.getsignal(s) is signal.SIG_IGN for s in switched)
+        signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGINT])
+        switch_handlers({signal.SIGINT: lambda s, f: got.append("third")})
+        os.kill(os.getpid(), signal.SIGINT)                 # pending (blocked) ...
+        ignore_interrupts()                                 # ... and discarded when ignored
+        switch_handlers({signal.SIGINT: lambda s, f: got.append("fourth")})
+        os.kill(os.getpid(), signal.SIGINT)                 # pending: the new handler takes it
+        assert got == []
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT])
+        assert got == ["fourth"], got
+        print("ok")
+    """)
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=ROOT)
+    assert (r.returncode, r.stdout.strip(), r.stderr) == (0, "ok", "")
