@@ -1,10 +1,9 @@
-"""The report's robustness section (acmm.report.sections.robustness) without the sweep installed."""
+"""The report's robustness section (acmm.report.sections.robustness) when the sweep fails."""
 from __future__ import annotations
-
-import sys
 
 import pytest
 
+from acmm_qpp.errors import ConfigError
 from acmm.report.context import SectionWriter
 from acmm.report import document as document_mod
 from acmm.report import gather as gather_mod
@@ -25,10 +24,13 @@ class _Robustness(SectionWriter):
 
 
 def test_robustness_absent_renders_not_available(tmp_path, monkeypatch):
-    monkeypatch.setitem(sys.modules, "acmm.sweep", None)        # import now raises ImportError
-    monkeypatch.setitem(sys.modules, "acmm.sweep.run", None)    # (also when already imported)
+    """A sweep that fails with an AcmmError: the section says "Not available", with the reason."""
+    def refuse(root, **kwargs):
+        raise ConfigError("sweep.bases: a refused sweep")
+
+    monkeypatch.setattr(gather_mod, "_robustness_from_sweep", refuse)
     res, note = gather_mod.robustness_result(tmp_path)
-    assert res is None and "not installed" in note
+    assert res is None and note == "the sweep failed: ConfigError: sweep.bases: a refused sweep"
     g = gather_mod.Gathered(configs={}, runs={}, robustness=None, robustness_note=note)
     rep = _Robustness(g, tmp_path, fast=True)
     rep.robustness()
