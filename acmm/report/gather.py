@@ -197,11 +197,7 @@ def acmm_config(name: str, root: Path | None = None, *, fast: bool = False):
     acmm.io.config.Config
         The config, figures off.
     """
-    # the packaged file itself: a file or folder named like it in the working directory is not it
-    data = load_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
-    if root is not None:
-        data["output"]["root"] = str(root)
-    data["output"]["figures"] = False
+    data = _packaged(load_config, name, root)
     if fast and data.get("schedule") is not None:
         data["name"] = f"{data['name']}_fast"
         data["simulation"]["orbits"] = FAST_ORBITS
@@ -224,11 +220,17 @@ def qpp_config(name: str, root: Path | None = None):
     qpp.io.config.QppConfig
         The config, figures off.
     """
-    data = load_qpp_config(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
+    return parse_qpp_config(_packaged(load_qpp_config, name, root), source=f"packaged config {name}")
+
+
+def _packaged(load, name: str, root: Path | None) -> dict:
+    """The packaged config ``name`` read by ``load`` (the file itself: a file or folder named like it
+    in the working directory is not it), as data with its results root ``root`` and figures off."""
+    data = load(packaged_config_path(f"{name}.yaml", PACKAGED_CONFIGS)).model_dump(mode="json")
     if root is not None:
         data["output"]["root"] = str(root)
     data["output"]["figures"] = False
-    return parse_qpp_config(data, source=f"packaged config {name}")
+    return data
 
 
 def _stage_record(stage, cfg_name, path, chash, dhash, reused, wall):
