@@ -130,6 +130,12 @@ def _residual_jac(th, inertia, n, bias, r, jac, want_jac):
 
 
 @njit_cached()
+def _max_diff(a, b):
+    """max_i |a_i − b_i| of two attitudes (rad): the jump of a continuation step."""
+    return np.abs(a - b).max()
+
+
+@njit_cached()
 def _det3(a):
     return (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
             - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
@@ -172,21 +178,17 @@ def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out, yaw_only=Fal
     An iterate beyond 89.5° fails: in any angle, or with ``yaw_only`` in yaw θ3 alone, the one
     singular angle of the 2-3-1 sequence."""
     th = theta0.copy()
-    amax = 0.0
-    for i in range(3):
-        for j in range(3):
-            amax = max(amax, abs(inertia[i, j]))
-    scale = max(3.0 * n * n * amax, 1e-300)
+    scale = max(3.0 * n * n * np.abs(inertia).max(), 1e-300)
     thr = max(min(tol, 1e-13 * scale), 1e-15 * scale)          # threshold of _RESIDUAL_TOL
     r = np.empty(3)
     jac = np.empty((3, 3))
     step = np.empty(3)
-    for _ in range(max_iter):
-        _residual_jac(th, inertia, n, bias, r, jac, True)
+    for it in range(max_iter + 1):          # the last pass only tests the final iterate
+        _residual_jac(th, inertia, n, bias, r, jac, it < max_iter)
         if max(abs(r[0]), abs(r[1]), abs(r[2])) <= thr:
             out[:] = th
             return True
-        if not _solve3(jac, -r, step):
+        if it == max_iter or not _solve3(jac, -r, step):
             return False
         norm = 0.0
         for i in range(3):
@@ -194,16 +196,10 @@ def _newton(theta0, inertia, n, bias, tol, max_iter, max_step, out, yaw_only=Fal
                 return False
             norm = max(norm, abs(step[i]))
         if norm > max_step:
-            for i in range(3):
-                step[i] *= max_step / norm
-        for i in range(3):
-            th[i] += step[i]
+            step *= max_step / norm
+        th += step
         if abs(th[2]) > _THETA_LIMIT or (not yaw_only and max(abs(th[0]), abs(th[1])) > _THETA_LIMIT):
             return False
-    _residual_jac(th, inertia, n, bias, r, jac, False)
-    if max(abs(r[0]), abs(r[1]), abs(r[2])) <= thr:
-        out[:] = th
-        return True
     return False
 
 
@@ -231,12 +227,7 @@ def _continue(theta, i0, i1, b0, b1, n, tol, min_step, connected=False):
         trial = min(1.0, lam + step)
         inertia = i0 + trial * (i1 - i0)
         bias = b0 + trial * (b1 - b0)
-        ok = _newton(th, inertia, n, bias, tol, 50, 0.5, new, connected)
-        if ok:
-            jump = 0.0
-            for i in range(3):
-                jump = max(jump, abs(new[i] - th[i]))
-            ok = jump <= _MAX_JUMP
+        ok = _newton(th, inertia, n, bias, tol, 50, 0.5, new, connected) and _max_diff(new, th) <= _MAX_JUMP
         if ok:
             _residual_jac(new, inertia, n, bias, r, jac, True)
             det = np.sign(_det3(jac))
@@ -285,11 +276,9 @@ def _smooth_step(th, new, lam, trial, i0, i1, b0, b1, n):
         return False
     h = trial - lam
     err = 0.0
-    size = 0.0
     for i in range(3):
         err = max(err, abs(new[i] - th[i] - 0.5 * h * (ta[i] + tb[i])))
-        size = max(size, abs(new[i] - th[i]))
-    return err <= 0.05 * size + 1e-12
+    return err <= 0.05 * _max_diff(new, th) + 1e-12
 
 
 @njit_cached()
@@ -300,13 +289,7 @@ def _fold_location(theta, lam, inertia, n, bias, tol):
     new = np.empty(3)
     for _ in range(40):
         mid = 0.5 * (lo + hi)
-        ok = _newton(th, inertia, n, mid * bias, tol, 50, 0.05, new)
-        if ok:
-            jump = 0.0
-            for i in range(3):
-                jump = max(jump, abs(new[i] - th[i]))
-            ok = jump < _MAX_JUMP
-        if ok:
+        if _newton(th, inertia, n, mid * bias, tol, 50, 0.05, new) and _max_diff(new, th) < _MAX_JUMP:
             lo = mid
             th[:] = new
         else:
@@ -318,11 +301,8 @@ def _fold_location(theta, lam, inertia, n, bias, tol):
 def _from_lvlh(inertia, n, bias, tol):
     """(θ, status, λ): status 0 solved, 1 fold in the products of inertia (λ reached), 2 fold
     in the bias (λ: the largest bias fraction with an equilibrium)."""
-    diag = np.zeros((3, 3))
-    for i in range(3):
-        diag[i, i] = inertia[i, i]
     zero = np.zeros(3)
-    th, lam, fold = _continue(np.zeros(3), diag, inertia, zero, zero, n, tol, 1e-7)
+    th, lam, fold = _continue(np.zeros(3), np.diag(np.diag(inertia)), inertia, zero, zero, n, tol, 1e-7)
     if fold:
         return th, 1, lam
     th, lam, fold = _continue(th, inertia, inertia, zero, bias, n, tol, 1e-7)
@@ -336,13 +316,8 @@ def _from_root(theta0, i0, b0, i1, b1, n, tol):
     """(θ, ok): the root of (i1, b1) on the branch through the root of (i0, b0) that damped
     Newton reaches from θ0 (within 5°), by the connected continuation."""
     start = np.empty(3)
-    if not _newton(theta0, i0, n, b0, tol, 50, 0.05, start, False):
-        return theta0.copy(), False
-    jump = 0.0
-    for i in range(3):
-        jump = max(jump, abs(start[i] - theta0[i]))
-    if jump > _MAX_JUMP:
-        return start, False
+    if not (_newton(theta0, i0, n, b0, tol, 50, 0.05, start, False) and _max_diff(start, theta0) <= _MAX_JUMP):
+        return theta0.copy(), False         # the caller reads θ only when ok
     th, _, fold = _continue(start, i0, i1, b0, b1, n, tol, 1e-7, True)
     return th, not fold
 
