@@ -67,8 +67,7 @@ def controllability(model: LinearModel, tol: float = 1e-10) -> Controllability:
     nx = a.shape[0]
     points = list(np.linalg.eigvals(a)) + [0.0]
     ratios = pbh_ratios(a, b, points)
-    eig_ratios = ratios[:-1]
-    rank = nx - int(np.sum(eig_ratios <= tol))
+    rank = nx - int(np.sum(ratios[:-1] <= tol))        # the last point is s = 0
     i = int(np.argmin(ratios))
     return Controllability(rank=rank, order=nx, min_ratio=float(ratios[i]), worst_s=complex(points[i]),
                            tol=tol)

@@ -1,17 +1,10 @@
 """Nonlinear rigid-body dynamics of the Space Station (CR-185644 eqs 3.1–3.9).
 
-Conventions (see ``docs/ERRATA.md`` § Units, § Frames, § Kinematics and § Momentum balance):
-
-* Units: slug·ft², ft·lbf, ft·lbf·s, rad, s.
-* θ = (roll θ1, pitch θ2, yaw θ3) is a pitch–yaw–roll (2-3-1) sequence from LVLH to body:
-  ``C_BL = C1(θ1) C3(θ3) C2(θ2)``; LVLH axes x = velocity, y = −orbit normal, z = nadir.
-* The nadir vector c (eq 3.4) is the third column of C_BL; the LVLH angular velocity seen in
-  body axes is C_BL·(0, −n, 0) (eq 4.3).
-* Eq 3.6 is misprinted: its (1,1) bracket entry is cos θ3, so f11 = 1.
-* The control torque u enters ω̇ as −u and ḣ as +u; the disturbance w enters ω̇ as +w.
-
-The kinematics (rotations, nadir vector, LVLH rate, eqs 3.4–3.6) live in :mod:`acmm.model.kinematics`.  All functions are pure and accept stacked inputs along leading axes
-where noted; they keep the input dtype, so complex-step differentiation works through them.
+Units slug·ft², ft·lbf, ft·lbf·s, rad, s (``docs/ERRATA.md`` § Units); attitude θ, frames and the
+kinematics of eqs 3.4–3.6 as in :mod:`acmm.model.kinematics`.  The control torque u enters ω̇ as −u
+and ḣ as +u; the disturbance w enters ω̇ as +w (``docs/ERRATA.md`` § Momentum balance).  All
+functions are pure and accept stacked inputs along leading axes where noted; they keep the input
+dtype, so complex-step differentiation works through them.
 """
 from __future__ import annotations
 

@@ -139,12 +139,8 @@ def state_units(drf_mode: str = "attitude_hold") -> list[str]:
     """
     base = ["rad/s"] * 3 + ["rad"] * 3 + ["ft*lbf*s"] * 3 + ["ft*lbf*s^2"] * 3
     in_units = {4: "rad", 5: "rad", 6: "ft*lbf*s", 7: "ft*lbf*s"}
-    drf = []
-    for _freq in (1, 2):
-        for idx in DRF_INPUTS[drf_mode]:
-            u = in_units[idx]
-            drf += [f"{u}*s", f"{u}*s^2"]
-    return base + drf
+    drf = [f"{in_units[idx]}*s{p}" for idx in DRF_INPUTS[drf_mode] for p in ("", "^2")]
+    return base + drf * 2          # the filters at n, then at 2n
 
 
 def kinematics_jacobian(theta: np.ndarray, n: float) -> np.ndarray:
@@ -195,12 +191,11 @@ def state_scales(n: float, drf_mode: str = "attitude_hold", inertia=None) -> np.
     s[3:6] = ang
     s[6:9] = mom
     s[9:12] = mom / n
-    base = {4: ang, 5: ang, 6: mom, 7: mom}
     k = 12
     for wf in (n, 2 * n):
         for idx in DRF_INPUTS[drf_mode]:
-            s[k] = base[idx] / wf          # α̇ ~ input / ω_f
-            s[k + 1] = base[idx] / wf ** 2  # α ~ input / ω_f²
+            s[k] = s[idx] / wf          # α̇ ~ input / ω_f
+            s[k + 1] = s[idx] / wf ** 2  # α ~ input / ω_f²
             k += 2
     return s
 
@@ -251,15 +246,13 @@ def linearize(inertia: np.ndarray, theta_star: np.ndarray, n: float, *,
     # x1 = M z: replace δω2 by the linearized θ̇2 (eq 4.26); ẋ1 = M A_z M⁻¹ x1 is E1⁻¹A1 (4.27-4.29)
     m = np.eye(6)
     m[1] = a_z[4]
-    m_inv = np.linalg.inv(m)
-    a11 = m @ a_z @ m_inv
     b_z = np.vstack([-i_inv, np.zeros((3, 3))])   # u enters ω̇ as −u (eq 3.1; printed 4.30 sign wrong)
     g_z = np.vstack([i_inv, np.zeros((3, 3))])    # w enters ω̇ as +w
 
     A = np.zeros((24, 24))
     B = np.zeros((24, 3))
     G = np.zeros((24, 3))
-    A[0:6, 0:6] = a11
+    A[0:6, 0:6] = m @ a_z @ np.linalg.inv(m)
     B[0:6] = m @ b_z
     G[0:6] = m @ g_z
     # CMG momentum and its integral, eqs 4.31-4.34 (A2(3,1) = −n cos θ1 cos θ3, printed +)
@@ -309,15 +302,11 @@ def design_point(inertia_full: np.ndarray, theta_tea: np.ndarray, n: float, *,
     ValueError
         When ``model`` is not one of the three variants.
     """
-    inertia_full = np.asarray(inertia_full, float)
-    if model == "coupled":
-        return linearize(inertia_full, theta_tea, n, drf_mode=drf_mode, variant=model)
-    if model == "no_cross_inertia":
-        return linearize(np.diag(np.diag(inertia_full)), theta_tea, n, drf_mode=drf_mode,
-                         variant=model)
-    if model == "small_angle":
-        return linearize(inertia_full, np.zeros(3), n, drf_mode=drf_mode, variant=model)
-    raise ValueError(f"unknown design model {model!r}")
+    if model not in ("coupled", "no_cross_inertia", "small_angle"):
+        raise ValueError(f"unknown design model {model!r}")
+    inertia = np.asarray(inertia_full, float)
+    return linearize(np.diag(np.diag(inertia)) if model == "no_cross_inertia" else inertia,
+                     np.zeros(3) if model == "small_angle" else theta_tea, n, drf_mode=drf_mode, variant=model)
 
 
 def linearize_config(cfg) -> LinearModel:

@@ -18,7 +18,6 @@ NOMINAL_MOMENTUM = 1000.0
 MOMENTUM_BAND = (1e-2, 1e2)
 
 
-
 def momentum_scale(n: float, inertia=None) -> float:
     """Nominal CMG momentum of a station, ft·lbf·s: :data:`NOMINAL_MOMENTUM`, or for a station
     whose natural momentum λmax(I)·n·:data:`NOMINAL_ANGLE` lies outside :data:`MOMENTUM_BAND`

@@ -44,13 +44,9 @@ def output_unit(unit: str, system: str = "imperial") -> str:
     str
         The unit written to output files.
     """
-    if unit == "deg":
-        return "rad"
-    if unit == "deg/s":
-        return "rad/s"
-    if system == "SI":
-        return _SI.get(unit, unit)
-    return unit
+    if unit in ("deg", "deg/s"):
+        return unit.replace("deg", "rad")
+    return display_unit(unit, system)
 
 
 def display_unit(unit: str, system: str = "imperial") -> str:
@@ -69,9 +65,7 @@ def display_unit(unit: str, system: str = "imperial") -> str:
     str
         The unit shown.
     """
-    if system == "SI":
-        return _SI.get(unit, unit)
-    return unit
+    return _SI.get(unit, unit) if system == "SI" else unit
 
 
 def to_system(value, unit: str, system: str = "imperial", display: bool = False):

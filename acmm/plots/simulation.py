@@ -260,4 +260,3 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
             text.set_text("\n".join(column))
             text.set_fontsize(size)
     return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
-

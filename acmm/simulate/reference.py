@@ -1,11 +1,5 @@
-"""Plain-numpy right-hand side of the closed loop simulated by :mod:`acmm.simulate.kernel`.
-
-Built from :mod:`acmm.model.dynamics` independently of the compiled kernel: the reference the kernel
-(its :func:`acmm.simulate.kernel.kernel_rhs` at one state) is tested against and the ``solve_ivp``
-baseline of ``make bench``.  It is the nonlinear model of
-eqs 3.1–3.9 (rigid-body and CMG dynamics, 2-3-1 kinematics, gravity-gradient and disturbance
-torques) closed by the controller and DRF states of ch. 4–5.  Split from
-:mod:`acmm.simulate.kernel` (issue 12).
+"""Plain-numpy right-hand side of the closed loop simulated by :mod:`acmm.simulate.kernel` (eqs 3.1–3.9,
+ch. 4–5), built from :mod:`acmm.model.dynamics` independently of the compiled kernel.
 """
 from __future__ import annotations
 
@@ -28,7 +22,7 @@ def rhs_numpy(t: float, X: np.ndarray, sc: Scenario, level: int = 0) -> np.ndarr
     t : float
         Time, s.
     X : (24,) array
-        Plain state, in the units listed in the module docstring.
+        Plain state X, in the units of :mod:`acmm.simulate.scenario`.
     sc : Scenario
         The closed loop (units in :class:`Scenario`).
     level : int
@@ -60,4 +54,3 @@ def rhs_numpy(t: float, X: np.ndarray, sc: Scenario, level: int = 0) -> np.ndarr
         d_drf[2 * j] = -wf * wf * drf[2 * j + 1] + drf_in[j % 3]
         d_drf[2 * j + 1] = drf[2 * j]
     return np.concatenate([omega_dot, theta_dot, h_dot, h, d_drf])
-

@@ -5,9 +5,6 @@ statistics (the stair-case of inertia levels, ch. 6).
 
 Integrated state X (24): ω (rad/s), θ (rad), h (ft·lbf·s), ∫h (ft·lbf·s²), DRF states
 (α̇1, α1, α̇2, α2, α̇3, α3, β̇1, β1, β̇2, β2, β̇3, β3) (eqs 3.1, 3.5, 3.8, 4.35–4.40).
-
-Moved out of :mod:`acmm.simulate.kernel` (issue 12); the compiled
-integrator stays there.
 """
 from __future__ import annotations
 
