@@ -12,8 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acmm.plots.base import (FAST_TEXT_RC, bake_texts, compact_formatter, data_limits,
-    premake_ticks, write_figure, in_view_ticks, state_units)
-from acmm.plots.base import stage_pyplot
+    premake_ticks, write_figure, in_view_ticks, state_units, stage_pyplot)
 from acmm.plots.panel_grid import PanelGrid
 from matplotlib.ticker import MaxNLocator
 
@@ -166,8 +165,10 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
         a.plot(x, -t * x, "k-", lw=0.8)
         for k, (p, name) in enumerate(zip(poles_per_point, names)):
             p = np.asarray(p) / n
+            # a point of the blend of eq 5.3 (blend_0.017) is named by its parameter
+            label = name.replace("blend_", "blend parameter s = ", 1) if name.startswith("blend_") else name
             a.plot(p.real, p.imag, "x", ms=4, color=cmap(k / max(1, len(names) - 1)),
-                   label=_point_label(name) if len(names) <= 12 and a is ax else None)
+                   label=label if len(names) <= 12 and a is ax else None)
         a.axvline(0, color="k", lw=0.5)
         a.set_xlabel("real part Re λ (units of n, the orbit rate)")
         a.set_ylabel("imaginary part Im λ (units of n)")
@@ -184,14 +185,6 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
         fig.legend(*ax.get_legend_handles_labels(), fontsize=7, loc="center right", frameon=False)
     fig.subplots_adjust(left=0.07, right=0.8, bottom=0.1, top=0.88, wspace=0.25)
     return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
-
-
-def _point_label(name: str) -> str:
-    """A design point's name as a legend says it: ``blend_0.017`` (a point of the blend of eq 5.3)
-    is ``blend parameter s = 0.017``; other names are kept."""
-    if name.startswith("blend_"):
-        return f"blend parameter s = {name[len('blend_'):]}"
-    return name
 
 
 def _path_check_layout():
@@ -248,7 +241,6 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
         lo, hi = float(fin.min()), float(fin.max())
         pad = max(0.05 * (hi - lo), 0.02 * max(abs(hi), 1e-3))
         a2.set_ylim(max(0.0, lo - pad), hi + pad)
-
     a2.yaxis.set_major_locator(MaxNLocator(6))
     return write_figure(fig, path, vector, tight=False)
 

@@ -96,15 +96,13 @@ class PanelGrid:
         self.panels = [Panel((lefts[c], bottoms[r], rights[c] - lefts[c], tops[r] - bottoms[r]))
                        for r in range(rows) for c in range(cols)]
         rc, tf = mpl.rcParams, fig.transFigure
-        self.titles = []
+        boxes = [p.box for p in self.panels]
         pad = rc["axes.titlepad"] / 72 * fig.dpi / fig.bbox.height
-        for p in self.panels:
-            x0, y0, w, h = p.box
-            self.titles.append(fig.text(x0 + w / 2, y0 + h + pad, "", ha="center", va="baseline",
-                                        fontsize=title_size))
+        self.titles = [fig.text(x0 + w / 2, y0 + h + pad, "", ha="center", va="baseline", fontsize=title_size)
+                       for x0, y0, w, h in boxes]
         self.frames = fig.add_artist(LineCollection(
-            [self._frame(p) for p in self.panels], colors=rc["axes.edgecolor"],
-            linewidths=rc["axes.linewidth"], transform=tf, zorder=2.5))
+            [[(x0, y0), (x0 + w, y0), (x0 + w, y0 + h), (x0, y0 + h), (x0, y0)] for x0, y0, w, h in boxes],
+            colors=rc["axes.edgecolor"], linewidths=rc["axes.linewidth"], transform=tf, zorder=2.5))
         self.grid = fig.add_artist(LineCollection([], colors=rc["grid.color"], linewidths=rc["grid.linewidth"],
                                                   alpha=rc["grid.alpha"], transform=tf, zorder=1.5))
         self.ticks = fig.add_artist(LineCollection([], colors=rc["ytick.color"],
@@ -113,11 +111,6 @@ class PanelGrid:
         self.tick_labels: list = []
         self.labels: list = []
         fig.panel_grid = self
-
-    @staticmethod
-    def _frame(p: Panel) -> list:
-        x0, y0, w, h = p.box
-        return [(x0, y0), (x0 + w, y0), (x0 + w, y0 + h), (x0, y0 + h), (x0, y0)]
 
     def set_title(self, k: int, text: str) -> None:
         """Set the title of a panel.

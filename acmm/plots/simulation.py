@@ -10,8 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from acmm.plots.base import (AXES, FAST_TEXT_RC, bake_texts, compact_formatter, data_limits,
-    premake_ticks, write_figure, decimate, in_view_ticks)
-from acmm.plots.base import stage_pyplot
+    premake_ticks, write_figure, decimate, in_view_ticks, stage_pyplot)
 from acmm.plots.panel_grid import PanelGrid
 from acmm.model.unit_systems import pretty, shown
 import matplotlib as mpl
@@ -26,14 +25,6 @@ def _in_view_locator(nbins: int):
             return in_view_ticks(*self.axis.get_view_interval(), nbins)
 
     return InView(nbins, min_n_ticks=3)
-
-
-def _panel_axes(ax) -> None:
-    """A summary panel's axes: few y ticks written short, at most six x ticks."""
-    ax.yaxis.set_major_locator(_in_view_locator(3))
-    ax.yaxis.set_major_formatter(compact_formatter())
-    ax.tick_params(labelsize=8)
-    ax.xaxis.set_major_locator(_in_view_locator(5))
 
 
 def _axis_histories_layout(units: str):
@@ -179,7 +170,11 @@ def _summary_layout(units: str, n_rows: int = 12):
         ax.set_ylabel(label)
     lines = []
     for ax in (top, *mid):
-        _panel_axes(ax)
+        # few y ticks written short, at most six x ticks
+        ax.yaxis.set_major_locator(_in_view_locator(3))
+        ax.yaxis.set_major_formatter(compact_formatter())
+        ax.tick_params(labelsize=8)
+        ax.xaxis.set_major_locator(_in_view_locator(5))
         ax.set_xlabel("time (orbits)")
         # the labels at fixed axes coordinates: the automatic placement measures every tick label again
         ax.xaxis.set_label_coords(0.5, -0.1 if ax is top else -0.12)

@@ -9,10 +9,8 @@ the commanded torque is clipped to ±torque_limit per axis; a CMG axis at |h_i| 
 delivers only the torque that stops |h_i| growing, and the body receives exactly the torque the
 CMG absorbs, so I ω̇ + ḣ + ω×(Iω + h) = τ_gg + w holds along every trajectory.
 
-The integrator is an adaptive Dormand–Prince 5(4) pair compiled with numba (``cache=True``: the
-one-time compilation is reused across runs).  :func:`rhs_numpy` (in :mod:`acmm.simulate.reference`) is a plain-numpy right-hand side of the same model built from
-:mod:`acmm.model.dynamics`, used as the independent reference and as the ``solve_ivp`` baseline of
-``make bench``.
+The integrator is an adaptive Dormand–Prince 5(4) pair compiled with numba and cached on disk
+(:mod:`acmm.model.compiled_cache`); :mod:`acmm.simulate.reference` is its plain-numpy reference.
 
 Integrated state X (24): ω (rad/s), θ (rad), h (ft·lbf·s), ∫h (ft·lbf·s²), DRF states
 (α̇1, α1, α̇2, α2, α̇3, α3, β̇1, β1, β̇2, β2, β̇3, β3).
@@ -120,7 +118,7 @@ class LoopConstants(NamedTuple):
     hmax : float, ft·lbf·s
         CMG momentum limit per axis (ch. 5.1).
     drf_idx : (6,) int array
-        Index in x (eq 4.47) of each DRF's input (eqs 4.35–4.40; :func:`_drf_index`).
+        Index in x (eq 4.47) of each DRF's input (eqs 4.35–4.40), the filters at n then at 2n.
     rtol : float
         Relative tolerance of the integrator, dimensionless.
     atol : (24,) array
@@ -358,9 +356,7 @@ def closed_loop_rhs(t, X, lv, loop, out, w):
     out[6] = u[0] - wxh0
     out[7] = u[1] - wxh1
     out[8] = u[2] - wxh2
-    out[9] = h1
-    out[10] = h2
-    out[11] = h3
+    out[9:12] = X[6:9]
     # DRFs, eqs 4.35-4.40: d(α̇)/dt = −ω_f² α + input, dα/dt = α̇
     for j in range(6):
         wf = n if j < 3 else 2.0 * n
@@ -554,11 +550,6 @@ def _integrate(sample_times, x0, sched, loop, out):
     return last, stop, t, n_steps, n_rej
 
 
-def _drf_index(drf_mode: str) -> np.ndarray:
-    """Index in x (eq 4.47) of the input of each of the six DRFs (n filters, then 2n)."""
-    return np.array([DRF_INPUTS[drf_mode][j % 3] for j in range(6)], dtype=np.int64)
-
-
 def _schedule(sc: Scenario) -> LevelSchedule:
     """The per-level arrays of ``sc`` for the kernel (contiguous float64)."""
     L = sc.level_start.shape[0]
@@ -579,7 +570,8 @@ def _loop_constants(sc: Scenario) -> LoopConstants:
     """The plant, controller and integrator constants of ``sc`` for the kernel (its units)."""
     return LoopConstants(ha=np.asarray(sc.harmonic_a, float), hb=np.asarray(sc.harmonic_b, float), n=float(sc.n),
                          tmax=float(sc.torque_limit), hmax=float(sc.momentum_limit),
-                         drf_idx=_drf_index(sc.drf_mode), rtol=float(sc.rtol), atol=np.asarray(sc.atol, float),
+                         drf_idx=np.array(DRF_INPUTS[sc.drf_mode] * 2, dtype=np.int64),
+                         rtol=float(sc.rtol), atol=np.asarray(sc.atol, float),
                          divergence=float(sc.divergence), max_sat=float(sc.max_saturation),
                          C=_C, A=_A, B5=_B5, E=_E)
 
