@@ -1,17 +1,13 @@
 """What every stage figure shares (report Figs 5.3–5.26, 6.2–6.30): saving a figure (PNG/PDF,
-atomically), figure skeletons (each figure's layout function, its texts baked), tick and line thinning, and the unit labels of
-the 24 states of eq 4.46.
+atomically), texts rendered ahead, tick and line thinning, and the unit labels of the 24 states of
+eq 4.46; the figures themselves are in :mod:`acmm.plots.design` and :mod:`acmm.plots.simulation`.
 
-Drawing cost (issue 16): a skeleton holds everything that does not depend on the data (axes,
-empty lines, legend, tick artists) and its fixed texts already rasterized (:func:`bake_texts`);
-the figure function then sets the data and the limits (:func:`data_limits`, no autoscaling
-bookkeeping) and saves.  Grids of panels are drawn without an Axes each
-(:mod:`acmm.plots.panel_grid`), tick labels are few and short (:func:`in_view_ticks`,
-:func:`compact_formatter`) and text is unhinted while these figures are drawn
-(:data:`FAST_TEXT_RC`).
-
-The figures themselves
-are in :mod:`acmm.plots.design` and :mod:`acmm.plots.simulation`.
+Drawing cost (issue 16): a figure function first builds everything that does not depend on the
+data (axes, empty lines, legend, tick artists) with its fixed texts rasterized (:func:`bake_texts`),
+then sets the data and the limits (:func:`data_limits`, no autoscaling bookkeeping) and saves.
+Grids of panels are drawn without an Axes each (:mod:`acmm.plots.panel_grid`), tick labels are few
+and short (:func:`in_view_ticks`, :func:`compact_formatter`) and text is unhinted while these
+figures are drawn (:data:`FAST_TEXT_RC`).
 """
 from __future__ import annotations
 
@@ -100,8 +96,7 @@ def bake_texts(fig, texts) -> None:
     their place; the texts themselves are hidden.
 
     Laying out and rasterizing text is the costliest part of drawing a stage figure (each glyph
-    is rendered on its own); a skeleton (each figure's layout function) pays it before the
-    data exist.  The PNG differs from drawing the texts at save time only by rounding of the
+    is rendered on its own).  The PNG differs from drawing the texts at save time only by rounding of the
     anti-aliased edges.  Drawn on any other canvas (a PDF, another size or resolution, a
     'tight' bounding box) the texts are drawn as texts instead.
 

@@ -1,9 +1,7 @@
 """Figures of the design stage: the LQR gains of the design points with the gain schedule of
 ch. 5.3 (cf. Figs 5.3–5.26), the closed-loop poles with the sector of ch. 5.2 (Fig 5.2), and the
-scheduled gain checked along the path.
-
-Each function takes arrays, draws one figure and saves it as PNG (and PDF when asked) under the
-given path.  Split from :mod:`acmm.plots` (issue 12).
+scheduled gain checked along the path.  Each function takes arrays, draws one figure and saves it
+as PNG (and PDF when asked) under the given path.
 """
 from __future__ import annotations
 
@@ -21,33 +19,6 @@ def _gain_unit(state_unit: str, torque_unit: str) -> str:
     """Unit of a gain column K(i, j): ``torque_unit`` per unit of state j (``ft·lbf/rad``,
     ``ft·lbf/(ft·lbf·s)``)."""
     return f"{torque_unit}/({state_unit})" if any(ch in state_unit for ch in "/·") else f"{torque_unit}/{state_unit}"
-
-
-def _gain_grid_layout(state_names: tuple, units: tuple, torque_unit: str):
-    """The 24 panels (:class:`acmm.plots.panel_grid.PanelGrid`: frames, titles with the gain's unit,
-    the TEA label under the bottom row, the legend once for the figure) and the six series (LQR
-    gains as dots, the schedule as a line, per gain row); the data, limits and ticks are set later.
-
-    Cost-cut (issue 16): no Axes per panel (24 Axes with their axis and tick artists took
-    ~0.65 s to build and draw), a fixed layout (tight_layout/bbox 'tight' on 24 panels costs
-    seconds), the legend at a fixed place, the fixed texts rendered ahead (:func:`bake_texts`).
-    """
-    plt = stage_pyplot()
-    fig = plt.figure(figsize=(13, 15), dpi=80)
-    colors = ("C0", "C1", "C2")
-    series = ([{"marker": "o", "ls": "none", "ms": 3, "color": c,
-                "label": f"K({i + 1},·): point gain (dots), schedule (line)"} for i, c in enumerate(colors)]
-              + [{"lw": 1, "color": c} for c in colors])
-    grid = PanelGrid(fig, 6, 4, series, {"left": 0.06, "right": 0.98, "bottom": 0.04, "top": 0.95,
-                                         "wspace": 0.38, "hspace": 0.3})
-    for j in range(24):
-        grid.set_title(j, f"K(i,{j + 1}) — {state_names[j]} ({_gain_unit(units[j], torque_unit)})")
-    for j in range(20, 24):
-        grid.set_label(j, "pitch TEA θ2* (deg)", "below")
-    fig.legend(handles=grid.lines[:3], loc="upper center", bbox_to_anchor=(0.5, 0.978),
-               ncol=3, fontsize=7, frameon=False)
-    bake_texts(fig, [*grid.titles, *grid.labels, *fig.legends])
-    return fig, grid
 
 
 @dataclass
@@ -111,7 +82,24 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     curve = fit if isinstance(fit, SampledSchedule) else _sample_schedule(fit, theta2)
     fine, kf = np.degrees(curve.theta2), curve.gains
     units = units or state_units()
-    fig, grid = _gain_grid_layout(tuple(state_names), tuple(units), torque_unit)
+    # 24 panels without an Axes each (24 Axes with their axis and tick artists took ~0.65 s to build
+    # and draw; issue 16), a fixed layout (tight_layout/bbox 'tight' on 24 panels costs seconds), the
+    # legend at a fixed place and the fixed texts pre-rendered (bake_texts); six series: the LQR gains
+    # as dots and the schedule as a line, per gain row
+    fig = stage_pyplot().figure(figsize=(13, 15), dpi=80)
+    colors = ("C0", "C1", "C2")
+    series = ([{"marker": "o", "ls": "none", "ms": 3, "color": c,
+                "label": f"K({i + 1},·): point gain (dots), schedule (line)"} for i, c in enumerate(colors)]
+              + [{"lw": 1, "color": c} for c in colors])
+    grid = PanelGrid(fig, 6, 4, series, {"left": 0.06, "right": 0.98, "bottom": 0.04, "top": 0.95,
+                                         "wspace": 0.38, "hspace": 0.3})
+    for j in range(24):
+        grid.set_title(j, f"K(i,{j + 1}) — {state_names[j]} ({_gain_unit(units[j], torque_unit)})")
+    for j in range(20, 24):
+        grid.set_label(j, "pitch TEA θ2* (deg)", "below")
+    fig.legend(handles=grid.lines[:3], loc="upper center", bbox_to_anchor=(0.5, 0.978),
+               ncol=3, fontsize=7, frameon=False)
+    bake_texts(fig, [*grid.titles, *grid.labels, *fig.legends])
     xlim = data_limits(theta2_deg, fine) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 4)
     for j in range(24):
@@ -187,22 +175,6 @@ def pole_map(poles_per_point, names, n, sigma, half_angle_deg, path, vector=Fals
     return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
 
 
-def _path_check_layout():
-    """The path check's two axes with their labels and log scale (data-independent; the same
-    artists in the same order as drawing them after the data: the PNG is identical)."""
-    plt = stage_pyplot()
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
-    a1.set_ylabel("units of n")
-    # a linear axis (a log axis over less than a decade showed two tick labels): α is between
-    # 0 and 2 for a skew-0 disk margin
-    a2.set_ylabel("disk margin α at u, skew 0 (1)")
-    a2.set_xlabel("pitch TEA θ2* (deg)")
-    # a fixed layout: bbox 'tight' draws the figure twice
-    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
-    premake_ticks([a1, a2], 10, 11)
-    return fig, (a1, a2)
-
-
 def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=False):
     """The scheduled gain on the local model along the path: largest Re λ and worst sector
     margin (units of n) and the plant-input disk margin α versus pitch TEA.
@@ -228,7 +200,15 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
     th = np.degrees(theta2)
-    fig, (a1, a2) = _path_check_layout()
+    fig, (a1, a2) = stage_pyplot().subplots(2, 1, figsize=(7.5, 6), sharex=True)
+    a1.set_ylabel("units of n")
+    # a linear axis (a log axis over less than a decade showed two tick labels): α is between
+    # 0 and 2 for a skew-0 disk margin
+    a2.set_ylabel("disk margin α at u, skew 0 (1)")
+    a2.set_xlabel("pitch TEA θ2* (deg)")
+    # a fixed layout: bbox 'tight' draws the figure twice
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.09, top=0.94, hspace=0.1)
+    premake_ticks([a1, a2], 10, 11)
     a1.plot(th, max_real, "-", color="C3", label="largest Re λ / n")
     a1.plot(th, margin, "-", color="C0", label="worst sector margin / n")
     a1.axhline(0.0, color="k", lw=0.8)
@@ -243,24 +223,6 @@ def schedule_path_check(theta2, max_real, margin, disk_margin, path, vector=Fals
         a2.set_ylim(max(0.0, lo - pad), hi + pad)
     a2.yaxis.set_major_locator(MaxNLocator(6))
     return write_figure(fig, path, vector, tight=False)
-
-
-def _scheduled_poles_layout():
-    """The scheduled pole map's axes with labels and title, its (empty) scatter and the colour
-    bar (data-independent: the PNG is identical to drawing them after the data; the colour bar's
-    axes and ticks were the costliest part of drawing this figure after the data)."""
-    plt = stage_pyplot()
-    fig, ax = plt.subplots(figsize=(6.5, 5.5))
-    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
-    ax.set_xlabel("Re λ / n")
-    ax.set_ylabel("Im λ / n")
-    ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
-    # above the sector's fill (1), below its boundary lines (2)
-    sc = ax.scatter(np.empty(0), np.empty(0), c=np.empty(0), s=3, cmap="viridis", zorder=1.5)
-    cbar = fig.colorbar(sc, ax=ax, label="pitch TEA θ2* (deg)")
-    premake_ticks([ax], 10, 10)
-    cbar.ax.yaxis.get_major_ticks(10)
-    return fig, ax, sc
 
 
 def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=False):
@@ -290,7 +252,17 @@ def scheduled_pole_map(poles, theta2, n, sigma, half_angle_deg, path, vector=Fal
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
     p = np.asarray(poles) / n
-    fig, ax, sc = _scheduled_poles_layout()
+    fig, ax = stage_pyplot().subplots(figsize=(6.5, 5.5))
+    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.1, top=0.93)    # fixed: no bbox 'tight' pass
+    ax.set_xlabel("Re λ / n")
+    ax.set_ylabel("Im λ / n")
+    ax.set_title("Scheduled-loop poles along the path (sector of Fig 5.2 shaded)")
+    # an empty scatter above the sector's fill (1), below its boundary lines (2), and the colour bar
+    # before the data (its axes and ticks were the costliest part of drawing them after the data)
+    sc = ax.scatter(np.empty(0), np.empty(0), c=np.empty(0), s=3, cmap="viridis", zorder=1.5)
+    cbar = fig.colorbar(sc, ax=ax, label="pitch TEA θ2* (deg)")
+    premake_ticks([ax], 10, 10)
+    cbar.ax.yaxis.get_major_ticks(10)
     t = np.tan(np.radians(half_angle_deg))
     fin = p[np.isfinite(p)]                  # limits from the finite poles (a failed eig: NaN)
     fin = fin if fin.size else np.zeros(1, complex)

@@ -1,9 +1,7 @@
 """Figures of the simulation stage (ch. 6): attitude error, rate, torque and CMG momentum per axis
 (Figs 6.2–6.13, 6.20–6.30), the inertia steps of the stair-case (Figs 6.14–6.19) and a one-page
-summary with the per-level statistics.
-
-Each function takes arrays, draws one figure and saves it as PNG (and PDF when asked) under the
-given path.  Split from :mod:`acmm.plots` (issue 12).
+summary with the per-level statistics.  Each function takes arrays, draws one figure and saves it
+as PNG (and PDF when asked) under the given path.
 """
 from __future__ import annotations
 
@@ -25,29 +23,6 @@ def _in_view_locator(nbins: int):
             return in_view_ticks(*self.axis.get_view_interval(), nbins)
 
     return InView(nbins, min_n_ticks=3)
-
-
-def _axis_histories_layout(units: str):
-    """The 12 panels (:class:`acmm.plots.panel_grid.PanelGrid`) with the axis names over the top row,
-    the quantity left of each row, the time under the bottom row (pre-rendered: bake_texts) and
-    one line series for all panels."""
-    plt = stage_pyplot()
-    fig = plt.figure(figsize=(13, 10))
-    uu, hu = shown(1.0, "ft*lbf", units)[1], shown(1.0, "ft*lbf*s", units)[1]
-    labels = ["attitude error θ−θ̂* (deg)", "body rate rel. LVLH (deg/s)",
-              f"control torque ({pretty(uu)})", f"CMG momentum ({pretty(hu)})"]
-    # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
-    grid = PanelGrid(fig, 4, 3, [{"lw": 0.7, "color": "C0"}],
-                     {"left": 0.07, "right": 0.98, "bottom": 0.06, "top": 0.93, "wspace": 0.25, "hspace": 0.12},
-                     title_size=mpl.rcParams["axes.titlesize"], tick_size=8)
-    for r, label in enumerate(labels):
-        for a in range(3):
-            grid.set_label(3 * r + a, label, "left", fontsize=8 if a == 0 else 7)
-    for a in range(3):
-        grid.set_title(a, AXES[a])
-        grid.set_label(9 + a, "time (orbits)", "below", offset=0.12)
-    bake_texts(fig, [*grid.titles, *grid.labels])
-    return fig, grid
 
 
 def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units="imperial"):
@@ -81,9 +56,24 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    fig, grid = _axis_histories_layout(units)
-    u = shown(np.asarray(u), "ft*lbf", units)[0]
-    h = shown(np.asarray(h), "ft*lbf*s", units)[0]
+    u, uu = shown(np.asarray(u), "ft*lbf", units)
+    h, hu = shown(np.asarray(h), "ft*lbf*s", units)
+    # 12 panels without an Axes each, the axis names over the top row, the quantity left of each
+    # row, the time under the bottom row (pre-rendered: bake_texts), one line series for all panels
+    fig = stage_pyplot().figure(figsize=(13, 10))
+    labels = ["attitude error θ−θ̂* (deg)", "body rate rel. LVLH (deg/s)",
+              f"control torque ({pretty(uu)})", f"CMG momentum ({pretty(hu)})"]
+    # a fixed layout: tight_layout plus bbox 'tight' draw the 12 panels three times
+    grid = PanelGrid(fig, 4, 3, [{"lw": 0.7, "color": "C0"}],
+                     {"left": 0.07, "right": 0.98, "bottom": 0.06, "top": 0.93, "wspace": 0.25, "hspace": 0.12},
+                     title_size=mpl.rcParams["axes.titlesize"], tick_size=8)
+    for r, label in enumerate(labels):
+        for a in range(3):
+            grid.set_label(3 * r + a, label, "left", fontsize=8 if a == 0 else 7)
+    for a in range(3):
+        grid.set_title(a, AXES[a])
+        grid.set_label(9 + a, "time (orbits)", "below", offset=0.12)
+    bake_texts(fig, [*grid.titles, *grid.labels])
     xlim = data_limits(orbits) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 5)
     for r, data in enumerate((err_deg, rate, u, h)):
@@ -92,25 +82,6 @@ def axis_histories(orbits, err_deg, rate, u, h, title, path, vector=False, units
     grid.draw_data(compact_formatter().format_ticks)
     fig.suptitle(title)
     return write_figure(fig, path, vector, tight=False, rc=FAST_TEXT_RC)
-
-
-def _inertia_layout(units: str):
-    """The six panels (:class:`acmm.plots.panel_grid.PanelGrid`) with titles, labels (pre-rendered)
-    and one step-line series for all panels."""
-    iu = shown(1.0, "slug*ft^2", units)[1]
-    plt = stage_pyplot()
-    fig = plt.figure(figsize=(12, 6))
-    grid = PanelGrid(fig, 2, 3, [{"drawstyle": "steps-post", "color": "C0"}],
-                     {"left": 0.07, "right": 0.98, "bottom": 0.09, "top": 0.9, "wspace": 0.3, "hspace": 0.25},
-                     title_size=mpl.rcParams["axes.titlesize"], tick_size=8)
-    for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
-        grid.set_title(k, f"I({i + 1},{j + 1})")
-        grid.set_label(k, f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})", "left")
-    for k in range(3, 6):
-        grid.set_label(k, "time (orbits)", "below", offset=0.12)
-    title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
-    bake_texts(fig, [title, *grid.titles, *grid.labels])
-    return fig, grid
 
 
 _INERTIA_ELEMENTS = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
@@ -137,9 +108,19 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    inertia = shown(np.asarray(inertia), "slug*ft^2", units)[0]
-
-    fig, grid = _inertia_layout(units)
+    inertia, iu = shown(np.asarray(inertia), "slug*ft^2", units)
+    # six panels with titles and labels (pre-rendered), one step-line series for all panels
+    fig = stage_pyplot().figure(figsize=(12, 6))
+    grid = PanelGrid(fig, 2, 3, [{"drawstyle": "steps-post", "color": "C0"}],
+                     {"left": 0.07, "right": 0.98, "bottom": 0.09, "top": 0.9, "wspace": 0.3, "hspace": 0.25},
+                     title_size=mpl.rcParams["axes.titlesize"], tick_size=8)
+    for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
+        grid.set_title(k, f"I({i + 1},{j + 1})")
+        grid.set_label(k, f"inertia I{i + 1}{j + 1} (10⁶ {pretty(iu)})", "left")
+    for k in range(3, 6):
+        grid.set_label(k, "time (orbits)", "below", offset=0.12)
+    title = fig.suptitle("Inertia variation MB3 → AC (cf. Figs 6.14–6.19)")
+    bake_texts(fig, [title, *grid.titles, *grid.labels])
     xlim = data_limits(orbits) or (0.0, 1.0)
     xticks = in_view_ticks(*xlim, 5)
     for k, (i, j) in enumerate(_INERTIA_ELEMENTS):
@@ -150,53 +131,6 @@ def inertia_histories(orbits, inertia, path, vector=False, units="imperial"):
 
 #: the per-level table of the summary: column headers (the last takes the momentum unit)
 _TABLE_HEADER = ("level", "start (orbit)", "θ2* est (deg)", "steady |err| max (deg) r/p/y", "peak |h| ({})")
-
-
-def _summary_layout(units: str, n_rows: int = 12):
-    """The three panels with their (empty) lines, one legend, the table's header and empty
-    columns; titles, labels, legend and header pre-rendered (bake_texts).  The table's height
-    follows its ``n_rows`` rows (at most 12 lines of full height): a one-level run leaves no
-    blank third of the page."""
-    hu, uu = shown(1.0, "ft*lbf*s", units)[1], shown(1.0, "ft*lbf", units)[1]
-    plt = stage_pyplot()
-    table_ratio = min(1.0, 0.25 + 0.0625 * max(1, n_rows))
-    k = 1.0 / table_ratio           # the header's and rules' offsets from the top stay the same in points
-    fig = plt.figure(figsize=(11, 8.5 * (2 + table_ratio) / 3))
-    gs = fig.add_gridspec(3, 2, height_ratios=(1.0, 1.0, table_ratio))
-    top = fig.add_subplot(gs[0, :])
-    top.set_ylabel("attitude error (deg)")
-    mid = [fig.add_subplot(gs[1, col]) for col in range(2)]
-    for ax, label in zip(mid, (f"CMG momentum ({pretty(hu)})", f"delivered torque ({pretty(uu)})")):
-        ax.set_ylabel(label)
-    lines = []
-    for ax in (top, *mid):
-        # few y ticks written short, at most six x ticks
-        ax.yaxis.set_major_locator(_in_view_locator(3))
-        ax.yaxis.set_major_formatter(compact_formatter())
-        ax.tick_params(labelsize=8)
-        ax.xaxis.set_major_locator(_in_view_locator(5))
-        ax.set_xlabel("time (orbits)")
-        # the labels at fixed axes coordinates: the automatic placement measures every tick label again
-        ax.xaxis.set_label_coords(0.5, -0.1 if ax is top else -0.12)
-        ax.yaxis.set_label_coords(-0.06 if ax is top else -0.12, 0.5)
-        # empty lines, their data set later (~40 % cheaper than ax.plot's argument handling)
-        lines.append([ax.add_line(Line2D([], [], lw=0.7, color=f"C{a}", label=AXES[a])) for a in range(3)])
-    # one legend for the three panels, above them: no 'best' placement search over the data
-    fig.legend(handles=lines[0], loc="upper right", bbox_to_anchor=(0.98, 0.995), ncol=3, fontsize=8,
-               frameon=False)
-    table = fig.add_subplot(gs[2, :])
-    table.axis("off")
-    head = [table.text((k + 0.5) / 5, 1.0, h.format(pretty(hu)), ha="center", va="top", fontsize=8,
-                       transform=table.transAxes) for k, h in enumerate(_TABLE_HEADER)]
-    rules = [table.plot([0, 1], [y, y], transform=table.transAxes, color="k", lw=lw, clip_on=False)[0]
-             for y, lw in ((1 + 0.02 * k, 0.9), (1 - 0.07 * k, 0.6))]
-    body = [table.text((c + 0.5) / 5, 1 - 0.09 * k, "", ha="center", va="top", fontsize=8, linespacing=1.45,
-                       transform=table.transAxes) for c in range(5)]
-    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
-    premake_ticks([top, *mid], 6, 4)
-    bake_texts(fig, [*head, *rules, *fig.legends,
-                      *(t for ax in (top, *mid) for t in (ax.xaxis.label, ax.yaxis.label))])
-    return fig, (top, mid, lines, body)
 
 
 def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=False, units="imperial"):
@@ -230,10 +164,49 @@ def summary(orbits, err_deg, h, u, level_stats, verdict, title, path, vector=Fal
     list of pathlib.Path
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
-    h = shown(np.asarray(h), "ft*lbf*s", units)[0]
-    u = shown(np.asarray(u), "ft*lbf", units)[0]
+    h, hu = shown(np.asarray(h), "ft*lbf*s", units)
+    u, uu = shown(np.asarray(u), "ft*lbf", units)
     k_h = shown(1.0, "ft*lbf*s", units)[0]
-    fig, (top, mid, lines, body) = _summary_layout(units, min(len(level_stats), 12))
+    # the three panels with their (empty) lines, one legend, the table's header and empty columns;
+    # titles, labels, legend and header pre-rendered (bake_texts).  The table's height follows its rows
+    # (at most 12 lines of full height): a one-level run leaves no blank third of the page
+    table_ratio = min(1.0, 0.25 + 0.0625 * max(1, min(len(level_stats), 12)))
+    k = 1.0 / table_ratio           # the header's and rules' offsets from the top stay the same in points
+    fig = stage_pyplot().figure(figsize=(11, 8.5 * (2 + table_ratio) / 3))
+    gs = fig.add_gridspec(3, 2, height_ratios=(1.0, 1.0, table_ratio))
+    top = fig.add_subplot(gs[0, :])
+    top.set_ylabel("attitude error (deg)")
+    mid = [fig.add_subplot(gs[1, col]) for col in range(2)]
+    for ax, label in zip(mid, (f"CMG momentum ({pretty(hu)})", f"delivered torque ({pretty(uu)})")):
+        ax.set_ylabel(label)
+    lines = []
+    for ax in (top, *mid):
+        # few y ticks written short, at most six x ticks
+        ax.yaxis.set_major_locator(_in_view_locator(3))
+        ax.yaxis.set_major_formatter(compact_formatter())
+        ax.tick_params(labelsize=8)
+        ax.xaxis.set_major_locator(_in_view_locator(5))
+        ax.set_xlabel("time (orbits)")
+        # the labels at fixed axes coordinates: the automatic placement measures every tick label again
+        ax.xaxis.set_label_coords(0.5, -0.1 if ax is top else -0.12)
+        ax.yaxis.set_label_coords(-0.06 if ax is top else -0.12, 0.5)
+        # empty lines, their data set later (~40 % cheaper than ax.plot's argument handling)
+        lines.append([ax.add_line(Line2D([], [], lw=0.7, color=f"C{a}", label=AXES[a])) for a in range(3)])
+    # one legend for the three panels, above them: no 'best' placement search over the data
+    fig.legend(handles=lines[0], loc="upper right", bbox_to_anchor=(0.98, 0.995), ncol=3, fontsize=8,
+               frameon=False)
+    table = fig.add_subplot(gs[2, :])
+    table.axis("off")
+    head = [table.text((c + 0.5) / 5, 1.0, text.format(pretty(hu)), ha="center", va="top", fontsize=8,
+                       transform=table.transAxes) for c, text in enumerate(_TABLE_HEADER)]
+    rules = [table.plot([0, 1], [y, y], transform=table.transAxes, color="k", lw=lw, clip_on=False)[0]
+             for y, lw in ((1 + 0.02 * k, 0.9), (1 - 0.07 * k, 0.6))]
+    body = [table.text((c + 0.5) / 5, 1 - 0.09 * k, "", ha="center", va="top", fontsize=8, linespacing=1.45,
+                       transform=table.transAxes) for c in range(5)]
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.02, top=0.95, wspace=0.25, hspace=0.35)
+    premake_ticks([top, *mid], 6, 4)
+    bake_texts(fig, [*head, *rules, *fig.legends,
+                      *(t for ax in (top, *mid) for t in (ax.xaxis.label, ax.yaxis.label))])
     xlim = data_limits(orbits)
     for ax, panel, data in zip((top, *mid), lines, (err_deg, h, u)):
         for a in range(3):

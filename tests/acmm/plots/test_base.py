@@ -18,14 +18,18 @@ def test_decimate_keeps_the_envelope():
     assert plot_base.decimate(short, short)[0] is short or np.array_equal(plot_base.decimate(short, short)[0], short)
 
 
-def test_baked_texts_are_text_in_a_pdf():
+def test_baked_texts_are_text_in_a_pdf(captured, tmp_path):
     import io
 
     from acmm.plots import base as plot_base
     from acmm.plots import design as design_plots
-    
-    fig, grid = design_plots._gain_grid_layout(tuple(STATE_NAMES), tuple(plot_base.state_units()), "ft·lbf")
-    title = grid.titles[0]
+
+    theta2 = np.radians(np.linspace(-45, -5, 5))
+    gains = np.cos(np.arange(5 * 3 * 24)).reshape(5, 3, 24)
+    design_plots.gain_schedule_grid(theta2, gains, design_plots.SampledSchedule("polynomial", theta2, gains),
+                                    STATE_NAMES, tmp_path / "g.png")
+    fig = captured[0]
+    title = fig.panel_grid.titles[0]
     drawn, draw = [], title.draw
     title.draw = lambda renderer: (title.get_visible() and drawn.append(type(renderer).__name__), draw(renderer))
     fig.savefig(io.BytesIO(), format="png")
