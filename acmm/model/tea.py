@@ -13,11 +13,6 @@ continuation (first step 0.05 of the path, ×1.5 up to 0.1 on success, halved on
 below 1e-7; a step is accepted when Newton converges to :data:`_RESIDUAL_TOL`, θ jumps
 ≤ 5° and the sign of det ∂r/∂θ is kept) and the bisection of a fold.  The functions below are the
 Python layer: the :class:`TEA` record, the fallbacks, the messages and the errors.
-
-A sweep case's plant is a perturbation of the plant its controller was designed for: its TEA is the
-equilibrium connected to the design TEA (:func:`solve_tea_connected`, the same continuation from
-the design TEA along the line from the nominal plant to the perturbed one), or where that branch
-folds, the root continued from LVLH (:func:`solve_tea_fast`).
 """
 from __future__ import annotations
 
@@ -475,12 +470,8 @@ def solve_tea(inertia: np.ndarray, n: float, bias: np.ndarray, expected=None) ->
     try:
         t = _solve_by_continuation(inertia, n, bias)
     except (NoEquilibriumError, ConvergenceError) as exc:
-        if at is not None:
-            return at
-        return _without_continuation(exc, inertia, n, bias)
-    if at is not None and np.max(np.abs(t.theta - at.theta)) > 1e-6:
-        return at
-    return t
+        return at if at is not None else _without_continuation(exc, inertia, n, bias)
+    return at if at is not None and np.max(np.abs(t.theta - at.theta)) > 1e-6 else t
 
 
 def _at_expected(inertia, n, bias, expected) -> TEA | None:

@@ -15,12 +15,6 @@ from acmm.plots.panel_grid import PanelGrid
 from matplotlib.ticker import MaxNLocator
 
 
-def _gain_unit(state_unit: str, torque_unit: str) -> str:
-    """Unit of a gain column K(i, j): ``torque_unit`` per unit of state j (``ft·lbf/rad``,
-    ``ft·lbf/(ft·lbf·s)``)."""
-    return f"{torque_unit}/({state_unit})" if any(ch in state_unit for ch in "/·") else f"{torque_unit}/{state_unit}"
-
-
 @dataclass
 class SampledSchedule:
     """A gain schedule sampled for drawing: ``gains[k]`` (3, 24) at pitch TEA ``theta2[k]`` (rad).
@@ -43,13 +37,6 @@ class SampledSchedule:
     gains: np.ndarray
 
 
-def _sample_schedule(fit, theta2, n: int = 60) -> SampledSchedule:
-    """``fit`` (an :class:`acmm.design.schedule.ScheduleFit`) at ``n`` evenly spaced pitch TEAs spanning
-    ``theta2`` (rad), in the units of its gains."""
-    fine = np.linspace(theta2.min(), theta2.max(), n)
-    return SampledSchedule(fit.form, fine, np.array([fit.gain(t) for t in fine]))
-
-
 def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, units=None,
                        torque_unit="ft·lbf"):
     """K(i, j) versus pitch TEA for all 24 columns (3 rows each), with the fitted curves.
@@ -61,7 +48,8 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     gains : (P, 3, 24) array
         LQR gains, ``torque_unit`` per state unit.
     fit : acmm.design.schedule.ScheduleFit or SampledSchedule
-        The schedule, or its samples from :func:`_sample_schedule` (same units as ``gains``).
+        The schedule (drawn at 60 pitch TEAs spanning ``theta2``), or its samples (same units as
+        ``gains``).
     state_names : list of str
         The 24 state names.
     path : path-like
@@ -79,7 +67,11 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
         The files written (``.png``, and ``.pdf`` with ``vector``).
     """
     theta2_deg = np.degrees(theta2)
-    curve = fit if isinstance(fit, SampledSchedule) else _sample_schedule(fit, theta2)
+    if isinstance(fit, SampledSchedule):
+        curve = fit
+    else:
+        fine = np.linspace(theta2.min(), theta2.max(), 60)
+        curve = SampledSchedule(fit.form, fine, np.array([fit.gain(t) for t in fine]))
     fine, kf = np.degrees(curve.theta2), curve.gains
     units = units or state_units()
     # 24 panels without an Axes each (24 Axes with their axis and tick artists took ~0.65 s to build
@@ -94,7 +86,9 @@ def gain_schedule_grid(theta2, gains, fit, state_names, path, vector=False, unit
     grid = PanelGrid(fig, 6, 4, series, {"left": 0.06, "right": 0.98, "bottom": 0.04, "top": 0.95,
                                          "wspace": 0.38, "hspace": 0.3})
     for j in range(24):
-        grid.set_title(j, f"K(i,{j + 1}) — {state_names[j]} ({_gain_unit(units[j], torque_unit)})")
+        unit = units[j]         # the gain's unit: torque per unit of state j (ft·lbf/rad, ft·lbf/(ft·lbf·s))
+        gain_unit = f"{torque_unit}/({unit})" if any(ch in unit for ch in "/·") else f"{torque_unit}/{unit}"
+        grid.set_title(j, f"K(i,{j + 1}) — {state_names[j]} ({gain_unit})")
     for j in range(20, 24):
         grid.set_label(j, "pitch TEA θ2* (deg)", "below")
     fig.legend(handles=grid.lines[:3], loc="upper center", bbox_to_anchor=(0.5, 0.978),

@@ -72,27 +72,8 @@ class LevelSchedule(NamedTuple):
 
 
 class Level(NamedTuple):
-    """The rows of :class:`LevelSchedule` of the level in force (built by :func:`_level`).
-
-    Attributes
-    ----------
-    inertia : (3, 3) array, slug·ft²
-        True plant inertia (eq 3.1).
-    inertia_inv : (3, 3) array, 1/(slug·ft²)
-        Its inverse.
-    bias : (3,) array, ft·lbf
-        Bias torque (eq 3.9).
-    theta_est : (3,) array, rad
-        TEA estimate θ̂* (eq 4.47).
-    omega_est : (3,) array, rad/s
-        Body rate of the LVLH frame at θ̂* (eq 3.5).
-    gain : (3, 24) array
-        Gain K (eq 5.1), in the units of eq 4.47.
-    theta_ref : (3,) array, rad
-        Attitude the run's extremes are measured from.
-    mid : float, s
-        Middle of the level's dwell.
-    """
+    """The rows of :class:`LevelSchedule` of the level in force (built by :func:`_level`): its
+    fields of the same names and units, and ``mid`` = ``level_mid[level]`` (s)."""
 
     inertia: np.ndarray
     inertia_inv: np.ndarray

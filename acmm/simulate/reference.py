@@ -46,11 +46,7 @@ def rhs_numpy(t: float, X: np.ndarray, sc: Scenario, level: int = 0) -> np.ndarr
     u = np.where(at_limit, absorbed, u)
     w = dyn.disturbance_torque(t, sc.bias[level], sc.harmonic_a, sc.harmonic_b, n)
     _, omega_dot, h_dot = dyn.plant_rhs(theta, omega, h, sc.inertia[level], n, w, u)
-    drf_in = x[list(DRF_INPUTS[sc.drf_mode])]
-    drf = X[12:24]
-    d_drf = np.empty(12)
-    for j in range(6):
-        wf = n if j < 3 else 2 * n
-        d_drf[2 * j] = -wf * wf * drf[2 * j + 1] + drf_in[j % 3]
-        d_drf[2 * j + 1] = drf[2 * j]
+    # DRFs at n, then 2n: (α̇, α)' = (−ω_f² α + input, α̇)
+    wf = np.repeat([n, 2 * n], 3)
+    d_drf = np.stack([-wf * wf * X[13:24:2] + x[list(DRF_INPUTS[sc.drf_mode] * 2)], X[12:24:2]], -1).ravel()
     return np.concatenate([omega_dot, theta_dot, h_dot, h, d_drf])
