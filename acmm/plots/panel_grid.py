@@ -229,8 +229,7 @@ class PanelGrid:
             line.set_data(np.concatenate(xs) if xs else [], np.concatenate(ys) if ys else [])
 
     def _labels(self, labels, x, y, align: dict) -> None:
-        xs = np.broadcast_to(x, (len(labels),))
-        ys = np.broadcast_to(y, (len(labels),))
-        for lab, xi, yi in zip(labels, xs, ys):
-            self.tick_labels.append(self.fig.text(xi, yi, lab, fontsize=self.tick_size, **align))
+        xs, ys = np.broadcast_to(x, (len(labels),)), np.broadcast_to(y, (len(labels),))
+        self.tick_labels += [self.fig.text(xi, yi, lab, fontsize=self.tick_size, **align)
+                             for lab, xi, yi in zip(labels, xs, ys)]
 

@@ -557,15 +557,6 @@ def _loop_constants(sc: Scenario) -> LoopConstants:
                          C=_C, A=_A, B5=_B5, E=_E)
 
 
-def _outputs(n_samples: int, n_levels: int) -> KernelOutputs:
-    """Output buffers: samples NaN (flags 0) until written, extremes NaN until reached, the
-    saturation times 0."""
-    return KernelOutputs(state=np.full((n_samples, 24), np.nan), u_cmd=np.full((n_samples, 3), np.nan),
-                         u=np.full((n_samples, 3), np.nan), flags=np.zeros((n_samples, 6)),
-                         level=np.zeros(n_samples, dtype=np.int64), peak_h=np.full(n_levels, np.nan),
-                         steady=np.full((n_levels, 3), np.nan), run=np.append(np.full(9, np.nan), np.zeros(2)))
-
-
 def simulate(sc: Scenario) -> SimResult:
     """Integrate a :class:`Scenario`; stops early (a result, not an error) on divergence.
 
@@ -583,7 +574,11 @@ def simulate(sc: Scenario) -> SimResult:
     SimResult
         Sampled trajectory (up to the stop) and verdict.
     """
-    out = _outputs(sc.sample_times.shape[0], sc.level_start.shape[0])
+    # samples NaN (flags 0) until written, extremes NaN until reached, the saturation times 0
+    S, L = sc.sample_times.shape[0], sc.level_start.shape[0]
+    out = KernelOutputs(state=np.full((S, 24), np.nan), u_cmd=np.full((S, 3), np.nan), u=np.full((S, 3), np.nan),
+                        flags=np.zeros((S, 6)), level=np.zeros(S, dtype=np.int64), peak_h=np.full(L, np.nan),
+                        steady=np.full((L, 3), np.nan), run=np.append(np.full(9, np.nan), np.zeros(2)))
     last, stop, t_stop, n_steps, n_rej = _integrate(
         np.ascontiguousarray(sc.sample_times, float), np.asarray(sc.x0, float), _schedule(sc),
         _loop_constants(sc), out)
