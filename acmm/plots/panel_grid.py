@@ -188,18 +188,14 @@ class PanelGrid:
         p.xlim, p.ylim = tuple(map(float, xlim)), tuple(map(float, ylim))
         p.xticks, p.yticks = [float(v) for v in xticks], [float(v) for v in in_view_ticks(*ylim, nbins)]
 
-    def draw_data(self, formatter, x_labelled=None) -> None:
-        """Put every panel's series, grid lines, tick marks and tick labels in place.
+    def draw_data(self, formatter) -> None:
+        """Put every panel's series, grid lines, tick marks and tick labels (x: the bottom row's) in place.
 
         Parameters
         ----------
         formatter : callable
             Tick values → their label strings (``Formatter.format_ticks``).
-        x_labelled : iterable of int, optional
-            Panels whose x ticks are labelled (default: the bottom row).
         """
-        x_labelled = set(range((self.rows - 1) * self.cols, self.rows * self.cols)
-                         if x_labelled is None else x_labelled)
         fig = self.fig
         tick = 3.5 / 72 * fig.dpi                 # tick length and label pad, px (matplotlib's)
         tw, th = tick / fig.bbox.width, tick / fig.bbox.height
@@ -214,7 +210,7 @@ class PanelGrid:
             grid += [[(x, y0), (x, y0 + h)] for x in gx] + [[(x0, y), (x0 + w, y)] for y in gy]
             marks += [[(x0 - tw, y), (x0, y)] for y in gy]
             self._labels(formatter(p.yticks), x0 - 2 * tw, gy, {"ha": "right", "va": "center_baseline"})
-            if k in x_labelled:
+            if k >= (self.rows - 1) * self.cols:
                 marks += [[(x, y0 - th), (x, y0)] for x in gx]
                 self._labels(formatter(p.xticks), gx, y0 - 2 * th, {"ha": "center", "va": "top"})
         self.grid.set_segments(grid)
