@@ -6,10 +6,9 @@ The iteration, with the *corrected* denominator (``docs/ERRATA.md`` § Riccati s
     S(k+1) = S(k) [5I + 10S²(k) + S⁴(k)] [I + 10S²(k) + 5S⁴(k)]⁻¹,   S(0) = M,
 
 evaluated in partial fractions (the same rational map, conditioned like κ(S) instead of κ(S)⁴)
-and accelerated by determinantal (or norm) scaling.  The printed denominator I + 10S + 5S⁴ is
-kept as ``form="printed"`` only so that tests can show it does not converge.
-
-Used by :mod:`acmm.design.riccati`.
+and accelerated by determinantal (or norm) scaling.  The printed denominator I + 10S + 5S⁴ does
+not converge to the sign (from the left half-line it either ends at +1 or wanders near −2); it is
+kept as ``form="printed"`` only so that tests can show it.
 """
 from __future__ import annotations
 

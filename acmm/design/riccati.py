@@ -12,19 +12,12 @@ methods behind :func:`solve_care`:
     balancing).
 ``"sign"``
     The matrix sign function of the Hamiltonian (eq 5.5) by the fifth-order iteration of eq 5.6
-    with the *corrected* denominator (``docs/ERRATA.md`` § Riccati sign function)::
-
-        S(k+1) = S(k) [5I + 10S²(k) + S⁴(k)] [I + 10S²(k) + 5S⁴(k)]⁻¹,   S(0) = H,
-
-    evaluated in partial fractions (the same rational map, conditioned like κ(S) instead of
-    κ(S)⁴) and accelerated by determinantal (or norm) scaling; [I; P] then spans the stable
-    invariant subspace of H = [[A, −G], [−Q, −A']], G = BR⁻¹B', which is the range of the
-    projector (I − sign H)/2: an orthonormal basis [U1; U2] of it from a column-pivoted QR
+    with the *corrected* denominator (:func:`acmm.design.matrix_sign.matrix_sign`); [I; P] then
+    spans the stable invariant subspace of H = [[A, −G], [−Q, −A']], G = BR⁻¹B', which is the range
+    of the projector (I − sign H)/2: an orthonormal basis [U1; U2] of it from a column-pivoted QR
     factorization gives P = U2 U1⁻¹.  (Solving (sign H + I)[I; P] = 0 by least squares instead
     loses up to ten digits on the nearly uncontrollable claim-1 model: backward error 3e-6
-    against 1e-16.)  The printed denominator I + 10S + 5S⁴ does not converge to the
-    sign (from the left half-line it either ends at +1 or wanders near −2); it is kept as
-    ``form="printed"`` of :func:`matrix_sign` only so that tests can show it.
+    against 1e-16.)
 ``"slycot"``
     SLICOT SB02MD (Schur vectors of the Hamiltonian) via :func:`slycot.sb02md`.
 
@@ -94,6 +87,19 @@ def _as_square(M, k: int, name: str) -> np.ndarray:
     if M.shape != (k, k):
         raise ValueError(f"{name} must be a scalar or {k}×{k}, got shape {M.shape}")
     return 0.5 * (M + M.T)
+
+
+def _gram(B, R) -> np.ndarray:
+    """G = B R⁻¹ B', symmetrized."""
+    G = B @ np.linalg.solve(R, B.T)
+    return 0.5 * (G + G.T)
+
+
+def _ratio(num: float, den: float) -> float:
+    """num / den, with 0/0 = 0 and x/0 = inf."""
+    if den == 0.0:
+        return 0.0 if num == 0.0 else float("inf")
+    return float(num / den)
 
 
 def as_R(R, m: int) -> np.ndarray:
@@ -179,10 +185,7 @@ def care_residual(A, B, Q, R, P) -> float:
     PGP = PB @ np.linalg.solve(R, PB.T)
     res = AtP + AtP.T - PGP + Q
     den = np.linalg.norm(Q) + 2.0 * np.linalg.norm(AtP) + np.linalg.norm(PGP)
-    num = np.linalg.norm(res)
-    if den == 0.0:
-        return 0.0 if num == 0.0 else float("inf")
-    return float(num / den)
+    return _ratio(np.linalg.norm(res), den)
 
 
 def care_backward_error(A, B, Q, R, P) -> float:
@@ -222,16 +225,12 @@ def care_backward_error(A, B, Q, R, P) -> float:
     A, B, P = (np.asarray(x, dtype=float) for x in (A, B, P))
     Q = _as_square(Q, A.shape[0], "Q")
     R = as_R(R, B.shape[1])
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
+    G = _gram(B, R)
     AtP = A.T @ P
     res = AtP + AtP.T - P @ G @ P + Q
     aP = np.abs(A).T @ np.abs(P)
     den = float(np.linalg.norm(aP + aP.T + np.abs(P) @ np.abs(G) @ np.abs(P) + np.abs(Q)))
-    num = float(np.linalg.norm(0.5 * (res + res.T)))
-    if den == 0.0:
-        return 0.0 if num == 0.0 else float("inf")
-    return num / den
+    return _ratio(float(np.linalg.norm(0.5 * (res + res.T))), den)
 
 
 def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
@@ -265,8 +264,7 @@ def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
         An eigenvalue of H on, or within rounding of, the imaginary axis.
     """
     n = A.shape[0]
-    G = B @ np.linalg.solve(R, B.T)
-    H = np.block([[A, -0.5 * (G + G.T)], [-Q, -A.T]])
+    H = np.block([[A, -_gram(B, R)], [-Q, -A.T]])
     hn = float(np.linalg.norm(H))
     if n == 0 or hn == 0.0:
         if n:
@@ -317,8 +315,7 @@ def care_condition(A, B, Q, R, P) -> float:
     float
         κ_CARE, dimensionless.
     """
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
+    G = _gram(B, R)
     Ac = A - G @ P
     if A.shape[0] == 0:
         return 0.0
@@ -467,8 +464,7 @@ def refine_care(A, B, Q, R, P) -> tuple[np.ndarray, int]:
     tuple
         (P, steps): the refined symmetric solution and the number of steps kept.
     """
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
+    G = _gram(B, R)
     P = 0.5 * (P + P.T)
     omega = care_backward_error(A, B, Q, R, P)
     steps = 0
@@ -519,9 +515,7 @@ def _line_search(Res: np.ndarray, V: np.ndarray) -> float:
 def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign_tol=1e-13,
                max_iter=60):
     n = A.shape[0]
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
-    H = np.block([[A, -G], [-Q, -A.T]])
+    H = np.block([[A, -_gram(B, R)], [-Q, -A.T]])
     sr = matrix_sign(H, scaling=scaling, evaluation=evaluation, tol=sign_tol, max_iter=max_iter)
     # range(I − sign H) is the stable invariant subspace span[I; P] of H
     Z, _, _ = sla.qr(np.eye(2 * n) - sr.S, pivoting=True)
@@ -536,11 +530,8 @@ def _care_slycot(A, B, Q, R):
     except ImportError as exc:  # pragma: no cover - slycot is a declared dependency
         raise ConvergenceError("method='slycot' needs the slycot package",
                                hint=other_method_hint("slycot")) from exc
-    n = A.shape[0]
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
     try:
-        out = sb02md(n, A.copy(), G, Q.copy(), "C", scal="N", sort="S")
+        out = sb02md(A.shape[0], A.copy(), _gram(B, R), Q.copy(), "C", scal="N", sort="S")
     except Exception as exc:  # slycot raises SlycotArithmeticError / ValueError
         raise ConvergenceError(f"Riccati solve (method='slycot', SB02MD) failed: {exc}",
                                hint=other_method_hint("slycot")) from exc
@@ -658,10 +649,9 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
                                       sign_evaluation=sign_evaluation, max_iter=max_iter)
     seconds = time.perf_counter() - t0
     Ps = 0.5 * (Ps + Ps.T)
+    steps = 0
     if np.all(np.isfinite(Ps)):
         Ps, steps = refine_care(As, Bs, Qs, R, Ps)
-    else:
-        steps = 0
     Ks, res, omega = _verified_gain(As, Bs, Qs, R, Ps, method=method, tol=tol, scaled=d is not None)
     cond = care_condition(As, Bs, Qs, R, Ps)
     if d is not None:
