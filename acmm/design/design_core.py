@@ -144,9 +144,8 @@ def _refine(points: list, s: DesignSettings, sched: ScheduleSettings, path, map_
     they are returned among the blend's points in the order of s.
     """
     n = s.orbit_rate
-    ends = [p.spec for p in points if p.spec.s in (0.0, 1.0)]
-    start = next(p for p in ends if p.s == 0.0)
-    end = next(p for p in ends if p.s == 1.0)
+    start = next(p.spec for p in points if p.spec.s == 0.0)
+    end = next(p.spec for p in points if p.spec.s == 1.0)
     added = rounds = 0
     while True:
         fit = _schedule(points, s, sched, None)

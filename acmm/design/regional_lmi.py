@@ -54,27 +54,14 @@ control energy of the answer stays within 0.1 % of the unregularized program's (
 MB3).  The same weight on tr X̃ in the scaled coordinates, whose eigenvalues span many decades,
 left the program ill-posed or cost more energy; a bound X' ⪯ cI would add a cone.
 
-Solvers (``solver``; :data:`ROUTES`), each answer accepted on the checks of :func:`_rejection`
-(X̃ ≻ 0; every pole's margin and the margin X̃ certifies by generalized eigenvalues ≥ μ; the disk;
-the cost LMIs' largest eigenvalue ≤ :data:`COST_TOL` of their norm), never on a status string;
-a refused answer falls back to the next solver with a warning, and when none passes the error says
-what each solver returned — never "infeasible", which a solver's failure does not prove:
-
-* ``"conelp"`` (default): cvxopt's primal-dual ``conelp`` (Nesterov–Todd scaling) with a KKT
-  solver that forms the 678 × 678 Schur complement from the program's structure — every block is a
-  sum of terms Sym(P V Qᵀ), so the complement is a sum of Kronecker products of small matrices
-  (:mod:`acmm.design.lmi_structure`) — in two passes (:func:`_route_conelp`), as DSDP below
-  (``make bench`` times it; ``tests/test_determinism.py`` holds the gains under two BLAS kernels
-  and thread counts).
-* ``"dsdp"``: DSDP 5, a dual-scaling method that factors the 678 × 678 Schur complement
-  and uses the low rank of each variable's data, through ``cvxopt.dsdp`` (GPL-3, README); two
-  passes (:func:`_route_dsdp`): the second in the coordinates of the first's answer, where X' ≈ I,
-  converges to a K independent of the BLAS kernel.
-* ``"clarabel"``: Clarabel through cvxpy (Apache-2.0), the reference: it factors the whole KKT
-  system, with a dense 1 176 × 1 176 block per 48 × 48 LMI (``make bench`` times the three); a first pass, then
-  up to ``refinements`` passes with T ← T chol(X') and the input columns scaled to unit gain-row
-  norms, the objective divided by the last optimum, at gap and feasibility tolerance ``tol``.
-
+Solvers (``solver``; :data:`ROUTES`): ``"conelp"`` (default: cvxopt's ``conelp`` with the KKT solver
+of :mod:`acmm.design.lmi_structure`, :func:`_route_conelp`), ``"dsdp"`` (DSDP 5 through ``cvxopt.dsdp``,
+GPL-3, README; :func:`_route_dsdp`) and ``"clarabel"`` (through cvxpy, Apache-2.0, the reference: it
+factors the whole KKT system, a dense 1 176 × 1 176 block per 48 × 48 LMI; :func:`_route_clarabel`);
+``make bench`` times the three, ``tests/test_determinism.py`` holds the gains under two BLAS kernels
+and thread counts.  Each answer is accepted on the checks of :func:`_rejection`, never on a status
+string; a refused answer falls back to the next solver with a warning, and when none passes the
+error says what each solver returned — never "infeasible", which a solver's failure does not prove.
 All three solve the same program; at the tolerance 1e-7 the optimum's flat directions let their
 gains differ by more than each solver's own rounding does (a slow test at MB3 holds them to 3e-5).
 """
@@ -598,9 +585,8 @@ def _solve_conelp(prog: LMIProgram, tol: float, feastol: float, max_iter: int = 
                   refinement: int = 2):
     """cvxopt's ``conelp`` on ``prog`` with its :class:`acmm.design.lmi_structure.StructuredKKT`:
     :func:`acmm.design.lmi_structure.run_conelp` (tolerances dimensionless, returns as it does)."""
-    N, m = prog.sizes
-    return run_conelp(StructuredKKT(prog.terms, layout(N, m)), prog.c, prog.F0, tol, feastol, max_iter, start,
-                      refinement)
+    return run_conelp(StructuredKKT(prog.terms, layout(*prog.sizes)), prog.c, prog.F0, tol, feastol, max_iter,
+                      start, refinement)
 
 
 def _solve_clarabel_pass(prog: LMIProgram, obj_scale: float, st: "RegionalLMISettings", tol: float):
@@ -626,9 +612,7 @@ def _solve_clarabel_pass(prog: LMIProgram, obj_scale: float, st: "RegionalLMISet
     iters = int(problem.solver_stats.num_iters or 0)
     if X.value is None:
         return "no answer", None, iters
-    iu, ium = np.triu_indices(N), np.triu_indices(m)
-    v = np.concatenate([X.value[iu], X2.value[iu], Y.value.ravel(), W.value[ium]])
-    return problem.status, v, iters
+    return problem.status, prog.pack(X.value, X2.value, Y.value, W.value), iters
 
 
 def _precondition(T, Ks, Xs):
@@ -793,8 +777,7 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
                           + "; ".join(rejected) + ")", hint=_RELAX_HINT)
     solve_time = time.perf_counter() - ts
     Ks, Xs, X2s, cost, lmi_residual = sol
-    Acl = As - Bs @ Ks
-    lam, _, _, kappa = eigen_conditioning(Acl)
+    lam, _, _, kappa = eigen_conditioning(As - Bs @ Ks)
     order = np.lexsort((lam.imag, lam.real))
     poles, kappa = lam[order] * n, kappa[order]
     margin = float(np.min(sector_margin(poles, n, st.sigma, st.half_angle_deg)))
@@ -959,8 +942,7 @@ def _rejection(As, Bs, Gs, sol, st, n):
         return f"fastest pole |λ| = {fastest:.4g}n outside the disk of radius {st.disk_radius}n"
     if residual > COST_TOL:
         return f"cost LMIs violated by {residual:.1e} (relative)"
-    Acl = As - Bs @ Ks
-    W = sla.solve_continuous_lyapunov(Acl, -(Gs @ Gs.T))
+    W = sla.solve_continuous_lyapunov(As - Bs @ Ks, -(Gs @ Gs.T))
     energy = float(np.trace(Ks @ W @ Ks.T))
     if not energy <= cost * (1 + 1e-6):
         return f"control energy {energy:.6g} above the cost bound {cost:.6g}"

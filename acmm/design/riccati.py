@@ -27,15 +27,12 @@ the 24 ACMM states span ~12 orders of magnitude; unscaled, every method loses mo
 (``docs/ERRATA.md`` § Scaling).
 
 Refinement and acceptance: every solver's answer is refined by Newton–Kleinman steps with exact
-line search (:func:`refine_care`; Kleinman 1968, Benner & Byers 1998): each step solves the
-Lyapunov equation A_c'Δ + ΔA_c = −ℛ(P) of the closed loop A_c = A − GP for the residual ℛ(P)
-and moves P by tΔ, t ∈ (0, 2] minimizing ‖ℛ(P + tΔ)‖.  The refinement stops when a step no
-longer halves the backward error ω (:func:`care_backward_error`), i.e. at working accuracy,
-not after a fixed count.  The solution is accepted when ω ≤ ``tol``: ω measures the residual
-against the size of the terms as floating point evaluates them, so a nearly uncontrollable
-model (whose P spans many orders of magnitude, with large cancelling terms in PGP) is judged by
-what working precision can give, the same for every method.  The relative residual of
-:func:`care_residual` is still computed and reported; the error of P is about κ_CARE·ω.
+line search (:func:`refine_care`; Kleinman 1968, Benner & Byers 1998) until a step no longer
+halves the backward error ω (:func:`care_backward_error`), i.e. at working accuracy, not after a
+fixed count, and accepted when ω ≤ ``tol``: ω judges a nearly uncontrollable model (large
+cancelling terms in PGP) by what working precision can give, the same for every method.  The
+relative residual of :func:`care_residual` is still computed and reported; the error of P is
+about κ_CARE·ω.
 
 Existence check (every method): before solving, the eigenvalues λ_i of the (scaled) Hamiltonian
 H = [[A, −G], [−Q, −A']] are computed, after balancing (H_b = T⁻¹HT, LAPACK GEBAL with
@@ -640,7 +637,15 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    A, B, Q, R, d = _as_problem(A, B, Q, R, scale)
+    A = np.asarray(A, dtype=float)
+    B = np.asarray(B, dtype=float)
+    if B.ndim == 1:
+        B = B[:, None]
+    n, m = B.shape
+    if A.shape != (n, n):
+        raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
+    Q, R = _as_square(Q, n, "Q"), as_R(R, m)
+    d = np.asarray(scale, dtype=float) if scale is not None else None
     As, Bs, Qs = scale_problem(A, B, Q, d) if d is not None else (A, B, Q)
 
     gap = hamiltonian_check(As, Bs, Qs, R, method=method)
@@ -649,10 +654,23 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
                                       sign_evaluation=sign_evaluation, max_iter=max_iter)
     seconds = time.perf_counter() - t0
     Ps = 0.5 * (Ps + Ps.T)
-    steps = 0
-    if np.all(np.isfinite(Ps)):
-        Ps, steps = refine_care(As, Bs, Qs, R, Ps)
-    Ks, res, omega = _verified_gain(As, Bs, Qs, R, Ps, method=method, tol=tol, scaled=d is not None)
+    if not np.all(np.isfinite(Ps)):
+        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values",
+                               hint=other_method_hint(method))
+    # (the refinement keeps only finite, stabilizing steps)
+    Ps, steps = refine_care(As, Bs, Qs, R, Ps)
+    res = care_residual(As, Bs, Qs, R, Ps)
+    omega = care_backward_error(As, Bs, Qs, R, Ps)
+    if not omega <= tol:
+        _refuse(f"Riccati solve (method={method!r}{', state-scaled' if d is not None else ''}"
+                f"): backward error {omega:.3e} after refinement exceeds tolerance {tol:.1e} "
+                f"(relative residual {res:.3e})", method, omega, residual_hint(method))
+    Ks = np.linalg.solve(R, Bs.T @ Ps)
+    worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
+    if not worst < 0.0:
+        _refuse(f"Riccati solve (method={method!r}): solution is not stabilizing "
+                f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
+                f"{res:.3e})", method, res, residual_hint(method))
     cond = care_condition(As, Bs, Qs, R, Ps)
     if d is not None:
         P = Ps / d[:, None] / d[None, :]
@@ -663,37 +681,3 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
                       scale=d, seconds=seconds, condition=cond,
                       ill_conditioned=bool(not cond <= ILL_CONDITIONED), hamiltonian_gap=gap,
                       backward_error=omega, refinement_steps=steps)
-
-
-def _as_problem(A, B, Q, R, scale):
-    """Arrays (A, B, Q, R) of matching shapes, and the scale d as an array (or None)."""
-    A = np.asarray(A, dtype=float)
-    B = np.asarray(B, dtype=float)
-    if B.ndim == 1:
-        B = B[:, None]
-    n, m = B.shape
-    if A.shape != (n, n):
-        raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
-    d = np.asarray(scale, dtype=float) if scale is not None else None
-    return A, B, _as_square(Q, n, "Q"), as_R(R, m), d
-
-
-def _verified_gain(As, Bs, Qs, R, Ps, *, method, tol, scaled):
-    """(K̃, relative residual, backward error) of a refined solution P̃, refused if non-finite,
-    inaccurate (backward error above ``tol``) or not stabilizing."""
-    if not np.all(np.isfinite(Ps)):
-        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values",
-                               hint=other_method_hint(method))
-    res = care_residual(As, Bs, Qs, R, Ps)
-    omega = care_backward_error(As, Bs, Qs, R, Ps)
-    if not omega <= tol:
-        _refuse(f"Riccati solve (method={method!r}{', state-scaled' if scaled else ''}"
-                f"): backward error {omega:.3e} after refinement exceeds tolerance {tol:.1e} "
-                f"(relative residual {res:.3e})", method, omega, residual_hint(method))
-    Ks = np.linalg.solve(R, Bs.T @ Ps)
-    worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
-    if not worst < 0.0:
-        _refuse(f"Riccati solve (method={method!r}): solution is not stabilizing "
-                       f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
-                       f"{res:.3e})", method, res, residual_hint(method))
-    return Ks, res, omega

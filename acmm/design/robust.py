@@ -223,8 +223,7 @@ def _plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFa
     labels, inertias, thetas = ["nominal"], [I0], [th0]
     rng = np.random.default_rng(np.random.SeedSequence([st.seed]))
     draws = unphysical = folded = 0
-    members = 0
-    while members < st.samples and draws < DRAWS_PER_MEMBER * st.samples:
+    while len(labels) <= st.samples and draws < DRAWS_PER_MEMBER * st.samples:       # the nominal and the draws
         values = {k: float(rng.uniform(-h, h)) for k in ELEMENTS}
         draws += 1
         I = perturb_inertia(I0, values)
@@ -238,7 +237,6 @@ def _plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFa
         labels.append(f"draw {draws - 1}")
         inertias.append(I)
         thetas.append(tea.theta)
-        members += 1
     scalings_folded = []
     for s in (1.0 - h, 1.0 + h):
         tea = solve_tea_connected(th0, I0, b0, s * I0, n, b0)

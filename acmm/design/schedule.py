@@ -284,7 +284,6 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
     ScheduleCheck
         Margins and largest pole real parts, units of n.
     """
-    d = s
     n = s.orbit_rate
     names, th2, margins, kinds, max_real = [], [], [], [], []
 
@@ -293,7 +292,7 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
         names.append(name)
         th2.append(theta2)
         kinds.append(kind)
-        margins.append(np.min(sector_lqr.sector_margin(poles, n, d.sector.sigma, d.sector.half_angle_deg)))
+        margins.append(np.min(sector_lqr.sector_margin(poles, n, s.sector.sigma, s.sector.half_angle_deg)))
         max_real.append(np.max(poles.real) / n)
 
     for p in points:
@@ -303,7 +302,7 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
         spec = PointSpec(f"mid_{0.5 * (a.spec.s + b.spec.s):.3f}", 0.5 * (a.spec.inertia + b.spec.inertia),
                          0.5 * (a.spec.bias + b.spec.bias), 0.5 * (a.spec.s + b.spec.s))
         t = solve_tea_near(spec.inertia, n, spec.bias, 0.5 * (a.tea.theta + b.tea.theta))
-        model = lin.design_point(spec.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
+        model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
         _check(spec.name, model, t.theta[1], "midpoint")
     return ScheduleCheck(names, np.array(th2), np.array(margins), kinds, np.array(max_real))
 
