@@ -807,8 +807,7 @@ def _route_dsdp(As, Bs, Gs, K0, T, st):
     if v is None:
         return status, (it,), None
     sol = _solution(prog, v)
-    T1, s_u = _precondition(T, sol[0], sol[1])
-    prog = lmi_program(As, Bs, Gs, T1, s_u, st, T_reg=T)
+    prog = lmi_program(As, Bs, Gs, *_precondition(T, sol[0], sol[1]), st, T_reg=T)
     status, v, it2 = _solve_dsdp(prog, st.tol)
     return status, (it, it2), None if v is None else _solution(prog, v)
 
@@ -831,14 +830,12 @@ def _route_conelp(As, Bs, Gs, K0, T, st):
     iterate carried into them
     (:func:`_carry_iterate`: the same program, so the same point, residuals and gap):
     (status, iterations, solution or None)."""
-    s_u = np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12)
-    prog = lmi_program(As, Bs, Gs, T, s_u, st)
+    prog = lmi_program(As, Bs, Gs, T, np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12), st)
     status, v, it, iterate = _solve_conelp(prog, *CONELP_FIRST_TOL, st.max_iter, refinement=1)
     if v is None:
         return status, (it,), None
     sol = _solution(prog, v)
-    T1, s_u1 = _precondition(T, sol[0], sol[1])
-    prog2 = lmi_program(As, Bs, Gs, T1, s_u1, st, T_reg=T)
+    prog2 = lmi_program(As, Bs, Gs, *_precondition(T, sol[0], sol[1]), st, T_reg=T)
     feastol = min(st.tol, CONELP_FEASTOL)
     try:
         status, v, it2, _ = _solve_conelp(prog2, st.tol, feastol, st.max_iter,

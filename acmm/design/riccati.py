@@ -517,8 +517,7 @@ def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign
     # range(I − sign H) is the stable invariant subspace span[I; P] of H
     Z, _, _ = sla.qr(np.eye(2 * n) - sr.S, pivoting=True)
     U1, U2 = Z[:n, :n], Z[n:, :n]
-    P = np.linalg.solve(U1.T, U2.T).T
-    return P, sr.iterations
+    return np.linalg.solve(U1.T, U2.T).T, sr.iterations
 
 
 def _care_slycot(A, B, Q, R):

@@ -1,15 +1,12 @@
 """Quadratic gain schedules versus the TEA (CR-185644 ch. 5.3, Figs 5.3–5.26).
 
-Design points (:mod:`acmm.design.schedule_points`) lie on the blend I(s) = (1−s)·I_start + s·I_to
-(bias blended alike) and/or are named configurations.  Each gets its TEA (eqs 4.1–4.3), its design model (eq 4.46) and a sector
-LQR gain (ch. 5.2); every gain element is then fitted by a least-squares polynomial (order 2 in
-the report) in the scheduling variable θ2* (pitch TEA, rad), and with ``schedule.fit: shifted_lqr``
-converged on the path's shifted LQR cost (:func:`acmm.design.schedule_shifted_lqr.refit_shifted_lqr`).  The scheduled gain
-is re-checked on the local linear model at every design point and midpoint
-(:func:`check_schedule`) and at ``schedule.n_check`` TEAs evenly spaced along the whole path
-(:func:`acmm.design.path_check.check_path`: largest Re λ, worst sector margin, disk margin at the plant
-input).  The config is read only by :func:`acmm.design.schedule_points.point_specs` (and
-:mod:`acmm.design.settings`); the rest takes arrays and settings objects.
+Each design point (:mod:`acmm.design.schedule_points`) gets its TEA (eqs 4.1–4.3), its design model
+(eq 4.46) and a sector LQR gain (ch. 5.2); every gain element is then fitted by a least-squares
+polynomial (order 2 in the report) in the scheduling variable θ2* (pitch TEA, rad), and with
+``schedule.fit: shifted_lqr`` converged on the path's shifted LQR cost
+(:func:`acmm.design.schedule_shifted_lqr.refit_shifted_lqr`).  The scheduled gain is re-checked on
+the local linear model at every design point and midpoint (:func:`check_schedule`) and along the
+whole path (:func:`acmm.design.path_check.check_path`).
 """
 from __future__ import annotations
 

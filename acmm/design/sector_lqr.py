@@ -398,12 +398,8 @@ def _problem(A, B, R, n, sigma, half_angle_deg, Q0, scale, method, riccati_metho
     else:
         Q0s = np.asarray(Q0, dtype=float)
         Q0s = float(Q0s) * np.eye(nx) if Q0s.ndim == 0 else 0.5 * (Q0s + Q0s.T)
-    if scale is not None:
-        d = np.asarray(scale, dtype=float)
-        As, Bs, _ = scale_problem(A, B, np.zeros((nx, nx)), d)
-    else:
-        d = None
-        As, Bs = A, B
+    d = None if scale is None else np.asarray(scale, dtype=float)
+    As, Bs = (A, B) if d is None else scale_problem(A, B, np.zeros((nx, nx)), d)[:2]
     Bs, R = Bs * input_scale, R * input_scale ** 2
     _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin)
     return _SectorProblem(As, Bs, Q0s, R, d, n, sigma, half_angle_deg, min_margin, residual_tol, method,
@@ -430,8 +426,7 @@ def _sector_uniform(p: _SectorProblem, max_uniform_shift: float) -> SectorLQR:
         good, r_hi = ok(hi)
         if good:
             break
-        lo = hi
-        hi *= 1.25
+        lo, hi = hi, 1.25 * hi
         if hi > max_uniform_shift * n:
             raise DesignError(f"sector LQR (uniform): no shift α ≤ {max_uniform_shift}n puts "
                               f"every pole in the sector", hint=SECTOR_HINT)
@@ -450,14 +445,12 @@ def _sector_shift(p: _SectorProblem, line_spacing: float) -> SectorLQR:
     (up to 4 sweeps; each group of stray poles needing about the same line is mirrored)."""
     As, Bs, R, n = p.As, p.Bs, p.R, p.n
     phi = np.deg2rad(p.half_angle_deg)
-    r0 = p.lqr_shifted(p.alpha)
-    Ps = r0.P.copy()
+    Ps = p.lqr_shifted(p.alpha).P.copy()
     Qs = p.Q0s.copy()
     target = 1.5 * p.min_margin
     mirror_shifts = []
     for _sweep in range(4):
-        Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
-        lam = np.linalg.eigvals(Acl)
+        lam = np.linalg.eigvals(As - Bs @ np.linalg.solve(R, Bs.T @ Ps))
         stray = lam[sector_margin(lam, n, p.sigma, p.half_angle_deg) < p.min_margin]
         if stray.size == 0:
             break
