@@ -153,8 +153,7 @@ def _refine(points: list, s: DesignSettings, sched: ScheduleSettings, path, map_
         bad = ~(pc.margin >= sched.refine_margin)          # NaN (a failed eigenvalue) fails
         if not bad.any() or added >= sched.refine_points:
             break
-        order = np.argsort([p.tea.theta[1] for p in points], kind="stable")
-        nodes = [points[k] for k in order]
+        nodes = sorted(points, key=lambda p: p.tea.theta[1])
         x = np.array([p.tea.theta[1] for p in nodes])
         where = np.clip(np.searchsorted(x, pc.theta2[bad]) - 1, 0, len(x) - 2)
         worst = {}

@@ -50,15 +50,6 @@ _PF = ((float((4.8 - 8.0 * _A1) / (5.0 * (_A2 - _A1))), float(_A1)),
        (float((4.8 - 8.0 * _A2) / (5.0 * (_A1 - _A2))), float(_A2)))
 
 
-def _check_options(scaling, form, evaluation) -> None:
-    if form not in ("corrected", "printed"):
-        raise ValueError(f"form must be 'corrected' or 'printed', got {form!r}")
-    if evaluation not in ("partial_fraction", "polynomial"):
-        raise ValueError(f"evaluation must be 'partial_fraction' or 'polynomial', got {evaluation!r}")
-    if scaling not in ("det", "norm", None, "none"):
-        raise ValueError(f"scaling must be 'det', 'norm' or None, got {scaling!r}")
-
-
 def _accelerated(S, scaling, n):
     """μ S with the determinantal or norm factor μ (S unchanged when μ is unusable)."""
     if scaling == "det":
@@ -160,9 +151,13 @@ def matrix_sign(M, *, scaling: str = "det", tol: float = 1e-13, max_iter: int = 
     S = M0.copy()
     n = S.shape[0]
     eye = np.eye(n)
-    _check_options(scaling, form, evaluation)
+    if form not in ("corrected", "printed"):
+        raise ValueError(f"form must be 'corrected' or 'printed', got {form!r}")
+    if evaluation not in ("partial_fraction", "polynomial"):
+        raise ValueError(f"evaluation must be 'partial_fraction' or 'polynomial', got {evaluation!r}")
+    if scaling not in ("det", "norm", None, "none"):
+        raise ValueError(f"scaling must be 'det', 'norm' or None, got {scaling!r}")
     step = np.inf
-    prev = np.inf
     for k in range(1, max_iter + 1):
         if scaling in ("det", "norm") and step > 1e-2:
             S = _accelerated(S, scaling, n)

@@ -480,8 +480,7 @@ class LMIProgram:
         tuple of arrays
             (K̃, X̃, X̃₂), scaled coordinates (time in 1/n), dimensionless.
         """
-        X, X2, Y, _ = self.unpack(v)
-        X = 0.5 * (X + X.T)
+        X, X2, Y, _ = self.unpack(v)               # (symmetric to the bit)
         Ti = np.linalg.inv(self.T)
         Kz = self.s_u[:, None] * np.linalg.solve(X, Y.T).T
         Xs, X2s = self.T @ X @ self.T.T, self.T @ X2 @ self.T.T

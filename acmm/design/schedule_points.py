@@ -8,8 +8,7 @@ takes arrays and settings objects.
 """
 from __future__ import annotations
 
-from contextlib import contextmanager
-
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 
 import numpy as np
@@ -274,7 +273,11 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
     start = PointSpec(first.name, first.inertia, first.bias, 0.0, expected=first.expected)
     end = PointSpec(last.name, last.inertia, last.bias, 1.0, expected=last.expected)
     grid = np.linspace(0.0, 1.0, n_track)
-    track = _track_to_fold(start, end, n, grid)       # where the branch folds, the points before it are checked
+    track = []
+    with suppress(NoEquilibriumError, ConvergenceError):     # where the branch folds, the points before it are checked
+        for t in _continue_blend(start, end, n, grid):
+            track.append(t)
+    track = np.array(track).reshape(-1, 3)
     reach = grid[len(track) - 1] if len(track) else -1.0       # the last s the branch reaches
     for sp, th in blend:
         branch = None
@@ -287,15 +290,3 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
         if branch is None or np.max(np.abs((th - branch + np.pi) % (2 * np.pi) - np.pi)) > tol:
             return BranchJump(sp.name, float(sp.s), th, branch, sp.expected is not None)
     return None
-
-
-def _track_to_fold(start: PointSpec, end: PointSpec, n: float, grid: np.ndarray) -> np.ndarray:
-    """TEA (k, 3), rad, of :func:`_continue_blend` over ``grid`` up to the last s before the
-    branch folds (k = 0 when even the start has none)."""
-    out = []
-    try:
-        for t in _continue_blend(start, end, n, grid):
-            out.append(t)
-    except (NoEquilibriumError, ConvergenceError):
-        pass
-    return np.array(out).reshape(-1, 3)
