@@ -124,9 +124,8 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
         points, refinement = _refine(points, s, sched, path, map_points, progress)
     fit = _schedule(points, s, sched, path)
     check = sch.check_schedule(fit, points, s)
-    path_check = None
-    if path is not None:
-        path_check = check_path(fit.gain, path, s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg)
+    path_check = (None if path is None else
+                  check_path(fit.gain, path, s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg))
     return DesignedSchedule(points, fit, check, path_check, refinement)
 
 

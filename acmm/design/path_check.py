@@ -155,8 +155,7 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
     Bs = path.B / d[None, :, None]
     # one batched eigendecomposition of every closed loop, reused by the disk margin
     lam_all, V_all = np.linalg.eig(As - Bs @ Ks)
-    for j in range(P):
-        lam = lam_all[j]
+    for j, lam in enumerate(lam_all):
         lam = lam[np.lexsort((lam.imag, lam.real))]
         poles.append(lam)
         mr[j] = np.max(lam.real) / n

@@ -70,7 +70,7 @@ from __future__ import annotations
 import threading
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg as sla
@@ -168,9 +168,7 @@ class RegionalLMI:
     margin : float
         Worst sector margin of the poles, units of n.
     certified_margin : float
-        Sector margin proved by X (:func:`certified_margin`): min(a* − σ, c* sin φ), a* and c*
-        the largest half-plane shift and cone-apex shift for which the region LMIs hold with this
-        X and K, less a rounding allowance, units of n.
+        Sector margin proved by X and K, less a rounding allowance (:func:`certified_margin`), units of n.
     eig_condition : (N,) array
         Eigenvalue condition numbers of Ã − B̃K̃ (:func:`~acmm.design.sector_lqr.eigen_conditioning`),
         same order as ``poles``, dimensionless.
@@ -529,9 +527,8 @@ def lmi_program(As, Bs, Gs, T, s_u, st: "RegionalLMISettings", T_reg=None) -> LM
     TT = P.T @ P
     c = np.concatenate([st.regularization * TT[iu] * offdiag, st.regularization * TT[iu] * offdiag,
                         np.zeros(m * N), (s_u[ium[0]] * s_u[ium[1]]) * np.where(ium[0] == ium[1], 1.0, 0.0)])
-    GG = Gz @ Gz.T
-    F0 = LMIProgram(Az, Bz, GG, T, s_u, pars, c, [], [], st.regularization * TT).blocks(np.zeros(c.size))
-    return LMIProgram(Az, Bz, GG, T, s_u, pars, c, F0, program_terms(Az, Bz, pars), st.regularization * TT)
+    prog = LMIProgram(Az, Bz, Gz @ Gz.T, T, s_u, pars, c, [], program_terms(Az, Bz, pars), st.regularization * TT)
+    return replace(prog, F0=prog.blocks(np.zeros(c.size)))            # the blocks at v = 0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -629,9 +626,8 @@ def certified_margin(As, Bs, Ks, X, sigma: float, half_angle_deg: float) -> floa
     c ≤ c* = λ_min(−L₀(Z))/(2 sin φ), L₀(Z) = [[sin φ He Z, cos φ (Z − Zᵀ)], [cos φ (Zᵀ − Z),
     sin φ He Z]] (the generalized eigenvalues of the pencils with X, computed from symmetric
     matrices of the whitened loop Z, whatever the condition of X); the margin is
-    min(a* − σ, c* sin φ) − δ, with δ = 8 N ε κ(L) (‖Ã‖ + ‖B̃‖‖K̃‖) a first-order bound of the
-    rounding in forming Ã_cl and Z (ε the unit roundoff).  −inf if X is not ≻ 0 (its Cholesky
-    factorization fails).
+    min(a* − σ, c* sin φ) − δ, δ the rounding allowance of :func:`whitened_loop`.  −inf if X is not
+    ≻ 0 (its Cholesky factorization fails).
 
     Parameters
     ----------

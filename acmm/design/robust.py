@@ -301,10 +301,10 @@ def _region_certificate(As: np.ndarray, Bs: np.ndarray, Ks: np.ndarray) -> Regio
     With X = LLᵀ and Z = L⁻¹(Ã − B̃K̃)L: He(A_cl X) + 2aX ⪯ 0 for a = −λ_max(Z + Zᵀ)/2, and the
     cone LMI [[sin φ He Z, cos φ (Z − Zᵀ)], [cos φ (Zᵀ − Z), sin φ He Z]] ⪯ 0 for every
     φ ≥ φ* (monotone: tan φ·diag(He Z, He Z) + [[0, S], [−S, 0]] decreases with φ when
-    He Z ⪯ 0), φ* found by bisection to 1e-9 rad.  Both less the rounding allowance
-    δ = 8Nε κ(L)(‖Ã‖ + ‖B̃‖‖K̃‖) of forming Z.  Model and gain scaled (time in 1/n), dimensionless;
-    the certified decay in units of n, the cone in deg (decay −inf or ≤ 0 and cone NaN when no
-    certificate was found).
+    He Z ⪯ 0), φ* found by bisection to 1e-9 rad.  Both less the rounding allowance δ of
+    :func:`acmm.design.regional_lmi.whitened_loop`.  Model and gain scaled (time in 1/n),
+    dimensionless; the certified decay in units of n, the cone in deg (decay −inf or ≤ 0 and cone
+    NaN when no certificate was found).
     """
     lam, V = np.linalg.eig(As - Bs @ Ks)
     max_real = float(np.max(lam.real))

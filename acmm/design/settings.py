@@ -112,10 +112,9 @@ class DesignSettings:
         """
         q = np.full(nx, float(self.Q0))
         if self.Q0_groups is not None:
-            g = self.Q0_groups
-            if g.size != nx:
-                raise ValueError(f"Q0_groups gives {g.size} weights for a {nx}-state model")
-            q = q + g
+            if self.Q0_groups.size != nx:
+                raise ValueError(f"Q0_groups gives {self.Q0_groups.size} weights for a {nx}-state model")
+            q = q + self.Q0_groups
         return np.diag(q) if np.any(q > 0) else None
 
 
