@@ -124,9 +124,8 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
         points, refinement = _refine(points, s, sched, path, map_points, progress)
     fit = _schedule(points, s, sched, path)
     check = sch.check_schedule(fit, points, s)
-    path_check = None
-    if path is not None:
-        path_check = check_path(fit.gain, path, s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg)
+    path_check = (None if path is None else
+                  check_path(fit.gain, path, s.orbit_rate, s.sector.sigma, s.sector.half_angle_deg))
     return DesignedSchedule(points, fit, check, path_check, refinement)
 
 
@@ -144,9 +143,8 @@ def _refine(points: list, s: DesignSettings, sched: ScheduleSettings, path, map_
     they are returned among the blend's points in the order of s.
     """
     n = s.orbit_rate
-    ends = [p.spec for p in points if p.spec.s in (0.0, 1.0)]
-    start = next(p for p in ends if p.s == 0.0)
-    end = next(p for p in ends if p.s == 1.0)
+    start = next(p.spec for p in points if p.spec.s == 0.0)
+    end = next(p.spec for p in points if p.spec.s == 1.0)
     added = rounds = 0
     while True:
         fit = _schedule(points, s, sched, None)
@@ -154,8 +152,7 @@ def _refine(points: list, s: DesignSettings, sched: ScheduleSettings, path, map_
         bad = ~(pc.margin >= sched.refine_margin)          # NaN (a failed eigenvalue) fails
         if not bad.any() or added >= sched.refine_points:
             break
-        order = np.argsort([p.tea.theta[1] for p in points], kind="stable")
-        nodes = [points[k] for k in order]
+        nodes = sorted(points, key=lambda p: p.tea.theta[1])
         x = np.array([p.tea.theta[1] for p in nodes])
         where = np.clip(np.searchsorted(x, pc.theta2[bad]) - 1, 0, len(x) - 2)
         worst = {}

@@ -104,7 +104,7 @@ def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None, *, refine: in
     return (alpha,) + disk_gain_phase(alpha)
 
 
-def disk_parts(A, B, K, n, omega_n=None, refine=6, eig=None):
+def disk_parts(A, B, K, n, omega_n=None, eig=None):
     """S(jω) − I/2 on the frequency grid (stacked) and the cheap upper bound √(‖M‖₁‖M‖∞) of
     σ̄ ≥ μ at each frequency; None for an unstable closed loop.  Scaled inputs.
 
@@ -118,8 +118,6 @@ def disk_parts(A, B, K, n, omega_n=None, refine=6, eig=None):
         Orbit rate, rad/s (the grid is in units of it).
     omega_n : array_like, optional
         Frequency grid in units of ``n`` (default :data:`DISK_OMEGA_N`).
-    refine : int, optional
-        Not used here (the signature of the branch-and-bound step).
     eig : tuple, optional
         The eigendecomposition (λ, V, V⁻¹ or None, cond V) of A − BK when already computed.
 
@@ -154,8 +152,7 @@ def disk_parts(A, B, K, n, omega_n=None, refine=6, eig=None):
         S = np.array([np.eye(m) - K @ np.linalg.solve(1j * wk * eye - Acl, B) for wk in w])
     M = S - 0.5 * np.eye(m)[None]
     aM = np.abs(M)
-    cheap = np.sqrt(aM.sum(axis=1).max(axis=1) * aM.sum(axis=2).max(axis=1))
-    return M, cheap
+    return M, np.sqrt(aM.sum(axis=1).max(axis=1) * aM.sum(axis=2).max(axis=1))
 
 
 def disk_alpha_batch(parts, refine: int = 6, rounds: int = 6) -> np.ndarray:

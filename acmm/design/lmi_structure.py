@@ -22,10 +22,8 @@ structure ("Cone Programming", "Exploiting Structure": G given as an operator an
 ``kktsolver`` of one's own); everything else — the Nesterov–Todd scaling, the steps, the
 stopping rule — is cvxopt's.
 
-:func:`run_conelp` hands a program to cvxopt's ``conelp`` with this KKT solver: LAPACK's
-Cholesky of H (an LU factorization where rounding leaves H numerically indefinite, counted in the
-answer's status), then back-substitution.  It stops on cvxopt's relative gap and feasibility
-tolerances; an answer is accepted or refused by :mod:`acmm.design.regional_lmi`'s checks.
+:func:`run_conelp` hands a program to cvxopt's ``conelp`` with this KKT solver
+(:meth:`StructuredKKT.factor`); an answer is accepted or refused by :mod:`acmm.design.regional_lmi`'s checks.
 """
 from __future__ import annotations
 

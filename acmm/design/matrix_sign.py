@@ -6,10 +6,9 @@ The iteration, with the *corrected* denominator (``docs/ERRATA.md`` § Riccati s
     S(k+1) = S(k) [5I + 10S²(k) + S⁴(k)] [I + 10S²(k) + 5S⁴(k)]⁻¹,   S(0) = M,
 
 evaluated in partial fractions (the same rational map, conditioned like κ(S) instead of κ(S)⁴)
-and accelerated by determinantal (or norm) scaling.  The printed denominator I + 10S + 5S⁴ is
-kept as ``form="printed"`` only so that tests can show it does not converge.
-
-Used by :mod:`acmm.design.riccati`.
+and accelerated by determinantal (or norm) scaling.  The printed denominator I + 10S + 5S⁴ does
+not converge to the sign (from the left half-line it either ends at +1 or wanders near −2); it is
+kept as ``form="printed"`` only so that tests can show it.
 """
 from __future__ import annotations
 
@@ -49,15 +48,6 @@ class SignResult:
 _A1, _A2 = 1.0 - np.sqrt(0.8), 1.0 + np.sqrt(0.8)
 _PF = ((float((4.8 - 8.0 * _A1) / (5.0 * (_A2 - _A1))), float(_A1)),
        (float((4.8 - 8.0 * _A2) / (5.0 * (_A1 - _A2))), float(_A2)))
-
-
-def _check_options(scaling, form, evaluation) -> None:
-    if form not in ("corrected", "printed"):
-        raise ValueError(f"form must be 'corrected' or 'printed', got {form!r}")
-    if evaluation not in ("partial_fraction", "polynomial"):
-        raise ValueError(f"evaluation must be 'partial_fraction' or 'polynomial', got {evaluation!r}")
-    if scaling not in ("det", "norm", None, "none"):
-        raise ValueError(f"scaling must be 'det', 'norm' or None, got {scaling!r}")
 
 
 def _accelerated(S, scaling, n):
@@ -161,9 +151,13 @@ def matrix_sign(M, *, scaling: str = "det", tol: float = 1e-13, max_iter: int = 
     S = M0.copy()
     n = S.shape[0]
     eye = np.eye(n)
-    _check_options(scaling, form, evaluation)
+    if form not in ("corrected", "printed"):
+        raise ValueError(f"form must be 'corrected' or 'printed', got {form!r}")
+    if evaluation not in ("partial_fraction", "polynomial"):
+        raise ValueError(f"evaluation must be 'partial_fraction' or 'polynomial', got {evaluation!r}")
+    if scaling not in ("det", "norm", None, "none"):
+        raise ValueError(f"scaling must be 'det', 'norm' or None, got {scaling!r}")
     step = np.inf
-    prev = np.inf
     for k in range(1, max_iter + 1):
         if scaling in ("det", "norm") and step > 1e-2:
             S = _accelerated(S, scaling, n)

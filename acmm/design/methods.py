@@ -1,10 +1,7 @@
 """The design routes of one point (``design.pole_method``), resolved once into a :class:`PoleMethod`.
 
 Every route takes the point's model and the :class:`acmm.design.settings.DesignSettings` and returns
-the same record, :class:`PointGain`: the gain u = −K x (eq 5.3), its poles and sector margin
-(Fig 5.2), eigenvalue conditioning and robustness radii, the H2 control energy
-(:func:`acmm.design.regional_lmi.control_energy`, the same measure for every route), the Riccati
-design it rests on and, for the LMI route, its certificate and solver statistics.
+the same record, :class:`PointGain` (the gain u = −K x of eq 5.3 and its evidence, Fig 5.2).
 
 * ``"shift"``, ``"uniform"``: the sector LQR of report ch. 5.2 (:func:`acmm.design.sector_lqr.sector_lqr`);
 * ``"lmi"``: regional pole placement by LMIs (:func:`acmm.design.regional_lmi.regional_lmi`), its

@@ -2,9 +2,8 @@
 
 Design models at ``schedule.n_check`` TEAs evenly spaced along the blend (:func:`path_models`),
 the disk margin at the plant input (:func:`acmm.design.disk_margin.disk_margin_input`, batched over
-the path) and the
-path check itself (:func:`check_path`: largest Re λ, worst sector margin, disk margin).  Split
-from :mod:`acmm.design.schedule`.
+the path) and the path check itself (:func:`check_path`: largest Re λ, worst sector margin, disk
+margin).
 """
 from __future__ import annotations
 
@@ -14,7 +13,7 @@ import numpy as np
 
 from acmm.model import linearize as lin
 from acmm.design import sector_lqr
-from acmm.design.disk_margin import DISK_OMEGA_N, disk_alpha_batch, disk_parts, disk_gain_phase
+from acmm.design.disk_margin import DISK_OMEGA_N, disk_alpha_batch, disk_gain_phase, disk_parts
 from acmm.design.schedule import PointDesign
 from acmm.design.schedule_points import PointSpec, tea_spaced_blend
 from acmm.design.settings import DesignSettings
@@ -105,30 +104,20 @@ def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> P
     PathModels or None
         The models, None without a blend.
     """
-    specs = [p.spec for p in points]
-    d = s
     n = s.orbit_rate
-    blended = sorted((p for p in specs if np.isfinite(p.s)), key=lambda p: p.s)
+    blended = sorted((p.spec for p in points if np.isfinite(p.spec.s)), key=lambda p: p.s)
     if len(blended) < 2:
         return None
     start, end = blended[0], blended[-1]
     start = PointSpec(start.name, start.inertia, start.bias, 0.0, expected=start.expected)
     end = PointSpec(end.name, end.inertia, end.bias, 1.0, expected=end.expected)
     track = tea_spaced_blend(start, end, n_check, n)
-    th, ss, As, Bs = [], [], [], []
-    scales = None
-    for sp in track:
-        if sp.theta_guess is not None:
-            t = solve_tea_near(sp.inertia, n, sp.bias, sp.theta_guess, expected=sp.expected)
-        else:
-            t = solve_tea(sp.inertia, n, sp.bias, expected=sp.expected)
-        m = lin.design_point(sp.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
-        th.append(t.theta[1])
-        ss.append(sp.s)
-        As.append(m.A)
-        Bs.append(m.B)
-        scales = m.scales
-    return PathModels(np.array(th), np.array(ss), np.array(As), np.array(Bs), scales)
+    teas = [solve_tea(sp.inertia, n, sp.bias, expected=sp.expected) if sp.theta_guess is None
+            else solve_tea_near(sp.inertia, n, sp.bias, sp.theta_guess, expected=sp.expected) for sp in track]
+    models = [lin.design_point(sp.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
+              for sp, t in zip(track, teas)]
+    return PathModels(np.array([t.theta[1] for t in teas]), np.array([sp.s for sp in track]),
+                      np.array([m.A for m in models]), np.array([m.B for m in models]), models[-1].scales)
 
 
 def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
@@ -159,39 +148,36 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
     """
     P = path.theta2.size
     mr, mg, dm, dg, dp = (np.full(P, np.nan) for _ in range(5))
-    poles, parts = [], []
+    poles = []
     d = path.scales
     Ks = np.array([gain_at(path.theta2[j]) for j in range(P)]) * d[None, None, :]
     As = path.A / d[None, :, None] * d[None, None, :]
     Bs = path.B / d[None, :, None]
     # one batched eigendecomposition of every closed loop, reused by the disk margin
     lam_all, V_all = np.linalg.eig(As - Bs @ Ks)
+    for j, lam in enumerate(lam_all):
+        lam = lam[np.lexsort((lam.imag, lam.real))]
+        poles.append(lam)
+        mr[j] = np.max(lam.real) / n
+        mg[j] = np.min(sector_lqr.sector_margin(lam, n, sigma, half_angle_deg))
     if disk:
         condV = np.linalg.cond(V_all)
         try:
             W_all = np.linalg.inv(V_all)
         except np.linalg.LinAlgError:
             W_all = None
-    for j in range(P):
-        lam = lam_all[j]
-        lam = lam[np.lexsort((lam.imag, lam.real))]
-        poles.append(lam)
-        mr[j] = np.max(lam.real) / n
-        mg[j] = np.min(sector_lqr.sector_margin(lam, n, sigma, half_angle_deg))
-    if disk:
         # S(jω) − I/2 of every stable, well-conditioned loop in one modal evaluation
         # (as in disk_parts); the others one by one
         fast = (np.max(lam_all.real, axis=1) < 0) & (condV < 1e8) & (W_all is not None)
         parts = [None] * P
         if np.any(fast):
             idx = np.flatnonzero(fast)
-            w = n * DISK_OMEGA_N
-            m = Bs.shape[2]
             KV = Ks[idx] @ V_all[idx]                                   # (Q, M, N)
             WB = W_all[idx] @ Bs[idx]                                   # (Q, N, M)
+            w = n * DISK_OMEGA_N
             res = 1.0 / (1j * w[None, :, None] - lam_all[idx][:, None, :])   # (Q, F, N)
-            M_all = (0.5 * np.eye(m))[None, None] - np.einsum("qak,qfk,qkb->qfab", KV, res, WB,
-                                                                optimize=True)
+            M_all = (0.5 * np.eye(Bs.shape[2]))[None, None] - np.einsum("qak,qfk,qkb->qfab", KV, res, WB,
+                                                                         optimize=True)
             aM = np.abs(M_all)
             cheap = np.sqrt(aM.sum(axis=2).max(axis=2) * aM.sum(axis=3).max(axis=2))
             for r, j in enumerate(idx):
@@ -199,7 +185,6 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
         for j in np.flatnonzero(~fast):
             eig = (lam_all[j], V_all[j], None if W_all is None else W_all[j], condV[j])
             parts[j] = disk_parts(As[j], Bs[j], Ks[j], n, eig=eig)
-    if disk:
         # batched branch and bound over every TEA's frequencies
         dm[:] = disk_alpha_batch(parts)
         for j in range(P):

@@ -54,27 +54,14 @@ control energy of the answer stays within 0.1 % of the unregularized program's (
 MB3).  The same weight on tr X̃ in the scaled coordinates, whose eigenvalues span many decades,
 left the program ill-posed or cost more energy; a bound X' ⪯ cI would add a cone.
 
-Solvers (``solver``; :data:`ROUTES`), each answer accepted on the checks of :func:`_rejection`
-(X̃ ≻ 0; every pole's margin and the margin X̃ certifies by generalized eigenvalues ≥ μ; the disk;
-the cost LMIs' largest eigenvalue ≤ :data:`COST_TOL` of their norm), never on a status string;
-a refused answer falls back to the next solver with a warning, and when none passes the error says
-what each solver returned — never "infeasible", which a solver's failure does not prove:
-
-* ``"conelp"`` (default): cvxopt's primal-dual ``conelp`` (Nesterov–Todd scaling) with a KKT
-  solver that forms the 678 × 678 Schur complement from the program's structure — every block is a
-  sum of terms Sym(P V Qᵀ), so the complement is a sum of Kronecker products of small matrices
-  (:mod:`acmm.design.lmi_structure`) — in two passes (:func:`_route_conelp`), as DSDP below
-  (``make bench`` times it; ``tests/test_determinism.py`` holds the gains under two BLAS kernels
-  and thread counts).
-* ``"dsdp"``: DSDP 5, a dual-scaling method that factors the 678 × 678 Schur complement
-  and uses the low rank of each variable's data, through ``cvxopt.dsdp`` (GPL-3, README); two
-  passes (:func:`_route_dsdp`): the second in the coordinates of the first's answer, where X' ≈ I,
-  converges to a K independent of the BLAS kernel.
-* ``"clarabel"``: Clarabel through cvxpy (Apache-2.0), the reference: it factors the whole KKT
-  system, with a dense 1 176 × 1 176 block per 48 × 48 LMI (``make bench`` times the three); a first pass, then
-  up to ``refinements`` passes with T ← T chol(X') and the input columns scaled to unit gain-row
-  norms, the objective divided by the last optimum, at gap and feasibility tolerance ``tol``.
-
+Solvers (``solver``; :data:`ROUTES`): ``"conelp"`` (default: cvxopt's ``conelp`` with the KKT solver
+of :mod:`acmm.design.lmi_structure`, :func:`_route_conelp`), ``"dsdp"`` (DSDP 5 through ``cvxopt.dsdp``,
+GPL-3, README; :func:`_route_dsdp`) and ``"clarabel"`` (through cvxpy, Apache-2.0, the reference: it
+factors the whole KKT system, a dense 1 176 × 1 176 block per 48 × 48 LMI; :func:`_route_clarabel`);
+``make bench`` times the three, ``tests/test_determinism.py`` holds the gains under two BLAS kernels
+and thread counts.  Each answer is accepted on the checks of :func:`_rejection`, never on a status
+string; a refused answer falls back to the next solver with a warning, and when none passes the
+error says what each solver returned — never "infeasible", which a solver's failure does not prove.
 All three solve the same program; at the tolerance 1e-7 the optimum's flat directions let their
 gains differ by more than each solver's own rounding does (a slow test at MB3 holds them to 3e-5).
 """
@@ -83,7 +70,7 @@ from __future__ import annotations
 import threading
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg as sla
@@ -181,9 +168,7 @@ class RegionalLMI:
     margin : float
         Worst sector margin of the poles, units of n.
     certified_margin : float
-        Sector margin proved by X (:func:`certified_margin`): min(a* − σ, c* sin φ), a* and c*
-        the largest half-plane shift and cone-apex shift for which the region LMIs hold with this
-        X and K, less a rounding allowance, units of n.
+        Sector margin proved by X and K, less a rounding allowance (:func:`certified_margin`), units of n.
     eig_condition : (N,) array
         Eigenvalue condition numbers of Ã − B̃K̃ (:func:`~acmm.design.sector_lqr.eigen_conditioning`),
         same order as ``poles``, dimensionless.
@@ -493,8 +478,7 @@ class LMIProgram:
         tuple of arrays
             (K̃, X̃, X̃₂), scaled coordinates (time in 1/n), dimensionless.
         """
-        X, X2, Y, _ = self.unpack(v)
-        X = 0.5 * (X + X.T)
+        X, X2, Y, _ = self.unpack(v)               # (symmetric to the bit)
         Ti = np.linalg.inv(self.T)
         Kz = self.s_u[:, None] * np.linalg.solve(X, Y.T).T
         Xs, X2s = self.T @ X @ self.T.T, self.T @ X2 @ self.T.T
@@ -543,9 +527,8 @@ def lmi_program(As, Bs, Gs, T, s_u, st: "RegionalLMISettings", T_reg=None) -> LM
     TT = P.T @ P
     c = np.concatenate([st.regularization * TT[iu] * offdiag, st.regularization * TT[iu] * offdiag,
                         np.zeros(m * N), (s_u[ium[0]] * s_u[ium[1]]) * np.where(ium[0] == ium[1], 1.0, 0.0)])
-    GG = Gz @ Gz.T
-    F0 = LMIProgram(Az, Bz, GG, T, s_u, pars, c, [], [], st.regularization * TT).blocks(np.zeros(c.size))
-    return LMIProgram(Az, Bz, GG, T, s_u, pars, c, F0, program_terms(Az, Bz, pars), st.regularization * TT)
+    prog = LMIProgram(Az, Bz, Gz @ Gz.T, T, s_u, pars, c, [], program_terms(Az, Bz, pars), st.regularization * TT)
+    return replace(prog, F0=prog.blocks(np.zeros(c.size)))            # the blocks at v = 0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -598,9 +581,8 @@ def _solve_conelp(prog: LMIProgram, tol: float, feastol: float, max_iter: int = 
                   refinement: int = 2):
     """cvxopt's ``conelp`` on ``prog`` with its :class:`acmm.design.lmi_structure.StructuredKKT`:
     :func:`acmm.design.lmi_structure.run_conelp` (tolerances dimensionless, returns as it does)."""
-    N, m = prog.sizes
-    return run_conelp(StructuredKKT(prog.terms, layout(N, m)), prog.c, prog.F0, tol, feastol, max_iter, start,
-                      refinement)
+    return run_conelp(StructuredKKT(prog.terms, layout(*prog.sizes)), prog.c, prog.F0, tol, feastol, max_iter,
+                      start, refinement)
 
 
 def _solve_clarabel_pass(prog: LMIProgram, obj_scale: float, st: "RegionalLMISettings", tol: float):
@@ -626,9 +608,7 @@ def _solve_clarabel_pass(prog: LMIProgram, obj_scale: float, st: "RegionalLMISet
     iters = int(problem.solver_stats.num_iters or 0)
     if X.value is None:
         return "no answer", None, iters
-    iu, ium = np.triu_indices(N), np.triu_indices(m)
-    v = np.concatenate([X.value[iu], X2.value[iu], Y.value.ravel(), W.value[ium]])
-    return problem.status, v, iters
+    return problem.status, prog.pack(X.value, X2.value, Y.value, W.value), iters
 
 
 def _precondition(T, Ks, Xs):
@@ -646,9 +626,8 @@ def certified_margin(As, Bs, Ks, X, sigma: float, half_angle_deg: float) -> floa
     c ≤ c* = λ_min(−L₀(Z))/(2 sin φ), L₀(Z) = [[sin φ He Z, cos φ (Z − Zᵀ)], [cos φ (Zᵀ − Z),
     sin φ He Z]] (the generalized eigenvalues of the pencils with X, computed from symmetric
     matrices of the whitened loop Z, whatever the condition of X); the margin is
-    min(a* − σ, c* sin φ) − δ, with δ = 8 N ε κ(L) (‖Ã‖ + ‖B̃‖‖K̃‖) a first-order bound of the
-    rounding in forming Ã_cl and Z (ε the unit roundoff).  −inf if X is not ≻ 0 (its Cholesky
-    factorization fails).
+    min(a* − σ, c* sin φ) − δ, δ the rounding allowance of :func:`whitened_loop`.  −inf if X is not
+    ≻ 0 (its Cholesky factorization fails).
 
     Parameters
     ----------
@@ -793,8 +772,7 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
                           + "; ".join(rejected) + ")", hint=_RELAX_HINT)
     solve_time = time.perf_counter() - ts
     Ks, Xs, X2s, cost, lmi_residual = sol
-    Acl = As - Bs @ Ks
-    lam, _, _, kappa = eigen_conditioning(Acl)
+    lam, _, _, kappa = eigen_conditioning(As - Bs @ Ks)
     order = np.lexsort((lam.imag, lam.real))
     poles, kappa = lam[order] * n, kappa[order]
     margin = float(np.min(sector_margin(poles, n, st.sigma, st.half_angle_deg)))
@@ -824,8 +802,7 @@ def _route_dsdp(As, Bs, Gs, K0, T, st):
     if v is None:
         return status, (it,), None
     sol = _solution(prog, v)
-    T1, s_u = _precondition(T, sol[0], sol[1])
-    prog = lmi_program(As, Bs, Gs, T1, s_u, st, T_reg=T)
+    prog = lmi_program(As, Bs, Gs, *_precondition(T, sol[0], sol[1]), st, T_reg=T)
     status, v, it2 = _solve_dsdp(prog, st.tol)
     return status, (it, it2), None if v is None else _solution(prog, v)
 
@@ -848,14 +825,12 @@ def _route_conelp(As, Bs, Gs, K0, T, st):
     iterate carried into them
     (:func:`_carry_iterate`: the same program, so the same point, residuals and gap):
     (status, iterations, solution or None)."""
-    s_u = np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12)
-    prog = lmi_program(As, Bs, Gs, T, s_u, st)
+    prog = lmi_program(As, Bs, Gs, T, np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12), st)
     status, v, it, iterate = _solve_conelp(prog, *CONELP_FIRST_TOL, st.max_iter, refinement=1)
     if v is None:
         return status, (it,), None
     sol = _solution(prog, v)
-    T1, s_u1 = _precondition(T, sol[0], sol[1])
-    prog2 = lmi_program(As, Bs, Gs, T1, s_u1, st, T_reg=T)
+    prog2 = lmi_program(As, Bs, Gs, *_precondition(T, sol[0], sol[1]), st, T_reg=T)
     feastol = min(st.tol, CONELP_FEASTOL)
     try:
         status, v, it2, _ = _solve_conelp(prog2, st.tol, feastol, st.max_iter,
@@ -959,8 +934,7 @@ def _rejection(As, Bs, Gs, sol, st, n):
         return f"fastest pole |λ| = {fastest:.4g}n outside the disk of radius {st.disk_radius}n"
     if residual > COST_TOL:
         return f"cost LMIs violated by {residual:.1e} (relative)"
-    Acl = As - Bs @ Ks
-    W = sla.solve_continuous_lyapunov(Acl, -(Gs @ Gs.T))
+    W = sla.solve_continuous_lyapunov(As - Bs @ Ks, -(Gs @ Gs.T))
     energy = float(np.trace(Ks @ W @ Ks.T))
     if not energy <= cost * (1 + 1e-6):
         return f"control energy {energy:.6g} above the cost bound {cost:.6g}"

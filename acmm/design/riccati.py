@@ -12,19 +12,12 @@ methods behind :func:`solve_care`:
     balancing).
 ``"sign"``
     The matrix sign function of the Hamiltonian (eq 5.5) by the fifth-order iteration of eq 5.6
-    with the *corrected* denominator (``docs/ERRATA.md`` § Riccati sign function)::
-
-        S(k+1) = S(k) [5I + 10S²(k) + S⁴(k)] [I + 10S²(k) + 5S⁴(k)]⁻¹,   S(0) = H,
-
-    evaluated in partial fractions (the same rational map, conditioned like κ(S) instead of
-    κ(S)⁴) and accelerated by determinantal (or norm) scaling; [I; P] then spans the stable
-    invariant subspace of H = [[A, −G], [−Q, −A']], G = BR⁻¹B', which is the range of the
-    projector (I − sign H)/2: an orthonormal basis [U1; U2] of it from a column-pivoted QR
+    with the *corrected* denominator (:func:`acmm.design.matrix_sign.matrix_sign`); [I; P] then
+    spans the stable invariant subspace of H = [[A, −G], [−Q, −A']], G = BR⁻¹B', which is the range
+    of the projector (I − sign H)/2: an orthonormal basis [U1; U2] of it from a column-pivoted QR
     factorization gives P = U2 U1⁻¹.  (Solving (sign H + I)[I; P] = 0 by least squares instead
     loses up to ten digits on the nearly uncontrollable claim-1 model: backward error 3e-6
-    against 1e-16.)  The printed denominator I + 10S + 5S⁴ does not converge to the
-    sign (from the left half-line it either ends at +1 or wanders near −2); it is kept as
-    ``form="printed"`` of :func:`matrix_sign` only so that tests can show it.
+    against 1e-16.)
 ``"slycot"``
     SLICOT SB02MD (Schur vectors of the Hamiltonian) via :func:`slycot.sb02md`.
 
@@ -34,15 +27,12 @@ the 24 ACMM states span ~12 orders of magnitude; unscaled, every method loses mo
 (``docs/ERRATA.md`` § Scaling).
 
 Refinement and acceptance: every solver's answer is refined by Newton–Kleinman steps with exact
-line search (:func:`refine_care`; Kleinman 1968, Benner & Byers 1998): each step solves the
-Lyapunov equation A_c'Δ + ΔA_c = −ℛ(P) of the closed loop A_c = A − GP for the residual ℛ(P)
-and moves P by tΔ, t ∈ (0, 2] minimizing ‖ℛ(P + tΔ)‖.  The refinement stops when a step no
-longer halves the backward error ω (:func:`care_backward_error`), i.e. at working accuracy,
-not after a fixed count.  The solution is accepted when ω ≤ ``tol``: ω measures the residual
-against the size of the terms as floating point evaluates them, so a nearly uncontrollable
-model (whose P spans many orders of magnitude, with large cancelling terms in PGP) is judged by
-what working precision can give, the same for every method.  The relative residual of
-:func:`care_residual` is still computed and reported; the error of P is about κ_CARE·ω.
+line search (:func:`refine_care`; Kleinman 1968, Benner & Byers 1998) until a step no longer
+halves the backward error ω (:func:`care_backward_error`), i.e. at working accuracy, not after a
+fixed count, and accepted when ω ≤ ``tol``: ω judges a nearly uncontrollable model (large
+cancelling terms in PGP) by what working precision can give, the same for every method.  The
+relative residual of :func:`care_residual` is still computed and reported; the error of P is
+about κ_CARE·ω.
 
 Existence check (every method): before solving, the eigenvalues λ_i of the (scaled) Hamiltonian
 H = [[A, −G], [−Q, −A']] are computed, after balancing (H_b = T⁻¹HT, LAPACK GEBAL with
@@ -94,6 +84,19 @@ def _as_square(M, k: int, name: str) -> np.ndarray:
     if M.shape != (k, k):
         raise ValueError(f"{name} must be a scalar or {k}×{k}, got shape {M.shape}")
     return 0.5 * (M + M.T)
+
+
+def _gram(B, R) -> np.ndarray:
+    """G = B R⁻¹ B', symmetrized."""
+    G = B @ np.linalg.solve(R, B.T)
+    return 0.5 * (G + G.T)
+
+
+def _ratio(num: float, den: float) -> float:
+    """num / den, with 0/0 = 0 and x/0 = inf."""
+    if den == 0.0:
+        return 0.0 if num == 0.0 else float("inf")
+    return float(num / den)
 
 
 def as_R(R, m: int) -> np.ndarray:
@@ -179,10 +182,7 @@ def care_residual(A, B, Q, R, P) -> float:
     PGP = PB @ np.linalg.solve(R, PB.T)
     res = AtP + AtP.T - PGP + Q
     den = np.linalg.norm(Q) + 2.0 * np.linalg.norm(AtP) + np.linalg.norm(PGP)
-    num = np.linalg.norm(res)
-    if den == 0.0:
-        return 0.0 if num == 0.0 else float("inf")
-    return float(num / den)
+    return _ratio(np.linalg.norm(res), den)
 
 
 def care_backward_error(A, B, Q, R, P) -> float:
@@ -222,16 +222,12 @@ def care_backward_error(A, B, Q, R, P) -> float:
     A, B, P = (np.asarray(x, dtype=float) for x in (A, B, P))
     Q = _as_square(Q, A.shape[0], "Q")
     R = as_R(R, B.shape[1])
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
+    G = _gram(B, R)
     AtP = A.T @ P
     res = AtP + AtP.T - P @ G @ P + Q
     aP = np.abs(A).T @ np.abs(P)
     den = float(np.linalg.norm(aP + aP.T + np.abs(P) @ np.abs(G) @ np.abs(P) + np.abs(Q)))
-    num = float(np.linalg.norm(0.5 * (res + res.T)))
-    if den == 0.0:
-        return 0.0 if num == 0.0 else float("inf")
-    return num / den
+    return _ratio(float(np.linalg.norm(0.5 * (res + res.T))), den)
 
 
 def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
@@ -265,8 +261,7 @@ def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
         An eigenvalue of H on, or within rounding of, the imaginary axis.
     """
     n = A.shape[0]
-    G = B @ np.linalg.solve(R, B.T)
-    H = np.block([[A, -0.5 * (G + G.T)], [-Q, -A.T]])
+    H = np.block([[A, -_gram(B, R)], [-Q, -A.T]])
     hn = float(np.linalg.norm(H))
     if n == 0 or hn == 0.0:
         if n:
@@ -317,8 +312,7 @@ def care_condition(A, B, Q, R, P) -> float:
     float
         κ_CARE, dimensionless.
     """
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
+    G = _gram(B, R)
     Ac = A - G @ P
     if A.shape[0] == 0:
         return 0.0
@@ -467,8 +461,7 @@ def refine_care(A, B, Q, R, P) -> tuple[np.ndarray, int]:
     tuple
         (P, steps): the refined symmetric solution and the number of steps kept.
     """
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
+    G = _gram(B, R)
     P = 0.5 * (P + P.T)
     omega = care_backward_error(A, B, Q, R, P)
     steps = 0
@@ -519,15 +512,12 @@ def _line_search(Res: np.ndarray, V: np.ndarray) -> float:
 def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign_tol=1e-13,
                max_iter=60):
     n = A.shape[0]
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
-    H = np.block([[A, -G], [-Q, -A.T]])
+    H = np.block([[A, -_gram(B, R)], [-Q, -A.T]])
     sr = matrix_sign(H, scaling=scaling, evaluation=evaluation, tol=sign_tol, max_iter=max_iter)
     # range(I − sign H) is the stable invariant subspace span[I; P] of H
     Z, _, _ = sla.qr(np.eye(2 * n) - sr.S, pivoting=True)
     U1, U2 = Z[:n, :n], Z[n:, :n]
-    P = np.linalg.solve(U1.T, U2.T).T
-    return P, sr.iterations
+    return np.linalg.solve(U1.T, U2.T).T, sr.iterations
 
 
 def _care_slycot(A, B, Q, R):
@@ -536,11 +526,8 @@ def _care_slycot(A, B, Q, R):
     except ImportError as exc:  # pragma: no cover - slycot is a declared dependency
         raise ConvergenceError("method='slycot' needs the slycot package",
                                hint=other_method_hint("slycot")) from exc
-    n = A.shape[0]
-    G = B @ np.linalg.solve(R, B.T)
-    G = 0.5 * (G + G.T)
     try:
-        out = sb02md(n, A.copy(), G, Q.copy(), "C", scal="N", sort="S")
+        out = sb02md(A.shape[0], A.copy(), _gram(B, R), Q.copy(), "C", scal="N", sort="S")
     except Exception as exc:  # slycot raises SlycotArithmeticError / ValueError
         raise ConvergenceError(f"Riccati solve (method='slycot', SB02MD) failed: {exc}",
                                hint=other_method_hint("slycot")) from exc
@@ -649,7 +636,15 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    A, B, Q, R, d = _as_problem(A, B, Q, R, scale)
+    A = np.asarray(A, dtype=float)
+    B = np.asarray(B, dtype=float)
+    if B.ndim == 1:
+        B = B[:, None]
+    n, m = B.shape
+    if A.shape != (n, n):
+        raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
+    Q, R = _as_square(Q, n, "Q"), as_R(R, m)
+    d = np.asarray(scale, dtype=float) if scale is not None else None
     As, Bs, Qs = scale_problem(A, B, Q, d) if d is not None else (A, B, Q)
 
     gap = hamiltonian_check(As, Bs, Qs, R, method=method)
@@ -658,11 +653,23 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
                                       sign_evaluation=sign_evaluation, max_iter=max_iter)
     seconds = time.perf_counter() - t0
     Ps = 0.5 * (Ps + Ps.T)
-    if np.all(np.isfinite(Ps)):
-        Ps, steps = refine_care(As, Bs, Qs, R, Ps)
-    else:
-        steps = 0
-    Ks, res, omega = _verified_gain(As, Bs, Qs, R, Ps, method=method, tol=tol, scaled=d is not None)
+    if not np.all(np.isfinite(Ps)):
+        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values",
+                               hint=other_method_hint(method))
+    # (the refinement keeps only finite, stabilizing steps)
+    Ps, steps = refine_care(As, Bs, Qs, R, Ps)
+    res = care_residual(As, Bs, Qs, R, Ps)
+    omega = care_backward_error(As, Bs, Qs, R, Ps)
+    if not omega <= tol:
+        _refuse(f"Riccati solve (method={method!r}{', state-scaled' if d is not None else ''}"
+                f"): backward error {omega:.3e} after refinement exceeds tolerance {tol:.1e} "
+                f"(relative residual {res:.3e})", method, omega, residual_hint(method))
+    Ks = np.linalg.solve(R, Bs.T @ Ps)
+    worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
+    if not worst < 0.0:
+        _refuse(f"Riccati solve (method={method!r}): solution is not stabilizing "
+                f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
+                f"{res:.3e})", method, res, residual_hint(method))
     cond = care_condition(As, Bs, Qs, R, Ps)
     if d is not None:
         P = Ps / d[:, None] / d[None, :]
@@ -673,37 +680,3 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
                       scale=d, seconds=seconds, condition=cond,
                       ill_conditioned=bool(not cond <= ILL_CONDITIONED), hamiltonian_gap=gap,
                       backward_error=omega, refinement_steps=steps)
-
-
-def _as_problem(A, B, Q, R, scale):
-    """Arrays (A, B, Q, R) of matching shapes, and the scale d as an array (or None)."""
-    A = np.asarray(A, dtype=float)
-    B = np.asarray(B, dtype=float)
-    if B.ndim == 1:
-        B = B[:, None]
-    n, m = B.shape
-    if A.shape != (n, n):
-        raise ValueError(f"A must be {n}×{n} to match B, got {A.shape}")
-    d = np.asarray(scale, dtype=float) if scale is not None else None
-    return A, B, _as_square(Q, n, "Q"), as_R(R, m), d
-
-
-def _verified_gain(As, Bs, Qs, R, Ps, *, method, tol, scaled):
-    """(K̃, relative residual, backward error) of a refined solution P̃, refused if non-finite,
-    inaccurate (backward error above ``tol``) or not stabilizing."""
-    if not np.all(np.isfinite(Ps)):
-        raise ConvergenceError(f"Riccati solve (method={method!r}) returned non-finite values",
-                               hint=other_method_hint(method))
-    res = care_residual(As, Bs, Qs, R, Ps)
-    omega = care_backward_error(As, Bs, Qs, R, Ps)
-    if not omega <= tol:
-        _refuse(f"Riccati solve (method={method!r}{', state-scaled' if scaled else ''}"
-                f"): backward error {omega:.3e} after refinement exceeds tolerance {tol:.1e} "
-                f"(relative residual {res:.3e})", method, omega, residual_hint(method))
-    Ks = np.linalg.solve(R, Bs.T @ Ps)
-    worst = float(np.max(np.linalg.eigvals(As - Bs @ Ks).real))
-    if not worst < 0.0:
-        _refuse(f"Riccati solve (method={method!r}): solution is not stabilizing "
-                       f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
-                       f"{res:.3e})", method, res, residual_hint(method))
-    return Ks, res, omega

@@ -223,8 +223,7 @@ def _plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFa
     labels, inertias, thetas = ["nominal"], [I0], [th0]
     rng = np.random.default_rng(np.random.SeedSequence([st.seed]))
     draws = unphysical = folded = 0
-    members = 0
-    while members < st.samples and draws < DRAWS_PER_MEMBER * st.samples:
+    while len(labels) <= st.samples and draws < DRAWS_PER_MEMBER * st.samples:       # the nominal and the draws
         values = {k: float(rng.uniform(-h, h)) for k in ELEMENTS}
         draws += 1
         I = perturb_inertia(I0, values)
@@ -238,7 +237,6 @@ def _plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFa
         labels.append(f"draw {draws - 1}")
         inertias.append(I)
         thetas.append(tea.theta)
-        members += 1
     scalings_folded = []
     for s in (1.0 - h, 1.0 + h):
         tea = solve_tea_connected(th0, I0, b0, s * I0, n, b0)
@@ -303,10 +301,10 @@ def _region_certificate(As: np.ndarray, Bs: np.ndarray, Ks: np.ndarray) -> Regio
     With X = LLᵀ and Z = L⁻¹(Ã − B̃K̃)L: He(A_cl X) + 2aX ⪯ 0 for a = −λ_max(Z + Zᵀ)/2, and the
     cone LMI [[sin φ He Z, cos φ (Z − Zᵀ)], [cos φ (Zᵀ − Z), sin φ He Z]] ⪯ 0 for every
     φ ≥ φ* (monotone: tan φ·diag(He Z, He Z) + [[0, S], [−S, 0]] decreases with φ when
-    He Z ⪯ 0), φ* found by bisection to 1e-9 rad.  Both less the rounding allowance
-    δ = 8Nε κ(L)(‖Ã‖ + ‖B̃‖‖K̃‖) of forming Z.  Model and gain scaled (time in 1/n), dimensionless;
-    the certified decay in units of n, the cone in deg (decay −inf or ≤ 0 and cone NaN when no
-    certificate was found).
+    He Z ⪯ 0), φ* found by bisection to 1e-9 rad.  Both less the rounding allowance δ of
+    :func:`acmm.design.regional_lmi.whitened_loop`.  Model and gain scaled (time in 1/n),
+    dimensionless; the certified decay in units of n, the cone in deg (decay −inf or ≤ 0 and cone
+    NaN when no certificate was found).
     """
     lam, V = np.linalg.eig(As - Bs @ Ks)
     max_real = float(np.max(lam.real))

@@ -1,15 +1,12 @@
 """Quadratic gain schedules versus the TEA (CR-185644 ch. 5.3, Figs 5.3–5.26).
 
-Design points (:mod:`acmm.design.schedule_points`) lie on the blend I(s) = (1−s)·I_start + s·I_to
-(bias blended alike) and/or are named configurations.  Each gets its TEA (eqs 4.1–4.3), its design model (eq 4.46) and a sector
-LQR gain (ch. 5.2); every gain element is then fitted by a least-squares polynomial (order 2 in
-the report) in the scheduling variable θ2* (pitch TEA, rad), and with ``schedule.fit: shifted_lqr``
-converged on the path's shifted LQR cost (:func:`acmm.design.schedule_shifted_lqr.refit_shifted_lqr`).  The scheduled gain
-is re-checked on the local linear model at every design point and midpoint
-(:func:`check_schedule`) and at ``schedule.n_check`` TEAs evenly spaced along the whole path
-(:func:`acmm.design.path_check.check_path`: largest Re λ, worst sector margin, disk margin at the plant
-input).  The config is read only by :func:`acmm.design.schedule_points.point_specs` (and
-:mod:`acmm.design.settings`); the rest takes arrays and settings objects.
+Each design point (:mod:`acmm.design.schedule_points`) gets its TEA (eqs 4.1–4.3), its design model
+(eq 4.46) and a sector LQR gain (ch. 5.2); every gain element is then fitted by a least-squares
+polynomial (order 2 in the report) in the scheduling variable θ2* (pitch TEA, rad), and with
+``schedule.fit: shifted_lqr`` converged on the path's shifted LQR cost
+(:func:`acmm.design.schedule_shifted_lqr.refit_shifted_lqr`).  The scheduled gain is re-checked on
+the local linear model at every design point and midpoint (:func:`check_schedule`) and along the
+whole path (:func:`acmm.design.path_check.check_path`).
 """
 from __future__ import annotations
 
@@ -284,7 +281,6 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
     ScheduleCheck
         Margins and largest pole real parts, units of n.
     """
-    d = s
     n = s.orbit_rate
     names, th2, margins, kinds, max_real = [], [], [], [], []
 
@@ -293,7 +289,7 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
         names.append(name)
         th2.append(theta2)
         kinds.append(kind)
-        margins.append(np.min(sector_lqr.sector_margin(poles, n, d.sector.sigma, d.sector.half_angle_deg)))
+        margins.append(np.min(sector_lqr.sector_margin(poles, n, s.sector.sigma, s.sector.half_angle_deg)))
         max_real.append(np.max(poles.real) / n)
 
     for p in points:
@@ -303,7 +299,7 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
         spec = PointSpec(f"mid_{0.5 * (a.spec.s + b.spec.s):.3f}", 0.5 * (a.spec.inertia + b.spec.inertia),
                          0.5 * (a.spec.bias + b.spec.bias), 0.5 * (a.spec.s + b.spec.s))
         t = solve_tea_near(spec.inertia, n, spec.bias, 0.5 * (a.tea.theta + b.tea.theta))
-        model = lin.design_point(spec.inertia, t.theta, n, model=d.model, drf_mode=d.drf_mode)
+        model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
         _check(spec.name, model, t.theta[1], "midpoint")
     return ScheduleCheck(names, np.array(th2), np.array(margins), kinds, np.array(max_real))
 

@@ -8,8 +8,7 @@ takes arrays and settings objects.
 """
 from __future__ import annotations
 
-from contextlib import contextmanager
-
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,7 +88,9 @@ def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
         The configurations, with their tracked TEA as ``theta_guess``.
     """
     s_grid = np.linspace(0.0, 1.0, n_track)
-    thetas = _tea_track(start, end, n, n_track)
+    # (the design points and the path check of one design track the same blend: ~35 ms each, so it
+    # is not remembered between them)
+    thetas = np.array(list(_continue_blend(start, end, n, s_grid)))
     th2 = thetas[:, 1]
     d = np.diff(th2)
     if not (np.all(d > 0) or np.all(d < 0)):
@@ -143,13 +144,6 @@ def _continue_blend(start: PointSpec, end: PointSpec, n: float, grid):
         yield t
 
 
-def _tea_track(start: PointSpec, end: PointSpec, n: float, n_track: int) -> np.ndarray:
-    """TEA (n_track, 3) along the blend start → end by Newton continuation on evenly spaced s
-    (the design points and the path check of one design track the same blend: ~35 ms each, so
-    it is not remembered between them)."""
-    return np.array(list(_continue_blend(start, end, n, np.linspace(0.0, 1.0, n_track))))
-
-
 def point_specs(cfg) -> list[PointSpec]:
     """Design points of a config: the blend start → ``schedule.to`` plus ``schedule.points``.
 
@@ -168,30 +162,24 @@ def point_specs(cfg) -> list[PointSpec]:
         The design points.
     """
     n = cfg.orbit_rate
-    inertia = cfg.inertia.matrix()
-    start = PointSpec(cfg.name, inertia, resolve_bias(cfg.disturbance, inertia, n), 0.0,
-                      expected=cfg.disturbance.requested_tea())
+
+    def spec(name, inertia, disturbance, s=float("nan")):
+        matrix = inertia.matrix()
+        return PointSpec(name, matrix, resolve_bias(disturbance, matrix, n), s, expected=disturbance.requested_tea())
+
+    start = spec(cfg.name, cfg.inertia, cfg.disturbance, 0.0)
     sch = cfg.schedule
     if sch is None:
         return [start]
-    end = None
-    if sch.to is not None:
-        i_to = sch.to.inertia.matrix()
-        end = PointSpec(sch.to.name, i_to, resolve_bias(sch.to.disturbance, i_to, n), 1.0,
-                        expected=sch.to.disturbance.requested_tea())
-    extras = []
-    for p in sch.points:
-        i_p = p.inertia.matrix()
-        extras.append(PointSpec(p.name, i_p, resolve_bias(p.disturbance, i_p, n),
-                                expected=p.disturbance.requested_tea()))
+    end = None if sch.to is None else spec(sch.to.name, sch.to.inertia, sch.to.disturbance, 1.0)
+    extras = [spec(p.name, p.inertia, p.disturbance) for p in sch.points]
     return schedule_specs(start, end, extras, schedule_settings(cfg), n)
 
 
 def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSpec], sched, n: float
                    ) -> list[PointSpec]:
-    """The design points: ``start`` alone (``sched`` None), else the blend ``start`` → ``end``
-    (``sched.n_points`` points spaced by ``sched.spacing``; none when ``end`` is None) followed by
-    the named ``extras``.  ``n``: orbital rate, rad/s.
+    """The design points: ``start`` alone, else the blend ``start`` → ``end`` (``sched.n_points``
+    points spaced by ``sched.spacing``) followed by the named ``extras``.
 
     Parameters
     ----------
@@ -285,10 +273,11 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
     start = PointSpec(first.name, first.inertia, first.bias, 0.0, expected=first.expected)
     end = PointSpec(last.name, last.inertia, last.bias, 1.0, expected=last.expected)
     grid = np.linspace(0.0, 1.0, n_track)
-    try:
-        track = _tea_track(start, end, n, n_track)
-    except (NoEquilibriumError, ConvergenceError):
-        track = _track_to_fold(start, end, n, grid)       # the points before the fold are checked
+    track = []
+    with suppress(NoEquilibriumError, ConvergenceError):     # where the branch folds, the points before it are checked
+        for t in _continue_blend(start, end, n, grid):
+            track.append(t)
+    track = np.array(track).reshape(-1, 3)
     reach = grid[len(track) - 1] if len(track) else -1.0       # the last s the branch reaches
     for sp, th in blend:
         branch = None
@@ -301,15 +290,3 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
         if branch is None or np.max(np.abs((th - branch + np.pi) % (2 * np.pi) - np.pi)) > tol:
             return BranchJump(sp.name, float(sp.s), th, branch, sp.expected is not None)
     return None
-
-
-def _track_to_fold(start: PointSpec, end: PointSpec, n: float, grid: np.ndarray) -> np.ndarray:
-    """TEA (k, 3), rad, of :func:`_continue_blend` over ``grid`` up to the last s before the
-    branch folds (k = 0 when even the start has none)."""
-    out = []
-    try:
-        for t in _continue_blend(start, end, n, grid):
-            out.append(t)
-    except (NoEquilibriumError, ConvergenceError):
-        pass
-    return np.array(out).reshape(-1, 3)

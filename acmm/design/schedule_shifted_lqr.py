@@ -45,6 +45,7 @@ log's rank-one term −∇T ∇Tᵀ/T² (T the summed traces) and the weight ε 
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from math import comb
 
 import numpy as np
@@ -366,8 +367,7 @@ def _outcome(fit: ScheduleFit, st: dict, x: np.ndarray, w0: float, w1: float, st
             "message": message, "n_tea": len(st["idx"]), "max_real_before": float(w0),
             "max_real_after": float(w1), "accepted": bool(accepted)}
     if not accepted:
-        return ScheduleFit(fit.coef, fit.variable, fit.gains, fit.rms_residual, fit.rel_residual,
-                           fit.form, "least_squares", info)
+        return replace(fit, method="least_squares", refit_info=info)
     a = st["a0"] + x.reshape(st["shape"]) * st["sc"]
     coef = _power_basis(a, st["c0"], st["h0"]) / st["d"][None, None, :]    # powers of θ2*, units of K
     order = fit.order

@@ -300,55 +300,6 @@ def _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin):
                 f"and is uncontrollable (PBH ratio {ratio:.2e}); no feedback can move it", hint=hint)
 
 
-def _finish(As, Bs, Qs, R, Ps, alpha, n, sigma, half_angle_deg, d, min_margin, residual_tol,
-            method, riccati_method, mirror_shifts, e: float = 1.0) -> SectorLQR:
-    """Verify a design in scaled coordinates (the input in units of ``e``: B·e, R·e²) and map
-    it back to physical units."""
-    Qs = 0.5 * (Qs + Qs.T)
-    nx = As.shape[0]
-    Ash = As + alpha * np.eye(nx)
-    Ps = 0.5 * (Ps + Ps.T)
-    Ks = np.linalg.solve(R, Bs.T @ Ps)
-    poles = np.linalg.eigvals(As - Bs @ Ks)
-    poles = poles[np.lexsort((poles.imag, poles.real))]
-    margins = sector_margin(poles, n, sigma, half_angle_deg)
-    margin = float(np.min(margins))
-    qmin = float(np.min(np.linalg.eigvalsh(Qs))) if nx else 0.0
-    if qmin < -1e-12 * max(1.0, np.linalg.norm(Qs, 2)):
-        raise DesignError(f"sector LQR ({method}): Q is not positive semidefinite "
-                          f"(smallest eigenvalue {qmin:.3e})", hint="change design.Q0 or design.R")
-    res = care_residual(Ash, Bs, Qs, R, Ps)
-    omega = care_backward_error(Ash, Bs, Qs, R, Ps)
-    if not omega <= residual_tol:
-        raise ConvergenceError(f"sector LQR ({method}, Riccati method {riccati_method!r}): Riccati "
-                               f"backward error {omega:.3e} exceeds tolerance {residual_tol:.1e} "
-                               f"(relative residual {res:.3e})", hint=residual_hint(riccati_method))
-    if margin < min_margin:
-        bad = poles[margins < min_margin]
-        raise DesignError(
-            f"sector LQR ({method}): {bad.size} closed-loop pole(s) outside the sector "
-            f"Re λ ≤ −{sigma}n, |Im λ| ≤ tan({half_angle_deg}°)|Re λ| with margin {min_margin}n "
-            f"(worst margin {margin:.3g}n at λ/n = {complex(bad[0] / n):.4g})", hint=SECTOR_HINT)
-    lam_c, _, _, kappa = eigen_conditioning(As - Bs @ Ks)
-    kappa = kappa[np.lexsort((lam_c.imag, lam_c.real))]
-    e_norm, e_elem = sector_robustness(As, Bs, Ks, n, sigma, half_angle_deg)
-    kcare = care_condition(Ash, Bs, Qs, R, Ps)
-    if d is not None:
-        K = Ks / d[None, :]
-        P = Ps / d[:, None] / d[None, :]
-        Q = Qs / d[:, None] / d[None, :]
-    else:
-        K, P, Q = Ks, Ps, Qs
-    if e != 1.0:                        # u = e·ũ: K = e·K̃, R = R̃ / e²
-        K, R = K * e, R / e ** 2
-    return SectorLQR(K=K, P=P, Q=Q, R=R, poles=poles, margin=margin, residual=res,
-                     backward_error=omega, shift=alpha,
-                     mirror_shifts=tuple(mirror_shifts), method=method,
-                     riccati_method=riccati_method, scale=d, eig_condition=kappa,
-                     robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
-                     riccati_condition=kcare, riccati_ill_conditioned=bool(not kcare <= ILL_CONDITIONED))
-
-
 # ---------------------------------------------------------------------------------------------
 # the two methods: a uniform shift, or the shift σn and optimal pole shifting of the stray poles
 # ---------------------------------------------------------------------------------------------
@@ -385,10 +336,53 @@ class _SectorProblem:
                                    hint="lower design.sector.sigma (the shift α asked of the LQR may be too "
                                         f"large), or {exc.hint or other_method_hint(self.riccati_method)}") from exc
 
-    def finish(self, Qs, Ps, shift, mirror_shifts) -> SectorLQR:
-        return _finish(self.As, self.Bs, Qs, self.R, Ps, shift, self.n, self.sigma, self.half_angle_deg,
-                       self.d, self.min_margin, self.residual_tol, self.method, self.riccati_method,
-                       mirror_shifts, self.e)
+    def finish(self, Qs, Ps, alpha, mirror_shifts) -> SectorLQR:
+        """Verify a design in the solve's coordinates (the input in units of ``e``: B·e, R·e²) and
+        map it back to physical units."""
+        As, Bs, R, n, d, method = self.As, self.Bs, self.R, self.n, self.d, self.method
+        Qs = 0.5 * (Qs + Qs.T)
+        nx = As.shape[0]
+        Ash = As + alpha * np.eye(nx)
+        Ps = 0.5 * (Ps + Ps.T)
+        Ks = np.linalg.solve(R, Bs.T @ Ps)
+        poles = np.linalg.eigvals(As - Bs @ Ks)
+        poles = poles[np.lexsort((poles.imag, poles.real))]
+        margins = sector_margin(poles, n, self.sigma, self.half_angle_deg)
+        margin = float(np.min(margins))
+        qmin = float(np.min(np.linalg.eigvalsh(Qs))) if nx else 0.0
+        if qmin < -1e-12 * max(1.0, np.linalg.norm(Qs, 2)):
+            raise DesignError(f"sector LQR ({method}): Q is not positive semidefinite "
+                              f"(smallest eigenvalue {qmin:.3e})", hint="change design.Q0 or design.R")
+        res = care_residual(Ash, Bs, Qs, R, Ps)
+        omega = care_backward_error(Ash, Bs, Qs, R, Ps)
+        if not omega <= self.residual_tol:
+            raise ConvergenceError(f"sector LQR ({method}, Riccati method {self.riccati_method!r}): Riccati "
+                                   f"backward error {omega:.3e} exceeds tolerance {self.residual_tol:.1e} "
+                                   f"(relative residual {res:.3e})", hint=residual_hint(self.riccati_method))
+        if margin < self.min_margin:
+            bad = poles[margins < self.min_margin]
+            raise DesignError(
+                f"sector LQR ({method}): {bad.size} closed-loop pole(s) outside the sector "
+                f"Re λ ≤ −{self.sigma}n, |Im λ| ≤ tan({self.half_angle_deg}°)|Re λ| "
+                f"with margin {self.min_margin}n "
+                f"(worst margin {margin:.3g}n at λ/n = {complex(bad[0] / n):.4g})", hint=SECTOR_HINT)
+        lam_c, _, _, kappa = eigen_conditioning(As - Bs @ Ks)
+        kappa = kappa[np.lexsort((lam_c.imag, lam_c.real))]
+        e_norm, e_elem = sector_robustness(As, Bs, Ks, n, self.sigma, self.half_angle_deg)
+        kcare = care_condition(Ash, Bs, Qs, R, Ps)
+        if d is not None:
+            K = Ks / d[None, :]
+            P = Ps / d[:, None] / d[None, :]
+            Q = Qs / d[:, None] / d[None, :]
+        else:
+            K, P, Q = Ks, Ps, Qs
+        K, R = K * self.e, R / self.e ** 2          # u = e·ũ: K = e·K̃, R = R̃ / e²
+        return SectorLQR(K=K, P=P, Q=Q, R=R, poles=poles, margin=margin, residual=res,
+                         backward_error=omega, shift=alpha,
+                         mirror_shifts=tuple(mirror_shifts), method=method,
+                         riccati_method=self.riccati_method, scale=d, eig_condition=kappa,
+                         robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
+                         riccati_condition=kcare, riccati_ill_conditioned=bool(not kcare <= ILL_CONDITIONED))
 
 
 def _problem(A, B, R, n, sigma, half_angle_deg, Q0, scale, method, riccati_method, residual_tol,
@@ -404,14 +398,9 @@ def _problem(A, B, R, n, sigma, half_angle_deg, Q0, scale, method, riccati_metho
     else:
         Q0s = np.asarray(Q0, dtype=float)
         Q0s = float(Q0s) * np.eye(nx) if Q0s.ndim == 0 else 0.5 * (Q0s + Q0s.T)
-    if scale is not None:
-        d = np.asarray(scale, dtype=float)
-        As, Bs, _ = scale_problem(A, B, np.zeros((nx, nx)), d)
-    else:
-        d = None
-        As, Bs = A, B
-    if input_scale != 1.0:
-        Bs, R = Bs * input_scale, R * input_scale ** 2
+    d = None if scale is None else np.asarray(scale, dtype=float)
+    As, Bs = (A, B) if d is None else scale_problem(A, B, np.zeros((nx, nx)), d)[:2]
+    Bs, R = Bs * input_scale, R * input_scale ** 2
     _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin)
     return _SectorProblem(As, Bs, Q0s, R, d, n, sigma, half_angle_deg, min_margin, residual_tol, method,
                           riccati_method, float(input_scale))
@@ -437,8 +426,7 @@ def _sector_uniform(p: _SectorProblem, max_uniform_shift: float) -> SectorLQR:
         good, r_hi = ok(hi)
         if good:
             break
-        lo = hi
-        hi *= 1.25
+        lo, hi = hi, 1.25 * hi
         if hi > max_uniform_shift * n:
             raise DesignError(f"sector LQR (uniform): no shift α ≤ {max_uniform_shift}n puts "
                               f"every pole in the sector", hint=SECTOR_HINT)
@@ -457,14 +445,12 @@ def _sector_shift(p: _SectorProblem, line_spacing: float) -> SectorLQR:
     (up to 4 sweeps; each group of stray poles needing about the same line is mirrored)."""
     As, Bs, R, n = p.As, p.Bs, p.R, p.n
     phi = np.deg2rad(p.half_angle_deg)
-    r0 = p.lqr_shifted(p.alpha)
-    Ps = r0.P.copy()
+    Ps = p.lqr_shifted(p.alpha).P.copy()
     Qs = p.Q0s.copy()
     target = 1.5 * p.min_margin
     mirror_shifts = []
     for _sweep in range(4):
-        Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
-        lam = np.linalg.eigvals(Acl)
+        lam = np.linalg.eigvals(As - Bs @ np.linalg.solve(R, Bs.T @ Ps))
         stray = lam[sector_margin(lam, n, p.sigma, p.half_angle_deg) < p.min_margin]
         if stray.size == 0:
             break

@@ -3,10 +3,7 @@
 The core (:mod:`acmm.design.schedule`, :mod:`acmm.design.path_check`, :mod:`acmm.design.schedule_shifted_lqr`,
 :mod:`acmm.design.sector_lqr`) takes arrays and these small frozen objects, never the whole Config:
 :func:`design_settings` and :func:`schedule_settings` are the only readers of ``cfg.design`` and
-``cfg.schedule``'s numerical settings on the design path.  Following ``design.sector.sigma``:
-YAML → :class:`acmm.io.config.Config` → :func:`design_settings` → :class:`Sector` →
-:func:`acmm.design.schedule.sector_design` / :func:`acmm.design.schedule.check_schedule` /
-:func:`acmm.design.path_check.check_path` (explicit arguments) → ``design.h5``.
+``cfg.schedule``'s numerical settings on the design path.
 
 The settings are those of the sector LQR of report ch. 5.2 (sector of Fig 5.2, eqs 5.2–5.4) and
 of the gain schedule of ch. 5.3.
@@ -115,10 +112,9 @@ class DesignSettings:
         """
         q = np.full(nx, float(self.Q0))
         if self.Q0_groups is not None:
-            g = self.Q0_groups
-            if g.size != nx:
-                raise ValueError(f"Q0_groups gives {g.size} weights for a {nx}-state model")
-            q = q + g
+            if self.Q0_groups.size != nx:
+                raise ValueError(f"Q0_groups gives {self.Q0_groups.size} weights for a {nx}-state model")
+            q = q + self.Q0_groups
         return np.diag(q) if np.any(q > 0) else None
 
 
