@@ -245,9 +245,6 @@ def ensure_acmm_design(cfg, rerun: bool = False, donor_roots=()) -> StageRun:
     """``design.h5`` of an acmm config through :func:`acmm.stages.runners.design_for` (the stages' own
     reuse by ``design_hash``), or designed again (``rerun``).
 
-    ``donor_roots``: other run directories whose ``design.h5`` may be copied when its design hash
-    matches (the ``--fast`` stair-case reuses the full stair-case's design).
-
     Parameters
     ----------
     cfg : acmm.io.config.Config
@@ -255,7 +252,8 @@ def ensure_acmm_design(cfg, rerun: bool = False, donor_roots=()) -> StageRun:
     rerun : bool, optional
         Design again even when a matching file exists.
     donor_roots : iterable of path-like, optional
-        Run directories whose ``design.h5`` may be copied.
+        Run directories whose ``design.h5`` may be copied when its design hash matches (the
+        ``--fast`` stair-case reuses the full stair-case's design).
 
     Returns
     -------
@@ -298,14 +296,8 @@ def ensure_acmm_simulation(cfg, rerun: bool = False) -> StageRun:
     StageRun
         The simulation file used.
     """
-    chash, dhash = config_hash(cfg.to_yaml()), design_hash(cfg)
-    path = cfg.run_dir() / "sim.h5"
-    a = None if rerun else _try_attrs(path)
-    if a is not None and a.get("config_hash") == chash and a.get("design_hash") == dhash:
-        return _stage_record("acmm simulate", cfg.name, path, chash, dhash, True, 0.0)
-    t0 = time.perf_counter()
-    _, path = run_simulate(cfg, figures=False)
-    return _stage_record("acmm simulate", cfg.name, path, chash, dhash, False, time.perf_counter() - t0)
+    return _reused_or_run("acmm simulate", cfg, cfg.run_dir() / "sim.h5", design_hash(cfg), rerun,
+                          lambda: run_simulate(cfg, figures=False)[1])
 
 
 def ensure_qpp(cfg, stage: str, rerun: bool = False) -> StageRun:
@@ -325,17 +317,23 @@ def ensure_qpp(cfg, stage: str, rerun: bool = False) -> StageRun:
     StageRun
         The file used.
     """
-    chash = config_hash(cfg.to_yaml())
-    path = cfg.run_dir() / ("qpp_design.h5" if stage == "design" else "qpp_sim.h5")
-    a = None if rerun else _try_attrs(path)
-    if a is not None and a.get("config_hash") == chash:
-        return _stage_record(f"qpp {stage}", cfg.name, path, chash, "", True, 0.0)
-    t0 = time.perf_counter()
     if stage == "design":
-        path = qst.run_design(cfg, figures=False)[2]
-    else:
-        path = qst.run_simulate(cfg, figures=False)[3]
-    return _stage_record(f"qpp {stage}", cfg.name, path, chash, "", False, time.perf_counter() - t0)
+        return _reused_or_run("qpp design", cfg, cfg.run_dir() / "qpp_design.h5", "", rerun,
+                              lambda: qst.run_design(cfg, figures=False)[2])
+    return _reused_or_run("qpp simulate", cfg, cfg.run_dir() / "qpp_sim.h5", "", rerun,
+                          lambda: qst.run_simulate(cfg, figures=False)[3])
+
+
+def _reused_or_run(stage: str, cfg, path: Path, dhash: str, rerun: bool, run) -> StageRun:
+    """The :class:`StageRun` of ``path`` when its stored config hash (and design hash ``dhash``,
+    when not empty) match ``cfg``'s and not ``rerun``, else of the file ``run()`` writes."""
+    chash = config_hash(cfg.to_yaml())
+    a = None if rerun else _try_attrs(path)
+    if a is not None and a.get("config_hash") == chash and (not dhash or a.get("design_hash") == dhash):
+        return _stage_record(stage, cfg.name, path, chash, dhash, True, 0.0)
+    t0 = time.perf_counter()
+    path = run()
+    return _stage_record(stage, cfg.name, path, chash, dhash, False, time.perf_counter() - t0)
 
 
 def qpp_scenarios(path: Path) -> dict:
