@@ -1,25 +1,12 @@
 """The numbers README.md and the guide (docs/) quote about the packaged configs of Parts II and
-III: the stages they come from, run into a results root through the report's own functions
-(:mod:`acmm.report.gather`, figures off; :func:`run_stages`), and each block of text computed from
-their results with the report's own formatting (:mod:`acmm.report.numbers`).
-
-The stages: the packaged designs and simulations of ch. 5–6 (MB3, AC, the stair-case), the ±30 %
-inertia sweep of ch. 7, the qpp examples of ch. 13–14 and the shipped ones, and the variants the
-guide compares them with: the regional LMI and robust routes (:data:`ROUTE_VARIANTS`) and the
-stair-case's other schedules (:data:`STAIRCASE_VARIANTS`); and the search over procedure 12.1's
-family of the report's two qpp examples that docs/qpp-certificates.md quotes.
-
-Each block (:data:`BLOCKS`, name → a function of the :func:`run_stages` dict returning its
-Markdown) is the text between ``<!-- generated:NAME -->`` and ``<!-- /generated:NAME -->`` in
-README.md or one page of docs/ (``scripts/readme_numbers.py`` rewrites or checks them): the
-claims of ch. 6, the per-level statistics of the stair-case, the design points' margins and
-conditioning, the schedule along the path, the dwell-time certificate, the design routes, the
-±30 % Monte Carlo counts of ch. 7 and the inertia-scaling margins; the qpp blocks of ch. 13–14
-(the reproduced-vs-printed table, the bullet of "What the tool reproduces", the examples, the
-certificates and the family search).  Numbers are rounded to the digits that mean something
-(3 significant digits for momenta and attitude errors, 3 decimals for margins in units of n, 2
-significant digits for condition numbers and robustness radii), so the text does not change
-between machines.
+III: the stages they come from (the designs and simulations of ch. 5–6, the ±30 % inertia sweep of
+ch. 7, the qpp examples of ch. 13–14 and the shipped ones, the design routes and stair-case
+schedules the guide compares, the search over procedure 12.1's family), run into a results root
+through the report's own functions (:func:`run_stages`), and the text of each generated block
+(:data:`BLOCKS`, the text between ``<!-- generated:NAME -->`` and ``<!-- /generated:NAME -->`` that
+``scripts/readme_numbers.py`` rewrites or checks), written with the report's own formatting
+(:mod:`acmm.report.numbers`): rounded to the digits that mean something, so the text does not
+change between machines.
 """
 from __future__ import annotations
 
@@ -38,6 +25,7 @@ from acmm.model.tea import NoEquilibriumError
 from acmm.report.gather import (REPORT_VARIANTS, acmm_config, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp,
                                 qpp_config, qpp_scenarios, robustness_result)
 from acmm.report.numbers import fixed, markdown_table, sci, sig
+from acmm.report.sections.claim1 import peak_errors
 from acmm.report.sections.robustness import bounded_count, case_column
 from acmm.report.sections.schedule import point_energy
 from acmm.report.sections.table1 import table1_teas
@@ -103,12 +91,10 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
 
 
 def _family_search(cfg, grid: dict, beyond: tuple | None = None) -> dict:
-    """Procedure 12.1's family of ``cfg`` searched on ``grid`` (``rho``, ``w`` dimensionless, ``a``
-    in 1/s, as in :data:`qpp.design.family.REPORT_GRIDS`; :func:`qpp.design.family.search`), locally
-    from the grid's best point (largest m − β1; :func:`qpp.design.family.refine`) and, with ``beyond``
-    (ρ, w, a as in :data:`qpp.design.family.REPORT_CERTIFIED`), at that design off the grid, then on
-    the certificate's own samples (:func:`qpp.design.family.resettle`): ``{"candidates", "best",
-    "refined", "designs"[, "beyond", "resettled"]}``; minutes on one core for ch. 13's grid."""
+    """Procedure 12.1's family of ``cfg`` searched on ``grid`` (as :data:`qpp.design.family.REPORT_GRIDS`),
+    then locally from its best point (largest m − β1) and, with ``beyond`` (ρ, w, a as
+    :data:`qpp.design.family.REPORT_CERTIFIED`), at that design off the grid and on the certificate's
+    own samples: ``{"candidates", "best", "refined", "designs"[, "beyond", "resettled"]}``."""
     cands = search(cfg, grid["rho"], grid["w"], grid["a"])
     best = max(cands, key=lambda c: c.m - c.beta1)
     refined, designs = refine(cfg, best)
@@ -152,12 +138,9 @@ STAIRCASE_VARIANTS = {
 
 
 def _route_variants(root: Path, workers: int | None) -> dict:
-    """MB3 and AC designed by each route of :data:`ROUTE_VARIANTS` (regional LMI, robust) and the
-    packaged ±30 % sweep of those fixed gains on the same draws (``"design:<name>_<route>"``,
-    ``"sweep_<route>"``), and the stair-case variants of :data:`STAIRCASE_VARIANTS`, designed and
-    simulated (``"design:<variant>"``, ``"simulate:<variant>"``, ``"config:<variant>"``): files as
-    read by :func:`acmm_qpp.results.read_h5`, and configs; ``workers``: the sweeps' processes
-    (None: min(2, CPUs))."""
+    """MB3 and AC designed by each route of :data:`ROUTE_VARIANTS` with the packaged ±30 % sweep of
+    those gains (``"design:<name>_<route>"``, ``"sweep_<route>"``), and the stair-case variants of
+    :data:`STAIRCASE_VARIANTS` (``"design:…"``, ``"simulate:…"``, ``"config:…"``), as :func:`run_stages`."""
     out = {}
     for route, patch in ROUTE_VARIANTS.items():
         bases = []
@@ -449,21 +432,17 @@ def _block_qpp_examples(r: dict) -> str:
 
 
 def _wie_pitch_fold(cfg, pitch_bias: float = 4.0) -> float | None:
-    """The largest pitch bias (ft·lbf) on the branch the TEA continuation follows from LVLH, for
-    a pure pitch bias of ``pitch_bias`` that has no equilibrium; None when it has one.
-
-    The continuation of :func:`acmm.model.tea.solve_tea` (products of inertia, then the bias) and its
-    fold refinement, i.e. the bias its ``NoEquilibriumError`` names.
-    """
+    """The largest pitch bias (ft·lbf) on the branch the TEA continuation follows from LVLH (the
+    bias :func:`acmm.model.tea.solve_tea`'s ``NoEquilibriumError`` names) for a pure pitch bias of
+    ``pitch_bias`` that has no equilibrium; None when it has one."""
     inertia, n = cfg.inertia.matrix(), cfg.orbit_rate
     bias = np.array([0.0, pitch_bias, 0.0])
     try:
         tea.solve_tea(inertia, n, bias)
-        return None
     except NoEquilibriumError:
-        pass
-    lam = tea.bias_fold(inertia, n, bias)
-    return None if lam is None else lam * pitch_bias
+        lam = tea.bias_fold(inertia, n, bias)
+        return None if lam is None else lam * pitch_bias
+    return None
 
 
 def _block_table1_tea(r: dict) -> str:
@@ -498,13 +477,12 @@ def _block_table1_tea(r: dict) -> str:
 def _block_claims(r: dict) -> str:
     """Claims 1 and 2 of ch. 6, the sector designs, the schedule along the path, the ±30 % sweep (a table)."""
     s_c, s_d = r["simulate:mb3"], r["simulate:mb3_decoupled"]
-    o, err = s_c["orbits"], np.degrees(np.abs(s_c["attitude_error"]))
-    first, late = err[o <= 1.0].max(axis=0), err[o >= 2.0].max(axis=0)
+    first, late = peak_errors(s_c)
     rows = [
         ["1", "cross-inertia-free MB3 design (`mb3_decoupled`) on the nonlinear model",
          f"{h5_text(s_d['attrs']['verdict'])} at **{sig(s_d['attrs']['stop_time_orbits'], 2)} orbit**"],
         ["1", "fully coupled MB3 design (`mb3`)",
-         f"{h5_text(s_c['attrs']['verdict'])} over {sig(o[-1], 2)} orbits"],
+         f"{h5_text(s_c['attrs']['verdict'])} over {sig(s_c['orbits'][-1], 2)} orbits"],
         ["1", "its peak attitude error in the first orbit, roll / pitch / yaw",
          " / ".join(sig(v) for v in first) + "°"],
         ["1", "its peak attitude error after orbit 2, roll / pitch / yaw",
@@ -643,9 +621,6 @@ def _block_design_routes(r: dict) -> str:
     """The LQR route (sector LQR, the report's method) and the regional LMI route side by side at
     MB3 and AC: margin, conditioning, robustness, energy, fastest pole, and the ±30 % Monte Carlo
     and inertia-scaling margin of each fixed gain on the same draws."""
-    def point(d):
-        return d["points"][sorted(d["points"])[0]]
-
     def margin_range(sw, label, decimals=3):
         lo, hi = sw["margin"][f"{label}_down"], sw["margin"][f"{label}_up"]
         return f"{fixed(lo['limit'], decimals)} … {fixed(hi['limit'], decimals)}"
@@ -657,7 +632,7 @@ def _block_design_routes(r: dict) -> str:
                                    ("regional LMI", r[f"design:{name}_lmi"], r["sweep_lmi"], f"{name}_lmi"),
                                    ("robust gain for the ±30 % family (from the LMI gain)",
                                     r[f"design:{name}_robust"], r["sweep_robust"], f"{name}_robust")):
-            p = point(d)
+            p = d["points"][sorted(d["points"])[0]]
             A, B, K = (np.asarray(p[k]) for k in ("A", "B", "K"))
             fastest = float(np.max(-np.real(np.asarray(p["poles"])))) / n
             rr = (float(p["lmi"]["random_radius"]) if "lmi" in p and "robust" not in p

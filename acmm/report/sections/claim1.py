@@ -33,6 +33,25 @@ class Claim1Numbers:
     late: np.ndarray    #: peak |error| from orbit 2 on (deg)
 
 
+def peak_errors(sim: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Peak |attitude error| of a simulation in its first orbit and from orbit 2 on: the numbers
+    claim 1 and the README's claims table show of the coupled design.
+
+    Parameters
+    ----------
+    sim : dict
+        Its ``sim.h5`` as read by :func:`acmm_qpp.results.read_h5` (attitude error in rad).
+
+    Returns
+    -------
+    tuple of (3,) arrays
+        Roll, pitch, yaw, deg: the first orbit's, and from orbit 2 on (NaN for a shorter run).
+    """
+    o, err = sim["orbits"], np.degrees(np.abs(sim["attitude_error"]))
+    late = err[o >= 2.0].max(axis=0) if (o >= 2.0).any() else np.full(3, np.nan)
+    return err[o <= 1.0].max(axis=0), late
+
+
 def _build(ctx: SectionWriter, dec_true_poles: np.ndarray) -> Claim1Numbers:
     """Part: claim 1 on the nonlinear MB3 model; ``dec_true_poles``: the schedule section's poles of the
     cross-inertia-free gain on the coupled model, rad/s; returns the :class:`Claim1Numbers`."""
@@ -54,9 +73,7 @@ def _build(ctx: SectionWriter, dec_true_poles: np.ndarray) -> Claim1Numbers:
     ctx.doc.table(["design model", "sector margin (n)", "Riccati residual", "Riccati backward error", "nonlinear verdict",
                    "stopped at (orbit)", "peak |θ − θ*| (deg)"], rows,
                    "Claim 1 on the nonlinear MB3 model (same TEA, initial condition and disturbances)")
-    o, err = s_c["orbits"], np.degrees(np.abs(s_c["attitude_error"]))
-    first = err[o <= 1.0].max(axis=0)
-    late = err[o >= 2.0].max(axis=0) if (o >= 2.0).any() else np.full(3, np.nan)
+    first, late = peak_errors(s_c)
     div = float(s_d["attrs"]["stop_time_orbits"])
     numbers = Claim1Numbers(div, ev.real.max() / n, first, late)
     ctx.doc.ul([
