@@ -158,8 +158,8 @@ def _riccati_rows(m, d, n: float) -> list[list[str]]:
     ``d`` the config's design section (sector σ in units of n, R), ``n`` in rad/s."""
     rows = []
     # eq 5.6
-    alpha = d.sector.sigma * n
-    As, Bs, Qs = ric.scale_problem(m.A + alpha * np.eye(24), m.B, np.zeros((24, 24)), m.scales)
+    Ash, Z = m.A + d.sector.sigma * n * np.eye(24), np.zeros((24, 24))      # the shifted problem
+    As, Bs, Qs = ric.scale_problem(Ash, m.B, Z, m.scales)
     Rm = d.R * np.eye(3)
     Ham = np.block([[As, -Bs @ np.linalg.solve(Rm, Bs.T)], [-Qs, -As.T]])
     try:
@@ -175,18 +175,15 @@ def _riccati_rows(m, d, n: float) -> list[list[str]]:
                  "tests/acmm/design/test_matrix_sign.py"])
     # scaling
     D = np.diag(m.scales)
-    sc_rows = []
+    sc_rows, scaled = [], []        # residuals (scaled coordinates) of an unscaled and of a scaled solve
     for meth in ("scipy", "slycot", "sign"):
         try:
-            P, _ = ric.solve_unverified(m.A + alpha * np.eye(24), m.B, np.zeros((24, 24)), Rm, method=meth)
+            P, _ = ric.solve_unverified(Ash, m.B, Z, Rm, method=meth)
             sc_rows.append(f"{meth} {ric.care_residual(As, Bs, Qs, Rm, D @ P @ D):.1e}")
         except (ConvergenceError, ImportError) as exc:
             sc_rows.append(f"{meth} failed ({type(exc).__name__})")
-    scaled = []
-    for meth in ("scipy", "slycot", "sign"):
         try:
-            res = ric.solve_care(m.A + alpha * np.eye(24), m.B, np.zeros((24, 24)), Rm, method=meth,
-                                 scale=m.scales, tol=np.inf)
+            res = ric.solve_care(Ash, m.B, Z, Rm, method=meth, scale=m.scales, tol=np.inf)
             scaled.append(f"{meth} {res.residual:.1e}")
         except (ConvergenceError, ImportError) as exc:
             scaled.append(f"{meth} failed ({type(exc).__name__})")
