@@ -27,14 +27,13 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
     else None."""
     ctx.section(key)
     cfg = ctx.g.configs[name]
-    dpath, spath = ctx.run(f"qpp design:{name}").path, ctx.run(f"qpp simulate:{name}").path
+    dpath, spath = ctx.g.runs[f"qpp design:{name}"].path, ctx.g.runs[f"qpp simulate:{name}"].path
     d = ctx.data(f"qpp design:{name}")
     pub = cfg.published
     chap = "13" if key == "qpp13" else "14"
     _gain_table(ctx, chap, cfg, d)
     with h5py.File(dpath, "r") as f:
-        b1 = {rd: (float(f[f"beta1_{rd.replace('.', '_')}"][()]),
-                   float(f[f"beta1_{rd.replace('.', '_')}"].attrs["grid_value"]),
+        b1 = {rd: (float(f[f"beta1_{rd.replace('.', '_')}"][()]),                     # β1 and its peak, rad/s
                    float(f[f"beta1_{rd.replace('.', '_')}"].attrs["omega_peak_rad_s"])) for rd in ("eq10.7", "printed")}
         names = f["thresholds"].attrs["description"].split(":")[-1].replace(" ", "").split(",")
         circle_passed = bool(f.attrs["circle_passed"])
@@ -45,7 +44,7 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
                f"the printed B_z (H in the r-columns) {b1['printed'][0]:.5f}; the printed value matches neither "
                "(docs/ERRATA.md: it looks like a coarse frequency grid)")
     pn = ctx.ledger_add(f"ch. {chap}", "β1", _num_str(pub.beta1), b1["eq10.7"][0], explanation=expl_b1)
-    for rd, (v, gv, w) in b1.items():
+    for rd, (v, w) in b1.items():
         brow.append([f"β1, B_z {rd}", _num_str(pub.beta1), f"{v:.6f} (peak at {w:.4g} rad/s)",
                      status_text(pn) if rd == "eq10.7" else "see above"])
     m_pr = th["printed"][3] if "printed" in th else None
@@ -57,7 +56,7 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
             continue
         brow.append([f"β3 / β4 / m, {nm} bookkeeping", f"{pub.beta3} / {pub.beta4} / {pub.m}",
                      f"{row[1]:.5g} / {row[2]:.5g} / {row[3]:.5f}", "see the errata table"])
-    for rd, (v, _, _) in b1.items():
+    for rd, (v, _) in b1.items():
         verd = ", ".join(f"{nm}: {'β1 ≤ m' if v <= row[3] else 'β1 > m'}" for nm, row in th.items())
         brow.append([f"design inequality β1 ≤ m, B_z {rd}", "β1 < m", verd, ""])
     brow.append(["consistent certificate (one sector, one norm; the bookkeepings above reproduce, not certify)",
@@ -132,7 +131,7 @@ def _responses_figure(ctx: SectionWriter, key, name, out_labels) -> None:
     chap = "13" if key == "qpp13" else "14"
     beta_o = ctx.g.configs[name].spheres.beta_o
     plt = pyplot()
-    with h5py.File(ctx.run(f"qpp simulate:{name}").path, "r") as f:
+    with h5py.File(ctx.g.runs[f"qpp simulate:{name}"].path, "r") as f:
         scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
         data = {k: {d: f[k][d][()].T for d in ("t", "y", "y_o", "r", "u")} for k in scen}   # stored (t, channel)
     p = next(iter(data.values()))["y"].shape[0]
