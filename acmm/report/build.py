@@ -26,17 +26,16 @@ import scipy
 
 from acmm import __version__
 from acmm_qpp.errors import OutputError
-from acmm_qpp.outputs import run_lock, write_text
+from acmm_qpp.outputs import file_identity, run_lock, write_text
 from acmm_qpp.provenance import git_commit, git_dirty
 from acmm_qpp.signals import interrupts_deferred
 from acmm.report.constants import SECTIONS, TIMING_DATASETS
 from acmm.report.context import SectionWriter
 from acmm.report.document import render_html, render_markdown
 from acmm.report.ledger import status_text
-from acmm.report.gather import (Gathered, changed_runs, keep_stage, order_runs, report_configs, stage_tasks,
-                                warm_workers)
+from acmm.report.gather import Gathered, keep_stage, order_runs, report_configs, stage_tasks, warm_workers
 from acmm.report.manifest import build_manifest, compare_manifests
-from acmm.report.plan import assemble, run_part, section_tasks
+from acmm.report.plan import PARTS, run_part, section_tasks
 from acmm.report.publish import publish
 from acmm.report.runner import default_jobs, run_tasks
 import resource
@@ -194,8 +193,9 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
     md = render_markdown(rep.doc, title)
     page = render_html(rep.doc, title, staged)          # (embeds the PNGs it reads there)
     manifest["determinism"] = {k: v for k, v in cmp.items() if k != "differences"}
-    changed = changed_runs(g)
-    if changed:     # the stages' locks are not held while sections read: another run rewrote one
+    # the stages' locks are not held while sections read: another run of that name may have rewritten one
+    changed = [k for k, ident in g.identities.items() if file_identity(g.runs[k].path) != ident]
+    if changed:
         raise OutputError(f"{changed[0]}: its results file {g.runs[changed[0]].path} was rewritten while the "
                           "report ran (another run of that name?); nothing was written: run the report again")
     pairs = [(f, figdir / f.name) for f in sorted(staged.iterdir())]
@@ -259,7 +259,9 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
     order_runs(g, stages)
     sections: dict[str, float] = {}
     failures: list = []
-    assemble(rep, done, sections, failures)
+    for name, section, *_ in PARTS:         # in section order, whichever process wrote which part
+        _append(rep, failures, section, done[name])
+        sections[section] = sections.get(section, 0.0) + done[name].seconds
     for key, sec in sections.items():
         say(f"  section {key:<12} {sec:6.2f} s")
     timings.update(g.timings)
@@ -269,14 +271,20 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
 
 def _add(rep: SectionWriter, failures: list, key: str, build, *args):
     """Run one section's ``build`` as a part (:func:`acmm.report.plan.run_part`, a fresh writer) and
-    append its blocks and ledger to ``rep``; a user-facing error it raises is shown as the section
-    (its heading and the error) and appended to ``failures`` as ``(key, Failed)``."""
+    :func:`_append` it as section ``key``; returns its value."""
     part = run_part(build, rep.g, rep.figdir, rep.fast, args, rep._results, key, key)
+    _append(rep, failures, key, part)
+    return part.value
+
+
+def _append(rep: SectionWriter, failures: list, section: str, part) -> None:
+    """Append the blocks and printed numbers of ``part`` (a :class:`acmm.report.plan.Part`) to
+    ``rep``, and ``(section, Failed)`` to ``failures`` when it failed (its blocks then show the
+    section's heading and the error)."""
     if part.failed is not None:
-        failures.append((key, part.failed))
+        failures.append((section, part.failed))
     rep.doc.blocks.extend(part.blocks)
     rep.ledger.extend(part.ledger)
-    return part.value
 
 
 def _printed(ctx: SectionWriter, ledger: list) -> None:

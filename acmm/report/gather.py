@@ -386,7 +386,7 @@ class Gathered:
         (used by :func:`order_runs`).
     identities : dict
         Run key → :func:`acmm_qpp.outputs.file_identity` of its results file when the report
-        took it; checked before the report writes its pages (:func:`changed_runs`).
+        took it; checked before the report writes its pages.
     failed : dict
         Task name → :class:`Failed` of each stage that failed (or was not run because the
         stage it waits for failed); the sections reading it show the error.
@@ -536,23 +536,6 @@ def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rer
         tasks.append(_stage("sweep", _sweep_task, (), (root, fast, rerun, 1 if jobs > 1 else None),
                             0.5 if fast else _COST["sweep"]))
     return tasks
-
-
-def changed_runs(g: "Gathered") -> list[str]:
-    """Run keys whose results file is no longer the one the report took (another run of that
-    name wrote it meanwhile: the report's sections may have read either).
-
-    Parameters
-    ----------
-    g : Gathered
-        The gathered results.
-
-    Returns
-    -------
-    list of str
-        The changed run keys.
-    """
-    return [k for k, ident in g.identities.items() if file_identity(g.runs[k].path) != ident]
 
 
 def keep_stage(g: "Gathered", name: str, result, say: Callable[[str], None]) -> None:

@@ -51,9 +51,8 @@ class Part:
 
 def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: dict | None,
              name: str = "", heading: str | None = None, not_run: Failed | None = None) -> Part:
-    """``fn(ctx, *values)`` on a fresh writer; ``results``: HDF5 files already read (None: this
-    worker process's cache).  matplotlib's settings are reset first, so a figure looks the same
-    whichever figures the process drew before.  A user-facing error it raises
+    """``fn(ctx, *values)`` on a fresh writer, matplotlib's settings reset first (a figure looks the
+    same whichever figures the process drew before).  A user-facing error it raises
     (:func:`acmm.report.gather.failed`) becomes the part's :attr:`Part.failed` and its one-line
     text; a bug propagates.
 
@@ -115,8 +114,7 @@ PARTS = table1.PARTS + schedule.PARTS + claim1.PARTS + staircase.PARTS + robustn
 
 
 def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, results: dict | None) -> list[Task]:
-    """The parts of :data:`PARTS` as tasks; ``stage_names``: the stage tasks of the same graph
-    (a part waits only for those), ``results``: the shared cache of read files when serial.
+    """The parts of :data:`PARTS` as tasks.
 
     Parameters
     ----------
@@ -127,7 +125,8 @@ def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, resul
     fast : bool
         ``--fast`` report.
     stage_names : set of str
-        Names of the stage tasks in the same graph (:func:`acmm.report.gather.stage_tasks`).
+        Names of the stage tasks in the same graph (:func:`acmm.report.gather.stage_tasks`); a
+        part waits only for those.
     results : dict or None
         Shared cache of read results files (serial run), or None (each worker's own cache).
 
@@ -156,28 +155,3 @@ def _part_args(fn, value_deps, g, figdir, fast, results, name="", heading=None, 
         return (fn, g, figdir, fast, values, results, name, heading, not_run)
 
     return args
-
-
-def assemble(rep: SectionWriter, done: dict, timings: dict, failures: list | None = None) -> None:
-    """Append every part's blocks and printed numbers to ``rep`` in section order; per-section wall
-    time (sum of its parts) into ``timings``; ``(section, Failed)`` of each failed part into
-    ``failures``.
-
-    Parameters
-    ----------
-    rep : acmm.report.context.SectionWriter
-        The report's writer; its document and ledger are extended in place.
-    done : dict
-        Part name → :class:`Part`, for every part of :data:`PARTS`.
-    timings : dict
-        Section key → wall time, s; each part's time is added to its section's.
-    failures : list, optional
-        Appended ``(section key, acmm.report.gather.Failed)`` of each failed part, in section order.
-    """
-    for name, section, *_ in PARTS:
-        part: Part = done[name]
-        if part.failed is not None and failures is not None:
-            failures.append((section, part.failed))
-        rep.doc.blocks.extend(part.blocks)
-        rep.ledger.extend(part.ledger)
-        timings[section] = timings.get(section, 0.0) + part.seconds
