@@ -210,11 +210,10 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
         publish(pairs, staged / ".replaced")
     figs = sorted(figdir.glob("*.png"))
     say(f"wrote {out / 'index.html'} ({len(figs)} figures) in {time.perf_counter() - t_start:.1f} s")
+    wall = time.perf_counter() - t_start
     res = ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),
-                       rep.ledger, cmp, time.perf_counter() - t_start)
-    res.tasks = stats
-    res.timings = {**timings, "total": res.wall_time, "cpu (all processes)": _cpu() - cpu0}
-    res.jobs, res.failures, res.root = jobs, failures, root
+                       rep.ledger, cmp, wall, timings={**timings, "total": wall, "cpu (all processes)": _cpu() - cpu0},
+                       jobs=jobs, tasks=stats, failures=failures, root=root)
     for section, f in failures:
         say(f"  section {section}: {f.text()}")
     return res

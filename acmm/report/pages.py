@@ -576,8 +576,7 @@ def _block_schedule_path(r: dict) -> str:
     th = np.degrees(np.asarray(pa["theta2"]))
     mr, mg, dm = (np.asarray(pa[k]) for k in ("max_real", "sector_margin", "disk_margin"))
     i = int(np.argmin(dm))
-    form = h5_text(d["attrs"]["schedule_form"]) if "attrs" in d and "schedule_form" in d["attrs"] else (
-        "polynomial" if "refit_converged" in sc else "table")
+    form = h5_text(d["attrs"]["schedule_form"])             # (every scheduled design.h5 states it)
     rows = [["schedule form", "table look-up, K linear in θ2* between the design points" if form == "table"
              else "2nd-order polynomial in θ2*"]]
     if "refit_converged" in sc:
@@ -722,14 +721,12 @@ def _block_staircase_routes(r: dict) -> str:
 def _block_sweep_monte_carlo(r: dict) -> str:
     """Verdict counts of the ±30 % inertia Monte Carlo (``sweep_inertia30``, ``sweep.h5``), one row per base."""
     w = r["sweep"]
-    names = [h5_text(x) for x in np.atleast_1d(w["base_names"])]
-    verdict = np.array([h5_text(x) for x in np.atleast_1d(w["verdict"])])
     base, draws = np.atleast_1d(w["base"]), np.atleast_1d(w["n_draws"])
     peak = np.degrees(np.atleast_2d(w["peak_attitude_error"]))
     rows = []
-    for k, lab in enumerate(names):
+    for k, lab in enumerate(h5_text(x) for x in np.atleast_1d(w["base_names"])):
         sel = base == k
-        v = verdict[sel]
+        v = case_column(w, lab, "verdict")
         nd = int(draws[sel].sum())
         ok = peak[sel][v == "bounded"]
         med = " / ".join(sig(x, 2) for x in np.median(ok, axis=0)) if ok.size else "—"

@@ -67,8 +67,6 @@ def _design_on(A, B, m, s) -> str:
 def _kinematics_rows(th, n: float) -> list[list[str]]:
     """Eq 3.6 (printed f11) against eq 4.2 at the MB3 TEA ``th`` (rad) and a test attitude; ``n``
     the orbit rate, rad/s."""
-    rows = []
-    # eq 3.6
     def printed_f(theta):
         s1, s3, k1, k3 = np.sin(theta[0]), np.sin(theta[2]), np.cos(theta[0]), np.cos(theta[2])
         return np.array([[1, -k1 * s3, s1 * s3], [0, k1, -s1], [0, s1 * k3, k1 * k3]]) / k3
@@ -79,14 +77,13 @@ def _kinematics_rows(th, n: float) -> list[list[str]]:
     th_test = np.radians([10.0, -30.0, 25.0])
     r_mb3, r_test = np.abs(eq42(th, printed_f)).max(), np.abs(eq42(th_test, printed_f)).max()
     r_ok = max(np.abs(eq42(th, kin.kinematics_matrix)).max(), np.abs(eq42(th_test, kin.kinematics_matrix)).max())
-    rows.append(["eq 3.6 (1,1) entry", "1 inside the bracket", "cos θ3 (so f11 = 1; eq 4.4 already uses it)",
-                 f"printed f violates eq 4.2 (θ̇ = 0 at θ*) by {r_mb3:.2e} rad/s at the MB3 TEA and {r_test:.2e} rad/s "
-                 f"({r_test / n:.3f} n) at θ = (10°, −30°, 25°); corrected f: {r_ok:.1e} rad/s",
-                 "tests/acmm/model/test_kinematics.py"])
-    rows.append(["eqs 3.1, 3.8 momentum", "—", "I ω̇ + ḣ + ω×(Iω + h) = τgg + w holds exactly, also saturated",
-                 "checked along a saturated trajectory",
-                 "tests/acmm/model/test_dynamics.py, tests/acmm/simulate/test_kernel.py"])
-    return rows
+    return [["eq 3.6 (1,1) entry", "1 inside the bracket", "cos θ3 (so f11 = 1; eq 4.4 already uses it)",
+             f"printed f violates eq 4.2 (θ̇ = 0 at θ*) by {r_mb3:.2e} rad/s at the MB3 TEA and {r_test:.2e} rad/s "
+             f"({r_test / n:.3f} n) at θ = (10°, −30°, 25°); corrected f: {r_ok:.1e} rad/s",
+             "tests/acmm/model/test_kinematics.py"],
+            ["eqs 3.1, 3.8 momentum", "—", "I ω̇ + ḣ + ω×(Iω + h) = τgg + w holds exactly, also saturated",
+             "checked along a saturated trajectory",
+             "tests/acmm/model/test_dynamics.py, tests/acmm/simulate/test_kernel.py"]]
 
 
 def _tea_rows(I, n: float, t0, bias) -> list[list[str]]:
@@ -94,7 +91,6 @@ def _tea_rows(I, n: float, t0, bias) -> list[list[str]]:
     zero-bias TEA of the continuation) and the 4 ft·lbf pitch bias without an equilibrium;
     ``bias`` the back-solved bias torque of Table 1, ft·lbf."""
     rows = []
-    # TEA branches
     roots = tea_mod.all_equilibria(I, n, np.zeros(3))
     pitches = sorted({round(float(r.theta_deg[1]), 2) for r in roots})
     rows.append(["TEA roots (eqs 4.1–4.3)", "one TEA per configuration", "continuation from LVLH picks the "
@@ -118,8 +114,6 @@ def _linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
     ``s``) on them; ``m`` the coupled MB3 model at the TEA ``th`` (rad), ``I`` in slug·ft², ``n``
     in rad/s."""
     rows = []
-    # linearization
-
     # numerical Jacobian of τgg vs the closed form of 4.12–4.14 (corrected)
     h = 1e-6
     num = np.column_stack([(dyn.gravity_gradient_torque(th + h * e, I, n) - dyn.gravity_gradient_torque(th - h * e, I, n))
@@ -157,7 +151,6 @@ def _riccati_rows(m, d, n: float) -> list[list[str]]:
     """Eq 5.6 (sign iteration) and state scaling of the Riccati solve on the MB3 model ``m``;
     ``d`` the config's design section (sector σ in units of n, R), ``n`` in rad/s."""
     rows = []
-    # eq 5.6
     Ash, Z = m.A + d.sector.sigma * n * np.eye(24), np.zeros((24, 24))      # the shifted problem
     As, Bs, Qs = ric.scale_problem(Ash, m.B, Z, m.scales)
     Rm = d.R * np.eye(3)
@@ -198,7 +191,6 @@ def _design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[st
     """Sector LQR, saturation and claim 1 (MB3 inertia ``I`` in slug·ft², TEA ``th`` in rad, ``n``
     in rad/s, ``d`` the design section; ``st``/``sim`` the stair-case ``design.h5``/``sim.h5``)."""
     rows = []
-    # sector LQR
     pts = [st["points"][k] for k in sorted(st["points"])]
     ctrb = ctrb_mod.controllability(lin.design_point(I, th, n, model="no_cross_inertia", drf_mode=d.drf_mode))
     rows.append(["sector LQR (Sunkel–Shieh)", "algorithm cited, not available", "shifted LQR + optimal pole "
@@ -228,7 +220,6 @@ def _qpp_rows(s13, d13, a, beta3) -> list[list[str]]:
     and m, and the unknowns of ch. 14; ``s13``/``d13`` the ch. 13 config and ``qpp_design.h5``,
     ``a`` the ch. 14 config, ``beta3`` as :func:`_build`'s."""
     rows = []
-    # Part III
     rows.append(["signs of 13.6 / Table 14.1", "u = +K x̂, L = −H; plant f sign differs (13.1/14.2 vs 10.1)",
                  "as docs/ERRATA.md", "A_z rebuilt from the printed gains equals 13.6 / Table 14.1",
                  "tests/qpp/model/test_lure.py"])
