@@ -618,7 +618,7 @@ def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bo
     -------
     (dict or None, str)
         ``{"data": sweep.h5 as read by read_h5, "run": StageRun, "fast", "n_runs", "orbits",
-        "design", "tea_estimate", "seed", "bases"}`` and a note.  A sweep that fails with an :class:`AcmmError` or an
+        "design", "tea_estimate", "seed"}`` and a note.  A sweep that fails with an :class:`AcmmError` or an
         ``OSError``, makes the section "not available"; programming errors propagate.
     """
     try:
@@ -638,7 +638,6 @@ SWEEP_CONFIG = "sweep_inertia30.yaml"
 def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     """Run (or reuse, by ``results_key``) ``configs/sweep_inertia30.yaml`` through
     :func:`acmm.sweep.run_sweep` and read ``sweep.h5`` back."""
-
     p = packaged_config_path(SWEEP_CONFIG, PACKAGED_CONFIGS)
     if not p.exists():
         return None, f"configs/{SWEEP_CONFIG} is not present"
@@ -649,8 +648,7 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     data["output"]["figures"] = False
     if fast:
         data["name"] = f"{data['name']}_fast"
-        data["sweep"]["n_runs"] = FAST_SWEEP_RUNS
-        data["sweep"]["orbits"] = FAST_SWEEP_ORBITS
+        data["sweep"].update(n_runs=FAST_SWEEP_RUNS, orbits=FAST_SWEEP_ORBITS)
         data["sweep"].pop("margin", None)
     sweep = parse_sweep(data, source=str(p), directory=p.parent)
     path = sweep.run_dir() / "sweep.h5"
@@ -660,10 +658,7 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     if not reused:
         path = run_sweep(sweep, workers=workers or max(1, min(2, os.cpu_count() or 1)), figures=False).path
     wall = 0.0 if reused else time.perf_counter() - t0
-    d = read_h5(path)
-    chash = str(d["attrs"].get("config_hash", ""))
-    run = _stage_record("acmm sweep", sweep.name, path, chash, "", reused, wall)
-    spec = sweep.spec
+    d, spec = read_h5(path), sweep.spec
+    run = _stage_record("acmm sweep", sweep.name, path, str(d["attrs"].get("config_hash", "")), "", reused, wall)
     return {"data": d, "run": run, "fast": fast, "n_runs": spec.n_runs, "orbits": spec.orbits,
-            "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed,
-            "bases": [b.label for b in sweep.bases]}, f"{sweep.name}: {path}"
+            "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed}, f"{sweep.name}: {path}"
