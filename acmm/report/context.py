@@ -81,5 +81,4 @@ class SectionWriter:
         key : str
             Section key.
         """
-        title = dict(SECTIONS)[key]
-        self.doc.h(1, title, key)
+        self.doc.h(1, dict(SECTIONS)[key], key)
