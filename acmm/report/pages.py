@@ -27,7 +27,7 @@ from acmm.report.gather import (REPORT_VARIANTS, acmm_config, ensure_acmm_design
 from acmm.report.numbers import fixed, markdown_table, sci, sig
 from acmm.report.sections.claim1 import peak_errors
 from acmm.report.sections.robustness import bounded_count, case_column
-from acmm.report.sections.schedule import point_energy
+from acmm.report.sections.schedule import point_energy, route_numbers
 from acmm.report.sections.table1 import table1_teas
 from acmm.sweep.config import parse_sweep
 from acmm.sweep.run import run_sweep
@@ -689,13 +689,11 @@ def _block_staircase_routes(r: dict) -> str:
               "staircase_quadratic": "regional LMI points, quadratic converged on the path's shifted LQR cost"}
     rows = []
     for name, label in labels.items():
-        d, sim = r[f"design:{name}"], r[f"simulate:{name}"]
-        n = r[f"config:{name}"].orbit_rate
-        pa, sc, g = d["schedule"]["path"], d["schedule"], d.get("dwell")
-        energy = [point_energy(d["points"][key], n) for key in sorted(d["points"])]
-        tau = "no certificate" if g is None or "tau_star" not in g or not np.isfinite(float(g["tau_star"])) else (
-            f"{fixed(float(g['tau_star']), 2)} orbit" + ("" if np.all(np.asarray(g["dwell"]) > float(g["tau_star"]))
-                                                         else " (NOT certified)"))
+        d = r[f"design:{name}"]
+        x = route_numbers(d, r[f"simulate:{name}"], r[f"config:{name}"].orbit_rate)
+        pa, sc = d["schedule"]["path"], d["schedule"]
+        tau = "no certificate" if x["tau"] is None else f"{fixed(x['tau'], 2)} orbit" + (
+            "" if np.all(np.asarray(d["dwell"]["dwell"]) > x["tau"]) else " (NOT certified)")
         refit = ""
         if "refit_converged" in sc and h5_text(sc["fit_method"]) == "shifted_lqr":
             refit = (f" (from the least-squares fit's {fixed(float(sc['refit_max_real_before']), 2, sign=True)}n; "
@@ -703,15 +701,12 @@ def _block_staircase_routes(r: dict) -> str:
                      "cone at " + f"{int(sc['refit_n_tea'])} TEAs; "
                      + ("Newton's method converged" if float(sc["refit_converged"]) else
                         "NOT converged: " + h5_text(sc["refit_message"])) + ")")
-        verdict = h5_text(sim["attrs"]["verdict"])
-        peak = sig(np.max(sim["levels"]["peak_momentum"])) if verdict != "diverged" else (
-            f"diverged at orbit {fixed(float(sim['attrs']['stop_time_orbits']), 1)}")
+        peak = sig(x["peak"]) if x["peak"] is not None else f"diverged at orbit {fixed(x['stop'], 1)}"
         inside = int(np.sum(np.asarray(pa["sector_margin"]) >= 0))
         loop = [f"{fixed(np.max(pa['max_real']), sign=True)}n", f"{fixed(np.min(pa['sector_margin']), 2)}n ({inside})",
                 fixed(np.min(pa["disk_margin"])), peak, tau]
         rows.append([label + refit, f"{np.asarray(pa['theta2']).size}", *loop[:3],
-                     sig(np.max(d["max_eig_condition"]), 2), sci(np.min(d["robustness_radius_elementwise"])),
-                     sig(max(energy), 3), *loop[3:]])
+                     sig(x["kappa"], 2), sci(x["radius"]), sig(x["energy"], 3), *loop[3:]])
     return markdown_table(["stair-case (route, schedule)", "path TEAs", "largest Re λ on the path",
                            "worst sector margin on the path (TEAs with every pole in the sector)", "smallest disk margin", "κ max (points)",
                            "radius (first order, elementwise, min over points)", "energy (max over points)",
