@@ -338,17 +338,11 @@ def _block_qpp_reproduced(r: dict) -> str:
     """The qpp section's "Reproduced vs printed" table (ch. 13 SISO, ch. 14 manipulator)."""
     so, ma = _qpp_summary(r, "qpp_siso"), _qpp_summary(r, "qpp_manipulator")
     rows = [["SISO A_z (13.6), Table 14.1 A_z/B_z", "—", "rebuilt from printed gains, equal at printed precision"]]
-    for lab, x in (("SISO K1, Kc", so), ("manip. K1 / Kc", ma)):
+    for lab, x, two in (("SISO K1, Kc", so, "[{}], [{}]"), ("manip. K1 / Kc", ma, "{} / {}")):
         d, pub, h = x["d"], x["d"]["published"], x["cfg"].hinf
-        if lab.startswith("SISO"):
-            pr = f"[{_printed(pub['K1'])}], [{_printed(pub['Kc'])}]"
-            co = f"[{_gains(pub['K1'], d['K1'], 2)[0]}], [{_gains(pub['Kc'], d['Kc'], 2)[0]}]"
-        else:
-            pr = f"{_printed(np.ravel(pub['K1'])[None, :])} / {_printed(np.ravel(pub['Kc'])[None, :])}"
-            co = (f"{_gains(np.ravel(pub['K1'])[None, :], np.ravel(d['K1'])[None, :], 2)[0]} / "
-                  f"{_gains(np.ravel(pub['Kc'])[None, :], np.ravel(d['Kc'])[None, :], 2)[0]}")
-        rows.append([f"{lab} (ρ={sci(h.rho, 1)}, a={sci(h.a, 1)})", pr, co])
-        hp, hc = np.ravel(pub["H"])[None, :], np.ravel(d["H"])[None, :]
+        (k1, c1), (kc, cc), (hp, hc) = ((np.ravel(pub[k])[None, :], np.ravel(d[k])[None, :]) for k in ("K1", "Kc", "H"))
+        rows.append([f"{lab} (ρ={sci(h.rho, 1)}, a={sci(h.a, 1)})", two.format(_printed(k1), _printed(kc)),
+                     two.format(_gains(k1, c1, 2)[0], _gains(kc, cc, 2)[0])])
         rel = ", ".join(f"{sig(100 * v, 2)} %" for v in x["h_rel"])
         rows.append([f"{lab.split()[0]} H", _printed(hp), f"{_gains(hp, hc, 1)[0]} (rel. diff {rel})"])
     cfg_s, cfg_m = so["cfg"], ma["cfg"]
