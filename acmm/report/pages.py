@@ -55,8 +55,8 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
     Returns
     -------
     dict
-        ``"design:<name>"`` (mb3, mb3_decoupled, ac, staircase), ``"simulate:<name>"`` (mb3,
-        mb3_decoupled, staircase), ``"sweep"`` (``sweep_inertia30``) → the file as read by
+        ``"design:<name>"`` (mb3, mb3_decoupled, ac, staircase and :data:`STAIRCASE_VARIANTS`),
+        ``"simulate:<name>"`` (the same but ac), ``"sweep"`` (``sweep_inertia30``) → the file as read by
         :func:`acmm_qpp.results.read_h5`; ``"config:<name>"`` → the acmm config;
         ``"qpp_design:<name>"`` (:data:`QPP_CONFIGS`) → ``qpp_design.h5`` as read by ``read_h5``,
         ``"qpp_sim:<name>"`` → :func:`qpp_scenarios` of ``qpp_sim.h5``, ``"qpp_config:<name>"`` →
@@ -69,8 +69,9 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
         The ±30 % sweep could not run (the report's robustness section names why).
     """
     out: dict = {}
-    for name in ("mb3", "mb3_decoupled", "ac", "staircase"):
-        cfg = acmm_config(name, root)
+    acmm = [(name, acmm_config(name, root)) for name in ("mb3", "mb3_decoupled", "ac", "staircase")]
+    acmm += [(name, _variant_config(root, "staircase", name, patch)[1]) for name, patch in STAIRCASE_VARIANTS.items()]
+    for name, cfg in acmm:
         out[f"config:{name}"] = cfg
         out[f"design:{name}"] = read_h5(ensure_acmm_design(cfg).path)
         if name != "ac":
@@ -139,8 +140,7 @@ STAIRCASE_VARIANTS = {
 
 def _route_variants(root: Path, workers: int | None) -> dict:
     """MB3 and AC designed by each route of :data:`ROUTE_VARIANTS` with the packaged ±30 % sweep of
-    those gains (``"design:<name>_<route>"``, ``"sweep_<route>"``), and the stair-case variants of
-    :data:`STAIRCASE_VARIANTS` (``"design:…"``, ``"simulate:…"``, ``"config:…"``), as :func:`run_stages`."""
+    those gains (``"design:<name>_<route>"``, ``"sweep_<route>"``), as :func:`run_stages`."""
     out = {}
     for route, patch in ROUTE_VARIANTS.items():
         bases = []
@@ -155,11 +155,6 @@ def _route_variants(root: Path, workers: int | None) -> dict:
         sweep = parse_sweep(data, source=str(p), directory=p.parent)
         out[f"sweep_{route}"] = read_h5(run_sweep(sweep, workers=workers or max(1, min(2, os.cpu_count() or 1)),
                                                   figures=False).path)
-    for name, patch in STAIRCASE_VARIANTS.items():
-        _, cfg = _variant_config(root, "staircase", name, patch)
-        out[f"config:{name}"] = cfg
-        out[f"design:{name}"] = read_h5(ensure_acmm_design(cfg).path)
-        out[f"simulate:{name}"] = read_h5(ensure_acmm_simulation(cfg).path)
     return out
 
 
