@@ -47,15 +47,13 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
     for rd, (v, w) in b1.items():
         brow.append([f"β1, B_z {rd}", _num_str(pub.beta1), f"{v:.6f} (peak at {w:.4g} rad/s)",
                      status_text(pn) if rd == "eq10.7" else "see above"])
-    m_pr = th["printed"][3] if "printed" in th else None
+    m_pr = th["printed"][3]
     pn_m = ctx.ledger_add(f"ch. {chap}", "m (from printed β3, β4)", _num_str(pub.m), m_pr)
     brow.append(["m = β_o/(β_ri + ‖d‖∞ + β_o β3 + β4), printed β3, β4", _num_str(pub.m), f"{m_pr:.5f}",
                  status_text(pn_m)])
-    for nm, row in th.items():
-        if nm == "printed":
-            continue
-        brow.append([f"β3 / β4 / m, {nm} bookkeeping", f"{pub.beta3} / {pub.beta4} / {pub.m}",
-                     f"{row[1]:.5g} / {row[2]:.5g} / {row[3]:.5f}", "see the errata table"])
+    brow += [[f"β3 / β4 / m, {nm} bookkeeping", f"{pub.beta3} / {pub.beta4} / {pub.m}",
+              f"{row[1]:.5g} / {row[2]:.5g} / {row[3]:.5f}", "see the errata table"] for nm, row in th.items()
+             if nm != "printed"]
     for rd, (v, _) in b1.items():
         verd = ", ".join(f"{nm}: {'β1 ≤ m' if v <= row[3] else 'β1 > m'}" for nm, row in th.items())
         brow.append([f"design inequality β1 ≤ m, B_z {rd}", "β1 < m", verd, ""])
