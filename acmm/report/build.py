@@ -96,7 +96,7 @@ class ReportResult:
     determinism: dict
     wall_time: float
     sections: list = field(default_factory=lambda: [k for k, _ in SECTIONS])
-    timings: dict = field(default_factory=dict)     # (issue 16)
+    timings: dict = field(default_factory=dict)
     jobs: int = 1                   #: processes that ran the stages and sections
     tasks: dict = field(default_factory=dict)
     failures: list = field(default_factory=list)

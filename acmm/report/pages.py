@@ -5,8 +5,9 @@ schedules the guide compares, the search over procedure 12.1's family), run into
 through the report's own functions (:func:`run_stages`), and the text of each generated block
 (:data:`BLOCKS`, the text between ``<!-- generated:NAME -->`` and ``<!-- /generated:NAME -->`` that
 ``scripts/readme_numbers.py`` rewrites or checks), written with the report's own formatting
-(:mod:`acmm.report.numbers`): rounded to the digits that mean something, so the text does not
-change between machines.
+(:mod:`acmm.report.numbers`): rounded to the digits that mean something (3 significant digits for
+momenta and attitude errors, 3 decimals for margins in units of n, 2 significant digits for
+condition numbers and robustness radii), so the text does not change between machines.
 """
 from __future__ import annotations
 
@@ -92,10 +93,11 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
 
 
 def _family_search(cfg, grid: dict, beyond: tuple | None = None) -> dict:
-    """Procedure 12.1's family of ``cfg`` searched on ``grid`` (as :data:`qpp.design.family.REPORT_GRIDS`),
-    then locally from its best point (largest m − β1) and, with ``beyond`` (ρ, w, a as
-    :data:`qpp.design.family.REPORT_CERTIFIED`), at that design off the grid and on the certificate's
-    own samples: ``{"candidates", "best", "refined", "designs"[, "beyond", "resettled"]}``."""
+    """Procedure 12.1's family of ``cfg`` searched on ``grid`` (``rho``, ``w`` dimensionless, ``a`` in
+    1/s, as :data:`qpp.design.family.REPORT_GRIDS`), then locally from its best point (largest m − β1)
+    and, with ``beyond`` (ρ, w, a as :data:`qpp.design.family.REPORT_CERTIFIED`), at that design off
+    the grid and on the certificate's own samples: ``{"candidates", "best", "refined", "designs"[,
+    "beyond", "resettled"]}``; minutes on one core for ch. 13's grid."""
     cands = search(cfg, grid["rho"], grid["w"], grid["a"])
     best = max(cands, key=lambda c: c.m - c.beta1)
     refined, designs = refine(cfg, best)

@@ -145,7 +145,7 @@ def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, resul
     return tasks
 
 
-def _part_args(fn, value_deps, g, figdir, fast, results, name="", heading=None, deps=()):
+def _part_args(fn, value_deps, g, figdir, fast, results, name, heading, deps):
     """``done → arguments of run_part`` (built when the part is submitted: ``g`` then holds the
     stages it reads): the values of the parts ``value_deps``; a part whose stage or part in
     ``deps`` failed is not run."""
