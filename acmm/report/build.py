@@ -181,7 +181,10 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
     _add(rep, failures, "printed", _printed, list(rep.ledger))
     # determinism
     man_path = out / "manifest.json"
-    old = _previous_manifest(man_path)
+    try:
+        old = json.loads(man_path.read_text())          # the previous report's
+    except (OSError, ValueError):                       # none, or unreadable
+        old = None
     manifest = build_manifest(g)
     cmp = compare_manifests(old, manifest)
     _add(rep, failures, "determinism", _determinism, cmp, manifest)
@@ -217,14 +220,6 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
     for section, f in failures:
         say(f"  section {section}: {f.text()}")
     return res
-
-
-def _previous_manifest(path: Path) -> dict | None:
-    """The manifest of the previous report in the same folder (None: none, or unreadable)."""
-    try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
 
 
 def _cpu() -> float:

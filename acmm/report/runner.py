@@ -184,7 +184,11 @@ def _run_on_pool(pool, tasks: list[Task], jobs: int, done: dict, on_done, stats:
         finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
         for fut in finished:
             t = running.pop(fut)
-            outcome, value, raised, wall, cpu = _result(fut)
+            try:
+                outcome, value, raised, wall, cpu = fut.result()
+            except cf.BrokenExecutor:
+                raise OutputError("a report worker process died (killed, or out of memory); nothing was "
+                                  "written") from None
             stats[t.name] = (wall, cpu)
             raise_warnings_again(raised)        # as the serial run raises them
             if outcome == "error":
@@ -213,13 +217,6 @@ def _call(fn, args) -> tuple:
             cls = type(exc)
             outcome, value = "error", (cls.__module__, cls.__qualname__, str(exc), getattr(exc, "exit_code", None))
     return outcome, value, portable_warnings(caught), time.perf_counter() - t0, time.process_time() - c0
-
-
-def _result(fut: cf.Future) -> tuple:
-    try:
-        return fut.result()
-    except cf.BrokenExecutor:
-        raise OutputError("a report worker process died (killed, or out of memory); nothing was written") from None
 
 
 def _rebuild(module: str, qualname: str, message: str, exit_code) -> AcmmError:

@@ -170,7 +170,7 @@ def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
         for idx in np.ndindex(P.shape):
             if P[idx] == 0.0:
                 continue
-            ps = _printed_str(P[idx], gname)
+            ps = f"{P[idx]:.4f}" if gname == "H" else f"{P[idx]:.1f}"      # as printed: H 4 decimals, K 1
             expl = ""
             if gname == "H":
                 dv = float(np.asarray(dgkf.H)[idx])
@@ -272,11 +272,6 @@ def _text14(ctx: SectionWriter) -> None:
     w = _WHY14.format(mu=c.nonlinearity.mu, imp=sc0.impulse, ti=sc0.impulse_time or 0.0)
     _chapter(ctx, "qpp14", "qpp_manipulator", [("M45", 0, "0.006", None, w), ("M45", 1, "0.0015", None, w)],
              _OUT14)
-
-
-def _printed_str(v: float, gname: str) -> str:
-    """The printed form of a gain entry (H: four decimals; K1, Kc: one decimal, as in the report)."""
-    return f"{v:.4f}" if gname == "H" else f"{v:.1f}"
 
 
 def _num_str(v) -> str:
