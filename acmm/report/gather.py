@@ -427,8 +427,12 @@ def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
     cfgs = {name: acmm_config(name, root, fast=fast and name == "staircase")
             for name in ("mb3", "mb3_decoupled", "ac", "staircase")}
     for key, (suffix, patch) in REPORT_VARIANTS.items():
-        if not (fast and key == "staircase_quadratic"):
-            cfgs[key] = _variant(cfgs["staircase"], suffix, patch)
+        if not (fast and key == "staircase_quadratic"):         # the stair-case renamed and patched
+            data = cfgs["staircase"].model_dump(mode="json")
+            data["name"] = f"{data['name']}_{suffix}"
+            for section, values in patch.items():
+                data[section].update(values)
+            cfgs[key] = parse_config(data, source=f"{cfgs['staircase'].name} ({suffix})")
     cfgs.update({name: qpp_config(name, root) for name in ("qpp_siso", "qpp_manipulator")})
     return cfgs
 
@@ -441,16 +445,6 @@ REPORT_VARIANTS = {
     "staircase_lqr": ("lqr", {"design": {"pole_method": "shift"}, "schedule": {"refine_points": 0}}),
     "staircase_quadratic": ("quadratic", {"schedule": {"form": "polynomial", "fit": None}}),
 }
-
-
-def _variant(cfg, suffix: str, patch: dict):
-    """``cfg`` (:func:`acmm_config`) named ``<name>_<suffix>``, its sections updated by ``patch``
-    (``{section: {key: value}}``), validated."""
-    data = cfg.model_dump(mode="json")
-    data["name"] = f"{data['name']}_{suffix}"
-    for section, values in patch.items():
-        data[section].update(values)
-    return parse_config(data, source=f"{cfg.name} ({suffix})")
 
 
 def _guarded(name, fn, not_run, *args):

@@ -422,20 +422,6 @@ def _block_qpp_examples(r: dict) -> str:
                            "β1 ≤ m", "‖y − y_o‖∞ per scenario (β_o)"], rows)
 
 
-def _wie_pitch_fold(cfg, pitch_bias: float = 4.0) -> float | None:
-    """The largest pitch bias (ft·lbf) on the branch the TEA continuation follows from LVLH (the
-    bias :func:`acmm.model.tea.solve_tea`'s ``NoEquilibriumError`` names) for a pure pitch bias of
-    ``pitch_bias`` that has no equilibrium; None when it has one."""
-    inertia, n = cfg.inertia.matrix(), cfg.orbit_rate
-    bias = np.array([0.0, pitch_bias, 0.0])
-    try:
-        tea.solve_tea(inertia, n, bias)
-    except NoEquilibriumError:
-        lam = tea.bias_fold(inertia, n, bias)
-        return None if lam is None else lam * pitch_bias
-    return None
-
-
 def _block_table1_tea(r: dict) -> str:
     """The Table 1 TEA bullet: MB3 and AC TEAs, their residuals, MB3's zero-bias roots and the
     largest pitch bias with an MB3 equilibrium."""
@@ -445,9 +431,15 @@ def _block_table1_tea(r: dict) -> str:
     teas = {k: table1_teas(r[f"config:{k}"]) for k in ("mb3", "ac")}       # the report's Table 1 numbers
     t, zero = {k: v[0] for k, v in teas.items()}, teas["mb3"][1]
     cfg = r["config:mb3"]
-    roots = tea.all_equilibria(cfg.inertia.matrix(), cfg.orbit_rate, np.zeros(3))
+    inertia, n, wie = cfg.inertia.matrix(), cfg.orbit_rate, np.array([0.0, 4.0, 0.0])      # ft·lbf
+    roots = tea.all_equilibria(inertia, n, np.zeros(3))
     other = [x for x in roots if np.max(np.abs(x.theta - zero.theta)) > 1e-6]
-    fold = _wie_pitch_fold(cfg)
+    try:        # no equilibrium: the largest pitch bias on the branch the continuation follows from LVLH
+        tea.solve_tea(inertia, n, wie)
+        fold = None
+    except NoEquilibriumError:
+        lam = tea.bias_fold(inertia, n, wie)
+        fold = None if lam is None else lam * 4.0
 
     def bound(x):
         return "≤ " + sci(10.0 ** math.ceil(math.log10(max(x, 1e-16))), 1)     # 0: round-off level

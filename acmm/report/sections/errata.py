@@ -24,30 +24,23 @@ from acmm.design.schedule import sector_design
 
 
 def _build(ctx: SectionWriter, teas: dict, claim1: Claim1Numbers, beta3: tuple[float, float]) -> None:
-    """Part: the errata table; ``teas``: Table 1's ``{name: (TEA, zero-bias TEA, bias torque ft·lbf)}``,
+    """Part: the errata table (cheap checks only: item, printed / claim, correction used, evidence,
+    confirming tests); ``teas``: Table 1's ``{name: (TEA, zero-bias TEA, bias torque ft·lbf)}``,
     ``claim1``: the claim-1 numbers, ``beta3``: ch. 13's β3 with sin 5t and sin t, s^½."""
     ctx.section("errata")
     ctx.doc.p("Each misprint or convention of docs/ERRATA.md, the correction used, and the evidence: numbers "
               "computed in this run where the check is cheap, otherwise the test file that confirms it.")
-    g = ctx.g
+    g, cfg = ctx.g, ctx.g.configs["mb3"]
     stair = g.configs["staircase"].name
-    rows = _errata_rows(g.configs["mb3"], teas["mb3"], ctx.data("acmm design:" + stair),
-                       ctx.data("acmm simulate:" + stair), claim1, g.configs["qpp_siso"],
-                       ctx.data("qpp design:qpp_siso"), g.configs["qpp_manipulator"], beta3)
-    ctx.doc.table(["item", "printed / claim", "correction used", "evidence (this run)", "confirmed by"], rows)
-
-
-def _errata_rows(cfg, tea_mb3, st, sim, c1: Claim1Numbers, s13, d13, a, beta3) -> list[list[str]]:
-    """Rows of the errata table (cheap checks only): item, printed / claim, correction used,
-    evidence, confirming tests; ``cfg`` MB3, ``tea_mb3`` MB3's of :func:`_build`'s ``teas``, ``st``/``sim`` the
-    stair-case ``design.h5``/``sim.h5`` (u in ft·lbf, h in ft·lbf·s), ``s13``/``d13`` the ch. 13
-    config and ``qpp_design.h5``, ``a`` the ch. 14 config, ``beta3`` as :func:`_build`'s."""
     n, I = cfg.orbit_rate, cfg.inertia.matrix()
-    t, t0, bias = tea_mb3
+    t, t0, bias = teas["mb3"]
     th, d = t.theta, cfg.design
     m = lin.design_point(I, th, n, model="coupled", drf_mode=d.drf_mode)
-    return (_kinematics_rows(th, n) + _tea_rows(I, n, t0, bias) + _linearization_rows(I, th, n, m, design_settings(cfg))
-            + _riccati_rows(m, d, n) + _design_rows(I, th, n, d, st, sim, c1) + _qpp_rows(s13, d13, a, beta3))
+    rows = (_kinematics_rows(th, n) + _tea_rows(I, n, t0, bias) + _linearization_rows(I, th, n, m, design_settings(cfg))
+            + _riccati_rows(m, d, n)
+            + _design_rows(I, th, n, d, ctx.data("acmm design:" + stair), ctx.data("acmm simulate:" + stair), claim1)
+            + _qpp_rows(g.configs["qpp_siso"], ctx.data("qpp design:qpp_siso"), g.configs["qpp_manipulator"], beta3))
+    ctx.doc.table(["item", "printed / claim", "correction used", "evidence (this run)", "confirmed by"], rows)
 
 
 def _design_on(A, B, m, s) -> str:
