@@ -519,11 +519,9 @@ def _block_staircase_levels(r: dict) -> str:
     st, cfg = r["simulate:staircase"], r["config:staircase"]
     lv = st["levels"]
     orbit = 2 * np.pi / cfg.orbit_rate
-    rows = []
-    for k in range(len(lv["start"])):
-        rows.append([str(k), sig(lv["start"][k] / orbit), fixed(np.degrees(lv["tea_estimate"][k, 1]), 1),
-                     " / ".join(sig(v, 2) for v in np.degrees(lv["steady_error"][k])),
-                     sig(lv["peak_momentum"][k])])
+    rows = [[str(k), sig(lv["start"][k] / orbit), fixed(np.degrees(lv["tea_estimate"][k, 1]), 1),
+             " / ".join(sig(v, 2) for v in np.degrees(lv["steady_error"][k])), sig(lv["peak_momentum"][k])]
+            for k in range(len(lv["start"]))]
     return markdown_table(["level", "start (orbit)", "θ2* (deg)", "steady \\|θ − θ̂*\\| roll / pitch / yaw (deg)",
                            "peak \\|h\\| (ft·lbf·s)"], rows, "rrrrr")
 
