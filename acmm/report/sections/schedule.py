@@ -210,15 +210,13 @@ def _gain_figure(ctx: SectionWriter) -> None:
     other = None if quad is None else ctx.data("acmm design:" + quad.name)
     design = ctx.data("acmm design:" + cfg.name)
     plt = pyplot()
-    K, tea = design["K"], design["tea"]
-    sc = design["schedule"]
-    form = design["attrs"].get("schedule_form", "polynomial")
-    th = tea[:, 1]
+    K, th = design["K"], design["tea"][:, 1]
     fine = np.linspace(th.min(), th.max(), 120)
-    kf = np.array([schedule_gain(form, sc["coef"], sc["variable"], K, t) for t in fine])
-    ko = None if other is None else np.array([
-        schedule_gain(other["attrs"].get("schedule_form", "polynomial"), other["schedule"]["coef"],
-                      other["schedule"]["variable"], other["K"], t) for t in fine])
+
+    def gains(d):       # the schedule of a design.h5 on the fine grid
+        return np.array([schedule_gain(d["attrs"].get("schedule_form", "polynomial"), d["schedule"]["coef"],
+                                       d["schedule"]["variable"], d["K"], t) for t in fine])
+    kf, ko = gains(design), None if other is None else gains(other)
     units = lin.state_units(cfg.design.drf_mode)
     fig, axs = plt.subplots(6, 4, figsize=(11, 14), sharex=True)
     for j, ax in enumerate(axs.flat):
