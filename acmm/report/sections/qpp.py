@@ -87,10 +87,9 @@ def _consistent_verdict(attrs) -> str:
     return "not certified" + (f": {', '.join(failed)} fail" if failed else "")
 
 
-def _circle_figure(ctx: SectionWriter, key, name) -> None:
+def _circle_figure(ctx: SectionWriter, chap, name) -> None:
     """Circle criterion (lemma 1) of config ``name``: h_ii(−a + jω) with the Gershgorin mean radii
     (the ``circle`` group of ``qpp_design.h5``, dimensionless) and the critical disc of the sector."""
-    chap = "13" if key == "qpp13" else "14"
     design = ctx.data(f"qpp design:{name}")
     plt = pyplot()
     c = design["circle"]
@@ -123,10 +122,9 @@ def _circle_figure(ctx: SectionWriter, key, name) -> None:
     ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion", save(fig, ctx.figdir, f"{name}_circle"))
 
 
-def _responses_figure(ctx: SectionWriter, key, name, out_labels) -> None:
+def _responses_figure(ctx: SectionWriter, chap, name, out_labels) -> None:
     """Per scenario of ``qpp_sim.h5`` (t in s, outputs in the plant's units): y and y_o, and
     |y − y_o| against the output sphere's radius β_o."""
-    chap = "13" if key == "qpp13" else "14"
     beta_o = ctx.g.configs[name].spheres.beta_o
     plt = pyplot()
     with h5py.File(ctx.g.runs[f"qpp simulate:{name}"].path, "r") as f:
@@ -284,11 +282,11 @@ _Q13 = ("qpp design:qpp_siso", "qpp simulate:qpp_siso")
 _Q14 = ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator")
 PARTS = [
     ("qpp13", "qpp13", _text13, _Q13, (), 0.1),
-    ("qpp13/circle", "qpp13", partial(_circle_figure, key="qpp13", name="qpp_siso"), _Q13, (), 0.25),
-    ("qpp13/responses", "qpp13", partial(_responses_figure, key="qpp13", name="qpp_siso", out_labels=_OUT13),
+    ("qpp13/circle", "qpp13", partial(_circle_figure, chap="13", name="qpp_siso"), _Q13, (), 0.25),
+    ("qpp13/responses", "qpp13", partial(_responses_figure, chap="13", name="qpp_siso", out_labels=_OUT13),
      _Q13, (), 0.5),
     ("qpp14", "qpp14", _text14, _Q14, (), 0.1),
-    ("qpp14/circle", "qpp14", partial(_circle_figure, key="qpp14", name="qpp_manipulator"), _Q14, (), 0.35),
+    ("qpp14/circle", "qpp14", partial(_circle_figure, chap="14", name="qpp_manipulator"), _Q14, (), 0.35),
     ("qpp14/responses", "qpp14",
-     partial(_responses_figure, key="qpp14", name="qpp_manipulator", out_labels=_OUT14), _Q14, (), 0.85),
+     partial(_responses_figure, chap="14", name="qpp_manipulator", out_labels=_OUT14), _Q14, (), 0.85),
 ]
