@@ -192,8 +192,7 @@ def _qpp_summary(r: dict, name: str) -> dict:
     k = np.concatenate([np.ravel(pub["K1"]), np.ravel(pub["Kc"])])
     kc = np.concatenate([np.ravel(d["K1"]), np.ravel(d["Kc"])])
     _, k_ok = _gains(k[None, :], kc[None, :], 0)
-    hp = np.ravel(pub["H"])
-    rel = np.ravel(pub["H_rel_diff"])[hp != 0]
+    rel = np.ravel(pub["H_rel_diff"])[np.ravel(pub["H"]) != 0]
     m = float(np.atleast_2d(d["thresholds"])[0, 3])          # printed β3, β4 (row 0: printed bookkeeping)
     return {"d": d, "cfg": cfg, "sims": sims, "k_ok": k_ok, "h_rel": rel, "m": m,
             "b1": (float(pc["beta1_eq10_7"]), float(pc["beta1_printed"]))}
@@ -737,15 +736,14 @@ def _block_sweep_diverged(r: dict) -> str:
 def _block_sweep_margin(r: dict) -> str:
     """The tolerated uniform inertia scaling of each fixed design (``sweep.h5: margin/*``)."""
     w = r["sweep"]
-    mg = w["margin"]
+    mg, why = w["margin"], {"bounded": "not settled", "attitude": "diverged"}
+
+    def reason(m):      # a failure's reason in a word or two
+        text = h5_text(m["failure_reason"])
+        return next((v for k, v in why.items() if text.startswith(k)), text)
     rows = []
     for lab in (h5_text(x) for x in np.atleast_1d(w["base_names"])):
         lo, hi = mg[f"{lab}_down"], mg[f"{lab}_up"]
-        why = {"bounded": "not settled", "attitude": "diverged"}
-
-        def reason(m):
-            text = h5_text(m["failure_reason"])
-            return next((v for k, v in why.items() if text.startswith(k)), text)
         rows.append([lab.upper(), f"{fixed(lo['limit'])} … {fixed(hi['limit'])}",
                      f"{fixed(lo['first_failure'])} ({reason(lo)}) and {fixed(hi['first_failure'])} ({reason(hi)})"])
     return markdown_table(["design", "tolerated s", "first failure"], rows)
