@@ -13,6 +13,7 @@ import platform
 import shutil
 import tempfile
 import time
+from collections import Counter
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -25,17 +26,16 @@ import scipy
 
 from acmm import __version__
 from acmm_qpp.errors import OutputError
-from acmm_qpp.outputs import run_lock, write_text
+from acmm_qpp.outputs import file_identity, run_lock, write_text
 from acmm_qpp.provenance import git_commit, git_dirty
 from acmm_qpp.signals import interrupts_deferred
 from acmm.report.constants import SECTIONS, TIMING_DATASETS
 from acmm.report.context import SectionWriter
 from acmm.report.document import render_html, render_markdown
 from acmm.report.ledger import status_text
-from acmm.report.gather import (Gathered, changed_runs, keep_stage, order_runs, report_configs, stage_tasks,
-                                warm_workers)
+from acmm.report.gather import Gathered, keep_stage, order_runs, report_configs, stage_tasks, warm_workers
 from acmm.report.manifest import build_manifest, compare_manifests
-from acmm.report.plan import assemble, run_part, section_tasks
+from acmm.report.plan import PARTS, run_part, section_tasks
 from acmm.report.publish import publish
 from acmm.report.runner import default_jobs, run_tasks
 import resource
@@ -96,12 +96,9 @@ class ReportResult:
     determinism: dict
     wall_time: float
     sections: list = field(default_factory=lambda: [k for k, _ in SECTIONS])
-    #: wall time (s) of the stages, of each stage and of each section, and the total CPU (issue 16)
     timings: dict = field(default_factory=dict)
     jobs: int = 1                   #: processes that ran the stages and sections
-    #: per task of the graph (stages and section parts): (wall s, CPU s of the process that ran it)
     tasks: dict = field(default_factory=dict)
-    #: (section key, Failed) of each failed part or section, in section order
     failures: list = field(default_factory=list)
     root: Path | None = None        #: the results root of the stages
 
@@ -180,27 +177,28 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
     """The report, its figures drawn into ``staged`` and moved into ``figdir`` only with the
     pages: an interrupted or failed report leaves ``--out`` as it was (its figures were written
     as their tasks finished, beside the previous report's pages: a review)."""
-    g, rep, timings = _run_graph(root, staged, fast, rerun, robustness, jobs, say)
-    jobs = timings.pop("processes")
-    failures = timings.pop("failures")
-    _add(rep, "printed", _printed, list(rep.ledger), failures=failures)
+    g, rep, timings, stats, jobs, failures = _run_graph(root, staged, fast, rerun, robustness, jobs, say)
+    _add(rep, failures, "printed", _printed, list(rep.ledger))
     # determinism
     man_path = out / "manifest.json"
-    old = _previous_manifest(man_path)
+    try:
+        old = json.loads(man_path.read_text())          # the previous report's
+    except (OSError, ValueError):                       # none, or unreadable
+        old = None
     manifest = build_manifest(g)
     cmp = compare_manifests(old, manifest)
-    _add(rep, "determinism", _determinism, cmp, manifest, failures=failures)
+    _add(rep, failures, "determinism", _determinism, cmp, manifest)
     total = time.perf_counter() - t_start
-    _add(rep, "provenance", _provenance, g, {
+    _add(rep, failures, "provenance", _provenance, g, {
         "stages (until the last one finished)": timings["stages"],
-        f"stages and sections ({jobs} process{'es' if jobs > 1 else ''})": timings["graph"], "total": total},
-         failures=failures)
+        f"stages and sections ({jobs} process{'es' if jobs > 1 else ''})": timings["graph"], "total": total})
     title = "CR-185644 regenerated: ACMM (Part II) and QPP (Part III)" + (" — fast mode" if fast else "")
     md = render_markdown(rep.doc, title)
     page = render_html(rep.doc, title, staged)          # (embeds the PNGs it reads there)
     manifest["determinism"] = {k: v for k, v in cmp.items() if k != "differences"}
-    changed = changed_runs(g)
-    if changed:     # the stages' locks are not held while sections read: another run rewrote one
+    # the stages' locks are not held while sections read: another run of that name may have rewritten one
+    changed = [k for k, ident in g.identities.items() if file_identity(g.runs[k].path) != ident]
+    if changed:
         raise OutputError(f"{changed[0]}: its results file {g.runs[changed[0]].path} was rewritten while the "
                           "report ran (another run of that name?); nothing was written: run the report again")
     pairs = [(f, figdir / f.name) for f in sorted(staged.iterdir())]
@@ -215,24 +213,13 @@ def _build_into(out: Path, figdir: Path, staged: Path, root, fast, rerun, robust
         publish(pairs, staged / ".replaced")
     figs = sorted(figdir.glob("*.png"))
     say(f"wrote {out / 'index.html'} ({len(figs)} figures) in {time.perf_counter() - t_start:.1f} s")
+    wall = time.perf_counter() - t_start
     res = ReportResult(out, out / "index.html", out / "report.md", man_path, figs, list(g.runs.values()),
-                       rep.ledger, cmp, time.perf_counter() - t_start)
-    res.tasks = timings.pop("tasks")
-    res.timings = {**timings, "total": res.wall_time, "cpu (all processes)": _cpu() - cpu0}
-    res.jobs, res.failures, res.root = jobs, failures, root
+                       rep.ledger, cmp, wall, timings={**timings, "total": wall, "cpu (all processes)": _cpu() - cpu0},
+                       jobs=jobs, tasks=stats, failures=failures, root=root)
     for section, f in failures:
         say(f"  section {section}: {f.text()}")
     return res
-
-
-def _previous_manifest(path: Path) -> dict | None:
-    """The manifest of the previous report in the same folder (None: none, or unreadable)."""
-    if not path.exists():
-        return None
-    try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
 
 
 def _cpu() -> float:
@@ -243,7 +230,8 @@ def _cpu() -> float:
 
 def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jobs: int, say):
     """Stages and section parts as one task graph (:mod:`acmm.report.runner`); returns the gathered
-    results, the writer holding every content section, and the wall times."""
+    results, the writer holding every content section, the wall times (s: stages, graph, each stage
+    group and section), each task's (wall s, CPU s), the processes used and the failed parts."""
     t0 = time.perf_counter()
     g = Gathered(report_configs(root, fast=fast), {})
     rep = SectionWriter(g, figdir, fast)
@@ -265,36 +253,39 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
     order_runs(g, stages)
     sections: dict[str, float] = {}
     failures: list = []
-    assemble(rep, done, sections, failures)
+    for name, section, *_ in PARTS:         # in section order, whichever process wrote which part
+        _append(rep, failures, section, done[name])
+        sections[section] = sections.get(section, 0.0) + done[name].seconds
     for key, sec in sections.items():
         say(f"  section {key:<12} {sec:6.2f} s")
     timings.update(g.timings)
     timings.update({f"section {k}": v for k, v in sections.items()})
-    timings["tasks"] = stats
-    timings["processes"] = min(jobs, len(stages) + len(parts))      # run_tasks forks no more
-    timings["failures"] = failures
-    return g, rep, timings
+    return g, rep, timings, stats, min(jobs, len(stages) + len(parts)), failures     # run_tasks forks no more
 
 
-def _add(rep: SectionWriter, key: str, build, *args, failures: list | None = None):
+def _add(rep: SectionWriter, failures: list, key: str, build, *args):
     """Run one section's ``build`` as a part (:func:`acmm.report.plan.run_part`, a fresh writer) and
-    append its blocks and ledger to ``rep``; a user-facing error it raises is shown as the section
-    (its heading and the error) and appended to ``failures`` as ``(key, Failed)``."""
+    :func:`_append` it as section ``key``; returns its value."""
     part = run_part(build, rep.g, rep.figdir, rep.fast, args, rep._results, key, key)
-    if part.failed is not None and failures is not None:
-        failures.append((key, part.failed))
+    _append(rep, failures, key, part)
+    return part.value
+
+
+def _append(rep: SectionWriter, failures: list, section: str, part) -> None:
+    """Append the blocks and printed numbers of ``part`` (a :class:`acmm.report.plan.Part`) to
+    ``rep``, and ``(section, Failed)`` to ``failures`` when it failed (its blocks then show the
+    section's heading and the error)."""
+    if part.failed is not None:
+        failures.append((section, part.failed))
     rep.doc.blocks.extend(part.blocks)
     rep.ledger.extend(part.ledger)
-    return part.value
 
 
 def _printed(ctx: SectionWriter, ledger: list) -> None:
     """Section printed numbers: every entry of ``ledger`` (all sections before this one), with its
     status."""
     ctx.section("printed")
-    counts = {}
-    for pn in ledger:
-        counts[pn.status] = counts.get(pn.status, 0) + 1
+    counts = Counter(pn.status for pn in ledger)
     ctx.doc.p("Every printed number this report compares, with its status. Matched: |computed − printed| ≤ "
               "half a unit of the last printed digit. Summary: " +
               "; ".join(f"{v} {k}" for k, v in sorted(counts.items())) + ".")

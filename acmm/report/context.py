@@ -36,21 +36,6 @@ class SectionWriter:
         self.doc = Doc()
         self.ledger: list[PrintedNumber] = []
 
-    def run(self, key):
-        """The stage run ``key`` ("stage:name") of the gathered results.
-
-        Parameters
-        ----------
-        key : str
-            ``"<stage>:<config name>"``.
-
-        Returns
-        -------
-        acmm.report.gather.StageRun
-            Its file, config and hashes.
-        """
-        return self.g.runs[key]
-
     def data(self, key):
         """The results file of stage ``key`` ("stage:name") as read by :func:`acmm_qpp.results.read_h5`.
 
@@ -66,7 +51,7 @@ class SectionWriter:
             per report.
         """
         if key not in self._results:
-            self._results[key] = read_h5(self.run(key).path)
+            self._results[key] = read_h5(self.g.runs[key].path)
         return self._results[key]
 
     def ledger_add(self, *args, **kw) -> PrintedNumber:
@@ -96,5 +81,4 @@ class SectionWriter:
         key : str
             Section key.
         """
-        title = dict(SECTIONS)[key]
-        self.doc.h(1, title, key)
+        self.doc.h(1, dict(SECTIONS)[key], key)

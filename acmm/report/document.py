@@ -15,9 +15,6 @@ from acmm.report.ledger import STATUS_BOUND, STATUS_EXPLAINED, STATUS_MATCHED, S
 from acmm.report.numbers import markdown_table
 
 
-# =============================================================================================
-# document model: blocks rendered to Markdown and HTML alike
-# =============================================================================================
 @dataclass
 class Doc:
     """A list of blocks: ("h", level, text, anchor), ("p", text), ("list", items),
@@ -198,6 +195,3 @@ def render_html(doc: Doc, title: str, figdir: Path) -> str:
                          f'<a href="figures/{e(stem)}.png">PNG</a>)</figcaption></figure>')
     parts.append("</body></html>")
     return "\n".join(parts)
-
-
-# =============================================================================================

@@ -1,12 +1,7 @@
-"""One matplotlib style for every figure of ``acmm report`` (publication quality).
-
-The report's colours (:data:`COLORS`), rcParams (:data:`RC`, :data:`SPEED_RC`) and
-:func:`pyplot`, on the Agg backend of :func:`acmm_qpp.plot_style.agg_pyplot`, and its PDF + PNG
-writer.
-
-Labelled axes with units, legends, a colour-blind-safe cycle (Okabe–Ito), light grids, vector
-PDF plus a PNG for the HTML page.  Figures are drawn with the non-interactive Agg backend and
-closed after saving; nothing is shown on screen.
+"""One matplotlib style for every figure of ``acmm report`` (publication quality): a colour-blind
+safe cycle (:data:`COLORS`, Okabe–Ito), light grids (:data:`RC`, :data:`SPEED_RC`), the Agg backend
+of :func:`acmm_qpp.plot_style.agg_pyplot` (nothing shown on screen) and a vector PDF plus a PNG
+per figure for the HTML page.
 """
 from __future__ import annotations
 
@@ -66,9 +61,7 @@ def pyplot():
         ``matplotlib.pyplot``.
     """
     plt = agg_pyplot(force=True)
-    plt.rcParams.update(RC)
-    plt.rcParams["axes.prop_cycle"] = cycler(color=list(COLORS))
-    plt.rcParams.update(SPEED_RC)
+    plt.rcParams.update({**RC, "axes.prop_cycle": cycler(color=list(COLORS)), **SPEED_RC})
     return plt
 
 

@@ -245,9 +245,6 @@ def ensure_acmm_design(cfg, rerun: bool = False, donor_roots=()) -> StageRun:
     """``design.h5`` of an acmm config through :func:`acmm.stages.runners.design_for` (the stages' own
     reuse by ``design_hash``), or designed again (``rerun``).
 
-    ``donor_roots``: other run directories whose ``design.h5`` may be copied when its design hash
-    matches (the ``--fast`` stair-case reuses the full stair-case's design).
-
     Parameters
     ----------
     cfg : acmm.io.config.Config
@@ -255,7 +252,8 @@ def ensure_acmm_design(cfg, rerun: bool = False, donor_roots=()) -> StageRun:
     rerun : bool, optional
         Design again even when a matching file exists.
     donor_roots : iterable of path-like, optional
-        Run directories whose ``design.h5`` may be copied.
+        Run directories whose ``design.h5`` may be copied when its design hash matches (the
+        ``--fast`` stair-case reuses the full stair-case's design).
 
     Returns
     -------
@@ -298,14 +296,8 @@ def ensure_acmm_simulation(cfg, rerun: bool = False) -> StageRun:
     StageRun
         The simulation file used.
     """
-    chash, dhash = config_hash(cfg.to_yaml()), design_hash(cfg)
-    path = cfg.run_dir() / "sim.h5"
-    a = None if rerun else _try_attrs(path)
-    if a is not None and a.get("config_hash") == chash and a.get("design_hash") == dhash:
-        return _stage_record("acmm simulate", cfg.name, path, chash, dhash, True, 0.0)
-    t0 = time.perf_counter()
-    _, path = run_simulate(cfg, figures=False)
-    return _stage_record("acmm simulate", cfg.name, path, chash, dhash, False, time.perf_counter() - t0)
+    return _reused_or_run("acmm simulate", cfg, cfg.run_dir() / "sim.h5", design_hash(cfg), rerun,
+                          lambda: run_simulate(cfg, figures=False)[1])
 
 
 def ensure_qpp(cfg, stage: str, rerun: bool = False) -> StageRun:
@@ -325,17 +317,23 @@ def ensure_qpp(cfg, stage: str, rerun: bool = False) -> StageRun:
     StageRun
         The file used.
     """
-    chash = config_hash(cfg.to_yaml())
-    path = cfg.run_dir() / ("qpp_design.h5" if stage == "design" else "qpp_sim.h5")
-    a = None if rerun else _try_attrs(path)
-    if a is not None and a.get("config_hash") == chash:
-        return _stage_record(f"qpp {stage}", cfg.name, path, chash, "", True, 0.0)
-    t0 = time.perf_counter()
     if stage == "design":
-        path = qst.run_design(cfg, figures=False)[2]
-    else:
-        path = qst.run_simulate(cfg, figures=False)[3]
-    return _stage_record(f"qpp {stage}", cfg.name, path, chash, "", False, time.perf_counter() - t0)
+        return _reused_or_run("qpp design", cfg, cfg.run_dir() / "qpp_design.h5", "", rerun,
+                              lambda: qst.run_design(cfg, figures=False)[2])
+    return _reused_or_run("qpp simulate", cfg, cfg.run_dir() / "qpp_sim.h5", "", rerun,
+                          lambda: qst.run_simulate(cfg, figures=False)[3])
+
+
+def _reused_or_run(stage: str, cfg, path: Path, dhash: str, rerun: bool, run) -> StageRun:
+    """The :class:`StageRun` of ``path`` when its stored config hash (and design hash ``dhash``,
+    when not empty) match ``cfg``'s and not ``rerun``, else of the file ``run()`` writes."""
+    chash = config_hash(cfg.to_yaml())
+    a = None if rerun else _try_attrs(path)
+    if a is not None and a.get("config_hash") == chash and (not dhash or a.get("design_hash") == dhash):
+        return _stage_record(stage, cfg.name, path, chash, dhash, True, 0.0)
+    t0 = time.perf_counter()
+    path = run()
+    return _stage_record(stage, cfg.name, path, chash, dhash, False, time.perf_counter() - t0)
 
 
 def qpp_scenarios(path: Path) -> dict:
@@ -388,7 +386,7 @@ class Gathered:
         (used by :func:`order_runs`).
     identities : dict
         Run key → :func:`acmm_qpp.outputs.file_identity` of its results file when the report
-        took it; checked before the report writes its pages (:func:`changed_runs`).
+        took it; checked before the report writes its pages.
     failed : dict
         Task name → :class:`Failed` of each stage that failed (or was not run because the
         stage it waits for failed); the sections reading it show the error.
@@ -429,8 +427,12 @@ def report_configs(root: Path | None = None, *, fast: bool = False) -> dict:
     cfgs = {name: acmm_config(name, root, fast=fast and name == "staircase")
             for name in ("mb3", "mb3_decoupled", "ac", "staircase")}
     for key, (suffix, patch) in REPORT_VARIANTS.items():
-        if not (fast and key == "staircase_quadratic"):
-            cfgs[key] = _variant(cfgs["staircase"], suffix, patch)
+        if not (fast and key == "staircase_quadratic"):         # the stair-case renamed and patched
+            data = cfgs["staircase"].model_dump(mode="json")
+            data["name"] = f"{data['name']}_{suffix}"
+            for section, values in patch.items():
+                data[section].update(values)
+            cfgs[key] = parse_config(data, source=f"{cfgs['staircase'].name} ({suffix})")
     cfgs.update({name: qpp_config(name, root) for name in ("qpp_siso", "qpp_manipulator")})
     return cfgs
 
@@ -443,16 +445,6 @@ REPORT_VARIANTS = {
     "staircase_lqr": ("lqr", {"design": {"pole_method": "shift"}, "schedule": {"refine_points": 0}}),
     "staircase_quadratic": ("quadratic", {"schedule": {"form": "polynomial", "fit": None}}),
 }
-
-
-def _variant(cfg, suffix: str, patch: dict):
-    """``cfg`` (:func:`acmm_config`) named ``<name>_<suffix>``, its sections updated by ``patch``
-    (``{section: {key: value}}``), validated."""
-    data = cfg.model_dump(mode="json")
-    data["name"] = f"{data['name']}_{suffix}"
-    for section, values in patch.items():
-        data[section].update(values)
-    return parse_config(data, source=f"{cfg.name} ({suffix})")
 
 
 def _guarded(name, fn, not_run, *args):
@@ -540,23 +532,6 @@ def stage_tasks(cfgs: dict, root: Path | None = None, *, fast: bool = False, rer
     return tasks
 
 
-def changed_runs(g: "Gathered") -> list[str]:
-    """Run keys whose results file is no longer the one the report took (another run of that
-    name wrote it meanwhile: the report's sections may have read either).
-
-    Parameters
-    ----------
-    g : Gathered
-        The gathered results.
-
-    Returns
-    -------
-    list of str
-        The changed run keys.
-    """
-    return [k for k, ident in g.identities.items() if file_identity(g.runs[k].path) != ident]
-
-
 def keep_stage(g: "Gathered", name: str, result, say: Callable[[str], None]) -> None:
     """Record the result of stage task ``name`` in ``g`` (and print one line).
 
@@ -637,7 +612,7 @@ def robustness_result(root: Path | None = None, *, fast: bool = False, rerun: bo
     -------
     (dict or None, str)
         ``{"data": sweep.h5 as read by read_h5, "run": StageRun, "fast", "n_runs", "orbits",
-        "design", "tea_estimate", "seed", "bases"}`` and a note.  A sweep that fails with an :class:`AcmmError` or an
+        "design", "tea_estimate", "seed"}`` and a note.  A sweep that fails with an :class:`AcmmError` or an
         ``OSError``, makes the section "not available"; programming errors propagate.
     """
     try:
@@ -657,7 +632,6 @@ SWEEP_CONFIG = "sweep_inertia30.yaml"
 def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     """Run (or reuse, by ``results_key``) ``configs/sweep_inertia30.yaml`` through
     :func:`acmm.sweep.run_sweep` and read ``sweep.h5`` back."""
-
     p = packaged_config_path(SWEEP_CONFIG, PACKAGED_CONFIGS)
     if not p.exists():
         return None, f"configs/{SWEEP_CONFIG} is not present"
@@ -668,8 +642,7 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     data["output"]["figures"] = False
     if fast:
         data["name"] = f"{data['name']}_fast"
-        data["sweep"]["n_runs"] = FAST_SWEEP_RUNS
-        data["sweep"]["orbits"] = FAST_SWEEP_ORBITS
+        data["sweep"].update(n_runs=FAST_SWEEP_RUNS, orbits=FAST_SWEEP_ORBITS)
         data["sweep"].pop("margin", None)
     sweep = parse_sweep(data, source=str(p), directory=p.parent)
     path = sweep.run_dir() / "sweep.h5"
@@ -679,10 +652,7 @@ def _robustness_from_sweep(root, *, fast, rerun, workers=None):
     if not reused:
         path = run_sweep(sweep, workers=workers or max(1, min(2, os.cpu_count() or 1)), figures=False).path
     wall = 0.0 if reused else time.perf_counter() - t0
-    d = read_h5(path)
-    chash = str(d["attrs"].get("config_hash", ""))
-    run = _stage_record("acmm sweep", sweep.name, path, chash, "", reused, wall)
-    spec = sweep.spec
+    d, spec = read_h5(path), sweep.spec
+    run = _stage_record("acmm sweep", sweep.name, path, str(d["attrs"].get("config_hash", "")), "", reused, wall)
     return {"data": d, "run": run, "fast": fast, "n_runs": spec.n_runs, "orbits": spec.orbits,
-            "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed,
-            "bases": [b.label for b in sweep.bases]}, f"{sweep.name}: {path}"
+            "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed}, f"{sweep.name}: {path}"

@@ -61,10 +61,9 @@ def build_manifest(g: Gathered) -> dict:
         ``created_utc``, ``git_commit`` and ``files`` (stage key → path, config and design
         hash, creation time, reused flag, :func:`dataset_hashes`).
     """
-    files = {}
-    for key, r in g.runs.items():
-        files[key] = {"path": str(r.path), "config_hash": r.config_hash, "design_hash": r.design_hash,
-                      "created_utc": r.created_utc, "reused": r.reused, "datasets": dataset_hashes(r.path)}
+    files = {key: {"path": str(r.path), "config_hash": r.config_hash, "design_hash": r.design_hash,
+                   "created_utc": r.created_utc, "reused": r.reused, "datasets": dataset_hashes(r.path)}
+             for key, r in g.runs.items()}
     return {"created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
             "git_commit": git_commit(), "files": files}
 

@@ -1,25 +1,13 @@
 """The numbers README.md and the guide (docs/) quote about the packaged configs of Parts II and
-III: the stages they come from, run into a results root through the report's own functions
-(:mod:`acmm.report.gather`, figures off; :func:`run_stages`), and each block of text computed from
-their results with the report's own formatting (:mod:`acmm.report.numbers`).
-
-The stages: the packaged designs and simulations of ch. 5–6 (MB3, AC, the stair-case), the ±30 %
-inertia sweep of ch. 7, the qpp examples of ch. 13–14 and the shipped ones, and the variants the
-guide compares them with: the regional LMI and robust routes (:data:`ROUTE_VARIANTS`) and the
-stair-case's other schedules (:data:`STAIRCASE_VARIANTS`); and the search over procedure 12.1's
-family of the report's two qpp examples that docs/qpp-certificates.md quotes.
-
-Each block (:data:`BLOCKS`, name → a function of the :func:`run_stages` dict returning its
-Markdown) is the text between ``<!-- generated:NAME -->`` and ``<!-- /generated:NAME -->`` in
-README.md or one page of docs/ (``scripts/readme_numbers.py`` rewrites or checks them): the
-claims of ch. 6, the per-level statistics of the stair-case, the design points' margins and
-conditioning, the schedule along the path, the dwell-time certificate, the design routes, the
-±30 % Monte Carlo counts of ch. 7 and the inertia-scaling margins; the qpp blocks of ch. 13–14
-(the reproduced-vs-printed table, the bullet of "What the tool reproduces", the examples, the
-certificates and the family search).  Numbers are rounded to the digits that mean something
-(3 significant digits for momenta and attitude errors, 3 decimals for margins in units of n, 2
-significant digits for condition numbers and robustness radii), so the text does not change
-between machines.
+III: the stages they come from (the designs and simulations of ch. 5–6, the ±30 % inertia sweep of
+ch. 7, the qpp examples of ch. 13–14 and the shipped ones, the design routes and stair-case
+schedules the guide compares, the search over procedure 12.1's family), run into a results root
+through the report's own functions (:func:`run_stages`), and the text of each generated block
+(:data:`BLOCKS`, the text between ``<!-- generated:NAME -->`` and ``<!-- /generated:NAME -->`` that
+``scripts/readme_numbers.py`` rewrites or checks), written with the report's own formatting
+(:mod:`acmm.report.numbers`): rounded to the digits that mean something (3 significant digits for
+momenta and attitude errors, 3 decimals for margins in units of n, 2 significant digits for
+condition numbers and robustness radii), so the text does not change between machines.
 """
 from __future__ import annotations
 
@@ -38,8 +26,9 @@ from acmm.model.tea import NoEquilibriumError
 from acmm.report.gather import (REPORT_VARIANTS, acmm_config, ensure_acmm_design, ensure_acmm_simulation, ensure_qpp,
                                 qpp_config, qpp_scenarios, robustness_result)
 from acmm.report.numbers import fixed, markdown_table, sci, sig
+from acmm.report.sections.claim1 import peak_errors
 from acmm.report.sections.robustness import bounded_count, case_column
-from acmm.report.sections.schedule import point_energy
+from acmm.report.sections.schedule import point_energy, route_numbers
 from acmm.report.sections.table1 import table1_teas
 from acmm.sweep.config import parse_sweep
 from acmm.sweep.run import run_sweep
@@ -67,8 +56,8 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
     Returns
     -------
     dict
-        ``"design:<name>"`` (mb3, mb3_decoupled, ac, staircase), ``"simulate:<name>"`` (mb3,
-        mb3_decoupled, staircase), ``"sweep"`` (``sweep_inertia30``) → the file as read by
+        ``"design:<name>"`` (mb3, mb3_decoupled, ac, staircase and :data:`STAIRCASE_VARIANTS`),
+        ``"simulate:<name>"`` (the same but ac), ``"sweep"`` (``sweep_inertia30``) → the file as read by
         :func:`acmm_qpp.results.read_h5`; ``"config:<name>"`` → the acmm config;
         ``"qpp_design:<name>"`` (:data:`QPP_CONFIGS`) → ``qpp_design.h5`` as read by ``read_h5``,
         ``"qpp_sim:<name>"`` → :func:`qpp_scenarios` of ``qpp_sim.h5``, ``"qpp_config:<name>"`` →
@@ -81,8 +70,9 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
         The ±30 % sweep could not run (the report's robustness section names why).
     """
     out: dict = {}
-    for name in ("mb3", "mb3_decoupled", "ac", "staircase"):
-        cfg = acmm_config(name, root)
+    acmm = [(name, acmm_config(name, root)) for name in ("mb3", "mb3_decoupled", "ac", "staircase")]
+    acmm += [(name, _variant_config(root, "staircase", name, patch)[1]) for name, patch in STAIRCASE_VARIANTS.items()]
+    for name, cfg in acmm:
         out[f"config:{name}"] = cfg
         out[f"design:{name}"] = read_h5(ensure_acmm_design(cfg).path)
         if name != "ac":
@@ -103,12 +93,11 @@ def run_stages(root: Path, workers: int | None = None) -> dict:
 
 
 def _family_search(cfg, grid: dict, beyond: tuple | None = None) -> dict:
-    """Procedure 12.1's family of ``cfg`` searched on ``grid`` (``rho``, ``w`` dimensionless, ``a``
-    in 1/s, as in :data:`qpp.design.family.REPORT_GRIDS`; :func:`qpp.design.family.search`), locally
-    from the grid's best point (largest m − β1; :func:`qpp.design.family.refine`) and, with ``beyond``
-    (ρ, w, a as in :data:`qpp.design.family.REPORT_CERTIFIED`), at that design off the grid, then on
-    the certificate's own samples (:func:`qpp.design.family.resettle`): ``{"candidates", "best",
-    "refined", "designs"[, "beyond", "resettled"]}``; minutes on one core for ch. 13's grid."""
+    """Procedure 12.1's family of ``cfg`` searched on ``grid`` (``rho``, ``w`` dimensionless, ``a`` in
+    1/s, as :data:`qpp.design.family.REPORT_GRIDS`), then locally from its best point (largest m − β1)
+    and, with ``beyond`` (ρ, w, a as :data:`qpp.design.family.REPORT_CERTIFIED`), at that design off
+    the grid and on the certificate's own samples: ``{"candidates", "best", "refined", "designs"[,
+    "beyond", "resettled"]}``; minutes on one core for ch. 13's grid."""
     cands = search(cfg, grid["rho"], grid["w"], grid["a"])
     best = max(cands, key=lambda c: c.m - c.beta1)
     refined, designs = refine(cfg, best)
@@ -152,12 +141,8 @@ STAIRCASE_VARIANTS = {
 
 
 def _route_variants(root: Path, workers: int | None) -> dict:
-    """MB3 and AC designed by each route of :data:`ROUTE_VARIANTS` (regional LMI, robust) and the
-    packaged ±30 % sweep of those fixed gains on the same draws (``"design:<name>_<route>"``,
-    ``"sweep_<route>"``), and the stair-case variants of :data:`STAIRCASE_VARIANTS`, designed and
-    simulated (``"design:<variant>"``, ``"simulate:<variant>"``, ``"config:<variant>"``): files as
-    read by :func:`acmm_qpp.results.read_h5`, and configs; ``workers``: the sweeps' processes
-    (None: min(2, CPUs))."""
+    """MB3 and AC designed by each route of :data:`ROUTE_VARIANTS` with the packaged ±30 % sweep of
+    those gains (``"design:<name>_<route>"``, ``"sweep_<route>"``), as :func:`run_stages`."""
     out = {}
     for route, patch in ROUTE_VARIANTS.items():
         bases = []
@@ -172,11 +157,6 @@ def _route_variants(root: Path, workers: int | None) -> dict:
         sweep = parse_sweep(data, source=str(p), directory=p.parent)
         out[f"sweep_{route}"] = read_h5(run_sweep(sweep, workers=workers or max(1, min(2, os.cpu_count() or 1)),
                                                   figures=False).path)
-    for name, patch in STAIRCASE_VARIANTS.items():
-        _, cfg = _variant_config(root, "staircase", name, patch)
-        out[f"config:{name}"] = cfg
-        out[f"design:{name}"] = read_h5(ensure_acmm_design(cfg).path)
-        out[f"simulate:{name}"] = read_h5(ensure_acmm_simulation(cfg).path)
     return out
 
 
@@ -212,8 +192,7 @@ def _qpp_summary(r: dict, name: str) -> dict:
     k = np.concatenate([np.ravel(pub["K1"]), np.ravel(pub["Kc"])])
     kc = np.concatenate([np.ravel(d["K1"]), np.ravel(d["Kc"])])
     _, k_ok = _gains(k[None, :], kc[None, :], 0)
-    hp = np.ravel(pub["H"])
-    rel = np.ravel(pub["H_rel_diff"])[hp != 0]
+    rel = np.ravel(pub["H_rel_diff"])[np.ravel(pub["H"]) != 0]
     m = float(np.atleast_2d(d["thresholds"])[0, 3])          # printed β3, β4 (row 0: printed bookkeeping)
     return {"d": d, "cfg": cfg, "sims": sims, "k_ok": k_ok, "h_rel": rel, "m": m,
             "b1": (float(pc["beta1_eq10_7"]), float(pc["beta1_printed"]))}
@@ -355,17 +334,11 @@ def _block_qpp_reproduced(r: dict) -> str:
     """The qpp section's "Reproduced vs printed" table (ch. 13 SISO, ch. 14 manipulator)."""
     so, ma = _qpp_summary(r, "qpp_siso"), _qpp_summary(r, "qpp_manipulator")
     rows = [["SISO A_z (13.6), Table 14.1 A_z/B_z", "—", "rebuilt from printed gains, equal at printed precision"]]
-    for lab, x in (("SISO K1, Kc", so), ("manip. K1 / Kc", ma)):
+    for lab, x, two in (("SISO K1, Kc", so, "[{}], [{}]"), ("manip. K1 / Kc", ma, "{} / {}")):
         d, pub, h = x["d"], x["d"]["published"], x["cfg"].hinf
-        if lab.startswith("SISO"):
-            pr = f"[{_printed(pub['K1'])}], [{_printed(pub['Kc'])}]"
-            co = f"[{_gains(pub['K1'], d['K1'], 2)[0]}], [{_gains(pub['Kc'], d['Kc'], 2)[0]}]"
-        else:
-            pr = f"{_printed(np.ravel(pub['K1'])[None, :])} / {_printed(np.ravel(pub['Kc'])[None, :])}"
-            co = (f"{_gains(np.ravel(pub['K1'])[None, :], np.ravel(d['K1'])[None, :], 2)[0]} / "
-                  f"{_gains(np.ravel(pub['Kc'])[None, :], np.ravel(d['Kc'])[None, :], 2)[0]}")
-        rows.append([f"{lab} (ρ={sci(h.rho, 1)}, a={sci(h.a, 1)})", pr, co])
-        hp, hc = np.ravel(pub["H"])[None, :], np.ravel(d["H"])[None, :]
+        (k1, c1), (kc, cc), (hp, hc) = ((np.ravel(pub[k])[None, :], np.ravel(d[k])[None, :]) for k in ("K1", "Kc", "H"))
+        rows.append([f"{lab} (ρ={sci(h.rho, 1)}, a={sci(h.a, 1)})", two.format(_printed(k1), _printed(kc)),
+                     two.format(_gains(k1, c1, 2)[0], _gains(kc, cc, 2)[0])])
         rel = ", ".join(f"{sig(100 * v, 2)} %" for v in x["h_rel"])
         rows.append([f"{lab.split()[0]} H", _printed(hp), f"{_gains(hp, hc, 1)[0]} (rel. diff {rel})"])
     cfg_s, cfg_m = so["cfg"], ma["cfg"]
@@ -448,24 +421,6 @@ def _block_qpp_examples(r: dict) -> str:
                            "β1 ≤ m", "‖y − y_o‖∞ per scenario (β_o)"], rows)
 
 
-def _wie_pitch_fold(cfg, pitch_bias: float = 4.0) -> float | None:
-    """The largest pitch bias (ft·lbf) on the branch the TEA continuation follows from LVLH, for
-    a pure pitch bias of ``pitch_bias`` that has no equilibrium; None when it has one.
-
-    The continuation of :func:`acmm.model.tea.solve_tea` (products of inertia, then the bias) and its
-    fold refinement, i.e. the bias its ``NoEquilibriumError`` names.
-    """
-    inertia, n = cfg.inertia.matrix(), cfg.orbit_rate
-    bias = np.array([0.0, pitch_bias, 0.0])
-    try:
-        tea.solve_tea(inertia, n, bias)
-        return None
-    except NoEquilibriumError:
-        pass
-    lam = tea.bias_fold(inertia, n, bias)
-    return None if lam is None else lam * pitch_bias
-
-
 def _block_table1_tea(r: dict) -> str:
     """The Table 1 TEA bullet: MB3 and AC TEAs, their residuals, MB3's zero-bias roots and the
     largest pitch bias with an MB3 equilibrium."""
@@ -475,9 +430,15 @@ def _block_table1_tea(r: dict) -> str:
     teas = {k: table1_teas(r[f"config:{k}"]) for k in ("mb3", "ac")}       # the report's Table 1 numbers
     t, zero = {k: v[0] for k, v in teas.items()}, teas["mb3"][1]
     cfg = r["config:mb3"]
-    roots = tea.all_equilibria(cfg.inertia.matrix(), cfg.orbit_rate, np.zeros(3))
+    inertia, n, wie = cfg.inertia.matrix(), cfg.orbit_rate, np.array([0.0, 4.0, 0.0])      # ft·lbf
+    roots = tea.all_equilibria(inertia, n, np.zeros(3))
     other = [x for x in roots if np.max(np.abs(x.theta - zero.theta)) > 1e-6]
-    fold = _wie_pitch_fold(cfg)
+    try:        # no equilibrium: the largest pitch bias on the branch the continuation follows from LVLH
+        tea.solve_tea(inertia, n, wie)
+        fold = None
+    except NoEquilibriumError:
+        lam = tea.bias_fold(inertia, n, wie)
+        fold = None if lam is None else lam * 4.0
 
     def bound(x):
         return "≤ " + sci(10.0 ** math.ceil(math.log10(max(x, 1e-16))), 1)     # 0: round-off level
@@ -498,13 +459,12 @@ def _block_table1_tea(r: dict) -> str:
 def _block_claims(r: dict) -> str:
     """Claims 1 and 2 of ch. 6, the sector designs, the schedule along the path, the ±30 % sweep (a table)."""
     s_c, s_d = r["simulate:mb3"], r["simulate:mb3_decoupled"]
-    o, err = s_c["orbits"], np.degrees(np.abs(s_c["attitude_error"]))
-    first, late = err[o <= 1.0].max(axis=0), err[o >= 2.0].max(axis=0)
+    first, late = peak_errors(s_c)
     rows = [
         ["1", "cross-inertia-free MB3 design (`mb3_decoupled`) on the nonlinear model",
          f"{h5_text(s_d['attrs']['verdict'])} at **{sig(s_d['attrs']['stop_time_orbits'], 2)} orbit**"],
         ["1", "fully coupled MB3 design (`mb3`)",
-         f"{h5_text(s_c['attrs']['verdict'])} over {sig(o[-1], 2)} orbits"],
+         f"{h5_text(s_c['attrs']['verdict'])} over {sig(s_c['orbits'][-1], 2)} orbits"],
         ["1", "its peak attitude error in the first orbit, roll / pitch / yaw",
          " / ".join(sig(v) for v in first) + "°"],
         ["1", "its peak attitude error after orbit 2, roll / pitch / yaw",
@@ -558,11 +518,9 @@ def _block_staircase_levels(r: dict) -> str:
     st, cfg = r["simulate:staircase"], r["config:staircase"]
     lv = st["levels"]
     orbit = 2 * np.pi / cfg.orbit_rate
-    rows = []
-    for k in range(len(lv["start"])):
-        rows.append([str(k), sig(lv["start"][k] / orbit), fixed(np.degrees(lv["tea_estimate"][k, 1]), 1),
-                     " / ".join(sig(v, 2) for v in np.degrees(lv["steady_error"][k])),
-                     sig(lv["peak_momentum"][k])])
+    rows = [[str(k), sig(lv["start"][k] / orbit), fixed(np.degrees(lv["tea_estimate"][k, 1]), 1),
+             " / ".join(sig(v, 2) for v in np.degrees(lv["steady_error"][k])), sig(lv["peak_momentum"][k])]
+            for k in range(len(lv["start"]))]
     return markdown_table(["level", "start (orbit)", "θ2* (deg)", "steady \\|θ − θ̂*\\| roll / pitch / yaw (deg)",
                            "peak \\|h\\| (ft·lbf·s)"], rows, "rrrrr")
 
@@ -598,8 +556,7 @@ def _block_schedule_path(r: dict) -> str:
     th = np.degrees(np.asarray(pa["theta2"]))
     mr, mg, dm = (np.asarray(pa[k]) for k in ("max_real", "sector_margin", "disk_margin"))
     i = int(np.argmin(dm))
-    form = h5_text(d["attrs"]["schedule_form"]) if "attrs" in d and "schedule_form" in d["attrs"] else (
-        "polynomial" if "refit_converged" in sc else "table")
+    form = h5_text(d["attrs"]["schedule_form"])             # (every scheduled design.h5 states it)
     rows = [["schedule form", "table look-up, K linear in θ2* between the design points" if form == "table"
              else "2nd-order polynomial in θ2*"]]
     if "refit_converged" in sc:
@@ -643,9 +600,6 @@ def _block_design_routes(r: dict) -> str:
     """The LQR route (sector LQR, the report's method) and the regional LMI route side by side at
     MB3 and AC: margin, conditioning, robustness, energy, fastest pole, and the ±30 % Monte Carlo
     and inertia-scaling margin of each fixed gain on the same draws."""
-    def point(d):
-        return d["points"][sorted(d["points"])[0]]
-
     def margin_range(sw, label, decimals=3):
         lo, hi = sw["margin"][f"{label}_down"], sw["margin"][f"{label}_up"]
         return f"{fixed(lo['limit'], decimals)} … {fixed(hi['limit'], decimals)}"
@@ -657,7 +611,7 @@ def _block_design_routes(r: dict) -> str:
                                    ("regional LMI", r[f"design:{name}_lmi"], r["sweep_lmi"], f"{name}_lmi"),
                                    ("robust gain for the ±30 % family (from the LMI gain)",
                                     r[f"design:{name}_robust"], r["sweep_robust"], f"{name}_robust")):
-            p = point(d)
+            p = d["points"][sorted(d["points"])[0]]
             A, B, K = (np.asarray(p[k]) for k in ("A", "B", "K"))
             fastest = float(np.max(-np.real(np.asarray(p["poles"])))) / n
             rr = (float(p["lmi"]["random_radius"]) if "lmi" in p and "robust" not in p
@@ -715,13 +669,11 @@ def _block_staircase_routes(r: dict) -> str:
               "staircase_quadratic": "regional LMI points, quadratic converged on the path's shifted LQR cost"}
     rows = []
     for name, label in labels.items():
-        d, sim = r[f"design:{name}"], r[f"simulate:{name}"]
-        n = r[f"config:{name}"].orbit_rate
-        pa, sc, g = d["schedule"]["path"], d["schedule"], d.get("dwell")
-        energy = [point_energy(d["points"][key], n) for key in sorted(d["points"])]
-        tau = "no certificate" if g is None or "tau_star" not in g or not np.isfinite(float(g["tau_star"])) else (
-            f"{fixed(float(g['tau_star']), 2)} orbit" + ("" if np.all(np.asarray(g["dwell"]) > float(g["tau_star"]))
-                                                         else " (NOT certified)"))
+        d = r[f"design:{name}"]
+        x = route_numbers(d, r[f"simulate:{name}"], r[f"config:{name}"].orbit_rate)
+        pa, sc = d["schedule"]["path"], d["schedule"]
+        tau = "no certificate" if x["tau"] is None else f"{fixed(x['tau'], 2)} orbit" + (
+            "" if np.all(np.asarray(d["dwell"]["dwell"]) > x["tau"]) else " (NOT certified)")
         refit = ""
         if "refit_converged" in sc and h5_text(sc["fit_method"]) == "shifted_lqr":
             refit = (f" (from the least-squares fit's {fixed(float(sc['refit_max_real_before']), 2, sign=True)}n; "
@@ -729,15 +681,12 @@ def _block_staircase_routes(r: dict) -> str:
                      "cone at " + f"{int(sc['refit_n_tea'])} TEAs; "
                      + ("Newton's method converged" if float(sc["refit_converged"]) else
                         "NOT converged: " + h5_text(sc["refit_message"])) + ")")
-        verdict = h5_text(sim["attrs"]["verdict"])
-        peak = sig(np.max(sim["levels"]["peak_momentum"])) if verdict != "diverged" else (
-            f"diverged at orbit {fixed(float(sim['attrs']['stop_time_orbits']), 1)}")
+        peak = sig(x["peak"]) if x["peak"] is not None else f"diverged at orbit {fixed(x['stop'], 1)}"
         inside = int(np.sum(np.asarray(pa["sector_margin"]) >= 0))
         loop = [f"{fixed(np.max(pa['max_real']), sign=True)}n", f"{fixed(np.min(pa['sector_margin']), 2)}n ({inside})",
                 fixed(np.min(pa["disk_margin"])), peak, tau]
         rows.append([label + refit, f"{np.asarray(pa['theta2']).size}", *loop[:3],
-                     sig(np.max(d["max_eig_condition"]), 2), sci(np.min(d["robustness_radius_elementwise"])),
-                     sig(max(energy), 3), *loop[3:]])
+                     sig(x["kappa"], 2), sci(x["radius"]), sig(x["energy"], 3), *loop[3:]])
     return markdown_table(["stair-case (route, schedule)", "path TEAs", "largest Re λ on the path",
                            "worst sector margin on the path (TEAs with every pole in the sector)", "smallest disk margin", "κ max (points)",
                            "radius (first order, elementwise, min over points)", "energy (max over points)",
@@ -747,14 +696,12 @@ def _block_staircase_routes(r: dict) -> str:
 def _block_sweep_monte_carlo(r: dict) -> str:
     """Verdict counts of the ±30 % inertia Monte Carlo (``sweep_inertia30``, ``sweep.h5``), one row per base."""
     w = r["sweep"]
-    names = [h5_text(x) for x in np.atleast_1d(w["base_names"])]
-    verdict = np.array([h5_text(x) for x in np.atleast_1d(w["verdict"])])
     base, draws = np.atleast_1d(w["base"]), np.atleast_1d(w["n_draws"])
     peak = np.degrees(np.atleast_2d(w["peak_attitude_error"]))
     rows = []
-    for k, lab in enumerate(names):
+    for k, lab in enumerate(h5_text(x) for x in np.atleast_1d(w["base_names"])):
         sel = base == k
-        v = verdict[sel]
+        v = case_column(w, lab, "verdict")
         nd = int(draws[sel].sum())
         ok = peak[sel][v == "bounded"]
         med = " / ".join(sig(x, 2) for x in np.median(ok, axis=0)) if ok.size else "—"
@@ -789,15 +736,14 @@ def _block_sweep_diverged(r: dict) -> str:
 def _block_sweep_margin(r: dict) -> str:
     """The tolerated uniform inertia scaling of each fixed design (``sweep.h5: margin/*``)."""
     w = r["sweep"]
-    mg = w["margin"]
+    mg, why = w["margin"], {"bounded": "not settled", "attitude": "diverged"}
+
+    def reason(m):      # a failure's reason in a word or two
+        text = h5_text(m["failure_reason"])
+        return next((v for k, v in why.items() if text.startswith(k)), text)
     rows = []
     for lab in (h5_text(x) for x in np.atleast_1d(w["base_names"])):
         lo, hi = mg[f"{lab}_down"], mg[f"{lab}_up"]
-        why = {"bounded": "not settled", "attitude": "diverged"}
-
-        def reason(m):
-            text = h5_text(m["failure_reason"])
-            return next((v for k, v in why.items() if text.startswith(k)), text)
         rows.append([lab.upper(), f"{fixed(lo['limit'])} … {fixed(hi['limit'])}",
                      f"{fixed(lo['first_failure'])} ({reason(lo)}) and {fixed(hi['first_failure'])} ({reason(hi)})"])
     return markdown_table(["design", "tolerated s", "first failure"], rows)

@@ -1,12 +1,8 @@
-"""The report's sections as tasks of :mod:`acmm.report.runner` (issue 16).
-
-Each section is one or more *parts* (its text and tables, then figures) run in section order when
-serial, or concurrently on worker processes.  A part is a function ``fn(ctx, *values)`` of a fresh
-:class:`~acmm.report.context.SectionWriter`; values other sections computed (Table 1's TEAs, the
-claim-1 poles and numbers, β3 of ch. 13) are passed explicitly.  Each section module declares its
-own rows of :data:`PARTS`.  A part's blocks and printed numbers come back as a :class:`Part` and
-are put together in the order of :data:`PARTS`, so the document is the same whichever process
-wrote which part.
+"""The report's sections as tasks of :mod:`acmm.report.runner` (issue 16): each section is one or
+more *parts* (``fn(ctx, *values)`` of a fresh :class:`~acmm.report.context.SectionWriter`, declared
+in its module's ``PARTS``), serial or on worker processes; values other parts computed (Table 1's
+TEAs, the claim-1 poles, β3 of ch. 13) are passed explicitly, and the parts' blocks and printed
+numbers are put together in the order of :data:`PARTS`, whichever process wrote them.
 """
 from __future__ import annotations
 
@@ -53,20 +49,10 @@ class Part:
     failed: Failed | None = None     #: the part's failure, shown in its section
 
 
-def _failure_blocks(ctx: SectionWriter, section: str | None, f: Failed) -> None:
-    """Write failure ``f`` into ``ctx`` (a fresh writer): the heading of ``section`` (when not
-    None: the failed part is the one that writes it), then the error on one line."""
-    if section is not None:
-        ctx.section(section)
-    ctx.doc.p(f"FAILED — {f.text()}. (The other sections are complete; acmm report exits with code "
-              f"{f.exit_code}.)")
-
-
 def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: dict | None,
              name: str = "", heading: str | None = None, not_run: Failed | None = None) -> Part:
-    """``fn(ctx, *values)`` on a fresh writer; ``results``: HDF5 files already read (None: this
-    worker process's cache).  matplotlib's settings are reset first, so a figure looks the same
-    whichever figures the process drew before.  A user-facing error it raises
+    """``fn(ctx, *values)`` on a fresh writer, matplotlib's settings reset first (a figure looks the
+    same whichever figures the process drew before).  A user-facing error it raises
     (:func:`acmm.report.gather.failed`) becomes the part's :attr:`Part.failed` and its one-line
     text; a bug propagates.
 
@@ -112,7 +98,10 @@ def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: 
             if f is None:
                 raise
     ctx = SectionWriter(g, figdir, fast, cache)
-    _failure_blocks(ctx, heading, f)
+    if heading is not None:             # the failed part is the one that writes the heading
+        ctx.section(heading)
+    ctx.doc.p(f"FAILED — {f.text()}. (The other sections are complete; acmm report exits with code "
+              f"{f.exit_code}.)")
     return Part(ctx.doc.blocks, ctx.ledger, None, time.perf_counter() - t0, f)
 
 
@@ -125,8 +114,7 @@ PARTS = table1.PARTS + schedule.PARTS + claim1.PARTS + staircase.PARTS + robustn
 
 
 def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, results: dict | None) -> list[Task]:
-    """The parts of :data:`PARTS` as tasks; ``stage_names``: the stage tasks of the same graph
-    (a part waits only for those), ``results``: the shared cache of read files when serial.
+    """The parts of :data:`PARTS` as tasks.
 
     Parameters
     ----------
@@ -137,7 +125,8 @@ def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, resul
     fast : bool
         ``--fast`` report.
     stage_names : set of str
-        Names of the stage tasks in the same graph (:func:`acmm.report.gather.stage_tasks`).
+        Names of the stage tasks in the same graph (:func:`acmm.report.gather.stage_tasks`); a
+        part waits only for those.
     results : dict or None
         Shared cache of read results files (serial run), or None (each worker's own cache).
 
@@ -148,51 +137,21 @@ def section_tasks(g: Gathered, figdir: Path, fast: bool, stage_names: set, resul
     """
     tasks, headed = [], set()
     for name, section, fn, stage_deps, value_deps, cost in PARTS:
-        values = _values_of(value_deps)
         deps = tuple(d for d in stage_deps if d in stage_names) + value_deps
         heading = None if section in headed else section      # the first part of a section writes it
         headed.add(section)
-        required = tuple(d for d in deps if d not in OPTIONAL)
-        tasks.append(Task(name, run_part, deps, _part_args(fn, values, g, figdir, fast, results, name, heading,
-                                                           required), cost))
+        tasks.append(Task(name, run_part, deps, _part_args(fn, value_deps, g, figdir, fast, results, name, heading,
+                                                           tuple(d for d in deps if d not in OPTIONAL)), cost))
     return tasks
 
 
-def _values_of(deps: tuple):
-    """``done → (value of each part in deps)``."""
-    return lambda done: tuple(done[d].value for d in deps)
-
-
-def _part_args(fn, values, g, figdir, fast, results, name="", heading=None, deps=()):
+def _part_args(fn, value_deps, g, figdir, fast, results, name, heading, deps):
     """``done → arguments of run_part`` (built when the part is submitted: ``g`` then holds the
-    stages it reads); a part whose stage or part in ``deps`` failed is not run."""
+    stages it reads): the values of the parts ``value_deps``; a part whose stage or part in
+    ``deps`` failed is not run."""
     def args(done):
         not_run = blocked(name, done, deps)
-        return (fn, g, figdir, fast, () if not_run else values(done), results, name, heading, not_run)
+        values = () if not_run else tuple(done[d].value for d in value_deps)
+        return (fn, g, figdir, fast, values, results, name, heading, not_run)
 
     return args
-
-
-def assemble(rep: SectionWriter, done: dict, timings: dict, failures: list | None = None) -> None:
-    """Append every part's blocks and printed numbers to ``rep`` in section order; per-section wall
-    time (sum of its parts) into ``timings``; ``(section, Failed)`` of each failed part into
-    ``failures``.
-
-    Parameters
-    ----------
-    rep : acmm.report.context.SectionWriter
-        The report's writer; its document and ledger are extended in place.
-    done : dict
-        Part name → :class:`Part`, for every part of :data:`PARTS`.
-    timings : dict
-        Section key → wall time, s; each part's time is added to its section's.
-    failures : list, optional
-        Appended ``(section key, acmm.report.gather.Failed)`` of each failed part, in section order.
-    """
-    for name, section, *_ in PARTS:
-        part: Part = done[name]
-        if part.failed is not None and failures is not None:
-            failures.append((section, part.failed))
-        rep.doc.blocks.extend(part.blocks)
-        rep.ledger.extend(part.ledger)
-        timings[section] = timings.get(section, 0.0) + part.seconds

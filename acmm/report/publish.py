@@ -1,13 +1,9 @@
 """Put a finished report in place all at once: its figures and pages, staged in a folder of
-``--out``, replace the previous report's files together or not at all.
-
-A report used to move its figures one by one and then write ``manifest.json``, ``report.md`` and
-``index.html`` in place: a disk that filled up, or a directory in the way of ``index.html``, left
-the new figures and manifest beside the old page (a review), and the next report's determinism
-check then compared against a manifest of a report that was never written.  Now every file is
-written in the staging folder first (where running out of space changes nothing in ``--out``),
-every target is checked, and only renames within one file system remain; if one of them fails,
-those done are undone.
+``--out``, replace the previous report's files together or not at all (a half-published report
+would leave new figures beside an old page, and the next determinism check would compare against
+a manifest of a report never written).  Every file is written in the staging folder first, every
+target is checked, and only renames within one file system remain; if one fails, those done are
+undone.
 """
 from __future__ import annotations
 

@@ -1,24 +1,11 @@
-"""The report's task graph, run in dependency order in this process or on a process pool.
+"""The report's task graph (stages and section parts), run in dependency order in this process
+(``jobs=1``, in list order) or on a pool of worker processes (:func:`acmm.stages.pool.process_pool`:
+a task starts once its dependencies finished, longest remaining chain first).
 
-The report is a graph of independent pieces of work: the stages it gathers (designs, simulations,
-the robustness sweep, the QPP chapters) and the parts of its sections (each writes its own
-figures).  :func:`run_tasks` runs such a graph
-
-* serially (``jobs=1``): in the order of the list, in this process;
-* on a pool of ``jobs`` worker processes (:func:`acmm.stages.pool.process_pool`): a task is
-  submitted as soon as the tasks it depends on have finished, longest remaining chain first.
-  Only the task's function, its arguments (built in this process from the results of its
-  dependencies) and its return value cross the process boundary; everything a task writes
-  (HDF5 files, figures) is a file.
-
-The results are the same either way: every task is a deterministic function of its arguments and
-of files its dependencies wrote completely before it starts.
-
-Failures: a task that raises an :class:`~acmm_qpp.errors.AcmmError` in a worker is raised here
-as the same class with the same message (one clear line at the command line); any other
-exception propagates with the worker's traceback attached.  On the first failure no further task
-is started, the pool is stopped, and the error is raised — the caller writes its output only
-after :func:`run_tasks` returned.
+Only a task's function, its arguments (built here from its dependencies' results) and its return
+value cross the process boundary; what it writes is a file, so the results are the same either
+way.  A worker's :class:`~acmm_qpp.errors.AcmmError` is raised here as the same class and message;
+on the first failure no further task starts and the pool is stopped.
 """
 from __future__ import annotations
 
@@ -197,7 +184,11 @@ def _run_on_pool(pool, tasks: list[Task], jobs: int, done: dict, on_done, stats:
         finished, _ = cf.wait(list(running), return_when=cf.FIRST_COMPLETED)
         for fut in finished:
             t = running.pop(fut)
-            outcome, value, raised, wall, cpu = _result(fut)
+            try:
+                outcome, value, raised, wall, cpu = fut.result()
+            except cf.BrokenExecutor:
+                raise OutputError("a report worker process died (killed, or out of memory); nothing was "
+                                  "written") from None
             stats[t.name] = (wall, cpu)
             raise_warnings_again(raised)        # as the serial run raises them
             if outcome == "error":
@@ -226,13 +217,6 @@ def _call(fn, args) -> tuple:
             cls = type(exc)
             outcome, value = "error", (cls.__module__, cls.__qualname__, str(exc), getattr(exc, "exit_code", None))
     return outcome, value, portable_warnings(caught), time.perf_counter() - t0, time.process_time() - c0
-
-
-def _result(fut: cf.Future) -> tuple:
-    try:
-        return fut.result()
-    except cf.BrokenExecutor:
-        raise OutputError("a report worker process died (killed, or out of memory); nothing was written") from None
 
 
 def _rebuild(module: str, qualname: str, message: str, exit_code) -> AcmmError:

@@ -24,30 +24,23 @@ from acmm.design.schedule import sector_design
 
 
 def _build(ctx: SectionWriter, teas: dict, claim1: Claim1Numbers, beta3: tuple[float, float]) -> None:
-    """Part: the errata table; ``teas``: Table 1's ``{name: (TEA, zero-bias TEA, bias torque ft·lbf)}``,
+    """Part: the errata table (cheap checks only: item, printed / claim, correction used, evidence,
+    confirming tests); ``teas``: Table 1's ``{name: (TEA, zero-bias TEA, bias torque ft·lbf)}``,
     ``claim1``: the claim-1 numbers, ``beta3``: ch. 13's β3 with sin 5t and sin t, s^½."""
     ctx.section("errata")
     ctx.doc.p("Each misprint or convention of docs/ERRATA.md, the correction used, and the evidence: numbers "
               "computed in this run where the check is cheap, otherwise the test file that confirms it.")
-    g = ctx.g
+    g, cfg = ctx.g, ctx.g.configs["mb3"]
     stair = g.configs["staircase"].name
-    rows = _errata_rows(g.configs["mb3"], teas["mb3"], ctx.data("acmm design:" + stair),
-                       ctx.data("acmm simulate:" + stair), claim1, g.configs["qpp_siso"],
-                       ctx.data("qpp design:qpp_siso"), g.configs["qpp_manipulator"], beta3)
-    ctx.doc.table(["item", "printed / claim", "correction used", "evidence (this run)", "confirmed by"], rows)
-
-
-def _errata_rows(cfg, tea_mb3, st, sim, c1: Claim1Numbers, s13, d13, a, beta3) -> list[list[str]]:
-    """Rows of the errata table (cheap checks only): item, printed / claim, correction used,
-    evidence, confirming tests; ``cfg`` MB3, ``tea_mb3`` MB3's of :func:`_build`'s ``teas``, ``st``/``sim`` the
-    stair-case ``design.h5``/``sim.h5`` (u in ft·lbf, h in ft·lbf·s), ``s13``/``d13`` the ch. 13
-    config and ``qpp_design.h5``, ``a`` the ch. 14 config, ``beta3`` as :func:`_build`'s."""
     n, I = cfg.orbit_rate, cfg.inertia.matrix()
-    t, t0, bias = tea_mb3
+    t, t0, bias = teas["mb3"]
     th, d = t.theta, cfg.design
     m = lin.design_point(I, th, n, model="coupled", drf_mode=d.drf_mode)
-    return (_kinematics_rows(th, n) + _tea_rows(I, n, t0, bias) + _linearization_rows(I, th, n, m, design_settings(cfg))
-            + _riccati_rows(m, d, n) + _design_rows(I, th, n, d, st, sim, c1) + _qpp_rows(s13, d13, a, beta3))
+    rows = (_kinematics_rows(th, n) + _tea_rows(I, n, t0, bias) + _linearization_rows(I, th, n, m, design_settings(cfg))
+            + _riccati_rows(m, d, n)
+            + _design_rows(I, th, n, d, ctx.data("acmm design:" + stair), ctx.data("acmm simulate:" + stair), claim1)
+            + _qpp_rows(g.configs["qpp_siso"], ctx.data("qpp design:qpp_siso"), g.configs["qpp_manipulator"], beta3))
+    ctx.doc.table(["item", "printed / claim", "correction used", "evidence (this run)", "confirmed by"], rows)
 
 
 def _design_on(A, B, m, s) -> str:
@@ -67,8 +60,6 @@ def _design_on(A, B, m, s) -> str:
 def _kinematics_rows(th, n: float) -> list[list[str]]:
     """Eq 3.6 (printed f11) against eq 4.2 at the MB3 TEA ``th`` (rad) and a test attitude; ``n``
     the orbit rate, rad/s."""
-    rows = []
-    # eq 3.6
     def printed_f(theta):
         s1, s3, k1, k3 = np.sin(theta[0]), np.sin(theta[2]), np.cos(theta[0]), np.cos(theta[2])
         return np.array([[1, -k1 * s3, s1 * s3], [0, k1, -s1], [0, s1 * k3, k1 * k3]]) / k3
@@ -79,14 +70,13 @@ def _kinematics_rows(th, n: float) -> list[list[str]]:
     th_test = np.radians([10.0, -30.0, 25.0])
     r_mb3, r_test = np.abs(eq42(th, printed_f)).max(), np.abs(eq42(th_test, printed_f)).max()
     r_ok = max(np.abs(eq42(th, kin.kinematics_matrix)).max(), np.abs(eq42(th_test, kin.kinematics_matrix)).max())
-    rows.append(["eq 3.6 (1,1) entry", "1 inside the bracket", "cos θ3 (so f11 = 1; eq 4.4 already uses it)",
-                 f"printed f violates eq 4.2 (θ̇ = 0 at θ*) by {r_mb3:.2e} rad/s at the MB3 TEA and {r_test:.2e} rad/s "
-                 f"({r_test / n:.3f} n) at θ = (10°, −30°, 25°); corrected f: {r_ok:.1e} rad/s",
-                 "tests/acmm/model/test_kinematics.py"])
-    rows.append(["eqs 3.1, 3.8 momentum", "—", "I ω̇ + ḣ + ω×(Iω + h) = τgg + w holds exactly, also saturated",
-                 "checked along a saturated trajectory",
-                 "tests/acmm/model/test_dynamics.py, tests/acmm/simulate/test_kernel.py"])
-    return rows
+    return [["eq 3.6 (1,1) entry", "1 inside the bracket", "cos θ3 (so f11 = 1; eq 4.4 already uses it)",
+             f"printed f violates eq 4.2 (θ̇ = 0 at θ*) by {r_mb3:.2e} rad/s at the MB3 TEA and {r_test:.2e} rad/s "
+             f"({r_test / n:.3f} n) at θ = (10°, −30°, 25°); corrected f: {r_ok:.1e} rad/s",
+             "tests/acmm/model/test_kinematics.py"],
+            ["eqs 3.1, 3.8 momentum", "—", "I ω̇ + ḣ + ω×(Iω + h) = τgg + w holds exactly, also saturated",
+             "checked along a saturated trajectory",
+             "tests/acmm/model/test_dynamics.py, tests/acmm/simulate/test_kernel.py"]]
 
 
 def _tea_rows(I, n: float, t0, bias) -> list[list[str]]:
@@ -94,7 +84,6 @@ def _tea_rows(I, n: float, t0, bias) -> list[list[str]]:
     zero-bias TEA of the continuation) and the 4 ft·lbf pitch bias without an equilibrium;
     ``bias`` the back-solved bias torque of Table 1, ft·lbf."""
     rows = []
-    # TEA branches
     roots = tea_mod.all_equilibria(I, n, np.zeros(3))
     pitches = sorted({round(float(r.theta_deg[1]), 2) for r in roots})
     rows.append(["TEA roots (eqs 4.1–4.3)", "one TEA per configuration", "continuation from LVLH picks the "
@@ -118,8 +107,6 @@ def _linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
     ``s``) on them; ``m`` the coupled MB3 model at the TEA ``th`` (rad), ``I`` in slug·ft², ``n``
     in rad/s."""
     rows = []
-    # linearization
-
     # numerical Jacobian of τgg vs the closed form of 4.12–4.14 (corrected)
     h = 1e-6
     num = np.column_stack([(dyn.gravity_gradient_torque(th + h * e, I, n) - dyn.gravity_gradient_torque(th - h * e, I, n))
@@ -157,9 +144,8 @@ def _riccati_rows(m, d, n: float) -> list[list[str]]:
     """Eq 5.6 (sign iteration) and state scaling of the Riccati solve on the MB3 model ``m``;
     ``d`` the config's design section (sector σ in units of n, R), ``n`` in rad/s."""
     rows = []
-    # eq 5.6
-    alpha = d.sector.sigma * n
-    As, Bs, Qs = ric.scale_problem(m.A + alpha * np.eye(24), m.B, np.zeros((24, 24)), m.scales)
+    Ash, Z = m.A + d.sector.sigma * n * np.eye(24), np.zeros((24, 24))      # the shifted problem
+    As, Bs, Qs = ric.scale_problem(Ash, m.B, Z, m.scales)
     Rm = d.R * np.eye(3)
     Ham = np.block([[As, -Bs @ np.linalg.solve(Rm, Bs.T)], [-Qs, -As.T]])
     try:
@@ -175,18 +161,15 @@ def _riccati_rows(m, d, n: float) -> list[list[str]]:
                  "tests/acmm/design/test_matrix_sign.py"])
     # scaling
     D = np.diag(m.scales)
-    sc_rows = []
+    sc_rows, scaled = [], []        # residuals (scaled coordinates) of an unscaled and of a scaled solve
     for meth in ("scipy", "slycot", "sign"):
         try:
-            P, _ = ric.solve_unverified(m.A + alpha * np.eye(24), m.B, np.zeros((24, 24)), Rm, method=meth)
+            P, _ = ric.solve_unverified(Ash, m.B, Z, Rm, method=meth)
             sc_rows.append(f"{meth} {ric.care_residual(As, Bs, Qs, Rm, D @ P @ D):.1e}")
         except (ConvergenceError, ImportError) as exc:
             sc_rows.append(f"{meth} failed ({type(exc).__name__})")
-    scaled = []
-    for meth in ("scipy", "slycot", "sign"):
         try:
-            res = ric.solve_care(m.A + alpha * np.eye(24), m.B, np.zeros((24, 24)), Rm, method=meth,
-                                 scale=m.scales, tol=np.inf)
+            res = ric.solve_care(Ash, m.B, Z, Rm, method=meth, scale=m.scales, tol=np.inf)
             scaled.append(f"{meth} {res.residual:.1e}")
         except (ConvergenceError, ImportError) as exc:
             scaled.append(f"{meth} failed ({type(exc).__name__})")
@@ -201,7 +184,6 @@ def _design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[st
     """Sector LQR, saturation and claim 1 (MB3 inertia ``I`` in slug·ft², TEA ``th`` in rad, ``n``
     in rad/s, ``d`` the design section; ``st``/``sim`` the stair-case ``design.h5``/``sim.h5``)."""
     rows = []
-    # sector LQR
     pts = [st["points"][k] for k in sorted(st["points"])]
     ctrb = ctrb_mod.controllability(lin.design_point(I, th, n, model="no_cross_inertia", drf_mode=d.drf_mode))
     rows.append(["sector LQR (Sunkel–Shieh)", "algorithm cited, not available", "shifted LQR + optimal pole "
@@ -231,7 +213,6 @@ def _qpp_rows(s13, d13, a, beta3) -> list[list[str]]:
     and m, and the unknowns of ch. 14; ``s13``/``d13`` the ch. 13 config and ``qpp_design.h5``,
     ``a`` the ch. 14 config, ``beta3`` as :func:`_build`'s."""
     rows = []
-    # Part III
     rows.append(["signs of 13.6 / Table 14.1", "u = +K x̂, L = −H; plant f sign differs (13.1/14.2 vs 10.1)",
                  "as docs/ERRATA.md", "A_z rebuilt from the printed gains equals 13.6 / Table 14.1",
                  "tests/qpp/model/test_lure.py"])

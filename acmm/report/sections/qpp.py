@@ -27,14 +27,13 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
     else None."""
     ctx.section(key)
     cfg = ctx.g.configs[name]
-    dpath, spath = ctx.run(f"qpp design:{name}").path, ctx.run(f"qpp simulate:{name}").path
+    dpath, spath = ctx.g.runs[f"qpp design:{name}"].path, ctx.g.runs[f"qpp simulate:{name}"].path
     d = ctx.data(f"qpp design:{name}")
     pub = cfg.published
     chap = "13" if key == "qpp13" else "14"
     _gain_table(ctx, chap, cfg, d)
     with h5py.File(dpath, "r") as f:
-        b1 = {rd: (float(f[f"beta1_{rd.replace('.', '_')}"][()]),
-                   float(f[f"beta1_{rd.replace('.', '_')}"].attrs["grid_value"]),
+        b1 = {rd: (float(f[f"beta1_{rd.replace('.', '_')}"][()]),                     # β1 and its peak, rad/s
                    float(f[f"beta1_{rd.replace('.', '_')}"].attrs["omega_peak_rad_s"])) for rd in ("eq10.7", "printed")}
         names = f["thresholds"].attrs["description"].split(":")[-1].replace(" ", "").split(",")
         circle_passed = bool(f.attrs["circle_passed"])
@@ -45,19 +44,17 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
                f"the printed B_z (H in the r-columns) {b1['printed'][0]:.5f}; the printed value matches neither "
                "(docs/ERRATA.md: it looks like a coarse frequency grid)")
     pn = ctx.ledger_add(f"ch. {chap}", "β1", _num_str(pub.beta1), b1["eq10.7"][0], explanation=expl_b1)
-    for rd, (v, gv, w) in b1.items():
+    for rd, (v, w) in b1.items():
         brow.append([f"β1, B_z {rd}", _num_str(pub.beta1), f"{v:.6f} (peak at {w:.4g} rad/s)",
                      status_text(pn) if rd == "eq10.7" else "see above"])
-    m_pr = th["printed"][3] if "printed" in th else None
+    m_pr = th["printed"][3]
     pn_m = ctx.ledger_add(f"ch. {chap}", "m (from printed β3, β4)", _num_str(pub.m), m_pr)
     brow.append(["m = β_o/(β_ri + ‖d‖∞ + β_o β3 + β4), printed β3, β4", _num_str(pub.m), f"{m_pr:.5f}",
                  status_text(pn_m)])
-    for nm, row in th.items():
-        if nm == "printed":
-            continue
-        brow.append([f"β3 / β4 / m, {nm} bookkeeping", f"{pub.beta3} / {pub.beta4} / {pub.m}",
-                     f"{row[1]:.5g} / {row[2]:.5g} / {row[3]:.5f}", "see the errata table"])
-    for rd, (v, _, _) in b1.items():
+    brow += [[f"β3 / β4 / m, {nm} bookkeeping", f"{pub.beta3} / {pub.beta4} / {pub.m}",
+              f"{row[1]:.5g} / {row[2]:.5g} / {row[3]:.5f}", "see the errata table"] for nm, row in th.items()
+             if nm != "printed"]
+    for rd, (v, _) in b1.items():
         verd = ", ".join(f"{nm}: {'β1 ≤ m' if v <= row[3] else 'β1 > m'}" for nm, row in th.items())
         brow.append([f"design inequality β1 ≤ m, B_z {rd}", "β1 < m", verd, ""])
     brow.append(["consistent certificate (one sector, one norm; the bookkeepings above reproduce, not certify)",
@@ -90,10 +87,9 @@ def _consistent_verdict(attrs) -> str:
     return "not certified" + (f": {', '.join(failed)} fail" if failed else "")
 
 
-def _circle_figure(ctx: SectionWriter, key, name) -> None:
+def _circle_figure(ctx: SectionWriter, chap, name) -> None:
     """Circle criterion (lemma 1) of config ``name``: h_ii(−a + jω) with the Gershgorin mean radii
     (the ``circle`` group of ``qpp_design.h5``, dimensionless) and the critical disc of the sector."""
-    chap = "13" if key == "qpp13" else "14"
     design = ctx.data(f"qpp design:{name}")
     plt = pyplot()
     c = design["circle"]
@@ -126,13 +122,12 @@ def _circle_figure(ctx: SectionWriter, key, name) -> None:
     ctx.doc.fig(f"{name}_circle", f"Ch. {chap}: circle criterion", save(fig, ctx.figdir, f"{name}_circle"))
 
 
-def _responses_figure(ctx: SectionWriter, key, name, out_labels) -> None:
+def _responses_figure(ctx: SectionWriter, chap, name, out_labels) -> None:
     """Per scenario of ``qpp_sim.h5`` (t in s, outputs in the plant's units): y and y_o, and
     |y − y_o| against the output sphere's radius β_o."""
-    chap = "13" if key == "qpp13" else "14"
     beta_o = ctx.g.configs[name].spheres.beta_o
     plt = pyplot()
-    with h5py.File(ctx.run(f"qpp simulate:{name}").path, "r") as f:
+    with h5py.File(ctx.g.runs[f"qpp simulate:{name}"].path, "r") as f:
         scen = [k for k in f.keys() if isinstance(f[k], h5py.Group)]
         data = {k: {d: f[k][d][()].T for d in ("t", "y", "y_o", "r", "u")} for k in scen}   # stored (t, channel)
     p = next(iter(data.values()))["y"].shape[0]
@@ -173,7 +168,7 @@ def _gain_table(ctx: SectionWriter, chap: str, cfg, d) -> None:
         for idx in np.ndindex(P.shape):
             if P[idx] == 0.0:
                 continue
-            ps = _printed_str(P[idx], gname)
+            ps = f"{P[idx]:.4f}" if gname == "H" else f"{P[idx]:.1f}"      # as printed: H 4 decimals, K 1
             expl = ""
             if gname == "H":
                 dv = float(np.asarray(dgkf.H)[idx])
@@ -277,11 +272,6 @@ def _text14(ctx: SectionWriter) -> None:
              _OUT14)
 
 
-def _printed_str(v: float, gname: str) -> str:
-    """The printed form of a gain entry (H: four decimals; K1, Kc: one decimal, as in the report)."""
-    return f"{v:.4f}" if gname == "H" else f"{v:.1f}"
-
-
 def _num_str(v) -> str:
     """A number in full (``repr``) for the ledger, ``—`` for none."""
     return repr(float(v)) if v is not None else "—"
@@ -292,11 +282,11 @@ _Q13 = ("qpp design:qpp_siso", "qpp simulate:qpp_siso")
 _Q14 = ("qpp design:qpp_manipulator", "qpp simulate:qpp_manipulator")
 PARTS = [
     ("qpp13", "qpp13", _text13, _Q13, (), 0.1),
-    ("qpp13/circle", "qpp13", partial(_circle_figure, key="qpp13", name="qpp_siso"), _Q13, (), 0.25),
-    ("qpp13/responses", "qpp13", partial(_responses_figure, key="qpp13", name="qpp_siso", out_labels=_OUT13),
+    ("qpp13/circle", "qpp13", partial(_circle_figure, chap="13", name="qpp_siso"), _Q13, (), 0.25),
+    ("qpp13/responses", "qpp13", partial(_responses_figure, chap="13", name="qpp_siso", out_labels=_OUT13),
      _Q13, (), 0.5),
     ("qpp14", "qpp14", _text14, _Q14, (), 0.1),
-    ("qpp14/circle", "qpp14", partial(_circle_figure, key="qpp14", name="qpp_manipulator"), _Q14, (), 0.35),
+    ("qpp14/circle", "qpp14", partial(_circle_figure, chap="14", name="qpp_manipulator"), _Q14, (), 0.35),
     ("qpp14/responses", "qpp14",
-     partial(_responses_figure, key="qpp14", name="qpp_manipulator", out_labels=_OUT14), _Q14, (), 0.85),
+     partial(_responses_figure, chap="14", name="qpp_manipulator", out_labels=_OUT14), _Q14, (), 0.85),
 ]

@@ -84,7 +84,7 @@ def _build(ctx: SectionWriter) -> None:
               f"independently (unphysical draws redrawn), seed {r['seed']}, {r['n_runs']} runs per base, "
               f"{r['orbits']:g} orbits each; design '{r['design']}', TEA estimate '{r['tea_estimate']}' "
               f"(the controller {knows}); bias torque held at its nominal value; {start}.")
-    rows, fracs = [], {}
+    rows, fracs, mg = [], {}, d.get("margin", {})
     for k, lab in enumerate(names):
         sel = base == k
         v = verdict[sel]
@@ -94,11 +94,9 @@ def _build(ctx: SectionWriter) -> None:
         pk = peak[sel][v == "bounded"]
         med = fmt_value(np.median(pk, axis=0), "{:.2f}") if pk.size else "—"
         mx = fmt_value(np.max(pk, axis=0), "{:.2f}") if pk.size else "—"
-        lim = ""
-        mg = d.get("margin", {})
-        if f"{lab}_down" in mg and f"{lab}_up" in mg:
-            lim = f"[{float(mg[f'{lab}_down']['limit']):.3f}, {float(mg[f'{lab}_up']['limit']):.3f}]"
-        rows.append([lab.upper(), f"{nb}/{nv} ({100 * fracs[lab]:.0f} %)", others or "—", med, mx, lim or "—"])
+        lim = (f"[{float(mg[f'{lab}_down']['limit']):.3f}, {float(mg[f'{lab}_up']['limit']):.3f}]"
+               if f"{lab}_down" in mg and f"{lab}_up" in mg else "—")
+        rows.append([lab.upper(), f"{nb}/{nv} ({100 * fracs[lab]:.0f} %)", others or "—", med, mx, lim])
     ctx.doc.table(["base", "bounded", "other verdicts", "median peak |err| r/p/y (deg), bounded",
                    "max peak |err| r/p/y (deg), bounded", "uniform scaling s tolerated"], rows,
                    "±30 % inertia Monte Carlo with the fixed nominal designs")

@@ -89,6 +89,34 @@ def point_energy(p: dict, n: float) -> float:
     return control_energy(A, B, K, n, scales, torque_scale(scales))
 
 
+def route_numbers(d: dict, sim: dict, n: float) -> dict:
+    """What the stair-case routes tables of the report and of the guide show of one stair-case.
+
+    Parameters
+    ----------
+    d, sim : dict
+        Its ``design.h5`` and ``sim.h5`` as read by :func:`acmm_qpp.results.read_h5`.
+    n : float
+        Orbit rate, rad/s.
+
+    Returns
+    -------
+    dict
+        Over the design points: ``kappa``, the largest eigenvalue condition, and ``radius``, the
+        smallest elementwise robustness radius (dimensionless), ``energy``, the largest
+        :func:`point_energy`; ``peak``, the peak CMG momentum in ft·lbf·s (None: the run diverged,
+        at orbit ``stop``); ``tau``, the certified dwell τ* in orbits (None: no certificate).
+    """
+    pts = [d["points"][k] for k in sorted(d["points"])]
+    tau = float(d.get("dwell", {}).get("tau_star", np.nan))
+    diverged = h5_text(sim["attrs"]["verdict"]) == "diverged"
+    return {"kappa": max(float(p["max_eig_condition"]) for p in pts),
+            "radius": min(float(p["robustness_radius_elementwise"]) for p in pts),
+            "energy": max(point_energy(p, n) for p in pts),
+            "peak": None if diverged else float(np.max(sim["levels"]["peak_momentum"])),
+            "stop": float(sim["attrs"]["stop_time_orbits"]), "tau": tau if np.isfinite(tau) else None}
+
+
 def _routes(ctx: SectionWriter) -> None:
     """Part: the packaged stair-case (normally regional LMI points, a table look-up schedule) beside it on
     the report's route (sector LQR points, the same form) and the report's quadratic converged on the path
@@ -102,25 +130,20 @@ def _routes(ctx: SectionWriter) -> None:
         d, sim = ctx.data("acmm design:" + cfg.name), ctx.data("acmm simulate:" + cfg.name)
         pts = [d["points"][k] for k in sorted(d["points"])]
         lmi = all("lmi" in p for p in pts)
-        energy = max(point_energy(p, cfg.orbit_rate) for p in pts)
-        pa, g = d["schedule"].get("path", {}), d.get("dwell", {})
-        tau = f"{float(g['tau_star']):.2f} orbit" if "tau_star" in g and np.isfinite(float(g["tau_star"])) else "—"
+        x, pa = route_numbers(d, sim, cfg.orbit_rate), d["schedule"].get("path", {})
         form = "table" if d["attrs"].get("schedule_form") == "table" else {
             "shifted_lqr": "quadratic converged on the path"}.get(
             h5_text(d["schedule"].get("fit_method", b"least_squares")), "quadratic, least squares")
-        verdict = sim["attrs"].get("verdict", "")
-        peak = (f"{np.max(sim['levels']['peak_momentum']):.0f}" if verdict != "diverged" else
-                f"diverged at orbit {float(sim['attrs']['stop_time_orbits']):.1f}")
         rows.append([("regional LMI points" if lmi else "sector LQR points") + f", {form} (`{cfg.name}`"
                      + {"staircase": ", packaged)", "staircase_lqr": ", the report's route)"}.get(key, ")"),
-                     f"{max(float(p['max_eig_condition']) for p in pts):.2g}",
-                     f"{min(float(p['robustness_radius_elementwise']) for p in pts):.1e}",
+                     f"{x['kappa']:.2g}", f"{x['radius']:.1e}",
                      f"{min(float(p['lmi']['random_radius']) for p in pts):.1e}" if lmi else "—",
-                     f"{energy:.3g}",
+                     f"{x['energy']:.3g}",
                      f"{np.max(pa['max_real']):+.3f}" if "max_real" in pa else "—",
                      (f"{np.sum(np.asarray(pa['sector_margin']) >= 0)} of {np.size(pa['sector_margin'])}"
                       if "sector_margin" in pa else "—"),
-                     peak, tau])
+                     f"{x['peak']:.0f}" if x["peak"] is not None else f"diverged at orbit {x['stop']:.1f}",
+                     "—" if x["tau"] is None else f"{x['tau']:.2f} orbit"])
     ctx.doc.table(["stair-case (route, schedule)", "κ max (points)",
                    "robustness radius (first order, elementwise, min)", "radius (random re-check, min)",
                    "control energy (max over points)", "largest Re λ on the path (n)",
@@ -187,15 +210,13 @@ def _gain_figure(ctx: SectionWriter) -> None:
     other = None if quad is None else ctx.data("acmm design:" + quad.name)
     design = ctx.data("acmm design:" + cfg.name)
     plt = pyplot()
-    K, tea = design["K"], design["tea"]
-    sc = design["schedule"]
-    form = design["attrs"].get("schedule_form", "polynomial")
-    th = tea[:, 1]
+    K, th = design["K"], design["tea"][:, 1]
     fine = np.linspace(th.min(), th.max(), 120)
-    kf = np.array([schedule_gain(form, sc["coef"], sc["variable"], K, t) for t in fine])
-    ko = None if other is None else np.array([
-        schedule_gain(other["attrs"].get("schedule_form", "polynomial"), other["schedule"]["coef"],
-                      other["schedule"]["variable"], other["K"], t) for t in fine])
+
+    def gains(d):       # the schedule of a design.h5 on the fine grid
+        return np.array([schedule_gain(d["attrs"].get("schedule_form", "polynomial"), d["schedule"]["coef"],
+                                       d["schedule"]["variable"], d["K"], t) for t in fine])
+    kf, ko = gains(design), None if other is None else gains(other)
     units = lin.state_units(cfg.design.drf_mode)
     fig, axs = plt.subplots(6, 4, figsize=(11, 14), sharex=True)
     for j, ax in enumerate(axs.flat):

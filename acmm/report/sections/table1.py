@@ -69,11 +69,8 @@ def _build(ctx: SectionWriter) -> dict:
                          f"{t0.theta_deg[a]:+.3f}", status_text(pn)])
     ctx.doc.table(["config", "quantity", "printed", "computed", "zero-bias TEA", "status"], rows,
                   "Table 1: printed vs computed (TEA residual of eq 4.1 below 1e-12 ft·lbf)")
-    brow = []
-    for name in ("mb3", "ac"):
-        t, t0, bias = teas[name]
-        brow.append([name.upper(), fmt_value(bias, "{:+.5f}"), f"{t.residual:.1e}",
-                     fmt_value(np.degrees(t.omega) * 3600, "{:+.4f}")])
+    brow = [[name.upper(), fmt_value(bias, "{:+.5f}"), f"{t.residual:.1e}",
+             fmt_value(np.degrees(t.omega) * 3600, "{:+.4f}")] for name, (t, _, bias) in teas.items()]
     ctx.doc.table(["config", "bias used [roll, pitch, yaw] (ft·lbf)", "residual (ft·lbf)", "ω* (deg/h)"], brow,
                   "Bias torques used (back-solved from eq 4.1 at the printed TEA; not printed in the report)")
     return teas

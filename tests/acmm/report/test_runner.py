@@ -164,17 +164,15 @@ def _claim1_graph(root, figdir, jobs):
         stage_tasks,
         warm_workers,
     )
-    from acmm.report.plan import PARTS, _part_args, _values_of, run_part
+    from acmm.report.plan import section_tasks
 
     g = Gathered(report_configs(root), {})
     stages = [t for t in stage_tasks(g.configs, root, robustness=False, jobs=jobs)
               if t.name.endswith((":mb3", ":mb3_decoupled"))]
     rep = SectionWriter(g, figdir, False)
-    by_name = {p[0]: p for p in PARTS}
-    parts = [Task(name, run_part, by_name[name][3] + by_name[name][4],
-                  _part_args(by_name[name][2], _values_of(by_name[name][4]), g, figdir, False,
-                             rep._results if jobs == 1 else None)) for name in ("poles", "claim1")]
     names = {t.name for t in stages}
+    parts = [t for t in section_tasks(g, figdir, False, names, rep._results if jobs == 1 else None)
+             if t.name in ("poles", "claim1")]
     done = run_tasks(stages + parts, jobs, lambda n, r: keep_stage(g, n, r, lambda s: None) if n in names else None,
                      warm=warm_workers)
     order_runs(g, stages)
