@@ -237,7 +237,7 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
     rep = SectionWriter(g, figdir, fast)
     stages = stage_tasks(g.configs, root, fast=fast, rerun=rerun, robustness=robustness, jobs=jobs)
     names = {t.name for t in stages}
-    parts = section_tasks(g, figdir, fast, names, rep._results if jobs == 1 else None)
+    parts = section_tasks(g, figdir, fast, names, rep.results if jobs == 1 else None)
     timings: dict[str, float] = {"stages": 0.0}
     stats: dict[str, tuple] = {}
 
@@ -266,7 +266,7 @@ def _run_graph(root, figdir: Path, fast: bool, rerun: bool, robustness: bool, jo
 def _add(rep: SectionWriter, failures: list, key: str, build, *args):
     """Run one section's ``build`` as a part (:func:`acmm.report.plan.run_part`, a fresh writer) and
     :func:`_append` it as section ``key``; returns its value."""
-    part = run_part(build, rep.g, rep.figdir, rep.fast, args, rep._results, key, key)
+    part = run_part(build, rep.g, rep.figdir, rep.fast, args, rep.results, key, key)
     _append(rep, failures, key, part)
     return part.value
 

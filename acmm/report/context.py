@@ -15,7 +15,7 @@ class SectionWriter:
     """Inputs of a section (``g``: the gathered results, ``figdir``, ``fast``) and its output:
     ``doc`` (its text, tables and figures) and ``ledger`` (its printed numbers).
 
-    HDF5 files are read once per report (``results``, shared read-only between sections);
+    HDF5 files are read once per report (the ``results`` attribute, shared read-only between sections);
     sections pass values to each other only through explicit arguments and return values.
 
     Parameters
@@ -32,7 +32,7 @@ class SectionWriter:
 
     def __init__(self, g: Gathered, figdir: Path, fast: bool, results: dict | None = None):
         self.g, self.figdir, self.fast = g, figdir, fast
-        self._results = {} if results is None else results
+        self.results = {} if results is None else results
         self.doc = Doc()
         self.ledger: list[PrintedNumber] = []
 
@@ -50,9 +50,9 @@ class SectionWriter:
             Dataset name → array (in the file's units), ``attrs`` → root attributes; read once
             per report.
         """
-        if key not in self._results:
-            self._results[key] = read_h5(self.g.runs[key].path)
-        return self._results[key]
+        if key not in self.results:
+            self.results[key] = read_h5(self.g.runs[key].path)
+        return self.results[key]
 
     def ledger_add(self, *args, **kw) -> PrintedNumber:
         """Classify a printed number (:func:`acmm.report.ledger.check_printed`) and add it to the ledger.

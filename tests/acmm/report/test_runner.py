@@ -171,7 +171,7 @@ def _claim1_graph(root, figdir, jobs):
               if t.name.endswith((":mb3", ":mb3_decoupled"))]
     rep = SectionWriter(g, figdir, False)
     names = {t.name for t in stages}
-    parts = [t for t in section_tasks(g, figdir, False, names, rep._results if jobs == 1 else None)
+    parts = [t for t in section_tasks(g, figdir, False, names, rep.results if jobs == 1 else None)
              if t.name in ("poles", "claim1")]
     done = run_tasks(stages + parts, jobs, lambda n, r: keep_stage(g, n, r, lambda s: None) if n in names else None,
                      warm=warm_workers)
