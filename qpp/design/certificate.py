@@ -391,8 +391,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
         The certificate (``certified``: β1 ≤ m and circle criterion).
     """
     P = cfg.lure_plant()
-    K1 = np.atleast_2d(np.asarray(K1, float))
-    Kc = np.atleast_2d(np.asarray(Kc, float))
+    K1, Kc = (np.atleast_2d(np.asarray(x, float)) for x in (K1, Kc))
     H = np.asarray(H, float).reshape(P.n, P.p)
     Azd, Bzd, b1 = {}, {}, {}
     for reading in ("eq10.7", "printed"):
