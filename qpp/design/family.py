@@ -31,12 +31,9 @@ band·P)/‖r_o‖_{t1}, the later samples combined by weak duality (:func:`_dua
 β_o/(β_i + β_o β3_min(T)) (β3_min the sinusoidal φ's closed form, else 0) with E(T) ≥ √T: a
 settling time with √T·L(T) > U(T) is excluded.
 
-A fourth bound takes the premises ``contraction`` and ``peak`` together (:func:`settle_exclusion`):
-β1 ≥ 1 and β1 < m ≤ β_o/(β_i + β_o β3_min(T) + |k|₂ ‖y_o‖_{L2[0, T]}/√T) keep y_o small on [0, T]
-(‖y_o‖_T < ν_max(T)), and a loop that settles right after T with so little output before it needs a
-large impulse response: γ∞ ≥ ‖h‖₂ ≥ L(T, ν), from the settling constraints and ∫₀^T μ y_o ≤ ‖μ‖₂ ν
-by weak duality, with multipliers whose bound is computed in interval arithmetic.  A settling time
-is excluded when every ν ∈ [0, ν_max) has √T·L > U(T, ν).
+A fourth bound takes the premises ``contraction`` and ``peak`` together (:func:`settle_exclusion`,
+whose docstring gives the argument): they keep y_o small on [0, T], and a loop that settles right
+after T with so little output before it needs a large impulse response.
 
 When an upper bound of m is ≤ 1 ≤ β1, no design of the family is certified (the premise
 ``contraction``, β1 < m, fails).  Otherwise :func:`search` evaluates a grid of the family (T the
@@ -313,16 +310,22 @@ def _dual_line(t, A: float, w: float, ph: float, band: float) -> tuple:
     G = A ** 2 / 2 * (m * np.cos(w * (t[:, None] - t[None, :]))
                       - (np.sin(w * s + 2 * ph) - np.sin(w * (s - 2 * m) + 2 * ph)) / (2 * w))
     G = G * sg[:, None] * sg[None, :]
-    ev, V = np.linalg.eigh(0.5 * (G + G.T))
-    R = (V * np.sqrt(np.maximum(ev, 0.0))).T
-    c = np.abs(r) - band * A                     # (λ fitted at P = A; the line holds for every P)
-    mu = 1e3 * max(float(np.max(ev)), 1.0)
-    lam, _ = nnls(np.vstack([R, np.sqrt(mu) * c[None, :]]), np.concatenate([np.zeros(R.shape[0]), [np.sqrt(mu)]]),
-                  maxiter=20 * t.size)
+    # (λ fitted at P = A; the line holds for every P)
+    lam = _penalized_nnls(G, np.abs(r) - band * A, 20 * t.size)
     norm = float(np.sqrt(max(lam @ G @ lam, 0.0))) * (1 + 1e-9)
     if norm <= 0.0 or not np.any(lam > 0):
         return 0.0, 0.0
     return float(lam @ np.abs(r)) / norm, float(band * lam.sum()) / norm
+
+
+def _penalized_nnls(G, c, maxiter: int) -> np.ndarray:
+    """λ ≥ 0 minimizing λᵀGλ + pen·(cᵀλ − 1)², pen = 10³·max(λ_max(G), 1) (G symmetrized): the
+    least ‖Σ λ_i g_i‖ on the line cᵀλ = 1 as a non-negative least squares (:func:`_dual_line`,
+    :func:`_settle_multipliers`)."""
+    ev, V = np.linalg.eigh(0.5 * (G + G.T))
+    R = (V * np.sqrt(np.maximum(ev, 0.0))).T
+    pen = np.sqrt(1e3 * max(float(np.max(ev)), 1.0))
+    return nnls(np.vstack([R, pen * c[None, :]]), np.concatenate([np.zeros(R.shape[0]), [pen]]), maxiter=maxiter)[0]
 
 
 def _min_max(g1, g2, A: float, e: float) -> float:
@@ -474,12 +477,7 @@ def _settle_multipliers(later, sg, edges, c, nu: float, A: float, w: float, ph: 
     best = (-np.inf, np.zeros(later.size), np.zeros(D.size))
     for tau in _SETTLE_TAUS:
         K = np.linalg.solve(GFF + tau * np.diag(D), GgF.T)
-        R = Ggg - GgF @ K
-        ev, V = np.linalg.eigh(0.5 * (R + R.T))
-        Rh = (V * np.sqrt(np.maximum(ev, 0.0))).T
-        pen = 1e3 * max(float(np.max(ev)), 1.0)
-        lam, _ = nnls(np.vstack([Rh, np.sqrt(pen) * c[None, :]]),
-                      np.concatenate([np.zeros(Rh.shape[0]), [np.sqrt(pen)]]), maxiter=50 * later.size)
+        lam = _penalized_nnls(Ggg - GgF @ K, c, 50 * later.size)
         mu = K @ lam
         q2 = lam @ Ggg @ lam - 2 * lam @ GgF @ mu + mu @ GFF @ mu
         if q2 > 0:
