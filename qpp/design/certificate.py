@@ -4,8 +4,6 @@ settling time of the nominal loop.  The bookkeepings are described in :mod:`qpp.
 (``docs/ERRATA.md`` § QPP thresholds).
 
 The thresholds m and β3, β4 along the nominal loop are computed by :mod:`qpp.design.thresholds`.
-Moved out of :mod:`qpp.design.procedure` (issue 12) and runs the design
-procedure of ch. 12.1 on top of :func:`certify`.
 """
 from __future__ import annotations
 
@@ -354,16 +352,12 @@ def late_slope(cfg: QppConfig, T: float, horizon: float) -> tuple | None:
     if isinstance(nl, SinusoidalNonlinearity):     # slope k·|sin ωt|, k = |N F_unc|·γ_max (closed form)
         k = float(np.linalg.norm(cfg.sinusoidal_half_widths()))
         before, after = (k * float(spheres.sup_abs_sin(nl.omega, t0, t1)) for t0, t1 in ((0.0, T), (T, horizon)))
-        return (before, after) if after > 1.5 * before + 1e-12 else None
-    if not isinstance(nl, ExpressionNonlinearity):
+    elif isinstance(nl, ExpressionNonlinearity) and cfg.expression_model().t_varies:
+        tg, g = cfg.expression_model().slope_profile(horizon)
+        g = np.max(g, axis=0)
+        before, after = float(np.max(g[tg <= T], initial=0.0)), float(np.max(g[tg > T], initial=0.0))
+    else:
         return None
-    M = cfg.expression_model()
-    if not M.t_varies:
-        return None
-    tg, g = M.slope_profile(horizon)
-    g = np.max(g, axis=0)
-    before = float(np.max(g[tg <= T], initial=0.0))
-    after = float(np.max(g[tg > T], initial=0.0))
     return (before, after) if after > 1.5 * before + 1e-12 else None
 
 
@@ -397,19 +391,17 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
         The certificate (``certified``: β1 ≤ m and circle criterion).
     """
     P = cfg.lure_plant()
-    K1 = np.atleast_2d(np.asarray(K1, float))
-    Kc = np.atleast_2d(np.asarray(Kc, float))
+    K1, Kc = (np.atleast_2d(np.asarray(x, float)) for x in (K1, Kc))
     H = np.asarray(H, float).reshape(P.n, P.p)
-    Az = Bz = Cz = None
     Azd, Bzd, b1 = {}, {}, {}
     for reading in ("eq10.7", "printed"):
         Az, Bz, Cz = closed_loop(P, K1, Kc, H, bz=reading)
         Azd[reading], Bzd[reading] = Az, Bz
         b1[reading] = spheres.beta1(Az, Bz, Cz, a)
-    sector = default_sector(cfg)
+    sector, coupled = default_sector(cfg), sector_coupling(cfg)
     _, dcols = channels(P)
-    circ = circle_mod.circle_criterion(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=sector_coupling(cfg))
-    kyp = circle_kyp(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=sector_coupling(cfg))
+    circ = circle_mod.circle_criterion(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=coupled)
+    kyp = circle_kyp(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=coupled)
     T = cfg.spheres.T if T is None else float(T)
     horizon = max(T, cfg.simulation.t_final)
     n = int(min(20001, max(801, 801 * horizon / T)))
@@ -430,7 +422,6 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     res.late_slope = late_slope(cfg, T, horizon)
     res.bookkeeping = pick_bookkeeping(cfg, [x.name for x in th])
     res.bz = cfg.design.bz
-    coupled = sector_coupling(cfg)
     loop = (Azd["eq10.7"], Bzd["eq10.7"], Cz, {"z0": initial_state(cfg, P, K1, Kc), "a": a})
     res.consistent = consistent(cfg, t, y_o, sector, coupled, T, a, loop)
     # the certificate is of the loop that runs (B_z of eq 10.7, as simulated), whatever design.bz

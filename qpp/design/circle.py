@@ -392,13 +392,7 @@ def _grid_past_the_tail(A, B, C, a, omega, alpha, beta, max_decades: int = 12):
 
 
 # ------------------------------------------------------------------------------------------------
-# The small-gain form of the circle criterion for a coupled φ (φ_i depending on outputs other
-# than y_i, outside lemma 1 of ch. 9.2; Desoer & Vidyasagar, *Feedback Systems*, ch. VI).
-#
-# φ = C_0 y + Δ(y, t) with C_0 = diag(c_i), c_i the centre of a diagonal channel's sector and 0 for
-# a coupled one, ‖Δ‖₂ ≤ ρ‖y‖₂, ρ² = max_{diagonal i} r_i² + Σ_{coupled i} r_i²; the loop is
-# exponentially stable with rate a when A + B C_0 C + aI is Hurwitz and ρ·sup_ω σ̄(H_c(−a + jω)) < 1,
-# H_c = (I − H C_0)⁻¹ H.  Split from :mod:`qpp.design.circle`, which calls :func:`small_gain_result`.
+# The small-gain form of the circle criterion for a coupled φ (module docstring, "Coupled φ").
 
 
 def _small_gain_terms(alpha, beta, coupled) -> tuple[np.ndarray, float]:
@@ -561,19 +555,13 @@ def circle_kyp(A, B, C, sector, a: float = 0.0, coupled=None) -> KypResult:
     KypResult
         The decision, the gain and the scaling.
     """
-    A = np.atleast_2d(np.asarray(A, float))
-    B = np.atleast_2d(np.asarray(B, float))
-    C = np.atleast_2d(np.asarray(C, float))
+    A, B, C = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C))
     s = np.atleast_2d(np.asarray(sector, float))
     m = s.shape[0]
     coupled = np.zeros(m, bool) if coupled is None else np.asarray(coupled, bool)
-    centre = np.where(coupled, 0.0, 0.5 * (s[:, 0] + s[:, 1]))
-    half = np.where(coupled, np.maximum(np.abs(s[:, 0]), np.abs(s[:, 1])), 0.5 * (s[:, 1] - s[:, 0]))
-    if coupled.any():      # Δ is not diagonal: one radius ρ for all, no scaling
-        diag_part = float(np.max(half[~coupled] ** 2)) if (~coupled).any() else 0.0
-        radius = np.full(m, np.sqrt(diag_part + np.sum(half[coupled] ** 2)))
-    else:
-        radius = half
+    centre, rho = _small_gain_terms(s[:, 0], s[:, 1], coupled)
+    # Δ not diagonal (coupled): one radius ρ for all, no scaling; else the half-widths
+    radius = np.full(m, rho) if coupled.any() else 0.5 * (s[:, 1] - s[:, 0])
     Ac = A + B @ (centre[:, None] * C) + a * np.eye(A.shape[0])
     worst = float(np.max(np.linalg.eigvals(Ac).real))
     if not worst < 0:

@@ -31,12 +31,9 @@ band·P)/‖r_o‖_{t1}, the later samples combined by weak duality (:func:`_dua
 β_o/(β_i + β_o β3_min(T)) (β3_min the sinusoidal φ's closed form, else 0) with E(T) ≥ √T: a
 settling time with √T·L(T) > U(T) is excluded.
 
-A fourth bound takes the premises ``contraction`` and ``peak`` together (:func:`settle_exclusion`):
-β1 ≥ 1 and β1 < m ≤ β_o/(β_i + β_o β3_min(T) + |k|₂ ‖y_o‖_{L2[0, T]}/√T) keep y_o small on [0, T]
-(‖y_o‖_T < ν_max(T)), and a loop that settles right after T with so little output before it needs a
-large impulse response: γ∞ ≥ ‖h‖₂ ≥ L(T, ν), from the settling constraints and ∫₀^T μ y_o ≤ ‖μ‖₂ ν
-by weak duality, with multipliers whose bound is computed in interval arithmetic.  A settling time
-is excluded when every ν ∈ [0, ν_max) has √T·L > U(T, ν).
+A fourth bound takes the premises ``contraction`` and ``peak`` together (:func:`settle_exclusion`,
+whose docstring gives the argument): they keep y_o small on [0, T], and a loop that settles right
+after T with so little output before it needs a large impulse response.
 
 When an upper bound of m is ≤ 1 ≤ β1, no design of the family is certified (the premise
 ``contraction``, β1 < m, fails).  Otherwise :func:`search` evaluates a grid of the family (T the
@@ -86,6 +83,8 @@ class FamilyBounds:
         √p·β_ri + √r·‖d‖∞, output units.
     k : (r,) ndarray
         Half-widths of the certificate's sector, dimensionless.
+    k3 : float
+        (Σ max(k_i, k_struct,i)²)^½ of a sinusoidal φ (β3 = k3·sup |sin ωt|), else 0, dimensionless.
     """
 
     servo_frequencies: list
@@ -96,6 +95,7 @@ class FamilyBounds:
     m_upper_sin: float | None
     beta_i: float
     k: np.ndarray = field(repr=False)
+    k3: float = 0.0
 
     @property
     def excluded(self) -> bool:
@@ -134,12 +134,13 @@ def family_bounds(cfg: QppConfig) -> FamilyBounds:
     ws = _servo_frequencies(P.Ac)
     m_up = sp.beta_o / (beta_i + y0_term) if beta_i + y0_term > 0 else np.inf
     T_sin = m_sin = None
+    k3 = 0.0
     nl = cfg.nonlinearity
     if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
-        k_struct = cfg.sinusoidal_half_widths()
+        k3 = float(np.sqrt(np.sum(np.maximum(k, cfg.sinusoidal_half_widths()) ** 2)))
         T_sin = float(np.pi / (2 * nl.omega))
-        m_sin = float(sp.beta_o / (beta_i + sp.beta_o * np.sqrt(np.sum(np.maximum(k, k_struct) ** 2))))
-    return FamilyBounds(ws, 1.0 if ws else 0.0, float(m_up), y0_term, T_sin, m_sin, beta_i, k)
+        m_sin = float(sp.beta_o / (beta_i + sp.beta_o * k3))
+    return FamilyBounds(ws, 1.0 if ws else 0.0, float(m_up), y0_term, T_sin, m_sin, beta_i, k, k3)
 
 
 @dataclass
@@ -309,16 +310,22 @@ def _dual_line(t, A: float, w: float, ph: float, band: float) -> tuple:
     G = A ** 2 / 2 * (m * np.cos(w * (t[:, None] - t[None, :]))
                       - (np.sin(w * s + 2 * ph) - np.sin(w * (s - 2 * m) + 2 * ph)) / (2 * w))
     G = G * sg[:, None] * sg[None, :]
-    ev, V = np.linalg.eigh(0.5 * (G + G.T))
-    R = (V * np.sqrt(np.maximum(ev, 0.0))).T
-    c = np.abs(r) - band * A                     # (λ fitted at P = A; the line holds for every P)
-    mu = 1e3 * max(float(np.max(ev)), 1.0)
-    lam, _ = nnls(np.vstack([R, np.sqrt(mu) * c[None, :]]), np.concatenate([np.zeros(R.shape[0]), [np.sqrt(mu)]]),
-                  maxiter=20 * t.size)
+    # (λ fitted at P = A; the line holds for every P)
+    lam = _penalized_nnls(G, np.abs(r) - band * A, 20 * t.size)
     norm = float(np.sqrt(max(lam @ G @ lam, 0.0))) * (1 + 1e-9)
     if norm <= 0.0 or not np.any(lam > 0):
         return 0.0, 0.0
     return float(lam @ np.abs(r)) / norm, float(band * lam.sum()) / norm
+
+
+def _penalized_nnls(G, c, maxiter: int) -> np.ndarray:
+    """λ ≥ 0 minimizing λᵀGλ + pen·(cᵀλ − 1)², pen = 10³·max(λ_max(G), 1) (G symmetrized): the
+    least ‖Σ λ_i g_i‖ on the line cᵀλ = 1 as a non-negative least squares (:func:`_dual_line`,
+    :func:`_settle_multipliers`)."""
+    ev, V = np.linalg.eigh(0.5 * (G + G.T))
+    R = (V * np.sqrt(np.maximum(ev, 0.0))).T
+    pen = np.sqrt(1e3 * max(float(np.max(ev)), 1.0))
+    return nnls(np.vstack([R, pen * c[None, :]]), np.concatenate([np.zeros(R.shape[0]), [pen]]), maxiter=maxiter)[0]
 
 
 def _min_max(g1, g2, A: float, e: float) -> float:
@@ -337,14 +344,16 @@ def _min_max(g1, g2, A: float, e: float) -> float:
     return max(min(g1(hi), g2(lo)), 0.0)
 
 
-def _at_rest(cfg: QppConfig) -> bool:
-    """Whether the nominal loop starts at rest: x0 = 0 (the observer starts equal) and x_c(0) = 0
-    (``xc0: zero``, ``equilibrium`` with x0 = 0, or a list of zeros), so that y_o = h * r_o."""
-    x0 = cfg.plant.x0
+def _one_sine(cfg: QppConfig):
+    """The one sine term of r_o (a :class:`qpp.io.config.Term`) when r_o is one sine on one channel
+    and the nominal loop starts at rest, else None.  At rest: x0 = 0 (the observer starts equal) and
+    x_c(0) = 0 (``xc0: zero``, ``equilibrium`` with x0 = 0, or a list of zeros), so that y_o = h * r_o."""
+    ro, x0, xc0 = cfg.simulation.r_o, cfg.plant.x0, cfg.plant.xc0
+    if cfg.lure_plant().p != 1 or len(ro) != 1 or len(ro[0]) != 1 or ro[0][0].kind != "sin" or ro[0][0].omega <= 0:
+        return None
     if x0 is not None and np.any(np.asarray(x0, float) != 0.0):
-        return False
-    xc0 = cfg.plant.xc0
-    return not (isinstance(xc0, list) and np.any(np.asarray(xc0, float) != 0.0))
+        return None
+    return None if isinstance(xc0, list) and np.any(np.asarray(xc0, float) != 0.0) else ro[0][0]
 
 
 def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
@@ -362,26 +371,17 @@ def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
     PeakExclusion or None
         L(T), U(T) and the verdict per possible settling time.
     """
-    P = cfg.lure_plant()
-    ro = cfg.simulation.r_o
-    if P.p != 1 or len(ro) != 1 or len(ro[0]) != 1 or ro[0][0].kind != "sin" or ro[0][0].omega <= 0:
+    ro = _one_sine(cfg)
+    if ro is None:
         return None
-    if not _at_rest(cfg):
-        return None
-    A, w, ph = abs(ro[0][0].amplitude), ro[0][0].omega, ro[0][0].phase
+    A, w, ph = abs(ro.amplitude), ro.omega, ro.phase
     band, sp = cfg.spheres.settle_band, cfg.spheres
     horizon = max(cfg.simulation.t_final, sp.T)
     t = np.linspace(0.0, horizon, SETTLE_SAMPLES)[1:]
     energy = np.sqrt(_sine_energy(A, w, ph, t))
     r_abs = np.abs(A * np.sin(w * t + ph))
     b = family_bounds(cfg)
-    nl = cfg.nonlinearity
-    if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
-        k_struct = cfg.sinusoidal_half_widths()
-        k3 = float(np.sqrt(np.sum(np.maximum(b.k, k_struct) ** 2)))
-        b3 = k3 * spheres.sup_abs_sin(nl.omega, 0.0, t)
-    else:
-        b3 = np.zeros(t.size)
+    b3 = b.k3 * spheres.sup_abs_sin(cfg.nonlinearity.omega, 0.0, t) if b.k3 > 0 else np.zeros(t.size)
     U = sp.beta_o / (b.beta_i + sp.beta_o * b3)
     L = np.zeros(t.size)
     for j in range(t.size - 1):
@@ -477,12 +477,7 @@ def _settle_multipliers(later, sg, edges, c, nu: float, A: float, w: float, ph: 
     best = (-np.inf, np.zeros(later.size), np.zeros(D.size))
     for tau in _SETTLE_TAUS:
         K = np.linalg.solve(GFF + tau * np.diag(D), GgF.T)
-        R = Ggg - GgF @ K
-        ev, V = np.linalg.eigh(0.5 * (R + R.T))
-        Rh = (V * np.sqrt(np.maximum(ev, 0.0))).T
-        pen = 1e3 * max(float(np.max(ev)), 1.0)
-        lam, _ = nnls(np.vstack([Rh, np.sqrt(pen) * c[None, :]]),
-                      np.concatenate([np.zeros(Rh.shape[0]), [np.sqrt(pen)]]), maxiter=50 * later.size)
+        lam = _penalized_nnls(Ggg - GgF @ K, c, 50 * later.size)
         mu = K @ lam
         q2 = lam @ Ggg @ lam - 2 * lam @ GgF @ mu + mu @ GFF @ mu
         if q2 > 0:
@@ -605,22 +600,12 @@ def _settle_gamma(T: float, later, sg, edges, nu: float, A: float, w: float, ph:
 
 def _settle_setup(cfg: QppConfig) -> tuple | None:
     """(A, ω, φ, band, |k|₂, k3, family_bounds) of :func:`settle_exclusion`, or None where it does not apply."""
-    P = cfg.lure_plant()
-    ro, b = cfg.simulation.r_o, family_bounds(cfg)
-    if (P.p != 1 or len(ro) != 1 or len(ro[0]) != 1 or ro[0][0].kind != "sin" or ro[0][0].omega <= 0
-            or not _at_rest(cfg) or b.beta1_lower < 1.0):
-        return None
-    A, w, ph = abs(ro[0][0].amplitude), float(ro[0][0].omega), float(ro[0][0].phase)
-    if ro[0][0].amplitude < 0:
-        ph += np.pi
+    ro, b = _one_sine(cfg), family_bounds(cfg)
     k_norm = float(np.sqrt(np.sum(b.k ** 2)))
-    nl, k3 = cfg.nonlinearity, 0.0
-    if isinstance(nl, SinusoidalNonlinearity) and nl.omega > 0:
-        k_struct = cfg.sinusoidal_half_widths()
-        k3 = float(np.sqrt(np.sum(np.maximum(b.k, k_struct) ** 2)))
-    if k_norm <= 0:
+    if ro is None or b.beta1_lower < 1.0 or k_norm <= 0:
         return None
-    return A, w, ph, cfg.spheres.settle_band, k_norm, k3, b
+    ph = float(ro.phase) + (np.pi if ro.amplitude < 0 else 0.0)
+    return abs(ro.amplitude), float(ro.omega), ph, cfg.spheres.settle_band, k_norm, b.k3, b
 
 
 def settle_exclusion(cfg: QppConfig, pe: PeakExclusion | None = None) -> SettleExclusion | None:

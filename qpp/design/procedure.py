@@ -113,9 +113,8 @@ class _Procedure:
             g = hinf_gains(weighted_plant(self.P, ws), rho=rho, a=a, nu=self.hc.nu, weight=self.hc.weight,
                            observer=self.hc.observer)
             Az, Bz, Cz = closed_loop(self.P, g.K1, g.Kc, g.H, bz=self.dc.bz)
-            if np.linalg.eigvals(Az + a * np.eye(len(Az))).real.max() >= 0:
-                return np.inf
-            return spheres.hinf_norm(Az + a * np.eye(len(Az)), Bz, Cz)[0]
+            An = Az + a * np.eye(len(Az))
+            return np.inf if np.linalg.eigvals(An).real.max() >= 0 else spheres.hinf_norm(An, Bz, Cz)[0]
         except Exception:                              # noqa: BLE001 - any failure: not a candidate
             return np.inf
 
@@ -376,14 +375,12 @@ def limiting_factor(cfg: QppConfig, res: DesignResult) -> tuple[str, str]:
         return f"circle criterion fails for every a tried ({why} at a = {res.a:g})", _CIRCLE_HINT
     c = res.consistent
     failed = [k for k, (ok, _) in res.premises.items() if not ok]
-    if "range" in failed:
-        return f"the output sphere leaves the range the sector holds on: {res.premises['range'][1]}", ""
-    if "sector" in failed:
-        return f"phi is not proved to lie in the sector the certificate uses: {res.premises['sector'][1]}", ""
-    if "slope" in failed:
-        return f"the slope bound of beta3 is not proved: {res.premises['slope'][1]}", ""
-    if "circle" in failed:
-        return f"the circle criterion is not proved: {res.premises['circle'][1]}", _CIRCLE_HINT
+    for key, what, hint in (("range", "the output sphere leaves the range the sector holds on", ""),
+                            ("sector", "phi is not proved to lie in the sector the certificate uses", ""),
+                            ("slope", "the slope bound of beta3 is not proved", ""),
+                            ("circle", "the circle criterion is not proved", _CIRCLE_HINT)):
+        if key in failed:
+            return f"{what}: {res.premises[key][1]}", hint
     terms = {"β_i": c.beta_i, "β_o·β3": sp.beta_o * c.beta3, "β4": c.beta4}
     dom = max(terms, key=terms.get)
     lead = ("β1 > m" if "contraction" in failed else

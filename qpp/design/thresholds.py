@@ -91,17 +91,16 @@ def _arm_betas(cfg: QppConfig, t, x_o, T):
     N = P.N()
     b3 = b4 = 0.0
     h = 1e-6
+
+    def phi(X, M):
+        return np.array([N @ (f1(x, tt, M) - f1(x, tt, g_nom)) for x, tt in zip(X.T, t)])
+
     for M in (nl.M_min, nl.M_max):
-        phi = np.array([N @ (f1(x, tt, M) - f1(x, tt, g_nom)) for x, tt in zip(x_o.T, t)]).T
-        b4 = max(b4, spheres.truncated_l2(t, phi, T))
-        grads = []
+        b4 = max(b4, spheres.truncated_l2(t, phi(x_o, M).T, T))
         for j in range(P.p):           # ∂φ/∂y_j with y_j = x_j (C = [I 0])
-            e = np.zeros(P.n)
+            e = np.zeros((P.n, 1))
             e[j] = h
-            gp = np.array([N @ (f1(x + e, tt, M) - f1(x + e, tt, g_nom)) for x, tt in zip(x_o.T, t)])
-            gm = np.array([N @ (f1(x - e, tt, M) - f1(x - e, tt, g_nom)) for x, tt in zip(x_o.T, t)])
-            grads.append(((gp - gm) / (2 * h)).T)
-        b3 = max(b3, max(spheres.truncated_l2(t, g, T) for g in grads))
+            b3 = max(b3, spheres.truncated_l2(t, ((phi(x_o + e, M) - phi(x_o - e, M)) / (2 * h)).T, T))
     return b3, b4
 
 
@@ -132,30 +131,26 @@ def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> l
     T = sp.T if T is None else T
     nl = cfg.nonlinearity
     out = []
+
+    def add(name, k, b3, b4):
+        out.append(Thresholds(name, k, b3, b4, spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, b3, b4)))
+
     pub = cfg.published
     if pub.beta3 is not None and pub.beta4 is not None:
-        out.append(Thresholds("printed", np.nan, pub.beta3, pub.beta4,
-                              spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, pub.beta3, pub.beta4)))
+        add("printed", np.nan, pub.beta3, pub.beta4)
     if isinstance(nl, SinusoidalNonlinearity):
         k_rep = float(np.max(np.abs(np.asarray(nl.F_unc)).sum(axis=1)) * nl.gamma_max)
-        k_circ = float(np.max(np.abs(sector)))
-        for name, k in (("report", k_rep), ("circle", k_circ)):
-            b3 = spheres.beta3_sinusoidal(k, nl.omega, T)
-            b4 = spheres.beta4_sector(k, t, y_o, T)
-            out.append(Thresholds(name, k, b3, b4, spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, b3, b4)))
+        for name, k in (("report", k_rep), ("circle", float(np.max(np.abs(sector))))):
+            add(name, k, spheres.beta3_sinusoidal(k, nl.omega, T), spheres.beta4_sector(k, t, y_o, T))
     elif isinstance(nl, ExpressionNonlinearity):
         M = cfg.expression_model()
         b3, b4 = M.beta3(T), M.beta4(t, y_o, T)
         k = float(np.max(np.abs(sector)))
-        out.append(Thresholds("computed", k, b3, b4, spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, b3, b4)))
+        add("computed", k, b3, b4)
         if nl.beta3 is not None or nl.beta4 is not None:
-            s3 = b3 if nl.beta3 is None else nl.beta3
-            s4 = b4 if nl.beta4 is None else nl.beta4
-            out.append(Thresholds("stated", k, s3, s4, spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, s3, s4)))
+            add("stated", k, b3 if nl.beta3 is None else nl.beta3, b4 if nl.beta4 is None else nl.beta4)
     else:
-        b3, b4 = _arm_betas(cfg, t, x_o, T)
-        out.append(Thresholds("trajectory", np.nan, b3, b4,
-                              spheres.threshold_m(sp.beta_o, sp.beta_ri, sp.d_inf, b3, b4)))
+        add("trajectory", np.nan, *_arm_betas(cfg, t, x_o, T))
     return out
 
 

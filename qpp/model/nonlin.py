@@ -87,9 +87,8 @@ class ExpressionModel(SampleGrid):
         sp = sympy_module()
         self.p = int(p)
         self.names = list(params)
-        self.lo = np.array([params[k][0] for k in self.names], float)
-        self.hi = np.array([params[k][1] for k in self.names], float)
-        self.nom = np.array([params[k][2] for k in self.names], float)
+        # (min, max, nominal) of each parameter
+        self.lo, self.hi, self.nom = (np.array([params[k][c] for k in self.names], float) for c in range(3))
         self.y_range = np.asarray(y_range, float).reshape(self.p, 2)
         self.N = np.atleast_2d(np.asarray(N, float))
         self.t_range = float(t_range)
@@ -119,9 +118,7 @@ class ExpressionModel(SampleGrid):
             row = []
             for j in range(self.p):
                 try:
-                    d = sp.diff(ph, self.ys[j])
-                    fn = sp.lambdify(args, d, modules="numpy")
-                    row.append(fn)
+                    row.append(sp.lambdify(args, sp.diff(ph, self.ys[j]), modules="numpy"))
                 except Exception:                 # noqa: BLE001 - fall back to finite differences
                     row.append(None)
             self._dphi.append(row)
@@ -186,8 +183,7 @@ class ExpressionModel(SampleGrid):
                 g = None
         if g is None or not np.all(np.isfinite(g)):
             h = 1e-6 * max(1.0, float(np.ptp(self.y_range[j])))
-            Yp = list(Y)
-            Ym = list(Y)
+            Yp, Ym = list(Y), list(Y)
             Yp[j] = Y[j] + h
             Ym[j] = Y[j] - h
             g = (self._call(self._phi[i], Yp, t, TH) - self._call(self._phi[i], Ym, t, TH)) / (2 * h)

@@ -176,23 +176,19 @@ def refine(model, i: int, starts: dict, bounds: dict, at: dict | None = None) ->
     """
     ranges, free = _box(model, i)
     out = dict(bounds)
+    if not free.any():
+        return out
+    lo_hi = [r for r, f in zip(ranges, free) if f]
     for kind, x0 in starts.items():
-        x0 = np.asarray(x0, float)
-        base = x0.copy()
+        base = np.asarray(x0, float)
 
-        def value(z, kind=kind, base=base):
+        def cost(z, kind=kind, base=base):
             x = base.copy()
             x[free] = z
-            return _value(model, i, kind, x)
-
-        def cost(z, kind=kind):
-            v = value(z)
+            v = _value(model, i, kind, x)
             return np.inf if not np.isfinite(v) else -_SIGN[kind] * v
 
-        if not free.any():
-            continue
-        lo_hi = [r for r, f in zip(ranges, free) if f]
-        res = minimize(cost, x0[free], method="Nelder-Mead", bounds=lo_hi,
+        res = minimize(cost, base[free], method="Nelder-Mead", bounds=lo_hi,
                        options={"maxiter": REFINE_ITER_PER_DIM * int(free.sum()), "xatol": 1e-12,
                                 "fatol": 1e-15})
         if np.isfinite(res.fun):

@@ -268,9 +268,7 @@ def _integrate_segments(rhs, segments, z, t_eval, n, G, impulse, rtol, atol, div
             raise ConvergenceError(f"simulation failed at t = {sol.t[-1]:.4g} s: {sol.message}",
                                    hint="the loop is stiff or escapes: check the gains, or loosen "
                                         "simulation.rtol / simulation.atol")
-        keep = np.isin(sol.t, t_eval[mask])
-        got = sol.y[:, keep]
-        zs.append(got)
+        zs.append(sol.y[:, np.isin(sol.t, t_eval[mask])])
         if stopped:                 # diverged: the samples from here on are NaN
             done = np.hstack(zs)
             return np.hstack([done, np.full((done.shape[0], t_eval.size - done.shape[1]), np.nan)])
