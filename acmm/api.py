@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
+import acmm.io.config
 from acmm.io.config import Config
 from acmm_qpp.errors import ConfigError
-from acmm.io.config import load_config as _load_config
 from acmm.model import linearize as lin
 from acmm.stages.simulate import run_simulate
 from acmm.stages.design import compute_design
@@ -73,7 +73,7 @@ def load_config(config: str | Path | Config | None = None) -> Config:
         return config
     if config is not None and not isinstance(config, (str, Path)):
         raise ConfigError(f"config must be a path, a packaged config's name or a Config, not {type(config).__name__}")
-    return _load_config(config)
+    return acmm.io.config.load_config(config)
 
 
 def linearize(config, tea_pitch_deg: float | None = None):

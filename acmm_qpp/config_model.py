@@ -24,8 +24,10 @@ import difflib
 import math
 import types
 import typing
+from pathlib import Path
 from typing import Any, Callable, Optional
 
+import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, ValidationError, model_validator
 from pydantic.json_schema import GenerateJsonSchema
 from pydantic_core import PydanticCustomError
@@ -138,6 +140,31 @@ class StrictModel(BaseModel):
                     e["msg"] = "unknown key " + (f"(did you mean `{best}`?)" if best else f"(valid keys: {', '.join(keys)})")
             raise ValidationError.from_exception_data(exc.title, [
                 {**e, "type": PydanticCustomError(e["type"], e["msg"], e.get("ctx"))} for e in errors]) from None
+
+
+class RunConfig:
+    """The methods of a complete run config (a :class:`StrictModel` with ``name`` and ``output.root``)."""
+
+    def run_dir(self) -> Path:
+        """Directory of this run's results.
+
+        Returns
+        -------
+        Path
+            ``<output.root>/<name>``.
+        """
+        return Path(self.output.root) / self.name
+
+    def to_yaml(self) -> str:
+        """The resolved config (all defaults filled in) as YAML text, keys in schema order (what is
+        embedded in every results file).
+
+        Returns
+        -------
+        str
+            The YAML text.
+        """
+        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
 
 
 def quantity(unit: str, check: Optional[Callable[[float], float]] = None, *,

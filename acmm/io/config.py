@@ -20,10 +20,9 @@ from pathlib import Path
 from typing import Annotated, Literal, Optional
 
 import numpy as np
-import yaml
 from pydantic import BeforeValidator, Field, field_validator, model_validator
 
-from acmm_qpp.config_model import StrictModel, quantity
+from acmm_qpp.config_model import RunConfig, StrictModel, quantity
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.units import to_canonical
 from acmm.model.inertia import MAX_INERTIA
@@ -390,7 +389,7 @@ class Output(SectionModel):
         return v
 
 
-class Config(SectionModel):
+class Config(SectionModel, RunConfig):
     """A complete acmm run configuration."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX,
@@ -476,26 +475,6 @@ class Config(SectionModel):
         if sch is None:
             return 1
         return (sch.n_points if sch.to is not None else 1) + len(sch.points)
-
-    def run_dir(self) -> Path:
-        """Directory of this run's results.
-
-        Returns
-        -------
-        Path
-            ``<output.root>/<name>``.
-        """
-        return Path(self.output.root) / self.name
-
-    def to_yaml(self) -> str:
-        """The resolved config (all defaults filled in) as YAML text.
-
-        Returns
-        -------
-        str
-            The YAML text.
-        """
-        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
 
 
 def parse_config(data: object, source: str = "config") -> Config:

@@ -20,14 +20,12 @@ from __future__ import annotations
 
 import math
 import re
-from pathlib import Path
 from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
-import yaml
-from pydantic import BaseModel, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
-from acmm_qpp.config_model import Generator, StrictModel, header, quantity
+from acmm_qpp.config_model import Generator, RunConfig, StrictModel, header, quantity
 from acmm_qpp.configio import apply_overrides, read_yaml, remember_origin, validate_model
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.limits import how_to_raise, limit
@@ -62,16 +60,9 @@ QPP_MAX = 1e12
 
 def _implausible(v):
     """The first number in ``v`` (scalar or nested list) with |x| > QPP_MAX, else ``None``."""
-    if isinstance(v, bool) or isinstance(v, BaseModel):
-        return None
-    if isinstance(v, (int, float)):
-        return v if abs(v) > QPP_MAX else None
     if isinstance(v, (list, tuple)):
-        for x in v:
-            bad = _implausible(x)
-            if bad is not None:
-                return bad
-    return None
+        return next((bad for bad in map(_implausible, v) if bad is not None), None)
+    return v if isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v) > QPP_MAX else None
 
 
 class SectionModel(StrictModel):
@@ -417,7 +408,7 @@ class Output(SectionModel):
 _EXPR_CACHE: dict = {}
 
 
-class QppConfig(SectionModel):
+class QppConfig(SectionModel, RunConfig):
     """A complete ``qpp`` configuration."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX,
@@ -618,26 +609,6 @@ class QppConfig(SectionModel):
             _EXPR_CACHE[key] = ExpressionModel(nl._texts(), P.p, nl._param_table(), nl.y_range, P.N(), t_range,
                                                n_grid=nl.n_grid)
         return _EXPR_CACHE[key]
-
-    def run_dir(self) -> Path:
-        """The results directory of this run.
-
-        Returns
-        -------
-        pathlib.Path
-            ``<output.root>/<name>``.
-        """
-        return Path(self.output.root) / self.name
-
-    def to_yaml(self) -> str:
-        """The resolved config as YAML text (what is embedded in every results file).
-
-        Returns
-        -------
-        str
-            YAML document, keys in schema order.
-        """
-        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
 
 
 def parse_config(data: object, source: str = "config") -> QppConfig:
