@@ -534,9 +534,8 @@ def split_overrides(config, overrides) -> tuple[object, list[str]]:
         (config, or None when it was an override and no such file exists; list of overrides).
     """
     overrides = list(overrides or [])
-    if config is not None and looks_like_override(str(config)):
-        if not Path(str(config)).exists():
-            return None, [str(config)] + overrides
+    if config is not None and looks_like_override(str(config)) and not Path(str(config)).exists():
+        return None, [str(config)] + overrides
     return config, overrides
 
 
