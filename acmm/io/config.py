@@ -40,8 +40,6 @@ from acmm_qpp.limits import how_to_raise, limit
 #: is refused as a typo or an overflow hazard (bias torques are a few ft·lbf, CMG momentum ~1e4
 #: ft·lbf·s; the inertia's reasoning is :data:`acmm.model.inertia.MAX_INERTIA`'s).
 _RANGE = {"inertia": MAX_INERTIA, "torque": 1e9, "momentum": 1e12, "angle": 3600.0, "rate": 1.0, "time": 1e9}
-_CANON = {"inertia": "slug·ft²", "torque": "ft·lbf", "momentum": "ft·lbf·s", "angle": "deg", "rate": "rad/s",
-          "time": "s"}
 #: The report's unit of each dimension kind of the config (pint syntax): a bare number is in it.
 UNITS = {"inertia": "slug*ft^2", "torque": "ft*lbf", "momentum": "ft*lbf*s", "angle": "deg", "rate": "rad/s",
          "time": "s", "weight_torque": "1/(ft*lbf)^2"}
@@ -53,12 +51,12 @@ MIN_PRINCIPAL_MOMENT = 1e-6
 
 
 def _plausible_value(x: float, dimension: str) -> float:
-    """``x`` (in the canonical unit of :data:`_CANON`) unchanged when its magnitude is physically
+    """``x`` (in the unit of :data:`UNITS`) unchanged when its magnitude is physically
     plausible for ``dimension`` (``inertia``, ``torque``…), else a ValueError naming both."""
     bound = _RANGE.get(dimension)
     if bound is not None and abs(x) > bound:
-        raise ValueError(f"{x:.4g} {_CANON[dimension]} is outside the physically plausible range "
-                         f"|value| ≤ {bound:g} {_CANON[dimension]}")
+        unit = UNITS[dimension].replace("*", "·").replace("^2", "²")      # slug·ft², ft·lbf·s, ...
+        raise ValueError(f"{x:.4g} {unit} is outside the physically plausible range |value| ≤ {bound:g} {unit}")
     return x
 
 

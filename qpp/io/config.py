@@ -23,7 +23,7 @@ import re
 from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import AfterValidator, Field, field_validator, model_validator
 
 from acmm_qpp.config_model import Generator, RunConfig, StrictModel, header, quantity
 from acmm_qpp.configio import apply_overrides, read_yaml, remember_origin, validate_model
@@ -90,6 +90,10 @@ def _finite_matrix(v):
     if not np.all(np.isfinite(a)):
         raise ValueError("must contain finite numbers")
     return v
+
+
+#: a matrix field (plant, published gains) checked by :func:`_finite_matrix`
+FiniteMatrix = Annotated[Matrix, AfterValidator(_finite_matrix)]
 
 
 def _check_periods(field: str, omega: float, t_final: float) -> None:
@@ -308,21 +312,16 @@ class Simulation(SectionModel):
 class Plant(SectionModel):
     """Lure plant x' = A x + B u + G d + B f1(·), y = C x (eqs 10.1, 13.1, 14.2) and servo-compensator."""
 
-    A: Matrix = Field(description="plant state matrix (n×n), 1/s")
-    B: Matrix = Field(description="control input matrix (n×m)")
-    C: Matrix = Field(description="output matrix (p×n)")
-    G: Matrix = Field(description="disturbance input matrix (n×r), B = G N (assumption iii)")
-    Ac: Matrix = Field(description="servo-compensator matrix (q×q), eq 10.2: internal model of r_o")
-    Bc: Matrix = Field(description="servo-compensator input matrix (q×p), driven by e = r − y")
-    Cc: Matrix = Field(description="servo output matrix (·×q): the H∞ weight W_s e = C_c x_c (13.5)")
+    A: FiniteMatrix = Field(description="plant state matrix (n×n), 1/s")
+    B: FiniteMatrix = Field(description="control input matrix (n×m)")
+    C: FiniteMatrix = Field(description="output matrix (p×n)")
+    G: FiniteMatrix = Field(description="disturbance input matrix (n×r), B = G N (assumption iii)")
+    Ac: FiniteMatrix = Field(description="servo-compensator matrix (q×q), eq 10.2: internal model of r_o")
+    Bc: FiniteMatrix = Field(description="servo-compensator input matrix (q×p), driven by e = r − y")
+    Cc: FiniteMatrix = Field(description="servo output matrix (·×q): the H∞ weight W_s e = C_c x_c (13.5)")
     x0: Optional[list[float]] = Field(None, description="initial plant state (n), default 0; observer starts equal")
     xc0: Union[Literal["zero", "equilibrium"], list[float]] = Field(
         "zero", description="initial servo state: 0, 'equilibrium' (K_c x_c = −K_1 x0, least squares) or a list")
-
-    @field_validator("A", "B", "C", "G", "Ac", "Bc", "Cc")
-    @classmethod
-    def _mats(cls, v):
-        return _finite_matrix(v)
 
 
 class Hinf(SectionModel):
@@ -341,18 +340,13 @@ class Hinf(SectionModel):
 class Published(SectionModel):
     """Gains and numbers printed in the report, for comparison (and optionally for use)."""
 
-    K1: Optional[Matrix] = Field(None, description="printed K1 (m×n)")
-    Kc: Optional[Matrix] = Field(None, description="printed Kc (m×q)")
-    H: Optional[Matrix] = Field(None, description="printed observer gain H (n×p), report's sign")
+    K1: Optional[FiniteMatrix] = Field(None, description="printed K1 (m×n)")
+    Kc: Optional[FiniteMatrix] = Field(None, description="printed Kc (m×q)")
+    H: Optional[FiniteMatrix] = Field(None, description="printed observer gain H (n×p), report's sign")
     beta1: Optional[float] = Field(None, description="printed β1")
     beta3: Optional[float] = Field(None, description="printed β3")
     beta4: Optional[float] = Field(None, description="printed β4")
     m: Optional[float] = Field(None, description="printed threshold m")
-
-    @field_validator("K1", "Kc", "H")
-    @classmethod
-    def _mats(cls, v):
-        return v if v is None else _finite_matrix(v)
 
 
 class Spheres(SectionModel):
