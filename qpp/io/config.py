@@ -5,16 +5,9 @@ design procedure (section 12.1) and the simulation of ch. 13/14.
 Units: time s, frequency rad/s, the exponential weighting ``a`` 1/s; plant matrices and signals
 are in the user's units (the report's examples: m, rad, kg).  Unknown keys are rejected; a
 validation error becomes one :class:`acmm_qpp.errors.ConfigError` line naming the field.
-
-In order: the field types (numbers that may be written ``"<number> <unit>"``, converted to SI on
-load; the bound ``QPP_MAX`` on plausible magnitudes; the strict base of every section), the checks
-that span fields or bound the work (sectors, the sector sampling budget of an expression
-nonlinearity, the periods to integrate; each raises ``ValueError`` naming the field), the
-``nonlinearity`` section (the sinusoidal Lure nonlinearity of ch. 13, the polar arm of ch. 14,
-eq 14.1, and general sector-bounded expressions, :mod:`qpp.model.nonlin`, discriminated by
-``kind``), the ``simulation`` section (reference signals r_o(t) and r − r_o as sums of terms, the
-scenarios and the integrator settings of ch. 13.4 and 14.5), the other sections, the config itself
-and its JSON schema (``qpp schema``).
+Numbers may be written ``"<number> <unit>"`` (converted to SI on load), within ``QPP_MAX``; the
+``nonlinearity`` is sinusoidal (ch. 13), the polar arm (ch. 14, eq 14.1) or a sector-bounded
+expression (:mod:`qpp.model.nonlin`), told apart by ``kind``.
 """
 from __future__ import annotations
 
