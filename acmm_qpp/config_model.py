@@ -251,9 +251,7 @@ class Generator(GenerateJsonSchema):
         if kind == "float":
             return quantity_schema(generated)
         if kind == "list" and inner_core.get("items_schema", {}).get("type") == "float":
-            out = dict(generated)
-            out["items"] = quantity_schema(generated.get("items", {"type": "number"}))
-            return out
+            return {**generated, "items": quantity_schema(generated.get("items", {"type": "number"}))}
         return generated
 
 

@@ -201,9 +201,8 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
                                                 "nominal ones: the box of its beta3 (with y_o +- beta_o)")
     if r.published is not None:
         items["published_certificate"] = _published_certificate_items(r.published)
-    for reading in r.beta1:
+    for reading, b in r.beta1.items():
         key = reading.replace(".", "_")
-        b = r.beta1[reading]
         items[f"Bz_{key}"] = Dataset(r.Bz[reading], "loop-state units per s per exogenous unit", f"B_z, {reading} reading (columns [r, d])",
                                      dims=("loop_state", "exogenous"))
         items[f"beta1_{key}"] = Dataset(b["value"], "1", f"β1 exact (SLICOT L∞ norm), B_z {reading}",
