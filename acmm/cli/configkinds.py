@@ -1,12 +1,7 @@
 """The three config kinds (acmm run, sweep, qpp) side by side: the JSON schema of each, and
 loading a file of any kind (CR-185644 Part II for acmm and sweeps, Part III for qpp); which kind a
 YAML file is, is :meth:`acmm_qpp.cli.plumbing.ConfigKinds.kind_of` of :data:`acmm.cli.command.CONFIGS`.
-
-This package sits above both cores (like :mod:`acmm.report`, below :mod:`acmm_qpp.cli`): it imports ``acmm``
-and ``qpp``, neither of them imports it at import time (``tests/test_layers.py``).  It is not
-part of :mod:`acmm_qpp.cli` because tests and scripts use it without the command line, and its
-:func:`load_any` validates models, which is more than parsing arguments.  The schemas themselves
-are in :mod:`acmm.io.schema`, :mod:`qpp.io.config` and :mod:`acmm_qpp.config_model`.
+It imports ``acmm`` and ``qpp``; neither imports it (``tests/test_layers.py``).
 """
 from __future__ import annotations
 

@@ -15,7 +15,6 @@ from acmm_qpp.errors import EXIT_INPUT
 from acmm.cli.command import CONFIGS, FiguresOpt, acmm_command
 from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit
 from acmm.cli.steps import Steps
-from acmm_qpp.cli.progress import enabled
 
 
 class _Bar:
@@ -30,9 +29,7 @@ class _Bar:
     def __call__(self, done: int, total: int, rec: dict) -> None:
         if rec.get("kind") == "case" and rec.get("verdict") != "bounded":
             self.bad += 1
-        if not enabled():
-            return
-        if self.steps is None:
+        if self.steps is None:                     # (silent unless enabled: Steps checks)
             self.steps = Steps(f"{self.name}: {done - 1}/{total} tasks", total, rate=True).__enter__()
             self.steps.advance(n=done - 1)
         self.steps.advance(f"{self.name}: {self.bad} not bounded")
