@@ -127,8 +127,7 @@ class Inertia(SectionModel):
 
     @model_validator(mode="after")
     def _physical(self):
-        m = self.matrix()
-        eig = np.linalg.eigvalsh(m)
+        eig = np.linalg.eigvalsh(self.matrix())
         if eig[0] <= 0:
             raise ValueError(
                 f"inertia matrix is not positive definite (smallest principal moment {eig[0]:.4g} slug·ft²)")
