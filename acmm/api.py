@@ -102,10 +102,6 @@ def linearize(config, tea_pitch_deg: float | None = None):
 def simulate(config, figures: bool = False):
     """Design (or reuse ``design.h5``), run the nonlinear closed loop and write ``sim.h5``.
 
-    Returns ``(result, path)``: :class:`acmm.stages.runners.SimulateResult` (``.sim`` holds t, state,
-    u, verdict) and the path of ``sim.h5`` (open it with ``xarray.open_dataset(path,
-    engine="h5netcdf")``).
-
     Parameters
     ----------
     config : str or pathlib.Path or acmm.io.config.Config or None
@@ -116,7 +112,8 @@ def simulate(config, figures: bool = False):
     Returns
     -------
     tuple
-        (:class:`acmm.stages.runners.SimulateResult`, pathlib.Path of ``sim.h5``).
+        (:class:`acmm.stages.runners.SimulateResult`, whose ``.sim`` holds t, state, u, verdict;
+        pathlib.Path of ``sim.h5``, for ``xarray.open_dataset(path, engine="h5netcdf")``).
     """
     return run_simulate(load_config(config), figures=figures)
 

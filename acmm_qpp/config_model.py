@@ -270,6 +270,4 @@ def header(schema: dict, title: str) -> dict:
     dict
         A new schema mapping.
     """
-    out = {"$schema": "https://json-schema.org/draft/2020-12/schema", "title": title}
-    out.update(schema)
-    return out
+    return {"$schema": "https://json-schema.org/draft/2020-12/schema", "title": title, **schema}
