@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
+import acmm.io.config
 from acmm.io.config import Config
 from acmm_qpp.errors import ConfigError
-from acmm.io.config import load_config as _load_config
 from acmm.model import linearize as lin
 from acmm.stages.simulate import run_simulate
 from acmm.stages.design import compute_design
@@ -73,7 +73,7 @@ def load_config(config: str | Path | Config | None = None) -> Config:
         return config
     if config is not None and not isinstance(config, (str, Path)):
         raise ConfigError(f"config must be a path, a packaged config's name or a Config, not {type(config).__name__}")
-    return _load_config(config)
+    return acmm.io.config.load_config(config)
 
 
 def linearize(config, tea_pitch_deg: float | None = None):
@@ -102,10 +102,6 @@ def linearize(config, tea_pitch_deg: float | None = None):
 def simulate(config, figures: bool = False):
     """Design (or reuse ``design.h5``), run the nonlinear closed loop and write ``sim.h5``.
 
-    Returns ``(result, path)``: :class:`acmm.stages.runners.SimulateResult` (``.sim`` holds t, state,
-    u, verdict) and the path of ``sim.h5`` (open it with ``xarray.open_dataset(path,
-    engine="h5netcdf")``).
-
     Parameters
     ----------
     config : str or pathlib.Path or acmm.io.config.Config or None
@@ -116,7 +112,8 @@ def simulate(config, figures: bool = False):
     Returns
     -------
     tuple
-        (:class:`acmm.stages.runners.SimulateResult`, pathlib.Path of ``sim.h5``).
+        (:class:`acmm.stages.runners.SimulateResult`, whose ``.sim`` holds t, state, u, verdict;
+        pathlib.Path of ``sim.h5``, for ``xarray.open_dataset(path, engine="h5netcdf")``).
     """
     return run_simulate(load_config(config), figures=figures)
 

@@ -24,8 +24,10 @@ import difflib
 import math
 import types
 import typing
+from pathlib import Path
 from typing import Any, Callable, Optional
 
+import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, ValidationError, model_validator
 from pydantic.json_schema import GenerateJsonSchema
 from pydantic_core import PydanticCustomError
@@ -140,6 +142,31 @@ class StrictModel(BaseModel):
                 {**e, "type": PydanticCustomError(e["type"], e["msg"], e.get("ctx"))} for e in errors]) from None
 
 
+class RunConfig:
+    """The methods of a complete run config (a :class:`StrictModel` with ``name`` and ``output.root``)."""
+
+    def run_dir(self) -> Path:
+        """Directory of this run's results.
+
+        Returns
+        -------
+        Path
+            ``<output.root>/<name>``.
+        """
+        return Path(self.output.root) / self.name
+
+    def to_yaml(self) -> str:
+        """The resolved config (all defaults filled in) as YAML text, keys in schema order (what is
+        embedded in every results file).
+
+        Returns
+        -------
+        str
+            The YAML text.
+        """
+        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+
+
 def quantity(unit: str, check: Optional[Callable[[float], float]] = None, *,
              allow_none: bool = False) -> BeforeValidator:
     """The before-validator of a quantity field in the unit ``unit``: a number (in ``unit``) or a
@@ -224,9 +251,7 @@ class Generator(GenerateJsonSchema):
         if kind == "float":
             return quantity_schema(generated)
         if kind == "list" and inner_core.get("items_schema", {}).get("type") == "float":
-            out = dict(generated)
-            out["items"] = quantity_schema(generated.get("items", {"type": "number"}))
-            return out
+            return {**generated, "items": quantity_schema(generated.get("items", {"type": "number"}))}
         return generated
 
 
@@ -245,6 +270,4 @@ def header(schema: dict, title: str) -> dict:
     dict
         A new schema mapping.
     """
-    out = {"$schema": "https://json-schema.org/draft/2020-12/schema", "title": title}
-    out.update(schema)
-    return out
+    return {"$schema": "https://json-schema.org/draft/2020-12/schema", "title": title, **schema}

@@ -422,10 +422,8 @@ def apply_overrides(data: object, overrides: list[str] | tuple[str, ...] | None)
         A value is not valid YAML, or an override goes into a missing list element or inside a
         scalar value.
     """
-    if not overrides:
-        return data
-    if not isinstance(data, dict):
-        return data                       # the loader reports the malformed top level itself
+    if not overrides or not isinstance(data, dict):
+        return data                       # (a malformed top level: the loader reports it itself)
     out = copy.deepcopy(data)
     for text in overrides:
         text = str(text)

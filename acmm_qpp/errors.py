@@ -84,9 +84,8 @@ def with_hint(exc: BaseException) -> str:
 
 
 class ConfigError(AcmmError, ValueError):
-    """A config file is missing, unreadable, malformed or physically impossible (exit 2)."""
-
-    exit_code = EXIT_INPUT
+    """A config file is missing, unreadable, malformed or physically impossible (exit 2, the
+    :class:`AcmmError` default)."""
 
 
 class ConvergenceError(AcmmError, ArithmeticError):

@@ -110,8 +110,7 @@ def output_error(exc: OSError, what: str, where: str | Path):
     """
     if isinstance(exc, OutputError):
         return exc
-    why = exc.strerror or str(exc)
-    return OutputError(f"cannot write {what} {where}: {why}")
+    return OutputError(f"cannot write {what} {where}: {exc.strerror or exc}")
 
 
 def write_bytes(path: str | Path, data: bytes, what: str = "results") -> Path:

@@ -12,8 +12,6 @@ from typing import Optional
 # first: acmm_qpp.cli sets the BLAS thread defaults, which must precede the first import of numpy
 from acmm_qpp.cli.plumbing import (ConfigKinds, OutOpt, StrictOpt, help_command, overrides_arg, product_app,
                                    redraw_command, run_app, strict_exit, user_errors)
-from acmm_qpp.plot_style import files_only_backend
-from acmm_qpp.signals import terminate_like_ctrl_c
 from qpp import CONFIG_SECTIONS, PACKAGED_CONFIGS
 
 import numpy as np  # noqa: E402
@@ -224,11 +222,7 @@ def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
 
 
 def main() -> None:
-    """Run the command-line app (the console-script entry point); exits with the code of the run
-    (SIGTERM and SIGHUP roll back like Ctrl-C, and only the first interrupt counts:
-    :func:`acmm_qpp.signals.terminate_like_ctrl_c`)."""
-    terminate_like_ctrl_c(once=True)
-    files_only_backend()
+    """Console entry point (``qpp``): :func:`acmm_qpp.cli.plumbing.run_app` of the app."""
     run_app(app)
 
 

@@ -17,8 +17,6 @@ from acmm_qpp.cli.plumbing import (OutOpt, StrictOpt, help_command, overrides_ar
 from acmm.cli import report, sweep
 from acmm.cli.command import CONFIGS, FiguresOpt, acmm_command
 from acmm.cli.steps import Steps
-from acmm_qpp.plot_style import files_only_backend
-from acmm_qpp.signals import terminate_like_ctrl_c
 from acmm.model.unit_systems import shown
 
 app = product_app("Space Station attitude control / momentum management (CR-185644 Part II).",
@@ -360,11 +358,7 @@ def plot(target: str = typer.Argument(..., metavar="RUN_DIR_OR_H5",
 
 
 def main() -> None:
-    """Console entry point (``acmm``): SIGTERM and SIGHUP unwind like Ctrl-C
-    and only the first interrupt counts (:func:`acmm_qpp.signals.terminate_like_ctrl_c`), figures go
-    to files only, then the app runs."""
-    terminate_like_ctrl_c(once=True)
-    files_only_backend()
+    """Console entry point (``acmm``): :func:`acmm_qpp.cli.plumbing.run_app` of the app."""
     run_app(app)
 
 

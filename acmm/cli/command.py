@@ -1,8 +1,10 @@
 """What every ``acmm`` command shares: the kinds of config ``acmm`` reads (:data:`CONFIGS`), the
-``--figures/--no-figures`` option (:data:`FiguresOpt`) and the wrapper :func:`acmm_command` (:func:`acmm_qpp.cli.plumbing.user_errors`: one ``error:`` line, with
-the hint the error was raised with, and the ``note:`` lines numba's cache leaves after a run)."""
+``--figures/--no-figures`` option (:data:`FiguresOpt`) and the decorator :data:`acmm_command`
+(:func:`acmm_qpp.cli.plumbing.user_errors`: one ``error:`` line, with the hint the error was raised
+with, and the ``note:`` lines numba's cache leaves after a run)."""
 from __future__ import annotations
 
+import functools
 import sys
 
 import typer
@@ -32,17 +34,5 @@ def _compiled_cache_notes() -> list[str]:
     return cache.write_error_notes() if cache is not None else []
 
 
-def acmm_command(fn):
-    """:func:`acmm_qpp.cli.plumbing.user_errors` for an ``acmm`` command, with numba's cache notes.
-
-    Parameters
-    ----------
-    fn : callable
-        The command function.
-
-    Returns
-    -------
-    callable
-        The wrapped command.
-    """
-    return user_errors(fn, notes=_compiled_cache_notes)
+#: The decorator of an ``acmm`` command: :func:`acmm_qpp.cli.plumbing.user_errors` with numba's cache notes.
+acmm_command = functools.partial(user_errors, notes=_compiled_cache_notes)

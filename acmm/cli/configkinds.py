@@ -1,25 +1,20 @@
 """The three config kinds (acmm run, sweep, qpp) side by side: the JSON schema of each, and
 loading a file of any kind (CR-185644 Part II for acmm and sweeps, Part III for qpp); which kind a
 YAML file is, is :meth:`acmm_qpp.cli.plumbing.ConfigKinds.kind_of` of :data:`acmm.cli.command.CONFIGS`.
-
-This package sits above both cores (like :mod:`acmm.report`, below :mod:`acmm_qpp.cli`): it imports ``acmm``
-and ``qpp``, neither of them imports it at import time (``tests/test_layers.py``).  It is not
-part of :mod:`acmm_qpp.cli` because tests and scripts use it without the command line, and its
-:func:`load_any` validates models, which is more than parsing arguments.  The schemas themselves
-are in :mod:`acmm.io.schema`, :mod:`qpp.io.config` and :mod:`acmm_qpp.config_model`.
+It imports ``acmm`` and ``qpp``; neither imports it (``tests/test_layers.py``).
 """
 from __future__ import annotations
 
 import json
 
 from acmm import DEFAULT_CONFIG, PACKAGED_CONFIGS
-from acmm.io.config import parse_config, resolve_references, split_overrides
+from acmm.io.config import load_config, split_overrides
 from acmm.io.schema import acmm_schema
-from acmm.sweep.config import parse_sweep
+from acmm.sweep.config import load_sweep
 from acmm.sweep.spec import sweep_schema
 from acmm.cli.command import CONFIGS
-from acmm_qpp.configio import apply_overrides, read_yaml, remember_origin
-from qpp.io.config import parse_config as parse_qpp, qpp_schema
+from acmm_qpp.configio import apply_overrides, read_yaml
+import qpp.io.config
 
 
 def schema_json(kind: str) -> str:
@@ -35,7 +30,7 @@ def schema_json(kind: str) -> str:
     str
         JSON text (UTF-8 characters kept).
     """
-    schema = {"acmm": acmm_schema, "sweep": sweep_schema, "qpp": qpp_schema}[kind]()
+    schema = {"acmm": acmm_schema, "sweep": sweep_schema, "qpp": qpp.io.config.qpp_schema}[kind]()
     return json.dumps(schema, indent=2, ensure_ascii=False)
 
 
@@ -63,13 +58,7 @@ def load_any(path, overrides=None):
     """
     path, overrides = split_overrides(path, overrides)
     data, p = read_yaml(DEFAULT_CONFIG if path is None else path, PACKAGED_CONFIGS)
-    data = apply_overrides(data, overrides)
-    kind = CONFIGS.kind_of(data)
-    if kind == "sweep":
-        model = parse_sweep(data, source=str(p), directory=p.parent)
-    elif kind == "qpp":
-        model = parse_qpp(data, source=str(p))
-    else:
-        # schedule.to and the like relative to the config's folder, as `acmm tea|design|...` read them
-        model = parse_config(resolve_references(data, p.parent, str(p)), source=str(p))
-    return kind, remember_origin(model, str(p), overrides)
+    kind = CONFIGS.kind_of(apply_overrides(data, overrides))
+    # the kind's own loader (schedule.to and the like relative to the config's folder, as `acmm
+    # tea|design|...` read them)
+    return kind, {"sweep": load_sweep, "qpp": qpp.io.config.load_config, "acmm": load_config}[kind](p, overrides)

@@ -5,6 +5,7 @@ the report machinery stay inside the command so ``acmm --help`` stays fast.
 """
 from __future__ import annotations
 
+import functools
 from collections import Counter
 from pathlib import Path
 import sys
@@ -52,12 +53,7 @@ def register(app: typer.Typer) -> None:
 
         # progress on a terminal's stderr; elsewhere (CI, pipes) on stdout, so that stderr holds
         # the errors alone: one `error:` line when the report cannot go on (a full disk…)
-        stream = sys.stderr if enabled() else sys.stdout
-
-        def say(msg: str) -> None:
-            stream.write(msg + "\n")
-            stream.flush()
-
+        say = functools.partial(print, file=sys.stderr if enabled() else sys.stdout, flush=True)
         if not out.strip():              # Path("") would be the working directory itself
             raise ConfigError("--out: empty; give the report's output directory")
         r = build_report(Path(out), fast=fast, rerun=rerun, root=root, progress=say, jobs=jobs)

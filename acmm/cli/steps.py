@@ -70,9 +70,7 @@ class Steps:
             t = self._p.tasks[0]
             speed = t.finished_speed or t.speed
             kw["rate"] = f"{speed:.2f}/s" if speed else ""
-        self._p.update(self._task, advance=n, **kw)
-        if not self.refresh_thread:
-            self._p.refresh()
+        self._p.update(self._task, advance=n, refresh=not self.refresh_thread, **kw)
 
     def describe(self, text: str) -> None:
         """Change the text before the bar without moving it.
@@ -83,6 +81,4 @@ class Steps:
             New text.
         """
         if self._p is not None:
-            self._p.update(self._task, description=text)
-            if not self.refresh_thread:
-                self._p.refresh()
+            self._p.update(self._task, description=text, refresh=not self.refresh_thread)

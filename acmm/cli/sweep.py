@@ -5,6 +5,7 @@ is imported inside the command, so that ``acmm --help`` stays fast.
 """
 from __future__ import annotations
 
+import contextlib
 import logging
 from typing import Optional
 
@@ -14,7 +15,6 @@ from acmm_qpp.errors import EXIT_INPUT
 from acmm.cli.command import CONFIGS, FiguresOpt, acmm_command
 from acmm_qpp.cli.plumbing import fail, help_command, overrides_arg, strict_exit
 from acmm.cli.steps import Steps
-from acmm_qpp.cli.progress import enabled
 
 
 class _Bar:
@@ -29,9 +29,7 @@ class _Bar:
     def __call__(self, done: int, total: int, rec: dict) -> None:
         if rec.get("kind") == "case" and rec.get("verdict") != "bounded":
             self.bad += 1
-        if not enabled():
-            return
-        if self.steps is None:
+        if self.steps is None:                     # (silent unless enabled: Steps checks)
             self.steps = Steps(f"{self.name}: {done - 1}/{total} tasks", total, rate=True).__enter__()
             self.steps.advance(n=done - 1)
         self.steps.advance(f"{self.name}: {self.bad} not bounded")
@@ -56,18 +54,12 @@ def _check_executor_options(workers: Optional[int], scheduler: Optional[str]) ->
         fail("--scheduler: an empty address (give host:port of a Dask scheduler, or leave the option out "
              "to run on local processes)", EXIT_INPUT)
     if scheduler is not None:
-        _quiet_dask_client()
+        # after ``import distributed``, which sets its loggers' levels from its config; without it
+        # the sweep reports that --scheduler needs acmm-qpp[dask]
+        with contextlib.suppress(ImportError):
+            import distributed  # noqa: F401  # deferred: dask start-up, and an optional dependency
 
-
-def _quiet_dask_client() -> None:
-    """Silence the Dask client's error log (its tracebacks while it reconnects to a lost
-    scheduler); the sweep reports that loss on one line.  After ``import distributed``, which
-    sets its loggers' levels from its config."""
-    try:
-        import distributed  # noqa: F401  # deferred: dask start-up, and an optional dependency
-    except ImportError:        # reported by the sweep (--scheduler needs acmm-qpp[dask])
-        return
-    logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
+            logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
 
 
 def register(app: typer.Typer) -> None:

@@ -20,10 +20,9 @@ from pathlib import Path
 from typing import Annotated, Literal, Optional
 
 import numpy as np
-import yaml
 from pydantic import BeforeValidator, Field, field_validator, model_validator
 
-from acmm_qpp.config_model import StrictModel, quantity
+from acmm_qpp.config_model import RunConfig, StrictModel, quantity
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.units import to_canonical
 from acmm.model.inertia import MAX_INERTIA
@@ -41,8 +40,6 @@ from acmm_qpp.limits import how_to_raise, limit
 #: is refused as a typo or an overflow hazard (bias torques are a few ft·lbf, CMG momentum ~1e4
 #: ft·lbf·s; the inertia's reasoning is :data:`acmm.model.inertia.MAX_INERTIA`'s).
 _RANGE = {"inertia": MAX_INERTIA, "torque": 1e9, "momentum": 1e12, "angle": 3600.0, "rate": 1.0, "time": 1e9}
-_CANON = {"inertia": "slug·ft²", "torque": "ft·lbf", "momentum": "ft·lbf·s", "angle": "deg", "rate": "rad/s",
-          "time": "s"}
 #: The report's unit of each dimension kind of the config (pint syntax): a bare number is in it.
 UNITS = {"inertia": "slug*ft^2", "torque": "ft*lbf", "momentum": "ft*lbf*s", "angle": "deg", "rate": "rad/s",
          "time": "s", "weight_torque": "1/(ft*lbf)^2"}
@@ -54,12 +51,12 @@ MIN_PRINCIPAL_MOMENT = 1e-6
 
 
 def _plausible_value(x: float, dimension: str) -> float:
-    """``x`` (in the canonical unit of :data:`_CANON`) unchanged when its magnitude is physically
+    """``x`` (in the unit of :data:`UNITS`) unchanged when its magnitude is physically
     plausible for ``dimension`` (``inertia``, ``torque``…), else a ValueError naming both."""
     bound = _RANGE.get(dimension)
     if bound is not None and abs(x) > bound:
-        raise ValueError(f"{x:.4g} {_CANON[dimension]} is outside the physically plausible range "
-                         f"|value| ≤ {bound:g} {_CANON[dimension]}")
+        unit = UNITS[dimension].replace("*", "·").replace("^2", "²")      # slug·ft², ft·lbf·s, ...
+        raise ValueError(f"{x:.4g} {unit} is outside the physically plausible range |value| ≤ {bound:g} {unit}")
     return x
 
 
@@ -130,8 +127,7 @@ class Inertia(SectionModel):
 
     @model_validator(mode="after")
     def _physical(self):
-        m = self.matrix()
-        eig = np.linalg.eigvalsh(m)
+        eig = np.linalg.eigvalsh(self.matrix())
         if eig[0] <= 0:
             raise ValueError(
                 f"inertia matrix is not positive definite (smallest principal moment {eig[0]:.4g} slug·ft²)")
@@ -390,7 +386,7 @@ class Output(SectionModel):
         return v
 
 
-class Config(SectionModel):
+class Config(SectionModel, RunConfig):
     """A complete acmm run configuration."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX,
@@ -477,26 +473,6 @@ class Config(SectionModel):
             return 1
         return (sch.n_points if sch.to is not None else 1) + len(sch.points)
 
-    def run_dir(self) -> Path:
-        """Directory of this run's results.
-
-        Returns
-        -------
-        Path
-            ``<output.root>/<name>``.
-        """
-        return Path(self.output.root) / self.name
-
-    def to_yaml(self) -> str:
-        """The resolved config (all defaults filled in) as YAML text.
-
-        Returns
-        -------
-        str
-            The YAML text.
-        """
-        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
-
 
 def parse_config(data: object, source: str = "config") -> Config:
     """Validate a mapping (e.g. parsed YAML) into a :class:`Config` (one-line ConfigError).
@@ -555,9 +531,8 @@ def split_overrides(config, overrides) -> tuple[object, list[str]]:
         (config, or None when it was an override and no such file exists; list of overrides).
     """
     overrides = list(overrides or [])
-    if config is not None and looks_like_override(str(config)):
-        if not Path(str(config)).exists():
-            return None, [str(config)] + overrides
+    if config is not None and looks_like_override(str(config)) and not Path(str(config)).exists():
+        return None, [str(config)] + overrides
     return config, overrides
 
 

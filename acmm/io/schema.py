@@ -14,9 +14,6 @@ against the design points, matrix shapes of a qpp plant, a positive-definite ine
 right dimension).  Also, like pydantic's lax mode, the loader converts numeric strings (``"0.5"``)
 where a number is expected; the schema documents the canonical number form.
 
-The qpp schema is in :mod:`qpp.io.config`; the dispatcher across the three kinds (:func:`schema_json`,
-:func:`load_any`) is :mod:`acmm.cli.configkinds`.
-
 Editors: ``acmm schema --kind acmm > acmm.schema.json`` and a first line
 ``# yaml-language-server: $schema=./acmm.schema.json`` in the YAML file (VS Code's YAML
 extension, any editor using yaml-language-server).

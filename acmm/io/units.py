@@ -69,29 +69,11 @@ def state_space_in(system: str, drf_mode: str, **arrays):
     """
     d, _ = state_factors(drf_mode, system)
     k = conversion_factor("ft*lbf", "N*m") if system == "SI" else 1.0
-    out = {}
-    for name, a in arrays.items():
-        if a is None:
-            out[name] = None
-            continue
-        a = np.asarray(a, float)
-        if name == "A":
-            out[name] = d[:, None] * a / d[None, :]
-        elif name in ("B", "G"):
-            out[name] = d[:, None] * a / k
-        elif name == "K":
-            out[name] = k * a / d
-        elif name in ("P", "Q"):
-            out[name] = a / d[:, None] / d[None, :]
-        elif name == "R":
-            out[name] = a / k ** 2
-        elif name in ("x", "scales"):
-            out[name] = a * d
-        elif name == "drf":
-            out[name] = a * d[12:]
-        else:
-            raise KeyError(name)
-    return out
+    rules = {"A": lambda a: d[:, None] * a / d[None, :], "B": lambda a: d[:, None] * a / k,
+             "G": lambda a: d[:, None] * a / k, "K": lambda a: k * a / d,
+             "P": lambda a: a / d[:, None] / d[None, :], "Q": lambda a: a / d[:, None] / d[None, :],
+             "R": lambda a: a / k ** 2, "x": lambda a: a * d, "scales": lambda a: a * d, "drf": lambda a: a * d[12:]}
+    return {name: None if a is None else rules[name](np.asarray(a, float)) for name, a in arrays.items()}
 
 
 def convert_items(items: Mapping[str, Any], system: str) -> dict:

@@ -29,7 +29,8 @@ except ImportError:  # pragma: no cover
 
 from acmm_qpp.errors import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_USAGE, EXIT_VERDICT, AcmmError, ConfigError,
                              plain_failure, with_hint)
-from acmm_qpp.signals import ignore_interrupts
+from acmm_qpp.plot_style import files_only_backend
+from acmm_qpp.signals import ignore_interrupts, terminate_like_ctrl_c
 
 
 def fail(message: str, code: int = EXIT_INPUT) -> None:
@@ -475,16 +476,21 @@ def strict_exit(strict: bool, failed: bool, why: str) -> None:
 
 
 def run_app(app) -> None:
-    """Run a typer ``app`` (the console entry points) and leave with its exit code.  From the
-    moment the app has returned, SIGINT, SIGTERM and SIGHUP are ignored: the run is finished and
-    written, and a Ctrl-C landing in the exit path gave a KeyboardInterrupt traceback with exit 0,
-    or killed a finished run by the signal (a review).
+    """Run a typer ``app`` (the console entry points) and leave with its exit code: SIGTERM and
+    SIGHUP unwind like Ctrl-C and only the first interrupt counts
+    (:func:`acmm_qpp.signals.terminate_like_ctrl_c`), figures go to files only
+    (:func:`acmm_qpp.plot_style.files_only_backend`).  From the moment the app has returned,
+    SIGINT, SIGTERM and SIGHUP are ignored: the run is finished and written, and a Ctrl-C landing
+    in the exit path gave a KeyboardInterrupt traceback with exit 0, or killed a finished run by
+    the signal (a review).
 
     Parameters
     ----------
     app : typer.Typer
         The application.
     """
+    terminate_like_ctrl_c(once=True)
+    files_only_backend()
     try:
         try:
             app()

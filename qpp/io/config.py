@@ -5,29 +5,20 @@ design procedure (section 12.1) and the simulation of ch. 13/14.
 Units: time s, frequency rad/s, the exponential weighting ``a`` 1/s; plant matrices and signals
 are in the user's units (the report's examples: m, rad, kg).  Unknown keys are rejected; a
 validation error becomes one :class:`acmm_qpp.errors.ConfigError` line naming the field.
-
-In order: the field types (numbers that may be written ``"<number> <unit>"``, converted to SI on
-load; the bound ``QPP_MAX`` on plausible magnitudes; the strict base of every section), the checks
-that span fields or bound the work (sectors, the sector sampling budget of an expression
-nonlinearity, the periods to integrate; each raises ``ValueError`` naming the field), the
-``nonlinearity`` section (the sinusoidal Lure nonlinearity of ch. 13, the polar arm of ch. 14,
-eq 14.1, and general sector-bounded expressions, :mod:`qpp.model.nonlin`, discriminated by
-``kind``), the ``simulation`` section (reference signals r_o(t) and r − r_o as sums of terms, the
-scenarios and the integrator settings of ch. 13.4 and 14.5), the other sections, the config itself
-and its JSON schema (``qpp schema``).
+Numbers may be written ``"<number> <unit>"`` (converted to SI on load), within ``QPP_MAX``; the
+``nonlinearity`` is sinusoidal (ch. 13), the polar arm (ch. 14, eq 14.1) or a sector-bounded
+expression (:mod:`qpp.model.nonlin`), told apart by ``kind``.
 """
 from __future__ import annotations
 
 import math
 import re
-from pathlib import Path
 from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
-import yaml
-from pydantic import BaseModel, Field, field_validator, model_validator
+from pydantic import AfterValidator, Field, field_validator, model_validator
 
-from acmm_qpp.config_model import Generator, StrictModel, header, quantity
+from acmm_qpp.config_model import Generator, RunConfig, StrictModel, header, quantity
 from acmm_qpp.configio import apply_overrides, read_yaml, remember_origin, validate_model
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.limits import how_to_raise, limit
@@ -62,16 +53,9 @@ QPP_MAX = 1e12
 
 def _implausible(v):
     """The first number in ``v`` (scalar or nested list) with |x| > QPP_MAX, else ``None``."""
-    if isinstance(v, bool) or isinstance(v, BaseModel):
-        return None
-    if isinstance(v, (int, float)):
-        return v if abs(v) > QPP_MAX else None
     if isinstance(v, (list, tuple)):
-        for x in v:
-            bad = _implausible(x)
-            if bad is not None:
-                return bad
-    return None
+        return next((bad for bad in map(_implausible, v) if bad is not None), None)
+    return v if isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v) > QPP_MAX else None
 
 
 class SectionModel(StrictModel):
@@ -99,6 +83,10 @@ def _finite_matrix(v):
     if not np.all(np.isfinite(a)):
         raise ValueError("must contain finite numbers")
     return v
+
+
+#: a matrix field (plant, published gains) checked by :func:`_finite_matrix`
+FiniteMatrix = Annotated[Matrix, AfterValidator(_finite_matrix)]
 
 
 def _check_periods(field: str, omega: float, t_final: float) -> None:
@@ -317,21 +305,16 @@ class Simulation(SectionModel):
 class Plant(SectionModel):
     """Lure plant x' = A x + B u + G d + B f1(·), y = C x (eqs 10.1, 13.1, 14.2) and servo-compensator."""
 
-    A: Matrix = Field(description="plant state matrix (n×n), 1/s")
-    B: Matrix = Field(description="control input matrix (n×m)")
-    C: Matrix = Field(description="output matrix (p×n)")
-    G: Matrix = Field(description="disturbance input matrix (n×r), B = G N (assumption iii)")
-    Ac: Matrix = Field(description="servo-compensator matrix (q×q), eq 10.2: internal model of r_o")
-    Bc: Matrix = Field(description="servo-compensator input matrix (q×p), driven by e = r − y")
-    Cc: Matrix = Field(description="servo output matrix (·×q): the H∞ weight W_s e = C_c x_c (13.5)")
+    A: FiniteMatrix = Field(description="plant state matrix (n×n), 1/s")
+    B: FiniteMatrix = Field(description="control input matrix (n×m)")
+    C: FiniteMatrix = Field(description="output matrix (p×n)")
+    G: FiniteMatrix = Field(description="disturbance input matrix (n×r), B = G N (assumption iii)")
+    Ac: FiniteMatrix = Field(description="servo-compensator matrix (q×q), eq 10.2: internal model of r_o")
+    Bc: FiniteMatrix = Field(description="servo-compensator input matrix (q×p), driven by e = r − y")
+    Cc: FiniteMatrix = Field(description="servo output matrix (·×q): the H∞ weight W_s e = C_c x_c (13.5)")
     x0: Optional[list[float]] = Field(None, description="initial plant state (n), default 0; observer starts equal")
     xc0: Union[Literal["zero", "equilibrium"], list[float]] = Field(
         "zero", description="initial servo state: 0, 'equilibrium' (K_c x_c = −K_1 x0, least squares) or a list")
-
-    @field_validator("A", "B", "C", "G", "Ac", "Bc", "Cc")
-    @classmethod
-    def _mats(cls, v):
-        return _finite_matrix(v)
 
 
 class Hinf(SectionModel):
@@ -350,18 +333,13 @@ class Hinf(SectionModel):
 class Published(SectionModel):
     """Gains and numbers printed in the report, for comparison (and optionally for use)."""
 
-    K1: Optional[Matrix] = Field(None, description="printed K1 (m×n)")
-    Kc: Optional[Matrix] = Field(None, description="printed Kc (m×q)")
-    H: Optional[Matrix] = Field(None, description="printed observer gain H (n×p), report's sign")
+    K1: Optional[FiniteMatrix] = Field(None, description="printed K1 (m×n)")
+    Kc: Optional[FiniteMatrix] = Field(None, description="printed Kc (m×q)")
+    H: Optional[FiniteMatrix] = Field(None, description="printed observer gain H (n×p), report's sign")
     beta1: Optional[float] = Field(None, description="printed β1")
     beta3: Optional[float] = Field(None, description="printed β3")
     beta4: Optional[float] = Field(None, description="printed β4")
     m: Optional[float] = Field(None, description="printed threshold m")
-
-    @field_validator("K1", "Kc", "H")
-    @classmethod
-    def _mats(cls, v):
-        return v if v is None else _finite_matrix(v)
 
 
 class Spheres(SectionModel):
@@ -417,7 +395,7 @@ class Output(SectionModel):
 _EXPR_CACHE: dict = {}
 
 
-class QppConfig(SectionModel):
+class QppConfig(SectionModel, RunConfig):
     """A complete ``qpp`` configuration."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX,
@@ -618,26 +596,6 @@ class QppConfig(SectionModel):
             _EXPR_CACHE[key] = ExpressionModel(nl._texts(), P.p, nl._param_table(), nl.y_range, P.N(), t_range,
                                                n_grid=nl.n_grid)
         return _EXPR_CACHE[key]
-
-    def run_dir(self) -> Path:
-        """The results directory of this run.
-
-        Returns
-        -------
-        pathlib.Path
-            ``<output.root>/<name>``.
-        """
-        return Path(self.output.root) / self.name
-
-    def to_yaml(self) -> str:
-        """The resolved config as YAML text (what is embedded in every results file).
-
-        Returns
-        -------
-        str
-            YAML document, keys in schema order.
-        """
-        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
 
 
 def parse_config(data: object, source: str = "config") -> QppConfig:

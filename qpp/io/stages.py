@@ -101,12 +101,11 @@ def _printed_gain_items(pub, H) -> dict:
     """Datasets of the printed gains of the config's ``published`` section ({} when absent)."""
     if pub.K1 is None or pub.Kc is None:
         return {}
-    items = {
-        "K1": Dataset(np.asarray(pub.K1, float), GAIN_UNITS["K1"], "printed K1", dims=("input", "state")),
-        "Kc": Dataset(np.asarray(pub.Kc, float), GAIN_UNITS["Kc"], "printed Kc", dims=("input", "servo_state")),
-    }
-    if pub.H is not None:
-        items["H"] = Dataset(np.asarray(pub.H, float), GAIN_UNITS["H"], "printed H", dims=("state", "output"))
+    items = _gains(*(None if g is None else np.asarray(g, float) for g in (pub.K1, pub.Kc, pub.H)),
+                   "printed K1", "printed Kc", "printed H")
+    if pub.H is None:
+        del items["H"]
+    else:
         items["H_rel_diff"] = Dataset(
             np.where(np.abs(np.asarray(pub.H)) > 0, _rel(H, pub.H), 0.0), "1", "|H − H_printed|/|H_printed|",
             dims=("state", "output"))
@@ -133,16 +132,6 @@ def sector_verified(cfg: QppConfig) -> bool | None:
     if cfg.design.sector is not None or not isinstance(nl, ExpressionNonlinearity) or nl.sector is not None:
         return None
     return bool(cfg.expression_model().sector_info.verified)
-
-
-def _sector_check_items(cfg: QppConfig) -> dict:
-    """``sector_verified`` of a sector computed from an expression (:func:`sector_verified`)."""
-    verified = sector_verified(cfg)
-    if verified is None:
-        return {}
-    return {"sector_verified": Dataset(int(verified), "1", "1: φ within the grid's sector at 4000 random points "
-                                       "of the ranges; 0: some were outside, and the sector was widened to the "
-                                       "extremum climbed from them")}
 
 
 def design_items(cfg: QppConfig, r: DesignResult) -> dict:
@@ -212,9 +201,8 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
                                                 "nominal ones: the box of its beta3 (with y_o +- beta_o)")
     if r.published is not None:
         items["published_certificate"] = _published_certificate_items(r.published)
-    for reading in r.beta1:
+    for reading, b in r.beta1.items():
         key = reading.replace(".", "_")
-        b = r.beta1[reading]
         items[f"Bz_{key}"] = Dataset(r.Bz[reading], "loop-state units per s per exogenous unit", f"B_z, {reading} reading (columns [r, d])",
                                      dims=("loop_state", "exogenous"))
         items[f"beta1_{key}"] = Dataset(b["value"], "1", f"β1 exact (SLICOT L∞ norm), B_z {reading}",
@@ -222,7 +210,11 @@ def design_items(cfg: QppConfig, r: DesignResult) -> dict:
     items["Az"] = Dataset(r.Az["eq10.7"], "1/s", "A_z (eq 10.7; 13.6 / Table 14.1)",
                          dims=("loop_state", "loop_state_col"))
     items["thresholds"] = _thresholds(r.thresholds, "β3, β4, m (12.1)")
-    items.update(_sector_check_items(cfg))
+    verified = sector_verified(cfg)
+    if verified is not None:
+        items["sector_verified"] = Dataset(int(verified), "1", "1: φ within the grid's sector at 4000 random points "
+                                           "of the ranges; 0: some were outside, and the sector was widened to the "
+                                           "extremum climbed from them")
     items["circle"] = _circle_items(r.circle)
     printed = _printed_gain_items(cfg.published, r.H)
     if printed:
