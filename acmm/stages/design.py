@@ -25,18 +25,10 @@ from acmm.io.design_file import DesignTable, stored_table_digest, load_design_ta
 import json
 import time
 from acmm_qpp.provenance import config_hash
-from acmm.design import schedule_points as sp
 from acmm.design.design_core import design_schedule
 from acmm.design.settings import design_settings, schedule_settings
 from acmm.stages import design_output
-from acmm.design.schedule_points import off_branch_point
-
-AXES = ["roll", "pitch", "yaw"]
-
-
-# ---------------------------------------------------------------------------------------------
-# design: TEA → linearize → sector LQR per point → schedule
-# ---------------------------------------------------------------------------------------------
+from acmm.design.schedule_points import off_branch_point, point_specs
 
 
 @dataclass
@@ -192,7 +184,7 @@ def compute_design(config, progress=None) -> DesignResult:
 
     cfg = as_config(config)
     t0 = time.perf_counter()
-    specs, s = sp.point_specs(cfg), design_settings(cfg)
+    specs, s = point_specs(cfg), design_settings(cfg)
     workers = _point_workers(s.method.pooled, len(specs))
     if workers <= 1:
         ds = design_schedule(specs, s, schedule_settings(cfg), progress)
@@ -302,8 +294,6 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None, warn=Non
                     if h5_text(f.attrs.get("unit_system", "imperial")) == cfg.output.units:
                         return table, f"reused {path}"
     r, path = run_design(cfg, progress, figures, warn)
-    if cfg.output.units != "imperial":
-        # the table as a later run reuses it: converted to SI and back, so that a simulation is
-        # the same bit for bit whether its design was just made or read from design.h5
-        return load_design_table(path), f"designed, wrote {path}"
-    return r.table, f"designed, wrote {path}"
+    # in SI the table as a later run reuses it: converted to SI and back, so that a simulation is
+    # the same bit for bit whether its design was just made or read from design.h5
+    return r.table if cfg.output.units == "imperial" else load_design_table(path), f"designed, wrote {path}"

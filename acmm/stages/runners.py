@@ -16,11 +16,9 @@ import numpy as np
 
 from acmm.model import controllability as ctrb_mod, linearize as lin, tea as tea_mod
 from acmm.io.config import Config
-from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, as_config, in_system, write_results
+from acmm.stages.common import AXES, UNIT_A, UNIT_B, UNIT_STATE, as_config, in_system, write_results
 from acmm_qpp.outputs import stage
 from acmm_qpp.results import Dataset
-
-AXES = ["roll", "pitch", "yaw"]
 
 
 @dataclass

@@ -9,17 +9,14 @@ eq 3.9.
 from __future__ import annotations
 
 from functools import partial
-from pathlib import Path
 
 import numpy as np
 
 from acmm.model import kinematics as kin
 from acmm.simulate import scenario as scen
-from acmm.stages.common import UNIT_K, UNIT_STATE, stored_config, stored_in
+from acmm.stages.common import AXES, UNIT_K, UNIT_STATE, stored_config, stored_in
 from acmm_qpp.results import Dataset, h5_text
 import h5py
-
-AXES = ["roll", "pitch", "yaw"]
 
 
 def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[dict, dict]:
