@@ -1,24 +1,11 @@
 """Schema of a sweep config (pydantic v2, ``extra="forbid"``), read from YAML.
 
-A sweep file names one or more *base* configs (ordinary acmm configs) and says how to vary
-them::
-    name: inertia30                # results go to <output.root>/<name>/sweep.h5
-    description: "..."
-    sweep:
-      bases: [mb3, ac]             # paths (relative to this file, then the working directory)
-                                   # or packaged config names; or `base: mb3`
-      monte_carlo:                 # or `grid: {parameter: [values...]}`
-        inertia: {percent: 30}     # each of I11..I23 × (1 + U(−0.30, +0.30))
-      n_runs: 200                  # Monte Carlo draws per base
-      seed: 185644
-      design: fixed                # fixed nominal gain schedule | redesign per case
-      tea_estimate: nominal        # controller's TEA estimate with a fixed design
-      orbits: 10                   # per run (default: the base config's simulation.orbits)
-      margin: {low: 0.1, high: 10} # bisection on a uniform inertia scaling, per base
-    output: {root: runs, figures: true}
-
-Alternatively the ``sweep`` section may sit inside an ordinary config (no ``base``/``bases``):
-the rest of that file is then the single base config and the sweep takes its ``name``.
+A sweep file names one or more *base* configs (ordinary acmm configs: paths relative to the file,
+then the working directory, or packaged names) and says how to vary them (``monte_carlo`` with
+``n_runs`` and ``seed``, or ``grid``; ``design``, ``tea_estimate``, ``orbits``, ``margin``):
+docs/howto/sweeps.md shows a full file.  Alternatively the ``sweep`` section may sit inside an
+ordinary config (no ``base``/``bases``): the rest of that file is then the single base config
+and the sweep takes its ``name``.
 
 Parameters (see :data:`acmm.sweep.spec.PARAMETERS`): relative inertia-element changes
 ``dI11 … dI23`` (shorthand ``inertia``), a uniform inertia scale ``inertia_scale``, additive bias
@@ -38,13 +25,12 @@ from pathlib import Path
 import yaml
 
 from acmm.io.config import Config, load_config, parse_config
-from acmm_qpp.configio import read_yaml, require_mapping, validate_model
+from acmm_qpp.configio import apply_overrides, read_yaml, remember_origin, require_mapping, validate_model
 from acmm.sweep.spec import SweepFile, SweepSpec
 from acmm_qpp.errors import ConfigError
 import json
 from acmm.sweep.limits import check_sweep_work
 from acmm import PACKAGED_CONFIGS
-from acmm_qpp.configio import apply_overrides, remember_origin
 from acmm_qpp.provenance import config_hash
 import difflib
 
