@@ -7,20 +7,13 @@ from typing import Optional
 import numpy as np
 
 from acmm.model.inertia import perturb_inertia, unphysical_reason
-from acmm.sweep.spec import PARAMETERS, SHORTHANDS
-
-
-AXES = ("roll", "pitch", "yaw")
+from acmm.sweep.spec import AXES, PARAMETERS, SHORTHANDS
 
 #: Verdict codes stored in ``verdict_code``.
 VERDICTS = ("bounded", "not_settled", "diverged", "no_equilibrium", "unphysical", "design_failed",
             "tea_failed")
 
 
-
-# ---------------------------------------------------------------------------------------------
-# case parameters
-# ---------------------------------------------------------------------------------------------
 def draw_parameters(rng: np.random.Generator, spec) -> dict:
     """One draw of every Monte Carlo parameter, in the order the config lists them.
 
