@@ -170,9 +170,9 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     spec = sweep.spec
     t0 = time.perf_counter()
     key = sweep.results_key()
-    run_dir = out
-    jpath = run_dir / "sweep.journal"
-    done = _resumed(sweep, jpath, key) if resume and jpath.exists() else {}
+    jpath = out / "sweep.journal"
+    resumed = resume and jpath.exists()
+    done = _resumed(sweep, jpath, key) if resumed else {}
     n_resumed = len(done)
     tasks = [t for t in _sweep_tasks(sweep) if t not in done]
     total = n_resumed + len(tasks)
@@ -184,12 +184,16 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     executor, close = None, lambda abort=False: None
     if tasks:        # before the journal: an unreachable scheduler writes nothing
         executor, close = _make_executor(workers if not scheduler else 0, scheduler)
-    afresh = not (resume and jpath.exists())
     journal = None
     try:
         journal = Journal(jpath, key, fresh=not resume)
-        if afresh:              # after the journal: a journal that cannot be written changes nothing
-            _start_afresh(sweep, run_dir)
+        # after the journal (one that cannot be written changes nothing): partial results must not
+        # sit beside an earlier run's, so its tables and figures go and this sweep's config.yaml
+        # comes first (an interrupted re-run with another seed left its results beside the earlier
+        # run's config.yaml and figures: a review)
+        if not resumed:
+            _remove_earlier(out)
+            write_text(out / CONFIG_FILE, config_text_of(sweep))
     except BaseException:
         if journal is not None:
             journal.close()
@@ -236,16 +240,6 @@ def _resumed(sweep: Sweep, jpath: Path, key: str) -> dict:
                               "--resume")
         done[task] = rec
     return done
-
-
-def _start_afresh(sweep: Sweep, run_dir: Path) -> None:
-    """A sweep started afresh (not resumed) keeps partial results when interrupted, so it must not
-    sit beside an earlier run's: that run's ``sweep.h5``, ``sweep.csv`` and figures are removed
-    (its journal is replaced next) and this sweep's ``config.yaml`` is written first.  An
-    interrupted re-run with another seed left its results beside the earlier run's config.yaml
-    and figures (a review)."""
-    _remove_earlier(run_dir)
-    write_text(run_dir / CONFIG_FILE, config_text_of(sweep))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -320,14 +314,6 @@ def _task_key(rec: dict) -> tuple:
     return ("case", rec["base"], rec["index"]) if rec["kind"] == "case" else ("margin", rec["base"], rec["direction"])
 
 
-def _call(task, ctx):
-    kind, _, arg = task
-    return run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg)
-
-
-_WARM = False
-
-
 #: glibc ``mallopt`` parameter numbers
 M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
 #: fixed mmap threshold set in a worker whose dynamic threshold is off (bytes; glibc's dynamic
@@ -374,16 +360,14 @@ def _in_dask_worker() -> bool:
         return False
 
 
+@functools.cache
 def warm_worker() -> None:
     """Once per worker process: load the compiled kernels (from numba's cache: no compile) and
     in a Dask worker restore heap reuse (:func:`_restore_heap_reuse`); a long-lived Dask cluster can be warmed
     ahead with ``client.run(acmm.sweep.run.warm_worker)``."""
-    global _WARM
-    if not _WARM:
-        if _in_dask_worker():        # only the nanny's environment needs it; the user's own
-            _restore_heap_reuse()    # MALLOC_* choice in a driver or pool process is left alone
-        warm_up()
-        _WARM = True
+    if _in_dask_worker():        # only the nanny's environment needs it; the user's own
+        _restore_heap_reuse()    # MALLOC_* choice in a driver or pool process is left alone
+    warm_up()
 
 
 _LOCAL: dict = {}
@@ -418,7 +402,7 @@ def _call_chunk(chunk, ctx, code: Optional[str] = None) -> list[dict]:
                           f"command ({code}): start the workers from the same installation")
     warm_worker()
     ctx = _local_context(ctx)
-    return [_call(t, ctx) for t in chunk]
+    return [run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg) for kind, _, arg in chunk]
 
 
 @functools.lru_cache(maxsize=1)
@@ -442,12 +426,10 @@ def code_identity() -> str:
 def _scheduler_workers(executor, default: int) -> int:
     """Number of workers (threads, ≥ 1) of the Dask cluster behind ``executor``, else ``default``."""
     client = getattr(executor, "_client", None)
-    if client is None:
-        return max(1, default)
-    try:
-        return max(1, sum(int(v) for v in client.nthreads().values()))
-    except (AttributeError, KeyError, OSError, TypeError, ValueError):
-        return max(1, default)
+    with contextlib.suppress(AttributeError, KeyError, OSError, TypeError, ValueError):
+        if client is not None:
+            return max(1, sum(int(v) for v in client.nthreads().values()))
+    return max(1, default)
 
 
 def _task_arguments(executor, contexts: dict) -> dict:
@@ -458,9 +440,8 @@ def _task_arguments(executor, contexts: dict) -> dict:
     if client is None:
         return {k: (v,) for k, v in contexts.items()}
     remote = contexts
-    if contexts:
-        with contextlib.suppress(AttributeError, TypeError, ValueError):
-            remote = {k: client.scatter(v, broadcast=True, hash=False) for k, v in contexts.items()}
+    with contextlib.suppress(AttributeError, TypeError, ValueError):
+        remote = {k: client.scatter(v, broadcast=True, hash=False) for k, v in contexts.items()}
     return {k: (v, code_identity()) for k, v in remote.items()}
 
 
