@@ -14,7 +14,8 @@ import numpy as np
 
 from acmm_qpp.errors import ConvergenceError, DesignError
 from acmm.model.inertia import perturb_inertia
-from acmm.sweep.cases import AXES, unphysical_draw_reason, case_values
+from acmm.sweep.cases import unphysical_draw_reason, case_values
+from acmm.sweep.spec import AXES
 from acmm.simulate.scenario import scenario_from_config
 from acmm.stages.design import compute_design, design_table
 from acmm.design.schedule_points import PointSpec, schedule_specs
@@ -98,13 +99,6 @@ def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
     return schedule_specs(start, end, [spec(p) for p in cfg.schedule.points], schedule_settings(cfg), n)
 
 
-def _redesigned_table(cfg, values: dict, biases: np.ndarray):
-    """The design table of the perturbed plant: the core (:func:`acmm.design.design_core.design_schedule`)
-    called directly on the perturbed design points with the base config's settings."""
-    ds = design_schedule(_redesigned_specs(cfg, values, biases), design_settings(cfg), schedule_settings(cfg))
-    return design_table(ds.points, ds.fit, "")
-
-
 def empty_row(n_levels: int) -> dict:
     """The metrics row of a case that has none yet (NaN and empty values).
 
@@ -165,9 +159,10 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
     tea_note = ""
     try:
         if spec.design == "redesign":
-            ptable = _redesigned_table(cfg, values, bias)
+            # the core called directly on the perturbed design points with the base config's settings
+            ds = design_schedule(_redesigned_specs(cfg, values, bias), design_settings(cfg), schedule_settings(cfg))
             # only the inertia and bias differ from the base config, and those come from the table
-            sc = scen.scenario_from_config(cfg, ptable, orbits=ctx.orbits)
+            sc = scen.scenario_from_config(cfg, design_table(ds.points, ds.fit, ""), orbits=ctx.orbits)
             true = sc.theta_est.copy()
             # the redesign's bias per point is the held nominal bias (+ offsets); the schedule's
             # levels are the perturbed design points

@@ -183,32 +183,29 @@ class Journal:
     sync_interval = 0.5
 
     def __init__(self, path: Path, key: str, fresh: bool):
-        with _journal_errors(path):
-            self._open(path, key, fresh)
-        self._last_sync = time.monotonic()
-
-    def _open(self, path: Path, key: str, fresh: bool) -> None:
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        if fresh or not self.path.exists():
-            tmp = self.path.with_name(f".{self.path.name}.tmp")
-            try:
-                with open(tmp, "w") as f:
-                    f.write(json.dumps({"kind": "header", "version": JOURNAL_VERSION, "key": key}) + "\n")
-                    f.flush()
-                    os.fsync(f.fileno())
-                os.replace(tmp, self.path)       # only under the run lock: no sweep is using it
-            except BaseException:
-                with contextlib.suppress(OSError):
-                    os.unlink(tmp)
-                raise
-        else:
-            # drop a torn final line before appending
-            data = self.path.read_bytes()
-            if data and not data.endswith(b"\n"):
-                with open(self.path, "r+b") as f:
-                    f.truncate(data.rfind(b"\n") + 1)
-        self._f = open(self.path, "a")
+        with _journal_errors(path):
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            if fresh or not self.path.exists():
+                tmp = self.path.with_name(f".{self.path.name}.tmp")
+                try:
+                    with open(tmp, "w") as f:
+                        f.write(json.dumps({"kind": "header", "version": JOURNAL_VERSION, "key": key}) + "\n")
+                        f.flush()
+                        os.fsync(f.fileno())
+                    os.replace(tmp, self.path)       # only under the run lock: no sweep is using it
+                except BaseException:
+                    with contextlib.suppress(OSError):
+                        os.unlink(tmp)
+                    raise
+            else:
+                # drop a torn final line before appending
+                data = self.path.read_bytes()
+                if data and not data.endswith(b"\n"):
+                    with open(self.path, "r+b") as f:
+                        f.truncate(data.rfind(b"\n") + 1)
+            self._f = open(self.path, "a")
+        self._last_sync = time.monotonic()
 
     def append(self, records: list) -> None:
         """Append records (one write, one flush; an fsync when the last is older than the interval).
