@@ -189,7 +189,6 @@ def certificate_items(sc: StairCertificate) -> dict:
     """
     c = sc.certificate
     orbit = sc.orbit
-    level = ("level",)
     items = {
         "closed_loop": Dataset(sc.closed_loops, UNIT_A, "A_k - B_k K_k of each level's frozen loop (eq 4.46, coupled, "
                                "about the level's TEA)", dims=("level", "state", "state_col")),
@@ -210,7 +209,7 @@ def certificate_items(sc: StairCertificate) -> dict:
                                    "statement": "certificate of the linearized switched system",
                                    "not_certified_below_orbit": c.tau_lower / orbit}),
         "dwell": Dataset(c.dwell / orbit, "orbit", "time each level but the last is held", dims=("switch",)),
-        "transient": Dataset(c.transient, "1", "bound on sqrt(V_k) of the deviation while level k holds", dims=level),
+        "transient": Dataset(c.transient, "1", "bound on sqrt(V_k) of the deviation while level k holds", dims=("level",)),
         "u_bound": Dataset(c.u_bound, "ft*lbf", "bound on |u| while each level holds", AXES,
                            dims=("level", "axis"), attrs={"torque_limit_ft_lbf": c.torque_limit}),
         "h_bound": Dataset(c.h_bound, "ft*lbf*s", "bound on the deviation of |h| while each level holds",

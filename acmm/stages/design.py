@@ -1,7 +1,5 @@
 """The design stage: TEA → design model (eqs 4.46–4.47) → sector LQR per design point
 (ch. 5.2) → gain schedule (ch. 5.3), its ``design.h5`` and the reuse of a design already written.
-
-Split from :mod:`acmm.stages.runners` (issue 12).
 """
 from __future__ import annotations
 
@@ -109,9 +107,7 @@ class DesignResult:
             bad = ~(pc.max_real < 0)                # NaN (a failed eigenvalue) counts as unstable
             th = np.degrees(pc.theta2[bad])
             parts.append(f"at {int(bad.sum())} of {bad.size} path TEAs, θ2* {th.min():+.2f} ... {th.max():+.2f} deg")
-        if not parts:
-            return None
-        return "the scheduled closed loop is UNSTABLE " + " and ".join(parts)
+        return "the scheduled closed loop is UNSTABLE " + " and ".join(parts) if parts else None
 
     def worst_check_index(self) -> int | None:
         """Index of the schedule check with the smallest sector margin (None without a schedule).
@@ -137,10 +133,8 @@ def design_hash(cfg: Config) -> str:
     str
         :func:`acmm_qpp.provenance.config_hash` of those sections.
     """
-
-    d = cfg.model_dump(mode="json")
-    keys = ("inertia", "orbit_rate", "disturbance", "design", "schedule")
-    return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
+    keys = {"inertia", "orbit_rate", "disturbance", "design", "schedule"}
+    return config_hash(json.dumps(cfg.model_dump(mode="json", include=keys), sort_keys=True))
 
 
 def _point_workers(pooled: bool, n_points: int) -> int:

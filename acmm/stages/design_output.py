@@ -110,7 +110,7 @@ def _point_items(points) -> dict:
                               "input, time in 1/n (acmm.design.regional_lmi.control_energy)"),
         }
         if res.robust is not None:
-            g["robust"] = _robust_items(res.robust, p.gain)
+            g["robust"] = _robust_items(res.robust)
             g["K"] = replace(g["K"], description="robust gain for the family of design.robust (group robust), u = -K x")
             for key in _REFERENCE_LQR:
                 g[key] = replace(g[key], description=g[key].description + " of the route's reference sector LQR "
@@ -125,7 +125,7 @@ def _point_items(points) -> dict:
     return pts
 
 
-def _robust_items(r, gain) -> dict:
+def _robust_items(r) -> dict:
     """The ``points/<k>/robust`` group: the family, the start and one certificate per plant
     (:mod:`acmm.design.robust`)."""
     c = r.certificates

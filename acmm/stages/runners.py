@@ -1,11 +1,7 @@
-"""Stage runners: config in, results file out.  The glue between the pure library
-modules and the CLI (I/O at the edge; the mathematics lives in the library modules).
-
-Stages: the TEA (eqs 4.1–4.3), the design model (eqs 4.46–4.47), the sector LQR per design
-point (ch. 5.2) with its gain schedule (ch. 5.3), and the nonlinear simulation (ch. 6).
-
-The TEA and linearize stages live here; the design stage in :mod:`acmm.stages.design` and the
-simulation stage in :mod:`acmm.stages.simulate`.
+"""Stage runners: config in, results file out; the glue between the pure library modules and
+the CLI.  Here the TEA (eqs 4.1–4.3) and the design model (eqs 4.46–4.47); the sector LQR per
+design point (ch. 5.2) with its gain schedule (ch. 5.3) in :mod:`acmm.stages.design`, the
+nonlinear simulation (ch. 6) in :mod:`acmm.stages.simulate`.
 """
 from __future__ import annotations
 
