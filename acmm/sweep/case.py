@@ -75,8 +75,7 @@ def prepare_base(base, spec) -> BaseContext:
     cfg = base.config
     orbits = spec.orbits if spec.orbits is not None else cfg.simulation.orbits
     table = compute_design(cfg).table
-    sc = scenario_from_config(cfg, table, orbits=orbits)
-    return BaseContext(base.label, cfg, table, sc, spec, float(orbits))
+    return BaseContext(base.label, cfg, table, scenario_from_config(cfg, table, orbits=orbits), spec, float(orbits))
 
 
 def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:

@@ -65,10 +65,8 @@ def case_values(spec, index: int, inertias: np.ndarray) -> tuple[dict, int, Opti
         Why the final draw is unphysical (``None`` when it is physical).
     """
     if spec.grid is not None:
-        names = list(spec.grid)
-        shape = [len(spec.grid[k]) for k in names]
-        idx = np.unravel_index(index, shape)
-        values = {k: float(spec.grid[k][j]) for k, j in zip(names, idx)}
+        idx = np.unravel_index(index, [len(v) for v in spec.grid.values()])
+        values = {k: float(v[j]) for (k, v), j in zip(spec.grid.items(), idx)}
         return values, 1, unphysical_draw_reason(values, inertias)
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, index]))
     draws = 0

@@ -155,13 +155,10 @@ class Sweep:
         str
             16 hex digits (:func:`acmm_qpp.provenance.config_hash`).
         """
-
-        settings = self._case_settings()
-        f, bases = settings["file"], settings["bases"]
+        key = {**self._case_settings(), "metrics": METRICS_MODEL}
         # the order of the grid's and the Monte Carlo's parameters decides which values case i
         # gets (product order, draw order), and sort_keys below would lose it
-        order = {k: list(f["sweep"].get(k) or {}) for k in ("grid", "monte_carlo")}
-        key = {"file": f, "bases": bases, "parameter_order": order, "metrics": METRICS_MODEL}
+        key["parameter_order"] = {k: list(key["file"]["sweep"].get(k) or {}) for k in ("grid", "monte_carlo")}
         if self.spec.design == "fixed":        # a redesigned case is computed as before
             key["case_model"] = CASE_MODEL
         return config_hash(json.dumps(key, sort_keys=True))

@@ -25,8 +25,6 @@ from acmm.sweep.cases import VERDICTS
 
 JOURNAL_VERSION = 1
 
-_NUMBER = (int, float)
-
 #: the fields a case record adds to its metrics row (:func:`acmm.sweep.case.empty_row`)
 CASE_KEYS = {"base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ())}
 
@@ -49,23 +47,18 @@ MARGIN_FIELDS = {
 }
 
 
-def _is(kind: str, v) -> bool:
+def _shaped(kind: str, v, shape) -> bool:
+    if shape is None:
+        return isinstance(v, list) and all(_shaped(kind, x, ()) for x in v)
+    if shape:
+        return isinstance(v, list) and len(v) == shape[0] and all(_shaped(kind, x, shape[1:]) for x in v)
     if kind == "num":            # any float the sweep writes: finite, NaN or ±inf
-        return isinstance(v, _NUMBER) and not isinstance(v, bool)
+        return isinstance(v, (int, float)) and not isinstance(v, bool)
     if kind == "int":
         return isinstance(v, int) and not isinstance(v, bool) and v >= 0
     if kind == "bool":
         return isinstance(v, bool)
     return isinstance(v, str)
-
-
-def _shaped(kind: str, v, shape) -> bool:
-    if shape is None:
-        return isinstance(v, list) and all(_is(kind, x) for x in v)
-    if not shape:
-        return _is(kind, v)
-    return (isinstance(v, list) and len(v) == shape[0]
-            and all(_shaped(kind, x, shape[1:]) for x in v))
 
 
 def _record_problem(rec: object, bases: set | None = None) -> str | None:
@@ -86,7 +79,7 @@ def _record_problem(rec: object, bases: set | None = None) -> str | None:
         if rec["verdict"] not in VERDICTS:
             return f"unknown verdict {rec['verdict']!r}"
         values = rec.get("values")
-        if not isinstance(values, dict) or not all(_is("num", v) for v in values.values()):
+        if not isinstance(values, dict) or not all(_shaped("num", v, ()) for v in values.values()):
             return "case record with a malformed 'values'"
     elif rec["direction"] not in ("up", "down"):
         return f"unknown margin direction {rec['direction']!r}"

@@ -197,13 +197,12 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     }
     if margins:
         items["margin"] = _margin_items(margins, S)
-    attrs = _root_attrs(sweep, a, labels, len(rows), complete, wall_time)
     run_dir = sweep.run_dir()
-    items = _orbit_defined(items, sweep)
     system = sweep.file.output.units
-    path = write_h5(run_dir / "sweep.h5", with_coordinates(convert_items(items, system)), sweep.to_yaml(),
-                    {**attrs, "unit_system": system})
-    _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
+    path = write_h5(run_dir / "sweep.h5", with_coordinates(convert_items(_orbit_defined(items, sweep), system)),
+                    sweep.to_yaml(), {**_root_attrs(sweep, a, labels, len(rows), complete, wall_time),
+                                      "unit_system": system})
+    _write_csv(run_dir / "sweep.csv", labels, a, system)
     figs = []
     if figures and rows:
         try:
@@ -288,7 +287,7 @@ def _plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = Non
     fig, axs = plt.subplots(1, B, figsize=(4.6 * B, 3.6), squeeze=False)
     for k, lab in enumerate(labels):
         ax = axs[0, k]
-        sel = (a["base"] == k) & a["stable"]
+        sel = (a["base"] == k) & (np.array(a["verdict"], dtype=object) == "bounded")
         err = a["peak_attitude_error"][sel]
         if len(err):
             hi = max(float(np.nanmax(err)), 1e-3)
@@ -342,7 +341,6 @@ def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
         labels = [b.label for b in sweep.bases]
         verdict = [h5_text(v) for v in f["verdict"][()]]
         a = {"base": np.asarray(f["base"][()], np.int64), "verdict": verdict,
-             "stable": np.array([v == "bounded" for v in verdict], bool),
              "parameters": {k: stored_in(f, f"parameters/{k}", PARAMETERS[k].unit) for k in f["parameters"]
                             if k in PARAMETERS},
              "peak_attitude_error": stored_in(f, "peak_attitude_error", "deg"),

@@ -322,11 +322,8 @@ def sweep_schema() -> dict:
     keys, top = models_json_schema([(SweepFile, "validation"), (Config, "validation"),
                                     (SweepSpec, "validation")], schema_generator=AcmmGenerator)
     defs = fix_alternatives(top)["$defs"]
-    ref_file = keys[(SweepFile, "validation")]["$ref"]
-    ref_cfg = keys[(Config, "validation")]["$ref"]
-    ref_spec = keys[(SweepSpec, "validation")]["$ref"]
-    cfg_name = ref_cfg.split("/")[-1]
-    inline = copy.deepcopy(defs[cfg_name])
+    ref_file, ref_cfg, ref_spec = (keys[(model, "validation")]["$ref"] for model in (SweepFile, Config, SweepSpec))
+    inline = copy.deepcopy(defs[ref_cfg.split("/")[-1]])
     inline["title"] = "Config with an inline sweep section"
     inline["properties"]["sweep"] = {
         "allOf": [{"$ref": ref_spec},
@@ -334,8 +331,7 @@ def sweep_schema() -> dict:
         "description": "sweep over this very config (no base/bases)"}
     inline["required"] = sorted(set(inline.get("required", [])) | {"sweep"})
     defs["InlineSweepConfig"] = inline
-    file_name = ref_file.split("/")[-1]
-    file_def = defs[file_name]
+    file_def = defs[ref_file.split("/")[-1]]
     # the file form needs a base: the loader reads a `sweep` without base/bases as inline
     file_def["properties"]["sweep"] = {"allOf": [file_def["properties"]["sweep"],
                                                  {"anyOf": [{"required": ["base"]}, {"required": ["bases"]}]}]}
