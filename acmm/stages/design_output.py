@@ -287,8 +287,7 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
     with h5py.File(path, "r") as f:
         attrs = {k: f.attrs[k] for k in f.attrs}
         names = list(map(h5_text, np.atleast_1d(f["names"][()])))
-        keys = sorted(f["points"])
-        poles = [np.asarray(f[f"points/{k}/poles"][()]) for k in keys]
+        poles = [np.asarray(f[f"points/{k}/poles"][()]) for k in sorted(f["points"])]
         tea = np.asarray(f["tea"][()], float)
         K = np.asarray(f["K"][()], float)
         sched = None

@@ -161,11 +161,10 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
             # the core called directly on the perturbed design points with the base config's settings
             ds = design_schedule(_redesigned_specs(cfg, values, bias), design_settings(cfg), schedule_settings(cfg))
             # only the inertia and bias differ from the base config, and those come from the table
+            # (the redesign's bias per point is the held nominal bias (+ offsets); the schedule's
+            # levels are the perturbed design points)
             sc = scen.scenario_from_config(cfg, design_table(ds.points, ds.fit, ""), orbits=ctx.orbits)
             true = sc.theta_est.copy()
-            # the redesign's bias per point is the held nominal bias (+ offsets); the schedule's
-            # levels are the perturbed design points
-            sc = dataclasses.replace(sc, harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
         else:
             true, tea_note = _perturbed_tea(sc0, inertia, bias)
             if spec.tea_estimate == "true":
@@ -174,8 +173,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
                 gain = np.array([table.gain_at(true[k, 1], rows[k]) for k in range(L)])
             else:
                 est, gain = sc0.theta_est, sc0.gain
-            sc = dataclasses.replace(sc0, inertia=inertia, bias=bias, theta_est=est, gain=gain,
-                                     harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
+            sc = dataclasses.replace(sc0, inertia=inertia, bias=bias, theta_est=est, gain=gain)
     except NoEquilibriumError as exc:
         row.update(verdict="no_equilibrium", reason=str(exc).split(":")[0])
         return row
@@ -189,7 +187,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
         return row
     theta0 = true[0] + offset
     x0 = np.concatenate([kin.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
-    sc = dataclasses.replace(sc, x0=x0, theta_ref=true)
+    sc = dataclasses.replace(sc, x0=x0, theta_ref=true, harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
     r = sm.simulate(sc)
     row = _metrics(row, r, sc, true, n, spec)
     row["reason"] += tea_note

@@ -216,8 +216,7 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
         raise ConfigError(f"{source}: sweep.base: missing: give the base config (sweep.base: NAME or "
                           f"sweep.bases: [...]), or write the sweep inside a full acmm config{hint}")
     if inline:
-        rest = {k: v for k, v in data.items() if k != "sweep"}
-        base_cfg = parse_config(rest, source=source)
+        base_cfg = parse_config({k: v for k, v in data.items() if k != "sweep"}, source=source)
         file_data = {"name": base_cfg.name, "description": base_cfg.description, "sweep": raw,
                      "output": base_cfg.output.model_dump(mode="json")}
     else:
@@ -248,8 +247,7 @@ def _parse_resolved(data: dict, source: str) -> Sweep:
     bases_data = data.get("bases")
     if not isinstance(bases_data, dict) or not bases_data:
         raise ConfigError(f"{source}: bases: missing or empty (the resolved base configs, by name)")
-    file_data = data["sweep_file"]
-    sf = validate_model(SweepFile, file_data, f"{source}: sweep_file")
+    sf = validate_model(SweepFile, data["sweep_file"], f"{source}: sweep_file")
     bases = tuple(Base(str(label), parse_config(cfg, source=f"{source}: bases.{label}"), source)
                   for label, cfg in bases_data.items())
     for b in bases:
@@ -302,7 +300,5 @@ def _flatten(tree, prefix: str = "") -> dict:
     """``{"a.b.c": value}`` of a nested mapping (lists are values)."""
     if not isinstance(tree, dict):
         return {prefix: tree} if prefix else {}
-    out: dict = {}
-    for k, v in tree.items():
-        out.update(_flatten(v, f"{prefix}.{k}" if prefix else str(k)))
-    return out
+    return {key: value for k, v in tree.items()
+            for key, value in _flatten(v, f"{prefix}.{k}" if prefix else str(k)).items()}

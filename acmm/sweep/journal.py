@@ -33,10 +33,8 @@ CASE_KEYS = {"base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ())}
 def _case_fields() -> dict:
     """Case record fields: name → (kind, shape), kind "num" (a number, NaN or ±inf), "int" or
     "str": :data:`CASE_KEYS` and the metrics row's fields, read off its empty row."""
-    fields = dict(CASE_KEYS)
-    for k, v in empty_row(1).items():
-        fields[k] = ("str" if isinstance(v, str) else "int" if isinstance(v, int) else "num", np.shape(v))
-    return fields
+    return {**CASE_KEYS, **{k: ("str" if isinstance(v, str) else "int" if isinstance(v, int) else "num", np.shape(v))
+                            for k, v in empty_row(1).items()}}
 
 
 #: margin-search record fields, as :func:`_case_fields` ("bool": true/false; shape None: a list)

@@ -71,14 +71,13 @@ def _table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
     base then index) in the rows' units: attitude errors and TEAs deg, momentum ft·lbf·s, times
     orbits, inertia slug·ft², bias ft·lbf; ``parameters`` a dict of the swept parameters;
     ``verdict`` and ``reason`` lists of str."""
-    names = swept_parameters(sweep.spec)
     labels = [b.label for b in sweep.bases]
     return {
         "base": np.array([labels.index(r["base"]) for r in rows], np.int64),
         "index": np.array([r["index"] for r in rows], np.int64),
         "case": np.array([labels.index(r["base"]) * sweep.spec.n_cases() + r["index"] for r in rows], np.int64),
         "parameters": {k: np.array([r["values"].get(k, PARAMETERS[k].neutral) for r in rows], float)
-                       for k in names},
+                       for k in swept_parameters(sweep.spec)},
         "verdict": [r["verdict"] for r in rows],
         "verdict_code": np.array([VERDICTS.index(r["verdict"]) for r in rows], np.int64),
         "reason": [r["reason"] for r in rows],

@@ -300,13 +300,9 @@ def _sweep_tasks(sweep: Sweep):
     """The tasks of a sweep, in order: ``("case", base, index)`` for every case of every base, then
     ``("margin", base, direction)``."""
     n = sweep.spec.n_cases()
-    for b in sweep.bases:
-        for i in range(n):
-            yield ("case", b.label, i)
+    yield from (("case", b.label, i) for b in sweep.bases for i in range(n))
     if sweep.spec.margin is not None:
-        for b in sweep.bases:
-            for d in ("up", "down"):
-                yield ("margin", b.label, d)
+        yield from (("margin", b.label, d) for b in sweep.bases for d in ("up", "down"))
 
 
 def _task_key(rec: dict) -> tuple:
@@ -589,26 +585,21 @@ def _drive(sweep: Sweep, executor, close, chunks: _Chunker, remote: dict, window
     """Keep ``window`` chunks in flight on ``executor`` (their arguments after the chunk in
     ``remote``), journal and add to ``done`` each record as its chunk finishes (``progress(done,
     total, record)``, ``after_record(n_new)``), and rebuild ``sweep.h5`` in the background every
-    ``snapshot_interval`` s or more (:class:`_Snapshots`); returns the number of new records.
-
-    At the end, interrupts held (a second Ctrl-C in this cleanup hung the sweep: a review), the
-    journal is closed and the background rebuild awaited; when the sweep did not complete (an
-    interruption or a failure) the chunks in flight are cancelled, the executor is closed
-    (``close(abort=True)``) and a partial ``sweep.h5`` is written from the records so far.  A
-    worker lost under a chunk (not the case's own error) is one clear :class:`OutputError`.
-    """
+    ``snapshot_interval`` s or more (:class:`_Snapshots`); returns the number of new records.  A
+    sweep that does not complete (an interruption or a failure) cancels its chunks in flight,
+    closes the executor (``close(abort=True)``) and writes a partial ``sweep.h5``; a worker lost
+    under a chunk (not the case's own error) is one clear :class:`OutputError`."""
     snaps = _Snapshots(sweep, snapshot_interval)
-    pending: dict = {}
+    pending: set = set()
     n_new, complete = 0, False
     try:
         while True:
             while len(pending) < window and (c := chunks.next()) is not None:
-                pending[submit(executor, _call_chunk, c, *remote[c[0][1]])] = c
+                pending.add(submit(executor, _call_chunk, c, *remote[c[0][1]]))
             if not pending:
                 break
-            finished, _ = cf.wait(list(pending), return_when=cf.FIRST_COMPLETED)
+            finished, pending = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
             for fut in finished:
-                pending.pop(fut)
                 try:
                     recs = fut.result()
                 except BaseException as exc:
@@ -630,12 +621,12 @@ def _drive(sweep: Sweep, executor, close, chunks: _Chunker, remote: dict, window
         snaps.check()
         complete = True
     finally:
-        with interrupts_deferred():
+        with interrupts_deferred():          # a second Ctrl-C in this cleanup hung the sweep (a review)
             journal.close()
             snaps.wait()
             if not complete:
                 try:
-                    for fut in list(pending):
+                    for fut in pending:
                         fut.cancel()
                 finally:
                     close(abort=True)

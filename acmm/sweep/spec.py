@@ -51,21 +51,14 @@ AXES = ("roll", "pitch", "yaw")
 _ELEMENTS = ("I11", "I22", "I33", "I12", "I13", "I23")
 
 #: Every sweepable parameter, in canonical (column) order.
-PARAMETERS: dict[str, Parameter] = {}
-for _e in _ELEMENTS:
-    PARAMETERS[f"d{_e}"] = Parameter(f"d{_e}", "1", 0.0, "relative",
-                                     f"relative change of {_e}: {_e} → {_e}·(1 + d{_e})")
-PARAMETERS["inertia_scale"] = Parameter("inertia_scale", "1", 1.0, "scale",
-                                        "uniform inertia scaling: I → s·I (applied after the element changes)")
-for _a in AXES:
-    PARAMETERS[f"bias_{_a}"] = Parameter(f"bias_{_a}", "ft*lbf", 0.0, "absolute",
-                                         f"torque added to the {_a} bias (eq 3.9)")
-PARAMETERS["harmonic_scale"] = Parameter("harmonic_scale", "1", 1.0, "scale",
-                                         "factor on the harmonic amplitudes A and B (eq 3.9)")
-for _a in AXES:
-    PARAMETERS[f"offset_{_a}"] = Parameter(f"offset_{_a}", "deg", 0.0, "absolute",
-                                           f"initial {_a} attitude minus the plant's TEA, added to "
-                                           "simulation.initial_offset")
+PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
+    *(Parameter(f"d{e}", "1", 0.0, "relative", f"relative change of {e}: {e} → {e}·(1 + d{e})") for e in _ELEMENTS),
+    Parameter("inertia_scale", "1", 1.0, "scale",
+              "uniform inertia scaling: I → s·I (applied after the element changes)"),
+    *(Parameter(f"bias_{a}", "ft*lbf", 0.0, "absolute", f"torque added to the {a} bias (eq 3.9)") for a in AXES),
+    Parameter("harmonic_scale", "1", 1.0, "scale", "factor on the harmonic amplitudes A and B (eq 3.9)"),
+    *(Parameter(f"offset_{a}", "deg", 0.0, "absolute",
+                f"initial {a} attitude minus the plant's TEA, added to simulation.initial_offset") for a in AXES))}
 
 #: Shorthands expanding to several parameters (each drawn independently).
 SHORTHANDS = {"inertia": [f"d{e}" for e in _ELEMENTS],
@@ -168,15 +161,12 @@ class SweepSpec(StrictModel):
             data["grid"] = {k: [_in_unit(x, getattr(PARAMETERS.get(k), "unit", None), f"grid.{k}") for x in v]
                             if isinstance(v, list) else v for k, v in data["grid"].items()}
         if isinstance(data.get("monte_carlo"), dict):
-            mc = {}
-            for k, dist in data["monte_carlo"].items():
-                if isinstance(dist, dict):
-                    dist = dict(dist)
-                    for kind in ("uniform", "normal"):
-                        if isinstance(dist.get(kind), (list, tuple)):
-                            dist[kind] = [_in_unit(x, getattr(PARAMETERS.get(k), "unit", None), f"monte_carlo.{k}.{kind}")
-                                          for x in dist[kind]]
-                mc[k] = dist
+            mc = {k: dict(d) if isinstance(d, dict) else d for k, d in data["monte_carlo"].items()}
+            for k, dist in mc.items():
+                for kind in ("uniform", "normal"):
+                    if isinstance(dist, dict) and isinstance(dist.get(kind), (list, tuple)):
+                        dist[kind] = [_in_unit(x, getattr(PARAMETERS.get(k), "unit", None), f"monte_carlo.{k}.{kind}")
+                                      for x in dist[kind]]
             data["monte_carlo"] = mc
         if "settle_deg" in data:
             data["settle_deg"] = _in_unit(data["settle_deg"], "deg", "settle_deg")
