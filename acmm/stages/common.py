@@ -117,9 +117,8 @@ def define_units(items: dict, orbit_rate: float) -> dict:
     dict
         ``items``.
     """
-    period = 2 * np.pi / orbit_rate
     definitions = {"n": f"n = {float(orbit_rate)!r} * rad / s",
-                   "orbit": f"orbit = {float(period)!r} * s"}
+                   "orbit": f"orbit = {float(2 * np.pi / orbit_rate)!r} * s"}
     for key, ds in items.items():
         if isinstance(ds, dict):
             define_units(ds, orbit_rate)

@@ -190,9 +190,8 @@ def compute_design(config, progress=None) -> DesignResult:
             stop_pool(pool, abort=True)
             raise
         stop_pool(pool)
-    table = design_table(ds.points, ds.fit, design_hash(cfg))
-    return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check,
-                        ds.refinement)
+    return DesignResult(cfg, ds.points, ds.fit, ds.check, design_table(ds.points, ds.fit, design_hash(cfg)),
+                        time.perf_counter() - t0, ds.path_check, ds.refinement)
 
 
 def design_table(points, fit, design_hash: str) -> DesignTable:

@@ -108,7 +108,6 @@ class LinearizeResult:
     tea: tea_mod.TEA
     model: object
     controllability: object
-    #: open-loop eigenvalues of A (rad/s), as written to ``linearize.h5``
     eigenvalues: np.ndarray | None = None
 
     def eigenvalues_over_n(self) -> np.ndarray:
@@ -145,7 +144,6 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
                              model=cfg.design.model, drf_mode=cfg.design.drf_mode)
     ctrb = ctrb_mod.controllability(model)
     eig = np.linalg.eigvals(model.A)
-    result = LinearizeResult(cfg, tr.tea, model, ctrb, eig)
     names = list(model.state_names)
     items = {
         "A": Dataset(model.A, UNIT_A, "state matrix of eq 4.46 (x' = A x + B u + G w)",
@@ -171,4 +169,4 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     items = in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
     write_results(out / "linearize.h5", items, cfg,
                   {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
-    return result, cfg.run_dir() / "linearize.h5"
+    return LinearizeResult(cfg, tr.tea, model, ctrb, eig), cfg.run_dir() / "linearize.h5"

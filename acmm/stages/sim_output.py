@@ -84,10 +84,9 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
         },
         "wall_time": Dataset(wall, "s", "integration wall time"),
     }
-    attrs = {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
-             "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
-             "design_hash": design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
-    return items, attrs
+    return items, {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
+                   "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
+                   "design_hash": design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
 
 
 def sim_figures_from_file(path, out_dir) -> list:

@@ -145,8 +145,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
     row = empty_row(L)
     inertia = np.array([perturb_inertia(m, values) for m in sc0.inertia])
     bias = sc0.bias + np.array([values.get(f"bias_{a}", 0.0) for a in AXES])
-    row["inertia"] = inertia[0].tolist()
-    row["bias"] = bias[0].tolist()
+    row.update(inertia=inertia[0].tolist(), bias=bias[0].tolist())
     why = unphysical_draw_reason(values, sc0.inertia)
     if why is not None:
         row.update(verdict="unphysical", reason=why)
@@ -273,9 +272,8 @@ def run_case(ctx: BaseContext, index: int) -> dict:
         ``values`` and ``n_draws``.
     """
     values, draws, _ = case_values(ctx.spec, index, ctx.scenario.inertia)
-    row = simulate_values(ctx, values)
-    row.update(kind="case", base=ctx.label, index=int(index), values=values, n_draws=int(draws))
-    return row
+    return {**simulate_values(ctx, values), "kind": "case", "base": ctx.label, "index": int(index),
+            "values": values, "n_draws": int(draws)}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -317,18 +315,14 @@ def margin_search(ctx: BaseContext, direction: str) -> dict:
     if nominal:
         for k in range(1, m.scan_points + 1):
             s = end ** (k / m.scan_points)
-            if ok(s):
-                good = s
-            else:
+            if not ok(s):
                 bad = s
                 break
+            good = s
         if bad is not None:
             while max(good, bad) / min(good, bad) > 1 + m.rel_tol:
                 mid = math.sqrt(good * bad)
-                if ok(mid):
-                    good = mid
-                else:
-                    bad = mid
+                good, bad = (mid, bad) if ok(mid) else (good, mid)
     fail = next((e for e in evaluated if e[0] == bad), None)
     return {"kind": "margin", "base": ctx.label, "direction": direction,
             "limit": good if nominal else math.nan, "first_failure": math.nan if bad is None else bad,

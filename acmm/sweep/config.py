@@ -217,14 +217,11 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
                           f"sweep.bases: [...]), or write the sweep inside a full acmm config{hint}")
     if inline:
         base_cfg = parse_config({k: v for k, v in data.items() if k != "sweep"}, source=source)
-        file_data = {"name": base_cfg.name, "description": base_cfg.description, "sweep": raw,
-                     "output": base_cfg.output.model_dump(mode="json")}
-    else:
-        file_data = data
-    sf = validate_model(SweepFile, file_data, source)
-    if inline:
+        sf = validate_model(SweepFile, {"name": base_cfg.name, "description": base_cfg.description, "sweep": raw,
+                                        "output": base_cfg.output.model_dump(mode="json")}, source)
         bases = (Base(base_cfg.name, base_cfg, source),)
     else:
+        sf = validate_model(SweepFile, data, source)
         bases = tuple(_resolve_base(r, directory) for r in sf.sweep.base_names())
     labels = [b.label for b in bases]
     if len(set(labels)) != len(labels):

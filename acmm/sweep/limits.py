@@ -103,8 +103,7 @@ def check_sweep_work(sweep, source: str = "sweep config") -> None:
     if cases * spec.max_draws <= cap:
         return
     good, n = _physical_fraction(sweep, PILOT)
-    per_case = spec.max_draws if good == 0 else min(spec.max_draws, n / good)
-    expected = cases * per_case
+    expected = cases * (spec.max_draws if good == 0 else min(spec.max_draws, n / good))
     if expected > cap:
         raise ConfigError(f"{source}: sweep.max_draws: {good} of {n} pilot draws give a physical inertia, so "
                           f"{cases} cases would need ~{expected:.3g} draws; narrow sweep.monte_carlo, lower "

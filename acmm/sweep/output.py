@@ -337,16 +337,13 @@ def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
     """
     with h5py.File(path, "r") as f:
         sweep = parse_sweep(yaml.safe_load(h5_text(f.attrs["config"])), source=str(path))
-        labels = [b.label for b in sweep.bases]
         verdict = [h5_text(v) for v in f["verdict"][()]]
         a = {"base": np.asarray(f["base"][()], np.int64), "verdict": verdict,
-             "parameters": {k: stored_in(f, f"parameters/{k}", PARAMETERS[k].unit) for k in f["parameters"]
-                            if k in PARAMETERS},
+             # in the order of the sweep's parameters, as drawn
+             "parameters": {k: stored_in(f, f"parameters/{k}", PARAMETERS[k].unit)
+                            for k in swept_parameters(sweep.spec) if k in f["parameters"]},
              "peak_attitude_error": stored_in(f, "peak_attitude_error", "deg"),
              "tea_true": stored_in(f, "tea_true", "deg")}
-        nominal = (dict(zip(labels, stored_in(f, "nominal_tea", "deg"))) if "nominal_tea" in f else None)
-    order = list(swept_parameters(sweep.spec))         # the order of the sweep's parameters, as drawn
-    a["parameters"] = {k: a["parameters"][k] for k in order if k in a["parameters"]}
-    if not len(verdict):
-        return []
-    return [partial(_plot_sweep, sweep, a, out_dir, nominal)]
+        nominal = (dict(zip([b.label for b in sweep.bases], stored_in(f, "nominal_tea", "deg")))
+                   if "nominal_tea" in f else None)
+    return [partial(_plot_sweep, sweep, a, out_dir, nominal)] if verdict else []

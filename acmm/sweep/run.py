@@ -87,12 +87,8 @@ class SweepResult:
         dict
             Base label → {verdict: count, ..., "total": count}.
         """
-        out = {}
-        for b in self.sweep.bases:
-            rows = [r for r in self.rows if r["base"] == b.label]
-            out[b.label] = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
-            out[b.label]["total"] = len(rows)
-        return out
+        verdicts = {b.label: [r["verdict"] for r in self.rows if r["base"] == b.label] for b in self.sweep.bases}
+        return {lab: {**{v: vs.count(v) for v in VERDICTS}, "total": len(vs)} for lab, vs in verdicts.items()}
 
 
 #: The files a sweep owns in its run folder (its journal is not one of them: it survives for --resume).
@@ -166,6 +162,11 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     -------
     SweepResult
         What was done, with the rows and margins.
+
+    Raises
+    ------
+    OutputError
+        A worker died under a chunk (not the case's own error); the finished cases stay in the journal.
     """
     spec = sweep.spec
     t0 = time.perf_counter()
@@ -203,8 +204,53 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     n_workers = 1 if serial else _scheduler_workers(executor, workers)
     chunks = _Chunker(tasks, n_workers, chunk if chunk is not None else (1 if serial else None))
     window = 1 if serial else max(4, 2 * n_workers)
-    n_new = _drive(sweep, executor, close, chunks, _task_arguments(executor, contexts), window, journal, done,
-                   total, progress, after_record, snapshot_interval)
+    remote = _task_arguments(executor, contexts)
+    # keep `window` chunks in flight, journal each record as its chunk finishes and rebuild sweep.h5 in
+    # the background; a sweep that does not complete (an interruption or a failure) cancels its chunks
+    # in flight, closes the executor and writes a partial sweep.h5 from the records so far
+    snaps = _Snapshots(sweep, snapshot_interval)
+    pending: set = set()
+    n_new, complete = 0, False
+    try:
+        while True:
+            while len(pending) < window and (c := chunks.next()) is not None:
+                pending.add(submit(executor, _call_chunk, c, *remote[c[0][1]]))
+            if not pending:
+                break
+            finished, pending = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+            for fut in finished:
+                try:
+                    recs = fut.result()
+                except BaseException as exc:
+                    why = _lost_worker(exc)
+                    if why is None:
+                        raise
+                    raise OutputError(why) from None
+                chunks.returned(len(recs))
+                journal.append(recs)
+                for rec in recs:
+                    done[_task_key(rec)] = rec
+                    n_new += 1
+                    if progress is not None:
+                        progress(len(done), total, rec)
+                    if after_record is not None:
+                        after_record(n_new)
+            snaps.maybe(done)
+        snaps.wait()
+        snaps.check()
+        complete = True
+    finally:
+        with interrupts_deferred():          # a second Ctrl-C in this cleanup hung the sweep (a review)
+            journal.close()
+            snaps.wait()
+            if not complete:
+                try:
+                    for fut in pending:
+                        fut.cancel()
+                finally:
+                    close(abort=True)
+                    if done:
+                        write_results(sweep, list(done.values()), complete=False)
     close()
     path, figs = write_results(sweep, list(done.values()), complete=True,
                                figures=sweep.file.output.figures if figures is None else figures,
@@ -495,8 +541,7 @@ class _Chunker:
         self.workers = max(1, workers)
         self.size = size
         self._first_back: Optional[float] = None
-        self._cases_since = 0
-        self._chunks_since = 0
+        self._cases_since = self._chunks_since = 0
 
     def case_seconds(self) -> Optional[float]:
         """Measured cost of one case on one worker, s (None before there is a measure)."""
@@ -578,58 +623,3 @@ class _Snapshots:
         if self._thread is not None:
             self._thread.join()
             self._thread = None
-
-
-def _drive(sweep: Sweep, executor, close, chunks: _Chunker, remote: dict, window: int, journal: Journal,
-           done: dict, total: int, progress, after_record, snapshot_interval: float) -> int:
-    """Keep ``window`` chunks in flight on ``executor`` (their arguments after the chunk in
-    ``remote``), journal and add to ``done`` each record as its chunk finishes (``progress(done,
-    total, record)``, ``after_record(n_new)``), and rebuild ``sweep.h5`` in the background every
-    ``snapshot_interval`` s or more (:class:`_Snapshots`); returns the number of new records.  A
-    sweep that does not complete (an interruption or a failure) cancels its chunks in flight,
-    closes the executor (``close(abort=True)``) and writes a partial ``sweep.h5``; a worker lost
-    under a chunk (not the case's own error) is one clear :class:`OutputError`."""
-    snaps = _Snapshots(sweep, snapshot_interval)
-    pending: set = set()
-    n_new, complete = 0, False
-    try:
-        while True:
-            while len(pending) < window and (c := chunks.next()) is not None:
-                pending.add(submit(executor, _call_chunk, c, *remote[c[0][1]]))
-            if not pending:
-                break
-            finished, pending = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
-            for fut in finished:
-                try:
-                    recs = fut.result()
-                except BaseException as exc:
-                    why = _lost_worker(exc)
-                    if why is None:
-                        raise
-                    raise OutputError(why) from None
-                chunks.returned(len(recs))
-                journal.append(recs)
-                for rec in recs:
-                    done[_task_key(rec)] = rec
-                    n_new += 1
-                    if progress is not None:
-                        progress(len(done), total, rec)
-                    if after_record is not None:
-                        after_record(n_new)
-            snaps.maybe(done)
-        snaps.wait()
-        snaps.check()
-        complete = True
-    finally:
-        with interrupts_deferred():          # a second Ctrl-C in this cleanup hung the sweep (a review)
-            journal.close()
-            snaps.wait()
-            if not complete:
-                try:
-                    for fut in pending:
-                        fut.cancel()
-                finally:
-                    close(abort=True)
-                    if done:
-                        write_results(sweep, list(done.values()), complete=False)
-    return n_new
