@@ -17,10 +17,9 @@ import numpy as np
 from acmm.design.dwell import NOT_COVERED, DwellCertificate, DwellProof, dwell_certificate
 from acmm.io.config import Config
 from acmm.io.design_file import DesignTable
-from acmm.model import kinematics as kin
-from acmm.model import linearize as lin
+from acmm.model import kinematics, linearize
 from acmm.simulate.scenario import scenario_from_config
-from acmm.stages.common import UNIT_A, UNIT_STATE
+from acmm.stages.common import AXES, UNIT_A, UNIT_STATE
 from acmm_qpp import __version__
 from acmm_qpp.provenance import git_commit, git_dirty
 from acmm_qpp.results import Dataset, h5_text
@@ -74,7 +73,7 @@ def _level_closed_loops(cfg: Config, table: DesignTable) -> tuple:
     the scenario (its torque and momentum limits)) of the config's stair-case levels."""
     sc = scenario_from_config(cfg, table)
     n = sc.n
-    models = [lin.design_point(sc.inertia[k], sc.theta_est[k], n, model="coupled", drf_mode=sc.drf_mode)
+    models = [linearize.design_point(sc.inertia[k], sc.theta_est[k], n, model="coupled", drf_mode=sc.drf_mode)
               for k in range(len(sc.level_start))]
     Acl = np.array([m.A - m.B @ sc.gain[k] for k, m in enumerate(models)])
     jumps = np.array([_deviation(sc.theta_est[k], sc.theta_est[k + 1], n, Acl.shape[1])
@@ -89,7 +88,7 @@ def _deviation(theta: np.ndarray, theta_eq: np.ndarray, n: float, nx: int) -> np
     (θ̇2 = 0, and h, ∫h and the filter states are zero at every equilibrium)."""
     x = np.zeros(nx)
     x[list(_ATTITUDE_INDEX)] = np.asarray(theta, float) - np.asarray(theta_eq, float)
-    x[list(_RATE_INDEX)] = (kin.lvlh_rate_in_body(theta, n) - kin.lvlh_rate_in_body(theta_eq, n))[[0, 2]]
+    x[list(_RATE_INDEX)] = (kinematics.lvlh_rate_in_body(theta, n) - kinematics.lvlh_rate_in_body(theta_eq, n))[[0, 2]]
     return x
 
 
@@ -190,7 +189,6 @@ def certificate_items(sc: StairCertificate) -> dict:
     """
     c = sc.certificate
     orbit = sc.orbit
-    level = ("level",)
     items = {
         "closed_loop": Dataset(sc.closed_loops, UNIT_A, "A_k - B_k K_k of each level's frozen loop (eq 4.46, coupled, "
                                "about the level's TEA)", dims=("level", "state", "state_col")),
@@ -211,11 +209,12 @@ def certificate_items(sc: StairCertificate) -> dict:
                                    "statement": "certificate of the linearized switched system",
                                    "not_certified_below_orbit": c.tau_lower / orbit}),
         "dwell": Dataset(c.dwell / orbit, "orbit", "time each level but the last is held", dims=("switch",)),
-        "transient": Dataset(c.transient, "1", "bound on sqrt(V_k) of the deviation while level k holds", dims=level),
-        "u_bound": Dataset(c.u_bound, "ft*lbf", "bound on |u| while each level holds", ["roll", "pitch", "yaw"],
+        "transient": Dataset(c.transient, "1", "bound on sqrt(V_k) of the deviation while level k holds",
+                             dims=("level",)),
+        "u_bound": Dataset(c.u_bound, "ft*lbf", "bound on |u| while each level holds", AXES,
                            dims=("level", "axis"), attrs={"torque_limit_ft_lbf": c.torque_limit}),
         "h_bound": Dataset(c.h_bound, "ft*lbf*s", "bound on the deviation of |h| while each level holds",
-                           ["roll", "pitch", "yaw"], dims=("level", "axis"),
+                           AXES, dims=("level", "axis"),
                            attrs={"momentum_limit_ft_lbf_s": c.momentum_limit}),
     }
     if not len(sc.jumps):          # one level: no switch, no jump, no ratios
@@ -242,8 +241,7 @@ def certificate_lines(sc: StairCertificate) -> list[str]:
     if c.unstable_levels:
         bad = ", ".join(sc.names[k] for k in c.unstable_levels)
         return [f"  no certificate: the frozen closed loop of level(s) {bad} is not stable"]
-    n = sc.n
-    lines = [f"  {L} level(s); proved decay rate lambda = {c.decay / n:.4f} n"]
+    lines = [f"  {L} level(s); proved decay rate lambda = {c.decay / sc.n:.4f} n"]
     if L > 1:
         shortest = float(np.min(c.dwell)) / sc.orbit
         below = (f"not certified at {c.tau_lower / sc.orbit:.3f}" if c.tau_lower > 0 else
@@ -251,7 +249,6 @@ def certificate_lines(sc: StairCertificate) -> list[str]:
         lines.append(f"  certified minimum dwell tau* = {c.tau_star / sc.orbit:.3f} orbit (Geromel-Colaneri LMIs "
                      f"per level, switches checked both ways; {below}); "
                      f"shortest level {shortest:.2f} orbit: {'CERTIFIED' if c.certified else 'NOT certified'}")
-    if L > 1:
         lines.append(f"  TEA-step transient: |u| <= {np.max(c.u_bound):.3g} ft*lbf (limit {c.torque_limit:g}), "
                      f"|h - h*| <= {np.max(c.h_bound):.4g} ft*lbf*s (limit {c.momentum_limit:g}): "
                      f"{'within the limits' if c.within_limits else 'NOT within the limits (the ellipsoid bound is conservative)'}")

@@ -17,6 +17,8 @@ from acmm.io.units import convert_items, state_factors, state_space_in
 from acmm_qpp.results import h5_text, write_h5
 from acmm_qpp.units import conversion_factor
 
+#: The body axes, in the order of every per-axis array (the names of an ``axis`` dimension).
+AXES = ["roll", "pitch", "yaw"]
 #: Units of the per-state arrays, element by element: ``state_units[i]`` is the unit of state
 #: ``i``, given by the dataset's ``state_units`` attribute (set by :func:`in_system`); under
 #: ``output.units: SI`` ft*lbf reads N*m.  x' = A x + B u + G w (eq 4.46), u = −K x, and the
@@ -115,9 +117,8 @@ def define_units(items: dict, orbit_rate: float) -> dict:
     dict
         ``items``.
     """
-    period = 2 * np.pi / orbit_rate
     definitions = {"n": f"n = {float(orbit_rate)!r} * rad / s",
-                   "orbit": f"orbit = {float(period)!r} * s"}
+                   "orbit": f"orbit = {float(2 * np.pi / orbit_rate)!r} * s"}
     for key, ds in items.items():
         if isinstance(ds, dict):
             define_units(ds, orbit_rate)

@@ -1,7 +1,5 @@
 """The design stage: TEA → design model (eqs 4.46–4.47) → sector LQR per design point
 (ch. 5.2) → gain schedule (ch. 5.3), its ``design.h5`` and the reuse of a design already written.
-
-Split from :mod:`acmm.stages.runners` (issue 12).
 """
 from __future__ import annotations
 
@@ -25,18 +23,10 @@ from acmm.io.design_file import DesignTable, stored_table_digest, load_design_ta
 import json
 import time
 from acmm_qpp.provenance import config_hash
-from acmm.design import schedule_points as sp
 from acmm.design.design_core import design_schedule
 from acmm.design.settings import design_settings, schedule_settings
 from acmm.stages import design_output
-from acmm.design.schedule_points import off_branch_point
-
-AXES = ["roll", "pitch", "yaw"]
-
-
-# ---------------------------------------------------------------------------------------------
-# design: TEA → linearize → sector LQR per point → schedule
-# ---------------------------------------------------------------------------------------------
+from acmm.design.schedule_points import off_branch_point, point_specs
 
 
 @dataclass
@@ -117,9 +107,7 @@ class DesignResult:
             bad = ~(pc.max_real < 0)                # NaN (a failed eigenvalue) counts as unstable
             th = np.degrees(pc.theta2[bad])
             parts.append(f"at {int(bad.sum())} of {bad.size} path TEAs, θ2* {th.min():+.2f} ... {th.max():+.2f} deg")
-        if not parts:
-            return None
-        return "the scheduled closed loop is UNSTABLE " + " and ".join(parts)
+        return "the scheduled closed loop is UNSTABLE " + " and ".join(parts) if parts else None
 
     def worst_check_index(self) -> int | None:
         """Index of the schedule check with the smallest sector margin (None without a schedule).
@@ -145,10 +133,8 @@ def design_hash(cfg: Config) -> str:
     str
         :func:`acmm_qpp.provenance.config_hash` of those sections.
     """
-
-    d = cfg.model_dump(mode="json")
-    keys = ("inertia", "orbit_rate", "disturbance", "design", "schedule")
-    return config_hash(json.dumps({k: d[k] for k in keys}, sort_keys=True))
+    keys = {"inertia", "orbit_rate", "disturbance", "design", "schedule"}
+    return config_hash(json.dumps(cfg.model_dump(mode="json", include=keys), sort_keys=True))
 
 
 def _point_workers(pooled: bool, n_points: int) -> int:
@@ -192,7 +178,7 @@ def compute_design(config, progress=None) -> DesignResult:
 
     cfg = as_config(config)
     t0 = time.perf_counter()
-    specs, s = sp.point_specs(cfg), design_settings(cfg)
+    specs, s = point_specs(cfg), design_settings(cfg)
     workers = _point_workers(s.method.pooled, len(specs))
     if workers <= 1:
         ds = design_schedule(specs, s, schedule_settings(cfg), progress)
@@ -204,9 +190,8 @@ def compute_design(config, progress=None) -> DesignResult:
             stop_pool(pool, abort=True)
             raise
         stop_pool(pool)
-    table = design_table(ds.points, ds.fit, design_hash(cfg))
-    return DesignResult(cfg, ds.points, ds.fit, ds.check, table, time.perf_counter() - t0, ds.path_check,
-                        ds.refinement)
+    return DesignResult(cfg, ds.points, ds.fit, ds.check, design_table(ds.points, ds.fit, design_hash(cfg)),
+                        time.perf_counter() - t0, ds.path_check, ds.refinement)
 
 
 def design_table(points, fit, design_hash: str) -> DesignTable:
@@ -302,8 +287,6 @@ def design_for(cfg: Config, progress=None, figures: bool | None = None, warn=Non
                     if h5_text(f.attrs.get("unit_system", "imperial")) == cfg.output.units:
                         return table, f"reused {path}"
     r, path = run_design(cfg, progress, figures, warn)
-    if cfg.output.units != "imperial":
-        # the table as a later run reuses it: converted to SI and back, so that a simulation is
-        # the same bit for bit whether its design was just made or read from design.h5
-        return load_design_table(path), f"designed, wrote {path}"
-    return r.table, f"designed, wrote {path}"
+    # in SI the table as a later run reuses it: converted to SI and back, so that a simulation is
+    # the same bit for bit whether its design was just made or read from design.h5
+    return r.table if cfg.output.units == "imperial" else load_design_table(path), f"designed, wrote {path}"

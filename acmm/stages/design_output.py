@@ -16,14 +16,13 @@ import numpy as np
 from acmm.io.units import state_factors
 from acmm.model.linearize import STATE_NAMES
 from acmm.stages.certify import UNIT_ROLES, certificate_items, compute_certificate
-from acmm.stages.common import (UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE, define_units, in_system,
+from acmm.stages.common import (AXES, UNIT_A, UNIT_B, UNIT_K, UNIT_P, UNIT_Q, UNIT_STATE, define_units, in_system,
                                 stored_config)
 from acmm_qpp.results import Dataset, h5_text
 import h5py
 from acmm.design.schedule import schedule_gain
 from acmm.design.settings import design_settings
 
-AXES = ["roll", "pitch", "yaw"]
 #: a point's datasets that describe the reference sector LQR of a robust or LMI gain, not the gain
 _REFERENCE_LQR = ("Q", "P", "riccati_residual", "riccati_backward_error", "riccati_condition", "riccati_ill_conditioned")
 
@@ -49,12 +48,19 @@ def design_items(r, cfg) -> dict:
     """
     pts = _point_items(r.points)
     items = _table_items(r, pts)
+    # dataset path → role of acmm.io.units.state_space_in: what is converted per state, and as what
+    roles = {"K": "K"}
+    for key in pts:
+        roles.update({f"points/{key}/{m}": m for m in ("A", "B", "G", "Q", "P", "K")})
+        if "robust" in pts[key]:
+            roles[f"points/{key}/robust/nominal_K"] = "K"
+        roles[f"points/{key}/scales"] = "scales"
     if r.fit is not None:
         items["schedule"] = _schedule_items(r)
+        roles.update({"schedule/coef": "K", "schedule/rms_residual": "K"})
     # the file this design replaces: its proof is reused where the same program found it for these loops
     items["dwell"] = certificate_items(compute_certificate(cfg, r.table, cfg.run_dir() / "design.h5", exact=True))
-    roles = {**_unit_roles(pts, r.fit is not None),
-             **{k: v for k, v in UNIT_ROLES.items() if k.split("/")[1] in items["dwell"]}}
+    roles.update({k: v for k, v in UNIT_ROLES.items() if k.split("/")[1] in items["dwell"]})
     return define_units(in_system(items, cfg, roles), cfg.orbit_rate)
 
 
@@ -104,7 +110,7 @@ def _point_items(points) -> dict:
                               "input, time in 1/n (acmm.design.regional_lmi.control_energy)"),
         }
         if res.robust is not None:
-            g["robust"] = _robust_items(res.robust, p.gain)
+            g["robust"] = _robust_items(res.robust)
             g["K"] = replace(g["K"], description="robust gain for the family of design.robust (group robust), u = -K x")
             for key in _REFERENCE_LQR:
                 g[key] = replace(g[key], description=g[key].description + " of the route's reference sector LQR "
@@ -119,7 +125,7 @@ def _point_items(points) -> dict:
     return pts
 
 
-def _robust_items(r, gain) -> dict:
+def _robust_items(r) -> dict:
     """The ``points/<k>/robust`` group: the family, the start and one certificate per plant
     (:mod:`acmm.design.robust`)."""
     c = r.certificates
@@ -256,31 +262,6 @@ def _schedule_items(r) -> dict:
     return sched
 
 
-def _unit_roles(pts: dict, has_fit: bool) -> dict:
-    """Dataset path → role of :func:`acmm.io.units.state_space_in` (``"K"``, ``"A"``, ...): which
-    datasets of ``design.h5`` (point groups ``pts``, a schedule when ``has_fit``) are converted to
-    the output unit system, and as what."""
-    roles = {"K": "K"}
-    for key in pts:
-        roles.update({f"points/{key}/{m}": m for m in ("A", "B", "G", "Q", "P", "K")})
-        if "robust" in pts[key]:
-            roles[f"points/{key}/robust/nominal_K"] = "K"
-        roles[f"points/{key}/scales"] = "scales"
-    if has_fit:
-        roles.update({"schedule/coef": "K", "schedule/rms_residual": "K"})
-    return roles
-
-
-def _gain_labels(drf_mode: str, units_system: str) -> tuple[tuple, str]:
-    """(the 24 state unit labels as printed, torque unit ``"ft·lbf"`` or ``"N·m"``) for the gain
-    figure's labels (Figs 5.3–5.26) in DRF mode ``drf_mode`` and unit system ``units_system``."""
-    from acmm.plots.base import state_units  # deferred: matplotlib start-up
-
-    if units_system == "imperial":
-        return tuple(state_units(drf_mode)), "ft·lbf"
-    return tuple(u.replace("*", "·") for u in state_factors(drf_mode, units_system)[1]), "N·m"
-
-
 def design_figures_from_file(path: Path, out_dir: Path) -> list:
     """The figures of a design drawn from its ``design.h5`` alone (by the design stage after it
     wrote the file, and by ``acmm plot``): the points' pole map with the sector of ch. 5.2
@@ -301,12 +282,12 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
         The figure calls, for :func:`acmm_qpp.results.draw_figures`.
     """
     from acmm.plots import design as design_plots  # deferred: matplotlib start-up
+    from acmm.plots.base import state_units  # deferred: matplotlib start-up
 
     with h5py.File(path, "r") as f:
         attrs = {k: f.attrs[k] for k in f.attrs}
         names = list(map(h5_text, np.atleast_1d(f["names"][()])))
-        keys = sorted(f["points"])
-        poles = [np.asarray(f[f"points/{k}/poles"][()]) for k in keys]
+        poles = [np.asarray(f[f"points/{k}/poles"][()]) for k in sorted(f["points"])]
         tea = np.asarray(f["tea"][()], float)
         K = np.asarray(f["K"][()], float)
         sched = None
@@ -327,9 +308,13 @@ def design_figures_from_file(path: Path, out_dir: Path) -> list:
         fine = np.linspace(theta2.min(), theta2.max(), 60)
         sampled = design_plots.SampledSchedule(
             form, fine, np.array([schedule_gain(form, sched["coef"], sched["variable"], K, t) for t in fine]))
-        units, torque = _gain_labels(s.drf_mode, system)
+        # the 24 state units and the torque unit as the gain figure's labels print them (Figs 5.3–5.26)
+        if system == "imperial":
+            units, torque = list(state_units(s.drf_mode)), "ft·lbf"
+        else:
+            units, torque = [u.replace("*", "·") for u in state_factors(s.drf_mode, system)[1]], "N·m"
         calls.append(partial(design_plots.gain_schedule_grid, theta2, K, sampled, STATE_NAMES,
-                             out_dir / "design_gains.png", units=list(units), torque_unit=torque))
+                             out_dir / "design_gains.png", units=units, torque_unit=torque))
         pc = sched.get("path")
         if pc is not None:
             calls.append(partial(design_plots.schedule_path_check, pc["theta2"], pc["max_real"], pc["sector_margin"],

@@ -1,11 +1,7 @@
-"""Stage runners: config in, results file out.  The glue between the pure library
-modules and the CLI (I/O at the edge; the mathematics lives in the library modules).
-
-Stages: the TEA (eqs 4.1–4.3), the design model (eqs 4.46–4.47), the sector LQR per design
-point (ch. 5.2) with its gain schedule (ch. 5.3), and the nonlinear simulation (ch. 6).
-
-The TEA and linearize stages live here; the design stage in :mod:`acmm.stages.design` and the
-simulation stage in :mod:`acmm.stages.simulate`.
+"""Stage runners: config in, results file out; the glue between the pure library modules and
+the CLI.  Here the TEA (eqs 4.1–4.3) and the design model (eqs 4.46–4.47); the sector LQR per
+design point (ch. 5.2) with its gain schedule (ch. 5.3) in :mod:`acmm.stages.design`, the
+nonlinear simulation (ch. 6) in :mod:`acmm.stages.simulate`.
 """
 from __future__ import annotations
 
@@ -16,11 +12,9 @@ import numpy as np
 
 from acmm.model import controllability as ctrb_mod, linearize as lin, tea as tea_mod
 from acmm.io.config import Config
-from acmm.stages.common import UNIT_A, UNIT_B, UNIT_STATE, as_config, in_system, write_results
+from acmm.stages.common import AXES, UNIT_A, UNIT_B, UNIT_STATE, as_config, in_system, write_results
 from acmm_qpp.outputs import stage
 from acmm_qpp.results import Dataset
-
-AXES = ["roll", "pitch", "yaw"]
 
 
 @dataclass
@@ -114,7 +108,6 @@ class LinearizeResult:
     tea: tea_mod.TEA
     model: object
     controllability: object
-    #: open-loop eigenvalues of A (rad/s), as written to ``linearize.h5``
     eigenvalues: np.ndarray | None = None
 
     def eigenvalues_over_n(self) -> np.ndarray:
@@ -151,7 +144,6 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
                              model=cfg.design.model, drf_mode=cfg.design.drf_mode)
     ctrb = ctrb_mod.controllability(model)
     eig = np.linalg.eigvals(model.A)
-    result = LinearizeResult(cfg, tr.tea, model, ctrb, eig)
     names = list(model.state_names)
     items = {
         "A": Dataset(model.A, UNIT_A, "state matrix of eq 4.46 (x' = A x + B u + G w)",
@@ -177,4 +169,4 @@ def run_linearize(config, *, out: Path) -> tuple[LinearizeResult, Path]:
     items = in_system(items, cfg, {"A": "A", "B": "B", "G": "G", "scales": "scales"})
     write_results(out / "linearize.h5", items, cfg,
                   {"stage": "linearize", "variant": model.variant, "drf_mode": model.drf_mode})
-    return result, cfg.run_dir() / "linearize.h5"
+    return LinearizeResult(cfg, tr.tea, model, ctrb, eig), cfg.run_dir() / "linearize.h5"

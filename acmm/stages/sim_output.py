@@ -1,25 +1,19 @@
-"""What the simulation stage writes: the ``sim.h5`` items and the simulation figures.
-
-:func:`acmm.stages.simulate.run_simulate` calls these, as :mod:`acmm.stages.design_output` does for
-the design stage.  The outputs are those of the report's ch. 6
-simulations: attitude error, rates, torque and CMG momentum per axis (Figs 6.2–6.13, 6.20–6.30),
-the inertia steps (Figs 6.14–6.19) and the per-level statistics; the disturbance torque is that of
-eq 3.9.
+"""What the simulation stage (:func:`acmm.stages.simulate.run_simulate`) writes: the ``sim.h5``
+items and the figures of the report's ch. 6 simulations: attitude error, rates, torque and CMG
+momentum per axis (Figs 6.2–6.13, 6.20–6.30), the inertia steps (Figs 6.14–6.19) and the
+per-level statistics; the disturbance torque is that of eq 3.9.
 """
 from __future__ import annotations
 
 from functools import partial
-from pathlib import Path
 
 import numpy as np
 
 from acmm.model import kinematics as kin
 from acmm.simulate import scenario as scen
-from acmm.stages.common import UNIT_K, UNIT_STATE, stored_config, stored_in
+from acmm.stages.common import AXES, UNIT_K, UNIT_STATE, stored_config, stored_in
 from acmm_qpp.results import Dataset, h5_text
 import h5py
-
-AXES = ["roll", "pitch", "yaw"]
 
 
 def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[dict, dict]:
@@ -53,8 +47,7 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
     rel_rate = np.degrees(r.state[:, 0:3] - kin.lvlh_rate_in_body(r.state[:, 3:6], n))
     # one row per level of the stair-case: NaN for a level never reached (a diverged run), and
     # a steady error only for a level that reached the second half of its dwell
-    n_levels = len(sc.level_start)
-    steady = np.full((n_levels, 3), np.nan)
+    steady = np.full((len(sc.level_start), 3), np.nan)
     for st in stats:
         steady[st["level"]] = st["steady_error_deg"]
     peak = scen.level_peak_momentum(sc, r)
@@ -91,10 +84,9 @@ def sim_items(cfg, sc, r, stats: list, design_hash: str, wall: float) -> tuple[d
         },
         "wall_time": Dataset(wall, "s", "integration wall time"),
     }
-    attrs = {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
-             "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
-             "design_hash": design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
-    return items, attrs
+    return items, {"stage": "simulate", "verdict": r.verdict, "reason": r.reason,
+                   "stop_time_s": r.stop_time, "stop_time_orbits": r.stop_time * n / (2 * np.pi),
+                   "design_hash": design_hash, "n_steps": r.n_steps, "n_rejected": r.n_rejected}
 
 
 def sim_figures_from_file(path, out_dir) -> list:

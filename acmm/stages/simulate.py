@@ -12,8 +12,7 @@ import time
 
 from acmm.io.config import Config
 from acmm.io.dimensions import AUX_COORDS
-from acmm.simulate import kernel as sim_mod
-from acmm.simulate import scenario as scen
+from acmm.simulate import kernel, scenario
 from acmm.stages import sim_output
 from acmm.stages.common import as_config, define_units, in_system, write_results
 from acmm.stages.design import design_for
@@ -21,9 +20,6 @@ from acmm_qpp.outputs import stage
 from acmm_qpp.results import draw_figures
 
 
-# ---------------------------------------------------------------------------------------------
-# simulation
-# ---------------------------------------------------------------------------------------------
 @dataclass
 class SimulateResult:
     """A nonlinear closed-loop run (ch. 6).
@@ -89,15 +85,14 @@ def run_simulate(config, progress=None, figures: bool | None = None, warn=None, 
     cfg = as_config(config)
     want_figures = cfg.output.figures if figures is None else figures
     table, note = design_for(cfg, progress, figures, warn)
-    sc = scen.scenario_from_config(cfg, table)
+    sc = scenario.scenario_from_config(cfg, table)
     t0 = time.perf_counter()
-    r = sim_mod.simulate(sc)
+    r = kernel.simulate(sc)
     wall = time.perf_counter() - t0
-    stats = scen.level_statistics(sc, r)
-    result = SimulateResult(cfg, sc, r, stats, note, wall)
+    stats = scenario.level_statistics(sc, r)
     items, attrs = sim_output.sim_items(cfg, sc, r, stats, table.design_hash, wall)
     items = define_units(in_system(items, cfg, {"levels/gain": "K", "drf": "drf"}), cfg.orbit_rate)
     write_results(out / "sim.h5", items, cfg, attrs, aux_coords=AUX_COORDS)
     if want_figures:
         draw_figures(sim_output.sim_figures_from_file(out / "sim.h5", out))
-    return result, cfg.run_dir() / "sim.h5"
+    return SimulateResult(cfg, sc, r, stats, note, wall), cfg.run_dir() / "sim.h5"

@@ -14,7 +14,8 @@ import numpy as np
 
 from acmm_qpp.errors import ConvergenceError, DesignError
 from acmm.model.inertia import perturb_inertia
-from acmm.sweep.cases import AXES, unphysical_draw_reason, case_values
+from acmm.sweep.cases import unphysical_draw_reason, case_values
+from acmm.sweep.spec import AXES
 from acmm.simulate.scenario import scenario_from_config
 from acmm.stages.design import compute_design, design_table
 from acmm.design.schedule_points import PointSpec, schedule_specs
@@ -74,8 +75,7 @@ def prepare_base(base, spec) -> BaseContext:
     cfg = base.config
     orbits = spec.orbits if spec.orbits is not None else cfg.simulation.orbits
     table = compute_design(cfg).table
-    sc = scenario_from_config(cfg, table, orbits=orbits)
-    return BaseContext(base.label, cfg, table, sc, spec, float(orbits))
+    return BaseContext(base.label, cfg, table, scenario_from_config(cfg, table, orbits=orbits), spec, float(orbits))
 
 
 def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
@@ -96,13 +96,6 @@ def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
 
     end = spec(cfg.schedule.to, 1.0) if cfg.schedule.to is not None else None
     return schedule_specs(start, end, [spec(p) for p in cfg.schedule.points], schedule_settings(cfg), n)
-
-
-def _redesigned_table(cfg, values: dict, biases: np.ndarray):
-    """The design table of the perturbed plant: the core (:func:`acmm.design.design_core.design_schedule`)
-    called directly on the perturbed design points with the base config's settings."""
-    ds = design_schedule(_redesigned_specs(cfg, values, biases), design_settings(cfg), schedule_settings(cfg))
-    return design_table(ds.points, ds.fit, "")
 
 
 def empty_row(n_levels: int) -> dict:
@@ -152,8 +145,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
     row = empty_row(L)
     inertia = np.array([perturb_inertia(m, values) for m in sc0.inertia])
     bias = sc0.bias + np.array([values.get(f"bias_{a}", 0.0) for a in AXES])
-    row["inertia"] = inertia[0].tolist()
-    row["bias"] = bias[0].tolist()
+    row.update(inertia=inertia[0].tolist(), bias=bias[0].tolist())
     why = unphysical_draw_reason(values, sc0.inertia)
     if why is not None:
         row.update(verdict="unphysical", reason=why)
@@ -165,13 +157,13 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
     tea_note = ""
     try:
         if spec.design == "redesign":
-            ptable = _redesigned_table(cfg, values, bias)
+            # the core called directly on the perturbed design points with the base config's settings
+            ds = design_schedule(_redesigned_specs(cfg, values, bias), design_settings(cfg), schedule_settings(cfg))
             # only the inertia and bias differ from the base config, and those come from the table
-            sc = scen.scenario_from_config(cfg, ptable, orbits=ctx.orbits)
+            # (the redesign's bias per point is the held nominal bias (+ offsets); the schedule's
+            # levels are the perturbed design points)
+            sc = scen.scenario_from_config(cfg, design_table(ds.points, ds.fit, ""), orbits=ctx.orbits)
             true = sc.theta_est.copy()
-            # the redesign's bias per point is the held nominal bias (+ offsets); the schedule's
-            # levels are the perturbed design points
-            sc = dataclasses.replace(sc, harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
         else:
             true, tea_note = _perturbed_tea(sc0, inertia, bias)
             if spec.tea_estimate == "true":
@@ -180,8 +172,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
                 gain = np.array([table.gain_at(true[k, 1], rows[k]) for k in range(L)])
             else:
                 est, gain = sc0.theta_est, sc0.gain
-            sc = dataclasses.replace(sc0, inertia=inertia, bias=bias, theta_est=est, gain=gain,
-                                     harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
+            sc = dataclasses.replace(sc0, inertia=inertia, bias=bias, theta_est=est, gain=gain)
     except NoEquilibriumError as exc:
         row.update(verdict="no_equilibrium", reason=str(exc).split(":")[0])
         return row
@@ -195,7 +186,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
         return row
     theta0 = true[0] + offset
     x0 = np.concatenate([kin.lvlh_rate_in_body(theta0, n), theta0, np.zeros(18)])
-    sc = dataclasses.replace(sc, x0=x0, theta_ref=true)
+    sc = dataclasses.replace(sc, x0=x0, theta_ref=true, harmonic_a=sc0.harmonic_a * hs, harmonic_b=sc0.harmonic_b * hs)
     r = sm.simulate(sc)
     row = _metrics(row, r, sc, true, n, spec)
     row["reason"] += tea_note
@@ -281,9 +272,8 @@ def run_case(ctx: BaseContext, index: int) -> dict:
         ``values`` and ``n_draws``.
     """
     values, draws, _ = case_values(ctx.spec, index, ctx.scenario.inertia)
-    row = simulate_values(ctx, values)
-    row.update(kind="case", base=ctx.label, index=int(index), values=values, n_draws=int(draws))
-    return row
+    return {**simulate_values(ctx, values), "kind": "case", "base": ctx.label, "index": int(index),
+            "values": values, "n_draws": int(draws)}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -325,18 +315,14 @@ def margin_search(ctx: BaseContext, direction: str) -> dict:
     if nominal:
         for k in range(1, m.scan_points + 1):
             s = end ** (k / m.scan_points)
-            if ok(s):
-                good = s
-            else:
+            if not ok(s):
                 bad = s
                 break
+            good = s
         if bad is not None:
             while max(good, bad) / min(good, bad) > 1 + m.rel_tol:
                 mid = math.sqrt(good * bad)
-                if ok(mid):
-                    good = mid
-                else:
-                    bad = mid
+                good, bad = (mid, bad) if ok(mid) else (good, mid)
     fail = next((e for e in evaluated if e[0] == bad), None)
     return {"kind": "margin", "base": ctx.label, "direction": direction,
             "limit": good if nominal else math.nan, "first_failure": math.nan if bad is None else bad,

@@ -7,20 +7,13 @@ from typing import Optional
 import numpy as np
 
 from acmm.model.inertia import perturb_inertia, unphysical_reason
-from acmm.sweep.spec import PARAMETERS, SHORTHANDS
-
-
-AXES = ("roll", "pitch", "yaw")
+from acmm.sweep.spec import AXES, PARAMETERS, SHORTHANDS
 
 #: Verdict codes stored in ``verdict_code``.
 VERDICTS = ("bounded", "not_settled", "diverged", "no_equilibrium", "unphysical", "design_failed",
             "tea_failed")
 
 
-
-# ---------------------------------------------------------------------------------------------
-# case parameters
-# ---------------------------------------------------------------------------------------------
 def draw_parameters(rng: np.random.Generator, spec) -> dict:
     """One draw of every Monte Carlo parameter, in the order the config lists them.
 
@@ -72,10 +65,8 @@ def case_values(spec, index: int, inertias: np.ndarray) -> tuple[dict, int, Opti
         Why the final draw is unphysical (``None`` when it is physical).
     """
     if spec.grid is not None:
-        names = list(spec.grid)
-        shape = [len(spec.grid[k]) for k in names]
-        idx = np.unravel_index(index, shape)
-        values = {k: float(spec.grid[k][j]) for k, j in zip(names, idx)}
+        idx = np.unravel_index(index, [len(v) for v in spec.grid.values()])
+        values = {k: float(v[j]) for (k, v), j in zip(spec.grid.items(), idx)}
         return values, 1, unphysical_draw_reason(values, inertias)
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, index]))
     draws = 0

@@ -1,24 +1,11 @@
 """Schema of a sweep config (pydantic v2, ``extra="forbid"``), read from YAML.
 
-A sweep file names one or more *base* configs (ordinary acmm configs) and says how to vary
-them::
-    name: inertia30                # results go to <output.root>/<name>/sweep.h5
-    description: "..."
-    sweep:
-      bases: [mb3, ac]             # paths (relative to this file, then the working directory)
-                                   # or packaged config names; or `base: mb3`
-      monte_carlo:                 # or `grid: {parameter: [values...]}`
-        inertia: {percent: 30}     # each of I11..I23 × (1 + U(−0.30, +0.30))
-      n_runs: 200                  # Monte Carlo draws per base
-      seed: 185644
-      design: fixed                # fixed nominal gain schedule | redesign per case
-      tea_estimate: nominal        # controller's TEA estimate with a fixed design
-      orbits: 10                   # per run (default: the base config's simulation.orbits)
-      margin: {low: 0.1, high: 10} # bisection on a uniform inertia scaling, per base
-    output: {root: runs, figures: true}
-
-Alternatively the ``sweep`` section may sit inside an ordinary config (no ``base``/``bases``):
-the rest of that file is then the single base config and the sweep takes its ``name``.
+A sweep file names one or more *base* configs (ordinary acmm configs: paths relative to the file,
+then the working directory, or packaged names) and says how to vary them (``monte_carlo`` with
+``n_runs`` and ``seed``, or ``grid``; ``design``, ``tea_estimate``, ``orbits``, ``margin``):
+docs/howto/sweeps.md shows a full file.  Alternatively the ``sweep`` section may sit inside an
+ordinary config (no ``base``/``bases``): the rest of that file is then the single base config
+and the sweep takes its ``name``.
 
 Parameters (see :data:`acmm.sweep.spec.PARAMETERS`): relative inertia-element changes
 ``dI11 … dI23`` (shorthand ``inertia``), a uniform inertia scale ``inertia_scale``, additive bias
@@ -38,13 +25,12 @@ from pathlib import Path
 import yaml
 
 from acmm.io.config import Config, load_config, parse_config
-from acmm_qpp.configio import read_yaml, require_mapping, validate_model
+from acmm_qpp.configio import apply_overrides, read_yaml, remember_origin, require_mapping, validate_model
 from acmm.sweep.spec import SweepFile, SweepSpec
 from acmm_qpp.errors import ConfigError
 import json
 from acmm.sweep.limits import check_sweep_work
 from acmm import PACKAGED_CONFIGS
-from acmm_qpp.configio import apply_overrides, remember_origin
 from acmm_qpp.provenance import config_hash
 import difflib
 
@@ -169,13 +155,10 @@ class Sweep:
         str
             16 hex digits (:func:`acmm_qpp.provenance.config_hash`).
         """
-
-        settings = self._case_settings()
-        f, bases = settings["file"], settings["bases"]
+        key = {**self._case_settings(), "metrics": METRICS_MODEL}
         # the order of the grid's and the Monte Carlo's parameters decides which values case i
         # gets (product order, draw order), and sort_keys below would lose it
-        order = {k: list(f["sweep"].get(k) or {}) for k in ("grid", "monte_carlo")}
-        key = {"file": f, "bases": bases, "parameter_order": order, "metrics": METRICS_MODEL}
+        key["parameter_order"] = {k: list(key["file"]["sweep"].get(k) or {}) for k in ("grid", "monte_carlo")}
         if self.spec.design == "fixed":        # a redesigned case is computed as before
             key["case_model"] = CASE_MODEL
         return config_hash(json.dumps(key, sort_keys=True))
@@ -233,16 +216,12 @@ def parse_sweep(data: object, source: str = "sweep config", directory: Path | No
         raise ConfigError(f"{source}: sweep.base: missing: give the base config (sweep.base: NAME or "
                           f"sweep.bases: [...]), or write the sweep inside a full acmm config{hint}")
     if inline:
-        rest = {k: v for k, v in data.items() if k != "sweep"}
-        base_cfg = parse_config(rest, source=source)
-        file_data = {"name": base_cfg.name, "description": base_cfg.description, "sweep": raw,
-                     "output": base_cfg.output.model_dump(mode="json")}
-    else:
-        file_data = data
-    sf = validate_model(SweepFile, file_data, source)
-    if inline:
+        base_cfg = parse_config({k: v for k, v in data.items() if k != "sweep"}, source=source)
+        sf = validate_model(SweepFile, {"name": base_cfg.name, "description": base_cfg.description, "sweep": raw,
+                                        "output": base_cfg.output.model_dump(mode="json")}, source)
         bases = (Base(base_cfg.name, base_cfg, source),)
     else:
+        sf = validate_model(SweepFile, data, source)
         bases = tuple(_resolve_base(r, directory) for r in sf.sweep.base_names())
     labels = [b.label for b in bases]
     if len(set(labels)) != len(labels):
@@ -265,8 +244,7 @@ def _parse_resolved(data: dict, source: str) -> Sweep:
     bases_data = data.get("bases")
     if not isinstance(bases_data, dict) or not bases_data:
         raise ConfigError(f"{source}: bases: missing or empty (the resolved base configs, by name)")
-    file_data = data["sweep_file"]
-    sf = validate_model(SweepFile, file_data, f"{source}: sweep_file")
+    sf = validate_model(SweepFile, data["sweep_file"], f"{source}: sweep_file")
     bases = tuple(Base(str(label), parse_config(cfg, source=f"{source}: bases.{label}"), source)
                   for label, cfg in bases_data.items())
     for b in bases:
@@ -319,7 +297,5 @@ def _flatten(tree, prefix: str = "") -> dict:
     """``{"a.b.c": value}`` of a nested mapping (lists are values)."""
     if not isinstance(tree, dict):
         return {prefix: tree} if prefix else {}
-    out: dict = {}
-    for k, v in tree.items():
-        out.update(_flatten(v, f"{prefix}.{k}" if prefix else str(k)))
-    return out
+    return {key: value for k, v in tree.items()
+            for key, value in _flatten(v, f"{prefix}.{k}" if prefix else str(k)).items()}

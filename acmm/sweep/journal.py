@@ -25,8 +25,6 @@ from acmm.sweep.cases import VERDICTS
 
 JOURNAL_VERSION = 1
 
-_NUMBER = (int, float)
-
 #: the fields a case record adds to its metrics row (:func:`acmm.sweep.case.empty_row`)
 CASE_KEYS = {"base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ())}
 
@@ -35,10 +33,8 @@ CASE_KEYS = {"base": ("str", ()), "index": ("int", ()), "n_draws": ("int", ())}
 def _case_fields() -> dict:
     """Case record fields: name → (kind, shape), kind "num" (a number, NaN or ±inf), "int" or
     "str": :data:`CASE_KEYS` and the metrics row's fields, read off its empty row."""
-    fields = dict(CASE_KEYS)
-    for k, v in empty_row(1).items():
-        fields[k] = ("str" if isinstance(v, str) else "int" if isinstance(v, int) else "num", np.shape(v))
-    return fields
+    return {**CASE_KEYS, **{k: ("str" if isinstance(v, str) else "int" if isinstance(v, int) else "num", np.shape(v))
+                            for k, v in empty_row(1).items()}}
 
 
 #: margin-search record fields, as :func:`_case_fields` ("bool": true/false; shape None: a list)
@@ -49,23 +45,18 @@ MARGIN_FIELDS = {
 }
 
 
-def _is(kind: str, v) -> bool:
+def _shaped(kind: str, v, shape) -> bool:
+    if shape is None:
+        return isinstance(v, list) and all(_shaped(kind, x, ()) for x in v)
+    if shape:
+        return isinstance(v, list) and len(v) == shape[0] and all(_shaped(kind, x, shape[1:]) for x in v)
     if kind == "num":            # any float the sweep writes: finite, NaN or ±inf
-        return isinstance(v, _NUMBER) and not isinstance(v, bool)
+        return isinstance(v, (int, float)) and not isinstance(v, bool)
     if kind == "int":
         return isinstance(v, int) and not isinstance(v, bool) and v >= 0
     if kind == "bool":
         return isinstance(v, bool)
     return isinstance(v, str)
-
-
-def _shaped(kind: str, v, shape) -> bool:
-    if shape is None:
-        return isinstance(v, list) and all(_is(kind, x) for x in v)
-    if not shape:
-        return _is(kind, v)
-    return (isinstance(v, list) and len(v) == shape[0]
-            and all(_shaped(kind, x, shape[1:]) for x in v))
 
 
 def _record_problem(rec: object, bases: set | None = None) -> str | None:
@@ -86,7 +77,7 @@ def _record_problem(rec: object, bases: set | None = None) -> str | None:
         if rec["verdict"] not in VERDICTS:
             return f"unknown verdict {rec['verdict']!r}"
         values = rec.get("values")
-        if not isinstance(values, dict) or not all(_is("num", v) for v in values.values()):
+        if not isinstance(values, dict) or not all(_shaped("num", v, ()) for v in values.values()):
             return "case record with a malformed 'values'"
     elif rec["direction"] not in ("up", "down"):
         return f"unknown margin direction {rec['direction']!r}"
@@ -183,32 +174,29 @@ class Journal:
     sync_interval = 0.5
 
     def __init__(self, path: Path, key: str, fresh: bool):
-        with _journal_errors(path):
-            self._open(path, key, fresh)
-        self._last_sync = time.monotonic()
-
-    def _open(self, path: Path, key: str, fresh: bool) -> None:
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        if fresh or not self.path.exists():
-            tmp = self.path.with_name(f".{self.path.name}.tmp")
-            try:
-                with open(tmp, "w") as f:
-                    f.write(json.dumps({"kind": "header", "version": JOURNAL_VERSION, "key": key}) + "\n")
-                    f.flush()
-                    os.fsync(f.fileno())
-                os.replace(tmp, self.path)       # only under the run lock: no sweep is using it
-            except BaseException:
-                with contextlib.suppress(OSError):
-                    os.unlink(tmp)
-                raise
-        else:
-            # drop a torn final line before appending
-            data = self.path.read_bytes()
-            if data and not data.endswith(b"\n"):
-                with open(self.path, "r+b") as f:
-                    f.truncate(data.rfind(b"\n") + 1)
-        self._f = open(self.path, "a")
+        with _journal_errors(path):
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            if fresh or not self.path.exists():
+                tmp = self.path.with_name(f".{self.path.name}.tmp")
+                try:
+                    with open(tmp, "w") as f:
+                        f.write(json.dumps({"kind": "header", "version": JOURNAL_VERSION, "key": key}) + "\n")
+                        f.flush()
+                        os.fsync(f.fileno())
+                    os.replace(tmp, self.path)       # only under the run lock: no sweep is using it
+                except BaseException:
+                    with contextlib.suppress(OSError):
+                        os.unlink(tmp)
+                    raise
+            else:
+                # drop a torn final line before appending
+                data = self.path.read_bytes()
+                if data and not data.endswith(b"\n"):
+                    with open(self.path, "r+b") as f:
+                        f.truncate(data.rfind(b"\n") + 1)
+            self._f = open(self.path, "a")
+        self._last_sync = time.monotonic()
 
     def append(self, records: list) -> None:
         """Append records (one write, one flush; an fsync when the last is older than the interval).

@@ -52,18 +52,6 @@ def _margin_evaluations(margin) -> int:
     return total
 
 
-def _check_samples(sweep, source: str) -> None:
-    """The per-run output-sample limit (``SIM_SAMPLES``) at the sweep's own ``orbits``."""
-    for b in sweep.bases:
-        sim = b.config.simulation
-        orbits = sweep.spec.orbits if sweep.spec.orbits is not None else sim.orbits
-        samples = b.config.output_samples(orbits)
-        if samples > limit("SIM_SAMPLES", LIMITS):
-            raise ConfigError(f"{source}: sweep.orbits: {orbits:g} orbits of {b.label} at its sample_interval "
-                              f"{sim.sample_interval:g} s give {samples:.3g} output samples per run; lower "
-                              f"sweep.orbits or raise simulation.sample_interval ({how_to_raise('SIM_SAMPLES', LIMITS)})")
-
-
 def check_sweep_work(sweep, source: str = "sweep config") -> None:
     """Raise a one-line :class:`ConfigError` when a sweep exceeds a work limit.
 
@@ -83,20 +71,22 @@ def check_sweep_work(sweep, source: str = "sweep config") -> None:
     nb = len(sweep.bases)
     if nb == 0:
         raise ConfigError(f"{source}: sweep.base: give a base config ('base: NAME' or 'bases: [...]')")
-    if spec.grid is not None:
-        cases = 1
-        for v in spec.grid.values():
-            cases *= len(v)
-    else:
-        cases = int(spec.n_runs)
-    cases *= nb
+    cases = spec.n_cases() * nb
     if cases > limit("SWEEP_CASES", LIMITS):
         raise ConfigError(f"{source}: sweep: {cases:.3g} cases over {nb} base(s); use fewer grid values or "
                           f"n_runs ({how_to_raise('SWEEP_CASES', LIMITS)})")
-    _check_samples(sweep, source)
+    all_orbits = 0
+    for b in sweep.bases:          # the per-run output-sample limit at the sweep's own orbits
+        sim = b.config.simulation
+        orbits = spec.orbits if spec.orbits is not None else sim.orbits
+        samples = b.config.output_samples(orbits)
+        if samples > limit("SIM_SAMPLES", LIMITS):
+            raise ConfigError(f"{source}: sweep.orbits: {orbits:g} orbits of {b.label} at its sample_interval "
+                              f"{sim.sample_interval:g} s give {samples:.3g} output samples per run; lower "
+                              f"sweep.orbits or raise simulation.sample_interval ({how_to_raise('SIM_SAMPLES', LIMITS)})")
+        all_orbits += orbits
     runs = cases // nb + _margin_evaluations(spec.margin)        # per base
-    orbits = sum(spec.orbits if spec.orbits is not None else b.config.simulation.orbits for b in sweep.bases)
-    total_orbits = orbits * runs
+    total_orbits = all_orbits * runs
     if total_orbits > limit("SWEEP_ORBITS", LIMITS):
         raise ConfigError(f"{source}: sweep.orbits: {cases} cases"
                           f"{' and the margin searches' if spec.margin is not None else ''} simulate "
@@ -113,8 +103,7 @@ def check_sweep_work(sweep, source: str = "sweep config") -> None:
     if cases * spec.max_draws <= cap:
         return
     good, n = _physical_fraction(sweep, PILOT)
-    per_case = spec.max_draws if good == 0 else min(spec.max_draws, n / good)
-    expected = cases * per_case
+    expected = cases * (spec.max_draws if good == 0 else min(spec.max_draws, n / good))
     if expected > cap:
         raise ConfigError(f"{source}: sweep.max_draws: {good} of {n} pilot draws give a physical inertia, so "
                           f"{cases} cases would need ~{expected:.3g} draws; narrow sweep.monte_carlo, lower "

@@ -10,8 +10,8 @@ from acmm_qpp.errors import AcmmError, FigureError
 from acmm_qpp.outputs import write_text
 from acmm_qpp.results import Dataset, h5_text, write_h5
 from acmm.io.dimensions import with_coordinates
-from acmm.sweep.cases import AXES, VERDICTS
-from acmm.sweep.spec import MAP_EXTRAS, PARAMETERS, swept_parameters
+from acmm.sweep.cases import VERDICTS
+from acmm.sweep.spec import AXES, MAP_EXTRAS, PARAMETERS, swept_parameters
 from acmm.sweep.config import Sweep, parse_sweep
 import h5py
 import yaml
@@ -24,9 +24,6 @@ from acmm.model.unit_systems import display_unit, shown
 from functools import partial
 
 
-# ---------------------------------------------------------------------------------------------
-# results: sweep.h5, sweep.csv, figures
-# ---------------------------------------------------------------------------------------------
 def split_records(sweep: Sweep, records: list[dict]):
     """The case rows and the margin records of a sweep, each in the bases' order.
 
@@ -51,38 +48,42 @@ def split_records(sweep: Sweep, records: list[dict]):
     return rows, margins
 
 
+#: The dimension of the per-case arrays: one row per case.
+CASE = ("case",)
+#: The metric columns of the case table, in order: row field → (unit, description, shape of a row's value)
+METRICS = {
+    "time_to_divergence": ("orbit", "stop time of a diverged run (NaN if not)", ()),
+    "peak_attitude_error": ("deg", "max |θ − θ*_true| over the run (θ*_true: the plant's TEA)", (3,)),
+    "steady_attitude_error": ("deg", "max |θ − θ*_true| over the second half of the run", (3,)),
+    "peak_momentum": ("ft*lbf*s", "max |h_i| over the run", (3,)),
+    "torque_saturation_time": ("orbit", "time with any axis torque-limited (every integrator step)", ()),
+    "momentum_saturation_time": ("orbit", "time with any CMG axis at its momentum limit (every integrator step)",
+                                 ()),
+    "tea_true": ("deg", "TEA of the perturbed plant (first level)", (3,)),
+    "tea_estimate": ("deg", "TEA estimate used by the controller (first level)", (3,)),
+    "inertia": ("slug*ft^2", "perturbed inertia (first level)", (3, 3)),
+    "bias": ("ft*lbf", "bias torque (first level)", (3,)),
+}
+
+
 def _table_arrays(sweep: Sweep, rows: list[dict]) -> dict:
     """Column name → array (N rows) of the case rows (:func:`acmm.sweep.case.run_case`, sorted by
     base then index) in the rows' units: attitude errors and TEAs deg, momentum ft·lbf·s, times
     orbits, inertia slug·ft², bias ft·lbf; ``parameters`` a dict of the swept parameters;
     ``verdict`` and ``reason`` lists of str."""
-    names = swept_parameters(sweep.spec)
     labels = [b.label for b in sweep.bases]
-    N = len(rows)
-
-    def col(k, shape=()):
-        return np.array([r[k] for r in rows], float).reshape((N,) + shape)
-
     return {
         "base": np.array([labels.index(r["base"]) for r in rows], np.int64),
         "index": np.array([r["index"] for r in rows], np.int64),
         "case": np.array([labels.index(r["base"]) * sweep.spec.n_cases() + r["index"] for r in rows], np.int64),
         "parameters": {k: np.array([r["values"].get(k, PARAMETERS[k].neutral) for r in rows], float)
-                       for k in names},
+                       for k in swept_parameters(sweep.spec)},
         "verdict": [r["verdict"] for r in rows],
         "verdict_code": np.array([VERDICTS.index(r["verdict"]) for r in rows], np.int64),
         "reason": [r["reason"] for r in rows],
         "stable": np.array([r["verdict"] == "bounded" for r in rows], bool),
-        "time_to_divergence": col("time_to_divergence"),
-        "peak_attitude_error": col("peak_attitude_error", (3,)),
-        "steady_attitude_error": col("steady_attitude_error", (3,)),
-        "peak_momentum": col("peak_momentum", (3,)),
-        "torque_saturation_time": col("torque_saturation_time"),
-        "momentum_saturation_time": col("momentum_saturation_time"),
-        "tea_true": col("tea_true", (3,)),
-        "tea_estimate": col("tea_estimate", (3,)),
-        "inertia": col("inertia", (3, 3)),
-        "bias": col("bias", (3,)),
+        **{k: np.array([r[k] for r in rows], float).reshape((len(rows),) + shape)
+           for k, (_, _, shape) in METRICS.items()},
         "n_draws": np.array([r["n_draws"] for r in rows], np.int64),
     }
 
@@ -118,10 +119,8 @@ def _root_attrs(sweep: Sweep, a: dict, labels: list, n_done: int, complete: bool
                 wall_time: float | None) -> dict:
     """Root attributes of ``sweep.h5``: what was run, how far, and the verdict counts per base."""
     spec = sweep.spec
-    summary = {}
-    for k, lab in enumerate(labels):
-        sel = a["base"] == k
-        summary[lab] = {v: int(np.sum(sel & (a["verdict_code"] == j))) for j, v in enumerate(VERDICTS)}
+    summary = {lab: {v: int(np.sum((a["base"] == k) & (a["verdict_code"] == j))) for j, v in enumerate(VERDICTS)}
+               for k, lab in enumerate(labels)}
     attrs = {"stage": "sweep", "sweep_name": sweep.name, "complete": bool(complete),
              "n_cases_expected": spec.n_cases() * len(labels), "n_cases_done": n_done,
              "design": spec.design, "tea_estimate": spec.tea_estimate, "seed": spec.seed,
@@ -144,10 +143,6 @@ def _orbit_defined(items: dict, sweep) -> dict:
     # bases of different orbit rates: no one definition; each case's orbit is its orbit_period
     return {k: replace(v, attrs={**v.attrs, "units_per_case": "orbit = orbit_period[case] * s"})
             if getattr(v, "units", None) == "orbit" else v for k, v in items.items()}
-
-
-#: The dimension of the per-case arrays: one row per case.
-CASE = ("case",)
 
 
 def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bool = False,
@@ -190,22 +185,8 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
         "verdict_code": Dataset(a["verdict_code"], "1", "index into the root attribute 'verdicts'", dims=CASE),
         "reason": Dataset(S(a["reason"]), "1", "why the run stopped or was not run", dims=CASE),
         "stable": Dataset(a["stable"], "1", "verdict == bounded", dims=CASE),
-        "time_to_divergence": Dataset(a["time_to_divergence"], "orbit", "stop time of a diverged run (NaN if not)", dims=CASE),
-        "peak_attitude_error": Dataset(a["peak_attitude_error"], "deg",
-                                       "max |θ − θ*_true| over the run (θ*_true: the plant's TEA)", list(AXES), dims=("case", "axis")),
-        "steady_attitude_error": Dataset(a["steady_attitude_error"], "deg",
-                                         "max |θ − θ*_true| over the second half of the run", list(AXES), dims=("case", "axis")),
-        "peak_momentum": Dataset(a["peak_momentum"], "ft*lbf*s", "max |h_i| over the run", list(AXES), dims=("case", "axis")),
-        "torque_saturation_time": Dataset(a["torque_saturation_time"], "orbit",
-                                          "time with any axis torque-limited (every integrator step)", dims=CASE),
-        "momentum_saturation_time": Dataset(a["momentum_saturation_time"], "orbit",
-                                            "time with any CMG axis at its momentum limit (every integrator step)", dims=CASE),
-        "tea_true": Dataset(a["tea_true"], "deg", "TEA of the perturbed plant (first level)", list(AXES), dims=("case", "axis")),
-        "tea_estimate": Dataset(a["tea_estimate"], "deg", "TEA estimate used by the controller (first level)",
-                                list(AXES), dims=("case", "axis")),
-        "inertia": Dataset(a["inertia"], "slug*ft^2", "perturbed inertia (first level)",
-                           dims=("case", "axis", "axis_col")),
-        "bias": Dataset(a["bias"], "ft*lbf", "bias torque (first level)", list(AXES), dims=("case", "axis")),
+        **{k: Dataset(a[k], unit, text, list(AXES) if shape == (3,) else None,
+                      dims=CASE + ("axis", "axis_col")[:len(shape)]) for k, (unit, text, shape) in METRICS.items()},
         "n_draws": Dataset(a["n_draws"], "1", "Monte Carlo draws used (resampling of unphysical inertia)", dims=CASE),
         "nominal_tea": Dataset(np.array([nominal[lab] for lab in labels]).reshape(len(labels), 3), "deg",
                                "TEA of each base config's nominal plant (NaN: none found)", list(AXES),
@@ -215,13 +196,12 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
     }
     if margins:
         items["margin"] = _margin_items(margins, S)
-    attrs = _root_attrs(sweep, a, labels, len(rows), complete, wall_time)
     run_dir = sweep.run_dir()
-    items = _orbit_defined(items, sweep)
     system = sweep.file.output.units
-    path = write_h5(run_dir / "sweep.h5", with_coordinates(convert_items(items, system)), sweep.to_yaml(),
-                    {**attrs, "unit_system": system})
-    _write_csv(run_dir / "sweep.csv", labels, a, sweep.file.output.units)
+    path = write_h5(run_dir / "sweep.h5", with_coordinates(convert_items(_orbit_defined(items, sweep), system)),
+                    sweep.to_yaml(), {**_root_attrs(sweep, a, labels, len(rows), complete, wall_time),
+                                      "unit_system": system})
+    _write_csv(run_dir / "sweep.csv", labels, a, system)
     figs = []
     if figures and rows:
         try:
@@ -233,10 +213,11 @@ def write_results(sweep: Sweep, records: list[dict], complete: bool, figures: bo
 
 
 def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
+    per_axis = {"peak_attitude_error": "deg", "steady_attitude_error": "deg",
+                "peak_momentum": display_unit("ft*lbf*s", units), "tea_true": "deg"}
     cols = ["case", "base", "index"] + [f"{k}[{display_unit(PARAMETERS[k].unit, units)}]" for k in a["parameters"]] + [
         "verdict", "time_to_divergence[orbit]"]
-    for what, unit in (("peak_attitude_error", "deg"), ("steady_attitude_error", "deg"),
-                       ("peak_momentum", display_unit("ft*lbf*s", units)), ("tea_true", "deg")):
+    for what, unit in per_axis.items():
         cols += [f"{what}_{ax}[{unit}]" for ax in AXES]
     a = dict(a)
     a["parameters"] = {k: shown(np.asarray(v, float), PARAMETERS[k].unit, units)[0] for k, v in a["parameters"].items()}
@@ -247,7 +228,7 @@ def _write_csv(path: Path, labels, a, units: str = "imperial") -> None:
         vals = [str(a["case"][i]), labels[a["base"][i]], str(a["index"][i])]
         vals += [repr(float(v[i])) for v in a["parameters"].values()]
         vals += [a["verdict"][i], repr(float(a["time_to_divergence"][i]))]
-        for what in ("peak_attitude_error", "steady_attitude_error", "peak_momentum", "tea_true"):
+        for what in per_axis:
             vals += [repr(float(x)) for x in a[what][i]]
         vals += [repr(float(a["torque_saturation_time"][i])), repr(float(a["momentum_saturation_time"][i])),
                  str(a["n_draws"][i]), '"' + a["reason"][i].replace('"', "'") + '"']
@@ -266,8 +247,7 @@ def _plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = Non
 
     plt = stage_pyplot()
     labels = [b.label for b in sweep.bases]
-    names = list(a["parameters"])
-    axes_names = list(sweep.spec.map) if sweep.spec.map else (names[:2] if len(names) >= 2 else names[:1])
+    axes_names = list(sweep.spec.map) if sweep.spec.map else list(a["parameters"])[:2]
     nominal = _nominal_tea_deg(sweep) if nominal is None else nominal
 
     system = sweep.file.output.units
@@ -286,10 +266,8 @@ def _plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = Non
         ax = axs[0, k]
         sel = a["base"] == k
         x = values(axes_names[0], sel, lab)
-        if len(axes_names) > 1:
-            y = values(axes_names[1], sel, lab)
-        else:
-            y = np.nanmax(a["peak_attitude_error"][sel], axis=1)
+        y = (values(axes_names[1], sel, lab) if len(axes_names) > 1
+             else np.nanmax(a["peak_attitude_error"][sel], axis=1))
         verdicts = np.array(a["verdict"], dtype=object)[sel]
         for v in VERDICTS:
             m = verdicts == v
@@ -308,7 +286,7 @@ def _plot_sweep(sweep: Sweep, a: dict, run_dir: Path, nominal: dict | None = Non
     fig, axs = plt.subplots(1, B, figsize=(4.6 * B, 3.6), squeeze=False)
     for k, lab in enumerate(labels):
         ax = axs[0, k]
-        sel = (a["base"] == k) & a["stable"]
+        sel = (a["base"] == k) & (np.array(a["verdict"], dtype=object) == "bounded")
         err = a["peak_attitude_error"][sel]
         if len(err):
             hi = max(float(np.nanmax(err)), 1e-3)
@@ -359,17 +337,13 @@ def sweep_figures_from_file(path: Path, out_dir: Path) -> list:
     """
     with h5py.File(path, "r") as f:
         sweep = parse_sweep(yaml.safe_load(h5_text(f.attrs["config"])), source=str(path))
-        labels = [b.label for b in sweep.bases]
         verdict = [h5_text(v) for v in f["verdict"][()]]
         a = {"base": np.asarray(f["base"][()], np.int64), "verdict": verdict,
-             "stable": np.array([v == "bounded" for v in verdict], bool),
-             "parameters": {k: stored_in(f, f"parameters/{k}", PARAMETERS[k].unit) for k in f["parameters"]
-                            if k in PARAMETERS},
+             # in the order of the sweep's parameters, as drawn
+             "parameters": {k: stored_in(f, f"parameters/{k}", PARAMETERS[k].unit)
+                            for k in swept_parameters(sweep.spec) if k in f["parameters"]},
              "peak_attitude_error": stored_in(f, "peak_attitude_error", "deg"),
              "tea_true": stored_in(f, "tea_true", "deg")}
-        nominal = (dict(zip(labels, stored_in(f, "nominal_tea", "deg"))) if "nominal_tea" in f else None)
-    order = list(swept_parameters(sweep.spec))         # the order of the sweep's parameters, as drawn
-    a["parameters"] = {k: a["parameters"][k] for k in order if k in a["parameters"]}
-    if not len(verdict):
-        return []
-    return [partial(_plot_sweep, sweep, a, out_dir, nominal)]
+        nominal = (dict(zip([b.label for b in sweep.bases], stored_in(f, "nominal_tea", "deg")))
+                   if "nominal_tea" in f else None)
+    return [partial(_plot_sweep, sweep, a, out_dir, nominal)] if verdict else []

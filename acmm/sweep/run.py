@@ -87,12 +87,8 @@ class SweepResult:
         dict
             Base label → {verdict: count, ..., "total": count}.
         """
-        out = {}
-        for b in self.sweep.bases:
-            rows = [r for r in self.rows if r["base"] == b.label]
-            out[b.label] = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
-            out[b.label]["total"] = len(rows)
-        return out
+        verdicts = {b.label: [r["verdict"] for r in self.rows if r["base"] == b.label] for b in self.sweep.bases}
+        return {lab: {**{v: vs.count(v) for v in VERDICTS}, "total": len(vs)} for lab, vs in verdicts.items()}
 
 
 #: The files a sweep owns in its run folder (its journal is not one of them: it survives for --resume).
@@ -166,13 +162,18 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     -------
     SweepResult
         What was done, with the rows and margins.
+
+    Raises
+    ------
+    OutputError
+        A worker died under a chunk (not the case's own error); the finished cases stay in the journal.
     """
     spec = sweep.spec
     t0 = time.perf_counter()
     key = sweep.results_key()
-    run_dir = out
-    jpath = run_dir / "sweep.journal"
-    done = _resumed(sweep, jpath, key) if resume and jpath.exists() else {}
+    jpath = out / "sweep.journal"
+    resumed = resume and jpath.exists()
+    done = _resumed(sweep, jpath, key) if resumed else {}
     n_resumed = len(done)
     tasks = [t for t in _sweep_tasks(sweep) if t not in done]
     total = n_resumed + len(tasks)
@@ -184,12 +185,16 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     executor, close = None, lambda abort=False: None
     if tasks:        # before the journal: an unreachable scheduler writes nothing
         executor, close = _make_executor(workers if not scheduler else 0, scheduler)
-    afresh = not (resume and jpath.exists())
     journal = None
     try:
         journal = Journal(jpath, key, fresh=not resume)
-        if afresh:              # after the journal: a journal that cannot be written changes nothing
-            _start_afresh(sweep, run_dir)
+        # after the journal (one that cannot be written changes nothing): partial results must not
+        # sit beside an earlier run's, so its tables and figures go and this sweep's config.yaml
+        # comes first (an interrupted re-run with another seed left its results beside the earlier
+        # run's config.yaml and figures: a review)
+        if not resumed:
+            _remove_earlier(out)
+            write_text(out / CONFIG_FILE, config_text_of(sweep))
     except BaseException:
         if journal is not None:
             journal.close()
@@ -199,8 +204,53 @@ def run_sweep(sweep: Sweep | str | Path, *, workers: Optional[int] = None, sched
     n_workers = 1 if serial else _scheduler_workers(executor, workers)
     chunks = _Chunker(tasks, n_workers, chunk if chunk is not None else (1 if serial else None))
     window = 1 if serial else max(4, 2 * n_workers)
-    n_new = _drive(sweep, executor, close, chunks, _task_arguments(executor, contexts), window, journal, done,
-                   total, progress, after_record, snapshot_interval)
+    remote = _task_arguments(executor, contexts)
+    # keep `window` chunks in flight, journal each record as its chunk finishes and rebuild sweep.h5 in
+    # the background; a sweep that does not complete (an interruption or a failure) cancels its chunks
+    # in flight, closes the executor and writes a partial sweep.h5 from the records so far
+    snaps = _Snapshots(sweep, snapshot_interval)
+    pending: set = set()
+    n_new, complete = 0, False
+    try:
+        while True:
+            while len(pending) < window and (c := chunks.next()) is not None:
+                pending.add(submit(executor, _call_chunk, c, *remote[c[0][1]]))
+            if not pending:
+                break
+            finished, pending = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+            for fut in finished:
+                try:
+                    recs = fut.result()
+                except BaseException as exc:
+                    why = _lost_worker(exc)
+                    if why is None:
+                        raise
+                    raise OutputError(why) from None
+                chunks.returned(len(recs))
+                journal.append(recs)
+                for rec in recs:
+                    done[_task_key(rec)] = rec
+                    n_new += 1
+                    if progress is not None:
+                        progress(len(done), total, rec)
+                    if after_record is not None:
+                        after_record(n_new)
+            snaps.maybe(done)
+        snaps.wait()
+        snaps.check()
+        complete = True
+    finally:
+        with interrupts_deferred():          # a second Ctrl-C in this cleanup hung the sweep (a review)
+            journal.close()
+            snaps.wait()
+            if not complete:
+                try:
+                    for fut in pending:
+                        fut.cancel()
+                finally:
+                    close(abort=True)
+                    if done:
+                        write_results(sweep, list(done.values()), complete=False)
     close()
     path, figs = write_results(sweep, list(done.values()), complete=True,
                                figures=sweep.file.output.figures if figures is None else figures,
@@ -236,16 +286,6 @@ def _resumed(sweep: Sweep, jpath: Path, key: str) -> dict:
                               "--resume")
         done[task] = rec
     return done
-
-
-def _start_afresh(sweep: Sweep, run_dir: Path) -> None:
-    """A sweep started afresh (not resumed) keeps partial results when interrupted, so it must not
-    sit beside an earlier run's: that run's ``sweep.h5``, ``sweep.csv`` and figures are removed
-    (its journal is replaced next) and this sweep's ``config.yaml`` is written first.  An
-    interrupted re-run with another seed left its results beside the earlier run's config.yaml
-    and figures (a review)."""
-    _remove_earlier(run_dir)
-    write_text(run_dir / CONFIG_FILE, config_text_of(sweep))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -306,26 +346,14 @@ def _sweep_tasks(sweep: Sweep):
     """The tasks of a sweep, in order: ``("case", base, index)`` for every case of every base, then
     ``("margin", base, direction)``."""
     n = sweep.spec.n_cases()
-    for b in sweep.bases:
-        for i in range(n):
-            yield ("case", b.label, i)
+    yield from (("case", b.label, i) for b in sweep.bases for i in range(n))
     if sweep.spec.margin is not None:
-        for b in sweep.bases:
-            for d in ("up", "down"):
-                yield ("margin", b.label, d)
+        yield from (("margin", b.label, d) for b in sweep.bases for d in ("up", "down"))
 
 
 def _task_key(rec: dict) -> tuple:
     """The task (:func:`_sweep_tasks`' tuple) of the journal record ``rec``."""
     return ("case", rec["base"], rec["index"]) if rec["kind"] == "case" else ("margin", rec["base"], rec["direction"])
-
-
-def _call(task, ctx):
-    kind, _, arg = task
-    return run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg)
-
-
-_WARM = False
 
 
 #: glibc ``mallopt`` parameter numbers
@@ -374,16 +402,14 @@ def _in_dask_worker() -> bool:
         return False
 
 
+@functools.cache
 def warm_worker() -> None:
     """Once per worker process: load the compiled kernels (from numba's cache: no compile) and
     in a Dask worker restore heap reuse (:func:`_restore_heap_reuse`); a long-lived Dask cluster can be warmed
     ahead with ``client.run(acmm.sweep.run.warm_worker)``."""
-    global _WARM
-    if not _WARM:
-        if _in_dask_worker():        # only the nanny's environment needs it; the user's own
-            _restore_heap_reuse()    # MALLOC_* choice in a driver or pool process is left alone
-        warm_up()
-        _WARM = True
+    if _in_dask_worker():        # only the nanny's environment needs it; the user's own
+        _restore_heap_reuse()    # MALLOC_* choice in a driver or pool process is left alone
+    warm_up()
 
 
 _LOCAL: dict = {}
@@ -418,7 +444,7 @@ def _call_chunk(chunk, ctx, code: Optional[str] = None) -> list[dict]:
                           f"command ({code}): start the workers from the same installation")
     warm_worker()
     ctx = _local_context(ctx)
-    return [_call(t, ctx) for t in chunk]
+    return [run_case(ctx, arg) if kind == "case" else margin_search(ctx, arg) for kind, _, arg in chunk]
 
 
 @functools.lru_cache(maxsize=1)
@@ -442,12 +468,10 @@ def code_identity() -> str:
 def _scheduler_workers(executor, default: int) -> int:
     """Number of workers (threads, ≥ 1) of the Dask cluster behind ``executor``, else ``default``."""
     client = getattr(executor, "_client", None)
-    if client is None:
-        return max(1, default)
-    try:
-        return max(1, sum(int(v) for v in client.nthreads().values()))
-    except (AttributeError, KeyError, OSError, TypeError, ValueError):
-        return max(1, default)
+    with contextlib.suppress(AttributeError, KeyError, OSError, TypeError, ValueError):
+        if client is not None:
+            return max(1, sum(int(v) for v in client.nthreads().values()))
+    return max(1, default)
 
 
 def _task_arguments(executor, contexts: dict) -> dict:
@@ -458,9 +482,8 @@ def _task_arguments(executor, contexts: dict) -> dict:
     if client is None:
         return {k: (v,) for k, v in contexts.items()}
     remote = contexts
-    if contexts:
-        with contextlib.suppress(AttributeError, TypeError, ValueError):
-            remote = {k: client.scatter(v, broadcast=True, hash=False) for k, v in contexts.items()}
+    with contextlib.suppress(AttributeError, TypeError, ValueError):
+        remote = {k: client.scatter(v, broadcast=True, hash=False) for k, v in contexts.items()}
     return {k: (v, code_identity()) for k, v in remote.items()}
 
 
@@ -518,8 +541,7 @@ class _Chunker:
         self.workers = max(1, workers)
         self.size = size
         self._first_back: Optional[float] = None
-        self._cases_since = 0
-        self._chunks_since = 0
+        self._cases_since = self._chunks_since = 0
 
     def case_seconds(self) -> Optional[float]:
         """Measured cost of one case on one worker, s (None before there is a measure)."""
@@ -601,63 +623,3 @@ class _Snapshots:
         if self._thread is not None:
             self._thread.join()
             self._thread = None
-
-
-def _drive(sweep: Sweep, executor, close, chunks: _Chunker, remote: dict, window: int, journal: Journal,
-           done: dict, total: int, progress, after_record, snapshot_interval: float) -> int:
-    """Keep ``window`` chunks in flight on ``executor`` (their arguments after the chunk in
-    ``remote``), journal and add to ``done`` each record as its chunk finishes (``progress(done,
-    total, record)``, ``after_record(n_new)``), and rebuild ``sweep.h5`` in the background every
-    ``snapshot_interval`` s or more (:class:`_Snapshots`); returns the number of new records.
-
-    At the end, interrupts held (a second Ctrl-C in this cleanup hung the sweep: a review), the
-    journal is closed and the background rebuild awaited; when the sweep did not complete (an
-    interruption or a failure) the chunks in flight are cancelled, the executor is closed
-    (``close(abort=True)``) and a partial ``sweep.h5`` is written from the records so far.  A
-    worker lost under a chunk (not the case's own error) is one clear :class:`OutputError`.
-    """
-    snaps = _Snapshots(sweep, snapshot_interval)
-    pending: dict = {}
-    n_new, complete = 0, False
-    try:
-        while True:
-            while len(pending) < window and (c := chunks.next()) is not None:
-                pending[submit(executor, _call_chunk, c, *remote[c[0][1]])] = c
-            if not pending:
-                break
-            finished, _ = cf.wait(list(pending), return_when=cf.FIRST_COMPLETED)
-            for fut in finished:
-                pending.pop(fut)
-                try:
-                    recs = fut.result()
-                except BaseException as exc:
-                    why = _lost_worker(exc)
-                    if why is None:
-                        raise
-                    raise OutputError(why) from None
-                chunks.returned(len(recs))
-                journal.append(recs)
-                for rec in recs:
-                    done[_task_key(rec)] = rec
-                    n_new += 1
-                    if progress is not None:
-                        progress(len(done), total, rec)
-                    if after_record is not None:
-                        after_record(n_new)
-            snaps.maybe(done)
-        snaps.wait()
-        snaps.check()
-        complete = True
-    finally:
-        with interrupts_deferred():
-            journal.close()
-            snaps.wait()
-            if not complete:
-                try:
-                    for fut in list(pending):
-                        fut.cancel()
-                finally:
-                    close(abort=True)
-                    if done:
-                        write_results(sweep, list(done.values()), complete=False)
-    return n_new

@@ -1,15 +1,8 @@
-"""The sweepable parameters and the schema of the ``sweep`` section of a sweep config
-(pydantic v2, ``extra="forbid"``).
-
-The parameters (:data:`PARAMETERS`, CR-185644 Table 1 inertias, eq 3.9 disturbance): relative
-inertia-element changes ``dI11 … dI23`` (shorthand ``inertia``), a uniform inertia scale
-``inertia_scale``, additive bias torques ``bias_roll|pitch|yaw`` (ft·lbf, shorthand ``bias``), a
-factor on the harmonic amplitudes ``harmonic_scale`` (eq 3.9) and initial attitude offsets
-``offset_roll|pitch|yaw`` (deg, shorthand ``offset``); a value given with a unit is converted
-to the parameter's unit.  The schema: grid or Monte Carlo distributions of these parameters, the
-margin search on a uniform inertia scaling, and the sweep file (name, description, ``sweep``,
-``output``).  Cross-field rules: one of grid/Monte Carlo, known parameter names, ranges that keep
-the plant physical.
+"""The sweepable parameters (:data:`PARAMETERS`, CR-185644 Table 1 inertias, eq 3.9 disturbance,
+listed in :mod:`acmm.sweep.config`; a value given with a unit is converted to the parameter's
+unit) and the schema of the ``sweep`` section of a sweep config (pydantic v2, ``extra="forbid"``):
+grid or Monte Carlo distributions, the margin search, the sweep file.  Cross-field rules: one of
+grid/Monte Carlo, known parameter names, ranges that keep the plant physical.
 """
 from __future__ import annotations
 
@@ -54,30 +47,23 @@ class Parameter:
     description: str
 
 
-_AX = ("roll", "pitch", "yaw")
+AXES = ("roll", "pitch", "yaw")
 _ELEMENTS = ("I11", "I22", "I33", "I12", "I13", "I23")
 
 #: Every sweepable parameter, in canonical (column) order.
-PARAMETERS: dict[str, Parameter] = {}
-for _e in _ELEMENTS:
-    PARAMETERS[f"d{_e}"] = Parameter(f"d{_e}", "1", 0.0, "relative",
-                                     f"relative change of {_e}: {_e} → {_e}·(1 + d{_e})")
-PARAMETERS["inertia_scale"] = Parameter("inertia_scale", "1", 1.0, "scale",
-                                        "uniform inertia scaling: I → s·I (applied after the element changes)")
-for _a in _AX:
-    PARAMETERS[f"bias_{_a}"] = Parameter(f"bias_{_a}", "ft*lbf", 0.0, "absolute",
-                                         f"torque added to the {_a} bias (eq 3.9)")
-PARAMETERS["harmonic_scale"] = Parameter("harmonic_scale", "1", 1.0, "scale",
-                                         "factor on the harmonic amplitudes A and B (eq 3.9)")
-for _a in _AX:
-    PARAMETERS[f"offset_{_a}"] = Parameter(f"offset_{_a}", "deg", 0.0, "absolute",
-                                           f"initial {_a} attitude minus the plant's TEA, added to "
-                                           "simulation.initial_offset")
+PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
+    *(Parameter(f"d{e}", "1", 0.0, "relative", f"relative change of {e}: {e} → {e}·(1 + d{e})") for e in _ELEMENTS),
+    Parameter("inertia_scale", "1", 1.0, "scale",
+              "uniform inertia scaling: I → s·I (applied after the element changes)"),
+    *(Parameter(f"bias_{a}", "ft*lbf", 0.0, "absolute", f"torque added to the {a} bias (eq 3.9)") for a in AXES),
+    Parameter("harmonic_scale", "1", 1.0, "scale", "factor on the harmonic amplitudes A and B (eq 3.9)"),
+    *(Parameter(f"offset_{a}", "deg", 0.0, "absolute",
+                f"initial {a} attitude minus the plant's TEA, added to simulation.initial_offset") for a in AXES))}
 
 #: Shorthands expanding to several parameters (each drawn independently).
 SHORTHANDS = {"inertia": [f"d{e}" for e in _ELEMENTS],
-              "bias": [f"bias_{a}" for a in _AX],
-              "offset": [f"offset_{a}" for a in _AX]}
+              "bias": [f"bias_{a}" for a in AXES],
+              "offset": [f"offset_{a}" for a in AXES]}
 
 #: Derived columns that may also be used as stability-map axes.
 MAP_EXTRAS = ("tea_shift_roll", "tea_shift_pitch", "tea_shift_yaw")
@@ -96,11 +82,7 @@ def _in_unit(v, unit: Optional[str], where: str):
         raise ValueError(f"{where}: {exc}") from None
 
 
-class _Model(StrictModel):
-    """Strict base of the sweep sections (:class:`acmm_qpp.config_model.StrictModel`)."""
-
-
-class Dist(_Model):
+class Dist(StrictModel):
     """One distribution: exactly one of ``uniform``, ``normal`` or ``percent``."""
 
     uniform: Optional[tuple[float, float]] = Field(None, description="[low, high], parameter units")
@@ -122,7 +104,7 @@ class Dist(_Model):
         return self
 
 
-class Margin(_Model):
+class Margin(StrictModel):
     """Search for the range of a uniform inertia scaling s (I → s·I) the design tolerates.
 
     From s = 1, s is stepped geometrically towards ``high`` (and towards ``low``) in
@@ -137,7 +119,7 @@ class Margin(_Model):
     rel_tol: float = Field(0.01, ge=1e-6, lt=0.5, description="relative width of the final bracket")
 
 
-class SweepSpec(_Model):
+class SweepSpec(StrictModel):
     """The ``sweep`` section."""
 
     base: Optional[str] = Field(None, description="base config: path or packaged name")
@@ -179,15 +161,12 @@ class SweepSpec(_Model):
             data["grid"] = {k: [_in_unit(x, getattr(PARAMETERS.get(k), "unit", None), f"grid.{k}") for x in v]
                             if isinstance(v, list) else v for k, v in data["grid"].items()}
         if isinstance(data.get("monte_carlo"), dict):
-            mc = {}
-            for k, dist in data["monte_carlo"].items():
-                if isinstance(dist, dict):
-                    dist = dict(dist)
-                    for kind in ("uniform", "normal"):
-                        if isinstance(dist.get(kind), (list, tuple)):
-                            dist[kind] = [_in_unit(x, getattr(PARAMETERS.get(k), "unit", None), f"monte_carlo.{k}.{kind}")
-                                          for x in dist[kind]]
-                mc[k] = dist
+            mc = {k: dict(d) if isinstance(d, dict) else d for k, d in data["monte_carlo"].items()}
+            for k, dist in mc.items():
+                for kind in ("uniform", "normal"):
+                    if isinstance(dist, dict) and isinstance(dist.get(kind), (list, tuple)):
+                        dist[kind] = [_in_unit(x, getattr(PARAMETERS.get(k), "unit", None), f"monte_carlo.{k}.{kind}")
+                                      for x in dist[kind]]
             data["monte_carlo"] = mc
         if "settle_deg" in data:
             data["settle_deg"] = _in_unit(data["settle_deg"], "deg", "settle_deg")
@@ -214,7 +193,6 @@ class SweepSpec(_Model):
         if self.grid is not None:
             if not self.grid:
                 raise ValueError("grid: give at least one parameter")
-            size = 1
             for name, values in self.grid.items():
                 if name in SHORTHANDS:
                     raise ValueError(f"grid.{name}: shorthands are for monte_carlo; name the parameters "
@@ -222,11 +200,10 @@ class SweepSpec(_Model):
                 _check_name(name)
                 if not values:
                     raise ValueError(f"grid.{name}: give at least one value")
-                size *= len(values)
-            if self.n_runs is not None and self.n_runs != size:
-                raise ValueError(f"n_runs ({self.n_runs}) must equal the grid size ({size}) or be omitted")
+            if self.n_runs is not None and self.n_runs != self.n_cases():
+                raise ValueError(f"n_runs ({self.n_runs}) must equal the grid size ({self.n_cases()}) or be omitted")
         names = swept_parameters(self)
-        given = [p for k in list(self.grid or {}) + list(self.monte_carlo or {}) for p in SHORTHANDS.get(k, [k])]
+        given = _expanded(self)
         twice = sorted({p for p in given if given.count(p) > 1})
         if twice:
             raise ValueError(f"parameter {', '.join(twice)} is given twice (directly and through a shorthand: "
@@ -234,10 +211,8 @@ class SweepSpec(_Model):
         for name in names:
             if name == "inertia_scale" and any(v <= 0 for v in _support(self, name)):
                 raise ValueError("inertia_scale must stay > 0")
-            if name.startswith("offset_"):
-                for v in _support(self, name):
-                    if abs(v) >= 89:
-                        raise ValueError(f"{name} must stay within ±89 deg")
+            if name.startswith("offset_") and any(abs(v) >= 89 for v in _support(self, name)):
+                raise ValueError(f"{name} must stay within ±89 deg")
         if self.map is not None:
             if self.map[0] == self.map[1]:
                 raise ValueError(f"map: the two axes are both {self.map[0]!r}; give two different parameters")
@@ -307,14 +282,16 @@ def swept_parameters(spec: SweepSpec) -> list[str]:
     list of str
         Parameter names (:data:`PARAMETERS` order first).
     """
-    keys = list(spec.grid or {}) + list(spec.monte_carlo or {})
-    out = []
-    for k in keys:
-        out.extend(SHORTHANDS.get(k, [k]))
+    out = _expanded(spec)
     return [p for p in PARAMETERS if p in out] + [p for p in out if p not in PARAMETERS]
 
 
-class SweepFile(_Model):
+def _expanded(spec: SweepSpec) -> list[str]:
+    """The parameters the grid's and the Monte Carlo's keys name, in order, shorthands expanded."""
+    return [p for k in [*(spec.grid or {}), *(spec.monte_carlo or {})] for p in SHORTHANDS.get(k, [k])]
+
+
+class SweepFile(StrictModel):
     """A sweep config file: name, description, the ``sweep`` section and ``output``."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=RUN_NAME_MAX, description="sweep name; results in <root>/<name>/")
@@ -335,11 +312,8 @@ def sweep_schema() -> dict:
     keys, top = models_json_schema([(SweepFile, "validation"), (Config, "validation"),
                                     (SweepSpec, "validation")], schema_generator=AcmmGenerator)
     defs = fix_alternatives(top)["$defs"]
-    ref_file = keys[(SweepFile, "validation")]["$ref"]
-    ref_cfg = keys[(Config, "validation")]["$ref"]
-    ref_spec = keys[(SweepSpec, "validation")]["$ref"]
-    cfg_name = ref_cfg.split("/")[-1]
-    inline = copy.deepcopy(defs[cfg_name])
+    ref_file, ref_cfg, ref_spec = (keys[(model, "validation")]["$ref"] for model in (SweepFile, Config, SweepSpec))
+    inline = copy.deepcopy(defs[ref_cfg.split("/")[-1]])
     inline["title"] = "Config with an inline sweep section"
     inline["properties"]["sweep"] = {
         "allOf": [{"$ref": ref_spec},
@@ -347,8 +321,7 @@ def sweep_schema() -> dict:
         "description": "sweep over this very config (no base/bases)"}
     inline["required"] = sorted(set(inline.get("required", [])) | {"sweep"})
     defs["InlineSweepConfig"] = inline
-    file_name = ref_file.split("/")[-1]
-    file_def = defs[file_name]
+    file_def = defs[ref_file.split("/")[-1]]
     # the file form needs a base: the loader reads a `sweep` without base/bases as inline
     file_def["properties"]["sweep"] = {"allOf": [file_def["properties"]["sweep"],
                                                  {"anyOf": [{"required": ["base"]}, {"required": ["bases"]}]}]}
