@@ -11,6 +11,7 @@ condition numbers and robustness radii), so the text does not change between mac
 """
 from __future__ import annotations
 
+import itertools
 import math
 import os
 from pathlib import Path
@@ -385,12 +386,7 @@ QPP_EXAMPLES = {
 
 def _path(values, fmt) -> str:
     """``a → b → c`` of the successive distinct values (first and last kept)."""
-    out = []
-    for v in values:
-        t = fmt(v)
-        if not out or out[-1] != t:
-            out.append(t)
-    return " → ".join(out)
+    return " → ".join(t for t, _ in itertools.groupby(map(fmt, values)))
 
 
 def _block_qpp_examples(r: dict) -> str:
