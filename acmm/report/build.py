@@ -7,6 +7,7 @@ report's (determinism) and state the software, run and stage files used (provena
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import platform
@@ -347,7 +348,5 @@ def _provenance(rep: SectionWriter, g: Gathered, timings: dict) -> None:
 def _remove_empty(dirs: list) -> None:
     """Remove the folders ``dirs`` (innermost last in the list) that are empty."""
     for d in reversed(dirs):
-        try:
+        with contextlib.suppress(OSError):
             d.rmdir()
-        except OSError:
-            pass

@@ -180,11 +180,8 @@ def render_html(doc: Doc, title: str, figdir: Path) -> str:
                 t.append(f"<caption>{e(caption)}</caption>")
             t.append("<thead><tr>" + "".join(f"<th>{e(c)}</th>" for c in header) + "</tr></thead><tbody>")
             for r in rows:
-                cells = []
-                for c in r:
-                    cls = _status_class(c)
-                    cells.append(f'<td class="{cls}">{e(c)}</td>' if cls else f"<td>{e(c)}</td>")
-                t.append("<tr>" + "".join(cells) + "</tr>")
+                t.append("<tr>" + "".join(f'<td class="{cls}">{e(c)}</td>' if (cls := _status_class(c)) else
+                                          f"<td>{e(c)}</td>" for c in r) + "</tr>")
             t.append("</tbody></table>")
             parts.append("".join(t))
         elif b[0] == "fig":

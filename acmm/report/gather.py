@@ -317,11 +317,8 @@ def ensure_qpp(cfg, stage: str, rerun: bool = False) -> StageRun:
     StageRun
         The file used.
     """
-    if stage == "design":
-        return _reused_or_run("qpp design", cfg, cfg.run_dir() / "qpp_design.h5", "", rerun,
-                              lambda: qst.run_design(cfg, figures=False)[2])
-    return _reused_or_run("qpp simulate", cfg, cfg.run_dir() / "qpp_sim.h5", "", rerun,
-                          lambda: qst.run_simulate(cfg, figures=False)[3])
+    file, run, at = ("qpp_design.h5", qst.run_design, 2) if stage == "design" else ("qpp_sim.h5", qst.run_simulate, 3)
+    return _reused_or_run(f"qpp {stage}", cfg, cfg.run_dir() / file, "", rerun, lambda: run(cfg, figures=False)[at])
 
 
 def _reused_or_run(stage: str, cfg, path: Path, dhash: str, rerun: bool, run) -> StageRun:

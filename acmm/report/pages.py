@@ -11,6 +11,7 @@ condition numbers and robustness radii), so the text does not change between mac
 """
 from __future__ import annotations
 
+import itertools
 import math
 import os
 from pathlib import Path
@@ -385,12 +386,7 @@ QPP_EXAMPLES = {
 
 def _path(values, fmt) -> str:
     """``a → b → c`` of the successive distinct values (first and last kept)."""
-    out = []
-    for v in values:
-        t = fmt(v)
-        if not out or out[-1] != t:
-            out.append(t)
-    return " → ".join(out)
+    return " → ".join(t for t, _ in itertools.groupby(map(fmt, values)))
 
 
 def _block_qpp_examples(r: dict) -> str:
@@ -706,8 +702,7 @@ def _block_sweep_monte_carlo(r: dict) -> str:
         ok = peak[sel][v == "bounded"]
         med = " / ".join(sig(x, 2) for x in np.median(ok, axis=0)) if ok.size else "—"
         rows.append([lab.upper(), str(v.size), f"**{int(np.sum(v == 'bounded'))}**",
-                     str(int(np.sum(v == "not_settled"))), str(int(np.sum(v == "diverged"))),
-                     str(int(np.sum(v == "no_equilibrium"))),
+                     *(str(int(np.sum(v == x))) for x in ("not_settled", "diverged", "no_equilibrium")),
                      f"{nd - v.size} ({100 * v.size / nd:.0f} % of draws physical)", med])
     return markdown_table(["base", "cases", "bounded", "not settled", "diverged", "no equilibrium",
                            "unphysical draws redrawn", "median peak error of the bounded, r / p / y (deg)"],

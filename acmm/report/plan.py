@@ -50,7 +50,7 @@ class Part:
 
 
 def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: dict | None,
-             name: str = "", heading: str | None = None, not_run: Failed | None = None) -> Part:
+             name: str, heading: str | None, not_run: Failed | None = None) -> Part:
     """``fn(ctx, *values)`` on a fresh writer, matplotlib's settings reset first (a figure looks the
     same whichever figures the process drew before).  A user-facing error it raises
     (:func:`acmm.report.gather.failed`) becomes the part's :attr:`Part.failed` and its one-line
@@ -71,9 +71,9 @@ def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: 
     results : dict or None
         Results files already read (run key ``"stage:name"`` → contents as read by
         :func:`acmm_qpp.results.read_h5`); None: this worker process's cache.
-    name : str, optional
+    name : str
         Task name of the part (in its failure's message).
-    heading : str or None, optional
+    heading : str or None
         Section key whose heading this part writes (shown above its failure), or None.
     not_run : acmm.report.gather.Failed or None, optional
         A stage or part it reads failed: the part is not run and shows that failure.
@@ -94,7 +94,7 @@ def run_part(fn, g: Gathered, figdir: Path, fast: bool, values: tuple, results: 
             value = fn(ctx, *values)
             return Part(ctx.doc.blocks, ctx.ledger, value, time.perf_counter() - t0)
         except Exception as exc:  # noqa: BLE001 (re-raised unless a user-facing failure)
-            f = failed(name or getattr(fn, "__name__", "part"), exc)
+            f = failed(name, exc)
             if f is None:
                 raise
     ctx = SectionWriter(g, figdir, fast, cache)

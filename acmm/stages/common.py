@@ -5,6 +5,8 @@ Used by :mod:`acmm.stages.runners`, :mod:`acmm.stages.design` and :mod:`acmm.sta
 """
 from __future__ import annotations
 
+import functools
+import operator
 from pathlib import Path
 
 import numpy as np
@@ -56,9 +58,7 @@ def in_system(items: dict, cfg: Config, roles: dict) -> dict:
     _, su = state_factors(cfg.design.drf_mode, system)
     for path, role in roles.items():
         *groups, key = path.split("/")
-        g = items
-        for name in groups:
-            g = g[name]
+        g = functools.reduce(operator.getitem, groups, items)
         ds = g[key]
         attrs = dict(ds.attrs, state_units=np.array(su[12:] if role == "drf" else su, dtype="S"))
         if system == "imperial":

@@ -98,13 +98,8 @@ def _redesigned_specs(cfg, values: dict, biases: np.ndarray) -> list:
     return schedule_specs(start, end, [spec(p) for p in cfg.schedule.points], schedule_settings(cfg), n)
 
 
-def empty_row(n_levels: int) -> dict:
+def empty_row() -> dict:
     """The metrics row of a case that has none yet (NaN and empty values).
-
-    Parameters
-    ----------
-    n_levels : int
-        Inertia levels of the case.
 
     Returns
     -------
@@ -141,8 +136,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
         TEA is a verdict, not an exception.
     """
     sc0, table, cfg, spec = ctx.scenario, ctx.table, ctx.config, ctx.spec
-    L = sc0.inertia.shape[0]
-    row = empty_row(L)
+    row = empty_row()
     inertia = np.array([perturb_inertia(m, values) for m in sc0.inertia])
     bias = sc0.bias + np.array([values.get(f"bias_{a}", 0.0) for a in AXES])
     row.update(inertia=inertia[0].tolist(), bias=bias[0].tolist())
@@ -169,7 +163,7 @@ def simulate_values(ctx: BaseContext, values: dict) -> dict:
             if spec.tea_estimate == "true":
                 est = true
                 rows = table.level_rows()
-                gain = np.array([table.gain_at(true[k, 1], rows[k]) for k in range(L)])
+                gain = np.array([table.gain_at(t[1], r) for t, r in zip(true, rows)])
             else:
                 est, gain = sc0.theta_est, sc0.gain
             sc = dataclasses.replace(sc0, inertia=inertia, bias=bias, theta_est=est, gain=gain)

@@ -2,6 +2,7 @@
 perturbed inertia of case ``i`` (reproducible from base, index and seed alone)."""
 from __future__ import annotations
 
+import itertools
 from typing import Optional
 
 import numpy as np
@@ -69,10 +70,8 @@ def case_values(spec, index: int, inertias: np.ndarray) -> tuple[dict, int, Opti
         values = {k: float(v[j]) for (k, v), j in zip(spec.grid.items(), idx)}
         return values, 1, unphysical_draw_reason(values, inertias)
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, index]))
-    draws = 0
-    while True:
+    for draws in itertools.count(1):
         values = draw_parameters(rng, spec)
-        draws += 1
         why = unphysical_draw_reason(values, inertias)
         if why is None or spec.unphysical == "reject" or draws >= spec.max_draws:
             return values, draws, why

@@ -18,7 +18,7 @@ import numpy as np
 
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.configio import read_regular_file
-from acmm_qpp.outputs import output_error
+from acmm_qpp.outputs import output_error, write_bytes
 from acmm.sweep.case import empty_row
 from acmm.sweep.cases import VERDICTS
 
@@ -34,7 +34,7 @@ def _case_fields() -> dict:
     """Case record fields: name → (kind, shape), kind "num" (a number, NaN or ±inf), "int" or
     "str": :data:`CASE_KEYS` and the metrics row's fields, read off its empty row."""
     return {**CASE_KEYS, **{k: ("str" if isinstance(v, str) else "int" if isinstance(v, int) else "num", np.shape(v))
-                            for k, v in empty_row(1).items()}}
+                            for k, v in empty_row().items()}}
 
 
 #: margin-search record fields, as :func:`_case_fields` ("bool": true/false; shape None: a list)
@@ -177,18 +177,9 @@ class Journal:
         self.path = Path(path)
         with _journal_errors(path):
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            if fresh or not self.path.exists():
-                tmp = self.path.with_name(f".{self.path.name}.tmp")
-                try:
-                    with open(tmp, "w") as f:
-                        f.write(json.dumps({"kind": "header", "version": JOURNAL_VERSION, "key": key}) + "\n")
-                        f.flush()
-                        os.fsync(f.fileno())
-                    os.replace(tmp, self.path)       # only under the run lock: no sweep is using it
-                except BaseException:
-                    with contextlib.suppress(OSError):
-                        os.unlink(tmp)
-                    raise
+            if fresh or not self.path.exists():      # replaced only under the run lock: no sweep is using it
+                header = json.dumps({"kind": "header", "version": JOURNAL_VERSION, "key": key}) + "\n"
+                write_bytes(self.path, header.encode(), "the sweep journal")
             else:
                 # drop a torn final line before appending
                 data = self.path.read_bytes()

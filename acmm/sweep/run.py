@@ -299,9 +299,9 @@ class _SerialExecutor(cf.Executor):
         fut: cf.Future = cf.Future()
         try:
             fut.set_result(fn(*args, **kwargs))
+        except KeyboardInterrupt:
+            raise
         except BaseException as exc:  # noqa: BLE001 (re-raised by Future.result())
-            if isinstance(exc, KeyboardInterrupt):
-                raise
             fut.set_exception(exc)
         return fut
 

@@ -198,10 +198,10 @@ def _error_table(ctx: SectionWriter, chap: str, cfg, spath, printed_errors, out_
                   erow, f"Ch. {chap}: simulated tracking errors (nonlinear closed loop)")
 
 
-def _printed_gain_rows(ctx: SectionWriter, chap, d, pub, names=()):
+def _printed_gain_rows(ctx: SectionWriter, chap, d, pub, names):
     """β1, β3, β4, m of the *printed* gains (qpp_design.h5 ``published_certificate``) beside the
     synthesized ones; β1 of the printed gains also enters the ledger."""
-    pc = d.get("published_certificate") if isinstance(d, dict) else None
+    pc = d.get("published_certificate")
     if not pc:
         return []
     rows = []
