@@ -168,12 +168,9 @@ def lyapunov_matrices(Acl: np.ndarray, decay: float) -> np.ndarray:
     (L, N, N) array
         The symmetric P_k, dimensionless.
     """
-    N = Acl.shape[1]
-    out = np.empty_like(Acl, dtype=float)
-    for k, A in enumerate(Acl):
-        P = sla.solve_continuous_lyapunov((A + decay * np.eye(N)).T, -np.eye(N))
-        out[k] = 0.5 * (P + P.T)
-    return out
+    I = np.eye(Acl.shape[1])
+    P = np.array([sla.solve_continuous_lyapunov((A + decay * I).T, -I) for A in Acl], dtype=float)
+    return 0.5 * (P + P.transpose(0, 2, 1))
 
 
 def jump_ratios(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

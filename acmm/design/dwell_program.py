@@ -109,16 +109,6 @@ class _ChainKKT(StructuredKKT):
             out[key] = 2.0 * sum(M[idx] * w for idx, w in self._gather)
         return out
 
-    def schur(self, sigma) -> np.ndarray:
-        """The whole Schur complement, dense and dimensionless (for tests and small programs)."""
-        blocks = self.schur_blocks(sigma)
-        n = blocks[(0, 0)].shape[0]
-        H = np.zeros((self.levels * n,) * 2)
-        for (k, l), B in blocks.items():
-            H[k * n:(k + 1) * n, l * n:(l + 1) * n] = B
-            H[l * n:(l + 1) * n, k * n:(k + 1) * n] = B.T
-        return H
-
     def factor(self, sigma):
         """Block Cholesky of the block tridiagonal Schur complement: H = LLᵀ with diagonal blocks
         C_k = chol(H_kk − B_{k−1} B_{k−1}ᵀ) and sub-diagonal blocks B_k = H_(k,k+1)ᵀ C_k⁻ᵀ; returns
@@ -192,10 +182,7 @@ def solve_dwell_program(As: np.ndarray, T: float, decay: float, R: np.ndarray, m
         return None
     if v is None or not np.all(np.isfinite(v)):
         return None
-    P = np.empty((L, N, N))
-    for k, part in enumerate(np.split(v, L)):
-        Ph = np.empty((N, N))
-        Ph[i, j] = part
-        Ph[j, i] = part
-        P[k] = R[k].T @ Ph @ R[k]
+    Ph = np.empty((L, N, N))
+    Ph[:, i, j] = Ph[:, j, i] = v.reshape(L, -1)
+    P = np.array([r.T @ p @ r for r, p in zip(R, Ph)])
     return 0.5 * (P + P.transpose(0, 2, 1))
