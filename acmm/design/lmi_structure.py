@@ -261,10 +261,11 @@ class StructuredKKT:
     def _apply(self, v) -> np.ndarray:
         """G v: the blocks' linear parts Σ_t Sym(P_t V_t Q_tᵀ), (Σ m_k²,), each block a symmetric
         matrix stacked as a vector (row or column order alike), dimensionless."""
-        whole = self.lay._expand(v)
+        whole, lay = self.lay._expand(v), self.lay
+        V = {var: whole[lay.offsets[var]:lay.offsets[var] + r * c].reshape(r, c) for var, (r, c) in lay.shapes.items()}
         out = []
         for terms in self.blocks:
-            B = sum(t.P @ self._variable(whole, t.var) @ t.Q.T for t in terms)
+            B = sum(t.P @ V[t.var] @ t.Q.T for t in terms)
             out.append((B + B.T).ravel())
         return np.concatenate(out)
 
@@ -278,11 +279,6 @@ class StructuredKKT:
                 D = 2.0 * (t.P.T @ Z @ t.Q)
                 g[o:o + D.size] += D.ravel()
         return self.lay._fold(g)
-
-    def _variable(self, whole, var):
-        r, c = self.lay.shapes[var]
-        o = self.lay.offsets[var]
-        return whole[o:o + r * c].reshape(r, c)
 
     def schur(self, sigma) -> np.ndarray:
         """H_ab = Σ_k tr(F_k(E_a) Σ_k F_k(E_b) Σ_k) over the variable vector.
@@ -373,27 +369,11 @@ class StructuredKKT:
                     raise ArithmeticError("singular Schur complement") from None
             return lambda b: sla.lu_solve(lu, b, check_finite=False)
 
-    def kktsolver(self, W):
-        """cvxopt's ``kktsolver(W)``: the solver of [[0, Gᵀ], [G, −WᵀW]] [ux; uz] = [bx; bz]
-        (no equality constraints): H ux = bx + Gᵀ(WᵀW)⁻¹bz, then W uz = W⁻ᵀ(G ux − bz).
-
-        Parameters
-        ----------
-        W : dict
-            cvxopt's Nesterov–Todd scaling: ``W["rti"][k]`` = r_k⁻ᵀ, W_k(u) = r_kᵀ u r_k.
-
-        Returns
-        -------
-        callable
-            ``f(x, y, z)``: overwrites x with ux and z with W uz (cvxopt matrices); it raises
-            ArithmeticError where the solve is not finite, which cvxopt ends on.
-
-        Raises
-        ------
-        ArithmeticError
-            H is numerically singular (cvxopt then stops with status "unknown" and its last
-            iterate).
-        """
+    def _kktsolver(self, W):
+        """cvxopt's ``kktsolver(W)`` for [[0, Gᵀ], [G, −WᵀW]] [ux; uz] = [bx; bz] (no equality
+        constraints): H ux = bx + Gᵀ(WᵀW)⁻¹bz, then W uz = W⁻ᵀ(G ux − bz), W["rti"][k] = r_k⁻ᵀ the
+        Nesterov–Todd scaling W_k(u) = r_kᵀ u r_k.  Returns ``f(x, y, z)``, which overwrites x with ux
+        and z with W uz; ArithmeticError (H singular, or the solve not finite) ends cvxopt's solve."""
         rti = [np.array(r) for r in W["rti"]]
         sigma = [r @ r.T for r in rti]                  # (WᵀW)⁻¹ u = Σ u Σ,  Σ = r⁻ᵀ r⁻¹
         solve = self.factor(sigma)
@@ -410,19 +390,9 @@ class StructuredKKT:
             z[:] = cvxopt.matrix(np.concatenate(out))
         return f
 
-    def operator(self, x, y, alpha=1.0, beta=0.0, trans="N"):
-        """cvxopt's G(x, y, alpha, beta, trans): y := alpha G x + beta y, or Gᵀ with trans "T".
-
-        Parameters
-        ----------
-        x, y : cvxopt matrices
-            Argument and result (overwritten); cvxopt's 's' vectors are lower triangles, column by
-            column, dimensionless.
-        alpha, beta : float
-            Weights, dimensionless.
-        trans : str
-            "N" or "T".
-        """
+    def _operator(self, x, y, alpha=1.0, beta=0.0, trans="N"):
+        """cvxopt's G(x, y, alpha, beta, trans): y := alpha G x + beta y, or Gᵀ with trans "T" (cvxopt
+        matrices; 's' vectors as lower triangles, column by column)."""
         xv = np.array(x).ravel()
         r = self._apply(xv) if trans == "N" else self._adjoint(self._blocks_of(xv))
         y[:] = cvxopt.matrix(alpha * r + beta * np.array(y).ravel())
@@ -473,8 +443,8 @@ def run_conelp(kkt: StructuredKKT, c, F0, tol: float, feastol: float, max_iter: 
         warm = {"primalstart": {"x": cvxopt.matrix(v0),
                                 "s": cvxopt.matrix(np.concatenate([x.ravel(order="F") for x in slacks]))},
                 "dualstart": {"z": cvxopt.matrix(np.concatenate([x.ravel(order="F") for x in duals]))}}
-    sol = solvers.conelp(cvxopt.matrix(np.asarray(c, float)), kkt.operator, h, {"l": 0, "q": [], "s": kkt.dims},
-                         kktsolver=kkt.kktsolver, options=options, **warm)
+    sol = solvers.conelp(cvxopt.matrix(np.asarray(c, float)), kkt._operator, h, {"l": 0, "q": [], "s": kkt.dims},
+                         kktsolver=kkt._kktsolver, options=options, **warm)
     status = sol["status"] + (f" ({kkt.indefinite} indefinite Schur complements)" if kkt.indefinite else "")
     if sol["status"] not in ("optimal", "unknown") or sol["x"] is None or sol["z"] is None:
         # an infeasibility certificate's ray is no answer, and cvxopt's word for it no checked proof
