@@ -17,7 +17,8 @@ stays stable for ±30 % inertia variations.  Here the claim is designed for and 
    such nonsmooth spectral functions, without a convergence proof; HIFOO, Burke et al. 2006,
    designs multi-model fixed-order controllers this way, and MATLAB's ``systune`` optimizes the
    worst case over plants alike).  The objective is the abscissa alone: the cone is left free,
-   and the route's gain is kept when every plant is already certified in the sector with it.  BFGS is restarted from its last point until a restart lowers f by less than
+   and the route's gain is kept when every plant is already certified in the sector with it.
+   BFGS is restarted from its last point until a restart lowers f by less than
    :data:`RESTART_TOL` (units of n), at most :data:`MAX_RESTARTS` times (then ``stop`` says so).
    A common Lyapunov matrix for the whole family — the convex route — is infeasible for these
    stations (the directions of total momentum the CMGs cannot change rotate with the inertia),
@@ -220,10 +221,10 @@ def _plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFa
     docstring, step 1); fewer draws when :data:`DRAWS_PER_MEMBER` per member ran out."""
     I0, b0, th0 = (np.asarray(x, float) for x in (inertia, bias, theta))
     h = st.inertia_percent / 100.0
-    labels, inertias, thetas = ["nominal"], [I0], [th0]
+    members = [("nominal", I0, th0)]                                # (label, inertia, connected TEA)
     rng = np.random.default_rng(np.random.SeedSequence([st.seed]))
     draws = unphysical = folded = 0
-    while len(labels) <= st.samples and draws < DRAWS_PER_MEMBER * st.samples:       # the nominal and the draws
+    while len(members) <= st.samples and draws < DRAWS_PER_MEMBER * st.samples:      # the nominal and the draws
         values = {k: float(rng.uniform(-h, h)) for k in ELEMENTS}
         draws += 1
         I = perturb_inertia(I0, values)
@@ -234,20 +235,16 @@ def _plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFa
         if tea is None:
             folded += 1
             continue
-        labels.append(f"draw {draws - 1}")
-        inertias.append(I)
-        thetas.append(tea.theta)
+        members.append((f"draw {draws - 1}", I, tea.theta))
     scalings_folded = []
     for s in (1.0 - h, 1.0 + h):
         tea = solve_tea_connected(th0, I0, b0, s * I0, n, b0)
         if tea is None:
             scalings_folded.append(float(s))
             continue
-        labels.append(f"scale {s:.6g}")
-        inertias.append(s * I0)
-        thetas.append(tea.theta)
-    return PlantFamily(tuple(labels), np.array(inertias), np.array(thetas), draws, unphysical, folded,
-                       tuple(scalings_folded))
+        members.append((f"scale {s:.6g}", s * I0, tea.theta))
+    labels, inertias, thetas = zip(*members)
+    return PlantFamily(labels, np.array(inertias), np.array(thetas), draws, unphysical, folded, tuple(scalings_folded))
 
 
 def _worst_abscissa(Ks: np.ndarray, models) -> tuple[float, np.ndarray]:
@@ -280,13 +277,11 @@ def _robust_gain(models, K0: np.ndarray) -> tuple[np.ndarray, float, int, str]:
     x = np.zeros(M * N)
     best = f(x)[0]
     stop = f"{MAX_RESTARTS} restarts (the limit) without settling to {RESTART_TOL:g} n"
-    restarts = 0
     for restarts in range(1, MAX_RESTARTS + 1):
         res = so.minimize(f, x, jac=True, method="BFGS", options={"maxiter": BFGS_MAXITER, "gtol": 0.0})
         if res.fun < best:
             x = res.x
         if not best - res.fun >= RESTART_TOL:
-            best = min(best, float(res.fun))
             stop = f"a restart lowered the worst abscissa by less than {RESTART_TOL:g} n"
             break
         best = float(res.fun)
