@@ -74,7 +74,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg as sla
-from scipy import sparse
 
 from acmm.design.lmi_structure import (StructuredKKT, coefficient_arrays, conelp_available, layout, program_terms,
                                       run_conelp)
@@ -256,8 +255,8 @@ def scaled_model(A, B, n: float, scale=None, input_scale: float = 1.0):
     return A / d[:, None] * d[None, :] / n, B / d[:, None] * input_scale / n
 
 
-def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0, G=None) -> float:
-    """H2 control energy E(K) = tr(K̃ W K̃ᵀ), Ã_cl W + W Ã_clᵀ + G̃G̃ᵀ = 0 (module docstring).
+def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0) -> float:
+    """H2 control energy E(K) = tr(K̃ W K̃ᵀ), Ã_cl W + W Ã_clᵀ + G̃G̃ᵀ = 0, G̃ = −B̃ (module docstring).
 
     Parameters
     ----------
@@ -269,8 +268,6 @@ def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0, G=No
         State scales D, units of each state.
     input_scale : float
         Input unit e.
-    G : (N, p) array or None
-        Disturbance input, state units per s per ft·lbf; None = −B (torque disturbance at the input).
 
     Returns
     -------
@@ -280,11 +277,10 @@ def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0, G=No
     As, Bs = scaled_model(A, B, n, scale, input_scale)
     d = np.ones(As.shape[0]) if scale is None else np.asarray(scale, dtype=float)
     Ks = np.asarray(K, dtype=float) * d[None, :] / input_scale
-    Gs = -Bs if G is None else np.asarray(G, dtype=float) / d[:, None] * input_scale / n
     Acl = As - Bs @ Ks
     if np.max(np.linalg.eigvals(Acl).real) >= 0:
         return float("inf")
-    W = sla.solve_continuous_lyapunov(Acl, -(Gs @ Gs.T))
+    W = sla.solve_continuous_lyapunov(Acl, -(Bs @ Bs.T))              # G̃G̃ᵀ = B̃B̃ᵀ
     return float(np.trace(Ks @ W @ Ks.T))
 
 
@@ -553,8 +549,7 @@ def _solve_dsdp(prog: LMIProgram, tol: float):
         n_var, mk, _ = F.shape
         G = F.reshape(n_var, mk * mk).T.copy()          # column i = vec(F_i) (symmetric: any order)
         G[~np.tril(np.ones((mk, mk), bool)).ravel(order="F")] = 0.0
-        coo = sparse.coo_matrix(G)
-        Gs.append(cvxopt.spmatrix(coo.data.tolist(), coo.row.tolist(), coo.col.tolist(), G.shape))
+        Gs.append(cvxopt.sparse(cvxopt.matrix(G)))                      # its nonzero entries
     hs = [cvxopt.matrix(-F0) for F0 in prog.F0]
     options = {"DSDP_GapTolerance": tol, "DSDP_MaxIts": 500, "DSDP_Monitor": 0}
     with _DSDP_OPTIONS_LOCK:            # cvxopt reads its options from module state: one call at a time
@@ -686,7 +681,7 @@ def whitened_loop(As, Bs, Ks, X):
 
 
 def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = RegionalLMISettings(), *,
-                 scale=None, input_scale: float = 1.0, G=None) -> RegionalLMI:
+                 scale=None, input_scale: float = 1.0) -> RegionalLMI:
     """Gain with every pole certified in the sector with margin μ and a minimal H2 energy bound.
 
     Parameters
@@ -706,8 +701,6 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
         State scales D (x = D x̃), units of each state.
     input_scale : float
         Input unit e, ft·lbf (:func:`acmm.model.state_scaling.torque_scale`).
-    G : (N, p) array or None
-        Disturbance input, state units per s per ft·lbf; None = −B.
 
     Returns
     -------
@@ -731,10 +724,10 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
         raise ValueError("need n > 0, sigma > 0, 0 < half_angle_deg < 90, min_margin ≥ 0, dilation > 0, "
                          f"disk_radius ≥ 0, tol > 0, regularization ≥ 0, solver in {KNOWN_SOLVERS}")
     A, B = np.asarray(A, dtype=float), np.asarray(B, dtype=float)
-    N, m = B.shape
+    N = B.shape[0]
     d = np.ones(N) if scale is None else np.asarray(scale, dtype=float)
     As, Bs = scaled_model(A, B, n, d, input_scale)
-    Gs = -Bs if G is None else np.asarray(G, dtype=float) / d[:, None] * input_scale / n
+    Gs = -Bs                                                            # the disturbance torque enters at the input
     K0 = np.asarray(K_ref, dtype=float) * d[None, :] / input_scale
     Acl0 = As - Bs @ K0
     if np.max(np.linalg.eigvals(Acl0).real) > -st.sigma:
@@ -778,7 +771,7 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
     K = Ks / d[None, :] * input_scale
     e_norm, e_elem = sector_robustness(A, B, K, n, st.sigma, st.half_angle_deg, scale=d)
     rr = random_gain_radius(A, B, K, n, st.sigma, st.half_angle_deg, st.n_random, st.seed)
-    energy = control_energy(A, B, K, n, d, input_scale, G)
+    energy = control_energy(A, B, K, n, d, input_scale)
     return RegionalLMI(K=K, X=Xs, X2=X2s, poles=poles, margin=margin, certified_margin=cert,
                        eig_condition=kappa, robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
                        random_radius=rr, energy=energy, cost_bound=cost, status=status, tol=st.tol,
