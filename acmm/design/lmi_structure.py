@@ -187,16 +187,13 @@ def layout(N: int, m: int) -> Layout:
     shapes = {"Z": (N + m, N), "X2": (N, N), "W": (m, m)}
     offsets = dict(zip(VARIABLES, np.cumsum([0] + [r * c for r, c in shapes.values()])[:-1].tolist()))
 
-    nS, nY = N * (N + 1) // 2, m * N
     fx, sx = symmetric_places(N)
     fw, sw = symmetric_places(m)
-    n_var = 2 * nS + nY + fw.size
-    first, second = np.empty(n_var, int), np.empty(n_var, int)
-    for var, idx, f, t in (("Z", np.r_[0:nS, 2 * nS:2 * nS + nY], np.r_[fx, N * N + np.arange(nY)],
-                            np.r_[sx, np.full(nY, -1)]),
-                           ("X2", np.r_[nS:2 * nS], fx, sx), ("W", 2 * nS + nY + np.arange(fw.size), fw, sw)):
-        first[idx] = offsets[var] + f
-        second[idx] = np.where(t >= 0, offsets[var] + t, -1)
+    # v = [X's upper triangle, X₂'s, Y, W's]; X and Y are the rows of Z
+    first = np.concatenate([offsets["Z"] + fx, offsets["X2"] + fx, offsets["Z"] + N * N + np.arange(m * N),
+                            offsets["W"] + fw])
+    second = np.concatenate([np.where(sx >= 0, offsets["Z"] + sx, -1), np.where(sx >= 0, offsets["X2"] + sx, -1),
+                             np.full(m * N, -1), np.where(sw >= 0, offsets["W"] + sw, -1)])
     return Layout(shapes, offsets, first, second)
 
 
@@ -328,11 +325,8 @@ class StructuredKKT:
 
     def _blocks_of(self, z):
         """The symmetric blocks of a cvxopt 's' vector (lower triangles, column by column)."""
-        out = []
-        for k, (d, lower) in enumerate(zip(self.dims, self.lower)):
-            Z = z[self.offs[k]:self.offs[k + 1]].reshape(d, d).T
-            out.append(np.where(lower, Z, Z.T))
-        return out
+        Zs = [z[a:b].reshape(d, d).T for a, b, d in zip(self.offs[:-1], self.offs[1:], self.dims)]
+        return [np.where(lower, Z, Z.T) for Z, lower in zip(Zs, self.lower)]
 
     def factor(self, sigma):
         """The Schur complement H of the scaling ``sigma`` factored: LAPACK's Cholesky, or LU where
