@@ -23,6 +23,8 @@ the packaged stair-case, instead of one dense matrix of 3 600).  An answer is a 
 """
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import scipy.linalg as sla
 
@@ -78,11 +80,9 @@ class _ChainKKT(StructuredKKT):
         # placements of an off-diagonal entry (weight 0 where a placement repeats a diagonal one)
         i, j = np.triu_indices(N)
         off = (i != j).astype(float)
-        self._gather = []
-        for ri, rj, wr in ((i, j, np.ones(i.size)), (j, i, off)):
-            for ck, cl, wc in ((i, j, np.ones(i.size)), (j, i, off)):
-                self._gather.append(((ri[:, None] * N + ck[None, :]) * N * N + rj[:, None] * N + cl[None, :],
-                                     wr[:, None] * wc[None, :]))
+        places = ((i, j, np.ones(i.size)), (j, i, off))
+        self._gather = [((ri[:, None] * N + ck[None, :]) * N * N + rj[:, None] * N + cl[None, :],
+                         wr[:, None] * wc[None, :]) for (ri, rj, wr), (ck, cl, wc) in itertools.product(places, places)]
 
     def schur_blocks(self, sigma) -> dict:
         """The blocks H_(k,k) and H_(k,k+1) of the Schur complement for the block scalings ``sigma``
