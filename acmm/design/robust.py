@@ -382,14 +382,16 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
         return out
 
     models = models_at(1.0)
-    K0s = np.asarray(K_nominal, float) * d[None, :] / input_scale
+    K_nom = np.asarray(K_nominal, float)
+    K0s = K_nom * d[None, :] / input_scale
     start = _worst_abscissa(K0s, models)[0]
+    sector = (float(sector[0]), float(sector[1]))
     start_certs = tuple(_region_certificate(As, Bs, K0s) for As, Bs in models)
-    sigma, phi = sector
-    if all(c.decay >= sigma and c.cone_deg <= phi for c in start_certs):
-        return RobustDesign(np.asarray(K_nominal, float), np.asarray(K_nominal, float), fam, start_certs, start,
-                            start, 0, "the route's gain is certified in the sector for every plant: kept",
-                            time.perf_counter() - t0, (float(sigma), float(phi)))
+    kept = RobustDesign(K_nom, K_nom, fam, start_certs, start, start, 0,
+                        "the route's gain is certified in the sector for every plant: kept",
+                        time.perf_counter() - t0, sector)
+    if np.all(kept.sector_held()):
+        return kept
     Ks, restarts, limited = K0s, 0, []
     for step in CONTINUATION:
         Ks, worst, r, stop = _robust_gain(models if step == 1.0 else models_at(step), Ks)
@@ -401,5 +403,4 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
             f"the restart limit ({MAX_RESTARTS}) was reached at continuation step(s) {', '.join(limited)}")
     certs = tuple(_region_certificate(As, Bs, Ks) for As, Bs in models)
     K = Ks * input_scale / d[None, :]
-    return RobustDesign(K, np.asarray(K_nominal, float), fam, certs, worst, start, restarts, stop,
-                        time.perf_counter() - t0, (float(sector[0]), float(sector[1])))
+    return RobustDesign(K, K_nom, fam, certs, worst, start, restarts, stop, time.perf_counter() - t0, sector)
