@@ -313,15 +313,13 @@ class StructuredKKT:
             rk, cl = lay.shapes[w]
             t2 = (np.array(pp).T @ np.array(qq)).reshape(ri, rk, cj, cl).transpose(0, 2, 1, 3)
             t1 = (np.array(pq).T @ np.array(qp)).reshape(ri, cl, cj, rk).transpose(0, 2, 3, 1)
-            blk = t1 + t2
+            blk = (t1 + t2).reshape(ri * cj, rk * cl)
             rows = slice(lay.offsets[v], lay.offsets[v] + ri * cj)
             cols = slice(lay.offsets[w], lay.offsets[w] + rk * cl)
-            H[rows, cols] = blk.reshape(ri * cj, rk * cl)
+            H[rows, cols] = blk
             if v != w:
-                H[cols, rows] = blk.reshape(ri * cj, rk * cl).T
-        out = lay._fold(lay._fold(H), axis=1)
-        out *= 2.0
-        return out
+                H[cols, rows] = blk.T
+        return 2.0 * lay._fold(lay._fold(H), axis=1)
 
     def _blocks_of(self, z):
         """The symmetric blocks of a cvxopt 's' vector (lower triangles, column by column)."""
