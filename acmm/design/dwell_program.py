@@ -14,11 +14,9 @@ levels are each held at least T is exponentially stable with rate λ: a level he
 x takes V_k(x) to V_j(x(τ)) ≤ e^{−2λT} V_k(e^{A_k(τ−T)}x) ≤ e^{−2λτ} V_k(x).
 
 Every block is a sum of terms Sym(P V Qᵀ) in one or two of the P_k (:class:`acmm.design.lmi_structure.Term`),
-so the Schur complement of each Newton step is a sum of Kronecker products of 24 × 24 matrices
-(:mod:`acmm.design.lmi_structure`), and block tridiagonal: P_k meets only P_{k±1}.
-:class:`_ChainKKT` forms its blocks (one matrix product per pair of neighbouring levels, folded
-onto the symmetric variables by gathers) and factors it by block Cholesky (12 blocks of 300 at
-the packaged stair-case, instead of one dense matrix of 3 600).  An answer is a candidate only:
+so the Schur complement of each Newton step is a sum of Kronecker products of 24 × 24 matrices, and
+block tridiagonal: :class:`_ChainKKT` factors it by block Cholesky (12 blocks of 300 at the packaged
+stair-case, instead of one dense matrix of 3 600).  An answer is a candidate only:
 :mod:`acmm.design.dwell` accepts it on eigenvalue checks of its own.
 """
 from __future__ import annotations

@@ -766,28 +766,25 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
     lam, _, _, kappa = eigen_conditioning(As - Bs @ Ks)
     order = np.lexsort((lam.imag, lam.real))
     poles, kappa = lam[order] * n, kappa[order]
-    margin = float(np.min(sector_margin(poles, n, st.sigma, st.half_angle_deg)))
-    cert = certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg)
     K = Ks / d[None, :] * input_scale
     e_norm, e_elem = sector_robustness(A, B, K, n, st.sigma, st.half_angle_deg, scale=d)
-    rr = random_gain_radius(A, B, K, n, st.sigma, st.half_angle_deg, st.n_random, st.seed)
-    energy = control_energy(A, B, K, n, d, input_scale)
-    return RegionalLMI(K=K, X=Xs, X2=X2s, poles=poles, margin=margin, certified_margin=cert,
+    return RegionalLMI(K=K, X=Xs, X2=X2s, poles=poles,
+                       margin=float(np.min(sector_margin(poles, n, st.sigma, st.half_angle_deg))),
+                       certified_margin=certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg),
                        eig_condition=kappa, robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
-                       random_radius=rr, energy=energy, cost_bound=cost, status=status, tol=st.tol,
+                       random_radius=random_gain_radius(A, B, K, n, st.sigma, st.half_angle_deg, st.n_random, st.seed),
+                       energy=control_energy(A, B, K, n, d, input_scale), cost_bound=cost, status=status, tol=st.tol,
                        iterations=tuple(iters), solve_time=solve_time, solver=solver,
                        lmi_residual=lmi_residual, rejected=tuple(rejected))
 
 
 def _two_passes(As, Bs, Gs, K0, T, st, first, second):
-    """The two passes of DSDP and conelp: ``first(prog)`` in the reference loop's coordinates (T,
-    input columns scaled to the reference gain's rows) to a loose gap, then ``second(prog, prog2,
-    answer)`` in the coordinates of the first answer (T ← chol X̃, unit gain rows), where the optimum
-    is X ≈ I, to ``st.tol``.  The second pass makes the answer independent of rounding (one pass
-    stalls short of the optimum at a point that moves with the BLAS kernel;
-    ``tests/test_determinism.py`` holds K to 1e-6 under two kernels).  A refused second pass is not
-    replaced by the loose first: the fallback solver answers instead.  Both solves return (status,
-    v or None, iterations, ...): (status, iterations, solution or None)."""
+    """DSDP's and conelp's passes: ``first(prog)`` in the reference loop's coordinates (T, input columns
+    scaled to the reference gain's rows) to a loose gap, then ``second(prog, prog2, answer)`` in the
+    first answer's (T ← chol X̃, unit gain rows; the optimum is X ≈ I) to ``st.tol``, which makes the
+    answer independent of rounding (one pass stalls at a point that moves with the BLAS kernel).  A
+    refused second pass is not replaced by the first: the fallback solver answers instead.  Both
+    solves return (status, v or None, iterations, ...); returns (status, iterations, solution or None)."""
     prog = lmi_program(As, Bs, Gs, T, np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12), st)
     answer = first(prog)
     status, v, it = answer[:3]
