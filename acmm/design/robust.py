@@ -290,17 +290,12 @@ def _robust_gain(models, K0: np.ndarray) -> tuple[np.ndarray, float, int, str]:
 
 
 def _region_certificate(As: np.ndarray, Bs: np.ndarray, Ks: np.ndarray) -> RegionCertificate:
-    """A Lyapunov certificate X of the decay and cone the poles of Ã − B̃K̃ allow, re-checked
-    (module docstring, step 3).
-
-    With X = LLᵀ and Z = L⁻¹(Ã − B̃K̃)L: He(A_cl X) + 2aX ⪯ 0 for a = −λ_max(Z + Zᵀ)/2, and the
-    cone LMI [[sin φ He Z, cos φ (Z − Zᵀ)], [cos φ (Zᵀ − Z), sin φ He Z]] ⪯ 0 for every
-    φ ≥ φ* (monotone: tan φ·diag(He Z, He Z) + [[0, S], [−S, 0]] decreases with φ when
-    He Z ⪯ 0), φ* found by bisection to 1e-9 rad.  Both less the rounding allowance δ of
-    :func:`acmm.design.regional_lmi.whitened_loop`.  Model and gain scaled (time in 1/n),
-    dimensionless; the certified decay in units of n, the cone in deg (decay −inf or ≤ 0 and cone
-    NaN when no certificate was found).
-    """
+    """The :class:`RegionCertificate` of the scaled loop Ã − B̃K̃ (time in 1/n; module docstring,
+    step 3).  With X = LLᵀ and Z = L⁻¹(Ã − B̃K̃)L: He(A_cl X) + 2aX ⪯ 0 for a = −λ_max(Z + Zᵀ)/2, and
+    the cone LMI [[sin φ He Z, cos φ (Z − Zᵀ)], [cos φ (Zᵀ − Z), sin φ He Z]] ⪯ 0 for every φ ≥ φ*
+    (monotone: tan φ·diag(He Z, He Z) + [[0, S], [−S, 0]] decreases with φ when He Z ⪯ 0), φ* by
+    bisection to 1e-9 rad; both less the rounding allowance of
+    :func:`acmm.design.regional_lmi.whitened_loop`."""
     lam, V = np.linalg.eig(As - Bs @ Ks)
     max_real = float(np.max(lam.real))
     X = (V @ V.conj().T).real
