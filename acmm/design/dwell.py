@@ -33,10 +33,9 @@ An earlier certificate (Hespanha & Morse 1999: one common decay rate λ′, P_k 
 equations, τ* = ln μ / (2λ′)) is never sharper: its P_k satisfy the LMIs of step 2 at the rate
 λ < λ′ from T = ln μ / (2(λ′ − λ)) on.
 
-What it does not cover (stated with every certificate): the nonlinear plant (3.1–3.9) away from the
-equilibria, the saturations, the cyclic aerodynamic disturbance (eq 3.9) that the DRFs reject in
-steady state, and the equilibrium CMG momentum of each level.  The cores take arrays and return
-arrays; the stage gathers the levels from a scenario.
+What it does not cover is stated with every certificate (:data:`NOT_COVERED`: the nonlinear plant,
+eqs 3.1–3.9, away from the equilibria among others).  The cores take arrays and return arrays; the
+stage gathers the levels from a scenario.
 """
 from __future__ import annotations
 
@@ -168,12 +167,9 @@ def lyapunov_matrices(Acl: np.ndarray, decay: float) -> np.ndarray:
     (L, N, N) array
         The symmetric P_k, dimensionless.
     """
-    N = Acl.shape[1]
-    out = np.empty_like(Acl, dtype=float)
-    for k, A in enumerate(Acl):
-        P = sla.solve_continuous_lyapunov((A + decay * np.eye(N)).T, -np.eye(N))
-        out[k] = 0.5 * (P + P.T)
-    return out
+    I = np.eye(Acl.shape[1])
+    P = np.array([sla.solve_continuous_lyapunov((A + decay * I).T, -I) for A in Acl], dtype=float)
+    return 0.5 * (P + P.transpose(0, 2, 1))
 
 
 def jump_ratios(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -302,9 +298,8 @@ def smallest_dwell(As: np.ndarray, decay: float) -> tuple:
 
     def certify(k):
         """The matrices that certify the dwell k·(resolution)/α, or None."""
-        T = k * DWELL_RESOLUTION / alpha
         P = solve_dwell_program(Au, k * DWELL_RESOLUTION, rate, R)
-        return P if P is not None and np.all(dwell_margins(As, P, T, decay) > 0) else None
+        return P if P is not None and np.all(dwell_margins(As, P, k * DWELL_RESOLUTION / alpha, decay) > 0) else None
 
     # the bracket in whole steps of the resolution, so that the steps taken never depend on rounding
     lo, hi = 0, int(round(FIRST_UPPER / DWELL_RESOLUTION))
@@ -406,11 +401,9 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
         return DwellCertificate(np.nan, np.full_like(As, np.nan), d, np.full(L - 1, np.nan), np.full(L - 1, np.nan),
                                 np.inf, np.inf, 0.0, dwell, False, np.full(L, np.nan), nan3, nan3.copy(),
                                 float(torque_limit), float(momentum_limit), False, unstable)
-    proof = _reused(As, proof) if proof is not None and L > 1 else None
-    if proof is None:
-        proof = dwell_proof(As)
+    proof = (_reused(As, proof) if proof is not None and L > 1 else None) or dwell_proof(As)
     lam, tau, P = proof.decay, proof.tau, proof.P
-    up, down = jump_ratios(P) if L > 1 else (np.zeros(0), np.zeros(0))
+    up, down = jump_ratios(P)                                           # empty with one level
     mu = float(max(np.max(up, initial=1.0), np.max(down, initial=1.0)))
     s = np.zeros(L)
     if start is not None:

@@ -14,14 +14,14 @@ levels are each held at least T is exponentially stable with rate λ: a level he
 x takes V_k(x) to V_j(x(τ)) ≤ e^{−2λT} V_k(e^{A_k(τ−T)}x) ≤ e^{−2λτ} V_k(x).
 
 Every block is a sum of terms Sym(P V Qᵀ) in one or two of the P_k (:class:`acmm.design.lmi_structure.Term`),
-so the Schur complement of each Newton step is a sum of Kronecker products of 24 × 24 matrices
-(:mod:`acmm.design.lmi_structure`), and block tridiagonal: P_k meets only P_{k±1}.
-:class:`_ChainKKT` forms its blocks (one matrix product per pair of neighbouring levels, folded
-onto the symmetric variables by gathers) and factors it by block Cholesky (12 blocks of 300 at
-the packaged stair-case, instead of one dense matrix of 3 600).  An answer is a candidate only:
+so the Schur complement of each Newton step is a sum of Kronecker products of 24 × 24 matrices, and
+block tridiagonal: :class:`_ChainKKT` factors it by block Cholesky (12 blocks of 300 at the packaged
+stair-case, instead of one dense matrix of 3 600).  An answer is a candidate only:
 :mod:`acmm.design.dwell` accepts it on eigenvalue checks of its own.
 """
 from __future__ import annotations
+
+import itertools
 
 import numpy as np
 import scipy.linalg as sla
@@ -78,11 +78,9 @@ class _ChainKKT(StructuredKKT):
         # placements of an off-diagonal entry (weight 0 where a placement repeats a diagonal one)
         i, j = np.triu_indices(N)
         off = (i != j).astype(float)
-        self._gather = []
-        for ri, rj, wr in ((i, j, np.ones(i.size)), (j, i, off)):
-            for ck, cl, wc in ((i, j, np.ones(i.size)), (j, i, off)):
-                self._gather.append(((ri[:, None] * N + ck[None, :]) * N * N + rj[:, None] * N + cl[None, :],
-                                     wr[:, None] * wc[None, :]))
+        places = ((i, j, np.ones(i.size)), (j, i, off))
+        self._gather = [((ri[:, None] * N + ck[None, :]) * N * N + rj[:, None] * N + cl[None, :],
+                         wr[:, None] * wc[None, :]) for (ri, rj, wr), (ck, cl, wc) in itertools.product(places, places)]
 
     def schur_blocks(self, sigma) -> dict:
         """The blocks H_(k,k) and H_(k,k+1) of the Schur complement for the block scalings ``sigma``
@@ -108,16 +106,6 @@ class _ChainKKT(StructuredKKT):
             M = (np.array(xs).T @ np.array(ys)).ravel()
             out[key] = 2.0 * sum(M[idx] * w for idx, w in self._gather)
         return out
-
-    def schur(self, sigma) -> np.ndarray:
-        """The whole Schur complement, dense and dimensionless (for tests and small programs)."""
-        blocks = self.schur_blocks(sigma)
-        n = blocks[(0, 0)].shape[0]
-        H = np.zeros((self.levels * n,) * 2)
-        for (k, l), B in blocks.items():
-            H[k * n:(k + 1) * n, l * n:(l + 1) * n] = B
-            H[l * n:(l + 1) * n, k * n:(k + 1) * n] = B.T
-        return H
 
     def factor(self, sigma):
         """Block Cholesky of the block tridiagonal Schur complement: H = LLᵀ with diagonal blocks
@@ -192,10 +180,7 @@ def solve_dwell_program(As: np.ndarray, T: float, decay: float, R: np.ndarray, m
         return None
     if v is None or not np.all(np.isfinite(v)):
         return None
-    P = np.empty((L, N, N))
-    for k, part in enumerate(np.split(v, L)):
-        Ph = np.empty((N, N))
-        Ph[i, j] = part
-        Ph[j, i] = part
-        P[k] = R[k].T @ Ph @ R[k]
+    Ph = np.empty((L, N, N))
+    Ph[:, i, j] = Ph[:, j, i] = v.reshape(L, -1)
+    P = np.array([r.T @ p @ r for r, p in zip(R, Ph)])
     return 0.5 * (P + P.transpose(0, 2, 1))

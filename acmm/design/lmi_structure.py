@@ -187,16 +187,13 @@ def layout(N: int, m: int) -> Layout:
     shapes = {"Z": (N + m, N), "X2": (N, N), "W": (m, m)}
     offsets = dict(zip(VARIABLES, np.cumsum([0] + [r * c for r, c in shapes.values()])[:-1].tolist()))
 
-    nS, nY = N * (N + 1) // 2, m * N
     fx, sx = symmetric_places(N)
     fw, sw = symmetric_places(m)
-    n_var = 2 * nS + nY + fw.size
-    first, second = np.empty(n_var, int), np.empty(n_var, int)
-    for var, idx, f, t in (("Z", np.r_[0:nS, 2 * nS:2 * nS + nY], np.r_[fx, N * N + np.arange(nY)],
-                            np.r_[sx, np.full(nY, -1)]),
-                           ("X2", np.r_[nS:2 * nS], fx, sx), ("W", 2 * nS + nY + np.arange(fw.size), fw, sw)):
-        first[idx] = offsets[var] + f
-        second[idx] = np.where(t >= 0, offsets[var] + t, -1)
+    # v = [X's upper triangle, X₂'s, Y, W's]; X and Y are the rows of Z
+    first = np.concatenate([offsets["Z"] + fx, offsets["X2"] + fx, offsets["Z"] + N * N + np.arange(m * N),
+                            offsets["W"] + fw])
+    second = np.concatenate([np.where(sx >= 0, offsets["Z"] + sx, -1), np.where(sx >= 0, offsets["X2"] + sx, -1),
+                             np.full(m * N, -1), np.where(sw >= 0, offsets["W"] + sw, -1)])
     return Layout(shapes, offsets, first, second)
 
 
@@ -261,10 +258,11 @@ class StructuredKKT:
     def _apply(self, v) -> np.ndarray:
         """G v: the blocks' linear parts Σ_t Sym(P_t V_t Q_tᵀ), (Σ m_k²,), each block a symmetric
         matrix stacked as a vector (row or column order alike), dimensionless."""
-        whole = self.lay._expand(v)
+        whole, lay = self.lay._expand(v), self.lay
+        V = {var: whole[lay.offsets[var]:lay.offsets[var] + r * c].reshape(r, c) for var, (r, c) in lay.shapes.items()}
         out = []
         for terms in self.blocks:
-            B = sum(t.P @ self._variable(whole, t.var) @ t.Q.T for t in terms)
+            B = sum(t.P @ V[t.var] @ t.Q.T for t in terms)
             out.append((B + B.T).ravel())
         return np.concatenate(out)
 
@@ -278,11 +276,6 @@ class StructuredKKT:
                 D = 2.0 * (t.P.T @ Z @ t.Q)
                 g[o:o + D.size] += D.ravel()
         return self.lay._fold(g)
-
-    def _variable(self, whole, var):
-        r, c = self.lay.shapes[var]
-        o = self.lay.offsets[var]
-        return whole[o:o + r * c].reshape(r, c)
 
     def schur(self, sigma) -> np.ndarray:
         """H_ab = Σ_k tr(F_k(E_a) Σ_k F_k(E_b) Σ_k) over the variable vector.
@@ -320,23 +313,18 @@ class StructuredKKT:
             rk, cl = lay.shapes[w]
             t2 = (np.array(pp).T @ np.array(qq)).reshape(ri, rk, cj, cl).transpose(0, 2, 1, 3)
             t1 = (np.array(pq).T @ np.array(qp)).reshape(ri, cl, cj, rk).transpose(0, 2, 3, 1)
-            blk = t1 + t2
+            blk = (t1 + t2).reshape(ri * cj, rk * cl)
             rows = slice(lay.offsets[v], lay.offsets[v] + ri * cj)
             cols = slice(lay.offsets[w], lay.offsets[w] + rk * cl)
-            H[rows, cols] = blk.reshape(ri * cj, rk * cl)
+            H[rows, cols] = blk
             if v != w:
-                H[cols, rows] = blk.reshape(ri * cj, rk * cl).T
-        out = lay._fold(lay._fold(H), axis=1)
-        out *= 2.0
-        return out
+                H[cols, rows] = blk.T
+        return 2.0 * lay._fold(lay._fold(H), axis=1)
 
     def _blocks_of(self, z):
         """The symmetric blocks of a cvxopt 's' vector (lower triangles, column by column)."""
-        out = []
-        for k, (d, lower) in enumerate(zip(self.dims, self.lower)):
-            Z = z[self.offs[k]:self.offs[k + 1]].reshape(d, d).T
-            out.append(np.where(lower, Z, Z.T))
-        return out
+        Zs = [z[a:b].reshape(d, d).T for a, b, d in zip(self.offs[:-1], self.offs[1:], self.dims)]
+        return [np.where(lower, Z, Z.T) for Z, lower in zip(Zs, self.lower)]
 
     def factor(self, sigma):
         """The Schur complement H of the scaling ``sigma`` factored: LAPACK's Cholesky, or LU where
@@ -373,27 +361,11 @@ class StructuredKKT:
                     raise ArithmeticError("singular Schur complement") from None
             return lambda b: sla.lu_solve(lu, b, check_finite=False)
 
-    def kktsolver(self, W):
-        """cvxopt's ``kktsolver(W)``: the solver of [[0, Gᵀ], [G, −WᵀW]] [ux; uz] = [bx; bz]
-        (no equality constraints): H ux = bx + Gᵀ(WᵀW)⁻¹bz, then W uz = W⁻ᵀ(G ux − bz).
-
-        Parameters
-        ----------
-        W : dict
-            cvxopt's Nesterov–Todd scaling: ``W["rti"][k]`` = r_k⁻ᵀ, W_k(u) = r_kᵀ u r_k.
-
-        Returns
-        -------
-        callable
-            ``f(x, y, z)``: overwrites x with ux and z with W uz (cvxopt matrices); it raises
-            ArithmeticError where the solve is not finite, which cvxopt ends on.
-
-        Raises
-        ------
-        ArithmeticError
-            H is numerically singular (cvxopt then stops with status "unknown" and its last
-            iterate).
-        """
+    def _kktsolver(self, W):
+        """cvxopt's ``kktsolver(W)`` for [[0, Gᵀ], [G, −WᵀW]] [ux; uz] = [bx; bz] (no equality
+        constraints): H ux = bx + Gᵀ(WᵀW)⁻¹bz, then W uz = W⁻ᵀ(G ux − bz), W["rti"][k] = r_k⁻ᵀ the
+        Nesterov–Todd scaling W_k(u) = r_kᵀ u r_k.  Returns ``f(x, y, z)``, which overwrites x with ux
+        and z with W uz; ArithmeticError (H singular, or the solve not finite) ends cvxopt's solve."""
         rti = [np.array(r) for r in W["rti"]]
         sigma = [r @ r.T for r in rti]                  # (WᵀW)⁻¹ u = Σ u Σ,  Σ = r⁻ᵀ r⁻¹
         solve = self.factor(sigma)
@@ -410,19 +382,9 @@ class StructuredKKT:
             z[:] = cvxopt.matrix(np.concatenate(out))
         return f
 
-    def operator(self, x, y, alpha=1.0, beta=0.0, trans="N"):
-        """cvxopt's G(x, y, alpha, beta, trans): y := alpha G x + beta y, or Gᵀ with trans "T".
-
-        Parameters
-        ----------
-        x, y : cvxopt matrices
-            Argument and result (overwritten); cvxopt's 's' vectors are lower triangles, column by
-            column, dimensionless.
-        alpha, beta : float
-            Weights, dimensionless.
-        trans : str
-            "N" or "T".
-        """
+    def _operator(self, x, y, alpha=1.0, beta=0.0, trans="N"):
+        """cvxopt's G(x, y, alpha, beta, trans): y := alpha G x + beta y, or Gᵀ with trans "T" (cvxopt
+        matrices; 's' vectors as lower triangles, column by column)."""
         xv = np.array(x).ravel()
         r = self._apply(xv) if trans == "N" else self._adjoint(self._blocks_of(xv))
         y[:] = cvxopt.matrix(alpha * r + beta * np.array(y).ravel())
@@ -473,8 +435,8 @@ def run_conelp(kkt: StructuredKKT, c, F0, tol: float, feastol: float, max_iter: 
         warm = {"primalstart": {"x": cvxopt.matrix(v0),
                                 "s": cvxopt.matrix(np.concatenate([x.ravel(order="F") for x in slacks]))},
                 "dualstart": {"z": cvxopt.matrix(np.concatenate([x.ravel(order="F") for x in duals]))}}
-    sol = solvers.conelp(cvxopt.matrix(np.asarray(c, float)), kkt.operator, h, {"l": 0, "q": [], "s": kkt.dims},
-                         kktsolver=kkt.kktsolver, options=options, **warm)
+    sol = solvers.conelp(cvxopt.matrix(np.asarray(c, float)), kkt._operator, h, {"l": 0, "q": [], "s": kkt.dims},
+                         kktsolver=kkt._kktsolver, options=options, **warm)
     status = sol["status"] + (f" ({kkt.indefinite} indefinite Schur complements)" if kkt.indefinite else "")
     if sol["status"] not in ("optimal", "unknown") or sol["x"] is None or sol["z"] is None:
         # an infeasibility certificate's ray is no answer, and cvxopt's word for it no checked proof

@@ -74,7 +74,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg as sla
-from scipy import sparse
 
 from acmm.design.lmi_structure import (StructuredKKT, coefficient_arrays, conelp_available, layout, program_terms,
                                       run_conelp)
@@ -256,8 +255,8 @@ def scaled_model(A, B, n: float, scale=None, input_scale: float = 1.0):
     return A / d[:, None] * d[None, :] / n, B / d[:, None] * input_scale / n
 
 
-def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0, G=None) -> float:
-    """H2 control energy E(K) = tr(K̃ W K̃ᵀ), Ã_cl W + W Ã_clᵀ + G̃G̃ᵀ = 0 (module docstring).
+def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0) -> float:
+    """H2 control energy E(K) = tr(K̃ W K̃ᵀ), Ã_cl W + W Ã_clᵀ + G̃G̃ᵀ = 0, G̃ = −B̃ (module docstring).
 
     Parameters
     ----------
@@ -269,8 +268,6 @@ def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0, G=No
         State scales D, units of each state.
     input_scale : float
         Input unit e.
-    G : (N, p) array or None
-        Disturbance input, state units per s per ft·lbf; None = −B (torque disturbance at the input).
 
     Returns
     -------
@@ -280,11 +277,10 @@ def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0, G=No
     As, Bs = scaled_model(A, B, n, scale, input_scale)
     d = np.ones(As.shape[0]) if scale is None else np.asarray(scale, dtype=float)
     Ks = np.asarray(K, dtype=float) * d[None, :] / input_scale
-    Gs = -Bs if G is None else np.asarray(G, dtype=float) / d[:, None] * input_scale / n
     Acl = As - Bs @ Ks
     if np.max(np.linalg.eigvals(Acl).real) >= 0:
         return float("inf")
-    W = sla.solve_continuous_lyapunov(Acl, -(Gs @ Gs.T))
+    W = sla.solve_continuous_lyapunov(Acl, -(Bs @ Bs.T))              # G̃G̃ᵀ = B̃B̃ᵀ
     return float(np.trace(Ks @ W @ Ks.T))
 
 
@@ -479,10 +475,9 @@ class LMIProgram:
             (K̃, X̃, X̃₂), scaled coordinates (time in 1/n), dimensionless.
         """
         X, X2, Y, _ = self.unpack(v)               # (symmetric to the bit)
-        Ti = np.linalg.inv(self.T)
         Kz = self.s_u[:, None] * np.linalg.solve(X, Y.T).T
         Xs, X2s = self.T @ X @ self.T.T, self.T @ X2 @ self.T.T
-        return Kz @ Ti, 0.5 * (Xs + Xs.T), 0.5 * (X2s + X2s.T)
+        return Kz @ np.linalg.inv(self.T), 0.5 * (Xs + Xs.T), 0.5 * (X2s + X2s.T)
 
 
 def _sym(v, N, iu):
@@ -522,11 +517,10 @@ def lmi_program(As, Bs, Gs, T, s_u, st: "RegionalLMISettings", T_reg=None) -> LM
     mu = st.min_margin + st.backoff
     pars = (st.sigma + mu, mu / np.sin(phi), phi, st.disk_radius, st.dilation)
     iu, ium = np.triu_indices(N), np.triu_indices(m)
-    offdiag = np.where(iu[0] == iu[1], 1.0, 2.0)
     P = np.eye(N) if T_reg is None else np.linalg.solve(T_reg, T)
     TT = P.T @ P
-    c = np.concatenate([st.regularization * TT[iu] * offdiag, st.regularization * TT[iu] * offdiag,
-                        np.zeros(m * N), (s_u[ium[0]] * s_u[ium[1]]) * np.where(ium[0] == ium[1], 1.0, 0.0)])
+    reg = st.regularization * TT[iu] * np.where(iu[0] == iu[1], 1.0, 2.0)        # tr(reg X) over X's upper triangle
+    c = np.concatenate([reg, reg, np.zeros(m * N), (s_u[ium[0]] * s_u[ium[1]]) * np.where(ium[0] == ium[1], 1.0, 0.0)])
     prog = LMIProgram(Az, Bz, Gz @ Gz.T, T, s_u, pars, c, [], program_terms(Az, Bz, pars), st.regularization * TT)
     return replace(prog, F0=prog.blocks(np.zeros(c.size)))            # the blocks at v = 0
 
@@ -555,8 +549,7 @@ def _solve_dsdp(prog: LMIProgram, tol: float):
         n_var, mk, _ = F.shape
         G = F.reshape(n_var, mk * mk).T.copy()          # column i = vec(F_i) (symmetric: any order)
         G[~np.tril(np.ones((mk, mk), bool)).ravel(order="F")] = 0.0
-        coo = sparse.coo_matrix(G)
-        Gs.append(cvxopt.spmatrix(coo.data.tolist(), coo.row.tolist(), coo.col.tolist(), G.shape))
+        Gs.append(cvxopt.sparse(cvxopt.matrix(G)))                      # its nonzero entries
     hs = [cvxopt.matrix(-F0) for F0 in prog.F0]
     options = {"DSDP_GapTolerance": tol, "DSDP_MaxIts": 500, "DSDP_Monitor": 0}
     with _DSDP_OPTIONS_LOCK:            # cvxopt reads its options from module state: one call at a time
@@ -611,7 +604,7 @@ def _solve_clarabel_pass(prog: LMIProgram, obj_scale: float, st: "RegionalLMISet
     return problem.status, prog.pack(X.value, X2.value, Y.value, W.value), iters
 
 
-def _precondition(T, Ks, Xs):
+def _precondition(Ks, Xs):
     """The next pass's coordinates and input scaling: T ← chol(X̃), s_u = row norms of K̃ T."""
     T = np.linalg.cholesky(Xs)
     return T, np.maximum(np.linalg.norm(Ks @ T, axis=1), 1e-12)
@@ -688,7 +681,7 @@ def whitened_loop(As, Bs, Ks, X):
 
 
 def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = RegionalLMISettings(), *,
-                 scale=None, input_scale: float = 1.0, G=None) -> RegionalLMI:
+                 scale=None, input_scale: float = 1.0) -> RegionalLMI:
     """Gain with every pole certified in the sector with margin μ and a minimal H2 energy bound.
 
     Parameters
@@ -708,8 +701,6 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
         State scales D (x = D x̃), units of each state.
     input_scale : float
         Input unit e, ft·lbf (:func:`acmm.model.state_scaling.torque_scale`).
-    G : (N, p) array or None
-        Disturbance input, state units per s per ft·lbf; None = −B.
 
     Returns
     -------
@@ -733,10 +724,10 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
         raise ValueError("need n > 0, sigma > 0, 0 < half_angle_deg < 90, min_margin ≥ 0, dilation > 0, "
                          f"disk_radius ≥ 0, tol > 0, regularization ≥ 0, solver in {KNOWN_SOLVERS}")
     A, B = np.asarray(A, dtype=float), np.asarray(B, dtype=float)
-    N, m = B.shape
+    N = B.shape[0]
     d = np.ones(N) if scale is None else np.asarray(scale, dtype=float)
     As, Bs = scaled_model(A, B, n, d, input_scale)
-    Gs = -Bs if G is None else np.asarray(G, dtype=float) / d[:, None] * input_scale / n
+    Gs = -Bs                                                            # the disturbance torque enters at the input
     K0 = np.asarray(K_ref, dtype=float) * d[None, :] / input_scale
     Acl0 = As - Bs @ K0
     if np.max(np.linalg.eigvals(Acl0).real) > -st.sigma:
@@ -775,36 +766,41 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
     lam, _, _, kappa = eigen_conditioning(As - Bs @ Ks)
     order = np.lexsort((lam.imag, lam.real))
     poles, kappa = lam[order] * n, kappa[order]
-    margin = float(np.min(sector_margin(poles, n, st.sigma, st.half_angle_deg)))
-    cert = certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg)
     K = Ks / d[None, :] * input_scale
     e_norm, e_elem = sector_robustness(A, B, K, n, st.sigma, st.half_angle_deg, scale=d)
-    rr = random_gain_radius(A, B, K, n, st.sigma, st.half_angle_deg, st.n_random, st.seed)
-    energy = control_energy(A, B, K, n, d, input_scale, G)
-    return RegionalLMI(K=K, X=Xs, X2=X2s, poles=poles, margin=margin, certified_margin=cert,
+    return RegionalLMI(K=K, X=Xs, X2=X2s, poles=poles,
+                       margin=float(np.min(sector_margin(poles, n, st.sigma, st.half_angle_deg))),
+                       certified_margin=certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg),
                        eig_condition=kappa, robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
-                       random_radius=rr, energy=energy, cost_bound=cost, status=status, tol=st.tol,
+                       random_radius=random_gain_radius(A, B, K, n, st.sigma, st.half_angle_deg, st.n_random, st.seed),
+                       energy=control_energy(A, B, K, n, d, input_scale), cost_bound=cost, status=status, tol=st.tol,
                        iterations=tuple(iters), solve_time=solve_time, solver=solver,
                        lmi_residual=lmi_residual, rejected=tuple(rejected))
 
 
-def _route_dsdp(As, Bs, Gs, K0, T, st):
-    """DSDP twice: in the reference loop's coordinates (T, input columns scaled to the reference
-    gain's rows) to a loose gap (:data:`DSDP_FIRST_TOL`), then in the coordinates of that answer
-    (T ← chol X̃, unit gain rows), where the optimum is X ≈ I, to ``st.tol``.  The second pass
-    makes the answer independent of rounding (one pass stalls short of the optimum at a point
-    that moves with the BLAS kernel; ``tests/test_determinism.py`` holds K to 1e-6 under two
-    kernels).  A refused second pass is not replaced by the loose first: the fallback solver
-    answers instead.  cvxopt's interface reports no iteration count (0): (status, iterations,
-    solution or None)."""
+def _two_passes(As, Bs, Gs, K0, T, st, first, second):
+    """DSDP's and conelp's passes: ``first(prog)`` in the reference loop's coordinates (T, input columns
+    scaled to the reference gain's rows) to a loose gap, then ``second(prog, prog2, answer)`` in the
+    first answer's (T ← chol X̃, unit gain rows; the optimum is X ≈ I) to ``st.tol``, which makes the
+    answer independent of rounding (one pass stalls at a point that moves with the BLAS kernel).  A
+    refused second pass is not replaced by the first: the fallback solver answers instead.  Both
+    solves return (status, v or None, iterations, ...); returns (status, iterations, solution or None)."""
     prog = lmi_program(As, Bs, Gs, T, np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12), st)
-    status, v, it = _solve_dsdp(prog, max(st.tol, DSDP_FIRST_TOL))
+    answer = first(prog)
+    status, v, it = answer[:3]
     if v is None:
         return status, (it,), None
     sol = _solution(prog, v)
-    prog = lmi_program(As, Bs, Gs, *_precondition(T, sol[0], sol[1]), st, T_reg=T)
-    status, v, it2 = _solve_dsdp(prog, st.tol)
-    return status, (it, it2), None if v is None else _solution(prog, v)
+    prog2 = lmi_program(As, Bs, Gs, *_precondition(sol[0], sol[1]), st, T_reg=T)
+    status, v, it2 = second(prog, prog2, answer)[:3]
+    return status, (it, it2), None if v is None else _solution(prog2, v)
+
+
+def _route_dsdp(As, Bs, Gs, K0, T, st):
+    """DSDP in :func:`_two_passes`, the first to the gap :data:`DSDP_FIRST_TOL` (cvxopt's interface
+    reports no iteration count: 0)."""
+    return _two_passes(As, Bs, Gs, K0, T, st, lambda prog: _solve_dsdp(prog, max(st.tol, DSDP_FIRST_TOL)),
+                       lambda prog, prog2, answer: _solve_dsdp(prog2, st.tol))
 
 
 #: Relative gap and feasibility tolerances of conelp's first (pre-conditioning) pass, dimensionless
@@ -818,26 +814,22 @@ CONELP_FEASTOL = 1e-7
 
 
 def _route_conelp(As, Bs, Gs, K0, T, st):
-    """cvxopt's conelp with the program's structured KKT solver (:mod:`acmm.design.lmi_structure`),
-    twice, as :func:`_route_dsdp`: in the reference loop's coordinates to a loose gap
-    (:data:`CONELP_FIRST_TOL`), then in the coordinates of that answer to the relative gap ``st.tol``
-    and the feasibility min(``st.tol``, :data:`CONELP_FEASTOL`), started from the first pass's last
-    iterate carried into them
-    (:func:`_carry_iterate`: the same program, so the same point, residuals and gap):
-    (status, iterations, solution or None)."""
-    prog = lmi_program(As, Bs, Gs, T, np.maximum(np.linalg.norm(K0 @ T, axis=1), 1e-12), st)
-    status, v, it, iterate = _solve_conelp(prog, *CONELP_FIRST_TOL, st.max_iter, refinement=1)
-    if v is None:
-        return status, (it,), None
-    sol = _solution(prog, v)
-    prog2 = lmi_program(As, Bs, Gs, *_precondition(T, sol[0], sol[1]), st, T_reg=T)
+    """cvxopt's conelp with the program's structured KKT solver (:mod:`acmm.design.lmi_structure`)
+    in :func:`_two_passes`: the first to :data:`CONELP_FIRST_TOL`, the second to the relative gap
+    ``st.tol`` and the feasibility min(``st.tol``, :data:`CONELP_FEASTOL`), started from the first
+    pass's last iterate carried into its coordinates (:func:`_carry_iterate`: the same program, so
+    the same point, residuals and gap)."""
     feastol = min(st.tol, CONELP_FEASTOL)
-    try:
-        status, v, it2, _ = _solve_conelp(prog2, st.tol, feastol, st.max_iter,
-                                          start=_carry_iterate(prog, prog2, v, iterate))
-    except ValueError:          # cvxopt refused the carried iterate (not interior after rounding)
-        status, v, it2, _ = _solve_conelp(prog2, st.tol, feastol, st.max_iter)
-    return status, (it, it2), None if v is None else _solution(prog2, v)
+
+    def second(prog, prog2, answer):
+        try:
+            start = _carry_iterate(prog, prog2, answer[1], answer[3])
+            return _solve_conelp(prog2, st.tol, feastol, st.max_iter, start=start)
+        except ValueError:          # cvxopt refused the carried iterate (not interior after rounding)
+            return _solve_conelp(prog2, st.tol, feastol, st.max_iter)
+
+    return _two_passes(As, Bs, Gs, K0, T, st,
+                       lambda prog: _solve_conelp(prog, *CONELP_FIRST_TOL, st.max_iter, refinement=1), second)
 
 
 def _carry_iterate(prog: LMIProgram, prog2: LMIProgram, v, iterate):
@@ -868,9 +860,8 @@ def _route_clarabel(As, Bs, Gs, K0, T, st):
     passes with T ← chol(X̃) and unit gain rows, the objective divided by the last optimum,
     until Clarabel reports "optimal" (its status only selects the pass; acceptance is by the
     checks): (status, iterations, solution or None)."""
-    T0, s_u, obj = T, np.ones(Bs.shape[1]), 1.0
-    prog = lmi_program(As, Bs, Gs, T, s_u, st)
-    status, v, it = _solve_clarabel_pass(prog, obj, st, max(st.tol, 1e-6))
+    prog = lmi_program(As, Bs, Gs, T, np.ones(Bs.shape[1]), st)
+    status, v, it = _solve_clarabel_pass(prog, 1.0, st, max(st.tol, 1e-6))
     iters = [it]
     if v is None:
         return status, iters, None
@@ -878,8 +869,7 @@ def _route_clarabel(As, Bs, Gs, K0, T, st):
     for _ in range(st.refinements):
         if status == "optimal" and len(iters) > 1:
             break
-        T, s_u = _precondition(T, sol[0], sol[1])
-        prog = lmi_program(As, Bs, Gs, T, s_u, st, T_reg=T0)
+        prog = lmi_program(As, Bs, Gs, *_precondition(sol[0], sol[1]), st, T_reg=T)
         status_new, v, it = _solve_clarabel_pass(prog, max(sol[3], 1e-12), st, st.tol)
         iters.append(it)
         if v is None:
@@ -901,13 +891,11 @@ SOLVERS = tuple(ROUTES)
 def _solution(prog: LMIProgram, v):
     """(K̃, X̃, X̃₂, the cost tr(S W S), the largest relative eigenvalue of the cost blocks) of a
     variable vector."""
-    Ks, Xs, X2s = prog.result(v)
     W = prog.unpack(v)[3]
     S = np.diag(prog.s_u)
-    blocks = prog.blocks(v)
     residual = max(float(np.max(np.linalg.eigvalsh(0.5 * (F + F.T)))) / max(np.linalg.norm(F, 2), 1e-300)
-                   for F in blocks[-2:])
-    return Ks, Xs, X2s, float(np.trace(S @ W @ S)), residual
+                   for F in prog.blocks(v)[-2:])
+    return *prog.result(v), float(np.trace(S @ W @ S)), residual
 
 
 #: Largest eigenvalue of the cost blocks accepted, relative to their norm (the cost bound holds

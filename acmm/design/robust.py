@@ -17,7 +17,8 @@ stays stable for ±30 % inertia variations.  Here the claim is designed for and 
    such nonsmooth spectral functions, without a convergence proof; HIFOO, Burke et al. 2006,
    designs multi-model fixed-order controllers this way, and MATLAB's ``systune`` optimizes the
    worst case over plants alike).  The objective is the abscissa alone: the cone is left free,
-   and the route's gain is kept when every plant is already certified in the sector with it.  BFGS is restarted from its last point until a restart lowers f by less than
+   and the route's gain is kept when every plant is already certified in the sector with it.
+   BFGS is restarted from its last point until a restart lowers f by less than
    :data:`RESTART_TOL` (units of n), at most :data:`MAX_RESTARTS` times (then ``stop`` says so).
    A common Lyapunov matrix for the whole family — the convex route — is infeasible for these
    stations (the directions of total momentum the CMGs cannot change rotate with the inertia),
@@ -220,10 +221,10 @@ def _plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFa
     docstring, step 1); fewer draws when :data:`DRAWS_PER_MEMBER` per member ran out."""
     I0, b0, th0 = (np.asarray(x, float) for x in (inertia, bias, theta))
     h = st.inertia_percent / 100.0
-    labels, inertias, thetas = ["nominal"], [I0], [th0]
+    members = [("nominal", I0, th0)]                                # (label, inertia, connected TEA)
     rng = np.random.default_rng(np.random.SeedSequence([st.seed]))
     draws = unphysical = folded = 0
-    while len(labels) <= st.samples and draws < DRAWS_PER_MEMBER * st.samples:       # the nominal and the draws
+    while len(members) <= st.samples and draws < DRAWS_PER_MEMBER * st.samples:      # the nominal and the draws
         values = {k: float(rng.uniform(-h, h)) for k in ELEMENTS}
         draws += 1
         I = perturb_inertia(I0, values)
@@ -234,20 +235,16 @@ def _plant_family(inertia, bias, theta, n: float, st: RobustSettings) -> PlantFa
         if tea is None:
             folded += 1
             continue
-        labels.append(f"draw {draws - 1}")
-        inertias.append(I)
-        thetas.append(tea.theta)
+        members.append((f"draw {draws - 1}", I, tea.theta))
     scalings_folded = []
     for s in (1.0 - h, 1.0 + h):
         tea = solve_tea_connected(th0, I0, b0, s * I0, n, b0)
         if tea is None:
             scalings_folded.append(float(s))
             continue
-        labels.append(f"scale {s:.6g}")
-        inertias.append(s * I0)
-        thetas.append(tea.theta)
-    return PlantFamily(tuple(labels), np.array(inertias), np.array(thetas), draws, unphysical, folded,
-                       tuple(scalings_folded))
+        members.append((f"scale {s:.6g}", s * I0, tea.theta))
+    labels, inertias, thetas = zip(*members)
+    return PlantFamily(labels, np.array(inertias), np.array(thetas), draws, unphysical, folded, tuple(scalings_folded))
 
 
 def _worst_abscissa(Ks: np.ndarray, models) -> tuple[float, np.ndarray]:
@@ -280,13 +277,11 @@ def _robust_gain(models, K0: np.ndarray) -> tuple[np.ndarray, float, int, str]:
     x = np.zeros(M * N)
     best = f(x)[0]
     stop = f"{MAX_RESTARTS} restarts (the limit) without settling to {RESTART_TOL:g} n"
-    restarts = 0
     for restarts in range(1, MAX_RESTARTS + 1):
         res = so.minimize(f, x, jac=True, method="BFGS", options={"maxiter": BFGS_MAXITER, "gtol": 0.0})
         if res.fun < best:
             x = res.x
         if not best - res.fun >= RESTART_TOL:
-            best = min(best, float(res.fun))
             stop = f"a restart lowered the worst abscissa by less than {RESTART_TOL:g} n"
             break
         best = float(res.fun)
@@ -295,17 +290,12 @@ def _robust_gain(models, K0: np.ndarray) -> tuple[np.ndarray, float, int, str]:
 
 
 def _region_certificate(As: np.ndarray, Bs: np.ndarray, Ks: np.ndarray) -> RegionCertificate:
-    """A Lyapunov certificate X of the decay and cone the poles of Ã − B̃K̃ allow, re-checked
-    (module docstring, step 3).
-
-    With X = LLᵀ and Z = L⁻¹(Ã − B̃K̃)L: He(A_cl X) + 2aX ⪯ 0 for a = −λ_max(Z + Zᵀ)/2, and the
-    cone LMI [[sin φ He Z, cos φ (Z − Zᵀ)], [cos φ (Zᵀ − Z), sin φ He Z]] ⪯ 0 for every
-    φ ≥ φ* (monotone: tan φ·diag(He Z, He Z) + [[0, S], [−S, 0]] decreases with φ when
-    He Z ⪯ 0), φ* found by bisection to 1e-9 rad.  Both less the rounding allowance δ of
-    :func:`acmm.design.regional_lmi.whitened_loop`.  Model and gain scaled (time in 1/n),
-    dimensionless; the certified decay in units of n, the cone in deg (decay −inf or ≤ 0 and cone
-    NaN when no certificate was found).
-    """
+    """The :class:`RegionCertificate` of the scaled loop Ã − B̃K̃ (time in 1/n; module docstring,
+    step 3).  With X = LLᵀ and Z = L⁻¹(Ã − B̃K̃)L: He(A_cl X) + 2aX ⪯ 0 for a = −λ_max(Z + Zᵀ)/2, and
+    the cone LMI [[sin φ He Z, cos φ (Z − Zᵀ)], [cos φ (Zᵀ − Z), sin φ He Z]] ⪯ 0 for every φ ≥ φ*
+    (monotone: tan φ·diag(He Z, He Z) + [[0, S], [−S, 0]] decreases with φ when He Z ⪯ 0), φ* by
+    bisection to 1e-9 rad; both less the rounding allowance of
+    :func:`acmm.design.regional_lmi.whitened_loop`."""
     lam, V = np.linalg.eig(As - Bs @ Ks)
     max_real = float(np.max(lam.real))
     X = (V @ V.conj().T).real
@@ -387,14 +377,16 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
         return out
 
     models = models_at(1.0)
-    K0s = np.asarray(K_nominal, float) * d[None, :] / input_scale
+    K_nom = np.asarray(K_nominal, float)
+    K0s = K_nom * d[None, :] / input_scale
     start = _worst_abscissa(K0s, models)[0]
+    sector = (float(sector[0]), float(sector[1]))
     start_certs = tuple(_region_certificate(As, Bs, K0s) for As, Bs in models)
-    sigma, phi = sector
-    if all(c.decay >= sigma and c.cone_deg <= phi for c in start_certs):
-        return RobustDesign(np.asarray(K_nominal, float), np.asarray(K_nominal, float), fam, start_certs, start,
-                            start, 0, "the route's gain is certified in the sector for every plant: kept",
-                            time.perf_counter() - t0, (float(sigma), float(phi)))
+    kept = RobustDesign(K_nom, K_nom, fam, start_certs, start, start, 0,
+                        "the route's gain is certified in the sector for every plant: kept",
+                        time.perf_counter() - t0, sector)
+    if np.all(kept.sector_held()):
+        return kept
     Ks, restarts, limited = K0s, 0, []
     for step in CONTINUATION:
         Ks, worst, r, stop = _robust_gain(models if step == 1.0 else models_at(step), Ks)
@@ -406,5 +398,4 @@ def robust_design(inertia, bias, theta, n: float, K_nominal, scales, input_scale
             f"the restart limit ({MAX_RESTARTS}) was reached at continuation step(s) {', '.join(limited)}")
     certs = tuple(_region_certificate(As, Bs, Ks) for As, Bs in models)
     K = Ks * input_scale / d[None, :]
-    return RobustDesign(K, np.asarray(K_nominal, float), fam, certs, worst, start, restarts, stop,
-                        time.perf_counter() - t0, (float(sector[0]), float(sector[1])))
+    return RobustDesign(K, K_nom, fam, certs, worst, start, restarts, stop, time.perf_counter() - t0, sector)

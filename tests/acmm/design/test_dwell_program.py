@@ -70,9 +70,12 @@ def test_the_schur_complement_and_its_block_cholesky():
     cols = [np.split(kkt._apply(e), kkt.offs[1:-1]) for e in np.eye(n)]
     dense = np.array([[sum(np.trace(Fa.reshape(N, N) @ S @ Fb.reshape(N, N) @ S)
                            for Fa, Fb, S in zip(cols[a], cols[b], sigma)) for b in range(n)] for a in range(n)])
-    H = kkt.schur(sigma)
-    assert np.allclose(H, dense, atol=1e-10 * np.abs(dense).max())
+    H = np.zeros((n, n))                                  # the blocks set in place, the lower ones transposed
     m = N * (N + 1) // 2
+    for (k, l), B in kkt.schur_blocks(sigma).items():
+        H[k * m:(k + 1) * m, l * m:(l + 1) * m] = B
+        H[l * m:(l + 1) * m, k * m:(k + 1) * m] = B.T
+    assert np.allclose(H, dense, atol=1e-10 * np.abs(dense).max())
     assert np.all(H[:m, 2 * m:] == 0)                     # P_0 and P_2 never meet
     b = rng.standard_normal(n)
     assert np.allclose(kkt.factor(sigma)(b), np.linalg.solve(dense, b), rtol=1e-9, atol=1e-12)

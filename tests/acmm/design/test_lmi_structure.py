@@ -84,7 +84,7 @@ def test_the_kkt_solver_solves_the_kkt_equations():
     bx = rng.standard_normal(prog.c.size)
     Bz = [_spd(d, rng) - np.eye(d) for d in kkt.dims]
     x, z = cvxopt.matrix(bx), cvxopt.matrix(np.concatenate([np.tril(B).T.ravel() for B in Bz]))
-    kkt.kktsolver(W)(x, cvxopt.matrix(0.0, (0, 1)), z)
+    kkt._kktsolver(W)(x, cvxopt.matrix(0.0, (0, 1)), z)
     ux = np.array(x).ravel()
     Wuz = [np.array(z).ravel()[a:b].reshape(d, d).T for a, b, d in zip(kkt.offs[:-1], kkt.offs[1:], kkt.dims)]
     uz = [rk.T @ M @ rk for rk, M in zip([np.linalg.inv(x) for x in r], Wuz)]     # W⁻¹(W uz) = r⁻ᵀ(·)r⁻¹
