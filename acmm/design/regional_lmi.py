@@ -255,8 +255,8 @@ def scaled_model(A, B, n: float, scale=None, input_scale: float = 1.0):
     return A / d[:, None] * d[None, :] / n, B / d[:, None] * input_scale / n
 
 
-def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0) -> float:
-    """H2 control energy E(K) = tr(K̃ W K̃ᵀ), Ã_cl W + W Ã_clᵀ + G̃G̃ᵀ = 0, G̃ = −B̃ (module docstring).
+def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0, G=None) -> float:
+    """H2 control energy E(K) = tr(K̃ W K̃ᵀ), Ã_cl W + W Ã_clᵀ + G̃G̃ᵀ = 0 (module docstring).
 
     Parameters
     ----------
@@ -268,6 +268,8 @@ def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0) -> f
         State scales D, units of each state.
     input_scale : float
         Input unit e.
+    G : (N, p) array or None
+        Disturbance input, state units per s per ft·lbf; None = −B (torque disturbance at the input).
 
     Returns
     -------
@@ -277,10 +279,11 @@ def control_energy(A, B, K, n: float, scale=None, input_scale: float = 1.0) -> f
     As, Bs = scaled_model(A, B, n, scale, input_scale)
     d = np.ones(As.shape[0]) if scale is None else np.asarray(scale, dtype=float)
     Ks = np.asarray(K, dtype=float) * d[None, :] / input_scale
+    Gs = -Bs if G is None else np.asarray(G, dtype=float) / d[:, None] * input_scale / n
     Acl = As - Bs @ Ks
     if np.max(np.linalg.eigvals(Acl).real) >= 0:
         return float("inf")
-    W = sla.solve_continuous_lyapunov(Acl, -(Bs @ Bs.T))              # G̃G̃ᵀ = B̃B̃ᵀ
+    W = sla.solve_continuous_lyapunov(Acl, -(Gs @ Gs.T))
     return float(np.trace(Ks @ W @ Ks.T))
 
 
@@ -681,7 +684,7 @@ def whitened_loop(As, Bs, Ks, X):
 
 
 def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = RegionalLMISettings(), *,
-                 scale=None, input_scale: float = 1.0) -> RegionalLMI:
+                 scale=None, input_scale: float = 1.0, G=None) -> RegionalLMI:
     """Gain with every pole certified in the sector with margin μ and a minimal H2 energy bound.
 
     Parameters
@@ -701,6 +704,8 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
         State scales D (x = D x̃), units of each state.
     input_scale : float
         Input unit e, ft·lbf (:func:`acmm.model.state_scaling.torque_scale`).
+    G : (N, p) array or None
+        Disturbance input, state units per s per ft·lbf; None = −B.
 
     Returns
     -------
@@ -727,7 +732,7 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
     N = B.shape[0]
     d = np.ones(N) if scale is None else np.asarray(scale, dtype=float)
     As, Bs = scaled_model(A, B, n, d, input_scale)
-    Gs = -Bs                                                            # the disturbance torque enters at the input
+    Gs = -Bs if G is None else np.asarray(G, dtype=float) / d[:, None] * input_scale / n
     K0 = np.asarray(K_ref, dtype=float) * d[None, :] / input_scale
     Acl0 = As - Bs @ K0
     if np.max(np.linalg.eigvals(Acl0).real) > -st.sigma:
@@ -773,8 +778,8 @@ def regional_lmi(A, B, n: float, K_ref, settings: RegionalLMISettings = Regional
                        certified_margin=certified_margin(As, Bs, Ks, Xs, st.sigma, st.half_angle_deg),
                        eig_condition=kappa, robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
                        random_radius=random_gain_radius(A, B, K, n, st.sigma, st.half_angle_deg, st.n_random, st.seed),
-                       energy=control_energy(A, B, K, n, d, input_scale), cost_bound=cost, status=status, tol=st.tol,
-                       iterations=tuple(iters), solve_time=solve_time, solver=solver,
+                       energy=control_energy(A, B, K, n, d, input_scale, G), cost_bound=cost, status=status,
+                       tol=st.tol, iterations=tuple(iters), solve_time=solve_time, solver=solver,
                        lmi_residual=lmi_residual, rejected=tuple(rejected))
 
 
