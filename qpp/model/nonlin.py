@@ -173,6 +173,10 @@ class ExpressionModel(SampleGrid):
         """φ_i alone on broadcast arrays (the sector's climbs need one channel, not all r)."""
         return self._call(self._phi[i], Y, t, TH)
 
+    def _slope_sum(self, i, Y, t, TH):
+        """Σ_j |∂φ_i/∂y_j| on broadcast arrays (0 when φ_i depends on no output)."""
+        return sum(np.abs(self._grad(i, j, Y, t, TH)) for j in range(self.p) if self.dep[i][j])
+
     def _grad(self, i, j, Y, t, TH):
         fn = self._dphi[i][j]
         g = None
@@ -217,14 +221,13 @@ class ExpressionModel(SampleGrid):
                 n += ph.size
                 if not np.all(np.isfinite(ph)):
                     raise ConfigError(f"{where}: singular (non-finite value) on the stated ranges")
-                gsum = sum(np.abs(self._grad(i, j, Yf, tt, TH)) for j in range(self.p) if self.dep[i][j]) \
-                    if any(self.dep[i]) else np.zeros_like(ph)
+                gsum = self._slope_sum(i, Yf, tt, TH)
                 if not np.all(np.isfinite(gsum)):
                     raise ConfigError(f"{where}: not sector-bounded (unbounded slope) on the stated ranges")
-                if any(self.dep[i]) and float(np.max(gsum)) > slope[i]:
+                if np.max(gsum) > slope[i]:
                     gb = np.broadcast_to(gsum, ph.shape)
                     starts[i]["slope"] = self._point(Yf, tg_i, th, np.argmax(gb), gb.shape)
-                slope[i] = max(slope[i], float(np.max(gsum)))
+                    slope[i] = float(np.max(gsum))
                 y0 = np.ones(ph.shape[0], bool)               # the channel's outputs all 0
                 for j in outs:
                     y0 &= np.broadcast_to(Yf[j][:, 0] == 0, y0.shape)
@@ -307,12 +310,12 @@ class ExpressionModel(SampleGrid):
         nz = np.abs(yi) > 0
         ratio = ph[nz] / yi[nz]
         full = np.where(nz, ph / np.where(nz, yi, 1.0), np.nan)
-        if float(ratio.min()) < alpha[i]:
+        if ratio.min() < alpha[i]:
             starts["alpha"] = self._point(Yf, tg, th, np.nanargmin(full), full.shape)
-        if float(ratio.max()) > beta[i]:
+            alpha[i] = ratio.min()
+        if ratio.max() > beta[i]:
             starts["beta"] = self._point(Yf, tg, th, np.nanargmax(full), full.shape)
-        alpha[i] = min(alpha[i], float(ratio.min()))
-        beta[i] = max(beta[i], float(ratio.max()))
+            beta[i] = ratio.max()
         span = float(np.ptp(self.y_range[i]))
         small = nz & (np.abs(yi) <= 2e-9 * span)
         mid = (np.abs(yi) > 2e-9 * span) & (np.abs(yi) <= 2e-6 * span)
@@ -424,7 +427,7 @@ class ExpressionModel(SampleGrid):
             ny = max(Y.shape[0] for Y in Yf)
             for th in self.theta_samples():
                 TH = [np.full((1, 1), v) for v in th]
-                s = sum(np.abs(self._grad(i, j, Yf, tg[None, :], TH)) for j in range(self.p) if self.dep[i][j])
+                s = self._slope_sum(i, Yf, tg[None, :], TH)
                 g[i] = np.maximum(g[i], np.max(np.broadcast_to(s, (ny, tg.size)), axis=0))
         tg.flags.writeable = g.flags.writeable = False
         return tg, g
