@@ -103,14 +103,10 @@ def plot_scenario(sim, path: Path) -> Path:
     fig, axes = plt.subplots(3, 1, figsize=(9, 8.5), sharex=True, layout="constrained")
     many = p > MAX_LABELLED_CHANNELS        # a legend of line styles, not of every channel's four lines
     for i in range(p):
-        if many:
-            names = [f"{s} (all outputs)" for s in ("r", "r_o", "y", "y_o")] if i == 0 else [None] * 4
-        else:
-            names = [f"{s}{i + 1}" for s in ("r", "r_o", "y", "y_o")]
-        axes[0].plot(sim.t, sim.r[i], "g:", label=names[0])
-        axes[0].plot(sim.t, sim.r_o[i], "k--", lw=0.8, label=names[1])
-        axes[0].plot(sim.t, sim.y[i], "b-", label=names[2])
-        axes[0].plot(sim.t, sim.y_o[i], "r-", lw=0.8, label=names[3])
+        for s, v, style, lw in (("r", sim.r, "g:", None), ("r_o", sim.r_o, "k--", 0.8), ("y", sim.y, "b-", None),
+                                ("y_o", sim.y_o, "r-", 0.8)):
+            label = (f"{s} (all outputs)" if i == 0 else None) if many else f"{s}{i + 1}"
+            axes[0].plot(sim.t, v[i], style, lw=lw, label=label)
     worst = int(np.argmax(sim.error_per_output))
     first_other = 1 if worst == 0 else 0
     for i in range(p):

@@ -198,10 +198,8 @@ def simulate_nominal(plant: LurePlant, K1, Kc, H, f1, gamma_nominal, r_o, t_eval
 
 
 def _nominal_diverged_beyond(r_o, t: np.ndarray, z0: np.ndarray) -> float:
-    """The ``failed_beyond`` of a nominal loop (:func:`_simulate_loop`): DIVERGED_FACTOR times the
-    larger of 1, |z0| and |r_o| over the samples ``t`` (s), in the units of z.  The nominal loop of
-    an unstable design, which grows until the integrator fails, is then a result (NaN from there
-    on), not an integrator error; a stable one is integrated as before."""
+    """The ``failed_beyond`` of a nominal loop (:func:`simulate_nominal`): DIVERGED_FACTOR times the
+    larger of 1, |z0| and |r_o| over the samples ``t`` (s), in the units of z."""
     step = max(1, t.size // 200)
     r_peak = max((float(np.max(np.abs(eval_signal(r_o, tt)), initial=0.0)) for tt in t[::step]), default=0.0)
     return DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0), initial=0.0)), r_peak)
