@@ -169,10 +169,7 @@ def compile_interval(expr, symbols):
                                if node.func.__name__ == "DiracDelta" else ""))
 
     f = build(expr)
-
-    def call(*env):
-        return f(env)
-    return call
+    return lambda *env: f(env)
 
 
 @dataclass

@@ -177,10 +177,7 @@ class _Prover:
             if lo_b > hi_b:                     # both enclose the same values: round-off only
                 lo_b, hi_b = min(lo_b, hi_b), max(lo_b, hi_b)
             return iv.mpf([lo_b, hi_b])
-
-        def neg(*env):
-            return -ratio(*env)
-        return ratio, neg
+        return ratio, lambda *env: -ratio(*env)
 
 
 def prove(model) -> ProvedBounds:
@@ -296,11 +293,9 @@ def slope_cells(model, edges, proved: ProvedBounds) -> np.ndarray:
     edges = np.asarray(edges, float)
     K = edges.size - 1
     P = _Prover(model)
-    r = len(model.phi)
-    varies = [model.t in ph.free_symbols and any(model.dep[i]) for i, ph in enumerate(model.phi)]
     G = np.repeat(np.asarray(proved.slope, float)[:, None], K, axis=1)
-    for i in range(r):
-        if not varies[i] or not proved.slope_ok:
+    for i, ph in enumerate(model.phi):
+        if model.t not in ph.free_symbols or not any(model.dep[i]) or not proved.slope_ok:
             continue
         fn, syms = P.slope_fn(i)
         if model.t not in syms:
