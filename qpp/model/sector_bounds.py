@@ -17,14 +17,14 @@ from acmm_qpp.errors import ConfigError
 REFINE_ITER_PER_DIM = 200
 
 
-def _box(model, i: int) -> tuple[list, np.ndarray]:
-    """(lo, hi) of each variable x = (y_1 … y_p, t, θ_1 … θ_k), and the mask of those that can
-    change φ channel ``i``."""
+def _box(model, i: int) -> tuple[list, np.ndarray, list]:
+    """(lo, hi) of each variable x = (y_1 … y_p, t, θ_1 … θ_k), the mask of those that can
+    change φ channel ``i``, and their (lo, hi)."""
     ranges = [tuple(r) for r in model.y_range] + [(0.0, model.t_range if model.t_varies else 0.0)]
     ranges += list(zip(model.lo, model.hi))
     free = np.array([hi > lo for lo, hi in ranges])
     free[:model.p] &= np.isin(np.arange(model.p), model.channel_outputs(i))
-    return ranges, free
+    return ranges, free, [r for r, f in zip(ranges, free) if f]
 
 
 #: which way each bound is climbed: α down, β, the slope and the gain up
@@ -82,12 +82,11 @@ def global_search(model, i: int, kinds: tuple, bounds: dict) -> dict:
     dict
         The bounds, each widened to the best extremum found (never narrowed).
     """
-    ranges, free = _box(model, i)
-    if not free.any():
-        return dict(bounds)
-    lo_hi = [r for r, f in zip(ranges, free) if f]
-    base = np.array([0.5 * (lo + hi) for lo, hi in ranges])
+    ranges, free, lo_hi = _box(model, i)
     out = dict(bounds)
+    if not free.any():
+        return out
+    base = np.array([0.5 * (lo + hi) for lo, hi in ranges])
     for kind in kinds:
         def cost(Z, kind=kind):
             X = np.repeat(base[:, None], Z.shape[1], axis=1)
@@ -135,9 +134,8 @@ def climb_from(model, i: int, x, kinds: tuple, bounds: dict) -> dict:
     candidates = [x] + [np.concatenate([x[:p1], th]) for th in model.theta_samples()] if model.names else [x]
     starts = {}
     for kind in kinds:
-        vals = [_SIGN[kind] * _value(model, i, kind, c) for c in candidates]
-        vals = [v if np.isfinite(v) else -np.inf for v in vals]
-        starts[kind] = candidates[int(np.argmax(vals))]
+        vals = np.array([_SIGN[kind] * _value(model, i, kind, c) for c in candidates])
+        starts[kind] = candidates[int(np.argmax(np.where(np.isfinite(vals), vals, -np.inf)))]
     at: dict = {}
     out = refine(model, i, starts, bounds, at)
     if "slope" in kinds and "gain" in at:     # the largest |φ|/‖y‖ lies by a steep part: climb the slope there too
@@ -169,11 +167,10 @@ def refine(model, i: int, starts: dict, bounds: dict, at: dict | None = None) ->
     dict
         The same kinds, each value widened to the best extremum found (never narrowed).
     """
-    ranges, free = _box(model, i)
+    _, free, lo_hi = _box(model, i)
     out = dict(bounds)
     if not free.any():
         return out
-    lo_hi = [r for r, f in zip(ranges, free) if f]
     for kind, x0 in starts.items():
         base = np.asarray(x0, float)
 

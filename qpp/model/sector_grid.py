@@ -130,7 +130,7 @@ class SampleGrid:
         """Y (p arrays, each (Ny, 1) or (1, 1)) of channel ``i``'s sample grid: the mesh of its
         outputs, every other output at the low end of its range."""
         outs = self.channel_outputs(i)
-        mesh = np.meshgrid(*self._y_grid(outs), indexing="ij") if outs else []
+        mesh = np.meshgrid(*self._y_grid(outs), indexing="ij")
         Y = [np.full((1, 1), lo) for lo in self.y_range[:, 0]]
         for j, m in zip(outs, mesh):
             Y[j] = m.ravel()[:, None]
