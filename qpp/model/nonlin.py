@@ -113,15 +113,13 @@ class ExpressionModel(SampleGrid):
         self._f = [sp.lambdify(args, fi, modules="numpy") for fi in self.f]
         self._phi = [sp.lambdify(args, ph, modules="numpy") for ph in self.phi]
         self.dep = [[self.ys[j] in ph.free_symbols for j in range(self.p)] for ph in self.phi]
-        self._dphi = []
-        for ph in self.phi:
-            row = []
-            for j in range(self.p):
-                try:
-                    row.append(sp.lambdify(args, sp.diff(ph, self.ys[j]), modules="numpy"))
-                except Exception:                 # noqa: BLE001 - fall back to finite differences
-                    row.append(None)
-            self._dphi.append(row)
+
+        def derivative(ph, y):
+            try:
+                return sp.lambdify(args, sp.diff(ph, y), modules="numpy")
+            except Exception:                     # noqa: BLE001 - None: finite differences (_grad)
+                return None
+        self._dphi = [[derivative(ph, y) for y in self.ys] for ph in self.phi]
 
     # ------------------------------------------------------------------ evaluation
     @staticmethod
@@ -341,17 +339,12 @@ class ExpressionModel(SampleGrid):
         return np.concatenate([[Y[min(iy, Y.shape[0] - 1), 0] for Y in Yf], [tg[it]], np.asarray(th, float)])
 
     def _check_continuity(self) -> None:
-        """Every f1 channel continuous and finite on the stated ranges, decided in bounded time.
-
-        Each sub-expression that can make f1 singular — a denominator (a negative power), the
-        cosine under ``tan``, the argument of ``log`` and of a fractional power — is evaluated on a
-        grid of at most :data:`SINGULARITY_POINTS` points over the ranges of its symbols (y, t,
-        θ); a zero or a change of sign along an axis (a pole between grid points: tan at π/2), or a
-        negative argument of a root or a logarithm, is refused naming the symbol.  Then f1 itself
-        is evaluated on the grid: a value that is not finite or beyond :data:`VALUE_LIMIT` is
-        refused as an overflow.  (sympy's ``continuous_domain`` decided this symbolically, but
-        took minutes for ``tan(100*y1)``.)
-        """
+        """Every f1 channel continuous and finite on the stated ranges, decided in bounded time:
+        each sub-expression that can make f1 singular (:func:`_singular_argument`) evaluated on a
+        grid (:func:`_on_grid`), a zero, sign change (tan at π/2 between grid points) or negative
+        argument refused naming the symbol; then f1 itself, a value not finite or beyond
+        :data:`VALUE_LIMIT` refused as an overflow.  (sympy's ``continuous_domain`` decided this
+        symbolically, but took minutes for ``tan(100*y1)``.)"""
         sp = sympy_module()
         ranges = {**{s: tuple(r) for s, r in zip(self.ys, self.y_range)}, self.t: (0.0, self.t_range),
                   **{s: (lo, hi) for s, lo, hi in zip(self.th, self.lo, self.hi)}}
@@ -501,8 +494,7 @@ def _on_grid(sp, expr, syms, ranges):
         grid = np.meshgrid(*axes, indexing="ij")
     else:
         u = qmc.Sobol(d, scramble=True, seed=0).random(SINGULARITY_POINTS)
-        lo = np.array([ranges[s][0] for s in syms], float)
-        hi = np.array([ranges[s][1] for s in syms], float)
+        lo, hi = np.array([ranges[s] for s in syms], float).T
         grid = list((lo + u * (hi - lo)).T)
     fn = sp.lambdify(syms, expr, modules="numpy")
     with np.errstate(all="ignore"):
