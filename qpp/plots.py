@@ -51,13 +51,9 @@ def plot_circle(res, path: Path) -> list[Path]:
             lim = 1.1 * max(abs(cc) + R, np.abs(h).max() + c.radii[i].max())
         else:
             lim = 1.1 * (np.abs(h).max() + c.radii[i].max() + 1)
-        ax.set_xlim(-lim, lim)
-        ax.set_ylim(-lim, lim)
-        ax.set_aspect("equal")
+        ax.set(xlim=(-lim, lim), ylim=(-lim, lim), aspect="equal", xlabel="Re", ylabel="Im")
         ax.axhline(0, color="k", lw=0.5)
         ax.axvline(0, color="k", lw=0.5)
-        ax.set_xlabel("Re")
-        ax.set_ylabel("Im")
         form = "" if c.method == "gershgorin" else "\n(coupled φ: decided by the small-gain form, not this disc)"
         ax.set_title(f"Circle criterion, channel {i + 1}: {'pass' if c.passed else 'FAIL'} "
                      f"(margin {c.margins[i]:.3g}){form}")
@@ -103,14 +99,10 @@ def plot_scenario(sim, path: Path) -> Path:
     fig, axes = plt.subplots(3, 1, figsize=(9, 8.5), sharex=True, layout="constrained")
     many = p > MAX_LABELLED_CHANNELS        # a legend of line styles, not of every channel's four lines
     for i in range(p):
-        if many:
-            names = [f"{s} (all outputs)" for s in ("r", "r_o", "y", "y_o")] if i == 0 else [None] * 4
-        else:
-            names = [f"{s}{i + 1}" for s in ("r", "r_o", "y", "y_o")]
-        axes[0].plot(sim.t, sim.r[i], "g:", label=names[0])
-        axes[0].plot(sim.t, sim.r_o[i], "k--", lw=0.8, label=names[1])
-        axes[0].plot(sim.t, sim.y[i], "b-", label=names[2])
-        axes[0].plot(sim.t, sim.y_o[i], "r-", lw=0.8, label=names[3])
+        for s, v, style, lw in (("r", sim.r, "g:", None), ("r_o", sim.r_o, "k--", 0.8), ("y", sim.y, "b-", None),
+                                ("y_o", sim.y_o, "r-", 0.8)):
+            label = (f"{s} (all outputs)" if i == 0 else None) if many else f"{s}{i + 1}"
+            axes[0].plot(sim.t, v[i], style, lw=lw, label=label)
     worst = int(np.argmax(sim.error_per_output))
     first_other = 1 if worst == 0 else 0
     for i in range(p):
@@ -126,16 +118,15 @@ def plot_scenario(sim, path: Path) -> Path:
     axes[0].legend(**outside)
     axes[0].set_ylabel("reference / output")
     axes[1].axhline(sim.beta_o, color="r", ls="--", label=f"β_o = {sim.beta_o:g}")
-    axes[1].set_ylabel("tracking error")
-    axes[1].set_title(f"‖y − y_o‖∞ = {sim.error_inf:.4g} ({'within' if sim.passed else 'OUTSIDE'} the sphere)")
+    axes[1].set(ylabel="tracking error",
+                title=f"‖y − y_o‖∞ = {sim.error_inf:.4g} ({'within' if sim.passed else 'OUTSIDE'} the sphere)")
     axes[1].legend(**outside)
     for j in range(m):
         if m > MAX_LABELLED_CHANNELS:
             axes[2].plot(sim.t, sim.u[j], lw=0.8, label=f"u1 … u{m}" if j == 0 else None)
         else:
             axes[2].plot(sim.t, sim.u[j], label=f"u{j + 1}")
-    axes[2].set_ylabel("control u")
-    axes[2].set_xlabel("t, s")
+    axes[2].set(ylabel="control u", xlabel="t, s")
     axes[2].legend(**outside)
     fig.suptitle(f"scenario {sim.name} ({_scenario_values(sim)})")
     save_figure(fig, path, dpi=110, bbox_inches="tight")
@@ -168,10 +159,8 @@ def plot_cartesian(sims, a: float, path: Path) -> Path:
             label="nominal y_o")
     for s in sims:
         ax.plot((s.y[0] + a) * np.sin(s.y[1]), (s.y[0] + a) * np.cos(s.y[1]), label=f"{s.name} (M = {s.gamma:g} kg)")
-    ax.set_aspect("equal")
-    ax.set_xlabel("Y_A1, m")
-    ax.set_ylabel("Y_A2, m")
-    ax.set_title("Load path in Cartesian coordinates (cf. Fig 14.5)")
+    ax.set(aspect="equal", xlabel="Y_A1, m", ylabel="Y_A2, m",
+           title="Load path in Cartesian coordinates (cf. Fig 14.5)")
     ax.legend(fontsize=7, loc="best")
     save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
@@ -212,10 +201,9 @@ def plot_iterations(res, path: Path) -> Path:
         ax.set_xticks(k if k.size <= 30 else k[:: max(1, k.size // 15)])
         if k.size <= 3:               # a few evaluations: room around them, not two dots at the edges
             ax.set_xlim(0.5, k.size + 0.5)
-    ax.set_xlabel("evaluation of procedure 12.1")
-    ax.set_ylabel("β1, m")
-    ax.set_title(("certified" if res.certified else "NO certified design")
-                 + f": β1 = {res.beta1_ref:.4g}, m = {res.m_ref:.4g}")
+    verdict = "certified" if res.certified else "NO certified design"
+    ax.set(xlabel="evaluation of procedure 12.1", ylabel="β1, m",
+           title=f"{verdict}: β1 = {res.beta1_ref:.4g}, m = {res.m_ref:.4g}")
     ax.legend(fontsize=8)
     save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)

@@ -45,7 +45,7 @@ def _delta_q(nl):
     return compile_interval(expr, (x1, M))
 
 
-def arm_slope_bound(nl, N, x1_box, x3_box, x4_box, *, deadline: float | None = None) -> tuple:
+def arm_slope_bound(nl, N, x1_box, x3_box, x4_box) -> tuple:
     """Upper bounds of the spectral norm of ∂φ/∂y over x1 ∈ ``x1_box``, M ∈ [M_min, M_max] and,
     per cell, x3 and x4 in their boxes (module docstring), proved.
 
@@ -59,8 +59,6 @@ def arm_slope_bound(nl, N, x1_box, x3_box, x4_box, *, deadline: float | None = N
         Range of the radius x1 over every cell, in units of m (metres).
     x3_box, x4_box : (2, K) arrays
         Per cell, the range of the radial rate x3 (m/s) and of the angular rate x4 (rad/s).
-    deadline : float, optional
-        :func:`time.monotonic` time, in s, after which the branch and bound stops (its bound still holds).
 
     Returns
     -------
@@ -70,7 +68,7 @@ def arm_slope_bound(nl, N, x1_box, x3_box, x4_box, *, deadline: float | None = N
         The branch and bound of sup |Δq| (its ``gap`` is the enclosure's width), 1/m².
     """
     n1 = float(np.linalg.norm(np.asarray(N, float)[:, 1]))
-    deadline = time.monotonic() + 10.0 if deadline is None else deadline
+    deadline = time.monotonic() + 10.0          # the proof's time budget, s
     box = [tuple(map(float, x1_box)), (float(nl.M_min), float(nl.M_max))]
     f = _delta_q(nl)
     first = maximize(f, box, tol=0.0, deadline=deadline, max_boxes=16)

@@ -13,9 +13,10 @@ A bad expression raises :class:`acmm_qpp.errors.ConfigError` naming where it was
 from __future__ import annotations
 
 import ast
+import math
+import operator
 
 from acmm_qpp.errors import ConfigError
-import math
 
 MAX_LEN = 400           #: longest accepted expression, characters
 MAX_EXPONENT = 64       #: largest |numeric exponent| accepted in ``**``
@@ -148,8 +149,7 @@ def library_expression(form: str, output: int, gain: str, level: float | None) -
     raise ConfigError(f"nonlinearity: unknown library form {form!r}")
 
 
-_BINOPS = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: lambda a, b: a * b,
-           ast.Div: lambda a, b: a / b}
+_BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv}
 
 
 def _float_sized(a, b) -> bool:

@@ -18,8 +18,10 @@ jump, an unevaluated derivative — raises :class:`NotEnclosable`: no proof.
 """
 from __future__ import annotations
 
+import functools
 import heapq
 import itertools
+import operator
 import time
 from dataclasses import dataclass
 
@@ -36,29 +38,18 @@ class NotEnclosable(ValueError):
 
 
 def _sign(x):
-    if x.a > 0:
-        return iv.mpf(1)
-    if x.b < 0:
-        return iv.mpf(-1)
-    lo = -1 if x.a < 0 else 0
-    hi = 1 if x.b > 0 else 0
-    return iv.mpf([lo, hi])
+    if x.a > 0 or x.b < 0:
+        return iv.mpf(1 if x.a > 0 else -1)
+    return iv.mpf([-1 if x.a < 0 else 0, 1 if x.b > 0 else 0])
 
 
 def _heaviside(x):
-    if x.a > 0:
-        return iv.mpf(1)
-    if x.b < 0:
-        return iv.mpf(0)
-    return iv.mpf([0, 1])          # H(0) is 1/2 in sympy: inside [0, 1]
+    return iv.mpf([1 if x.a > 0 else 0, 0 if x.b < 0 else 1])     # H(0) is 1/2 in sympy: inside [0, 1]
 
 
-def _max(*xs):
-    return iv.mpf([max(x.a for x in xs), max(x.b for x in xs)])
-
-
-def _min(*xs):
-    return iv.mpf([min(x.a for x in xs), min(x.b for x in xs)])
+def _ends(pick, xs):
+    """Min (``pick`` = min) or Max (max) of intervals: the pick of their lower ends and of their upper ends."""
+    return iv.mpf([pick(x.a for x in xs), pick(x.b for x in xs)])
 
 
 def _tanh_point(v):
@@ -79,15 +70,11 @@ def _atan(x):
 
 
 def _sqrt(x):
-    if x.a < 0:
-        return _WHOLE
-    return iv.sqrt(x)
+    return _WHOLE if x.a < 0 else iv.sqrt(x)
 
 
 def _log(x):
-    if not x.a > 0:
-        return _WHOLE
-    return iv.log(x)
+    return iv.log(x) if x.a > 0 else _WHOLE
 
 
 def _pow_frac(x, e):
@@ -104,9 +91,7 @@ def _pow_frac(x, e):
 
 def _finite(x):
     """``x`` with a NaN end replaced by the whole line (mpmath gives NaN for inf − inf)."""
-    if x.a != x.a or x.b != x.b:
-        return _WHOLE
-    return x
+    return _WHOLE if x.a != x.a or x.b != x.b else x
 
 
 def compile_interval(expr, symbols):
@@ -142,34 +127,17 @@ def compile_interval(expr, symbols):
                 raise NotEnclosable(f"free symbol {node} without a range")
             k = index[node]
             return lambda env: env[k]
-        if node is sp.pi:
-            c = iv.pi
+        if node is sp.pi or node is sp.E:
+            c = iv.pi if node is sp.pi else iv.e
             return lambda env: c
-        if node is sp.E:
-            c = iv.e
-            return lambda env: c
-        if node.is_Integer or node.is_Float:
-            c = iv.mpf(int(node)) if node.is_Integer else iv.mpf(float(node))
-            return lambda env: c
-        if node.is_Rational:
-            c = iv.mpf(int(node.p)) / int(node.q)
+        if node.is_Rational or node.is_Float:              # integers and fractions exactly
+            c = (iv.mpf(int(node)) if node.is_Integer else iv.mpf(float(node)) if node.is_Float
+                 else iv.mpf(int(node.p)) / int(node.q))
             return lambda env: c
         if node.is_Add or node.is_Mul:
             parts = [build(a) for a in node.args]
-            if node.is_Add:
-                def add(env):
-                    s = parts[0](env)
-                    for f in parts[1:]:
-                        s = s + f(env)
-                    return _finite(s)
-                return add
-
-            def mul(env):
-                s = parts[0](env)
-                for f in parts[1:]:
-                    s = s * f(env)
-                return _finite(s)
-            return mul
+            op = operator.add if node.is_Add else operator.mul
+            return lambda env: _finite(functools.reduce(op, (f(env) for f in parts)))
         if node.is_Pow:
             base, e = node.args
             fb = build(base)
@@ -190,8 +158,8 @@ def compile_interval(expr, symbols):
             return lambda env: _heaviside(fa(env))
         if isinstance(node, (sp.Min, sp.Max)):
             parts = [build(a) for a in node.args]
-            op = _min if isinstance(node, sp.Min) else _max
-            return lambda env: op(*(f(env) for f in parts))
+            pick = min if isinstance(node, sp.Min) else max
+            return lambda env: _ends(pick, [f(env) for f in parts])
         fn = unary.get(node.func)
         if fn is not None and len(node.args) == 1:
             fa = build(node.args[0])
@@ -201,10 +169,7 @@ def compile_interval(expr, symbols):
                                if node.func.__name__ == "DiracDelta" else ""))
 
     f = build(expr)
-
-    def call(*env):
-        return f(env)
-    return call
+    return lambda *env: f(env)
 
 
 @dataclass
@@ -282,8 +247,7 @@ def maximize(enclose, box, *, target: float | None = None, tol: float = 0.0, dea
         val = enclose(*(iv.mpf(x) for x in mid))
         if val.a == val.a and val.a > best[0]:
             best[0], best[1] = val.a, mid
-        up = enc.b if enc.b == enc.b else mpmath.inf
-        return up
+        return enc.b if enc.b == enc.b else mpmath.inf
 
     def done(status, up, n):
         return Bound(status, float(up), float(best[0]), best[1], n, time.monotonic() - t0)
@@ -296,9 +260,7 @@ def maximize(enclose, box, *, target: float | None = None, tol: float = 0.0, dea
         up = -neg_up
         if target is not None and best[0] > target:
             return done("refuted", up, n)
-        if target is not None and up <= target:
-            return done("proved", up, n)
-        if target is None and up - best[0] <= tol:
+        if (up <= target) if target is not None else (up - best[0] <= tol):
             return done("proved", up, n)
         if n >= max_boxes or time.monotonic() > deadline:
             return done("limit", up, n)

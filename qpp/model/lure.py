@@ -24,8 +24,8 @@ from scipy.linalg import matrix_balance
 BZ_READINGS = ("eq10.7", "printed")
 
 
-def _m(x, name: str, ndim: int = 2) -> np.ndarray:
-    a = np.atleast_2d(np.asarray(x, dtype=float)) if ndim == 2 else np.asarray(x, float)
+def _m(x, name: str) -> np.ndarray:
+    a = np.atleast_2d(np.asarray(x, dtype=float))
     if not np.all(np.isfinite(a)):
         raise ConfigError(f"{name}: must contain finite numbers")
     return a
@@ -114,16 +114,13 @@ class LurePlant:
             If B is not in the range of G (the matching assumption fails).
         """
         N, *_ = np.linalg.lstsq(self.G, self.B, rcond=None)
-        if not np.allclose(self.G @ N, self.B, atol=1e-10 * max(1.0, np.abs(self.B).max())):
+        atol = 1e-10 * max(1.0, np.abs(self.B).max())
+        if not np.allclose(self.G @ N, self.B, atol=atol):
             raise ConfigError("plant: B is not G·N for any N (assumption (iii) of ch. 10.1 fails)")
         # entries at the level of the solve's round-off are zeros (B = G N exactly with them zeroed):
         # kept, a 1e-16 would couple a φ channel to every output (the circle test, the sector grid)
-        tiny = np.abs(N) <= 1e-13 * np.abs(N).max(initial=0.0)
-        if tiny.any():
-            N0 = np.where(tiny, 0.0, N)
-            if np.allclose(self.G @ N0, self.B, atol=1e-10 * max(1.0, np.abs(self.B).max())):
-                N = N0
-        return N
+        N0 = np.where(np.abs(N) <= 1e-13 * np.abs(N).max(initial=0.0), 0.0, N)
+        return N0 if np.allclose(self.G @ N0, self.B, atol=atol) else N
 
 
 def augmented(plant: LurePlant):

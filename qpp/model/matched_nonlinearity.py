@@ -37,16 +37,15 @@ def config_f1(cfg: QppConfig, plant: LurePlant):
     TypeError
         The nonlinearity is of no known kind.
     """
-    nl = cfg.nonlinearity
+    nl, C = cfg.nonlinearity, plant.C
     if isinstance(nl, ExpressionNonlinearity):
-        C, model = plant.C, cfg.expression_model()
+        model = cfg.expression_model()
 
         def f1(x, t, g):
             return model.f1(C @ x, t, g)
         return f1, model.nom.copy()
     if isinstance(nl, SinusoidalNonlinearity):
         F0, F1, Fu = (np.asarray(getattr(nl, k), float) for k in ("F0", "F1", "F_unc"))
-        C = plant.C
 
         def f1(x, t, g):
             y = C @ x

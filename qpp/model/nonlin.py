@@ -113,15 +113,13 @@ class ExpressionModel(SampleGrid):
         self._f = [sp.lambdify(args, fi, modules="numpy") for fi in self.f]
         self._phi = [sp.lambdify(args, ph, modules="numpy") for ph in self.phi]
         self.dep = [[self.ys[j] in ph.free_symbols for j in range(self.p)] for ph in self.phi]
-        self._dphi = []
-        for ph in self.phi:
-            row = []
-            for j in range(self.p):
-                try:
-                    row.append(sp.lambdify(args, sp.diff(ph, self.ys[j]), modules="numpy"))
-                except Exception:                 # noqa: BLE001 - fall back to finite differences
-                    row.append(None)
-            self._dphi.append(row)
+
+        def derivative(ph, y):
+            try:
+                return sp.lambdify(args, sp.diff(ph, y), modules="numpy")
+            except Exception:                     # noqa: BLE001 - None: finite differences (_grad)
+                return None
+        self._dphi = [[derivative(ph, y) for y in self.ys] for ph in self.phi]
 
     # ------------------------------------------------------------------ evaluation
     @staticmethod
@@ -173,6 +171,10 @@ class ExpressionModel(SampleGrid):
         """φ_i alone on broadcast arrays (the sector's climbs need one channel, not all r)."""
         return self._call(self._phi[i], Y, t, TH)
 
+    def _slope_sum(self, i, Y, t, TH):
+        """Σ_j |∂φ_i/∂y_j| on broadcast arrays (0 when φ_i depends on no output)."""
+        return sum(np.abs(self._grad(i, j, Y, t, TH)) for j in range(self.p) if self.dep[i][j])
+
     def _grad(self, i, j, Y, t, TH):
         fn = self._dphi[i][j]
         g = None
@@ -217,14 +219,13 @@ class ExpressionModel(SampleGrid):
                 n += ph.size
                 if not np.all(np.isfinite(ph)):
                     raise ConfigError(f"{where}: singular (non-finite value) on the stated ranges")
-                gsum = sum(np.abs(self._grad(i, j, Yf, tt, TH)) for j in range(self.p) if self.dep[i][j]) \
-                    if any(self.dep[i]) else np.zeros_like(ph)
+                gsum = self._slope_sum(i, Yf, tt, TH)
                 if not np.all(np.isfinite(gsum)):
                     raise ConfigError(f"{where}: not sector-bounded (unbounded slope) on the stated ranges")
-                if any(self.dep[i]) and float(np.max(gsum)) > slope[i]:
+                if np.max(gsum) > slope[i]:
                     gb = np.broadcast_to(gsum, ph.shape)
                     starts[i]["slope"] = self._point(Yf, tg_i, th, np.argmax(gb), gb.shape)
-                slope[i] = max(slope[i], float(np.max(gsum)))
+                    slope[i] = float(np.max(gsum))
                 y0 = np.ones(ph.shape[0], bool)               # the channel's outputs all 0
                 for j in outs:
                     y0 &= np.broadcast_to(Yf[j][:, 0] == 0, y0.shape)
@@ -307,12 +308,12 @@ class ExpressionModel(SampleGrid):
         nz = np.abs(yi) > 0
         ratio = ph[nz] / yi[nz]
         full = np.where(nz, ph / np.where(nz, yi, 1.0), np.nan)
-        if float(ratio.min()) < alpha[i]:
+        if ratio.min() < alpha[i]:
             starts["alpha"] = self._point(Yf, tg, th, np.nanargmin(full), full.shape)
-        if float(ratio.max()) > beta[i]:
+            alpha[i] = ratio.min()
+        if ratio.max() > beta[i]:
             starts["beta"] = self._point(Yf, tg, th, np.nanargmax(full), full.shape)
-        alpha[i] = min(alpha[i], float(ratio.min()))
-        beta[i] = max(beta[i], float(ratio.max()))
+            beta[i] = ratio.max()
         span = float(np.ptp(self.y_range[i]))
         small = nz & (np.abs(yi) <= 2e-9 * span)
         mid = (np.abs(yi) > 2e-9 * span) & (np.abs(yi) <= 2e-6 * span)
@@ -338,17 +339,12 @@ class ExpressionModel(SampleGrid):
         return np.concatenate([[Y[min(iy, Y.shape[0] - 1), 0] for Y in Yf], [tg[it]], np.asarray(th, float)])
 
     def _check_continuity(self) -> None:
-        """Every f1 channel continuous and finite on the stated ranges, decided in bounded time.
-
-        Each sub-expression that can make f1 singular — a denominator (a negative power), the
-        cosine under ``tan``, the argument of ``log`` and of a fractional power — is evaluated on a
-        grid of at most :data:`SINGULARITY_POINTS` points over the ranges of its symbols (y, t,
-        θ); a zero or a change of sign along an axis (a pole between grid points: tan at π/2), or a
-        negative argument of a root or a logarithm, is refused naming the symbol.  Then f1 itself
-        is evaluated on the grid: a value that is not finite or beyond :data:`VALUE_LIMIT` is
-        refused as an overflow.  (sympy's ``continuous_domain`` decided this symbolically, but
-        took minutes for ``tan(100*y1)``.)
-        """
+        """Every f1 channel continuous and finite on the stated ranges, decided in bounded time:
+        each sub-expression that can make f1 singular (:func:`_singular_argument`) evaluated on a
+        grid (:func:`_on_grid`), a zero, sign change (tan at π/2 between grid points) or negative
+        argument refused naming the symbol; then f1 itself, a value not finite or beyond
+        :data:`VALUE_LIMIT` refused as an overflow.  (sympy's ``continuous_domain`` decided this
+        symbolically, but took minutes for ``tan(100*y1)``.)"""
         sp = sympy_module()
         ranges = {**{s: tuple(r) for s, r in zip(self.ys, self.y_range)}, self.t: (0.0, self.t_range),
                   **{s: (lo, hi) for s, lo, hi in zip(self.th, self.lo, self.hi)}}
@@ -424,7 +420,7 @@ class ExpressionModel(SampleGrid):
             ny = max(Y.shape[0] for Y in Yf)
             for th in self.theta_samples():
                 TH = [np.full((1, 1), v) for v in th]
-                s = sum(np.abs(self._grad(i, j, Yf, tg[None, :], TH)) for j in range(self.p) if self.dep[i][j])
+                s = self._slope_sum(i, Yf, tg[None, :], TH)
                 g[i] = np.maximum(g[i], np.max(np.broadcast_to(s, (ny, tg.size)), axis=0))
         tg.flags.writeable = g.flags.writeable = False
         return tg, g
@@ -498,8 +494,7 @@ def _on_grid(sp, expr, syms, ranges):
         grid = np.meshgrid(*axes, indexing="ij")
     else:
         u = qmc.Sobol(d, scramble=True, seed=0).random(SINGULARITY_POINTS)
-        lo = np.array([ranges[s][0] for s in syms], float)
-        hi = np.array([ranges[s][1] for s in syms], float)
+        lo, hi = np.array([ranges[s] for s in syms], float).T
         grid = list((lo + u * (hi - lo)).T)
     fn = sp.lambdify(syms, expr, modules="numpy")
     with np.errstate(all="ignore"):

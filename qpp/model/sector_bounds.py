@@ -3,12 +3,9 @@
 :meth:`qpp.model.nonlin.ExpressionNonlinearity.sector_info` samples φ on a grid of Y × Θ × [0, t_range];
 a grid under-estimates a supremum that falls between its points (φ = δm·y·sin 2t, |δm| ≤ 0.1
 sampled on 256 times gives the sector ±0.09999976 instead of ±0.1), and a sector that is too
-small by any amount is not a certificate.  :func:`refine` therefore climbs from the best grid
-points of each bound to the local extremum (Nelder–Mead within the stated box, scipy) and widens
-the bound to what it finds (beyond round-off); :func:`global_search` searches the whole box as well
-(a global maximum in a basin the grid's best point does not lead to); :func:`verify` then checks the bounds at random points and, on a
-violation, widens them (+1 %) and returns the violating points, from which the model climbs again
-to the extremum the grid missed.  Bounds are only ever widened, never narrowed.
+small by any amount is not a certificate.  Hence :func:`refine` (a local climb from the best grid
+points), :func:`global_search` (the whole box) and :func:`verify` (random points, whose violations
+are climbed from again).  Bounds are only ever widened, never narrowed.
 """
 from __future__ import annotations
 
@@ -20,15 +17,14 @@ from acmm_qpp.errors import ConfigError
 REFINE_ITER_PER_DIM = 200
 
 
-def _box(model, i: int) -> tuple[list, np.ndarray]:
-    """The variables x = (y_1 … y_p, t, θ_1 … θ_k) that vary for φ channel ``i``: their
-    (lo, hi) and a mask of x (the outputs of :meth:`~qpp.model.sector_grid.SampleGrid.channel_outputs`;
-    the others cannot change φ_i)."""
+def _box(model, i: int) -> tuple[list, np.ndarray, list]:
+    """(lo, hi) of each variable x = (y_1 … y_p, t, θ_1 … θ_k), the mask of those that can
+    change φ channel ``i``, and their (lo, hi)."""
     ranges = [tuple(r) for r in model.y_range] + [(0.0, model.t_range if model.t_varies else 0.0)]
     ranges += list(zip(model.lo, model.hi))
     free = np.array([hi > lo for lo, hi in ranges])
     free[:model.p] &= np.isin(np.arange(model.p), model.channel_outputs(i))
-    return ranges, free
+    return ranges, free, [r for r, f in zip(ranges, free) if f]
 
 
 #: which way each bound is climbed: α down, β, the slope and the gain up
@@ -36,21 +32,20 @@ _SIGN = {"alpha": -1.0, "beta": 1.0, "slope": 1.0, "gain": 1.0}
 
 
 def _value(model, i: int, kind: str, x) -> float:
-    """φ_i / y_i (``"alpha"``, ``"beta"``), Σ_j |∂φ_i/∂y_j| (``"slope"``) or |φ_i| / ‖y‖∞
-    (``"gain"``, a lower bound of the slope since φ(0) = 0) at x = (y, t, θ); NaN for a ratio
-    at y_i ≈ 0 or a gain at y ≈ 0 (:func:`_values` at one point)."""
+    """:func:`_values` at one point x = (y, t, θ)."""
     return float(_values(model, i, kind, np.asarray(x, float)[:, None])[0])
 
 
 def _values(model, i: int, kind: str, X) -> np.ndarray:
-    """:func:`_value` at each column x = (y, t, θ) of X (p + 1 + k, S) (NaN where undefined)."""
+    """φ_i / y_i (``"alpha"``, ``"beta"``), Σ_j |∂φ_i/∂y_j| (``"slope"``) or |φ_i| / ‖y‖∞
+    (``"gain"``, a lower bound of the slope since φ(0) = 0) at each column x = (y, t, θ) of X
+    (p + 1 + k, S); NaN for a ratio at y_i ≈ 0 or a gain at y ≈ 0."""
     p = model.p
-    Y, t, TH = [X[j] for j in range(p)], X[p], [X[k] for k in range(p + 1, X.shape[0])]
+    Y, t, TH = list(X[:p]), X[p], list(X[p + 1:])
     S = X.shape[1]
     with np.errstate(all="ignore"):
         if kind == "slope":
-            return np.broadcast_to(sum((np.abs(model._grad(i, j, Y, t, TH)) for j in range(p) if model.dep[i][j]),
-                                       np.zeros(S)), (S,)).astype(float)
+            return np.broadcast_to(model._slope_sum(i, Y, t, TH), (S,)).astype(float)
         ph = np.broadcast_to(model._phi_i(i, Y, t, TH), (S,))
         if kind == "gain":
             ymax = np.max(np.abs(X[:p]), axis=0)
@@ -87,12 +82,11 @@ def global_search(model, i: int, kinds: tuple, bounds: dict) -> dict:
     dict
         The bounds, each widened to the best extremum found (never narrowed).
     """
-    ranges, free = _box(model, i)
-    if not free.any():
-        return dict(bounds)
-    lo_hi = [r for r, f in zip(ranges, free) if f]
-    base = np.array([0.5 * (lo + hi) for lo, hi in ranges])
+    ranges, free, lo_hi = _box(model, i)
     out = dict(bounds)
+    if not free.any():
+        return out
+    base = np.array([0.5 * (lo + hi) for lo, hi in ranges])
     for kind in kinds:
         def cost(Z, kind=kind):
             X = np.repeat(base[:, None], Z.shape[1], axis=1)
@@ -140,9 +134,8 @@ def climb_from(model, i: int, x, kinds: tuple, bounds: dict) -> dict:
     candidates = [x] + [np.concatenate([x[:p1], th]) for th in model.theta_samples()] if model.names else [x]
     starts = {}
     for kind in kinds:
-        vals = [_SIGN[kind] * _value(model, i, kind, c) for c in candidates]
-        vals = [v if np.isfinite(v) else -np.inf for v in vals]
-        starts[kind] = candidates[int(np.argmax(vals))]
+        vals = np.array([_SIGN[kind] * _value(model, i, kind, c) for c in candidates])
+        starts[kind] = candidates[int(np.argmax(np.where(np.isfinite(vals), vals, -np.inf)))]
     at: dict = {}
     out = refine(model, i, starts, bounds, at)
     if "slope" in kinds and "gain" in at:     # the largest |φ|/‖y‖ lies by a steep part: climb the slope there too
@@ -174,11 +167,10 @@ def refine(model, i: int, starts: dict, bounds: dict, at: dict | None = None) ->
     dict
         The same kinds, each value widened to the best extremum found (never narrowed).
     """
-    ranges, free = _box(model, i)
+    _, free, lo_hi = _box(model, i)
     out = dict(bounds)
     if not free.any():
         return out
-    lo_hi = [r for r, f in zip(ranges, free) if f]
     for kind, x0 in starts.items():
         base = np.asarray(x0, float)
 

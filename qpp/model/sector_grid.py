@@ -28,9 +28,7 @@ class SampleGrid:
         (S, k) ndarray
             The parameter samples, in the config's units.
         """
-        if not self.names:
-            return np.zeros((1, 0))
-        return np.array(list(itertools.product(*self._theta_axes())))
+        return np.array(list(itertools.product(*self._theta_axes())))     # no parameter: one empty row
 
     def theta_sample_count(self) -> int:
         """The number of rows of :meth:`theta_samples` (counted, not built).
@@ -115,10 +113,8 @@ class SampleGrid:
 
     def _y_grid(self, outputs: list) -> list:
         """The grid axis of each output in ``outputs``, with points near 0 added: ``n_grid``
-        points for a channel of one or two outputs, max(5, ⌊20000^(1/d)⌋) for d outputs beyond;
-        each axis also holds the points of the grid over all p outputs, whose axes had
-        ``n_grid`` points up to p = 2 and max(5, ⌊20000^(1/p)⌋) beyond, so a channel's grid is
-        never coarser than that one (a small ``n_grid`` on a plant of three or more outputs)."""
+        points for d ≤ 2 outputs, max(5, ⌊20000^(1/d)⌋) beyond, united with the axis of the grid
+        over all p outputs (so never coarser than that one)."""
         def per(d: int) -> int:
             return self.n_grid if d <= 2 else max(5, int(20000 ** (1.0 / d)))
 
@@ -134,7 +130,7 @@ class SampleGrid:
         """Y (p arrays, each (Ny, 1) or (1, 1)) of channel ``i``'s sample grid: the mesh of its
         outputs, every other output at the low end of its range."""
         outs = self.channel_outputs(i)
-        mesh = np.meshgrid(*self._y_grid(outs), indexing="ij") if outs else []
+        mesh = np.meshgrid(*self._y_grid(outs), indexing="ij")
         Y = [np.full((1, 1), lo) for lo in self.y_range[:, 0]]
         for j, m in zip(outs, mesh):
             Y[j] = m.ravel()[:, None]

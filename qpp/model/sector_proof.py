@@ -74,18 +74,18 @@ class ProvedBounds:
 TIDY_TERMS = 2000
 
 
-def _terms(sp, e) -> int:
+def _terms(e) -> int:
     """Terms of ``e`` once its products of sums are distributed (powers of sums kept), estimated."""
     if e.is_Add:
-        return sum(_terms(sp, a) for a in e.args)
+        return sum(_terms(a) for a in e.args)
     if e.is_Mul:
         n = 1
         for a in e.args:
-            n *= _terms(sp, a)
+            n *= _terms(a)
             if n > TIDY_TERMS:
                 return n
         return n
-    return 1 + sum(_terms(sp, a) - 1 for a in e.args if not a.is_Atom)
+    return 1 + sum(_terms(a) - 1 for a in e.args if not a.is_Atom)
 
 
 def _tidy(expr):
@@ -95,13 +95,9 @@ def _tidy(expr):
     dm·y·sin t, −k·sat(y) + 4·sat(y) becomes (4 − k)·sat(y).  Left as it is when the distribution
     would create more than TIDY_TERMS terms."""
     sp = sympy_module()
-    if _terms(sp, expr) > TIDY_TERMS:
+    if _terms(expr) > TIDY_TERMS:
         return expr
     return sp.factor_terms(sp.expand(expr, multinomial=False, power_exp=False, power_base=False, log=False))
-
-
-def _hull0(Y):
-    return iv.mpf([min(0, Y.a), max(0, Y.b)])
 
 
 def _ranges(model, syms, t_hi: float) -> list:
@@ -135,7 +131,7 @@ class _Prover:
 
     def phi0(self, i):
         """None when φ_i(0, t, θ) = 0 is proved, else the reason."""
-        sp, M = self.sp, self.model
+        M = self.model
         z = M.phi[i].subs({y: 0 for y in M.ys})
         if z == 0:
             return None
@@ -174,17 +170,14 @@ class _Prover:
                 lo_b, hi_b = r.a, r.b
             if d is not None and lo <= 0 <= hi:
                 e = list(env)
-                e[k] = _hull0(Y)
+                e[k] = iv.mpf([min(0, Y.a), max(0, Y.b)])          # the hull of 0 and Y
                 r = d(*e)
                 if r.a == r.a and r.b == r.b:
                     lo_b, hi_b = max(lo_b, r.a), min(hi_b, r.b)
             if lo_b > hi_b:                     # both enclose the same values: round-off only
                 lo_b, hi_b = min(lo_b, hi_b), max(lo_b, hi_b)
             return iv.mpf([lo_b, hi_b])
-
-        def neg(*env):
-            return -ratio(*env)
-        return ratio, neg
+        return ratio, lambda *env: -ratio(*env)
 
 
 def prove(model) -> ProvedBounds:
@@ -202,7 +195,6 @@ def prove(model) -> ProvedBounds:
     """
     t0 = time.monotonic()
     P = _Prover(model)
-    sp = P.sp
     info = model.sector_info
     s = np.array(info.sector, float)
     slope_s = np.array(info.slope_bound, float)
@@ -216,7 +208,6 @@ def prove(model) -> ProvedBounds:
         tol = REL_GAP * size + 1e-300
         ch = f"channel {i + 1}"
         if ph == 0:
-            sector[i] = s[i]
             continue
         why0 = P.phi0(i)
         if why0:
@@ -271,10 +262,9 @@ def prove(model) -> ProvedBounds:
     how = f"interval branch and bound, {P.boxes} boxes, {secs:.2g} s"
     # the sampled extremum is a value phi reaches; the proved bound lies REL_GAP beyond it: the
     # supremum is enclosed in [sampled, proved], of width the gap
-    sector_text = (f"proved ({how}; enclosure gap {max(sec_gap, default=0.0):.2g}, {REL_GAP:g} relative)"
-                   if sec_ok else "not proved: " + "; ".join(sec_fail))
-    slope_text = (f"proved ({how}; enclosure gap {max(slo_gap, default=0.0):.2g}, {REL_GAP:g} relative)"
-                  if slo_ok else "not proved: " + "; ".join(slo_fail))
+    sector_text, slope_text = (f"proved ({how}; enclosure gap {max(gap, default=0.0):.2g}, {REL_GAP:g} relative)"
+                               if not fail else "not proved: " + "; ".join(fail)
+                               for gap, fail in ((sec_gap, sec_fail), (slo_gap, slo_fail)))
     return ProvedBounds(sector, slope, sec_ok, slo_ok, sector_text, slope_text, secs, P.boxes)
 
 
@@ -303,11 +293,9 @@ def slope_cells(model, edges, proved: ProvedBounds) -> np.ndarray:
     edges = np.asarray(edges, float)
     K = edges.size - 1
     P = _Prover(model)
-    r = len(model.phi)
-    varies = [model.t in ph.free_symbols and any(model.dep[i]) for i, ph in enumerate(model.phi)]
     G = np.repeat(np.asarray(proved.slope, float)[:, None], K, axis=1)
-    for i in range(r):
-        if not varies[i] or not proved.slope_ok:
+    for i, ph in enumerate(model.phi):
+        if model.t not in ph.free_symbols or not any(model.dep[i]) or not proved.slope_ok:
             continue
         fn, syms = P.slope_fn(i)
         if model.t not in syms:

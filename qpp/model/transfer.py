@@ -57,22 +57,12 @@ def transfer_on_grid(A, B, C, s, method: str = "auto") -> np.ndarray:
     s = np.asarray(s, complex)
     n = A.shape[0]
     if method == "modal" or (method == "auto" and n >= MODAL_MIN_ORDER):
-        got = _modal(A, B, C, s)
-        if got is not None:
-            return got
+        lam, V = np.linalg.eig(A)
+        if np.isfinite(V).all() and not np.linalg.cond(V) > MODAL_MAX_COND:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                D = 1.0 / (s[:, None] - lam[None, :])      # (N, n)
+            if np.isfinite(D).all():                       # else s on an eigenvalue: H(s) is infinite there
+                WB = np.linalg.solve(V, B.astype(complex))  # (n, k)
+                return np.einsum("pi,Ni,ik->Npk", C @ V, D, WB, optimize=True)
     M = s[:, None, None] * np.eye(n)[None] - A[None]
     return C[None] @ np.linalg.solve(M, np.broadcast_to(B.astype(complex), (s.size,) + B.shape))
-
-
-def _modal(A, B, C, s):
-    """The modal form of :func:`transfer_on_grid`, or None when V is ill conditioned."""
-    lam, V = np.linalg.eig(A)
-    if not np.isfinite(V).all() or np.linalg.cond(V) > MODAL_MAX_COND:
-        return None
-    CV = C @ V                                         # (p, n)
-    WB = np.linalg.solve(V, B.astype(complex))         # (n, k)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        D = 1.0 / (s[:, None] - lam[None, :])          # (N, n)
-    if not np.isfinite(D).all():                       # s on an eigenvalue: H(s) is infinite there
-        return None
-    return np.einsum("pi,Ni,ik->Npk", CV, D, WB, optimize=True)

@@ -31,7 +31,7 @@ from acmm_qpp.errors import ConfigError, ConvergenceError
 from acmm_qpp.limits import how_to_raise, limit
 from qpp import LIMITS
 from qpp.io.config import ExpressionNonlinearity, QppConfig, Scenario, Term
-from qpp.model.lure import LurePlant
+from qpp.model.lure import LurePlant, closed_loop
 from qpp.model.matched_nonlinearity import config_f1
 
 
@@ -39,15 +39,14 @@ def _terms_value(terms: list[Term], t: float) -> float:
     """Value of one channel's sum of sine, step and ramp terms at time t (s), in its units."""
     v = 0.0
     for tm in terms:
+        off = np.inf if tm.t_off is None else tm.t_off
         if tm.kind == "sin":
             v += tm.amplitude * np.sin(tm.omega * t + tm.phase)
         elif tm.kind == "step":
             on = -np.inf if tm.t_on is None else tm.t_on
-            off = np.inf if tm.t_off is None else tm.t_off
             v += tm.amplitude if on <= t < off else 0.0
         else:  # ramp
             on = 0.0 if tm.t_on is None else tm.t_on
-            off = np.inf if tm.t_off is None else tm.t_off
             v += tm.amplitude * (min(max(t, on), off) - on)
     return v
 
@@ -89,14 +88,13 @@ def initial_state(cfg: QppConfig, plant: LurePlant, K1, Kc) -> np.ndarray:
     (2n+q,) ndarray
         z(0), in the config's units of x and x_c.
     """
-    n, q = plant.n, plant.q
-    x0 = np.zeros(n) if cfg.plant.x0 is None else np.asarray(cfg.plant.x0, float)
+    x0 = np.zeros(plant.n) if cfg.plant.x0 is None else np.asarray(cfg.plant.x0, float)
     if isinstance(cfg.plant.xc0, list):
         xc0 = np.asarray(cfg.plant.xc0, float)
     elif cfg.plant.xc0 == "equilibrium":
         xc0 = np.linalg.lstsq(np.atleast_2d(Kc), -np.atleast_2d(K1) @ x0, rcond=None)[0]
     else:
-        xc0 = np.zeros(q)
+        xc0 = np.zeros(plant.q)
     return np.concatenate([x0, xc0, x0])
 
 
@@ -198,10 +196,8 @@ def simulate_nominal(plant: LurePlant, K1, Kc, H, f1, gamma_nominal, r_o, t_eval
 
 
 def _nominal_diverged_beyond(r_o, t: np.ndarray, z0: np.ndarray) -> float:
-    """The ``failed_beyond`` of a nominal loop (:func:`_simulate_loop`): DIVERGED_FACTOR times the
-    larger of 1, |z0| and |r_o| over the samples ``t`` (s), in the units of z.  The nominal loop of
-    an unstable design, which grows until the integrator fails, is then a result (NaN from there
-    on), not an integrator error; a stable one is integrated as before."""
+    """The ``failed_beyond`` of a nominal loop (:func:`simulate_nominal`): DIVERGED_FACTOR times the
+    larger of 1, |z0| and |r_o| over the samples ``t`` (s), in the units of z."""
     step = max(1, t.size // 200)
     r_peak = max((float(np.max(np.abs(eval_signal(r_o, tt)), initial=0.0)) for tt in t[::step]), default=0.0)
     return DIVERGED_FACTOR * max(1.0, float(np.max(np.abs(z0), initial=0.0)), r_peak)
@@ -468,10 +464,7 @@ def check_work(cfg: QppConfig, K1, Kc, H, runs: int | None = None, horizon: floa
         The work exceeds the ``QPP_WORK`` limit.
     """
     P = cfg.lure_plant()
-    A, B, C, Ac, Bc = (np.atleast_2d(np.asarray(x, float)) for x in (P.A, P.B, P.C, P.Ac, P.Bc))
-    K1, Kc, L = np.atleast_2d(K1), np.atleast_2d(Kc), -np.atleast_2d(H)
-    n, q = P.n, P.q
-    Acl = np.block([[A, B @ Kc, B @ K1], [-Bc @ C, Ac, np.zeros((q, n))], [L @ C, B @ Kc, A + B @ K1 - L @ C]])
+    Acl = closed_loop(P, K1, Kc, H)[0]
     with np.errstate(all="ignore"):
         rate = float(np.max(np.abs(np.linalg.eigvals(Acl)))) if np.all(np.isfinite(Acl)) else math.inf
     nl = cfg.nonlinearity
@@ -479,7 +472,7 @@ def check_work(cfg: QppConfig, K1, Kc, H, runs: int | None = None, horizon: floa
     if hasattr(nl, "F0"):
         gain = sum(float(np.linalg.norm(np.asarray(getattr(nl, k), float), 2)) for k in ("F0", "F1"))
         gain += nl.gamma_max * float(np.linalg.norm(np.asarray(nl.F_unc, float), 2))
-        rate += gain * float(np.linalg.norm(B, 2) * np.linalg.norm(C, 2)) + nl.omega
+        rate += gain * float(np.linalg.norm(P.B, 2) * np.linalg.norm(P.C, 2)) + nl.omega
     omegas = [t.omega for sig in [sim.r_o] + [s.delta_r or [] for s in sim.scenarios] for ch in sig for t in ch]
     rate = max([rate] + omegas)
     runs = len(sim.scenarios) + 1 if runs is None else int(runs)
