@@ -381,9 +381,7 @@ class Output(SectionModel):
     @classmethod
     def _unit_system_in_any_case(cls, v):
         """``si``, ``Si``, ``IMPERIAL``: the unit system's name, whatever its case."""
-        if isinstance(v, str):
-            return {"si": "SI", "imperial": "imperial"}.get(v.strip().lower(), v)
-        return v
+        return {"si": "SI", "imperial": "imperial"}.get(v.strip().lower(), v) if isinstance(v, str) else v
 
 
 class Config(SectionModel, RunConfig):
