@@ -344,14 +344,9 @@ def owned_files(run_dir, patterns: tuple) -> dict:
     dict
         File name → identity.
     """
-    out, run_dir = {}, Path(run_dir)
-    if run_dir.is_dir():
-        for pattern in patterns:
-            for p in run_dir.glob(pattern):
-                ident = file_identity(p)
-                if ident is not None:
-                    out[p.name] = ident
-    return out
+    run_dir = Path(run_dir)
+    files = [p for pattern in patterns for p in run_dir.glob(pattern)] if run_dir.is_dir() else []
+    return {p.name: ident for p in files if (ident := file_identity(p)) is not None}
 
 
 def _remove(run_dir: Path, names) -> None:

@@ -23,10 +23,8 @@ def files_only_backend() -> None:
     if "matplotlib" in sys.modules:
         sys.modules["matplotlib"].use("Agg", force=True)
     elif "MPLCONFIGDIR" not in os.environ and not _writable_dir(_default_config_dir()):
-        # no writable home: matplotlib made a new /tmp/matplotlib-* folder in every process
-        # and warned twice;
-        # one folder per user, kept, holds its font cache across runs
-
+        # no writable home: matplotlib made a new /tmp/matplotlib-* folder in every process and
+        # warned twice; one folder per user, kept, holds its font cache across runs
         own = os.path.join(tempfile.gettempdir(), f"acmm-matplotlib-{os.getuid() if hasattr(os, 'getuid') else 0}")
         if _writable_dir(own, private=True):
             os.environ["MPLCONFIGDIR"] = own
@@ -53,7 +51,6 @@ def _writable_dir(path: str, private: bool = False) -> bool:
         st = os.lstat(path)
     except OSError:
         return False
-
     if private and (not stat.S_ISDIR(st.st_mode) or (hasattr(os, "getuid") and st.st_uid != os.getuid())):
         return False
     return os.access(path, os.W_OK)

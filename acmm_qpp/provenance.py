@@ -17,10 +17,9 @@ def _git_state() -> tuple[str, bool | None]:
     checkout or without git."""
     try:
         out = subprocess.run(["git", "status", "--porcelain=v2", "--branch", "--untracked-files=no"],
-                             cwd=Path(__file__).resolve().parent, capture_output=True, text=True, timeout=5)
-    except (OSError, subprocess.SubprocessError):
-        return "unknown", None
-    if out.returncode != 0:
+                             cwd=Path(__file__).resolve().parent, capture_output=True, text=True, timeout=5,
+                             check=True)
+    except (OSError, subprocess.SubprocessError):      # (a failing git: CalledProcessError)
         return "unknown", None
     lines = out.stdout.splitlines()
     oid = next((ln.split()[2] for ln in lines if ln.startswith("# branch.oid ")), "unknown")

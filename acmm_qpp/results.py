@@ -181,17 +181,14 @@ def _write_group(group, h5group, items: Mapping[str, Any]) -> None:
         group.create_variable(key, dims, dtype, data=data)
         attrs = {"units": value.units}
         if value.description:
-            attrs["description"] = value.description
+            attrs.update(description=value.description, long_name=value.description)
         if value.names is not None:
             attrs["names"] = json.dumps(list(value.names))
         attrs.update(value.attrs)
         if key == TIME and dims == (TIME,):
             attrs.update(standard_name="time", axis="T")
-        if value.description and "long_name" not in attrs:
-            attrs["long_name"] = value.description
-        stored = h5group[key].attrs
         for k, v in attrs.items():
-            stored[k] = _attr_value(v)
+            h5group[key].attrs[k] = _attr_value(v)
 
 
 #: Run names (every config's, and the names a config gives its runs): a single path component of letters,

@@ -42,8 +42,7 @@ def _spell(unit: str) -> str:
     """Normalize the spellings pint does not take: · ² ³, and ``h`` (hour, not Planck)."""
     u = unit.strip().replace("·", "*").replace("²", "^2").replace("³", "^3").replace("⁻¹", "^-1")
     u = re.sub(r"(?<![A-Za-z_])h(?![A-Za-z_])", "hour", u)
-    u = re.sub(r"(?<![A-Za-z_])sec(?![A-Za-z_])", "s", u)
-    return u
+    return re.sub(r"(?<![A-Za-z_])sec(?![A-Za-z_])", "s", u)
 
 
 @lru_cache(maxsize=256)

@@ -63,9 +63,7 @@ class Steps:
         """
         if self._p is None:
             return
-        kw = {}
-        if text is not None:
-            kw["description"] = text
+        kw = {} if text is None else {"description": text}
         if self.rate:
             t = self._p.tasks[0]
             speed = t.finished_speed or t.speed

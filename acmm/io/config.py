@@ -26,6 +26,7 @@ from acmm_qpp.config_model import RunConfig, StrictModel, quantity
 from acmm_qpp.errors import ConfigError
 from acmm_qpp.units import to_canonical
 from acmm.model.inertia import MAX_INERTIA
+from acmm.model.unit_systems import pretty
 from acmm_qpp.results import RUN_NAME_MAX, RUN_NAME_PATTERN, ROOT_PATTERN
 from acmm import DEFAULT_CONFIG, LIMITS, PACKAGED_CONFIGS
 from acmm_qpp.configio import read_yaml, validate_model
@@ -55,7 +56,7 @@ def _plausible_value(x: float, dimension: str) -> float:
     plausible for ``dimension`` (``inertia``, ``torque``…), else a ValueError naming both."""
     bound = _RANGE.get(dimension)
     if bound is not None and abs(x) > bound:
-        unit = UNITS[dimension].replace("*", "·").replace("^2", "²")      # slug·ft², ft·lbf·s, ...
+        unit = pretty(UNITS[dimension])
         raise ValueError(f"{x:.4g} {unit} is outside the physically plausible range |value| ≤ {bound:g} {unit}")
     return x
 
@@ -381,9 +382,7 @@ class Output(SectionModel):
     @classmethod
     def _unit_system_in_any_case(cls, v):
         """``si``, ``Si``, ``IMPERIAL``: the unit system's name, whatever its case."""
-        if isinstance(v, str):
-            return {"si": "SI", "imperial": "imperial"}.get(v.strip().lower(), v)
-        return v
+        return {"si": "SI", "imperial": "imperial"}.get(v.strip().lower(), v) if isinstance(v, str) else v
 
 
 class Config(SectionModel, RunConfig):

@@ -1,7 +1,5 @@
 """Reading a design back from ``design.h5`` (ch. 5.2–5.3 results): the table a simulation needs,
 checked against the digest the design stage wrote with it.
-
-Split from :mod:`acmm.stages.design`.
 """
 from __future__ import annotations
 
@@ -119,7 +117,6 @@ def load_design_table(path: Path) -> DesignTable:
         level = np.asarray(f["level"][()]).astype(bool) if "level" in f else None
     _check_table(names, inertia, bias, tea, K, coef, attrs.get("table_sha256"), level)
     if attrs.get("unit_system", "imperial") == "SI":      # back to the report's units
-
         drf_mode = (yaml.safe_load(attrs["config"]).get("design") or {}).get("drf_mode", "attitude_hold")
         f, _ = state_factors(drf_mode, "SI")
         inertia, bias = inertia / FT_LBF_IN_NM, bias / FT_LBF_IN_NM

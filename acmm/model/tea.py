@@ -554,11 +554,9 @@ def solve_tea_near(inertia: np.ndarray, n: float, bias: np.ndarray, theta_guess:
     theta = _root(theta_guess, inertia, n, bias, max_step=0.05)
     if theta is None or np.max(np.abs(theta - theta_guess)) > np.radians(5.0):
         return solve_tea(inertia, n, bias, expected=expected)
-    if expected is not None and np.max(np.abs(theta - expected)) > 1e-6:
-        at = _at_expected(inertia, n, bias, expected)
-        if at is not None:
-            return at
-    return _make_tea(theta, inertia, n, bias)
+    far = expected is not None and np.max(np.abs(theta - expected)) > 1e-6
+    at = _at_expected(inertia, n, bias, expected) if far else None
+    return at if at is not None else _make_tea(theta, inertia, n, bias)
 
 
 def _make_tea(theta, inertia, n, bias) -> TEA:

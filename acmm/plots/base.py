@@ -116,10 +116,8 @@ def bake_texts(fig, texts) -> None:
             t.set_visible(False)
     rgba = np.asarray(renderer.buffer_rgba())
     ink = rgba[..., 3] > 0
-    tiles = []
-    for r0, r1 in _runs(ink.any(axis=1), 0):
-        for c0, c1 in _runs(ink[r0:r1].any(axis=0), 8):
-            tiles.append((c0, h - r1, rgba[r0:r1, c0:c1][::-1].copy()))   # rows bottom first
+    tiles = [(c0, h - r1, rgba[r0:r1, c0:c1][::-1].copy())             # rows bottom first
+             for r0, r1 in _runs(ink.any(axis=1), 0) for c0, c1 in _runs(ink[r0:r1].any(axis=0), 8)]
     fig.add_artist(_tiles_artist(tiles, texts, (w, h, fig.dpi)))
 
 
@@ -326,14 +324,11 @@ def data_limits(*arrays, margin: float = 0.05):
     tuple of float or None
         (lo, hi) in the units of the data; None when no value is finite.
     """
-    lo, hi = np.inf, -np.inf
-    for a in arrays:
-        a = np.asarray(a, dtype=float)
-        a = a[np.isfinite(a)]
-        if a.size:
-            lo, hi = min(lo, float(a.min())), max(hi, float(a.max()))
-    if lo > hi:
+    a = np.concatenate([np.empty(0), *(np.asarray(x, dtype=float).ravel() for x in arrays)])
+    a = a[np.isfinite(a)]
+    if a.size == 0:
         return None
+    lo, hi = float(a.min()), float(a.max())
     pad = (hi - lo) * margin
     if pad <= 1e-12 * max(abs(lo), abs(hi)):         # one value: ±5 % of it (or ±0.05 about 0)
         pad = 0.05 * abs(lo) if lo else 0.05

@@ -200,16 +200,13 @@ class ConfigKinds(NamedTuple):
         list of str
             Sorted names without ``.yaml``; empty when the folder cannot be read.
         """
-        out = []
         try:
-            for f in sorted(resources.files(self.package).iterdir(), key=lambda p: p.name):
-                if f.name.endswith(".yaml"):
-                    top = re.findall(r"^([A-Za-z_]\w*)\s*:", f.read_text(encoding="utf-8"), flags=re.M)
-                    if self.kind_of(dict.fromkeys(top)) in wanted:
-                        out.append(f.name[:-5])
+            files = sorted(resources.files(self.package).iterdir(), key=lambda p: p.name)
+            tops = {f.name[:-5]: re.findall(r"^([A-Za-z_]\w*)\s*:", f.read_text(encoding="utf-8"), flags=re.M)
+                    for f in files if f.name.endswith(".yaml")}
         except (OSError, ModuleNotFoundError):  # pragma: no cover (a broken installation)
             return []
-        return out
+        return [name for name, top in tops.items() if self.kind_of(dict.fromkeys(top)) in wanted]
 
 
 def _write_epilog(formatter, examples=(), configs: ConfigKinds | None = None, kinds: tuple = (),
