@@ -15,7 +15,7 @@ from acmm.model import linearize as lin
 from acmm.design import sector_lqr
 from acmm.design.disk_margin import disk_alpha_batch, disk_gain_phase, disk_parts
 from acmm.design.schedule import PointDesign
-from acmm.design.schedule_points import PointSpec, tea_spaced_blend
+from acmm.design.schedule_points import tea_spaced_blend
 from acmm.design.settings import DesignSettings
 from acmm.model.tea import solve_tea, solve_tea_near
 
@@ -108,10 +108,7 @@ def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> P
     blended = sorted((p.spec for p in points if np.isfinite(p.spec.s)), key=lambda p: p.s)
     if len(blended) < 2:
         return None
-    start, end = blended[0], blended[-1]
-    start = PointSpec(start.name, start.inertia, start.bias, 0.0, expected=start.expected)
-    end = PointSpec(end.name, end.inertia, end.bias, 1.0, expected=end.expected)
-    track = tea_spaced_blend(start, end, n_check, n)
+    track = tea_spaced_blend(blended[0], blended[-1], n_check, n)
     teas = [solve_tea(sp.inertia, n, sp.bias, expected=sp.expected) if sp.theta_guess is None
             else solve_tea_near(sp.inertia, n, sp.bias, sp.theta_guess, expected=sp.expected) for sp in track]
     models = [lin.design_point(sp.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)

@@ -148,9 +148,7 @@ def _continue_blend(start: PointSpec, end: PointSpec, n: float, grid):
 def point_specs(cfg) -> list[PointSpec]:
     """Design points of a config: the blend start → ``schedule.to`` plus ``schedule.points``.
 
-    Without a ``schedule`` section, the config's own configuration is the only point.  This is
-    where the config's inertias and biases become :class:`PointSpec` s (with
-    :func:`acmm.design.settings.design_settings`, the one reading of the config on the design path).
+    Without a ``schedule`` section, the config's own configuration is the only point.
 
     Parameters
     ----------
@@ -265,13 +263,10 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
     blend = [(sp, np.asarray(th, float)) for sp, th in zip(specs, thetas) if np.isfinite(sp.s)]
     if len(blend) < 2:
         return None
-    first, last = blend[0][0], blend[-1][0]
-    start = PointSpec(first.name, first.inertia, first.bias, 0.0, expected=first.expected)
-    end = PointSpec(last.name, last.inertia, last.bias, 1.0, expected=last.expected)
     grid = np.linspace(0.0, 1.0, N_TRACK)
     track = []
     with suppress(NoEquilibriumError, ConvergenceError):     # where the branch folds, the points before it are checked
-        for t in _continue_blend(start, end, n, grid):
+        for t in _continue_blend(blend[0][0], blend[-1][0], n, grid):
             track.append(t)
     track = np.array(track).reshape(-1, 3)
     reach = grid[len(track) - 1] if len(track) else -1.0       # the last s the branch reaches
