@@ -130,17 +130,13 @@ def design_schedule(specs: list, s: DesignSettings, sched: ScheduleSettings | No
 
 
 def _refine(points: list, s: DesignSettings, sched: ScheduleSettings, path, map_points, progress):
-    """Table nodes added where the scheduled loop leaves the sector along ``path``.
+    """Table nodes added where the scheduled loop leaves the sector along ``path`` (a table is
+    linear in θ2* between nodes that are each in the sector, the loop between them need not be).
 
-    A table schedule interpolates K linearly in θ2* between its nodes; a loop that every node
-    keeps in the sector can leave it between them.  Each round checks the table at every TEA of
-    the path (margin ≥ ``sched.refine_margin``), takes every interval between neighbouring
-    blend nodes that holds a failing TEA, designs a node at the middle of its blend parameter s
-    (TEA from the neighbours' mean by Newton, the same design route), and refits; it stops when
-    every TEA has the margin, when ``sched.refine_points`` nodes were added (the intervals with
-    the worst margin first) or when no failing interval can be bisected (one end off the blend).
-    The new nodes are gains of the schedule, not levels of the stair-case (``PointSpec.level``);
-    they are returned among the blend's points in the order of s.
+    Each round designs a node at the middle s of every blend interval holding a path TEA below
+    ``sched.refine_margin`` (worst first, TEA from the neighbours' mean), until none fails,
+    ``sched.refine_points`` were added or no failing interval lies on the blend.  The nodes are
+    gains, not levels (``PointSpec.level``), returned among the blend's points in the order of s.
     """
     n = s.orbit_rate
     start = next(p.spec for p in points if p.spec.s == 0.0)

@@ -59,7 +59,7 @@ def _mu_upper(M: np.ndarray, iters: int = 25, floor=None) -> np.ndarray:
     return best
 
 
-def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None, *, refine: int = 6):
+def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None):
     """Balanced multiloop disk margin at the plant input of ẋ = Ax + Bu, u = −Kx.
 
     Loop broken at u: L(s) = K(sI − A)⁻¹B, S = (I + L)⁻¹ = I − K(sI − A + BK)⁻¹B.  With
@@ -87,8 +87,6 @@ def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None, *, refine: in
         each state.
     omega_n : array or None
         Frequencies in units of n; default :data:`DISK_OMEGA_N` (0.01n … 1000n, 121 points).
-    refine : int
-        Refinement steps of the branch and bound (:func:`disk_alpha_batch`).
 
     Returns
     -------
@@ -100,59 +98,63 @@ def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None, *, refine: in
     if scale is not None:
         d = np.asarray(scale, dtype=float)
         A, B, K = A / d[:, None] * d[None, :], B / d[:, None], K * d[None, :]
-    alpha = float(disk_alpha_batch([disk_parts(A, B, K, n, omega_n)], refine)[0])
+    alpha = float(disk_alpha_batch(disk_parts(A[None], B[None], K[None], n, omega_n))[0])
     return (alpha,) + disk_gain_phase(alpha)
 
 
-def disk_parts(A, B, K, n, omega_n=None, eig=None):
+def disk_parts(A, B, K, n, omega_n=None, eig=None) -> list:
     """S(jω) − I/2 on the frequency grid (stacked) and the cheap upper bound √(‖M‖₁‖M‖∞) of
-    σ̄ ≥ μ at each frequency; None for an unstable closed loop.  Scaled inputs.
+    σ̄ ≥ μ at each frequency, for a stack of loops; None for an unstable closed loop.  Scaled inputs.
 
     Parameters
     ----------
     A, B : ndarray
-        Plant matrices (n×n, n×m), scaled states (units of the scaled model).
+        Plant matrices (P×n×n, P×n×m), scaled states (units of the scaled model).
     K : ndarray
-        Gain (m×n), in the units of the scaled model.
+        Gains (P×m×n), in the units of the scaled model.
     n : float
         Orbit rate, rad/s (the grid is in units of it).
     omega_n : array_like, optional
         Frequency grid in units of ``n`` (default :data:`DISK_OMEGA_N`).
     eig : tuple, optional
-        The eigendecomposition (λ, V, V⁻¹ or None, cond V) of A − BK when already computed.
+        The eigendecompositions (λ, V) of every A − BK when already computed.
 
     Returns
     -------
-    tuple or None
-        (M, bound): M(jω) stacked over the grid (dimensionless) and the upper bound per frequency
-        (dimensionless); None when the closed loop is unstable.
+    list
+        Per loop (M, bound): M(jω) stacked over the grid (dimensionless) and the upper bound per
+        frequency (dimensionless); None when the closed loop is unstable.
     """
     Acl = A - B @ K
-    if eig is None:
-        lam, V = np.linalg.eig(Acl)
-        W, ok = None, False
-        if np.max(lam.real) < 0:
-            try:
-                W = np.linalg.inv(V)
-                ok = np.linalg.cond(V) < 1e8
-            except np.linalg.LinAlgError:
-                ok = False
-    else:
-        lam, V, W, condV = eig
-        ok = W is not None and condV < 1e8
-    if np.max(lam.real) >= 0:
-        return None
+    lam, V = np.linalg.eig(Acl) if eig is None else eig
+    condV = np.linalg.cond(V)
+    try:
+        W = np.linalg.inv(V)
+    except np.linalg.LinAlgError:
+        W = None
     w = n * (DISK_OMEGA_N if omega_n is None else np.asarray(omega_n, dtype=float))
-    m = B.shape[1]
-    if ok:
-        KV, WB = K @ V, W @ B
-        S = np.eye(m)[None] - np.einsum("ak,fk,kb->fab", KV, 1.0 / (1j * w[:, None] - lam[None, :]), WB)
-    else:
-        eye = np.eye(A.shape[0])
-        S = np.array([np.eye(m) - K @ np.linalg.solve(1j * wk * eye - Acl, B) for wk in w])
-    M = S - 0.5 * np.eye(m)[None]
-    aM = np.abs(M)
-    return M, np.sqrt(aM.sum(axis=1).max(axis=1) * aM.sum(axis=2).max(axis=1))
+    m = B.shape[-1]
+    stable = np.max(lam.real, axis=-1) < 0
+    parts = [None] * len(A)
+    # every stable, well-conditioned loop in one modal evaluation, the others by a solve per frequency
+    fast = stable & (condV < 1e8) & (W is not None)
+    if np.any(fast):
+        idx = np.flatnonzero(fast)
+        KV = K[idx] @ V[idx]                                        # (Q, M, N)
+        WB = W[idx] @ B[idx]                                        # (Q, N, M)
+        res = 1.0 / (1j * w[None, :, None] - lam[idx][:, None, :])  # (Q, F, N)
+        M_all = (0.5 * np.eye(m))[None, None] - np.einsum("qak,qfk,qkb->qfab", KV, res, WB, optimize=True)
+        aM = np.abs(M_all)
+        cheap = np.sqrt(aM.sum(axis=2).max(axis=2) * aM.sum(axis=3).max(axis=2))
+        for r, j in enumerate(idx):
+            parts[j] = (M_all[r], cheap[r])
+    eye = np.eye(A.shape[-1])
+    for j in np.flatnonzero(stable & ~fast):
+        S = np.array([np.eye(m) - K[j] @ np.linalg.solve(1j * wk * eye - Acl[j], B[j]) for wk in w])
+        M = S - 0.5 * np.eye(m)[None]
+        aM = np.abs(M)
+        parts[j] = (M, np.sqrt(aM.sum(axis=1).max(axis=1) * aM.sum(axis=2).max(axis=1)))
+    return parts
 
 
 def disk_alpha_batch(parts, refine: int = 6, rounds: int = 6) -> np.ndarray:

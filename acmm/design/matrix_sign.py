@@ -60,9 +60,7 @@ def _accelerated(S, scaling, n):
             mu = np.sqrt(np.linalg.norm(np.linalg.inv(S)) / np.linalg.norm(S))
         except np.linalg.LinAlgError:
             mu = 1.0
-    if np.isfinite(mu) and mu > 0:
-        S = mu * S
-    return S
+    return mu * S if np.isfinite(mu) and mu > 0 else S
 
 
 def _step(S, eye, form, evaluation, k):

@@ -13,9 +13,9 @@ import numpy as np
 
 from acmm.model import linearize as lin
 from acmm.design import sector_lqr
-from acmm.design.disk_margin import DISK_OMEGA_N, disk_alpha_batch, disk_gain_phase, disk_parts
+from acmm.design.disk_margin import disk_alpha_batch, disk_gain_phase, disk_parts
 from acmm.design.schedule import PointDesign
-from acmm.design.schedule_points import PointSpec, tea_spaced_blend
+from acmm.design.schedule_points import tea_spaced_blend
 from acmm.design.settings import DesignSettings
 from acmm.model.tea import solve_tea, solve_tea_near
 
@@ -108,10 +108,7 @@ def path_models(points: list[PointDesign], s: DesignSettings, n_check: int) -> P
     blended = sorted((p.spec for p in points if np.isfinite(p.spec.s)), key=lambda p: p.s)
     if len(blended) < 2:
         return None
-    start, end = blended[0], blended[-1]
-    start = PointSpec(start.name, start.inertia, start.bias, 0.0, expected=start.expected)
-    end = PointSpec(end.name, end.inertia, end.bias, 1.0, expected=end.expected)
-    track = tea_spaced_blend(start, end, n_check, n)
+    track = tea_spaced_blend(blended[0], blended[-1], n_check, n)
     teas = [solve_tea(sp.inertia, n, sp.bias, expected=sp.expected) if sp.theta_guess is None
             else solve_tea_near(sp.inertia, n, sp.bias, sp.theta_guess, expected=sp.expected) for sp in track]
     models = [lin.design_point(sp.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
@@ -147,46 +144,19 @@ def check_path(gain_at, path: PathModels, n: float, sigma: float = 0.5,
         The closed-loop measures at every TEA of the path.
     """
     P = path.theta2.size
-    mr, mg, dm, dg, dp = (np.full(P, np.nan) for _ in range(5))
-    poles = []
+    dm, dg, dp = (np.full(P, np.nan) for _ in range(3))
     d = path.scales
     Ks = np.array([gain_at(path.theta2[j]) for j in range(P)]) * d[None, None, :]
     As = path.A / d[None, :, None] * d[None, None, :]
     Bs = path.B / d[None, :, None]
     # one batched eigendecomposition of every closed loop, reused by the disk margin
     lam_all, V_all = np.linalg.eig(As - Bs @ Ks)
-    for j, lam in enumerate(lam_all):
-        lam = lam[np.lexsort((lam.imag, lam.real))]
-        poles.append(lam)
-        mr[j] = np.max(lam.real) / n
-        mg[j] = np.min(sector_lqr.sector_margin(lam, n, sigma, half_angle_deg))
+    poles = np.array([lam[np.lexsort((lam.imag, lam.real))] for lam in lam_all])
+    mr = np.max(poles.real, axis=1) / n
+    mg = np.min(sector_lqr.sector_margin(poles, n, sigma, half_angle_deg), axis=1)
     if disk:
-        condV = np.linalg.cond(V_all)
-        try:
-            W_all = np.linalg.inv(V_all)
-        except np.linalg.LinAlgError:
-            W_all = None
-        # S(jω) − I/2 of every stable, well-conditioned loop in one modal evaluation
-        # (as in disk_parts); the others one by one
-        fast = (np.max(lam_all.real, axis=1) < 0) & (condV < 1e8) & (W_all is not None)
-        parts = [None] * P
-        if np.any(fast):
-            idx = np.flatnonzero(fast)
-            KV = Ks[idx] @ V_all[idx]                                   # (Q, M, N)
-            WB = W_all[idx] @ Bs[idx]                                   # (Q, N, M)
-            w = n * DISK_OMEGA_N
-            res = 1.0 / (1j * w[None, :, None] - lam_all[idx][:, None, :])   # (Q, F, N)
-            M_all = (0.5 * np.eye(Bs.shape[2]))[None, None] - np.einsum("qak,qfk,qkb->qfab", KV, res, WB,
-                                                                         optimize=True)
-            aM = np.abs(M_all)
-            cheap = np.sqrt(aM.sum(axis=2).max(axis=2) * aM.sum(axis=3).max(axis=2))
-            for r, j in enumerate(idx):
-                parts[j] = (M_all[r], cheap[r])
-        for j in np.flatnonzero(~fast):
-            eig = (lam_all[j], V_all[j], None if W_all is None else W_all[j], condV[j])
-            parts[j] = disk_parts(As[j], Bs[j], Ks[j], n, eig=eig)
         # batched branch and bound over every TEA's frequencies
-        dm[:] = disk_alpha_batch(parts)
+        dm[:] = disk_alpha_batch(disk_parts(As, Bs, Ks, n, eig=(lam_all, V_all)))
         for j in range(P):
             dg[j], dp[j] = disk_gain_phase(dm[j]) if dm[j] > 0 else (0.0, 0.0)
-    return PathCheck(path.theta2.copy(), path.s.copy(), mr, mg, dm, dg, dp, np.array(poles))
+    return PathCheck(path.theta2.copy(), path.s.copy(), mr, mg, dm, dg, dp, poles)

@@ -260,15 +260,13 @@ def hamiltonian_check(A, B, Q, R, *, method: str = "") -> float:
     ConvergenceError
         An eigenvalue of H on, or within rounding of, the imaginary axis.
     """
-    n = A.shape[0]
-    H = np.block([[A, -_gram(B, R)], [-Q, -A.T]])
-    hn = float(np.linalg.norm(H))
-    if n == 0 or hn == 0.0:
-        if n:
-            _refuse(f"Riccati solve (method={method!r}): no stabilizing solution "
-                           f"(Hamiltonian is zero: every eigenvalue on the imaginary axis)",
-                           method, float("nan"), other_method_hint(method))
+    if A.shape[0] == 0:
         return float("inf")
+    H = np.block([[A, -_gram(B, R)], [-Q, -A.T]])
+    if np.linalg.norm(H) == 0.0:
+        _refuse(f"Riccati solve (method={method!r}): no stabilizing solution "
+                f"(Hamiltonian is zero: every eigenvalue on the imaginary axis)",
+                method, float("nan"), other_method_hint(method))
     Hb, _ = sla.matrix_balance(H, permute=True)
     hn = float(np.linalg.norm(Hb))
     w, vl, vr = sla.eig(Hb, left=True, right=True)
@@ -509,11 +507,10 @@ def _line_search(Res: np.ndarray, V: np.ndarray) -> float:
     return min(cand, key=f)
 
 
-def _care_sign(A, B, Q, R, *, scaling="det", evaluation="partial_fraction", sign_tol=1e-13,
-               max_iter=60):
+def _care_sign(A, B, Q, R, scaling, evaluation, max_iter):
     n = A.shape[0]
     H = np.block([[A, -_gram(B, R)], [-Q, -A.T]])
-    sr = matrix_sign(H, scaling=scaling, evaluation=evaluation, tol=sign_tol, max_iter=max_iter)
+    sr = matrix_sign(H, scaling=scaling, evaluation=evaluation, max_iter=max_iter)
     # range(I − sign H) is the stable invariant subspace span[I; P] of H
     Z, _, _ = sla.qr(np.eye(2 * n) - sr.S, pivoting=True)
     U1, U2 = Z[:n, :n], Z[n:, :n]
@@ -580,8 +577,7 @@ def solve_unverified(A, B, Q, R, *, method: str = "scipy", sign_scaling: str = "
         if method == "scipy":
             P = sla.solve_continuous_are(A, B, Q, R)
         elif method == "sign":
-            P, iterations = _care_sign(A, B, Q, R, scaling=sign_scaling,
-                                       evaluation=sign_evaluation, max_iter=max_iter)
+            P, iterations = _care_sign(A, B, Q, R, sign_scaling, sign_evaluation, max_iter)
         else:
             P = _care_slycot(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError) as exc:
@@ -590,9 +586,7 @@ def solve_unverified(A, B, Q, R, *, method: str = "scipy", sign_scaling: str = "
     return P, iterations
 
 
-def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e-12,
-               sign_scaling: str = "det", sign_evaluation: str = "partial_fraction",
-               max_iter: int = 60) -> CareResult:
+def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e-12) -> CareResult:
     """Stabilizing solution of A'P + PA − PBR⁻¹B'P + Q = 0 (eq 5.4), verified.
 
     Parameters
@@ -612,12 +606,6 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
     tol : float
         Largest acceptable backward error ω of the refined solution (:func:`care_backward_error`),
         dimensionless.  ``np.inf`` disables the refusal (for comparisons).
-    sign_scaling : {"det", "norm", None}
-        Acceleration of the sign iteration (``method="sign"`` only).
-    sign_evaluation : {"partial_fraction", "polynomial"}
-        Evaluation of eq 5.6 (:func:`matrix_sign`; ``method="sign"`` only).
-    max_iter : int
-        Iteration limit of the sign iteration.
 
     Returns
     -------
@@ -649,8 +637,7 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
 
     gap = hamiltonian_check(As, Bs, Qs, R, method=method)
     t0 = time.perf_counter()
-    Ps, iterations = solve_unverified(As, Bs, Qs, R, method=method, sign_scaling=sign_scaling,
-                                      sign_evaluation=sign_evaluation, max_iter=max_iter)
+    Ps, iterations = solve_unverified(As, Bs, Qs, R, method=method)
     seconds = time.perf_counter() - t0
     Ps = 0.5 * (Ps + Ps.T)
     if not np.all(np.isfinite(Ps)):
@@ -671,12 +658,8 @@ def solve_care(A, B, Q, R, *, method: str = "scipy", scale=None, tol: float = 1e
                 f"(closed-loop eigenvalue with real part {worst:.3e}; relative residual "
                 f"{res:.3e})", method, res, residual_hint(method))
     cond = care_condition(As, Bs, Qs, R, Ps)
-    if d is not None:
-        P = Ps / d[:, None] / d[None, :]
-        K = Ks / d[None, :]
-    else:
-        P, K = Ps, Ks
-    return CareResult(P=P, K=K, residual=res, method=method, iterations=iterations,
-                      scale=d, seconds=seconds, condition=cond,
+    d1 = np.ones(n) if d is None else d                 # (x/1.0 is exact)
+    return CareResult(P=Ps / d1[:, None] / d1[None, :], K=Ks / d1[None, :], residual=res, method=method,
+                      iterations=iterations, scale=d, seconds=seconds, condition=cond,
                       ill_conditioned=bool(not cond <= ILL_CONDITIONED), hamiltonian_gap=gap,
                       backward_error=omega, refinement_steps=steps)

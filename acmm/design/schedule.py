@@ -60,10 +60,6 @@ class ScheduleFit:
         Pitch TEA of each design point, rad.
     gains : (P, 3, 24) array
         LQR gains at the design points, units of K.
-    rms_residual : (3, 24) array
-        RMS residual of the polynomial per element (units of K).
-    rel_residual : (3, 24) array
-        RMS residual relative to max |K_ij| over the points, dimensionless.
     form : str
         ``"polynomial"`` or ``"table"``: what :meth:`gain` evaluates.
     method : str
@@ -71,16 +67,30 @@ class ScheduleFit:
     refit_info : dict
         Diagnostics of the refit on the path
         (:func:`acmm.design.schedule_shifted_lqr.refit_shifted_lqr`).
+    rms_residual : (3, 24) array
+        RMS residual of the polynomial at the design points per element (units of K), computed
+        from ``coef``, ``variable`` and ``gains``.
+    rel_residual : (3, 24) array
+        RMS residual relative to max |K_ij| over the points, dimensionless.
     """
 
     coef: np.ndarray
     variable: np.ndarray
     gains: np.ndarray
-    rms_residual: np.ndarray
-    rel_residual: np.ndarray
     form: str = "polynomial"
     method: str = "least_squares"
     refit_info: dict = field(default_factory=dict)
+    rms_residual: np.ndarray = field(init=False)
+    rel_residual: np.ndarray = field(init=False)
+
+    def __post_init__(self):
+        # the polynomial's residuals at the design points (a table's polynomial too, for the record)
+        flat = self.gains.reshape(self.variable.size, -1)
+        vander = self.variable[:, None] ** np.arange(self.order + 1)[None, :]
+        resid = flat - vander @ self.coef.reshape(self.order + 1, -1)
+        self.rms_residual = np.sqrt(np.mean(resid ** 2, axis=0)).reshape(self.gains.shape[1:])
+        peak = np.max(np.abs(flat), axis=0).reshape(self.gains.shape[1:])
+        self.rel_residual = np.divide(self.rms_residual, peak, out=np.zeros_like(peak), where=peak > 0)
 
     @property
     def order(self) -> int:
@@ -226,8 +236,7 @@ def sector_design(A, B, scales, s: DesignSettings):
     return s.method.design(A, B, scales, s)
 
 
-def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: str = "polynomial",
-                 weights=None) -> ScheduleFit:
+def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: str = "polynomial") -> ScheduleFit:
     """Least-squares polynomial fit of every gain element versus θ2* (ch. 5.3).
 
     Parameters
@@ -241,8 +250,6 @@ def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: st
     form : {"polynomial", "table"}
         Which form :meth:`ScheduleFit.gain` evaluates; the polynomial and its residuals are
         computed in both cases, for the record.
-    weights : (P,) array or None
-        Least-squares weight of each design point (default 1), dimensionless.
 
     Returns
     -------
@@ -254,14 +261,8 @@ def fit_schedule(theta2: np.ndarray, gains: np.ndarray, order: int = 2, form: st
     p = theta2.size
     order = min(order, p - 1)
     vander = theta2[:, None] ** np.arange(order + 1)[None, :]
-    flat = gains.reshape(p, -1)
-    w = np.ones(p) if weights is None else np.sqrt(np.asarray(weights, dtype=float))
-    coef, *_ = np.linalg.lstsq(vander * w[:, None], flat * w[:, None], rcond=None)
-    resid = flat - vander @ coef
-    rms = np.sqrt(np.mean(resid ** 2, axis=0)).reshape(3, -1)
-    peak = np.max(np.abs(flat), axis=0).reshape(3, -1)
-    rel = np.divide(rms, peak, out=np.zeros_like(rms), where=peak > 0)
-    return ScheduleFit(coef.reshape(order + 1, 3, -1), theta2, gains, rms, rel, form)
+    coef, *_ = np.linalg.lstsq(vander, gains.reshape(p, -1), rcond=None)
+    return ScheduleFit(coef.reshape(order + 1, 3, -1), theta2, gains, form)
 
 
 def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSettings) -> ScheduleCheck:

@@ -17,6 +17,10 @@ from acmm.model.tea import NoEquilibriumError, resolve_bias, solve_tea, solve_te
 from acmm_qpp.errors import ConvergenceError
 from acmm.design.settings import schedule_settings
 
+#: Values of s, evenly spaced, on which the TEA is continued along a blend (the TEA spacing, the path
+#: check and the branch check track the same blend).
+N_TRACK = 81
+
 
 @dataclass(frozen=True)
 class PointSpec:
@@ -63,11 +67,10 @@ def _blend_points(start: PointSpec, end: PointSpec, s_pts, guesses=None) -> list
             for k, s in enumerate(s_pts)]
 
 
-def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
-                     n_track: int = 81) -> list[PointSpec]:
+def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float) -> list[PointSpec]:
     """``n_points`` blend configurations whose pitch TEAs are evenly spaced.
 
-    The TEA is tracked along the blend by Newton continuation on ``n_track`` values of s (the
+    The TEA is tracked along the blend by Newton continuation on :data:`N_TRACK` values of s (the
     physical branch, starting from the start configuration's TEA), then s is interpolated at
     evenly spaced θ2*.  Falls back to evenly spaced s when θ2*(s) is not monotonic.
 
@@ -79,15 +82,13 @@ def tea_spaced_blend(start: PointSpec, end: PointSpec, n_points: int, n: float,
         Number of points including both ends.
     n : float
         Orbital rate, rad/s.
-    n_track : int
-        Number of s values on which the TEA is tracked.
 
     Returns
     -------
     list of PointSpec
         The configurations, with their tracked TEA as ``theta_guess``.
     """
-    s_grid = np.linspace(0.0, 1.0, n_track)
+    s_grid = np.linspace(0.0, 1.0, N_TRACK)
     # (the design points and the path check of one design track the same blend: ~35 ms each, so it
     # is not remembered between them)
     thetas = np.array(list(_continue_blend(start, end, n, s_grid)))
@@ -147,9 +148,7 @@ def _continue_blend(start: PointSpec, end: PointSpec, n: float, grid):
 def point_specs(cfg) -> list[PointSpec]:
     """Design points of a config: the blend start → ``schedule.to`` plus ``schedule.points``.
 
-    Without a ``schedule`` section, the config's own configuration is the only point.  This is
-    where the config's inertias and biases become :class:`PointSpec` s (with
-    :func:`acmm.design.settings.design_settings`, the one reading of the config on the design path).
+    Without a ``schedule`` section, the config's own configuration is the only point.
 
     Parameters
     ----------
@@ -189,8 +188,8 @@ def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSp
         The end of the blend (s = 1), or None.
     extras : list of PointSpec
         Named extra points.
-    sched : ScheduleSettings or None
-        Schedule settings; None: ``start`` only.
+    sched : ScheduleSettings
+        Schedule settings.
     n : float
         Orbital rate, rad/s.
 
@@ -199,8 +198,6 @@ def schedule_specs(start: PointSpec, end: PointSpec | None, extras: list[PointSp
     list of PointSpec
         The design points.
     """
-    if sched is None:
-        return [start]
     specs = [start]
     if end is not None:
         if sched.spacing == "tea":
@@ -237,16 +234,15 @@ class BranchJump:
     asked: bool
 
 
-def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6,
-                     n_track: int = 81) -> BranchJump | None:
+def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6) -> BranchJump | None:
     """The first blend point whose TEA lies off the branch continued from the blend's start.
 
     The points of a gain schedule (ch. 5.3) should lie on one branch of equilibria
     (eqs 4.1–4.3): the station moves along it as it is assembled.  A point solved on its own
     (blend spacing: each from LVLH; an end that asks for its TEA) can land on another branch
     where the blend crosses a fold; the points then jump and the schedule is fitted across the
-    jump.  Here the branch is continued from the start over ``n_track`` evenly spaced s (the
-    track the TEA spacing and the path check use) and Newton-solved at each point's s.
+    jump.  Here the branch is continued from the start over the :data:`N_TRACK` values of s of
+    the TEA spacing and Newton-solved at each point's s.
 
     Parameters
     ----------
@@ -258,8 +254,6 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
         Orbital rate, rad/s.
     tol : float, optional
         Largest angle (rad) by which a point may differ from the branch.
-    n_track : int, optional
-        Number of s values of the continuation.
 
     Returns
     -------
@@ -269,13 +263,10 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
     blend = [(sp, np.asarray(th, float)) for sp, th in zip(specs, thetas) if np.isfinite(sp.s)]
     if len(blend) < 2:
         return None
-    first, last = blend[0][0], blend[-1][0]
-    start = PointSpec(first.name, first.inertia, first.bias, 0.0, expected=first.expected)
-    end = PointSpec(last.name, last.inertia, last.bias, 1.0, expected=last.expected)
-    grid = np.linspace(0.0, 1.0, n_track)
+    grid = np.linspace(0.0, 1.0, N_TRACK)
     track = []
     with suppress(NoEquilibriumError, ConvergenceError):     # where the branch folds, the points before it are checked
-        for t in _continue_blend(start, end, n, grid):
+        for t in _continue_blend(blend[0][0], blend[-1][0], n, grid):
             track.append(t)
     track = np.array(track).reshape(-1, 3)
     reach = grid[len(track) - 1] if len(track) else -1.0       # the last s the branch reaches
@@ -283,10 +274,8 @@ def off_branch_point(specs: list[PointSpec], thetas, n: float, tol: float = 1e-6
         branch = None
         if sp.s <= reach + 1e-12:
             guess = np.array([np.interp(sp.s, grid[:len(track)], track[:, i]) for i in range(3)])
-            try:
+            with suppress(NoEquilibriumError, ConvergenceError):
                 branch = solve_tea_near(sp.inertia, n, sp.bias, guess).theta
-            except (NoEquilibriumError, ConvergenceError):
-                branch = None
         if branch is None or np.max(np.abs((th - branch + np.pi) % (2 * np.pi) - np.pi)) > tol:
             return BranchJump(sp.name, float(sp.s), th, branch, sp.expected is not None)
     return None

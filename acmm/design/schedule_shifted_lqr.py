@@ -108,8 +108,7 @@ def _refit_start(fit: ScheduleFit, path: PathModels, every: int) -> dict:
     th = path.theta2[idx]
     c0, h0 = 0.5 * (th.max() + th.min()), 0.5 * (th.max() - th.min())
     d = path.scales
-    As = [path.A[j] / d[:, None] * d[None, :] for j in idx]
-    Bs = [path.B[j] / d[:, None] for j in idx]
+    As, Bs = path.A[idx] / d[:, None] * d[None, :], path.B[idx] / d[:, None]
     order = fit.order
     u = (th - c0) / h0
     up = u[:, None] ** np.arange(order + 1)[None, :]                     # (T, order+1)
@@ -159,7 +158,7 @@ class _ShiftedCost:
 
     def __init__(self, st: dict, n: float, Q: np.ndarray, R: np.ndarray, weight: float):
         self.st, self.n, self.Q, self.R, self.weight = st, n, Q, R, weight
-        self.As, self.Bs = np.array(st["As"]), np.array(st["Bs"])
+        self.As, self.Bs = st["As"], st["Bs"]
         self.eye = np.eye(self.As.shape[1])
 
     def gains(self, x: np.ndarray) -> np.ndarray:
@@ -318,7 +317,7 @@ def refit_shifted_lqr(fit: ScheduleFit, path: PathModels, n: float, Q: np.ndarra
         raise ValueError("refit_shifted_lqr refines a polynomial schedule")
     every = max(1, (path.theta2.size - 1) // max(1, n_tea - 1))
     st = _refit_start(fit, path, every)
-    Qi = np.eye(st["As"][0].shape[0]) + Q
+    Qi = np.eye(st["As"].shape[1]) + Q
     # the homotopy's stages minimize the barrier alone (the weight would hold them near the
     # least-squares fit, which is far outside the region); the last problem adds it
     cost, stage_cost = _ShiftedCost(st, n, Qi, R, weight), _ShiftedCost(st, n, Qi, R, 0.0)
@@ -360,8 +359,7 @@ def refit_shifted_lqr(fit: ScheduleFit, path: PathModels, n: float, Q: np.ndarra
 
 def _outcome(fit: ScheduleFit, st: dict, x: np.ndarray, w0: float, w1: float, stages: int, steps: int,
              converged: bool, accepted: bool, message: str, decay: float, cone_deg: float) -> ScheduleFit:
-    """The refitted schedule (or ``fit`` when not ``accepted``) with its ``refit_info`` and its residuals
-    against the design-point gains."""
+    """The refitted schedule (or ``fit`` when not ``accepted``) with its ``refit_info``."""
     info = {"iterations": int(steps), "homotopy_stages": int(stages), "converged": bool(converged),
             "decay": float(decay), "cone_deg": float(cone_deg),
             "message": message, "n_tea": len(st["idx"]), "max_real_before": float(w0),
@@ -370,11 +368,4 @@ def _outcome(fit: ScheduleFit, st: dict, x: np.ndarray, w0: float, w1: float, st
         return replace(fit, method="least_squares", refit_info=info)
     a = st["a0"] + x.reshape(st["shape"]) * st["sc"]
     coef = _power_basis(a, st["c0"], st["h0"]) / st["d"][None, None, :]    # powers of θ2*, units of K
-    order = fit.order
-    P = fit.variable.size
-    vander_th = fit.variable[:, None] ** np.arange(order + 1)[None, :]
-    resid = fit.gains.reshape(P, -1) - vander_th @ coef.reshape(order + 1, -1)
-    rms = np.sqrt(np.mean(resid ** 2, axis=0)).reshape(fit.gains.shape[1:])
-    peak = np.max(np.abs(fit.gains.reshape(P, -1)), axis=0).reshape(fit.gains.shape[1:])
-    rel = np.divide(rms, peak, out=np.zeros_like(rms), where=peak > 0)
-    return ScheduleFit(coef, fit.variable, fit.gains, rms, rel, fit.form, "shifted_lqr", info)
+    return ScheduleFit(coef, fit.variable, fit.gains, fit.form, "shifted_lqr", info)

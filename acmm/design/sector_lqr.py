@@ -370,40 +370,15 @@ class _SectorProblem:
         kappa = kappa[np.lexsort((lam_c.imag, lam_c.real))]
         e_norm, e_elem = sector_robustness(As, Bs, Ks, n, self.sigma, self.half_angle_deg)
         kcare = care_condition(Ash, Bs, Qs, R, Ps)
-        if d is not None:
-            K = Ks / d[None, :]
-            P = Ps / d[:, None] / d[None, :]
-            Q = Qs / d[:, None] / d[None, :]
-        else:
-            K, P, Q = Ks, Ps, Qs
-        K, R = K * self.e, R / self.e ** 2          # u = e·ũ: K = e·K̃, R = R̃ / e²
+        d1 = np.ones(nx) if d is None else d                # (x/1.0 is exact)
+        P, Q = Ps / d1[:, None] / d1[None, :], Qs / d1[:, None] / d1[None, :]
+        K, R = Ks / d1[None, :] * self.e, R / self.e ** 2    # u = e·ũ: K = e·K̃, R = R̃ / e²
         return SectorLQR(K=K, P=P, Q=Q, R=R, poles=poles, margin=margin, residual=res,
                          backward_error=omega, shift=alpha,
                          mirror_shifts=tuple(mirror_shifts), method=method,
                          riccati_method=self.riccati_method, scale=d, eig_condition=kappa,
                          robustness_radius=e_norm, robustness_radius_elementwise=e_elem,
                          riccati_condition=kcare, riccati_ill_conditioned=bool(not kcare <= ILL_CONDITIONED))
-
-
-def _problem(A, B, R, n, sigma, half_angle_deg, Q0, scale, method, riccati_method, residual_tol,
-             min_margin, input_scale: float = 1.0) -> _SectorProblem:
-    """The arguments of :func:`sector_lqr` as a :class:`_SectorProblem` (scaled, the input in
-    units of ``input_scale``, Q0 as a matrix, every pole checked movable)."""
-    A = np.asarray(A, dtype=float)
-    B = np.asarray(B, dtype=float)
-    nx, m = B.shape
-    R = as_R(R, m)
-    if Q0 is None:
-        Q0s = np.zeros((nx, nx))
-    else:
-        Q0s = np.asarray(Q0, dtype=float)
-        Q0s = float(Q0s) * np.eye(nx) if Q0s.ndim == 0 else 0.5 * (Q0s + Q0s.T)
-    d = None if scale is None else np.asarray(scale, dtype=float)
-    As, Bs = (A, B) if d is None else scale_problem(A, B, np.zeros((nx, nx)), d)[:2]
-    Bs, R = Bs * input_scale, R * input_scale ** 2
-    _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin)
-    return _SectorProblem(As, Bs, Q0s, R, d, n, sigma, half_angle_deg, min_margin, residual_tol, method,
-                          riccati_method, float(input_scale))
 
 
 def _sector_uniform(p: _SectorProblem, max_uniform_shift: float) -> SectorLQR:
@@ -466,7 +441,6 @@ def _mirror_group(p: _SectorProblem, Ps, Qs, lo, hi, line_spacing, target, mirro
     As, Bs, R, n, alpha = p.As, p.Bs, p.R, p.n, p.alpha
     nx = As.shape[0]
     phi = np.deg2rad(p.half_angle_deg)
-    Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
 
     def select(re, im, lo=lo, hi=hi):
         z = np.array([complex(re, im)])
@@ -476,8 +450,7 @@ def _mirror_group(p: _SectorProblem, Ps, Qs, lo, hi, line_spacing, target, mirro
         return bool(lo * (1 - 0.01) <= h <= hi * (1 + 0.01))
 
     for k in range(nx if line_spacing > 0 else 1):
-        if k:
-            Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
+        Acl = As - Bs @ np.linalg.solve(R, Bs.T @ Ps)
         T, Z, sdim = sla.schur(Acl.T, output="real", sort=select)
         if sdim == 0:
             break
@@ -595,8 +568,20 @@ def sector_lqr(A, B, R, n: float, *, sigma: float = 0.5, half_angle_deg: float =
         raise ValueError("need n > 0, sigma > 0, 0 < half_angle_deg < 90 and min_margin ≥ 0")
     if not (0 < input_scale < float("inf")):
         raise ValueError("need input_scale > 0")
-    p = _problem(A, B, R, n, sigma, half_angle_deg, Q0, scale, method, riccati_method, residual_tol,
-                 min_margin, input_scale)
+    A = np.asarray(A, dtype=float)
+    B = np.asarray(B, dtype=float)
+    nx, m = B.shape
+    if Q0 is None:
+        Q0s = np.zeros((nx, nx))
+    else:
+        Q0s = np.asarray(Q0, dtype=float)
+        Q0s = float(Q0s) * np.eye(nx) if Q0s.ndim == 0 else 0.5 * (Q0s + Q0s.T)
+    d = None if scale is None else np.asarray(scale, dtype=float)
+    As, Bs = (A, B) if d is None else scale_problem(A, B, np.zeros((nx, nx)), d)[:2]
+    Bs, R = Bs * input_scale, as_R(R, m) * input_scale ** 2
+    _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin)
+    p = _SectorProblem(As, Bs, Q0s, R, d, n, sigma, half_angle_deg, min_margin, residual_tol, method,
+                       riccati_method, float(input_scale))
     if method == "uniform":
         return _sector_uniform(p, max_uniform_shift)
     return _sector_shift(p, line_spacing)

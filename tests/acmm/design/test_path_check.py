@@ -15,6 +15,7 @@ def test_path_disk_margin_agrees_with_python_control(staircase_lqr):
 
     from acmm.design import schedule as sch
     from acmm.design import path_check as path_check_mod
+    from acmm.design.disk_margin import DISK_OMEGA_N
 
     if not hasattr(control, "disk_margins"):       # python-control < 0.10.2
         pytest.skip("this python-control has no disk_margins")
@@ -24,7 +25,7 @@ def test_path_disk_margin_agrees_with_python_control(staircase_lqr):
     for j in (0, pc.theta2.size // 2, pc.theta2.size - 1):
         K = staircase_lqr.fit.gain(pc.theta2[j]) * d[None, :]
         L = control.ss(path.A[j] / d[:, None] * d[None, :], path.B[j] / d[:, None], K, np.zeros((3, 3)))
-        dm, dgm, dpm = control.disk_margins(L, N * path_check_mod.DISK_OMEGA_N)
+        dm, dgm, dpm = control.disk_margins(L, N * DISK_OMEGA_N)
         assert pc.disk_margin[j] == pytest.approx(dm, rel=1e-3)
         assert pc.disk_gain_margin_db[j] == pytest.approx(dgm, rel=1e-3)
         assert pc.disk_phase_margin_deg[j] == pytest.approx(dpm, rel=1e-3)
