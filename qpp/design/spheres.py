@@ -209,24 +209,25 @@ def l2_to_peak_gain(An, B, C) -> float:
     return float(np.sqrt(max(np.max(np.linalg.eigvalsh(Cb @ Pg @ Cb.T)), 0.0)))
 
 
-def E_factor(a: float, T: float) -> float:
+def E_factor(a: float, T):
     """E = [(e^{2aT} − 1)/(2a)]^{1/2} (eq 10.44); √T in the limit a → 0.
 
     Parameters
     ----------
     a : float
         Exponential weighting, 1/s.
-    T : float
-        Horizon, s.
+    T : float or array
+        Horizon(s), s.
 
     Returns
     -------
-    float
-        E, in s^{1/2} (units: square root of seconds).
+    float or ndarray
+        E, in s^{1/2} (units: square root of seconds), one per horizon.
     """
-    if a * T < 1e-8:
-        return float(np.sqrt(T * (1 + a * T)))
-    return float(np.sqrt(np.expm1(2 * a * T) / (2 * a)))
+    aT = a * np.asarray(T, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        E = np.where(aT < 1e-8, np.sqrt(T * (1 + aT)), np.sqrt(np.expm1(2 * aT) / (2 * a if a else 1.0)))
+    return float(E) if E.ndim == 0 else E
 
 
 def truncated_l2(t, y, T: float) -> float:

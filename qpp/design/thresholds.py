@@ -324,9 +324,7 @@ def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop
     f = np.asarray(f, float) * (1 + PAD)
     I_right = np.cumsum(h * f) * (1 + PAD)
     I_left = np.concatenate([[0.0], I_right[:-1]])
-    aT = a * enc.edges                          # E of eq 10.44 at every edge (spheres.E_factor, vectorized)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        E = np.where(aT < 1e-8, np.sqrt(enc.edges * (1 + aT)), np.sqrt(np.expm1(2 * aT) / (2 * a if a else 1.0)))
+    E = spheres.E_factor(a, enc.edges)           # eq 10.44 at every edge
     E_lo, E_hi = E * (1 - PAD), E * (1 + PAD)
     grow = np.exp(a * te) * (1 + PAD)
     B = E_lo[:-1] ** 2
@@ -354,7 +352,7 @@ def _sampled_m(cfg, t, y_o, T, a, k, coupled, beta_i, b3, te) -> float:
     ynorm = np.sqrt(np.sum(yk ** 2, axis=0))
     bound = np.array([k[i] * (ynorm if (coupled[i] or i >= yk.shape[0]) else np.abs(yk[i])) for i in range(k.size)])
     l2 = np.sqrt(np.maximum(cumulative_trapezoid(np.sum(bound ** 2, axis=0), tk, initial=0.0), 0.0))[1:]
-    E = np.array([spheres.E_factor(a, x) for x in tk[1:]])
+    E = spheres.E_factor(a, tk[1:])
     b3s = b3[np.clip(np.searchsorted(te, tk[1:], side="left"), 0, b3.size - 1)]
     return float(np.min(sp.beta_o / (beta_i + sp.beta_o * b3s + np.exp(a * tk[1:]) * l2 / E), initial=np.inf))
 
