@@ -19,7 +19,7 @@ from qpp.io.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinear
 from qpp.design.hinf import HinfGains
 from qpp.model.lure import channels, closed_loop
 from qpp.simulate.closed_loop import eval_signal, initial_state
-from qpp.design.thresholds import NORM, Consistent, Thresholds, consistent, nominal_output, pick_bookkeeping, thresholds
+from qpp.design.thresholds import NORM, Consistent, Thresholds, consistent, nominal_output, thresholds
 
 
 @dataclass
@@ -420,7 +420,10 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     res.settled = bool(Ts < float(t[-1]))
     res.T_modal = T_modal
     res.late_slope = late_slope(cfg, T, horizon)
-    res.bookkeeping = pick_bookkeeping(cfg, [x.name for x in th])
+    # the design iterates against design.bookkeeping when available, else the stated values, else
+    # the last (most specific) bookkeeping
+    names, bk = [x.name for x in th], cfg.design.bookkeeping
+    res.bookkeeping = bk if bk == "consistent" or bk in names else ("stated" if "stated" in names else names[-1])
     res.bz = cfg.design.bz
     loop = (Azd["eq10.7"], Bzd["eq10.7"], Cz, {"z0": initial_state(cfg, P, K1, Kc), "a": a})
     res.consistent = consistent(cfg, t, y_o, sector, coupled, T, a, loop)

@@ -355,24 +355,3 @@ def _sampled_m(cfg, t, y_o, T, a, k, coupled, beta_i, b3, te) -> float:
     E = spheres.E_factor(a, tk[1:])
     b3s = b3[np.clip(np.searchsorted(te, tk[1:], side="left"), 0, b3.size - 1)]
     return float(np.min(sp.beta_o / (beta_i + sp.beta_o * b3s + np.exp(a * tk[1:]) * l2 / E), initial=np.inf))
-
-
-def pick_bookkeeping(cfg: QppConfig, names: list[str]) -> str:
-    """The threshold the design iterates against: ``design.bookkeeping`` when available, else the
-    stated values, else the last (most specific) bookkeeping.
-
-    Parameters
-    ----------
-    cfg : qpp.io.config.QppConfig
-        Validated config (units: s, rad/s, the plant's own units).
-    names : list of str
-        Bookkeepings available (:func:`thresholds`).
-
-    Returns
-    -------
-    str
-        The chosen bookkeeping.
-    """
-    if cfg.design.bookkeeping == "consistent" or cfg.design.bookkeeping in names:
-        return cfg.design.bookkeeping
-    return "stated" if "stated" in names else names[-1]
