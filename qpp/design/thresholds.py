@@ -224,8 +224,8 @@ def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, beta_o: float,
     rho_v = spheres.l2_to_peak_gain(An, Bz, Cv) * beta_o / g_inf if g_inf > 0 else np.inf
     K = enc.lo.shape[1]
     groups = np.array_split(np.arange(K), min(ARM_GROUPS, K))
-    x3 = np.array([[enc.lo[2, g].min() - rho_v for g in groups], [enc.hi[2, g].max() + rho_v for g in groups]])
-    x4 = np.array([[enc.lo[3, g].min() - rho_v for g in groups], [enc.hi[3, g].max() + rho_v for g in groups]])
+    x3, x4 = (np.array([[enc.lo[i, g].min() - rho_v for g in groups], [enc.hi[i, g].max() + rho_v for g in groups]])
+              for i in (2, 3))
     x1 = (float(enc.lo[0].min() - beta_o), float(enc.hi[0].max() + beta_o))
     g, dq = arm_slope_bound(cfg.nonlinearity, P.N(), x1, x3, x4)
     ends = np.array([enc.edges[gr[-1] + 1] for gr in groups])
@@ -240,28 +240,26 @@ def _beta3_at(cfg: QppConfig, T: float, te: np.ndarray, k: np.ndarray, enc, loop
     """Upper bounds of β3(T') = sup over [0, T'] (nondecreasing in T') at the times ``te`` (s), and
     a note for the arm (ρ_v, the gap of sup |Δq|); see :func:`consistent`."""
     nl = cfg.nonlinearity
-    note = {}
     if isinstance(nl, SinusoidalNonlinearity):     # closed form: k·sup_{[0, T']} |sin ωt|
-        k_struct = cfg.sinusoidal_half_widths()
-        kk = np.maximum(k, k_struct)
-        return np.sqrt(np.sum(kk ** 2)) * spheres.sup_abs_sin(nl.omega, 0.0, te), note
+        kk = np.maximum(k, cfg.sinusoidal_half_widths())
+        return np.sqrt(np.sum(kk ** 2)) * spheres.sup_abs_sin(nl.omega, 0.0, te), {}
     if isinstance(nl, ExpressionNonlinearity):
         M = cfg.expression_model()
         if M.proof.slope_ok:         # proved bounds on cells of [0, T]; a T' takes every cell it reaches
             edges, G = M.proved_slope_cells(T)
             gn = np.maximum.accumulate(np.sqrt(np.sum(np.asarray(G, float) ** 2, axis=0)))
             idx = np.clip(np.searchsorted(edges, te, side="left") - 1, 0, gn.size - 1)
-            return gn[idx], note
+            return gn[idx], {}
         tg, g = M.slope_profile(T)   # not proved (the premise ``slope`` fails): the sampled profile
         g = np.array(g, float)
         if tg.size == 1:
             g = np.maximum(g, np.asarray(M.sector_info.slope_bound, float)[:, None])
-            return np.full(te.size, float(np.max(np.sqrt(np.sum(g ** 2, axis=0)), initial=0.0))), note
+            return np.full(te.size, float(np.max(np.sqrt(np.sum(g ** 2, axis=0)), initial=0.0))), {}
         gn = np.maximum.accumulate(np.sqrt(np.sum(g ** 2, axis=0)))
-        return gn[np.clip(np.searchsorted(tg, te, side="left"), 0, tg.size - 1)], note
+        return gn[np.clip(np.searchsorted(tg, te, side="left"), 0, tg.size - 1)], {}
     ends, gcum, rho_v, dq = _arm_beta3_cells(cfg, enc, loop, beta_o, T)
-    note.update(rho_v=float(rho_v), dq_gap=float(dq.gap), dq_upper=float(dq.upper))
-    return gcum[np.clip(np.searchsorted(ends, te - 1e-12 * max(T, 1.0), side="left"), 0, gcum.size - 1)], note
+    return (gcum[np.clip(np.searchsorted(ends, te - 1e-12 * max(T, 1.0), side="left"), 0, gcum.size - 1)],
+            {"rho_v": float(rho_v), "dq_gap": float(dq.gap), "dq_upper": float(dq.upper)})
 
 
 def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop) -> Consistent:
