@@ -84,8 +84,7 @@ def _hinf_hamiltonian(A, B, C, D, tol=1e-10):
         raise ValueError("hamiltonian method implemented for D = 0 only")
     eig = np.linalg.eigvals(A)
     cand = [0.0] + [abs(e.imag) for e in eig] + [abs(e) for e in eig]
-    lo = max(_sigma(A, B, C, D, w) for w in cand)
-    wpk = max(cand, key=lambda w: _sigma(A, B, C, D, w))
+    lo, wpk = max((_sigma(A, B, C, D, w), w) for w in cand)
     hi = lo * 10 + 1e-12
     n = A.shape[0]
 
@@ -104,8 +103,7 @@ def _hinf_hamiltonian(A, B, C, D, tol=1e-10):
         ws = crossings(g)
         if ws:
             mids = [0.5 * (w1 + w2) for w1, w2 in zip(ws, ws[1:])] + ws
-            vals = [(_sigma(A, B, C, D, w), w) for w in mids]
-            v, w = max(vals)
+            v, w = max((_sigma(A, B, C, D, w), w) for w in mids)
             lo, wpk = max(lo, v), w if v >= lo else wpk
             lo = max(lo, g)
         else:
