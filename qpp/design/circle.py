@@ -236,8 +236,6 @@ def _check(centres, radii, full_centres, alpha, beta, P0):
     N = np.zeros(m, dtype=int)
     for i in range(m):
         al, be = alpha[i], beta[i]
-        if not al < be:
-            raise ValueError(f"sector {i + 1}: need alpha < beta, got [{al}, {be}]")
         if al < 0 < be:
             c, R = critical_disc(al, be)
             margins[i] = np.min(R - (np.abs(centres[i] - c) + radii[i]))
@@ -336,12 +334,11 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None, coupled=None) 
     # full contour ω = −∞ … ∞ (h(−jω) = conj h(jω)); strictly proper → closes at 0
     full = np.concatenate([np.conj(centres[:, ::-1]), centres], axis=1)
     P0 = int(np.sum(np.linalg.eigvals(A + a * np.eye(A.shape[0])).real >= 0))
+    if not np.all(alpha < beta):
+        bad = int(np.argmin(alpha < beta))
+        raise ValueError(f"sector {bad + 1}: need alpha < beta, got [{alpha[bad]}, {beta[bad]}]")
     coupled = np.zeros(alpha.size, bool) if coupled is None else np.asarray(coupled, bool)
     if coupled.any():
-        if not np.all(alpha < beta):
-            bad = int(np.argmin(alpha < beta))
-            raise ValueError(f"sector {bad + 1}: need alpha < beta, got [{alpha[bad]}, {beta[bad]}]")
-
         return small_gain_result(Hw, A, B, C, a, omega, centres, radii, alpha, beta, coupled, P0)
     passed, margins, N = _check(centres, radii, full, alpha, beta, P0)
     passed = passed and _resolved(tail, alpha, beta)
