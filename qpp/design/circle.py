@@ -39,10 +39,9 @@ the grid does not resolve is not certified): exact for the encirclement count, a
 grid for the distance margins.
 
 **Decided by the KYP lemma, not on a frequency grid** (:func:`circle_kyp`, issue 43; the premise
-``circle`` of the certificate).  A sector [α_i, β_i] of φ_i is written φ = C_0 y + Δ(y, t) with
-C_0 = diag(c_i), c_i the centre (α_i + β_i)/2 of a diagonal channel (0 for a coupled one) and
-|Δ_i| ≤ r_i |y_i|, r_i the half-width (the loop transformation of the circle criterion).
-The loop ż = A z + B φ(C z) is exponentially stable with rate a when
+``circle`` of the certificate).  With φ = C_0 y + Δ(y, t) as above and |Δ_i| ≤ r_i |y_i|, r_i the
+half-width (the loop transformation of the circle criterion), the loop ż = A z + B φ(C z) is
+exponentially stable with rate a when
 
 * A_c = A + B C_0 C + aI is Hurwitz (eigenvalues), and
 * the small-gain inequality ‖D R C (sI − A_c)⁻¹ B D⁻¹‖∞ < 1 holds, R = diag(r_i), D a positive
