@@ -84,23 +84,21 @@ class _Procedure:
         self.work = 0.0          # integration work of the nominal loops so far (qpp.simulate.closed_loop.check_work)
 
     # -- gains -----------------------------------------------------------------
-    def gains(self, rho, a, ws, target=None, observer=None) -> HinfGains | None:
+    def gains(self, rho, a, ws, target=None) -> HinfGains | None:
         hc, dc = self.hc, self.dc
         Pw = weighted_plant(self.P, ws)
-        obs = observer or hc.observer
         try:
             if hc.search:
-                g = hinf_search(Pw, rho=rho, a=a, nu=None, weight=hc.weight, observer=obs, bz=dc.bz,
+                g = hinf_search(Pw, rho=rho, a=a, nu=None, weight=hc.weight, observer=hc.observer, bz=dc.bz,
                                 rho_factor=dc.rho_factor, rho_min=dc.rho_min, target=target)
-                for h in g.history:
-                    self.hist.append({**h, "a": a, "ws": float(np.mean(ws))})
+                passes = g.history
             else:
-                g = hinf_gains(Pw, rho=rho, a=a, nu=hc.nu, weight=hc.weight, observer=obs)
-
+                g = hinf_gains(Pw, rho=rho, a=a, nu=hc.nu, weight=hc.weight, observer=hc.observer)
                 tests = existence_tests(g)
-                self.hist.append({"rho": rho, "nu": hc.nu, "delta": closed_loop_norm(Pw, g, bz=dc.bz), **tests,
-                                  "admissible": bool(tests["k_psd"] and tests["h_psd"] and tests["spectral"]),
-                                  "action": "fixed nu", "a": a, "ws": float(np.mean(ws))})
+                passes = [{"rho": rho, "nu": hc.nu, "delta": closed_loop_norm(Pw, g, bz=dc.bz), **tests,
+                           "admissible": bool(tests["k_psd"] and tests["h_psd"] and tests["spectral"]),
+                           "action": "fixed nu"}]
+            self.hist.extend({**h, "a": a, "ws": float(np.mean(ws))} for h in passes)
             return g
         except (DesignError, ConvergenceError) as exc:
             self.records.append(self._rec("riccati", rho, np.nan, a, np.nan, np.nan, np.nan, np.nan, False,
