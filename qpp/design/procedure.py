@@ -456,9 +456,8 @@ def design(cfg: QppConfig) -> DesignResult:
 
 
 def _finish(cfg: QppConfig, res: DesignResult) -> None:
-    """The verdict: ``certified`` only when every premise of the consistent certificate holds
-    (:func:`qpp.design.certificate.premises`); a bookkeeping of the report never certifies by itself."""
-    res.certified = bool(res.premises) and all(ok for ok, _ in res.premises.values())
+    """The verdict in words (``certified``, set by :func:`qpp.design.certificate.certify`, holds only when
+    every premise of the consistent certificate holds; a bookkeeping of the report never certifies by itself)."""
     c = res.consistent
     if res.certified:
         res.verdict = (f"certified (one sector, Euclidean norm): beta1 = {res.beta1_ref:.5g} <= m = {c.m:.5g}, "
