@@ -405,11 +405,8 @@ _CIRCLE_HINT = ("narrow the nonlinearity's sector (its parameter ranges or y_ran
 def design(cfg: QppConfig) -> DesignResult:
     """Procedure 12.1 (or certification of the printed gains when ``design.gains = published``).
 
-    Steps: (1) a, T, m; (2) gains from ch. 11 (fixed ν, or the steps 1–8 search with all of its
-    tests when ``hinf.search``); (3) T ← settling time of the nominal closed loop (within 10 %),
-    m recomputed, β1 > m → ρ ← ρ·rho_factor; (4) circle criterion, else a adjusted both ways on a
-    geometric grid of [a_min, a_max] and back to step 1; (5) stop at the first certified design,
-    then try to raise a towards a_max.  If the loop fails: the wider search over W_s weights and ρ.
+    Steps 1–5 of the module docstring (a adjusted both ways on a geometric grid of [a_min, a_max];
+    after the first certified design, a raised towards a_max), then the wider search when they fail.
     Every evaluation is in ``iterations``; the result's ``certified``/``verdict`` say the outcome.
 
     Parameters
