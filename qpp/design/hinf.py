@@ -303,11 +303,9 @@ def _initial_nu(plant: LurePlant, rho: float, a: float, weight: str, observer: s
     try:
         g0 = hinf_gains(plant, rho=rho, a=a, nu=1.0, weight=weight, observer=observer, strict=False)
         nu = closed_loop_norm(plant, g0, bz=bz)
-        if not np.isfinite(nu) or nu <= 0:
-            nu = 1.0
     except (DesignError, ConvergenceError):
-        nu = 1.0
-    return nu
+        return 1.0
+    return nu if np.isfinite(nu) and nu > 0 else 1.0
 
 
 def _search_pass(plant: LurePlant, rho: float, a: float, nu: float, weight: str, observer: str, bz: str):
@@ -321,8 +319,7 @@ def _search_pass(plant: LurePlant, rho: float, a: float, nu: float, weight: str,
         rec["delta"] = delta = closed_loop_norm(plant, g, bz=bz)
     except (DesignError, ConvergenceError):
         g, delta = None, np.inf
-    ok = g is not None and rec["k_psd"] and rec["h_psd"] and rec["spectral"] and np.isfinite(delta)
-    rec["admissible"] = bool(ok)
+    rec["admissible"] = bool(rec["k_psd"] and rec["h_psd"] and rec["spectral"] and np.isfinite(delta))
     return g, delta, rec
 
 
