@@ -169,14 +169,10 @@ def _propagate(Phi: np.ndarray, x0: np.ndarray, n: int) -> np.ndarray:
         powers.append(Phi @ powers[-1])
     stack = np.vstack(powers)                                      # (k·d, d)
     d = x0.size
-    cols, x = [x0[:, None]], x0
-    done = 0
-    while done < n:
+    cols = [x0[:, None]]
+    for done in range(0, n, k):
         step = min(k, n - done)
-        blk = (stack[:step * d] @ x).reshape(step, d).T
-        cols.append(blk)
-        x = blk[:, -1]
-        done += step
+        cols.append((stack[:step * d] @ cols[-1][:, -1]).reshape(step, d).T)
     return np.hstack(cols)
 
 
