@@ -186,12 +186,16 @@ class Candidate:
     gamma_inf: float = np.nan
 
 
-def _servo_gain(res, freqs) -> float:
-    """min over ω_k of σ̄(C_z ((a + jω_k) I − A_n)⁻¹ B_z) (= σ̄ of the loop's T(jω_k)), dimensionless."""
+def _candidate(res, rho, w, a, freqs) -> Candidate:
+    """The certificate ``res`` of the design (ρ, w, a in 1/s) as a Candidate; its servo gain is the min
+    over ω_k (``freqs``, rad/s) of σ̄(C_z ((a + jω_k) I − A_n)⁻¹ B_z) (= σ̄ of the loop's T(jω_k))."""
     Az, Bz, Cz = res.Az["eq10.7"], res.Bz["eq10.7"], res.Cz
-    n = len(Az)
-    return float(min(np.linalg.svd(Cz @ np.linalg.solve(1j * w * np.eye(n) - Az, Bz), compute_uv=False)[0]
-                     for w in freqs)) if freqs else np.nan
+    servo = float(min(np.linalg.svd(Cz @ np.linalg.solve(1j * x * np.eye(len(Az)) - Az, Bz), compute_uv=False)[0]
+                      for x in freqs)) if freqs else np.nan
+    c = res.consistent
+    return Candidate(float(rho), tuple(np.atleast_1d(w).astype(float)), float(a), res.T, res.beta1_ref, c.m,
+                     res.gamma_inf * c.E_over_m, servo, res.certified,
+                     [k for k, (ok, _) in res.premises.items() if not ok], float(res.gamma_inf))
 
 
 def search(cfg: QppConfig, rhos, ws_list, a_list) -> list:
@@ -230,11 +234,7 @@ def search(cfg: QppConfig, rhos, ws_list, a_list) -> list:
                     res = certify(cfg, g.K1, g.Kc, g.H, float(a), T=T)
                 except (DesignError, ConvergenceError, np.linalg.LinAlgError):
                     continue
-                c = res.consistent
-                out.append(Candidate(float(rho), tuple(np.atleast_1d(w).astype(float)), float(a), T,
-                                     res.beta1_ref, c.m, res.gamma_inf * c.E_over_m, _servo_gain(res, freqs),
-                                     res.certified, [k for k, (ok, _) in res.premises.items() if not ok],
-                                     float(res.gamma_inf)))
+                out.append(_candidate(res, rho, w, a, freqs))
     return out
 
 
@@ -711,33 +711,7 @@ REFINE_EVALS = 30
 REPORT_CERTIFIED = {"qpp_siso": (1.3e-5, 1.69e4, 1e-8)}
 
 
-@dataclass
-class Resettled:
-    """A candidate's settling time found again on the certificate's own samples (:func:`resettle`).
-
-    Attributes
-    ----------
-    T : float
-        The settling time on the samples of :func:`qpp.design.certificate.certify` at the
-        candidate's T (finer than the first pass's), s.
-    m : float
-        The certificate's m at that T, dimensionless.
-    beta1 : float
-        β1, dimensionless.
-    certified : bool
-        Every premise holds at that T.
-    failed : list of str
-        The premises that fail at that T.
-    """
-
-    T: float
-    m: float
-    beta1: float
-    certified: bool
-    failed: list
-
-
-def resettle(cfg: QppConfig, c: Candidate) -> Resettled:
+def resettle(cfg: QppConfig, c: Candidate) -> Candidate:
     """The settling time of a candidate of :func:`search` taken again from the certificate at its T
     (which samples [0, max(T, t_final)] up to 20 001 times instead of the first pass's
     :data:`SETTLE_SAMPLES`), and the certificate at that settling time.
@@ -751,15 +725,14 @@ def resettle(cfg: QppConfig, c: Candidate) -> Resettled:
 
     Returns
     -------
-    Resettled
-        The finer settling time and the verdict there.
+    Candidate
+        The same design certified at the finer settling time (``T``, s).
     """
-    g = hinf_gains(weighted_plant(cfg.lure_plant(), c.ws[0]), rho=c.rho, a=c.a, nu=cfg.hinf.nu,
+    P = cfg.lure_plant()
+    g = hinf_gains(weighted_plant(P, c.ws[0]), rho=c.rho, a=c.a, nu=cfg.hinf.nu,
                    weight=cfg.hinf.weight, observer=cfg.hinf.observer)
     T = float(certify(cfg, g.K1, g.Kc, g.H, c.a, T=c.T).T_settle)
-    res = certify(cfg, g.K1, g.Kc, g.H, c.a, T=T)
-    return Resettled(T, float(res.consistent.m), float(res.beta1_ref), bool(res.certified),
-                     [k for k, (ok, _) in res.premises.items() if not ok])
+    return _candidate(certify(cfg, g.K1, g.Kc, g.H, c.a, T=T), c.rho, c.ws[0], c.a, _servo_frequencies(P.Ac))
 
 #: the grids of the report's examples searched (docs/qpp-certificates.md): ρ over six decades, five
 #: output weights w, three a; the manipulator's bounds already exclude its family, its grid is smaller
