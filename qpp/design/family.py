@@ -662,7 +662,7 @@ def settle_exclusion(cfg: QppConfig, pe: PeakExclusion | None = None) -> SettleE
     A, w, ph, band, k_norm, k3, b = setup
     sp, nl = cfg.spheres, cfg.nonlinearity
     times = pe.times[~pe.excluded & (pe.times < (b.T_sin if b.T_sin is not None else np.inf))]
-    out = {key: [] for key in ("nu_max", "gamma", "nu_low", "splits", "excluded")}
+    rows = []
     bo, bi = iv.mpf(sp.beta_o), iv.mpf(b.beta_i)
     for T in times:
         Ti = iv.mpf(float(T))
@@ -692,13 +692,9 @@ def settle_exclusion(cfg: QppConfig, pe: PeakExclusion | None = None) -> SettleE
             if nu_lo >= nu_hi * (1 - 1e-3):
                 break
             nu_hi = nu_lo
-        out["nu_max"].append(float(nu_max.b))
-        out["gamma"].append(gamma0)
-        out["nu_low"].append(max(nu_hi, 0.0))
-        out["splits"].append(splits)
-        out["excluded"].append(bool(ok))
-    return SettleExclusion(times, np.array(out["nu_max"]), np.array(out["gamma"]), np.array(out["nu_low"]),
-                           np.array(out["splits"], int), np.array(out["excluded"], bool))
+        rows.append((float(nu_max.b), gamma0, max(nu_hi, 0.0), splits, ok))
+    cols = np.array(rows, float).reshape(-1, 5).T      # ν_max, L(T, ν_max), ν_low, splits, excluded
+    return SettleExclusion(times, cols[0], cols[1], cols[2], cols[3].astype(int), cols[4].astype(bool))
 
 
 #: evaluations of :func:`refine` from the best grid point
