@@ -425,7 +425,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     names, bk = [x.name for x in th], cfg.design.bookkeeping
     res.bookkeeping = bk if bk == "consistent" or bk in names else ("stated" if "stated" in names else names[-1])
     res.bz = cfg.design.bz
-    loop = (Azd["eq10.7"], Bzd["eq10.7"], Cz, {"z0": initial_state(cfg, P, K1, Kc), "a": a})
+    loop = (Azd["eq10.7"], Bzd["eq10.7"], Cz, initial_state(cfg, P, K1, Kc))
     res.consistent = consistent(cfg, t, y_o, sector, coupled, T, a, loop)
     # the certificate is of the loop that runs (B_z of eq 10.7, as simulated), whatever design.bz
     # says; the printed B_z reading stays in the bookkeeping

@@ -207,7 +207,7 @@ class Consistent:
     note: dict = field(default_factory=dict)
 
 
-def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, beta_o: float, T: float):
+def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, a: float, beta_o: float):
     """The polar arm's β3 proved over the sphere around the nominal trajectory, per group of the
     enclosure's cells (:data:`ARM_GROUPS` groups of [0, T]): y = (x1, x2) within β_o of the
     enclosure of y_o, the rates (x3, x4) within ρ_v = γ_v β_o / γ∞ of theirs (γ_v the L2-to-peak gain
@@ -217,7 +217,7 @@ def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, beta_o: float,
     Returns (group ends in s, cumulative bounds, ρ_v, the Δq branch and bound)."""
     P = cfg.lure_plant()
     Az, Bz, Cz, _ = loop
-    An = Az + float(loop[3]["a"]) * np.eye(len(Az))
+    An = Az + float(a) * np.eye(len(Az))
     Cv = np.zeros((2, Az.shape[0]))
     Cv[0, 2] = Cv[1, 3] = 1.0                     # the rates x3, x4 of z = [x; x_c; x̂]
     g_inf = spheres.l2_to_peak_gain(An, Bz, Cz)
@@ -236,7 +236,7 @@ def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, beta_o: float,
 ARM_GROUPS = 128
 
 
-def _beta3_at(cfg: QppConfig, T: float, te: np.ndarray, k: np.ndarray, enc, loop, beta_o):
+def _beta3_at(cfg: QppConfig, T: float, te: np.ndarray, k: np.ndarray, enc, loop, a: float, beta_o):
     """Upper bounds of β3(T') = sup over [0, T'] (nondecreasing in T') at the times ``te`` (s), and
     a note for the arm (ρ_v, the gap of sup |Δq|); see :func:`consistent`."""
     nl = cfg.nonlinearity
@@ -257,7 +257,7 @@ def _beta3_at(cfg: QppConfig, T: float, te: np.ndarray, k: np.ndarray, enc, loop
             return np.full(te.size, float(np.max(np.sqrt(np.sum(g ** 2, axis=0)), initial=0.0))), {}
         gn = np.maximum.accumulate(np.sqrt(np.sum(g ** 2, axis=0)))
         return gn[np.clip(np.searchsorted(tg, te, side="left"), 0, tg.size - 1)], {}
-    ends, gcum, rho_v, dq = _arm_beta3_cells(cfg, enc, loop, beta_o, T)
+    ends, gcum, rho_v, dq = _arm_beta3_cells(cfg, enc, loop, a, beta_o)
     return (gcum[np.clip(np.searchsorted(ends, te - 1e-12 * max(T, 1.0), side="left"), 0, gcum.size - 1)],
             {"rho_v": float(rho_v), "dq_gap": float(dq.gap), "dq_upper": float(dq.upper)})
 
@@ -296,7 +296,7 @@ def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop
     a : float
         Exponential weighting a, 1/s.
     loop : tuple
-        (A_z in 1/s, B_z of eq 10.7, C_z, {"z0": z(0), "a": a}) of the nominal loop.
+        (A_z in 1/s, B_z of eq 10.7, C_z, z(0)) of the nominal loop.
 
     Returns
     -------
@@ -305,16 +305,16 @@ def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop
     """
     sp = cfg.spheres
     P = cfg.lure_plant()
-    Az, Bz, Cz, extra = loop
+    Az, Bz, Cz, z0 = loop
     k = np.max(np.abs(np.asarray(sector, float)), axis=1)
     beta_i = float(np.sqrt(P.p) * sp.beta_ri + np.sqrt(P.r) * sp.d_inf)
     try:
-        enc = enclose(Az, np.asarray(Bz)[:, :P.p], extra["z0"], cfg.simulation.r_o, T)
+        enc = enclose(Az, np.asarray(Bz)[:, :P.p], z0, cfg.simulation.r_o, T)
     except ValueError as exc:            # a loop too stiff for the cell budget: m is not bounded
         return Consistent(beta_i, np.inf, np.inf, 0.0, k, float(T), np.inf, note={"unbounded": str(exc)})
     te = enc.edges[1:]
     h = enc.h
-    b3, note = _beta3_at(cfg, T, te, k, enc, loop, sp.beta_o)
+    b3, note = _beta3_at(cfg, T, te, k, enc, loop, a, sp.beta_o)
     ylo, yhi = enc.box(Cz)
     ysup = np.maximum(np.abs(ylo), np.abs(yhi))
     ysq = np.sum(ysup ** 2, axis=0)
