@@ -104,7 +104,7 @@ def _arm_betas(cfg: QppConfig, t, x_o, T):
     return b3, b4
 
 
-def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> list[Thresholds]:
+def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float) -> list[Thresholds]:
     """Threshold m (12.1) in each bookkeeping (see :mod:`qpp.design.procedure`) at truncation time T (s).
 
     Parameters
@@ -119,8 +119,8 @@ def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> l
         Nominal plant state, state units.
     sector : (r, 2) array
         Sector of the circle check, dimensionless gains.
-    T : float, optional
-        Truncation time, s (default ``spheres.T``).
+    T : float
+        Truncation time, s.
 
     Returns
     -------
@@ -128,7 +128,6 @@ def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> l
         One per bookkeeping available for this nonlinearity.
     """
     sp = cfg.spheres
-    T = sp.T if T is None else T
     nl = cfg.nonlinearity
     out = []
 
