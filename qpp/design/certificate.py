@@ -240,11 +240,11 @@ def default_sector(cfg: QppConfig) -> np.ndarray:
         if nl.sector is not None:
             return np.asarray(nl.sector, float)
         s = np.array(cfg.expression_model().proof.sector, float)   # the sampled sector, widened to the proved one
-        flat = ~(s[:, 0] < s[:, 1])        # a sampled φ ≡ 0 (or exactly linear): [α, α]
-        if flat.any():                     # widened by 1e-12 (as a zero sinusoidal one, above)
-            pad = 1e-12 * np.maximum(1.0, np.abs(s[flat]).max(axis=1))
-            s[flat, 0] -= pad
-            s[flat, 1] += pad
+        # a sampled φ ≡ 0 (or exactly linear) gives [α, α]: widened by 1e-12 (as a zero sinusoidal one, above)
+        flat = ~(s[:, 0] < s[:, 1])
+        pad = 1e-12 * np.maximum(1.0, np.abs(s[flat]).max(axis=1))
+        s[flat, 0] -= pad
+        s[flat, 1] += pad
         return s
     raise DesignError("design.sector must be given for a polar_arm nonlinearity")
 
