@@ -514,13 +514,11 @@ def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:
     """Whether φ lies in the sector the certificate uses (premise ``sector``).
 
     The sinusoidal form's sector is structural, ±N·γ_max·|F_unc| (row sums): a stated
-    ``design.sector`` must contain it.  An expression's stated ``nonlinearity.sector`` must contain
-    the sector sampled from the expression on ``y_range`` (no slack).  The polar arm's sector is
-    the config's assumption (φ depends on the rates, not on y alone): not a premise this tool
-    proves; its β3 is proved over the sphere (:func:`qpp.design.thresholds.consistent`).  An
-    expression's sector is proved by interval branch and bound
-    (:attr:`qpp.model.nonlin.ExpressionModel.proof`): the sampled sector widened by
-    :data:`qpp.model.sector_proof.REL_GAP`, which a stated sector must contain.
+    ``design.sector`` must contain it.  An expression's sector is proved by interval branch and bound
+    (:attr:`qpp.model.nonlin.ExpressionModel.proof`: the sampled sector widened by
+    :data:`qpp.model.sector_proof.REL_GAP`), which a stated ``nonlinearity.sector`` must contain.  The
+    polar arm's sector is the config's assumption (φ depends on the rates, not on y alone): not a
+    premise this tool proves; its β3 is proved over the sphere (:func:`qpp.design.thresholds.consistent`).
 
     Parameters
     ----------
