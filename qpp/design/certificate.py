@@ -559,7 +559,7 @@ def premises(cfg: QppConfig, res: DesignResult) -> dict:
     cfg : qpp.io.config.QppConfig
         Validated config.
     res : DesignResult
-        The design, with ``consistent`` and ``gamma_inf`` computed.
+        The design, with ``consistent``, ``gamma_inf`` and ``circle_proof`` computed.
 
     Returns
     -------
@@ -576,10 +576,9 @@ def premises(cfg: QppConfig, res: DesignResult) -> dict:
     out = {
         "stable": (worst < 0, f"A_z + aI Hurwitz, B_z of eq 10.7 (largest Re λ = {worst:.4g} 1/s)"),
         "sector": sector_premise(cfg, res.sector),
-        "circle": (bool(res.circle_proof is not None and res.circle_proof.proved), "circle criterion with the sector "
-                   f"{np.round(res.sector, 6).tolist()} at a = {res.a:g}: "
-                   + (res.circle_proof.text if res.circle_proof is not None else "not decided")
-                   + f" (frequency grid: {'passes' if res.circle.passed else 'fails'})"),
+        "circle": (bool(res.circle_proof.proved), f"circle criterion with the sector {np.round(res.sector, 6).tolist()}"
+                   f" at a = {res.a:g}: {res.circle_proof.text} (frequency grid: "
+                   f"{'passes' if res.circle.passed else 'fails'})"),
         "contraction": (bool(b1 < c.m), f"beta1 = {b1:.6g} < m = {c.m:.6g} (eqs 10.43, 10.57 in the Euclidean "
                         f"norm, B_z of eq 10.7; m a lower bound for every T' in (0, T], least in the cell ending at "
                         f"T' = {c.T_worst:.4g} s; the trapezoid rule on the samples gives {c.m_sampled:.6g}: "
