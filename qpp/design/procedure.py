@@ -101,8 +101,7 @@ class _Procedure:
             self.hist.extend({**h, "a": a, "ws": float(np.mean(ws))} for h in passes)
             return g
         except (DesignError, ConvergenceError) as exc:
-            self.records.append(self._rec("riccati", rho, np.nan, a, np.nan, np.nan, np.nan, np.nan, False,
-                                          False, ws, note=str(exc)))
+            self.records.append(self._rec("riccati", rho, a, ws, note=str(exc)))
             return None
 
     def beta1_only(self, rho, a, ws) -> float:
@@ -118,7 +117,8 @@ class _Procedure:
 
     # -- evaluation --------------------------------------------------------------
     @staticmethod
-    def _rec(stage, rho, nu, a, T, delta, b1, m, circle, cert, ws, note=""):
+    def _rec(stage, rho, a, ws, nu=np.nan, T=np.nan, delta=np.nan, b1=np.nan, m=np.nan, circle=False, cert=False,
+             note=""):
         return {"stage": stage, "rho": float(rho), "nu": float(nu), "a": float(a), "T": float(T),
                 "delta": float(delta), "beta1": float(b1), "m": float(m), "circle": bool(circle),
                 "certified": bool(cert), "ws": [float(x) for x in np.atleast_1d(ws)], "note": note}
@@ -130,8 +130,8 @@ class _Procedure:
         res.ws_scale = [float(x) for x in np.atleast_1d(ws)]
 
         delta = closed_loop_norm(weighted_plant(self.P, ws), g, bz=self.dc.bz)
-        self.records.append(self._rec(stage, g.rho, g.nu, a, T, delta, res.beta1_ref, res.m_ref,
-                                      res.circle.passed, res.certified, ws))
+        self.records.append(self._rec(stage, g.rho, a, ws, g.nu, T, delta, res.beta1_ref, res.m_ref,
+                                      res.circle.passed, res.certified))
         if self.best is None or _score(res) < _score(self.best):
             self.best = res
         return res
@@ -178,8 +178,8 @@ class _Procedure:
         grid = sorted(grid[grid != a], key=lambda x: abs(np.log(max(x, 1e-300)) - np.log(max(a, 1e-300))))
         for cand in grid:
             ok = circle_mod.circle_criterion(Az, Bz[:, dcols], Cz, sector, a=float(cand), coupled=coupled).passed
-            self.records.append(self._rec("circle a", g.rho, g.nu, cand, np.nan, np.nan, np.nan, np.nan, ok,
-                                          False, [1.0], note="circle criterion with fixed gains"))
+            self.records.append(self._rec("circle a", g.rho, cand, [1.0], nu=g.nu, circle=ok,
+                                          note="circle criterion with fixed gains"))
             if ok:
                 return float(cand)
         return None
@@ -249,8 +249,8 @@ class _Procedure:
         for ws in _ws_candidates(self.P.Cc.shape[0], self.dc.ws_scales):
             rho = self._rho_minimizing_beta1(a, ws)
             if rho is None:
-                self.records.append(self._rec("wider", np.nan, np.nan, a, np.nan, np.nan, np.inf, np.nan, False,
-                                              False, ws, note="no stabilizing gains for any rho"))
+                self.records.append(self._rec("wider", np.nan, a, ws, b1=np.inf,
+                                              note="no stabilizing gains for any rho"))
                 continue
             res = self._finish_candidate(rho, a, ws)
             if res is not None and _meets(res):
@@ -428,8 +428,8 @@ def design(cfg: QppConfig) -> DesignResult:
     if dc.gains == "published":
         p = cfg.published
         res = certify(cfg, p.K1, p.Kc, p.H, hc.a, "published")
-        res.iterations = [_Procedure._rec("published", np.nan, np.nan, hc.a, res.T, np.nan, res.beta1_ref,
-                                          res.m_ref, res.circle.passed, res.certified, [1.0])]
+        res.iterations = [_Procedure._rec("published", np.nan, hc.a, [1.0], T=res.T, b1=res.beta1_ref, m=res.m_ref,
+                                          circle=res.circle.passed, cert=res.certified)]
         _finish(cfg, res)
         return res
     proc = _Procedure(cfg)
