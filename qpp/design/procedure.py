@@ -245,7 +245,7 @@ class _Procedure:
         """The wider search after steps 1–5 failed (ch. 15: a controller exists when min over ρ, W_s of
         β1 < m): per W_s of :func:`_ws_candidates`, the ρ minimizing β1, finished by steps 2–4, all at
         the best design's a; the first design meeting its target, else None."""
-        a = self.best.a if self.best is not None else self.hc.a
+        a = self.best.a
         for ws in _ws_candidates(self.P.Cc.shape[0], self.dc.ws_scales):
             rho = self._rho_minimizing_beta1(a, ws)
             if rho is None:
@@ -275,10 +275,10 @@ class _Procedure:
         """Steps 2–4 once at the wider search's ρ, W_s (a in 1/s): gains (target: the best m), β1 and m
         from the best design's T, T adapted; β1 ≤ m with the circle failing → one retry at another a.
         The evaluated design, None when no gains exist at this ρ."""
-        g = self.gains(rho, a, ws, target=self.best.m_ref if self.best is not None else None)
+        g = self.gains(rho, a, ws, target=self.best.m_ref)
         if g is None:
             return None
-        res = self.evaluate(g, a, self.best.T if self.best is not None else self.cfg.spheres.T, ws, "wider")
+        res = self.evaluate(g, a, self.best.T, ws, "wider")
         res, T = self.adapt_T(g, a, res.T, ws, res, "wider")
         if res.lhs_ref <= res.m_ref and not res.circle.passed:
             res = self._retry_circle(g, res, rho, a, T, ws)
