@@ -302,11 +302,7 @@ def _ws_candidates(p_w: int, ws_scales) -> list[np.ndarray]:
     alone times each factor of CHANNEL_FACTORS."""
     weights = [np.full(p_w, w) for w in ws_scales]
     if p_w > 1:
-        for i in range(p_w):
-            for w in CHANNEL_FACTORS:
-                v = np.ones(p_w)
-                v[i] = w
-                weights.append(v)
+        weights += [np.where(np.arange(p_w) == i, w, 1.0) for i in range(p_w) for w in CHANNEL_FACTORS]
     return weights
 
 
