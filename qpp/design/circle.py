@@ -224,11 +224,6 @@ class CircleResult:
     peak_gain: float = float("nan")    #: sup_ω σ̄(H_c(−a + jω)) at s = 1 (nan for "gershgorin")
 
 
-def _winding(z: np.ndarray, c: float) -> int:
-    ang = np.unwrap(np.angle(z - c))
-    return int(np.round((ang[-1] - ang[0]) / (2 * np.pi)))
-
-
 def _check(centres, radii, full_centres, alpha, beta, P0):
     m = centres.shape[0]
     margins = np.empty(m)
@@ -245,7 +240,8 @@ def _check(centres, radii, full_centres, alpha, beta, P0):
         else:
             c, R = critical_disc(al, be)
             margins[i] = np.min(np.abs(centres[i] - c) - radii[i] - R)
-            N[i] = -_winding(full_centres[i], c)   # clockwise count
+            ang = np.unwrap(np.angle(full_centres[i] - c))           # winding number about the disc centre,
+            N[i] = -int(np.round((ang[-1] - ang[0]) / (2 * np.pi)))   # counted clockwise
     # eq 9.3 over all channels; a band inside its disc or half plane counts N_ci = 0
     return bool(np.all(margins > 0) and int(N.sum()) == -P0), margins, N
 
