@@ -126,7 +126,12 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
     P = plant
     Aa, Ba, Ga, _ = augmented(P)
     Ab = Aa + a * np.eye(Aa.shape[0])
-    Cw = _state_weight(P, weight)
+    if weight == "servo":                        # the state weight Q = C_wᵀ C_w
+        Cw = np.hstack([np.zeros((P.Cc.shape[0], P.n)), P.Cc])
+    elif weight == "output":
+        Cw = np.hstack([P.C, np.zeros((P.p, P.q))])
+    else:
+        raise ValueError(f"weight must be 'servo' or 'output', got {weight!r}")
     Q = Cw.T @ Cw
     Bcomb = np.hstack([Ba, Ga])
     R = np.diag([rho ** 2] * Ba.shape[1] + [-nu ** 2] * Ga.shape[1])
@@ -154,16 +159,6 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
     else:
         raise ValueError(f"observer must be 'filter' or 'dgkf', got {observer!r}")
     return HinfGains(K[:, :n], K[:, n:], H, k, h, rho, nu, a, res_k, res_h, lam)
-
-
-def _state_weight(P: LurePlant, weight: str) -> np.ndarray:
-    """C_w of the state weight Q = C_wᵀ C_w of :func:`hinf_gains`: ``[0 Cc]`` (servo) or ``[C 0]``
-    (output)."""
-    if weight == "servo":
-        return np.hstack([np.zeros((P.Cc.shape[0], P.n)), P.Cc])
-    if weight == "output":
-        return np.hstack([P.C, np.zeros((P.p, P.q))])
-    raise ValueError(f"weight must be 'servo' or 'output', got {weight!r}")
 
 
 def _filter_riccati(P: LurePlant, a: float):
