@@ -401,7 +401,6 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     sector, coupled = default_sector(cfg), sector_coupling(cfg)
     _, dcols = channels(P)
     circ = circle_mod.circle_criterion(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=coupled)
-    kyp = circle_kyp(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=coupled)
     T = cfg.spheres.T if T is None else float(T)
     horizon = max(T, cfg.simulation.t_final)
     n = int(min(20001, max(801, 801 * horizon / T)))
@@ -415,7 +414,7 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     th = thresholds(cfg, t, y_o, x_o, sector, T)
     res = DesignResult(K1, Kc, H, gains_source, hinf, a, T, Azd, Bzd, Cz, b1, th, circ, sector,
                        spheres.E_factor(a, T), t[keep], y_o[:, keep])
-    res.circle_proof = kyp
+    res.circle_proof = circle_kyp(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=coupled)
     res.T_settle = Ts
     res.settled = bool(Ts < float(t[-1]))
     res.T_modal = T_modal
