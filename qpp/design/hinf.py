@@ -231,9 +231,6 @@ def hinf_search(plant: LurePlant, *, rho: float, a: float, nu: float | None = No
     (step 8), else ρ is decreased.  With ``target`` the search stops at the first admissible
     solution with δ ≤ target (procedure 12.1 step 2: "until β1 ≤ m").
 
-    Returns the admissible gains of smallest δ; ``history`` holds one dict per pass: ρ, ν, δ,
-    k_psd, h_psd, lambda_kh_scaled, spectral, admissible, action.
-
     Parameters
     ----------
     plant : LurePlant
@@ -263,7 +260,8 @@ def hinf_search(plant: LurePlant, *, rho: float, a: float, nu: float | None = No
     Returns
     -------
     HinfGains
-        The admissible gains of smallest δ, with ``history`` filled in.
+        The admissible gains of smallest δ; ``history`` holds one dict per pass: ρ, ν, δ, k_psd,
+        h_psd, lambda_kh_scaled, spectral, admissible, action.
 
     Raises
     ------
