@@ -280,12 +280,6 @@ class PeakExclusion:
         return self.times[(self.times < T_max) & ~self.excluded]
 
 
-def _sine_energy(A: float, w: float, ph: float, t):
-    """‖A sin(ωs + φ)‖²_{L2[0, t]} = A² [t/2 − (sin(2(ωt + φ)) − sin 2φ)/(4ω)], (output unit)²·s."""
-    t = np.asarray(t, float)
-    return A ** 2 * (t / 2 - (np.sin(2 * (w * t + ph)) - np.sin(2 * ph)) / (4 * w))
-
-
 #: later samples whose constraints the weak-duality bound of :func:`_dual_line` combines
 DUAL_SAMPLES = 200
 
@@ -378,7 +372,8 @@ def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
     band, sp = cfg.spheres.settle_band, cfg.spheres
     horizon = max(cfg.simulation.t_final, sp.T)
     t = np.linspace(0.0, horizon, SETTLE_SAMPLES)[1:]
-    energy = np.sqrt(_sine_energy(A, w, ph, t))
+    # ‖r_o‖_{L2[0, t]}: ‖A sin(ωs + φ)‖² = A² [t/2 − (sin(2(ωt + φ)) − sin 2φ)/(4ω)], (output unit)²·s
+    energy = np.sqrt(A ** 2 * (t / 2 - (np.sin(2 * (w * t + ph)) - np.sin(2 * ph)) / (4 * w)))
     r_abs = np.abs(A * np.sin(w * t + ph))
     b = family_bounds(cfg)
     b3 = b.k3 * spheres.sup_abs_sin(cfg.nonlinearity.omega, 0.0, t) if b.k3 > 0 else np.zeros(t.size)
