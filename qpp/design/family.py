@@ -443,17 +443,6 @@ class SettleExclusion:
         return self.times[~self.excluded]
 
 
-def _settle_terms(s, later, sg, edges, A: float, w: float, ph: float) -> tuple:
-    """The functions g_i(s) = s_i r_o(t_i − s) (s < t_i) and G_j(s) = ∫_{cell j} r_o(t − s) 1[t > s] dt
-    of :func:`settle_exclusion` at the points s (float; only to choose the multipliers), output units."""
-    Pg = sg[:, None] * np.where(s[None, :] < later[:, None], A * np.sin(w * (later[:, None] - s[None, :]) + ph), 0.0)
-    c0, c1 = edges[:-1][:, None], edges[1:][:, None]
-    lo = np.maximum(c0, s[None, :])
-    PG = np.where(s[None, :] < c1,
-                  A / w * (np.cos(w * (lo - s[None, :]) + ph) - np.cos(w * (c1 - s[None, :]) + ph)), 0.0)
-    return Pg, PG
-
-
 def _settle_multipliers(later, sg, edges, c, nu: float, A: float, w: float, ph: float) -> tuple:
     """Multipliers λ ≥ 0 (later samples) and μ (cells of [0, T]) for :func:`settle_exclusion`: for
     each τ of :data:`_SETTLE_TAUS`, μ minimizes ‖q‖² + τ Σ μ_j² |cell_j| for given λ (least squares),
@@ -465,7 +454,12 @@ def _settle_multipliers(later, sg, edges, c, nu: float, A: float, w: float, ph: 
     """
     S = _SETTLE_QUAD
     s = (np.arange(S) + 0.5) * later[-1] / S
-    Pg, PG = _settle_terms(s, later, sg, edges, A, w, ph)
+    # g_i(s) = s_i r_o(t_i − s) (s < t_i) and G_j(s) = ∫_{cell j} r_o(t − s) 1[t > s] dt at the points s
+    Pg = sg[:, None] * np.where(s[None, :] < later[:, None], A * np.sin(w * (later[:, None] - s[None, :]) + ph), 0.0)
+    c0, c1 = edges[:-1][:, None], edges[1:][:, None]
+    lo = np.maximum(c0, s[None, :])
+    PG = np.where(s[None, :] < c1,
+                  A / w * (np.cos(w * (lo - s[None, :]) + ph) - np.cos(w * (c1 - s[None, :]) + ph)), 0.0)
     dq = later[-1] / S
     Ggg, GgF, GFF = Pg @ Pg.T * dq, Pg @ PG.T * dq, PG @ PG.T * dq
     D = np.diff(edges)
