@@ -19,7 +19,7 @@ from qpp.io.config import ExpressionNonlinearity, QppConfig, SinusoidalNonlinear
 from qpp.design.hinf import HinfGains
 from qpp.model.lure import channels, closed_loop
 from qpp.simulate.closed_loop import eval_signal, initial_state
-from qpp.design.thresholds import NORM, Consistent, Thresholds, consistent, nominal_output, pick_bookkeeping, thresholds
+from qpp.design.thresholds import NORM, Consistent, Thresholds, consistent, nominal_output, thresholds
 
 
 @dataclass
@@ -240,11 +240,11 @@ def default_sector(cfg: QppConfig) -> np.ndarray:
         if nl.sector is not None:
             return np.asarray(nl.sector, float)
         s = np.array(cfg.expression_model().proof.sector, float)   # the sampled sector, widened to the proved one
-        flat = ~(s[:, 0] < s[:, 1])        # a sampled φ ≡ 0 (or exactly linear): [α, α]
-        if flat.any():                     # widened by 1e-12 (as a zero sinusoidal one, above)
-            pad = 1e-12 * np.maximum(1.0, np.abs(s[flat]).max(axis=1))
-            s[flat, 0] -= pad
-            s[flat, 1] += pad
+        # a sampled φ ≡ 0 (or exactly linear) gives [α, α]: widened by 1e-12 (as a zero sinusoidal one, above)
+        flat = ~(s[:, 0] < s[:, 1])
+        pad = 1e-12 * np.maximum(1.0, np.abs(s[flat]).max(axis=1))
+        s[flat, 0] -= pad
+        s[flat, 1] += pad
         return s
     raise DesignError("design.sector must be given for a polar_arm nonlinearity")
 
@@ -401,7 +401,6 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     sector, coupled = default_sector(cfg), sector_coupling(cfg)
     _, dcols = channels(P)
     circ = circle_mod.circle_criterion(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=coupled)
-    kyp = circle_kyp(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=coupled)
     T = cfg.spheres.T if T is None else float(T)
     horizon = max(T, cfg.simulation.t_final)
     n = int(min(20001, max(801, 801 * horizon / T)))
@@ -415,14 +414,17 @@ def certify(cfg: QppConfig, K1, Kc, H, a: float, gains_source: str = "given",
     th = thresholds(cfg, t, y_o, x_o, sector, T)
     res = DesignResult(K1, Kc, H, gains_source, hinf, a, T, Azd, Bzd, Cz, b1, th, circ, sector,
                        spheres.E_factor(a, T), t[keep], y_o[:, keep])
-    res.circle_proof = kyp
+    res.circle_proof = circle_kyp(Az, Bzd["eq10.7"][:, dcols], Cz, sector, a=a, coupled=coupled)
     res.T_settle = Ts
     res.settled = bool(Ts < float(t[-1]))
     res.T_modal = T_modal
     res.late_slope = late_slope(cfg, T, horizon)
-    res.bookkeeping = pick_bookkeeping(cfg, [x.name for x in th])
+    # the design iterates against design.bookkeeping when available, else the stated values, else
+    # the last (most specific) bookkeeping
+    names, bk = [x.name for x in th], cfg.design.bookkeeping
+    res.bookkeeping = bk if bk == "consistent" or bk in names else ("stated" if "stated" in names else names[-1])
     res.bz = cfg.design.bz
-    loop = (Azd["eq10.7"], Bzd["eq10.7"], Cz, {"z0": initial_state(cfg, P, K1, Kc), "a": a})
+    loop = (Azd["eq10.7"], Bzd["eq10.7"], Cz, initial_state(cfg, P, K1, Kc))
     res.consistent = consistent(cfg, t, y_o, sector, coupled, T, a, loop)
     # the certificate is of the loop that runs (B_z of eq 10.7, as simulated), whatever design.bz
     # says; the printed B_z reading stays in the bookkeeping
@@ -511,13 +513,11 @@ def sector_premise(cfg: QppConfig, sector: np.ndarray) -> tuple:
     """Whether φ lies in the sector the certificate uses (premise ``sector``).
 
     The sinusoidal form's sector is structural, ±N·γ_max·|F_unc| (row sums): a stated
-    ``design.sector`` must contain it.  An expression's stated ``nonlinearity.sector`` must contain
-    the sector sampled from the expression on ``y_range`` (no slack).  The polar arm's sector is
-    the config's assumption (φ depends on the rates, not on y alone): not a premise this tool
-    proves; its β3 is proved over the sphere (:func:`qpp.design.thresholds.consistent`).  An
-    expression's sector is proved by interval branch and bound
-    (:attr:`qpp.model.nonlin.ExpressionModel.proof`): the sampled sector widened by
-    :data:`qpp.model.sector_proof.REL_GAP`, which a stated sector must contain.
+    ``design.sector`` must contain it.  An expression's sector is proved by interval branch and bound
+    (:attr:`qpp.model.nonlin.ExpressionModel.proof`: the sampled sector widened by
+    :data:`qpp.model.sector_proof.REL_GAP`), which a stated ``nonlinearity.sector`` must contain.  The
+    polar arm's sector is the config's assumption (φ depends on the rates, not on y alone): not a
+    premise this tool proves; its β3 is proved over the sphere (:func:`qpp.design.thresholds.consistent`).
 
     Parameters
     ----------
@@ -558,7 +558,7 @@ def premises(cfg: QppConfig, res: DesignResult) -> dict:
     cfg : qpp.io.config.QppConfig
         Validated config.
     res : DesignResult
-        The design, with ``consistent`` and ``gamma_inf`` computed.
+        The design, with ``consistent``, ``gamma_inf`` and ``circle_proof`` computed.
 
     Returns
     -------
@@ -575,10 +575,9 @@ def premises(cfg: QppConfig, res: DesignResult) -> dict:
     out = {
         "stable": (worst < 0, f"A_z + aI Hurwitz, B_z of eq 10.7 (largest Re λ = {worst:.4g} 1/s)"),
         "sector": sector_premise(cfg, res.sector),
-        "circle": (bool(res.circle_proof is not None and res.circle_proof.proved), "circle criterion with the sector "
-                   f"{np.round(res.sector, 6).tolist()} at a = {res.a:g}: "
-                   + (res.circle_proof.text if res.circle_proof is not None else "not decided")
-                   + f" (frequency grid: {'passes' if res.circle.passed else 'fails'})"),
+        "circle": (bool(res.circle_proof.proved), f"circle criterion with the sector {np.round(res.sector, 6).tolist()}"
+                   f" at a = {res.a:g}: {res.circle_proof.text} (frequency grid: "
+                   f"{'passes' if res.circle.passed else 'fails'})"),
         "contraction": (bool(b1 < c.m), f"beta1 = {b1:.6g} < m = {c.m:.6g} (eqs 10.43, 10.57 in the Euclidean "
                         f"norm, B_z of eq 10.7; m a lower bound for every T' in (0, T], least in the cell ending at "
                         f"T' = {c.T_worst:.4g} s; the trapezoid rule on the samples gives {c.m_sampled:.6g}: "

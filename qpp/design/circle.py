@@ -39,10 +39,9 @@ the grid does not resolve is not certified): exact for the encirclement count, a
 grid for the distance margins.
 
 **Decided by the KYP lemma, not on a frequency grid** (:func:`circle_kyp`, issue 43; the premise
-``circle`` of the certificate).  A sector [α_i, β_i] of φ_i is written φ = C_0 y + Δ(y, t) with
-C_0 = diag(c_i), c_i the centre (α_i + β_i)/2 of a diagonal channel (0 for a coupled one) and
-|Δ_i| ≤ r_i |y_i|, r_i the half-width (the loop transformation of the circle criterion).
-The loop ż = A z + B φ(C z) is exponentially stable with rate a when
+``circle`` of the certificate).  With φ = C_0 y + Δ(y, t) as above and |Δ_i| ≤ r_i |y_i|, r_i the
+half-width (the loop transformation of the circle criterion), the loop ż = A z + B φ(C z) is
+exponentially stable with rate a when
 
 * A_c = A + B C_0 C + aI is Hurwitz (eigenvalues), and
 * the small-gain inequality ‖D R C (sI − A_c)⁻¹ B D⁻¹‖∞ < 1 holds, R = diag(r_i), D a positive
@@ -225,19 +224,12 @@ class CircleResult:
     peak_gain: float = float("nan")    #: sup_ω σ̄(H_c(−a + jω)) at s = 1 (nan for "gershgorin")
 
 
-def _winding(z: np.ndarray, c: float) -> int:
-    ang = np.unwrap(np.angle(z - c))
-    return int(np.round((ang[-1] - ang[0]) / (2 * np.pi)))
-
-
 def _check(centres, radii, full_centres, alpha, beta, P0):
     m = centres.shape[0]
     margins = np.empty(m)
     N = np.zeros(m, dtype=int)
     for i in range(m):
         al, be = alpha[i], beta[i]
-        if not al < be:
-            raise ValueError(f"sector {i + 1}: need alpha < beta, got [{al}, {be}]")
         if al < 0 < be:
             c, R = critical_disc(al, be)
             margins[i] = np.min(R - (np.abs(centres[i] - c) + radii[i]))
@@ -248,7 +240,8 @@ def _check(centres, radii, full_centres, alpha, beta, P0):
         else:
             c, R = critical_disc(al, be)
             margins[i] = np.min(np.abs(centres[i] - c) - radii[i] - R)
-            N[i] = -_winding(full_centres[i], c)   # clockwise count
+            ang = np.unwrap(np.angle(full_centres[i] - c))           # winding number about the disc centre,
+            N[i] = -int(np.round((ang[-1] - ang[0]) / (2 * np.pi)))   # counted clockwise
     # eq 9.3 over all channels; a band inside its disc or half plane counts N_ci = 0
     return bool(np.all(margins > 0) and int(N.sum()) == -P0), margins, N
 
@@ -336,12 +329,11 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None, coupled=None) 
     # full contour ω = −∞ … ∞ (h(−jω) = conj h(jω)); strictly proper → closes at 0
     full = np.concatenate([np.conj(centres[:, ::-1]), centres], axis=1)
     P0 = int(np.sum(np.linalg.eigvals(A + a * np.eye(A.shape[0])).real >= 0))
+    if not np.all(alpha < beta):
+        bad = int(np.argmin(alpha < beta))
+        raise ValueError(f"sector {bad + 1}: need alpha < beta, got [{alpha[bad]}, {beta[bad]}]")
     coupled = np.zeros(alpha.size, bool) if coupled is None else np.asarray(coupled, bool)
     if coupled.any():
-        if not np.all(alpha < beta):
-            bad = int(np.argmin(alpha < beta))
-            raise ValueError(f"sector {bad + 1}: need alpha < beta, got [{alpha[bad]}, {beta[bad]}]")
-
         return small_gain_result(Hw, A, B, C, a, omega, centres, radii, alpha, beta, coupled, P0)
     passed, margins, N = _check(centres, radii, full, alpha, beta, P0)
     passed = passed and _resolved(tail, alpha, beta)

@@ -186,12 +186,16 @@ class Candidate:
     gamma_inf: float = np.nan
 
 
-def _servo_gain(res, freqs) -> float:
-    """min over ω_k of σ̄(C_z ((a + jω_k) I − A_n)⁻¹ B_z) (= σ̄ of the loop's T(jω_k)), dimensionless."""
+def _candidate(res, rho, w, a, freqs) -> Candidate:
+    """The certificate ``res`` of the design (ρ, w, a in 1/s) as a Candidate; its servo gain is the min
+    over ω_k (``freqs``, rad/s) of σ̄(C_z ((a + jω_k) I − A_n)⁻¹ B_z) (= σ̄ of the loop's T(jω_k))."""
     Az, Bz, Cz = res.Az["eq10.7"], res.Bz["eq10.7"], res.Cz
-    n = len(Az)
-    return float(min(np.linalg.svd(Cz @ np.linalg.solve(1j * w * np.eye(n) - Az, Bz), compute_uv=False)[0]
-                     for w in freqs)) if freqs else np.nan
+    servo = float(min(np.linalg.svd(Cz @ np.linalg.solve(1j * x * np.eye(len(Az)) - Az, Bz), compute_uv=False)[0]
+                      for x in freqs)) if freqs else np.nan
+    c = res.consistent
+    return Candidate(float(rho), tuple(np.atleast_1d(w).astype(float)), float(a), res.T, res.beta1_ref, c.m,
+                     res.gamma_inf * c.E_over_m, servo, res.certified,
+                     [k for k, (ok, _) in res.premises.items() if not ok], float(res.gamma_inf))
 
 
 def search(cfg: QppConfig, rhos, ws_list, a_list) -> list:
@@ -230,11 +234,7 @@ def search(cfg: QppConfig, rhos, ws_list, a_list) -> list:
                     res = certify(cfg, g.K1, g.Kc, g.H, float(a), T=T)
                 except (DesignError, ConvergenceError, np.linalg.LinAlgError):
                     continue
-                c = res.consistent
-                out.append(Candidate(float(rho), tuple(np.atleast_1d(w).astype(float)), float(a), T,
-                                     res.beta1_ref, c.m, res.gamma_inf * c.E_over_m, _servo_gain(res, freqs),
-                                     res.certified, [k for k, (ok, _) in res.premises.items() if not ok],
-                                     float(res.gamma_inf)))
+                out.append(_candidate(res, rho, w, a, freqs))
     return out
 
 
@@ -278,12 +278,6 @@ class PeakExclusion:
             The open settling times, s.
         """
         return self.times[(self.times < T_max) & ~self.excluded]
-
-
-def _sine_energy(A: float, w: float, ph: float, t):
-    """‖A sin(ωs + φ)‖²_{L2[0, t]} = A² [t/2 − (sin(2(ωt + φ)) − sin 2φ)/(4ω)], (output unit)²·s."""
-    t = np.asarray(t, float)
-    return A ** 2 * (t / 2 - (np.sin(2 * (w * t + ph)) - np.sin(2 * ph)) / (4 * w))
 
 
 #: later samples whose constraints the weak-duality bound of :func:`_dual_line` combines
@@ -378,7 +372,8 @@ def peak_exclusion(cfg: QppConfig) -> PeakExclusion | None:
     band, sp = cfg.spheres.settle_band, cfg.spheres
     horizon = max(cfg.simulation.t_final, sp.T)
     t = np.linspace(0.0, horizon, SETTLE_SAMPLES)[1:]
-    energy = np.sqrt(_sine_energy(A, w, ph, t))
+    # ‖r_o‖_{L2[0, t]}: ‖A sin(ωs + φ)‖² = A² [t/2 − (sin(2(ωt + φ)) − sin 2φ)/(4ω)], (output unit)²·s
+    energy = np.sqrt(A ** 2 * (t / 2 - (np.sin(2 * (w * t + ph)) - np.sin(2 * ph)) / (4 * w)))
     r_abs = np.abs(A * np.sin(w * t + ph))
     b = family_bounds(cfg)
     b3 = b.k3 * spheres.sup_abs_sin(cfg.nonlinearity.omega, 0.0, t) if b.k3 > 0 else np.zeros(t.size)
@@ -448,17 +443,6 @@ class SettleExclusion:
         return self.times[~self.excluded]
 
 
-def _settle_terms(s, later, sg, edges, A: float, w: float, ph: float) -> tuple:
-    """The functions g_i(s) = s_i r_o(t_i − s) (s < t_i) and G_j(s) = ∫_{cell j} r_o(t − s) 1[t > s] dt
-    of :func:`settle_exclusion` at the points s (float; only to choose the multipliers), output units."""
-    Pg = sg[:, None] * np.where(s[None, :] < later[:, None], A * np.sin(w * (later[:, None] - s[None, :]) + ph), 0.0)
-    c0, c1 = edges[:-1][:, None], edges[1:][:, None]
-    lo = np.maximum(c0, s[None, :])
-    PG = np.where(s[None, :] < c1,
-                  A / w * (np.cos(w * (lo - s[None, :]) + ph) - np.cos(w * (c1 - s[None, :]) + ph)), 0.0)
-    return Pg, PG
-
-
 def _settle_multipliers(later, sg, edges, c, nu: float, A: float, w: float, ph: float) -> tuple:
     """Multipliers λ ≥ 0 (later samples) and μ (cells of [0, T]) for :func:`settle_exclusion`: for
     each τ of :data:`_SETTLE_TAUS`, μ minimizes ‖q‖² + τ Σ μ_j² |cell_j| for given λ (least squares),
@@ -470,7 +454,12 @@ def _settle_multipliers(later, sg, edges, c, nu: float, A: float, w: float, ph: 
     """
     S = _SETTLE_QUAD
     s = (np.arange(S) + 0.5) * later[-1] / S
-    Pg, PG = _settle_terms(s, later, sg, edges, A, w, ph)
+    # g_i(s) = s_i r_o(t_i − s) (s < t_i) and G_j(s) = ∫_{cell j} r_o(t − s) 1[t > s] dt at the points s
+    Pg = sg[:, None] * np.where(s[None, :] < later[:, None], A * np.sin(w * (later[:, None] - s[None, :]) + ph), 0.0)
+    c0, c1 = edges[:-1][:, None], edges[1:][:, None]
+    lo = np.maximum(c0, s[None, :])
+    PG = np.where(s[None, :] < c1,
+                  A / w * (np.cos(w * (lo - s[None, :]) + ph) - np.cos(w * (c1 - s[None, :]) + ph)), 0.0)
     dq = later[-1] / S
     Ggg, GgF, GFF = Pg @ Pg.T * dq, Pg @ PG.T * dq, PG @ PG.T * dq
     D = np.diff(edges)
@@ -662,7 +651,7 @@ def settle_exclusion(cfg: QppConfig, pe: PeakExclusion | None = None) -> SettleE
     A, w, ph, band, k_norm, k3, b = setup
     sp, nl = cfg.spheres, cfg.nonlinearity
     times = pe.times[~pe.excluded & (pe.times < (b.T_sin if b.T_sin is not None else np.inf))]
-    out = {key: [] for key in ("nu_max", "gamma", "nu_low", "splits", "excluded")}
+    rows = []
     bo, bi = iv.mpf(sp.beta_o), iv.mpf(b.beta_i)
     for T in times:
         Ti = iv.mpf(float(T))
@@ -692,13 +681,9 @@ def settle_exclusion(cfg: QppConfig, pe: PeakExclusion | None = None) -> SettleE
             if nu_lo >= nu_hi * (1 - 1e-3):
                 break
             nu_hi = nu_lo
-        out["nu_max"].append(float(nu_max.b))
-        out["gamma"].append(gamma0)
-        out["nu_low"].append(max(nu_hi, 0.0))
-        out["splits"].append(splits)
-        out["excluded"].append(bool(ok))
-    return SettleExclusion(times, np.array(out["nu_max"]), np.array(out["gamma"]), np.array(out["nu_low"]),
-                           np.array(out["splits"], int), np.array(out["excluded"], bool))
+        rows.append((float(nu_max.b), gamma0, max(nu_hi, 0.0), splits, ok))
+    cols = np.array(rows, float).reshape(-1, 5).T      # ν_max, L(T, ν_max), ν_low, splits, excluded
+    return SettleExclusion(times, cols[0], cols[1], cols[2], cols[3].astype(int), cols[4].astype(bool))
 
 
 #: evaluations of :func:`refine` from the best grid point
@@ -711,33 +696,7 @@ REFINE_EVALS = 30
 REPORT_CERTIFIED = {"qpp_siso": (1.3e-5, 1.69e4, 1e-8)}
 
 
-@dataclass
-class Resettled:
-    """A candidate's settling time found again on the certificate's own samples (:func:`resettle`).
-
-    Attributes
-    ----------
-    T : float
-        The settling time on the samples of :func:`qpp.design.certificate.certify` at the
-        candidate's T (finer than the first pass's), s.
-    m : float
-        The certificate's m at that T, dimensionless.
-    beta1 : float
-        β1, dimensionless.
-    certified : bool
-        Every premise holds at that T.
-    failed : list of str
-        The premises that fail at that T.
-    """
-
-    T: float
-    m: float
-    beta1: float
-    certified: bool
-    failed: list
-
-
-def resettle(cfg: QppConfig, c: Candidate) -> Resettled:
+def resettle(cfg: QppConfig, c: Candidate) -> Candidate:
     """The settling time of a candidate of :func:`search` taken again from the certificate at its T
     (which samples [0, max(T, t_final)] up to 20 001 times instead of the first pass's
     :data:`SETTLE_SAMPLES`), and the certificate at that settling time.
@@ -751,15 +710,14 @@ def resettle(cfg: QppConfig, c: Candidate) -> Resettled:
 
     Returns
     -------
-    Resettled
-        The finer settling time and the verdict there.
+    Candidate
+        The same design certified at the finer settling time (``T``, s).
     """
-    g = hinf_gains(weighted_plant(cfg.lure_plant(), c.ws[0]), rho=c.rho, a=c.a, nu=cfg.hinf.nu,
+    P = cfg.lure_plant()
+    g = hinf_gains(weighted_plant(P, c.ws[0]), rho=c.rho, a=c.a, nu=cfg.hinf.nu,
                    weight=cfg.hinf.weight, observer=cfg.hinf.observer)
     T = float(certify(cfg, g.K1, g.Kc, g.H, c.a, T=c.T).T_settle)
-    res = certify(cfg, g.K1, g.Kc, g.H, c.a, T=T)
-    return Resettled(T, float(res.consistent.m), float(res.beta1_ref), bool(res.certified),
-                     [k for k, (ok, _) in res.premises.items() if not ok])
+    return _candidate(certify(cfg, g.K1, g.Kc, g.H, c.a, T=T), c.rho, c.ws[0], c.a, _servo_frequencies(P.Ac))
 
 #: the grids of the report's examples searched (docs/qpp-certificates.md): ρ over six decades, five
 #: output weights w, three a; the manipulator's bounds already exclude its family, its grid is smaller

@@ -126,7 +126,12 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
     P = plant
     Aa, Ba, Ga, _ = augmented(P)
     Ab = Aa + a * np.eye(Aa.shape[0])
-    Cw = _state_weight(P, weight)
+    if weight == "servo":                        # the state weight Q = C_wᵀ C_w
+        Cw = np.hstack([np.zeros((P.Cc.shape[0], P.n)), P.Cc])
+    elif weight == "output":
+        Cw = np.hstack([P.C, np.zeros((P.p, P.q))])
+    else:
+        raise ValueError(f"weight must be 'servo' or 'output', got {weight!r}")
     Q = Cw.T @ Cw
     Bcomb = np.hstack([Ba, Ga])
     R = np.diag([rho ** 2] * Ba.shape[1] + [-nu ** 2] * Ga.shape[1])
@@ -154,16 +159,6 @@ def hinf_gains(plant: LurePlant, *, rho: float, a: float, nu: float = 1.0,
     else:
         raise ValueError(f"observer must be 'filter' or 'dgkf', got {observer!r}")
     return HinfGains(K[:, :n], K[:, n:], H, k, h, rho, nu, a, res_k, res_h, lam)
-
-
-def _state_weight(P: LurePlant, weight: str) -> np.ndarray:
-    """C_w of the state weight Q = C_wᵀ C_w of :func:`hinf_gains`: ``[0 Cc]`` (servo) or ``[C 0]``
-    (output)."""
-    if weight == "servo":
-        return np.hstack([np.zeros((P.Cc.shape[0], P.n)), P.Cc])
-    if weight == "output":
-        return np.hstack([P.C, np.zeros((P.p, P.q))])
-    raise ValueError(f"weight must be 'servo' or 'output', got {weight!r}")
 
 
 def _filter_riccati(P: LurePlant, a: float):
@@ -236,9 +231,6 @@ def hinf_search(plant: LurePlant, *, rho: float, a: float, nu: float | None = No
     (step 8), else ρ is decreased.  With ``target`` the search stops at the first admissible
     solution with δ ≤ target (procedure 12.1 step 2: "until β1 ≤ m").
 
-    Returns the admissible gains of smallest δ; ``history`` holds one dict per pass: ρ, ν, δ,
-    k_psd, h_psd, lambda_kh_scaled, spectral, admissible, action.
-
     Parameters
     ----------
     plant : LurePlant
@@ -268,7 +260,8 @@ def hinf_search(plant: LurePlant, *, rho: float, a: float, nu: float | None = No
     Returns
     -------
     HinfGains
-        The admissible gains of smallest δ, with ``history`` filled in.
+        The admissible gains of smallest δ; ``history`` holds one dict per pass: ρ, ν, δ, k_psd,
+        h_psd, lambda_kh_scaled, spectral, admissible, action.
 
     Raises
     ------
@@ -303,11 +296,9 @@ def _initial_nu(plant: LurePlant, rho: float, a: float, weight: str, observer: s
     try:
         g0 = hinf_gains(plant, rho=rho, a=a, nu=1.0, weight=weight, observer=observer, strict=False)
         nu = closed_loop_norm(plant, g0, bz=bz)
-        if not np.isfinite(nu) or nu <= 0:
-            nu = 1.0
     except (DesignError, ConvergenceError):
-        nu = 1.0
-    return nu
+        return 1.0
+    return nu if np.isfinite(nu) and nu > 0 else 1.0
 
 
 def _search_pass(plant: LurePlant, rho: float, a: float, nu: float, weight: str, observer: str, bz: str):
@@ -321,8 +312,7 @@ def _search_pass(plant: LurePlant, rho: float, a: float, nu: float, weight: str,
         rec["delta"] = delta = closed_loop_norm(plant, g, bz=bz)
     except (DesignError, ConvergenceError):
         g, delta = None, np.inf
-    ok = g is not None and rec["k_psd"] and rec["h_psd"] and rec["spectral"] and np.isfinite(delta)
-    rec["admissible"] = bool(ok)
+    rec["admissible"] = bool(rec["k_psd"] and rec["h_psd"] and rec["spectral"] and np.isfinite(delta))
     return g, delta, rec
 
 

@@ -137,16 +137,6 @@ def _exosystem(r_o, t_a: float, t_b: float):
     return S, Q, w
 
 
-def _variation(r_o, h: float, slopes: np.ndarray) -> np.ndarray:
-    """Per channel, a bound on sup |r_o(t) − r_o(t_j)| over a cell of width h (s) without switching."""
-    out = np.abs(np.asarray(slopes, float)) * h
-    for i, ch in enumerate(r_o):
-        for tm in ch:
-            if tm.kind == "sin":
-                out[i] += abs(tm.amplitude) * min(2.0, tm.omega * h)
-    return out
-
-
 def _picard(X: np.ndarray, v: np.ndarray) -> np.ndarray:
     """The least bound δ ≥ 0 of δ ≤ v + X δ (X ≥ 0 with ‖X‖∞ < 1, v ≥ 0 per column), from above:
     ‖δ‖∞ ≤ ‖v‖∞ / (1 − ‖X‖∞), then three steps δ ← v + X δ (each one a bound)."""
@@ -169,14 +159,10 @@ def _propagate(Phi: np.ndarray, x0: np.ndarray, n: int) -> np.ndarray:
         powers.append(Phi @ powers[-1])
     stack = np.vstack(powers)                                      # (k·d, d)
     d = x0.size
-    cols, x = [x0[:, None]], x0
-    done = 0
-    while done < n:
+    cols = [x0[:, None]]
+    for done in range(0, n, k):
         step = min(k, n - done)
-        blk = (stack[:step * d] @ x).reshape(step, d).T
-        cols.append(blk)
-        x = blk[:, -1]
-        done += step
+        cols.append((stack[:step * d] @ cols[-1][:, -1]).reshape(step, d).T)
     return np.hstack(cols)
 
 
@@ -231,7 +217,11 @@ def enclose(Az, Br, z0, r_o, T: float, cells: int = CELLS) -> NominalEnclosure:
         M = np.block([[Az, Br @ Q], [np.zeros((S.shape[0], N)), S]])
         Phi = expm(M * h)
         slopes = w[2 * (S.shape[0] // 2 - p) + 1::2][:p] if p else np.zeros(0)
-        dr = _variation(r_o, h, slopes)
+        dr = np.abs(slopes) * h        # per channel, a bound on sup |r_o(t) − r_o(t_j)| over a cell
+        for i, ch in enumerate(r_o):
+            for tm in ch:
+                if tm.kind == "sin":
+                    dr[i] += abs(tm.amplitude) * min(2.0, tm.omega * h)
         ZW = _propagate(Phi, np.concatenate([z, w]), n)             # (N + nw, n + 1)
         zs, rs = ZW[:N], Q @ ZW[N:]
         F = np.abs(Az @ zs[:, :-1] + Br @ rs[:, :-1]) / scale[:, None]   # |D⁻¹ ż(t_j)|

@@ -84,27 +84,24 @@ class _Procedure:
         self.work = 0.0          # integration work of the nominal loops so far (qpp.simulate.closed_loop.check_work)
 
     # -- gains -----------------------------------------------------------------
-    def gains(self, rho, a, ws, target=None, observer=None) -> HinfGains | None:
+    def gains(self, rho, a, ws, target=None) -> HinfGains | None:
         hc, dc = self.hc, self.dc
         Pw = weighted_plant(self.P, ws)
-        obs = observer or hc.observer
         try:
             if hc.search:
-                g = hinf_search(Pw, rho=rho, a=a, nu=None, weight=hc.weight, observer=obs, bz=dc.bz,
+                g = hinf_search(Pw, rho=rho, a=a, nu=None, weight=hc.weight, observer=hc.observer, bz=dc.bz,
                                 rho_factor=dc.rho_factor, rho_min=dc.rho_min, target=target)
-                for h in g.history:
-                    self.hist.append({**h, "a": a, "ws": float(np.mean(ws))})
+                passes = g.history
             else:
-                g = hinf_gains(Pw, rho=rho, a=a, nu=hc.nu, weight=hc.weight, observer=obs)
-
+                g = hinf_gains(Pw, rho=rho, a=a, nu=hc.nu, weight=hc.weight, observer=hc.observer)
                 tests = existence_tests(g)
-                self.hist.append({"rho": rho, "nu": hc.nu, "delta": closed_loop_norm(Pw, g, bz=dc.bz), **tests,
-                                  "admissible": bool(tests["k_psd"] and tests["h_psd"] and tests["spectral"]),
-                                  "action": "fixed nu", "a": a, "ws": float(np.mean(ws))})
+                passes = [{"rho": rho, "nu": hc.nu, "delta": closed_loop_norm(Pw, g, bz=dc.bz), **tests,
+                           "admissible": bool(tests["k_psd"] and tests["h_psd"] and tests["spectral"]),
+                           "action": "fixed nu"}]
+            self.hist.extend({**h, "a": a, "ws": float(np.mean(ws))} for h in passes)
             return g
         except (DesignError, ConvergenceError) as exc:
-            self.records.append(self._rec("riccati", rho, np.nan, a, np.nan, np.nan, np.nan, np.nan, False,
-                                          False, ws, note=str(exc)))
+            self.records.append(self._rec("riccati", rho, a, ws, note=str(exc)))
             return None
 
     def beta1_only(self, rho, a, ws) -> float:
@@ -120,7 +117,8 @@ class _Procedure:
 
     # -- evaluation --------------------------------------------------------------
     @staticmethod
-    def _rec(stage, rho, nu, a, T, delta, b1, m, circle, cert, ws, note=""):
+    def _rec(stage, rho, a, ws, nu=np.nan, T=np.nan, delta=np.nan, b1=np.nan, m=np.nan, circle=False, cert=False,
+             note=""):
         return {"stage": stage, "rho": float(rho), "nu": float(nu), "a": float(a), "T": float(T),
                 "delta": float(delta), "beta1": float(b1), "m": float(m), "circle": bool(circle),
                 "certified": bool(cert), "ws": [float(x) for x in np.atleast_1d(ws)], "note": note}
@@ -132,8 +130,8 @@ class _Procedure:
         res.ws_scale = [float(x) for x in np.atleast_1d(ws)]
 
         delta = closed_loop_norm(weighted_plant(self.P, ws), g, bz=self.dc.bz)
-        self.records.append(self._rec(stage, g.rho, g.nu, a, T, delta, res.beta1_ref, res.m_ref,
-                                      res.circle.passed, res.certified, ws))
+        self.records.append(self._rec(stage, g.rho, a, ws, g.nu, T, delta, res.beta1_ref, res.m_ref,
+                                      res.circle.passed, res.certified))
         if self.best is None or _score(res) < _score(self.best):
             self.best = res
         return res
@@ -180,8 +178,8 @@ class _Procedure:
         grid = sorted(grid[grid != a], key=lambda x: abs(np.log(max(x, 1e-300)) - np.log(max(a, 1e-300))))
         for cand in grid:
             ok = circle_mod.circle_criterion(Az, Bz[:, dcols], Cz, sector, a=float(cand), coupled=coupled).passed
-            self.records.append(self._rec("circle a", g.rho, g.nu, cand, np.nan, np.nan, np.nan, np.nan, ok,
-                                          False, [1.0], note="circle criterion with fixed gains"))
+            self.records.append(self._rec("circle a", g.rho, cand, [1.0], nu=g.nu, circle=ok,
+                                          note="circle criterion with fixed gains"))
             if ok:
                 return float(cand)
         return None
@@ -247,12 +245,12 @@ class _Procedure:
         """The wider search after steps 1–5 failed (ch. 15: a controller exists when min over ρ, W_s of
         β1 < m): per W_s of :func:`_ws_candidates`, the ρ minimizing β1, finished by steps 2–4, all at
         the best design's a; the first design meeting its target, else None."""
-        a = self.best.a if self.best is not None else self.hc.a
+        a = self.best.a
         for ws in _ws_candidates(self.P.Cc.shape[0], self.dc.ws_scales):
             rho = self._rho_minimizing_beta1(a, ws)
             if rho is None:
-                self.records.append(self._rec("wider", np.nan, np.nan, a, np.nan, np.nan, np.inf, np.nan, False,
-                                              False, ws, note="no stabilizing gains for any rho"))
+                self.records.append(self._rec("wider", np.nan, a, ws, b1=np.inf,
+                                              note="no stabilizing gains for any rho"))
                 continue
             res = self._finish_candidate(rho, a, ws)
             if res is not None and _meets(res):
@@ -277,10 +275,10 @@ class _Procedure:
         """Steps 2–4 once at the wider search's ρ, W_s (a in 1/s): gains (target: the best m), β1 and m
         from the best design's T, T adapted; β1 ≤ m with the circle failing → one retry at another a.
         The evaluated design, None when no gains exist at this ρ."""
-        g = self.gains(rho, a, ws, target=self.best.m_ref if self.best is not None else None)
+        g = self.gains(rho, a, ws, target=self.best.m_ref)
         if g is None:
             return None
-        res = self.evaluate(g, a, self.best.T if self.best is not None else self.cfg.spheres.T, ws, "wider")
+        res = self.evaluate(g, a, self.best.T, ws, "wider")
         res, T = self.adapt_T(g, a, res.T, ws, res, "wider")
         if res.lhs_ref <= res.m_ref and not res.circle.passed:
             res = self._retry_circle(g, res, rho, a, T, ws)
@@ -304,11 +302,7 @@ def _ws_candidates(p_w: int, ws_scales) -> list[np.ndarray]:
     alone times each factor of CHANNEL_FACTORS."""
     weights = [np.full(p_w, w) for w in ws_scales]
     if p_w > 1:
-        for i in range(p_w):
-            for w in CHANNEL_FACTORS:
-                v = np.ones(p_w)
-                v[i] = w
-                weights.append(v)
+        weights += [np.where(np.arange(p_w) == i, w, 1.0) for i in range(p_w) for w in CHANNEL_FACTORS]
     return weights
 
 
@@ -407,11 +401,8 @@ _CIRCLE_HINT = ("narrow the nonlinearity's sector (its parameter ranges or y_ran
 def design(cfg: QppConfig) -> DesignResult:
     """Procedure 12.1 (or certification of the printed gains when ``design.gains = published``).
 
-    Steps: (1) a, T, m; (2) gains from ch. 11 (fixed ν, or the steps 1–8 search with all of its
-    tests when ``hinf.search``); (3) T ← settling time of the nominal closed loop (within 10 %),
-    m recomputed, β1 > m → ρ ← ρ·rho_factor; (4) circle criterion, else a adjusted both ways on a
-    geometric grid of [a_min, a_max] and back to step 1; (5) stop at the first certified design,
-    then try to raise a towards a_max.  If the loop fails: the wider search over W_s weights and ρ.
+    Steps 1–5 of the module docstring (a adjusted both ways on a geometric grid of [a_min, a_max];
+    after the first certified design, a raised towards a_max), then the wider search when they fail.
     Every evaluation is in ``iterations``; the result's ``certified``/``verdict`` say the outcome.
 
     Parameters
@@ -433,8 +424,8 @@ def design(cfg: QppConfig) -> DesignResult:
     if dc.gains == "published":
         p = cfg.published
         res = certify(cfg, p.K1, p.Kc, p.H, hc.a, "published")
-        res.iterations = [_Procedure._rec("published", np.nan, np.nan, hc.a, res.T, np.nan, res.beta1_ref,
-                                          res.m_ref, res.circle.passed, res.certified, [1.0])]
+        res.iterations = [_Procedure._rec("published", np.nan, hc.a, [1.0], T=res.T, b1=res.beta1_ref, m=res.m_ref,
+                                          circle=res.circle.passed, cert=res.certified)]
         _finish(cfg, res)
         return res
     proc = _Procedure(cfg)
@@ -458,9 +449,8 @@ def design(cfg: QppConfig) -> DesignResult:
 
 
 def _finish(cfg: QppConfig, res: DesignResult) -> None:
-    """The verdict: ``certified`` only when every premise of the consistent certificate holds
-    (:func:`qpp.design.certificate.premises`); a bookkeeping of the report never certifies by itself."""
-    res.certified = bool(res.premises) and all(ok for ok, _ in res.premises.values())
+    """The verdict in words (``certified``, set by :func:`qpp.design.certificate.certify`, holds only when
+    every premise of the consistent certificate holds; a bookkeeping of the report never certifies by itself)."""
     c = res.consistent
     if res.certified:
         res.verdict = (f"certified (one sector, Euclidean norm): beta1 = {res.beta1_ref:.5g} <= m = {c.m:.5g}, "

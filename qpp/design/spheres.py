@@ -84,8 +84,7 @@ def _hinf_hamiltonian(A, B, C, D, tol=1e-10):
         raise ValueError("hamiltonian method implemented for D = 0 only")
     eig = np.linalg.eigvals(A)
     cand = [0.0] + [abs(e.imag) for e in eig] + [abs(e) for e in eig]
-    lo = max(_sigma(A, B, C, D, w) for w in cand)
-    wpk = max(cand, key=lambda w: _sigma(A, B, C, D, w))
+    lo, wpk = max((_sigma(A, B, C, D, w), w) for w in cand)
     hi = lo * 10 + 1e-12
     n = A.shape[0]
 
@@ -104,8 +103,7 @@ def _hinf_hamiltonian(A, B, C, D, tol=1e-10):
         ws = crossings(g)
         if ws:
             mids = [0.5 * (w1 + w2) for w1, w2 in zip(ws, ws[1:])] + ws
-            vals = [(_sigma(A, B, C, D, w), w) for w in mids]
-            v, w = max(vals)
+            v, w = max((_sigma(A, B, C, D, w), w) for w in mids)
             lo, wpk = max(lo, v), w if v >= lo else wpk
             lo = max(lo, g)
         else:
@@ -209,24 +207,25 @@ def l2_to_peak_gain(An, B, C) -> float:
     return float(np.sqrt(max(np.max(np.linalg.eigvalsh(Cb @ Pg @ Cb.T)), 0.0)))
 
 
-def E_factor(a: float, T: float) -> float:
+def E_factor(a: float, T):
     """E = [(e^{2aT} − 1)/(2a)]^{1/2} (eq 10.44); √T in the limit a → 0.
 
     Parameters
     ----------
     a : float
         Exponential weighting, 1/s.
-    T : float
-        Horizon, s.
+    T : float or array
+        Horizon(s), s.
 
     Returns
     -------
-    float
-        E, in s^{1/2} (units: square root of seconds).
+    float or ndarray
+        E, in s^{1/2} (units: square root of seconds), one per horizon.
     """
-    if a * T < 1e-8:
-        return float(np.sqrt(T * (1 + a * T)))
-    return float(np.sqrt(np.expm1(2 * a * T) / (2 * a)))
+    aT = a * np.asarray(T, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        E = np.where(aT < 1e-8, np.sqrt(T * (1 + aT)), np.sqrt(np.expm1(2 * aT) / (2 * a if a else 1.0)))
+    return float(E) if E.ndim == 0 else E
 
 
 def truncated_l2(t, y, T: float) -> float:

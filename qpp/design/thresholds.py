@@ -104,7 +104,7 @@ def _arm_betas(cfg: QppConfig, t, x_o, T):
     return b3, b4
 
 
-def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> list[Thresholds]:
+def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float) -> list[Thresholds]:
     """Threshold m (12.1) in each bookkeeping (see :mod:`qpp.design.procedure`) at truncation time T (s).
 
     Parameters
@@ -119,8 +119,8 @@ def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> l
         Nominal plant state, state units.
     sector : (r, 2) array
         Sector of the circle check, dimensionless gains.
-    T : float, optional
-        Truncation time, s (default ``spheres.T``).
+    T : float
+        Truncation time, s.
 
     Returns
     -------
@@ -128,7 +128,6 @@ def thresholds(cfg: QppConfig, t, y_o, x_o, sector, T: float | None = None) -> l
         One per bookkeeping available for this nonlinearity.
     """
     sp = cfg.spheres
-    T = sp.T if T is None else T
     nl = cfg.nonlinearity
     out = []
 
@@ -207,7 +206,7 @@ class Consistent:
     note: dict = field(default_factory=dict)
 
 
-def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, beta_o: float, T: float):
+def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, a: float, beta_o: float):
     """The polar arm's β3 proved over the sphere around the nominal trajectory, per group of the
     enclosure's cells (:data:`ARM_GROUPS` groups of [0, T]): y = (x1, x2) within β_o of the
     enclosure of y_o, the rates (x3, x4) within ρ_v = γ_v β_o / γ∞ of theirs (γ_v the L2-to-peak gain
@@ -217,15 +216,15 @@ def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, beta_o: float,
     Returns (group ends in s, cumulative bounds, ρ_v, the Δq branch and bound)."""
     P = cfg.lure_plant()
     Az, Bz, Cz, _ = loop
-    An = Az + float(loop[3]["a"]) * np.eye(len(Az))
+    An = Az + float(a) * np.eye(len(Az))
     Cv = np.zeros((2, Az.shape[0]))
     Cv[0, 2] = Cv[1, 3] = 1.0                     # the rates x3, x4 of z = [x; x_c; x̂]
     g_inf = spheres.l2_to_peak_gain(An, Bz, Cz)
     rho_v = spheres.l2_to_peak_gain(An, Bz, Cv) * beta_o / g_inf if g_inf > 0 else np.inf
     K = enc.lo.shape[1]
     groups = np.array_split(np.arange(K), min(ARM_GROUPS, K))
-    x3 = np.array([[enc.lo[2, g].min() - rho_v for g in groups], [enc.hi[2, g].max() + rho_v for g in groups]])
-    x4 = np.array([[enc.lo[3, g].min() - rho_v for g in groups], [enc.hi[3, g].max() + rho_v for g in groups]])
+    x3, x4 = (np.array([[enc.lo[i, g].min() - rho_v for g in groups], [enc.hi[i, g].max() + rho_v for g in groups]])
+              for i in (2, 3))
     x1 = (float(enc.lo[0].min() - beta_o), float(enc.hi[0].max() + beta_o))
     g, dq = arm_slope_bound(cfg.nonlinearity, P.N(), x1, x3, x4)
     ends = np.array([enc.edges[gr[-1] + 1] for gr in groups])
@@ -236,32 +235,30 @@ def _arm_beta3_cells(cfg: QppConfig, enc: NominalEnclosure, loop, beta_o: float,
 ARM_GROUPS = 128
 
 
-def _beta3_at(cfg: QppConfig, T: float, te: np.ndarray, k: np.ndarray, enc, loop, beta_o):
+def _beta3_at(cfg: QppConfig, T: float, te: np.ndarray, k: np.ndarray, enc, loop, a: float, beta_o):
     """Upper bounds of β3(T') = sup over [0, T'] (nondecreasing in T') at the times ``te`` (s), and
     a note for the arm (ρ_v, the gap of sup |Δq|); see :func:`consistent`."""
     nl = cfg.nonlinearity
-    note = {}
     if isinstance(nl, SinusoidalNonlinearity):     # closed form: k·sup_{[0, T']} |sin ωt|
-        k_struct = cfg.sinusoidal_half_widths()
-        kk = np.maximum(k, k_struct)
-        return np.sqrt(np.sum(kk ** 2)) * spheres.sup_abs_sin(nl.omega, 0.0, te), note
+        kk = np.maximum(k, cfg.sinusoidal_half_widths())
+        return np.sqrt(np.sum(kk ** 2)) * spheres.sup_abs_sin(nl.omega, 0.0, te), {}
     if isinstance(nl, ExpressionNonlinearity):
         M = cfg.expression_model()
         if M.proof.slope_ok:         # proved bounds on cells of [0, T]; a T' takes every cell it reaches
             edges, G = M.proved_slope_cells(T)
             gn = np.maximum.accumulate(np.sqrt(np.sum(np.asarray(G, float) ** 2, axis=0)))
             idx = np.clip(np.searchsorted(edges, te, side="left") - 1, 0, gn.size - 1)
-            return gn[idx], note
+            return gn[idx], {}
         tg, g = M.slope_profile(T)   # not proved (the premise ``slope`` fails): the sampled profile
         g = np.array(g, float)
         if tg.size == 1:
             g = np.maximum(g, np.asarray(M.sector_info.slope_bound, float)[:, None])
-            return np.full(te.size, float(np.max(np.sqrt(np.sum(g ** 2, axis=0)), initial=0.0))), note
+            return np.full(te.size, float(np.max(np.sqrt(np.sum(g ** 2, axis=0)), initial=0.0))), {}
         gn = np.maximum.accumulate(np.sqrt(np.sum(g ** 2, axis=0)))
-        return gn[np.clip(np.searchsorted(tg, te, side="left"), 0, tg.size - 1)], note
-    ends, gcum, rho_v, dq = _arm_beta3_cells(cfg, enc, loop, beta_o, T)
-    note.update(rho_v=float(rho_v), dq_gap=float(dq.gap), dq_upper=float(dq.upper))
-    return gcum[np.clip(np.searchsorted(ends, te - 1e-12 * max(T, 1.0), side="left"), 0, gcum.size - 1)], note
+        return gn[np.clip(np.searchsorted(tg, te, side="left"), 0, tg.size - 1)], {}
+    ends, gcum, rho_v, dq = _arm_beta3_cells(cfg, enc, loop, a, beta_o)
+    return (gcum[np.clip(np.searchsorted(ends, te - 1e-12 * max(T, 1.0), side="left"), 0, gcum.size - 1)],
+            {"rho_v": float(rho_v), "dq_gap": float(dq.gap), "dq_upper": float(dq.upper)})
 
 
 def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop) -> Consistent:
@@ -298,7 +295,7 @@ def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop
     a : float
         Exponential weighting a, 1/s.
     loop : tuple
-        (A_z in 1/s, B_z of eq 10.7, C_z, {"z0": z(0), "a": a}) of the nominal loop.
+        (A_z in 1/s, B_z of eq 10.7, C_z, z(0)) of the nominal loop.
 
     Returns
     -------
@@ -307,16 +304,16 @@ def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop
     """
     sp = cfg.spheres
     P = cfg.lure_plant()
-    Az, Bz, Cz, extra = loop
+    Az, Bz, Cz, z0 = loop
     k = np.max(np.abs(np.asarray(sector, float)), axis=1)
     beta_i = float(np.sqrt(P.p) * sp.beta_ri + np.sqrt(P.r) * sp.d_inf)
     try:
-        enc = enclose(Az, np.asarray(Bz)[:, :P.p], extra["z0"], cfg.simulation.r_o, T)
+        enc = enclose(Az, np.asarray(Bz)[:, :P.p], z0, cfg.simulation.r_o, T)
     except ValueError as exc:            # a loop too stiff for the cell budget: m is not bounded
         return Consistent(beta_i, np.inf, np.inf, 0.0, k, float(T), np.inf, note={"unbounded": str(exc)})
     te = enc.edges[1:]
     h = enc.h
-    b3, note = _beta3_at(cfg, T, te, k, enc, loop, sp.beta_o)
+    b3, note = _beta3_at(cfg, T, te, k, enc, loop, a, sp.beta_o)
     ylo, yhi = enc.box(Cz)
     ysup = np.maximum(np.abs(ylo), np.abs(yhi))
     ysq = np.sum(ysup ** 2, axis=0)
@@ -324,9 +321,7 @@ def consistent(cfg: QppConfig, t, y_o, sector, coupled, T: float, a: float, loop
     f = np.asarray(f, float) * (1 + PAD)
     I_right = np.cumsum(h * f) * (1 + PAD)
     I_left = np.concatenate([[0.0], I_right[:-1]])
-    aT = a * enc.edges                          # E of eq 10.44 at every edge (spheres.E_factor, vectorized)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        E = np.where(aT < 1e-8, np.sqrt(enc.edges * (1 + aT)), np.sqrt(np.expm1(2 * aT) / (2 * a if a else 1.0)))
+    E = spheres.E_factor(a, enc.edges)           # eq 10.44 at every edge
     E_lo, E_hi = E * (1 - PAD), E * (1 + PAD)
     grow = np.exp(a * te) * (1 + PAD)
     B = E_lo[:-1] ** 2
@@ -354,27 +349,6 @@ def _sampled_m(cfg, t, y_o, T, a, k, coupled, beta_i, b3, te) -> float:
     ynorm = np.sqrt(np.sum(yk ** 2, axis=0))
     bound = np.array([k[i] * (ynorm if (coupled[i] or i >= yk.shape[0]) else np.abs(yk[i])) for i in range(k.size)])
     l2 = np.sqrt(np.maximum(cumulative_trapezoid(np.sum(bound ** 2, axis=0), tk, initial=0.0), 0.0))[1:]
-    E = np.array([spheres.E_factor(a, x) for x in tk[1:]])
+    E = spheres.E_factor(a, tk[1:])
     b3s = b3[np.clip(np.searchsorted(te, tk[1:], side="left"), 0, b3.size - 1)]
     return float(np.min(sp.beta_o / (beta_i + sp.beta_o * b3s + np.exp(a * tk[1:]) * l2 / E), initial=np.inf))
-
-
-def pick_bookkeeping(cfg: QppConfig, names: list[str]) -> str:
-    """The threshold the design iterates against: ``design.bookkeeping`` when available, else the
-    stated values, else the last (most specific) bookkeeping.
-
-    Parameters
-    ----------
-    cfg : qpp.io.config.QppConfig
-        Validated config (units: s, rad/s, the plant's own units).
-    names : list of str
-        Bookkeepings available (:func:`thresholds`).
-
-    Returns
-    -------
-    str
-        The chosen bookkeeping.
-    """
-    if cfg.design.bookkeeping == "consistent" or cfg.design.bookkeeping in names:
-        return cfg.design.bookkeeping
-    return "stated" if "stated" in names else names[-1]
