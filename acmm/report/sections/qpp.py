@@ -39,14 +39,12 @@ def _chapter(ctx: SectionWriter, key, name, printed_errors, out_labels):
         circle_passed = bool(f.attrs["circle_passed"])
         consistent = _consistent_verdict(f.attrs)
     th = {nm: row for nm, row in zip(names, np.atleast_2d(d["thresholds"]))}
-    brow = []
     expl_b1 = (f"β1 is computed exactly (L∞ norm) for both readings of B_z: eq 10.7 gives {b1['eq10.7'][0]:.5f}, "
                f"the printed B_z (H in the r-columns) {b1['printed'][0]:.5f}; the printed value matches neither "
                "(docs/ERRATA.md: it looks like a coarse frequency grid)")
     pn = ctx.ledger_add(f"ch. {chap}", "β1", _num_str(pub.beta1), b1["eq10.7"][0], explanation=expl_b1)
-    for rd, (v, w) in b1.items():
-        brow.append([f"β1, B_z {rd}", _num_str(pub.beta1), f"{v:.6f} (peak at {w:.4g} rad/s)",
-                     status_text(pn) if rd == "eq10.7" else "see above"])
+    brow = [[f"β1, B_z {rd}", _num_str(pub.beta1), f"{v:.6f} (peak at {w:.4g} rad/s)",
+             status_text(pn) if rd == "eq10.7" else "see above"] for rd, (v, w) in b1.items()]
     m_pr = th["printed"][3]
     pn_m = ctx.ledger_add(f"ch. {chap}", "m (from printed β3, β4)", _num_str(pub.m), m_pr)
     brow.append(["m = β_o/(β_ri + ‖d‖∞ + β_o β3 + β4), printed β3, β4", _num_str(pub.m), f"{m_pr:.5f}",

@@ -289,11 +289,8 @@ def _pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:
         q = p["poles"] / n
         ax.plot(q.real, q.imag, "x", ms=4, color=cmap(k / max(1, len(pts) - 1)),
                 label=f"θ2* = {th[k]:.1f}°" if k in (0, len(pts) - 1) else None)
-    ax.axvline(0, color="k", lw=0.5)
     ax.set_xlabel("Re λ / n (n = orbital rate)")
-    ax.set_ylabel("Im λ / n")
     ax.set_title(f"Stair-case schedule: {len(pts)} design points")
-    ax.legend(loc="upper left")
     ax = axs[1]
     pc = mb3["points"][sorted(mb3["points"])[0]]["poles"] / n
     pd = dec["points"][sorted(dec["points"])[0]]["poles"] / n
@@ -303,11 +300,12 @@ def _pole_figure(ctx: SectionWriter, ev: np.ndarray) -> None:
     ax.plot(pc.real, pc.imag, "x", color=COLORS[0], label="coupled design, coupled model")
     ax.plot(pd.real, pd.imag, "+", color=COLORS[2], label="no-cross-inertia design, its own model")
     ax.plot(pt.real, pt.imag, "o", mfc="none", color=COLORS[1], label="no-cross-inertia gain, true coupled model")
-    ax.axvline(0, color="k", lw=0.5)
     ax.set_xlabel("Re λ / n")
-    ax.set_ylabel("Im λ / n")
     ax.set_title("Claim 1 (MB3): closed-loop poles")
-    ax.legend(loc="upper left")
+    for ax in axs:
+        ax.axvline(0, color="k", lw=0.5)
+        ax.set_ylabel("Im λ / n")
+        ax.legend(loc="upper left")
     fixed_layout(fig, left=0.72, bottom=0.54, top=0.34, wspace=0.16)
     ctx.doc.fig("pole_maps", "Closed-loop poles (units of n) and the sector of Fig 5.2: every stair-case "
                 "design point (left); the claim-1 designs and the cross-inertia-free gain on the true "
@@ -318,14 +316,12 @@ def _conditioning(ctx: SectionWriter, d, pts):
     """Per-point conditioning and robustness; the scheduled gain along the whole path (tables)."""
     if "max_eig_condition" in pts[0]:
         lmi = all("lmi" in p for p in pts)
-        rows = []
-        for name, p in zip(d["names"], pts):
-            rows.append([h5_text(name), f"{np.degrees(float(p['tea'][1])):.2f}",
-                         f"{float(p['sector_margin']):+.3f}", f"{float(p['max_eig_condition']):.2e}",
-                         f"{float(p['robustness_radius']):.1e}",
-                         f"{float(p['robustness_radius_elementwise']):.1e}"]
-                        + ([f"{float(p['lmi']['random_radius']):.1e}"] if lmi else [])
-                        + [f"{float(p['riccati_condition']):.1e}"])
+        rows = [[h5_text(name), f"{np.degrees(float(p['tea'][1])):.2f}",
+                 f"{float(p['sector_margin']):+.3f}", f"{float(p['max_eig_condition']):.2e}",
+                 f"{float(p['robustness_radius']):.1e}", f"{float(p['robustness_radius_elementwise']):.1e}"]
+                + ([f"{float(p['lmi']['random_radius']):.1e}"] if lmi else [])
+                + [f"{float(p['riccati_condition']):.1e}"]
+                for name, p in zip(d["names"], pts)]
         ctx.doc.table(["point", "θ2* (deg)", "sector margin (n)", "max eigenvalue condition (scaled)",
                        "sector robustness radius ‖δK‖/‖K‖", "radius, elementwise"]
                       + (["radius, random re-check"] if lmi else [])
