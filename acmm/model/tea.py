@@ -716,12 +716,10 @@ def _without_continuation(exc, inertia: np.ndarray, n: float, bias: np.ndarray) 
             return family
         raise _with_other_roots(exc, inertia, n, bias) from None
     found = all_equilibria(inertia, n, bias)
-    if found:
-        return found[0]
-    family = _non_isolated_equilibrium(inertia, n, bias)         # a symmetry axis off the body axes
-    if family is not None:
-        return family
-    raise exc
+    tea = found[0] if found else _non_isolated_equilibrium(inertia, n, bias)  # a family: symmetry axis off body axes
+    if tea is None:
+        raise exc
+    return tea
 
 
 def solve_tea_fast(inertia: np.ndarray, n: float, bias: np.ndarray) -> TEA:
