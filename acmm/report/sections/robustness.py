@@ -115,19 +115,19 @@ def _build(ctx: SectionWriter) -> None:
     plt = pyplot()
     keys = [k for k in ("dI11", "dI22", "dI33", "dI12", "dI13", "dI23") if k in params]
     dmax = np.max(np.abs(np.column_stack([params[k] for k in keys])), axis=1) if keys else np.zeros(len(base))
+    pk = np.full(len(base), np.nan)
+    finite = np.isfinite(peak).any(axis=1)
+    pk[finite] = np.nanmax(peak[finite], axis=1)
     fig, axs = plt.subplots(1, len(names), figsize=(5.2 * len(names), 4.0), squeeze=False)
     for k, lab in enumerate(names):
         ax = axs[0, k]
         sel = base == k
         ok = sel & (verdict == "bounded")
         bad = sel & (verdict != "bounded")
-        pk = np.full(len(base), np.nan)
-        finite = np.isfinite(peak).any(axis=1)
-        pk[finite] = np.nanmax(peak[finite], axis=1)
         ax.plot(100 * dmax[ok], pk[ok], "o", ms=3.5, color=COLORS[0], label="bounded")
         top = np.nanmax(pk[ok]) * 1.5 if ok.any() and np.isfinite(pk[ok]).any() else 60.0
-        yb = np.where(np.isfinite(pk[bad]), pk[bad], top)
-        ax.plot(100 * dmax[bad], np.minimum(yb, top), "x", ms=4, color=COLORS[1],
+        # fmin: a non-finite peak is drawn at the top
+        ax.plot(100 * dmax[bad], np.fmin(pk[bad], top), "x", ms=4, color=COLORS[1],
                 label="diverged / no equilibrium (clipped)")
         ax.set_yscale("log")
         ax.set_xlabel("largest inertia-element perturbation max|δ| (%)")

@@ -17,7 +17,7 @@ def _summary(ctx: SectionWriter) -> None:
     """Part: text, per-level table and printed numbers of the stair-case (claim 2, ch. 6)."""
     ctx.section("staircase")
     cfg = ctx.g.configs["staircase"]
-    s = ctx.data("acmm simulate:" + cfg.name)
+    s = _sim(ctx)
     a = s["attrs"]
     if ctx.fast:
         ctx.doc.p(f"FAST MODE (--fast): the stair-case is shortened to {FAST_ORBITS:g} orbits "
@@ -110,15 +110,14 @@ def _figure_levels(ctx: SectionWriter) -> None:
     th = np.degrees(sim["levels"]["tea_estimate"][:, 1])[: len(sim["levels"]["steady_error"])]
     for a in range(3):
         axs[0].plot(th, np.degrees(sim["levels"]["steady_error"][:, a]), "o-", color=COLORS[a], label=AXES[a])
-    axs[0].set_xlabel("pitch TEA of the level θ2* (deg)")
     axs[0].set_ylabel("steady |θ − θ̂*| (deg)")
     axs[0].set_title("Steady attitude error per level (second half of each dwell)")
-    axs[0].legend()
     axs[1].plot(th, sim["levels"]["peak_momentum"], "s-", color=COLORS[3], label="peak |h_i| over the level")
-    axs[1].set_xlabel("pitch TEA of the level θ2* (deg)")
     axs[1].set_ylabel("peak CMG momentum (ft·lbf·s)")
     axs[1].set_title("Peak momentum per level")
-    axs[1].legend()
+    for ax in axs:
+        ax.set_xlabel("pitch TEA of the level θ2* (deg)")
+        ax.legend()
     fixed_layout(fig3, left=0.62, bottom=0.54, top=0.33, wspace=0.16)
     ctx.doc.fig("staircase_levels", "Per-level steady error and peak momentum vs the level's pitch TEA",
                 save(fig3, ctx.figdir, "staircase_levels"))
