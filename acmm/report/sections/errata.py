@@ -83,23 +83,21 @@ def _tea_rows(I, n: float, t0, bias) -> list[list[str]]:
     """TEA branches of MB3 (inertia ``I`` in slug·ft², orbit rate ``n`` in rad/s; ``t0`` the
     zero-bias TEA of the continuation) and the 4 ft·lbf pitch bias without an equilibrium;
     ``bias`` the back-solved bias torque of Table 1, ft·lbf."""
-    rows = []
     roots = tea_mod.all_equilibria(I, n, np.zeros(3))
     pitches = sorted({round(float(r.theta_deg[1]), 2) for r in roots})
-    rows.append(["TEA roots (eqs 4.1–4.3)", "one TEA per configuration", "continuation from LVLH picks the "
-                 "physical branch", f"MB3, zero bias: {len(roots)} equilibria found, pitch {pitches} deg; "
-                 f"continuation gives {t0.theta_deg[1]:+.2f}°; Table 1 TEAs reproduced with back-solved bias "
-                 f"{fmt_value(bias, '{:+.4f}')} ft·lbf", "tests/acmm/model/test_tea.py"])
     cap = 3 * n ** 2 * np.hypot((I[2, 2] - I[0, 0]) / 2, I[0, 2])
     try:
         tea_mod.solve_tea(I, n, np.array([0.0, 4.0, 0.0]))
         msg = "an equilibrium was found (unexpected)"
     except NoEquilibriumError as exc:
         msg = "no equilibrium: " + str(exc).split(":", 1)[-1].strip()
-    rows.append(["4 ft·lbf pitch bias (Wie et al. 1989)", "used with MB3", "MB3 has no TEA for it",
-                 f"largest gravity-gradient pitch torque of MB3 = {cap:.3f} ft·lbf < 4; solve_tea: {msg}",
-                 "tests/acmm/model/test_tea.py"])
-    return rows
+    return [["TEA roots (eqs 4.1–4.3)", "one TEA per configuration", "continuation from LVLH picks the "
+             "physical branch", f"MB3, zero bias: {len(roots)} equilibria found, pitch {pitches} deg; "
+             f"continuation gives {t0.theta_deg[1]:+.2f}°; Table 1 TEAs reproduced with back-solved bias "
+             f"{fmt_value(bias, '{:+.4f}')} ft·lbf", "tests/acmm/model/test_tea.py"],
+            ["4 ft·lbf pitch bias (Wie et al. 1989)", "used with MB3", "MB3 has no TEA for it",
+             f"largest gravity-gradient pitch torque of MB3 = {cap:.3f} ft·lbf < 4; solve_tea: {msg}",
+             "tests/acmm/model/test_tea.py"]]
 
 
 def _linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
@@ -183,60 +181,56 @@ def _riccati_rows(m, d, n: float) -> list[list[str]]:
 def _design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str]]:
     """Sector LQR, saturation and claim 1 (MB3 inertia ``I`` in slug·ft², TEA ``th`` in rad, ``n``
     in rad/s, ``d`` the design section; ``st``/``sim`` the stair-case ``design.h5``/``sim.h5``)."""
-    rows = []
     pts = [st["points"][k] for k in sorted(st["points"])]
     ctrb = ctrb_mod.controllability(lin.design_point(I, th, n, model="no_cross_inertia", drf_mode=d.drf_mode))
-    rows.append(["sector LQR (Sunkel–Shieh)", "algorithm cited, not available", "shifted LQR + optimal pole "
-                 "shifting of the DRF poles (Amin 1985); K exact LQR gain of a Q ⪰ 0",
-                 f"{len(pts)} stair-case points"
-                 + (" (designed by the regional LMI route, pre-conditioned by this sector LQR)"
-                    if all("lmi" in p for p in pts) else "")
-                 + f": worst margin {min(float(p['sector_margin']) for p in pts):+.4f} n, "
-                 f"worst sector-LQR residual {max(float(p['riccati_residual']) for p in pts):.1e}; "
-                 "cross-inertia-free MB3 model "
-                 f"PBH σmin/σmax = {ctrb.min_ratio:.1e} (nearly uncontrollable)",
-                 "tests/acmm/design/test_sector_lqr.py, tests/acmm/stages/test_design.py"])
-    rows.append(["saturation", "±150 ft·lbf, 20 000 ft·lbf·s", "CMG at its limit delivers only the torque that stops "
-                 "|h_i| growing", f"stair-case: peak |u| {np.abs(sim['u']).max():.1f} ft·lbf, peak |h| "
-                 f"{np.nanmax(sim['levels']['peak_momentum']):.0f} ft·lbf·s (every integrator step)",
-                 "tests/acmm/simulate/test_kernel.py"])
-    rows.append(["claim 1", "cross-inertia-free design unstable within 0.1 orbit",
-                 "design: minimum-energy shifted LQR (Q0 = 0, R = I/(100 ft·lbf)²) + pole shifting of the DRF poles",
-                 f"diverges at {c1.div:.3f} orbit; its gain on the true linear model: max Re λ = {c1.maxre:+.3f} n; "
-                 f"coupled design bounded, peak error first orbit {fmt_value(c1.first, '{:.1f}')} deg, from orbit 2 "
-                 f"{fmt_value(c1.late, '{:.2f}')} deg", "tests/acmm/simulate/test_kernel.py"])
-    return rows
+    return [["sector LQR (Sunkel–Shieh)", "algorithm cited, not available", "shifted LQR + optimal pole "
+             "shifting of the DRF poles (Amin 1985); K exact LQR gain of a Q ⪰ 0",
+             f"{len(pts)} stair-case points"
+             + (" (designed by the regional LMI route, pre-conditioned by this sector LQR)"
+                if all("lmi" in p for p in pts) else "")
+             + f": worst margin {min(float(p['sector_margin']) for p in pts):+.4f} n, "
+             f"worst sector-LQR residual {max(float(p['riccati_residual']) for p in pts):.1e}; "
+             "cross-inertia-free MB3 model "
+             f"PBH σmin/σmax = {ctrb.min_ratio:.1e} (nearly uncontrollable)",
+             "tests/acmm/design/test_sector_lqr.py, tests/acmm/stages/test_design.py"],
+            ["saturation", "±150 ft·lbf, 20 000 ft·lbf·s", "CMG at its limit delivers only the torque that stops "
+             "|h_i| growing", f"stair-case: peak |u| {np.abs(sim['u']).max():.1f} ft·lbf, peak |h| "
+             f"{np.nanmax(sim['levels']['peak_momentum']):.0f} ft·lbf·s (every integrator step)",
+             "tests/acmm/simulate/test_kernel.py"],
+            ["claim 1", "cross-inertia-free design unstable within 0.1 orbit",
+             "design: minimum-energy shifted LQR (Q0 = 0, R = I/(100 ft·lbf)²) + pole shifting of the DRF poles",
+             f"diverges at {c1.div:.3f} orbit; its gain on the true linear model: max Re λ = {c1.maxre:+.3f} n; "
+             f"coupled design bounded, peak error first orbit {fmt_value(c1.first, '{:.1f}')} deg, from orbit 2 "
+             f"{fmt_value(c1.late, '{:.2f}')} deg", "tests/acmm/simulate/test_kernel.py"]]
 
 
 def _qpp_rows(s13, d13, a, beta3) -> list[list[str]]:
     """Part III (ch. 10–14): the signs of 13.6 / Table 14.1, B_z, the ch. 11 weights, β3 (eq 10.54)
     and m, and the unknowns of ch. 14; ``s13``/``d13`` the ch. 13 config and ``qpp_design.h5``,
     ``a`` the ch. 14 config, ``beta3`` as :func:`_build`'s."""
-    rows = []
-    rows.append(["signs of 13.6 / Table 14.1", "u = +K x̂, L = −H; plant f sign differs (13.1/14.2 vs 10.1)",
-                 "as docs/ERRATA.md", "A_z rebuilt from the printed gains equals 13.6 / Table 14.1",
-                 "tests/qpp/model/test_lure.py"])
     b = {rd: float(d13[f"beta1_{rd.replace('.', '_')}"]) for rd in ("eq10.7", "printed")}
-    rows.append(["B_z of 13.6 / Table 14.1", "H in the r-columns of the observer rows", "eq 10.7 (zeros); β1 "
-                 "reported for both", f"ch. 13 β1 = {b['eq10.7']:.5f} (eq 10.7), {b['printed']:.5f} (printed B_z); "
-                 f"printed 1.61454", "tests/qpp/design/test_spheres.py"])
-    rows.append(["ch. 11 weights", "state weight [C 0]ᵀ[C 0]; Lyapunov 11.2 for the observer",
-                 "servo weight [0 C_c]ᵀ[0 C_c]; filter Riccati H = −h Cᵀ",
-                 f"ch. 13 K1 = {fmt_value(d13['K1'], '{:.1f}')}, Kc = {fmt_value(d13['Kc'], '{:.1f}')} (printed "
-                 f"{fmt_value(s13.published.K1, '{:.1f}')}, {fmt_value(s13.published.Kc, '{:.1f}')})",
-                 "tests/qpp/design/test_hinf.py"])
     b3_5, b3_1 = beta3
     th13 = np.atleast_2d(d13["thresholds"])
-    rows.append(["β3 (10.54) and m", "β3 = 0.02727; half-width 0.05 in m, [−0.5, 0.5] in the circle check",
-                 "β3 = 0.05‖(sin 5t)_T‖₂; both bookkeepings reported",
-                 f"0.05‖(sin 5t)_T‖₂ = {b3_5:.5f} at T = 0.5 s; with sin t: {b3_1:.5f}; m = "
-                 + ", ".join(f"{v[3]:.4f}" for v in th13) + " (printed, report, circle bookkeepings)",
-                 "tests/qpp/design/test_spheres.py"])
-    rows.append(["ch. 14 target and unknowns", "Y_A1, Y_A2 ambiguous; μ, impulse not printed",
-                 "Y_A1 = (x1 + a) sin x2, Y_A2 = (x1 + a) cos x2; μ and impulse are config parameters",
-                 f"μ = {a.nonlinearity.mu:g} kg, impulse {a.simulation.scenarios[0].impulse} at "
-                 f"t = {a.simulation.scenarios[0].impulse_time} s", "tests/qpp/simulate/test_closed_loop.py"])
-    return rows
+    return [["signs of 13.6 / Table 14.1", "u = +K x̂, L = −H; plant f sign differs (13.1/14.2 vs 10.1)",
+             "as docs/ERRATA.md", "A_z rebuilt from the printed gains equals 13.6 / Table 14.1",
+             "tests/qpp/model/test_lure.py"],
+            ["B_z of 13.6 / Table 14.1", "H in the r-columns of the observer rows", "eq 10.7 (zeros); β1 "
+             "reported for both", f"ch. 13 β1 = {b['eq10.7']:.5f} (eq 10.7), {b['printed']:.5f} (printed B_z); "
+             f"printed 1.61454", "tests/qpp/design/test_spheres.py"],
+            ["ch. 11 weights", "state weight [C 0]ᵀ[C 0]; Lyapunov 11.2 for the observer",
+             "servo weight [0 C_c]ᵀ[0 C_c]; filter Riccati H = −h Cᵀ",
+             f"ch. 13 K1 = {fmt_value(d13['K1'], '{:.1f}')}, Kc = {fmt_value(d13['Kc'], '{:.1f}')} (printed "
+             f"{fmt_value(s13.published.K1, '{:.1f}')}, {fmt_value(s13.published.Kc, '{:.1f}')})",
+             "tests/qpp/design/test_hinf.py"],
+            ["β3 (10.54) and m", "β3 = 0.02727; half-width 0.05 in m, [−0.5, 0.5] in the circle check",
+             "β3 = 0.05‖(sin 5t)_T‖₂; both bookkeepings reported",
+             f"0.05‖(sin 5t)_T‖₂ = {b3_5:.5f} at T = 0.5 s; with sin t: {b3_1:.5f}; m = "
+             + ", ".join(f"{v[3]:.4f}" for v in th13) + " (printed, report, circle bookkeepings)",
+             "tests/qpp/design/test_spheres.py"],
+            ["ch. 14 target and unknowns", "Y_A1, Y_A2 ambiguous; μ, impulse not printed",
+             "Y_A1 = (x1 + a) sin x2, Y_A2 = (x1 + a) cos x2; μ and impulse are config parameters",
+             f"μ = {a.nonlinearity.mu:g} kg, impulse {a.simulation.scenarios[0].impulse} at "
+             f"t = {a.simulation.scenarios[0].impulse_time} s", "tests/qpp/simulate/test_closed_loop.py"]]
 
 
 #: this section's parts, rows of :data:`acmm.report.plan.PARTS`
