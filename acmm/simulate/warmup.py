@@ -7,7 +7,6 @@ after install loads machine code instead of compiling it (~10 s).  Prints what i
 """
 from __future__ import annotations
 
-import sys
 import time
 import numpy as np
 from acmm.simulate import kernel as sm, scenario as scen
@@ -54,9 +53,8 @@ def main() -> int:
     if why is not None:
         print(f"acmm: nothing compiled ahead: {why}")
         return 0
-    sys.stdout.write("acmm: compiling the numba kernels (simulator, TEA continuation) into the cache "
-                     "— one time, ~20–60 s, longer on a busy machine ... ")
-    sys.stdout.flush()
+    print("acmm: compiling the numba kernels (simulator, TEA continuation) into the cache "
+          "— one time, ~20–60 s, longer on a busy machine ... ", end="", flush=True)
     dt = warm_up()
     print(f"done in {dt:.1f} s")
     for line in write_error_notes():
