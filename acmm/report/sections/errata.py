@@ -104,44 +104,41 @@ def _linearization_rows(I, th, n: float, m, s) -> list[list[str]]:
     """Eqs 4.12–4.14, 4.28–4.34, 4.44: the Jacobian and the printed signs, with designs (settings
     ``s``) on them; ``m`` the coupled MB3 model at the TEA ``th`` (rad), ``I`` in slug·ft², ``n``
     in rad/s."""
-    rows = []
     # numerical Jacobian of τgg vs the closed form of 4.12–4.14 (corrected)
     h = 1e-6
     num = np.column_stack([(dyn.gravity_gradient_torque(th + h * e, I, n) - dyn.gravity_gradient_torque(th - h * e, I, n))
                            / (2 * h) for e in np.eye(3)])
     ana = dyn.gravity_gradient_jacobian(th, I, n)
-    rows.append(["eqs 4.12–4.14 ∂τgg/∂θ", "prefactor −3n²; row 2 lacks −I23·B1·C1; 4.13/4.14 garbled",
-                 "3n²(d_k×Ic + c×I d_k), d_k = ∂c/∂θ_k",
-                 f"closed form vs central differences at the MB3 TEA: max difference "
-                 f"{np.abs(num - ana).max():.1e} ft·lbf/rad (entries up to {np.abs(ana).max():.2f}); "
-                 f"with the printed sign: {np.abs(num + ana).max():.2f} ft·lbf/rad",
-                 "tests/acmm/model/test_linearize.py (numerical Jacobian of the nonlinear model, 50 random cases)"])
-    rows.append(["eq 4.28 E1", "1/cos θ1 scales all of E1", "rows 1–3 only; rows 4–6 identity", "—",
-                 "tests/acmm/model/test_linearize.py"])
-    rows.append(["eq 4.29 column 6", "τgg² term in rows 1–3", "τgyr²·n·sin θ3 (units)", "—",
-                 "tests/acmm/model/test_linearize.py"])
-    rows.append(["eqs 4.30, 4.33, 4.49 signs", "u, w signs", "u enters ω̇ as −u and ḣ as +u; w enters ω̇ as +w",
-                 "input sign reversed: " + _design_on(m.A, -m.B, m, s),
-                 "tests/acmm/model/test_dynamics.py, tests/acmm/model/test_linearize.py"])
     a2 = m.A[6:9, 6:9]
     Ap = m.A.copy()
     Ap[8, 6] = -Ap[8, 6]
-    rows.append(["eq 4.34 A2(3,1)", "+n cos θ1 cos θ3", "−n cos θ1 cos θ3 (block −[ω*×] skew-symmetric)",
-                 f"A2(3,1) = {a2[2, 0]:+.4e} rad/s; printed sign gives |A2 + A2ᵀ|max = {2 * abs(a2[2, 0]):.3e} rad/s "
-                 f"(ours {np.abs(a2 + a2.T).max():.1e}); " + _design_on(Ap, m.B, m, s),
-                 "tests/acmm/model/test_linearize.py"])
     Aq = m.A.copy()
     for src, good, bad in ((4, 20, 21), (5, 22, 23)):
         Aq[bad, src], Aq[good, src] = Aq[good, src], 0.0
-    rows.append(["eq 4.44 DRF input rows", "θ2, θ3 drive rows 10, 12 of x3", "rows 9, 11 (β̇2, β̇3)",
-                 "printed rows: " + _design_on(Aq, m.B, m, s), "tests/acmm/model/test_linearize.py"])
-    return rows
+    return [["eqs 4.12–4.14 ∂τgg/∂θ", "prefactor −3n²; row 2 lacks −I23·B1·C1; 4.13/4.14 garbled",
+             "3n²(d_k×Ic + c×I d_k), d_k = ∂c/∂θ_k",
+             f"closed form vs central differences at the MB3 TEA: max difference "
+             f"{np.abs(num - ana).max():.1e} ft·lbf/rad (entries up to {np.abs(ana).max():.2f}); "
+             f"with the printed sign: {np.abs(num + ana).max():.2f} ft·lbf/rad",
+             "tests/acmm/model/test_linearize.py (numerical Jacobian of the nonlinear model, 50 random cases)"],
+            ["eq 4.28 E1", "1/cos θ1 scales all of E1", "rows 1–3 only; rows 4–6 identity", "—",
+             "tests/acmm/model/test_linearize.py"],
+            ["eq 4.29 column 6", "τgg² term in rows 1–3", "τgyr²·n·sin θ3 (units)", "—",
+             "tests/acmm/model/test_linearize.py"],
+            ["eqs 4.30, 4.33, 4.49 signs", "u, w signs", "u enters ω̇ as −u and ḣ as +u; w enters ω̇ as +w",
+             "input sign reversed: " + _design_on(m.A, -m.B, m, s),
+             "tests/acmm/model/test_dynamics.py, tests/acmm/model/test_linearize.py"],
+            ["eq 4.34 A2(3,1)", "+n cos θ1 cos θ3", "−n cos θ1 cos θ3 (block −[ω*×] skew-symmetric)",
+             f"A2(3,1) = {a2[2, 0]:+.4e} rad/s; printed sign gives |A2 + A2ᵀ|max = {2 * abs(a2[2, 0]):.3e} rad/s "
+             f"(ours {np.abs(a2 + a2.T).max():.1e}); " + _design_on(Ap, m.B, m, s),
+             "tests/acmm/model/test_linearize.py"],
+            ["eq 4.44 DRF input rows", "θ2, θ3 drive rows 10, 12 of x3", "rows 9, 11 (β̇2, β̇3)",
+             "printed rows: " + _design_on(Aq, m.B, m, s), "tests/acmm/model/test_linearize.py"]]
 
 
 def _riccati_rows(m, d, n: float) -> list[list[str]]:
     """Eq 5.6 (sign iteration) and state scaling of the Riccati solve on the MB3 model ``m``;
     ``d`` the config's design section (sector σ in units of n, R), ``n`` in rad/s."""
-    rows = []
     Ash, Z = m.A + d.sector.sigma * n * np.eye(24), np.zeros((24, 24))      # the shifted problem
     As, Bs, Qs = ric.scale_problem(Ash, m.B, Z, m.scales)
     Rm = d.R * np.eye(3)
@@ -153,10 +150,6 @@ def _riccati_rows(m, d, n: float) -> list[list[str]]:
         pr = str(exc)
     ok = msign.matrix_sign(Ham)
     f = lambda x: x * (5 + 10 * x ** 2 + x ** 4) / (1 + 10 * x + 5 * x ** 4)  # noqa: E731
-    rows.append(["eq 5.6 sign iteration", "denominator I + 10S + 5S⁴", "I + 10S² + 5S⁴",
-                 f"scalar: printed map sends −1 to {f(-1.0):g} (sign(−1) is not a fixed point); MB3 scaled "
-                 f"Hamiltonian (48×48): printed form — {pr}; corrected form converges in {ok.iterations} iterations",
-                 "tests/acmm/design/test_matrix_sign.py"])
     # scaling
     D = np.diag(m.scales)
     sc_rows, scaled = [], []        # residuals (scaled coordinates) of an unscaled and of a scaled solve
@@ -171,11 +164,14 @@ def _riccati_rows(m, d, n: float) -> list[list[str]]:
             scaled.append(f"{meth} {res.residual:.1e}")
         except (ConvergenceError, ImportError) as exc:
             scaled.append(f"{meth} failed ({type(exc).__name__})")
-    rows.append(["state scaling", "Riccati solved in physical units", "scale states by nominal magnitudes; "
-                 "residual checked scaled", f"MB3 state scales span {m.scales.max() / m.scales.min():.1e}; "
-                 f"relative residual (scaled coordinates), unscaled solve: {', '.join(sc_rows)}; scaled solve: "
-                 f"{', '.join(scaled)}", "tests/acmm/design/test_riccati.py"])
-    return rows
+    return [["eq 5.6 sign iteration", "denominator I + 10S + 5S⁴", "I + 10S² + 5S⁴",
+             f"scalar: printed map sends −1 to {f(-1.0):g} (sign(−1) is not a fixed point); MB3 scaled "
+             f"Hamiltonian (48×48): printed form — {pr}; corrected form converges in {ok.iterations} iterations",
+             "tests/acmm/design/test_matrix_sign.py"],
+            ["state scaling", "Riccati solved in physical units", "scale states by nominal magnitudes; "
+             "residual checked scaled", f"MB3 state scales span {m.scales.max() / m.scales.min():.1e}; "
+             f"relative residual (scaled coordinates), unscaled solve: {', '.join(sc_rows)}; scaled solve: "
+             f"{', '.join(scaled)}", "tests/acmm/design/test_riccati.py"]]
 
 
 def _design_rows(I, th, n: float, d, st, sim, c1: Claim1Numbers) -> list[list[str]]:
