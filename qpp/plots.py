@@ -13,6 +13,13 @@ from acmm_qpp.results import save_figure
 from qpp.design.circle import critical_disc
 
 
+def _save(plt, fig, path: Path) -> Path:
+    """Write every qpp figure the same way (110 dpi, tight box) and close it; returns ``path``."""
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
 def plot_circle(res, path: Path) -> list[Path]:
     """Gershgorin mean band of H(−a + jω) against the critical disc, one figure per channel.
 
@@ -58,10 +65,7 @@ def plot_circle(res, path: Path) -> list[Path]:
         ax.set_title(f"Circle criterion, channel {i + 1}: {'pass' if c.passed else 'FAIL'} "
                      f"(margin {c.margins[i]:.3g}){form}")
         ax.legend(fontsize=7, loc="upper right")
-        p = path.with_name(f"{path.stem}_ch{i + 1}.png")
-        save_figure(fig, p, dpi=110, bbox_inches="tight")
-        plt.close(fig)
-        out.append(p)
+        out.append(_save(plt, fig, path.with_name(f"{path.stem}_ch{i + 1}.png")))
     return out
 
 
@@ -129,9 +133,7 @@ def plot_scenario(sim, path: Path) -> Path:
     axes[2].set(ylabel="control u", xlabel="t, s")
     axes[2].legend(**outside)
     fig.suptitle(f"scenario {sim.name} ({_scenario_values(sim)})")
-    save_figure(fig, path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def plot_cartesian(sims, a: float, path: Path) -> Path:
@@ -162,9 +164,7 @@ def plot_cartesian(sims, a: float, path: Path) -> Path:
     ax.set(aspect="equal", xlabel="Y_A1, m", ylabel="Y_A2, m",
            title="Load path in Cartesian coordinates (cf. Fig 14.5)")
     ax.legend(fontsize=7, loc="best")
-    save_figure(fig, path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def plot_iterations(res, path: Path) -> Path:
@@ -205,6 +205,4 @@ def plot_iterations(res, path: Path) -> Path:
     ax.set(xlabel="evaluation of procedure 12.1", ylabel="β1, m",
            title=f"{verdict}: β1 = {res.beta1_ref:.4g}, m = {res.m_ref:.4g}")
     ax.legend(fontsize=8)
-    save_figure(fig, path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)

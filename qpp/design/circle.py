@@ -339,10 +339,8 @@ def circle_criterion(A, B, C, sector, a: float = 0.0, omega=None, coupled=None) 
     passed = passed and _resolved(tail, alpha, beta)
 
     def ok(s):        # a scale whose critical set the grid does not resolve is not certified
-        sa, sb = s * alpha, s * beta
-        if not np.all(sa < sb):       # a denormal sector scaled down to [-0, 0]: not a sector
-            return False
-        return _resolved(tail, sa, sb) and _check(centres, radii, full, sa, sb, P0)[0]
+        sa, sb = s * alpha, s * beta  # (a denormal sector scaled down to [-0, 0] is not a sector)
+        return bool(np.all(sa < sb)) and _resolved(tail, sa, sb) and _check(centres, radii, full, sa, sb, P0)[0]
 
     smin, smax = _passing_scales(ok, fine=P0 > 0)
     if np.isnan(smax):

@@ -47,6 +47,7 @@ certificate's finer samples, where it is not.
 """
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -223,18 +224,16 @@ def search(cfg: QppConfig, rhos, ws_list, a_list) -> list:
     hc = cfg.hinf
     horizon = max(cfg.simulation.t_final, cfg.spheres.T)
     out = []
-    for rho in rhos:
-        for w in ws_list:
-            for a in a_list:
-                try:
-                    g = hinf_gains(weighted_plant(P, w), rho=float(rho), a=float(a), nu=hc.nu, weight=hc.weight,
-                                   observer=hc.observer)
-                    first = certify(cfg, g.K1, g.Kc, g.H, float(a), T=horizon)     # (SETTLE_SAMPLES samples)
-                    T = float(min(max(first.T_settle, 1e-3 * horizon), horizon))
-                    res = certify(cfg, g.K1, g.Kc, g.H, float(a), T=T)
-                except (DesignError, ConvergenceError, np.linalg.LinAlgError):
-                    continue
-                out.append(_candidate(res, rho, w, a, freqs))
+    for rho, w, a in itertools.product(rhos, ws_list, a_list):
+        try:
+            g = hinf_gains(weighted_plant(P, w), rho=float(rho), a=float(a), nu=hc.nu, weight=hc.weight,
+                           observer=hc.observer)
+            first = certify(cfg, g.K1, g.Kc, g.H, float(a), T=horizon)     # (SETTLE_SAMPLES samples)
+            T = float(min(max(first.T_settle, 1e-3 * horizon), horizon))
+            res = certify(cfg, g.K1, g.Kc, g.H, float(a), T=T)
+        except (DesignError, ConvergenceError, np.linalg.LinAlgError):
+            continue
+        out.append(_candidate(res, rho, w, a, freqs))
     return out
 
 

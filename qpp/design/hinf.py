@@ -271,8 +271,9 @@ def hinf_search(plant: LurePlant, *, rho: float, a: float, nu: float | None = No
     history = []
     best: HinfGains | None = None
     best_delta = np.inf
-    if nu is None:
-        nu = _initial_nu(plant, rho, a, weight, observer, bz)
+    if nu is None:                      # step 1: δ of the ν = 1 design (1 when that design fails)
+        nu = _search_pass(plant, rho, a, 1.0, weight, observer, bz)[1]
+        nu = nu if np.isfinite(nu) and nu > 0 else 1.0
     nu_min = np.inf
     for _ in range(max_iter):
         g, delta, rec = _search_pass(plant, rho, a, nu, weight, observer, bz)
@@ -289,16 +290,6 @@ def hinf_search(plant: LurePlant, *, rho: float, a: float, nu: float | None = No
                           "(k1 ⪰ 0, h∞ ⪰ 0, λmax(k1 h∞) < ν² failed for every ρ, ν tried)")
     best.history = history
     return best
-
-
-def _initial_nu(plant: LurePlant, rho: float, a: float, weight: str, observer: str, bz: str) -> float:
-    """Step 1 of ch. 11: δ = ‖T_wy‖∞ of the ν = 1 design (1 when that design fails)."""
-    try:
-        g0 = hinf_gains(plant, rho=rho, a=a, nu=1.0, weight=weight, observer=observer, strict=False)
-        nu = closed_loop_norm(plant, g0, bz=bz)
-    except (DesignError, ConvergenceError):
-        return 1.0
-    return nu if np.isfinite(nu) and nu > 0 else 1.0
 
 
 def _search_pass(plant: LurePlant, rho: float, a: float, nu: float, weight: str, observer: str, bz: str):

@@ -281,19 +281,12 @@ class _Procedure:
         res = self.evaluate(g, a, self.best.T, ws, "wider")
         res, T = self.adapt_T(g, a, res.T, ws, res, "wider")
         if res.lhs_ref <= res.m_ref and not res.circle.passed:
-            res = self._retry_circle(g, res, rho, a, T, ws)
+            # step 4 ("otherwise adjust a"); res kept when no a passes or no gains exist there
+            a_new = self.circle_a(g, a)
+            g2 = None if a_new is None else self.gains(rho, a_new, ws)
+            if g2 is not None:
+                res = self.evaluate(g2, a_new, T, ws, "wider a")
         return res
-
-    def _retry_circle(self, g, res, rho, a, T, ws) -> DesignResult:
-        """Step 4 in the wider search ("otherwise adjust a"): gains redesigned at (ρ, an a passing the
-        circle with g, W_s) and evaluated at T (s); ``res`` when no a passes or no gains exist there."""
-        a_new = self.circle_a(g, a)
-        if a_new is None:
-            return res
-        g2 = self.gains(rho, a_new, ws)
-        if g2 is None:
-            return res
-        return self.evaluate(g2, a_new, T, ws, "wider a")
 
 
 def _ws_candidates(p_w: int, ws_scales) -> list[np.ndarray]:

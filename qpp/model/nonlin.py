@@ -185,9 +185,8 @@ class ExpressionModel(SampleGrid):
                 g = None
         if g is None or not np.all(np.isfinite(g)):
             h = 1e-6 * max(1.0, float(np.ptp(self.y_range[j])))
-            Yp, Ym = list(Y), list(Y)
-            Yp[j] = Y[j] + h
-            Ym[j] = Y[j] - h
+            Yp = [y + h if k == j else y for k, y in enumerate(Y)]
+            Ym = [y - h if k == j else y for k, y in enumerate(Y)]
             g = (self._call(self._phi[i], Yp, t, TH) - self._call(self._phi[i], Ym, t, TH)) / (2 * h)
         return g
 
