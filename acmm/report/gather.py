@@ -585,7 +585,7 @@ def order_runs(g: "Gathered", tasks: list) -> None:
 def warm_workers() -> None:
     """Imports (and the compiled simulator, a first figure's fonts and caches) every worker needs,
     done once before forking them (the modules they import are imported at the top of this one)."""
-    warm_up(lambda *a: None)
+    warm_up()
     warm()
 
 

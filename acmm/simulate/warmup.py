@@ -9,18 +9,13 @@ from __future__ import annotations
 
 import time
 import numpy as np
-from acmm.simulate import kernel as sm, scenario as scen
-from acmm.model.tea import warm_up as warm_tea
+from acmm.simulate import kernel, scenario
+from acmm.model import tea
 from acmm.model.compiled_cache import uncached_note, write_error_notes
 
 
-def warm_up(say=print) -> float:
+def warm_up() -> float:
     """Compile (or load) every numba kernel; returns the wall time (s).
-
-    Parameters
-    ----------
-    say : callable, optional
-        Not used (the caller prints).
 
     Returns
     -------
@@ -28,16 +23,16 @@ def warm_up(say=print) -> float:
         Wall time of the warm-up, s.
     """
     t0 = time.perf_counter()
-    warm_tea()
+    tea.warm_up()
     n = 0.0011
     inertia = np.diag([2.0e7, 1.0e6, 2.1e7])[None]
-    sc = scen.Scenario(level_start=np.zeros(1), inertia=inertia, bias=np.zeros((1, 3)), theta_est=np.zeros((1, 3)),
-                     gain=np.zeros((1, 3, 24)), harmonic_a=np.zeros(3), harmonic_b=np.zeros(3), n=n,
-                     torque_limit=100.0, momentum_limit=1e4, drf_mode="attitude_hold", t_end=600.0,
-                     sample_times=np.array([0.0, 300.0, 600.0]), x0=np.zeros(24), rtol=1e-8,
-                     atol=scen.plain_scales(n, "attitude_hold") * 1e-8, divergence=1.0, max_saturation=1e4)
-    sm.simulate(sc)
-    sm.kernel_rhs(sc, 0.0, np.zeros(24))
+    sc = scenario.Scenario(level_start=np.zeros(1), inertia=inertia, bias=np.zeros((1, 3)), theta_est=np.zeros((1, 3)),
+                         gain=np.zeros((1, 3, 24)), harmonic_a=np.zeros(3), harmonic_b=np.zeros(3), n=n,
+                         torque_limit=100.0, momentum_limit=1e4, drf_mode="attitude_hold", t_end=600.0,
+                         sample_times=np.array([0.0, 300.0, 600.0]), x0=np.zeros(24), rtol=1e-8,
+                         atol=scenario.plain_scales(n, "attitude_hold") * 1e-8, divergence=1.0, max_saturation=1e4)
+    kernel.simulate(sc)
+    kernel.kernel_rhs(sc, 0.0, np.zeros(24))
     return time.perf_counter() - t0
 
 
