@@ -281,8 +281,6 @@ def _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin):
     """DesignError if an open-loop pole that must move is (numerically) uncontrollable (PBH)."""
     lam = np.linalg.eigvals(As)
     outside = lam[sector_margin(lam, n, sigma, half_angle_deg) < min_margin]
-    if outside.size == 0:
-        return
     for z, ratio in zip(outside, pbh_ratios(As, Bs, outside)):
         if ratio <= UNCONTROLLABLE_RATIO:
             hint = ("no gain moves that pole and no sector (σ > 0) holds Re λ ≥ 0: change design.model or "
