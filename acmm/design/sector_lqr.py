@@ -269,7 +269,7 @@ def _required_h(lam: np.ndarray, n: float, sigma: float, phi: float, target: flo
 def _group(h: np.ndarray, rel_gap: float = 0.02) -> list[tuple[float, float]]:
     """Chain-link sorted h values into groups whose neighbours differ by < rel_gap."""
     hs = np.sort(h)
-    runs = np.split(hs, np.flatnonzero(np.diff(hs) > rel_gap * hs[:-1]) + 1)
+    runs = np.split(hs, np.flatnonzero(~(np.diff(hs) <= rel_gap * hs[:-1])) + 1)   # (a NaN starts a group)
     return [(r[0], r[-1]) for r in runs]
 
 
