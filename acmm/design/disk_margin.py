@@ -183,10 +183,8 @@ def disk_alpha_batch(parts, refine: int = 6, rounds: int = 6) -> np.ndarray:
     # a lower bound of the largest μ per loop: max|M_ii| ≤ μ(M) and ρ(M) ≤ μ(M) at every
     # frequency, so a frequency whose D-scaled bound falls below the largest of these cannot
     # set α (its iteration may stop there; α is unchanged)
-    low = np.zeros(P)
-    for j, p in enumerate(parts):
-        if p is not None:
-            low[j] = float(np.max(np.abs(np.diagonal(p[0], axis1=1, axis2=2))))
+    low = np.array([0.0 if p is None else float(np.max(np.abs(np.diagonal(p[0], axis1=1, axis2=2))))
+                    for p in parts])
     for rnd in range(rounds + 1):
         pick = []
         for j, p in enumerate(parts):
@@ -201,25 +199,17 @@ def disk_alpha_batch(parts, refine: int = 6, rounds: int = 6) -> np.ndarray:
             break
         Ms = np.concatenate([parts[j][0][f] for j, f in pick])
         rho = np.max(np.abs(np.linalg.eigvals(Ms)), axis=1)
-        k = 0
-        for j, f in pick:
-            low[j] = max(low[j], float(np.max(rho[k:k + f.size])))
-            k += f.size
+        cuts = np.cumsum([f.size for _, f in pick])[:-1]          # each loop's rows of Ms
+        for (j, f), r in zip(pick, np.split(rho, cuts)):
+            low[j] = max(low[j], float(np.max(r)))
         floor = np.concatenate([np.full(f.size, max(low[j], best[j])) for j, f in pick])
         sig = np.linalg.norm(Ms, ord=2, axis=(1, 2))
         mu = np.minimum(sig, _mu_upper(Ms, floor=floor))
-        k = 0
-        for j, f in pick:
-            r = f.size
-            ub[j][f] = mu[k:k + r]
+        for (j, f), m in zip(pick, np.split(mu, cuts)):
+            ub[j][f] = m
             exact[j][f] = True
-            best[j] = max(best[j], float(np.max(mu[k:k + r])))
-            k += r
-    out = np.zeros(P)
-    for j, p in enumerate(parts):
-        if p is not None:
-            out[j] = 1.0 / max(np.max(ub[j]), best[j])
-    return out
+            best[j] = max(best[j], float(np.max(m)))
+    return np.array([0.0 if p is None else 1.0 / max(np.max(ub[j]), best[j]) for j, p in enumerate(parts)])
 
 
 def disk_gain_phase(alpha: float) -> tuple[float, float]:

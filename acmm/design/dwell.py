@@ -413,12 +413,11 @@ def dwell_certificate(Acl: np.ndarray, K: np.ndarray, scale: np.ndarray, dwell: 
         dj = np.asarray(jumps[k - 1], float) * Dinv
         q = 1.0 if dwell[k - 1] >= tau else np.sqrt(up[k - 1])
         s[k] = q * np.exp(-lam * dwell[k - 1]) * s[k - 1] + np.sqrt(dj @ P[k] @ dj)
-    u_bound, h_bound = np.empty((L, 3)), np.empty((L, 3))
-    for k in range(L):
-        Pinv = np.linalg.inv(P[k])
-        Ks = K[k] * d[None, :]                                            # u = −K D x̃
-        u_bound[k] = s[k] * np.sqrt(np.einsum("ai,ij,aj->a", Ks, Pinv, Ks))
-        h_bound[k] = s[k] * d[list(h_index)] * np.sqrt(np.diag(Pinv)[list(h_index)])
+    Pinv = np.linalg.inv(P)
+    Ks = np.asarray(K, float) * d                                         # u = −K D x̃
+    h = list(h_index)
+    u_bound = s[:, None] * np.sqrt(np.einsum("kai,kij,kaj->ka", Ks, Pinv, Ks))
+    h_bound = s[:, None] * d[h] * np.sqrt(np.diagonal(Pinv, axis1=1, axis2=2)[:, h])
     within = bool(np.all(u_bound <= torque_limit) and np.all(h_bound <= momentum_limit))
     return DwellCertificate(lam, P, d, up, down, mu, tau, proof.lower, dwell, bool(L < 2 or np.all(dwell >= tau)), s,
                             u_bound, h_bound, float(torque_limit), float(momentum_limit), within)

@@ -283,15 +283,12 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
         Margins and largest pole real parts, units of n.
     """
     n = s.orbit_rate
-    names, th2, margins, kinds, max_real = [], [], [], [], []
+    rows = []                           # (name, θ2*, kind, worst margin, largest Re λ), units of n
 
     def _check(name, model, theta2, kind):
         poles = np.linalg.eigvals(model.A - model.B @ fit.gain(theta2))
-        names.append(name)
-        th2.append(theta2)
-        kinds.append(kind)
-        margins.append(np.min(sector_lqr.sector_margin(poles, n, s.sector.sigma, s.sector.half_angle_deg)))
-        max_real.append(np.max(poles.real) / n)
+        margin = np.min(sector_lqr.sector_margin(poles, n, s.sector.sigma, s.sector.half_angle_deg))
+        rows.append((name, theta2, kind, margin, np.max(poles.real) / n))
 
     for p in points:
         _check(p.spec.name, p.model, p.tea.theta[1], "design point")
@@ -302,5 +299,6 @@ def check_schedule(fit: ScheduleFit, points: list[PointDesign], s: DesignSetting
         t = solve_tea_near(spec.inertia, n, spec.bias, 0.5 * (a.tea.theta + b.tea.theta))
         model = lin.design_point(spec.inertia, t.theta, n, model=s.model, drf_mode=s.drf_mode)
         _check(spec.name, model, t.theta[1], "midpoint")
-    return ScheduleCheck(names, np.array(th2), np.array(margins), kinds, np.array(max_real))
+    names, th2, kinds, margins, max_real = zip(*rows)
+    return ScheduleCheck(list(names), np.array(th2), np.array(margins), list(kinds), np.array(max_real))
 

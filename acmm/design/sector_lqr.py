@@ -269,15 +269,8 @@ def _required_h(lam: np.ndarray, n: float, sigma: float, phi: float, target: flo
 def _group(h: np.ndarray, rel_gap: float = 0.02) -> list[tuple[float, float]]:
     """Chain-link sorted h values into groups whose neighbours differ by < rel_gap."""
     hs = np.sort(h)
-    groups, lo, hi = [], hs[0], hs[0]
-    for v in hs[1:]:
-        if v - hi <= rel_gap * hi:
-            hi = v
-        else:
-            groups.append((lo, hi))
-            lo = hi = v
-    groups.append((lo, hi))
-    return groups
+    runs = np.split(hs, np.flatnonzero(~(np.diff(hs) <= rel_gap * hs[:-1])) + 1)   # (a NaN starts a group)
+    return [(r[0], r[-1]) for r in runs]
 
 
 #: PBH ratio of :func:`acmm.model.controllability.pbh_ratios` below which a mode counts as uncontrollable.
@@ -288,8 +281,6 @@ def _check_movable(As, Bs, n, sigma, half_angle_deg, min_margin):
     """DesignError if an open-loop pole that must move is (numerically) uncontrollable (PBH)."""
     lam = np.linalg.eigvals(As)
     outside = lam[sector_margin(lam, n, sigma, half_angle_deg) < min_margin]
-    if outside.size == 0:
-        return
     for z, ratio in zip(outside, pbh_ratios(As, Bs, outside)):
         if ratio <= UNCONTROLLABLE_RATIO:
             hint = ("no gain moves that pole and no sector (σ > 0) holds Re λ ≥ 0: change design.model or "
