@@ -59,7 +59,7 @@ def _mu_upper(M: np.ndarray, iters: int = 25, floor=None) -> np.ndarray:
     return best
 
 
-def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None):
+def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None, *, refine: int = 6):
     """Balanced multiloop disk margin at the plant input of ẋ = Ax + Bu, u = −Kx.
 
     Loop broken at u: L(s) = K(sI − A)⁻¹B, S = (I + L)⁻¹ = I − K(sI − A + BK)⁻¹B.  With
@@ -87,6 +87,8 @@ def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None):
         each state.
     omega_n : array or None
         Frequencies in units of n; default :data:`DISK_OMEGA_N` (0.01n … 1000n, 121 points).
+    refine : int
+        Refinement steps of the branch and bound (:func:`disk_alpha_batch`).
 
     Returns
     -------
@@ -98,7 +100,7 @@ def disk_margin_input(A, B, K, n: float, scale=None, omega_n=None):
     if scale is not None:
         d = np.asarray(scale, dtype=float)
         A, B, K = A / d[:, None] * d[None, :], B / d[:, None], K * d[None, :]
-    alpha = float(disk_alpha_batch(disk_parts(A[None], B[None], K[None], n, omega_n))[0])
+    alpha = float(disk_alpha_batch(disk_parts(A[None], B[None], K[None], n, omega_n), refine)[0])
     return (alpha,) + disk_gain_phase(alpha)
 
 

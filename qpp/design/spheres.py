@@ -84,7 +84,7 @@ def _hinf_hamiltonian(A, B, C, D, tol=1e-10):
         raise ValueError("hamiltonian method implemented for D = 0 only")
     eig = np.linalg.eigvals(A)
     cand = [0.0] + [abs(e.imag) for e in eig] + [abs(e) for e in eig]
-    lo, wpk = max((_sigma(A, B, C, D, w), w) for w in cand)
+    lo, wpk = max(((_sigma(A, B, C, D, w), w) for w in cand), key=lambda p: p[0])     # the first maximiser
     hi = lo * 10 + 1e-12
     n = A.shape[0]
 

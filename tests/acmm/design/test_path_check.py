@@ -3,6 +3,7 @@ against python-control's (SLICOT AB13MD) on the same local loops."""
 import numpy as np
 import pytest
 
+from acmm.design.disk_margin import DISK_OMEGA_N
 from acmm.design.settings import design_settings
 
 N = 0.0011
@@ -15,7 +16,6 @@ def test_path_disk_margin_agrees_with_python_control(staircase_lqr):
 
     from acmm.design import schedule as sch
     from acmm.design import path_check as path_check_mod
-    from acmm.design.disk_margin import DISK_OMEGA_N
 
     if not hasattr(control, "disk_margins"):       # python-control < 0.10.2
         pytest.skip("this python-control has no disk_margins")
